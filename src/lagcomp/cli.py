@@ -1,0 +1,170 @@
+"""The `lagcomp` command line: list, show and run the bundled examples; regenerate `generated/`.
+
+    lagcomp list
+    lagcomp show double_pendulum
+    lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz
+    lagcomp generate generated/          (add --check to only report stale files)
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from lagcomp.errors import LagcompError
+
+
+def _key_values(pairs: list[str], what: str) -> dict:
+    values = {}
+    for pair in pairs or []:
+        key, sep, value = pair.partition("=")
+        if not sep or not key:
+            raise LagcompError(f"{what} {pair!r} must look like name=value.")
+        try:
+            values[key] = int(value) if value.lstrip("-").isdigit() else float(value)
+        except ValueError as err:
+            raise LagcompError(f"{what} {pair!r}: {value!r} is not a number.") from err
+    return values
+
+
+def _system(args):
+    from lagcomp import examples
+
+    return examples.get(args.name, **_key_values(args.arg, "--arg"))
+
+
+def cmd_list(args) -> int:
+    from lagcomp import examples
+
+    width = max(map(len, examples.EXAMPLES))
+    for name, factory in examples.EXAMPLES.items():
+        print(f"{name:<{width}}  {factory().description}")
+    return 0
+
+
+def cmd_show(args) -> int:
+    import sympy as sp
+
+    from lagcomp.codegen.lower import lower
+    from lagcomp.mechanics.lagrange import derive
+    from lagcomp.runtime import compile
+
+    system = _system(args)
+    eom = derive(system)
+    model = compile(system, cache_dir=args.cache_dir)
+    print(f"{system.name}: {system.description}\n")
+    print(f"coordinates q  = ({', '.join(system.coordinate_names)})")
+    print(f"parameters  p  = ({', '.join(system.parameter_names)})   [kernel order]")
+    print(f"defaults       = {system.defaults}")
+    print(f"cyclic         = {list(eom.cyclic) or 'none'}\n")
+    print("Equations of motion  M(q, t) q̈ = F(q, q̇, t):\n")
+    print("M =")
+    print(sp.pretty(eom.M, use_unicode=True))
+    print("\nF =")
+    print(sp.pretty(eom.F, use_unicode=True))
+    print("\nenergy T + V =", eom.energy)
+    print("energy function h =", eom.energy_function)
+    ops = {k.name: k.operation_count for k in lower(eom).kernels}
+    print(f"\noperations after CSE: {ops}")
+    print(f"generated module: {model.source_path}")
+    return 0
+
+
+def cmd_run(args) -> int:
+    from lagcomp.runtime import compile
+
+    system = _system(args)
+    started = time.perf_counter()
+    model = compile(system, cache_dir=args.cache_dir)
+    compiled = time.perf_counter()
+    origin = "from cache" if model.from_cache else "derived and emitted"
+    print(f"{system.name}: {origin} in {compiled - started:.2f} s ({model.source_path})", file=sys.stderr)
+    if not model.from_cache:
+        print("first run: numba compiles the kernels and drivers once (cached for later runs)...", file=sys.stderr)
+    options = dict(method=args.method, save_every=args.save_every)
+    if args.method == "rk4":
+        options["dt"] = args.dt if args.dt is not None else 1e-3
+    else:
+        options.update(rtol=args.rtol, atol=args.atol)
+        if args.dt is not None:
+            options["first_step"] = args.dt
+    t_end = args.t_end if args.t_end is not None else system.t_end
+    sol = model.simulate(
+        (args.t_start, t_end), q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"), **options
+    )
+    elapsed = time.perf_counter() - compiled
+    print(f"method      {sol.method}   status {sol.status}: {sol.message}")
+    print(f"time span   [{sol.t[0]:g}, {sol.t[-1]:g}]   steps {sol.nsteps}   rejected {sol.nrejected}   rhs evaluations {sol.nfev}")
+    print(f"wall time   {elapsed:.3f} s (integration{', including numba compilation' if not model.from_cache else ''})")
+    print(f"energy      T+V: {sol.energy[0]:.12g} -> {sol.energy[-1]:.12g} (max relative drift {sol.energy_drift():.3g})")
+    print(f"            h:   {sol.energy_function[0]:.12g} -> {sol.energy_function[-1]:.12g} "
+          f"(max relative drift {sol.energy_drift('energy_function'):.3g})")
+    final = ", ".join(f"{c}={v:.8g}" for c, v in zip(sol.coordinates, sol.q[-1]))
+    print(f"final       {final}")
+    if args.out:
+        sol.save_npz(args.out)
+        print(f"saved       {args.out} ({len(sol.t)} points)")
+    return 0 if sol.success else 1
+
+
+def cmd_generate(args) -> int:
+    from lagcomp.codegen.bundled import write_generated
+
+    stale = write_generated(Path(args.directory), check=args.check)
+    if args.check:
+        for path in stale:
+            print(f"stale: {path}")
+        return 1 if stale else 0
+    for path in stale:
+        print(f"wrote {path}")
+    return 0
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="lagcomp", description="Compile and simulate Lagrangian systems.")
+    parser.add_argument("--cache-dir", help="cache root (default: $LAGCOMP_CACHE_DIR or the user cache directory)")
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("list", help="list the bundled examples").set_defaults(func=cmd_list)
+
+    def example(name, help_):
+        p = sub.add_parser(name, help=help_)
+        p.add_argument("name", help="example name (see `lagcomp list`)")
+        p.add_argument("--arg", action="append", metavar="K=V", help="argument of the example factory, e.g. n=5")
+        return p
+
+    example("show", "print the derived equations and the generated module's path").set_defaults(func=cmd_show)
+    run = example("run", "simulate an example and print a summary")
+    run.add_argument("--t-start", type=float, default=0.0)
+    run.add_argument("--t-end", type=float, help="end time (default: the example's)")
+    run.add_argument("--method", default="dop853", choices=["dop853", "dopri5", "rk4"])
+    run.add_argument("--dt", type=float, help="step of rk4 (default 1e-3); first step of adaptive methods")
+    run.add_argument("--rtol", type=float, default=1e-10)
+    run.add_argument("--atol", type=float, default=1e-10)
+    run.add_argument("--save-every", type=int, default=1, metavar="K")
+    run.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
+    run.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
+    run.add_argument("--qd0", type=float, nargs="+", help="initial velocities")
+    run.add_argument("--out", help="write the solution to this .npz file")
+    run.set_defaults(func=cmd_run)
+    gen = sub.add_parser("generate", help="regenerate the emitted modules of the bundled examples")
+    gen.add_argument("directory", nargs="?", default="generated")
+    gen.add_argument("--check", action="store_true", help="only list stale files; exit 1 if any")
+    gen.set_defaults(func=cmd_generate)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except LagcompError as err:
+        print(f"lagcomp: error: {err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,114 @@
+"""Lower derived equations (`EOM`) to the kernel IR, with one CSE per kernel.
+
+Each kernel's outputs go through a single `sympy.cse` together, so that the
+mass matrix and forcing of ``rhs`` share their sines, cosines and products.
+Symbols are renamed to the locals the emitted code binds them to: the
+coordinate names for q, ``<name>_dot`` for q̇, the parameter names for p, and
+``_c0, _c1, ...`` for common subexpressions (every generated local
+starts with an underscore, so it cannot collide with a user name).
+"""
+
+from __future__ import annotations
+
+import keyword
+import re
+
+import sympy as sp
+
+from lagcomp.ir import Kernel, LinearSolve, ModuleIR
+from lagcomp.mechanics.lagrange import EOM
+from lagcomp.model.system import t
+
+#: Names the emitted module uses itself; user names equal to them get a trailing underscore.
+RESERVED = {"t", "y", "p", "out", "math", "np", "njit", "rhs", "mm", "ff", "abs"}
+#: Largest system whose LDLᵀ solve is emitted unrolled; larger ones call a loop (`_ldlt_solve`).
+UNROLL_MAX = 8
+
+
+def _local_name(name: str) -> str:
+    """A safe local for a user name; generated locals all start with ``_``."""
+    if keyword.iskeyword(name) or name in RESERVED or name.startswith("_") or not name.isidentifier():
+        name = re.sub(r"\W", "_", name) + "_"
+    return name
+
+
+def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
+    """Map each model symbol to a local symbol, and list the loads that bind them."""
+    n = eom.n
+    sources = [(s, f"y[{i}]") for i, s in enumerate(eom.q)]
+    sources += [(s, f"y[{n + i}]") for i, s in enumerate(eom.qd)]
+    sources += [(s, f"p[{k}]") for k, s in enumerate(eom.parameters)]
+    mapping, loads, used = {}, [], set()
+    for symbol, source in sources:
+        local = _local_name(symbol.name)
+        while local in used:
+            local += "_"
+        used.add(local)
+        mapping[symbol] = sp.Symbol(local, real=True)
+        loads.append((local, source))
+    mapping[t] = sp.Symbol("t", real=True)
+    return mapping, tuple(loads)
+
+
+def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
+    """CSE the stores together and keep only the loads the code uses."""
+    targets = [target for target, _ in stores]
+    exprs = [sp.sympify(e).xreplace(mapping) for _, e in stores]
+    temps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("_c", real=True), order="canonical")
+    used = set().union(*(e.free_symbols for e in reduced), *(e.free_symbols for _, e in temps))
+    used_names = {s.name for s in used}
+    needed = tuple((local, src) for local, src in loads if local in used_names)
+    return Kernel(
+        name=name, doc=doc, args=args, loads=needed,
+        temps=tuple((s.name, e) for s, e in temps),
+        stores=tuple(zip(targets, reduced)), solve=solve,
+    )
+
+
+def lower(eom: EOM) -> ModuleIR:
+    """Build the IR of the module for `eom`: rhs, mass_matrix, forcing, energies, momenta."""
+    n = eom.n
+    mapping, loads = _bindings(eom)
+    state_args = ("t", "y", "p")
+    unrolled = n <= UNROLL_MAX
+    m_names = tuple(tuple(f"_m{i}_{j}" if unrolled else f"mm[{i}, {j}]" for j in range(i + 1)) for i in range(n))
+    f_names = tuple(f"_f{i}" if unrolled else f"ff[{i}]" for i in range(n))
+    rhs_stores = [(f"out[{i}]", eom.qd[i]) for i in range(n)]
+    rhs_stores += [(m_names[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
+    rhs_stores += [(f_names[i], eom.F[i]) for i in range(n)]
+    kernels = (
+        _kernel(
+            "rhs",
+            "State derivative dy/dt = (q̇, q̈), shape (2n,), with M(q, t) q̈ = F(q, q̇, t).\n\n"
+            "Returns 0, or k > 0 when pivot k of the LDLᵀ factorization of M is not\n"
+            "positive (M is singular or indefinite at this state); `out` is then invalid.",
+            (*state_args, "out"), rhs_stores, mapping, loads,
+            solve=LinearSolve(n=n, m=m_names, f=f_names, offset=n, unrolled=unrolled),
+        ),
+        _kernel(
+            "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",
+            (*state_args, "out"),
+            [(f"out[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(n)], mapping, loads,
+        ),
+        _kernel(
+            "forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`.",
+            (*state_args, "out"), [(f"out[{i}]", eom.F[i]) for i in range(n)], mapping, loads,
+        ),
+        _kernel(
+            "energy", "Total mechanical energy T + V.", state_args, [("return", eom.energy)], mapping, loads,
+        ),
+        _kernel(
+            "energy_function", "Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.",
+            state_args, [("return", eom.energy_function)], mapping, loads,
+        ),
+        _kernel(
+            "momenta", "Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`.",
+            (*state_args, "out"), [(f"out[{i}]", eom.momenta[i]) for i in range(n)], mapping, loads,
+        ),
+    )
+    system = eom.system
+    return ModuleIR(
+        system_name=system.name, description=system.description,
+        coordinate_names=system.coordinate_names, parameter_names=system.parameter_names,
+        kernels=kernels,
+    )

@@ -1,0 +1,52 @@
+"""Print sympy expressions as numba-friendly Python scalar code.
+
+Symbols print as their names (the IR has already renamed them to locals).
+Scalar math goes through the `math` module (numba lowers it to LLVM
+intrinsics).  Integer powers keep an int literal exponent (``x**2``), which
+numba expands into multiplications at compile time (a float exponent would
+call `pow`); square roots become `math.sqrt`, rationals float literals.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
+
+
+class KernelPrinter(PythonCodePrinter):
+    """`PythonCodePrinter` with float literals, int-literal powers and `math.sqrt`."""
+
+    def __init__(self):
+        super().__init__({"fully_qualified_modules": True, "standard": "python3"})
+
+    def _print_Symbol(self, expr):
+        return expr.name
+
+    def _print_Rational(self, expr):
+        return repr(float(expr.p) / float(expr.q))
+
+    def _print_Half(self, expr):
+        return "0.5"
+
+    def _print_Integer(self, expr):
+        return f"{int(expr)}.0"
+
+    def _print_sign(self, expr):
+        return f"np.sign({self._print(expr.args[0])})"
+
+    def _print_Pow(self, expr, rational=False):
+        base, exp = expr.args
+        b = self.parenthesize(base, sp.printing.precedence.PRECEDENCE["Mul"] + 1)
+        if exp.is_Integer:  # an int literal: numba unrolls it into multiplications
+            k = int(exp)
+            return f"{b}**{k}" if k > 0 else (f"1.0/{b}" if k == -1 else f"1.0/{b}**{-k}")
+        if exp == sp.S.Half:
+            return f"math.sqrt({self._print(base)})"
+        if exp == -sp.S.Half:
+            return f"1.0/math.sqrt({self._print(base)})"
+        return f"{b}**{self._print(exp)}"
+
+
+def to_code(expr: sp.Expr) -> str:
+    """The Python source of a scalar expression."""
+    return KernelPrinter().doprint(expr)

@@ -1,0 +1,49 @@
+"""Exceptions and warnings raised by lagcomp.
+
+Every error a user can provoke with bad input is a subclass of `LagcompError`
+and also of the builtin it refines (`ValueError` for bad input, `RuntimeError`
+for failures at run time), so ``except ValueError`` keeps working.  Messages
+name the culprit and say how to fix it.
+"""
+
+from __future__ import annotations
+
+
+class LagcompError(Exception):
+    """Base class of every error lagcomp raises on purpose."""
+
+
+class ModelError(LagcompError, ValueError):
+    """The system description is not a valid mechanical system."""
+
+
+class UndeclaredSymbolError(ModelError):
+    """An expression contains a symbol that is neither coordinate, parameter nor t."""
+
+
+class SingularMassMatrixError(ModelError):
+    """The kinetic energy is not positive definite in the velocities."""
+
+
+class ParameterError(LagcompError, ValueError):
+    """Parameter values are missing, unknown or not finite."""
+
+
+class InitialConditionError(LagcompError, ValueError):
+    """Initial coordinates or velocities have the wrong length or are not finite."""
+
+
+class OptionError(LagcompError, ValueError):
+    """An integration option (time span, step, tolerance, method...) is out of range."""
+
+
+class IntegrationError(LagcompError, RuntimeError):
+    """An integration failed; the partial solution is attached as ``.solution``."""
+
+    def __init__(self, message: str, solution=None):
+        super().__init__(message)
+        self.solution = solution
+
+
+class CacheWarning(UserWarning):
+    """A cache entry could not be used and was rebuilt."""

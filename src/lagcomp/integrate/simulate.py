@@ -1,0 +1,140 @@
+"""Run a compiled model: validate at the boundary, call the numba driver chunk by chunk.
+
+The drivers keep their whole state in small in/out arrays, so a run whose
+output outgrows one buffer simply continues in the next; Python is involved
+once per chunk, never per step, and memory is bounded by what is saved
+(`save_every`, `t_eval`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from lagcomp.errors import IntegrationError, OptionError
+from lagcomp.integrate.methods import get_method
+from lagcomp.integrate.solution import MESSAGES, Solution
+from lagcomp.integrate.tableaux import driver_arguments
+
+#: Rows per output chunk: small runs allocate little, long ones grow to this.
+FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
+BUFFER_FULL = 1
+
+
+def _time_span(t_span) -> tuple[float, float]:
+    try:
+        t0, t1 = (float(v) for v in t_span)
+    except (TypeError, ValueError) as err:
+        raise OptionError(f"`t_span` must be a pair (t0, t1) of numbers, got {t_span!r}.") from err
+    if not (math.isfinite(t0) and math.isfinite(t1)):
+        raise OptionError(f"`t_span` must be finite, got ({t0}, {t1}).")
+    if not t1 > t0:
+        raise OptionError(f"`t_span` = ({t0}, {t1}) is empty: the end time must be after the start time.")
+    return t0, t1
+
+
+def _positive(value, name: str) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError) as err:
+        raise OptionError(f"`{name}` must be a number, got {value!r}.") from err
+    if not (value > 0 and math.isfinite(value)):
+        raise OptionError(f"`{name}` must be positive and finite, got {value}.")
+    return value
+
+
+def _t_eval(t_eval, t0: float, t1: float) -> np.ndarray | None:
+    if t_eval is None:
+        return None
+    t_eval = np.asarray(t_eval, dtype=float).ravel()
+    if t_eval.size == 0 or not np.all(np.isfinite(t_eval)):
+        raise OptionError("`t_eval` must be a non-empty array of finite times.")
+    if np.any(np.diff(t_eval) <= 0) or t_eval[0] < t0 or t_eval[-1] > t1:
+        raise OptionError(f"`t_eval` must be strictly increasing and within t_span = ({t0}, {t1}).")
+    return t_eval
+
+
+def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=1e-8,
+             atol=1e-10, t_eval=None, save_every=1, first_step=None, max_step=math.inf,
+             max_steps=100_000_000, throw=False) -> Solution:
+    """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
+    t0, t1 = _time_span(t_span)
+    m = get_method(method)
+    p = model.parameter_vector(params)
+    y0 = model.initial_state(q0, qd0)
+    if not isinstance(save_every, (int, np.integer)) or save_every < 1:
+        raise OptionError(f"`save_every` must be a positive integer, got {save_every!r}.")
+    t_eval = _t_eval(t_eval, t0, t1)
+    y = y0.copy()
+    clock = np.array([t0, 0.0])
+    counters = np.zeros(5, dtype=np.int64)
+    kernels = model.kernels
+    driver = getattr(kernels, m.driver)
+    tableau_arrays = driver_arguments(m.tableau)
+    if m.adaptive:
+        if dt is not None:
+            raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own (use `first_step`).")
+        rtol, atol = _positive(rtol, "rtol"), _positive(atol, "atol")
+        if first_step is not None:
+            clock[1] = _positive(first_step, "first_step")
+        max_step = _positive(max_step, "max_step") if max_step != math.inf else math.inf
+        events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
+
+        def advance(ts, ys):
+            return driver(y, clock, counters, p, t1, rtol, atol, max_step, int(max_steps), int(save_every),
+                          events, ts, ys, *tableau_arrays)
+        expected_rows = len(events) + 1 if t_eval is not None else FIRST_CHUNK
+    else:
+        if dt is None:
+            raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
+        if t_eval is not None:
+            raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every` or dopri5/dop853.")
+        dt = _positive(dt, "dt")
+        n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
+        if n_steps > max_steps:
+            raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {max_steps}.")
+
+        def advance(ts, ys):
+            return driver(y, clock, counters, p, t0, dt, n_steps, t1, int(save_every), ts, ys)
+        expected_rows = n_steps // save_every + 1
+
+    save_initial = t_eval is None or t_eval[0] == t0
+    ts_parts = [np.array([t0])] if save_initial else []
+    ys_parts = [y0[None, :].copy()] if save_initial else []
+    chunk = int(min(max(expected_rows, 16), FIRST_CHUNK if m.adaptive and t_eval is None else MAX_CHUNK))
+    while True:
+        ts, ys = np.empty(chunk), np.empty((chunk, y.size))
+        status, n_saved = advance(ts, ys)
+        ts_parts.append(ts[:n_saved])
+        ys_parts.append(ys[:n_saved])
+        if status != BUFFER_FULL:
+            break
+        chunk = min(2 * chunk, MAX_CHUNK)
+    return _solution(model, m.name, p, int(status), ts_parts, ys_parts, y, clock, counters, throw)
+
+
+def _solution(model, method, p, status, ts_parts, ys_parts, y, clock, counters, throw) -> Solution:
+    ts, ys = np.concatenate(ts_parts), np.concatenate(ys_parts)
+    t_failure = None
+    message = MESSAGES[status]
+    if status < 0:
+        t_failure = float(clock[0])
+        if ts.size == 0 or ts[-1] != t_failure:  # keep the last good state
+            ts, ys = np.append(ts, t_failure), np.vstack([ys, y])
+        n = model.n
+        state = ", ".join(f"{c}={v:.6g}" for c, v in zip(model.coordinates, y[:n]))
+        rates = ", ".join(f"{c}_dot={v:.6g}" for c, v in zip(model.coordinates, y[n:]))
+        message = f"{message} Stopped at t = {t_failure:.10g}, last good state {state}, {rates}."
+    energy, energy_function = np.empty(ts.size), np.empty(ts.size)
+    model.kernels.observables(ts, ys, p, energy, energy_function)
+    n = model.n
+    solution = Solution(
+        t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), energy=energy, energy_function=energy_function,
+        status=status, message=message, t_failure=t_failure,
+        nfev=int(counters[0]), nsteps=int(counters[1]), nrejected=int(counters[2]),
+        method=method, coordinates=model.coordinates, params=dict(zip(model.parameters, p.tolist())),
+    )
+    if throw and status < 0:
+        raise IntegrationError(message, solution)
+    return solution

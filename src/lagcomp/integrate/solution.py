@@ -1,0 +1,103 @@
+"""The result of a simulation: a frozen record of arrays, status and counters."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: Driver status codes and what they mean to a user (a failed run is a status, not an exception).
+MESSAGES = {
+    0: "The integration reached the end of the time span.",
+    -1: "The state or its derivative became non-finite (NaN or inf).",
+    -2: "The mass matrix became singular (the kinetic energy is not positive definite at this state).",
+    -3: "The step size became too small (the solution may be singular here).",
+    -4: "The maximum number of steps was reached.",
+}
+
+
+@dataclass(frozen=True)
+class Solution:
+    """A trajectory saved at times `t`.
+
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+        Saved times.
+    q, qd : ndarray, shape (m, n)
+        Coordinates and velocities at those times.
+    energy : ndarray, shape (m,)
+        Total mechanical energy T + V, evaluated by the compiled kernel.
+    energy_function : ndarray, shape (m,)
+        Energy function h (Jacobi integral), conserved for time-independent
+        conservative systems even when T + V is not (imposed motions).
+    status : int
+        0 on success, negative on failure (see `MESSAGES`).
+    message : str
+        What happened, with the time of failure if any.
+    t_failure : float or None
+        Time of the last good state when the run failed.
+    nfev, nsteps, nrejected : int
+        Right-hand-side evaluations, accepted steps and rejected steps.
+    method : str
+        The integration method used.
+    coordinates : tuple of str
+        Coordinate names, the column order of `q` and `qd`.
+    params : dict
+        Parameter values used, by name.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    energy: np.ndarray
+    energy_function: np.ndarray
+    status: int
+    message: str
+    t_failure: float | None
+    nfev: int
+    nsteps: int
+    nrejected: int
+    method: str
+    coordinates: tuple
+    params: dict = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return self.status == 0
+
+    @property
+    def y(self) -> np.ndarray:
+        """The state (q, q̇) at each saved time, shape (m, 2n)."""
+        return np.hstack([self.q, self.qd])
+
+    def energy_drift(self, which: str = "energy") -> float:
+        """Largest relative deviation of `energy` (or `energy_function`) from its initial value."""
+        values = getattr(self, which)
+        scale = max(abs(values[0]), np.finfo(float).tiny)
+        return float(np.max(np.abs(values - values[0])) / scale)
+
+    def to_dict(self) -> dict:
+        """Arrays and scalars as a dict of numpy arrays (what `save_npz` writes)."""
+        return {
+            "t": self.t, "q": self.q, "qd": self.qd,
+            "energy": self.energy, "energy_function": self.energy_function,
+            "status": np.asarray(self.status), "message": np.asarray(self.message),
+            "t_failure": np.asarray(np.nan if self.t_failure is None else self.t_failure),
+            "nfev": np.asarray(self.nfev), "nsteps": np.asarray(self.nsteps),
+            "nrejected": np.asarray(self.nrejected), "method": np.asarray(self.method),
+            "coordinates": np.asarray(self.coordinates),
+            "param_names": np.asarray(list(self.params)),
+            "param_values": np.asarray(list(self.params.values()), dtype=float),
+        }
+
+    def save_npz(self, path: str | os.PathLike) -> None:
+        """Write `to_dict()` to a compressed .npz file."""
+        np.savez_compressed(path, **self.to_dict())
+
+    def __repr__(self) -> str:
+        return (
+            f"Solution(method={self.method!r}, status={self.status}, points={len(self.t)}, "
+            f"t=[{self.t[0]:g}, {self.t[-1]:g}], nsteps={self.nsteps}, nfev={self.nfev})"
+        )

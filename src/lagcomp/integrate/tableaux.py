@@ -1,0 +1,242 @@
+"""Butcher tableaux of the integrators, as validated, read-only data.
+
+The compiled drivers (``lagcomp/codegen/templates/drivers.py``) take the
+coefficient arrays as arguments; :func:`driver_arguments` returns them in the
+order each driver expects.
+
+Conventions (Hairer, Norsett & Wanner, *Solving ODEs I*, sec. II.1-II.6):
+
+* ``A`` is the (s, s) strictly lower-triangular stage matrix, ``B`` the (s,)
+  weights of the propagated solution and ``C`` the (s,) nodes (row sums of A).
+* Error weights (``E`` for DOPRI5, ``E3``/``E5`` for DOP853) have s + 1
+  entries: the last multiplies the FSAL stage ``f(t + h, y_new)``.  Each sums
+  to zero, since it is a difference of two consistent weight vectors.
+* ``P`` (s + 1, m): DOPRI5 dense output, ``y(t + x h) = y + h K^T P [x, x^2,
+  ..., x^m]`` with K including the FSAL row.
+* ``A_EXTRA`` (n_extra, s + 1 + n_extra), ``C_EXTRA`` (n_extra,): extra stages
+  for DOP853's dense output; ``D`` (m, s + 1 + n_extra) its coefficients.
+
+DOPRI5 and DOP853 coefficients are read from scipy's solver classes
+(``scipy.integrate.RK45`` / ``DOP853`` class attributes), so that the drivers
+reproduce scipy's step sequence.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+import scipy.integrate
+
+__all__ = ["Tableau", "RK4", "DOPRI5", "DOP853", "driver_arguments"]
+
+#: Absolute tolerance for the consistency checks.  The published rational
+#: coefficients are stored as rounded floats, so sums are exact only to a few
+#: ulps (observed: < 1e-15 for scipy's tableaux).
+_TOL = 1e-14
+
+_ARRAY_FIELDS = ("A", "B", "C", "E", "E3", "E5", "P", "D", "A_EXTRA", "C_EXTRA")
+
+
+def _frozen_array(value, name: str, ndim: int) -> np.ndarray:
+    """Return a read-only float64 copy of ``value``; check its dimension."""
+    arr = np.array(value, dtype=np.float64, copy=True)
+    if arr.ndim != ndim:
+        raise ValueError(f"{name} must be {ndim}-dimensional, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} contains non-finite values")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Tableau:
+    """An explicit Runge-Kutta method given by its coefficients.
+
+    ``order`` is the order of the propagated solution; ``error_order`` the
+    order ``q`` of the error estimator (the local error estimate behaves
+    like ``h^(q+1)``), which sets the step-control exponent ``-1/(q+1)``.
+    It is ``None`` for a method without error estimate (fixed step).
+
+    The arrays are copied to read-only float64 arrays and the invariants
+    listed in the module docstring are checked; a violation raises
+    ``ValueError``.
+    """
+
+    name: str
+    order: int
+    error_order: Optional[int]
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    E: Optional[np.ndarray] = None
+    E3: Optional[np.ndarray] = None
+    E5: Optional[np.ndarray] = None
+    P: Optional[np.ndarray] = None
+    D: Optional[np.ndarray] = None
+    A_EXTRA: Optional[np.ndarray] = None
+    C_EXTRA: Optional[np.ndarray] = None
+
+    def __post_init__(self) -> None:
+        ndims = {"A": 2, "B": 1, "C": 1, "E": 1, "E3": 1, "E5": 1,
+                 "P": 2, "D": 2, "A_EXTRA": 2, "C_EXTRA": 1}
+        for name in _ARRAY_FIELDS:
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, _frozen_array(value, name, ndims[name]))
+        self._check()
+
+    # -- invariants -------------------------------------------------------
+
+    @property
+    def n_stages(self) -> int:
+        """Number of stages s of the main method (without the FSAL stage)."""
+        return self.B.shape[0]
+
+    def _check(self) -> None:
+        if not isinstance(self.order, (int, np.integer)) or self.order < 1:
+            raise ValueError(f"{self.name}: order must be a positive integer")
+        A, B, C = self.A, self.B, self.C
+        s = B.shape[0]
+        if s < 1 or A.shape != (s, s) or C.shape != (s,):
+            raise ValueError(
+                f"{self.name}: inconsistent shapes A{A.shape}, B{B.shape}, C{C.shape}")
+        if np.any(np.triu(A) != 0.0):
+            raise ValueError(f"{self.name}: A must be strictly lower triangular (explicit method)")
+        if np.max(np.abs(A.sum(axis=1) - C)) > _TOL:
+            raise ValueError(f"{self.name}: row sums of A must equal C")
+        if abs(B.sum() - 1.0) > _TOL:
+            raise ValueError(f"{self.name}: sum(B) must be 1")
+
+        # Error estimators.
+        if (self.E3 is None) != (self.E5 is None):
+            raise ValueError(f"{self.name}: E3 and E5 must be given together")
+        estimators = [(k, getattr(self, k)) for k in ("E", "E3", "E5")
+                      if getattr(self, k) is not None]
+        for key, vec in estimators:
+            if vec.shape != (s + 1,):
+                raise ValueError(
+                    f"{self.name}: {key} must have n_stages + 1 = {s + 1} entries "
+                    f"(the last for the FSAL stage), got {vec.shape}")
+            if abs(vec.sum()) > _TOL:
+                raise ValueError(f"{self.name}: sum({key}) must be 0, got {vec.sum():.3e}")
+        if estimators:
+            if not isinstance(self.error_order, (int, np.integer)) or self.error_order < 1:
+                raise ValueError(f"{self.name}: error_order must be a positive integer")
+        elif self.error_order is not None:
+            raise ValueError(f"{self.name}: error_order given without error weights")
+
+        # DOPRI5-style dense output: continuity at x = 1 needs
+        # P.sum(axis=1) == [B, 0] (the interpolant reproduces y_new).
+        if self.P is not None:
+            P = self.P
+            if P.shape[0] != s + 1 or P.shape[1] < 1:
+                raise ValueError(f"{self.name}: P must have shape (n_stages + 1, m), got {P.shape}")
+            if np.max(np.abs(P.sum(axis=1) - np.append(B, 0.0))) > _TOL:
+                raise ValueError(f"{self.name}: rows of P must sum to [B, 0]")
+
+        # DOP853-style dense output with extra stages.
+        extra = (self.D, self.A_EXTRA, self.C_EXTRA)
+        if any(x is not None for x in extra):
+            if any(x is None for x in extra):
+                raise ValueError(f"{self.name}: D, A_EXTRA and C_EXTRA must be given together")
+            D, AX, CX = extra
+            n_extra = CX.shape[0]
+            n_all = s + 1 + n_extra
+            if AX.shape != (n_extra, n_all) or D.shape[1] != n_all:
+                raise ValueError(
+                    f"{self.name}: inconsistent dense-output shapes A_EXTRA{AX.shape}, "
+                    f"C_EXTRA{CX.shape}, D{D.shape} for {s} stages")
+            for k in range(n_extra):
+                if np.any(AX[k, s + 1 + k:] != 0.0):
+                    raise ValueError(f"{self.name}: A_EXTRA row {k} uses a stage not yet computed")
+            if np.max(np.abs(AX.sum(axis=1) - CX)) > _TOL:
+                raise ValueError(f"{self.name}: row sums of A_EXTRA must equal C_EXTRA")
+            # For f = const the interpolant is linear: D's rows sum to zero
+            # (relative to their size: the entries are of order 1e2-1e3).
+            if np.any(np.abs(D.sum(axis=1)) > _TOL * np.abs(D).sum(axis=1)):
+                raise ValueError(f"{self.name}: rows of D must sum to 0")
+
+
+def _square(A: np.ndarray) -> np.ndarray:
+    """Pad an (s, s-1) stage matrix, as scipy stores RK45's, to (s, s)."""
+    A = np.asarray(A, dtype=np.float64)
+    s = A.shape[0]
+    out = np.zeros((s, s))
+    out[:, : A.shape[1]] = A
+    return out
+
+
+#: Classic 4th-order Runge-Kutta method (Kutta 1901; HNW I, table II.1.2).
+RK4 = Tableau(
+    name="RK4",
+    order=4,
+    error_order=None,
+    A=[[0.0, 0.0, 0.0, 0.0],
+       [0.5, 0.0, 0.0, 0.0],
+       [0.0, 0.5, 0.0, 0.0],
+       [0.0, 0.0, 1.0, 0.0]],
+    B=[1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0],
+    C=[0.0, 0.5, 0.5, 1.0],
+)
+
+_RK45 = scipy.integrate.RK45
+#: Dormand & Prince (1980) 5(4) pair with quartic dense output.
+DOPRI5 = Tableau(
+    name="DOPRI5",
+    order=int(_RK45.order),
+    error_order=int(_RK45.error_estimator_order),
+    A=_square(_RK45.A),
+    B=_RK45.B,
+    C=_RK45.C,
+    E=_RK45.E,
+    P=_RK45.P,
+)
+
+_DOP853 = scipy.integrate.DOP853
+#: Hairer's DOP853: 8th order, 5th/3rd-order error estimates, 7th-order dense
+#: output from three extra stages.
+DOP853 = Tableau(
+    name="DOP853",
+    order=int(_DOP853.order),
+    error_order=int(_DOP853.error_estimator_order),
+    A=_DOP853.A,
+    B=_DOP853.B,
+    C=_DOP853.C,
+    E3=_DOP853.E3,
+    E5=_DOP853.E5,
+    D=_DOP853.D,
+    A_EXTRA=_DOP853.A_EXTRA,
+    C_EXTRA=_DOP853.C_EXTRA,
+)
+
+
+def driver_arguments(tableau: Tableau) -> tuple[np.ndarray, ...]:
+    """Trailing tableau arguments of the compiled driver for ``tableau``.
+
+    * DOP853-type (``D``/``A_EXTRA``/``C_EXTRA`` present), for ``dop853_run``:
+      ``(A, B, C, E3, E5, D, A_EXTRA, C_EXTRA)``;
+    * DOPRI5-type (``E`` and ``P``), for ``dopri5_run``: ``(A, B, C, E, P)``;
+    * fixed-step methods without error estimate (RK4): ``()``, since
+      ``rk4_run`` has its coefficients built in.
+
+    The arrays are writable C-contiguous float64 copies (numba compiles one
+    specialization per array layout, and read-only inputs would add more).
+    Raises ``ValueError`` for a tableau no driver can use.
+    """
+    def copies(*names: str) -> tuple[np.ndarray, ...]:
+        return tuple(np.ascontiguousarray(getattr(tableau, k), dtype=np.float64).copy()
+                     for k in names)
+
+    if tableau.D is not None:
+        if tableau.E3 is None:
+            raise ValueError(f"{tableau.name}: the DOP853 driver needs E3 and E5")
+        return copies("A", "B", "C", "E3", "E5", "D", "A_EXTRA", "C_EXTRA")
+    if tableau.E is not None:
+        if tableau.P is None:
+            raise ValueError(f"{tableau.name}: the DOPRI5 driver needs the dense-output matrix P")
+        return copies("A", "B", "C", "E", "P")
+    if tableau.E3 is None:
+        return ()
+    raise ValueError(f"{tableau.name}: no driver for this combination of coefficients")

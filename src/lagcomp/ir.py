@@ -1,0 +1,94 @@
+"""The intermediate representation between the symbolic model and emitted code.
+
+A `ModuleIR` is the full content of one generated module as data: which
+kernels it holds and, for each, straight-line assignments over local names.
+It has no sympy mechanics objects in it, only expressions over plain symbols
+named after the locals they print as, so the emitter is a pure printer.
+
+Kernel calling convention (all arrays float64, C-contiguous):
+
+- ``y`` is the state (q, q̇), shape (2n,); ``p`` the parameters in the
+  module's documented order; ``t`` the time.
+- kernels with ``out`` write their result into it and return nothing, except
+  ``rhs``, which returns an int status (0, or k > 0 when the mass matrix is
+  not positive definite at pivot k: the state is singular).
+- scalar kernels (energies) return a float.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+
+@dataclass(frozen=True)
+class LinearSolve:
+    """Solve M x = f for x after the stores, M symmetric positive definite.
+
+    ``m[i][j]`` (i ≥ j, lower triangle) and ``f[i]`` are the targets the stores
+    bind; x is written to ``out[offset + i]``.  Unrolled, the targets are
+    scalar locals and the factorization is straight-line code; otherwise they
+    are elements of work arrays ``mm`` (n, n) and ``ff`` (n,) handed to a loop.
+    """
+
+    n: int
+    m: tuple[tuple[str, ...], ...]
+    f: tuple[str, ...]
+    offset: int
+    unrolled: bool = True
+
+
+@dataclass(frozen=True)
+class Kernel:
+    """One numba function: load inputs, compute temporaries, store outputs.
+
+    Attributes
+    ----------
+    name : str
+        Function name in the module.
+    doc : str
+        Its docstring (what it computes, shapes, units).
+    args : tuple of str
+        Argument names, e.g. ``("t", "y", "p", "out")``.
+    loads : tuple of (local, source)
+        Inputs bound to locals, e.g. ``("theta1", "y[0]")``.
+    temps : tuple of (local, Expr)
+        Common subexpressions, in evaluation order.
+    stores : tuple of (target, Expr)
+        Output assignments; the target is an lvalue (``out[0]``, a local) or
+        ``return`` for scalar kernels.
+    solve : LinearSolve or None
+        Linear solve appended after the stores (the q̈ of ``rhs``).
+    """
+
+    name: str
+    doc: str
+    args: tuple[str, ...]
+    loads: tuple[tuple[str, str], ...]
+    temps: tuple[tuple[str, sp.Expr], ...]
+    stores: tuple[tuple[str, sp.Expr], ...]
+    solve: LinearSolve | None = None
+
+    @property
+    def operation_count(self) -> int:
+        """Arithmetic operations left after CSE (what numba's compile time grows with)."""
+        return int(sum(sp.count_ops(e) for _, e in self.temps + self.stores))
+
+
+@dataclass(frozen=True)
+class ModuleIR:
+    """Everything one generated module contains."""
+
+    system_name: str
+    description: str
+    coordinate_names: tuple[str, ...]
+    parameter_names: tuple[str, ...]
+    kernels: tuple[Kernel, ...]
+
+    @property
+    def n(self) -> int:
+        return len(self.coordinate_names)
+
+    def kernel(self, name: str) -> Kernel:
+        return next(k for k in self.kernels if k.name == name)

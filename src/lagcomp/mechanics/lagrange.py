@@ -1,0 +1,195 @@
+r"""Lagrange's equations of a `System`, derived symbolically (sympy only).
+
+The one normal form lagcomp produces
+------------------------------------
+With T(q, q̇, t) at most quadratic in q̇, Lagrange's equations
+
+    A_i = d/dt ∂T/∂q̇_i − ∂T/∂q_i = Q_i − ∂V/∂q_i − ∂D/∂q̇_i
+
+are linear in the accelerations and are written
+
+    M(q, t) q̈ = F(q, q̇, t)
+
+    M_ij = ∂²T / ∂q̇_i ∂q̇_j                                  (symmetric)
+    F_i  = Q_i − ∂V/∂q_i − ∂D/∂q̇_i + ∂T/∂q_i
+           − Σ_j (∂²T/∂q̇_i ∂q_j) q̇_j − ∂²T/∂q̇_i ∂t
+
+so F collects every term of the equation that does not multiply q̈: applied
+and conservative forces, dissipation, and the velocity- and time-dependent
+inertial terms (Coriolis, centrifugal, imposed-motion terms).
+
+Also derived: the conjugate momenta p_i = ∂L/∂q̇_i (L = T − V), the energy
+function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L, which is conserved when L
+does not depend on t explicitly and Q = 0, D = 0; the total mechanical energy
+E = T + V (equal to h when T is homogeneous quadratic in q̇); and the cyclic
+coordinates, those absent from L with no force acting along them, whose
+momenta are conserved.
+
+Expressions here use plain symbols: `EOM.q[i]` for q_i(t) and `EOM.qd[i]`
+for q̇_i(t), never functions of t, so that later stages see ordinary algebra.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import sympy as sp
+from sympy.simplify.fu import TR5, TR10i
+
+from lagcomp.errors import ModelError, SingularMassMatrixError
+from lagcomp.model.system import System, t
+
+
+@dataclass(frozen=True)
+class EOM:
+    """Equations of motion M(q, t) q̈ = F(q, q̇, t) and the derived quantities.
+
+    Attributes
+    ----------
+    system : System
+        The description these were derived from.
+    q, qd : tuple of Symbol
+        Plain symbols standing for q_i(t) and q̇_i(t).
+    parameters : tuple of Symbol
+        Parameters in kernel order.
+    M : Matrix, shape (n, n)
+        Mass matrix, symmetric, depends on q and t only.
+    F : Matrix, shape (n, 1)
+        Forcing: everything but M q̈ (sign convention in the module docstring).
+    T, V, L : Expr
+        Kinetic and potential energy and the Lagrangian, in plain symbols.
+    energy : Expr
+        Total mechanical energy T + V.
+    energy_function : Expr
+        Jacobi integral h = Σ q̇_i ∂L/∂q̇_i − L.
+    momenta : Matrix, shape (n, 1)
+        Conjugate momenta ∂L/∂q̇_i.
+    cyclic : tuple of str
+        Names of cyclic coordinates (∂L/∂q_i = 0 and Q_i = 0, ∂D/∂q̇_i = 0).
+    """
+
+    system: System
+    q: tuple
+    qd: tuple
+    parameters: tuple
+    M: sp.Matrix
+    F: sp.Matrix
+    T: sp.Expr
+    V: sp.Expr
+    L: sp.Expr
+    energy: sp.Expr
+    energy_function: sp.Expr
+    momenta: sp.Matrix
+    cyclic: tuple
+
+    @property
+    def n(self) -> int:
+        return len(self.q)
+
+
+def state_symbols(system: System) -> tuple[tuple, tuple]:
+    """Plain symbols for the coordinates (same names) and velocities (``<name>_dot``)."""
+    names = system.coordinate_names
+    taken = set(system.parameter_names)
+    q = tuple(sp.Dummy(n) if n in taken else sp.Symbol(n, real=True) for n in names)
+    qd = tuple(sp.Symbol(f"{n}_dot", real=True) for n in names)
+    clash = taken & {s.name for s in qd}
+    if clash:
+        raise ModelError(f"Parameter name(s) {sorted(clash)} clash with velocity names; rename the parameter(s).")
+    return q, qd
+
+
+def to_plain(expr: sp.Expr, system: System, q, qd) -> sp.Expr:
+    """Replace q_i(t) by q[i] and q_i'(t) by qd[i]; accelerations are an error."""
+    coords = system.coordinates
+    velocities = {c.diff(t): v for c, v in zip(coords, qd)}
+    expr = expr.xreplace(velocities)
+    leftover = [d for d in expr.atoms(sp.Derivative) if d.expr in coords]
+    if leftover:
+        raise ModelError(f"{leftover[0]} appears in the system; T, V and forces may depend on q, q̇ and t only.")
+    return expr.xreplace(dict(zip(coords, q)))
+
+
+def derive(system: System) -> EOM:
+    """Derive M, F, the energies, momenta and cyclic coordinates of `system`."""
+    q, qd = state_symbols(system)
+    plain = lambda expr: to_plain(expr, system, q, qd)  # noqa: E731
+    T, V, D = plain(system.T), plain(system.V), plain(system.dissipation)
+    Q = [plain(Qi) for Qi in system.forces]
+    if V.has(*qd):
+        raise ModelError("The potential V depends on velocities; put velocity-dependent forces in `forces`.")
+
+    dT_dqd = [T.diff(v) for v in qd]
+    M = sp.Matrix(system.n, system.n, lambda i, j: dT_dqd[i].diff(qd[j]))
+    if any(entry.has(*qd) for entry in M):
+        raise ModelError("The kinetic energy T is not quadratic in the velocities (its Hessian in q̇ depends on q̇).")
+    _check_mass_matrix(M, system, q, qd)
+
+    F = sp.Matrix(
+        [
+            Q[i] - V.diff(q[i]) - D.diff(qd[i]) + T.diff(q[i])
+            - sum(dT_dqd[i].diff(q[j]) * qd[j] for j in range(system.n))
+            - dT_dqd[i].diff(t)
+            for i in range(system.n)
+        ]
+    )
+    L = T - V
+    momenta = sp.Matrix([L.diff(v) for v in qd])
+    h = sum(v * p for v, p in zip(qd, momenta)) - L
+    cyclic = tuple(
+        name
+        for name, qi, vi, Qi in zip(system.coordinate_names, q, qd, Q)
+        if L.diff(qi) == 0 and Qi == 0 and D.diff(vi) == 0
+    )
+    return EOM(
+        system=system, q=q, qd=qd, parameters=system.parameters,
+        M=M.applyfunc(_tidy), F=F.applyfunc(_tidy), T=T, V=V, L=L,
+        energy=_tidy(T + V), energy_function=_tidy(h), momenta=momenta.applyfunc(_tidy), cyclic=cyclic,
+    )
+
+
+def _tidy(expr: sp.Expr) -> sp.Expr:
+    """Cheap simplification that pays off in operation count (e.g. sin²+cos² → 1).
+
+    Two of Fu's rules (far cheaper than a full `trigsimp`): chains of links
+    written in Cartesian form give l1 l2 (sin θ1 sin θ2 + cos θ1 cos θ2), which
+    becomes l1 l2 cos(θ1 − θ2), and m l² (sin² θ + cos² θ), which becomes m l².
+    The result is kept only when it has no more operations than the input.
+    """
+    tidied = sp.expand(TR5(sp.expand(expr)))  # sin² → 1 − cos², so sin² + cos² cancels
+    tidied = sp.factor_terms(TR10i(tidied))  # cos a cos b + sin a sin b → cos(a − b)
+    return tidied if sp.count_ops(tidied) <= sp.count_ops(expr) else expr
+
+
+def _check_mass_matrix(M: sp.Matrix, system: System, q, qd) -> None:
+    """Refuse a mass matrix that is singular for every state and parameter value.
+
+    Symbolically cheap checks first (a coordinate with no inertia at all),
+    then the determinant at a few random states and positive parameter values;
+    a state-dependent singularity is left to the kernel, which reports it with
+    the state where it happens.
+    """
+    names = system.coordinate_names
+    for i in range(system.n):
+        if all(M[i, j] == 0 for j in range(system.n)):
+            raise SingularMassMatrixError(
+                f"T does not depend on the velocity of coordinate `{names[i]}` (its mass-matrix row is zero): "
+                "the kinetic energy must be positive definite in the velocities."
+            )
+    args = (*q, t, *system.parameters)
+    evaluate = sp.lambdify(args, M, modules="numpy")
+    rng = np.random.default_rng(20261122)
+    for _ in range(3):
+        values = rng.uniform(0.3, 1.7, size=len(args))
+        with np.errstate(all="ignore"):
+            m = np.asarray(evaluate(*values), dtype=float)
+        if not np.all(np.isfinite(m)):
+            return  # cannot judge at this random point; the kernel checks at run time
+        scale = np.prod(np.maximum(np.abs(np.diag(m)), 1e-300))
+        if abs(np.linalg.det(m)) > 1e-10 * scale:
+            return
+    raise SingularMassMatrixError(
+        "The mass matrix ∂²T/∂q̇² is singular at every state tried: the kinetic energy is not positive definite "
+        f"in the velocities of {', '.join(names)}. Check T for a missing term or a redundant coordinate."
+    )

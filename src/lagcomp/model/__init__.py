@@ -1,0 +1,3 @@
+"""What the user writes: coordinates, energies, forces (see `system`)."""
+
+from lagcomp.model.system import System as System, coordinates as coordinates, t as t

@@ -1,0 +1,212 @@
+"""The user's description of a mechanical system.
+
+A `System` is what a physicist writes down: generalized coordinates q_i(t),
+the kinetic energy T(q, q̇, t), the potential V(q, t), generalized forces
+Q_i(q, q̇, t) that do not derive from V, and a Rayleigh dissipation function
+D(q, q̇, t) whose forces are −∂D/∂q̇_i.  Imposed motions are explicit
+expressions of `t` written straight into T, V or Q (a hoop turned at
+φ(t) = Ωt + ε sin 2t, a tray moved along a(t)).  Every other free symbol is a
+parameter, passed by name at run time.
+
+Validation happens here, when the System is built, and is cheap (free-symbol
+checks only); the symbolic derivation lives in `lagcomp.mechanics`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import sympy as sp
+from sympy.physics.mechanics import dynamicsymbols
+
+from lagcomp.errors import InitialConditionError, ModelError, ParameterError, UndeclaredSymbolError
+
+#: The time symbol shared with ``sympy.physics.mechanics.dynamicsymbols``.
+t = dynamicsymbols._t
+
+
+def coordinates(names: str) -> tuple[sp.Function, ...]:
+    """Generalized coordinates as functions of time, e.g. ``coordinates("x theta")``.
+
+    Always returns a tuple, even for one name.  The result is interchangeable
+    with ``sympy.physics.mechanics.dynamicsymbols``.
+    """
+    made = dynamicsymbols(names)
+    return tuple(made) if isinstance(made, (list, tuple)) else (made,)
+
+
+def _sympify(value, what: str) -> sp.Expr:
+    try:
+        return sp.sympify(value)
+    except (sp.SympifyError, TypeError) as err:
+        raise ModelError(f"`{what}` must be a sympy expression, got {value!r}.") from err
+
+
+def _is_coordinate(q) -> bool:
+    return isinstance(q, sp.core.function.AppliedUndef) and q.args == (t,)
+
+
+@dataclass(frozen=True)
+class System:
+    """A Lagrangian system: coordinates, energies, forces, and run defaults.
+
+    Parameters
+    ----------
+    coordinates : sequence of functions of t
+        The generalized coordinates q_i(t), from `coordinates` or
+        ``dynamicsymbols``.  Their order is the order of q in every kernel.
+    T : sympy expression
+        Kinetic energy T(q, q̇, t), at most quadratic in the velocities q̇ = q.diff(t).
+    V : sympy expression, optional
+        Potential energy V(q, t).
+    forces : sequence or mapping, optional
+        Generalized forces Q_i(q, q̇, t) not derived from V: one expression per
+        coordinate, or a mapping {coordinate: Q} (missing ones are zero).
+    dissipation : sympy expression, optional
+        Rayleigh dissipation function D(q, q̇, t); adds −∂D/∂q̇_i to Q_i.
+    parameters : sequence of symbols, optional
+        The parameters in the order kernels receive them.  Inferred from the
+        free symbols (sorted by name) when omitted; when given, any other free
+        symbol is an error.
+    name : str
+        A Python identifier naming the system (module names, CLI, cache).
+    description : str
+        One line for ``lagcomp list``.
+    defaults : mapping of str to float
+        Default parameter values by name; ``simulate`` fills missing values from it.
+    q0, qd0 : sequence of float, optional
+        Default initial coordinates and velocities.
+    t_end : float
+        Default length of a run started from the command line.
+    """
+
+    coordinates: tuple
+    T: sp.Expr
+    V: sp.Expr = sp.S.Zero
+    forces: tuple = ()
+    dissipation: sp.Expr = sp.S.Zero
+    parameters: tuple | None = None
+    name: str = "system"
+    description: str = ""
+    defaults: Mapping[str, float] = field(default_factory=dict)
+    q0: tuple | None = None
+    qd0: tuple | None = None
+    t_end: float = 10.0
+
+    def __post_init__(self):
+        coords = tuple(self.coordinates)
+        if not coords:
+            raise ModelError("A System needs at least one coordinate.")
+        for q in coords:
+            if not _is_coordinate(q):
+                raise ModelError(
+                    f"Coordinate {q!r} is not a function of t; create coordinates with "
+                    "lagcomp.coordinates('q1 q2') or sympy.physics.mechanics.dynamicsymbols."
+                )
+        if len(set(coords)) != len(coords):
+            raise ModelError(f"Coordinates are repeated: {coords}.")
+        if not self.name.isidentifier():
+            raise ModelError(f"System name {self.name!r} must be a Python identifier, like 'double_pendulum'.")
+        set_ = object.__setattr__
+        set_(self, "coordinates", coords)
+        set_(self, "T", _sympify(self.T, "T"))
+        set_(self, "V", _sympify(self.V, "V"))
+        set_(self, "dissipation", _sympify(self.dissipation, "dissipation"))
+        set_(self, "forces", self._normalized_forces(coords))
+        set_(self, "parameters", self._checked_parameters(coords))
+        set_(self, "defaults", self._checked_defaults())
+        set_(self, "q0", self._checked_initial(self.q0, "q0"))
+        set_(self, "qd0", self._checked_initial(self.qd0, "qd0"))
+
+    # -- validation ---------------------------------------------------------------
+
+    def _normalized_forces(self, coords) -> tuple:
+        forces = self.forces
+        if isinstance(forces, Mapping):
+            unknown = [k for k in forces if k not in coords]
+            if unknown:
+                raise ModelError(f"`forces` names {unknown}, which are not coordinates of {self.name!r}.")
+            return tuple(_sympify(forces.get(q, 0), f"forces[{q}]") for q in coords)
+        forces = tuple(forces) if isinstance(forces, Sequence) or forces else ()
+        if not forces:
+            return (sp.S.Zero,) * len(coords)
+        if len(forces) != len(coords):
+            raise ModelError(
+                f"`forces` has {len(forces)} entries but there are {len(coords)} coordinates; "
+                "give one generalized force per coordinate or a mapping {coordinate: force}."
+            )
+        return tuple(_sympify(Q, f"forces[{i}]") for i, Q in enumerate(forces))
+
+    def expressions(self) -> dict[str, sp.Expr]:
+        """Every user expression by role, for validation and display."""
+        exprs = {"T": self.T, "V": self.V, "dissipation": self.dissipation}
+        exprs.update({f"forces[{q.func.__name__}]": Q for q, Q in zip(self.coordinates, self.forces)})
+        return exprs
+
+    def _checked_parameters(self, coords) -> tuple:
+        found: set[sp.Symbol] = set()
+        for role, expr in self.expressions().items():
+            for f in expr.atoms(sp.core.function.AppliedUndef):
+                if f not in coords:
+                    raise UndeclaredSymbolError(
+                        f"{f} in {role} is not a coordinate of {self.name!r}: add it to the coordinates, "
+                        "or write an imposed motion as an explicit expression of t."
+                    )
+            found |= {s for s in expr.free_symbols if s != t}
+        if self.parameters is None:
+            return tuple(sorted(found, key=lambda s: s.name))
+        declared = tuple(self.parameters)
+        for s in declared:
+            if not isinstance(s, sp.Symbol):
+                raise ModelError(f"Parameter {s!r} must be a sympy Symbol.")
+        undeclared = sorted(found - set(declared), key=lambda s: s.name)
+        if undeclared:
+            raise UndeclaredSymbolError(
+                f"Symbol(s) {', '.join(s.name for s in undeclared)} appear in {self.name!r} but are neither "
+                "coordinates, parameters nor t: add them to `parameters` (or omit `parameters` to infer them)."
+            )
+        return declared
+
+    def _checked_defaults(self) -> dict:
+        names = {s.name for s in self.parameters}
+        unknown = sorted(set(self.defaults) - names)
+        if unknown:
+            raise ParameterError(f"Default values given for unknown parameter(s) {unknown}; parameters are {sorted(names)}.")
+        checked = {}
+        for k, v in self.defaults.items():
+            v = float(v)
+            if not math.isfinite(v):
+                raise ParameterError(f"Default value of parameter `{k}` is {v}; it must be finite.")
+            checked[k] = v
+        return checked
+
+    def _checked_initial(self, values, what: str):
+        if values is None:
+            return None
+        values = tuple(float(v) for v in values)
+        if len(values) != len(self.coordinates):
+            raise InitialConditionError(f"`{what}` has {len(values)} values for {len(self.coordinates)} coordinates.")
+        return values
+
+    # -- views --------------------------------------------------------------------
+
+    @property
+    def n(self) -> int:
+        """Number of generalized coordinates."""
+        return len(self.coordinates)
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        return tuple(q.func.__name__ for q in self.coordinates)
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.parameters)
+
+    def fingerprint(self) -> str:
+        """A canonical text of everything the derivation depends on (for cache keys)."""
+        parts = [self.name, repr(self.coordinate_names), repr(self.parameter_names)]
+        parts += [f"{role}={sp.srepr(expr)}" for role, expr in self.expressions().items()]
+        return "\n".join(parts)

@@ -1,0 +1,234 @@
+"""`compile` a System into a `Model`: derive, lower, emit, cache, load.
+
+This is the one module that sees both halves of the pipeline: on a cache miss
+it runs the symbolic stages (mechanics → ir → codegen) and stores the
+module; on a hit it loads the module straight from disk, with no sympy work
+and, thanks to numba's own cache beside it, no numba compilation.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+
+import numpy as np
+
+from lagcomp.cache import Cache, Entry, input_key, load_module
+from lagcomp.errors import CacheWarning, InitialConditionError, ParameterError, SingularMassMatrixError
+from lagcomp.model.system import System
+
+
+def compile(system: System, *, cache_dir: str | os.PathLike | None = None) -> "Model":  # noqa: A001
+    """Compile `system` into a `Model` of numba kernels, using the on-disk cache.
+
+    Parameters
+    ----------
+    system : System
+        What to compile.
+    cache_dir : path, optional
+        Cache root; defaults to $LAGCOMP_CACHE_DIR, else the user cache directory.
+
+    Returns
+    -------
+    Model
+        ``model.from_cache`` tells whether the derivation was skipped.
+    """
+    cache = Cache(cache_dir)
+    key = input_key(system.fingerprint(), options={})
+    entry = cache.lookup(key)
+    if entry is not None:
+        try:
+            return Model(system, load_module(entry), entry, from_cache=True)
+        except Exception as err:  # a damaged module that still hashed right, or a stale numba cache
+            warnings.warn(f"lagcomp could not load {entry.path.name} ({err}); rebuilding it.", CacheWarning, stacklevel=2)
+            cache.discard(entry)
+    entry = build(system, cache, key)
+    return Model(system, load_module(entry), entry, from_cache=False)
+
+
+def build(system: System, cache: Cache, key: str) -> Entry:
+    """Derive, lower and emit `system`, and store the module under `key`."""
+    from lagcomp.codegen.emit import emit
+    from lagcomp.codegen.lower import lower
+    from lagcomp.mechanics.lagrange import derive
+
+    eom = derive(system)
+    ir = lower(eom)
+    metadata = {
+        "coordinates": list(system.coordinate_names),
+        "parameters": list(system.parameter_names),
+        "cyclic": list(eom.cyclic),
+        "operations": {k.name: k.operation_count for k in ir.kernels},
+    }
+    return cache.store(key, emit(ir), system.name, metadata)
+
+
+class Model:
+    """A compiled system: its kernels, parameter order and defaults.
+
+    Attributes
+    ----------
+    system : System
+        The description it was compiled from.
+    kernels : module
+        The generated module (``rhs``, ``mass_matrix``, ``forcing``, ``energy``,
+        ``energy_function``, ``momenta`` and the drivers), numba functions
+        following the conventions of `lagcomp.ir`.
+    source_path : pathlib.Path
+        The generated module's file.
+    from_cache : bool
+        True when the module came from the cache without derivation.
+    coordinates, parameters : tuple of str
+        Coordinate names (order of q) and parameter names (order of p).
+    cyclic : tuple of str
+        Cyclic coordinates (their conjugate momenta are conserved).
+    operations : dict
+        Arithmetic operations per kernel after CSE.
+    """
+
+    def __init__(self, system: System, kernels, entry: Entry, from_cache: bool):
+        self.system = system
+        self.kernels = kernels
+        self.source_path = entry.path
+        self.from_cache = from_cache
+        self.coordinates = tuple(entry.metadata["coordinates"])
+        self.parameters = tuple(entry.metadata["parameters"])
+        self.cyclic = tuple(entry.metadata["cyclic"])
+        self.operations = dict(entry.metadata["operations"])
+
+    @property
+    def name(self) -> str:
+        return self.system.name
+
+    @property
+    def n(self) -> int:
+        return len(self.coordinates)
+
+    def __repr__(self) -> str:
+        origin = "cache" if self.from_cache else "fresh build"
+        return f"Model({self.name!r}, n={self.n}, parameters={self.parameters}, from {origin}: {self.source_path})"
+
+    # -- inputs -------------------------------------------------------------------
+
+    def parameter_vector(self, params: dict | None = None) -> np.ndarray:
+        """Parameter values by name (defaults filled in) as the kernel vector p."""
+        values = dict(self.system.defaults)
+        values.update(params or {})
+        unknown = sorted(set(values) - set(self.parameters))
+        if unknown:
+            raise ParameterError(f"Unknown parameter(s) {unknown} for {self.name!r}; its parameters are {list(self.parameters)}.")
+        missing = [k for k in self.parameters if k not in values]
+        if missing:
+            raise ParameterError(f"Missing value(s) for parameter(s) {missing} of {self.name!r}; pass them in `params`.")
+        p = np.empty(len(self.parameters))
+        for k, name in enumerate(self.parameters):
+            try:
+                p[k] = float(values[name])
+            except (TypeError, ValueError) as err:
+                raise ParameterError(f"Parameter `{name}` must be a number, got {values[name]!r}.") from err
+            if not math.isfinite(p[k]):
+                raise ParameterError(f"Parameter `{name}` is {p[k]}; it must be finite.")
+        return p
+
+    def initial_state(self, q0=None, qd0=None) -> np.ndarray:
+        """The state y = (q0, qd0), defaults from the System, checked for length and finiteness."""
+        parts = []
+        for what, given, default in (("q0", q0, self.system.q0), ("qd0", qd0, self.system.qd0)):
+            values = given if given is not None else default
+            if values is None:
+                values = [0.0] * self.n if what == "qd0" else None
+            if values is None:
+                raise InitialConditionError(f"`q0` is required: {self.name!r} has no default initial coordinates.")
+            values = np.atleast_1d(np.asarray(values, dtype=float))
+            if values.shape != (self.n,):
+                raise InitialConditionError(
+                    f"`{what}` has {values.size} value(s); {self.name!r} has {self.n} coordinates {list(self.coordinates)}."
+                )
+            if not np.all(np.isfinite(values)):
+                raise InitialConditionError(f"`{what}` = {values.tolist()} is not finite.")
+            parts.append(values)
+        return np.concatenate(parts)
+
+    # -- kernels from Python --------------------------------------------------------
+
+    def rhs(self, t: float, y, params: dict | None = None) -> np.ndarray:
+        """dy/dt at one state y = (q, q̇); raises SingularMassMatrixError where M is singular."""
+        y = np.ascontiguousarray(y, dtype=float)
+        out = np.empty(2 * self.n)
+        status = self.kernels.rhs(float(t), y, self.parameter_vector(params), out)
+        if status:
+            state = ", ".join(f"{c}={v:.6g}" for c, v in zip(self.coordinates, y[: self.n]))
+            raise SingularMassMatrixError(
+                f"The mass matrix of {self.name!r} is singular at t={t:g}, {state} (pivot {status}): "
+                "the kinetic energy is not positive definite in the velocities there."
+            )
+        return out
+
+    def _state(self, q, qd):
+        qd = np.zeros(self.n) if qd is None else qd
+        return np.concatenate([np.asarray(q, dtype=float).ravel(), np.asarray(qd, dtype=float).ravel()])
+
+    def mass_matrix(self, q, t: float = 0.0, params: dict | None = None) -> np.ndarray:
+        """M(q, t), shape (n, n)."""
+        out = np.empty((self.n, self.n))
+        self.kernels.mass_matrix(float(t), self._state(q, None), self.parameter_vector(params), out)
+        return out
+
+    def forcing(self, q, qd, t: float = 0.0, params: dict | None = None) -> np.ndarray:
+        """F(q, q̇, t) of M q̈ = F, shape (n,)."""
+        out = np.empty(self.n)
+        self.kernels.forcing(float(t), self._state(q, qd), self.parameter_vector(params), out)
+        return out
+
+    def momenta(self, q, qd, t: float = 0.0, params: dict | None = None) -> np.ndarray:
+        """Conjugate momenta ∂L/∂q̇, shape (n,)."""
+        out = np.empty(self.n)
+        self.kernels.momenta(float(t), self._state(q, qd), self.parameter_vector(params), out)
+        return out
+
+    def energy(self, q, qd, t: float = 0.0, params: dict | None = None) -> float:
+        """Total mechanical energy T + V."""
+        return float(self.kernels.energy(float(t), self._state(q, qd), self.parameter_vector(params)))
+
+    def energy_function(self, q, qd, t: float = 0.0, params: dict | None = None) -> float:
+        """Energy function (Jacobi integral) h."""
+        return float(self.kernels.energy_function(float(t), self._state(q, qd), self.parameter_vector(params)))
+
+    # -- runs -----------------------------------------------------------------------
+
+    def simulate(self, t_span, q0=None, qd0=None, params: dict | None = None, **options):
+        """Integrate from `t_span[0]` to `t_span[1]` and return a `Solution`.
+
+        Parameters
+        ----------
+        t_span : (float, float)
+            Start and end time, t0 < t1.
+        q0, qd0 : array_like, shape (n,), optional
+            Initial coordinates and velocities; default to the System's.
+        params : dict, optional
+            Parameter values by name; missing ones come from the System's defaults.
+
+        Other Parameters
+        ----------------
+        method : {"dop853", "dopri5", "rk4"}
+            Integration method (default "dop853").
+        dt : float
+            Step of fixed-step methods (required for "rk4").
+        rtol, atol : float
+            Tolerances of adaptive methods (defaults 1e-8, 1e-10).
+        t_eval : array_like, optional
+            Times at which to save, by dense output (adaptive methods only).
+        save_every : int
+            Save every k-th step (and the last); bounds memory on long runs.
+        first_step, max_step : float
+            Initial and largest step of adaptive methods.
+        max_steps : int
+            Accepted steps allowed before the run stops with a failed status.
+        throw : bool
+            Raise `IntegrationError` (with the partial solution) on failure
+            instead of returning a Solution whose `status` is negative.
+        """
+        from lagcomp.integrate.simulate import simulate
+
+        return simulate(self, t_span, q0, qd0, params, **options)

@@ -1,0 +1,124 @@
+"""The bundled examples against closed-form solutions, conservation laws and a second derivation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from reference import lagranges_method_functions
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from lagcomp import examples
+
+TIGHT = dict(method="dop853", rtol=1e-12, atol=1e-14)
+
+
+def test_sling_follows_cosh(compiled):
+    model = compiled("sling")
+    a, omega = 0.1, model.system.defaults["omega"]
+    ts = np.linspace(0, 2, 41)
+    sol = model.simulate((0, 2), q0=[a], qd0=[0.0], t_eval=ts, **TIGHT)
+    assert sol.success
+    np.testing.assert_allclose(sol.t, ts)
+    np.testing.assert_allclose(sol.q[:, 0], a * np.cosh(omega * ts), rtol=1e-9, atol=0)
+
+
+def test_rope_without_friction_follows_cosh(compiled):
+    model = compiled("rope")
+    L, g, x0 = model.system.defaults["L"], model.system.defaults["g"], 0.2
+    ts = np.linspace(0, 0.6, 31)
+    sol = model.simulate((0, 0.6), q0=[x0], qd0=[0.0], t_eval=ts, **TIGHT)
+    np.testing.assert_allclose(sol.q[:, 0], x0 * np.cosh(ts * np.sqrt(g / L)), rtol=1e-9, atol=0)
+
+
+def test_rope_with_friction_above_critical_length(compiled):
+    model = compiled("rope_friction")
+    d = model.system.defaults
+    L, g, f, x0 = d["L"], d["g"], d["f"], 0.4
+    l0 = f * L / (1 + f)
+    assert x0 > l0
+    ts = np.linspace(0, 0.55, 23)
+    sol = model.simulate((0, 0.55), q0=[x0], qd0=[0.0], t_eval=ts, **TIGHT)
+    expected = l0 + (x0 - l0) * np.cosh(ts * np.sqrt(g * (1 + f) / L))
+    np.testing.assert_allclose(sol.q[:, 0], expected, rtol=1e-9, atol=0)
+
+
+@pytest.mark.parametrize("amplitude", [0.1, 2.5])
+def test_huygens_period_is_independent_of_amplitude(compiled, amplitude):
+    model = compiled("huygens")
+    R, g = model.system.defaults["R"], model.system.defaults["g"]
+    period = 4 * np.pi * np.sqrt(R / g)
+
+    def theta_at(time):  # θ crosses zero a quarter period after release from rest
+        return model.simulate((0, time), q0=[amplitude], qd0=[0.0], **TIGHT).q[-1, 0]
+
+    quarter = brentq(theta_at, 0.2 * period, 0.3 * period, xtol=1e-14, rtol=1e-15)
+    assert 4 * quarter == pytest.approx(period, rel=1e-8)
+
+
+def test_cylinder_on_tray_follows_the_tray_acceleration(compiled):
+    model = compiled("tray_cylinder")
+    d = model.system.defaults
+    k = d["I"] / (d["I"] + d["M"] * d["R"] ** 2)
+    A, W = d["A"], d["Omega"]
+    ts = np.linspace(0, 10, 101)
+    sol = model.simulate((0, 10), q0=[0.3], qd0=[0.1], t_eval=ts, **TIGHT)
+    accel = np.array([model.rhs(t, y)[1] for t, y in zip(sol.t, sol.y)])
+    np.testing.assert_allclose(accel, k * (-A * W**2 * np.sin(W * ts)), rtol=1e-12, atol=1e-12)
+    # integrated twice: X = X0 + Ẋ0 t + k (a(t) − a(0) − ȧ(0) t)
+    expected = 0.3 + 0.1 * ts + k * (A * np.sin(W * ts) - A * W * ts)
+    np.testing.assert_allclose(sol.q[:, 0], expected, rtol=0, atol=1e-10)
+
+
+def _random_states(rng, n, count=20):
+    return rng.uniform(-np.pi, np.pi, (count, n)), rng.uniform(-3, 3, (count, n))
+
+
+@pytest.mark.parametrize("name, kwargs", [("double_pendulum", {}), ("n_link_pendulum", {"n": 5})])
+def test_mass_matrix_and_forcing_match_lagranges_method(compiled, rng, name, kwargs):
+    model = compiled(name, **kwargs)
+    ref_M, ref_F = lagranges_method_functions(model.system)
+    params = {k: v for k, v in zip(model.parameters, rng.uniform(0.5, 2.0, len(model.parameters)))}
+    pvec = model.parameter_vector(params)
+    for q, qd in zip(*_random_states(rng, model.n)):
+        np.testing.assert_allclose(model.mass_matrix(q, params=params), ref_M(q, qd, 0.0, pvec), rtol=1e-12, atol=1e-12)
+        expected_F = np.asarray(ref_F(q, qd, 0.0, pvec), dtype=float).ravel()
+        np.testing.assert_allclose(model.forcing(q, qd, params=params), expected_F, rtol=1e-12, atol=1e-11)
+
+
+def test_double_pendulum_conserves_energy_and_matches_scipy(compiled):
+    model = compiled("double_pendulum")
+    sol = model.simulate((0, 100), q0=[2.0, 1.0], qd0=[0.0, 0.0], method="dop853", rtol=1e-12, atol=1e-12)
+    assert sol.success
+    assert sol.energy_drift() < 1e-9
+
+    p = model.parameter_vector()
+    rhs = lambda t, y: model.rhs(t, y)  # noqa: E731
+    ts = np.linspace(0, 5, 51)
+    ours = model.simulate((0, 5), q0=[2.0, 1.0], qd0=[0.0, 0.0], t_eval=ts, method="dop853", rtol=1e-12, atol=1e-12)
+    theirs = solve_ivp(rhs, (0, 5), [2.0, 1.0, 0.0, 0.0], method="DOP853", t_eval=ts, rtol=1e-12, atol=1e-12)
+    assert p.size == 5 and theirs.success
+    np.testing.assert_allclose(ours.y, theirs.y.T, rtol=0, atol=1e-8)
+
+
+def test_rk4_converges_with_order_four(compiled):
+    model = compiled("sling")
+    a, omega = 0.1, model.system.defaults["omega"]
+    errors = []
+    for dt in (0.04, 0.02, 0.01):
+        sol = model.simulate((0, 2), q0=[a], qd0=[0.0], method="rk4", dt=dt)
+        assert sol.t[-1] == 2.0
+        errors.append(abs(sol.q[-1, 0] - a * np.cosh(omega * 2)))
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all((15.0 <= ratios) & (ratios <= 17.0)), ratios
+
+
+@pytest.mark.parametrize("name", sorted(examples.EXAMPLES))
+def test_every_example_runs_with_its_defaults(compiled, name):
+    model = compiled(name)
+    sol = model.simulate((0, model.system.t_end), method="dop853", rtol=1e-10, atol=1e-10)
+    assert sol.success, sol.message
+    assert np.all(np.isfinite(sol.y))
+    if name in {"simple_pendulum", "double_pendulum", "n_link_pendulum", "sling", "rope", "huygens", "unbalanced_cylinder"}:
+        # time-independent and conservative: the energy function is conserved
+        assert sol.energy_drift("energy_function") < 1e-7

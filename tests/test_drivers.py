@@ -1,0 +1,382 @@
+"""Tests of the compiled integration drivers (codegen/templates/drivers.py).
+
+The drivers are a source template appended to generated modules that define
+``rhs``.  The harness below does the same with a hand-written ``rhs``: it
+writes header + kernel + template to a temporary file and imports it (once per
+test module, since numba compilation dominates the run time).  Results are
+checked against closed-form solutions and against scipy's ``solve_ivp``,
+which implements the same algorithms.
+"""
+
+import importlib.util
+import sys
+import uuid
+
+import numpy as np
+import pytest
+import scipy.integrate
+from scipy.integrate import solve_ivp
+
+from lagcomp.integrate.tableaux import DOP853, DOPRI5, driver_arguments
+
+# -- harness ------------------------------------------------------------------
+
+HEADER = "import numpy as np\nfrom numba import njit\n\n"
+
+# Test problems, selected by p[0]:
+#   0  harmonic oscillator  y0' = y1, y1' = -y0                     (N = 2)
+#   1  Kepler problem       q'' = -q / |q|^3, y = (q, q')            (N = 4)
+#   2  oscillator whose derivative is NaN for t > p[1]
+#   3  oscillator whose rhs returns status 3 (singular) for t > p[1]
+RHS_SOURCE = '''
+@njit(cache=True)
+def rhs(t, y, p, out):
+    kind = int(p[0])
+    if kind == 1:
+        r2 = y[0] * y[0] + y[1] * y[1]
+        r3 = r2 * np.sqrt(r2)
+        out[0] = y[2]
+        out[1] = y[3]
+        out[2] = -y[0] / r3
+        out[3] = -y[1] / r3
+        return 0
+    out[0] = y[1]
+    out[1] = -y[0]
+    if kind == 2 and t > p[1]:
+        out[1] = np.nan
+    if kind == 3 and t > p[1]:
+        return 3
+    return 0
+
+'''
+
+
+def _template_text():
+    spec = importlib.util.find_spec("lagcomp")
+    package_dir = spec.submodule_search_locations[0]
+    with open(f"{package_dir}/codegen/templates/drivers.py", encoding="utf-8") as fh:
+        return fh.read()
+
+
+@pytest.fixture(scope="module")
+def mod(tmp_path_factory):
+    """The compiled harness module (header + rhs + driver template)."""
+    name = f"lagcomp_test_drivers_{uuid.uuid4().hex}"
+    path = tmp_path_factory.mktemp("drivers") / f"{name}.py"
+    path.write_text(HEADER + RHS_SOURCE + _template_text(), encoding="utf-8")
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # numba's cache locator needs the module registered
+    try:
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        sys.modules.pop(name, None)
+
+
+OSCILLATOR, KEPLER, NAN_AFTER, SINGULAR_AFTER = 0.0, 1.0, 2.0, 3.0
+ECC = 0.5
+Y0 = {
+    OSCILLATOR: np.array([1.0, 0.0]),
+    KEPLER: np.array([1.0 - ECC, 0.0, 0.0, np.sqrt((1.0 + ECC) / (1.0 - ECC))]),
+}
+T_END = {OSCILLATOR: 10.0, KEPLER: 20.0}
+
+
+def exact(kind, t):
+    """Closed-form solutions; Kepler via Newton on Kepler's equation."""
+    t = np.asarray(t, dtype=float)
+    if kind == OSCILLATOR:
+        return np.stack([np.cos(t), -np.sin(t)], axis=-1)
+    E = t.copy()
+    for _ in range(60):
+        E = E - (E - ECC * np.sin(E) - t) / (1.0 - ECC * np.cos(E))
+    b = np.sqrt(1.0 - ECC**2)
+    den = 1.0 - ECC * np.cos(E)
+    return np.stack([np.cos(E) - ECC, b * np.sin(E), -np.sin(E) / den, b * np.cos(E) / den], axis=-1)
+
+
+def f_numpy(kind):
+    """The same right-hand sides for scipy."""
+    if kind == OSCILLATOR:
+        return lambda t, y: np.array([y[1], -y[0]])
+
+    def kepler(t, y):
+        r3 = (y[0] ** 2 + y[1] ** 2) ** 1.5
+        return np.array([y[2], y[3], -y[0] / r3, -y[1] / r3])
+
+    return kepler
+
+
+METHODS = {"RK45": ("dopri5_run", DOPRI5), "DOP853": ("dop853_run", DOP853)}
+
+
+class Run:
+    """Outcome of one or more driver calls: concatenated output and final state."""
+
+    def __init__(self, status, ts, ys, y, clock, counters, calls):
+        self.status, self.ts, self.ys = status, ts, ys
+        self.y, self.clock, self.counters, self.calls = y, clock, counters, calls
+
+
+def _collect(call, y, clock, counters, cap, max_calls):
+    n = y.shape[0]
+    ts_all, ys_all = [], []
+    for calls in range(1, max_calls + 1):
+        ts = np.full(cap, np.nan)
+        ys = np.full((cap, n), np.nan)
+        status, n_saved = call(ts, ys)
+        assert 0 <= n_saved <= cap
+        ts_all.append(ts[:n_saved].copy())
+        ys_all.append(ys[:n_saved].copy())
+        if status != 1:
+            break
+    return Run(status, np.concatenate(ts_all), np.concatenate(ys_all), y, clock, counters, calls)
+
+
+def run_adaptive(mod, method, kind, tol, *, t_end=None, p_extra=(), t_eval=(),
+                 cap=100_000, save_every=1, max_steps=10**7, max_step=np.inf, max_calls=1):
+    fname, tableau = METHODS[method]
+    driver = getattr(mod, fname)
+    base = KEPLER if kind == KEPLER else OSCILLATOR
+    y = Y0[base].copy()
+    t_end = T_END[base] if t_end is None else t_end
+    clock = np.zeros(2)
+    counters = np.zeros(5, dtype=np.int64)
+    p = np.array([kind, *p_extra], dtype=float)
+    t_eval = np.asarray(t_eval, dtype=float)
+    args = driver_arguments(tableau)
+
+    def call(ts, ys):
+        return driver(y, clock, counters, p, t_end, tol, tol, max_step, max_steps,
+                      save_every, t_eval, ts, ys, *args)
+
+    return _collect(call, y, clock, counters, cap, max_calls)
+
+
+def run_rk4(mod, kind, dt, t_end, *, p_extra=(), save_every=1, cap=100_000, max_calls=1):
+    y = np.array(Y0[KEPLER if kind == KEPLER else OSCILLATOR], dtype=float)
+    n_steps = int(np.ceil(t_end / dt - 1e-9))
+    clock = np.zeros(2)
+    counters = np.zeros(5, dtype=np.int64)
+    p = np.array([kind, *p_extra], dtype=float)
+
+    def call(ts, ys):
+        return mod.rk4_run(y, clock, counters, p, 0.0, dt, n_steps, t_end, save_every, ts, ys)
+
+    return _collect(call, y, clock, counters, cap, max_calls)
+
+
+# -- accuracy against scipy and closed forms -----------------------------------
+
+CASES = [(m, k, tol) for m in METHODS for k in (OSCILLATOR, KEPLER) for tol in (1e-6, 1e-9)]
+CASE_IDS = [f"{m}-{'osc' if k == OSCILLATOR else 'kepler'}-{tol:g}" for m, k, tol in CASES]
+
+
+@pytest.mark.parametrize("method, kind, tol", CASES, ids=CASE_IDS)
+def test_steps_and_error_match_scipy(mod, method, kind, tol):
+    run = run_adaptive(mod, method, kind, tol)
+    t_end = T_END[kind]
+    ref = solve_ivp(f_numpy(kind), (0.0, t_end), Y0[kind], method=method, rtol=tol, atol=tol)
+
+    assert run.status == 0
+    assert run.clock[0] == t_end and run.ts[-1] == t_end
+    n_steps = run.counters[1]
+    assert len(run.ts) == n_steps  # save_every = 1: every step, initial point excluded
+    assert abs(n_steps - (len(ref.t) - 1)) <= 1
+    if n_steps == len(ref.t) - 1:
+        # Same rejections too: f(t0), the initial-step probe, s stages per trial.
+        assert run.counters[0] == ref.nfev
+    assert np.all(np.diff(run.ts) > 0)
+    np.testing.assert_array_equal(run.y, run.ys[-1])
+
+    err = np.abs(run.y - exact(kind, t_end)).max()
+    err_ref = np.abs(ref.y[:, -1] - exact(kind, t_end)).max()
+    assert err <= 1.5 * err_ref
+
+
+@pytest.mark.parametrize("method, kind, tol", CASES, ids=CASE_IDS)
+def test_dense_output_matches_scipy(mod, method, kind, tol):
+    t_end = T_END[kind]
+    t_eval = np.linspace(0.0, t_end, 241)[1:]
+    run = run_adaptive(mod, method, kind, tol, t_eval=t_eval)
+    ref = solve_ivp(f_numpy(kind), (0.0, t_end), Y0[kind], method=method,
+                    rtol=tol, atol=tol, t_eval=t_eval)
+
+    assert run.status == 0 and run.counters[3] == len(t_eval)
+    np.testing.assert_array_equal(run.ts, t_eval)
+    # Same algorithm: the interpolants agree far below the tolerance.
+    assert np.abs(run.ys - ref.y.T).max() <= 0.01 * tol
+    err = np.abs(run.ys - exact(kind, t_eval)).max()
+    err_ref = np.abs(ref.y.T - exact(kind, t_eval)).max()
+    assert err <= 1.5 * err_ref
+    # The last point is t_end itself: it is the final state, not interpolated.
+    np.testing.assert_array_equal(run.ys[-1], run.y)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_initial_step_matches_scipy(mod, method):
+    """With max_steps = 0 the driver only selects the first step (clock[1])."""
+    tol = 1e-7
+    run = run_adaptive(mod, method, KEPLER, tol, max_steps=0)
+    assert run.status == -4 and run.counters[1] == 0
+    assert run.counters[0] == 2  # f(t0, y0) and the probe Euler step
+    solver_class = getattr(scipy.integrate, method)
+    solver = solver_class(f_numpy(KEPLER), 0.0, Y0[KEPLER], T_END[KEPLER], rtol=tol, atol=tol)
+    assert run.clock[1] == pytest.approx(solver.h_abs, rel=1e-12)
+
+
+def test_max_step_is_respected(mod):
+    run = run_adaptive(mod, "RK45", OSCILLATOR, 1e-6, max_step=0.05)
+    assert run.status == 0
+    assert np.diff(np.concatenate([[0.0], run.ts])).max() <= 0.05 * (1 + 1e-12)
+
+
+# -- RK4 -----------------------------------------------------------------------
+
+def test_rk4_convergence_order(mod):
+    errors = []
+    for dt in (0.1, 0.05, 0.025):
+        run = run_rk4(mod, OSCILLATOR, dt, 2.0)
+        assert run.status == 0 and run.clock[0] == 2.0 and run.ts[-1] == 2.0
+        assert run.counters[0] == 4 * run.counters[1] == 4 * round(2.0 / dt)
+        errors.append(np.abs(run.y - exact(OSCILLATOR, 2.0)).max())
+    ratios = [errors[0] / errors[1], errors[1] / errors[2]]
+    assert all(15.0 <= r <= 17.0 for r in ratios), ratios
+
+
+def test_rk4_grid_times_and_last_step(mod):
+    """Times are t0 + k dt (no accumulated drift); the last step is clipped."""
+    run = run_rk4(mod, OSCILLATOR, 0.1, 1.05)
+    assert run.status == 0 and run.counters[1] == 11
+    np.testing.assert_array_equal(run.ts[:-1], 0.1 * np.arange(1, 11))
+    assert run.ts[-1] == 1.05
+
+
+# -- chunked output buffers ----------------------------------------------------
+
+def _assert_same_trajectory(chunked, whole):
+    assert chunked.status == whole.status == 0
+    np.testing.assert_array_equal(chunked.ts, whole.ts)
+    assert np.abs(chunked.ys - whole.ys).max() <= 1e-14
+    np.testing.assert_array_equal(chunked.y, whole.y)
+    np.testing.assert_array_equal(chunked.clock, whole.clock)
+
+
+CHUNK_CASES = [
+    # method, t_eval points, save_every, cap
+    ("RK45", 0, 1, 7),
+    ("RK45", 0, 3, 7),
+    ("RK45", 100, 1, 7),
+    ("DOP853", 0, 1, 7),
+    ("DOP853", 100, 1, 7),
+]
+
+
+@pytest.mark.parametrize("method, n_eval, save_every, cap", CHUNK_CASES)
+def test_adaptive_chunked_equals_single_call(mod, method, n_eval, save_every, cap):
+    t_eval = np.linspace(0.0, 20.0, n_eval + 1)[1:] if n_eval else ()
+    kw = dict(t_eval=t_eval, save_every=save_every)
+    whole = run_adaptive(mod, method, KEPLER, 1e-8, **kw)
+    chunked = run_adaptive(mod, method, KEPLER, 1e-8, cap=cap, max_calls=10_000, **kw)
+    _assert_same_trajectory(chunked, whole)
+    assert chunked.calls >= -(-len(whole.ts) // cap) > 5
+    # Identical steps; each extra call re-evaluates f at its starting state.
+    np.testing.assert_array_equal(chunked.counters[1:], whole.counters[1:])
+    assert chunked.counters[0] == whole.counters[0] + chunked.calls - 1
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_chunked_with_more_points_per_step_than_buffer(mod, method):
+    """A step holding more t_eval points than a whole buffer is redone."""
+    t_eval = np.linspace(0.0, 5.0, 1001)[1:]
+    whole = run_adaptive(mod, method, OSCILLATOR, 1e-6, t_eval=t_eval)
+    chunked = run_adaptive(mod, method, OSCILLATOR, 1e-6, t_eval=t_eval, cap=3, max_calls=10_000)
+    _assert_same_trajectory(chunked, whole)
+    assert chunked.counters[1] == whole.counters[1]
+
+
+def test_rk4_chunked_equals_single_call(mod):
+    for save_every in (1, 4):
+        whole = run_rk4(mod, KEPLER, 0.01, 7.0, save_every=save_every)
+        chunked = run_rk4(mod, KEPLER, 0.01, 7.0, save_every=save_every, cap=7, max_calls=10_000)
+        _assert_same_trajectory(chunked, whole)
+        np.testing.assert_array_equal(chunked.counters, whole.counters)  # no FSAL: no extra f
+
+
+# -- save_every decimation ---------------------------------------------------------
+
+def _expected_decimation(all_steps, k):
+    idx = list(range(k - 1, len(all_steps.ts), k))
+    if idx[-1] != len(all_steps.ts) - 1:
+        idx.append(len(all_steps.ts) - 1)
+    return idx
+
+
+@pytest.mark.parametrize("method", ["RK4", *METHODS])
+def test_save_every(mod, method):
+    if method == "RK4":
+        every = run_rk4(mod, OSCILLATOR, 0.1, 3.05)
+    else:
+        every = run_adaptive(mod, method, KEPLER, 1e-7)
+    # A k that does not divide the step count, so the final step is an extra row.
+    k = next(k for k in (4, 5, 7, 11) if len(every.ts) % k != 0)
+    if method == "RK4":
+        decimated = run_rk4(mod, OSCILLATOR, 0.1, 3.05, save_every=k)
+    else:
+        decimated = run_adaptive(mod, method, KEPLER, 1e-7, save_every=k)
+    idx = _expected_decimation(every, k)
+    np.testing.assert_array_equal(decimated.ts, every.ts[idx])
+    np.testing.assert_array_equal(decimated.ys, every.ys[idx])
+
+
+# -- failures ---------------------------------------------------------------------
+
+def test_rk4_nan_gives_status_minus_1(mod):
+    run = run_rk4(mod, NAN_AFTER, 0.1, 5.0, p_extra=(1.0,))
+    assert run.status == -1
+    assert 0.9 <= run.clock[0] <= 1.0 and run.counters[1] == 10
+    assert np.all(np.isfinite(run.y)) and np.all(np.isfinite(run.ys))
+    np.testing.assert_allclose(run.y, exact(OSCILLATOR, run.clock[0]), atol=1e-5)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_adaptive_nan_stops_just_before_blowup(mod, method):
+    run = run_adaptive(mod, method, NAN_AFTER, 1e-6, p_extra=(1.0,))
+    assert run.status in (-1, -3)
+    assert 1.0 - 1e-6 < run.clock[0] <= 1.0
+    assert np.all(np.isfinite(run.y)) and np.all(np.isfinite(run.ys))
+    assert np.all(run.ts <= 1.0) and run.ts[-1] == run.clock[0]
+    np.testing.assert_allclose(run.y, exact(OSCILLATOR, run.clock[0]), atol=1e-5)
+
+
+@pytest.mark.parametrize("method", ["RK4", *METHODS])
+def test_rhs_failure_gives_status_minus_2(mod, method):
+    if method == "RK4":
+        run = run_rk4(mod, SINGULAR_AFTER, 0.1, 5.0, p_extra=(0.5,))
+        assert run.counters[1] == 5
+    else:
+        run = run_adaptive(mod, method, SINGULAR_AFTER, 1e-6, p_extra=(0.5,))
+    assert run.status == -2
+    assert run.clock[0] <= 0.5
+    if len(run.ts):
+        assert run.ts[-1] == run.clock[0]
+        np.testing.assert_array_equal(run.ys[-1], run.y)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_max_steps_then_resume(mod, method):
+    limited = run_adaptive(mod, method, OSCILLATOR, 1e-6, max_steps=5)
+    assert limited.status == -4 and limited.counters[1] == 5 and len(limited.ts) == 5
+    assert limited.clock[0] == limited.ts[-1] < T_END[OSCILLATOR]
+
+    # The state in y/clock/counters lets a run continue after raising the limit.
+    fname, tableau = METHODS[method]
+    ts, ys = np.empty(10_000), np.empty((10_000, 2))
+    status, n = getattr(mod, fname)(
+        limited.y, limited.clock, limited.counters, np.array([OSCILLATOR]), T_END[OSCILLATOR],
+        1e-6, 1e-6, np.inf, 10**7, 1, np.empty(0), ts, ys, *driver_arguments(tableau))
+    whole = run_adaptive(mod, method, OSCILLATOR, 1e-6)
+    assert status == 0
+    np.testing.assert_array_equal(np.concatenate([limited.ts, ts[:n]]), whole.ts)
+    np.testing.assert_array_equal(limited.y, whole.y)
