@@ -41,6 +41,10 @@ from lagcomp.errors import ModelError, SingularMassMatrixError
 from lagcomp.model.system import System, t
 
 
+#: Expressions with more operations than this are not simplified (see `_tidy`).
+TIDY_MAX_OPS = 300
+
+
 @dataclass(frozen=True)
 class EOM:
     """Equations of motion M(q, t) q̈ = F(q, q̇, t) and the derived quantities.
@@ -156,7 +160,12 @@ def _tidy(expr: sp.Expr) -> sp.Expr:
     written in Cartesian form give l1 l2 (sin θ1 sin θ2 + cos θ1 cos θ2), which
     becomes l1 l2 cos(θ1 − θ2), and m l² (sin² θ + cos² θ), which becomes m l².
     The result is kept only when it has no more operations than the input.
+    Large expressions are left alone: the rules are quadratic in the number of
+    terms (a 10-link chain's forcing would take ~40 s) and CSE recovers much of
+    the sharing anyway.
     """
+    if sp.count_ops(expr) > TIDY_MAX_OPS:
+        return expr
     tidied = sp.expand(TR5(sp.expand(expr)))  # sin² → 1 − cos², so sin² + cos² cancels
     tidied = sp.factor_terms(TR10i(tidied))  # cos a cos b + sin a sin b → cos(a − b)
     return tidied if sp.count_ops(tidied) <= sp.count_ops(expr) else expr

@@ -1,0 +1,110 @@
+"""The disk cache: a second process does no derivation and no numba compilation; damage is rebuilt."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+import warnings
+
+import pytest
+
+import lagcomp as lc
+from lagcomp import examples
+
+PROBE = textwrap.dedent(
+    """
+    import json, sys
+    import lagcomp as lc
+    import lagcomp.mechanics.lagrange as lagrange
+    from lagcomp import examples
+
+    derivations = []
+    original = lagrange.derive
+    lagrange.derive = lambda system: derivations.append(system.name) or original(system)
+
+    model = lc.compile(examples.get("simple_pendulum"), cache_dir=sys.argv[1])
+    sol = model.simulate((0, 1), method="rk4", dt=0.01)
+    stats = {name: getattr(model.kernels, name).stats for name in ("rk4_run", "observables")}
+    print(json.dumps({
+        "from_cache": model.from_cache,
+        "derivations": len(derivations),
+        "misses": sum(sum(s.cache_misses.values()) for s in stats.values()),
+        "hits": sum(sum(s.cache_hits.values()) for s in stats.values()),
+        "final": sol.q[-1, 0],
+    }))
+    """
+)
+
+
+def _probe(cache_dir) -> dict:
+    env = {k: v for k, v in os.environ.items() if k != "LAGCOMP_CACHE_DIR"}
+    out = subprocess.run([sys.executable, "-c", PROBE, str(cache_dir)], capture_output=True, text=True, env=env, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_second_process_does_no_derivation_and_no_numba_compilation(tmp_path):
+    first = _probe(tmp_path)
+    assert first == {**first, "from_cache": False, "derivations": 1}
+    assert first["misses"] == 2  # rk4_run and observables compiled once, then saved
+    second = _probe(tmp_path)
+    assert second["from_cache"] is True and second["derivations"] == 0
+    assert second["misses"] == 0 and second["hits"] == 2
+    assert second["final"] == first["final"]
+
+
+def _module_files(cache_dir):
+    return sorted((cache_dir / "modules").glob("*.py"))
+
+
+def test_truncated_module_is_detected_and_rebuilt(tmp_path):
+    system = examples.get("sling")
+    lc.compile(system, cache_dir=tmp_path)
+    (path,) = _module_files(tmp_path)
+    text = path.read_text()
+    path.write_text(text[: len(text) // 2])
+    with pytest.warns(lc.CacheWarning, match="does not match its recorded sha256"):
+        model = lc.compile(system, cache_dir=tmp_path)
+    assert not model.from_cache
+    assert path.read_text() == text
+    assert model.simulate((0, 1), method="rk4", dt=0.1).success
+
+
+def test_corrupt_index_entry_is_rebuilt(tmp_path):
+    system = examples.get("sling")
+    lc.compile(system, cache_dir=tmp_path)
+    (index,) = (tmp_path / "index").glob("*.json")
+    index.write_text("{not json")
+    with pytest.warns(lc.CacheWarning, match="unusable"):
+        model = lc.compile(system, cache_dir=tmp_path)
+    assert not model.from_cache
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert lc.compile(system, cache_dir=tmp_path).from_cache
+
+
+def test_unchanged_module_is_never_rewritten(tmp_path):
+    # numba stamps its cache on the module's mtime: a rewrite would discard the machine code
+    system = examples.get("rope")
+    lc.compile(system, cache_dir=tmp_path)
+    (path,) = _module_files(tmp_path)
+    stamp = path.stat().st_mtime_ns
+    for index in (tmp_path / "index").glob("*.json"):
+        index.unlink()  # forces a fresh derivation, which emits the same source
+    model = lc.compile(system, cache_dir=tmp_path)
+    assert not model.from_cache
+    assert path.stat().st_mtime_ns == stamp
+
+
+def test_different_systems_get_different_modules(tmp_path):
+    lc.compile(examples.get("rope"), cache_dir=tmp_path)
+    lc.compile(examples.get("rope_friction"), cache_dir=tmp_path)
+    assert len(_module_files(tmp_path)) == 2
+
+
+def test_cache_location_from_environment(tmp_path, monkeypatch):
+    monkeypatch.setenv("LAGCOMP_CACHE_DIR", str(tmp_path / "env-cache"))
+    model = lc.compile(examples.get("sling"))
+    assert model.source_path.is_relative_to(tmp_path / "env-cache")

@@ -1,0 +1,70 @@
+"""The command line and the committed `generated/` modules."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lagcomp import examples
+from lagcomp.cli import main
+from lagcomp.codegen.bundled import bundled_sources
+
+GENERATED = Path(__file__).resolve().parents[1] / "generated"
+
+
+def test_generated_modules_are_current():
+    sources = bundled_sources()
+    stale = [name for name, text in sources.items()
+             if not (GENERATED / name).exists() or (GENERATED / name).read_text(encoding="utf-8") != text]
+    assert not stale, f"stale files in generated/: {stale}; regenerate with `lagcomp generate generated/`"
+    assert sorted(p.name for p in GENERATED.glob("*.py")) == sorted(sources)
+
+
+def test_list_names_every_example(capsys):
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    for name in examples.EXAMPLES:
+        assert name in out
+
+
+def test_run_prints_a_summary_and_saves(capsys, tmp_path, cache_dir):
+    out_file = tmp_path / "run.npz"
+    code = main(["--cache-dir", str(cache_dir), "run", "sling", "--t-end", "1.5", "--param", "omega=3",
+                 "--q0", "0.2", "--out", str(out_file)])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "status 0" in out and "steps" in out and "max relative drift" in out
+    data = np.load(out_file)
+    assert data["t"][-1] == 1.5
+    np.testing.assert_allclose(data["q"][-1, 0], 0.2 * np.cosh(3 * 1.5), rtol=1e-8)
+    assert list(data["param_names"]) == ["m", "omega"] and data["param_values"][1] == 3.0
+
+
+def test_run_rk4_with_decimation(capsys, cache_dir, tmp_path):
+    out_file = tmp_path / "rk4.npz"
+    main(["--cache-dir", str(cache_dir), "run", "simple_pendulum", "--method", "rk4", "--dt", "0.001",
+          "--t-end", "2", "--save-every", "100", "--out", str(out_file)])
+    data = np.load(out_file)
+    np.testing.assert_allclose(data["t"], np.linspace(0, 2, 21), atol=1e-12)
+
+
+def test_bad_input_is_a_message_not_a_traceback(capsys, cache_dir):
+    assert main(["--cache-dir", str(cache_dir), "run", "no_such_system"]) == 2
+    assert "no_such_system" in capsys.readouterr().err
+    assert main(["--cache-dir", str(cache_dir), "run", "sling", "--param", "omega=-"]) == 2
+    assert main(["--cache-dir", str(cache_dir), "run", "sling", "--param", "mass=2"]) == 2
+    assert "Unknown parameter" in capsys.readouterr().err
+
+
+def test_show_prints_equations_and_module_path(capsys, cache_dir):
+    assert main(["--cache-dir", str(cache_dir), "show", "hoop_bead"]) == 0
+    out = capsys.readouterr().out
+    assert "parameters  p  = (m, R, g, Omega, epsilon)" in out
+    assert "M =" in out and "F =" in out and "generated module:" in out
+
+
+def test_example_arguments(capsys, cache_dir):
+    assert main(["--cache-dir", str(cache_dir), "show", "n_link_pendulum", "--arg", "n=2"]) == 0
+    assert "theta2" in capsys.readouterr().out
