@@ -5,10 +5,13 @@ The drivers are a source template appended to generated modules that define
 writes header + kernel + template to a temporary file and imports it (once per
 test module, since numba compilation dominates the run time).  Results are
 checked against closed-form solutions and against scipy's ``solve_ivp``,
-which implements the same algorithms.
+which implements the same algorithms.  The harness kernel is compiled with
+``error_model="numpy"``, as the generated kernels are, so that a division by
+zero in it gives inf/NaN for the drivers to detect.
 """
 
 import importlib.util
+import re
 import sys
 import uuid
 
@@ -28,10 +31,20 @@ HEADER = "import numpy as np\nfrom numba import njit\n\n"
 #   1  Kepler problem       q'' = -q / |q|^3, y = (q, q')            (N = 4)
 #   2  oscillator whose derivative is NaN for t > p[1]
 #   3  oscillator whose rhs returns status 3 (singular) for t > p[1]
+#   4  y0' = 1 / (1 - t), y1' = 0: a division by zero at t = 1  (N = 2)
+#   5  at rest: y' = 0, so that every norm of f vanishes          (N = 2)
 RHS_SOURCE = '''
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rhs(t, y, p, out):
     kind = int(p[0])
+    if kind == 4:
+        out[0] = 1.0 / (1.0 - t)
+        out[1] = 0.0
+        return 0
+    if kind == 5:
+        out[0] = 0.0
+        out[1] = 0.0
+        return 0
     if kind == 1:
         r2 = y[0] * y[0] + y[1] * y[1]
         r3 = r2 * np.sqrt(r2)
@@ -47,6 +60,16 @@ def rhs(t, y, p, out):
     if kind == 3 and t > p[1]:
         return 3
     return 0
+
+
+@njit(cache=True, error_model="numpy")
+def project(t, y, p):
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def constraint_residual(t, y, p):
+    return 0.0
 
 '''
 
@@ -74,7 +97,7 @@ def mod(tmp_path_factory):
         sys.modules.pop(name, None)
 
 
-OSCILLATOR, KEPLER, NAN_AFTER, SINGULAR_AFTER = 0.0, 1.0, 2.0, 3.0
+OSCILLATOR, KEPLER, NAN_AFTER, SINGULAR_AFTER, BLOWUP, REST = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0
 ECC = 0.5
 Y0 = {
     OSCILLATOR: np.array([1.0, 0.0]),
@@ -134,21 +157,23 @@ def _collect(call, y, clock, counters, cap, max_calls):
     return Run(status, np.concatenate(ts_all), np.concatenate(ys_all), y, clock, counters, calls)
 
 
-def run_adaptive(mod, method, kind, tol, *, t_end=None, p_extra=(), t_eval=(),
-                 cap=100_000, save_every=1, max_steps=10**7, max_step=np.inf, max_calls=1):
+def run_adaptive(mod, method, kind, tol, *, atol=None, t_end=None, p_extra=(), t_eval=(),
+                 cap=100_000, save_every=1, max_steps=10**7, max_step=np.inf, max_calls=1,
+                 first_step=0.0):
     fname, tableau = METHODS[method]
     driver = getattr(mod, fname)
     base = KEPLER if kind == KEPLER else OSCILLATOR
     y = Y0[base].copy()
     t_end = T_END[base] if t_end is None else t_end
-    clock = np.zeros(2)
+    atol = tol if atol is None else atol
+    clock = np.array([0.0, first_step])
     counters = np.zeros(5, dtype=np.int64)
     p = np.array([kind, *p_extra], dtype=float)
     t_eval = np.asarray(t_eval, dtype=float)
     args = driver_arguments(tableau)
 
     def call(ts, ys):
-        return driver(y, clock, counters, p, t_end, tol, tol, max_step, max_steps,
+        return driver(y, clock, counters, p, 0, np.zeros(1), t_end, tol, atol, max_step, max_steps,
                       save_every, t_eval, ts, ys, *args)
 
     return _collect(call, y, clock, counters, cap, max_calls)
@@ -162,7 +187,7 @@ def run_rk4(mod, kind, dt, t_end, *, p_extra=(), save_every=1, cap=100_000, max_
     p = np.array([kind, *p_extra], dtype=float)
 
     def call(ts, ys):
-        return mod.rk4_run(y, clock, counters, p, 0.0, dt, n_steps, t_end, save_every, ts, ys)
+        return mod.rk4_run(y, clock, counters, p, 0, np.zeros(1), 0.0, dt, n_steps, t_end, save_every, ts, ys)
 
     return _collect(call, y, clock, counters, cap, max_calls)
 
@@ -374,9 +399,82 @@ def test_max_steps_then_resume(mod, method):
     fname, tableau = METHODS[method]
     ts, ys = np.empty(10_000), np.empty((10_000, 2))
     status, n = getattr(mod, fname)(
-        limited.y, limited.clock, limited.counters, np.array([OSCILLATOR]), T_END[OSCILLATOR],
+        limited.y, limited.clock, limited.counters, np.array([OSCILLATOR]), 0, np.zeros(1), T_END[OSCILLATOR],
         1e-6, 1e-6, np.inf, 10**7, 1, np.empty(0), ts, ys, *driver_arguments(tableau))
     whole = run_adaptive(mod, method, OSCILLATOR, 1e-6)
     assert status == 0
     np.testing.assert_array_equal(np.concatenate([limited.ts, ts[:n]]), whole.ts)
     np.testing.assert_array_equal(limited.y, whole.y)
+
+
+# -- division by zero and other non-finite trouble: a status, never an exception --
+
+def test_template_uses_the_numpy_error_model_everywhere():
+    """Under numba's default error model a division by zero raises
+    ZeroDivisionError out of the compiled loop; the drivers rely on inf/NaN."""
+    decorators = re.findall(r"^@njit\((.*)\)$", _template_text(), flags=re.M)
+    assert decorators and all('error_model="numpy"' in d for d in decorators)
+
+
+def blowup_exact(t):
+    return 1.0 - np.log(1.0 - t)
+
+
+@pytest.mark.parametrize("method", ["RK4", *METHODS])
+def test_division_by_zero_in_rhs_stops_the_run_before_the_singularity(mod, method):
+    """f = 1 / (1 - t) is inf at t = 1 (and finite but of the wrong sign past it)."""
+    if method == "RK4":
+        run = run_rk4(mod, BLOWUP, 0.25, 2.0)
+        # The step 0.75 -> 1 evaluates f(1) = inf in its last stage.
+        assert run.status == -1 and run.counters[1] == 3 and run.clock[0] == 0.75
+        assert run.counters[0] == 16
+        rel = 1e-3
+    else:
+        run = run_adaptive(mod, method, BLOWUP, 1e-8, t_end=2.0)
+        assert run.status in (-1, -3)
+        assert 1.0 - 1e-9 < run.clock[0] < 1.0
+        assert run.ts[-1] == run.clock[0]
+        rel = 1e-4
+    assert np.all(np.isfinite(run.y)) and np.all(np.isfinite(run.ys))
+    np.testing.assert_allclose(run.y, [blowup_exact(run.clock[0]), 0.0], rtol=rel)
+    np.testing.assert_allclose(run.ys[:, 0], blowup_exact(run.ts), rtol=rel)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_vanishing_norms_take_the_same_steps_as_scipy(mod, method):
+    """y' = 0: ||f0|| = ||f1 - f0|| = 0 in the initial step (h0 = 1e-6,
+    h1 = max(1e-6, 1e-3 h0)) and a zero error norm every step (growth by
+    MAX_FACTOR): the guarded divisions of scipy's step control."""
+    run = run_adaptive(mod, method, REST, 1e-6)
+    ref = solve_ivp(lambda t, y: np.zeros(2), (0.0, T_END[OSCILLATOR]), Y0[OSCILLATOR],
+                    method=method, rtol=1e-6, atol=1e-6)
+    assert run.status == 0 and ref.status == 0
+    np.testing.assert_allclose(run.ts, ref.t[1:], rtol=1e-12)
+    assert run.counters[0] == ref.nfev and run.counters[2] == 0
+    np.testing.assert_array_equal(run.y, Y0[OSCILLATOR])
+
+
+@pytest.mark.parametrize("kind", [OSCILLATOR, REST], ids=["crossing-zero", "identically-zero"])
+@pytest.mark.parametrize("method", METHODS)
+def test_zero_error_scale_is_a_status_not_an_exception(mod, method, kind):
+    """atol = 0 with a state component that is exactly 0 makes the error scale
+    atol + |y| rtol zero: 0/0 in the norms (scipy divides by it too and goes on
+    with NaN; numba's default error model would raise ZeroDivisionError).  The
+    run must end with a status: here the very first trial has a NaN error."""
+    run = run_adaptive(mod, method, kind, 1e-6, atol=0.0, t_end=1.0)
+    assert run.status in (-1, -3)
+    assert run.clock[0] == 0.0 and run.counters[1] == 0
+    np.testing.assert_array_equal(run.y, Y0[OSCILLATOR])
+
+
+@pytest.mark.parametrize("first_step", [np.nan, np.inf], ids=["nan", "inf"])
+@pytest.mark.parametrize("method", METHODS)
+def test_non_finite_step_size_ends_the_run(mod, method, first_step):
+    """A NaN step (or an infinite one with t_end = inf) never shrinks below
+    the minimum step; the step control must stop instead of looping forever."""
+    run = run_adaptive(mod, method, OSCILLATOR, 1e-6, first_step=first_step, t_end=np.inf)
+    assert run.status == -1 and run.counters[1] == 0 and run.clock[0] == 0.0
+    # With a finite t_end an infinite first step is simply clipped.
+    if first_step == np.inf:
+        run = run_adaptive(mod, method, OSCILLATOR, 1e-6, first_step=first_step)
+        assert run.status == 0 and run.clock[0] == T_END[OSCILLATOR]

@@ -21,5 +21,11 @@ from lagcomp.errors import (
     UndeclaredSymbolError as UndeclaredSymbolError,
 )
 from lagcomp.integrate.solution import Solution as Solution
-from lagcomp.model import System as System, coordinates as coordinates, t as t
+from lagcomp.model import (
+    Holonomic as Holonomic,
+    Nonholonomic as Nonholonomic,
+    System as System,
+    coordinates as coordinates,
+    t as t,
+)
 from lagcomp.runtime import Model as Model, compile as compile  # noqa: A004

@@ -15,8 +15,10 @@ Two keys, so that a second process does neither sympy nor numba work:
   never rewritten while it is intact: numba stamps its cache on the source
   file's mtime and size, so a rewrite would throw the machine code away.
 * the *input key* hashes the system's canonical description, the compile
-  options and the lagcomp, sympy, numba and Python versions.  An index entry
-  under it lets `compile` skip the derivation entirely.
+  options, the lagcomp, sympy, numba and Python versions and the source of
+  lagcomp's compiler itself (so a development change to the derivation or
+  the emitter never serves a module written by the old code).  An index
+  entry under it lets `compile` skip the derivation entirely.
 
 An entry whose file is missing, truncated or altered (sha256 mismatch) is a
 miss: it is reported with a `CacheWarning` and rebuilt, never trusted.
@@ -24,6 +26,7 @@ miss: it is reported with a `CacheWarning` and rebuilt, never trusted.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.util
 import json
@@ -59,8 +62,25 @@ def _sha256(text: str) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+#: The parts of lagcomp whose code decides what a module contains.
+_COMPILER_PARTS = ("model", "mechanics", "codegen", "ir.py")
+
+
+@functools.lru_cache(maxsize=1)
+def _compiler_digest() -> str:
+    package = Path(__file__).parent
+    digest = hashlib.sha256()
+    for part in _COMPILER_PARTS:
+        root = package / part
+        for path in sorted(root.rglob("*.py")) if root.is_dir() else [root]:
+            digest.update(path.relative_to(package).as_posix().encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
 def _versions() -> str:
-    return f"lagcomp={__version__};sympy={sympy.__version__};numba={numba.__version__};python={sys.version_info[:3]}"
+    return (f"lagcomp={__version__};compiler={_compiler_digest()};sympy={sympy.__version__};"
+            f"numba={numba.__version__};python={sys.version_info[:3]}")
 
 
 def input_key(fingerprint: str, options: dict) -> str:

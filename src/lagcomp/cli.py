@@ -66,6 +66,15 @@ def cmd_show(args) -> int:
     print(sp.pretty(eom.M, use_unicode=True))
     print("\nF =")
     print(sp.pretty(eom.F, use_unicode=True))
+    if eom.k:
+        kinds = ", ".join(f"{c} ({'holonomic' if h else 'nonholonomic'})" for c, h in zip(eom.constraint_names, eom.holonomic))
+        print(f"\nconstraints Λ(q, t) q̇ + b = 0, multipliers λ in this order: {kinds}")
+        print("M q̈ = F + Λᵀ λ,  Λ q̈ = γ\n\nΛ =")
+        print(sp.pretty(eom.C, use_unicode=True))
+        print("\nb =")
+        print(sp.pretty(eom.b, use_unicode=True))
+        print("\nγ =")
+        print(sp.pretty(eom.gamma, use_unicode=True))
     print("\nenergy T + V =", eom.energy)
     print("energy function h =", eom.energy_function)
     ops = {k.name: k.operation_count for k in lower(eom).kernels}
@@ -103,6 +112,10 @@ def cmd_run(args) -> int:
     print(f"energy      T+V: {sol.energy[0]:.12g} -> {sol.energy[-1]:.12g} (max relative drift {sol.energy_drift():.3g})")
     print(f"            h:   {sol.energy_function[0]:.12g} -> {sol.energy_function[-1]:.12g} "
           f"(max relative drift {sol.energy_drift('energy_function'):.3g})")
+    for name, values in sol.reactions.items():
+        print(f"reaction    {name}: {values[0]:.8g} -> {values[-1]:.8g} (range {values.min():.6g} .. {values.max():.6g})")
+    if sol.reactions:
+        print(f"            largest constraint residual {sol.constraint_residual:.3g}")
     final = ", ".join(f"{c}={v:.8g}" for c, v in zip(sol.coordinates, sol.q[-1]))
     print(f"final       {final}")
     if args.out:

@@ -40,6 +40,23 @@ class LinearSolve:
 
 
 @dataclass(frozen=True)
+class AugmentedSolve:
+    """Solve an N×N system by LU with partial pivoting (`_lu_solve`), for constrained systems.
+
+    The stores fill the work array ``_kkt`` of shape (N, N + 1), zeros
+    included by allocation: the matrix in its first N columns and the
+    right-hand side in the last.  Entries ``first .. first + count − 1`` of the
+    solution go to ``out[offset:]``.  Unlike `LinearSolve` it does not need
+    the leading block (the mass matrix) to be regular.
+    """
+
+    size: int
+    first: int
+    count: int
+    offset: int
+
+
+@dataclass(frozen=True)
 class Kernel:
     """One numba function: load inputs, compute temporaries, store outputs.
 
@@ -58,8 +75,8 @@ class Kernel:
     stores : tuple of (target, Expr)
         Output assignments; the target is an lvalue (``out[0]``, a local) or
         ``return`` for scalar kernels.
-    solve : LinearSolve or None
-        Linear solve appended after the stores (the q̈ of ``rhs``).
+    solve : LinearSolve, AugmentedSolve or None
+        Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``).
     """
 
     name: str
@@ -68,7 +85,7 @@ class Kernel:
     loads: tuple[tuple[str, str], ...]
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
-    solve: LinearSolve | None = None
+    solve: LinearSolve | AugmentedSolve | None = None
 
     @property
     def operation_count(self) -> int:
@@ -85,6 +102,12 @@ class ModuleIR:
     coordinate_names: tuple[str, ...]
     parameter_names: tuple[str, ...]
     kernels: tuple[Kernel, ...]
+    constraint_names: tuple[str, ...] = ()
+    holonomic: tuple[bool, ...] = ()
+
+    @property
+    def k(self) -> int:
+        return len(self.constraint_names)
 
     @property
     def n(self) -> int:

@@ -59,9 +59,23 @@ def build(system: System, cache: Cache, key: str) -> Entry:
         "coordinates": list(system.coordinate_names),
         "parameters": list(system.parameter_names),
         "cyclic": list(eom.cyclic),
+        "constraints": list(eom.constraint_names),
+        "holonomic": list(eom.holonomic),
         "operations": {k.name: k.operation_count for k in ir.kernels},
     }
     return cache.store(key, emit(ir), system.name, metadata)
+
+
+def _baumgarte_gains(baumgarte) -> tuple[float, float]:
+    from lagcomp.errors import OptionError
+
+    try:
+        alpha, beta = (float(v) for v in baumgarte)
+    except (TypeError, ValueError) as err:
+        raise OptionError(f"`baumgarte` must be a pair (alpha, beta) of numbers, got {baumgarte!r}.") from err
+    if not (alpha >= 0 and beta >= 0 and math.isfinite(alpha) and math.isfinite(beta)):
+        raise OptionError(f"`baumgarte` gains must be finite and non-negative, got ({alpha}, {beta}).")
+    return alpha, beta
 
 
 class Model:
@@ -83,6 +97,8 @@ class Model:
         Coordinate names (order of q) and parameter names (order of p).
     cyclic : tuple of str
         Cyclic coordinates (their conjugate momenta are conserved).
+    constraints : tuple of str
+        Constraint names, the order of the multipliers λ (reactions).
     operations : dict
         Arithmetic operations per kernel after CSE.
     """
@@ -95,6 +111,8 @@ class Model:
         self.coordinates = tuple(entry.metadata["coordinates"])
         self.parameters = tuple(entry.metadata["parameters"])
         self.cyclic = tuple(entry.metadata["cyclic"])
+        self.constraints = tuple(entry.metadata["constraints"])
+        self.holonomic = tuple(entry.metadata["holonomic"])
         self.operations = dict(entry.metadata["operations"])
 
     @property
@@ -105,14 +123,23 @@ class Model:
     def n(self) -> int:
         return len(self.coordinates)
 
+    @property
+    def k(self) -> int:
+        """Number of constraints."""
+        return len(self.constraints)
+
     def __repr__(self) -> str:
         origin = "cache" if self.from_cache else "fresh build"
         return f"Model({self.name!r}, n={self.n}, parameters={self.parameters}, from {origin}: {self.source_path})"
 
     # -- inputs -------------------------------------------------------------------
 
-    def parameter_vector(self, params: dict | None = None) -> np.ndarray:
-        """Parameter values by name (defaults filled in) as the kernel vector p."""
+    def parameter_vector(self, params: dict | None = None, baumgarte=(0.0, 0.0)) -> np.ndarray:
+        """Parameter values by name (defaults filled in) as the kernel vector p.
+
+        For constrained systems p ends with the Baumgarte gains (α, β), which
+        add −2α (Λ q̇ + b) − β² Φ to the acceleration-level constraints.
+        """
         values = dict(self.system.defaults)
         values.update(params or {})
         unknown = sorted(set(values) - set(self.parameters))
@@ -121,7 +148,9 @@ class Model:
         missing = [k for k in self.parameters if k not in values]
         if missing:
             raise ParameterError(f"Missing value(s) for parameter(s) {missing} of {self.name!r}; pass them in `params`.")
-        p = np.empty(len(self.parameters))
+        p = np.empty(len(self.parameters) + (2 if self.k else 0))
+        if self.k:
+            p[-2:] = _baumgarte_gains(baumgarte)
         for k, name in enumerate(self.parameters):
             try:
                 p[k] = float(values[name])
@@ -164,6 +193,25 @@ class Model:
                 "the kinetic energy is not positive definite in the velocities there."
             )
         return out
+
+    def reactions(self, t: float, y, params: dict | None = None) -> dict[str, float]:
+        """The multipliers λ at one state, by constraint name (generalized reaction forces)."""
+        y = np.ascontiguousarray(y, dtype=float)
+        out = np.empty(self.k)
+        status = self.kernels.reactions(float(t), y, self.parameter_vector(params), out)
+        if status:
+            raise SingularMassMatrixError(
+                f"The augmented matrix [M Λᵀ; Λ 0] of {self.name!r} is singular at t={t:g} (pivot {status})."
+            )
+        return dict(zip(self.constraints, out.tolist()))
+
+    def constraint_residuals(self, t: float, y, params: dict | None = None) -> dict[str, float]:
+        """Residuals at one state by name: ``"<name>"`` for Φ (holonomic) and ``"<name>_dot"`` for Λ q̇ + b."""
+        y = np.ascontiguousarray(y, dtype=float)
+        names = [c for c, h in zip(self.constraints, self.holonomic) if h] + [f"{c}_dot" for c in self.constraints]
+        out = np.empty(len(names))
+        self.kernels.constraint_residuals(float(t), y, self.parameter_vector(params), out)
+        return dict(zip(names, out.tolist()))
 
     def _state(self, q, qd):
         qd = np.zeros(self.n) if qd is None else qd
@@ -225,6 +273,18 @@ class Model:
             Initial and largest step of adaptive methods.
         max_steps : int
             Accepted steps allowed before the run stops with a failed status.
+        projection : bool, optional
+            Constrained systems: project the state onto the constraints after
+            every step (positions by Gauss-Newton on Φ = 0, then velocities on
+            Λ q̇ + b = 0). Default: on for fixed-step methods, off for adaptive
+            ones, whose error control keeps the drift at the tolerance.
+        baumgarte : (float, float)
+            Constrained systems: Baumgarte gains (α, β) ≥ 0, replacing Λ q̈ = γ
+            by Λ q̈ = γ − 2α (Λ q̇ + b) − β² Φ; (0, 0) by default.
+        project_initial : bool
+            Constrained systems: project inconsistent q0/qd0 onto the
+            constraints (reported in `Solution.projected_initial_state`)
+            instead of raising `InitialConditionError`.
         throw : bool
             Raise `IntegrationError` (with the partial solution) on failure
             instead of returning a Solution whose `status` is negative.

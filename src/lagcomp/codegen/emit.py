@@ -18,7 +18,7 @@ from importlib import resources
 
 from lagcomp import __version__
 from lagcomp.codegen.printer import to_code
-from lagcomp.ir import Kernel, LinearSolve, ModuleIR
+from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR
 
 INDENT = "    "
 
@@ -104,20 +104,65 @@ def _ldlt_solve(mm, ff, out, offset):
 '''
 
 
+_LU_SOLVE = f'''
+
+@njit(cache=True, error_model="numpy")
+def _lu_solve(a):
+    """Solve the N×N system stored as a = [A | r], shape (N, N + 1), in place.
+
+    Gaussian elimination with partial pivoting (LU of A applied to r); the
+    solution ends in a[:, N].  Returns 0, or j + 1 when pivot j is below
+    {PIVOT_TOLERANCE!r} × max|A| (A singular to working precision).
+    """
+    size = a.shape[0]
+    scale = 0.0
+    for i in range(size):
+        for j in range(size):
+            scale = max(scale, abs(a[i, j]))
+    for j in range(size):
+        pivot = j
+        for i in range(j + 1, size):
+            if abs(a[i, j]) > abs(a[pivot, j]):
+                pivot = i
+        if not abs(a[pivot, j]) > {PIVOT_TOLERANCE!r} * scale:
+            return j + 1
+        if pivot != j:
+            for c in range(j, size + 1):
+                a[j, c], a[pivot, c] = a[pivot, c], a[j, c]
+        for i in range(j + 1, size):
+            factor = a[i, j] / a[j, j]
+            for c in range(j + 1, size + 1):
+                a[i, c] -= factor * a[j, c]
+    for i in range(size - 1, -1, -1):
+        x = a[i, size]
+        for c in range(i + 1, size):
+            x -= a[i, c] * a[c, size]
+        a[i, size] = x / a[i, i]
+    return 0
+'''
+
+
 def _kernel_source(kernel: Kernel) -> str:
     body = f'"""{kernel.doc}"""'.splitlines()
     body += [f"{local} = {source}" for local, source in kernel.loads]
-    if kernel.solve is not None and not kernel.solve.unrolled:
-        n = kernel.solve.n
+    solve = kernel.solve
+    if isinstance(solve, AugmentedSolve):
+        body.append(f"_kkt = np.zeros(({solve.size}, {solve.size + 1}))")
+    elif solve is not None and not solve.unrolled:
+        n = solve.n
         body += [f"mm = np.empty(({n}, {n}))", f"ff = np.empty({n})"]
     body += [f"{name} = {to_code(expr)}" for name, expr in kernel.temps]
     for target, expr in kernel.stores:
         body.append(f"return {to_code(expr)}" if target == "return" else f"{target} = {to_code(expr)}")
-    if kernel.solve is not None:
-        if kernel.solve.unrolled:
-            body += _unrolled_ldlt(kernel.solve)
+    if isinstance(solve, AugmentedSolve):
+        body += ["_status = _lu_solve(_kkt)", "if _status:", f"{INDENT}return _status"]
+        body += [f"out[{solve.offset + i}] = _kkt[{solve.first + i}, {solve.size}]" for i in range(solve.count)]
+        body.append("return 0")
+    elif solve is not None:
+        if solve.unrolled:
+            body += _unrolled_ldlt(solve)
         else:
-            body.append(f"return _ldlt_solve(mm, ff, out, {kernel.solve.offset})")
+            body.append(f"return _ldlt_solve(mm, ff, out, {solve.offset})")
     lines = ["", "", '@njit(cache=True, error_model="numpy")', f"def {kernel.name}({', '.join(kernel.args)}):"]
     lines += [INDENT + line if line else "" for line in body]
     return "\n".join(lines) + "\n"
@@ -134,6 +179,121 @@ def observables(ts, ys, p, energy_out, energy_function_out):
 '''
 
 
+_UNCONSTRAINED_HOOKS = '''
+
+@njit(cache=True, error_model="numpy")
+def constraint_residual(t, y, p):
+    """Largest constraint residual: always 0.0, this system has no constraints."""
+    return 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def project(t, y, p):
+    """Projection onto the constraints: nothing to do, this system has none."""
+    return 0
+'''
+
+_CONSTRAINED_HOOKS = '''
+
+#: Rows of the constraint matrix that belong to holonomic constraints.
+HOLONOMIC_ROWS = np.array({rows}, dtype=np.int64)
+
+
+@njit(cache=True, error_model="numpy")
+def constraint_residual(t, y, p):
+    """Largest |Φ| over the holonomic constraints and |Λ q̇ + b| over all constraints."""
+    r = np.empty({kh} + {k})
+    constraint_residuals(t, y, p, r)
+    return np.max(np.abs(r))
+
+
+@njit(cache=True, error_model="numpy")
+def _gram_solve(a, rows, rhs_, mu):
+    """mu = (A Aᵀ)⁻¹ rhs_ for the chosen rows of A = a[:, :n] (Euclidean least change)."""
+    m = rows.shape[0]
+    n = a.shape[1] - 1
+    g = np.empty((m, m))
+    for i in range(m):
+        for j in range(i + 1):
+            s = 0.0
+            for c in range(n):
+                s += a[rows[i], c] * a[rows[j], c]
+            g[i, j] = s
+    return _ldlt_solve(g, rhs_, mu, 0)
+
+
+@njit(cache=True, error_model="numpy")
+def project(t, y, p):
+    """Move y onto the constraints at time t, in place, by the smallest Euclidean change.
+
+    Coordinates: Gauss-Newton on Φ(q, t) = 0, q ← q − Jᵀ (J Jᵀ)⁻¹ Φ with J the
+    holonomic rows of Λ, until the correction is at rounding level.
+    Velocities: q̇ ← q̇ − Λᵀ (Λ Λᵀ)⁻¹ (Λ q̇ + b) for all constraints.
+    Returns 0, or j > 0 when Λ Λᵀ is singular (redundant constraints).
+    """
+    n, k, kh = {n}, {k}, {kh}
+    a = np.empty((k, n + 1))
+    r = np.empty(kh + k)
+    rhs_ = np.empty(k)
+    mu = np.empty(k)
+    for _ in range({newton}):
+        if kh == 0:
+            break
+        constraint_residuals(t, y, p, r)
+        constraint_matrix(t, y, p, a)
+        rhs_[:kh] = r[:kh]
+        status = _gram_solve(a, HOLONOMIC_ROWS, rhs_[:kh], mu[:kh])
+        if status:
+            return status
+        step, size = 0.0, 0.0
+        for c in range(n):
+            d = 0.0
+            for i in range(kh):
+                d += a[HOLONOMIC_ROWS[i], c] * mu[i]
+            y[c] -= d
+            step = max(step, abs(d))
+            size = max(size, abs(y[c]))
+        if step <= 4e-16 * (1.0 + size):
+            break
+    constraint_matrix(t, y, p, a)
+    for i in range(k):
+        s = a[i, n]
+        for c in range(n):
+            s += a[i, c] * y[n + c]
+        rhs_[i] = s
+    status = _gram_solve(a, np.arange(k), rhs_, mu)
+    if status:
+        return status
+    for c in range(n):
+        d = 0.0
+        for i in range(k):
+            d += a[i, c] * mu[i]
+        y[n + c] -= d
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def reactions_along(ts, ys, p, lam_out, residual_out):
+    """Multipliers λ, shape (m, k), and largest residual, shape (m,), at each saved row.
+
+    Returns 0, or i + 1 when the augmented matrix is singular at row i.
+    """
+    for i in range(ts.shape[0]):
+        if reactions(ts[i], ys[i], p, lam_out[i]):
+            return i + 1
+        residual_out[i] = constraint_residual(ts[i], ys[i], p)
+    return 0
+'''
+
+
+def _constraint_hooks(ir: ModuleIR) -> str:
+    """`project` and `constraint_residual`, which the drivers call after every step."""
+    if not ir.k:
+        return _UNCONSTRAINED_HOOKS
+    rows = [c for c in range(ir.k) if ir.holonomic[c]]
+    return _CONSTRAINED_HOOKS.format(rows=rows, n=ir.n, k=ir.k, kh=len(rows), newton=8)
+
+
 def drivers_template() -> str:
     """The integration drivers appended to every module (see the template's docstring)."""
     return resources.files("lagcomp.codegen").joinpath("templates/drivers.py").read_text(encoding="utf-8")
@@ -143,8 +303,11 @@ def emit(ir: ModuleIR) -> str:
     """The complete source text of the module for `ir`."""
     parts = [_header(ir)]
     parts += [_kernel_source(k) for k in ir.kernels]
-    if any(k.solve is not None and not k.solve.unrolled for k in ir.kernels):
+    if ir.k or any(isinstance(k.solve, LinearSolve) and not k.solve.unrolled for k in ir.kernels):
         parts.append(_LOOP_LDLT)
+    if ir.k:
+        parts.append(_LU_SOLVE)
+    parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
     parts.append("\n\n# " + "-" * 76 + "\n# Integration drivers (lagcomp/codegen/templates/drivers.py)\n\n")
     parts.append(drivers_template())

@@ -15,7 +15,7 @@ import re
 
 import sympy as sp
 
-from lagcomp.ir import Kernel, LinearSolve, ModuleIR
+from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR
 from lagcomp.mechanics.lagrange import EOM
 from lagcomp.model.system import t
 
@@ -32,15 +32,21 @@ def _local_name(name: str) -> str:
     return name
 
 
+#: Baumgarte gains, stored after the user parameters in p for constrained systems.
+BAUMGARTE = (sp.Symbol("_baumgarte_alpha", real=True), sp.Symbol("_baumgarte_beta", real=True))
+
+
 def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
     """Map each model symbol to a local symbol, and list the loads that bind them."""
     n = eom.n
     sources = [(s, f"y[{i}]") for i, s in enumerate(eom.q)]
     sources += [(s, f"y[{n + i}]") for i, s in enumerate(eom.qd)]
     sources += [(s, f"p[{k}]") for k, s in enumerate(eom.parameters)]
+    if eom.k:
+        sources += [(s, f"p[{len(eom.parameters) + i}]") for i, s in enumerate(BAUMGARTE)]
     mapping, loads, used = {}, [], set()
     for symbol, source in sources:
-        local = _local_name(symbol.name)
+        local = symbol.name if symbol in BAUMGARTE else _local_name(symbol.name)
         while local in used:
             local += "_"
         used.add(local)
@@ -65,8 +71,76 @@ def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
     )
 
 
+def _velocity_residual(eom: EOM, c: int) -> sp.Expr:
+    """Λ_c · q̇ + b_c, which vanishes on the constraint."""
+    return sum((eom.C[c, j] * eom.qd[j] for j in range(eom.n)), eom.b[c])
+
+
+def _augmented_stores(eom: EOM) -> list:
+    """Stores filling ``_kkt`` = [[M, −Λᵀ, F], [Λ, 0, γ̃]], γ̃ with the Baumgarte terms.
+
+    Unknowns (q̈, λ): M q̈ − Λᵀ λ = F and Λ q̈ = γ − 2α (Λ q̇ + b) − β² Φ.
+    """
+    n, k, N = eom.n, eom.k, eom.n + eom.k
+    alpha, beta = BAUMGARTE
+    stores = [(f"_kkt[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(n) if eom.M[i, j] != 0]
+    stores += [(f"_kkt[{i}, {n + c}]", -eom.C[c, i]) for i in range(n) for c in range(k) if eom.C[c, i] != 0]
+    stores += [(f"_kkt[{i}, {N}]", eom.F[i]) for i in range(n)]
+    stores += [(f"_kkt[{n + c}, {j}]", eom.C[c, j]) for c in range(k) for j in range(n) if eom.C[c, j] != 0]
+    holonomic_rows = [c for c in range(k) if eom.holonomic[c]]
+    for c in range(k):
+        stabilized = eom.gamma[c] - 2 * alpha * _velocity_residual(eom, c)
+        if eom.holonomic[c]:
+            stabilized -= beta**2 * eom.Phi[holonomic_rows.index(c)]
+        stores.append((f"_kkt[{n + c}, {N}]", stabilized))
+    return stores
+
+
+def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
+    """rhs and reactions through the augmented system, and the constraint residuals and matrix."""
+    n, k = eom.n, eom.k
+    state_args = ("t", "y", "p")
+    velocities = [(f"out[{i}]", eom.qd[i]) for i in range(n)]
+    augmented = _augmented_stores(eom)
+    kh = len(eom.Phi)
+    return (
+        _kernel(
+            "rhs",
+            "State derivative dy/dt = (q̇, q̈), shape (2n,), from the augmented system\n"
+            "M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).\n\n"
+            "Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid.",
+            (*state_args, "out"), velocities + augmented, mapping, loads,
+            solve=AugmentedSolve(size=n + k, first=0, count=n, offset=n),
+        ),
+        _kernel(
+            "reactions",
+            f"Multipliers λ, shape ({k},), in constraint order {eom.constraint_names}: the generalized\n"
+            "force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular.",
+            (*state_args, "out"), augmented, mapping, loads,
+            solve=AugmentedSolve(size=n + k, first=n, count=k, offset=0),
+        ),
+        _kernel(
+            "constraint_residuals",
+            f"Residuals, shape ({kh + k},): Φ of the {kh} holonomic constraints, then Λ q̇ + b of all {k}.",
+            (*state_args, "out"),
+            [(f"out[{h}]", eom.Phi[h]) for h in range(kh)]
+            + [(f"out[{kh + c}]", _velocity_residual(eom, c)) for c in range(k)],
+            mapping, loads,
+        ),
+        _kernel(
+            "constraint_matrix",
+            f"Constraint matrix [Λ | b], shape ({k}, {n + 1}), into `out`.",
+            (*state_args, "out"),
+            [(f"out[{c}, {j}]", eom.C[c, j]) for c in range(k) for j in range(n)]
+            + [(f"out[{c}, {n}]", eom.b[c]) for c in range(k)],
+            mapping, loads,
+        ),
+    )
+
+
 def lower(eom: EOM) -> ModuleIR:
-    """Build the IR of the module for `eom`: rhs, mass_matrix, forcing, energies, momenta."""
+    """Build the IR of the module for `eom`: rhs, mass_matrix, forcing, energies, momenta,
+    and for constrained systems reactions, constraint residuals and matrix."""
     n = eom.n
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
@@ -76,7 +150,7 @@ def lower(eom: EOM) -> ModuleIR:
     rhs_stores = [(f"out[{i}]", eom.qd[i]) for i in range(n)]
     rhs_stores += [(m_names[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
     rhs_stores += [(f_names[i], eom.F[i]) for i in range(n)]
-    kernels = (
+    rhs = (
         _kernel(
             "rhs",
             "State derivative dy/dt = (q̇, q̈), shape (2n,), with M(q, t) q̈ = F(q, q̇, t).\n\n"
@@ -85,6 +159,8 @@ def lower(eom: EOM) -> ModuleIR:
             (*state_args, "out"), rhs_stores, mapping, loads,
             solve=LinearSolve(n=n, m=m_names, f=f_names, offset=n, unrolled=unrolled),
         ),
+    )
+    kernels = (_constraint_kernels(eom, mapping, loads) if eom.k else rhs) + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",
             (*state_args, "out"),
@@ -110,5 +186,5 @@ def lower(eom: EOM) -> ModuleIR:
     return ModuleIR(
         system_name=system.name, description=system.description,
         coordinate_names=system.coordinate_names, parameter_names=system.parameter_names,
-        kernels=kernels,
+        kernels=kernels, constraint_names=eom.constraint_names, holonomic=eom.holonomic,
     )

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError
+from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.methods import get_method
 from lagcomp.integrate.solution import MESSAGES, Solution
 from lagcomp.integrate.tableaux import driver_arguments
@@ -57,12 +58,15 @@ def _t_eval(t_eval, t0: float, t1: float) -> np.ndarray | None:
 
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=1e-8,
              atol=1e-10, t_eval=None, save_every=1, first_step=None, max_step=math.inf,
-             max_steps=100_000_000, throw=False) -> Solution:
+             max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
+             throw=False) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     t0, t1 = _time_span(t_span)
     m = get_method(method)
-    p = model.parameter_vector(params)
-    y0 = model.initial_state(q0, qd0)
+    p = model.parameter_vector(params, baumgarte)
+    y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
+    projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
+    residual_max = np.zeros(1)
     if not isinstance(save_every, (int, np.integer)) or save_every < 1:
         raise OptionError(f"`save_every` must be a positive integer, got {save_every!r}.")
     t_eval = _t_eval(t_eval, t0, t1)
@@ -82,8 +86,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
 
         def advance(ts, ys):
-            return driver(y, clock, counters, p, t1, rtol, atol, max_step, int(max_steps), int(save_every),
-                          events, ts, ys, *tableau_arrays)
+            return driver(y, clock, counters, p, projecting, residual_max, t1, rtol, atol, max_step,
+                          int(max_steps), int(save_every), events, ts, ys, *tableau_arrays)
         expected_rows = len(events) + 1 if t_eval is not None else FIRST_CHUNK
     else:
         if dt is None:
@@ -96,7 +100,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
             raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {max_steps}.")
 
         def advance(ts, ys):
-            return driver(y, clock, counters, p, t0, dt, n_steps, t1, int(save_every), ts, ys)
+            return driver(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps, t1, int(save_every), ts, ys)
         expected_rows = n_steps // save_every + 1
 
     save_initial = t_eval is None or t_eval[0] == t0
@@ -111,11 +115,14 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         if status != BUFFER_FULL:
             break
         chunk = min(2 * chunk, MAX_CHUNK)
-    return _solution(model, m.name, p, int(status), ts_parts, ys_parts, y, clock, counters, throw)
+    run = dict(method=m.name, status=int(status), clock=clock, counters=counters, projected=projected,
+               residual_max=float(residual_max[0]))
+    return _solution(model, p, ts_parts, ys_parts, y, run, throw)
 
 
-def _solution(model, method, p, status, ts_parts, ys_parts, y, clock, counters, throw) -> Solution:
+def _solution(model, p, ts_parts, ys_parts, y, run, throw) -> Solution:
     ts, ys = np.concatenate(ts_parts), np.concatenate(ys_parts)
+    status, clock, counters = run["status"], run["clock"], run["counters"]
     t_failure = None
     message = MESSAGES[status]
     if status < 0:
@@ -128,12 +135,16 @@ def _solution(model, method, p, status, ts_parts, ys_parts, y, clock, counters, 
         message = f"{message} Stopped at t = {t_failure:.10g}, last good state {state}, {rates}."
     energy, energy_function = np.empty(ts.size), np.empty(ts.size)
     model.kernels.observables(ts, ys, p, energy, energy_function)
+    reactions, residuals = reactions_along(model, ts, ys, p)
     n = model.n
     solution = Solution(
         t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), energy=energy, energy_function=energy_function,
         status=status, message=message, t_failure=t_failure,
         nfev=int(counters[0]), nsteps=int(counters[1]), nrejected=int(counters[2]),
-        method=method, coordinates=model.coordinates, params=dict(zip(model.parameters, p.tolist())),
+        method=run["method"], coordinates=model.coordinates,
+        params=dict(zip(model.parameters, p.tolist())),
+        reactions=reactions, constraint_residual=max(run["residual_max"], float(np.max(residuals, initial=0.0))),
+        projected_initial_state=ys[0].copy() if run["projected"] else None,
     )
     if throw and status < 0:
         raise IntegrationError(message, solution)

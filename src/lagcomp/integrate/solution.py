@@ -11,7 +11,8 @@ import numpy as np
 MESSAGES = {
     0: "The integration reached the end of the time span.",
     -1: "The state or its derivative became non-finite (NaN or inf).",
-    -2: "The mass matrix became singular (the kinetic energy is not positive definite at this state).",
+    -2: "The mass matrix became singular (the kinetic energy is not positive definite at this state), or with "
+        "constraints the augmented matrix [M Λᵀ; Λ 0] did (redundant constraints).",
     -3: "The step size became too small (the solution may be singular here).",
     -4: "The maximum number of steps was reached.",
 }
@@ -46,6 +47,15 @@ class Solution:
         Coordinate names, the column order of `q` and `qd`.
     params : dict
         Parameter values used, by name.
+    reactions : dict of str to ndarray, shape (m,)
+        Multiplier λ_k of each constraint along the run, by name: the
+        generalized force it exerts along its row Λ_k (empty without constraints).
+    constraint_residual : float
+        Largest constraint residual seen (|Φ| for holonomic constraints and
+        |Λ q̇ + b| for all), over every step taken; 0.0 without constraints.
+    projected_initial_state : ndarray, shape (2n,), or None
+        The state the run started from when ``project_initial=True`` moved the
+        given one onto the constraints.
     """
 
     t: np.ndarray
@@ -62,6 +72,9 @@ class Solution:
     method: str
     coordinates: tuple
     params: dict = field(default_factory=dict)
+    reactions: dict = field(default_factory=dict)
+    constraint_residual: float = 0.0
+    projected_initial_state: np.ndarray | None = None
 
     @property
     def success(self) -> bool:
@@ -90,6 +103,8 @@ class Solution:
             "coordinates": np.asarray(self.coordinates),
             "param_names": np.asarray(list(self.params)),
             "param_values": np.asarray(list(self.params.values()), dtype=float),
+            "constraint_residual": np.asarray(self.constraint_residual),
+            **{f"reaction_{name}": values for name, values in self.reactions.items()},
         }
 
     def save_npz(self, path: str | os.PathLike) -> None:

@@ -25,6 +25,17 @@ E = T + V (equal to h when T is homogeneous quadratic in q̇); and the cyclic
 coordinates, those absent from L with no force acting along them, whose
 momenta are conserved.
 
+Constraints
+-----------
+Constraint k is Λ_k(q, t)·q̇ + b_k(q, t) = 0; a holonomic Φ_k(q, t) = 0 gives
+Λ_k = ∂Φ_k/∂q and b_k = ∂Φ_k/∂t.  With multipliers λ the equations become
+
+    M q̈ = F + Λᵀ λ,        Λ q̈ = γ,    γ = −(dΛ/dt q̇ + db/dt)
+
+(the second is the constraint differentiated once more in time, its ∂/∂t
+terms included).  λ_k is the generalized force the constraint exerts along
+row Λ_k — the reaction — in the units set by how the constraint is written.
+
 Expressions here use plain symbols: `EOM.q[i]` for q_i(t) and `EOM.qd[i]`
 for q̇_i(t), never functions of t, so that later stages see ordinary algebra.
 """
@@ -38,6 +49,7 @@ import sympy as sp
 from sympy.simplify.fu import TR5, TR10i
 
 from lagcomp.errors import ModelError, SingularMassMatrixError
+from lagcomp.model.constraints import Holonomic
 from lagcomp.model.system import System, t
 
 
@@ -71,6 +83,18 @@ class EOM:
         Conjugate momenta ∂L/∂q̇_i.
     cyclic : tuple of str
         Names of cyclic coordinates (∂L/∂q_i = 0 and Q_i = 0, ∂D/∂q̇_i = 0).
+    constraint_names : tuple of str
+        Constraint names, the row order of Λ, b, γ and λ.
+    holonomic : tuple of bool
+        Which constraints are holonomic.
+    Phi : Matrix, shape (k_h, 1)
+        Position residuals Φ(q, t) of the holonomic constraints, in order.
+    C : Matrix, shape (k, n)
+        Constraint matrix Λ(q, t).
+    b : Matrix, shape (k, 1)
+        Velocity-constraint offsets b(q, t).
+    gamma : Matrix, shape (k, 1)
+        Right-hand side of the acceleration-level constraints Λ q̈ = γ.
     """
 
     system: System
@@ -86,10 +110,21 @@ class EOM:
     energy_function: sp.Expr
     momenta: sp.Matrix
     cyclic: tuple
+    constraint_names: tuple
+    holonomic: tuple
+    Phi: sp.Matrix
+    C: sp.Matrix
+    b: sp.Matrix
+    gamma: sp.Matrix
 
     @property
     def n(self) -> int:
         return len(self.q)
+
+    @property
+    def k(self) -> int:
+        """Number of constraints (multipliers)."""
+        return len(self.constraint_names)
 
 
 def state_symbols(system: System) -> tuple[tuple, tuple]:
@@ -128,7 +163,8 @@ def derive(system: System) -> EOM:
     M = sp.Matrix(system.n, system.n, lambda i, j: dT_dqd[i].diff(qd[j]))
     if any(entry.has(*qd) for entry in M):
         raise ModelError("The kinetic energy T is not quadratic in the velocities (its Hessian in q̇ depends on q̇).")
-    _check_mass_matrix(M, system, q, qd)
+    constraints = _constraints(system, q, qd, plain)
+    _check_mass_matrix(M, constraints["C"], system, q)
 
     F = sp.Matrix(
         [
@@ -150,6 +186,43 @@ def derive(system: System) -> EOM:
         system=system, q=q, qd=qd, parameters=system.parameters,
         M=M.applyfunc(_tidy), F=F.applyfunc(_tidy), T=T, V=V, L=L,
         energy=_tidy(T + V), energy_function=_tidy(h), momenta=momenta.applyfunc(_tidy), cyclic=cyclic,
+        **constraints,
+    )
+
+
+def _time_derivative(expr: sp.Expr, q, qd) -> sp.Expr:
+    """d/dt of f(q, t) along the motion: Σ ∂f/∂q_j q̇_j + ∂f/∂t."""
+    return sum((expr.diff(qj) * vj for qj, vj in zip(q, qd)), expr.diff(t))
+
+
+def _constraints(system: System, q, qd, plain) -> dict:
+    """Λ, b, γ and Φ of the system's constraints (see the module docstring)."""
+    rows, offsets, residuals, holonomic = [], [], [], []
+    for c in system.constraints:
+        expr = plain(c.expr)
+        if isinstance(c, Holonomic):
+            rows.append([expr.diff(qi) for qi in q])
+            offsets.append(expr.diff(t))
+            residuals.append(expr)
+        else:
+            row = [expr.diff(v) for v in qd]
+            if any(entry.has(*qd) for entry in row):
+                raise ModelError(f"Nonholonomic constraint `{c.name}` is not linear in the velocities.")
+            rows.append(row)
+            offsets.append(expr.xreplace({v: 0 for v in qd}))
+        holonomic.append(isinstance(c, Holonomic))
+    k, n = len(rows), len(q)
+    C = sp.Matrix(k, n, lambda i, j: rows[i][j])
+    b = sp.Matrix(k, 1, offsets)
+    gamma = sp.Matrix(
+        k, 1,
+        lambda i, _: -(sum((_time_derivative(C[i, j], q, qd) * qd[j] for j in range(n)), sp.S.Zero)
+                       + _time_derivative(b[i], q, qd)),
+    )
+    return dict(
+        constraint_names=system.constraint_names, holonomic=tuple(holonomic),
+        Phi=sp.Matrix(len(residuals), 1, residuals), C=C.applyfunc(_tidy), b=b.applyfunc(_tidy),
+        gamma=gamma.applyfunc(_tidy),
     )
 
 
@@ -171,16 +244,21 @@ def _tidy(expr: sp.Expr) -> sp.Expr:
     return tidied if sp.count_ops(tidied) <= sp.count_ops(expr) else expr
 
 
-def _check_mass_matrix(M: sp.Matrix, system: System, q, qd) -> None:
-    """Refuse a mass matrix that is singular for every state and parameter value.
+def _check_mass_matrix(M: sp.Matrix, C: sp.Matrix, system: System, q) -> None:
+    """Refuse equations that are singular for every state and parameter value.
 
-    Symbolically cheap checks first (a coordinate with no inertia at all),
-    then the determinant at a few random states and positive parameter values;
-    a state-dependent singularity is left to the kernel, which reports it with
+    Without constraints M itself must be regular.  With constraints only the
+    augmented matrix [M Λᵀ; Λ 0] must be: a massless hoop carrying a point
+    mass has a singular M and well-posed constrained equations.  Symbolically
+    cheap checks first (a coordinate with no inertia at all), then the
+    determinant at a few random states and positive parameter values; a
+    state-dependent singularity is left to the kernel, which reports it with
     the state where it happens.
     """
     names = system.coordinate_names
-    for i in range(system.n):
+    if C.rows:
+        M = sp.BlockMatrix([[M, C.T], [C, sp.zeros(C.rows, C.rows)]]).as_explicit()
+    for i in range(system.n if not C.rows else 0):
         if all(M[i, j] == 0 for j in range(system.n)):
             raise SingularMassMatrixError(
                 f"T does not depend on the velocity of coordinate `{names[i]}` (its mass-matrix row is zero): "
@@ -195,9 +273,15 @@ def _check_mass_matrix(M: sp.Matrix, system: System, q, qd) -> None:
             m = np.asarray(evaluate(*values), dtype=float)
         if not np.all(np.isfinite(m)):
             return  # cannot judge at this random point; the kernel checks at run time
-        scale = np.prod(np.maximum(np.abs(np.diag(m)), 1e-300))
+        scale = np.prod(np.maximum(np.linalg.norm(m, axis=1), 1e-300))
         if abs(np.linalg.det(m)) > 1e-10 * scale:
             return
+    if C.rows:
+        raise SingularMassMatrixError(
+            "The constrained equations are singular at every state tried: the augmented matrix [M Λᵀ; Λ 0] has "
+            f"no inverse. Either constraints {list(system.constraint_names)} are redundant, or the kinetic energy "
+            f"is not positive definite on the motions they allow ({', '.join(names)})."
+        )
     raise SingularMassMatrixError(
         "The mass matrix ∂²T/∂q̇² is singular at every state tried: the kinetic energy is not positive definite "
         f"in the velocities of {', '.join(names)}. Check T for a missing term or a redundant coordinate."

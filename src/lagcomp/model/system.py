@@ -22,6 +22,7 @@ import sympy as sp
 from sympy.physics.mechanics import dynamicsymbols
 
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError, UndeclaredSymbolError
+from lagcomp.model.constraints import Holonomic, Nonholonomic
 
 #: The time symbol shared with ``sympy.physics.mechanics.dynamicsymbols``.
 t = dynamicsymbols._t
@@ -66,6 +67,8 @@ class System:
         coordinate, or a mapping {coordinate: Q} (missing ones are zero).
     dissipation : sympy expression, optional
         Rayleigh dissipation function D(q, q̇, t); adds −∂D/∂q̇_i to Q_i.
+    constraints : sequence of Holonomic / Nonholonomic, optional
+        Named constraints, enforced with Lagrange multipliers (reactions).
     parameters : sequence of symbols, optional
         The parameters in the order kernels receive them.  Inferred from the
         free symbols (sorted by name) when omitted; when given, any other free
@@ -87,6 +90,7 @@ class System:
     V: sp.Expr = sp.S.Zero
     forces: tuple = ()
     dissipation: sp.Expr = sp.S.Zero
+    constraints: tuple = ()
     parameters: tuple | None = None
     name: str = "system"
     description: str = ""
@@ -115,6 +119,7 @@ class System:
         set_(self, "V", _sympify(self.V, "V"))
         set_(self, "dissipation", _sympify(self.dissipation, "dissipation"))
         set_(self, "forces", self._normalized_forces(coords))
+        set_(self, "constraints", self._checked_constraints())
         set_(self, "parameters", self._checked_parameters(coords))
         set_(self, "defaults", self._checked_defaults())
         set_(self, "q0", self._checked_initial(self.q0, "q0"))
@@ -139,11 +144,33 @@ class System:
             )
         return tuple(_sympify(Q, f"forces[{i}]") for i, Q in enumerate(forces))
 
+    def _checked_constraints(self) -> tuple:
+        constraints = tuple(self.constraints)
+        for c in constraints:
+            if not isinstance(c, (Holonomic, Nonholonomic)):
+                raise ModelError(f"Constraint {c!r} must be a lagcomp Holonomic or Nonholonomic constraint.")
+        names = [c.name for c in constraints]
+        repeated = sorted({n for n in names if names.count(n) > 1})
+        if repeated:
+            raise ModelError(f"Constraint names must be unique; repeated: {repeated}.")
+        velocities = [q.diff(t) for q in self.coordinates]
+        for c in constraints:
+            if isinstance(c, Holonomic) and c.Phi.has(*velocities):
+                raise ModelError(
+                    f"Holonomic constraint `{c.name}` contains velocities; declare it as Nonholonomic(name, expr) instead."
+                )
+        return constraints
+
     def expressions(self) -> dict[str, sp.Expr]:
         """Every user expression by role, for validation and display."""
         exprs = {"T": self.T, "V": self.V, "dissipation": self.dissipation}
         exprs.update({f"forces[{q.func.__name__}]": Q for q, Q in zip(self.coordinates, self.forces)})
+        exprs.update({f"constraint {c.name}": c.expr for c in self.constraints})
         return exprs
+
+    @property
+    def constraint_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.constraints)
 
     def _checked_parameters(self, coords) -> tuple:
         found: set[sp.Symbol] = set()
@@ -209,4 +236,5 @@ class System:
         """A canonical text of everything the derivation depends on (for cache keys)."""
         parts = [self.name, repr(self.coordinate_names), repr(self.parameter_names)]
         parts += [f"{role}={sp.srepr(expr)}" for role, expr in self.expressions().items()]
+        parts += [f"{type(c).__name__} {c.name}" for c in self.constraints]
         return "\n".join(parts)

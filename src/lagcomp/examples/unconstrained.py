@@ -1,22 +1,4 @@
-"""Bundled example systems, ready to compile and run.
-
-Each factory returns a `lagcomp.model.System` with parameter defaults,
-initial conditions and a run length.  Look them up by name with `get` or
-through the `EXAMPLES` registry:
-
-=========================  ========================================================
-``simple_pendulum``        point mass on a massless rod
-``double_pendulum``        two point masses on two massless rods
-``n_link_pendulum``        planar chain of n point masses (name ``n_link_pendulum_<n>``)
-``sling``                  bead on a rod turning at a constant rate in a horizontal plane
-``rope``                   rope slipping off a frictionless table edge
-``rope_friction``          the same rope with Coulomb friction on the table
-``hoop_bead``              bead on a hoop turned about its vertical diameter by φ(t)
-``huygens``                Huygens' isochronous cycloidal pendulum
-``tray_cylinder``          cylinder rolling without slipping on a tray moved along a(t)
-``unbalanced_cylinder``    rolling cylinder whose centre of mass is off its axis
-``driven_pendulum``        pendulum on a vertically vibrated support (Kapitza)
-=========================  ========================================================
+"""Bundled examples without constraints (or with the constraints eliminated by hand).
 
 Conventions: SI units, gravity g along −z (or −y in planar examples), angles in
 radians, dots are time derivatives.  Imposed motions are explicit functions of
@@ -26,15 +8,12 @@ equation of motion it yields and any closed-form solution.
 
 from __future__ import annotations
 
-import re
-from collections.abc import Callable
-
 import sympy as sp
 
 from lagcomp.errors import ModelError
 from lagcomp.model import System, coordinates, t
 
-__all__ = ["EXAMPLES", "get"] + [
+__all__ = [
     "simple_pendulum", "double_pendulum", "n_link_pendulum", "sling", "rope", "rope_friction",
     "hoop_bead", "huygens", "tray_cylinder", "unbalanced_cylinder", "driven_pendulum",
 ]
@@ -346,28 +325,3 @@ def driven_pendulum() -> System:
         defaults={"m": 1.0, "l": 1.0, "g": 9.81, "A": 0.05, "Omega": 200.0},
         q0=(2.9,), qd0=(0.0,), t_end=10.0,
     )
-
-
-#: Every bundled example by name; each factory takes only optional keyword arguments.
-EXAMPLES: dict[str, Callable[..., System]] = {
-    f.__name__: f
-    for f in (
-        simple_pendulum, double_pendulum, n_link_pendulum, sling, rope, rope_friction,
-        hoop_bead, huygens, tray_cylinder, unbalanced_cylinder, driven_pendulum,
-    )
-}
-
-
-def get(name: str, **kwargs) -> System:
-    """The example `name` built with `kwargs`, e.g. ``get("n_link_pendulum", n=5)``.
-
-    The names n_link_pendulum Systems carry (``n_link_pendulum_5``) are accepted too.
-    """
-    match = re.fullmatch(r"n_link_pendulum_(\d+)", name) if isinstance(name, str) else None
-    if match and "n" not in kwargs:  # the name an n_link_pendulum System carries
-        return n_link_pendulum(n=int(match.group(1)), **kwargs)
-    try:
-        factory = EXAMPLES[name]
-    except (KeyError, TypeError):
-        raise ModelError(f"Unknown example {name!r}; known examples: {', '.join(sorted(EXAMPLES))}.") from None
-    return factory(**kwargs)

@@ -1,0 +1,79 @@
+"""Bundled example systems, ready to compile and run.
+
+Each factory returns a `lagcomp.model.System` with parameter defaults,
+initial conditions and a run length.  Look them up by name with `get` or
+through the `EXAMPLES` registry:
+
+=========================  ========================================================
+``simple_pendulum``        point mass on a massless rod
+``double_pendulum``        two point masses on two massless rods
+``n_link_pendulum``        planar chain of n point masses (name ``n_link_pendulum_<n>``)
+``sling``                  bead on a rod turning at a constant rate in a horizontal plane
+``rope``                   rope slipping off a frictionless table edge
+``rope_friction``          the same rope with Coulomb friction on the table
+``hoop_bead``              bead on a hoop turned about its vertical diameter by φ(t)
+``huygens``                Huygens' isochronous cycloidal pendulum
+``tray_cylinder``          cylinder rolling without slipping on a tray moved along a(t)
+``unbalanced_cylinder``    rolling cylinder whose centre of mass is off its axis
+``driven_pendulum``        pendulum on a vertically vibrated support (Kapitza)
+``hoop_bead_reaction``     the hoop bead with φ released: the hoop's normal push as λ
+``unbalanced_cylinder_reactions``  the unbalanced cylinder with F_v and F_h from released constraints
+``free_axle``              axle with two independent wheels on an incline (3 multipliers)
+``rolling_disc``           thin disc rolling without slipping on a plane (nonholonomic, 3D)
+``chaplygin_sleigh``       rigid body on a knife edge (nonholonomic)
+``spherical_pendulum_cartesian``  bob on a rod in Cartesian coordinates: λ gives the rod tension
+``spherical_pendulum``     the same pendulum in spherical angles
+=========================  ========================================================
+
+The factories live in `unconstrained` and `constrained`; each docstring states
+the coordinates, conventions, Lagrangian, equations and any closed form.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+
+from lagcomp.errors import ModelError
+from lagcomp.examples.constrained import CONSTRAINED_EXAMPLES
+from lagcomp.examples.unconstrained import (
+    double_pendulum,
+    driven_pendulum,
+    hoop_bead,
+    huygens,
+    n_link_pendulum,
+    rope,
+    rope_friction,
+    simple_pendulum,
+    sling,
+    tray_cylinder,
+    unbalanced_cylinder,
+)
+from lagcomp.model import System
+
+__all__ = ["EXAMPLES", "get"]
+
+#: Every bundled example by name; each factory takes only optional keyword arguments.
+EXAMPLES: dict[str, Callable[..., System]] = {
+    f.__name__: f
+    for f in (
+        simple_pendulum, double_pendulum, n_link_pendulum, sling, rope, rope_friction,
+        hoop_bead, huygens, tray_cylinder, unbalanced_cylinder, driven_pendulum,
+    )
+}
+EXAMPLES.update(CONSTRAINED_EXAMPLES)
+
+
+def get(name: str, **kwargs) -> System:
+    """The example `name` built with `kwargs`, e.g. ``get("n_link_pendulum", n=5)``.
+
+    The names n_link_pendulum Systems carry (``n_link_pendulum_5``) are accepted too.
+    """
+    match = re.fullmatch(r"n_link_pendulum_(\d+)", name) if isinstance(name, str) else None
+    if match and "n" not in kwargs:  # the name an n_link_pendulum System carries
+        return n_link_pendulum(n=int(match.group(1)), **kwargs)
+    try:
+        factory = EXAMPLES[name]
+    except (KeyError, TypeError):
+        raise ModelError(f"Unknown example {name!r}; known examples: {', '.join(sorted(EXAMPLES))}.") from None
+    return factory(**kwargs)
