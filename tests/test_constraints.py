@@ -122,3 +122,23 @@ def test_bad_constraints_are_refused():
                           constraints=[Holonomic("a", x - y), Holonomic("b", 2 * x - 2 * y)], name="s")
     with pytest.raises(lc.SingularMassMatrixError, match="redundant"):
         derive(redundant)
+
+
+@pytest.mark.parametrize("singular_mass", [False, True])
+def test_augmented_solver_matches_numpy(planar_pendulum, rng, singular_mass):
+    # Schur complement where M is positive definite, LU with pivoting where it is singular
+    n, k = 5, 2
+    for _ in range(20):
+        B = rng.normal(size=(n, n))
+        M = B @ B.T + 0.1 * np.eye(n)
+        if singular_mass:
+            M[:, -1] = M[-1, :] = 0.0
+        C = rng.normal(size=(k, n))
+        rhs = rng.normal(size=n + k)
+        A = np.block([[M, -C.T], [C, np.zeros((k, k))]])
+        packed = np.hstack([A, rhs[:, None]])
+        assert planar_pendulum.kernels._kkt_solve(packed, n) == 0
+        np.testing.assert_allclose(packed[:, -1], np.linalg.solve(A, rhs), rtol=1e-9, atol=1e-10)
+    redundant = np.hstack([np.block([[M, -np.vstack([C[0], C[0]]).T], [np.vstack([C[0], C[0]]), np.zeros((k, k))]]),
+                           rhs[:, None]])
+    assert planar_pendulum.kernels._kkt_solve(redundant, n) > 0

@@ -94,7 +94,10 @@ def cmd_run(args) -> int:
     print(f"{system.name}: {origin} in {compiled - started:.2f} s ({model.source_path})", file=sys.stderr)
     if not model.from_cache:
         print("first run: numba compiles the kernels and drivers once (cached for later runs)...", file=sys.stderr)
-    options = dict(method=args.method, save_every=args.save_every)
+    options = dict(method=args.method, save_every=args.save_every, projection=args.projection,
+                   project_initial=args.project_initial)
+    if args.baumgarte:
+        options["baumgarte"] = tuple(args.baumgarte)
     if args.method == "rk4":
         options["dt"] = args.dt if args.dt is not None else 1e-3
     else:
@@ -106,6 +109,9 @@ def cmd_run(args) -> int:
         (args.t_start, t_end), q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"), **options
     )
     elapsed = time.perf_counter() - compiled
+    if sol.projected_initial_state is not None:
+        start = ", ".join(f"{v:.10g}" for v in sol.projected_initial_state)
+        print(f"initial     projected onto the constraints: y0 = ({start})")
     print(f"method      {sol.method}   status {sol.status}: {sol.message}")
     print(f"time span   [{sol.t[0]:g}, {sol.t[-1]:g}]   steps {sol.nsteps}   rejected {sol.nrejected}   rhs evaluations {sol.nfev}")
     print(f"wall time   {elapsed:.3f} s (integration{', including numba compilation' if not model.from_cache else ''})")
@@ -162,6 +168,11 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
     run.add_argument("--qd0", type=float, nargs="+", help="initial velocities")
     run.add_argument("--out", help="write the solution to this .npz file")
+    run.add_argument("--projection", action=argparse.BooleanOptionalAction, default=None,
+                     help="project onto the constraints after every step (default: on for rk4)")
+    run.add_argument("--baumgarte", type=float, nargs=2, metavar=("ALPHA", "BETA"), help="Baumgarte gains")
+    run.add_argument("--project-initial", action="store_true",
+                     help="project inconsistent initial conditions onto the constraints")
     run.set_defaults(func=cmd_run)
     gen = sub.add_parser("generate", help="regenerate the emitted modules of the bundled examples")
     gen.add_argument("directory", nargs="?", default="generated")

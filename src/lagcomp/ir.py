@@ -41,16 +41,18 @@ class LinearSolve:
 
 @dataclass(frozen=True)
 class AugmentedSolve:
-    """Solve an N×N system by LU with partial pivoting (`_lu_solve`), for constrained systems.
+    """Solve the augmented system of a constrained system (`_kkt_solve`).
 
     The stores fill the work array ``_kkt`` of shape (N, N + 1), zeros
-    included by allocation: the matrix in its first N columns and the
-    right-hand side in the last.  Entries ``first .. first + count − 1`` of the
+    included by allocation: [[M, −Λᵀ], [Λ, 0]] in its first N columns and the
+    right-hand side (F, γ) in the last; M is the leading ``mass_block`` ×
+    ``mass_block`` block.  Entries ``first .. first + count − 1`` of the
     solution go to ``out[offset:]``.  Unlike `LinearSolve` it does not need
-    the leading block (the mass matrix) to be regular.
+    M to be regular (Schur complement where it is, LU with pivoting where not).
     """
 
     size: int
+    mass_block: int
     first: int
     count: int
     offset: int

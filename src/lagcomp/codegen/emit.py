@@ -1,10 +1,13 @@
 """Emit the Python source of a generated module from its IR (pure, deterministic).
 
 The module holds, in order: a header naming the system, its state and
-parameter order and the lagcomp version; the kernels; `observables`, which
-evaluates the energies along a saved trajectory; and the integration drivers
-(`templates/drivers.py`), appended as text so they call the kernels as module
-globals — that is what lets numba cache them across processes (DESIGN.md).
+parameter order and the lagcomp version; the kernels; the constraint hooks
+the drivers call (`project`, `constraint_residual`); `observables`, which
+evaluates the energies along a saved trajectory; then two templates appended
+as text, the linear solvers (`templates/linear_solvers.py`) and the
+integration drivers (`templates/drivers.py`), so that they call the kernels
+as module globals — that is what lets numba cache them across processes
+(DESIGN.md).
 The same IR always gives the same bytes: no timestamps, stable ordering.
 
 Kernels use numba's ``error_model="numpy"``: a division by zero gives inf or
@@ -21,10 +24,6 @@ from lagcomp.codegen.printer import to_code
 from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR
 
 INDENT = "    "
-
-#: A pivot d_j of LDLᵀ counts as non-positive below this fraction of M_jj
-#: (M is then singular to working precision, condition number ≳ 1e14).
-PIVOT_TOLERANCE = 1e-14
 
 
 def _header(ir: ModuleIR) -> str:
@@ -55,7 +54,7 @@ def _unrolled_ldlt(solve: LinearSolve) -> list[str]:
     for j in range(n):
         terms = "".join(f" - {l(j, k)}*{l(j, k)}*_d{k}" for k in range(j))
         lines.append(f"_d{j} = {m[j][j]}{terms}")
-        lines.append(f"if not _d{j} > {PIVOT_TOLERANCE!r}*abs({m[j][j]}):")
+        lines.append(f"if not _d{j} > _PIVOT_TOLERANCE*abs({m[j][j]}):")
         lines.append(f"{INDENT}return {j + 1}")
         for i in range(j + 1, n):
             terms = "".join(f" - {l(i, k)}*{l(j, k)}*_d{k}" for k in range(j))
@@ -71,77 +70,6 @@ def _unrolled_ldlt(solve: LinearSolve) -> list[str]:
     return lines
 
 
-_LOOP_LDLT = f'''
-
-@njit(cache=True, error_model="numpy")
-def _ldlt_solve(mm, ff, out, offset):
-    """Solve mm x = ff (symmetric, lower triangle used) by LDLᵀ in place; x into out[offset:].
-
-    Returns 0, or j + 1 when pivot j is not positive (mm singular or indefinite).
-    """
-    n = ff.shape[0]
-    for j in range(n):
-        d = mm[j, j]
-        for k in range(j):
-            d -= mm[j, k] * mm[j, k] * mm[k, k]
-        if not d > {PIVOT_TOLERANCE!r} * abs(mm[j, j]):
-            return j + 1
-        mm[j, j] = d
-        for i in range(j + 1, n):
-            s = mm[i, j]
-            for k in range(j):
-                s -= mm[i, k] * mm[j, k] * mm[k, k]
-            mm[i, j] = s / d
-    for i in range(n):
-        for k in range(i):
-            ff[i] -= mm[i, k] * ff[k]
-    for i in range(n - 1, -1, -1):
-        x = ff[i] / mm[i, i]
-        for k in range(i + 1, n):
-            x -= mm[k, i] * out[offset + k]
-        out[offset + i] = x
-    return 0
-'''
-
-
-_LU_SOLVE = f'''
-
-@njit(cache=True, error_model="numpy")
-def _lu_solve(a):
-    """Solve the N×N system stored as a = [A | r], shape (N, N + 1), in place.
-
-    Gaussian elimination with partial pivoting (LU of A applied to r); the
-    solution ends in a[:, N].  Returns 0, or j + 1 when pivot j is below
-    {PIVOT_TOLERANCE!r} × max|A| (A singular to working precision).
-    """
-    size = a.shape[0]
-    scale = 0.0
-    for i in range(size):
-        for j in range(size):
-            scale = max(scale, abs(a[i, j]))
-    for j in range(size):
-        pivot = j
-        for i in range(j + 1, size):
-            if abs(a[i, j]) > abs(a[pivot, j]):
-                pivot = i
-        if not abs(a[pivot, j]) > {PIVOT_TOLERANCE!r} * scale:
-            return j + 1
-        if pivot != j:
-            for c in range(j, size + 1):
-                a[j, c], a[pivot, c] = a[pivot, c], a[j, c]
-        for i in range(j + 1, size):
-            factor = a[i, j] / a[j, j]
-            for c in range(j + 1, size + 1):
-                a[i, c] -= factor * a[j, c]
-    for i in range(size - 1, -1, -1):
-        x = a[i, size]
-        for c in range(i + 1, size):
-            x -= a[i, c] * a[c, size]
-        a[i, size] = x / a[i, i]
-    return 0
-'''
-
-
 def _kernel_source(kernel: Kernel) -> str:
     body = f'"""{kernel.doc}"""'.splitlines()
     body += [f"{local} = {source}" for local, source in kernel.loads]
@@ -155,7 +83,7 @@ def _kernel_source(kernel: Kernel) -> str:
     for target, expr in kernel.stores:
         body.append(f"return {to_code(expr)}" if target == "return" else f"{target} = {to_code(expr)}")
     if isinstance(solve, AugmentedSolve):
-        body += ["_status = _lu_solve(_kkt)", "if _status:", f"{INDENT}return _status"]
+        body += [f"_status = _kkt_solve(_kkt, {solve.mass_block})", "if _status:", f"{INDENT}return _status"]
         body += [f"out[{solve.offset + i}] = _kkt[{solve.first + i}, {solve.size}]" for i in range(solve.count)]
         body.append("return 0")
     elif solve is not None:
@@ -294,21 +222,18 @@ def _constraint_hooks(ir: ModuleIR) -> str:
     return _CONSTRAINED_HOOKS.format(rows=rows, n=ir.n, k=ir.k, kh=len(rows), newton=8)
 
 
-def drivers_template() -> str:
-    """The integration drivers appended to every module (see the template's docstring)."""
-    return resources.files("lagcomp.codegen").joinpath("templates/drivers.py").read_text(encoding="utf-8")
+def template(name: str) -> str:
+    """The text of ``templates/<name>.py``, appended to every module (see its docstring)."""
+    return resources.files("lagcomp.codegen").joinpath(f"templates/{name}.py").read_text(encoding="utf-8")
 
 
 def emit(ir: ModuleIR) -> str:
     """The complete source text of the module for `ir`."""
     parts = [_header(ir)]
     parts += [_kernel_source(k) for k in ir.kernels]
-    if ir.k or any(isinstance(k.solve, LinearSolve) and not k.solve.unrolled for k in ir.kernels):
-        parts.append(_LOOP_LDLT)
-    if ir.k:
-        parts.append(_LU_SOLVE)
     parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
-    parts.append("\n\n# " + "-" * 76 + "\n# Integration drivers (lagcomp/codegen/templates/drivers.py)\n\n")
-    parts.append(drivers_template())
+    for name in ("linear_solvers", "drivers"):
+        parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")
+        parts.append(template(name))
     return "".join(parts)

@@ -110,14 +110,14 @@ def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
             "M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).\n\n"
             "Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid.",
             (*state_args, "out"), velocities + augmented, mapping, loads,
-            solve=AugmentedSolve(size=n + k, first=0, count=n, offset=n),
+            solve=AugmentedSolve(size=n + k, mass_block=n, first=0, count=n, offset=n),
         ),
         _kernel(
             "reactions",
             f"Multipliers λ, shape ({k},), in constraint order {eom.constraint_names}: the generalized\n"
             "force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular.",
             (*state_args, "out"), augmented, mapping, loads,
-            solve=AugmentedSolve(size=n + k, first=n, count=k, offset=0),
+            solve=AugmentedSolve(size=n + k, mass_block=n, first=n, count=k, offset=0),
         ),
         _kernel(
             "constraint_residuals",

@@ -29,7 +29,7 @@ def consistent_initial_state(model, t0: float, y0: np.ndarray, p: np.ndarray, pr
         constraint = worst_name.removesuffix("_dot") if level == "velocity" else worst_name
         raise InitialConditionError(
             f"The initial state violates constraint `{constraint}` at {level} level by {worst:.3g} "
-            f"(tolerance {tolerance:g}); fix q0/qd0, or pass project_initial=True to project them onto the constraints."
+            f"(tolerance {tolerance:g}); fix q0/qd0, or pass project_initial=True (--project-initial on the command line) to project them onto the constraints."
         )
     y = y0.copy()
     status = model.kernels.project(t0, y, p)
