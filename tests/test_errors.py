@@ -102,7 +102,10 @@ def test_missing_parameter_value(tmp_path):
      (dict(atol=-1e-9), lc.OptionError, "`atol` must be positive"),
      (dict(method="euler"), lc.OptionError, "Unknown method 'euler'"),
      (dict(t_eval=[0.5, 0.2]), lc.OptionError, "strictly increasing"),
-     (dict(save_every=0), lc.OptionError, "`save_every`")],
+     (dict(save_every=0), lc.OptionError, "`save_every`"),
+     (dict(max_steps=0), lc.OptionError, "`max_steps` must be a positive integer"),
+     (dict(method="rk4", dt=1e-3, max_steps=10), lc.OptionError, "exceed `max_steps`"),
+     (dict(dt=0.1), lc.OptionError, "chooses its own")],
 )
 def test_bad_run_options(model, kwargs, error, match):
     t_span = kwargs.pop("t_span", (0.0, 1.0))
@@ -125,3 +128,9 @@ def test_nan_stops_the_run_and_returns_the_partial_solution(tmp_path):
     adaptive = model.simulate((0, 2), q0=[0.0], qd0=[0.0], method="dop853")
     assert adaptive.status in (-1, -3) and adaptive.t_failure < 1.0 + 1e-9
     assert np.all(np.isfinite(adaptive.q))
+
+
+def test_step_limit_returns_the_partial_solution(model):
+    sol = model.simulate((0, 100), max_steps=5)
+    assert sol.status == -4 and sol.nsteps == 5 and len(sol.t) == 6
+    assert "maximum number of steps" in sol.message and sol.t_failure == sol.t[-1] < 100

@@ -56,6 +56,49 @@ def _t_eval(t_eval, t0: float, t1: float) -> np.ndarray | None:
     return t_eval
 
 
+def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
+    """The chunk call of an adaptive method, and the rows its output will need."""
+    t0, t1 = clock[0], options["t1"]
+    if options["dt"] is not None:
+        raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own (use `first_step`).")
+    rtol, atol = _positive(options["rtol"], "rtol"), _positive(options["atol"], "atol")
+    if options["first_step"] is not None:
+        clock[1] = _positive(options["first_step"], "first_step")
+    max_step = options["max_step"]
+    max_step = _positive(max_step, "max_step") if max_step != math.inf else math.inf
+    events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
+    driver, tableau_arrays = getattr(kernels, m.driver), driver_arguments(m.tableau)
+
+    def advance(ts, ys):
+        return driver(y, clock, counters, p, *run_args, t1, rtol, atol, max_step, options["max_steps"],
+                      options["save_every"], events, ts, ys, *tableau_arrays)
+    return advance, (len(events) + 1 if t_eval is not None else None)
+
+
+def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
+    """The chunk call of a fixed-step method, and the rows its output will need."""
+    t0, t1 = clock[0], options["t1"]
+    if options["dt"] is None:
+        raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
+    if t_eval is not None:
+        raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every` or dopri5/dop853.")
+    dt = _positive(options["dt"], "dt")
+    n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
+    if n_steps > options["max_steps"]:
+        raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {options['max_steps']}.")
+    driver = getattr(kernels, m.driver)
+
+    def advance(ts, ys):
+        return driver(y, clock, counters, p, *run_args, t0, dt, n_steps, t1, options["save_every"], ts, ys)
+    return advance, n_steps // options["save_every"] + 1
+
+
+def _count(value, name: str) -> int:
+    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 1:
+        raise OptionError(f"`{name}` must be a positive integer, got {value!r}.")
+    return int(value)
+
+
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=1e-8,
              atol=1e-10, t_eval=None, save_every=1, first_step=None, max_step=math.inf,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
@@ -64,49 +107,20 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     t0, t1 = _time_span(t_span)
     m = get_method(method)
     p = model.parameter_vector(params, baumgarte)
+    options = dict(t1=t1, dt=dt, rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
+                   save_every=_count(save_every, "save_every"), max_steps=_count(max_steps, "max_steps"))
+    t_eval = _t_eval(t_eval, t0, t1)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
     residual_max = np.zeros(1)
-    if not isinstance(save_every, (int, np.integer)) or save_every < 1:
-        raise OptionError(f"`save_every` must be a positive integer, got {save_every!r}.")
-    t_eval = _t_eval(t_eval, t0, t1)
-    y = y0.copy()
-    clock = np.array([t0, 0.0])
-    counters = np.zeros(5, dtype=np.int64)
-    kernels = model.kernels
-    driver = getattr(kernels, m.driver)
-    tableau_arrays = driver_arguments(m.tableau)
-    if m.adaptive:
-        if dt is not None:
-            raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own (use `first_step`).")
-        rtol, atol = _positive(rtol, "rtol"), _positive(atol, "atol")
-        if first_step is not None:
-            clock[1] = _positive(first_step, "first_step")
-        max_step = _positive(max_step, "max_step") if max_step != math.inf else math.inf
-        events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
-
-        def advance(ts, ys):
-            return driver(y, clock, counters, p, projecting, residual_max, t1, rtol, atol, max_step,
-                          int(max_steps), int(save_every), events, ts, ys, *tableau_arrays)
-        expected_rows = len(events) + 1 if t_eval is not None else FIRST_CHUNK
-    else:
-        if dt is None:
-            raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
-        if t_eval is not None:
-            raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every` or dopri5/dop853.")
-        dt = _positive(dt, "dt")
-        n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
-        if n_steps > max_steps:
-            raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {max_steps}.")
-
-        def advance(ts, ys):
-            return driver(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps, t1, int(save_every), ts, ys)
-        expected_rows = n_steps // save_every + 1
+    y, clock, counters = y0.copy(), np.array([t0, 0.0]), np.zeros(5, dtype=np.int64)
+    make = _adaptive_driver if m.adaptive else _fixed_step_driver
+    advance, rows = make(m, model.kernels, y, clock, counters, p, (projecting, residual_max), t_eval, options)
 
     save_initial = t_eval is None or t_eval[0] == t0
     ts_parts = [np.array([t0])] if save_initial else []
     ys_parts = [y0[None, :].copy()] if save_initial else []
-    chunk = int(min(max(expected_rows, 16), FIRST_CHUNK if m.adaptive and t_eval is None else MAX_CHUNK))
+    chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
     while True:
         ts, ys = np.empty(chunk), np.empty((chunk, y.size))
         status, n_saved = advance(ts, ys)
