@@ -27,3 +27,13 @@ def test_ci_runs_the_readme_test_command():
     assert test_line.split("&& ")[-1] == "python -m pytest"
     run_line = _readme_commands()[0]
     assert run_line.split("&& ")[-1] in ci  # the main job runs in CI too
+
+
+def test_readme_quick_start_runs_as_written(monkeypatch, cache_dir):
+    monkeypatch.setenv("LAGCOMP_CACHE_DIR", str(cache_dir))
+    block = re.search(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S).group(1)
+    namespace: dict = {}
+    exec(compile(block, "README.md", "exec"), namespace)
+    sol = namespace["sol"]
+    assert sol.success and sol.t[-1] == 100 and sol.q.shape == (len(sol.t), 2)
+    assert sol.energy_drift() < 1e-6
