@@ -272,11 +272,12 @@ def reactions_along(ts, ys, p, lam_out, residual_out):
 
 
 @njit(cache=True, error_model="numpy")
-def observables(ts, ys, p, energy_out, energy_function_out):
-    """Total energy T + V and energy function h at each saved row (ts (m,), ys (m, 2n))."""
+def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
+    """Along saved rows (ts (m,), ys (m, 2n)): T + V, the energy function h, and the momenta (m, n)."""
     for k in range(ts.shape[0]):
         energy_out[k] = energy(ts[k], ys[k], p)
         energy_function_out[k] = energy_function(ts[k], ys[k], p)
+        momenta(ts[k], ys[k], p, momenta_out[k])
 
 
 # ----------------------------------------------------------------------------

@@ -105,11 +105,12 @@ def project(t, y, p):
 
 
 @njit(cache=True, error_model="numpy")
-def observables(ts, ys, p, energy_out, energy_function_out):
-    """Total energy T + V and energy function h at each saved row (ts (m,), ys (m, 2n))."""
+def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
+    """Along saved rows (ts (m,), ys (m, 2n)): T + V, the energy function h, and the momenta (m, n)."""
     for k in range(ts.shape[0]):
         energy_out[k] = energy(ts[k], ys[k], p)
         energy_function_out[k] = energy_function(ts[k], ys[k], p)
+        momenta(ts[k], ys[k], p, momenta_out[k])
 
 
 # ----------------------------------------------------------------------------

@@ -58,3 +58,16 @@ def test_ten_million_steps_in_bounded_memory(compiled):
     assert sol.nsteps == 10_000_000 and len(sol.t) == 101
     assert peak < 2_000_000, f"peak traced memory {peak} bytes"
     assert sol.energy_drift() < 1e-10
+
+
+def test_invariants_include_cyclic_momenta(compiled):
+    model = compiled("spherical_pendulum")
+    assert model.cyclic == ("phi",)
+    sol = model.simulate((0, 20), method="dop853", rtol=1e-12, atol=1e-12)
+    invariants = sol.invariants()
+    assert set(invariants) == {"h", "p_phi"}
+    values, drift = invariants["p_phi"]
+    m, l = model.system.defaults["m"], model.system.defaults["l"]
+    np.testing.assert_allclose(values, m * l**2 * np.sin(sol.q[:, 0]) ** 2 * sol.qd[:, 1], rtol=1e-14)
+    assert drift < 1e-10 and invariants["h"][1] < 1e-10
+    assert sol.momenta.shape == sol.q.shape

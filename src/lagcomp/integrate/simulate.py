@@ -147,12 +147,13 @@ def _solution(model, p, ts_parts, ys_parts, y, run, throw) -> Solution:
         state = ", ".join(f"{c}={v:.6g}" for c, v in zip(model.coordinates, y[:n]))
         rates = ", ".join(f"{c}_dot={v:.6g}" for c, v in zip(model.coordinates, y[n:]))
         message = f"{message} Stopped at t = {t_failure:.10g}, last good state {state}, {rates}."
-    energy, energy_function = np.empty(ts.size), np.empty(ts.size)
-    model.kernels.observables(ts, ys, p, energy, energy_function)
+    energy, energy_function, momenta = np.empty(ts.size), np.empty(ts.size), np.empty((ts.size, model.n))
+    model.kernels.observables(ts, ys, p, energy, energy_function, momenta)
     reactions, residuals = reactions_along(model, ts, ys, p)
     n = model.n
     solution = Solution(
         t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), energy=energy, energy_function=energy_function,
+        momenta=momenta, cyclic=model.cyclic,
         status=status, message=message, t_failure=t_failure,
         nfev=int(counters[0]), nsteps=int(counters[1]), nrejected=int(counters[2]),
         method=run["method"], coordinates=model.coordinates,

@@ -18,6 +18,12 @@ MESSAGES = {
 }
 
 
+def _relative_drift(values: np.ndarray) -> float:
+    """max |v − v₀| / |v₀| (absolute when v₀ = 0)."""
+    scale = abs(values[0]) if values[0] != 0 else 1.0
+    return float(np.max(np.abs(values - values[0])) / scale)
+
+
 @dataclass(frozen=True)
 class Solution:
     """A trajectory saved at times `t`.
@@ -33,6 +39,11 @@ class Solution:
     energy_function : ndarray, shape (m,)
         Energy function h (Jacobi integral), conserved for time-independent
         conservative systems even when T + V is not (imposed motions).
+    momenta : ndarray, shape (m, n)
+        Conjugate momenta ∂L/∂q̇ at the saved times.
+    cyclic : tuple of str
+        The model's cyclic coordinates, whose momenta are conserved
+        (without constraints acting along them).
     status : int
         0 on success, negative on failure (see `MESSAGES`).
     message : str
@@ -63,6 +74,8 @@ class Solution:
     qd: np.ndarray
     energy: np.ndarray
     energy_function: np.ndarray
+    momenta: np.ndarray
+    cyclic: tuple
     status: int
     message: str
     t_failure: float | None
@@ -87,15 +100,25 @@ class Solution:
 
     def energy_drift(self, which: str = "energy") -> float:
         """Largest relative deviation of `energy` (or `energy_function`) from its initial value."""
-        values = getattr(self, which)
-        scale = max(abs(values[0]), np.finfo(float).tiny)
-        return float(np.max(np.abs(values - values[0])) / scale)
+        return _relative_drift(getattr(self, which))
+
+    def invariants(self) -> dict[str, tuple[np.ndarray, float]]:
+        """The candidate conserved quantities along the run, with their largest relative drift.
+
+        Returns ``{name: (values, drift)}`` for the energy function ``h``
+        (conserved when L has no explicit t and no forces act) and the momentum
+        ``p_<name>`` of each cyclic coordinate.  Whether a quantity is really
+        conserved depends on the system; the drift tells.
+        """
+        found = {"h": self.energy_function}
+        found.update({f"p_{c}": self.momenta[:, self.coordinates.index(c)] for c in self.cyclic})
+        return {name: (values, _relative_drift(values)) for name, values in found.items()}
 
     def to_dict(self) -> dict:
         """Arrays and scalars as a dict of numpy arrays (what `save_npz` writes)."""
         return {
             "t": self.t, "q": self.q, "qd": self.qd,
-            "energy": self.energy, "energy_function": self.energy_function,
+            "energy": self.energy, "energy_function": self.energy_function, "momenta": self.momenta,
             "status": np.asarray(self.status), "message": np.asarray(self.message),
             "t_failure": np.asarray(np.nan if self.t_failure is None else self.t_failure),
             "nfev": np.asarray(self.nfev), "nsteps": np.asarray(self.nsteps),
