@@ -309,7 +309,7 @@ calling ``rhs`` as a module-level global.  Every function here is
 compiled code and do not allocate (work arrays are allocated once at the start
 of each driver call).
 
-Public drivers (the calling convention is shared by all three):
+Public drivers (the calling convention is shared by all four):
 
 * ``rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
   t_end, save_every, ts, ys)``
@@ -318,6 +318,9 @@ Public drivers (the calling convention is shared by all three):
 * ``dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
   atol, max_step, max_steps, save_every, t_eval, ts, ys, A, B, C, E3, E5, D,
   A_EXTRA, C_EXTRA)``
+* ``composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
+  n_steps, t_end, save_every, ts, ys, weights)``: symplectic compositions of
+  Störmer-Verlet for separable systems (at the end of this file).
 
 The trailing tableau arrays are ``lagcomp.integrate.tableaux.driver_arguments``
 of the corresponding tableau.  State is kept in the in/out arrays so that a
@@ -1179,3 +1182,93 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
         clock[0] = t
         clock[1] = h_abs
         counters[1] += 1
+
+
+# ---------------------------------------------------------------------------
+# Explicit symplectic compositions for separable systems
+# ---------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
+                    n_steps, t_end, save_every, ts, ys, weights):
+    """Symmetric composition of Störmer-Verlet substeps; fixed step ``dt``; resumable.
+
+    For separable systems only (constant mass matrix M, accelerations
+    independent of the velocities; the caller checks): then p = M q̇ is a
+    constant linear change of variables, and kick-drift-kick on (q, q̇),
+
+        q̇ ← q̇ + ½ w h q̈(q, t),   q ← q + w h q̇,   q̇ ← q̇ + ½ w h q̈(q, t + w h),
+
+    is the Störmer-Verlet step of H = ½ pᵀ M⁻¹ p + V(q) (HLW, *Geometric
+    Numerical Integration*, sec. I.3).  A step of size h runs one substep per
+    weight w (``lagcomp.integrate.compositions``).  The acceleration at the
+    end of a substep is the start of the next one, so a substep costs one
+    ``rhs`` call.  Step times, saving, chunking and failure statuses follow
+    ``rk4_run``.  Projection is not offered: constrained systems are not
+    separable in this sense.
+    """
+    n2 = y.shape[0]
+    n = n2 // 2
+    cap = ts.shape[0]
+    acc = np.empty(n2)
+    acc_new = np.empty(n2)
+    y_new = np.empty(n2)
+    n_saved = 0
+    if counters[1] < n_steps:
+        status = rhs(clock[0], y, p, acc)
+        counters[0] += 1
+        if status != 0:
+            return _ODE_RHS_FAILED, n_saved
+    while True:
+        k = counters[1]
+        if k >= n_steps:
+            return _ODE_DONE, n_saved
+        last = k == n_steps - 1
+        if last or counters[4] + 1 >= save_every:
+            if n_saved >= cap:
+                return _ODE_BUFFER_FULL, n_saved
+        t_a = min(t0 + k * dt, t_end)
+        if last:
+            t_b = t_end
+        else:
+            t_b = min(t0 + (k + 1) * dt, t_end)
+        h = t_b - t_a
+
+        for i in range(n2):
+            y_new[i] = y[i]
+            acc_new[i] = acc[i]
+        elapsed = 0.0
+        status = 0
+        for j in range(weights.shape[0]):
+            hw = weights[j] * h
+            for i in range(n):
+                y_new[n + i] += 0.5 * hw * acc_new[n + i]
+                y_new[i] += hw * y_new[n + i]
+            elapsed += weights[j]
+            t_sub = t_b if j == weights.shape[0] - 1 else t_a + elapsed * h
+            status = rhs(t_sub, y_new, p, acc_new)
+            counters[0] += 1
+            if status != 0:
+                break
+            for i in range(n):
+                y_new[n + i] += 0.5 * hw * acc_new[n + i]
+        if status != 0:
+            return _ODE_RHS_FAILED, n_saved
+        for i in range(n2):
+            if not np.isfinite(y_new[i]):
+                status = -1
+        if status != 0:
+            return _ODE_NONFINITE, n_saved
+
+        for i in range(n2):
+            y[i] = y_new[i]
+            acc[i] = acc_new[i]
+        clock[0] = t_b
+        counters[1] = k + 1
+        counters[4] += 1
+        if last or counters[4] >= save_every:
+            ts[n_saved] = t_b
+            for i in range(n2):
+                ys[n_saved, i] = y[i]
+            n_saved += 1
+            counters[4] = 0

@@ -61,6 +61,7 @@ def build(system: System, cache: Cache, key: str) -> Entry:
         "cyclic": list(eom.cyclic),
         "constraints": list(eom.constraint_names),
         "holonomic": list(eom.holonomic),
+        "separable": eom.separable,
         "operations": {k.name: k.operation_count for k in ir.kernels},
     }
     return cache.store(key, emit(ir), system.name, metadata)
@@ -99,6 +100,8 @@ class Model:
         Cyclic coordinates (their conjugate momenta are conserved).
     constraints : tuple of str
         Constraint names, the order of the multipliers λ (reactions).
+    separable : bool
+        Whether the explicit symplectic methods (verlet, yoshida4, yoshida6) apply.
     operations : dict
         Arithmetic operations per kernel after CSE.
     """
@@ -113,6 +116,7 @@ class Model:
         self.cyclic = tuple(entry.metadata["cyclic"])
         self.constraints = tuple(entry.metadata["constraints"])
         self.holonomic = tuple(entry.metadata["holonomic"])
+        self.separable = bool(entry.metadata["separable"])
         self.operations = dict(entry.metadata["operations"])
 
     @property
@@ -259,10 +263,11 @@ class Model:
 
         Other Parameters
         ----------------
-        method : {"dop853", "dopri5", "rk4"}
-            Integration method (default "dop853").
+        method : {"dop853", "dopri5", "rk4", "verlet", "yoshida4", "yoshida6"}
+            Integration method (default "dop853"); the last three are explicit
+            symplectic methods for separable systems (`Model.separable`).
         dt : float
-            Step of fixed-step methods (required for "rk4").
+            Step of fixed-step methods (required for all but dop853, dopri5).
         rtol, atol : float
             Tolerances of adaptive methods (defaults 1e-8, 1e-10).
         t_eval : array_like, optional

@@ -8,20 +8,32 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from lagcomp.integrate import tableaux
-from lagcomp.integrate.tableaux import Tableau
+from lagcomp.integrate import compositions, tableaux
+from lagcomp.integrate.compositions import Composition
+from lagcomp.integrate.tableaux import Tableau, driver_arguments
 
 
 @dataclass(frozen=True)
 class Method:
-    """An integration method: its driver, tableau and what it accepts."""
+    """An integration method: its driver, coefficients and what it accepts.
+
+    ``separable_only`` methods need `Model.separable` (explicit symplectic
+    compositions); the others integrate any system.
+    """
 
     name: str
     order: int
     adaptive: bool
     driver: str
-    tableau: Tableau
+    tableau: Tableau | Composition
     summary: str
+    separable_only: bool = False
+
+    def driver_arguments(self) -> tuple:
+        """The coefficient arrays the driver takes after its common arguments."""
+        if isinstance(self.tableau, Composition):
+            return self.tableau.driver_arguments()
+        return driver_arguments(self.tableau)
 
 
 METHODS = {
@@ -32,11 +44,17 @@ METHODS = {
                "Dormand-Prince 5(4), adaptive, quartic dense output (scipy's RK45)"),
         Method("dop853", 8, True, "dop853_run", tableaux.DOP853,
                "Dormand-Prince 8(5,3), adaptive, 7th-order dense output (Hairer's DOP853)"),
+        Method("verlet", 2, False, "composition_run", compositions.VERLET,
+               "Störmer-Verlet, symplectic, fixed step, separable systems", separable_only=True),
+        Method("yoshida4", 4, False, "composition_run", compositions.YOSHIDA4,
+               "Yoshida's triple-jump composition of Verlet, symplectic, order 4", separable_only=True),
+        Method("yoshida6", 6, False, "composition_run", compositions.YOSHIDA6,
+               "Yoshida's 7-stage composition of Verlet, symplectic, order 6", separable_only=True),
     )
 }
 
 #: Other accepted spellings.
-ALIASES = {"rk45": "dopri5", "dopri853": "dop853"}
+ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "leapfrog": "verlet", "stormer_verlet": "verlet"}
 
 
 def get_method(name: str) -> Method:

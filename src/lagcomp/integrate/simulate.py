@@ -16,7 +16,6 @@ from lagcomp.errors import IntegrationError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.methods import get_method
 from lagcomp.integrate.solution import MESSAGES, Solution
-from lagcomp.integrate.tableaux import driver_arguments
 
 #: Rows per output chunk: small runs allocate little, long ones grow to this.
 FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
@@ -67,7 +66,7 @@ def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, option
     max_step = options["max_step"]
     max_step = _positive(max_step, "max_step") if max_step != math.inf else math.inf
     events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
-    driver, tableau_arrays = getattr(kernels, m.driver), driver_arguments(m.tableau)
+    driver, tableau_arrays = getattr(kernels, m.driver), m.driver_arguments()
 
     def advance(ts, ys):
         return driver(y, clock, counters, p, *run_args, t1, rtol, atol, max_step, options["max_steps"],
@@ -86,10 +85,11 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
     n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
     if n_steps > options["max_steps"]:
         raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {options['max_steps']}.")
-    driver = getattr(kernels, m.driver)
+    driver, coefficients = getattr(kernels, m.driver), m.driver_arguments()
 
     def advance(ts, ys):
-        return driver(y, clock, counters, p, *run_args, t0, dt, n_steps, t1, options["save_every"], ts, ys)
+        return driver(y, clock, counters, p, *run_args, t0, dt, n_steps, t1, options["save_every"], ts, ys,
+                      *coefficients)
     return advance, n_steps // options["save_every"] + 1
 
 
@@ -106,6 +106,11 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     t0, t1 = _time_span(t_span)
     m = get_method(method)
+    if m.separable_only and not model.separable:
+        raise OptionError(
+            f"`{m.name}` needs a separable system (no constraints, a constant mass matrix and forces that do not "
+            f"depend on velocities); {model.name!r} is not one. Use dop853, dopri5 or rk4."
+        )
     p = model.parameter_vector(params, baumgarte)
     options = dict(t1=t1, dt=dt, rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
                    save_every=_count(save_every, "save_every"), max_steps=_count(max_steps, "max_steps"))

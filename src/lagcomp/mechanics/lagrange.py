@@ -95,6 +95,10 @@ class EOM:
         Velocity-constraint offsets b(q, t).
     gamma : Matrix, shape (k, 1)
         Right-hand side of the acceleration-level constraints Λ q̈ = γ.
+    separable : bool
+        Whether explicit symplectic methods apply: no constraints, M constant
+        (free of q and t) and F free of q̇, i.e. H = ½ pᵀ M⁻¹ p + V(q, t)
+        with forces depending on q and t only.
     """
 
     system: System
@@ -116,6 +120,7 @@ class EOM:
     C: sp.Matrix
     b: sp.Matrix
     gamma: sp.Matrix
+    separable: bool
 
     @property
     def n(self) -> int:
@@ -177,6 +182,11 @@ def derive(system: System) -> EOM:
     L = T - V
     momenta = sp.Matrix([L.diff(v) for v in qd])
     h = sum(v * p for v, p in zip(qd, momenta)) - L
+    separable = (
+        not system.constraints
+        and not any(entry.has(t, *q) for entry in M)
+        and not any(entry.has(*qd) for entry in F)
+    )
     cyclic = tuple(
         name
         for name, qi, vi, Qi in zip(system.coordinate_names, q, qd, Q)
@@ -186,7 +196,7 @@ def derive(system: System) -> EOM:
         system=system, q=q, qd=qd, parameters=system.parameters,
         M=M.applyfunc(_tidy), F=F.applyfunc(_tidy), T=T, V=V, L=L,
         energy=_tidy(T + V), energy_function=_tidy(h), momenta=momenta.applyfunc(_tidy), cyclic=cyclic,
-        **constraints,
+        separable=separable, **constraints,
     )
 
 

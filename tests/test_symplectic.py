@@ -1,0 +1,77 @@
+"""Explicit symplectic compositions (Störmer-Verlet, Yoshida 4 and 6) on separable systems."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import lagcomp as lc
+from lagcomp.integrate.compositions import YOSHIDA4, YOSHIDA6, Composition
+from lagcomp.integrate.methods import METHODS
+
+t = lc.t
+
+
+@pytest.fixture(scope="module")
+def kepler(tmp_path_factory):
+    x, y = lc.coordinates("x y")
+    mu = sp.Symbol("mu", positive=True)
+    system = lc.System([x, y], T=(x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=-mu / sp.sqrt(x**2 + y**2),
+                       name="kepler", defaults={"mu": 1.0})
+    return lc.compile(system, cache_dir=tmp_path_factory.mktemp("kepler-cache"))
+
+
+@pytest.mark.parametrize("method", ["verlet", "yoshida4", "yoshida6"])
+def test_convergence_order_on_the_pendulum(compiled, method):
+    model = compiled("simple_pendulum")
+    assert model.separable
+    reference = model.simulate((0, 4), method="dop853", rtol=1e-13, atol=1e-13).y[-1]
+    order = METHODS[method].order
+    steps = (0.04, 0.02, 0.01) if order < 6 else (0.2, 0.1, 0.05)
+    errors = [np.max(np.abs(model.simulate((0, 4), method=method, dt=dt).y[-1] - reference)) for dt in steps]
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    np.testing.assert_allclose(ratios, 2.0**order, rtol=0.10)
+
+
+def test_kepler_energy_error_stays_bounded_while_rk4_drifts(kepler):
+    e = 0.6  # periapsis start: r = 1 − e, v = √((1 + e)/(1 − e)); period 2π
+    q0, qd0 = [1 - e, 0.0], [0.0, np.sqrt((1 + e) / (1 - e))]
+    orbits, dt = 200, 2 * np.pi / 2000
+    span = (0, orbits * 2 * np.pi)
+    H0 = kepler.energy(q0, qd0)
+    errors = {}
+    for method in ("verlet", "yoshida4", "rk4"):
+        sol = kepler.simulate(span, q0=q0, qd0=qd0, method=method, dt=dt, save_every=100)
+        err = np.abs(sol.energy / H0 - 1)
+        tenth = len(err) // 10
+        errors[method] = (err[:tenth].max(), err[-tenth:].max())
+    for method in ("verlet", "yoshida4"):
+        first, last = errors[method]
+        assert last <= 2 * first, (method, first, last)
+    first, last = errors["rk4"]
+    assert last > 5 * first  # RK4 drifts away at the same step
+
+
+def test_angular_momentum_of_kepler_is_kept_to_round_off(kepler):
+    # Verlet conserves quadratic first integrals of this form exactly (up to rounding)
+    sol = kepler.simulate((0, 200), q0=[0.4, 0.0], qd0=[0.0, 2.0], method="verlet", dt=1e-3, save_every=1000)
+    L = sol.q[:, 0] * sol.qd[:, 1] - sol.q[:, 1] * sol.qd[:, 0]
+    assert np.max(np.abs(L - L[0])) < 1e-11
+
+
+def test_non_separable_systems_are_refused(compiled):
+    with pytest.raises(lc.OptionError, match=r"`verlet` needs a separable system.*'double_pendulum'"):
+        compiled("double_pendulum").simulate((0, 1), method="verlet", dt=0.01)
+    assert not compiled("spherical_pendulum_cartesian").separable  # constrained
+    with pytest.raises(lc.OptionError, match="give the step `dt`"):
+        compiled("simple_pendulum").simulate((0, 1), method="yoshida6")
+
+
+def test_composition_weights_are_checked():
+    assert YOSHIDA4.weights.sum() == pytest.approx(1.0, abs=1e-15)
+    assert YOSHIDA6.weights.size == 7
+    with pytest.raises(ValueError, match="sum"):
+        Composition("broken", 2, np.array([0.5, 0.6]))
+    with pytest.raises(ValueError, match="symmetric"):
+        Composition("lopsided", 2, np.array([0.3, 0.7]))
