@@ -90,6 +90,35 @@ def momenta(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def momentum_rate(t, y, p, out):
+    """ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces."""
+    theta = y[0]
+    m = p[0]
+    l = p[1]
+    g = p[2]
+    out[0] = -g*l*m*math.sin(theta)
+
+
+@njit(cache=True, error_model="numpy")
+def velocities(t, y, p, out):
+    """Velocities q̇, shape (n,), at x = (q, p) (here `y` holds q then the momenta p), from
+    M(q, t) q̇ = p − b(q, t). Returns 0, or k > 0 when pivot k of M is not positive."""
+    m = p[0]
+    l = p[1]
+    _p_theta = y[1]
+    _m0_0 = l**2*m
+    _f0 = _p_theta
+    # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
+    _d0 = _m0_0
+    if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _z0 = _f0
+    _x0 = _z0/_d0
+    out[0] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -303,7 +332,7 @@ calling ``rhs`` as a module-level global.  Every function here is
 compiled code and do not allocate (work arrays are allocated once at the start
 of each driver call).
 
-Public drivers (the calling convention is shared by all four):
+Public drivers (the calling convention is shared by all five):
 
 * ``rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
   t_end, save_every, ts, ys)``
@@ -314,7 +343,12 @@ Public drivers (the calling convention is shared by all four):
   A_EXTRA, C_EXTRA)``
 * ``composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
   n_steps, t_end, save_every, ts, ys, weights)``: symplectic compositions of
-  Störmer-Verlet for separable systems (at the end of this file).
+  Störmer-Verlet for separable systems (at the end of this file);
+* ``collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
+  n_steps, t_end, save_every, ts, ys, A, B, C, max_iter)``: implicit
+  Gauss-Legendre collocation on the canonical equations in (q, p), for any
+  unconstrained Lagrangian; it needs the kernels ``velocities`` and
+  ``momentum_rate`` and returns -5 when its stage equations do not converge.
 
 The trailing tableau arrays are ``lagcomp.integrate.tableaux.driver_arguments``
 of the corresponding tableau.  State is kept in the in/out arrays so that a
@@ -474,6 +508,7 @@ _ODE_NONFINITE = -1
 _ODE_RHS_FAILED = -2
 _ODE_STEP_TOO_SMALL = -3
 _ODE_MAX_STEPS = -4
+_ODE_NOT_CONVERGED = -5   # implicit stage equations not solved (step too large)
 
 
 # ---------------------------------------------------------------------------
@@ -1264,5 +1299,136 @@ def composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
             ts[n_saved] = t_b
             for i in range(n2):
                 ys[n_saved, i] = y[i]
+            n_saved += 1
+            counters[4] = 0
+
+
+# ---------------------------------------------------------------------------
+# Implicit Gauss-Legendre collocation on the canonical equations
+# ---------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
+                    n_steps, t_end, save_every, ts, ys, A, B, C, max_iter):
+    """Implicit Runge-Kutta (Gauss-Legendre) on x = (q, p); fixed step ``dt``; resumable.
+
+    The canonical equations are evaluated without a symbolic inverse:
+    q̇ = ``velocities``(t, x) solves M q̇ = p − b, and ṗ = ``momentum_rate``
+    at (q, q̇) is ∂L/∂q + Q = −∂H/∂q + Q.  Saved rows and ``y`` stay in
+    (q, q̇); x is rebuilt from ``momenta`` at the start of each call.  The
+    stage equations K_i = f(t + c_i h, x + h Σ_j a_ij K_j) are solved by
+    fixed-point iteration, updating each stage as soon as it is computed,
+    from K = 0, until the change of h·K reaches rounding level (below 4e-16
+    relative to the state, or no longer decreasing once below 1e-10); after
+    ``max_iter`` sweeps the run stops with -5 (the step is too large for
+    the iteration to contract).  Explicit time dependence is evaluated at
+    the stage times t + c_i h, which is the method applied to the autonomous
+    system extended by t' = 1 (HLW, sec. VI.4).  Step times, saving and
+    chunking follow ``rk4_run``.
+    """
+    n2 = y.shape[0]
+    n = n2 // 2
+    s = B.shape[0]
+    cap = ts.shape[0]
+    x = np.empty(n2)
+    xs = np.empty(n2)
+    y_stage = np.empty(n2)
+    qdot = np.empty(n)
+    pdot = np.empty(n)
+    K = np.empty((s, n2))
+    n_saved = 0
+    momenta(clock[0], y, p, pdot)
+    for c in range(n):
+        x[c] = y[c]
+        x[n + c] = pdot[c]
+    while True:
+        k = counters[1]
+        if k >= n_steps:
+            return _ODE_DONE, n_saved
+        last = k == n_steps - 1
+        if last or counters[4] + 1 >= save_every:
+            if n_saved >= cap:
+                return _ODE_BUFFER_FULL, n_saved
+        t_a = min(t0 + k * dt, t_end)
+        if last:
+            t_b = t_end
+        else:
+            t_b = min(t0 + (k + 1) * dt, t_end)
+        h = t_b - t_a
+
+        scale = 1.0
+        for c in range(n2):
+            scale = max(scale, abs(x[c]))
+        for i in range(s):
+            for c in range(n2):
+                K[i, c] = 0.0
+        converged = False
+        status = 0
+        previous = np.inf
+        for sweep in range(max_iter):
+            change = 0.0
+            for i in range(s):
+                for c in range(n2):
+                    acc = x[c]
+                    for j in range(s):
+                        acc += h * A[i, j] * K[j, c]
+                    xs[c] = acc
+                t_stage = t_a + C[i] * h
+                status = velocities(t_stage, xs, p, qdot)
+                if status == 0:
+                    for c in range(n):
+                        y_stage[c] = xs[c]
+                        y_stage[n + c] = qdot[c]
+                    momentum_rate(t_stage, y_stage, p, pdot)
+                counters[0] += 1
+                if status != 0:
+                    break
+                for c in range(n):
+                    change = max(change, abs(h * (qdot[c] - K[i, c])), abs(h * (pdot[c] - K[i, n + c])))
+                    K[i, c] = qdot[c]
+                    K[i, n + c] = pdot[c]
+            if status != 0:
+                break
+            change /= scale
+            if not np.isfinite(change):
+                status = -1
+                break
+            if change <= 4e-16 or (change >= previous and change < 1e-10):
+                converged = True
+                break
+            previous = change
+        if status > 0:
+            return _ODE_RHS_FAILED, n_saved
+        if status < 0:
+            return _ODE_NONFINITE, n_saved
+        if not converged:
+            return _ODE_NOT_CONVERGED, n_saved
+
+        for c in range(n2):
+            acc = x[c]
+            for i in range(s):
+                acc += h * B[i] * K[i, c]
+            xs[c] = acc
+            if not np.isfinite(acc):
+                status = -1
+        if status == 0:
+            status = velocities(t_b, xs, p, qdot)
+            if status > 0:
+                return _ODE_RHS_FAILED, n_saved
+        if status != 0:
+            return _ODE_NONFINITE, n_saved
+
+        for c in range(n):
+            x[c] = xs[c]
+            x[n + c] = xs[n + c]
+            y[c] = xs[c]
+            y[n + c] = qdot[c]
+        clock[0] = t_b
+        counters[1] = k + 1
+        counters[4] += 1
+        if last or counters[4] >= save_every:
+            ts[n_saved] = t_b
+            for c in range(n2):
+                ys[n_saved, c] = y[c]
             n_saved += 1
             counters[4] = 0

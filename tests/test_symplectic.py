@@ -75,3 +75,39 @@ def test_composition_weights_are_checked():
         Composition("broken", 2, np.array([0.5, 0.6]))
     with pytest.raises(ValueError, match="symmetric"):
         Composition("lopsided", 2, np.array([0.3, 0.7]))
+
+
+@pytest.mark.parametrize("method", ["gauss1", "gauss2", "gauss3"])
+def test_gauss_legendre_convergence_order_on_the_pendulum(compiled, method):
+    model = compiled("simple_pendulum")
+    reference = model.simulate((0, 4), method="dop853", rtol=1e-13, atol=1e-13).y[-1]
+    order = METHODS[method].order
+    steps = (0.04, 0.02, 0.01) if order < 6 else (0.2, 0.1, 0.05)
+    errors = [np.max(np.abs(model.simulate((0, 4), method=method, dt=dt).y[-1] - reference)) for dt in steps]
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    np.testing.assert_allclose(ratios, 2.0**order, rtol=0.10)
+
+
+def test_gauss_legendre_keeps_the_double_pendulum_energy(compiled):
+    # non-separable: H is not T(p) + V(q); Gauss-Legendre is symplectic on (q, p) all the same
+    model = compiled("double_pendulum")
+    sol = model.simulate((0, 1000), q0=[1.0, 0.5], qd0=[0.0, 0.0], method="gauss2", dt=0.01, save_every=100)
+    assert sol.success and sol.nsteps == 100_000
+    err = np.abs(sol.energy_function / sol.energy_function[0] - 1)
+    tenth = len(err) // 10
+    assert err.max() < 1e-6
+    assert err[-tenth:].max() <= 2 * err[:tenth].max()
+
+
+def test_gauss_legendre_on_time_dependent_and_gyroscopic_systems(compiled):
+    # imposed motion (explicit t) and momenta with a q-dependent offset: compare with DOP853
+    model = compiled("driven_pendulum")
+    ts = np.linspace(0, 1, 11)
+    reference = model.simulate((0, 1), method="dop853", rtol=1e-12, atol=1e-12, t_eval=ts)
+    sol = model.simulate((0, 1), method="gauss3", dt=1e-3, save_every=100)
+    np.testing.assert_allclose(sol.y, reference.y, rtol=0, atol=1e-8)
+
+
+def test_gauss_legendre_reports_a_step_too_large(compiled):
+    sol = compiled("simple_pendulum").simulate((0, 10), method="gauss2", dt=2.0)
+    assert sol.status == -5 and "reduce the step" in sol.message

@@ -159,7 +159,7 @@ def _parser() -> argparse.ArgumentParser:
     run = example("run", "simulate an example and print a summary")
     run.add_argument("--t-start", type=float, default=0.0)
     run.add_argument("--t-end", type=float, help="end time (default: the example's)")
-    run.add_argument("--method", default="dop853", choices=["dop853", "dopri5", "rk4", "verlet", "yoshida4", "yoshida6"])
+    run.add_argument("--method", default="dop853", choices=["dop853", "dopri5", "rk4", "verlet", "yoshida4", "yoshida6", "gauss1", "gauss2", "gauss3"])
     run.add_argument("--dt", type=float, help="step of fixed-step methods (default 1e-3); first step of adaptive ones")
     run.add_argument("--rtol", type=float, default=1e-10)
     run.add_argument("--atol", type=float, default=1e-10)

@@ -138,6 +138,26 @@ def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
     )
 
 
+def _velocities_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """q̇ from x = (q, p): solve M(q, t) q̇ = p − b(q, t) (the inverse Legendre map, numerically)."""
+    n = eom.n
+    unrolled = n <= UNROLL_MAX
+    momenta = [sp.Symbol(f"_p_{name}", real=True) for name in eom.system.coordinate_names]
+    loads = tuple(item for item in loads if not item[1].startswith("y[") or int(item[1][2:-1]) < n)
+    loads += tuple((s.name, f"y[{n + i}]") for i, s in enumerate(momenta))
+    m_names = tuple(tuple(f"_m{i}_{j}" if unrolled else f"mm[{i}, {j}]" for j in range(i + 1)) for i in range(n))
+    f_names = tuple(f"_f{i}" if unrolled else f"ff[{i}]" for i in range(n))
+    stores = [(m_names[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
+    stores += [(f_names[i], momenta[i] - eom.momentum_offset[i]) for i in range(n)]
+    return _kernel(
+        "velocities",
+        "Velocities q̇, shape (n,), at x = (q, p) (here `y` holds q then the momenta p), from\n"
+        "M(q, t) q̇ = p − b(q, t). Returns 0, or k > 0 when pivot k of M is not positive.",
+        ("t", "y", "p", "out"), stores, mapping, loads,
+        solve=LinearSolve(n=n, m=m_names, f=f_names, offset=0, unrolled=unrolled),
+    )
+
+
 def lower(eom: EOM) -> ModuleIR:
     """Build the IR of the module for `eom`: rhs, mass_matrix, forcing, energies, momenta,
     and for constrained systems reactions, constraint residuals and matrix."""
@@ -181,7 +201,12 @@ def lower(eom: EOM) -> ModuleIR:
             "momenta", "Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`.",
             (*state_args, "out"), [(f"out[{i}]", eom.momenta[i]) for i in range(n)], mapping, loads,
         ),
-    )
+        _kernel(
+            "momentum_rate",
+            "ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces.",
+            (*state_args, "out"), [(f"out[{i}]", eom.momentum_rate[i]) for i in range(n)], mapping, loads,
+        ),
+    ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads),))
     system = eom.system
     return ModuleIR(
         system_name=system.name, description=system.description,

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from lagcomp.integrate import compositions, tableaux
+from lagcomp.integrate import collocation, compositions, tableaux
+from lagcomp.integrate.collocation import Collocation
 from lagcomp.integrate.compositions import Composition
 from lagcomp.integrate.tableaux import Tableau, driver_arguments
 
@@ -25,15 +26,22 @@ class Method:
     order: int
     adaptive: bool
     driver: str
-    tableau: Tableau | Composition
+    tableau: Tableau | Composition | Collocation
     summary: str
     separable_only: bool = False
+    unconstrained_only: bool = False
 
     def driver_arguments(self) -> tuple:
-        """The coefficient arrays the driver takes after its common arguments."""
+        """The coefficient arrays (and settings) the driver takes after its common arguments."""
+        if isinstance(self.tableau, Collocation):
+            return (*self.tableau.driver_arguments(), MAX_FIXED_POINT_SWEEPS)
         if isinstance(self.tableau, Composition):
             return self.tableau.driver_arguments()
         return driver_arguments(self.tableau)
+
+
+#: Fixed-point sweeps allowed per Gauss-Legendre step before the run stops (status -5).
+MAX_FIXED_POINT_SWEEPS = 100
 
 
 METHODS = {
@@ -50,11 +58,18 @@ METHODS = {
                "Yoshida's triple-jump composition of Verlet, symplectic, order 4", separable_only=True),
         Method("yoshida6", 6, False, "composition_run", compositions.YOSHIDA6,
                "Yoshida's 7-stage composition of Verlet, symplectic, order 6", separable_only=True),
+        Method("gauss1", 2, False, "collocation_run", collocation.GAUSS1,
+               "implicit midpoint rule on (q, p), symplectic for any Lagrangian", unconstrained_only=True),
+        Method("gauss2", 4, False, "collocation_run", collocation.GAUSS2,
+               "2-stage Gauss-Legendre on (q, p), symplectic, order 4", unconstrained_only=True),
+        Method("gauss3", 6, False, "collocation_run", collocation.GAUSS3,
+               "3-stage Gauss-Legendre on (q, p), symplectic, order 6", unconstrained_only=True),
     )
 }
 
 #: Other accepted spellings.
-ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "leapfrog": "verlet", "stormer_verlet": "verlet"}
+ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "leapfrog": "verlet", "stormer_verlet": "verlet",
+           "midpoint": "gauss1", "gl1": "gauss1", "gl2": "gauss2", "gl3": "gauss3"}
 
 
 def get_method(name: str) -> Method:

@@ -109,8 +109,12 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     if m.separable_only and not model.separable:
         raise OptionError(
             f"`{m.name}` needs a separable system (no constraints, a constant mass matrix and forces that do not "
-            f"depend on velocities); {model.name!r} is not one. Use dop853, dopri5 or rk4."
+            f"depend on velocities); {model.name!r} is not one. Use gauss2 (symplectic for any Lagrangian), "
+            "dop853, dopri5 or rk4."
         )
+    if m.unconstrained_only and model.k:
+        raise OptionError(f"`{m.name}` does not handle constraints yet; {model.name!r} has {list(model.constraints)}. "
+                          "Use dop853, dopri5 or rk4.")
     p = model.parameter_vector(params, baumgarte)
     options = dict(t1=t1, dt=dt, rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
                    save_every=_count(save_every, "save_every"), max_steps=_count(max_steps, "max_steps"))

@@ -15,6 +15,7 @@ MESSAGES = {
         "constraints the augmented matrix [M Λᵀ; Λ 0] did (redundant constraints).",
     -3: "The step size became too small (the solution may be singular here).",
     -4: "The maximum number of steps was reached.",
+    -5: "The implicit stage equations did not converge: reduce the step `dt`.",
 }
 
 

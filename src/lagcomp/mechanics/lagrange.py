@@ -19,7 +19,8 @@ and conservative forces, dissipation, and the velocity- and time-dependent
 inertial terms (Coriolis, centrifugal, imposed-motion terms).
 
 Also derived: the conjugate momenta p_i = ∂L/∂q̇_i (L = T − V), the energy
-function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L, which is conserved when L
+function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L — the Hamiltonian H(q, p, t)
+written in (q, q̇) — which is conserved when L
 does not depend on t explicitly and Q = 0, D = 0; the total mechanical energy
 E = T + V (equal to h when T is homogeneous quadratic in q̇); and the cyclic
 coordinates, those absent from L with no force acting along them, whose
@@ -99,6 +100,11 @@ class EOM:
         Whether explicit symplectic methods apply: no constraints, M constant
         (free of q and t) and F free of q̇, i.e. H = ½ pᵀ M⁻¹ p + V(q, t)
         with forces depending on q and t only.
+    momentum_offset : Matrix, shape (n, 1)
+        b(q, t) in p = M q̇ + b (momenta are affine in q̇).
+    momentum_rate : Matrix, shape (n, 1)
+        ṗ = ∂L/∂q + Q − ∂D/∂q̇ as a function of (q, q̇, t): with q̇ from
+        M q̇ = p − b this is Hamilton's ṗ = −∂H/∂q (+ non-conservative forces).
     """
 
     system: System
@@ -121,6 +127,8 @@ class EOM:
     b: sp.Matrix
     gamma: sp.Matrix
     separable: bool
+    momentum_offset: sp.Matrix
+    momentum_rate: sp.Matrix
 
     @property
     def n(self) -> int:
@@ -181,6 +189,9 @@ def derive(system: System) -> EOM:
     )
     L = T - V
     momenta = sp.Matrix([L.diff(v) for v in qd])
+    at_rest = {v: 0 for v in qd}
+    momentum_offset = momenta.xreplace(at_rest)
+    momentum_rate = sp.Matrix([Q[i] - D.diff(qd[i]) + L.diff(q[i]) for i in range(system.n)])
     h = sum(v * p for v, p in zip(qd, momenta)) - L
     separable = (
         not system.constraints
@@ -196,7 +207,8 @@ def derive(system: System) -> EOM:
         system=system, q=q, qd=qd, parameters=system.parameters,
         M=M.applyfunc(_tidy), F=F.applyfunc(_tidy), T=T, V=V, L=L,
         energy=_tidy(T + V), energy_function=_tidy(h), momenta=momenta.applyfunc(_tidy), cyclic=cyclic,
-        separable=separable, **constraints,
+        separable=separable, momentum_offset=momentum_offset.applyfunc(_tidy),
+        momentum_rate=momentum_rate.applyfunc(_tidy), **constraints,
     )
 
 
