@@ -754,7 +754,7 @@ Public drivers (the calling convention is shared by all five):
   n_steps, t_end, save_every, ts, ys, weights)``: symplectic compositions of
   Störmer-Verlet for separable systems (at the end of this file);
 * ``collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
-  n_steps, t_end, save_every, ts, ys, A, B, C, max_iter)``: implicit
+  n_steps, t_end, save_every, ts, ys, A, B, C, E, max_iter)``: implicit
   Gauss-Legendre collocation on the canonical equations in (q, p), for any
   unconstrained Lagrangian; it needs the kernels ``velocities`` and
   ``momentum_rate`` and returns -5 when its stage equations do not converge.
@@ -1718,7 +1718,7 @@ def composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
 
 @njit(cache=True, error_model="numpy")
 def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
-                    n_steps, t_end, save_every, ts, ys, A, B, C, max_iter):
+                    n_steps, t_end, save_every, ts, ys, A, B, C, E, max_iter):
     """Implicit Runge-Kutta (Gauss-Legendre) on x = (q, p); fixed step ``dt``; resumable.
 
     The canonical equations are evaluated without a symbolic inverse:
@@ -1727,7 +1727,8 @@ def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
     (q, q̇); x is rebuilt from ``momenta`` at the start of each call.  The
     stage equations K_i = f(t + c_i h, x + h Σ_j a_ij K_j) are solved by
     fixed-point iteration, updating each stage as soon as it is computed,
-    from K = 0, until the change of h·K reaches rounding level (below 4e-16
+    from the previous step's stages extrapolated by E (zero on a call's first
+    step), until the change of h·K reaches rounding level (below 4e-16
     relative to the state, or no longer decreasing once below 1e-10); after
     ``max_iter`` sweeps the run stops with -5 (the step is too large for
     the iteration to contract).  Explicit time dependence is evaluated at
@@ -1745,6 +1746,8 @@ def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
     qdot = np.empty(n)
     pdot = np.empty(n)
     K = np.empty((s, n2))
+    K_previous = np.zeros((s, n2))
+    extrapolate = False
     n_saved = 0
     momenta(clock[0], y, p, pdot)
     for c in range(n):
@@ -1770,7 +1773,11 @@ def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
             scale = max(scale, abs(x[c]))
         for i in range(s):
             for c in range(n2):
-                K[i, c] = 0.0
+                guess = 0.0
+                if extrapolate and not last:
+                    for j in range(s):
+                        guess += E[i, j] * K_previous[j, c]
+                K[i, c] = guess
         converged = False
         status = 0
         previous = np.inf
@@ -1832,6 +1839,10 @@ def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
             x[n + c] = xs[n + c]
             y[c] = xs[c]
             y[n + c] = qdot[c]
+        for i in range(s):
+            for c in range(n2):
+                K_previous[i, c] = K[i, c]
+        extrapolate = True
         clock[0] = t_b
         counters[1] = k + 1
         counters[4] += 1

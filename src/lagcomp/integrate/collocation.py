@@ -51,9 +51,28 @@ class Collocation:
             value.setflags(write=False)
             object.__setattr__(self, name, value)
 
+    @property
+    def extrapolation(self) -> np.ndarray:
+        """E (s, s): the previous step's stage derivatives K_j give the next step's first guess Σ_j E_ij K_j.
+
+        The collocation polynomial's derivative interpolates K_j at the nodes
+        c_j; E_ij = ℓ_j(1 + c_i) evaluates its Lagrange basis at the next
+        step's nodes (same step size), a guess accurate to O(h^s) that saves
+        fixed-point sweeps.
+        """
+        C = self.C
+        s = C.size
+        E = np.ones((s, s))
+        for i in range(s):
+            for j in range(s):
+                for m in range(s):
+                    if m != j:
+                        E[i, j] *= (1.0 + C[i] - C[m]) / (C[j] - C[m])
+        return E
+
     def driver_arguments(self) -> tuple[np.ndarray, ...]:
-        """The arrays `collocation_run` takes: A, B, C."""
-        return tuple(np.ascontiguousarray(v).copy() for v in (self.A, self.B, self.C))
+        """The arrays `collocation_run` takes: A, B, C and the extrapolation matrix E."""
+        return tuple(np.ascontiguousarray(v, dtype=np.float64).copy() for v in (self.A, self.B, self.C, self.extrapolation))
 
 
 _r3, _r15 = math.sqrt(3.0), math.sqrt(15.0)
