@@ -133,7 +133,7 @@ def test_initial_conditions_satisfy_constraints(name):
 
 def test_hoop_reaction_is_the_push_normal_to_the_hoop():
     eom = eom_of("hoop_bead_reaction")
-    (th, thd), (ph, phd) = coord(eom, "theta"), coord(eom, "phi")
+    (th, thd), (_, phd) = coord(eom, "theta"), coord(eom, "phi")
     m, R, g, Om, eps = (param(eom, k) for k in ("m", "R", "g", "Omega", "epsilon"))
     assert eom.constraint_names == ("drive",)
     qdd, lam = kkt_symbolic(eom)

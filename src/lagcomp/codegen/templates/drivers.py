@@ -181,6 +181,8 @@ four in ``dop853_run``; LLVM inlines a small kernel at each and calls a large
 one.
 """
 
+# ruff: noqa: F821  (rhs, project, velocities, ... are defined by the module this text is appended to)
+
 import numpy as np
 from numba import njit
 
