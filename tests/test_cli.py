@@ -67,3 +67,13 @@ def test_show_prints_equations_and_module_path(capsys, cache_dir):
 def test_example_arguments(capsys, cache_dir):
     assert main(["--cache-dir", str(cache_dir), "show", "n_link_pendulum", "--arg", "n=2"]) == 0
     assert "theta2" in capsys.readouterr().out
+
+
+def test_show_derives_once_on_a_cache_miss(capsys, tmp_path, monkeypatch):
+    import lagcomp.mechanics.lagrange as lagrange
+
+    calls = []
+    original = lagrange.derive
+    monkeypatch.setattr(lagrange, "derive", lambda system: calls.append(system.name) or original(system))
+    assert main(["--cache-dir", str(tmp_path), "show", "sling"]) == 0
+    assert calls == ["sling"]

@@ -48,13 +48,12 @@ def cmd_list(args) -> int:
 def cmd_show(args) -> int:
     import sympy as sp
 
-    from lagcomp.codegen.lower import lower
     from lagcomp.mechanics.lagrange import derive
     from lagcomp.runtime import compile
 
     system = _system(args)
     eom = derive(system)
-    model = compile(system, cache_dir=args.cache_dir)
+    model = compile(system, cache_dir=args.cache_dir, eom=eom)
     print(f"{system.name}: {system.description}\n")
     print(f"coordinates q  = ({', '.join(system.coordinate_names)})")
     print(f"parameters  p  = ({', '.join(system.parameter_names)})   [kernel order]")
@@ -77,8 +76,7 @@ def cmd_show(args) -> int:
         print(sp.pretty(eom.gamma, use_unicode=True))
     print("\nenergy T + V =", eom.energy)
     print("energy function h =", eom.energy_function)
-    ops = {k.name: k.operation_count for k in lower(eom).kernels}
-    print(f"\noperations after CSE: {ops}")
+    print(f"\noperations after CSE: {model.operations}")
     print(f"generated module: {model.source_path}")
     return 0
 

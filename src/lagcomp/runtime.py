@@ -19,7 +19,7 @@ from lagcomp.errors import CacheWarning, InitialConditionError, ParameterError, 
 from lagcomp.model.system import System
 
 
-def compile(system: System, *, cache_dir: str | os.PathLike | None = None) -> "Model":  # noqa: A001
+def compile(system: System, *, cache_dir: str | os.PathLike | None = None, eom=None) -> "Model":  # noqa: A001
     """Compile `system` into a `Model` of numba kernels, using the on-disk cache.
 
     Parameters
@@ -28,6 +28,9 @@ def compile(system: System, *, cache_dir: str | os.PathLike | None = None) -> "M
         What to compile.
     cache_dir : path, optional
         Cache root; defaults to $LAGCOMP_CACHE_DIR, else the user cache directory.
+    eom : lagcomp.mechanics.lagrange.EOM, optional
+        The equations of `system` if the caller has derived them already
+        (used on a cache miss instead of deriving them again).
 
     Returns
     -------
@@ -43,17 +46,17 @@ def compile(system: System, *, cache_dir: str | os.PathLike | None = None) -> "M
         except Exception as err:  # a damaged module that still hashed right, or a stale numba cache
             warnings.warn(f"lagcomp could not load {entry.path.name} ({err}); rebuilding it.", CacheWarning, stacklevel=2)
             cache.discard(entry)
-    entry = build(system, cache, key)
+    entry = build(system, cache, key, eom)
     return Model(system, load_module(entry), entry, from_cache=False)
 
 
-def build(system: System, cache: Cache, key: str) -> Entry:
-    """Derive, lower and emit `system`, and store the module under `key`."""
+def build(system: System, cache: Cache, key: str, eom=None) -> Entry:
+    """Derive (unless `eom` is given), lower and emit `system`, and store the module under `key`."""
     from lagcomp.codegen.emit import emit
     from lagcomp.codegen.lower import lower
     from lagcomp.mechanics.lagrange import derive
 
-    eom = derive(system)
+    eom = derive(system) if eom is None else eom
     ir = lower(eom)
     metadata = {
         "coordinates": list(system.coordinate_names),
