@@ -212,12 +212,22 @@ class Model:
             )
         return dict(zip(self.constraints, out.tolist()))
 
+    @property
+    def residual_labels(self) -> tuple[tuple[str, str], ...]:
+        """(constraint, level) of each entry of the ``constraint_residuals`` kernel's output.
+
+        Level "position" for Φ of the holonomic constraints, then "velocity"
+        for Λ q̇ + b of all constraints.
+        """
+        holonomic = tuple((c, "position") for c, h in zip(self.constraints, self.holonomic) if h)
+        return holonomic + tuple((c, "velocity") for c in self.constraints)
+
     def constraint_residuals(self, t: float, y, params: dict | None = None) -> dict[str, float]:
         """Residuals at one state by name: ``"<name>"`` for Φ (holonomic) and ``"<name>_dot"`` for Λ q̇ + b."""
         y = np.ascontiguousarray(y, dtype=float)
-        names = [c for c, h in zip(self.constraints, self.holonomic) if h] + [f"{c}_dot" for c in self.constraints]
-        out = np.empty(len(names))
+        out = np.empty(len(self.residual_labels))
         self.kernels.constraint_residuals(float(t), y, self.parameter_vector(params), out)
+        names = [c if level == "position" else f"{c}_dot" for c, level in self.residual_labels]
         return dict(zip(names, out.tolist()))
 
     def _state(self, q, qd):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import keyword
 import re
+from dataclasses import replace
 
 import sympy as sp
 
@@ -71,6 +72,16 @@ def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
     )
 
 
+def _spd_solve(M: sp.Matrix, rhs: list, offset: int) -> tuple[list, LinearSolve]:
+    """Stores binding M (lower triangle) and the right-hand side, and the LDLᵀ solve that follows them."""
+    n = M.rows
+    unrolled = n <= UNROLL_MAX
+    m = tuple(tuple(f"_m{i}_{j}" if unrolled else f"mm[{i}, {j}]" for j in range(i + 1)) for i in range(n))
+    f = tuple(f"_f{i}" if unrolled else f"ff[{i}]" for i in range(n))
+    stores = [(m[i][j], M[i, j]) for i in range(n) for j in range(i + 1)] + list(zip(f, rhs))
+    return stores, LinearSolve(n=n, m=m, f=f, offset=offset, unrolled=unrolled)
+
+
 def _velocity_residual(eom: EOM, c: int) -> sp.Expr:
     """Λ_c · q̇ + b_c, which vanishes on the constraint."""
     return sum((eom.C[c, j] * eom.qd[j] for j in range(eom.n)), eom.b[c])
@@ -101,24 +112,25 @@ def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
     n, k = eom.n, eom.k
     state_args = ("t", "y", "p")
     velocities = [(f"out[{i}]", eom.qd[i]) for i in range(n)]
-    augmented = _augmented_stores(eom)
     kh = len(eom.Phi)
-    return (
-        _kernel(
-            "rhs",
-            "State derivative dy/dt = (q̇, q̈), shape (2n,), from the augmented system\n"
-            "M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).\n\n"
-            "Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid.",
-            (*state_args, "out"), velocities + augmented, mapping, loads,
-            solve=AugmentedSolve(size=n + k, mass_block=n, first=0, count=n, offset=n),
-        ),
-        _kernel(
-            "reactions",
-            f"Multipliers λ, shape ({k},), in constraint order {eom.constraint_names}: the generalized\n"
+    rhs = _kernel(
+        "rhs",
+        "State derivative dy/dt = (q̇, q̈), shape (2n,), from the augmented system\n"
+        "M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).\n\n"
+        "Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid.",
+        (*state_args, "out"), velocities + _augmented_stores(eom), mapping, loads,
+        solve=AugmentedSolve(size=n + k, mass_block=n, first=0, count=n, offset=n),
+    )
+    # the same augmented system, so the same CSE: only what is copied out differs
+    reactions = replace(
+        rhs, name="reactions",
+        doc=f"Multipliers λ, shape ({k},), in constraint order {eom.constraint_names}: the generalized\n"
             "force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular.",
-            (*state_args, "out"), augmented, mapping, loads,
-            solve=AugmentedSolve(size=n + k, mass_block=n, first=n, count=k, offset=0),
-        ),
+        stores=rhs.stores[n:], solve=AugmentedSolve(size=n + k, mass_block=n, first=n, count=k, offset=0),
+    )
+    return (
+        rhs,
+        reactions,
         _kernel(
             "constraint_residuals",
             f"Residuals, shape ({kh + k},): Φ of the {kh} holonomic constraints, then Λ q̇ + b of all {k}.",
@@ -139,22 +151,33 @@ def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
 
 
 def _velocities_kernel(eom: EOM, mapping, loads) -> Kernel:
-    """q̇ from x = (q, p): solve M(q, t) q̇ = p − b(q, t) (the inverse Legendre map, numerically)."""
+    """q̇ from x = (q, p): solve M(q, t) q̇ = p − b(q, t) (the inverse Legendre map, numerically).
+
+    The second half of the state argument holds the momenta here; M and b do
+    not depend on q̇, so the velocity loads drop out as unused.
+    """
     n = eom.n
-    unrolled = n <= UNROLL_MAX
     momenta = [sp.Symbol(f"_p_{name}", real=True) for name in eom.system.coordinate_names]
-    loads = tuple(item for item in loads if not item[1].startswith("y[") or int(item[1][2:-1]) < n)
     loads += tuple((s.name, f"y[{n + i}]") for i, s in enumerate(momenta))
-    m_names = tuple(tuple(f"_m{i}_{j}" if unrolled else f"mm[{i}, {j}]" for j in range(i + 1)) for i in range(n))
-    f_names = tuple(f"_f{i}" if unrolled else f"ff[{i}]" for i in range(n))
-    stores = [(m_names[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
-    stores += [(f_names[i], momenta[i] - eom.momentum_offset[i]) for i in range(n)]
+    stores, solve = _spd_solve(eom.M, [momenta[i] - eom.momentum_offset[i] for i in range(n)], offset=0)
     return _kernel(
         "velocities",
         "Velocities q̇, shape (n,), at x = (q, p) (here `y` holds q then the momenta p), from\n"
         "M(q, t) q̇ = p − b(q, t). Returns 0, or k > 0 when pivot k of M is not positive.",
-        ("t", "y", "p", "out"), stores, mapping, loads,
-        solve=LinearSolve(n=n, m=m_names, f=f_names, offset=0, unrolled=unrolled),
+        ("t", "y", "p", "out"), stores, mapping, loads, solve=solve,
+    )
+
+
+def _rhs_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """dy/dt = (q̇, q̈) of an unconstrained system, q̈ by LDLᵀ of M."""
+    n = eom.n
+    stores, solve = _spd_solve(eom.M, list(eom.F), offset=n)
+    return _kernel(
+        "rhs",
+        "State derivative dy/dt = (q̇, q̈), shape (2n,), with M(q, t) q̈ = F(q, q̇, t).\n\n"
+        "Returns 0, or k > 0 when pivot k of the LDLᵀ factorization of M is not\n"
+        "positive (M is singular or indefinite at this state); `out` is then invalid.",
+        ("t", "y", "p", "out"), [(f"out[{i}]", eom.qd[i]) for i in range(n)] + stores, mapping, loads, solve=solve,
     )
 
 
@@ -164,23 +187,7 @@ def lower(eom: EOM) -> ModuleIR:
     n = eom.n
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
-    unrolled = n <= UNROLL_MAX
-    m_names = tuple(tuple(f"_m{i}_{j}" if unrolled else f"mm[{i}, {j}]" for j in range(i + 1)) for i in range(n))
-    f_names = tuple(f"_f{i}" if unrolled else f"ff[{i}]" for i in range(n))
-    rhs_stores = [(f"out[{i}]", eom.qd[i]) for i in range(n)]
-    rhs_stores += [(m_names[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
-    rhs_stores += [(f_names[i], eom.F[i]) for i in range(n)]
-    rhs = (
-        _kernel(
-            "rhs",
-            "State derivative dy/dt = (q̇, q̈), shape (2n,), with M(q, t) q̈ = F(q, q̇, t).\n\n"
-            "Returns 0, or k > 0 when pivot k of the LDLᵀ factorization of M is not\n"
-            "positive (M is singular or indefinite at this state); `out` is then invalid.",
-            (*state_args, "out"), rhs_stores, mapping, loads,
-            solve=LinearSolve(n=n, m=m_names, f=f_names, offset=n, unrolled=unrolled),
-        ),
-    )
-    kernels = (_constraint_kernels(eom, mapping, loads) if eom.k else rhs) + (
+    kernels = (_constraint_kernels(eom, mapping, loads) if eom.k else (_rhs_kernel(eom, mapping, loads),)) + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",
             (*state_args, "out"),

@@ -20,16 +20,18 @@ def consistent_initial_state(model, t0: float, y0: np.ndarray, p: np.ndarray, pr
     """
     if not model.k:
         return y0, False
-    names = model.constraint_residuals(t0, y0, _params_from(model, p)).items()
-    worst_name, worst = max(names, key=lambda item: abs(item[1]))
+    residuals = np.empty(len(model.residual_labels))
+    model.kernels.constraint_residuals(t0, y0, p, residuals)
+    worst_index = int(np.argmax(np.abs(residuals)))
+    worst = residuals[worst_index]
     if abs(worst) <= tolerance:
         return y0, False
     if not project:
-        level = "velocity" if worst_name.endswith("_dot") else "position"
-        constraint = worst_name.removesuffix("_dot") if level == "velocity" else worst_name
+        constraint, level = model.residual_labels[worst_index]
         raise InitialConditionError(
             f"The initial state violates constraint `{constraint}` at {level} level by {worst:.3g} "
-            f"(tolerance {tolerance:g}); fix q0/qd0, or pass project_initial=True (--project-initial on the command line) to project them onto the constraints."
+            f"(tolerance {tolerance:g}); fix q0/qd0, or pass project_initial=True (--project-initial on the "
+            "command line) to project them onto the constraints."
         )
     y = y0.copy()
     status = model.kernels.project(t0, y, p)
@@ -40,9 +42,6 @@ def consistent_initial_state(model, t0: float, y0: np.ndarray, p: np.ndarray, pr
         )
     return y, True
 
-
-def _params_from(model, p: np.ndarray) -> dict:
-    return dict(zip(model.parameters, p[: len(model.parameters)]))
 
 
 def reactions_along(model, ts: np.ndarray, ys: np.ndarray, p: np.ndarray) -> tuple[dict, np.ndarray]:

@@ -15,7 +15,7 @@ checks only); the symbolic derivation lives in `lagcomp.mechanics`.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import sympy as sp
@@ -134,7 +134,7 @@ class System:
             if unknown:
                 raise ModelError(f"`forces` names {unknown}, which are not coordinates of {self.name!r}.")
             return tuple(_sympify(forces.get(q, 0), f"forces[{q}]") for q in coords)
-        forces = tuple(forces) if isinstance(forces, Sequence) or forces else ()
+        forces = tuple(forces or ())
         if not forces:
             return (sp.S.Zero,) * len(coords)
         if len(forces) != len(coords):
