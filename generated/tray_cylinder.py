@@ -354,11 +354,12 @@ Public drivers (the calling convention is shared by all five):
   A_EXTRA, C_EXTRA)``
 * ``composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
   n_steps, t_end, save_every, ts, ys, weights)``: symplectic compositions of
-  Störmer-Verlet for separable systems (at the end of this file);
+  Störmer-Verlet for separable systems (in ``symplectic.py``, appended after
+  this file);
 * ``collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
   n_steps, t_end, save_every, ts, ys, A, B, C, E, max_iter)``: implicit
   Gauss-Legendre collocation on the canonical equations in (q, p), for any
-  unconstrained Lagrangian; it needs the kernels ``velocities`` and
+  unconstrained Lagrangian (also in ``symplectic.py``); it needs the kernels ``velocities`` and
   ``momentum_rate`` and returns -5 when its stage equations do not converge.
 
 The trailing tableau arrays are ``lagcomp.integrate.tableaux.driver_arguments``
@@ -1224,6 +1225,32 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
         clock[0] = t
         clock[1] = h_abs
         counters[1] += 1
+
+
+# ----------------------------------------------------------------------------
+# lagcomp/codegen/templates/symplectic.py
+
+"""Symplectic drivers: a *template*, appended verbatim to every generated module after ``drivers.py``.
+
+Like ``drivers.py`` (read its docstring first: the calling convention, the
+status codes, the chunked and resumable state in ``y``, ``clock`` and
+``counters``, and why each driver is one long function are shared), this
+text is not imported as part of lagcomp; it uses the module's kernels and
+the status constants of ``drivers.py`` as globals.
+
+* ``composition_run``: symmetric compositions of Störmer-Verlet (explicit,
+  separable systems only);
+* ``collocation_run``: implicit Gauss-Legendre collocation on the canonical
+  equations in (q, p), for any unconstrained Lagrangian.
+
+Both are fixed-step: step k goes from ``t0 + k dt`` to ``t0 + (k+1) dt``, the
+last step landing exactly on ``t_end``, as in ``rk4_run``.
+"""
+
+# ruff: noqa: F821  (rhs, velocities, momenta, _ODE_* ... are defined by the module this text is appended to)
+
+import numpy as np
+from numba import njit
 
 
 # ---------------------------------------------------------------------------

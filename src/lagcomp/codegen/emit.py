@@ -3,9 +3,9 @@
 The module holds, in order: a header naming the system, its state and
 parameter order and the lagcomp version; the kernels; the constraint hooks
 the drivers call (`project`, `constraint_residual`); `observables`, which
-evaluates the energies along a saved trajectory; then two templates appended
+evaluates the energies along a saved trajectory; then templates appended
 as text, the linear solvers (`templates/linear_solvers.py`) and the
-integration drivers (`templates/drivers.py`), so that they call the kernels
+integration drivers (`templates/drivers.py`, `templates/symplectic.py`), so that they call the kernels
 as module globals — that is what lets numba cache them across processes
 (DESIGN.md).
 The same IR always gives the same bytes: no timestamps, stable ordering.
@@ -234,7 +234,7 @@ def emit(ir: ModuleIR) -> str:
     parts += [_kernel_source(k) for k in ir.kernels]
     parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
-    for name in ("linear_solvers", "drivers"):
+    for name in ("linear_solvers", "drivers", "symplectic"):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")
         parts.append(template(name))
     return "".join(parts)

@@ -1,7 +1,7 @@
 """The integration methods `simulate` offers, as data (a registry, like scipy's METHODS).
 
 Each `Method` names the driver function emitted into every generated module
-(`lagcomp/codegen/templates/drivers.py`) and the tableau whose arrays it takes.
+(`lagcomp/codegen/templates/drivers.py` and `symplectic.py`) and the tableau whose arrays it takes.
 """
 
 from __future__ import annotations

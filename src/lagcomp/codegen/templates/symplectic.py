@@ -1,0 +1,263 @@
+"""Symplectic drivers: a *template*, appended verbatim to every generated module after ``drivers.py``.
+
+Like ``drivers.py`` (read its docstring first: the calling convention, the
+status codes, the chunked and resumable state in ``y``, ``clock`` and
+``counters``, and why each driver is one long function are shared), this
+text is not imported as part of lagcomp; it uses the module's kernels and
+the status constants of ``drivers.py`` as globals.
+
+* ``composition_run``: symmetric compositions of Störmer-Verlet (explicit,
+  separable systems only);
+* ``collocation_run``: implicit Gauss-Legendre collocation on the canonical
+  equations in (q, p), for any unconstrained Lagrangian.
+
+Both are fixed-step: step k goes from ``t0 + k dt`` to ``t0 + (k+1) dt``, the
+last step landing exactly on ``t_end``, as in ``rk4_run``.
+"""
+
+# ruff: noqa: F821  (rhs, velocities, momenta, _ODE_* ... are defined by the module this text is appended to)
+
+import numpy as np
+from numba import njit
+
+
+# ---------------------------------------------------------------------------
+# Explicit symplectic compositions for separable systems
+# ---------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
+                    n_steps, t_end, save_every, ts, ys, weights):
+    """Symmetric composition of Störmer-Verlet substeps; fixed step ``dt``; resumable.
+
+    For separable systems only (constant mass matrix M, accelerations
+    independent of the velocities; the caller checks): then p = M q̇ is a
+    constant linear change of variables, and kick-drift-kick on (q, q̇),
+
+        q̇ ← q̇ + ½ w h q̈(q, t),   q ← q + w h q̇,   q̇ ← q̇ + ½ w h q̈(q, t + w h),
+
+    is the Störmer-Verlet step of H = ½ pᵀ M⁻¹ p + V(q) (HLW, *Geometric
+    Numerical Integration*, sec. I.3).  A step of size h runs one substep per
+    weight w (``lagcomp.integrate.compositions``).  The acceleration at the
+    end of a substep is the start of the next one, so a substep costs one
+    ``rhs`` call.  Step times, saving, chunking and failure statuses follow
+    ``rk4_run``.  Projection is not offered: constrained systems are not
+    separable in this sense.
+    """
+    n2 = y.shape[0]
+    n = n2 // 2
+    cap = ts.shape[0]
+    acc = np.empty(n2)
+    acc_new = np.empty(n2)
+    y_new = np.empty(n2)
+    n_saved = 0
+    if counters[1] < n_steps:
+        status = rhs(clock[0], y, p, acc)
+        counters[0] += 1
+        if status != 0:
+            return _ODE_RHS_FAILED, n_saved
+    while True:
+        k = counters[1]
+        if k >= n_steps:
+            return _ODE_DONE, n_saved
+        last = k == n_steps - 1
+        if last or counters[4] + 1 >= save_every:
+            if n_saved >= cap:
+                return _ODE_BUFFER_FULL, n_saved
+        t_a = min(t0 + k * dt, t_end)
+        if last:
+            t_b = t_end
+        else:
+            t_b = min(t0 + (k + 1) * dt, t_end)
+        h = t_b - t_a
+
+        for i in range(n2):
+            y_new[i] = y[i]
+            acc_new[i] = acc[i]
+        elapsed = 0.0
+        status = 0
+        for j in range(weights.shape[0]):
+            hw = weights[j] * h
+            for i in range(n):
+                y_new[n + i] += 0.5 * hw * acc_new[n + i]
+                y_new[i] += hw * y_new[n + i]
+            elapsed += weights[j]
+            t_sub = t_b if j == weights.shape[0] - 1 else t_a + elapsed * h
+            status = rhs(t_sub, y_new, p, acc_new)
+            counters[0] += 1
+            if status != 0:
+                break
+            for i in range(n):
+                y_new[n + i] += 0.5 * hw * acc_new[n + i]
+        if status != 0:
+            return _ODE_RHS_FAILED, n_saved
+        for i in range(n2):
+            if not np.isfinite(y_new[i]):
+                status = -1
+        if status != 0:
+            return _ODE_NONFINITE, n_saved
+
+        for i in range(n2):
+            y[i] = y_new[i]
+            acc[i] = acc_new[i]
+        clock[0] = t_b
+        counters[1] = k + 1
+        counters[4] += 1
+        if last or counters[4] >= save_every:
+            ts[n_saved] = t_b
+            for i in range(n2):
+                ys[n_saved, i] = y[i]
+            n_saved += 1
+            counters[4] = 0
+
+
+# ---------------------------------------------------------------------------
+# Implicit Gauss-Legendre collocation on the canonical equations
+# ---------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
+                    n_steps, t_end, save_every, ts, ys, A, B, C, E, max_iter):
+    """Implicit Runge-Kutta (Gauss-Legendre) on x = (q, p); fixed step ``dt``; resumable.
+
+    The canonical equations are evaluated without a symbolic inverse:
+    q̇ = ``velocities``(t, x) solves M q̇ = p − b, and ṗ = ``momentum_rate``
+    at (q, q̇) is ∂L/∂q + Q = −∂H/∂q + Q.  Saved rows and ``y`` stay in
+    (q, q̇); x is rebuilt from ``momenta`` at the start of each call.  The
+    stage equations K_i = f(t + c_i h, x + h Σ_j a_ij K_j) are solved by
+    fixed-point iteration, updating each stage as soon as it is computed,
+    from the previous step's stages extrapolated by E (zero on a call's first
+    step), until the change of h·K reaches rounding level (below 4e-16
+    relative to the state, or no longer decreasing once below 1e-14); after
+    ``max_iter`` sweeps the run stops with -5 (the step is too large for
+    the iteration to contract).  Explicit time dependence is evaluated at
+    the stage times t + c_i h, which is the method applied to the autonomous
+    system extended by t' = 1 (HLW, sec. VI.4).  Step times, saving and
+    chunking follow ``rk4_run``.
+    """
+    n2 = y.shape[0]
+    n = n2 // 2
+    s = B.shape[0]
+    cap = ts.shape[0]
+    x = np.empty(n2)
+    xs = np.empty(n2)
+    y_stage = np.empty(n2)
+    qdot = np.empty(n)
+    pdot = np.empty(n)
+    K = np.empty((s, n2))
+    K_previous = np.zeros((s, n2))
+    extrapolate = False
+    compensation = np.zeros(n2)
+    new_compensation = np.zeros(n2)
+    n_saved = 0
+    momenta(clock[0], y, p, pdot)
+    for c in range(n):
+        x[c] = y[c]
+        x[n + c] = pdot[c]
+    while True:
+        k = counters[1]
+        if k >= n_steps:
+            return _ODE_DONE, n_saved
+        last = k == n_steps - 1
+        if last or counters[4] + 1 >= save_every:
+            if n_saved >= cap:
+                return _ODE_BUFFER_FULL, n_saved
+        t_a = min(t0 + k * dt, t_end)
+        if last:
+            t_b = t_end
+        else:
+            t_b = min(t0 + (k + 1) * dt, t_end)
+        h = t_b - t_a
+
+        scale = 1.0
+        for c in range(n2):
+            scale = max(scale, abs(x[c]))
+        for i in range(s):
+            for c in range(n2):
+                guess = 0.0
+                if extrapolate and not last:
+                    for j in range(s):
+                        guess += E[i, j] * K_previous[j, c]
+                K[i, c] = guess
+        converged = False
+        status = 0
+        previous = np.inf
+        for sweep in range(max_iter):
+            change = 0.0
+            for i in range(s):
+                for c in range(n2):
+                    acc = x[c]
+                    for j in range(s):
+                        acc += h * A[i, j] * K[j, c]
+                    xs[c] = acc
+                t_stage = t_a + C[i] * h
+                status = velocities(t_stage, xs, p, qdot)
+                if status == 0:
+                    for c in range(n):
+                        y_stage[c] = xs[c]
+                        y_stage[n + c] = qdot[c]
+                    momentum_rate(t_stage, y_stage, p, pdot)
+                counters[0] += 1
+                if status != 0:
+                    break
+                for c in range(n):
+                    change = max(change, abs(h * (qdot[c] - K[i, c])), abs(h * (pdot[c] - K[i, n + c])))
+                    K[i, c] = qdot[c]
+                    K[i, n + c] = pdot[c]
+            if status != 0:
+                break
+            change /= scale
+            if not np.isfinite(change):
+                status = -1
+                break
+            if change <= 4e-16 or (change >= previous and change < 1e-14):
+                converged = True
+                break
+            previous = change
+        if status > 0:
+            return _ODE_RHS_FAILED, n_saved
+        if status < 0:
+            return _ODE_NONFINITE, n_saved
+        if not converged:
+            return _ODE_NOT_CONVERGED, n_saved
+
+        # x ← x + h Σ b_i K_i with compensated (Kahan) summation: the
+        # increment's rounding is carried to the next step instead of lost,
+        # which removes the systematic energy drift of long runs.
+        for c in range(n2):
+            increment = 0.0
+            for i in range(s):
+                increment += h * B[i] * K[i, c]
+            increment -= compensation[c]
+            acc = x[c] + increment
+            new_compensation[c] = (acc - x[c]) - increment
+            xs[c] = acc
+            if not np.isfinite(acc):
+                status = -1
+        if status == 0:
+            status = velocities(t_b, xs, p, qdot)
+            if status > 0:
+                return _ODE_RHS_FAILED, n_saved
+        if status != 0:
+            return _ODE_NONFINITE, n_saved
+
+        for c in range(n):
+            x[c] = xs[c]
+            x[n + c] = xs[n + c]
+            y[c] = xs[c]
+            y[n + c] = qdot[c]
+        for c in range(n2):
+            compensation[c] = new_compensation[c]
+        for i in range(s):
+            for c in range(n2):
+                K_previous[i, c] = K[i, c]
+        extrapolate = True
+        clock[0] = t_b
+        counters[1] = k + 1
+        counters[4] += 1
+        if last or counters[4] >= save_every:
+            ts[n_saved] = t_b
+            for c in range(n2):
+                ys[n_saved, c] = y[c]
+            n_saved += 1
+            counters[4] = 0
