@@ -111,6 +111,19 @@ def velocities(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def canonical_partials(t, y, p, out):
+    """At y = (q, q̇), shape (4, n, n) into `out`: out[0] = M, out[1] = ∂P/∂q, out[2] = ∂r/∂q,
+    out[3] = ∂r/∂q̇ (P = M q̇ + b the momenta, r = ∂L/∂q + Q − ∂D/∂q̇ their rate; row i is
+    component i, column j the variable j)."""
+    m = p[0]
+    omega = p[1]
+    out[0, 0, 0] = m
+    out[1, 0, 0] = 0.0
+    out[2, 0, 0] = m*omega**2
+    out[3, 0, 0] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -143,7 +156,8 @@ only when it is first called, so solvers a system does not use cost nothing.
 
 * ``_ldlt_solve``: symmetric positive definite systems (the mass matrix of a
   large unconstrained system; small ones get the same factorization unrolled
-  by the emitter).
+  by the emitter); ``_ldlt_solve_matrix``, the same for several right-hand
+  sides at once (M⁻¹ applied to a matrix, in ``canonical_jacobian``).
 * ``_kkt_solve``: the augmented system of a constrained system,
   [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ).  Where M is positive definite it uses the
   Schur complement: with M = L D Lᵀ, W = M⁻¹ Λᵀ and u = M⁻¹ F, the
@@ -192,6 +206,39 @@ def _ldlt_solve(mm, ff, out, offset):
         for k in range(i + 1, n):
             x -= mm[k, i] * out[offset + k]
         out[offset + i] = x
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def _ldlt_solve_matrix(mm, b):
+    """Solve mm X = b for all m columns of b, shape (n, m), in place: X overwrites b.
+
+    mm (n, n) symmetric, lower triangle used, is factored once by LDLᵀ as in
+    ``_ldlt_solve`` (L and D overwrite it).  Returns 0, or j + 1 when pivot j
+    is not positive (mm singular or indefinite); b is then invalid.
+    """
+    n = mm.shape[0]
+    for j in range(n):
+        d = mm[j, j]
+        for k in range(j):
+            d -= mm[j, k] * mm[j, k] * mm[k, k]
+        if not d > _PIVOT_TOLERANCE * abs(mm[j, j]):
+            return j + 1
+        mm[j, j] = d
+        for i in range(j + 1, n):
+            s = mm[i, j]
+            for k in range(j):
+                s -= mm[i, k] * mm[j, k] * mm[k, k]
+            mm[i, j] = s / d
+    for c in range(b.shape[1]):
+        for i in range(n):
+            for k in range(i):
+                b[i, c] -= mm[i, k] * b[k, c]
+        for i in range(n - 1, -1, -1):
+            x = b[i, c] / mm[i, i]
+            for k in range(i + 1, n):
+                x -= mm[k, i] * b[k, c]
+            b[i, c] = x
     return 0
 
 
@@ -293,6 +340,92 @@ def _kkt_solve(a, n):
         a[i, size] = x
     for r in range(k):
         a[n + r, size] = lam[r]
+    return 0
+
+
+# ----------------------------------------------------------------------------
+# lagcomp/codegen/templates/hamiltonian.py
+
+"""Hamiltonian form of an unconstrained system: a *template*, appended to unconstrained modules only.
+
+Like ``linear_solvers.py`` and ``drivers.py``, this text is appended verbatim
+to each generated module of a system without constraints; it uses the
+module's kernels ``velocities``, ``energy_function`` and
+``canonical_partials`` and the solver ``_ldlt_solve_matrix`` as globals.
+
+The canonical state is x = (q, p), shape (2n,), p the conjugate momenta
+P(q, q̇, t) = ∂L/∂q̇ = M(q, t) q̇ + b(q, t).  Nothing here inverts M
+symbolically: q̇ = v(q, p, t) solves M v = p − b numerically (``velocities``),
+and the Hamiltonian and the Jacobian of the canonical equations are built
+from kernels evaluated at (q, v).
+"""
+
+# ruff: noqa: F821  (velocities, energy_function, canonical_partials, _ldlt_solve_matrix: module globals)
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, error_model="numpy")
+def hamiltonian(t, x, p):
+    """H(q, p, t) at x = (q, p), shape (2n,): the energy function at (q, v(q, p, t)).
+
+    The Legendre transform H = p·v − L(q, v, t) is the value of the energy
+    function h = Σ q̇_i ∂L/∂q̇_i − L at q̇ = v.  Returns NaN where M is not
+    positive definite (v undefined).
+    """
+    n = x.shape[0] // 2
+    v = np.empty(n)
+    if velocities(t, x, p, v):
+        return np.nan
+    y = np.empty(2 * n)
+    for i in range(n):
+        y[i] = x[i]
+        y[n + i] = v[i]
+    return energy_function(t, y, p)
+
+
+@njit(cache=True, error_model="numpy")
+def canonical_jacobian(t, x, p, J):
+    """Jacobian ∂f/∂x, shape (2n, 2n) into ``J``, of the canonical equations at x = (q, p).
+
+    f(x) = (q̇, ṗ) = (v, r(q, v, t)) with v = M⁻¹ (p − b) and r the momentum
+    rate ∂L/∂q + Q − ∂D/∂q̇ (Hamilton's −∂H/∂q plus the forces).  With the
+    partials at fixed q̇ of ``canonical_partials``, P_q = ∂P/∂q,
+    R_q = ∂r/∂q, R_v = ∂r/∂q̇: differentiating P(q, v) = p gives
+    P_q dq + M dv = dp, so dv = M⁻¹ (dp − P_q dq), and dṗ = R_q dq + R_v dv:
+
+        J = [[−M⁻¹ P_q,          M⁻¹    ],
+             [R_q − R_v M⁻¹ P_q, R_v M⁻¹]].
+
+    The top block row W = M⁻¹ [−P_q | I] is solved with one LDLᵀ
+    factorization of M; the bottom one is [R_q | 0] + R_v W.  Returns 0, or
+    k > 0 when M is not positive definite at pivot k (``J`` is then invalid).
+    """
+    n = x.shape[0] // 2
+    v = np.empty(n)
+    status = velocities(t, x, p, v)
+    if status:
+        return status
+    y = np.empty(2 * n)
+    for i in range(n):
+        y[i] = x[i]
+        y[n + i] = v[i]
+    blocks = np.empty((4, n, n))
+    canonical_partials(t, y, p, blocks)
+    for i in range(n):
+        for j in range(n):
+            J[i, j] = -blocks[1, i, j]
+            J[i, n + j] = 1.0 if i == j else 0.0
+    status = _ldlt_solve_matrix(blocks[0], J[:n])
+    if status:
+        return status
+    for i in range(n):
+        for j in range(2 * n):
+            s = blocks[2, i, j] if j < n else 0.0
+            for k in range(n):
+                s += blocks[3, i, k] * J[k, j]
+            J[n + i, j] = s
     return 0
 
 

@@ -15,7 +15,7 @@ import warnings
 import numpy as np
 
 from lagcomp.cache import Cache, Entry, input_key, load_module
-from lagcomp.errors import CacheWarning, InitialConditionError, ParameterError, SingularMassMatrixError
+from lagcomp.errors import CacheWarning, InitialConditionError, ModelError, ParameterError, SingularMassMatrixError
 from lagcomp.model.system import System
 
 
@@ -194,12 +194,16 @@ class Model:
         out = np.empty(2 * self.n)
         status = self.kernels.rhs(float(t), y, self.parameter_vector(params), out)
         if status:
-            state = ", ".join(f"{c}={v:.6g}" for c, v in zip(self.coordinates, y[: self.n]))
-            raise SingularMassMatrixError(
-                f"The mass matrix of {self.name!r} is singular at t={t:g}, {state} (pivot {status}): "
-                "the kinetic energy is not positive definite in the velocities there."
-            )
+            raise self._singular_mass_matrix(t, y, status)
         return out
+
+    def _singular_mass_matrix(self, t: float, state, status: int) -> SingularMassMatrixError:
+        """The error for a kernel that found M singular (pivot `status`) at `state` = (q, ...)."""
+        where = ", ".join(f"{c}={v:.6g}" for c, v in zip(self.coordinates, state[: self.n]))
+        return SingularMassMatrixError(
+            f"The mass matrix of {self.name!r} is singular at t={t:g}, {where} (pivot {status}): "
+            "the kinetic energy is not positive definite in the velocities there."
+        )
 
     def reactions(self, t: float, y, params: dict | None = None) -> dict[str, float]:
         """The multipliers λ at one state, by constraint name (generalized reaction forces)."""
@@ -259,6 +263,52 @@ class Model:
     def energy_function(self, q, qd, t: float = 0.0, params: dict | None = None) -> float:
         """Energy function (Jacobi integral) h."""
         return float(self.kernels.energy_function(float(t), self._state(q, qd), self.parameter_vector(params)))
+
+    # -- Hamiltonian form (unconstrained systems) --------------------------------------
+
+    def canonical_state(self, q, qd, t: float = 0.0, params: dict | None = None) -> np.ndarray:
+        """x = (q, p), shape (2n,): coordinates and conjugate momenta p = ∂L/∂q̇ at (q, q̇, t)."""
+        return np.concatenate([np.asarray(q, dtype=float).ravel(), self.momenta(q, qd, t, params)])
+
+    def _canonical_input(self, x, kernel: str) -> np.ndarray:
+        """`x` as a contiguous float vector of shape (2n,), for a kernel of unconstrained systems only."""
+        if self.k:
+            raise ModelError(
+                f"`{kernel}` needs an unconstrained system: {self.name!r} has constraints {list(self.constraints)}, "
+                "so its momenta do not determine its velocities."
+            )
+        x = np.ascontiguousarray(x, dtype=float)
+        if x.shape != (2 * self.n,):
+            raise InitialConditionError(
+                f"`x` must be (q, p) with shape ({2 * self.n},) for {self.name!r}, got shape {x.shape}."
+            )
+        return x
+
+    def hamiltonian(self, t: float, x, params: dict | None = None) -> float:
+        """H(q, p, t) at the canonical state x = (q, p) (see `canonical_state`).
+
+        The Legendre transform of L: the energy function at q̇ solved from
+        p = M(q, t) q̇ + b(q, t).  Raises SingularMassMatrixError where M is singular.
+        """
+        x = self._canonical_input(x, "hamiltonian")
+        p = self.parameter_vector(params)
+        status = self.kernels.velocities(float(t), x, p, np.empty(self.n))
+        if status:
+            raise self._singular_mass_matrix(t, x, status)
+        return float(self.kernels.hamiltonian(float(t), x, p))
+
+    def canonical_jacobian(self, t: float, x, params: dict | None = None) -> np.ndarray:
+        """∂f/∂x, shape (2n, 2n), of the canonical equations ẋ = f(t, x) = (q̇, ṗ) at x = (q, p).
+
+        ṗ includes the non-conservative forces (∂L/∂q + Q − ∂D/∂q̇, at fixed q̇);
+        rows are (q̇, ṗ), columns (q, p).  Raises SingularMassMatrixError where M is singular.
+        """
+        x = self._canonical_input(x, "canonical_jacobian")
+        out = np.empty((2 * self.n, 2 * self.n))
+        status = self.kernels.canonical_jacobian(float(t), x, self.parameter_vector(params), out)
+        if status:
+            raise self._singular_mass_matrix(t, x, status)
+        return out
 
     # -- runs -----------------------------------------------------------------------
 

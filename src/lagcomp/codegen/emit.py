@@ -4,7 +4,8 @@ The module holds, in order: a header naming the system, its state and
 parameter order and the lagcomp version; the kernels; the constraint hooks
 the drivers call (`project`, `constraint_residual`); `observables`, which
 evaluates the energies along a saved trajectory; then templates appended
-as text, the linear solvers (`templates/linear_solvers.py`) and the
+as text, the linear solvers (`templates/linear_solvers.py`), for unconstrained
+systems the Hamiltonian and canonical Jacobian (`templates/hamiltonian.py`), and the
 integration drivers (`templates/drivers.py`, `templates/symplectic.py`), so that they call the kernels
 as module globals — that is what lets numba cache them across processes
 (DESIGN.md).
@@ -234,7 +235,8 @@ def emit(ir: ModuleIR) -> str:
     parts += [_kernel_source(k) for k in ir.kernels]
     parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
-    for name in ("linear_solvers", "drivers", "symplectic"):
+    hamiltonian = () if ir.k else ("hamiltonian",)  # needs `velocities`, which constrained modules lack
+    for name in ("linear_solvers", *hamiltonian, "drivers", "symplectic"):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")
         parts.append(template(name))
     return "".join(parts)

@@ -168,6 +168,30 @@ def _velocities_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+def _canonical_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """M, P_q, R_q, R_v at y = (q, q̇): the blocks of the Jacobian of the canonical equations.
+
+    With P(q, q̇, t) = M q̇ + b (the momenta) and r(q, q̇, t) the momentum rate,
+    P_q = ∂P/∂q, R_q = ∂r/∂q and R_v = ∂r/∂q̇ are partials at fixed q̇; the
+    template `canonical_jacobian` combines them (its docstring derives how).
+    A force that jumps (Coulomb friction's sign(q̇)) contributes its derivative
+    away from the jump: the DiracDelta at the jump is dropped.
+    """
+    n = eom.n
+    blocks = (eom.M, eom.momenta.jacobian(eom.q), eom.momentum_rate.jacobian(eom.q),
+              eom.momentum_rate.jacobian(eom.qd))
+    blocks = [block.replace(sp.DiracDelta, lambda *args: sp.S.Zero) for block in blocks]
+    return _kernel(
+        "canonical_partials",
+        "At y = (q, q̇), shape (4, n, n) into `out`: out[0] = M, out[1] = ∂P/∂q, out[2] = ∂r/∂q,\n"
+        "out[3] = ∂r/∂q̇ (P = M q̇ + b the momenta, r = ∂L/∂q + Q − ∂D/∂q̇ their rate; row i is\n"
+        "component i, column j the variable j).",
+        ("t", "y", "p", "out"),
+        [(f"out[{k}, {i}, {j}]", block[i, j]) for k, block in enumerate(blocks) for i in range(n) for j in range(n)],
+        mapping, loads,
+    )
+
+
 def _rhs_kernel(eom: EOM, mapping, loads) -> Kernel:
     """dy/dt = (q̇, q̈) of an unconstrained system, q̈ by LDLᵀ of M."""
     n = eom.n
@@ -213,7 +237,7 @@ def lower(eom: EOM) -> ModuleIR:
             "ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces.",
             (*state_args, "out"), [(f"out[{i}]", eom.momentum_rate[i]) for i in range(n)], mapping, loads,
         ),
-    ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads),))
+    ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
     system = eom.system
     return ModuleIR(
         system_name=system.name, description=system.description,

@@ -7,7 +7,8 @@ only when it is first called, so solvers a system does not use cost nothing.
 
 * ``_ldlt_solve``: symmetric positive definite systems (the mass matrix of a
   large unconstrained system; small ones get the same factorization unrolled
-  by the emitter).
+  by the emitter); ``_ldlt_solve_matrix``, the same for several right-hand
+  sides at once (M⁻¹ applied to a matrix, in ``canonical_jacobian``).
 * ``_kkt_solve``: the augmented system of a constrained system,
   [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ).  Where M is positive definite it uses the
   Schur complement: with M = L D Lᵀ, W = M⁻¹ Λᵀ and u = M⁻¹ F, the
@@ -56,6 +57,39 @@ def _ldlt_solve(mm, ff, out, offset):
         for k in range(i + 1, n):
             x -= mm[k, i] * out[offset + k]
         out[offset + i] = x
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def _ldlt_solve_matrix(mm, b):
+    """Solve mm X = b for all m columns of b, shape (n, m), in place: X overwrites b.
+
+    mm (n, n) symmetric, lower triangle used, is factored once by LDLᵀ as in
+    ``_ldlt_solve`` (L and D overwrite it).  Returns 0, or j + 1 when pivot j
+    is not positive (mm singular or indefinite); b is then invalid.
+    """
+    n = mm.shape[0]
+    for j in range(n):
+        d = mm[j, j]
+        for k in range(j):
+            d -= mm[j, k] * mm[j, k] * mm[k, k]
+        if not d > _PIVOT_TOLERANCE * abs(mm[j, j]):
+            return j + 1
+        mm[j, j] = d
+        for i in range(j + 1, n):
+            s = mm[i, j]
+            for k in range(j):
+                s -= mm[i, k] * mm[j, k] * mm[k, k]
+            mm[i, j] = s / d
+    for c in range(b.shape[1]):
+        for i in range(n):
+            for k in range(i):
+                b[i, c] -= mm[i, k] * b[k, c]
+        for i in range(n - 1, -1, -1):
+            x = b[i, c] / mm[i, i]
+            for k in range(i + 1, n):
+                x -= mm[k, i] * b[k, c]
+            b[i, c] = x
     return 0
 
 
