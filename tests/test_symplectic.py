@@ -77,13 +77,15 @@ def test_composition_weights_are_checked():
         Composition("lopsided", 2, np.array([0.3, 0.7]))
 
 
+@pytest.mark.parametrize("solver", ["fixed_point", "newton"])
 @pytest.mark.parametrize("method", ["gauss1", "gauss2", "gauss3"])
-def test_gauss_legendre_convergence_order_on_the_pendulum(compiled, method):
+def test_gauss_legendre_convergence_order_on_the_pendulum(compiled, method, solver):
     model = compiled("simple_pendulum")
     reference = model.simulate((0, 4), method="dop853", rtol=1e-13, atol=1e-13).y[-1]
     order = METHODS[method].order
     steps = (0.04, 0.02, 0.01) if order < 6 else (0.2, 0.1, 0.05)
-    errors = [np.max(np.abs(model.simulate((0, 4), method=method, dt=dt).y[-1] - reference)) for dt in steps]
+    errors = [np.max(np.abs(model.simulate((0, 4), method=method, dt=dt, implicit_solver=solver).y[-1] - reference))
+              for dt in steps]
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
     np.testing.assert_allclose(ratios, 2.0**order, rtol=0.10)
 
@@ -108,6 +110,37 @@ def test_gauss_legendre_on_time_dependent_and_gyroscopic_systems(compiled):
     np.testing.assert_allclose(sol.y, reference.y, rtol=0, atol=1e-8)
 
 
-def test_gauss_legendre_reports_a_step_too_large(compiled):
-    sol = compiled("simple_pendulum").simulate((0, 10), method="gauss2", dt=2.0)
+@pytest.mark.parametrize(("solver", "dt"), [("fixed_point", 2.0), ("newton", 20.0)])
+def test_gauss_legendre_reports_a_step_too_large(compiled, solver, dt):
+    sol = compiled("simple_pendulum").simulate((0, 100), method="gauss2", dt=dt, implicit_solver=solver)
     assert sol.status == -5 and "reduce the step" in sol.message
+    assert sol.t_failure == 0.0 and sol.t[-1] == 0.0
+
+
+def test_newton_and_fixed_point_iteration_give_the_same_trajectory(compiled):
+    # both solve the stage equations to rounding level: only rounding differs
+    model = compiled("double_pendulum")
+    fixed_point, newton = (model.simulate((0, 10), q0=[1.0, 0.5], method="gauss2", dt=0.01, implicit_solver=solver)
+                           for solver in ("fixed_point", "newton"))
+    assert fixed_point.success and newton.success
+    np.testing.assert_allclose(newton.y, fixed_point.y, rtol=0, atol=1e-13)
+    assert newton.nfev < 0.8 * fixed_point.nfev  # fewer evaluations of f (and one Jacobian per step)
+
+
+def test_newton_converges_where_fixed_point_iteration_does_not(compiled):
+    # a stiff pendulum, ω = √(g/l) = 100: at h ω = 5 the fixed-point iteration diverges (it needs h ω ‖A‖ < 1)
+    model = compiled("simple_pendulum")
+    runs = {solver: model.simulate((0, 5), q0=[0.1], params={"g": 1e4}, method="gauss2", dt=0.05,
+                                   implicit_solver=solver) for solver in ("fixed_point", "newton")}
+    assert runs["fixed_point"].status == -5
+    sol = runs["newton"]
+    assert sol.success and sol.nsteps == 100
+    assert np.max(np.abs(sol.energy / sol.energy[0] - 1)) < 1e-5
+
+
+def test_implicit_solver_option_is_checked(compiled):
+    model = compiled("simple_pendulum")
+    with pytest.raises(lc.OptionError, match="choose one of 'fixed_point', 'newton'"):
+        model.simulate((0, 1), method="gauss2", dt=0.1, implicit_solver="broyden")
+    with pytest.raises(lc.OptionError, match=r"applies to the implicit methods \(gauss1, gauss2, gauss3\); rk4"):
+        model.simulate((0, 1), method="rk4", dt=0.1, implicit_solver="newton")

@@ -326,11 +326,18 @@ class Model:
 
         Other Parameters
         ----------------
-        method : {"dop853", "dopri5", "rk4", "verlet", "yoshida4", "yoshida6"}
-            Integration method (default "dop853"); the last three are explicit
-            symplectic methods for separable systems (`Model.separable`).
+        method : {"dop853", "dopri5", "rk4", "verlet", "yoshida4", "yoshida6", "gauss1", "gauss2", "gauss3"}
+            Integration method (default "dop853"); verlet and yoshida4/6 are
+            explicit symplectic methods for separable systems (`Model.separable`),
+            gauss1/2/3 implicit symplectic ones for any unconstrained system.
         dt : float
             Step of fixed-step methods (required for all but dop853, dopri5).
+        implicit_solver : {"fixed_point", "newton"}, optional
+            How gauss1/2/3 solve their stage equations: fixed-point iteration
+            (the default: cheapest per step on ordinary problems), or
+            simplified Newton with the Jacobian of the canonical equations,
+            which converges at steps where fixed-point iteration does not
+            (stiff or fast motions; status -5 says the step was too large).
         rtol, atol : float
             Tolerances of adaptive methods (defaults 1e-8, 1e-10).
         t_eval : array_like, optional

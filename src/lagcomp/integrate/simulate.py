@@ -14,7 +14,7 @@ import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
-from lagcomp.integrate.methods import get_method
+from lagcomp.integrate.methods import get_method, implicit_solver_for
 from lagcomp.integrate.solution import MESSAGES, Solution
 
 #: Rows per output chunk: small runs allocate little, long ones grow to this.
@@ -85,7 +85,7 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
     n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
     if n_steps > options["max_steps"]:
         raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {options['max_steps']}.")
-    driver, coefficients = getattr(kernels, m.driver), m.driver_arguments()
+    driver, coefficients = getattr(kernels, m.driver), m.driver_arguments(options["implicit_solver"])
 
     def advance(ts, ys):
         return driver(y, clock, counters, p, *run_args, t0, dt, n_steps, t1, options["save_every"], ts, ys,
@@ -100,7 +100,7 @@ def _count(value, name: str) -> int:
 
 
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=1e-8,
-             atol=1e-10, t_eval=None, save_every=1, first_step=None, max_step=math.inf,
+             atol=1e-10, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
              throw=False) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
@@ -118,6 +118,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     p = model.parameter_vector(params, baumgarte)
     options = dict(t1=t1, dt=dt, rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
                    save_every=_count(save_every, "save_every"), max_steps=_count(max_steps, "max_steps"))
+    options["implicit_solver"] = implicit_solver_for(m, implicit_solver)
     t_eval = _t_eval(t_eval, t0, t1)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))

@@ -17,6 +17,9 @@ only when it is first called, so solvers a system does not use cost nothing.
   singular — a massless rolling hoop carrying a point mass — it falls back
   to ``_lu_solve``, Gaussian elimination with partial pivoting of the whole
   matrix, which only needs the augmented matrix to be regular.
+* ``_lu_factor`` and ``_lu_substitute``: the same elimination split in two,
+  for a matrix factored once and applied to many right-hand sides (the
+  simplified Newton iteration of ``collocation_run``).
 
 A pivot below ``_PIVOT_TOLERANCE`` times the matrix's scale counts as zero:
 the matrix is then singular to working precision (condition number ≳ 1e14),
@@ -126,6 +129,54 @@ def _lu_solve(a):
             x -= a[i, c] * a[c, size]
         a[i, size] = x / a[i, i]
     return 0
+
+
+@njit(cache=True, error_model="numpy")
+def _lu_factor(a, pivots):
+    """LU factorization with partial pivoting of the square a, in place: PA = LU.
+
+    On return a holds U on and above the diagonal and the multipliers of L
+    (unit diagonal) below it, and row j was swapped with row pivots[j] at
+    step j.  Returns 0, or j + 1 when pivot j is below _PIVOT_TOLERANCE ×
+    max|a| (a singular to working precision).
+    """
+    size = a.shape[0]
+    scale = 0.0
+    for i in range(size):
+        for j in range(size):
+            scale = max(scale, abs(a[i, j]))
+    for j in range(size):
+        pivot = j
+        for i in range(j + 1, size):
+            if abs(a[i, j]) > abs(a[pivot, j]):
+                pivot = i
+        pivots[j] = pivot
+        if not abs(a[pivot, j]) > _PIVOT_TOLERANCE * scale:
+            return j + 1
+        if pivot != j:
+            for c in range(size):
+                a[j, c], a[pivot, c] = a[pivot, c], a[j, c]
+        for i in range(j + 1, size):
+            a[i, j] /= a[j, j]
+            for c in range(j + 1, size):
+                a[i, c] -= a[i, j] * a[j, c]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def _lu_substitute(a, pivots, r):
+    """Solve A x = r in place (x overwrites r), with a and pivots from ``_lu_factor`` of A."""
+    size = a.shape[0]
+    for j in range(size):
+        r[j], r[pivots[j]] = r[pivots[j]], r[j]
+    for i in range(size):
+        for c in range(i):
+            r[i] -= a[i, c] * r[c]
+    for i in range(size - 1, -1, -1):
+        x = r[i]
+        for c in range(i + 1, size):
+            x -= a[i, c] * r[c]
+        r[i] = x / a[i, i]
 
 
 @njit(cache=True, error_model="numpy")
