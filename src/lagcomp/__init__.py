@@ -22,10 +22,22 @@ from lagcomp.errors import (
 )
 from lagcomp.integrate.solution import Solution as Solution
 from lagcomp.model import (
+    Damper as Damper,
+    Force as Force,
+    Gravity as Gravity,
     Holonomic as Holonomic,
+    MovingFrame as MovingFrame,
     Nonholonomic as Nonholonomic,
+    Particle as Particle,
+    RigidBody as RigidBody,
+    Spring as Spring,
     System as System,
+    Torque as Torque,
+    body_rates as body_rates,
     coordinates as coordinates,
+    from_kanes_method as from_kanes_method,
+    from_lagranges_method as from_lagranges_method,
+    rotated as rotated,
     t as t,
 )
 from lagcomp.runtime import Model as Model, compile as compile  # noqa: A004

@@ -23,9 +23,14 @@ through the `EXAMPLES` registry:
 ``chaplygin_sleigh``       rigid body on a knife edge (nonholonomic)
 ``spherical_pendulum_cartesian``  bob on a rod in Cartesian coordinates: λ gives the rod tension
 ``spherical_pendulum``     the same pendulum in spherical angles
+``turn_indicator``         gyroscope in a gimbal of a banked, turning aircraft (moving frame, rigid body)
+``compton_disc``           disc on a turning carousel at latitude λ, axis swung over (moving frame)
+``driven_pendulum_support``  ``driven_pendulum`` written in the support's frame (driving inertial force)
+``symmetric_top``          heavy symmetric top in Euler angles (rigid body, gravity)
 =========================  ========================================================
 
-The factories live in `unconstrained` and `constrained`; each docstring states
+The factories live in `unconstrained`, `constrained` and `bodies` (systems
+built from Particle / RigidBody, loads and moving frames); each docstring states
 the coordinates, conventions, Lagrangian, equations and any closed form.
 """
 
@@ -35,6 +40,7 @@ import re
 from collections.abc import Callable
 
 from lagcomp.errors import ModelError
+from lagcomp.examples.bodies import BODIES_EXAMPLES
 from lagcomp.examples.constrained import CONSTRAINED_EXAMPLES
 from lagcomp.examples.unconstrained import (
     double_pendulum,
@@ -62,6 +68,7 @@ EXAMPLES: dict[str, Callable[..., System]] = {
     )
 }
 EXAMPLES.update(CONSTRAINED_EXAMPLES)
+EXAMPLES.update(BODIES_EXAMPLES)
 
 
 def get(name: str, **kwargs) -> System:

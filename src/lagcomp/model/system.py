@@ -8,6 +8,14 @@ expressions of `t` written straight into T, V or Q (a hoop turned at
 φ(t) = Ωt + ε sin 2t, a tray moved along a(t)).  Every other free symbol is a
 parameter, passed by name at run time.
 
+Instead of (or as well as) writing T, V and Q, a System may list `bodies`
+(particles and rigid bodies, `lagcomp.model.bodies`) and `loads` (forces,
+torques, springs, dampers, gravity, `lagcomp.model.loads`), described in a
+`frame` that may move with an imposed motion (`lagcomp.model.frames`).  Their
+kinetic and potential energies, generalized forces and dissipation are added
+to what is written directly, once, when the System is built: the fields T, V,
+forces and dissipation then hold the totals that the derivation uses.
+
 Validation happens here, when the System is built, and is cheap (free-symbol
 checks only); the symbolic derivation lives in `lagcomp.mechanics`.
 """
@@ -22,7 +30,9 @@ import sympy as sp
 from sympy.physics.mechanics import dynamicsymbols
 
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError, UndeclaredSymbolError
+from lagcomp.model.assemble import assemble
 from lagcomp.model.constraints import Holonomic, Nonholonomic
+from lagcomp.model.frames import as_frame
 
 #: The time symbol shared with ``sympy.physics.mechanics.dynamicsymbols``.
 t = dynamicsymbols._t
@@ -58,7 +68,7 @@ class System:
     coordinates : sequence of functions of t
         The generalized coordinates q_i(t), from `coordinates` or
         ``dynamicsymbols``.  Their order is the order of q in every kernel.
-    T : sympy expression
+    T : sympy expression, optional when `bodies` are given
         Kinetic energy T(q, q̇, t), at most quadratic in the velocities q̇ = q.diff(t).
     V : sympy expression, optional
         Potential energy V(q, t).
@@ -83,10 +93,26 @@ class System:
         Default initial coordinates and velocities.
     t_end : float
         Default length of a run started from the command line.
+    bodies : sequence of Particle / RigidBody, optional
+        Bodies whose kinetic energy (and own potential) is added to T (and V);
+        sympy.physics.mechanics Particle and RigidBody are accepted.
+    loads : sequence, optional
+        Force, Torque, Spring, Damper, Gravity, or sympy.physics.mechanics load
+        pairs; they add to `forces`, V and `dissipation`.
+    frame : ReferenceFrame or MovingFrame, optional
+        The frame bodies and loads are described in: a sympy ReferenceFrame
+        (Galilean; needed for sympy.physics.vector objects), or a MovingFrame
+        with an imposed acceleration and rotation, whose inertial terms are
+        added for every body.  T, V and forces written directly are taken as given.
+
+    After construction T, V, forces and dissipation hold the totals (written
+    directly plus bodies and loads); `dataclasses.replace` keeps track of which
+    part was written directly, so replacing `bodies` or any other field does not count
+    the bodies twice.
     """
 
     coordinates: tuple
-    T: sp.Expr
+    T: sp.Expr = sp.S.Zero
     V: sp.Expr = sp.S.Zero
     forces: tuple = ()
     dissipation: sp.Expr = sp.S.Zero
@@ -98,6 +124,11 @@ class System:
     q0: tuple | None = None
     qd0: tuple | None = None
     t_end: float = 10.0
+    bodies: tuple = ()
+    loads: tuple = ()
+    frame: object = None
+    #: (what was written directly, the totals) when bodies or loads were merged in; see `_merge`.
+    _written: tuple | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         coords = tuple(self.coordinates)
@@ -119,11 +150,48 @@ class System:
         set_(self, "V", _sympify(self.V, "V"))
         set_(self, "dissipation", _sympify(self.dissipation, "dissipation"))
         set_(self, "forces", self._normalized_forces(coords))
+        roles = self._merge(coords)
         set_(self, "constraints", self._checked_constraints())
-        set_(self, "parameters", self._checked_parameters(coords))
+        set_(self, "parameters", self._checked_parameters(coords, roles))
         set_(self, "defaults", self._checked_defaults())
         set_(self, "q0", self._checked_initial(self.q0, "q0"))
         set_(self, "qd0", self._checked_initial(self.qd0, "qd0"))
+
+    # -- bodies and loads ----------------------------------------------------------
+
+    def _merge(self, coords) -> dict:
+        """Add the bodies' and loads' T, V, Q and D to the fields; return their roles for validation.
+
+        A System made by `dataclasses.replace` receives the totals of the old one
+        in T, V, forces and dissipation, and `_written` = (written, totals): a field
+        still equal to the old total is taken back to what was written directly.
+        """
+        set_ = object.__setattr__
+        given = (self.T, self.V, self.forces, self.dissipation)
+        if self._written is not None:
+            written, totals = self._written
+            given = tuple(w if g == tot else g for g, w, tot in zip(given, written, totals))
+        frame = as_frame(self.frame)
+        set_(self, "bodies", tuple(self.bodies))
+        set_(self, "loads", tuple(self.loads))
+        if not self.bodies and not self.loads:
+            set_(self, "_written", None)
+            T, V, forces, D = given
+            set_(self, "T", T), set_(self, "V", V), set_(self, "forces", forces), set_(self, "dissipation", D)
+            if T == 0:
+                raise ModelError(f"{self.name!r} has no kinetic energy: give T, or bodies whose T lagcomp writes.")
+            return {}
+        parts = assemble(coords, self.bodies, self.loads, frame)
+        T, V, forces, D = given
+        totals = (T + parts.T, V + parts.V, tuple(a + b for a, b in zip(forces, parts.Q)), D + parts.D)
+        set_(self, "bodies", parts.bodies)
+        set_(self, "loads", parts.loads)
+        set_(self, "T", totals[0]), set_(self, "V", totals[1])
+        set_(self, "forces", totals[2]), set_(self, "dissipation", totals[3])
+        set_(self, "_written", (given, totals))
+        if totals[0] == 0:
+            raise ModelError(f"{self.name!r} has no kinetic energy: its bodies are all massless and T is not given.")
+        return parts.roles
 
     # -- validation ---------------------------------------------------------------
 
@@ -172,9 +240,9 @@ class System:
     def constraint_names(self) -> tuple[str, ...]:
         return tuple(c.name for c in self.constraints)
 
-    def _checked_parameters(self, coords) -> tuple:
+    def _checked_parameters(self, coords, roles=None) -> tuple:
         found: set[sp.Symbol] = set()
-        for role, expr in self.expressions().items():
+        for role, expr in {**(roles or {}), **self.expressions()}.items():
             for f in expr.atoms(sp.core.function.AppliedUndef):
                 if f not in coords:
                     raise UndeclaredSymbolError(
@@ -190,8 +258,10 @@ class System:
                 raise ModelError(f"Parameter {s!r} must be a sympy Symbol.")
         undeclared = sorted(found - set(declared), key=lambda s: s.name)
         if undeclared:
+            where = next((role for role, expr in (roles or {}).items() if expr.has(undeclared[0])), None)
             raise UndeclaredSymbolError(
-                f"Symbol(s) {', '.join(s.name for s in undeclared)} appear in {self.name!r} but are neither "
+                f"Symbol(s) {', '.join(s.name for s in undeclared)} appear in {self.name!r}"
+                f"{f' (first in {where})' if where else ''} but are neither "
                 "coordinates, parameters nor t: add them to `parameters` (or omit `parameters` to infer them)."
             )
         return declared
