@@ -71,6 +71,15 @@ def project(t, y, p):
 def constraint_residual(t, y, p):
     return 0.0
 
+
+@njit(cache=True, error_model="numpy")
+def event_values(t, y, p, out):
+    # event 0: y[0] (the oscillator's position); event 1: t - p[1]
+    if out.shape[0] > 0:
+        out[0] = y[0]
+    if out.shape[0] > 1:
+        out[1] = t - p[1]
+
 '''
 
 
@@ -132,6 +141,8 @@ def f_numpy(kind):
 
 
 METHODS = {"RK45": ("dopri5_run", DOPRI5), "DOP853": ("dop853_run", DOP853)}
+NO_PAUSE = np.iinfo(np.int64).max
+NO_EVENTS = (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(0), np.empty((0, 0)), np.empty(0, np.int64))
 
 
 class Run:
@@ -167,14 +178,14 @@ def run_adaptive(mod, method, kind, tol, *, atol=None, t_end=None, p_extra=(), t
     t_end = T_END[base] if t_end is None else t_end
     atol = tol if atol is None else atol
     clock = np.array([0.0, first_step])
-    counters = np.zeros(5, dtype=np.int64)
+    counters = np.zeros(6, dtype=np.int64)
     p = np.array([kind, *p_extra], dtype=float)
     t_eval = np.asarray(t_eval, dtype=float)
     args = driver_arguments(tableau)
 
     def call(ts, ys):
-        return driver(y, clock, counters, p, 0, np.zeros(1), t_end, tol, atol, max_step, max_steps,
-                      save_every, t_eval, ts, ys, *args)
+        return driver(y, clock, counters, p, 0, np.zeros(1), t_end, tol, atol, max_step, max_steps, NO_PAUSE,
+                      save_every, t_eval, ts, ys, *NO_EVENTS, *args)
 
     return _collect(call, y, clock, counters, cap, max_calls)
 
@@ -183,11 +194,12 @@ def run_rk4(mod, kind, dt, t_end, *, p_extra=(), save_every=1, cap=100_000, max_
     y = np.array(Y0[KEPLER if kind == KEPLER else OSCILLATOR], dtype=float)
     n_steps = int(np.ceil(t_end / dt - 1e-9))
     clock = np.zeros(2)
-    counters = np.zeros(5, dtype=np.int64)
+    counters = np.zeros(6, dtype=np.int64)
     p = np.array([kind, *p_extra], dtype=float)
 
     def call(ts, ys):
-        return mod.rk4_run(y, clock, counters, p, 0, np.zeros(1), 0.0, dt, n_steps, t_end, save_every, ts, ys)
+        return mod.rk4_run(y, clock, counters, p, 0, np.zeros(1), 0.0, dt, n_steps, NO_PAUSE, t_end, save_every,
+                           ts, ys)
 
     return _collect(call, y, clock, counters, cap, max_calls)
 
@@ -400,7 +412,7 @@ def test_max_steps_then_resume(mod, method):
     ts, ys = np.empty(10_000), np.empty((10_000, 2))
     status, n = getattr(mod, fname)(
         limited.y, limited.clock, limited.counters, np.array([OSCILLATOR]), 0, np.zeros(1), T_END[OSCILLATOR],
-        1e-6, 1e-6, np.inf, 10**7, 1, np.empty(0), ts, ys, *driver_arguments(tableau))
+        1e-6, 1e-6, np.inf, 10**7, NO_PAUSE, 1, np.empty(0), ts, ys, *NO_EVENTS, *driver_arguments(tableau))
     whole = run_adaptive(mod, method, OSCILLATOR, 1e-6)
     assert status == 0
     np.testing.assert_array_equal(np.concatenate([limited.ts, ts[:n]]), whole.ts)
@@ -478,3 +490,105 @@ def test_non_finite_step_size_ends_the_run(mod, method, first_step):
     if first_step == np.inf:
         run = run_adaptive(mod, method, OSCILLATOR, 1e-6, first_step=first_step)
         assert run.status == 0 and run.clock[0] == T_END[OSCILLATOR]
+
+
+# -- events and pausing -----------------------------------------------------------
+
+def run_events(mod, method, directions, actions, *, tol=1e-10, t_end=10.0, switch_time=np.inf, ev_cap=64,
+               pause_every=None):
+    """Oscillator y = (cos t, −sin t) with events g0 = y[0], g1 = t − switch_time; collects every call's rows."""
+    fname, tableau = METHODS[method]
+    y, clock, counters = Y0[OSCILLATOR].copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
+    p = np.array([OSCILLATOR, switch_time])
+    directions, actions = np.array(directions, dtype=np.int64), np.array(actions, dtype=np.int64)
+    ts_all, ys_all, events = [], [], []
+    for _ in range(100_000):
+        ts, ys = np.empty(1000), np.empty((1000, 2))
+        ev = (np.empty(ev_cap), np.empty((ev_cap, 2)), np.empty(ev_cap, dtype=np.int64))
+        counters[5] = 0
+        pause_at = NO_PAUSE if pause_every is None else counters[1] + pause_every
+        status, n_saved = getattr(mod, fname)(
+            y, clock, counters, p, 0, np.zeros(1), t_end, tol, tol, np.inf, 10**7, pause_at, 1, np.empty(0),
+            ts, ys, directions, actions, *ev, *driver_arguments(tableau))
+        ts_all.append(ts[:n_saved].copy())
+        ys_all.append(ys[:n_saved].copy())
+        events += [(ev[0][k], ev[1][k].copy(), ev[2][k]) for k in range(counters[5])]
+        if status not in (1, 2):
+            break
+    return status, np.concatenate(ts_all), np.concatenate(ys_all), events, counters, clock
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("direction, expected", [(0, [1, 3, 5]), (1, [3]), (-1, [1, 5])])
+def test_event_directions_and_times(mod, method, direction, expected):
+    """cos t vanishes at π/2, 3π/2, 5π/2 in [0, 10]: upwards at 3π/2, downwards at the others."""
+    status, _, _, events, _, _ = run_events(mod, method, [direction, 0], [1, 0])
+    assert status == 0
+    times = np.array([e[0] for e in events])
+    np.testing.assert_allclose(times, np.array(expected) * np.pi / 2, rtol=0, atol=1e-9)
+    for t_event, state, index in events:
+        assert index == 0 and abs(state[0]) < 1e-12          # the root of the interpolant, to rounding
+        assert abs(state[1] + np.sin(t_event)) < 1e-9
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_terminal_event_ends_the_run_at_its_time(mod, method):
+    """g1 = t − 2.5 is linear in t: the stop lands on 2.5 to rounding, the last row is the event's state,
+    and the crossing of g0 at π/2 before it is still recorded, in time order."""
+    status, ts, ys, events, counters, clock = run_events(mod, method, [0, 1], [1, 2], switch_time=2.5)
+    assert status == 3
+    assert [e[2] for e in events] == [0, 1]
+    assert abs(events[1][0] - 2.5) < 1e-15 and clock[0] == ts[-1] == events[1][0]
+    np.testing.assert_array_equal(ys[-1], events[1][1])
+    np.testing.assert_allclose(ys[-1], [np.cos(2.5), -np.sin(2.5)], atol=1e-9)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_pausing_and_small_event_buffers_change_nothing(mod, method):
+    """A run cut into one-step calls (pause_at) with event buffers of the minimum size gives the same
+    saved rows and events as one call; only the FSAL re-evaluation per call adds to nfev."""
+    whole = run_events(mod, method, [0, 0], [1, 1], switch_time=4.0, t_end=30.0)
+    cut = run_events(mod, method, [0, 0], [1, 1], switch_time=4.0, t_end=30.0, ev_cap=2, pause_every=1)
+    assert whole[0] == cut[0] == 0
+    np.testing.assert_array_equal(whole[1], cut[1])
+    np.testing.assert_array_equal(whole[2], cut[2])
+    assert [(e[0], e[2]) for e in whole[3]] == [(e[0], e[2]) for e in cut[3]]
+    np.testing.assert_array_equal(whole[4][1:5], cut[4][1:5])
+
+
+def test_rk4_pauses_and_resumes_identically(mod):
+    """rk4_run with pause_at: the same rows as one call."""
+    whole = run_rk4(mod, OSCILLATOR, 0.01, 3.0)
+    y, clock, counters = Y0[OSCILLATOR].copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
+    rows = []
+    while True:
+        ts, ys = np.empty(1000), np.empty((1000, 2))
+        status, n = mod.rk4_run(y, clock, counters, np.array([OSCILLATOR]), 0, np.zeros(1), 0.0, 0.01, 300,
+                                counters[1] + 7, 3.0, 1, ts, ys)
+        rows.append(ys[:n].copy())
+        if status != 2:
+            break
+    assert status == 0
+    np.testing.assert_array_equal(np.concatenate(rows), whole.ys)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_terminal_event_row_has_room_with_decimated_output(mod, method):
+    """With save_every > 1 a terminal event still writes its row: the driver keeps room for it."""
+    fname, tableau = METHODS[method]
+    y, clock, counters = Y0[OSCILLATOR].copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
+    ts, ys = np.full(1, np.nan), np.full((1, 2), np.nan)
+    calls = 0
+    rows = []
+    while True:
+        calls += 1
+        ev = (np.empty(4), np.empty((4, 2)), np.empty(4, dtype=np.int64))
+        counters[5] = 0
+        status, n = getattr(mod, fname)(
+            y, clock, counters, np.array([OSCILLATOR, 2.5]), 0, np.zeros(1), 10.0, 1e-8, 1e-8, np.inf, 10**7,
+            NO_PAUSE, 10**6, np.empty(0), ts, ys, np.zeros(2, np.int64), np.array([0, 2]), *ev,
+            *driver_arguments(tableau))
+        rows += [(ts[k], ys[k].copy()) for k in range(n)]
+        if status != 1:
+            break
+    assert status == 3 and len(rows) == 1 and rows[0][0] == 2.5 and calls <= 2

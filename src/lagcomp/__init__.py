@@ -23,6 +23,7 @@ from lagcomp.errors import (
 from lagcomp.integrate.solution import Solution as Solution
 from lagcomp.model import (
     Damper as Damper,
+    Event as Event,
     Force as Force,
     Gravity as Gravity,
     Holonomic as Holonomic,

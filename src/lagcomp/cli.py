@@ -93,7 +93,8 @@ def cmd_run(args) -> int:
     if not model.from_cache:
         print("first run: numba compiles the kernels and drivers once (cached for later runs)...", file=sys.stderr)
     options = dict(method=args.method, save_every=args.save_every, projection=args.projection,
-                   project_initial=args.project_initial)
+                   project_initial=args.project_initial, record="summary" if args.summary else "trajectory",
+                   progress=False if args.quiet else None)
     if args.baumgarte:
         options["baumgarte"] = tuple(args.baumgarte)
     if args.method not in ("dop853", "dopri5"):  # fixed-step methods
@@ -113,9 +114,13 @@ def cmd_run(args) -> int:
     print(f"method      {sol.method}   status {sol.status}: {sol.message}")
     print(f"time span   [{sol.t[0]:g}, {sol.t[-1]:g}]   steps {sol.nsteps}   rejected {sol.nrejected}   rhs evaluations {sol.nfev}")
     print(f"wall time   {elapsed:.3f} s (integration{', including numba compilation' if not model.from_cache else ''})")
-    print(f"energy      T+V: {sol.energy[0]:.12g} -> {sol.energy[-1]:.12g} (max relative drift {sol.energy_drift():.3g})")
+    summary = sol.summary
+    print(f"energy      T+V: {sol.energy[0]:.12g} -> {sol.energy[-1]:.12g} (max relative drift {summary.energy_error:.3g})")
     print(f"            h:   {sol.energy_function[0]:.12g} -> {sol.energy_function[-1]:.12g} "
-          f"(max relative drift {sol.energy_drift('energy_function'):.3g})")
+          f"(max relative drift {summary.energy_function_error:.3g})")
+    for name, record in sol.events.items():
+        when = f" at t = {record.t[0]:.10g} .. {record.t[-1]:.10g}" if len(record) else ""
+        print(f"event       {name}: {len(record)} occurrence(s){when}")
     for name, values in sol.reactions.items():
         print(f"reaction    {name}: {values[0]:.8g} -> {values[-1]:.8g} (range {values.min():.6g} .. {values.max():.6g})")
     if sol.reactions:
@@ -166,6 +171,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
     run.add_argument("--qd0", type=float, nargs="+", help="initial velocities")
     run.add_argument("--out", help="write the solution to this .npz file")
+    run.add_argument("--summary", action="store_true",
+                     help="keep only the first and last states and running reductions (O(1) memory for long runs)")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.add_argument("--projection", action=argparse.BooleanOptionalAction, default=None,
                      help="project onto the constraints after every step (default: on for rk4)")
     run.add_argument("--baumgarte", type=float, nargs=2, metavar=("ALPHA", "BETA"), help="Baumgarte gains")

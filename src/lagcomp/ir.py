@@ -106,6 +106,7 @@ class ModuleIR:
     kernels: tuple[Kernel, ...]
     constraint_names: tuple[str, ...] = ()
     holonomic: tuple[bool, ...] = ()
+    event_names: tuple[str, ...] = ()
 
     @property
     def k(self) -> int:

@@ -360,6 +360,22 @@ class Model:
             Constrained systems: project inconsistent q0/qd0 onto the
             constraints (reported in `Solution.projected_initial_state`)
             instead of raising `InitialConditionError`.
+        events : None, bool or list of str
+            Which of the System's events to locate (adaptive methods only):
+            None (default) all of them with dop853/dopri5 and none with the
+            fixed-step methods; True all (an error for fixed-step methods);
+            False none; or their names.  Occurrences are in `Solution.events`;
+            a terminal one stops the run with status 1.
+        record : {"trajectory", "summary"}
+            Keep every saved row (default), or only the first and last rows
+            and `Solution.summary` (largest energy errors, coordinate ranges,
+            reduced over every saved row), so memory stays O(1) however long
+            the run.
+        progress : bool, optional
+            Show a progress bar: None (default) for runs lasting over two
+            seconds, True always, False never.  Ctrl-C stops a run between
+            driver calls (about every quarter second) and returns what was
+            computed, with status 2.
         throw : bool
             Raise `IntegrationError` (with the partial solution) on failure
             instead of returning a Solution whose `status` is negative.
@@ -367,3 +383,40 @@ class Model:
         from lagcomp.integrate.simulate import simulate
 
         return simulate(self, t_span, q0, qd0, params, **options)
+
+    def sweep(self, t_span, grid, **options):
+        """Integrate every point of a grid of initial values and parameters, on all cores; returns a `Sweep`.
+
+        Parameters
+        ----------
+        t_span : (float, float)
+            Start and end time, shared by all trajectories.
+        grid : dict of str to array_like, or array_like of shape (N, k)
+            Swept quantities by name: coordinate names (initial q), ``<coordinate>_dot``
+            (initial q̇) and parameter names.  A dict is combined as a Cartesian
+            product (``combine="product"``, outputs shaped like the grid) or
+            element-wise (``combine="zip"``); an (N, k) array needs ``names``.
+
+        Other Parameters
+        ----------------
+        q0, qd0, params
+            Values of everything not swept (defaults: the System's).
+        method, dt, rtol, atol, t_eval, save_every, max_step, max_steps, events
+            As for `simulate`; each trajectory has its own step-size control.
+        output : str or sequence of {"dense", "energy", "events"}
+            What to keep besides the final state, time, status and counters:
+            states at common times (``t_eval`` for adaptive methods, every
+            ``save_every``-th step for fixed-step ones), the largest relative
+            energy error, the first ``event_cap`` occurrences of each event.
+        workers : int, optional
+            Threads (default: one per CPU); the result does not depend on it.
+        memory_limit : int
+            Bytes the outputs may take (default 2 GiB); a larger request is
+            refused before the sweep starts.
+        progress : bool, optional
+            Progress bar (None: for sweeps over two seconds).  Ctrl-C stops
+            between chunks; `Sweep.done` marks the trajectories that ran.
+        """
+        from lagcomp.integrate.sweep import sweep
+
+        return sweep(self, t_span, grid, **options)

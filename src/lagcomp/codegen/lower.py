@@ -205,6 +205,16 @@ def _rhs_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """The event functions g_e(t, q, q̇), all at once (a kernel with no stores when there are none)."""
+    names = eom.system.event_names
+    return _kernel(
+        "event_values",
+        f"Event functions g, shape ({len(names)},), in order {names}, into `out`; the drivers locate their zeros.",
+        ("t", "y", "p", "out"), [(f"out[{e}]", g) for e, g in enumerate(eom.events)], mapping, loads,
+    )
+
+
 def lower(eom: EOM) -> ModuleIR:
     """Build the IR of the module for `eom`: rhs, mass_matrix, forcing, energies, momenta,
     and for constrained systems reactions, constraint residuals and matrix."""
@@ -237,10 +247,12 @@ def lower(eom: EOM) -> ModuleIR:
             "ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces.",
             (*state_args, "out"), [(f"out[{i}]", eom.momentum_rate[i]) for i in range(n)], mapping, loads,
         ),
+        _event_kernel(eom, mapping, loads),
     ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
     system = eom.system
     return ModuleIR(
         system_name=system.name, description=system.description,
         coordinate_names=system.coordinate_names, parameter_names=system.parameter_names,
         kernels=kernels, constraint_names=eom.constraint_names, holonomic=eom.holonomic,
+        event_names=system.event_names,
     )

@@ -16,6 +16,7 @@ through the `EXAMPLES` registry:
 ``tray_cylinder``          cylinder rolling without slipping on a tray moved along a(t)
 ``unbalanced_cylinder``    rolling cylinder whose centre of mass is off its axis
 ``driven_pendulum``        pendulum on a vertically vibrated support (Kapitza)
+``henon_heiles``           star in a galactic potential; events for its Poincaré section
 ``hoop_bead_reaction``     the hoop bead with φ released: the hoop's normal push as λ
 ``unbalanced_cylinder_reactions``  the unbalanced cylinder with F_v and F_h from released constraints
 ``free_axle``              axle with two independent wheels on an incline (3 multipliers)
@@ -45,6 +46,7 @@ from lagcomp.examples.constrained import CONSTRAINED_EXAMPLES
 from lagcomp.examples.unconstrained import (
     double_pendulum,
     driven_pendulum,
+    henon_heiles,
     hoop_bead,
     huygens,
     n_link_pendulum,
@@ -64,7 +66,7 @@ EXAMPLES: dict[str, Callable[..., System]] = {
     f.__name__: f
     for f in (
         simple_pendulum, double_pendulum, n_link_pendulum, sling, rope, rope_friction,
-        hoop_bead, huygens, tray_cylinder, unbalanced_cylinder, driven_pendulum,
+        hoop_bead, huygens, tray_cylinder, unbalanced_cylinder, driven_pendulum, henon_heiles,
     )
 }
 EXAMPLES.update(CONSTRAINED_EXAMPLES)

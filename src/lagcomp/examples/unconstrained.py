@@ -11,11 +11,11 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp.errors import ModelError
-from lagcomp.model import System, coordinates, t
+from lagcomp.model import Event, System, coordinates, t
 
 __all__ = [
     "simple_pendulum", "double_pendulum", "n_link_pendulum", "sling", "rope", "rope_friction",
-    "hoop_bead", "huygens", "tray_cylinder", "unbalanced_cylinder", "driven_pendulum",
+    "hoop_bead", "huygens", "tray_cylinder", "unbalanced_cylinder", "driven_pendulum", "henon_heiles",
 ]
 
 
@@ -324,4 +324,35 @@ def driven_pendulum() -> System:
         description="Pendulum on a vertically vibrated support (stable when inverted).",
         defaults={"m": 1.0, "l": 1.0, "g": 9.81, "A": 0.05, "Omega": 200.0},
         q0=(2.9,), qd0=(0.0,), t_end=10.0,
+    )
+
+
+def henon_heiles() -> System:
+    """Hénon–Heiles: a star in an axisymmetric galaxy's potential, in scaled units.
+
+    Coordinates x, y (unit mass and frequency); coupling λ (1 in the classic
+    problem, 0 leaves two uncoupled unit oscillators).
+    T = ½ (ẋ² + ẏ²),  V = ½ (x² + y²) + λ (x² y − y³/3).
+    Equations: ẍ = −x − 2λ x y,  ÿ = −y − λ (x² − y²).  The energy is the only
+    classical integral; below the escape energy 1/6 λ⁻² the motion is bounded,
+    mostly regular at E = 1/12 and largely chaotic at E = 1/8.
+
+    Events: ``section``, x = 0 crossed with ẋ > 0 (the usual Poincaré section,
+    points (y, ẏ)); ``y_turn``, ẏ = 0 crossed downwards (a maximum of y).
+    The default start lies on the section at E = 1/12, y = 0.1, ẏ = 0.
+    """
+    x, y = coordinates("x y")
+    (lam,) = _params("lam")
+    energy, y0 = sp.Rational(1, 12), sp.Rational(1, 10)
+    xd0 = sp.sqrt(2 * (energy - y0**2 / 2 + y0**3 / 3))  # V(0, y0) = y0²/2 − y0³/3 at λ = 1
+    return System(
+        coordinates=(x, y),
+        T=(x.diff(t) ** 2 + y.diff(t) ** 2) / 2,
+        V=(x**2 + y**2) / 2 + lam * (x**2 * y - y**3 / 3),
+        parameters=(lam,),
+        name="henon_heiles",
+        description="Star in a galactic potential: regular and chaotic orbits, Poincaré section x = 0.",
+        defaults={"lam": 1.0},
+        q0=(0.0, float(y0)), qd0=(float(xd0), 0.0), t_end=200.0,
+        events=(Event("section", x, direction=1), Event("y_turn", y.diff(t), direction=-1)),
     )

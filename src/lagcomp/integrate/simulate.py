@@ -2,24 +2,39 @@
 
 The drivers keep their whole state in small in/out arrays, so a run whose
 output outgrows one buffer simply continues in the next; Python is involved
-once per chunk, never per step, and memory is bounded by what is saved
-(`save_every`, `t_eval`).
+once per call, never per step.  Calls are also cut by a step budget
+(``pause_at``) sized to take about `CALL_SECONDS`, so that a long run shows
+progress and stops cleanly on Ctrl-C, returning what it computed.  Memory is
+bounded by what is kept: every saved row (`save_every`, `t_eval`) or, with
+``record="summary"``, only running reductions (`lagcomp.integrate.recording`).
 """
 
 from __future__ import annotations
 
 import math
+import signal
+import threading
+import time
+from contextlib import contextmanager
 
 import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.methods import get_method, implicit_solver_for
-from lagcomp.integrate.solution import MESSAGES, Solution
+from lagcomp.integrate.recording import RECORD_MODES, Recorder
+from lagcomp.integrate.solution import MESSAGES, EventRecord, Solution
 
 #: Rows per output chunk: small runs allocate little, long ones grow to this.
 FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
-BUFFER_FULL = 1
+#: Driver statuses that mean "call again" (buffer full, step budget used) and "terminal event".
+BUFFER_FULL, PAUSED, EVENT = 1, 2, 3
+#: Solution statuses of a run stopped by a terminal event, and by the user (Ctrl-C).
+TERMINATED, INTERRUPTED = 1, 2
+#: Target wall time of one driver call, and the step budget of the first one.
+CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
+#: Runs longer than this show a progress bar (unless ``progress=False``).
+PROGRESS_DELAY = 2.0
 
 
 def _time_span(t_span) -> tuple[float, float]:
@@ -55,6 +70,25 @@ def _t_eval(t_eval, t0: float, t1: float) -> np.ndarray | None:
     return t_eval
 
 
+def _event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
+    """``directions`` and ``actions`` (0 off, 1 record, 2 record and stop) of the model's events."""
+    declared = model.system.events
+    if events is None or events is True:
+        chosen = [e.name for e in declared] if (m.adaptive or events is True) else []
+    elif events is False:
+        chosen = []
+    else:
+        chosen = [events] if isinstance(events, str) else list(events)
+        unknown = [name for name in chosen if name not in model.system.event_names]
+        if unknown:
+            raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.system.event_names)}.")
+    if chosen and not m.adaptive:
+        raise OptionError(f"Events are located on dense output, which {m.name} lacks; use dop853 or dopri5.")
+    directions = np.array([e.direction for e in declared], dtype=np.int64)
+    actions = np.array([(2 if e.terminal else 1) if e.name in chosen else 0 for e in declared], dtype=np.int64)
+    return directions, actions
+
+
 def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
     """The chunk call of an adaptive method, and the rows its output will need."""
     t0, t1 = clock[0], options["t1"]
@@ -68,9 +102,9 @@ def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, option
     events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
     driver, tableau_arrays = getattr(kernels, m.driver), m.driver_arguments()
 
-    def advance(ts, ys):
-        return driver(y, clock, counters, p, *run_args, t1, rtol, atol, max_step, options["max_steps"],
-                      options["save_every"], events, ts, ys, *tableau_arrays)
+    def advance(ts, ys, pause_at, event_buffers):
+        return driver(y, clock, counters, p, *run_args, t1, rtol, atol, max_step, options["max_steps"], pause_at,
+                      options["save_every"], events, ts, ys, *options["events"], *event_buffers, *tableau_arrays)
     return advance, (len(events) + 1 if t_eval is not None else None)
 
 
@@ -87,8 +121,8 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
         raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {options['max_steps']}.")
     driver, coefficients = getattr(kernels, m.driver), m.driver_arguments(options["implicit_solver"])
 
-    def advance(ts, ys):
-        return driver(y, clock, counters, p, *run_args, t0, dt, n_steps, t1, options["save_every"], ts, ys,
+    def advance(ts, ys, pause_at, event_buffers):
+        return driver(y, clock, counters, p, *run_args, t0, dt, n_steps, pause_at, t1, options["save_every"], ts, ys,
                       *coefficients)
     return advance, n_steps // options["save_every"] + 1
 
@@ -99,13 +133,8 @@ def _count(value, name: str) -> int:
     return int(value)
 
 
-def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=1e-8,
-             atol=1e-10, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
-             max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
-             throw=False) -> Solution:
-    """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
-    t0, t1 = _time_span(t_span)
-    m = get_method(method)
+def check_method(model, m) -> None:
+    """Refuse a method that does not apply to `model` (separable-only or unconstrained-only methods)."""
     if m.separable_only and not model.separable:
         raise OptionError(
             f"`{m.name}` needs a separable system (no constraints, a constant mass matrix and forces that do not "
@@ -115,50 +144,132 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     if m.unconstrained_only and model.k:
         raise OptionError(f"`{m.name}` does not handle constraints yet; {model.name!r} has {list(model.constraints)}. "
                           "Use dop853, dopri5 or rk4.")
+
+
+def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=1e-8,
+             atol=1e-10, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
+             max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
+             events=None, record="trajectory", progress=None, throw=False) -> Solution:
+    """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
+    t0, t1 = _time_span(t_span)
+    m = get_method(method)
+    check_method(model, m)
+    if record not in RECORD_MODES:
+        raise OptionError(f"`record` must be one of {RECORD_MODES}, got {record!r}.")
     p = model.parameter_vector(params, baumgarte)
     options = dict(t1=t1, dt=dt, rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
-                   save_every=_count(save_every, "save_every"), max_steps=_count(max_steps, "max_steps"))
+                   save_every=_count(save_every, "save_every"), max_steps=_count(max_steps, "max_steps"),
+                   events=_event_arguments(model, m, events))
     options["implicit_solver"] = implicit_solver_for(m, implicit_solver)
     t_eval = _t_eval(t_eval, t0, t1)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
     residual_max = np.zeros(1)
-    y, clock, counters = y0.copy(), np.array([t0, 0.0]), np.zeros(5, dtype=np.int64)
+    y, clock, counters = y0.copy(), np.array([t0, 0.0]), np.zeros(6, dtype=np.int64)
     make = _adaptive_driver if m.adaptive else _fixed_step_driver
     advance, rows = make(m, model.kernels, y, clock, counters, p, (projecting, residual_max), t_eval, options)
 
-    save_initial = t_eval is None or t_eval[0] == t0
-    ts_parts = [np.array([t0])] if save_initial else []
-    ys_parts = [y0[None, :].copy()] if save_initial else []
+    recorder = Recorder(model, p, record)
+    if t_eval is None or t_eval[0] == t0:
+        recorder.add(np.array([t0]), y0[None, :])
+    n_events = len(model.system.events)
+    event_parts: list[tuple] = []
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
-    while True:
-        ts, ys = np.empty(chunk), np.empty((chunk, y.size))
-        status, n_saved = advance(ts, ys)
-        ts_parts.append(ts[:n_saved])
-        ys_parts.append(ys[:n_saved])
-        if status != BUFFER_FULL:
-            break
-        chunk = min(2 * chunk, MAX_CHUNK)
-    run = dict(method=m.name, status=int(status), clock=clock, counters=counters, projected=projected,
-               residual_max=float(residual_max[0]))
-    return _solution(model, p, ts_parts, ys_parts, y, run, throw)
+    status = _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress)
+    if (status < 0 or status == INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != clock[0]):
+        recorder.add(np.array([clock[0]]), y[None, :])  # keep the last good state
+    run = dict(method=m.name, status=status, clock=clock, counters=counters, projected=projected,
+               residual_max=float(residual_max[0]), events=_event_records(model, event_parts))
+    return _solution(model, p, recorder, y, run, throw)
 
 
-def _solution(model, p, ts_parts, ys_parts, y, run, throw) -> Solution:
-    ts, ys = np.concatenate(ts_parts), np.concatenate(ys_parts)
+@contextmanager
+def _deferred_interrupt():
+    """Within the block, Ctrl-C sets ``flag[0]`` instead of raising, so no chunk is half-recorded.
+
+    (numba code does not see signals anyway; this also covers the Python
+    bookkeeping between calls.)  Only the main thread can install handlers;
+    elsewhere Ctrl-C keeps its usual meaning.
+    """
+    flag = [False]
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+
+    def handler(signum, frame):
+        flag[0] = True
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _progress_bar(t0: float, t1: float, progress):
+    from tqdm.auto import tqdm
+
+    return tqdm(total=t1 - t0, unit="t", unit_scale=True, leave=False, disable=progress is False, mininterval=0.5,
+                delay=0.0 if progress else PROGRESS_DELAY, bar_format="{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]")
+
+
+def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress) -> int:
+    """Call the driver until the run ends; returns the Solution status (driver codes mapped)."""
+    n = y.size
+    budget, t0 = FIRST_BUDGET, clock[0]
+    with _deferred_interrupt() as interrupted, _progress_bar(t0, t1, progress) as bar:
+        ts, ys = np.empty(chunk), np.empty((chunk, n))
+        while True:
+            event_buffers = (np.empty(max(n_events, 16)), np.empty((max(n_events, 16), n)),
+                             np.empty(max(n_events, 16), dtype=np.int64))
+            counters[5] = 0
+            started = time.perf_counter()
+            steps_before = counters[1]
+            status, n_saved = advance(ts, ys, min(steps_before + budget, np.iinfo(np.int64).max), event_buffers)
+            elapsed = time.perf_counter() - started
+            recorder.add(ts[:n_saved], ys[:n_saved])
+            if counters[5]:
+                event_parts.append(tuple(a[:counters[5]].copy() for a in event_buffers))
+            bar.update(clock[0] - t0 - bar.n)
+            if status == BUFFER_FULL and n_saved == chunk and chunk < MAX_CHUNK:
+                chunk = min(2 * chunk, MAX_CHUNK)
+                ts, ys = np.empty(chunk), np.empty((chunk, n))
+            if status == PAUSED and counters[1] - steps_before == budget:
+                budget = int(budget * min(8.0, max(0.5, CALL_SECONDS / max(elapsed, 1e-6))))
+                budget = max(budget, 16)
+            if status not in (BUFFER_FULL, PAUSED):
+                return TERMINATED if status == EVENT else int(status)
+            if interrupted[0]:
+                return INTERRUPTED
+
+
+def _event_records(model, event_parts) -> dict:
+    """Occurrences of each declared event: {name: EventRecord(t, q, qd)}, in time order."""
+    n = model.n
+    if event_parts:
+        t_all, y_all, i_all = (np.concatenate(column) for column in zip(*event_parts))
+    else:
+        t_all, y_all, i_all = np.empty(0), np.empty((0, 2 * n)), np.empty(0, dtype=np.int64)
+    records = {}
+    for index, event in enumerate(model.system.events):
+        hit = i_all == index
+        records[event.name] = EventRecord(t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:])
+    return records
+
+
+def _solution(model, p, recorder, y, run, throw) -> Solution:
+    ts, ys, energy, energy_function, momenta = recorder.rows_kept()
     status, clock, counters = run["status"], run["clock"], run["counters"]
     t_failure = None
     message = MESSAGES[status]
-    if status < 0:
-        t_failure = float(clock[0])
-        if ts.size == 0 or ts[-1] != t_failure:  # keep the last good state
-            ts, ys = np.append(ts, t_failure), np.vstack([ys, y])
+    if status < 0 or status == INTERRUPTED:
         n = model.n
         state = ", ".join(f"{c}={v:.6g}" for c, v in zip(model.coordinates, y[:n]))
         rates = ", ".join(f"{c}_dot={v:.6g}" for c, v in zip(model.coordinates, y[n:]))
-        message = f"{message} Stopped at t = {t_failure:.10g}, last good state {state}, {rates}."
-    energy, energy_function, momenta = np.empty(ts.size), np.empty(ts.size), np.empty((ts.size, model.n))
-    model.kernels.observables(ts, ys, p, energy, energy_function, momenta)
+        message = f"{message} Stopped at t = {clock[0]:.10g}, last good state {state}, {rates}."
+        t_failure = float(clock[0]) if status < 0 else None
+    if status == TERMINATED:
+        fired = [name for name, record in run["events"].items() if record.t.size and record.t[-1] == clock[0]]
+        message = f"{message} Event {fired[0] if fired else '?'!r} at t = {clock[0]:.10g}."
     reactions, residuals = reactions_along(model, ts, ys, p)
     n = model.n
     solution = Solution(
@@ -170,6 +281,7 @@ def _solution(model, p, ts_parts, ys_parts, y, run, throw) -> Solution:
         params=dict(zip(model.parameters, p.tolist())),
         reactions=reactions, constraint_residual=max(run["residual_max"], float(np.max(residuals, initial=0.0))),
         projected_initial_state=ys[0].copy() if run["projected"] else None,
+        events=run["events"], summary=recorder.summary(),
     )
     if throw and status < 0:
         raise IntegrationError(message, solution)

@@ -7,9 +7,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lagcomp.integrate.recording import RunSummary
+
 #: Driver status codes and what they mean to a user (a failed run is a status, not an exception).
 MESSAGES = {
     0: "The integration reached the end of the time span.",
+    1: "A terminal event stopped the integration.",
+    2: "Interrupted by the user (Ctrl-C); the solution holds what was computed.",
     -1: "The state or its derivative became non-finite (NaN or inf).",
     -2: "The mass matrix became singular (the kinetic energy is not positive definite at this state), or with "
         "constraints the augmented matrix [M Λᵀ; Λ 0] did (redundant constraints).",
@@ -17,6 +21,18 @@ MESSAGES = {
     -4: "The maximum number of steps was reached.",
     -5: "The implicit stage equations did not converge: reduce the step `dt`.",
 }
+
+
+@dataclass(frozen=True)
+class EventRecord:
+    """The occurrences of one event: times (k,), and coordinates and velocities (k, n) there."""
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+
+    def __len__(self) -> int:
+        return self.t.shape[0]
 
 
 def _relative_drift(values: np.ndarray) -> float:
@@ -46,7 +62,8 @@ class Solution:
         The model's cyclic coordinates, whose momenta are conserved
         (without constraints acting along them).
     status : int
-        0 on success, negative on failure (see `MESSAGES`).
+        0 when the end of the span was reached, 1 when a terminal event
+        stopped the run, 2 when Ctrl-C did, negative on failure (`MESSAGES`).
     message : str
         What happened, with the time of failure if any.
     t_failure : float or None
@@ -68,6 +85,13 @@ class Solution:
     projected_initial_state : ndarray, shape (2n,), or None
         The state the run started from when ``project_initial=True`` moved the
         given one onto the constraints.
+    events : dict of str to EventRecord
+        Each declared event's occurrences, by name (empty records when the
+        method does not locate events or they were switched off).
+    summary : RunSummary or None
+        Running reductions over every saved row (`lagcomp.integrate.recording`):
+        the largest energy errors, coordinate ranges.  With
+        ``record="summary"`` the arrays above hold only the first and last rows.
     """
 
     t: np.ndarray
@@ -89,10 +113,13 @@ class Solution:
     reactions: dict = field(default_factory=dict)
     constraint_residual: float = 0.0
     projected_initial_state: np.ndarray | None = None
+    events: dict = field(default_factory=dict)
+    summary: RunSummary | None = None
 
     @property
     def success(self) -> bool:
-        return self.status == 0
+        """The run reached the end of its span or a terminal event."""
+        return self.status in (0, 1)
 
     @property
     def y(self) -> np.ndarray:
@@ -129,6 +156,8 @@ class Solution:
             "param_values": np.asarray(list(self.params.values()), dtype=float),
             "constraint_residual": np.asarray(self.constraint_residual),
             **{f"reaction_{name}": values for name, values in self.reactions.items()},
+            **{f"event_{name}_{part}": getattr(record, part)
+               for name, record in self.events.items() for part in ("t", "q", "qd")},
         }
 
     def save_npz(self, path: str | os.PathLike) -> None:

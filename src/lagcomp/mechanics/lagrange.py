@@ -105,6 +105,8 @@ class EOM:
     momentum_rate : Matrix, shape (n, 1)
         ṗ = ∂L/∂q + Q − ∂D/∂q̇ as a function of (q, q̇, t): with q̇ from
         M q̇ = p − b this is Hamilton's ṗ = −∂H/∂q (+ non-conservative forces).
+    events : tuple of Expr
+        The event functions g(q, q̇, t) of `System.events`, in order.
     """
 
     system: System
@@ -129,6 +131,7 @@ class EOM:
     separable: bool
     momentum_offset: sp.Matrix
     momentum_rate: sp.Matrix
+    events: tuple = ()
 
     @property
     def n(self) -> int:
@@ -208,7 +211,8 @@ def derive(system: System) -> EOM:
         M=M.applyfunc(_tidy), F=F.applyfunc(_tidy), T=T, V=V, L=L,
         energy=_tidy(T + V), energy_function=_tidy(h), momenta=momenta.applyfunc(_tidy), cyclic=cyclic,
         separable=separable, momentum_offset=momentum_offset.applyfunc(_tidy),
-        momentum_rate=momentum_rate.applyfunc(_tidy), **constraints,
+        momentum_rate=momentum_rate.applyfunc(_tidy), events=tuple(plain(e.expr) for e in system.events),
+        **constraints,
     )
 
 

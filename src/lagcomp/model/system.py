@@ -33,6 +33,7 @@ from lagcomp.errors import InitialConditionError, ModelError, ParameterError, Un
 from lagcomp.model.assemble import assemble
 from lagcomp.model.constraints import Holonomic, Nonholonomic
 from lagcomp.model.frames import as_frame
+from lagcomp.model.events import Event
 
 #: The time symbol shared with ``sympy.physics.mechanics.dynamicsymbols``.
 t = dynamicsymbols._t
@@ -93,6 +94,9 @@ class System:
         Default initial coordinates and velocities.
     t_end : float
         Default length of a run started from the command line.
+    events : sequence of Event, optional
+        Named functions g(t, q, q̇) whose zeros the adaptive methods locate
+        (`lagcomp.model.events`); compiled with the other kernels.
     bodies : sequence of Particle / RigidBody, optional
         Bodies whose kinetic energy (and own potential) is added to T (and V);
         sympy.physics.mechanics Particle and RigidBody are accepted.
@@ -124,6 +128,7 @@ class System:
     q0: tuple | None = None
     qd0: tuple | None = None
     t_end: float = 10.0
+    events: tuple = ()
     bodies: tuple = ()
     loads: tuple = ()
     frame: object = None
@@ -152,6 +157,7 @@ class System:
         set_(self, "forces", self._normalized_forces(coords))
         roles = self._merge(coords)
         set_(self, "constraints", self._checked_constraints())
+        set_(self, "events", self._checked_events())
         set_(self, "parameters", self._checked_parameters(coords, roles))
         set_(self, "defaults", self._checked_defaults())
         set_(self, "q0", self._checked_initial(self.q0, "q0"))
@@ -229,16 +235,32 @@ class System:
                 )
         return constraints
 
+    def _checked_events(self) -> tuple:
+        events = tuple(self.events)
+        for e in events:
+            if not isinstance(e, Event):
+                raise ModelError(f"Event {e!r} must be a lagcomp Event(name, expr, direction, terminal).")
+        names = [e.name for e in events]
+        repeated = sorted({n for n in names if names.count(n) > 1})
+        if repeated:
+            raise ModelError(f"Event names must be unique; repeated: {repeated}.")
+        return events
+
     def expressions(self) -> dict[str, sp.Expr]:
         """Every user expression by role, for validation and display."""
         exprs = {"T": self.T, "V": self.V, "dissipation": self.dissipation}
         exprs.update({f"forces[{q.func.__name__}]": Q for q, Q in zip(self.coordinates, self.forces)})
         exprs.update({f"constraint {c.name}": c.expr for c in self.constraints})
+        exprs.update({f"event {e.name}": e.expr for e in self.events})
         return exprs
 
     @property
     def constraint_names(self) -> tuple[str, ...]:
         return tuple(c.name for c in self.constraints)
+
+    @property
+    def event_names(self) -> tuple[str, ...]:
+        return tuple(e.name for e in self.events)
 
     def _checked_parameters(self, coords, roles=None) -> tuple:
         found: set[sp.Symbol] = set()

@@ -2,7 +2,7 @@
 
 This file is not imported as part of lagcomp.  Its text is appended to each
 generated kernel module, after the kernels.  The module it is appended to
-provides five names:
+provides these names:
 
 * ``np`` and ``njit`` (``import numpy as np`` / ``from numba import njit`` in
   the generated header; they are imported again below so that this file is
@@ -13,7 +13,9 @@ provides five names:
 * ``project(t, y, p) -> int``: moves ``y`` onto the system's constraints in
   place (0, or ``k > 0`` when that is impossible), and
   ``constraint_residual(t, y, p) -> float``: the largest constraint residual.
-  Unconstrained modules define them as no-ops that numba folds away.
+  Unconstrained modules define them as no-ops that numba folds away;
+* ``event_values(t, y, p, out)``: the values of the system's event
+  functions (nothing when it has none).
 
 Why a template rather than generic drivers taking ``rhs`` as an argument:
 numba's on-disk cache misses for a cached function that receives a jitted
@@ -26,21 +28,24 @@ of each driver call).
 Public drivers (the calling convention is shared by all five):
 
 * ``rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
-  t_end, save_every, ts, ys)``
+  pause_at, t_end, save_every, ts, ys)``
 * ``dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
-  atol, max_step, max_steps, save_every, t_eval, ts, ys, A, B, C, E, P)``
-* ``dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
-  atol, max_step, max_steps, save_every, t_eval, ts, ys, A, B, C, E3, E5, D,
-  A_EXTRA, C_EXTRA)``
+  atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
+  directions, actions, ev_t, ev_y, ev_i, A, B, C, E, P)``
+* ``dop853_run(...)``: the same arguments as ``dopri5_run``, then
+  ``A, B, C, E3, E5, D, A_EXTRA, C_EXTRA``;
 * ``composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
-  n_steps, t_end, save_every, ts, ys, weights)``: symplectic compositions of
+  n_steps, pause_at, t_end, save_every, ts, ys, weights)``: symplectic compositions of
   Störmer-Verlet for separable systems (in ``symplectic.py``, appended after
   this file);
 * ``collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
-  n_steps, t_end, save_every, ts, ys, A, B, C, E, max_iter)``: implicit
-  Gauss-Legendre collocation on the canonical equations in (q, p), for any
-  unconstrained Lagrangian (also in ``symplectic.py``); it needs the kernels ``velocities`` and
-  ``momentum_rate`` and returns -5 when its stage equations do not converge.
+  n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter,
+  newton)``: implicit Gauss-Legendre collocation on the canonical equations
+  in (q, p), for any unconstrained Lagrangian (also in ``symplectic.py``),
+  its stage equations solved by fixed-point iteration (``newton`` None) or
+  simplified Newton (True); it needs the kernels ``velocities``,
+  ``momentum_rate`` and ``canonical_jacobian`` and returns -5 when the stage
+  equations do not converge.
 
 The trailing tableau arrays are ``lagcomp.integrate.tableaux.driver_arguments``
 of the corresponding tableau.  State is kept in the in/out arrays so that a
@@ -49,21 +54,38 @@ run can be resumed, chunk by chunk, when the output buffer fills:
 * ``y``        float64[N], current state (last accepted state on return);
 * ``clock``    float64[2] = [t, h]: current time and next step size to try
   (adaptive drivers; h == 0 selects the initial step automatically);
-* ``counters`` int64[5] = [nfev, nsteps, nrejected, i_eval, since_save];
+* ``counters`` int64[6] = [nfev, nsteps, nrejected, i_eval, since_save,
+  n_events]: the last is the number of event rows written to ``ev_*`` by
+  this call (the caller resets it with each fresh event buffer);
+* ``pause_at`` int: return status 2 before step number ``pause_at`` (counted
+  from the start of the run, ``counters[1]``); the caller resumes with a
+  later ``pause_at``.  This bounds the time of one call, so Python can show
+  progress and honour Ctrl-C between calls;
 * ``ts``, ``ys`` float64[cap], float64[cap, N]: output rows written from 0;
   the initial point is never written (the caller does that);
 * ``projecting`` int: 1 projects every accepted state onto the constraints
   (RK4: before it is saved; adaptive: after the step's outputs, re-evaluating
   the FSAL derivative at the projected state); ``residual_max`` float64[1]:
-  the running maximum of ``constraint_residual`` over accepted states.
+  the running maximum of ``constraint_residual`` over accepted states;
+* events (adaptive drivers): ``directions`` int64[E] (+1, -1, 0),
+  ``actions`` int64[E] (0 ignore, 1 record, 2 record and stop), and the
+  output rows ``ev_t`` float64[cap_e], ``ev_y`` float64[cap_e, N],
+  ``ev_i`` int64[cap_e] (time, state, event index); a step starts only when
+  ``cap_e`` has room for one row per event.  After each accepted step the
+  events are evaluated at its end; each sign change in an event's direction
+  is located on the dense output by Brent's method (``_event_root``) and
+  recorded in time order.  A terminal event ends the step, and the run, at
+  its time: the event's state is the last saved row and ``y``, status 3.
 
 Every driver returns ``(status, n_saved)``: status 0 = reached ``t_end``;
 1 = output buffer full (call again with a fresh buffer; the continuation is
 identical to an uninterrupted run except for one extra ``f`` evaluation per
 call of the adaptive drivers; with ``t_eval`` the buffer may hold fewer than
-``cap`` rows, see "Output buffer" below); -1 = non-finite state, derivative or
-step size; -2 = ``rhs`` returned a non-zero status; -3 = step size too small;
--4 = maximum number of steps reached.  On failure ``y`` and ``clock[0]`` hold
+``cap`` rows, see "Output buffer" below); 2 = paused at ``pause_at`` (call
+again; the continuation is identical in the same way); 3 = a terminal event
+stopped the run; -1 = non-finite state, derivative or step size; -2 =
+``rhs`` returned a non-zero status; -3 = step size too small; -4 = maximum
+number of steps reached; -5 = implicit stage equations not solved.  On failure ``y`` and ``clock[0]`` hold
 the last good state and its time.
 
 No floating-point trouble raises
@@ -203,6 +225,8 @@ _ODE_RHS_FAILED = -2
 _ODE_STEP_TOO_SMALL = -3
 _ODE_MAX_STEPS = -4
 _ODE_NOT_CONVERGED = -5   # implicit stage equations not solved (step too large)
+_ODE_PAUSED = 2           # the call's step budget (``pause_at``) is used up: call again
+_ODE_EVENT = 3            # a terminal event stopped the run
 
 
 # ---------------------------------------------------------------------------
@@ -211,7 +235,7 @@ _ODE_NOT_CONVERGED = -5   # implicit stage equations not solved (step too large)
 
 @njit(cache=True, error_model="numpy")
 def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
-            t_end, save_every, ts, ys):
+            pause_at, t_end, save_every, ts, ys):
     """Integrate with classic RK4 (HNW II.1) and a fixed step ``dt``; resumable.
 
     Step k (0-based, ``k = counters[1]``) goes from ``t0 + k dt`` to
@@ -234,6 +258,8 @@ def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
         k = counters[1]
         if k >= n_steps:
             return _ODE_DONE, n_saved
+        if k >= pause_at:
+            return _ODE_PAUSED, n_saved
         last = k == n_steps - 1
         if last or counters[4] + 1 >= save_every:
             if n_saved >= cap:
@@ -290,6 +316,160 @@ def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
             counters[4] = 0
 
 
+# >>> events
+# ---------------------------------------------------------------------------
+# Events on the dense output (shared by DOPRI5 and DOP853)
+# ---------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def _dense_state(kind, F, y, t, h, tau, out):
+    """State at time ``tau`` inside the step (t, t + h) from its dense output, into ``out``.
+
+    ``kind`` 5: DOPRI5, ``F`` holds Q with ``y(t + x h) = y + h sum_m Q[m] x^(m+1)``;
+    ``kind`` 8: DOP853, ``F`` holds the rows of ``contd8`` (see ``dop853_run``).
+    """
+    n = y.shape[0]
+    rows = F.shape[0]
+    x = (tau - t) / h
+    if kind == 5:
+        for i in range(n):
+            acc = 0.0
+            for m in range(rows - 1, -1, -1):
+                acc = (acc + F[m, i]) * x
+            out[i] = y[i] + h * acc
+    else:
+        one_minus_x = 1.0 - x
+        for i in range(n):
+            acc = 0.0
+            for r in range(rows - 1, -1, -1):
+                acc += F[r, i]
+                if r % 2 == 0:
+                    acc *= x
+                else:
+                    acc *= one_minus_x
+            out[i] = y[i] + acc
+
+
+@njit(cache=True, error_model="numpy")
+def _event_crossings(g_old, g_new, directions, actions, crossed):
+    """Flag in ``crossed`` the active events whose sign change over the step matches their direction.
+
+    Up: g_old < 0 <= g_new; down: g_old > 0 >= g_new (a zero at the step's
+    start does not count: it was the previous step's end).  Returns the count.
+    """
+    count = 0
+    for e in range(g_old.shape[0]):
+        up = g_old[e] < 0.0 and g_new[e] >= 0.0
+        down = g_old[e] > 0.0 and g_new[e] <= 0.0
+        hit = actions[e] > 0 and ((up and directions[e] >= 0) or (down and directions[e] <= 0))
+        crossed[e] = hit
+        if hit:
+            count += 1
+    return count
+
+
+@njit(cache=True, error_model="numpy")
+def _event_root(kind, F, y, t, h, p, e, a, fa, b, fb, ywork, gwork):
+    """Zero of event ``e`` on the dense output between times a and b (fa, fb of opposite signs).
+
+    Brent's method (R. P. Brent, *Algorithms for Minimization without
+    Derivatives*, 1973, ch. 4: inverse quadratic interpolation and secant
+    steps, safeguarded by bisection), to 2 eps |tau| + 2 eps in time:
+    a few units of rounding.
+    """
+    eps = 2.220446049250313e-16
+    c = a
+    fc = fa
+    d = b - a
+    step = d
+    for _ in range(200):
+        if (fb > 0.0) == (fc > 0.0):
+            c = a
+            fc = fa
+            d = b - a
+            step = d
+        if abs(fc) < abs(fb):
+            a = b
+            b = c
+            c = a
+            fa = fb
+            fb = fc
+            fc = fa
+        tol = 2.0 * eps * abs(b) + 2.0 * eps
+        half = 0.5 * (c - b)
+        if abs(half) <= tol or fb == 0.0:
+            break
+        if abs(step) >= tol and abs(fa) > abs(fb):
+            s = fb / fa
+            if a == c:                           # secant
+                num = 2.0 * half * s
+                den = 1.0 - s
+            else:                                # inverse quadratic
+                qa = fa / fc
+                r = fb / fc
+                num = s * (2.0 * half * qa * (qa - r) - (b - a) * (r - 1.0))
+                den = (qa - 1.0) * (r - 1.0) * (s - 1.0)
+            if num > 0.0:
+                den = -den
+            else:
+                num = -num
+            if 2.0 * num < min(3.0 * half * den - abs(tol * den), abs(step * den)):
+                step = d
+                d = num / den
+            else:
+                d = half
+                step = d
+        else:
+            d = half
+            step = d
+        a = b
+        fa = fb
+        if abs(d) > tol:
+            b += d
+        elif half > 0.0:
+            b += tol
+        else:
+            b -= tol
+        _dense_state(kind, F, y, t, h, b, ywork)
+        event_values(b, ywork, p, gwork)
+        fb = gwork[e]
+    return b
+
+
+@njit(cache=True, error_model="numpy")
+def _record_events(kind, F, y, t, h, p, g_old, g_new, crossed, actions, times,
+                   te, ye, ie, n_recorded, ywork, gwork):
+    """Locate the flagged crossings of the step (t, t + h) and record them in time order.
+
+    Writes times, states and event indices to ``te``/``ye``/``ie`` from row
+    ``n_recorded`` (the caller made room for one row per event).  Events
+    after the first terminal one are dropped.  Returns the new row count and
+    the time of the terminal event (inf when none fired).
+    """
+    n_events = g_old.shape[0]
+    for e in range(n_events):
+        times[e] = np.inf
+        if crossed[e]:
+            times[e] = _event_root(kind, F, y, t, h, p, e, t, g_old[e], t + h, g_new[e], ywork, gwork)
+    t_stop = np.inf
+    while True:
+        first = -1
+        for e in range(n_events):
+            if times[e] < np.inf and (first < 0 or times[e] < times[first]):
+                first = e
+        if first < 0 or times[first] > t_stop:
+            break
+        te[n_recorded] = times[first]
+        _dense_state(kind, F, y, t, h, times[first], ye[n_recorded])
+        ie[n_recorded] = first
+        n_recorded += 1
+        if actions[first] == 2:
+            t_stop = times[first]
+        times[first] = np.inf
+    return n_recorded, t_stop
+
+# <<< events
+
 # ---------------------------------------------------------------------------
 # Adaptive embedded Runge-Kutta: DOPRI5 and DOP853 (two parallel bodies; see
 # "Why each driver is one long function" above)
@@ -297,8 +477,8 @@ def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
 
 @njit(cache=True, error_model="numpy")
 def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
-               atol, max_step, max_steps,
-               save_every, t_eval, ts, ys, A, B, C, E, P):
+               atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
+               directions, actions, ev_t, ev_y, ev_i, A, B, C, E, P):
     """Dormand-Prince 5(4) with step control and quartic dense output.
 
     ``A`` (s, s) strictly lower triangular, ``B``/``C`` (s,), ``E`` (s+1,)
@@ -329,6 +509,14 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
     ytmp = np.empty(n)
     Q = np.empty((n_power, n))  # dense-output coefficients; Q[0] is also
                                 # the error scale of the initial step
+    # >>> events
+    n_events = directions.shape[0]
+    g_old = np.empty(n_events)
+    g_new = np.empty(n_events)
+    g_work = np.empty(n_events)
+    crossed = np.zeros(n_events, dtype=np.bool_)
+    crossing_times = np.empty(n_events)
+    # <<< events
 
     n_saved = 0
     t = clock[0]
@@ -338,9 +526,13 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
     while counters[3] < n_eval and t_eval[counters[3]] <= t:
         counters[3] += 1
 
-    # First stage of the first step (FSAL thereafter).
+    # First stage of the first step (FSAL thereafter); events at the start.
     status = rhs(t, y, p, K[0])
     counters[0] += 1
+    # >>> events
+    if n_events > 0:
+        event_values(t, y, p, g_old)
+    # <<< events
     if status == 0:
         for i in range(n):
             if not (np.isfinite(y[i]) and np.isfinite(K[0, i])):
@@ -399,6 +591,8 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             return _ODE_DONE, n_saved
         if counters[1] >= max_steps:
             return _ODE_MAX_STEPS, n_saved
+        if counters[1] >= pause_at:
+            return _ODE_PAUSED, n_saved
 
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         if h_abs > max_step:
@@ -422,6 +616,12 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             need = 1
         if need > room and (n_saved > 0 or not use_t_eval):
             return _ODE_BUFFER_FULL, n_saved
+        # >>> events
+        if counters[5] + n_events > ev_t.shape[0]:
+            return _ODE_BUFFER_FULL, n_saved
+        if n_events > 0 and not use_t_eval and n_saved >= cap:
+            return _ODE_BUFFER_FULL, n_saved    # a terminal event saves its row
+        # <<< events
 
         # Trial loop: shrink until the error estimate is acceptable.
         step_rejected = False
@@ -508,19 +708,38 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             step_rejected = True
             counters[2] += 1
 
+        # Events of the accepted step; the interpolant when an event or a
+        # t_eval point lies inside it; a terminal event cuts the step short.
+        n_crossed = 0
+        # >>> events
+        if n_events > 0:
+            event_values(t_new, y_new, p, g_new)
+            n_crossed = _event_crossings(g_old, g_new, directions, actions, crossed)
+        # <<< events
+        j = counters[3]
+        if n_crossed > 0 or (use_t_eval and j < n_eval and t_eval[j] < t_new):
+            for m in range(n_power):
+                for i in range(n):
+                    Q[m, i] = 0.0
+                for jj in range(n_k):
+                    w = P[jj, m]
+                    if w != 0.0:
+                        for i in range(n):
+                            Q[m, i] += w * K[jj, i]
+        stop = False
+        # >>> events
+        if n_crossed > 0:
+            n_recorded, t_stop = _record_events(5, Q, y, t, h, p, g_old, g_new, crossed, actions,
+                                                crossing_times, ev_t, ev_y, ev_i, counters[5], ytmp, g_work)
+            counters[5] = n_recorded
+            if t_stop < np.inf:
+                stop = True
+                t_new = t_stop
+                _dense_state(5, Q, y, t, h, t_stop, y_new)
+        # <<< events
+
         # Outputs of the accepted step t -> t_new.
         if use_t_eval:
-            j = counters[3]
-            if j < n_eval and t_eval[j] < t_new:
-                # A point strictly inside the step: build the interpolant.
-                for m in range(n_power):
-                    for i in range(n):
-                        Q[m, i] = 0.0
-                    for jj in range(n_k):
-                        w = P[jj, m]
-                        if w != 0.0:
-                            for i in range(n):
-                                Q[m, i] += w * K[jj, i]
             while j < n_eval and t_eval[j] <= t_new and n_saved < cap:
                 te = t_eval[j]
                 ts[n_saved] = te
@@ -544,7 +763,7 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
                 return _ODE_BUFFER_FULL, n_saved
         else:
             counters[4] += 1
-            if counters[4] >= save_every or t_new >= t_end:
+            if counters[4] >= save_every or t_new >= t_end or stop:
                 ts[n_saved] = t_new
                 for i in range(n):
                     ys[n_saved, i] = y_new[i]
@@ -573,12 +792,22 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
         clock[0] = t
         clock[1] = h_abs
         counters[1] += 1
+        if stop:
+            return _ODE_EVENT, n_saved
+        # >>> events
+        if n_events > 0:
+            if projecting:
+                event_values(t, y, p, g_old)
+            else:
+                for ev in range(n_events):
+                    g_old[ev] = g_new[ev]
+        # <<< events
 
 
 @njit(cache=True, error_model="numpy")
 def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
-               atol, max_step, max_steps,
-               save_every, t_eval, ts, ys, A, B, C, E3, E5, D, A_EXTRA,
+               atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
+               directions, actions, ev_t, ev_y, ev_i, A, B, C, E3, E5, D, A_EXTRA,
                C_EXTRA):
     """Hairer's DOP853: order 8 with the combined 5th/3rd-order error
     estimate (error order q = 7) and 7th-order dense output.
@@ -619,6 +848,14 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
     ytmp = np.empty(n)
     F = np.empty((n_rows, n))   # dense-output coefficients; F[0] is also
                                 # the error scale of the initial step
+    # >>> events
+    n_events = directions.shape[0]
+    g_old = np.empty(n_events)
+    g_new = np.empty(n_events)
+    g_work = np.empty(n_events)
+    crossed = np.zeros(n_events, dtype=np.bool_)
+    crossing_times = np.empty(n_events)
+    # <<< events
 
     n_saved = 0
     t = clock[0]
@@ -628,9 +865,13 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
     while counters[3] < n_eval and t_eval[counters[3]] <= t:
         counters[3] += 1
 
-    # First stage of the first step (FSAL thereafter).
+    # First stage of the first step (FSAL thereafter); events at the start.
     status = rhs(t, y, p, K[0])
     counters[0] += 1
+    # >>> events
+    if n_events > 0:
+        event_values(t, y, p, g_old)
+    # <<< events
     if status == 0:
         for i in range(n):
             if not (np.isfinite(y[i]) and np.isfinite(K[0, i])):
@@ -689,6 +930,8 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             return _ODE_DONE, n_saved
         if counters[1] >= max_steps:
             return _ODE_MAX_STEPS, n_saved
+        if counters[1] >= pause_at:
+            return _ODE_PAUSED, n_saved
 
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         if h_abs > max_step:
@@ -712,6 +955,12 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             need = 1
         if need > room and (n_saved > 0 or not use_t_eval):
             return _ODE_BUFFER_FULL, n_saved
+        # >>> events
+        if counters[5] + n_events > ev_t.shape[0]:
+            return _ODE_BUFFER_FULL, n_saved
+        if n_events > 0 and not use_t_eval and n_saved >= cap:
+            return _ODE_BUFFER_FULL, n_saved    # a terminal event saves its row
+        # <<< events
 
         # Trial loop: shrink until the error estimate is acceptable.
         step_rejected = False
@@ -806,48 +1055,67 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             step_rejected = True
             counters[2] += 1
 
+        # Events of the accepted step; the interpolant when an event or a
+        # t_eval point lies inside it (first the extra stages K[s+1 .. s+3]
+        # (jj: stage index; j is the t_eval index), then the rows F); a
+        # terminal event cuts the step short.
+        n_crossed = 0
+        # >>> events
+        if n_events > 0:
+            event_values(t_new, y_new, p, g_new)
+            n_crossed = _event_crossings(g_old, g_new, directions, actions, crossed)
+        # <<< events
+        j = counters[3]
+        if n_crossed > 0 or (use_t_eval and j < n_eval and t_eval[j] < t_new):
+            for s in range(n_k, n_all):
+                row = s - n_k
+                for i in range(n):
+                    ytmp[i] = 0.0
+                for jj in range(s):
+                    a = A_EXTRA[row, jj]
+                    if a != 0.0:
+                        for i in range(n):
+                            ytmp[i] += a * K[jj, i]
+                for i in range(n):
+                    ytmp[i] = y[i] + h * ytmp[i]
+                status = rhs(t + C_EXTRA[row] * h, ytmp, p, K[s])
+                counters[0] += 1
+                if status == 0:
+                    for i in range(n):
+                        if not np.isfinite(K[s, i]):
+                            status = -1
+                if status != 0:
+                    return ((_ODE_RHS_FAILED if status > 0
+                             else _ODE_NONFINITE), n_saved)
+            for i in range(n):
+                dy = y_new[i] - y[i]
+                F[0, i] = dy
+                F[1, i] = h * K[0, i] - dy
+                F[2, i] = 2.0 * dy - h * (K[n_stages, i] + K[0, i])
+            for r in range(3, n_rows):
+                for i in range(n):
+                    F[r, i] = 0.0
+                for jj in range(n_all):
+                    w = D[r - 3, jj]
+                    if w != 0.0:
+                        for i in range(n):
+                            F[r, i] += w * K[jj, i]
+                for i in range(n):
+                    F[r, i] *= h
+        stop = False
+        # >>> events
+        if n_crossed > 0:
+            n_recorded, t_stop = _record_events(8, F, y, t, h, p, g_old, g_new, crossed, actions,
+                                                crossing_times, ev_t, ev_y, ev_i, counters[5], ytmp, g_work)
+            counters[5] = n_recorded
+            if t_stop < np.inf:
+                stop = True
+                t_new = t_stop
+                _dense_state(8, F, y, t, h, t_stop, y_new)
+        # <<< events
+
         # Outputs of the accepted step t -> t_new.
         if use_t_eval:
-            j = counters[3]
-            if j < n_eval and t_eval[j] < t_new:
-                # A point strictly inside the step: build the interpolant,
-                # first the extra stages K[s+1 .. s+3] (jj: stage index; j
-                # is the t_eval index), then the rows F.
-                for s in range(n_k, n_all):
-                    row = s - n_k
-                    for i in range(n):
-                        ytmp[i] = 0.0
-                    for jj in range(s):
-                        a = A_EXTRA[row, jj]
-                        if a != 0.0:
-                            for i in range(n):
-                                ytmp[i] += a * K[jj, i]
-                    for i in range(n):
-                        ytmp[i] = y[i] + h * ytmp[i]
-                    status = rhs(t + C_EXTRA[row] * h, ytmp, p, K[s])
-                    counters[0] += 1
-                    if status == 0:
-                        for i in range(n):
-                            if not np.isfinite(K[s, i]):
-                                status = -1
-                    if status != 0:
-                        return ((_ODE_RHS_FAILED if status > 0
-                                 else _ODE_NONFINITE), n_saved)
-                for i in range(n):
-                    dy = y_new[i] - y[i]
-                    F[0, i] = dy
-                    F[1, i] = h * K[0, i] - dy
-                    F[2, i] = 2.0 * dy - h * (K[n_stages, i] + K[0, i])
-                for r in range(3, n_rows):
-                    for i in range(n):
-                        F[r, i] = 0.0
-                    for jj in range(n_all):
-                        w = D[r - 3, jj]
-                        if w != 0.0:
-                            for i in range(n):
-                                F[r, i] += w * K[jj, i]
-                    for i in range(n):
-                        F[r, i] *= h
             while j < n_eval and t_eval[j] <= t_new and n_saved < cap:
                 te = t_eval[j]
                 ts[n_saved] = te
@@ -876,7 +1144,7 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
                 return _ODE_BUFFER_FULL, n_saved
         else:
             counters[4] += 1
-            if counters[4] >= save_every or t_new >= t_end:
+            if counters[4] >= save_every or t_new >= t_end or stop:
                 ts[n_saved] = t_new
                 for i in range(n):
                     ys[n_saved, i] = y_new[i]
@@ -905,3 +1173,13 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
         clock[0] = t
         clock[1] = h_abs
         counters[1] += 1
+        if stop:
+            return _ODE_EVENT, n_saved
+        # >>> events
+        if n_events > 0:
+            if projecting:
+                event_values(t, y, p, g_old)
+            else:
+                for ev in range(n_events):
+                    g_old[ev] = g_new[ev]
+        # <<< events

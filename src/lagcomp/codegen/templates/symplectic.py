@@ -29,7 +29,7 @@ from numba import njit
 
 @njit(cache=True, error_model="numpy")
 def composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
-                    n_steps, t_end, save_every, ts, ys, weights):
+                    n_steps, pause_at, t_end, save_every, ts, ys, weights):
     """Symmetric composition of Störmer-Verlet substeps; fixed step ``dt``; resumable.
 
     For separable systems only (constant mass matrix M, accelerations
@@ -62,6 +62,8 @@ def composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
         k = counters[1]
         if k >= n_steps:
             return _ODE_DONE, n_saved
+        if k >= pause_at:
+            return _ODE_PAUSED, n_saved
         last = k == n_steps - 1
         if last or counters[4] + 1 >= save_every:
             if n_saved >= cap:
@@ -119,7 +121,7 @@ def composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
 
 @njit(cache=True, error_model="numpy")
 def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
-                    n_steps, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton):
+                    n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton):
     """Implicit Runge-Kutta (Gauss-Legendre) on x = (q, p); fixed step ``dt``; resumable.
 
     The canonical equations are evaluated without a symbolic inverse:
@@ -180,6 +182,8 @@ def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
         k = counters[1]
         if k >= n_steps:
             return _ODE_DONE, n_saved
+        if k >= pause_at:
+            return _ODE_PAUSED, n_saved
         last = k == n_steps - 1
         if last or counters[4] + 1 >= save_every:
             if n_saved >= cap:

@@ -1,0 +1,448 @@
+"""Swept runs: many trajectories over a grid of initial values and parameters, on every core.
+
+`sweep` builds the N initial states and parameter vectors of a grid, checks
+the memory its outputs need, and hands them to the compiled sweep loop of
+the method (``sweep_<driver>`` in the generated module, which releases the
+GIL; `lagcomp/codegen/templates/sweeps.py`) chunk by chunk, each chunk split
+across `workers` threads: Python runs once per chunk, so a long sweep shows progress and stops cleanly on Ctrl-C,
+keeping the chunks already done.  Trajectories are independent and each
+writes only its own output rows, so the result is identical — bitwise —
+whatever the number of threads.
+
+Grid names are coordinate names (initial coordinates), ``<coordinate>_dot``
+(initial velocities) and parameter names; everything not swept comes from
+`q0`, `qd0`, `params` or the System's defaults.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lagcomp.errors import OptionError
+from lagcomp.integrate.methods import get_method
+from lagcomp.integrate.simulate import (
+    _count,
+    _deferred_interrupt,
+    _event_arguments,
+    _positive,
+    _t_eval,
+    _time_span,
+    check_method,
+)
+
+#: Outputs a sweep can keep besides the final state and status.
+OUTPUTS = ("dense", "energy", "events")
+#: Default ceiling on the memory of a sweep's outputs, in bytes (raise it with `memory_limit`).
+MEMORY_LIMIT = 2 * 2**30
+#: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread.
+CHUNK_SECONDS, FIRST_CHUNK_PER_THREAD = 0.5, 8
+#: Solution-style status of trajectories a Ctrl-C left unstarted.
+NOT_RUN = 2
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """The outcome of `Model.sweep`: outputs shaped like the grid.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The swept quantities, in grid order.
+    combine : str
+        "product" (a Cartesian grid), "zip" or "explicit" (one trajectory per row).
+    axes : dict of str to ndarray
+        For ``combine="product"`` the 1-D values along each grid axis; for
+        ``"zip"`` and explicit arrays the value of each name per trajectory.
+    shape : tuple of int
+        Grid shape: one axis per name for a product, (N,) otherwise.
+    final : ndarray, shape (*shape, 2n)
+        State (q, q̇) where each trajectory ended.
+    t_final : ndarray, shape
+        Time it ended (t_end, or earlier on failure or a terminal event).
+    status : ndarray of int, shape
+        As `Solution.status`: 0 reached the end, 1 terminal event, 2 not run
+        (interrupted sweep), negative failures (`MESSAGES`).
+    nfev, nsteps, nrejected : ndarray of int, shape
+        Counters per trajectory.
+    t_dense, dense : ndarray, shapes (m,) and (*shape, m, 2n), or None
+        States at common times (``output`` includes "dense").
+    energy_error : ndarray, shape, or None
+        Largest relative deviation of T + V from its initial value over the
+        saved rows (every step unless `save_every`/`t_eval` say otherwise).
+    events : dict of str to dict, or None
+        Per event: ``count`` (shape), ``t`` (*shape, cap) and ``y``
+        (*shape, cap, 2n) of the first `event_cap` occurrences (NaN beyond).
+    done : ndarray of bool, shape
+        Which trajectories ran (all, unless Ctrl-C interrupted the sweep).
+    coordinates : tuple of str
+    method : str
+    """
+
+    names: tuple
+    combine: str
+    axes: dict
+    shape: tuple
+    final: np.ndarray
+    t_final: np.ndarray
+    status: np.ndarray
+    nfev: np.ndarray
+    nsteps: np.ndarray
+    nrejected: np.ndarray
+    done: np.ndarray
+    coordinates: tuple
+    method: str
+    t_dense: np.ndarray | None = None
+    dense: np.ndarray | None = None
+    energy_error: np.ndarray | None = None
+    events: dict | None = field(default=None)
+
+    @property
+    def interrupted(self) -> bool:
+        return not bool(self.done.all())
+
+    def to_numpy(self) -> dict[str, np.ndarray]:
+        """Every array by name (what `save_npz` writes and `load_npz` reads)."""
+        arrays = {
+            "names": np.asarray(self.names), "combine": np.asarray(self.combine),
+            "shape": np.asarray(self.shape, dtype=np.int64),
+            "coordinates": np.asarray(self.coordinates), "method": np.asarray(self.method),
+            "final": self.final, "t_final": self.t_final, "status": self.status, "nfev": self.nfev,
+            "nsteps": self.nsteps, "nrejected": self.nrejected, "done": self.done,
+        }
+        arrays.update({f"axis_{name}": values for name, values in self.axes.items()})
+        for key in ("t_dense", "dense", "energy_error"):
+            if getattr(self, key) is not None:
+                arrays[key] = getattr(self, key)
+        for name, record in (self.events or {}).items():
+            arrays.update({f"event_{name}_{part}": values for part, values in record.items()})
+        return arrays
+
+    def save_npz(self, path) -> None:
+        np.savez_compressed(path, **self.to_numpy())
+
+    @classmethod
+    def load_npz(cls, path) -> Sweep:
+        with np.load(path) as data:
+            arrays = {key: data[key] for key in data.files}
+        names = tuple(arrays.pop("names").tolist())
+        events: dict = {}
+        for key in [k for k in arrays if k.startswith("event_")]:
+            name, part = key[len("event_"):].rsplit("_", 1)
+            events.setdefault(name, {})[part] = arrays.pop(key)
+        return cls(
+            names=names, axes={name: arrays.pop(f"axis_{name}") for name in names},
+            shape=tuple(arrays.pop("shape").tolist()), coordinates=tuple(arrays.pop("coordinates").tolist()),
+            method=str(arrays.pop("method")), combine=str(arrays.pop("combine")), events=events or None, **arrays,
+        )
+
+    def to_xarray(self):
+        """An ``xarray.Dataset`` with one dimension per swept name (product grids) or ``trajectory``."""
+        try:
+            import xarray as xr
+        except ImportError as err:
+            raise ImportError("Sweep.to_xarray needs xarray: pip install 'lagcomp[xarray]'.") from err
+        product = self.combine == "product"
+        dims = self.names if product else ("trajectory",)
+        coords = {name: (name if product else "trajectory", self.axes[name]) for name in self.names}
+        state = [f"{c}" for c in self.coordinates] + [f"{c}_dot" for c in self.coordinates]
+        data = {
+            "final": ((*dims, "state"), self.final), "t_final": (dims, self.t_final), "status": (dims, self.status),
+            "nsteps": (dims, self.nsteps), "nfev": (dims, self.nfev),
+        }
+        if self.energy_error is not None:
+            data["energy_error"] = (dims, self.energy_error)
+        if self.dense is not None:
+            data["dense"] = ((*dims, "time", "state"), self.dense)
+            coords["time"] = self.t_dense
+        return xr.Dataset(data, coords={**coords, "state": state})
+
+
+def _grid(model, grid, combine: str, names) -> tuple[tuple, dict, tuple, np.ndarray]:
+    """(names, axes, shape, values (N, k)) from the user's grid description."""
+    if isinstance(grid, dict):
+        names = tuple(grid)
+        columns = [np.asarray(v, dtype=float).ravel() for v in grid.values()]
+        if any(c.size == 0 for c in columns):
+            raise OptionError("Every swept quantity needs at least one value.")
+        if combine == "product":
+            shape = tuple(c.size for c in columns)
+            mesh = np.meshgrid(*columns, indexing="ij")
+            values = np.column_stack([m.ravel() for m in mesh])
+            axes = dict(zip(names, columns))
+        elif combine == "zip":
+            if len({c.size for c in columns}) != 1:
+                raise OptionError(f"`combine='zip'` needs arrays of one length; got {[c.size for c in columns]}.")
+            values = np.column_stack(columns)
+            shape, axes = (values.shape[0],), dict(zip(names, columns))
+        else:
+            raise OptionError(f"`combine` must be 'product' or 'zip', got {combine!r}.")
+    else:
+        values = np.asarray(grid, dtype=float)
+        if values.ndim != 2 or names is None or len(names) != values.shape[1]:
+            raise OptionError("An explicit grid is an (N, k) array with `names` giving its k columns.")
+        names = tuple(names)
+        shape, axes = (values.shape[0],), {name: values[:, i].copy() for i, name in enumerate(names)}
+    known = list(model.coordinates) + [f"{c}_dot" for c in model.coordinates] + list(model.parameters)
+    unknown = [name for name in names if name not in known]
+    if unknown or len(set(names)) != len(names):
+        raise OptionError(f"Cannot sweep {unknown or names}: grid names must be distinct coordinates, "
+                          f"'<coordinate>_dot' velocities or parameters: {known}.")
+    if not np.all(np.isfinite(values)):
+        raise OptionError("The grid holds non-finite values.")
+    return names, axes, shape, values
+
+
+def _memory(n_traj: int, n2: int, m: int, n_events: int, cap: int) -> int:
+    """Bytes of the outputs: state, times, status and counters; dense rows; energy; events."""
+    per = 8 * (n2 + 1 + 1 + 3 + 2) + 8 * m * n2 + 8 * n_events * (1 + cap * (1 + n2))
+    return n_traj * per + 8 * n_traj * (n2 + 8)  # + the inputs Y0 and P
+
+
+def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=None, params=None,
+          method="dop853", dt=None, rtol=1e-8, atol=1e-10, t_eval=None, save_every=1, max_step=math.inf,
+          max_steps=100_000_000, events=None, event_cap=16, output=(), workers=None, client=None,
+          progress=None, memory_limit=MEMORY_LIMIT) -> Sweep:
+    """Integrate every point of `grid`; see `lagcomp.Model.sweep` for the arguments."""
+    t0, t1 = _time_span(t_span)
+    m = get_method(method)
+    check_method(model, m)
+    if model.k:
+        raise OptionError(f"Sweeps of constrained systems are not supported yet ({model.name!r} has constraints); "
+                          "loop over `simulate` instead.")
+    output = (output,) if isinstance(output, str) else tuple(output)
+    unknown = [o for o in output if o not in OUTPUTS]
+    if unknown:
+        raise OptionError(f"Unknown sweep output(s) {unknown}; choose from {OUTPUTS} (the final state is always kept).")
+    names, axes, shape, values = _grid(model, grid, combine, names)
+    n2 = 2 * model.n
+    y_base = model.initial_state(q0, qd0)
+    p_base = model.parameter_vector(params)
+    Y0 = np.repeat(y_base[None, :], values.shape[0], axis=0)
+    P = np.repeat(p_base[None, :], values.shape[0], axis=0)
+    state_names = list(model.coordinates) + [f"{c}_dot" for c in model.coordinates]
+    for column, name in enumerate(names):
+        if name in state_names:
+            Y0[:, state_names.index(name)] = values[:, column]
+        else:
+            P[:, list(model.parameters).index(name)] = values[:, column]
+    save_every = _count(save_every, "save_every")
+    max_steps = _count(max_steps, "max_steps")
+    directions, actions = _event_arguments(model, m, events)
+    want_events = "events" in output
+    if want_events and not actions.any():
+        raise OptionError(f"`output` asks for events but none are active ({model.name!r} declares "
+                          f"{list(model.system.event_names)}; events need dop853 or dopri5).")
+    cap = _count(event_cap, "event_cap") if want_events else 0
+    n_traj = values.shape[0]
+
+    if m.adaptive:
+        if dt is not None:
+            raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own.")
+        rtol, atol = _positive(rtol, "rtol"), _positive(atol, "atol")
+        max_step = _positive(max_step, "max_step") if max_step != math.inf else math.inf
+        t_eval = _t_eval(t_eval, t0, t1)
+        if "dense" in output and t_eval is None:
+            raise OptionError("`output='dense'` with an adaptive method needs the common times `t_eval`.")
+        t_dense = t_eval if "dense" in output else None
+        after_start = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
+        save_initial = t_eval is not None and t_eval[0] == t0
+        fixed = (t0, t1, rtol, atol, max_step, max_steps, save_every, after_start, save_initial, directions, actions)
+    else:
+        if dt is None:
+            raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
+        if t_eval is not None:
+            raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every`.")
+        dt = _positive(dt, "dt")
+        n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
+        if n_steps > max_steps:
+            raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {max_steps}.")
+        steps = np.minimum(np.arange(0, n_steps + save_every, save_every), n_steps)
+        t_dense = np.unique(np.minimum(t0 + steps * dt, t1)) if "dense" in output else None
+        if t_dense is not None:
+            t_dense[-1] = t1
+        fixed = (t0, dt, n_steps, t1, save_every)
+    rows = 0 if t_dense is None else t_dense.size
+    n_events = len(model.system.events) if want_events else 0
+    needed = _memory(n_traj, n2, rows, n_events, cap)
+    if needed > memory_limit:
+        raise OptionError(
+            f"The sweep's outputs need {needed / 2**20:.1f} MiB for {n_traj} trajectories, above the limit of "
+            f"{memory_limit / 2**20:.1f} MiB: save fewer rows (t_eval, save_every), fewer events (event_cap), "
+            "split the grid, or raise `memory_limit`."
+        )
+
+    layout = (n2, rows, len(directions), cap)
+    out = _allocate(n_traj, layout)
+    task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments())
+    if client is None:
+        done = _run_locally(model.kernels, task, Y0, P, out, workers, progress)
+    else:
+        done = _run_on_dask(client, _worker_spec(model), task, Y0, P, out, progress)
+    statuses = out["status"]
+    statuses[statuses == 3] = 1      # the driver's "terminal event", numbered as in Solution
+    counts = out["counts"]
+    e0, deviation = out["energy"][:, 0], out["energy"][:, 1]
+    relative = np.where(e0 != 0, deviation / np.where(e0 != 0, np.abs(e0), 1.0), deviation)
+    shaped = lambda a: a.reshape(*shape, *a.shape[1:])  # noqa: E731
+    events_out = None
+    if want_events:
+        events_out = {
+            event.name: {"count": shaped(out["event_count"][:, i]), "t": shaped(out["event_t"][:, i]),
+                         "y": shaped(out["event_y"][:, i])}
+            for i, event in enumerate(model.system.events) if actions[i]
+        }
+    return Sweep(
+        names=names, combine=combine if isinstance(grid, dict) else "explicit", axes=axes, shape=shape,
+        final=shaped(out["final"]), t_final=shaped(out["t_final"]),
+        status=shaped(statuses), nfev=shaped(counts[:, 0]), nsteps=shaped(counts[:, 1]),
+        nrejected=shaped(counts[:, 2]), done=shaped(done), coordinates=model.coordinates, method=m.name,
+        t_dense=t_dense, dense=shaped(out["dense"]) if t_dense is not None else None,
+        energy_error=shaped(relative) if "energy" in output else None, events=events_out,
+    )
+
+
+@dataclass(frozen=True)
+class _Task:
+    """What every chunk of one sweep runs: the driver, its fixed arguments and the output layout."""
+
+    driver: str
+    adaptive: bool
+    fixed: tuple
+    layout: tuple          # (2n, dense rows, events, event cap)
+    coefficients: tuple
+
+
+def _allocate(n_traj: int, layout: tuple) -> dict[str, np.ndarray]:
+    """Output arrays of `n_traj` trajectories, NaN (or status "not run") until they run."""
+    n2, rows, n_events, cap = layout
+    return dict(
+        final=np.full((n_traj, n2), np.nan), t_final=np.full(n_traj, np.nan),
+        status=np.full(n_traj, NOT_RUN, dtype=np.int64), counts=np.zeros((n_traj, 3), dtype=np.int64),
+        dense=np.full((n_traj, rows, n2), np.nan), energy=np.full((n_traj, 2), np.nan),
+        event_count=np.zeros((n_traj, n_events), dtype=np.int64), event_t=np.full((n_traj, n_events, cap), np.nan),
+        event_y=np.full((n_traj, n_events, cap, n2), np.nan),
+    )
+
+
+def _run_chunk(kernels, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str, np.ndarray]:
+    """Integrate the trajectories Y0, P (a chunk) with the module's compiled sweep loop; their outputs."""
+    out = _allocate(Y0.shape[0], task.layout)
+    loop = getattr(kernels, f"sweep_{task.driver}")
+    common = (out["final"], out["t_final"], out["status"], out["counts"], out["dense"], out["energy"])
+    if task.adaptive:
+        loop(Y0, P, 0, *task.fixed, *common, out["event_count"], out["event_t"], out["event_y"], task.coefficients)
+    else:
+        loop(Y0, P, 0, *task.fixed, *common, task.coefficients)
+    return out
+
+
+def _store(out: dict, a: int, chunk: dict) -> None:
+    for key, values in chunk.items():
+        out[key][a:a + values.shape[0]] = values
+
+
+def _progress(total: int, progress):
+    from tqdm.auto import tqdm
+
+    from lagcomp.integrate.simulate import PROGRESS_DELAY
+
+    return tqdm(total=total, unit="traj", leave=False, disable=progress is False, mininterval=0.5,
+                delay=0.0 if progress else PROGRESS_DELAY)
+
+
+def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndarray:
+    """Run consecutive chunks, each split across `workers` threads; returns which trajectories ran.
+
+    The compiled sweep loops release the GIL, so the threads run them in
+    parallel; a chunk is sized to take about `CHUNK_SECONDS`, which is how
+    often the progress bar moves and Ctrl-C is looked at.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    n_traj = Y0.shape[0]
+    threads = (os.cpu_count() or 1) if workers is None else _count(workers, "workers")
+    done = np.zeros(n_traj, dtype=bool)
+    chunk = FIRST_CHUNK_PER_THREAD * threads
+    with ThreadPoolExecutor(threads) as pool, _deferred_interrupt() as interrupted, \
+            _progress(n_traj, progress) as bar:
+        a = 0
+        while a < n_traj and not interrupted[0]:
+            b = min(a + chunk, n_traj)
+            bounds = np.linspace(a, b, min(threads, b - a) + 1).astype(int)
+            started = time.perf_counter()
+            parts = [(lo, pool.submit(_run_chunk, kernels, task, Y0[lo:hi], P[lo:hi]))
+                     for lo, hi in zip(bounds[:-1], bounds[1:])]
+            for lo, future in parts:
+                _store(out, lo, future.result())
+            elapsed = time.perf_counter() - started
+            done[a:b] = True
+            bar.update(b - a)
+            if b - a == chunk:
+                chunk = max(threads, int(chunk * min(8.0, max(0.5, CHUNK_SECONDS / max(elapsed, 1e-6)))))
+            a = b
+    return done
+
+
+# -- beyond one machine: Dask -------------------------------------------------------
+
+#: Modules loaded by this (worker) process, by source key: each is compiled (or loaded) once per process.
+_WORKER_MODULES: dict = {}
+
+
+def _worker_spec(model) -> tuple[str, str, str]:
+    """What a worker needs to load the model's kernels: the emitted source, the system name, a cache root."""
+    return model.source_path.read_text(encoding="utf-8"), model.name, str(model.source_path.parent.parent)
+
+
+def _worker_kernels(spec: tuple[str, str, str]):
+    """The kernels module of `spec` in this process: from the worker's cache, written there if missing.
+
+    The module is rebuilt from its source text, never unpickled, so numba
+    compiles it (or loads its own on-disk cache) once per worker process.
+    The client's cache root is used when the worker can write to it (same
+    machine or a shared file system), else the worker's default root.
+    """
+    from lagcomp.cache import Cache, load_module, source_key
+
+    source, system_name, root = spec
+    key = source_key(source)
+    if key not in _WORKER_MODULES:
+        cache = Cache(root) if os.access(root, os.W_OK) else Cache(None)
+        entry = cache.store(f"worker-{key}", source, system_name, {})
+        _WORKER_MODULES[key] = load_module(entry)
+    return _WORKER_MODULES[key]
+
+
+def _remote_chunk(spec, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str, np.ndarray]:
+    return _run_chunk(_worker_kernels(spec), task, Y0, P)
+
+
+def _run_on_dask(client, spec, task: _Task, Y0, P, out, progress) -> np.ndarray:
+    """One Dask task per chunk (about four per worker thread); returns which trajectories ran.
+
+    Ctrl-C cancels the tasks not yet finished and keeps the others.
+    """
+    from distributed import as_completed
+
+    n_traj = Y0.shape[0]
+    slots = max(1, sum(client.nthreads().values()))
+    bounds = np.linspace(0, n_traj, min(n_traj, 4 * slots) + 1).astype(int)
+    [spec_future] = client.scatter([spec], broadcast=True)
+    futures = {client.submit(_remote_chunk, spec_future, task, Y0[a:b], P[a:b], pure=False): (a, b)
+               for a, b in zip(bounds[:-1], bounds[1:])}
+    done = np.zeros(n_traj, dtype=bool)
+    with _deferred_interrupt() as interrupted, _progress(n_traj, progress) as bar:
+        for future in as_completed(futures):
+            a, b = futures[future]
+            _store(out, a, future.result())
+            done[a:b] = True
+            bar.update(b - a)
+            if interrupted[0]:
+                client.cancel([f for f in futures if not f.done()])
+                break
+    return done

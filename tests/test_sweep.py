@@ -1,0 +1,193 @@
+"""Sweeps: the same trajectories as separate `simulate` calls, whatever the number of threads."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+
+import numpy as np
+import pytest
+
+from lagcomp.errors import OptionError
+from lagcomp.integrate.sweep import Sweep
+
+
+@pytest.fixture(scope="module")
+def double_pendulum(compiled):
+    return compiled("double_pendulum")
+
+
+GRID = {"theta1": np.linspace(-3, 3, 12), "theta2": np.linspace(-3, 3, 10)}
+
+
+def _separately(model, sweep, **options):
+    """Final states of one `simulate` call per grid point."""
+    finals = np.empty_like(sweep.final)
+    for i, a in enumerate(GRID["theta1"]):
+        for j, b in enumerate(GRID["theta2"]):
+            sol = model.simulate((0, 10), q0=[a, b], qd0=[0.0, 0.0], **options)
+            finals[i, j] = np.r_[sol.q[-1], sol.qd[-1]]
+    return finals
+
+
+@pytest.mark.parametrize("options", [dict(method="rk4", dt=0.01), dict(method="dop853", rtol=1e-9, atol=1e-9)],
+                         ids=["rk4", "dop853"])
+def test_sweep_equals_separate_runs_bitwise_for_any_thread_count(double_pendulum, options):
+    one = double_pendulum.sweep((0, 10), GRID, qd0=[0, 0], workers=1, **options)
+    two = double_pendulum.sweep((0, 10), GRID, qd0=[0, 0], workers=2, **options)
+    assert one.shape == (12, 10) and one.final.shape == (12, 10, 4)
+    assert np.all(one.status == 0) and one.done.all()
+    np.testing.assert_array_equal(one.final, two.final)
+    np.testing.assert_array_equal(one.nsteps, two.nsteps)
+    np.testing.assert_array_equal(one.final, _separately(double_pendulum, one, **options))
+    np.testing.assert_array_equal(one.t_final, 10.0)
+
+
+def test_zip_and_explicit_grids_and_swept_parameters(double_pendulum):
+    zipped = double_pendulum.sweep((0, 2), {"theta1": [0.1, 0.2, 0.3], "g": [1.0, 9.81, 20.0]}, combine="zip",
+                                   method="rk4", dt=0.01)
+    explicit = double_pendulum.sweep((0, 2), np.array([[0.1, 1.0], [0.2, 9.81], [0.3, 20.0]]),
+                                     names=["theta1", "g"], method="rk4", dt=0.01)
+    np.testing.assert_array_equal(zipped.final, explicit.final)
+    for k, (theta1, g) in enumerate([(0.1, 1.0), (0.2, 9.81), (0.3, 20.0)]):
+        q0 = list(double_pendulum.system.q0)
+        q0[0] = theta1
+        sol = double_pendulum.simulate((0, 2), q0=q0, params={"g": g}, method="rk4", dt=0.01)
+        np.testing.assert_array_equal(zipped.final[k], np.r_[sol.q[-1], sol.qd[-1]])
+
+
+def test_dense_output_and_energy_match_simulate(double_pendulum):
+    t_eval = np.linspace(0, 5, 11)
+    sweep = double_pendulum.sweep((0, 5), {"theta1_dot": [0.0, 1.0, 2.0]}, t_eval=t_eval, rtol=1e-10, atol=1e-10,
+                                  output=("dense", "energy"))
+    assert sweep.dense.shape == (3, 11, 4)
+    for k, rate in enumerate([0.0, 1.0, 2.0]):
+        qd0 = [rate, double_pendulum.system.qd0[1]]
+        sol = double_pendulum.simulate((0, 5), qd0=qd0, t_eval=t_eval, rtol=1e-10, atol=1e-10)
+        np.testing.assert_array_equal(sweep.dense[k], np.hstack([sol.q, sol.qd]))
+        assert sweep.energy_error[k] == pytest.approx(sol.energy_drift(), rel=1e-12)
+
+
+def test_fixed_step_dense_rows_follow_save_every(double_pendulum):
+    sweep = double_pendulum.sweep((0, 1), {"theta1": [0.5, 1.0]}, method="rk4", dt=0.01, save_every=30,
+                                  output="dense")
+    sol = double_pendulum.simulate((0, 1), q0=[0.5, double_pendulum.system.q0[1]], method="rk4", dt=0.01,
+                                   save_every=30)
+    np.testing.assert_array_equal(sweep.t_dense, sol.t)
+    np.testing.assert_array_equal(sweep.dense[0], np.hstack([sol.q, sol.qd]))
+
+
+def test_poincare_crossings_per_trajectory(compiled):
+    model = compiled("henon_heiles")
+    ys = np.array([0.05, 0.1, 0.15])
+    energy = 1 / 12
+    xdot = np.sqrt(2 * (energy - ys**2 / 2 + ys**3 / 3))
+    sweep = model.sweep((0, 300), {"y": ys, "x_dot": xdot}, combine="zip", rtol=1e-11, atol=1e-11,
+                        output="events", event_cap=100, events=["section"])
+    for k in range(3):
+        sol = model.simulate((0, 300), q0=[0, ys[k]], qd0=[xdot[k], 0], rtol=1e-11, atol=1e-11, events=["section"])
+        record = sol.events["section"]
+        count = sweep.events["section"]["count"][k]
+        assert count == len(record) > 40
+        np.testing.assert_array_equal(sweep.events["section"]["t"][k, :count], record.t)
+        assert np.all(np.isnan(sweep.events["section"]["t"][k, count:]))
+
+
+def test_memory_estimate_refuses_before_running(double_pendulum):
+    grid = {"theta1": np.linspace(0, 1, 1000), "theta2": np.linspace(0, 1, 1000)}
+    with pytest.raises(OptionError, match=r"need \d+\.\d MiB .* above the limit of 1\.0 MiB"):
+        double_pendulum.sweep((0, 1), grid, method="rk4", dt=0.01, memory_limit=2**20)
+    with pytest.raises(OptionError, match="MiB"):
+        double_pendulum.sweep((0, 1), {"theta1": [0.0]}, t_eval=np.linspace(0, 1, 10**6), output="dense",
+                              memory_limit=2**20)
+
+
+def test_bad_grids_are_refused(double_pendulum):
+    with pytest.raises(OptionError, match="grid names"):
+        double_pendulum.sweep((0, 1), {"omega": [1.0]}, method="rk4", dt=0.1)
+    with pytest.raises(OptionError, match="one length"):
+        double_pendulum.sweep((0, 1), {"theta1": [1.0, 2.0], "g": [1.0]}, combine="zip", method="rk4", dt=0.1)
+    with pytest.raises(OptionError, match="non-finite"):
+        double_pendulum.sweep((0, 1), {"theta1": [np.nan]}, method="rk4", dt=0.1)
+    with pytest.raises(OptionError, match="Unknown sweep output"):
+        double_pendulum.sweep((0, 1), {"theta1": [1.0]}, method="rk4", dt=0.1, output="everything")
+
+
+def test_ctrl_c_keeps_the_finished_chunks(double_pendulum):
+    grid = {"theta1": np.linspace(-3, 3, 400), "theta2": np.linspace(-3, 3, 50)}   # ~10 s of work
+    timer = threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        sweep = double_pendulum.sweep((0, 10), grid, qd0=[0, 0], method="rk4", dt=0.01, progress=False)
+    finally:
+        timer.cancel()
+    assert sweep.interrupted and 0 < sweep.done.sum() < sweep.done.size
+    assert np.all(sweep.status[sweep.done] == 0) and np.all(sweep.status[~sweep.done] == 2)
+    assert np.all(np.isnan(sweep.final[~sweep.done]))
+
+
+def test_save_and_load_round_trip(double_pendulum, tmp_path):
+    sweep = double_pendulum.sweep((0, 1), {"theta1": [0.1, 0.2], "g": [9.0, 9.81, 10.0]}, method="rk4", dt=0.01,
+                                  output="energy")
+    sweep.save_npz(tmp_path / "sweep.npz")
+    loaded = Sweep.load_npz(tmp_path / "sweep.npz")
+    assert loaded.names == sweep.names and loaded.shape == sweep.shape == (2, 3)
+    assert loaded.combine == "product" and loaded.method == "rk4"
+    np.testing.assert_array_equal(loaded.final, sweep.final)
+    np.testing.assert_array_equal(loaded.axes["g"], [9.0, 9.81, 10.0])
+    np.testing.assert_array_equal(loaded.energy_error, sweep.energy_error)
+
+
+def test_kapitza_map_finds_the_stability_boundary_of_the_inverted_pendulum(compiled):
+    """Vibrated support h = A cos Ωt: upside down is stable when A²Ω² > 2 g l (the averaged potential
+    −(g/l) cos θ + (AΩ/2l)² sin²θ has a minimum at θ = π).  Sweep the amplitude across the boundary,
+    start 0.05 rad from upright, and call a run stable when it never leaves by more than 0.5 rad."""
+    model = compiled("driven_pendulum")
+    g, l, omega = 9.81, 1.0, 200.0
+    amplitudes = np.arange(0.016, 0.0285, 0.001)
+    t_eval = np.linspace(0, 20, 2001)
+    sweep = model.sweep((0, 20), {"A": amplitudes}, q0=[np.pi - 0.05], qd0=[0.0],
+                        params={"g": g, "l": l, "Omega": omega}, t_eval=t_eval, rtol=1e-9, atol=1e-9,
+                        output="dense")
+    assert np.all(sweep.status == 0)
+    stable = np.max(np.abs(sweep.dense[:, :, 0] - np.pi), axis=1) < 0.5
+    assert not stable[0] and stable[-1]
+    first_stable = np.argmax(stable)
+    assert np.all(stable[first_stable:]) and not np.any(stable[:first_stable])  # one boundary
+    boundary = np.sqrt(2 * g * l) / omega
+    assert amplitudes[first_stable - 1] <= boundary + 0.001 and amplitudes[first_stable] >= boundary - 0.001
+
+
+def test_dask_local_cluster_gives_the_local_result_compiling_once_per_worker(double_pendulum):
+    """Two worker processes load the module from its source (not pickled numba objects), compile or load it
+    once each, and return exactly the local result; a second sweep reuses the loaded kernels."""
+    distributed = pytest.importorskip("distributed")
+    grid = {"theta1": np.linspace(-2, 2, 9), "g": [9.0, 9.81]}
+    local = double_pendulum.sweep((0, 3), grid, method="rk4", dt=0.01, output="energy")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) \
+            as cluster, distributed.Client(cluster) as client:
+        remote = double_pendulum.sweep((0, 3), grid, method="rk4", dt=0.01, output="energy", client=client)
+        again = double_pendulum.sweep((0, 3), grid, method="rk4", dt=0.01, output="energy", client=client)
+
+        def loaded():
+            from lagcomp.integrate import sweep as module
+            return [len(m.sweep_rk4_run.signatures) for m in module._WORKER_MODULES.values()]
+
+        per_worker = client.run(loaded)
+    np.testing.assert_array_equal(remote.final, local.final)
+    np.testing.assert_array_equal(remote.energy_error, local.energy_error)
+    np.testing.assert_array_equal(again.final, local.final)
+    assert remote.done.all()
+    assert all(counts in ([], [1]) for counts in per_worker.values()) and [1] in per_worker.values()
+
+
+def test_to_xarray_names_dimensions_after_the_swept_quantities(double_pendulum):
+    pytest.importorskip("xarray")
+    sweep = double_pendulum.sweep((0, 1), {"theta1": [0.1, 0.2], "g": [9.0, 9.81, 10.0]}, method="rk4", dt=0.01)
+    data = sweep.to_xarray()
+    assert data["final"].dims == ("theta1", "g", "state")
+    assert data["final"].sel(theta1=0.2, g=9.81, state="theta2_dot").item() == sweep.final[1, 1, 3]
+    zipped = double_pendulum.sweep((0, 1), {"theta1": [0.1, 0.2], "g": [9.0, 9.81]}, combine="zip", method="rk4",
+                                   dt=0.01).to_xarray()
+    assert zipped["final"].dims == ("trajectory", "state") and list(zipped["g"].values) == [9.0, 9.81]
