@@ -138,6 +138,20 @@ def test_force_virtual_work_with_imposed_motion():
     assert is_zero(s.forces[0] - F * sp.cos(w * t))
 
 
+def test_torque_on_a_body_uses_its_partial_angular_velocities():
+    psi, theta = lc.coordinates("psi theta")
+    tau1, tau2, tau3 = sp.symbols("tau1:4")
+    N = ReferenceFrame("N")
+    B = lc.rotated(N, (psi, "z"), (theta, "x"))
+    by_frame = lc.RigidBody(1, (0, 0, 0), (1, 1, 1), B, name="b")
+    by_components = lc.RigidBody(1, (0, 0, 0), (1, 1, 1), lc.body_rates(B, N), name="c")
+    for body in (by_frame, by_components):  # ω = (θ̇, ψ̇ sin θ, ψ̇ cos θ) in body axes
+        s = lc.System([psi, theta], bodies=[body], loads=[lc.Torque((tau1, tau2, tau3), body)], frame=N, name="s")
+        assert is_zero(sp.Matrix(s.forces) - sp.Matrix([tau2 * sp.sin(theta) + tau3 * sp.cos(theta), tau1]))
+    s = lc.System([psi, theta], bodies=[by_frame], loads=[lc.Torque(tau3 * N.z, by_frame)], frame=N, name="s")
+    assert is_zero(sp.Matrix(s.forces) - sp.Matrix([tau3, 0]))  # a torque about the fixed z works on ψ only
+
+
 # -- moving frames -------------------------------------------------------------------------------
 
 
@@ -215,6 +229,28 @@ def test_symmetric_top_energy_and_cyclic_angles():
     T = J * (theta.diff(t) ** 2 + psi.diff(t) ** 2 * sp.sin(theta) ** 2) / 2 + I3 * (phi.diff(t) + psi.diff(t) * sp.cos(theta)) ** 2 / 2
     assert is_zero(s.T - T) and is_zero(s.V - M * g * l * sp.cos(theta))
     assert derive(s).cyclic == ("psi", "phi")
+
+
+def test_free_axle_from_its_wheels_as_rigid_bodies():
+    """The example's hand-written T and V, rebuilt from two wheels (rigid bodies) and gravity on the incline."""
+    ex = examples.get("free_axle")
+    X, Y, theta, phi, phi_p = ex.coordinates
+    m, R, L, I1, I3, g, alpha = ex.parameters
+    N = ReferenceFrame("N")  # X across the slope, Y down it, z the plane's upward normal
+    A = lc.rotated(N, (theta, "z"), name="A")  # A.x = u, along the axle
+    centre = sp.Matrix([X, Y, R])
+    u = sp.Matrix([sp.cos(theta), sp.sin(theta), 0])
+    wheels = [
+        lc.RigidBody(m, centre + sign * L / 2 * u, (I3, I1, I1), lc.rotated(A, (angle, "x"), name=f"W{k}"), axes=A,
+                     name=f"wheel{k}")
+        for k, (sign, angle) in enumerate(((1, phi), (-1, phi_p)))
+    ]
+    gravity = lc.Gravity((0, g * sp.sin(alpha), -g * sp.cos(alpha)))
+    built = lc.System(ex.coordinates, bodies=wheels, loads=[gravity], constraints=ex.constraints, frame=N,
+                      parameters=ex.parameters, name="axle")
+    assert is_zero(built.T - ex.T)
+    assert is_zero(built.V - ex.V - 2 * m * g * R * sp.cos(alpha))  # the constant height of the centres
+    assert is_zero(residual(built) - residual(ex))
 
 
 def test_body_with_components_and_rotation_matrix_in_a_turning_frame():
