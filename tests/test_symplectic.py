@@ -144,3 +144,27 @@ def test_implicit_solver_option_is_checked(compiled):
         model.simulate((0, 1), method="gauss2", dt=0.1, implicit_solver="broyden")
     with pytest.raises(lc.OptionError, match=r"applies to the implicit methods \(gauss1, gauss2, gauss3\); rk4"):
         model.simulate((0, 1), method="rk4", dt=0.1, implicit_solver="newton")
+
+
+@pytest.fixture(scope="module")
+def forced_duffing(cache_dir):
+    """ẍ = −x − 0.4 x³ + cos 3t: separable, with an explicit time dependence."""
+    (x,) = lc.coordinates("x")
+    t = lc.t
+    system = lc.System([x], T=x.diff(t) ** 2 / 2, V=x**2 / 2 + sp.Rational(1, 10) * x**4 - x * sp.cos(3 * t),
+                       name="forced_duffing")
+    return lc.compile(system, cache_dir=cache_dir)
+
+
+@pytest.mark.parametrize("method, steps", [("verlet", (0.04, 0.02, 0.01)), ("yoshida4", (0.04, 0.02, 0.01)),
+                                           ("yoshida6", (0.2, 0.1, 0.05)), ("gauss2", (0.08, 0.04, 0.02)),
+                                           ("gauss3", (0.2, 0.1, 0.05))])
+def test_imposed_time_dependence_keeps_the_order(forced_duffing, method, steps):
+    """Explicit t is advanced with the drifts (compositions) or taken at the stage times (Gauss–Legendre),
+    as in the extended phase space: the observed order is the method's."""
+    assert forced_duffing.separable
+    reference = forced_duffing.simulate((0, 2), q0=[1.0], qd0=[0.0], rtol=1e-13, atol=1e-13).q[-1, 0]
+    errors = [abs(forced_duffing.simulate((0, 2), q0=[1.0], qd0=[0.0], method=method, dt=dt).q[-1, 0] - reference)
+              for dt in steps]
+    observed = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    np.testing.assert_allclose(observed, METHODS[method].order, rtol=0.1)
