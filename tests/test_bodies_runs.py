@@ -172,8 +172,7 @@ def test_symmetric_top_long_run(compiled):
 def test_compiled_lagranges_method_gives_the_native_accelerations(compiled, cache_dir, rng, builder, native, kwargs):
     reference = compiled(native, **kwargs)
     built = builder(**kwargs)
-    system = lc.from_lagranges_method(built["method"], name=f"sympy_{native}", parameters=built["parameters"])
-    model = lc.compile(system, cache_dir=cache_dir)
+    model = lc.compile(built["method"], cache_dir=cache_dir, name=f"sympy_{native}", parameters=built["parameters"])
     assert model.parameters == reference.parameters
     n = reference.n
     for _ in range(20):

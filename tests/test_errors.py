@@ -134,3 +134,13 @@ def test_step_limit_returns_the_partial_solution(model):
     sol = model.simulate((0, 100), max_steps=5)
     assert sol.status == -4 and sol.nsteps == 5 and len(sol.t) == 6
     assert "maximum number of steps" in sol.message and sol.t_failure == sol.t[-1] < 100
+
+
+def test_compile_refuses_what_is_not_a_system():
+    import lagcomp.examples
+    from lagcomp.errors import ModelError
+
+    with pytest.raises(ModelError, match="needs a lagcomp System"):
+        lc.compile("double_pendulum")
+    with pytest.raises(ModelError, match="only with a sympy method object"):
+        lc.compile(lc.examples.get("simple_pendulum"), name="other")

@@ -19,13 +19,15 @@ from lagcomp.errors import CacheWarning, InitialConditionError, ModelError, Para
 from lagcomp.model.system import System
 
 
-def compile(system: System, *, cache_dir: str | os.PathLike | None = None, eom=None) -> "Model":  # noqa: A001
+def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **system_kwargs) -> "Model":  # noqa: A001
     """Compile `system` into a `Model` of numba kernels, using the on-disk cache.
 
     Parameters
     ----------
-    system : System
-        What to compile.
+    system : System, or sympy.physics.mechanics LagrangesMethod / KanesMethod
+        What to compile.  A sympy method object is converted first
+        (`lagcomp.from_lagranges_method`, `lagcomp.from_kanes_method`), with
+        `system_kwargs` (name, parameters, defaults, q0, qd0, ...) passed on.
     cache_dir : path, optional
         Cache root; defaults to $LAGCOMP_CACHE_DIR, else the user cache directory.
     eom : lagcomp.mechanics.lagrange.EOM, optional
@@ -37,6 +39,7 @@ def compile(system: System, *, cache_dir: str | os.PathLike | None = None, eom=N
     Model
         ``model.from_cache`` tells whether the derivation was skipped.
     """
+    system = _as_system(system, system_kwargs)
     cache = Cache(cache_dir)
     key = input_key(system.fingerprint(), options={})
     entry = cache.lookup(key)
@@ -48,6 +51,26 @@ def compile(system: System, *, cache_dir: str | os.PathLike | None = None, eom=N
             cache.discard(entry)
     entry = build(system, cache, key, eom)
     return Model(system, load_module(entry), entry, from_cache=False)
+
+
+def _as_system(system, system_kwargs: dict) -> System:
+    """`system` itself, or the System of a sympy LagrangesMethod / KanesMethod."""
+    from sympy.physics import mechanics as me
+
+    from lagcomp.errors import ModelError
+    from lagcomp.model.interop import from_kanes_method, from_lagranges_method
+
+    if isinstance(system, me.LagrangesMethod):
+        return from_lagranges_method(system, **system_kwargs)
+    if isinstance(system, me.KanesMethod):
+        return from_kanes_method(system, **system_kwargs)
+    if system_kwargs:
+        raise ModelError(f"compile() takes System options {sorted(system_kwargs)} only with a sympy method object; "
+                         "set them on the System itself.")
+    if not isinstance(system, System):
+        raise ModelError(f"compile() needs a lagcomp System or a sympy LagrangesMethod/KanesMethod, "
+                         f"got {type(system).__name__}.")
+    return system
 
 
 def build(system: System, cache: Cache, key: str, eom=None) -> Entry:
