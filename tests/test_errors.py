@@ -137,10 +137,10 @@ def test_step_limit_returns_the_partial_solution(model):
 
 
 def test_compile_refuses_what_is_not_a_system():
-    import lagcomp.examples
+    from lagcomp import examples
     from lagcomp.errors import ModelError
 
     with pytest.raises(ModelError, match="needs a lagcomp System"):
         lc.compile("double_pendulum")
     with pytest.raises(ModelError, match="only with a sympy method object"):
-        lc.compile(lc.examples.get("simple_pendulum"), name="other")
+        lc.compile(examples.get("simple_pendulum"), name="other")

@@ -79,6 +79,10 @@ class Kernel:
         ``return`` for scalar kernels.
     solve : LinearSolve, AugmentedSolve or None
         Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``).
+    lanes : bool
+        The body runs once per lane ``_l`` of a batch (structure of arrays:
+        ``Y[i, _l]``, ``P[k, _l]``, ``out[i, _l]``), in a loop LLVM can
+        vectorize: no early return, a singular pivot sets ``bad[_l]``.
     """
 
     name: str
@@ -88,6 +92,7 @@ class Kernel:
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
     solve: LinearSolve | AugmentedSolve | None = None
+    lanes: bool = False
 
     @property
     def operation_count(self) -> int:

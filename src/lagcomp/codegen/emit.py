@@ -50,16 +50,24 @@ def _header(ir: ModuleIR) -> str:
     )
 
 
-def _unrolled_ldlt(solve: LinearSolve) -> list[str]:
-    """Straight-line LDLᵀ of the n×n symmetric M, then x = M⁻¹ f into out[offset:]."""
+def _unrolled_ldlt(solve: LinearSolve, lanes: bool = False) -> list[str]:
+    """Straight-line LDLᵀ of the n×n symmetric M, then x = M⁻¹ f into out[offset:].
+
+    With `lanes` (one lane of a batch) there is no early return, which would
+    keep LLVM from vectorizing the loop over lanes: the pivot tests are
+    collected into ``bad[_l]`` instead.
+    """
     n, m, f = solve.n, solve.m, solve.f
     lines = ["# Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here."]
     l = lambda i, j: f"_l{i}_{j}"  # noqa: E731  L[i, j], i > j
     for j in range(n):
         terms = "".join(f" - {l(j, k)}*{l(j, k)}*_d{k}" for k in range(j))
         lines.append(f"_d{j} = {m[j][j]}{terms}")
-        lines.append(f"if not _d{j} > _PIVOT_TOLERANCE*abs({m[j][j]}):")
-        lines.append(f"{INDENT}return {j + 1}")
+        if lanes:
+            lines.append(f"_ok{j} = _d{j} > _PIVOT_TOLERANCE*abs({m[j][j]})")
+        else:
+            lines.append(f"if not _d{j} > _PIVOT_TOLERANCE*abs({m[j][j]}):")
+            lines.append(f"{INDENT}return {j + 1}")
         for i in range(j + 1, n):
             terms = "".join(f" - {l(i, k)}*{l(j, k)}*_d{k}" for k in range(j))
             lines.append(f"{l(i, j)} = ({m[i][j]}{terms})/_d{j}")
@@ -69,12 +77,27 @@ def _unrolled_ldlt(solve: LinearSolve) -> list[str]:
     for i in reversed(range(n)):
         terms = "".join(f" - {l(k, i)}*_x{k}" for k in range(i + 1, n))
         lines.append(f"_x{i} = _z{i}/_d{i}{terms}")
+    if lanes:
+        lines.append(f"bad[_l] = not ({' & '.join(f'_ok{j}' for j in range(n))})")
+        lines += [f"out[{solve.offset + i}, _l] = _x{i}" for i in range(n)]
+        return lines
     lines += [f"out[{solve.offset + i}] = _x{i}" for i in range(n)]
     lines.append("return 0")
     return lines
 
 
+def _lanes_kernel_source(kernel: Kernel) -> list[str]:
+    """The body of a `Kernel.lanes` kernel: the scalar body, once per lane, in a loop over lanes."""
+    inner = [f"{local} = {source}" for local, source in kernel.loads]
+    inner += [f"{name} = {to_code(expr, lanes=True)}" for name, expr in kernel.temps]
+    inner += [f"{target} = {to_code(expr, lanes=True)}" for target, expr in kernel.stores]
+    inner += _unrolled_ldlt(kernel.solve, lanes=True)
+    return f'"""{kernel.doc}"""'.splitlines() + ["for _l in range(Y.shape[1]):"] + [INDENT + x for x in inner]
+
+
 def _kernel_source(kernel: Kernel) -> str:
+    if kernel.lanes:
+        return _decorated(kernel, _lanes_kernel_source(kernel))
     body = f'"""{kernel.doc}"""'.splitlines()
     body += [f"{local} = {source}" for local, source in kernel.loads]
     solve = kernel.solve
@@ -95,6 +118,10 @@ def _kernel_source(kernel: Kernel) -> str:
             body += _unrolled_ldlt(solve)
         else:
             body.append(f"return _ldlt_solve(mm, ff, out, {solve.offset})")
+    return _decorated(kernel, body)
+
+
+def _decorated(kernel: Kernel, body: list[str]) -> str:
     lines = ["", "", '@njit(cache=True, error_model="numpy")', f"def {kernel.name}({', '.join(kernel.args)}):"]
     lines += [INDENT + line if line else "" for line in body]
     return "\n".join(lines) + "\n"
@@ -270,7 +297,8 @@ def emit(ir: ModuleIR) -> str:
     parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
     hamiltonian = () if ir.k else ("hamiltonian",)  # needs `velocities`, which constrained modules lack
-    for name in ("linear_solvers", *hamiltonian, "drivers", "symplectic"):
+    lanes = ("lanes",) if any(k.lanes for k in ir.kernels) else ()
+    for name in ("linear_solvers", *hamiltonian, "drivers", "symplectic", *lanes):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")
         parts.append(template(name, events=bool(ir.event_names)))
     parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n")

@@ -205,6 +205,28 @@ def _rhs_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+def _lane_source(source: str) -> str:
+    """``y[i]`` → ``Y[i, _l]``, ``p[k]`` → ``P[k, _l]``, ``out[i]`` → ``out[i, _l]`` (structure of arrays)."""
+    return re.sub(r"^(y|p|out)\[(\d+)\]$", lambda m: f"{m.group(1).upper() if m.group(1) != 'out' else 'out'}"
+                  f"[{m.group(2)}, _l]", source)
+
+
+def _rhs_lanes_kernel(rhs: Kernel) -> Kernel:
+    """`rhs` over a batch of trajectories in lock-step (one SIMD lane each), from the same CSE.
+
+    Only for unrolled solves (n ≤ UNROLL_MAX): the looped LDLᵀ would need a
+    work array per lane.  The time t is shared by the lanes (fixed steps).
+    """
+    n = rhs.solve.n
+    return replace(
+        rhs, name="rhs_lanes", args=("t", "Y", "P", "out", "bad"), lanes=True,
+        doc="dy/dt of `rhs` for every lane l: Y (2n, B) states, P (n_p, B) parameters, out (2n, B);\n"
+            f"bad[l] is set when M is singular in lane l (n = {n}).",
+        loads=tuple((local, _lane_source(src)) for local, src in rhs.loads),
+        stores=tuple((_lane_source(target), expr) for target, expr in rhs.stores),
+    )
+
+
 def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
     """The event functions g_e(t, q, q̇), all at once (a kernel with no stores when there are none)."""
     names = eom.system.event_names
@@ -221,7 +243,12 @@ def lower(eom: EOM) -> ModuleIR:
     n = eom.n
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
-    kernels = (_constraint_kernels(eom, mapping, loads) if eom.k else (_rhs_kernel(eom, mapping, loads),)) + (
+    if eom.k:
+        first = _constraint_kernels(eom, mapping, loads)
+    else:
+        rhs = _rhs_kernel(eom, mapping, loads)
+        first = (rhs, _rhs_lanes_kernel(rhs)) if rhs.solve.unrolled else (rhs,)
+    kernels = first + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",
             (*state_args, "out"),

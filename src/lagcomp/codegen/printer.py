@@ -47,6 +47,18 @@ class KernelPrinter(PythonCodePrinter):
         return f"{b}**{self._print(exp)}"
 
 
-def to_code(expr: sp.Expr) -> str:
-    """The Python source of a scalar expression."""
-    return KernelPrinter().doprint(expr)
+class LanePrinter(KernelPrinter):
+    """`KernelPrinter` for code that runs across SIMD lanes: sin and cos call the template's
+    polynomial ``_vsin``/``_vcos`` (``templates/lanes.py``), which LLVM can vectorize, where
+    ``math.sin`` is an opaque libm call that keeps the loop scalar."""
+
+    def _print_sin(self, expr):
+        return f"_vsin({self._print(expr.args[0])})"
+
+    def _print_cos(self, expr):
+        return f"_vcos({self._print(expr.args[0])})"
+
+
+def to_code(expr: sp.Expr, lanes: bool = False) -> str:
+    """The Python source of a scalar expression (`lanes`: for a loop over SIMD lanes)."""
+    return (LanePrinter() if lanes else KernelPrinter()).doprint(expr)

@@ -206,7 +206,7 @@ def _memory(n_traj: int, n2: int, m: int, n_events: int, cap: int) -> int:
 def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=None, params=None,
           method="dop853", dt=None, rtol=1e-8, atol=1e-10, t_eval=None, save_every=1, max_step=math.inf,
           max_steps=100_000_000, events=None, event_cap=16, output=(), workers=None, client=None,
-          progress=None, memory_limit=MEMORY_LIMIT) -> Sweep:
+          batched=False, progress=None, memory_limit=MEMORY_LIMIT) -> Sweep:
     """Integrate every point of `grid`; see `lagcomp.Model.sweep` for the arguments."""
     t0, t1 = _time_span(t_span)
     m = get_method(method)
@@ -278,7 +278,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
 
     layout = (n2, rows, len(directions), cap)
     out = _allocate(n_traj, layout)
-    task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments())
+    task = _Task(_batched_driver(model, m) if batched else m.driver, m.adaptive, fixed, layout, m.driver_arguments())
     if client is None:
         done = _run_locally(model.kernels, task, Y0, P, out, workers, progress)
     else:
@@ -304,6 +304,18 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         t_dense=t_dense, dense=shaped(out["dense"]) if t_dense is not None else None,
         energy_error=shaped(relative) if "energy" in output else None, events=events_out,
     )
+
+
+#: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`).
+BATCHED = {"rk4": "rk4_lanes"}
+
+
+def _batched_driver(model, m) -> str:
+    if m.name not in BATCHED:
+        raise OptionError(f"`batched=True` is available for {sorted(BATCHED)}; not yet for {m.name}.")
+    if not hasattr(model.kernels, f"sweep_{BATCHED[m.name]}"):
+        raise OptionError(f"{model.name!r} has no batched kernel (constrained, or more than 8 coordinates).")
+    return BATCHED[m.name]
 
 
 @dataclass(frozen=True)
@@ -334,7 +346,9 @@ def _run_chunk(kernels, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str,
     out = _allocate(Y0.shape[0], task.layout)
     loop = getattr(kernels, f"sweep_{task.driver}")
     common = (out["final"], out["t_final"], out["status"], out["counts"], out["dense"], out["energy"])
-    if task.adaptive:
+    if task.driver in BATCHED.values():
+        loop(Y0, P, *task.fixed, *common)
+    elif task.adaptive:
         loop(Y0, P, 0, *task.fixed, *common, out["event_count"], out["event_t"], out["event_y"], task.coefficients)
     else:
         loop(Y0, P, 0, *task.fixed, *common, task.coefficients)
