@@ -198,6 +198,24 @@ def event_values(t, y, p, out):
     """Event functions g, shape (0,), in order (), into `out`; the drivers locate their zeros."""
 
 
+@njit(cache=True, error_model="numpy")
+def rest_partials(t, y, p, out):
+    """At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,
+    column j the variable j). The velocities in `y` are ignored: the partials are those at rest."""
+    theta = y[0]
+    m = p[0]
+    R = p[1]
+    g = p[2]
+    out[0, 0, 0] = R*g*m*math.cos(theta)
+    out[0, 0, 1] = 0.0
+    out[0, 1, 0] = 0.0
+    out[0, 1, 1] = 0.0
+    out[1, 0, 0] = 0.0
+    out[1, 0, 1] = 0.0
+    out[1, 1, 0] = 0.0
+    out[1, 1, 1] = 0.0
+
+
 #: Rows of the constraint matrix that belong to holonomic constraints.
 HOLONOMIC_ROWS = np.array([0], dtype=np.int64)
 

@@ -443,10 +443,12 @@ class Model:
             Run the chunks as Dask tasks; workers rebuild the kernels from
             the emitted source (once per worker process).
         batched : bool
-            rk4 only: advance blocks of 32 trajectories in lock-step through
-            the SIMD kernel ``rhs_lanes`` (about 2.8x cheaper per evaluation on
-            the double pendulum); its polynomial sin/cos agree with libm to
-            2 ulp, so results match the scalar path to rounding, not bitwise.
+            rk4 and dop853: advance blocks of 32 trajectories together through
+            the SIMD kernel ``rhs_lanes`` (each with its own steps for
+            dop853; final states and energy errors only), about 2x the
+            throughput.  Its polynomial sin/cos agree with libm to 2 ulp, so
+            results match the scalar path to rounding (bitwise without
+            trigonometry).
         memory_limit : int
             Bytes the outputs may take (default 2 GiB); a larger request is
             refused before the sweep starts.

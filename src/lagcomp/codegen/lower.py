@@ -17,7 +17,7 @@ from dataclasses import replace
 import sympy as sp
 
 from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR
-from lagcomp.mechanics.lagrange import EOM
+from lagcomp.mechanics.lagrange import EOM, to_plain
 from lagcomp.model.system import t
 
 #: Names the emitted module uses itself; user names equal to them get a trailing underscore.
@@ -215,14 +215,15 @@ def _rhs_lanes_kernel(rhs: Kernel) -> Kernel:
     """`rhs` over a batch of trajectories in lock-step (one SIMD lane each), from the same CSE.
 
     Only for unrolled solves (n ≤ UNROLL_MAX): the looped LDLᵀ would need a
-    work array per lane.  The time t is shared by the lanes (fixed steps).
+    work array per lane.  Each lane has its own time (adaptive steps).
     """
     n = rhs.solve.n
+    uses_t = any(sp.Symbol("t", real=True) in e.free_symbols for _, e in rhs.temps + rhs.stores)
     return replace(
-        rhs, name="rhs_lanes", args=("t", "Y", "P", "out", "bad"), lanes=True,
-        doc="dy/dt of `rhs` for every lane l: Y (2n, B) states, P (n_p, B) parameters, out (2n, B);\n"
-            f"bad[l] is set when M is singular in lane l (n = {n}).",
-        loads=tuple((local, _lane_source(src)) for local, src in rhs.loads),
+        rhs, name="rhs_lanes", args=("T", "Y", "P", "out", "bad"), lanes=True,
+        doc="dy/dt of `rhs` for every lane l: T (B,) times, Y (2n, B) states, P (n_p, B) parameters,\n"
+            f"out (2n, B); bad[l] is set when M is singular in lane l (n = {n}).",
+        loads=(("t", "T[_l]"),) * uses_t + tuple((local, _lane_source(src)) for local, src in rhs.loads),
         stores=tuple((_lane_source(target), expr) for target, expr in rhs.stores),
     )
 
@@ -234,6 +235,35 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
         "event_values",
         f"Event functions g, shape ({len(names)},), in order {names}, into `out`; the drivers locate their zeros.",
         ("t", "y", "p", "out"), [(f"out[{e}]", g) for e, g in enumerate(eom.events)], mapping, loads,
+    )
+
+
+def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """∂F/∂q and ∂F/∂q̇ at rest (q̇ = 0): what equilibria and small oscillations need (`lagcomp.analysis`).
+
+    ∂F/∂q is the Jacobian of F(q, 0, t), which is small (every q̇ term drops
+    out before differentiating).  ∂F/∂q̇ is not taken from F itself: with
+    L = ½ q̇ᵀM q̇ + bᵀq̇ + L₀ and the non-conservative forces Q_d = Q − ∂D/∂q̇,
+    the part of F linear in q̇ is (B_qᵀ − B_q − ∂M/∂t) q̇ + (Q_d's), B_q = ∂b/∂q,
+    so its coefficient needs only M, b and Q_d.  Differentiating the full F
+    instead costs ~10 s of sympy for a 10-link chain (0.2 s this way).
+    """
+    n, system = eom.n, eom.system
+    at_rest = {v: 0 for v in eom.qd}
+    plain = lambda expr: to_plain(sp.sympify(expr), system, eom.q, eom.qd)  # noqa: E731
+    D = plain(system.dissipation)
+    Q_d = sp.Matrix([plain(Q) - D.diff(v) for Q, v in zip(system.forces, eom.qd)])
+    B_q = eom.momentum_offset.jacobian(eom.q)
+    blocks = (eom.F.xreplace(at_rest).jacobian(eom.q),
+              B_q.T - B_q - eom.M.diff(t) + Q_d.jacobian(eom.qd).xreplace(at_rest))
+    blocks = [block.replace(sp.DiracDelta, lambda *args: sp.S.Zero) for block in blocks]
+    return _kernel(
+        "rest_partials",
+        "At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,\n"
+        "column j the variable j). The velocities in `y` are ignored: the partials are those at rest.",
+        ("t", "y", "p", "out"),
+        [(f"out[{k}, {i}, {j}]", block[i, j]) for k, block in enumerate(blocks) for i in range(n) for j in range(n)],
+        mapping, loads,
     )
 
 
@@ -275,6 +305,7 @@ def lower(eom: EOM) -> ModuleIR:
             (*state_args, "out"), [(f"out[{i}]", eom.momentum_rate[i]) for i in range(n)], mapping, loads,
         ),
         _event_kernel(eom, mapping, loads),
+        _rest_partials_kernel(eom, mapping, loads),
     ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
     system = eom.system
     return ModuleIR(

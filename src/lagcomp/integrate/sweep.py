@@ -278,7 +278,15 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
 
     layout = (n2, rows, len(directions), cap)
     out = _allocate(n_traj, layout)
-    task = _Task(_batched_driver(model, m) if batched else m.driver, m.adaptive, fixed, layout, m.driver_arguments())
+    if batched:
+        driver = _batched_driver(model, m)
+        if m.adaptive and (rows or want_events):
+            raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "
+                              "events yet); drop `batched` for those outputs.")
+        fixed, coefficients = (fixed[:7], m.driver_arguments()[:5]) if m.adaptive else (fixed, ())
+        task = _Task(driver, m.adaptive, fixed, layout, coefficients)
+    else:
+        task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments())
     if client is None:
         done = _run_locally(model.kernels, task, Y0, P, out, workers, progress)
     else:
@@ -307,7 +315,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
 
 
 #: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`).
-BATCHED = {"rk4": "rk4_lanes"}
+BATCHED = {"rk4": "rk4_lanes", "dop853": "dop853_lanes"}
 
 
 def _batched_driver(model, m) -> str:
@@ -347,7 +355,7 @@ def _run_chunk(kernels, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str,
     loop = getattr(kernels, f"sweep_{task.driver}")
     common = (out["final"], out["t_final"], out["status"], out["counts"], out["dense"], out["energy"])
     if task.driver in BATCHED.values():
-        loop(Y0, P, *task.fixed, *common)
+        loop(Y0, P, *task.fixed, *common, *task.coefficients)
     elif task.adaptive:
         loop(Y0, P, 0, *task.fixed, *common, out["event_count"], out["event_t"], out["event_y"], task.coefficients)
     else:
