@@ -20,8 +20,26 @@ Two keys, so that a second process does neither sympy nor numba work:
   the emitter never serves a module written by the old code).  An index
   entry under it lets `compile` skip the derivation entirely.
 
-An entry whose file is missing, truncated or altered (sha256 mismatch) is a
-miss: it is reported with a `CacheWarning` and rebuilt, never trusted.
+An entry whose file is missing, truncated or altered (sha256 mismatch), or
+whose record names other lagcomp/numba/Python versions, is a miss: it is
+reported with a `CacheWarning` and rebuilt, never trusted.
+
+Faults and concurrency
+----------------------
+* Every file is written to a temporary name and renamed into place, so a
+  reader never sees a torn file; a writer killed mid-write leaves only a
+  ``.*.tmp`` file, which nobody reads and the next `store` in that directory
+  removes once it is an hour old.
+* Processes that compile the same system at the same time serialize on a
+  lock file per input key (``locks/<key>.lock``, `fcntl.flock`): the first
+  derives and stores, the others wait and then find its entry, so one entry
+  results and the system is derived once.  Writing a module file holds a
+  lock per module file as well, so workers that store the same source under
+  different keys never rewrite each other's file.  (Without `fcntl`, on
+  Windows, only the atomic rename protects the files.)
+* A cache root that cannot be written (read-only, full, a path under a
+  regular file) never breaks a compile: lagcomp warns with a `CacheWarning`
+  and uses a private temporary directory for the rest of the process.
 """
 
 from __future__ import annotations
@@ -33,7 +51,9 @@ import json
 import os
 import sys
 import tempfile
+import time
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -44,6 +64,11 @@ import sympy
 
 from lagcomp import __version__
 from lagcomp.errors import CacheWarning
+
+try:
+    import fcntl
+except ImportError:  # Windows: the atomic rename alone keeps files whole
+    fcntl = None
 
 ENV_VAR = "LAGCOMP_CACHE_DIR"
 LAYOUT_VERSION = "1"
@@ -114,8 +139,50 @@ def _atomic_write(path: Path, text: str) -> None:
         raise
 
 
+#: Temporary files older than this (seconds) were left by a writer that died; `store` removes them.
+STALE_TEMPORARY_AGE = 3600.0
+
+
+def _remove_stale_temporaries(directory: Path) -> None:
+    now = time.time()
+    for tmp in directory.glob(".*.tmp"):
+        try:
+            if now - tmp.stat().st_mtime > STALE_TEMPORARY_AGE:
+                tmp.unlink()
+        except OSError:
+            pass  # another process removed it, or it is not ours to remove
+
+
+@contextmanager
+def _locked(path: Path):
+    """Hold an exclusive `flock` on the file `path` (created if needed) for the block."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a+b") as f:
+        if fcntl is not None:
+            fcntl.flock(f.fileno(), fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            if fcntl is not None:
+                fcntl.flock(f.fileno(), fcntl.LOCK_UN)
+
+
+#: The private temporary root this process falls back to when its cache root cannot be written.
+_fallback_root: Path | None = None
+#: Roots already reported unwritable (one warning per root and process).
+_reported_roots: set = set()
+
+
+def fallback_root() -> Path:
+    """A private temporary cache root for this process (created on first use)."""
+    global _fallback_root
+    if _fallback_root is None:
+        _fallback_root = Path(tempfile.mkdtemp(prefix="lagcomp-cache-"))
+    return _fallback_root
+
+
 class Cache:
-    """The cache under one root directory."""
+    """The cache under one root directory (which moves to `fallback_root` if it cannot be written)."""
 
     def __init__(self, cache_dir: str | os.PathLike | None = None):
         self.root = cache_root(cache_dir)
@@ -123,37 +190,86 @@ class Cache:
     def _index_file(self, key: str) -> Path:
         return self.root / "index" / f"{key}.json"
 
+    def _fall_back(self, err: OSError) -> bool:
+        """Move to the temporary root after a failed write; False if already there."""
+        if self.root == fallback_root():
+            return False
+        if self.root not in _reported_roots:
+            _reported_roots.add(self.root)
+            warnings.warn(f"lagcomp cannot write its cache under {self.root} ({err}); using {fallback_root()} for "
+                          f"this process instead. Set {ENV_VAR} or cache_dir= to a writable directory to keep "
+                          "compiled systems across runs.", CacheWarning, stacklevel=4)
+        self.root = fallback_root()
+        return True
+
+    @contextmanager
+    def lock(self, key: str):
+        """Hold the lock of input `key` (one compile of a system at a time, across processes)."""
+        try:
+            lock = _locked(self.root / "locks" / f"{key}.lock")
+            lock.__enter__()
+        except OSError as err:
+            if not self._fall_back(err):
+                raise
+            lock = _locked(self.root / "locks" / f"{key}.lock")
+            lock.__enter__()
+        try:
+            yield
+        finally:
+            lock.__exit__(None, None, None)
+
     def lookup(self, key: str) -> Entry | None:
-        """The entry stored under input `key`, or None (with a warning if it was damaged)."""
+        """The entry stored under input `key`, or None (with a warning if it was damaged or stale)."""
         index = self._index_file(key)
         if not index.exists():
             return None
         try:
             record = json.loads(index.read_text(encoding="utf-8"))
+            if record.get("versions", _versions()) != _versions():
+                raise ValueError(f"it was written by another lagcomp or numba version ({record['versions']})")
             path = self.root / "modules" / record["module"]
             text = path.read_text(encoding="utf-8")
             if _sha256(text) != record["sha256"]:
                 raise ValueError(f"{path} does not match its recorded sha256 (truncated or edited)")
-        except (OSError, ValueError, KeyError, TypeError) as err:
+        except (OSError, ValueError, KeyError, TypeError, AttributeError) as err:
             warnings.warn(f"lagcomp cache entry {index.name} is unusable ({err}); rebuilding it.", CacheWarning, stacklevel=3)
-            index.unlink(missing_ok=True)
+            try:
+                index.unlink(missing_ok=True)
+            except OSError:
+                pass  # a read-only cache: the rebuilt entry goes to the fallback root
             return None
         return Entry(path=path, module_name=_module_name(path), metadata=record["metadata"])
 
     def store(self, key: str, source: str, system_name: str, metadata: dict) -> Entry:
-        """Write `source` (unless an intact copy exists) and index it under input `key`."""
+        """Write `source` (unless an intact copy exists) and index it under input `key`.
+
+        A root that cannot be written is replaced by the fallback root, with a `CacheWarning`.
+        """
+        try:
+            return self._store(key, source, system_name, metadata)
+        except OSError as err:
+            if not self._fall_back(err):
+                raise
+            return self._store(key, source, system_name, metadata)
+
+    def _store(self, key: str, source: str, system_name: str, metadata: dict) -> Entry:
         path = self.root / "modules" / f"{system_name}_{source_key(source)}.py"
         digest = _sha256(source)
-        intact = path.exists() and _sha256(path.read_text(encoding="utf-8", errors="replace")) == digest
-        if not intact:
-            _atomic_write(path, source)
-        record = {"module": path.name, "sha256": digest, "metadata": metadata}
+        with _locked(self.root / "locks" / f"{path.stem}.lock"):
+            intact = path.exists() and _sha256(path.read_text(encoding="utf-8", errors="replace")) == digest
+            if not intact:
+                _atomic_write(path, source)
+        _remove_stale_temporaries(path.parent)
+        record = {"module": path.name, "sha256": digest, "metadata": metadata, "versions": _versions()}
         _atomic_write(self._index_file(key), json.dumps(record, indent=1, sort_keys=True))
         return Entry(path=path, module_name=_module_name(path), metadata=metadata)
 
     def discard(self, entry: Entry) -> None:
         """Remove a module file that failed to load, so the rebuild writes a fresh one."""
-        entry.path.unlink(missing_ok=True)
+        try:
+            entry.path.unlink(missing_ok=True)
+        except OSError:
+            pass  # read-only: the rebuild falls back to a writable root
 
 
 def _module_name(path: Path) -> str:
