@@ -197,6 +197,13 @@ def _grid(model, grid, combine: str, names) -> tuple[tuple, dict, tuple, np.ndar
     return names, axes, shape, values
 
 
+def _row_every(save_every: int, output: tuple, n_steps: int) -> int:
+    """Steps between the rows the drivers hand back: `save_every` when rows are used (dense output,
+    energy errors), else only the last one — then each trajectory is one driver call, not one per
+    buffer of rows (which would also re-evaluate the adaptive methods' first stage each time)."""
+    return save_every if ("dense" in output or "energy" in output) else n_steps + 1
+
+
 def _memory(n_traj: int, n2: int, m: int, n_events: int, cap: int) -> int:
     """Bytes of the outputs: state, times, status and counters; dense rows; energy; events."""
     per = 8 * (n2 + 1 + 1 + 3 + 2) + 8 * m * n2 + 8 * n_events * (1 + cap * (1 + n2))
@@ -251,7 +258,8 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         t_dense = t_eval if "dense" in output else None
         after_start = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
         save_initial = t_eval is not None and t_eval[0] == t0
-        fixed = (t0, t1, rtol, atol, max_step, max_steps, save_every, after_start, save_initial, directions, actions)
+        fixed = (t0, t1, rtol, atol, max_step, max_steps, _row_every(save_every, output, max_steps), after_start,
+                 save_initial, directions, actions)
     else:
         if dt is None:
             raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
@@ -265,7 +273,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         t_dense = np.unique(np.minimum(t0 + steps * dt, t1)) if "dense" in output else None
         if t_dense is not None:
             t_dense[-1] = t1
-        fixed = (t0, dt, n_steps, t1, save_every)
+        fixed = (t0, dt, n_steps, t1, _row_every(save_every, output, n_steps))
     rows = 0 if t_dense is None else t_dense.size
     n_events = len(model.system.events) if want_events else 0
     needed = _memory(n_traj, n2, rows, n_events, cap)
