@@ -686,8 +686,11 @@ run can be resumed, chunk by chunk, when the output buffer fills:
   the initial point is never written (the caller does that);
 * ``projecting`` int: 1 projects every accepted state onto the constraints
   (RK4: before it is saved; adaptive: after the step's outputs, re-evaluating
-  the FSAL derivative at the projected state); ``residual_max`` float64[1]:
-  the running maximum of ``constraint_residual`` over accepted states;
+  the FSAL derivative at the projected state); ``residual_max`` float64[1]
+  or [2]: the running maximum of ``constraint_residual`` over accepted
+  states, and optionally a bound: the step whose residual exceeds
+  ``residual_max[1]`` is committed (and saved if due), then the driver
+  returns -6 (RK4, DOP853, DOPRI5);
 * events (adaptive drivers): ``directions`` int64[E] (+1, -1, 0),
   ``actions`` int64[E] (0 ignore, 1 record, 2 record and stop), and the
   output rows ``ev_t`` float64[cap_e], ``ev_y`` float64[cap_e, N],
@@ -706,8 +709,10 @@ call of the adaptive drivers; with ``t_eval`` the buffer may hold fewer than
 again; the continuation is identical in the same way); 3 = a terminal event
 stopped the run; -1 = non-finite state, derivative or step size; -2 =
 ``rhs`` returned a non-zero status; -3 = step size too small; -4 = maximum
-number of steps reached; -5 = implicit stage equations not solved.  On failure ``y`` and ``clock[0]`` hold
-the last good state and its time.
+number of steps reached; -5 = implicit stage equations not solved; -6 = the
+constraint residual of the last (committed) step exceeded ``residual_max[1]``.
+On failure ``y`` and ``clock[0]`` hold the last good state and its time (for
+-6, the committed state whose residual is too large).
 
 No floating-point trouble raises
 --------------------------------
@@ -846,6 +851,7 @@ _ODE_RHS_FAILED = -2
 _ODE_STEP_TOO_SMALL = -3
 _ODE_MAX_STEPS = -4
 _ODE_NOT_CONVERGED = -5   # implicit stage equations not solved (step too large)
+_ODE_RESIDUAL = -6        # constraint residual above the bound residual_max[1]
 _ODE_PAUSED = 2           # the call's step budget (``pause_at``) is used up: call again
 _ODE_EVENT = 3            # a terminal event stopped the run
 
@@ -875,6 +881,7 @@ def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
     ytmp = np.empty(n)
     y_new = np.empty(n)
     n_saved = 0
+    residual_bound = residual_max[1] if residual_max.shape[0] > 1 else np.inf
     while True:
         k = counters[1]
         if k >= n_steps:
@@ -935,6 +942,8 @@ def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
                 ys[n_saved, i] = y[i]
             n_saved += 1
             counters[4] = 0
+        if residual > residual_bound:
+            return _ODE_RESIDUAL, n_saved
 
 
 
@@ -979,6 +988,7 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
                                 # the error scale of the initial step
 
     n_saved = 0
+    residual_bound = residual_max[1] if residual_max.shape[0] > 1 else np.inf
     t = clock[0]
     if t >= t_end:
         return _ODE_DONE, n_saved
@@ -1227,6 +1237,8 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
         clock[0] = t
         clock[1] = h_abs
         counters[1] += 1
+        if residual > residual_bound:
+            return _ODE_RESIDUAL, n_saved
         if stop:
             return _ODE_EVENT, n_saved
 
@@ -1277,6 +1289,7 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
                                 # the error scale of the initial step
 
     n_saved = 0
+    residual_bound = residual_max[1] if residual_max.shape[0] > 1 else np.inf
     t = clock[0]
     if t >= t_end:
         return _ODE_DONE, n_saved
@@ -1567,6 +1580,8 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
         clock[0] = t
         clock[1] = h_abs
         counters[1] += 1
+        if residual > residual_bound:
+            return _ODE_RESIDUAL, n_saved
         if stop:
             return _ODE_EVENT, n_saved
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import os
 import warnings
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -177,6 +178,9 @@ class Model:
         add −2α (Λ q̇ + b) − β² Φ to the acceleration-level constraints.
         """
         values = dict(self.system.defaults)
+        if params is not None and not isinstance(params, Mapping):
+            raise ParameterError(f"`params` must be a mapping of parameter name to value, like "
+                                 f"{dict.fromkeys(self.parameters[:2], 1.0)}, got {type(params).__name__}.")
         values.update(params or {})
         unknown = sorted(set(values) - set(self.parameters))
         if unknown:
@@ -205,10 +209,15 @@ class Model:
                 values = [0.0] * self.n if what == "qd0" else None
             if values is None:
                 raise InitialConditionError(f"`q0` is required: {self.name!r} has no default initial coordinates.")
-            values = np.atleast_1d(np.asarray(values, dtype=float))
+            try:
+                values = np.atleast_1d(np.asarray(values, dtype=float))
+            except (TypeError, ValueError) as err:
+                raise InitialConditionError(f"`{what}` must be {self.n} number(s), one per coordinate "
+                                            f"{list(self.coordinates)}, got {values!r}.") from err
             if values.shape != (self.n,):
+                shape = f"shape {values.shape}" if values.ndim > 1 else f"{values.size} value(s)"
                 raise InitialConditionError(
-                    f"`{what}` has {values.size} value(s); {self.name!r} has {self.n} coordinates {list(self.coordinates)}."
+                    f"`{what}` has {shape}; {self.name!r} has {self.n} coordinates {list(self.coordinates)}."
                 )
             if not np.all(np.isfinite(values)):
                 raise InitialConditionError(f"`{what}` = {values.tolist()} is not finite.")
@@ -408,6 +417,10 @@ class Model:
         throw : bool
             Raise `IntegrationError` (with the partial solution) on failure
             instead of returning a Solution whose `status` is negative.
+        max_residual : float, optional
+            Constrained systems (rk4, dop853, dopri5): stop with status -6
+            once a step's constraint residual (|Φ| or |Λ q̇ + b|) exceeds
+            this bound; that step is kept as the last row.  None: no bound.
         """
         from lagcomp.integrate.simulate import simulate
 

@@ -19,7 +19,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from lagcomp.errors import IntegrationError, OptionError
+from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.methods import get_method, implicit_solver_for
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
@@ -33,6 +33,10 @@ BUFFER_FULL, PAUSED, EVENT = 1, 2, 3
 TERMINATED, INTERRUPTED = 1, 2
 #: Target wall time of one driver call, and the step budget of the first one.
 CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
+#: Relative tolerances below this (100 machine epsilons) ask for more than float64 can give.
+RTOL_MIN = 100 * np.finfo(float).eps
+#: Solution status of a run stopped because the constraint residual exceeded ``max_residual``.
+RESIDUAL_EXCEEDED = -6
 #: Runs longer than this show a progress bar (unless ``progress=False``).
 PROGRESS_DELAY = 2.0
 
@@ -95,6 +99,9 @@ def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, option
     if options["dt"] is not None:
         raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own (use `first_step`).")
     rtol, atol = _positive(options["rtol"], "rtol"), _positive(options["atol"], "atol")
+    if not RTOL_MIN <= rtol < 1:
+        raise OptionError(f"`rtol` = {rtol:g} is out of range: it must be at least {RTOL_MIN:.2g} (100 machine "
+                          "epsilons; float64 cannot do better) and below 1.")
     if options["first_step"] is not None:
         clock[1] = _positive(options["first_step"], "first_step")
     max_step = options["max_step"]
@@ -149,7 +156,7 @@ def check_method(model, m) -> None:
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=1e-8,
              atol=1e-10, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
-             events=None, record="trajectory", progress=None, throw=False) -> Solution:
+             events=None, record="trajectory", progress=None, throw=False, max_residual=None) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     t0, t1 = _time_span(t_span)
     m = get_method(method)
@@ -164,7 +171,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     t_eval = _t_eval(t_eval, t0, t1)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
-    residual_max = np.zeros(1)
+    bound = math.inf if max_residual is None else _positive(max_residual, "max_residual")
+    residual_max = np.array([0.0, bound])  # running maximum, and the bound the drivers stop at
     y, clock, counters = y0.copy(), np.array([t0, 0.0]), np.zeros(6, dtype=np.int64)
     make = _adaptive_driver if m.adaptive else _fixed_step_driver
     advance, rows = make(m, model.kernels, y, clock, counters, p, (projecting, residual_max), t_eval, options)
@@ -176,10 +184,12 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     event_parts: list[tuple] = []
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
     status = _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress)
+    if status == -2 and counters[1] == 0:
+        _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != clock[0]):
         recorder.add(np.array([clock[0]]), y[None, :])  # keep the last good state
     run = dict(method=m.name, status=status, clock=clock, counters=counters, projected=projected,
-               residual_max=float(residual_max[0]), events=_event_records(model, event_parts))
+               residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
     return _solution(model, p, recorder, y, run, throw)
 
 
@@ -242,6 +252,63 @@ def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts
                 return INTERRUPTED
 
 
+def _refuse_singular_start(model, t0: float, y0: np.ndarray, p: np.ndarray) -> None:
+    """Raise SingularMassMatrixError if the equations are singular at the initial state itself.
+
+    That is bad input (parameter values or q0), not a failure of the run: the
+    message names the parameters that are zero and, with constraints, those
+    whose rows of Λ are linearly dependent there (redundant constraints).
+    """
+    n = model.n
+    if not model.kernels.rhs(t0, y0, p, np.empty(2 * n)):
+        return  # singular at a stage of the first step, not at the start: a run failure
+    where = ", ".join(f"{c}={v:.6g}" for c, v in zip(model.coordinates, y0[:n]))
+    zero = [name for name, value in zip(model.parameters, p) if value == 0]
+    hint = (f" Parameter(s) {zero} are zero: a zero mass, length or moment of inertia takes the inertia out "
+            "of a coordinate." if zero else "")
+    redundant = _redundant_constraints(model, t0, y0, p) if model.k else []
+    if redundant:
+        raise SingularMassMatrixError(
+            f"Constraint(s) {redundant} of {model.name!r} are redundant at the initial state t={t0:g}, {where}: "
+            f"there their rows of Λ depend linearly on the rows of the constraints before them (in the order "
+            f"{list(model.constraints)}). "
+            "Remove them, or start from a state where the constraints are independent."
+        )
+    matrix = "augmented matrix [M Λᵀ; Λ 0]" if model.k else "mass matrix"
+    raise SingularMassMatrixError(
+        f"The {matrix} of {model.name!r} is singular at the initial state t={t0:g}, {where}, with parameters "
+        f"{dict(zip(model.parameters, p.tolist()))}: the kinetic energy is not positive definite there.{hint} "
+        "Change q0 or the parameter values."
+    )
+
+
+def _redundant_constraints(model, t0: float, y0: np.ndarray, p: np.ndarray) -> list[str]:
+    """Names of the constraints whose row Λ_k(q0) depends on the rows before it.
+
+    Λ comes from the ``constraint_residuals`` kernel: its velocity-level
+    entries Λ q̇ + b are linear in q̇, so unit velocities give Λ's columns exactly.
+    """
+    n, k = model.n, model.k
+    out = np.empty(len(model.residual_labels))
+    velocity = np.empty((n + 1, k))
+    for j in range(n + 1):
+        y = y0.copy()
+        y[n:] = 0.0
+        if j < n:
+            y[n + j] = 1.0
+        model.kernels.constraint_residuals(t0, y, p, out)
+        velocity[j] = out[-k:]
+    rows = (velocity[:n] - velocity[n]).T  # Λ, shape (k, n)
+    tolerance = 1e-10 * max(1.0, float(np.abs(rows).max()))
+    redundant, rank = [], 0
+    for i in range(k):
+        new_rank = np.linalg.matrix_rank(rows[: i + 1], tol=tolerance)
+        if new_rank == rank:
+            redundant.append(model.constraints[i])
+        rank = new_rank
+    return redundant
+
+
 def _event_records(model, event_parts) -> dict:
     """Occurrences of each declared event: {name: EventRecord(t, q, qd)}, in time order."""
     n = model.n
@@ -265,7 +332,10 @@ def _solution(model, p, recorder, y, run, throw) -> Solution:
         n = model.n
         state = ", ".join(f"{c}={v:.6g}" for c, v in zip(model.coordinates, y[:n]))
         rates = ", ".join(f"{c}_dot={v:.6g}" for c, v in zip(model.coordinates, y[n:]))
-        message = f"{message} Stopped at t = {clock[0]:.10g}, last good state {state}, {rates}."
+        last = "state" if status == RESIDUAL_EXCEEDED else "last good state"
+        message = f"{message} Stopped at t = {clock[0]:.10g}, {last} {state}, {rates}."
+        if status == RESIDUAL_EXCEEDED:
+            message += f" Residual {run['residual_max']:.3g} > max_residual = {run['max_residual']:g}."
         t_failure = float(clock[0]) if status < 0 else None
     if status == TERMINATED:
         fired = [name for name, record in run["events"].items() if record.t.size and record.t[-1] == clock[0]]

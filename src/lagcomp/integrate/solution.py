@@ -20,6 +20,8 @@ MESSAGES = {
     -3: "The step size became too small (the solution may be singular here).",
     -4: "The maximum number of steps was reached.",
     -5: "The implicit stage equations did not converge: reduce the step `dt`.",
+    -6: "The constraint residual exceeded `max_residual`: the run drifted off the constraints (tighten rtol/atol, "
+        "or use projection=True or baumgarte=(alpha, beta)).",
 }
 
 

@@ -174,6 +174,7 @@ def derive(system: System) -> EOM:
     Q = [plain(Qi) for Qi in system.forces]
     if V.has(*qd):
         raise ModelError("The potential V depends on velocities; put velocity-dependent forces in `forces`.")
+    _check_differentiable(system, (*q, *qd), T, V, D, Q, plain)
 
     dT_dqd = [T.diff(v) for v in qd]
     M = sp.Matrix(system.n, system.n, lambda i, j: dT_dqd[i].diff(qd[j]))
@@ -270,6 +271,48 @@ def _tidy(expr: sp.Expr) -> sp.Expr:
     return tidied if sp.count_ops(tidied) <= sp.count_ops(expr) else expr
 
 
+#: Functions without a derivative everywhere (a kink, a jump or a branch change).
+NON_SMOOTH = (sp.Abs, sp.sign, sp.Piecewise, sp.Heaviside, sp.DiracDelta, sp.floor, sp.ceiling, sp.frac,
+              sp.Min, sp.Max, sp.Mod)
+
+
+def _check_differentiable(system: System, state, T, V, D, Q, plain) -> None:
+    """Refuse non-smooth functions of the state where lagcomp differentiates them.
+
+    T and the constraints are differentiated twice (M, F; Λ, γ), so any kink
+    or jump there is refused.  V and D are differentiated once: a kink is
+    allowed (|x| gives the force sign(x)), a jump is not (its derivative is a
+    DiracDelta impulse).  Forces are only evaluated (a Coulomb friction
+    sign(q̇) is fine), but their derivative must exist away from the jumps.
+    """
+    def culprits(expr):
+        return [f for f in expr.atoms(*NON_SMOOTH) if f.has(*state)]
+
+    twice = {"T": T, **{f"constraint `{c.name}`": plain(c.expr) for c in system.constraints}}
+    for role, expr in twice.items():
+        bad = culprits(expr)
+        if bad:
+            raise ModelError(
+                f"{role} of {system.name!r} contains {bad[0]}, which has no derivative where its argument changes "
+                f"sign or branch; Lagrange's equations differentiate {role} twice. Write it as a smooth "
+                "expression (e.g. sqrt(x**2 + eps**2) for |x|), or make each regime its own System and switch "
+                "between them at a terminal Event."
+            )
+    once = {"V": V, "dissipation": D, **{f"forces[{name}]": Qi for name, Qi in zip(system.coordinate_names, Q)}}
+    for role, expr in once.items():
+        for f in culprits(expr):
+            for v in sorted(f.free_symbols & set(state), key=str):
+                derivative = f.diff(v)
+                impulse = derivative.has(sp.DiracDelta) and not role.startswith("forces")
+                if impulse or derivative.has(sp.Derivative):
+                    raise ModelError(
+                        f"{role} of {system.name!r} contains {f}, whose derivative in {v} is {derivative}: "
+                        f"{'a jump in a potential is an impulse, which' if impulse else 'that'} lagcomp cannot "
+                        "integrate. Write it as a smooth expression, or make each regime its own System and "
+                        "switch between them at a terminal Event."
+                    )
+
+
 def _check_mass_matrix(M: sp.Matrix, C: sp.Matrix, system: System, q) -> None:
     """Refuse equations that are singular for every state and parameter value.
 
@@ -293,15 +336,24 @@ def _check_mass_matrix(M: sp.Matrix, C: sp.Matrix, system: System, q) -> None:
     args = (*q, t, *system.parameters)
     evaluate = sp.lambdify(args, M, modules="numpy")
     rng = np.random.default_rng(20261122)
+    negative = 0
     for _ in range(3):
         values = rng.uniform(0.3, 1.7, size=len(args))
         with np.errstate(all="ignore"):
             m = np.asarray(evaluate(*values), dtype=float)
         if not np.all(np.isfinite(m)):
             return  # cannot judge at this random point; the kernel checks at run time
+        if not C.rows and np.linalg.eigvalsh(m)[0] < -1e-12 * np.abs(m).max():
+            negative += 1  # T < 0 for some velocities here: not a kinetic energy
+            continue
         scale = np.prod(np.maximum(np.linalg.norm(m, axis=1), 1e-300))
         if abs(np.linalg.det(m)) > 1e-10 * scale:
             return
+    if negative == 3:
+        raise SingularMassMatrixError(
+            f"The mass matrix ∂²T/∂q̇² has a negative eigenvalue at every state tried: T is negative for some "
+            f"velocities of {', '.join(names)}, so it is not a kinetic energy. Check the signs in T (L = T − V)."
+        )
     if C.rows:
         raise SingularMassMatrixError(
             "The constrained equations are singular at every state tried: the augmented matrix [M Λᵀ; Λ 0] has "

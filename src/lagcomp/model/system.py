@@ -272,6 +272,13 @@ class System:
                         "or write an imposed motion as an explicit expression of t."
                     )
             found |= {s for s in expr.free_symbols if s != t}
+        impostor = next((s for s in found if s.name == t.name), None)
+        if impostor is not None:
+            raise ModelError(
+                f"{self.name!r} contains a symbol named t ({sp.srepr(impostor)}) that is not lagcomp's time "
+                "symbol, so it would become a parameter: write imposed motions with lagcomp.t "
+                "(= sympy.physics.mechanics.dynamicsymbols._t)."
+            )
         if self.parameters is None:
             return tuple(sorted(found, key=lambda s: s.name))
         declared = tuple(self.parameters)
@@ -280,7 +287,8 @@ class System:
                 raise ModelError(f"Parameter {s!r} must be a sympy Symbol.")
         undeclared = sorted(found - set(declared), key=lambda s: s.name)
         if undeclared:
-            where = next((role for role, expr in (roles or {}).items() if expr.has(undeclared[0])), None)
+            where = next((role for role, expr in {**(roles or {}), **self.expressions()}.items()
+                          if expr.has(undeclared[0])), None)
             raise UndeclaredSymbolError(
                 f"Symbol(s) {', '.join(s.name for s in undeclared)} appear in {self.name!r}"
                 f"{f' (first in {where})' if where else ''} but are neither "
@@ -295,7 +303,10 @@ class System:
             raise ParameterError(f"Default values given for unknown parameter(s) {unknown}; parameters are {sorted(names)}.")
         checked = {}
         for k, v in self.defaults.items():
-            v = float(v)
+            try:
+                v = float(v)
+            except (TypeError, ValueError) as err:
+                raise ParameterError(f"Default value of parameter `{k}` must be a number, got {v!r}.") from err
             if not math.isfinite(v):
                 raise ParameterError(f"Default value of parameter `{k}` is {v}; it must be finite.")
             checked[k] = v
@@ -304,9 +315,17 @@ class System:
     def _checked_initial(self, values, what: str):
         if values is None:
             return None
-        values = tuple(float(v) for v in values)
+        try:
+            values = tuple(float(v) for v in values)
+        except (TypeError, ValueError) as err:
+            raise InitialConditionError(
+                f"`{what}` must be a sequence of {len(self.coordinates)} numbers (one per coordinate "
+                f"{list(self.coordinate_names)}), got {values!r}."
+            ) from err
         if len(values) != len(self.coordinates):
             raise InitialConditionError(f"`{what}` has {len(values)} values for {len(self.coordinates)} coordinates.")
+        if not all(math.isfinite(v) for v in values):
+            raise InitialConditionError(f"`{what}` = {list(values)} is not finite.")
         return values
 
     # -- views --------------------------------------------------------------------

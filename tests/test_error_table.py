@@ -1,0 +1,241 @@
+"""Every row of docs/errors.md, provoked: the exception (or warning) it names, and a message naming the culprit.
+
+`CASES` maps each case of the table to (trigger, culprit): the trigger does
+the wrong thing, the culprit is text the message must contain.  The test
+reads the table, so a row without a case (or a case without a row) fails.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import warnings
+from pathlib import Path
+
+import pytest
+import sympy as sp
+
+import lagcomp as lc
+from lagcomp.model import t
+
+TABLE = Path(__file__).resolve().parent.parent / "docs" / "errors.md"
+
+x, y = lc.coordinates("x y")
+m, k, g, l = sp.symbols("m k g l", positive=True)
+a, c = sp.symbols("a c")
+
+
+def _rows() -> dict[str, str]:
+    """{case: the 'lagcomp answers' cell} of every table row."""
+    rows = {}
+    for line in TABLE.read_text(encoding="utf-8").splitlines():
+        match = re.match(r"\| `([\w-]+)` \|(.*)\|\s*$", line)
+        if match:
+            cells = [cell.strip() for cell in re.split(r"(?<!\\)\|", match.group(2))]
+            rows[match.group(1)] = cells[1]
+    return rows
+
+
+def _expected(answer: str) -> type:
+    """The class the row's 'lagcomp answers' cell names: IntegrationError for run failures (throw=True)."""
+    name = "IntegrationError" if answer.startswith("status") else re.match(r"`(\w+)`", answer).group(1)
+    return getattr(lc, name)
+
+
+# -- the systems the triggers use -------------------------------------------------------
+
+
+def oscillator(**overrides) -> lc.System:
+    spec = dict(coordinates=[x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="table_oscillator",
+                defaults={"m": 1.0, "k": 1.0}, q0=(1.0,))
+    spec.update(overrides)
+    return lc.System(**spec)
+
+
+def plane(**overrides) -> lc.System:
+    spec = dict(coordinates=[x, y], T=m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=m * g * y, name="table_plane")
+    spec.update(overrides)
+    return lc.System(**spec)
+
+
+@pytest.fixture(scope="module")
+def models(compiled, cache_dir):
+    """The models of the run-time rows: examples shared with the other tests, and one that fails on purpose."""
+    # M = m (1 − c t) vanishes at t = 1/c; the force a q̇² makes q̇ blow up in finite time
+    failing = lc.System([x], T=m * (1 - c * t) * x.diff(t) ** 2 / 2, forces=[a * x.diff(t) ** 2],
+                        name="table_failing", defaults={"m": 1.0, "a": 0.0, "c": 0.0}, q0=(0.0,), qd0=(1.0,))
+    degenerate = lc.System([x], T=m * x**2 * x.diff(t) ** 2 / 2, name="table_degenerate",
+                           events=[lc.Event("origin", x)])
+    walled = plane(constraints=[lc.Holonomic("rod", x**2 + y**2 - l**2), lc.Holonomic("wall", x - l)],
+                   name="table_walled", defaults={"m": 1.0, "g": 9.81, "l": 1.0}, q0=(1.0, 0.0))
+    return {
+        "pendulum": compiled("simple_pendulum"),
+        "rod": compiled("spherical_pendulum_cartesian"),
+        "failing": lc.compile(failing, cache_dir=cache_dir),
+        "degenerate": lc.compile(degenerate, cache_dir=cache_dir),
+        "walled": lc.compile(walled, cache_dir=cache_dir),
+    }
+
+
+def _simulate(name, **options):
+    def run(models):
+        t_span = options.pop("t_span", (0.0, 1.0))
+        return models[name].simulate(t_span, **options)
+    return run
+
+
+def _fail(name, **options):
+    return _simulate(name, throw=True, progress=False, **options)
+
+
+def _cache_case(kind):
+    def provoke(models, tmp_path):
+        system = oscillator(name="table_cached")
+        if kind == "unwritable":
+            blocker = tmp_path / "file"
+            blocker.write_text("")
+            return lc.compile(system, cache_dir=blocker / "cache")
+        lc.compile(system, cache_dir=tmp_path)
+        if kind == "corrupt":
+            (module,) = (tmp_path / "modules").glob("*.py")
+            module.write_text(module.read_text()[:100])
+        else:
+            (index,) = (tmp_path / "index").glob("*.json")
+            record = json.loads(index.read_text())
+            index.write_text(json.dumps({**record, "versions": "numba=0.0.1"}))
+        return lc.compile(system, cache_dir=tmp_path)
+    return provoke
+
+
+def _inertia():
+    from sympy.physics.vector import ReferenceFrame
+
+    N = ReferenceFrame("N")
+    return lc.RigidBody(m, (x, 0, 0), (1, -2, 1), N)
+
+
+def _lagranges_method_without_frame():
+    import sympy.physics.mechanics as me
+
+    return lc.compile(me.LagrangesMethod(m * x.diff(t) ** 2 / 2, [x], forcelist=[(me.Point("P"), me.ReferenceFrame("N").x)]))
+
+
+CASES = {
+    # the description: System(...) and compile
+    "undeclared-symbol": (lambda: oscillator(V=k * x**2 / 2 + sp.Symbol("stray") * x, parameters=(m, k)), "stray"),
+    "undeclared-function": (lambda: oscillator(V=k * (x - sp.Function("phi")(t)) ** 2), "phi(t)"),
+    "plain-symbol-coordinate": (lambda: lc.System([sp.Symbol("q")], T=sp.Symbol("q") ** 2, name="bad"), "Coordinate q"),
+    "repeated-coordinate": (lambda: lc.System([x, x], T=m * x.diff(t) ** 2), "(x(t), x(t))"),
+    "bad-system-name": (lambda: oscillator(name="double-pendulum"), "'double-pendulum'"),
+    "not-an-expression": (lambda: oscillator(T="m*"), "`T`"),
+    "no-kinetic-energy": (lambda: oscillator(T=0), "'table_oscillator' has no kinetic energy"),
+    "T-not-quadratic": (lambda: lc.compile(oscillator(T=m * x.diff(t) ** 4)), "kinetic energy T"),
+    "accelerations-in-expressions": (lambda: lc.compile(oscillator(events=[lc.Event("e", x.diff(t, 2))])),
+                                     "Derivative(x(t), (t, 2))"),
+    "velocity-dependent-potential": (lambda: lc.compile(oscillator(V=k * x * x.diff(t))), "potential V"),
+    "non-smooth-T": (lambda: lc.compile(oscillator(T=sp.Piecewise((m, x > 0), (2 * m, True)) * x.diff(t) ** 2 / 2)),
+                     "T of 'table_oscillator' contains Piecewise"),
+    "non-smooth-constraint": (lambda: lc.compile(plane(constraints=[lc.Holonomic("kink", sp.Abs(x) - y)])),
+                              "constraint `kink`"),
+    "jump-in-potential": (lambda: lc.compile(oscillator(V=k * sp.Heaviside(x))), "Heaviside(x)"),
+    "zero-inertia-coordinate": (lambda: lc.compile(plane(T=m * x.diff(t) ** 2 / 2)), "`y`"),
+    "singular-mass-matrix": (lambda: lc.compile(plane(T=m * (x.diff(t) + y.diff(t)) ** 2 / 2)), "x, y"),
+    "negative-kinetic-energy": (lambda: lc.compile(oscillator(T=-m * x.diff(t) ** 2 / 2)), "negative eigenvalue"),
+    "redundant-constraints": (lambda: lc.compile(plane(constraints=[lc.Holonomic("one", x - y),
+                                                                    lc.Holonomic("two", 2 * x - 2 * y)])),
+                              "['one', 'two']"),
+    "holonomic-with-velocities": (lambda: plane(constraints=[lc.Holonomic("c", x.diff(t) - y)]), "`c`"),
+    "nonholonomic-not-linear": (lambda: lc.compile(plane(constraints=[lc.Nonholonomic("c", x.diff(t) ** 2 - y)])),
+                                "`c`"),
+    "bad-constraint-name": (lambda: lc.Holonomic("a rod", x), "'a rod'"),
+    "repeated-constraint-names": (lambda: plane(constraints=[lc.Holonomic("c", x), lc.Holonomic("c", y)]), "['c']"),
+    "forces-wrong-length": (lambda: oscillator(forces=[1, 2]), "`forces` has 2 entries"),
+    "forces-unknown-coordinate": (lambda: oscillator(forces={y: 1}), "y(t)"),
+    "parameter-not-a-symbol": (lambda: oscillator(parameters=(m, k, 3)), "Parameter 3"),
+    "symbol-named-t": (lambda: oscillator(V=k * x**2 / 2 + sp.Symbol("t", real=True) * x),
+                       "symbol named t (Symbol('t', real=True))"),
+    "velocity-name-clash": (lambda: lc.compile(oscillator(V=sp.Symbol("x_dot") * x, defaults={})), "['x_dot']"),
+    "event-undeclared-symbol": (lambda: oscillator(events=[lc.Event("hit", x - sp.Symbol("wall"))], parameters=(m, k)),
+                                "wall appear in 'table_oscillator' (first in event hit)"),
+    "event-bad-direction": (lambda: lc.Event("hit", x, direction=2), "got 2"),
+    "default-unknown-parameter": (lambda: oscillator(defaults={"mass": 1.0}), "['mass']"),
+    "default-not-a-number": (lambda: oscillator(defaults={"m": "heavy", "k": 1.0}), "`m`"),
+    "default-initial-values": (lambda: oscillator(q0=("one",)), "`q0`"),
+    "not-a-system": (lambda: lc.compile("double_pendulum"), "got str"),
+    "inertia-not-positive": (_inertia, "inertia"),
+    # a run's inputs: Model.simulate
+    "unknown-parameter": (_simulate("pendulum", params={"mass": 1.0}), "['mass']"),
+    "missing-parameter": (lambda models: models["degenerate"].simulate((0, 1), q0=[1.0], params={}), "['m']"),
+    "non-finite-parameter": (_simulate("pendulum", params={"g": math.inf}), "`g` is inf"),
+    "parameter-not-a-number": (_simulate("pendulum", params={"l": [1.0, 2.0]}), "`l`"),
+    "params-not-a-mapping": (_simulate("pendulum", params=[1.0, 1.0, 9.81]), "`params`"),
+    "initial-wrong-length": (_simulate("pendulum", q0=[1.0, 2.0]), "`q0` has 2 value(s)"),
+    "initial-wrong-shape": (_simulate("pendulum", qd0=[[0.0]]), "`qd0` has shape (1, 1)"),
+    "initial-not-finite": (_simulate("pendulum", qd0=[math.nan]), "`qd0`"),
+    "initial-not-a-number": (_simulate("pendulum", q0=["up"]), "`q0`"),
+    "initial-missing": (lambda models: models["degenerate"].simulate((0, 1), params={"m": 1.0}), "`q0` is required"),
+    "inconsistent-initial-conditions": (_simulate("rod", q0=[1.0, 0.0, -1.0]), "constraint `rod` at position level"),
+    "singular-at-initial-state": (_simulate("degenerate", q0=[0.0], params={"m": 1.0}, method="rk4", dt=0.1), "x=0"),
+    "parameter-makes-M-singular": (_simulate("pendulum", params={"m": 0.0}), "['m'] are zero"),
+    "redundant-constraints-at-initial-state": (_simulate("walled", method="rk4", dt=0.01), "['wall']"),
+    "bad-time-span": (_simulate("pendulum", t_span=(1.0, 0.0)), "`t_span`"),
+    "bad-step": (_simulate("pendulum", method="rk4", dt=-0.1), "`dt`"),
+    "missing-step": (_simulate("pendulum", method="rk4"), "`dt`"),
+    "step-with-adaptive-method": (_simulate("pendulum", dt=0.1), "`dt`"),
+    "bad-tolerance": (_simulate("pendulum", atol=math.nan), "`atol`"),
+    "tolerance-out-of-range": (_simulate("pendulum", rtol=1e-16), "`rtol` = 1e-16"),
+    "bad-step-bounds": (_simulate("pendulum", first_step=0.0), "`first_step`"),
+    "bad-save-every": (_simulate("pendulum", save_every=1.5), "`save_every`"),
+    "bad-max-steps": (_simulate("pendulum", method="rk4", dt=1e-3, max_steps=10), "`max_steps`"),
+    "bad-t-eval": (_simulate("pendulum", t_eval=[0.5, 2.0]), "`t_eval`"),
+    "unknown-method": (_simulate("pendulum", method="euler"), "'euler'"),
+    "method-not-applicable": (_simulate("rod", method="verlet", dt=0.1), "`verlet`"),
+    "unknown-implicit-solver": (_simulate("pendulum", method="gauss2", dt=0.1, implicit_solver="broyden"), "broyden"),
+    "bad-record": (_simulate("pendulum", record="everything"), "`record`"),
+    "unknown-event": (_simulate("pendulum", events=["apex"]), "['apex']"),
+    "events-with-fixed-step": (_simulate("degenerate", q0=[1.0], params={"m": 1.0}, method="rk4", dt=0.1, events=True),
+                               "rk4"),
+    "bad-baumgarte": (_simulate("rod", baumgarte=(-1.0, 0.0)), "`baumgarte`"),
+    "bad-max-residual": (_simulate("rod", max_residual=-1.0), "`max_residual`"),
+    # a run that fails part-way (throw=True; the statuses are tested in test_integration_failures.py)
+    "non-finite-state": (_fail("failing", t_span=(0, 2), params={"a": 1.0}, method="rk4", dt=0.01), "non-finite"),
+    "singular-during-run": (_fail("failing", t_span=(0, 2), params={"c": 1.0}, method="rk4", dt=0.1), "singular"),
+    "step-size-underflow": (_fail("failing", t_span=(0, 2), params={"a": 1.0}), "step size became too small"),
+    "max-steps-reached": (_fail("pendulum", max_steps=3), "maximum number of steps"),
+    "implicit-not-converged": (_fail("failing", t_span=(0, 0.9), params={"a": 1.0}, method="gauss2", dt=0.3),
+                               "did not converge"),
+    "constraint-drift": (_fail("rod", rtol=1e-4, atol=1e-4, max_residual=1e-6), "max_residual = 1e-06"),
+    # the cache
+    "corrupt-cache-entry": (_cache_case("corrupt"), "sha256"),
+    "stale-cache-entry": (_cache_case("stale"), "another lagcomp or numba version"),
+    "unwritable-cache": (_cache_case("unwritable"), "cannot write its cache"),
+}
+
+
+def test_every_row_has_a_case_and_every_case_a_row():
+    rows = _rows()
+    assert len(rows) > 60
+    assert sorted(set(rows) - set(CASES)) == [] and sorted(set(CASES) - set(rows)) == []
+
+
+@pytest.mark.parametrize("case", sorted(_rows()))
+def test_row(case, models, tmp_path):
+    expected = _expected(_rows()[case])
+    trigger, culprit = CASES[case]
+    arguments = {"models": models, "tmp_path": tmp_path}
+    names = trigger.__code__.co_varnames[: trigger.__code__.co_argcount]
+    call = lambda: trigger(*(arguments[name] for name in names))  # noqa: E731
+    if issubclass(expected, Warning):
+        with pytest.warns(expected) as record:
+            call()
+        messages = [str(w.message) for w in record if issubclass(w.category, expected)]
+        assert any(culprit in message for message in messages), messages
+        return
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", lc.CacheWarning)
+        with pytest.raises(expected) as info:
+            call()
+    assert type(info.value).__name__ == expected.__name__ or expected is lc.IntegrationError
+    assert culprit in str(info.value), str(info.value)
+    assert not isinstance(info.value, (sp.SympifyError,)) and type(info.value).__module__.startswith("lagcomp")
