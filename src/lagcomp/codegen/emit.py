@@ -5,7 +5,8 @@ parameter order and the lagcomp version; the kernels; the constraint hooks
 the drivers call (`project`, `constraint_residual`); `observables`, which
 evaluates the energies along a saved trajectory; then templates appended
 as text, the linear solvers (`templates/linear_solvers.py`), for unconstrained
-systems the Hamiltonian and canonical Jacobian (`templates/hamiltonian.py`), and the
+systems the Hamiltonian and canonical Jacobian (`templates/hamiltonian.py`) and the
+Lyapunov-exponent loops (`templates/lyapunov.py`), and the
 integration drivers (`templates/drivers.py`, `templates/symplectic.py`), so that they call the kernels
 as module globals — that is what lets numba cache them across processes
 (DESIGN.md).
@@ -296,7 +297,7 @@ def emit(ir: ModuleIR) -> str:
     parts += [_kernel_source(k) for k in ir.kernels]
     parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
-    hamiltonian = () if ir.k else ("hamiltonian",)  # needs `velocities`, which constrained modules lack
+    hamiltonian = () if ir.k else ("hamiltonian", "lyapunov")  # need `velocities`, which constrained modules lack
     lanes = ("lanes",) if any(k.lanes for k in ir.kernels) else ()
     for name in ("linear_solvers", *hamiltonian, "drivers", "symplectic", *lanes):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")

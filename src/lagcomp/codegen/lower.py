@@ -17,7 +17,7 @@ from dataclasses import replace
 import sympy as sp
 
 from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR
-from lagcomp.mechanics.lagrange import EOM, to_plain
+from lagcomp.mechanics.lagrange import EOM, rest_partials
 from lagcomp.model.system import t
 
 #: Names the emitted module uses itself; user names equal to them get a trailing underscore.
@@ -239,24 +239,13 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 
 def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
-    """∂F/∂q and ∂F/∂q̇ at rest (q̇ = 0): what equilibria and small oscillations need (`lagcomp.analysis`).
+    """∂F/∂q and ∂F/∂q̇ at rest (q̇ = 0), for equilibria and small oscillations (`lagcomp.analysis`).
 
-    ∂F/∂q is the Jacobian of F(q, 0, t), which is small (every q̇ term drops
-    out before differentiating).  ∂F/∂q̇ is not taken from F itself: with
-    L = ½ q̇ᵀM q̇ + bᵀq̇ + L₀ and the non-conservative forces Q_d = Q − ∂D/∂q̇,
-    the part of F linear in q̇ is (B_qᵀ − B_q − ∂M/∂t) q̇ + (Q_d's), B_q = ∂b/∂q,
-    so its coefficient needs only M, b and Q_d.  Differentiating the full F
-    instead costs ~10 s of sympy for a 10-link chain (0.2 s this way).
+    Built from `rest_partials`, which avoids differentiating the full F (about
+    10 s of sympy for a 10-link chain, 0.2 s its way).
     """
-    n, system = eom.n, eom.system
-    at_rest = {v: 0 for v in eom.qd}
-    plain = lambda expr: to_plain(sp.sympify(expr), system, eom.q, eom.qd)  # noqa: E731
-    D = plain(system.dissipation)
-    Q_d = sp.Matrix([plain(Q) - D.diff(v) for Q, v in zip(system.forces, eom.qd)])
-    B_q = eom.momentum_offset.jacobian(eom.q)
-    blocks = (eom.F.xreplace(at_rest).jacobian(eom.q),
-              B_q.T - B_q - eom.M.diff(t) + Q_d.jacobian(eom.qd).xreplace(at_rest))
-    blocks = [block.replace(sp.DiracDelta, lambda *args: sp.S.Zero) for block in blocks]
+    n = eom.n
+    blocks = [block.replace(sp.DiracDelta, lambda *args: sp.S.Zero) for block in rest_partials(eom)]
     return _kernel(
         "rest_partials",
         "At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,\n"

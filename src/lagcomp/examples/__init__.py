@@ -28,6 +28,7 @@ through the `EXAMPLES` registry:
 ``compton_disc``           disc on a turning carousel at latitude λ, axis swung over (moving frame)
 ``driven_pendulum_support``  ``driven_pendulum`` written in the support's frame (driving inertial force)
 ``symmetric_top``          heavy symmetric top in Euler angles (rigid body, gravity)
+``wheel_jack``             crank, screw and lozenge holding a load: statics by virtual work
 =========================  ========================================================
 
 The factories live in `unconstrained`, `constrained` and `bodies` (systems

@@ -14,9 +14,11 @@ from __future__ import annotations
 import sympy as sp
 from sympy.physics.vector import ReferenceFrame
 
-from lagcomp.model import Gravity, MovingFrame, Particle, RigidBody, System, Torque, coordinates, rotated, t
+from lagcomp.model import Force, Gravity, MovingFrame, Particle, RigidBody, System, Torque, coordinates, rotated, t
 
-__all__ = ["turn_indicator", "compton_disc", "driven_pendulum_support", "symmetric_top", "BODIES_EXAMPLES"]
+__all__ = [
+    "turn_indicator", "compton_disc", "driven_pendulum_support", "symmetric_top", "wheel_jack", "BODIES_EXAMPLES",
+]
 
 
 def _params(names: str) -> tuple[sp.Symbol, ...]:
@@ -171,4 +173,50 @@ def symmetric_top() -> System:
     )
 
 
-BODIES_EXAMPLES = {f.__name__: f for f in (turn_indicator, compton_disc, driven_pendulum_support, symmetric_top)}
+def wheel_jack() -> System:
+    r"""Wheel jack: a crank turns a screw that closes a lozenge, lifting a load (a statics problem).
+
+    Geometry (plane x horizontal, y up).  The lozenge ABCD has side l; C rests
+    on the ground at the origin, the load sits on A = (0, 2 l sin θ), and B, D
+    = (±l cos θ, l sin θ) are joined by the threaded stem, horizontal, of
+    length DB = 2 l cos θ.  Coordinate θ: the angle between a side and the
+    stem.  The crank (arm a) turns the stem about its axis by α; a screw of
+    pitch h shortens DB by h per turn, so up to a constant
+        α(θ) = −4π l cos θ / h,     α′(θ) = 4π l sin θ / h.
+    Loads: the weight P on A, Force (0, −P) at A; the effort F pushing the
+    crank handle, the Torque F a about the stem axis on the crank.
+
+    Virtual work for δθ: δW = F a δα − P δy_A = (4π a l F sin θ / h − 2 l P cos θ) δθ,
+    so the generalized force is Q_θ = 2 l (2π a F sin θ / h − P cos θ), and the
+    jack holds the load (d'Alembert: Q_θ = 0) when
+        P / F = 2π a tan θ / h
+    (a = 20 cm, h = 2 mm, θ = 30°: P/F ≈ 363).  The balance is unstable:
+    ∂Q_θ/∂θ > 0, a frictionless jack lifts under any excess effort and runs
+    down under any deficit.  The only inertia is the crank and screw's moment J
+    about the stem (x), T = ½ J α̇² = ½ J (4π l sin θ / h)² θ̇², which gives the
+    mechanism a motion and plays no part in the balance.  Defaults: a 4 kN load,
+    12 N of effort (above the 11.0 N that balance at 30°): the jack lifts slowly.
+    """
+    (theta,) = coordinates("theta")
+    l, h, a, P, F, J = _params("l h a P F J")
+    N = ReferenceFrame("N")
+    alpha = -4 * sp.pi * l * sp.cos(theta) / h
+    crank = rotated(N, (alpha, N.x), name="K")
+    screw = RigidBody(0, (0, 0, 0), (J, J / 2, J / 2), crank, name="crank_and_screw")  # a disc-like crank
+    return System(
+        coordinates=(theta,),
+        bodies=(screw,),
+        loads=(Force((0, -P, 0), (0, 2 * l * sp.sin(theta), 0), name="load"),
+               Torque((F * a, 0, 0), crank, name="effort")),
+        frame=N,
+        parameters=(l, h, a, P, F, J),
+        name="wheel_jack",
+        description="Wheel jack: a crank and screw close a lozenge under a load (statics by virtual work).",
+        defaults={"l": 0.2, "h": 0.002, "a": 0.2, "P": 4000.0, "F": 12.0, "J": 1e-3},
+        q0=(float(sp.pi / 6),), qd0=(0.0,), t_end=1.0,
+    )
+
+
+BODIES_EXAMPLES = {
+    f.__name__: f for f in (turn_indicator, compton_disc, driven_pendulum_support, symmetric_top, wheel_jack)
+}

@@ -1,0 +1,85 @@
+"""Shared plumbing of the analysis modules: argument checks and direct kernel calls."""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from lagcomp.errors import InitialConditionError, ModelError
+
+
+def unconstrained(model, what: str) -> None:
+    """Refuse a constrained model for `what` (its equations need the multipliers as unknowns)."""
+    if model.k:
+        raise ModelError(
+            f"{what} needs an unconstrained system: {model.name!r} has constraints {list(model.constraints)}. "
+            "Eliminate them with independent coordinates (the reference chapter's way) and compile that system."
+        )
+
+
+def explicit_time(*exprs, system) -> bool:
+    """Whether any of `exprs` depends on t other than through the coordinates q(t) and velocities q̇(t)."""
+    from lagcomp.model.system import t
+
+    plain = {}
+    for i, q in enumerate(system.coordinates):
+        plain[q.diff(t)] = sp.Dummy(f"v{i}")
+    for i, q in enumerate(system.coordinates):
+        plain[q] = sp.Dummy(f"q{i}")
+    return any(sp.sympify(e).xreplace(plain).has(t) for e in exprs)
+
+
+def coordinates_vector(model, q, what: str = "q") -> np.ndarray:
+    """`q` as a float vector of shape (n,), checked."""
+    q = np.atleast_1d(np.asarray(q, dtype=float)).ravel()
+    if q.shape != (model.n,):
+        raise InitialConditionError(
+            f"`{what}` has {q.size} value(s); {model.name!r} has {model.n} coordinates {list(model.coordinates)}."
+        )
+    if not np.all(np.isfinite(q)):
+        raise InitialConditionError(f"`{what}` = {q.tolist()} is not finite.")
+    return q
+
+
+class RestForces:
+    """F(q, 0, t) and its partials at rest for one parameter vector, straight from the kernels.
+
+    Holds the parameter vector and work arrays, so that root finders can call
+    it thousands of times without re-validating the parameters each time.
+    """
+
+    def __init__(self, model, params: dict | None, t: float):
+        self.model, self.t = model, float(t)
+        self.p = model.parameter_vector(params)
+        self.params = dict(zip(model.parameters, self.p.tolist()))
+        self._y = np.zeros(2 * model.n)
+        self._blocks = np.empty((2, model.n, model.n))
+
+    def _state(self, q) -> np.ndarray:
+        self._y[: self.model.n] = q
+        return self._y
+
+    def force(self, q, t: float | None = None) -> np.ndarray:
+        """F(q, 0, t), shape (n,)."""
+        out = np.empty(self.model.n)
+        self.model.kernels.forcing(self.t if t is None else float(t), self._state(q), self.p, out)
+        return out
+
+    def partials(self, q, t: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(∂F/∂q, ∂F/∂q̇) at (q, 0, t), each (n, n)."""
+        self.model.kernels.rest_partials(self.t if t is None else float(t), self._state(q), self.p, self._blocks)
+        return self._blocks[0].copy(), self._blocks[1].copy()
+
+    def mass_matrix(self, q) -> np.ndarray:
+        out = np.empty((self.model.n, self.model.n))
+        self.model.kernels.mass_matrix(self.t, self._state(q), self.p, out)
+        return out
+
+    def force_scale(self, q) -> float:
+        """A size for F near q: the largest |∂F/∂q| times the coordinates' size (at least 1e-300).
+
+        Residuals are judged against it, so that "F = 0" means the same for a
+        bead of 0.1 kg and a jack lifting 4000 N.
+        """
+        stiffness, _ = self.partials(q)
+        return max(float(np.max(np.abs(stiffness))) * max(1.0, float(np.max(np.abs(q)))), 1e-300)

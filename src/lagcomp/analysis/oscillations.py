@@ -1,0 +1,249 @@
+r"""Small oscillations about an equilibrium: linearization, normal modes, stability.
+
+Near an equilibrium q* (F(q*, 0, t) = 0, so q̈ = 0 there and the variation of
+M multiplies a vanishing q̈), M q̈ = F(q, q̇, t) becomes, for q = q* + δq,
+
+    M₀ δq̈ + (G₀ + D₀) δq̇ + K₀ δq = 0,
+
+    M₀ = M(q*, t),   K₀ = −∂F/∂q,   C₀ = −∂F/∂q̇ = G₀ + D₀   at (q*, 0, t),
+
+G₀ = (C₀ − C₀ᵀ)/2 the gyroscopic (skew) part — Coriolis forces of a rotating
+frame or an imposed rotation — and D₀ = (C₀ + C₀ᵀ)/2 the damping.  For a
+conservative system K₀ is the Hessian of the (effective) potential and is
+symmetric; a non-symmetric K₀ means circulatory forces.
+
+Without G₀ and D₀ and with K₀ symmetric, δq = v cos(ω t) gives the
+generalized symmetric eigenproblem K₀ v = ω² M₀ v (`scipy.linalg.eigh`): real
+ω² whose signs decide stability, M₀-orthonormal mode shapes.  Otherwise
+δq = v e^{λt} gives the quadratic eigenproblem (λ² M₀ + λ C₀ + K₀) v = 0,
+solved through its first-order companion form; frequencies are |Im λ|, and
+stability needs every Re λ ≤ 0 (gyroscopic stabilization is only ever
+linear, "marginal", stability: Re λ = 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import linalg
+
+from lagcomp.analysis._common import RestForces, coordinates_vector, unconstrained
+
+#: Relative size below which G₀, D₀, asymmetry and Re λ count as zero.
+ZERO = 1e-10
+
+
+@dataclass(frozen=True)
+class Linearization:
+    """M₀ δq̈ + (G₀ + D₀) δq̇ + K₀ δq = 0 about the configuration `q` (module docstring).
+
+    Attributes
+    ----------
+    q : ndarray, shape (n,)
+    t : float
+    M, K, G, D : ndarray, shape (n, n)
+        Mass, stiffness, gyroscopic and damping matrices at (q, 0, t).
+    residual : float
+        max |F(q, 0, t)|: the linearization is about an equilibrium only when it is ~0.
+    coordinates : tuple of str
+    params : dict
+    """
+
+    q: np.ndarray
+    t: float
+    M: np.ndarray
+    K: np.ndarray
+    G: np.ndarray
+    D: np.ndarray
+    residual: float
+    coordinates: tuple
+    params: dict = field(default_factory=dict)
+
+    @property
+    def C(self) -> np.ndarray:
+        """The whole velocity matrix G + D = −∂F/∂q̇."""
+        return self.G + self.D
+
+    def _small(self, a: np.ndarray) -> bool:
+        scale = max(float(np.max(np.abs(self.K))), float(np.max(np.abs(self.M))), 1e-300)
+        return float(np.max(np.abs(a))) <= ZERO * scale
+
+    def __repr__(self) -> str:
+        where = ", ".join(f"{c}={v:.8g}" for c, v in zip(self.coordinates, self.q))
+        kind = "conservative" if self.conservative else "with gyroscopic/damping/circulatory terms"
+        return f"Linearization({where}, t={self.t:g}, {kind}, residual={self.residual:.2g})"
+
+    @property
+    def conservative(self) -> bool:
+        """No gyroscopic or damping terms and a symmetric stiffness: the eigh case."""
+        return self._small(self.G) and self._small(self.D) and self._small(self.K - self.K.T)
+
+
+@dataclass(frozen=True)
+class Modes:
+    """Normal modes of a `Linearization`.
+
+    Attributes
+    ----------
+    frequencies : ndarray, shape (m,)
+        Angular frequencies ω of the oscillating modes, ascending.
+    shapes : ndarray, shape (n, m)
+        Their mode shapes (columns): real and M₀-orthonormal in the
+        conservative case, complex otherwise (the v of λ = iω).
+    omega2 : ndarray, shape (n,), or None
+        Conservative case: all eigenvalues ω² of K₀ v = ω² M₀ v, ascending
+        (negative: exponential divergence at rate √−ω²).
+    eigenvalues : ndarray of complex, shape (2n,)
+        λ of (λ² M₀ + λ C₀ + K₀) v = 0, by decreasing real part.
+    growth_rate : float
+        Largest Re λ.
+    stability : str
+        "asymptotically stable" (every Re λ < 0), "stable" (conservative,
+        every ω² > 0), "marginal" (some Re λ = 0 or ω² = 0, others stable:
+        linear theory cannot decide), or "unstable" (some Re λ > 0).
+    linearization : Linearization
+    """
+
+    frequencies: np.ndarray
+    shapes: np.ndarray
+    omega2: np.ndarray | None
+    eigenvalues: np.ndarray
+    growth_rate: float
+    stability: str
+    linearization: Linearization
+
+    @property
+    def stable(self) -> bool:
+        """Linearly stable: no growing mode ("stable", "asymptotically stable" or "marginal" with Re λ = 0)."""
+        return self.stability != "unstable"
+
+    def __repr__(self) -> str:
+        return (f"Modes({self.stability}, frequencies={np.array2string(self.frequencies, precision=6)}, "
+                f"growth_rate={self.growth_rate:.3g})")
+
+
+def linearize(model, q, params: dict | None = None, *, t: float = 0.0) -> Linearization:
+    """M₀, K₀, G₀, D₀ about the configuration `q` (an equilibrium, e.g. `find_equilibrium(...).q`)."""
+    unconstrained(model, "linearize")
+    q = coordinates_vector(model, q)
+    rest = RestForces(model, params, t)
+    F_q, F_v = rest.partials(q)
+    C = -F_v
+    return Linearization(
+        q=q, t=float(t), M=rest.mass_matrix(q), K=-F_q, G=(C - C.T) / 2, D=(C + C.T) / 2,
+        residual=float(np.max(np.abs(rest.force(q)))), coordinates=model.coordinates, params=rest.params,
+    )
+
+
+def normal_modes(model_or_linearization, q=None, params: dict | None = None, *, t: float = 0.0) -> Modes:
+    """Normal-mode frequencies and shapes and the stability verdict at an equilibrium.
+
+    Pass a `Linearization`, or a model and the equilibrium coordinates `q`
+    (with `params`, `t`).  See the module docstring for the two cases.
+    """
+    lin = model_or_linearization
+    if not isinstance(lin, Linearization):
+        lin = linearize(lin, q, params, t=t)
+    quadratic = _quadratic_eigenvalues(lin)
+    growth = float(np.max(quadratic.real))
+    scale = _rate_scale(lin)
+    if lin.conservative:
+        K = (lin.K + lin.K.T) / 2
+        omega2, vectors = linalg.eigh(K, lin.M)
+        tiny = np.abs(omega2) <= ZERO * max(float(np.max(np.abs(omega2))), 1e-300)
+        oscillating = (omega2 > 0) & ~tiny
+        if np.any((omega2 < 0) & ~tiny):
+            stability = "unstable"
+        elif np.any(tiny):
+            stability = "marginal"
+        else:
+            stability = "stable"
+        return Modes(frequencies=np.sqrt(omega2[oscillating]), shapes=vectors[:, oscillating], omega2=omega2,
+                     eigenvalues=quadratic, growth_rate=growth, stability=stability, linearization=lin)
+    if growth > ZERO * scale:
+        stability = "unstable"
+    elif growth < -ZERO * scale:
+        stability = "asymptotically stable"
+    else:
+        stability = "marginal"
+    # one eigenvalue of each conjugate pair (Im λ > 0), ascending in frequency
+    upper = np.flatnonzero(quadratic.imag > ZERO * scale)
+    order = upper[np.argsort(quadratic.imag[upper])]
+    vectors = _quadratic_vectors(lin, quadratic[order])
+    return Modes(frequencies=quadratic.imag[order], shapes=vectors, omega2=None, eigenvalues=quadratic,
+                 growth_rate=growth, stability=stability, linearization=lin)
+
+
+def _rate_scale(lin: Linearization) -> float:
+    """A rate (1/time) for judging Re λ: √(|K|/|M|) + |C|/|M|."""
+    m = max(float(np.max(np.abs(lin.M))), 1e-300)
+    return float(np.sqrt(np.max(np.abs(lin.K)) / m) + np.max(np.abs(lin.C)) / m) or 1.0
+
+
+def _quadratic_eigenvalues(lin: Linearization) -> np.ndarray:
+    """λ of (λ² M + λ C + K) v = 0 from the companion form [[0, I], [−M⁻¹K, −M⁻¹C]], by decreasing Re λ."""
+    n = lin.M.shape[0]
+    MK = linalg.solve(lin.M, lin.K, assume_a="sym")
+    MC = linalg.solve(lin.M, lin.C, assume_a="sym")
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-MK, -MC]])
+    values = linalg.eigvals(A)
+    return values[np.lexsort((-values.imag, -values.real))]
+
+
+def _quadratic_vectors(lin: Linearization, values: np.ndarray) -> np.ndarray:
+    """Null vectors of λ² M + λ C + K for each λ (smallest singular vector), unit 2-norm."""
+    shapes = np.empty((lin.M.shape[0], values.size), dtype=complex)
+    for j, lam in enumerate(values):
+        _, _, vh = linalg.svd(lam**2 * lin.M + lam * lin.C + lin.K)
+        shapes[:, j] = vh[-1].conj()
+    return shapes
+
+
+# -- symbolic --------------------------------------------------------------------------
+
+
+def linearize_symbolic(system, q, *, subs: dict | None = None, eom=None, simplify: bool = True) -> dict:
+    """M₀, K₀, G₀, D₀ as sympy matrices at the configuration `q`, and the frequency equation.
+
+    Parameters
+    ----------
+    system : System
+    q : sequence of expressions, or dict
+        The equilibrium: one sympy expression per coordinate (in the
+        parameters, e.g. ``acos(-g/(R*Omega**2))``), or a mapping from
+        coordinate names to them.
+    subs : dict, optional
+        Parameter values (by name or symbol) to substitute first, e.g.
+        ``{"epsilon": 0}`` to make an imposed motion steady.
+
+    Returns
+    -------
+    dict
+        ``M``, ``K``, ``G``, ``D`` (sympy Matrices), ``omega2`` (the symbol
+        ω² of the frequency equation), ``characteristic`` (det(K − ω² M), a
+        polynomial in ω², meaningful when G = D = 0) and ``omega2_roots``
+        (its roots, for n ≤ 2; the general quadratic eigenproblem has no
+        closed form to offer).
+    """
+    import sympy as sp
+
+    from lagcomp.mechanics.lagrange import derive, rest_partials
+
+    eom = derive(system) if eom is None else eom
+    values = [q[name] for name in system.coordinate_names] if isinstance(q, dict) else list(q)
+    by_name = {s.name: s for s in eom.parameters}
+    given = {(by_name[k] if isinstance(k, str) else k): sp.sympify(v) for k, v in (subs or {}).items()}
+    at = {**given, **{qi: sp.sympify(v).xreplace(given) for qi, v in zip(eom.q, values)}}
+    tidy = sp.simplify if simplify else (lambda e: e)
+    F_q, F_v = (m.xreplace(at).doit() for m in rest_partials(eom))
+    C = -F_v
+    result = {
+        "M": eom.M.xreplace(at).applyfunc(tidy), "K": (-F_q).applyfunc(tidy),
+        "G": ((C - C.T) / 2).applyfunc(tidy), "D": ((C + C.T) / 2).applyfunc(tidy),
+    }
+    w2 = sp.Symbol("omega2")
+    result["omega2"] = w2
+    result["characteristic"] = sp.expand((result["K"] - w2 * result["M"]).det())
+    result["omega2_roots"] = [tidy(r) for r in sp.solve(result["characteristic"], w2)] if eom.n <= 2 else None
+    return result
