@@ -2,7 +2,7 @@
 
     lagcomp list
     lagcomp show double_pendulum
-    lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz
+    lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz --plot run.png
     lagcomp generate generated/          (add --check to only report stale files)
 """
 
@@ -130,6 +130,14 @@ def cmd_run(args) -> int:
     if args.out:
         sol.save_npz(args.out)
         print(f"saved       {args.out} ({len(sol.t)} points)")
+    if args.plot:
+        from lagcomp.plots import plot_run
+
+        try:
+            plot_run(sol, title=f"{system.name}: {sol.method}, {len(sol.t)} points").savefig(args.plot, dpi=120)
+        except ImportError as err:  # matplotlib is an optional extra
+            raise LagcompError(str(err)) from err
+        print(f"plotted     {args.plot} (coordinates and energy error vs time)")
     return 0 if sol.success else 1
 
 
@@ -171,6 +179,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
     run.add_argument("--qd0", type=float, nargs="+", help="initial velocities")
     run.add_argument("--out", help="write the solution to this .npz file")
+    run.add_argument("--plot", metavar="PNG", help="draw coordinates and energy error vs time to this image (needs matplotlib)")
     run.add_argument("--summary", action="store_true",
                      help="keep only the first and last states and running reductions (O(1) memory for long runs)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")

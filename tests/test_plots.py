@@ -1,0 +1,86 @@
+"""Every plot function renders a PNG headless (Agg), and `lagcomp run --plot` writes one.
+
+What the pictures show was checked by eye once (docs/figures/, drawn by
+docs/figures/make_figures.py); these tests check that each renders from the
+objects it documents, with sensible axes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib")
+
+from lagcomp import analysis as an  # noqa: E402
+from lagcomp import plots  # noqa: E402
+from lagcomp.cli import main  # noqa: E402
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def _render(fig, path) -> None:
+    """Save through the figure's own canvas: no pyplot, no display (Agg for PNG)."""
+    fig.savefig(path, dpi=60)
+    data = path.read_bytes()
+    assert data.startswith(PNG) and len(data) > 5000
+
+
+@pytest.fixture(scope="module")
+def pendulum_run(compiled):
+    return compiled("simple_pendulum").simulate((0, 5), rtol=1e-10, atol=1e-10)
+
+
+def test_time_plots(pendulum_run, tmp_path):
+    fig = plots.plot_coordinates(pendulum_run, velocities=True)
+    assert len(fig.axes) == 2 and fig.axes[-1].get_xlabel() == "t"
+    _render(fig, tmp_path / "coordinates.png")
+    fig = plots.plot_energy_error(pendulum_run)
+    assert fig.axes[0].get_yscale() == "log"
+    _render(fig, tmp_path / "energy.png")
+    _render(plots.plot_run(pendulum_run), tmp_path / "run.png")
+
+
+def test_phase_portrait_plots(compiled, pendulum_run, tmp_path):
+    model = compiled("unbalanced_cylinder")
+    portrait = an.phase_portrait(model, [0.9, 1.1, 1.5], (-math.pi, math.pi), periodic=True, samples=201)
+    fig = plots.plot_phase_portrait(portrait)
+    assert fig.axes[0].get_xlabel() == "theta"
+    _render(fig, tmp_path / "portrait.png")
+    _render(plots.plot_phase_portrait(pendulum_run), tmp_path / "trajectory.png")
+
+
+def test_poincare_and_sweep_plots(compiled, tmp_path):
+    hh = compiled("henon_heiles")
+    start = np.array([[0.0, y, 0.0, 0.0] for y in (-0.1, 0.1, 0.3)])
+    start, valid = an.on_energy_surface(hh, 1 / 8, start, "x_dot")
+    section = an.poincare_section(hh, (0, 300), start, max_points=100, progress=False)
+    assert np.all(section.count > 10) and np.all(section.status == 0)
+    # on the section x = 0 with ẋ > 0, and on the energy surface
+    hits = section.y[0, : section.count[0]]
+    np.testing.assert_allclose(hits[:, 0], 0.0, atol=1e-9)
+    assert np.all(hits[:, 2] > 0)
+    assert [len(p) for p in section.points("y", "y_dot")] == np.minimum(section.count, 100).tolist()
+    _render(plots.plot_poincare(section, "y", "y_dot"), tmp_path / "section.png")
+    sweep = hh.sweep((0, 20), {"y": np.linspace(-0.2, 0.2, 4), "y_dot": np.linspace(-0.1, 0.1, 3)},
+                     qd0=[0.3, 0.0], output="energy", progress=False)
+    fig = plots.plot_sweep(sweep)
+    assert fig.axes[0].get_xlabel() == "y"
+    _render(fig, tmp_path / "sweep.png")
+    _render(plots.plot_sweep(sweep, sweep.final[..., 1], cmap="coolwarm", symmetric=True, label="y(20)"),
+            tmp_path / "sweep_final.png")
+
+
+def test_lyapunov_plot(compiled, tmp_path):
+    hh = compiled("henon_heiles")
+    result = an.lyapunov_exponents(hh, (0, 100), dt=0.05, progress=False)
+    _render(plots.plot_lyapunov(result), tmp_path / "lyapunov.png")
+
+
+def test_cli_run_writes_a_plot(tmp_path, cache_dir, capsys):
+    png = tmp_path / "run.png"
+    assert main(["--cache-dir", str(cache_dir), "run", "sling", "--t-end", "1", "--quiet", "--plot", str(png)]) == 0
+    assert "plotted" in capsys.readouterr().out
+    assert png.read_bytes().startswith(PNG)
