@@ -174,6 +174,7 @@ CASES = {
     "initial-wrong-shape": (_simulate("pendulum", qd0=[[0.0]]), "`qd0` has shape (1, 1)"),
     "initial-not-finite": (_simulate("pendulum", qd0=[math.nan]), "`qd0`"),
     "initial-not-a-number": (_simulate("pendulum", q0=["up"]), "`q0`"),
+    "kernel-state-wrong-size": (lambda models: models["pendulum"].rhs(0.0, [1.0, 0.0, 0.0]), "`y` must have shape (2,)"),
     "initial-missing": (lambda models: models["degenerate"].simulate((0, 1), params={"m": 1.0}), "`q0` is required"),
     "inconsistent-initial-conditions": (_simulate("rod", q0=[1.0, 0.0, -1.0]), "constraint `rod` at position level"),
     "singular-at-initial-state": (_simulate("degenerate", q0=[0.0], params={"m": 1.0}, method="rk4", dt=0.1), "x=0"),

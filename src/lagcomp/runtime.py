@@ -228,7 +228,7 @@ class Model:
 
     def rhs(self, t: float, y, params: dict | None = None) -> np.ndarray:
         """dy/dt at one state y = (q, q̇); raises SingularMassMatrixError where M is singular."""
-        y = np.ascontiguousarray(y, dtype=float)
+        y = self._vector(y, 2 * self.n, "y")
         out = np.empty(2 * self.n)
         status = self.kernels.rhs(float(t), y, self.parameter_vector(params), out)
         if status:
@@ -245,7 +245,7 @@ class Model:
 
     def reactions(self, t: float, y, params: dict | None = None) -> dict[str, float]:
         """The multipliers λ at one state, by constraint name (generalized reaction forces)."""
-        y = np.ascontiguousarray(y, dtype=float)
+        y = self._vector(y, 2 * self.n, "y")
         out = np.empty(self.k)
         status = self.kernels.reactions(float(t), y, self.parameter_vector(params), out)
         if status:
@@ -266,15 +266,28 @@ class Model:
 
     def constraint_residuals(self, t: float, y, params: dict | None = None) -> dict[str, float]:
         """Residuals at one state by name: ``"<name>"`` for Φ (holonomic) and ``"<name>_dot"`` for Λ q̇ + b."""
-        y = np.ascontiguousarray(y, dtype=float)
+        y = self._vector(y, 2 * self.n, "y")
         out = np.empty(len(self.residual_labels))
         self.kernels.constraint_residuals(float(t), y, self.parameter_vector(params), out)
         names = [c if level == "position" else f"{c}_dot" for c, level in self.residual_labels]
         return dict(zip(names, out.tolist()))
 
+    def _vector(self, values, size: int, what: str) -> np.ndarray:
+        """`values` as a contiguous float vector of shape (size,): the kernels do not check bounds."""
+        try:
+            values = np.ascontiguousarray(values, dtype=float).ravel()
+        except (TypeError, ValueError) as err:
+            raise InitialConditionError(f"`{what}` must be {size} numbers for {self.name!r}, got {values!r}.") from err
+        if values.shape != (size,):
+            raise InitialConditionError(
+                f"`{what}` must have shape ({size},) for {self.name!r} (coordinates {list(self.coordinates)}), "
+                f"got shape {values.shape}."
+            )
+        return values
+
     def _state(self, q, qd):
         qd = np.zeros(self.n) if qd is None else qd
-        return np.concatenate([np.asarray(q, dtype=float).ravel(), np.asarray(qd, dtype=float).ravel()])
+        return np.concatenate([self._vector(q, self.n, "q"), self._vector(qd, self.n, "qd")])
 
     def mass_matrix(self, q, t: float = 0.0, params: dict | None = None) -> np.ndarray:
         """M(q, t), shape (n, n)."""
