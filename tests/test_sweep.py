@@ -238,3 +238,8 @@ def test_batched_dop853_takes_the_scalar_steps(compiled, double_pendulum):
     np.testing.assert_allclose(lanes.final, scalar.final, rtol=0, atol=1e-8)
     with pytest.raises(OptionError, match="dense rows or events"):
         double_pendulum.sweep((0, 1), small, t_eval=[0.5, 1.0], output="dense", batched=True)
+
+
+def test_sweep_checks_tolerances_like_simulate(double_pendulum):
+    with pytest.raises(OptionError, match="rtol"):
+        double_pendulum.sweep((0, 1), {"theta1": [0.1]}, rtol=1e-17)

@@ -93,15 +93,21 @@ def _event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     return directions, actions
 
 
+def tolerances(rtol, atol) -> tuple[float, float]:
+    """`rtol` and `atol` checked: positive, finite, and rtol in [100 eps, 1) (float64 cannot do better)."""
+    rtol, atol = _positive(rtol, "rtol"), _positive(atol, "atol")
+    if not RTOL_MIN <= rtol < 1:
+        raise OptionError(f"`rtol` = {rtol:g} is out of range: it must be at least {RTOL_MIN:.2g} (100 machine "
+                          "epsilons; float64 cannot do better) and below 1.")
+    return rtol, atol
+
+
 def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
     """The chunk call of an adaptive method, and the rows its output will need."""
     t0, t1 = clock[0], options["t1"]
     if options["dt"] is not None:
         raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own (use `first_step`).")
-    rtol, atol = _positive(options["rtol"], "rtol"), _positive(options["atol"], "atol")
-    if not RTOL_MIN <= rtol < 1:
-        raise OptionError(f"`rtol` = {rtol:g} is out of range: it must be at least {RTOL_MIN:.2g} (100 machine "
-                          "epsilons; float64 cannot do better) and below 1.")
+    rtol, atol = tolerances(options["rtol"], options["atol"])
     if options["first_step"] is not None:
         clock[1] = _positive(options["first_step"], "first_step")
     max_step = options["max_step"]

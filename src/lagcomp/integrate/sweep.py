@@ -33,6 +33,7 @@ from lagcomp.integrate.simulate import (
     _t_eval,
     _time_span,
     check_method,
+    tolerances,
 )
 
 #: Outputs a sweep can keep besides the final state and status.
@@ -250,7 +251,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if m.adaptive:
         if dt is not None:
             raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own.")
-        rtol, atol = _positive(rtol, "rtol"), _positive(atol, "atol")
+        rtol, atol = tolerances(rtol, atol)
         max_step = _positive(max_step, "max_step") if max_step != math.inf else math.inf
         t_eval = _t_eval(t_eval, t0, t1)
         if "dense" in output and t_eval is None:
