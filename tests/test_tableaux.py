@@ -77,12 +77,17 @@ def test_dense_output_shapes_and_continuity():
     np.testing.assert_allclose(DOP853.A_EXTRA.sum(axis=1), DOP853.C_EXTRA, atol=1e-14)
 
 
-def test_coefficients_come_from_scipy():
-    np.testing.assert_array_equal(DOPRI5.A[:, :5], scipy.integrate.RK45.A)
+def test_coefficients_are_scipys_bit_for_bit():
+    """The copied Dormand-Prince data equal scipy's class attributes exactly (and scipy's orders)."""
+    rk45, dop853 = scipy.integrate.RK45, scipy.integrate.DOP853
+    np.testing.assert_array_equal(DOPRI5.A[:, :5], rk45.A)
     assert np.all(DOPRI5.A[:, 5] == 0.0)
-    np.testing.assert_array_equal(DOPRI5.E, scipy.integrate.RK45.E)
-    np.testing.assert_array_equal(DOP853.E5, scipy.integrate.DOP853.E5)
-    np.testing.assert_array_equal(DOP853.D, scipy.integrate.DOP853.D)
+    for field in ("B", "C", "E", "P"):
+        np.testing.assert_array_equal(getattr(DOPRI5, field), getattr(rk45, field), err_msg=field)
+    for field in ("A", "B", "C", "E3", "E5", "D", "A_EXTRA", "C_EXTRA"):
+        np.testing.assert_array_equal(getattr(DOP853, field), getattr(dop853, field), err_msg=field)
+    assert (rk45.order, rk45.error_estimator_order) == (DOPRI5.order, DOPRI5.error_order)
+    assert (dop853.order, dop853.error_estimator_order) == (DOP853.order, DOP853.error_order)
     assert (DOPRI5.order, DOPRI5.error_order) == (5, 4)
     assert (DOP853.order, DOP853.error_order) == (8, 7)
 

@@ -16,9 +16,10 @@ Conventions (Hairer, Norsett & Wanner, *Solving ODEs I*, sec. II.1-II.6):
 * ``A_EXTRA`` (n_extra, s + 1 + n_extra), ``C_EXTRA`` (n_extra,): extra stages
   for DOP853's dense output; ``D`` (m, s + 1 + n_extra) its coefficients.
 
-DOPRI5 and DOP853 coefficients are read from scipy's solver classes
-(``scipy.integrate.RK45`` / ``DOP853`` class attributes), so that the drivers
-reproduce scipy's step sequence.
+DOPRI5 and DOP853 coefficients are scipy's own (``scipy.integrate.RK45`` /
+``DOP853`` class attributes, copied into `lagcomp.integrate.dormand_prince` and
+checked bitwise against scipy by the tests), so that the drivers reproduce
+scipy's step sequence.
 """
 
 from __future__ import annotations
@@ -27,7 +28,8 @@ from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
-import scipy.integrate
+
+from lagcomp.integrate import dormand_prince as dp
 
 __all__ = ["Tableau", "RK4", "DOPRI5", "DOP853", "driver_arguments"]
 
@@ -181,34 +183,32 @@ RK4 = Tableau(
     C=[0.0, 0.5, 0.5, 1.0],
 )
 
-_RK45 = scipy.integrate.RK45
 #: Dormand & Prince (1980) 5(4) pair with quartic dense output.
 DOPRI5 = Tableau(
     name="DOPRI5",
-    order=int(_RK45.order),
-    error_order=int(_RK45.error_estimator_order),
-    A=_square(_RK45.A),
-    B=_RK45.B,
-    C=_RK45.C,
-    E=_RK45.E,
-    P=_RK45.P,
+    order=5,
+    error_order=4,
+    A=_square(dp.RK45_A),
+    B=dp.RK45_B,
+    C=dp.RK45_C,
+    E=dp.RK45_E,
+    P=dp.RK45_P,
 )
 
-_DOP853 = scipy.integrate.DOP853
 #: Hairer's DOP853: 8th order, 5th/3rd-order error estimates, 7th-order dense
 #: output from three extra stages.
 DOP853 = Tableau(
     name="DOP853",
-    order=int(_DOP853.order),
-    error_order=int(_DOP853.error_estimator_order),
-    A=_DOP853.A,
-    B=_DOP853.B,
-    C=_DOP853.C,
-    E3=_DOP853.E3,
-    E5=_DOP853.E5,
-    D=_DOP853.D,
-    A_EXTRA=_DOP853.A_EXTRA,
-    C_EXTRA=_DOP853.C_EXTRA,
+    order=8,
+    error_order=7,
+    A=dp.DOP853_A,
+    B=dp.DOP853_B,
+    C=dp.DOP853_C,
+    E3=dp.DOP853_E3,
+    E5=dp.DOP853_E5,
+    D=dp.DOP853_D,
+    A_EXTRA=dp.DOP853_A_EXTRA,
+    C_EXTRA=dp.DOP853_C_EXTRA,
 )
 
 
