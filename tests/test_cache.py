@@ -39,9 +39,26 @@ PROBE = textwrap.dedent(
 )
 
 
-def _probe(cache_dir) -> dict:
+LOAD_PROBE = textwrap.dedent(
+    """
+    import json, sys
+    import lagcomp as lc
+
+    model = lc.load("simple_pendulum", cache_dir=sys.argv[1])
+    sol = model.simulate((0, 1), method="rk4", dt=0.01)
+    stats = {name: getattr(model.kernels, name).stats for name in ("rk4_run", "observables")}
+    print(json.dumps({
+        "sympy_imported": "sympy" in sys.modules,
+        "misses": sum(sum(s.cache_misses.values()) for s in stats.values()),
+        "final": sol.q[-1, 0],
+    }))
+    """
+)
+
+
+def _probe(cache_dir, probe=PROBE) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "LAGCOMP_CACHE_DIR"}
-    out = subprocess.run([sys.executable, "-c", PROBE, str(cache_dir)], capture_output=True, text=True, env=env, check=True)
+    out = subprocess.run([sys.executable, "-c", probe, str(cache_dir)], capture_output=True, text=True, env=env, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -53,6 +70,8 @@ def test_second_process_does_no_derivation_and_no_numba_compilation(tmp_path):
     assert second["from_cache"] is True and second["derivations"] == 0
     assert second["misses"] == 0 and second["hits"] == 2
     assert second["final"] == first["final"]
+    loaded = _probe(tmp_path, LOAD_PROBE)  # lagcomp.load: by name, without importing sympy at all
+    assert loaded == {"sympy_imported": False, "misses": 0, "final": first["final"]}
 
 
 def _module_files(cache_dir):
@@ -108,3 +127,29 @@ def test_cache_location_from_environment(tmp_path, monkeypatch):
     monkeypatch.setenv("LAGCOMP_CACHE_DIR", str(tmp_path / "env-cache"))
     model = lc.compile(examples.get("sling"))
     assert model.source_path.is_relative_to(tmp_path / "env-cache")
+
+
+def test_load_restores_the_run_defaults_and_events(compiled, cache_dir):
+    model = compiled("henon_heiles")
+    loaded = lc.load("henon_heiles", cache_dir=cache_dir)
+    assert loaded.system is None and loaded.cache_key == model.cache_key
+    assert (loaded.defaults, loaded.q0, loaded.qd0, loaded.t_end) == (model.defaults, model.q0, model.qd0, model.t_end)
+    assert loaded.events == model.events and [e.direction for e in loaded.events] == [1, -1]
+    a = model.simulate((0, 50), rtol=1e-10, atol=1e-12, progress=False)
+    b = loaded.simulate((0, 50), rtol=1e-10, atol=1e-12, progress=False)
+    assert len(a.events["section"]) > 3
+    assert b.events["section"].t.tolist() == a.events["section"].t.tolist()
+    assert b.y[-1].tolist() == a.y[-1].tolist()
+
+
+def test_load_of_an_unknown_name_says_what_to_do(tmp_path):
+    with pytest.raises(lc.ModelError, match=r"No compiled model named 'nothing_here'.*lagcomp.compile"):
+        lc.load("nothing_here", cache_dir=tmp_path)
+
+
+def test_analysis_of_a_loaded_model_asks_for_the_system(compiled, cache_dir):
+    from lagcomp.analysis import conserved_quantities
+
+    compiled("simple_pendulum")
+    with pytest.raises(lc.ModelError, match=r"lagcomp.load\(\) does not carry"):
+        conserved_quantities(lc.load("simple_pendulum", cache_dir=cache_dir))

@@ -211,6 +211,7 @@ CASES = {
     "corrupt-cache-entry": (_cache_case("corrupt"), "sha256"),
     "stale-cache-entry": (_cache_case("stale"), "another lagcomp or numba version"),
     "unwritable-cache": (_cache_case("unwritable"), "cannot write its cache"),
+    "load-unknown-name": (lambda models, tmp_path: lc.load("never_compiled", cache_dir=tmp_path), "'never_compiled'"),
 }
 
 

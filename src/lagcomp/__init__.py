@@ -5,6 +5,7 @@
     system = lc.System([th], T=..., V=..., name="pendulum")
     model = lc.compile(system)            # derive, emit, cache, load
     sol = model.simulate((0, 10), q0=[1.0], params=dict(...))
+    model = lc.load("pendulum")           # a later process: from the cache, no sympy
 """
 
 __version__ = "0.1.0"
@@ -21,24 +22,27 @@ from lagcomp.errors import (
     UndeclaredSymbolError as UndeclaredSymbolError,
 )
 from lagcomp.integrate.solution import Solution as Solution
-from lagcomp.model import (
-    Damper as Damper,
-    Event as Event,
-    Force as Force,
-    Gravity as Gravity,
-    Holonomic as Holonomic,
-    MovingFrame as MovingFrame,
-    Nonholonomic as Nonholonomic,
-    Particle as Particle,
-    RigidBody as RigidBody,
-    Spring as Spring,
-    System as System,
-    Torque as Torque,
-    body_rates as body_rates,
-    coordinates as coordinates,
-    from_kanes_method as from_kanes_method,
-    from_lagranges_method as from_lagranges_method,
-    rotated as rotated,
-    t as t,
+from lagcomp.runtime import Model as Model, compile as compile, load as load  # noqa: A004
+
+#: What `lagcomp.model` contributes to the namespace.  It is imported on first
+#: use (PEP 562), because it imports sympy: a process that only runs a cached
+#: model (`lagcomp.load`) starts without sympy's ~0.5 s import.
+_MODEL_NAMES = (
+    "Damper", "Event", "Force", "Gravity", "Holonomic", "MovingFrame", "Nonholonomic", "Particle", "RigidBody",
+    "Spring", "System", "Torque", "body_rates", "coordinates", "from_kanes_method", "from_lagranges_method",
+    "rotated", "t",
 )
-from lagcomp.runtime import Model as Model, compile as compile  # noqa: A004
+
+
+def __getattr__(name: str):
+    if name in _MODEL_NAMES:
+        from lagcomp import model
+
+        value = getattr(model, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'lagcomp' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_MODEL_NAMES))

@@ -6,6 +6,9 @@ Layout under the cache root::
     modules/__pycache__/...              code is cached beside it (cache=True)
     index/<input key>.json               input key -> module file, its sha256,
                                          and the metadata a Model needs
+    names/<system name>.json             the input key last compiled under that
+                                         name and the System's run defaults
+                                         (what `lagcomp.load` reads)
 
 Two keys, so that a second process does neither sympy nor numba work:
 
@@ -46,9 +49,11 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import importlib.metadata
 import importlib.util
 import json
 import os
+import re
 import sys
 import tempfile
 import time
@@ -60,7 +65,6 @@ from types import ModuleType
 
 import numba
 import platformdirs
-import sympy
 
 from lagcomp import __version__
 from lagcomp.errors import CacheWarning
@@ -103,8 +107,14 @@ def _compiler_digest() -> str:
     return digest.hexdigest()
 
 
+@functools.lru_cache(maxsize=1)
+def _sympy_version() -> str:
+    """sympy's version from its package metadata: a warm start (`lagcomp.load`) never imports sympy."""
+    return importlib.metadata.version("sympy")
+
+
 def _versions() -> str:
-    return (f"lagcomp={__version__};compiler={_compiler_digest()};sympy={sympy.__version__};"
+    return (f"lagcomp={__version__};compiler={_compiler_digest()};sympy={_sympy_version()};"
             f"numba={numba.__version__};python={sys.version_info[:3]}")
 
 
@@ -120,8 +130,9 @@ def source_key(source: str) -> str:
 
 @dataclass(frozen=True)
 class Entry:
-    """A usable cache entry: the module file and the metadata stored with it."""
+    """A usable cache entry: its input key, the module file and the metadata stored with it."""
 
+    key: str
     path: Path
     module_name: str
     metadata: dict
@@ -238,7 +249,7 @@ class Cache:
             except OSError:
                 pass  # a read-only cache: the rebuilt entry goes to the fallback root
             return None
-        return Entry(path=path, module_name=_module_name(path), metadata=record["metadata"])
+        return Entry(key=key, path=path, module_name=_module_name(path), metadata=record["metadata"])
 
     def store(self, key: str, source: str, system_name: str, metadata: dict) -> Entry:
         """Write `source` (unless an intact copy exists) and index it under input `key`.
@@ -262,7 +273,37 @@ class Cache:
         _remove_stale_temporaries(path.parent)
         record = {"module": path.name, "sha256": digest, "metadata": metadata, "versions": _versions()}
         _atomic_write(self._index_file(key), json.dumps(record, indent=1, sort_keys=True))
-        return Entry(path=path, module_name=_module_name(path), metadata=metadata)
+        return Entry(key=key, path=path, module_name=_module_name(path), metadata=metadata)
+
+    def _name_file(self, name: str) -> Path:
+        safe = name if re.fullmatch(r"[A-Za-z0-9_.-]{1,100}", name) else f"_{_sha256(name)[:32]}"
+        return self.root / "names" / f"{safe}.json"
+
+    def remember(self, name: str, key: str, run_defaults: dict) -> None:
+        """Record that `name` was last compiled under input `key`, with the System's `run_defaults`.
+
+        Best effort: a cache that cannot be written keeps its older record (or
+        none), and `recall` then finds that one (or nothing).
+        """
+        record = json.dumps({"name": name, "key": key, "run_defaults": run_defaults}, indent=1, sort_keys=True)
+        path = self._name_file(name)
+        try:
+            if not path.exists() or path.read_text(encoding="utf-8") != record:
+                _atomic_write(path, record)
+        except OSError:
+            pass
+
+    def recall(self, name: str) -> tuple[Entry, dict] | None:
+        """The entry last compiled under `name` and its run defaults, or None if there is none (or it is unusable)."""
+        try:
+            record = json.loads(self._name_file(name).read_text(encoding="utf-8"))
+            key, run_defaults = record["key"], record["run_defaults"]
+            if record["name"] != name:
+                return None
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+        entry = self.lookup(key)
+        return None if entry is None else (entry, run_defaults)
 
     def discard(self, entry: Entry) -> None:
         """Remove a module file that failed to load, so the rebuild writes a fresh one."""

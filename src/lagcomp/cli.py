@@ -9,12 +9,13 @@
 from __future__ import annotations
 
 import argparse
+import hashlib
 import sys
 import time
 from pathlib import Path
 
 
-from lagcomp.errors import LagcompError
+from lagcomp.errors import LagcompError, ModelError
 
 
 def _key_values(pairs: list[str], what: str) -> dict:
@@ -34,6 +35,36 @@ def _system(args):
     from lagcomp import examples
 
     return examples.get(args.name, **_key_values(args.arg, "--arg"))
+
+
+def _example_alias(args) -> str:
+    """The cache name under which `run` remembers a bundled example built with `args`.
+
+    It hashes the examples' and the compiler's source, so an edited example
+    (or derivation) is compiled afresh instead of loaded.
+    """
+    from lagcomp.cache import _compiler_digest
+
+    digest = hashlib.sha256(_compiler_digest().encode())
+    for path in sorted((Path(__file__).parent / "examples").glob("*.py")):
+        digest.update(path.read_bytes())
+    arguments = "".join(f".{k}={v}" for k, v in sorted(_key_values(args.arg, "--arg").items()))
+    return f"example.{args.name}{arguments}.{digest.hexdigest()[:16]}"
+
+
+def _example_model(args):
+    """The compiled bundled example: loaded by name when this lagcomp compiled it before, so no sympy."""
+    from lagcomp.cache import Cache
+    from lagcomp.runtime import compile, load, run_defaults
+
+    alias = _example_alias(args)
+    try:
+        return load(alias, cache_dir=args.cache_dir)
+    except ModelError:
+        system = _system(args)
+        model = compile(system, cache_dir=args.cache_dir)
+        Cache(args.cache_dir).remember(alias, model.cache_key, run_defaults(system))
+        return model
 
 
 def cmd_list(args) -> int:
@@ -82,14 +113,11 @@ def cmd_show(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from lagcomp.runtime import compile
-
-    system = _system(args)
     started = time.perf_counter()
-    model = compile(system, cache_dir=args.cache_dir)
+    model = _example_model(args)
     compiled = time.perf_counter()
     origin = "from cache" if model.from_cache else "derived and emitted"
-    print(f"{system.name}: {origin} in {compiled - started:.2f} s ({model.source_path})", file=sys.stderr)
+    print(f"{model.name}: {origin} in {compiled - started:.2f} s ({model.source_path})", file=sys.stderr)
     if not model.from_cache:
         print("first run: numba compiles the kernels and drivers once (cached for later runs)...", file=sys.stderr)
     options = dict(method=args.method, save_every=args.save_every, projection=args.projection,
@@ -103,7 +131,7 @@ def cmd_run(args) -> int:
         options.update(rtol=args.rtol, atol=args.atol)
         if args.dt is not None:
             options["first_step"] = args.dt
-    t_end = args.t_end if args.t_end is not None else system.t_end
+    t_end = args.t_end if args.t_end is not None else model.t_end
     sol = model.simulate(
         (args.t_start, t_end), q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"), **options
     )
@@ -134,7 +162,7 @@ def cmd_run(args) -> int:
         from lagcomp.plots import plot_run
 
         try:
-            plot_run(sol, title=f"{system.name}: {sol.method}, {len(sol.t)} points").savefig(args.plot, dpi=120)
+            plot_run(sol, title=f"{model.name}: {sol.method}, {len(sol.t)} points").savefig(args.plot, dpi=120)
         except ImportError as err:  # matplotlib is an optional extra
             raise LagcompError(str(err)) from err
         print(f"plotted     {args.plot} (coordinates and energy error vs time)")

@@ -3,7 +3,9 @@
 This is the one module that sees both halves of the pipeline: on a cache miss
 it runs the symbolic stages (mechanics → ir → codegen) and stores the
 module; on a hit it loads the module straight from disk, with no sympy work
-and, thanks to numba's own cache beside it, no numba compilation.
+and, thanks to numba's own cache beside it, no numba compilation.  `load`
+goes further for a later process: it finds a model by name and never imports
+sympy, so a cached model is ready in well under a second.
 """
 
 from __future__ import annotations
@@ -12,12 +14,12 @@ import math
 import os
 import warnings
 from collections.abc import Mapping
+from typing import NamedTuple
 
 import numpy as np
 
 from lagcomp.cache import Cache, Entry, input_key, load_module
 from lagcomp.errors import CacheWarning, InitialConditionError, ModelError, ParameterError, SingularMassMatrixError
-from lagcomp.model.system import System
 
 
 def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **system_kwargs) -> "Model":  # noqa: A001
@@ -43,13 +45,20 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **s
     system = _as_system(system, system_kwargs)
     cache = Cache(cache_dir)
     key = input_key(system.fingerprint(), options={})
+    model = _compiled(system, cache, key, eom)
+    cache.remember(system.name, key, run_defaults(system))
+    return model
+
+
+def _compiled(system, cache: Cache, key: str, eom) -> "Model":
+    """The Model of `system` from the cache entry under `key`, built first on a miss."""
     entry = cache.lookup(key)
     damaged = False
     if entry is not None:
         try:
             return Model(system, load_module(entry), entry, from_cache=True)
         except Exception as err:  # a damaged module that still hashed right, or a stale numba cache
-            warnings.warn(f"lagcomp could not load {entry.path.name} ({err}); rebuilding it.", CacheWarning, stacklevel=2)
+            warnings.warn(f"lagcomp could not load {entry.path.name} ({err}); rebuilding it.", CacheWarning, stacklevel=3)
             cache.discard(entry)
             damaged = True
     with cache.lock(key):  # processes compiling the same system derive it once, one after the other
@@ -60,12 +69,65 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **s
     return Model(system, load_module(entry), entry, from_cache=False)
 
 
-def _as_system(system, system_kwargs: dict) -> System:
+def load(name: str, *, cache_dir: str | os.PathLike | None = None) -> "Model":
+    """The model last compiled under `name`, from the cache, without sympy.
+
+    `compile` records, per System name, which cache entry it used and the
+    System's run defaults (parameter values, q0, qd0, t_end, events).  `load`
+    reads that record, so a later process can simulate a compiled system with
+    no sympy import, no derivation and no numba compilation.  The returned
+    Model has ``system=None``: what needs the symbolic System (the
+    `lagcomp.analysis` functions) needs `compile` instead.
+
+    Raises ModelError when nothing named `name` was compiled into this cache
+    (or its entry no longer matches this lagcomp, numba or Python version).
+    """
+    cache = Cache(cache_dir)
+    found = cache.recall(name)
+    if found is None:
+        raise ModelError(f"No compiled model named {name!r} in the cache at {cache.root}: compile it first "
+                         "(lagcomp.compile(system)), with the same cache directory and lagcomp version.")
+    entry, defaults = found
+    try:
+        kernels = load_module(entry)
+    except Exception as err:  # a damaged module that still hashed right
+        warnings.warn(f"lagcomp could not load {entry.path.name} ({err}); discarding it.", CacheWarning, stacklevel=2)
+        cache.discard(entry)
+        raise ModelError(f"The compiled model {name!r} in {cache.root} is damaged and was discarded: "
+                         "compile it again (lagcomp.compile(system)).") from err
+    return Model(None, kernels, entry, from_cache=True, recorded=defaults)
+
+
+class EventSpec(NamedTuple):
+    """What a run needs of a declared event (its expression lives in the ``event_values`` kernel)."""
+
+    name: str
+    direction: int
+    terminal: bool
+
+
+def run_defaults(system) -> dict:
+    """The parts of `system` a run uses that are not in its cache key, as JSON-ready data."""
+    def floats(values):
+        return None if values is None else [float(v) for v in values]
+
+    return {
+        "name": system.name,
+        "description": system.description,
+        "defaults": {k: float(v) for k, v in system.defaults.items()},
+        "q0": floats(system.q0),
+        "qd0": floats(system.qd0),
+        "t_end": float(system.t_end),
+        "events": [[e.name, int(e.direction), bool(e.terminal)] for e in system.events],
+    }
+
+
+def _as_system(system, system_kwargs: dict):
     """`system` itself, or the System of a sympy LagrangesMethod / KanesMethod."""
     from sympy.physics import mechanics as me
 
-    from lagcomp.errors import ModelError
     from lagcomp.model.interop import from_kanes_method, from_lagranges_method
+    from lagcomp.model.system import System
 
     if isinstance(system, me.LagrangesMethod):
         return from_lagranges_method(system, **system_kwargs)
@@ -80,7 +142,7 @@ def _as_system(system, system_kwargs: dict) -> System:
     return system
 
 
-def build(system: System, cache: Cache, key: str, eom=None) -> Entry:
+def build(system, cache: Cache, key: str, eom=None) -> Entry:
     """Derive (unless `eom` is given), lower and emit `system`, and store the module under `key`."""
     from lagcomp.codegen.emit import emit
     from lagcomp.codegen.lower import lower
@@ -117,14 +179,25 @@ class Model:
 
     Attributes
     ----------
-    system : System
-        The description it was compiled from.
+    system : System or None
+        The description it was compiled from; None for a model from `load`.
+    name, description : str
+    defaults : dict
+        Parameter values used where `params` leaves one out.
+    q0, qd0 : tuple of float or None
+        Default initial coordinates and velocities.
+    t_end : float
+        The System's suggested run length.
+    events : tuple of EventSpec
+        The declared events (name, direction, terminal), in kernel order.
     kernels : module
         The generated module (``rhs``, ``mass_matrix``, ``forcing``, ``energy``,
         ``energy_function``, ``momenta`` and the drivers), numba functions
         following the conventions of `lagcomp.ir`.
     source_path : pathlib.Path
         The generated module's file.
+    cache_key : str
+        The cache's input key of the compiled description.
     from_cache : bool
         True when the module came from the cache without derivation.
     coordinates, parameters : tuple of str
@@ -139,10 +212,19 @@ class Model:
         Arithmetic operations per kernel after CSE.
     """
 
-    def __init__(self, system: System, kernels, entry: Entry, from_cache: bool):
+    def __init__(self, system, kernels, entry: Entry, from_cache: bool, recorded: dict | None = None):
         self.system = system
+        recorded = run_defaults(system) if system is not None else recorded
+        self.name = recorded["name"]
+        self.description = recorded["description"]
+        self.defaults = dict(recorded["defaults"])
+        self.q0 = None if recorded["q0"] is None else tuple(recorded["q0"])
+        self.qd0 = None if recorded["qd0"] is None else tuple(recorded["qd0"])
+        self.t_end = recorded["t_end"]
+        self.events = tuple(EventSpec(name, direction, terminal) for name, direction, terminal in recorded["events"])
         self.kernels = kernels
         self.source_path = entry.path
+        self.cache_key = entry.key
         self.from_cache = from_cache
         self.coordinates = tuple(entry.metadata["coordinates"])
         self.parameters = tuple(entry.metadata["parameters"])
@@ -153,8 +235,8 @@ class Model:
         self.operations = dict(entry.metadata["operations"])
 
     @property
-    def name(self) -> str:
-        return self.system.name
+    def event_names(self) -> tuple[str, ...]:
+        return tuple(e.name for e in self.events)
 
     @property
     def n(self) -> int:
@@ -177,7 +259,7 @@ class Model:
         For constrained systems p ends with the Baumgarte gains (α, β), which
         add −2α (Λ q̇ + b) − β² Φ to the acceleration-level constraints.
         """
-        values = dict(self.system.defaults)
+        values = dict(self.defaults)
         if params is not None and not isinstance(params, Mapping):
             raise ParameterError(f"`params` must be a mapping of parameter name to value, like "
                                  f"{dict.fromkeys(self.parameters[:2], 1.0)}, got {type(params).__name__}.")
@@ -203,7 +285,7 @@ class Model:
     def initial_state(self, q0=None, qd0=None) -> np.ndarray:
         """The state y = (q0, qd0), defaults from the System, checked for length and finiteness."""
         parts = []
-        for what, given, default in (("q0", q0, self.system.q0), ("qd0", qd0, self.system.qd0)):
+        for what, given, default in (("q0", q0, self.q0), ("qd0", qd0, self.qd0)):
             values = given if given is not None else default
             if values is None:
                 values = [0.0] * self.n if what == "qd0" else None

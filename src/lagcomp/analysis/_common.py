@@ -17,6 +17,14 @@ def unconstrained(model, what: str) -> None:
         )
 
 
+def symbolic_system(model, what: str):
+    """The System `model` was compiled from; a loaded model (`lagcomp.load`) has none to give."""
+    if model.system is None:
+        raise ModelError(f"{what} reads the equations of {model.name!r}, which a model from lagcomp.load() does not "
+                         "carry: build its System and use lagcomp.compile(system) (a cache hit, no recompilation).")
+    return model.system
+
+
 def explicit_time(*exprs, system) -> bool:
     """Whether any of `exprs` depends on t other than through the coordinates q(t) and velocities q̇(t)."""
     from lagcomp.model.system import t

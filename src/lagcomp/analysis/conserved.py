@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from lagcomp.analysis._common import explicit_time
+from lagcomp.analysis._common import explicit_time, symbolic_system
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,7 @@ def conserved_quantities(model) -> list[Conserved]:
     """The model's first integrals that follow from the form of its Lagrangian (cheap sympy checks only)."""
     from lagcomp.model.system import t
 
-    system = model.system
+    system = symbolic_system(model, "conserved_quantities")
     found = []
     forces = any(Q != 0 for Q in system.forces) or system.dissipation != 0
     timed = explicit_time(system.T, system.V, system=system)

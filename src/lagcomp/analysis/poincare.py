@@ -137,9 +137,9 @@ def poincare_section(model, t_span, initial_states, params: dict | None = None, 
     Other keyword arguments go to `Model.sweep` (``workers``, ``max_step``, ``progress``, ...).
     """
     unconstrained(model, "poincare_section")
-    if event not in model.system.event_names:
+    if event not in model.event_names:
         raise OptionError(f"{model.name!r} has no event {event!r}; declare it on the System, e.g. "
-                          f"Event({event!r}, x, direction=1). Its events: {list(model.system.event_names)}.")
+                          f"Event({event!r}, x, direction=1). Its events: {list(model.event_names)}.")
     states = np.array(initial_states, dtype=float, ndmin=2)
     names = _state_names(model)
     if states.shape[1] != len(names) or not np.all(np.isfinite(states)):

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lagcomp.analysis._common import unconstrained
+from lagcomp.analysis._common import symbolic_system, unconstrained
 from lagcomp.analysis.oscillations import normal_modes
 from lagcomp.analysis.statics import STEADY_CHECK_OFFSETS, Equilibrium, find_equilibria
 from lagcomp.errors import ModelError, OptionError
@@ -96,7 +96,7 @@ class Portrait:
 
 def _check_energy_integral(model, p, grid) -> None:
     """Refuse systems whose energy function is not conserved (forces, dissipation, explicit t)."""
-    system = model.system
+    system = symbolic_system(model, "The energy portrait")
     if any(Q != 0 for Q in system.forces) or system.dissipation != 0:
         raise ModelError(f"{model.name!r} has generalized forces or dissipation: its energy function is not "
                          "conserved, so the phase portrait cannot come from the energy integral; simulate instead.")

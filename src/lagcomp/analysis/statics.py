@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
-from lagcomp.analysis._common import RestForces, coordinates_vector, explicit_time, unconstrained
+from lagcomp.analysis._common import RestForces, coordinates_vector, explicit_time, symbolic_system, unconstrained
 from lagcomp.errors import OptionError
 
 #: Times (after t) at which a time-dependent system's equilibrium is checked for steadiness.
@@ -81,7 +81,7 @@ class Equilibrium:
 
 
 def _depends_on_time(model) -> bool:
-    system = model.system
+    system = symbolic_system(model, "The statics analysis")
     return explicit_time(system.T, system.V, system.dissipation, *system.forces, system=system)
 
 

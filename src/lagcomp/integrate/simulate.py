@@ -76,16 +76,16 @@ def _t_eval(t_eval, t0: float, t1: float) -> np.ndarray | None:
 
 def _event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     """``directions`` and ``actions`` (0 off, 1 record, 2 record and stop) of the model's events."""
-    declared = model.system.events
+    declared = model.events
     if events is None or events is True:
         chosen = [e.name for e in declared] if (m.adaptive or events is True) else []
     elif events is False:
         chosen = []
     else:
         chosen = [events] if isinstance(events, str) else list(events)
-        unknown = [name for name in chosen if name not in model.system.event_names]
+        unknown = [name for name in chosen if name not in model.event_names]
         if unknown:
-            raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.system.event_names)}.")
+            raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.event_names)}.")
     if chosen and not m.adaptive:
         raise OptionError(f"Events are located on dense output, which {m.name} lacks; use dop853 or dopri5.")
     directions = np.array([e.direction for e in declared], dtype=np.int64)
@@ -186,7 +186,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     recorder = Recorder(model, p, record)
     if t_eval is None or t_eval[0] == t0:
         recorder.add(np.array([t0]), y0[None, :])
-    n_events = len(model.system.events)
+    n_events = len(model.events)
     event_parts: list[tuple] = []
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
     status = _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress)
@@ -323,7 +323,7 @@ def _event_records(model, event_parts) -> dict:
     else:
         t_all, y_all, i_all = np.empty(0), np.empty((0, 2 * n)), np.empty(0, dtype=np.int64)
     records = {}
-    for index, event in enumerate(model.system.events):
+    for index, event in enumerate(model.events):
         hit = i_all == index
         records[event.name] = EventRecord(t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:])
     return records

@@ -244,7 +244,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     want_events = "events" in output
     if want_events and not actions.any():
         raise OptionError(f"`output` asks for events but none are active ({model.name!r} declares "
-                          f"{list(model.system.event_names)}; events need dop853 or dopri5).")
+                          f"{list(model.event_names)}; events need dop853 or dopri5).")
     cap = _count(event_cap, "event_cap") if want_events else 0
     n_traj = values.shape[0]
 
@@ -276,7 +276,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             t_dense[-1] = t1
         fixed = (t0, dt, n_steps, t1, _row_every(save_every, output, n_steps))
     rows = 0 if t_dense is None else t_dense.size
-    n_events = len(model.system.events) if want_events else 0
+    n_events = len(model.events) if want_events else 0
     needed = _memory(n_traj, n2, rows, n_events, cap)
     if needed > memory_limit:
         raise OptionError(
@@ -311,7 +311,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         events_out = {
             event.name: {"count": shaped(out["event_count"][:, i]), "t": shaped(out["event_t"][:, i]),
                          "y": shaped(out["event_y"][:, i])}
-            for i, event in enumerate(model.system.events) if actions[i]
+            for i, event in enumerate(model.events) if actions[i]
         }
     return Sweep(
         names=names, combine=combine if isinstance(grid, dict) else "explicit", axes=axes, shape=shape,
