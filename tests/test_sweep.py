@@ -9,7 +9,7 @@ import threading
 import numpy as np
 import pytest
 
-from lagcomp.errors import OptionError
+from lagcomp.errors import InitialConditionError, OptionError
 from lagcomp.integrate.sweep import Sweep
 
 
@@ -243,3 +243,28 @@ def test_batched_dop853_takes_the_scalar_steps(compiled, double_pendulum):
 def test_sweep_checks_tolerances_like_simulate(double_pendulum):
     with pytest.raises(OptionError, match="rtol"):
         double_pendulum.sweep((0, 1), {"theta1": [0.1]}, rtol=1e-17)
+
+
+@pytest.mark.parametrize("options", [dict(method="rk4", dt=0.005), dict(method="dop853", rtol=1e-10, atol=1e-10)],
+                         ids=["rk4-projected", "dop853"])
+def test_constrained_sweep_equals_separate_runs_and_keeps_the_rod_length(compiled, options):
+    """Spherical pendulum in Cartesian coordinates (rod as a multiplier): initial x swept and projected onto
+    the sphere, g swept; each trajectory is bitwise the `simulate` run from the same projected state."""
+    model = compiled("spherical_pendulum_cartesian")
+    grid = {"x": [0.3, 0.6, 0.9], "g": [4.0, 9.81]}
+    sweep = model.sweep((0, 2), grid, project_initial=True, output="energy", **options)
+    assert np.all(sweep.status == 0)
+    for i, x in enumerate(grid["x"]):
+        for j, g in enumerate(grid["g"]):
+            q0 = [x, *model.q0[1:]]
+            sol = model.simulate((0, 2), q0=q0, params={"g": g}, project_initial=True, progress=False, **options)
+            np.testing.assert_array_equal(sweep.final[i, j], np.r_[sol.q[-1], sol.qd[-1]])
+    x, y, z = np.moveaxis(sweep.final[..., :3], -1, 0)
+    np.testing.assert_allclose(x**2 + y**2 + z**2, 1.0, atol=1e-8)  # l = 1: the rod held its length
+    assert np.max(sweep.energy_error) < 1e-6  # the rod's tension does no work
+
+
+def test_constrained_sweep_refuses_an_inconsistent_start_naming_the_trajectory(compiled):
+    model = compiled("spherical_pendulum_cartesian")
+    with pytest.raises(InitialConditionError, match=r"Trajectory 1 of the sweep \(x=0.6\).*constraint `rod`"):
+        model.sweep((0, 1), {"x": [model.q0[0], 0.6]}, method="rk4", dt=0.01)

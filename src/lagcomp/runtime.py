@@ -540,6 +540,10 @@ class Model:
             Values of everything not swept (defaults: the System's).
         method, dt, rtol, atol, t_eval, save_every, max_step, max_steps, events
             As for `simulate`; each trajectory has its own step-size control.
+        projection, baumgarte, project_initial
+            Constrained systems, as for `simulate`: every initial state is
+            checked against the constraints (an inconsistent one is refused,
+            naming its trajectory, unless ``project_initial=True`` projects it).
         output : str or sequence of {"dense", "energy", "events"}
             What to keep besides the final state, time, status and counters:
             states at common times (``t_eval`` for adaptive methods, every

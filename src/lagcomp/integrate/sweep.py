@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lagcomp.errors import OptionError
+from lagcomp.errors import InitialConditionError, OptionError
+from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.methods import get_method
 from lagcomp.integrate.simulate import (
     _count,
@@ -214,14 +215,12 @@ def _memory(n_traj: int, n2: int, m: int, n_events: int, cap: int) -> int:
 def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=None, params=None,
           method="dop853", dt=None, rtol=1e-8, atol=1e-10, t_eval=None, save_every=1, max_step=math.inf,
           max_steps=100_000_000, events=None, event_cap=16, output=(), workers=None, client=None,
-          batched=False, progress=None, memory_limit=MEMORY_LIMIT) -> Sweep:
+          batched=False, progress=None, memory_limit=MEMORY_LIMIT, projection=None, baumgarte=(0.0, 0.0),
+          project_initial=False) -> Sweep:
     """Integrate every point of `grid`; see `lagcomp.Model.sweep` for the arguments."""
     t0, t1 = _time_span(t_span)
     m = get_method(method)
     check_method(model, m)
-    if model.k:
-        raise OptionError(f"Sweeps of constrained systems are not supported yet ({model.name!r} has constraints); "
-                          "loop over `simulate` instead.")
     output = (output,) if isinstance(output, str) else tuple(output)
     unknown = [o for o in output if o not in OUTPUTS]
     if unknown:
@@ -229,7 +228,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     names, axes, shape, values = _grid(model, grid, combine, names)
     n2 = 2 * model.n
     y_base = model.initial_state(q0, qd0)
-    p_base = model.parameter_vector(params)
+    p_base = model.parameter_vector(params, baumgarte)
     Y0 = np.repeat(y_base[None, :], values.shape[0], axis=0)
     P = np.repeat(p_base[None, :], values.shape[0], axis=0)
     state_names = list(model.coordinates) + [f"{c}_dot" for c in model.coordinates]
@@ -238,6 +237,9 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             Y0[:, state_names.index(name)] = values[:, column]
         else:
             P[:, list(model.parameters).index(name)] = values[:, column]
+    if model.k:
+        _consistent_initial_states(model, t0, Y0, P, project_initial, names, values)
+    projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
     save_every = _count(save_every, "save_every")
     max_steps = _count(max_steps, "max_steps")
     directions, actions = _event_arguments(model, m, events)
@@ -293,9 +295,9 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "
                               "events yet); drop `batched` for those outputs.")
         fixed, coefficients = (fixed[:7], m.driver_arguments()[:5]) if m.adaptive else (fixed, ())
-        task = _Task(driver, m.adaptive, fixed, layout, coefficients)
+        task = _Task(driver, m.adaptive, fixed, layout, coefficients, projecting)
     else:
-        task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments())
+        task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments(), projecting)
     if client is None:
         done = _run_locally(model.kernels, task, Y0, P, out, workers, progress)
     else:
@@ -323,6 +325,16 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     )
 
 
+def _consistent_initial_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, project: bool, names, values) -> None:
+    """Check every initial state against the constraints, or project it (in place), as `simulate` does."""
+    for k in range(Y0.shape[0]):
+        try:
+            Y0[k], _ = consistent_initial_state(model, t0, Y0[k], P[k], project)
+        except InitialConditionError as err:
+            where = ", ".join(f"{name}={value:g}" for name, value in zip(names, values[k]))
+            raise InitialConditionError(f"Trajectory {k} of the sweep ({where}): {err}") from err
+
+
 #: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`).
 BATCHED = {"rk4": "rk4_lanes", "dop853": "dop853_lanes"}
 
@@ -344,6 +356,7 @@ class _Task:
     fixed: tuple
     layout: tuple          # (2n, dense rows, events, event cap)
     coefficients: tuple
+    projecting: int        # constrained systems: project onto the constraints after every step (0 or 1)
 
 
 def _allocate(n_traj: int, layout: tuple) -> dict[str, np.ndarray]:
@@ -366,9 +379,10 @@ def _run_chunk(kernels, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str,
     if task.driver in BATCHED.values():
         loop(Y0, P, *task.fixed, *common, *task.coefficients)
     elif task.adaptive:
-        loop(Y0, P, 0, *task.fixed, *common, out["event_count"], out["event_t"], out["event_y"], task.coefficients)
+        loop(Y0, P, task.projecting, *task.fixed, *common, out["event_count"], out["event_t"], out["event_y"],
+             task.coefficients)
     else:
-        loop(Y0, P, 0, *task.fixed, *common, task.coefficients)
+        loop(Y0, P, task.projecting, *task.fixed, *common, task.coefficients)
     return out
 
 
