@@ -77,3 +77,32 @@ def test_show_derives_once_on_a_cache_miss(capsys, tmp_path, monkeypatch):
     monkeypatch.setattr(lagrange, "derive", lambda system: calls.append(system.name) or original(system))
     assert main(["--cache-dir", str(tmp_path), "show", "sling"]) == 0
     assert calls == ["sling"]
+
+
+def test_sweep_over_a_coordinate_and_a_parameter_follows_cosh(capsys, tmp_path, cache_dir):
+    """The sling, ρ'' = ω²ρ from rest: ρ(t) = ρ0 cosh(ωt) at every grid point."""
+    from lagcomp.integrate.sweep import Sweep
+
+    out_file = tmp_path / "sweep.npz"
+    code = main(["--cache-dir", str(cache_dir), "sweep", "sling", "--grid", "rho=0.1:0.3:3", "--param", "omega=1:3:3",
+                 "--param", "m=2", "--t-end", "1.5", "--output", "max-energy-error", "--quiet", "--out", str(out_file)])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "9 trajectories over rho (3 values), omega (3 values)" in out and "status      0: 9" in out
+    sweep = Sweep.load_npz(out_file)
+    rho0, omega = np.meshgrid(sweep.axes["rho"], sweep.axes["omega"], indexing="ij")
+    np.testing.assert_allclose(sweep.final[..., 0], rho0 * np.cosh(omega * 1.5), rtol=1e-8)
+    np.testing.assert_array_equal(sweep.t_final, 1.5)
+
+
+def test_sweep_options_are_checked_with_a_message(capsys, cache_dir):
+    for argv, message in [
+        (["sweep", "sling"], "Nothing to sweep"),
+        (["sweep", "sling", "--grid", "rho=0:1:0"], "LO:HI:N"),
+        (["sweep", "sling", "--grid", "rho=0:1:2", "--output", "every=10"], "times=N"),
+        (["sweep", "sling", "--grid", "rho=0:1:2", "--method", "rk4", "--output", "times=3"], "every=K"),
+        (["sweep", "sling", "--grid", "rho=0:1:2", "--output", "nonsense"], "choose final"),
+        (["sweep", "sling", "--grid", "nope=0:1:2"], "nope"),
+    ]:
+        assert main(["--cache-dir", str(cache_dir), *argv]) == 2, argv
+        assert message in capsys.readouterr().err, argv

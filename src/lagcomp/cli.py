@@ -182,6 +182,121 @@ def cmd_generate(args) -> int:
     return 0
 
 
+def _grid_axis(spec: str, what: str) -> tuple[str, object]:
+    """``name=LO:HI:N`` as (name, N evenly spaced values), or ``name=V`` as (name, float)."""
+    name, sep, value = spec.partition("=")
+    if not sep or not name:
+        raise LagcompError(f"{what} {spec!r} must look like name=value or name=LO:HI:N.")
+    parts = value.split(":")
+    try:
+        if len(parts) == 1:
+            return name, float(value)
+        if len(parts) == 3:
+            lo, hi, count = float(parts[0]), float(parts[1]), int(parts[2])
+            if count >= 1:
+                import numpy as np
+
+                return name, np.linspace(lo, hi, count)
+    except ValueError:
+        pass
+    raise LagcompError(f"{what} {spec!r}: expected a number, or LO:HI:N with N a whole number >= 1.")
+
+
+def _sweep_outputs(specs: list[str], adaptive: bool, t_span) -> tuple[tuple, dict]:
+    """`--output` values as (Model.sweep outputs, extra options): final, every=K, times=N, max-energy-error, events."""
+    import numpy as np
+
+    outputs, options = [], {}
+    for spec in specs or ["final"]:
+        key, _, value = spec.partition("=")
+        if key == "final":
+            continue
+        if key in ("max-energy-error", "events"):
+            outputs.append("energy" if key == "max-energy-error" else "events")
+            continue
+        if key in ("every", "times"):
+            try:
+                count = int(value)
+            except ValueError:
+                count = 0
+            if count < 1:
+                raise LagcompError(f"--output {spec!r}: {key}=K needs a whole number K >= 1.")
+            if key == "every" and adaptive:
+                raise LagcompError("--output every=K saves every K-th step of a fixed-step method; "
+                                   "an adaptive one saves at common times: --output times=N.")
+            if key == "times" and not adaptive:
+                raise LagcompError("--output times=N is for adaptive methods; fixed-step ones save every K-th "
+                                   "step: --output every=K.")
+            outputs.append("dense")
+            if key == "every":
+                options["save_every"] = count
+            else:
+                options["t_eval"] = np.linspace(*t_span, count)
+            continue
+        raise LagcompError(f"--output {spec!r}: choose final, every=K, times=N, max-energy-error or events.")
+    return tuple(dict.fromkeys(outputs)), options
+
+
+def cmd_sweep(args) -> int:
+    import numpy as np
+
+    from lagcomp.integrate.methods import get_method
+
+    model = _example_model(args)
+    method = get_method(args.method)
+    t_span = (args.t_start, args.t_end if args.t_end is not None else model.t_end)
+    grid, params = {}, {}  # axes in order: the --grid ones, then the swept --param ones
+    for spec in (args.grid or []):
+        name, value = _grid_axis(spec, "--grid")
+        grid[name] = np.atleast_1d(value)
+    for spec in (args.param or []):
+        name, value = _grid_axis(spec, "--param")
+        (params if isinstance(value, float) else grid)[name] = value
+    if not grid:
+        raise LagcompError("Nothing to sweep: give at least one --grid NAME=LO:HI:N (a coordinate, "
+                           "<coordinate>_dot or a parameter) or --param NAME=LO:HI:N.")
+    outputs, options = _sweep_outputs(args.output, method.adaptive, t_span)
+    if method.adaptive:
+        options.update(rtol=args.rtol, atol=args.atol)
+    else:
+        options["dt"] = args.dt if args.dt is not None else 1e-3
+    if args.projection is not None:
+        options["projection"] = args.projection
+    client = None
+    if args.scheduler:
+        try:
+            from dask.distributed import Client
+        except ImportError as err:
+            raise LagcompError("--scheduler needs dask.distributed: pip install 'lagcomp[dask]'.") from err
+        client = Client(args.scheduler)
+    started = time.perf_counter()
+    sweep = model.sweep(t_span, grid, combine=args.combine, q0=args.q0, qd0=args.qd0, params=params,
+                        method=method.name, output=outputs, workers=args.workers, client=client,
+                        batched=args.batched, project_initial=args.project_initial,
+                        progress=False if args.quiet else None, **options)
+    elapsed = time.perf_counter() - started
+    count = int(np.prod(sweep.shape))
+    axes = ", ".join(f"{name} ({len(sweep.axes[name])} values)" for name in sweep.names)
+    print(f"sweep       {model.name}: {count} trajectories over {axes}, {sweep.combine}")
+    print(f"method      {sweep.method}   t in [{t_span[0]:g}, {t_span[1]:g}]   {int(sweep.nsteps.sum())} steps in all")
+    print(f"wall time   {elapsed:.3f} s ({count / elapsed:,.0f} trajectories/s)")
+    statuses, counts = np.unique(sweep.status, return_counts=True)
+    print("status      " + ", ".join(f"{int(s)}: {int(c)}" for s, c in zip(statuses, counts)))
+    if sweep.energy_error is not None:
+        finite = sweep.energy_error[np.isfinite(sweep.energy_error)]
+        if finite.size:
+            print(f"energy      largest relative error per trajectory: median {np.median(finite):.3g}, "
+                  f"max {finite.max():.3g}")
+    for name, record in (sweep.events or {}).items():
+        print(f"event       {name}: {int(record['count'].sum())} occurrence(s) in all")
+    if args.out:
+        sweep.save_npz(args.out)
+        print(f"saved       {args.out}")
+    if client is not None:
+        client.close()
+    return 0 if sweep.done.all() else 130
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lagcomp", description="Compile and simulate Lagrangian systems.")
     parser.add_argument("--cache-dir", help="cache root (default: $LAGCOMP_CACHE_DIR or the user cache directory)")
@@ -217,6 +332,36 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--project-initial", action="store_true",
                      help="project inconsistent initial conditions onto the constraints")
     run.set_defaults(func=cmd_run)
+    sweep = example("sweep", "integrate a grid of initial values and parameters on every core")
+    from lagcomp.integrate.methods import METHODS
+
+    sweep.add_argument("--grid", "--q0-grid", action="append", metavar="NAME=LO:HI:N",
+                       help="swept initial value or parameter, N evenly spaced values (coordinate, "
+                            "<coordinate>_dot or parameter name)")
+    sweep.add_argument("--param", action="append", metavar="NAME=V|NAME=LO:HI:N",
+                       help="parameter value, or a swept range")
+    sweep.add_argument("--combine", choices=["product", "zip"], default="product",
+                       help="Cartesian product of the axes (default) or element-wise")
+    sweep.add_argument("--output", action="append", metavar="KIND",
+                       help="final (default), every=K (fixed-step), times=N (adaptive), max-energy-error, events")
+    sweep.add_argument("--t-start", type=float, default=0.0)
+    sweep.add_argument("--t-end", type=float, help="end time (default: the example's)")
+    sweep.add_argument("--method", default="dop853", choices=sorted(METHODS))
+    sweep.add_argument("--dt", type=float, help="step of fixed-step methods (default 1e-3)")
+    sweep.add_argument("--rtol", type=float, default=1e-10)
+    sweep.add_argument("--atol", type=float, default=1e-10)
+    sweep.add_argument("--q0", type=float, nargs="+", help="initial coordinates not swept")
+    sweep.add_argument("--qd0", type=float, nargs="+", help="initial velocities not swept")
+    sweep.add_argument("--workers", type=int, help="threads (default: one per CPU)")
+    sweep.add_argument("--scheduler", metavar="ADDRESS", help="run the chunks on this Dask scheduler")
+    sweep.add_argument("--batched", action="store_true", help="SIMD lanes (rk4, dop853; final states and energy)")
+    sweep.add_argument("--projection", action=argparse.BooleanOptionalAction, default=None,
+                       help="project onto the constraints after every step (default: on for fixed-step methods)")
+    sweep.add_argument("--project-initial", action="store_true",
+                       help="project inconsistent initial states onto the constraints")
+    sweep.add_argument("--out", help="write the sweep to this .npz file")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep.set_defaults(func=cmd_sweep)
     gen = sub.add_parser("generate", help="regenerate the emitted modules of the bundled examples")
     gen.add_argument("directory", nargs="?", default="generated")
     gen.add_argument("--check", action="store_true", help="only list stale files; exit 1 if any")
