@@ -2465,6 +2465,357 @@ def sweep_dop853_lanes(Y0, P, t0, t_end, rtol, atol, max_step, max_steps, save_e
             energy_stats[a + l, 1] = deviation[l]
 
 
+@njit(cache=True, error_model="numpy")
+def taylor_coefficients(t, y, p, X, W):
+    """Normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!, k = 0..order (order = X.shape[1] − 1),
+    of the solution through y at t; W is a work array of shape (TAYLOR_WORK, order + 1).
+
+    One pass over the operations of `rhs` per order k (lagcomp.codegen.taylor gives the
+    recurrences); each block is commented with the statement of `rhs` it computes.
+    Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
+    order = X.shape[1] - 1
+    phi_dot = X[1]
+    I_Y = p[1]
+    omega = p[2]
+    lambda_ = p[3]
+    nu = p[4]
+    _c1 = (0.5)*math.pi
+    _m0_0 = I_Y
+    _k1 = I_Y*_c1*nu*omega*math.sin(lambda_)
+    if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _k9 = 1.0/_m0_0
+    _t = W[0]
+    _c0 = W[1]
+    _u2 = W[2]
+    _u3 = W[3]
+    _u4 = W[4]
+    _u5 = W[5]
+    _u6 = W[6]
+    _u7 = W[7]
+    _f0 = W[8]
+    _x0 = W[9]
+    for i in range(2):
+        X[i, 0] = y[i]
+    for k in range(order + 1):
+        _t[k] = 0.0
+    _t[0] = t
+    if order > 0:
+        _t[1] = 1.0
+    for k in range(order):
+        # _c0 = nu*t
+        _c0[k] = nu*_t[k]
+        # _f0 = I_Y*_c1*nu*omega*math.sin(_c0)*math.sin(lambda_)*math.cos(_c1*math.cos(_c0))
+        _taylor_sin_cos(_c0, _u2, _u3, k)
+        _u4[k] = _c1*_u3[k]
+        _taylor_sin_cos(_u4, _u5, _u6, k)
+        _u7[k] = _taylor_mul(_u6, _u2, k)
+        _f0[k] = _k1*_u7[k]
+        # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
+        _x0[k] = _k9*_f0[k]
+        # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
+        X[0, k + 1] = phi_dot[k]/(k + 1)
+        X[1, k + 1] = _x0[k]/(k + 1)
+    return 0
+
+
+#: Rows of the work array of `taylor_coefficients` (9 series operations per order).
+TAYLOR_WORK = 10
+
+
+# ----------------------------------------------------------------------------
+# lagcomp/codegen/templates/taylor.py
+
+"""Taylor-series integrator: a *template*, appended to the generated modules that have a Taylor kernel.
+
+Like ``drivers.py``, this text is appended verbatim to a generated module,
+after ``drivers.py`` and the module's ``taylor_coefficients`` kernel
+(`lagcomp.codegen.taylor` emits it for unconstrained systems whose
+equations use only functions with a Taylor recurrence).  The module provides
+``taylor_coefficients(t, y, p, X, W)``, ``TAYLOR_WORK``, ``event_values`` and
+the helpers and status codes of ``drivers.py`` (``_ODE_*``, and in modules
+with events ``_event_crossings``, ``_record_events``, ``_dense_state``).
+
+The ``_taylor_*`` helpers are the recurrences of `lagcomp.codegen.taylor`:
+each returns (or writes) coefficient k of its result from coefficients
+0..k of its arguments and 0..k−1 of the result itself.  They are small
+enough for LLVM to inline into ``taylor_coefficients``.
+
+``taylor_run`` has the calling convention of ``dop853_run`` (the module
+docstring of ``drivers.py``: arguments, statuses, output buffer, events,
+resuming), without tableau arrays.  Each step:
+
+1. Order and step (Jorba & Zou, "A software package for the numerical
+   integration of ODEs by means of high-order Taylor methods", Experiment.
+   Math. 14 (2005) 99-117, sec. 3.2; the rule heyoka uses): the order is
+   fixed for the run, ``p = ceil(−½ ln ε + 1)`` with ε = min(rtol, atol)
+   (20 at ε = 2.2e-16).  At each step the series of the solution to order p
+   is computed, and with ``‖·‖`` the max norm over the state,
+   ``ρ_j = (s / ‖y[j]‖)^(1/j)`` for j = p − 1 and p, s = ‖y‖ (relative
+   control) or 1 when ``rtol ‖y‖ ≤ atol`` (absolute control); the step is
+   ``h = min(ρ_{p−1}, ρ_p) · exp(−0.7/(p − 1)) / e²``, clamped to
+   ``max_step`` and to the end of the span.  Then the truncation term is
+   about ``s e^(−2p) ≤ ε s``: no step is ever rejected, and ``nrejected``
+   stays 0.  When both coefficients vanish (a polynomial solution) the step
+   is only limited by ``max_step`` and the span.
+2. The new state is the series at h, summed by Horner's rule from the top
+   order down, and its increment added to y with compensated (Kahan)
+   summation; the carry is an argument, so that a run resumed chunk by
+   chunk is bitwise the same as one call (simulate keeps it; sweeps pass an
+   empty array, which turns compensation off).
+3. Dense output is the series itself: ``t_eval`` points and events inside
+   the step are evaluated on it exactly (``_dense_state`` kind 0), events
+   located by Brent's method on it as for DOP853.
+
+``nfev`` counts evaluations of ``taylor_coefficients`` (one per step).
+"""
+
+# ruff: noqa: F821  (taylor_coefficients, TAYLOR_WORK, event_values, _ODE_* ... come from the module)
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_mul(a, b, k):
+    """Coefficient k of a·b."""
+    s = 0.0
+    for j in range(k + 1):
+        s += a[j] * b[k - j]
+    return s
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_square(a, k):
+    """Coefficient k of a² (half the products of `_taylor_mul`)."""
+    s = 0.0
+    for j in range((k + 1) // 2):
+        s += a[j] * a[k - j]
+    s *= 2.0
+    if k % 2 == 0:
+        s += a[k // 2] * a[k // 2]
+    return s
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_div(a, b, w, k):
+    """Coefficient k of w = a/b, from w[0..k−1]."""
+    s = a[k]
+    for j in range(1, k + 1):
+        s -= b[j] * w[k - j]
+    return s / b[0]
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_rdiv(c, b, w, k):
+    """Coefficient k of w = c/b for a constant c, from w[0..k−1]."""
+    s = c if k == 0 else 0.0
+    for j in range(1, k + 1):
+        s -= b[j] * w[k - j]
+    return s / b[0]
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_sqrt(a, w, k):
+    """Coefficient k of w = √a, from w[0..k−1]."""
+    if k == 0:
+        return math.sqrt(a[0])
+    s = a[k]
+    for j in range(1, k):
+        s -= w[j] * w[k - j]
+    return s / (2.0 * w[0])
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_pow(a, alpha, w, k):
+    """Coefficient k of w = a^alpha (constant alpha, a[0] ≠ 0), from w[0..k−1]."""
+    if k == 0:
+        return a[0] ** alpha
+    s = 0.0
+    for j in range(k):
+        s += (alpha * (k - j) - j) * a[k - j] * w[j]
+    return s / (k * a[0])
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_exp(a, w, k):
+    """Coefficient k of w = exp(a), from w[0..k−1]."""
+    if k == 0:
+        return math.exp(a[0])
+    s = 0.0
+    for j in range(1, k + 1):
+        s += j * a[j] * w[k - j]
+    return s / k
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_log(a, w, k):
+    """Coefficient k of w = log(a), from w[0..k−1]."""
+    if k == 0:
+        return math.log(a[0])
+    s = 0.0
+    for j in range(1, k):
+        s += j * w[j] * a[k - j]
+    return (a[k] - s / k) / a[0]
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_sin_cos(a, s, c, k):
+    """Coefficient k of s = sin(a) and c = cos(a) together (each recurrence needs the other)."""
+    if k == 0:
+        s[0] = math.sin(a[0])
+        c[0] = math.cos(a[0])
+        return
+    ss = 0.0
+    cc = 0.0
+    for j in range(1, k + 1):
+        ja = j * a[j]
+        ss += ja * c[k - j]
+        cc += ja * s[k - j]
+    s[k] = ss / k
+    c[k] = -cc / k
+
+
+@njit(cache=True, error_model="numpy")
+def taylor_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
+               atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
+               directions, actions, ev_t, ev_y, ev_i, compensation):
+    """Adaptive Taylor method of order p = ceil(−½ ln min(rtol, atol) + 1); see the module docstring.
+
+    The arguments, statuses and resuming are those of ``dop853_run``
+    (``drivers.py``), then ``compensation`` float64[n], the carry of the
+    compensated summation, kept across calls by the caller (start with
+    zeros); an empty array turns compensation off.  ``clock[1]`` holds the
+    last step taken.
+    """
+    n = y.shape[0]
+    cap = ts.shape[0]
+    n_eval = t_eval.shape[0]
+    use_t_eval = n_eval > 0
+    order = max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol)) + 1.0)))
+    rho_factor = math.exp(-0.7 / (order - 1)) / (math.e * math.e)
+
+    # Work arrays, allocated once per call.
+    X = np.empty((n, order + 1))
+    W = np.empty((TAYLOR_WORK, order + 1))
+    y_new = np.empty(n)
+    compensated = compensation.shape[0] == n
+
+    n_saved = 0
+    t = clock[0]
+    if t >= t_end:
+        return _ODE_DONE, n_saved
+    while counters[3] < n_eval and t_eval[counters[3]] <= t:
+        counters[3] += 1
+
+    while True:
+        if t >= t_end:
+            return _ODE_DONE, n_saved
+        if counters[1] >= max_steps:
+            return _ODE_MAX_STEPS, n_saved
+        if counters[1] >= pause_at:
+            return _ODE_PAUSED, n_saved
+
+        # The series at (t, y), and the step from its last two coefficients.
+        status = taylor_coefficients(t, y, p, X, W)
+        counters[0] += 1
+        if status != 0:
+            return _ODE_RHS_FAILED, n_saved
+        norm_y = 0.0
+        norm_last = 0.0
+        norm_before = 0.0
+        finite = True
+        for i in range(n):
+            for kk in range(order + 1):
+                finite = finite and np.isfinite(X[i, kk])
+            norm_y = max(norm_y, abs(y[i]))
+            norm_last = max(norm_last, abs(X[i, order]))
+            norm_before = max(norm_before, abs(X[i, order - 1]))
+        if not finite:
+            return _ODE_NONFINITE, n_saved
+        scale = 1.0 if rtol * norm_y <= atol else norm_y
+        rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
+        h = min(rho * rho_factor, max_step)     # inf when both coefficients vanish
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        if not h >= min_step:                   # (true for NaN)
+            return _ODE_STEP_TOO_SMALL if h < min_step else _ODE_NONFINITE, n_saved
+        t_new = t + h
+        if t_new > t_end:
+            t_new = t_end
+        h = t_new - t
+
+        # Stop before a step whose outputs would not fit (as in dop853_run).
+        room = cap - n_saved
+        need = 0
+        if use_t_eval:
+            j = counters[3]
+            while j < n_eval and t_eval[j] <= t_new and need <= room:
+                need += 1
+                j += 1
+        elif counters[4] + 1 >= save_every or t_new >= t_end:
+            need = 1
+        if need > room and (n_saved > 0 or not use_t_eval):
+            return _ODE_BUFFER_FULL, n_saved
+
+        # The new state: the series at h (Horner), its increment added with compensation.
+        for i in range(n):
+            acc = 0.0
+            for kk in range(order, 0, -1):
+                acc = (acc + X[i, kk]) * h
+            if compensated:
+                increment = acc - compensation[i]
+                y_new[i] = y[i] + increment
+                compensation[i] = (y_new[i] - y[i]) - increment
+            else:
+                y_new[i] = y[i] + acc
+            if not np.isfinite(y_new[i]):
+                return _ODE_NONFINITE, n_saved
+
+        stop = False
+
+        # Outputs of the step t -> t_new: t_eval points on the series, or every save_every-th step.
+        if use_t_eval:
+            j = counters[3]
+            while j < n_eval and t_eval[j] <= t_new and n_saved < cap:
+                te = t_eval[j]
+                ts[n_saved] = te
+                if te == t_new:
+                    for i in range(n):
+                        ys[n_saved, i] = y_new[i]
+                else:
+                    u = te - t
+                    for i in range(n):
+                        acc = 0.0
+                        for kk in range(order, 0, -1):
+                            acc = (acc + X[i, kk]) * u
+                        ys[n_saved, i] = y[i] + acc
+                n_saved += 1
+                j += 1
+            counters[3] = j
+            if j < n_eval and t_eval[j] <= t_new:
+                return _ODE_BUFFER_FULL, n_saved    # more points in one step than a whole buffer
+        else:
+            counters[4] += 1
+            if counters[4] >= save_every or t_new >= t_end or stop:
+                ts[n_saved] = t_new
+                for i in range(n):
+                    ys[n_saved, i] = y_new[i]
+                n_saved += 1
+                counters[4] = 0
+
+        # Commit the step.
+        for i in range(n):
+            y[i] = y_new[i]
+        t = t_new
+        clock[0] = t
+        clock[1] = h
+        counters[1] += 1
+        if stop:
+            return _ODE_EVENT, n_saved
+
+
 # ----------------------------------------------------------------------------
 # lagcomp/codegen/templates/sweeps.py, once per driver
 

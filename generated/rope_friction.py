@@ -2465,6 +2465,10 @@ def sweep_dop853_lanes(Y0, P, t0, t_end, rtol, atol, max_step, max_steps, save_e
             energy_stats[a + l, 1] = deviation[l]
 
 
+#: Why this module has no Taylor integrator (method='taylor').
+TAYLOR_REFUSED = 'the function Piecewise (no Taylor recurrence for it)'
+
+
 # ----------------------------------------------------------------------------
 # lagcomp/codegen/templates/sweeps.py, once per driver
 

@@ -2701,6 +2701,494 @@ def sweep_dop853_lanes(Y0, P, t0, t_end, rtol, atol, max_step, max_steps, save_e
             energy_stats[a + l, 1] = deviation[l]
 
 
+@njit(cache=True, error_model="numpy")
+def taylor_coefficients(t, y, p, X, W):
+    """Normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!, k = 0..order (order = X.shape[1] − 1),
+    of the solution through y at t; W is a work array of shape (TAYLOR_WORK, order + 1).
+
+    One pass over the operations of `rhs` per order k (lagcomp.codegen.taylor gives the
+    recurrences); each block is commented with the statement of `rhs` it computes.
+    Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
+    order = X.shape[1] - 1
+    theta = X[1]
+    psi_dot = X[3]
+    theta_dot = X[4]
+    phi_dot = X[5]
+    M = p[0]
+    l = p[1]
+    g = p[2]
+    I1 = p[3]
+    I3 = p[4]
+    _c2 = M*l**2
+    _c3 = I1 + _c2
+    _m1_0 = 0.0
+    _m1_1 = _c3
+    _m2_1 = 0.0
+    _m2_2 = I3
+    _k18 = 2.0*I3
+    _k33 = M*g*l
+    _c8 = W[0]
+    _c0 = W[1]
+    _c1 = W[2]
+    _c4 = W[3]
+    _c5 = W[4]
+    _c6 = W[5]
+    _c7 = W[6]
+    _c9 = W[7]
+    _c10 = W[8]
+    _u9 = W[9]
+    _u10 = W[10]
+    _u11 = W[11]
+    _u12 = W[12]
+    _u13 = W[13]
+    _m0_0 = W[14]
+    _u15 = W[15]
+    _u16 = W[16]
+    _u17 = W[17]
+    _u19 = W[18]
+    _u20 = W[19]
+    _u21 = W[20]
+    _u22 = W[21]
+    _u23 = W[22]
+    _f0 = W[23]
+    _u25 = W[24]
+    _u26 = W[25]
+    _u27 = W[26]
+    _u28 = W[27]
+    _u29 = W[28]
+    _u30 = W[29]
+    _u31 = W[30]
+    _u32 = W[31]
+    _u34 = W[32]
+    _f1 = W[33]
+    _u36 = W[34]
+    _f2 = W[35]
+    _l1_0 = W[36]
+    _l2_0 = W[37]
+    _u40 = W[38]
+    _u41 = W[39]
+    _d1 = W[40]
+    _u43 = W[41]
+    _u44 = W[42]
+    _u45 = W[43]
+    _l2_1 = W[44]
+    _u47 = W[45]
+    _u48 = W[46]
+    _u49 = W[47]
+    _u50 = W[48]
+    _u51 = W[49]
+    _d2 = W[50]
+    _u53 = W[51]
+    _z1 = W[52]
+    _u55 = W[53]
+    _u56 = W[54]
+    _u57 = W[55]
+    _z2 = W[56]
+    _x2 = W[57]
+    _u60 = W[58]
+    _u61 = W[59]
+    _x1 = W[60]
+    _u63 = W[61]
+    _u64 = W[62]
+    _u65 = W[63]
+    _u66 = W[64]
+    _x0 = W[65]
+    for i in range(6):
+        X[i, 0] = y[i]
+    for k in range(order):
+        # _c0 = math.cos(theta)
+        _taylor_sin_cos(theta, _c8, _c0, k)
+        # _c1 = _c0**2
+        _c1[k] = _taylor_square(_c0, k)
+        # _c4 = I3*_c0
+        _c4[k] = I3*_c0[k]
+        # _c5 = I1*_c0
+        _c5[k] = I1*_c0[k]
+        # _c6 = 2.0*psi_dot
+        _c6[k] = 2.0*psi_dot[k]
+        # _c7 = _c0*_c2
+        _c7[k] = _c2*_c0[k]
+        # _c8 = math.sin(theta)
+        # _c9 = _c8*theta_dot
+        _c9[k] = _taylor_mul(_c8, theta_dot, k)
+        # _c10 = psi_dot**2
+        _c10[k] = _taylor_square(psi_dot, k)
+        # _m0_0 = -I1*_c1 + I3*_c1 - _c1*_c2 + _c3
+        _u9[k] = I3*_c1[k]
+        _u10[k] = I1*_c1[k]
+        _u11[k] = _c2*_c1[k]
+        _u12[k] = _u9[k] - _u10[k]
+        _u13[k] = _u12[k] - _u11[k]
+        _m0_0[k] = _u13[k] + _c3 if k == 0 else _u13[k]
+        # _m2_0 = _c4
+        # _f0 = _c9*(2.0*I3*_c0*psi_dot + I3*phi_dot - _c5*_c6 - _c6*_c7)
+        _u15[k] = I3*phi_dot[k]
+        _u16[k] = _taylor_mul(_c5, _c6, k)
+        _u17[k] = _taylor_mul(_c6, _c7, k)
+        _u19[k] = _taylor_mul(_c0, psi_dot, k)
+        _u20[k] = _k18*_u19[k]
+        _u21[k] = _u15[k] + _u20[k]
+        _u22[k] = _u21[k] - _u16[k]
+        _u23[k] = _u22[k] - _u17[k]
+        _f0[k] = _taylor_mul(_c9, _u23, k)
+        # _f1 = _c8*(-I3*phi_dot*psi_dot + M*g*l - _c10*_c4 + _c10*_c5 + _c10*_c7)
+        _u25[k] = _taylor_mul(_c10, _c5, k)
+        _u26[k] = _taylor_mul(_c10, _c7, k)
+        _u27[k] = _taylor_mul(_c10, _c4, k)
+        _u28[k] = _taylor_mul(phi_dot, psi_dot, k)
+        _u29[k] = I3*_u28[k]
+        _u30[k] = _u25[k] + _u26[k]
+        _u31[k] = _u30[k] - _u27[k]
+        _u32[k] = _u31[k] - _u29[k]
+        _u34[k] = _u32[k] + _k33 if k == 0 else _u32[k]
+        _f1[k] = _taylor_mul(_c8, _u34, k)
+        # _f2 = I3*_c9*psi_dot
+        _u36[k] = _taylor_mul(_c9, psi_dot, k)
+        _f2[k] = I3*_u36[k]
+        # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
+        if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
+            return 1
+        _l1_0[k] = _taylor_rdiv(_m1_0, _m0_0, _l1_0, k)
+        _l2_0[k] = _taylor_div(_c4, _m0_0, _l2_0, k)
+        _u40[k] = _taylor_square(_l1_0, k)
+        _u41[k] = _taylor_mul(_u40, _m0_0, k)
+        _d1[k] = _m1_1 - _u41[k] if k == 0 else -_u41[k]
+        if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
+            return 2
+        _u43[k] = _taylor_mul(_l2_0, _l1_0, k)
+        _u44[k] = _taylor_mul(_u43, _m0_0, k)
+        _u45[k] = _m2_1 - _u44[k] if k == 0 else -_u44[k]
+        _l2_1[k] = _taylor_div(_u45, _d1, _l2_1, k)
+        _u47[k] = _taylor_square(_l2_0, k)
+        _u48[k] = _taylor_mul(_u47, _m0_0, k)
+        _u49[k] = _m2_2 - _u48[k] if k == 0 else -_u48[k]
+        _u50[k] = _taylor_square(_l2_1, k)
+        _u51[k] = _taylor_mul(_u50, _d1, k)
+        _d2[k] = _u49[k] - _u51[k]
+        if k == 0 and not _d2[0] > _PIVOT_TOLERANCE*abs(_m2_2):
+            return 3
+        _u53[k] = _taylor_mul(_l1_0, _f0, k)
+        _z1[k] = _f1[k] - _u53[k]
+        _u55[k] = _taylor_mul(_l2_0, _f0, k)
+        _u56[k] = _f2[k] - _u55[k]
+        _u57[k] = _taylor_mul(_l2_1, _z1, k)
+        _z2[k] = _u56[k] - _u57[k]
+        _x2[k] = _taylor_div(_z2, _d2, _x2, k)
+        _u60[k] = _taylor_div(_z1, _d1, _u60, k)
+        _u61[k] = _taylor_mul(_l2_1, _x2, k)
+        _x1[k] = _u60[k] - _u61[k]
+        _u63[k] = _taylor_div(_f0, _m0_0, _u63, k)
+        _u64[k] = _taylor_mul(_l1_0, _x1, k)
+        _u65[k] = _u63[k] - _u64[k]
+        _u66[k] = _taylor_mul(_l2_0, _x2, k)
+        _x0[k] = _u65[k] - _u66[k]
+        # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
+        X[0, k + 1] = psi_dot[k]/(k + 1)
+        X[1, k + 1] = theta_dot[k]/(k + 1)
+        X[2, k + 1] = phi_dot[k]/(k + 1)
+        X[3, k + 1] = _x0[k]/(k + 1)
+        X[4, k + 1] = _x1[k]/(k + 1)
+        X[5, k + 1] = _x2[k]/(k + 1)
+    return 0
+
+
+#: Rows of the work array of `taylor_coefficients` (74 series operations per order).
+TAYLOR_WORK = 66
+
+
+# ----------------------------------------------------------------------------
+# lagcomp/codegen/templates/taylor.py
+
+"""Taylor-series integrator: a *template*, appended to the generated modules that have a Taylor kernel.
+
+Like ``drivers.py``, this text is appended verbatim to a generated module,
+after ``drivers.py`` and the module's ``taylor_coefficients`` kernel
+(`lagcomp.codegen.taylor` emits it for unconstrained systems whose
+equations use only functions with a Taylor recurrence).  The module provides
+``taylor_coefficients(t, y, p, X, W)``, ``TAYLOR_WORK``, ``event_values`` and
+the helpers and status codes of ``drivers.py`` (``_ODE_*``, and in modules
+with events ``_event_crossings``, ``_record_events``, ``_dense_state``).
+
+The ``_taylor_*`` helpers are the recurrences of `lagcomp.codegen.taylor`:
+each returns (or writes) coefficient k of its result from coefficients
+0..k of its arguments and 0..k−1 of the result itself.  They are small
+enough for LLVM to inline into ``taylor_coefficients``.
+
+``taylor_run`` has the calling convention of ``dop853_run`` (the module
+docstring of ``drivers.py``: arguments, statuses, output buffer, events,
+resuming), without tableau arrays.  Each step:
+
+1. Order and step (Jorba & Zou, "A software package for the numerical
+   integration of ODEs by means of high-order Taylor methods", Experiment.
+   Math. 14 (2005) 99-117, sec. 3.2; the rule heyoka uses): the order is
+   fixed for the run, ``p = ceil(−½ ln ε + 1)`` with ε = min(rtol, atol)
+   (20 at ε = 2.2e-16).  At each step the series of the solution to order p
+   is computed, and with ``‖·‖`` the max norm over the state,
+   ``ρ_j = (s / ‖y[j]‖)^(1/j)`` for j = p − 1 and p, s = ‖y‖ (relative
+   control) or 1 when ``rtol ‖y‖ ≤ atol`` (absolute control); the step is
+   ``h = min(ρ_{p−1}, ρ_p) · exp(−0.7/(p − 1)) / e²``, clamped to
+   ``max_step`` and to the end of the span.  Then the truncation term is
+   about ``s e^(−2p) ≤ ε s``: no step is ever rejected, and ``nrejected``
+   stays 0.  When both coefficients vanish (a polynomial solution) the step
+   is only limited by ``max_step`` and the span.
+2. The new state is the series at h, summed by Horner's rule from the top
+   order down, and its increment added to y with compensated (Kahan)
+   summation; the carry is an argument, so that a run resumed chunk by
+   chunk is bitwise the same as one call (simulate keeps it; sweeps pass an
+   empty array, which turns compensation off).
+3. Dense output is the series itself: ``t_eval`` points and events inside
+   the step are evaluated on it exactly (``_dense_state`` kind 0), events
+   located by Brent's method on it as for DOP853.
+
+``nfev`` counts evaluations of ``taylor_coefficients`` (one per step).
+"""
+
+# ruff: noqa: F821  (taylor_coefficients, TAYLOR_WORK, event_values, _ODE_* ... come from the module)
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_mul(a, b, k):
+    """Coefficient k of a·b."""
+    s = 0.0
+    for j in range(k + 1):
+        s += a[j] * b[k - j]
+    return s
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_square(a, k):
+    """Coefficient k of a² (half the products of `_taylor_mul`)."""
+    s = 0.0
+    for j in range((k + 1) // 2):
+        s += a[j] * a[k - j]
+    s *= 2.0
+    if k % 2 == 0:
+        s += a[k // 2] * a[k // 2]
+    return s
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_div(a, b, w, k):
+    """Coefficient k of w = a/b, from w[0..k−1]."""
+    s = a[k]
+    for j in range(1, k + 1):
+        s -= b[j] * w[k - j]
+    return s / b[0]
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_rdiv(c, b, w, k):
+    """Coefficient k of w = c/b for a constant c, from w[0..k−1]."""
+    s = c if k == 0 else 0.0
+    for j in range(1, k + 1):
+        s -= b[j] * w[k - j]
+    return s / b[0]
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_sqrt(a, w, k):
+    """Coefficient k of w = √a, from w[0..k−1]."""
+    if k == 0:
+        return math.sqrt(a[0])
+    s = a[k]
+    for j in range(1, k):
+        s -= w[j] * w[k - j]
+    return s / (2.0 * w[0])
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_pow(a, alpha, w, k):
+    """Coefficient k of w = a^alpha (constant alpha, a[0] ≠ 0), from w[0..k−1]."""
+    if k == 0:
+        return a[0] ** alpha
+    s = 0.0
+    for j in range(k):
+        s += (alpha * (k - j) - j) * a[k - j] * w[j]
+    return s / (k * a[0])
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_exp(a, w, k):
+    """Coefficient k of w = exp(a), from w[0..k−1]."""
+    if k == 0:
+        return math.exp(a[0])
+    s = 0.0
+    for j in range(1, k + 1):
+        s += j * a[j] * w[k - j]
+    return s / k
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_log(a, w, k):
+    """Coefficient k of w = log(a), from w[0..k−1]."""
+    if k == 0:
+        return math.log(a[0])
+    s = 0.0
+    for j in range(1, k):
+        s += j * w[j] * a[k - j]
+    return (a[k] - s / k) / a[0]
+
+
+@njit(cache=True, error_model="numpy")
+def _taylor_sin_cos(a, s, c, k):
+    """Coefficient k of s = sin(a) and c = cos(a) together (each recurrence needs the other)."""
+    if k == 0:
+        s[0] = math.sin(a[0])
+        c[0] = math.cos(a[0])
+        return
+    ss = 0.0
+    cc = 0.0
+    for j in range(1, k + 1):
+        ja = j * a[j]
+        ss += ja * c[k - j]
+        cc += ja * s[k - j]
+    s[k] = ss / k
+    c[k] = -cc / k
+
+
+@njit(cache=True, error_model="numpy")
+def taylor_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
+               atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
+               directions, actions, ev_t, ev_y, ev_i, compensation):
+    """Adaptive Taylor method of order p = ceil(−½ ln min(rtol, atol) + 1); see the module docstring.
+
+    The arguments, statuses and resuming are those of ``dop853_run``
+    (``drivers.py``), then ``compensation`` float64[n], the carry of the
+    compensated summation, kept across calls by the caller (start with
+    zeros); an empty array turns compensation off.  ``clock[1]`` holds the
+    last step taken.
+    """
+    n = y.shape[0]
+    cap = ts.shape[0]
+    n_eval = t_eval.shape[0]
+    use_t_eval = n_eval > 0
+    order = max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol)) + 1.0)))
+    rho_factor = math.exp(-0.7 / (order - 1)) / (math.e * math.e)
+
+    # Work arrays, allocated once per call.
+    X = np.empty((n, order + 1))
+    W = np.empty((TAYLOR_WORK, order + 1))
+    y_new = np.empty(n)
+    compensated = compensation.shape[0] == n
+
+    n_saved = 0
+    t = clock[0]
+    if t >= t_end:
+        return _ODE_DONE, n_saved
+    while counters[3] < n_eval and t_eval[counters[3]] <= t:
+        counters[3] += 1
+
+    while True:
+        if t >= t_end:
+            return _ODE_DONE, n_saved
+        if counters[1] >= max_steps:
+            return _ODE_MAX_STEPS, n_saved
+        if counters[1] >= pause_at:
+            return _ODE_PAUSED, n_saved
+
+        # The series at (t, y), and the step from its last two coefficients.
+        status = taylor_coefficients(t, y, p, X, W)
+        counters[0] += 1
+        if status != 0:
+            return _ODE_RHS_FAILED, n_saved
+        norm_y = 0.0
+        norm_last = 0.0
+        norm_before = 0.0
+        finite = True
+        for i in range(n):
+            for kk in range(order + 1):
+                finite = finite and np.isfinite(X[i, kk])
+            norm_y = max(norm_y, abs(y[i]))
+            norm_last = max(norm_last, abs(X[i, order]))
+            norm_before = max(norm_before, abs(X[i, order - 1]))
+        if not finite:
+            return _ODE_NONFINITE, n_saved
+        scale = 1.0 if rtol * norm_y <= atol else norm_y
+        rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
+        h = min(rho * rho_factor, max_step)     # inf when both coefficients vanish
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        if not h >= min_step:                   # (true for NaN)
+            return _ODE_STEP_TOO_SMALL if h < min_step else _ODE_NONFINITE, n_saved
+        t_new = t + h
+        if t_new > t_end:
+            t_new = t_end
+        h = t_new - t
+
+        # Stop before a step whose outputs would not fit (as in dop853_run).
+        room = cap - n_saved
+        need = 0
+        if use_t_eval:
+            j = counters[3]
+            while j < n_eval and t_eval[j] <= t_new and need <= room:
+                need += 1
+                j += 1
+        elif counters[4] + 1 >= save_every or t_new >= t_end:
+            need = 1
+        if need > room and (n_saved > 0 or not use_t_eval):
+            return _ODE_BUFFER_FULL, n_saved
+
+        # The new state: the series at h (Horner), its increment added with compensation.
+        for i in range(n):
+            acc = 0.0
+            for kk in range(order, 0, -1):
+                acc = (acc + X[i, kk]) * h
+            if compensated:
+                increment = acc - compensation[i]
+                y_new[i] = y[i] + increment
+                compensation[i] = (y_new[i] - y[i]) - increment
+            else:
+                y_new[i] = y[i] + acc
+            if not np.isfinite(y_new[i]):
+                return _ODE_NONFINITE, n_saved
+
+        stop = False
+
+        # Outputs of the step t -> t_new: t_eval points on the series, or every save_every-th step.
+        if use_t_eval:
+            j = counters[3]
+            while j < n_eval and t_eval[j] <= t_new and n_saved < cap:
+                te = t_eval[j]
+                ts[n_saved] = te
+                if te == t_new:
+                    for i in range(n):
+                        ys[n_saved, i] = y_new[i]
+                else:
+                    u = te - t
+                    for i in range(n):
+                        acc = 0.0
+                        for kk in range(order, 0, -1):
+                            acc = (acc + X[i, kk]) * u
+                        ys[n_saved, i] = y[i] + acc
+                n_saved += 1
+                j += 1
+            counters[3] = j
+            if j < n_eval and t_eval[j] <= t_new:
+                return _ODE_BUFFER_FULL, n_saved    # more points in one step than a whole buffer
+        else:
+            counters[4] += 1
+            if counters[4] >= save_every or t_new >= t_end or stop:
+                ts[n_saved] = t_new
+                for i in range(n):
+                    ys[n_saved, i] = y_new[i]
+                n_saved += 1
+                counters[4] = 0
+
+        # Commit the step.
+        for i in range(n):
+            y[i] = y_new[i]
+        t = t_new
+        clock[0] = t
+        clock[1] = h
+        counters[1] += 1
+        if stop:
+            return _ODE_EVENT, n_saved
+
+
 # ----------------------------------------------------------------------------
 # lagcomp/codegen/templates/sweeps.py, once per driver
 

@@ -1931,6 +1931,10 @@ def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
             counters[4] = 0
 
 
+#: Why this module has no Taylor integrator (method='taylor').
+TAYLOR_REFUSED = 'constraints (their multipliers are not covered)'
+
+
 # ----------------------------------------------------------------------------
 # lagcomp/codegen/templates/sweeps.py, once per driver
 

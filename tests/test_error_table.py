@@ -75,6 +75,7 @@ def models(compiled, cache_dir):
         "failing": lc.compile(failing, cache_dir=cache_dir),
         "degenerate": lc.compile(degenerate, cache_dir=cache_dir),
         "walled": lc.compile(walled, cache_dir=cache_dir),
+        "friction": compiled("rope_friction"),
     }
 
 
@@ -192,6 +193,7 @@ CASES = {
     "bad-t-eval": (_simulate("pendulum", t_eval=[0.5, 2.0]), "`t_eval`"),
     "unknown-method": (_simulate("pendulum", method="euler"), "'euler'"),
     "method-not-applicable": (_simulate("rod", method="verlet", dt=0.1), "`verlet`"),
+    "taylor-not-applicable": (_simulate("friction", method="taylor"), "`taylor` cannot integrate 'rope_friction'"),
     "unknown-implicit-solver": (_simulate("pendulum", method="gauss2", dt=0.1, implicit_solver="broyden"), "broyden"),
     "bad-record": (_simulate("pendulum", record="everything"), "`record`"),
     "unknown-event": (_simulate("pendulum", events=["apex"]), "['apex']"),

@@ -24,6 +24,7 @@ from importlib import resources
 
 from lagcomp import __version__
 from lagcomp.codegen.printer import to_code
+from lagcomp.codegen.taylor import taylor_source
 from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR
 
 INDENT = "    "
@@ -302,6 +303,7 @@ def emit(ir: ModuleIR) -> str:
     for name in ("linear_solvers", *hamiltonian, "drivers", "symplectic", *lanes):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")
         parts.append(template(name, events=bool(ir.event_names)))
+    parts.append(taylor_source(ir, events=bool(ir.event_names)))  # taylor_coefficients and taylor_run, or why not
     parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n")
     parts.append(_sweeps())
     return "".join(parts)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from lagcomp.integrate import collocation, compositions, tableaux
 from lagcomp.integrate.collocation import Collocation
 from lagcomp.integrate.compositions import Composition
@@ -20,6 +22,11 @@ IMPLICIT_SOLVERS = {"fixed_point": None, "newton": True}
 #: (14 evaluations of f per step) against 0.19 s for Newton (9 evaluations, one Jacobian and one LU);
 #: measured with bench/bench_collocation.py, which also shows the stiff cases where Newton wins.
 DEFAULT_IMPLICIT_SOLVER = "fixed_point"
+#: Machine epsilon of float64; the Taylor method's default tolerance (heyoka's default too).
+EPS = 2.220446049250313e-16
+#: Relative tolerances below this (100 machine epsilons) ask more of the Runge-Kutta error estimates
+#: than float64 can give.
+RTOL_MIN = 100 * EPS
 #: Iterations (fixed-point sweeps or Newton steps) allowed per step before the run stops (status -5).
 MAX_STAGE_ITERATIONS = 100
 
@@ -36,10 +43,14 @@ class Method:
     order: int
     adaptive: bool
     driver: str
-    tableau: Tableau | Composition | Collocation
+    tableau: Tableau | Composition | Collocation | None
     summary: str
     separable_only: bool = False
     unconstrained_only: bool = False
+    #: Default tolerances (None: atol follows rtol), and the smallest rtol accepted.
+    default_rtol: float = 1e-8
+    default_atol: float | None = 1e-10
+    rtol_min: float = RTOL_MIN
 
     @property
     def implicit(self) -> bool:
@@ -54,6 +65,8 @@ class Method:
         """
         if self.implicit:
             return (*self.tableau.driver_arguments(), MAX_STAGE_ITERATIONS, IMPLICIT_SOLVERS[implicit_solver])
+        if self.tableau is None:  # the Taylor method: its order follows from the tolerances; no
+            return (np.zeros(0),)   # compensated summation (simulate passes a carry of size n instead)
         if isinstance(self.tableau, Composition):
             return self.tableau.driver_arguments()
         return driver_arguments(self.tableau)
@@ -79,6 +92,10 @@ METHODS = {
                "2-stage Gauss-Legendre on (q, p), symplectic, order 4", unconstrained_only=True),
         Method("gauss3", 6, False, "collocation_run", collocation.GAUSS3,
                "3-stage Gauss-Legendre on (q, p), symplectic, order 6", unconstrained_only=True),
+        Method("taylor", 20, True, "taylor_run", None,
+               "Taylor series to order ceil(-ln(tol)/2 + 1) (20 at machine precision), adaptive, dense "
+               "output from the series (Jorba & Zou); unconstrained systems", unconstrained_only=True,
+               default_rtol=EPS, default_atol=None, rtol_min=EPS),
     )
 }
 

@@ -93,12 +93,22 @@ def _event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     return directions, actions
 
 
-def tolerances(rtol, atol) -> tuple[float, float]:
-    """`rtol` and `atol` checked: positive, finite, and rtol in [100 eps, 1) (float64 cannot do better)."""
+def tolerances(rtol, atol, m=None) -> tuple[float, float]:
+    """`rtol` and `atol` checked: positive, finite, and rtol in [100 eps, 1) (float64 cannot do better).
+
+    With a method `m`, None stands for its defaults (`Method.default_rtol`, `default_atol`) and
+    rtol may go down to its `rtol_min` (machine epsilon for the Taylor method, which has no error
+    estimate to keep above rounding).
+    """
+    if m is not None:
+        rtol = m.default_rtol if rtol is None else rtol
+        atol = (rtol if m.default_atol is None else m.default_atol) if atol is None else atol
     rtol, atol = _positive(rtol, "rtol"), _positive(atol, "atol")
-    if not RTOL_MIN <= rtol < 1:
-        raise OptionError(f"`rtol` = {rtol:g} is out of range: it must be at least {RTOL_MIN:.2g} (100 machine "
-                          "epsilons; float64 cannot do better) and below 1.")
+    rtol_min = RTOL_MIN if m is None else m.rtol_min
+    if not rtol_min <= rtol < 1:
+        reason = "100 machine epsilons; float64 cannot do better" if rtol_min >= RTOL_MIN else "machine epsilon"
+        raise OptionError(f"`rtol` = {rtol:g} is out of range: it must be at least {rtol_min:.2g} ({reason}) "
+                          "and below 1.")
     return rtol, atol
 
 
@@ -107,13 +117,15 @@ def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, option
     t0, t1 = clock[0], options["t1"]
     if options["dt"] is not None:
         raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own (use `first_step`).")
-    rtol, atol = tolerances(options["rtol"], options["atol"])
+    rtol, atol = tolerances(options["rtol"], options["atol"], m)
     if options["first_step"] is not None:
         clock[1] = _positive(options["first_step"], "first_step")
     max_step = options["max_step"]
     max_step = _positive(max_step, "max_step") if max_step != math.inf else math.inf
     events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
     driver, tableau_arrays = getattr(kernels, m.driver), m.driver_arguments()
+    if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
+        tableau_arrays = (np.zeros(y.size),)
 
     def advance(ts, ys, pause_at, event_buffers):
         return driver(y, clock, counters, p, *run_args, t1, rtol, atol, max_step, options["max_steps"], pause_at,
@@ -147,7 +159,12 @@ def _count(value, name: str) -> int:
 
 
 def check_method(model, m) -> None:
-    """Refuse a method that does not apply to `model` (separable-only or unconstrained-only methods)."""
+    """Refuse a method that does not apply to `model` (separable-only or unconstrained-only methods,
+    and the Taylor method where the module has no Taylor kernel: ``TAYLOR_REFUSED`` says why)."""
+    refused = getattr(model.kernels, "TAYLOR_REFUSED", None) if m.name == "taylor" and not model.k else None
+    if refused is not None:
+        raise OptionError(f"`taylor` cannot integrate {model.name!r}: its equations hold {refused}. "
+                          "Use dop853 (adaptive, dense output, events) instead.")
     if m.separable_only and not model.separable:
         raise OptionError(
             f"`{m.name}` needs a separable system (no constraints, a constant mass matrix and forces that do not "
@@ -159,8 +176,8 @@ def check_method(model, m) -> None:
                           "Use dop853, dopri5 or rk4.")
 
 
-def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=1e-8,
-             atol=1e-10, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
+def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=None,
+             atol=None, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
              events=None, record="trajectory", progress=None, throw=False, max_residual=None) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""

@@ -335,12 +335,21 @@ def _dense_state(kind, F, y, t, h, tau, out):
     """State at time ``tau`` inside the step (t, t + h) from its dense output, into ``out``.
 
     ``kind`` 5: DOPRI5, ``F`` holds Q with ``y(t + x h) = y + h sum_m Q[m] x^(m+1)``;
-    ``kind`` 8: DOP853, ``F`` holds the rows of ``contd8`` (see ``dop853_run``).
+    ``kind`` 8: DOP853, ``F`` holds the rows of ``contd8`` (see ``dop853_run``);
+    ``kind`` 0: the Taylor method, ``F`` holds the series, ``y(t + u) = sum_m F[i, m] u^m``
+    (``taylor_run`` in taylor.py).
     """
     n = y.shape[0]
     rows = F.shape[0]
     x = (tau - t) / h
-    if kind == 5:
+    if kind == 0:
+        u = tau - t
+        for i in range(n):
+            acc = 0.0
+            for m in range(F.shape[1] - 1, -1, -1):
+                acc = acc * u + F[i, m]
+            out[i] = acc
+    elif kind == 5:
         for i in range(n):
             acc = 0.0
             for m in range(rows - 1, -1, -1):

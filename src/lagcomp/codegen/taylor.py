@@ -1,0 +1,515 @@
+"""Taylor coefficients of the solution, by automatic differentiation of the ``rhs`` kernel.
+
+The ``rhs`` kernel of an unconstrained system is a straight-line program:
+loads, CSE temporaries, the stores of q̇, M and F, and the LDLᵀ solve of
+M q̈ = F.  Split into elementary operations (add, sub, mul, div, square,
+sqrt, pow with a constant exponent, exp, log, sin and cos together), every
+intermediate value u(t) along the solution has a Taylor series
+u(t + τ) = Σ_k u[k] τ^k whose *normalized* coefficients u[k] = u⁽ᵏ⁾/k!
+follow from those of its arguments by the standard recurrences
+(Moore 1966; Jorba & Zou, Experiment. Math. 14 (2005) 99-117, sec. 3):
+
+    w = a ± b      w[k] = a[k] ± b[k]
+    w = a b        w[k] = Σ_{j=0..k} a[j] b[k−j]
+    w = a²         w[k] = 2 Σ_{j<k/2} a[j] a[k−j]  (+ a[k/2]² for even k)
+    w = a / b      w[k] = (a[k] − Σ_{j=1..k} b[j] w[k−j]) / b[0]
+    w = √a         w[k] = (a[k] − Σ_{j=1..k−1} w[j] w[k−j]) / (2 w[0])
+    w = a^α        w[k] = Σ_{j=0..k−1} (α (k−j) − j) a[k−j] w[j] / (k a[0])
+    w = exp a      w[k] = Σ_{j=1..k} j a[j] w[k−j] / k
+    w = log a      w[k] = (a[k] − Σ_{j=1..k−1} j w[j] a[k−j] / k) / a[0]
+    s, c = sin a, cos a
+                   s[k] = Σ_{j=1..k} j a[j] c[k−j] / k,  c[k] = −Σ_{j=1..k} j a[j] s[k−j] / k
+
+and the state itself from the ODE: y[k+1] = f(y)[k] / (k + 1).  So one pass
+over the program per order k, in order k = 0, 1, ..., p − 1, gives the
+series of the solution to order p at a point.  Values that depend on the
+parameters only are plain scalars computed once (their series is constant);
+time, when the equations depend on it, is the series (t, 1, 0, ...): t is
+treated as a state whose derivative is 1.  Integer powers become products
+(a[0] = 0 is allowed, as for q̇² at rest); other powers use the pow
+recurrence, which needs a[0] ≠ 0.
+
+`taylor_source` emits this as one numba function ``taylor_coefficients(t,
+y, p, X, W)`` with a line per operation, each commented with the scalar
+statement of ``rhs`` it came from, plus ``TAYLOR_WORK`` (rows of the work
+array ``W``); the driver ``taylor_run`` comes from ``templates/taylor.py``.
+Systems the method does not cover (constraints, or a function without a
+recurrence here: sign, Abs, Piecewise, ...) get ``TAYLOR_REFUSED``, a
+string saying why, instead.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from lagcomp.codegen.printer import to_code
+from lagcomp.ir import Kernel, LinearSolve, ModuleIR
+
+INDENT = "    "
+
+
+class Unsupported(Exception):
+    """The rhs holds something without a Taylor recurrence here (the message says what)."""
+
+
+@dataclass(frozen=True)
+class Op:
+    """One elementary operation at order k: ``line`` (template helper call or inline statement)."""
+
+    line: str
+    comment: str = ""
+
+
+@dataclass
+class TaylorProgram:
+    """The decomposed rhs: scalar setup, the series rows, the per-order body.
+
+    ``setup`` are statements before the order loop (parameter loads and
+    constants), ``rows`` the names of the series held in rows of the work
+    array ``W`` (in order), ``body`` the operations of one order k, and
+    ``checks`` the pivots of M tested at k = 0 (name of d_j, name of m_jj).
+    """
+
+    n_state: int
+    setup: list[str] = field(default_factory=list)
+    rows: list[str] = field(default_factory=list)
+    body: list[Op] = field(default_factory=list)
+    uses_t: bool = False
+
+    @property
+    def operation_count(self) -> int:
+        return sum(1 for op in self.body if not op.line.startswith(("if ", "#")))
+
+
+@dataclass(frozen=True)
+class Value:
+    """A value of the program: a series (name of a 1-d array of coefficients) or a scalar constant.
+
+    A constant is a sympy Number or a Symbol naming a scalar local.
+    """
+
+    series: str | None = None
+    const: sp.Expr | None = None
+
+    @property
+    def is_const(self) -> bool:
+        return self.series is None
+
+
+def _c(expr) -> Value:
+    return Value(const=sp.sympify(expr))
+
+
+class _Builder:
+    """Turns expressions over the rhs locals into elementary series operations."""
+
+    def __init__(self, n_state: int):
+        self.program = TaylorProgram(n_state=n_state)
+        self.env: dict[sp.Symbol, Value] = {}
+        self.count = 0
+        self.sincos: dict[str, tuple[Value, Value]] = {}
+        self.memo: dict[tuple, Value] = {}
+        self.renamed: dict[str, str] = {}
+        self.scalars: dict[sp.Expr, Value] = {}
+
+    # -- naming ---------------------------------------------------------------------------
+
+    def _new_series(self) -> str:
+        name = f"_u{self.count}"
+        self.count += 1
+        self.program.rows.append(name)
+        return name
+
+    def _scalar(self, expr: sp.Expr, name: str | None = None) -> Value:
+        """A constant, bound to a scalar local unless it is a number or a symbol already."""
+        expr = sp.sympify(expr)
+        if name is None and (expr.is_Number or expr.is_Symbol):
+            return _c(expr)
+        if name is None:
+            if expr in self.scalars:
+                return self.scalars[expr]
+            name = f"_k{self.count}"
+            self.count += 1
+            self.scalars[expr] = _c(sp.Symbol(name, real=True))
+        self.program.setup.append(f"{name} = {to_code(expr)}")
+        return _c(sp.Symbol(name, real=True))
+
+    def _emit(self, line: str, comment: str = "") -> None:
+        self.program.body.append(Op(line, comment))
+
+    def _op(self, key: tuple, make) -> Value:
+        """A series operation; equal operations on the same arguments are computed once."""
+        if key not in self.memo:
+            w = self._new_series()
+            make(w)
+            self.memo[key] = Value(series=w)
+        return self.memo[key]
+
+    # -- elementary operations on Values -------------------------------------------------
+
+    def add(self, a: Value, b: Value) -> Value:
+        if a.is_const and b.is_const:
+            return self._scalar(a.const + b.const)
+        if a.is_const:
+            a, b = b, a
+        if b.is_const:
+            if b.const == 0:
+                return a
+            return self._op(("add_c", a.series, b.const), lambda w: self._emit(
+                f"{w}[k] = {a.series}[k] + {to_code(b.const)} if k == 0 else {a.series}[k]"))
+        key = ("add",) + tuple(sorted((a.series, b.series)))
+        return self._op(key, lambda w: self._emit(f"{w}[k] = {a.series}[k] + {b.series}[k]"))
+
+    def neg(self, a: Value) -> Value:
+        if a.is_const:
+            return self._scalar(-a.const)
+        return self._op(("neg", a.series), lambda w: self._emit(f"{w}[k] = -{a.series}[k]"))
+
+    def sub(self, a: Value, b: Value) -> Value:
+        if b.is_const:
+            return self.add(a, self._scalar(-b.const))
+        if a.is_const:
+            if a.const == 0:
+                return self.neg(b)
+            return self._op(("rsub_c", a.const, b.series), lambda w: self._emit(
+                f"{w}[k] = {to_code(a.const)} - {b.series}[k] if k == 0 else -{b.series}[k]"))
+        return self._op(("sub", a.series, b.series), lambda w: self._emit(
+            f"{w}[k] = {a.series}[k] - {b.series}[k]"))
+
+    def mul(self, a: Value, b: Value) -> Value:
+        if a.is_const and b.is_const:
+            return self._scalar(a.const * b.const)
+        if a.is_const:
+            a, b = b, a
+        if b.is_const:
+            if b.const == 1:
+                return a
+            if b.const == 0:
+                return _c(0)
+            if b.const == -1:
+                return self.neg(a)
+            return self._op(("scale", a.series, b.const), lambda w: self._emit(
+                f"{w}[k] = {to_code(b.const)}*{a.series}[k]"))
+        if a.series == b.series:
+            return self.square(a)
+        key = ("mul",) + tuple(sorted((a.series, b.series)))
+        return self._op(key, lambda w: self._emit(f"{w}[k] = _taylor_mul({a.series}, {b.series}, k)"))
+
+    def square(self, a: Value) -> Value:
+        if a.is_const:
+            return self._scalar(a.const**2)
+        return self._op(("sqr", a.series), lambda w: self._emit(f"{w}[k] = _taylor_square({a.series}, k)"))
+
+    def div(self, a: Value, b: Value) -> Value:
+        if b.is_const:
+            if a.is_const:
+                return self._scalar(a.const / b.const)
+            return self.mul(a, self._scalar(1 / b.const))
+        if a.is_const:
+            if a.const == 0:
+                return _c(0)
+            return self._op(("rdiv", a.const, b.series), lambda w: self._emit(
+                f"{w}[k] = _taylor_rdiv({to_code(a.const)}, {b.series}, {w}, k)"))
+        return self._op(("div", a.series, b.series), lambda w: self._emit(
+            f"{w}[k] = _taylor_div({a.series}, {b.series}, {w}, k)"))
+
+    def sqrt(self, a: Value) -> Value:
+        if a.is_const:
+            return self._scalar(sp.sqrt(a.const))
+        return self._op(("sqrt", a.series), lambda w: self._emit(f"{w}[k] = _taylor_sqrt({a.series}, {w}, k)"))
+
+    def pow(self, a: Value, alpha: sp.Expr) -> Value:
+        if a.is_const:
+            return self._scalar(a.const**alpha)
+        if alpha.is_Integer or (alpha.is_Float and alpha == int(alpha)):
+            e = int(alpha)
+            if e == 0:
+                return _c(1)
+            if e < 0:
+                return self.div(_c(1), self.pow(a, sp.Integer(-e)))
+            if e == 1:
+                return a
+            half = self.pow(a, sp.Integer(e // 2))
+            return self.square(half) if e % 2 == 0 else self.mul(self.square(half), a)
+        if alpha == sp.S.Half:
+            return self.sqrt(a)
+        return self._op(("pow", a.series, alpha), lambda w: self._emit(
+            f"{w}[k] = _taylor_pow({a.series}, {to_code(sp.Float(alpha, 17))}, {w}, k)"))
+
+    def exp(self, a: Value) -> Value:
+        if a.is_const:
+            return self._scalar(sp.exp(a.const))
+        return self._op(("exp", a.series), lambda w: self._emit(f"{w}[k] = _taylor_exp({a.series}, {w}, k)"))
+
+    def log(self, a: Value) -> Value:
+        if a.is_const:
+            return self._scalar(sp.log(a.const))
+        return self._op(("log", a.series), lambda w: self._emit(f"{w}[k] = _taylor_log({a.series}, {w}, k)"))
+
+    def sin_cos(self, a: Value) -> tuple[Value, Value]:
+        if a.is_const:
+            return self._scalar(sp.sin(a.const)), self._scalar(sp.cos(a.const))
+        if a.series not in self.sincos:
+            s, c = self._new_series(), self._new_series()
+            self._emit(f"_taylor_sin_cos({a.series}, {s}, {c}, k)")
+            self.sincos[a.series] = (Value(series=s), Value(series=c))
+        return self.sincos[a.series]
+
+    # -- expressions ----------------------------------------------------------------------
+
+    def is_const(self, expr) -> bool:
+        """Whether `expr` depends on parameters only (its free symbols are bound to scalars)."""
+        for s in expr.free_symbols:
+            if s not in self.env:
+                raise Unsupported(f"unknown local {s}")
+            if not self.env[s].is_const:
+                return False
+        return True
+
+    def value(self, expr: sp.Expr) -> Value:
+        """The Value of a sympy expression over the bound locals."""
+        if expr.is_Symbol:
+            if expr.name == "t":
+                self.program.uses_t = True
+            self.is_const(expr)
+            return self.env[expr]
+        if self.is_const(expr):
+            return self._scalar(expr)
+        if expr.is_Add:
+            return self._sum(expr.args)
+        if expr.is_Mul:
+            return self._product(expr.args)
+        if expr.is_Pow:
+            base, e = expr.args
+            if not self.is_const(e):
+                return self.exp(self.mul(self.value(e), self.log(self.value(base))))
+            if not e.is_Number:
+                e_value = self.value(e)
+                return self.exp(self.mul(e_value, self.log(self.value(base))))
+            return self.pow(self.value(base), e)
+        f = expr.func
+        if f in (sp.sin, sp.cos):
+            s, c = self.sin_cos(self.value(expr.args[0]))
+            return s if f is sp.sin else c
+        if f is sp.tan:
+            return self.div(*self.sin_cos(self.value(expr.args[0])))
+        if f is sp.exp:
+            return self.exp(self.value(expr.args[0]))
+        if f is sp.log and len(expr.args) == 1:
+            return self.log(self.value(expr.args[0]))
+        if f in (sp.sinh, sp.cosh, sp.tanh):
+            a = self.value(expr.args[0])
+            ep, em = self.exp(a), self.exp(self.neg(a))
+            if f is sp.tanh:
+                return self.div(self.sub(ep, em), self.add(ep, em))
+            return self.mul(self.sub(ep, em) if f is sp.sinh else self.add(ep, em), _c(sp.S.Half))
+        raise Unsupported(f"the function {f.__name__} (no Taylor recurrence for it)")
+
+    def _sum(self, args) -> Value:
+        consts = [a for a in args if self.is_const(a)]
+        terms = []
+        for a in args:
+            if self.is_const(a):
+                continue
+            coefficient, _ = a.as_coeff_Mul()
+            terms.append((-1, self.value(-a)) if coefficient.is_negative else (1, self.value(a)))
+        terms.sort(key=lambda term: term[0] < 0)  # a positive term first when there is one
+        sign, acc = terms[0]
+        if sign < 0:
+            acc = self.neg(acc)
+        for sign, v in terms[1:]:
+            acc = self.add(acc, v) if sign > 0 else self.sub(acc, v)
+        if consts:
+            acc = self.add(acc, self.value(sp.Add(*consts)))
+        return acc
+
+    def _product(self, args) -> Value:
+        consts = [a for a in args if self.is_const(a)]
+        numerator, denominator = [], []
+        for a in args:
+            if self.is_const(a):
+                continue
+            if a.is_Pow and a.exp.is_Number and a.exp.is_negative:
+                denominator.append(a.base if a.exp == -1 else a.base ** (-a.exp))
+            else:
+                numerator.append(a)
+        c = self.value(sp.Mul(*consts)) if consts else _c(1)
+        num = den = None
+        for a in numerator:
+            v = self.value(a)
+            num = v if num is None else self.mul(num, v)
+        for a in denominator:
+            v = self.value(a)
+            den = v if den is None else self.mul(den, v)
+        if den is None:
+            return self.mul(num, c)
+        if num is None:
+            return self.div(c, den)
+        return self.mul(self.div(num, den), c)
+
+    def bind(self, name: str, expr: sp.Expr) -> Value:
+        """The Value of the statement ``name = expr`` of rhs; its last new series is renamed `name`."""
+        if self.is_const(expr):
+            return self._scalar(expr, name)
+        self._emit("#", f"{name} = {to_code(expr)}")
+        return self.name(self.value(expr), name)
+
+    def name(self, v: Value, name: str, start: int | None = None) -> Value:
+        """Call the series `v` `name` if this statement created it; else `v` as it is (an alias)."""
+        if v.is_const or v.series in self.renamed or not v.series.startswith("_u"):
+            return v
+        self.renamed[v.series] = name
+        return v
+
+
+def _ldlt(b: _Builder, solve: LinearSolve) -> list[Value]:
+    """x = M⁻¹ f by LDLᵀ in series arithmetic (the same steps as the emitted ``_unrolled_ldlt``).
+
+    The pivots are tested at order 0 (the value at t): k = 0 returns j + 1 there, as ``rhs`` does.
+    """
+    n = solve.n
+    m = [[b.env[sp.Symbol(_target(solve.m[i][j]), real=True)] for j in range(i + 1)] for i in range(n)]
+    f = [b.env[sp.Symbol(_target(solve.f[i]), real=True)] for i in range(n)]
+    b._emit("#", "Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.")
+    d, low = [], {}
+    for j in range(n):
+        dj = m[j][j]
+        for k in range(j):
+            dj = b.sub(dj, b.mul(b.square(low[j, k]), d[k]))
+        if dj.is_const:
+            dj = b._scalar(dj.const, f"_d{j}") if not dj.const.is_Symbol else dj
+        else:
+            dj = b.name(dj, f"_d{j}")
+        d.append(dj)
+        mjj = m[j][j]
+        scale = f"{mjj.series}[0]" if not mjj.is_const else to_code(mjj.const)
+        pivot = f"{dj.series}[0]" if not dj.is_const else to_code(dj.const)
+        test = f"not {pivot} > _PIVOT_TOLERANCE*abs({scale})"
+        if dj.is_const:
+            b.program.setup += [f"if {test}:", f"{INDENT}return {j + 1}"]
+        else:
+            b._emit(f"if k == 0 and {test}:")
+            b._emit(f"{INDENT}return {j + 1}")
+        for i in range(j + 1, n):
+            lij = m[i][j]
+            for k in range(j):
+                lij = b.sub(lij, b.mul(b.mul(low[i, k], low[j, k]), d[k]))
+            low[i, j] = b.name(b.div(lij, dj), f"_l{i}_{j}")
+    z = []
+    for i in range(n):
+        zi = f[i]
+        for k in range(i):
+            zi = b.sub(zi, b.mul(low[i, k], z[k]))
+        z.append(b.name(zi, f"_z{i}"))
+    x = [None] * n
+    for i in reversed(range(n)):
+        xi = b.div(z[i], d[i])
+        for k in range(i + 1, n):
+            xi = b.sub(xi, b.mul(low[k, i], x[k]))
+        x[i] = b.name(xi, f"_x{i}")
+    return x
+
+
+def _target(target: str) -> str:
+    """A store target as a local name: ``_m1_0`` stays, ``mm[1, 0]`` becomes ``_m1_0``."""
+    if target.startswith("mm["):
+        i, j = target[3:-1].split(", ")
+        return f"_m{i}_{j}"
+    if target.startswith("ff["):
+        return f"_f{target[3:-1]}"
+    return target
+
+
+def decompose(rhs: Kernel, n: int) -> TaylorProgram:
+    """The Taylor program of an unconstrained ``rhs`` kernel (n coordinates, state size 2n).
+
+    Raises `Unsupported` for anything without a recurrence here.
+    """
+    if not isinstance(rhs.solve, LinearSolve):
+        raise Unsupported("constraints (the augmented system is solved with pivoting)")
+    b = _Builder(2 * n)
+    for local, source in rhs.loads:
+        symbol = sp.Symbol(local, real=True)
+        if source.startswith("y["):
+            b.program.setup.append(f"{local} = X[{int(source[2:-1])}]")
+            b.env[symbol] = Value(series=local)
+        else:
+            b.program.setup.append(f"{local} = {source}")
+            b.env[symbol] = _c(symbol)
+    b.env[sp.Symbol("t", real=True)] = Value(series="_t")
+    for name, expr in rhs.temps:
+        b.env[sp.Symbol(name, real=True)] = b.bind(name, expr)
+    derivative = [None] * (2 * n)
+    for target, expr in rhs.stores:
+        if target.startswith("out["):
+            derivative[int(target[4:-1])] = b.value(expr)
+        else:
+            local = _target(target)
+            b.env[sp.Symbol(local, real=True)] = b.bind(local, expr)
+    for i, v in enumerate(_ldlt(b, rhs.solve)):
+        derivative[rhs.solve.offset + i] = v
+    b._emit("#", "The state's next coefficient: y[k + 1] = f[k]/(k + 1).")
+    for i, v in enumerate(derivative):
+        if v.is_const:
+            b._emit(f"X[{i}, k + 1] = ({to_code(v.const)} if k == 0 else 0.0)/(k + 1)")
+        else:
+            b._emit(f"X[{i}, k + 1] = {v.series}[k]/(k + 1)")
+    renamed = b.renamed
+    if renamed:
+        pattern = re.compile(r"\b(" + "|".join(map(re.escape, renamed)) + r")\b")
+        b.program.body = [Op(pattern.sub(lambda m: renamed[m.group(1)], op.line), op.comment)
+                          for op in b.program.body]
+        b.program.rows = [renamed.get(row, row) for row in b.program.rows]
+    return b.program
+
+
+def emit_taylor(program: TaylorProgram) -> str:
+    """The source of ``taylor_coefficients`` and ``TAYLOR_WORK`` for `program`."""
+    rows = (["_t"] if program.uses_t else []) + program.rows
+    lines = [
+        '"""Normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!, k = 0..order (order = X.shape[1] − 1),',
+        "of the solution through y at t; W is a work array of shape (TAYLOR_WORK, order + 1).",
+        "",
+        "One pass over the operations of `rhs` per order k (lagcomp.codegen.taylor gives the",
+        "recurrences); each block is commented with the statement of `rhs` it computes.",
+        'Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""',
+        "order = X.shape[1] - 1",
+    ]
+    lines += program.setup
+    lines += [f"{row} = W[{i}]" for i, row in enumerate(rows)]
+    lines += [f"for i in range({program.n_state}):", f"{INDENT}X[i, 0] = y[i]"]
+    if program.uses_t:
+        lines += ["for k in range(order + 1):", f"{INDENT}_t[k] = 0.0", "_t[0] = t", "if order > 0:",
+                  f"{INDENT}_t[1] = 1.0"]
+    lines.append("for k in range(order):")
+    lines += [INDENT + (f"# {op.comment}" if op.line == "#" else op.line) for op in program.body]
+    lines.append("return 0")
+    body = "\n".join(INDENT + line if line else "" for line in lines)
+    return (
+        '\n\n@njit(cache=True, error_model="numpy")\n'
+        "def taylor_coefficients(t, y, p, X, W):\n"
+        f"{body}\n\n\n"
+        f"#: Rows of the work array of `taylor_coefficients` ({program.operation_count} series operations "
+        "per order).\n"
+        f"TAYLOR_WORK = {max(len(rows), 1)}\n"
+    )
+
+
+def taylor_source(ir: ModuleIR, events: bool) -> str:
+    """``taylor_coefficients`` and the driver template for `ir`, or ``TAYLOR_REFUSED`` saying why not."""
+    from lagcomp.codegen.emit import template
+
+    try:
+        if ir.k:
+            raise Unsupported("constraints (their multipliers are not covered)")
+        program = decompose(ir.kernel("rhs"), ir.n)
+    except Unsupported as err:
+        return f"\n\n#: Why this module has no Taylor integrator (method='taylor').\nTAYLOR_REFUSED = {str(err)!r}\n"
+    return (
+        emit_taylor(program)
+        + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/taylor.py\n\n"
+        + template("taylor", events=events)
+    )

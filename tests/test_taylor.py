@@ -1,0 +1,311 @@
+"""The Taylor-series integrator (method="taylor"): its recurrences, its accuracy, its events.
+
+References are independent of lagcomp's Taylor code: sympy series for each
+recurrence, a numpy long-double Taylor integration of the double pendulum's
+hand-derived equations (eps ≈ 1e-19), Kepler's conserved quantities, and
+lagcomp's own DOP853 for the Hénon–Heiles section.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import mpmath
+import numpy as np
+import pytest
+import sympy as sp
+
+import lagcomp as lc
+import lagcomp.examples
+from lagcomp.codegen.taylor import Unsupported, decompose
+from lagcomp.errors import OptionError
+from lagcomp.model import t
+
+ORDER = 12
+
+
+# -- the recurrences against sympy series ---------------------------------------------------
+
+@pytest.fixture(scope="module")
+def pendulum(compiled):
+    return compiled("double_pendulum")
+
+
+A = [0.7, -0.3, 0.25, 0.1, -0.05]  # a(τ) = Σ A[k] τ^k, a(0) > 0
+B = [1.3, 0.2, -0.4, 0.0, 0.15]
+
+
+def _reference(f, order=ORDER):
+    """Normalized Taylor coefficients at τ = 0 of f(a(τ), b(τ)), by mpmath at 40 digits.
+
+    (mpmath.taylor differentiates numerically at high precision; sympy's series of sin(a(τ)) to
+    order 12 takes half a minute.)
+    """
+    with mpmath.workdps(40):
+        a = lambda tau: mpmath.polyval(A[::-1], tau)  # noqa: E731
+        b = lambda tau: mpmath.polyval(B[::-1], tau)  # noqa: E731
+        coefficients = mpmath.taylor(lambda tau: f(a(tau), b(tau)), 0, order)
+        return np.array([float(c) for c in coefficients])
+
+
+def _series(coefficients, order=ORDER):
+    out = np.zeros(order + 1)
+    out[: len(coefficients)] = coefficients
+    return out
+
+
+CASES = {
+    "_taylor_mul": (lambda a, b: a * b, lambda h, a, b, w, k: h(a, b, k)),
+    "_taylor_square": (lambda a, b: a**2, lambda h, a, b, w, k: h(a, k)),
+    "_taylor_div": (lambda a, b: a / b, lambda h, a, b, w, k: h(a, b, w, k)),
+    "_taylor_rdiv": (lambda a, b: 2.5 / b, lambda h, a, b, w, k: h(2.5, b, w, k)),
+    "_taylor_sqrt": (lambda a, b: mpmath.sqrt(a), lambda h, a, b, w, k: h(a, w, k)),
+    "_taylor_pow": (lambda a, b: a ** mpmath.mpf(-1.5), lambda h, a, b, w, k: h(a, -1.5, w, k)),
+    "_taylor_exp": (lambda a, b: mpmath.exp(a), lambda h, a, b, w, k: h(a, w, k)),
+    "_taylor_log": (lambda a, b: mpmath.log(a), lambda h, a, b, w, k: h(a, w, k)),
+}
+
+
+@pytest.mark.parametrize("name", [*CASES, "_taylor_sin_cos"])
+def test_each_recurrence_against_an_independent_expansion(pendulum, name):
+    """Each helper of templates/taylor.py, run order by order as taylor_coefficients runs it."""
+    helper = getattr(pendulum.kernels, name).py_func  # plain Python: no compilation
+    a, b = _series(A), _series(B)
+    if name == "_taylor_sin_cos":
+        s, c = np.zeros(ORDER + 1), np.zeros(ORDER + 1)
+        for k in range(ORDER + 1):
+            helper(a, s, c, k)
+        np.testing.assert_allclose(s, _reference(lambda a, b: mpmath.sin(a)), rtol=1e-13, atol=1e-15)
+        np.testing.assert_allclose(c, _reference(lambda a, b: mpmath.cos(a)), rtol=1e-13, atol=1e-15)
+        return
+    f, call = CASES[name]
+    w = np.zeros(ORDER + 1)
+    for k in range(ORDER + 1):
+        w[k] = call(helper, a, b, w, k)
+    np.testing.assert_allclose(w, _reference(f), rtol=1e-13, atol=1e-15)
+
+
+def test_coefficients_are_the_derivatives_of_the_solution(pendulum):
+    """X[:, 1] = f(y), and the series agrees with the solution a small step later."""
+    kernels = pendulum.kernels
+    p = pendulum.parameter_vector()
+    y = np.array([2.0, 1.0, 0.3, -0.7])
+    X, W = np.empty((4, 21)), np.empty((kernels.TAYLOR_WORK, 21))
+    assert kernels.taylor_coefficients(0.0, y, p, X, W) == 0
+    np.testing.assert_allclose(X[:, 0], y)
+    np.testing.assert_allclose(X[:, 1], pendulum.rhs(0.0, y), rtol=1e-14)
+    h = 0.05
+    series = np.polynomial.polynomial.polyval(h, X.T)
+    run = pendulum.simulate((0.0, h), y[:2], y[2:], method="dop853", rtol=1e-13, atol=1e-15, progress=False)
+    np.testing.assert_allclose(series, run.y[-1], rtol=0, atol=1e-13)
+
+
+def test_decomposition_refuses_what_it_cannot_expand(compiled):
+    from lagcomp.codegen.lower import lower
+    from lagcomp.examples import get
+    from lagcomp.mechanics.lagrange import derive
+
+    ir = lower(derive(get("rope_friction")))
+    with pytest.raises(Unsupported, match="Piecewise"):
+        decompose(ir.kernel("rhs"), ir.n)
+    model = compiled("rope_friction")
+    with pytest.raises(OptionError, match="`taylor` cannot integrate 'rope_friction'"):
+        model.simulate((0, 1), method="taylor")
+
+
+# -- accuracy --------------------------------------------------------------------------------
+
+def _jet_reference(y0, t_end, params, order=30, fraction=0.25):
+    """The double pendulum at t_end in numpy long double, by a Taylor method written from scratch.
+
+    Equations from the example's docstring (δ = θ1 − θ2), solved by Cramer's rule:
+    (m1 + m2) l1 θ̈1 + m2 l2 cos δ θ̈2 = −m2 l2 θ̇2² sin δ − (m1 + m2) g sin θ1,
+    l1 cos δ θ̈1 + l2 θ̈2 = l1 θ̇1² sin δ − g sin θ2.
+    Each step is `fraction` of the radius of convergence estimated from the last two
+    coefficients, so the truncation error is about fraction^order (1e-18 by default).
+    """
+    L = np.longdouble
+    m1, m2, l1, l2, g = (L(params[k]) for k in ("m1", "m2", "l1", "l2", "g"))
+    a11, a22 = (m1 + m2) * l1, l2
+    y = np.array(y0, dtype=L)
+    j = np.arange(order + 2, dtype=L)
+    names = ("th1", "th2", "w1", "w2", "d", "S1", "C1", "S2", "C2", "Sd", "Cd", "w1sq", "w2sq", "b1", "b2",
+             "det", "x1", "x2")
+
+    def conv(a, b, k):
+        return np.dot(a[: k + 1], b[k::-1])
+
+    t_now = L(0)
+    compensation = np.zeros(4, dtype=L)
+    while t_now < t_end:
+        s = {name: np.zeros(order + 1, dtype=L) for name in names}
+        for i, name in enumerate(("th1", "th2", "w1", "w2")):
+            s[name][0] = y[i]
+        for k in range(order):
+            s["d"][k] = s["th1"][k] - s["th2"][k]
+            for arg, S, C in (("th1", "S1", "C1"), ("th2", "S2", "C2"), ("d", "Sd", "Cd")):
+                if k == 0:
+                    s[S][0], s[C][0] = np.sin(s[arg][0]), np.cos(s[arg][0])
+                else:
+                    ja = j[1: k + 1] * s[arg][1: k + 1]
+                    s[S][k] = np.dot(ja, s[C][k - 1:: -1]) / k
+                    s[C][k] = -np.dot(ja, s[S][k - 1:: -1]) / k
+            s["w1sq"][k] = conv(s["w1"], s["w1"], k)
+            s["w2sq"][k] = conv(s["w2"], s["w2"], k)
+            s["b1"][k] = -m2 * l2 * conv(s["w2sq"], s["Sd"], k) - (m1 + m2) * g * s["S1"][k]
+            s["b2"][k] = l1 * conv(s["w1sq"], s["Sd"], k) - g * s["S2"][k]
+            s["det"][k] = (a11 * a22 if k == 0 else 0) - m2 * l2 * l1 * conv(s["Cd"], s["Cd"], k)
+            n1 = a22 * s["b1"][k] - m2 * l2 * conv(s["Cd"], s["b2"], k)
+            n2 = a11 * s["b2"][k] - l1 * conv(s["Cd"], s["b1"], k)
+            for x, num in (("x1", n1), ("x2", n2)):
+                s[x][k] = (num - (np.dot(s["det"][1: k + 1], s[x][k - 1:: -1]) if k else 0)) / s["det"][0]
+            for name, rate in (("th1", "w1"), ("th2", "w2"), ("w1", "x1"), ("w2", "x2")):
+                s[name][k + 1] = s[rate][k] / (k + 1)
+        last = [max(abs(s[name][m]) for name in ("th1", "th2", "w1", "w2")) for m in (order - 1, order)]
+        rho = min(last[0] ** (L(-1) / (order - 1)), last[1] ** (L(-1) / order))
+        step = min(fraction * rho, L(t_end) - t_now)
+        for i, name in enumerate(("th1", "th2", "w1", "w2")):  # y += increment, compensated (Kahan)
+            acc = L(0)
+            for c in s[name][:0:-1]:
+                acc = (acc + c) * step
+            increment = acc - compensation[i]
+            new = y[i] + increment
+            compensation[i] = (new - y[i]) - increment
+            y[i] = new
+        t_now += step
+    return y
+
+
+@pytest.fixture(scope="module")
+def reference(pendulum):
+    params = pendulum.system.defaults
+    y0 = (2.0, 1.0, 0.0, 0.0)
+    return _jet_reference(y0, 10.0, params, order=36, fraction=0.2)
+
+
+def test_long_double_reference_is_converged(pendulum, reference):
+    """Two settings far from truncation agree to 1e-13 at t = 10 (rounding at 1e-19, grown ~1e5-fold)."""
+    other = _jet_reference((2.0, 1.0, 0.0, 0.0), 10.0, pendulum.system.defaults, order=44, fraction=0.12)
+    assert float(np.max(np.abs(other - reference))) < 1e-13
+
+
+def test_error_at_t10_falls_with_the_tolerance(pendulum, reference):
+    errors = []
+    for tol in (1e-6, 1e-8, 1e-10, 1e-12, 1e-14, 2.220446049250313e-16):
+        run = pendulum.simulate((0, 10), method="taylor", rtol=tol, progress=False, record="summary")
+        errors.append(float(np.max(np.abs(run.y[-1] - reference.astype(float)))))
+    assert all(b < a for a, b in zip(errors, errors[1:])), errors
+    assert errors[0] < 1e-1 and errors[2] < 1e-6
+    # Rounding errors of 1e-16 grow about 1e5-fold by t = 10 on this chaotic orbit (the long-double
+    # reference shows it too), so ~1e-11 is the floor of any float64 integration (heyoka: 1.6e-11;
+    # DOP853 at rtol 2.3e-14: 1.2e-9).
+    assert errors[-1] < 3e-11, errors
+
+
+def test_energy_at_default_tolerance(pendulum):
+    run = pendulum.simulate((0, 200), method="taylor", progress=False, record="summary")
+    assert run.success and run.method == "taylor" and run.nrejected == 0
+    drift = run.summary.energy_error if hasattr(run.summary, "energy_error") else run.energy_drift()
+    assert drift < 1e-12
+
+
+def test_time_dependent_system_matches_dop853(compiled):
+    model = compiled("driven_pendulum")
+    a = model.simulate((0, 5), method="taylor", progress=False)
+    b = model.simulate((0, 5), method="dop853", rtol=1e-13, atol=1e-14, progress=False)
+    np.testing.assert_allclose(a.y[-1], b.y[-1], atol=1e-9)
+
+
+def test_dense_output_is_the_series(pendulum):
+    t_eval = np.linspace(0.0, 3.0, 301)
+    dense = pendulum.simulate((0, 3), method="taylor", t_eval=t_eval, progress=False)
+    np.testing.assert_array_equal(dense.t, t_eval)
+    tight = pendulum.simulate((0, 3), method="dop853", rtol=1e-13, atol=1e-15, t_eval=t_eval, progress=False)
+    np.testing.assert_allclose(dense.y, tight.y, rtol=0, atol=1e-10)
+    steps = pendulum.simulate((0, 3), method="taylor", progress=False)
+    assert dense.nsteps == steps.nsteps  # t_eval does not change the steps
+    np.testing.assert_array_equal(dense.y[-1], steps.y[-1])
+
+
+def test_chunked_run_equals_one_call(pendulum):
+    whole = pendulum.simulate((0, 20), method="taylor", progress=False, save_every=7)
+    kernels = pendulum.kernels
+    y = np.array([2.0, 1.0, 0.0, 0.0])
+    clock, counters = np.array([0.0, 0.0]), np.zeros(6, dtype=np.int64)
+    p = pendulum.parameter_vector()
+    rows = []
+    empty = (np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64), np.empty(16), np.empty((16, 4)),
+             np.empty(16, dtype=np.int64))
+    eps = 2.220446049250313e-16
+    carry = np.zeros(4)
+    while True:
+        ts, ys = np.empty(5), np.empty((5, 4))
+        status, n = kernels.taylor_run(y, clock, counters, p, 0, np.zeros(1), 20.0, eps, eps, math.inf, 10**9,
+                                       counters[1] + 13, 7, np.empty(0), ts, ys, *empty, carry)
+        rows.append(ys[:n].copy())
+        if status not in (1, 2):
+            break
+    assert status == 0
+    np.testing.assert_array_equal(np.vstack(rows), whole.y[1:])  # bitwise: the carry is kept across calls
+
+
+# -- Kepler -----------------------------------------------------------------------------------
+
+def kepler() -> lc.System:
+    x, y = lc.coordinates("x y")
+    mu = sp.Symbol("mu", positive=True)
+    return lc.System(coordinates=(x, y), T=(x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=-mu / sp.sqrt(x**2 + y**2),
+                     parameters=(mu,), defaults={"mu": 1.0}, name="kepler_taylor",
+                     q0=(0.1, 0.0), qd0=(0.0, math.sqrt(1.9 / 0.1)))  # pericentre of a = 1, e = 0.9
+
+
+@pytest.fixture(scope="module")
+def kepler_model(cache_dir):
+    return lc.compile(kepler(), cache_dir=cache_dir)
+
+
+def _kepler_invariants(run):
+    x, y, vx, vy = run.y.T
+    energy = (vx**2 + vy**2) / 2 - 1 / np.hypot(x, y)
+    return energy, x * vy - y * vx
+
+
+@pytest.mark.parametrize("orbits", [20, pytest.param(10_000, marks=pytest.mark.slow)])
+def test_kepler_invariants_at_round_off(kepler_model, orbits):
+    run = kepler_model.simulate((0, 2 * math.pi * orbits), method="taylor", progress=False,
+                                t_eval=2 * math.pi * np.arange(1, orbits + 1))
+    assert run.success
+    energy, momentum = _kepler_invariants(run)
+    e0, l0 = -0.5, math.sqrt(1.9 * 0.1)
+    assert np.max(np.abs(energy / e0 - 1)) < 2e-15 * math.sqrt(orbits) * 10
+    assert np.max(np.abs(momentum / l0 - 1)) < 2e-15 * math.sqrt(orbits) * 10
+    # back at the pericentre after each whole orbit
+    assert np.max(np.abs(run.q[:, 0] - 0.1)) < 1e-12 * orbits
+
+
+# -- events on the series ---------------------------------------------------------------------
+
+def test_henon_heiles_section_matches_dop853(compiled):
+    model = compiled("henon_heiles")
+    taylor = model.simulate((0, 200), method="taylor", progress=False, record="summary")
+    dop = model.simulate((0, 200), method="dop853", rtol=1e-13, atol=1e-15, progress=False, record="summary")
+    a, b = taylor.events["section"], dop.events["section"]
+    assert len(a) == len(b) > 20
+    np.testing.assert_allclose(a.t, b.t, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(a.q[:, 1], b.q[:, 1], rtol=0, atol=1e-9)
+    assert np.max(np.abs(a.q[:, 0])) < 1e-13  # on the section x = 0 (Brent: 2 eps |t| in time)
+
+
+def test_terminal_event_stops_on_the_series(compiled, cache_dir):
+    """λ = 0: y = 0.1 cos t + 0.05 sin t peaks at t = atan(1/2) (as in test_events), found on the series."""
+    system = lc.examples.get("henon_heiles")
+    section, y_turn = system.events
+    terminal = dataclasses.replace(system, events=(section, dataclasses.replace(y_turn, terminal=True)))
+    model = lc.compile(terminal, cache_dir=cache_dir)
+    run = model.simulate((0, 50), qd0=[0.3, 0.05], params={"lam": 0.0}, method="taylor", progress=False)
+    t_peak = np.arctan(0.5)
+    assert run.status == 1 and "y_turn" in run.message
+    assert run.t[-1] == run.events["y_turn"].t[0]
+    assert abs(run.t[-1] - t_peak) < 1e-14
+    np.testing.assert_allclose(run.q[-1], [0.3 * np.sin(t_peak), np.hypot(0.1, 0.05)], rtol=0, atol=1e-15)
