@@ -106,3 +106,24 @@ def test_sweep_options_are_checked_with_a_message(capsys, cache_dir):
     ]:
         assert main(["--cache-dir", str(cache_dir), *argv]) == 2, argv
         assert message in capsys.readouterr().err, argv
+
+
+def test_run_and_sweep_a_users_model_by_the_name_it_was_compiled_under(capsys, tmp_path):
+    """x'' = −(k/m) x from x0 = 1: x(t) = cos(√(k/m) t)."""
+    import sympy as sp
+
+    import lagcomp as lc
+
+    x, = lc.coordinates("x")
+    m, k = sp.symbols("m k", positive=True)
+    lc.compile(lc.System([x], T=m * x.diff(lc.t) ** 2 / 2, V=k * x**2 / 2, name="my_oscillator",
+                         defaults={"m": 1.0, "k": 4.0}, q0=(1.0,)), cache_dir=tmp_path)
+    assert main(["--cache-dir", str(tmp_path), "run", "my_oscillator", "--t-end", "1.0"]) == 0
+    out = capsys.readouterr().out
+    final = float(out.split("final       x=")[1].split()[0])
+    assert abs(final - np.cos(2.0)) < 1e-7
+    assert main(["--cache-dir", str(tmp_path), "sweep", "my_oscillator", "--param", "k=1:9:3", "--t-end", "1.0",
+                 "--quiet"]) == 0
+    assert "3 trajectories over k (3 values)" in capsys.readouterr().out
+    assert main(["--cache-dir", str(tmp_path), "run", "not_a_model"]) == 2
+    assert "Nor is it the name of a model compiled with lagcomp.compile()" in capsys.readouterr().err

@@ -53,7 +53,8 @@ def _example_alias(args) -> str:
 
 
 def _example_model(args):
-    """The compiled bundled example: loaded by name when this lagcomp compiled it before, so no sympy."""
+    """The model named on the command line: a bundled example (loaded by name when this lagcomp
+    compiled it before, so no sympy; else compiled), or a user's model compiled earlier under that name."""
     from lagcomp.cache import Cache
     from lagcomp.runtime import compile, load, run_defaults
 
@@ -61,10 +62,20 @@ def _example_model(args):
     try:
         return load(alias, cache_dir=args.cache_dir)
     except ModelError:
+        pass
+    try:
         system = _system(args)
-        model = compile(system, cache_dir=args.cache_dir)
-        Cache(args.cache_dir).remember(alias, model.cache_key, run_defaults(system))
-        return model
+    except ModelError as unknown:
+        if args.arg:
+            raise
+        try:
+            return load(args.name, cache_dir=args.cache_dir)
+        except ModelError:
+            raise LagcompError(f"{unknown} Nor is it the name of a model compiled with lagcomp.compile() into "
+                               f"the cache {Cache(args.cache_dir).root}.") from None
+    model = compile(system, cache_dir=args.cache_dir)
+    Cache(args.cache_dir).remember(alias, model.cache_key, run_defaults(system))
+    return model
 
 
 def cmd_list(args) -> int:
