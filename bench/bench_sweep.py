@@ -37,6 +37,28 @@ def timed(run, repeats: int) -> tuple[float, object]:
     return statistics.median(times), result
 
 
+def grid(side: int) -> dict:
+    """The side × side grid of (θ1, θ2) ∈ [−3, 3]² swept here."""
+    angles = np.linspace(-3, 3, side)
+    return {"theta1": angles, "theta2": angles}
+
+
+def scipy_loop(model, starts, method: str, options: dict):
+    """A Python loop of solve_ivp over `starts` (θ1, θ2), with the model's compiled rhs called from Python."""
+    p = model.parameter_vector()
+    out = np.empty(4)
+
+    def f(t, y):
+        model.kernels.rhs(t, y, p, out)
+        return out.copy()
+
+    def loop():
+        for a, b in starts:
+            solve_ivp(f, (0, T_END), [a, b, 0.0, 0.0], method=method, **options)
+
+    return loop
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--side", type=int, default=100)
@@ -44,13 +66,12 @@ def main() -> None:
     parser.add_argument("--scipy-samples", type=int, default=20)
     args = parser.parse_args()
     angles = np.linspace(-3, 3, args.side)
-    grid = {"theta1": angles, "theta2": angles}
     n = args.side**2
     with tempfile.TemporaryDirectory() as cache_dir:
         model = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
 
         def sweep(workers, **options):
-            return model.sweep((0, T_END), grid, qd0=[0, 0], workers=workers, progress=False, **options)
+            return model.sweep((0, T_END), grid(args.side), qd0=[0, 0], workers=workers, progress=False, **options)
 
         reference = sweep(2, rtol=1e-13, atol=1e-13).final
         print(f"double pendulum, {args.side}×{args.side} grid, t = {T_END:g}; median endpoint error vs rtol 1e-13\n")
@@ -58,12 +79,6 @@ def main() -> None:
         print("|---|---|---|---|---|---|---|")
         rng = np.random.default_rng(0)
         samples = rng.choice(n, size=min(args.scipy_samples, n), replace=False)
-        p = model.parameter_vector()
-        out = np.empty(4)
-
-        def f(t, y):
-            model.kernels.rhs(t, y, p, out)
-            return out.copy()
 
         cases = [("dop853", dict(rtol=tol, atol=tol), f"tol {tol:g}", "DOP853") for tol in (1e-7, 1e-8, 1e-9, 1e-10)]
         cases += [("rk4", dict(method="rk4", dt=0.01), "dt 0.01 (1000 steps)", None),
@@ -77,12 +92,7 @@ def main() -> None:
             versus = ""
             if scipy_method:
                 starts = np.column_stack([np.repeat(angles, args.side), np.tile(angles, args.side)])[samples]
-
-                def loop():
-                    for a, b in starts:
-                        solve_ivp(f, (0, T_END), [a, b, 0.0, 0.0], method=scipy_method, **options)
-
-                seconds, _ = timed(loop, 1)
+                seconds, _ = timed(scipy_loop(model, starts, scipy_method, options), 1)
                 versus = f"{rates[1] / (len(samples) / seconds):.0f}×"
             print(f"| {method} | {setting} | {error:.1e} | {rates[0]:,.0f} | {rates[1]:,.0f} | "
                   f"{rates[1] / rates[0]:.2f} | {versus} |")

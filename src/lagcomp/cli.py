@@ -4,6 +4,7 @@
     lagcomp show double_pendulum
     lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz --plot run.png
     lagcomp generate generated/          (add --check to only report stale files)
+    lagcomp bench double_pendulum        (kernel ns/call, op counts, steps/s per method, compile times)
 """
 
 from __future__ import annotations
@@ -178,6 +179,25 @@ def cmd_run(args) -> int:
             raise LagcompError(str(err)) from err
         print(f"plotted     {args.plot} (coordinates and energy error vs time)")
     return 0 if sol.success else 1
+
+
+def cmd_bench(args) -> int:
+    """Kernel cost, op counts, steps/s of every applicable method and compile times of one model."""
+    from lagcomp import examples
+    from lagcomp.benchmark import report
+    from lagcomp.runtime import compile, load
+
+    started = time.perf_counter()
+    example = None
+    if args.name in examples.EXAMPLES or args.name.startswith("n_link_pendulum"):
+        model = compile(_system(args), cache_dir=args.cache_dir)
+        example = (args.name, _key_values(args.arg, "--arg"))
+    else:  # a user's own model, compiled earlier under this name
+        model = load(args.name, cache_dir=args.cache_dir)
+    loaded = time.perf_counter() - started
+    print(report(model, example=example, load_seconds=loaded, repeats=args.repeats, dt=args.dt, steps=args.steps,
+                 methods=args.methods, cold=not args.no_cold), end="")
+    return 0
 
 
 def cmd_generate(args) -> int:
@@ -373,6 +393,14 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("--out", help="write the sweep to this .npz file")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(func=cmd_sweep)
+    bench = example("bench", "time one model (a bundled example, or one compiled earlier under NAME): "
+                             "kernel ns/call, op counts, steps/s per method, compile times")
+    bench.set_defaults(func=cmd_bench)
+    bench.add_argument("--repeats", type=int, default=5, help="timed repeats per figure (medians)")
+    bench.add_argument("--dt", type=float, default=1e-3, help="step of the fixed-step methods")
+    bench.add_argument("--steps", type=int, default=100_000, help="steps of each fixed-step run")
+    bench.add_argument("--methods", nargs="+", metavar="METHOD", help="time only these methods (default: all that apply)")
+    bench.add_argument("--no-cold", action="store_true", help="skip the cold compile in a fresh process")
     gen = sub.add_parser("generate", help="regenerate the emitted modules of the bundled examples")
     gen.add_argument("directory", nargs="?", default="generated")
     gen.add_argument("--check", action="store_true", help="only list stale files; exit 1 if any")

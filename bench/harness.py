@@ -1,0 +1,113 @@
+"""Timing, peers and the markdown table: what every section of `python -m bench` shares."""
+
+from __future__ import annotations
+
+import importlib
+import statistics
+import time
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Stat:
+    """Median, min and max of repeated measurements (seconds, or any unit)."""
+
+    median: float
+    low: float
+    high: float
+    repeats: int
+
+    def scaled(self, factor: float) -> "Stat":
+        return Stat(self.median * factor, self.low * factor, self.high * factor, self.repeats)
+
+    def ratio(self, base: "Stat") -> "Stat":
+        """self / base: median over median, the range from the extremes of both."""
+        return Stat(self.median / base.median, self.low / base.high, self.high / base.low, self.repeats)
+
+
+def measure(run, repeats: int = 5, warmup: int = 1, per_call: int = 1) -> Stat:
+    """Wall time of `run()` over `repeats` runs after `warmup` untimed ones, divided by `per_call`."""
+    for _ in range(warmup):
+        run()
+    times = []
+    for _ in range(max(repeats, 1)):
+        start = time.perf_counter()
+        run()
+        times.append((time.perf_counter() - start) / per_call)
+    return Stat(statistics.median(times), min(times), max(times), len(times))
+
+
+def stat_of(values: list[float]) -> Stat:
+    return Stat(statistics.median(values), min(values), max(values), len(values))
+
+
+def peer(module: str):
+    """The peer's module, or None when it is not installed (the table then says so)."""
+    try:
+        return importlib.import_module(module)
+    except Exception:  # an ImportError, or a broken install of a compiled extension
+        return None
+
+
+SKIPPED = "skipped: not installed"
+
+
+def fmt(value: float, unit: str = "") -> str:
+    if value != value:  # nan
+        return "–"
+    if value == 0:
+        return f"0{unit}"
+    a = abs(value)
+    if a >= 1e4 or a < 1e-3:
+        text = f"{value:.2e}"
+    elif a >= 100:
+        text = f"{value:,.0f}"
+    elif a >= 10:
+        text = f"{value:.1f}"
+    else:
+        text = f"{value:.3g}"
+    return f"{text}{unit}"
+
+
+def fmt_stat(s: Stat, unit: str = "") -> str:
+    if unit == "×":  # ratios: two decimals where they matter
+        def r(x):
+            return f"{x:.2f}" if x < 100 else fmt(x)
+        return f"{r(s.median)}× ({r(s.low)}–{r(s.high)})"
+    return f"{fmt(s.median, unit)} ({fmt(s.low)}–{fmt(s.high)})"
+
+
+@dataclass
+class Table:
+    """One markdown table: a title, a note, column names and rows of strings."""
+
+    title: str
+    columns: list[str]
+    note: str = ""
+    rows: list[list[str]] = field(default_factory=list)
+
+    def add(self, *cells) -> None:
+        self.rows.append([str(c) for c in cells])
+
+    def markdown(self) -> str:
+        lines = [f"### {self.title}", ""]
+        if self.note:
+            lines += [self.note, ""]
+        lines.append("| " + " | ".join(self.columns) + " |")
+        lines.append("|" + "---|" * len(self.columns))
+        lines += ["| " + " | ".join(r) + " |" for r in self.rows]
+        return "\n".join(lines) + "\n"
+
+
+@dataclass
+class Target:
+    """One of issue 8's targets: what it says, and whether this run met it."""
+
+    name: str
+    wanted: str
+    measured: str = "not measured"
+    met: bool | None = None
+
+    def row(self) -> list[str]:
+        verdict = {True: "met", False: "missed", None: "not measured" if self.measured == "not measured" else "reported"}[self.met]
+        return [self.name, self.wanted, self.measured, verdict]

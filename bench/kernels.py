@@ -1,0 +1,164 @@
+"""Kernel cost: ns per right-hand-side call, inside a compiled loop and from Python, and op counts.
+
+Baseline: the hand-written numba RHS of the same system (`bench.systems`),
+called in the same compiled loop.  "In a loop" is what an integrator sees:
+an `@njit` loop calls the kernel n times, nudging y[0] each time so nothing
+can be hoisted.  "From Python" is one call of the jitted function per
+Python-level call, as scipy's solve_ivp makes it.  GFLOP/s is the op count
+after CSE (sympy's count_ops over the mass matrix and forcing, the numeric
+solve not counted) over the in-loop time.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from bench import systems
+from bench.harness import Table, fmt, fmt_stat, measure, peer
+
+
+def looped(rhs):
+    """An @njit loop making `n` calls of `rhs(t, y, p, out)`; returns a checksum so nothing is dead code."""
+    @numba.njit
+    def loop(y, p, out, n):
+        acc = 0.0
+        for _ in range(n):
+            y[0] += 1e-12
+            rhs(0.0, y, p, out)
+            acc += out[out.shape[0] - 1]
+        return acc
+
+    return loop
+
+
+def in_loop(rhs, y0, p, repeats: int, calls: int = 200_000):
+    y, out = y0.copy(), np.empty(y0.size)
+    loop = looped(rhs)
+    loop(y, p, out, 10)  # compile
+    return measure(lambda: loop(y0.copy(), p, out, calls), repeats, per_call=calls).scaled(1e9)
+
+
+def from_python(call, repeats: int, calls: int = 2_000):
+    def run():
+        for _ in range(calls):
+            call()
+    return measure(run, repeats, per_call=calls).scaled(1e9)
+
+
+def lambdify_rhs(eom):
+    """sympy.lambdify of lagcomp's derived M and F (cse=True), q̈ by numpy.linalg.solve: the naive Python RHS."""
+    import sympy as sp
+
+    n = len(eom.q)
+    f = sp.lambdify((eom.q, eom.qd, eom.parameters), (eom.M, eom.F), modules="numpy", cse=True)
+
+    def rhs(t, y, p):
+        M, F = f(y[:n], y[n:], p)
+        return np.concatenate([y[n:], np.linalg.solve(np.asarray(M, float), np.asarray(F, float).ravel())])
+
+    return rhs
+
+
+def pydy_functions(n: int):
+    """PyDy's cython and lambdify ODE functions of the N-link chain, and its op count after CSE."""
+    import sympy as sp
+    from pydy.codegen.c_code import CMatrixGenerator
+    from pydy.codegen.ode_function_generators import generate_ode_function
+
+    km, q, u, constants = systems.kane_chain(n)
+    M, F = km.mass_matrix_full, km.forcing_full
+    funcs = {}
+    for generator in ("cython", "lambdify"):
+        if generator == "cython" and peer("Cython") is None:
+            continue
+        funcs[generator] = generate_ode_function(F, q, u, constants, mass_matrix=M, generator=generator)
+    gen = CMatrixGenerator([q, u, constants], [km.mass_matrix, km.forcing])  # runs its CSE
+    ops = sum(sp.count_ops(e) for _, e in gen.subexprs) + sum(sp.count_ops(e) for m in gen.simplified_matrices for e in m)
+    return funcs, int(ops)
+
+
+def jitcode_f():
+    """JiTCODE's compiled f of the double pendulum (the reduced ODE), default parameters inlined."""
+    import symengine
+    from jitcode import jitcode, y
+
+    acc = systems.double_pendulum_reduced(symengine.sin, symengine.cos, y(0), y(1), y(2), y(3), 1.0, 1.0, 1.0, 1.0, 9.81)
+    ode = jitcode([y(2), y(3), *acc], verbose=False)
+    ode.compile_C(verbose=False)
+    ode.set_integrator("dopri5")
+    ode.set_initial_value(np.array([2.0, 1.0, 0.0, 0.0]), 0.0)
+    return ode
+
+
+def hand_written(case: str):
+    """The hand-written numba RHS of a case, or None when there is none (constrained examples)."""
+    if case == "double_pendulum":
+        return systems.double_pendulum_rhs
+    if case == "simple_pendulum" or case.startswith("n_link_pendulum_"):
+        return systems.chain_rhs
+    return None
+
+
+def section(ctx) -> Table:
+    table = Table(
+        "Kernel cost: ns per RHS call",
+        ["case", "implementation", "ns/call, median (min–max)", "× hand-written numba in a loop", "ops after CSE", "GFLOP/s"],
+        note="Baseline (1.00×): a hand-written numba RHS of the same system in the same compiled loop "
+             "(Cramer's rule for the double pendulum; the closed-form chain with a Cholesky solve for N links); "
+             "for the constrained examples, which have none, lagcomp's own rhs in the loop. "
+             "ops: sympy count_ops after CSE, of lagcomp's rhs (M and F; its emitted LDLᵀ solve not counted) "
+             "and of PyDy's mass matrix and forcing (its numeric solve not counted either).",
+    )
+    for case in ctx.kernel_cases():
+        model = ctx.model(case)
+        if model is None:
+            table.add(case, "lagcomp", ctx.unavailable(case), "", "", "")
+            continue
+        y0, p = model.initial_state(), model.parameter_vector()
+        n = model.n
+        ops = model.operations.get("rhs", 0)
+        out = np.empty(2 * n)
+        ours = in_loop(model.kernels.rhs, y0, p, ctx.repeats)
+        ours_py = from_python(lambda: model.kernels.rhs(0.0, y0, p, out), ctx.repeats)
+        hand = hand_written(case)
+        if hand is None:  # no closed form here: lagcomp's own in-loop call is the baseline
+            base = ours
+            rows = [("lagcomp rhs, in a loop (baseline: no hand-written RHS)", ours, ops),
+                    ("lagcomp rhs, from Python", ours_py, ops)]
+        else:
+            label = "hand-written numba" if case == "double_pendulum" else "closed-form numba (loops)"
+            base = in_loop(hand, y0, p, ctx.repeats)
+            rows = [(label + ", in a loop", base, ""), ("lagcomp rhs, in a loop", ours, ops),
+                    (label + ", from Python", from_python(lambda: hand(0.0, y0, p, out), ctx.repeats), ""),
+                    ("lagcomp rhs, from Python", ours_py, ops)]
+            ctx.kernel_results[case] = (base, ours)
+        if hand is not None and (case == "double_pendulum" or n <= ctx.peer_max_links):
+            eom = ctx.eom(case)
+            if eom is not None:
+                f = lambdify_rhs(eom)
+                rows.append(("sympy lambdify (M, F) + numpy solve", from_python(lambda: f(0.0, y0, p), ctx.repeats, 200), ""))
+            if ctx.peer("pydy") is None:
+                rows.append(("PyDy cython / lambdify", ctx.skipped, ""))
+            else:
+                funcs, pydy_ops = ctx.cached(("pydy", n), lambda: pydy_functions(n))
+                x = y0.copy()
+                for gen, f in funcs.items():
+                    rows.append((f"PyDy {gen} ODE function, from Python",
+                                 from_python(lambda: f(x, 0.0, p), ctx.repeats, 500), pydy_ops))
+                if "cython" not in funcs:
+                    rows.append(("PyDy cython", ctx.skipped + " (Cython)", ""))
+        if case == "double_pendulum":
+            if ctx.peer("jitcode") is None:
+                rows.append(("JiTCODE compiled f", ctx.skipped, ""))
+            else:
+                ode = ctx.cached("jitcode", jitcode_f)
+                f = ode.f
+                rows.append(("JiTCODE compiled f, from Python", from_python(lambda: f(0.0, y0), ctx.repeats), ""))
+        for name, stat, count in rows:
+            if isinstance(stat, str):
+                table.add(case, name, stat, "", "", "")
+                continue
+            gflops = fmt(count / stat.median) if count and "loop" in name else ""
+            table.add(case, name, fmt_stat(stat), fmt_stat(stat.ratio(base), "×"), count or "", gflops)
+    return table
