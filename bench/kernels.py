@@ -11,25 +11,12 @@ solve not counted) over the in-loop time.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from lagcomp.benchmark import looped
 
 from bench import systems
 from bench.harness import Table, fmt, fmt_stat, measure, peer
-
-
-def looped(rhs):
-    """An @njit loop making `n` calls of `rhs(t, y, p, out)`; returns a checksum so nothing is dead code."""
-    @numba.njit
-    def loop(y, p, out, n):
-        acc = 0.0
-        for _ in range(n):
-            y[0] += 1e-12
-            rhs(0.0, y, p, out)
-            acc += out[out.shape[0] - 1]
-        return acc
-
-    return loop
 
 
 def in_loop(rhs, y0, p, repeats: int, calls: int = 200_000):
