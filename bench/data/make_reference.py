@@ -13,7 +13,9 @@ anything the benchmark measures.  g is the double nearest 9.81, exactly
 solves, and the difference shows at t = 10.  The
 script writes the states as decimal strings; `--check FILE` compares a
 second run (e.g. at another precision) with a stored one and prints the
-largest difference, which is how the stored file was validated.
+largest difference, which is how the stored file was validated: the stored
+30-digit run (about 10 minutes) and a 24-digit one agree to 1.3e-23 at
+every t = 1, ..., 10.
 """
 
 from __future__ import annotations
