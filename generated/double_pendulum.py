@@ -2661,41 +2661,109 @@ def taylor_coefficients(t, y, p, X, W):
         # _c0 = theta1 - theta2
         _c0[k] = theta1[k] - theta2[k]
         # _c2 = g*math.sin(theta1)
-        _taylor_sin_cos(theta1, _u1, _u2, k)
+        # _u1, _u2 = sin(theta1), cos(theta1)
+        if k == 0:
+            _u1[0] = math.sin(theta1[0])
+            _u2[0] = math.cos(theta1[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*theta1[_j]
+                _s += _ja*_u2[k - _j]
+                _c += _ja*_u1[k - _j]
+            _u1[k] = _s/k
+            _u2[k] = -_c/k
         _c2[k] = g*_u1[k]
         # _c3 = math.sin(_c0)
-        _taylor_sin_cos(_c0, _c3, _u5, k)
+        # _c3, _u5 = sin(_c0), cos(_c0)
+        if k == 0:
+            _c3[0] = math.sin(_c0[0])
+            _u5[0] = math.cos(_c0[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*_c0[_j]
+                _s += _ja*_u5[k - _j]
+                _c += _ja*_c3[k - _j]
+            _c3[k] = _s/k
+            _u5[k] = -_c/k
         # _m1_0 = _c1*l1*math.cos(_c0)
         _m1_0[k] = _k6*_u5[k]
         # _f0 = -l1*(_c1*_c3*theta2_dot**2 + _c2*m1 + _c2*m2)
         _u9[k] = m1*_c2[k]
         _u10[k] = m2*_c2[k]
-        _u11[k] = _taylor_square(theta2_dot, k)
-        _u12[k] = _taylor_mul(_c3, _u11, k)
+        # _u11 = theta2_dot**2
+        _s = theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*theta2_dot[_j]*theta2_dot[k - _j]
+        _u11[k] = _s
+        # _u12 = _c3*_u11
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c3[_j]*_u11[k - _j]
+        _u12[k] = _s
         _u13[k] = _c1*_u12[k]
         _u14[k] = _u9[k] + _u10[k]
         _u15[k] = _u14[k] + _u13[k]
         _f0[k] = _k8*_u15[k]
         # _f1 = _c1*(_c3*l1*theta1_dot**2 - g*math.sin(theta2))
-        _taylor_sin_cos(theta2, _u17, _u18, k)
+        # _u17, _u18 = sin(theta2), cos(theta2)
+        if k == 0:
+            _u17[0] = math.sin(theta2[0])
+            _u18[0] = math.cos(theta2[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*theta2[_j]
+                _s += _ja*_u18[k - _j]
+                _c += _ja*_u17[k - _j]
+            _u17[k] = _s/k
+            _u18[k] = -_c/k
         _u19[k] = g*_u17[k]
-        _u20[k] = _taylor_square(theta1_dot, k)
-        _u21[k] = _taylor_mul(_c3, _u20, k)
+        # _u20 = theta1_dot**2
+        _s = theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*theta1_dot[_j]*theta1_dot[k - _j]
+        _u20[k] = _s
+        # _u21 = _c3*_u20
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c3[_j]*_u20[k - _j]
+        _u21[k] = _s
         _u22[k] = l1*_u21[k]
         _u23[k] = _u22[k] - _u19[k]
         _f1[k] = _c1*_u23[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _l1_0[k] = _k25*_m1_0[k]
-        _u27[k] = _taylor_square(_l1_0, k)
+        # _u27 = _l1_0**2
+        _s = _l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_l1_0[_j]*_l1_0[k - _j]
+        _u27[k] = _s
         _u28[k] = _m0_0*_u27[k]
         _d1[k] = _m1_1 - _u28[k] if k == 0 else -_u28[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
-        _u30[k] = _taylor_mul(_l1_0, _f0, k)
+        # _u30 = _l1_0*_f0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l1_0[_j]*_f0[k - _j]
+        _u30[k] = _s
         _z1[k] = _f1[k] - _u30[k]
-        _x1[k] = _taylor_div(_z1, _d1, _x1, k)
+        # _x1 = _z1/_d1
+        _s = _z1[k]
+        for _j in range(1, k + 1):
+            _s -= _d1[_j]*_x1[k - _j]
+        _x1[k] = _s/_d1[0]
         _u33[k] = _k25*_f0[k]
-        _u34[k] = _taylor_mul(_l1_0, _x1, k)
+        # _u34 = _l1_0*_x1
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l1_0[_j]*_x1[k - _j]
+        _u34[k] = _s
         _x0[k] = _u33[k] - _u34[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta1_dot[k]/(k + 1)
@@ -2716,16 +2784,12 @@ TAYLOR_WORK = 33
 
 Like ``drivers.py``, this text is appended verbatim to a generated module,
 after ``drivers.py`` and the module's ``taylor_coefficients`` kernel
-(`lagcomp.codegen.taylor` emits it for unconstrained systems whose
+(`lagcomp.codegen.taylor` emits it, the recurrences written out as loops,
+for unconstrained systems whose
 equations use only functions with a Taylor recurrence).  The module provides
 ``taylor_coefficients(t, y, p, X, W)``, ``TAYLOR_WORK``, ``event_values`` and
 the helpers and status codes of ``drivers.py`` (``_ODE_*``, and in modules
 with events ``_event_crossings``, ``_record_events``, ``_dense_state``).
-
-The ``_taylor_*`` helpers are the recurrences of `lagcomp.codegen.taylor`:
-each returns (or writes) coefficient k of its result from coefficients
-0..k of its arguments and 0..k−1 of the result itself.  They are small
-enough for LLVM to inline into ``taylor_coefficients``.
 
 ``taylor_run`` has the calling convention of ``dop853_run`` (the module
 docstring of ``drivers.py``: arguments, statuses, output buffer, events,
@@ -2762,106 +2826,6 @@ import math
 
 import numpy as np
 from numba import njit
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_mul(a, b, k):
-    """Coefficient k of a·b."""
-    s = 0.0
-    for j in range(k + 1):
-        s += a[j] * b[k - j]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_square(a, k):
-    """Coefficient k of a² (half the products of `_taylor_mul`)."""
-    s = 0.0
-    for j in range((k + 1) // 2):
-        s += a[j] * a[k - j]
-    s *= 2.0
-    if k % 2 == 0:
-        s += a[k // 2] * a[k // 2]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_div(a, b, w, k):
-    """Coefficient k of w = a/b, from w[0..k−1]."""
-    s = a[k]
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_rdiv(c, b, w, k):
-    """Coefficient k of w = c/b for a constant c, from w[0..k−1]."""
-    s = c if k == 0 else 0.0
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sqrt(a, w, k):
-    """Coefficient k of w = √a, from w[0..k−1]."""
-    if k == 0:
-        return math.sqrt(a[0])
-    s = a[k]
-    for j in range(1, k):
-        s -= w[j] * w[k - j]
-    return s / (2.0 * w[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_pow(a, alpha, w, k):
-    """Coefficient k of w = a^alpha (constant alpha, a[0] ≠ 0), from w[0..k−1]."""
-    if k == 0:
-        return a[0] ** alpha
-    s = 0.0
-    for j in range(k):
-        s += (alpha * (k - j) - j) * a[k - j] * w[j]
-    return s / (k * a[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_exp(a, w, k):
-    """Coefficient k of w = exp(a), from w[0..k−1]."""
-    if k == 0:
-        return math.exp(a[0])
-    s = 0.0
-    for j in range(1, k + 1):
-        s += j * a[j] * w[k - j]
-    return s / k
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_log(a, w, k):
-    """Coefficient k of w = log(a), from w[0..k−1]."""
-    if k == 0:
-        return math.log(a[0])
-    s = 0.0
-    for j in range(1, k):
-        s += j * w[j] * a[k - j]
-    return (a[k] - s / k) / a[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sin_cos(a, s, c, k):
-    """Coefficient k of s = sin(a) and c = cos(a) together (each recurrence needs the other)."""
-    if k == 0:
-        s[0] = math.sin(a[0])
-        c[0] = math.cos(a[0])
-        return
-    ss = 0.0
-    cc = 0.0
-    for j in range(1, k + 1):
-        ja = j * a[j]
-        ss += ja * c[k - j]
-        cc += ja * s[k - j]
-    s[k] = ss / k
-    c[k] = -cc / k
 
 
 @njit(cache=True, error_model="numpy")

@@ -2532,11 +2532,39 @@ def taylor_coefficients(t, y, p, X, W):
     for k in range(order):
         # _f0 = l*m*(A*Omega**2*math.cos(Omega*t) - g)*math.sin(theta)
         _u2[k] = Omega*_t[k]
-        _taylor_sin_cos(_u2, _u3, _u4, k)
+        # _u3, _u4 = sin(_u2), cos(_u2)
+        if k == 0:
+            _u3[0] = math.sin(_u2[0])
+            _u4[0] = math.cos(_u2[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*_u2[_j]
+                _s += _ja*_u4[k - _j]
+                _c += _ja*_u3[k - _j]
+            _u3[k] = _s/k
+            _u4[k] = -_c/k
         _u5[k] = _k1*_u4[k]
         _u7[k] = _u5[k] + _k6 if k == 0 else _u5[k]
-        _taylor_sin_cos(theta, _u8, _u9, k)
-        _u10[k] = _taylor_mul(_u7, _u8, k)
+        # _u8, _u9 = sin(theta), cos(theta)
+        if k == 0:
+            _u8[0] = math.sin(theta[0])
+            _u9[0] = math.cos(theta[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*theta[_j]
+                _s += _ja*_u9[k - _j]
+                _c += _ja*_u8[k - _j]
+            _u8[k] = _s/k
+            _u9[k] = -_c/k
+        # _u10 = _u7*_u8
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _u7[_j]*_u8[k - _j]
+        _u10[k] = _s
         _f0[k] = _k0*_u10[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k12*_f0[k]
@@ -2557,16 +2585,12 @@ TAYLOR_WORK = 11
 
 Like ``drivers.py``, this text is appended verbatim to a generated module,
 after ``drivers.py`` and the module's ``taylor_coefficients`` kernel
-(`lagcomp.codegen.taylor` emits it for unconstrained systems whose
+(`lagcomp.codegen.taylor` emits it, the recurrences written out as loops,
+for unconstrained systems whose
 equations use only functions with a Taylor recurrence).  The module provides
 ``taylor_coefficients(t, y, p, X, W)``, ``TAYLOR_WORK``, ``event_values`` and
 the helpers and status codes of ``drivers.py`` (``_ODE_*``, and in modules
 with events ``_event_crossings``, ``_record_events``, ``_dense_state``).
-
-The ``_taylor_*`` helpers are the recurrences of `lagcomp.codegen.taylor`:
-each returns (or writes) coefficient k of its result from coefficients
-0..k of its arguments and 0..k−1 of the result itself.  They are small
-enough for LLVM to inline into ``taylor_coefficients``.
 
 ``taylor_run`` has the calling convention of ``dop853_run`` (the module
 docstring of ``drivers.py``: arguments, statuses, output buffer, events,
@@ -2603,106 +2627,6 @@ import math
 
 import numpy as np
 from numba import njit
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_mul(a, b, k):
-    """Coefficient k of a·b."""
-    s = 0.0
-    for j in range(k + 1):
-        s += a[j] * b[k - j]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_square(a, k):
-    """Coefficient k of a² (half the products of `_taylor_mul`)."""
-    s = 0.0
-    for j in range((k + 1) // 2):
-        s += a[j] * a[k - j]
-    s *= 2.0
-    if k % 2 == 0:
-        s += a[k // 2] * a[k // 2]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_div(a, b, w, k):
-    """Coefficient k of w = a/b, from w[0..k−1]."""
-    s = a[k]
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_rdiv(c, b, w, k):
-    """Coefficient k of w = c/b for a constant c, from w[0..k−1]."""
-    s = c if k == 0 else 0.0
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sqrt(a, w, k):
-    """Coefficient k of w = √a, from w[0..k−1]."""
-    if k == 0:
-        return math.sqrt(a[0])
-    s = a[k]
-    for j in range(1, k):
-        s -= w[j] * w[k - j]
-    return s / (2.0 * w[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_pow(a, alpha, w, k):
-    """Coefficient k of w = a^alpha (constant alpha, a[0] ≠ 0), from w[0..k−1]."""
-    if k == 0:
-        return a[0] ** alpha
-    s = 0.0
-    for j in range(k):
-        s += (alpha * (k - j) - j) * a[k - j] * w[j]
-    return s / (k * a[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_exp(a, w, k):
-    """Coefficient k of w = exp(a), from w[0..k−1]."""
-    if k == 0:
-        return math.exp(a[0])
-    s = 0.0
-    for j in range(1, k + 1):
-        s += j * a[j] * w[k - j]
-    return s / k
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_log(a, w, k):
-    """Coefficient k of w = log(a), from w[0..k−1]."""
-    if k == 0:
-        return math.log(a[0])
-    s = 0.0
-    for j in range(1, k):
-        s += j * w[j] * a[k - j]
-    return (a[k] - s / k) / a[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sin_cos(a, s, c, k):
-    """Coefficient k of s = sin(a) and c = cos(a) together (each recurrence needs the other)."""
-    if k == 0:
-        s[0] = math.sin(a[0])
-        c[0] = math.cos(a[0])
-        return
-    ss = 0.0
-    cc = 0.0
-    for j in range(1, k + 1):
-        ja = j * a[j]
-        ss += ja * c[k - j]
-        cc += ja * s[k - j]
-    s[k] = ss / k
-    c[k] = -cc / k
 
 
 @njit(cache=True, error_model="numpy")

@@ -2532,16 +2532,52 @@ def taylor_coefficients(t, y, p, X, W):
         _t[1] = 1.0
     for k in range(order):
         # _c1 = math.sin(theta)
-        _taylor_sin_cos(theta, _c1, _u1, k)
+        # _c1, _u1 = sin(theta), cos(theta)
+        if k == 0:
+            _c1[0] = math.sin(theta[0])
+            _u1[0] = math.cos(theta[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*theta[_j]
+                _s += _ja*_u1[k - _j]
+                _c += _ja*_c1[k - _j]
+            _c1[k] = _s/k
+            _u1[k] = -_c/k
         # _f0 = R*_c1*g*m + _c0*_c1*(Omega + 2.0*epsilon*math.cos(2.0*t))**2*math.cos(theta)
         _u3[k] = _k2*_c1[k]
         _u5[k] = 2.0*_t[k]
-        _taylor_sin_cos(_u5, _u6, _u7, k)
+        # _u6, _u7 = sin(_u5), cos(_u5)
+        if k == 0:
+            _u6[0] = math.sin(_u5[0])
+            _u7[0] = math.cos(_u5[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*_u5[_j]
+                _s += _ja*_u7[k - _j]
+                _c += _ja*_u6[k - _j]
+            _u6[k] = _s/k
+            _u7[k] = -_c/k
         _u8[k] = _k4*_u7[k]
         _u9[k] = _u8[k] + Omega if k == 0 else _u8[k]
-        _u10[k] = _taylor_square(_u9, k)
-        _u11[k] = _taylor_mul(_c1, _u10, k)
-        _u12[k] = _taylor_mul(_u11, _u1, k)
+        # _u10 = _u9**2
+        _s = _u9[k//2]*_u9[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_u9[_j]*_u9[k - _j]
+        _u10[k] = _s
+        # _u11 = _c1*_u10
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c1[_j]*_u10[k - _j]
+        _u11[k] = _s
+        # _u12 = _u11*_u1
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _u11[_j]*_u1[k - _j]
+        _u12[k] = _s
         _u13[k] = _c0*_u12[k]
         _f0[k] = _u3[k] + _u13[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
@@ -2563,16 +2599,12 @@ TAYLOR_WORK = 15
 
 Like ``drivers.py``, this text is appended verbatim to a generated module,
 after ``drivers.py`` and the module's ``taylor_coefficients`` kernel
-(`lagcomp.codegen.taylor` emits it for unconstrained systems whose
+(`lagcomp.codegen.taylor` emits it, the recurrences written out as loops,
+for unconstrained systems whose
 equations use only functions with a Taylor recurrence).  The module provides
 ``taylor_coefficients(t, y, p, X, W)``, ``TAYLOR_WORK``, ``event_values`` and
 the helpers and status codes of ``drivers.py`` (``_ODE_*``, and in modules
 with events ``_event_crossings``, ``_record_events``, ``_dense_state``).
-
-The ``_taylor_*`` helpers are the recurrences of `lagcomp.codegen.taylor`:
-each returns (or writes) coefficient k of its result from coefficients
-0..k of its arguments and 0..k−1 of the result itself.  They are small
-enough for LLVM to inline into ``taylor_coefficients``.
 
 ``taylor_run`` has the calling convention of ``dop853_run`` (the module
 docstring of ``drivers.py``: arguments, statuses, output buffer, events,
@@ -2609,106 +2641,6 @@ import math
 
 import numpy as np
 from numba import njit
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_mul(a, b, k):
-    """Coefficient k of a·b."""
-    s = 0.0
-    for j in range(k + 1):
-        s += a[j] * b[k - j]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_square(a, k):
-    """Coefficient k of a² (half the products of `_taylor_mul`)."""
-    s = 0.0
-    for j in range((k + 1) // 2):
-        s += a[j] * a[k - j]
-    s *= 2.0
-    if k % 2 == 0:
-        s += a[k // 2] * a[k // 2]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_div(a, b, w, k):
-    """Coefficient k of w = a/b, from w[0..k−1]."""
-    s = a[k]
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_rdiv(c, b, w, k):
-    """Coefficient k of w = c/b for a constant c, from w[0..k−1]."""
-    s = c if k == 0 else 0.0
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sqrt(a, w, k):
-    """Coefficient k of w = √a, from w[0..k−1]."""
-    if k == 0:
-        return math.sqrt(a[0])
-    s = a[k]
-    for j in range(1, k):
-        s -= w[j] * w[k - j]
-    return s / (2.0 * w[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_pow(a, alpha, w, k):
-    """Coefficient k of w = a^alpha (constant alpha, a[0] ≠ 0), from w[0..k−1]."""
-    if k == 0:
-        return a[0] ** alpha
-    s = 0.0
-    for j in range(k):
-        s += (alpha * (k - j) - j) * a[k - j] * w[j]
-    return s / (k * a[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_exp(a, w, k):
-    """Coefficient k of w = exp(a), from w[0..k−1]."""
-    if k == 0:
-        return math.exp(a[0])
-    s = 0.0
-    for j in range(1, k + 1):
-        s += j * a[j] * w[k - j]
-    return s / k
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_log(a, w, k):
-    """Coefficient k of w = log(a), from w[0..k−1]."""
-    if k == 0:
-        return math.log(a[0])
-    s = 0.0
-    for j in range(1, k):
-        s += j * w[j] * a[k - j]
-    return (a[k] - s / k) / a[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sin_cos(a, s, c, k):
-    """Coefficient k of s = sin(a) and c = cos(a) together (each recurrence needs the other)."""
-    if k == 0:
-        s[0] = math.sin(a[0])
-        c[0] = math.cos(a[0])
-        return
-    ss = 0.0
-    cc = 0.0
-    for j in range(1, k + 1):
-        ja = j * a[j]
-        ss += ja * c[k - j]
-        cc += ja * s[k - j]
-    s[k] = ss / k
-    c[k] = -cc / k
 
 
 @njit(cache=True, error_model="numpy")

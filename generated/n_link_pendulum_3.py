@@ -2951,27 +2951,103 @@ def taylor_coefficients(t, y, p, X, W):
         # _c5 = _c2 + theta2
         _c5[k] = _c2[k] + theta2[k]
         # _c6 = g*math.sin(theta1)
-        _taylor_sin_cos(theta1, _u4, _u5, k)
+        # _u4, _u5 = sin(theta1), cos(theta1)
+        if k == 0:
+            _u4[0] = math.sin(theta1[0])
+            _u5[0] = math.cos(theta1[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*theta1[_j]
+                _s += _ja*_u5[k - _j]
+                _c += _ja*_u4[k - _j]
+            _u4[k] = _s/k
+            _u5[k] = -_c/k
         _c6[k] = g*_u4[k]
         # _c7 = math.sin(_c1)
-        _taylor_sin_cos(_c1, _c7, _u8, k)
+        # _c7, _u8 = sin(_c1), cos(_c1)
+        if k == 0:
+            _c7[0] = math.sin(_c1[0])
+            _u8[0] = math.cos(_c1[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*_c1[_j]
+                _s += _ja*_u8[k - _j]
+                _c += _ja*_c7[k - _j]
+            _c7[k] = _s/k
+            _u8[k] = -_c/k
         # _c8 = l2*theta2_dot**2
-        _u9[k] = _taylor_square(theta2_dot, k)
+        # _u9 = theta2_dot**2
+        _s = theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*theta2_dot[_j]*theta2_dot[k - _j]
+        _u9[k] = _s
         _c8[k] = l2*_u9[k]
         # _c9 = _c7*_c8
-        _c9[k] = _taylor_mul(_c7, _c8, k)
+        # _c9 = _c7*_c8
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c7[_j]*_c8[k - _j]
+        _c9[k] = _s
         # _c10 = math.sin(_c3)
-        _taylor_sin_cos(_c3, _c10, _u13, k)
+        # _c10, _u13 = sin(_c3), cos(_c3)
+        if k == 0:
+            _c10[0] = math.sin(_c3[0])
+            _u13[0] = math.cos(_c3[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*_c3[_j]
+                _s += _ja*_u13[k - _j]
+                _c += _ja*_c10[k - _j]
+            _c10[k] = _s/k
+            _u13[k] = -_c/k
         # _c11 = _c4*theta3_dot**2
-        _u14[k] = _taylor_square(theta3_dot, k)
+        # _u14 = theta3_dot**2
+        _s = theta3_dot[k//2]*theta3_dot[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*theta3_dot[_j]*theta3_dot[k - _j]
+        _u14[k] = _s
         _c11[k] = _c4*_u14[k]
         # _c12 = g*math.sin(theta2)
-        _taylor_sin_cos(theta2, _u16, _u17, k)
+        # _u16, _u17 = sin(theta2), cos(theta2)
+        if k == 0:
+            _u16[0] = math.sin(theta2[0])
+            _u17[0] = math.cos(theta2[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*theta2[_j]
+                _s += _ja*_u17[k - _j]
+                _c += _ja*_u16[k - _j]
+            _u16[k] = _s/k
+            _u17[k] = -_c/k
         _c12[k] = g*_u16[k]
         # _c13 = math.sin(_c5)
-        _taylor_sin_cos(_c5, _c13, _u20, k)
+        # _c13, _u20 = sin(_c5), cos(_c5)
+        if k == 0:
+            _c13[0] = math.sin(_c5[0])
+            _u20[0] = math.cos(_c5[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*_c5[_j]
+                _s += _ja*_u20[k - _j]
+                _c += _ja*_c13[k - _j]
+            _c13[k] = _s/k
+            _u20[k] = -_c/k
         # _c14 = theta1_dot**2
-        _c14[k] = _taylor_square(theta1_dot, k)
+        # _c14 = theta1_dot**2
+        _s = theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*theta1_dot[_j]*theta1_dot[k - _j]
+        _c14[k] = _s
         # _m1_0 = _c0*l1*l2*math.cos(_c1)
         _m1_0[k] = _k22*_u8[k]
         # _m2_0 = _c4*l1*math.cos(_c3)
@@ -2979,7 +3055,11 @@ def taylor_coefficients(t, y, p, X, W):
         # _m2_1 = _c4*l2*math.cos(_c5)
         _m2_1[k] = _k26*_u20[k]
         # _f0 = -l1*(_c10*_c11 + _c6*m1 + _c6*m2 + _c6*m3 + _c9*m2 + _c9*m3)
-        _u29[k] = _taylor_mul(_c10, _c11, k)
+        # _u29 = _c10*_c11
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c10[_j]*_c11[k - _j]
+        _u29[k] = _s
         _u30[k] = m1*_c6[k]
         _u31[k] = m2*_c6[k]
         _u32[k] = m3*_c6[k]
@@ -2992,10 +3072,18 @@ def taylor_coefficients(t, y, p, X, W):
         _u39[k] = _u38[k] + _u34[k]
         _f0[k] = _k28*_u39[k]
         # _f1 = l2*(-_c11*_c13 - _c12*m2 - _c12*m3 + _c14*_c7*l1*m2 + _c14*_c7*l1*m3)
-        _u41[k] = _taylor_mul(_c11, _c13, k)
+        # _u41 = _c11*_c13
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c11[_j]*_c13[k - _j]
+        _u41[k] = _s
         _u42[k] = m2*_c12[k]
         _u43[k] = m3*_c12[k]
-        _u45[k] = _taylor_mul(_c14, _c7, k)
+        # _u45 = _c14*_c7
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c14[_j]*_c7[k - _j]
+        _u45[k] = _s
         _u46[k] = _k44*_u45[k]
         _u48[k] = _k47*_u45[k]
         _u49[k] = _u46[k] + _u48[k]
@@ -3004,10 +3092,30 @@ def taylor_coefficients(t, y, p, X, W):
         _u52[k] = _u51[k] - _u43[k]
         _f1[k] = l2*_u52[k]
         # _f2 = _c4*(_c10*_c14*l1 + _c13*_c8 - g*math.sin(theta3))
-        _u54[k] = _taylor_mul(_c13, _c8, k)
-        _taylor_sin_cos(theta3, _u55, _u56, k)
+        # _u54 = _c13*_c8
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c13[_j]*_c8[k - _j]
+        _u54[k] = _s
+        # _u55, _u56 = sin(theta3), cos(theta3)
+        if k == 0:
+            _u55[0] = math.sin(theta3[0])
+            _u56[0] = math.cos(theta3[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*theta3[_j]
+                _s += _ja*_u56[k - _j]
+                _c += _ja*_u55[k - _j]
+            _u55[k] = _s/k
+            _u56[k] = -_c/k
         _u57[k] = g*_u55[k]
-        _u58[k] = _taylor_mul(_c10, _c14, k)
+        # _u58 = _c10*_c14
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c10[_j]*_c14[k - _j]
+        _u58[k] = _s
         _u59[k] = l1*_u58[k]
         _u60[k] = _u54[k] + _u59[k]
         _u61[k] = _u60[k] - _u57[k]
@@ -3015,37 +3123,93 @@ def taylor_coefficients(t, y, p, X, W):
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _l1_0[k] = _k63*_m1_0[k]
         _l2_0[k] = _k63*_m2_0[k]
-        _u66[k] = _taylor_square(_l1_0, k)
+        # _u66 = _l1_0**2
+        _s = _l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_l1_0[_j]*_l1_0[k - _j]
+        _u66[k] = _s
         _u67[k] = _m0_0*_u66[k]
         _d1[k] = _m1_1 - _u67[k] if k == 0 else -_u67[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
-        _u69[k] = _taylor_mul(_l2_0, _l1_0, k)
+        # _u69 = _l2_0*_l1_0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_0[_j]*_l1_0[k - _j]
+        _u69[k] = _s
         _u70[k] = _m0_0*_u69[k]
         _u71[k] = _m2_1[k] - _u70[k]
-        _l2_1[k] = _taylor_div(_u71, _d1, _l2_1, k)
-        _u73[k] = _taylor_square(_l2_0, k)
+        # _l2_1 = _u71/_d1
+        _s = _u71[k]
+        for _j in range(1, k + 1):
+            _s -= _d1[_j]*_l2_1[k - _j]
+        _l2_1[k] = _s/_d1[0]
+        # _u73 = _l2_0**2
+        _s = _l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_l2_0[_j]*_l2_0[k - _j]
+        _u73[k] = _s
         _u74[k] = _m0_0*_u73[k]
         _u75[k] = _m2_2 - _u74[k] if k == 0 else -_u74[k]
-        _u76[k] = _taylor_square(_l2_1, k)
-        _u77[k] = _taylor_mul(_u76, _d1, k)
+        # _u76 = _l2_1**2
+        _s = _l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_l2_1[_j]*_l2_1[k - _j]
+        _u76[k] = _s
+        # _u77 = _u76*_d1
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _u76[_j]*_d1[k - _j]
+        _u77[k] = _s
         _d2[k] = _u75[k] - _u77[k]
         if k == 0 and not _d2[0] > _PIVOT_TOLERANCE*abs(_m2_2):
             return 3
-        _u79[k] = _taylor_mul(_l1_0, _f0, k)
+        # _u79 = _l1_0*_f0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l1_0[_j]*_f0[k - _j]
+        _u79[k] = _s
         _z1[k] = _f1[k] - _u79[k]
-        _u81[k] = _taylor_mul(_l2_0, _f0, k)
+        # _u81 = _l2_0*_f0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_0[_j]*_f0[k - _j]
+        _u81[k] = _s
         _u82[k] = _f2[k] - _u81[k]
-        _u83[k] = _taylor_mul(_l2_1, _z1, k)
+        # _u83 = _l2_1*_z1
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_1[_j]*_z1[k - _j]
+        _u83[k] = _s
         _z2[k] = _u82[k] - _u83[k]
-        _x2[k] = _taylor_div(_z2, _d2, _x2, k)
-        _u86[k] = _taylor_div(_z1, _d1, _u86, k)
-        _u87[k] = _taylor_mul(_l2_1, _x2, k)
+        # _x2 = _z2/_d2
+        _s = _z2[k]
+        for _j in range(1, k + 1):
+            _s -= _d2[_j]*_x2[k - _j]
+        _x2[k] = _s/_d2[0]
+        # _u86 = _z1/_d1
+        _s = _z1[k]
+        for _j in range(1, k + 1):
+            _s -= _d1[_j]*_u86[k - _j]
+        _u86[k] = _s/_d1[0]
+        # _u87 = _l2_1*_x2
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_1[_j]*_x2[k - _j]
+        _u87[k] = _s
         _x1[k] = _u86[k] - _u87[k]
         _u89[k] = _k63*_f0[k]
-        _u90[k] = _taylor_mul(_l1_0, _x1, k)
+        # _u90 = _l1_0*_x1
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l1_0[_j]*_x1[k - _j]
+        _u90[k] = _s
         _u91[k] = _u89[k] - _u90[k]
-        _u92[k] = _taylor_mul(_l2_0, _x2, k)
+        # _u92 = _l2_0*_x2
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_0[_j]*_x2[k - _j]
+        _u92[k] = _s
         _x0[k] = _u91[k] - _u92[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta1_dot[k]/(k + 1)
@@ -3068,16 +3232,12 @@ TAYLOR_WORK = 87
 
 Like ``drivers.py``, this text is appended verbatim to a generated module,
 after ``drivers.py`` and the module's ``taylor_coefficients`` kernel
-(`lagcomp.codegen.taylor` emits it for unconstrained systems whose
+(`lagcomp.codegen.taylor` emits it, the recurrences written out as loops,
+for unconstrained systems whose
 equations use only functions with a Taylor recurrence).  The module provides
 ``taylor_coefficients(t, y, p, X, W)``, ``TAYLOR_WORK``, ``event_values`` and
 the helpers and status codes of ``drivers.py`` (``_ODE_*``, and in modules
 with events ``_event_crossings``, ``_record_events``, ``_dense_state``).
-
-The ``_taylor_*`` helpers are the recurrences of `lagcomp.codegen.taylor`:
-each returns (or writes) coefficient k of its result from coefficients
-0..k of its arguments and 0..k−1 of the result itself.  They are small
-enough for LLVM to inline into ``taylor_coefficients``.
 
 ``taylor_run`` has the calling convention of ``dop853_run`` (the module
 docstring of ``drivers.py``: arguments, statuses, output buffer, events,
@@ -3114,106 +3274,6 @@ import math
 
 import numpy as np
 from numba import njit
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_mul(a, b, k):
-    """Coefficient k of a·b."""
-    s = 0.0
-    for j in range(k + 1):
-        s += a[j] * b[k - j]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_square(a, k):
-    """Coefficient k of a² (half the products of `_taylor_mul`)."""
-    s = 0.0
-    for j in range((k + 1) // 2):
-        s += a[j] * a[k - j]
-    s *= 2.0
-    if k % 2 == 0:
-        s += a[k // 2] * a[k // 2]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_div(a, b, w, k):
-    """Coefficient k of w = a/b, from w[0..k−1]."""
-    s = a[k]
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_rdiv(c, b, w, k):
-    """Coefficient k of w = c/b for a constant c, from w[0..k−1]."""
-    s = c if k == 0 else 0.0
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sqrt(a, w, k):
-    """Coefficient k of w = √a, from w[0..k−1]."""
-    if k == 0:
-        return math.sqrt(a[0])
-    s = a[k]
-    for j in range(1, k):
-        s -= w[j] * w[k - j]
-    return s / (2.0 * w[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_pow(a, alpha, w, k):
-    """Coefficient k of w = a^alpha (constant alpha, a[0] ≠ 0), from w[0..k−1]."""
-    if k == 0:
-        return a[0] ** alpha
-    s = 0.0
-    for j in range(k):
-        s += (alpha * (k - j) - j) * a[k - j] * w[j]
-    return s / (k * a[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_exp(a, w, k):
-    """Coefficient k of w = exp(a), from w[0..k−1]."""
-    if k == 0:
-        return math.exp(a[0])
-    s = 0.0
-    for j in range(1, k + 1):
-        s += j * a[j] * w[k - j]
-    return s / k
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_log(a, w, k):
-    """Coefficient k of w = log(a), from w[0..k−1]."""
-    if k == 0:
-        return math.log(a[0])
-    s = 0.0
-    for j in range(1, k):
-        s += j * w[j] * a[k - j]
-    return (a[k] - s / k) / a[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sin_cos(a, s, c, k):
-    """Coefficient k of s = sin(a) and c = cos(a) together (each recurrence needs the other)."""
-    if k == 0:
-        s[0] = math.sin(a[0])
-        c[0] = math.cos(a[0])
-        return
-    ss = 0.0
-    cc = 0.0
-    for j in range(1, k + 1):
-        ja = j * a[j]
-        ss += ja * c[k - j]
-        cc += ja * s[k - j]
-    s[k] = ss / k
-    c[k] = -cc / k
 
 
 @njit(cache=True, error_model="numpy")

@@ -2797,9 +2797,25 @@ def taylor_coefficients(t, y, p, X, W):
         X[i, 0] = y[i]
     for k in range(order):
         # _c0 = math.cos(theta)
-        _taylor_sin_cos(theta, _c8, _c0, k)
+        # _c8, _c0 = sin(theta), cos(theta)
+        if k == 0:
+            _c8[0] = math.sin(theta[0])
+            _c0[0] = math.cos(theta[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*theta[_j]
+                _s += _ja*_c0[k - _j]
+                _c += _ja*_c8[k - _j]
+            _c8[k] = _s/k
+            _c0[k] = -_c/k
         # _c1 = _c0**2
-        _c1[k] = _taylor_square(_c0, k)
+        # _c1 = _c0**2
+        _s = _c0[k//2]*_c0[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_c0[_j]*_c0[k - _j]
+        _c1[k] = _s
         # _c4 = I3*_c0
         _c4[k] = I3*_c0[k]
         # _c5 = I1*_c0
@@ -2810,9 +2826,17 @@ def taylor_coefficients(t, y, p, X, W):
         _c7[k] = _c2*_c0[k]
         # _c8 = math.sin(theta)
         # _c9 = _c8*theta_dot
-        _c9[k] = _taylor_mul(_c8, theta_dot, k)
+        # _c9 = _c8*theta_dot
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c8[_j]*theta_dot[k - _j]
+        _c9[k] = _s
         # _c10 = psi_dot**2
-        _c10[k] = _taylor_square(psi_dot, k)
+        # _c10 = psi_dot**2
+        _s = psi_dot[k//2]*psi_dot[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*psi_dot[_j]*psi_dot[k - _j]
+        _c10[k] = _s
         # _m0_0 = -I1*_c1 + I3*_c1 - _c1*_c2 + _c3
         _u9[k] = I3*_c1[k]
         _u10[k] = I1*_c1[k]
@@ -2823,64 +2847,184 @@ def taylor_coefficients(t, y, p, X, W):
         # _m2_0 = _c4
         # _f0 = _c9*(2.0*I3*_c0*psi_dot + I3*phi_dot - _c5*_c6 - _c6*_c7)
         _u15[k] = I3*phi_dot[k]
-        _u16[k] = _taylor_mul(_c5, _c6, k)
-        _u17[k] = _taylor_mul(_c6, _c7, k)
-        _u19[k] = _taylor_mul(_c0, psi_dot, k)
+        # _u16 = _c5*_c6
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c5[_j]*_c6[k - _j]
+        _u16[k] = _s
+        # _u17 = _c6*_c7
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c6[_j]*_c7[k - _j]
+        _u17[k] = _s
+        # _u19 = _c0*psi_dot
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c0[_j]*psi_dot[k - _j]
+        _u19[k] = _s
         _u20[k] = _k18*_u19[k]
         _u21[k] = _u15[k] + _u20[k]
         _u22[k] = _u21[k] - _u16[k]
         _u23[k] = _u22[k] - _u17[k]
-        _f0[k] = _taylor_mul(_c9, _u23, k)
+        # _f0 = _c9*_u23
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c9[_j]*_u23[k - _j]
+        _f0[k] = _s
         # _f1 = _c8*(-I3*phi_dot*psi_dot + M*g*l - _c10*_c4 + _c10*_c5 + _c10*_c7)
-        _u25[k] = _taylor_mul(_c10, _c5, k)
-        _u26[k] = _taylor_mul(_c10, _c7, k)
-        _u27[k] = _taylor_mul(_c10, _c4, k)
-        _u28[k] = _taylor_mul(phi_dot, psi_dot, k)
+        # _u25 = _c10*_c5
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c10[_j]*_c5[k - _j]
+        _u25[k] = _s
+        # _u26 = _c10*_c7
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c10[_j]*_c7[k - _j]
+        _u26[k] = _s
+        # _u27 = _c10*_c4
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c10[_j]*_c4[k - _j]
+        _u27[k] = _s
+        # _u28 = phi_dot*psi_dot
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += phi_dot[_j]*psi_dot[k - _j]
+        _u28[k] = _s
         _u29[k] = I3*_u28[k]
         _u30[k] = _u25[k] + _u26[k]
         _u31[k] = _u30[k] - _u27[k]
         _u32[k] = _u31[k] - _u29[k]
         _u34[k] = _u32[k] + _k33 if k == 0 else _u32[k]
-        _f1[k] = _taylor_mul(_c8, _u34, k)
+        # _f1 = _c8*_u34
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c8[_j]*_u34[k - _j]
+        _f1[k] = _s
         # _f2 = I3*_c9*psi_dot
-        _u36[k] = _taylor_mul(_c9, psi_dot, k)
+        # _u36 = _c9*psi_dot
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c9[_j]*psi_dot[k - _j]
+        _u36[k] = _s
         _f2[k] = I3*_u36[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
             return 1
-        _l1_0[k] = _taylor_rdiv(_m1_0, _m0_0, _l1_0, k)
-        _l2_0[k] = _taylor_div(_c4, _m0_0, _l2_0, k)
-        _u40[k] = _taylor_square(_l1_0, k)
-        _u41[k] = _taylor_mul(_u40, _m0_0, k)
+        # _l1_0 = _m1_0/_m0_0
+        _s = _m1_0 if k == 0 else 0.0
+        for _j in range(1, k + 1):
+            _s -= _m0_0[_j]*_l1_0[k - _j]
+        _l1_0[k] = _s/_m0_0[0]
+        # _l2_0 = _c4/_m0_0
+        _s = _c4[k]
+        for _j in range(1, k + 1):
+            _s -= _m0_0[_j]*_l2_0[k - _j]
+        _l2_0[k] = _s/_m0_0[0]
+        # _u40 = _l1_0**2
+        _s = _l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_l1_0[_j]*_l1_0[k - _j]
+        _u40[k] = _s
+        # _u41 = _u40*_m0_0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _u40[_j]*_m0_0[k - _j]
+        _u41[k] = _s
         _d1[k] = _m1_1 - _u41[k] if k == 0 else -_u41[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
-        _u43[k] = _taylor_mul(_l2_0, _l1_0, k)
-        _u44[k] = _taylor_mul(_u43, _m0_0, k)
+        # _u43 = _l2_0*_l1_0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_0[_j]*_l1_0[k - _j]
+        _u43[k] = _s
+        # _u44 = _u43*_m0_0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _u43[_j]*_m0_0[k - _j]
+        _u44[k] = _s
         _u45[k] = _m2_1 - _u44[k] if k == 0 else -_u44[k]
-        _l2_1[k] = _taylor_div(_u45, _d1, _l2_1, k)
-        _u47[k] = _taylor_square(_l2_0, k)
-        _u48[k] = _taylor_mul(_u47, _m0_0, k)
+        # _l2_1 = _u45/_d1
+        _s = _u45[k]
+        for _j in range(1, k + 1):
+            _s -= _d1[_j]*_l2_1[k - _j]
+        _l2_1[k] = _s/_d1[0]
+        # _u47 = _l2_0**2
+        _s = _l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_l2_0[_j]*_l2_0[k - _j]
+        _u47[k] = _s
+        # _u48 = _u47*_m0_0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _u47[_j]*_m0_0[k - _j]
+        _u48[k] = _s
         _u49[k] = _m2_2 - _u48[k] if k == 0 else -_u48[k]
-        _u50[k] = _taylor_square(_l2_1, k)
-        _u51[k] = _taylor_mul(_u50, _d1, k)
+        # _u50 = _l2_1**2
+        _s = _l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_l2_1[_j]*_l2_1[k - _j]
+        _u50[k] = _s
+        # _u51 = _u50*_d1
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _u50[_j]*_d1[k - _j]
+        _u51[k] = _s
         _d2[k] = _u49[k] - _u51[k]
         if k == 0 and not _d2[0] > _PIVOT_TOLERANCE*abs(_m2_2):
             return 3
-        _u53[k] = _taylor_mul(_l1_0, _f0, k)
+        # _u53 = _l1_0*_f0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l1_0[_j]*_f0[k - _j]
+        _u53[k] = _s
         _z1[k] = _f1[k] - _u53[k]
-        _u55[k] = _taylor_mul(_l2_0, _f0, k)
+        # _u55 = _l2_0*_f0
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_0[_j]*_f0[k - _j]
+        _u55[k] = _s
         _u56[k] = _f2[k] - _u55[k]
-        _u57[k] = _taylor_mul(_l2_1, _z1, k)
+        # _u57 = _l2_1*_z1
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_1[_j]*_z1[k - _j]
+        _u57[k] = _s
         _z2[k] = _u56[k] - _u57[k]
-        _x2[k] = _taylor_div(_z2, _d2, _x2, k)
-        _u60[k] = _taylor_div(_z1, _d1, _u60, k)
-        _u61[k] = _taylor_mul(_l2_1, _x2, k)
+        # _x2 = _z2/_d2
+        _s = _z2[k]
+        for _j in range(1, k + 1):
+            _s -= _d2[_j]*_x2[k - _j]
+        _x2[k] = _s/_d2[0]
+        # _u60 = _z1/_d1
+        _s = _z1[k]
+        for _j in range(1, k + 1):
+            _s -= _d1[_j]*_u60[k - _j]
+        _u60[k] = _s/_d1[0]
+        # _u61 = _l2_1*_x2
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_1[_j]*_x2[k - _j]
+        _u61[k] = _s
         _x1[k] = _u60[k] - _u61[k]
-        _u63[k] = _taylor_div(_f0, _m0_0, _u63, k)
-        _u64[k] = _taylor_mul(_l1_0, _x1, k)
+        # _u63 = _f0/_m0_0
+        _s = _f0[k]
+        for _j in range(1, k + 1):
+            _s -= _m0_0[_j]*_u63[k - _j]
+        _u63[k] = _s/_m0_0[0]
+        # _u64 = _l1_0*_x1
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l1_0[_j]*_x1[k - _j]
+        _u64[k] = _s
         _u65[k] = _u63[k] - _u64[k]
-        _u66[k] = _taylor_mul(_l2_0, _x2, k)
+        # _u66 = _l2_0*_x2
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _l2_0[_j]*_x2[k - _j]
+        _u66[k] = _s
         _x0[k] = _u65[k] - _u66[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = psi_dot[k]/(k + 1)
@@ -2903,16 +3047,12 @@ TAYLOR_WORK = 66
 
 Like ``drivers.py``, this text is appended verbatim to a generated module,
 after ``drivers.py`` and the module's ``taylor_coefficients`` kernel
-(`lagcomp.codegen.taylor` emits it for unconstrained systems whose
+(`lagcomp.codegen.taylor` emits it, the recurrences written out as loops,
+for unconstrained systems whose
 equations use only functions with a Taylor recurrence).  The module provides
 ``taylor_coefficients(t, y, p, X, W)``, ``TAYLOR_WORK``, ``event_values`` and
 the helpers and status codes of ``drivers.py`` (``_ODE_*``, and in modules
 with events ``_event_crossings``, ``_record_events``, ``_dense_state``).
-
-The ``_taylor_*`` helpers are the recurrences of `lagcomp.codegen.taylor`:
-each returns (or writes) coefficient k of its result from coefficients
-0..k of its arguments and 0..k−1 of the result itself.  They are small
-enough for LLVM to inline into ``taylor_coefficients``.
 
 ``taylor_run`` has the calling convention of ``dop853_run`` (the module
 docstring of ``drivers.py``: arguments, statuses, output buffer, events,
@@ -2949,106 +3089,6 @@ import math
 
 import numpy as np
 from numba import njit
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_mul(a, b, k):
-    """Coefficient k of a·b."""
-    s = 0.0
-    for j in range(k + 1):
-        s += a[j] * b[k - j]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_square(a, k):
-    """Coefficient k of a² (half the products of `_taylor_mul`)."""
-    s = 0.0
-    for j in range((k + 1) // 2):
-        s += a[j] * a[k - j]
-    s *= 2.0
-    if k % 2 == 0:
-        s += a[k // 2] * a[k // 2]
-    return s
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_div(a, b, w, k):
-    """Coefficient k of w = a/b, from w[0..k−1]."""
-    s = a[k]
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_rdiv(c, b, w, k):
-    """Coefficient k of w = c/b for a constant c, from w[0..k−1]."""
-    s = c if k == 0 else 0.0
-    for j in range(1, k + 1):
-        s -= b[j] * w[k - j]
-    return s / b[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sqrt(a, w, k):
-    """Coefficient k of w = √a, from w[0..k−1]."""
-    if k == 0:
-        return math.sqrt(a[0])
-    s = a[k]
-    for j in range(1, k):
-        s -= w[j] * w[k - j]
-    return s / (2.0 * w[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_pow(a, alpha, w, k):
-    """Coefficient k of w = a^alpha (constant alpha, a[0] ≠ 0), from w[0..k−1]."""
-    if k == 0:
-        return a[0] ** alpha
-    s = 0.0
-    for j in range(k):
-        s += (alpha * (k - j) - j) * a[k - j] * w[j]
-    return s / (k * a[0])
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_exp(a, w, k):
-    """Coefficient k of w = exp(a), from w[0..k−1]."""
-    if k == 0:
-        return math.exp(a[0])
-    s = 0.0
-    for j in range(1, k + 1):
-        s += j * a[j] * w[k - j]
-    return s / k
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_log(a, w, k):
-    """Coefficient k of w = log(a), from w[0..k−1]."""
-    if k == 0:
-        return math.log(a[0])
-    s = 0.0
-    for j in range(1, k):
-        s += j * w[j] * a[k - j]
-    return (a[k] - s / k) / a[0]
-
-
-@njit(cache=True, error_model="numpy")
-def _taylor_sin_cos(a, s, c, k):
-    """Coefficient k of s = sin(a) and c = cos(a) together (each recurrence needs the other)."""
-    if k == 0:
-        s[0] = math.sin(a[0])
-        c[0] = math.cos(a[0])
-        return
-    ss = 0.0
-    cc = 0.0
-    for j in range(1, k + 1):
-        ja = j * a[j]
-        ss += ja * c[k - j]
-        cc += ja * s[k - j]
-    s[k] = ss / k
-    c[k] = -cc / k
 
 
 @njit(cache=True, error_model="numpy")

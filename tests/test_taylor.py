@@ -18,7 +18,7 @@ import sympy as sp
 
 import lagcomp as lc
 import lagcomp.examples
-from lagcomp.codegen.taylor import Unsupported, decompose
+from lagcomp.codegen.taylor import _INLINE, Unsupported, decompose
 from lagcomp.errors import OptionError
 from lagcomp.model import t
 
@@ -55,35 +55,42 @@ def _series(coefficients, order=ORDER):
     return out
 
 
-CASES = {
-    "_taylor_mul": (lambda a, b: a * b, lambda h, a, b, w, k: h(a, b, k)),
-    "_taylor_square": (lambda a, b: a**2, lambda h, a, b, w, k: h(a, k)),
-    "_taylor_div": (lambda a, b: a / b, lambda h, a, b, w, k: h(a, b, w, k)),
-    "_taylor_rdiv": (lambda a, b: 2.5 / b, lambda h, a, b, w, k: h(2.5, b, w, k)),
-    "_taylor_sqrt": (lambda a, b: mpmath.sqrt(a), lambda h, a, b, w, k: h(a, w, k)),
-    "_taylor_pow": (lambda a, b: a ** mpmath.mpf(-1.5), lambda h, a, b, w, k: h(a, -1.5, w, k)),
-    "_taylor_exp": (lambda a, b: mpmath.exp(a), lambda h, a, b, w, k: h(a, w, k)),
-    "_taylor_log": (lambda a, b: mpmath.log(a), lambda h, a, b, w, k: h(a, w, k)),
+CASES = {  # operation: (f(a, b) in mpmath, the arguments' names in the loop's template)
+    "_taylor_mul": (lambda a, b: a * b, {}),
+    "_taylor_square": (lambda a, b: a**2, {}),
+    "_taylor_div": (lambda a, b: a / b, {}),
+    "_taylor_rdiv": (lambda a, b: 2.5 / b, {"c": "2.5"}),
+    "_taylor_sqrt": (lambda a, b: mpmath.sqrt(a), {}),
+    "_taylor_pow": (lambda a, b: a ** mpmath.mpf(-1.5), {"c": "-1.5"}),
+    "_taylor_exp": (lambda a, b: mpmath.exp(a), {}),
+    "_taylor_log": (lambda a, b: mpmath.log(a), {}),
+    "_taylor_sin_cos": (None, {"w": "s", "b": "c"}),
 }
 
 
-@pytest.mark.parametrize("name", [*CASES, "_taylor_sin_cos"])
-def test_each_recurrence_against_an_independent_expansion(pendulum, name):
-    """Each helper of templates/taylor.py, run order by order as taylor_coefficients runs it."""
-    helper = getattr(pendulum.kernels, name).py_func  # plain Python: no compilation
+def _recurrence(name):
+    """The emitted loop of operation `name` (`_INLINE`), run for k = 0..ORDER in plain Python."""
+    names = dict(w="w", a="a", b="b", c="c")
+    names.update(CASES[name][1])
+    body = "\n".join("        " + line.format(**names) for line in _INLINE[name][1])
+    namespace = {"math": math}
+    exec(f"def run(a, b, c, w, s):\n    for k in range({ORDER + 1}):\n{body}\n", namespace)
+    return namespace["run"]
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_each_recurrence_against_an_independent_expansion(name):
+    """The loop taylor_coefficients runs for each operation, against mpmath's expansion."""
     a, b = _series(A), _series(B)
+    w, s, c = np.zeros(ORDER + 1), np.zeros(ORDER + 1), np.zeros(ORDER + 1)
+    run = _recurrence(name)
     if name == "_taylor_sin_cos":
-        s, c = np.zeros(ORDER + 1), np.zeros(ORDER + 1)
-        for k in range(ORDER + 1):
-            helper(a, s, c, k)
+        run(a, None, c, None, s)
         np.testing.assert_allclose(s, _reference(lambda a, b: mpmath.sin(a)), rtol=1e-13, atol=1e-15)
         np.testing.assert_allclose(c, _reference(lambda a, b: mpmath.cos(a)), rtol=1e-13, atol=1e-15)
         return
-    f, call = CASES[name]
-    w = np.zeros(ORDER + 1)
-    for k in range(ORDER + 1):
-        w[k] = call(helper, a, b, w, k)
-    np.testing.assert_allclose(w, _reference(f), rtol=1e-13, atol=1e-15)
+    run(a, b, 2.5, w, None)
+    np.testing.assert_allclose(w, _reference(CASES[name][0]), rtol=1e-13, atol=1e-15)
 
 
 def test_coefficients_are_the_derivatives_of_the_solution(pendulum):

@@ -29,10 +29,14 @@ treated as a state whose derivative is 1.  Integer powers become products
 (a[0] = 0 is allowed, as for q̇² at rest); other powers use the pow
 recurrence, which needs a[0] ≠ 0.
 
-`taylor_source` emits this as one numba function ``taylor_coefficients(t,
-y, p, X, W)`` with a line per operation, each commented with the scalar
-statement of ``rhs`` it came from, plus ``TAYLOR_WORK`` (rows of the work
-array ``W``); the driver ``taylor_run`` comes from ``templates/taylor.py``.
+`decompose` writes the program in a call notation, one line per operation
+(``w[k] = _taylor_mul(a, b, k)``, ...); `taylor_source` prints it as one
+numba function ``taylor_coefficients(t, y, p, X, W)`` with each call written
+out as its loop (`_INLINE`: numba passes arrays to a called function with
+reference counting, which costs more than these short loops: inline, the
+double pendulum runs 1.5x faster), each block commented with the statement of
+``rhs`` it computes; plus ``TAYLOR_WORK`` (rows of the work array ``W``).
+The driver ``taylor_run`` comes from ``templates/taylor.py``.
 Systems the method does not cover (constraints, or a function without a
 recurrence here: sign, Abs, Piecewise, ...) get ``TAYLOR_REFUSED``, a
 string saying why, instead.
@@ -466,6 +470,65 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
     return b.program
 
 
+#: Each operation of the call notation as the loop that computes coefficient k of its result from
+#: coefficients 0..k of its arguments and 0..k−1 of the result (``{w}`` the result, ``{a}``, ``{b}``
+#: the arguments, ``{c}`` a constant; sin/cos write {w} and {b}): (summary comment, lines).
+_INLINE = {
+    "_taylor_mul": ("{w} = {a}*{b}", ["_s = 0.0", "for _j in range(k + 1):", "    _s += {a}[_j]*{b}[k - _j]",
+                                          "{w}[k] = _s"]),
+    "_taylor_square": ("{w} = {a}**2", ["_s = {a}[k//2]*{a}[k//2] if k % 2 == 0 else 0.0",
+                                           "for _j in range((k + 1)//2):", "    _s += 2.0*{a}[_j]*{a}[k - _j]",
+                                           "{w}[k] = _s"]),
+    "_taylor_div": ("{w} = {a}/{b}", ["_s = {a}[k]", "for _j in range(1, k + 1):",
+                                         "    _s -= {b}[_j]*{w}[k - _j]", "{w}[k] = _s/{b}[0]"]),
+    "_taylor_rdiv": ("{w} = {c}/{b}", ["_s = {c} if k == 0 else 0.0", "for _j in range(1, k + 1):",
+                                          "    _s -= {b}[_j]*{w}[k - _j]", "{w}[k] = _s/{b}[0]"]),
+    "_taylor_sqrt": ("{w} = sqrt({a})", ["if k == 0:", "    {w}[0] = math.sqrt({a}[0])", "else:",
+                                            "    _s = {a}[k]", "    for _j in range(1, k):",
+                                            "        _s -= {w}[_j]*{w}[k - _j]", "    {w}[k] = _s/(2.0*{w}[0])"]),
+    "_taylor_pow": ("{w} = {a}**{c}", ["if k == 0:", "    {w}[0] = {a}[0]**{c}", "else:", "    _s = 0.0",
+                                          "    for _j in range(k):",
+                                          "        _s += ({c}*(k - _j) - _j)*{a}[k - _j]*{w}[_j]",
+                                          "    {w}[k] = _s/(k*{a}[0])"]),
+    "_taylor_exp": ("{w} = exp({a})", ["if k == 0:", "    {w}[0] = math.exp({a}[0])", "else:", "    _s = 0.0",
+                                          "    for _j in range(1, k + 1):", "        _s += _j*{a}[_j]*{w}[k - _j]",
+                                          "    {w}[k] = _s/k"]),
+    "_taylor_log": ("{w} = log({a})", ["if k == 0:", "    {w}[0] = math.log({a}[0])", "else:", "    _s = 0.0",
+                                          "    for _j in range(1, k):", "        _s += _j*{w}[_j]*{a}[k - _j]",
+                                          "    {w}[k] = ({a}[k] - _s/k)/{a}[0]"]),
+    "_taylor_sin_cos": ("{w}, {b} = sin({a}), cos({a})",
+                        ["if k == 0:", "    {w}[0] = math.sin({a}[0])", "    {b}[0] = math.cos({a}[0])", "else:",
+                         "    _s = 0.0", "    _c = 0.0", "    for _j in range(1, k + 1):",
+                         "        _ja = _j*{a}[_j]", "        _s += _ja*{b}[k - _j]", "        _c += _ja*{w}[k - _j]",
+                         "    {w}[k] = _s/k", "    {b}[k] = -_c/k"]),
+}
+_CALL = re.compile(r"^(?:(?P<w>\w+)\[k\] = )?(?P<f>_taylor_\w+)\((?P<args>.*), k\)$")
+
+
+def _inline(line: str) -> list[str]:
+    """A helper-call line of the program as its loop (`_INLINE`), or the line itself."""
+    match = _CALL.match(line)
+    if not match:
+        return [line]
+    f, args = match.group("f"), [a.strip() for a in match.group("args").split(",")]
+    if f == "_taylor_sin_cos":
+        names = dict(a=args[0], w=args[1], b=args[2])
+    elif f in ("_taylor_mul",):
+        names = dict(w=match.group("w"), a=args[0], b=args[1])
+    elif f == "_taylor_square":
+        names = dict(w=match.group("w"), a=args[0])
+    elif f == "_taylor_div":
+        names = dict(w=match.group("w"), a=args[0], b=args[1])
+    elif f == "_taylor_rdiv":
+        names = dict(w=match.group("w"), c=args[0], b=args[1])
+    elif f == "_taylor_pow":
+        names = dict(w=match.group("w"), a=args[0], c=args[1])
+    else:
+        names = dict(w=match.group("w"), a=args[0])
+    summary, lines = _INLINE[f]
+    return ["# " + summary.format(**names)] + [line.format(**names) for line in lines]
+
+
 def emit_taylor(program: TaylorProgram) -> str:
     """The source of ``taylor_coefficients`` and ``TAYLOR_WORK`` for `program`."""
     rows = (["_t"] if program.uses_t else []) + program.rows
@@ -485,7 +548,8 @@ def emit_taylor(program: TaylorProgram) -> str:
         lines += ["for k in range(order + 1):", f"{INDENT}_t[k] = 0.0", "_t[0] = t", "if order > 0:",
                   f"{INDENT}_t[1] = 1.0"]
     lines.append("for k in range(order):")
-    lines += [INDENT + (f"# {op.comment}" if op.line == "#" else op.line) for op in program.body]
+    for op in program.body:
+        lines += [INDENT + line for line in ([f"# {op.comment}"] if op.line == "#" else _inline(op.line))]
     lines.append("return 0")
     body = "\n".join(INDENT + line if line else "" for line in lines)
     return (

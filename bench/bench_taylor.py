@@ -1,0 +1,277 @@
+"""The Taylor method (method="taylor", issue 9) against lagcomp's DOP853 and heyoka, in one process.
+
+    PYTHONPATH=src python bench/bench_taylor.py [--quick]
+
+Sections (each timing is a median of warm runs; ratios are measured in the same run):
+
+1. Double pendulum (the ``double_pendulum`` example, θ = (2, 1), θ̇ = 0), t ∈ [0, 100]:
+   error of the state at t = 10 (dense output) against the 30-digit mpmath
+   reference in bench/data, and wall time, for lagcomp's taylor and dop853 at
+   several tolerances, and heyoka (when installed) on the hand-reduced ODE
+   and on the raw Cartesian-velocity Lagrangian (hy.lagrangian).
+2. Long run: |ΔE/E| at t = 10⁴ at the default tolerance, and its wall time.
+3. Kepler, e = 0.9, 10⁴ orbits: relative energy and angular momentum errors
+   at each orbit, their maximum and the slope of log(running max) against log t
+   (≤ 0.5: no faster than √t).
+4. Hénon–Heiles section x = 0 (ẋ > 0) to t = 2000: event times of taylor
+   against dop853 (rtol 1e-13) and against heyoka's own event detection.
+5. What the Taylor kernel costs: series operations per order, emit time and
+   the first-call (numba compilation) time of taylor_run in a fresh cache.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import sympy as sp
+
+import lagcomp as lc
+from lagcomp import examples
+from lagcomp.model import t as time_symbol
+
+HERE = Path(__file__).resolve().parent
+EPS = float(np.finfo(float).eps)
+Y0 = np.array([2.0, 1.0, 0.0, 0.0])
+P = [1.0, 1.0, 1.0, 1.0, 9.81]
+GRID = np.array([10.0, 100.0])
+
+
+def median_ms(run, repeats=7):
+    run()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return 1e3 * statistics.median(times), 1e3 * min(times), 1e3 * max(times)
+
+
+def reference_t10() -> np.ndarray:
+    data = json.loads((HERE / "data" / "double_pendulum_reference.json").read_text())
+    return np.array([float(v) for v in data["states"]["10"]])
+
+
+def heyoka_pendulum(raw: bool, tol):
+    import heyoka as hy
+
+    th1, th2, w1, w2 = hy.make_vars("th1", "th2", "w1", "w2")
+    m1, m2, l1, l2, g = (hy.par[i] for i in range(5))
+    if raw:
+        x1, y1 = l1 * hy.sin(th1), -l1 * hy.cos(th1)
+        x2, y2 = x1 + l2 * hy.sin(th2), y1 - l2 * hy.cos(th2)
+
+        def speed2(*xy):
+            return sum((hy.diff(c, th1) * w1 + hy.diff(c, th2) * w2) ** 2 for c in xy)
+
+        L = m1 * speed2(x1, y1) / 2. + m2 * speed2(x2, y2) / 2. - g * (m1 * y1 + m2 * y2)
+        system = hy.lagrangian(L, [th1, th2], [w1, w2])
+    else:
+        d = th1 - th2
+        a11, a12, a22 = (m1 + m2) * l1**2, m2 * l1 * l2 * hy.cos(d), m2 * l2**2
+        f1 = -m2 * l1 * l2 * w2**2 * hy.sin(d) - (m1 + m2) * g * l1 * hy.sin(th1)
+        f2 = m2 * l1 * l2 * w1**2 * hy.sin(d) - m2 * g * l2 * hy.sin(th2)
+        det = a11 * a22 - a12**2
+        system = [(th1, w1), (th2, w2), (w1, (a22 * f1 - a12 * f2) / det), (w2, (a11 * f2 - a12 * f1) / det)]
+    ta = hy.taylor_adaptive(system, list(Y0), pars=P, **({} if tol is None else {"tol": tol}))
+
+    def run():
+        ta.time = 0.0
+        ta.state[:] = Y0
+        states = ta.propagate_grid(np.concatenate([[0.0], GRID]))[-1]
+        return states[1].copy(), states[2].copy()
+    return ta, run
+
+
+def pendulum_energy(y):
+    th1, th2, w1, w2 = y
+    m1, m2, l1, l2, g = P
+    T = 0.5 * (m1 + m2) * l1**2 * w1**2 + 0.5 * m2 * l2**2 * w2**2 + m2 * l1 * l2 * w1 * w2 * math.cos(th1 - th2)
+    return T - (m1 + m2) * g * l1 * math.cos(th1) - m2 * g * l2 * math.cos(th2)
+
+
+def section_pendulum(model, have_heyoka, repeats):
+    print("\n## 1. Double pendulum, t in [0, 100]: error at t = 10 against the 30-digit reference\n")
+    print("| integrator | tol | steps | error at t = 10 | energy error at 100 | wall ms median (min-max) | "
+          "x taylor default |")
+    print("|---|---|---|---|---|---|---|")
+    ref = reference_t10()
+    e0 = pendulum_energy(Y0)
+    rows = []
+    for method, tols in (("taylor", [1e-8, 1e-10, 1e-12, 1e-14, None]),
+                         ("dop853", [1e-8, 1e-10, 1e-12, 1e-13, 2.3e-14])):
+        for tol in tols:
+            options = dict(method=method, t_eval=GRID, progress=False)
+            if tol is not None:
+                options.update(rtol=tol, atol=tol)
+
+            def run(options=options):
+                return model.simulate((0, 100), **options)
+            sol = run()
+            wall = median_ms(run, repeats)
+            rows.append((f"lagcomp {method}", "default (eps)" if tol is None else f"{tol:.1e}", sol.nsteps,
+                         float(np.max(np.abs(sol.y[0] - ref))), abs(pendulum_energy(sol.y[-1]) / e0 - 1), wall))
+    if have_heyoka:
+        for raw in (False, True):
+            for tol in (1e-10, None):
+                ta, run = heyoka_pendulum(raw, tol)
+                a, b = run()
+                wall = median_ms(run, repeats)
+                label = "heyoka " + ("raw Cartesian Lagrangian" if raw else "hand-reduced ODE")
+                rows.append((label, "default (eps)" if tol is None else f"{tol:.1e}", "",
+                             float(np.max(np.abs(a - ref))), abs(pendulum_energy(b) / e0 - 1), wall))
+    base = next(r[5][0] for r in rows if r[0] == "lagcomp taylor" and r[1].startswith("default"))
+    for name, tol, steps, err, de, (med, lo, hi) in rows:
+        print(f"| {name} | {tol} | {steps} | {err:.2e} | {de:.1e} | {med:.2f} ({lo:.2f}-{hi:.2f}) | "
+              f"{med / base:.2f} |")
+
+
+def section_long_run(model, have_heyoka, t_end):
+    print(f"\n## 2. Double pendulum to t = {t_end:g} at the default tolerance\n")
+    print("| integrator | steps | abs(dE/E) at the end | max abs(dE/E) over saved rows | wall s |")
+    print("|---|---|---|---|---|")
+    start = time.perf_counter()
+    sol = model.simulate((0, t_end), method="taylor", progress=False, save_every=100)
+    wall = time.perf_counter() - start
+    energy = sol.energy
+    print(f"| lagcomp taylor | {sol.nsteps} | {abs(energy[-1] / energy[0] - 1):.2e} | "
+          f"{np.max(np.abs(energy / energy[0] - 1)):.2e} | {wall:.2f} |")
+    if have_heyoka:
+        ta, _ = heyoka_pendulum(False, None)
+        ta.time, ta.state[:] = 0.0, Y0
+        start = time.perf_counter()
+        ta.propagate_until(t_end)
+        wall = time.perf_counter() - start
+        print(f"| heyoka reduced ODE | | {abs(pendulum_energy(ta.state) / pendulum_energy(Y0) - 1):.2e} | | "
+              f"{wall:.2f} |")
+
+
+def kepler_system() -> lc.System:
+    x, y = lc.coordinates("x y")
+    mu = sp.Symbol("mu", positive=True)
+    return lc.System(coordinates=(x, y), T=(x.diff(time_symbol) ** 2 + y.diff(time_symbol) ** 2) / 2,
+                     V=-mu / sp.sqrt(x**2 + y**2), parameters=(mu,), defaults={"mu": 1.0}, name="kepler_bench",
+                     q0=(0.1, 0.0), qd0=(0.0, math.sqrt(1.9 / 0.1)))
+
+
+def section_kepler(cache_dir, orbits):
+    print(f"\n## 3. Kepler, e = 0.9, {orbits} orbits, default tolerance\n")
+    model = lc.compile(kepler_system(), cache_dir=cache_dir)
+    t_eval = 2 * math.pi * np.arange(1, orbits + 1)
+    start = time.perf_counter()
+    sol = model.simulate((0, t_eval[-1]), method="taylor", t_eval=t_eval, progress=False)
+    wall = time.perf_counter() - start
+    x, y = sol.q.T
+    vx, vy = sol.qd.T
+    energy = (vx**2 + vy**2) / 2 - 1 / np.hypot(x, y)
+    momentum = x * vy - y * vx
+    de = np.abs(energy / -0.5 - 1)
+    dl = np.abs(momentum / math.sqrt(0.19) - 1)
+    print("| quantity | max relative error | at orbit 100 | at the end | slope of log running max vs log t |")
+    print("|---|---|---|---|---|")
+    for name, err in (("energy", de), ("angular momentum", dl)):
+        running = np.maximum.accumulate(err)
+        keep = (sol.t >= sol.t[len(sol.t) // 100]) & (running > 0)
+        slope = np.polyfit(np.log(sol.t[keep]), np.log(running[keep]), 1)[0]
+        print(f"| {name} | {err.max():.2e} | {err[min(99, len(err) - 1)]:.2e} | {err[-1]:.2e} | {slope:.2f} |")
+    print(f"\n{sol.nsteps} steps ({sol.nsteps / orbits:.0f} per orbit) in {wall:.2f} s; pericentre drift "
+          f"{np.max(np.abs(x - 0.1)):.1e}")
+
+
+def heyoka_section_times(t_end):
+    import heyoka as hy
+
+    x, y, vx, vy = hy.make_vars("x", "y", "vx", "vy")
+    system = [(x, vx), (y, vy), (vx, -x - 2 * x * y), (vy, -y - (x**2 - y**2))]
+    found = []
+
+    def callback(ta, t, d_sgn):
+        found.append(t)
+    event = hy.nt_event(x, callback, direction=hy.event_direction.positive)
+    model = examples.get("henon_heiles")
+    state = [float(model.q0[0]), float(model.q0[1]), float(model.qd0[0]), float(model.qd0[1])]
+    ta = hy.taylor_adaptive(system, state, nt_events=[event])
+    ta.propagate_until(t_end)
+    return np.array(found)
+
+
+def section_henon_heiles(compiled_model, have_heyoka, t_end):
+    print(f"\n## 4. Hénon-Heiles section x = 0 (xdot > 0), t in [0, {t_end:g}]\n")
+    taylor = compiled_model.simulate((0, t_end), method="taylor", progress=False, record="summary")
+    dop = compiled_model.simulate((0, t_end), method="dop853", rtol=1e-13, atol=1e-15, progress=False,
+                                  record="summary")
+    a, b = taylor.events["section"].t, dop.events["section"].t
+    print("| comparison | crossings | max abs(dt) | max abs(dt) over the first 10 |")
+    print("|---|---|---|---|")
+    n = min(len(a), len(b))
+    print(f"| taylor vs dop853 rtol 1e-13 | {len(a)} / {len(b)} | {np.max(np.abs(a[:n] - b[:n])):.1e} | "
+          f"{np.max(np.abs(a[:10] - b[:10])):.1e} |")
+    if have_heyoka:
+        h = heyoka_section_times(t_end)
+        n = min(len(a), len(h))
+        print(f"| taylor vs heyoka (tol eps, nt_event) | {len(a)} / {len(h)} | {np.max(np.abs(a[:n] - h[:n])):.1e} | "
+              f"{np.max(np.abs(a[:10] - h[:10])):.1e} |")
+        n = min(len(b), len(h))
+        print(f"| dop853 vs heyoka | {len(b)} / {len(h)} | {np.max(np.abs(b[:n] - h[:n])):.1e} | "
+              f"{np.max(np.abs(b[:10] - h[:10])):.1e} |")
+
+
+def section_cost(names):
+    from lagcomp.codegen.lower import lower
+    from lagcomp.codegen.taylor import Unsupported, decompose
+    from lagcomp.mechanics.lagrange import derive
+
+    print("\n## 5. Cost of the Taylor kernel\n")
+    print("| example | rhs ops after CSE | series ops per order | decompose + print ms | first taylor run s "
+          "(compile) | first dop853 run s (compile) |")
+    print("|---|---|---|---|---|---|")
+    for name in names:
+        system = examples.get(name)
+        ir = lower(derive(system))
+        rhs = ir.kernel("rhs")
+        start = time.perf_counter()
+        try:
+            program = decompose(rhs, ir.n)
+        except Unsupported as err:
+            print(f"| {name} | {rhs.operation_count} | refused: {err} | | | |")
+            continue
+        emit_ms = 1e3 * (time.perf_counter() - start)
+        with tempfile.TemporaryDirectory() as fresh:
+            model = lc.compile(system, cache_dir=fresh)
+            times = []
+            for method in ("taylor", "dop853"):
+                start = time.perf_counter()
+                model.simulate((0, 0.1), method=method, progress=False)
+                times.append(time.perf_counter() - start)
+        print(f"| {name} | {rhs.operation_count} | {program.operation_count} | {emit_ms:.1f} | {times[0]:.1f} | "
+              f"{times[1]:.1f} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="shorter runs (t = 10³, 10³ orbits, 3 repeats)")
+    args = parser.parse_args()
+    try:
+        import heyoka  # noqa: F401
+        have_heyoka = True
+    except ImportError:
+        have_heyoka = False
+    print(f"lagcomp {lc.__version__}, python {sys.version.split()[0]}, heyoka: {have_heyoka}")
+    with tempfile.TemporaryDirectory() as cache_dir:
+        pendulum = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
+        section_pendulum(pendulum, have_heyoka, 3 if args.quick else 7)
+        section_long_run(pendulum, have_heyoka, 1e3 if args.quick else 1e4)
+        section_kepler(cache_dir, 1000 if args.quick else 10_000)
+        section_henon_heiles(lc.compile(examples.get("henon_heiles"), cache_dir=cache_dir), have_heyoka, 2000)
+    section_cost(["double_pendulum", "henon_heiles", "n_link_pendulum_3", "symmetric_top"])
+
+
+if __name__ == "__main__":
+    main()
