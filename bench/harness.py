@@ -111,3 +111,34 @@ class Target:
     def row(self) -> list[str]:
         verdict = {True: "met", False: "missed", None: "not measured" if self.measured == "not measured" else "reported"}[self.met]
         return [self.name, self.wanted, self.measured, verdict]
+
+
+def interleaved_times(runs: list, repeats: int = 5, warmup: int = 1, per_call: list | None = None) -> list[list[float]]:
+    """Per-round times of `runs`, timed round-robin for `repeats` rounds after `warmup` untimed calls each.
+
+    On a shared machine the load changes from second to second: timing the
+    baseline and the others in alternation, and taking the median of the
+    per-round ratios (`paired`), keeps a load spike from landing on one side only.
+    """
+    per_call = per_call or [1] * len(runs)
+    for run in runs:
+        for _ in range(warmup):
+            run()
+    times = [[] for _ in runs]
+    for _ in range(max(repeats, 1)):
+        for i, run in enumerate(runs):
+            start = time.perf_counter()
+            run()
+            times[i].append((time.perf_counter() - start) / per_call[i])
+    return times
+
+
+def paired(a: list[float], b: list[float]) -> Stat:
+    """Median (min–max) of the per-round ratios a_i / b_i."""
+    return stat_of([x / y for x, y in zip(a, b)])
+
+
+def interleaved(runs: list, repeats: int = 5, warmup: int = 1, per_call: list | None = None) -> tuple[list[Stat], list[Stat]]:
+    """Each run's time Stat and its paired ratio Stat to runs[0] (see `interleaved_times`)."""
+    times = interleaved_times(runs, repeats, warmup, per_call)
+    return [stat_of(t) for t in times], [paired(t, times[0]) for t in times]

@@ -1,7 +1,8 @@
 """Kernel cost: ns per right-hand-side call, inside a compiled loop and from Python, and op counts.
 
 Baseline: the hand-written numba RHS of the same system (`bench.systems`),
-called in the same compiled loop.  "In a loop" is what an integrator sees:
+called in the same compiled loop.  All rows of a case are timed round-robin
+and each ratio is the median of per-round ratios (`harness.interleaved`).  "In a loop" is what an integrator sees:
 an `@njit` loop calls the kernel n times, nudging y[0] each time so nothing
 can be hoisted.  "From Python" is one call of the jitted function per
 Python-level call, as scipy's solve_ivp makes it.  GFLOP/s is the op count
@@ -16,21 +17,23 @@ import numpy as np
 from lagcomp.benchmark import looped
 
 from bench import systems
-from bench.harness import Table, fmt, fmt_stat, measure, peer
+from bench.harness import Table, fmt, fmt_stat, interleaved, peer
 
 
-def in_loop(rhs, y0, p, repeats: int, calls: int = 200_000):
-    y, out = y0.copy(), np.empty(y0.size)
+def in_loop(rhs, y0, p, calls: int = 200_000):
+    """(run, calls): a compiled loop of `calls` calls of `rhs`, compiled here."""
+    out = np.empty(y0.size)
     loop = looped(rhs)
-    loop(y, p, out, 10)  # compile
-    return measure(lambda: loop(y0.copy(), p, out, calls), repeats, per_call=calls).scaled(1e9)
+    loop(y0.copy(), p, out, 10)  # compile
+    return (lambda: loop(y0.copy(), p, out, calls)), calls
 
 
-def from_python(call, repeats: int, calls: int = 2_000):
+def from_python(call, calls: int = 2_000):
+    """(run, calls): `calls` calls of `call` from a Python loop."""
     def run():
         for _ in range(calls):
             call()
-    return measure(run, repeats, per_call=calls).scaled(1e9)
+    return run, calls
 
 
 def lambdify_rhs(eom):
@@ -106,25 +109,22 @@ def section(ctx) -> Table:
         n = model.n
         ops = model.operations.get("rhs", 0)
         out = np.empty(2 * n)
-        ours = in_loop(model.kernels.rhs, y0, p, ctx.repeats)
-        ours_py = from_python(lambda: model.kernels.rhs(0.0, y0, p, out), ctx.repeats)
+        ours = in_loop(model.kernels.rhs, y0, p)
+        ours_py = from_python(lambda: model.kernels.rhs(0.0, y0, p, out))
         hand = hand_written(case)
         if hand is None:  # no closed form here: lagcomp's own in-loop call is the baseline
-            base = ours
             rows = [("lagcomp rhs, in a loop (baseline: no hand-written RHS)", ours, ops),
                     ("lagcomp rhs, from Python", ours_py, ops)]
         else:
             label = "hand-written numba" if case == "double_pendulum" else "closed-form numba (loops)"
-            base = in_loop(hand, y0, p, ctx.repeats)
-            rows = [(label + ", in a loop", base, ""), ("lagcomp rhs, in a loop", ours, ops),
-                    (label + ", from Python", from_python(lambda: hand(0.0, y0, p, out), ctx.repeats), ""),
+            rows = [(label + ", in a loop", in_loop(hand, y0, p), ""), ("lagcomp rhs, in a loop", ours, ops),
+                    (label + ", from Python", from_python(lambda: hand(0.0, y0, p, out)), ""),
                     ("lagcomp rhs, from Python", ours_py, ops)]
-            ctx.kernel_results[case] = (base, ours)
         if hand is not None and (case == "double_pendulum" or n <= ctx.peer_max_links):
             eom = ctx.eom(case)
             if eom is not None:
-                f = lambdify_rhs(eom)
-                rows.append(("sympy lambdify (M, F) + numpy solve", from_python(lambda: f(0.0, y0, p), ctx.repeats, 200), ""))
+                g = lambdify_rhs(eom)
+                rows.append(("sympy lambdify (M, F) + numpy solve", from_python(lambda: g(0.0, y0, p), 200), ""))
             if ctx.peer("pydy") is None:
                 rows.append(("PyDy cython / lambdify", ctx.skipped, ""))
             else:
@@ -132,20 +132,26 @@ def section(ctx) -> Table:
                 x = y0.copy()
                 for gen, f in funcs.items():
                     rows.append((f"PyDy {gen} ODE function, from Python",
-                                 from_python(lambda: f(x, 0.0, p), ctx.repeats, 500), pydy_ops))
+                                 from_python(lambda f=f: f(x, 0.0, p), 500), pydy_ops))
                 if "cython" not in funcs:
                     rows.append(("PyDy cython", ctx.skipped + " (Cython)", ""))
         if case == "double_pendulum":
             if ctx.peer("jitcode") is None:
                 rows.append(("JiTCODE compiled f", ctx.skipped, ""))
             else:
-                ode = ctx.cached("jitcode", jitcode_f)
-                f = ode.f
-                rows.append(("JiTCODE compiled f, from Python", from_python(lambda: f(0.0, y0), ctx.repeats), ""))
+                jf = ctx.cached("jitcode", jitcode_f).f
+                rows.append(("JiTCODE compiled f, from Python", from_python(lambda: jf(0.0, y0)), ""))
+        timed = [r for r in rows if not isinstance(r[1], str)]
+        stats, ratios = interleaved([r[1][0] for r in timed], ctx.repeats, per_call=[r[1][1] for r in timed])
+        results = {r[0]: (s.scaled(1e9), q) for r, s, q in zip(timed, stats, ratios)}
+        if hand is not None:
+            ctx.kernel_results[case] = (results[timed[0][0]][0], results["lagcomp rhs, in a loop"][0],
+                                        results["lagcomp rhs, in a loop"][1])
         for name, stat, count in rows:
             if isinstance(stat, str):
                 table.add(case, name, stat, "", "", "")
                 continue
+            stat, ratio = results[name]
             gflops = fmt(count / stat.median) if count and "loop" in name else ""
-            table.add(case, name, fmt_stat(stat), fmt_stat(stat.ratio(base), "×"), count or "", gflops)
+            table.add(case, name, fmt_stat(stat), fmt_stat(ratio, "×"), count or "", gflops)
     return table

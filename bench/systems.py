@@ -126,7 +126,7 @@ def rk4_driver(rhs):
     """A hand-written numba RK4 loop over `rhs`: the baseline of the fixed-step throughput."""
     @numba.njit
     def run(y, p, dt, n):
-        k1, k2, k3, k4, tmp = (np.empty(y.size) for _ in range(5))
+        k1, k2, k3, k4, tmp = np.empty(y.size), np.empty(y.size), np.empty(y.size), np.empty(y.size), np.empty(y.size)
         t = 0.0
         for _ in range(n):
             rhs(t, y, p, k1)
