@@ -101,7 +101,7 @@ def _setup(model, q0, qd0, params, t_span, dt):
 
 def _run(model, advance, t0, t1, dt, transient, renorm_every, samples, progress, sums):
     """Drive `advance(steps, n)` chunk by chunk; returns (status, times, history)."""
-    from lagcomp.integrate.simulate import _deferred_interrupt, _progress_bar
+    from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
 
     renorm_every = int(renorm_every)
     if renorm_every < 1:
@@ -122,7 +122,7 @@ def _run(model, advance, t0, t1, dt, transient, renorm_every, samples, progress,
     ends = ends // renorm_every * renorm_every
     ends = np.unique(np.append(ends[ends > 0], n_avg).astype(np.int64)) + n_transient
     times, rows = [], []
-    with _deferred_interrupt() as interrupted, _progress_bar(t0, t1, progress) as bar:
+    with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
         bar.update(n_transient * dt)
         for end in ends:
             if status != 0:

@@ -12,17 +12,24 @@ bounded by what is kept: every saved row (`save_every`, `t_eval`) or, with
 from __future__ import annotations
 
 import math
-import signal
-import threading
 import time
-from contextlib import contextmanager
 
 import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.methods import get_method, implicit_solver_for
+from lagcomp.integrate.options import (
+    check_method,
+    count,
+    event_arguments,
+    positive,
+    t_eval_points,
+    time_span,
+    tolerances,
+)
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
+from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
 from lagcomp.integrate.solution import MESSAGES, EventRecord, Solution
 
 #: Rows per output chunk: small runs allocate little, long ones grow to this.
@@ -33,83 +40,8 @@ BUFFER_FULL, PAUSED, EVENT = 1, 2, 3
 TERMINATED, INTERRUPTED = 1, 2
 #: Target wall time of one driver call, and the step budget of the first one.
 CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
-#: Relative tolerances below this (100 machine epsilons) ask for more than float64 can give.
-RTOL_MIN = 100 * np.finfo(float).eps
 #: Solution status of a run stopped because the constraint residual exceeded ``max_residual``.
 RESIDUAL_EXCEEDED = -6
-#: Runs longer than this show a progress bar (unless ``progress=False``).
-PROGRESS_DELAY = 2.0
-
-
-def _time_span(t_span) -> tuple[float, float]:
-    try:
-        t0, t1 = (float(v) for v in t_span)
-    except (TypeError, ValueError) as err:
-        raise OptionError(f"`t_span` must be a pair (t0, t1) of numbers, got {t_span!r}.") from err
-    if not (math.isfinite(t0) and math.isfinite(t1)):
-        raise OptionError(f"`t_span` must be finite, got ({t0}, {t1}).")
-    if not t1 > t0:
-        raise OptionError(f"`t_span` = ({t0}, {t1}) is empty: the end time must be after the start time.")
-    return t0, t1
-
-
-def _positive(value, name: str) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError) as err:
-        raise OptionError(f"`{name}` must be a number, got {value!r}.") from err
-    if not (value > 0 and math.isfinite(value)):
-        raise OptionError(f"`{name}` must be positive and finite, got {value}.")
-    return value
-
-
-def _t_eval(t_eval, t0: float, t1: float) -> np.ndarray | None:
-    if t_eval is None:
-        return None
-    t_eval = np.asarray(t_eval, dtype=float).ravel()
-    if t_eval.size == 0 or not np.all(np.isfinite(t_eval)):
-        raise OptionError("`t_eval` must be a non-empty array of finite times.")
-    if np.any(np.diff(t_eval) <= 0) or t_eval[0] < t0 or t_eval[-1] > t1:
-        raise OptionError(f"`t_eval` must be strictly increasing and within t_span = ({t0}, {t1}).")
-    return t_eval
-
-
-def _event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
-    """``directions`` and ``actions`` (0 off, 1 record, 2 record and stop) of the model's events."""
-    declared = model.events
-    if events is None or events is True:
-        chosen = [e.name for e in declared] if (m.adaptive or events is True) else []
-    elif events is False:
-        chosen = []
-    else:
-        chosen = [events] if isinstance(events, str) else list(events)
-        unknown = [name for name in chosen if name not in model.event_names]
-        if unknown:
-            raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.event_names)}.")
-    if chosen and not m.adaptive:
-        raise OptionError(f"Events are located on dense output, which {m.name} lacks; use dop853 or dopri5.")
-    directions = np.array([e.direction for e in declared], dtype=np.int64)
-    actions = np.array([(2 if e.terminal else 1) if e.name in chosen else 0 for e in declared], dtype=np.int64)
-    return directions, actions
-
-
-def tolerances(rtol, atol, m=None) -> tuple[float, float]:
-    """`rtol` and `atol` checked: positive, finite, and rtol in [100 eps, 1) (float64 cannot do better).
-
-    With a method `m`, None stands for its defaults (`Method.default_rtol`, `default_atol`) and
-    rtol may go down to its `rtol_min` (machine epsilon for the Taylor method, which has no error
-    estimate to keep above rounding).
-    """
-    if m is not None:
-        rtol = m.default_rtol if rtol is None else rtol
-        atol = (rtol if m.default_atol is None else m.default_atol) if atol is None else atol
-    rtol, atol = _positive(rtol, "rtol"), _positive(atol, "atol")
-    rtol_min = RTOL_MIN if m is None else m.rtol_min
-    if not rtol_min <= rtol < 1:
-        reason = "100 machine epsilons; float64 cannot do better" if rtol_min >= RTOL_MIN else "machine epsilon"
-        raise OptionError(f"`rtol` = {rtol:g} is out of range: it must be at least {rtol_min:.2g} ({reason}) "
-                          "and below 1.")
-    return rtol, atol
 
 
 def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
@@ -119,9 +51,9 @@ def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, option
         raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own (use `first_step`).")
     rtol, atol = tolerances(options["rtol"], options["atol"], m)
     if options["first_step"] is not None:
-        clock[1] = _positive(options["first_step"], "first_step")
+        clock[1] = positive(options["first_step"], "first_step")
     max_step = options["max_step"]
-    max_step = _positive(max_step, "max_step") if max_step != math.inf else math.inf
+    max_step = positive(max_step, "max_step") if max_step != math.inf else math.inf
     events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
     driver, tableau_arrays = getattr(kernels, m.driver), m.driver_arguments()
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
@@ -140,7 +72,7 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
         raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
     if t_eval is not None:
         raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every` or dopri5/dop853.")
-    dt = _positive(options["dt"], "dt")
+    dt = positive(options["dt"], "dt")
     n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
     if n_steps > options["max_steps"]:
         raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {options['max_steps']}.")
@@ -152,49 +84,25 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
     return advance, n_steps // options["save_every"] + 1
 
 
-def _count(value, name: str) -> int:
-    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 1:
-        raise OptionError(f"`{name}` must be a positive integer, got {value!r}.")
-    return int(value)
-
-
-def check_method(model, m) -> None:
-    """Refuse a method that does not apply to `model` (separable-only or unconstrained-only methods,
-    and the Taylor method where the module has no Taylor kernel: ``TAYLOR_REFUSED`` says why)."""
-    refused = getattr(model.kernels, "TAYLOR_REFUSED", None) if m.name == "taylor" and not model.k else None
-    if refused is not None:
-        raise OptionError(f"`taylor` cannot integrate {model.name!r}: its equations hold {refused}. "
-                          "Use dop853 (adaptive, dense output, events) instead.")
-    if m.separable_only and not model.separable:
-        raise OptionError(
-            f"`{m.name}` needs a separable system (no constraints, a constant mass matrix and forces that do not "
-            f"depend on velocities); {model.name!r} is not one. Use gauss2 (symplectic for any Lagrangian), "
-            "dop853, dopri5 or rk4."
-        )
-    if m.unconstrained_only and model.k:
-        raise OptionError(f"`{m.name}` does not handle constraints yet; {model.name!r} has {list(model.constraints)}. "
-                          "Use dop853, dopri5 or rk4.")
-
-
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=None,
              atol=None, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
              events=None, record="trajectory", progress=None, throw=False, max_residual=None) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
-    t0, t1 = _time_span(t_span)
+    t0, t1 = time_span(t_span)
     m = get_method(method)
     check_method(model, m)
     if record not in RECORD_MODES:
         raise OptionError(f"`record` must be one of {RECORD_MODES}, got {record!r}.")
     p = model.parameter_vector(params, baumgarte)
     options = dict(t1=t1, dt=dt, rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
-                   save_every=_count(save_every, "save_every"), max_steps=_count(max_steps, "max_steps"),
-                   events=_event_arguments(model, m, events))
+                   save_every=count(save_every, "save_every"), max_steps=count(max_steps, "max_steps"),
+                   events=event_arguments(model, m, events))
     options["implicit_solver"] = implicit_solver_for(m, implicit_solver)
-    t_eval = _t_eval(t_eval, t0, t1)
+    t_eval = t_eval_points(t_eval, t0, t1)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
-    bound = math.inf if max_residual is None else _positive(max_residual, "max_residual")
+    bound = math.inf if max_residual is None else positive(max_residual, "max_residual")
     residual_max = np.array([0.0, bound])  # running maximum, and the bound the drivers stop at
     y, clock, counters = y0.copy(), np.array([t0, 0.0]), np.zeros(6, dtype=np.int64)
     make = _adaptive_driver if m.adaptive else _fixed_step_driver
@@ -216,40 +124,11 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     return _solution(model, p, recorder, y, run, throw)
 
 
-@contextmanager
-def _deferred_interrupt():
-    """Within the block, Ctrl-C sets ``flag[0]`` instead of raising, so no chunk is half-recorded.
-
-    (numba code does not see signals anyway; this also covers the Python
-    bookkeeping between calls.)  Only the main thread can install handlers;
-    elsewhere Ctrl-C keeps its usual meaning.
-    """
-    flag = [False]
-    if threading.current_thread() is not threading.main_thread():
-        yield flag
-        return
-
-    def handler(signum, frame):
-        flag[0] = True
-    previous = signal.signal(signal.SIGINT, handler)
-    try:
-        yield flag
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
-def _progress_bar(t0: float, t1: float, progress):
-    from tqdm.auto import tqdm
-
-    return tqdm(total=t1 - t0, unit="t", unit_scale=True, leave=False, disable=progress is False, mininterval=0.5,
-                delay=0.0 if progress else PROGRESS_DELAY, bar_format="{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]")
-
-
 def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress) -> int:
     """Call the driver until the run ends; returns the Solution status (driver codes mapped)."""
     n = y.size
     budget, t0 = FIRST_BUDGET, clock[0]
-    with _deferred_interrupt() as interrupted, _progress_bar(t0, t1, progress) as bar:
+    with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
         ts, ys = np.empty(chunk), np.empty((chunk, n))
         while True:
             event_buffers = (np.empty(max(n_events, 16)), np.empty((max(n_events, 16), n)),

@@ -26,16 +26,16 @@ import numpy as np
 from lagcomp.errors import InitialConditionError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.methods import get_method
-from lagcomp.integrate.simulate import (
-    _count,
-    _deferred_interrupt,
-    _event_arguments,
-    _positive,
-    _t_eval,
-    _time_span,
+from lagcomp.integrate.options import (
     check_method,
+    count,
+    event_arguments,
+    positive,
+    t_eval_points,
+    time_span,
     tolerances,
 )
+from lagcomp.integrate.run_control import PROGRESS_DELAY, deferred_interrupt
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
@@ -218,7 +218,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
           batched=False, progress=None, memory_limit=MEMORY_LIMIT, projection=None, baumgarte=(0.0, 0.0),
           project_initial=False) -> Sweep:
     """Integrate every point of `grid`; see `lagcomp.Model.sweep` for the arguments."""
-    t0, t1 = _time_span(t_span)
+    t0, t1 = time_span(t_span)
     m = get_method(method)
     check_method(model, m)
     output = (output,) if isinstance(output, str) else tuple(output)
@@ -240,22 +240,22 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if model.k:
         _consistent_initial_states(model, t0, Y0, P, project_initial, names, values)
     projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
-    save_every = _count(save_every, "save_every")
-    max_steps = _count(max_steps, "max_steps")
-    directions, actions = _event_arguments(model, m, events)
+    save_every = count(save_every, "save_every")
+    max_steps = count(max_steps, "max_steps")
+    directions, actions = event_arguments(model, m, events)
     want_events = "events" in output
     if want_events and not actions.any():
         raise OptionError(f"`output` asks for events but none are active ({model.name!r} declares "
                           f"{list(model.event_names)}; events need dop853 or dopri5).")
-    cap = _count(event_cap, "event_cap") if want_events else 0
+    cap = count(event_cap, "event_cap") if want_events else 0
     n_traj = values.shape[0]
 
     if m.adaptive:
         if dt is not None:
             raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own.")
         rtol, atol = tolerances(rtol, atol)
-        max_step = _positive(max_step, "max_step") if max_step != math.inf else math.inf
-        t_eval = _t_eval(t_eval, t0, t1)
+        max_step = positive(max_step, "max_step") if max_step != math.inf else math.inf
+        t_eval = t_eval_points(t_eval, t0, t1)
         if "dense" in output and t_eval is None:
             raise OptionError("`output='dense'` with an adaptive method needs the common times `t_eval`.")
         t_dense = t_eval if "dense" in output else None
@@ -268,7 +268,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
         if t_eval is not None:
             raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every`.")
-        dt = _positive(dt, "dt")
+        dt = positive(dt, "dt")
         n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
         if n_steps > max_steps:
             raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {max_steps}.")
@@ -394,8 +394,6 @@ def _store(out: dict, a: int, chunk: dict) -> None:
 def _progress(total: int, progress):
     from tqdm.auto import tqdm
 
-    from lagcomp.integrate.simulate import PROGRESS_DELAY
-
     return tqdm(total=total, unit="traj", leave=False, disable=progress is False, mininterval=0.5,
                 delay=0.0 if progress else PROGRESS_DELAY)
 
@@ -410,10 +408,10 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
     from concurrent.futures import ThreadPoolExecutor
 
     n_traj = Y0.shape[0]
-    threads = (os.cpu_count() or 1) if workers is None else _count(workers, "workers")
+    threads = (os.cpu_count() or 1) if workers is None else count(workers, "workers")
     done = np.zeros(n_traj, dtype=bool)
     chunk = FIRST_CHUNK_PER_THREAD * threads
-    with ThreadPoolExecutor(threads) as pool, _deferred_interrupt() as interrupted, \
+    with ThreadPoolExecutor(threads) as pool, deferred_interrupt() as interrupted, \
             _progress(n_traj, progress) as bar:
         a = 0
         while a < n_traj and not interrupted[0]:
@@ -481,7 +479,7 @@ def _run_on_dask(client, spec, task: _Task, Y0, P, out, progress) -> np.ndarray:
     futures = {client.submit(_remote_chunk, spec_future, task, Y0[a:b], P[a:b], pure=False): (a, b)
                for a, b in zip(bounds[:-1], bounds[1:])}
     done = np.zeros(n_traj, dtype=bool)
-    with _deferred_interrupt() as interrupted, _progress(n_traj, progress) as bar:
+    with deferred_interrupt() as interrupted, _progress(n_traj, progress) as bar:
         for future in as_completed(futures):
             a, b = futures[future]
             _store(out, a, future.result())
