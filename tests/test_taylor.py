@@ -316,3 +316,13 @@ def test_terminal_event_stops_on_the_series(compiled, cache_dir):
     assert run.t[-1] == run.events["y_turn"].t[0]
     assert abs(run.t[-1] - t_peak) < 1e-14
     np.testing.assert_allclose(run.q[-1], [0.3 * np.sin(t_peak), np.hypot(0.1, 0.05)], rtol=0, atol=1e-15)
+
+
+def test_sweep_equals_separate_runs(pendulum):
+    """sweep(method="taylor") runs the same driver per trajectory (sweep_taylor_run): the same final states."""
+    angles = np.array([1.0, 1.5, 2.0])
+    sweep = pendulum.sweep((0, 5), {"theta1": angles}, method="taylor", progress=False, workers=1)
+    assert sweep.method == "taylor" and np.all(sweep.status == 0)
+    for i, angle in enumerate(angles):
+        run = pendulum.simulate((0, 5), q0=[angle, 1.0], method="taylor", progress=False)
+        np.testing.assert_array_equal(sweep.final[i], run.y[-1])

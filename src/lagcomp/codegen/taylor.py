@@ -572,8 +572,14 @@ def taylor_source(ir: ModuleIR, events: bool) -> str:
         program = decompose(ir.kernel("rhs"), ir.n)
     except Unsupported as err:
         return f"\n\n#: Why this module has no Taylor integrator (method='taylor').\nTAYLOR_REFUSED = {str(err)!r}\n"
+    sweeps = template("sweeps")  # its generic adaptive loop, for taylor_run (as emit._sweeps does for the others)
+    start = sweeps.rindex("@njit", 0, sweeps.index("def sweep_adaptive("))
+    end = sweeps.rindex("@njit", 0, sweeps.index("def sweep_fixed("))
+    sweep = sweeps[start:end].replace("sweep_adaptive", "sweep_taylor_run").replace("ADAPTIVE_DRIVER", "taylor_run")
     return (
         emit_taylor(program)
         + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/taylor.py\n\n"
         + template("taylor", events=events)
+        + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py: sweep_adaptive for taylor_run\n\n"
+        + sweep.rstrip("\n") + "\n"
     )

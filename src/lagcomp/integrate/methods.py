@@ -65,8 +65,8 @@ class Method:
         """
         if self.implicit:
             return (*self.tableau.driver_arguments(), MAX_STAGE_ITERATIONS, IMPLICIT_SOLVERS[implicit_solver])
-        if self.tableau is None:  # the Taylor method: its order follows from the tolerances; no
-            return (np.zeros(0),)   # compensated summation (simulate passes a carry of size n instead)
+        if self.tableau is None:  # the Taylor method: its order follows from the tolerances; the empty
+            return (np.zeros(0),)   # carry restarts with each call (simulate passes one of size n instead)
         if isinstance(self.tableau, Composition):
             return self.tableau.driver_arguments()
         return driver_arguments(self.tableau)

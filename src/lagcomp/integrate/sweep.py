@@ -213,7 +213,7 @@ def _memory(n_traj: int, n2: int, m: int, n_events: int, cap: int) -> int:
 
 
 def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=None, params=None,
-          method="dop853", dt=None, rtol=1e-8, atol=1e-10, t_eval=None, save_every=1, max_step=math.inf,
+          method="dop853", dt=None, rtol=None, atol=None, t_eval=None, save_every=1, max_step=math.inf,
           max_steps=100_000_000, events=None, event_cap=16, output=(), workers=None, client=None,
           batched=False, progress=None, memory_limit=MEMORY_LIMIT, projection=None, baumgarte=(0.0, 0.0),
           project_initial=False) -> Sweep:
@@ -253,7 +253,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if m.adaptive:
         if dt is not None:
             raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own.")
-        rtol, atol = tolerances(rtol, atol)
+        rtol, atol = tolerances(rtol, atol, m)  # None: the method's defaults
         max_step = positive(max_step, "max_step") if max_step != math.inf else math.inf
         t_eval = t_eval_points(t_eval, t0, t1)
         if "dense" in output and t_eval is None:
