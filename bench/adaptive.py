@@ -176,7 +176,8 @@ def section(ctx) -> Table:
     elif eom is not None:
         from bench.kernels import lambdify_rhs
 
-        runners.append(scipy_runner("scipy solve_ivp DOP853, sympy lambdify rhs", lambdify_rhs(eom), 1e-10))
+        naive = lambdify_rhs(eom)
+        runners.append(scipy_runner("scipy solve_ivp DOP853, sympy lambdify rhs", lambda t, y: naive(t, y, P), 1e-10))
     groups.append(("scipy", runners))
     groups.append(("PyDy", ctx.skipped if ctx.peer("pydy") is None else [pydy_odeint_runner(ctx, 1e-10)]))
 

@@ -126,8 +126,19 @@ def machine() -> str:
     except (OSError, StopIteration):
         pass
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    revision = "unknown revision"
+    try:
+        import subprocess
+        from pathlib import Path
+
+        out = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True, timeout=10,
+                             cwd=Path(__file__).resolve().parents[1])
+        if out.returncode == 0:
+            revision = f"lagcomp at {out.stdout.strip()}"
+    except (OSError, subprocess.SubprocessError):
+        pass
     return (f"{cpu}, {os.cpu_count()} logical CPUs, load average {load:.1f} at start; Python {platform.python_version()}, "
-            f"numba {numba.__version__}, numpy {numpy.__version__}")
+            f"numba {numba.__version__}, numpy {numpy.__version__}; {revision}")
 
 
 def targets_table(ctx) -> Table:
@@ -156,7 +167,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", help="also write the markdown to this file")
     parser.add_argument("--repeats", type=int, default=5, help="timed repeats per figure (medians; default 5)")
     parser.add_argument("--case-timeout", type=float, default=None,
-                        help="time limit of one cold compile, seconds (default 150, 60 with --quick)")
+                        help="time limit of one cold compile, seconds (default 120, 60 with --quick)")
     parser.add_argument("--only", nargs="+", choices=SECTIONS, help="run only these sections")
     parser.add_argument("--cases", nargs="+", help="benchmark cases (default: all, or the quick set)")
     parser.add_argument("--no-peers", action="store_true", help="lagcomp and the hand-written baselines only")
@@ -165,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.repeats = max(args.repeats, 1)
     if args.case_timeout is None:
-        args.case_timeout = 60.0 if args.quick else 150.0
+        args.case_timeout = 60.0 if args.quick else 120.0
     sections = args.only or SECTIONS
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="lagcomp-bench-") as tmp:
