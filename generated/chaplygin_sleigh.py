@@ -48,7 +48,7 @@ def rhs(t, y, p, out):
     _kkt[3, 0] = -_c0
     _kkt[3, 1] = _c1
     _kkt[3, 2] = a
-    _kkt[3, 4] = -2.0*_baumgarte_alpha*(-_c0*x_dot + _c1*y_dot + a*theta_dot) + theta_dot*(_c0*y_dot + _c1*x_dot)
+    _kkt[3, 4] = theta_dot*(_c0*y_dot + _c1*x_dot) - 2.0*_baumgarte_alpha*(_c1*y_dot + a*theta_dot - _c0*x_dot)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -85,7 +85,7 @@ def reactions(t, y, p, out):
     _kkt[3, 0] = -_c0
     _kkt[3, 1] = _c1
     _kkt[3, 2] = a
-    _kkt[3, 4] = -2.0*_baumgarte_alpha*(-_c0*x_dot + _c1*y_dot + a*theta_dot) + theta_dot*(_c0*y_dot + _c1*x_dot)
+    _kkt[3, 4] = theta_dot*(_c0*y_dot + _c1*x_dot) - 2.0*_baumgarte_alpha*(_c1*y_dot + a*theta_dot - _c0*x_dot)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -101,7 +101,7 @@ def constraint_residuals(t, y, p, out):
     y_dot = y[4]
     theta_dot = y[5]
     a = p[2]
-    out[0] = a*theta_dot - x_dot*math.sin(theta) + y_dot*math.cos(theta)
+    out[0] = a*theta_dot + y_dot*math.cos(theta) - x_dot*math.sin(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -147,8 +147,7 @@ def energy(t, y, p):
     theta_dot = y[5]
     m = p[0]
     I = p[1]
-    _c0 = (0.5)*m
-    return (0.5)*I*theta_dot**2 + _c0*x_dot**2 + _c0*y_dot**2
+    return (0.5)*I*theta_dot**2 + (0.5)*m*(x_dot**2 + y_dot**2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -159,8 +158,7 @@ def energy_function(t, y, p):
     theta_dot = y[5]
     m = p[0]
     I = p[1]
-    _c0 = (0.5)*m
-    return (0.5)*I*theta_dot**2 + _c0*x_dot**2 + _c0*y_dot**2
+    return (0.5)*I*theta_dot**2 + (0.5)*m*(x_dot**2 + y_dot**2)
 
 
 @njit(cache=True, error_model="numpy")

@@ -31,7 +31,7 @@ def rhs(t, y, p, out):
     _c1 = (0.5)*math.pi
     out[0] = phi_dot
     _m0_0 = I_Y
-    _f0 = I_Y*_c1*nu*omega*math.sin(_c0)*math.sin(lambda_)*math.cos(_c1*math.cos(_c0))
+    _f0 = I_Y*_c1*nu*omega*math.cos(_c1*math.cos(_c0))*math.sin(_c0)*math.sin(lambda_)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -57,7 +57,7 @@ def rhs_lanes(T, Y, P, out, bad):
         _c1 = (0.5)*math.pi
         out[0, _l] = phi_dot
         _m0_0 = I_Y
-        _f0 = I_Y*_c1*nu*omega*_vsin(_c0)*_vsin(lambda_)*_vcos(_c1*_vcos(_c0))
+        _f0 = I_Y*_c1*nu*omega*_vcos(_c1*_vcos(_c0))*_vsin(_c0)*_vsin(lambda_)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -83,7 +83,7 @@ def forcing(t, y, p, out):
     nu = p[4]
     _c0 = nu*t
     _c1 = (0.5)*math.pi
-    out[0] = I_Y*_c1*nu*omega*math.sin(_c0)*math.sin(lambda_)*math.cos(_c1*math.cos(_c0))
+    out[0] = I_Y*_c1*nu*omega*math.cos(_c1*math.cos(_c0))*math.sin(_c0)*math.sin(lambda_)
 
 
 @njit(cache=True, error_model="numpy")
@@ -99,7 +99,7 @@ def energy(t, y, p):
     _c1 = (0.5)*I
     _c2 = math.sin(lambda_)
     _c3 = math.pi*(0.5 - 0.5*math.cos(_c0))
-    return (0.5)*I_Y*(_c2*omega*math.cos(_c3) + phi_dot)**2 + _c1*_c2**2*omega**2*math.sin(_c3)**2 + _c1*((0.5)*math.pi*nu*math.sin(_c0) - omega*math.cos(lambda_))**2
+    return _c1*(-omega*math.cos(lambda_) + (0.5)*math.pi*nu*math.sin(_c0))**2 + (0.5)*I_Y*(phi_dot + _c2*omega*math.cos(_c3))**2 + _c1*_c2**2*omega**2*math.sin(_c3)**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -111,12 +111,18 @@ def energy_function(t, y, p):
     omega = p[2]
     lambda_ = p[3]
     nu = p[4]
-    _c0 = nu*t
-    _c1 = (0.5)*I
-    _c2 = math.sin(lambda_)
-    _c3 = math.pi*(0.5 - 0.5*math.cos(_c0))
-    _c4 = _c2*omega*math.cos(_c3)
-    return (0.5)*I_Y*phi_dot*(2.0*_c4 + 2.0*phi_dot) - 0.5*I_Y*(_c4 + phi_dot)**2 - _c1*_c2**2*omega**2*math.sin(_c3)**2 - _c1*((0.5)*math.pi*nu*math.sin(_c0) - omega*math.cos(lambda_))**2
+    _c0 = (0.5)*I_Y
+    _c1 = nu*t
+    _c2 = math.cos(_c1)
+    _c3 = (0.5)*math.pi
+    _c4 = _c2*_c3
+    _c5 = omega**2
+    _c6 = _c5*math.sin(lambda_)**2
+    _c7 = math.pi**2*nu**2
+    _c8 = (0.25)*_c7
+    _c9 = math.cos(lambda_)
+    _c10 = math.sin(_c1)
+    return I*(-_c6 - _c8 - 0.5*_c5*_c9**2) + _c0*phi_dot**2 + I*_c8*_c2**2 + _c6*math.sin(_c4)**2*(I - _c0) + (0.5)*I*_c6*math.cos(_c4)**2 + (0.125)*I*_c7*_c10**2 + I*_c10*_c3*_c9*nu*omega
 
 
 @njit(cache=True, error_model="numpy")
@@ -127,7 +133,7 @@ def momenta(t, y, p, out):
     omega = p[2]
     lambda_ = p[3]
     nu = p[4]
-    out[0] = I_Y*(omega*math.sin(lambda_)*math.sin((0.5)*math.pi*math.cos(nu*t)) + phi_dot)
+    out[0] = I_Y*phi_dot + I_Y*omega*math.sin(lambda_)*math.sin((0.5)*math.pi*math.cos(nu*t))
 
 
 @njit(cache=True, error_model="numpy")
@@ -159,7 +165,7 @@ def velocities(t, y, p, out):
     nu = p[4]
     _p_phi = y[1]
     _m0_0 = I_Y
-    _f0 = -I_Y*omega*math.sin(lambda_)*math.sin((0.5)*math.pi*math.cos(nu*t)) + _p_phi
+    _f0 = _p_phi - I_Y*omega*math.sin(lambda_)*math.sin((0.5)*math.pi*math.cos(nu*t))
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -2505,7 +2511,7 @@ def taylor_coefficients(t, y, p, X, W):
     for k in range(order):
         # _c0 = nu*t
         _c0[k] = nu*_t[k]
-        # _f0 = I_Y*_c1*nu*omega*math.sin(_c0)*math.sin(lambda_)*math.cos(_c1*math.cos(_c0))
+        # _f0 = I_Y*_c1*nu*omega*math.cos(_c1*math.cos(_c0))*math.sin(_c0)*math.sin(lambda_)
         # _u2, _u3 = sin(_c0), cos(_c0)
         if k == 0:
             _u2[0] = math.sin(_c0[0])

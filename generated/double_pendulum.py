@@ -31,17 +31,18 @@ def rhs(t, y, p, out):
     l1 = p[2]
     l2 = p[3]
     g = p[4]
-    _c0 = theta1 - theta2
-    _c1 = l2*m2
-    _c2 = g*math.sin(theta1)
-    _c3 = math.sin(_c0)
+    _c0 = m1 + m2
+    _c1 = theta2 - theta1
+    _c2 = l2*m2
+    _c3 = _c2*l1
+    _c4 = _c3*math.sin(_c1)
     out[0] = theta1_dot
     out[1] = theta2_dot
-    _m0_0 = l1**2*(m1 + m2)
-    _m1_0 = _c1*l1*math.cos(_c0)
-    _m1_1 = l2**2*m2
-    _f0 = -l1*(_c1*_c3*theta2_dot**2 + _c2*m1 + _c2*m2)
-    _f1 = _c1*(_c3*l1*theta1_dot**2 - g*math.sin(theta2))
+    _m0_0 = _c0*l1**2
+    _m1_0 = _c3*math.cos(_c1)
+    _m1_1 = m2*l2**2
+    _f0 = _c4*theta2_dot**2 - _c0*g*l1*math.sin(theta1)
+    _f1 = -_c4*theta1_dot**2 - _c2*g*math.sin(theta2)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -73,17 +74,18 @@ def rhs_lanes(T, Y, P, out, bad):
         l1 = P[2, _l]
         l2 = P[3, _l]
         g = P[4, _l]
-        _c0 = theta1 - theta2
-        _c1 = l2*m2
-        _c2 = g*_vsin(theta1)
-        _c3 = _vsin(_c0)
+        _c0 = m1 + m2
+        _c1 = theta2 - theta1
+        _c2 = l2*m2
+        _c3 = _c2*l1
+        _c4 = _c3*_vsin(_c1)
         out[0, _l] = theta1_dot
         out[1, _l] = theta2_dot
-        _m0_0 = l1**2*(m1 + m2)
-        _m1_0 = _c1*l1*_vcos(_c0)
-        _m1_1 = l2**2*m2
-        _f0 = -l1*(_c1*_c3*theta2_dot**2 + _c2*m1 + _c2*m2)
-        _f1 = _c1*(_c3*l1*theta1_dot**2 - g*_vsin(theta2))
+        _m0_0 = _c0*l1**2
+        _m1_0 = _c3*_vcos(_c1)
+        _m1_1 = m2*l2**2
+        _f0 = _c4*theta2_dot**2 - _c0*g*l1*_vsin(theta1)
+        _f1 = -_c4*theta1_dot**2 - _c2*g*_vsin(theta2)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -112,7 +114,7 @@ def mass_matrix(t, y, p, out):
     out[0, 0] = l1**2*(m1 + m2)
     out[0, 1] = _c0
     out[1, 0] = _c0
-    out[1, 1] = l2**2*m2
+    out[1, 1] = m2*l2**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -127,11 +129,10 @@ def forcing(t, y, p, out):
     l1 = p[2]
     l2 = p[3]
     g = p[4]
-    _c0 = g*math.sin(theta1)
-    _c1 = math.sin(theta1 - theta2)
-    _c2 = l2*m2
-    out[0] = -l1*(_c0*m1 + _c0*m2 + _c1*_c2*theta2_dot**2)
-    out[1] = _c2*(_c1*l1*theta1_dot**2 - g*math.sin(theta2))
+    _c0 = l2*m2
+    _c1 = -_c0*l1*math.sin(theta1 - theta2)
+    out[0] = _c1*theta2_dot**2 - g*l1*(m1 + m2)*math.sin(theta1)
+    out[1] = -_c1*theta1_dot**2 - _c0*g*math.sin(theta2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -146,10 +147,9 @@ def energy(t, y, p):
     l1 = p[2]
     l2 = p[3]
     g = p[4]
-    _c0 = g*l1*math.cos(theta1)
+    _c0 = m1 + m2
     _c1 = l2*m2
-    _c2 = (0.5)*l1**2*theta1_dot**2
-    return -_c0*m1 - _c0*m2 - _c1*g*math.cos(theta2) + _c1*l1*theta1_dot*theta2_dot*math.cos(theta1 - theta2) + _c2*m1 + _c2*m2 + (0.5)*l2**2*m2*theta2_dot**2
+    return (0.5)*_c0*l1**2*theta1_dot**2 + (0.5)*m2*l2**2*theta2_dot**2 - _c1*g*math.cos(theta2) - _c0*g*l1*math.cos(theta1) + _c1*l1*theta1_dot*theta2_dot*math.cos(theta1 - theta2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -164,10 +164,9 @@ def energy_function(t, y, p):
     l1 = p[2]
     l2 = p[3]
     g = p[4]
-    _c0 = g*l1*math.cos(theta1)
+    _c0 = m1 + m2
     _c1 = l2*m2
-    _c2 = (0.5)*l1**2*theta1_dot**2
-    return -_c0*m1 - _c0*m2 - _c1*g*math.cos(theta2) + _c1*l1*theta1_dot*theta2_dot*math.cos(theta1 - theta2) + _c2*m1 + _c2*m2 + (0.5)*l2**2*m2*theta2_dot**2
+    return (0.5)*_c0*l1**2*theta1_dot**2 + (0.5)*m2*l2**2*theta2_dot**2 - _c1*g*math.cos(theta2) - _c0*g*l1*math.cos(theta1) + _c1*l1*theta1_dot*theta2_dot*math.cos(theta1 - theta2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -181,11 +180,10 @@ def momenta(t, y, p, out):
     m2 = p[1]
     l1 = p[2]
     l2 = p[3]
-    _c0 = l1*theta1_dot
-    _c1 = math.cos(theta1 - theta2)
-    _c2 = l2*theta2_dot
-    out[0] = l1*(_c0*m1 + _c0*m2 + _c1*_c2*m2)
-    out[1] = l2*m2*(_c0*_c1 + _c2)
+    _c0 = m2*theta2_dot
+    _c1 = l1*l2*math.cos(theta1 - theta2)
+    out[0] = _c0*_c1 + theta1_dot*l1**2*(m1 + m2)
+    out[1] = _c0*l2**2 + _c1*m2*theta1_dot
 
 
 @njit(cache=True, error_model="numpy")
@@ -200,11 +198,10 @@ def momentum_rate(t, y, p, out):
     l1 = p[2]
     l2 = p[3]
     g = p[4]
-    _c0 = g*math.sin(theta1)
-    _c1 = l2*m2
-    _c2 = math.sin(theta1 - theta2)
-    out[0] = -l1*(_c0*m1 + _c0*m2 + _c1*_c2*theta1_dot*theta2_dot)
-    out[1] = _c1*(_c2*l1*theta1_dot*theta2_dot - g*math.sin(theta2))
+    _c0 = l2*m2
+    _c1 = -_c0*l1*theta1_dot*theta2_dot*math.sin(theta1 - theta2)
+    out[0] = _c1 - g*l1*(m1 + m2)*math.sin(theta1)
+    out[1] = -_c1 - _c0*g*math.sin(theta2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -223,8 +220,7 @@ def rest_partials(t, y, p, out):
     l1 = p[2]
     l2 = p[3]
     g = p[4]
-    _c0 = g*math.cos(theta1)
-    out[0, 0, 0] = -l1*(_c0*m1 + _c0*m2)
+    out[0, 0, 0] = -g*l1*(m1 + m2)*math.cos(theta1)
     out[0, 0, 1] = 0.0
     out[0, 1, 0] = 0.0
     out[0, 1, 1] = -g*l2*m2*math.cos(theta2)
@@ -248,7 +244,7 @@ def velocities(t, y, p, out):
     _p_theta2 = y[3]
     _m0_0 = l1**2*(m1 + m2)
     _m1_0 = l1*l2*m2*math.cos(theta1 - theta2)
-    _m1_1 = l2**2*m2
+    _m1_1 = m2*l2**2
     _f0 = _p_theta1
     _f1 = _p_theta2
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
@@ -282,35 +278,34 @@ def canonical_partials(t, y, p, out):
     l1 = p[2]
     l2 = p[3]
     g = p[4]
-    _c0 = l2*m2
-    _c1 = theta1 - theta2
-    _c2 = math.cos(_c1)
+    _c0 = m1 + m2
+    _c1 = theta2 - theta1
+    _c2 = l2*m2
     _c3 = _c2*l1
-    _c4 = _c0*_c3
-    _c5 = _c0*l1*math.sin(_c1)
+    _c4 = _c3*math.cos(_c1)
+    _c5 = _c3*math.sin(_c1)
     _c6 = _c5*theta2_dot
     _c7 = -_c6
     _c8 = _c5*theta1_dot
     _c9 = -_c8
-    _c10 = g*math.cos(theta1)
-    _c11 = theta1_dot*theta2_dot
-    _c12 = _c11*_c4
-    out[0, 0, 0] = l1**2*(m1 + m2)
+    _c10 = _c4*theta1_dot*theta2_dot
+    _c11 = -_c10
+    out[0, 0, 0] = _c0*l1**2
     out[0, 0, 1] = _c4
     out[0, 1, 0] = _c4
-    out[0, 1, 1] = l2**2*m2
-    out[1, 0, 0] = _c7
-    out[1, 0, 1] = _c6
-    out[1, 1, 0] = _c9
-    out[1, 1, 1] = _c8
-    out[2, 0, 0] = -l1*(_c0*_c11*_c2 + _c10*m1 + _c10*m2)
-    out[2, 0, 1] = _c12
-    out[2, 1, 0] = _c12
-    out[2, 1, 1] = _c0*(-_c11*_c3 - g*math.cos(theta2))
-    out[3, 0, 0] = _c7
-    out[3, 0, 1] = _c9
-    out[3, 1, 0] = _c6
-    out[3, 1, 1] = _c8
+    out[0, 1, 1] = m2*l2**2
+    out[1, 0, 0] = _c6
+    out[1, 0, 1] = _c7
+    out[1, 1, 0] = _c8
+    out[1, 1, 1] = _c9
+    out[2, 0, 0] = _c11 - _c0*g*l1*math.cos(theta1)
+    out[2, 0, 1] = _c10
+    out[2, 1, 0] = _c10
+    out[2, 1, 1] = _c11 - _c2*g*math.cos(theta2)
+    out[3, 0, 0] = _c6
+    out[3, 0, 1] = _c8
+    out[3, 1, 0] = _c7
+    out[3, 1, 1] = _c9
 
 
 @njit(cache=True, error_model="numpy")
@@ -2614,157 +2609,148 @@ def taylor_coefficients(t, y, p, X, W):
     l1 = p[2]
     l2 = p[3]
     g = p[4]
-    _c1 = l2*m2
-    _m0_0 = l1**2*(m1 + m2)
-    _k6 = _c1*l1
-    _m1_1 = l2**2*m2
-    _k8 = -l1
+    _c0 = m1 + m2
+    _c2 = l2*m2
+    _c3 = _c2*l1
+    _m0_0 = _c0*l1**2
+    _m1_1 = m2*l2**2
+    _k7 = _c0*g*l1
+    _k14 = _c2*g
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
-    _k25 = 1.0/_m0_0
-    _c0 = W[0]
+    _k20 = 1.0/_m0_0
+    _c1 = W[0]
     _u1 = W[1]
     _u2 = W[2]
-    _c2 = W[3]
-    _c3 = W[4]
+    _c4 = W[3]
+    _m1_0 = W[4]
     _u5 = W[5]
-    _m1_0 = W[6]
-    _u9 = W[7]
-    _u10 = W[8]
-    _u11 = W[9]
-    _u12 = W[10]
-    _u13 = W[11]
-    _u14 = W[12]
+    _u6 = W[6]
+    _u8 = W[7]
+    _u9 = W[8]
+    _u10 = W[9]
+    _f0 = W[10]
+    _u12 = W[11]
+    _u13 = W[12]
     _u15 = W[13]
-    _f0 = W[14]
+    _u16 = W[14]
     _u17 = W[15]
     _u18 = W[16]
-    _u19 = W[17]
-    _u20 = W[18]
-    _u21 = W[19]
-    _u22 = W[20]
-    _u23 = W[21]
-    _f1 = W[22]
-    _l1_0 = W[23]
-    _u27 = W[24]
+    _f1 = W[17]
+    _l1_0 = W[18]
+    _u22 = W[19]
+    _u23 = W[20]
+    _d1 = W[21]
+    _u25 = W[22]
+    _z1 = W[23]
+    _x1 = W[24]
     _u28 = W[25]
-    _d1 = W[26]
-    _u30 = W[27]
-    _z1 = W[28]
-    _x1 = W[29]
-    _u33 = W[30]
-    _u34 = W[31]
-    _x0 = W[32]
+    _u29 = W[26]
+    _x0 = W[27]
     for i in range(4):
         X[i, 0] = y[i]
     for k in range(order):
-        # _c0 = theta1 - theta2
-        _c0[k] = theta1[k] - theta2[k]
-        # _c2 = g*math.sin(theta1)
-        # _u1, _u2 = sin(theta1), cos(theta1)
+        # _c1 = theta2 - theta1
+        _c1[k] = theta2[k] - theta1[k]
+        # _c4 = _c3*math.sin(_c1)
+        # _u1, _u2 = sin(_c1), cos(_c1)
         if k == 0:
-            _u1[0] = math.sin(theta1[0])
-            _u2[0] = math.cos(theta1[0])
+            _u1[0] = math.sin(_c1[0])
+            _u2[0] = math.cos(_c1[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*_c1[_j]
+                _s += _ja*_u2[k - _j]
+                _c += _ja*_u1[k - _j]
+            _u1[k] = _s/k
+            _u2[k] = -_c/k
+        _c4[k] = _c3*_u1[k]
+        # _m1_0 = _c3*math.cos(_c1)
+        _m1_0[k] = _c3*_u2[k]
+        # _f0 = _c4*theta2_dot**2 - _c0*g*l1*math.sin(theta1)
+        # _u5 = theta2_dot**2
+        _s = theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*theta2_dot[_j]*theta2_dot[k - _j]
+        _u5[k] = _s
+        # _u6 = _c4*_u5
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c4[_j]*_u5[k - _j]
+        _u6[k] = _s
+        # _u8, _u9 = sin(theta1), cos(theta1)
+        if k == 0:
+            _u8[0] = math.sin(theta1[0])
+            _u9[0] = math.cos(theta1[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
                 _ja = _j*theta1[_j]
-                _s += _ja*_u2[k - _j]
-                _c += _ja*_u1[k - _j]
-            _u1[k] = _s/k
-            _u2[k] = -_c/k
-        _c2[k] = g*_u1[k]
-        # _c3 = math.sin(_c0)
-        # _c3, _u5 = sin(_c0), cos(_c0)
-        if k == 0:
-            _c3[0] = math.sin(_c0[0])
-            _u5[0] = math.cos(_c0[0])
-        else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
-                _ja = _j*_c0[_j]
-                _s += _ja*_u5[k - _j]
-                _c += _ja*_c3[k - _j]
-            _c3[k] = _s/k
-            _u5[k] = -_c/k
-        # _m1_0 = _c1*l1*math.cos(_c0)
-        _m1_0[k] = _k6*_u5[k]
-        # _f0 = -l1*(_c1*_c3*theta2_dot**2 + _c2*m1 + _c2*m2)
-        _u9[k] = m1*_c2[k]
-        _u10[k] = m2*_c2[k]
-        # _u11 = theta2_dot**2
-        _s = theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0
+                _s += _ja*_u9[k - _j]
+                _c += _ja*_u8[k - _j]
+            _u8[k] = _s/k
+            _u9[k] = -_c/k
+        _u10[k] = _k7*_u8[k]
+        _f0[k] = _u6[k] - _u10[k]
+        # _f1 = -_c4*theta1_dot**2 - _c2*g*math.sin(theta2)
+        # _u12 = theta1_dot**2
+        _s = theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
-            _s += 2.0*theta2_dot[_j]*theta2_dot[k - _j]
-        _u11[k] = _s
-        # _u12 = _c3*_u11
+            _s += 2.0*theta1_dot[_j]*theta1_dot[k - _j]
+        _u12[k] = _s
+        # _u13 = _c4*_u12
         _s = 0.0
         for _j in range(k + 1):
-            _s += _c3[_j]*_u11[k - _j]
-        _u12[k] = _s
-        _u13[k] = _c1*_u12[k]
-        _u14[k] = _u9[k] + _u10[k]
-        _u15[k] = _u14[k] + _u13[k]
-        _f0[k] = _k8*_u15[k]
-        # _f1 = _c1*(_c3*l1*theta1_dot**2 - g*math.sin(theta2))
-        # _u17, _u18 = sin(theta2), cos(theta2)
+            _s += _c4[_j]*_u12[k - _j]
+        _u13[k] = _s
+        # _u15, _u16 = sin(theta2), cos(theta2)
         if k == 0:
-            _u17[0] = math.sin(theta2[0])
-            _u18[0] = math.cos(theta2[0])
+            _u15[0] = math.sin(theta2[0])
+            _u16[0] = math.cos(theta2[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
                 _ja = _j*theta2[_j]
-                _s += _ja*_u18[k - _j]
-                _c += _ja*_u17[k - _j]
-            _u17[k] = _s/k
-            _u18[k] = -_c/k
-        _u19[k] = g*_u17[k]
-        # _u20 = theta1_dot**2
-        _s = theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta1_dot[_j]*theta1_dot[k - _j]
-        _u20[k] = _s
-        # _u21 = _c3*_u20
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c3[_j]*_u20[k - _j]
-        _u21[k] = _s
-        _u22[k] = l1*_u21[k]
-        _u23[k] = _u22[k] - _u19[k]
-        _f1[k] = _c1*_u23[k]
+                _s += _ja*_u16[k - _j]
+                _c += _ja*_u15[k - _j]
+            _u15[k] = _s/k
+            _u16[k] = -_c/k
+        _u17[k] = _k14*_u15[k]
+        _u18[k] = -_u13[k]
+        _f1[k] = _u18[k] - _u17[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _l1_0[k] = _k25*_m1_0[k]
-        # _u27 = _l1_0**2
+        _l1_0[k] = _k20*_m1_0[k]
+        # _u22 = _l1_0**2
         _s = _l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_l1_0[_j]*_l1_0[k - _j]
-        _u27[k] = _s
-        _u28[k] = _m0_0*_u27[k]
-        _d1[k] = _m1_1 - _u28[k] if k == 0 else -_u28[k]
+        _u22[k] = _s
+        _u23[k] = _m0_0*_u22[k]
+        _d1[k] = _m1_1 - _u23[k] if k == 0 else -_u23[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
-        # _u30 = _l1_0*_f0
+        # _u25 = _l1_0*_f0
         _s = 0.0
         for _j in range(k + 1):
             _s += _l1_0[_j]*_f0[k - _j]
-        _u30[k] = _s
-        _z1[k] = _f1[k] - _u30[k]
+        _u25[k] = _s
+        _z1[k] = _f1[k] - _u25[k]
         # _x1 = _z1/_d1
         _s = _z1[k]
         for _j in range(1, k + 1):
             _s -= _d1[_j]*_x1[k - _j]
         _x1[k] = _s/_d1[0]
-        _u33[k] = _k25*_f0[k]
-        # _u34 = _l1_0*_x1
+        _u28[k] = _k20*_f0[k]
+        # _u29 = _l1_0*_x1
         _s = 0.0
         for _j in range(k + 1):
             _s += _l1_0[_j]*_x1[k - _j]
-        _u34[k] = _s
-        _x0[k] = _u33[k] - _u34[k]
+        _u29[k] = _s
+        _x0[k] = _u28[k] - _u29[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta1_dot[k]/(k + 1)
         X[1, k + 1] = theta2_dot[k]/(k + 1)
@@ -2773,8 +2759,8 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (35 series operations per order).
-TAYLOR_WORK = 33
+#: Rows of the work array of `taylor_coefficients` (30 series operations per order).
+TAYLOR_WORK = 28
 
 
 # ----------------------------------------------------------------------------

@@ -29,9 +29,10 @@ def rhs(t, y, p, out):
     g = p[2]
     A = p[3]
     Omega = p[4]
+    _c0 = l*m
     out[0] = theta_dot
-    _m0_0 = l**2*m
-    _f0 = l*m*(A*Omega**2*math.cos(Omega*t) - g)*math.sin(theta)
+    _m0_0 = m*l**2
+    _f0 = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.sin(theta)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -55,9 +56,10 @@ def rhs_lanes(T, Y, P, out, bad):
         g = P[2, _l]
         A = P[3, _l]
         Omega = P[4, _l]
+        _c0 = l*m
         out[0, _l] = theta_dot
-        _m0_0 = l**2*m
-        _f0 = l*m*(A*Omega**2*_vcos(Omega*t) - g)*_vsin(theta)
+        _m0_0 = m*l**2
+        _f0 = (-_c0*g + A*_c0*Omega**2*_vcos(Omega*t))*_vsin(theta)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -72,7 +74,7 @@ def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     m = p[0]
     l = p[1]
-    out[0, 0] = l**2*m
+    out[0, 0] = m*l**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -84,7 +86,8 @@ def forcing(t, y, p, out):
     g = p[2]
     A = p[3]
     Omega = p[4]
-    out[0] = l*m*(A*Omega**2*math.cos(Omega*t) - g)*math.sin(theta)
+    _c0 = l*m
+    out[0] = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.sin(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -97,8 +100,8 @@ def energy(t, y, p):
     g = p[2]
     A = p[3]
     Omega = p[4]
-    _c0 = math.cos(theta)
-    return l*m*(A*Omega**2*_c0*math.cos(Omega*t) - _c0*g + (0.5)*l*theta_dot**2)
+    _c0 = l*m*math.cos(theta)
+    return -_c0*g + (0.5)*m*l**2*theta_dot**2 + A*_c0*Omega**2*math.cos(Omega*t)
 
 
 @njit(cache=True, error_model="numpy")
@@ -111,8 +114,8 @@ def energy_function(t, y, p):
     g = p[2]
     A = p[3]
     Omega = p[4]
-    _c0 = math.cos(theta)
-    return l*m*(A*Omega**2*_c0*math.cos(Omega*t) - _c0*g + (0.5)*l*theta_dot**2)
+    _c0 = l*m*math.cos(theta)
+    return -_c0*g + (0.5)*m*l**2*theta_dot**2 + A*_c0*Omega**2*math.cos(Omega*t)
 
 
 @njit(cache=True, error_model="numpy")
@@ -121,7 +124,7 @@ def momenta(t, y, p, out):
     theta_dot = y[1]
     m = p[0]
     l = p[1]
-    out[0] = l**2*m*theta_dot
+    out[0] = m*theta_dot*l**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -133,7 +136,8 @@ def momentum_rate(t, y, p, out):
     g = p[2]
     A = p[3]
     Omega = p[4]
-    out[0] = l*m*(A*Omega**2*math.cos(Omega*t) - g)*math.sin(theta)
+    _c0 = l*m
+    out[0] = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.sin(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -151,7 +155,8 @@ def rest_partials(t, y, p, out):
     g = p[2]
     A = p[3]
     Omega = p[4]
-    out[0, 0, 0] = l*m*(A*Omega**2*math.cos(Omega*t) - g)*math.cos(theta)
+    _c0 = l*m
+    out[0, 0, 0] = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.cos(theta)
     out[1, 0, 0] = 0.0
 
 
@@ -162,7 +167,7 @@ def velocities(t, y, p, out):
     m = p[0]
     l = p[1]
     _p_theta = y[1]
-    _m0_0 = l**2*m
+    _m0_0 = m*l**2
     _f0 = _p_theta
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
@@ -185,9 +190,10 @@ def canonical_partials(t, y, p, out):
     g = p[2]
     A = p[3]
     Omega = p[4]
-    out[0, 0, 0] = l**2*m
+    _c0 = l*m
+    out[0, 0, 0] = m*l**2
     out[1, 0, 0] = 0.0
-    out[2, 0, 0] = l*m*(A*Omega**2*math.cos(Omega*t) - g)*math.cos(theta)
+    out[2, 0, 0] = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.cos(theta)
     out[3, 0, 0] = 0.0
 
 
@@ -2490,24 +2496,23 @@ def taylor_coefficients(t, y, p, X, W):
     g = p[2]
     A = p[3]
     Omega = p[4]
-    _m0_0 = l**2*m
-    _k0 = l*m
-    _k1 = A*Omega**2
-    _k6 = -g
+    _c0 = l*m
+    _m0_0 = m*l**2
+    _k0 = A*_c0*Omega**2
+    _k5 = -_c0*g
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
-    _k12 = 1.0/_m0_0
+    _k10 = 1.0/_m0_0
     _t = W[0]
-    _u2 = W[1]
-    _u3 = W[2]
-    _u4 = W[3]
-    _u5 = W[4]
-    _u7 = W[5]
-    _u8 = W[6]
-    _u9 = W[7]
-    _u10 = W[8]
-    _f0 = W[9]
-    _x0 = W[10]
+    _u1 = W[1]
+    _u2 = W[2]
+    _u3 = W[3]
+    _u4 = W[4]
+    _u6 = W[5]
+    _u7 = W[6]
+    _u8 = W[7]
+    _f0 = W[8]
+    _x0 = W[9]
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order + 1):
@@ -2516,52 +2521,51 @@ def taylor_coefficients(t, y, p, X, W):
     if order > 0:
         _t[1] = 1.0
     for k in range(order):
-        # _f0 = l*m*(A*Omega**2*math.cos(Omega*t) - g)*math.sin(theta)
-        _u2[k] = Omega*_t[k]
-        # _u3, _u4 = sin(_u2), cos(_u2)
+        # _f0 = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.sin(theta)
+        _u1[k] = Omega*_t[k]
+        # _u2, _u3 = sin(_u1), cos(_u1)
         if k == 0:
-            _u3[0] = math.sin(_u2[0])
-            _u4[0] = math.cos(_u2[0])
+            _u2[0] = math.sin(_u1[0])
+            _u3[0] = math.cos(_u1[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
-                _ja = _j*_u2[_j]
-                _s += _ja*_u4[k - _j]
-                _c += _ja*_u3[k - _j]
-            _u3[k] = _s/k
-            _u4[k] = -_c/k
-        _u5[k] = _k1*_u4[k]
-        _u7[k] = _u5[k] + _k6 if k == 0 else _u5[k]
-        # _u8, _u9 = sin(theta), cos(theta)
+                _ja = _j*_u1[_j]
+                _s += _ja*_u3[k - _j]
+                _c += _ja*_u2[k - _j]
+            _u2[k] = _s/k
+            _u3[k] = -_c/k
+        _u4[k] = _k0*_u3[k]
+        _u6[k] = _u4[k] + _k5 if k == 0 else _u4[k]
+        # _u7, _u8 = sin(theta), cos(theta)
         if k == 0:
-            _u8[0] = math.sin(theta[0])
-            _u9[0] = math.cos(theta[0])
+            _u7[0] = math.sin(theta[0])
+            _u8[0] = math.cos(theta[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
                 _ja = _j*theta[_j]
-                _s += _ja*_u9[k - _j]
-                _c += _ja*_u8[k - _j]
-            _u8[k] = _s/k
-            _u9[k] = -_c/k
-        # _u10 = _u7*_u8
+                _s += _ja*_u8[k - _j]
+                _c += _ja*_u7[k - _j]
+            _u7[k] = _s/k
+            _u8[k] = -_c/k
+        # _f0 = _u6*_u7
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u7[_j]*_u8[k - _j]
-        _u10[k] = _s
-        _f0[k] = _k0*_u10[k]
+            _s += _u6[_j]*_u7[k - _j]
+        _f0[k] = _s
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _x0[k] = _k12*_f0[k]
+        _x0[k] = _k10*_f0[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta_dot[k]/(k + 1)
         X[1, k + 1] = _x0[k]/(k + 1)
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (10 series operations per order).
-TAYLOR_WORK = 11
+#: Rows of the work array of `taylor_coefficients` (9 series operations per order).
+TAYLOR_WORK = 10
 
 
 # ----------------------------------------------------------------------------

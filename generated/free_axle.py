@@ -41,13 +41,17 @@ def rhs(t, y, p, out):
     _baumgarte_beta = p[8]
     _kkt = np.zeros((8, 9))
     _c0 = 2.0*m
-    _c1 = R*math.sin(theta)
-    _c2 = R*math.cos(theta)
-    _c3 = -_c2
-    _c4 = -R
-    _c5 = -_c1
-    _c6 = theta_dot*(phi_dot + phi_prime_dot)
-    _c7 = 2.0*_baumgarte_alpha
+    _c1 = math.sin(theta)
+    _c2 = R*_c1
+    _c3 = math.cos(theta)
+    _c4 = R*_c3
+    _c5 = -_c4
+    _c6 = -R
+    _c7 = -_c2
+    _c8 = R*phi_dot
+    _c9 = R*phi_prime_dot
+    _c10 = 2.0*_baumgarte_alpha
+    _c11 = theta_dot*(phi_dot + phi_prime_dot)
     out[0] = X_dot
     out[1] = Y_dot
     out[2] = theta_dot
@@ -55,17 +59,17 @@ def rhs(t, y, p, out):
     out[4] = phi_prime_dot
     _kkt[0, 0] = _c0
     _kkt[1, 1] = _c0
-    _kkt[2, 2] = 2.0*I1 + (0.5)*L**2*m
+    _kkt[2, 2] = 2.0*I1 + (0.5)*m*L**2
     _kkt[3, 3] = I3
     _kkt[4, 4] = I3
     _kkt[0, 5] = -2.0
     _kkt[1, 6] = -2.0
     _kkt[2, 7] = -L
-    _kkt[3, 5] = _c1
-    _kkt[3, 6] = _c3
-    _kkt[3, 7] = _c4
-    _kkt[4, 5] = _c1
-    _kkt[4, 6] = _c3
+    _kkt[3, 5] = _c2
+    _kkt[3, 6] = _c5
+    _kkt[3, 7] = _c6
+    _kkt[4, 5] = _c2
+    _kkt[4, 6] = _c5
     _kkt[4, 7] = R
     _kkt[0, 8] = 0.0
     _kkt[1, 8] = _c0*g*math.sin(alpha)
@@ -73,17 +77,17 @@ def rhs(t, y, p, out):
     _kkt[3, 8] = 0.0
     _kkt[4, 8] = 0.0
     _kkt[5, 0] = 2.0
-    _kkt[5, 3] = _c5
-    _kkt[5, 4] = _c5
+    _kkt[5, 3] = _c7
+    _kkt[5, 4] = _c7
     _kkt[6, 1] = 2.0
-    _kkt[6, 3] = _c2
-    _kkt[6, 4] = _c2
+    _kkt[6, 3] = _c4
+    _kkt[6, 4] = _c4
     _kkt[7, 2] = L
     _kkt[7, 3] = R
-    _kkt[7, 4] = _c4
-    _kkt[5, 8] = _c2*_c6 - _c7*(2.0*X_dot - _c1*phi_dot - _c1*phi_prime_dot)
-    _kkt[6, 8] = _c1*_c6 - _c7*(2.0*Y_dot + _c2*phi_dot + _c2*phi_prime_dot)
-    _kkt[7, 8] = -_baumgarte_beta**2*(L*theta + R*(phi - phi_prime)) - _c7*(L*theta_dot + R*phi_dot - R*phi_prime_dot)
+    _kkt[7, 4] = _c6
+    _kkt[5, 8] = _c11*_c4 - _c10*(2.0*X_dot - _c1*_c8 - _c1*_c9)
+    _kkt[6, 8] = _c11*_c2 - _c10*(2.0*Y_dot + _c3*_c8 + _c3*_c9)
+    _kkt[7, 8] = -_c10*(_c8 - _c9 + L*theta_dot) - _baumgarte_beta**2*(L*theta + R*(phi - phi_prime))
     _status = _kkt_solve(_kkt, 5)
     if _status:
         return _status
@@ -118,26 +122,30 @@ def reactions(t, y, p, out):
     _baumgarte_beta = p[8]
     _kkt = np.zeros((8, 9))
     _c0 = 2.0*m
-    _c1 = R*math.sin(theta)
-    _c2 = R*math.cos(theta)
-    _c3 = -_c2
-    _c4 = -R
-    _c5 = -_c1
-    _c6 = theta_dot*(phi_dot + phi_prime_dot)
-    _c7 = 2.0*_baumgarte_alpha
+    _c1 = math.sin(theta)
+    _c2 = R*_c1
+    _c3 = math.cos(theta)
+    _c4 = R*_c3
+    _c5 = -_c4
+    _c6 = -R
+    _c7 = -_c2
+    _c8 = R*phi_dot
+    _c9 = R*phi_prime_dot
+    _c10 = 2.0*_baumgarte_alpha
+    _c11 = theta_dot*(phi_dot + phi_prime_dot)
     _kkt[0, 0] = _c0
     _kkt[1, 1] = _c0
-    _kkt[2, 2] = 2.0*I1 + (0.5)*L**2*m
+    _kkt[2, 2] = 2.0*I1 + (0.5)*m*L**2
     _kkt[3, 3] = I3
     _kkt[4, 4] = I3
     _kkt[0, 5] = -2.0
     _kkt[1, 6] = -2.0
     _kkt[2, 7] = -L
-    _kkt[3, 5] = _c1
-    _kkt[3, 6] = _c3
-    _kkt[3, 7] = _c4
-    _kkt[4, 5] = _c1
-    _kkt[4, 6] = _c3
+    _kkt[3, 5] = _c2
+    _kkt[3, 6] = _c5
+    _kkt[3, 7] = _c6
+    _kkt[4, 5] = _c2
+    _kkt[4, 6] = _c5
     _kkt[4, 7] = R
     _kkt[0, 8] = 0.0
     _kkt[1, 8] = _c0*g*math.sin(alpha)
@@ -145,17 +153,17 @@ def reactions(t, y, p, out):
     _kkt[3, 8] = 0.0
     _kkt[4, 8] = 0.0
     _kkt[5, 0] = 2.0
-    _kkt[5, 3] = _c5
-    _kkt[5, 4] = _c5
+    _kkt[5, 3] = _c7
+    _kkt[5, 4] = _c7
     _kkt[6, 1] = 2.0
-    _kkt[6, 3] = _c2
-    _kkt[6, 4] = _c2
+    _kkt[6, 3] = _c4
+    _kkt[6, 4] = _c4
     _kkt[7, 2] = L
     _kkt[7, 3] = R
-    _kkt[7, 4] = _c4
-    _kkt[5, 8] = _c2*_c6 - _c7*(2.0*X_dot - _c1*phi_dot - _c1*phi_prime_dot)
-    _kkt[6, 8] = _c1*_c6 - _c7*(2.0*Y_dot + _c2*phi_dot + _c2*phi_prime_dot)
-    _kkt[7, 8] = -_baumgarte_beta**2*(L*theta + R*(phi - phi_prime)) - _c7*(L*theta_dot + R*phi_dot - R*phi_prime_dot)
+    _kkt[7, 4] = _c6
+    _kkt[5, 8] = _c11*_c4 - _c10*(2.0*X_dot - _c1*_c8 - _c1*_c9)
+    _kkt[6, 8] = _c11*_c2 - _c10*(2.0*Y_dot + _c3*_c8 + _c3*_c9)
+    _kkt[7, 8] = -_c10*(_c8 - _c9 + L*theta_dot) - _baumgarte_beta**2*(L*theta + R*(phi - phi_prime))
     _status = _kkt_solve(_kkt, 5)
     if _status:
         return _status
@@ -185,7 +193,7 @@ def constraint_residuals(t, y, p, out):
     out[0] = L*theta + R*(phi - phi_prime)
     out[1] = 2.0*X_dot - _c0*_c1 - _c0*_c2
     out[2] = 2.0*Y_dot + _c1*_c3 + _c2*_c3
-    out[3] = L*theta_dot + _c1 - _c2
+    out[3] = _c1 - _c2 + L*theta_dot
 
 
 @njit(cache=True, error_model="numpy")
@@ -236,7 +244,7 @@ def mass_matrix(t, y, p, out):
     out[1, 4] = 0.0
     out[2, 0] = 0.0
     out[2, 1] = 0.0
-    out[2, 2] = 2.0*I1 + (0.5)*L**2*m
+    out[2, 2] = 2.0*I1 + (0.5)*m*L**2
     out[2, 3] = 0.0
     out[2, 4] = 0.0
     out[3, 0] = 0.0
@@ -279,7 +287,7 @@ def energy(t, y, p):
     I3 = p[4]
     g = p[5]
     alpha = p[6]
-    return (0.5)*I3*(phi_dot**2 + phi_prime_dot**2) - 2.0*Y*g*m*math.sin(alpha) + m*(X_dot**2 + Y_dot**2) + theta_dot**2*(I1 + (0.25)*L**2*m)
+    return m*(X_dot**2 + Y_dot**2) + theta_dot**2*(I1 + (0.25)*m*L**2) + (0.5)*I3*(phi_dot**2 + phi_prime_dot**2) - 2.0*Y*g*m*math.sin(alpha)
 
 
 @njit(cache=True, error_model="numpy")
@@ -297,9 +305,7 @@ def energy_function(t, y, p):
     I3 = p[4]
     g = p[5]
     alpha = p[6]
-    _c0 = theta_dot**2
-    _c1 = (0.5)*I3
-    return I1*_c0 + (0.25)*L**2*_c0*m + X_dot**2*m - 2.0*Y*g*m*math.sin(alpha) + Y_dot**2*m + _c1*phi_dot**2 + _c1*phi_prime_dot**2
+    return m*(X_dot**2 + Y_dot**2) + theta_dot**2*(I1 + (0.25)*m*L**2) + (0.5)*I3*(phi_dot**2 + phi_prime_dot**2) - 2.0*Y*g*m*math.sin(alpha)
 
 
 @njit(cache=True, error_model="numpy")
@@ -317,7 +323,7 @@ def momenta(t, y, p, out):
     _c0 = 2.0*m
     out[0] = X_dot*_c0
     out[1] = Y_dot*_c0
-    out[2] = theta_dot*(2.0*I1 + (0.5)*L**2*m)
+    out[2] = theta_dot*(2.0*I1 + (0.5)*m*L**2)
     out[3] = I3*phi_dot
     out[4] = I3*phi_prime_dot
 

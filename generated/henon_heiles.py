@@ -33,8 +33,8 @@ def rhs(t, y, p, out):
     _m0_0 = 1.0
     _m1_0 = 0.0
     _m1_1 = 1.0
-    _f0 = -x*(2.0*lam*y_ + 1.0)
-    _f1 = -lam*x**2 + lam*y_**2 - y_
+    _f0 = x*(-1.0 - 2.0*lam*y_)
+    _f1 = -y_ + lam*y_**2 - lam*x**2
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -67,8 +67,8 @@ def rhs_lanes(T, Y, P, out, bad):
         _m0_0 = 1.0
         _m1_0 = 0.0
         _m1_1 = 1.0
-        _f0 = -x*(2.0*lam*y_ + 1.0)
-        _f1 = -lam*x**2 + lam*y_**2 - y_
+        _f0 = x*(-1.0 - 2.0*lam*y_)
+        _f1 = -y_ + lam*y_**2 - lam*x**2
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -99,8 +99,8 @@ def forcing(t, y, p, out):
     x = y[0]
     y_ = y[1]
     lam = p[0]
-    out[0] = -x*(2.0*lam*y_ + 1.0)
-    out[1] = -lam*x**2 + lam*y_**2 - y_
+    out[0] = x*(-1.0 - 2.0*lam*y_)
+    out[1] = -y_ + lam*y_**2 - lam*x**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -112,7 +112,7 @@ def energy(t, y, p):
     y_dot = y[3]
     lam = p[0]
     _c0 = x**2
-    return (0.5)*_c0 + lam*(_c0*y_ - 0.3333333333333333*y_**3) + (0.5)*x_dot**2 + (0.5)*y_**2 + (0.5)*y_dot**2
+    return (0.5)*_c0 + (0.5)*x_dot**2 + (0.5)*y_**2 + (0.5)*y_dot**2 + lam*(-0.3333333333333333*y_**3 + _c0*y_)
 
 
 @njit(cache=True, error_model="numpy")
@@ -124,7 +124,7 @@ def energy_function(t, y, p):
     y_dot = y[3]
     lam = p[0]
     _c0 = x**2
-    return (0.5)*_c0 + lam*(_c0*y_ - 0.3333333333333333*y_**3) + (0.5)*x_dot**2 + (0.5)*y_**2 + (0.5)*y_dot**2
+    return (0.5)*_c0 + (0.5)*x_dot**2 + (0.5)*y_**2 + (0.5)*y_dot**2 + lam*(-0.3333333333333333*y_**3 + _c0*y_)
 
 
 @njit(cache=True, error_model="numpy")
@@ -142,8 +142,8 @@ def momentum_rate(t, y, p, out):
     x = y[0]
     y_ = y[1]
     lam = p[0]
-    out[0] = -x*(2.0*lam*y_ + 1.0)
-    out[1] = -lam*x**2 + lam*y_**2 - y_
+    out[0] = x*(-1.0 - 2.0*lam*y_)
+    out[1] = -y_ + lam*y_**2 - lam*x**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -165,10 +165,10 @@ def rest_partials(t, y, p, out):
     _c0 = 2.0*lam
     _c1 = _c0*y_
     _c2 = -_c0*x
-    out[0, 0, 0] = -_c1 - 1.0
+    out[0, 0, 0] = -1.0 - _c1
     out[0, 0, 1] = _c2
     out[0, 1, 0] = _c2
-    out[0, 1, 1] = _c1 - 1.0
+    out[0, 1, 1] = -1.0 + _c1
     out[1, 0, 0] = 0.0
     out[1, 0, 1] = 0.0
     out[1, 1, 0] = 0.0
@@ -222,10 +222,10 @@ def canonical_partials(t, y, p, out):
     out[1, 0, 1] = 0.0
     out[1, 1, 0] = 0.0
     out[1, 1, 1] = 0.0
-    out[2, 0, 0] = -_c1 - 1.0
+    out[2, 0, 0] = -1.0 - _c1
     out[2, 0, 1] = _c2
     out[2, 1, 0] = _c2
-    out[2, 1, 1] = _c1 - 1.0
+    out[2, 1, 1] = -1.0 + _c1
     out[3, 0, 0] = 0.0
     out[3, 0, 1] = 0.0
     out[3, 1, 0] = 0.0
@@ -2807,16 +2807,16 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(4):
         X[i, 0] = y[i]
     for k in range(order):
-        # _f0 = -x*(2.0*lam*y_ + 1.0)
+        # _f0 = x*(-1.0 - 2.0*lam*y_)
         _u1[k] = _k0*y_[k]
-        _u2[k] = _u1[k] + 1.0 if k == 0 else _u1[k]
-        # _u3 = x*_u2
+        _u2[k] = -_u1[k]
+        _u3[k] = _u2[k] + -1.0 if k == 0 else _u2[k]
+        # _f0 = x*_u3
         _s = 0.0
         for _j in range(k + 1):
-            _s += x[_j]*_u2[k - _j]
-        _u3[k] = _s
-        _f0[k] = -_u3[k]
-        # _f1 = -lam*x**2 + lam*y_**2 - y_
+            _s += x[_j]*_u3[k - _j]
+        _f0[k] = _s
+        # _f1 = -y_ + lam*y_**2 - lam*x**2
         # _u5 = y_**2
         _s = y_[k//2]*y_[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):

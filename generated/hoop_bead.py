@@ -29,11 +29,13 @@ def rhs(t, y, p, out):
     g = p[2]
     Omega = p[3]
     epsilon = p[4]
-    _c0 = R**2*m
+    _c0 = m*R**2
     _c1 = math.sin(theta)
+    _c2 = math.cos(2.0*t)
+    _c3 = 4.0*_c0
     out[0] = theta_dot
     _m0_0 = _c0
-    _f0 = R*_c1*g*m + _c0*_c1*(Omega + 2.0*epsilon*math.cos(2.0*t))**2*math.cos(theta)
+    _f0 = _c1*(_c0*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon)*math.cos(theta) + R*_c1*g*m
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -57,11 +59,13 @@ def rhs_lanes(T, Y, P, out, bad):
         g = P[2, _l]
         Omega = P[3, _l]
         epsilon = P[4, _l]
-        _c0 = R**2*m
+        _c0 = m*R**2
         _c1 = _vsin(theta)
+        _c2 = _vcos(2.0*t)
+        _c3 = 4.0*_c0
         out[0, _l] = theta_dot
         _m0_0 = _c0
-        _f0 = R*_c1*g*m + _c0*_c1*(Omega + 2.0*epsilon*_vcos(2.0*t))**2*_vcos(theta)
+        _f0 = _c1*(_c0*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon)*_vcos(theta) + R*_c1*g*m
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -76,7 +80,7 @@ def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     m = p[0]
     R = p[1]
-    out[0, 0] = R**2*m
+    out[0, 0] = m*R**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -88,8 +92,11 @@ def forcing(t, y, p, out):
     g = p[2]
     Omega = p[3]
     epsilon = p[4]
-    _c0 = m*math.sin(theta)
-    out[0] = R**2*_c0*(Omega + 2.0*epsilon*math.cos(2.0*t))**2*math.cos(theta) + R*_c0*g
+    _c0 = math.sin(theta)
+    _c1 = m*R**2
+    _c2 = math.cos(2.0*t)
+    _c3 = 4.0*_c1
+    out[0] = _c0*(_c1*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon)*math.cos(theta) + R*_c0*g*m
 
 
 @njit(cache=True, error_model="numpy")
@@ -102,7 +109,7 @@ def energy(t, y, p):
     g = p[2]
     Omega = p[3]
     epsilon = p[4]
-    return (0.5)*R**2*m*(theta_dot**2 + (Omega + 2.0*epsilon*math.cos(2.0*t))**2*math.sin(theta)**2) + R*g*m*math.cos(theta)
+    return (0.5)*m*R**2*(theta_dot**2 + (Omega + 2.0*epsilon*math.cos(2.0*t))**2*math.sin(theta)**2) + R*g*m*math.cos(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -115,9 +122,12 @@ def energy_function(t, y, p):
     g = p[2]
     Omega = p[3]
     epsilon = p[4]
-    _c0 = theta_dot**2
-    _c1 = R**2*m
-    return R*g*m*math.cos(theta) + _c0*_c1 - 0.5*_c1*(_c0 + (Omega + 2.0*epsilon*math.cos(2.0*t))**2*math.sin(theta)**2)
+    _c0 = m*R**2
+    _c1 = (0.5)*_c0
+    _c2 = math.sin(theta)**2
+    _c3 = math.cos(2.0*t)
+    _c4 = 2.0*_c0*_c2
+    return _c1*theta_dot**2 - _c1*_c2*Omega**2 - _c4*_c3**2*epsilon**2 + R*g*m*math.cos(theta) - Omega*_c3*_c4*epsilon
 
 
 @njit(cache=True, error_model="numpy")
@@ -126,7 +136,7 @@ def momenta(t, y, p, out):
     theta_dot = y[1]
     m = p[0]
     R = p[1]
-    out[0] = R**2*m*theta_dot
+    out[0] = m*theta_dot*R**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -138,8 +148,11 @@ def momentum_rate(t, y, p, out):
     g = p[2]
     Omega = p[3]
     epsilon = p[4]
-    _c0 = m*math.sin(theta)
-    out[0] = R**2*_c0*(Omega + 2.0*epsilon*math.cos(2.0*t))**2*math.cos(theta) + R*_c0*g
+    _c0 = math.sin(theta)
+    _c1 = m*R**2
+    _c2 = math.cos(2.0*t)
+    _c3 = 4.0*_c1
+    out[0] = _c0*(_c1*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon)*math.cos(theta) + R*_c0*g*m
 
 
 @njit(cache=True, error_model="numpy")
@@ -158,8 +171,11 @@ def rest_partials(t, y, p, out):
     Omega = p[3]
     epsilon = p[4]
     _c0 = math.cos(theta)
-    _c1 = R**2*m*(Omega + 2.0*epsilon*math.cos(2.0*t))**2
-    out[0, 0, 0] = R*_c0*g*m + _c0**2*_c1 - _c1*math.sin(theta)**2
+    _c1 = m*R**2
+    _c2 = math.cos(2.0*t)
+    _c3 = 4.0*_c1
+    _c4 = _c1*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon
+    out[0, 0, 0] = _c4*_c0**2 - _c4*math.sin(theta)**2 + R*_c0*g*m
     out[1, 0, 0] = 0.0
 
 
@@ -170,7 +186,7 @@ def velocities(t, y, p, out):
     m = p[0]
     R = p[1]
     _p_theta = y[1]
-    _m0_0 = R**2*m
+    _m0_0 = m*R**2
     _f0 = _p_theta
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
@@ -193,12 +209,14 @@ def canonical_partials(t, y, p, out):
     g = p[2]
     Omega = p[3]
     epsilon = p[4]
-    _c0 = R**2*m
+    _c0 = m*R**2
     _c1 = math.cos(theta)
-    _c2 = _c0*(Omega + 2.0*epsilon*math.cos(2.0*t))**2
+    _c2 = math.cos(2.0*t)
+    _c3 = 4.0*_c0
+    _c4 = _c0*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon
     out[0, 0, 0] = _c0
     out[1, 0, 0] = 0.0
-    out[2, 0, 0] = R*_c1*g*m + _c1**2*_c2 - _c2*math.sin(theta)**2
+    out[2, 0, 0] = _c4*_c1**2 - _c4*math.sin(theta)**2 + R*_c1*g*m
     out[3, 0, 0] = 0.0
 
 
@@ -2501,28 +2519,32 @@ def taylor_coefficients(t, y, p, X, W):
     g = p[2]
     Omega = p[3]
     epsilon = p[4]
-    _c0 = R**2*m
+    _c0 = m*R**2
+    _c3 = 4.0*_c0
     _m0_0 = _c0
-    _k2 = R*g*m
-    _k4 = 2.0*epsilon
+    _k5 = _c3*epsilon**2
+    _k8 = Omega*_c3*epsilon
+    _k11 = _c0*Omega**2
+    _k15 = R*g*m
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
-    _k15 = 1.0/_m0_0
+    _k18 = 1.0/_m0_0
     _t = W[0]
     _c1 = W[1]
     _u1 = W[2]
-    _u3 = W[3]
-    _u5 = W[4]
-    _u6 = W[5]
-    _u7 = W[6]
-    _u8 = W[7]
+    _u2 = W[3]
+    _u3 = W[4]
+    _c2 = W[5]
+    _u6 = W[6]
+    _u7 = W[7]
     _u9 = W[8]
     _u10 = W[9]
-    _u11 = W[10]
-    _u12 = W[11]
-    _u13 = W[12]
-    _f0 = W[13]
-    _x0 = W[14]
+    _u12 = W[10]
+    _u13 = W[11]
+    _u14 = W[12]
+    _u16 = W[13]
+    _f0 = W[14]
+    _x0 = W[15]
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order + 1):
@@ -2545,51 +2567,53 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_c1[k - _j]
             _c1[k] = _s/k
             _u1[k] = -_c/k
-        # _f0 = R*_c1*g*m + _c0*_c1*(Omega + 2.0*epsilon*math.cos(2.0*t))**2*math.cos(theta)
-        _u3[k] = _k2*_c1[k]
-        _u5[k] = 2.0*_t[k]
-        # _u6, _u7 = sin(_u5), cos(_u5)
+        # _c2 = math.cos(2.0*t)
+        _u2[k] = 2.0*_t[k]
+        # _u3, _c2 = sin(_u2), cos(_u2)
         if k == 0:
-            _u6[0] = math.sin(_u5[0])
-            _u7[0] = math.cos(_u5[0])
+            _u3[0] = math.sin(_u2[0])
+            _c2[0] = math.cos(_u2[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
-                _ja = _j*_u5[_j]
-                _s += _ja*_u7[k - _j]
-                _c += _ja*_u6[k - _j]
-            _u6[k] = _s/k
-            _u7[k] = -_c/k
-        _u8[k] = _k4*_u7[k]
-        _u9[k] = _u8[k] + Omega if k == 0 else _u8[k]
-        # _u10 = _u9**2
-        _s = _u9[k//2]*_u9[k//2] if k % 2 == 0 else 0.0
+                _ja = _j*_u2[_j]
+                _s += _ja*_c2[k - _j]
+                _c += _ja*_u3[k - _j]
+            _u3[k] = _s/k
+            _c2[k] = -_c/k
+        # _f0 = _c1*(_c0*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon)*math.cos(theta) + R*_c1*g*m
+        # _u6 = _c2**2
+        _s = _c2[k//2]*_c2[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
-            _s += 2.0*_u9[_j]*_u9[k - _j]
-        _u10[k] = _s
-        # _u11 = _c1*_u10
+            _s += 2.0*_c2[_j]*_c2[k - _j]
+        _u6[k] = _s
+        _u7[k] = _k5*_u6[k]
+        _u9[k] = _k8*_c2[k]
+        _u10[k] = _u7[k] + _u9[k]
+        _u12[k] = _u10[k] + _k11 if k == 0 else _u10[k]
+        # _u13 = _c1*_u12
         _s = 0.0
         for _j in range(k + 1):
-            _s += _c1[_j]*_u10[k - _j]
-        _u11[k] = _s
-        # _u12 = _u11*_u1
+            _s += _c1[_j]*_u12[k - _j]
+        _u13[k] = _s
+        # _u14 = _u13*_u1
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u11[_j]*_u1[k - _j]
-        _u12[k] = _s
-        _u13[k] = _c0*_u12[k]
-        _f0[k] = _u3[k] + _u13[k]
+            _s += _u13[_j]*_u1[k - _j]
+        _u14[k] = _s
+        _u16[k] = _k15*_c1[k]
+        _f0[k] = _u14[k] + _u16[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _x0[k] = _k15*_f0[k]
+        _x0[k] = _k18*_f0[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta_dot[k]/(k + 1)
         X[1, k + 1] = _x0[k]/(k + 1)
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (14 series operations per order).
-TAYLOR_WORK = 15
+#: Rows of the work array of `taylor_coefficients` (15 series operations per order).
+TAYLOR_WORK = 16
 
 
 # ----------------------------------------------------------------------------

@@ -34,9 +34,9 @@ def rhs(t, y, p, out):
     _baumgarte_alpha = p[5]
     _baumgarte_beta = p[6]
     _kkt = np.zeros((3, 4))
-    _c0 = R**2*m
+    _c0 = m*R**2
     _c1 = math.sin(theta)
-    _c2 = math.cos(theta)
+    _c2 = _c0*_c1*math.cos(theta)
     _c3 = 2.0*t
     _c4 = epsilon*math.sin(_c3)
     out[0] = theta_dot
@@ -44,10 +44,10 @@ def rhs(t, y, p, out):
     _kkt[0, 0] = _c0
     _kkt[1, 1] = _c0*_c1**2
     _kkt[1, 2] = -1.0
-    _kkt[0, 3] = R*_c1*m*(R*_c2*phi_dot**2 + g)
-    _kkt[1, 3] = -2.0*_c0*_c1*_c2*phi_dot*theta_dot
+    _kkt[0, 3] = _c2*phi_dot**2 + R*_c1*g*m
+    _kkt[1, 3] = -2.0*_c2*phi_dot*theta_dot
     _kkt[2, 1] = 1.0
-    _kkt[2, 3] = -2.0*_baumgarte_alpha*(-Omega - 2.0*epsilon*math.cos(_c3) + phi_dot) - _baumgarte_beta**2*(-Omega*t - _c4 + phi) - 4.0*_c4
+    _kkt[2, 3] = -4.0*_c4 - _baumgarte_beta**2*(phi - _c4 - Omega*t) - 2.0*_baumgarte_alpha*(phi_dot - Omega - 2.0*epsilon*math.cos(_c3))
     _status = _kkt_solve(_kkt, 2)
     if _status:
         return _status
@@ -72,18 +72,18 @@ def reactions(t, y, p, out):
     _baumgarte_alpha = p[5]
     _baumgarte_beta = p[6]
     _kkt = np.zeros((3, 4))
-    _c0 = R**2*m
+    _c0 = m*R**2
     _c1 = math.sin(theta)
-    _c2 = math.cos(theta)
+    _c2 = _c0*_c1*math.cos(theta)
     _c3 = 2.0*t
     _c4 = epsilon*math.sin(_c3)
     _kkt[0, 0] = _c0
     _kkt[1, 1] = _c0*_c1**2
     _kkt[1, 2] = -1.0
-    _kkt[0, 3] = R*_c1*m*(R*_c2*phi_dot**2 + g)
-    _kkt[1, 3] = -2.0*_c0*_c1*_c2*phi_dot*theta_dot
+    _kkt[0, 3] = _c2*phi_dot**2 + R*_c1*g*m
+    _kkt[1, 3] = -2.0*_c2*phi_dot*theta_dot
     _kkt[2, 1] = 1.0
-    _kkt[2, 3] = -2.0*_baumgarte_alpha*(-Omega - 2.0*epsilon*math.cos(_c3) + phi_dot) - _baumgarte_beta**2*(-Omega*t - _c4 + phi) - 4.0*_c4
+    _kkt[2, 3] = -4.0*_c4 - _baumgarte_beta**2*(phi - _c4 - Omega*t) - 2.0*_baumgarte_alpha*(phi_dot - Omega - 2.0*epsilon*math.cos(_c3))
     _status = _kkt_solve(_kkt, 2)
     if _status:
         return _status
@@ -99,8 +99,8 @@ def constraint_residuals(t, y, p, out):
     Omega = p[3]
     epsilon = p[4]
     _c0 = 2.0*t
-    out[0] = -Omega*t - epsilon*math.sin(_c0) + phi
-    out[1] = -Omega - 2.0*epsilon*math.cos(_c0) + phi_dot
+    out[0] = phi - Omega*t - epsilon*math.sin(_c0)
+    out[1] = phi_dot - Omega - 2.0*epsilon*math.cos(_c0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -119,7 +119,7 @@ def mass_matrix(t, y, p, out):
     theta = y[0]
     m = p[0]
     R = p[1]
-    _c0 = R**2*m
+    _c0 = m*R**2
     out[0, 0] = _c0
     out[0, 1] = 0.0
     out[1, 0] = 0.0
@@ -135,10 +135,10 @@ def forcing(t, y, p, out):
     m = p[0]
     R = p[1]
     g = p[2]
-    _c0 = math.cos(theta)
-    _c1 = m*math.sin(theta)
-    out[0] = R*_c1*(R*_c0*phi_dot**2 + g)
-    out[1] = -2.0*R**2*_c0*_c1*phi_dot*theta_dot
+    _c0 = m*math.sin(theta)
+    _c1 = _c0*R**2*math.cos(theta)
+    out[0] = _c1*phi_dot**2 + R*_c0*g
+    out[1] = -2.0*_c1*phi_dot*theta_dot
 
 
 @njit(cache=True, error_model="numpy")
@@ -150,7 +150,7 @@ def energy(t, y, p):
     m = p[0]
     R = p[1]
     g = p[2]
-    return (0.5)*R**2*m*(phi_dot**2*math.sin(theta)**2 + theta_dot**2) + R*g*m*math.cos(theta)
+    return (0.5)*m*R**2*(theta_dot**2 + phi_dot**2*math.sin(theta)**2) + R*g*m*math.cos(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -162,10 +162,7 @@ def energy_function(t, y, p):
     m = p[0]
     R = p[1]
     g = p[2]
-    _c0 = math.cos(theta)
-    _c1 = (0.5)*R
-    _c2 = _c1*phi_dot**2
-    return R*m*(-_c0**2*_c2 + _c0*g + _c1*theta_dot**2 + _c2)
+    return (0.5)*m*R**2*(theta_dot**2 + phi_dot**2*math.sin(theta)**2) + R*g*m*math.cos(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -176,7 +173,7 @@ def momenta(t, y, p, out):
     phi_dot = y[3]
     m = p[0]
     R = p[1]
-    _c0 = R**2*m
+    _c0 = m*R**2
     out[0] = _c0*theta_dot
     out[1] = _c0*phi_dot*math.sin(theta)**2
 
@@ -189,7 +186,8 @@ def momentum_rate(t, y, p, out):
     m = p[0]
     R = p[1]
     g = p[2]
-    out[0] = R*m*(R*phi_dot**2*math.cos(theta) + g)*math.sin(theta)
+    _c0 = m*math.sin(theta)
+    out[0] = R*_c0*g + _c0*R**2*phi_dot**2*math.cos(theta)
     out[1] = 0.0
 
 

@@ -29,9 +29,10 @@ def rhs(t, y, p, out):
     g = p[2]
     _c0 = (0.5)*theta
     _c1 = math.cos(_c0)
+    _c2 = m*R**2
     out[0] = theta_dot
-    _m0_0 = 4.0*R**2*_c1**2*m
-    _f0 = R*m*(2.0*R*_c1*theta_dot**2*math.sin(_c0) - g*math.sin(theta))
+    _m0_0 = 4.0*_c2*_c1**2
+    _f0 = -R*g*m*math.sin(theta) + 2.0*_c1*_c2*theta_dot**2*math.sin(_c0)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -54,9 +55,10 @@ def rhs_lanes(T, Y, P, out, bad):
         g = P[2, _l]
         _c0 = (0.5)*theta
         _c1 = _vcos(_c0)
+        _c2 = m*R**2
         out[0, _l] = theta_dot
-        _m0_0 = 4.0*R**2*_c1**2*m
-        _f0 = R*m*(2.0*R*_c1*theta_dot**2*_vsin(_c0) - g*_vsin(theta))
+        _m0_0 = 4.0*_c2*_c1**2
+        _f0 = -R*g*m*_vsin(theta) + 2.0*_c1*_c2*theta_dot**2*_vsin(_c0)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -72,7 +74,7 @@ def mass_matrix(t, y, p, out):
     theta = y[0]
     m = p[0]
     R = p[1]
-    out[0, 0] = 4.0*R**2*m*math.cos((0.5)*theta)**2
+    out[0, 0] = 4.0*m*R**2*math.cos((0.5)*theta)**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -84,7 +86,7 @@ def forcing(t, y, p, out):
     R = p[1]
     g = p[2]
     _c0 = (0.5)*theta
-    out[0] = R*m*(2.0*R*theta_dot**2*math.sin(_c0)*math.cos(_c0) - g*math.sin(theta))
+    out[0] = -R*g*m*math.sin(theta) + 2.0*m*R**2*theta_dot**2*math.cos(_c0)*math.sin(_c0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -95,7 +97,7 @@ def energy(t, y, p):
     m = p[0]
     R = p[1]
     g = p[2]
-    return R*m*(2.0*R*theta_dot**2*math.cos((0.5)*theta)**2 - g*math.cos(theta) + g)
+    return R*g*m*(1.0 - math.cos(theta)) + 2.0*m*R**2*theta_dot**2*math.cos((0.5)*theta)**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -106,7 +108,7 @@ def energy_function(t, y, p):
     m = p[0]
     R = p[1]
     g = p[2]
-    return R*m*(2.0*R*theta_dot**2*math.cos((0.5)*theta)**2 - g*math.cos(theta) + g)
+    return R*g*m*(1.0 - math.cos(theta)) + 2.0*m*R**2*theta_dot**2*math.cos((0.5)*theta)**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -116,7 +118,7 @@ def momenta(t, y, p, out):
     theta_dot = y[1]
     m = p[0]
     R = p[1]
-    out[0] = 4.0*R**2*m*theta_dot*math.cos((0.5)*theta)**2
+    out[0] = 4.0*m*theta_dot*R**2*math.cos((0.5)*theta)**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -128,7 +130,7 @@ def momentum_rate(t, y, p, out):
     R = p[1]
     g = p[2]
     _c0 = (0.5)*theta
-    out[0] = -R*m*(2.0*R*theta_dot**2*math.sin(_c0)*math.cos(_c0) + g*math.sin(theta))
+    out[0] = -R*g*m*math.sin(theta) - 2.0*m*R**2*theta_dot**2*math.cos(_c0)*math.sin(_c0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -156,7 +158,7 @@ def velocities(t, y, p, out):
     m = p[0]
     R = p[1]
     _p_theta = y[1]
-    _m0_0 = 4.0*R**2*m*math.cos((0.5)*theta)**2
+    _m0_0 = 4.0*m*R**2*math.cos((0.5)*theta)**2
     _f0 = _p_theta
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
@@ -181,14 +183,15 @@ def canonical_partials(t, y, p, out):
     _c0 = (0.5)*theta
     _c1 = math.cos(_c0)
     _c2 = _c1**2
-    _c3 = 4.0*R**2*m
-    _c4 = math.sin(_c0)
-    _c5 = -_c1*_c3*_c4*theta_dot
-    _c6 = R*theta_dot**2
-    out[0, 0, 0] = _c2*_c3
-    out[1, 0, 0] = _c5
-    out[2, 0, 0] = -R*m*(_c2*_c6 - _c4**2*_c6 + g*math.cos(theta))
-    out[3, 0, 0] = _c5
+    _c3 = m*R**2
+    _c4 = 4.0*_c3
+    _c5 = math.sin(_c0)
+    _c6 = -_c1*_c4*_c5*theta_dot
+    _c7 = _c3*theta_dot**2
+    out[0, 0, 0] = _c2*_c4
+    out[1, 0, 0] = _c6
+    out[2, 0, 0] = _c7*_c5**2 - _c2*_c7 - R*g*m*math.cos(theta)
+    out[3, 0, 0] = _c6
 
 
 @njit(cache=True, error_model="numpy")
@@ -2488,9 +2491,10 @@ def taylor_coefficients(t, y, p, X, W):
     m = p[0]
     R = p[1]
     g = p[2]
-    _k3 = 4.0*R**2*m
-    _k6 = R*m
-    _k10 = 2.0*R
+    _c2 = m*R**2
+    _k3 = 4.0*_c2
+    _k6 = R*g*m
+    _k10 = 2.0*_c2
     _c0 = W[0]
     _u1 = W[1]
     _c1 = W[2]
@@ -2503,9 +2507,8 @@ def taylor_coefficients(t, y, p, X, W):
     _u12 = W[9]
     _u13 = W[10]
     _u14 = W[11]
-    _u15 = W[12]
-    _f0 = W[13]
-    _x0 = W[14]
+    _f0 = W[12]
+    _x0 = W[13]
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
@@ -2525,14 +2528,14 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u1[k - _j]
             _u1[k] = _s/k
             _c1[k] = -_c/k
-        # _m0_0 = 4.0*R**2*_c1**2*m
+        # _m0_0 = 4.0*_c2*_c1**2
         # _u4 = _c1**2
         _s = _c1[k//2]*_c1[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_c1[_j]*_c1[k - _j]
         _u4[k] = _s
         _m0_0[k] = _k3*_u4[k]
-        # _f0 = R*m*(2.0*R*_c1*theta_dot**2*math.sin(_c0) - g*math.sin(theta))
+        # _f0 = -R*g*m*math.sin(theta) + 2.0*_c1*_c2*theta_dot**2*math.sin(_c0)
         # _u7, _u8 = sin(theta), cos(theta)
         if k == 0:
             _u7[0] = math.sin(theta[0])
@@ -2546,7 +2549,7 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u7[k - _j]
             _u7[k] = _s/k
             _u8[k] = -_c/k
-        _u9[k] = g*_u7[k]
+        _u9[k] = _k6*_u7[k]
         # _u11 = theta_dot**2
         _s = theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
@@ -2563,8 +2566,7 @@ def taylor_coefficients(t, y, p, X, W):
             _s += _u12[_j]*_u1[k - _j]
         _u13[k] = _s
         _u14[k] = _k10*_u13[k]
-        _u15[k] = _u14[k] - _u9[k]
-        _f0[k] = _k6*_u15[k]
+        _f0[k] = _u14[k] - _u9[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
             return 1
@@ -2579,8 +2581,8 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (16 series operations per order).
-TAYLOR_WORK = 15
+#: Rows of the work array of `taylor_coefficients` (15 series operations per order).
+TAYLOR_WORK = 14
 
 
 # ----------------------------------------------------------------------------

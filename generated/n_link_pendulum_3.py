@@ -36,32 +36,34 @@ def rhs(t, y, p, out):
     l3 = p[5]
     g = p[6]
     _c0 = m2 + m3
-    _c1 = theta1 - theta2
-    _c2 = -theta3
-    _c3 = _c2 + theta1
-    _c4 = l3*m3
-    _c5 = _c2 + theta2
-    _c6 = g*math.sin(theta1)
-    _c7 = math.sin(_c1)
-    _c8 = l2*theta2_dot**2
-    _c9 = _c7*_c8
-    _c10 = math.sin(_c3)
-    _c11 = _c4*theta3_dot**2
-    _c12 = g*math.sin(theta2)
-    _c13 = math.sin(_c5)
-    _c14 = theta1_dot**2
+    _c1 = _c0 + m1
+    _c2 = -theta1
+    _c3 = _c2 + theta2
+    _c4 = _c0*l2
+    _c5 = _c4*l1
+    _c6 = _c2 + theta3
+    _c7 = l3*m3
+    _c8 = _c7*l1
+    _c9 = theta2 - theta3
+    _c10 = _c7*l2
+    _c11 = theta2_dot**2
+    _c12 = _c5*math.sin(_c3)
+    _c13 = theta3_dot**2
+    _c14 = _c8*math.sin(_c6)
+    _c15 = theta1_dot**2
+    _c16 = _c10*math.sin(_c9)
     out[0] = theta1_dot
     out[1] = theta2_dot
     out[2] = theta3_dot
-    _m0_0 = l1**2*(_c0 + m1)
-    _m1_0 = _c0*l1*l2*math.cos(_c1)
+    _m0_0 = _c1*l1**2
+    _m1_0 = _c5*math.cos(_c3)
     _m1_1 = _c0*l2**2
-    _m2_0 = _c4*l1*math.cos(_c3)
-    _m2_1 = _c4*l2*math.cos(_c5)
-    _m2_2 = l3**2*m3
-    _f0 = -l1*(_c10*_c11 + _c6*m1 + _c6*m2 + _c6*m3 + _c9*m2 + _c9*m3)
-    _f1 = l2*(-_c11*_c13 - _c12*m2 - _c12*m3 + _c14*_c7*l1*m2 + _c14*_c7*l1*m3)
-    _f2 = _c4*(_c10*_c14*l1 + _c13*_c8 - g*math.sin(theta3))
+    _m2_0 = _c8*math.cos(_c6)
+    _m2_1 = _c10*math.cos(_c9)
+    _m2_2 = m3*l3**2
+    _f0 = _c11*_c12 + _c13*_c14 - _c1*g*l1*math.sin(theta1)
+    _f1 = -_c12*_c15 - _c13*_c16 - _c4*g*math.sin(theta2)
+    _f2 = _c11*_c16 - _c14*_c15 - _c7*g*math.sin(theta3)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -106,32 +108,34 @@ def rhs_lanes(T, Y, P, out, bad):
         l3 = P[5, _l]
         g = P[6, _l]
         _c0 = m2 + m3
-        _c1 = theta1 - theta2
-        _c2 = -theta3
-        _c3 = _c2 + theta1
-        _c4 = l3*m3
-        _c5 = _c2 + theta2
-        _c6 = g*_vsin(theta1)
-        _c7 = _vsin(_c1)
-        _c8 = l2*theta2_dot**2
-        _c9 = _c7*_c8
-        _c10 = _vsin(_c3)
-        _c11 = _c4*theta3_dot**2
-        _c12 = g*_vsin(theta2)
-        _c13 = _vsin(_c5)
-        _c14 = theta1_dot**2
+        _c1 = _c0 + m1
+        _c2 = -theta1
+        _c3 = _c2 + theta2
+        _c4 = _c0*l2
+        _c5 = _c4*l1
+        _c6 = _c2 + theta3
+        _c7 = l3*m3
+        _c8 = _c7*l1
+        _c9 = theta2 - theta3
+        _c10 = _c7*l2
+        _c11 = theta2_dot**2
+        _c12 = _c5*_vsin(_c3)
+        _c13 = theta3_dot**2
+        _c14 = _c8*_vsin(_c6)
+        _c15 = theta1_dot**2
+        _c16 = _c10*_vsin(_c9)
         out[0, _l] = theta1_dot
         out[1, _l] = theta2_dot
         out[2, _l] = theta3_dot
-        _m0_0 = l1**2*(_c0 + m1)
-        _m1_0 = _c0*l1*l2*_vcos(_c1)
+        _m0_0 = _c1*l1**2
+        _m1_0 = _c5*_vcos(_c3)
         _m1_1 = _c0*l2**2
-        _m2_0 = _c4*l1*_vcos(_c3)
-        _m2_1 = _c4*l2*_vcos(_c5)
-        _m2_2 = l3**2*m3
-        _f0 = -l1*(_c10*_c11 + _c6*m1 + _c6*m2 + _c6*m3 + _c9*m2 + _c9*m3)
-        _f1 = l2*(-_c11*_c13 - _c12*m2 - _c12*m3 + _c14*_c7*l1*m2 + _c14*_c7*l1*m3)
-        _f2 = _c4*(_c10*_c14*l1 + _c13*_c8 - g*_vsin(theta3))
+        _m2_0 = _c8*_vcos(_c6)
+        _m2_1 = _c10*_vcos(_c9)
+        _m2_2 = m3*l3**2
+        _f0 = _c11*_c12 + _c13*_c14 - _c1*g*l1*_vsin(theta1)
+        _f1 = -_c12*_c15 - _c13*_c16 - _c4*g*_vsin(theta2)
+        _f2 = _c11*_c16 - _c14*_c15 - _c7*g*_vsin(theta3)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -167,20 +171,20 @@ def mass_matrix(t, y, p, out):
     l2 = p[4]
     l3 = p[5]
     _c0 = m2 + m3
-    _c1 = _c0*l1*l2*math.cos(theta1 - theta2)
-    _c2 = -theta3
+    _c1 = -theta1
+    _c2 = _c0*l1*l2*math.cos(_c1 + theta2)
     _c3 = l3*m3
-    _c4 = _c3*l1*math.cos(_c2 + theta1)
-    _c5 = _c3*l2*math.cos(_c2 + theta2)
+    _c4 = _c3*l1*math.cos(_c1 + theta3)
+    _c5 = _c3*l2*math.cos(theta2 - theta3)
     out[0, 0] = l1**2*(_c0 + m1)
-    out[0, 1] = _c1
+    out[0, 1] = _c2
     out[0, 2] = _c4
-    out[1, 0] = _c1
+    out[1, 0] = _c2
     out[1, 1] = _c0*l2**2
     out[1, 2] = _c5
     out[2, 0] = _c4
     out[2, 1] = _c5
-    out[2, 2] = l3**2*m3
+    out[2, 2] = m3*l3**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -199,20 +203,19 @@ def forcing(t, y, p, out):
     l2 = p[4]
     l3 = p[5]
     g = p[6]
-    _c0 = g*math.sin(theta1)
-    _c1 = math.sin(theta1 - theta2)
-    _c2 = l2*theta2_dot**2
-    _c3 = _c1*_c2
-    _c4 = -theta3
-    _c5 = math.sin(_c4 + theta1)
+    _c0 = m2 + m3
+    _c1 = theta2_dot**2
+    _c2 = -theta1
+    _c3 = _c0*l2
+    _c4 = _c3*math.sin(_c2 + theta2)
+    _c5 = theta3_dot**2
     _c6 = l3*m3
-    _c7 = _c6*theta3_dot**2
-    _c8 = g*math.sin(theta2)
-    _c9 = math.sin(_c4 + theta2)
-    _c10 = theta1_dot**2
-    out[0] = -l1*(_c0*m1 + _c0*m2 + _c0*m3 + _c3*m2 + _c3*m3 + _c5*_c7)
-    out[1] = l2*(_c1*_c10*l1*m2 + _c1*_c10*l1*m3 - _c7*_c9 - _c8*m2 - _c8*m3)
-    out[2] = _c6*(_c10*_c5*l1 + _c2*_c9 - g*math.sin(theta3))
+    _c7 = _c6*math.sin(_c2 + theta3)
+    _c8 = l1*theta1_dot**2
+    _c9 = _c6*l2*math.sin(theta2 - theta3)
+    out[0] = _c1*_c4*l1 + _c5*_c7*l1 - g*l1*(_c0 + m1)*math.sin(theta1)
+    out[1] = -_c4*_c8 - _c5*_c9 - _c3*g*math.sin(theta2)
+    out[2] = _c1*_c9 - _c7*_c8 - _c6*g*math.sin(theta3)
 
 
 @njit(cache=True, error_model="numpy")
@@ -231,16 +234,14 @@ def energy(t, y, p):
     l2 = p[4]
     l3 = p[5]
     g = p[6]
-    _c0 = math.cos(theta1)
-    _c1 = _c0*l1
-    _c2 = l2*math.cos(theta2)
-    _c3 = _c1 + _c2
-    _c4 = l3*math.cos(theta3)
-    _c5 = math.sin(theta1)
-    _c6 = l1**2*theta1_dot**2
-    _c7 = _c5*l1*theta1_dot + l2*theta2_dot*math.sin(theta2)
-    _c8 = _c1*theta1_dot + _c2*theta2_dot
-    return -_c1*g*m1 - _c3*g*m2 + g*m3*(-_c3 - _c4) + (0.5)*m1*(_c0**2*_c6 + _c5**2*_c6) + (0.5)*m2*(_c7**2 + _c8**2) + (0.5)*m3*((_c7 + l3*theta3_dot*math.sin(theta3))**2 + (_c4*theta3_dot + _c8)**2)
+    _c0 = l3*m3
+    _c1 = m2 + m3
+    _c2 = _c1 + m1
+    _c3 = _c1*l2
+    _c4 = _c0*theta3_dot
+    _c5 = -theta1
+    _c6 = l1*theta1_dot
+    return _c4*_c6*math.cos(_c5 + theta3) + (0.5)*_c1*l2**2*theta2_dot**2 + (0.5)*_c2*l1**2*theta1_dot**2 + (0.5)*m3*l3**2*theta3_dot**2 - _c0*g*math.cos(theta3) - _c3*g*math.cos(theta2) + _c3*_c6*theta2_dot*math.cos(_c5 + theta2) + _c4*l2*theta2_dot*math.cos(theta2 - theta3) - _c2*g*l1*math.cos(theta1)
 
 
 @njit(cache=True, error_model="numpy")
@@ -259,17 +260,14 @@ def energy_function(t, y, p):
     l2 = p[4]
     l3 = p[5]
     g = p[6]
-    _c0 = g*l1*math.cos(theta1)
-    _c1 = l2*m2
-    _c2 = g*math.cos(theta2)
-    _c3 = l2*m3
-    _c4 = l3*m3
-    _c5 = (0.5)*l1**2*theta1_dot**2
-    _c6 = (0.5)*l2**2*theta2_dot**2
-    _c7 = l1*theta1_dot
-    _c8 = _c7*theta2_dot*math.cos(theta1 - theta2)
-    _c9 = -theta3
-    return -_c0*m1 - _c0*m2 - _c0*m3 - _c1*_c2 + _c1*_c8 - _c2*_c3 + _c3*_c8 + _c3*l3*theta2_dot*theta3_dot*math.cos(_c9 + theta2) + _c4*_c7*theta3_dot*math.cos(_c9 + theta1) - _c4*g*math.cos(theta3) + _c5*m1 + _c5*m2 + _c5*m3 + _c6*m2 + _c6*m3 + (0.5)*l3**2*m3*theta3_dot**2
+    _c0 = l3*m3
+    _c1 = m2 + m3
+    _c2 = _c1 + m1
+    _c3 = _c1*l2
+    _c4 = _c0*theta3_dot
+    _c5 = -theta1
+    _c6 = l1*theta1_dot
+    return _c4*_c6*math.cos(_c5 + theta3) + (0.5)*_c1*l2**2*theta2_dot**2 + (0.5)*_c2*l1**2*theta1_dot**2 + (0.5)*m3*l3**2*theta3_dot**2 - _c0*g*math.cos(theta3) - _c3*g*math.cos(theta2) + _c3*_c6*theta2_dot*math.cos(_c5 + theta2) + _c4*l2*theta2_dot*math.cos(theta2 - theta3) - _c2*g*l1*math.cos(theta1)
 
 
 @njit(cache=True, error_model="numpy")
@@ -287,21 +285,19 @@ def momenta(t, y, p, out):
     l1 = p[3]
     l2 = p[4]
     l3 = p[5]
-    _c0 = l1*theta1_dot
-    _c1 = _c0*m2
-    _c2 = _c0*m3
-    _c3 = math.cos(theta1 - theta2)
-    _c4 = l2*theta2_dot
-    _c5 = _c4*m2
-    _c6 = _c4*m3
-    _c7 = -theta3
-    _c8 = math.cos(_c7 + theta1)
-    _c9 = l3*theta3_dot
-    _c10 = _c9*m3
-    _c11 = math.cos(_c7 + theta2)
-    out[0] = l1*(_c0*m1 + _c1 + _c10*_c8 + _c2 + _c3*_c5 + _c3*_c6)
-    out[1] = l2*(_c1*_c3 + _c10*_c11 + _c2*_c3 + _c5 + _c6)
-    out[2] = l3*m3*(_c0*_c8 + _c11*_c4 + _c9)
+    _c0 = m2 + m3
+    _c1 = -theta1
+    _c2 = math.cos(_c1 + theta3)
+    _c3 = m3*theta3_dot
+    _c4 = _c3*l3
+    _c5 = _c0*theta2_dot
+    _c6 = l2*math.cos(_c1 + theta2)
+    _c7 = l1*theta1_dot
+    _c8 = l2*math.cos(theta2 - theta3)
+    _c9 = l3*m3
+    out[0] = _c2*_c4*l1 + _c5*_c6*l1 + theta1_dot*l1**2*(_c0 + m1)
+    out[1] = _c4*_c8 + _c5*l2**2 + _c0*_c6*_c7
+    out[2] = _c3*l3**2 + _c2*_c7*_c9 + _c8*_c9*theta2_dot
 
 
 @njit(cache=True, error_model="numpy")
@@ -320,18 +316,18 @@ def momentum_rate(t, y, p, out):
     l2 = p[4]
     l3 = p[5]
     g = p[6]
-    _c0 = g*math.sin(theta1)
-    _c1 = math.sin(theta1 - theta2)
-    _c2 = l2*theta2_dot
-    _c3 = _c2*theta1_dot
-    _c4 = l3*m3
-    _c5 = -theta3
-    _c6 = theta3_dot*math.sin(_c5 + theta1)
-    _c7 = g*math.sin(theta2)
-    _c8 = theta3_dot*math.sin(_c5 + theta2)
-    out[0] = -l1*(_c0*m1 + _c0*m2 + _c0*m3 + _c1*_c3*m2 + _c1*_c3*m3 + _c4*_c6*theta1_dot)
-    out[1] = l2*(_c1*l1*m2*theta1_dot*theta2_dot + _c1*l1*m3*theta1_dot*theta2_dot - _c4*_c8*theta2_dot - _c7*m2 - _c7*m3)
-    out[2] = _c4*(_c2*_c8 + _c6*l1*theta1_dot - g*math.sin(theta3))
+    _c0 = m2 + m3
+    _c1 = -theta1
+    _c2 = _c0*l2
+    _c3 = l1*theta1_dot
+    _c4 = _c2*_c3*theta2_dot*math.sin(_c1 + theta2)
+    _c5 = l3*m3
+    _c6 = _c5*theta3_dot
+    _c7 = _c3*_c6*math.sin(_c1 + theta3)
+    _c8 = _c6*l2*theta2_dot*math.sin(theta2 - theta3)
+    out[0] = _c4 + _c7 - g*l1*(_c0 + m1)*math.sin(theta1)
+    out[1] = -_c4 - _c8 - _c2*g*math.sin(theta2)
+    out[2] = _c8 - _c7 - _c5*g*math.sin(theta3)
 
 
 @njit(cache=True, error_model="numpy")
@@ -353,13 +349,12 @@ def rest_partials(t, y, p, out):
     l2 = p[4]
     l3 = p[5]
     g = p[6]
-    _c0 = g*math.cos(theta1)
-    _c1 = g*math.cos(theta2)
-    out[0, 0, 0] = -l1*(_c0*m1 + _c0*m2 + _c0*m3)
+    _c0 = m2 + m3
+    out[0, 0, 0] = -g*l1*(_c0 + m1)*math.cos(theta1)
     out[0, 0, 1] = 0.0
     out[0, 0, 2] = 0.0
     out[0, 1, 0] = 0.0
-    out[0, 1, 1] = l2*(-_c1*m2 - _c1*m3)
+    out[0, 1, 1] = -_c0*g*l2*math.cos(theta2)
     out[0, 1, 2] = 0.0
     out[0, 2, 0] = 0.0
     out[0, 2, 1] = 0.0
@@ -392,14 +387,14 @@ def velocities(t, y, p, out):
     _p_theta2 = y[4]
     _p_theta3 = y[5]
     _c0 = m2 + m3
-    _c1 = -theta3
+    _c1 = -theta1
     _c2 = l3*m3
     _m0_0 = l1**2*(_c0 + m1)
-    _m1_0 = _c0*l1*l2*math.cos(theta1 - theta2)
+    _m1_0 = _c0*l1*l2*math.cos(_c1 + theta2)
     _m1_1 = _c0*l2**2
-    _m2_0 = _c2*l1*math.cos(_c1 + theta1)
-    _m2_1 = _c2*l2*math.cos(_c1 + theta2)
-    _m2_2 = l3**2*m3
+    _m2_0 = _c2*l1*math.cos(_c1 + theta3)
+    _m2_1 = _c2*l2*math.cos(theta2 - theta3)
+    _m2_2 = m3*l3**2
     _f0 = _p_theta1
     _f1 = _p_theta2
     _f2 = _p_theta3
@@ -447,90 +442,76 @@ def canonical_partials(t, y, p, out):
     l3 = p[5]
     g = p[6]
     _c0 = m2 + m3
-    _c1 = theta1 - theta2
-    _c2 = math.cos(_c1)
-    _c3 = _c0*_c2*l1*l2
-    _c4 = -theta3
-    _c5 = _c4 + theta1
-    _c6 = math.cos(_c5)
-    _c7 = l3*m3
-    _c8 = _c7*l1
-    _c9 = _c6*_c8
-    _c10 = _c4 + theta2
-    _c11 = math.cos(_c10)
-    _c12 = _c7*l2
-    _c13 = _c11*_c12
-    _c14 = math.sin(_c5)
-    _c15 = _c7*theta3_dot
-    _c16 = math.sin(_c1)
-    _c17 = l2*theta2_dot
-    _c18 = _c16*_c17
-    _c19 = _c18*m2 + _c18*m3
-    _c20 = _c14*_c15 + _c19
-    _c21 = _c14*_c8*theta3_dot
-    _c22 = l1*theta1_dot
-    _c23 = _c16*_c22
-    _c24 = _c23*m2 + _c23*m3
-    _c25 = math.sin(_c10)
-    _c26 = l2*(-_c15*_c25 + _c24)
-    _c27 = _c12*_c25*theta3_dot
-    _c28 = _c14*_c22
-    _c29 = -_c28*_c7
-    _c30 = _c17*_c25
-    _c31 = -_c30*_c7
-    _c32 = _c7*(_c28 + _c30)
-    _c33 = g*math.cos(theta1)
-    _c34 = _c2*m2
-    _c35 = _c17*theta1_dot
-    _c36 = _c2*m3
-    _c37 = _c34*_c35 + _c35*_c36
-    _c38 = _c22*_c6
-    _c39 = _c15*_c38
-    _c40 = _c22*theta2_dot
-    _c41 = _c34*_c40 + _c36*_c40
-    _c42 = g*math.cos(theta2)
-    _c43 = _c11*_c17
-    _c44 = _c15*_c43
-    _c45 = _c16*m2
-    _c46 = l2*theta1_dot
-    _c47 = _c16*m3
-    _c48 = l1*theta2_dot
-    out[0, 0, 0] = l1**2*(_c0 + m1)
-    out[0, 0, 1] = _c3
-    out[0, 0, 2] = _c9
-    out[0, 1, 0] = _c3
+    _c1 = _c0 + m1
+    _c2 = -theta1
+    _c3 = _c2 + theta2
+    _c4 = _c0*l2
+    _c5 = _c4*l1
+    _c6 = _c5*math.cos(_c3)
+    _c7 = _c2 + theta3
+    _c8 = l3*m3
+    _c9 = _c8*l1
+    _c10 = _c9*math.cos(_c7)
+    _c11 = theta2 - theta3
+    _c12 = _c8*l2
+    _c13 = _c12*math.cos(_c11)
+    _c14 = _c5*math.sin(_c3)
+    _c15 = _c14*theta2_dot
+    _c16 = _c9*math.sin(_c7)
+    _c17 = _c16*theta3_dot
+    _c18 = _c15 + _c17
+    _c19 = -_c15
+    _c20 = -_c17
+    _c21 = _c14*theta1_dot
+    _c22 = _c12*math.sin(_c11)
+    _c23 = _c22*theta3_dot
+    _c24 = -_c21 - _c23
+    _c25 = _c16*theta1_dot
+    _c26 = _c22*theta2_dot
+    _c27 = -_c26
+    _c28 = _c26 - _c25
+    _c29 = _c10*theta1_dot*theta3_dot
+    _c30 = -_c29
+    _c31 = _c6*theta1_dot*theta2_dot
+    _c32 = -_c31
+    _c33 = _c13*theta2_dot*theta3_dot
+    _c34 = -_c33
+    out[0, 0, 0] = _c1*l1**2
+    out[0, 0, 1] = _c6
+    out[0, 0, 2] = _c10
+    out[0, 1, 0] = _c6
     out[0, 1, 1] = _c0*l2**2
     out[0, 1, 2] = _c13
-    out[0, 2, 0] = _c9
+    out[0, 2, 0] = _c10
     out[0, 2, 1] = _c13
-    out[0, 2, 2] = l3**2*m3
-    out[1, 0, 0] = -_c20*l1
-    out[1, 0, 1] = _c19*l1
-    out[1, 0, 2] = _c21
-    out[1, 1, 0] = -_c24*l2
-    out[1, 1, 1] = _c26
-    out[1, 1, 2] = _c27
-    out[1, 2, 0] = _c29
-    out[1, 2, 1] = _c31
-    out[1, 2, 2] = _c32
-    out[2, 0, 0] = -l1*(_c15*_c6*theta1_dot + _c33*m1 + _c33*m2 + _c33*m3 + _c37)
-    out[2, 0, 1] = _c37*l1
-    out[2, 0, 2] = _c39
-    out[2, 1, 0] = _c41*l2
-    out[2, 1, 1] = l2*(-_c11*_c15*theta2_dot - _c41 - _c42*m2 - _c42*m3)
-    out[2, 1, 2] = _c44
-    out[2, 2, 0] = _c39
-    out[2, 2, 1] = _c44
-    out[2, 2, 2] = _c7*(-_c38*theta3_dot - _c43*theta3_dot - g*math.cos(theta3))
-    out[3, 0, 0] = -_c20*l1
-    out[3, 0, 1] = -l1*(_c45*_c46 + _c46*_c47)
-    out[3, 0, 2] = _c29
-    out[3, 1, 0] = l2*(_c45*_c48 + _c47*_c48)
-    out[3, 1, 1] = _c26
-    out[3, 1, 2] = _c31
-    out[3, 2, 0] = _c21
-    out[3, 2, 1] = _c27
-    out[3, 2, 2] = _c32
+    out[0, 2, 2] = m3*l3**2
+    out[1, 0, 0] = _c18
+    out[1, 0, 1] = _c19
+    out[1, 0, 2] = _c20
+    out[1, 1, 0] = _c21
+    out[1, 1, 1] = _c24
+    out[1, 1, 2] = _c23
+    out[1, 2, 0] = _c25
+    out[1, 2, 1] = _c27
+    out[1, 2, 2] = _c28
+    out[2, 0, 0] = _c30 + _c32 - _c1*g*l1*math.cos(theta1)
+    out[2, 0, 1] = _c31
+    out[2, 0, 2] = _c29
+    out[2, 1, 0] = _c31
+    out[2, 1, 1] = _c32 + _c34 - _c4*g*math.cos(theta2)
+    out[2, 1, 2] = _c33
+    out[2, 2, 0] = _c29
+    out[2, 2, 1] = _c33
+    out[2, 2, 2] = _c30 + _c34 - _c8*g*math.cos(theta3)
+    out[3, 0, 0] = _c18
+    out[3, 0, 1] = _c21
+    out[3, 0, 2] = _c25
+    out[3, 1, 0] = _c19
+    out[3, 1, 1] = _c24
+    out[3, 1, 2] = _c27
+    out[3, 2, 0] = _c20
+    out[3, 2, 1] = _c23
+    out[3, 2, 2] = _c28
 
 
 @njit(cache=True, error_model="numpy")
@@ -2839,378 +2820,345 @@ def taylor_coefficients(t, y, p, X, W):
     l3 = p[5]
     g = p[6]
     _c0 = m2 + m3
-    _c4 = l3*m3
-    _m0_0 = l1**2*(_c0 + m1)
-    _k22 = _c0*l1*l2
+    _c1 = _c0 + m1
+    _c4 = _c0*l2
+    _c5 = _c4*l1
+    _c7 = l3*m3
+    _c8 = _c7*l1
+    _c10 = _c7*l2
+    _m0_0 = _c1*l1**2
     _m1_1 = _c0*l2**2
-    _k24 = _c4*l1
-    _k26 = _c4*l2
-    _m2_2 = l3**2*m3
-    _k28 = -l1
-    _k44 = l1*m2
-    _k47 = l1*m3
+    _m2_2 = m3*l3**2
+    _k21 = _c1*g*l1
+    _k29 = _c4*g
+    _k38 = _c7*g
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
-    _k63 = 1.0/_m0_0
-    _c1 = W[0]
-    _c2 = W[1]
-    _c3 = W[2]
-    _c5 = W[3]
-    _u4 = W[4]
+    _k44 = 1.0/_m0_0
+    _c2 = W[0]
+    _c3 = W[1]
+    _c6 = W[2]
+    _c9 = W[3]
+    _c11 = W[4]
     _u5 = W[5]
-    _c6 = W[6]
-    _c7 = W[7]
-    _u8 = W[8]
+    _u6 = W[6]
+    _c12 = W[7]
+    _c13 = W[8]
     _u9 = W[9]
-    _c8 = W[10]
-    _c9 = W[11]
-    _c10 = W[12]
+    _u10 = W[10]
+    _c14 = W[11]
+    _c15 = W[12]
     _u13 = W[13]
     _u14 = W[14]
-    _c11 = W[15]
-    _u16 = W[16]
-    _u17 = W[17]
-    _c12 = W[18]
-    _c13 = W[19]
+    _c16 = W[15]
+    _m1_0 = W[16]
+    _m2_0 = W[17]
+    _m2_1 = W[18]
+    _u19 = W[19]
     _u20 = W[20]
-    _c14 = W[21]
-    _m1_0 = W[22]
-    _m2_0 = W[23]
-    _m2_1 = W[24]
-    _u29 = W[25]
-    _u30 = W[26]
-    _u31 = W[27]
-    _u32 = W[28]
-    _u33 = W[29]
-    _u34 = W[30]
-    _u35 = W[31]
-    _u36 = W[32]
-    _u37 = W[33]
-    _u38 = W[34]
-    _u39 = W[35]
-    _f0 = W[36]
-    _u41 = W[37]
-    _u42 = W[38]
-    _u43 = W[39]
-    _u45 = W[40]
-    _u46 = W[41]
-    _u48 = W[42]
-    _u49 = W[43]
-    _u50 = W[44]
-    _u51 = W[45]
-    _u52 = W[46]
-    _f1 = W[47]
-    _u54 = W[48]
-    _u55 = W[49]
-    _u56 = W[50]
-    _u57 = W[51]
-    _u58 = W[52]
-    _u59 = W[53]
-    _u60 = W[54]
-    _u61 = W[55]
-    _f2 = W[56]
-    _l1_0 = W[57]
-    _l2_0 = W[58]
-    _u66 = W[59]
-    _u67 = W[60]
-    _d1 = W[61]
-    _u69 = W[62]
-    _u70 = W[63]
-    _u71 = W[64]
-    _l2_1 = W[65]
-    _u73 = W[66]
-    _u74 = W[67]
-    _u75 = W[68]
-    _u76 = W[69]
-    _u77 = W[70]
-    _d2 = W[71]
-    _u79 = W[72]
-    _z1 = W[73]
-    _u81 = W[74]
-    _u82 = W[75]
-    _u83 = W[76]
-    _z2 = W[77]
-    _x2 = W[78]
-    _u86 = W[79]
-    _u87 = W[80]
-    _x1 = W[81]
-    _u89 = W[82]
-    _u90 = W[83]
-    _u91 = W[84]
-    _u92 = W[85]
-    _x0 = W[86]
+    _u22 = W[21]
+    _u23 = W[22]
+    _u24 = W[23]
+    _u25 = W[24]
+    _f0 = W[25]
+    _u27 = W[26]
+    _u28 = W[27]
+    _u30 = W[28]
+    _u31 = W[29]
+    _u32 = W[30]
+    _u33 = W[31]
+    _u34 = W[32]
+    _f1 = W[33]
+    _u36 = W[34]
+    _u37 = W[35]
+    _u39 = W[36]
+    _u40 = W[37]
+    _u41 = W[38]
+    _u42 = W[39]
+    _f2 = W[40]
+    _l1_0 = W[41]
+    _l2_0 = W[42]
+    _u47 = W[43]
+    _u48 = W[44]
+    _d1 = W[45]
+    _u50 = W[46]
+    _u51 = W[47]
+    _u52 = W[48]
+    _l2_1 = W[49]
+    _u54 = W[50]
+    _u55 = W[51]
+    _u56 = W[52]
+    _u57 = W[53]
+    _u58 = W[54]
+    _d2 = W[55]
+    _u60 = W[56]
+    _z1 = W[57]
+    _u62 = W[58]
+    _u63 = W[59]
+    _u64 = W[60]
+    _z2 = W[61]
+    _x2 = W[62]
+    _u67 = W[63]
+    _u68 = W[64]
+    _x1 = W[65]
+    _u70 = W[66]
+    _u71 = W[67]
+    _u72 = W[68]
+    _u73 = W[69]
+    _x0 = W[70]
     for i in range(6):
         X[i, 0] = y[i]
     for k in range(order):
-        # _c1 = theta1 - theta2
-        _c1[k] = theta1[k] - theta2[k]
-        # _c2 = -theta3
-        _c2[k] = -theta3[k]
-        # _c3 = _c2 + theta1
-        _c3[k] = _c2[k] + theta1[k]
-        # _c5 = _c2 + theta2
-        _c5[k] = _c2[k] + theta2[k]
-        # _c6 = g*math.sin(theta1)
-        # _u4, _u5 = sin(theta1), cos(theta1)
-        if k == 0:
-            _u4[0] = math.sin(theta1[0])
-            _u5[0] = math.cos(theta1[0])
-        else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
-                _ja = _j*theta1[_j]
-                _s += _ja*_u5[k - _j]
-                _c += _ja*_u4[k - _j]
-            _u4[k] = _s/k
-            _u5[k] = -_c/k
-        _c6[k] = g*_u4[k]
-        # _c7 = math.sin(_c1)
-        # _c7, _u8 = sin(_c1), cos(_c1)
-        if k == 0:
-            _c7[0] = math.sin(_c1[0])
-            _u8[0] = math.cos(_c1[0])
-        else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
-                _ja = _j*_c1[_j]
-                _s += _ja*_u8[k - _j]
-                _c += _ja*_c7[k - _j]
-            _c7[k] = _s/k
-            _u8[k] = -_c/k
-        # _c8 = l2*theta2_dot**2
-        # _u9 = theta2_dot**2
+        # _c2 = -theta1
+        _c2[k] = -theta1[k]
+        # _c3 = _c2 + theta2
+        _c3[k] = _c2[k] + theta2[k]
+        # _c6 = _c2 + theta3
+        _c6[k] = _c2[k] + theta3[k]
+        # _c9 = theta2 - theta3
+        _c9[k] = theta2[k] - theta3[k]
+        # _c11 = theta2_dot**2
+        # _c11 = theta2_dot**2
         _s = theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*theta2_dot[_j]*theta2_dot[k - _j]
-        _u9[k] = _s
-        _c8[k] = l2*_u9[k]
-        # _c9 = _c7*_c8
-        # _c9 = _c7*_c8
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c7[_j]*_c8[k - _j]
-        _c9[k] = _s
-        # _c10 = math.sin(_c3)
-        # _c10, _u13 = sin(_c3), cos(_c3)
+        _c11[k] = _s
+        # _c12 = _c5*math.sin(_c3)
+        # _u5, _u6 = sin(_c3), cos(_c3)
         if k == 0:
-            _c10[0] = math.sin(_c3[0])
-            _u13[0] = math.cos(_c3[0])
+            _u5[0] = math.sin(_c3[0])
+            _u6[0] = math.cos(_c3[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
                 _ja = _j*_c3[_j]
-                _s += _ja*_u13[k - _j]
-                _c += _ja*_c10[k - _j]
-            _c10[k] = _s/k
-            _u13[k] = -_c/k
-        # _c11 = _c4*theta3_dot**2
-        # _u14 = theta3_dot**2
+                _s += _ja*_u6[k - _j]
+                _c += _ja*_u5[k - _j]
+            _u5[k] = _s/k
+            _u6[k] = -_c/k
+        _c12[k] = _c5*_u5[k]
+        # _c13 = theta3_dot**2
+        # _c13 = theta3_dot**2
         _s = theta3_dot[k//2]*theta3_dot[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*theta3_dot[_j]*theta3_dot[k - _j]
-        _u14[k] = _s
-        _c11[k] = _c4*_u14[k]
-        # _c12 = g*math.sin(theta2)
-        # _u16, _u17 = sin(theta2), cos(theta2)
+        _c13[k] = _s
+        # _c14 = _c8*math.sin(_c6)
+        # _u9, _u10 = sin(_c6), cos(_c6)
         if k == 0:
-            _u16[0] = math.sin(theta2[0])
-            _u17[0] = math.cos(theta2[0])
+            _u9[0] = math.sin(_c6[0])
+            _u10[0] = math.cos(_c6[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*_c6[_j]
+                _s += _ja*_u10[k - _j]
+                _c += _ja*_u9[k - _j]
+            _u9[k] = _s/k
+            _u10[k] = -_c/k
+        _c14[k] = _c8*_u9[k]
+        # _c15 = theta1_dot**2
+        # _c15 = theta1_dot**2
+        _s = theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*theta1_dot[_j]*theta1_dot[k - _j]
+        _c15[k] = _s
+        # _c16 = _c10*math.sin(_c9)
+        # _u13, _u14 = sin(_c9), cos(_c9)
+        if k == 0:
+            _u13[0] = math.sin(_c9[0])
+            _u14[0] = math.cos(_c9[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*_c9[_j]
+                _s += _ja*_u14[k - _j]
+                _c += _ja*_u13[k - _j]
+            _u13[k] = _s/k
+            _u14[k] = -_c/k
+        _c16[k] = _c10*_u13[k]
+        # _m1_0 = _c5*math.cos(_c3)
+        _m1_0[k] = _c5*_u6[k]
+        # _m2_0 = _c8*math.cos(_c6)
+        _m2_0[k] = _c8*_u10[k]
+        # _m2_1 = _c10*math.cos(_c9)
+        _m2_1[k] = _c10*_u14[k]
+        # _f0 = _c11*_c12 + _c13*_c14 - _c1*g*l1*math.sin(theta1)
+        # _u19 = _c11*_c12
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c11[_j]*_c12[k - _j]
+        _u19[k] = _s
+        # _u20 = _c13*_c14
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c13[_j]*_c14[k - _j]
+        _u20[k] = _s
+        # _u22, _u23 = sin(theta1), cos(theta1)
+        if k == 0:
+            _u22[0] = math.sin(theta1[0])
+            _u23[0] = math.cos(theta1[0])
+        else:
+            _s = 0.0
+            _c = 0.0
+            for _j in range(1, k + 1):
+                _ja = _j*theta1[_j]
+                _s += _ja*_u23[k - _j]
+                _c += _ja*_u22[k - _j]
+            _u22[k] = _s/k
+            _u23[k] = -_c/k
+        _u24[k] = _k21*_u22[k]
+        _u25[k] = _u19[k] + _u20[k]
+        _f0[k] = _u25[k] - _u24[k]
+        # _f1 = -_c12*_c15 - _c13*_c16 - _c4*g*math.sin(theta2)
+        # _u27 = _c12*_c15
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c12[_j]*_c15[k - _j]
+        _u27[k] = _s
+        # _u28 = _c13*_c16
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c13[_j]*_c16[k - _j]
+        _u28[k] = _s
+        # _u30, _u31 = sin(theta2), cos(theta2)
+        if k == 0:
+            _u30[0] = math.sin(theta2[0])
+            _u31[0] = math.cos(theta2[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
                 _ja = _j*theta2[_j]
-                _s += _ja*_u17[k - _j]
-                _c += _ja*_u16[k - _j]
-            _u16[k] = _s/k
-            _u17[k] = -_c/k
-        _c12[k] = g*_u16[k]
-        # _c13 = math.sin(_c5)
-        # _c13, _u20 = sin(_c5), cos(_c5)
+                _s += _ja*_u31[k - _j]
+                _c += _ja*_u30[k - _j]
+            _u30[k] = _s/k
+            _u31[k] = -_c/k
+        _u32[k] = _k29*_u30[k]
+        _u33[k] = -_u27[k]
+        _u34[k] = _u33[k] - _u28[k]
+        _f1[k] = _u34[k] - _u32[k]
+        # _f2 = _c11*_c16 - _c14*_c15 - _c7*g*math.sin(theta3)
+        # _u36 = _c11*_c16
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c11[_j]*_c16[k - _j]
+        _u36[k] = _s
+        # _u37 = _c14*_c15
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c14[_j]*_c15[k - _j]
+        _u37[k] = _s
+        # _u39, _u40 = sin(theta3), cos(theta3)
         if k == 0:
-            _c13[0] = math.sin(_c5[0])
-            _u20[0] = math.cos(_c5[0])
-        else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
-                _ja = _j*_c5[_j]
-                _s += _ja*_u20[k - _j]
-                _c += _ja*_c13[k - _j]
-            _c13[k] = _s/k
-            _u20[k] = -_c/k
-        # _c14 = theta1_dot**2
-        # _c14 = theta1_dot**2
-        _s = theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta1_dot[_j]*theta1_dot[k - _j]
-        _c14[k] = _s
-        # _m1_0 = _c0*l1*l2*math.cos(_c1)
-        _m1_0[k] = _k22*_u8[k]
-        # _m2_0 = _c4*l1*math.cos(_c3)
-        _m2_0[k] = _k24*_u13[k]
-        # _m2_1 = _c4*l2*math.cos(_c5)
-        _m2_1[k] = _k26*_u20[k]
-        # _f0 = -l1*(_c10*_c11 + _c6*m1 + _c6*m2 + _c6*m3 + _c9*m2 + _c9*m3)
-        # _u29 = _c10*_c11
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c10[_j]*_c11[k - _j]
-        _u29[k] = _s
-        _u30[k] = m1*_c6[k]
-        _u31[k] = m2*_c6[k]
-        _u32[k] = m3*_c6[k]
-        _u33[k] = m2*_c9[k]
-        _u34[k] = m3*_c9[k]
-        _u35[k] = _u29[k] + _u30[k]
-        _u36[k] = _u35[k] + _u31[k]
-        _u37[k] = _u36[k] + _u32[k]
-        _u38[k] = _u37[k] + _u33[k]
-        _u39[k] = _u38[k] + _u34[k]
-        _f0[k] = _k28*_u39[k]
-        # _f1 = l2*(-_c11*_c13 - _c12*m2 - _c12*m3 + _c14*_c7*l1*m2 + _c14*_c7*l1*m3)
-        # _u41 = _c11*_c13
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c11[_j]*_c13[k - _j]
-        _u41[k] = _s
-        _u42[k] = m2*_c12[k]
-        _u43[k] = m3*_c12[k]
-        # _u45 = _c14*_c7
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c14[_j]*_c7[k - _j]
-        _u45[k] = _s
-        _u46[k] = _k44*_u45[k]
-        _u48[k] = _k47*_u45[k]
-        _u49[k] = _u46[k] + _u48[k]
-        _u50[k] = _u49[k] - _u41[k]
-        _u51[k] = _u50[k] - _u42[k]
-        _u52[k] = _u51[k] - _u43[k]
-        _f1[k] = l2*_u52[k]
-        # _f2 = _c4*(_c10*_c14*l1 + _c13*_c8 - g*math.sin(theta3))
-        # _u54 = _c13*_c8
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c13[_j]*_c8[k - _j]
-        _u54[k] = _s
-        # _u55, _u56 = sin(theta3), cos(theta3)
-        if k == 0:
-            _u55[0] = math.sin(theta3[0])
-            _u56[0] = math.cos(theta3[0])
+            _u39[0] = math.sin(theta3[0])
+            _u40[0] = math.cos(theta3[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
                 _ja = _j*theta3[_j]
-                _s += _ja*_u56[k - _j]
-                _c += _ja*_u55[k - _j]
-            _u55[k] = _s/k
-            _u56[k] = -_c/k
-        _u57[k] = g*_u55[k]
-        # _u58 = _c10*_c14
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c10[_j]*_c14[k - _j]
-        _u58[k] = _s
-        _u59[k] = l1*_u58[k]
-        _u60[k] = _u54[k] + _u59[k]
-        _u61[k] = _u60[k] - _u57[k]
-        _f2[k] = _c4*_u61[k]
+                _s += _ja*_u40[k - _j]
+                _c += _ja*_u39[k - _j]
+            _u39[k] = _s/k
+            _u40[k] = -_c/k
+        _u41[k] = _k38*_u39[k]
+        _u42[k] = _u36[k] - _u37[k]
+        _f2[k] = _u42[k] - _u41[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _l1_0[k] = _k63*_m1_0[k]
-        _l2_0[k] = _k63*_m2_0[k]
-        # _u66 = _l1_0**2
+        _l1_0[k] = _k44*_m1_0[k]
+        _l2_0[k] = _k44*_m2_0[k]
+        # _u47 = _l1_0**2
         _s = _l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_l1_0[_j]*_l1_0[k - _j]
-        _u66[k] = _s
-        _u67[k] = _m0_0*_u66[k]
-        _d1[k] = _m1_1 - _u67[k] if k == 0 else -_u67[k]
+        _u47[k] = _s
+        _u48[k] = _m0_0*_u47[k]
+        _d1[k] = _m1_1 - _u48[k] if k == 0 else -_u48[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
-        # _u69 = _l2_0*_l1_0
+        # _u50 = _l2_0*_l1_0
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_0[_j]*_l1_0[k - _j]
-        _u69[k] = _s
-        _u70[k] = _m0_0*_u69[k]
-        _u71[k] = _m2_1[k] - _u70[k]
-        # _l2_1 = _u71/_d1
-        _s = _u71[k]
+        _u50[k] = _s
+        _u51[k] = _m0_0*_u50[k]
+        _u52[k] = _m2_1[k] - _u51[k]
+        # _l2_1 = _u52/_d1
+        _s = _u52[k]
         for _j in range(1, k + 1):
             _s -= _d1[_j]*_l2_1[k - _j]
         _l2_1[k] = _s/_d1[0]
-        # _u73 = _l2_0**2
+        # _u54 = _l2_0**2
         _s = _l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_l2_0[_j]*_l2_0[k - _j]
-        _u73[k] = _s
-        _u74[k] = _m0_0*_u73[k]
-        _u75[k] = _m2_2 - _u74[k] if k == 0 else -_u74[k]
-        # _u76 = _l2_1**2
+        _u54[k] = _s
+        _u55[k] = _m0_0*_u54[k]
+        _u56[k] = _m2_2 - _u55[k] if k == 0 else -_u55[k]
+        # _u57 = _l2_1**2
         _s = _l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_l2_1[_j]*_l2_1[k - _j]
-        _u76[k] = _s
-        # _u77 = _u76*_d1
+        _u57[k] = _s
+        # _u58 = _u57*_d1
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u76[_j]*_d1[k - _j]
-        _u77[k] = _s
-        _d2[k] = _u75[k] - _u77[k]
+            _s += _u57[_j]*_d1[k - _j]
+        _u58[k] = _s
+        _d2[k] = _u56[k] - _u58[k]
         if k == 0 and not _d2[0] > _PIVOT_TOLERANCE*abs(_m2_2):
             return 3
-        # _u79 = _l1_0*_f0
+        # _u60 = _l1_0*_f0
         _s = 0.0
         for _j in range(k + 1):
             _s += _l1_0[_j]*_f0[k - _j]
-        _u79[k] = _s
-        _z1[k] = _f1[k] - _u79[k]
-        # _u81 = _l2_0*_f0
+        _u60[k] = _s
+        _z1[k] = _f1[k] - _u60[k]
+        # _u62 = _l2_0*_f0
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_0[_j]*_f0[k - _j]
-        _u81[k] = _s
-        _u82[k] = _f2[k] - _u81[k]
-        # _u83 = _l2_1*_z1
+        _u62[k] = _s
+        _u63[k] = _f2[k] - _u62[k]
+        # _u64 = _l2_1*_z1
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_1[_j]*_z1[k - _j]
-        _u83[k] = _s
-        _z2[k] = _u82[k] - _u83[k]
+        _u64[k] = _s
+        _z2[k] = _u63[k] - _u64[k]
         # _x2 = _z2/_d2
         _s = _z2[k]
         for _j in range(1, k + 1):
             _s -= _d2[_j]*_x2[k - _j]
         _x2[k] = _s/_d2[0]
-        # _u86 = _z1/_d1
+        # _u67 = _z1/_d1
         _s = _z1[k]
         for _j in range(1, k + 1):
-            _s -= _d1[_j]*_u86[k - _j]
-        _u86[k] = _s/_d1[0]
-        # _u87 = _l2_1*_x2
+            _s -= _d1[_j]*_u67[k - _j]
+        _u67[k] = _s/_d1[0]
+        # _u68 = _l2_1*_x2
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_1[_j]*_x2[k - _j]
-        _u87[k] = _s
-        _x1[k] = _u86[k] - _u87[k]
-        _u89[k] = _k63*_f0[k]
-        # _u90 = _l1_0*_x1
+        _u68[k] = _s
+        _x1[k] = _u67[k] - _u68[k]
+        _u70[k] = _k44*_f0[k]
+        # _u71 = _l1_0*_x1
         _s = 0.0
         for _j in range(k + 1):
             _s += _l1_0[_j]*_x1[k - _j]
-        _u90[k] = _s
-        _u91[k] = _u89[k] - _u90[k]
-        # _u92 = _l2_0*_x2
+        _u71[k] = _s
+        _u72[k] = _u70[k] - _u71[k]
+        # _u73 = _l2_0*_x2
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_0[_j]*_x2[k - _j]
-        _u92[k] = _s
-        _x0[k] = _u91[k] - _u92[k]
+        _u73[k] = _s
+        _x0[k] = _u72[k] - _u73[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta1_dot[k]/(k + 1)
         X[1, k + 1] = theta2_dot[k]/(k + 1)
@@ -3221,8 +3169,8 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (89 series operations per order).
-TAYLOR_WORK = 87
+#: Rows of the work array of `taylor_coefficients` (73 series operations per order).
+TAYLOR_WORK = 71
 
 
 # ----------------------------------------------------------------------------

@@ -87,7 +87,8 @@ def energy(t, y, p):
     M = p[0]
     L = p[1]
     g = p[2]
-    return (0.5)*M*(x_dot**2 - g*x**2/L)
+    _c0 = (0.5)*M
+    return _c0*x_dot**2 - _c0*g*x**2/L
 
 
 @njit(cache=True, error_model="numpy")
@@ -98,7 +99,8 @@ def energy_function(t, y, p):
     M = p[0]
     L = p[1]
     g = p[2]
-    return (0.5)*M*(x_dot**2 - g*x**2/L)
+    _c0 = (0.5)*M
+    return _c0*x_dot**2 - _c0*g*x**2/L
 
 
 @njit(cache=True, error_model="numpy")

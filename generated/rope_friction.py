@@ -31,7 +31,7 @@ def rhs(t, y, p, out):
     _c0 = 1.0/L
     out[0] = x_dot
     _m0_0 = M
-    _f0 = -M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0)) + M*_c0*g*x
+    _f0 = M*_c0*g*x - M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -56,7 +56,7 @@ def rhs_lanes(T, Y, P, out, bad):
         _c0 = 1.0/L
         out[0, _l] = x_dot
         _m0_0 = M
-        _f0 = -M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0)) + M*_c0*g*x
+        _f0 = M*_c0*g*x - M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -83,7 +83,7 @@ def forcing(t, y, p, out):
     g = p[2]
     f = p[3]
     _c0 = 1.0/L
-    out[0] = -M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0)) + M*_c0*g*x
+    out[0] = M*_c0*g*x - M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
 
 
 @njit(cache=True, error_model="numpy")
@@ -94,7 +94,8 @@ def energy(t, y, p):
     M = p[0]
     L = p[1]
     g = p[2]
-    return (0.5)*M*(x_dot**2 - g*x**2/L)
+    _c0 = (0.5)*M
+    return _c0*x_dot**2 - _c0*g*x**2/L
 
 
 @njit(cache=True, error_model="numpy")
@@ -105,7 +106,8 @@ def energy_function(t, y, p):
     M = p[0]
     L = p[1]
     g = p[2]
-    return (0.5)*M*(x_dot**2 - g*x**2/L)
+    _c0 = (0.5)*M
+    return _c0*x_dot**2 - _c0*g*x**2/L
 
 
 @njit(cache=True, error_model="numpy")
@@ -126,7 +128,7 @@ def momentum_rate(t, y, p, out):
     g = p[2]
     f = p[3]
     _c0 = 1.0/L
-    out[0] = -M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0)) + M*_c0*g*x
+    out[0] = M*_c0*g*x - M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
 
 
 @njit(cache=True, error_model="numpy")
@@ -143,7 +145,7 @@ def rest_partials(t, y, p, out):
     g = p[2]
     f = p[3]
     _c0 = M*g/L
-    out[0, 0, 0] = _c0*f + _c0
+    out[0, 0, 0] = _c0 + _c0*f
     out[1, 0, 0] = 0.0
 
 
@@ -178,7 +180,7 @@ def canonical_partials(t, y, p, out):
     _c0 = M*g/L
     out[0, 0, 0] = M
     out[1, 0, 0] = 0.0
-    out[2, 0, 0] = _c0*f*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0)) + _c0
+    out[2, 0, 0] = _c0 + _c0*f*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
     out[3, 0, 0] = 0.0
 
 

@@ -28,7 +28,7 @@ def rhs(t, y, p, out):
     l = p[1]
     g = p[2]
     out[0] = theta_dot
-    _m0_0 = l**2*m
+    _m0_0 = m*l**2
     _f0 = -g*l*m*math.sin(theta)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
@@ -51,7 +51,7 @@ def rhs_lanes(T, Y, P, out, bad):
         l = P[1, _l]
         g = P[2, _l]
         out[0, _l] = theta_dot
-        _m0_0 = l**2*m
+        _m0_0 = m*l**2
         _f0 = -g*l*m*_vsin(theta)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
@@ -67,7 +67,7 @@ def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     m = p[0]
     l = p[1]
-    out[0, 0] = l**2*m
+    out[0, 0] = m*l**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -88,7 +88,7 @@ def energy(t, y, p):
     m = p[0]
     l = p[1]
     g = p[2]
-    return l*m*(-g*math.cos(theta) + (0.5)*l*theta_dot**2)
+    return (0.5)*m*l**2*theta_dot**2 - g*l*m*math.cos(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -99,7 +99,7 @@ def energy_function(t, y, p):
     m = p[0]
     l = p[1]
     g = p[2]
-    return l*m*(-g*math.cos(theta) + (0.5)*l*theta_dot**2)
+    return (0.5)*m*l**2*theta_dot**2 - g*l*m*math.cos(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -108,7 +108,7 @@ def momenta(t, y, p, out):
     theta_dot = y[1]
     m = p[0]
     l = p[1]
-    out[0] = l**2*m*theta_dot
+    out[0] = m*theta_dot*l**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -145,7 +145,7 @@ def velocities(t, y, p, out):
     m = p[0]
     l = p[1]
     _p_theta = y[1]
-    _m0_0 = l**2*m
+    _m0_0 = m*l**2
     _f0 = _p_theta
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
@@ -166,7 +166,7 @@ def canonical_partials(t, y, p, out):
     m = p[0]
     l = p[1]
     g = p[2]
-    out[0, 0, 0] = l**2*m
+    out[0, 0, 0] = m*l**2
     out[1, 0, 0] = 0.0
     out[2, 0, 0] = -g*l*m*math.cos(theta)
     out[3, 0, 0] = 0.0
@@ -2469,7 +2469,7 @@ def taylor_coefficients(t, y, p, X, W):
     m = p[0]
     l = p[1]
     g = p[2]
-    _m0_0 = l**2*m
+    _m0_0 = m*l**2
     _k0 = -g*l*m
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1

@@ -28,7 +28,7 @@ def rhs(t, y, p, out):
     omega = p[1]
     out[0] = rho_dot
     _m0_0 = m
-    _f0 = m*omega**2*rho
+    _f0 = m*rho*omega**2
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -50,7 +50,7 @@ def rhs_lanes(T, Y, P, out, bad):
         omega = P[1, _l]
         out[0, _l] = rho_dot
         _m0_0 = m
-        _f0 = m*omega**2*rho
+        _f0 = m*rho*omega**2
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -73,7 +73,7 @@ def forcing(t, y, p, out):
     rho = y[0]
     m = p[0]
     omega = p[1]
-    out[0] = m*omega**2*rho
+    out[0] = m*rho*omega**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -83,7 +83,7 @@ def energy(t, y, p):
     rho_dot = y[1]
     m = p[0]
     omega = p[1]
-    return (0.5)*m*(omega**2*rho**2 + rho_dot**2)
+    return (0.5)*m*(rho_dot**2 + omega**2*rho**2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -93,7 +93,8 @@ def energy_function(t, y, p):
     rho_dot = y[1]
     m = p[0]
     omega = p[1]
-    return (0.5)*m*(-omega**2*rho**2 + rho_dot**2)
+    _c0 = (0.5)*m
+    return _c0*rho_dot**2 - _c0*omega**2*rho**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -110,7 +111,7 @@ def momentum_rate(t, y, p, out):
     rho = y[0]
     m = p[0]
     omega = p[1]
-    out[0] = m*omega**2*rho
+    out[0] = m*rho*omega**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -2465,7 +2466,7 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
-        # _f0 = m*omega**2*rho
+        # _f0 = m*rho*omega**2
         _f0[k] = _k0*rho[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k2*_f0[k]

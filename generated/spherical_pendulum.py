@@ -28,16 +28,16 @@ def rhs(t, y, p, out):
     m = p[0]
     l = p[1]
     g = p[2]
-    _c0 = l**2*m
+    _c0 = m*l**2
     _c1 = math.sin(theta)
-    _c2 = math.cos(theta)
+    _c2 = _c0*_c1*math.cos(theta)
     out[0] = theta_dot
     out[1] = phi_dot
     _m0_0 = _c0
     _m1_0 = 0.0
     _m1_1 = _c0*_c1**2
-    _f0 = _c1*l*m*(_c2*l*phi_dot**2 - g)
-    _f1 = -2.0*_c0*_c1*_c2*phi_dot*theta_dot
+    _f0 = _c2*phi_dot**2 - _c1*g*l*m
+    _f1 = -2.0*_c2*phi_dot*theta_dot
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -66,16 +66,16 @@ def rhs_lanes(T, Y, P, out, bad):
         m = P[0, _l]
         l = P[1, _l]
         g = P[2, _l]
-        _c0 = l**2*m
+        _c0 = m*l**2
         _c1 = _vsin(theta)
-        _c2 = _vcos(theta)
+        _c2 = _c0*_c1*_vcos(theta)
         out[0, _l] = theta_dot
         out[1, _l] = phi_dot
         _m0_0 = _c0
         _m1_0 = 0.0
         _m1_1 = _c0*_c1**2
-        _f0 = _c1*l*m*(_c2*l*phi_dot**2 - g)
-        _f1 = -2.0*_c0*_c1*_c2*phi_dot*theta_dot
+        _f0 = _c2*phi_dot**2 - _c1*g*l*m
+        _f1 = -2.0*_c2*phi_dot*theta_dot
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -97,7 +97,7 @@ def mass_matrix(t, y, p, out):
     theta = y[0]
     m = p[0]
     l = p[1]
-    _c0 = l**2*m
+    _c0 = m*l**2
     out[0, 0] = _c0
     out[0, 1] = 0.0
     out[1, 0] = 0.0
@@ -113,10 +113,10 @@ def forcing(t, y, p, out):
     m = p[0]
     l = p[1]
     g = p[2]
-    _c0 = math.cos(theta)
-    _c1 = m*math.sin(theta)
-    out[0] = _c1*l*(_c0*l*phi_dot**2 - g)
-    out[1] = -2.0*_c0*_c1*l**2*phi_dot*theta_dot
+    _c0 = m*math.sin(theta)
+    _c1 = _c0*l**2*math.cos(theta)
+    out[0] = _c1*phi_dot**2 - _c0*g*l
+    out[1] = -2.0*_c1*phi_dot*theta_dot
 
 
 @njit(cache=True, error_model="numpy")
@@ -128,7 +128,7 @@ def energy(t, y, p):
     m = p[0]
     l = p[1]
     g = p[2]
-    return -g*l*m*math.cos(theta) + (0.5)*l**2*m*(phi_dot**2*math.sin(theta)**2 + theta_dot**2)
+    return (0.5)*m*l**2*(theta_dot**2 + phi_dot**2*math.sin(theta)**2) - g*l*m*math.cos(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -140,9 +140,7 @@ def energy_function(t, y, p):
     m = p[0]
     l = p[1]
     g = p[2]
-    _c0 = math.cos(theta)
-    _c1 = phi_dot**2
-    return l*m*(-0.5*_c0**2*_c1*l - _c0*g + (0.5)*_c1*l + (0.5)*l*theta_dot**2)
+    return (0.5)*m*l**2*(theta_dot**2 + phi_dot**2*math.sin(theta)**2) - g*l*m*math.cos(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -153,7 +151,7 @@ def momenta(t, y, p, out):
     phi_dot = y[3]
     m = p[0]
     l = p[1]
-    _c0 = l**2*m
+    _c0 = m*l**2
     out[0] = _c0*theta_dot
     out[1] = _c0*phi_dot*math.sin(theta)**2
 
@@ -166,7 +164,8 @@ def momentum_rate(t, y, p, out):
     m = p[0]
     l = p[1]
     g = p[2]
-    out[0] = l*m*(-g + l*phi_dot**2*math.cos(theta))*math.sin(theta)
+    _c0 = m*math.sin(theta)
+    out[0] = -_c0*g*l + _c0*l**2*phi_dot**2*math.cos(theta)
     out[1] = 0.0
 
 
@@ -202,7 +201,7 @@ def velocities(t, y, p, out):
     l = p[1]
     _p_theta = y[2]
     _p_phi = y[3]
-    _c0 = l**2*m
+    _c0 = m*l**2
     _m0_0 = _c0
     _m1_0 = 0.0
     _m1_1 = _c0*math.sin(theta)**2
@@ -235,7 +234,7 @@ def canonical_partials(t, y, p, out):
     m = p[0]
     l = p[1]
     g = p[2]
-    _c0 = l**2*m
+    _c0 = m*l**2
     _c1 = math.sin(theta)
     _c2 = _c0*_c1**2
     _c3 = math.cos(theta)
@@ -249,7 +248,7 @@ def canonical_partials(t, y, p, out):
     out[1, 0, 1] = 0.0
     out[1, 1, 0] = _c4
     out[1, 1, 1] = 0.0
-    out[2, 0, 0] = -_c2*_c5 + _c3*l*m*(_c3*_c5*l - g)
+    out[2, 0, 0] = -_c2*_c5 + _c0*_c5*_c3**2 - _c3*g*l*m
     out[2, 0, 1] = 0.0
     out[2, 1, 0] = 0.0
     out[2, 1, 1] = 0.0
@@ -2557,115 +2556,107 @@ def taylor_coefficients(t, y, p, X, W):
     m = p[0]
     l = p[1]
     g = p[2]
-    _c0 = l**2*m
+    _c0 = m*l**2
     _m0_0 = _c0
     _m1_0 = 0.0
-    _k4 = l*m
-    _k8 = -g
-    _k12 = -2.0*_c0
+    _k8 = g*l*m
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
-    _k17 = _m1_0/_m0_0
-    _k18 = _k17**2
-    _k19 = _k18*_m0_0
-    _k20 = -_k19
-    _k25 = 1.0/_m0_0
+    _k14 = _m1_0/_m0_0
+    _k15 = _k14**2
+    _k16 = _k15*_m0_0
+    _k17 = -_k16
+    _k22 = 1.0/_m0_0
     _c1 = W[0]
-    _c2 = W[1]
+    _u1 = W[1]
     _u2 = W[2]
-    _m1_1 = W[3]
-    _u5 = W[4]
-    _u6 = W[5]
-    _u7 = W[6]
-    _u9 = W[7]
-    _u10 = W[8]
+    _c2 = W[3]
+    _u4 = W[4]
+    _m1_1 = W[5]
+    _u6 = W[6]
+    _u7 = W[7]
+    _u9 = W[8]
     _f0 = W[9]
-    _u13 = W[10]
-    _u14 = W[11]
-    _u15 = W[12]
-    _f1 = W[13]
-    _d1 = W[14]
-    _u22 = W[15]
-    _z1 = W[16]
-    _x1 = W[17]
-    _u26 = W[18]
-    _u27 = W[19]
-    _x0 = W[20]
+    _u11 = W[10]
+    _u12 = W[11]
+    _f1 = W[12]
+    _d1 = W[13]
+    _u19 = W[14]
+    _z1 = W[15]
+    _x1 = W[16]
+    _u23 = W[17]
+    _u24 = W[18]
+    _x0 = W[19]
     for i in range(4):
         X[i, 0] = y[i]
     for k in range(order):
         # _c1 = math.sin(theta)
-        # _c1, _c2 = sin(theta), cos(theta)
+        # _c1, _u1 = sin(theta), cos(theta)
         if k == 0:
             _c1[0] = math.sin(theta[0])
-            _c2[0] = math.cos(theta[0])
+            _u1[0] = math.cos(theta[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
                 _ja = _j*theta[_j]
-                _s += _ja*_c2[k - _j]
+                _s += _ja*_u1[k - _j]
                 _c += _ja*_c1[k - _j]
             _c1[k] = _s/k
-            _c2[k] = -_c/k
-        # _c2 = math.cos(theta)
+            _u1[k] = -_c/k
+        # _c2 = _c0*_c1*math.cos(theta)
+        # _u2 = _c1*_u1
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c1[_j]*_u1[k - _j]
+        _u2[k] = _s
+        _c2[k] = _c0*_u2[k]
         # _m1_1 = _c0*_c1**2
-        # _u2 = _c1**2
+        # _u4 = _c1**2
         _s = _c1[k//2]*_c1[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_c1[_j]*_c1[k - _j]
-        _u2[k] = _s
-        _m1_1[k] = _c0*_u2[k]
-        # _f0 = _c1*l*m*(_c2*l*phi_dot**2 - g)
-        # _u5 = phi_dot**2
+        _u4[k] = _s
+        _m1_1[k] = _c0*_u4[k]
+        # _f0 = _c2*phi_dot**2 - _c1*g*l*m
+        # _u6 = phi_dot**2
         _s = phi_dot[k//2]*phi_dot[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*phi_dot[_j]*phi_dot[k - _j]
-        _u5[k] = _s
-        # _u6 = _c2*_u5
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c2[_j]*_u5[k - _j]
         _u6[k] = _s
-        _u7[k] = l*_u6[k]
-        _u9[k] = _u7[k] + _k8 if k == 0 else _u7[k]
-        # _u10 = _c1*_u9
+        # _u7 = _c2*_u6
         _s = 0.0
         for _j in range(k + 1):
-            _s += _c1[_j]*_u9[k - _j]
-        _u10[k] = _s
-        _f0[k] = _k4*_u10[k]
-        # _f1 = -2.0*_c0*_c1*_c2*phi_dot*theta_dot
-        # _u13 = _c1*_c2
+            _s += _c2[_j]*_u6[k - _j]
+        _u7[k] = _s
+        _u9[k] = _k8*_c1[k]
+        _f0[k] = _u7[k] - _u9[k]
+        # _f1 = -2.0*_c2*phi_dot*theta_dot
+        # _u11 = _c2*phi_dot
         _s = 0.0
         for _j in range(k + 1):
-            _s += _c1[_j]*_c2[k - _j]
-        _u13[k] = _s
-        # _u14 = _u13*phi_dot
+            _s += _c2[_j]*phi_dot[k - _j]
+        _u11[k] = _s
+        # _u12 = _u11*theta_dot
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u13[_j]*phi_dot[k - _j]
-        _u14[k] = _s
-        # _u15 = _u14*theta_dot
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _u14[_j]*theta_dot[k - _j]
-        _u15[k] = _s
-        _f1[k] = _k12*_u15[k]
+            _s += _u11[_j]*theta_dot[k - _j]
+        _u12[k] = _s
+        _f1[k] = -2.0*_u12[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _d1[k] = _m1_1[k] + _k20 if k == 0 else _m1_1[k]
+        _d1[k] = _m1_1[k] + _k17 if k == 0 else _m1_1[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1[0]):
             return 2
-        _u22[k] = _k17*_f0[k]
-        _z1[k] = _f1[k] - _u22[k]
+        _u19[k] = _k14*_f0[k]
+        _z1[k] = _f1[k] - _u19[k]
         # _x1 = _z1/_d1
         _s = _z1[k]
         for _j in range(1, k + 1):
             _s -= _d1[_j]*_x1[k - _j]
         _x1[k] = _s/_d1[0]
-        _u26[k] = _k25*_f0[k]
-        _u27[k] = _k17*_x1[k]
-        _x0[k] = _u26[k] - _u27[k]
+        _u23[k] = _k22*_f0[k]
+        _u24[k] = _k14*_x1[k]
+        _x0[k] = _u23[k] - _u24[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta_dot[k]/(k + 1)
         X[1, k + 1] = phi_dot[k]/(k + 1)
@@ -2674,8 +2665,8 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (25 series operations per order).
-TAYLOR_WORK = 21
+#: Rows of the work array of `taylor_coefficients` (24 series operations per order).
+TAYLOR_WORK = 20
 
 
 # ----------------------------------------------------------------------------

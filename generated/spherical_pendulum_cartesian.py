@@ -52,7 +52,7 @@ def rhs(t, y, p, out):
     _kkt[3, 0] = _c0
     _kkt[3, 1] = _c1
     _kkt[3, 2] = _c2
-    _kkt[3, 4] = -2.0*_baumgarte_alpha*(_c0*x_dot + _c1*y_dot + _c2*z_dot) - _baumgarte_beta**2*(-l**2 + x**2 + y_**2 + z**2) - 2.0*x_dot**2 - 2.0*y_dot**2 - 2.0*z_dot**2
+    _kkt[3, 4] = -2.0*x_dot**2 - 2.0*y_dot**2 - 2.0*z_dot**2 - _baumgarte_beta**2*(x**2 + y_**2 + z**2 - l**2) - 2.0*_baumgarte_alpha*(_c0*x_dot + _c1*y_dot + _c2*z_dot)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -93,7 +93,7 @@ def reactions(t, y, p, out):
     _kkt[3, 0] = _c0
     _kkt[3, 1] = _c1
     _kkt[3, 2] = _c2
-    _kkt[3, 4] = -2.0*_baumgarte_alpha*(_c0*x_dot + _c1*y_dot + _c2*z_dot) - _baumgarte_beta**2*(-l**2 + x**2 + y_**2 + z**2) - 2.0*x_dot**2 - 2.0*y_dot**2 - 2.0*z_dot**2
+    _kkt[3, 4] = -2.0*x_dot**2 - 2.0*y_dot**2 - 2.0*z_dot**2 - _baumgarte_beta**2*(x**2 + y_**2 + z**2 - l**2) - 2.0*_baumgarte_alpha*(_c0*x_dot + _c1*y_dot + _c2*z_dot)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -111,7 +111,7 @@ def constraint_residuals(t, y, p, out):
     y_dot = y[4]
     z_dot = y[5]
     l = p[1]
-    out[0] = -l**2 + x**2 + y_**2 + z**2
+    out[0] = x**2 + y_**2 + z**2 - l**2
     out[1] = 2.0*x*x_dot + 2.0*y_*y_dot + 2.0*z*z_dot
 
 
@@ -161,7 +161,7 @@ def energy(t, y, p):
     z_dot = y[5]
     m = p[0]
     g = p[2]
-    return g*m*z + (0.5)*m*(x_dot**2 + y_dot**2 + z_dot**2)
+    return (0.5)*m*(x_dot**2 + y_dot**2 + z_dot**2) + g*m*z
 
 
 @njit(cache=True, error_model="numpy")
@@ -173,7 +173,7 @@ def energy_function(t, y, p):
     z_dot = y[5]
     m = p[0]
     g = p[2]
-    return m*(g*z + (0.5)*x_dot**2 + (0.5)*y_dot**2 + (0.5)*z_dot**2)
+    return (0.5)*m*(x_dot**2 + y_dot**2 + z_dot**2) + g*m*z
 
 
 @njit(cache=True, error_model="numpy")

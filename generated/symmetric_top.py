@@ -32,28 +32,25 @@ def rhs(t, y, p, out):
     I1 = p[3]
     I3 = p[4]
     _c0 = math.cos(theta)
-    _c1 = _c0**2
-    _c2 = M*l**2
-    _c3 = I1 + _c2
-    _c4 = I3*_c0
-    _c5 = I1*_c0
-    _c6 = 2.0*psi_dot
-    _c7 = _c0*_c2
-    _c8 = math.sin(theta)
-    _c9 = _c8*theta_dot
-    _c10 = psi_dot**2
+    _c1 = M*l**2
+    _c2 = I3 - I1 - _c1
+    _c3 = I1 + _c1
+    _c4 = math.sin(theta)
+    _c5 = I3*_c4*phi_dot
+    _c6 = _c0*_c2*_c4
+    _c7 = psi_dot*theta_dot
     out[0] = psi_dot
     out[1] = theta_dot
     out[2] = phi_dot
-    _m0_0 = -I1*_c1 + I3*_c1 - _c1*_c2 + _c3
+    _m0_0 = _c3 + _c2*_c0**2
     _m1_0 = 0.0
     _m1_1 = _c3
-    _m2_0 = _c4
+    _m2_0 = I3*_c0
     _m2_1 = 0.0
     _m2_2 = I3
-    _f0 = _c9*(2.0*I3*_c0*psi_dot + I3*phi_dot - _c5*_c6 - _c6*_c7)
-    _f1 = _c8*(-I3*phi_dot*psi_dot + M*g*l - _c10*_c4 + _c10*_c5 + _c10*_c7)
-    _f2 = I3*_c9*psi_dot
+    _f0 = _c5*theta_dot + 2.0*_c6*_c7
+    _f1 = -_c5*psi_dot - _c6*psi_dot**2 + M*_c4*g*l
+    _f2 = I3*_c4*_c7
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -94,28 +91,25 @@ def rhs_lanes(T, Y, P, out, bad):
         I1 = P[3, _l]
         I3 = P[4, _l]
         _c0 = _vcos(theta)
-        _c1 = _c0**2
-        _c2 = M*l**2
-        _c3 = I1 + _c2
-        _c4 = I3*_c0
-        _c5 = I1*_c0
-        _c6 = 2.0*psi_dot
-        _c7 = _c0*_c2
-        _c8 = _vsin(theta)
-        _c9 = _c8*theta_dot
-        _c10 = psi_dot**2
+        _c1 = M*l**2
+        _c2 = I3 - I1 - _c1
+        _c3 = I1 + _c1
+        _c4 = _vsin(theta)
+        _c5 = I3*_c4*phi_dot
+        _c6 = _c0*_c2*_c4
+        _c7 = psi_dot*theta_dot
         out[0, _l] = psi_dot
         out[1, _l] = theta_dot
         out[2, _l] = phi_dot
-        _m0_0 = -I1*_c1 + I3*_c1 - _c1*_c2 + _c3
+        _m0_0 = _c3 + _c2*_c0**2
         _m1_0 = 0.0
         _m1_1 = _c3
-        _m2_0 = _c4
+        _m2_0 = I3*_c0
         _m2_1 = 0.0
         _m2_2 = I3
-        _f0 = _c9*(2.0*I3*_c0*psi_dot + I3*phi_dot - _c5*_c6 - _c6*_c7)
-        _f1 = _c8*(-I3*phi_dot*psi_dot + M*g*l - _c10*_c4 + _c10*_c5 + _c10*_c7)
-        _f2 = I3*_c9*psi_dot
+        _f0 = _c5*theta_dot + 2.0*_c6*_c7
+        _f1 = -_c5*psi_dot - _c6*psi_dot**2 + M*_c4*g*l
+        _f2 = I3*_c4*_c7
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -147,17 +141,16 @@ def mass_matrix(t, y, p, out):
     I1 = p[3]
     I3 = p[4]
     _c0 = math.cos(theta)
-    _c1 = _c0**2
-    _c2 = M*l**2
-    _c3 = I1 + _c2
-    _c4 = I3*_c0
-    out[0, 0] = -I1*_c1 + I3*_c1 - _c1*_c2 + _c3
+    _c1 = M*l**2
+    _c2 = I1 + _c1
+    _c3 = I3*_c0
+    out[0, 0] = _c2 + _c0**2*(I3 - I1 - _c1)
     out[0, 1] = 0.0
-    out[0, 2] = _c4
+    out[0, 2] = _c3
     out[1, 0] = 0.0
-    out[1, 1] = _c3
+    out[1, 1] = _c2
     out[1, 2] = 0.0
-    out[2, 0] = _c4
+    out[2, 0] = _c3
     out[2, 1] = 0.0
     out[2, 2] = I3
 
@@ -174,15 +167,13 @@ def forcing(t, y, p, out):
     g = p[2]
     I1 = p[3]
     I3 = p[4]
-    _c0 = math.cos(theta)
-    _c1 = 2.0*_c0*psi_dot
-    _c2 = M*l**2
-    _c3 = math.sin(theta)
-    _c4 = _c3*theta_dot
-    _c5 = _c0*psi_dot**2
-    out[0] = _c4*(-I1*_c1 + 2.0*I3*_c0*psi_dot + I3*phi_dot - _c1*_c2)
-    out[1] = _c3*(I1*_c5 - I3*_c5 - I3*phi_dot*psi_dot + M*g*l + _c2*_c5)
-    out[2] = I3*_c4*psi_dot
+    _c0 = math.sin(theta)
+    _c1 = I3*_c0*phi_dot
+    _c2 = _c0*(I3 - I1 - M*l**2)*math.cos(theta)
+    _c3 = psi_dot*theta_dot
+    out[0] = _c1*theta_dot + 2.0*_c2*_c3
+    out[1] = -_c1*psi_dot - _c2*psi_dot**2 + M*_c0*g*l
+    out[2] = I3*_c0*_c3
 
 
 @njit(cache=True, error_model="numpy")
@@ -197,13 +188,13 @@ def energy(t, y, p):
     g = p[2]
     I1 = p[3]
     I3 = p[4]
-    _c0 = psi_dot**2
-    _c1 = (0.5)*I1
-    _c2 = theta_dot**2
-    _c3 = (0.5)*I3
-    _c4 = math.cos(theta)
-    _c5 = _c0*_c4**2
-    return I3*_c4*phi_dot*psi_dot + M*_c4*g*l + (0.5)*M*l**2*(_c0 + _c2 - _c5) + _c0*_c1 + _c1*_c2 - _c1*_c5 + _c3*_c5 + _c3*phi_dot**2
+    _c0 = (0.5)*I1
+    _c1 = (0.5)*M*l**2
+    _c2 = _c0 + _c1
+    _c3 = psi_dot**2
+    _c4 = (0.5)*I3
+    _c5 = math.cos(theta)
+    return _c2*_c3 + _c2*theta_dot**2 + _c4*phi_dot**2 + _c3*_c5**2*(_c4 - _c0 - _c1) + I3*_c5*phi_dot*psi_dot + M*_c5*g*l
 
 
 @njit(cache=True, error_model="numpy")
@@ -218,16 +209,13 @@ def energy_function(t, y, p):
     g = p[2]
     I1 = p[3]
     I3 = p[4]
-    _c0 = psi_dot**2
-    _c1 = (0.5)*I1
-    _c2 = _c0*_c1
-    _c3 = theta_dot**2
+    _c0 = (0.5)*I1
+    _c1 = (0.5)*M*l**2
+    _c2 = _c0 + _c1
+    _c3 = psi_dot**2
     _c4 = (0.5)*I3
     _c5 = math.cos(theta)
-    _c6 = (0.5)*M*l**2
-    _c7 = _c5**2
-    _c8 = _c0*_c7
-    return I3*_c5*phi_dot*psi_dot + M*_c5*g*l + _c0*_c6 + _c1*_c3 - _c2*_c7 + _c2 + _c3*_c6 + _c4*_c8 + _c4*phi_dot**2 - _c6*_c8
+    return _c2*_c3 + _c2*theta_dot**2 + _c4*phi_dot**2 + _c3*_c5**2*(_c4 - _c0 - _c1) + I3*_c5*phi_dot*psi_dot + M*_c5*g*l
 
 
 @njit(cache=True, error_model="numpy")
@@ -241,14 +229,13 @@ def momenta(t, y, p, out):
     l = p[1]
     I1 = p[3]
     I3 = p[4]
-    _c0 = I1*psi_dot
-    _c1 = math.cos(theta)
-    _c2 = M*l**2
-    _c3 = _c1**2
-    _c4 = _c3*psi_dot
-    out[0] = I3*_c1*phi_dot + I3*_c4 - _c0*_c3 + _c0 - _c2*_c4 + _c2*psi_dot
-    out[1] = theta_dot*(I1 + _c2)
-    out[2] = I3*(_c1*psi_dot + phi_dot)
+    _c0 = math.cos(theta)
+    _c1 = M*l**2
+    _c2 = I1 + _c1
+    _c3 = I3*phi_dot
+    out[0] = _c0*_c3 + psi_dot*(_c2 + _c0**2*(I3 - I1 - _c1))
+    out[1] = _c2*theta_dot
+    out[2] = _c3 + I3*_c0*psi_dot
 
 
 @njit(cache=True, error_model="numpy")
@@ -262,9 +249,9 @@ def momentum_rate(t, y, p, out):
     g = p[2]
     I1 = p[3]
     I3 = p[4]
-    _c0 = psi_dot**2*math.cos(theta)
+    _c0 = math.sin(theta)
     out[0] = 0.0
-    out[1] = (I1*_c0 - I3*_c0 - I3*phi_dot*psi_dot + M*_c0*l**2 + M*g*l)*math.sin(theta)
+    out[1] = M*_c0*g*l - I3*_c0*phi_dot*psi_dot - _c0*psi_dot**2*(I3 - I1 - M*l**2)*math.cos(theta)
     out[2] = 0.0
 
 
@@ -314,12 +301,11 @@ def velocities(t, y, p, out):
     _p_theta = y[4]
     _p_phi = y[5]
     _c0 = math.cos(theta)
-    _c1 = _c0**2
-    _c2 = M*l**2
-    _c3 = I1 + _c2
-    _m0_0 = -I1*_c1 + I3*_c1 - _c1*_c2 + _c3
+    _c1 = M*l**2
+    _c2 = I1 + _c1
+    _m0_0 = _c2 + _c0**2*(I3 - I1 - _c1)
     _m1_0 = 0.0
-    _m1_1 = _c3
+    _m1_1 = _c2
     _m2_0 = I3*_c0
     _m2_1 = 0.0
     _m2_2 = I3
@@ -365,44 +351,39 @@ def canonical_partials(t, y, p, out):
     I1 = p[3]
     I3 = p[4]
     _c0 = math.cos(theta)
-    _c1 = _c0**2
-    _c2 = M*l**2
-    _c3 = I1 + _c2
-    _c4 = I3*_c0
-    _c5 = math.sin(theta)
-    _c6 = I3*phi_dot
-    _c7 = 2.0*psi_dot
-    _c8 = _c0*_c7
-    _c9 = I1*_c8
-    _c10 = _c4*_c7
-    _c11 = _c2*_c8
-    _c12 = -I3*_c5*psi_dot
-    _c13 = psi_dot**2
-    _c14 = I1*_c13
-    _c15 = _c13*_c2
-    out[0, 0, 0] = -I1*_c1 + I3*_c1 - _c1*_c2 + _c3
+    _c1 = M*l**2
+    _c2 = I3 - I1 - _c1
+    _c3 = _c2*_c0**2
+    _c4 = I1 + _c1
+    _c5 = I3*_c0
+    _c6 = math.sin(theta)
+    _c7 = I3*_c6
+    _c8 = -_c7*phi_dot - 2.0*_c0*_c2*_c6*psi_dot
+    _c9 = -_c7*psi_dot
+    _c10 = psi_dot**2
+    out[0, 0, 0] = _c3 + _c4
     out[0, 0, 1] = 0.0
-    out[0, 0, 2] = _c4
+    out[0, 0, 2] = _c5
     out[0, 1, 0] = 0.0
-    out[0, 1, 1] = _c3
+    out[0, 1, 1] = _c4
     out[0, 1, 2] = 0.0
-    out[0, 2, 0] = _c4
+    out[0, 2, 0] = _c5
     out[0, 2, 1] = 0.0
     out[0, 2, 2] = I3
     out[1, 0, 0] = 0.0
-    out[1, 0, 1] = -_c10*_c5 + _c11*_c5 - _c5*_c6 + _c5*_c9
+    out[1, 0, 1] = _c8
     out[1, 0, 2] = 0.0
     out[1, 1, 0] = 0.0
     out[1, 1, 1] = 0.0
     out[1, 1, 2] = 0.0
     out[1, 2, 0] = 0.0
-    out[1, 2, 1] = _c12
+    out[1, 2, 1] = _c9
     out[1, 2, 2] = 0.0
     out[2, 0, 0] = 0.0
     out[2, 0, 1] = 0.0
     out[2, 0, 2] = 0.0
     out[2, 1, 0] = 0.0
-    out[2, 1, 1] = _c0*(M*g*l + _c0*_c14 + _c0*_c15 - _c13*_c4 - _c6*psi_dot) + _c5*(I3*_c13*_c5 - _c14*_c5 - _c15*_c5)
+    out[2, 1, 1] = -_c10*_c3 + _c10*_c2*_c6**2 - _c5*phi_dot*psi_dot + M*_c0*g*l
     out[2, 1, 2] = 0.0
     out[2, 2, 0] = 0.0
     out[2, 2, 1] = 0.0
@@ -410,9 +391,9 @@ def canonical_partials(t, y, p, out):
     out[3, 0, 0] = 0.0
     out[3, 0, 1] = 0.0
     out[3, 0, 2] = 0.0
-    out[3, 1, 0] = _c5*(-_c10 + _c11 - _c6 + _c9)
+    out[3, 1, 0] = _c8
     out[3, 1, 1] = 0.0
-    out[3, 1, 2] = _c12
+    out[3, 1, 2] = _c9
     out[3, 2, 0] = 0.0
     out[3, 2, 1] = 0.0
     out[3, 2, 2] = 0.0
@@ -2719,87 +2700,74 @@ def taylor_coefficients(t, y, p, X, W):
     g = p[2]
     I1 = p[3]
     I3 = p[4]
-    _c2 = M*l**2
-    _c3 = I1 + _c2
+    _c1 = M*l**2
+    _c2 = I3 - I1 - _c1
+    _c3 = I1 + _c1
     _m1_0 = 0.0
     _m1_1 = _c3
     _m2_1 = 0.0
     _m2_2 = I3
-    _k18 = 2.0*I3
-    _k33 = M*g*l
-    _c8 = W[0]
+    _k18 = M*g*l
+    _c4 = W[0]
     _c0 = W[1]
-    _c1 = W[2]
-    _c4 = W[3]
-    _c5 = W[4]
+    _u2 = W[2]
+    _c5 = W[3]
+    _u4 = W[4]
     _c6 = W[5]
     _c7 = W[6]
-    _c9 = W[7]
-    _c10 = W[8]
-    _u9 = W[9]
-    _u10 = W[10]
+    _u7 = W[7]
+    _u8 = W[8]
+    _m0_0 = W[9]
+    _m2_0 = W[10]
     _u11 = W[11]
     _u12 = W[12]
     _u13 = W[13]
-    _m0_0 = W[14]
+    _f0 = W[14]
     _u15 = W[15]
     _u16 = W[16]
     _u17 = W[17]
     _u19 = W[18]
     _u20 = W[19]
-    _u21 = W[20]
+    _f1 = W[20]
     _u22 = W[21]
-    _u23 = W[22]
-    _f0 = W[23]
-    _u25 = W[24]
+    _f2 = W[22]
+    _l1_0 = W[23]
+    _l2_0 = W[24]
     _u26 = W[25]
     _u27 = W[26]
-    _u28 = W[27]
+    _d1 = W[27]
     _u29 = W[28]
     _u30 = W[29]
     _u31 = W[30]
-    _u32 = W[31]
-    _u34 = W[32]
-    _f1 = W[33]
-    _u36 = W[34]
-    _f2 = W[35]
-    _l1_0 = W[36]
-    _l2_0 = W[37]
-    _u40 = W[38]
-    _u41 = W[39]
-    _d1 = W[40]
-    _u43 = W[41]
-    _u44 = W[42]
-    _u45 = W[43]
-    _l2_1 = W[44]
-    _u47 = W[45]
-    _u48 = W[46]
-    _u49 = W[47]
-    _u50 = W[48]
-    _u51 = W[49]
-    _d2 = W[50]
-    _u53 = W[51]
-    _z1 = W[52]
-    _u55 = W[53]
-    _u56 = W[54]
-    _u57 = W[55]
-    _z2 = W[56]
-    _x2 = W[57]
-    _u60 = W[58]
-    _u61 = W[59]
-    _x1 = W[60]
-    _u63 = W[61]
-    _u64 = W[62]
-    _u65 = W[63]
-    _u66 = W[64]
-    _x0 = W[65]
+    _l2_1 = W[31]
+    _u33 = W[32]
+    _u34 = W[33]
+    _u35 = W[34]
+    _u36 = W[35]
+    _u37 = W[36]
+    _d2 = W[37]
+    _u39 = W[38]
+    _z1 = W[39]
+    _u41 = W[40]
+    _u42 = W[41]
+    _u43 = W[42]
+    _z2 = W[43]
+    _x2 = W[44]
+    _u46 = W[45]
+    _u47 = W[46]
+    _x1 = W[47]
+    _u49 = W[48]
+    _u50 = W[49]
+    _u51 = W[50]
+    _u52 = W[51]
+    _x0 = W[52]
     for i in range(6):
         X[i, 0] = y[i]
     for k in range(order):
         # _c0 = math.cos(theta)
-        # _c8, _c0 = sin(theta), cos(theta)
+        # _c4, _c0 = sin(theta), cos(theta)
         if k == 0:
-            _c8[0] = math.sin(theta[0])
+            _c4[0] = math.sin(theta[0])
             _c0[0] = math.cos(theta[0])
         else:
             _s = 0.0
@@ -2807,108 +2775,79 @@ def taylor_coefficients(t, y, p, X, W):
             for _j in range(1, k + 1):
                 _ja = _j*theta[_j]
                 _s += _ja*_c0[k - _j]
-                _c += _ja*_c8[k - _j]
-            _c8[k] = _s/k
+                _c += _ja*_c4[k - _j]
+            _c4[k] = _s/k
             _c0[k] = -_c/k
-        # _c1 = _c0**2
-        # _c1 = _c0**2
+        # _c4 = math.sin(theta)
+        # _c5 = I3*_c4*phi_dot
+        # _u2 = _c4*phi_dot
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c4[_j]*phi_dot[k - _j]
+        _u2[k] = _s
+        _c5[k] = I3*_u2[k]
+        # _c6 = _c0*_c2*_c4
+        # _u4 = _c0*_c4
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c0[_j]*_c4[k - _j]
+        _u4[k] = _s
+        _c6[k] = _c2*_u4[k]
+        # _c7 = psi_dot*theta_dot
+        # _c7 = psi_dot*theta_dot
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += psi_dot[_j]*theta_dot[k - _j]
+        _c7[k] = _s
+        # _m0_0 = _c3 + _c2*_c0**2
+        # _u7 = _c0**2
         _s = _c0[k//2]*_c0[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_c0[_j]*_c0[k - _j]
-        _c1[k] = _s
-        # _c4 = I3*_c0
-        _c4[k] = I3*_c0[k]
-        # _c5 = I1*_c0
-        _c5[k] = I1*_c0[k]
-        # _c6 = 2.0*psi_dot
-        _c6[k] = 2.0*psi_dot[k]
-        # _c7 = _c0*_c2
-        _c7[k] = _c2*_c0[k]
-        # _c8 = math.sin(theta)
-        # _c9 = _c8*theta_dot
-        # _c9 = _c8*theta_dot
+        _u7[k] = _s
+        _u8[k] = _c2*_u7[k]
+        _m0_0[k] = _u8[k] + _c3 if k == 0 else _u8[k]
+        # _m2_0 = I3*_c0
+        _m2_0[k] = I3*_c0[k]
+        # _f0 = _c5*theta_dot + 2.0*_c6*_c7
+        # _u11 = _c5*theta_dot
         _s = 0.0
         for _j in range(k + 1):
-            _s += _c8[_j]*theta_dot[k - _j]
-        _c9[k] = _s
-        # _c10 = psi_dot**2
-        # _c10 = psi_dot**2
-        _s = psi_dot[k//2]*psi_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*psi_dot[_j]*psi_dot[k - _j]
-        _c10[k] = _s
-        # _m0_0 = -I1*_c1 + I3*_c1 - _c1*_c2 + _c3
-        _u9[k] = I3*_c1[k]
-        _u10[k] = I1*_c1[k]
-        _u11[k] = _c2*_c1[k]
-        _u12[k] = _u9[k] - _u10[k]
-        _u13[k] = _u12[k] - _u11[k]
-        _m0_0[k] = _u13[k] + _c3 if k == 0 else _u13[k]
-        # _m2_0 = _c4
-        # _f0 = _c9*(2.0*I3*_c0*psi_dot + I3*phi_dot - _c5*_c6 - _c6*_c7)
-        _u15[k] = I3*phi_dot[k]
-        # _u16 = _c5*_c6
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c5[_j]*_c6[k - _j]
-        _u16[k] = _s
-        # _u17 = _c6*_c7
+            _s += _c5[_j]*theta_dot[k - _j]
+        _u11[k] = _s
+        # _u12 = _c6*_c7
         _s = 0.0
         for _j in range(k + 1):
             _s += _c6[_j]*_c7[k - _j]
+        _u12[k] = _s
+        _u13[k] = 2.0*_u12[k]
+        _f0[k] = _u11[k] + _u13[k]
+        # _f1 = -_c5*psi_dot - _c6*psi_dot**2 + M*_c4*g*l
+        # _u15 = _c5*psi_dot
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c5[_j]*psi_dot[k - _j]
+        _u15[k] = _s
+        # _u16 = psi_dot**2
+        _s = psi_dot[k//2]*psi_dot[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*psi_dot[_j]*psi_dot[k - _j]
+        _u16[k] = _s
+        # _u17 = _c6*_u16
+        _s = 0.0
+        for _j in range(k + 1):
+            _s += _c6[_j]*_u16[k - _j]
         _u17[k] = _s
-        # _u19 = _c0*psi_dot
+        _u19[k] = _k18*_c4[k]
+        _u20[k] = _u19[k] - _u15[k]
+        _f1[k] = _u20[k] - _u17[k]
+        # _f2 = I3*_c4*_c7
+        # _u22 = _c4*_c7
         _s = 0.0
         for _j in range(k + 1):
-            _s += _c0[_j]*psi_dot[k - _j]
-        _u19[k] = _s
-        _u20[k] = _k18*_u19[k]
-        _u21[k] = _u15[k] + _u20[k]
-        _u22[k] = _u21[k] - _u16[k]
-        _u23[k] = _u22[k] - _u17[k]
-        # _f0 = _c9*_u23
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c9[_j]*_u23[k - _j]
-        _f0[k] = _s
-        # _f1 = _c8*(-I3*phi_dot*psi_dot + M*g*l - _c10*_c4 + _c10*_c5 + _c10*_c7)
-        # _u25 = _c10*_c5
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c10[_j]*_c5[k - _j]
-        _u25[k] = _s
-        # _u26 = _c10*_c7
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c10[_j]*_c7[k - _j]
-        _u26[k] = _s
-        # _u27 = _c10*_c4
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c10[_j]*_c4[k - _j]
-        _u27[k] = _s
-        # _u28 = phi_dot*psi_dot
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += phi_dot[_j]*psi_dot[k - _j]
-        _u28[k] = _s
-        _u29[k] = I3*_u28[k]
-        _u30[k] = _u25[k] + _u26[k]
-        _u31[k] = _u30[k] - _u27[k]
-        _u32[k] = _u31[k] - _u29[k]
-        _u34[k] = _u32[k] + _k33 if k == 0 else _u32[k]
-        # _f1 = _c8*_u34
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c8[_j]*_u34[k - _j]
-        _f1[k] = _s
-        # _f2 = I3*_c9*psi_dot
-        # _u36 = _c9*psi_dot
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c9[_j]*psi_dot[k - _j]
-        _u36[k] = _s
-        _f2[k] = I3*_u36[k]
+            _s += _c4[_j]*_c7[k - _j]
+        _u22[k] = _s
+        _f2[k] = I3*_u22[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
             return 1
@@ -2917,115 +2856,115 @@ def taylor_coefficients(t, y, p, X, W):
         for _j in range(1, k + 1):
             _s -= _m0_0[_j]*_l1_0[k - _j]
         _l1_0[k] = _s/_m0_0[0]
-        # _l2_0 = _c4/_m0_0
-        _s = _c4[k]
+        # _l2_0 = _m2_0/_m0_0
+        _s = _m2_0[k]
         for _j in range(1, k + 1):
             _s -= _m0_0[_j]*_l2_0[k - _j]
         _l2_0[k] = _s/_m0_0[0]
-        # _u40 = _l1_0**2
+        # _u26 = _l1_0**2
         _s = _l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_l1_0[_j]*_l1_0[k - _j]
-        _u40[k] = _s
-        # _u41 = _u40*_m0_0
+        _u26[k] = _s
+        # _u27 = _u26*_m0_0
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u40[_j]*_m0_0[k - _j]
-        _u41[k] = _s
-        _d1[k] = _m1_1 - _u41[k] if k == 0 else -_u41[k]
+            _s += _u26[_j]*_m0_0[k - _j]
+        _u27[k] = _s
+        _d1[k] = _m1_1 - _u27[k] if k == 0 else -_u27[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
-        # _u43 = _l2_0*_l1_0
+        # _u29 = _l2_0*_l1_0
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_0[_j]*_l1_0[k - _j]
-        _u43[k] = _s
-        # _u44 = _u43*_m0_0
+        _u29[k] = _s
+        # _u30 = _u29*_m0_0
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u43[_j]*_m0_0[k - _j]
-        _u44[k] = _s
-        _u45[k] = _m2_1 - _u44[k] if k == 0 else -_u44[k]
-        # _l2_1 = _u45/_d1
-        _s = _u45[k]
+            _s += _u29[_j]*_m0_0[k - _j]
+        _u30[k] = _s
+        _u31[k] = _m2_1 - _u30[k] if k == 0 else -_u30[k]
+        # _l2_1 = _u31/_d1
+        _s = _u31[k]
         for _j in range(1, k + 1):
             _s -= _d1[_j]*_l2_1[k - _j]
         _l2_1[k] = _s/_d1[0]
-        # _u47 = _l2_0**2
+        # _u33 = _l2_0**2
         _s = _l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_l2_0[_j]*_l2_0[k - _j]
-        _u47[k] = _s
-        # _u48 = _u47*_m0_0
+        _u33[k] = _s
+        # _u34 = _u33*_m0_0
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u47[_j]*_m0_0[k - _j]
-        _u48[k] = _s
-        _u49[k] = _m2_2 - _u48[k] if k == 0 else -_u48[k]
-        # _u50 = _l2_1**2
+            _s += _u33[_j]*_m0_0[k - _j]
+        _u34[k] = _s
+        _u35[k] = _m2_2 - _u34[k] if k == 0 else -_u34[k]
+        # _u36 = _l2_1**2
         _s = _l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_l2_1[_j]*_l2_1[k - _j]
-        _u50[k] = _s
-        # _u51 = _u50*_d1
+        _u36[k] = _s
+        # _u37 = _u36*_d1
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u50[_j]*_d1[k - _j]
-        _u51[k] = _s
-        _d2[k] = _u49[k] - _u51[k]
+            _s += _u36[_j]*_d1[k - _j]
+        _u37[k] = _s
+        _d2[k] = _u35[k] - _u37[k]
         if k == 0 and not _d2[0] > _PIVOT_TOLERANCE*abs(_m2_2):
             return 3
-        # _u53 = _l1_0*_f0
+        # _u39 = _l1_0*_f0
         _s = 0.0
         for _j in range(k + 1):
             _s += _l1_0[_j]*_f0[k - _j]
-        _u53[k] = _s
-        _z1[k] = _f1[k] - _u53[k]
-        # _u55 = _l2_0*_f0
+        _u39[k] = _s
+        _z1[k] = _f1[k] - _u39[k]
+        # _u41 = _l2_0*_f0
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_0[_j]*_f0[k - _j]
-        _u55[k] = _s
-        _u56[k] = _f2[k] - _u55[k]
-        # _u57 = _l2_1*_z1
+        _u41[k] = _s
+        _u42[k] = _f2[k] - _u41[k]
+        # _u43 = _l2_1*_z1
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_1[_j]*_z1[k - _j]
-        _u57[k] = _s
-        _z2[k] = _u56[k] - _u57[k]
+        _u43[k] = _s
+        _z2[k] = _u42[k] - _u43[k]
         # _x2 = _z2/_d2
         _s = _z2[k]
         for _j in range(1, k + 1):
             _s -= _d2[_j]*_x2[k - _j]
         _x2[k] = _s/_d2[0]
-        # _u60 = _z1/_d1
+        # _u46 = _z1/_d1
         _s = _z1[k]
         for _j in range(1, k + 1):
-            _s -= _d1[_j]*_u60[k - _j]
-        _u60[k] = _s/_d1[0]
-        # _u61 = _l2_1*_x2
+            _s -= _d1[_j]*_u46[k - _j]
+        _u46[k] = _s/_d1[0]
+        # _u47 = _l2_1*_x2
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_1[_j]*_x2[k - _j]
-        _u61[k] = _s
-        _x1[k] = _u60[k] - _u61[k]
-        # _u63 = _f0/_m0_0
+        _u47[k] = _s
+        _x1[k] = _u46[k] - _u47[k]
+        # _u49 = _f0/_m0_0
         _s = _f0[k]
         for _j in range(1, k + 1):
-            _s -= _m0_0[_j]*_u63[k - _j]
-        _u63[k] = _s/_m0_0[0]
-        # _u64 = _l1_0*_x1
+            _s -= _m0_0[_j]*_u49[k - _j]
+        _u49[k] = _s/_m0_0[0]
+        # _u50 = _l1_0*_x1
         _s = 0.0
         for _j in range(k + 1):
             _s += _l1_0[_j]*_x1[k - _j]
-        _u64[k] = _s
-        _u65[k] = _u63[k] - _u64[k]
-        # _u66 = _l2_0*_x2
+        _u50[k] = _s
+        _u51[k] = _u49[k] - _u50[k]
+        # _u52 = _l2_0*_x2
         _s = 0.0
         for _j in range(k + 1):
             _s += _l2_0[_j]*_x2[k - _j]
-        _u66[k] = _s
-        _x0[k] = _u65[k] - _u66[k]
+        _u52[k] = _s
+        _x0[k] = _u51[k] - _u52[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = psi_dot[k]/(k + 1)
         X[1, k + 1] = theta_dot[k]/(k + 1)
@@ -3036,8 +2975,8 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (74 series operations per order).
-TAYLOR_WORK = 66
+#: Rows of the work array of `taylor_coefficients` (61 series operations per order).
+TAYLOR_WORK = 53
 
 
 # ----------------------------------------------------------------------------

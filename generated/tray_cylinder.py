@@ -31,7 +31,7 @@ def rhs(t, y, p, out):
     _c0 = I/R**2
     out[0] = X_dot
     _m0_0 = M + _c0
-    _f0 = -A*Omega**2*_c0*math.sin(Omega*t)
+    _f0 = -A*_c0*Omega**2*math.sin(Omega*t)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -57,7 +57,7 @@ def rhs_lanes(T, Y, P, out, bad):
         _c0 = I/R**2
         out[0, _l] = X_dot
         _m0_0 = M + _c0
-        _f0 = -A*Omega**2*_c0*_vsin(Omega*t)
+        _f0 = -A*_c0*Omega**2*_vsin(Omega*t)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -73,7 +73,7 @@ def mass_matrix(t, y, p, out):
     M = p[0]
     R = p[1]
     I = p[2]
-    out[0, 0] = I/R**2 + M
+    out[0, 0] = M + I/R**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -95,7 +95,7 @@ def energy(t, y, p):
     I = p[2]
     A = p[3]
     Omega = p[4]
-    return (0.5)*I*(-A*Omega*math.cos(Omega*t) + X_dot)**2/R**2 + (0.5)*M*X_dot**2
+    return (0.5)*M*X_dot**2 + (0.5)*I*(X_dot - A*Omega*math.cos(Omega*t))**2/R**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -107,9 +107,8 @@ def energy_function(t, y, p):
     I = p[2]
     A = p[3]
     Omega = p[4]
-    _c0 = (0.5)*X_dot**2
-    _c1 = I/R**2
-    return -0.5*A**2*Omega**2*_c1*math.cos(Omega*t)**2 + M*_c0 + _c0*_c1
+    _c0 = (0.5)*I/R**2
+    return X_dot**2*(_c0 + (0.5)*M) - _c0*A**2*Omega**2*math.cos(Omega*t)**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -122,7 +121,7 @@ def momenta(t, y, p, out):
     A = p[3]
     Omega = p[4]
     _c0 = I/R**2
-    out[0] = -A*Omega*_c0*math.cos(Omega*t) + M*X_dot + X_dot*_c0
+    out[0] = X_dot*(M + _c0) - A*Omega*_c0*math.cos(Omega*t)
 
 
 @njit(cache=True, error_model="numpy")
@@ -156,7 +155,7 @@ def velocities(t, y, p, out):
     _p_X = y[1]
     _c0 = I/R**2
     _m0_0 = M + _c0
-    _f0 = A*Omega*_c0*math.cos(Omega*t) + _p_X
+    _f0 = _p_X + A*Omega*_c0*math.cos(Omega*t)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -175,7 +174,7 @@ def canonical_partials(t, y, p, out):
     M = p[0]
     R = p[1]
     I = p[2]
-    out[0, 0, 0] = I/R**2 + M
+    out[0, 0, 0] = M + I/R**2
     out[1, 0, 0] = 0.0
     out[2, 0, 0] = 0.0
     out[3, 0, 0] = 0.0
@@ -2481,7 +2480,7 @@ def taylor_coefficients(t, y, p, X, W):
     Omega = p[4]
     _c0 = I/R**2
     _m0_0 = M + _c0
-    _k0 = -A*Omega**2*_c0
+    _k0 = -A*_c0*Omega**2
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
     _k5 = 1.0/_m0_0
@@ -2499,7 +2498,7 @@ def taylor_coefficients(t, y, p, X, W):
     if order > 0:
         _t[1] = 1.0
     for k in range(order):
-        # _f0 = -A*Omega**2*_c0*math.sin(Omega*t)
+        # _f0 = -A*_c0*Omega**2*math.sin(Omega*t)
         _u1[k] = Omega*_t[k]
         # _u2, _u3 = sin(_u1), cos(_u1)
         if k == 0:

@@ -31,16 +31,18 @@ def rhs(t, y, p, out):
     alpha = p[4]
     k = p[5]
     c = p[6]
-    _c0 = math.sin(alpha)
-    _c1 = math.sin(theta)
-    _c2 = math.cos(alpha)
-    _c3 = math.cos(theta)
-    _c4 = -_c0*_c1 + _c2*_c3
-    _c5 = _c0*_c3
-    _c6 = _c1*_c2
+    _c0 = math.cos(alpha)
+    _c1 = _c0**2
+    _c2 = math.sin(alpha)
+    _c3 = _c2**2
+    _c4 = math.sin(theta)
+    _c5 = math.cos(theta)
+    _c6 = omega**2
+    _c7 = _c0*_c2*_c6
+    _c8 = I*Omega*omega
     out[0] = theta_dot
     _m0_0 = I_X
-    _f0 = I*_c4*omega*(Omega + omega*(_c5 + _c6)) + (0.5)*I_X*_c4*omega**2*(-2.0*_c5 - 2.0*_c6) - c*theta_dot - k*theta
+    _f0 = -c*theta_dot - k*theta + _c0*_c5*_c8 + _c7*_c4**2*(I_X - I) + _c7*_c5**2*(I - I_X) - _c2*_c4*_c8 + _c4*_c5*_c6*(I*_c1 + I_X*_c3 - I*_c3 - I_X*_c1)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -65,16 +67,18 @@ def rhs_lanes(T, Y, P, out, bad):
         alpha = P[4, _l]
         k = P[5, _l]
         c = P[6, _l]
-        _c0 = _vsin(alpha)
-        _c1 = _vsin(theta)
-        _c2 = _vcos(alpha)
-        _c3 = _vcos(theta)
-        _c4 = -_c0*_c1 + _c2*_c3
-        _c5 = _c0*_c3
-        _c6 = _c1*_c2
+        _c0 = _vcos(alpha)
+        _c1 = _c0**2
+        _c2 = _vsin(alpha)
+        _c3 = _c2**2
+        _c4 = _vsin(theta)
+        _c5 = _vcos(theta)
+        _c6 = omega**2
+        _c7 = _c0*_c2*_c6
+        _c8 = I*Omega*omega
         out[0, _l] = theta_dot
         _m0_0 = I_X
-        _f0 = I*_c4*omega*(Omega + omega*(_c5 + _c6)) + (0.5)*I_X*_c4*omega**2*(-2.0*_c5 - 2.0*_c6) - c*theta_dot - k*theta
+        _f0 = -c*theta_dot - k*theta + _c0*_c5*_c8 + _c7*_c4**2*(I_X - I) + _c7*_c5**2*(I - I_X) - _c2*_c4*_c8 + _c4*_c5*_c6*(I*_c1 + I_X*_c3 - I*_c3 - I_X*_c1)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -103,14 +107,16 @@ def forcing(t, y, p, out):
     alpha = p[4]
     k = p[5]
     c = p[6]
-    _c0 = math.sin(alpha)
-    _c1 = math.sin(theta)
-    _c2 = math.cos(alpha)
-    _c3 = math.cos(theta)
-    _c4 = -_c0*_c1 + _c2*_c3
-    _c5 = _c0*_c3
-    _c6 = _c1*_c2
-    out[0] = I*_c4*omega*(Omega + omega*(_c5 + _c6)) + (0.5)*I_X*_c4*omega**2*(-2.0*_c5 - 2.0*_c6) - c*theta_dot - k*theta
+    _c0 = math.cos(alpha)
+    _c1 = _c0**2
+    _c2 = math.sin(alpha)
+    _c3 = _c2**2
+    _c4 = math.sin(theta)
+    _c5 = math.cos(theta)
+    _c6 = omega**2
+    _c7 = _c0*_c2*_c6
+    _c8 = I*Omega*omega
+    out[0] = -c*theta_dot - k*theta + _c0*_c5*_c8 + _c7*_c4**2*(I_X - I) + _c7*_c5**2*(I - I_X) - _c2*_c4*_c8 + _c4*_c5*_c6*(I*_c1 + I_X*_c3 - I*_c3 - I_X*_c1)
 
 
 @njit(cache=True, error_model="numpy")
@@ -123,12 +129,12 @@ def energy(t, y, p):
     Omega = p[2]
     omega = p[3]
     alpha = p[4]
-    _c0 = (0.5)*I_X
+    _c0 = math.cos(theta)
     _c1 = math.sin(alpha)
-    _c2 = math.cos(theta)
-    _c3 = math.sin(theta)
-    _c4 = math.cos(alpha)
-    return (0.5)*I*(Omega + omega*(_c1*_c2 + _c3*_c4))**2 + _c0*omega**2*(-_c1*_c3 + _c2*_c4)**2 + _c0*theta_dot**2
+    _c2 = math.sin(theta)
+    _c3 = math.cos(alpha)
+    _c4 = (0.5)*I_X
+    return _c4*theta_dot**2 + (0.5)*I*(Omega + omega*(_c0*_c1 + _c2*_c3))**2 + _c4*omega**2*(_c0*_c3 - _c1*_c2)**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -141,11 +147,19 @@ def energy_function(t, y, p):
     Omega = p[2]
     omega = p[3]
     alpha = p[4]
-    _c0 = math.sin(alpha)
-    _c1 = math.cos(theta)
-    _c2 = math.sin(theta)
-    _c3 = math.cos(alpha)
-    return -0.5*I*(Omega + omega*(_c0*_c1 + _c2*_c3))**2 - 0.5*I_X*omega**2*(-_c0*_c2 + _c1*_c3)**2 + (0.5)*I_X*theta_dot**2
+    _c0 = (0.5)*I_X
+    _c1 = I*Omega*omega
+    _c2 = math.cos(theta)
+    _c3 = math.sin(alpha)
+    _c4 = _c2*_c3
+    _c5 = (0.5)*I
+    _c6 = omega**2
+    _c7 = _c3**2
+    _c8 = math.cos(alpha)
+    _c9 = _c8**2
+    _c10 = math.sin(theta)
+    _c11 = _c10*_c8
+    return _c0*theta_dot**2 - _c1*_c11 - _c1*_c4 - _c5*Omega**2 + _c6*_c10**2*(-_c0*_c7 - _c5*_c9) + _c6*_c2**2*(-_c0*_c9 - _c5*_c7) + _c11*_c4*_c6*(I_X - I)
 
 
 @njit(cache=True, error_model="numpy")
@@ -168,14 +182,16 @@ def momentum_rate(t, y, p, out):
     alpha = p[4]
     k = p[5]
     c = p[6]
-    _c0 = math.sin(alpha)
-    _c1 = math.sin(theta)
-    _c2 = math.cos(alpha)
-    _c3 = math.cos(theta)
-    _c4 = -_c0*_c1 + _c2*_c3
-    _c5 = _c0*_c3
-    _c6 = _c1*_c2
-    out[0] = I*_c4*omega*(Omega + omega*(_c5 + _c6)) + (0.5)*I_X*_c4*omega**2*(-2.0*_c5 - 2.0*_c6) - c*theta_dot - k*theta
+    _c0 = math.cos(alpha)
+    _c1 = _c0**2
+    _c2 = math.sin(alpha)
+    _c3 = _c2**2
+    _c4 = math.sin(theta)
+    _c5 = math.cos(theta)
+    _c6 = omega**2
+    _c7 = _c0*_c2*_c6
+    _c8 = I*Omega*omega
+    out[0] = -c*theta_dot - k*theta + _c0*_c5*_c8 + _c7*_c4**2*(I_X - I) + _c7*_c5**2*(I - I_X) - _c2*_c4*_c8 + _c4*_c5*_c6*(I*_c1 + I_X*_c3 - I*_c3 - I_X*_c1)
 
 
 @njit(cache=True, error_model="numpy")
@@ -195,19 +211,19 @@ def rest_partials(t, y, p, out):
     alpha = p[4]
     k = p[5]
     c = p[6]
-    _c0 = omega**2
-    _c1 = math.sin(alpha)
-    _c2 = math.sin(theta)
-    _c3 = _c1*_c2
-    _c4 = math.cos(alpha)
-    _c5 = math.cos(theta)
-    _c6 = -_c3 + _c4*_c5
-    _c7 = _c1*_c5
-    _c8 = _c2*_c4
-    _c9 = _c7 + _c8
-    _c10 = -_c9
-    _c11 = (0.5)*I_X*_c0
-    out[0, 0, 0] = I*_c0*_c6**2 + I*_c10*omega*(Omega + _c9*omega) + _c10*_c11*(-2.0*_c7 - 2.0*_c8) + _c11*_c6*(2.0*_c3 - 2.0*_c4*_c5) - k
+    _c0 = math.sin(theta)
+    _c1 = math.cos(alpha)
+    _c2 = _c1**2
+    _c3 = math.sin(alpha)
+    _c4 = _c3**2
+    _c5 = omega**2
+    _c6 = _c5*(I*_c2 + I_X*_c4 - I*_c4 - I_X*_c2)
+    _c7 = _c0*_c1
+    _c8 = I*Omega*omega
+    _c9 = math.cos(theta)
+    _c10 = _c3*_c9
+    _c11 = 2.0*_c10*_c5*_c7
+    out[0, 0, 0] = -k + _c11*(I_X - I) + _c6*_c9**2 - _c10*_c8 - _c11*(I - I_X) - _c6*_c0**2 - _c7*_c8
     out[1, 0, 0] = -c
 
 
@@ -242,21 +258,21 @@ def canonical_partials(t, y, p, out):
     alpha = p[4]
     k = p[5]
     c = p[6]
-    _c0 = omega**2
-    _c1 = math.sin(alpha)
-    _c2 = math.sin(theta)
+    _c0 = I*Omega*omega
+    _c1 = math.cos(theta)
+    _c2 = math.sin(alpha)
     _c3 = _c1*_c2
     _c4 = math.cos(alpha)
-    _c5 = math.cos(theta)
-    _c6 = -_c3 + _c4*_c5
-    _c7 = _c1*_c5
-    _c8 = _c2*_c4
-    _c9 = _c7 + _c8
-    _c10 = -_c9
-    _c11 = (0.5)*I_X*_c0
+    _c5 = _c4**2
+    _c6 = _c2**2
+    _c7 = omega**2
+    _c8 = _c7*(I*_c5 + I_X*_c6 - I*_c6 - I_X*_c5)
+    _c9 = math.sin(theta)
+    _c10 = _c4*_c9
+    _c11 = 2.0*_c10*_c3*_c7
     out[0, 0, 0] = I_X
     out[1, 0, 0] = 0.0
-    out[2, 0, 0] = I*_c0*_c6**2 + I*_c10*omega*(Omega + _c9*omega) + _c10*_c11*(-2.0*_c7 - 2.0*_c8) + _c11*_c6*(2.0*_c3 - 2.0*_c4*_c5) - k
+    out[2, 0, 0] = -k + _c11*(I_X - I) + _c8*_c1**2 - _c0*_c10 - _c0*_c3 - _c11*(I - I_X) - _c8*_c9**2
     out[3, 0, 0] = -c
 
 
@@ -2561,99 +2577,98 @@ def taylor_coefficients(t, y, p, X, W):
     alpha = p[4]
     k = p[5]
     c = p[6]
-    _c0 = math.sin(alpha)
-    _c2 = math.cos(alpha)
+    _c0 = math.cos(alpha)
+    _c1 = _c0**2
+    _c2 = math.sin(alpha)
+    _c3 = _c2**2
+    _c6 = omega**2
+    _c7 = _c0*_c2*_c6
+    _c8 = I*Omega*omega
     _m0_0 = I_X
-    _k9 = I*omega
-    _k15 = (0.5)*I_X*omega**2
+    _k4 = _c0*_c8
+    _k6 = _c7*(I_X - I)
+    _k9 = _c7*(I - I_X)
+    _k12 = _c2*_c8
+    _k14 = _c6*(I*_c1 + I_X*_c3 - I*_c3 - I_X*_c1)
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
-    _k25 = 1.0/_m0_0
-    _c1 = W[0]
-    _c3 = W[1]
+    _k23 = 1.0/_m0_0
+    _c4 = W[0]
+    _c5 = W[1]
     _u2 = W[2]
     _u3 = W[3]
-    _c4 = W[4]
-    _c5 = W[5]
-    _c6 = W[6]
-    _u7 = W[7]
-    _u8 = W[8]
-    _u10 = W[9]
-    _u11 = W[10]
-    _u12 = W[11]
-    _u13 = W[12]
-    _u14 = W[13]
-    _u16 = W[14]
-    _u17 = W[15]
-    _u18 = W[16]
-    _u19 = W[17]
-    _u20 = W[18]
-    _u21 = W[19]
-    _u22 = W[20]
-    _u23 = W[21]
-    _f0 = W[22]
-    _x0 = W[23]
+    _u5 = W[4]
+    _u7 = W[5]
+    _u8 = W[6]
+    _u10 = W[7]
+    _u11 = W[8]
+    _u13 = W[9]
+    _u15 = W[10]
+    _u16 = W[11]
+    _u17 = W[12]
+    _u18 = W[13]
+    _u19 = W[14]
+    _u20 = W[15]
+    _u21 = W[16]
+    _f0 = W[17]
+    _x0 = W[18]
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
-        # _c1 = math.sin(theta)
-        # _c1, _c3 = sin(theta), cos(theta)
+        # _c4 = math.sin(theta)
+        # _c4, _c5 = sin(theta), cos(theta)
         if k == 0:
-            _c1[0] = math.sin(theta[0])
-            _c3[0] = math.cos(theta[0])
+            _c4[0] = math.sin(theta[0])
+            _c5[0] = math.cos(theta[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
                 _ja = _j*theta[_j]
-                _s += _ja*_c3[k - _j]
-                _c += _ja*_c1[k - _j]
-            _c1[k] = _s/k
-            _c3[k] = -_c/k
-        # _c3 = math.cos(theta)
-        # _c4 = -_c0*_c1 + _c2*_c3
-        _u2[k] = _c2*_c3[k]
-        _u3[k] = _c0*_c1[k]
-        _c4[k] = _u2[k] - _u3[k]
-        # _c5 = _c0*_c3
-        _c5[k] = _c0*_c3[k]
-        # _c6 = _c1*_c2
-        _c6[k] = _c2*_c1[k]
-        # _f0 = I*_c4*omega*(Omega + omega*(_c5 + _c6)) + (0.5)*I_X*_c4*omega**2*(-2.0*_c5 - 2.0*_c6) - c*theta_dot - k*theta
-        _u7[k] = c*theta_dot[k]
-        _u8[k] = k*theta[k]
-        _u10[k] = _c5[k] + _c6[k]
-        _u11[k] = omega*_u10[k]
-        _u12[k] = _u11[k] + Omega if k == 0 else _u11[k]
-        # _u13 = _c4*_u12
+                _s += _ja*_c5[k - _j]
+                _c += _ja*_c4[k - _j]
+            _c4[k] = _s/k
+            _c5[k] = -_c/k
+        # _c5 = math.cos(theta)
+        # _f0 = -c*theta_dot - k*theta + _c0*_c5*_c8 + _c7*_c4**2*(I_X - I) + _c7*_c5**2*(I - I_X) - _c2*_c4*_c8 + _c4*_c5*_c6*(I*_c1 + I_X*_c3 - I*_c3 - I_X*_c1)
+        _u2[k] = c*theta_dot[k]
+        _u3[k] = k*theta[k]
+        _u5[k] = _k4*_c5[k]
+        # _u7 = _c4**2
+        _s = _c4[k//2]*_c4[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_c4[_j]*_c4[k - _j]
+        _u7[k] = _s
+        _u8[k] = _k6*_u7[k]
+        # _u10 = _c5**2
+        _s = _c5[k//2]*_c5[k//2] if k % 2 == 0 else 0.0
+        for _j in range((k + 1)//2):
+            _s += 2.0*_c5[_j]*_c5[k - _j]
+        _u10[k] = _s
+        _u11[k] = _k9*_u10[k]
+        _u13[k] = _k12*_c4[k]
+        # _u15 = _c4*_c5
         _s = 0.0
         for _j in range(k + 1):
-            _s += _c4[_j]*_u12[k - _j]
-        _u13[k] = _s
-        _u14[k] = _k9*_u13[k]
-        _u16[k] = 2.0*_c5[k]
-        _u17[k] = 2.0*_c6[k]
-        _u18[k] = -_u16[k]
-        _u19[k] = _u18[k] - _u17[k]
-        # _u20 = _c4*_u19
-        _s = 0.0
-        for _j in range(k + 1):
-            _s += _c4[_j]*_u19[k - _j]
-        _u20[k] = _s
-        _u21[k] = _k15*_u20[k]
-        _u22[k] = _u14[k] + _u21[k]
-        _u23[k] = _u22[k] - _u7[k]
-        _f0[k] = _u23[k] - _u8[k]
+            _s += _c4[_j]*_c5[k - _j]
+        _u15[k] = _s
+        _u16[k] = _k14*_u15[k]
+        _u17[k] = _u5[k] + _u8[k]
+        _u18[k] = _u17[k] + _u11[k]
+        _u19[k] = _u18[k] + _u16[k]
+        _u20[k] = _u19[k] - _u2[k]
+        _u21[k] = _u20[k] - _u3[k]
+        _f0[k] = _u21[k] - _u13[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _x0[k] = _k25*_f0[k]
+        _x0[k] = _k23*_f0[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta_dot[k]/(k + 1)
         X[1, k + 1] = _x0[k]/(k + 1)
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (25 series operations per order).
-TAYLOR_WORK = 24
+#: Rows of the work array of `taylor_coefficients` (20 series operations per order).
+TAYLOR_WORK = 19
 
 
 # ----------------------------------------------------------------------------

