@@ -199,7 +199,7 @@ def heyoka_section_times(t_end):
     state = [float(model.q0[0]), float(model.q0[1]), float(model.qd0[0]), float(model.qd0[1])]
     ta = hy.taylor_adaptive(system, state, nt_events=[event])
     ta.propagate_until(t_end)
-    return np.array(found)
+    return np.array([t for t in found if t > 1e-9])  # heyoka also reports the start, which lies on the section
 
 
 def section_henon_heiles(compiled_model, have_heyoka, t_end):
@@ -223,18 +223,34 @@ def section_henon_heiles(compiled_model, have_heyoka, t_end):
               f"{np.max(np.abs(b[:10] - h[:10])):.1e} |")
 
 
+COLD = r"""
+import json, sys, tempfile, time
+import lagcomp as lc
+from lagcomp import examples
+with tempfile.TemporaryDirectory() as fresh:
+    model = lc.compile(examples.get(sys.argv[1]), cache_dir=fresh)
+    times = {}
+    for method in ("taylor", "dop853"):
+        start = time.perf_counter()
+        model.simulate((0, 0.1), method=method, progress=False)
+        times[method] = time.perf_counter() - start
+print(json.dumps(times))
+"""
+
+
 def section_cost(names):
+    import subprocess
+
     from lagcomp.codegen.lower import lower
     from lagcomp.codegen.taylor import Unsupported, decompose
     from lagcomp.mechanics.lagrange import derive
 
-    print("\n## 5. Cost of the Taylor kernel\n")
-    print("| example | rhs ops after CSE | series ops per order | decompose + print ms | first taylor run s "
-          "(compile) | first dop853 run s (compile) |")
+    print("\n## 5. Cost of the Taylor kernel (first runs in a fresh process and cache: numba compilation)\n")
+    print("| example | rhs ops after CSE | series ops per order | decompose ms | first taylor run s | "
+          "first dop853 run s |")
     print("|---|---|---|---|---|---|")
     for name in names:
-        system = examples.get(name)
-        ir = lower(derive(system))
+        ir = lower(derive(examples.get(name)))
         rhs = ir.kernel("rhs")
         start = time.perf_counter()
         try:
@@ -243,15 +259,10 @@ def section_cost(names):
             print(f"| {name} | {rhs.operation_count} | refused: {err} | | | |")
             continue
         emit_ms = 1e3 * (time.perf_counter() - start)
-        with tempfile.TemporaryDirectory() as fresh:
-            model = lc.compile(system, cache_dir=fresh)
-            times = []
-            for method in ("taylor", "dop853"):
-                start = time.perf_counter()
-                model.simulate((0, 0.1), method=method, progress=False)
-                times.append(time.perf_counter() - start)
-        print(f"| {name} | {rhs.operation_count} | {program.operation_count} | {emit_ms:.1f} | {times[0]:.1f} | "
-              f"{times[1]:.1f} |")
+        out = subprocess.run([sys.executable, "-c", COLD, name], capture_output=True, text=True, check=True)
+        times = json.loads(out.stdout.strip().splitlines()[-1])
+        print(f"| {name} | {rhs.operation_count} | {program.operation_count} | {emit_ms:.1f} | "
+              f"{times['taylor']:.1f} | {times['dop853']:.1f} |")
 
 
 def main() -> None:
@@ -270,7 +281,7 @@ def main() -> None:
         section_long_run(pendulum, have_heyoka, 1e3 if args.quick else 1e4)
         section_kepler(cache_dir, 1000 if args.quick else 10_000)
         section_henon_heiles(lc.compile(examples.get("henon_heiles"), cache_dir=cache_dir), have_heyoka, 2000)
-    section_cost(["double_pendulum", "henon_heiles", "n_link_pendulum_3", "symmetric_top"])
+    section_cost(["double_pendulum", "henon_heiles", "n_link_pendulum_3", "symmetric_top", "rope_friction"])
 
 
 if __name__ == "__main__":

@@ -2517,33 +2517,47 @@ def taylor_coefficients(t, y, p, X, W):
             _u2[0] = math.sin(_c0[0])
             _u3[0] = math.cos(_c0[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_c0[k]
+            _s = _ja*_u3[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u2[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_c0[_j]
+                _jb = (_j + 1)*_c0[_j + 1]
                 _s += _ja*_u3[k - _j]
                 _c += _ja*_u2[k - _j]
-            _u2[k] = _s/k
-            _u3[k] = -_c/k
+                _r += _jb*_u3[k - 1 - _j]
+                _d += _jb*_u2[k - 1 - _j]
+            _u2[k] = (_s + _r)/k
+            _u3[k] = -(_c + _d)/k
         _u4[k] = _c1*_u3[k]
         # _u5, _u6 = sin(_u4), cos(_u4)
         if k == 0:
             _u5[0] = math.sin(_u4[0])
             _u6[0] = math.cos(_u4[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_u4[k]
+            _s = _ja*_u6[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u5[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_u4[_j]
+                _jb = (_j + 1)*_u4[_j + 1]
                 _s += _ja*_u6[k - _j]
                 _c += _ja*_u5[k - _j]
-            _u5[k] = _s/k
-            _u6[k] = -_c/k
+                _r += _jb*_u6[k - 1 - _j]
+                _d += _jb*_u5[k - 1 - _j]
+            _u5[k] = (_s + _r)/k
+            _u6[k] = -(_c + _d)/k
         # _u7 = _u6*_u2
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u6[k]*_u2[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u6[_j]*_u2[k - _j]
-        _u7[k] = _s
+            _r += _u6[_j + 1]*_u2[k - 1 - _j]
+        _u7[k] = _s + _r
         _f0[k] = _k1*_u7[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k9*_f0[k]

@@ -2658,98 +2658,135 @@ def taylor_coefficients(t, y, p, X, W):
             _u1[0] = math.sin(_c1[0])
             _u2[0] = math.cos(_c1[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_c1[k]
+            _s = _ja*_u2[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u1[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_c1[_j]
+                _jb = (_j + 1)*_c1[_j + 1]
                 _s += _ja*_u2[k - _j]
                 _c += _ja*_u1[k - _j]
-            _u1[k] = _s/k
-            _u2[k] = -_c/k
+                _r += _jb*_u2[k - 1 - _j]
+                _d += _jb*_u1[k - 1 - _j]
+            _u1[k] = (_s + _r)/k
+            _u2[k] = -(_c + _d)/k
         _c4[k] = _c3*_u1[k]
         # _m1_0 = _c3*math.cos(_c1)
         _m1_0[k] = _c3*_u2[k]
         # _f0 = _c4*theta2_dot**2 - _c0*g*l1*math.sin(theta1)
         # _u5 = theta2_dot**2
-        _s = theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta2_dot[_j]*theta2_dot[k - _j]
-        _u5[k] = _s
+        _m = (k + 1)//2
+        _s = theta2_dot[_m - 1]*theta2_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += theta2_dot[_j]*theta2_dot[k - _j]
+            _r += theta2_dot[_j + 1]*theta2_dot[k - 1 - _j]
+        _u5[k] = 2.0*(_s + _r) + (theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0)
         # _u6 = _c4*_u5
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c4[k]*_u5[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c4[_j]*_u5[k - _j]
-        _u6[k] = _s
+            _r += _c4[_j + 1]*_u5[k - 1 - _j]
+        _u6[k] = _s + _r
         # _u8, _u9 = sin(theta1), cos(theta1)
         if k == 0:
             _u8[0] = math.sin(theta1[0])
             _u9[0] = math.cos(theta1[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta1[k]
+            _s = _ja*_u9[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u8[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta1[_j]
+                _jb = (_j + 1)*theta1[_j + 1]
                 _s += _ja*_u9[k - _j]
                 _c += _ja*_u8[k - _j]
-            _u8[k] = _s/k
-            _u9[k] = -_c/k
+                _r += _jb*_u9[k - 1 - _j]
+                _d += _jb*_u8[k - 1 - _j]
+            _u8[k] = (_s + _r)/k
+            _u9[k] = -(_c + _d)/k
         _u10[k] = _k7*_u8[k]
         _f0[k] = _u6[k] - _u10[k]
         # _f1 = -_c4*theta1_dot**2 - _c2*g*math.sin(theta2)
         # _u12 = theta1_dot**2
-        _s = theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta1_dot[_j]*theta1_dot[k - _j]
-        _u12[k] = _s
+        _m = (k + 1)//2
+        _s = theta1_dot[_m - 1]*theta1_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += theta1_dot[_j]*theta1_dot[k - _j]
+            _r += theta1_dot[_j + 1]*theta1_dot[k - 1 - _j]
+        _u12[k] = 2.0*(_s + _r) + (theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0)
         # _u13 = _c4*_u12
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c4[k]*_u12[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c4[_j]*_u12[k - _j]
-        _u13[k] = _s
+            _r += _c4[_j + 1]*_u12[k - 1 - _j]
+        _u13[k] = _s + _r
         # _u15, _u16 = sin(theta2), cos(theta2)
         if k == 0:
             _u15[0] = math.sin(theta2[0])
             _u16[0] = math.cos(theta2[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta2[k]
+            _s = _ja*_u16[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u15[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta2[_j]
+                _jb = (_j + 1)*theta2[_j + 1]
                 _s += _ja*_u16[k - _j]
                 _c += _ja*_u15[k - _j]
-            _u15[k] = _s/k
-            _u16[k] = -_c/k
+                _r += _jb*_u16[k - 1 - _j]
+                _d += _jb*_u15[k - 1 - _j]
+            _u15[k] = (_s + _r)/k
+            _u16[k] = -(_c + _d)/k
         _u17[k] = _k14*_u15[k]
         _u18[k] = -_u13[k]
         _f1[k] = _u18[k] - _u17[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _l1_0[k] = _k20*_m1_0[k]
         # _u22 = _l1_0**2
-        _s = _l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_l1_0[_j]*_l1_0[k - _j]
-        _u22[k] = _s
+        _m = (k + 1)//2
+        _s = _l1_0[_m - 1]*_l1_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _l1_0[_j]*_l1_0[k - _j]
+            _r += _l1_0[_j + 1]*_l1_0[k - 1 - _j]
+        _u22[k] = 2.0*(_s + _r) + (_l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0)
         _u23[k] = _m0_0*_u22[k]
         _d1[k] = _m1_1 - _u23[k] if k == 0 else -_u23[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
         # _u25 = _l1_0*_f0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l1_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l1_0[_j]*_f0[k - _j]
-        _u25[k] = _s
+            _r += _l1_0[_j + 1]*_f0[k - 1 - _j]
+        _u25[k] = _s + _r
         _z1[k] = _f1[k] - _u25[k]
         # _x1 = _z1/_d1
-        _s = _z1[k]
-        for _j in range(1, k + 1):
+        _s = _z1[k] - (_d1[k]*_x1[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _d1[_j]*_x1[k - _j]
-        _x1[k] = _s/_d1[0]
+            _r += _d1[_j + 1]*_x1[k - 1 - _j]
+        _x1[k] = (_s - _r)/_d1[0]
         _u28[k] = _k20*_f0[k]
         # _u29 = _l1_0*_x1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l1_0[k]*_x1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l1_0[_j]*_x1[k - _j]
-        _u29[k] = _s
+            _r += _l1_0[_j + 1]*_x1[k - 1 - _j]
+        _u29[k] = _s + _r
         _x0[k] = _u28[k] - _u29[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta1_dot[k]/(k + 1)
@@ -2759,7 +2796,7 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (30 series operations per order).
+#: Rows of the work array of `taylor_coefficients` (29 series operations per order).
 TAYLOR_WORK = 28
 
 

@@ -2543,14 +2543,20 @@ def taylor_coefficients(t, y, p, X, W):
             _u2[0] = math.sin(_u1[0])
             _u3[0] = math.cos(_u1[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_u1[k]
+            _s = _ja*_u3[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u2[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_u1[_j]
+                _jb = (_j + 1)*_u1[_j + 1]
                 _s += _ja*_u3[k - _j]
                 _c += _ja*_u2[k - _j]
-            _u2[k] = _s/k
-            _u3[k] = -_c/k
+                _r += _jb*_u3[k - 1 - _j]
+                _d += _jb*_u2[k - 1 - _j]
+            _u2[k] = (_s + _r)/k
+            _u3[k] = -(_c + _d)/k
         _u4[k] = _k0*_u3[k]
         _u6[k] = _u4[k] + _k5 if k == 0 else _u4[k]
         # _u7, _u8 = sin(theta), cos(theta)
@@ -2558,19 +2564,27 @@ def taylor_coefficients(t, y, p, X, W):
             _u7[0] = math.sin(theta[0])
             _u8[0] = math.cos(theta[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta[k]
+            _s = _ja*_u8[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u7[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta[_j]
+                _jb = (_j + 1)*theta[_j + 1]
                 _s += _ja*_u8[k - _j]
                 _c += _ja*_u7[k - _j]
-            _u7[k] = _s/k
-            _u8[k] = -_c/k
+                _r += _jb*_u8[k - 1 - _j]
+                _d += _jb*_u7[k - 1 - _j]
+            _u7[k] = (_s + _r)/k
+            _u8[k] = -(_c + _d)/k
         # _f0 = _u6*_u7
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u6[k]*_u7[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u6[_j]*_u7[k - _j]
-        _f0[k] = _s
+            _r += _u6[_j + 1]*_u7[k - 1 - _j]
+        _f0[k] = _s + _r
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k10*_f0[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).

@@ -2812,22 +2812,30 @@ def taylor_coefficients(t, y, p, X, W):
         _u2[k] = -_u1[k]
         _u3[k] = _u2[k] + -1.0 if k == 0 else _u2[k]
         # _f0 = x*_u3
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = x[k]*_u3[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += x[_j]*_u3[k - _j]
-        _f0[k] = _s
+            _r += x[_j + 1]*_u3[k - 1 - _j]
+        _f0[k] = _s + _r
         # _f1 = -y_ + lam*y_**2 - lam*x**2
         # _u5 = y_**2
-        _s = y_[k//2]*y_[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*y_[_j]*y_[k - _j]
-        _u5[k] = _s
+        _m = (k + 1)//2
+        _s = y_[_m - 1]*y_[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += y_[_j]*y_[k - _j]
+            _r += y_[_j + 1]*y_[k - 1 - _j]
+        _u5[k] = 2.0*(_s + _r) + (y_[k//2]*y_[k//2] if k % 2 == 0 else 0.0)
         _u6[k] = lam*_u5[k]
         # _u7 = x**2
-        _s = x[k//2]*x[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*x[_j]*x[k - _j]
-        _u7[k] = _s
+        _m = (k + 1)//2
+        _s = x[_m - 1]*x[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += x[_j]*x[k - _j]
+            _r += x[_j + 1]*x[k - 1 - _j]
+        _u7[k] = 2.0*(_s + _r) + (x[k//2]*x[k//2] if k % 2 == 0 else 0.0)
         _u8[k] = lam*_u7[k]
         _u9[k] = _u6[k] - y_[k]
         _f1[k] = _u9[k] - _u8[k]

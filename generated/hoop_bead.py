@@ -2559,14 +2559,20 @@ def taylor_coefficients(t, y, p, X, W):
             _c1[0] = math.sin(theta[0])
             _u1[0] = math.cos(theta[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta[k]
+            _s = _ja*_u1[0] if k % 2 == 1 else 0.0
+            _c = _ja*_c1[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta[_j]
+                _jb = (_j + 1)*theta[_j + 1]
                 _s += _ja*_u1[k - _j]
                 _c += _ja*_c1[k - _j]
-            _c1[k] = _s/k
-            _u1[k] = -_c/k
+                _r += _jb*_u1[k - 1 - _j]
+                _d += _jb*_c1[k - 1 - _j]
+            _c1[k] = (_s + _r)/k
+            _u1[k] = -(_c + _d)/k
         # _c2 = math.cos(2.0*t)
         _u2[k] = 2.0*_t[k]
         # _u3, _c2 = sin(_u2), cos(_u2)
@@ -2574,34 +2580,47 @@ def taylor_coefficients(t, y, p, X, W):
             _u3[0] = math.sin(_u2[0])
             _c2[0] = math.cos(_u2[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_u2[k]
+            _s = _ja*_c2[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u3[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_u2[_j]
+                _jb = (_j + 1)*_u2[_j + 1]
                 _s += _ja*_c2[k - _j]
                 _c += _ja*_u3[k - _j]
-            _u3[k] = _s/k
-            _c2[k] = -_c/k
+                _r += _jb*_c2[k - 1 - _j]
+                _d += _jb*_u3[k - 1 - _j]
+            _u3[k] = (_s + _r)/k
+            _c2[k] = -(_c + _d)/k
         # _f0 = _c1*(_c0*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon)*math.cos(theta) + R*_c1*g*m
         # _u6 = _c2**2
-        _s = _c2[k//2]*_c2[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_c2[_j]*_c2[k - _j]
-        _u6[k] = _s
+        _m = (k + 1)//2
+        _s = _c2[_m - 1]*_c2[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _c2[_j]*_c2[k - _j]
+            _r += _c2[_j + 1]*_c2[k - 1 - _j]
+        _u6[k] = 2.0*(_s + _r) + (_c2[k//2]*_c2[k//2] if k % 2 == 0 else 0.0)
         _u7[k] = _k5*_u6[k]
         _u9[k] = _k8*_c2[k]
         _u10[k] = _u7[k] + _u9[k]
         _u12[k] = _u10[k] + _k11 if k == 0 else _u10[k]
         # _u13 = _c1*_u12
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c1[k]*_u12[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c1[_j]*_u12[k - _j]
-        _u13[k] = _s
+            _r += _c1[_j + 1]*_u12[k - 1 - _j]
+        _u13[k] = _s + _r
         # _u14 = _u13*_u1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u13[k]*_u1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u13[_j]*_u1[k - _j]
-        _u14[k] = _s
+            _r += _u13[_j + 1]*_u1[k - 1 - _j]
+        _u14[k] = _s + _r
         _u16[k] = _k15*_c1[k]
         _f0[k] = _u14[k] + _u16[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.

@@ -2520,20 +2520,29 @@ def taylor_coefficients(t, y, p, X, W):
             _u1[0] = math.sin(_c0[0])
             _c1[0] = math.cos(_c0[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_c0[k]
+            _s = _ja*_c1[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u1[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_c0[_j]
+                _jb = (_j + 1)*_c0[_j + 1]
                 _s += _ja*_c1[k - _j]
                 _c += _ja*_u1[k - _j]
-            _u1[k] = _s/k
-            _c1[k] = -_c/k
+                _r += _jb*_c1[k - 1 - _j]
+                _d += _jb*_u1[k - 1 - _j]
+            _u1[k] = (_s + _r)/k
+            _c1[k] = -(_c + _d)/k
         # _m0_0 = 4.0*_c2*_c1**2
         # _u4 = _c1**2
-        _s = _c1[k//2]*_c1[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_c1[_j]*_c1[k - _j]
-        _u4[k] = _s
+        _m = (k + 1)//2
+        _s = _c1[_m - 1]*_c1[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _c1[_j]*_c1[k - _j]
+            _r += _c1[_j + 1]*_c1[k - 1 - _j]
+        _u4[k] = 2.0*(_s + _r) + (_c1[k//2]*_c1[k//2] if k % 2 == 0 else 0.0)
         _m0_0[k] = _k3*_u4[k]
         # _f0 = -R*g*m*math.sin(theta) + 2.0*_c1*_c2*theta_dot**2*math.sin(_c0)
         # _u7, _u8 = sin(theta), cos(theta)
@@ -2541,47 +2550,62 @@ def taylor_coefficients(t, y, p, X, W):
             _u7[0] = math.sin(theta[0])
             _u8[0] = math.cos(theta[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta[k]
+            _s = _ja*_u8[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u7[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta[_j]
+                _jb = (_j + 1)*theta[_j + 1]
                 _s += _ja*_u8[k - _j]
                 _c += _ja*_u7[k - _j]
-            _u7[k] = _s/k
-            _u8[k] = -_c/k
+                _r += _jb*_u8[k - 1 - _j]
+                _d += _jb*_u7[k - 1 - _j]
+            _u7[k] = (_s + _r)/k
+            _u8[k] = -(_c + _d)/k
         _u9[k] = _k6*_u7[k]
         # _u11 = theta_dot**2
-        _s = theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta_dot[_j]*theta_dot[k - _j]
-        _u11[k] = _s
+        _m = (k + 1)//2
+        _s = theta_dot[_m - 1]*theta_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += theta_dot[_j]*theta_dot[k - _j]
+            _r += theta_dot[_j + 1]*theta_dot[k - 1 - _j]
+        _u11[k] = 2.0*(_s + _r) + (theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0)
         # _u12 = _c1*_u11
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c1[k]*_u11[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c1[_j]*_u11[k - _j]
-        _u12[k] = _s
+            _r += _c1[_j + 1]*_u11[k - 1 - _j]
+        _u12[k] = _s + _r
         # _u13 = _u12*_u1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u12[k]*_u1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u12[_j]*_u1[k - _j]
-        _u13[k] = _s
+            _r += _u12[_j + 1]*_u1[k - 1 - _j]
+        _u13[k] = _s + _r
         _u14[k] = _k10*_u13[k]
         _f0[k] = _u14[k] - _u9[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
             return 1
         # _x0 = _f0/_m0_0
-        _s = _f0[k]
-        for _j in range(1, k + 1):
+        _s = _f0[k] - (_m0_0[k]*_x0[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _m0_0[_j]*_x0[k - _j]
-        _x0[k] = _s/_m0_0[0]
+            _r += _m0_0[_j + 1]*_x0[k - 1 - _j]
+        _x0[k] = (_s - _r)/_m0_0[0]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta_dot[k]/(k + 1)
         X[1, k + 1] = _x0[k]/(k + 1)
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (15 series operations per order).
+#: Rows of the work array of `taylor_coefficients` (14 series operations per order).
 TAYLOR_WORK = 14
 
 

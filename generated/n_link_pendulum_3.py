@@ -2919,66 +2919,93 @@ def taylor_coefficients(t, y, p, X, W):
         _c9[k] = theta2[k] - theta3[k]
         # _c11 = theta2_dot**2
         # _c11 = theta2_dot**2
-        _s = theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta2_dot[_j]*theta2_dot[k - _j]
-        _c11[k] = _s
+        _m = (k + 1)//2
+        _s = theta2_dot[_m - 1]*theta2_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += theta2_dot[_j]*theta2_dot[k - _j]
+            _r += theta2_dot[_j + 1]*theta2_dot[k - 1 - _j]
+        _c11[k] = 2.0*(_s + _r) + (theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0)
         # _c12 = _c5*math.sin(_c3)
         # _u5, _u6 = sin(_c3), cos(_c3)
         if k == 0:
             _u5[0] = math.sin(_c3[0])
             _u6[0] = math.cos(_c3[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_c3[k]
+            _s = _ja*_u6[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u5[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_c3[_j]
+                _jb = (_j + 1)*_c3[_j + 1]
                 _s += _ja*_u6[k - _j]
                 _c += _ja*_u5[k - _j]
-            _u5[k] = _s/k
-            _u6[k] = -_c/k
+                _r += _jb*_u6[k - 1 - _j]
+                _d += _jb*_u5[k - 1 - _j]
+            _u5[k] = (_s + _r)/k
+            _u6[k] = -(_c + _d)/k
         _c12[k] = _c5*_u5[k]
         # _c13 = theta3_dot**2
         # _c13 = theta3_dot**2
-        _s = theta3_dot[k//2]*theta3_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta3_dot[_j]*theta3_dot[k - _j]
-        _c13[k] = _s
+        _m = (k + 1)//2
+        _s = theta3_dot[_m - 1]*theta3_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += theta3_dot[_j]*theta3_dot[k - _j]
+            _r += theta3_dot[_j + 1]*theta3_dot[k - 1 - _j]
+        _c13[k] = 2.0*(_s + _r) + (theta3_dot[k//2]*theta3_dot[k//2] if k % 2 == 0 else 0.0)
         # _c14 = _c8*math.sin(_c6)
         # _u9, _u10 = sin(_c6), cos(_c6)
         if k == 0:
             _u9[0] = math.sin(_c6[0])
             _u10[0] = math.cos(_c6[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_c6[k]
+            _s = _ja*_u10[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u9[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_c6[_j]
+                _jb = (_j + 1)*_c6[_j + 1]
                 _s += _ja*_u10[k - _j]
                 _c += _ja*_u9[k - _j]
-            _u9[k] = _s/k
-            _u10[k] = -_c/k
+                _r += _jb*_u10[k - 1 - _j]
+                _d += _jb*_u9[k - 1 - _j]
+            _u9[k] = (_s + _r)/k
+            _u10[k] = -(_c + _d)/k
         _c14[k] = _c8*_u9[k]
         # _c15 = theta1_dot**2
         # _c15 = theta1_dot**2
-        _s = theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta1_dot[_j]*theta1_dot[k - _j]
-        _c15[k] = _s
+        _m = (k + 1)//2
+        _s = theta1_dot[_m - 1]*theta1_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += theta1_dot[_j]*theta1_dot[k - _j]
+            _r += theta1_dot[_j + 1]*theta1_dot[k - 1 - _j]
+        _c15[k] = 2.0*(_s + _r) + (theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0)
         # _c16 = _c10*math.sin(_c9)
         # _u13, _u14 = sin(_c9), cos(_c9)
         if k == 0:
             _u13[0] = math.sin(_c9[0])
             _u14[0] = math.cos(_c9[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_c9[k]
+            _s = _ja*_u14[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u13[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_c9[_j]
+                _jb = (_j + 1)*_c9[_j + 1]
                 _s += _ja*_u14[k - _j]
                 _c += _ja*_u13[k - _j]
-            _u13[k] = _s/k
-            _u14[k] = -_c/k
+                _r += _jb*_u14[k - 1 - _j]
+                _d += _jb*_u13[k - 1 - _j]
+            _u13[k] = (_s + _r)/k
+            _u14[k] = -(_c + _d)/k
         _c16[k] = _c10*_u13[k]
         # _m1_0 = _c5*math.cos(_c3)
         _m1_0[k] = _c5*_u6[k]
@@ -2988,83 +3015,113 @@ def taylor_coefficients(t, y, p, X, W):
         _m2_1[k] = _c10*_u14[k]
         # _f0 = _c11*_c12 + _c13*_c14 - _c1*g*l1*math.sin(theta1)
         # _u19 = _c11*_c12
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c11[k]*_c12[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c11[_j]*_c12[k - _j]
-        _u19[k] = _s
+            _r += _c11[_j + 1]*_c12[k - 1 - _j]
+        _u19[k] = _s + _r
         # _u20 = _c13*_c14
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c13[k]*_c14[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c13[_j]*_c14[k - _j]
-        _u20[k] = _s
+            _r += _c13[_j + 1]*_c14[k - 1 - _j]
+        _u20[k] = _s + _r
         # _u22, _u23 = sin(theta1), cos(theta1)
         if k == 0:
             _u22[0] = math.sin(theta1[0])
             _u23[0] = math.cos(theta1[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta1[k]
+            _s = _ja*_u23[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u22[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta1[_j]
+                _jb = (_j + 1)*theta1[_j + 1]
                 _s += _ja*_u23[k - _j]
                 _c += _ja*_u22[k - _j]
-            _u22[k] = _s/k
-            _u23[k] = -_c/k
+                _r += _jb*_u23[k - 1 - _j]
+                _d += _jb*_u22[k - 1 - _j]
+            _u22[k] = (_s + _r)/k
+            _u23[k] = -(_c + _d)/k
         _u24[k] = _k21*_u22[k]
         _u25[k] = _u19[k] + _u20[k]
         _f0[k] = _u25[k] - _u24[k]
         # _f1 = -_c12*_c15 - _c13*_c16 - _c4*g*math.sin(theta2)
         # _u27 = _c12*_c15
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c12[k]*_c15[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c12[_j]*_c15[k - _j]
-        _u27[k] = _s
+            _r += _c12[_j + 1]*_c15[k - 1 - _j]
+        _u27[k] = _s + _r
         # _u28 = _c13*_c16
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c13[k]*_c16[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c13[_j]*_c16[k - _j]
-        _u28[k] = _s
+            _r += _c13[_j + 1]*_c16[k - 1 - _j]
+        _u28[k] = _s + _r
         # _u30, _u31 = sin(theta2), cos(theta2)
         if k == 0:
             _u30[0] = math.sin(theta2[0])
             _u31[0] = math.cos(theta2[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta2[k]
+            _s = _ja*_u31[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u30[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta2[_j]
+                _jb = (_j + 1)*theta2[_j + 1]
                 _s += _ja*_u31[k - _j]
                 _c += _ja*_u30[k - _j]
-            _u30[k] = _s/k
-            _u31[k] = -_c/k
+                _r += _jb*_u31[k - 1 - _j]
+                _d += _jb*_u30[k - 1 - _j]
+            _u30[k] = (_s + _r)/k
+            _u31[k] = -(_c + _d)/k
         _u32[k] = _k29*_u30[k]
         _u33[k] = -_u27[k]
         _u34[k] = _u33[k] - _u28[k]
         _f1[k] = _u34[k] - _u32[k]
         # _f2 = _c11*_c16 - _c14*_c15 - _c7*g*math.sin(theta3)
         # _u36 = _c11*_c16
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c11[k]*_c16[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c11[_j]*_c16[k - _j]
-        _u36[k] = _s
+            _r += _c11[_j + 1]*_c16[k - 1 - _j]
+        _u36[k] = _s + _r
         # _u37 = _c14*_c15
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c14[k]*_c15[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c14[_j]*_c15[k - _j]
-        _u37[k] = _s
+            _r += _c14[_j + 1]*_c15[k - 1 - _j]
+        _u37[k] = _s + _r
         # _u39, _u40 = sin(theta3), cos(theta3)
         if k == 0:
             _u39[0] = math.sin(theta3[0])
             _u40[0] = math.cos(theta3[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta3[k]
+            _s = _ja*_u40[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u39[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta3[_j]
+                _jb = (_j + 1)*theta3[_j + 1]
                 _s += _ja*_u40[k - _j]
                 _c += _ja*_u39[k - _j]
-            _u39[k] = _s/k
-            _u40[k] = -_c/k
+                _r += _jb*_u40[k - 1 - _j]
+                _d += _jb*_u39[k - 1 - _j]
+            _u39[k] = (_s + _r)/k
+            _u40[k] = -(_c + _d)/k
         _u41[k] = _k38*_u39[k]
         _u42[k] = _u36[k] - _u37[k]
         _f2[k] = _u42[k] - _u41[k]
@@ -3072,92 +3129,123 @@ def taylor_coefficients(t, y, p, X, W):
         _l1_0[k] = _k44*_m1_0[k]
         _l2_0[k] = _k44*_m2_0[k]
         # _u47 = _l1_0**2
-        _s = _l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_l1_0[_j]*_l1_0[k - _j]
-        _u47[k] = _s
+        _m = (k + 1)//2
+        _s = _l1_0[_m - 1]*_l1_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _l1_0[_j]*_l1_0[k - _j]
+            _r += _l1_0[_j + 1]*_l1_0[k - 1 - _j]
+        _u47[k] = 2.0*(_s + _r) + (_l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0)
         _u48[k] = _m0_0*_u47[k]
         _d1[k] = _m1_1 - _u48[k] if k == 0 else -_u48[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
         # _u50 = _l2_0*_l1_0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_0[k]*_l1_0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_0[_j]*_l1_0[k - _j]
-        _u50[k] = _s
+            _r += _l2_0[_j + 1]*_l1_0[k - 1 - _j]
+        _u50[k] = _s + _r
         _u51[k] = _m0_0*_u50[k]
         _u52[k] = _m2_1[k] - _u51[k]
         # _l2_1 = _u52/_d1
-        _s = _u52[k]
-        for _j in range(1, k + 1):
+        _s = _u52[k] - (_d1[k]*_l2_1[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _d1[_j]*_l2_1[k - _j]
-        _l2_1[k] = _s/_d1[0]
+            _r += _d1[_j + 1]*_l2_1[k - 1 - _j]
+        _l2_1[k] = (_s - _r)/_d1[0]
         # _u54 = _l2_0**2
-        _s = _l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_l2_0[_j]*_l2_0[k - _j]
-        _u54[k] = _s
+        _m = (k + 1)//2
+        _s = _l2_0[_m - 1]*_l2_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _l2_0[_j]*_l2_0[k - _j]
+            _r += _l2_0[_j + 1]*_l2_0[k - 1 - _j]
+        _u54[k] = 2.0*(_s + _r) + (_l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0)
         _u55[k] = _m0_0*_u54[k]
         _u56[k] = _m2_2 - _u55[k] if k == 0 else -_u55[k]
         # _u57 = _l2_1**2
-        _s = _l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_l2_1[_j]*_l2_1[k - _j]
-        _u57[k] = _s
+        _m = (k + 1)//2
+        _s = _l2_1[_m - 1]*_l2_1[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _l2_1[_j]*_l2_1[k - _j]
+            _r += _l2_1[_j + 1]*_l2_1[k - 1 - _j]
+        _u57[k] = 2.0*(_s + _r) + (_l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0)
         # _u58 = _u57*_d1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u57[k]*_d1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u57[_j]*_d1[k - _j]
-        _u58[k] = _s
+            _r += _u57[_j + 1]*_d1[k - 1 - _j]
+        _u58[k] = _s + _r
         _d2[k] = _u56[k] - _u58[k]
         if k == 0 and not _d2[0] > _PIVOT_TOLERANCE*abs(_m2_2):
             return 3
         # _u60 = _l1_0*_f0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l1_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l1_0[_j]*_f0[k - _j]
-        _u60[k] = _s
+            _r += _l1_0[_j + 1]*_f0[k - 1 - _j]
+        _u60[k] = _s + _r
         _z1[k] = _f1[k] - _u60[k]
         # _u62 = _l2_0*_f0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_0[_j]*_f0[k - _j]
-        _u62[k] = _s
+            _r += _l2_0[_j + 1]*_f0[k - 1 - _j]
+        _u62[k] = _s + _r
         _u63[k] = _f2[k] - _u62[k]
         # _u64 = _l2_1*_z1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_1[k]*_z1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_1[_j]*_z1[k - _j]
-        _u64[k] = _s
+            _r += _l2_1[_j + 1]*_z1[k - 1 - _j]
+        _u64[k] = _s + _r
         _z2[k] = _u63[k] - _u64[k]
         # _x2 = _z2/_d2
-        _s = _z2[k]
-        for _j in range(1, k + 1):
+        _s = _z2[k] - (_d2[k]*_x2[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _d2[_j]*_x2[k - _j]
-        _x2[k] = _s/_d2[0]
+            _r += _d2[_j + 1]*_x2[k - 1 - _j]
+        _x2[k] = (_s - _r)/_d2[0]
         # _u67 = _z1/_d1
-        _s = _z1[k]
-        for _j in range(1, k + 1):
+        _s = _z1[k] - (_d1[k]*_u67[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _d1[_j]*_u67[k - _j]
-        _u67[k] = _s/_d1[0]
+            _r += _d1[_j + 1]*_u67[k - 1 - _j]
+        _u67[k] = (_s - _r)/_d1[0]
         # _u68 = _l2_1*_x2
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_1[k]*_x2[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_1[_j]*_x2[k - _j]
-        _u68[k] = _s
+            _r += _l2_1[_j + 1]*_x2[k - 1 - _j]
+        _u68[k] = _s + _r
         _x1[k] = _u67[k] - _u68[k]
         _u70[k] = _k44*_f0[k]
         # _u71 = _l1_0*_x1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l1_0[k]*_x1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l1_0[_j]*_x1[k - _j]
-        _u71[k] = _s
+            _r += _l1_0[_j + 1]*_x1[k - 1 - _j]
+        _u71[k] = _s + _r
         _u72[k] = _u70[k] - _u71[k]
         # _u73 = _l2_0*_x2
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_0[k]*_x2[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_0[_j]*_x2[k - _j]
-        _u73[k] = _s
+            _r += _l2_0[_j + 1]*_x2[k - 1 - _j]
+        _u73[k] = _s + _r
         _x0[k] = _u72[k] - _u73[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta1_dot[k]/(k + 1)
@@ -3169,7 +3257,7 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (73 series operations per order).
+#: Rows of the work array of `taylor_coefficients` (71 series operations per order).
 TAYLOR_WORK = 71
 
 

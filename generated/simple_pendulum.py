@@ -2487,14 +2487,20 @@ def taylor_coefficients(t, y, p, X, W):
             _u1[0] = math.sin(theta[0])
             _u2[0] = math.cos(theta[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta[k]
+            _s = _ja*_u2[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u1[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta[_j]
+                _jb = (_j + 1)*theta[_j + 1]
                 _s += _ja*_u2[k - _j]
                 _c += _ja*_u1[k - _j]
-            _u1[k] = _s/k
-            _u2[k] = -_c/k
+                _r += _jb*_u2[k - 1 - _j]
+                _d += _jb*_u1[k - 1 - _j]
+            _u1[k] = (_s + _r)/k
+            _u2[k] = -(_c + _d)/k
         _f0[k] = _k0*_u1[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k4*_f0[k]

@@ -2596,52 +2596,72 @@ def taylor_coefficients(t, y, p, X, W):
             _c1[0] = math.sin(theta[0])
             _u1[0] = math.cos(theta[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta[k]
+            _s = _ja*_u1[0] if k % 2 == 1 else 0.0
+            _c = _ja*_c1[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta[_j]
+                _jb = (_j + 1)*theta[_j + 1]
                 _s += _ja*_u1[k - _j]
                 _c += _ja*_c1[k - _j]
-            _c1[k] = _s/k
-            _u1[k] = -_c/k
+                _r += _jb*_u1[k - 1 - _j]
+                _d += _jb*_c1[k - 1 - _j]
+            _c1[k] = (_s + _r)/k
+            _u1[k] = -(_c + _d)/k
         # _c2 = _c0*_c1*math.cos(theta)
         # _u2 = _c1*_u1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c1[k]*_u1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c1[_j]*_u1[k - _j]
-        _u2[k] = _s
+            _r += _c1[_j + 1]*_u1[k - 1 - _j]
+        _u2[k] = _s + _r
         _c2[k] = _c0*_u2[k]
         # _m1_1 = _c0*_c1**2
         # _u4 = _c1**2
-        _s = _c1[k//2]*_c1[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_c1[_j]*_c1[k - _j]
-        _u4[k] = _s
+        _m = (k + 1)//2
+        _s = _c1[_m - 1]*_c1[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _c1[_j]*_c1[k - _j]
+            _r += _c1[_j + 1]*_c1[k - 1 - _j]
+        _u4[k] = 2.0*(_s + _r) + (_c1[k//2]*_c1[k//2] if k % 2 == 0 else 0.0)
         _m1_1[k] = _c0*_u4[k]
         # _f0 = _c2*phi_dot**2 - _c1*g*l*m
         # _u6 = phi_dot**2
-        _s = phi_dot[k//2]*phi_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*phi_dot[_j]*phi_dot[k - _j]
-        _u6[k] = _s
+        _m = (k + 1)//2
+        _s = phi_dot[_m - 1]*phi_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += phi_dot[_j]*phi_dot[k - _j]
+            _r += phi_dot[_j + 1]*phi_dot[k - 1 - _j]
+        _u6[k] = 2.0*(_s + _r) + (phi_dot[k//2]*phi_dot[k//2] if k % 2 == 0 else 0.0)
         # _u7 = _c2*_u6
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c2[k]*_u6[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c2[_j]*_u6[k - _j]
-        _u7[k] = _s
+            _r += _c2[_j + 1]*_u6[k - 1 - _j]
+        _u7[k] = _s + _r
         _u9[k] = _k8*_c1[k]
         _f0[k] = _u7[k] - _u9[k]
         # _f1 = -2.0*_c2*phi_dot*theta_dot
         # _u11 = _c2*phi_dot
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c2[k]*phi_dot[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c2[_j]*phi_dot[k - _j]
-        _u11[k] = _s
+            _r += _c2[_j + 1]*phi_dot[k - 1 - _j]
+        _u11[k] = _s + _r
         # _u12 = _u11*theta_dot
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u11[k]*theta_dot[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u11[_j]*theta_dot[k - _j]
-        _u12[k] = _s
+            _r += _u11[_j + 1]*theta_dot[k - 1 - _j]
+        _u12[k] = _s + _r
         _f1[k] = -2.0*_u12[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _d1[k] = _m1_1[k] + _k17 if k == 0 else _m1_1[k]
@@ -2650,10 +2670,12 @@ def taylor_coefficients(t, y, p, X, W):
         _u19[k] = _k14*_f0[k]
         _z1[k] = _f1[k] - _u19[k]
         # _x1 = _z1/_d1
-        _s = _z1[k]
-        for _j in range(1, k + 1):
+        _s = _z1[k] - (_d1[k]*_x1[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _d1[_j]*_x1[k - _j]
-        _x1[k] = _s/_d1[0]
+            _r += _d1[_j + 1]*_x1[k - 1 - _j]
+        _x1[k] = (_s - _r)/_d1[0]
         _u23[k] = _k22*_f0[k]
         _u24[k] = _k14*_x1[k]
         _x0[k] = _u23[k] - _u24[k]
@@ -2665,7 +2687,7 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (24 series operations per order).
+#: Rows of the work array of `taylor_coefficients` (23 series operations per order).
 TAYLOR_WORK = 20
 
 

@@ -2770,200 +2770,271 @@ def taylor_coefficients(t, y, p, X, W):
             _c4[0] = math.sin(theta[0])
             _c0[0] = math.cos(theta[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta[k]
+            _s = _ja*_c0[0] if k % 2 == 1 else 0.0
+            _c = _ja*_c4[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta[_j]
+                _jb = (_j + 1)*theta[_j + 1]
                 _s += _ja*_c0[k - _j]
                 _c += _ja*_c4[k - _j]
-            _c4[k] = _s/k
-            _c0[k] = -_c/k
+                _r += _jb*_c0[k - 1 - _j]
+                _d += _jb*_c4[k - 1 - _j]
+            _c4[k] = (_s + _r)/k
+            _c0[k] = -(_c + _d)/k
         # _c4 = math.sin(theta)
         # _c5 = I3*_c4*phi_dot
         # _u2 = _c4*phi_dot
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c4[k]*phi_dot[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c4[_j]*phi_dot[k - _j]
-        _u2[k] = _s
+            _r += _c4[_j + 1]*phi_dot[k - 1 - _j]
+        _u2[k] = _s + _r
         _c5[k] = I3*_u2[k]
         # _c6 = _c0*_c2*_c4
         # _u4 = _c0*_c4
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c0[k]*_c4[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c0[_j]*_c4[k - _j]
-        _u4[k] = _s
+            _r += _c0[_j + 1]*_c4[k - 1 - _j]
+        _u4[k] = _s + _r
         _c6[k] = _c2*_u4[k]
         # _c7 = psi_dot*theta_dot
         # _c7 = psi_dot*theta_dot
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = psi_dot[k]*theta_dot[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += psi_dot[_j]*theta_dot[k - _j]
-        _c7[k] = _s
+            _r += psi_dot[_j + 1]*theta_dot[k - 1 - _j]
+        _c7[k] = _s + _r
         # _m0_0 = _c3 + _c2*_c0**2
         # _u7 = _c0**2
-        _s = _c0[k//2]*_c0[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_c0[_j]*_c0[k - _j]
-        _u7[k] = _s
+        _m = (k + 1)//2
+        _s = _c0[_m - 1]*_c0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _c0[_j]*_c0[k - _j]
+            _r += _c0[_j + 1]*_c0[k - 1 - _j]
+        _u7[k] = 2.0*(_s + _r) + (_c0[k//2]*_c0[k//2] if k % 2 == 0 else 0.0)
         _u8[k] = _c2*_u7[k]
         _m0_0[k] = _u8[k] + _c3 if k == 0 else _u8[k]
         # _m2_0 = I3*_c0
         _m2_0[k] = I3*_c0[k]
         # _f0 = _c5*theta_dot + 2.0*_c6*_c7
         # _u11 = _c5*theta_dot
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c5[k]*theta_dot[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c5[_j]*theta_dot[k - _j]
-        _u11[k] = _s
+            _r += _c5[_j + 1]*theta_dot[k - 1 - _j]
+        _u11[k] = _s + _r
         # _u12 = _c6*_c7
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c6[k]*_c7[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c6[_j]*_c7[k - _j]
-        _u12[k] = _s
+            _r += _c6[_j + 1]*_c7[k - 1 - _j]
+        _u12[k] = _s + _r
         _u13[k] = 2.0*_u12[k]
         _f0[k] = _u11[k] + _u13[k]
         # _f1 = -_c5*psi_dot - _c6*psi_dot**2 + M*_c4*g*l
         # _u15 = _c5*psi_dot
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c5[k]*psi_dot[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c5[_j]*psi_dot[k - _j]
-        _u15[k] = _s
+            _r += _c5[_j + 1]*psi_dot[k - 1 - _j]
+        _u15[k] = _s + _r
         # _u16 = psi_dot**2
-        _s = psi_dot[k//2]*psi_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*psi_dot[_j]*psi_dot[k - _j]
-        _u16[k] = _s
+        _m = (k + 1)//2
+        _s = psi_dot[_m - 1]*psi_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += psi_dot[_j]*psi_dot[k - _j]
+            _r += psi_dot[_j + 1]*psi_dot[k - 1 - _j]
+        _u16[k] = 2.0*(_s + _r) + (psi_dot[k//2]*psi_dot[k//2] if k % 2 == 0 else 0.0)
         # _u17 = _c6*_u16
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c6[k]*_u16[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c6[_j]*_u16[k - _j]
-        _u17[k] = _s
+            _r += _c6[_j + 1]*_u16[k - 1 - _j]
+        _u17[k] = _s + _r
         _u19[k] = _k18*_c4[k]
         _u20[k] = _u19[k] - _u15[k]
         _f1[k] = _u20[k] - _u17[k]
         # _f2 = I3*_c4*_c7
         # _u22 = _c4*_c7
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c4[k]*_c7[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c4[_j]*_c7[k - _j]
-        _u22[k] = _s
+            _r += _c4[_j + 1]*_c7[k - 1 - _j]
+        _u22[k] = _s + _r
         _f2[k] = I3*_u22[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
             return 1
         # _l1_0 = _m1_0/_m0_0
-        _s = _m1_0 if k == 0 else 0.0
-        for _j in range(1, k + 1):
+        _s = (_m1_0 if k == 0 else 0.0) - (_m0_0[k]*_l1_0[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _m0_0[_j]*_l1_0[k - _j]
-        _l1_0[k] = _s/_m0_0[0]
+            _r += _m0_0[_j + 1]*_l1_0[k - 1 - _j]
+        _l1_0[k] = (_s - _r)/_m0_0[0]
         # _l2_0 = _m2_0/_m0_0
-        _s = _m2_0[k]
-        for _j in range(1, k + 1):
+        _s = _m2_0[k] - (_m0_0[k]*_l2_0[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _m0_0[_j]*_l2_0[k - _j]
-        _l2_0[k] = _s/_m0_0[0]
+            _r += _m0_0[_j + 1]*_l2_0[k - 1 - _j]
+        _l2_0[k] = (_s - _r)/_m0_0[0]
         # _u26 = _l1_0**2
-        _s = _l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_l1_0[_j]*_l1_0[k - _j]
-        _u26[k] = _s
+        _m = (k + 1)//2
+        _s = _l1_0[_m - 1]*_l1_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _l1_0[_j]*_l1_0[k - _j]
+            _r += _l1_0[_j + 1]*_l1_0[k - 1 - _j]
+        _u26[k] = 2.0*(_s + _r) + (_l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0)
         # _u27 = _u26*_m0_0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u26[k]*_m0_0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u26[_j]*_m0_0[k - _j]
-        _u27[k] = _s
+            _r += _u26[_j + 1]*_m0_0[k - 1 - _j]
+        _u27[k] = _s + _r
         _d1[k] = _m1_1 - _u27[k] if k == 0 else -_u27[k]
         if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
         # _u29 = _l2_0*_l1_0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_0[k]*_l1_0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_0[_j]*_l1_0[k - _j]
-        _u29[k] = _s
+            _r += _l2_0[_j + 1]*_l1_0[k - 1 - _j]
+        _u29[k] = _s + _r
         # _u30 = _u29*_m0_0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u29[k]*_m0_0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u29[_j]*_m0_0[k - _j]
-        _u30[k] = _s
+            _r += _u29[_j + 1]*_m0_0[k - 1 - _j]
+        _u30[k] = _s + _r
         _u31[k] = _m2_1 - _u30[k] if k == 0 else -_u30[k]
         # _l2_1 = _u31/_d1
-        _s = _u31[k]
-        for _j in range(1, k + 1):
+        _s = _u31[k] - (_d1[k]*_l2_1[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _d1[_j]*_l2_1[k - _j]
-        _l2_1[k] = _s/_d1[0]
+            _r += _d1[_j + 1]*_l2_1[k - 1 - _j]
+        _l2_1[k] = (_s - _r)/_d1[0]
         # _u33 = _l2_0**2
-        _s = _l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_l2_0[_j]*_l2_0[k - _j]
-        _u33[k] = _s
+        _m = (k + 1)//2
+        _s = _l2_0[_m - 1]*_l2_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _l2_0[_j]*_l2_0[k - _j]
+            _r += _l2_0[_j + 1]*_l2_0[k - 1 - _j]
+        _u33[k] = 2.0*(_s + _r) + (_l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0)
         # _u34 = _u33*_m0_0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u33[k]*_m0_0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u33[_j]*_m0_0[k - _j]
-        _u34[k] = _s
+            _r += _u33[_j + 1]*_m0_0[k - 1 - _j]
+        _u34[k] = _s + _r
         _u35[k] = _m2_2 - _u34[k] if k == 0 else -_u34[k]
         # _u36 = _l2_1**2
-        _s = _l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_l2_1[_j]*_l2_1[k - _j]
-        _u36[k] = _s
+        _m = (k + 1)//2
+        _s = _l2_1[_m - 1]*_l2_1[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _l2_1[_j]*_l2_1[k - _j]
+            _r += _l2_1[_j + 1]*_l2_1[k - 1 - _j]
+        _u36[k] = 2.0*(_s + _r) + (_l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0)
         # _u37 = _u36*_d1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u36[k]*_d1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u36[_j]*_d1[k - _j]
-        _u37[k] = _s
+            _r += _u36[_j + 1]*_d1[k - 1 - _j]
+        _u37[k] = _s + _r
         _d2[k] = _u35[k] - _u37[k]
         if k == 0 and not _d2[0] > _PIVOT_TOLERANCE*abs(_m2_2):
             return 3
         # _u39 = _l1_0*_f0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l1_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l1_0[_j]*_f0[k - _j]
-        _u39[k] = _s
+            _r += _l1_0[_j + 1]*_f0[k - 1 - _j]
+        _u39[k] = _s + _r
         _z1[k] = _f1[k] - _u39[k]
         # _u41 = _l2_0*_f0
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_0[_j]*_f0[k - _j]
-        _u41[k] = _s
+            _r += _l2_0[_j + 1]*_f0[k - 1 - _j]
+        _u41[k] = _s + _r
         _u42[k] = _f2[k] - _u41[k]
         # _u43 = _l2_1*_z1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_1[k]*_z1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_1[_j]*_z1[k - _j]
-        _u43[k] = _s
+            _r += _l2_1[_j + 1]*_z1[k - 1 - _j]
+        _u43[k] = _s + _r
         _z2[k] = _u42[k] - _u43[k]
         # _x2 = _z2/_d2
-        _s = _z2[k]
-        for _j in range(1, k + 1):
+        _s = _z2[k] - (_d2[k]*_x2[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _d2[_j]*_x2[k - _j]
-        _x2[k] = _s/_d2[0]
+            _r += _d2[_j + 1]*_x2[k - 1 - _j]
+        _x2[k] = (_s - _r)/_d2[0]
         # _u46 = _z1/_d1
-        _s = _z1[k]
-        for _j in range(1, k + 1):
+        _s = _z1[k] - (_d1[k]*_u46[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _d1[_j]*_u46[k - _j]
-        _u46[k] = _s/_d1[0]
+            _r += _d1[_j + 1]*_u46[k - 1 - _j]
+        _u46[k] = (_s - _r)/_d1[0]
         # _u47 = _l2_1*_x2
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_1[k]*_x2[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_1[_j]*_x2[k - _j]
-        _u47[k] = _s
+            _r += _l2_1[_j + 1]*_x2[k - 1 - _j]
+        _u47[k] = _s + _r
         _x1[k] = _u46[k] - _u47[k]
         # _u49 = _f0/_m0_0
-        _s = _f0[k]
-        for _j in range(1, k + 1):
+        _s = _f0[k] - (_m0_0[k]*_u49[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _m0_0[_j]*_u49[k - _j]
-        _u49[k] = _s/_m0_0[0]
+            _r += _m0_0[_j + 1]*_u49[k - 1 - _j]
+        _u49[k] = (_s - _r)/_m0_0[0]
         # _u50 = _l1_0*_x1
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l1_0[k]*_x1[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l1_0[_j]*_x1[k - _j]
-        _u50[k] = _s
+            _r += _l1_0[_j + 1]*_x1[k - 1 - _j]
+        _u50[k] = _s + _r
         _u51[k] = _u49[k] - _u50[k]
         # _u52 = _l2_0*_x2
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _l2_0[k]*_x2[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _l2_0[_j]*_x2[k - _j]
-        _u52[k] = _s
+            _r += _l2_0[_j + 1]*_x2[k - 1 - _j]
+        _u52[k] = _s + _r
         _x0[k] = _u51[k] - _u52[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = psi_dot[k]/(k + 1)
@@ -2975,7 +3046,7 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (61 series operations per order).
+#: Rows of the work array of `taylor_coefficients` (58 series operations per order).
 TAYLOR_WORK = 53
 
 

@@ -2505,14 +2505,20 @@ def taylor_coefficients(t, y, p, X, W):
             _u2[0] = math.sin(_u1[0])
             _u3[0] = math.cos(_u1[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*_u1[k]
+            _s = _ja*_u3[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u2[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*_u1[_j]
+                _jb = (_j + 1)*_u1[_j + 1]
                 _s += _ja*_u3[k - _j]
                 _c += _ja*_u2[k - _j]
-            _u2[k] = _s/k
-            _u3[k] = -_c/k
+                _r += _jb*_u3[k - 1 - _j]
+                _d += _jb*_u2[k - 1 - _j]
+            _u2[k] = (_s + _r)/k
+            _u3[k] = -(_c + _d)/k
         _f0[k] = _k0*_u2[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k5*_f0[k]

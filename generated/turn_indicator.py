@@ -2621,37 +2621,51 @@ def taylor_coefficients(t, y, p, X, W):
             _c4[0] = math.sin(theta[0])
             _c5[0] = math.cos(theta[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta[k]
+            _s = _ja*_c5[0] if k % 2 == 1 else 0.0
+            _c = _ja*_c4[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta[_j]
+                _jb = (_j + 1)*theta[_j + 1]
                 _s += _ja*_c5[k - _j]
                 _c += _ja*_c4[k - _j]
-            _c4[k] = _s/k
-            _c5[k] = -_c/k
+                _r += _jb*_c5[k - 1 - _j]
+                _d += _jb*_c4[k - 1 - _j]
+            _c4[k] = (_s + _r)/k
+            _c5[k] = -(_c + _d)/k
         # _c5 = math.cos(theta)
         # _f0 = -c*theta_dot - k*theta + _c0*_c5*_c8 + _c7*_c4**2*(I_X - I) + _c7*_c5**2*(I - I_X) - _c2*_c4*_c8 + _c4*_c5*_c6*(I*_c1 + I_X*_c3 - I*_c3 - I_X*_c1)
         _u2[k] = c*theta_dot[k]
         _u3[k] = k*theta[k]
         _u5[k] = _k4*_c5[k]
         # _u7 = _c4**2
-        _s = _c4[k//2]*_c4[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_c4[_j]*_c4[k - _j]
-        _u7[k] = _s
+        _m = (k + 1)//2
+        _s = _c4[_m - 1]*_c4[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _c4[_j]*_c4[k - _j]
+            _r += _c4[_j + 1]*_c4[k - 1 - _j]
+        _u7[k] = 2.0*(_s + _r) + (_c4[k//2]*_c4[k//2] if k % 2 == 0 else 0.0)
         _u8[k] = _k6*_u7[k]
         # _u10 = _c5**2
-        _s = _c5[k//2]*_c5[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_c5[_j]*_c5[k - _j]
-        _u10[k] = _s
+        _m = (k + 1)//2
+        _s = _c5[_m - 1]*_c5[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _c5[_j]*_c5[k - _j]
+            _r += _c5[_j + 1]*_c5[k - 1 - _j]
+        _u10[k] = 2.0*(_s + _r) + (_c5[k//2]*_c5[k//2] if k % 2 == 0 else 0.0)
         _u11[k] = _k9*_u10[k]
         _u13[k] = _k12*_c4[k]
         # _u15 = _c4*_c5
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c4[k]*_c5[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c4[_j]*_c5[k - _j]
-        _u15[k] = _s
+            _r += _c4[_j + 1]*_c5[k - 1 - _j]
+        _u15[k] = _s + _r
         _u16[k] = _k14*_u15[k]
         _u17[k] = _u5[k] + _u8[k]
         _u18[k] = _u17[k] + _u11[k]

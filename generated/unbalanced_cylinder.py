@@ -2532,14 +2532,20 @@ def taylor_coefficients(t, y, p, X, W):
             _u0[0] = math.sin(theta[0])
             _u1[0] = math.cos(theta[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta[k]
+            _s = _ja*_u1[0] if k % 2 == 1 else 0.0
+            _c = _ja*_u0[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta[_j]
+                _jb = (_j + 1)*theta[_j + 1]
                 _s += _ja*_u1[k - _j]
                 _c += _ja*_u0[k - _j]
-            _u0[k] = _s/k
-            _u1[k] = -_c/k
+                _r += _jb*_u1[k - 1 - _j]
+                _d += _jb*_u0[k - 1 - _j]
+            _u0[k] = (_s + _r)/k
+            _u1[k] = -(_c + _d)/k
         _c1[k] = _c0*_u0[k]
         # _m0_0 = I + M*R**2 + M*a**2 - 2.0*R*_c0*math.cos(theta)
         _u4[k] = _k3*_u1[k]
@@ -2548,15 +2554,20 @@ def taylor_coefficients(t, y, p, X, W):
         # _f0 = -_c1*g - R*_c1*theta_dot**2
         _u8[k] = g*_c1[k]
         # _u9 = theta_dot**2
-        _s = theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta_dot[_j]*theta_dot[k - _j]
-        _u9[k] = _s
+        _m = (k + 1)//2
+        _s = theta_dot[_m - 1]*theta_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += theta_dot[_j]*theta_dot[k - _j]
+            _r += theta_dot[_j + 1]*theta_dot[k - 1 - _j]
+        _u9[k] = 2.0*(_s + _r) + (theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0)
         # _u10 = _c1*_u9
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c1[k]*_u9[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c1[_j]*_u9[k - _j]
-        _u10[k] = _s
+            _r += _c1[_j + 1]*_u9[k - 1 - _j]
+        _u10[k] = _s + _r
         _u11[k] = R*_u10[k]
         _u12[k] = -_u8[k]
         _f0[k] = _u12[k] - _u11[k]
@@ -2564,17 +2575,19 @@ def taylor_coefficients(t, y, p, X, W):
         if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
             return 1
         # _x0 = _f0/_m0_0
-        _s = _f0[k]
-        for _j in range(1, k + 1):
+        _s = _f0[k] - (_m0_0[k]*_x0[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _m0_0[_j]*_x0[k - _j]
-        _x0[k] = _s/_m0_0[0]
+            _r += _m0_0[_j + 1]*_x0[k - 1 - _j]
+        _x0[k] = (_s - _r)/_m0_0[0]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta_dot[k]/(k + 1)
         X[1, k + 1] = _x0[k]/(k + 1)
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (15 series operations per order).
+#: Rows of the work array of `taylor_coefficients` (14 series operations per order).
 TAYLOR_WORK = 13
 
 

@@ -2540,39 +2540,55 @@ def taylor_coefficients(t, y, p, X, W):
             _c0[0] = math.sin(theta[0])
             _c2[0] = math.cos(theta[0])
         else:
-            _s = 0.0
-            _c = 0.0
-            for _j in range(1, k + 1):
+            _ja = k*theta[k]
+            _s = _ja*_c2[0] if k % 2 == 1 else 0.0
+            _c = _ja*_c0[0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
                 _ja = _j*theta[_j]
+                _jb = (_j + 1)*theta[_j + 1]
                 _s += _ja*_c2[k - _j]
                 _c += _ja*_c0[k - _j]
-            _c0[k] = _s/k
-            _c2[k] = -_c/k
+                _r += _jb*_c2[k - 1 - _j]
+                _d += _jb*_c0[k - 1 - _j]
+            _c0[k] = (_s + _r)/k
+            _c2[k] = -(_c + _d)/k
         # _c2 = math.cos(theta)
         # _m0_0 = _c1*_c0**2
         # _u2 = _c0**2
-        _s = _c0[k//2]*_c0[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*_c0[_j]*_c0[k - _j]
-        _u2[k] = _s
+        _m = (k + 1)//2
+        _s = _c0[_m - 1]*_c0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += _c0[_j]*_c0[k - _j]
+            _r += _c0[_j + 1]*_c0[k - 1 - _j]
+        _u2[k] = 2.0*(_s + _r) + (_c0[k//2]*_c0[k//2] if k % 2 == 0 else 0.0)
         _m0_0[k] = _c1*_u2[k]
         # _f0 = -2.0*P*_c2*l - _c0*_c1*_c2*theta_dot**2 + 4.0*math.pi*F*_c0*a*l/h
         _u5[k] = _k4*_c2[k]
         # _u6 = _c0*_c2
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _c0[k]*_c2[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _c0[_j]*_c2[k - _j]
-        _u6[k] = _s
+            _r += _c0[_j + 1]*_c2[k - 1 - _j]
+        _u6[k] = _s + _r
         # _u7 = theta_dot**2
-        _s = theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0
-        for _j in range((k + 1)//2):
-            _s += 2.0*theta_dot[_j]*theta_dot[k - _j]
-        _u7[k] = _s
+        _m = (k + 1)//2
+        _s = theta_dot[_m - 1]*theta_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += theta_dot[_j]*theta_dot[k - _j]
+            _r += theta_dot[_j + 1]*theta_dot[k - 1 - _j]
+        _u7[k] = 2.0*(_s + _r) + (theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0)
         # _u8 = _u6*_u7
-        _s = 0.0
-        for _j in range(k + 1):
+        _s = _u6[k]*_u7[0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
             _s += _u6[_j]*_u7[k - _j]
-        _u8[k] = _s
+            _r += _u6[_j + 1]*_u7[k - 1 - _j]
+        _u8[k] = _s + _r
         _u9[k] = _c1*_u8[k]
         _u11[k] = _k10*_c0[k]
         _u12[k] = _u11[k] - _u5[k]
@@ -2581,17 +2597,19 @@ def taylor_coefficients(t, y, p, X, W):
         if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
             return 1
         # _x0 = _f0/_m0_0
-        _s = _f0[k]
-        for _j in range(1, k + 1):
+        _s = _f0[k] - (_m0_0[k]*_x0[0] if k % 2 == 1 else 0.0)
+        _r = 0.0
+        for _j in range(1, k, 2):
             _s -= _m0_0[_j]*_x0[k - _j]
-        _x0[k] = _s/_m0_0[0]
+            _r += _m0_0[_j + 1]*_x0[k - 1 - _j]
+        _x0[k] = (_s - _r)/_m0_0[0]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = theta_dot[k]/(k + 1)
         X[1, k + 1] = _x0[k]/(k + 1)
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (15 series operations per order).
+#: Rows of the work array of `taylor_coefficients` (14 series operations per order).
 TAYLOR_WORK = 13
 
 

@@ -119,6 +119,15 @@ def test_decomposition_refuses_what_it_cannot_expand(compiled):
     model = compiled("rope_friction")
     with pytest.raises(OptionError, match="`taylor` cannot integrate 'rope_friction'"):
         model.simulate((0, 1), method="taylor")
+    from lagcomp.benchmark import applicable_methods
+
+    assert "taylor" not in [m.name for m in applicable_methods(model)]
+    assert "taylor_coefficients" not in model.operations
+
+
+def test_operation_count_is_reported(pendulum):
+    """`lagcomp bench` lists model.operations: the Taylor kernel's series operations per order too."""
+    assert 20 <= pendulum.operations["taylor_coefficients"] <= 60
 
 
 # -- accuracy --------------------------------------------------------------------------------

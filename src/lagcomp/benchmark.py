@@ -74,7 +74,8 @@ def applicable_methods(model) -> list:
     from lagcomp.integrate.methods import METHODS
 
     return [m for m in METHODS.values()
-            if not (m.separable_only and not model.separable) and not (m.unconstrained_only and model.k)]
+            if not (m.separable_only and not model.separable) and not (m.unconstrained_only and model.k)
+            and not (m.name == "taylor" and hasattr(model.kernels, "TAYLOR_REFUSED"))]
 
 
 def method_speed(model, method, repeats: int = 5, dt: float = 1e-3, steps: int = 100_000, rtol: float = 1e-10) -> dict:

@@ -146,6 +146,7 @@ def build(system, cache: Cache, key: str, eom=None) -> Entry:
     """Derive (unless `eom` is given), lower and emit `system`, and store the module under `key`."""
     from lagcomp.codegen.emit import emit
     from lagcomp.codegen.lower import lower
+    from lagcomp.codegen.taylor import taylor_operations
     from lagcomp.mechanics.lagrange import derive
 
     eom = derive(system) if eom is None else eom
@@ -157,7 +158,7 @@ def build(system, cache: Cache, key: str, eom=None) -> Entry:
         "constraints": list(eom.constraint_names),
         "holonomic": list(eom.holonomic),
         "separable": eom.separable,
-        "operations": {k.name: k.operation_count for k in ir.kernels},
+        "operations": {**{k.name: k.operation_count for k in ir.kernels}, **taylor_operations(ir)},
     }
     return cache.store(key, emit(ir), system.name, metadata)
 
@@ -459,12 +460,14 @@ class Model:
 
         Other Parameters
         ----------------
-        method : {"dop853", "dopri5", "rk4", "verlet", "yoshida4", "yoshida6", "gauss1", "gauss2", "gauss3"}
+        method : {"dop853", "dopri5", "taylor", "rk4", "verlet", "yoshida4", "yoshida6", "gauss1", "gauss2", "gauss3"}
             Integration method (default "dop853"); verlet and yoshida4/6 are
             explicit symplectic methods for separable systems (`Model.separable`),
-            gauss1/2/3 implicit symplectic ones for any unconstrained system.
+            gauss1/2/3 implicit symplectic ones for any unconstrained system,
+            taylor an adaptive Taylor-series method (unconstrained systems of
+            smooth functions; machine precision by default).
         dt : float
-            Step of fixed-step methods (required for all but dop853, dopri5).
+            Step of fixed-step methods (required for all but dop853, dopri5, taylor).
         implicit_solver : {"fixed_point", "newton"}, optional
             How gauss1/2/3 solve their stage equations: fixed-point iteration
             (the default: cheapest per step on ordinary problems), or
@@ -472,7 +475,8 @@ class Model:
             which converges at steps where fixed-point iteration does not
             (stiff or fast motions; status -5 says the step was too large).
         rtol, atol : float
-            Tolerances of adaptive methods (defaults 1e-8, 1e-10).
+            Tolerances of adaptive methods (defaults 1e-8, 1e-10; for taylor machine
+            epsilon, and atol = rtol unless given).
         t_eval : array_like, optional
             Times at which to save, by dense output (adaptive methods only).
         save_every : int
