@@ -137,7 +137,7 @@ def cmd_run(args) -> int:
                    progress=False if args.quiet else None)
     if args.baumgarte:
         options["baumgarte"] = tuple(args.baumgarte)
-    if args.method not in ("dop853", "dopri5"):  # fixed-step methods
+    if args.method not in ("dop853", "dopri5", "taylor"):  # fixed-step methods
         options["dt"] = args.dt if args.dt is not None else 1e-3
     else:
         options.update(rtol=args.rtol, atol=args.atol)
@@ -344,7 +344,7 @@ def _parser() -> argparse.ArgumentParser:
     run = example("run", "simulate an example and print a summary")
     run.add_argument("--t-start", type=float, default=0.0)
     run.add_argument("--t-end", type=float, help="end time (default: the example's)")
-    run.add_argument("--method", default="dop853", choices=["dop853", "dopri5", "rk4", "verlet", "yoshida4", "yoshida6", "gauss1", "gauss2", "gauss3"])
+    run.add_argument("--method", default="dop853", choices=["dop853", "dopri5", "taylor", "rk4", "verlet", "yoshida4", "yoshida6", "gauss1", "gauss2", "gauss3"])
     run.add_argument("--dt", type=float, help="step of fixed-step methods (default 1e-3); first step of adaptive ones")
     run.add_argument("--rtol", type=float, default=1e-10)
     run.add_argument("--atol", type=float, default=1e-10)
