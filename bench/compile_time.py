@@ -148,8 +148,13 @@ def section(ctx) -> Table:
         for n_links, key in ((10, "cold10"), (24, "cold24")):
             if case == f"n_link_pendulum_{n_links}":
                 target = ctx.target(key)
-                target.measured = f"{total:.1f} s ({pieces})"
-                target.met = total <= (6.0 if n_links == 10 else 60.0)
+                limit = 6.0 if n_links == 10 else 60.0
+                without_driver = total - result["driver"]
+                target.measured = (f"{total:.1f} s with the first dop853 run, {without_driver:.1f} s to a callable "
+                                   f"rhs ({pieces})")
+                target.met = total <= limit
+                if not target.met and without_driver <= limit:
+                    target.verdict = "missed with the dop853 driver's numba compile; met without it"
         if case in ctx.peer_compile_cases():
             n = 2 if case == "double_pendulum" else int(case.rsplit("_", 1)[1])
             if ctx.peer("pydy") is None or ctx.peer("Cython") is None:

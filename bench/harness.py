@@ -107,9 +107,11 @@ class Target:
     wanted: str
     measured: str = "not measured"
     met: bool | None = None
+    verdict: str = ""  # overrides met/missed where one word would mislead (e.g. absolute vs relative)
 
     def row(self) -> list[str]:
-        verdict = {True: "met", False: "missed", None: "not measured" if self.measured == "not measured" else "reported"}[self.met]
+        verdict = self.verdict or {True: "met", False: "missed",
+                                   None: "not measured" if self.measured == "not measured" else "reported"}[self.met]
         return [self.name, self.wanted, self.measured, verdict]
 
 

@@ -56,6 +56,8 @@ def fixed_section(ctx) -> Table:
                                    f"hand-written numba RK4 {hand_rate / 1e6:.2f} M here, lagcomp {speed.median:.2f}× it "
                                    f"(the target is 4.0/4.5 = 0.89× the prototype machine's hand-written)")
                 target.met = rate.median >= 4e6
+                if not target.met and speed.median >= 4.0 / 4.5:
+                    target.verdict = "missed in absolute terms on this machine; met relative to hand-written numba"
     return table
 
 
@@ -94,7 +96,7 @@ def _calibration_runs():
 
 
 def sweep_section(ctx) -> Table:
-    side = 40 if ctx.quick else 100
+    side = 40 if ctx.quick else 60
     table = Table(
         f"Sweeps: double pendulum, {side}×{side} grid of (θ1, θ2), t = {T_END:g}",
         ["method", "setting", "traj/s, 1 thread", "traj/s, 2 threads", "2 vs 1 threads", "× scipy loop"],
@@ -132,6 +134,10 @@ def sweep_section(ctx) -> Table:
                                    f"scaling {scaling.median:.2f}× ({scaling.low:.2f}–{scaling.high:.2f}); a pure "
                                    f"compute loop scaled {available.median:.2f}× at the same time")
                 target.met = rates[1].median >= 8000 and scaling.median >= 1.85
+                if available.median < 1.85:
+                    target.verdict = ("throughput " + ("met" if rates[1].median >= 8000 else "missed")
+                                      + "; scaling not measurable: the machine itself scaled "
+                                      + f"{available.median:.2f}×")
     return table
 
 
