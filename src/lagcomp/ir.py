@@ -83,6 +83,10 @@ class Kernel:
         The body runs once per lane ``_l`` of a batch (structure of arrays:
         ``Y[i, _l]``, ``P[k, _l]``, ``out[i, _l]``), in a loop LLVM can
         vectorize: no early return, a singular pivot sets ``bad[_l]``.
+    alias : str or None
+        The name of another kernel of the module that computes the same
+        thing: this one is emitted as that function (``name = alias``), so
+        numba compiles it once.
     """
 
     name: str
@@ -93,6 +97,7 @@ class Kernel:
     stores: tuple[tuple[str, sp.Expr], ...]
     solve: LinearSolve | AugmentedSolve | None = None
     lanes: bool = False
+    alias: str | None = None
 
     @property
     def operation_count(self) -> int:

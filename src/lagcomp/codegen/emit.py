@@ -98,6 +98,9 @@ def _lanes_kernel_source(kernel: Kernel) -> list[str]:
 
 
 def _kernel_source(kernel: Kernel) -> str:
+    if kernel.alias:
+        comment = "".join(f"\n# {line}".rstrip() for line in kernel.doc.splitlines())
+        return f"\n{comment}\n{kernel.name} = {kernel.alias}\n"
     if kernel.lanes:
         return _decorated(kernel, _lanes_kernel_source(kernel))
     body = f'"""{kernel.doc}"""'.splitlines()

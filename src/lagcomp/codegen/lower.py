@@ -289,6 +289,16 @@ def _rhs_lanes_kernel(rhs: Kernel) -> Kernel:
     )
 
 
+def _energy_function_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """h = Σ q̇_i ∂L/∂q̇_i − L; when it is T + V (T homogeneous quadratic in q̇), the `energy` kernel itself."""
+    doc = "Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L."
+    if eom.energy_function == eom.energy:
+        doc += "\nHere T is homogeneous quadratic in q̇, so h = T + V: the kernel `energy`."
+        return Kernel(name="energy_function", doc=doc, args=("t", "y", "p"), loads=(), temps=(), stores=(),
+                      alias="energy")
+    return _kernel("energy_function", doc, ("t", "y", "p"), [("return", eom.energy_function)], mapping, loads)
+
+
 def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
     """The event functions g_e(t, q, q̇), all at once (a kernel with no stores when there are none)."""
     names = eom.system.event_names
@@ -341,10 +351,7 @@ def lower(eom: EOM) -> ModuleIR:
         _kernel(
             "energy", "Total mechanical energy T + V.", state_args, [("return", eom.energy)], mapping, loads,
         ),
-        _kernel(
-            "energy_function", "Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.",
-            state_args, [("return", eom.energy_function)], mapping, loads,
-        ),
+        _energy_function_kernel(eom, mapping, loads),
         _kernel(
             "momenta", "Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`.",
             (*state_args, "out"), [(f"out[{i}]", eom.momenta[i]) for i in range(n)], mapping, loads,

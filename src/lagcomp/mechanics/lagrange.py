@@ -225,6 +225,7 @@ def derive(system: System) -> EOM:
     momenta = sp.Matrix([sum((M[i, j] * qd[j] for j in range(n)), b[i]) for i in range(n)])
     momentum_rate = sp.Matrix([Q[i] - dD[i] + dL_dq[i] for i in range(n)])
     T1 = sum((bi * v for bi, v in zip(b, qd)), sp.S.Zero)
+    energy = _tidy_small(T + V, variables)
     separable = (
         not system.constraints
         and not any(entry.has(t, *q) for entry in M)
@@ -236,7 +237,7 @@ def derive(system: System) -> EOM:
     return EOM(
         system=system, q=q, qd=qd, parameters=system.parameters,
         M=M, F=F, T=T, V=V, L=T - V,
-        energy=_tidy_small(T + V, variables), energy_function=_tidy_small(T - T1 - 2 * T0 + V, variables),
+        energy=energy, energy_function=energy if T1 == 0 and T0 == 0 else _tidy_small(T - T1 - 2 * T0 + V, variables),
         momenta=momenta, cyclic=cyclic,
         separable=separable, momentum_offset=b, momentum_rate=momentum_rate,
         events=tuple(plain(e.expr) for e in system.events), **constraints,
