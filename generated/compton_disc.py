@@ -2509,6 +2509,8 @@ def taylor_coefficients(t, y, p, X, W):
     if order > 0:
         _t[1] = 1.0
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _c0 = nu*t
         _c0[k] = nu*_t[k]
         # _f0 = I_Y*_c1*nu*omega*math.cos(_c1*math.cos(_c0))*math.sin(_c0)*math.sin(lambda_)
@@ -2529,8 +2531,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u2[k - _j]
                 _r += _jb*_u3[k - 1 - _j]
                 _d += _jb*_u2[k - 1 - _j]
-            _u2[k] = (_s + _r)/k
-            _u3[k] = -(_c + _d)/k
+            _u2[k] = (_s + _r)*_ik
+            _u3[k] = -(_c + _d)*_ik
         _u4[k] = _c1*_u3[k]
         # _u5, _u6 = sin(_u4), cos(_u4)
         if k == 0:
@@ -2549,8 +2551,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u5[k - _j]
                 _r += _jb*_u6[k - 1 - _j]
                 _d += _jb*_u5[k - 1 - _j]
-            _u5[k] = (_s + _r)/k
-            _u6[k] = -(_c + _d)/k
+            _u5[k] = (_s + _r)*_ik
+            _u6[k] = -(_c + _d)*_ik
         # _u7 = _u6*_u2
         _s = _u6[k]*_u2[0] if k % 2 == 0 else 0.0
         _r = 0.0
@@ -2562,8 +2564,8 @@ def taylor_coefficients(t, y, p, X, W):
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k9*_f0[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = phi_dot[k]/(k + 1)
-        X[1, k + 1] = _x0[k]/(k + 1)
+        X[0, k + 1] = phi_dot[k]*_ik1
+        X[1, k + 1] = _x0[k]*_ik1
     return 0
 
 

@@ -2638,6 +2638,8 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(4):
         X[i, 0] = y[i]
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _c1 = theta2 - theta1
         _c1[k] = theta2[k] - theta1[k]
         # _c4 = _c3*math.sin(_c1)
@@ -2658,8 +2660,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u1[k - _j]
                 _r += _jb*_u2[k - 1 - _j]
                 _d += _jb*_u1[k - 1 - _j]
-            _u1[k] = (_s + _r)/k
-            _u2[k] = -(_c + _d)/k
+            _u1[k] = (_s + _r)*_ik
+            _u2[k] = -(_c + _d)*_ik
         _c4[k] = _c3*_u1[k]
         # _m1_0 = _c3*math.cos(_c1)
         _m1_0[k] = _c3*_u2[k]
@@ -2696,8 +2698,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u8[k - _j]
                 _r += _jb*_u9[k - 1 - _j]
                 _d += _jb*_u8[k - 1 - _j]
-            _u8[k] = (_s + _r)/k
-            _u9[k] = -(_c + _d)/k
+            _u8[k] = (_s + _r)*_ik
+            _u9[k] = -(_c + _d)*_ik
         _u10[k] = _k7*_u8[k]
         _f0[k] = _u6[k] - _u10[k]
         # _f1 = -_c4*theta1_dot**2 - _c2*g*math.sin(theta2)
@@ -2733,8 +2735,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u15[k - _j]
                 _r += _jb*_u16[k - 1 - _j]
                 _d += _jb*_u15[k - 1 - _j]
-            _u15[k] = (_s + _r)/k
-            _u16[k] = -(_c + _d)/k
+            _u15[k] = (_s + _r)*_ik
+            _u16[k] = -(_c + _d)*_ik
         _u17[k] = _k14*_u15[k]
         _u18[k] = -_u13[k]
         _f1[k] = _u18[k] - _u17[k]
@@ -2777,10 +2779,10 @@ def taylor_coefficients(t, y, p, X, W):
         _u29[k] = _s + _r
         _x0[k] = _u28[k] - _u29[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta1_dot[k]/(k + 1)
-        X[1, k + 1] = theta2_dot[k]/(k + 1)
-        X[2, k + 1] = _x0[k]/(k + 1)
-        X[3, k + 1] = _x1[k]/(k + 1)
+        X[0, k + 1] = theta1_dot[k]*_ik1
+        X[1, k + 1] = theta2_dot[k]*_ik1
+        X[2, k + 1] = _x0[k]*_ik1
+        X[3, k + 1] = _x1[k]*_ik1
     return 0
 
 

@@ -2512,6 +2512,8 @@ def taylor_coefficients(t, y, p, X, W):
     if order > 0:
         _t[1] = 1.0
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _f0 = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.sin(theta)
         _u1[k] = Omega*_t[k]
         # _u2, _u3 = sin(_u1), cos(_u1)
@@ -2531,8 +2533,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u2[k - _j]
                 _r += _jb*_u3[k - 1 - _j]
                 _d += _jb*_u2[k - 1 - _j]
-            _u2[k] = (_s + _r)/k
-            _u3[k] = -(_c + _d)/k
+            _u2[k] = (_s + _r)*_ik
+            _u3[k] = -(_c + _d)*_ik
         _u4[k] = _k0*_u3[k]
         _u6[k] = _u4[k] + _k5 if k == 0 else _u4[k]
         # _u7, _u8 = sin(theta), cos(theta)
@@ -2552,8 +2554,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u7[k - _j]
                 _r += _jb*_u8[k - 1 - _j]
                 _d += _jb*_u7[k - 1 - _j]
-            _u7[k] = (_s + _r)/k
-            _u8[k] = -(_c + _d)/k
+            _u7[k] = (_s + _r)*_ik
+            _u8[k] = -(_c + _d)*_ik
         # _f0 = _u6*_u7
         _s = _u6[k]*_u7[0] if k % 2 == 0 else 0.0
         _r = 0.0
@@ -2564,8 +2566,8 @@ def taylor_coefficients(t, y, p, X, W):
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k10*_f0[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]/(k + 1)
-        X[1, k + 1] = _x0[k]/(k + 1)
+        X[0, k + 1] = theta_dot[k]*_ik1
+        X[1, k + 1] = _x0[k]*_ik1
     return 0
 
 

@@ -2800,6 +2800,8 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(4):
         X[i, 0] = y[i]
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _f0 = x*(-1.0 - 2.0*lam*y_)
         _u1[k] = _k0*y_[k]
         _u2[k] = -_u1[k]
@@ -2840,10 +2842,10 @@ def taylor_coefficients(t, y, p, X, W):
         _u22[k] = _k11*_x1[k]
         _x0[k] = _u21[k] - _u22[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = x_dot[k]/(k + 1)
-        X[1, k + 1] = y_dot[k]/(k + 1)
-        X[2, k + 1] = _x0[k]/(k + 1)
-        X[3, k + 1] = _x1[k]/(k + 1)
+        X[0, k + 1] = x_dot[k]*_ik1
+        X[1, k + 1] = y_dot[k]*_ik1
+        X[2, k + 1] = _x0[k]*_ik1
+        X[3, k + 1] = _x1[k]*_ik1
     return 0
 
 

@@ -2553,6 +2553,8 @@ def taylor_coefficients(t, y, p, X, W):
     if order > 0:
         _t[1] = 1.0
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _c1 = math.sin(theta)
         # _c1, _u1 = sin(theta), cos(theta)
         if k == 0:
@@ -2571,8 +2573,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_c1[k - _j]
                 _r += _jb*_u1[k - 1 - _j]
                 _d += _jb*_c1[k - 1 - _j]
-            _c1[k] = (_s + _r)/k
-            _u1[k] = -(_c + _d)/k
+            _c1[k] = (_s + _r)*_ik
+            _u1[k] = -(_c + _d)*_ik
         # _c2 = math.cos(2.0*t)
         _u2[k] = 2.0*_t[k]
         # _u3, _c2 = sin(_u2), cos(_u2)
@@ -2592,8 +2594,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u3[k - _j]
                 _r += _jb*_c2[k - 1 - _j]
                 _d += _jb*_u3[k - 1 - _j]
-            _u3[k] = (_s + _r)/k
-            _c2[k] = -(_c + _d)/k
+            _u3[k] = (_s + _r)*_ik
+            _c2[k] = -(_c + _d)*_ik
         # _f0 = _c1*(_c0*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon)*math.cos(theta) + R*_c1*g*m
         # _u6 = _c2**2
         _m = (k + 1)//2
@@ -2626,8 +2628,8 @@ def taylor_coefficients(t, y, p, X, W):
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k18*_f0[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]/(k + 1)
-        X[1, k + 1] = _x0[k]/(k + 1)
+        X[0, k + 1] = theta_dot[k]*_ik1
+        X[1, k + 1] = _x0[k]*_ik1
     return 0
 
 

@@ -2506,6 +2506,8 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _c0 = (0.5)*theta
         _c0[k] = 0.5*theta[k]
         # _c1 = math.cos(_c0)
@@ -2526,8 +2528,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u1[k - _j]
                 _r += _jb*_c1[k - 1 - _j]
                 _d += _jb*_u1[k - 1 - _j]
-            _u1[k] = (_s + _r)/k
-            _c1[k] = -(_c + _d)/k
+            _u1[k] = (_s + _r)*_ik
+            _c1[k] = -(_c + _d)*_ik
         # _m0_0 = 4.0*_c2*_c1**2
         # _u4 = _c1**2
         _m = (k + 1)//2
@@ -2556,8 +2558,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u7[k - _j]
                 _r += _jb*_u8[k - 1 - _j]
                 _d += _jb*_u7[k - 1 - _j]
-            _u7[k] = (_s + _r)/k
-            _u8[k] = -(_c + _d)/k
+            _u7[k] = (_s + _r)*_ik
+            _u8[k] = -(_c + _d)*_ik
         _u9[k] = _k6*_u7[k]
         # _u11 = theta_dot**2
         _m = (k + 1)//2
@@ -2594,8 +2596,8 @@ def taylor_coefficients(t, y, p, X, W):
             _r += _m0_0[_j + 1]*_x0[k - 1 - _j]
         _x0[k] = (_s - _r)/_m0_0[0]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]/(k + 1)
-        X[1, k + 1] = _x0[k]/(k + 1)
+        X[0, k + 1] = theta_dot[k]*_ik1
+        X[1, k + 1] = _x0[k]*_ik1
     return 0
 
 

@@ -2888,6 +2888,8 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(6):
         X[i, 0] = y[i]
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _c2 = -theta1
         _c2[k] = -theta1[k]
         # _c3 = _c2 + theta2
@@ -2923,8 +2925,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u5[k - _j]
                 _r += _jb*_u6[k - 1 - _j]
                 _d += _jb*_u5[k - 1 - _j]
-            _u5[k] = (_s + _r)/k
-            _u6[k] = -(_c + _d)/k
+            _u5[k] = (_s + _r)*_ik
+            _u6[k] = -(_c + _d)*_ik
         _c12[k] = _c5*_u5[k]
         # _c13 = theta3_dot**2
         # _c13 = theta3_dot**2
@@ -2953,8 +2955,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u9[k - _j]
                 _r += _jb*_u10[k - 1 - _j]
                 _d += _jb*_u9[k - 1 - _j]
-            _u9[k] = (_s + _r)/k
-            _u10[k] = -(_c + _d)/k
+            _u9[k] = (_s + _r)*_ik
+            _u10[k] = -(_c + _d)*_ik
         _c14[k] = _c8*_u9[k]
         # _c15 = theta1_dot**2
         # _c15 = theta1_dot**2
@@ -2983,8 +2985,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u13[k - _j]
                 _r += _jb*_u14[k - 1 - _j]
                 _d += _jb*_u13[k - 1 - _j]
-            _u13[k] = (_s + _r)/k
-            _u14[k] = -(_c + _d)/k
+            _u13[k] = (_s + _r)*_ik
+            _u14[k] = -(_c + _d)*_ik
         _c16[k] = _c10*_u13[k]
         # _m1_0 = _c5*math.cos(_c3)
         _m1_0[k] = _c5*_u6[k]
@@ -3024,8 +3026,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u22[k - _j]
                 _r += _jb*_u23[k - 1 - _j]
                 _d += _jb*_u22[k - 1 - _j]
-            _u22[k] = (_s + _r)/k
-            _u23[k] = -(_c + _d)/k
+            _u22[k] = (_s + _r)*_ik
+            _u23[k] = -(_c + _d)*_ik
         _u24[k] = _k21*_u22[k]
         _u25[k] = _u19[k] + _u20[k]
         _f0[k] = _u25[k] - _u24[k]
@@ -3061,8 +3063,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u30[k - _j]
                 _r += _jb*_u31[k - 1 - _j]
                 _d += _jb*_u30[k - 1 - _j]
-            _u30[k] = (_s + _r)/k
-            _u31[k] = -(_c + _d)/k
+            _u30[k] = (_s + _r)*_ik
+            _u31[k] = -(_c + _d)*_ik
         _u32[k] = _k29*_u30[k]
         _u33[k] = -_u27[k]
         _u34[k] = _u33[k] - _u28[k]
@@ -3099,8 +3101,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u39[k - _j]
                 _r += _jb*_u40[k - 1 - _j]
                 _d += _jb*_u39[k - 1 - _j]
-            _u39[k] = (_s + _r)/k
-            _u40[k] = -(_c + _d)/k
+            _u39[k] = (_s + _r)*_ik
+            _u40[k] = -(_c + _d)*_ik
         _u41[k] = _k38*_u39[k]
         _u42[k] = _u36[k] - _u37[k]
         _f2[k] = _u42[k] - _u41[k]
@@ -3227,12 +3229,12 @@ def taylor_coefficients(t, y, p, X, W):
         _u73[k] = _s + _r
         _x0[k] = _u72[k] - _u73[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta1_dot[k]/(k + 1)
-        X[1, k + 1] = theta2_dot[k]/(k + 1)
-        X[2, k + 1] = theta3_dot[k]/(k + 1)
-        X[3, k + 1] = _x0[k]/(k + 1)
-        X[4, k + 1] = _x1[k]/(k + 1)
-        X[5, k + 1] = _x2[k]/(k + 1)
+        X[0, k + 1] = theta1_dot[k]*_ik1
+        X[1, k + 1] = theta2_dot[k]*_ik1
+        X[2, k + 1] = theta3_dot[k]*_ik1
+        X[3, k + 1] = _x0[k]*_ik1
+        X[4, k + 1] = _x1[k]*_ik1
+        X[5, k + 1] = _x2[k]*_ik1
     return 0
 
 

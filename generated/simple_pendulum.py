@@ -2475,6 +2475,8 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _f0 = -g*l*m*math.sin(theta)
         # _u1, _u2 = sin(theta), cos(theta)
         if k == 0:
@@ -2493,14 +2495,14 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u1[k - _j]
                 _r += _jb*_u2[k - 1 - _j]
                 _d += _jb*_u1[k - 1 - _j]
-            _u1[k] = (_s + _r)/k
-            _u2[k] = -(_c + _d)/k
+            _u1[k] = (_s + _r)*_ik
+            _u2[k] = -(_c + _d)*_ik
         _f0[k] = _k0*_u1[k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k4*_f0[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]/(k + 1)
-        X[1, k + 1] = _x0[k]/(k + 1)
+        X[0, k + 1] = theta_dot[k]*_ik1
+        X[1, k + 1] = _x0[k]*_ik1
     return 0
 
 

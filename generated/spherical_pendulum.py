@@ -2583,6 +2583,8 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(4):
         X[i, 0] = y[i]
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _c1 = math.sin(theta)
         # _c1, _u1 = sin(theta), cos(theta)
         if k == 0:
@@ -2601,8 +2603,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_c1[k - _j]
                 _r += _jb*_u1[k - 1 - _j]
                 _d += _jb*_c1[k - 1 - _j]
-            _c1[k] = (_s + _r)/k
-            _u1[k] = -(_c + _d)/k
+            _c1[k] = (_s + _r)*_ik
+            _u1[k] = -(_c + _d)*_ik
         # _c2 = _c0*_c1*math.cos(theta)
         # _u2 = _c1*_u1
         _s = _c1[k]*_u1[0] if k % 2 == 0 else 0.0
@@ -2673,10 +2675,10 @@ def taylor_coefficients(t, y, p, X, W):
         _u24[k] = _k14*_x1[k]
         _x0[k] = _u23[k] - _u24[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]/(k + 1)
-        X[1, k + 1] = phi_dot[k]/(k + 1)
-        X[2, k + 1] = _x0[k]/(k + 1)
-        X[3, k + 1] = _x1[k]/(k + 1)
+        X[0, k + 1] = theta_dot[k]*_ik1
+        X[1, k + 1] = phi_dot[k]*_ik1
+        X[2, k + 1] = _x0[k]*_ik1
+        X[3, k + 1] = _x1[k]*_ik1
     return 0
 
 

@@ -2748,6 +2748,8 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(6):
         X[i, 0] = y[i]
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _c0 = math.cos(theta)
         # _c4, _c0 = sin(theta), cos(theta)
         if k == 0:
@@ -2766,8 +2768,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_c4[k - _j]
                 _r += _jb*_c0[k - 1 - _j]
                 _d += _jb*_c4[k - 1 - _j]
-            _c4[k] = (_s + _r)/k
-            _c0[k] = -(_c + _d)/k
+            _c4[k] = (_s + _r)*_ik
+            _c0[k] = -(_c + _d)*_ik
         # _c4 = math.sin(theta)
         # _c5 = I3*_c4*phi_dot
         # _u2 = _c4*phi_dot
@@ -3021,12 +3023,12 @@ def taylor_coefficients(t, y, p, X, W):
         _u52[k] = _s + _r
         _x0[k] = _u51[k] - _u52[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = psi_dot[k]/(k + 1)
-        X[1, k + 1] = theta_dot[k]/(k + 1)
-        X[2, k + 1] = phi_dot[k]/(k + 1)
-        X[3, k + 1] = _x0[k]/(k + 1)
-        X[4, k + 1] = _x1[k]/(k + 1)
-        X[5, k + 1] = _x2[k]/(k + 1)
+        X[0, k + 1] = psi_dot[k]*_ik1
+        X[1, k + 1] = theta_dot[k]*_ik1
+        X[2, k + 1] = phi_dot[k]*_ik1
+        X[3, k + 1] = _x0[k]*_ik1
+        X[4, k + 1] = _x1[k]*_ik1
+        X[5, k + 1] = _x2[k]*_ik1
     return 0
 
 

@@ -2615,6 +2615,8 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _c4 = math.sin(theta)
         # _c4, _c5 = sin(theta), cos(theta)
         if k == 0:
@@ -2633,8 +2635,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_c4[k - _j]
                 _r += _jb*_c5[k - 1 - _j]
                 _d += _jb*_c4[k - 1 - _j]
-            _c4[k] = (_s + _r)/k
-            _c5[k] = -(_c + _d)/k
+            _c4[k] = (_s + _r)*_ik
+            _c5[k] = -(_c + _d)*_ik
         # _c5 = math.cos(theta)
         # _f0 = -c*theta_dot - k*theta + _c0*_c5*_c8 + _c7*_c4**2*(I_X - I) + _c7*_c5**2*(I - I_X) - _c2*_c4*_c8 + _c4*_c5*_c6*(I*_c1 + I_X*_c3 - I*_c3 - I_X*_c1)
         _u2[k] = c*theta_dot[k]
@@ -2676,8 +2678,8 @@ def taylor_coefficients(t, y, p, X, W):
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         _x0[k] = _k23*_f0[k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]/(k + 1)
-        X[1, k + 1] = _x0[k]/(k + 1)
+        X[0, k + 1] = theta_dot[k]*_ik1
+        X[1, k + 1] = _x0[k]*_ik1
     return 0
 
 

@@ -2517,6 +2517,8 @@ def taylor_coefficients(t, y, p, X, W):
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
+        _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
+        _ik1 = 1.0/(k + 1)
         # _c1 = _c0*math.sin(theta)
         # _u0, _u1 = sin(theta), cos(theta)
         if k == 0:
@@ -2535,8 +2537,8 @@ def taylor_coefficients(t, y, p, X, W):
                 _c += _ja*_u0[k - _j]
                 _r += _jb*_u1[k - 1 - _j]
                 _d += _jb*_u0[k - 1 - _j]
-            _u0[k] = (_s + _r)/k
-            _u1[k] = -(_c + _d)/k
+            _u0[k] = (_s + _r)*_ik
+            _u1[k] = -(_c + _d)*_ik
         _c1[k] = _c0*_u0[k]
         # _m0_0 = I + M*R**2 + M*a**2 - 2.0*R*_c0*math.cos(theta)
         _u4[k] = _k3*_u1[k]
@@ -2573,8 +2575,8 @@ def taylor_coefficients(t, y, p, X, W):
             _r += _m0_0[_j + 1]*_x0[k - 1 - _j]
         _x0[k] = (_s - _r)/_m0_0[0]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]/(k + 1)
-        X[1, k + 1] = _x0[k]/(k + 1)
+        X[0, k + 1] = theta_dot[k]*_ik1
+        X[1, k + 1] = _x0[k]*_ik1
     return 0
 
 

@@ -74,7 +74,8 @@ def _recurrence(name):
     names.update(CASES[name][1])
     body = "\n".join("        " + line.format(**names) for line in _INLINE[name][1])
     namespace = {"math": math}
-    exec(f"def run(a, b, c, w, s):\n    for k in range({ORDER + 1}):\n{body}\n", namespace)
+    prelude = "        _ik = 1.0/k if k > 0 else 0.0\n"  # as at the top of taylor_coefficients' loop
+    exec(f"def run(a, b, c, w, s):\n    for k in range({ORDER + 1}):\n{prelude}{body}\n", namespace)
     return namespace["run"]
 
 

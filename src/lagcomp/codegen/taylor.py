@@ -459,9 +459,9 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
     b._emit("#", "The state's next coefficient: y[k + 1] = f[k]/(k + 1).")
     for i, v in enumerate(derivative):
         if v.is_const:
-            b._emit(f"X[{i}, k + 1] = ({to_code(v.const)} if k == 0 else 0.0)/(k + 1)")
+            b._emit(f"X[{i}, k + 1] = ({to_code(v.const)} if k == 0 else 0.0)*_ik1")
         else:
-            b._emit(f"X[{i}, k + 1] = {v.series}[k]/(k + 1)")
+            b._emit(f"X[{i}, k + 1] = {v.series}[k]*_ik1")
     renamed = b.renamed
     if renamed:
         pattern = re.compile(r"\b(" + "|".join(map(re.escape, renamed)) + r")\b")
@@ -498,13 +498,13 @@ _INLINE = {
     "_taylor_pow": ("{w} = {a}**{c}", ["if k == 0:", "    {w}[0] = {a}[0]**{c}", "else:", "    _s = 0.0",
                                           "    for _j in range(k):",
                                           "        _s += ({c}*(k - _j) - _j)*{a}[k - _j]*{w}[_j]",
-                                          "    {w}[k] = _s/(k*{a}[0])"]),
+                                          "    {w}[k] = _s*_ik/{a}[0]"]),
     "_taylor_exp": ("{w} = exp({a})", ["if k == 0:", "    {w}[0] = math.exp({a}[0])", "else:", "    _s = 0.0",
                                           "    for _j in range(1, k + 1):", "        _s += _j*{a}[_j]*{w}[k - _j]",
-                                          "    {w}[k] = _s/k"]),
+                                          "    {w}[k] = _s*_ik"]),
     "_taylor_log": ("{w} = log({a})", ["if k == 0:", "    {w}[0] = math.log({a}[0])", "else:", "    _s = 0.0",
                                           "    for _j in range(1, k):", "        _s += _j*{w}[_j]*{a}[k - _j]",
-                                          "    {w}[k] = ({a}[k] - _s/k)/{a}[0]"]),
+                                          "    {w}[k] = ({a}[k] - _s*_ik)/{a}[0]"]),
     "_taylor_sin_cos": ("{w}, {b} = sin({a}), cos({a})",
                         ["if k == 0:", "    {w}[0] = math.sin({a}[0])", "    {b}[0] = math.cos({a}[0])", "else:",
                          "    _ja = k*{a}[k]", "    _s = _ja*{b}[0] if k % 2 == 1 else 0.0",
@@ -512,7 +512,7 @@ _INLINE = {
                          "    for _j in range(1, k, 2):", "        _ja = _j*{a}[_j]", "        _jb = (_j + 1)*{a}[_j + 1]",
                          "        _s += _ja*{b}[k - _j]", "        _c += _ja*{w}[k - _j]",
                          "        _r += _jb*{b}[k - 1 - _j]", "        _d += _jb*{w}[k - 1 - _j]",
-                         "    {w}[k] = (_s + _r)/k", "    {b}[k] = -(_c + _d)/k"]),
+                         "    {w}[k] = (_s + _r)*_ik", "    {b}[k] = -(_c + _d)*_ik"]),
 }
 _CALL = re.compile(r"^(?:(?P<w>\w+)\[k\] = )?(?P<f>_taylor_\w+)\((?P<args>.*), k\)$")
 
@@ -559,7 +559,8 @@ def emit_taylor(program: TaylorProgram) -> str:
     if program.uses_t:
         lines += ["for k in range(order + 1):", f"{INDENT}_t[k] = 0.0", "_t[0] = t", "if order > 0:",
                   f"{INDENT}_t[1] = 1.0"]
-    lines.append("for k in range(order):")
+    lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order",
+              f"{INDENT}_ik1 = 1.0/(k + 1)"]
     for op in program.body:
         lines += [INDENT + line for line in ([f"# {op.comment}"] if op.line == "#" else _inline(op.line))]
     lines.append("return 0")
