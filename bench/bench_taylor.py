@@ -1,6 +1,6 @@
 """The Taylor method (method="taylor", issue 9) against lagcomp's DOP853 and heyoka, in one process.
 
-    PYTHONPATH=src python bench/bench_taylor.py [--quick]
+    PYTHONPATH=src python bench/bench_taylor.py [--quick] [--sections 1 2 ...]
 
 Sections (each timing is a median of warm runs; ratios are measured in the same run):
 
@@ -42,16 +42,6 @@ EPS = float(np.finfo(float).eps)
 Y0 = np.array([2.0, 1.0, 0.0, 0.0])
 P = [1.0, 1.0, 1.0, 1.0, 9.81]
 GRID = np.array([10.0, 100.0])
-
-
-def median_ms(run, repeats=7):
-    run()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return 1e3 * statistics.median(times), 1e3 * min(times), 1e3 * max(times)
 
 
 def reference_t10() -> np.ndarray:
@@ -98,13 +88,14 @@ def pendulum_energy(y):
 
 
 def section_pendulum(model, have_heyoka, repeats):
+    """Every runner once per round, rounds repeated: all see the same machine load (it is shared)."""
     print("\n## 1. Double pendulum, t in [0, 100]: error at t = 10 against the 30-digit reference\n")
     print("| integrator | tol | steps | error at t = 10 | energy error at 100 | wall ms median (min-max) | "
-          "x taylor default |")
+          "x taylor default (median of per-round ratios) |")
     print("|---|---|---|---|---|---|---|")
     ref = reference_t10()
     e0 = pendulum_energy(Y0)
-    rows = []
+    runners = []  # (name, tol label, run -> (state at 10, state at 100, steps))
     for method, tols in (("taylor", [1e-8, 1e-10, 1e-12, 1e-14, None]),
                          ("dop853", [1e-8, 1e-10, 1e-12, 1e-13, 2.3e-14])):
         for tol in tols:
@@ -113,24 +104,29 @@ def section_pendulum(model, have_heyoka, repeats):
                 options.update(rtol=tol, atol=tol)
 
             def run(options=options):
-                return model.simulate((0, 100), **options)
-            sol = run()
-            wall = median_ms(run, repeats)
-            rows.append((f"lagcomp {method}", "default (eps)" if tol is None else f"{tol:.1e}", sol.nsteps,
-                         float(np.max(np.abs(sol.y[0] - ref))), abs(pendulum_energy(sol.y[-1]) / e0 - 1), wall))
+                sol = model.simulate((0, 100), **options)
+                return sol.y[0], sol.y[-1], sol.nsteps
+            runners.append((f"lagcomp {method}", "default (eps)" if tol is None else f"{tol:.1e}", run))
     if have_heyoka:
         for raw in (False, True):
             for tol in (1e-10, None):
-                ta, run = heyoka_pendulum(raw, tol)
-                a, b = run()
-                wall = median_ms(run, repeats)
+                _, hy_run = heyoka_pendulum(raw, tol)
                 label = "heyoka " + ("raw Cartesian Lagrangian" if raw else "hand-reduced ODE")
-                rows.append((label, "default (eps)" if tol is None else f"{tol:.1e}", "",
-                             float(np.max(np.abs(a - ref))), abs(pendulum_energy(b) / e0 - 1), wall))
-    base = next(r[5][0] for r in rows if r[0] == "lagcomp taylor" and r[1].startswith("default"))
-    for name, tol, steps, err, de, (med, lo, hi) in rows:
-        print(f"| {name} | {tol} | {steps} | {err:.2e} | {de:.1e} | {med:.2f} ({lo:.2f}-{hi:.2f}) | "
-              f"{med / base:.2f} |")
+                runners.append((label, "default (eps)" if tol is None else f"{tol:.1e}",
+                                lambda hy_run=hy_run: (*hy_run(), "")))
+    results = [run() for _, _, run in runners]  # warm (compilation), and the figures
+    times = [[] for _ in runners]
+    for _ in range(repeats):
+        for i, (_, _, run) in enumerate(runners):
+            start = time.perf_counter()
+            run()
+            times[i].append(1e3 * (time.perf_counter() - start))
+    base = next(i for i, r in enumerate(runners) if r[0] == "lagcomp taylor" and r[1].startswith("default"))
+    for (name, tol, _), (a, b, steps), t in zip(runners, results, times):
+        ratio = statistics.median(x / y for x, y in zip(t, times[base]))
+        print(f"| {name} | {tol} | {steps} | {float(np.max(np.abs(a - ref))):.2e} | "
+              f"{abs(pendulum_energy(b) / e0 - 1):.1e} | {statistics.median(t):.2f} ({min(t):.2f}-{max(t):.2f}) | "
+              f"{ratio:.2f} |")
 
 
 def section_long_run(model, have_heyoka, t_end):
@@ -268,7 +264,9 @@ def section_cost(names):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="shorter runs (t = 10³, 10³ orbits, 3 repeats)")
+    parser.add_argument("--sections", type=int, nargs="+", default=[1, 2, 3, 4, 5], help="which sections to run")
     args = parser.parse_args()
+    todo = set(args.sections)
     try:
         import heyoka  # noqa: F401
         have_heyoka = True
@@ -277,11 +275,16 @@ def main() -> None:
     print(f"lagcomp {lc.__version__}, python {sys.version.split()[0]}, heyoka: {have_heyoka}")
     with tempfile.TemporaryDirectory() as cache_dir:
         pendulum = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
-        section_pendulum(pendulum, have_heyoka, 3 if args.quick else 7)
-        section_long_run(pendulum, have_heyoka, 1e3 if args.quick else 1e4)
-        section_kepler(cache_dir, 1000 if args.quick else 10_000)
-        section_henon_heiles(lc.compile(examples.get("henon_heiles"), cache_dir=cache_dir), have_heyoka, 2000)
-    section_cost(["double_pendulum", "henon_heiles", "n_link_pendulum_3", "symmetric_top", "rope_friction"])
+        if 1 in todo:
+            section_pendulum(pendulum, have_heyoka, 3 if args.quick else 15)
+        if 2 in todo:
+            section_long_run(pendulum, have_heyoka, 1e3 if args.quick else 1e4)
+        if 3 in todo:
+            section_kepler(cache_dir, 1000 if args.quick else 10_000)
+        if 4 in todo:
+            section_henon_heiles(lc.compile(examples.get("henon_heiles"), cache_dir=cache_dir), have_heyoka, 2000)
+    if 5 in todo:
+        section_cost(["double_pendulum", "henon_heiles", "n_link_pendulum_3", "symmetric_top", "rope_friction"])
 
 
 if __name__ == "__main__":
