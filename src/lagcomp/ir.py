@@ -26,10 +26,10 @@ import sympy as sp
 class LinearSolve:
     """Solve M x = f for x after the stores, M symmetric positive definite.
 
-    ``m[i][j]`` (i ≥ j, lower triangle) and ``f[i]`` are the targets the stores
-    bind; x is written to ``out[offset + i]``.  Unrolled, the targets are
-    scalar locals and the factorization is straight-line code; otherwise they
-    are elements of work arrays ``mm`` (n, n) and ``ff`` (n,) handed to a loop.
+    ``m[i][j]`` (i ≥ j, lower triangle) and ``f[i]`` are the scalar locals the
+    stores bind; x is written to ``out[offset + i]``.  Unrolled, the
+    factorization is straight-line code; otherwise the locals are gathered
+    into arrays ``mm`` (n, n) and ``ff`` (n,) handed to a loop.
     """
 
     n: int
@@ -37,6 +37,22 @@ class LinearSolve:
     f: tuple[str, ...]
     offset: int
     unrolled: bool = True
+
+
+@dataclass(frozen=True)
+class SymmetricProduct:
+    """out[offset + i] = f[i] + Σ_j M_ij y[start + j] after the stores, M symmetric.
+
+    ``m[i][j]`` (i ≥ j) and ``f[i]`` are the scalar locals the stores bind,
+    gathered into arrays for a loop: for a large system the products written
+    out one by one cost numba more to compile than the entries of M.
+    """
+
+    n: int
+    m: tuple[tuple[str, ...], ...]
+    f: tuple[str, ...]
+    start: int
+    offset: int
 
 
 @dataclass(frozen=True)
@@ -77,8 +93,9 @@ class Kernel:
     stores : tuple of (target, Expr)
         Output assignments; the target is an lvalue (``out[0]``, a local) or
         ``return`` for scalar kernels.
-    solve : LinearSolve, AugmentedSolve or None
-        Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``).
+    solve : LinearSolve, AugmentedSolve, SymmetricProduct or None
+        Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``),
+        or the matrix-vector product of ``momenta`` for large systems.
     lanes : bool
         The body runs once per lane ``_l`` of a batch (structure of arrays:
         ``Y[i, _l]``, ``P[k, _l]``, ``out[i, _l]``), in a loop LLVM can
@@ -95,7 +112,7 @@ class Kernel:
     loads: tuple[tuple[str, str], ...]
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
-    solve: LinearSolve | AugmentedSolve | None = None
+    solve: LinearSolve | AugmentedSolve | SymmetricProduct | None = None
     lanes: bool = False
     alias: str | None = None
 

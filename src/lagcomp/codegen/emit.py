@@ -25,7 +25,7 @@ from importlib import resources
 from lagcomp import __version__
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor import taylor_source
-from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR
+from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR, SymmetricProduct
 
 INDENT = "    "
 
@@ -88,6 +88,38 @@ def _unrolled_ldlt(solve: LinearSolve, lanes: bool = False) -> list[str]:
     return lines
 
 
+def _gathered(solve, symmetric: bool) -> list[str]:
+    """``mm`` and ``ff`` from the locals of M (lower triangle, or both when `symmetric`) and f.
+
+    From tuples: numba compiles a tuple into an array several times faster
+    than one store per element (a 24-link chain's 300 stores took ~3 s).
+    """
+    n = solve.n
+    entry = lambda i, j: solve.m[i][j] if j <= i else (solve.m[j][i] if symmetric else "0.0")  # noqa: E731
+    one = "," if n == 1 else ""  # a tuple of one element
+    lines = ["mm = np.array(("] + [f"{INDENT}({', '.join(entry(i, j) for j in range(n))}{one})," for i in range(n)]
+    return lines + ["))", f"ff = np.array(({', '.join(solve.f)}{one}))"]
+
+
+def _looped_ldlt(solve: LinearSolve) -> list[str]:
+    """M's lower triangle and f gathered into arrays, then the loop `_ldlt_solve` (linear_solvers.py)."""
+    lines = ["# Solve M x = f by LDLᵀ (loops); a non-positive pivot means M is singular here."]
+    return lines + _gathered(solve, symmetric=False) + [f"return _ldlt_solve(mm, ff, out, {solve.offset})"]
+
+
+def _symmetric_product(solve: SymmetricProduct) -> list[str]:
+    """out[offset + i] = f_i + Σ_j M_ij y[start + j], as a loop."""
+    at = lambda k, i: f"{k} + {i}" if k else i  # noqa: E731
+    return [f"# out = f + M y[{solve.start}:], M symmetric (a loop compiles faster than the products written out)."] \
+        + _gathered(solve, symmetric=True) + [
+            f"for _i in range({solve.n}):",
+            f"{INDENT}_s = ff[_i]",
+            f"{INDENT}for _j in range({solve.n}):",
+            f"{INDENT * 2}_s += mm[_i, _j]*y[{at(solve.start, '_j')}]",
+            f"{INDENT}out[{at(solve.offset, '_i')}] = _s",
+        ]
+
+
 def _lanes_kernel_source(kernel: Kernel) -> list[str]:
     """The body of a `Kernel.lanes` kernel: the scalar body, once per lane, in a loop over lanes."""
     inner = [f"{local} = {source}" for local, source in kernel.loads]
@@ -108,9 +140,6 @@ def _kernel_source(kernel: Kernel) -> str:
     solve = kernel.solve
     if isinstance(solve, AugmentedSolve):
         body.append(f"_kkt = np.zeros(({solve.size}, {solve.size + 1}))")
-    elif solve is not None and not solve.unrolled:
-        n = solve.n
-        body += [f"mm = np.empty(({n}, {n}))", f"ff = np.empty({n})"]
     body += [f"{name} = {to_code(expr)}" for name, expr in kernel.temps]
     for target, expr in kernel.stores:
         body.append(f"return {to_code(expr)}" if target == "return" else f"{target} = {to_code(expr)}")
@@ -118,11 +147,13 @@ def _kernel_source(kernel: Kernel) -> str:
         body += [f"_status = _kkt_solve(_kkt, {solve.mass_block})", "if _status:", f"{INDENT}return _status"]
         body += [f"out[{solve.offset + i}] = _kkt[{solve.first + i}, {solve.size}]" for i in range(solve.count)]
         body.append("return 0")
+    elif isinstance(solve, SymmetricProduct):
+        body += _symmetric_product(solve)
     elif solve is not None:
         if solve.unrolled:
             body += _unrolled_ldlt(solve)
         else:
-            body.append(f"return _ldlt_solve(mm, ff, out, {solve.offset})")
+            body += _looped_ldlt(solve)
     return _decorated(kernel, body)
 
 

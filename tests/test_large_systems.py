@@ -1,0 +1,29 @@
+"""Kernels of systems above UNROLL_MAX coordinates: looped LDLᵀ and momenta, from gathered arrays."""
+
+import numpy as np
+
+import lagcomp as lc
+from lagcomp import examples
+from lagcomp.codegen.lower import UNROLL_MAX
+
+
+def test_looped_kernels_agree_with_mass_matrix_and_forcing(cache_dir):
+    n = UNROLL_MAX + 1
+    model = lc.compile(examples.n_link_pendulum(n), cache_dir=cache_dir)
+    k = model.kernels
+    rng = np.random.default_rng(8)
+    for _ in range(3):
+        y = rng.normal(size=2 * n)
+        p = model.parameter_vector({f"{s}{i}": rng.uniform(0.5, 2.0) for s in "ml" for i in range(1, n + 1)})
+        M, F, out, momenta = np.empty((n, n)), np.empty(n), np.empty(2 * n), np.empty(n)
+        k.mass_matrix(0.0, y, p, M)
+        k.forcing(0.0, y, p, F)
+        assert k.rhs(0.0, y, p, out) == 0
+        k.momenta(0.0, y, p, momenta)
+        np.testing.assert_allclose(out[:n], y[n:])
+        np.testing.assert_allclose(out[n:], np.linalg.solve(M, F), rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(momenta, M @ y[n:], rtol=1e-12, atol=1e-12)
+        velocities = np.empty(n)
+        assert k.velocities(0.0, np.concatenate([y[:n], momenta]), p, velocities) == 0
+        np.testing.assert_allclose(velocities, y[n:], rtol=1e-9, atol=1e-12)
+        assert k.energy_function(0.0, y, p) == k.energy(0.0, y, p)  # h = T + V: the same kernel
