@@ -2588,10 +2588,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta1 = X[0]
-    theta2 = X[1]
-    theta1_dot = X[2]
-    theta2_dot = X[3]
     m1 = p[0]
     m2 = p[1]
     l1 = p[2]
@@ -2607,182 +2603,187 @@ def taylor_coefficients(t, y, p, X, W):
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
     _k20 = 1.0/_m0_0
-    _c1 = W[0]
-    _u1 = W[1]
-    _u2 = W[2]
-    _c4 = W[3]
-    _m1_0 = W[4]
-    _u5 = W[5]
-    _u6 = W[6]
-    _u8 = W[7]
-    _u9 = W[8]
-    _u10 = W[9]
-    _f0 = W[10]
-    _u12 = W[11]
-    _u13 = W[12]
-    _u15 = W[13]
-    _u16 = W[14]
-    _u17 = W[15]
-    _u18 = W[16]
-    _f1 = W[17]
-    _l1_0 = W[18]
-    _u22 = W[19]
-    _u23 = W[20]
-    _d1 = W[21]
-    _u25 = W[22]
-    _z1 = W[23]
-    _x1 = W[24]
-    _u28 = W[25]
-    _u29 = W[26]
-    _x0 = W[27]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta1 = 0
+    theta2 = 1
+    theta1_dot = 2
+    theta2_dot = 3
+    _c1 = 0
+    _u1 = 1
+    _u2 = 2
+    _c4 = 3
+    _m1_0 = 4
+    _u5 = 5
+    _u6 = 6
+    _u8 = 7
+    _u9 = 8
+    _u10 = 9
+    _f0 = 10
+    _u12 = 11
+    _u13 = 12
+    _u15 = 13
+    _u16 = 14
+    _u17 = 15
+    _u18 = 16
+    _f1 = 17
+    _l1_0 = 18
+    _u22 = 19
+    _u23 = 20
+    _d1 = 21
+    _u25 = 22
+    _z1 = 23
+    _x1 = 24
+    _u28 = 25
+    _u29 = 26
+    _x0 = 27
     for i in range(4):
         X[i, 0] = y[i]
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
         # _c1 = theta2 - theta1
-        _c1[k] = theta2[k] - theta1[k]
+        W[_c1, k] = X[theta2, k] - X[theta1, k]
         # _c4 = _c3*math.sin(_c1)
         # _u1, _u2 = sin(_c1), cos(_c1)
         if k == 0:
-            _u1[0] = math.sin(_c1[0])
-            _u2[0] = math.cos(_c1[0])
+            W[_u1, 0] = math.sin(W[_c1, 0])
+            W[_u2, 0] = math.cos(W[_c1, 0])
         else:
-            _ja = k*_c1[k]
-            _s = _ja*_u2[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u1[0] if k % 2 == 1 else 0.0
+            _ja = k*W[_c1, k]
+            _s = _ja*W[_u2, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u1, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*_c1[_j]
-                _jb = (_j + 1)*_c1[_j + 1]
-                _s += _ja*_u2[k - _j]
-                _c += _ja*_u1[k - _j]
-                _r += _jb*_u2[k - 1 - _j]
-                _d += _jb*_u1[k - 1 - _j]
-            _u1[k] = (_s + _r)*_ik
-            _u2[k] = -(_c + _d)*_ik
-        _c4[k] = _c3*_u1[k]
+                _ja = _j*W[_c1, _j]
+                _jb = (_j + 1)*W[_c1, _j + 1]
+                _s += _ja*W[_u2, k - _j]
+                _c += _ja*W[_u1, k - _j]
+                _r += _jb*W[_u2, k - 1 - _j]
+                _d += _jb*W[_u1, k - 1 - _j]
+            W[_u1, k] = (_s + _r)*_ik
+            W[_u2, k] = -(_c + _d)*_ik
+        W[_c4, k] = _c3*W[_u1, k]
         # _m1_0 = _c3*math.cos(_c1)
-        _m1_0[k] = _c3*_u2[k]
+        W[_m1_0, k] = _c3*W[_u2, k]
         # _f0 = _c4*theta2_dot**2 - _c0*g*l1*math.sin(theta1)
         # _u5 = theta2_dot**2
         _m = (k + 1)//2
-        _s = theta2_dot[_m - 1]*theta2_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[theta2_dot, _m - 1]*X[theta2_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += theta2_dot[_j]*theta2_dot[k - _j]
-            _r += theta2_dot[_j + 1]*theta2_dot[k - 1 - _j]
-        _u5[k] = 2.0*(_s + _r) + (theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[theta2_dot, _j]*X[theta2_dot, k - _j]
+            _r += X[theta2_dot, _j + 1]*X[theta2_dot, k - 1 - _j]
+        W[_u5, k] = 2.0*(_s + _r) + (X[theta2_dot, k//2]*X[theta2_dot, k//2] if k % 2 == 0 else 0.0)
         # _u6 = _c4*_u5
-        _s = _c4[k]*_u5[0] if k % 2 == 0 else 0.0
+        _s = W[_c4, k]*W[_u5, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c4[_j]*_u5[k - _j]
-            _r += _c4[_j + 1]*_u5[k - 1 - _j]
-        _u6[k] = _s + _r
+            _s += W[_c4, _j]*W[_u5, k - _j]
+            _r += W[_c4, _j + 1]*W[_u5, k - 1 - _j]
+        W[_u6, k] = _s + _r
         # _u8, _u9 = sin(theta1), cos(theta1)
         if k == 0:
-            _u8[0] = math.sin(theta1[0])
-            _u9[0] = math.cos(theta1[0])
+            W[_u8, 0] = math.sin(X[theta1, 0])
+            W[_u9, 0] = math.cos(X[theta1, 0])
         else:
-            _ja = k*theta1[k]
-            _s = _ja*_u9[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u8[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta1, k]
+            _s = _ja*W[_u9, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u8, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta1[_j]
-                _jb = (_j + 1)*theta1[_j + 1]
-                _s += _ja*_u9[k - _j]
-                _c += _ja*_u8[k - _j]
-                _r += _jb*_u9[k - 1 - _j]
-                _d += _jb*_u8[k - 1 - _j]
-            _u8[k] = (_s + _r)*_ik
-            _u9[k] = -(_c + _d)*_ik
-        _u10[k] = _k7*_u8[k]
-        _f0[k] = _u6[k] - _u10[k]
+                _ja = _j*X[theta1, _j]
+                _jb = (_j + 1)*X[theta1, _j + 1]
+                _s += _ja*W[_u9, k - _j]
+                _c += _ja*W[_u8, k - _j]
+                _r += _jb*W[_u9, k - 1 - _j]
+                _d += _jb*W[_u8, k - 1 - _j]
+            W[_u8, k] = (_s + _r)*_ik
+            W[_u9, k] = -(_c + _d)*_ik
+        W[_u10, k] = _k7*W[_u8, k]
+        W[_f0, k] = W[_u6, k] - W[_u10, k]
         # _f1 = -_c4*theta1_dot**2 - _c2*g*math.sin(theta2)
         # _u12 = theta1_dot**2
         _m = (k + 1)//2
-        _s = theta1_dot[_m - 1]*theta1_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[theta1_dot, _m - 1]*X[theta1_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += theta1_dot[_j]*theta1_dot[k - _j]
-            _r += theta1_dot[_j + 1]*theta1_dot[k - 1 - _j]
-        _u12[k] = 2.0*(_s + _r) + (theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[theta1_dot, _j]*X[theta1_dot, k - _j]
+            _r += X[theta1_dot, _j + 1]*X[theta1_dot, k - 1 - _j]
+        W[_u12, k] = 2.0*(_s + _r) + (X[theta1_dot, k//2]*X[theta1_dot, k//2] if k % 2 == 0 else 0.0)
         # _u13 = _c4*_u12
-        _s = _c4[k]*_u12[0] if k % 2 == 0 else 0.0
+        _s = W[_c4, k]*W[_u12, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c4[_j]*_u12[k - _j]
-            _r += _c4[_j + 1]*_u12[k - 1 - _j]
-        _u13[k] = _s + _r
+            _s += W[_c4, _j]*W[_u12, k - _j]
+            _r += W[_c4, _j + 1]*W[_u12, k - 1 - _j]
+        W[_u13, k] = _s + _r
         # _u15, _u16 = sin(theta2), cos(theta2)
         if k == 0:
-            _u15[0] = math.sin(theta2[0])
-            _u16[0] = math.cos(theta2[0])
+            W[_u15, 0] = math.sin(X[theta2, 0])
+            W[_u16, 0] = math.cos(X[theta2, 0])
         else:
-            _ja = k*theta2[k]
-            _s = _ja*_u16[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u15[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta2, k]
+            _s = _ja*W[_u16, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u15, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta2[_j]
-                _jb = (_j + 1)*theta2[_j + 1]
-                _s += _ja*_u16[k - _j]
-                _c += _ja*_u15[k - _j]
-                _r += _jb*_u16[k - 1 - _j]
-                _d += _jb*_u15[k - 1 - _j]
-            _u15[k] = (_s + _r)*_ik
-            _u16[k] = -(_c + _d)*_ik
-        _u17[k] = _k14*_u15[k]
-        _u18[k] = -_u13[k]
-        _f1[k] = _u18[k] - _u17[k]
+                _ja = _j*X[theta2, _j]
+                _jb = (_j + 1)*X[theta2, _j + 1]
+                _s += _ja*W[_u16, k - _j]
+                _c += _ja*W[_u15, k - _j]
+                _r += _jb*W[_u16, k - 1 - _j]
+                _d += _jb*W[_u15, k - 1 - _j]
+            W[_u15, k] = (_s + _r)*_ik
+            W[_u16, k] = -(_c + _d)*_ik
+        W[_u17, k] = _k14*W[_u15, k]
+        W[_u18, k] = -W[_u13, k]
+        W[_f1, k] = W[_u18, k] - W[_u17, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _l1_0[k] = _k20*_m1_0[k]
+        W[_l1_0, k] = _k20*W[_m1_0, k]
         # _u22 = _l1_0**2
         _m = (k + 1)//2
-        _s = _l1_0[_m - 1]*_l1_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_l1_0, _m - 1]*W[_l1_0, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _l1_0[_j]*_l1_0[k - _j]
-            _r += _l1_0[_j + 1]*_l1_0[k - 1 - _j]
-        _u22[k] = 2.0*(_s + _r) + (_l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0)
-        _u23[k] = _m0_0*_u22[k]
-        _d1[k] = _m1_1 - _u23[k] if k == 0 else -_u23[k]
-        if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
+            _s += W[_l1_0, _j]*W[_l1_0, k - _j]
+            _r += W[_l1_0, _j + 1]*W[_l1_0, k - 1 - _j]
+        W[_u22, k] = 2.0*(_s + _r) + (W[_l1_0, k//2]*W[_l1_0, k//2] if k % 2 == 0 else 0.0)
+        W[_u23, k] = _m0_0*W[_u22, k]
+        W[_d1, k] = _m1_1 - W[_u23, k] if k == 0 else -W[_u23, k]
+        if k == 0 and not W[_d1, 0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
         # _u25 = _l1_0*_f0
-        _s = _l1_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _s = W[_l1_0, k]*W[_f0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l1_0[_j]*_f0[k - _j]
-            _r += _l1_0[_j + 1]*_f0[k - 1 - _j]
-        _u25[k] = _s + _r
-        _z1[k] = _f1[k] - _u25[k]
+            _s += W[_l1_0, _j]*W[_f0, k - _j]
+            _r += W[_l1_0, _j + 1]*W[_f0, k - 1 - _j]
+        W[_u25, k] = _s + _r
+        W[_z1, k] = W[_f1, k] - W[_u25, k]
         # _x1 = _z1/_d1
-        _s = _z1[k] - (_d1[k]*_x1[0] if k % 2 == 1 else 0.0)
+        _s = W[_z1, k] - (W[_d1, k]*W[_x1, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _d1[_j]*_x1[k - _j]
-            _r += _d1[_j + 1]*_x1[k - 1 - _j]
-        _x1[k] = (_s - _r)/_d1[0]
-        _u28[k] = _k20*_f0[k]
+            _s -= W[_d1, _j]*W[_x1, k - _j]
+            _r += W[_d1, _j + 1]*W[_x1, k - 1 - _j]
+        W[_x1, k] = (_s - _r)/W[_d1, 0]
+        W[_u28, k] = _k20*W[_f0, k]
         # _u29 = _l1_0*_x1
-        _s = _l1_0[k]*_x1[0] if k % 2 == 0 else 0.0
+        _s = W[_l1_0, k]*W[_x1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l1_0[_j]*_x1[k - _j]
-            _r += _l1_0[_j + 1]*_x1[k - 1 - _j]
-        _u29[k] = _s + _r
-        _x0[k] = _u28[k] - _u29[k]
+            _s += W[_l1_0, _j]*W[_x1, k - _j]
+            _r += W[_l1_0, _j + 1]*W[_x1, k - 1 - _j]
+        W[_u29, k] = _s + _r
+        W[_x0, k] = W[_u28, k] - W[_u29, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta1_dot[k]*_ik1
-        X[1, k + 1] = theta2_dot[k]*_ik1
-        X[2, k + 1] = _x0[k]*_ik1
-        X[3, k + 1] = _x1[k]*_ik1
+        X[0, k + 1] = X[theta1_dot, k]*_ik1
+        X[1, k + 1] = X[theta2_dot, k]*_ik1
+        X[2, k + 1] = W[_x0, k]*_ik1
+        X[3, k + 1] = W[_x1, k]*_ik1
     return 0
 
 

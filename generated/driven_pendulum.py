@@ -2504,8 +2504,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta = X[0]
-    theta_dot = X[1]
     m = p[0]
     l = p[1]
     g = p[2]
@@ -2518,80 +2516,83 @@ def taylor_coefficients(t, y, p, X, W):
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
     _k10 = 1.0/_m0_0
-    _t = W[0]
-    _u1 = W[1]
-    _u2 = W[2]
-    _u3 = W[3]
-    _u4 = W[4]
-    _u6 = W[5]
-    _u7 = W[6]
-    _u8 = W[7]
-    _f0 = W[8]
-    _x0 = W[9]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta = 0
+    theta_dot = 1
+    _t = 0
+    _u1 = 1
+    _u2 = 2
+    _u3 = 3
+    _u4 = 4
+    _u6 = 5
+    _u7 = 6
+    _u8 = 7
+    _f0 = 8
+    _x0 = 9
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order + 1):
-        _t[k] = 0.0
-    _t[0] = t
+        W[_t, k] = 0.0
+    W[_t, 0] = t
     if order > 0:
-        _t[1] = 1.0
+        W[_t, 1] = 1.0
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
         # _f0 = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.sin(theta)
-        _u1[k] = Omega*_t[k]
+        W[_u1, k] = Omega*W[_t, k]
         # _u2, _u3 = sin(_u1), cos(_u1)
         if k == 0:
-            _u2[0] = math.sin(_u1[0])
-            _u3[0] = math.cos(_u1[0])
+            W[_u2, 0] = math.sin(W[_u1, 0])
+            W[_u3, 0] = math.cos(W[_u1, 0])
         else:
-            _ja = k*_u1[k]
-            _s = _ja*_u3[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u2[0] if k % 2 == 1 else 0.0
+            _ja = k*W[_u1, k]
+            _s = _ja*W[_u3, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u2, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*_u1[_j]
-                _jb = (_j + 1)*_u1[_j + 1]
-                _s += _ja*_u3[k - _j]
-                _c += _ja*_u2[k - _j]
-                _r += _jb*_u3[k - 1 - _j]
-                _d += _jb*_u2[k - 1 - _j]
-            _u2[k] = (_s + _r)*_ik
-            _u3[k] = -(_c + _d)*_ik
-        _u4[k] = _k0*_u3[k]
-        _u6[k] = _u4[k] + _k5 if k == 0 else _u4[k]
+                _ja = _j*W[_u1, _j]
+                _jb = (_j + 1)*W[_u1, _j + 1]
+                _s += _ja*W[_u3, k - _j]
+                _c += _ja*W[_u2, k - _j]
+                _r += _jb*W[_u3, k - 1 - _j]
+                _d += _jb*W[_u2, k - 1 - _j]
+            W[_u2, k] = (_s + _r)*_ik
+            W[_u3, k] = -(_c + _d)*_ik
+        W[_u4, k] = _k0*W[_u3, k]
+        W[_u6, k] = W[_u4, k] + _k5 if k == 0 else W[_u4, k]
         # _u7, _u8 = sin(theta), cos(theta)
         if k == 0:
-            _u7[0] = math.sin(theta[0])
-            _u8[0] = math.cos(theta[0])
+            W[_u7, 0] = math.sin(X[theta, 0])
+            W[_u8, 0] = math.cos(X[theta, 0])
         else:
-            _ja = k*theta[k]
-            _s = _ja*_u8[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u7[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta, k]
+            _s = _ja*W[_u8, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u7, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta[_j]
-                _jb = (_j + 1)*theta[_j + 1]
-                _s += _ja*_u8[k - _j]
-                _c += _ja*_u7[k - _j]
-                _r += _jb*_u8[k - 1 - _j]
-                _d += _jb*_u7[k - 1 - _j]
-            _u7[k] = (_s + _r)*_ik
-            _u8[k] = -(_c + _d)*_ik
+                _ja = _j*X[theta, _j]
+                _jb = (_j + 1)*X[theta, _j + 1]
+                _s += _ja*W[_u8, k - _j]
+                _c += _ja*W[_u7, k - _j]
+                _r += _jb*W[_u8, k - 1 - _j]
+                _d += _jb*W[_u7, k - 1 - _j]
+            W[_u7, k] = (_s + _r)*_ik
+            W[_u8, k] = -(_c + _d)*_ik
         # _f0 = _u6*_u7
-        _s = _u6[k]*_u7[0] if k % 2 == 0 else 0.0
+        _s = W[_u6, k]*W[_u7, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u6[_j]*_u7[k - _j]
-            _r += _u6[_j + 1]*_u7[k - 1 - _j]
-        _f0[k] = _s + _r
+            _s += W[_u6, _j]*W[_u7, k - _j]
+            _r += W[_u6, _j + 1]*W[_u7, k - 1 - _j]
+        W[_f0, k] = _s + _r
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _x0[k] = _k10*_f0[k]
+        W[_x0, k] = _k10*W[_f0, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]*_ik1
-        X[1, k + 1] = _x0[k]*_ik1
+        X[0, k + 1] = X[theta_dot, k]*_ik1
+        X[1, k + 1] = W[_x0, k]*_ik1
     return 0
 
 

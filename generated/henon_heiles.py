@@ -2761,10 +2761,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    x = X[0]
-    y_ = X[1]
-    x_dot = X[2]
-    y_dot = X[3]
     lam = p[0]
     _m0_0 = 1.0
     _m1_0 = 0.0
@@ -2781,71 +2777,76 @@ def taylor_coefficients(t, y, p, X, W):
         return 2
     _k18 = 1.0/_k15
     _k20 = 1.0/_m0_0
-    _u1 = W[0]
-    _u2 = W[1]
-    _u3 = W[2]
-    _f0 = W[3]
-    _u5 = W[4]
-    _u6 = W[5]
-    _u7 = W[6]
-    _u8 = W[7]
-    _u9 = W[8]
-    _f1 = W[9]
-    _u16 = W[10]
-    _z1 = W[11]
-    _x1 = W[12]
-    _u21 = W[13]
-    _u22 = W[14]
-    _x0 = W[15]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    x = 0
+    y_ = 1
+    x_dot = 2
+    y_dot = 3
+    _u1 = 0
+    _u2 = 1
+    _u3 = 2
+    _f0 = 3
+    _u5 = 4
+    _u6 = 5
+    _u7 = 6
+    _u8 = 7
+    _u9 = 8
+    _f1 = 9
+    _u16 = 10
+    _z1 = 11
+    _x1 = 12
+    _u21 = 13
+    _u22 = 14
+    _x0 = 15
     for i in range(4):
         X[i, 0] = y[i]
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
         # _f0 = x*(-1.0 - 2.0*lam*y_)
-        _u1[k] = _k0*y_[k]
-        _u2[k] = -_u1[k]
-        _u3[k] = _u2[k] + -1.0 if k == 0 else _u2[k]
+        W[_u1, k] = _k0*X[y_, k]
+        W[_u2, k] = -W[_u1, k]
+        W[_u3, k] = W[_u2, k] + -1.0 if k == 0 else W[_u2, k]
         # _f0 = x*_u3
-        _s = x[k]*_u3[0] if k % 2 == 0 else 0.0
+        _s = X[x, k]*W[_u3, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += x[_j]*_u3[k - _j]
-            _r += x[_j + 1]*_u3[k - 1 - _j]
-        _f0[k] = _s + _r
+            _s += X[x, _j]*W[_u3, k - _j]
+            _r += X[x, _j + 1]*W[_u3, k - 1 - _j]
+        W[_f0, k] = _s + _r
         # _f1 = -y_ + lam*y_**2 - lam*x**2
         # _u5 = y_**2
         _m = (k + 1)//2
-        _s = y_[_m - 1]*y_[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[y_, _m - 1]*X[y_, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += y_[_j]*y_[k - _j]
-            _r += y_[_j + 1]*y_[k - 1 - _j]
-        _u5[k] = 2.0*(_s + _r) + (y_[k//2]*y_[k//2] if k % 2 == 0 else 0.0)
-        _u6[k] = lam*_u5[k]
+            _s += X[y_, _j]*X[y_, k - _j]
+            _r += X[y_, _j + 1]*X[y_, k - 1 - _j]
+        W[_u5, k] = 2.0*(_s + _r) + (X[y_, k//2]*X[y_, k//2] if k % 2 == 0 else 0.0)
+        W[_u6, k] = lam*W[_u5, k]
         # _u7 = x**2
         _m = (k + 1)//2
-        _s = x[_m - 1]*x[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[x, _m - 1]*X[x, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += x[_j]*x[k - _j]
-            _r += x[_j + 1]*x[k - 1 - _j]
-        _u7[k] = 2.0*(_s + _r) + (x[k//2]*x[k//2] if k % 2 == 0 else 0.0)
-        _u8[k] = lam*_u7[k]
-        _u9[k] = _u6[k] - y_[k]
-        _f1[k] = _u9[k] - _u8[k]
+            _s += X[x, _j]*X[x, k - _j]
+            _r += X[x, _j + 1]*X[x, k - 1 - _j]
+        W[_u7, k] = 2.0*(_s + _r) + (X[x, k//2]*X[x, k//2] if k % 2 == 0 else 0.0)
+        W[_u8, k] = lam*W[_u7, k]
+        W[_u9, k] = W[_u6, k] - X[y_, k]
+        W[_f1, k] = W[_u9, k] - W[_u8, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _u16[k] = _k11*_f0[k]
-        _z1[k] = _f1[k] - _u16[k]
-        _x1[k] = _k18*_z1[k]
-        _u21[k] = _k20*_f0[k]
-        _u22[k] = _k11*_x1[k]
-        _x0[k] = _u21[k] - _u22[k]
+        W[_u16, k] = _k11*W[_f0, k]
+        W[_z1, k] = W[_f1, k] - W[_u16, k]
+        W[_x1, k] = _k18*W[_z1, k]
+        W[_u21, k] = _k20*W[_f0, k]
+        W[_u22, k] = _k11*W[_x1, k]
+        W[_x0, k] = W[_u21, k] - W[_u22, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = x_dot[k]*_ik1
-        X[1, k + 1] = y_dot[k]*_ik1
-        X[2, k + 1] = _x0[k]*_ik1
-        X[3, k + 1] = _x1[k]*_ik1
+        X[0, k + 1] = X[x_dot, k]*_ik1
+        X[1, k + 1] = X[y_dot, k]*_ik1
+        X[2, k + 1] = W[_x0, k]*_ik1
+        X[3, k + 1] = W[_x1, k]*_ik1
     return 0
 
 

@@ -2512,8 +2512,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta = X[0]
-    theta_dot = X[1]
     m = p[0]
     R = p[1]
     g = p[2]
@@ -2529,107 +2527,110 @@ def taylor_coefficients(t, y, p, X, W):
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
     _k18 = 1.0/_m0_0
-    _t = W[0]
-    _c1 = W[1]
-    _u1 = W[2]
-    _u2 = W[3]
-    _u3 = W[4]
-    _c2 = W[5]
-    _u6 = W[6]
-    _u7 = W[7]
-    _u9 = W[8]
-    _u10 = W[9]
-    _u12 = W[10]
-    _u13 = W[11]
-    _u14 = W[12]
-    _u16 = W[13]
-    _f0 = W[14]
-    _x0 = W[15]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta = 0
+    theta_dot = 1
+    _t = 0
+    _c1 = 1
+    _u1 = 2
+    _u2 = 3
+    _u3 = 4
+    _c2 = 5
+    _u6 = 6
+    _u7 = 7
+    _u9 = 8
+    _u10 = 9
+    _u12 = 10
+    _u13 = 11
+    _u14 = 12
+    _u16 = 13
+    _f0 = 14
+    _x0 = 15
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order + 1):
-        _t[k] = 0.0
-    _t[0] = t
+        W[_t, k] = 0.0
+    W[_t, 0] = t
     if order > 0:
-        _t[1] = 1.0
+        W[_t, 1] = 1.0
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
         # _c1 = math.sin(theta)
         # _c1, _u1 = sin(theta), cos(theta)
         if k == 0:
-            _c1[0] = math.sin(theta[0])
-            _u1[0] = math.cos(theta[0])
+            W[_c1, 0] = math.sin(X[theta, 0])
+            W[_u1, 0] = math.cos(X[theta, 0])
         else:
-            _ja = k*theta[k]
-            _s = _ja*_u1[0] if k % 2 == 1 else 0.0
-            _c = _ja*_c1[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta, k]
+            _s = _ja*W[_u1, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_c1, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta[_j]
-                _jb = (_j + 1)*theta[_j + 1]
-                _s += _ja*_u1[k - _j]
-                _c += _ja*_c1[k - _j]
-                _r += _jb*_u1[k - 1 - _j]
-                _d += _jb*_c1[k - 1 - _j]
-            _c1[k] = (_s + _r)*_ik
-            _u1[k] = -(_c + _d)*_ik
+                _ja = _j*X[theta, _j]
+                _jb = (_j + 1)*X[theta, _j + 1]
+                _s += _ja*W[_u1, k - _j]
+                _c += _ja*W[_c1, k - _j]
+                _r += _jb*W[_u1, k - 1 - _j]
+                _d += _jb*W[_c1, k - 1 - _j]
+            W[_c1, k] = (_s + _r)*_ik
+            W[_u1, k] = -(_c + _d)*_ik
         # _c2 = math.cos(2.0*t)
-        _u2[k] = 2.0*_t[k]
+        W[_u2, k] = 2.0*W[_t, k]
         # _u3, _c2 = sin(_u2), cos(_u2)
         if k == 0:
-            _u3[0] = math.sin(_u2[0])
-            _c2[0] = math.cos(_u2[0])
+            W[_u3, 0] = math.sin(W[_u2, 0])
+            W[_c2, 0] = math.cos(W[_u2, 0])
         else:
-            _ja = k*_u2[k]
-            _s = _ja*_c2[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u3[0] if k % 2 == 1 else 0.0
+            _ja = k*W[_u2, k]
+            _s = _ja*W[_c2, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u3, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*_u2[_j]
-                _jb = (_j + 1)*_u2[_j + 1]
-                _s += _ja*_c2[k - _j]
-                _c += _ja*_u3[k - _j]
-                _r += _jb*_c2[k - 1 - _j]
-                _d += _jb*_u3[k - 1 - _j]
-            _u3[k] = (_s + _r)*_ik
-            _c2[k] = -(_c + _d)*_ik
+                _ja = _j*W[_u2, _j]
+                _jb = (_j + 1)*W[_u2, _j + 1]
+                _s += _ja*W[_c2, k - _j]
+                _c += _ja*W[_u3, k - _j]
+                _r += _jb*W[_c2, k - 1 - _j]
+                _d += _jb*W[_u3, k - 1 - _j]
+            W[_u3, k] = (_s + _r)*_ik
+            W[_c2, k] = -(_c + _d)*_ik
         # _f0 = _c1*(_c0*Omega**2 + _c3*_c2**2*epsilon**2 + Omega*_c2*_c3*epsilon)*math.cos(theta) + R*_c1*g*m
         # _u6 = _c2**2
         _m = (k + 1)//2
-        _s = _c2[_m - 1]*_c2[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_c2, _m - 1]*W[_c2, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _c2[_j]*_c2[k - _j]
-            _r += _c2[_j + 1]*_c2[k - 1 - _j]
-        _u6[k] = 2.0*(_s + _r) + (_c2[k//2]*_c2[k//2] if k % 2 == 0 else 0.0)
-        _u7[k] = _k5*_u6[k]
-        _u9[k] = _k8*_c2[k]
-        _u10[k] = _u7[k] + _u9[k]
-        _u12[k] = _u10[k] + _k11 if k == 0 else _u10[k]
+            _s += W[_c2, _j]*W[_c2, k - _j]
+            _r += W[_c2, _j + 1]*W[_c2, k - 1 - _j]
+        W[_u6, k] = 2.0*(_s + _r) + (W[_c2, k//2]*W[_c2, k//2] if k % 2 == 0 else 0.0)
+        W[_u7, k] = _k5*W[_u6, k]
+        W[_u9, k] = _k8*W[_c2, k]
+        W[_u10, k] = W[_u7, k] + W[_u9, k]
+        W[_u12, k] = W[_u10, k] + _k11 if k == 0 else W[_u10, k]
         # _u13 = _c1*_u12
-        _s = _c1[k]*_u12[0] if k % 2 == 0 else 0.0
+        _s = W[_c1, k]*W[_u12, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c1[_j]*_u12[k - _j]
-            _r += _c1[_j + 1]*_u12[k - 1 - _j]
-        _u13[k] = _s + _r
+            _s += W[_c1, _j]*W[_u12, k - _j]
+            _r += W[_c1, _j + 1]*W[_u12, k - 1 - _j]
+        W[_u13, k] = _s + _r
         # _u14 = _u13*_u1
-        _s = _u13[k]*_u1[0] if k % 2 == 0 else 0.0
+        _s = W[_u13, k]*W[_u1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u13[_j]*_u1[k - _j]
-            _r += _u13[_j + 1]*_u1[k - 1 - _j]
-        _u14[k] = _s + _r
-        _u16[k] = _k15*_c1[k]
-        _f0[k] = _u14[k] + _u16[k]
+            _s += W[_u13, _j]*W[_u1, k - _j]
+            _r += W[_u13, _j + 1]*W[_u1, k - 1 - _j]
+        W[_u14, k] = _s + _r
+        W[_u16, k] = _k15*W[_c1, k]
+        W[_f0, k] = W[_u14, k] + W[_u16, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _x0[k] = _k18*_f0[k]
+        W[_x0, k] = _k18*W[_f0, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]*_ik1
-        X[1, k + 1] = _x0[k]*_ik1
+        X[0, k + 1] = X[theta_dot, k]*_ik1
+        X[1, k + 1] = W[_x0, k]*_ik1
     return 0
 
 

@@ -2480,8 +2480,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta = X[0]
-    theta_dot = X[1]
     m = p[0]
     R = p[1]
     g = p[2]
@@ -2489,115 +2487,118 @@ def taylor_coefficients(t, y, p, X, W):
     _k3 = 4.0*_c2
     _k6 = R*g*m
     _k10 = 2.0*_c2
-    _c0 = W[0]
-    _u1 = W[1]
-    _c1 = W[2]
-    _u4 = W[3]
-    _m0_0 = W[4]
-    _u7 = W[5]
-    _u8 = W[6]
-    _u9 = W[7]
-    _u11 = W[8]
-    _u12 = W[9]
-    _u13 = W[10]
-    _u14 = W[11]
-    _f0 = W[12]
-    _x0 = W[13]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta = 0
+    theta_dot = 1
+    _c0 = 0
+    _u1 = 1
+    _c1 = 2
+    _u4 = 3
+    _m0_0 = 4
+    _u7 = 5
+    _u8 = 6
+    _u9 = 7
+    _u11 = 8
+    _u12 = 9
+    _u13 = 10
+    _u14 = 11
+    _f0 = 12
+    _x0 = 13
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
         # _c0 = (0.5)*theta
-        _c0[k] = 0.5*theta[k]
+        W[_c0, k] = 0.5*X[theta, k]
         # _c1 = math.cos(_c0)
         # _u1, _c1 = sin(_c0), cos(_c0)
         if k == 0:
-            _u1[0] = math.sin(_c0[0])
-            _c1[0] = math.cos(_c0[0])
+            W[_u1, 0] = math.sin(W[_c0, 0])
+            W[_c1, 0] = math.cos(W[_c0, 0])
         else:
-            _ja = k*_c0[k]
-            _s = _ja*_c1[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u1[0] if k % 2 == 1 else 0.0
+            _ja = k*W[_c0, k]
+            _s = _ja*W[_c1, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u1, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*_c0[_j]
-                _jb = (_j + 1)*_c0[_j + 1]
-                _s += _ja*_c1[k - _j]
-                _c += _ja*_u1[k - _j]
-                _r += _jb*_c1[k - 1 - _j]
-                _d += _jb*_u1[k - 1 - _j]
-            _u1[k] = (_s + _r)*_ik
-            _c1[k] = -(_c + _d)*_ik
+                _ja = _j*W[_c0, _j]
+                _jb = (_j + 1)*W[_c0, _j + 1]
+                _s += _ja*W[_c1, k - _j]
+                _c += _ja*W[_u1, k - _j]
+                _r += _jb*W[_c1, k - 1 - _j]
+                _d += _jb*W[_u1, k - 1 - _j]
+            W[_u1, k] = (_s + _r)*_ik
+            W[_c1, k] = -(_c + _d)*_ik
         # _m0_0 = 4.0*_c2*_c1**2
         # _u4 = _c1**2
         _m = (k + 1)//2
-        _s = _c1[_m - 1]*_c1[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_c1, _m - 1]*W[_c1, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _c1[_j]*_c1[k - _j]
-            _r += _c1[_j + 1]*_c1[k - 1 - _j]
-        _u4[k] = 2.0*(_s + _r) + (_c1[k//2]*_c1[k//2] if k % 2 == 0 else 0.0)
-        _m0_0[k] = _k3*_u4[k]
+            _s += W[_c1, _j]*W[_c1, k - _j]
+            _r += W[_c1, _j + 1]*W[_c1, k - 1 - _j]
+        W[_u4, k] = 2.0*(_s + _r) + (W[_c1, k//2]*W[_c1, k//2] if k % 2 == 0 else 0.0)
+        W[_m0_0, k] = _k3*W[_u4, k]
         # _f0 = -R*g*m*math.sin(theta) + 2.0*_c1*_c2*theta_dot**2*math.sin(_c0)
         # _u7, _u8 = sin(theta), cos(theta)
         if k == 0:
-            _u7[0] = math.sin(theta[0])
-            _u8[0] = math.cos(theta[0])
+            W[_u7, 0] = math.sin(X[theta, 0])
+            W[_u8, 0] = math.cos(X[theta, 0])
         else:
-            _ja = k*theta[k]
-            _s = _ja*_u8[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u7[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta, k]
+            _s = _ja*W[_u8, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u7, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta[_j]
-                _jb = (_j + 1)*theta[_j + 1]
-                _s += _ja*_u8[k - _j]
-                _c += _ja*_u7[k - _j]
-                _r += _jb*_u8[k - 1 - _j]
-                _d += _jb*_u7[k - 1 - _j]
-            _u7[k] = (_s + _r)*_ik
-            _u8[k] = -(_c + _d)*_ik
-        _u9[k] = _k6*_u7[k]
+                _ja = _j*X[theta, _j]
+                _jb = (_j + 1)*X[theta, _j + 1]
+                _s += _ja*W[_u8, k - _j]
+                _c += _ja*W[_u7, k - _j]
+                _r += _jb*W[_u8, k - 1 - _j]
+                _d += _jb*W[_u7, k - 1 - _j]
+            W[_u7, k] = (_s + _r)*_ik
+            W[_u8, k] = -(_c + _d)*_ik
+        W[_u9, k] = _k6*W[_u7, k]
         # _u11 = theta_dot**2
         _m = (k + 1)//2
-        _s = theta_dot[_m - 1]*theta_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[theta_dot, _m - 1]*X[theta_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += theta_dot[_j]*theta_dot[k - _j]
-            _r += theta_dot[_j + 1]*theta_dot[k - 1 - _j]
-        _u11[k] = 2.0*(_s + _r) + (theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[theta_dot, _j]*X[theta_dot, k - _j]
+            _r += X[theta_dot, _j + 1]*X[theta_dot, k - 1 - _j]
+        W[_u11, k] = 2.0*(_s + _r) + (X[theta_dot, k//2]*X[theta_dot, k//2] if k % 2 == 0 else 0.0)
         # _u12 = _c1*_u11
-        _s = _c1[k]*_u11[0] if k % 2 == 0 else 0.0
+        _s = W[_c1, k]*W[_u11, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c1[_j]*_u11[k - _j]
-            _r += _c1[_j + 1]*_u11[k - 1 - _j]
-        _u12[k] = _s + _r
+            _s += W[_c1, _j]*W[_u11, k - _j]
+            _r += W[_c1, _j + 1]*W[_u11, k - 1 - _j]
+        W[_u12, k] = _s + _r
         # _u13 = _u12*_u1
-        _s = _u12[k]*_u1[0] if k % 2 == 0 else 0.0
+        _s = W[_u12, k]*W[_u1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u12[_j]*_u1[k - _j]
-            _r += _u12[_j + 1]*_u1[k - 1 - _j]
-        _u13[k] = _s + _r
-        _u14[k] = _k10*_u13[k]
-        _f0[k] = _u14[k] - _u9[k]
+            _s += W[_u12, _j]*W[_u1, k - _j]
+            _r += W[_u12, _j + 1]*W[_u1, k - 1 - _j]
+        W[_u13, k] = _s + _r
+        W[_u14, k] = _k10*W[_u13, k]
+        W[_f0, k] = W[_u14, k] - W[_u9, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
+        if k == 0 and not W[_m0_0, 0] > _PIVOT_TOLERANCE*abs(W[_m0_0, 0]):
             return 1
         # _x0 = _f0/_m0_0
-        _s = _f0[k] - (_m0_0[k]*_x0[0] if k % 2 == 1 else 0.0)
+        _s = W[_f0, k] - (W[_m0_0, k]*W[_x0, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _m0_0[_j]*_x0[k - _j]
-            _r += _m0_0[_j + 1]*_x0[k - 1 - _j]
-        _x0[k] = (_s - _r)/_m0_0[0]
+            _s -= W[_m0_0, _j]*W[_x0, k - _j]
+            _r += W[_m0_0, _j + 1]*W[_x0, k - 1 - _j]
+        W[_x0, k] = (_s - _r)/W[_m0_0, 0]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]*_ik1
-        X[1, k + 1] = _x0[k]*_ik1
+        X[0, k + 1] = X[theta_dot, k]*_ik1
+        X[1, k + 1] = W[_x0, k]*_ik1
     return 0
 
 

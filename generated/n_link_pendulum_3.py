@@ -2785,12 +2785,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta1 = X[0]
-    theta2 = X[1]
-    theta3 = X[2]
-    theta1_dot = X[3]
-    theta2_dot = X[4]
-    theta3_dot = X[5]
     m1 = p[0]
     m2 = p[1]
     m3 = p[2]
@@ -2814,427 +2808,434 @@ def taylor_coefficients(t, y, p, X, W):
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
     _k44 = 1.0/_m0_0
-    _c2 = W[0]
-    _c3 = W[1]
-    _c6 = W[2]
-    _c9 = W[3]
-    _c11 = W[4]
-    _u5 = W[5]
-    _u6 = W[6]
-    _c12 = W[7]
-    _c13 = W[8]
-    _u9 = W[9]
-    _u10 = W[10]
-    _c14 = W[11]
-    _c15 = W[12]
-    _u13 = W[13]
-    _u14 = W[14]
-    _c16 = W[15]
-    _m1_0 = W[16]
-    _m2_0 = W[17]
-    _m2_1 = W[18]
-    _u19 = W[19]
-    _u20 = W[20]
-    _u22 = W[21]
-    _u23 = W[22]
-    _u24 = W[23]
-    _u25 = W[24]
-    _f0 = W[25]
-    _u27 = W[26]
-    _u28 = W[27]
-    _u30 = W[28]
-    _u31 = W[29]
-    _u32 = W[30]
-    _u33 = W[31]
-    _u34 = W[32]
-    _f1 = W[33]
-    _u36 = W[34]
-    _u37 = W[35]
-    _u39 = W[36]
-    _u40 = W[37]
-    _u41 = W[38]
-    _u42 = W[39]
-    _f2 = W[40]
-    _l1_0 = W[41]
-    _l2_0 = W[42]
-    _u47 = W[43]
-    _u48 = W[44]
-    _d1 = W[45]
-    _u50 = W[46]
-    _u51 = W[47]
-    _u52 = W[48]
-    _l2_1 = W[49]
-    _u54 = W[50]
-    _u55 = W[51]
-    _u56 = W[52]
-    _u57 = W[53]
-    _u58 = W[54]
-    _d2 = W[55]
-    _u60 = W[56]
-    _z1 = W[57]
-    _u62 = W[58]
-    _u63 = W[59]
-    _u64 = W[60]
-    _z2 = W[61]
-    _x2 = W[62]
-    _u67 = W[63]
-    _u68 = W[64]
-    _x1 = W[65]
-    _u70 = W[66]
-    _u71 = W[67]
-    _u72 = W[68]
-    _u73 = W[69]
-    _x0 = W[70]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta1 = 0
+    theta2 = 1
+    theta3 = 2
+    theta1_dot = 3
+    theta2_dot = 4
+    theta3_dot = 5
+    _c2 = 0
+    _c3 = 1
+    _c6 = 2
+    _c9 = 3
+    _c11 = 4
+    _u5 = 5
+    _u6 = 6
+    _c12 = 7
+    _c13 = 8
+    _u9 = 9
+    _u10 = 10
+    _c14 = 11
+    _c15 = 12
+    _u13 = 13
+    _u14 = 14
+    _c16 = 15
+    _m1_0 = 16
+    _m2_0 = 17
+    _m2_1 = 18
+    _u19 = 19
+    _u20 = 20
+    _u22 = 21
+    _u23 = 22
+    _u24 = 23
+    _u25 = 24
+    _f0 = 25
+    _u27 = 26
+    _u28 = 27
+    _u30 = 28
+    _u31 = 29
+    _u32 = 30
+    _u33 = 31
+    _u34 = 32
+    _f1 = 33
+    _u36 = 34
+    _u37 = 35
+    _u39 = 36
+    _u40 = 37
+    _u41 = 38
+    _u42 = 39
+    _f2 = 40
+    _l1_0 = 41
+    _l2_0 = 42
+    _u47 = 43
+    _u48 = 44
+    _d1 = 45
+    _u50 = 46
+    _u51 = 47
+    _u52 = 48
+    _l2_1 = 49
+    _u54 = 50
+    _u55 = 51
+    _u56 = 52
+    _u57 = 53
+    _u58 = 54
+    _d2 = 55
+    _u60 = 56
+    _z1 = 57
+    _u62 = 58
+    _u63 = 59
+    _u64 = 60
+    _z2 = 61
+    _x2 = 62
+    _u67 = 63
+    _u68 = 64
+    _x1 = 65
+    _u70 = 66
+    _u71 = 67
+    _u72 = 68
+    _u73 = 69
+    _x0 = 70
     for i in range(6):
         X[i, 0] = y[i]
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
         # _c2 = -theta1
-        _c2[k] = -theta1[k]
+        W[_c2, k] = -X[theta1, k]
         # _c3 = _c2 + theta2
-        _c3[k] = _c2[k] + theta2[k]
+        W[_c3, k] = W[_c2, k] + X[theta2, k]
         # _c6 = _c2 + theta3
-        _c6[k] = _c2[k] + theta3[k]
+        W[_c6, k] = W[_c2, k] + X[theta3, k]
         # _c9 = theta2 - theta3
-        _c9[k] = theta2[k] - theta3[k]
+        W[_c9, k] = X[theta2, k] - X[theta3, k]
         # _c11 = theta2_dot**2
         # _c11 = theta2_dot**2
         _m = (k + 1)//2
-        _s = theta2_dot[_m - 1]*theta2_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[theta2_dot, _m - 1]*X[theta2_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += theta2_dot[_j]*theta2_dot[k - _j]
-            _r += theta2_dot[_j + 1]*theta2_dot[k - 1 - _j]
-        _c11[k] = 2.0*(_s + _r) + (theta2_dot[k//2]*theta2_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[theta2_dot, _j]*X[theta2_dot, k - _j]
+            _r += X[theta2_dot, _j + 1]*X[theta2_dot, k - 1 - _j]
+        W[_c11, k] = 2.0*(_s + _r) + (X[theta2_dot, k//2]*X[theta2_dot, k//2] if k % 2 == 0 else 0.0)
         # _c12 = _c5*math.sin(_c3)
         # _u5, _u6 = sin(_c3), cos(_c3)
         if k == 0:
-            _u5[0] = math.sin(_c3[0])
-            _u6[0] = math.cos(_c3[0])
+            W[_u5, 0] = math.sin(W[_c3, 0])
+            W[_u6, 0] = math.cos(W[_c3, 0])
         else:
-            _ja = k*_c3[k]
-            _s = _ja*_u6[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u5[0] if k % 2 == 1 else 0.0
+            _ja = k*W[_c3, k]
+            _s = _ja*W[_u6, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u5, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*_c3[_j]
-                _jb = (_j + 1)*_c3[_j + 1]
-                _s += _ja*_u6[k - _j]
-                _c += _ja*_u5[k - _j]
-                _r += _jb*_u6[k - 1 - _j]
-                _d += _jb*_u5[k - 1 - _j]
-            _u5[k] = (_s + _r)*_ik
-            _u6[k] = -(_c + _d)*_ik
-        _c12[k] = _c5*_u5[k]
+                _ja = _j*W[_c3, _j]
+                _jb = (_j + 1)*W[_c3, _j + 1]
+                _s += _ja*W[_u6, k - _j]
+                _c += _ja*W[_u5, k - _j]
+                _r += _jb*W[_u6, k - 1 - _j]
+                _d += _jb*W[_u5, k - 1 - _j]
+            W[_u5, k] = (_s + _r)*_ik
+            W[_u6, k] = -(_c + _d)*_ik
+        W[_c12, k] = _c5*W[_u5, k]
         # _c13 = theta3_dot**2
         # _c13 = theta3_dot**2
         _m = (k + 1)//2
-        _s = theta3_dot[_m - 1]*theta3_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[theta3_dot, _m - 1]*X[theta3_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += theta3_dot[_j]*theta3_dot[k - _j]
-            _r += theta3_dot[_j + 1]*theta3_dot[k - 1 - _j]
-        _c13[k] = 2.0*(_s + _r) + (theta3_dot[k//2]*theta3_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[theta3_dot, _j]*X[theta3_dot, k - _j]
+            _r += X[theta3_dot, _j + 1]*X[theta3_dot, k - 1 - _j]
+        W[_c13, k] = 2.0*(_s + _r) + (X[theta3_dot, k//2]*X[theta3_dot, k//2] if k % 2 == 0 else 0.0)
         # _c14 = _c8*math.sin(_c6)
         # _u9, _u10 = sin(_c6), cos(_c6)
         if k == 0:
-            _u9[0] = math.sin(_c6[0])
-            _u10[0] = math.cos(_c6[0])
+            W[_u9, 0] = math.sin(W[_c6, 0])
+            W[_u10, 0] = math.cos(W[_c6, 0])
         else:
-            _ja = k*_c6[k]
-            _s = _ja*_u10[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u9[0] if k % 2 == 1 else 0.0
+            _ja = k*W[_c6, k]
+            _s = _ja*W[_u10, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u9, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*_c6[_j]
-                _jb = (_j + 1)*_c6[_j + 1]
-                _s += _ja*_u10[k - _j]
-                _c += _ja*_u9[k - _j]
-                _r += _jb*_u10[k - 1 - _j]
-                _d += _jb*_u9[k - 1 - _j]
-            _u9[k] = (_s + _r)*_ik
-            _u10[k] = -(_c + _d)*_ik
-        _c14[k] = _c8*_u9[k]
+                _ja = _j*W[_c6, _j]
+                _jb = (_j + 1)*W[_c6, _j + 1]
+                _s += _ja*W[_u10, k - _j]
+                _c += _ja*W[_u9, k - _j]
+                _r += _jb*W[_u10, k - 1 - _j]
+                _d += _jb*W[_u9, k - 1 - _j]
+            W[_u9, k] = (_s + _r)*_ik
+            W[_u10, k] = -(_c + _d)*_ik
+        W[_c14, k] = _c8*W[_u9, k]
         # _c15 = theta1_dot**2
         # _c15 = theta1_dot**2
         _m = (k + 1)//2
-        _s = theta1_dot[_m - 1]*theta1_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[theta1_dot, _m - 1]*X[theta1_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += theta1_dot[_j]*theta1_dot[k - _j]
-            _r += theta1_dot[_j + 1]*theta1_dot[k - 1 - _j]
-        _c15[k] = 2.0*(_s + _r) + (theta1_dot[k//2]*theta1_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[theta1_dot, _j]*X[theta1_dot, k - _j]
+            _r += X[theta1_dot, _j + 1]*X[theta1_dot, k - 1 - _j]
+        W[_c15, k] = 2.0*(_s + _r) + (X[theta1_dot, k//2]*X[theta1_dot, k//2] if k % 2 == 0 else 0.0)
         # _c16 = _c10*math.sin(_c9)
         # _u13, _u14 = sin(_c9), cos(_c9)
         if k == 0:
-            _u13[0] = math.sin(_c9[0])
-            _u14[0] = math.cos(_c9[0])
+            W[_u13, 0] = math.sin(W[_c9, 0])
+            W[_u14, 0] = math.cos(W[_c9, 0])
         else:
-            _ja = k*_c9[k]
-            _s = _ja*_u14[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u13[0] if k % 2 == 1 else 0.0
+            _ja = k*W[_c9, k]
+            _s = _ja*W[_u14, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u13, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*_c9[_j]
-                _jb = (_j + 1)*_c9[_j + 1]
-                _s += _ja*_u14[k - _j]
-                _c += _ja*_u13[k - _j]
-                _r += _jb*_u14[k - 1 - _j]
-                _d += _jb*_u13[k - 1 - _j]
-            _u13[k] = (_s + _r)*_ik
-            _u14[k] = -(_c + _d)*_ik
-        _c16[k] = _c10*_u13[k]
+                _ja = _j*W[_c9, _j]
+                _jb = (_j + 1)*W[_c9, _j + 1]
+                _s += _ja*W[_u14, k - _j]
+                _c += _ja*W[_u13, k - _j]
+                _r += _jb*W[_u14, k - 1 - _j]
+                _d += _jb*W[_u13, k - 1 - _j]
+            W[_u13, k] = (_s + _r)*_ik
+            W[_u14, k] = -(_c + _d)*_ik
+        W[_c16, k] = _c10*W[_u13, k]
         # _m1_0 = _c5*math.cos(_c3)
-        _m1_0[k] = _c5*_u6[k]
+        W[_m1_0, k] = _c5*W[_u6, k]
         # _m2_0 = _c8*math.cos(_c6)
-        _m2_0[k] = _c8*_u10[k]
+        W[_m2_0, k] = _c8*W[_u10, k]
         # _m2_1 = _c10*math.cos(_c9)
-        _m2_1[k] = _c10*_u14[k]
+        W[_m2_1, k] = _c10*W[_u14, k]
         # _f0 = _c11*_c12 + _c13*_c14 - _c1*g*l1*math.sin(theta1)
         # _u19 = _c11*_c12
-        _s = _c11[k]*_c12[0] if k % 2 == 0 else 0.0
+        _s = W[_c11, k]*W[_c12, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c11[_j]*_c12[k - _j]
-            _r += _c11[_j + 1]*_c12[k - 1 - _j]
-        _u19[k] = _s + _r
+            _s += W[_c11, _j]*W[_c12, k - _j]
+            _r += W[_c11, _j + 1]*W[_c12, k - 1 - _j]
+        W[_u19, k] = _s + _r
         # _u20 = _c13*_c14
-        _s = _c13[k]*_c14[0] if k % 2 == 0 else 0.0
+        _s = W[_c13, k]*W[_c14, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c13[_j]*_c14[k - _j]
-            _r += _c13[_j + 1]*_c14[k - 1 - _j]
-        _u20[k] = _s + _r
+            _s += W[_c13, _j]*W[_c14, k - _j]
+            _r += W[_c13, _j + 1]*W[_c14, k - 1 - _j]
+        W[_u20, k] = _s + _r
         # _u22, _u23 = sin(theta1), cos(theta1)
         if k == 0:
-            _u22[0] = math.sin(theta1[0])
-            _u23[0] = math.cos(theta1[0])
+            W[_u22, 0] = math.sin(X[theta1, 0])
+            W[_u23, 0] = math.cos(X[theta1, 0])
         else:
-            _ja = k*theta1[k]
-            _s = _ja*_u23[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u22[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta1, k]
+            _s = _ja*W[_u23, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u22, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta1[_j]
-                _jb = (_j + 1)*theta1[_j + 1]
-                _s += _ja*_u23[k - _j]
-                _c += _ja*_u22[k - _j]
-                _r += _jb*_u23[k - 1 - _j]
-                _d += _jb*_u22[k - 1 - _j]
-            _u22[k] = (_s + _r)*_ik
-            _u23[k] = -(_c + _d)*_ik
-        _u24[k] = _k21*_u22[k]
-        _u25[k] = _u19[k] + _u20[k]
-        _f0[k] = _u25[k] - _u24[k]
+                _ja = _j*X[theta1, _j]
+                _jb = (_j + 1)*X[theta1, _j + 1]
+                _s += _ja*W[_u23, k - _j]
+                _c += _ja*W[_u22, k - _j]
+                _r += _jb*W[_u23, k - 1 - _j]
+                _d += _jb*W[_u22, k - 1 - _j]
+            W[_u22, k] = (_s + _r)*_ik
+            W[_u23, k] = -(_c + _d)*_ik
+        W[_u24, k] = _k21*W[_u22, k]
+        W[_u25, k] = W[_u19, k] + W[_u20, k]
+        W[_f0, k] = W[_u25, k] - W[_u24, k]
         # _f1 = -_c12*_c15 - _c13*_c16 - _c4*g*math.sin(theta2)
         # _u27 = _c12*_c15
-        _s = _c12[k]*_c15[0] if k % 2 == 0 else 0.0
+        _s = W[_c12, k]*W[_c15, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c12[_j]*_c15[k - _j]
-            _r += _c12[_j + 1]*_c15[k - 1 - _j]
-        _u27[k] = _s + _r
+            _s += W[_c12, _j]*W[_c15, k - _j]
+            _r += W[_c12, _j + 1]*W[_c15, k - 1 - _j]
+        W[_u27, k] = _s + _r
         # _u28 = _c13*_c16
-        _s = _c13[k]*_c16[0] if k % 2 == 0 else 0.0
+        _s = W[_c13, k]*W[_c16, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c13[_j]*_c16[k - _j]
-            _r += _c13[_j + 1]*_c16[k - 1 - _j]
-        _u28[k] = _s + _r
+            _s += W[_c13, _j]*W[_c16, k - _j]
+            _r += W[_c13, _j + 1]*W[_c16, k - 1 - _j]
+        W[_u28, k] = _s + _r
         # _u30, _u31 = sin(theta2), cos(theta2)
         if k == 0:
-            _u30[0] = math.sin(theta2[0])
-            _u31[0] = math.cos(theta2[0])
+            W[_u30, 0] = math.sin(X[theta2, 0])
+            W[_u31, 0] = math.cos(X[theta2, 0])
         else:
-            _ja = k*theta2[k]
-            _s = _ja*_u31[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u30[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta2, k]
+            _s = _ja*W[_u31, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u30, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta2[_j]
-                _jb = (_j + 1)*theta2[_j + 1]
-                _s += _ja*_u31[k - _j]
-                _c += _ja*_u30[k - _j]
-                _r += _jb*_u31[k - 1 - _j]
-                _d += _jb*_u30[k - 1 - _j]
-            _u30[k] = (_s + _r)*_ik
-            _u31[k] = -(_c + _d)*_ik
-        _u32[k] = _k29*_u30[k]
-        _u33[k] = -_u27[k]
-        _u34[k] = _u33[k] - _u28[k]
-        _f1[k] = _u34[k] - _u32[k]
+                _ja = _j*X[theta2, _j]
+                _jb = (_j + 1)*X[theta2, _j + 1]
+                _s += _ja*W[_u31, k - _j]
+                _c += _ja*W[_u30, k - _j]
+                _r += _jb*W[_u31, k - 1 - _j]
+                _d += _jb*W[_u30, k - 1 - _j]
+            W[_u30, k] = (_s + _r)*_ik
+            W[_u31, k] = -(_c + _d)*_ik
+        W[_u32, k] = _k29*W[_u30, k]
+        W[_u33, k] = -W[_u27, k]
+        W[_u34, k] = W[_u33, k] - W[_u28, k]
+        W[_f1, k] = W[_u34, k] - W[_u32, k]
         # _f2 = _c11*_c16 - _c14*_c15 - _c7*g*math.sin(theta3)
         # _u36 = _c11*_c16
-        _s = _c11[k]*_c16[0] if k % 2 == 0 else 0.0
+        _s = W[_c11, k]*W[_c16, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c11[_j]*_c16[k - _j]
-            _r += _c11[_j + 1]*_c16[k - 1 - _j]
-        _u36[k] = _s + _r
+            _s += W[_c11, _j]*W[_c16, k - _j]
+            _r += W[_c11, _j + 1]*W[_c16, k - 1 - _j]
+        W[_u36, k] = _s + _r
         # _u37 = _c14*_c15
-        _s = _c14[k]*_c15[0] if k % 2 == 0 else 0.0
+        _s = W[_c14, k]*W[_c15, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c14[_j]*_c15[k - _j]
-            _r += _c14[_j + 1]*_c15[k - 1 - _j]
-        _u37[k] = _s + _r
+            _s += W[_c14, _j]*W[_c15, k - _j]
+            _r += W[_c14, _j + 1]*W[_c15, k - 1 - _j]
+        W[_u37, k] = _s + _r
         # _u39, _u40 = sin(theta3), cos(theta3)
         if k == 0:
-            _u39[0] = math.sin(theta3[0])
-            _u40[0] = math.cos(theta3[0])
+            W[_u39, 0] = math.sin(X[theta3, 0])
+            W[_u40, 0] = math.cos(X[theta3, 0])
         else:
-            _ja = k*theta3[k]
-            _s = _ja*_u40[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u39[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta3, k]
+            _s = _ja*W[_u40, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u39, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta3[_j]
-                _jb = (_j + 1)*theta3[_j + 1]
-                _s += _ja*_u40[k - _j]
-                _c += _ja*_u39[k - _j]
-                _r += _jb*_u40[k - 1 - _j]
-                _d += _jb*_u39[k - 1 - _j]
-            _u39[k] = (_s + _r)*_ik
-            _u40[k] = -(_c + _d)*_ik
-        _u41[k] = _k38*_u39[k]
-        _u42[k] = _u36[k] - _u37[k]
-        _f2[k] = _u42[k] - _u41[k]
+                _ja = _j*X[theta3, _j]
+                _jb = (_j + 1)*X[theta3, _j + 1]
+                _s += _ja*W[_u40, k - _j]
+                _c += _ja*W[_u39, k - _j]
+                _r += _jb*W[_u40, k - 1 - _j]
+                _d += _jb*W[_u39, k - 1 - _j]
+            W[_u39, k] = (_s + _r)*_ik
+            W[_u40, k] = -(_c + _d)*_ik
+        W[_u41, k] = _k38*W[_u39, k]
+        W[_u42, k] = W[_u36, k] - W[_u37, k]
+        W[_f2, k] = W[_u42, k] - W[_u41, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _l1_0[k] = _k44*_m1_0[k]
-        _l2_0[k] = _k44*_m2_0[k]
+        W[_l1_0, k] = _k44*W[_m1_0, k]
+        W[_l2_0, k] = _k44*W[_m2_0, k]
         # _u47 = _l1_0**2
         _m = (k + 1)//2
-        _s = _l1_0[_m - 1]*_l1_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_l1_0, _m - 1]*W[_l1_0, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _l1_0[_j]*_l1_0[k - _j]
-            _r += _l1_0[_j + 1]*_l1_0[k - 1 - _j]
-        _u47[k] = 2.0*(_s + _r) + (_l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0)
-        _u48[k] = _m0_0*_u47[k]
-        _d1[k] = _m1_1 - _u48[k] if k == 0 else -_u48[k]
-        if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
+            _s += W[_l1_0, _j]*W[_l1_0, k - _j]
+            _r += W[_l1_0, _j + 1]*W[_l1_0, k - 1 - _j]
+        W[_u47, k] = 2.0*(_s + _r) + (W[_l1_0, k//2]*W[_l1_0, k//2] if k % 2 == 0 else 0.0)
+        W[_u48, k] = _m0_0*W[_u47, k]
+        W[_d1, k] = _m1_1 - W[_u48, k] if k == 0 else -W[_u48, k]
+        if k == 0 and not W[_d1, 0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
         # _u50 = _l2_0*_l1_0
-        _s = _l2_0[k]*_l1_0[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_0, k]*W[_l1_0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_0[_j]*_l1_0[k - _j]
-            _r += _l2_0[_j + 1]*_l1_0[k - 1 - _j]
-        _u50[k] = _s + _r
-        _u51[k] = _m0_0*_u50[k]
-        _u52[k] = _m2_1[k] - _u51[k]
+            _s += W[_l2_0, _j]*W[_l1_0, k - _j]
+            _r += W[_l2_0, _j + 1]*W[_l1_0, k - 1 - _j]
+        W[_u50, k] = _s + _r
+        W[_u51, k] = _m0_0*W[_u50, k]
+        W[_u52, k] = W[_m2_1, k] - W[_u51, k]
         # _l2_1 = _u52/_d1
-        _s = _u52[k] - (_d1[k]*_l2_1[0] if k % 2 == 1 else 0.0)
+        _s = W[_u52, k] - (W[_d1, k]*W[_l2_1, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _d1[_j]*_l2_1[k - _j]
-            _r += _d1[_j + 1]*_l2_1[k - 1 - _j]
-        _l2_1[k] = (_s - _r)/_d1[0]
+            _s -= W[_d1, _j]*W[_l2_1, k - _j]
+            _r += W[_d1, _j + 1]*W[_l2_1, k - 1 - _j]
+        W[_l2_1, k] = (_s - _r)/W[_d1, 0]
         # _u54 = _l2_0**2
         _m = (k + 1)//2
-        _s = _l2_0[_m - 1]*_l2_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_l2_0, _m - 1]*W[_l2_0, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _l2_0[_j]*_l2_0[k - _j]
-            _r += _l2_0[_j + 1]*_l2_0[k - 1 - _j]
-        _u54[k] = 2.0*(_s + _r) + (_l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0)
-        _u55[k] = _m0_0*_u54[k]
-        _u56[k] = _m2_2 - _u55[k] if k == 0 else -_u55[k]
+            _s += W[_l2_0, _j]*W[_l2_0, k - _j]
+            _r += W[_l2_0, _j + 1]*W[_l2_0, k - 1 - _j]
+        W[_u54, k] = 2.0*(_s + _r) + (W[_l2_0, k//2]*W[_l2_0, k//2] if k % 2 == 0 else 0.0)
+        W[_u55, k] = _m0_0*W[_u54, k]
+        W[_u56, k] = _m2_2 - W[_u55, k] if k == 0 else -W[_u55, k]
         # _u57 = _l2_1**2
         _m = (k + 1)//2
-        _s = _l2_1[_m - 1]*_l2_1[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_l2_1, _m - 1]*W[_l2_1, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _l2_1[_j]*_l2_1[k - _j]
-            _r += _l2_1[_j + 1]*_l2_1[k - 1 - _j]
-        _u57[k] = 2.0*(_s + _r) + (_l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0)
+            _s += W[_l2_1, _j]*W[_l2_1, k - _j]
+            _r += W[_l2_1, _j + 1]*W[_l2_1, k - 1 - _j]
+        W[_u57, k] = 2.0*(_s + _r) + (W[_l2_1, k//2]*W[_l2_1, k//2] if k % 2 == 0 else 0.0)
         # _u58 = _u57*_d1
-        _s = _u57[k]*_d1[0] if k % 2 == 0 else 0.0
+        _s = W[_u57, k]*W[_d1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u57[_j]*_d1[k - _j]
-            _r += _u57[_j + 1]*_d1[k - 1 - _j]
-        _u58[k] = _s + _r
-        _d2[k] = _u56[k] - _u58[k]
-        if k == 0 and not _d2[0] > _PIVOT_TOLERANCE*abs(_m2_2):
+            _s += W[_u57, _j]*W[_d1, k - _j]
+            _r += W[_u57, _j + 1]*W[_d1, k - 1 - _j]
+        W[_u58, k] = _s + _r
+        W[_d2, k] = W[_u56, k] - W[_u58, k]
+        if k == 0 and not W[_d2, 0] > _PIVOT_TOLERANCE*abs(_m2_2):
             return 3
         # _u60 = _l1_0*_f0
-        _s = _l1_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _s = W[_l1_0, k]*W[_f0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l1_0[_j]*_f0[k - _j]
-            _r += _l1_0[_j + 1]*_f0[k - 1 - _j]
-        _u60[k] = _s + _r
-        _z1[k] = _f1[k] - _u60[k]
+            _s += W[_l1_0, _j]*W[_f0, k - _j]
+            _r += W[_l1_0, _j + 1]*W[_f0, k - 1 - _j]
+        W[_u60, k] = _s + _r
+        W[_z1, k] = W[_f1, k] - W[_u60, k]
         # _u62 = _l2_0*_f0
-        _s = _l2_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_0, k]*W[_f0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_0[_j]*_f0[k - _j]
-            _r += _l2_0[_j + 1]*_f0[k - 1 - _j]
-        _u62[k] = _s + _r
-        _u63[k] = _f2[k] - _u62[k]
+            _s += W[_l2_0, _j]*W[_f0, k - _j]
+            _r += W[_l2_0, _j + 1]*W[_f0, k - 1 - _j]
+        W[_u62, k] = _s + _r
+        W[_u63, k] = W[_f2, k] - W[_u62, k]
         # _u64 = _l2_1*_z1
-        _s = _l2_1[k]*_z1[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_1, k]*W[_z1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_1[_j]*_z1[k - _j]
-            _r += _l2_1[_j + 1]*_z1[k - 1 - _j]
-        _u64[k] = _s + _r
-        _z2[k] = _u63[k] - _u64[k]
+            _s += W[_l2_1, _j]*W[_z1, k - _j]
+            _r += W[_l2_1, _j + 1]*W[_z1, k - 1 - _j]
+        W[_u64, k] = _s + _r
+        W[_z2, k] = W[_u63, k] - W[_u64, k]
         # _x2 = _z2/_d2
-        _s = _z2[k] - (_d2[k]*_x2[0] if k % 2 == 1 else 0.0)
+        _s = W[_z2, k] - (W[_d2, k]*W[_x2, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _d2[_j]*_x2[k - _j]
-            _r += _d2[_j + 1]*_x2[k - 1 - _j]
-        _x2[k] = (_s - _r)/_d2[0]
+            _s -= W[_d2, _j]*W[_x2, k - _j]
+            _r += W[_d2, _j + 1]*W[_x2, k - 1 - _j]
+        W[_x2, k] = (_s - _r)/W[_d2, 0]
         # _u67 = _z1/_d1
-        _s = _z1[k] - (_d1[k]*_u67[0] if k % 2 == 1 else 0.0)
+        _s = W[_z1, k] - (W[_d1, k]*W[_u67, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _d1[_j]*_u67[k - _j]
-            _r += _d1[_j + 1]*_u67[k - 1 - _j]
-        _u67[k] = (_s - _r)/_d1[0]
+            _s -= W[_d1, _j]*W[_u67, k - _j]
+            _r += W[_d1, _j + 1]*W[_u67, k - 1 - _j]
+        W[_u67, k] = (_s - _r)/W[_d1, 0]
         # _u68 = _l2_1*_x2
-        _s = _l2_1[k]*_x2[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_1, k]*W[_x2, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_1[_j]*_x2[k - _j]
-            _r += _l2_1[_j + 1]*_x2[k - 1 - _j]
-        _u68[k] = _s + _r
-        _x1[k] = _u67[k] - _u68[k]
-        _u70[k] = _k44*_f0[k]
+            _s += W[_l2_1, _j]*W[_x2, k - _j]
+            _r += W[_l2_1, _j + 1]*W[_x2, k - 1 - _j]
+        W[_u68, k] = _s + _r
+        W[_x1, k] = W[_u67, k] - W[_u68, k]
+        W[_u70, k] = _k44*W[_f0, k]
         # _u71 = _l1_0*_x1
-        _s = _l1_0[k]*_x1[0] if k % 2 == 0 else 0.0
+        _s = W[_l1_0, k]*W[_x1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l1_0[_j]*_x1[k - _j]
-            _r += _l1_0[_j + 1]*_x1[k - 1 - _j]
-        _u71[k] = _s + _r
-        _u72[k] = _u70[k] - _u71[k]
+            _s += W[_l1_0, _j]*W[_x1, k - _j]
+            _r += W[_l1_0, _j + 1]*W[_x1, k - 1 - _j]
+        W[_u71, k] = _s + _r
+        W[_u72, k] = W[_u70, k] - W[_u71, k]
         # _u73 = _l2_0*_x2
-        _s = _l2_0[k]*_x2[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_0, k]*W[_x2, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_0[_j]*_x2[k - _j]
-            _r += _l2_0[_j + 1]*_x2[k - 1 - _j]
-        _u73[k] = _s + _r
-        _x0[k] = _u72[k] - _u73[k]
+            _s += W[_l2_0, _j]*W[_x2, k - _j]
+            _r += W[_l2_0, _j + 1]*W[_x2, k - 1 - _j]
+        W[_u73, k] = _s + _r
+        W[_x0, k] = W[_u72, k] - W[_u73, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta1_dot[k]*_ik1
-        X[1, k + 1] = theta2_dot[k]*_ik1
-        X[2, k + 1] = theta3_dot[k]*_ik1
-        X[3, k + 1] = _x0[k]*_ik1
-        X[4, k + 1] = _x1[k]*_ik1
-        X[5, k + 1] = _x2[k]*_ik1
+        X[0, k + 1] = X[theta1_dot, k]*_ik1
+        X[1, k + 1] = X[theta2_dot, k]*_ik1
+        X[2, k + 1] = X[theta3_dot, k]*_ik1
+        X[3, k + 1] = W[_x0, k]*_ik1
+        X[4, k + 1] = W[_x1, k]*_ik1
+        X[5, k + 1] = W[_x2, k]*_ik1
     return 0
 
 

@@ -2458,8 +2458,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta = X[0]
-    theta_dot = X[1]
     m = p[0]
     l = p[1]
     g = p[2]
@@ -2468,10 +2466,13 @@ def taylor_coefficients(t, y, p, X, W):
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
     _k4 = 1.0/_m0_0
-    _u1 = W[0]
-    _u2 = W[1]
-    _f0 = W[2]
-    _x0 = W[3]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta = 0
+    theta_dot = 1
+    _u1 = 0
+    _u2 = 1
+    _f0 = 2
+    _x0 = 3
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
@@ -2480,29 +2481,29 @@ def taylor_coefficients(t, y, p, X, W):
         # _f0 = -g*l*m*math.sin(theta)
         # _u1, _u2 = sin(theta), cos(theta)
         if k == 0:
-            _u1[0] = math.sin(theta[0])
-            _u2[0] = math.cos(theta[0])
+            W[_u1, 0] = math.sin(X[theta, 0])
+            W[_u2, 0] = math.cos(X[theta, 0])
         else:
-            _ja = k*theta[k]
-            _s = _ja*_u2[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u1[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta, k]
+            _s = _ja*W[_u2, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u1, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta[_j]
-                _jb = (_j + 1)*theta[_j + 1]
-                _s += _ja*_u2[k - _j]
-                _c += _ja*_u1[k - _j]
-                _r += _jb*_u2[k - 1 - _j]
-                _d += _jb*_u1[k - 1 - _j]
-            _u1[k] = (_s + _r)*_ik
-            _u2[k] = -(_c + _d)*_ik
-        _f0[k] = _k0*_u1[k]
+                _ja = _j*X[theta, _j]
+                _jb = (_j + 1)*X[theta, _j + 1]
+                _s += _ja*W[_u2, k - _j]
+                _c += _ja*W[_u1, k - _j]
+                _r += _jb*W[_u2, k - 1 - _j]
+                _d += _jb*W[_u1, k - 1 - _j]
+            W[_u1, k] = (_s + _r)*_ik
+            W[_u2, k] = -(_c + _d)*_ik
+        W[_f0, k] = _k0*W[_u1, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _x0[k] = _k4*_f0[k]
+        W[_x0, k] = _k4*W[_f0, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]*_ik1
-        X[1, k + 1] = _x0[k]*_ik1
+        X[0, k + 1] = X[theta_dot, k]*_ik1
+        X[1, k + 1] = W[_x0, k]*_ik1
     return 0
 
 

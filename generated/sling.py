@@ -2452,8 +2452,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    rho = X[0]
-    rho_dot = X[1]
     m = p[0]
     omega = p[1]
     _m0_0 = m
@@ -2461,20 +2459,23 @@ def taylor_coefficients(t, y, p, X, W):
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
     _k2 = 1.0/_m0_0
-    _f0 = W[0]
-    _x0 = W[1]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    rho = 0
+    rho_dot = 1
+    _f0 = 0
+    _x0 = 1
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
         # _f0 = m*rho*omega**2
-        _f0[k] = _k0*rho[k]
+        W[_f0, k] = _k0*X[rho, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _x0[k] = _k2*_f0[k]
+        W[_x0, k] = _k2*W[_f0, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = rho_dot[k]*_ik1
-        X[1, k + 1] = _x0[k]*_ik1
+        X[0, k + 1] = X[rho_dot, k]*_ik1
+        X[1, k + 1] = W[_x0, k]*_ik1
     return 0
 
 

@@ -2543,9 +2543,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta = X[0]
-    theta_dot = X[2]
-    phi_dot = X[3]
     m = p[0]
     l = p[1]
     g = p[2]
@@ -2560,26 +2557,30 @@ def taylor_coefficients(t, y, p, X, W):
     _k16 = _k15*_m0_0
     _k17 = -_k16
     _k22 = 1.0/_m0_0
-    _c1 = W[0]
-    _u1 = W[1]
-    _u2 = W[2]
-    _c2 = W[3]
-    _u4 = W[4]
-    _m1_1 = W[5]
-    _u6 = W[6]
-    _u7 = W[7]
-    _u9 = W[8]
-    _f0 = W[9]
-    _u11 = W[10]
-    _u12 = W[11]
-    _f1 = W[12]
-    _d1 = W[13]
-    _u19 = W[14]
-    _z1 = W[15]
-    _x1 = W[16]
-    _u23 = W[17]
-    _u24 = W[18]
-    _x0 = W[19]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta = 0
+    theta_dot = 2
+    phi_dot = 3
+    _c1 = 0
+    _u1 = 1
+    _u2 = 2
+    _c2 = 3
+    _u4 = 4
+    _m1_1 = 5
+    _u6 = 6
+    _u7 = 7
+    _u9 = 8
+    _f0 = 9
+    _u11 = 10
+    _u12 = 11
+    _f1 = 12
+    _d1 = 13
+    _u19 = 14
+    _z1 = 15
+    _x1 = 16
+    _u23 = 17
+    _u24 = 18
+    _x0 = 19
     for i in range(4):
         X[i, 0] = y[i]
     for k in range(order):
@@ -2588,97 +2589,97 @@ def taylor_coefficients(t, y, p, X, W):
         # _c1 = math.sin(theta)
         # _c1, _u1 = sin(theta), cos(theta)
         if k == 0:
-            _c1[0] = math.sin(theta[0])
-            _u1[0] = math.cos(theta[0])
+            W[_c1, 0] = math.sin(X[theta, 0])
+            W[_u1, 0] = math.cos(X[theta, 0])
         else:
-            _ja = k*theta[k]
-            _s = _ja*_u1[0] if k % 2 == 1 else 0.0
-            _c = _ja*_c1[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta, k]
+            _s = _ja*W[_u1, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_c1, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta[_j]
-                _jb = (_j + 1)*theta[_j + 1]
-                _s += _ja*_u1[k - _j]
-                _c += _ja*_c1[k - _j]
-                _r += _jb*_u1[k - 1 - _j]
-                _d += _jb*_c1[k - 1 - _j]
-            _c1[k] = (_s + _r)*_ik
-            _u1[k] = -(_c + _d)*_ik
+                _ja = _j*X[theta, _j]
+                _jb = (_j + 1)*X[theta, _j + 1]
+                _s += _ja*W[_u1, k - _j]
+                _c += _ja*W[_c1, k - _j]
+                _r += _jb*W[_u1, k - 1 - _j]
+                _d += _jb*W[_c1, k - 1 - _j]
+            W[_c1, k] = (_s + _r)*_ik
+            W[_u1, k] = -(_c + _d)*_ik
         # _c2 = _c0*_c1*math.cos(theta)
         # _u2 = _c1*_u1
-        _s = _c1[k]*_u1[0] if k % 2 == 0 else 0.0
+        _s = W[_c1, k]*W[_u1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c1[_j]*_u1[k - _j]
-            _r += _c1[_j + 1]*_u1[k - 1 - _j]
-        _u2[k] = _s + _r
-        _c2[k] = _c0*_u2[k]
+            _s += W[_c1, _j]*W[_u1, k - _j]
+            _r += W[_c1, _j + 1]*W[_u1, k - 1 - _j]
+        W[_u2, k] = _s + _r
+        W[_c2, k] = _c0*W[_u2, k]
         # _m1_1 = _c0*_c1**2
         # _u4 = _c1**2
         _m = (k + 1)//2
-        _s = _c1[_m - 1]*_c1[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_c1, _m - 1]*W[_c1, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _c1[_j]*_c1[k - _j]
-            _r += _c1[_j + 1]*_c1[k - 1 - _j]
-        _u4[k] = 2.0*(_s + _r) + (_c1[k//2]*_c1[k//2] if k % 2 == 0 else 0.0)
-        _m1_1[k] = _c0*_u4[k]
+            _s += W[_c1, _j]*W[_c1, k - _j]
+            _r += W[_c1, _j + 1]*W[_c1, k - 1 - _j]
+        W[_u4, k] = 2.0*(_s + _r) + (W[_c1, k//2]*W[_c1, k//2] if k % 2 == 0 else 0.0)
+        W[_m1_1, k] = _c0*W[_u4, k]
         # _f0 = _c2*phi_dot**2 - _c1*g*l*m
         # _u6 = phi_dot**2
         _m = (k + 1)//2
-        _s = phi_dot[_m - 1]*phi_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[phi_dot, _m - 1]*X[phi_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += phi_dot[_j]*phi_dot[k - _j]
-            _r += phi_dot[_j + 1]*phi_dot[k - 1 - _j]
-        _u6[k] = 2.0*(_s + _r) + (phi_dot[k//2]*phi_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[phi_dot, _j]*X[phi_dot, k - _j]
+            _r += X[phi_dot, _j + 1]*X[phi_dot, k - 1 - _j]
+        W[_u6, k] = 2.0*(_s + _r) + (X[phi_dot, k//2]*X[phi_dot, k//2] if k % 2 == 0 else 0.0)
         # _u7 = _c2*_u6
-        _s = _c2[k]*_u6[0] if k % 2 == 0 else 0.0
+        _s = W[_c2, k]*W[_u6, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c2[_j]*_u6[k - _j]
-            _r += _c2[_j + 1]*_u6[k - 1 - _j]
-        _u7[k] = _s + _r
-        _u9[k] = _k8*_c1[k]
-        _f0[k] = _u7[k] - _u9[k]
+            _s += W[_c2, _j]*W[_u6, k - _j]
+            _r += W[_c2, _j + 1]*W[_u6, k - 1 - _j]
+        W[_u7, k] = _s + _r
+        W[_u9, k] = _k8*W[_c1, k]
+        W[_f0, k] = W[_u7, k] - W[_u9, k]
         # _f1 = -2.0*_c2*phi_dot*theta_dot
         # _u11 = _c2*phi_dot
-        _s = _c2[k]*phi_dot[0] if k % 2 == 0 else 0.0
+        _s = W[_c2, k]*X[phi_dot, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c2[_j]*phi_dot[k - _j]
-            _r += _c2[_j + 1]*phi_dot[k - 1 - _j]
-        _u11[k] = _s + _r
+            _s += W[_c2, _j]*X[phi_dot, k - _j]
+            _r += W[_c2, _j + 1]*X[phi_dot, k - 1 - _j]
+        W[_u11, k] = _s + _r
         # _u12 = _u11*theta_dot
-        _s = _u11[k]*theta_dot[0] if k % 2 == 0 else 0.0
+        _s = W[_u11, k]*X[theta_dot, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u11[_j]*theta_dot[k - _j]
-            _r += _u11[_j + 1]*theta_dot[k - 1 - _j]
-        _u12[k] = _s + _r
-        _f1[k] = -2.0*_u12[k]
+            _s += W[_u11, _j]*X[theta_dot, k - _j]
+            _r += W[_u11, _j + 1]*X[theta_dot, k - 1 - _j]
+        W[_u12, k] = _s + _r
+        W[_f1, k] = -2.0*W[_u12, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _d1[k] = _m1_1[k] + _k17 if k == 0 else _m1_1[k]
-        if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1[0]):
+        W[_d1, k] = W[_m1_1, k] + _k17 if k == 0 else W[_m1_1, k]
+        if k == 0 and not W[_d1, 0] > _PIVOT_TOLERANCE*abs(W[_m1_1, 0]):
             return 2
-        _u19[k] = _k14*_f0[k]
-        _z1[k] = _f1[k] - _u19[k]
+        W[_u19, k] = _k14*W[_f0, k]
+        W[_z1, k] = W[_f1, k] - W[_u19, k]
         # _x1 = _z1/_d1
-        _s = _z1[k] - (_d1[k]*_x1[0] if k % 2 == 1 else 0.0)
+        _s = W[_z1, k] - (W[_d1, k]*W[_x1, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _d1[_j]*_x1[k - _j]
-            _r += _d1[_j + 1]*_x1[k - 1 - _j]
-        _x1[k] = (_s - _r)/_d1[0]
-        _u23[k] = _k22*_f0[k]
-        _u24[k] = _k14*_x1[k]
-        _x0[k] = _u23[k] - _u24[k]
+            _s -= W[_d1, _j]*W[_x1, k - _j]
+            _r += W[_d1, _j + 1]*W[_x1, k - 1 - _j]
+        W[_x1, k] = (_s - _r)/W[_d1, 0]
+        W[_u23, k] = _k22*W[_f0, k]
+        W[_u24, k] = _k14*W[_x1, k]
+        W[_x0, k] = W[_u23, k] - W[_u24, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]*_ik1
-        X[1, k + 1] = phi_dot[k]*_ik1
-        X[2, k + 1] = _x0[k]*_ik1
-        X[3, k + 1] = _x1[k]*_ik1
+        X[0, k + 1] = X[theta_dot, k]*_ik1
+        X[1, k + 1] = X[phi_dot, k]*_ik1
+        X[2, k + 1] = W[_x0, k]*_ik1
+        X[3, k + 1] = W[_x1, k]*_ik1
     return 0
 
 

@@ -2675,10 +2675,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta = X[1]
-    psi_dot = X[3]
-    theta_dot = X[4]
-    phi_dot = X[5]
     M = p[0]
     l = p[1]
     g = p[2]
@@ -2692,59 +2688,64 @@ def taylor_coefficients(t, y, p, X, W):
     _m2_1 = 0.0
     _m2_2 = I3
     _k18 = M*g*l
-    _c4 = W[0]
-    _c0 = W[1]
-    _u2 = W[2]
-    _c5 = W[3]
-    _u4 = W[4]
-    _c6 = W[5]
-    _c7 = W[6]
-    _u7 = W[7]
-    _u8 = W[8]
-    _m0_0 = W[9]
-    _m2_0 = W[10]
-    _u11 = W[11]
-    _u12 = W[12]
-    _u13 = W[13]
-    _f0 = W[14]
-    _u15 = W[15]
-    _u16 = W[16]
-    _u17 = W[17]
-    _u19 = W[18]
-    _u20 = W[19]
-    _f1 = W[20]
-    _u22 = W[21]
-    _f2 = W[22]
-    _l1_0 = W[23]
-    _l2_0 = W[24]
-    _u26 = W[25]
-    _u27 = W[26]
-    _d1 = W[27]
-    _u29 = W[28]
-    _u30 = W[29]
-    _u31 = W[30]
-    _l2_1 = W[31]
-    _u33 = W[32]
-    _u34 = W[33]
-    _u35 = W[34]
-    _u36 = W[35]
-    _u37 = W[36]
-    _d2 = W[37]
-    _u39 = W[38]
-    _z1 = W[39]
-    _u41 = W[40]
-    _u42 = W[41]
-    _u43 = W[42]
-    _z2 = W[43]
-    _x2 = W[44]
-    _u46 = W[45]
-    _u47 = W[46]
-    _x1 = W[47]
-    _u49 = W[48]
-    _u50 = W[49]
-    _u51 = W[50]
-    _u52 = W[51]
-    _x0 = W[52]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta = 1
+    psi_dot = 3
+    theta_dot = 4
+    phi_dot = 5
+    _c4 = 0
+    _c0 = 1
+    _u2 = 2
+    _c5 = 3
+    _u4 = 4
+    _c6 = 5
+    _c7 = 6
+    _u7 = 7
+    _u8 = 8
+    _m0_0 = 9
+    _m2_0 = 10
+    _u11 = 11
+    _u12 = 12
+    _u13 = 13
+    _f0 = 14
+    _u15 = 15
+    _u16 = 16
+    _u17 = 17
+    _u19 = 18
+    _u20 = 19
+    _f1 = 20
+    _u22 = 21
+    _f2 = 22
+    _l1_0 = 23
+    _l2_0 = 24
+    _u26 = 25
+    _u27 = 26
+    _d1 = 27
+    _u29 = 28
+    _u30 = 29
+    _u31 = 30
+    _l2_1 = 31
+    _u33 = 32
+    _u34 = 33
+    _u35 = 34
+    _u36 = 35
+    _u37 = 36
+    _d2 = 37
+    _u39 = 38
+    _z1 = 39
+    _u41 = 40
+    _u42 = 41
+    _u43 = 42
+    _z2 = 43
+    _x2 = 44
+    _u46 = 45
+    _u47 = 46
+    _x1 = 47
+    _u49 = 48
+    _u50 = 49
+    _u51 = 50
+    _u52 = 51
+    _x0 = 52
     for i in range(6):
         X[i, 0] = y[i]
     for k in range(order):
@@ -2753,282 +2754,282 @@ def taylor_coefficients(t, y, p, X, W):
         # _c0 = math.cos(theta)
         # _c4, _c0 = sin(theta), cos(theta)
         if k == 0:
-            _c4[0] = math.sin(theta[0])
-            _c0[0] = math.cos(theta[0])
+            W[_c4, 0] = math.sin(X[theta, 0])
+            W[_c0, 0] = math.cos(X[theta, 0])
         else:
-            _ja = k*theta[k]
-            _s = _ja*_c0[0] if k % 2 == 1 else 0.0
-            _c = _ja*_c4[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta, k]
+            _s = _ja*W[_c0, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_c4, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta[_j]
-                _jb = (_j + 1)*theta[_j + 1]
-                _s += _ja*_c0[k - _j]
-                _c += _ja*_c4[k - _j]
-                _r += _jb*_c0[k - 1 - _j]
-                _d += _jb*_c4[k - 1 - _j]
-            _c4[k] = (_s + _r)*_ik
-            _c0[k] = -(_c + _d)*_ik
+                _ja = _j*X[theta, _j]
+                _jb = (_j + 1)*X[theta, _j + 1]
+                _s += _ja*W[_c0, k - _j]
+                _c += _ja*W[_c4, k - _j]
+                _r += _jb*W[_c0, k - 1 - _j]
+                _d += _jb*W[_c4, k - 1 - _j]
+            W[_c4, k] = (_s + _r)*_ik
+            W[_c0, k] = -(_c + _d)*_ik
         # _c4 = math.sin(theta)
         # _c5 = I3*_c4*phi_dot
         # _u2 = _c4*phi_dot
-        _s = _c4[k]*phi_dot[0] if k % 2 == 0 else 0.0
+        _s = W[_c4, k]*X[phi_dot, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c4[_j]*phi_dot[k - _j]
-            _r += _c4[_j + 1]*phi_dot[k - 1 - _j]
-        _u2[k] = _s + _r
-        _c5[k] = I3*_u2[k]
+            _s += W[_c4, _j]*X[phi_dot, k - _j]
+            _r += W[_c4, _j + 1]*X[phi_dot, k - 1 - _j]
+        W[_u2, k] = _s + _r
+        W[_c5, k] = I3*W[_u2, k]
         # _c6 = _c0*_c2*_c4
         # _u4 = _c0*_c4
-        _s = _c0[k]*_c4[0] if k % 2 == 0 else 0.0
+        _s = W[_c0, k]*W[_c4, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c0[_j]*_c4[k - _j]
-            _r += _c0[_j + 1]*_c4[k - 1 - _j]
-        _u4[k] = _s + _r
-        _c6[k] = _c2*_u4[k]
+            _s += W[_c0, _j]*W[_c4, k - _j]
+            _r += W[_c0, _j + 1]*W[_c4, k - 1 - _j]
+        W[_u4, k] = _s + _r
+        W[_c6, k] = _c2*W[_u4, k]
         # _c7 = psi_dot*theta_dot
         # _c7 = psi_dot*theta_dot
-        _s = psi_dot[k]*theta_dot[0] if k % 2 == 0 else 0.0
+        _s = X[psi_dot, k]*X[theta_dot, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += psi_dot[_j]*theta_dot[k - _j]
-            _r += psi_dot[_j + 1]*theta_dot[k - 1 - _j]
-        _c7[k] = _s + _r
+            _s += X[psi_dot, _j]*X[theta_dot, k - _j]
+            _r += X[psi_dot, _j + 1]*X[theta_dot, k - 1 - _j]
+        W[_c7, k] = _s + _r
         # _m0_0 = _c3 + _c2*_c0**2
         # _u7 = _c0**2
         _m = (k + 1)//2
-        _s = _c0[_m - 1]*_c0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_c0, _m - 1]*W[_c0, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _c0[_j]*_c0[k - _j]
-            _r += _c0[_j + 1]*_c0[k - 1 - _j]
-        _u7[k] = 2.0*(_s + _r) + (_c0[k//2]*_c0[k//2] if k % 2 == 0 else 0.0)
-        _u8[k] = _c2*_u7[k]
-        _m0_0[k] = _u8[k] + _c3 if k == 0 else _u8[k]
+            _s += W[_c0, _j]*W[_c0, k - _j]
+            _r += W[_c0, _j + 1]*W[_c0, k - 1 - _j]
+        W[_u7, k] = 2.0*(_s + _r) + (W[_c0, k//2]*W[_c0, k//2] if k % 2 == 0 else 0.0)
+        W[_u8, k] = _c2*W[_u7, k]
+        W[_m0_0, k] = W[_u8, k] + _c3 if k == 0 else W[_u8, k]
         # _m2_0 = I3*_c0
-        _m2_0[k] = I3*_c0[k]
+        W[_m2_0, k] = I3*W[_c0, k]
         # _f0 = _c5*theta_dot + 2.0*_c6*_c7
         # _u11 = _c5*theta_dot
-        _s = _c5[k]*theta_dot[0] if k % 2 == 0 else 0.0
+        _s = W[_c5, k]*X[theta_dot, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c5[_j]*theta_dot[k - _j]
-            _r += _c5[_j + 1]*theta_dot[k - 1 - _j]
-        _u11[k] = _s + _r
+            _s += W[_c5, _j]*X[theta_dot, k - _j]
+            _r += W[_c5, _j + 1]*X[theta_dot, k - 1 - _j]
+        W[_u11, k] = _s + _r
         # _u12 = _c6*_c7
-        _s = _c6[k]*_c7[0] if k % 2 == 0 else 0.0
+        _s = W[_c6, k]*W[_c7, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c6[_j]*_c7[k - _j]
-            _r += _c6[_j + 1]*_c7[k - 1 - _j]
-        _u12[k] = _s + _r
-        _u13[k] = 2.0*_u12[k]
-        _f0[k] = _u11[k] + _u13[k]
+            _s += W[_c6, _j]*W[_c7, k - _j]
+            _r += W[_c6, _j + 1]*W[_c7, k - 1 - _j]
+        W[_u12, k] = _s + _r
+        W[_u13, k] = 2.0*W[_u12, k]
+        W[_f0, k] = W[_u11, k] + W[_u13, k]
         # _f1 = -_c5*psi_dot - _c6*psi_dot**2 + M*_c4*g*l
         # _u15 = _c5*psi_dot
-        _s = _c5[k]*psi_dot[0] if k % 2 == 0 else 0.0
+        _s = W[_c5, k]*X[psi_dot, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c5[_j]*psi_dot[k - _j]
-            _r += _c5[_j + 1]*psi_dot[k - 1 - _j]
-        _u15[k] = _s + _r
+            _s += W[_c5, _j]*X[psi_dot, k - _j]
+            _r += W[_c5, _j + 1]*X[psi_dot, k - 1 - _j]
+        W[_u15, k] = _s + _r
         # _u16 = psi_dot**2
         _m = (k + 1)//2
-        _s = psi_dot[_m - 1]*psi_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[psi_dot, _m - 1]*X[psi_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += psi_dot[_j]*psi_dot[k - _j]
-            _r += psi_dot[_j + 1]*psi_dot[k - 1 - _j]
-        _u16[k] = 2.0*(_s + _r) + (psi_dot[k//2]*psi_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[psi_dot, _j]*X[psi_dot, k - _j]
+            _r += X[psi_dot, _j + 1]*X[psi_dot, k - 1 - _j]
+        W[_u16, k] = 2.0*(_s + _r) + (X[psi_dot, k//2]*X[psi_dot, k//2] if k % 2 == 0 else 0.0)
         # _u17 = _c6*_u16
-        _s = _c6[k]*_u16[0] if k % 2 == 0 else 0.0
+        _s = W[_c6, k]*W[_u16, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c6[_j]*_u16[k - _j]
-            _r += _c6[_j + 1]*_u16[k - 1 - _j]
-        _u17[k] = _s + _r
-        _u19[k] = _k18*_c4[k]
-        _u20[k] = _u19[k] - _u15[k]
-        _f1[k] = _u20[k] - _u17[k]
+            _s += W[_c6, _j]*W[_u16, k - _j]
+            _r += W[_c6, _j + 1]*W[_u16, k - 1 - _j]
+        W[_u17, k] = _s + _r
+        W[_u19, k] = _k18*W[_c4, k]
+        W[_u20, k] = W[_u19, k] - W[_u15, k]
+        W[_f1, k] = W[_u20, k] - W[_u17, k]
         # _f2 = I3*_c4*_c7
         # _u22 = _c4*_c7
-        _s = _c4[k]*_c7[0] if k % 2 == 0 else 0.0
+        _s = W[_c4, k]*W[_c7, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c4[_j]*_c7[k - _j]
-            _r += _c4[_j + 1]*_c7[k - 1 - _j]
-        _u22[k] = _s + _r
-        _f2[k] = I3*_u22[k]
+            _s += W[_c4, _j]*W[_c7, k - _j]
+            _r += W[_c4, _j + 1]*W[_c7, k - 1 - _j]
+        W[_u22, k] = _s + _r
+        W[_f2, k] = I3*W[_u22, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
+        if k == 0 and not W[_m0_0, 0] > _PIVOT_TOLERANCE*abs(W[_m0_0, 0]):
             return 1
         # _l1_0 = _m1_0/_m0_0
-        _s = (_m1_0 if k == 0 else 0.0) - (_m0_0[k]*_l1_0[0] if k % 2 == 1 else 0.0)
+        _s = (_m1_0 if k == 0 else 0.0) - (W[_m0_0, k]*W[_l1_0, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _m0_0[_j]*_l1_0[k - _j]
-            _r += _m0_0[_j + 1]*_l1_0[k - 1 - _j]
-        _l1_0[k] = (_s - _r)/_m0_0[0]
+            _s -= W[_m0_0, _j]*W[_l1_0, k - _j]
+            _r += W[_m0_0, _j + 1]*W[_l1_0, k - 1 - _j]
+        W[_l1_0, k] = (_s - _r)/W[_m0_0, 0]
         # _l2_0 = _m2_0/_m0_0
-        _s = _m2_0[k] - (_m0_0[k]*_l2_0[0] if k % 2 == 1 else 0.0)
+        _s = W[_m2_0, k] - (W[_m0_0, k]*W[_l2_0, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _m0_0[_j]*_l2_0[k - _j]
-            _r += _m0_0[_j + 1]*_l2_0[k - 1 - _j]
-        _l2_0[k] = (_s - _r)/_m0_0[0]
+            _s -= W[_m0_0, _j]*W[_l2_0, k - _j]
+            _r += W[_m0_0, _j + 1]*W[_l2_0, k - 1 - _j]
+        W[_l2_0, k] = (_s - _r)/W[_m0_0, 0]
         # _u26 = _l1_0**2
         _m = (k + 1)//2
-        _s = _l1_0[_m - 1]*_l1_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_l1_0, _m - 1]*W[_l1_0, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _l1_0[_j]*_l1_0[k - _j]
-            _r += _l1_0[_j + 1]*_l1_0[k - 1 - _j]
-        _u26[k] = 2.0*(_s + _r) + (_l1_0[k//2]*_l1_0[k//2] if k % 2 == 0 else 0.0)
+            _s += W[_l1_0, _j]*W[_l1_0, k - _j]
+            _r += W[_l1_0, _j + 1]*W[_l1_0, k - 1 - _j]
+        W[_u26, k] = 2.0*(_s + _r) + (W[_l1_0, k//2]*W[_l1_0, k//2] if k % 2 == 0 else 0.0)
         # _u27 = _u26*_m0_0
-        _s = _u26[k]*_m0_0[0] if k % 2 == 0 else 0.0
+        _s = W[_u26, k]*W[_m0_0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u26[_j]*_m0_0[k - _j]
-            _r += _u26[_j + 1]*_m0_0[k - 1 - _j]
-        _u27[k] = _s + _r
-        _d1[k] = _m1_1 - _u27[k] if k == 0 else -_u27[k]
-        if k == 0 and not _d1[0] > _PIVOT_TOLERANCE*abs(_m1_1):
+            _s += W[_u26, _j]*W[_m0_0, k - _j]
+            _r += W[_u26, _j + 1]*W[_m0_0, k - 1 - _j]
+        W[_u27, k] = _s + _r
+        W[_d1, k] = _m1_1 - W[_u27, k] if k == 0 else -W[_u27, k]
+        if k == 0 and not W[_d1, 0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
         # _u29 = _l2_0*_l1_0
-        _s = _l2_0[k]*_l1_0[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_0, k]*W[_l1_0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_0[_j]*_l1_0[k - _j]
-            _r += _l2_0[_j + 1]*_l1_0[k - 1 - _j]
-        _u29[k] = _s + _r
+            _s += W[_l2_0, _j]*W[_l1_0, k - _j]
+            _r += W[_l2_0, _j + 1]*W[_l1_0, k - 1 - _j]
+        W[_u29, k] = _s + _r
         # _u30 = _u29*_m0_0
-        _s = _u29[k]*_m0_0[0] if k % 2 == 0 else 0.0
+        _s = W[_u29, k]*W[_m0_0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u29[_j]*_m0_0[k - _j]
-            _r += _u29[_j + 1]*_m0_0[k - 1 - _j]
-        _u30[k] = _s + _r
-        _u31[k] = _m2_1 - _u30[k] if k == 0 else -_u30[k]
+            _s += W[_u29, _j]*W[_m0_0, k - _j]
+            _r += W[_u29, _j + 1]*W[_m0_0, k - 1 - _j]
+        W[_u30, k] = _s + _r
+        W[_u31, k] = _m2_1 - W[_u30, k] if k == 0 else -W[_u30, k]
         # _l2_1 = _u31/_d1
-        _s = _u31[k] - (_d1[k]*_l2_1[0] if k % 2 == 1 else 0.0)
+        _s = W[_u31, k] - (W[_d1, k]*W[_l2_1, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _d1[_j]*_l2_1[k - _j]
-            _r += _d1[_j + 1]*_l2_1[k - 1 - _j]
-        _l2_1[k] = (_s - _r)/_d1[0]
+            _s -= W[_d1, _j]*W[_l2_1, k - _j]
+            _r += W[_d1, _j + 1]*W[_l2_1, k - 1 - _j]
+        W[_l2_1, k] = (_s - _r)/W[_d1, 0]
         # _u33 = _l2_0**2
         _m = (k + 1)//2
-        _s = _l2_0[_m - 1]*_l2_0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_l2_0, _m - 1]*W[_l2_0, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _l2_0[_j]*_l2_0[k - _j]
-            _r += _l2_0[_j + 1]*_l2_0[k - 1 - _j]
-        _u33[k] = 2.0*(_s + _r) + (_l2_0[k//2]*_l2_0[k//2] if k % 2 == 0 else 0.0)
+            _s += W[_l2_0, _j]*W[_l2_0, k - _j]
+            _r += W[_l2_0, _j + 1]*W[_l2_0, k - 1 - _j]
+        W[_u33, k] = 2.0*(_s + _r) + (W[_l2_0, k//2]*W[_l2_0, k//2] if k % 2 == 0 else 0.0)
         # _u34 = _u33*_m0_0
-        _s = _u33[k]*_m0_0[0] if k % 2 == 0 else 0.0
+        _s = W[_u33, k]*W[_m0_0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u33[_j]*_m0_0[k - _j]
-            _r += _u33[_j + 1]*_m0_0[k - 1 - _j]
-        _u34[k] = _s + _r
-        _u35[k] = _m2_2 - _u34[k] if k == 0 else -_u34[k]
+            _s += W[_u33, _j]*W[_m0_0, k - _j]
+            _r += W[_u33, _j + 1]*W[_m0_0, k - 1 - _j]
+        W[_u34, k] = _s + _r
+        W[_u35, k] = _m2_2 - W[_u34, k] if k == 0 else -W[_u34, k]
         # _u36 = _l2_1**2
         _m = (k + 1)//2
-        _s = _l2_1[_m - 1]*_l2_1[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_l2_1, _m - 1]*W[_l2_1, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _l2_1[_j]*_l2_1[k - _j]
-            _r += _l2_1[_j + 1]*_l2_1[k - 1 - _j]
-        _u36[k] = 2.0*(_s + _r) + (_l2_1[k//2]*_l2_1[k//2] if k % 2 == 0 else 0.0)
+            _s += W[_l2_1, _j]*W[_l2_1, k - _j]
+            _r += W[_l2_1, _j + 1]*W[_l2_1, k - 1 - _j]
+        W[_u36, k] = 2.0*(_s + _r) + (W[_l2_1, k//2]*W[_l2_1, k//2] if k % 2 == 0 else 0.0)
         # _u37 = _u36*_d1
-        _s = _u36[k]*_d1[0] if k % 2 == 0 else 0.0
+        _s = W[_u36, k]*W[_d1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u36[_j]*_d1[k - _j]
-            _r += _u36[_j + 1]*_d1[k - 1 - _j]
-        _u37[k] = _s + _r
-        _d2[k] = _u35[k] - _u37[k]
-        if k == 0 and not _d2[0] > _PIVOT_TOLERANCE*abs(_m2_2):
+            _s += W[_u36, _j]*W[_d1, k - _j]
+            _r += W[_u36, _j + 1]*W[_d1, k - 1 - _j]
+        W[_u37, k] = _s + _r
+        W[_d2, k] = W[_u35, k] - W[_u37, k]
+        if k == 0 and not W[_d2, 0] > _PIVOT_TOLERANCE*abs(_m2_2):
             return 3
         # _u39 = _l1_0*_f0
-        _s = _l1_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _s = W[_l1_0, k]*W[_f0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l1_0[_j]*_f0[k - _j]
-            _r += _l1_0[_j + 1]*_f0[k - 1 - _j]
-        _u39[k] = _s + _r
-        _z1[k] = _f1[k] - _u39[k]
+            _s += W[_l1_0, _j]*W[_f0, k - _j]
+            _r += W[_l1_0, _j + 1]*W[_f0, k - 1 - _j]
+        W[_u39, k] = _s + _r
+        W[_z1, k] = W[_f1, k] - W[_u39, k]
         # _u41 = _l2_0*_f0
-        _s = _l2_0[k]*_f0[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_0, k]*W[_f0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_0[_j]*_f0[k - _j]
-            _r += _l2_0[_j + 1]*_f0[k - 1 - _j]
-        _u41[k] = _s + _r
-        _u42[k] = _f2[k] - _u41[k]
+            _s += W[_l2_0, _j]*W[_f0, k - _j]
+            _r += W[_l2_0, _j + 1]*W[_f0, k - 1 - _j]
+        W[_u41, k] = _s + _r
+        W[_u42, k] = W[_f2, k] - W[_u41, k]
         # _u43 = _l2_1*_z1
-        _s = _l2_1[k]*_z1[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_1, k]*W[_z1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_1[_j]*_z1[k - _j]
-            _r += _l2_1[_j + 1]*_z1[k - 1 - _j]
-        _u43[k] = _s + _r
-        _z2[k] = _u42[k] - _u43[k]
+            _s += W[_l2_1, _j]*W[_z1, k - _j]
+            _r += W[_l2_1, _j + 1]*W[_z1, k - 1 - _j]
+        W[_u43, k] = _s + _r
+        W[_z2, k] = W[_u42, k] - W[_u43, k]
         # _x2 = _z2/_d2
-        _s = _z2[k] - (_d2[k]*_x2[0] if k % 2 == 1 else 0.0)
+        _s = W[_z2, k] - (W[_d2, k]*W[_x2, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _d2[_j]*_x2[k - _j]
-            _r += _d2[_j + 1]*_x2[k - 1 - _j]
-        _x2[k] = (_s - _r)/_d2[0]
+            _s -= W[_d2, _j]*W[_x2, k - _j]
+            _r += W[_d2, _j + 1]*W[_x2, k - 1 - _j]
+        W[_x2, k] = (_s - _r)/W[_d2, 0]
         # _u46 = _z1/_d1
-        _s = _z1[k] - (_d1[k]*_u46[0] if k % 2 == 1 else 0.0)
+        _s = W[_z1, k] - (W[_d1, k]*W[_u46, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _d1[_j]*_u46[k - _j]
-            _r += _d1[_j + 1]*_u46[k - 1 - _j]
-        _u46[k] = (_s - _r)/_d1[0]
+            _s -= W[_d1, _j]*W[_u46, k - _j]
+            _r += W[_d1, _j + 1]*W[_u46, k - 1 - _j]
+        W[_u46, k] = (_s - _r)/W[_d1, 0]
         # _u47 = _l2_1*_x2
-        _s = _l2_1[k]*_x2[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_1, k]*W[_x2, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_1[_j]*_x2[k - _j]
-            _r += _l2_1[_j + 1]*_x2[k - 1 - _j]
-        _u47[k] = _s + _r
-        _x1[k] = _u46[k] - _u47[k]
+            _s += W[_l2_1, _j]*W[_x2, k - _j]
+            _r += W[_l2_1, _j + 1]*W[_x2, k - 1 - _j]
+        W[_u47, k] = _s + _r
+        W[_x1, k] = W[_u46, k] - W[_u47, k]
         # _u49 = _f0/_m0_0
-        _s = _f0[k] - (_m0_0[k]*_u49[0] if k % 2 == 1 else 0.0)
+        _s = W[_f0, k] - (W[_m0_0, k]*W[_u49, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _m0_0[_j]*_u49[k - _j]
-            _r += _m0_0[_j + 1]*_u49[k - 1 - _j]
-        _u49[k] = (_s - _r)/_m0_0[0]
+            _s -= W[_m0_0, _j]*W[_u49, k - _j]
+            _r += W[_m0_0, _j + 1]*W[_u49, k - 1 - _j]
+        W[_u49, k] = (_s - _r)/W[_m0_0, 0]
         # _u50 = _l1_0*_x1
-        _s = _l1_0[k]*_x1[0] if k % 2 == 0 else 0.0
+        _s = W[_l1_0, k]*W[_x1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l1_0[_j]*_x1[k - _j]
-            _r += _l1_0[_j + 1]*_x1[k - 1 - _j]
-        _u50[k] = _s + _r
-        _u51[k] = _u49[k] - _u50[k]
+            _s += W[_l1_0, _j]*W[_x1, k - _j]
+            _r += W[_l1_0, _j + 1]*W[_x1, k - 1 - _j]
+        W[_u50, k] = _s + _r
+        W[_u51, k] = W[_u49, k] - W[_u50, k]
         # _u52 = _l2_0*_x2
-        _s = _l2_0[k]*_x2[0] if k % 2 == 0 else 0.0
+        _s = W[_l2_0, k]*W[_x2, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _l2_0[_j]*_x2[k - _j]
-            _r += _l2_0[_j + 1]*_x2[k - 1 - _j]
-        _u52[k] = _s + _r
-        _x0[k] = _u51[k] - _u52[k]
+            _s += W[_l2_0, _j]*W[_x2, k - _j]
+            _r += W[_l2_0, _j + 1]*W[_x2, k - 1 - _j]
+        W[_u52, k] = _s + _r
+        W[_x0, k] = W[_u51, k] - W[_u52, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = psi_dot[k]*_ik1
-        X[1, k + 1] = theta_dot[k]*_ik1
-        X[2, k + 1] = phi_dot[k]*_ik1
-        X[3, k + 1] = _x0[k]*_ik1
-        X[4, k + 1] = _x1[k]*_ik1
-        X[5, k + 1] = _x2[k]*_ik1
+        X[0, k + 1] = X[psi_dot, k]*_ik1
+        X[1, k + 1] = X[theta_dot, k]*_ik1
+        X[2, k + 1] = X[phi_dot, k]*_ik1
+        X[3, k + 1] = W[_x0, k]*_ik1
+        X[4, k + 1] = W[_x1, k]*_ik1
+        X[5, k + 1] = W[_x2, k]*_ik1
     return 0
 
 

@@ -2472,7 +2472,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    X_dot = X[1]
     M = p[0]
     R = p[1]
     I = p[2]
@@ -2484,49 +2483,51 @@ def taylor_coefficients(t, y, p, X, W):
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
     _k5 = 1.0/_m0_0
-    _t = W[0]
-    _u1 = W[1]
-    _u2 = W[2]
-    _u3 = W[3]
-    _f0 = W[4]
-    _x0 = W[5]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    X_dot = 1
+    _t = 0
+    _u1 = 1
+    _u2 = 2
+    _u3 = 3
+    _f0 = 4
+    _x0 = 5
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order + 1):
-        _t[k] = 0.0
-    _t[0] = t
+        W[_t, k] = 0.0
+    W[_t, 0] = t
     if order > 0:
-        _t[1] = 1.0
+        W[_t, 1] = 1.0
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
         # _f0 = -A*_c0*Omega**2*math.sin(Omega*t)
-        _u1[k] = Omega*_t[k]
+        W[_u1, k] = Omega*W[_t, k]
         # _u2, _u3 = sin(_u1), cos(_u1)
         if k == 0:
-            _u2[0] = math.sin(_u1[0])
-            _u3[0] = math.cos(_u1[0])
+            W[_u2, 0] = math.sin(W[_u1, 0])
+            W[_u3, 0] = math.cos(W[_u1, 0])
         else:
-            _ja = k*_u1[k]
-            _s = _ja*_u3[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u2[0] if k % 2 == 1 else 0.0
+            _ja = k*W[_u1, k]
+            _s = _ja*W[_u3, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u2, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*_u1[_j]
-                _jb = (_j + 1)*_u1[_j + 1]
-                _s += _ja*_u3[k - _j]
-                _c += _ja*_u2[k - _j]
-                _r += _jb*_u3[k - 1 - _j]
-                _d += _jb*_u2[k - 1 - _j]
-            _u2[k] = (_s + _r)*_ik
-            _u3[k] = -(_c + _d)*_ik
-        _f0[k] = _k0*_u2[k]
+                _ja = _j*W[_u1, _j]
+                _jb = (_j + 1)*W[_u1, _j + 1]
+                _s += _ja*W[_u3, k - _j]
+                _c += _ja*W[_u2, k - _j]
+                _r += _jb*W[_u3, k - 1 - _j]
+                _d += _jb*W[_u2, k - 1 - _j]
+            W[_u2, k] = (_s + _r)*_ik
+            W[_u3, k] = -(_c + _d)*_ik
+        W[_f0, k] = _k0*W[_u2, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _x0[k] = _k5*_f0[k]
+        W[_x0, k] = _k5*W[_f0, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = X_dot[k]*_ik1
-        X[1, k + 1] = _x0[k]*_ik1
+        X[0, k + 1] = X[X_dot, k]*_ik1
+        X[1, k + 1] = W[_x0, k]*_ik1
     return 0
 
 

