@@ -2504,13 +2504,8 @@ resuming), without tableau arrays.  Each step:
 1. Order and step (Jorba & Zou, "A software package for the numerical
    integration of ODEs by means of high-order Taylor methods", Experiment.
    Math. 14 (2005) 99-117, sec. 3.2; the rule heyoka uses): the order is
-   fixed for the run, ``p = ceil(−½ ln ε + 1)`` with ε = min(rtol, atol),
-   plus one at machine precision (ε < 1e-15: 21 at the default 2.2e-16).
-   The extra order puts the truncation error, which is the same at every
-   pass of a periodic orbit and so accumulates linearly, e² times below the
-   rounding errors, which accumulate like a random walk: on Kepler's e = 0.9
-   orbit the energy drift per orbit falls from 3e-17 to the noise (< 1e-17),
-   for 10-15% more work per step.  At each step the series of the solution to order p
+   fixed for the run, ``p = ceil(−½ ln ε + 1)`` with ε = min(rtol, atol)
+   (20 at ε = 2.2e-16).  At each step the series of the solution to order p
    is computed, and with ``‖·‖`` the max norm over the state,
    ``ρ_j = (s / ‖y[j]‖)^(1/j)`` for j = p − 1 and p, s = ‖y‖ (relative
    control) or 1 when ``rtol ‖y‖ ≤ atol`` (absolute control); the step is
@@ -2544,8 +2539,7 @@ from numba import njit
 def taylor_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
                atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
                directions, actions, ev_t, ev_y, ev_i, compensation):
-    """Adaptive Taylor method of order p = ceil(−½ ln min(rtol, atol) + 1), + 1 at machine precision; see
-    the module docstring.
+    """Adaptive Taylor method of order p = ceil(−½ ln min(rtol, atol) + 1); see the module docstring.
 
     The arguments, statuses and resuming are those of ``dop853_run``
     (``drivers.py``), then ``compensation`` float64[n], the carry of the
@@ -2558,10 +2552,7 @@ def taylor_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
     cap = ts.shape[0]
     n_eval = t_eval.shape[0]
     use_t_eval = n_eval > 0
-    tol = min(rtol, atol)
-    order = max(2, int(math.ceil(-0.5 * math.log(tol) + 1.0)))
-    if tol < 1e-15:     # machine precision: truncation (a bias) well below rounding (noise)
-        order += 1
+    order = max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol)) + 1.0)))
     rho_factor = math.exp(-0.7 / (order - 1)) / (math.e * math.e)
 
     # Work arrays, allocated once per call.

@@ -300,9 +300,6 @@ def test_kepler_invariants_at_round_off(kepler_model, orbits):
     assert np.max(np.abs(momentum / l0 - 1)) < 2e-15 * math.sqrt(orbits) * 10
     # back at the pericentre after each whole orbit
     assert np.max(np.abs(run.q[:, 0] - 0.1)) < 1e-12 * orbits
-    if orbits >= 1000:  # no systematic energy drift: the truncation error stays below rounding
-        drift_per_orbit = np.polyfit(np.arange(orbits), energy / e0 - 1, 1)[0]
-        assert abs(drift_per_orbit) < 1.5e-17, drift_per_orbit
 
 
 # -- events on the series ---------------------------------------------------------------------
