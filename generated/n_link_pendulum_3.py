@@ -37,33 +37,35 @@ def rhs(t, y, p, out):
     g = p[6]
     _c0 = m2 + m3
     _c1 = _c0 + m1
-    _c2 = -theta1
-    _c3 = _c2 + theta2
-    _c4 = _c0*l2
-    _c5 = _c4*l1
-    _c6 = _c2 + theta3
-    _c7 = l3*m3
-    _c8 = _c7*l1
-    _c9 = theta2 - theta3
-    _c10 = _c7*l2
-    _c11 = theta2_dot**2
-    _c12 = _c5*math.sin(_c3)
+    _c2 = math.sin(theta2)
+    _c3 = math.sin(theta1)
+    _c4 = math.cos(theta2)
+    _c5 = math.cos(theta1)
+    _c6 = _c0*l2
+    _c7 = _c6*l1
+    _c8 = math.sin(theta3)
+    _c9 = math.cos(theta3)
+    _c10 = l3*m3
+    _c11 = _c10*l1
+    _c12 = _c10*l2
     _c13 = theta3_dot**2
-    _c14 = _c8*math.sin(_c6)
-    _c15 = theta1_dot**2
-    _c16 = _c10*math.sin(_c9)
+    _c14 = _c11*(_c5*_c8 - _c3*_c9)
+    _c15 = theta2_dot**2
+    _c16 = _c7*(_c2*_c5 - _c3*_c4)
+    _c17 = _c12*(_c2*_c9 - _c4*_c8)
+    _c18 = theta1_dot**2
     out[0] = theta1_dot
     out[1] = theta2_dot
     out[2] = theta3_dot
     _m0_0 = _c1*l1**2
-    _m1_0 = _c5*math.cos(_c3)
+    _m1_0 = _c7*(_c2*_c3 + _c4*_c5)
     _m1_1 = _c0*l2**2
-    _m2_0 = _c8*math.cos(_c6)
-    _m2_1 = _c10*math.cos(_c9)
+    _m2_0 = _c11*(_c3*_c8 + _c5*_c9)
+    _m2_1 = _c12*(_c2*_c8 + _c4*_c9)
     _m2_2 = m3*l3**2
-    _f0 = _c11*_c12 + _c13*_c14 - _c1*g*l1*math.sin(theta1)
-    _f1 = -_c12*_c15 - _c13*_c16 - _c4*g*math.sin(theta2)
-    _f2 = _c11*_c16 - _c14*_c15 - _c7*g*math.sin(theta3)
+    _f0 = _c13*_c14 + _c15*_c16 - _c1*_c3*g*l1
+    _f1 = -_c13*_c17 - _c16*_c18 - _c2*_c6*g
+    _f2 = _c15*_c17 - _c14*_c18 - _c10*_c8*g
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -109,33 +111,35 @@ def rhs_lanes(T, Y, P, out, bad):
         g = P[6, _l]
         _c0 = m2 + m3
         _c1 = _c0 + m1
-        _c2 = -theta1
-        _c3 = _c2 + theta2
-        _c4 = _c0*l2
-        _c5 = _c4*l1
-        _c6 = _c2 + theta3
-        _c7 = l3*m3
-        _c8 = _c7*l1
-        _c9 = theta2 - theta3
-        _c10 = _c7*l2
-        _c11 = theta2_dot**2
-        _c12 = _c5*_vsin(_c3)
+        _c2 = _vsin(theta2)
+        _c3 = _vsin(theta1)
+        _c4 = _vcos(theta2)
+        _c5 = _vcos(theta1)
+        _c6 = _c0*l2
+        _c7 = _c6*l1
+        _c8 = _vsin(theta3)
+        _c9 = _vcos(theta3)
+        _c10 = l3*m3
+        _c11 = _c10*l1
+        _c12 = _c10*l2
         _c13 = theta3_dot**2
-        _c14 = _c8*_vsin(_c6)
-        _c15 = theta1_dot**2
-        _c16 = _c10*_vsin(_c9)
+        _c14 = _c11*(_c5*_c8 - _c3*_c9)
+        _c15 = theta2_dot**2
+        _c16 = _c7*(_c2*_c5 - _c3*_c4)
+        _c17 = _c12*(_c2*_c9 - _c4*_c8)
+        _c18 = theta1_dot**2
         out[0, _l] = theta1_dot
         out[1, _l] = theta2_dot
         out[2, _l] = theta3_dot
         _m0_0 = _c1*l1**2
-        _m1_0 = _c5*_vcos(_c3)
+        _m1_0 = _c7*(_c2*_c3 + _c4*_c5)
         _m1_1 = _c0*l2**2
-        _m2_0 = _c8*_vcos(_c6)
-        _m2_1 = _c10*_vcos(_c9)
+        _m2_0 = _c11*(_c3*_c8 + _c5*_c9)
+        _m2_1 = _c12*(_c2*_c8 + _c4*_c9)
         _m2_2 = m3*l3**2
-        _f0 = _c11*_c12 + _c13*_c14 - _c1*g*l1*_vsin(theta1)
-        _f1 = -_c12*_c15 - _c13*_c16 - _c4*g*_vsin(theta2)
-        _f2 = _c11*_c16 - _c14*_c15 - _c7*g*_vsin(theta3)
+        _f0 = _c13*_c14 + _c15*_c16 - _c1*_c3*g*l1
+        _f1 = -_c13*_c17 - _c16*_c18 - _c2*_c6*g
+        _f2 = _c15*_c17 - _c14*_c18 - _c10*_c8*g
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -422,75 +426,77 @@ def canonical_partials(t, y, p, out):
     g = p[6]
     _c0 = m2 + m3
     _c1 = _c0 + m1
-    _c2 = -theta1
-    _c3 = _c2 + theta2
-    _c4 = _c0*l2
-    _c5 = _c4*l1
-    _c6 = _c5*math.cos(_c3)
-    _c7 = _c2 + theta3
-    _c8 = l3*m3
-    _c9 = _c8*l1
-    _c10 = _c9*math.cos(_c7)
-    _c11 = theta2 - theta3
-    _c12 = _c8*l2
-    _c13 = _c12*math.cos(_c11)
-    _c14 = _c5*math.sin(_c3)
-    _c15 = _c14*theta2_dot
-    _c16 = _c9*math.sin(_c7)
+    _c2 = math.sin(theta2)
+    _c3 = math.sin(theta1)
+    _c4 = math.cos(theta2)
+    _c5 = math.cos(theta1)
+    _c6 = _c0*l2
+    _c7 = _c6*l1
+    _c8 = _c7*(_c2*_c3 + _c4*_c5)
+    _c9 = math.sin(theta3)
+    _c10 = math.cos(theta3)
+    _c11 = l3*m3
+    _c12 = _c11*l1
+    _c13 = _c12*(_c10*_c5 + _c3*_c9)
+    _c14 = _c11*l2
+    _c15 = _c14*(_c10*_c4 + _c2*_c9)
+    _c16 = _c12*(_c5*_c9 - _c10*_c3)
     _c17 = _c16*theta3_dot
-    _c18 = _c15 + _c17
-    _c19 = -_c15
-    _c20 = -_c17
-    _c21 = _c14*theta1_dot
-    _c22 = _c12*math.sin(_c11)
-    _c23 = _c22*theta3_dot
-    _c24 = -_c21 - _c23
-    _c25 = _c16*theta1_dot
-    _c26 = _c22*theta2_dot
-    _c27 = -_c26
-    _c28 = _c26 - _c25
-    _c29 = _c10*theta1_dot*theta3_dot
-    _c30 = -_c29
-    _c31 = _c6*theta1_dot*theta2_dot
+    _c18 = _c7*(_c2*_c5 - _c3*_c4)
+    _c19 = _c18*theta2_dot
+    _c20 = _c17 + _c19
+    _c21 = -_c19
+    _c22 = -_c17
+    _c23 = _c18*theta1_dot
+    _c24 = _c14*(_c10*_c2 - _c4*_c9)
+    _c25 = _c24*theta3_dot
+    _c26 = -_c23 - _c25
+    _c27 = _c16*theta1_dot
+    _c28 = _c24*theta2_dot
+    _c29 = -_c28
+    _c30 = _c28 - _c27
+    _c31 = _c8*theta1_dot*theta2_dot
     _c32 = -_c31
-    _c33 = _c13*theta2_dot*theta3_dot
+    _c33 = _c13*theta1_dot*theta3_dot
     _c34 = -_c33
+    _c35 = _c15*theta2_dot*theta3_dot
+    _c36 = -_c35
     out[0, 0, 0] = _c1*l1**2
-    out[0, 0, 1] = _c6
-    out[0, 0, 2] = _c10
-    out[0, 1, 0] = _c6
+    out[0, 0, 1] = _c8
+    out[0, 0, 2] = _c13
+    out[0, 1, 0] = _c8
     out[0, 1, 1] = _c0*l2**2
-    out[0, 1, 2] = _c13
-    out[0, 2, 0] = _c10
-    out[0, 2, 1] = _c13
+    out[0, 1, 2] = _c15
+    out[0, 2, 0] = _c13
+    out[0, 2, 1] = _c15
     out[0, 2, 2] = m3*l3**2
-    out[1, 0, 0] = _c18
-    out[1, 0, 1] = _c19
-    out[1, 0, 2] = _c20
-    out[1, 1, 0] = _c21
-    out[1, 1, 1] = _c24
-    out[1, 1, 2] = _c23
-    out[1, 2, 0] = _c25
-    out[1, 2, 1] = _c27
-    out[1, 2, 2] = _c28
-    out[2, 0, 0] = _c30 + _c32 - _c1*g*l1*math.cos(theta1)
+    out[1, 0, 0] = _c20
+    out[1, 0, 1] = _c21
+    out[1, 0, 2] = _c22
+    out[1, 1, 0] = _c23
+    out[1, 1, 1] = _c26
+    out[1, 1, 2] = _c25
+    out[1, 2, 0] = _c27
+    out[1, 2, 1] = _c29
+    out[1, 2, 2] = _c30
+    out[2, 0, 0] = _c32 + _c34 - _c1*_c5*g*l1
     out[2, 0, 1] = _c31
-    out[2, 0, 2] = _c29
+    out[2, 0, 2] = _c33
     out[2, 1, 0] = _c31
-    out[2, 1, 1] = _c32 + _c34 - _c4*g*math.cos(theta2)
-    out[2, 1, 2] = _c33
-    out[2, 2, 0] = _c29
-    out[2, 2, 1] = _c33
-    out[2, 2, 2] = _c30 + _c34 - _c8*g*math.cos(theta3)
-    out[3, 0, 0] = _c18
-    out[3, 0, 1] = _c21
-    out[3, 0, 2] = _c25
-    out[3, 1, 0] = _c19
-    out[3, 1, 1] = _c24
-    out[3, 1, 2] = _c27
-    out[3, 2, 0] = _c20
-    out[3, 2, 1] = _c23
-    out[3, 2, 2] = _c28
+    out[2, 1, 1] = _c32 + _c36 - _c4*_c6*g
+    out[2, 1, 2] = _c35
+    out[2, 2, 0] = _c33
+    out[2, 2, 1] = _c35
+    out[2, 2, 2] = _c34 + _c36 - _c10*_c11*g
+    out[3, 0, 0] = _c20
+    out[3, 0, 1] = _c23
+    out[3, 0, 2] = _c27
+    out[3, 1, 0] = _c21
+    out[3, 1, 1] = _c26
+    out[3, 1, 2] = _c29
+    out[3, 2, 0] = _c22
+    out[3, 2, 1] = _c25
+    out[3, 2, 2] = _c30
 
 
 @njit(cache=True, error_model="numpy")
@@ -2794,20 +2800,20 @@ def taylor_coefficients(t, y, p, X, W):
     g = p[6]
     _c0 = m2 + m3
     _c1 = _c0 + m1
-    _c4 = _c0*l2
-    _c5 = _c4*l1
-    _c7 = l3*m3
-    _c8 = _c7*l1
-    _c10 = _c7*l2
+    _c6 = _c0*l2
+    _c7 = _c6*l1
+    _c10 = l3*m3
+    _c11 = _c10*l1
+    _c12 = _c10*l2
     _m0_0 = _c1*l1**2
     _m1_1 = _c0*l2**2
     _m2_2 = m3*l3**2
-    _k21 = _c1*g*l1
-    _k29 = _c4*g
-    _k38 = _c7*g
+    _k35 = _c1*g*l1
+    _k41 = _c6*g
+    _k48 = _c10*g
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
-    _k44 = 1.0/_m0_0
+    _k52 = 1.0/_m0_0
     # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
     theta1 = 0
     theta2 = 1
@@ -2816,119 +2822,152 @@ def taylor_coefficients(t, y, p, X, W):
     theta2_dot = 4
     theta3_dot = 5
     _c2 = 0
-    _c3 = 1
-    _c6 = 2
-    _c9 = 3
-    _c11 = 4
-    _u5 = 5
-    _u6 = 6
-    _c12 = 7
-    _c13 = 8
+    _c4 = 1
+    _c3 = 2
+    _c5 = 3
+    _c8 = 4
+    _c9 = 5
+    _c13 = 6
+    _u7 = 7
+    _u8 = 8
     _u9 = 9
-    _u10 = 10
-    _c14 = 11
-    _c15 = 12
+    _c14 = 10
+    _c15 = 11
+    _u12 = 12
     _u13 = 13
     _u14 = 14
     _c16 = 15
-    _m1_0 = 16
-    _m2_0 = 17
-    _m2_1 = 18
-    _u19 = 19
-    _u20 = 20
-    _u22 = 21
-    _u23 = 22
-    _u24 = 23
-    _u25 = 24
-    _f0 = 25
-    _u27 = 26
-    _u28 = 27
-    _u30 = 28
-    _u31 = 29
-    _u32 = 30
-    _u33 = 31
-    _u34 = 32
-    _f1 = 33
-    _u36 = 34
-    _u37 = 35
-    _u39 = 36
-    _u40 = 37
-    _u41 = 38
-    _u42 = 39
-    _f2 = 40
-    _l1_0 = 41
-    _l2_0 = 42
-    _u47 = 43
-    _u48 = 44
-    _d1 = 45
-    _u50 = 46
-    _u51 = 47
-    _u52 = 48
-    _l2_1 = 49
-    _u54 = 50
+    _u16 = 16
+    _u17 = 17
+    _u18 = 18
+    _c17 = 19
+    _c18 = 20
+    _u21 = 21
+    _u22 = 22
+    _u23 = 23
+    _m1_0 = 24
+    _u25 = 25
+    _u26 = 26
+    _u27 = 27
+    _m2_0 = 28
+    _u29 = 29
+    _u30 = 30
+    _u31 = 31
+    _m2_1 = 32
+    _u33 = 33
+    _u34 = 34
+    _u36 = 35
+    _u37 = 36
+    _f0 = 37
+    _u39 = 38
+    _u40 = 39
+    _u42 = 40
+    _u43 = 41
+    _u44 = 42
+    _f1 = 43
+    _u46 = 44
+    _u47 = 45
+    _u49 = 46
+    _u50 = 47
+    _f2 = 48
+    _l1_0 = 49
+    _l2_0 = 50
     _u55 = 51
     _u56 = 52
-    _u57 = 53
+    _d1 = 53
     _u58 = 54
-    _d2 = 55
+    _u59 = 55
     _u60 = 56
-    _z1 = 57
+    _l2_1 = 57
     _u62 = 58
     _u63 = 59
     _u64 = 60
-    _z2 = 61
-    _x2 = 62
-    _u67 = 63
+    _u65 = 61
+    _u66 = 62
+    _d2 = 63
     _u68 = 64
-    _x1 = 65
+    _z1 = 65
     _u70 = 66
     _u71 = 67
     _u72 = 68
-    _u73 = 69
-    _x0 = 70
+    _z2 = 69
+    _x2 = 70
+    _u75 = 71
+    _u76 = 72
+    _x1 = 73
+    _u78 = 74
+    _u79 = 75
+    _u80 = 76
+    _u81 = 77
+    _x0 = 78
     for i in range(6):
         X[i, 0] = y[i]
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
-        # _c2 = -theta1
-        W[_c2, k] = -X[theta1, k]
-        # _c3 = _c2 + theta2
-        W[_c3, k] = W[_c2, k] + X[theta2, k]
-        # _c6 = _c2 + theta3
-        W[_c6, k] = W[_c2, k] + X[theta3, k]
-        # _c9 = theta2 - theta3
-        W[_c9, k] = X[theta2, k] - X[theta3, k]
-        # _c11 = theta2_dot**2
-        # _c11 = theta2_dot**2
-        _m = (k + 1)//2
-        _s = X[theta2_dot, _m - 1]*X[theta2_dot, k - _m + 1] if _m % 2 == 1 else 0.0
-        _r = 0.0
-        for _j in range(0, _m - 1, 2):
-            _s += X[theta2_dot, _j]*X[theta2_dot, k - _j]
-            _r += X[theta2_dot, _j + 1]*X[theta2_dot, k - 1 - _j]
-        W[_c11, k] = 2.0*(_s + _r) + (X[theta2_dot, k//2]*X[theta2_dot, k//2] if k % 2 == 0 else 0.0)
-        # _c12 = _c5*math.sin(_c3)
-        # _u5, _u6 = sin(_c3), cos(_c3)
+        # _c2 = math.sin(theta2)
+        # _c2, _c4 = sin(theta2), cos(theta2)
         if k == 0:
-            W[_u5, 0] = math.sin(W[_c3, 0])
-            W[_u6, 0] = math.cos(W[_c3, 0])
+            W[_c2, 0] = math.sin(X[theta2, 0])
+            W[_c4, 0] = math.cos(X[theta2, 0])
         else:
-            _ja = k*W[_c3, k]
-            _s = _ja*W[_u6, 0] if k % 2 == 1 else 0.0
-            _c = _ja*W[_u5, 0] if k % 2 == 1 else 0.0
+            _ja = k*X[theta2, k]
+            _s = _ja*W[_c4, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_c2, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*W[_c3, _j]
-                _jb = (_j + 1)*W[_c3, _j + 1]
-                _s += _ja*W[_u6, k - _j]
-                _c += _ja*W[_u5, k - _j]
-                _r += _jb*W[_u6, k - 1 - _j]
-                _d += _jb*W[_u5, k - 1 - _j]
-            W[_u5, k] = (_s + _r)*_ik
-            W[_u6, k] = -(_c + _d)*_ik
-        W[_c12, k] = _c5*W[_u5, k]
+                _ja = _j*X[theta2, _j]
+                _jb = (_j + 1)*X[theta2, _j + 1]
+                _s += _ja*W[_c4, k - _j]
+                _c += _ja*W[_c2, k - _j]
+                _r += _jb*W[_c4, k - 1 - _j]
+                _d += _jb*W[_c2, k - 1 - _j]
+            W[_c2, k] = (_s + _r)*_ik
+            W[_c4, k] = -(_c + _d)*_ik
+        # _c3 = math.sin(theta1)
+        # _c3, _c5 = sin(theta1), cos(theta1)
+        if k == 0:
+            W[_c3, 0] = math.sin(X[theta1, 0])
+            W[_c5, 0] = math.cos(X[theta1, 0])
+        else:
+            _ja = k*X[theta1, k]
+            _s = _ja*W[_c5, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_c3, 0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
+                _ja = _j*X[theta1, _j]
+                _jb = (_j + 1)*X[theta1, _j + 1]
+                _s += _ja*W[_c5, k - _j]
+                _c += _ja*W[_c3, k - _j]
+                _r += _jb*W[_c5, k - 1 - _j]
+                _d += _jb*W[_c3, k - 1 - _j]
+            W[_c3, k] = (_s + _r)*_ik
+            W[_c5, k] = -(_c + _d)*_ik
+        # _c4 = math.cos(theta2)
+        # _c5 = math.cos(theta1)
+        # _c8 = math.sin(theta3)
+        # _c8, _c9 = sin(theta3), cos(theta3)
+        if k == 0:
+            W[_c8, 0] = math.sin(X[theta3, 0])
+            W[_c9, 0] = math.cos(X[theta3, 0])
+        else:
+            _ja = k*X[theta3, k]
+            _s = _ja*W[_c9, 0] if k % 2 == 1 else 0.0
+            _c = _ja*W[_c8, 0] if k % 2 == 1 else 0.0
+            _r = 0.0
+            _d = 0.0
+            for _j in range(1, k, 2):
+                _ja = _j*X[theta3, _j]
+                _jb = (_j + 1)*X[theta3, _j + 1]
+                _s += _ja*W[_c9, k - _j]
+                _c += _ja*W[_c8, k - _j]
+                _r += _jb*W[_c9, k - 1 - _j]
+                _d += _jb*W[_c8, k - 1 - _j]
+            W[_c8, k] = (_s + _r)*_ik
+            W[_c9, k] = -(_c + _d)*_ik
+        # _c9 = math.cos(theta3)
         # _c13 = theta3_dot**2
         # _c13 = theta3_dot**2
         _m = (k + 1)//2
@@ -2938,258 +2977,264 @@ def taylor_coefficients(t, y, p, X, W):
             _s += X[theta3_dot, _j]*X[theta3_dot, k - _j]
             _r += X[theta3_dot, _j + 1]*X[theta3_dot, k - 1 - _j]
         W[_c13, k] = 2.0*(_s + _r) + (X[theta3_dot, k//2]*X[theta3_dot, k//2] if k % 2 == 0 else 0.0)
-        # _c14 = _c8*math.sin(_c6)
-        # _u9, _u10 = sin(_c6), cos(_c6)
-        if k == 0:
-            W[_u9, 0] = math.sin(W[_c6, 0])
-            W[_u10, 0] = math.cos(W[_c6, 0])
-        else:
-            _ja = k*W[_c6, k]
-            _s = _ja*W[_u10, 0] if k % 2 == 1 else 0.0
-            _c = _ja*W[_u9, 0] if k % 2 == 1 else 0.0
-            _r = 0.0
-            _d = 0.0
-            for _j in range(1, k, 2):
-                _ja = _j*W[_c6, _j]
-                _jb = (_j + 1)*W[_c6, _j + 1]
-                _s += _ja*W[_u10, k - _j]
-                _c += _ja*W[_u9, k - _j]
-                _r += _jb*W[_u10, k - 1 - _j]
-                _d += _jb*W[_u9, k - 1 - _j]
-            W[_u9, k] = (_s + _r)*_ik
-            W[_u10, k] = -(_c + _d)*_ik
-        W[_c14, k] = _c8*W[_u9, k]
-        # _c15 = theta1_dot**2
-        # _c15 = theta1_dot**2
+        # _c14 = _c11*(_c5*_c8 - _c3*_c9)
+        # _u7 = _c5*_c8
+        _s = W[_c5, k]*W[_c8, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c5, _j]*W[_c8, k - _j]
+            _r += W[_c5, _j + 1]*W[_c8, k - 1 - _j]
+        W[_u7, k] = _s + _r
+        # _u8 = _c3*_c9
+        _s = W[_c3, k]*W[_c9, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c3, _j]*W[_c9, k - _j]
+            _r += W[_c3, _j + 1]*W[_c9, k - 1 - _j]
+        W[_u8, k] = _s + _r
+        W[_u9, k] = W[_u7, k] - W[_u8, k]
+        W[_c14, k] = _c11*W[_u9, k]
+        # _c15 = theta2_dot**2
+        # _c15 = theta2_dot**2
+        _m = (k + 1)//2
+        _s = X[theta2_dot, _m - 1]*X[theta2_dot, k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += X[theta2_dot, _j]*X[theta2_dot, k - _j]
+            _r += X[theta2_dot, _j + 1]*X[theta2_dot, k - 1 - _j]
+        W[_c15, k] = 2.0*(_s + _r) + (X[theta2_dot, k//2]*X[theta2_dot, k//2] if k % 2 == 0 else 0.0)
+        # _c16 = _c7*(_c2*_c5 - _c3*_c4)
+        # _u12 = _c2*_c5
+        _s = W[_c2, k]*W[_c5, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c2, _j]*W[_c5, k - _j]
+            _r += W[_c2, _j + 1]*W[_c5, k - 1 - _j]
+        W[_u12, k] = _s + _r
+        # _u13 = _c3*_c4
+        _s = W[_c3, k]*W[_c4, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c3, _j]*W[_c4, k - _j]
+            _r += W[_c3, _j + 1]*W[_c4, k - 1 - _j]
+        W[_u13, k] = _s + _r
+        W[_u14, k] = W[_u12, k] - W[_u13, k]
+        W[_c16, k] = _c7*W[_u14, k]
+        # _c17 = _c12*(_c2*_c9 - _c4*_c8)
+        # _u16 = _c2*_c9
+        _s = W[_c2, k]*W[_c9, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c2, _j]*W[_c9, k - _j]
+            _r += W[_c2, _j + 1]*W[_c9, k - 1 - _j]
+        W[_u16, k] = _s + _r
+        # _u17 = _c4*_c8
+        _s = W[_c4, k]*W[_c8, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c4, _j]*W[_c8, k - _j]
+            _r += W[_c4, _j + 1]*W[_c8, k - 1 - _j]
+        W[_u17, k] = _s + _r
+        W[_u18, k] = W[_u16, k] - W[_u17, k]
+        W[_c17, k] = _c12*W[_u18, k]
+        # _c18 = theta1_dot**2
+        # _c18 = theta1_dot**2
         _m = (k + 1)//2
         _s = X[theta1_dot, _m - 1]*X[theta1_dot, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
             _s += X[theta1_dot, _j]*X[theta1_dot, k - _j]
             _r += X[theta1_dot, _j + 1]*X[theta1_dot, k - 1 - _j]
-        W[_c15, k] = 2.0*(_s + _r) + (X[theta1_dot, k//2]*X[theta1_dot, k//2] if k % 2 == 0 else 0.0)
-        # _c16 = _c10*math.sin(_c9)
-        # _u13, _u14 = sin(_c9), cos(_c9)
-        if k == 0:
-            W[_u13, 0] = math.sin(W[_c9, 0])
-            W[_u14, 0] = math.cos(W[_c9, 0])
-        else:
-            _ja = k*W[_c9, k]
-            _s = _ja*W[_u14, 0] if k % 2 == 1 else 0.0
-            _c = _ja*W[_u13, 0] if k % 2 == 1 else 0.0
-            _r = 0.0
-            _d = 0.0
-            for _j in range(1, k, 2):
-                _ja = _j*W[_c9, _j]
-                _jb = (_j + 1)*W[_c9, _j + 1]
-                _s += _ja*W[_u14, k - _j]
-                _c += _ja*W[_u13, k - _j]
-                _r += _jb*W[_u14, k - 1 - _j]
-                _d += _jb*W[_u13, k - 1 - _j]
-            W[_u13, k] = (_s + _r)*_ik
-            W[_u14, k] = -(_c + _d)*_ik
-        W[_c16, k] = _c10*W[_u13, k]
-        # _m1_0 = _c5*math.cos(_c3)
-        W[_m1_0, k] = _c5*W[_u6, k]
-        # _m2_0 = _c8*math.cos(_c6)
-        W[_m2_0, k] = _c8*W[_u10, k]
-        # _m2_1 = _c10*math.cos(_c9)
-        W[_m2_1, k] = _c10*W[_u14, k]
-        # _f0 = _c11*_c12 + _c13*_c14 - _c1*g*l1*math.sin(theta1)
-        # _u19 = _c11*_c12
-        _s = W[_c11, k]*W[_c12, 0] if k % 2 == 0 else 0.0
+        W[_c18, k] = 2.0*(_s + _r) + (X[theta1_dot, k//2]*X[theta1_dot, k//2] if k % 2 == 0 else 0.0)
+        # _m1_0 = _c7*(_c2*_c3 + _c4*_c5)
+        # _u21 = _c2*_c3
+        _s = W[_c2, k]*W[_c3, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c11, _j]*W[_c12, k - _j]
-            _r += W[_c11, _j + 1]*W[_c12, k - 1 - _j]
-        W[_u19, k] = _s + _r
-        # _u20 = _c13*_c14
+            _s += W[_c2, _j]*W[_c3, k - _j]
+            _r += W[_c2, _j + 1]*W[_c3, k - 1 - _j]
+        W[_u21, k] = _s + _r
+        # _u22 = _c4*_c5
+        _s = W[_c4, k]*W[_c5, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c4, _j]*W[_c5, k - _j]
+            _r += W[_c4, _j + 1]*W[_c5, k - 1 - _j]
+        W[_u22, k] = _s + _r
+        W[_u23, k] = W[_u21, k] + W[_u22, k]
+        W[_m1_0, k] = _c7*W[_u23, k]
+        # _m2_0 = _c11*(_c3*_c8 + _c5*_c9)
+        # _u25 = _c3*_c8
+        _s = W[_c3, k]*W[_c8, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c3, _j]*W[_c8, k - _j]
+            _r += W[_c3, _j + 1]*W[_c8, k - 1 - _j]
+        W[_u25, k] = _s + _r
+        # _u26 = _c5*_c9
+        _s = W[_c5, k]*W[_c9, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c5, _j]*W[_c9, k - _j]
+            _r += W[_c5, _j + 1]*W[_c9, k - 1 - _j]
+        W[_u26, k] = _s + _r
+        W[_u27, k] = W[_u25, k] + W[_u26, k]
+        W[_m2_0, k] = _c11*W[_u27, k]
+        # _m2_1 = _c12*(_c2*_c8 + _c4*_c9)
+        # _u29 = _c2*_c8
+        _s = W[_c2, k]*W[_c8, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c2, _j]*W[_c8, k - _j]
+            _r += W[_c2, _j + 1]*W[_c8, k - 1 - _j]
+        W[_u29, k] = _s + _r
+        # _u30 = _c4*_c9
+        _s = W[_c4, k]*W[_c9, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c4, _j]*W[_c9, k - _j]
+            _r += W[_c4, _j + 1]*W[_c9, k - 1 - _j]
+        W[_u30, k] = _s + _r
+        W[_u31, k] = W[_u29, k] + W[_u30, k]
+        W[_m2_1, k] = _c12*W[_u31, k]
+        # _f0 = _c13*_c14 + _c15*_c16 - _c1*_c3*g*l1
+        # _u33 = _c13*_c14
         _s = W[_c13, k]*W[_c14, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
             _s += W[_c13, _j]*W[_c14, k - _j]
             _r += W[_c13, _j + 1]*W[_c14, k - 1 - _j]
-        W[_u20, k] = _s + _r
-        # _u22, _u23 = sin(theta1), cos(theta1)
-        if k == 0:
-            W[_u22, 0] = math.sin(X[theta1, 0])
-            W[_u23, 0] = math.cos(X[theta1, 0])
-        else:
-            _ja = k*X[theta1, k]
-            _s = _ja*W[_u23, 0] if k % 2 == 1 else 0.0
-            _c = _ja*W[_u22, 0] if k % 2 == 1 else 0.0
-            _r = 0.0
-            _d = 0.0
-            for _j in range(1, k, 2):
-                _ja = _j*X[theta1, _j]
-                _jb = (_j + 1)*X[theta1, _j + 1]
-                _s += _ja*W[_u23, k - _j]
-                _c += _ja*W[_u22, k - _j]
-                _r += _jb*W[_u23, k - 1 - _j]
-                _d += _jb*W[_u22, k - 1 - _j]
-            W[_u22, k] = (_s + _r)*_ik
-            W[_u23, k] = -(_c + _d)*_ik
-        W[_u24, k] = _k21*W[_u22, k]
-        W[_u25, k] = W[_u19, k] + W[_u20, k]
-        W[_f0, k] = W[_u25, k] - W[_u24, k]
-        # _f1 = -_c12*_c15 - _c13*_c16 - _c4*g*math.sin(theta2)
-        # _u27 = _c12*_c15
-        _s = W[_c12, k]*W[_c15, 0] if k % 2 == 0 else 0.0
+        W[_u33, k] = _s + _r
+        # _u34 = _c15*_c16
+        _s = W[_c15, k]*W[_c16, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c12, _j]*W[_c15, k - _j]
-            _r += W[_c12, _j + 1]*W[_c15, k - 1 - _j]
-        W[_u27, k] = _s + _r
-        # _u28 = _c13*_c16
-        _s = W[_c13, k]*W[_c16, 0] if k % 2 == 0 else 0.0
+            _s += W[_c15, _j]*W[_c16, k - _j]
+            _r += W[_c15, _j + 1]*W[_c16, k - 1 - _j]
+        W[_u34, k] = _s + _r
+        W[_u36, k] = _k35*W[_c3, k]
+        W[_u37, k] = W[_u33, k] + W[_u34, k]
+        W[_f0, k] = W[_u37, k] - W[_u36, k]
+        # _f1 = -_c13*_c17 - _c16*_c18 - _c2*_c6*g
+        # _u39 = _c13*_c17
+        _s = W[_c13, k]*W[_c17, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c13, _j]*W[_c16, k - _j]
-            _r += W[_c13, _j + 1]*W[_c16, k - 1 - _j]
-        W[_u28, k] = _s + _r
-        # _u30, _u31 = sin(theta2), cos(theta2)
-        if k == 0:
-            W[_u30, 0] = math.sin(X[theta2, 0])
-            W[_u31, 0] = math.cos(X[theta2, 0])
-        else:
-            _ja = k*X[theta2, k]
-            _s = _ja*W[_u31, 0] if k % 2 == 1 else 0.0
-            _c = _ja*W[_u30, 0] if k % 2 == 1 else 0.0
-            _r = 0.0
-            _d = 0.0
-            for _j in range(1, k, 2):
-                _ja = _j*X[theta2, _j]
-                _jb = (_j + 1)*X[theta2, _j + 1]
-                _s += _ja*W[_u31, k - _j]
-                _c += _ja*W[_u30, k - _j]
-                _r += _jb*W[_u31, k - 1 - _j]
-                _d += _jb*W[_u30, k - 1 - _j]
-            W[_u30, k] = (_s + _r)*_ik
-            W[_u31, k] = -(_c + _d)*_ik
-        W[_u32, k] = _k29*W[_u30, k]
-        W[_u33, k] = -W[_u27, k]
-        W[_u34, k] = W[_u33, k] - W[_u28, k]
-        W[_f1, k] = W[_u34, k] - W[_u32, k]
-        # _f2 = _c11*_c16 - _c14*_c15 - _c7*g*math.sin(theta3)
-        # _u36 = _c11*_c16
-        _s = W[_c11, k]*W[_c16, 0] if k % 2 == 0 else 0.0
+            _s += W[_c13, _j]*W[_c17, k - _j]
+            _r += W[_c13, _j + 1]*W[_c17, k - 1 - _j]
+        W[_u39, k] = _s + _r
+        # _u40 = _c16*_c18
+        _s = W[_c16, k]*W[_c18, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c11, _j]*W[_c16, k - _j]
-            _r += W[_c11, _j + 1]*W[_c16, k - 1 - _j]
-        W[_u36, k] = _s + _r
-        # _u37 = _c14*_c15
-        _s = W[_c14, k]*W[_c15, 0] if k % 2 == 0 else 0.0
+            _s += W[_c16, _j]*W[_c18, k - _j]
+            _r += W[_c16, _j + 1]*W[_c18, k - 1 - _j]
+        W[_u40, k] = _s + _r
+        W[_u42, k] = _k41*W[_c2, k]
+        W[_u43, k] = -W[_u39, k]
+        W[_u44, k] = W[_u43, k] - W[_u40, k]
+        W[_f1, k] = W[_u44, k] - W[_u42, k]
+        # _f2 = _c15*_c17 - _c14*_c18 - _c10*_c8*g
+        # _u46 = _c15*_c17
+        _s = W[_c15, k]*W[_c17, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c14, _j]*W[_c15, k - _j]
-            _r += W[_c14, _j + 1]*W[_c15, k - 1 - _j]
-        W[_u37, k] = _s + _r
-        # _u39, _u40 = sin(theta3), cos(theta3)
-        if k == 0:
-            W[_u39, 0] = math.sin(X[theta3, 0])
-            W[_u40, 0] = math.cos(X[theta3, 0])
-        else:
-            _ja = k*X[theta3, k]
-            _s = _ja*W[_u40, 0] if k % 2 == 1 else 0.0
-            _c = _ja*W[_u39, 0] if k % 2 == 1 else 0.0
-            _r = 0.0
-            _d = 0.0
-            for _j in range(1, k, 2):
-                _ja = _j*X[theta3, _j]
-                _jb = (_j + 1)*X[theta3, _j + 1]
-                _s += _ja*W[_u40, k - _j]
-                _c += _ja*W[_u39, k - _j]
-                _r += _jb*W[_u40, k - 1 - _j]
-                _d += _jb*W[_u39, k - 1 - _j]
-            W[_u39, k] = (_s + _r)*_ik
-            W[_u40, k] = -(_c + _d)*_ik
-        W[_u41, k] = _k38*W[_u39, k]
-        W[_u42, k] = W[_u36, k] - W[_u37, k]
-        W[_f2, k] = W[_u42, k] - W[_u41, k]
+            _s += W[_c15, _j]*W[_c17, k - _j]
+            _r += W[_c15, _j + 1]*W[_c17, k - 1 - _j]
+        W[_u46, k] = _s + _r
+        # _u47 = _c14*_c18
+        _s = W[_c14, k]*W[_c18, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c14, _j]*W[_c18, k - _j]
+            _r += W[_c14, _j + 1]*W[_c18, k - 1 - _j]
+        W[_u47, k] = _s + _r
+        W[_u49, k] = _k48*W[_c8, k]
+        W[_u50, k] = W[_u46, k] - W[_u47, k]
+        W[_f2, k] = W[_u50, k] - W[_u49, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        W[_l1_0, k] = _k44*W[_m1_0, k]
-        W[_l2_0, k] = _k44*W[_m2_0, k]
-        # _u47 = _l1_0**2
+        W[_l1_0, k] = _k52*W[_m1_0, k]
+        W[_l2_0, k] = _k52*W[_m2_0, k]
+        # _u55 = _l1_0**2
         _m = (k + 1)//2
         _s = W[_l1_0, _m - 1]*W[_l1_0, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
             _s += W[_l1_0, _j]*W[_l1_0, k - _j]
             _r += W[_l1_0, _j + 1]*W[_l1_0, k - 1 - _j]
-        W[_u47, k] = 2.0*(_s + _r) + (W[_l1_0, k//2]*W[_l1_0, k//2] if k % 2 == 0 else 0.0)
-        W[_u48, k] = _m0_0*W[_u47, k]
-        W[_d1, k] = _m1_1 - W[_u48, k] if k == 0 else -W[_u48, k]
+        W[_u55, k] = 2.0*(_s + _r) + (W[_l1_0, k//2]*W[_l1_0, k//2] if k % 2 == 0 else 0.0)
+        W[_u56, k] = _m0_0*W[_u55, k]
+        W[_d1, k] = _m1_1 - W[_u56, k] if k == 0 else -W[_u56, k]
         if k == 0 and not W[_d1, 0] > _PIVOT_TOLERANCE*abs(_m1_1):
             return 2
-        # _u50 = _l2_0*_l1_0
+        # _u58 = _l2_0*_l1_0
         _s = W[_l2_0, k]*W[_l1_0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
             _s += W[_l2_0, _j]*W[_l1_0, k - _j]
             _r += W[_l2_0, _j + 1]*W[_l1_0, k - 1 - _j]
-        W[_u50, k] = _s + _r
-        W[_u51, k] = _m0_0*W[_u50, k]
-        W[_u52, k] = W[_m2_1, k] - W[_u51, k]
-        # _l2_1 = _u52/_d1
-        _s = W[_u52, k] - (W[_d1, k]*W[_l2_1, 0] if k % 2 == 1 else 0.0)
+        W[_u58, k] = _s + _r
+        W[_u59, k] = _m0_0*W[_u58, k]
+        W[_u60, k] = W[_m2_1, k] - W[_u59, k]
+        # _l2_1 = _u60/_d1
+        _s = W[_u60, k] - (W[_d1, k]*W[_l2_1, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
             _s -= W[_d1, _j]*W[_l2_1, k - _j]
             _r += W[_d1, _j + 1]*W[_l2_1, k - 1 - _j]
         W[_l2_1, k] = (_s - _r)/W[_d1, 0]
-        # _u54 = _l2_0**2
+        # _u62 = _l2_0**2
         _m = (k + 1)//2
         _s = W[_l2_0, _m - 1]*W[_l2_0, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
             _s += W[_l2_0, _j]*W[_l2_0, k - _j]
             _r += W[_l2_0, _j + 1]*W[_l2_0, k - 1 - _j]
-        W[_u54, k] = 2.0*(_s + _r) + (W[_l2_0, k//2]*W[_l2_0, k//2] if k % 2 == 0 else 0.0)
-        W[_u55, k] = _m0_0*W[_u54, k]
-        W[_u56, k] = _m2_2 - W[_u55, k] if k == 0 else -W[_u55, k]
-        # _u57 = _l2_1**2
+        W[_u62, k] = 2.0*(_s + _r) + (W[_l2_0, k//2]*W[_l2_0, k//2] if k % 2 == 0 else 0.0)
+        W[_u63, k] = _m0_0*W[_u62, k]
+        W[_u64, k] = _m2_2 - W[_u63, k] if k == 0 else -W[_u63, k]
+        # _u65 = _l2_1**2
         _m = (k + 1)//2
         _s = W[_l2_1, _m - 1]*W[_l2_1, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
             _s += W[_l2_1, _j]*W[_l2_1, k - _j]
             _r += W[_l2_1, _j + 1]*W[_l2_1, k - 1 - _j]
-        W[_u57, k] = 2.0*(_s + _r) + (W[_l2_1, k//2]*W[_l2_1, k//2] if k % 2 == 0 else 0.0)
-        # _u58 = _u57*_d1
-        _s = W[_u57, k]*W[_d1, 0] if k % 2 == 0 else 0.0
+        W[_u65, k] = 2.0*(_s + _r) + (W[_l2_1, k//2]*W[_l2_1, k//2] if k % 2 == 0 else 0.0)
+        # _u66 = _u65*_d1
+        _s = W[_u65, k]*W[_d1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_u57, _j]*W[_d1, k - _j]
-            _r += W[_u57, _j + 1]*W[_d1, k - 1 - _j]
-        W[_u58, k] = _s + _r
-        W[_d2, k] = W[_u56, k] - W[_u58, k]
+            _s += W[_u65, _j]*W[_d1, k - _j]
+            _r += W[_u65, _j + 1]*W[_d1, k - 1 - _j]
+        W[_u66, k] = _s + _r
+        W[_d2, k] = W[_u64, k] - W[_u66, k]
         if k == 0 and not W[_d2, 0] > _PIVOT_TOLERANCE*abs(_m2_2):
             return 3
-        # _u60 = _l1_0*_f0
+        # _u68 = _l1_0*_f0
         _s = W[_l1_0, k]*W[_f0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
             _s += W[_l1_0, _j]*W[_f0, k - _j]
             _r += W[_l1_0, _j + 1]*W[_f0, k - 1 - _j]
-        W[_u60, k] = _s + _r
-        W[_z1, k] = W[_f1, k] - W[_u60, k]
-        # _u62 = _l2_0*_f0
+        W[_u68, k] = _s + _r
+        W[_z1, k] = W[_f1, k] - W[_u68, k]
+        # _u70 = _l2_0*_f0
         _s = W[_l2_0, k]*W[_f0, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
             _s += W[_l2_0, _j]*W[_f0, k - _j]
             _r += W[_l2_0, _j + 1]*W[_f0, k - 1 - _j]
-        W[_u62, k] = _s + _r
-        W[_u63, k] = W[_f2, k] - W[_u62, k]
-        # _u64 = _l2_1*_z1
+        W[_u70, k] = _s + _r
+        W[_u71, k] = W[_f2, k] - W[_u70, k]
+        # _u72 = _l2_1*_z1
         _s = W[_l2_1, k]*W[_z1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
             _s += W[_l2_1, _j]*W[_z1, k - _j]
             _r += W[_l2_1, _j + 1]*W[_z1, k - 1 - _j]
-        W[_u64, k] = _s + _r
-        W[_z2, k] = W[_u63, k] - W[_u64, k]
+        W[_u72, k] = _s + _r
+        W[_z2, k] = W[_u71, k] - W[_u72, k]
         # _x2 = _z2/_d2
         _s = W[_z2, k] - (W[_d2, k]*W[_x2, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
@@ -3197,38 +3242,38 @@ def taylor_coefficients(t, y, p, X, W):
             _s -= W[_d2, _j]*W[_x2, k - _j]
             _r += W[_d2, _j + 1]*W[_x2, k - 1 - _j]
         W[_x2, k] = (_s - _r)/W[_d2, 0]
-        # _u67 = _z1/_d1
-        _s = W[_z1, k] - (W[_d1, k]*W[_u67, 0] if k % 2 == 1 else 0.0)
+        # _u75 = _z1/_d1
+        _s = W[_z1, k] - (W[_d1, k]*W[_u75, 0] if k % 2 == 1 else 0.0)
         _r = 0.0
         for _j in range(1, k, 2):
-            _s -= W[_d1, _j]*W[_u67, k - _j]
-            _r += W[_d1, _j + 1]*W[_u67, k - 1 - _j]
-        W[_u67, k] = (_s - _r)/W[_d1, 0]
-        # _u68 = _l2_1*_x2
+            _s -= W[_d1, _j]*W[_u75, k - _j]
+            _r += W[_d1, _j + 1]*W[_u75, k - 1 - _j]
+        W[_u75, k] = (_s - _r)/W[_d1, 0]
+        # _u76 = _l2_1*_x2
         _s = W[_l2_1, k]*W[_x2, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
             _s += W[_l2_1, _j]*W[_x2, k - _j]
             _r += W[_l2_1, _j + 1]*W[_x2, k - 1 - _j]
-        W[_u68, k] = _s + _r
-        W[_x1, k] = W[_u67, k] - W[_u68, k]
-        W[_u70, k] = _k44*W[_f0, k]
-        # _u71 = _l1_0*_x1
+        W[_u76, k] = _s + _r
+        W[_x1, k] = W[_u75, k] - W[_u76, k]
+        W[_u78, k] = _k52*W[_f0, k]
+        # _u79 = _l1_0*_x1
         _s = W[_l1_0, k]*W[_x1, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
             _s += W[_l1_0, _j]*W[_x1, k - _j]
             _r += W[_l1_0, _j + 1]*W[_x1, k - 1 - _j]
-        W[_u71, k] = _s + _r
-        W[_u72, k] = W[_u70, k] - W[_u71, k]
-        # _u73 = _l2_0*_x2
+        W[_u79, k] = _s + _r
+        W[_u80, k] = W[_u78, k] - W[_u79, k]
+        # _u81 = _l2_0*_x2
         _s = W[_l2_0, k]*W[_x2, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
             _s += W[_l2_0, _j]*W[_x2, k - _j]
             _r += W[_l2_0, _j + 1]*W[_x2, k - 1 - _j]
-        W[_u73, k] = _s + _r
-        W[_x0, k] = W[_u72, k] - W[_u73, k]
+        W[_u81, k] = _s + _r
+        W[_x0, k] = W[_u80, k] - W[_u81, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = X[theta1_dot, k]*_ik1
         X[1, k + 1] = X[theta2_dot, k]*_ik1
@@ -3239,8 +3284,8 @@ def taylor_coefficients(t, y, p, X, W):
     return 0
 
 
-#: Rows of the work array of `taylor_coefficients` (71 series operations per order).
-TAYLOR_WORK = 71
+#: Rows of the work array of `taylor_coefficients` (82 series operations per order).
+TAYLOR_WORK = 79
 
 
 # ----------------------------------------------------------------------------

@@ -85,10 +85,39 @@ def _symengine_cse(exprs: list, mapping: dict) -> tuple[list, list]:
     long chains, with no more operations.  Temporaries are ``_c0, _c1, ...``; every symbol
     comes back real, as in the sympy path."""
     rename = {se.sympify(k): se.Symbol(v.name) for k, v in mapping.items()}
-    pairs, reduced = se.cse([se.sympify(e).xreplace(rename) for e in exprs])
+    images = [se.sympify(e).xreplace(rename) for e in exprs]
+    angles = _angle_sums(images)
+    pairs, reduced = se.cse([e.xreplace(angles) for e in images] if angles else images)
     symbols = {str(symbol): sp.Symbol(f"_c{k}", real=True) for k, (symbol, _) in enumerate(pairs)}
     back = _SympyFromSymengine(symbols)
     return [(symbols[str(s)], back(e)) for s, e in pairs], [back(e) for e in reduced]
+
+
+def _angle_sums(images: list) -> dict:
+    """sin and cos of ±a ± b (a, b symbols) as products of sin and cos of a and b, where that
+    leaves fewer calls of sin and cos: a chain's sin(θi − θj) and cos(θi − θj) for every pair,
+    n(n − 1) calls, become products of the 2n values sin θi, cos θi.  A call costs 10-20 ns at
+    run time, a product about 1 ns; the double pendulum (4 calls either way) is left as it is.
+    """
+    trig = set().union(*(e.atoms(se.sin, se.cos) for e in images))
+    sums = {}
+    for f in trig:
+        terms = f.args[0].as_coefficients_dict()
+        angles = {s: c for s, c in terms.items() if c != 0}
+        if len(angles) == 2 and all(isinstance(s, se.Symbol) and c in (1, -1) for s, c in angles.items()):
+            sums[f] = angles
+    singles = {g(s) for angles in sums.values() for s in angles for g in (se.sin, se.cos)}
+    if len((trig - sums.keys()) | singles) >= len(trig):
+        return {}
+    replacement = {}
+    for f, angles in sums.items():
+        (a, ca), (b, cb) = sorted(angles.items(), key=lambda item: str(item[0]))
+        sin_a, sin_b = ca * se.sin(a), cb * se.sin(b)  # sin(±a) = ±sin a
+        if type(f).__name__ == "sin":
+            replacement[f] = sin_a * se.cos(b) + se.cos(a) * sin_b
+        else:
+            replacement[f] = se.cos(a) * se.cos(b) - sin_a * sin_b
+    return replacement
 
 
 class _SympyFromSymengine:
