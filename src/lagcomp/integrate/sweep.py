@@ -475,7 +475,11 @@ def _run_on_dask(client, spec, task: _Task, Y0, P, out, progress) -> np.ndarray:
     n_traj = Y0.shape[0]
     slots = max(1, sum(client.nthreads().values()))
     bounds = np.linspace(0, n_traj, min(n_traj, 4 * slots) + 1).astype(int)
-    [spec_future] = client.scatter([spec], broadcast=True)
+    # hash=False: a fresh key per sweep.  With content hashing, a second sweep of the same model
+    # reuses the first one's key, and the release of the first sweep's future can reach the
+    # scheduler after the new scatter and delete the data under the new tasks ("lost
+    # dependencies": the LocalCluster test failed so now and then).
+    [spec_future] = client.scatter([spec], broadcast=True, hash=False)
     futures = {client.submit(_remote_chunk, spec_future, task, Y0[a:b], P[a:b], pure=False): (a, b)
                for a, b in zip(bounds[:-1], bounds[1:])}
     done = np.zeros(n_traj, dtype=bool)
