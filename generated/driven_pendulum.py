@@ -32,7 +32,7 @@ def rhs(t, y, p, out):
     _c0 = l*m
     out[0] = theta_dot
     _m0_0 = m*l**2
-    _f0 = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.sin(theta)
+    _f0 = (-_c0*g + A*_c0*Omega**2*_cos(Omega*t))*_sin(theta)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -87,7 +87,7 @@ def forcing(t, y, p, out):
     A = p[3]
     Omega = p[4]
     _c0 = l*m
-    out[0] = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.sin(theta)
+    out[0] = (-_c0*g + A*_c0*Omega**2*_cos(Omega*t))*_sin(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -101,8 +101,8 @@ def energy(t, y, p):
     A = p[3]
     Omega = p[4]
     _c0 = Omega*t
-    _c1 = math.cos(theta)
-    return (0.5)*m*((l*theta_dot*math.sin(theta) - A*Omega*math.sin(_c0))**2 + _c1**2*l**2*theta_dot**2) + g*m*(A*math.cos(_c0) - _c1*l)
+    _c1 = _cos(theta)
+    return (0.5)*m*((l*theta_dot*_sin(theta) - A*Omega*_sin(_c0))**2 + _c1**2*l**2*theta_dot**2) + g*m*(A*_cos(_c0) - _c1*l)
 
 
 @njit(cache=True, error_model="numpy")
@@ -118,8 +118,8 @@ def energy_function(t, y, p):
     _c0 = (0.5)*m
     _c1 = _c0*A**2*Omega**2
     _c2 = g*m
-    _c3 = math.cos(Omega*t)
-    return -_c1 + _c1*_c3**2 + A*_c2*_c3 + _c0*l**2*theta_dot**2 - _c2*l*math.cos(theta)
+    _c3 = _cos(Omega*t)
+    return -_c1 + _c1*_c3**2 + A*_c2*_c3 + _c0*l**2*theta_dot**2 - _c2*l*_cos(theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -131,7 +131,7 @@ def momenta(t, y, p, out):
     l = p[1]
     A = p[3]
     Omega = p[4]
-    out[0] = m*theta_dot*l**2 - A*Omega*l*m*math.sin(theta)*math.sin(Omega*t)
+    out[0] = m*theta_dot*l**2 - A*Omega*l*m*_sin(theta)*_sin(Omega*t)
 
 
 @njit(cache=True, error_model="numpy")
@@ -145,7 +145,7 @@ def momentum_rate(t, y, p, out):
     A = p[3]
     Omega = p[4]
     _c0 = l*m
-    out[0] = -_c0*g*math.sin(theta) - A*Omega*_c0*theta_dot*math.cos(theta)*math.sin(Omega*t)
+    out[0] = -_c0*g*_sin(theta) - A*Omega*_c0*theta_dot*_cos(theta)*_sin(Omega*t)
 
 
 @njit(cache=True, error_model="numpy")
@@ -164,7 +164,7 @@ def rest_partials(t, y, p, out):
     A = p[3]
     Omega = p[4]
     _c0 = l*m
-    out[0, 0, 0] = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.cos(theta)
+    out[0, 0, 0] = (-_c0*g + A*_c0*Omega**2*_cos(Omega*t))*_cos(theta)
     out[1, 0, 0] = 0.0
 
 
@@ -179,7 +179,7 @@ def velocities(t, y, p, out):
     Omega = p[4]
     _p_theta = y[1]
     _m0_0 = m*l**2
-    _f0 = _p_theta + A*Omega*l*m*math.sin(theta)*math.sin(Omega*t)
+    _f0 = _p_theta + A*Omega*l*m*_sin(theta)*_sin(Omega*t)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -203,12 +203,12 @@ def canonical_partials(t, y, p, out):
     A = p[3]
     Omega = p[4]
     _c0 = l*m
-    _c1 = _c0*math.cos(theta)
-    _c2 = A*Omega*math.sin(Omega*t)
+    _c1 = _c0*_cos(theta)
+    _c2 = A*Omega*_sin(Omega*t)
     _c3 = -_c1*_c2
     out[0, 0, 0] = m*l**2
     out[1, 0, 0] = _c3
-    out[2, 0, 0] = -_c1*g + _c0*_c2*theta_dot*math.sin(theta)
+    out[2, 0, 0] = -_c1*g + _c0*_c2*theta_dot*_sin(theta)
     out[3, 0, 0] = _c3
 
 
@@ -231,6 +231,97 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
         energy_out[k] = energy(ts[k], ys[k], p)
         energy_function_out[k] = energy_function(ts[k], ys[k], p)
         momenta(ts[k], ys[k], p, momenta_out[k])
+
+
+# ----------------------------------------------------------------------------
+# lagcomp/codegen/templates/trig.py
+
+"""sin and cos for the kernels: a *template*, appended to every generated module.
+
+The kernels print ``sin(x)`` and ``cos(x)`` as ``_sin(x)`` and ``_cos(x)``
+(``lagcomp.codegen.printer``), which are defined here: Cody–Waite reduction
+of x by π/2 in four parts (fdlibm's constants: the first three have 33
+significant bits, so k times each is exact for |k| < 2²⁰), then Cephes'
+minimax polynomials for sin and cos on [−π/4, π/4] (Cephes ``sin.c``).  The
+results are within 2 ulp of libm's, most of them equal (tests/test_trig.py).
+
+Why not libm: an integrator's stages depend on each other, so it waits for
+each kernel call to finish, and a libm ``sin`` is an opaque call of 10-15 ns
+with branches on the argument's size.  The polynomial is a few dozen
+arithmetic operations that LLVM schedules with the rest of the kernel, and
+``sin x`` and ``cos x`` of one argument share the reduction.  On the double
+pendulum (three sines and a cosine per ``rhs``) DOP853 runs about 1.4x
+faster (``python -m bench --sections adaptive``).
+
+* ``_sin``/``_cos``: scalar kernels.  For |x| > ``_TRIG_POLY_MAX`` (10⁵) they
+  call libm, where the reduction would start to lose accuracy (k·π/2 is
+  exact only while |k| < 2²⁰, |x| < 1.6·10⁶), and for non-finite x (NaN).
+* ``_vsin``/``_vcos``: the same polynomials without the branch, for the
+  batched kernels (``lanes.py``), whose loop over SIMD lanes LLVM vectorizes
+  only when it holds no call.  Accurate while |x| < 1.6·10⁶.
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+# sin(r) = r + r z S(z), cos(r) = 1 − z/2 + z² C(z), z = r², |r| ≤ π/4 (Cephes sin.c)
+_SIN_0, _SIN_1, _SIN_2 = 1.58962301576546568060e-10, -2.50507477628578072866e-8, 2.75573136213857245213e-6
+_SIN_3, _SIN_4, _SIN_5 = -1.98412698295895385996e-4, 8.33333333332211858878e-3, -1.66666666666666307295e-1
+_COS_0, _COS_1, _COS_2 = -1.13585365213876817300e-11, 2.08757008419747316778e-9, -2.75573141792967388112e-7
+_COS_3, _COS_4, _COS_5 = 2.48015872888517045348e-5, -1.38888888888730564116e-3, 4.16666666666665929218e-2
+# π/2 in four parts, the first three of 33 bits so that k times them is exact (fdlibm's pio2_1, pio2_2,
+# pio2_3, pio2_3t): r keeps its relative accuracy even next to a multiple of π/2
+_PIO2_1, _PIO2_2 = 1.57079632673412561417e+00, 6.07710050630396597660e-11
+_PIO2_3, _PIO2_4 = 2.02226624871116645580e-21, 8.47842766036889956997e-32
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _quadrant(x):
+    """x = k π/2 + r with |r| ≤ π/4: returns (k mod 4, sin r, cos r)."""
+    k = math.floor(x * 0.63661977236758134308 + 0.5)
+    r = (((x - k * _PIO2_1) - k * _PIO2_2) - k * _PIO2_3) - k * _PIO2_4
+    z = r * r
+    s = r + r * z * (((((_SIN_0 * z + _SIN_1) * z + _SIN_2) * z + _SIN_3) * z + _SIN_4) * z + _SIN_5)
+    c = 1.0 - 0.5 * z + z * z * (((((_COS_0 * z + _COS_1) * z + _COS_2) * z + _COS_3) * z + _COS_4) * z + _COS_5)
+    return np.int64(k) & 3, s, c
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _vsin(x):
+    """sin x, vectorizable (see the module docstring)."""
+    q, s, c = _quadrant(x)
+    v = c if q & 1 else s
+    return -v if q & 2 else v
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _vcos(x):
+    """cos x, vectorizable (see the module docstring)."""
+    q, s, c = _quadrant(x)
+    v = s if q & 1 else c
+    return -v if (q + 1) & 2 else v
+
+
+#: Above this |x|, ``_sin`` and ``_cos`` call libm (see the module docstring).
+_TRIG_POLY_MAX = 1e5
+
+
+@njit(cache=True, error_model="numpy")
+def _sin(x):
+    """sin x for the scalar kernels: the polynomial, or libm for huge or non-finite x."""
+    if abs(x) <= _TRIG_POLY_MAX:
+        return _vsin(x)
+    return math.sin(x)
+
+
+@njit(cache=True, error_model="numpy")
+def _cos(x):
+    """cos x for the scalar kernels: the polynomial, or libm for huge or non-finite x."""
+    if abs(x) <= _TRIG_POLY_MAX:
+        return _vcos(x)
+    return math.cos(x)
 
 
 # ----------------------------------------------------------------------------
@@ -1042,6 +1133,7 @@ def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
     K = np.empty((4, n))
     ytmp = np.empty(n)
     y_new = np.empty(n)
+    f_stage = np.empty(n)
     n_saved = 0
     residual_bound = residual_max[1] if residual_max.shape[0] > 1 else np.inf
     while True:
@@ -1062,7 +1154,8 @@ def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
 
         # One step of size h from (t_a, y): stage s is
         # K[s] = f(t_a + c h, y + c h K[s-1]) with c = 0, 1/2, 1/2, 1 (one
-        # rhs call site instead of four: less code for numba and LLVM).
+        # rhs call site instead of four: less code for numba and LLVM; no
+        # array views passed to it, as in dop853_run).
         h = t_b - t_a
         for s in range(4):
             if s == 0:
@@ -1071,13 +1164,18 @@ def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
                 c = 1.0
             else:
                 c = 0.5
-            if s > 0:
+            if s == 0:
+                for i in range(n):
+                    ytmp[i] = y[i]
+            else:
                 for i in range(n):
                     ytmp[i] = y[i] + c * h * K[s - 1, i]
-            status = rhs(t_a + c * h, y if s == 0 else ytmp, p, K[s])
+            status = rhs(t_a + c * h, ytmp, p, f_stage)
             counters[0] += 1
             if status != 0:
                 return _ODE_RHS_FAILED, n_saved
+            for i in range(n):
+                K[s, i] = f_stage[i]
         sixth = h / 6.0
         status = 0
         for i in range(n):
@@ -1146,6 +1244,7 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
     K = np.empty((n_k, n))
     y_new = np.empty(n)
     ytmp = np.empty(n)
+    f_stage = np.empty(n)
     Q = np.empty((n_power, n))  # dense-output coefficients; Q[0] is also
                                 # the error scale of the initial step
 
@@ -1263,36 +1362,36 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             # Stages K[1 .. s]: K[s] = f(t + c h, y + h sum_{j<s} a_j K[j])
             # with (a, c) = (A[s], C[s]), and for s = n_stages (B, 1): the
             # stage argument is then y_new and the stage the FSAL derivative.
-            # Zero coefficients are skipped (the DOP853 tableau is sparse).
+            # Zero coefficients are skipped (the tableaux are sparse).  No
+            # array views in this loop (A[s], K[s]): each one costs reference
+            # counting per stage, and rhs writes into f_stage, which is copied
+            # into K[s] (DOP853 on the double pendulum: 10-20% faster).
             status = 0
             for s in range(1, n_stages + 1):
-                if s < n_stages:
-                    w = A[s]
-                    c = C[s]
-                    arg = ytmp
-                else:
-                    w = B
-                    c = 1.0
-                    arg = y_new
+                last = s == n_stages
+                c = 1.0 if last else C[s]
                 for i in range(n):
-                    arg[i] = 0.0
+                    ytmp[i] = 0.0
                 for j in range(s):
-                    a = w[j]
+                    a = B[j] if last else A[s, j]
                     if a != 0.0:
                         for i in range(n):
-                            arg[i] += a * K[j, i]
+                            ytmp[i] += a * K[j, i]
                 for i in range(n):
-                    arg[i] = y[i] + h * arg[i]
-                    if s == n_stages and not np.isfinite(arg[i]):
-                        status = -1
-                if status != 0:
-                    break
-                status = rhs(t + c * h, arg, p, K[s])
-                counters[0] += 1
-                if status == 0:
+                    ytmp[i] = y[i] + h * ytmp[i]
+                if last:
                     for i in range(n):
-                        if not np.isfinite(K[s, i]):
+                        y_new[i] = ytmp[i]
+                        if not np.isfinite(ytmp[i]):
                             status = -1
+                    if status != 0:
+                        break
+                status = rhs(t + c * h, ytmp, p, f_stage)
+                counters[0] += 1
+                for i in range(n):
+                    K[s, i] = f_stage[i]
+                    if status == 0 and not np.isfinite(f_stage[i]):
+                        status = -1
                 if status != 0:
                     break
             if status > 0:
@@ -1447,6 +1546,7 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
     K = np.empty((n_all, n))
     y_new = np.empty(n)
     ytmp = np.empty(n)
+    f_stage = np.empty(n)
     F = np.empty((n_rows, n))   # dense-output coefficients; F[0] is also
                                 # the error scale of the initial step
 
@@ -1564,36 +1664,36 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             # Stages K[1 .. s]: K[s] = f(t + c h, y + h sum_{j<s} a_j K[j])
             # with (a, c) = (A[s], C[s]), and for s = n_stages (B, 1): the
             # stage argument is then y_new and the stage the FSAL derivative.
-            # Zero coefficients are skipped (the DOP853 tableau is sparse).
+            # Zero coefficients are skipped (the tableaux are sparse).  No
+            # array views in this loop (A[s], K[s]): each one costs reference
+            # counting per stage, and rhs writes into f_stage, which is copied
+            # into K[s] (DOP853 on the double pendulum: 10-20% faster).
             status = 0
             for s in range(1, n_stages + 1):
-                if s < n_stages:
-                    w = A[s]
-                    c = C[s]
-                    arg = ytmp
-                else:
-                    w = B
-                    c = 1.0
-                    arg = y_new
+                last = s == n_stages
+                c = 1.0 if last else C[s]
                 for i in range(n):
-                    arg[i] = 0.0
+                    ytmp[i] = 0.0
                 for j in range(s):
-                    a = w[j]
+                    a = B[j] if last else A[s, j]
                     if a != 0.0:
                         for i in range(n):
-                            arg[i] += a * K[j, i]
+                            ytmp[i] += a * K[j, i]
                 for i in range(n):
-                    arg[i] = y[i] + h * arg[i]
-                    if s == n_stages and not np.isfinite(arg[i]):
-                        status = -1
-                if status != 0:
-                    break
-                status = rhs(t + c * h, arg, p, K[s])
-                counters[0] += 1
-                if status == 0:
+                    ytmp[i] = y[i] + h * ytmp[i]
+                if last:
                     for i in range(n):
-                        if not np.isfinite(K[s, i]):
+                        y_new[i] = ytmp[i]
+                        if not np.isfinite(ytmp[i]):
                             status = -1
+                    if status != 0:
+                        break
+                status = rhs(t + c * h, ytmp, p, f_stage)
+                counters[0] += 1
+                for i in range(n):
+                    K[s, i] = f_stage[i]
+                    if status == 0 and not np.isfinite(f_stage[i]):
+                        status = -1
                 if status != 0:
                     break
             if status > 0:
@@ -2077,9 +2177,8 @@ over lanes that LLVM vectorizes: 4 lanes per AVX2 instruction.  Two things
 would keep that loop scalar, and are avoided: an early return (a singular
 mass matrix sets ``bad[l]`` instead) and calls into libm, whose ``sin`` and
 ``cos`` LLVM cannot vectorize.  Those two come from ``_vsin`` and ``_vcos``
-below: Cody–Waite reduction by π/2 in four parts, then Cephes' minimax
-polynomials on [−π/4, π/4] — within 2 ulp of libm (most results equal), so a
-batched sweep agrees with the scalar path to rounding, not bitwise.  On the
+(``trig.py``): the polynomials the scalar kernels use too, without their
+branch to libm for huge arguments.  On the
 double pendulum the kernel costs 18 ns per trajectory against 50 ns for the
 scalar ``rhs`` (measured in a compiled loop, AVX2).
 
@@ -2095,48 +2194,10 @@ non-finite (-1) keeps its last good state and time, like ``rk4_run``.
 
 # ruff: noqa: F821  (rhs_lanes, energy, _ODE_* are defined by the module this text is appended to)
 
-import math
-
 import numpy as np
 from numba import njit
 
 _LANES = 32
-# sin(r) = r + r z S(z), cos(r) = 1 − z/2 + z² C(z), z = r², |r| ≤ π/4 (Cephes sin.c)
-_SIN_0, _SIN_1, _SIN_2 = 1.58962301576546568060e-10, -2.50507477628578072866e-8, 2.75573136213857245213e-6
-_SIN_3, _SIN_4, _SIN_5 = -1.98412698295895385996e-4, 8.33333333332211858878e-3, -1.66666666666666307295e-1
-_COS_0, _COS_1, _COS_2 = -1.13585365213876817300e-11, 2.08757008419747316778e-9, -2.75573141792967388112e-7
-_COS_3, _COS_4, _COS_5 = 2.48015872888517045348e-5, -1.38888888888730564116e-3, 4.16666666666665929218e-2
-# π/2 in four parts, the first three of 33 bits so that k times them is exact (fdlibm's pio2_1, pio2_2,
-# pio2_3, pio2_3t): r keeps its relative accuracy even next to a multiple of π/2
-_PIO2_1, _PIO2_2 = 1.57079632673412561417e+00, 6.07710050630396597660e-11
-_PIO2_3, _PIO2_4 = 2.02226624871116645580e-21, 8.47842766036889956997e-32
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _quadrant(x):
-    """x = k π/2 + r with |r| ≤ π/4: returns (k mod 4, sin r, cos r)."""
-    k = math.floor(x * 0.63661977236758134308 + 0.5)
-    r = (((x - k * _PIO2_1) - k * _PIO2_2) - k * _PIO2_3) - k * _PIO2_4
-    z = r * r
-    s = r + r * z * (((((_SIN_0 * z + _SIN_1) * z + _SIN_2) * z + _SIN_3) * z + _SIN_4) * z + _SIN_5)
-    c = 1.0 - 0.5 * z + z * z * (((((_COS_0 * z + _COS_1) * z + _COS_2) * z + _COS_3) * z + _COS_4) * z + _COS_5)
-    return np.int64(k) & 3, s, c
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _vsin(x):
-    """sin x, vectorizable (see the module docstring)."""
-    q, s, c = _quadrant(x)
-    v = c if q & 1 else s
-    return -v if q & 2 else v
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _vcos(x):
-    """cos x, vectorizable (see the module docstring)."""
-    q, s, c = _quadrant(x)
-    v = s if q & 1 else c
-    return -v if (q + 1) & 2 else v
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -2539,7 +2600,7 @@ def taylor_coefficients(t, y, p, X, W):
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
-        # _f0 = (-_c0*g + A*_c0*Omega**2*math.cos(Omega*t))*math.sin(theta)
+        # _f0 = (-_c0*g + A*_c0*Omega**2*_cos(Omega*t))*_sin(theta)
         W[_u1, k] = Omega*W[_t, k]
         # _u2, _u3 = sin(_u1), cos(_u1)
         if k == 0:
@@ -2699,18 +2760,14 @@ def taylor_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
         counters[0] += 1
         if status != 0:
             return _ODE_RHS_FAILED, n_saved
+        # (A non-finite coefficient is caught below: every one enters the Horner sum of y_new.)
         norm_y = 0.0
         norm_last = 0.0
         norm_before = 0.0
-        finite = True
         for i in range(n):
-            for kk in range(order + 1):
-                finite = finite and np.isfinite(X[i, kk])
             norm_y = max(norm_y, abs(y[i]))
             norm_last = max(norm_last, abs(X[i, order]))
             norm_before = max(norm_before, abs(X[i, order - 1]))
-        if not finite:
-            return _ODE_NONFINITE, n_saved
         scale = 1.0 if rtol * norm_y <= atol else norm_y
         rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
         h = min(rho * rho_factor, max_step)     # inf when both coefficients vanish

@@ -80,6 +80,6 @@ def test_emitted_module_header_and_determinism():
     assert emit(lower(derive(examples.get("double_pendulum")))) == source
     compile(source, "double_pendulum.py", "exec")
     # one CSE over M and F together: the shared sin(θ1 − θ2) is computed once in rhs
-    rhs = source.split("def rhs(")[1].split("def mass_matrix(")[0]
-    assert rhs.count("math.sin(") == 3  # sin θ1, sin θ2, sin(θ1 − θ2)
-    assert rhs.count("math.cos(") == 1  # cos(θ1 − θ2)
+    rhs = source.split("def rhs(")[1].split("def rhs_lanes(")[0]
+    assert rhs.count("_sin(") == 3  # sin θ1, sin θ2, sin(θ1 − θ2) (templates/trig.py)
+    assert rhs.count("_cos(") == 1  # cos(θ1 − θ2)

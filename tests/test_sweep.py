@@ -211,17 +211,6 @@ def test_batched_rk4_matches_the_scalar_path(compiled, double_pendulum):
         double_pendulum.sweep((0, 1), small, method="dopri5", batched=True)
 
 
-def test_vectorizable_sin_cos_are_within_two_ulp(double_pendulum):
-    kernels = double_pendulum.kernels
-    x = np.concatenate([np.linspace(-20, 20, 20001), np.random.default_rng(1).uniform(-1e4, 1e4, 2000),
-                        [0.0, np.pi / 2, np.pi, -np.pi / 4, 1e-300]])
-    sin = np.array([kernels._vsin(v) for v in x])
-    cos = np.array([kernels._vcos(v) for v in x])
-    for ours, exact in ((sin, np.sin(x)), (cos, np.cos(x))):
-        ulps = np.abs(ours - exact) / np.spacing(np.abs(exact))
-        assert np.max(ulps[np.abs(exact) > 1e-300]) <= 2
-
-
 def test_batched_dop853_takes_the_scalar_steps(compiled, double_pendulum):
     """Each lane runs dop853_run's step control in the same arithmetic order: on Hénon–Heiles (no
     trigonometry) the same steps and bitwise the same states; with sin/cos the ≤ 2 ulp differences may

@@ -4,7 +4,7 @@ The module holds, in order: a header naming the system, its state and
 parameter order and the lagcomp version; the kernels; the constraint hooks
 the drivers call (`project`, `constraint_residual`); `observables`, which
 evaluates the energies along a saved trajectory; then templates appended
-as text, the linear solvers (`templates/linear_solvers.py`), for unconstrained
+as text, the kernels' sin and cos (`templates/trig.py`), the linear solvers (`templates/linear_solvers.py`), for unconstrained
 systems the Hamiltonian and canonical Jacobian (`templates/hamiltonian.py`) and the
 Lyapunov-exponent loops (`templates/lyapunov.py`), and the
 integration drivers (`templates/drivers.py`, `templates/symplectic.py`), so that they call the kernels
@@ -334,7 +334,7 @@ def emit(ir: ModuleIR) -> str:
     parts.append(_OBSERVABLES)
     hamiltonian = () if ir.k else ("hamiltonian", "lyapunov")  # need `velocities`, which constrained modules lack
     lanes = ("lanes",) if any(k.lanes for k in ir.kernels) else ()
-    for name in ("linear_solvers", *hamiltonian, "drivers", "symplectic", *lanes):
+    for name in ("trig", "linear_solvers", *hamiltonian, "drivers", "symplectic", *lanes):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")
         parts.append(template(name, events=bool(ir.event_names)))
     parts.append(taylor_source(ir, events=bool(ir.event_names)))  # taylor_coefficients and taylor_run, or why not

@@ -2,9 +2,12 @@
 
 Symbols print as their names (the IR has already renamed them to locals).
 Scalar math goes through the `math` module (numba lowers it to LLVM
-intrinsics).  Integer powers keep an int literal exponent (``x**2``), which
+intrinsics), except sin and cos, which call the module's own ``_sin`` and
+``_cos`` (``templates/trig.py``: polynomials, faster than libm's calls).  Integer powers keep an int literal exponent (``x**2``), which
 numba expands into multiplications at compile time (a float exponent would
-call `pow`); square roots become `math.sqrt`, rationals float literals.
+call `pow`, 20-40 ns); half-integer powers become a square root times an
+integer power (``r**(-3/2)`` is ``1.0/(r*math.sqrt(r))``: Kepler's RK4 ran at
+a third of a hand-written loop through pow); rationals print as float literals.
 """
 
 from __future__ import annotations
@@ -14,7 +17,9 @@ from sympy.printing.pycode import PythonCodePrinter
 
 
 class KernelPrinter(PythonCodePrinter):
-    """`PythonCodePrinter` with float literals, int-literal powers and `math.sqrt`."""
+    """`PythonCodePrinter` with float literals, int-literal powers, `math.sqrt`, ``_sin``/``_cos``."""
+
+    sin_name, cos_name = "_sin", "_cos"
 
     def __init__(self):
         super().__init__({"fully_qualified_modules": True, "standard": "python3", "order": "none"})
@@ -31,6 +36,12 @@ class KernelPrinter(PythonCodePrinter):
     def _print_Integer(self, expr):
         return f"{int(expr)}.0"
 
+    def _print_sin(self, expr):
+        return f"{self.sin_name}({self._print(expr.args[0])})"
+
+    def _print_cos(self, expr):
+        return f"{self.cos_name}({self._print(expr.args[0])})"
+
     def _print_sign(self, expr):
         return f"np.sign({self._print(expr.args[0])})"
 
@@ -40,23 +51,22 @@ class KernelPrinter(PythonCodePrinter):
         if exp.is_Integer:  # an int literal: numba unrolls it into multiplications
             k = int(exp)
             return f"{b}**{k}" if k > 0 else (f"1.0/{b}" if k == -1 else f"1.0/{b}**{-k}")
-        if exp == sp.S.Half:
-            return f"math.sqrt({self._print(base)})"
-        if exp == -sp.S.Half:
-            return f"1.0/math.sqrt({self._print(base)})"
+        if exp.is_Rational and exp.q == 2:  # b**(k/2) = b**((|k|-1)/2) * sqrt(b): no call to pow
+            root = f"math.sqrt({self._print(base)})"
+            m = (abs(int(exp.p)) - 1) // 2
+            if m == 0:
+                return root if exp > 0 else f"1.0/{root}"
+            magnitude = f"({b}{'' if m == 1 else f'**{m}'}*{root})"  # parenthesized: a Mul prints it as a divisor
+            return magnitude if exp > 0 else f"1.0/{magnitude}"
         return f"{b}**{self._print(exp)}"
 
 
 class LanePrinter(KernelPrinter):
-    """`KernelPrinter` for code that runs across SIMD lanes: sin and cos call the template's
-    polynomial ``_vsin``/``_vcos`` (``templates/lanes.py``), which LLVM can vectorize, where
-    ``math.sin`` is an opaque libm call that keeps the loop scalar."""
+    """`KernelPrinter` for code that runs across SIMD lanes: sin and cos call ``_vsin``/``_vcos``
+    (``templates/trig.py``), the polynomials without ``_sin``'s branch to libm, so that LLVM can
+    vectorize the loop (a call keeps it scalar)."""
 
-    def _print_sin(self, expr):
-        return f"_vsin({self._print(expr.args[0])})"
-
-    def _print_cos(self, expr):
-        return f"_vcos({self._print(expr.args[0])})"
+    sin_name, cos_name = "_vsin", "_vcos"
 
 
 #: One printer of each kind, reused: building a printer costs more than printing a small expression.

@@ -6,9 +6,8 @@ over lanes that LLVM vectorizes: 4 lanes per AVX2 instruction.  Two things
 would keep that loop scalar, and are avoided: an early return (a singular
 mass matrix sets ``bad[l]`` instead) and calls into libm, whose ``sin`` and
 ``cos`` LLVM cannot vectorize.  Those two come from ``_vsin`` and ``_vcos``
-below: Cody–Waite reduction by π/2 in four parts, then Cephes' minimax
-polynomials on [−π/4, π/4] — within 2 ulp of libm (most results equal), so a
-batched sweep agrees with the scalar path to rounding, not bitwise.  On the
+(``trig.py``): the polynomials the scalar kernels use too, without their
+branch to libm for huge arguments.  On the
 double pendulum the kernel costs 18 ns per trajectory against 50 ns for the
 scalar ``rhs`` (measured in a compiled loop, AVX2).
 
@@ -24,48 +23,10 @@ non-finite (-1) keeps its last good state and time, like ``rk4_run``.
 
 # ruff: noqa: F821  (rhs_lanes, energy, _ODE_* are defined by the module this text is appended to)
 
-import math
-
 import numpy as np
 from numba import njit
 
 _LANES = 32
-# sin(r) = r + r z S(z), cos(r) = 1 − z/2 + z² C(z), z = r², |r| ≤ π/4 (Cephes sin.c)
-_SIN_0, _SIN_1, _SIN_2 = 1.58962301576546568060e-10, -2.50507477628578072866e-8, 2.75573136213857245213e-6
-_SIN_3, _SIN_4, _SIN_5 = -1.98412698295895385996e-4, 8.33333333332211858878e-3, -1.66666666666666307295e-1
-_COS_0, _COS_1, _COS_2 = -1.13585365213876817300e-11, 2.08757008419747316778e-9, -2.75573141792967388112e-7
-_COS_3, _COS_4, _COS_5 = 2.48015872888517045348e-5, -1.38888888888730564116e-3, 4.16666666666665929218e-2
-# π/2 in four parts, the first three of 33 bits so that k times them is exact (fdlibm's pio2_1, pio2_2,
-# pio2_3, pio2_3t): r keeps its relative accuracy even next to a multiple of π/2
-_PIO2_1, _PIO2_2 = 1.57079632673412561417e+00, 6.07710050630396597660e-11
-_PIO2_3, _PIO2_4 = 2.02226624871116645580e-21, 8.47842766036889956997e-32
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _quadrant(x):
-    """x = k π/2 + r with |r| ≤ π/4: returns (k mod 4, sin r, cos r)."""
-    k = math.floor(x * 0.63661977236758134308 + 0.5)
-    r = (((x - k * _PIO2_1) - k * _PIO2_2) - k * _PIO2_3) - k * _PIO2_4
-    z = r * r
-    s = r + r * z * (((((_SIN_0 * z + _SIN_1) * z + _SIN_2) * z + _SIN_3) * z + _SIN_4) * z + _SIN_5)
-    c = 1.0 - 0.5 * z + z * z * (((((_COS_0 * z + _COS_1) * z + _COS_2) * z + _COS_3) * z + _COS_4) * z + _COS_5)
-    return np.int64(k) & 3, s, c
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _vsin(x):
-    """sin x, vectorizable (see the module docstring)."""
-    q, s, c = _quadrant(x)
-    v = c if q & 1 else s
-    return -v if q & 2 else v
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _vcos(x):
-    """cos x, vectorizable (see the module docstring)."""
-    q, s, c = _quadrant(x)
-    v = s if q & 1 else c
-    return -v if (q + 1) & 2 else v
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
