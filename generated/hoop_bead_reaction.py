@@ -323,8 +323,9 @@ each kernel call to finish, and a libm ``sin`` is an opaque call of 10-15 ns
 with branches on the argument's size.  The polynomial is a few dozen
 arithmetic operations that LLVM schedules with the rest of the kernel, and
 ``sin x`` and ``cos x`` of one argument share the reduction.  On the double
-pendulum (three sines and a cosine per ``rhs``) DOP853 runs about 1.4x
-faster (``python -m bench --sections adaptive``).
+pendulum (three sines and a cosine per ``rhs``) this, with the drivers'
+view-free stage loop, brought DOP853 from 1.42x to 1.19x numbalsoda's
+dop853 (``python -m bench --only adaptive``).
 
 * ``_sin``/``_cos``: scalar kernels.  For |x| > ``_TRIG_POLY_MAX`` (10⁵) they
   call libm, where the reduction would start to lose accuracy (k·π/2 is
