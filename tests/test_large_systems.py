@@ -1,14 +1,16 @@
-"""Kernels of systems above UNROLL_MAX coordinates: looped LDLᵀ and momenta, from gathered arrays."""
+"""Kernels at the edge of UNROLL_MAX: the largest unrolled LDLᵀ, and the smallest looped one (LDLᵀ and
+momenta from gathered arrays)."""
 
 import numpy as np
+import pytest
 
 import lagcomp as lc
 from lagcomp import examples
 from lagcomp.codegen.lower import UNROLL_MAX
 
 
-def test_looped_kernels_agree_with_mass_matrix_and_forcing(cache_dir):
-    n = UNROLL_MAX + 1
+@pytest.mark.parametrize("n", [UNROLL_MAX, UNROLL_MAX + 1])
+def test_kernels_agree_with_mass_matrix_and_forcing(cache_dir, n):
     model = lc.compile(examples.n_link_pendulum(n), cache_dir=cache_dir)
     k = model.kernels
     rng = np.random.default_rng(8)

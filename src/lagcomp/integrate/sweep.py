@@ -343,7 +343,8 @@ def _batched_driver(model, m) -> str:
     if m.name not in BATCHED:
         raise OptionError(f"`batched=True` is available for {sorted(BATCHED)}; not yet for {m.name}.")
     if not hasattr(model.kernels, f"sweep_{BATCHED[m.name]}"):
-        raise OptionError(f"{model.name!r} has no batched kernel (constrained, or more than 8 coordinates).")
+        raise OptionError(f"{model.name!r} has no batched kernel (constrained, or more coordinates than "
+                          "lagcomp.codegen.lower.UNROLL_MAX, whose LDLᵀ solve is a loop).")
     return BATCHED[m.name]
 
 
