@@ -15,7 +15,8 @@ Sections (each timing is a median of warm runs; ratios are measured in the same 
    their mean (a drift) and the slope of log(rms) against log t (½: no faster
    than √t, Brouwer's law; 1: a drift).
 4. Hénon–Heiles section x = 0 (ẋ > 0) to t = 2000: event times of taylor
-   against dop853 (rtol 1e-13) and against heyoka's own event detection.
+   against dop853 (rtol 1e-13) and against heyoka's own event detection, and
+   the spread of taylor's times over 8 starts 1 ulp apart (the rounding floor).
 5. What the Taylor kernel costs: series operations per order, emit time and
    the first-call (numba compilation) time of taylor_run in a fresh cache.
 """
@@ -232,6 +233,16 @@ def section_henon_heiles(compiled_model, have_heyoka, t_end):
         n = min(len(b), len(h))
         print(f"| dop853 vs heyoka | {len(b)} / {len(h)} | {np.max(np.abs(b[:n] - h[:n])):.1e} | "
               f"{np.max(np.abs(b[:10] - h[:10])):.1e} |")
+    # The rounding floor: the same run from 8 starts whose ẋ0 differ by 1 ulp (one realization of the
+    # rounding each); no float64 integrator can pin the crossing times down more closely than their spread.
+    v0 = float(compiled_model.qd0[0])
+    starts = {"x_dot": v0 + np.arange(8) * np.spacing(v0)}
+    sweep = compiled_model.sweep((0, t_end), starts, method="taylor", output="events", event_cap=len(a) + 8,
+                                 progress=False, workers=2)
+    times = sweep.events["section"]["t"][:, :len(a)]
+    spread = np.max(times, axis=0) - np.min(times, axis=0)
+    print(f"| taylor from 8 starts 1 ulp apart in xdot0 (spread) | {len(a)} each | {np.max(spread):.1e} | "
+          f"{np.max(spread[:10]):.1e} |")
 
 
 COLD = r"""
