@@ -2728,7 +2728,7 @@ def sweep_dop853_lanes(Y0, P, t0, t_end, rtol, atol, max_step, max_steps, save_e
             energy_stats[a + l, 1] = deviation[l]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def taylor_coefficients(t, y, p, X, W):
     """Normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!, k = 0..order (order = X.shape[1] − 1),
     of the solution through y at t; W is a work array of shape (TAYLOR_WORK, order + 1).

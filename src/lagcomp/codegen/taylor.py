@@ -587,7 +587,7 @@ def emit_taylor(program: TaylorProgram) -> str:
     lines[start:] = [line if line.lstrip().startswith("#") else pattern.sub(indexed, line) for line in lines[start:]]
     body = "\n".join(INDENT + line if line else "" for line in lines)
     return (
-        '\n\n@njit(cache=True, error_model="numpy")\n'
+        '\n\n@njit(cache=True, error_model="numpy", fastmath={"contract"})\n'
         "def taylor_coefficients(t, y, p, X, W):\n"
         f"{body}\n\n\n"
         f"#: Rows of the work array of `taylor_coefficients` ({program.operation_count} series operations "
