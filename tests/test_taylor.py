@@ -182,16 +182,21 @@ def _jet_reference(y0, t_end, params, order=30, fraction=0.25):
         last = [max(abs(s[name][m]) for name in ("th1", "th2", "w1", "w2")) for m in (order - 1, order)]
         rho = min(last[0] ** (L(-1) / (order - 1)), last[1] ** (L(-1) / order))
         step = min(fraction * rho, L(t_end) - t_now)
-        for i, name in enumerate(("th1", "th2", "w1", "w2")):  # y += increment, compensated (Kahan)
-            acc = L(0)
-            for c in s[name][:0:-1]:
-                acc = (acc + c) * step
-            increment = acc - compensation[i]
-            new = y[i] + increment
-            compensation[i] = (new - y[i]) - increment
-            y[i] = new
+        _advance(y, compensation, [s[name] for name in ("th1", "th2", "w1", "w2")], step)
         t_now += step
     return y
+
+
+def _advance(state, compensation, series, step):
+    """state[i] += Σ_{k≥1} series[i][k] step^k (Horner), with compensated (Kahan) summation, in place."""
+    for i, coefficients in enumerate(series):
+        acc = np.longdouble(0)
+        for c in coefficients[:0:-1]:
+            acc = (acc + c) * step
+        increment = acc - compensation[i]
+        new = state[i] + increment
+        compensation[i] = (new - state[i]) - increment
+        state[i] = new
 
 
 @pytest.fixture(scope="module")
@@ -339,14 +344,7 @@ def _henon_heiles_section_reference(y0, t_end, lam, order=30, fraction=0.2):
             for _ in range(40):
                 tau -= np.polynomial.polynomial.polyval(tau, X) / np.polynomial.polynomial.polyval(tau, derivative)
             crossings.append(t_now + tau)
-        for i, c in enumerate(series):  # state += increment, compensated (Kahan)
-            acc = L(0)
-            for coefficient in c[:0:-1]:
-                acc = (acc + coefficient) * step
-            increment = acc - compensation[i]
-            new = state[i] + increment
-            compensation[i] = (new - state[i]) - increment
-            state[i] = new
+        _advance(state, compensation, series, step)
         t_now += step
     return np.array(crossings)
 

@@ -3,11 +3,12 @@
 Symbols print as their names (the IR has already renamed them to locals).
 Scalar math goes through the `math` module (numba lowers it to LLVM
 intrinsics), except sin and cos, which call the module's own ``_sin`` and
-``_cos`` (``templates/trig.py``: polynomials, faster than libm's calls).  Integer powers keep an int literal exponent (``x**2``), which
-numba expands into multiplications at compile time (a float exponent would
-call `pow`, 20-40 ns); half-integer powers become a square root times an
-integer power (``r**(-3/2)`` is ``1.0/(r*math.sqrt(r))``: Kepler's RK4 ran at
-a third of a hand-written loop through pow); rationals print as float literals.
+``_cos`` (``templates/trig.py``: polynomials, faster than libm's calls).
+Integer powers keep an int literal exponent (``x**2``), which numba expands
+into multiplications at compile time (a float exponent would call `pow`,
+20-40 ns); half-integer powers become a square root times an integer power
+(``r**(-3/2)`` is ``1.0/(r*math.sqrt(r))``: through pow, Kepler's RK4 ran at
+a third of a hand-written loop); rationals print as float literals.
 """
 
 from __future__ import annotations
