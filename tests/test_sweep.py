@@ -194,8 +194,8 @@ def test_to_xarray_names_dimensions_after_the_swept_quantities(double_pendulum):
 
 
 def test_batched_rk4_matches_the_scalar_path(compiled, double_pendulum):
-    """SIMD lanes do the scalar arithmetic in the same order: bitwise equal without trigonometry
-    (Hénon–Heiles), within rounding with it (polynomial sin/cos, ≤ 2 ulp from libm)."""
+    """SIMD lanes do the scalar arithmetic in the same order, with the same polynomial sin and cos
+    (templates/trig.py): bitwise equal, without trigonometry (Hénon–Heiles) and with it."""
     henon = compiled("henon_heiles")
     grid = {"x": np.linspace(-0.3, 0.3, 7), "y": np.linspace(-0.3, 0.3, 11)}   # 77: two blocks, one partial
     scalar = henon.sweep((0, 5), grid, method="rk4", dt=0.01, output=("dense", "energy"), save_every=100)
@@ -206,15 +206,15 @@ def test_batched_rk4_matches_the_scalar_path(compiled, double_pendulum):
     small = {"theta1": np.linspace(-0.3, 0.3, 9), "theta2": np.linspace(-0.3, 0.3, 5)}
     scalar = double_pendulum.sweep((0, 5), small, method="rk4", dt=0.01, qd0=[0, 0])
     lanes = double_pendulum.sweep((0, 5), small, method="rk4", dt=0.01, qd0=[0, 0], batched=True)
-    np.testing.assert_allclose(lanes.final, scalar.final, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(lanes.final, scalar.final)
     with pytest.raises(OptionError, match="batched"):
         double_pendulum.sweep((0, 1), small, method="dopri5", batched=True)
 
 
 def test_batched_dop853_takes_the_scalar_steps(compiled, double_pendulum):
-    """Each lane runs dop853_run's step control in the same arithmetic order: on Hénon–Heiles (no
-    trigonometry) the same steps and bitwise the same states; with sin/cos the ≤ 2 ulp differences may
-    shift a step, so agreement is at the tolerance."""
+    """Each lane runs dop853_run's step control in the same arithmetic order: the same steps and
+    bitwise the same states, on Hénon–Heiles and on the double pendulum (the scalar and the batched
+    kernels share their sin and cos polynomials)."""
     henon = compiled("henon_heiles")
     grid = {"x": np.linspace(-0.3, 0.3, 7), "y": np.linspace(-0.3, 0.3, 11)}
     scalar = henon.sweep((0, 20), grid, rtol=1e-10, atol=1e-10, output="energy")
@@ -224,7 +224,8 @@ def test_batched_dop853_takes_the_scalar_steps(compiled, double_pendulum):
     small = {"theta1": np.linspace(-0.3, 0.3, 9), "theta2": np.linspace(-0.3, 0.3, 5)}
     scalar = double_pendulum.sweep((0, 5), small, rtol=1e-10, atol=1e-10, qd0=[0, 0])
     lanes = double_pendulum.sweep((0, 5), small, rtol=1e-10, atol=1e-10, qd0=[0, 0], batched=True)
-    np.testing.assert_allclose(lanes.final, scalar.final, rtol=0, atol=1e-8)
+    np.testing.assert_array_equal(lanes.final, scalar.final)
+    np.testing.assert_array_equal(lanes.nsteps, scalar.nsteps)
     with pytest.raises(OptionError, match="dense rows or events"):
         double_pendulum.sweep((0, 1), small, t_eval=[0.5, 1.0], output="dense", batched=True)
 

@@ -562,9 +562,10 @@ class Model:
             rk4 and dop853: advance blocks of 32 trajectories together through
             the SIMD kernel ``rhs_lanes`` (each with its own steps for
             dop853; final states and energy errors only), about 2x the
-            throughput.  Its polynomial sin/cos agree with libm to 2 ulp, so
-            results match the scalar path to rounding (bitwise without
-            trigonometry).
+            throughput.  Same arithmetic as the scalar path, sin and cos
+            included (templates/trig.py), so the same results bitwise while
+            the arguments of sin and cos stay below 1e5 in size (beyond, the
+            scalar kernels call libm: within 2 ulp).
         memory_limit : int
             Bytes the outputs may take (default 2 GiB); a larger request is
             refused before the sweep starts.
