@@ -9,9 +9,9 @@ state reported at t = 10 and 100 (issue 8's DOP853 target).  Prints:
    cfunc right-hand side (the hand-written numba one, bench/systems.py), so
    the two take the same steps or not;
 2. wall time of lagcomp's ``dop853_run`` called directly (no Python around
-   it), of ``Model.simulate`` (the same driver plus the run's fixed cost),
-   and of numbalsoda's dop853, timed round-robin; ratios are medians of
-   per-round ratios against numbalsoda.
+   it), of ``Model.simulate`` with its default options (the same driver plus
+   the run's fixed cost), and of numbalsoda's dop853, timed round-robin;
+   ratios are medians of per-round ratios against numbalsoda.
 
 numbalsoda comes with the bench extra (``pip install '.[bench]'``, it needs gfortran).
 """
@@ -79,7 +79,7 @@ def main() -> None:
         runners = {
             "lagcomp dop853_run, called directly": driver_run(model),
             "lagcomp Model.simulate": lambda: model.simulate((0, GRID[-1]), method="dop853", rtol=TOL, atol=TOL,
-                                                             t_eval=GRID[1:], progress=False).nfev,
+                                                             t_eval=GRID[1:]).nfev,
             "numbalsoda dop853": numbalsoda_run(),
         }
         evaluations = {name: run() for name, run in runners.items()}  # also compiles / loads everything

@@ -51,6 +51,17 @@ def test_progress_bar_only_when_asked_or_long(pendulum, capfd):
     assert "| t = 0/1" in capfd.readouterr().err
 
 
+def test_progress_bar_appears_once_a_run_is_long(pendulum, capfd, monkeypatch):
+    """By default the bar is made at the first update after PROGRESS_DELAY seconds (here 0), not before."""
+    from lagcomp.integrate import run_control
+
+    monkeypatch.setattr(run_control, "PROGRESS_DELAY", 0.0)
+    pendulum.simulate((0, 1))
+    assert "| t = " in capfd.readouterr().err
+    pendulum.simulate((0, 1), progress=False)
+    assert capfd.readouterr().err == ""
+
+
 def test_ctrl_c_returns_the_partial_solution(pendulum):
     """SIGINT during a long run: the driver call in progress finishes, then the run stops with status 2,
     keeping every row computed and the state reached (to resume from)."""
