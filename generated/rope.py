@@ -2647,7 +2647,8 @@ def taylor_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
         counters[0] += 1
         if status != 0:
             return _ODE_RHS_FAILED, n_saved
-        # (A non-finite coefficient is caught below: every one enters the Horner sum of y_new.)
+        # Non-finite coefficients: an infinite one among the last two would make the step 0 (-3, "too
+        # small"), so those are tested here; any other reaches y_new through the Horner sum, tested there.
         norm_y = 0.0
         norm_last = 0.0
         norm_before = 0.0
@@ -2655,6 +2656,8 @@ def taylor_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             norm_y = max(norm_y, abs(y[i]))
             norm_last = max(norm_last, abs(X[i, order]))
             norm_before = max(norm_before, abs(X[i, order - 1]))
+        if not (norm_last < np.inf and norm_before < np.inf):      # (also false for NaN)
+            return _ODE_NONFINITE, n_saved
         scale = 1.0 if rtol * norm_y <= atol else norm_y
         rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
         h = min(rho * rho_factor, max_step)     # inf when both coefficients vanish
