@@ -35,7 +35,7 @@ from lagcomp.integrate.options import (
     time_span,
     tolerances,
 )
-from lagcomp.integrate.run_control import PROGRESS_DELAY, deferred_interrupt
+from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
@@ -392,13 +392,6 @@ def _store(out: dict, a: int, chunk: dict) -> None:
         out[key][a:a + values.shape[0]] = values
 
 
-def _progress(total: int, progress):
-    from tqdm.auto import tqdm
-
-    return tqdm(total=total, unit="traj", leave=False, disable=progress is False, mininterval=0.5,
-                delay=0.0 if progress else PROGRESS_DELAY)
-
-
 def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndarray:
     """Run consecutive chunks, each split across `workers` threads; returns which trajectories ran.
 
@@ -413,7 +406,7 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
     done = np.zeros(n_traj, dtype=bool)
     chunk = FIRST_CHUNK_PER_THREAD * threads
     with ThreadPoolExecutor(threads) as pool, deferred_interrupt() as interrupted, \
-            _progress(n_traj, progress) as bar:
+            LazyProgress(n_traj, progress, unit="traj") as bar:
         a = 0
         while a < n_traj and not interrupted[0]:
             b = min(a + chunk, n_traj)
@@ -484,7 +477,7 @@ def _run_on_dask(client, spec, task: _Task, Y0, P, out, progress) -> np.ndarray:
     futures = {client.submit(_remote_chunk, spec_future, task, Y0[a:b], P[a:b], pure=False): (a, b)
                for a, b in zip(bounds[:-1], bounds[1:])}
     done = np.zeros(n_traj, dtype=bool)
-    with deferred_interrupt() as interrupted, _progress(n_traj, progress) as bar:
+    with deferred_interrupt() as interrupted, LazyProgress(n_traj, progress, unit="traj") as bar:
         for future in as_completed(futures):
             a, b = futures[future]
             _store(out, a, future.result())
