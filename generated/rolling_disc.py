@@ -577,13 +577,13 @@ minimax polynomials for sin and cos on [−π/4, π/4] (Cephes ``sin.c``).  The
 results are within 2 ulp of libm's, most of them equal (tests/test_trig.py).
 
 Why not libm: an integrator's stages depend on each other, so it waits for
-each kernel call to finish, and a libm ``sin`` is an opaque call of 10-15 ns
-with branches on the argument's size.  The polynomial is a few dozen
-arithmetic operations that LLVM schedules with the rest of the kernel, and
-``sin x`` and ``cos x`` of one argument share the reduction.  On the double
-pendulum (three sines and a cosine per ``rhs``) this, with the drivers'
-view-free stage loop, brought DOP853 from 1.42x to 1.19x numbalsoda's
-dop853 (``python -m bench --only adaptive``).
+each kernel call to finish, and a libm ``sin`` is an opaque call with
+branches on the argument's size.  The polynomial is a few dozen arithmetic
+operations that LLVM schedules with the rest of the kernel, and ``sin x`` and
+``cos x`` of one argument share the reduction.  On the double pendulum (three
+sines and a cosine per ``rhs``) this, with the drivers' view-free stage loop,
+brought DOP853 from 1.42x to 1.21x numbalsoda's dop853 (``python -m bench
+--only adaptive`` at c6d8e63 and at aed6595).
 
 * ``_sin``/``_cos``: scalar kernels.  For |x| > ``_TRIG_POLY_MAX`` (10⁵) they
   call libm, where the reduction would start to lose accuracy (k·π/2 is
@@ -1400,9 +1400,9 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             # with (a, c) = (A[s], C[s]), and for s = n_stages (B, 1): the
             # stage argument is then y_new and the stage the FSAL derivative.
             # Zero coefficients are skipped (the tableaux are sparse).  No
-            # array views in this loop (A[s], K[s]): each one costs reference
-            # counting per stage, and rhs writes into f_stage, which is copied
-            # into K[s] (DOP853 on the double pendulum: 10-20% faster).
+            # array views in this loop (A[s], K[s]): numba builds and
+            # reference-counts each one per stage; rhs writes into f_stage,
+            # which is copied into K[s].
             status = 0
             for s in range(1, n_stages + 1):
                 last = s == n_stages
@@ -1702,9 +1702,9 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             # with (a, c) = (A[s], C[s]), and for s = n_stages (B, 1): the
             # stage argument is then y_new and the stage the FSAL derivative.
             # Zero coefficients are skipped (the tableaux are sparse).  No
-            # array views in this loop (A[s], K[s]): each one costs reference
-            # counting per stage, and rhs writes into f_stage, which is copied
-            # into K[s] (DOP853 on the double pendulum: 10-20% faster).
+            # array views in this loop (A[s], K[s]): numba builds and
+            # reference-counts each one per stage; rhs writes into f_stage,
+            # which is copied into K[s].
             status = 0
             for s in range(1, n_stages + 1):
                 last = s == n_stages

@@ -24,8 +24,9 @@ from lagcomp.model.system import t
 #: Names the emitted module uses itself; user names equal to them get a trailing underscore.
 RESERVED = {"t", "y", "p", "out", "math", "np", "njit", "rhs", "mm", "ff", "abs"}
 #: Largest system whose LDLᵀ solve is emitted unrolled; larger ones call a loop (`_ldlt_solve`).
-#: Unrolled, the N-link chain's rhs costs 0.75x the looped one at N = 10 and 12 (470 vs 630 ns,
-#: 697 vs 914 ns in a compiled loop) and 16-25% more numba compile time (+0.4 s, +1.1 s).
+#: Unrolled, the 10-link chain's rhs costs 462 ns in a compiled loop against 635 ns looped
+#: (`python -m bench --only kernels --cases n_link_pendulum_10` at aed6595 and at d880236, whose
+#: limit was 8), for about 0.4 s more numba compile time of rhs (1.1 s at 12 links).
 UNROLL_MAX = 12
 
 

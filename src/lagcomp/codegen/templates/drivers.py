@@ -669,9 +669,9 @@ def dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             # with (a, c) = (A[s], C[s]), and for s = n_stages (B, 1): the
             # stage argument is then y_new and the stage the FSAL derivative.
             # Zero coefficients are skipped (the tableaux are sparse).  No
-            # array views in this loop (A[s], K[s]): each one costs reference
-            # counting per stage, and rhs writes into f_stage, which is copied
-            # into K[s] (DOP853 on the double pendulum: 10-20% faster).
+            # array views in this loop (A[s], K[s]): numba builds and
+            # reference-counts each one per stage; rhs writes into f_stage,
+            # which is copied into K[s].
             status = 0
             for s in range(1, n_stages + 1):
                 last = s == n_stages
@@ -1012,9 +1012,9 @@ def dop853_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             # with (a, c) = (A[s], C[s]), and for s = n_stages (B, 1): the
             # stage argument is then y_new and the stage the FSAL derivative.
             # Zero coefficients are skipped (the tableaux are sparse).  No
-            # array views in this loop (A[s], K[s]): each one costs reference
-            # counting per stage, and rhs writes into f_stage, which is copied
-            # into K[s] (DOP853 on the double pendulum: 10-20% faster).
+            # array views in this loop (A[s], K[s]): numba builds and
+            # reference-counts each one per stage; rhs writes into f_stage,
+            # which is copied into K[s].
             status = 0
             for s in range(1, n_stages + 1):
                 last = s == n_stages
