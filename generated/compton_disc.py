@@ -2579,8 +2579,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _f0 = I_Y*_c1*nu*omega*_cos(_c1*_cos(_c0))*_sin(_c0)*_sin(lambda_)
         # _u2, _u3 = sin(_c0), cos(_c0)
         if k == 0:
-            W[_u2, 0] = math.sin(W[_c0, 0])
-            W[_u3, 0] = math.cos(W[_c0, 0])
+            W[_u2, 0] = _sin(W[_c0, 0])
+            W[_u3, 0] = _cos(W[_c0, 0])
         else:
             _ja = k*W[_c0, k]
             _s = _ja*W[_u3, 0] if k % 2 == 1 else 0.0
@@ -2599,8 +2599,8 @@ def taylor_coefficients(t, y, p, X, W):
         W[_u4, k] = _c1*W[_u3, k]
         # _u5, _u6 = sin(_u4), cos(_u4)
         if k == 0:
-            W[_u5, 0] = math.sin(W[_u4, 0])
-            W[_u6, 0] = math.cos(W[_u4, 0])
+            W[_u5, 0] = _sin(W[_u4, 0])
+            W[_u6, 0] = _cos(W[_u4, 0])
         else:
             _ja = k*W[_u4, k]
             _s = _ja*W[_u6, 0] if k % 2 == 1 else 0.0

@@ -2708,8 +2708,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _c4 = _c3*_sin(_c1)
         # _u1, _u2 = sin(_c1), cos(_c1)
         if k == 0:
-            W[_u1, 0] = math.sin(W[_c1, 0])
-            W[_u2, 0] = math.cos(W[_c1, 0])
+            W[_u1, 0] = _sin(W[_c1, 0])
+            W[_u2, 0] = _cos(W[_c1, 0])
         else:
             _ja = k*W[_c1, k]
             _s = _ja*W[_u2, 0] if k % 2 == 1 else 0.0
@@ -2746,8 +2746,8 @@ def taylor_coefficients(t, y, p, X, W):
         W[_u6, k] = _s + _r
         # _u8, _u9 = sin(theta1), cos(theta1)
         if k == 0:
-            W[_u8, 0] = math.sin(X[theta1, 0])
-            W[_u9, 0] = math.cos(X[theta1, 0])
+            W[_u8, 0] = _sin(X[theta1, 0])
+            W[_u9, 0] = _cos(X[theta1, 0])
         else:
             _ja = k*X[theta1, k]
             _s = _ja*W[_u9, 0] if k % 2 == 1 else 0.0
@@ -2783,8 +2783,8 @@ def taylor_coefficients(t, y, p, X, W):
         W[_u13, k] = _s + _r
         # _u15, _u16 = sin(theta2), cos(theta2)
         if k == 0:
-            W[_u15, 0] = math.sin(X[theta2, 0])
-            W[_u16, 0] = math.cos(X[theta2, 0])
+            W[_u15, 0] = _sin(X[theta2, 0])
+            W[_u16, 0] = _cos(X[theta2, 0])
         else:
             _ja = k*X[theta2, k]
             _s = _ja*W[_u16, 0] if k % 2 == 1 else 0.0

@@ -2581,8 +2581,8 @@ def taylor_coefficients(t, y, p, X, W):
         W[_u1, k] = Omega*W[_t, k]
         # _u2, _u3 = sin(_u1), cos(_u1)
         if k == 0:
-            W[_u2, 0] = math.sin(W[_u1, 0])
-            W[_u3, 0] = math.cos(W[_u1, 0])
+            W[_u2, 0] = _sin(W[_u1, 0])
+            W[_u3, 0] = _cos(W[_u1, 0])
         else:
             _ja = k*W[_u1, k]
             _s = _ja*W[_u3, 0] if k % 2 == 1 else 0.0
@@ -2602,8 +2602,8 @@ def taylor_coefficients(t, y, p, X, W):
         W[_u6, k] = W[_u4, k] + _k5 if k == 0 else W[_u4, k]
         # _u7, _u8 = sin(theta), cos(theta)
         if k == 0:
-            W[_u7, 0] = math.sin(X[theta, 0])
-            W[_u8, 0] = math.cos(X[theta, 0])
+            W[_u7, 0] = _sin(X[theta, 0])
+            W[_u8, 0] = _cos(X[theta, 0])
         else:
             _ja = k*X[theta, k]
             _s = _ja*W[_u8, 0] if k % 2 == 1 else 0.0

@@ -2621,8 +2621,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _c1 = _sin(theta)
         # _c1, _u1 = sin(theta), cos(theta)
         if k == 0:
-            W[_c1, 0] = math.sin(X[theta, 0])
-            W[_u1, 0] = math.cos(X[theta, 0])
+            W[_c1, 0] = _sin(X[theta, 0])
+            W[_u1, 0] = _cos(X[theta, 0])
         else:
             _ja = k*X[theta, k]
             _s = _ja*W[_u1, 0] if k % 2 == 1 else 0.0
@@ -2642,8 +2642,8 @@ def taylor_coefficients(t, y, p, X, W):
         W[_u2, k] = 2.0*W[_t, k]
         # _u3, _c2 = sin(_u2), cos(_u2)
         if k == 0:
-            W[_u3, 0] = math.sin(W[_u2, 0])
-            W[_c2, 0] = math.cos(W[_u2, 0])
+            W[_u3, 0] = _sin(W[_u2, 0])
+            W[_c2, 0] = _cos(W[_u2, 0])
         else:
             _ja = k*W[_u2, k]
             _s = _ja*W[_c2, 0] if k % 2 == 1 else 0.0

@@ -2576,8 +2576,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _c1 = _cos(_c0)
         # _u1, _c1 = sin(_c0), cos(_c0)
         if k == 0:
-            W[_u1, 0] = math.sin(W[_c0, 0])
-            W[_c1, 0] = math.cos(W[_c0, 0])
+            W[_u1, 0] = _sin(W[_c0, 0])
+            W[_c1, 0] = _cos(W[_c0, 0])
         else:
             _ja = k*W[_c0, k]
             _s = _ja*W[_c1, 0] if k % 2 == 1 else 0.0
@@ -2606,8 +2606,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _f0 = -R*g*m*_sin(theta) + 2.0*_c1*_c2*theta_dot**2*_sin(_c0)
         # _u7, _u8 = sin(theta), cos(theta)
         if k == 0:
-            W[_u7, 0] = math.sin(X[theta, 0])
-            W[_u8, 0] = math.cos(X[theta, 0])
+            W[_u7, 0] = _sin(X[theta, 0])
+            W[_u8, 0] = _cos(X[theta, 0])
         else:
             _ja = k*X[theta, k]
             _s = _ja*W[_u8, 0] if k % 2 == 1 else 0.0

@@ -2970,8 +2970,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _c2 = _sin(theta2)
         # _c2, _c4 = sin(theta2), cos(theta2)
         if k == 0:
-            W[_c2, 0] = math.sin(X[theta2, 0])
-            W[_c4, 0] = math.cos(X[theta2, 0])
+            W[_c2, 0] = _sin(X[theta2, 0])
+            W[_c4, 0] = _cos(X[theta2, 0])
         else:
             _ja = k*X[theta2, k]
             _s = _ja*W[_c4, 0] if k % 2 == 1 else 0.0
@@ -2990,8 +2990,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _c3 = _sin(theta1)
         # _c3, _c5 = sin(theta1), cos(theta1)
         if k == 0:
-            W[_c3, 0] = math.sin(X[theta1, 0])
-            W[_c5, 0] = math.cos(X[theta1, 0])
+            W[_c3, 0] = _sin(X[theta1, 0])
+            W[_c5, 0] = _cos(X[theta1, 0])
         else:
             _ja = k*X[theta1, k]
             _s = _ja*W[_c5, 0] if k % 2 == 1 else 0.0
@@ -3012,8 +3012,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _c8 = _sin(theta3)
         # _c8, _c9 = sin(theta3), cos(theta3)
         if k == 0:
-            W[_c8, 0] = math.sin(X[theta3, 0])
-            W[_c9, 0] = math.cos(X[theta3, 0])
+            W[_c8, 0] = _sin(X[theta3, 0])
+            W[_c9, 0] = _cos(X[theta3, 0])
         else:
             _ja = k*X[theta3, k]
             _s = _ja*W[_c9, 0] if k % 2 == 1 else 0.0

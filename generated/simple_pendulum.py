@@ -2543,8 +2543,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _f0 = -g*l*m*_sin(theta)
         # _u1, _u2 = sin(theta), cos(theta)
         if k == 0:
-            W[_u1, 0] = math.sin(X[theta, 0])
-            W[_u2, 0] = math.cos(X[theta, 0])
+            W[_u1, 0] = _sin(X[theta, 0])
+            W[_u2, 0] = _cos(X[theta, 0])
         else:
             _ja = k*X[theta, k]
             _s = _ja*W[_u2, 0] if k % 2 == 1 else 0.0

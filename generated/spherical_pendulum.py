@@ -2651,8 +2651,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _c1 = _sin(theta)
         # _c1, _u1 = sin(theta), cos(theta)
         if k == 0:
-            W[_c1, 0] = math.sin(X[theta, 0])
-            W[_u1, 0] = math.cos(X[theta, 0])
+            W[_c1, 0] = _sin(X[theta, 0])
+            W[_u1, 0] = _cos(X[theta, 0])
         else:
             _ja = k*X[theta, k]
             _s = _ja*W[_u1, 0] if k % 2 == 1 else 0.0

@@ -2816,8 +2816,8 @@ def taylor_coefficients(t, y, p, X, W):
         # _c0 = _cos(theta)
         # _c4, _c0 = sin(theta), cos(theta)
         if k == 0:
-            W[_c4, 0] = math.sin(X[theta, 0])
-            W[_c0, 0] = math.cos(X[theta, 0])
+            W[_c4, 0] = _sin(X[theta, 0])
+            W[_c0, 0] = _cos(X[theta, 0])
         else:
             _ja = k*X[theta, k]
             _s = _ja*W[_c0, 0] if k % 2 == 1 else 0.0

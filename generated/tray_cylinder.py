@@ -2567,8 +2567,8 @@ def taylor_coefficients(t, y, p, X, W):
         W[_u1, k] = Omega*W[_t, k]
         # _u2, _u3 = sin(_u1), cos(_u1)
         if k == 0:
-            W[_u2, 0] = math.sin(W[_u1, 0])
-            W[_u3, 0] = math.cos(W[_u1, 0])
+            W[_u2, 0] = _sin(W[_u1, 0])
+            W[_u3, 0] = _cos(W[_u1, 0])
         else:
             _ja = k*W[_u1, k]
             _s = _ja*W[_u3, 0] if k % 2 == 1 else 0.0

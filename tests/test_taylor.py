@@ -49,7 +49,7 @@ def _reference(f, order=ORDER):
         return np.array([float(c) for c in coefficients])
 
 
-def _series(coefficients, order=ORDER):
+def _padded(coefficients, order=ORDER):
     out = np.zeros(order + 1)
     out[: len(coefficients)] = coefficients
     return out
@@ -73,7 +73,7 @@ def _recurrence(name):
     names = dict(w="w", a="a", b="b", c="c")
     names.update(CASES[name][1])
     body = "\n".join("        " + line.format(**names) for line in _INLINE[name][1])
-    namespace = {"math": math}
+    namespace = {"math": math, "_sin": math.sin, "_cos": math.cos}
     prelude = "        _ik = 1.0/k if k > 0 else 0.0\n"  # as at the top of taylor_coefficients' loop
     exec(f"def run(a, b, c, w, s):\n    for k in range({ORDER + 1}):\n{prelude}{body}\n", namespace)
     return namespace["run"]
@@ -82,7 +82,7 @@ def _recurrence(name):
 @pytest.mark.parametrize("name", list(CASES))
 def test_each_recurrence_against_an_independent_expansion(name):
     """The loop taylor_coefficients runs for each operation, against mpmath's expansion."""
-    a, b = _series(A), _series(B)
+    a, b = _padded(A), _padded(B)
     w, s, c = np.zeros(ORDER + 1), np.zeros(ORDER + 1), np.zeros(ORDER + 1)
     run = _recurrence(name)
     if name == "_taylor_sin_cos":
@@ -92,6 +92,34 @@ def test_each_recurrence_against_an_independent_expansion(name):
         return
     run(a, b, 2.5, w, None)
     np.testing.assert_allclose(w, _reference(CASES[name][0]), rtol=1e-13, atol=1e-15)
+
+
+#: Each operation in the call notation (`decompose`'s lines): its arguments, and the result's name.
+CALLS = {
+    "_taylor_mul": (["a", "b"], "w"), "_taylor_square": (["a"], "w"), "_taylor_div": (["a", "b", "w"], "w"),
+    "_taylor_rdiv": (["2.5", "b", "w"], "w"), "_taylor_sqrt": (["a", "w"], "w"),
+    "_taylor_pow": (["a", "-1.5", "w"], "w"), "_taylor_exp": (["a", "w"], "w"), "_taylor_log": (["a", "w"], "w"),
+    "_taylor_sin_cos": (["a", "s", "c"], None),
+}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_each_unrolled_recurrence_against_an_independent_expansion(name):
+    """The straight-line form of each operation (batched Taylor sweeps, taylor_lanes), against mpmath."""
+    from lagcomp.codegen.taylor_lanes import _operation, _series
+
+    args, result = CALLS[name]
+    lines = [line for k in range(ORDER + 1) for line in _operation(name, args, result, k)]
+    namespace = {"math": math, "_vsin": math.sin, "_vcos": math.cos}
+    for series, coefficients in (("a", A), ("b", B)):
+        namespace.update({_series(series, k): x for k, x in enumerate(_padded(coefficients))})
+    exec("\n".join(lines), namespace)
+    got = lambda w: np.array([namespace[_series(w, k)] for k in range(ORDER + 1)])  # noqa: E731
+    if name == "_taylor_sin_cos":
+        np.testing.assert_allclose(got("s"), _reference(lambda a, b: mpmath.sin(a)), rtol=1e-13, atol=1e-15)
+        np.testing.assert_allclose(got("c"), _reference(lambda a, b: mpmath.cos(a)), rtol=1e-13, atol=1e-15)
+        return
+    np.testing.assert_allclose(got("w"), _reference(CASES[name][0]), rtol=1e-13, atol=1e-15)
 
 
 def test_coefficients_are_the_derivatives_of_the_solution(pendulum):

@@ -385,7 +385,7 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("--qd0", type=float, nargs="+", help="initial velocities not swept")
     sweep.add_argument("--workers", type=int, help="threads (default: one per CPU)")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="run the chunks on this Dask scheduler")
-    sweep.add_argument("--batched", action="store_true", help="SIMD lanes (rk4, dop853; final states and energy)")
+    sweep.add_argument("--batched", action="store_true", help="SIMD lanes (rk4, dop853, taylor; final states and energy)")
     sweep.add_argument("--projection", action=argparse.BooleanOptionalAction, default=None,
                        help="project onto the constraints after every step (default: on for fixed-step methods)")
     sweep.add_argument("--project-initial", action="store_true",

@@ -50,6 +50,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from lagcomp.codegen.printer import to_code
+from lagcomp.codegen.taylor_lanes import CALL
 from lagcomp.ir import Kernel, LinearSolve, ModuleIR
 
 INDENT = "    "
@@ -506,7 +507,7 @@ _INLINE = {
                                           "    for _j in range(1, k):", "        _s += _j*{w}[_j]*{a}[k - _j]",
                                           "    {w}[k] = ({a}[k] - _s*_ik)/{a}[0]"]),
     "_taylor_sin_cos": ("{w}, {b} = sin({a}), cos({a})",
-                        ["if k == 0:", "    {w}[0] = math.sin({a}[0])", "    {b}[0] = math.cos({a}[0])", "else:",
+                        ["if k == 0:", "    {w}[0] = _sin({a}[0])", "    {b}[0] = _cos({a}[0])", "else:",
                          "    _ja = k*{a}[k]", "    _s = _ja*{b}[0] if k % 2 == 1 else 0.0",
                          "    _c = _ja*{w}[0] if k % 2 == 1 else 0.0", "    _r = 0.0", "    _d = 0.0",
                          "    for _j in range(1, k, 2):", "        _ja = _j*{a}[_j]", "        _jb = (_j + 1)*{a}[_j + 1]",
@@ -514,12 +515,11 @@ _INLINE = {
                          "        _r += _jb*{b}[k - 1 - _j]", "        _d += _jb*{w}[k - 1 - _j]",
                          "    {w}[k] = (_s + _r)*_ik", "    {b}[k] = -(_c + _d)*_ik"]),
 }
-_CALL = re.compile(r"^(?:(?P<w>\w+)\[k\] = )?(?P<f>_taylor_\w+)\((?P<args>.*), k\)$")
 
 
 def _inline(line: str) -> list[str]:
     """A helper-call line of the program as its loop (`_INLINE`), or the line itself."""
-    match = _CALL.match(line)
+    match = CALL.match(line)
     if not match:
         return [line]
     f, args = match.group("f"), [a.strip() for a in match.group("args").split(",")]
@@ -596,14 +596,25 @@ def emit_taylor(program: TaylorProgram) -> str:
     )
 
 
-def taylor_operations(ir: ModuleIR) -> dict[str, int]:
-    """``{"taylor_coefficients": series operations per order}``, or {} when the module has no Taylor kernel."""
+def taylor_program(ir: ModuleIR) -> dict | None:
+    """The Taylor program of `ir` as plain data (the call notation), or None when it has none.
+
+    Stored with the module (cache metadata): `lagcomp.codegen.taylor_lanes`
+    writes batched kernels of any order from it, without sympy.
+    """
     try:
         if ir.k:
-            return {}
-        return {"taylor_coefficients": decompose(ir.kernel("rhs"), ir.n).operation_count}
+            return None
+        program = decompose(ir.kernel("rhs"), ir.n)
     except Unsupported:
-        return {}
+        return None
+    states = [None] * program.n_state
+    for line in program.setup:
+        match = re.fullmatch(r"(\w+) = X\[(\d+)\]", line)
+        if match:
+            states[int(match.group(2))] = match.group(1)
+    return dict(n_state=program.n_state, setup=list(program.setup), states=states, uses_t=program.uses_t,
+                body=[op.line for op in program.body], operations=program.operation_count)
 
 
 def taylor_source(ir: ModuleIR, events: bool) -> str:

@@ -41,8 +41,10 @@ from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 OUTPUTS = ("dense", "energy", "events")
 #: Default ceiling on the memory of a sweep's outputs, in bytes (raise it with `memory_limit`).
 MEMORY_LIMIT = 2 * 2**30
-#: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread.
-CHUNK_SECONDS, FIRST_CHUNK_PER_THREAD = 0.5, 8
+#: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread
+#: (batched drivers: enough trajectories to fill the 32 lanes of a batch several times over, so that
+#: few lanes idle while the last trajectories of the chunk finish).
+CHUNK_SECONDS, FIRST_CHUNK_PER_THREAD, FIRST_BATCHED_CHUNK_PER_THREAD = 0.5, 8, 128
 #: Solution-style status of trajectories a Ctrl-C left unstarted.
 NOT_RUN = 2
 
@@ -289,19 +291,23 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
 
     layout = (n2, rows, len(directions), cap)
     out = _allocate(n_traj, layout)
+    spec = None        # the model's own module; a batched Taylor sweep has a module of its own
     if batched:
         driver = _batched_driver(model, m)
         if m.adaptive and (rows or want_events):
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "
                               "events yet); drop `batched` for those outputs.")
         fixed, coefficients = (fixed[:7], m.driver_arguments()[:5]) if m.adaptive else (fixed, ())
+        if m.name == "taylor":
+            spec, coefficients = _taylor_lanes_spec(model, rtol, atol), ()
         task = _Task(driver, m.adaptive, fixed, layout, coefficients, projecting)
     else:
         task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments(), projecting)
     if client is None:
-        done = _run_locally(model.kernels, task, Y0, P, out, workers, progress)
+        kernels = model.kernels if spec is None else _worker_kernels(spec)
+        done = _run_locally(kernels, task, Y0, P, out, workers, progress)
     else:
-        done = _run_on_dask(client, _worker_spec(model), task, Y0, P, out, progress)
+        done = _run_on_dask(client, spec or _worker_spec(model), task, Y0, P, out, progress)
     statuses = out["status"]
     statuses[statuses == 3] = 1      # the driver's "terminal event", numbered as in Solution
     counts = out["counts"]
@@ -336,12 +342,14 @@ def _consistent_initial_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, 
 
 
 #: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`).
-BATCHED = {"rk4": "rk4_lanes", "dop853": "dop853_lanes"}
+BATCHED = {"rk4": "rk4_lanes", "dop853": "dop853_lanes", "taylor": "taylor_lanes"}
 
 
 def _batched_driver(model, m) -> str:
     if m.name not in BATCHED:
         raise OptionError(f"`batched=True` is available for {sorted(BATCHED)}; not yet for {m.name}.")
+    if m.name == "taylor":
+        return BATCHED["taylor"]       # check_method has checked that the model has a Taylor program
     if not hasattr(model.kernels, f"sweep_{BATCHED[m.name]}"):
         raise OptionError(f"{model.name!r} has no batched kernel (constrained, or more coordinates than "
                           "lagcomp.codegen.lower.UNROLL_MAX, whose LDLᵀ solve is a loop).")
@@ -404,7 +412,7 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
     n_traj = Y0.shape[0]
     threads = (os.cpu_count() or 1) if workers is None else count(workers, "workers")
     done = np.zeros(n_traj, dtype=bool)
-    chunk = FIRST_CHUNK_PER_THREAD * threads
+    chunk = (FIRST_BATCHED_CHUNK_PER_THREAD if task.driver in BATCHED.values() else FIRST_CHUNK_PER_THREAD) * threads
     with ThreadPoolExecutor(threads) as pool, deferred_interrupt() as interrupted, \
             LazyProgress(n_traj, progress, unit="traj") as bar:
         a = 0
@@ -434,6 +442,26 @@ _WORKER_MODULES: dict = {}
 def _worker_spec(model) -> tuple[str, str, str]:
     """What a worker needs to load the model's kernels: the emitted source, the system name, a cache root."""
     return model.source_path.read_text(encoding="utf-8"), model.name, str(model.source_path.parent.parent)
+
+
+def _taylor_lanes_spec(model, rtol: float, atol: float) -> tuple[str, str, str]:
+    """The spec of the module with the batched Taylor kernel of the order these tolerances need.
+
+    Written from the model's module and its Taylor program (no sympy), then
+    cached like any module: numba compiles it once, at the first sweep of this
+    model at this order (`lagcomp.codegen.taylor_lanes`).
+    """
+    from lagcomp.codegen import taylor_lanes
+
+    program, order = model._taylor_program, taylor_lanes.taylor_order(rtol, atol)
+    terms = taylor_lanes.unrolled_terms(program, order)
+    if terms > taylor_lanes.TERMS_MAX:
+        raise OptionError(
+            f"A batched Taylor sweep of {model.name!r} at order {order} (rtol={rtol:g}, atol={atol:g}) would unroll "
+            f"about {terms:,} terms, above lagcomp.codegen.taylor_lanes.TERMS_MAX = {taylor_lanes.TERMS_MAX:,} "
+            "(numba's compile time grows with them): loosen the tolerances, or drop `batched`.")
+    source = taylor_lanes.taylor_lanes_module(model.source_path.read_text(encoding="utf-8"), program, order)
+    return source, model.name, str(model.source_path.parent.parent)
 
 
 def _worker_kernels(spec: tuple[str, str, str]):

@@ -1,0 +1,299 @@
+"""The Taylor program unrolled at one order, over SIMD lanes: the kernel of batched Taylor sweeps.
+
+``taylor_coefficients`` (`lagcomp.codegen.taylor`) loops over the orders k
+and, inside each series operation, over the terms j of its convolution.
+Those short loops with data-dependent trip counts keep LLVM from vectorizing
+anything across trajectories (a probe with the lanes as the innermost array
+axis ran no faster per trajectory than the scalar kernel: the accumulators
+cannot stay in registers, and numba's arrays may alias).  Here the order p
+is fixed when the source is written, so every coefficient u[k] of every
+intermediate series is a local variable ``u_k`` and every convolution a
+sum written out: the per-trajectory program is straight-line code, the
+same shape as ``rhs_lanes``, and the loop over lanes around it vectorizes
+(4 lanes per AVX2 instruction).  heyoka's batch mode compiles the same way.
+
+The source depends on the order, so it is written when a sweep asks for it
+(`taylor_lanes_source`), from the program's call notation alone (no sympy):
+`lagcomp.codegen.taylor.taylor_program` stores it with the model's module
+(cache metadata).  Each operation
+sums its terms in the order of the loop kernel (even and odd terms in two
+accumulators), so a lane follows the scalar method closely; it is not
+bitwise the same, since LLVM may fuse a different product of a sum into a
+multiply-add.
+
+Generated functions, p the order and L the lanes; every array is flat with
+the lane last, ``A[row*L + l]`` (numba indexes 2-d arrays with run-time
+strides, and LLVM needs one run-time overlap check per store then: past 8 of
+them it does not vectorize)::
+
+    taylor_lanes(T, Y, P, X)
+        T (L,) times, Y (2n·L,) states (rows past 2n are not read),
+        P (n_p·L,) parameters; out X:
+        rows i(p + 1) + k the normalized coefficients y_i⁽ᵏ⁾/k!, k = 0..p,
+        then rows 2n(p + 1) + 0, 1, 2 the max norms of y, of its
+        coefficients p and p − 1, and row 2n(p + 1) + 3 is 1.0 where a
+        pivot of M is not positive (M singular), else 0.0.
+    taylor_lanes_advance(H, X, S, S_new)
+        S (4n·L,) states (rows 0..2n−1) and carries of the compensated sum
+        (rows 2n..4n−1); out S_new: the same after a step H[l] in each lane.
+"""
+
+from __future__ import annotations
+
+import re
+
+INDENT = "    "
+
+#: A helper call of the call notation (``w[k] = _taylor_mul(a, b, k)``); `taylor._inline` parses it too.
+CALL = re.compile(r"^(?:(?P<w>\w+)\[k\] = )?(?P<f>_taylor_\w+)\((?P<args>.*), k\)$")
+_PIVOT = re.compile(r"^if k == 0 and not (?P<test>.*):$")
+_STATE = re.compile(r"^X\[(?P<i>\d+), k \+ 1\] = (?P<value>.*)\*_ik1$")
+_INDEXED = re.compile(r"\b([A-Za-z_]\w*)\[(k|0)\]")
+_CONDITIONAL = re.compile(r"^(?P<w>\w+)\[k\] = (?P<first>.*) if k == 0 else (?P<rest>.*)$")
+
+
+def _series(name: str, k: int) -> str:
+    """The local holding coefficient k of the series `name` (a prefix no parameter or rhs local has)."""
+    return f"_o{k}_{name}"
+
+
+def _at(text: str, k: int) -> str:
+    """`text` with ``name[k]`` and ``name[0]`` replaced by the locals of order `k` and 0."""
+    return _INDEXED.sub(lambda m: _series(m.group(1), k if m.group(2) == "k" else 0), text)
+
+
+def _sum(terms: list[str]) -> str:
+    return " + ".join(terms) if terms else "0.0"
+
+
+def _convolution(k: int, a: str, b: str, first: int = 0) -> tuple[list[str], list[str]]:
+    """Terms a_j b_{k−j}, j = first..k, split as the loop kernel sums them: even and odd j."""
+    even = [f"{_series(a, j)}*{_series(b, k - j)}" for j in range(first, k + 1) if (j - first) % 2 == 0]
+    odd = [f"{_series(a, j)}*{_series(b, k - j)}" for j in range(first, k + 1) if (j - first) % 2 == 1]
+    return even, odd
+
+
+def _both(even: list[str], odd: list[str]) -> str:
+    """The two accumulators added, as the loop kernel does at the end."""
+    if not odd:
+        return _sum(even)
+    return f"({_sum(even)}) + ({_sum(odd)})"
+
+
+def _operation(f: str, args: list[str], w: str | None, k: int) -> list[str]:
+    """Coefficient k of one series operation of the call notation (the recurrences of `taylor`)."""
+    s = lambda name, j: _series(name, j)  # noqa: E731
+    inverse_k = repr(1.0 / k) if k else "0.0"
+    if f == "_taylor_mul":
+        a, b = args
+        even, odd = _convolution(k, a, b)
+        return [f"{s(w, k)} = {_both(even, odd)}"]
+    if f == "_taylor_square":
+        (a,) = args
+        pairs = [f"{s(a, j)}*{s(a, k - j)}" for j in range((k + 1) // 2)]
+        middle = f"{s(a, k // 2)}*{s(a, k // 2)}" if k % 2 == 0 else None
+        if not pairs:
+            return [f"{s(w, k)} = {middle}"]
+        doubled = f"2.0*({_both(pairs[0::2], pairs[1::2])})"
+        return [f"{s(w, k)} = {doubled}" + (f" + {middle}" if middle else "")]
+    if f in ("_taylor_div", "_taylor_rdiv"):
+        numerator, b = args[:2]
+        top = s(numerator, k) if f == "_taylor_div" else (numerator if k == 0 else "0.0")
+        even, odd = _convolution(k, b, w, first=1)
+        if not even:
+            return [f"{s(w, k)} = {top}/{s(b, 0)}"]
+        return [f"{s(w, k)} = ({top} - ({_both(even, odd)}))/{s(b, 0)}"]
+    if f == "_taylor_sqrt":
+        a = args[0]
+        if k == 0:
+            return [f"{s(w, 0)} = math.sqrt({s(a, 0)})"]
+        terms = [f"{s(w, j)}*{s(w, k - j)}" for j in range(1, k)]
+        return [f"{s(w, k)} = ({s(a, k)} - ({_sum(terms)}))/(2.0*{s(w, 0)})"]
+    if f == "_taylor_pow":
+        a, c = args[:2]
+        if k == 0:
+            return [f"{s(w, 0)} = {s(a, 0)}**{c}"]
+        terms = [f"({c}*{k - j} - {j})*{s(a, k - j)}*{s(w, j)}" for j in range(k)]
+        return [f"{s(w, k)} = ({_sum(terms)})*{inverse_k}/{s(a, 0)}"]
+    if f == "_taylor_exp":
+        a = args[0]
+        if k == 0:
+            return [f"{s(w, 0)} = math.exp({s(a, 0)})"]
+        terms = [f"{j}.0*{s(a, j)}*{s(w, k - j)}" for j in range(1, k + 1)]
+        return [f"{s(w, k)} = ({_sum(terms)})*{inverse_k}"]
+    if f == "_taylor_log":
+        a = args[0]
+        if k == 0:
+            return [f"{s(w, 0)} = math.log({s(a, 0)})"]
+        terms = [f"{j}.0*{s(w, j)}*{s(a, k - j)}" for j in range(1, k)]
+        return [f"{s(w, k)} = ({s(a, k)} - ({_sum(terms)})*{inverse_k})/{s(a, 0)}"]
+    if f == "_taylor_sin_cos":
+        a, sine, cosine = args
+        if k == 0:
+            return [f"{s(sine, 0)} = _vsin({s(a, 0)})", f"{s(cosine, 0)} = _vcos({s(a, 0)})"]
+        scaled = lambda j: f"{j}.0*{s(a, j)}"  # noqa: E731
+        # the loop kernel's accumulators: odd k starts with j = k; then pairs (j, j + 1) for odd j
+        def split(other: str) -> str:
+            first = [f"{scaled(k)}*{s(other, 0)}"] if k % 2 == 1 else []
+            odd = [f"{scaled(j)}*{s(other, k - j)}" for j in range(1, k, 2)]
+            even = [f"{scaled(j + 1)}*{s(other, k - 1 - j)}" for j in range(1, k, 2)]
+            return _both(first + odd, even)
+        return [f"{s(sine, k)} = ({split(cosine)})*{inverse_k}", f"{s(cosine, k)} = -({split(sine)})*{inverse_k}"]
+    raise ValueError(f"no unrolled form of {f}")
+
+
+def _order_lines(body: list[str], k: int, states: dict[int, str]) -> list[str]:
+    """The program's operations at order k (`body`: the lines of the call notation)."""
+    lines = []
+    for line in body:
+        if line.startswith("#") or line.startswith(INDENT):     # comments; the pivot test's return line
+            continue
+        pivot = _PIVOT.match(line)
+        if pivot:
+            if k == 0:
+                lines.append(f"_ok = _ok & ({_at(pivot.group('test'), 0)})")
+            continue
+        state = _STATE.match(line)
+        if state:
+            i = int(state.group("i"))
+            value = state.group("value")
+            conditional = re.fullmatch(r"\((?P<c>.*) if k == 0 else 0\.0\)", value)
+            if conditional:
+                value = conditional.group("c") if k == 0 else "0.0"
+            else:
+                value = _at(value, k)
+            lines.append(f"{_series(states[i], k + 1)} = {value}*{1.0 / (k + 1)!r}")
+            continue
+        call = CALL.match(line)
+        if call:
+            args = [a.strip() for a in call.group("args").split(",")]
+            lines += _operation(call.group("f"), args, call.group("w"), k)
+            continue
+        conditional = _CONDITIONAL.match(line)
+        if conditional:
+            value = conditional.group("first") if k == 0 else conditional.group("rest")
+            lines.append(f"{_series(conditional.group('w'), k)} = {_at(value, k)}")
+            continue
+        w, value = line.split(" = ", 1)
+        lines.append(f"{_series(w[:-3], k)} = {_at(value, k)}")
+    return lines
+
+
+def taylor_lanes_source(program: dict, order: int, lanes: int) -> str:
+    """The source of ``taylor_lanes`` and ``taylor_lanes_advance`` at `order` for `program`.
+
+    `program` has ``n_state``, ``setup`` (statements before the order
+    loop, over the scalar parameter vector ``p``), ``states`` (series name of
+    each state component, in order), ``uses_t`` and ``body`` (the operations
+    of one order k in the call notation).
+    """
+    n_state, states = program["n_state"], dict(enumerate(program["states"]))
+    lines = ["_ok = True"]
+    for line in program["setup"]:
+        if re.fullmatch(r"\w+ = X\[\d+\]", line):
+            continue
+        if line.startswith("if "):
+            lines.append(f"_ok = _ok & ({line[len('if not '):-1]})")
+        elif line.startswith(INDENT):
+            continue
+        else:
+            lines.append(re.sub(r"\bp\[(\d+)\]", lambda m: f"P[{int(m.group(1)) * lanes} + _l]", line))
+    lines += [f"{_series(states[i], 0)} = Y[{i * lanes} + _l]" for i in range(n_state)]
+    if program["uses_t"]:
+        lines += [f"{_series('_t', 0)} = T[_l]", f"{_series('_t', 1)} = 1.0"]
+        lines += [f"{_series('_t', k)} = 0.0" for k in range(2, order + 1)]
+    for k in range(order):
+        lines.append(f"# order {k}")
+        lines += _order_lines(program["body"], k, states)
+    lines += [f"X[{(i * (order + 1) + k) * lanes} + _l] = {_series(states[i], k)}"
+              for i in range(n_state) for k in range(order + 1)]
+    # then the max norms of y and of its last two coefficients (for the step, as in taylor_run), and the pivots
+    first = n_state * (order + 1)
+    for row, k in ((first, 0), (first + 1, order), (first + 2, order - 1)):
+        lines.append("_norm = 0.0")
+        lines += [f"_norm = max(_norm, abs({_series(states[i], k)}))" for i in range(n_state)]
+        lines.append(f"X[{row * lanes} + _l] = _norm")
+    lines.append(f"X[{(first + 3) * lanes} + _l] = 0.0 if _ok else 1.0")
+    kernel = _lane_loop("taylor_lanes(T, Y, P, X)", f"Coefficients of order 0..{order} of every lane; see lagcomp.codegen.taylor_lanes.",
+                        lanes, lines)
+    return kernel + "\n\n" + _advance_source(n_state, order, lanes)
+
+
+def _advance_source(n_state: int, order: int, lanes: int) -> str:
+    """``taylor_lanes_advance``: every lane's new state, Horner's rule and compensated sums as ``taylor_run``'s."""
+    lines = ["_h = H[_l]"]
+    for i in range(n_state):
+        top = f"X[{(i * (order + 1) + order) * lanes} + _l]"
+        horner = f"{top}*_h"
+        for k in range(order - 1, 0, -1):
+            horner = f"({horner} + X[{(i * (order + 1) + k) * lanes} + _l])*_h"
+        y, carry = f"S[{i * lanes} + _l]", f"S[{(n_state + i) * lanes} + _l]"
+        lines += [f"_increment = {horner} - {carry}", f"_y = {y} + _increment",
+                  f"S_new[{i * lanes} + _l] = _y", f"S_new[{(n_state + i) * lanes} + _l] = (_y - {y}) - _increment"]
+    return _lane_loop("taylor_lanes_advance(H, X, S, S_new)",
+                      "Every lane's state and carry S_new after its step H[l] from S; see lagcomp.codegen.taylor_lanes.",
+                      lanes, lines)
+
+
+def _lane_loop(signature: str, doc: str, lanes: int, lines: list[str]) -> str:
+    """A function whose body is `lines` in a loop over the lanes ``_l`` (which LLVM vectorizes).
+
+    Arrays are flat, indexed ``row*lanes + _l`` with constant rows (see the module docstring).
+    """
+    body = "\n".join(2 * INDENT + line for line in lines)
+    return (
+        f'@njit(cache=True, error_model="numpy", fastmath={{"contract"}}, nogil=True)\n'
+        f"def {signature}:\n"
+        f'{INDENT}"""{doc}"""\n'
+        f"{INDENT}for _l in range({lanes}):\n"
+        f"{body}\n"
+    )
+
+
+#: Lanes of a batch: enough for LLVM to vectorize the loop around the straight-line body (with 8 it
+#: unrolls the loop instead, and keeps the code scalar), few enough for the coefficients of a batch
+#: to stay in the L1 cache (double pendulum at order 13: 14 KiB).
+LANES = 32
+
+
+def taylor_order(rtol: float, atol: float) -> int:
+    """The order ``taylor_run`` uses for these tolerances: ceil(−½ ln min(rtol, atol) + 1), at least 2."""
+    import math
+
+    return max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol)) + 1.0)))
+
+
+#: Largest unrolled program written (`unrolled_terms`).  The first batched sweep (numba compiling the
+#: module) took 10 s for the double pendulum at order 13 (1,586 terms) and 21 s for the 3-link
+#: pendulum at order 13 (4,576), growing about linearly: the limit is about a minute.
+TERMS_MAX = 12_000
+
+
+def unrolled_terms(program: dict, order: int) -> int:
+    """About how many products and sums `taylor_lanes_source` writes for `program` at `order`.
+
+    A convolution (a call of the call notation) has k + 1 terms at order k,
+    sin and cos twice that; any other operation one per order.
+    """
+    convolution = sum(2 if line.startswith("_taylor_sin_cos") else 1
+                      for line in program["body"] if "_taylor_" in line)
+    return convolution * order * (order + 1) // 2 + (len(program["body"]) - convolution) * order
+
+
+def taylor_lanes_module(module_source: str, program: dict, order: int, lanes: int = LANES) -> str:
+    """A module for batched Taylor sweeps at `order`: the model's module, ``taylor_lanes`` and its driver.
+
+    The model's module comes first, whole, so that the new module stands on
+    its own (numba caches it by its own file; a Dask worker builds it from
+    this text alone); numba compiles only the functions a sweep calls.
+    """
+    from lagcomp.codegen.emit import template
+
+    return (
+        module_source.rstrip("\n")
+        + f"\n\n\n# {'-' * 76}\n# Batched Taylor sweeps at order {order}, {lanes} lanes (lagcomp.codegen.taylor_lanes)\n\n"
+        + f"_TAYLOR_ORDER = {order}\n_TAYLOR_LANES = {lanes}\n\n\n"
+        + taylor_lanes_source(program, order, lanes)
+        + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/taylor_lanes.py\n\n"
+        + template("taylor_lanes")
+    )
