@@ -91,6 +91,8 @@ def main() -> None:
                   for tol in args.dop853_tolerances[-1:]]
         cases += [("taylor", dict(method="taylor", rtol=tol, atol=tol), f"tol {tol:g}", None)
                   for tol in args.taylor_tolerances]
+        cases += [("taylor batched", dict(method="taylor", rtol=tol, atol=tol, batched=True),
+                   f"tol {tol:g}, SIMD lanes", None) for tol in args.taylor_tolerances]
         cases += [("rk4", dict(method="rk4", dt=0.01), "dt 0.01 (1000 steps)", None),
                   ("rk4 batched", dict(method="rk4", dt=0.01, batched=True), "dt 0.01, SIMD lanes", None)]
         for method, options, setting, scipy_method in cases:

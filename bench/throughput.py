@@ -117,7 +117,8 @@ def sweep_section(ctx) -> Table:
               "the scaling the machine offers during this run")
     cases = [("rk4", dict(method="rk4", dt=0.01), "dt 0.01 (10³ steps)"),
              ("rk4 batched", dict(method="rk4", dt=0.01, batched=True), "dt 0.01, SIMD lanes"),
-             ("dop853", dict(rtol=1e-8, atol=1e-8), "tol 1e-8")]
+             ("dop853", dict(rtol=1e-8, atol=1e-8), "tol 1e-8"),
+             ("taylor batched", dict(method="taylor", rtol=1e-10, atol=1e-10, batched=True), "tol 1e-10, SIMD lanes")]
     for name, options, setting in cases:
         runs = [lambda workers=workers, options=options: model.sweep(
             (0, T_END), grid(side), qd0=[0, 0], workers=workers, progress=False, **options) for workers in (1, 2)]
