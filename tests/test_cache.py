@@ -21,6 +21,13 @@ PROBE = textwrap.dedent(
     import lagcomp.mechanics.lagrange as lagrange
     from lagcomp import examples
 
+    def batched_taylor_misses(model):
+        # numba compilations of a batched Taylor sweep (its own module, written at the sweep)
+        from lagcomp.integrate import sweep
+        model.sweep((0, 1), {"theta": [0.1, 0.2]}, method="taylor", rtol=1e-6, atol=1e-6, batched=True)
+        (module,) = [m for m in sweep._WORKER_MODULES.values() if hasattr(m, "sweep_taylor_lanes")]
+        return sum(module.sweep_taylor_lanes.stats.cache_misses.values())
+
     derivations = []
     original = lagrange.derive
     lagrange.derive = lambda system: derivations.append(system.name) or original(system)
@@ -29,6 +36,7 @@ PROBE = textwrap.dedent(
     sol = model.simulate((0, 1), method="rk4", dt=0.01)
     stats = {name: getattr(model.kernels, name).stats for name in ("rk4_run", "observables")}
     print(json.dumps({
+        "batched_taylor": batched_taylor_misses(model),
         "from_cache": model.from_cache,
         "derivations": len(derivations),
         "misses": sum(sum(s.cache_misses.values()) for s in stats.values()),
@@ -44,10 +52,18 @@ LOAD_PROBE = textwrap.dedent(
     import json, sys
     import lagcomp as lc
 
+    def batched_taylor_misses(model):
+        # numba compilations of a batched Taylor sweep (its own module, written at the sweep)
+        from lagcomp.integrate import sweep
+        model.sweep((0, 1), {"theta": [0.1, 0.2]}, method="taylor", rtol=1e-6, atol=1e-6, batched=True)
+        (module,) = [m for m in sweep._WORKER_MODULES.values() if hasattr(m, "sweep_taylor_lanes")]
+        return sum(module.sweep_taylor_lanes.stats.cache_misses.values())
+
     model = lc.load("simple_pendulum", cache_dir=sys.argv[1])
     sol = model.simulate((0, 1), method="rk4", dt=0.01)
     stats = {name: getattr(model.kernels, name).stats for name in ("rk4_run", "observables")}
     print(json.dumps({
+        "batched_taylor": batched_taylor_misses(model),
         "sympy_imported": "sympy" in sys.modules,
         "misses": sum(sum(s.cache_misses.values()) for s in stats.values()),
         "final": sol.q[-1, 0],
@@ -64,14 +80,14 @@ def _probe(cache_dir, probe=PROBE) -> dict:
 
 def test_second_process_does_no_derivation_and_no_numba_compilation(tmp_path):
     first = _probe(tmp_path)
-    assert first == {**first, "from_cache": False, "derivations": 1}
+    assert first == {**first, "from_cache": False, "derivations": 1, "batched_taylor": 1}
     assert first["misses"] == 2  # rk4_run and observables compiled once, then saved
     second = _probe(tmp_path)
     assert second["from_cache"] is True and second["derivations"] == 0
-    assert second["misses"] == 0 and second["hits"] == 2
+    assert second["misses"] == 0 and second["hits"] == 2 and second["batched_taylor"] == 0
     assert second["final"] == first["final"]
     loaded = _probe(tmp_path, LOAD_PROBE)  # lagcomp.load: by name, without importing sympy at all
-    assert loaded == {"sympy_imported": False, "misses": 0, "final": first["final"]}
+    assert loaded == {"sympy_imported": False, "misses": 0, "final": first["final"], "batched_taylor": 0}
 
 
 def _module_files(cache_dir):

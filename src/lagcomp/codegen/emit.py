@@ -19,12 +19,11 @@ and stop the run with the time of failure.
 
 from __future__ import annotations
 
-import re
-from importlib import resources
 
 from lagcomp import __version__
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor import taylor_source
+from lagcomp.codegen.templating import template
 from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR, SymmetricProduct
 
 INDENT = "    "
@@ -290,20 +289,6 @@ def _constraint_hooks(ir: ModuleIR) -> str:
     return _CONSTRAINED_HOOKS.format(rows=rows, n=ir.n, k=ir.k, kh=len(rows), newton=8)
 
 
-#: Template lines between these markers (and the markers) serve only systems with events.
-_EVENT_BLOCK = re.compile(r"^[ \t]*# >>> events\n.*?^[ \t]*# <<< events\n", re.DOTALL | re.MULTILINE)
-
-
-def template(name: str, events: bool = True) -> str:
-    """The text of ``templates/<name>.py``, appended to every module (see its docstring).
-
-    Without `events`, the blocks marked ``# >>> events`` ... ``# <<< events``
-    are left out: event handling makes the adaptive drivers take about 1.8 s
-    longer to compile (DOP853 on the double pendulum, 2.8 s -> 4.7 s), a
-    cost only systems that declare events should pay.
-    """
-    text = resources.files("lagcomp.codegen").joinpath(f"templates/{name}.py").read_text(encoding="utf-8")
-    return text if events else _EVENT_BLOCK.sub("", text)
 
 
 #: The drivers of ``templates/drivers.py`` and ``symplectic.py``, by calling convention.

@@ -51,6 +51,7 @@ import sympy as sp
 
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor_lanes import CALL
+from lagcomp.codegen.templating import template
 from lagcomp.ir import Kernel, LinearSolve, ModuleIR
 
 INDENT = "    "
@@ -619,8 +620,6 @@ def taylor_program(ir: ModuleIR) -> dict | None:
 
 def taylor_source(ir: ModuleIR, events: bool) -> str:
     """``taylor_coefficients`` and the driver template for `ir`, or ``TAYLOR_REFUSED`` saying why not."""
-    from lagcomp.codegen.emit import template
-
     try:
         if ir.k:
             raise Unsupported("constraints (their multipliers are not covered)")

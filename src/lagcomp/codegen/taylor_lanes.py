@@ -42,6 +42,8 @@ from __future__ import annotations
 
 import re
 
+from lagcomp.codegen.templating import template
+
 INDENT = "    "
 
 #: A helper call of the call notation (``w[k] = _taylor_mul(a, b, k)``); `taylor._inline` parses it too.
@@ -287,8 +289,6 @@ def taylor_lanes_module(module_source: str, program: dict, order: int, lanes: in
     its own (numba caches it by its own file; a Dask worker builds it from
     this text alone); numba compiles only the functions a sweep calls.
     """
-    from lagcomp.codegen.emit import template
-
     return (
         module_source.rstrip("\n")
         + f"\n\n\n# {'-' * 76}\n# Batched Taylor sweeps at order {order}, {lanes} lanes (lagcomp.codegen.taylor_lanes)\n\n"
