@@ -47,8 +47,9 @@ def rhs(t, y, p, out):
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
+    _r0 = 1.0/_d0
     _z0 = _f0
-    _x0 = _z0/_d0
+    _x0 = _z0*_r0
     out[1] = _x0
     return 0
 
@@ -82,8 +83,9 @@ def rhs_lanes(T, Y, P, out, bad):
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
+        _r0 = 1.0/_d0
         _z0 = _f0
-        _x0 = _z0/_d0
+        _x0 = _z0*_r0
         bad[_l] = not (_ok0)
         out[1, _l] = _x0
 
@@ -239,8 +241,9 @@ def velocities(t, y, p, out):
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
+    _r0 = 1.0/_d0
     _z0 = _f0
-    _x0 = _z0/_d0
+    _x0 = _z0*_r0
     out[0] = _x0
     return 0
 

@@ -373,7 +373,7 @@ class _Builder:
 
 
 def _ldlt(b: _Builder, solve: LinearSolve) -> list[Value]:
-    """x = M⁻¹ f by LDLᵀ in series arithmetic (the same steps as the emitted ``_unrolled_ldlt``).
+    """x = M⁻¹ f by LDLᵀ in series arithmetic (the factorization ``_unrolled_ldlt`` emits, in plain form).
 
     The pivots are tested at order 0 (the value at t): k = 0 returns j + 1 there, as ``rhs`` does.
     """
