@@ -18,7 +18,7 @@ import sys
 import numpy as np
 
 from bench import systems
-from bench.bench_sweep import T_END, grid, scipy_loop
+from bench.bench_sweep import T_END, grid, scipy_loop, starts_of
 from bench.harness import Table, fmt, fmt_stat, interleaved_times, measure, paired, stat_of
 
 
@@ -106,8 +106,7 @@ def sweep_section(ctx) -> Table:
     )
     model = ctx.model("double_pendulum")
     n = side * side
-    angles = np.linspace(-3, 3, side)
-    starts = np.column_stack([np.repeat(angles, side), np.tile(angles, side)])[np.random.default_rng(0).choice(n, 20)]
+    starts = starts_of(side)[np.random.default_rng(0).choice(n, 20)]
     loop = measure(scipy_loop(model, starts, "DOP853", dict(rtol=1e-8, atol=1e-8)), ctx.repeats)
     scipy_rate = len(starts) / loop.median
     table.add("scipy solve_ivp loop", "DOP853 tol 1e-8", fmt(scipy_rate), "", "", "1.00×")
