@@ -1,6 +1,9 @@
-"""Sweep throughput: trajectories per second on 1 and 2 threads, against a Python loop of scipy solve_ivp.
+"""Sweep throughput at equal accuracy: trajectories per second on 1 and 2 threads, beside the peers.
 
     python -m bench.bench_sweep [--side 100] [--repeats 3]      (from the repository root)
+
+scans the tolerances; ``python -m bench`` runs a subset as its section
+"ensembles" (`SECTION_SCANS`).
 
 The double pendulum from a side × side grid of (θ1, θ2) ∈ [−3, 3]², at rest,
 to t = 10.  Accuracy is the median over the grid of the endpoint error (max
@@ -30,6 +33,7 @@ from scipy.integrate import solve_ivp
 
 import lagcomp as lc
 from bench import systems
+from bench.harness import Table, fmt
 from lagcomp import examples
 
 T_END = 10.0
@@ -137,19 +141,82 @@ def numbalsoda_prange(starts: np.ndarray, p: np.ndarray, tol: float):
     return run
 
 
-def peer_cases(starts: np.ndarray, p: np.ndarray, args) -> list:
-    """(name, setting, run(workers)) of the installed peers; a skipped row for the others."""
+def lagcomp_cases(model, side: int, scans: dict) -> list:
+    """(name, setting, run(workers) -> final states (N, 4)) of lagcomp's sweeps; `scans` gives the tolerances."""
+    def case(name, setting, **options):
+        def run(workers):
+            sweep = model.sweep((0, T_END), grid(side), qd0=[0, 0], workers=workers, progress=False, **options)
+            return sweep.final.reshape(-1, 4)
+        return name, setting, run
+    cases = [case("dop853", f"tol {tol:g}", rtol=tol, atol=tol) for tol in scans["dop853"]]
+    cases += [case("dop853 batched", f"tol {tol:g}, SIMD lanes", rtol=tol, atol=tol, batched=True)
+              for tol in scans["dop853 batched"]]
+    cases += [case("taylor", f"tol {tol:g}", method="taylor", rtol=tol, atol=tol) for tol in scans["taylor"]]
+    cases += [case("taylor batched", f"tol {tol:g}, SIMD lanes", method="taylor", rtol=tol, atol=tol, batched=True)
+              for tol in scans["taylor batched"]]
+    if scans.get("rk4"):
+        cases += [case("rk4", "dt 0.01 (1000 steps)", method="rk4", dt=0.01),
+                  case("rk4 batched", "dt 0.01, SIMD lanes", method="rk4", dt=0.01, batched=True)]
+    return cases
+
+
+def peer_cases(starts: np.ndarray, p: np.ndarray, scans: dict) -> list:
+    """The same for the installed peers; run None (a skipped row) for the others."""
     cases = []
-    for name, module, make, tolerances in (
-            ("heyoka batch, reduced ODE", "heyoka", heyoka_batch, args.heyoka_tolerances),
-            ("numbalsoda dop853, prange", "numbalsoda", numbalsoda_prange, args.dop853_tolerances[-2:])):
+    for name, module, make in (("heyoka batch, reduced ODE", "heyoka", heyoka_batch),
+                               ("numbalsoda dop853, prange", "numbalsoda", numbalsoda_prange)):
         try:
             __import__(module)
         except ImportError:
             cases.append((name, "skipped: not installed", None))
             continue
-        cases += [(name, f"tol {tol:g}", make(starts, p, tol)) for tol in tolerances]
+        cases += [(name, f"tol {tol:g}", make(starts, p, tol)) for tol in scans[module]]
     return cases
+
+
+def equal_accuracy_table(side: int, repeats: int, scans: dict, cache_dir: str, scipy_samples: int = 20) -> Table:
+    """Every case of `scans` on the side × side grid: median error, traj/s on 1 and 2 threads, × a scipy loop."""
+    model = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
+    n = side * side
+    reference = model.sweep((0, T_END), grid(side), qd0=[0, 0], method="taylor", progress=False).final.reshape(-1, 4)
+    starts = starts_of(side)
+    sample = starts[np.random.default_rng(0).choice(n, size=min(scipy_samples, n), replace=False)]
+    scipy_tol = scans["dop853"][0]
+    seconds, _ = timed(scipy_loop(model, sample, "DOP853", dict(rtol=scipy_tol, atol=scipy_tol)), 1)
+    scipy_rate = len(sample) / seconds
+    table = Table(
+        f"Sweeps at equal accuracy: double pendulum, {side}×{side} grid of (θ1, θ2) at rest, t = {T_END:g}",
+        ["method", "setting", "median error", "traj/s, 1 thread", "traj/s, 2 threads", "2 vs 1", "× scipy loop"],
+        note="The median error is the median over the grid of the endpoint error (max norm of the state) against "
+             "a Taylor sweep at machine precision, so rows compare at equal accuracy, not equal nominal tolerance. "
+             f"Rates are medians of {repeats} warm runs. Baseline: a Python loop of scipy solve_ivp (DOP853, tol "
+             f"{scipy_tol:g}, lagcomp's compiled rhs) over {len(sample)} grid points, {fmt(scipy_rate)} traj/s. "
+             "heyoka runs its batch mode (taylor_adaptive_batch, recommended_simd_size() trajectories per batch, "
+             "one integrator per thread) on the hand-reduced ODE; numbalsoda its dop853 on a hand-written numba "
+             "rhs in a numba prange.",
+    )
+    for name, setting, run in lagcomp_cases(model, side, scans) + peer_cases(starts, model.parameter_vector(), scans):
+        if run is None:
+            table.add(name, setting, "", "", "", "", "")
+            continue
+        rates = []
+        for workers in (1, 2):
+            seconds, final = timed(lambda: run(workers), repeats)
+            rates.append(n / seconds)
+        error = np.median(np.max(np.abs(final - reference), axis=-1))
+        table.add(name, setting, f"{error:.1e}", fmt(rates[0]), fmt(rates[1]), f"{rates[1] / rates[0]:.2f}",
+                  f"{rates[1] / scipy_rate:,.0f}×")
+    return table
+
+
+#: The rows `python -m bench` runs (the CLI below scans more tolerances by default).
+SECTION_SCANS = {"dop853": [1e-12], "dop853 batched": [1e-13], "taylor": [1e-10], "taylor batched": [1e-10, 1e-12],
+                 "heyoka": [1e-10, 1e-12], "numbalsoda": [1e-12]}
+
+
+def section(ctx) -> Table:
+    """`python -m bench`'s section: the grid of issue 6 (100×100; 20×20 with --quick)."""
+    return equal_accuracy_table(20 if ctx.quick else 100, min(ctx.repeats, 3), SECTION_SCANS, ctx.cache_dir)
 
 
 def main() -> None:
@@ -161,56 +228,11 @@ def main() -> None:
     parser.add_argument("--taylor-tolerances", type=float, nargs="+", default=[1e-10, 1e-12, 1e-14])
     parser.add_argument("--heyoka-tolerances", type=float, nargs="+", default=[1e-10, 1e-12])
     args = parser.parse_args()
-    n = args.side**2
+    scans = {"dop853": args.dop853_tolerances, "dop853 batched": args.dop853_tolerances[-1:],
+             "taylor": args.taylor_tolerances, "taylor batched": args.taylor_tolerances, "rk4": True,
+             "heyoka": args.heyoka_tolerances, "numbalsoda": args.dop853_tolerances[-2:]}
     with tempfile.TemporaryDirectory() as cache_dir:
-        model = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
-
-        def sweep(workers, **options):
-            return model.sweep((0, T_END), grid(args.side), qd0=[0, 0], workers=workers, progress=False, **options)
-
-        reference = sweep(2, method="taylor").final
-        print(f"double pendulum, {args.side}×{args.side} grid, t = {T_END:g}; median endpoint error vs taylor at "
-              "machine precision\n")
-        print("| method | setting | median error | traj/s, 1 thread | traj/s, 2 threads | 2 vs 1 | vs scipy loop |")
-        print("|---|---|---|---|---|---|---|")
-        rng = np.random.default_rng(0)
-        samples = rng.choice(n, size=min(args.scipy_samples, n), replace=False)
-
-        cases = [("dop853", dict(rtol=tol, atol=tol), f"tol {tol:g}", "DOP853")
-                 for tol in args.dop853_tolerances]
-        cases += [("dop853 batched", dict(rtol=tol, atol=tol, batched=True), f"tol {tol:g}, SIMD lanes", None)
-                  for tol in args.dop853_tolerances[-1:]]
-        cases += [("taylor", dict(method="taylor", rtol=tol, atol=tol), f"tol {tol:g}", None)
-                  for tol in args.taylor_tolerances]
-        cases += [("taylor batched", dict(method="taylor", rtol=tol, atol=tol, batched=True),
-                   f"tol {tol:g}, SIMD lanes", None) for tol in args.taylor_tolerances]
-        cases += [("rk4", dict(method="rk4", dt=0.01), "dt 0.01 (1000 steps)", None),
-                  ("rk4 batched", dict(method="rk4", dt=0.01, batched=True), "dt 0.01, SIMD lanes", None)]
-        for method, options, setting, scipy_method in cases:
-            rates = []
-            for workers in (1, 2):
-                seconds, result = timed(lambda: sweep(workers, **options), args.repeats)
-                rates.append(n / seconds)
-            error = np.median(np.max(np.abs(result.final - reference), axis=-1))
-            versus = ""
-            if scipy_method:
-                starts = starts_of(args.side)[samples]
-                seconds, _ = timed(scipy_loop(model, starts, scipy_method, options), 1)
-                versus = f"{rates[1] / (len(samples) / seconds):.0f}×"
-            print(f"| {method} | {setting} | {error:.1e} | {rates[0]:,.0f} | {rates[1]:,.0f} | "
-                  f"{rates[1] / rates[0]:.2f} | {versus} |")
-        flat_reference = reference.reshape(-1, reference.shape[-1])
-        for name, setting, run in peer_cases(starts_of(args.side), model.parameter_vector(), args):
-            if run is None:
-                print(f"| {name} | {setting} |  |  |  |  |  |")
-                continue
-            rates = []
-            for workers in (1, 2):
-                seconds, final = timed(lambda: run(workers), args.repeats)
-                rates.append(n / seconds)
-            error = np.median(np.max(np.abs(final - flat_reference), axis=-1))
-            print(f"| {name} | {setting} | {error:.1e} | {rates[0]:,.0f} | {rates[1]:,.0f} | "
-                  f"{rates[1] / rates[0]:.2f} |  |")
+        print(equal_accuracy_table(args.side, args.repeats, scans, cache_dir, args.scipy_samples).markdown())
 
 
 if __name__ == "__main__":

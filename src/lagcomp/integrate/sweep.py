@@ -418,6 +418,8 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
         a = 0
         while a < n_traj and not interrupted[0]:
             b = min(a + chunk, n_traj)
+            if n_traj - b < chunk // 2:
+                b = n_traj          # a short tail joins this chunk: one wait for the slowest thread fewer
             bounds = np.linspace(a, b, min(threads, b - a) + 1).astype(int)
             started = time.perf_counter()
             parts = [(lo, pool.submit(_run_chunk, kernels, task, Y0[lo:hi], P[lo:hi]))
