@@ -1,9 +1,9 @@
 """Batched Taylor sweeps: a *template*, appended after a ``taylor_lanes`` kernel of one order.
 
 `lagcomp.codegen.taylor_lanes` writes a module for one Taylor order p: the
-model's module, then ``taylor_lanes`` (the program unrolled at order p over
-``_TAYLOR_LANES`` lanes), the constants ``_TAYLOR_ORDER`` and
-``_TAYLOR_LANES``, then this text.
+model's module, the constants ``_TAYLOR_ORDER`` and ``_TAYLOR_LANES``,
+``taylor_lanes`` (the program unrolled at order p over the lanes) and
+``taylor_lanes_advance`` (every lane's Horner sum), then this text.
 
 ``sweep_taylor_lanes`` runs the trajectories (Y0[k], P[k]) through the lanes.
 Each lane takes the steps ``taylor_run`` (``taylor.py``) takes from its own
@@ -18,7 +18,7 @@ lanes, not the longest one times the lanes.  Outputs as ``sweep_dop853_lanes``
 (final states, statuses, counts, energy errors), nrejected always 0.
 """
 
-# ruff: noqa: F821  (taylor_lanes, _TAYLOR_ORDER, _TAYLOR_LANES, energy, _ODE_* come from the module)
+# ruff: noqa: F821  (taylor_lanes, taylor_lanes_advance, _TAYLOR_*, energy, _ODE_* come from the module)
 
 import math
 
