@@ -84,7 +84,7 @@ def _both(even: list[str], odd: list[str]) -> str:
 
 def _operation(f: str, args: list[str], w: str | None, k: int) -> list[str]:
     """Coefficient k of one series operation of the call notation (the recurrences of `taylor`)."""
-    s = lambda name, j: _series(name, j)  # noqa: E731
+    s = _series
     inverse_k = repr(1.0 / k) if k else "0.0"
     if f == "_taylor_mul":
         a, b = args
@@ -176,8 +176,8 @@ def _order_lines(body: list[str], k: int, states: dict[int, str]) -> list[str]:
             value = conditional.group("first") if k == 0 else conditional.group("rest")
             lines.append(f"{_series(conditional.group('w'), k)} = {_at(value, k)}")
             continue
-        w, value = line.split(" = ", 1)
-        lines.append(f"{_series(w[:-3], k)} = {_at(value, k)}")
+        target, value = line.split(" = ", 1)       # "w[k] = <linear in the arguments' [k]>"
+        lines.append(f"{_series(target.removesuffix('[k]'), k)} = {_at(value, k)}")
     return lines
 
 
@@ -216,8 +216,8 @@ def taylor_lanes_source(program: dict, order: int, lanes: int) -> str:
         lines += [f"_norm = max(_norm, abs({_series(states[i], k)}))" for i in range(n_state)]
         lines.append(f"X[{row * lanes} + _l] = _norm")
     lines.append(f"X[{(first + 3) * lanes} + _l] = 0.0 if _ok else 1.0")
-    kernel = _lane_loop("taylor_lanes(T, Y, P, X)", f"Coefficients of order 0..{order} of every lane; see lagcomp.codegen.taylor_lanes.",
-                        lanes, lines)
+    doc = f"Coefficients of order 0..{order} of every lane; see lagcomp.codegen.taylor_lanes."
+    kernel = _lane_loop("taylor_lanes(T, Y, P, X)", doc, lanes, lines)
     return kernel + "\n\n" + _advance_source(n_state, order, lanes)
 
 
@@ -232,9 +232,8 @@ def _advance_source(n_state: int, order: int, lanes: int) -> str:
         y, carry = f"S[{i * lanes} + _l]", f"S[{(n_state + i) * lanes} + _l]"
         lines += [f"_increment = {horner} - {carry}", f"_y = {y} + _increment",
                   f"S_new[{i * lanes} + _l] = _y", f"S_new[{(n_state + i) * lanes} + _l] = (_y - {y}) - _increment"]
-    return _lane_loop("taylor_lanes_advance(H, X, S, S_new)",
-                      "Every lane's state and carry S_new after its step H[l] from S; see lagcomp.codegen.taylor_lanes.",
-                      lanes, lines)
+    doc = "Every lane's state and carry S_new after its step H[l] from S; see lagcomp.codegen.taylor_lanes."
+    return _lane_loop("taylor_lanes_advance(H, X, S, S_new)", doc, lanes, lines)
 
 
 def _lane_loop(signature: str, doc: str, lanes: int, lines: list[str]) -> str:
@@ -291,7 +290,8 @@ def taylor_lanes_module(module_source: str, program: dict, order: int, lanes: in
     """
     return (
         module_source.rstrip("\n")
-        + f"\n\n\n# {'-' * 76}\n# Batched Taylor sweeps at order {order}, {lanes} lanes (lagcomp.codegen.taylor_lanes)\n\n"
+        + f"\n\n\n# {'-' * 76}\n# Batched Taylor sweeps at order {order}, {lanes} lanes"
+        + " (lagcomp.codegen.taylor_lanes)\n\n"
         + f"_TAYLOR_ORDER = {order}\n_TAYLOR_LANES = {lanes}\n\n\n"
         + taylor_lanes_source(program, order, lanes)
         + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/taylor_lanes.py\n\n"
