@@ -341,7 +341,8 @@ def _consistent_initial_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, 
             raise InitialConditionError(f"Trajectory {k} of the sweep ({where}): {err}") from err
 
 
-#: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`).
+#: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`; taylor: `taylor_lanes.py`,
+#: in a module of its own per order).
 BATCHED = {"rk4": "rk4_lanes", "dop853": "dop853_lanes", "taylor": "taylor_lanes"}
 
 
@@ -456,6 +457,8 @@ def _taylor_lanes_spec(model, rtol: float, atol: float) -> tuple[str, str, str]:
     from lagcomp.codegen import taylor_lanes
 
     program, order = model._taylor_program, taylor_lanes.taylor_order(rtol, atol)
+    if program is None:     # (check_method refuses systems without a Taylor kernel before this)
+        raise OptionError(f"{model.name!r} has no Taylor program for a batched sweep; drop `batched`.")
     terms = taylor_lanes.unrolled_terms(program, order)
     if terms > taylor_lanes.TERMS_MAX:
         raise OptionError(
