@@ -146,12 +146,13 @@ def build(system, cache: Cache, key: str, eom=None) -> Entry:
     """Derive (unless `eom` is given), lower and emit `system`, and store the module under `key`."""
     from lagcomp.codegen.emit import emit
     from lagcomp.codegen.lower import lower
-    from lagcomp.codegen.taylor import taylor_program
+    from lagcomp.codegen.taylor import taylor_decomposition, taylor_program
     from lagcomp.mechanics.lagrange import derive
 
     eom = derive(system) if eom is None else eom
     ir = lower(eom)
-    program = taylor_program(ir)
+    taylor = taylor_decomposition(ir)
+    program = taylor_program(taylor)
     metadata = {
         "coordinates": list(system.coordinate_names),
         "parameters": list(system.parameter_names),
@@ -163,7 +164,7 @@ def build(system, cache: Cache, key: str, eom=None) -> Entry:
                        **({"taylor_coefficients": program["operations"]} if program else {})},
         "taylor_program": program,
     }
-    return cache.store(key, emit(ir), system.name, metadata)
+    return cache.store(key, emit(ir, taylor), system.name, metadata)
 
 
 def _baumgarte_gains(baumgarte) -> tuple[float, float]:

@@ -4,7 +4,8 @@ The module holds, in order: a header naming the system, its state and
 parameter order and the lagcomp version; the kernels; the constraint hooks
 the drivers call (`project`, `constraint_residual`); `observables`, which
 evaluates the energies along a saved trajectory; then templates appended
-as text, the kernels' sin and cos (`templates/trig.py`), the linear solvers (`templates/linear_solvers.py`), for unconstrained
+as text, the kernels' sin and cos (`templates/trig.py`), the linear solvers
+(`templates/linear_solvers.py`), for unconstrained
 systems the Hamiltonian and canonical Jacobian (`templates/hamiltonian.py`) and the
 Lyapunov-exponent loops (`templates/lyapunov.py`), and the
 integration drivers (`templates/drivers.py`, `templates/symplectic.py`), so that they call the kernels
@@ -19,10 +20,9 @@ and stop the run with the time of failure.
 
 from __future__ import annotations
 
-
 from lagcomp import __version__
 from lagcomp.codegen.printer import to_code
-from lagcomp.codegen.taylor import taylor_source
+from lagcomp.codegen.taylor import TaylorProgram, Unsupported, taylor_decomposition, taylor_source
 from lagcomp.codegen.templating import template
 from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR, SymmetricProduct
 
@@ -315,8 +315,6 @@ def _constraint_hooks(ir: ModuleIR) -> str:
     return _CONSTRAINED_HOOKS.format(rows=rows, n=ir.n, k=ir.k, kh=len(rows), newton=8)
 
 
-
-
 #: The drivers of ``templates/drivers.py`` and ``symplectic.py``, by calling convention.
 ADAPTIVE_DRIVERS = ("dopri5_run", "dop853_run")
 FIXED_STEP_DRIVERS = ("rk4_run", "composition_run", "collocation_run")
@@ -337,8 +335,11 @@ def _sweeps() -> str:
     return "".join(parts).rstrip("\n") + "\n"
 
 
-def emit(ir: ModuleIR) -> str:
-    """The complete source text of the module for `ir`."""
+def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None) -> str:
+    """The complete source text of the module for `ir`.
+
+    `taylor` is `taylor_decomposition(ir)` when the caller has it already (it also stores the program).
+    """
     parts = [_header(ir)]
     parts += [_kernel_source(k) for k in ir.kernels]
     parts.append(_constraint_hooks(ir))
@@ -348,7 +349,8 @@ def emit(ir: ModuleIR) -> str:
     for name in ("trig", "linear_solvers", *hamiltonian, "drivers", "symplectic", *lanes):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")
         parts.append(template(name, events=bool(ir.event_names)))
-    parts.append(taylor_source(ir, events=bool(ir.event_names)))  # taylor_coefficients and taylor_run, or why not
+    taylor = taylor_decomposition(ir) if taylor is None else taylor
+    parts.append(taylor_source(taylor, events=bool(ir.event_names)))  # taylor_coefficients and taylor_run, or why not
     parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n")
     parts.append(_sweeps())
     return "".join(parts)

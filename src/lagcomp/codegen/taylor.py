@@ -597,41 +597,43 @@ def emit_taylor(program: TaylorProgram) -> str:
     )
 
 
-def taylor_program(ir: ModuleIR) -> dict | None:
-    """The Taylor program of `ir` as plain data (the call notation), or None when it has none.
+def taylor_decomposition(ir: ModuleIR) -> TaylorProgram | Unsupported:
+    """The Taylor program of `ir`, or the `Unsupported` saying why it has none (computed once per module)."""
+    try:
+        if ir.k:
+            raise Unsupported("constraints (their multipliers are not covered)")
+        return decompose(ir.kernel("rhs"), ir.n)
+    except Unsupported as err:
+        return err
+
+
+def taylor_program(taylor: TaylorProgram | Unsupported) -> dict | None:
+    """The program as plain data (the call notation), or None when the module has none.
 
     Stored with the module (cache metadata): `lagcomp.codegen.taylor_lanes`
     writes batched kernels of any order from it, without sympy.
     """
-    try:
-        if ir.k:
-            return None
-        program = decompose(ir.kernel("rhs"), ir.n)
-    except Unsupported:
+    if isinstance(taylor, Unsupported):
         return None
-    states = [None] * program.n_state
-    for line in program.setup:
+    states = [None] * taylor.n_state
+    for line in taylor.setup:
         match = re.fullmatch(r"(\w+) = X\[(\d+)\]", line)
         if match:
             states[int(match.group(2))] = match.group(1)
-    return dict(n_state=program.n_state, setup=list(program.setup), states=states, uses_t=program.uses_t,
-                body=[op.line for op in program.body], operations=program.operation_count)
+    return dict(n_state=taylor.n_state, setup=list(taylor.setup), states=states, uses_t=taylor.uses_t,
+                body=[op.line for op in taylor.body], operations=taylor.operation_count)
 
 
-def taylor_source(ir: ModuleIR, events: bool) -> str:
-    """``taylor_coefficients`` and the driver template for `ir`, or ``TAYLOR_REFUSED`` saying why not."""
-    try:
-        if ir.k:
-            raise Unsupported("constraints (their multipliers are not covered)")
-        program = decompose(ir.kernel("rhs"), ir.n)
-    except Unsupported as err:
-        return f"\n\n#: Why this module has no Taylor integrator (method='taylor').\nTAYLOR_REFUSED = {str(err)!r}\n"
+def taylor_source(taylor: TaylorProgram | Unsupported, events: bool) -> str:
+    """``taylor_coefficients`` and the driver template, or ``TAYLOR_REFUSED`` saying why there are none."""
+    if isinstance(taylor, Unsupported):
+        return f"\n\n#: Why this module has no Taylor integrator (method='taylor').\nTAYLOR_REFUSED = {str(taylor)!r}\n"
     sweeps = template("sweeps")  # its generic adaptive loop, for taylor_run (as emit._sweeps does for the others)
     start = sweeps.rindex("@njit", 0, sweeps.index("def sweep_adaptive("))
     end = sweeps.rindex("@njit", 0, sweeps.index("def sweep_fixed("))
     sweep = sweeps[start:end].replace("sweep_adaptive", "sweep_taylor_run").replace("ADAPTIVE_DRIVER", "taylor_run")
     return (
-        emit_taylor(program)
+        emit_taylor(taylor)
         + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/taylor.py\n\n"
         + template("taylor", events=events)
         + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py: sweep_adaptive for taylor_run\n\n"

@@ -40,6 +40,7 @@ them it does not vectorize)::
 
 from __future__ import annotations
 
+import math
 import re
 
 from lagcomp.codegen.templating import template
@@ -259,15 +260,13 @@ LANES = 32
 
 def taylor_order(rtol: float, atol: float) -> int:
     """The order ``taylor_run`` uses for these tolerances: ceil(−½ ln min(rtol, atol) + 1), at least 2."""
-    import math
-
     return max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol)) + 1.0)))
 
 
 #: Largest unrolled program written (`unrolled_terms`).  numba's compile time grows about linearly
 #: with the terms: the wall time of a model's first batched Taylor sweep at rtol = atol = 1e-10
-#: (order 13), empty caches, was 10 s for the double pendulum (1,586 terms) and 21 s for
-#: n_link_pendulum(3) (4,576), so the limit stands at about a minute.
+#: (order 13), empty caches, was 10 s for the double pendulum (1,508 terms) and 21 s for
+#: n_link_pendulum(3) (4,303), so the limit stands at about a minute.
 TERMS_MAX = 12_000
 
 
@@ -275,11 +274,13 @@ def unrolled_terms(program: dict, order: int) -> int:
     """About how many products and sums `taylor_lanes_source` writes for `program` at `order`.
 
     A convolution (a call of the call notation) has k + 1 terms at order k,
-    sin and cos twice that; any other operation one per order.
+    sin and cos twice that; any other operation (comments and pivot tests
+    aside) one per order.
     """
-    convolution = sum(2 if line.startswith("_taylor_sin_cos") else 1
-                      for line in program["body"] if "_taylor_" in line)
-    return convolution * order * (order + 1) // 2 + (len(program["body"]) - convolution) * order
+    operations = [line for line in program["body"] if not line.startswith(("if ", "#", INDENT))]
+    calls = [line for line in operations if CALL.match(line)]
+    convolutions = sum(2 if "_taylor_sin_cos(" in line else 1 for line in calls)
+    return convolutions * order * (order + 1) // 2 + (len(operations) - len(calls)) * order
 
 
 def taylor_lanes_module(module_source: str, program: dict, order: int, lanes: int = LANES) -> str:
