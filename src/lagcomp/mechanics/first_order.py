@@ -1,0 +1,90 @@
+r"""The first-order form of a mechanical system, in coordinates q and speeds u (sympy only).
+
+Lagrange's equations (`lagcomp.mechanics.lagrange`) and Kane's equations
+(`sympy.physics.mechanics.KanesMethod`) both come down to one form,
+
+    q̇ = N(q, u, t)                          kinematic differential equations, n_q rows
+    M(q, t) u̇ = F(q, u, t) + Cᵀ λ            dynamics, n_u rows
+    C(q, t) u̇ = γ(q, u, t)                   acceleration-level constraints with multipliers λ
+    Φ(q, t) = 0                              configuration (holonomic) constraints, n_h rows
+    Ψ(q, u, t) = 0                           velocity constraints, n_v rows, linear in u
+
+- Lagrange: u = q̇ (N = u), M symmetric, C = Λ and γ as in `lagrange.EOM`,
+  Ψ = Λ q̇ + b (every constraint, the holonomic ones differentiated once).
+- Kane: N from the kinematic differential equations, M and F as KanesMethod forms
+  them (the differentiated velocity constraints are rows of M, so M is not
+  symmetric), no multipliers (C has no rows), Ψ = k_nh u + f_nh.
+
+Consequences used downstream: a state (q, u) is consistent when Φ = 0 and Ψ = 0;
+n_q − n_h coordinates and n_u − n_v speeds are independent, and a linearization
+reduced to them has n_q − n_h + n_u − n_v states.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+
+@dataclass(frozen=True)
+class FirstOrderForm:
+    """q̇ = N, M u̇ = F + Cᵀλ, C u̇ = γ, Φ = 0, Ψ = 0 (module docstring), in plain symbols.
+
+    Attributes
+    ----------
+    q, u : tuple of Symbol
+        Coordinates (n_q) and speeds (n_u), plain symbols (not functions of t).
+    parameters : tuple of Symbol
+        Parameters in kernel order.
+    coordinate_names, speed_names : tuple of str
+        Labels for results (eigenvector components, plots).
+    N : Matrix, shape (n_q, 1)
+        q̇ as a function of (q, u, t).
+    M : Matrix, shape (n_u, n_u)
+        Regular where the system is well posed; need not be symmetric.
+    F : Matrix, shape (n_u, 1)
+    C : Matrix, shape (k, n_u)
+        Rows that carry multipliers λ (k = 0 for Kane's equations).
+    gamma : Matrix, shape (k, 1)
+    Phi : Matrix, shape (n_h, 1)
+        Configuration constraints Φ(q, t).
+    Psi : Matrix, shape (n_v, 1)
+        Velocity constraints Ψ(q, u, t), linear in u.
+    multiplier_names : tuple of str
+        Names of the k multipliers, in the row order of C.
+    """
+
+    q: tuple
+    u: tuple
+    parameters: tuple
+    coordinate_names: tuple
+    speed_names: tuple
+    N: sp.Matrix
+    M: sp.Matrix
+    F: sp.Matrix
+    C: sp.Matrix
+    gamma: sp.Matrix
+    Phi: sp.Matrix
+    Psi: sp.Matrix
+    multiplier_names: tuple = ()
+
+    @property
+    def n_q(self) -> int:
+        return len(self.q)
+
+    @property
+    def n_u(self) -> int:
+        return len(self.u)
+
+
+def from_eom(eom) -> FirstOrderForm:
+    """The first-order form of Lagrange's equations `eom` (a `lagrange.EOM`): u = q̇."""
+    names = tuple(eom.system.coordinate_names)
+    qd = sp.Matrix(eom.qd)
+    return FirstOrderForm(
+        q=tuple(eom.q), u=tuple(eom.qd), parameters=tuple(eom.parameters),
+        coordinate_names=names, speed_names=tuple(f"{name}_dot" for name in names),
+        N=qd, M=eom.M, F=eom.F, C=eom.C, gamma=eom.gamma, Phi=eom.Phi,
+        Psi=eom.C * qd + eom.b, multiplier_names=tuple(eom.constraint_names),
+    )
