@@ -28,9 +28,12 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **s
     Parameters
     ----------
     system : System, or sympy.physics.mechanics LagrangesMethod / KanesMethod
-        What to compile.  A sympy method object is converted first
-        (`lagcomp.from_lagranges_method`, `lagcomp.from_kanes_method`), with
-        `system_kwargs` (name, parameters, defaults, q0, qd0, ...) passed on.
+        What to compile.  A LagrangesMethod is converted first
+        (`lagcomp.from_lagranges_method`), with `system_kwargs` (name,
+        parameters, defaults, q0, qd0, ...) passed on.  A KanesMethod is
+        compiled as Kane's equations over the state (q, u) into a
+        `lagcomp.kane_model.KaneModel` (options name, parameters, defaults,
+        q0, u0, t_end, description).
     cache_dir : path, optional
         Cache root; defaults to $LAGCOMP_CACHE_DIR, else the user cache directory.
     eom : lagcomp.mechanics.lagrange.EOM, optional
@@ -42,6 +45,12 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **s
     Model
         ``model.from_cache`` tells whether the derivation was skipped.
     """
+    from sympy.physics.mechanics import KanesMethod
+
+    if isinstance(system, KanesMethod):
+        from lagcomp.kane_model import compile_kane
+
+        return compile_kane(system, cache_dir, **system_kwargs)
     system = _as_system(system, system_kwargs)
     cache = Cache(cache_dir)
     key = input_key(system.fingerprint(), options={})
@@ -95,6 +104,10 @@ def load(name: str, *, cache_dir: str | os.PathLike | None = None) -> "Model":
         cache.discard(entry)
         raise ModelError(f"The compiled model {name!r} in {cache.root} is damaged and was discarded: "
                          "compile it again (lagcomp.compile(system)).") from err
+    if entry.metadata.get("kane"):
+        from lagcomp.kane_model import KaneModel
+
+        return KaneModel(None, kernels, entry, from_cache=True, recorded=defaults)
     return Model(None, kernels, entry, from_cache=True, recorded=defaults)
 
 
@@ -247,6 +260,11 @@ class Model:
     @property
     def n(self) -> int:
         return len(self.coordinates)
+
+    @property
+    def state_size(self) -> int:
+        """Length of the state y the kernels and drivers take: 2n for (q, q̇)."""
+        return 2 * self.n
 
     @property
     def k(self) -> int:

@@ -18,7 +18,7 @@ def consistent_initial_state(model, t0: float, y0: np.ndarray, p: np.ndarray, pr
     `project`, a residual above `tolerance` raises `InitialConditionError`
     naming the constraint and the size of the violation.
     """
-    if not model.k:
+    if not model.residual_labels:
         return y0, False
     residuals = np.empty(len(model.residual_labels))
     model.kernels.constraint_residuals(t0, y0, p, residuals)

@@ -91,6 +91,10 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
 def check_method(model, m) -> None:
     """Refuse a method that does not apply to `model` (separable-only or unconstrained-only methods,
     and the Taylor method where the module has no Taylor kernel: ``TAYLOR_REFUSED`` says why)."""
+    kane = getattr(model, "speeds", None)
+    if kane is not None and m.name not in ("dop853", "dopri5", "rk4"):
+        raise OptionError(f"`{m.name}` needs the state (q, q̇) of Lagrange's equations; {model.name!r} is a Kane "
+                          "model with state (q, u). Use dop853, dopri5 or rk4.")
     refused = getattr(model.kernels, "TAYLOR_REFUSED", None) if m.name == "taylor" and not model.k else None
     if refused is not None:
         raise OptionError(f"`taylor` cannot integrate {model.name!r}: its equations hold {refused}. "

@@ -59,7 +59,8 @@ class Recorder:
         self.rows = 0
         n = model.n
         self.cyclic = [model.coordinates.index(c) for c in model.cyclic]
-        self.extremes = np.array([np.full(2 * n, np.inf), np.full(2 * n, -np.inf)])
+        size = model.state_size
+        self.extremes = np.array([np.full(size, np.inf), np.full(size, -np.inf)])
         self.deviation = np.zeros(2 + len(self.cyclic))
 
     def add(self, ts: np.ndarray, ys: np.ndarray) -> None:

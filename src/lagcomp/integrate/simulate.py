@@ -101,7 +101,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     options["implicit_solver"] = implicit_solver_for(m, implicit_solver)
     t_eval = t_eval_points(t_eval, t0, t1)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
-    projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
+    projecting = int(bool(model.residual_labels) and (not m.adaptive if projection is None else bool(projection)))
     bound = math.inf if max_residual is None else positive(max_residual, "max_residual")
     residual_max = np.array([0.0, bound])  # running maximum, and the bound the drivers stop at
     y, clock, counters = y0.copy(), np.array([t0, 0.0]), np.zeros(6, dtype=np.int64)
@@ -162,7 +162,7 @@ def _refuse_singular_start(model, t0: float, y0: np.ndarray, p: np.ndarray) -> N
     whose rows of Λ are linearly dependent there (redundant constraints).
     """
     n = model.n
-    if not model.kernels.rhs(t0, y0, p, np.empty(2 * n)):
+    if not model.kernels.rhs(t0, y0, p, np.empty(y0.size)):
         return  # singular at a stage of the first step, not at the start: a run failure
     where = ", ".join(f"{c}={v:.6g}" for c, v in zip(model.coordinates, y0[:n]))
     zero = [name for name, value in zip(model.parameters, p) if value == 0]

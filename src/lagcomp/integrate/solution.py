@@ -90,6 +90,11 @@ class Solution:
     events : dict of str to EventRecord
         Each declared event's occurrences, by name (empty records when the
         method does not locate events or they were switched off).
+    u : ndarray, shape (m, n_u), or None
+        Kane models (`lagcomp.kane_model`): the generalized speeds, whose names
+        are `speeds`; `qd` then holds q̇ from the kinematic equations.
+    speeds : tuple of str
+        Names of the columns of `u` (empty for Lagrange models).
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
@@ -117,6 +122,8 @@ class Solution:
     projected_initial_state: np.ndarray | None = None
     events: dict = field(default_factory=dict)
     summary: RunSummary | None = None
+    u: np.ndarray | None = None
+    speeds: tuple = ()
 
     @property
     def success(self) -> bool:
@@ -125,8 +132,8 @@ class Solution:
 
     @property
     def y(self) -> np.ndarray:
-        """The state (q, q̇) at each saved time, shape (m, 2n)."""
-        return np.hstack([self.q, self.qd])
+        """The state at each saved time: (q, q̇), shape (m, 2n); (q, u) for Kane models."""
+        return np.hstack([self.q, self.qd if self.u is None else self.u])
 
     def energy_drift(self, which: str = "energy") -> float:
         """Largest relative deviation of `energy` (or `energy_function`) from its initial value."""

@@ -1,0 +1,259 @@
+r"""Emit the module of a Kane model: kernels over the state y = (q, u), then the drivers.
+
+The input is a `FirstOrderForm` from `lagcomp.mechanics.kane` (q̇ = N,
+M u̇ = F, Φ = 0, Ψ = 0, no multipliers), with T + V and the auxiliary
+reactions when the model has them.  Kernels (``n_q`` coordinates, ``n_u``
+speeds, state length ``n_q + n_u``; same calling conventions as
+`lagcomp.ir`):
+
+- ``rhs(t, y, p, out)``: out[:n_q] = N, out[n_q:] = u̇ from M u̇ = F by LU
+  with partial pivoting (``_lu_solve``: M is square but not symmetric when
+  the velocity constraints are among its rows).  Returns 0, or j > 0 when
+  pivot j is zero (M singular there).
+- ``kinematics(t, y, p, out)``: q̇ = N, shape (n_q,).
+- ``energy(t, y, p)``: T + V, NaN when it could not be formed; ``energy_function`` is the same kernel.
+- ``constraint_residuals(t, y, p, out)``: Φ (n_h), then Ψ (n_v);
+  ``configuration_jacobian`` ∂Φ/∂q (n_h, n_q) and ``velocity_constraint_matrix``
+  [∂Ψ/∂u | Ψ at u = 0] (n_v, n_u + 1), which ``project`` uses.
+- ``reactions(t, y, p, out)``: the noncontributing forces of the auxiliary
+  speeds at the u̇ of ``rhs`` (only when the model has them).
+
+Then the hooks the drivers call (``project``, ``constraint_residual``,
+``event_values``), ``observables`` and ``kinematics_along`` /
+``reactions_along`` over saved rows, and the templates ``trig``,
+``linear_solvers`` and ``drivers`` (rk4, dopri5, dop853, which are generic in
+the state's length).  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
+reaches the emitted code, so none can collide with it (DESIGN.md, "Names");
+the header lists which is which.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from lagcomp import __version__
+from lagcomp.codegen.emit import INDENT
+from lagcomp.codegen.lower import _kernel
+from lagcomp.codegen.printer import to_code
+from lagcomp.codegen.templating import template
+from lagcomp.mechanics.first_order import FirstOrderForm
+from lagcomp.mechanics.kane import acceleration_symbols
+from lagcomp.model.system import t
+
+ARGS = ("t", "y", "p", "out")
+
+
+def _bindings(form: FirstOrderForm, reactions: bool):
+    """Model symbol -> local symbol, and the loads binding the locals (u̇ too when `reactions`)."""
+    n_q = form.n_q
+    sources = [(s, f"_q{i}", f"y[{i}]") for i, s in enumerate(form.q)]
+    sources += [(s, f"_u{i}", f"y[{n_q + i}]") for i, s in enumerate(form.u)]
+    sources += [(s, f"_p{k}", f"p[{k}]") for k, s in enumerate(form.parameters)]
+    if reactions:
+        sources += [(s, f"_ud{i}", f"_ydot[{n_q + i}]") for i, s in enumerate(acceleration_symbols(form))]
+    mapping = {s: sp.Symbol(local, real=True) for s, local, _ in sources}
+    mapping[t] = sp.Symbol("t", real=True)
+    return mapping, tuple((local, source) for _, local, source in sources)
+
+
+def _function(kernel, before=(), after=()) -> str:
+    """The source of `kernel`, with lines `before` its loads and `after` its stores."""
+    body = f'"""{kernel.doc}"""'.splitlines() + list(before)
+    body += [f"{local} = {source}" for local, source in kernel.loads]
+    body += [f"{name} = {to_code(expr)}" for name, expr in kernel.temps]
+    for target, expr in kernel.stores:
+        body.append(f"return {to_code(expr)}" if target == "return" else f"{target} = {to_code(expr)}")
+    body += list(after)
+    lines = ["", "", '@njit(cache=True, error_model="numpy")', f"def {kernel.name}({', '.join(kernel.args)}):"]
+    return "\n".join(lines + [INDENT + line if line else "" for line in body]) + "\n"
+
+
+def _rhs(form: FirstOrderForm, mapping, loads) -> tuple:
+    n_q, n_u = form.n_q, form.n_u
+    stores = [(f"out[{i}]", form.N[i]) for i in range(n_q)]
+    stores += [(f"_kkt[{i}, {j}]", form.M[i, j]) for i in range(n_u) for j in range(n_u) if form.M[i, j] != 0]
+    stores += [(f"_kkt[{i}, {n_u}]", form.F[i]) for i in range(n_u)]
+    kernel = _kernel(
+        "rhs", f"dy/dt = (q̇, u̇), shape ({n_q + n_u},): q̇ = N(q, u, t) and M u̇ = F by LU with pivoting.\n\n"
+        "Returns 0, or j > 0 when pivot j of M is zero (M singular here); `out` is then invalid.",
+        ARGS, stores, mapping, loads,
+    )
+    after = ["_status = _lu_solve(_kkt)", "if _status:", f"{INDENT}return _status"]
+    after += [f"out[{n_q + i}] = _kkt[{i}, {n_u}]" for i in range(n_u)] + ["return 0"]
+    return kernel, _function(kernel, before=[f"_kkt = np.zeros(({n_u}, {n_u + 1}))"], after=after)
+
+
+def _plain_kernels(form: FirstOrderForm, energy, mapping, loads) -> list:
+    n_q, n_u = form.n_q, form.n_u
+    n_h, n_v = form.Phi.rows, form.Psi.rows
+    at_rest = {u: 0 for u in form.u}
+    A = form.Psi.jacobian(sp.Matrix(form.u)) if n_v else sp.zeros(0, n_u)
+    J = form.Phi.jacobian(sp.Matrix(form.q)) if n_h else sp.zeros(0, n_q)
+    specs = [
+        ("kinematics", f"q̇ = N(q, u, t), shape ({n_q},), into `out`.", ARGS,
+         [(f"out[{i}]", form.N[i]) for i in range(n_q)]),
+        ("energy", "T + V" + ("" if energy is not None else ": not available for this model (NaN)") + ".",
+         ARGS[:3], [("return", sp.nan if energy is None else energy)]),
+        ("constraint_residuals", f"Φ ({n_h} configuration constraints), then Ψ ({n_v} velocity constraints).",
+         ARGS, [(f"out[{i}]", form.Phi[i]) for i in range(n_h)] + [(f"out[{n_h + i}]", form.Psi[i])
+                                                                   for i in range(n_v)]),
+        ("configuration_jacobian", f"∂Φ/∂q, shape ({n_h}, {n_q}), into `out`.", ARGS,
+         [(f"out[{i}, {j}]", J[i, j]) for i in range(n_h) for j in range(n_q)]),
+        ("velocity_constraint_matrix", f"[∂Ψ/∂u | Ψ(u = 0)], shape ({n_v}, {n_u + 1}), into `out`.", ARGS,
+         [(f"out[{i}, {j}]", A[i, j]) for i in range(n_v) for j in range(n_u)]
+         + [(f"out[{i}, {n_u}]", form.Psi[i].xreplace(at_rest)) for i in range(n_v)]),
+    ]
+    return [_kernel(name, doc, args, stores, mapping, loads) for name, doc, args, stores in specs]
+
+
+def _reactions(form: FirstOrderForm, names, expressions, mapping, loads) -> tuple:
+    n = form.n_q + form.n_u
+    kernel = _kernel(
+        "reactions", f"Noncontributing forces {tuple(names)} at the u̇ of `rhs`, into `out`.\n"
+        "Returns 0, or the status of `rhs` when M is singular.",
+        ARGS, [(f"out[{i}]", e) for i, e in enumerate(expressions)], mapping, loads,
+    )
+    before = [f"_ydot = np.empty({n})", "_status = rhs(t, y, p, _ydot)", "if _status:", f"{INDENT}return _status"]
+    return kernel, _function(kernel, before=before, after=["return 0"]) + _REACTIONS_ALONG
+
+
+_REACTIONS_ALONG = '''
+
+@njit(cache=True, error_model="numpy")
+def reactions_along(ts, ys, p, out):
+    """The auxiliary reactions at each saved row, shape (m, n_r); returns i + 1 if rhs fails at row i."""
+    for k in range(ts.shape[0]):
+        if reactions(ts[k], ys[k], p, out[k]):
+            return k + 1
+    return 0
+'''
+
+_HOOKS = '''
+
+@njit(cache=True, error_model="numpy")
+def event_values(t, y, p, out):
+    """No events: Kane models do not declare any."""
+    pass
+
+
+@njit(cache=True, error_model="numpy")
+def constraint_residual(t, y, p):
+    """Largest |Φ| and |Ψ| (0.0 without constraints)."""
+    if {n_r} == 0:
+        return 0.0
+    r = np.empty({n_r})
+    constraint_residuals(t, y, p, r)
+    return np.max(np.abs(r))
+
+
+@njit(cache=True, error_model="numpy")
+def _gram(a, columns, r, mu):
+    """mu = (A Aᵀ)⁻¹ r for A = a[:, :columns] (least Euclidean change)."""
+    m = a.shape[0]
+    g = np.empty((m, m))
+    for i in range(m):
+        for j in range(i + 1):
+            s = 0.0
+            for c in range(columns):
+                s += a[i, c] * a[j, c]
+            g[i, j] = s
+    return _ldlt_solve(g, r, mu, 0)
+
+
+@njit(cache=True, error_model="numpy")
+def project(t, y, p):
+    """Move y onto Φ = 0 (Gauss-Newton on q) and Ψ = 0 (least change of u), in place.
+
+    Returns 0, or j > 0 when a Gram matrix is singular (dependent constraints).
+    """
+    n_q, n_u, n_h, n_v = {n_q}, {n_u}, {n_h}, {n_v}
+    if n_h:
+        J = np.empty((n_h, n_q))
+        r = np.empty(n_h + n_v)
+        mu = np.empty(n_h)
+        for _ in range(8):
+            constraint_residuals(t, y, p, r)
+            configuration_jacobian(t, y, p, J)
+            rhs_ = r[:n_h].copy()
+            status = _gram(J, n_q, rhs_, mu)
+            if status:
+                return status
+            step, size = 0.0, 0.0
+            for c in range(n_q):
+                d = 0.0
+                for i in range(n_h):
+                    d += J[i, c] * mu[i]
+                y[c] -= d
+                step = max(step, abs(d))
+                size = max(size, abs(y[c]))
+            if step <= 4e-16 * (1.0 + size):
+                break
+    if n_v:
+        a = np.empty((n_v, n_u + 1))
+        velocity_constraint_matrix(t, y, p, a)
+        rhs_ = np.empty(n_v)
+        mu = np.empty(n_v)
+        for i in range(n_v):
+            s = a[i, n_u]
+            for c in range(n_u):
+                s += a[i, c] * y[n_q + c]
+            rhs_[i] = s
+        status = _gram(a, n_u, rhs_, mu)
+        if status:
+            return status
+        for c in range(n_u):
+            d = 0.0
+            for i in range(n_v):
+                d += a[i, c] * mu[i]
+            y[n_q + c] -= d
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
+    """Along saved rows: T + V (twice: Kane models have no separate energy function); no momenta (NaN)."""
+    for k in range(ts.shape[0]):
+        energy_out[k] = energy(ts[k], ys[k], p)
+        energy_function_out[k] = energy_out[k]
+        momenta_out[k, :] = np.nan
+
+
+@njit(cache=True, error_model="numpy")
+def kinematics_along(ts, ys, p, out):
+    """q̇ at each saved row, shape (m, n_q)."""
+    for k in range(ts.shape[0]):
+        kinematics(ts[k], ys[k], p, out[k])
+'''
+
+
+def _header(name: str, form: FirstOrderForm, reaction_names) -> str:
+    locals_ = ", ".join(f"_q{i}={c}" for i, c in enumerate(form.coordinate_names))
+    locals_ += "; " + ", ".join(f"_u{i}={c}" for i, c in enumerate(form.speed_names))
+    params = ", ".join(f"_p{k}={s.name}" for k, s in enumerate(form.parameters)) or "(none)"
+    return (
+        f'"""Kernels of the Kane model {name!r}, generated by lagcomp {__version__}. Do not edit.\n\n'
+        f"State       y = (q, u), n_q = {form.n_q}, n_u = {form.n_u}: {locals_}\n"
+        f"Parameters  p: {params}\n"
+        f"Constraints Φ: {form.Phi.rows}, Ψ: {form.Psi.rows}; reactions {tuple(reaction_names)}\n\n"
+        "Equations: q̇ = N(q, u, t), M u̇ = F as sympy's KanesMethod forms them (lagcomp.mechanics.kane).\n"
+        '"""\n\nimport math\n\nimport numpy as np\nfrom numba import njit\n'
+    )
+
+
+def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), reactions=None) -> tuple[str, dict]:
+    """The module source for a Kane model, and the operation count of each kernel after CSE."""
+    mapping, loads = _bindings(form, bool(reaction_names))
+    rhs, rhs_source = _rhs(form, mapping, loads)
+    kernels = [rhs] + _plain_kernels(form, energy, mapping, loads)
+    parts = [_header(name, form, reaction_names), rhs_source] + [_function(k) for k in kernels[1:]]
+    parts.append("\n\nenergy_function = energy\n")
+    if reaction_names:
+        kernel, source = _reactions(form, reaction_names, reactions, mapping, loads)
+        kernels.append(kernel)
+        parts.append(source)
+    parts.append(_HOOKS.format(n_r=form.Phi.rows + form.Psi.rows, n_q=form.n_q, n_u=form.n_u, n_h=form.Phi.rows,
+                               n_v=form.Psi.rows))
+    for piece in ("trig", "linear_solvers", "drivers"):
+        parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{piece}.py\n\n")
+        parts.append(template(piece, events=False))
+    return "".join(parts), {k.name: k.operation_count for k in kernels}
