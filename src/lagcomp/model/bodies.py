@@ -41,6 +41,7 @@ from sympy.physics.mechanics import dynamicsymbols
 from sympy.physics.vector import Dyadic, Point, ReferenceFrame, Vector
 
 from lagcomp.errors import ModelError
+from lagcomp.model.stated_velocities import check_stated_velocities
 from lagcomp.model.frames import MovingFrame, column
 
 __all__ = ["Particle", "RigidBody", "Kinematics", "as_body", "rotated", "body_rates"]
@@ -118,6 +119,7 @@ def _point_motion(point, frame: MovingFrame, what: str) -> tuple[sp.Matrix | Non
             except ValueError as err:
                 raise ModelError(f"{what}: no position of {point} from the frame's origin {frame.origin}: {err}") from err
         else:
+            check_stated_velocities([point], [], frame.axes)
             try:
                 return None, point.vel(frame.axes).to_matrix(frame.axes)
             except ValueError as err:
@@ -291,6 +293,7 @@ class RigidBody:
                     f"{self.name}: the angular velocity is a ReferenceFrame; give the System `frame=` (the "
                     "ReferenceFrame the system is described in, or a MovingFrame with `axes`)."
                 )
+            check_stated_velocities([], [w], frame.axes)
             w = w.ang_vel_in(frame.axes)
         if isinstance(w, Vector):
             w = w.to_matrix(self.axes)

@@ -8,16 +8,21 @@ constraint equations — and returns the equivalent lagcomp `System`.  L is
 split by degree in q̇: V = −L|_{q̇=0} and T = L + V (T + V is then the
 mechanical energy of a natural system).
 
-`from_kanes_method(km)` is for Kane models whose generalized speeds u are
-invertible linear functions of q̇ (u_i = q̇_i being the usual case): lagcomp's
-kernels work on the state (q, q̇), so the kinetic energy of km's bodies, the
-virtual work of its loads and its velocity constraints are rewritten with
-u = u(q, q̇) from the kinematic differential equations, and Lagrange's equations
-are derived from them.  Both methods give the same motion; the equations
-differ by the invertible change of speeds.  Unsupported, with a clear error:
-auxiliary speeds, and kinematic equations that do not determine u from q̇.
-Configuration constraints enter through their time derivatives, which
-KanesMethod requires among its velocity constraints.
+`from_kanes_method(km)` turns a Kane model into a Lagrange System — a
+re-derivation, for Kane models whose generalized speeds u are invertible
+linear functions of q̇ (u_i = q̇_i being the usual case): the kinetic energy
+of km's bodies, the virtual work of its loads and its velocity constraints
+are rewritten with u = u(q, q̇) from the kinematic differential equations,
+and Lagrange's equations are derived from them.  ``lagcomp.compile(km)`` does
+NOT take this path: it compiles Kane's equations as KanesMethod forms them
+(`lagcomp.kane_model`), which is right for every KanesMethod.  Unsupported
+here, with a clear error: auxiliary speeds, kinematic equations that do not
+determine u from q̇, and velocities set by hand that are not the time
+derivatives of the positions (rolling contacts written with
+``v2pt_theory``): Lagrange's equations of such a T are those of another
+system (`lagcomp.model.stated_velocities`).  The same check guards
+`from_lagranges_method` for the bodies and load points the LagrangesMethod
+was given (with ``bodies=`` unset sympy keeps only L, which cannot be checked).
 
 Multipliers follow lagcomp's convention (`lagcomp.mechanics.lagrange`), not
 sympy's ``lam_vec``: M q̈ = F + Λᵀ λ with Λ the Jacobian of the constraint as written.
@@ -34,6 +39,7 @@ from lagcomp.model.bodies import as_body
 from lagcomp.model.constraints import Holonomic, Nonholonomic
 from lagcomp.model.frames import MovingFrame
 from lagcomp.model.loads import as_load
+from lagcomp.model.stated_velocities import check_stated_velocities
 from lagcomp.model.system import System
 
 __all__ = ["from_lagranges_method", "from_kanes_method"]
@@ -49,6 +55,15 @@ def _generalized_forces(loads, frame: MovingFrame, coordinates) -> list[sp.Expr]
     return Q
 
 
+def _check_velocities(bodies, loads, inertial, kindiff) -> None:
+    """Refuse velocities set by hand that are not d/dt of the positions (`stated_velocities`)."""
+    points = [getattr(b, "masscenter", getattr(b, "point", None)) for b in bodies]
+    frames = [getattr(b, "frame", None) for b in bodies]
+    for where, _ in loads:
+        (points if isinstance(where, me.Point) else frames).append(where)
+    check_stated_velocities(points, frames, inertial, kindiff)
+
+
 def from_lagranges_method(lm: me.LagrangesMethod, *, name: str = "system", **system_kwargs) -> System:
     """The lagcomp System of a sympy ``LagrangesMethod`` (its Lagrangian, loads and constraints).
 
@@ -58,6 +73,8 @@ def from_lagranges_method(lm: me.LagrangesMethod, *, name: str = "system", **sys
     """
     if not isinstance(lm, me.LagrangesMethod):
         raise ModelError(f"from_lagranges_method needs a sympy LagrangesMethod, got {type(lm).__name__}.")
+    if lm.inertial is not None:
+        _check_velocities(lm.bodies or (), lm.forcelist or (), lm.inertial, {})
     coordinates = tuple(lm.q)
     L = sp.sympify(lm._L[0])
     at_rest = {q.diff(t): 0 for q in coordinates}
@@ -82,7 +99,9 @@ def from_kanes_method(km: me.KanesMethod, *, name: str = "system", **system_kwar
     if not isinstance(km, me.KanesMethod):
         raise ModelError(f"from_kanes_method needs a sympy KanesMethod, got {type(km).__name__}.")
     if len(km._uaux):
-        raise ModelError("KanesMethod with auxiliary speeds is not supported: lagcomp's state is (q, q̇).")
+        raise ModelError("from_kanes_method does not take auxiliary speeds: compile the KanesMethod itself "
+                         "(lagcomp.compile(km)), which reports their noncontributing forces as reactions.")
+    _check_velocities(km.bodies, km.loads or (), km._inertial, km.kindiffdict())
     coordinates = tuple(km.q)
     qd = [q.diff(t) for q in coordinates]
     u = list(km.u)
