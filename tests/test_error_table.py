@@ -76,6 +76,7 @@ def models(compiled, cache_dir):
         "degenerate": lc.compile(degenerate, cache_dir=cache_dir),
         "walled": lc.compile(walled, cache_dir=cache_dir),
         "friction": compiled("rope_friction"),
+        "kane": lc.compile(_kane_slider(), name="table_kane_slider", cache_dir=cache_dir, defaults={"m": 1.0}),
     }
 
 
@@ -122,6 +123,41 @@ def _lagranges_method_without_frame():
     return lc.compile(me.LagrangesMethod(m * x.diff(t) ** 2 / 2, [x], forcelist=[(me.Point("P"), me.ReferenceFrame("N").x)]))
 
 
+def me_function(name):
+    """A function of time (``dynamicsymbols(name)``)."""
+    import sympy.physics.mechanics as me
+
+    return me.dynamicsymbols(name)
+
+
+def _rolling_disc_by_hand():
+    """A LagrangesMethod whose disc centre's velocity comes from a contact point set at rest (v2pt_theory)."""
+    import sympy.physics.mechanics as me
+
+    N = me.ReferenceFrame("N")
+    D = N.orientnew("D", "Axis", [-x, N.z])
+    C = me.Point("C")
+    C.set_vel(N, 0)
+    G = C.locatenew("G", l * N.y)
+    G.v2pt_theory(C, N, D)
+    disc = me.RigidBody("disc", G, D, m, (me.inertia(D, 1, 1, 2), G))
+    return lc.compile(me.LagrangesMethod(me.Lagrangian(N, disc), [x], bodies=[disc], frame=N))
+
+
+def _kane_slider(formed=True, force=None):
+    """x' = w, a particle pushed along N.x by `force` (default none); KanesMethod, equations formed or not."""
+    import sympy.physics.mechanics as me
+
+    w = me.dynamicsymbols("w")
+    N = me.ReferenceFrame("N")
+    P = me.Point("P")
+    P.set_vel(N, w * N.x)
+    km = me.KanesMethod(N, [x], [w], kd_eqs=[x.diff(t) - w])
+    if formed:
+        km.kanes_equations([me.Particle("p", P, m)], [(P, force * N.x)] if force is not None else [])
+    return km
+
+
 CASES = {
     # the description: System(...) and compile
     "undeclared-symbol": (lambda: oscillator(V=k * x**2 / 2 + sp.Symbol("stray") * x, parameters=(m, k)), "stray"),
@@ -165,6 +201,11 @@ CASES = {
     "default-initial-values": (lambda: oscillator(q0=("one",)), "`q0`"),
     "not-a-system": (lambda: lc.compile("double_pendulum"), "got str"),
     "inertia-not-positive": (_inertia, "inertia"),
+    "velocity-set-by-hand": (_rolling_disc_by_hand, "point G: its velocity in N was set by hand"),
+    "kane-equations-not-formed": (lambda: lc.compile(_kane_slider(formed=False)), "kanes_equations"),
+    "kane-specified-function": (lambda: lc.compile(_kane_slider(force=me_function("F"))), "F(t)"),
+    "kane-method-not-applicable": (_simulate("kane", q0=[0.0], method="gauss2", dt=0.1), "`gauss2`"),
+    "kane-initial-velocities": (_simulate("kane", q0=[0.0], qd0=[1.0]), "`u0`"),
     # a run's inputs: Model.simulate
     "unknown-parameter": (_simulate("pendulum", params={"mass": 1.0}), "['mass']"),
     "missing-parameter": (lambda models: models["degenerate"].simulate((0, 1), q0=[1.0], params={}), "['m']"),
