@@ -57,6 +57,8 @@ def test_pendulum_with_u_equal_l_qdot_returns_after_its_elliptic_period():
     assert abs(sol.u[-1, 0]) < 1e-11  # measured 1.3e-12
     np.testing.assert_allclose(sol.qd[:, 0], sol.u[:, 0] / l, rtol=1e-15)  # q̇ from the kinematic equation
     np.testing.assert_allclose(sol.y, np.hstack([sol.q, sol.u]))
+    saved = sol.to_dict()
+    assert saved["u"] is sol.u and list(saved["speeds"]) == ["u"]
     energy = 0.5 * m * sol.u[:, 0] ** 2 - m * g * l * np.cos(sol.q[:, 0])
     np.testing.assert_allclose(sol.energy, energy, rtol=1e-14)  # measured 8e-16
     assert np.ptp(sol.energy) < 1e-11 * abs(sol.energy[0])  # measured 1.4e-12

@@ -155,6 +155,7 @@ class Solution:
         """Arrays and scalars as a dict of numpy arrays (what `save_npz` writes)."""
         return {
             "t": self.t, "q": self.q, "qd": self.qd,
+            **({"u": self.u, "speeds": np.asarray(self.speeds)} if self.u is not None else {}),
             "energy": self.energy, "energy_function": self.energy_function, "momenta": self.momenta,
             "status": np.asarray(self.status), "message": np.asarray(self.message),
             "t_failure": np.asarray(np.nan if self.t_failure is None else self.t_failure),
