@@ -19,6 +19,7 @@ from scipy.special import ellipk
 
 import lagcomp as lc
 from lagcomp import InitialConditionError, ModelError, OptionError
+from lagcomp.analysis import linearize
 
 import kane_models
 
@@ -154,6 +155,8 @@ def test_kane_model_refuses_what_needs_q_qdot_and_inconsistent_starts():
         model.sweep((0, 1), {"m": [1.0, 2.0]})
     with pytest.raises(ModelError, match="Kane model"):
         model.momenta([0, 0, 0], [1, 0, 0])
+    with pytest.raises(ModelError, match="Kane model .* no `rest_partials`"):  # analysis written for (q, q̇)
+        linearize(model, [0, 0, 0])
     with pytest.raises(ModelError, match="kanes_equations"):
         lc.compile(me.KanesMethod(me.ReferenceFrame("N"), [me.dynamicsymbols("z")], [me.dynamicsymbols("w")],
                                   kd_eqs=[me.dynamicsymbols("z", 1) - me.dynamicsymbols("w")]))

@@ -117,6 +117,34 @@ def _run_defaults(form, options) -> dict:
     }
 
 
+class KaneKernelMissing(ModelError, AttributeError):
+    """A kernel of Lagrange's equations asked of a Kane model's module (an AttributeError too, so that
+    ``getattr(kernels, name, default)`` keeps working)."""
+
+
+class KaneKernels:
+    """A Kane model's generated module, answering for the kernels of (q, q̇) it does not have.
+
+    Code written for Lagrange models (the analysis functions: equilibria,
+    linearization at rest, Lyapunov exponents, sections) reaches for kernels
+    such as ``forcing`` or ``rest_partials``; they get a ModelError saying why
+    instead of an AttributeError about a generated module's name.
+    """
+
+    def __init__(self, module, name: str):
+        self._module, self._name = module, name
+
+    def __getattr__(self, kernel: str):
+        try:
+            return getattr(self._module, kernel)
+        except AttributeError:
+            raise KaneKernelMissing(
+                f"{self._name!r} is a Kane model (state (q, u)): its module has no `{kernel}`, a kernel of Lagrange's "
+                "equations in (q, q̇). Kane models simulate with dop853, dopri5 or rk4; analyse them through "
+                "`model.first_order_form` and `model.rhs`."
+            ) from None
+
+
 class KaneModel(Model):
     """A compiled KanesMethod: state (q, u) (module docstring)."""
 
@@ -125,6 +153,7 @@ class KaneModel(Model):
 
     def __init__(self, system, kernels, entry, from_cache: bool, recorded: dict | None = None):
         super().__init__(system, kernels, entry, from_cache, recorded)
+        self.kernels = KaneKernels(kernels, self.name)
         self.speeds = tuple(entry.metadata["speeds"])
         self.reaction_names = tuple(entry.metadata["reaction_names"])
         self._residual_labels = tuple(tuple(pair) for pair in entry.metadata["residual_labels"])
