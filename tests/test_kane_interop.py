@@ -46,8 +46,8 @@ def kane_pendulum(auxiliary: bool = False):
 PENDULUM = dict(m=1.3, l=0.8, g=9.81)
 
 
-def test_pendulum_with_u_equal_l_qdot_returns_after_its_elliptic_period():
-    model = lc.compile(kane_pendulum(), name="kane_pendulum_u_lqd", defaults=PENDULUM)
+def test_pendulum_with_u_equal_l_qdot_returns_after_its_elliptic_period(cache_dir):
+    model = lc.compile(kane_pendulum(), cache_dir=cache_dir, name="kane_pendulum_u_lqd", defaults=PENDULUM)
     assert model.coordinates == ("q",) and model.speeds == ("u",)
     m, l, g = PENDULUM["m"], PENDULUM["l"], PENDULUM["g"]
     q0 = 2.0  # a large swing: the period is 4 sqrt(l/g) K(sin²(q0/2)), 1.35 times the small-swing one
@@ -65,8 +65,9 @@ def test_pendulum_with_u_equal_l_qdot_returns_after_its_elliptic_period():
     assert np.ptp(sol.energy) < 1e-11 * abs(sol.energy[0])  # measured 1.4e-12
 
 
-def test_auxiliary_speed_gives_the_rod_tension_as_a_reaction():
-    model = lc.compile(kane_pendulum(auxiliary=True), name="kane_pendulum_tension", defaults=PENDULUM)
+def test_auxiliary_speed_gives_the_rod_tension_as_a_reaction(cache_dir):
+    model = lc.compile(kane_pendulum(auxiliary=True), cache_dir=cache_dir, name="kane_pendulum_tension",
+                       defaults=PENDULUM)
     assert model.reaction_names == ("R",)
     m, l, g = PENDULUM["m"], PENDULUM["l"], PENDULUM["g"]
     sol = model.simulate((0, 2.0), q0=[1.0], u0=[0.5], rtol=1e-11, atol=1e-11)
@@ -116,8 +117,8 @@ def sleigh_closed_form(times, v0, w0, theta0):
     return V * np.tanh(s), w0 * math.cosh(c) / np.cosh(s), theta0 + w0 * math.cosh(c) / lam * (gd(s) - gd(c))
 
 
-def test_chaplygin_sleigh_follows_its_closed_form_and_keeps_the_knife_edge():
-    model = lc.compile(chaplygin_sleigh(), name="chaplygin_sleigh", defaults=SLEIGH)
+def test_chaplygin_sleigh_follows_its_closed_form_and_keeps_the_knife_edge(cache_dir):
+    model = lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="chaplygin_sleigh", defaults=SLEIGH)
     assert model.speeds == ("u1", "u3", "u2")  # independent, then dependent
     times = np.linspace(0, 6, 61)
     sol = model.simulate((0, 6), q0=[0.0, 0.0, 0.2], u0=[-0.5, 1.5, 0.0], t_eval=times, rtol=1e-12, atol=1e-12)
@@ -138,8 +139,8 @@ def test_chaplygin_sleigh_follows_its_closed_form_and_keeps_the_knife_edge():
     assert np.max(np.abs(fixed.q[:, 2] - theta)) < 5e-13  # measured 4.1e-14
 
 
-def test_kane_model_refuses_what_needs_q_qdot_and_inconsistent_starts():
-    model = lc.compile(chaplygin_sleigh(), name="chaplygin_sleigh", defaults=SLEIGH)
+def test_kane_model_refuses_what_needs_q_qdot_and_inconsistent_starts(cache_dir):
+    model = lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="chaplygin_sleigh", defaults=SLEIGH)
     for method in ("gauss2", "taylor", "verlet", "yoshida4"):
         with pytest.raises(OptionError, match="dop853, dopri5 or rk4"):
             model.simulate((0, 1), q0=[0, 0, 0], u0=[1, 0, 0], method=method, dt=0.01)
@@ -162,9 +163,15 @@ def test_kane_model_refuses_what_needs_q_qdot_and_inconsistent_starts():
                                   kd_eqs=[me.dynamicsymbols("z", 1) - me.dynamicsymbols("w")]))
 
 
-def test_a_kane_model_is_loaded_by_name_without_sympy():
-    lc.compile(chaplygin_sleigh(), name="chaplygin_sleigh", defaults=SLEIGH, q0=[0, 0, 0.2], u0=[-0.5, 1.5, 0])
-    loaded = lc.load("chaplygin_sleigh")
+def test_a_kane_model_is_loaded_by_name_without_sympy(cache_dir):
+    again = lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="chaplygin_sleigh", defaults=SLEIGH)
+    reordered = lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="sleigh_reordered", parameters=["a", "m", "I"],
+                           defaults=SLEIGH)
+    assert reordered.parameters == ("a", "m", "I") and reordered.cache_key != again.cache_key
+    assert lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="chaplygin_sleigh", defaults=SLEIGH).from_cache
+    lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="chaplygin_sleigh", defaults=SLEIGH, q0=[0, 0, 0.2],
+               u0=[-0.5, 1.5, 0])  # the run defaults `load` finds
+    loaded = lc.load("chaplygin_sleigh", cache_dir=cache_dir)
     assert type(loaded).__name__ == "KaneModel" and loaded.first_order_form is None
     v, w, _ = sleigh_closed_form(np.array([1.0]), -0.5, 1.5, 0.2)
     sol = loaded.simulate((0, 1), rtol=1e-12, atol=1e-12)
@@ -178,9 +185,9 @@ PUBLISHED_5 = np.array([-14.07838969, -0.32286642, -0.77534188 - 4.46486771j, -0
 
 
 @pytest.fixture(scope="module")
-def bicycle():
+def bicycle(cache_dir):
     km, values, radii = kane_models.bicycle()
-    return km, values, radii, lc.compile(km, name="whipple_bicycle", defaults=values)
+    return km, values, radii, lc.compile(km, cache_dir=cache_dir, name="whipple_bicycle", defaults=values)
 
 
 def _on_constraints(model, q_ind, u_ind):
@@ -229,7 +236,8 @@ def test_bicycle_eigenvalues_at_5_m_s_match_the_benchmark(bicycle):
         J[:, j] = (f(x0 + e) - f(x0 - e)) / (2 * h)
     lean_steer = [1, 2, 3, 5]  # q2, q5, u2, u5
     eigenvalues = np.sort_complex(np.linalg.eigvals(J[np.ix_(lean_steer, lean_steer)]))
-    np.testing.assert_allclose(eigenvalues, np.sort_complex(PUBLISHED_5), atol=3e-8)  # measured 8.8e-9: the published values have 8 decimals
+    # measured 8.8e-9: the published values have 8 decimals
+    np.testing.assert_allclose(eigenvalues, np.sort_complex(PUBLISHED_5), atol=3e-8)
 
 
 def test_bicycle_run_agrees_with_scipy_on_sympys_own_equations(bicycle):
@@ -253,13 +261,13 @@ def test_bicycle_run_agrees_with_scipy_on_sympys_own_equations(bicycle):
     assert np.ptp(sol.energy) < 1e-12 * abs(sol.energy[0])  # no-slip rolling does no work; measured 1.0e-13
 
 
-def test_bicycle_with_wheel_angles_is_refused_by_lagrange_paths_and_compiled_right_by_kane(bicycle):
+def test_bicycle_with_wheel_angles_is_refused_by_lagrange_paths_and_compiled_right_by_kane(bicycle, cache_dir):
     """Issue 18's variant: the wheel angles q3, q6 as coordinates (u = q̇), velocities still set by hand.
     Re-deriving Lagrange's equations from its T is refused; compile(km) gives the original bicycle's u̇."""
     variant, values, (rr, rf) = kane_models.bicycle(wheel_angles=True)
     with pytest.raises(ModelError, match=r"point \w+: its velocity in N was set by hand .* Compile the KanesMethod"):
         lc.from_kanes_method(variant)
-    model = lc.compile(variant, name="whipple_bicycle_wheel_angles", defaults=values)
+    model = lc.compile(variant, cache_dir=cache_dir, name="whipple_bicycle_wheel_angles", defaults=values)
     assert model.coordinates == ("q1", "q2", "q5", "q3", "q6", "q4")
     original = bicycle[3]
     y = _on_constraints(original, [0.1, 0.05, -0.02], [0.3, 5.0 / rr, -0.1])

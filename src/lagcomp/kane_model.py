@@ -33,6 +33,7 @@ A `KaneModel` is a `lagcomp.Model` with these differences:
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 
 import numpy as np
 
@@ -80,9 +81,30 @@ def compile_kane(km, cache_dir=None, **options) -> "KaneModel":
 
 
 def _srepr(expr) -> str:
+    """A canonical digest of `expr` (sympy's tree, assumptions of symbols included), for the cache key.
+
+    Like ``sympy.srepr`` hashed, but each distinct subexpression is visited once:
+    srepr of the bicycle's equations took about 6 s, most of a cache hit's time.
+    """
     import sympy as sp
 
-    return "None" if expr is None else sp.srepr(expr)
+    if expr is None:
+        return "None"
+    if isinstance(expr, sp.MatrixBase):
+        expr = sp.ImmutableMatrix(expr)
+    memo: dict = {}
+
+    def digest(node) -> str:
+        done = memo.get(node)
+        if done is None:
+            if node.args:
+                text = type(node).__name__ + "(" + ",".join(digest(a) for a in node.args) + ")"
+            else:  # an atom: srepr keeps every digit of a Float and a Symbol's assumptions
+                text = sp.srepr(node)
+            done = memo[node] = hashlib.sha256(text.encode()).hexdigest()[:24]
+        return done
+
+    return digest(expr)
 
 
 def _build(cache, key, name, form, energy, names, reactions):
@@ -254,7 +276,7 @@ class KaneModel(Model):
         """Integrate from (q0, u0); see the module docstring and `lagcomp.Model.simulate` for the options."""
         from lagcomp.integrate.simulate import simulate
 
-        if "qd0" in options:
+        if options.pop("qd0", None) is not None:  # (None: what `lagcomp run` passes when --qd0 is not given)
             raise InitialConditionError(f"{self.name!r} is a Kane model: give its initial speeds as `u0` "
                                         f"(speeds {list(self.speeds)}), not `qd0`.")
         solution = simulate(self, t_span, q0, u0, params, **options)
