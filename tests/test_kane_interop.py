@@ -77,6 +77,25 @@ def test_auxiliary_speed_gives_the_rod_tension_as_a_reaction(cache_dir):
     assert model.reactions(0.0, [0.3, 1.1])["R"] == pytest.approx(m * g * math.cos(0.3) + m * 1.1**2 / l, rel=1e-14)
 
 
+def test_energy_is_nan_where_a_load_has_no_potential(cache_dir):
+    """A damped pendulum (a load −c u along the path): no T + V to form, so the energy kernel says NaN."""
+    q, u = me.dynamicsymbols("q u")
+    m, l, g, c = sp.symbols("m l g c", positive=True)
+    N = me.ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", [q, N.z])
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", -l * A.y)
+    P.set_vel(N, u * A.x)
+    km = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff(t) - u / l])
+    km.kanes_equations([me.Particle("bob", P, m)], [(P, -m * g * N.y), (P, -c * u * A.x)])
+    model = lc.compile(km, cache_dir=cache_dir, name="kane_damped_pendulum", defaults=dict(PENDULUM, c=0.7))
+    assert not model.energy_available
+    sol = model.simulate((0, 1), q0=[1.0], u0=[0.0], record="summary")
+    assert np.all(np.isnan(sol.energy)) and math.isnan(model.energy([1.0], [0.0]))
+XX
+
+
 def chaplygin_sleigh():
     """A rigid body on a knife edge at P, its mass centre G a distance a ahead of P along the blade.
 

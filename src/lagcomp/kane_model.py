@@ -24,7 +24,8 @@ A `KaneModel` is a `lagcomp.Model` with these differences:
   ``speeds``; ``y`` is (q, u).  ``energy`` is T + V where it can be formed
   (see `lagcomp.mechanics.kane.kane_energy`), else NaN; ``momenta`` are NaN.
   ``reactions`` holds the noncontributing forces of auxiliary speeds by name;
-  ``constraint_residual`` the largest |Φ|, |Ψ| over the steps.
+  ``constraint_residual`` the largest |Φ|, |Ψ| over the steps.  In ``summary``,
+  ``qd_min``/``qd_max`` are the ranges of u.
 - ``first_order_form``: the `FirstOrderForm` compiled (None for a model from
   `lagcomp.load`), for linearization about steady motions; ``kanes_method``:
   the KanesMethod itself.
