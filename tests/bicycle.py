@@ -123,8 +123,11 @@ def _benchmark_values() -> dict:
 BENCHMARK = _benchmark_values()
 
 
-def first_order_form(km: me.KanesMethod) -> FirstOrderForm:
-    """q̇ = N(q, u), M u̇ = F, Φ = 0, Ψ = 0 of `km` in plain symbols (no multipliers: C has no rows)."""
+def first_order_form(km: me.KanesMethod, parameters=None) -> FirstOrderForm:
+    """q̇ = N(q, u), M u̇ = F, Φ = 0, Ψ = 0 of any formed `km` in plain symbols (no multipliers: C has no rows).
+
+    `parameters`: the parameter symbols in order (default: the bicycle's, `PARAMETER_NAMES`).
+    """
     t = me.dynamicsymbols._t
     q, u = list(km.q), list(km.u)
     q_plain = sp.symbols(" ".join(str(s.func) for s in q))
@@ -139,7 +142,7 @@ def first_order_form(km: me.KanesMethod) -> FirstOrderForm:
         return converted
 
     velocity = sp.Matrix(km._k_nh) * sp.Matrix(u) + sp.Matrix(km._f_nh)
-    parameters = tuple(sp.Symbol(name) for name in PARAMETER_NAMES)
+    parameters = tuple(sp.Symbol(name) for name in PARAMETER_NAMES) if parameters is None else tuple(parameters)
     return FirstOrderForm(
         q=tuple(q_plain), u=tuple(u_plain), parameters=parameters,
         coordinate_names=tuple(str(s) for s in q_plain), speed_names=tuple(str(s) for s in u_plain),

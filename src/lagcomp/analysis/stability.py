@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from lagcomp.analysis._steady_setup import consistent_speeds, first_order_form
+from lagcomp.analysis._steady_setup import consistent_speeds, first_order_form, state_vector
 from lagcomp.analysis.steady import linearize_steady
 from lagcomp.errors import LinearizationError, OptionError
 
@@ -131,7 +131,7 @@ def _point_function(system, parameter, q, u, params, t, independent):
         return lambda value: {**base, "params": {**base["params"], parameter: value}}
     if parameter in form.speed_names:
         k = list(form.speed_names).index(parameter)
-        start = np.zeros(form.n_u) if u is None else np.array(u, dtype=float)
+        start = np.zeros(form.n_u) if u is None else state_vector(u, form.speed_names, "u")
         keep = list(dict.fromkeys([parameter, *(n for n in independent or () if n in form.speed_names)]))
 
         def speeds(value):

@@ -125,8 +125,15 @@ class SteadyLinearization:
 
     @property
     def rate_scale(self) -> float:
-        """A rate (1/time) against which Re λ is judged: the largest |λ| (at least 1e-300)."""
-        return max(float(np.max(np.abs(self.eigenvalues))) if self.eigenvalues.size else 0.0, 1e-300)
+        """A rate (1/time) against which Re λ is judged: the largest |λ| or |A_ij| (at least 1e-300).
+
+        |A| and not |λ| alone: the rounding error of computed eigenvalues
+        scales with |A|, and near a collision of eigenvalues at 0 (where
+        stability changes in conservative and gyroscopic systems) every |λ|
+        is small while their rounding errors are not.
+        """
+        largest = float(np.max(np.abs(self.eigenvalues))) if self.eigenvalues.size else 0.0
+        return max(largest, float(np.max(np.abs(self.A), initial=0.0)), 1e-300)
 
     @property
     def stability(self) -> str:
