@@ -305,7 +305,7 @@ def test_bicycle_state_matrix_matches_sympys_linearization(bike):
 
 def test_bicycle_weave_and_capsize_speeds(bike):
     sweep = stability_sweep(bike, running, np.linspace(0.0, 10.0, 21), [0.0] * 4, None, bicycle.BENCHMARK,
-                            drop=("q1", "u3"))
+                            drop=("q1", "u3"), label="v")
     assert [(c.becomes, c.crossing) for c in sweep.changes] == [("stable", "transversal"),
                                                                 ("unstable", "transversal")]
     # measured: 4e-15
@@ -315,3 +315,42 @@ def test_bicycle_weave_and_capsize_speeds(bike):
                                running(0.0)["u"], bicycle.BENCHMARK, drop=("q1", "u3"))
     np.testing.assert_allclose([c.value * bicycle.RAD_REAR for c in by_wheel.changes], [WEAVE, CAPSIZE],
                                rtol=0, atol=1e-10)
+    assert sweep.parameter == "v" and sweep.unstable[0] and not sweep.unstable[10] and sweep.unstable[-1]
+
+
+def test_stability_plot(bike, tmp_path):
+    pytest.importorskip("matplotlib")
+    from lagcomp.plots import plot_stability
+
+    sweep = stability_sweep(bike, running, np.linspace(0.0, 10.0, 11), [0.0] * 4, None, bicycle.BENCHMARK,
+                            drop=("q1", "u3"), label="v")
+    fig = plot_stability(sweep)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "v"
+    # per eigenvalue: Re solid and |Im| dashed; plus the two legend proxies
+    styles = [line.get_linestyle() for line in ax.get_lines() if line.get_xydata().shape[0] == 11]
+    assert styles.count("-") == 4 and styles.count("--") == 4
+    fig.savefig(tmp_path / "bicycle.png", dpi=60)
+    assert (tmp_path / "bicycle.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_cli_stability_finds_the_hoop_beads_critical_rate(capsys, tmp_path):
+    """The bottom of a hoop turned at Ω becomes unstable at Ω² = g/R (δθ̈ = (Ω² − g/R) δθ there)."""
+    pytest.importorskip("matplotlib")
+    from lagcomp.cli import main
+
+    argv = ["--cache-dir", str(tmp_path), "stability", "hoop_bead", "--param", "Omega", "--range", "1", "8",
+            "--num", "8", "--set", "epsilon=0", "--q", str(math.pi), "--plot", str(tmp_path / "hoop.png")]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    line = next(row for row in out.splitlines() if row.startswith("becomes unstable at Omega = "))
+    # measured: 1e-13 relative (printed to 12 digits)
+    assert float(line.split("= ")[1].split()[0]) == pytest.approx(math.sqrt(9.81 / 0.5), rel=1e-11)
+    assert (tmp_path / "hoop.png").exists()
+
+
+def test_cli_stability_reports_an_unknown_parameter(capsys):
+    from lagcomp.cli import main
+
+    assert main(["stability", "hoop_bead", "--param", "spin", "--range", "0", "1"]) == 2
+    assert "Unknown sweep parameter 'spin'" in capsys.readouterr().err

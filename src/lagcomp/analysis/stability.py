@@ -83,7 +83,7 @@ class StabilitySweep:
 
 
 def stability_sweep(system, parameter, values, q, u=None, params: dict | None = None, *, t: float = 0.0,
-                    drop=(), independent=None) -> StabilitySweep:
+                    drop=(), independent=None, label: str | None = None) -> StabilitySweep:
     """Follow the eigenvalues of the steady motion (q, u) as `parameter` runs through `values`.
 
     Parameters
@@ -97,6 +97,9 @@ def stability_sweep(system, parameter, values, q, u=None, params: dict | None = 
     values : sequence of float, increasing, at least 2
     q, u, params, t, drop, independent
         The base point and the options of `linearize_steady`.
+    label : str, optional
+        The parameter's name in results and plots (default: `parameter`'s
+        name, or the function's).
     """
     values = np.asarray(values, dtype=float).ravel()
     if values.size < 2 or not np.all(np.isfinite(values)) or np.any(np.diff(values) <= 0):
@@ -114,7 +117,7 @@ def stability_sweep(system, parameter, values, q, u=None, params: dict | None = 
     changes = tuple(_locate(linearize, a, b, ra, rb, XTOL * (values[-1] - values[0]))
                     for a, b, ra, rb in zip(values[:-1], values[1:], results[:-1], results[1:])
                     if (ra.stability == "unstable") != (rb.stability == "unstable"))
-    name = parameter if isinstance(parameter, str) else getattr(parameter, "__name__", "parameter")
+    name = label or (parameter if isinstance(parameter, str) else getattr(parameter, "__name__", "parameter"))
     return StabilitySweep(parameter=name, values=values, eigenvalues=eigenvalues,
                           growth=np.array([r.growth_rate for r in results]), unstable=unstable,
                           changes=changes, states=results[0].states)
