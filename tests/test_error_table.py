@@ -227,6 +227,7 @@ CASES = {
                                                                     independent=["x", "z"]), "['y']"),
     "steady-drop-not-ignorable": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -1.0], drop=["x"]),
                                   "`x`"),
+    "steady-at-a-kink": (lambda models: an.linearize_steady(models["friction"], [0.5], [0.0]), "x_dot = 0"),
     "sweep-unknown-parameter": (lambda models: an.stability_sweep(models["rod"], "mass", [1.0, 2.0], [0.0, 0.0, -1.0]),
                                 "'mass'"),
 }

@@ -239,6 +239,20 @@ def test_cartesian_spherical_pendulum_hanging_and_on_a_cone():
     assert cone.residual == pytest.approx(9.81 * math.tan(theta0), rel=1e-12)
 
 
+# -- non-smooth equations (sympy's derivatives, DiracDelta away from kinks) -----------
+
+
+def test_sliding_rope_with_coulomb_friction():
+    """While sliding (ẋ > 0): ẍ = (g(1 + f)/L)(x − l0), so λ = ±√(g(1 + f)/L); at rest sign(ẋ) has a kink."""
+    system = examples.get("rope_friction")
+    lin = linearize_steady(system, [0.4], [0.5], {"f": 0.3})
+    rate = math.sqrt(9.81 * 1.3 / 1.0)
+    # measured: 0 (both entries exact in binary to the last bit here)
+    same_spectrum(lin.eigenvalues, [rate, -rate], atol=1e-13 * rate)
+    with pytest.raises(lc.LinearizationError, match="x_dot = 0 is a kink"):
+        linearize_steady(system, [0.4], [0.0])
+
+
 # -- unconstrained: the same as `linearize` ------------------------------------------
 
 

@@ -9,7 +9,9 @@ them) the dynamics are the residuals
 and their derivatives with respect to q and u, differentiated symbolically
 (symengine where every function is one it differentiates as sympy does,
 sympy otherwise), give the implicit-function-theorem derivatives of
-(a, λ) exactly — no finite differences.  Two compiled functions:
+(a, λ) exactly — no finite differences.  Derivatives of sign, Abs,
+Heaviside and Piecewise (DiracDelta terms) are taken away from their kinks,
+and a point on a kink is refused.  Two compiled functions:
 
 - `point(q, u, p, t)`: N, M, F, C, γ, Φ, Ψ and the Jacobians N_q, N_u, Φ_q,
   Ψ_q, Ψ_u, everything the accelerations and the constraint manifold need;
@@ -28,7 +30,7 @@ import numpy as np
 import symengine as se
 import sympy as sp
 
-from lagcomp.errors import ModelError
+from lagcomp.errors import LinearizationError, ModelError
 from lagcomp.mechanics.lagrange import _symengine_maps, symengine_ready
 from lagcomp.model.system import t as TIME
 
@@ -48,10 +50,23 @@ class FormJacobians:
     form: object
     _point: object
     _partials: object
+    kinks: tuple = ()
 
     def point(self, q, u, p, t: float) -> dict:
-        """N, M, F, C, γ, Φ, Ψ (as matrices) and N_q, N_u, Φ_q, Ψ_q, Ψ_u at (q, u, t), by name."""
+        """N, M, F, C, γ, Φ, Ψ (as matrices) and N_q, N_u, Φ_q, Ψ_q, Ψ_u at (q, u, t), by name.
+
+        Raises LinearizationError at a kink (the argument of a sign, Abs,
+        Heaviside or Piecewise condition is 0 there): no derivative exists.
+        """
         values = self._point(np.concatenate([q, u, p, [t]]))
+        if self.kinks:
+            at = np.abs(np.array(values[len(POINT_OUTPUTS)], dtype=float).ravel())
+            size = max(1.0, float(np.max(np.abs(np.concatenate([q, u])), initial=0.0)))
+            if np.any(at <= 1e-14 * size):
+                culprit = self.kinks[int(np.argmin(at))]
+                raise LinearizationError(f"The equations are not differentiable at this point: {culprit} = 0 is a "
+                                         "kink of a sign, Abs, Heaviside or Piecewise in them. Linearize away from it "
+                                         "(e.g. while sliding, not at rest, for Coulomb friction).")
         return {name: np.array(v, dtype=float).reshape(shape) for name, v, shape in
                 zip(POINT_OUTPUTS, values, self._point_shapes())}
 
@@ -102,8 +117,11 @@ def _build(form) -> FormJacobians:
         partials = se.Lambdify([to_se(s) for s in partial_args], *derivs[5:], cse=True, backend=_backend())
     else:
         derivs = [sp.Matrix(m).jacobian(xs) for m, xs in jacobians]
-        point = _sympy_function(point_args, plain + derivs[:5])
+        kinks = sorted({d.args[0] for m in derivs for d in m.atoms(sp.DiracDelta)}, key=sp.default_sort_key)
+        derivs = [m.replace(sp.DiracDelta, lambda *args: sp.S.Zero) for m in derivs]
+        point = _sympy_function(point_args, plain + derivs[:5] + [sp.Matrix(len(kinks), 1, kinks)])
         partials = _sympy_function(partial_args, derivs[5:])
+        return FormJacobians(form, point, partials, tuple(kinks))
     return FormJacobians(form, point, partials)
 
 
@@ -113,10 +131,9 @@ def _backend() -> str:
 
 
 def _sympy_function(args, outputs):
-    """One numpy function of the vector `args` returning the matrices `outputs`."""
-    vector = sp.MatrixSymbol("_lc_x", len(args), 1)
-    outputs = [sp.Matrix(m).xreplace({s: vector[i, 0] for i, s in enumerate(args)}) for m in outputs]
-    return sp.lambdify([vector], outputs, modules="numpy", cse=True)
+    """One numpy function of the vector `args` returning the matrices `outputs` (sympy's lambdify)."""
+    function = sp.lambdify(list(args), [sp.Matrix(m) for m in outputs], modules="numpy", cse=True, dummify=True)
+    return lambda x: function(*x)
 
 
 def _check_symbols(form, allowed: set) -> None:

@@ -98,7 +98,8 @@ def state_vector(values, names, what: str) -> np.ndarray:
         unknown = sorted(set(values) - set(names))
         missing = [n for n in names if n not in values]
         if unknown or missing:
-            raise InitialConditionError(f"`{what}` must give exactly {list(names)}; unknown {unknown}, missing {missing}.")
+            raise InitialConditionError(f"`{what}` must give exactly {list(names)}; "
+                                        f"unknown {unknown}, missing {missing}.")
         values = [values[n] for n in names]
     x = np.atleast_1d(np.asarray(values, dtype=float)).ravel()
     if x.shape != (len(names),):
@@ -108,15 +109,19 @@ def state_vector(values, names, what: str) -> np.ndarray:
     return x
 
 
-def form_point(system, q, u, params, t: float, *, check: bool = True) -> FormPoint:
-    """Evaluate the form at (q, u): accelerations and multipliers from the KKT system, constraints checked."""
+def _evaluated(system, q, u, params, t: float):
+    """(form, q, u, p, named parameters, values at the point), the inputs checked."""
     form, defaults = first_order_form(system)
     p, named = parameter_vector(form, params, defaults)
     q = state_vector(q, form.coordinate_names, "q")
     u = np.zeros(form.n_u) if u is None else state_vector(u, form.speed_names, "u")
-    values = evaluator(form).point(q, u, p, float(t))
-    if check:
-        _check_consistent(form, q, u, values)
+    return form, q, u, p, named, evaluator(form).point(q, u, p, float(t))
+
+
+def form_point(system, q, u, params, t: float) -> FormPoint:
+    """Evaluate the form at (q, u): constraints checked, accelerations and multipliers from the KKT system."""
+    form, q, u, p, named, values = _evaluated(system, q, u, params, t)
+    _check_consistent(form, q, u, values)
     k = form.C.rows
     kkt = np.block([[values["M"], -values["C"].T], [values["C"], np.zeros((k, k))]])
     try:
@@ -202,14 +207,13 @@ def consistent_speeds(system, q, u, params: dict | None = None, *, t: float = 0.
     other independent ones (chosen by pivoted QR of Ψ_u).  The speeds of a steady motion, e.g. a
     disc's spin with its contact point's velocity completed.
     """
-    point = form_point(system, q, u, params, t, check=False)
-    v, names = point.values, list(point.form.speed_names)
-    named = [n for n in (independent or ()) if n in names]
-    dependent = _dependent(v["Psi_u"], names, named, (), "speeds")
-    u = point.u.copy()
+    form, q, u, p, _, values = _evaluated(system, q, u, params, t)
+    names = list(form.speed_names)
+    dependent = _dependent(values["Psi_u"], names, [n for n in (independent or ()) if n in names], (), "speeds")
+    u = u.copy()
     if dependent:
-        # Ψ is linear in u: Ψ(u) = Ψ(u_with_dependent_zero) + Ψ_ud u_d
+        # Ψ is linear in u: Ψ(u) = Ψ(u with u_d = 0) + Ψ_ud u_d
         u[dependent] = 0.0
-        zeroed = evaluator(point.form).point(point.q, u, point.p, point.t)["Psi"][:, 0]
-        u[dependent] = linalg.solve(v["Psi_u"][:, dependent], -zeroed)
+        zeroed = evaluator(form).point(q, u, p, float(t))["Psi"][:, 0]
+        u[dependent] = linalg.solve(values["Psi_u"][:, dependent], -zeroed)
     return u

@@ -30,7 +30,7 @@ import numpy as np
 from scipy import optimize
 
 from lagcomp.analysis._steady_setup import consistent_speeds, first_order_form, state_vector
-from lagcomp.analysis.steady import linearize_steady
+from lagcomp.analysis.steady import ZERO, linearize_steady
 from lagcomp.errors import LinearizationError, OptionError
 
 #: Absolute tolerance of a located change, relative to the sweep's span.
@@ -127,8 +127,10 @@ def _point_function(system, parameter, q, u, params, t, independent):
     """value -> dict(q, u, params) of the point at that value of `parameter`."""
     base = {"q": q, "u": u, "params": dict(params or {})}
     if callable(parameter):
-        return lambda value: {**base, **parameter(value),
-                              "params": {**base["params"], **parameter(value).get("params", {})}}
+        def given(value):
+            point = parameter(value)
+            return {**base, **point, "params": {**base["params"], **point.get("params", {})}}
+        return given
     form, _ = first_order_form(system)
     if parameter in [str(s) for s in form.parameters]:
         return lambda value: {**base, "params": {**base["params"], parameter: value}}
@@ -162,7 +164,7 @@ def _follow(spectra: list) -> np.ndarray:
 def _locate(linearize, a, b, ra, rb, xtol) -> StabilityChange:
     """The value in (a, b) where the verdict changes (module docstring)."""
     becomes = "unstable" if rb.stability == "unstable" else "stable"
-    tol_a, tol_b = 1e-10 * ra.rate_scale, 1e-10 * rb.rate_scale
+    tol_a, tol_b = ZERO * ra.rate_scale, ZERO * rb.rate_scale
     if (ra.growth_rate < -tol_a and rb.growth_rate > tol_b) or (ra.growth_rate > tol_a and rb.growth_rate < -tol_b):
         value = optimize.brentq(lambda x: linearize(x).growth_rate, a, b, xtol=xtol, rtol=4 * np.finfo(float).eps)
         return StabilityChange(float(value), becomes, "transversal")
