@@ -45,9 +45,10 @@ drift — yaw, wheel angles, the contact point, the top's spin angle — while t
 others and all speeds stay constant, so A does not depend on time.  Such a
 coordinate is ignorable when no kept rate depends on it (its column of A
 vanishes off its own row); `drop=` removes it (and ignorable speeds, such as
-a wheel's spin rate) from y, which removes its zero eigenvalue and leaves the
-others unchanged — the check that the column vanishes is made and a coordinate
-that is not ignorable is refused.  `residual` is the largest rate of the kept
+a wheel's spin rate) from y.  With those columns zero, A is block triangular,
+so the kept block's eigenvalues are eigenvalues of A and the dropped block's
+(`dropped_eigenvalues`, zero for cyclic coordinates) are the rest; the check
+that the columns vanish is made, and a state that is not ignorable is refused.  `residual` is the largest rate of the kept
 coordinates and of the kept independent speeds: zero (to rounding) exactly
 when the point is a steady motion of the reduced system; `drift` gives the
 rates of the dropped coordinates.
@@ -101,6 +102,9 @@ class SteadyLinearization:
         Largest |rate| of the kept states at the point: ~0 on a steady motion.
     drift : dict
         Rates of the dropped coordinates and speeds (the cyclic drift).
+    dropped_eigenvalues : ndarray of complex
+        Eigenvalues of the dropped block of the reduced A (0 for truly
+        cyclic coordinates; the rest of the spectrum, not in `stability`).
     """
 
     A: np.ndarray
@@ -117,6 +121,7 @@ class SteadyLinearization:
     dropped: tuple
     residual: float
     drift: dict = field(default_factory=dict)
+    dropped_eigenvalues: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=complex))
 
     @property
     def growth_rate(self) -> float:
@@ -202,6 +207,7 @@ def linearize_steady(system, q, u=None, params: dict | None = None, *, t: float 
     basis = _tangent_basis(point, choice)
     A = A_full[choice.rows] @ basis
     kept = [j for j, name in enumerate(choice.states) if name not in choice.dropped]
+    gone = [j for j in range(len(choice.states)) if j not in kept]
     _check_ignorable(A, choice, kept)
     A_kept = A[np.ix_(kept, kept)]
     eigenvalues, vectors = linalg.eig(A_kept)
@@ -215,6 +221,7 @@ def linearize_steady(system, q, u=None, params: dict | None = None, *, t: float 
         dropped=choice.dropped,
         residual=float(np.max(np.abs(state_rates[kept]), initial=0.0)),
         drift={choice.states[j]: float(state_rates[j]) for j in range(len(choice.states)) if j not in kept},
+        dropped_eigenvalues=linalg.eigvals(A[np.ix_(gone, gone)]) if gone else np.zeros(0, dtype=complex),
     )
 
 
