@@ -55,12 +55,20 @@ class Choice:
 
 
 def first_order_form(system) -> tuple[FirstOrderForm, dict]:
-    """(form, default parameter values) of a Model, a System or a FirstOrderForm."""
+    """(form, default parameter values) of a Model, a System or a FirstOrderForm.
+
+    A model that carries its form as ``first_order_form`` (one compiled from a
+    KanesMethod) gives that form; other models and Systems are derived
+    (Lagrange's equations, u = q̇), once per System.
+    """
     from lagcomp.mechanics.lagrange import derive
     from lagcomp.model.system import System
 
     if isinstance(system, FirstOrderForm):
         return system, {}
+    carried = getattr(system, "first_order_form", None)  # a model compiled from Kane's equations keeps its form
+    if isinstance(carried, FirstOrderForm):
+        return carried, dict(getattr(system, "defaults", None) or {})
     source = getattr(system, "system", system)
     if source is None:
         raise ModelError(f"linearize_steady reads the equations of {system.name!r}, which a model from "
