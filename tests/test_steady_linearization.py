@@ -46,6 +46,7 @@ is not steady in these coordinates: the bob's acceleration toward the axis,
 from __future__ import annotations
 
 import math
+import types
 
 import numpy as np
 import pytest
@@ -303,6 +304,13 @@ def test_bicycle_eigenvalues_are_the_published_ones(bike, v):
     np.testing.assert_allclose(lin.dropped_eigenvalues, 0.0, atol=1e-12)  # yaw and rear-wheel rate: cyclic
     # measured: 1e-14 (v = 0), 4.4e-14 (v = 5)
     same_spectrum(lin.eigenvalues, PUBLISHED[v], atol=1e-10)
+
+
+def test_a_model_carrying_its_form_is_linearized_from_it(bike):
+    """The protocol of models compiled from a KanesMethod: `first_order_form` and `defaults` attributes."""
+    model = types.SimpleNamespace(name="bicycle", first_order_form=bike, defaults=bicycle.BENCHMARK)
+    lin = linearize_steady(model, [0.0] * 4, running(5.0)["u"], drop=("q1", "u3"))
+    same_spectrum(lin.eigenvalues, PUBLISHED[5.0], atol=1e-10)
 
 
 def test_bicycle_state_matrix_matches_sympys_linearization(bike):
