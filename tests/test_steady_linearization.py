@@ -163,6 +163,32 @@ def test_upright_rolling_disc_matches_the_closed_form(disc, omega, heading, x, s
     same_spectrum(lin.eigenvalues, [0.0, root, -root], atol=1e-10 * max(1.0, abs(root)))
 
 
+def test_the_choice_of_independent_speeds_changes_the_basis_not_the_spectrum(disc):
+    """On straight rolling at heading 0.4 only x, y and φ drift, and neither basis depends on them: the two
+    reduced matrices are similar (on a steady turn the basis with φ̇ dependent would follow ψ: see below)."""
+    q = [0.2, -0.1, 0.4, 0.0, 0.3]
+    u = consistent_speeds(disc, q, [0, 0, 0, 0, 9.0], independent=["psi_dot", "theta_dot", "phi_dot"])
+    automatic = linearize_steady(disc, q, u)
+    chosen = linearize_steady(disc, q, u, independent=["x_dot", "psi_dot", "theta_dot"])
+    assert set(automatic.dependent) == {"x_dot", "y_dot"} and set(chosen.dependent) == {"y_dot", "phi_dot"}
+    # measured: 8e-17 of the rate scale
+    same_spectrum(chosen.eigenvalues, automatic.eigenvalues, atol=1e-11 * automatic.rate_scale)
+    # both bases span the same tangent space: each basis vector is a combination of the other's
+    P, Q = automatic.basis, chosen.basis
+    coefficients, *_ = np.linalg.lstsq(P, Q, rcond=None)
+    np.testing.assert_allclose(P @ coefficients, Q, atol=1e-12)
+
+
+def test_a_basis_that_follows_a_drifting_coordinate_is_refused(disc):
+    """On the example's steady turn (ψ drifts), φ̇ dependent makes the kept rates depend on ψ: not ignorable."""
+    q = list(disc.q0)
+    u = consistent_speeds(disc, q, list(disc.qd0), independent=["psi_dot", "theta_dot", "phi_dot"])
+    turning = linearize_steady(disc, q, u, drop=("x", "y", "psi", "phi"))
+    assert turning.residual <= 1e-13 and turning.drift["psi"] == pytest.approx(disc.qd0[2])
+    with pytest.raises(lc.LinearizationError, match="`psi` is not ignorable"):
+        linearize_steady(disc, q, u, independent=["x_dot", "psi_dot", "theta_dot"], drop=("x", "y", "psi", "phi"))
+
+
 def test_thin_disc_rolls_upright_stably_above_the_closed_form_spin(disc):
     params = {"m": 1.0, "r": 0.1, "I1": 0.0025, "I3": 0.005, "g": 9.81}  # uniform thin disc
     sweep = stability_sweep(disc, "phi_dot", np.linspace(1.0, 12.0, 12), [0.0] * 5, None, params, drop=DISC_DROP)

@@ -36,8 +36,11 @@ n_u − n_v) basis of T these two lines define.  The independent rows E of
 
     ẏ = A y,    A = E A_full P.
 
-Another choice of independent coordinates gives a similar A (same
-eigenvalues): both are the restriction of A_full to T in two bases.
+At an equilibrium, and on a steady motion where the change of basis
+between two choices of independent states stays constant, another choice
+gives a similar A (the same eigenvalues): both are the restriction of A_full
+to T in two bases.  (ẏ = E A_full P y holds exactly for any choice, since
+E P = I makes E Ṗ = 0; but if P changes along the motion, A does too.)
 
 Steady motions and ignorable coordinates: about a steady motion (a bicycle
 running straight, a sleeping top, a disc rolling upright) some coordinates
@@ -48,7 +51,13 @@ vanishes off its own row); `drop=` removes it (and ignorable speeds, such as
 a wheel's spin rate) from y.  With those columns zero, A is block triangular,
 so the kept block's eigenvalues are eigenvalues of A and the dropped block's
 (`dropped_eigenvalues`, zero for cyclic coordinates) are the rest; the check
-that the columns vanish is made, and a state that is not ignorable is refused.  `residual` is the largest rate of the kept
+that the columns vanish is made, and a state that is not ignorable is refused.
+The eigenvalues are the motion's stability exponents when the reduced system
+is autonomous along it: the kept states constant (`residual` ≈ 0) and A
+unchanged as the dropped coordinates drift.  The column check verifies the
+latter to first order at the point, and catches a basis that follows a
+drifting coordinate (on a disc's steady turn, φ̇ dependent makes the kept
+rates depend on the heading ψ; the pivoted QR takes ẋ, ẏ dependent instead).  `residual` is the largest rate of the kept
 coordinates and of the kept independent speeds: zero (to rounding) exactly
 when the point is a steady motion of the reduced system; `drift` gives the
 rates of the dropped coordinates.
