@@ -17,6 +17,7 @@ import pytest
 import sympy as sp
 
 import lagcomp as lc
+from lagcomp import analysis as an
 from lagcomp.model import t
 
 TABLE = Path(__file__).resolve().parent.parent / "docs" / "errors.md"
@@ -255,6 +256,21 @@ CASES = {
     "stale-cache-entry": (_cache_case("stale"), "another lagcomp or numba version"),
     "unwritable-cache": (_cache_case("unwritable"), "cannot write its cache"),
     "load-unknown-name": (lambda models, tmp_path: lc.load("never_compiled", cache_dir=tmp_path), "'never_compiled'"),
+    "linearize-constrained": (lambda models: an.linearize(models["rod"], [0.0, 0.0, -1.0]), "linearize_steady"),
+    "steady-off-constraints": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -2.0]), "residual"),
+    "steady-singular-point": (lambda: an.linearize_steady(lc.System([x], T=m * x**2 * x.diff(t) ** 2 / 2,
+                                                                    name="table_degenerate"), [0.0], None, {"m": 1.0}),
+                              "singular"),
+    "steady-unknown-state": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -1.0], drop=["w"]), "['w']"),
+    "steady-too-many-independent": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -1.0],
+                                                                      independent=["x", "y", "z"]), "['x', 'y', 'z']"),
+    "steady-singular-dependent": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -1.0],
+                                                                    independent=["x", "z"]), "['y']"),
+    "steady-drop-not-ignorable": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -1.0], drop=["x"]),
+                                  "`x`"),
+    "steady-at-a-kink": (lambda models: an.linearize_steady(models["friction"], [0.5], [0.0]), "x_dot = 0"),
+    "sweep-unknown-parameter": (lambda models: an.stability_sweep(models["rod"], "mass", [1.0, 2.0], [0.0, 0.0, -1.0]),
+                                "'mass'"),
 }
 
 

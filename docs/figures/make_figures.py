@@ -75,6 +75,13 @@ def main(directory: Path) -> None:
                           symmetric=True, title="double pendulum from rest: turns of the second rod after 10 s"),
          "sweep_map.png")
 
+    # eigenvalues along a parameter: a thin disc rolling upright is stable above φ̇² = g/(3r)
+    cyclic = ("x", "y", "psi", "phi", "phi_dot")
+    disc = analysis.stability_sweep(examples.get("rolling_disc"), "phi_dot", np.linspace(0.5, 12, 47), [0.0] * 5,
+                                    drop=cyclic)
+    save(plots.plot_stability(disc, title="rolling disc, upright: eigenvalues vs spin (stable for φ̇² > g/(3r))"),
+         "stability_disc.png")
+
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parent)

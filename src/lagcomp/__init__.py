@@ -15,6 +15,7 @@ from lagcomp.errors import (
     InitialConditionError as InitialConditionError,
     IntegrationError as IntegrationError,
     LagcompError as LagcompError,
+    LinearizationError as LinearizationError,
     ModelError as ModelError,
     OptionError as OptionError,
     ParameterError as ParameterError,

@@ -5,6 +5,7 @@
     lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz --plot run.png
     lagcomp generate generated/          (add --check to only report stale files)
     lagcomp bench double_pendulum        (kernel ns/call, op counts, steps/s per method, compile times)
+    lagcomp stability hoop_bead --param Omega --range 1 8 --set epsilon=0 --q 3.14159265 --plot eig.png
 """
 
 from __future__ import annotations
@@ -328,6 +329,34 @@ def cmd_sweep(args) -> int:
     return 0 if sweep.done.all() else 130
 
 
+def cmd_stability(args) -> int:
+    """Eigenvalues of a steady motion of an example along a parameter or speed, and where stability changes."""
+    import numpy as np
+
+    from lagcomp.analysis import stability_sweep
+
+    system = _system(args)
+    q = system.q0 if args.q is None else args.q
+    u = [0.0] * len(system.coordinates) if args.u is None else args.u
+    values = np.linspace(args.range[0], args.range[1], args.num)
+    sweep = stability_sweep(system, args.param, values, q, u, _key_values(args.set, "--set"), drop=args.drop or ())
+    print(f"{system.name}: eigenvalues of the linearization about q = {list(q)}, u = {list(u)} "
+          f"in the reduced state ({', '.join(sweep.states)})")
+    for value, unstable, row in zip(sweep.values, sweep.unstable, sweep.eigenvalues):
+        shown = "  ".join(f"{z.real:+.6g}{z.imag:+.6g}j" if z.imag else f"{z.real:+.6g}" for z in row)
+        print(f"{args.param} = {value:<10.6g} {'unstable' if unstable else 'stable  '}  {shown}")
+    for change in sweep.changes:
+        print(f"becomes {change.becomes} at {args.param} = {change.value:.12g} ({change.crossing} crossing)")
+    if not sweep.changes:
+        print(f"no change of stability for {args.param} in [{values[0]:g}, {values[-1]:g}]")
+    if args.plot:
+        from lagcomp.plots import plot_stability
+
+        plot_stability(sweep, title=f"{system.name}: eigenvalues vs {args.param}").savefig(args.plot, dpi=120)
+        print(f"plot: {args.plot}")
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lagcomp", description="Compile and simulate Lagrangian systems.")
     parser.add_argument("--cache-dir", help="cache root (default: $LAGCOMP_CACHE_DIR or the user cache directory)")
@@ -401,6 +430,16 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--steps", type=int, default=100_000, help="steps of each fixed-step run")
     bench.add_argument("--methods", nargs="+", metavar="METHOD", help="time only these methods (default: all that apply)")
     bench.add_argument("--no-cold", action="store_true", help="skip the cold compile in a fresh process")
+    stability = example("stability", "eigenvalues of a steady motion along a parameter; where stability changes")
+    stability.add_argument("--param", required=True, help="swept parameter, or speed (<coordinate>_dot)")
+    stability.add_argument("--range", type=float, nargs=2, required=True, metavar=("LO", "HI"))
+    stability.add_argument("--num", type=int, default=41, help="values in the range (default 41)")
+    stability.add_argument("--set", action="append", metavar="K=V", help="value of another parameter, e.g. g=9.81")
+    stability.add_argument("--q", type=float, nargs="+", help="coordinates of the steady motion (default: the example's q0)")
+    stability.add_argument("--u", type=float, nargs="+", help="its speeds (default: zero but the swept one; dependent ones completed)")
+    stability.add_argument("--drop", nargs="+", metavar="NAME", help="ignorable coordinates/speeds to leave out")
+    stability.add_argument("--plot", metavar="PNG", help="draw the eigenvalues vs the parameter (needs matplotlib)")
+    stability.set_defaults(func=cmd_stability)
     gen = sub.add_parser("generate", help="regenerate the emitted modules of the bundled examples")
     gen.add_argument("directory", nargs="?", default="generated")
     gen.add_argument("--check", action="store_true", help="only list stale files; exit 1 if any")

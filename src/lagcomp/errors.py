@@ -25,6 +25,10 @@ class SingularMassMatrixError(ModelError):
     """The kinetic energy is not positive definite in the velocities."""
 
 
+class LinearizationError(LagcompError, ValueError):
+    """A linearization cannot be formed as asked: singular constraint blocks, a dropped state that matters."""
+
+
 class ParameterError(LagcompError, ValueError):
     """Parameter values are missing, unknown or not finite."""
 

@@ -14,6 +14,8 @@ notebook by leaving it as a cell's value, or write it with
 `plot_poincare`            a Section's points, one colour per trajectory
 `plot_sweep`               a Sweep quantity over its grid (map or line)
 `plot_lyapunov`            running Lyapunov estimates vs t, log-log
+`plot_stability`           eigenvalues of a StabilitySweep vs its parameter:
+                           Re λ solid, Im λ dashed, stability changes marked
 =========================  ===================================================
 """
 
@@ -220,4 +222,41 @@ def plot_lyapunov(*results, labels=None, reference: bool = True, title: str | No
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize="small")
     ax.set_title(title or "Lyapunov exponent estimates")
+    return fig
+
+
+def plot_stability(sweep, *, title: str | None = None):
+    """Eigenvalues of a `StabilitySweep` against its parameter, drawn as the bicycle literature draws them.
+
+    Each followed eigenvalue keeps one colour: its real part solid, its
+    imaginary part dashed where it is not zero (|Im λ|: a conjugate pair
+    shares one dashed curve).  Stability changes are dotted vertical lines,
+    and the ranges where no Re λ > 0 are shaded.
+    """
+    fig = _figure(7.0, 4.5)
+    ax = fig.add_subplot()
+    x, values = sweep.values, sweep.eigenvalues
+    scale = max(float(np.max(np.abs(values), initial=0.0)), 1e-300)
+    for j in range(values.shape[1]):
+        colour = f"C{j % 10}"
+        ax.plot(x, values[:, j].real, "-", color=colour, lw=1.4)
+        imag = np.abs(values[:, j].imag)
+        ax.plot(x, np.where(imag > 1e-9 * scale, imag, np.nan), "--", color=colour, lw=1.0)
+    ax.axhline(0.0, color="k", lw=0.6)
+    edges = [x[0], *(c.value for c in sweep.changes), x[-1]]
+    for left, right in zip(edges[:-1], edges[1:]):
+        middle = np.searchsorted(x, 0.5 * (left + right))
+        if not sweep.unstable[min(middle, len(x) - 1)]:
+            ax.axvspan(left, right, color="0.9", zorder=0)
+    for change in sweep.changes:
+        ax.axvline(change.value, color="k", ls=":", lw=1.0)
+        ax.annotate(f"{change.value:.4g}", (change.value, 1.0), xycoords=("data", "axes fraction"),
+                    ha="left", va="top", fontsize="small")
+    ax.plot([], [], "k-", label="Re λ")
+    ax.plot([], [], "k--", label="|Im λ|")
+    ax.legend(fontsize="small", loc="lower left")
+    ax.set_xlabel(_label(sweep.parameter))
+    ax.set_ylabel("eigenvalues λ")
+    ax.grid(alpha=0.3)
+    ax.set_title(title or f"eigenvalues vs {sweep.parameter} (shaded: stable)")
     return fig

@@ -9,6 +9,10 @@ symbolic counterpart where one is useful:
                    symbolic `generalized_forces`, `balance` (virtual work)
 ``oscillations``   `linearize` (M₀, K₀, G₀, D₀), `normal_modes`, stability;
                    `linearize_symbolic`
+``steady``         `linearize_steady`: about steady motions, constrained or not
+                   (reduced state matrix, eigenvalues, modes); `consistent_speeds`
+``stability``      `stability_sweep`: eigenvalues along a parameter, where
+                   stability changes
 ``conserved``      `conserved_quantities`: first integrals and why
 ``portrait``       `phase_portrait` of 1-DoF systems from the energy integral
 ``poincare``       `poincare_section` over many initial states, `on_energy_surface`
@@ -36,6 +40,16 @@ from lagcomp.analysis.oscillations import (
 from lagcomp.analysis.poincare import Section as Section, on_energy_surface as on_energy_surface
 from lagcomp.analysis.poincare import poincare_section as poincare_section
 from lagcomp.analysis.portrait import Portrait as Portrait, phase_portrait as phase_portrait
+from lagcomp.analysis.steady import (
+    SteadyLinearization as SteadyLinearization,
+    consistent_speeds as consistent_speeds,
+    linearize_steady as linearize_steady,
+)
+from lagcomp.analysis.stability import (
+    StabilityChange as StabilityChange,
+    StabilitySweep as StabilitySweep,
+    stability_sweep as stability_sweep,
+)
 from lagcomp.analysis.statics import (
     Equilibrium as Equilibrium,
     balance as balance,

@@ -28,7 +28,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg
 
-from lagcomp.analysis._common import RestForces, coordinates_vector, unconstrained
+from lagcomp.analysis._common import RestForces, coordinates_vector
+from lagcomp.errors import ModelError
 
 #: Relative size below which G₀, D₀, asymmetry and Re λ count as zero.
 ZERO = 1e-10
@@ -124,8 +125,18 @@ class Modes:
 
 
 def linearize(model, q, params: dict | None = None, *, t: float = 0.0) -> Linearization:
-    """M₀, K₀, G₀, D₀ about the configuration `q` (an equilibrium, e.g. `find_equilibrium(...).q`)."""
-    unconstrained(model, "linearize")
+    """M₀, K₀, G₀, D₀ about the configuration `q` (an equilibrium, e.g. `find_equilibrium(...).q`).
+
+    Constrained systems, and steady motions (q̇ ≠ 0), are linearized by
+    `lagcomp.analysis.linearize_steady` (a first-order state matrix on the
+    constraint manifold); this function refuses them with a pointer there.
+    """
+    if model.k:
+        raise ModelError(
+            f"linearize (M₀, K₀, G₀, D₀) needs an unconstrained system: {model.name!r} has constraints "
+            f"{list(model.constraints)}. Use lagcomp.analysis.linearize_steady(model, q, qd), which reduces the "
+            "linearization to independent coordinates and speeds on the constraints."
+        )
     q = coordinates_vector(model, q)
     rest = RestForces(model, params, t)
     F_q, F_v = rest.partials(q)
