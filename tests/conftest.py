@@ -32,6 +32,15 @@ def compiled(cache_dir):
     return get
 
 
+@pytest.fixture(scope="session")
+def whipple_bicycle(cache_dir):
+    """sympy's test_kane3 bicycle: (its KanesMethod, the model `lc.compile(km)` makes of it), built once."""
+    import kane_models
+
+    km, values, _ = kane_models.bicycle()
+    return km, lc.compile(km, cache_dir=cache_dir, name="whipple_bicycle", defaults=values)
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

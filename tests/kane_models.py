@@ -87,7 +87,7 @@ def bicycle(wheel_angles: bool = False):
                      u_ind=[u2, u3, u5], u_dependent=[u1, u4, u6], velocity_constraints=conlist_speed,
                      kd_eqs=kd, constraint_solver="CRAMER")
     KM.kanes_equations(BL, FL)
-    return KM, _benchmark_values(), (0.3, 0.35)
+    return KM, dict(BENCHMARK), (RAD_REAR, RAD_FRONT)
 
 
 def _benchmark_values() -> dict:
@@ -113,3 +113,9 @@ def _benchmark_values() -> dict:
         g=9.81,
     )
     return {k: float(v) for k, v in values.items()}
+
+
+#: The benchmark bicycle's parameter values by name.
+BENCHMARK = _benchmark_values()
+#: Its wheel radii (m): a forward speed v is the rear wheel rate u3 = v / RAD_REAR, the front's u6 = v / RAD_FRONT.
+RAD_REAR, RAD_FRONT = 0.3, 0.35

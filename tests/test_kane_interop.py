@@ -204,9 +204,9 @@ PUBLISHED_5 = np.array([-14.07838969, -0.32286642, -0.77534188 - 4.46486771j, -0
 
 
 @pytest.fixture(scope="module")
-def bicycle(cache_dir):
-    km, values, radii = kane_models.bicycle()
-    return km, values, radii, lc.compile(km, cache_dir=cache_dir, name="whipple_bicycle", defaults=values)
+def bicycle(whipple_bicycle):
+    km, model = whipple_bicycle
+    return km, dict(kane_models.BENCHMARK), (kane_models.RAD_REAR, kane_models.RAD_FRONT), model
 
 
 def _on_constraints(model, q_ind, u_ind):

@@ -46,7 +46,6 @@ is not steady in these coordinates: the bob's acceleration toward the axis,
 from __future__ import annotations
 
 import math
-import types
 
 import numpy as np
 import pytest
@@ -56,6 +55,7 @@ from hypothesis import strategies as st
 
 import lagcomp as lc
 from lagcomp import examples
+from lagcomp.mechanics.kane import kane_form
 from lagcomp.analysis import (
     consistent_speeds,
     linearize,
@@ -64,7 +64,7 @@ from lagcomp.analysis import (
     stability_sweep,
 )
 
-import bicycle  # noqa: E402  (tests/ is on sys.path through conftest's rootdir)
+import kane_models  # noqa: E402  (tests/ is on sys.path through conftest's rootdir)
 import sympy_models  # noqa: E402
 
 # -- the sleeping top ------------------------------------------------------------------
@@ -201,7 +201,7 @@ def test_kane_rolling_disc_matches_sympys_linearizer():
     built = sympy_models.kane_rolling_disc()
     km = built["method"]
     km.kanes_equations(km.bodies, km.loads)
-    form = bicycle.first_order_form(km, built["parameters"])
+    form = kane_form(km, built["parameters"])
     values = {"m": 1.0, "r": 0.1, "I1": 0.0025, "I3": 0.005, "g": 9.81}
     q = [0.3, -0.2, 0.6, 0.0, 1.1]
     u = consistent_speeds(form, q, {"u_psi": 0.0, "u_theta": 0.0, "u_phi": 12.0, "u_x": 0.0, "u_y": 0.0},
@@ -312,18 +312,19 @@ WEAVE, CAPSIZE = 4.29238253634111, 6.02426201538837
 
 
 @pytest.fixture(scope="module")
-def bike():
-    """sympy's test_kane3 KanesMethod as a first-order form (about 3 s to build here)."""
-    return bicycle.first_order_form(bicycle.kane3_bicycle())
+def bike(whipple_bicycle):
+    """sympy's test_kane3 KanesMethod as `lc.compile` compiles it (conftest's session fixture)."""
+    _, model = whipple_bicycle
+    return model
 
 
 def running(v: float) -> dict:
-    return {"u": {"u2": 0.0, "u3": v / bicycle.RAD_REAR, "u5": 0.0, "u1": 0.0, "u4": 0.0, "u6": v / bicycle.RAD_FRONT}}
+    return {"u": {"u2": 0.0, "u3": v / kane_models.RAD_REAR, "u5": 0.0, "u1": 0.0, "u4": 0.0, "u6": v / kane_models.RAD_FRONT}}
 
 
 @pytest.mark.parametrize("v", sorted(PUBLISHED))
 def test_bicycle_eigenvalues_are_the_published_ones(bike, v):
-    lin = linearize_steady(bike, [0.0] * 4, running(v)["u"], bicycle.BENCHMARK, drop=("q1", "u3"))
+    lin = linearize_steady(bike, [0.0] * 4, running(v)["u"], kane_models.BENCHMARK, drop=("q1", "u3"))
     assert lin.states == ("q2", "q5", "u2", "u5")  # lean, steer and their rates
     assert set(lin.dependent) == {"q4", "u1", "u4", "u6"}
     assert lin.residual <= 1e-13
@@ -332,17 +333,18 @@ def test_bicycle_eigenvalues_are_the_published_ones(bike, v):
     same_spectrum(lin.eigenvalues, PUBLISHED[v], atol=1e-10)
 
 
-def test_a_model_carrying_its_form_is_linearized_from_it(bike):
-    """The protocol of models compiled from a KanesMethod: `first_order_form` and `defaults` attributes."""
-    model = types.SimpleNamespace(name="bicycle", first_order_form=bike, defaults=bicycle.BENCHMARK)
-    lin = linearize_steady(model, [0.0] * 4, running(5.0)["u"], drop=("q1", "u3"))
+def test_the_kane_form_itself_is_linearized_like_the_compiled_model(whipple_bicycle):
+    """`linearize_steady` takes the `FirstOrderForm` of `lagcomp.mechanics.kane.kane_form` as well as a Model."""
+    km, model = whipple_bicycle
+    form = kane_form(km, model.first_order_form.parameters)
+    lin = linearize_steady(form, [0.0] * 4, running(5.0)["u"], kane_models.BENCHMARK, drop=("q1", "u3"))
     same_spectrum(lin.eigenvalues, PUBLISHED[5.0], atol=1e-10)
 
 
 def test_bicycle_state_matrix_matches_sympys_linearization(bike):
     """test_kane3's `Res`: the lean/steer rows of KanesMethod.linearize, printed to 15 digits."""
     for v in range(6):
-        lin = linearize_steady(bike, [0.0] * 4, running(float(v))["u"], bicycle.BENCHMARK, drop=("q1", "u3"))
+        lin = linearize_steady(bike, [0.0] * 4, running(float(v))["u"], kane_models.BENCHMARK, drop=("q1", "u3"))
         res = np.array([[0, 0, 1.0, 0], [0, 0, 0, 1.0],
                         [9.48977444677355, -0.891197738059089 * v**2 - 0.571523173729245,
                          -0.105522449805691 * v, -0.330515398992311 * v],
@@ -353,16 +355,16 @@ def test_bicycle_state_matrix_matches_sympys_linearization(bike):
 
 
 def test_bicycle_weave_and_capsize_speeds(bike):
-    sweep = stability_sweep(bike, running, np.linspace(0.0, 10.0, 21), [0.0] * 4, None, bicycle.BENCHMARK,
+    sweep = stability_sweep(bike, running, np.linspace(0.0, 10.0, 21), [0.0] * 4, None, kane_models.BENCHMARK,
                             drop=("q1", "u3"), label="v")
     assert [(c.becomes, c.crossing) for c in sweep.changes] == [("stable", "transversal"),
                                                                 ("unstable", "transversal")]
     # measured: 4e-15
     np.testing.assert_allclose([c.value for c in sweep.changes], [WEAVE, CAPSIZE], rtol=0, atol=1e-10)
     # the same through the rear wheel's rate, the front wheel's completed by the constraints
-    by_wheel = stability_sweep(bike, "u3", np.linspace(0.0, 10.0, 21) / bicycle.RAD_REAR, [0.0] * 4,
-                               running(0.0)["u"], bicycle.BENCHMARK, drop=("q1", "u3"))
-    np.testing.assert_allclose([c.value * bicycle.RAD_REAR for c in by_wheel.changes], [WEAVE, CAPSIZE],
+    by_wheel = stability_sweep(bike, "u3", np.linspace(0.0, 10.0, 21) / kane_models.RAD_REAR, [0.0] * 4,
+                               running(0.0)["u"], kane_models.BENCHMARK, drop=("q1", "u3"))
+    np.testing.assert_allclose([c.value * kane_models.RAD_REAR for c in by_wheel.changes], [WEAVE, CAPSIZE],
                                rtol=0, atol=1e-10)
     assert sweep.parameter == "v" and sweep.unstable[0] and not sweep.unstable[10] and sweep.unstable[-1]
 
@@ -371,7 +373,7 @@ def test_stability_plot(bike, tmp_path):
     pytest.importorskip("matplotlib")
     from lagcomp.plots import plot_stability
 
-    sweep = stability_sweep(bike, running, np.linspace(0.0, 10.0, 11), [0.0] * 4, None, bicycle.BENCHMARK,
+    sweep = stability_sweep(bike, running, np.linspace(0.0, 10.0, 11), [0.0] * 4, None, kane_models.BENCHMARK,
                             drop=("q1", "u3"), label="v")
     fig = plot_stability(sweep)
     ax = fig.axes[0]
