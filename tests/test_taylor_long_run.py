@@ -5,7 +5,8 @@ ulp(θ2), the angle fed that rounding into the rhs at every step, and the
 relative energy error to t = 10⁴ was 2.0e-11 rms over 16 starts 1 ulp apart
 (one realization 7.0e-11).  `taylor_run` now computes the series at each
 periodic coordinate reduced to [−π, π] with its compensated-sum carry
-(`lagcomp.codegen.periodic`, `_taylor_reduced`): 4.5e-13 rms.  References:
+(`lagcomp.codegen.periodic`, `_taylor_reduced`): 5.4e-13 rms (``python -m
+bench.taylor_error_sources``).  References:
 conservation of energy, and mpmath for the reduction.
 """
 
@@ -101,9 +102,10 @@ def _energy_errors(model, t_end, members):
 
 
 def test_double_pendulum_energy_to_t500(compiled):
-    """Measured over 16 starts: rms 3.6e-14 at t = 500, largest 6.5e-14 (before the reduction: 7.1e-13
-    and 2.0e-12).  The largest over every step, 2.1e-13 (median), is read at stored states: θ2 near 100
-    rounded to ulp(100) and the energy kernel's own rounding (1e-13 between it and 40 digits there)."""
+    """Measured over these 8 starts: rms 3.7e-14 at t = 500, largest 5.8e-14 (before the reduction:
+    5.5e-13 and 1.0e-12).  The largest over every step, 2.4e-13 (median; 5.6e-13 before), is read at
+    stored states: θ2 near 100 rounded to ulp(100), and the energy kernel's own rounding (5e-14 between
+    it and a 40-digit evaluation at those states)."""
     final, largest = _energy_errors(compiled("double_pendulum"), 500.0, 8)
     assert math.sqrt(np.mean(final**2)) < 1.5e-13
     assert final.max() < 3e-13
@@ -112,8 +114,8 @@ def test_double_pendulum_energy_to_t500(compiled):
 
 @pytest.mark.slow
 def test_double_pendulum_energy_to_t1e4(compiled):
-    """Issue 18's target, at most 2e-11 to t = 10⁴.  Measured over 16 starts: rms 4.5e-13 at the end,
-    largest over every step 3.4e-12 (before: 2.0e-11 rms, 7.0e-11 largest)."""
+    """Issue 18's target, at most 2e-11 to t = 10⁴.  Measured over these 4 starts: rms 3.7e-13 at the
+    end, largest over every step 1.7e-12 (before the reduction: 2.5e-11 and 7.7e-11)."""
     final, largest = _energy_errors(compiled("double_pendulum"), 1e4, 4)
     assert largest.max() <= 2e-11
     assert math.sqrt(np.mean(final**2)) < 2e-12
