@@ -200,16 +200,19 @@ def main(argv: list[str] | None = None) -> int:
             print(f"<!-- cold compile of {case} ... -->", file=sys.stderr, flush=True)
             ctx.cold[case] = compile_time.cold(case, ctx.cache_dir, ctx.case_timeout)
         runners = {"compile": compile_time.section}
-        from bench import adaptive, bench_sweep, kernels, throughput
+        from bench import adaptive, bench_sweep, bench_taylor, kernels, throughput
 
         runners.update(kernels=kernels.section, adaptive=adaptive.section, fixed=throughput.fixed_section,
                        sweeps=throughput.sweep_section, ensembles=bench_sweep.section,
-                       long=throughput.long_run_section, memory=throughput.memory_section)
+                       long=lambda ctx: [throughput.long_run_section(ctx), bench_taylor.long_run_table(ctx)],
+                       memory=throughput.memory_section)
         for name in SECTIONS:
             if name in sections:
                 print(f"<!-- section {name} ... -->", file=sys.stderr, flush=True)
                 try:
-                    emit(runners[name](ctx))
+                    tables = runners[name](ctx)
+                    for table in tables if isinstance(tables, list) else [tables]:
+                        emit(table)
                 except Exception as err:  # one broken section must not hide the others
                     import traceback
 

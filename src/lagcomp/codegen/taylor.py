@@ -49,6 +49,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from lagcomp.codegen.periodic import periodic_coordinates
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor_lanes import CALL
 from lagcomp.codegen.templating import template
@@ -76,7 +77,9 @@ class TaylorProgram:
     ``setup`` are statements before the order loop (parameter loads and
     constants), ``rows`` the names of the series held in rows of the work
     array ``W`` (in order), ``body`` the operations of one order k, and
-    ``checks`` the pivots of M tested at k = 0 (name of d_j, name of m_jj).
+    ``checks`` the pivots of M tested at k = 0 (name of d_j, name of m_jj);
+    ``periodic`` the coordinates the rhs sees only through sin and cos
+    (`lagcomp.codegen.periodic`), which ``taylor_run`` reduces to [−π, π].
     """
 
     n_state: int
@@ -84,6 +87,7 @@ class TaylorProgram:
     rows: list[str] = field(default_factory=list)
     body: list[Op] = field(default_factory=list)
     uses_t: bool = False
+    periodic: tuple[int, ...] = ()
 
     @property
     def operation_count(self) -> int:
@@ -470,6 +474,7 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
         b.program.body = [Op(pattern.sub(lambda m: renamed[m.group(1)], op.line), op.comment)
                           for op in b.program.body]
         b.program.rows = [renamed.get(row, row) for row in b.program.rows]
+    b.program.periodic = periodic_coordinates(rhs, n)
     return b.program
 
 
@@ -593,7 +598,10 @@ def emit_taylor(program: TaylorProgram) -> str:
         f"{body}\n\n\n"
         f"#: Rows of the work array of `taylor_coefficients` ({program.operation_count} series operations "
         "per order).\n"
-        f"TAYLOR_WORK = {max(len(rows), 1)}\n"
+        f"TAYLOR_WORK = {max(len(rows), 1)}\n\n"
+        "#: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the\n"
+        "#: series with them reduced to [−π, π] (lagcomp.codegen.periodic).\n"
+        f"TAYLOR_PERIODIC = np.array({list(program.periodic)}, dtype=np.int64)\n"
     )
 
 
@@ -621,7 +629,8 @@ def taylor_program(taylor: TaylorProgram | Unsupported) -> dict | None:
         if match:
             states[int(match.group(2))] = match.group(1)
     return dict(n_state=taylor.n_state, setup=list(taylor.setup), states=states, uses_t=taylor.uses_t,
-                body=[op.line for op in taylor.body], operations=taylor.operation_count)
+                body=[op.line for op in taylor.body], operations=taylor.operation_count,
+                periodic=list(taylor.periodic))
 
 
 def taylor_source(taylor: TaylorProgram | Unsupported, events: bool) -> str:

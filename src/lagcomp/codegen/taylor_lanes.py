@@ -27,7 +27,9 @@ strides, and LLVM needs one run-time overlap check per store then: past 8 of
 them it does not vectorize)::
 
     taylor_lanes(T, Y, P, X)
-        T (L,) times, Y (2n·L,) states (rows past 2n are not read),
+        T (L,) times, Y (4n·L,) states, then the carries of the
+        compensated sum (read for the periodic coordinates only, which enter
+        the series reduced to [−π, π] as in ``taylor_run``),
         P (n_p·L,) parameters; out X:
         rows i(p + 1) + k the normalized coefficients y_i⁽ᵏ⁾/k!, k = 0..p,
         then rows 2n(p + 1) + 0, 1, 2 the max norms of y, of its
@@ -201,20 +203,25 @@ def taylor_lanes_source(program: dict, order: int, lanes: int) -> str:
             continue
         else:
             lines.append(re.sub(r"\bp\[(\d+)\]", lambda m: f"P[{int(m.group(1)) * lanes} + _l]", line))
-    lines += [f"{_series(states[i], 0)} = Y[{i * lanes} + _l]" for i in range(n_state)]
+    periodic = set(program.get("periodic", ()))
+    lines += [f"{_series(states[i], 0)} = _taylor_reduced(Y[{i * lanes} + _l], Y[{(n_state + i) * lanes} + _l])"
+              if i in periodic else f"{_series(states[i], 0)} = Y[{i * lanes} + _l]" for i in range(n_state)]
     if program["uses_t"]:
         lines += [f"{_series('_t', 0)} = T[_l]", f"{_series('_t', 1)} = 1.0"]
         lines += [f"{_series('_t', k)} = 0.0" for k in range(2, order + 1)]
     for k in range(order):
         lines.append(f"# order {k}")
         lines += _order_lines(program["body"], k, states)
-    lines += [f"X[{(i * (order + 1) + k) * lanes} + _l] = {_series(states[i], k)}"
+    # coefficient 0 is y itself, also for a periodic coordinate (as in taylor_run)
+    lines += [f"X[{(i * (order + 1) + k) * lanes} + _l] = "
+              + (f"Y[{i * lanes} + _l]" if k == 0 else _series(states[i], k))
               for i in range(n_state) for k in range(order + 1)]
     # then the max norms of y and of its last two coefficients (for the step, as in taylor_run), and the pivots
     first = n_state * (order + 1)
     for row, k in ((first, 0), (first + 1, order), (first + 2, order - 1)):
         lines.append("_norm = 0.0")
-        lines += [f"_norm = max(_norm, abs({_series(states[i], k)}))" for i in range(n_state)]
+        lines += [f"_norm = max(_norm, abs({f'Y[{i * lanes} + _l]' if k == 0 else _series(states[i], k)}))"
+                  for i in range(n_state)]
         lines.append(f"X[{row * lanes} + _l] = _norm")
     lines.append(f"X[{(first + 3) * lanes} + _l] = 0.0 if _ok else 1.0")
     doc = f"Coefficients of order 0..{order} of every lane; see lagcomp.codegen.taylor_lanes."

@@ -7,8 +7,9 @@ model's module, the constants ``_TAYLOR_ORDER`` and ``_TAYLOR_LANES``,
 
 ``sweep_taylor_lanes`` runs the trajectories (Y0[k], P[k]) through the lanes.
 Each lane takes the steps ``taylor_run`` (``taylor.py``) takes from its own
-state: the step from the last two coefficients, the new state by Horner's
-rule and compensated summation, with the same arithmetic in the same order,
+state: the series with the periodic coordinates reduced as there, the step
+from the last two coefficients, the new state by Horner's rule and
+compensated summation, with the same arithmetic in the same order,
 so a lane differs from the scalar driver only by the rounding of the
 coefficients themselves (LLVM may fuse another product of a sum into a
 multiply-add in the unrolled kernel).  Lanes do not wait for each other:
