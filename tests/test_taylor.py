@@ -400,7 +400,8 @@ def test_terminal_event_stops_on_the_series(compiled, cache_dir):
     """λ = 0: y = 0.1 cos t + 0.05 sin t peaks at t = atan(1/2) (as in test_events), found on the series."""
     system = lc.examples.get("henon_heiles")
     section, y_turn = system.events
-    terminal = dataclasses.replace(system, events=(section, dataclasses.replace(y_turn, terminal=True)))
+    terminal = dataclasses.replace(system, events=(section, dataclasses.replace(y_turn, terminal=True)),
+                                   name="henon_heiles_terminal")  # its own name: lc.load("henon_heiles") elsewhere
     model = lc.compile(terminal, cache_dir=cache_dir)
     run = model.simulate((0, 50), qd0=[0.3, 0.05], params={"lam": 0.0}, method="taylor", progress=False)
     t_peak = np.arctan(0.5)
