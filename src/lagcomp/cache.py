@@ -42,11 +42,13 @@ Faults and concurrency
   Windows, only the atomic rename protects the files.)
 * A cache root that cannot be written (read-only, full, a path under a
   regular file) never breaks a compile: lagcomp warns with a `CacheWarning`
-  and uses a private temporary directory for the rest of the process.
+  and uses a private temporary directory for the rest of the process,
+  removed when the process exits.
 """
 
 from __future__ import annotations
 
+import atexit
 import functools
 import hashlib
 import importlib.metadata
@@ -54,6 +56,7 @@ import importlib.util
 import json
 import os
 import re
+import shutil
 import sys
 import tempfile
 import time
@@ -66,8 +69,8 @@ from types import ModuleType
 import numba
 import platformdirs
 
-from lagcomp import __version__
-from lagcomp.errors import CacheWarning
+from lagcomp import __version__, numba_cache
+from lagcomp.errors import CacheWarning, CorruptCacheRecordError
 
 try:
     import fcntl
@@ -185,10 +188,11 @@ _reported_roots: set = set()
 
 
 def fallback_root() -> Path:
-    """A private temporary cache root for this process (created on first use)."""
+    """A private temporary cache root for this process (created on first use, removed at exit)."""
     global _fallback_root
     if _fallback_root is None:
         _fallback_root = Path(tempfile.mkdtemp(prefix="lagcomp-cache-"))
+        atexit.register(shutil.rmtree, _fallback_root, ignore_errors=True)
     return _fallback_root
 
 
@@ -294,14 +298,32 @@ class Cache:
             pass
 
     def recall(self, name: str) -> tuple[Entry, dict] | None:
-        """The entry last compiled under `name` and its run defaults, or None if there is none (or it is unusable)."""
+        """The entry last compiled under `name` and its run defaults, or None if there is none (or it is stale).
+
+        A record that does not parse is removed and reported with `CorruptCacheRecordError`,
+        so that the caller says so (and the next `compile` under that name writes a new one).
+        """
+        path = self._name_file(name)
         try:
-            record = json.loads(self._name_file(name).read_text(encoding="utf-8"))
-            key, run_defaults = record["key"], record["run_defaults"]
-            if record["name"] != name:
-                return None
-        except (OSError, ValueError, KeyError, TypeError):
+            text = path.read_text(encoding="utf-8")
+        except OSError:
             return None
+        try:
+            record = json.loads(text)
+            key, run_defaults, recorded = record["key"], record["run_defaults"], record["name"]
+            if not (isinstance(key, str) and isinstance(run_defaults, dict)):
+                raise TypeError("its key or run defaults have the wrong type")
+        except (ValueError, KeyError, TypeError) as err:
+            try:
+                path.unlink(missing_ok=True)
+            except OSError:
+                pass
+            raise CorruptCacheRecordError(
+                f"The cache's record of the model {name!r} ({path}) was corrupt ({type(err).__name__}: {err}) and "
+                "has been removed: compile the model again (lagcomp.compile(system)) to record it afresh."
+            ) from None
+        if recorded != name:
+            return None  # another name hashed to the same file name
         entry = self.lookup(key)
         return None if entry is None else (entry, run_defaults)
 
@@ -333,4 +355,9 @@ def load_module(entry: Entry) -> ModuleType:
     except BaseException:
         del sys.modules[entry.module_name]
         raise
+    removed = numba_cache.heal(module)
+    if removed:
+        warnings.warn(f"lagcomp found numba's cache files of {entry.path.name} unreadable and removed them "
+                      f"({len(removed)} files, {removed[0]}, ...); numba compiles those functions again, once.",
+                      CacheWarning, stacklevel=3)
     return module

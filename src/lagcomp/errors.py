@@ -25,6 +25,10 @@ class SingularMassMatrixError(ModelError):
     """The kinetic energy is not positive definite in the velocities."""
 
 
+class CorruptCacheRecordError(ModelError):
+    """The cache's record of a model's name could not be read; it was removed (compile the model again)."""
+
+
 class ParameterError(LagcompError, ValueError):
     """Parameter values are missing, unknown or not finite."""
 
