@@ -525,6 +525,10 @@ class Model:
             Constrained systems (rk4, dop853, dopri5): stop with status -6
             once a step's constraint residual (|Φ| or |Λ q̇ + b|) exceeds
             this bound; that step is kept as the last row.  None: no bound.
+        memory_limit : int
+            Bytes the saved rows may take (default 2 GiB).  Where their number
+            is known before the run (fixed-step methods, `t_eval`), a larger
+            request is refused with `OptionError` before anything runs.
         """
         from lagcomp.integrate.simulate import simulate
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
+from lagcomp.integrate.memory import MEMORY_LIMIT, check as check_memory, run_bytes
 from lagcomp.integrate.methods import get_method, implicit_solver_for
 from lagcomp.integrate.options import (
     check_method,
@@ -87,7 +88,8 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=None,
              atol=None, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
-             events=None, record="trajectory", progress=None, throw=False, max_residual=None) -> Solution:
+             events=None, record="trajectory", progress=None, throw=False, max_residual=None,
+             memory_limit=MEMORY_LIMIT) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     t0, t1 = time_span(t_span)
     m = get_method(method)
@@ -99,6 +101,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
                    save_every=count(save_every, "save_every"), max_steps=count(max_steps, "max_steps"),
                    events=event_arguments(model, m, events))
     options["implicit_solver"] = implicit_solver_for(m, implicit_solver)
+    if record == "trajectory":
+        _check_memory(model, m, (t0, t1), dt, t_eval, options["save_every"], memory_limit)
     t_eval = t_eval_points(t_eval, t0, t1)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
@@ -122,6 +126,27 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     run = dict(method=m.name, status=status, clock=clock, counters=counters, projected=projected,
                residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
     return _solution(model, p, recorder, y, run, throw)
+
+
+def _check_memory(model, m, t_span, dt, t_eval, save_every: int, memory_limit) -> None:
+    """Refuse a run whose saved rows would exceed `memory_limit`, before it starts (see `memory.run_bytes`).
+
+    The rows are known up front for `t_eval` (its size: an array of 10⁹ times is refused before it is
+    copied) and for fixed-step methods (steps / save_every); an adaptive run without `t_eval` saves
+    every `save_every`-th accepted step, a number no one knows in advance.
+    """
+    if t_eval is not None:
+        rows = int(np.size(t_eval)) + 1
+        where = f"{rows - 1:,} `t_eval` times"
+    elif not m.adaptive and dt is not None:
+        steps = max(1, math.ceil((t_span[1] - t_span[0]) / positive(dt, "dt") * (1 - 1e-12)))
+        rows = steps // save_every + 1
+        where = f"{rows:,} rows ({steps:,} steps of dt = {dt:g}, every {save_every}-th saved)"
+    else:
+        return
+    check_memory(run_bytes(rows, model.n, model.k), memory_limit, "The run's saved rows", where,
+                 "save fewer rows (`save_every=K` keeps every K-th step; pass fewer `t_eval` points), "
+                 "keep only the first and last rows and running reductions (`record=\"summary\"`)")
 
 
 def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress) -> int:

@@ -25,6 +25,7 @@ import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state
+from lagcomp.integrate.memory import MEMORY_LIMIT, check as check_memory, sweep_bytes
 from lagcomp.integrate.methods import get_method
 from lagcomp.integrate.options import (
     check_method,
@@ -39,8 +40,6 @@ from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
-#: Default ceiling on the memory of a sweep's outputs, in bytes (raise it with `memory_limit`).
-MEMORY_LIMIT = 2 * 2**30
 #: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread
 #: (batched drivers: enough trajectories to fill the 32 lanes of a batch several times over, so that
 #: few lanes idle while the last trajectories of the chunk finish).
@@ -208,12 +207,6 @@ def _row_every(save_every: int, output: tuple, n_steps: int) -> int:
     return save_every if ("dense" in output or "energy" in output) else n_steps + 1
 
 
-def _memory(n_traj: int, n2: int, m: int, n_events: int, cap: int) -> int:
-    """Bytes of the outputs: state, times, status and counters; dense rows; energy; events."""
-    per = 8 * (n2 + 1 + 1 + 3 + 2) + 8 * m * n2 + 8 * n_events * (1 + cap * (1 + n2))
-    return n_traj * per + 8 * n_traj * (n2 + 8)  # + the inputs Y0 and P
-
-
 def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=None, params=None,
           method="dop853", dt=None, rtol=None, atol=None, t_eval=None, save_every=1, max_step=math.inf,
           max_steps=100_000_000, events=None, event_cap=16, output=(), workers=None, client=None,
@@ -281,13 +274,9 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         fixed = (t0, dt, n_steps, t1, _row_every(save_every, output, n_steps))
     rows = 0 if t_dense is None else t_dense.size
     n_events = len(model.events) if want_events else 0
-    needed = _memory(n_traj, n2, rows, n_events, cap)
-    if needed > memory_limit:
-        raise OptionError(
-            f"The sweep's outputs need {needed / 2**20:.1f} MiB for {n_traj} trajectories, above the limit of "
-            f"{memory_limit / 2**20:.1f} MiB: save fewer rows (t_eval, save_every), fewer events (event_cap), "
-            "split the grid, or raise `memory_limit`."
-        )
+    check_memory(sweep_bytes(n_traj, n2, rows, n_events, cap), memory_limit, "The sweep's outputs",
+                 f"{n_traj} trajectories", "save fewer rows (t_eval, save_every), fewer events (event_cap), "
+                 "split the grid")
 
     layout = (n2, rows, len(directions), cap)
     out = _allocate(n_traj, layout)
