@@ -268,7 +268,7 @@ class Cache:
             return self._store(key, source, system_name, metadata)
 
     def _store(self, key: str, source: str, system_name: str, metadata: dict) -> Entry:
-        path = self.root / "modules" / f"{system_name}_{source_key(source)}.py"
+        path = self.root / "modules" / f"{_file_stem(system_name)}_{source_key(source)}.py"
         digest = _sha256(source)
         with _locked(self.root / "locks" / f"{path.stem}.lock"):
             intact = path.exists() and _sha256(path.read_text(encoding="utf-8", errors="replace")) == digest
@@ -333,6 +333,22 @@ class Cache:
             entry.path.unlink(missing_ok=True)
         except OSError:
             pass  # read-only: the rebuild falls back to a writable root
+
+
+#: System names up to this long (ASCII letters, digits, _) name their module files as they are.
+STEM_MAX = 64
+
+
+def _file_stem(name: str) -> str:
+    """`name` as the start of a module file name: itself when short and ASCII, else a prefix and a hash.
+
+    File names are limited (255 bytes on most file systems, the lock file adds to the module's),
+    while a System name is any Python identifier, of any length and alphabet.
+    """
+    if re.fullmatch(rf"[A-Za-z0-9_]{{1,{STEM_MAX}}}", name):
+        return name
+    prefix = re.sub(r"[^A-Za-z0-9_]", "", name)[:32]
+    return f"{prefix}_{_sha256(name)[:16]}"
 
 
 def _module_name(path: Path) -> str:

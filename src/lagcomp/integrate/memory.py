@@ -30,10 +30,15 @@ def sweep_bytes(n_traj: int, n2: int, rows: int, n_events: int, cap: int) -> int
     return n_traj * per + 8 * n_traj * (n2 + 8)
 
 
-def check(needed: int, limit, what: str, detail: str, remedies: str) -> None:
-    """Raise OptionError when `needed` bytes exceed `limit`: `what` needs the figure for `detail`; `remedies`."""
+def checked_limit(limit) -> float:
+    """`memory_limit` checked: a positive number of bytes."""
     if isinstance(limit, bool) or not isinstance(limit, (int, float)) or not limit > 0:
         raise OptionError(f"`memory_limit` must be a positive number of bytes, got {limit!r}.")
-    if needed > limit:
+    return limit
+
+
+def check(needed: int, limit, what: str, detail: str, remedies: str) -> None:
+    """Raise OptionError when `needed` bytes exceed `limit`: `what` needs the figure for `detail`; `remedies`."""
+    if needed > checked_limit(limit):
         raise OptionError(f"{what} need {needed / 2**20:.1f} MiB for {detail}, above the limit of "
                           f"{limit / 2**20:.1f} MiB: {remedies}, or raise `memory_limit`.")

@@ -18,7 +18,7 @@ import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
-from lagcomp.integrate.memory import MEMORY_LIMIT, check as check_memory, run_bytes
+from lagcomp.integrate.memory import MEMORY_LIMIT, check as check_memory, checked_limit, run_bytes
 from lagcomp.integrate.methods import get_method, implicit_solver_for
 from lagcomp.integrate.options import (
     check_method,
@@ -135,6 +135,7 @@ def _check_memory(model, m, t_span, dt, t_eval, save_every: int, memory_limit) -
     copied) and for fixed-step methods (steps / save_every); an adaptive run without `t_eval` saves
     every `save_every`-th accepted step, a number no one knows in advance.
     """
+    checked_limit(memory_limit)
     if t_eval is not None:
         rows = int(np.size(t_eval)) + 1
         where = f"{rows - 1:,} `t_eval` times"

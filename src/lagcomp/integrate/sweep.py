@@ -165,36 +165,63 @@ class Sweep:
         return xr.Dataset(data, coords={**coords, "state": state})
 
 
-def _grid(model, grid, combine: str, names) -> tuple[tuple, dict, tuple, np.ndarray]:
-    """(names, axes, shape, values (N, k)) from the user's grid description."""
+def _floats(values, what: str) -> np.ndarray:
+    try:
+        return np.asarray(values, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise OptionError(f"{what} must hold numbers, got {values!r}.") from err
+
+
+def _grid_name(key) -> str:
+    """A grid key as a name: a sympy Symbol (a parameter) stands for its name."""
+    name = key.name if getattr(key, "is_Symbol", False) else key
+    if not isinstance(name, str):
+        raise OptionError(f"Grid names must be strings (coordinates, '<coordinate>_dot' velocities or parameters), "
+                          f"got {key!r}.")
+    return name
+
+
+def _grid(model, grid, combine: str, names, memory_limit) -> tuple[tuple, dict, tuple, np.ndarray]:
+    """(names, axes, shape, values (N, k)) from the user's grid description.
+
+    The number of points is checked against `memory_limit` before the grid is built: a product of
+    a few long axes is larger than the memory it names.
+    """
     if isinstance(grid, dict):
-        names = tuple(grid)
-        columns = [np.asarray(v, dtype=float).ravel() for v in grid.values()]
+        names = tuple(_grid_name(key) for key in grid)
+        columns = [_floats(v, f"Grid values of `{name}`").ravel() for name, v in zip(names, grid.values())]
         if any(c.size == 0 for c in columns):
             raise OptionError("Every swept quantity needs at least one value.")
+        if combine not in ("product", "zip"):
+            raise OptionError(f"`combine` must be 'product' or 'zip', got {combine!r}.")
+        points = math.prod(c.size for c in columns) if combine == "product" else columns[0].size
+        check_memory(sweep_bytes(points, 2 * model.n, len(columns), 0, 0), memory_limit, "The sweep's grid",
+                     f"{points:,} trajectories", "sweep fewer points, or split the grid")
         if combine == "product":
             shape = tuple(c.size for c in columns)
             mesh = np.meshgrid(*columns, indexing="ij")
             values = np.column_stack([m.ravel() for m in mesh])
             axes = dict(zip(names, columns))
-        elif combine == "zip":
+        else:
             if len({c.size for c in columns}) != 1:
                 raise OptionError(f"`combine='zip'` needs arrays of one length; got {[c.size for c in columns]}.")
             values = np.column_stack(columns)
             shape, axes = (values.shape[0],), dict(zip(names, columns))
-        else:
-            raise OptionError(f"`combine` must be 'product' or 'zip', got {combine!r}.")
     else:
-        values = np.asarray(grid, dtype=float)
-        if values.ndim != 2 or names is None or len(names) != values.shape[1]:
+        values = _floats(grid, "An explicit grid")
+        if isinstance(names, str) or values.ndim != 2 or names is None or len(names) != values.shape[1]:
             raise OptionError("An explicit grid is an (N, k) array with `names` giving its k columns.")
-        names = tuple(names)
+        names = tuple(_grid_name(name) for name in names)
         shape, axes = (values.shape[0],), {name: values[:, i].copy() for i, name in enumerate(names)}
     known = list(model.coordinates) + [f"{c}_dot" for c in model.coordinates] + list(model.parameters)
     unknown = [name for name in names if name not in known]
     if unknown or len(set(names)) != len(names):
         raise OptionError(f"Cannot sweep {unknown or names}: grid names must be distinct coordinates, "
                           f"'<coordinate>_dot' velocities or parameters: {known}.")
+    ambiguous = [name for name in names if known.count(name) > 1]
+    if ambiguous:
+        raise OptionError(f"Cannot sweep {ambiguous}: in {model.name!r} the name stands for two quantities (a "
+                          "coordinate or parameter, and the velocity '<coordinate>_dot'); rename one of them.")
     if not np.all(np.isfinite(values)):
         raise OptionError("The grid holds non-finite values.")
     return names, axes, shape, values
@@ -220,7 +247,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     unknown = [o for o in output if o not in OUTPUTS]
     if unknown:
         raise OptionError(f"Unknown sweep output(s) {unknown}; choose from {OUTPUTS} (the final state is always kept).")
-    names, axes, shape, values = _grid(model, grid, combine, names)
+    names, axes, shape, values = _grid(model, grid, combine, names, memory_limit)
     n2 = 2 * model.n
     y_base = model.initial_state(q0, qd0)
     p_base = model.parameter_vector(params, baumgarte)
