@@ -22,7 +22,8 @@ from lagcomp.cache import Cache, Entry, input_key, load_module
 from lagcomp.errors import CacheWarning, InitialConditionError, ModelError, ParameterError, SingularMassMatrixError
 
 
-def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **system_kwargs) -> "Model":  # noqa: A001
+def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, progress=None,  # noqa: A001
+            **system_kwargs) -> "Model":
     """Compile `system` into a `Model` of numba kernels, using the on-disk cache.
 
     Parameters
@@ -36,6 +37,10 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **s
     eom : lagcomp.mechanics.lagrange.EOM, optional
         The equations of `system` if the caller has derived them already
         (used on a cache miss instead of deriving them again).
+    progress : bool, optional
+        On a cache miss, show which stage is running (deriving, CSE, the
+        Taylor program, emitting): None (default) once the build has lasted
+        two seconds, True always, False never.
 
     Returns
     -------
@@ -45,12 +50,12 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **s
     system = _as_system(system, system_kwargs)
     cache = Cache(cache_dir)
     key = input_key(system.fingerprint(), options={})
-    model = _compiled(system, cache, key, eom)
+    model = _compiled(system, cache, key, eom, progress)
     cache.remember(system.name, key, run_defaults(system))
     return model
 
 
-def _compiled(system, cache: Cache, key: str, eom) -> "Model":
+def _compiled(system, cache: Cache, key: str, eom, progress=None) -> "Model":
     """The Model of `system` from the cache entry under `key`, built first on a miss."""
     entry = cache.lookup(key)
     damaged = False
@@ -65,7 +70,7 @@ def _compiled(system, cache: Cache, key: str, eom) -> "Model":
         entry = None if damaged else cache.lookup(key)  # stored by another process while this one waited?
         if entry is not None:
             return Model(system, load_module(entry), entry, from_cache=True)
-        entry = build(system, cache, key, eom)
+        entry = build(system, cache, key, eom, progress)
     return Model(system, load_module(entry), entry, from_cache=False)
 
 
@@ -142,17 +147,30 @@ def _as_system(system, system_kwargs: dict):
     return system
 
 
-def build(system, cache: Cache, key: str, eom=None) -> Entry:
+#: The stages of a build, as its progress bar names them (see `lagcomp.stages`).
+BUILD_STAGES = ("deriving the equations of motion (sympy)", "lowering and CSE of the kernels",
+                "Taylor-series program", "emitting and storing the module")
+
+
+def build(system, cache: Cache, key: str, eom=None, progress=None) -> Entry:
     """Derive (unless `eom` is given), lower and emit `system`, and store the module under `key`."""
     from lagcomp.codegen.emit import emit
     from lagcomp.codegen.lower import lower
     from lagcomp.codegen.taylor import taylor_decomposition, taylor_program
     from lagcomp.mechanics.lagrange import derive
+    from lagcomp.stages import Stages
 
-    eom = derive(system) if eom is None else eom
-    ir = lower(eom)
-    taylor = taylor_decomposition(ir)
-    program = taylor_program(taylor)
+    derive_, lower_, taylor_, emit_ = BUILD_STAGES
+    with Stages(f"compiling {system.name}", BUILD_STAGES, progress) as stages:
+        stages.start(derive_)
+        eom = derive(system) if eom is None else eom
+        stages.start(lower_)
+        ir = lower(eom)
+        stages.start(taylor_)
+        taylor = taylor_decomposition(ir)
+        program = taylor_program(taylor)
+        stages.start(emit_)
+        source = emit(ir, taylor)
     metadata = {
         "coordinates": list(system.coordinate_names),
         "parameters": list(system.parameter_names),
@@ -164,7 +182,7 @@ def build(system, cache: Cache, key: str, eom=None) -> Entry:
                        **({"taylor_coefficients": program["operations"]} if program else {})},
         "taylor_program": program,
     }
-    return cache.store(key, emit(ir, taylor), system.name, metadata)
+    return cache.store(key, source, system.name, metadata)
 
 
 def _baumgarte_gains(baumgarte) -> tuple[float, float]:

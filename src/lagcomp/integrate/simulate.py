@@ -11,6 +11,7 @@ bounded by what is kept: every saved row (`save_every`, `t_eval`) or, with
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 
@@ -118,7 +119,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     n_events = len(model.events)
     event_parts: list[tuple] = []
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
-    status = _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress)
+    first = _numba_stage(model, m, progress)
+    status = _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress, first)
     if status == -2 and counters[1] == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != clock[0]):
@@ -150,8 +152,25 @@ def _check_memory(model, m, t_span, dt, t_eval, save_every: int, memory_limit) -
                  "keep only the first and last rows and running reductions (`record=\"summary\"`)")
 
 
-def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress) -> int:
-    """Call the driver until the run ends; returns the Solution status (driver codes mapped)."""
+def _numba_stage(model, m, progress):
+    """What the first driver call of a run shows while numba compiles (or loads) its kernels and driver.
+
+    A shown bar only where numba has not compiled that driver in this process yet, and after
+    the usual delay (`lagcomp.stages`): a driver loaded from numba's cache takes well under it.
+    """
+    from lagcomp.stages import Stages
+
+    if progress is False or getattr(getattr(model.kernels, m.driver, None), "signatures", None):
+        return None
+    stage = f"numba: compiling the kernels and the {m.name} driver (once; cached for later runs)"
+    return Stages(f"preparing {model.name}", (stage,), progress)
+
+
+def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress, first=None) -> int:
+    """Call the driver until the run ends; returns the Solution status (driver codes mapped).
+
+    `first`, if not None, is a context around the first call (numba compiles there: `_numba_stage`).
+    """
     n = y.size
     budget, t0 = FIRST_BUDGET, clock[0]
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
@@ -162,7 +181,12 @@ def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts
             counters[5] = 0
             started = time.perf_counter()
             steps_before = counters[1]
-            status, n_saved = advance(ts, ys, min(steps_before + budget, np.iinfo(np.int64).max), event_buffers)
+            with first or contextlib.nullcontext() as stages:
+                if stages is not None:
+                    stages.start(stages.names[0])
+                status, n_saved = advance(ts, ys, min(steps_before + budget, np.iinfo(np.int64).max), event_buffers)
+            if first is not None:  # numba was compiling: the run's bar times the run from here
+                first, bar.started = None, time.perf_counter()
             elapsed = time.perf_counter() - started
             recorder.add(ts[:n_saved], ys[:n_saved])
             if counters[5]:
