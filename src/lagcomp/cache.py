@@ -70,7 +70,7 @@ import numba
 import platformdirs
 
 from lagcomp import __version__, numba_cache
-from lagcomp.errors import CacheWarning, CorruptCacheRecordError
+from lagcomp.errors import CacheWarning, CorruptCacheRecordError, OptionError
 
 try:
     import fcntl
@@ -84,6 +84,8 @@ LAYOUT_VERSION = "1"
 def cache_root(cache_dir: str | os.PathLike | None = None) -> Path:
     """The cache directory: `cache_dir`, else $LAGCOMP_CACHE_DIR, else the user cache dir."""
     if cache_dir is not None:
+        if not isinstance(cache_dir, (str, os.PathLike)) or not os.fspath(cache_dir):
+            raise OptionError(f"`cache_dir` must be a directory path (str or pathlib.Path), got {cache_dir!r}.")
         return Path(cache_dir)
     if os.environ.get(ENV_VAR):
         return Path(os.environ[ENV_VAR])

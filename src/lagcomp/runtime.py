@@ -87,6 +87,8 @@ def load(name: str, *, cache_dir: str | os.PathLike | None = None) -> "Model":
     Raises ModelError when nothing named `name` was compiled into this cache
     (or its entry no longer matches this lagcomp, numba or Python version).
     """
+    if not isinstance(name, str) or not name:
+        raise ModelError(f"`lagcomp.load` takes the name a System was compiled under (a string), got {name!r}.")
     cache = Cache(cache_dir)
     found = cache.recall(name)
     if found is None:
@@ -561,8 +563,10 @@ class Model:
             is known before the run (fixed-step methods, `t_eval`), a larger
             request is refused with `OptionError` before anything runs.
         """
+        from lagcomp.integrate.options import known_options
         from lagcomp.integrate.simulate import simulate
 
+        known_options(simulate, options, "Model.simulate")
         return simulate(self, t_span, q0, qd0, params, **options)
 
     def sweep(self, t_span, grid, **options):
@@ -619,6 +623,8 @@ class Model:
             Progress bar (None: for sweeps over two seconds).  Ctrl-C stops
             between chunks; `Sweep.done` marks the trajectories that ran.
         """
+        from lagcomp.integrate.options import known_options
         from lagcomp.integrate.sweep import sweep
 
+        known_options(sweep, options, "Model.sweep")
         return sweep(self, t_span, grid, **options)

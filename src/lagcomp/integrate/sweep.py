@@ -243,7 +243,10 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     t0, t1 = time_span(t_span)
     m = get_method(method)
     check_method(model, m)
-    output = (output,) if isinstance(output, str) else tuple(output)
+    try:
+        output = (output,) if isinstance(output, str) else tuple(output)
+    except TypeError:
+        raise OptionError(f"`output` must be one of {OUTPUTS} or a sequence of them, got {output!r}.") from None
     unknown = [o for o in output if o not in OUTPUTS]
     if unknown:
         raise OptionError(f"Unknown sweep output(s) {unknown}; choose from {OUTPUTS} (the final state is always kept).")
