@@ -15,6 +15,7 @@ import re
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 import sympy as sp
 
@@ -233,6 +234,12 @@ CASES = {
     "run-too-large-for-memory": (_simulate("pendulum", t_span=(0, 10), method="rk4", dt=1e-7), "record=\"summary\""),
     "bad-memory-limit": (_simulate("pendulum", memory_limit="lots"), "`memory_limit`"),
     "ambiguous-sweep-name": (lambda models: models["clash"].sweep((0, 1), {"x_dot": [0.0, 1.0]}), "['x_dot']"),
+    "unknown-option": (_simulate("pendulum", save_evry=10), "did you mean `save_every`?"),
+    "sweep-too-large-for-memory": (lambda models: models["pendulum"].sweep((0, 1), {"theta": np.zeros(10**5),
+                                                                                    "l": np.ones(10**5)}),
+                                   "10,000,000,000 trajectories"),
+    "sweep-grid-not-numbers": (lambda models: models["pendulum"].sweep((0, 1), {"theta": ["up", "down"]}),
+                               "Grid values of `theta`"),
     # a run that fails part-way (throw=True; the statuses are tested in test_integration_failures.py)
     "non-finite-state": (_fail("failing", t_span=(0, 2), params={"a": 1.0}, method="rk4", dt=0.01), "non-finite"),
     "singular-during-run": (_fail("failing", t_span=(0, 2), params={"c": 1.0}, method="rk4", dt=0.1), "singular"),
@@ -246,6 +253,7 @@ CASES = {
     "stale-cache-entry": (_cache_case("stale"), "another lagcomp or numba version"),
     "unwritable-cache": (_cache_case("unwritable"), "cannot write its cache"),
     "load-unknown-name": (lambda models, tmp_path: lc.load("never_compiled", cache_dir=tmp_path), "'never_compiled'"),
+    "bad-cache-dir": (lambda: lc.compile(oscillator(), cache_dir=5), "`cache_dir`"),
     "corrupt-name-record": (_cache_case("name record"), "was corrupt"),
     "unreadable-numba-cache": (_cache_case("numba"), "unreadable and removed"),
     "cli-unknown-example-argument": (lambda: _cli_system("n_link_pendulum", "m=3"), "the example 'n_link_pendulum' takes"),
