@@ -114,3 +114,29 @@ def test_check_writable_accepts_a_plain_file_name(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     cli._check_writable("x.npz", "--out")  # the current directory
     cli._check_writable(str(tmp_path / "x.npz"), "--out")
+
+
+def test_ctrl_c_while_numba_compiles_stops_the_command(capsys, cache_dir, monkeypatch):
+    """Ctrl-C lands in the first (warm-up) call, where numba compiles: the command stops there (the
+    warm-up reaches its end in that call, so before it was swallowed and the whole run went on)."""
+    import contextlib
+
+    import lagcomp.integrate.simulate as simulate_module
+
+    monkeypatch.setattr(simulate_module, "deferred_interrupt", lambda: contextlib.nullcontext([True]))
+    assert main(["--cache-dir", str(cache_dir), "run", "simple_pendulum", "--t-end", "100", "--quiet"]) == 130
+    out, err = capsys.readouterr()
+    assert "final" not in out and "interrupted" in _one_line_error(err.split("\n", 1)[1])
+
+
+def test_cache_warnings_are_one_line(capsys, tmp_path):
+    _user_model(tmp_path, name="cli_warned")
+    for data in (tmp_path / "modules" / "__pycache__").glob("*.nbi"):
+        data.write_bytes(b"broken")
+    import sys
+
+    for name in [n for n in sys.modules if n.startswith("lagcomp_generated_cli_warned_")]:
+        del sys.modules[name]
+    assert main(["--cache-dir", str(tmp_path), "show", "cli_warned"]) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and all(line.startswith("lagcomp: warning: ") for line in err.splitlines())

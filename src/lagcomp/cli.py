@@ -13,6 +13,7 @@ import argparse
 import hashlib
 import sys
 import time
+import warnings
 from pathlib import Path
 
 
@@ -263,9 +264,13 @@ def _warm_up(model, t0: float, t1: float, run: dict, options: dict) -> float:
     A run of one step (or a millionth of the span) with the same method and options: the timed run
     after it is integration only.  Bad options raise here, as they would in the run itself.
     """
+    from lagcomp.integrate.simulate import INTERRUPTED
+
     started = time.perf_counter()
     span = options.get("dt") or options.get("first_step") or 1e-6 * (t1 - t0)
-    model.simulate((t0, t0 + min(span, t1 - t0)), **run, **{**options, "record": "summary", "progress": False})
+    sol = model.simulate((t0, t0 + min(span, t1 - t0)), **run, **{**options, "record": "summary"})
+    if sol.status == INTERRUPTED:  # Ctrl-C while numba compiled: stop here, not after the whole run
+        raise KeyboardInterrupt
     return time.perf_counter() - started
 
 
@@ -511,10 +516,17 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings (a cache entry rebuilt, a cache directory replaced) as one line, without source lines."""
+    print(f"lagcomp: warning: {message}", file=sys.stderr if file is None else file)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning
+            return args.func(args)
     except LagcompError as err:
         print(f"lagcomp: error: {err}", file=sys.stderr)
         return 2

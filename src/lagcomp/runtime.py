@@ -550,7 +550,8 @@ class Model:
             Show a progress bar: None (default) for runs lasting over two
             seconds, True always, False never.  Ctrl-C stops a run between
             driver calls (about every quarter second) and returns what was
-            computed, with status 2.
+            computed, with status 2 (also when it arrives in the call that
+            ends the run, numba's first compilation included).
         throw : bool
             Raise `IntegrationError` (with the partial solution) on failure
             instead of returning a Solution whose `status` is negative.

@@ -199,6 +199,8 @@ def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts
                 budget = int(budget * min(8.0, max(0.5, CALL_SECONDS / max(elapsed, 1e-6))))
                 budget = max(budget, 16)
             if status not in (BUFFER_FULL, PAUSED):
+                if status == 0 and interrupted[0]:
+                    return INTERRUPTED  # Ctrl-C in the last call (often numba compiling): reported, not swallowed
                 return TERMINATED if status == EVENT else int(status)
             if interrupted[0]:
                 return INTERRUPTED
