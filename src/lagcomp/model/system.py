@@ -57,11 +57,11 @@ def _sympify(value, what: str) -> sp.Expr:
 def _refuse_non_real(expr: sp.Expr, what: str) -> None:
     """Refuse the imaginary unit and infinities: the kernels compute in real float64."""
     if expr.has(sp.I):
-        raise ModelError(f"{what} contains the imaginary unit I ({expr}): lagcomp's systems are real; "
+        raise ModelError(f"{what} contains the imaginary unit I: lagcomp's systems are real; "
                          "write T, V, forces, constraints and events as real expressions.")
     bad = [value for value in (sp.zoo, sp.oo, -sp.oo, sp.nan) if expr.has(value)]
     if bad:
-        raise ModelError(f"{what} contains {bad[0]} ({expr}): every term must be finite.")
+        raise ModelError(f"{what} contains {bad[0]}: every term must be finite.")
 
 
 def _sequence(value, what: str, of: str) -> tuple:
