@@ -248,6 +248,7 @@ CASES = {
     "implicit-not-converged": (_fail("failing", t_span=(0, 0.9), params={"a": 1.0}, method="gauss2", dt=0.3),
                                "did not converge"),
     "constraint-drift": (_fail("rod", rtol=1e-4, atol=1e-4, max_residual=1e-6), "max_residual = 1e-06"),
+    "memory-limit-reached": (_fail("pendulum", t_span=(0, 1000), memory_limit=10_000), "`memory_limit`"),
     # the cache
     "corrupt-cache-entry": (_cache_case("corrupt"), "sha256"),
     "stale-cache-entry": (_cache_case("stale"), "another lagcomp or numba version"),

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import lagcomp as lc
 from lagcomp import OptionError
 from lagcomp.integrate.memory import MEMORY_LIMIT, run_bytes
 
@@ -57,3 +58,18 @@ def test_the_estimate_bounds_what_a_run_keeps(compiled):
         kept += sum(r.nbytes for r in sol.reactions.values())
         estimate = run_bytes(sol.t.size, model.n, model.k)
         assert kept <= estimate <= 3 * kept  # the estimate is the peak while rows are joined: ~2x what is kept
+
+
+def test_an_adaptive_run_stops_at_the_limit_and_keeps_its_rows(pendulum):
+    """Without t_eval an adaptive run's rows are not known up front: it stops when they reach the limit,
+    with status -7 and every row computed so far (the same rows as an unlimited run, cut short)."""
+    limit = 200 * run_bytes(1, pendulum.n, pendulum.k)  # 200 rows; the run saves about 1,460
+    full = pendulum.simulate((0, 200), progress=False)
+    cut = pendulum.simulate((0, 200), progress=False, memory_limit=limit)
+    assert full.success and full.t.size > 1000
+    assert cut.status == -7 and "memory_limit" in cut.message and cut.t[-1] < 200
+    assert 200 < cut.t.size < full.t.size  # stopped after the output buffer that crossed the limit
+    np.testing.assert_array_equal(cut.q, full.q[: cut.t.size])
+    with pytest.raises(lc.IntegrationError) as info:
+        pendulum.simulate((0, 200), progress=False, memory_limit=limit, throw=True)
+    assert info.value.solution.t.size == cut.t.size

@@ -562,7 +562,9 @@ class Model:
         memory_limit : int
             Bytes the saved rows may take (default 2 GiB).  Where their number
             is known before the run (fixed-step methods, `t_eval`), a larger
-            request is refused with `OptionError` before anything runs.
+            request is refused with `OptionError` before anything runs; an
+            adaptive run without `t_eval` stops with status -7 once its rows
+            reach the limit, keeping them.
         """
         from lagcomp.integrate.options import known_options
         from lagcomp.integrate.simulate import simulate

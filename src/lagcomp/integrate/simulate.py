@@ -44,6 +44,8 @@ TERMINATED, INTERRUPTED = 1, 2
 CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
 #: Solution status of a run stopped because the constraint residual exceeded ``max_residual``.
 RESIDUAL_EXCEEDED = -6
+#: Solution status of a run whose saved rows reached ``memory_limit`` (adaptive runs without t_eval).
+MEMORY_FULL = -7
 
 
 def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
@@ -120,7 +122,9 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     event_parts: list[tuple] = []
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
     first = _numba_stage(model, m, progress)
-    status = _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress, first)
+    max_rows = memory_limit // run_bytes(1, model.n, model.k) if record == "trajectory" else math.inf
+    status = _run(advance, y, clock, counters, t1, (chunk, max_rows), recorder, n_events, event_parts, progress,
+                  first)
     if status == -2 and counters[1] == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != clock[0]):
@@ -170,7 +174,9 @@ def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts
     """Call the driver until the run ends; returns the Solution status (driver codes mapped).
 
     `first`, if not None, is a context around the first call (numba compiles there: `_numba_stage`).
+    `chunk` is (rows of the first output buffer, rows the run may keep before it stops with MEMORY_FULL).
     """
+    chunk, max_rows = chunk
     n = y.size
     budget, t0 = FIRST_BUDGET, clock[0]
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
@@ -189,6 +195,8 @@ def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts
                 first, bar.started = None, time.perf_counter()
             elapsed = time.perf_counter() - started
             recorder.add(ts[:n_saved], ys[:n_saved])
+            if recorder.rows > max_rows and status in (BUFFER_FULL, PAUSED):
+                return MEMORY_FULL  # what was computed is kept; a fixed-step or t_eval run was refused up front
             if counters[5]:
                 event_parts.append(tuple(a[:counters[5]].copy() for a in event_buffers))
             bar.update(clock[0] - t0 - bar.n)
