@@ -61,3 +61,17 @@ def test_stages_report_the_current_one(monkeypatch):
         while stages.bar is None and time.monotonic() < deadline:
             time.sleep(0.01)
         assert stages.bar is not None and stages.bar.n == 1 and stages.bar.postfix == "two"
+
+
+def test_numba_stage_only_for_a_dispatcher_not_compiled_yet():
+    import numba
+
+    @numba.njit
+    def twice(v):
+        return 2 * v
+
+    stage = lagcomp.stages.numba_stage(twice, "twice", "preparing", None)
+    assert stage is not None and "numba: compiling twice" in stage.names[0]
+    assert lagcomp.stages.numba_stage(twice, "twice", "preparing", False) is None
+    twice(1.0)
+    assert lagcomp.stages.numba_stage(twice, "twice", "preparing", None) is None

@@ -69,3 +69,12 @@ class Stages:
         if self.bar is not None:
             self.bar.close()
         return False
+
+
+def numba_stage(dispatcher, what: str, title: str, progress) -> Stages | None:
+    """The `Stages` shown around the first call of `dispatcher` while numba compiles it (and `what` it
+    calls), or None when it is compiled in this process already or progress is off.  A dispatcher numba
+    loads from its disk cache takes well under the delay, so nothing shows then."""
+    if progress is False or getattr(dispatcher, "signatures", None):
+        return None
+    return Stages(title, (f"numba: compiling {what} (once; cached for later runs)",), progress)

@@ -157,17 +157,11 @@ def _check_memory(model, m, t_span, dt, t_eval, save_every: int, memory_limit) -
 
 
 def _numba_stage(model, m, progress):
-    """What the first driver call of a run shows while numba compiles (or loads) its kernels and driver.
+    """What the first driver call of a run shows while numba compiles its kernels and driver."""
+    from lagcomp.stages import numba_stage
 
-    A shown bar only where numba has not compiled that driver in this process yet, and after
-    the usual delay (`lagcomp.stages`): a driver loaded from numba's cache takes well under it.
-    """
-    from lagcomp.stages import Stages
-
-    if progress is False or getattr(getattr(model.kernels, m.driver, None), "signatures", None):
-        return None
-    stage = f"numba: compiling the kernels and the {m.name} driver (once; cached for later runs)"
-    return Stages(f"preparing {model.name}", (stage,), progress)
+    return numba_stage(getattr(model.kernels, m.driver, None), f"the kernels and the {m.name} driver",
+                       f"preparing {model.name}", progress)
 
 
 def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress, first=None) -> int:

@@ -16,6 +16,7 @@ Grid names are coordinate names (initial coordinates), ``<coordinate>_dot``
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import time
@@ -429,8 +430,12 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
     """
     from concurrent.futures import ThreadPoolExecutor
 
+    from lagcomp.stages import numba_stage
+
     n_traj = Y0.shape[0]
     threads = (os.cpu_count() or 1) if workers is None else count(workers, "workers")
+    first = numba_stage(getattr(kernels, f"sweep_{task.driver}", None), f"the {task.driver} sweep loop",
+                        "preparing the sweep", progress)
     done = np.zeros(n_traj, dtype=bool)
     chunk = (FIRST_BATCHED_CHUNK_PER_THREAD if task.driver in BATCHED.values() else FIRST_CHUNK_PER_THREAD) * threads
     with ThreadPoolExecutor(threads) as pool, deferred_interrupt() as interrupted, \
@@ -444,8 +449,13 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
             started = time.perf_counter()
             parts = [(lo, pool.submit(_run_chunk, kernels, task, Y0[lo:hi], P[lo:hi]))
                      for lo, hi in zip(bounds[:-1], bounds[1:])]
-            for lo, future in parts:
-                _store(out, lo, future.result())
+            with first or contextlib.nullcontext() as stages:  # numba compiles in the first chunk
+                if stages is not None:
+                    stages.start(stages.names[0])
+                for lo, future in parts:
+                    _store(out, lo, future.result())
+            if first is not None:
+                first, bar.started = None, time.perf_counter()
             elapsed = time.perf_counter() - started
             done[a:b] = True
             bar.update(b - a)
