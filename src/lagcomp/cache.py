@@ -1,4 +1,5 @@
-"""On-disk cache of generated modules (filesystem only: no sympy, no numba).
+"""On-disk cache of generated modules (filesystem work; no sympy, and numba only for its version and,
+through `lagcomp.numba_cache`, the health of its own cache files beside a loaded module).
 
 Layout under the cache root::
 
@@ -25,7 +26,12 @@ Two keys, so that a second process does neither sympy nor numba work:
 
 An entry whose file is missing, truncated or altered (sha256 mismatch), or
 whose record names other lagcomp/numba/Python versions, is a miss: it is
-reported with a `CacheWarning` and rebuilt, never trusted.
+reported with a `CacheWarning` and rebuilt, never trusted.  numba's own files
+beside a module (``__pycache__/*.nbi``, ``*.nbc``) are read back when the
+module is loaded, and unreadable ones are removed (numba recompiles, once),
+with a `CacheWarning`; a ``names/`` record that does not parse is removed and
+reported (`CorruptCacheRecordError`).  Module files are named after the System
+up to `STEM_MAX` ASCII characters, else after a prefix and a hash.
 
 Faults and concurrency
 ----------------------
