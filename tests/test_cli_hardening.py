@@ -140,3 +140,14 @@ def test_cache_warnings_are_one_line(capsys, tmp_path):
     assert main(["--cache-dir", str(tmp_path), "show", "cli_warned"]) == 0
     err = capsys.readouterr().err
     assert "Traceback" not in err and all(line.startswith("lagcomp: warning: ") for line in err.splitlines())
+
+
+def test_plot_without_matplotlib_is_refused_before_the_run(capsys, cache_dir, tmp_path, monkeypatch):
+    import importlib.util
+
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *rest: None if name == "matplotlib" else find_spec(name, *rest))
+    assert main(["--cache-dir", str(cache_dir), "run", "simple_pendulum", "--plot", str(tmp_path / "p.png")]) == 2
+    out, err = capsys.readouterr()
+    assert "final" not in out and "lagcomp[plots]" in _one_line_error(err)

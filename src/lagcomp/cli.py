@@ -201,6 +201,11 @@ def cmd_show(args) -> int:
 def cmd_run(args) -> int:
     _check_writable(args.out, "--out")
     _check_writable(args.plot, "--plot")
+    if args.plot:
+        import importlib.util
+
+        if importlib.util.find_spec("matplotlib") is None:  # known before the run, not after it
+            raise LagcompError("--plot needs matplotlib: pip install 'lagcomp[plots]'.")
     started = time.perf_counter()
     model = _example_model(args)
     compiled = time.perf_counter()
