@@ -7,17 +7,21 @@ reads the table, so a row without a case (or a case without a row) fails.
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
+import sys
 import re
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 import sympy as sp
 
 import lagcomp as lc
 from lagcomp import analysis as an
+from lagcomp import cli
 from lagcomp.model import t
 
 TABLE = Path(__file__).resolve().parent.parent / "docs" / "errors.md"
@@ -78,6 +82,9 @@ def models(compiled, cache_dir):
         "walled": lc.compile(walled, cache_dir=cache_dir),
         "friction": compiled("rope_friction"),
         "kane": lc.compile(_kane_slider(), name="table_kane_slider", cache_dir=cache_dir, defaults={"m": 1.0}),
+        # a parameter named like the velocity of x: derived correctly, but "x_dot" is ambiguous in a sweep grid
+        "clash": lc.compile(oscillator(V=sp.Symbol("x_dot") * x, name="table_clash",
+                                       defaults={"m": 1.0, "x_dot": 1.0}), cache_dir=cache_dir),
     }
 
 
@@ -100,6 +107,17 @@ def _cache_case(kind):
             blocker.write_text("")
             return lc.compile(system, cache_dir=blocker / "cache")
         lc.compile(system, cache_dir=tmp_path)
+        if kind == "name record":
+            (record,) = (tmp_path / "names").glob("table_cached*.json")
+            record.write_text("{")
+            return lc.load("table_cached", cache_dir=tmp_path)
+        if kind == "numba":
+            model = lc.compile(oscillator(name="table_numba"), cache_dir=tmp_path)
+            model.simulate((0, 0.1), method="rk4", dt=0.01, progress=False)  # numba writes its cache files
+            for data in (tmp_path / "modules" / "__pycache__").glob("table_numba*.nbc"):
+                data.write_bytes(b"\x80\x05 not a pickle")
+            del sys.modules[model.kernels.__name__]  # as a new process: the module runs again, numba reads its files
+            return lc.compile(oscillator(name="table_numba"), cache_dir=tmp_path)
         if kind == "corrupt":
             (module,) = (tmp_path / "modules").glob("*.py")
             module.write_text(module.read_text()[:100])
@@ -109,6 +127,11 @@ def _cache_case(kind):
             index.write_text(json.dumps({**record, "versions": "numba=0.0.1"}))
         return lc.compile(system, cache_dir=tmp_path)
     return provoke
+
+
+def _cli_system(name, *arguments):
+    """What `lagcomp run NAME --arg ...` builds before anything else."""
+    return cli._system(argparse.Namespace(name=name, arg=list(arguments)))
 
 
 def _inertia():
@@ -166,7 +189,14 @@ CASES = {
     "plain-symbol-coordinate": (lambda: lc.System([sp.Symbol("q")], T=sp.Symbol("q") ** 2, name="bad"), "Coordinate q"),
     "repeated-coordinate": (lambda: lc.System([x, x], T=m * x.diff(t) ** 2), "(x(t), x(t))"),
     "bad-system-name": (lambda: oscillator(name="double-pendulum"), "'double-pendulum'"),
-    "not-an-expression": (lambda: oscillator(T="m*"), "`T`"),
+    "not-an-expression": (lambda: oscillator(T=[m]), "`T` must be a sympy expression"),
+    "expression-is-a-string": (lambda: oscillator(events=[lc.Event("hit", "x - 1")]),
+                               "Event `hit`: the expression is the string 'x - 1'"),
+    "complex-or-infinite-expression": (lambda: oscillator(V=sp.I * k * x**2), "V contains the imaginary unit"),
+    "coordinates-not-a-sequence": (lambda: lc.System("x", T=m * x.diff(t) ** 2), "`coordinates`"),
+    "field-not-a-sequence": (lambda: plane(constraints=lc.Holonomic("floor", y)), "`constraints` must be a sequence"),
+    "bad-t-end": (lambda: oscillator(t_end=-1.0), "`t_end`"),
+    "defaults-not-a-mapping": (lambda: oscillator(defaults=[1.0, 2.0]), "`defaults`"),
     "no-kinetic-energy": (lambda: oscillator(T=0), "'table_oscillator' has no kinetic energy"),
     "T-not-quadratic": (lambda: lc.compile(oscillator(T=m * x.diff(t) ** 4)), "kinetic energy T"),
     "accelerations-in-expressions": (lambda: lc.compile(oscillator(events=[lc.Event("e", x.diff(t, 2))])),
@@ -193,7 +223,6 @@ CASES = {
     "parameter-not-a-symbol": (lambda: oscillator(parameters=(m, k, 3)), "Parameter 3"),
     "symbol-named-t": (lambda: oscillator(V=k * x**2 / 2 + sp.Symbol("t", real=True) * x),
                        "symbol named t (Symbol('t', real=True))"),
-    "velocity-name-clash": (lambda: lc.compile(oscillator(V=sp.Symbol("x_dot") * x, defaults={})), "['x_dot']"),
     "event-undeclared-symbol": (lambda: oscillator(events=[lc.Event("hit", x - sp.Symbol("wall"))], parameters=(m, k)),
                                 "wall appear in 'table_oscillator' (first in event hit)"),
     "event-bad-direction": (lambda: lc.Event("hit", x, direction=2), "got 2"),
@@ -213,6 +242,7 @@ CASES = {
     "non-finite-parameter": (_simulate("pendulum", params={"g": math.inf}), "`g` is inf"),
     "parameter-not-a-number": (_simulate("pendulum", params={"l": [1.0, 2.0]}), "`l`"),
     "params-not-a-mapping": (_simulate("pendulum", params=[1.0, 1.0, 9.81]), "`params`"),
+    "params-keys-not-names": (_simulate("pendulum", params={3: 1.0}), "`params` keys"),
     "initial-wrong-length": (_simulate("pendulum", q0=[1.0, 2.0]), "`q0` has 2 value(s)"),
     "initial-wrong-shape": (_simulate("pendulum", qd0=[[0.0]]), "`qd0` has shape (1, 1)"),
     "initial-not-finite": (_simulate("pendulum", qd0=[math.nan]), "`qd0`"),
@@ -243,6 +273,15 @@ CASES = {
                                "rk4"),
     "bad-baumgarte": (_simulate("rod", baumgarte=(-1.0, 0.0)), "`baumgarte`"),
     "bad-max-residual": (_simulate("rod", max_residual=-1.0), "`max_residual`"),
+    "run-too-large-for-memory": (_simulate("pendulum", t_span=(0, 10), method="rk4", dt=1e-7), "record=\"summary\""),
+    "bad-memory-limit": (_simulate("pendulum", memory_limit="lots"), "`memory_limit`"),
+    "ambiguous-sweep-name": (lambda models: models["clash"].sweep((0, 1), {"x_dot": [0.0, 1.0]}), "['x_dot']"),
+    "unknown-option": (_simulate("pendulum", save_evry=10), "did you mean `save_every`?"),
+    "sweep-too-large-for-memory": (lambda models: models["pendulum"].sweep((0, 1), {"theta": np.zeros(10**5),
+                                                                                    "l": np.ones(10**5)}),
+                                   "10,000,000,000 trajectories"),
+    "sweep-grid-not-numbers": (lambda models: models["pendulum"].sweep((0, 1), {"theta": ["up", "down"]}),
+                               "Grid values of `theta`"),
     # a run that fails part-way (throw=True; the statuses are tested in test_integration_failures.py)
     "non-finite-state": (_fail("failing", t_span=(0, 2), params={"a": 1.0}, method="rk4", dt=0.01), "non-finite"),
     "singular-during-run": (_fail("failing", t_span=(0, 2), params={"c": 1.0}, method="rk4", dt=0.1), "singular"),
@@ -251,6 +290,7 @@ CASES = {
     "implicit-not-converged": (_fail("failing", t_span=(0, 0.9), params={"a": 1.0}, method="gauss2", dt=0.3),
                                "did not converge"),
     "constraint-drift": (_fail("rod", rtol=1e-4, atol=1e-4, max_residual=1e-6), "max_residual = 1e-06"),
+    "memory-limit-reached": (_fail("pendulum", t_span=(0, 1000), memory_limit=10_000), "`memory_limit`"),
     # the cache
     "corrupt-cache-entry": (_cache_case("corrupt"), "sha256"),
     "stale-cache-entry": (_cache_case("stale"), "another lagcomp or numba version"),
@@ -271,6 +311,12 @@ CASES = {
     "steady-at-a-kink": (lambda models: an.linearize_steady(models["friction"], [0.5], [0.0]), "x_dot = 0"),
     "sweep-unknown-parameter": (lambda models: an.stability_sweep(models["rod"], "mass", [1.0, 2.0], [0.0, 0.0, -1.0]),
                                 "'mass'"),
+    "bad-cache-dir": (lambda: lc.compile(oscillator(), cache_dir=5), "`cache_dir`"),
+    "corrupt-name-record": (_cache_case("name record"), "was corrupt"),
+    "unreadable-numba-cache": (_cache_case("numba"), "unreadable and removed"),
+    "cli-unknown-example-argument": (lambda: _cli_system("n_link_pendulum", "m=3"), "the example 'n_link_pendulum' takes"),
+    "cli-unwritable-output": (lambda tmp_path: cli._check_writable(str(tmp_path / "nonexistent" / "x.npz"), "--out"),
+                              "does not exist"),
 }
 
 

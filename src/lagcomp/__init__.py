@@ -12,6 +12,7 @@ __version__ = "0.1.0"
 
 from lagcomp.errors import (
     CacheWarning as CacheWarning,
+    CorruptCacheRecordError as CorruptCacheRecordError,
     InitialConditionError as InitialConditionError,
     IntegrationError as IntegrationError,
     LagcompError as LagcompError,
@@ -23,6 +24,7 @@ from lagcomp.errors import (
     UndeclaredSymbolError as UndeclaredSymbolError,
 )
 from lagcomp.integrate.solution import Solution as Solution
+from lagcomp.integrate.sweep import Sweep as Sweep
 from lagcomp.runtime import Model as Model, compile as compile, load as load  # noqa: A004
 
 #: What `lagcomp.model` contributes to the namespace.  It is imported on first

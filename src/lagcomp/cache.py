@@ -1,4 +1,5 @@
-"""On-disk cache of generated modules (filesystem only: no sympy, no numba).
+"""On-disk cache of generated modules (filesystem work; no sympy, and numba only for its version and,
+through `lagcomp.numba_cache`, the health of its own cache files beside a loaded module).
 
 Layout under the cache root::
 
@@ -25,7 +26,12 @@ Two keys, so that a second process does neither sympy nor numba work:
 
 An entry whose file is missing, truncated or altered (sha256 mismatch), or
 whose record names other lagcomp/numba/Python versions, is a miss: it is
-reported with a `CacheWarning` and rebuilt, never trusted.
+reported with a `CacheWarning` and rebuilt, never trusted.  numba's own files
+beside a module (``__pycache__/*.nbi``, ``*.nbc``) are read back when the
+module is loaded, and unreadable ones are removed (numba recompiles, once),
+with a `CacheWarning`; a ``names/`` record that does not parse is removed and
+reported (`CorruptCacheRecordError`).  Module files are named after the System
+up to `STEM_MAX` ASCII characters, else after a prefix and a hash.
 
 Faults and concurrency
 ----------------------
@@ -42,11 +48,13 @@ Faults and concurrency
   Windows, only the atomic rename protects the files.)
 * A cache root that cannot be written (read-only, full, a path under a
   regular file) never breaks a compile: lagcomp warns with a `CacheWarning`
-  and uses a private temporary directory for the rest of the process.
+  and uses a private temporary directory for the rest of the process,
+  removed when the process exits.
 """
 
 from __future__ import annotations
 
+import atexit
 import functools
 import hashlib
 import importlib.metadata
@@ -54,6 +62,7 @@ import importlib.util
 import json
 import os
 import re
+import shutil
 import sys
 import tempfile
 import time
@@ -66,8 +75,8 @@ from types import ModuleType
 import numba
 import platformdirs
 
-from lagcomp import __version__
-from lagcomp.errors import CacheWarning
+from lagcomp import __version__, numba_cache
+from lagcomp.errors import CacheWarning, CorruptCacheRecordError, OptionError
 
 try:
     import fcntl
@@ -81,6 +90,8 @@ LAYOUT_VERSION = "1"
 def cache_root(cache_dir: str | os.PathLike | None = None) -> Path:
     """The cache directory: `cache_dir`, else $LAGCOMP_CACHE_DIR, else the user cache dir."""
     if cache_dir is not None:
+        if not isinstance(cache_dir, (str, os.PathLike)) or not os.fspath(cache_dir):
+            raise OptionError(f"`cache_dir` must be a directory path (str or pathlib.Path), got {cache_dir!r}.")
         return Path(cache_dir)
     if os.environ.get(ENV_VAR):
         return Path(os.environ[ENV_VAR])
@@ -185,10 +196,11 @@ _reported_roots: set = set()
 
 
 def fallback_root() -> Path:
-    """A private temporary cache root for this process (created on first use)."""
+    """A private temporary cache root for this process (created on first use, removed at exit)."""
     global _fallback_root
     if _fallback_root is None:
         _fallback_root = Path(tempfile.mkdtemp(prefix="lagcomp-cache-"))
+        atexit.register(shutil.rmtree, _fallback_root, ignore_errors=True)
     return _fallback_root
 
 
@@ -264,7 +276,7 @@ class Cache:
             return self._store(key, source, system_name, metadata)
 
     def _store(self, key: str, source: str, system_name: str, metadata: dict) -> Entry:
-        path = self.root / "modules" / f"{system_name}_{source_key(source)}.py"
+        path = self.root / "modules" / f"{_file_stem(system_name)}_{source_key(source)}.py"
         digest = _sha256(source)
         with _locked(self.root / "locks" / f"{path.stem}.lock"):
             intact = path.exists() and _sha256(path.read_text(encoding="utf-8", errors="replace")) == digest
@@ -294,14 +306,32 @@ class Cache:
             pass
 
     def recall(self, name: str) -> tuple[Entry, dict] | None:
-        """The entry last compiled under `name` and its run defaults, or None if there is none (or it is unusable)."""
+        """The entry last compiled under `name` and its run defaults, or None if there is none (or it is stale).
+
+        A record that does not parse is removed and reported with `CorruptCacheRecordError`,
+        so that the caller says so (and the next `compile` under that name writes a new one).
+        """
+        path = self._name_file(name)
         try:
-            record = json.loads(self._name_file(name).read_text(encoding="utf-8"))
-            key, run_defaults = record["key"], record["run_defaults"]
-            if record["name"] != name:
-                return None
-        except (OSError, ValueError, KeyError, TypeError):
+            text = path.read_text(encoding="utf-8")
+        except OSError:
             return None
+        try:
+            record = json.loads(text)
+            key, run_defaults, recorded = record["key"], record["run_defaults"], record["name"]
+            if not (isinstance(key, str) and isinstance(run_defaults, dict)):
+                raise TypeError("its key or run defaults have the wrong type")
+        except (ValueError, KeyError, TypeError) as err:
+            try:
+                path.unlink(missing_ok=True)
+            except OSError:
+                pass
+            raise CorruptCacheRecordError(
+                f"The cache's record of the model {name!r} ({path}) was corrupt ({type(err).__name__}: {err}) and "
+                "has been removed: compile the model again (lagcomp.compile(system)) to record it afresh."
+            ) from None
+        if recorded != name:
+            return None  # another name hashed to the same file name
         entry = self.lookup(key)
         return None if entry is None else (entry, run_defaults)
 
@@ -311,6 +341,22 @@ class Cache:
             entry.path.unlink(missing_ok=True)
         except OSError:
             pass  # read-only: the rebuild falls back to a writable root
+
+
+#: System names up to this long (ASCII letters, digits, _) name their module files as they are.
+STEM_MAX = 64
+
+
+def _file_stem(name: str) -> str:
+    """`name` as the start of a module file name: itself when short and ASCII, else a prefix and a hash.
+
+    File names are limited (255 bytes on most file systems, the lock file adds to the module's),
+    while a System name is any Python identifier, of any length and alphabet.
+    """
+    if re.fullmatch(rf"[A-Za-z0-9_]{{1,{STEM_MAX}}}", name):
+        return name
+    prefix = re.sub(r"[^A-Za-z0-9_]", "", name)[:32]
+    return f"{prefix}_{_sha256(name)[:16]}"
 
 
 def _module_name(path: Path) -> str:
@@ -333,4 +379,9 @@ def load_module(entry: Entry) -> ModuleType:
     except BaseException:
         del sys.modules[entry.module_name]
         raise
+    removed = numba_cache.heal(module)
+    if removed:
+        warnings.warn(f"lagcomp found numba's cache files of {entry.path.name} unreadable and removed them "
+                      f"({len(removed)} files, {removed[0]}, ...); numba compiles those functions again, once.",
+                      CacheWarning, stacklevel=3)
     return module

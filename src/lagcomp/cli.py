@@ -14,6 +14,7 @@ import argparse
 import hashlib
 import sys
 import time
+import warnings
 from pathlib import Path
 
 
@@ -34,9 +35,44 @@ def _key_values(pairs: list[str], what: str) -> dict:
 
 
 def _system(args):
+    """The bundled example `args.name` built with the --arg values; a wrong argument is a message."""
+    import inspect
+    import re
+
     from lagcomp import examples
 
-    return examples.get(args.name, **_key_values(args.arg, "--arg"))
+    arguments = _key_values(args.arg, "--arg")
+    factory = examples.EXAMPLES.get(args.name)
+    if factory is None and re.fullmatch(r"n_link_pendulum_\d+", args.name):
+        factory = examples.EXAMPLES["n_link_pendulum"]
+    if factory is not None and arguments:
+        accepted = list(inspect.signature(factory).parameters)
+        unknown = sorted(set(arguments) - set(accepted))
+        if unknown:
+            raise LagcompError(f"--arg {', '.join(unknown)}: the example {args.name!r} takes "
+                               f"{', '.join(f'{a}=...' for a in accepted) or 'no arguments'}.")
+    try:
+        return examples.get(args.name, **arguments)
+    except LagcompError:
+        raise
+    except (TypeError, ValueError, ArithmeticError) as err:
+        raise LagcompError(f"The example {args.name!r} refused --arg {arguments}: {err}.") from err
+
+
+def _check_writable(path: str | None, what: str) -> None:
+    """Refuse an output path that cannot be written, before any work whose results it would hold."""
+    if path is None:
+        return
+    import os
+
+    target = Path(path)
+    if target.is_dir():
+        raise LagcompError(f"{what} {path} is a directory; give a file name.")
+    folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise LagcompError(f"{what} {path}: the directory {folder} does not exist; create it first.")
+    if not os.access(folder, os.W_OK) or (target.exists() and not os.access(target, os.W_OK)):
+        raise LagcompError(f"{what} {path} cannot be written (permission denied).")
 
 
 def _example_alias(args) -> str:
@@ -70,14 +106,25 @@ def _example_model(args):
     except ModelError as unknown:
         if args.arg:
             raise
-        try:
-            return load(args.name, cache_dir=args.cache_dir)
-        except ModelError:
-            raise LagcompError(f"{unknown} Nor is it the name of a model compiled with lagcomp.compile() into "
-                               f"the cache {Cache(args.cache_dir).root}.") from None
+        return _users_model(args, unknown)
     model = compile(system, cache_dir=args.cache_dir)
     Cache(args.cache_dir).remember(alias, model.cache_key, run_defaults(system))
     return model
+
+
+def _users_model(args, unknown: ModelError):
+    """The model compiled earlier under `args.name` (`lagcomp.load`), for a name that is no bundled example."""
+    from lagcomp.cache import Cache
+    from lagcomp.errors import CorruptCacheRecordError
+    from lagcomp.runtime import load
+
+    try:
+        return load(args.name, cache_dir=args.cache_dir)
+    except CorruptCacheRecordError:
+        raise
+    except ModelError:
+        raise LagcompError(f"{unknown} Nor is it the name of a model compiled with lagcomp.compile() into "
+                           f"the cache {Cache(args.cache_dir).root}.") from None
 
 
 def cmd_list(args) -> int:
@@ -89,13 +136,40 @@ def cmd_list(args) -> int:
     return 0
 
 
+def _show_compiled(model) -> int:
+    """`show` for a user's model from the cache: what the cache records (the equations stay in its module)."""
+    print(f"{model.name}: {model.description or '(no description)'}   [compiled model from the cache]\n")
+    print(f"coordinates q  = ({', '.join(model.coordinates)})")
+    print(f"parameters  p  = ({', '.join(model.parameters)})   [kernel order]")
+    print(f"defaults       = {model.defaults}")
+    print(f"q0, qd0        = {model.q0}, {model.qd0}")
+    print(f"cyclic         = {list(model.cyclic) or 'none'}")
+    print(f"separable      = {model.separable} (explicit symplectic methods "
+          f"{'apply' if model.separable else 'do not apply'})")
+    if model.k:
+        kinds = ", ".join(f"{c} ({'holonomic' if h else 'nonholonomic'})"
+                          for c, h in zip(model.constraints, model.holonomic))
+        print(f"constraints    = {kinds}")
+    if model.events:
+        print(f"events         = {', '.join(e.name for e in model.events)}")
+    print(f"\noperations after CSE: {model.operations}")
+    print(f"generated module: {model.source_path}")
+    print("(the equations are in the generated module; lagcomp.compile(system) in Python derives them again)")
+    return 0
+
+
 def cmd_show(args) -> int:
     import sympy as sp
 
     from lagcomp.mechanics.lagrange import derive
     from lagcomp.runtime import compile
 
-    system = _system(args)
+    try:
+        system = _system(args)
+    except ModelError as unknown:
+        if args.arg:
+            raise
+        return _show_compiled(_users_model(args, unknown))
     eom = derive(system)
     model = compile(system, cache_dir=args.cache_dir, eom=eom)
     print(f"{system.name}: {system.description}\n")
@@ -126,13 +200,18 @@ def cmd_show(args) -> int:
 
 
 def cmd_run(args) -> int:
+    _check_writable(args.out, "--out")
+    _check_writable(args.plot, "--plot")
+    if args.plot:
+        import importlib.util
+
+        if importlib.util.find_spec("matplotlib") is None:  # known before the run, not after it
+            raise LagcompError("--plot needs matplotlib: pip install 'lagcomp[plots]'.")
     started = time.perf_counter()
     model = _example_model(args)
     compiled = time.perf_counter()
     origin = "from cache" if model.from_cache else "derived and emitted"
     print(f"{model.name}: {origin} in {compiled - started:.2f} s ({model.source_path})", file=sys.stderr)
-    if not model.from_cache:
-        print("first run: numba compiles the kernels and drivers once (cached for later runs)...", file=sys.stderr)
     options = dict(method=args.method, save_every=args.save_every, projection=args.projection,
                    project_initial=args.project_initial, record="summary" if args.summary else "trajectory",
                    progress=False if args.quiet else None)
@@ -145,16 +224,19 @@ def cmd_run(args) -> int:
         if args.dt is not None:
             options["first_step"] = args.dt
     t_end = args.t_end if args.t_end is not None else model.t_end
-    sol = model.simulate(
-        (args.t_start, t_end), q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"), **options
-    )
-    elapsed = time.perf_counter() - compiled
+    run = dict(q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"))
+    warmed = _warm_up(model, args.t_start, t_end, run, options)
+    print(f"numba: kernels and driver ready in {warmed:.2f} s (compiled on a first run, then loaded from its cache)",
+          file=sys.stderr)
+    begun = time.perf_counter()
+    sol = model.simulate((args.t_start, t_end), **run, **options)
+    elapsed = time.perf_counter() - begun
     if sol.projected_initial_state is not None:
         start = ", ".join(f"{v:.10g}" for v in sol.projected_initial_state)
         print(f"initial     projected onto the constraints: y0 = ({start})")
     print(f"method      {sol.method}   status {sol.status}: {sol.message}")
     print(f"time span   [{sol.t[0]:g}, {sol.t[-1]:g}]   steps {sol.nsteps}   rejected {sol.nrejected}   rhs evaluations {sol.nfev}")
-    print(f"wall time   {elapsed:.3f} s (integration{', including numba compilation' if not model.from_cache else ''})")
+    print(f"wall time   {elapsed:.3f} s (integration; numba compilation or loading before it: {warmed:.2f} s)")
     summary = sol.summary
     print(f"energy      T+V: {sol.energy[0]:.12g} -> {sol.energy[-1]:.12g} (max relative drift {summary.energy_error:.3g})")
     print(f"            h:   {sol.energy_function[0]:.12g} -> {sol.energy_function[-1]:.12g} "
@@ -182,6 +264,22 @@ def cmd_run(args) -> int:
     return 0 if sol.success else 1
 
 
+def _warm_up(model, t0: float, t1: float, run: dict, options: dict) -> float:
+    """Seconds numba takes to compile (or load from its cache) what a run with `options` calls.
+
+    A run of one step (or a millionth of the span) with the same method and options: the timed run
+    after it is integration only.  Bad options raise here, as they would in the run itself.
+    """
+    from lagcomp.integrate.simulate import INTERRUPTED
+
+    started = time.perf_counter()
+    span = options.get("dt") or options.get("first_step") or 1e-6 * (t1 - t0)
+    sol = model.simulate((t0, t0 + min(span, t1 - t0)), **run, **{**options, "record": "summary"})
+    if sol.status == INTERRUPTED:  # Ctrl-C while numba compiled: stop here, not after the whole run
+        raise KeyboardInterrupt
+    return time.perf_counter() - started
+
+
 def cmd_bench(args) -> int:
     """Kernel cost, op counts, steps/s of every applicable method and compile times of one model."""
     from lagcomp import examples
@@ -196,6 +294,13 @@ def cmd_bench(args) -> int:
     else:  # a user's own model, compiled earlier under this name
         model = load(args.name, cache_dir=args.cache_dir)
     loaded = time.perf_counter() - started
+    params = _key_values(args.param, "--param")
+    model.initial_state(args.q0, args.qd0), model.parameter_vector(params)  # checked: a message, not a traceback
+    if args.q0 is not None:  # the values the benchmark runs from, for this process only
+        model.q0 = tuple(args.q0)
+    if args.qd0 is not None:
+        model.qd0 = tuple(args.qd0)
+    model.defaults.update(params)
     print(report(model, example=example, load_seconds=loaded, repeats=args.repeats, dt=args.dt, steps=args.steps,
                  methods=args.methods, cold=not args.no_cold), end="")
     return 0
@@ -273,7 +378,9 @@ def cmd_sweep(args) -> int:
     import numpy as np
 
     from lagcomp.integrate.methods import get_method
+    from lagcomp.integrate.sweep import NOT_RUN
 
+    _check_writable(args.out, "--out")
     model = _example_model(args)
     method = get_method(args.method)
     t_span = (args.t_start, args.t_end if args.t_end is not None else model.t_end)
@@ -307,12 +414,14 @@ def cmd_sweep(args) -> int:
                         batched=args.batched, project_initial=args.project_initial,
                         progress=False if args.quiet else None, **options)
     elapsed = time.perf_counter() - started
-    count = int(np.prod(sweep.shape))
+    count, done = int(np.prod(sweep.shape)), int(sweep.done.sum())
     axes = ", ".join(f"{name} ({len(sweep.axes[name])} values)" for name in sweep.names)
     print(f"sweep       {model.name}: {count} trajectories over {axes}, {sweep.combine}")
+    if done < count:
+        print(f"interrupted {done} of {count} trajectories done (the others have status {NOT_RUN}, `done` False)")
     print(f"method      {sweep.method}   t in [{t_span[0]:g}, {t_span[1]:g}]   {int(sweep.nsteps.sum())} steps in all")
-    print(f"wall time   {elapsed:.3f} s ({count / elapsed:,.0f} trajectories/s)")
-    statuses, counts = np.unique(sweep.status, return_counts=True)
+    print(f"wall time   {elapsed:.3f} s ({done / elapsed:,.0f} trajectories/s over the {done} done)")
+    statuses, counts = np.unique(sweep.status[sweep.done], return_counts=True)
     print("status      " + ", ".join(f"{int(s)}: {int(c)}" for s, c in zip(statuses, counts)))
     if sweep.energy_error is not None:
         finite = sweep.energy_error[np.isfinite(sweep.energy_error)]
@@ -369,7 +478,8 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--arg", action="append", metavar="K=V", help="argument of the example factory, e.g. n=5")
         return p
 
-    example("show", "print the derived equations and the generated module's path").set_defaults(func=cmd_show)
+    example("show", "print the derived equations (of a bundled example; for a model compiled earlier under NAME, "
+                    "what the cache records) and the generated module's path").set_defaults(func=cmd_show)
     run = example("run", "simulate an example and print a summary")
     run.add_argument("--t-start", type=float, default=0.0)
     run.add_argument("--t-end", type=float, help="end time (default: the example's)")
@@ -430,6 +540,9 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--steps", type=int, default=100_000, help="steps of each fixed-step run")
     bench.add_argument("--methods", nargs="+", metavar="METHOD", help="time only these methods (default: all that apply)")
     bench.add_argument("--no-cold", action="store_true", help="skip the cold compile in a fresh process")
+    bench.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
+    bench.add_argument("--q0", type=float, nargs="+", help="initial coordinates (default: the model's)")
+    bench.add_argument("--qd0", type=float, nargs="+", help="initial velocities (default: the model's, else 0)")
     stability = example("stability", "eigenvalues of a steady motion along a parameter; where stability changes")
     stability.add_argument("--param", required=True, help="swept parameter, or speed (<coordinate>_dot)")
     stability.add_argument("--range", type=float, nargs=2, required=True, metavar=("LO", "HI"))
@@ -447,13 +560,24 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings (a cache entry rebuilt, a cache directory replaced) as one line, without source lines."""
+    print(f"lagcomp: warning: {message}", file=sys.stderr if file is None else file)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning
+            return args.func(args)
     except LagcompError as err:
         print(f"lagcomp: error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # runs and sweeps stop cleanly on their own; this is derivation or compilation
+        print("lagcomp: interrupted (Ctrl-C); the cache is intact: its files are written whole or not at all, "
+              "so the next command starts the interrupted work again.", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

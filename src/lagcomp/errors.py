@@ -29,6 +29,10 @@ class LinearizationError(LagcompError, ValueError):
     """A linearization cannot be formed as asked: singular constraint blocks, a dropped state that matters."""
 
 
+class CorruptCacheRecordError(ModelError):
+    """The cache's record of a model's name could not be read; it was removed (compile the model again)."""
+
+
 class ParameterError(LagcompError, ValueError):
     """Parameter values are missing, unknown or not finite."""
 

@@ -22,7 +22,8 @@ from lagcomp.cache import Cache, Entry, input_key, load_module
 from lagcomp.errors import CacheWarning, InitialConditionError, ModelError, ParameterError, SingularMassMatrixError
 
 
-def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **system_kwargs) -> "Model":  # noqa: A001
+def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, progress=None,  # noqa: A001
+            **system_kwargs) -> "Model":
     """Compile `system` into a `Model` of numba kernels, using the on-disk cache.
 
     Parameters
@@ -39,6 +40,10 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **s
     eom : lagcomp.mechanics.lagrange.EOM, optional
         The equations of `system` if the caller has derived them already
         (used on a cache miss instead of deriving them again).
+    progress : bool, optional
+        On a cache miss, show which stage is running (deriving, CSE, the
+        Taylor program, emitting): None (default) once the build has lasted
+        two seconds, True always, False never.
 
     Returns
     -------
@@ -54,12 +59,12 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **s
     system = _as_system(system, system_kwargs)
     cache = Cache(cache_dir)
     key = input_key(system.fingerprint(), options={})
-    model = _compiled(system, cache, key, eom)
+    model = _compiled(system, cache, key, eom, progress)
     cache.remember(system.name, key, run_defaults(system))
     return model
 
 
-def _compiled(system, cache: Cache, key: str, eom) -> "Model":
+def _compiled(system, cache: Cache, key: str, eom, progress=None) -> "Model":
     """The Model of `system` from the cache entry under `key`, built first on a miss."""
     entry = cache.lookup(key)
     damaged = False
@@ -74,7 +79,7 @@ def _compiled(system, cache: Cache, key: str, eom) -> "Model":
         entry = None if damaged else cache.lookup(key)  # stored by another process while this one waited?
         if entry is not None:
             return Model(system, load_module(entry), entry, from_cache=True)
-        entry = build(system, cache, key, eom)
+        entry = build(system, cache, key, eom, progress)
     return Model(system, load_module(entry), entry, from_cache=False)
 
 
@@ -91,6 +96,8 @@ def load(name: str, *, cache_dir: str | os.PathLike | None = None) -> "Model":
     Raises ModelError when nothing named `name` was compiled into this cache
     (or its entry no longer matches this lagcomp, numba or Python version).
     """
+    if not isinstance(name, str) or not name:
+        raise ModelError(f"`lagcomp.load` takes the name a System was compiled under (a string), got {name!r}.")
     cache = Cache(cache_dir)
     found = cache.recall(name)
     if found is None:
@@ -155,17 +162,30 @@ def _as_system(system, system_kwargs: dict):
     return system
 
 
-def build(system, cache: Cache, key: str, eom=None) -> Entry:
+#: The stages of a build, as its progress bar names them (see `lagcomp.stages`).
+BUILD_STAGES = ("deriving the equations of motion (sympy)", "lowering and CSE of the kernels",
+                "Taylor-series program", "emitting and storing the module")
+
+
+def build(system, cache: Cache, key: str, eom=None, progress=None) -> Entry:
     """Derive (unless `eom` is given), lower and emit `system`, and store the module under `key`."""
     from lagcomp.codegen.emit import emit
     from lagcomp.codegen.lower import lower
     from lagcomp.codegen.taylor import taylor_decomposition, taylor_program
     from lagcomp.mechanics.lagrange import derive
+    from lagcomp.stages import Stages
 
-    eom = derive(system) if eom is None else eom
-    ir = lower(eom)
-    taylor = taylor_decomposition(ir)
-    program = taylor_program(taylor)
+    derive_, lower_, taylor_, emit_ = BUILD_STAGES
+    with Stages(f"compiling {system.name}", BUILD_STAGES, progress) as stages:
+        stages.start(derive_)
+        eom = derive(system) if eom is None else eom
+        stages.start(lower_)
+        ir = lower(eom)
+        stages.start(taylor_)
+        taylor = taylor_decomposition(ir)
+        program = taylor_program(taylor)
+        stages.start(emit_)
+        source = emit(ir, taylor)
     metadata = {
         "coordinates": list(system.coordinate_names),
         "parameters": list(system.parameter_names),
@@ -177,7 +197,7 @@ def build(system, cache: Cache, key: str, eom=None) -> Entry:
                        **({"taylor_coefficients": program["operations"]} if program else {})},
         "taylor_program": program,
     }
-    return cache.store(key, emit(ir, taylor), system.name, metadata)
+    return cache.store(key, source, system.name, metadata)
 
 
 def _baumgarte_gains(baumgarte) -> tuple[float, float]:
@@ -287,7 +307,7 @@ class Model:
         if params is not None and not isinstance(params, Mapping):
             raise ParameterError(f"`params` must be a mapping of parameter name to value, like "
                                  f"{dict.fromkeys(self.parameters[:2], 1.0)}, got {type(params).__name__}.")
-        values.update(params or {})
+        values.update(self._by_name(params or {}))
         unknown = sorted(set(values) - set(self.parameters))
         if unknown:
             raise ParameterError(f"Unknown parameter(s) {unknown} for {self.name!r}; its parameters are {list(self.parameters)}.")
@@ -305,6 +325,19 @@ class Model:
             if not math.isfinite(p[k]):
                 raise ParameterError(f"Parameter `{name}` is {p[k]}; it must be finite.")
         return p
+
+    def _by_name(self, params: Mapping) -> dict:
+        """`params` keyed by parameter name: a sympy Symbol stands for its name (no sympy import needed)."""
+        named = {}
+        for key, value in params.items():
+            name = key.name if getattr(key, "is_Symbol", False) and isinstance(getattr(key, "name", None), str) else key
+            if not isinstance(name, str):
+                raise ParameterError(f"`params` keys must be parameter names (or their sympy Symbols), got {key!r}; "
+                                     f"the parameters of {self.name!r} are {list(self.parameters)}.")
+            if name in named:
+                raise ParameterError(f"`params` gives parameter `{name}` twice (by name and by Symbol).")
+            named[name] = value
+        return named
 
     def initial_state(self, q0=None, qd0=None) -> np.ndarray:
         """The state y = (q0, qd0), defaults from the System, checked for length and finiteness."""
@@ -535,7 +568,8 @@ class Model:
             Show a progress bar: None (default) for runs lasting over two
             seconds, True always, False never.  Ctrl-C stops a run between
             driver calls (about every quarter second) and returns what was
-            computed, with status 2.
+            computed, with status 2 (also when it arrives in the call that
+            ends the run, numba's first compilation included).
         throw : bool
             Raise `IntegrationError` (with the partial solution) on failure
             instead of returning a Solution whose `status` is negative.
@@ -543,9 +577,17 @@ class Model:
             Constrained systems (rk4, dop853, dopri5): stop with status -6
             once a step's constraint residual (|Φ| or |Λ q̇ + b|) exceeds
             this bound; that step is kept as the last row.  None: no bound.
+        memory_limit : int
+            Bytes the saved rows may take (default 2 GiB).  Where their number
+            is known before the run (fixed-step methods, `t_eval`), a larger
+            request is refused with `OptionError` before anything runs; an
+            adaptive run without `t_eval` stops with status -7 once its rows
+            reach the limit, keeping them.
         """
+        from lagcomp.integrate.options import known_options
         from lagcomp.integrate.simulate import simulate
 
+        known_options(simulate, options, "Model.simulate")
         return simulate(self, t_span, q0, qd0, params, **options)
 
     def sweep(self, t_span, grid, **options):
@@ -602,6 +644,8 @@ class Model:
             Progress bar (None: for sweeps over two seconds).  Ctrl-C stops
             between chunks; `Sweep.done` marks the trajectories that ran.
         """
+        from lagcomp.integrate.options import known_options
         from lagcomp.integrate.sweep import sweep
 
+        known_options(sweep, options, "Model.sweep")
         return sweep(self, t_span, grid, **options)

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import difflib
+import inspect
 import math
 
 import numpy as np
@@ -108,3 +110,14 @@ def check_method(model, m) -> None:
     if m.unconstrained_only and model.k:
         raise OptionError(f"`{m.name}` does not handle constraints yet; {model.name!r} has {list(model.constraints)}. "
                           "Use dop853, dopri5 or rk4.")
+
+
+def known_options(function, options: dict, what: str) -> None:
+    """Refuse keyword `options` that `function` (simulate, sweep) does not take, naming the nearest."""
+    accepted = [name for name, parameter in inspect.signature(function).parameters.items()
+                if parameter.kind is inspect.Parameter.KEYWORD_ONLY]
+    unknown = [name for name in options if name not in accepted]
+    if unknown:
+        near = difflib.get_close_matches(unknown[0], accepted, n=1)
+        hint = f" (did you mean `{near[0]}`?)" if near else ""
+        raise OptionError(f"Unknown option(s) {unknown} for {what}{hint}; its options are {sorted(accepted)}.")

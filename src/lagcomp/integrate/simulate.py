@@ -11,6 +11,7 @@ bounded by what is kept: every saved row (`save_every`, `t_eval`) or, with
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 
@@ -18,6 +19,7 @@ import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
+from lagcomp.integrate.memory import MEMORY_LIMIT, check as check_memory, checked_limit, run_bytes
 from lagcomp.integrate.methods import get_method, implicit_solver_for
 from lagcomp.integrate.options import (
     check_method,
@@ -42,6 +44,8 @@ TERMINATED, INTERRUPTED = 1, 2
 CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
 #: Solution status of a run stopped because the constraint residual exceeded ``max_residual``.
 RESIDUAL_EXCEEDED = -6
+#: Solution status of a run whose saved rows reached ``memory_limit`` (adaptive runs without t_eval).
+MEMORY_FULL = -7
 
 
 def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
@@ -87,7 +91,8 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=None,
              atol=None, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
-             events=None, record="trajectory", progress=None, throw=False, max_residual=None) -> Solution:
+             events=None, record="trajectory", progress=None, throw=False, max_residual=None,
+             memory_limit=MEMORY_LIMIT) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     t0, t1 = time_span(t_span)
     m = get_method(method)
@@ -99,6 +104,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
                    save_every=count(save_every, "save_every"), max_steps=count(max_steps, "max_steps"),
                    events=event_arguments(model, m, events))
     options["implicit_solver"] = implicit_solver_for(m, implicit_solver)
+    if record == "trajectory":
+        _check_memory(model, m, (t0, t1), dt, t_eval, options["save_every"], memory_limit)
     t_eval = t_eval_points(t_eval, t0, t1)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     projecting = int(bool(model.residual_labels) and (not m.adaptive if projection is None else bool(projection)))
@@ -114,7 +121,10 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     n_events = len(model.events)
     event_parts: list[tuple] = []
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
-    status = _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress)
+    first = _numba_stage(model, m, progress)
+    max_rows = memory_limit // run_bytes(1, model.n, model.k) if record == "trajectory" else math.inf
+    status = _run(advance, y, clock, counters, t1, (chunk, max_rows), recorder, n_events, event_parts, progress,
+                  first)
     if status == -2 and counters[1] == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != clock[0]):
@@ -124,8 +134,43 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     return _solution(model, p, recorder, y, run, throw)
 
 
-def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress) -> int:
-    """Call the driver until the run ends; returns the Solution status (driver codes mapped)."""
+def _check_memory(model, m, t_span, dt, t_eval, save_every: int, memory_limit) -> None:
+    """Refuse a run whose saved rows would exceed `memory_limit`, before it starts (see `memory.run_bytes`).
+
+    The rows are known up front for `t_eval` (its size: an array of 10⁹ times is refused before it is
+    copied) and for fixed-step methods (steps / save_every); an adaptive run without `t_eval` saves
+    every `save_every`-th accepted step, a number no one knows in advance.
+    """
+    checked_limit(memory_limit)
+    if t_eval is not None:
+        rows = int(np.size(t_eval)) + 1
+        where = f"{rows - 1:,} `t_eval` times"
+    elif not m.adaptive and dt is not None:
+        steps = max(1, math.ceil((t_span[1] - t_span[0]) / positive(dt, "dt") * (1 - 1e-12)))
+        rows = steps // save_every + 1
+        where = f"{rows:,} rows ({steps:,} steps of dt = {dt:g}, every {save_every}-th saved)"
+    else:
+        return
+    check_memory(run_bytes(rows, model.n, model.k), memory_limit, "The run's saved rows", where,
+                 "save fewer rows (`save_every=K` keeps every K-th step; pass fewer `t_eval` points), "
+                 "keep only the first and last rows and running reductions (`record=\"summary\"`)")
+
+
+def _numba_stage(model, m, progress):
+    """What the first driver call of a run shows while numba compiles its kernels and driver."""
+    from lagcomp.stages import numba_stage
+
+    return numba_stage(getattr(model.kernels, m.driver, None), f"the kernels and the {m.name} driver",
+                       f"preparing {model.name}", progress)
+
+
+def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress, first=None) -> int:
+    """Call the driver until the run ends; returns the Solution status (driver codes mapped).
+
+    `first`, if not None, is a context around the first call (numba compiles there: `_numba_stage`).
+    `chunk` is (rows of the first output buffer, rows the run may keep before it stops with MEMORY_FULL).
+    """
+    chunk, max_rows = chunk
     n = y.size
     budget, t0 = FIRST_BUDGET, clock[0]
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
@@ -136,9 +181,16 @@ def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts
             counters[5] = 0
             started = time.perf_counter()
             steps_before = counters[1]
-            status, n_saved = advance(ts, ys, min(steps_before + budget, np.iinfo(np.int64).max), event_buffers)
+            with first or contextlib.nullcontext() as stages:
+                if stages is not None:
+                    stages.start(stages.names[0])
+                status, n_saved = advance(ts, ys, min(steps_before + budget, np.iinfo(np.int64).max), event_buffers)
+            if first is not None:  # numba was compiling: the run's bar times the run from here
+                first, bar.started = None, time.perf_counter()
             elapsed = time.perf_counter() - started
             recorder.add(ts[:n_saved], ys[:n_saved])
+            if recorder.rows > max_rows and status in (BUFFER_FULL, PAUSED):
+                return MEMORY_FULL  # what was computed is kept; a fixed-step or t_eval run was refused up front
             if counters[5]:
                 event_parts.append(tuple(a[:counters[5]].copy() for a in event_buffers))
             bar.update(clock[0] - t0 - bar.n)
@@ -149,6 +201,8 @@ def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts
                 budget = int(budget * min(8.0, max(0.5, CALL_SECONDS / max(elapsed, 1e-6))))
                 budget = max(budget, 16)
             if status not in (BUFFER_FULL, PAUSED):
+                if status == 0 and interrupted[0]:
+                    return INTERRUPTED  # Ctrl-C in the last call (often numba compiling): reported, not swallowed
                 return TERMINATED if status == EVENT else int(status)
             if interrupted[0]:
                 return INTERRUPTED

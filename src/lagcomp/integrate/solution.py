@@ -22,6 +22,8 @@ MESSAGES = {
     -5: "The implicit stage equations did not converge: reduce the step `dt`.",
     -6: "The constraint residual exceeded `max_residual`: the run drifted off the constraints (tighten rtol/atol, "
         "or use projection=True or baumgarte=(alpha, beta)).",
+    -7: "The saved rows reached `memory_limit`; the run stopped and kept them (save every K-th step with "
+        "`save_every`, keep only the summary with record=\"summary\", or raise `memory_limit`).",
 }
 
 

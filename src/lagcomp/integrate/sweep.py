@@ -16,6 +16,7 @@ Grid names are coordinate names (initial coordinates), ``<coordinate>_dot``
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import time
@@ -25,6 +26,7 @@ import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state
+from lagcomp.integrate.memory import MEMORY_LIMIT, check as check_memory, sweep_bytes
 from lagcomp.integrate.methods import get_method
 from lagcomp.integrate.options import (
     check_method,
@@ -39,8 +41,6 @@ from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
-#: Default ceiling on the memory of a sweep's outputs, in bytes (raise it with `memory_limit`).
-MEMORY_LIMIT = 2 * 2**30
 #: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread
 #: (batched drivers: enough trajectories to fill the 32 lanes of a batch several times over, so that
 #: few lanes idle while the last trajectories of the chunk finish).
@@ -166,36 +166,63 @@ class Sweep:
         return xr.Dataset(data, coords={**coords, "state": state})
 
 
-def _grid(model, grid, combine: str, names) -> tuple[tuple, dict, tuple, np.ndarray]:
-    """(names, axes, shape, values (N, k)) from the user's grid description."""
+def _floats(values, what: str) -> np.ndarray:
+    try:
+        return np.asarray(values, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise OptionError(f"{what} must hold numbers, got {values!r}.") from err
+
+
+def _grid_name(key) -> str:
+    """A grid key as a name: a sympy Symbol (a parameter) stands for its name."""
+    name = key.name if getattr(key, "is_Symbol", False) else key
+    if not isinstance(name, str):
+        raise OptionError(f"Grid names must be strings (coordinates, '<coordinate>_dot' velocities or parameters), "
+                          f"got {key!r}.")
+    return name
+
+
+def _grid(model, grid, combine: str, names, memory_limit) -> tuple[tuple, dict, tuple, np.ndarray]:
+    """(names, axes, shape, values (N, k)) from the user's grid description.
+
+    The number of points is checked against `memory_limit` before the grid is built: a product of
+    a few long axes is larger than the memory it names.
+    """
     if isinstance(grid, dict):
-        names = tuple(grid)
-        columns = [np.asarray(v, dtype=float).ravel() for v in grid.values()]
+        names = tuple(_grid_name(key) for key in grid)
+        columns = [_floats(v, f"Grid values of `{name}`").ravel() for name, v in zip(names, grid.values())]
         if any(c.size == 0 for c in columns):
             raise OptionError("Every swept quantity needs at least one value.")
+        if combine not in ("product", "zip"):
+            raise OptionError(f"`combine` must be 'product' or 'zip', got {combine!r}.")
+        points = math.prod(c.size for c in columns) if combine == "product" else columns[0].size
+        check_memory(sweep_bytes(points, 2 * model.n, len(columns), 0, 0), memory_limit, "The sweep's grid",
+                     f"{points:,} trajectories", "sweep fewer points, or split the grid")
         if combine == "product":
             shape = tuple(c.size for c in columns)
             mesh = np.meshgrid(*columns, indexing="ij")
             values = np.column_stack([m.ravel() for m in mesh])
             axes = dict(zip(names, columns))
-        elif combine == "zip":
+        else:
             if len({c.size for c in columns}) != 1:
                 raise OptionError(f"`combine='zip'` needs arrays of one length; got {[c.size for c in columns]}.")
             values = np.column_stack(columns)
             shape, axes = (values.shape[0],), dict(zip(names, columns))
-        else:
-            raise OptionError(f"`combine` must be 'product' or 'zip', got {combine!r}.")
     else:
-        values = np.asarray(grid, dtype=float)
-        if values.ndim != 2 or names is None or len(names) != values.shape[1]:
+        values = _floats(grid, "An explicit grid")
+        if isinstance(names, str) or values.ndim != 2 or names is None or len(names) != values.shape[1]:
             raise OptionError("An explicit grid is an (N, k) array with `names` giving its k columns.")
-        names = tuple(names)
+        names = tuple(_grid_name(name) for name in names)
         shape, axes = (values.shape[0],), {name: values[:, i].copy() for i, name in enumerate(names)}
     known = list(model.coordinates) + [f"{c}_dot" for c in model.coordinates] + list(model.parameters)
     unknown = [name for name in names if name not in known]
     if unknown or len(set(names)) != len(names):
         raise OptionError(f"Cannot sweep {unknown or names}: grid names must be distinct coordinates, "
                           f"'<coordinate>_dot' velocities or parameters: {known}.")
+    ambiguous = [name for name in names if known.count(name) > 1]
+    if ambiguous:
+        raise OptionError(f"Cannot sweep {ambiguous}: in {model.name!r} the name stands for two quantities (a "
+                          "coordinate or parameter, and the velocity '<coordinate>_dot'); rename one of them.")
     if not np.all(np.isfinite(values)):
         raise OptionError("The grid holds non-finite values.")
     return names, axes, shape, values
@@ -208,12 +235,6 @@ def _row_every(save_every: int, output: tuple, n_steps: int) -> int:
     return save_every if ("dense" in output or "energy" in output) else n_steps + 1
 
 
-def _memory(n_traj: int, n2: int, m: int, n_events: int, cap: int) -> int:
-    """Bytes of the outputs: state, times, status and counters; dense rows; energy; events."""
-    per = 8 * (n2 + 1 + 1 + 3 + 2) + 8 * m * n2 + 8 * n_events * (1 + cap * (1 + n2))
-    return n_traj * per + 8 * n_traj * (n2 + 8)  # + the inputs Y0 and P
-
-
 def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=None, params=None,
           method="dop853", dt=None, rtol=None, atol=None, t_eval=None, save_every=1, max_step=math.inf,
           max_steps=100_000_000, events=None, event_cap=16, output=(), workers=None, client=None,
@@ -223,11 +244,14 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     t0, t1 = time_span(t_span)
     m = get_method(method)
     check_method(model, m)
-    output = (output,) if isinstance(output, str) else tuple(output)
+    try:
+        output = (output,) if isinstance(output, str) else tuple(output)
+    except TypeError:
+        raise OptionError(f"`output` must be one of {OUTPUTS} or a sequence of them, got {output!r}.") from None
     unknown = [o for o in output if o not in OUTPUTS]
     if unknown:
         raise OptionError(f"Unknown sweep output(s) {unknown}; choose from {OUTPUTS} (the final state is always kept).")
-    names, axes, shape, values = _grid(model, grid, combine, names)
+    names, axes, shape, values = _grid(model, grid, combine, names, memory_limit)
     n2 = 2 * model.n
     y_base = model.initial_state(q0, qd0)
     p_base = model.parameter_vector(params, baumgarte)
@@ -281,13 +305,9 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         fixed = (t0, dt, n_steps, t1, _row_every(save_every, output, n_steps))
     rows = 0 if t_dense is None else t_dense.size
     n_events = len(model.events) if want_events else 0
-    needed = _memory(n_traj, n2, rows, n_events, cap)
-    if needed > memory_limit:
-        raise OptionError(
-            f"The sweep's outputs need {needed / 2**20:.1f} MiB for {n_traj} trajectories, above the limit of "
-            f"{memory_limit / 2**20:.1f} MiB: save fewer rows (t_eval, save_every), fewer events (event_cap), "
-            "split the grid, or raise `memory_limit`."
-        )
+    check_memory(sweep_bytes(n_traj, n2, rows, n_events, cap), memory_limit, "The sweep's outputs",
+                 f"{n_traj} trajectories", "save fewer rows (t_eval, save_every), fewer events (event_cap), "
+                 "split the grid")
 
     layout = (n2, rows, len(directions), cap)
     out = _allocate(n_traj, layout)
@@ -410,8 +430,12 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
     """
     from concurrent.futures import ThreadPoolExecutor
 
+    from lagcomp.stages import numba_stage
+
     n_traj = Y0.shape[0]
     threads = (os.cpu_count() or 1) if workers is None else count(workers, "workers")
+    first = numba_stage(getattr(kernels, f"sweep_{task.driver}", None), f"the {task.driver} sweep loop",
+                        "preparing the sweep", progress)
     done = np.zeros(n_traj, dtype=bool)
     chunk = (FIRST_BATCHED_CHUNK_PER_THREAD if task.driver in BATCHED.values() else FIRST_CHUNK_PER_THREAD) * threads
     with ThreadPoolExecutor(threads) as pool, deferred_interrupt() as interrupted, \
@@ -425,8 +449,13 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
             started = time.perf_counter()
             parts = [(lo, pool.submit(_run_chunk, kernels, task, Y0[lo:hi], P[lo:hi]))
                      for lo, hi in zip(bounds[:-1], bounds[1:])]
-            for lo, future in parts:
-                _store(out, lo, future.result())
+            with first or contextlib.nullcontext() as stages:  # numba compiles in the first chunk
+                if stages is not None:
+                    stages.start(stages.names[0])
+                for lo, future in parts:
+                    _store(out, lo, future.result())
+            if first is not None:
+                first, bar.started = None, time.perf_counter()
             elapsed = time.perf_counter() - started
             done[a:b] = True
             bar.update(b - a)

@@ -149,14 +149,17 @@ class EOM:
 
 
 def state_symbols(system: System) -> tuple[tuple, tuple]:
-    """Plain symbols for the coordinates (same names) and velocities (``<name>_dot``)."""
+    """Plain symbols for the coordinates (same names) and velocities (``<name>_dot``).
+
+    Where a name is taken already (a coordinate named like a parameter, a velocity ``x_dot`` named
+    like a coordinate or a parameter ``x_dot``) the symbol is a Dummy of that name: distinct by
+    construction, so one quantity is never read as another.
+    """
     names = system.coordinate_names
     taken = set(system.parameter_names)
     q = tuple(sp.Dummy(n) if n in taken else sp.Symbol(n, real=True) for n in names)
-    qd = tuple(sp.Symbol(f"{n}_dot", real=True) for n in names)
-    clash = taken & {s.name for s in qd}
-    if clash:
-        raise ModelError(f"Parameter name(s) {sorted(clash)} clash with velocity names; rename the parameter(s).")
+    taken |= set(names)
+    qd = tuple(sp.Dummy(f"{n}_dot") if f"{n}_dot" in taken else sp.Symbol(f"{n}_dot", real=True) for n in names)
     return q, qd
 
 

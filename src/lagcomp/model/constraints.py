@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from lagcomp.errors import ModelError
+from lagcomp.model.expressions import expression
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,7 @@ class Holonomic:
 
     def __post_init__(self):
         _check_name(self.name)
-        object.__setattr__(self, "Phi", sp.sympify(self.Phi))
+        object.__setattr__(self, "Phi", expression(self.Phi, f"Constraint `{self.name}`: Phi"))
 
     @property
     def expr(self) -> sp.Expr:
@@ -67,7 +68,7 @@ class Nonholonomic:
 
     def __post_init__(self):
         _check_name(self.name)
-        object.__setattr__(self, "expr", sp.sympify(self.expr))
+        object.__setattr__(self, "expr", expression(self.expr, f"Constraint `{self.name}`: the expression"))
 
 
 def _check_name(name: str) -> None:

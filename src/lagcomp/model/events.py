@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from lagcomp.errors import ModelError
+from lagcomp.model.expressions import expression
 
 
 @dataclass(frozen=True)
@@ -52,10 +53,7 @@ class Event:
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.isidentifier():
             raise ModelError(f"Event name {self.name!r} must be a Python identifier, like 'section'.")
-        try:
-            object.__setattr__(self, "expr", sp.sympify(self.expr))
-        except (sp.SympifyError, TypeError) as err:
-            raise ModelError(f"Event `{self.name}`: the expression must be a sympy expression, got {self.expr!r}.") from err
+        object.__setattr__(self, "expr", expression(self.expr, f"Event `{self.name}`: the expression"))
         if self.direction not in (-1, 0, 1):
             raise ModelError(f"Event `{self.name}`: direction must be -1, 0 or +1, got {self.direction!r}.")
         object.__setattr__(self, "direction", int(self.direction))

@@ -34,6 +34,7 @@ from lagcomp.model.assemble import assemble
 from lagcomp.model.constraints import Holonomic, Nonholonomic
 from lagcomp.model.frames import as_frame
 from lagcomp.model.events import Event
+from lagcomp.model.expressions import expression
 
 #: The time symbol shared with ``sympy.physics.mechanics.dynamicsymbols``.
 t = dynamicsymbols._t
@@ -50,10 +51,39 @@ def coordinates(names: str) -> tuple[sp.Function, ...]:
 
 
 def _sympify(value, what: str) -> sp.Expr:
-    try:
-        return sp.sympify(value)
-    except (sp.SympifyError, TypeError) as err:
-        raise ModelError(f"`{what}` must be a sympy expression, got {value!r}.") from err
+    return expression(value, f"`{what}`")
+
+
+def _refuse_non_real(expr: sp.Expr, what: str) -> None:
+    """Refuse the imaginary unit and infinities: the kernels compute in real float64."""
+    if expr.has(sp.I):
+        raise ModelError(f"{what} contains the imaginary unit I: lagcomp's systems are real; "
+                         "write T, V, forces, constraints and events as real expressions.")
+    bad = [value for value in (sp.zoo, sp.oo, -sp.oo, sp.nan) if expr.has(value)]
+    if bad:
+        raise ModelError(f"{what} contains {bad[0]}: every term must be finite.")
+
+
+def _sequence(value, what: str, of: str) -> tuple:
+    """`value` as a tuple (None as empty), or a ModelError naming the field and what it must hold."""
+    if value is None:
+        return ()
+    if not isinstance(value, (str, bytes)):
+        try:
+            return tuple(value)
+        except TypeError:
+            pass
+    raise ModelError(f"`{what}` must be a sequence of {of}, got {type(value).__name__} {value!r}.")
+
+
+def _coordinate_tuple(coordinates) -> tuple:
+    """The coordinates as a tuple: one coordinate alone is accepted as a sequence of one."""
+    if _is_coordinate(coordinates):
+        return (coordinates,)
+    if isinstance(coordinates, (str, bytes)) or not hasattr(coordinates, "__iter__"):
+        raise ModelError(f"`coordinates` must be a sequence of functions of t (from lagcomp.coordinates('q1 q2') "
+                         f"or dynamicsymbols), got {type(coordinates).__name__} {coordinates!r}.")
+    return tuple(coordinates)
 
 
 def _is_coordinate(q) -> bool:
@@ -136,7 +166,7 @@ class System:
     _written: tuple | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
-        coords = tuple(self.coordinates)
+        coords = _coordinate_tuple(self.coordinates)
         if not coords:
             raise ModelError("A System needs at least one coordinate.")
         for q in coords:
@@ -147,10 +177,11 @@ class System:
                 )
         if len(set(coords)) != len(coords):
             raise ModelError(f"Coordinates are repeated: {coords}.")
-        if not self.name.isidentifier():
+        if not isinstance(self.name, str) or not self.name.isidentifier():
             raise ModelError(f"System name {self.name!r} must be a Python identifier, like 'double_pendulum'.")
         set_ = object.__setattr__
         set_(self, "coordinates", coords)
+        self._normalize_containers()
         set_(self, "T", _sympify(self.T, "T"))
         set_(self, "V", _sympify(self.V, "V"))
         set_(self, "dissipation", _sympify(self.dissipation, "dissipation"))
@@ -158,10 +189,37 @@ class System:
         roles = self._merge(coords)
         set_(self, "constraints", self._checked_constraints())
         set_(self, "events", self._checked_events())
+        for role, expr in self.expressions().items():
+            _refuse_non_real(expr, role)
         set_(self, "parameters", self._checked_parameters(coords, roles))
         set_(self, "defaults", self._checked_defaults())
         set_(self, "q0", self._checked_initial(self.q0, "q0"))
         set_(self, "qd0", self._checked_initial(self.qd0, "qd0"))
+
+    def _normalize_containers(self) -> None:
+        """The sequence and mapping fields as tuples and dicts, and the plain fields checked, before any use."""
+        set_ = object.__setattr__
+        for what, of in (("constraints", "Holonomic / Nonholonomic constraints"), ("events", "Events"),
+                         ("bodies", "Particles / RigidBodies"), ("loads", "loads (Force, Torque, Spring, ...)")):
+            set_(self, what, _sequence(getattr(self, what), what, of))
+        if self.parameters is not None:
+            set_(self, "parameters", _sequence(self.parameters, "parameters", "sympy Symbols"))
+        if not isinstance(self.forces, Mapping):
+            set_(self, "forces", _sequence(self.forces, "forces", "generalized forces, one per coordinate"))
+        if self.defaults is None:
+            set_(self, "defaults", {})
+        if not isinstance(self.defaults, Mapping):
+            raise ParameterError(f"`defaults` must be a mapping of parameter name to value, like {{'m': 1.0}}, "
+                                 f"got {type(self.defaults).__name__}.")
+        if not isinstance(self.description, str):
+            raise ModelError(f"`description` must be a string, got {type(self.description).__name__}.")
+        try:
+            t_end = float(self.t_end)
+        except (TypeError, ValueError):
+            t_end = math.nan
+        if isinstance(self.t_end, bool) or not (t_end > 0 and math.isfinite(t_end)):
+            raise ModelError(f"`t_end` must be a positive, finite number of time units, got {self.t_end!r}.")
+        set_(self, "t_end", t_end)
 
     # -- bodies and loads ----------------------------------------------------------
 
@@ -208,7 +266,6 @@ class System:
             if unknown:
                 raise ModelError(f"`forces` names {unknown}, which are not coordinates of {self.name!r}.")
             return tuple(_sympify(forces.get(q, 0), f"forces[{q}]") for q in coords)
-        forces = tuple(forces or ())
         if not forces:
             return (sp.S.Zero,) * len(coords)
         if len(forces) != len(coords):
@@ -298,11 +355,20 @@ class System:
 
     def _checked_defaults(self) -> dict:
         names = {s.name for s in self.parameters}
-        unknown = sorted(set(self.defaults) - names)
+        by_name = {}
+        for key, value in self.defaults.items():
+            name = key.name if isinstance(key, sp.Symbol) else key  # a parameter Symbol stands for its name
+            if not isinstance(name, str):
+                raise ParameterError(f"`defaults` keys must be parameter names, got {key!r}; "
+                                     f"parameters are {sorted(names)}.")
+            if name in by_name:
+                raise ParameterError(f"`defaults` gives parameter `{name}` twice (by name and by Symbol).")
+            by_name[name] = value
+        unknown = sorted(set(by_name) - names)
         if unknown:
             raise ParameterError(f"Default values given for unknown parameter(s) {unknown}; parameters are {sorted(names)}.")
         checked = {}
-        for k, v in self.defaults.items():
+        for k, v in by_name.items():
             try:
                 v = float(v)
             except (TypeError, ValueError) as err:
