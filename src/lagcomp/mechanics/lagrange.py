@@ -154,9 +154,10 @@ def state_symbols(system: System) -> tuple[tuple, tuple]:
     taken = set(system.parameter_names)
     q = tuple(sp.Dummy(n) if n in taken else sp.Symbol(n, real=True) for n in names)
     qd = tuple(sp.Symbol(f"{n}_dot", real=True) for n in names)
-    clash = taken & {s.name for s in qd}
+    clash = (taken | set(names)) & {s.name for s in qd}
     if clash:
-        raise ModelError(f"Parameter name(s) {sorted(clash)} clash with velocity names; rename the parameter(s).")
+        raise ModelError(f"Parameter or coordinate name(s) {sorted(clash)} are also velocity names (the velocity "
+                         "of coordinate x is named x_dot, in sweeps and solutions); rename them.")
     return q, qd
 
 
@@ -552,7 +553,8 @@ def _check_mass_matrix(M: sp.Matrix, C: sp.Matrix, system: System, q) -> None:
     args = (*q, t, *system.parameters)
     size = M.rows
     rows, cols = np.tril_indices(size)
-    lower = sp.lambdify(args, [M[i, j] for i, j in zip(rows, cols)], modules="numpy")  # M is symmetric
+    # M is symmetric; dummify: user names ("ﬁ" beside "fi", keywords) are no Python arguments here
+    lower = sp.lambdify(args, [M[i, j] for i, j in zip(rows, cols)], modules="numpy", dummify=True)
     rng = np.random.default_rng(20261122)
     negative = 0
     for _ in range(3):
