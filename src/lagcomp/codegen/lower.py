@@ -67,8 +67,19 @@ def user_local(prefix: str, name: str, index: int) -> str:
     return f"{prefix}{index}_{letters}"
 
 
-#: Baumgarte gains, stored after the user parameters in p for constrained systems.
-BAUMGARTE = (sp.Symbol("_baumgarte_alpha", real=True), sp.Symbol("_baumgarte_beta", real=True))
+#: The locals of the Baumgarte gains α, β, stored after the user parameters in p for constrained systems.
+BAUMGARTE = ("_baumgarte_alpha", "_baumgarte_beta")
+
+
+def _baumgarte(eom: EOM) -> tuple[sp.Symbol, sp.Symbol]:
+    """The symbols of the Baumgarte gains: named like their locals, unless a parameter has that name
+    (the symengine CSE tells symbols apart by name only, not by assumptions)."""
+    taken, gains = {s.name for s in eom.parameters}, []
+    for name in BAUMGARTE:
+        while name in taken:
+            name += "_"
+        gains.append(sp.Symbol(name, real=True))
+    return tuple(gains)
 
 
 def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
@@ -76,14 +87,14 @@ def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
 
     Coordinates and velocities are named after the coordinate (``q_x``, ``qd_x``; the velocity
     symbol's own name is ``x_dot``), parameters after themselves (``p_k``); the Baumgarte gains
-    are lagcomp's, ``_baumgarte_alpha`` and ``_baumgarte_beta``.
+    are lagcomp's, `BAUMGARTE`.
     """
     n, names = eom.n, eom.system.coordinate_names
     sources = [(s, user_local("q", names[i], i), f"y[{i}]") for i, s in enumerate(eom.q)]
     sources += [(s, user_local("qd", names[i], i), f"y[{n + i}]") for i, s in enumerate(eom.qd)]
     sources += [(s, user_local("p", s.name, k), f"p[{k}]") for k, s in enumerate(eom.parameters)]
     if eom.k:
-        sources += [(s, s.name, f"p[{len(eom.parameters) + i}]") for i, s in enumerate(BAUMGARTE)]
+        sources += [(s, BAUMGARTE[i], f"p[{len(eom.parameters) + i}]") for i, s in enumerate(_baumgarte(eom))]
     mapping, loads = {}, []
     for symbol, local, source in sources:
         mapping[symbol] = sp.Symbol(local, real=True)
@@ -216,7 +227,7 @@ def _augmented_stores(eom: EOM) -> list:
     Unknowns (q̈, λ): M q̈ − Λᵀ λ = F and Λ q̈ = γ − 2α (Λ q̇ + b) − β² Φ.
     """
     n, k, N = eom.n, eom.k, eom.n + eom.k
-    alpha, beta = BAUMGARTE
+    alpha, beta = _baumgarte(eom)
     stores = [(f"_kkt[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(n) if eom.M[i, j] != 0]
     stores += [(f"_kkt[{i}, {n + c}]", -eom.C[c, i]) for i in range(n) for c in range(k) if eom.C[c, i] != 0]
     stores += [(f"_kkt[{i}, {N}]", eom.F[i]) for i in range(n)]

@@ -149,11 +149,23 @@ class EOM:
 
 
 def state_symbols(system: System) -> tuple[tuple, tuple]:
-    """Plain symbols for the coordinates (same names) and velocities (``<name>_dot``)."""
+    """Plain symbols for the coordinates (same names) and velocities (``<name>_dot``).
+
+    A coordinate named like a parameter or like time (``t``) gets a symbol of another name, one no
+    symbol of the system has: symengine, which derives and CSEs the equations, tells symbols apart
+    by name only (not by assumptions, nor a Dummy from a Symbol).
+    """
     names = system.coordinate_names
     taken = set(system.parameter_names)
-    q = tuple(sp.Dummy(n) if n in taken else sp.Symbol(n, real=True) for n in names)
     qd = tuple(sp.Symbol(f"{n}_dot", real=True) for n in names)
+    used = taken | set(names) | {s.name for s in qd} | {t.name}
+
+    def own(name: str) -> str:
+        while name in used:
+            name += "_"
+        used.add(name)
+        return name
+    q = tuple(sp.Symbol(own(n) if n in taken or n == t.name else n, real=True) for n in names)
     clash = (taken | set(names)) & {s.name for s in qd}
     if clash:
         raise ModelError(f"Parameter or coordinate name(s) {sorted(clash)} are also velocity names (the velocity "
