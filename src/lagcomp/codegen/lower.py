@@ -38,7 +38,6 @@ from dataclasses import replace
 import symengine as se
 import sympy as sp
 
-from lagcomp.errors import ModelError
 from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR, SymmetricProduct
 from lagcomp.mechanics.lagrange import EOM, rest_partials, symengine_ready
 from lagcomp.model.system import t
@@ -99,11 +98,8 @@ def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
     for symbol, local, source in sources:
         mapping[symbol] = sp.Symbol(local, real=True)
         loads.append((local, source))
-    locals_ = [local for local, _ in loads]
-    shared = sorted({local for local in locals_ if locals_.count(local) > 1})
-    if shared:  # only distinct symbols of one name do this (Symbol("k") and Symbol("k", positive=True))
-        raise ModelError(f"{eom.system.name!r} has distinct symbols of the same name ({', '.join(shared)}, "
-                         "as kernel locals): parameters are passed by name, so give each its own name.")
+    # distinct by construction: prefixes per kind, and a System refuses two symbols of one name
+    assert len({local for local, _ in loads}) == len(loads), loads
     mapping[t] = sp.Symbol("t", real=True)
     return mapping, tuple(loads)
 
