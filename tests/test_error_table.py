@@ -223,6 +223,7 @@ CASES = {
     "parameter-not-a-symbol": (lambda: oscillator(parameters=(m, k, 3)), "Parameter 3"),
     "symbol-named-t": (lambda: oscillator(V=k * x**2 / 2 + sp.Symbol("t", real=True) * x),
                        "symbol named t (Symbol('t', real=True))"),
+    "same-name-symbols": (lambda: oscillator(V=(k + sp.Symbol("k")) * x**2 / 2, defaults={}), "['k']"),
     "event-undeclared-symbol": (lambda: oscillator(events=[lc.Event("hit", x - sp.Symbol("wall"))], parameters=(m, k)),
                                 "wall appear in 'table_oscillator' (first in event hit)"),
     "event-bad-direction": (lambda: lc.Event("hit", x, direction=2), "got 2"),

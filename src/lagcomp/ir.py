@@ -87,7 +87,8 @@ class Kernel:
     args : tuple of str
         Argument names, e.g. ``("t", "y", "p", "out")``.
     loads : tuple of (local, source)
-        Inputs bound to locals, e.g. ``("theta1", "y[0]")``.
+        Inputs bound to locals, e.g. ``("q_theta1", "y[0]")`` (user symbols are ``q_``, ``qd_``,
+        ``p_`` ... locals: `lagcomp.codegen.lower`, Names).
     temps : tuple of (local, Expr)
         Common subexpressions, in evaluation order.
     stores : tuple of (target, Expr)

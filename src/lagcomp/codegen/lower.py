@@ -2,16 +2,37 @@
 
 Each kernel's outputs go through a single `sympy.cse` together, so that the
 mass matrix and forcing of ``rhs`` share their sines, cosines and products.
-Symbols are renamed to the locals the emitted code binds them to: the
-coordinate names for q, ``<name>_dot`` for q̇, the parameter names for p, and
-``_c0, _c1, ...`` for common subexpressions (every generated local
-starts with an underscore, so it cannot collide with a user name).
+Symbols are renamed to the locals the emitted code binds them to (`user_local`),
+and ``_c0, _c1, ...`` for common subexpressions.
+
+Names (DESIGN.md, "Two contracts of the emitted code").  A user may name a
+coordinate or parameter anything; the emitted code cannot collide with it,
+by construction:
+
+- every local bound to a user symbol lies in the *user namespace*, the names
+  matching `USER_NAMESPACE`: ``q_<name>`` for a coordinate, ``qd_<name>`` for
+  its velocity, ``p_<name>`` for a parameter, ``mom_<name>`` for a conjugate
+  momentum (``p_k = p[3]``); a name that does not stay itself as a Python
+  identifier (``x.1``, a keyword-free but NFKC-unstable ``ﬁ``, ...) becomes
+  ``<prefix><i>_<its letters>`` with i its position (``p3_x_1``), which no
+  identifier name reaches (a digit, not ``_``, follows the prefix letters);
+- no other name the emitted modules bind or read (arguments, locals, loop
+  variables, kernels, helpers, module constants, imports, the builtins they
+  call) is in the user namespace: generated locals start with ``_`` or are
+  the fixed names of the kernels and templates (``t``, ``y``, ``p``, ``out``,
+  ``X``, ``W``, ``k``, ``order``, ``range``, ``math``, ``np`` ...).
+
+So a user's ``k`` is ``p_k`` in every kernel and the Taylor program's order
+loop ``for k in range(order)`` cannot overwrite it.  The test
+``tests/test_names.py`` checks the second half on the emitted source with
+`ast`, builtins included.  The header docstring of a module keeps the
+user's own names.
 """
 
 from __future__ import annotations
 
-import keyword
 import re
+import unicodedata
 from dataclasses import replace
 
 import symengine as se
@@ -21,8 +42,8 @@ from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR, SymmetricP
 from lagcomp.mechanics.lagrange import EOM, rest_partials, symengine_ready
 from lagcomp.model.system import t
 
-#: Names the emitted module uses itself; user names equal to them get a trailing underscore.
-RESERVED = {"t", "y", "p", "out", "math", "np", "njit", "rhs", "mm", "ff", "abs"}
+#: The user namespace (module docstring): a prefix for each kind of user symbol, then ``_`` or a digit.
+USER_NAMESPACE = re.compile(r"(q|qd|p|mom)[_0-9]")
 #: Largest system whose LDLᵀ solve is emitted unrolled; larger ones call a loop (`_ldlt_solve`).
 #: Unrolled, the 10-link chain's rhs costs 462 ns in a compiled loop against 635 ns looped
 #: (`python -m bench --only kernels --cases n_link_pendulum_10` at aed6595 and at d880236, whose
@@ -30,33 +51,55 @@ RESERVED = {"t", "y", "p", "out", "math", "np", "njit", "rhs", "mm", "ff", "abs"
 UNROLL_MAX = 12
 
 
-def _local_name(name: str) -> str:
-    """A safe local for a user name; generated locals all start with ``_``."""
-    if keyword.iskeyword(name) or name in RESERVED or name.startswith("_") or not name.isidentifier():
-        name = re.sub(r"\W", "_", name) + "_"
-    return name
+def user_local(prefix: str, name: str, index: int) -> str:
+    """The local of the user symbol `name`, the `index`-th of its kind `prefix` (q, qd, p or mom).
+
+    ``<prefix>_<name>`` when that is an identifier Python keeps as written (NFKC-stable), else
+    ``<prefix><index>_`` and the name's letters, other characters as ``_``: distinct names of one
+    kind always get distinct locals, and no local of one kind is one of another.
+    """
+    local = f"{prefix}_{name}"
+    if local.isidentifier() and unicodedata.normalize("NFKC", local) == local:
+        return local
+    letters = "".join(c if f"a{c}".isidentifier() and unicodedata.normalize("NFKC", c) == c else "_"
+                      for c in name)
+    return f"{prefix}{index}_{letters}"
 
 
-#: Baumgarte gains, stored after the user parameters in p for constrained systems.
-BAUMGARTE = (sp.Symbol("_baumgarte_alpha", real=True), sp.Symbol("_baumgarte_beta", real=True))
+#: The locals of the Baumgarte gains α, β, stored after the user parameters in p for constrained systems.
+BAUMGARTE = ("_baumgarte_alpha", "_baumgarte_beta")
+
+
+def _baumgarte(eom: EOM) -> tuple[sp.Symbol, sp.Symbol]:
+    """The symbols of the Baumgarte gains: named like their locals, unless a parameter has that name
+    (the symengine CSE tells symbols apart by name only, not by assumptions)."""
+    taken, gains = {s.name for s in eom.parameters}, []
+    for name in BAUMGARTE:
+        while name in taken:
+            name += "_"
+        gains.append(sp.Symbol(name, real=True))
+    return tuple(gains)
 
 
 def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
-    """Map each model symbol to a local symbol, and list the loads that bind them."""
-    n = eom.n
-    sources = [(s, f"y[{i}]") for i, s in enumerate(eom.q)]
-    sources += [(s, f"y[{n + i}]") for i, s in enumerate(eom.qd)]
-    sources += [(s, f"p[{k}]") for k, s in enumerate(eom.parameters)]
+    """Map each model symbol to a local symbol in the user namespace, and list the loads that bind them.
+
+    Coordinates and velocities are named after the coordinate (``q_x``, ``qd_x``; the velocity
+    symbol's own name is ``x_dot``), parameters after themselves (``p_k``); the Baumgarte gains
+    are lagcomp's, `BAUMGARTE`.
+    """
+    n, names = eom.n, eom.system.coordinate_names
+    sources = [(s, user_local("q", names[i], i), f"y[{i}]") for i, s in enumerate(eom.q)]
+    sources += [(s, user_local("qd", names[i], i), f"y[{n + i}]") for i, s in enumerate(eom.qd)]
+    sources += [(s, user_local("p", s.name, k), f"p[{k}]") for k, s in enumerate(eom.parameters)]
     if eom.k:
-        sources += [(s, f"p[{len(eom.parameters) + i}]") for i, s in enumerate(BAUMGARTE)]
-    mapping, loads, used = {}, [], set()
-    for symbol, source in sources:
-        local = symbol.name if symbol in BAUMGARTE else _local_name(symbol.name)
-        while local in used:
-            local += "_"
-        used.add(local)
+        sources += [(s, BAUMGARTE[i], f"p[{len(eom.parameters) + i}]") for i, s in enumerate(_baumgarte(eom))]
+    mapping, loads = {}, []
+    for symbol, local, source in sources:
         mapping[symbol] = sp.Symbol(local, real=True)
         loads.append((local, source))
+    # distinct by construction: prefixes per kind, and a System refuses two symbols of one name
+    assert len({local for local, _ in loads}) == len(loads), loads
     mapping[t] = sp.Symbol("t", real=True)
     return mapping, tuple(loads)
 
@@ -180,7 +223,7 @@ def _augmented_stores(eom: EOM) -> list:
     Unknowns (q̈, λ): M q̈ − Λᵀ λ = F and Λ q̈ = γ − 2α (Λ q̇ + b) − β² Φ.
     """
     n, k, N = eom.n, eom.k, eom.n + eom.k
-    alpha, beta = BAUMGARTE
+    alpha, beta = _baumgarte(eom)
     stores = [(f"_kkt[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(n) if eom.M[i, j] != 0]
     stores += [(f"_kkt[{i}, {n + c}]", -eom.C[c, i]) for i in range(n) for c in range(k) if eom.C[c, i] != 0]
     stores += [(f"_kkt[{i}, {N}]", eom.F[i]) for i in range(n)]
@@ -244,7 +287,7 @@ def _velocities_kernel(eom: EOM, mapping, loads) -> Kernel:
     not depend on q̇, so the velocity loads drop out as unused.
     """
     n = eom.n
-    momenta = [sp.Symbol(f"_p_{name}", real=True) for name in eom.system.coordinate_names]
+    momenta = [sp.Symbol(user_local("mom", name, i), real=True) for i, name in enumerate(eom.system.coordinate_names)]
     loads += tuple((s.name, f"y[{n + i}]") for i, s in enumerate(momenta))
     stores, solve = _spd_solve(eom.M, [momenta[i] - eom.momentum_offset[i] for i in range(n)], offset=0)
     return _kernel(

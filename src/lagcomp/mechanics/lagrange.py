@@ -151,15 +151,25 @@ class EOM:
 def state_symbols(system: System) -> tuple[tuple, tuple]:
     """Plain symbols for the coordinates (same names) and velocities (``<name>_dot``).
 
-    Where a name is taken already (a coordinate named like a parameter, a velocity ``x_dot`` named
-    like a coordinate or a parameter ``x_dot``) the symbol is a Dummy of that name: distinct by
-    construction, so one quantity is never read as another.
+    A name taken already — a coordinate named like a parameter or like time (``t``), a velocity
+    ``x_dot`` named like a coordinate or a parameter ``x_dot`` — gets a symbol of another name, one
+    no symbol of the system has: distinct by construction, so one quantity is never read as another
+    (symengine, which derives and CSEs the equations, tells symbols apart by name only, not by
+    assumptions, nor a Dummy from a Symbol).  Labels (``x_dot`` in solutions) keep the user's names;
+    where such a label would be ambiguous (a sweep grid key) it is refused there.
     """
     names = system.coordinate_names
     taken = set(system.parameter_names)
-    q = tuple(sp.Dummy(n) if n in taken else sp.Symbol(n, real=True) for n in names)
-    taken |= set(names)
-    qd = tuple(sp.Dummy(f"{n}_dot") if f"{n}_dot" in taken else sp.Symbol(f"{n}_dot", real=True) for n in names)
+    used = taken | set(names) | {f"{n}_dot" for n in names} | {t.name}
+
+    def own(name: str) -> str:
+        while name in used:
+            name += "_"
+        used.add(name)
+        return name
+    q = tuple(sp.Symbol(own(n) if n in taken or n == t.name else n, real=True) for n in names)
+    qd = tuple(sp.Symbol(own(f"{n}_dot") if f"{n}_dot" in taken | set(names) else f"{n}_dot", real=True)
+               for n in names)
     return q, qd
 
 
@@ -555,7 +565,8 @@ def _check_mass_matrix(M: sp.Matrix, C: sp.Matrix, system: System, q) -> None:
     args = (*q, t, *system.parameters)
     size = M.rows
     rows, cols = np.tril_indices(size)
-    lower = sp.lambdify(args, [M[i, j] for i, j in zip(rows, cols)], modules="numpy")  # M is symmetric
+    # M is symmetric; dummify: user names ("ﬁ" beside "fi", keywords) are no Python arguments here
+    lower = sp.lambdify(args, [M[i, j] for i, j in zip(rows, cols)], modules="numpy", dummify=True)
     rng = np.random.default_rng(20261122)
     negative = 0
     for _ in range(3):

@@ -90,6 +90,15 @@ def _is_coordinate(q) -> bool:
     return isinstance(q, sp.core.function.AppliedUndef) and q.args == (t,)
 
 
+def _unique_names(names: list[str], kind: str) -> None:
+    """Refuse two distinct symbols of one name (``Symbol("k")`` and ``Symbol("k", positive=True)``):
+    values are passed by name, so the name must say which one is meant."""
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise ModelError(f"Distinct {kind} share the name(s) {repeated} (symbols that differ only in their "
+                         "assumptions, or in their class): values are passed by name, so rename one of each.")
+
+
 @dataclass(frozen=True)
 class System:
     """A Lagrangian system: coordinates, energies, forces, and run defaults.
@@ -177,6 +186,7 @@ class System:
                 )
         if len(set(coords)) != len(coords):
             raise ModelError(f"Coordinates are repeated: {coords}.")
+        _unique_names([q.func.__name__ for q in coords], "coordinates")
         if not isinstance(self.name, str) or not self.name.isidentifier():
             raise ModelError(f"System name {self.name!r} must be a Python identifier, like 'double_pendulum'.")
         set_ = object.__setattr__
@@ -192,6 +202,7 @@ class System:
         for role, expr in self.expressions().items():
             _refuse_non_real(expr, role)
         set_(self, "parameters", self._checked_parameters(coords, roles))
+        _unique_names([s.name for s in self.parameters], "parameters")
         set_(self, "defaults", self._checked_defaults())
         set_(self, "q0", self._checked_initial(self.q0, "q0"))
         set_(self, "qd0", self._checked_initial(self.qd0, "qd0"))

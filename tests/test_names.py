@@ -1,0 +1,337 @@
+"""A user's names cannot change the answer (DESIGN.md, "Two contracts of the emitted code: Names").
+
+Coordinates and parameters may be named like anything the emitted modules use themselves
+(``k``, the Taylor program's order loop; ``X``, ``W``, its arrays; ``range``, ``math``, ``np``, ...):
+every method must still integrate the system the user wrote.  The references are closed forms
+(a harmonic oscillator x(t) = A cos ωt, ω² = k/m) and lagcomp's DOP853 at tight tolerance on a
+model whose names collide with nothing.
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+import keyword
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+import sympy as sp
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+import lagcomp as lc
+from lagcomp import examples
+from lagcomp.cli import main
+from lagcomp.codegen.lower import USER_NAMESPACE
+from lagcomp.errors import ModelError
+from lagcomp.codegen.taylor_lanes import taylor_lanes_module
+
+
+def _spring(stiffness: str, mass: str, length: str, coordinate: str) -> lc.System:
+    """m x'' = −k (x − l) under the given names, x(0) = 1.2, ẋ(0) = 0: x(t) = l + (1.2 − l) cos(√(k/m) t)."""
+    (x,) = lc.coordinates(coordinate)
+    k, m, l = sp.symbols(f"{stiffness} {mass} {length}", positive=True, seq=True)
+    return lc.System(coordinates=(x,), T=m * x.diff(lc.t) ** 2 / 2, V=k * (x - l) ** 2 / 2, parameters=(k, m, l),
+                     name="spring", q0=(1.2,), qd0=(0.0,))
+
+
+def test_a_spring_with_stiffness_k_integrated_by_taylor_follows_the_closed_form(cache_dir):
+    # before the fix, the Taylor program's order loop `for k in range(order)` overwrote the stiffness:
+    # x(3) = 2.388 instead of 1.2 cos(3·√(4/2.5)) = −0.0818 (issue 18, part 4)
+    model = lc.compile(_spring("k", "m", "l", "x"), cache_dir=cache_dir)
+    sol = model.simulate((0.0, 3.0), params={"k": 4.0, "m": 2.5, "l": 0.5}, method="taylor")
+    assert sol.status == 0
+    exact = 0.5 + 0.7 * math.cos(math.sqrt(4.0 / 2.5) * 3.0)
+    assert abs(sol.q[-1, 0] - exact) < 1e-13  # measured 1.7e-16
+
+
+def test_turn_indicator_by_taylor_agrees_with_dop853(compiled):
+    # turn_indicator has a parameter `k` (the spring of the gimbal): taylor ended at θ = 1.1008
+    # where dop853, rk4 and gauss2 agree on 0.16144
+    model = compiled("turn_indicator")
+    taylor = model.simulate((0.0, 10.0), method="taylor")
+    reference = model.simulate((0.0, 10.0), rtol=1e-13, atol=1e-13)
+    assert taylor.status == 0 and reference.status == 0
+    assert abs(taylor.q[-1, 0] - reference.q[-1, 0]) < 1e-12  # measured 2.2e-16
+    assert abs(reference.q[-1, 0] - 0.16143697) < 1e-7
+
+
+def test_cli_run_turn_indicator_by_taylor(capsys, cache_dir, tmp_path):
+    out_file = tmp_path / "taylor.npz"
+    code = main(["--cache-dir", str(cache_dir), "run", "turn_indicator", "--method", "taylor", "--quiet",
+                 "--out", str(out_file)])
+    assert code == 0
+    assert "theta=0.16143" in capsys.readouterr().out
+    assert abs(np.load(out_file)["q"][-1, 0] - 0.16143697) < 1e-7
+
+
+# -- every name the emitted modules use, as the user's names ---------------------------------
+
+COMMON = ("k", "i", "j", "n", "t_", "y", "p", "out", "X", "W", "range", "order", "math", "np", "njit", "h",
+          "dt", "status", "lambda_", "lambda", "for", "x0", "x1", "X0", "q_x", "qd_x", "p_k", "mom_x", "_c0", "_u1")
+
+
+def _identifiers(source: str) -> set[str]:
+    """Every identifier of a module's source: names, arguments, functions, imports and attributes."""
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Name):
+            found.add(node.id)
+        elif isinstance(node, ast.arg):
+            found.add(node.arg)
+        elif isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            found.add(node.name)
+        elif isinstance(node, ast.alias):
+            found.add(node.asname or node.name)
+        elif isinstance(node, ast.Attribute):
+            found.add(node.attr)
+    return found
+
+
+def _probes() -> tuple[lc.System, lc.System]:
+    """Two small systems whose modules hold every template: events, Taylor, lanes; constraints."""
+    x, z = lc.coordinates("x z")
+    a, b = sp.symbols("a b", positive=True)
+    free = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * x**2 + b * z**2,
+                     events=[lc.Event("hit", x)], name="probe_free")
+    rod = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * z,
+                    constraints=[lc.Holonomic("rod", x**2 + z**2 - b**2)], name="probe_rod")
+    return free, rod
+
+
+def _sources(model: lc.Model) -> list[str]:
+    """The model's module and, when it has a Taylor program, the batched Taylor module (written at sweep time)."""
+    source = model.source_path.read_text(encoding="utf-8")
+    program = model._taylor_program
+    return [source] + ([taylor_lanes_module(source, program, order=3)] if program is not None else [])
+
+
+def _user_locals(model: lc.Model) -> set[str]:
+    """The locals the kernels bind the model's symbols to (lagcomp.codegen.lower, docstring), identifiers only."""
+    prefixes = ("q", "qd") if model.k else ("q", "qd", "mom")  # momenta: `velocities`, unconstrained only
+    return {f"{prefix}_{name}" for name in model.coordinates for prefix in prefixes} | {f"p_{name}" for name in model.parameters}
+
+
+@pytest.fixture(scope="module")
+def probes(cache_dir) -> list[lc.Model]:
+    return [lc.compile(system, cache_dir=cache_dir) for system in _probes()]  # emitted; numba compiles nothing yet
+
+
+@pytest.fixture(scope="module")
+def emitted_names(probes) -> list[str]:
+    """The identifiers of emitted modules (read back with `ast`), Python's builtins and keywords, common names."""
+    names = set(dir(builtins)) | set(keyword.kwlist) | set(COMMON)
+    for model in probes:
+        for source in _sources(model):
+            names |= _identifiers(source)
+    return sorted(names - {"t"})  # t is lagcomp's time (a symbol named t is refused: test below)
+
+
+@dataclass(frozen=True)
+class Oscillators:
+    """Uncoupled oscillators under the user's names: m_j c_j'' = −κ_j c_j, κ_j the sum of the group j.
+
+    T = Σ_j m_j ċ_j²/2 and V = Σ_j Σ_{a ∈ groups[j]} a c_j²/2, one term per parameter, so that every
+    parameter multiplies a state in the kernels (inside the Taylor program's order loop too).
+    From c_j(0) = A_j, ċ_j(0) = 0: c_j(t) = A_j cos(ω_j t), ω_j² = κ_j/m_j; an event at each zero
+    of c_0, t = (2i + 1) π/(2 ω_0).
+    """
+
+    coordinates: tuple[str, ...]
+    masses: tuple[str, ...]
+    groups: tuple[tuple[str, ...], ...]
+    event: str = "crossing"
+
+    def system(self) -> lc.System:
+        c = lc.coordinates(" ".join(self.coordinates))
+        m = [sp.Symbol(name, positive=True) for name in self.masses]
+        groups = [[sp.Symbol(name, positive=True) for name in group] for group in self.groups]
+        return lc.System(
+            coordinates=c, T=sum(mj * cj.diff(lc.t) ** 2 / 2 for mj, cj in zip(m, c)),
+            V=sp.Add(*(a * cj**2 / 2 for group, cj in zip(groups, c) for a in group)),
+            parameters=(*m, *(a for group in groups for a in group)),
+            events=[lc.Event(self.event, c[0], direction=0)], name="names_oscillators",
+        )
+
+    def values(self) -> tuple[dict, np.ndarray, np.ndarray]:
+        """Parameter values, amplitudes A and frequencies ω (ω_j from 0.7 to 1.9, ω_0 = 1.3)."""
+        n = len(self.coordinates)
+        omega = np.linspace(0.7, 1.9, n) if n > 1 else np.array([1.3])
+        omega = np.roll(omega, -int(np.argmin(np.abs(omega - 1.3))))
+        params = {}
+        for j, (mass, group) in enumerate(zip(self.masses, self.groups)):
+            params[mass] = 0.5 + 0.25 * j
+            weights = np.arange(1, len(group) + 1, dtype=float)
+            params.update(zip(group, params[mass] * omega[j] ** 2 * weights / weights.sum()))
+        return params, 1.0 - 0.1 * np.arange(n), omega
+
+
+T_END = 2.0
+#: method: (options, largest |c_j(T_END) − A_j cos(ω_j T_END)| allowed); measured errors in comments.
+METHODS = {
+    "dop853": (dict(rtol=1e-12, atol=1e-12), 1e-10),
+    "dopri5": (dict(rtol=1e-10, atol=1e-12), 1e-8),
+    "taylor": ({}, 1e-13),
+    "rk4": (dict(dt=1e-3), 1e-11),
+    "verlet": (dict(dt=1e-3), 1e-5),
+    "yoshida4": (dict(dt=1e-3), 1e-10),
+    "yoshida6": (dict(dt=1e-3), 1e-12),
+    "gauss1": (dict(dt=1e-3), 1e-5),
+    "gauss2": (dict(dt=1e-3), 1e-11),
+    "gauss3": (dict(dt=1e-3), 1e-12),
+}
+
+
+def _every_method_follows_the_closed_form(model: lc.Model, spec: Oscillators, methods=METHODS) -> dict:
+    """Run each method to T_END; assert the closed form (and the events' times); return the errors."""
+    params, amplitude, omega = spec.values()
+    exact = amplitude * np.cos(omega * T_END)
+    errors = {}
+    for method in methods:
+        options, tolerance = METHODS[method]
+        sol = model.simulate((0.0, T_END), q0=amplitude, qd0=np.zeros(len(amplitude)), params=params,
+                             method=method, progress=False, **options)
+        assert sol.status == 0, (method, sol.message)
+        errors[method] = float(np.max(np.abs(sol.q[-1] - exact)))
+        assert errors[method] < tolerance, (method, errors[method])
+        if method in ("dop853", "taylor"):  # the drivers that locate events
+            crossings = sol.events[spec.event].t
+            assert np.allclose(crossings, np.pi / (2 * omega[0]) * (1 + 2 * np.arange(len(crossings))), atol=1e-9)
+            assert len(crossings) == int(omega[0] * T_END / np.pi + 0.5)
+    return errors
+
+
+def _batched_sweep_follows_the_closed_form(model: lc.Model, spec: Oscillators, method: str) -> float:
+    """A batched sweep over c_0's amplitude: every trajectory's final state against the closed form."""
+    params, amplitude, omega = spec.values()
+    starts = np.linspace(0.4, 1.2, 5)
+    result = model.sweep((0.0, T_END), {spec.coordinates[0]: starts}, q0=amplitude, qd0=np.zeros(len(amplitude)),
+                         params=params, method=method, batched=True, rtol=1e-12, atol=1e-12,
+                         **({"dt": 1e-3} if method == "rk4" else {}), workers=1, progress=False)
+    assert np.all(result.status == 0)
+    exact = starts * np.cos(omega[0] * T_END)
+    return float(np.max(np.abs(result.final[:, 0] - exact)))
+
+
+def _many_names(pool: list[str], coordinates: tuple[str, ...]) -> Oscillators:
+    """`coordinates` and, as parameters, every other name of `pool`: masses first, the rest in groups."""
+    n = len(coordinates)
+    rest = [name for name in pool if name not in coordinates and name not in {f"{c}_dot" for c in coordinates}]
+    return Oscillators(coordinates, tuple(rest[:n]), tuple(tuple(rest[n + j::n]) for j in range(n)))
+
+
+RISKY_COORDINATES = ("k", "X", "range", "order", "i", "W")
+
+
+@pytest.fixture(scope="module")
+def many_names(emitted_names, cache_dir) -> tuple[lc.Model, Oscillators]:
+    """One system with every name of `emitted_names`: six coordinates, the rest (about 670) as parameters."""
+    spec = _many_names(emitted_names, RISKY_COORDINATES)
+    assert sum(map(len, spec.groups)) + len(spec.masses) > 500  # all of them, not a sample
+    return lc.compile(spec.system(), cache_dir=cache_dir), spec
+
+
+def test_no_emitted_name_is_in_the_user_namespace(probes, many_names):
+    """The invariant of lagcomp.codegen.lower (its docstring): user locals and lagcomp's own names are disjoint."""
+    for model in [*probes, many_names[0]]:
+        found = set().union(*map(_identifiers, _sources(model)))
+        assert {name for name in found if USER_NAMESPACE.match(name)} == _user_locals(model)
+    assert not [name for name in dir(builtins) if USER_NAMESPACE.match(name)]
+
+
+def test_every_emitted_name_as_a_user_name(many_names):
+    """Every kind of kernel that binds user names (rhs, taylor_coefficients, the canonical kernels of the
+    Gauss methods, events), run under ~670 colliding names, against the closed form."""
+    model, spec = many_names
+    errors = _every_method_follows_the_closed_form(model, spec, methods=("taylor", "rk4", "gauss2"))
+    assert set(errors) == {"taylor", "rk4", "gauss2"}  # measured 1.4e-16, 2.0e-13, 3.4e-14
+
+
+@pytest.mark.slow
+def test_every_emitted_name_as_a_user_name_every_method(many_names):
+    model, spec = many_names
+    errors = _every_method_follows_the_closed_form(model, spec)
+    assert set(errors) == set(METHODS)
+    for method in ("dop853", "rk4"):
+        assert _batched_sweep_follows_the_closed_form(model, spec, method) < 1e-10  # measured 4.4e-14 (dop853)
+
+
+@pytest.mark.slow
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                                                  HealthCheck.too_slow])
+@given(data=st.data())
+def test_names_drawn_from_the_emitted_ones_every_method(emitted_names, cache_dir, data):
+    """Hypothesis draws the coordinates' and parameters' names; every method and a batched Taylor sweep
+    (the unrolled program, `taylor_lanes`) against the closed form.  About a minute per example."""
+    n = data.draw(st.integers(1, 3), label="coordinates")
+    names = data.draw(st.lists(st.sampled_from(emitted_names), min_size=3 * n, max_size=3 * n + 4, unique=True))
+    coordinates = tuple(names[:n])
+    assume(not {f"{c}_dot" for c in coordinates} & set(names))  # the velocities' names (refused: test below)
+    rest = names[2 * n:]
+    spec = Oscillators(coordinates, tuple(names[n:2 * n]), tuple(tuple(rest[j::n]) for j in range(n)),
+                       event=data.draw(st.sampled_from([name for name in emitted_names if name.isidentifier()])))
+    model = lc.compile(spec.system(), cache_dir=cache_dir)
+    _every_method_follows_the_closed_form(model, spec)
+    assert _batched_sweep_follows_the_closed_form(model, spec, "taylor") < 1e-12
+
+
+def _value(model: lc.Model, q, qd, params, t=0.0) -> np.ndarray:
+    return model.rhs(t, np.concatenate([q, qd]), params)
+
+
+def test_names_python_would_not_read_back_as_written(cache_dir):
+    """Symbols whose names are no identifiers, or identifiers Python normalizes (NFKC: "ﬁ" is "fi"), keywords,
+    quotes and backslashes (printed into docstrings), a coordinate named t and one named like a parameter."""
+    odd = ["x.1", "x_1", "ﬁ", "fi", "lambda", "1st", 'say """hi"""\\', "θ"]
+    symbols = [sp.Symbol(name, positive=True) for name in odd]
+    tau, x = lc.coordinates("t x")  # a coordinate named t, not the time lc.t
+    shared = sp.Symbol("x", positive=True)  # a parameter named like the coordinate x
+    weights = np.arange(1, len(odd) + 1, dtype=float)
+    V = sum(w * s for w, s in zip(weights, symbols)) * tau**2 / 2 + shared * x**2 / 2 - tau * sp.cos(lc.t)
+    system = lc.System(coordinates=(tau, x), T=(tau.diff(lc.t) ** 2 + x.diff(lc.t) ** 2) / 2, V=V,
+                       name="odd_names", description='A description with """quotes""" and a \\ backslash.')
+    model = lc.compile(system, cache_dir=cache_dir)
+    values = dict(zip(odd, 10.0 ** -np.arange(len(odd))), x=5.0)
+    stiffness = sum(w * values[name] for w, name in zip(weights, odd))
+    got = _value(model, [2.0, 3.0], [0.0, 0.0], values, t=0.5)
+    np.testing.assert_allclose(got[2:], [-stiffness * 2.0 + math.cos(0.5), -5.0 * 3.0], rtol=1e-15)
+    assert 'say """hi"""' in model.source_path.read_text(encoding="utf-8").encode().decode("unicode_escape")
+
+
+def test_a_parameter_named_like_a_baumgarte_gain(cache_dir):
+    """A pendulum on a rod (x, y), gravity named like lagcomp's own Baumgarte gain: at rest at angle θ from
+    the downward vertical, ẍ = −g sin θ cos θ, ÿ = −g sin² θ."""
+    x, y = lc.coordinates("x y")
+    g = sp.Symbol("_baumgarte_alpha", positive=True)
+    system = lc.System(coordinates=(x, y), T=(x.diff(lc.t) ** 2 + y.diff(lc.t) ** 2) / 2, V=g * y,
+                       constraints=[lc.Holonomic("rod", x**2 + y**2 - 1)], name="gain_named")
+    model = lc.compile(system, cache_dir=cache_dir)
+    theta = 0.6
+    got = _value(model, [math.sin(theta), -math.cos(theta)], [0.0, 0.0], {"_baumgarte_alpha": 9.8})
+    expected = [-9.8 * math.sin(theta) * math.cos(theta), -9.8 * math.sin(theta) ** 2]
+    np.testing.assert_allclose(got[2:], expected, rtol=1e-14)
+
+
+@pytest.mark.parametrize("make, culprit", [
+    (lambda x, k: dict(V=k * x**2 + sp.Symbol("k") * x), "['k']"),  # two symbols named k
+    (lambda x, k: dict(V=k * x**2 + sp.Symbol("t", real=True) * x), "symbol named t"),  # t is time
+])
+def test_ambiguous_names_are_refused(make, culprit):
+    (x,) = lc.coordinates("x")
+    k = sp.Symbol("k", positive=True)
+    with pytest.raises(ModelError, match=re.escape(culprit)):
+        lc.System(coordinates=(x,), T=x.diff(lc.t) ** 2 / 2, name="ambiguous", **make(x, k))
+
+
+def test_a_coordinate_named_like_a_velocity_compiles_to_the_right_rhs(cache_dir):
+    """Coordinates x and x_dot (unit masses, a spring of stiffness 3 between them): the velocity of x gets
+    a symbol of its own name, so ẍ = −3 (x − x_dot) and the velocities are read where they are stored."""
+    x, x_dot = lc.coordinates("x x_dot")
+    system = lc.System(coordinates=(x, x_dot), T=(x.diff(lc.t) ** 2 + x_dot.diff(lc.t) ** 2) / 2,
+                       V=3 * (x - x_dot) ** 2 / 2, name="dots")
+    model = lc.compile(system, cache_dir=cache_dir)
+    y = np.array([0.5, -0.25, 2.0, 7.0])
+    np.testing.assert_array_equal(model.rhs(0.0, y), [2.0, 7.0, -2.25, 2.25])
