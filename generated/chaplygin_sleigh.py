@@ -7,6 +7,7 @@ State       y = (x, y, theta, x_dot, y_dot, theta_dot)
 Parameters  p = (m, I, a)
 
 Equations of motion: M(q, t) q̈ = F(q, q̇, t) (see lagcomp.mechanics.lagrange).
+Kernel locals: q_<name>, qd_<name>, p_<name> for the coordinates, velocities, parameters above.
 All kernels take float64 arrays and write into preallocated outputs.
 """
 
@@ -22,33 +23,33 @@ def rhs(t, y, p, out):
     M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).
 
     Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid."""
-    theta = y[2]
-    x_dot = y[3]
-    y_dot = y[4]
-    theta_dot = y[5]
-    m = p[0]
-    I = p[1]
-    a = p[2]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
     _baumgarte_alpha = p[3]
     _kkt = np.zeros((4, 5))
-    _c0 = _sin(theta)
-    _c1 = _cos(theta)
-    out[0] = x_dot
-    out[1] = y_dot
-    out[2] = theta_dot
-    _kkt[0, 0] = m
-    _kkt[1, 1] = m
-    _kkt[2, 2] = I
+    _c0 = _sin(q_theta)
+    _c1 = _cos(q_theta)
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_theta
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_I
     _kkt[0, 3] = _c0
     _kkt[1, 3] = -_c1
-    _kkt[2, 3] = -a
+    _kkt[2, 3] = -p_a
     _kkt[0, 4] = 0.0
     _kkt[1, 4] = 0.0
     _kkt[2, 4] = 0.0
     _kkt[3, 0] = -_c0
     _kkt[3, 1] = _c1
-    _kkt[3, 2] = a
-    _kkt[3, 4] = theta_dot*(_c0*y_dot + _c1*x_dot) - 2.0*_baumgarte_alpha*(_c1*y_dot + a*theta_dot - _c0*x_dot)
+    _kkt[3, 2] = p_a
+    _kkt[3, 4] = qd_theta*(_c0*qd_y + _c1*qd_x) - 2.0*_baumgarte_alpha*(_c1*qd_y + p_a*qd_theta - _c0*qd_x)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -62,30 +63,30 @@ def rhs(t, y, p, out):
 def reactions(t, y, p, out):
     """Multipliers λ, shape (1,), in constraint order ('knife',): the generalized
     force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular."""
-    theta = y[2]
-    x_dot = y[3]
-    y_dot = y[4]
-    theta_dot = y[5]
-    m = p[0]
-    I = p[1]
-    a = p[2]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
     _baumgarte_alpha = p[3]
     _kkt = np.zeros((4, 5))
-    _c0 = _sin(theta)
-    _c1 = _cos(theta)
-    _kkt[0, 0] = m
-    _kkt[1, 1] = m
-    _kkt[2, 2] = I
+    _c0 = _sin(q_theta)
+    _c1 = _cos(q_theta)
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_I
     _kkt[0, 3] = _c0
     _kkt[1, 3] = -_c1
-    _kkt[2, 3] = -a
+    _kkt[2, 3] = -p_a
     _kkt[0, 4] = 0.0
     _kkt[1, 4] = 0.0
     _kkt[2, 4] = 0.0
     _kkt[3, 0] = -_c0
     _kkt[3, 1] = _c1
-    _kkt[3, 2] = a
-    _kkt[3, 4] = theta_dot*(_c0*y_dot + _c1*x_dot) - 2.0*_baumgarte_alpha*(_c1*y_dot + a*theta_dot - _c0*x_dot)
+    _kkt[3, 2] = p_a
+    _kkt[3, 4] = qd_theta*(_c0*qd_y + _c1*qd_x) - 2.0*_baumgarte_alpha*(_c1*qd_y + p_a*qd_theta - _c0*qd_x)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -96,39 +97,39 @@ def reactions(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (1,): Φ of the 0 holonomic constraints, then Λ q̇ + b of all 1."""
-    theta = y[2]
-    x_dot = y[3]
-    y_dot = y[4]
-    theta_dot = y[5]
-    a = p[2]
-    out[0] = a*theta_dot + y_dot*_cos(theta) - x_dot*_sin(theta)
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_a = p[2]
+    out[0] = p_a*qd_theta + qd_y*_cos(q_theta) - qd_x*_sin(q_theta)
 
 
 @njit(cache=True, error_model="numpy")
 def constraint_matrix(t, y, p, out):
     """Constraint matrix [Λ | b], shape (1, 4), into `out`."""
-    theta = y[2]
-    a = p[2]
-    out[0, 0] = -_sin(theta)
-    out[0, 1] = _cos(theta)
-    out[0, 2] = a
+    q_theta = y[2]
+    p_a = p[2]
+    out[0, 0] = -_sin(q_theta)
+    out[0, 1] = _cos(q_theta)
+    out[0, 2] = p_a
     out[0, 3] = 0.0
 
 
 @njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
-    m = p[0]
-    I = p[1]
-    out[0, 0] = m
+    p_m = p[0]
+    p_I = p[1]
+    out[0, 0] = p_m
     out[0, 1] = 0.0
     out[0, 2] = 0.0
     out[1, 0] = 0.0
-    out[1, 1] = m
+    out[1, 1] = p_m
     out[1, 2] = 0.0
     out[2, 0] = 0.0
     out[2, 1] = 0.0
-    out[2, 2] = I
+    out[2, 2] = p_I
 
 
 @njit(cache=True, error_model="numpy")
@@ -142,12 +143,12 @@ def forcing(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def energy(t, y, p):
     """Total mechanical energy T + V."""
-    x_dot = y[3]
-    y_dot = y[4]
-    theta_dot = y[5]
-    m = p[0]
-    I = p[1]
-    return (0.5)*I*theta_dot**2 + (0.5)*m*(x_dot**2 + y_dot**2)
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    return (0.5)*p_I*qd_theta**2 + (0.5)*p_m*(qd_x**2 + qd_y**2)
 
 
 # Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.
@@ -158,14 +159,14 @@ energy_function = energy
 @njit(cache=True, error_model="numpy")
 def momenta(t, y, p, out):
     """Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`."""
-    x_dot = y[3]
-    y_dot = y[4]
-    theta_dot = y[5]
-    m = p[0]
-    I = p[1]
-    out[0] = m*x_dot
-    out[1] = m*y_dot
-    out[2] = I*theta_dot
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    out[0] = p_m*qd_x
+    out[1] = p_m*qd_y
+    out[2] = p_I*qd_theta
 
 
 @njit(cache=True, error_model="numpy")

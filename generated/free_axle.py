@@ -7,6 +7,7 @@ State       y = (X, Y, theta, phi, phi_prime, X_dot, Y_dot, theta_dot, phi_dot, 
 Parameters  p = (m, R, L, I1, I3, g, alpha)
 
 Equations of motion: M(q, t) q̈ = F(q, q̇, t) (see lagcomp.mechanics.lagrange).
+Kernel locals: q_<name>, qd_<name>, p_<name> for the coordinates, velocities, parameters above.
 All kernels take float64 arrays and write into preallocated outputs.
 """
 
@@ -22,72 +23,71 @@ def rhs(t, y, p, out):
     M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).
 
     Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid."""
-    theta = y[2]
-    phi = y[3]
-    phi_prime = y[4]
-    X_dot = y[5]
-    Y_dot = y[6]
-    theta_dot = y[7]
-    phi_dot = y[8]
-    phi_prime_dot = y[9]
-    m = p[0]
-    R = p[1]
-    L = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    g = p[5]
-    alpha = p[6]
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
     _baumgarte_alpha = p[7]
     _baumgarte_beta = p[8]
     _kkt = np.zeros((8, 9))
-    _c0 = 2.0*m
-    _c1 = _sin(theta)
-    _c2 = R*_c1
-    _c3 = _cos(theta)
-    _c4 = R*_c3
-    _c5 = -_c4
-    _c6 = -R
-    _c7 = -_c2
-    _c8 = R*phi_dot
-    _c9 = R*phi_prime_dot
-    _c10 = 2.0*_baumgarte_alpha
-    _c11 = theta_dot*(phi_dot + phi_prime_dot)
-    out[0] = X_dot
-    out[1] = Y_dot
-    out[2] = theta_dot
-    out[3] = phi_dot
-    out[4] = phi_prime_dot
+    _c0 = 2.0*p_m
+    _c1 = _sin(q_theta)
+    _c2 = _c1*p_R
+    _c3 = p_R*_cos(q_theta)
+    _c4 = -_c3
+    _c5 = -p_R
+    _c6 = -_c2
+    _c7 = p_R*qd_phi
+    _c8 = p_R*qd_phi_prime
+    _c9 = 2.0*_baumgarte_alpha
+    _c10 = qd_theta*(qd_phi + qd_phi_prime)
+    out[0] = qd_X
+    out[1] = qd_Y
+    out[2] = qd_theta
+    out[3] = qd_phi
+    out[4] = qd_phi_prime
     _kkt[0, 0] = _c0
     _kkt[1, 1] = _c0
-    _kkt[2, 2] = 2.0*I1 + (0.5)*m*L**2
-    _kkt[3, 3] = I3
-    _kkt[4, 4] = I3
+    _kkt[2, 2] = 2.0*p_I1 + (0.5)*p_m*p_L**2
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
     _kkt[0, 5] = -2.0
     _kkt[1, 6] = -2.0
-    _kkt[2, 7] = -L
+    _kkt[2, 7] = -p_L
     _kkt[3, 5] = _c2
-    _kkt[3, 6] = _c5
-    _kkt[3, 7] = _c6
+    _kkt[3, 6] = _c4
+    _kkt[3, 7] = _c5
     _kkt[4, 5] = _c2
-    _kkt[4, 6] = _c5
-    _kkt[4, 7] = R
+    _kkt[4, 6] = _c4
+    _kkt[4, 7] = p_R
     _kkt[0, 8] = 0.0
-    _kkt[1, 8] = _c0*g*_sin(alpha)
+    _kkt[1, 8] = _c0*p_g*_sin(p_alpha)
     _kkt[2, 8] = 0.0
     _kkt[3, 8] = 0.0
     _kkt[4, 8] = 0.0
     _kkt[5, 0] = 2.0
-    _kkt[5, 3] = _c7
-    _kkt[5, 4] = _c7
+    _kkt[5, 3] = _c6
+    _kkt[5, 4] = _c6
     _kkt[6, 1] = 2.0
-    _kkt[6, 3] = _c4
-    _kkt[6, 4] = _c4
-    _kkt[7, 2] = L
-    _kkt[7, 3] = R
-    _kkt[7, 4] = _c6
-    _kkt[5, 8] = _c11*_c4 - _c10*(2.0*X_dot - _c1*_c8 - _c1*_c9)
-    _kkt[6, 8] = _c11*_c2 - _c10*(2.0*Y_dot + _c3*_c8 + _c3*_c9)
-    _kkt[7, 8] = -_c10*(_c8 - _c9 + L*theta_dot) - _baumgarte_beta**2*(L*theta + R*(phi - phi_prime))
+    _kkt[6, 3] = _c3
+    _kkt[6, 4] = _c3
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c5
+    _kkt[5, 8] = _c10*_c3 - _c9*(2.0*qd_X - _c1*_c7 - _c1*_c8)
+    _kkt[6, 8] = _c10*_c2 - _c9*(2.0*qd_Y + _c3*qd_phi + _c3*qd_phi_prime)
+    _kkt[7, 8] = -_c9*(_c7 - _c8 + p_L*qd_theta) - _baumgarte_beta**2*(p_L*q_theta + p_R*(q_phi - q_phi_prime))
     _status = _kkt_solve(_kkt, 5)
     if _status:
         return _status
@@ -103,67 +103,66 @@ def rhs(t, y, p, out):
 def reactions(t, y, p, out):
     """Multipliers λ, shape (3,), in constraint order ('roll_X', 'roll_Y', 'steer'): the generalized
     force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular."""
-    theta = y[2]
-    phi = y[3]
-    phi_prime = y[4]
-    X_dot = y[5]
-    Y_dot = y[6]
-    theta_dot = y[7]
-    phi_dot = y[8]
-    phi_prime_dot = y[9]
-    m = p[0]
-    R = p[1]
-    L = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    g = p[5]
-    alpha = p[6]
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
     _baumgarte_alpha = p[7]
     _baumgarte_beta = p[8]
     _kkt = np.zeros((8, 9))
-    _c0 = 2.0*m
-    _c1 = _sin(theta)
-    _c2 = R*_c1
-    _c3 = _cos(theta)
-    _c4 = R*_c3
-    _c5 = -_c4
-    _c6 = -R
-    _c7 = -_c2
-    _c8 = R*phi_dot
-    _c9 = R*phi_prime_dot
-    _c10 = 2.0*_baumgarte_alpha
-    _c11 = theta_dot*(phi_dot + phi_prime_dot)
+    _c0 = 2.0*p_m
+    _c1 = _sin(q_theta)
+    _c2 = _c1*p_R
+    _c3 = p_R*_cos(q_theta)
+    _c4 = -_c3
+    _c5 = -p_R
+    _c6 = -_c2
+    _c7 = p_R*qd_phi
+    _c8 = p_R*qd_phi_prime
+    _c9 = 2.0*_baumgarte_alpha
+    _c10 = qd_theta*(qd_phi + qd_phi_prime)
     _kkt[0, 0] = _c0
     _kkt[1, 1] = _c0
-    _kkt[2, 2] = 2.0*I1 + (0.5)*m*L**2
-    _kkt[3, 3] = I3
-    _kkt[4, 4] = I3
+    _kkt[2, 2] = 2.0*p_I1 + (0.5)*p_m*p_L**2
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
     _kkt[0, 5] = -2.0
     _kkt[1, 6] = -2.0
-    _kkt[2, 7] = -L
+    _kkt[2, 7] = -p_L
     _kkt[3, 5] = _c2
-    _kkt[3, 6] = _c5
-    _kkt[3, 7] = _c6
+    _kkt[3, 6] = _c4
+    _kkt[3, 7] = _c5
     _kkt[4, 5] = _c2
-    _kkt[4, 6] = _c5
-    _kkt[4, 7] = R
+    _kkt[4, 6] = _c4
+    _kkt[4, 7] = p_R
     _kkt[0, 8] = 0.0
-    _kkt[1, 8] = _c0*g*_sin(alpha)
+    _kkt[1, 8] = _c0*p_g*_sin(p_alpha)
     _kkt[2, 8] = 0.0
     _kkt[3, 8] = 0.0
     _kkt[4, 8] = 0.0
     _kkt[5, 0] = 2.0
-    _kkt[5, 3] = _c7
-    _kkt[5, 4] = _c7
+    _kkt[5, 3] = _c6
+    _kkt[5, 4] = _c6
     _kkt[6, 1] = 2.0
-    _kkt[6, 3] = _c4
-    _kkt[6, 4] = _c4
-    _kkt[7, 2] = L
-    _kkt[7, 3] = R
-    _kkt[7, 4] = _c6
-    _kkt[5, 8] = _c11*_c4 - _c10*(2.0*X_dot - _c1*_c8 - _c1*_c9)
-    _kkt[6, 8] = _c11*_c2 - _c10*(2.0*Y_dot + _c3*_c8 + _c3*_c9)
-    _kkt[7, 8] = -_c10*(_c8 - _c9 + L*theta_dot) - _baumgarte_beta**2*(L*theta + R*(phi - phi_prime))
+    _kkt[6, 3] = _c3
+    _kkt[6, 4] = _c3
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c5
+    _kkt[5, 8] = _c10*_c3 - _c9*(2.0*qd_X - _c1*_c7 - _c1*_c8)
+    _kkt[6, 8] = _c10*_c2 - _c9*(2.0*qd_Y + _c3*qd_phi + _c3*qd_phi_prime)
+    _kkt[7, 8] = -_c9*(_c7 - _c8 + p_L*qd_theta) - _baumgarte_beta**2*(p_L*q_theta + p_R*(q_phi - q_phi_prime))
     _status = _kkt_solve(_kkt, 5)
     if _status:
         return _status
@@ -176,34 +175,34 @@ def reactions(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (4,): Φ of the 1 holonomic constraints, then Λ q̇ + b of all 3."""
-    theta = y[2]
-    phi = y[3]
-    phi_prime = y[4]
-    X_dot = y[5]
-    Y_dot = y[6]
-    theta_dot = y[7]
-    phi_dot = y[8]
-    phi_prime_dot = y[9]
-    R = p[1]
-    L = p[2]
-    _c0 = _sin(theta)
-    _c1 = R*phi_dot
-    _c2 = R*phi_prime_dot
-    _c3 = _cos(theta)
-    out[0] = L*theta + R*(phi - phi_prime)
-    out[1] = 2.0*X_dot - _c0*_c1 - _c0*_c2
-    out[2] = 2.0*Y_dot + _c1*_c3 + _c2*_c3
-    out[3] = _c1 - _c2 + L*theta_dot
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_R = p[1]
+    p_L = p[2]
+    _c0 = _sin(q_theta)
+    _c1 = p_R*qd_phi
+    _c2 = p_R*qd_phi_prime
+    _c3 = _cos(q_theta)
+    out[0] = p_L*q_theta + p_R*(q_phi - q_phi_prime)
+    out[1] = 2.0*qd_X - _c0*_c1 - _c0*_c2
+    out[2] = 2.0*qd_Y + _c1*_c3 + _c2*_c3
+    out[3] = _c1 - _c2 + p_L*qd_theta
 
 
 @njit(cache=True, error_model="numpy")
 def constraint_matrix(t, y, p, out):
     """Constraint matrix [Λ | b], shape (3, 6), into `out`."""
-    theta = y[2]
-    R = p[1]
-    L = p[2]
-    _c0 = -R*_sin(theta)
-    _c1 = R*_cos(theta)
+    q_theta = y[2]
+    p_R = p[1]
+    p_L = p[2]
+    _c0 = -p_R*_sin(q_theta)
+    _c1 = p_R*_cos(q_theta)
     out[0, 0] = 2.0
     out[0, 1] = 0.0
     out[0, 2] = 0.0
@@ -216,9 +215,9 @@ def constraint_matrix(t, y, p, out):
     out[1, 4] = _c1
     out[2, 0] = 0.0
     out[2, 1] = 0.0
-    out[2, 2] = L
-    out[2, 3] = R
-    out[2, 4] = -R
+    out[2, 2] = p_L
+    out[2, 3] = p_R
+    out[2, 4] = -p_R
     out[0, 5] = 0.0
     out[1, 5] = 0.0
     out[2, 5] = 0.0
@@ -227,11 +226,11 @@ def constraint_matrix(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
-    m = p[0]
-    L = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    _c0 = 2.0*m
+    p_m = p[0]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = 2.0*p_m
     out[0, 0] = _c0
     out[0, 1] = 0.0
     out[0, 2] = 0.0
@@ -244,29 +243,29 @@ def mass_matrix(t, y, p, out):
     out[1, 4] = 0.0
     out[2, 0] = 0.0
     out[2, 1] = 0.0
-    out[2, 2] = 2.0*I1 + (0.5)*m*L**2
+    out[2, 2] = 2.0*p_I1 + (0.5)*p_m*p_L**2
     out[2, 3] = 0.0
     out[2, 4] = 0.0
     out[3, 0] = 0.0
     out[3, 1] = 0.0
     out[3, 2] = 0.0
-    out[3, 3] = I3
+    out[3, 3] = p_I3
     out[3, 4] = 0.0
     out[4, 0] = 0.0
     out[4, 1] = 0.0
     out[4, 2] = 0.0
     out[4, 3] = 0.0
-    out[4, 4] = I3
+    out[4, 4] = p_I3
 
 
 @njit(cache=True, error_model="numpy")
 def forcing(t, y, p, out):
     """Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`."""
-    m = p[0]
-    g = p[5]
-    alpha = p[6]
+    p_m = p[0]
+    p_g = p[5]
+    p_alpha = p[6]
     out[0] = 0.0
-    out[1] = 2.0*g*m*_sin(alpha)
+    out[1] = 2.0*p_g*p_m*_sin(p_alpha)
     out[2] = 0.0
     out[3] = 0.0
     out[4] = 0.0
@@ -275,19 +274,19 @@ def forcing(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def energy(t, y, p):
     """Total mechanical energy T + V."""
-    Y = y[1]
-    X_dot = y[5]
-    Y_dot = y[6]
-    theta_dot = y[7]
-    phi_dot = y[8]
-    phi_prime_dot = y[9]
-    m = p[0]
-    L = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    g = p[5]
-    alpha = p[6]
-    return m*(X_dot**2 + Y_dot**2) + theta_dot**2*(I1 + (0.25)*m*L**2) + (0.5)*I3*(phi_dot**2 + phi_prime_dot**2) - 2.0*Y*g*m*_sin(alpha)
+    q_Y = y[1]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    return p_m*(qd_X**2 + qd_Y**2) + qd_theta**2*(p_I1 + (0.25)*p_m*p_L**2) + (0.5)*p_I3*(qd_phi**2 + qd_phi_prime**2) - 2.0*p_g*p_m*q_Y*_sin(p_alpha)
 
 
 # Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.
@@ -298,31 +297,31 @@ energy_function = energy
 @njit(cache=True, error_model="numpy")
 def momenta(t, y, p, out):
     """Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`."""
-    X_dot = y[5]
-    Y_dot = y[6]
-    theta_dot = y[7]
-    phi_dot = y[8]
-    phi_prime_dot = y[9]
-    m = p[0]
-    L = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    _c0 = 2.0*m
-    out[0] = X_dot*_c0
-    out[1] = Y_dot*_c0
-    out[2] = theta_dot*(2.0*I1 + (0.5)*m*L**2)
-    out[3] = I3*phi_dot
-    out[4] = I3*phi_prime_dot
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = 2.0*p_m
+    out[0] = _c0*qd_X
+    out[1] = _c0*qd_Y
+    out[2] = qd_theta*(2.0*p_I1 + (0.5)*p_m*p_L**2)
+    out[3] = p_I3*qd_phi
+    out[4] = p_I3*qd_phi_prime
 
 
 @njit(cache=True, error_model="numpy")
 def momentum_rate(t, y, p, out):
     """ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces."""
-    m = p[0]
-    g = p[5]
-    alpha = p[6]
+    p_m = p[0]
+    p_g = p[5]
+    p_alpha = p[6]
     out[0] = 0.0
-    out[1] = 2.0*g*m*_sin(alpha)
+    out[1] = 2.0*p_g*p_m*_sin(p_alpha)
     out[2] = 0.0
     out[3] = 0.0
     out[4] = 0.0

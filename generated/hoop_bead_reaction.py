@@ -7,6 +7,7 @@ State       y = (theta, phi, theta_dot, phi_dot)
 Parameters  p = (m, R, g, Omega, epsilon)
 
 Equations of motion: M(q, t) q̈ = F(q, q̇, t) (see lagcomp.mechanics.lagrange).
+Kernel locals: q_<name>, qd_<name>, p_<name> for the coordinates, velocities, parameters above.
 All kernels take float64 arrays and write into preallocated outputs.
 """
 
@@ -22,32 +23,32 @@ def rhs(t, y, p, out):
     M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).
 
     Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid."""
-    theta = y[0]
-    phi = y[1]
-    theta_dot = y[2]
-    phi_dot = y[3]
-    m = p[0]
-    R = p[1]
-    g = p[2]
-    Omega = p[3]
-    epsilon = p[4]
+    q_theta = y[0]
+    q_phi = y[1]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
     _baumgarte_alpha = p[5]
     _baumgarte_beta = p[6]
     _kkt = np.zeros((3, 4))
-    _c0 = m*R**2
-    _c1 = _sin(theta)
-    _c2 = _c0*_c1*_cos(theta)
+    _c0 = p_m*p_R**2
+    _c1 = _sin(q_theta)
+    _c2 = _c0*_c1*_cos(q_theta)
     _c3 = 2.0*t
-    _c4 = epsilon*_sin(_c3)
-    out[0] = theta_dot
-    out[1] = phi_dot
+    _c4 = p_epsilon*_sin(_c3)
+    out[0] = qd_theta
+    out[1] = qd_phi
     _kkt[0, 0] = _c0
     _kkt[1, 1] = _c0*_c1**2
     _kkt[1, 2] = -1.0
-    _kkt[0, 3] = _c2*phi_dot**2 + R*_c1*g*m
-    _kkt[1, 3] = -2.0*_c2*phi_dot*theta_dot
+    _kkt[0, 3] = _c2*qd_phi**2 + _c1*p_R*p_g*p_m
+    _kkt[1, 3] = -2.0*_c2*qd_phi*qd_theta
     _kkt[2, 1] = 1.0
-    _kkt[2, 3] = -4.0*_c4 - _baumgarte_beta**2*(phi - _c4 - Omega*t) - 2.0*_baumgarte_alpha*(phi_dot - Omega - 2.0*epsilon*_cos(_c3))
+    _kkt[2, 3] = -4.0*_c4 - _baumgarte_beta**2*(q_phi - _c4 - p_Omega*t) - 2.0*_baumgarte_alpha*(qd_phi - p_Omega - 2.0*p_epsilon*_cos(_c3))
     _status = _kkt_solve(_kkt, 2)
     if _status:
         return _status
@@ -60,30 +61,30 @@ def rhs(t, y, p, out):
 def reactions(t, y, p, out):
     """Multipliers λ, shape (1,), in constraint order ('drive',): the generalized
     force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular."""
-    theta = y[0]
-    phi = y[1]
-    theta_dot = y[2]
-    phi_dot = y[3]
-    m = p[0]
-    R = p[1]
-    g = p[2]
-    Omega = p[3]
-    epsilon = p[4]
+    q_theta = y[0]
+    q_phi = y[1]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
     _baumgarte_alpha = p[5]
     _baumgarte_beta = p[6]
     _kkt = np.zeros((3, 4))
-    _c0 = m*R**2
-    _c1 = _sin(theta)
-    _c2 = _c0*_c1*_cos(theta)
+    _c0 = p_m*p_R**2
+    _c1 = _sin(q_theta)
+    _c2 = _c0*_c1*_cos(q_theta)
     _c3 = 2.0*t
-    _c4 = epsilon*_sin(_c3)
+    _c4 = p_epsilon*_sin(_c3)
     _kkt[0, 0] = _c0
     _kkt[1, 1] = _c0*_c1**2
     _kkt[1, 2] = -1.0
-    _kkt[0, 3] = _c2*phi_dot**2 + R*_c1*g*m
-    _kkt[1, 3] = -2.0*_c2*phi_dot*theta_dot
+    _kkt[0, 3] = _c2*qd_phi**2 + _c1*p_R*p_g*p_m
+    _kkt[1, 3] = -2.0*_c2*qd_phi*qd_theta
     _kkt[2, 1] = 1.0
-    _kkt[2, 3] = -4.0*_c4 - _baumgarte_beta**2*(phi - _c4 - Omega*t) - 2.0*_baumgarte_alpha*(phi_dot - Omega - 2.0*epsilon*_cos(_c3))
+    _kkt[2, 3] = -4.0*_c4 - _baumgarte_beta**2*(q_phi - _c4 - p_Omega*t) - 2.0*_baumgarte_alpha*(qd_phi - p_Omega - 2.0*p_epsilon*_cos(_c3))
     _status = _kkt_solve(_kkt, 2)
     if _status:
         return _status
@@ -94,63 +95,63 @@ def reactions(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (2,): Φ of the 1 holonomic constraints, then Λ q̇ + b of all 1."""
-    phi = y[1]
-    phi_dot = y[3]
-    Omega = p[3]
-    epsilon = p[4]
+    q_phi = y[1]
+    qd_phi = y[3]
+    p_Omega = p[3]
+    p_epsilon = p[4]
     _c0 = 2.0*t
-    out[0] = phi - Omega*t - epsilon*_sin(_c0)
-    out[1] = phi_dot - Omega - 2.0*epsilon*_cos(_c0)
+    out[0] = q_phi - p_Omega*t - p_epsilon*_sin(_c0)
+    out[1] = qd_phi - p_Omega - 2.0*p_epsilon*_cos(_c0)
 
 
 @njit(cache=True, error_model="numpy")
 def constraint_matrix(t, y, p, out):
     """Constraint matrix [Λ | b], shape (1, 3), into `out`."""
-    Omega = p[3]
-    epsilon = p[4]
+    p_Omega = p[3]
+    p_epsilon = p[4]
     out[0, 0] = 0.0
     out[0, 1] = 1.0
-    out[0, 2] = -Omega - 2.0*epsilon*_cos(2.0*t)
+    out[0, 2] = -p_Omega - 2.0*p_epsilon*_cos(2.0*t)
 
 
 @njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
-    theta = y[0]
-    m = p[0]
-    R = p[1]
-    _c0 = m*R**2
+    q_theta = y[0]
+    p_m = p[0]
+    p_R = p[1]
+    _c0 = p_m*p_R**2
     out[0, 0] = _c0
     out[0, 1] = 0.0
     out[1, 0] = 0.0
-    out[1, 1] = _c0*_sin(theta)**2
+    out[1, 1] = _c0*_sin(q_theta)**2
 
 
 @njit(cache=True, error_model="numpy")
 def forcing(t, y, p, out):
     """Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`."""
-    theta = y[0]
-    theta_dot = y[2]
-    phi_dot = y[3]
-    m = p[0]
-    R = p[1]
-    g = p[2]
-    _c0 = m*_sin(theta)
-    _c1 = _c0*R**2*_cos(theta)
-    out[0] = _c1*phi_dot**2 + R*_c0*g
-    out[1] = -2.0*_c1*phi_dot*theta_dot
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    _c0 = p_m*_sin(q_theta)
+    _c1 = _c0*p_R**2*_cos(q_theta)
+    out[0] = _c1*qd_phi**2 + _c0*p_R*p_g
+    out[1] = -2.0*_c1*qd_phi*qd_theta
 
 
 @njit(cache=True, error_model="numpy")
 def energy(t, y, p):
     """Total mechanical energy T + V."""
-    theta = y[0]
-    theta_dot = y[2]
-    phi_dot = y[3]
-    m = p[0]
-    R = p[1]
-    g = p[2]
-    return (0.5)*m*R**2*(theta_dot**2 + phi_dot**2*_sin(theta)**2) + R*g*m*_cos(theta)
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    return (0.5)*p_m*p_R**2*(qd_theta**2 + qd_phi**2*_sin(q_theta)**2) + p_R*p_g*p_m*_cos(q_theta)
 
 
 # Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.
@@ -161,26 +162,26 @@ energy_function = energy
 @njit(cache=True, error_model="numpy")
 def momenta(t, y, p, out):
     """Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`."""
-    theta = y[0]
-    theta_dot = y[2]
-    phi_dot = y[3]
-    m = p[0]
-    R = p[1]
-    _c0 = m*R**2
-    out[0] = _c0*theta_dot
-    out[1] = _c0*phi_dot*_sin(theta)**2
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    _c0 = p_m*p_R**2
+    out[0] = _c0*qd_theta
+    out[1] = _c0*qd_phi*_sin(q_theta)**2
 
 
 @njit(cache=True, error_model="numpy")
 def momentum_rate(t, y, p, out):
     """ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces."""
-    theta = y[0]
-    phi_dot = y[3]
-    m = p[0]
-    R = p[1]
-    g = p[2]
-    _c0 = m*_sin(theta)
-    out[0] = R*_c0*g + _c0*R**2*phi_dot**2*_cos(theta)
+    q_theta = y[0]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    _c0 = p_m*_sin(q_theta)
+    out[0] = _c0*p_R*p_g + _c0*p_R**2*qd_phi**2*_cos(q_theta)
     out[1] = 0.0
 
 
@@ -193,11 +194,11 @@ def event_values(t, y, p, out):
 def rest_partials(t, y, p, out):
     """At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,
     column j the variable j). The velocities in `y` are ignored: the partials are those at rest."""
-    theta = y[0]
-    m = p[0]
-    R = p[1]
-    g = p[2]
-    out[0, 0, 0] = R*g*m*_cos(theta)
+    q_theta = y[0]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    out[0, 0, 0] = p_R*p_g*p_m*_cos(q_theta)
     out[0, 0, 1] = 0.0
     out[0, 1, 0] = 0.0
     out[0, 1, 1] = 0.0

@@ -7,6 +7,7 @@ State       y = (x, x_dot)
 Parameters  p = (M, L, g, f)
 
 Equations of motion: M(q, t) q̈ = F(q, q̇, t) (see lagcomp.mechanics.lagrange).
+Kernel locals: q_<name>, qd_<name>, p_<name> for the coordinates, velocities, parameters above.
 All kernels take float64 arrays and write into preallocated outputs.
 """
 
@@ -22,16 +23,16 @@ def rhs(t, y, p, out):
 
     Returns 0, or k > 0 when pivot k of the LDLᵀ factorization of M is not
     positive (M is singular or indefinite at this state); `out` is then invalid."""
-    x = y[0]
-    x_dot = y[1]
-    M = p[0]
-    L = p[1]
-    g = p[2]
-    f = p[3]
-    _c0 = 1.0/L
-    out[0] = x_dot
-    _m0_0 = M
-    _f0 = M*_c0*g*x - M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
+    q_x = y[0]
+    qd_x = y[1]
+    p_M = p[0]
+    p_L = p[1]
+    p_g = p[2]
+    p_f = p[3]
+    _c0 = 1.0/p_L
+    out[0] = qd_x
+    _m0_0 = p_M
+    _f0 = _c0*p_M*p_g*q_x - _c0*p_M*p_f*p_g*(p_L - q_x)*((np.sign(qd_x)) if (qd_x != 0.0) else (1.0))
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -48,16 +49,16 @@ def rhs_lanes(T, Y, P, out, bad):
     """dy/dt of `rhs` for every lane l: T (B,) times, Y (2n, B) states, P (n_p, B) parameters,
     out (2n, B); bad[l] is set when M is singular in lane l (n = 1)."""
     for _l in range(Y.shape[1]):
-        x = Y[0, _l]
-        x_dot = Y[1, _l]
-        M = P[0, _l]
-        L = P[1, _l]
-        g = P[2, _l]
-        f = P[3, _l]
-        _c0 = 1.0/L
-        out[0, _l] = x_dot
-        _m0_0 = M
-        _f0 = M*_c0*g*x - M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
+        q_x = Y[0, _l]
+        qd_x = Y[1, _l]
+        p_M = P[0, _l]
+        p_L = P[1, _l]
+        p_g = P[2, _l]
+        p_f = P[3, _l]
+        _c0 = 1.0/p_L
+        out[0, _l] = qd_x
+        _m0_0 = p_M
+        _f0 = _c0*p_M*p_g*q_x - _c0*p_M*p_f*p_g*(p_L - q_x)*((np.sign(qd_x)) if (qd_x != 0.0) else (1.0))
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -71,33 +72,33 @@ def rhs_lanes(T, Y, P, out, bad):
 @njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
-    M = p[0]
-    out[0, 0] = M
+    p_M = p[0]
+    out[0, 0] = p_M
 
 
 @njit(cache=True, error_model="numpy")
 def forcing(t, y, p, out):
     """Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`."""
-    x = y[0]
-    x_dot = y[1]
-    M = p[0]
-    L = p[1]
-    g = p[2]
-    f = p[3]
-    _c0 = 1.0/L
-    out[0] = M*_c0*g*x - M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
+    q_x = y[0]
+    qd_x = y[1]
+    p_M = p[0]
+    p_L = p[1]
+    p_g = p[2]
+    p_f = p[3]
+    _c0 = 1.0/p_L
+    out[0] = _c0*p_M*p_g*q_x - _c0*p_M*p_f*p_g*(p_L - q_x)*((np.sign(qd_x)) if (qd_x != 0.0) else (1.0))
 
 
 @njit(cache=True, error_model="numpy")
 def energy(t, y, p):
     """Total mechanical energy T + V."""
-    x = y[0]
-    x_dot = y[1]
-    M = p[0]
-    L = p[1]
-    g = p[2]
-    _c0 = (0.5)*M
-    return _c0*x_dot**2 - _c0*g*x**2/L
+    q_x = y[0]
+    qd_x = y[1]
+    p_M = p[0]
+    p_L = p[1]
+    p_g = p[2]
+    _c0 = (0.5)*p_M
+    return _c0*qd_x**2 - _c0*p_g*q_x**2/p_L
 
 
 # Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.
@@ -108,22 +109,22 @@ energy_function = energy
 @njit(cache=True, error_model="numpy")
 def momenta(t, y, p, out):
     """Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`."""
-    x_dot = y[1]
-    M = p[0]
-    out[0] = M*x_dot
+    qd_x = y[1]
+    p_M = p[0]
+    out[0] = p_M*qd_x
 
 
 @njit(cache=True, error_model="numpy")
 def momentum_rate(t, y, p, out):
     """ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces."""
-    x = y[0]
-    x_dot = y[1]
-    M = p[0]
-    L = p[1]
-    g = p[2]
-    f = p[3]
-    _c0 = 1.0/L
-    out[0] = M*_c0*g*x - M*_c0*f*g*(L - x)*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
+    q_x = y[0]
+    qd_x = y[1]
+    p_M = p[0]
+    p_L = p[1]
+    p_g = p[2]
+    p_f = p[3]
+    _c0 = 1.0/p_L
+    out[0] = _c0*p_M*p_g*q_x - _c0*p_M*p_f*p_g*(p_L - q_x)*((np.sign(qd_x)) if (qd_x != 0.0) else (1.0))
 
 
 @njit(cache=True, error_model="numpy")
@@ -135,12 +136,12 @@ def event_values(t, y, p, out):
 def rest_partials(t, y, p, out):
     """At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,
     column j the variable j). The velocities in `y` are ignored: the partials are those at rest."""
-    M = p[0]
-    L = p[1]
-    g = p[2]
-    f = p[3]
-    _c0 = M*g/L
-    out[0, 0, 0] = _c0 + _c0*f
+    p_M = p[0]
+    p_L = p[1]
+    p_g = p[2]
+    p_f = p[3]
+    _c0 = p_M*p_g/p_L
+    out[0, 0, 0] = _c0 + _c0*p_f
     out[1, 0, 0] = 0.0
 
 
@@ -148,10 +149,10 @@ def rest_partials(t, y, p, out):
 def velocities(t, y, p, out):
     """Velocities q̇, shape (n,), at x = (q, p) (here `y` holds q then the momenta p), from
     M(q, t) q̇ = p − b(q, t). Returns 0, or k > 0 when pivot k of M is not positive."""
-    M = p[0]
-    _p_x = y[1]
-    _m0_0 = M
-    _f0 = _p_x
+    p_M = p[0]
+    mom_x = y[1]
+    _m0_0 = p_M
+    _f0 = mom_x
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -168,15 +169,15 @@ def canonical_partials(t, y, p, out):
     """At y = (q, q̇), shape (4, n, n) into `out`: out[0] = M, out[1] = ∂P/∂q, out[2] = ∂r/∂q,
     out[3] = ∂r/∂q̇ (P = M q̇ + b the momenta, r = ∂L/∂q + Q − ∂D/∂q̇ their rate; row i is
     component i, column j the variable j)."""
-    x_dot = y[1]
-    M = p[0]
-    L = p[1]
-    g = p[2]
-    f = p[3]
-    _c0 = M*g/L
-    out[0, 0, 0] = M
+    qd_x = y[1]
+    p_M = p[0]
+    p_L = p[1]
+    p_g = p[2]
+    p_f = p[3]
+    _c0 = p_M*p_g/p_L
+    out[0, 0, 0] = p_M
     out[1, 0, 0] = 0.0
-    out[2, 0, 0] = _c0 + _c0*f*((np.sign(x_dot)) if (x_dot != 0.0) else (1.0))
+    out[2, 0, 0] = _c0 + _c0*p_f*((np.sign(qd_x)) if (qd_x != 0.0) else (1.0))
     out[3, 0, 0] = 0.0
 
 

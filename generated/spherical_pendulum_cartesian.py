@@ -7,6 +7,7 @@ State       y = (x, y, z, x_dot, y_dot, z_dot)
 Parameters  p = (m, l, g)
 
 Equations of motion: M(q, t) q̈ = F(q, q̇, t) (see lagcomp.mechanics.lagrange).
+Kernel locals: q_<name>, qd_<name>, p_<name> for the coordinates, velocities, parameters above.
 All kernels take float64 arrays and write into preallocated outputs.
 """
 
@@ -22,37 +23,37 @@ def rhs(t, y, p, out):
     M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).
 
     Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid."""
-    x = y[0]
-    y_ = y[1]
-    z = y[2]
-    x_dot = y[3]
-    y_dot = y[4]
-    z_dot = y[5]
-    m = p[0]
-    l = p[1]
-    g = p[2]
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
     _baumgarte_alpha = p[3]
     _baumgarte_beta = p[4]
     _kkt = np.zeros((4, 5))
-    _c0 = 2.0*x
-    _c1 = 2.0*y_
-    _c2 = 2.0*z
-    out[0] = x_dot
-    out[1] = y_dot
-    out[2] = z_dot
-    _kkt[0, 0] = m
-    _kkt[1, 1] = m
-    _kkt[2, 2] = m
+    _c0 = 2.0*q_x
+    _c1 = 2.0*q_y
+    _c2 = 2.0*q_z
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_z
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_m
     _kkt[0, 3] = -_c0
     _kkt[1, 3] = -_c1
     _kkt[2, 3] = -_c2
     _kkt[0, 4] = 0.0
     _kkt[1, 4] = 0.0
-    _kkt[2, 4] = -g*m
+    _kkt[2, 4] = -p_g*p_m
     _kkt[3, 0] = _c0
     _kkt[3, 1] = _c1
     _kkt[3, 2] = _c2
-    _kkt[3, 4] = -2.0*x_dot**2 - 2.0*y_dot**2 - 2.0*z_dot**2 - _baumgarte_beta**2*(x**2 + y_**2 + z**2 - l**2) - 2.0*_baumgarte_alpha*(_c0*x_dot + _c1*y_dot + _c2*z_dot)
+    _kkt[3, 4] = -2.0*qd_x**2 - 2.0*qd_y**2 - 2.0*qd_z**2 - _baumgarte_beta**2*(q_x**2 + q_y**2 + q_z**2 - p_l**2) - 2.0*_baumgarte_alpha*(_c0*qd_x + _c1*qd_y + _c2*qd_z)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -66,34 +67,34 @@ def rhs(t, y, p, out):
 def reactions(t, y, p, out):
     """Multipliers λ, shape (1,), in constraint order ('rod',): the generalized
     force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular."""
-    x = y[0]
-    y_ = y[1]
-    z = y[2]
-    x_dot = y[3]
-    y_dot = y[4]
-    z_dot = y[5]
-    m = p[0]
-    l = p[1]
-    g = p[2]
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
     _baumgarte_alpha = p[3]
     _baumgarte_beta = p[4]
     _kkt = np.zeros((4, 5))
-    _c0 = 2.0*x
-    _c1 = 2.0*y_
-    _c2 = 2.0*z
-    _kkt[0, 0] = m
-    _kkt[1, 1] = m
-    _kkt[2, 2] = m
+    _c0 = 2.0*q_x
+    _c1 = 2.0*q_y
+    _c2 = 2.0*q_z
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_m
     _kkt[0, 3] = -_c0
     _kkt[1, 3] = -_c1
     _kkt[2, 3] = -_c2
     _kkt[0, 4] = 0.0
     _kkt[1, 4] = 0.0
-    _kkt[2, 4] = -g*m
+    _kkt[2, 4] = -p_g*p_m
     _kkt[3, 0] = _c0
     _kkt[3, 1] = _c1
     _kkt[3, 2] = _c2
-    _kkt[3, 4] = -2.0*x_dot**2 - 2.0*y_dot**2 - 2.0*z_dot**2 - _baumgarte_beta**2*(x**2 + y_**2 + z**2 - l**2) - 2.0*_baumgarte_alpha*(_c0*x_dot + _c1*y_dot + _c2*z_dot)
+    _kkt[3, 4] = -2.0*qd_x**2 - 2.0*qd_y**2 - 2.0*qd_z**2 - _baumgarte_beta**2*(q_x**2 + q_y**2 + q_z**2 - p_l**2) - 2.0*_baumgarte_alpha*(_c0*qd_x + _c1*qd_y + _c2*qd_z)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -104,64 +105,64 @@ def reactions(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (2,): Φ of the 1 holonomic constraints, then Λ q̇ + b of all 1."""
-    x = y[0]
-    y_ = y[1]
-    z = y[2]
-    x_dot = y[3]
-    y_dot = y[4]
-    z_dot = y[5]
-    l = p[1]
-    out[0] = x**2 + y_**2 + z**2 - l**2
-    out[1] = 2.0*x*x_dot + 2.0*y_*y_dot + 2.0*z*z_dot
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_l = p[1]
+    out[0] = q_x**2 + q_y**2 + q_z**2 - p_l**2
+    out[1] = 2.0*q_x*qd_x + 2.0*q_y*qd_y + 2.0*q_z*qd_z
 
 
 @njit(cache=True, error_model="numpy")
 def constraint_matrix(t, y, p, out):
     """Constraint matrix [Λ | b], shape (1, 4), into `out`."""
-    x = y[0]
-    y_ = y[1]
-    z = y[2]
-    out[0, 0] = 2.0*x
-    out[0, 1] = 2.0*y_
-    out[0, 2] = 2.0*z
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    out[0, 0] = 2.0*q_x
+    out[0, 1] = 2.0*q_y
+    out[0, 2] = 2.0*q_z
     out[0, 3] = 0.0
 
 
 @njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
-    m = p[0]
-    out[0, 0] = m
+    p_m = p[0]
+    out[0, 0] = p_m
     out[0, 1] = 0.0
     out[0, 2] = 0.0
     out[1, 0] = 0.0
-    out[1, 1] = m
+    out[1, 1] = p_m
     out[1, 2] = 0.0
     out[2, 0] = 0.0
     out[2, 1] = 0.0
-    out[2, 2] = m
+    out[2, 2] = p_m
 
 
 @njit(cache=True, error_model="numpy")
 def forcing(t, y, p, out):
     """Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`."""
-    m = p[0]
-    g = p[2]
+    p_m = p[0]
+    p_g = p[2]
     out[0] = 0.0
     out[1] = 0.0
-    out[2] = -g*m
+    out[2] = -p_g*p_m
 
 
 @njit(cache=True, error_model="numpy")
 def energy(t, y, p):
     """Total mechanical energy T + V."""
-    z = y[2]
-    x_dot = y[3]
-    y_dot = y[4]
-    z_dot = y[5]
-    m = p[0]
-    g = p[2]
-    return (0.5)*m*(x_dot**2 + y_dot**2 + z_dot**2) + g*m*z
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_g = p[2]
+    return (0.5)*p_m*(qd_x**2 + qd_y**2 + qd_z**2) + p_g*p_m*q_z
 
 
 # Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.
@@ -172,23 +173,23 @@ energy_function = energy
 @njit(cache=True, error_model="numpy")
 def momenta(t, y, p, out):
     """Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`."""
-    x_dot = y[3]
-    y_dot = y[4]
-    z_dot = y[5]
-    m = p[0]
-    out[0] = m*x_dot
-    out[1] = m*y_dot
-    out[2] = m*z_dot
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    out[0] = p_m*qd_x
+    out[1] = p_m*qd_y
+    out[2] = p_m*qd_z
 
 
 @njit(cache=True, error_model="numpy")
 def momentum_rate(t, y, p, out):
     """ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces."""
-    m = p[0]
-    g = p[2]
+    p_m = p[0]
+    p_g = p[2]
     out[0] = 0.0
     out[1] = 0.0
-    out[2] = -g*m
+    out[2] = -p_g*p_m
 
 
 @njit(cache=True, error_model="numpy")

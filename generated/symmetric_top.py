@@ -7,6 +7,7 @@ State       y = (psi, theta, phi, psi_dot, theta_dot, phi_dot)
 Parameters  p = (M, l, g, I1, I3)
 
 Equations of motion: M(q, t) q̈ = F(q, q̇, t) (see lagcomp.mechanics.lagrange).
+Kernel locals: q_<name>, qd_<name>, p_<name> for the coordinates, velocities, parameters above.
 All kernels take float64 arrays and write into preallocated outputs.
 """
 
@@ -22,35 +23,36 @@ def rhs(t, y, p, out):
 
     Returns 0, or k > 0 when pivot k of the LDLᵀ factorization of M is not
     positive (M is singular or indefinite at this state); `out` is then invalid."""
-    theta = y[1]
-    psi_dot = y[3]
-    theta_dot = y[4]
-    phi_dot = y[5]
-    M = p[0]
-    l = p[1]
-    g = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    _c0 = _cos(theta)
-    _c1 = M*l**2
-    _c2 = I3 - I1 - _c1
-    _c3 = I1 + _c1
-    _c4 = _sin(theta)
-    _c5 = I3*_c4*phi_dot
-    _c6 = _c0*_c2*_c4
-    _c7 = psi_dot*theta_dot
-    out[0] = psi_dot
-    out[1] = theta_dot
-    out[2] = phi_dot
-    _m0_0 = _c3 + _c2*_c0**2
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = p_M*p_l**2
+    _c1 = p_I3 - _c0 - p_I1
+    _c2 = _cos(q_theta)
+    _c3 = _c0 + p_I1
+    _c4 = _sin(q_theta)
+    _c5 = p_I3*qd_phi
+    _c6 = _c4*qd_psi
+    _c7 = _c6*qd_theta
+    _c8 = _c1*_c2
+    out[0] = qd_psi
+    out[1] = qd_theta
+    out[2] = qd_phi
+    _m0_0 = _c3 + _c1*_c2**2
     _m1_0 = 0.0
     _m1_1 = _c3
-    _m2_0 = I3*_c0
+    _m2_0 = _c2*p_I3
     _m2_1 = 0.0
-    _m2_2 = I3
-    _f0 = _c5*theta_dot + 2.0*_c6*_c7
-    _f1 = -_c5*psi_dot - _c6*psi_dot**2 + M*_c4*g*l
-    _f2 = I3*_c4*_c7
+    _m2_2 = p_I3
+    _f0 = 2.0*_c7*_c8 + _c4*_c5*qd_theta
+    _f1 = -_c5*_c6 - _c4*_c8*qd_psi**2 + _c4*p_M*p_g*p_l
+    _f2 = _c7*p_I3
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -87,35 +89,36 @@ def rhs_lanes(T, Y, P, out, bad):
     """dy/dt of `rhs` for every lane l: T (B,) times, Y (2n, B) states, P (n_p, B) parameters,
     out (2n, B); bad[l] is set when M is singular in lane l (n = 3)."""
     for _l in range(Y.shape[1]):
-        theta = Y[1, _l]
-        psi_dot = Y[3, _l]
-        theta_dot = Y[4, _l]
-        phi_dot = Y[5, _l]
-        M = P[0, _l]
-        l = P[1, _l]
-        g = P[2, _l]
-        I1 = P[3, _l]
-        I3 = P[4, _l]
-        _c0 = _vcos(theta)
-        _c1 = M*l**2
-        _c2 = I3 - I1 - _c1
-        _c3 = I1 + _c1
-        _c4 = _vsin(theta)
-        _c5 = I3*_c4*phi_dot
-        _c6 = _c0*_c2*_c4
-        _c7 = psi_dot*theta_dot
-        out[0, _l] = psi_dot
-        out[1, _l] = theta_dot
-        out[2, _l] = phi_dot
-        _m0_0 = _c3 + _c2*_c0**2
+        q_theta = Y[1, _l]
+        qd_psi = Y[3, _l]
+        qd_theta = Y[4, _l]
+        qd_phi = Y[5, _l]
+        p_M = P[0, _l]
+        p_l = P[1, _l]
+        p_g = P[2, _l]
+        p_I1 = P[3, _l]
+        p_I3 = P[4, _l]
+        _c0 = p_M*p_l**2
+        _c1 = p_I3 - _c0 - p_I1
+        _c2 = _vcos(q_theta)
+        _c3 = _c0 + p_I1
+        _c4 = _vsin(q_theta)
+        _c5 = p_I3*qd_phi
+        _c6 = _c4*qd_psi
+        _c7 = _c6*qd_theta
+        _c8 = _c1*_c2
+        out[0, _l] = qd_psi
+        out[1, _l] = qd_theta
+        out[2, _l] = qd_phi
+        _m0_0 = _c3 + _c1*_c2**2
         _m1_0 = 0.0
         _m1_1 = _c3
-        _m2_0 = I3*_c0
+        _m2_0 = _c2*p_I3
         _m2_1 = 0.0
-        _m2_2 = I3
-        _f0 = _c5*theta_dot + 2.0*_c6*_c7
-        _f1 = -_c5*psi_dot - _c6*psi_dot**2 + M*_c4*g*l
-        _f2 = I3*_c4*_c7
+        _m2_2 = p_I3
+        _f0 = 2.0*_c7*_c8 + _c4*_c5*qd_theta
+        _f1 = -_c5*_c6 - _c4*_c8*qd_psi**2 + _c4*p_M*p_g*p_l
+        _f2 = _c7*p_I3
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -147,16 +150,16 @@ def rhs_lanes(T, Y, P, out, bad):
 @njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
-    theta = y[1]
-    M = p[0]
-    l = p[1]
-    I1 = p[3]
-    I3 = p[4]
-    _c0 = _cos(theta)
-    _c1 = M*l**2
-    _c2 = I1 + _c1
-    _c3 = I3*_c0
-    out[0, 0] = _c2 + _c0**2*(I3 - I1 - _c1)
+    q_theta = y[1]
+    p_M = p[0]
+    p_l = p[1]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = p_M*p_l**2
+    _c1 = _cos(q_theta)
+    _c2 = _c0 + p_I1
+    _c3 = _c1*p_I3
+    out[0, 0] = _c2 + _c1**2*(p_I3 - _c0 - p_I1)
     out[0, 1] = 0.0
     out[0, 2] = _c3
     out[1, 0] = 0.0
@@ -164,49 +167,50 @@ def mass_matrix(t, y, p, out):
     out[1, 2] = 0.0
     out[2, 0] = _c3
     out[2, 1] = 0.0
-    out[2, 2] = I3
+    out[2, 2] = p_I3
 
 
 @njit(cache=True, error_model="numpy")
 def forcing(t, y, p, out):
     """Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`."""
-    theta = y[1]
-    psi_dot = y[3]
-    theta_dot = y[4]
-    phi_dot = y[5]
-    M = p[0]
-    l = p[1]
-    g = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    _c0 = _sin(theta)
-    _c1 = I3*_c0*phi_dot
-    _c2 = _c0*(I3 - I1 - M*l**2)*_cos(theta)
-    _c3 = psi_dot*theta_dot
-    out[0] = _c1*theta_dot + 2.0*_c2*_c3
-    out[1] = -_c1*psi_dot - _c2*psi_dot**2 + M*_c0*g*l
-    out[2] = I3*_c0*_c3
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = _sin(q_theta)
+    _c1 = p_I3*qd_phi
+    _c2 = _c0*qd_psi
+    _c3 = _c2*qd_theta
+    _c4 = (p_I3 - p_I1 - p_M*p_l**2)*_cos(q_theta)
+    out[0] = 2.0*_c3*_c4 + _c0*_c1*qd_theta
+    out[1] = -_c1*_c2 - _c0*_c4*qd_psi**2 + _c0*p_M*p_g*p_l
+    out[2] = _c3*p_I3
 
 
 @njit(cache=True, error_model="numpy")
 def energy(t, y, p):
     """Total mechanical energy T + V."""
-    theta = y[1]
-    psi_dot = y[3]
-    theta_dot = y[4]
-    phi_dot = y[5]
-    M = p[0]
-    l = p[1]
-    g = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    _c0 = (0.5)*I1
-    _c1 = (0.5)*M*l**2
-    _c2 = _c0 + _c1
-    _c3 = psi_dot**2
-    _c4 = (0.5)*I3
-    _c5 = _cos(theta)
-    return _c2*_c3 + _c2*theta_dot**2 + _c4*phi_dot**2 + _c3*_c5**2*(_c4 - _c0 - _c1) + I3*_c5*phi_dot*psi_dot + M*_c5*g*l
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = qd_psi**2
+    _c1 = (0.5)*p_I1
+    _c2 = (0.5)*p_M*p_l**2
+    _c3 = _c1 + _c2
+    _c4 = (0.5)*p_I3
+    _c5 = _cos(q_theta)
+    return _c0*_c3 + _c3*qd_theta**2 + _c4*qd_phi**2 + _c0*_c5**2*(_c4 - _c1 - _c2) + _c5*p_I3*qd_phi*qd_psi + _c5*p_M*p_g*p_l
 
 
 # Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.
@@ -217,37 +221,37 @@ energy_function = energy
 @njit(cache=True, error_model="numpy")
 def momenta(t, y, p, out):
     """Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`."""
-    theta = y[1]
-    psi_dot = y[3]
-    theta_dot = y[4]
-    phi_dot = y[5]
-    M = p[0]
-    l = p[1]
-    I1 = p[3]
-    I3 = p[4]
-    _c0 = _cos(theta)
-    _c1 = M*l**2
-    _c2 = I1 + _c1
-    _c3 = I3*phi_dot
-    out[0] = _c0*_c3 + psi_dot*(_c2 + _c0**2*(I3 - I1 - _c1))
-    out[1] = _c2*theta_dot
-    out[2] = _c3 + I3*_c0*psi_dot
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = p_M*p_l**2
+    _c1 = _cos(q_theta)
+    _c2 = _c0 + p_I1
+    _c3 = p_I3*qd_phi
+    out[0] = _c1*_c3 + qd_psi*(_c2 + _c1**2*(p_I3 - _c0 - p_I1))
+    out[1] = _c2*qd_theta
+    out[2] = _c3 + _c1*p_I3*qd_psi
 
 
 @njit(cache=True, error_model="numpy")
 def momentum_rate(t, y, p, out):
     """ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces."""
-    theta = y[1]
-    psi_dot = y[3]
-    phi_dot = y[5]
-    M = p[0]
-    l = p[1]
-    g = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    _c0 = _sin(theta)
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = _sin(q_theta)
     out[0] = 0.0
-    out[1] = M*_c0*g*l - I3*_c0*phi_dot*psi_dot - _c0*psi_dot**2*(I3 - I1 - M*l**2)*_cos(theta)
+    out[1] = _c0*p_M*p_g*p_l - _c0*p_I3*qd_phi*qd_psi - _c0*qd_psi**2*(p_I3 - p_I1 - p_M*p_l**2)*_cos(q_theta)
     out[2] = 0.0
 
 
@@ -260,15 +264,15 @@ def event_values(t, y, p, out):
 def rest_partials(t, y, p, out):
     """At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,
     column j the variable j). The velocities in `y` are ignored: the partials are those at rest."""
-    theta = y[1]
-    M = p[0]
-    l = p[1]
-    g = p[2]
+    q_theta = y[1]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
     out[0, 0, 0] = 0.0
     out[0, 0, 1] = 0.0
     out[0, 0, 2] = 0.0
     out[0, 1, 0] = 0.0
-    out[0, 1, 1] = M*g*l*_cos(theta)
+    out[0, 1, 1] = p_M*p_g*p_l*_cos(q_theta)
     out[0, 1, 2] = 0.0
     out[0, 2, 0] = 0.0
     out[0, 2, 1] = 0.0
@@ -288,26 +292,26 @@ def rest_partials(t, y, p, out):
 def velocities(t, y, p, out):
     """Velocities q̇, shape (n,), at x = (q, p) (here `y` holds q then the momenta p), from
     M(q, t) q̇ = p − b(q, t). Returns 0, or k > 0 when pivot k of M is not positive."""
-    theta = y[1]
-    M = p[0]
-    l = p[1]
-    I1 = p[3]
-    I3 = p[4]
-    _p_psi = y[3]
-    _p_theta = y[4]
-    _p_phi = y[5]
-    _c0 = _cos(theta)
-    _c1 = M*l**2
-    _c2 = I1 + _c1
-    _m0_0 = _c2 + _c0**2*(I3 - I1 - _c1)
+    q_theta = y[1]
+    p_M = p[0]
+    p_l = p[1]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    mom_psi = y[3]
+    mom_theta = y[4]
+    mom_phi = y[5]
+    _c0 = p_M*p_l**2
+    _c1 = _cos(q_theta)
+    _c2 = _c0 + p_I1
+    _m0_0 = _c2 + _c1**2*(p_I3 - _c0 - p_I1)
     _m1_0 = 0.0
     _m1_1 = _c2
-    _m2_0 = I3*_c0
+    _m2_0 = _c1*p_I3
     _m2_1 = 0.0
-    _m2_2 = I3
-    _f0 = _p_psi
-    _f1 = _p_theta
-    _f2 = _p_phi
+    _m2_2 = p_I3
+    _f0 = mom_psi
+    _f1 = mom_theta
+    _f2 = mom_phi
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -344,25 +348,25 @@ def canonical_partials(t, y, p, out):
     """At y = (q, q̇), shape (4, n, n) into `out`: out[0] = M, out[1] = ∂P/∂q, out[2] = ∂r/∂q,
     out[3] = ∂r/∂q̇ (P = M q̇ + b the momenta, r = ∂L/∂q + Q − ∂D/∂q̇ their rate; row i is
     component i, column j the variable j)."""
-    theta = y[1]
-    psi_dot = y[3]
-    phi_dot = y[5]
-    M = p[0]
-    l = p[1]
-    g = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    _c0 = _cos(theta)
-    _c1 = M*l**2
-    _c2 = I3 - I1 - _c1
-    _c3 = _c2*_c0**2
-    _c4 = I1 + _c1
-    _c5 = I3*_c0
-    _c6 = _sin(theta)
-    _c7 = I3*_c6
-    _c8 = -_c7*phi_dot - 2.0*_c0*_c2*_c6*psi_dot
-    _c9 = -_c7*psi_dot
-    _c10 = psi_dot**2
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = p_M*p_l**2
+    _c1 = p_I3 - _c0 - p_I1
+    _c2 = _cos(q_theta)
+    _c3 = _c1*_c2**2
+    _c4 = _c0 + p_I1
+    _c5 = _c2*p_I3
+    _c6 = _sin(q_theta)
+    _c7 = _c6*p_I3
+    _c8 = -_c7*qd_phi - 2.0*_c1*_c2*_c6*qd_psi
+    _c9 = -_c7*qd_psi
+    _c10 = qd_psi**2
     out[0, 0, 0] = _c3 + _c4
     out[0, 0, 1] = 0.0
     out[0, 0, 2] = _c5
@@ -371,7 +375,7 @@ def canonical_partials(t, y, p, out):
     out[0, 1, 2] = 0.0
     out[0, 2, 0] = _c5
     out[0, 2, 1] = 0.0
-    out[0, 2, 2] = I3
+    out[0, 2, 2] = p_I3
     out[1, 0, 0] = 0.0
     out[1, 0, 1] = _c8
     out[1, 0, 2] = 0.0
@@ -385,7 +389,7 @@ def canonical_partials(t, y, p, out):
     out[2, 0, 1] = 0.0
     out[2, 0, 2] = 0.0
     out[2, 1, 0] = 0.0
-    out[2, 1, 1] = -_c10*_c3 + _c10*_c2*_c6**2 - _c5*phi_dot*psi_dot + M*_c0*g*l
+    out[2, 1, 1] = -_c10*_c3 + _c1*_c10*_c6**2 - _c5*qd_phi*qd_psi + _c2*p_M*p_g*p_l
     out[2, 1, 2] = 0.0
     out[2, 2, 0] = 0.0
     out[2, 2, 1] = 0.0
@@ -2755,35 +2759,35 @@ def taylor_coefficients(t, y, p, X, W):
     recurrences); each block is commented with the statement of `rhs` it computes.
     Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""
     order = X.shape[1] - 1
-    M = p[0]
-    l = p[1]
-    g = p[2]
-    I1 = p[3]
-    I3 = p[4]
-    _c1 = M*l**2
-    _c2 = I3 - I1 - _c1
-    _c3 = I1 + _c1
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = p_M*p_l**2
+    _c1 = p_I3 - _c0 - p_I1
+    _c3 = _c0 + p_I1
     _m1_0 = 0.0
     _m1_1 = _c3
     _m2_1 = 0.0
-    _m2_2 = I3
-    _k18 = M*g*l
+    _m2_2 = p_I3
+    _k19 = p_M*p_g*p_l
     # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
-    theta = 1
-    psi_dot = 3
-    theta_dot = 4
-    phi_dot = 5
+    q_theta = 1
+    qd_psi = 3
+    qd_theta = 4
+    qd_phi = 5
     _c4 = 0
-    _c0 = 1
-    _u2 = 2
-    _c5 = 3
-    _u4 = 4
-    _c6 = 5
-    _c7 = 6
+    _c2 = 1
+    _c5 = 2
+    _c6 = 3
+    _c7 = 4
+    _c8 = 5
+    _u6 = 6
     _u7 = 7
-    _u8 = 8
-    _m0_0 = 9
-    _m2_0 = 10
+    _m0_0 = 8
+    _m2_0 = 9
+    _u10 = 10
     _u11 = 11
     _u12 = 12
     _u13 = 13
@@ -2791,10 +2795,10 @@ def taylor_coefficients(t, y, p, X, W):
     _u15 = 15
     _u16 = 16
     _u17 = 17
-    _u19 = 18
+    _u18 = 18
     _u20 = 19
-    _f1 = 20
-    _u22 = 21
+    _u21 = 20
+    _f1 = 21
     _f2 = 22
     _l1_0 = 23
     _l2_0 = 24
@@ -2831,118 +2835,119 @@ def taylor_coefficients(t, y, p, X, W):
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
-        # _c0 = _cos(theta)
-        # _c4, _c0 = sin(theta), cos(theta)
+        # _c2 = _cos(q_theta)
+        # _c4, _c2 = sin(q_theta), cos(q_theta)
         if k == 0:
-            W[_c4, 0] = _sin(X[theta, 0])
-            W[_c0, 0] = _cos(X[theta, 0])
+            W[_c4, 0] = _sin(X[q_theta, 0])
+            W[_c2, 0] = _cos(X[q_theta, 0])
         else:
-            _ja = k*X[theta, k]
-            _s = _ja*W[_c0, 0] if k % 2 == 1 else 0.0
+            _ja = k*X[q_theta, k]
+            _s = _ja*W[_c2, 0] if k % 2 == 1 else 0.0
             _c = _ja*W[_c4, 0] if k % 2 == 1 else 0.0
             _r = 0.0
             _d = 0.0
             for _j in range(1, k, 2):
-                _ja = _j*X[theta, _j]
-                _jb = (_j + 1)*X[theta, _j + 1]
-                _s += _ja*W[_c0, k - _j]
+                _ja = _j*X[q_theta, _j]
+                _jb = (_j + 1)*X[q_theta, _j + 1]
+                _s += _ja*W[_c2, k - _j]
                 _c += _ja*W[_c4, k - _j]
-                _r += _jb*W[_c0, k - 1 - _j]
+                _r += _jb*W[_c2, k - 1 - _j]
                 _d += _jb*W[_c4, k - 1 - _j]
             W[_c4, k] = (_s + _r)*_ik
-            W[_c0, k] = -(_c + _d)*_ik
-        # _c4 = _sin(theta)
-        # _c5 = I3*_c4*phi_dot
-        # _u2 = _c4*phi_dot
-        _s = W[_c4, k]*X[phi_dot, 0] if k % 2 == 0 else 0.0
+            W[_c2, k] = -(_c + _d)*_ik
+        # _c4 = _sin(q_theta)
+        # _c5 = p_I3*qd_phi
+        W[_c5, k] = p_I3*X[qd_phi, k]
+        # _c6 = _c4*qd_psi
+        # _c6 = _c4*qd_psi
+        _s = W[_c4, k]*X[qd_psi, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c4, _j]*X[phi_dot, k - _j]
-            _r += W[_c4, _j + 1]*X[phi_dot, k - 1 - _j]
-        W[_u2, k] = _s + _r
-        W[_c5, k] = I3*W[_u2, k]
-        # _c6 = _c0*_c2*_c4
-        # _u4 = _c0*_c4
-        _s = W[_c0, k]*W[_c4, 0] if k % 2 == 0 else 0.0
+            _s += W[_c4, _j]*X[qd_psi, k - _j]
+            _r += W[_c4, _j + 1]*X[qd_psi, k - 1 - _j]
+        W[_c6, k] = _s + _r
+        # _c7 = _c6*qd_theta
+        # _c7 = _c6*qd_theta
+        _s = W[_c6, k]*X[qd_theta, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c0, _j]*W[_c4, k - _j]
-            _r += W[_c0, _j + 1]*W[_c4, k - 1 - _j]
-        W[_u4, k] = _s + _r
-        W[_c6, k] = _c2*W[_u4, k]
-        # _c7 = psi_dot*theta_dot
-        # _c7 = psi_dot*theta_dot
-        _s = X[psi_dot, k]*X[theta_dot, 0] if k % 2 == 0 else 0.0
-        _r = 0.0
-        for _j in range(0, k, 2):
-            _s += X[psi_dot, _j]*X[theta_dot, k - _j]
-            _r += X[psi_dot, _j + 1]*X[theta_dot, k - 1 - _j]
+            _s += W[_c6, _j]*X[qd_theta, k - _j]
+            _r += W[_c6, _j + 1]*X[qd_theta, k - 1 - _j]
         W[_c7, k] = _s + _r
-        # _m0_0 = _c3 + _c2*_c0**2
-        # _u7 = _c0**2
+        # _c8 = _c1*_c2
+        W[_c8, k] = _c1*W[_c2, k]
+        # _m0_0 = _c3 + _c1*_c2**2
+        # _u6 = _c2**2
         _m = (k + 1)//2
-        _s = W[_c0, _m - 1]*W[_c0, k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = W[_c2, _m - 1]*W[_c2, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += W[_c0, _j]*W[_c0, k - _j]
-            _r += W[_c0, _j + 1]*W[_c0, k - 1 - _j]
-        W[_u7, k] = 2.0*(_s + _r) + (W[_c0, k//2]*W[_c0, k//2] if k % 2 == 0 else 0.0)
-        W[_u8, k] = _c2*W[_u7, k]
-        W[_m0_0, k] = W[_u8, k] + _c3 if k == 0 else W[_u8, k]
-        # _m2_0 = I3*_c0
-        W[_m2_0, k] = I3*W[_c0, k]
-        # _f0 = _c5*theta_dot + 2.0*_c6*_c7
-        # _u11 = _c5*theta_dot
-        _s = W[_c5, k]*X[theta_dot, 0] if k % 2 == 0 else 0.0
+            _s += W[_c2, _j]*W[_c2, k - _j]
+            _r += W[_c2, _j + 1]*W[_c2, k - 1 - _j]
+        W[_u6, k] = 2.0*(_s + _r) + (W[_c2, k//2]*W[_c2, k//2] if k % 2 == 0 else 0.0)
+        W[_u7, k] = _c1*W[_u6, k]
+        W[_m0_0, k] = W[_u7, k] + _c3 if k == 0 else W[_u7, k]
+        # _m2_0 = _c2*p_I3
+        W[_m2_0, k] = p_I3*W[_c2, k]
+        # _f0 = 2.0*_c7*_c8 + _c4*_c5*qd_theta
+        # _u10 = _c7*_c8
+        _s = W[_c7, k]*W[_c8, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c5, _j]*X[theta_dot, k - _j]
-            _r += W[_c5, _j + 1]*X[theta_dot, k - 1 - _j]
-        W[_u11, k] = _s + _r
-        # _u12 = _c6*_c7
-        _s = W[_c6, k]*W[_c7, 0] if k % 2 == 0 else 0.0
+            _s += W[_c7, _j]*W[_c8, k - _j]
+            _r += W[_c7, _j + 1]*W[_c8, k - 1 - _j]
+        W[_u10, k] = _s + _r
+        W[_u11, k] = 2.0*W[_u10, k]
+        # _u12 = _c4*_c5
+        _s = W[_c4, k]*W[_c5, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c6, _j]*W[_c7, k - _j]
-            _r += W[_c6, _j + 1]*W[_c7, k - 1 - _j]
+            _s += W[_c4, _j]*W[_c5, k - _j]
+            _r += W[_c4, _j + 1]*W[_c5, k - 1 - _j]
         W[_u12, k] = _s + _r
-        W[_u13, k] = 2.0*W[_u12, k]
-        W[_f0, k] = W[_u11, k] + W[_u13, k]
-        # _f1 = -_c5*psi_dot - _c6*psi_dot**2 + M*_c4*g*l
-        # _u15 = _c5*psi_dot
-        _s = W[_c5, k]*X[psi_dot, 0] if k % 2 == 0 else 0.0
+        # _u13 = _u12*qd_theta
+        _s = W[_u12, k]*X[qd_theta, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c5, _j]*X[psi_dot, k - _j]
-            _r += W[_c5, _j + 1]*X[psi_dot, k - 1 - _j]
+            _s += W[_u12, _j]*X[qd_theta, k - _j]
+            _r += W[_u12, _j + 1]*X[qd_theta, k - 1 - _j]
+        W[_u13, k] = _s + _r
+        W[_f0, k] = W[_u11, k] + W[_u13, k]
+        # _f1 = -_c5*_c6 - _c4*_c8*qd_psi**2 + _c4*p_M*p_g*p_l
+        # _u15 = _c5*_c6
+        _s = W[_c5, k]*W[_c6, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c5, _j]*W[_c6, k - _j]
+            _r += W[_c5, _j + 1]*W[_c6, k - 1 - _j]
         W[_u15, k] = _s + _r
-        # _u16 = psi_dot**2
+        # _u16 = _c4*_c8
+        _s = W[_c4, k]*W[_c8, 0] if k % 2 == 0 else 0.0
+        _r = 0.0
+        for _j in range(0, k, 2):
+            _s += W[_c4, _j]*W[_c8, k - _j]
+            _r += W[_c4, _j + 1]*W[_c8, k - 1 - _j]
+        W[_u16, k] = _s + _r
+        # _u17 = qd_psi**2
         _m = (k + 1)//2
-        _s = X[psi_dot, _m - 1]*X[psi_dot, k - _m + 1] if _m % 2 == 1 else 0.0
+        _s = X[qd_psi, _m - 1]*X[qd_psi, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
-            _s += X[psi_dot, _j]*X[psi_dot, k - _j]
-            _r += X[psi_dot, _j + 1]*X[psi_dot, k - 1 - _j]
-        W[_u16, k] = 2.0*(_s + _r) + (X[psi_dot, k//2]*X[psi_dot, k//2] if k % 2 == 0 else 0.0)
-        # _u17 = _c6*_u16
-        _s = W[_c6, k]*W[_u16, 0] if k % 2 == 0 else 0.0
+            _s += X[qd_psi, _j]*X[qd_psi, k - _j]
+            _r += X[qd_psi, _j + 1]*X[qd_psi, k - 1 - _j]
+        W[_u17, k] = 2.0*(_s + _r) + (X[qd_psi, k//2]*X[qd_psi, k//2] if k % 2 == 0 else 0.0)
+        # _u18 = _u16*_u17
+        _s = W[_u16, k]*W[_u17, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += W[_c6, _j]*W[_u16, k - _j]
-            _r += W[_c6, _j + 1]*W[_u16, k - 1 - _j]
-        W[_u17, k] = _s + _r
-        W[_u19, k] = _k18*W[_c4, k]
-        W[_u20, k] = W[_u19, k] - W[_u15, k]
-        W[_f1, k] = W[_u20, k] - W[_u17, k]
-        # _f2 = I3*_c4*_c7
-        # _u22 = _c4*_c7
-        _s = W[_c4, k]*W[_c7, 0] if k % 2 == 0 else 0.0
-        _r = 0.0
-        for _j in range(0, k, 2):
-            _s += W[_c4, _j]*W[_c7, k - _j]
-            _r += W[_c4, _j + 1]*W[_c7, k - 1 - _j]
-        W[_u22, k] = _s + _r
-        W[_f2, k] = I3*W[_u22, k]
+            _s += W[_u16, _j]*W[_u17, k - _j]
+            _r += W[_u16, _j + 1]*W[_u17, k - 1 - _j]
+        W[_u18, k] = _s + _r
+        W[_u20, k] = _k19*W[_c4, k]
+        W[_u21, k] = W[_u20, k] - W[_u15, k]
+        W[_f1, k] = W[_u21, k] - W[_u18, k]
+        # _f2 = _c7*p_I3
+        W[_f2, k] = p_I3*W[_c7, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         if k == 0 and not W[_m0_0, 0] > _PIVOT_TOLERANCE*abs(W[_m0_0, 0]):
             return 1
@@ -3104,9 +3109,9 @@ def taylor_coefficients(t, y, p, X, W):
         W[_u52, k] = _s + _r
         W[_x0, k] = W[_u51, k] - W[_u52, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
-        X[0, k + 1] = X[psi_dot, k]*_ik1
-        X[1, k + 1] = X[theta_dot, k]*_ik1
-        X[2, k + 1] = X[phi_dot, k]*_ik1
+        X[0, k + 1] = X[qd_psi, k]*_ik1
+        X[1, k + 1] = X[qd_theta, k]*_ik1
+        X[2, k + 1] = X[qd_phi, k]*_ik1
         X[3, k + 1] = W[_x0, k]*_ik1
         X[4, k + 1] = W[_x1, k]*_ik1
         X[5, k + 1] = W[_x2, k]*_ik1
@@ -3115,6 +3120,10 @@ def taylor_coefficients(t, y, p, X, W):
 
 #: Rows of the work array of `taylor_coefficients` (58 series operations per order).
 TAYLOR_WORK = 53
+
+#: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
+#: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
+TAYLOR_PERIODIC = np.array([1], dtype=np.int64)
 
 
 # ----------------------------------------------------------------------------
@@ -3127,7 +3136,7 @@ after ``drivers.py`` and the module's ``taylor_coefficients`` kernel
 (`lagcomp.codegen.taylor` emits it, the recurrences written out as loops,
 for unconstrained systems whose
 equations use only functions with a Taylor recurrence).  The module provides
-``taylor_coefficients(t, y, p, X, W)``, ``TAYLOR_WORK``, ``event_values`` and
+``taylor_coefficients(t, y, p, X, W)``, ``TAYLOR_WORK``, ``TAYLOR_PERIODIC``, ``event_values`` and
 the helpers and status codes of ``drivers.py`` (``_ODE_*``, and in modules
 with events ``_event_crossings``, ``_record_events``, ``_dense_state``).
 
@@ -3147,11 +3156,20 @@ resuming), without tableau arrays.  Each step:
    ``max_step`` and to the end of the span.  Then the truncation term is
    about ``s e^(−2p) ≤ ε s``: no step is ever rejected, and ``nrejected``
    stays 0.  When both coefficients vanish (a polynomial solution) the step
-   is only limited by ``max_step`` and the span.
+   is only limited by ``max_step`` and the span.  The series is computed
+   at y, except that each coordinate the rhs sees only through sin and cos
+   (``TAYLOR_PERIODIC``, `lagcomp.codegen.periodic`) enters reduced to
+   [−π, π] with the carry of step 2 folded in (``_taylor_reduced``): an
+   angle that has wound to θ ≈ 500 is stored to ulp(500) = 5.7e-14, and the
+   rhs evaluated there took in that rounding at every step (the double
+   pendulum's relative energy error at t = 10⁴, rms over 16 starts 1 ulp
+   apart, is 2.0e-11 without, 5.4e-13 with it: ``python -m
+   bench.taylor_error_sources``).  The norms of the step rule stay those of
+   y (with the reduced state: 2.4e-13, for 21% more steps).
 2. The new state is the series at h, summed by Horner's rule from the top
    order down, and its increment added to y with compensated (Kahan)
-   summation (about 10x smaller energy drift on the double pendulum to
-   t = 10⁴); the carry is an argument, so that a run resumed chunk by chunk
+   summation (that energy error is 3.3e-11 with a plain sum, the same
+   bench); the carry is an argument, so that a run resumed chunk by chunk
    is bitwise the same as one call (simulate keeps it; sweeps pass an empty
    array and the carry restarts with each call).
 3. Dense output is the series itself: ``t_eval`` points and events inside
@@ -3161,12 +3179,39 @@ resuming), without tableau arrays.  Each step:
 ``nfev`` counts evaluations of ``taylor_coefficients`` (one per step).
 """
 
-# ruff: noqa: F821  (taylor_coefficients, TAYLOR_WORK, event_values, _ODE_* ... come from the module)
+# ruff: noqa: F821  (taylor_coefficients, TAYLOR_WORK, TAYLOR_PERIODIC, event_values, _ODE_* ... come from the module)
 
 import math
 
 import numpy as np
 from numba import njit
+
+# 2π in three parts: the first two of 31 and 32 significant bits, so that m times them is exact for
+# |m| < 2²⁰ (fdlibm's π/2 parts pio2_1, pio2_2, pio2_3, times 4); the third leaves 3.4e-31
+_TWO_PI_1, _TWO_PI_2, _TWO_PI_3 = 6.2831853069365025, 2.4308402025215864e-10, 8.089064994844666e-21
+#: Up to this |y| ``_taylor_reduced`` reduces (|m| < 2²⁰); beyond, y − carry as it is.
+_TAYLOR_REDUCE_MAX = 6.5e6
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _taylor_reduced(y, carry):
+    """y − carry − 2πm with m the nearest integer to y/2π, rounded once (|result| ≤ π + 1 ulp).
+
+    y − m·2π₁ is exact (both factors short, and Sterbenz's lemma: the two
+    are within a factor 2 when m ≠ 0); the second part is subtracted with
+    its rounding error kept (Knuth's TwoSum), then the third part and the
+    carry (y stands for y − carry, ``taylor_run``) join that small term.
+    Branch-free apart from the final choice, for the SIMD lanes of
+    ``taylor_lanes`` as well.
+    """
+    m = np.floor(y * 0.15915494309189535 + 0.5)
+    r = y - m * _TWO_PI_1
+    b = m * _TWO_PI_2
+    s = r - b
+    bb = s - r
+    e = (r - (s - bb)) - (b + bb)
+    reduced = s + ((e - m * _TWO_PI_3) - carry)
+    return reduced if abs(y) < _TAYLOR_REDUCE_MAX else y - carry
 
 
 @njit(cache=True, error_model="numpy")
@@ -3193,6 +3238,7 @@ def taylor_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
     X = np.empty((n, order + 1))
     W = np.empty((TAYLOR_WORK, order + 1))
     y_new = np.empty(n)
+    y_series = np.empty(n)              # where the series is computed: y, periodic coordinates reduced
     if compensation.shape[0] != n:      # no carry kept by the caller (sweeps): one for this call
         compensation = np.zeros(n)
 
@@ -3212,10 +3258,16 @@ def taylor_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
             return _ODE_PAUSED, n_saved
 
         # The series at (t, y), and the step from its last two coefficients.
-        status = taylor_coefficients(t, y, p, X, W)
+        for i in range(n):
+            y_series[i] = y[i]
+        for i in TAYLOR_PERIODIC:
+            y_series[i] = _taylor_reduced(y[i], compensation[i])
+        status = taylor_coefficients(t, y_series, p, X, W)
         counters[0] += 1
         if status != 0:
             return _ODE_RHS_FAILED, n_saved
+        for i in TAYLOR_PERIODIC:
+            X[i, 0] = y[i]                      # the dense output's constant term: y itself
         # Non-finite coefficients: an infinite one among the last two would make the step 0 (-3, "too
         # small"), so those are tested here; any other reaches y_new through the Horner sum, tested there.
         norm_y = 0.0

@@ -7,6 +7,7 @@ State       y = (x, z, theta, x_dot, z_dot, theta_dot)
 Parameters  p = (M, R, a, I, g)
 
 Equations of motion: M(q, t) q̈ = F(q, q̇, t) (see lagcomp.mechanics.lagrange).
+Kernel locals: q_<name>, qd_<name>, p_<name> for the coordinates, velocities, parameters above.
 All kernels take float64 arrays and write into preallocated outputs.
 """
 
@@ -22,51 +23,51 @@ def rhs(t, y, p, out):
     M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).
 
     Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid."""
-    x = y[0]
-    z = y[1]
-    theta = y[2]
-    x_dot = y[3]
-    z_dot = y[4]
-    theta_dot = y[5]
-    M = p[0]
-    R = p[1]
-    a = p[2]
-    I = p[3]
-    g = p[4]
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
     _baumgarte_alpha = p[5]
     _baumgarte_beta = p[6]
     _kkt = np.zeros((5, 6))
-    _c0 = M*a
-    _c1 = _c0*_cos(theta)
+    _c0 = p_M*p_a
+    _c1 = _c0*_cos(q_theta)
     _c2 = -_c1
-    _c3 = _sin(theta)
+    _c3 = _sin(q_theta)
     _c4 = _c0*_c3
-    _c5 = theta_dot**2
-    _c6 = M*g
-    _c7 = -R
+    _c5 = qd_theta**2
+    _c6 = p_M*p_g
+    _c7 = -p_R
     _c8 = _baumgarte_beta**2
     _c9 = 2.0*_baumgarte_alpha
-    out[0] = x_dot
-    out[1] = z_dot
-    out[2] = theta_dot
-    _kkt[0, 0] = M
+    out[0] = qd_x
+    out[1] = qd_z
+    out[2] = qd_theta
+    _kkt[0, 0] = p_M
     _kkt[0, 2] = _c2
-    _kkt[1, 1] = M
+    _kkt[1, 1] = p_M
     _kkt[1, 2] = _c4
     _kkt[2, 0] = _c2
     _kkt[2, 1] = _c4
-    _kkt[2, 2] = I + M*a**2
+    _kkt[2, 2] = p_I + p_M*p_a**2
     _kkt[0, 4] = -1.0
     _kkt[1, 3] = -1.0
-    _kkt[2, 4] = R
+    _kkt[2, 4] = p_R
     _kkt[0, 5] = -_c4*_c5
     _kkt[1, 5] = -_c6 - _c1*_c5
-    _kkt[2, 5] = -_c3*_c6*a
+    _kkt[2, 5] = -_c3*_c6*p_a
     _kkt[3, 1] = 1.0
     _kkt[4, 0] = 1.0
     _kkt[4, 2] = _c7
-    _kkt[3, 5] = -_c8*(_c7 + z) - _c9*z_dot
-    _kkt[4, 5] = -_c8*(x - R*theta) - _c9*(x_dot - R*theta_dot)
+    _kkt[3, 5] = -_c8*(_c7 + q_z) - _c9*qd_z
+    _kkt[4, 5] = -_c8*(q_x - p_R*q_theta) - _c9*(qd_x - p_R*qd_theta)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -80,48 +81,48 @@ def rhs(t, y, p, out):
 def reactions(t, y, p, out):
     """Multipliers λ, shape (2,), in constraint order ('normal', 'friction'): the generalized
     force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular."""
-    x = y[0]
-    z = y[1]
-    theta = y[2]
-    x_dot = y[3]
-    z_dot = y[4]
-    theta_dot = y[5]
-    M = p[0]
-    R = p[1]
-    a = p[2]
-    I = p[3]
-    g = p[4]
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
     _baumgarte_alpha = p[5]
     _baumgarte_beta = p[6]
     _kkt = np.zeros((5, 6))
-    _c0 = M*a
-    _c1 = _c0*_cos(theta)
+    _c0 = p_M*p_a
+    _c1 = _c0*_cos(q_theta)
     _c2 = -_c1
-    _c3 = _sin(theta)
+    _c3 = _sin(q_theta)
     _c4 = _c0*_c3
-    _c5 = theta_dot**2
-    _c6 = M*g
-    _c7 = -R
+    _c5 = qd_theta**2
+    _c6 = p_M*p_g
+    _c7 = -p_R
     _c8 = _baumgarte_beta**2
     _c9 = 2.0*_baumgarte_alpha
-    _kkt[0, 0] = M
+    _kkt[0, 0] = p_M
     _kkt[0, 2] = _c2
-    _kkt[1, 1] = M
+    _kkt[1, 1] = p_M
     _kkt[1, 2] = _c4
     _kkt[2, 0] = _c2
     _kkt[2, 1] = _c4
-    _kkt[2, 2] = I + M*a**2
+    _kkt[2, 2] = p_I + p_M*p_a**2
     _kkt[0, 4] = -1.0
     _kkt[1, 3] = -1.0
-    _kkt[2, 4] = R
+    _kkt[2, 4] = p_R
     _kkt[0, 5] = -_c4*_c5
     _kkt[1, 5] = -_c6 - _c1*_c5
-    _kkt[2, 5] = -_c3*_c6*a
+    _kkt[2, 5] = -_c3*_c6*p_a
     _kkt[3, 1] = 1.0
     _kkt[4, 0] = 1.0
     _kkt[4, 2] = _c7
-    _kkt[3, 5] = -_c8*(_c7 + z) - _c9*z_dot
-    _kkt[4, 5] = -_c8*(x - R*theta) - _c9*(x_dot - R*theta_dot)
+    _kkt[3, 5] = -_c8*(_c7 + q_z) - _c9*qd_z
+    _kkt[4, 5] = -_c8*(q_x - p_R*q_theta) - _c9*(qd_x - p_R*qd_theta)
     _status = _kkt_solve(_kkt, 3)
     if _status:
         return _status
@@ -133,29 +134,29 @@ def reactions(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (4,): Φ of the 2 holonomic constraints, then Λ q̇ + b of all 2."""
-    x = y[0]
-    z = y[1]
-    theta = y[2]
-    x_dot = y[3]
-    z_dot = y[4]
-    theta_dot = y[5]
-    R = p[1]
-    out[0] = z - R
-    out[1] = x - R*theta
-    out[2] = z_dot
-    out[3] = x_dot - R*theta_dot
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_R = p[1]
+    out[0] = q_z - p_R
+    out[1] = q_x - p_R*q_theta
+    out[2] = qd_z
+    out[3] = qd_x - p_R*qd_theta
 
 
 @njit(cache=True, error_model="numpy")
 def constraint_matrix(t, y, p, out):
     """Constraint matrix [Λ | b], shape (2, 4), into `out`."""
-    R = p[1]
+    p_R = p[1]
     out[0, 0] = 0.0
     out[0, 1] = 1.0
     out[0, 2] = 0.0
     out[1, 0] = 1.0
     out[1, 1] = 0.0
-    out[1, 2] = -R
+    out[1, 2] = -p_R
     out[0, 3] = 0.0
     out[1, 3] = 0.0
 
@@ -163,54 +164,54 @@ def constraint_matrix(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
-    theta = y[2]
-    M = p[0]
-    a = p[2]
-    I = p[3]
-    _c0 = M*a
-    _c1 = -_c0*_cos(theta)
-    _c2 = _c0*_sin(theta)
-    out[0, 0] = M
+    q_theta = y[2]
+    p_M = p[0]
+    p_a = p[2]
+    p_I = p[3]
+    _c0 = p_M*p_a
+    _c1 = -_c0*_cos(q_theta)
+    _c2 = _c0*_sin(q_theta)
+    out[0, 0] = p_M
     out[0, 1] = 0.0
     out[0, 2] = _c1
     out[1, 0] = 0.0
-    out[1, 1] = M
+    out[1, 1] = p_M
     out[1, 2] = _c2
     out[2, 0] = _c1
     out[2, 1] = _c2
-    out[2, 2] = I + M*a**2
+    out[2, 2] = p_I + p_M*p_a**2
 
 
 @njit(cache=True, error_model="numpy")
 def forcing(t, y, p, out):
     """Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`."""
-    theta = y[2]
-    theta_dot = y[5]
-    M = p[0]
-    a = p[2]
-    g = p[4]
-    _c0 = a*_sin(theta)
-    _c1 = M*theta_dot**2
-    _c2 = M*g
+    q_theta = y[2]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_a = p[2]
+    p_g = p[4]
+    _c0 = p_a*_sin(q_theta)
+    _c1 = p_M*qd_theta**2
+    _c2 = p_M*p_g
     out[0] = -_c0*_c1
-    out[1] = -_c2 - _c1*a*_cos(theta)
+    out[1] = -_c2 - _c1*p_a*_cos(q_theta)
     out[2] = -_c0*_c2
 
 
 @njit(cache=True, error_model="numpy")
 def energy(t, y, p):
     """Total mechanical energy T + V."""
-    z = y[1]
-    theta = y[2]
-    x_dot = y[3]
-    z_dot = y[4]
-    theta_dot = y[5]
-    M = p[0]
-    a = p[2]
-    I = p[3]
-    g = p[4]
-    _c0 = a*_cos(theta)
-    return (0.5)*I*theta_dot**2 + (0.5)*M*((x_dot - _c0*theta_dot)**2 + (z_dot + a*theta_dot*_sin(theta))**2) + M*g*(z - _c0)
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _c0 = p_a*_cos(q_theta)
+    return (0.5)*p_I*qd_theta**2 + (0.5)*p_M*((qd_x - _c0*qd_theta)**2 + (qd_z + p_a*qd_theta*_sin(q_theta))**2) + p_M*p_g*(q_z - _c0)
 
 
 # Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.
@@ -221,39 +222,39 @@ energy_function = energy
 @njit(cache=True, error_model="numpy")
 def momenta(t, y, p, out):
     """Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`."""
-    theta = y[2]
-    x_dot = y[3]
-    z_dot = y[4]
-    theta_dot = y[5]
-    M = p[0]
-    a = p[2]
-    I = p[3]
-    _c0 = M*x_dot
-    _c1 = M*theta_dot
-    _c2 = a*_cos(theta)
-    _c3 = M*z_dot
-    _c4 = a*_sin(theta)
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_a = p[2]
+    p_I = p[3]
+    _c0 = p_M*qd_x
+    _c1 = p_a*_cos(q_theta)
+    _c2 = p_M*qd_theta
+    _c3 = p_M*qd_z
+    _c4 = p_a*_sin(q_theta)
     out[0] = _c0 - _c1*_c2
-    out[1] = _c3 + _c1*_c4
-    out[2] = _c3*_c4 + theta_dot*(I + M*a**2) - _c0*_c2
+    out[1] = _c3 + _c2*_c4
+    out[2] = _c3*_c4 + qd_theta*(p_I + p_M*p_a**2) - _c0*_c1
 
 
 @njit(cache=True, error_model="numpy")
 def momentum_rate(t, y, p, out):
     """ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces."""
-    theta = y[2]
-    x_dot = y[3]
-    z_dot = y[4]
-    theta_dot = y[5]
-    M = p[0]
-    a = p[2]
-    g = p[4]
-    _c0 = M*g
-    _c1 = a*_sin(theta)
-    _c2 = M*theta_dot
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_a = p[2]
+    p_g = p[4]
+    _c0 = p_M*p_g
+    _c1 = p_a*_sin(q_theta)
+    _c2 = p_M*qd_theta
     out[0] = 0.0
     out[1] = -_c0
-    out[2] = -_c0*_c1 + _c1*_c2*x_dot + _c2*a*z_dot*_cos(theta)
+    out[2] = -_c0*_c1 + _c1*_c2*qd_x + _c2*p_a*qd_z*_cos(q_theta)
 
 
 @njit(cache=True, error_model="numpy")
@@ -265,10 +266,10 @@ def event_values(t, y, p, out):
 def rest_partials(t, y, p, out):
     """At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,
     column j the variable j). The velocities in `y` are ignored: the partials are those at rest."""
-    theta = y[2]
-    M = p[0]
-    a = p[2]
-    g = p[4]
+    q_theta = y[2]
+    p_M = p[0]
+    p_a = p[2]
+    p_g = p[4]
     out[0, 0, 0] = 0.0
     out[0, 0, 1] = 0.0
     out[0, 0, 2] = 0.0
@@ -277,7 +278,7 @@ def rest_partials(t, y, p, out):
     out[0, 1, 2] = 0.0
     out[0, 2, 0] = 0.0
     out[0, 2, 1] = 0.0
-    out[0, 2, 2] = -M*a*g*_cos(theta)
+    out[0, 2, 2] = -p_M*p_a*p_g*_cos(q_theta)
     out[1, 0, 0] = 0.0
     out[1, 0, 1] = 0.0
     out[1, 0, 2] = 0.0
