@@ -49,7 +49,8 @@ def lagranges_method_rhs(system):
 
     def rhs(time, y):
         qv, uv = y[:n], y[n:]
-        force = np.asarray(F(qv, uv, time, p), dtype=float).ravel() + np.asarray(R(qv, uv, time, p), dtype=float).ravel()
+        force = np.asarray(F(qv, uv, time, p), dtype=float).ravel()
+        force = force + np.asarray(R(qv, uv, time, p), dtype=float).ravel()
         return np.concatenate([uv, np.linalg.solve(np.asarray(M(qv, uv, time, p), dtype=float), force)])
 
     return rhs

@@ -17,8 +17,6 @@ and checks their reactions against Newton's.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 import sympy as sp
@@ -85,13 +83,17 @@ def _replace(spec, field, value):
 
 def _add_to(field, terms):
     """Add ε·term to the expression `field`."""
-    return st.tuples(coefficients, st.sampled_from(terms)).map(lambda d: lambda s: _replace(s, field, s[field] + d[0] * d[1]))
+    def change(d):
+        eps, term = d
+        return lambda s: _replace(s, field, s[field] + eps * term)
+    return st.tuples(coefficients, st.sampled_from(terms)).map(change)
 
 
 def _add_to_force(draw_index, terms):
     def change(d):
         i, eps, term = d
-        return lambda s: _replace(s, "forces", tuple(Q + eps * term if j == i else Q for j, Q in enumerate(s["forces"])))
+        return lambda s: _replace(s, "forces", tuple(Q + eps * term if j == i else Q
+                                                     for j, Q in enumerate(s["forces"])))
     return st.tuples(draw_index, coefficients, st.sampled_from(terms)).map(change)
 
 

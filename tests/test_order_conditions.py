@@ -83,7 +83,7 @@ def density(tree) -> int:
 
 def test_tree_counts_are_oeis_a000081():
     assert [len(trees(n)) for n in range(1, 10)] == [1, 1, 2, 4, 9, 20, 48, 115, 286]
-    assert {t: density(t) for t in trees(3)} == {(((),),): 6, ((), ()): 3}  # the tall tree [[•]], the bushy [•, •]
+    assert {t: density(t) for t in trees(3)} == {(((),),): 6, ((), ()): 3}  # the tall tree [[•]], bushy [•, •]
 
 
 class Weights:
@@ -252,7 +252,7 @@ def _generators():
 
 
 def _basic_method(X, weight):
-    """Taylor series of Φ_{wh} = exp(wh X₁ + (wh)³X₃ + (wh)⁵X₅ + (wh)⁷X₇): any symmetric method of order 2."""
+    """Taylor series of Φ_{wh} = exp(wh X₁ + (wh)³X₃ + (wh)⁵X₅ + (wh)⁷X₇): any symmetric 2nd-order method."""
     y = [mp.zeros(4, 4) for _ in range(DEGREE + 1)]
     for k in (1, 3, 5, 7):
         y[k] = weight**k * X[k]

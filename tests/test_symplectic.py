@@ -182,9 +182,9 @@ def forced_duffing(cache_dir):
     return lc.compile(system, cache_dir=cache_dir)
 
 
-@pytest.mark.parametrize("method, steps", [("verlet", (0.04, 0.02, 0.01, 0.005)), ("yoshida4", (0.04, 0.02, 0.01, 0.005)),
-                                           ("yoshida6", (0.1, 0.05, 0.025)), ("gauss2", (0.08, 0.04, 0.02, 0.01)),
-                                           ("gauss3", (0.1, 0.05, 0.025))])
+@pytest.mark.parametrize("method, steps", [("verlet", (0.04, 0.02, 0.01, 0.005)),
+                                           ("yoshida4", (0.04, 0.02, 0.01, 0.005)), ("yoshida6", (0.1, 0.05, 0.025)),
+                                           ("gauss2", (0.08, 0.04, 0.02, 0.01)), ("gauss3", (0.1, 0.05, 0.025))])
 def test_imposed_time_dependence_keeps_the_order(forced_duffing, method, steps):
     """Explicit t is advanced with the drifts (compositions) or taken at the stage times (Gauss–Legendre),
     as in the extended phase space: the observed order is the method's.
