@@ -26,3 +26,31 @@ def lagranges_method_functions(system):
     F = F.xreplace(to_plain).xreplace(to_plain_q)
     args = (q, u, t, system.parameters)
     return sp.lambdify(args, M, "numpy"), sp.lambdify(args, F, "numpy")
+
+
+def lagranges_method_rhs(system):
+    """ẏ = f(t, y) of an unconstrained `system` at its default parameters, derived by LagrangesMethod.
+
+    y = (q, q̇); q̈ = M⁻¹ F with M, F from `lagranges_method_functions` and the
+    Rayleigh forces −∂D/∂q̇ added to F.  For scipy's `solve_ivp`.
+    """
+    import numpy as np
+
+    if system.constraints:
+        raise ValueError(f"{system.name} has constraints: LagrangesMethod's multipliers are not set up here")
+    M, F = lagranges_method_functions(system)
+    n = len(system.coordinates)
+    velocities = [c.diff(t) for c in system.coordinates]
+    rayleigh = sp.Matrix([-system.dissipation.diff(v) for v in velocities])
+    q, u = sp.symbols(f"q0:{n}"), sp.symbols(f"u0:{n}")
+    plain = {**dict(zip(velocities, u)), **dict(zip(system.coordinates, q))}
+    R = sp.lambdify((q, u, t, system.parameters), rayleigh.xreplace(plain), "numpy")
+    p = [system.defaults[s.name] for s in system.parameters]
+
+    def rhs(time, y):
+        qv, uv = y[:n], y[n:]
+        force = np.asarray(F(qv, uv, time, p), dtype=float).ravel()
+        force = force + np.asarray(R(qv, uv, time, p), dtype=float).ravel()
+        return np.concatenate([uv, np.linalg.solve(np.asarray(M(qv, uv, time, p), dtype=float), force)])
+
+    return rhs

@@ -43,8 +43,9 @@ def test_run_prints_a_summary_and_saves(capsys, tmp_path, cache_dir):
 
 def test_run_rk4_with_decimation(capsys, cache_dir, tmp_path):
     out_file = tmp_path / "rk4.npz"
-    main(["--cache-dir", str(cache_dir), "run", "simple_pendulum", "--method", "rk4", "--dt", "0.001",
-          "--t-end", "2", "--save-every", "100", "--out", str(out_file)])
+    code = main(["--cache-dir", str(cache_dir), "run", "simple_pendulum", "--method", "rk4", "--dt", "0.001",
+                 "--t-end", "2", "--save-every", "100", "--out", str(out_file)])
+    assert code == 0 and "status 0" in capsys.readouterr().out
     data = np.load(out_file)
     np.testing.assert_allclose(data["t"], np.linspace(0, 2, 21), atol=1e-12)
 

@@ -36,4 +36,4 @@ def test_readme_quick_start_runs_as_written(monkeypatch, cache_dir):
     exec(compile(block, "README.md", "exec"), namespace)
     sol = namespace["sol"]
     assert sol.success and sol.t[-1] == 100 and sol.q.shape == (len(sol.t), 2)
-    assert sol.energy_drift() < 1e-6
+    assert sol.energy_drift() < 2e-7  # measured 6.3e-8 (dop853 at rtol 1e-10 over 100 s)

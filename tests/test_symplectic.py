@@ -6,11 +6,38 @@ import numpy as np
 import pytest
 import sympy as sp
 
+from scipy.integrate import solve_ivp
+
 import lagcomp as lc
 from lagcomp.integrate.compositions import YOSHIDA4, YOSHIDA6, Composition
 from lagcomp.integrate.methods import METHODS
 
 t = lc.t
+
+#: Window on a fitted convergence order (log-log slope of the global error against the step).
+#: Measured deviations from the method's order: at most 0.013 on the pendulum, 0.034 on the forced Duffing
+#: oscillator (Yoshida 6, still slightly pre-asymptotic at h = 0.1).
+ORDER_WINDOW = 0.05
+
+
+def observed_order(steps, errors) -> float:
+    """Slope of the least-squares line through (log h, log error)."""
+    return float(np.polyfit(np.log(steps), np.log(errors), 1)[0])
+
+
+@pytest.fixture(scope="module")
+def pendulum_reference(compiled):
+    """θ, θ̇ at t = 4 from the textbook equation θ̈ = −(g/l) sin θ, by scipy's DOP853 at rtol 2.3e-14."""
+    d = compiled("simple_pendulum").system.defaults
+    w2 = d["g"] / d["l"]
+    sol = solve_ivp(lambda _, y: [y[1], -w2 * np.sin(y[0])], (0, 4), [1.0, 0.0], method="DOP853",
+                    rtol=2.3e-14, atol=1e-16)
+    return sol.y[:, -1]
+
+
+#: Steps per method: fine enough to be asymptotic, coarse enough that the error (≥ 2e-10) stays far above
+#: the reference's (~1e-13).
+PENDULUM_STEPS = {2: (0.04, 0.02, 0.01, 0.005), 4: (0.04, 0.02, 0.01, 0.005), 6: (0.1, 0.05, 0.025)}
 
 
 @pytest.fixture(scope="module")
@@ -23,15 +50,15 @@ def kepler(tmp_path_factory):
 
 
 @pytest.mark.parametrize("method", ["verlet", "yoshida4", "yoshida6"])
-def test_convergence_order_on_the_pendulum(compiled, method):
+def test_convergence_order_on_the_pendulum(compiled, pendulum_reference, method):
+    """Measured orders: 2.0009 (Verlet), 4.0001 (Yoshida 4), 5.992 (Yoshida 6)."""
     model = compiled("simple_pendulum")
     assert model.separable
-    reference = model.simulate((0, 4), method="dop853", rtol=1e-13, atol=1e-13).y[-1]
     order = METHODS[method].order
-    steps = (0.04, 0.02, 0.01) if order < 6 else (0.2, 0.1, 0.05)
-    errors = [np.max(np.abs(model.simulate((0, 4), method=method, dt=dt).y[-1] - reference)) for dt in steps]
-    ratios = np.array(errors[:-1]) / np.array(errors[1:])
-    np.testing.assert_allclose(ratios, 2.0**order, rtol=0.10)
+    steps = PENDULUM_STEPS[order]
+    errors = [np.max(np.abs(model.simulate((0, 4), method=method, dt=dt).y[-1] - pendulum_reference))
+              for dt in steps]
+    assert abs(observed_order(steps, errors) - order) <= ORDER_WINDOW, errors
 
 
 def test_kepler_energy_error_stays_bounded_while_rk4_drifts(kepler):
@@ -79,15 +106,14 @@ def test_composition_weights_are_checked():
 
 @pytest.mark.parametrize("solver", ["fixed_point", "newton"])
 @pytest.mark.parametrize("method", ["gauss1", "gauss2", "gauss3"])
-def test_gauss_legendre_convergence_order_on_the_pendulum(compiled, method, solver):
+def test_gauss_legendre_convergence_order_on_the_pendulum(compiled, pendulum_reference, method, solver):
+    """Measured orders (either solver): 1.997 (gauss1), 3.9997 (gauss2), 5.987 (gauss3)."""
     model = compiled("simple_pendulum")
-    reference = model.simulate((0, 4), method="dop853", rtol=1e-13, atol=1e-13).y[-1]
     order = METHODS[method].order
-    steps = (0.04, 0.02, 0.01) if order < 6 else (0.2, 0.1, 0.05)
-    errors = [np.max(np.abs(model.simulate((0, 4), method=method, dt=dt, implicit_solver=solver).y[-1] - reference))
-              for dt in steps]
-    ratios = np.array(errors[:-1]) / np.array(errors[1:])
-    np.testing.assert_allclose(ratios, 2.0**order, rtol=0.10)
+    steps = PENDULUM_STEPS[order]
+    errors = [np.max(np.abs(model.simulate((0, 4), method=method, dt=dt, implicit_solver=solver).y[-1]
+                            - pendulum_reference)) for dt in steps]
+    assert abs(observed_order(steps, errors) - order) <= ORDER_WINDOW, errors
 
 
 def test_gauss_legendre_keeps_the_double_pendulum_energy(compiled):
@@ -107,7 +133,7 @@ def test_gauss_legendre_on_time_dependent_and_gyroscopic_systems(compiled):
     ts = np.linspace(0, 1, 11)
     reference = model.simulate((0, 1), method="dop853", rtol=1e-12, atol=1e-12, t_eval=ts)
     sol = model.simulate((0, 1), method="gauss3", dt=1e-3, save_every=100)
-    np.testing.assert_allclose(sol.y, reference.y, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(sol.y, reference.y, rtol=0, atol=5e-10)  # measured 1.4e-10
 
 
 @pytest.mark.parametrize(("solver", "dt"), [("fixed_point", 2.0), ("newton", 20.0)])
@@ -156,15 +182,19 @@ def forced_duffing(cache_dir):
     return lc.compile(system, cache_dir=cache_dir)
 
 
-@pytest.mark.parametrize("method, steps", [("verlet", (0.04, 0.02, 0.01)), ("yoshida4", (0.04, 0.02, 0.01)),
-                                           ("yoshida6", (0.2, 0.1, 0.05)), ("gauss2", (0.08, 0.04, 0.02)),
-                                           ("gauss3", (0.2, 0.1, 0.05))])
+@pytest.mark.parametrize("method, steps", [("verlet", (0.04, 0.02, 0.01, 0.005)),
+                                           ("yoshida4", (0.04, 0.02, 0.01, 0.005)), ("yoshida6", (0.1, 0.05, 0.025)),
+                                           ("gauss2", (0.08, 0.04, 0.02, 0.01)), ("gauss3", (0.1, 0.05, 0.025))])
 def test_imposed_time_dependence_keeps_the_order(forced_duffing, method, steps):
     """Explicit t is advanced with the drifts (compositions) or taken at the stage times (Gauss–Legendre),
-    as in the extended phase space: the observed order is the method's."""
+    as in the extended phase space: the observed order is the method's.
+
+    Reference: the textbook equation ẍ = −x − 0.4 x³ + cos 3t by scipy's DOP853 at rtol 2.3e-14, its
+    smallest (lagcomp's own DOP853 at 1e-13 agrees to 7e-14).  Measured orders: 2.0004, 4.0019, 6.034, 4.011, 5.992.
+    """
     assert forced_duffing.separable
-    reference = forced_duffing.simulate((0, 2), q0=[1.0], qd0=[0.0], rtol=1e-13, atol=1e-13).q[-1, 0]
+    reference = solve_ivp(lambda t_, y: [y[1], -y[0] - 0.4 * y[0] ** 3 + np.cos(3 * t_)], (0, 2), [1.0, 0.0],
+                          method="DOP853", rtol=2.3e-14, atol=1e-16).y[0, -1]
     errors = [abs(forced_duffing.simulate((0, 2), q0=[1.0], qd0=[0.0], method=method, dt=dt).q[-1, 0] - reference)
               for dt in steps]
-    observed = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
-    np.testing.assert_allclose(observed, METHODS[method].order, rtol=0.1)
+    assert abs(observed_order(steps, errors) - METHODS[method].order) <= ORDER_WINDOW, errors

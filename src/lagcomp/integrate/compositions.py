@@ -53,8 +53,15 @@ def _triple_jump() -> np.ndarray:
 
 
 def _yoshida6() -> np.ndarray:
-    """Order 6, Yoshida's solution A: seven substeps w3 w2 w1 w0 w1 w2 w3."""
-    w1, w2, w3 = -1.17767998417887, 0.235573213359357, 0.784513610477560
+    """Order 6, Yoshida's solution A: seven substeps w3 w2 w1 w0 w1 w2 w3.
+
+    Yoshida published 15 digits (−1.17767998417887, 0.235573213359357,
+    0.784513610477560), which satisfy the order-6 conditions only to ~1e-14;
+    the values below are his solution refined by Newton's method on those
+    conditions in 40-digit arithmetic (tests/test_order_conditions.py checks
+    them to round-off).
+    """
+    w1, w2, w3 = -1.1776799841788710069464, 0.2355732133593581336848, 0.7845136104775572638195
     w0 = 1.0 - 2.0 * (w1 + w2 + w3)
     return np.array([w3, w2, w1, w0, w1, w2, w3])
 
