@@ -146,7 +146,8 @@ def cmd_run(args) -> int:
             options["first_step"] = args.dt
     t_end = args.t_end if args.t_end is not None else model.t_end
     sol = model.simulate(
-        (args.t_start, t_end), q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"), **options
+        (args.t_start, t_end), q0=args.q0, qd0=args.qd0, u0=args.u0, params=_key_values(args.param, "--param"),
+        **options
     )
     elapsed = time.perf_counter() - compiled
     if sol.projected_initial_state is not None:
@@ -380,7 +381,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--save-every", type=int, default=1, metavar="K")
     run.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
     run.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
-    run.add_argument("--qd0", type=float, nargs="+", help="initial velocities")
+    run.add_argument("--qd0", type=float, nargs="+", help="initial velocities q̇ (a Lagrange model: one per coordinate)")
+    run.add_argument("--u0", type=float, nargs="+",
+                     help="initial speeds u (a model compiled from a KanesMethod, state (q, u): one per speed, "
+                          "in its order `speeds`; such a model refuses --qd0)")
     run.add_argument("--out", help="write the solution to this .npz file")
     run.add_argument("--plot", metavar="PNG", help="draw coordinates and energy error vs time to this image (needs matplotlib)")
     run.add_argument("--summary", action="store_true",

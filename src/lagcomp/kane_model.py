@@ -18,8 +18,11 @@ A `KaneModel` is a `lagcomp.Model` with these differences:
   keep Ψ at its initial value), or be projected with ``project_initial=True``
   (least change of q on Φ, then of u on Ψ).  Methods: dop853, dopri5 and rk4
   (``projection=True`` projects after every step, the default for rk4);
-  the others need y = (q, q̇) and refuse with an OptionError.  No events,
-  no Baumgarte terms, no sweeps.
+  the others need y = (q, q̇) and refuse with an OptionError.  No events
+  (a KanesMethod declares none), no Baumgarte terms.
+- ``sweep(t_span, grid, q0, u0, ...)``: grids over coordinates, speeds (by
+  name) and parameters with dop853, dopri5 or rk4, through the same compiled
+  sweep loops as Lagrange models (not ``batched``).
 - The `Solution` has ``q``, ``qd`` (q̇ = N(q, u) at each row), ``u`` and
   ``speeds``; ``y`` is (q, u).  ``energy`` is T + V where it can be formed
   (see `lagcomp.mechanics.kane.kane_energy`), else NaN; ``momenta`` are NaN.
@@ -163,8 +166,9 @@ class KaneKernels:
         except AttributeError:
             raise KaneKernelMissing(
                 f"{self._name!r} is a Kane model (state (q, u)): its module has no `{kernel}`, a kernel of Lagrange's "
-                "equations in (q, q̇). Kane models simulate with dop853, dopri5 or rk4; analyse them through "
-                "`model.first_order_form` and `model.rhs`."
+                "equations in (q, q̇). Kane models simulate and sweep with dop853, dopri5 or rk4; linearize them "
+                "with lagcomp.analysis.linearize_steady (steady motions and equilibria, constraints included), or "
+                "use `model.first_order_form` and `model.rhs`."
             ) from None
 
 
@@ -186,6 +190,11 @@ class KaneModel(Model):
     @property
     def state_size(self) -> int:
         return len(self.coordinates) + len(self.speeds)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Labels of the state y = (q, u): the coordinates, then the speeds."""
+        return self.coordinates + self.speeds
 
     @property
     def residual_labels(self) -> tuple[tuple[str, str], ...]:
@@ -279,7 +288,7 @@ class KaneModel(Model):
 
         if options.pop("qd0", None) is not None:  # (None: what `lagcomp run` passes when --qd0 is not given)
             raise InitialConditionError(f"{self.name!r} is a Kane model: give its initial speeds as `u0` "
-                                        f"(speeds {list(self.speeds)}), not `qd0`.")
+                                        f"(speeds {list(self.speeds)}; --u0 on the command line), not `qd0`.")
         solution = simulate(self, t_span, q0, u0, params, **options)
         return self._completed(solution)
 
@@ -297,5 +306,17 @@ class KaneModel(Model):
             reactions = {name: values[:, j].copy() for j, name in enumerate(self.reaction_names)}
         return dataclasses.replace(solution, qd=qd, u=u, speeds=self.speeds, reactions=reactions)
 
-    def sweep(self, t_span, grid, **options):
-        raise OptionError(f"sweep() does not run Kane models yet; simulate {self.name!r} once per point instead.")
+    def sweep(self, t_span, grid, q0=None, u0=None, **options):
+        """Integrate every point of `grid` (see `lagcomp.Model.sweep`), the state being (q, u).
+
+        Grid names are coordinates, speeds (initial u) and parameters; `q0`,
+        `u0` and `params` give what is not swept.  Methods dop853, dopri5 and
+        rk4, one trajectory per thread (no ``batched``); ``Sweep.final`` and
+        ``dense`` hold (q, u), ``Sweep.speeds`` names the speeds.
+        """
+        from lagcomp.integrate.sweep import sweep
+
+        if options.pop("qd0", None) is not None:  # (None: what `lagcomp sweep` passes when --qd0 is not given)
+            raise InitialConditionError(f"{self.name!r} is a Kane model: give its initial speeds as `u0` "
+                                        f"(speeds {list(self.speeds)}), not `qd0`.")
+        return sweep(self, t_span, grid, q0=q0, qd0=u0, **options)

@@ -267,6 +267,11 @@ class Model:
         return 2 * self.n
 
     @property
+    def state_names(self) -> tuple[str, ...]:
+        """Labels of the state y the drivers advance: the coordinates, then ``<coordinate>_dot``."""
+        return self.coordinates + tuple(f"{c}_dot" for c in self.coordinates)
+
+    @property
     def k(self) -> int:
         """Number of constraints."""
         return len(self.constraints)
@@ -546,6 +551,10 @@ class Model:
         """
         from lagcomp.integrate.simulate import simulate
 
+        if options.pop("u0", None) is not None:  # (None: what `lagcomp run` passes when --u0 is not given)
+            raise InitialConditionError(f"`u0` gives the initial speeds of a Kane model (state (q, u)); {self.name!r} "
+                                        f"is a Lagrange model: give its initial velocities as `qd0` (--qd0 on the "
+                                        f"command line), one per coordinate {list(self.coordinates)}.")
         return simulate(self, t_span, q0, qd0, params, **options)
 
     def sweep(self, t_span, grid, **options):

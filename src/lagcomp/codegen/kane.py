@@ -22,7 +22,8 @@ Then the hooks the drivers call (``project``, ``constraint_residual``,
 ``event_values``), ``observables`` and ``kinematics_along`` /
 ``reactions_along`` over saved rows, and the templates ``trig``,
 ``linear_solvers`` and ``drivers`` (rk4, dopri5, dop853, which are generic in
-the state's length).  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
+the state's length), and ``sweeps`` (``sweep_<driver>`` of those three, for
+`lagcomp.integrate.sweep`).  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
 reaches the emitted code, so none can collide with it (DESIGN.md, "Names");
 the header lists which is which.
 """
@@ -32,7 +33,7 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp import __version__
-from lagcomp.codegen.emit import INDENT
+from lagcomp.codegen.emit import INDENT, sweeps_source
 from lagcomp.codegen.lower import _kernel
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.templating import template
@@ -256,4 +257,6 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
     for piece in ("trig", "linear_solvers", "drivers"):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{piece}.py\n\n")
         parts.append(template(piece, events=False))
+    parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n")
+    parts.append(sweeps_source(adaptive=("dopri5_run", "dop853_run"), fixed=("rk4_run",)))
     return "".join(parts), {k.name: k.operation_count for k in kernels}

@@ -231,11 +231,9 @@ def _solution(model, p, recorder, y, run, throw) -> Solution:
     t_failure = None
     message = MESSAGES[status]
     if status < 0 or status == INTERRUPTED:
-        n = model.n
-        state = ", ".join(f"{c}={v:.6g}" for c, v in zip(model.coordinates, y[:n]))
-        rates = ", ".join(f"{c}_dot={v:.6g}" for c, v in zip(model.coordinates, y[n:]))
+        state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, y))  # (q, q̇), or (q, u) of Kane
         last = "state" if status == RESIDUAL_EXCEEDED else "last good state"
-        message = f"{message} Stopped at t = {clock[0]:.10g}, {last} {state}, {rates}."
+        message = f"{message} Stopped at t = {clock[0]:.10g}, {last} {state}."
         if status == RESIDUAL_EXCEEDED:
             message += f" Residual {run['residual_max']:.3g} > max_residual = {run['max_residual']:g}."
         t_failure = float(clock[0]) if status < 0 else None
