@@ -20,6 +20,7 @@ from scipy.special import ellipk
 import lagcomp as lc
 from lagcomp import InitialConditionError, ModelError, OptionError
 from lagcomp.analysis import conserved_quantities, linearize
+from lagcomp.integrate.sweep import Sweep
 
 import kane_models
 
@@ -188,7 +189,7 @@ def test_kane_model_refuses_what_needs_q_qdot_and_inconsistent_starts(cache_dir)
                                   kd_eqs=[me.dynamicsymbols("z", 1) - me.dynamicsymbols("w")]))
 
 
-def test_sweeps_of_a_kane_model_equal_separate_runs_and_the_closed_form(cache_dir):
+def test_sweeps_of_a_kane_model_equal_separate_runs_and_the_closed_form(cache_dir, tmp_path):
     """A grid over a parameter and an initial speed (dop853), and over a speed (rk4, projecting): each
     trajectory's final (q, u) equals a separate `simulate` bitwise; dop853's follow the sleigh's closed form."""
     model = lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="chaplygin_sleigh", defaults=SLEIGH)
@@ -209,6 +210,9 @@ def test_sweeps_of_a_kane_model_equal_separate_runs_and_the_closed_form(cache_di
     sol = model.simulate((0, 1), q0=start["q0"], u0=[-0.5, 2.0, 0.0], method="rk4", dt=1e-3)
     np.testing.assert_array_equal(fixed.final[1], sol.y[-1])
     assert fixed.final[1, 5] == 0.0  # projected onto the knife edge after every step, as simulate does
+    fixed.save_npz(tmp_path / "sweep.npz")
+    again = Sweep.load_npz(tmp_path / "sweep.npz")
+    assert again.speeds == ("u1", "u3", "u2") and np.array_equal(again.final, fixed.final)
 
 
 def test_a_failed_kane_run_names_its_speeds(cache_dir):
