@@ -210,7 +210,8 @@ CASES = {
     "lagrange-initial-speeds": (_simulate("pendulum", u0=[1.0]), "'simple_pendulum' is a Lagrange model"),
     "kane-batched-sweep": (lambda models: models["kane"].sweep((0, 1), {"m": [1.0]}, q0=[0.0], batched=True),
                            "'table_kane_slider' is a Kane model"),
-    "kane-no-lagrangian": (lambda models: an.conserved_quantities(models["kane"]), "'table_kane_slider' is a Kane model"),
+    "kane-no-lagrangian": (lambda models: an.conserved_quantities(models["kane"]),
+                           "'table_kane_slider' is a Kane model"),
     # a run's inputs: Model.simulate
     "unknown-parameter": (_simulate("pendulum", params={"mass": 1.0}), "['mass']"),
     "missing-parameter": (lambda models: models["degenerate"].simulate((0, 1), q0=[1.0], params={}), "['m']"),

@@ -381,7 +381,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--save-every", type=int, default=1, metavar="K")
     run.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
     run.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
-    run.add_argument("--qd0", type=float, nargs="+", help="initial velocities q̇ (a Lagrange model: one per coordinate)")
+    run.add_argument("--qd0", type=float, nargs="+", help="initial velocities q̇ (Lagrange models: one per coordinate)")
     run.add_argument("--u0", type=float, nargs="+",
                      help="initial speeds u (a model compiled from a KanesMethod, state (q, u): one per speed, "
                           "in its order `speeds`; such a model refuses --qd0)")
