@@ -208,6 +208,8 @@ CASES = {
     "kane-method-not-applicable": (_simulate("kane", q0=[0.0], method="gauss2", dt=0.1), "`gauss2`"),
     "kane-initial-velocities": (_simulate("kane", q0=[0.0], qd0=[1.0]), "`u0`"),
     "lagrange-initial-speeds": (_simulate("pendulum", u0=[1.0]), "'simple_pendulum' is a Lagrange model"),
+    "kane-event-unknown-symbol": (lambda: lc.compile(_kane_slider(), events=[lc.Event("wall", x - sp.Symbol("w0"))]),
+                                  "Event `wall` holds ['w0']"),
     "kane-batched-sweep": (lambda models: models["kane"].sweep((0, 1), {"m": [1.0]}, q0=[0.0], batched=True),
                            "'table_kane_slider' is a Kane model"),
     "kane-no-lagrangian": (lambda models: an.conserved_quantities(models["kane"]),

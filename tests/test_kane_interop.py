@@ -215,6 +215,35 @@ def test_sweeps_of_a_kane_model_equal_separate_runs_and_the_closed_form(cache_di
     assert again.speeds == ("u1", "u3", "u2") and np.array_equal(again.final, fixed.final)
 
 
+def test_events_of_a_kane_model_fall_at_the_pendulums_closed_form_times(cache_dir):
+    """g = q (the bob passing the bottom, downwards) and g = u (a turning point, terminal) on the pendulum with
+    u = l q̇ from rest at q0: at T/4 and T/2 of the elliptic period, with speed −√(2 g l (1 − cos q0)) at the
+    bottom (energy); in a sweep too, per amplitude. An event holding a symbol the equations lack is refused."""
+    km = kane_pendulum()
+    q, u = km.q[0], km.u[0]
+    events = [lc.Event("bottom", q, direction=-1), lc.Event("turn", u, direction=1, terminal=True)]
+    model = lc.compile(km, cache_dir=cache_dir, name="kane_pendulum_events", defaults=PENDULUM, events=events)
+    assert model.event_names == ("bottom", "turn")
+    m, l, g = PENDULUM["m"], PENDULUM["l"], PENDULUM["g"]
+    period = lambda q0: 4 * math.sqrt(l / g) * ellipk(math.sin(q0 / 2) ** 2)  # noqa: E731
+    sol = model.simulate((0, 10), q0=[2.0], u0=[0.0], rtol=1e-12, atol=1e-12)
+    assert sol.status == 1 and "Event 'turn'" in sol.message
+    assert abs(sol.events["bottom"].t[0] - period(2.0) / 4) < 2e-13  # measured 2.3e-14
+    assert abs(sol.events["turn"].t[0] - period(2.0) / 2) < 5e-13  # measured 1.2e-13
+    assert sol.t[-1] == sol.events["turn"].t[0]
+    speed = math.sqrt(2 * g * l * (1 - math.cos(2.0)))
+    assert abs(sol.events["bottom"].qd[0, 0] + speed) < 5e-11  # `qd` holds u; measured 6.7e-12
+    amplitudes = [0.5, 1.0, 2.0]
+    sweep = model.sweep((0, 10), {"q": amplitudes}, q0=[0.0], u0=[0.0], rtol=1e-12, atol=1e-12, output="events",
+                        progress=False)
+    assert np.all(sweep.status == 1) and np.all(sweep.events["turn"]["count"] == 1)
+    expected = np.array([period(a) / 4 for a in amplitudes])
+    assert np.max(np.abs(sweep.events["bottom"]["t"][:, 0] - expected)) < 3e-13  # measured 6.4e-14
+    np.testing.assert_allclose(sweep.t_final, 2 * expected, rtol=0, atol=5e-13)  # the terminal turning point
+    with pytest.raises(ModelError, match=r"Event `far` holds \['L'\]"):
+        lc.compile(km, cache_dir=cache_dir, name="kane_pendulum_stray", events=[lc.Event("far", q - sp.Symbol("L"))])
+
+
 def test_a_failed_kane_run_names_its_speeds(cache_dir):
     """The failure message lists the last good state (q, u) by the coordinates' and speeds' names."""
     model = lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="chaplygin_sleigh", defaults=SLEIGH)

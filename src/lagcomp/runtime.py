@@ -33,7 +33,7 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, **s
         parameters, defaults, q0, qd0, ...) passed on.  A KanesMethod is
         compiled as Kane's equations over the state (q, u) into a
         `lagcomp.kane_model.KaneModel` (options name, parameters, defaults,
-        q0, u0, t_end, description).
+        q0, u0, t_end, description, events).
     cache_dir : path, optional
         Cache root; defaults to $LAGCOMP_CACHE_DIR, else the user cache directory.
     eom : lagcomp.mechanics.lagrange.EOM, optional

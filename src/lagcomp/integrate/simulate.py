@@ -212,12 +212,12 @@ def _redundant_constraints(model, t0: float, y0: np.ndarray, p: np.ndarray) -> l
 
 
 def _event_records(model, event_parts) -> dict:
-    """Occurrences of each declared event: {name: EventRecord(t, q, qd)}, in time order."""
+    """Occurrences of each declared event: {name: EventRecord(t, q, qd)}, in time order (qd: u of a Kane model)."""
     n = model.n
     if event_parts:
         t_all, y_all, i_all = (np.concatenate(column) for column in zip(*event_parts))
     else:
-        t_all, y_all, i_all = np.empty(0), np.empty((0, 2 * n)), np.empty(0, dtype=np.int64)
+        t_all, y_all, i_all = np.empty(0), np.empty((0, model.state_size)), np.empty(0, dtype=np.int64)
     records = {}
     for index, event in enumerate(model.events):
         hit = i_all == index
