@@ -237,6 +237,13 @@ CASES = {
     "kane-specified-function": (lambda: lc.compile(_kane_slider(force=me_function("F"))), "F(t)"),
     "kane-method-not-applicable": (_simulate("kane", q0=[0.0], method="gauss2", dt=0.1), "`gauss2`"),
     "kane-initial-velocities": (_simulate("kane", q0=[0.0], qd0=[1.0]), "`u0`"),
+    "lagrange-initial-speeds": (_simulate("pendulum", u0=[1.0]), "'simple_pendulum' is a Lagrange model"),
+    "kane-event-unknown-symbol": (lambda: lc.compile(_kane_slider(), events=[lc.Event("wall", x - sp.Symbol("w0"))]),
+                                  "Event `wall` holds ['w0']"),
+    "kane-batched-sweep": (lambda models: models["kane"].sweep((0, 1), {"m": [1.0]}, q0=[0.0], batched=True),
+                           "'table_kane_slider' is a Kane model"),
+    "kane-no-lagrangian": (lambda models: an.conserved_quantities(models["kane"]),
+                           "'table_kane_slider' is a Kane model"),
     # a run's inputs: Model.simulate
     "unknown-parameter": (_simulate("pendulum", params={"mass": 1.0}), "['mass']"),
     "missing-parameter": (lambda models: models["degenerate"].simulate((0, 1), q0=[1.0], params={}), "['m']"),

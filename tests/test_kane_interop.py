@@ -19,7 +19,8 @@ from scipy.special import ellipk
 
 import lagcomp as lc
 from lagcomp import InitialConditionError, ModelError, OptionError
-from lagcomp.analysis import linearize
+from lagcomp.analysis import conserved_quantities, linearize
+from lagcomp.integrate.sweep import Sweep
 
 import kane_models
 
@@ -171,8 +172,14 @@ def test_kane_model_refuses_what_needs_q_qdot_and_inconsistent_starts(cache_dir)
         model.simulate((0, 1), q0=[0, 0, 0], qd0=[1, 0, 0])
     with pytest.raises(OptionError, match="baumgarte"):
         model.simulate((0, 1), q0=[0, 0, 0], u0=[1, 0, 0], baumgarte=(1.0, 1.0))
-    with pytest.raises(OptionError):
-        model.sweep((0, 1), {"m": [1.0, 2.0]})
+    with pytest.raises(OptionError, match="Kane model .* drop `batched`"):
+        model.sweep((0, 1), {"m": [1.0, 2.0]}, q0=[0, 0, 0], u0=[1, 0, 0], batched=True)
+    with pytest.raises(InitialConditionError, match="u0"):
+        model.sweep((0, 1), {"m": [1.0, 2.0]}, q0=[0, 0, 0], qd0=[1, 0, 0])
+    with pytest.raises(OptionError, match="speeds or parameters: .*'u1', 'u3', 'u2'"):
+        model.sweep((0, 1), {"u1_dot": [1.0]}, q0=[0, 0, 0])
+    with pytest.raises(ModelError, match="Kane model .* linearize_steady .* lagcomp.System or sympy LagrangesMethod"):
+        conserved_quantities(model)
     with pytest.raises(ModelError, match="Kane model"):
         model.momenta([0, 0, 0], [1, 0, 0])
     with pytest.raises(ModelError, match="Kane model .* no `rest_partials`"):  # analysis written for (q, q̇)
@@ -180,6 +187,71 @@ def test_kane_model_refuses_what_needs_q_qdot_and_inconsistent_starts(cache_dir)
     with pytest.raises(ModelError, match="kanes_equations"):
         lc.compile(me.KanesMethod(me.ReferenceFrame("N"), [me.dynamicsymbols("z")], [me.dynamicsymbols("w")],
                                   kd_eqs=[me.dynamicsymbols("z", 1) - me.dynamicsymbols("w")]))
+
+
+def test_sweeps_of_a_kane_model_equal_separate_runs_and_the_closed_form(cache_dir, tmp_path):
+    """A grid over a parameter and an initial speed (dop853), and over a speed (rk4, projecting): each
+    trajectory's final (q, u) equals a separate `simulate` bitwise; dop853's follow the sleigh's closed form."""
+    model = lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="chaplygin_sleigh", defaults=SLEIGH)
+    start = dict(q0=[0.0, 0.0, 0.2], u0=[-0.5, 1.5, 0.0])
+    a_values, u1_values = [0.3, 0.4], [-0.5, 0.25, 1.0]
+    sweep = model.sweep((0, 3), {"a": a_values, "u1": u1_values}, rtol=1e-12, atol=1e-12, workers=2,
+                        output="energy", progress=False, **start)
+    assert sweep.shape == (2, 3) and sweep.final.shape == (2, 3, 6) and sweep.speeds == ("u1", "u3", "u2")
+    assert np.all(sweep.status == 0)
+    for i, a in enumerate(a_values):
+        for j, u1 in enumerate(u1_values):
+            sol = model.simulate((0, 3), q0=start["q0"], u0=[u1, 1.5, 0.0], params={"a": a}, rtol=1e-12, atol=1e-12)
+            np.testing.assert_array_equal(sweep.final[i, j], sol.y[-1])
+            assert sweep.energy_error[i, j] == pytest.approx(sol.energy_drift(), rel=1e-12, abs=1e-16)
+    v, w, theta = sleigh_closed_form(np.array([3.0]), 1.0, 1.5, 0.2)  # a = 0.4 (SLEIGH), u1 = 1.0
+    assert np.max(np.abs(sweep.final[1, 2, [3, 4, 2]] - [v[0], w[0], theta[0]])) < 2e-11  # measured 3.6e-13
+    fixed = model.sweep((0, 1), {"u3": [1.0, 2.0]}, method="rk4", dt=1e-3, progress=False, **start)
+    sol = model.simulate((0, 1), q0=start["q0"], u0=[-0.5, 2.0, 0.0], method="rk4", dt=1e-3)
+    np.testing.assert_array_equal(fixed.final[1], sol.y[-1])
+    assert fixed.final[1, 5] == 0.0  # projected onto the knife edge after every step, as simulate does
+    fixed.save_npz(tmp_path / "sweep.npz")
+    again = Sweep.load_npz(tmp_path / "sweep.npz")
+    assert again.speeds == ("u1", "u3", "u2") and np.array_equal(again.final, fixed.final)
+
+
+def test_events_of_a_kane_model_fall_at_the_pendulums_closed_form_times(cache_dir):
+    """g = q (the bob passing the bottom, downwards) and g = u (a turning point, terminal) on the pendulum with
+    u = l q̇ from rest at q0: at T/4 and T/2 of the elliptic period, with speed −√(2 g l (1 − cos q0)) at the
+    bottom (energy); in a sweep too, per amplitude. An event holding a symbol the equations lack is refused."""
+    km = kane_pendulum()
+    q, u = km.q[0], km.u[0]
+    events = [lc.Event("bottom", q, direction=-1), lc.Event("turn", u, direction=1, terminal=True)]
+    model = lc.compile(km, cache_dir=cache_dir, name="kane_pendulum_events", defaults=PENDULUM, events=events)
+    assert model.event_names == ("bottom", "turn")
+    m, l, g = PENDULUM["m"], PENDULUM["l"], PENDULUM["g"]
+    period = lambda q0: 4 * math.sqrt(l / g) * ellipk(math.sin(q0 / 2) ** 2)  # noqa: E731
+    sol = model.simulate((0, 10), q0=[2.0], u0=[0.0], rtol=1e-12, atol=1e-12)
+    assert sol.status == 1 and "Event 'turn'" in sol.message
+    assert abs(sol.events["bottom"].t[0] - period(2.0) / 4) < 2e-13  # measured 2.3e-14
+    assert abs(sol.events["turn"].t[0] - period(2.0) / 2) < 5e-13  # measured 1.2e-13
+    assert sol.t[-1] == sol.events["turn"].t[0]
+    speed = math.sqrt(2 * g * l * (1 - math.cos(2.0)))
+    assert abs(sol.events["bottom"].qd[0, 0] + speed) < 5e-11  # `qd` holds u; measured 6.7e-12
+    amplitudes = [0.5, 1.0, 2.0]
+    sweep = model.sweep((0, 10), {"q": amplitudes}, q0=[0.0], u0=[0.0], rtol=1e-12, atol=1e-12, output="events",
+                        progress=False)
+    assert np.all(sweep.status == 1) and np.all(sweep.events["turn"]["count"] == 1)
+    expected = np.array([period(a) / 4 for a in amplitudes])
+    assert np.max(np.abs(sweep.events["bottom"]["t"][:, 0] - expected)) < 3e-13  # measured 6.4e-14
+    np.testing.assert_allclose(sweep.t_final, 2 * expected, rtol=0, atol=5e-13)  # the terminal turning point
+    with pytest.raises(ModelError, match=r"Event `far` holds \['L'\]"):
+        lc.compile(km, cache_dir=cache_dir, name="kane_pendulum_stray", events=[lc.Event("far", q - sp.Symbol("L"))])
+
+
+def test_a_failed_kane_run_names_its_speeds(cache_dir):
+    """The failure message lists the last good state (q, u) by the coordinates' and speeds' names."""
+    model = lc.compile(chaplygin_sleigh(), cache_dir=cache_dir, name="chaplygin_sleigh", defaults=SLEIGH)
+    sol = model.simulate((0, 2), q0=[0.0, 0.0, 0.2], u0=[-0.5, 1.5, 0.0], max_steps=3)
+    assert sol.status == -4
+    state = sol.message.split("last good state ")[1]
+    assert [part.split("=")[0] for part in state.rstrip(".").split(", ")] == ["x", "y", "theta", "u1", "u3", "u2"]
+    assert f"u3={sol.u[-1, 1]:.6g}" in state and "_dot" not in sol.message
 
 
 def test_a_kane_model_is_loaded_by_name_without_sympy(cache_dir):

@@ -50,6 +50,7 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
+import sympy.physics.mechanics as me
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -405,3 +406,100 @@ def test_cli_stability_reports_an_unknown_parameter(capsys):
 
     assert main(["stability", "hoop_bead", "--param", "spin", "--range", "0", "1"]) == 2
     assert "Unknown sweep parameter 'spin'" in capsys.readouterr().err
+
+
+# -- LagrangesMethod models with constraints: lc.compile(lm) + linearize_steady against sympy's Linearizer ----------
+
+
+def _sympy_state_matrix(lm, q_ind, qd_ind, q_dep, qd_dep, point: dict, values: dict) -> np.ndarray:
+    """sympy's reduced A (``LagrangesMethod.linearize(..., A_and_B=True)``, states [q_ind, qd_ind]) at `point`,
+    a steady motion: accelerations zero, the multipliers from ``solve_multipliers`` there."""
+    t = me.dynamicsymbols._t
+    op = dict(point)
+    op.update({q.diff(t, 2): 0 for q in lm.q})
+    op.update(lm.solve_multipliers(op_point=[op, values]))
+    A = lm.linearize(q_ind=q_ind, qd_ind=qd_ind, q_dep=q_dep, qd_dep=qd_dep, op_point=[op, values], A_and_B=True)[0]
+    return np.array(A.evalf(30).tolist(), dtype=float)
+
+
+def test_lagranges_method_conical_pendulum_matches_sympys_linearizer(cache_dir):
+    r"""A spherical pendulum in (θ, φ, r) with the holonomic constraint r − L = 0, on its conical motion
+    (θ = θ0, φ̇ = Ω with Ω² = g / (L cos θ0)): r and ṙ dependent, as sympy's Linearizer is told.
+
+    Zero eigenvalues, twice: φ is cyclic (its column of A is zero: the cone turned about the vertical is
+    the same motion), and φ̇'s direction is the family of conical motions at other θ0 (p_φ conserved: a
+    neighbouring steady motion, not a restoring mode). The nutation pair is ±iω, ω² = Ω² (1 + 3 cos² θ0).
+    (Coordinates in the order (θ, φ, r) so that sympy's permutation of [q_ind, q_dep] is the identity:
+    with (r, θ, φ) sympy 1.14's Linearizer takes the transposed permutation matrix of that 3-cycle and
+    raises NonInvertibleMatrixError.)
+    """
+    r, th, ph = me.dynamicsymbols("r theta phi")
+    m, g, L = sp.symbols("m g L", positive=True)
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", r * (sp.sin(th) * sp.cos(ph) * N.x + sp.sin(th) * sp.sin(ph) * N.y - sp.cos(th) * N.z))
+    P.set_vel(N, P.pos_from(O).dt(N))
+    lm = me.LagrangesMethod(me.Lagrangian(N, me.Particle("bob", P, m)), [th, ph, r], hol_coneqs=[r - L],
+                            forcelist=[(P, -m * g * N.z)], frame=N)
+    lm.form_lagranges_equations()
+    values = {"m": 1.3, "g": 9.81, "L": 0.8}
+    theta0, phi0 = 0.6, 0.4
+    Omega = math.sqrt(values["g"] / (values["L"] * math.cos(theta0)))
+    model = lc.compile(lm, cache_dir=cache_dir, name="lm_conical_pendulum", defaults=values)
+    q, u = [theta0, phi0, values["L"]], [0.0, Omega, 0.0]
+    lin = linearize_steady(model, q, u, independent=["theta", "phi", "theta_dot", "phi_dot"])
+    assert lin.states == ("theta", "phi", "theta_dot", "phi_dot") and lin.dependent == ("r", "r_dot")
+    t = me.dynamicsymbols._t
+    point = {**dict(zip(lm.q, q)), **dict(zip([c.diff(t) for c in lm.q], u))}
+    reference = _sympy_state_matrix(lm, [th, ph], [th.diff(t), ph.diff(t)], [r], [r.diff(t)], point,
+                                    {sp.Symbol(k, positive=True): v for k, v in values.items()})
+    # measured: max |ΔA| = 3.6e-15 (|A| up to 11.3)
+    np.testing.assert_allclose(lin.A, reference, rtol=0, atol=1e-12)
+    omega = Omega * math.sqrt(1 + 3 * math.cos(theta0) ** 2)
+    assert np.sort(np.abs(lin.eigenvalues.imag)) == pytest.approx([0, 0, omega, omega], abs=1e-12)
+    np.testing.assert_allclose(np.sort(np.abs(np.linalg.eigvals(reference))), [0, 0, omega, omega], atol=1e-12)
+    assert np.max(np.abs(lin.eigenvalues.real)) < 1e-12
+    steady = linearize_steady(model, q, u, drop=["phi"])  # the cyclic φ dropped: a steady motion, residual 0
+    assert steady.states == ("theta", "theta_dot", "phi_dot") and steady.residual < 1e-13  # measured 1.1e-15
+    assert steady.drift == {"phi": pytest.approx(Omega, rel=1e-15)} and steady.stability == "marginal"
+
+
+def test_lagranges_method_sleigh_matches_sympys_linearizer_and_its_closed_form(cache_dir):
+    r"""The Chaplygin sleigh as a LagrangesMethod with a nonholonomic constraint (the knife edge at P:
+    −ẋ sin θ + ẏ cos θ = 0, ẏ dependent), sliding straight along its blade at speed v0 with heading θ0.
+
+    Closed form (test_kane_interop's sleigh, v the speed along the blade, ω = θ̇): v̇ = a ω²,
+    ω̇ = −m a v ω / J with J = I + m a²; about ω = 0 the only nonzero eigenvalue is −m a v0 / J (yaw rate
+    decays with the centre of mass ahead of the blade). The four zero eigenvalues: x, y and θ, because a
+    straight slide shifted or turned is again one (their columns have no restoring entry), and v, because
+    a slide at another speed is again one (v̇ = a ω² is of second order in ω).
+    """
+    x, y, th = me.dynamicsymbols("x y theta")
+    m, I, a = sp.symbols("m I a", positive=True)
+    N = me.ReferenceFrame("N")
+    B = N.orientnew("B", "Axis", [th, N.z])
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    G = P.locatenew("G", a * B.x)
+    body = me.RigidBody("sleigh", G, B, m, (me.inertia(B, 0, 0, I), G))
+    t = me.dynamicsymbols._t
+    knife = -x.diff(t) * sp.sin(th) + y.diff(t) * sp.cos(th)
+    lm = me.LagrangesMethod(me.Lagrangian(N, body), [x, y, th], nonhol_coneqs=[knife], bodies=[body], frame=N)
+    lm.form_lagranges_equations()
+    values = {"m": 2.0, "I": 0.3, "a": 0.4}
+    model = lc.compile(lm, cache_dir=cache_dir, name="lm_chaplygin_sleigh", defaults=values)
+    v0, theta0 = 1.5, 0.3
+    q, u = [0.7, -0.2, theta0], [v0 * math.cos(theta0), v0 * math.sin(theta0), 0.0]
+    lin = linearize_steady(model, q, u, independent=["x", "y", "theta", "x_dot", "theta_dot"])
+    assert lin.dependent == ("y_dot",)
+    point = {**dict(zip(lm.q, q)), **dict(zip([c.diff(t) for c in lm.q], u))}
+    reference = _sympy_state_matrix(lm, [x, y, th], [x.diff(t), th.diff(t)], [], [y.diff(t)], point,
+                                    {sp.Symbol(k, positive=True): v for k, v in values.items()})
+    # measured: max |ΔA| = 8.9e-16 (|A| up to 1.9)
+    np.testing.assert_allclose(lin.A, reference, rtol=0, atol=1e-12)
+    J = values["I"] + values["m"] * values["a"] ** 2
+    decay = -values["m"] * values["a"] * v0 / J
+    assert lin.eigenvalues[-1] == pytest.approx(decay, rel=1e-13) and np.all(np.abs(lin.eigenvalues[:-1]) < 1e-12)
+    assert np.sort(np.linalg.eigvals(reference).real)[0] == pytest.approx(decay, rel=1e-13)

@@ -224,7 +224,7 @@ def cmd_run(args) -> int:
         if args.dt is not None:
             options["first_step"] = args.dt
     t_end = args.t_end if args.t_end is not None else model.t_end
-    run = dict(q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"))
+    run = dict(q0=args.q0, qd0=args.qd0, u0=args.u0, params=_key_values(args.param, "--param"))
     warmed = _warm_up(model, args.t_start, t_end, run, options)
     print(f"numba: kernels and driver ready in {warmed:.2f} s (compiled on a first run, then loaded from its cache)",
           file=sys.stderr)
@@ -490,7 +490,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--save-every", type=int, default=1, metavar="K")
     run.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
     run.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
-    run.add_argument("--qd0", type=float, nargs="+", help="initial velocities")
+    run.add_argument("--qd0", type=float, nargs="+", help="initial velocities q̇ (Lagrange models: one per coordinate)")
+    run.add_argument("--u0", type=float, nargs="+",
+                     help="initial speeds u (a model compiled from a KanesMethod, state (q, u): one per speed, "
+                          "in its order `speeds`; such a model refuses --qd0)")
     run.add_argument("--out", help="write the solution to this .npz file")
     run.add_argument("--plot", metavar="PNG", help="draw coordinates and energy error vs time to this image (needs matplotlib)")
     run.add_argument("--summary", action="store_true",

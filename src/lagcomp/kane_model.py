@@ -18,8 +18,14 @@ A `KaneModel` is a `lagcomp.Model` with these differences:
   keep Ψ at its initial value), or be projected with ``project_initial=True``
   (least change of q on Φ, then of u on Ψ).  Methods: dop853, dopri5 and rk4
   (``projection=True`` projects after every step, the default for rk4);
-  the others need y = (q, q̇) and refuse with an OptionError.  No events,
-  no Baumgarte terms, no sweeps.
+  the others need y = (q, q̇) and refuse with an OptionError.  No Baumgarte terms.
+- Events: ``compile(km, events=[lagcomp.Event(name, g, direction, terminal)])``
+  with g in q(t), u(t), q̇ (through the kinematic equations), t and the
+  equations' parameters, located on the dense output of dop853/dopri5 as for
+  Lagrange models; in ``Solution.events`` an `EventRecord`'s ``qd`` holds u.
+- ``sweep(t_span, grid, q0, u0, ...)``: grids over coordinates, speeds (by
+  name) and parameters with dop853, dopri5 or rk4, through the same compiled
+  sweep loops as Lagrange models (not ``batched``).
 - The `Solution` has ``q``, ``qd`` (q̇ = N(q, u) at each row), ``u`` and
   ``speeds``; ``y`` is (q, u).  ``energy`` is T + V where it can be formed
   (see `lagcomp.mechanics.kane.kane_energy`), else NaN; ``momenta`` are NaN.
@@ -45,12 +51,12 @@ from lagcomp.runtime import Model
 #: Methods that take any first-order state y; the others need y = (q, q̇).
 KANE_METHODS = ("dop853", "dopri5", "rk4")
 #: Options `compile(km, ...)` accepts for a KanesMethod.
-KANE_OPTIONS = ("name", "parameters", "defaults", "q0", "u0", "t_end", "description")
+KANE_OPTIONS = ("name", "parameters", "defaults", "q0", "u0", "t_end", "description", "events")
 
 
 def compile_kane(km, cache_dir=None, **options) -> "KaneModel":
     """Compile the KanesMethod `km` (module docstring); `options` as in `KANE_OPTIONS`."""
-    from lagcomp.mechanics.kane import auxiliary_reactions, kane_energy, kane_form
+    from lagcomp.mechanics.kane import auxiliary_reactions, kane_energy, kane_events, kane_form
 
     unknown = sorted(set(options) - set(KANE_OPTIONS))
     if unknown:
@@ -59,13 +65,15 @@ def compile_kane(km, cache_dir=None, **options) -> "KaneModel":
     form = kane_form(km, options.get("parameters"))
     names, reactions = auxiliary_reactions(km, form)
     energy = kane_energy(km, form)
-    recorded = _run_defaults(form, options)
+    events, event_exprs = kane_events(km, form, options.get("events"))
+    recorded = _run_defaults(form, options, events)
     fingerprint = "\n".join(
         ["kane", recorded["name"], repr(form.coordinate_names), repr(form.speed_names),
          repr([s.name for s in form.parameters]), repr(names)]
         + [f"{role}={_srepr(expr)}" for role, expr in (("N", form.N), ("M", form.M), ("F", form.F),
                                                       ("Phi", form.Phi), ("Psi", form.Psi), ("energy", energy),
                                                       ("reactions", reactions))]
+        + [f"event {e.name} {e.direction} {e.terminal}={_srepr(g)}" for e, g in zip(events, event_exprs)]
     )
     cache = Cache(cache_dir)
     key = input_key(fingerprint, options={"kane": 1})
@@ -74,7 +82,8 @@ def compile_kane(km, cache_dir=None, **options) -> "KaneModel":
         with cache.lock(key):
             entry = cache.lookup(key)
             if entry is None:
-                entry, fresh = _build(cache, key, recorded["name"], form, energy, names, reactions), True
+                entry, fresh = _build(cache, key, recorded["name"], form, energy, names, reactions,
+                                      tuple(zip((e.name for e in events), event_exprs))), True
     model = KaneModel(None, load_module(entry), entry, from_cache=not fresh, recorded=recorded)
     model.first_order_form, model.kanes_method = form, km
     cache.remember(recorded["name"], key, recorded)
@@ -108,10 +117,10 @@ def _srepr(expr) -> str:
     return digest(expr)
 
 
-def _build(cache, key, name, form, energy, names, reactions):
+def _build(cache, key, name, form, energy, names, reactions, events):
     from lagcomp.codegen.kane import emit_kane
 
-    source, operations = emit_kane(name, form, energy, names, reactions)
+    source, operations = emit_kane(name, form, energy, names, reactions, events)
     metadata = {
         "kane": True, "coordinates": list(form.coordinate_names), "speeds": list(form.speed_names),
         "parameters": [s.name for s in form.parameters], "cyclic": [], "constraints": [], "holonomic": [],
@@ -123,7 +132,7 @@ def _build(cache, key, name, form, energy, names, reactions):
     return cache.store(key, source, name, metadata)
 
 
-def _run_defaults(form, options) -> dict:
+def _run_defaults(form, options, events=()) -> dict:
     def floats(values, size, what):
         if values is None:
             return None
@@ -136,7 +145,8 @@ def _run_defaults(form, options) -> dict:
     return {
         "name": options.get("name", "kane_model"), "description": options.get("description", ""),
         "defaults": defaults, "q0": floats(options.get("q0"), form.n_q, "q0"),
-        "qd0": floats(options.get("u0"), form.n_u, "u0"), "t_end": float(options.get("t_end", 10.0)), "events": [],
+        "qd0": floats(options.get("u0"), form.n_u, "u0"), "t_end": float(options.get("t_end", 10.0)),
+        "events": [[e.name, e.direction, e.terminal] for e in events],
     }
 
 
@@ -163,8 +173,9 @@ class KaneKernels:
         except AttributeError:
             raise KaneKernelMissing(
                 f"{self._name!r} is a Kane model (state (q, u)): its module has no `{kernel}`, a kernel of Lagrange's "
-                "equations in (q, q̇). Kane models simulate with dop853, dopri5 or rk4; analyse them through "
-                "`model.first_order_form` and `model.rhs`."
+                "equations in (q, q̇). Kane models simulate and sweep with dop853, dopri5 or rk4; linearize them "
+                "with lagcomp.analysis.linearize_steady (steady motions and equilibria, constraints included), or "
+                "use `model.first_order_form` and `model.rhs`."
             ) from None
 
 
@@ -186,6 +197,11 @@ class KaneModel(Model):
     @property
     def state_size(self) -> int:
         return len(self.coordinates) + len(self.speeds)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Labels of the state y = (q, u): the coordinates, then the speeds."""
+        return self.coordinates + self.speeds
 
     @property
     def residual_labels(self) -> tuple[tuple[str, str], ...]:
@@ -279,7 +295,7 @@ class KaneModel(Model):
 
         if options.pop("qd0", None) is not None:  # (None: what `lagcomp run` passes when --qd0 is not given)
             raise InitialConditionError(f"{self.name!r} is a Kane model: give its initial speeds as `u0` "
-                                        f"(speeds {list(self.speeds)}), not `qd0`.")
+                                        f"(speeds {list(self.speeds)}; --u0 on the command line), not `qd0`.")
         solution = simulate(self, t_span, q0, u0, params, **options)
         return self._completed(solution)
 
@@ -297,5 +313,17 @@ class KaneModel(Model):
             reactions = {name: values[:, j].copy() for j, name in enumerate(self.reaction_names)}
         return dataclasses.replace(solution, qd=qd, u=u, speeds=self.speeds, reactions=reactions)
 
-    def sweep(self, t_span, grid, **options):
-        raise OptionError(f"sweep() does not run Kane models yet; simulate {self.name!r} once per point instead.")
+    def sweep(self, t_span, grid, q0=None, u0=None, **options):
+        """Integrate every point of `grid` (see `lagcomp.Model.sweep`), the state being (q, u).
+
+        Grid names are coordinates, speeds (initial u) and parameters; `q0`,
+        `u0` and `params` give what is not swept.  Methods dop853, dopri5 and
+        rk4, one trajectory per thread (no ``batched``); ``Sweep.final`` and
+        ``dense`` hold (q, u), ``Sweep.speeds`` names the speeds.
+        """
+        from lagcomp.integrate.sweep import sweep
+
+        if options.pop("qd0", None) is not None:  # (None: what `lagcomp sweep` passes when --qd0 is not given)
+            raise InitialConditionError(f"{self.name!r} is a Kane model: give its initial speeds as `u0` "
+                                        f"(speeds {list(self.speeds)}), not `qd0`.")
+        return sweep(self, t_span, grid, q0=q0, qd0=u0, **options)

@@ -34,7 +34,7 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, pro
         parameters, defaults, q0, qd0, ...) passed on.  A KanesMethod is
         compiled as Kane's equations over the state (q, u) into a
         `lagcomp.kane_model.KaneModel` (options name, parameters, defaults,
-        q0, u0, t_end, description).
+        q0, u0, t_end, description, events).
     cache_dir : path, optional
         Cache root; defaults to $LAGCOMP_CACHE_DIR, else the user cache directory.
     eom : lagcomp.mechanics.lagrange.EOM, optional
@@ -285,6 +285,11 @@ class Model:
     def state_size(self) -> int:
         """Length of the state y the kernels and drivers take: 2n for (q, q̇)."""
         return 2 * self.n
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Labels of the state y the drivers advance: the coordinates, then ``<coordinate>_dot``."""
+        return self.coordinates + tuple(f"{c}_dot" for c in self.coordinates)
 
     @property
     def k(self) -> int:
@@ -587,6 +592,10 @@ class Model:
         from lagcomp.integrate.options import known_options
         from lagcomp.integrate.simulate import simulate
 
+        if options.pop("u0", None) is not None:  # (None: what `lagcomp run` passes when --u0 is not given)
+            raise InitialConditionError(f"`u0` gives the initial speeds of a Kane model (state (q, u)); {self.name!r} "
+                                        f"is a Lagrange model: give its initial velocities as `qd0` (--qd0 on the "
+                                        f"command line), one per coordinate {list(self.coordinates)}.")
         known_options(simulate, options, "Model.simulate")
         return simulate(self, t_span, q0, qd0, params, **options)
 

@@ -18,7 +18,21 @@ def unconstrained(model, what: str) -> None:
 
 
 def symbolic_system(model, what: str):
-    """The System `model` was compiled from; a loaded model (`lagcomp.load`) has none to give."""
+    """The System `model` was compiled from; a loaded model (`lagcomp.load`) has none to give.
+
+    A Kane model (compiled from a KanesMethod) has no System at all: its
+    equations are Kane's, not Lagrange's, so the message says what applies to it.
+    """
+    if getattr(model, "speeds", None) is not None:  # a KaneModel: state (q, u), no L to read
+        raise ModelError(
+            f"{what} reads the Lagrangian (T, V, generalized forces) of a System; {model.name!r} is a Kane model, "
+            "compiled from a KanesMethod's equations (state (q, u)), which has none. For a Kane model lagcomp "
+            "offers simulate and sweep (dop853, dopri5, rk4), rhs, energy (T + V where the loads have a "
+            "potential; watch Solution.energy for conservation), constraint_residuals, reactions, and "
+            "linearize_steady / stability_sweep about steady motions. For this analysis, build the model as a "
+            "lagcomp.System or sympy LagrangesMethod (possible when its velocities are the time derivatives of "
+            "its positions) and compile that."
+        )
     if model.system is None:
         raise ModelError(f"{what} reads the equations of {model.name!r}, which a model from lagcomp.load() does not "
                          "carry: build its System and use lagcomp.compile(system) (a cache hit, no recompilation).")

@@ -338,15 +338,16 @@ ADAPTIVE_DRIVERS = ("dopri5_run", "dop853_run")
 FIXED_STEP_DRIVERS = ("rk4_run", "composition_run", "collocation_run")
 
 
-def _sweeps() -> str:
-    """``templates/sweeps.py`` with its two generic functions copied once per driver (see its docstring)."""
+def sweeps_source(adaptive=ADAPTIVE_DRIVERS, fixed=FIXED_STEP_DRIVERS) -> str:
+    """``templates/sweeps.py`` with its two generic functions copied once per driver (see its docstring):
+    once per `adaptive` driver and once per `fixed`-step one (a Kane module has dopri5, dop853 and rk4 only)."""
     text = template("sweeps")
     start = text.rindex("@njit", 0, text.index("def sweep_adaptive("))
     middle = text.rindex("@njit", 0, text.index("def sweep_fixed("))
     parts = [text[:start]]
     for generic, placeholder, drivers in (
-        (text[start:middle], "ADAPTIVE_DRIVER", ADAPTIVE_DRIVERS),
-        (text[middle:].rstrip("\n") + "\n\n\n", "FIXED_DRIVER", FIXED_STEP_DRIVERS),
+        (text[start:middle], "ADAPTIVE_DRIVER", adaptive),
+        (text[middle:].rstrip("\n") + "\n\n\n", "FIXED_DRIVER", fixed),
     ):
         name = "sweep_adaptive" if placeholder == "ADAPTIVE_DRIVER" else "sweep_fixed"
         parts += [generic.replace(name, f"sweep_{driver}").replace(placeholder, driver) for driver in drivers]
@@ -370,5 +371,5 @@ def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None) -> str
     taylor = taylor_decomposition(ir) if taylor is None else taylor
     parts.append(taylor_source(taylor, events=bool(ir.event_names)))  # taylor_coefficients and taylor_run, or why not
     parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n")
-    parts.append(_sweeps())
+    parts.append(sweeps_source())
     return "".join(parts)

@@ -18,11 +18,14 @@ speeds, state length ``n_q + n_u``; same calling conventions as
 - ``reactions(t, y, p, out)``: the noncontributing forces of the auxiliary
   speeds at the u̇ of ``rhs`` (only when the model has them).
 
-Then the hooks the drivers call (``project``, ``constraint_residual``,
-``event_values``), ``observables`` and ``kinematics_along`` /
+- ``event_values(t, y, p, out)``: g of each declared event (`lagcomp.Event`
+  over q, u and t); without events a stub, and the drivers' event code is left out.
+
+Then the hooks the drivers call (``project``, ``constraint_residual``), ``observables`` and ``kinematics_along`` /
 ``reactions_along`` over saved rows, and the templates ``trig``,
 ``linear_solvers`` and ``drivers`` (rk4, dopri5, dop853, which are generic in
-the state's length).  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
+the state's length), and ``sweeps`` (``sweep_<driver>`` of those three, for
+`lagcomp.integrate.sweep`).  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
 reaches the emitted code, so none can collide with it (DESIGN.md, "Names");
 the header lists which is which.
 """
@@ -32,7 +35,7 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp import __version__
-from lagcomp.codegen.emit import INDENT
+from lagcomp.codegen.emit import INDENT, sweeps_source
 from lagcomp.codegen.lower import _kernel
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.templating import template
@@ -128,13 +131,15 @@ def reactions_along(ts, ys, p, out):
     return 0
 '''
 
-_HOOKS = '''
+_NO_EVENTS = '''
 
 @njit(cache=True, error_model="numpy")
 def event_values(t, y, p, out):
-    """No events: Kane models do not declare any."""
+    """No events: this model declares none."""
     pass
+'''
 
+_HOOKS = '''
 
 @njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
@@ -226,6 +231,16 @@ def kinematics_along(ts, ys, p, out):
 '''
 
 
+def _events(form: FirstOrderForm, events, mapping, loads) -> tuple:
+    """The ``event_values`` kernel (g of each event into `out`) and its source; the stub without events."""
+    if not events:
+        return None, _NO_EVENTS
+    names = tuple(name for name, _ in events)
+    kernel = _kernel("event_values", f"Event functions g = {names} at one state, into `out`.", ARGS,
+                     [(f"out[{i}]", g) for i, (_, g) in enumerate(events)], mapping, loads)
+    return kernel, _function(kernel)
+
+
 def _header(name: str, form: FirstOrderForm, reaction_names) -> str:
     locals_ = ", ".join(f"_q{i}={c}" for i, c in enumerate(form.coordinate_names))
     locals_ += "; " + ", ".join(f"_u{i}={c}" for i, c in enumerate(form.speed_names))
@@ -240,8 +255,12 @@ def _header(name: str, form: FirstOrderForm, reaction_names) -> str:
     )
 
 
-def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), reactions=None) -> tuple[str, dict]:
-    """The module source for a Kane model, and the operation count of each kernel after CSE."""
+def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), reactions=None,
+              events=()) -> tuple[str, dict]:
+    """The module source for a Kane model, and the operation count of each kernel after CSE.
+
+    `events` are (name, g) pairs, g over the plain symbols of `form` (`lagcomp.mechanics.kane.kane_events`).
+    """
     mapping, loads = _bindings(form, bool(reaction_names))
     rhs, rhs_source = _rhs(form, mapping, loads)
     kernels = [rhs] + _plain_kernels(form, energy, mapping, loads)
@@ -251,9 +270,15 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
         kernel, source = _reactions(form, reaction_names, reactions, mapping, loads)
         kernels.append(kernel)
         parts.append(source)
+    event_kernel, event_source = _events(form, events, mapping, loads)
+    if event_kernel is not None:
+        kernels.append(event_kernel)
+    parts.append(event_source)
     parts.append(_HOOKS.format(n_r=form.Phi.rows + form.Psi.rows, n_q=form.n_q, n_u=form.n_u, n_h=form.Phi.rows,
                                n_v=form.Psi.rows))
     for piece in ("trig", "linear_solvers", "drivers"):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{piece}.py\n\n")
-        parts.append(template(piece, events=False))
+        parts.append(template(piece, events=bool(events)))
+    parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n")
+    parts.append(sweeps_source(adaptive=("dopri5_run", "dop853_run"), fixed=("rk4_run",)))
     return "".join(parts), {k.name: k.operation_count for k in kernels}

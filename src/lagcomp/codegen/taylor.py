@@ -637,7 +637,7 @@ def taylor_source(taylor: TaylorProgram | Unsupported, events: bool) -> str:
     """``taylor_coefficients`` and the driver template, or ``TAYLOR_REFUSED`` saying why there are none."""
     if isinstance(taylor, Unsupported):
         return f"\n\n#: Why this module has no Taylor integrator (method='taylor').\nTAYLOR_REFUSED = {str(taylor)!r}\n"
-    sweeps = template("sweeps")  # its generic adaptive loop, for taylor_run (as emit._sweeps does for the others)
+    sweeps = template("sweeps")  # its generic adaptive loop, for taylor_run (as emit.sweeps_source does for the others)
     start = sweeps.rindex("@njit", 0, sweeps.index("def sweep_adaptive("))
     end = sweeps.rindex("@njit", 0, sweeps.index("def sweep_fixed("))
     sweep = sweeps[start:end].replace("sweep_adaptive", "sweep_taylor_run").replace("ADAPTIVE_DRIVER", "taylor_run")

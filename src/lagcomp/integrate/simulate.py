@@ -266,12 +266,12 @@ def _redundant_constraints(model, t0: float, y0: np.ndarray, p: np.ndarray) -> l
 
 
 def _event_records(model, event_parts) -> dict:
-    """Occurrences of each declared event: {name: EventRecord(t, q, qd)}, in time order."""
+    """Occurrences of each declared event: {name: EventRecord(t, q, qd)}, in time order (qd: u of a Kane model)."""
     n = model.n
     if event_parts:
         t_all, y_all, i_all = (np.concatenate(column) for column in zip(*event_parts))
     else:
-        t_all, y_all, i_all = np.empty(0), np.empty((0, 2 * n)), np.empty(0, dtype=np.int64)
+        t_all, y_all, i_all = np.empty(0), np.empty((0, model.state_size)), np.empty(0, dtype=np.int64)
     records = {}
     for index, event in enumerate(model.events):
         hit = i_all == index
@@ -285,11 +285,9 @@ def _solution(model, p, recorder, y, run, throw) -> Solution:
     t_failure = None
     message = MESSAGES[status]
     if status < 0 or status == INTERRUPTED:
-        n = model.n
-        state = ", ".join(f"{c}={v:.6g}" for c, v in zip(model.coordinates, y[:n]))
-        rates = ", ".join(f"{c}_dot={v:.6g}" for c, v in zip(model.coordinates, y[n:]))
+        state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, y))  # (q, q̇), or (q, u) of Kane
         last = "state" if status == RESIDUAL_EXCEEDED else "last good state"
-        message = f"{message} Stopped at t = {clock[0]:.10g}, {last} {state}, {rates}."
+        message = f"{message} Stopped at t = {clock[0]:.10g}, {last} {state}."
         if status == RESIDUAL_EXCEEDED:
             message += f" Residual {run['residual_max']:.3g} > max_residual = {run['max_residual']:g}."
         t_failure = float(clock[0]) if status < 0 else None

@@ -11,7 +11,9 @@ whatever the number of threads.
 
 Grid names are coordinate names (initial coordinates), ``<coordinate>_dot``
 (initial velocities) and parameter names; everything not swept comes from
-`q0`, `qd0`, `params` or the System's defaults.
+`q0`, `qd0`, `params` or the System's defaults.  A Kane model (state (q, u),
+`lagcomp.kane_model`) sweeps its speeds by their names (`Model.state_names`)
+and takes the speeds not swept as `qd0` (its ``sweep`` passes `u0` there).
 """
 
 from __future__ import annotations
@@ -64,8 +66,9 @@ class Sweep:
         ``"zip"`` and explicit arrays the value of each name per trajectory.
     shape : tuple of int
         Grid shape: one axis per name for a product, (N,) otherwise.
-    final : ndarray, shape (*shape, 2n)
-        State (q, q̇) where each trajectory ended.
+    final : ndarray, shape (*shape, n_y)
+        State where each trajectory ended: (q, q̇), n_y = 2n; for a Kane
+        model (q, u), n_y = n_q + n_u, the speeds named in `speeds`.
     t_final : ndarray, shape
         Time it ended (t_end, or earlier on failure or a terminal event).
     status : ndarray of int, shape
@@ -73,18 +76,20 @@ class Sweep:
         (interrupted sweep), negative failures (`MESSAGES`).
     nfev, nsteps, nrejected : ndarray of int, shape
         Counters per trajectory.
-    t_dense, dense : ndarray, shapes (m,) and (*shape, m, 2n), or None
+    t_dense, dense : ndarray, shapes (m,) and (*shape, m, n_y), or None
         States at common times (``output`` includes "dense").
     energy_error : ndarray, shape, or None
         Largest relative deviation of T + V from its initial value over the
         saved rows (every step unless `save_every`/`t_eval` say otherwise).
     events : dict of str to dict, or None
         Per event: ``count`` (shape), ``t`` (*shape, cap) and ``y``
-        (*shape, cap, 2n) of the first `event_cap` occurrences (NaN beyond).
+        (*shape, cap, n_y) of the first `event_cap` occurrences (NaN beyond).
     done : ndarray of bool, shape
         Which trajectories ran (all, unless Ctrl-C interrupted the sweep).
     coordinates : tuple of str
     method : str
+    speeds : tuple of str
+        A Kane model's speed names (the last n_u columns of a state); empty for Lagrange models.
     """
 
     names: tuple
@@ -104,6 +109,7 @@ class Sweep:
     dense: np.ndarray | None = None
     energy_error: np.ndarray | None = None
     events: dict | None = field(default=None)
+    speeds: tuple = ()
 
     @property
     def interrupted(self) -> bool:
@@ -118,6 +124,8 @@ class Sweep:
             "final": self.final, "t_final": self.t_final, "status": self.status, "nfev": self.nfev,
             "nsteps": self.nsteps, "nrejected": self.nrejected, "done": self.done,
         }
+        if self.speeds:
+            arrays["speeds"] = np.asarray(self.speeds)
         arrays.update({f"axis_{name}": values for name, values in self.axes.items()})
         for key in ("t_dense", "dense", "energy_error"):
             if getattr(self, key) is not None:
@@ -141,6 +149,7 @@ class Sweep:
         return cls(
             names=names, axes={name: arrays.pop(f"axis_{name}") for name in names},
             shape=tuple(arrays.pop("shape").tolist()), coordinates=tuple(arrays.pop("coordinates").tolist()),
+            speeds=tuple(arrays.pop("speeds").tolist()) if "speeds" in arrays else (),
             method=str(arrays.pop("method")), combine=str(arrays.pop("combine")), events=events or None, **arrays,
         )
 
@@ -153,7 +162,7 @@ class Sweep:
         product = self.combine == "product"
         dims = self.names if product else ("trajectory",)
         coords = {name: (name if product else "trajectory", self.axes[name]) for name in self.names}
-        state = [f"{c}" for c in self.coordinates] + [f"{c}_dot" for c in self.coordinates]
+        state = list(self.coordinates) + (list(self.speeds) or [f"{c}_dot" for c in self.coordinates])
         data = {
             "final": ((*dims, "state"), self.final), "t_final": (dims, self.t_final), "status": (dims, self.status),
             "nsteps": (dims, self.nsteps), "nfev": (dims, self.nfev),
@@ -214,11 +223,12 @@ def _grid(model, grid, combine: str, names, memory_limit) -> tuple[tuple, dict, 
             raise OptionError("An explicit grid is an (N, k) array with `names` giving its k columns.")
         names = tuple(_grid_name(name) for name in names)
         shape, axes = (values.shape[0],), {name: values[:, i].copy() for i, name in enumerate(names)}
-    known = list(model.coordinates) + [f"{c}_dot" for c in model.coordinates] + list(model.parameters)
+    known = list(model.state_names) + list(model.parameters)
     unknown = [name for name in names if name not in known]
     if unknown or len(set(names)) != len(names):
+        velocities = "speeds" if getattr(model, "speeds", None) is not None else "'<coordinate>_dot' velocities"
         raise OptionError(f"Cannot sweep {unknown or names}: grid names must be distinct coordinates, "
-                          f"'<coordinate>_dot' velocities or parameters: {known}.")
+                          f"{velocities} or parameters: {known}.")
     ambiguous = [name for name in names if known.count(name) > 1]
     if ambiguous:
         raise OptionError(f"Cannot sweep {ambiguous}: in {model.name!r} the name stands for two quantities (a "
@@ -252,20 +262,21 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if unknown:
         raise OptionError(f"Unknown sweep output(s) {unknown}; choose from {OUTPUTS} (the final state is always kept).")
     names, axes, shape, values = _grid(model, grid, combine, names, memory_limit)
-    n2 = 2 * model.n
+    n2 = model.state_size
     y_base = model.initial_state(q0, qd0)
     p_base = model.parameter_vector(params, baumgarte)
     Y0 = np.repeat(y_base[None, :], values.shape[0], axis=0)
     P = np.repeat(p_base[None, :], values.shape[0], axis=0)
-    state_names = list(model.coordinates) + [f"{c}_dot" for c in model.coordinates]
+    state_names = list(model.state_names)
     for column, name in enumerate(names):
         if name in state_names:
             Y0[:, state_names.index(name)] = values[:, column]
         else:
             P[:, list(model.parameters).index(name)] = values[:, column]
-    if model.k:
+    constrained = bool(model.residual_labels)  # (a Kane model's Φ and Ψ have no multipliers: model.k is 0)
+    if constrained:
         _consistent_initial_states(model, t0, Y0, P, project_initial, names, values)
-    projecting = int(bool(model.k) and (not m.adaptive if projection is None else bool(projection)))
+    projecting = int(constrained and (not m.adaptive if projection is None else bool(projection)))
     save_every = count(save_every, "save_every")
     max_steps = count(max_steps, "max_steps")
     directions, actions = event_arguments(model, m, events)
@@ -346,6 +357,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         final=shaped(out["final"]), t_final=shaped(out["t_final"]),
         status=shaped(statuses), nfev=shaped(counts[:, 0]), nsteps=shaped(counts[:, 1]),
         nrejected=shaped(counts[:, 2]), done=shaped(done), coordinates=model.coordinates, method=m.name,
+        speeds=tuple(getattr(model, "speeds", None) or ()),
         t_dense=t_dense, dense=shaped(out["dense"]) if t_dense is not None else None,
         energy_error=shaped(relative) if "energy" in output else None, events=events_out,
     )
@@ -367,6 +379,10 @@ BATCHED = {"rk4": "rk4_lanes", "dop853": "dop853_lanes", "taylor": "taylor_lanes
 
 
 def _batched_driver(model, m) -> str:
+    if getattr(model, "speeds", None) is not None:
+        raise OptionError(f"`batched=True` needs the SIMD kernels of Lagrange's equations; {model.name!r} is a Kane "
+                          "model (state (q, u)) without them: drop `batched` (its sweep runs one trajectory per "
+                          "thread with dop853, dopri5 or rk4).")
     if m.name not in BATCHED:
         raise OptionError(f"`batched=True` is available for {sorted(BATCHED)}; not yet for {m.name}.")
     if m.name == "taylor":

@@ -31,6 +31,9 @@ position tree whose velocity in N is set to zero — accepted only when dV/dt = 
 (so that a force whose point moves other than its position says is not
 turned into a wrong potential).  Otherwise None, and the kernel returns NaN.
 
+`kane_events(km, form, events)`: the g(q, u, t) of `lagcomp.Event`s over the
+same plain symbols, for the event kernel.
+
 `auxiliary_reactions(km, form)`: with auxiliary speeds, ``km.auxiliary_eqs``
 = 0 determines the noncontributing forces the user applied (functions of t
 that appear only there); they are solved symbolically as functions of
@@ -169,6 +172,34 @@ def auxiliary_reactions(km: me.KanesMethod, form: FirstOrderForm) -> tuple[tuple
         raise ModelError("The auxiliary equations do not determine the noncontributing forces "
                          f"{[str(x) for x in unknowns]} (not linear in them, or singular).")
     return tuple(s.name for s in symbols), A.LUsolve(b)
+
+
+def kane_events(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple[tuple, tuple]:
+    """(the `lagcomp.Event`s, their g over the plain symbols of `form`) of a Kane model.
+
+    g may hold q(t), u(t), q̇ (replaced by N from the kinematic equations), t
+    and parameters of the equations; any other symbol is refused by name
+    (a parameter the equations lack would have no slot in p).
+    """
+    from lagcomp.model.events import Event
+
+    plain = _Plain(km)
+    allowed = set(form.q) | set(form.u) | set(form.parameters) | {t}
+    specs, exprs = [], []
+    for event in events or ():
+        if not isinstance(event, Event):
+            raise ModelError(f"`events` of a KanesMethod are lagcomp.Event(name, g(q, u, t)), got {event!r}.")
+        g = plain(event.expr, f"event `{event.name}`")
+        stray = sorted(str(x) for x in g.free_symbols - allowed)
+        if stray:
+            raise ModelError(f"Event `{event.name}` holds {stray}, which are neither coordinates, speeds, t nor "
+                             f"parameters of the KanesMethod's equations {[x.name for x in form.parameters]}.")
+        specs.append(event)
+        exprs.append(g)
+    names = [e.name for e in specs]
+    if len(set(names)) != len(names):
+        raise ModelError(f"Event names must be distinct, got {names}.")
+    return tuple(specs), tuple(exprs)
 
 
 def acceleration_symbols(form: FirstOrderForm) -> tuple:
