@@ -23,20 +23,23 @@ def random_states(model, n: int = 50, *, seed: int = 0, spread: float = 1.0) -> 
     return np.hstack([q, qd])
 
 
-def close_approach_states(model, points, n: int = 30, *, distances=CLOSE_DISTANCES, seed: int = 0,
+def close_approach_states(model, points, n: int = 30, *, anchors=(), distances=CLOSE_DISTANCES, seed: int = 0,
                           spread: float = 1.0) -> np.ndarray:
-    """n states in which two of the `points` are a distance d apart, d cycling through `distances`.
+    """n states in which a point comes a distance d from another point or from a fixed anchor.
 
     Parameters
     ----------
     points : sequence of tuples of coordinate names
-        The Cartesian coordinates of each point, e.g. ``[("x1", "y1"), ("x2", "y2")]``.
-        Every point has the same number of coordinates (2 or 3).
+        The Cartesian coordinates of each moving point, e.g. ``[("x1", "y1"), ("x2", "y2")]``.
+    anchors : sequence of tuples of float
+        Fixed positions the points can approach (a primary of the restricted
+        three-body problem), each with as many coordinates as a point.
     distances : sequence of float
-        Separations of the close pair.
+        Separations of the close pair, used in turn.
 
-    Each state starts from `random_states`; a random pair (a, b) of points is
-    chosen and b is put at a + d·u, u a random unit vector.  Velocities stay random.
+    Each state starts from `random_states`; a pair (two points, or a point and
+    an anchor) is chosen at random and the point is put at the other's
+    position + d·u, u a random unit vector.  Velocities stay random.
     """
     index = {name: i for i, name in enumerate(model.coordinates)}
     try:
@@ -44,14 +47,18 @@ def close_approach_states(model, points, n: int = 30, *, distances=CLOSE_DISTANC
     except KeyError as err:
         raise ModelError(f"`points` names {err.args[0]!r}, which is not a coordinate of {model.name!r} "
                          f"(coordinates {list(model.coordinates)}).") from None
-    if len(slots) < 2 or len({len(s) for s in slots}) != 1:
-        raise ModelError("`points` must list at least two points with the same number of coordinates each.")
+    anchors = [np.asarray(a, dtype=float) for a in anchors]
+    sizes = {len(s) for s in slots} | {a.size for a in anchors}
+    pairs = [(a, b) for a in range(len(slots)) for b in range(len(slots)) if a != b]
+    pairs += [(a, -1 - k) for a in range(len(slots)) for k in range(len(anchors))]
+    if not pairs or len(sizes) != 1:
+        raise ModelError("`points` and `anchors` must give at least one pair, every point and anchor with the "
+                         f"same number of coordinates (got sizes {sorted(sizes)}).")
     rng = np.random.default_rng(seed)
     states = random_states(model, n, seed=seed + 1, spread=spread)
     for k, state in enumerate(states):
-        a, b = rng.choice(len(slots), size=2, replace=False)
-        u = rng.standard_normal(len(slots[a]))
-        u /= np.linalg.norm(u)
-        d = distances[k % len(distances)]
-        state[slots[b]] = state[slots[a]] + d * u
+        moved, other = pairs[rng.integers(len(pairs))]
+        target = state[slots[other]] if other >= 0 else anchors[-1 - other]
+        u = rng.standard_normal(len(slots[moved]))
+        state[slots[moved]] = target + distances[k % len(distances)] * u / np.linalg.norm(u)
     return states

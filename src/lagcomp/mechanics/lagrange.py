@@ -292,10 +292,10 @@ def _kinetic_parts(T: sp.Expr, qd, variables) -> tuple[sp.Matrix, sp.Matrix, sp.
         Te, ve = to_se(T), [to_se(v) for v in qd]
         gradient = [Te.diff(v) for v in ve]
         rest = {v: 0 for v in ve}
-        hessian = {(i, j): se.expand(gradient[i].diff(ve[j])) for i, j in pairs}
-        if any(entry.free_symbols & set(ve) for entry in hessian.values()):
+        hessian = {(i, j): gradient[i].diff(ve[j]) for i, j in pairs}
+        if any(entry.free_symbols & set(ve) and se.expand(entry).free_symbols & set(ve) for entry in hessian.values()):
             raise ModelError(NOT_QUADRATIC)
-        tidy = lambda image: _tidy_symengine(se.expand(image), [to_se(v) for v in variables], to_sympy)  # noqa: E731
+        tidy = lambda image: _tidy_symengine(image, [to_se(v) for v in variables], to_sympy)  # noqa: E731
         lower = {ij: tidy(entry) for ij, entry in hessian.items()}
         b, T0 = [tidy(g.subs(rest)) for g in gradient], tidy(Te.subs(rest))
     else:
@@ -313,7 +313,7 @@ def _gradient(expr: sp.Expr, xs, variables) -> list:
     if symengine_ready([expr]) and any(x in expr.free_symbols for x in xs):
         to_se, to_sympy = _symengine_maps({*expr.free_symbols, *xs})
         image = to_se(expr)
-        partials = [to_sympy(se.expand(image.diff(to_se(x)))) for x in xs]
+        partials = [to_sympy(image.diff(to_se(x))) for x in xs]  # not expanded: `_tidy` keeps the structure
     else:
         partials = [_diff(expr, x) for x in xs]
     return [_tidy(d, variables) for d in partials]
@@ -393,6 +393,94 @@ def _constraints(system: System, q, qd, plain) -> dict:
     )
 
 
+def _kept_structure(expr, variables, backend=sp) -> tuple:
+    """`expr` with the parts that must not be expanded replaced by placeholders, and the map back.
+
+    Expanding is what Fu's rules need to see l1 l2 (sin θ1 sin θ2 + cos θ1 cos θ2)
+    as separate products, and it is harmless for sums of sines and cosines.
+    Elsewhere it costs accuracy: a squared distance (x1 − x2)² multiplied out
+    to x1² − 2 x1 x2 + x2², or a force G m1 m2 (x2 − x1)/r³ split into
+    G m1 m2 x2/r³ − G m1 m2 x1/r³, cancels when the bodies come close.  So a
+    sum over the `variables` is kept whole (a placeholder) unless each of its
+    terms in the variables holds a sine or cosine; so is a power of the
+    variables with an exponent other than a positive integer (r⁻³, √·) and
+    any call of another function.  `backend` is sympy or symengine (the
+    expression's own); the placeholders are Dummies or fresh symbols of it.
+    """
+    return _Keeper({backend.sympify(v) for v in variables}, backend).run(backend.sympify(expr))
+
+
+class _Keeper:
+    """The walk of `_kept_structure`, with the dependence on the variables and the
+    trigonometric test memoized per subexpression (each is linear in the tree then)."""
+
+    def __init__(self, names: set, backend):
+        self.names, self.backend = names, backend
+        self.kept: dict = {}
+        self.memo: dict = {}
+        self.dependent: dict = {}
+        self.trig: dict = {}
+
+    def run(self, expr) -> tuple:
+        result = self.walk(expr)
+        return result, {placeholder: original for original, placeholder in self.kept.items()}
+
+    def depends(self, e) -> bool:
+        found = self.dependent.get(e)
+        if found is None:
+            found = self.dependent[e] = (e in self.names) if not e.args else any(map(self.depends, e.args))
+        return found
+
+    def walk(self, e):
+        if not e.args or not self.depends(e):
+            return e
+        done = self.memo.get(e)
+        if done is None:
+            done = self.memo[e] = self._rebuilt(e)
+        return done
+
+    def _rebuilt(self, e):
+        b = self.backend
+        if isinstance(e, (b.sin, b.cos)):
+            return e  # its argument is not expanded (sp.expand's trig=False)
+        if isinstance(e, b.Pow) and not _positive_integer(e.args[1]):
+            return self.placeholder(e)
+        if isinstance(e, b.Add) and not self.trigonometric_sum(e):
+            return self.placeholder(e)
+        if not isinstance(e, (b.Add, b.Mul, b.Pow)):
+            return self.placeholder(e)  # another function: kept whole
+        args = [self.walk(a) for a in e.args]
+        return e if all(x is y for x, y in zip(args, e.args)) else e.func(*args)
+
+    def placeholder(self, e):
+        if e not in self.kept:
+            self.kept[e] = sp.Dummy() if self.backend is sp else se.Symbol(f"_lagcomp_kept{len(self.kept)}")
+        return self.kept[e]
+
+    def trigonometric_sum(self, e) -> bool:
+        """Whether each term of the sum `e` that depends on the variables holds a sine or cosine of them."""
+        return all(self.trigonometric(term) for term in e.args if self.depends(term))
+
+    def trigonometric(self, factor) -> bool:
+        found = self.trig.get(factor)
+        if found is None:
+            b = self.backend
+            if isinstance(factor, (b.sin, b.cos)):
+                found = True
+            elif isinstance(factor, b.Pow):
+                found = _positive_integer(factor.args[1]) and self.trigonometric(factor.args[0])
+            elif isinstance(factor, b.Mul):
+                found = any(self.trigonometric(f) for f in factor.args)
+            else:
+                found = isinstance(factor, b.Add) and self.trigonometric_sum(factor)
+            self.trig[factor] = found
+        return found
+
+
+def _positive_integer(x) -> bool:
+    return isinstance(x, (sp.Integer, se.Integer)) and x > 0
+
+
 def _tidy(expr: sp.Expr, variables) -> sp.Expr:
     """Cheap simplification that pays off in operation count (e.g. sin²+cos² → 1).
 
@@ -405,23 +493,27 @@ def _tidy(expr: sp.Expr, variables) -> sp.Expr:
     Σ_a m_a l1² cos²θ1 is c sin²θ1 + c cos²θ1 for them, whatever the number
     of masses.  The result is kept only when it has no more operations than
     the input; expressions with more than TIDY_MAX_TERMS terms once expanded
-    are left alone (CSE recovers much of the sharing anyway).
+    are left alone (CSE recovers much of the sharing anyway).  Only sums of
+    sines and cosines are expanded: the structure that keeps a kernel
+    accurate (differences, norms, powers) is kept whole (`_kept_structure`).
     """
     expr = sp.sympify(expr)
     if expr.is_Atom or (expr.is_Add and len(expr.args) > TIDY_MAX_TERMS):
         return expr
-    if not expr.is_Add and not any((f.is_Add or (f.is_Pow and f.base.is_Add)) and f.has(*variables)
-                                   for f in sp.Mul.make_args(expr)):
+    compact, kept = _kept_structure(expr, variables)
+    variables = (*variables, *kept)
+    if not compact.is_Add and not any((f.is_Add or (f.is_Pow and f.base.is_Add)) and f.has(*variables)
+                                      for f in sp.Mul.make_args(compact)):
         return expr  # a single term in the variables: nothing to combine
     groups: dict = {}
-    for term in sp.Add.make_args(expr):  # expand only the parts that depend on the variables
+    for term in sp.Add.make_args(compact):  # expand only the parts that depend on the variables
         coefficient, factor = term.as_independent(*variables, as_Add=False)
         for part in sp.Add.make_args(sp.expand(factor)):
             c, f = part.as_independent(*variables, as_Add=False)
             groups.setdefault(f, []).append(coefficient * c)
     if sum(map(len, groups.values())) > TIDY_MAX_TERMS:
         return expr
-    result = _tidy_groups(groups)
+    result = _tidy_groups(groups).xreplace(kept)
     return result if sp.count_ops(result) <= sp.count_ops(expr) else expr
 
 
@@ -432,18 +524,22 @@ def _tidy_small(expr: sp.Expr, variables) -> sp.Expr:
 
 
 def _tidy_symengine(image, variables, to_sympy) -> sp.Expr:
-    """`_tidy` of the expanded symengine expression `image`, grouped in symengine (no large sympy
-    expression is ever built); `to_sympy` converts back."""
-    names = {se.sympify(v) for v in variables}
+    """`_tidy` of the symengine expression `image` (over `variables`, symengine symbols), expanded
+    and grouped in symengine (no large sympy expression is ever built), the structure
+    `_kept_structure` keeps left whole; `to_sympy` converts back."""
+    compact, kept = _kept_structure(image, variables, backend=se)
+    names = {*variables, *kept}
+    image = se.expand(compact)
     groups: dict = {}
     for term in (image.args if isinstance(image, se.Add) else (image,)):
         factors = term.args if isinstance(term, se.Mul) else (term,)
         dependent = [f for f in factors if f.free_symbols & names]
         key = se.Mul(*dependent)
         groups.setdefault(key, []).append(se.Mul(*(f for f in factors if not f.free_symbols & names)))
+    back = {to_sympy(k): to_sympy(v) for k, v in kept.items()}
     if sum(map(len, groups.values())) > TIDY_MAX_TERMS:
-        return to_sympy(image)
-    return _tidy_groups({to_sympy(f): [to_sympy(c) for c in cs] for f, cs in groups.items()})
+        return to_sympy(image).xreplace(back)
+    return _tidy_groups({to_sympy(f): [to_sympy(c) for c in cs] for f, cs in groups.items()}).xreplace(back)
 
 
 def _tidy_groups(groups: dict) -> sp.Expr:
