@@ -20,7 +20,7 @@ from bench.harness import SKIPPED, Table, Target, peer
 FULL_CASES = ["double_pendulum", "kepler", "n_link_pendulum_2", "n_link_pendulum_4", "n_link_pendulum_8",
               "n_link_pendulum_10", "rolling_disc", "free_axle", "n_link_pendulum_16", "n_link_pendulum_24"]
 QUICK_CASES = ["double_pendulum", "kepler", "n_link_pendulum_4"]
-SECTIONS = ["compile", "kernels", "adaptive", "fixed", "sweeps", "ensembles", "long", "memory"]
+SECTIONS = ["compile", "kernels", "accuracy", "adaptive", "fixed", "sweeps", "ensembles", "long", "memory"]
 
 TARGETS = {
     "rhs_dp": ("double-pendulum RHS in a loop", "≤ 1.2× hand-written numba"),
@@ -200,9 +200,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"<!-- cold compile of {case} ... -->", file=sys.stderr, flush=True)
             ctx.cold[case] = compile_time.cold(case, ctx.cache_dir, ctx.case_timeout)
         runners = {"compile": compile_time.section}
-        from bench import adaptive, bench_sweep, bench_taylor, kernels, throughput
+        from bench import accuracy, adaptive, bench_sweep, bench_taylor, kernels, throughput
 
-        runners.update(kernels=kernels.section, adaptive=adaptive.section, fixed=throughput.fixed_section,
+        runners.update(kernels=kernels.section, accuracy=accuracy.section, adaptive=adaptive.section,
+                       fixed=throughput.fixed_section,
                        sweeps=throughput.sweep_section, ensembles=bench_sweep.section,
                        long=lambda ctx: [throughput.long_run_section(ctx), bench_taylor.long_run_table(ctx)],
                        memory=throughput.memory_section)
@@ -211,7 +212,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"<!-- section {name} ... -->", file=sys.stderr, flush=True)
                 try:
                     tables = runners[name](ctx)
-                    for table in tables if isinstance(tables, list) else [tables]:
+                    for table in tables if isinstance(tables, list) else [tables]:  # a section may print several
                         emit(table)
                 except Exception as err:  # one broken section must not hide the others
                     import traceback

@@ -37,7 +37,16 @@ _MODEL_NAMES = (
 )
 
 
+#: Imported on first use too (sympy, mpmath): the kernel-accuracy check of `lagcomp.accuracy`.
+_ACCURACY_NAMES = ("kernel_accuracy",)
+
+
 def __getattr__(name: str):
+    if name in _ACCURACY_NAMES:
+        from lagcomp import accuracy
+
+        globals()[name] = value = getattr(accuracy, name)
+        return value
     if name in _MODEL_NAMES:
         from lagcomp import model
 
@@ -48,4 +57,4 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_MODEL_NAMES))
+    return sorted(set(globals()) | set(_MODEL_NAMES) | set(_ACCURACY_NAMES))

@@ -29,10 +29,12 @@ through the `EXAMPLES` registry:
 ``driven_pendulum_support``  ``driven_pendulum`` written in the support's frame (driving inertial force)
 ``symmetric_top``          heavy symmetric top in Euler angles (rigid body, gravity)
 ``wheel_jack``             crank, screw and lozenge holding a load: statics by virtual work
+``pythagorean_three_body``  Burrau's three bodies (masses 3, 4, 5) from rest: close approaches
+``restricted_three_body``  circular restricted three-body problem, rotating frame (Arenstorf orbit)
 =========================  ========================================================
 
-The factories live in `unconstrained`, `constrained` and `bodies` (systems
-built from Particle / RigidBody, loads and moving frames); each docstring states
+The factories live in `unconstrained`, `constrained`, `bodies` (systems
+built from Particle / RigidBody, loads and moving frames) and `gravitation`; each docstring states
 the coordinates, conventions, Lagrangian, equations and any closed form.
 """
 
@@ -44,6 +46,7 @@ from collections.abc import Callable
 from lagcomp.errors import ModelError
 from lagcomp.examples.bodies import BODIES_EXAMPLES
 from lagcomp.examples.constrained import CONSTRAINED_EXAMPLES
+from lagcomp.examples.gravitation import GRAVITATION_EXAMPLES
 from lagcomp.examples.unconstrained import (
     double_pendulum,
     driven_pendulum,
@@ -72,6 +75,7 @@ EXAMPLES: dict[str, Callable[..., System]] = {
 }
 EXAMPLES.update(CONSTRAINED_EXAMPLES)
 EXAMPLES.update(BODIES_EXAMPLES)
+EXAMPLES.update(GRAVITATION_EXAMPLES)
 
 
 def get(name: str, **kwargs) -> System:

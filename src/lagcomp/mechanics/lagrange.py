@@ -48,19 +48,11 @@ from dataclasses import dataclass
 import numpy as np
 import symengine as se
 import sympy as sp
-from sympy.simplify.fu import TR5, TR10i
 
 from lagcomp.errors import ModelError, SingularMassMatrixError
+from lagcomp.mechanics.tidy import tidy as _tidy, tidy_small as _tidy_small, tidy_symengine as _tidy_symengine
 from lagcomp.model.constraints import Holonomic
 from lagcomp.model.system import System, t
-
-
-#: Expressions with more terms than this (expanded) are not simplified (see `_tidy`).
-TIDY_MAX_TERMS = 400
-#: The energies are simplified only up to this many operations (see `_tidy_small`).
-TIDY_MAX_OPS = 300
-#: Fu's rules run on at most this many groups of terms (see `_tidy`).
-TIDY_MAX_GROUPS = 60
 
 
 @dataclass(frozen=True)
@@ -293,7 +285,7 @@ NOT_QUADRATIC = "The kinetic energy T is not quadratic in the velocities (its He
 
 
 def _kinetic_parts(T: sp.Expr, qd, variables) -> tuple[sp.Matrix, sp.Matrix, sp.Expr]:
-    """M, b and T₀ of T = ½ q̇ᵀ M q̇ + bᵀ q̇ + T₀, each simplified (`_tidy`).
+    """M, b and T₀ of T = ½ q̇ᵀ M q̇ + bᵀ q̇ + T₀, each simplified (`lagcomp.mechanics.tidy`).
 
     Raises ModelError when T is not quadratic in q̇ (its Hessian depends on q̇).
     """
@@ -305,10 +297,10 @@ def _kinetic_parts(T: sp.Expr, qd, variables) -> tuple[sp.Matrix, sp.Matrix, sp.
         Te, ve = to_se(T), [to_se(v) for v in qd]
         gradient = [Te.diff(v) for v in ve]
         rest = {v: 0 for v in ve}
-        hessian = {(i, j): se.expand(gradient[i].diff(ve[j])) for i, j in pairs}
-        if any(entry.free_symbols & set(ve) for entry in hessian.values()):
+        hessian = {(i, j): gradient[i].diff(ve[j]) for i, j in pairs}
+        if any(entry.free_symbols & set(ve) and se.expand(entry).free_symbols & set(ve) for entry in hessian.values()):
             raise ModelError(NOT_QUADRATIC)
-        tidy = lambda image: _tidy_symengine(se.expand(image), [to_se(v) for v in variables], to_sympy)  # noqa: E731
+        tidy = lambda image: _tidy_symengine(image, [to_se(v) for v in variables], to_sympy)  # noqa: E731
         lower = {ij: tidy(entry) for ij, entry in hessian.items()}
         b, T0 = [tidy(g.subs(rest)) for g in gradient], tidy(Te.subs(rest))
     else:
@@ -326,7 +318,7 @@ def _gradient(expr: sp.Expr, xs, variables) -> list:
     if symengine_ready([expr]) and any(x in expr.free_symbols for x in xs):
         to_se, to_sympy = _symengine_maps({*expr.free_symbols, *xs})
         image = to_se(expr)
-        partials = [to_sympy(se.expand(image.diff(to_se(x)))) for x in xs]
+        partials = [to_sympy(image.diff(to_se(x))) for x in xs]  # not expanded: `_tidy` keeps the structure
     else:
         partials = [_diff(expr, x) for x in xs]
     return [_tidy(d, variables) for d in partials]
@@ -404,100 +396,6 @@ def _constraints(system: System, q, qd, plain) -> dict:
         Phi=sp.Matrix(len(residuals), 1, residuals), C=C.applyfunc(tidy), b=b.applyfunc(tidy),
         gamma=gamma.applyfunc(tidy),
     )
-
-
-def _tidy(expr: sp.Expr, variables) -> sp.Expr:
-    """Cheap simplification that pays off in operation count (e.g. sin²+cos² → 1).
-
-    Two of Fu's rules (far cheaper than a full `trigsimp`): chains of links
-    written in Cartesian form give l1 l2 (sin θ1 sin θ2 + cos θ1 cos θ2), which
-    becomes l1 l2 cos(θ1 − θ2), and m l² (sin² θ + cos² θ), which becomes m l².
-    The rules are quadratic in the number of terms, so they run on the
-    expression grouped by its factors that depend on the `variables` (q, q̇,
-    t), each group's coefficient a single placeholder: Σ_a m_a l1² sin²θ1 +
-    Σ_a m_a l1² cos²θ1 is c sin²θ1 + c cos²θ1 for them, whatever the number
-    of masses.  The result is kept only when it has no more operations than
-    the input; expressions with more than TIDY_MAX_TERMS terms once expanded
-    are left alone (CSE recovers much of the sharing anyway).
-    """
-    expr = sp.sympify(expr)
-    if expr.is_Atom or (expr.is_Add and len(expr.args) > TIDY_MAX_TERMS):
-        return expr
-    if not expr.is_Add and not any((f.is_Add or (f.is_Pow and f.base.is_Add)) and f.has(*variables)
-                                   for f in sp.Mul.make_args(expr)):
-        return expr  # a single term in the variables: nothing to combine
-    groups: dict = {}
-    for term in sp.Add.make_args(expr):  # expand only the parts that depend on the variables
-        coefficient, factor = term.as_independent(*variables, as_Add=False)
-        for part in sp.Add.make_args(sp.expand(factor)):
-            c, f = part.as_independent(*variables, as_Add=False)
-            groups.setdefault(f, []).append(coefficient * c)
-    if sum(map(len, groups.values())) > TIDY_MAX_TERMS:
-        return expr
-    result = _tidy_groups(groups)
-    return result if sp.count_ops(result) <= sp.count_ops(expr) else expr
-
-
-def _tidy_small(expr: sp.Expr, variables) -> sp.Expr:
-    """`_tidy` for expressions of at most TIDY_MAX_OPS operations, others as they are: the energies,
-    from T as written, can expand to thousands of terms for a long chain."""
-    return expr if sp.count_ops(expr) > TIDY_MAX_OPS else _tidy(expr, variables)
-
-
-def _tidy_symengine(image, variables, to_sympy) -> sp.Expr:
-    """`_tidy` of the expanded symengine expression `image`, grouped in symengine (no large sympy
-    expression is ever built); `to_sympy` converts back."""
-    names = {se.sympify(v) for v in variables}
-    groups: dict = {}
-    for term in (image.args if isinstance(image, se.Add) else (image,)):
-        factors = term.args if isinstance(term, se.Mul) else (term,)
-        dependent = [f for f in factors if f.free_symbols & names]
-        key = se.Mul(*dependent)
-        groups.setdefault(key, []).append(se.Mul(*(f for f in factors if not f.free_symbols & names)))
-    if sum(map(len, groups.values())) > TIDY_MAX_TERMS:
-        return to_sympy(image)
-    return _tidy_groups({to_sympy(f): [to_sympy(c) for c in cs] for f, cs in groups.items()})
-
-
-def _tidy_groups(groups: dict) -> sp.Expr:
-    """Σ_f (Σ groups[f]) f, simplified by Fu's rules over placeholders for the coefficients (`_tidy`)."""
-    placeholders: dict = {}
-    compact = []
-    for factor, coefficients in groups.items():
-        coefficient = _common_factor(coefficients)
-        if coefficient != 0:
-            compact.append(placeholders.setdefault(coefficient, sp.Dummy()) * factor)
-    compact = sp.Add(*compact)
-    if len(groups) <= TIDY_MAX_GROUPS:
-        tidied = sp.expand(TR5(compact))  # sin² → 1 − cos², so sin² + cos² cancels
-        tidied = sp.factor_terms(TR10i(tidied))  # cos a cos b + sin a sin b → cos(a − b)
-        if sp.count_ops(tidied) <= sp.count_ops(compact):
-            compact = tidied
-    return compact.xreplace({placeholder: c for c, placeholder in placeholders.items()})
-
-
-def _common_factor(terms: list) -> sp.Expr:
-    """Σ terms with the symbolic factors common to all of them taken out (a cheap `factor_terms`).
-
-    l1² m1 + l1² m2 + l1² m3 becomes l1² (m1 + m2 + m3).  Only positive
-    integer powers are taken out, and a numeric coefficient only when all
-    terms have the same one.
-    """
-    if len(terms) < 2:
-        return sp.Add(*terms)
-    split = [term.as_coeff_Mul() for term in terms]
-    powers = [rest.as_powers_dict() for _, rest in split]
-    common = {}
-    for base, exp in powers[0].items():
-        exps = [p.get(base, 0) for p in powers]
-        if all(e.is_Integer and e > 0 for e in map(sp.sympify, exps)):
-            common[base] = min(exps)
-    numbers = {c for c, _ in split}
-    number = numbers.pop() if len(numbers) == 1 else sp.S.One
-    if not common and number == 1:
-        return sp.Add(*terms)
-    inner = [c / number * sp.Mul(*(b**(e - common.get(b, 0)) for b, e in p.items())) for (c, _), p in zip(split, powers)]
-    return number * sp.Mul(*(b**e for b, e in common.items())) * sp.Add(*inner)
 
 
 #: Functions without a derivative everywhere (a kink, a jump or a branch change).
