@@ -114,18 +114,25 @@ def energy_function(t, y, p):
     p_omega = p[2]
     p_lambda = p[3]
     p_nu = p[4]
-    _c0 = (0.5)*p_I_Y
-    _c1 = p_nu*t
-    _c2 = _cos(_c1)
-    _c3 = (0.5)*math.pi
-    _c4 = _c2*_c3
-    _c5 = p_omega**2
-    _c6 = _c5*_sin(p_lambda)**2
-    _c7 = math.pi**2*p_nu**2
-    _c8 = (0.25)*_c7
-    _c9 = _cos(p_lambda)
-    _c10 = _sin(_c1)
-    return _c0*qd_phi**2 + p_I*(-_c6 - _c8 - 0.5*_c5*_c9**2) + _c6*_sin(_c4)**2*(p_I - _c0) + _c8*p_I*_c2**2 + (0.5)*_c6*p_I*_cos(_c4)**2 + (0.125)*_c7*p_I*_c10**2 + _c10*_c3*_c9*p_I*p_nu*p_omega
+    _c0 = p_nu*t
+    _c1 = _cos(_c0)
+    _c2 = (0.5)*_c1
+    _c3 = math.pi*(0.5 - _c2)
+    _c4 = _sin(p_lambda)
+    _c5 = _c4*p_omega
+    _c6 = _c4**2
+    _c7 = p_omega**2
+    _c8 = _c7*p_I
+    _c9 = _c6*_c8
+    _c10 = _sin(math.pi*_c2)
+    _c11 = _c10**2
+    _c12 = _cos(p_lambda)
+    _c13 = _c12*p_omega
+    _c14 = math.pi*p_nu*_sin(_c0)
+    _c15 = (0.5)*p_I
+    _c16 = (0.25)*p_I*math.pi**2*p_nu**2
+    _c17 = _c6*_c7
+    return -_c16 - _c9 + _c11*_c9 + _c15*((0.5)*_c14 - _c13)**2 + _c16*_c1**2 + (0.5)*p_I_Y*(qd_phi + _c5*_cos(_c3))**2 - _c8*_c12**2 + _c13*_c14*p_I + _c15*_c17*_sin(_c3)**2 - _c11*_c17*p_I_Y - _c10*_c5*p_I_Y*qd_phi
 
 
 @njit(cache=True, error_model="numpy")

@@ -34,8 +34,8 @@ def rhs(t, y, p, out):
     _m0_0 = 1.0
     _m1_0 = 0.0
     _m1_1 = 1.0
-    _f0 = q_x*(-1.0 - 2.0*p_lam*q_y)
-    _f1 = -q_y + p_lam*q_y**2 - p_lam*q_x**2
+    _f0 = -q_x - 2.0*p_lam*q_x*q_y
+    _f1 = -q_y - p_lam*(q_x**2 - q_y**2)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -71,8 +71,8 @@ def rhs_lanes(T, Y, P, out, bad):
         _m0_0 = 1.0
         _m1_0 = 0.0
         _m1_1 = 1.0
-        _f0 = q_x*(-1.0 - 2.0*p_lam*q_y)
-        _f1 = -q_y + p_lam*q_y**2 - p_lam*q_x**2
+        _f0 = -q_x - 2.0*p_lam*q_x*q_y
+        _f1 = -q_y - p_lam*(q_x**2 - q_y**2)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -106,8 +106,8 @@ def forcing(t, y, p, out):
     q_x = y[0]
     q_y = y[1]
     p_lam = p[0]
-    out[0] = q_x*(-1.0 - 2.0*p_lam*q_y)
-    out[1] = -q_y + p_lam*q_y**2 - p_lam*q_x**2
+    out[0] = -q_x - 2.0*p_lam*q_x*q_y
+    out[1] = -q_y - p_lam*(q_x**2 - q_y**2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -142,8 +142,8 @@ def momentum_rate(t, y, p, out):
     q_x = y[0]
     q_y = y[1]
     p_lam = p[0]
-    out[0] = q_x*(-1.0 - 2.0*p_lam*q_y)
-    out[1] = -q_y + p_lam*q_y**2 - p_lam*q_x**2
+    out[0] = -q_x - 2.0*p_lam*q_x*q_y
+    out[1] = -q_y - p_lam*(q_x**2 - q_y**2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -2875,37 +2875,37 @@ def taylor_coefficients(t, y, p, X, W):
     for k in range(order):
         _ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order
         _ik1 = 1.0/(k + 1)
-        # _f0 = q_x*(-1.0 - 2.0*p_lam*q_y)
-        W[_u1, k] = _k0*X[q_y, k]
-        W[_u2, k] = -W[_u1, k]
-        W[_u3, k] = W[_u2, k] + -1.0 if k == 0 else W[_u2, k]
-        # _f0 = q_x*_u3
-        _s = X[q_x, k]*W[_u3, 0] if k % 2 == 0 else 0.0
+        # _f0 = -q_x - 2.0*p_lam*q_x*q_y
+        # _u1 = q_x*q_y
+        _s = X[q_x, k]*X[q_y, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
-            _s += X[q_x, _j]*W[_u3, k - _j]
-            _r += X[q_x, _j + 1]*W[_u3, k - 1 - _j]
-        W[_f0, k] = _s + _r
-        # _f1 = -q_y + p_lam*q_y**2 - p_lam*q_x**2
-        # _u5 = q_y**2
-        _m = (k + 1)//2
-        _s = X[q_y, _m - 1]*X[q_y, k - _m + 1] if _m % 2 == 1 else 0.0
-        _r = 0.0
-        for _j in range(0, _m - 1, 2):
-            _s += X[q_y, _j]*X[q_y, k - _j]
-            _r += X[q_y, _j + 1]*X[q_y, k - 1 - _j]
-        W[_u5, k] = 2.0*(_s + _r) + (X[q_y, k//2]*X[q_y, k//2] if k % 2 == 0 else 0.0)
-        W[_u6, k] = p_lam*W[_u5, k]
-        # _u7 = q_x**2
+            _s += X[q_x, _j]*X[q_y, k - _j]
+            _r += X[q_x, _j + 1]*X[q_y, k - 1 - _j]
+        W[_u1, k] = _s + _r
+        W[_u2, k] = _k0*W[_u1, k]
+        W[_u3, k] = -X[q_x, k]
+        W[_f0, k] = W[_u3, k] - W[_u2, k]
+        # _f1 = -q_y - p_lam*(q_x**2 - q_y**2)
+        # _u5 = q_x**2
         _m = (k + 1)//2
         _s = X[q_x, _m - 1]*X[q_x, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
             _s += X[q_x, _j]*X[q_x, k - _j]
             _r += X[q_x, _j + 1]*X[q_x, k - 1 - _j]
-        W[_u7, k] = 2.0*(_s + _r) + (X[q_x, k//2]*X[q_x, k//2] if k % 2 == 0 else 0.0)
+        W[_u5, k] = 2.0*(_s + _r) + (X[q_x, k//2]*X[q_x, k//2] if k % 2 == 0 else 0.0)
+        # _u6 = q_y**2
+        _m = (k + 1)//2
+        _s = X[q_y, _m - 1]*X[q_y, k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += X[q_y, _j]*X[q_y, k - _j]
+            _r += X[q_y, _j + 1]*X[q_y, k - 1 - _j]
+        W[_u6, k] = 2.0*(_s + _r) + (X[q_y, k//2]*X[q_y, k//2] if k % 2 == 0 else 0.0)
+        W[_u7, k] = W[_u5, k] - W[_u6, k]
         W[_u8, k] = p_lam*W[_u7, k]
-        W[_u9, k] = W[_u6, k] - X[q_y, k]
+        W[_u9, k] = -X[q_y, k]
         W[_f1, k] = W[_u9, k] - W[_u8, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
         W[_u16, k] = _k11*W[_f0, k]

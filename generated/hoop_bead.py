@@ -125,12 +125,13 @@ def energy_function(t, y, p):
     p_g = p[2]
     p_Omega = p[3]
     p_epsilon = p[4]
-    _c0 = p_m*p_R**2
-    _c1 = (0.5)*_c0
-    _c2 = _sin(q_theta)**2
-    _c3 = _cos(2.0*t)
-    _c4 = 2.0*_c0*_c2
-    return _c1*qd_theta**2 - _c1*_c2*p_Omega**2 - _c4*_c3**2*p_epsilon**2 + p_R*p_g*p_m*_cos(q_theta) - _c3*_c4*p_Omega*p_epsilon
+    _c0 = _sin(q_theta)**2
+    _c1 = _cos(2.0*t)
+    _c2 = _c1*p_epsilon
+    _c3 = p_m*p_R**2
+    _c4 = _c0*_c3
+    _c5 = 4.0*_c4
+    return (0.5)*_c3*(qd_theta**2 + _c0*(p_Omega + 2.0*_c2)**2) - _c4*p_Omega**2 - _c2*_c5*p_Omega - _c5*_c1**2*p_epsilon**2 + p_R*p_g*p_m*_cos(q_theta)
 
 
 @njit(cache=True, error_model="numpy")

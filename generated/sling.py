@@ -96,8 +96,8 @@ def energy_function(t, y, p):
     qd_rho = y[1]
     p_m = p[0]
     p_omega = p[1]
-    _c0 = (0.5)*p_m
-    return _c0*qd_rho**2 - _c0*p_omega**2*q_rho**2
+    _c0 = p_omega**2*q_rho**2
+    return (0.5)*p_m*(_c0 + qd_rho**2) - _c0*p_m
 
 
 @njit(cache=True, error_model="numpy")

@@ -206,11 +206,11 @@ def energy(t, y, p):
     p_I3 = p[4]
     _c0 = qd_psi**2
     _c1 = (0.5)*p_I1
-    _c2 = (0.5)*p_M*p_l**2
-    _c3 = _c1 + _c2
-    _c4 = (0.5)*p_I3
-    _c5 = _cos(q_theta)
-    return _c0*_c3 + _c3*qd_theta**2 + _c4*qd_phi**2 + _c0*_c5**2*(_c4 - _c1 - _c2) + _c5*p_I3*qd_phi*qd_psi + _c5*p_M*p_g*p_l
+    _c2 = qd_theta**2
+    _c3 = _cos(q_theta)
+    _c4 = _c0*_c3**2
+    _c5 = (0.5)*p_I3
+    return _c0*_c1 + _c1*_c2 + _c4*_c5 + _c5*qd_phi**2 - _c1*_c4 + (0.5)*p_M*p_l**2*(_c0 + _c2 - _c4) + _c3*p_I3*qd_phi*qd_psi + _c3*p_M*p_g*p_l
 
 
 # Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.

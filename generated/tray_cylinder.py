@@ -110,8 +110,10 @@ def energy_function(t, y, p):
     p_I = p[2]
     p_A = p[3]
     p_Omega = p[4]
-    _c0 = (0.5)*p_I/p_R**2
-    return qd_X**2*(_c0 + (0.5)*p_M) - _c0*p_A**2*p_Omega**2*_cos(p_Omega*t)**2
+    _c0 = _cos(p_Omega*t)
+    _c1 = _c0*p_A*p_Omega
+    _c2 = p_I/p_R**2
+    return (0.5)*_c2*(qd_X - _c1)**2 + (0.5)*p_M*qd_X**2 + _c1*_c2*qd_X - _c2*_c0**2*p_A**2*p_Omega**2
 
 
 @njit(cache=True, error_model="numpy")

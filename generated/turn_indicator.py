@@ -36,14 +36,14 @@ def rhs(t, y, p, out):
     _c1 = p_omega**2
     _c2 = _sin(p_alpha)
     _c3 = _cos(p_alpha)
-    _c4 = _c1*_c2*_c3
+    _c4 = _c1*_c2*_c3*(p_I - p_I_X)
     _c5 = _c3**2
     _c6 = _c2**2
     _c7 = _cos(q_theta)
     _c8 = p_I*p_Omega*p_omega
     out[0] = qd_theta
     _m0_0 = p_I_X
-    _f0 = -p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 + _c4*_c0**2*(p_I_X - p_I) + _c4*_c7**2*(p_I - p_I_X) - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
+    _f0 = _c4*_c7**2 - _c4*_c0**2 - p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
     if not _d0 > _PIVOT_TOLERANCE*abs(_m0_0):
@@ -73,14 +73,14 @@ def rhs_lanes(T, Y, P, out, bad):
         _c1 = p_omega**2
         _c2 = _vsin(p_alpha)
         _c3 = _vcos(p_alpha)
-        _c4 = _c1*_c2*_c3
+        _c4 = _c1*_c2*_c3*(p_I - p_I_X)
         _c5 = _c3**2
         _c6 = _c2**2
         _c7 = _vcos(q_theta)
         _c8 = p_I*p_Omega*p_omega
         out[0, _l] = qd_theta
         _m0_0 = p_I_X
-        _f0 = -p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 + _c4*_c0**2*(p_I_X - p_I) + _c4*_c7**2*(p_I - p_I_X) - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
+        _f0 = _c4*_c7**2 - _c4*_c0**2 - p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
         # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
         _d0 = _m0_0
         _ok0 = _d0 > _PIVOT_TOLERANCE*abs(_m0_0)
@@ -114,12 +114,12 @@ def forcing(t, y, p, out):
     _c1 = p_omega**2
     _c2 = _sin(p_alpha)
     _c3 = _cos(p_alpha)
-    _c4 = _c1*_c2*_c3
+    _c4 = _c1*_c2*_c3*(p_I - p_I_X)
     _c5 = _c3**2
     _c6 = _c2**2
     _c7 = _cos(q_theta)
     _c8 = p_I*p_Omega*p_omega
-    out[0] = -p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 + _c4*_c0**2*(p_I_X - p_I) + _c4*_c7**2*(p_I - p_I_X) - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
+    out[0] = _c4*_c7**2 - _c4*_c0**2 - p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
 
 
 @njit(cache=True, error_model="numpy")
@@ -150,19 +150,20 @@ def energy_function(t, y, p):
     p_Omega = p[2]
     p_omega = p[3]
     p_alpha = p[4]
-    _c0 = (0.5)*p_I_X
-    _c1 = p_I*p_Omega*p_omega
-    _c2 = _cos(q_theta)
-    _c3 = _sin(p_alpha)
-    _c4 = _c2*_c3
-    _c5 = (0.5)*p_I
-    _c6 = p_omega**2
-    _c7 = _c3**2
-    _c8 = _cos(p_alpha)
-    _c9 = _c8**2
-    _c10 = _sin(q_theta)
-    _c11 = _c10*_c8
-    return _c0*qd_theta**2 - _c1*_c11 - _c1*_c4 - _c5*p_Omega**2 + _c6*_c10**2*(-_c0*_c7 - _c5*_c9) + _c6*_c2**2*(-_c0*_c9 - _c5*_c7) + _c11*_c4*_c6*(p_I_X - p_I)
+    _c0 = _cos(q_theta)
+    _c1 = _sin(p_alpha)
+    _c2 = _c0*_c1
+    _c3 = _sin(q_theta)
+    _c4 = _cos(p_alpha)
+    _c5 = _c3*_c4
+    _c6 = 2.0*p_I*p_Omega*p_omega
+    _c7 = p_omega**2
+    _c8 = _c4**2
+    _c9 = _c1**2
+    _c10 = (0.5)*p_I_X
+    _c11 = _c0*_c4
+    _c12 = _c1*_c3
+    return _c10*qd_theta**2 + (0.5)*p_I*(p_Omega + p_omega*(_c2 + _c5))**2 - _c2*_c6 - _c5*_c6 - p_I*p_Omega**2 + _c10*_c7*(_c11 - _c12)**2 - _c7*_c0**2*(_c8*p_I_X + _c9*p_I) - _c7*_c3**2*(_c8*p_I + _c9*p_I_X) - 2.0*_c11*_c12*_c7*(p_I - p_I_X)
 
 
 @njit(cache=True, error_model="numpy")
@@ -189,12 +190,12 @@ def momentum_rate(t, y, p, out):
     _c1 = p_omega**2
     _c2 = _sin(p_alpha)
     _c3 = _cos(p_alpha)
-    _c4 = _c1*_c2*_c3
+    _c4 = _c1*_c2*_c3*(p_I - p_I_X)
     _c5 = _c3**2
     _c6 = _c2**2
     _c7 = _cos(q_theta)
     _c8 = p_I*p_Omega*p_omega
-    out[0] = -p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 + _c4*_c0**2*(p_I_X - p_I) + _c4*_c7**2*(p_I - p_I_X) - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
+    out[0] = _c4*_c7**2 - _c4*_c0**2 - p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
 
 
 @njit(cache=True, error_model="numpy")
@@ -225,8 +226,7 @@ def rest_partials(t, y, p, out):
     _c8 = p_I*p_Omega*p_omega
     _c9 = _cos(q_theta)
     _c10 = _c3*_c9
-    _c11 = 2.0*_c10*_c5*_c7
-    out[0, 0, 0] = -p_k + _c11*(p_I_X - p_I) + _c6*_c9**2 - _c10*_c8 - _c11*(p_I - p_I_X) - _c6*_c0**2 - _c7*_c8
+    out[0, 0, 0] = -p_k + _c6*_c9**2 - _c10*_c8 - _c6*_c0**2 - _c7*_c8 - 4.0*_c10*_c5*_c7*(p_I - p_I_X)
     out[1, 0, 0] = -p_c
 
 
@@ -273,10 +273,9 @@ def canonical_partials(t, y, p, out):
     _c8 = _c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
     _c9 = _sin(q_theta)
     _c10 = _c4*_c9
-    _c11 = 2.0*_c10*_c3*_c7
     out[0, 0, 0] = p_I_X
     out[1, 0, 0] = 0.0
-    out[2, 0, 0] = -p_k + _c11*(p_I_X - p_I) + _c8*_c1**2 - _c0*_c10 - _c0*_c3 - _c11*(p_I - p_I_X) - _c8*_c9**2
+    out[2, 0, 0] = -p_k + _c8*_c1**2 - _c0*_c10 - _c0*_c3 - _c8*_c9**2 - 4.0*_c10*_c3*_c7*(p_I - p_I_X)
     out[3, 0, 0] = -p_c
 
 
@@ -2644,19 +2643,17 @@ def taylor_coefficients(t, y, p, X, W):
     _c1 = p_omega**2
     _c2 = _sin(p_alpha)
     _c3 = _cos(p_alpha)
-    _c4 = _c1*_c2*_c3
+    _c4 = _c1*_c2*_c3*(p_I - p_I_X)
     _c5 = _c3**2
     _c6 = _c2**2
     _c8 = p_I*p_Omega*p_omega
     _m0_0 = p_I_X
-    _k4 = _c3*_c8
-    _k6 = _c4*(p_I_X - p_I)
-    _k9 = _c4*(p_I - p_I_X)
-    _k12 = _c2*_c8
-    _k14 = _c1*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
+    _k8 = _c3*_c8
+    _k10 = _c2*_c8
+    _k12 = _c1*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
     if not _m0_0 > _PIVOT_TOLERANCE*abs(_m0_0):
         return 1
-    _k23 = 1.0/_m0_0
+    _k21 = 1.0/_m0_0
     # Row indices: a state component's series is a row of X, an intermediate value's a row of W.
     q_theta = 0
     qd_theta = 1
@@ -2664,19 +2661,19 @@ def taylor_coefficients(t, y, p, X, W):
     _c7 = 1
     _u2 = 2
     _u3 = 3
-    _u5 = 4
-    _u7 = 5
-    _u8 = 6
-    _u10 = 7
-    _u11 = 8
-    _u13 = 9
-    _u15 = 10
-    _u16 = 11
-    _u17 = 12
-    _u18 = 13
-    _u19 = 14
-    _u20 = 15
-    _u21 = 16
+    _u4 = 4
+    _u5 = 5
+    _u6 = 6
+    _u7 = 7
+    _u9 = 8
+    _u11 = 9
+    _u13 = 10
+    _u14 = 11
+    _u15 = 12
+    _u16 = 13
+    _u17 = 14
+    _u18 = 15
+    _u19 = 16
     _f0 = 17
     _x0 = 18
     for i in range(2):
@@ -2705,45 +2702,45 @@ def taylor_coefficients(t, y, p, X, W):
             W[_c0, k] = (_s + _r)*_ik
             W[_c7, k] = -(_c + _d)*_ik
         # _c7 = _cos(q_theta)
-        # _f0 = -p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 + _c4*_c0**2*(p_I_X - p_I) + _c4*_c7**2*(p_I - p_I_X) - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
-        W[_u2, k] = p_c*X[qd_theta, k]
-        W[_u3, k] = p_k*X[q_theta, k]
-        W[_u5, k] = _k4*W[_c7, k]
-        # _u7 = _c0**2
-        _m = (k + 1)//2
-        _s = W[_c0, _m - 1]*W[_c0, k - _m + 1] if _m % 2 == 1 else 0.0
-        _r = 0.0
-        for _j in range(0, _m - 1, 2):
-            _s += W[_c0, _j]*W[_c0, k - _j]
-            _r += W[_c0, _j + 1]*W[_c0, k - 1 - _j]
-        W[_u7, k] = 2.0*(_s + _r) + (W[_c0, k//2]*W[_c0, k//2] if k % 2 == 0 else 0.0)
-        W[_u8, k] = _k6*W[_u7, k]
-        # _u10 = _c7**2
+        # _f0 = _c4*_c7**2 - _c4*_c0**2 - p_c*qd_theta - p_k*q_theta + _c3*_c7*_c8 - _c0*_c2*_c8 + _c0*_c1*_c7*(_c5*p_I + _c6*p_I_X - _c5*p_I_X - _c6*p_I)
+        # _u2 = _c7**2
         _m = (k + 1)//2
         _s = W[_c7, _m - 1]*W[_c7, k - _m + 1] if _m % 2 == 1 else 0.0
         _r = 0.0
         for _j in range(0, _m - 1, 2):
             _s += W[_c7, _j]*W[_c7, k - _j]
             _r += W[_c7, _j + 1]*W[_c7, k - 1 - _j]
-        W[_u10, k] = 2.0*(_s + _r) + (W[_c7, k//2]*W[_c7, k//2] if k % 2 == 0 else 0.0)
-        W[_u11, k] = _k9*W[_u10, k]
-        W[_u13, k] = _k12*W[_c0, k]
-        # _u15 = _c0*_c7
+        W[_u2, k] = 2.0*(_s + _r) + (W[_c7, k//2]*W[_c7, k//2] if k % 2 == 0 else 0.0)
+        W[_u3, k] = _c4*W[_u2, k]
+        # _u4 = _c0**2
+        _m = (k + 1)//2
+        _s = W[_c0, _m - 1]*W[_c0, k - _m + 1] if _m % 2 == 1 else 0.0
+        _r = 0.0
+        for _j in range(0, _m - 1, 2):
+            _s += W[_c0, _j]*W[_c0, k - _j]
+            _r += W[_c0, _j + 1]*W[_c0, k - 1 - _j]
+        W[_u4, k] = 2.0*(_s + _r) + (W[_c0, k//2]*W[_c0, k//2] if k % 2 == 0 else 0.0)
+        W[_u5, k] = _c4*W[_u4, k]
+        W[_u6, k] = p_c*X[qd_theta, k]
+        W[_u7, k] = p_k*X[q_theta, k]
+        W[_u9, k] = _k8*W[_c7, k]
+        W[_u11, k] = _k10*W[_c0, k]
+        # _u13 = _c0*_c7
         _s = W[_c0, k]*W[_c7, 0] if k % 2 == 0 else 0.0
         _r = 0.0
         for _j in range(0, k, 2):
             _s += W[_c0, _j]*W[_c7, k - _j]
             _r += W[_c0, _j + 1]*W[_c7, k - 1 - _j]
-        W[_u15, k] = _s + _r
-        W[_u16, k] = _k14*W[_u15, k]
-        W[_u17, k] = W[_u5, k] + W[_u8, k]
-        W[_u18, k] = W[_u17, k] + W[_u11, k]
-        W[_u19, k] = W[_u18, k] + W[_u16, k]
-        W[_u20, k] = W[_u19, k] - W[_u2, k]
-        W[_u21, k] = W[_u20, k] - W[_u3, k]
-        W[_f0, k] = W[_u21, k] - W[_u13, k]
+        W[_u13, k] = _s + _r
+        W[_u14, k] = _k12*W[_u13, k]
+        W[_u15, k] = W[_u3, k] + W[_u9, k]
+        W[_u16, k] = W[_u15, k] + W[_u14, k]
+        W[_u17, k] = W[_u16, k] - W[_u5, k]
+        W[_u18, k] = W[_u17, k] - W[_u6, k]
+        W[_u19, k] = W[_u18, k] - W[_u7, k]
+        W[_f0, k] = W[_u19, k] - W[_u11, k]
         # Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.
-        W[_x0, k] = _k23*W[_f0, k]
+        W[_x0, k] = _k21*W[_f0, k]
         # The state's next coefficient: y[k + 1] = f[k]/(k + 1).
         X[0, k + 1] = X[qd_theta, k]*_ik1
         X[1, k + 1] = W[_x0, k]*_ik1
