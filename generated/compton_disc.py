@@ -114,25 +114,21 @@ def energy_function(t, y, p):
     p_omega = p[2]
     p_lambda = p[3]
     p_nu = p[4]
-    _c0 = p_nu*t
-    _c1 = _cos(_c0)
-    _c2 = (0.5)*_c1
-    _c3 = math.pi*(0.5 - _c2)
-    _c4 = _sin(p_lambda)
-    _c5 = _c4*p_omega
-    _c6 = _c4**2
-    _c7 = p_omega**2
-    _c8 = _c7*p_I
-    _c9 = _c6*_c8
-    _c10 = _sin(math.pi*_c2)
-    _c11 = _c10**2
-    _c12 = _cos(p_lambda)
-    _c13 = _c12*p_omega
-    _c14 = math.pi*p_nu*_sin(_c0)
-    _c15 = (0.5)*p_I
-    _c16 = (0.25)*p_I*math.pi**2*p_nu**2
-    _c17 = _c6*_c7
-    return -_c16 - _c9 + _c11*_c9 + _c15*((0.5)*_c14 - _c13)**2 + _c16*_c1**2 + (0.5)*p_I_Y*(qd_phi + _c5*_cos(_c3))**2 - _c8*_c12**2 + _c13*_c14*p_I + _c15*_c17*_sin(_c3)**2 - _c11*_c17*p_I_Y - _c10*_c5*p_I_Y*qd_phi
+    _c0 = _cos(p_lambda)
+    _c1 = _c0*p_omega
+    _c2 = p_nu*t
+    _c3 = math.pi*p_nu*_sin(_c2)
+    _c4 = (0.5)*p_I
+    _c5 = _cos(_c2)
+    _c6 = (0.5)*_c5
+    _c7 = math.pi*(0.5 - _c6)
+    _c8 = _sin(p_lambda)
+    _c9 = _c8*p_omega
+    _c10 = _sin(math.pi*_c6)
+    _c11 = p_omega**2
+    _c12 = _c11*_c8**2
+    _c13 = (0.25)*math.pi**2*p_nu**2
+    return _c4*((0.5)*_c3 - _c1)**2 + p_I*(-_c12 - _c13 - _c11*_c0**2) + (0.5)*p_I_Y*(qd_phi + _c9*_cos(_c7))**2 + _c1*_c3*p_I + _c12*_c4*_sin(_c7)**2 + _c12*_c10**2*(p_I - p_I_Y) + _c13*p_I*_c5**2 - _c10*_c9*p_I_Y*qd_phi
 
 
 @njit(cache=True, error_model="numpy")

@@ -207,10 +207,10 @@ def energy(t, y, p):
     _c0 = qd_psi**2
     _c1 = (0.5)*p_I1
     _c2 = qd_theta**2
-    _c3 = _cos(q_theta)
-    _c4 = _c0*_c3**2
-    _c5 = (0.5)*p_I3
-    return _c0*_c1 + _c1*_c2 + _c4*_c5 + _c5*qd_phi**2 - _c1*_c4 + (0.5)*p_M*p_l**2*(_c0 + _c2 - _c4) + _c3*p_I3*qd_phi*qd_psi + _c3*p_M*p_g*p_l
+    _c3 = (0.5)*p_I3
+    _c4 = _cos(q_theta)
+    _c5 = _c0*_c4**2
+    return _c0*_c1 + _c1*_c2 + _c3*qd_phi**2 + _c5*(_c3 - _c1) + (0.5)*p_M*p_l**2*(_c0 + _c2 - _c5) + _c4*p_I3*qd_phi*qd_psi + _c4*p_M*p_g*p_l
 
 
 # Energy function (Jacobi integral) h = Σ q̇_i ∂L/∂q̇_i − L.

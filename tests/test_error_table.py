@@ -88,6 +88,12 @@ def models(compiled, cache_dir):
     }
 
 
+def _close_approach(model, points):
+    from lagcomp.accuracy import close_approach_states
+
+    return close_approach_states(model, points, 3)
+
+
 def _simulate(name, **options):
     def run(models):
         t_span = options.pop("t_span", (0.0, 1.0))
@@ -319,6 +325,9 @@ CASES = {
     "steady-at-a-kink": (lambda models: an.linearize_steady(models["friction"], [0.5], [0.0]), "x_dot = 0"),
     "sweep-unknown-parameter": (lambda models: an.stability_sweep(models["rod"], "mass", [1.0, 2.0], [0.0, 0.0, -1.0]),
                                 "'mass'"),
+    "accuracy-bad-states": (lambda models: lc.kernel_accuracy(models["pendulum"], [[0.1, 0.2, 0.3]]), "shape (m, 2)"),
+    "accuracy-needs-system": (lambda models: lc.kernel_accuracy(models["kane"]), "KanesMethod"),
+    "accuracy-unknown-point": (lambda models: _close_approach(models["rod"], [("x", "w")]), "'w'"),
     "bad-cache-dir": (lambda: lc.compile(oscillator(), cache_dir=5), "`cache_dir`"),
     "corrupt-name-record": (_cache_case("name record"), "was corrupt"),
     "unreadable-numba-cache": (_cache_case("numba"), "unreadable and removed"),

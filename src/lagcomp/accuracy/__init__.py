@@ -143,7 +143,10 @@ class Accuracy:
 
 
 def _checked_states(model, states, t) -> tuple[np.ndarray, np.ndarray]:
-    y = np.atleast_2d(np.asarray(states, dtype=float))
+    try:
+        y = np.atleast_2d(np.asarray(states, dtype=float))
+    except (TypeError, ValueError) as err:
+        raise ModelError(f"`states` must be an (m, {2 * model.n}) array of numbers for {model.name!r}: {err}.") from err
     if y.ndim != 2 or y.shape[1] != 2 * model.n:
         raise ModelError(f"`states` must have shape (m, {2 * model.n}) for {model.name!r} (q then q̇), "
                          f"got shape {np.shape(states)}.")
@@ -154,6 +157,10 @@ def _checked_states(model, states, t) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _equations(model) -> ReferenceEquations:
+    if getattr(model, "kanes_method", None) is not None:
+        raise ModelError(f"The accuracy check measures kernels against Lagrange's equations of a System; "
+                         f"{model.name!r} was compiled from a KanesMethod, whose equations it does not re-derive. "
+                         "Compare its `rhs` with sympy's own `km.rhs()` evaluated in mpmath instead.")
     if model.system is None:
         raise ModelError(f"The accuracy check of {model.name!r} needs its System: this model came from "
                          "`lagcomp.load`; use `lagcomp.compile(system)` instead.")

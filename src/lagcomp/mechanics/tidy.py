@@ -134,6 +134,7 @@ def tidy(expr: sp.Expr, variables) -> sp.Expr:
     expr = sp.sympify(expr)
     if expr.is_Atom or (expr.is_Add and len(expr.args) > TIDY_MAX_TERMS):
         return expr
+    expr = _collected(expr, variables)
     compact, kept = _kept_structure(expr, variables)
     variables = (*variables, *kept)
     if not compact.is_Add and not any((f.is_Add or (f.is_Pow and f.base.is_Add)) and f.has(*variables)
@@ -149,6 +150,22 @@ def tidy(expr: sp.Expr, variables) -> sp.Expr:
         return expr
     result = _tidy_groups(groups).xreplace(kept)
     return result if sp.count_ops(result) <= sp.count_ops(expr) else expr
+
+
+def _collected(expr: sp.Expr, variables) -> sp.Expr:
+    """`expr` with the terms of its top-level sum that share their factor in the `variables` summed
+    first: a₁ x + a₂ x + … becomes (a₁ + a₂ + …) x.  Nothing is expanded, so no cancellation in the
+    variables is introduced; without it a sum that `_kept_structure` keeps whole (the gradient of
+    Σ_a a x²/2, a linear sum over many parameters) would cost one product per term at run time."""
+    if not expr.is_Add:
+        return expr
+    groups: dict = {}
+    for term in expr.args:
+        coefficient, factor = term.as_independent(*variables, as_Add=False)
+        groups.setdefault(factor, []).append(coefficient)
+    if len(groups) == len(expr.args):
+        return expr
+    return sp.Add(*(_common_factor(coefficients) * factor for factor, coefficients in groups.items()))
 
 
 def tidy_small(expr: sp.Expr, variables) -> sp.Expr:
