@@ -146,3 +146,14 @@ class ModuleIR:
 
     def kernel(self, name: str) -> Kernel:
         return next(k for k in self.kernels if k.name == name)
+
+
+def target_local(target: str) -> str:
+    """A kernel store target as the local the emitted solve reads: ``mm[1, 0]`` -> ``_m1_0``,
+    ``ff[2]`` -> ``_f2``; other targets (``out[3]``, ``_m1_0``) stay as they are."""
+    if target.startswith("mm["):
+        i, j = target[3:-1].split(", ")
+        return f"_m{i}_{j}"
+    if target.startswith("ff["):
+        return f"_f{target[3:-1]}"
+    return target

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from lagcomp.ir import Kernel
+from lagcomp.ir import Kernel, target_local
 
 #: The kinds of an expression: coordinate name -> integer n (the expression is n q plus a part periodic
 #: in q; 0 is left out) or None (neither).  A coordinate not in the dict: periodic in it or independent.
@@ -47,18 +47,8 @@ def periodic_coordinates(rhs: Kernel, n: int) -> tuple[int, ...]:
         kinds = _kinds(expr, env)
         spoiled.update(kinds)   # an output linear in q (n ≠ 0) is not periodic in q either
         if not target.startswith("out["):
-            env[_local(target)] = kinds
+            env[target_local(target)] = kinds
     return tuple(sorted(i for i, local in coordinates if local not in spoiled))
-
-
-def _local(target: str) -> str:
-    """A store target as the local the solve reads (``mm[1, 0]`` -> ``_m1_0``, as `taylor._target`)."""
-    if target.startswith("mm["):
-        i, j = target[3:-1].split(", ")
-        return f"_m{i}_{j}"
-    if target.startswith("ff["):
-        return f"_f{target[3:-1]}"
-    return target
 
 
 def _kinds(expr: sp.Expr, env: dict[str, Kinds]) -> Kinds:

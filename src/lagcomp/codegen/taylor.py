@@ -53,7 +53,7 @@ from lagcomp.codegen.periodic import periodic_coordinates
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor_lanes import CALL
 from lagcomp.codegen.templating import template
-from lagcomp.ir import Kernel, LinearSolve, ModuleIR
+from lagcomp.ir import Kernel, LinearSolve, ModuleIR, target_local
 
 INDENT = "    "
 
@@ -382,8 +382,8 @@ def _ldlt(b: _Builder, solve: LinearSolve) -> list[Value]:
     The pivots are tested at order 0 (the value at t): k = 0 returns j + 1 there, as ``rhs`` does.
     """
     n = solve.n
-    m = [[b.env[sp.Symbol(_target(solve.m[i][j]), real=True)] for j in range(i + 1)] for i in range(n)]
-    f = [b.env[sp.Symbol(_target(solve.f[i]), real=True)] for i in range(n)]
+    m = [[b.env[sp.Symbol(target_local(solve.m[i][j]), real=True)] for j in range(i + 1)] for i in range(n)]
+    f = [b.env[sp.Symbol(target_local(solve.f[i]), real=True)] for i in range(n)]
     b._emit("#", "Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.")
     d, low = [], {}
     for j in range(n):
@@ -424,16 +424,6 @@ def _ldlt(b: _Builder, solve: LinearSolve) -> list[Value]:
     return x
 
 
-def _target(target: str) -> str:
-    """A store target as a local name: ``_m1_0`` stays, ``mm[1, 0]`` becomes ``_m1_0``."""
-    if target.startswith("mm["):
-        i, j = target[3:-1].split(", ")
-        return f"_m{i}_{j}"
-    if target.startswith("ff["):
-        return f"_f{target[3:-1]}"
-    return target
-
-
 def decompose(rhs: Kernel, n: int) -> TaylorProgram:
     """The Taylor program of an unconstrained ``rhs`` kernel (n coordinates, state size 2n).
 
@@ -458,7 +448,7 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
         if target.startswith("out["):
             derivative[int(target[4:-1])] = b.value(expr)
         else:
-            local = _target(target)
+            local = target_local(target)
             b.env[sp.Symbol(local, real=True)] = b.bind(local, expr)
     for i, v in enumerate(_ldlt(b, rhs.solve)):
         derivative[rhs.solve.offset + i] = v
