@@ -167,8 +167,11 @@ LAGRANGES_METHOD = {
 
 def test_every_example_has_an_independent_reference():
     """Each example meets at least one check that does not compare lagcomp with itself (here or in
-    test_reactions: hoop_bead_reaction's drive angle; the constrained examples' conserved h and residuals)."""
+    test_reactions: hoop_bead_reaction's drive angle; the constrained examples' conserved h and residuals;
+    test_accuracy: the gravitational examples' kernels against Newton's law and Hairer's hand-written
+    restricted problem, and the Pythagorean run against scipy on a hand-written rhs)."""
     covered = set(CONSERVED_H) | set(LAGRANGES_METHOD) | {"hoop_bead_reaction"}
+    covered |= {"pythagorean_three_body", "restricted_three_body"}
     assert covered == set(examples.EXAMPLES)
     assert not any(examples.get(name).constraints for name in LAGRANGES_METHOD)
 

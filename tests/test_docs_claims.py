@@ -25,7 +25,7 @@ def test_sweep_load_npz_is_reachable_from_lagcomp():
 
 def test_readme_gives_the_measured_test_suite_time():
     assert "a few minutes" not in README
-    assert "about 9 minutes on 2 cores" in README
+    assert re.search(r"about \d+ minutes on 2 cores: \d+ tests in \d+ min", README)  # a figure, measured
 
 
 def test_errors_table_claims_no_completeness():
