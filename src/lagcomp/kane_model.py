@@ -179,6 +179,15 @@ class KaneKernels:
             ) from None
 
 
+def _lagrange_only(what: str):
+    """A method of `Model` that needs the state (q, q̇): on a Kane model it refuses with a ModelError."""
+    def refuse(self, *args, **kwargs):
+        raise ModelError(f"`{what}` needs the state (q, q̇) of Lagrange's equations; {self.name!r} is a Kane "
+                         "model with state (q, u).")
+    refuse.__name__ = what
+    return refuse
+
+
 class KaneModel(Model):
     """A compiled KanesMethod: state (q, u) (module docstring)."""
 
@@ -256,27 +265,12 @@ class KaneModel(Model):
         y = np.concatenate([self._vector(q, self.n, "q"), self._vector(u, len(self.speeds), "u")])
         return float(self.kernels.energy(float(t), y, self.parameter_vector(params)))
 
-    def _lagrange_only(self, what: str):
-        raise ModelError(f"`{what}` needs the state (q, q̇) of Lagrange's equations; {self.name!r} is a Kane "
-                         "model with state (q, u).")
-
-    def mass_matrix(self, *args, **kwargs):
-        self._lagrange_only("mass_matrix")
-
-    def forcing(self, *args, **kwargs):
-        self._lagrange_only("forcing")
-
-    def momenta(self, *args, **kwargs):
-        self._lagrange_only("momenta")
-
-    def energy_function(self, *args, **kwargs):
-        self._lagrange_only("energy_function")
-
-    def hamiltonian(self, *args, **kwargs):
-        self._lagrange_only("hamiltonian")
-
-    def canonical_jacobian(self, *args, **kwargs):
-        self._lagrange_only("canonical_jacobian")
+    mass_matrix = _lagrange_only("mass_matrix")
+    forcing = _lagrange_only("forcing")
+    momenta = _lagrange_only("momenta")
+    energy_function = _lagrange_only("energy_function")
+    hamiltonian = _lagrange_only("hamiltonian")
+    canonical_jacobian = _lagrange_only("canonical_jacobian")
 
     def reactions(self, t: float, y, params=None) -> dict[str, float]:
         """The noncontributing forces of the auxiliary speeds at one state y = (q, u), by name."""

@@ -20,6 +20,7 @@ import numpy as np
 
 from lagcomp.cache import Cache, Entry, input_key, load_module
 from lagcomp.errors import CacheWarning, InitialConditionError, ModelError, ParameterError, SingularMassMatrixError
+from lagcomp.names import by_name
 
 
 def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, progress=None,  # noqa: A001
@@ -312,7 +313,7 @@ class Model:
         if params is not None and not isinstance(params, Mapping):
             raise ParameterError(f"`params` must be a mapping of parameter name to value, like "
                                  f"{dict.fromkeys(self.parameters[:2], 1.0)}, got {type(params).__name__}.")
-        values.update(self._by_name(params or {}))
+        values.update(by_name(params or {}, "params", self.parameters))
         unknown = sorted(set(values) - set(self.parameters))
         if unknown:
             raise ParameterError(f"Unknown parameter(s) {unknown} for {self.name!r}; its parameters are {list(self.parameters)}.")
@@ -330,19 +331,6 @@ class Model:
             if not math.isfinite(p[k]):
                 raise ParameterError(f"Parameter `{name}` is {p[k]}; it must be finite.")
         return p
-
-    def _by_name(self, params: Mapping) -> dict:
-        """`params` keyed by parameter name: a sympy Symbol stands for its name (no sympy import needed)."""
-        named = {}
-        for key, value in params.items():
-            name = key.name if getattr(key, "is_Symbol", False) and isinstance(getattr(key, "name", None), str) else key
-            if not isinstance(name, str):
-                raise ParameterError(f"`params` keys must be parameter names (or their sympy Symbols), got {key!r}; "
-                                     f"the parameters of {self.name!r} are {list(self.parameters)}.")
-            if name in named:
-                raise ParameterError(f"`params` gives parameter `{name}` twice (by name and by Symbol).")
-            named[name] = value
-        return named
 
     def initial_state(self, q0=None, qd0=None) -> np.ndarray:
         """The state y = (q0, qd0), defaults from the System, checked for length and finiteness."""

@@ -30,6 +30,7 @@ import sympy as sp
 from sympy.physics.mechanics import dynamicsymbols
 
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError, UndeclaredSymbolError
+from lagcomp.names import by_name
 from lagcomp.model.assemble import assemble
 from lagcomp.model.constraints import Holonomic, Nonholonomic
 from lagcomp.model.frames import as_frame
@@ -366,20 +367,12 @@ class System:
 
     def _checked_defaults(self) -> dict:
         names = {s.name for s in self.parameters}
-        by_name = {}
-        for key, value in self.defaults.items():
-            name = key.name if isinstance(key, sp.Symbol) else key  # a parameter Symbol stands for its name
-            if not isinstance(name, str):
-                raise ParameterError(f"`defaults` keys must be parameter names, got {key!r}; "
-                                     f"parameters are {sorted(names)}.")
-            if name in by_name:
-                raise ParameterError(f"`defaults` gives parameter `{name}` twice (by name and by Symbol).")
-            by_name[name] = value
-        unknown = sorted(set(by_name) - names)
+        named = by_name(self.defaults, "defaults", sorted(names))
+        unknown = sorted(set(named) - names)
         if unknown:
             raise ParameterError(f"Default values given for unknown parameter(s) {unknown}; parameters are {sorted(names)}.")
         checked = {}
-        for k, v in by_name.items():
+        for k, v in named.items():
             try:
                 v = float(v)
             except (TypeError, ValueError) as err:
