@@ -21,6 +21,7 @@ import scipy.integrate
 from scipy.integrate import solve_ivp
 
 from lagcomp.integrate.tableaux import DOP853, DOPRI5, driver_arguments
+from lagcomp.integrate.status import Status
 
 # -- harness ------------------------------------------------------------------
 
@@ -163,7 +164,7 @@ def _collect(call, y, clock, counters, cap, max_calls):
         assert 0 <= n_saved <= cap
         ts_all.append(ts[:n_saved].copy())
         ys_all.append(ys[:n_saved].copy())
-        if status != 1:
+        if status != Status.BUFFER_FULL:
             break
     return Run(status, np.concatenate(ts_all), np.concatenate(ys_all), y, clock, counters, calls)
 
@@ -513,7 +514,7 @@ def run_events(mod, method, directions, actions, *, tol=1e-10, t_end=10.0, switc
         ts_all.append(ts[:n_saved].copy())
         ys_all.append(ys[:n_saved].copy())
         events += [(ev[0][k], ev[1][k].copy(), ev[2][k]) for k in range(counters[5])]
-        if status not in (1, 2):
+        if not Status(status).call_again:
             break
     return status, np.concatenate(ts_all), np.concatenate(ys_all), events, counters, clock
 
@@ -536,7 +537,7 @@ def test_terminal_event_ends_the_run_at_its_time(mod, method):
     """g1 = t − 2.5 is linear in t: the stop lands on 2.5 to rounding, the last row is the event's state,
     and the crossing of g0 at π/2 before it is still recorded, in time order."""
     status, ts, ys, events, counters, clock = run_events(mod, method, [0, 1], [1, 2], switch_time=2.5)
-    assert status == 3
+    assert status == Status.TERMINATED
     assert [e[2] for e in events] == [0, 1]
     assert abs(events[1][0] - 2.5) < 1e-15 and clock[0] == ts[-1] == events[1][0]
     np.testing.assert_array_equal(ys[-1], events[1][1])
@@ -566,7 +567,7 @@ def test_rk4_pauses_and_resumes_identically(mod):
         status, n = mod.rk4_run(y, clock, counters, np.array([OSCILLATOR]), 0, np.zeros(1), 0.0, 0.01, 300,
                                 counters[1] + 7, 3.0, 1, ts, ys)
         rows.append(ys[:n].copy())
-        if status != 2:
+        if status != Status.PAUSED:
             break
     assert status == 0
     np.testing.assert_array_equal(np.concatenate(rows), whole.ys)
@@ -589,6 +590,6 @@ def test_terminal_event_row_has_room_with_decimated_output(mod, method):
             NO_PAUSE, 10**6, np.empty(0), ts, ys, np.zeros(2, np.int64), np.array([0, 2]), *ev,
             *driver_arguments(tableau))
         rows += [(ts[k], ys[k].copy()) for k in range(n)]
-        if status != 1:
+        if status != Status.BUFFER_FULL:
             break
-    assert status == 3 and len(rows) == 1 and rows[0][0] == 2.5 and calls <= 2
+    assert status == Status.TERMINATED and len(rows) == 1 and rows[0][0] == 2.5 and calls <= 2

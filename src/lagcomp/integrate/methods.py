@@ -1,11 +1,16 @@
 """The integration methods `simulate` offers, as data (a registry, like scipy's METHODS).
 
-Each `Method` names the driver function emitted into every generated module
-(`lagcomp/codegen/templates/drivers.py` and `symplectic.py`) and the tableau whose arrays it takes.
+Each `Method` names its driver and the tableau whose arrays it takes.  A driver is either a
+library function of `lagcomp.integrate.drivers` (``"module:function"``), which takes the model
+kernels named by `Method.kernels` as its first arguments, or the name of a driver function still
+emitted into every generated module (`lagcomp/codegen/templates/`), which calls the kernels as
+module globals.
 """
 
 from __future__ import annotations
 
+import functools
+import importlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,6 +47,7 @@ class Method:
     name: str
     order: int
     adaptive: bool
+    #: ``"lagcomp.integrate.drivers.<module>:<function>"``, or a function of the generated module.
     driver: str
     tableau: Tableau | Composition | Collocation | None
     summary: str
@@ -51,6 +57,21 @@ class Method:
     default_rtol: float = 1e-8
     default_atol: float | None = 1e-10
     rtol_min: float = RTOL_MIN
+    #: The model kernels a library driver takes first, by name (e.g. ``("rhs", "project", ...)``).
+    kernels: tuple[str, ...] = ()
+    #: The library sweep loop (``"module:function"``) that runs this method over many trajectories.
+    sweep: str | None = None
+
+    @property
+    def in_library(self) -> bool:
+        """Whether the driver is library code (compiled once per installation) rather than emitted."""
+        return ":" in self.driver
+
+    def bound_driver(self, kernels):
+        """The driver with the model's `kernels` (its generated module) bound as its first arguments."""
+        if not self.in_library:
+            return getattr(kernels, self.driver)
+        return functools.partial(library_function(self.driver), *(getattr(kernels, k) for k in self.kernels))
 
     @property
     def implicit(self) -> bool:
@@ -102,6 +123,12 @@ METHODS = {
 #: Other accepted spellings.
 ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "leapfrog": "verlet", "stormer_verlet": "verlet",
            "midpoint": "gauss1", "gl1": "gauss1", "gl2": "gauss2", "gl3": "gauss3"}
+
+
+def library_function(reference: str):
+    """The function ``"package.module:name"`` names, imported now (numba loads or compiles it then)."""
+    module, _, name = reference.partition(":")
+    return getattr(importlib.import_module(module), name)
 
 
 def implicit_solver_for(method: Method, name: str | None) -> str:

@@ -32,20 +32,13 @@ from lagcomp.integrate.options import (
 )
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
-from lagcomp.integrate.solution import MESSAGES, EventRecord, Solution
+from lagcomp.integrate.solution import EventRecord, Solution
+from lagcomp.integrate.status import Status
 
 #: Rows per output chunk: small runs allocate little, long ones grow to this.
 FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
-#: Driver statuses that mean "call again" (buffer full, step budget used) and "terminal event".
-BUFFER_FULL, PAUSED, EVENT = 1, 2, 3
-#: Solution statuses of a run stopped by a terminal event, and by the user (Ctrl-C).
-TERMINATED, INTERRUPTED = 1, 2
 #: Target wall time of one driver call, and the step budget of the first one.
 CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
-#: Solution status of a run stopped because the constraint residual exceeded ``max_residual``.
-RESIDUAL_EXCEEDED = -6
-#: Solution status of a run whose saved rows reached ``memory_limit`` (adaptive runs without t_eval).
-MEMORY_FULL = -7
 
 
 def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
@@ -59,7 +52,7 @@ def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, option
     max_step = options["max_step"]
     max_step = positive(max_step, "max_step") if max_step != math.inf else math.inf
     events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
-    driver, tableau_arrays = getattr(kernels, m.driver), m.driver_arguments()
+    driver, tableau_arrays = m.bound_driver(kernels), m.driver_arguments()
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
         tableau_arrays = (np.zeros(y.size),)
 
@@ -80,7 +73,7 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
     n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
     if n_steps > options["max_steps"]:
         raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {options['max_steps']}.")
-    driver, coefficients = getattr(kernels, m.driver), m.driver_arguments(options["implicit_solver"])
+    driver, coefficients = m.bound_driver(kernels), m.driver_arguments(options["implicit_solver"])
 
     def advance(ts, ys, pause_at, event_buffers):
         return driver(y, clock, counters, p, *run_args, t0, dt, n_steps, pause_at, t1, options["save_every"], ts, ys,
@@ -125,9 +118,9 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     max_rows = memory_limit // run_bytes(1, model.n, model.k) if record == "trajectory" else math.inf
     status = _run(advance, y, clock, counters, t1, (chunk, max_rows), recorder, n_events, event_parts, progress,
                   first)
-    if status == -2 and counters[1] == 0:
+    if status == Status.RHS_FAILED and counters[1] == 0:
         _refuse_singular_start(model, t0, y0, p)
-    if (status < 0 or status == INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != clock[0]):
+    if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != clock[0]):
         recorder.add(np.array([clock[0]]), y[None, :])  # keep the last good state
     run = dict(method=m.name, status=status, clock=clock, counters=counters, projected=projected,
                residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
@@ -160,12 +153,13 @@ def _numba_stage(model, m, progress):
     """What the first driver call of a run shows while numba compiles its kernels and driver."""
     from lagcomp.stages import numba_stage
 
-    return numba_stage(getattr(model.kernels, m.driver, None), f"the kernels and the {m.name} driver",
+    first = m.kernels[0] if m.in_library else m.driver  # library drivers are compiled on import
+    return numba_stage(getattr(model.kernels, first, None), f"the kernels and the {m.name} driver",
                        f"preparing {model.name}", progress)
 
 
 def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress, first=None) -> int:
-    """Call the driver until the run ends; returns the Solution status (driver codes mapped).
+    """Call the driver until the run ends; returns the run's `Status`.
 
     `first`, if not None, is a context around the first call (numba compiles there: `_numba_stage`).
     `chunk` is (rows of the first output buffer, rows the run may keep before it stops with MEMORY_FULL).
@@ -189,23 +183,23 @@ def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts
                 first, bar.started = None, time.perf_counter()
             elapsed = time.perf_counter() - started
             recorder.add(ts[:n_saved], ys[:n_saved])
-            if recorder.rows > max_rows and status in (BUFFER_FULL, PAUSED):
-                return MEMORY_FULL  # what was computed is kept; a fixed-step or t_eval run was refused up front
+            if recorder.rows > max_rows and Status(status).call_again:
+                return Status.MEMORY_FULL  # what was computed is kept; a fixed-step or t_eval run was refused up front
             if counters[5]:
                 event_parts.append(tuple(a[:counters[5]].copy() for a in event_buffers))
             bar.update(clock[0] - t0 - bar.n)
-            if status == BUFFER_FULL and n_saved == chunk and chunk < MAX_CHUNK:
+            if status == Status.BUFFER_FULL and n_saved == chunk and chunk < MAX_CHUNK:
                 chunk = min(2 * chunk, MAX_CHUNK)
                 ts, ys = np.empty(chunk), np.empty((chunk, n))
-            if status == PAUSED and counters[1] - steps_before == budget:
+            if status == Status.PAUSED and counters[1] - steps_before == budget:
                 budget = int(budget * min(8.0, max(0.5, CALL_SECONDS / max(elapsed, 1e-6))))
                 budget = max(budget, 16)
-            if status not in (BUFFER_FULL, PAUSED):
-                if status == 0 and interrupted[0]:
-                    return INTERRUPTED  # Ctrl-C in the last call (often numba compiling): reported, not swallowed
-                return TERMINATED if status == EVENT else int(status)
+            if not Status(status).call_again:
+                if status == Status.DONE and interrupted[0]:
+                    return Status.INTERRUPTED  # Ctrl-C in the last call (often numba compiling): reported
+                return Status(status)
             if interrupted[0]:
-                return INTERRUPTED
+                return Status.INTERRUPTED
 
 
 def _refuse_singular_start(model, t0: float, y0: np.ndarray, p: np.ndarray) -> None:
@@ -283,15 +277,15 @@ def _solution(model, p, recorder, y, run, throw) -> Solution:
     ts, ys, energy, energy_function, momenta = recorder.rows_kept()
     status, clock, counters = run["status"], run["clock"], run["counters"]
     t_failure = None
-    message = MESSAGES[status]
-    if status < 0 or status == INTERRUPTED:
+    message = Status(status).message
+    if status < 0 or status == Status.INTERRUPTED:
         state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, y))  # (q, q̇), or (q, u) of Kane
-        last = "state" if status == RESIDUAL_EXCEEDED else "last good state"
+        last = "state" if status == Status.RESIDUAL_EXCEEDED else "last good state"
         message = f"{message} Stopped at t = {clock[0]:.10g}, {last} {state}."
-        if status == RESIDUAL_EXCEEDED:
+        if status == Status.RESIDUAL_EXCEEDED:
             message += f" Residual {run['residual_max']:.3g} > max_residual = {run['max_residual']:g}."
         t_failure = float(clock[0]) if status < 0 else None
-    if status == TERMINATED:
+    if status == Status.TERMINATED:
         fired = [name for name, record in run["events"].items() if record.t.size and record.t[-1] == clock[0]]
         message = f"{message} Event {fired[0] if fired else '?'!r} at t = {clock[0]:.10g}."
     reactions, residuals = reactions_along(model, ts, ys, p)

@@ -8,24 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lagcomp.integrate.recording import RunSummary
-
-#: Driver status codes and what they mean to a user (a failed run is a status, not an exception).
-MESSAGES = {
-    0: "The integration reached the end of the time span.",
-    1: "A terminal event stopped the integration.",
-    2: "Interrupted by the user (Ctrl-C); the solution holds what was computed.",
-    -1: "The state or its derivative became non-finite (NaN or inf).",
-    -2: "The mass matrix became singular (the kinetic energy is not positive definite at this state), or with "
-        "constraints the augmented matrix [M Λᵀ; Λ 0] did (redundant constraints).",
-    -3: "The step size became too small (the solution may be singular here).",
-    -4: "The maximum number of steps was reached.",
-    -5: "The implicit stage equations did not converge: reduce the step `dt`.",
-    -6: "The constraint residual exceeded `max_residual`: the run drifted off the constraints (tighten rtol/atol, "
-        "or use projection=True or baumgarte=(alpha, beta)).",
-    -7: "The saved rows reached `memory_limit`; the run stopped and kept them (save every K-th step with "
-        "`save_every`, keep only the summary with record=\"summary\", or raise `memory_limit`).",
-}
-
+from lagcomp.integrate.status import MESSAGES  # noqa: F401  (re-exported: a failed run is a status, not an exception)
 
 @dataclass(frozen=True)
 class EventRecord:

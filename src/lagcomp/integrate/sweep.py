@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import functools
 import os
 import time
 from dataclasses import dataclass, field
@@ -29,7 +30,7 @@ import numpy as np
 from lagcomp.errors import InitialConditionError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.memory import MEMORY_LIMIT, check as check_memory, sweep_bytes
-from lagcomp.integrate.methods import get_method
+from lagcomp.integrate.methods import get_method, library_function
 from lagcomp.integrate.options import (
     check_method,
     count,
@@ -333,14 +334,13 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             spec, coefficients = _taylor_lanes_spec(model, rtol, atol), ()
         task = _Task(driver, m.adaptive, fixed, layout, coefficients, projecting)
     else:
-        task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments(), projecting)
+        task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments(), projecting, m.sweep, m.kernels)
     if client is None:
         kernels = model.kernels if spec is None else _worker_kernels(spec)
         done = _run_locally(kernels, task, Y0, P, out, workers, progress)
     else:
         done = _run_on_dask(client, spec or _worker_spec(model), task, Y0, P, out, progress)
     statuses = out["status"]
-    statuses[statuses == 3] = 1      # the driver's "terminal event", numbered as in Solution
     counts = out["counts"]
     e0, deviation = out["energy"][:, 0], out["energy"][:, 1]
     relative = np.where(e0 != 0, deviation / np.where(e0 != 0, np.abs(e0), 1.0), deviation)
@@ -403,6 +403,15 @@ class _Task:
     layout: tuple          # (2n, dense rows, events, event cap)
     coefficients: tuple
     projecting: int        # constrained systems: project onto the constraints after every step (0 or 1)
+    sweep: str | None = None     # the library sweep loop (`Method.sweep`), else the module's sweep_<driver>
+    kernels: tuple = ()          # the kernels it takes first, by name (`Method.kernels`), then ``energy``
+
+    def loop(self, kernels):
+        """The compiled sweep loop of this task for the model's `kernels` (its generated module)."""
+        if self.sweep is None:
+            return getattr(kernels, f"sweep_{self.driver}")
+        bound = (getattr(kernels, name) for name in (*self.kernels, "energy"))
+        return functools.partial(library_function(self.sweep), *bound)
 
 
 def _allocate(n_traj: int, layout: tuple) -> dict[str, np.ndarray]:
@@ -420,7 +429,7 @@ def _allocate(n_traj: int, layout: tuple) -> dict[str, np.ndarray]:
 def _run_chunk(kernels, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str, np.ndarray]:
     """Integrate the trajectories Y0, P (a chunk) with the module's compiled sweep loop; their outputs."""
     out = _allocate(Y0.shape[0], task.layout)
-    loop = getattr(kernels, f"sweep_{task.driver}")
+    loop = task.loop(kernels)
     common = (out["final"], out["t_final"], out["status"], out["counts"], out["dense"], out["energy"])
     if task.driver in BATCHED.values():
         loop(Y0, P, *task.fixed, *common, *task.coefficients)
@@ -450,7 +459,8 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
 
     n_traj = Y0.shape[0]
     threads = (os.cpu_count() or 1) if workers is None else count(workers, "workers")
-    first = numba_stage(getattr(kernels, f"sweep_{task.driver}", None), f"the {task.driver} sweep loop",
+    watched = getattr(kernels, task.kernels[0]) if task.sweep else getattr(kernels, f"sweep_{task.driver}", None)
+    first = numba_stage(watched, f"the {task.driver} sweep loop",
                         "preparing the sweep", progress)
     done = np.zeros(n_traj, dtype=bool)
     chunk = (FIRST_BATCHED_CHUNK_PER_THREAD if task.driver in BATCHED.values() else FIRST_CHUNK_PER_THREAD) * threads

@@ -1,0 +1,37 @@
+"""The numba types of the model kernels as the library drivers receive them: the driver protocol's signatures.
+
+A driver of `lagcomp.integrate.drivers` is compiled once per installation from an explicit
+signature, ``@njit(SIGNATURE, cache=True)``, whose leading arguments are the model's kernels typed
+as ``numba.types.FunctionType``: a first-class function value, called through its address.  The
+signature names the kernel's *type*, not the kernel, so numba's on-disk cache of the driver serves
+every model (a dispatcher argument without an explicit signature would compile, and cache, one
+specialisation per kernel).  Python passes the generated module's dispatchers (``kernels.rhs``);
+numba compiles each for the signature below on its first use, from the model's own cache.
+
+Every generated module defines these kernels with these signatures (no-ops where the model has no
+constraints or no events), so any driver can take any model.  Arrays are C-contiguous float64:
+``t`` is the time, ``y`` the state (2n,), ``p`` the parameter vector, ``out`` the result.
+"""
+
+from __future__ import annotations
+
+from numba import types
+
+#: float64[::1], float64[:, ::1], int64[::1]: the array types of every driver argument.
+VECTOR = types.float64[::1]
+MATRIX = types.float64[:, ::1]
+INDICES = types.int64[::1]
+FLOAT, INT = types.float64, types.int64
+#: What a driver returns: (Status, rows written to the output buffer).
+OUTCOME = types.UniTuple(types.int64, 2)
+
+#: ``rhs(t, y, p, out) -> int``: ``out = y'``; 0, or k > 0 when the mass matrix was singular at pivot k.
+RHS = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, VECTOR))
+#: ``project(t, y, p) -> int``: moves ``y`` onto the constraints in place; 0, or k > 0 when impossible.
+PROJECT = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR))
+#: ``constraint_residual(t, y, p) -> float``: the largest constraint residual at ``y`` (0.0 without constraints).
+RESIDUAL = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
+#: ``event_values(t, y, p, out)``: the event functions' values at ``y`` (writes nothing without events).
+EVENTS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
+#: ``energy(t, y, p) -> float``: T + V at ``y`` (the sweeps' energy drift).
+ENERGY = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))

@@ -1,0 +1,243 @@
+"""Linear solvers for the generated kernels and the implicit drivers.
+
+numba compiles each into the kernel or driver that calls it, at that
+function's first compile, and caches it with it.
+
+* ``ldlt_solve``: symmetric positive definite systems (the mass matrix of a
+  large unconstrained system; small ones get the same factorization unrolled
+  by the emitter); ``ldlt_solve_matrix``, the same for several right-hand
+  sides at once (M⁻¹ applied to a matrix, in ``canonical_jacobian``).
+* ``kkt_solve``: the augmented system of a constrained system,
+  [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ).  Where M is positive definite it uses the
+  Schur complement: with M = L D Lᵀ, W = M⁻¹ Λᵀ and u = M⁻¹ F, the
+  multipliers solve (Λ W) λ = γ − Λ u (Λ W is symmetric positive definite
+  when the constraints are independent) and q̈ = u + W λ.  Where M is
+  singular — a massless rolling hoop carrying a point mass — it falls back
+  to ``lu_solve``, Gaussian elimination with partial pivoting of the whole
+  matrix, which only needs the augmented matrix to be regular.
+* ``lu_factor`` and ``lu_substitute``: the same elimination split in two,
+  for a matrix factored once and applied to many right-hand sides (the
+  simplified Newton iteration of ``collocation_run``).
+
+A pivot below ``_PIVOT_TOLERANCE`` times the matrix's scale counts as zero:
+the matrix is then singular to working precision (condition number ≳ 1e14),
+and the solver returns j + 1 for the failing pivot j instead of dividing.
+"""
+
+import numpy as np
+from numba import njit
+
+_PIVOT_TOLERANCE = 1e-14
+
+
+@njit(cache=True, error_model="numpy")
+def ldlt_solve(mm, ff, out, offset):
+    """Solve mm x = ff (symmetric, lower triangle used) by LDLᵀ in place; x into out[offset:].
+
+    On return the strict lower triangle of mm holds L, its diagonal D.
+    Returns 0, or j + 1 when pivot j is not positive (mm singular or indefinite).
+    """
+    n = ff.shape[0]
+    for j in range(n):
+        d = mm[j, j]
+        for k in range(j):
+            d -= mm[j, k] * mm[j, k] * mm[k, k]
+        if not d > _PIVOT_TOLERANCE * abs(mm[j, j]):
+            return j + 1
+        mm[j, j] = d
+        for i in range(j + 1, n):
+            s = mm[i, j]
+            for k in range(j):
+                s -= mm[i, k] * mm[j, k] * mm[k, k]
+            mm[i, j] = s / d
+    for i in range(n):
+        for k in range(i):
+            ff[i] -= mm[i, k] * ff[k]
+    for i in range(n - 1, -1, -1):
+        x = ff[i] / mm[i, i]
+        for k in range(i + 1, n):
+            x -= mm[k, i] * out[offset + k]
+        out[offset + i] = x
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def ldlt_solve_matrix(mm, b):
+    """Solve mm X = b for all m columns of b, shape (n, m), in place: X overwrites b.
+
+    mm (n, n) symmetric, lower triangle used, is factored once by LDLᵀ as in
+    ``ldlt_solve`` (L and D overwrite it).  Returns 0, or j + 1 when pivot j
+    is not positive (mm singular or indefinite); b is then invalid.
+    """
+    n = mm.shape[0]
+    for j in range(n):
+        d = mm[j, j]
+        for k in range(j):
+            d -= mm[j, k] * mm[j, k] * mm[k, k]
+        if not d > _PIVOT_TOLERANCE * abs(mm[j, j]):
+            return j + 1
+        mm[j, j] = d
+        for i in range(j + 1, n):
+            s = mm[i, j]
+            for k in range(j):
+                s -= mm[i, k] * mm[j, k] * mm[k, k]
+            mm[i, j] = s / d
+    for c in range(b.shape[1]):
+        for i in range(n):
+            for k in range(i):
+                b[i, c] -= mm[i, k] * b[k, c]
+        for i in range(n - 1, -1, -1):
+            x = b[i, c] / mm[i, i]
+            for k in range(i + 1, n):
+                x -= mm[k, i] * b[k, c]
+            b[i, c] = x
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def lu_solve(a):
+    """Solve the N×N system stored as a = [A | r], shape (N, N + 1), in place.
+
+    Gaussian elimination with partial pivoting (LU of A applied to r); the
+    solution ends in a[:, N].  Returns 0, or j + 1 when pivot j is below
+    _PIVOT_TOLERANCE × max|A| (A singular to working precision).
+    """
+    size = a.shape[0]
+    scale = 0.0
+    for i in range(size):
+        for j in range(size):
+            scale = max(scale, abs(a[i, j]))
+    for j in range(size):
+        pivot = j
+        for i in range(j + 1, size):
+            if abs(a[i, j]) > abs(a[pivot, j]):
+                pivot = i
+        if not abs(a[pivot, j]) > _PIVOT_TOLERANCE * scale:
+            return j + 1
+        if pivot != j:
+            for c in range(j, size + 1):
+                a[j, c], a[pivot, c] = a[pivot, c], a[j, c]
+        for i in range(j + 1, size):
+            factor = a[i, j] / a[j, j]
+            for c in range(j + 1, size + 1):
+                a[i, c] -= factor * a[j, c]
+    for i in range(size - 1, -1, -1):
+        x = a[i, size]
+        for c in range(i + 1, size):
+            x -= a[i, c] * a[c, size]
+        a[i, size] = x / a[i, i]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def lu_factor(a, pivots):
+    """LU factorization with partial pivoting of the square a, in place: PA = LU.
+
+    On return a holds U on and above the diagonal and the multipliers of L
+    (unit diagonal) below it, and row j was swapped with row pivots[j] at
+    step j.  Returns 0, or j + 1 when pivot j is below _PIVOT_TOLERANCE ×
+    max|a| (a singular to working precision).
+    """
+    size = a.shape[0]
+    scale = 0.0
+    for i in range(size):
+        for j in range(size):
+            scale = max(scale, abs(a[i, j]))
+    for j in range(size):
+        pivot = j
+        for i in range(j + 1, size):
+            if abs(a[i, j]) > abs(a[pivot, j]):
+                pivot = i
+        pivots[j] = pivot
+        if not abs(a[pivot, j]) > _PIVOT_TOLERANCE * scale:
+            return j + 1
+        if pivot != j:
+            for c in range(size):
+                a[j, c], a[pivot, c] = a[pivot, c], a[j, c]
+        for i in range(j + 1, size):
+            a[i, j] /= a[j, j]
+            for c in range(j + 1, size):
+                a[i, c] -= a[i, j] * a[j, c]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def lu_substitute(a, pivots, r):
+    """Solve A x = r in place (x overwrites r), with a and pivots from ``lu_factor`` of A."""
+    size = a.shape[0]
+    for j in range(size):
+        r[j], r[pivots[j]] = r[pivots[j]], r[j]
+    for i in range(size):
+        for c in range(i):
+            r[i] -= a[i, c] * r[c]
+    for i in range(size - 1, -1, -1):
+        x = r[i]
+        for c in range(i + 1, size):
+            x -= a[i, c] * r[c]
+        r[i] = x / a[i, i]
+
+
+@njit(cache=True, error_model="numpy")
+def kkt_solve(a, n):
+    """Solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ), stored as a = [A | r], shape (n + k, n + k + 1).
+
+    The solution ends in a[:, n + k] (q̈ first, then λ).  Schur complement
+    through LDLᵀ of M where M is positive definite, else LU of the whole
+    matrix (see the module docstring).  Returns 0, or j + 1 for a zero pivot.
+    """
+    size = a.shape[0]
+    k = size - n
+    # Columns of [Λᵀ | F]: W = M⁻¹ Λᵀ in work[:, n:n+k], u = M⁻¹ F in work[:, n+k].
+    work = np.empty((n, n + k + 1))
+    for j in range(k + 1):
+        for i in range(n):
+            work[i, n + j] = a[i, n + j] if j == k else -a[i, n + j]
+    for i in range(n):
+        for j in range(i + 1):
+            work[i, j] = a[i, j]
+    # LDLᵀ of M in work[:, :n]; not positive definite here: use LU instead.
+    for j in range(n):
+        d = work[j, j]
+        for m in range(j):
+            d -= work[j, m] * work[j, m] * work[m, m]
+        if not d > _PIVOT_TOLERANCE * abs(a[j, j]):
+            return lu_solve(a)
+        work[j, j] = d
+        for i in range(j + 1, n):
+            s = work[i, j]
+            for m in range(j):
+                s -= work[i, m] * work[j, m] * work[m, m]
+            work[i, j] = s / d
+    for c in range(n, n + k + 1):
+        for i in range(n):
+            for m in range(i):
+                work[i, c] -= work[i, m] * work[m, c]
+        for i in range(n - 1, -1, -1):
+            x = work[i, c] / work[i, i]
+            for m in range(i + 1, n):
+                x -= work[m, i] * work[m, c]
+            work[i, c] = x
+    # Schur complement S = Λ W (k × k) and its right-hand side γ − Λ u.
+    schur = np.empty((k, k))
+    rhs_ = np.empty(k)
+    lam = np.empty(k)
+    for r in range(k):
+        s = a[n + r, size]
+        for i in range(n):
+            s -= a[n + r, i] * work[i, n + k]
+        rhs_[r] = s
+        for c in range(r + 1):
+            s = 0.0
+            for i in range(n):
+                s += a[n + r, i] * work[i, n + c]
+            schur[r, c] = s
+    if ldlt_solve(schur, rhs_, lam, 0):
+        return lu_solve(a)
+    for i in range(n):
+        x = work[i, n + k]
+        for r in range(k):
+            x += work[i, n + r] * lam[r]
+        a[i, size] = x
+    for r in range(k):
+        a[n + r, size] = lam[r]
+    return 0
