@@ -1125,7 +1125,7 @@ run can be resumed, chunk by chunk, when the output buffer fills:
 * ``counters`` int64[6] = [nfev, nsteps, nrejected, i_eval, since_save,
   n_events]: the last is the number of event rows written to ``ev_*`` by
   this call (the caller resets it with each fresh event buffer);
-* ``pause_at`` int: return status 2 before step number ``pause_at`` (counted
+* ``pause_at`` int: return status 11 before step number ``pause_at`` (counted
   from the start of the run, ``counters[1]``); the caller resumes with a
   later ``pause_at``.  This bounds the time of one call, so Python can show
   progress and honour Ctrl-C between calls;
@@ -1146,14 +1146,14 @@ run can be resumed, chunk by chunk, when the output buffer fills:
   events are evaluated at its end; each sign change in an event's direction
   is located on the dense output by Brent's method (``_event_root``) and
   recorded in time order.  A terminal event ends the step, and the run, at
-  its time: the event's state is the last saved row and ``y``, status 3.
+  its time: the event's state is the last saved row and ``y``, status 1.
 
 Every driver returns ``(status, n_saved)``: status 0 = reached ``t_end``;
-1 = output buffer full (call again with a fresh buffer; the continuation is
+10 = output buffer full (call again with a fresh buffer; the continuation is
 identical to an uninterrupted run except for one extra ``f`` evaluation per
 call of the adaptive drivers; with ``t_eval`` the buffer may hold fewer than
-``cap`` rows, see "Output buffer" below); 2 = paused at ``pause_at`` (call
-again; the continuation is identical in the same way); 3 = a terminal event
+``cap`` rows, see "Output buffer" below); 11 = paused at ``pause_at`` (call
+again; the continuation is identical in the same way); 1 = a terminal event
 stopped the run; -1 = non-finite state, derivative or step size; -2 =
 ``rhs`` returned a non-zero status; -3 = step size too small; -4 = maximum
 number of steps reached; -5 = implicit stage equations not solved; -6 = the
@@ -1226,7 +1226,7 @@ follows (q is the error order: 4 for DOPRI5, 7 for DOP853):
 
 Output buffer: before each step the number of rows it may write is bounded
 (from the trial step, which rejections only shorten); if they do not fit,
-status 1 is returned before the step.  With ``t_eval`` this can happen while
+status 10 is returned before the step.  With ``t_eval`` this can happen while
 the buffer still has free rows (``n_saved < cap``): the rows written are
 always ``ts[:n_saved]``.  Only if a single step holds more ``t_eval`` points
 than an empty buffer, the points that fit are written and the step is *not*
@@ -1288,19 +1288,19 @@ _ODE_SAFETY = 0.9       # safety factor "fac" applied to the optimal step
 _ODE_MIN_FACTOR = 0.2   # never shrink the step by more than this factor
 _ODE_MAX_FACTOR = 10.0  # never grow the step by more than this factor
 
-# Status codes returned by the drivers.  Inside a driver, ``status`` holds
-# the outcome of a group of rhs calls: 0, the rhs status (> 0), or -1 when
-# a derivative or state was not finite.
+# Status codes returned by the drivers: the values of lagcomp.integrate.status.Status.
+# Inside a driver, ``status`` holds the outcome of a group of rhs calls: 0, the
+# rhs status (> 0), or -1 when a derivative or state was not finite.
 _ODE_DONE = 0
-_ODE_BUFFER_FULL = 1
+_ODE_EVENT = 1            # a terminal event stopped the run (Status.TERMINATED)
 _ODE_NONFINITE = -1
 _ODE_RHS_FAILED = -2
 _ODE_STEP_TOO_SMALL = -3
 _ODE_MAX_STEPS = -4
 _ODE_NOT_CONVERGED = -5   # implicit stage equations not solved (step too large)
 _ODE_RESIDUAL = -6        # constraint residual above the bound residual_max[1]
-_ODE_PAUSED = 2           # the call's step budget (``pause_at``) is used up: call again
-_ODE_EVENT = 3            # a terminal event stopped the run
+_ODE_BUFFER_FULL = 10     # the output buffer is full: call again with a fresh one
+_ODE_PAUSED = 11          # the call's step budget (``pause_at``) is used up: call again
 
 
 # ---------------------------------------------------------------------------
@@ -1317,7 +1317,7 @@ def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
     exactly at ``t_end``.  Times are computed from k rather than accumulated,
     so there is no drift.  A row is saved after a step when
     ``counters[4]`` (steps since the last save) reaches ``save_every`` or it
-    is the last step.  Returns ``(status, n_saved)``; status 1 is returned
+    is the last step.  Returns ``(status, n_saved)``; status 10 is returned
     before a step whose row would not fit into ``ts``/``ys``.  The new state
     is checked for finiteness every step (-1: state not updated); a non-zero
     rhs status gives -2.  ``clock[0]`` always holds the time of ``y``.
