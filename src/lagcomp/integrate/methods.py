@@ -92,15 +92,29 @@ class Method:
             return self.tableau.driver_arguments()
         return driver_arguments(self.tableau)
 
+    @property
+    def any_state(self) -> bool:
+        """Whether the method integrates y' = f(t, y) for any first-order state y (a Runge-Kutta tableau),
+        e.g. a Kane model's (q, u), rather than needing the (q, q̇) of Lagrange's equations."""
+        return isinstance(self.tableau, Tableau)
+
+
+def _embedded(name: str, tableau: Tableau, summary: str) -> Method:
+    """An adaptive embedded Runge-Kutta pair: the library driver `embedded_run` with `tableau`'s data."""
+    module = "lagcomp.integrate.drivers.embedded"
+    return Method(name, tableau.order, True, f"{module}:embedded_run", tableau, summary,
+                  kernels=("rhs", "project", "constraint_residual", "event_values"), sweep=f"{module}:sweep_embedded")
+
 
 METHODS = {
     m.name: m
     for m in (
         Method("rk4", 4, False, "rk4_run", tableaux.RK4, "classic Runge-Kutta, fixed step `dt`"),
-        Method("dopri5", 5, True, "dopri5_run", tableaux.DOPRI5,
-               "Dormand-Prince 5(4), adaptive, quartic dense output (scipy's RK45)"),
-        Method("dop853", 8, True, "dop853_run", tableaux.DOP853,
-               "Dormand-Prince 8(5,3), adaptive, 7th-order dense output (Hairer's DOP853)"),
+        _embedded("dopri5", tableaux.DOPRI5, "Dormand-Prince 5(4), adaptive, quartic dense output (scipy's RK45)"),
+        _embedded("dop853", tableaux.DOP853,
+                  "Dormand-Prince 8(5,3), adaptive, 7th-order dense output (Hairer's DOP853)"),
+        _embedded("tsit5", tableaux.TSIT5, "Tsitouras 5(4), adaptive, quartic dense output"),
+        _embedded("bs3", tableaux.BS3, "Bogacki-Shampine 3(2), adaptive, cubic dense output (scipy's RK23)"),
         Method("verlet", 2, False, "composition_run", compositions.VERLET,
                "Störmer-Verlet, symplectic, fixed step, separable systems", separable_only=True),
         Method("yoshida4", 4, False, "composition_run", compositions.YOSHIDA4,
@@ -121,7 +135,7 @@ METHODS = {
 }
 
 #: Other accepted spellings.
-ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "leapfrog": "verlet", "stormer_verlet": "verlet",
+ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "rk23": "bs3", "leapfrog": "verlet", "stormer_verlet": "verlet",
            "midpoint": "gauss1", "gl1": "gauss1", "gl2": "gauss2", "gl3": "gauss3"}
 
 

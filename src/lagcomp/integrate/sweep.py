@@ -434,8 +434,9 @@ def _run_chunk(kernels, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str,
     if task.driver in BATCHED.values():
         loop(Y0, P, *task.fixed, *common, *task.coefficients)
     elif task.adaptive:
+        coefficients = task.coefficients if task.sweep else (task.coefficients,)  # library loops take them flat
         loop(Y0, P, task.projecting, *task.fixed, *common, out["event_count"], out["event_t"], out["event_y"],
-             task.coefficients)
+             *coefficients)
     else:
         loop(Y0, P, task.projecting, *task.fixed, *common, task.coefficients)
     return out

@@ -1,8 +1,9 @@
 """Butcher tableaux of the integrators, as validated, read-only data.
 
-The compiled drivers (``lagcomp/codegen/templates/drivers.py``) take the
-coefficient arrays as arguments; :func:`driver_arguments` returns them in the
-order each driver expects.
+The compiled drivers take the coefficient arrays as arguments; :func:`driver_arguments`
+returns them in the order the driver expects (for the embedded pairs, those of
+`lagcomp.integrate.drivers.embedded.embedded_run`).  An embedded pair is a `Tableau` and a
+line of the registry `lagcomp.integrate.methods`: nothing else.
 
 Conventions (Hairer, Norsett & Wanner, *Solving ODEs I*, sec. II.1-II.6):
 
@@ -11,15 +12,15 @@ Conventions (Hairer, Norsett & Wanner, *Solving ODEs I*, sec. II.1-II.6):
 * Error weights (``E`` for DOPRI5, ``E3``/``E5`` for DOP853) have s + 1
   entries: the last multiplies the FSAL stage ``f(t + h, y_new)``.  Each sums
   to zero, since it is a difference of two consistent weight vectors.
-* ``P`` (s + 1, m): DOPRI5 dense output, ``y(t + x h) = y + h K^T P [x, x^2,
-  ..., x^m]`` with K including the FSAL row.
+* ``P`` (s + 1, m): dense output in powers of the step fraction (DOPRI5, Tsit5,
+  BS3), ``y(t + x h) = y + h K^T P [x, x^2, ..., x^m]`` with K including the FSAL row.
 * ``A_EXTRA`` (n_extra, s + 1 + n_extra), ``C_EXTRA`` (n_extra,): extra stages
   for DOP853's dense output; ``D`` (m, s + 1 + n_extra) its coefficients.
 
 DOPRI5 and DOP853 coefficients are scipy's own (``scipy.integrate.RK45`` /
 ``DOP853`` class attributes, copied into `lagcomp.integrate.dormand_prince` and
 checked bitwise against scipy by the tests), so that the drivers reproduce
-scipy's step sequence.
+scipy's step sequence; so are BS3's (``scipy.integrate.RK23``).
 """
 
 from __future__ import annotations
@@ -31,12 +32,16 @@ import numpy as np
 
 from lagcomp.integrate import dormand_prince as dp
 
-__all__ = ["Tableau", "RK4", "DOPRI5", "DOP853", "driver_arguments"]
+__all__ = ["Tableau", "RK4", "DOPRI5", "DOP853", "TSIT5", "BS3", "driver_arguments"]
 
 #: Absolute tolerance for the consistency checks.  The published rational
 #: coefficients are stored as rounded floats, so sums are exact only to a few
 #: ulps (observed: < 1e-15 for scipy's tableaux).
 _TOL = 1e-14
+
+#: How the embedded driver turns the error weights into the error norm: the RMS norm of one estimate
+#: (E), or DOP853's combination of its 5th- and 3rd-order estimates (E5, E3).
+ERROR_RMS, ERROR_DOP853 = 0, 1
 
 _ARRAY_FIELDS = ("A", "B", "C", "E", "E3", "E5", "P", "D", "A_EXTRA", "C_EXTRA")
 
@@ -212,31 +217,90 @@ DOP853 = Tableau(
 )
 
 
-def driver_arguments(tableau: Tableau) -> tuple[np.ndarray, ...]:
+#: Tsitouras' 5(4) pair (Ch. Tsitouras, "Runge-Kutta pairs of order 5(4) satisfying only the first
+#: column simplifying assumption", Comput. Math. Appl. 62 (2011) 770-775): 7 stages with FSAL like
+#: DOPRI5, with a smaller error constant.  The coefficients are the paper's, computed to 80 digits (as
+#: in the tables of DifferentialEquations.jl) and rounded to float64; the dense output of order 4 is
+#: the paper's, its factored polynomials b_i(x) expanded in powers of x.  E = b_hat - b, scipy's sign.
+#: tests/test_order_conditions.py checks the orders 5, 4 and 4 (dense output) to rounding.
+TSIT5 = Tableau(
+    name="TSIT5",
+    order=5,
+    error_order=4,
+    A=[[0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+       [0.161, 0.0, 0.0, 0.0, 0.0, 0.0],
+       [-0.008480655492356989, 0.335480655492357, 0.0, 0.0, 0.0, 0.0],
+       [2.8971530571054935, -6.359448489975075, 4.3622954328695815, 0.0, 0.0, 0.0],
+       [5.325864828439257, -11.748883564062828, 7.4955393428898365, -0.09249506636175525, 0.0, 0.0],
+       [5.86145544294642, -12.92096931784711, 8.159367898576159, -0.071584973281401, -0.028269050394068383, 0.0]],
+    B=[0.09646076681806523, 0.01, 0.4798896504144996, 1.379008574103742, -3.290069515436081, 2.324710524099774],
+    C=[0.0, 0.161, 0.327, 0.9, 0.9800255409045097, 1.0],
+    E=[-0.0017800110522257714, -0.0008164344596567469, 0.007880878010261995, -0.1447110071732629,
+       0.5823571654525552, -0.45808210592918697, 0.015151515151515152],
+    P=[[1.0, -2.763706197274826, 2.9132554618219126, -1.0530884977290216],
+       [0.0, 0.13169999999999998, -0.2234, 0.1017],
+       [0.0, 3.9302962368947516, -5.941033872131505, 2.490627285651253],
+       [0.0, -12.411077166933676, 30.33818863028232, -16.548102889244902],
+       [0.0, 37.50931341651104, -88.1789048947664, 47.37952196281928],
+       [0.0, -27.896526289197286, 65.09189467479366, -34.87065786149661],
+       [0.0, 1.5, -4.0, 2.5]],
+)
+
+#: Bogacki & Shampine's 3(2) pair (P. Bogacki, L. F. Shampine, "A 3(2) pair of Runge-Kutta formulas",
+#: Appl. Math. Lett. 2 (1989) 321-325) with its cubic Hermite dense output: scipy's RK23, whose
+#: float64 values these expressions give bit for bit (checked by tests/test_tableaux.py).
+BS3 = Tableau(
+    name="BS3",
+    order=3,
+    error_order=2,
+    A=[[0.0, 0.0, 0.0],
+       [1 / 2, 0.0, 0.0],
+       [0.0, 3 / 4, 0.0]],
+    B=[2 / 9, 1 / 3, 4 / 9],
+    C=[0.0, 1 / 2, 3 / 4],
+    E=[5 / 72, -1 / 12, -1 / 9, 1 / 8],
+    P=[[1.0, -4 / 3, 5 / 9],
+       [0.0, 1.0, -2 / 3],
+       [0.0, 4 / 3, -8 / 9],
+       [0.0, -1.0, 1.0]],
+)
+
+
+def driver_arguments(tableau: Tableau) -> tuple:
     """Trailing tableau arguments of the compiled driver for ``tableau``.
 
-    * DOP853-type (``D``/``A_EXTRA``/``C_EXTRA`` present), for ``dop853_run``:
-      ``(A, B, C, E3, E5, D, A_EXTRA, C_EXTRA)``;
-    * DOPRI5-type (``E`` and ``P``), for ``dopri5_run``: ``(A, B, C, E, P)``;
-    * fixed-step methods without error estimate (RK4): ``()``, since
-      ``rk4_run`` has its coefficients built in.
+    * an embedded pair (error weights present), for
+      `lagcomp.integrate.drivers.embedded.embedded_run`: ``(A, B, C, error_weights, error_norm,
+      error_exponent, dense_kind, dense_weights, extra_A, extra_C)`` with
 
-    The arrays are writable C-contiguous float64 copies (numba compiles one
-    specialization per array layout, and read-only inputs would add more).
+      - ``error_weights`` (1, s + 1) = [E] and ``error_norm`` ERROR_RMS, or for DOP853 (2, s + 1) =
+        [E5, E3] and ERROR_DOP853; ``error_exponent`` = -1 / (error_order + 1);
+      - ``dense_kind`` DENSE_POWERS with ``dense_weights`` = Pᵀ (m, s + 1) and no extra stages
+        (``extra_A`` (0, s + 1), ``extra_C`` (0,)), or for DOP853 DENSE_CONTD8 with D and its extra
+        stages ``A_EXTRA``, ``C_EXTRA``;
+
+    * fixed-step methods without error estimate (RK4): ``()``, since ``rk4_run`` has its
+      coefficients built in.
+
+    The arrays are writable C-contiguous float64 copies (the drivers' signatures name that layout).
     Raises ``ValueError`` for a tableau no driver can use.
     """
-    def copies(*names: str) -> tuple[np.ndarray, ...]:
-        return tuple(np.ascontiguousarray(getattr(tableau, k), dtype=np.float64).copy()
-                     for k in names)
+    from lagcomp.integrate.drivers.events import DENSE_CONTD8, DENSE_POWERS
 
-    if tableau.D is not None:
-        if tableau.E3 is None:
-            raise ValueError(f"{tableau.name}: the DOP853 driver needs E3 and E5")
-        return copies("A", "B", "C", "E3", "E5", "D", "A_EXTRA", "C_EXTRA")
+    def copy(array) -> np.ndarray:
+        return np.ascontiguousarray(array, dtype=np.float64).copy()
+
+    if tableau.E3 is None and tableau.E is None:
+        return ()
     if tableau.E is not None:
         if tableau.P is None:
-            raise ValueError(f"{tableau.name}: the DOPRI5 driver needs the dense-output matrix P")
-        return copies("A", "B", "C", "E", "P")
-    if tableau.E3 is None:
-        return ()
-    raise ValueError(f"{tableau.name}: no driver for this combination of coefficients")
+            raise ValueError(f"{tableau.name}: the embedded driver needs the dense-output matrix P")
+        errors, norm = [tableau.E], ERROR_RMS
+        dense, stages = (DENSE_POWERS, tableau.P.T), (np.zeros((0, tableau.n_stages + 1)), np.zeros(0))
+    else:
+        if tableau.D is None:
+            raise ValueError(f"{tableau.name}: the combined E5/E3 error estimate comes with DOP853's dense output D")
+        errors, norm = [tableau.E5, tableau.E3], ERROR_DOP853
+        dense, stages = (DENSE_CONTD8, tableau.D), (tableau.A_EXTRA, tableau.C_EXTRA)
+    return (copy(tableau.A), copy(tableau.B), copy(tableau.C), copy(np.vstack(errors)), norm,
+            -1.0 / (tableau.error_order + 1), dense[0], copy(dense[1]), copy(stages[0]), copy(stages[1]))

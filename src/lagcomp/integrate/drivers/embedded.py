@@ -1,0 +1,575 @@
+"""One adaptive driver for every embedded explicit Runge-Kutta pair: DOPRI5, DOP853, Tsit5, BS3, ...
+
+`embedded_run` integrates y' = f(t, y) with step-size control and dense output; what differs between
+the pairs is data (`lagcomp.integrate.tableaux.driver_arguments`), in the spirit of scipy's
+``rk.py``, where DOP853 overrides only its error norm and its interpolant:
+
+* the stages: ``A`` (s, s) strictly lower triangular, weights ``B`` (s,), nodes ``C`` (s,); stage
+  s + 1 is the FSAL stage ``f(t + h, y_new)``, which starts the next step;
+* the error estimate: ``error_weights`` (rows, s + 1), each row a difference of two weight vectors
+  over the stages and the FSAL stage, and ``error_norm``: `ERROR_RMS` (one row E: the RMS norm of
+  ``h E·K / scale``, HNW II.4; DOPRI5, Tsit5, BS3) or `ERROR_DOP853` (rows E5, E3: Hairer's combined
+  estimate ``|h| e5 / sqrt(n (e5 + 0.01 e3))`` with e5, e3 the squared 2-norms of the scaled 5th- and
+  3rd-order estimates, ``dop853.f``; HNW II.5); ``error_exponent`` = -1/(q + 1) for the estimate's
+  order q (`Tableau.error_order`);
+* the dense output (HNW II.6), built only for steps that hold a ``t_eval`` point or an event:
+  ``dense_kind`` `DENSE_POWERS` (DOPRI5, Tsit5, BS3: ``dense_weights`` is Pᵀ (m, s + 1), and
+  ``Q[r] = dense_weights[r] @ K`` gives ``y(t + x h) = y + h sum_r Q[r] x^(r+1)``, evaluated in
+  Horner form) or `DENSE_CONTD8` (DOP853's ``contd8``: ``extra_A`` (3, s + 4) and ``extra_C`` (3,)
+  give three more stages, and the rows ``F0 = dy = y_new - y``, ``F1 = h f_old - dy``,
+  ``F2 = 2 dy - h (f_new + f_old)``, ``F3.. = h dense_weights @ K`` give
+  ``y(t + x h) = y + x (F0 + (1-x) (F1 + x (F2 + (1-x) (F3 + ...))))``).  Pairs without extra
+  stages pass ``extra_A`` (0, s + 1) and ``extra_C`` (0,).
+
+`sweep_embedded` runs it over many trajectories (`lagcomp.integrate.sweep`).
+
+Arguments, after the kernels (`kernel_types`) and before the tableau: the driver protocol of
+`lagcomp.integrate.drivers`, with
+
+* ``y`` (N,): the state, the last accepted one on return; ``clock`` = [t, h]: its time and the next
+  step to try (h <= 0 selects the initial step); ``counters`` int64[6] = [nfev, nsteps, nrejected,
+  i_eval, since_save, n_events], the last the event rows this call wrote (the caller resets it with
+  each fresh event buffer);
+* ``projecting`` 1 projects each accepted state onto the constraints (after the step's outputs, and
+  the FSAL stage is then evaluated again at the projected state); ``residual_max`` [running maximum
+  of ``constraint_residual`` over accepted states] or [.., bound]: the step whose residual exceeds the
+  bound is committed (and saved if due), then the driver returns RESIDUAL_EXCEEDED;
+* ``pause_at``: return PAUSED before step number ``pause_at`` (counted from the run's start,
+  ``counters[1]``), so that Python can show progress and honour Ctrl-C between calls;
+* ``t_eval`` (points after the start; empty: save every ``save_every``-th step and the last one),
+  ``ts`` (cap,), ``ys`` (cap, N): output rows from 0 (the caller writes the initial point);
+* events: ``directions`` int64[E] (+1, -1, 0), ``actions`` int64[E] (0 ignore, 1 record, 2 record
+  and stop) and the rows ``ev_t`` (cap_e,), ``ev_y`` (cap_e, N), ``ev_i`` int64[cap_e]; a step starts
+  only when they have room for one row per event.  After each accepted step the events are evaluated
+  at its end and each sign change in an event's direction is located on the dense output
+  (`lagcomp.integrate.drivers.events`); a terminal event ends the step, and the run, at its time:
+  its state is the last saved row and ``y``, status TERMINATED.
+
+It returns ``(status, n_saved)``, status a `Status`: DONE at ``t_end``; BUFFER_FULL or PAUSED: call
+again (with a fresh output buffer, a later ``pause_at``), and the continuation is identical to an
+uninterrupted run except for one more f evaluation per call; TERMINATED; NONFINITE, RHS_FAILED,
+STEP_TOO_SMALL, MAX_STEPS, RESIDUAL_EXCEEDED, with ``y`` and ``clock[0]`` the last good state (for
+RESIDUAL_EXCEEDED the committed one whose residual is too large).
+
+Step-size control
+-----------------
+
+The standard control of explicit Runge-Kutta pairs, Hairer, Norsett & Wanner, *Solving Ordinary
+Differential Equations I* (2nd ed., 1993), sec. II.4 (automatic step size control, starting step)
+and II.6 (dense output), with scipy's constants (``solve_ivp``), so that at equal tolerances a pair
+takes scipy's steps (tests/test_drivers.py checks DOPRI5, DOP853 and BS3 against RK45, DOP853, RK23):
+
+1. Initial step, when ``clock[1] <= 0``: with ``scale = atol + |y0| rtol`` and the RMS norm,
+   ``d0 = ||y0||``, ``d1 = ||f0||``; a probe ``h0 = 0.01 d0/d1`` (1e-6 if either is tiny; at most the
+   interval); an Euler step gives ``f1 = f(t0 + h0, y0 + h0 f0)`` and ``d2 = ||f1 - f0|| / h0``; then
+   ``h1 = (0.01 / max(d1, d2)) ** (1/(q+1))`` (or ``max(1e-6, 1e-3 h0)`` when both are negligible)
+   and the step is ``min(100 h0, h1, t_end - t0, max_step)``.  A non-finite probe derivative gives
+   ``min(h0, max_step)`` and leaves the trouble to the step rejection.
+2. Trial steps: the step is clamped to ``max_step`` (or raised to the minimum ``10 ulp(t)``) and
+   clipped to land on ``t_end``.  It is accepted when the error norm ``err < 1`` (scale
+   ``atol + max(|y|, |y_new|) rtol`` per component), and the next step is
+   ``h min(MAX_FACTOR, SAFETY err^(-1/(q+1)))`` (at most h after a rejection in this step); otherwise
+   h is multiplied by ``max(MIN_FACTOR, SAFETY err^(-1/(q+1)))`` and the step tried again.  A trial with
+   non-finite stages or error is rejected with ``h *= MIN_FACTOR``; if h then falls below the minimum
+   step the run stops with NONFINITE (last trouble non-finite) or STEP_TOO_SMALL.
+3. The outputs of the accepted step (below), the projection, then the commit:
+   ``y = y_new``, ``K[0] = K[s]``.
+
+No floating-point trouble raises: the driver and the kernels use numba's ``error_model="numpy"``
+(a division by zero gives inf or NaN, as in numpy, instead of raising ZeroDivisionError out of the
+compiled loop and losing the partial solution).  Every derivative and new state is tested; a trial
+whose error is NaN or inf is rejected (``err < 1`` is false for NaN); the step-size tests are written
+so that a NaN step ends the run (``not h >= min_step``) instead of looping forever.  The divisions
+that can meet a zero norm are guarded as in scipy (``0.01 d0 / d1`` only when both are at least
+1e-5, ``0.01 / max(d1, d2)`` only when one exceeds 1e-15, ``err ** exponent`` only for err > 0, and
+DOP853's norm is 0 when both estimates vanish).  A zero component of the error scale (atol = 0 and
+a component exactly 0) makes a norm inf or NaN, which the control treats like any other non-finite
+estimate.  Array operations that could raise (slice assignment) are explicit loops.
+
+Output buffer: before each step the rows it may write are bounded (from the trial step, which
+rejections only shorten); if they do not fit, BUFFER_FULL is returned before the step.  With
+``t_eval`` this can happen while the buffer still has free rows: the rows written are always
+``ts[:n_saved]``.  Only if a single step holds more ``t_eval`` points than an empty buffer, the points
+that fit are written and the step is *not* committed; the next call redoes the same (deterministic)
+step and goes on with the remaining points.
+
+Why one long function
+---------------------
+
+The step loop is one function whose hot loops (stage sums, error norm, dense rows) are written
+inline: moving that arithmetic into small helpers slowed the step loop by 15-35% (measured on the
+template drivers this one replaces), and so did array views inside the stage loop (numba builds and
+reference-counts each one: ``rhs`` writes into ``f_stage``, copied into ``K[s]``).  It calls ``rhs``
+from three places (first stage, initial-step probe, stages; four with DOP853's extra stages).  Its
+compile time, which decided that layout when every model compiled its own copy, is now paid once
+per installation: numba caches this function for every model, since its signature names the
+kernels' types, not the kernels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, types
+
+from lagcomp.integrate.drivers.events import DENSE_CONTD8, dense_state, event_crossings, record_events
+from lagcomp.integrate.drivers.kernel_types import (
+    ENERGY,
+    EVENTS,
+    FLOAT,
+    INDICES,
+    INT,
+    MATRIX,
+    OUTCOME,
+    PROJECT,
+    RESIDUAL,
+    RHS,
+    VECTOR,
+)
+from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
+from lagcomp.integrate.status import Status
+from lagcomp.integrate.tableaux import ERROR_RMS
+
+#: Step-size controller constants (HNW I, sec. II.4, eqs. (4.12)-(4.13); scipy's values): the safety
+#: factor on the optimal step, and the bounds of the factor by which one step may change the next.
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
+
+#: The tableau's arguments, after the run's: A, B, C, error_weights, error_norm, error_exponent,
+#: dense_kind, dense_weights, extra_A, extra_C.
+TABLEAU = (MATRIX, VECTOR, VECTOR, MATRIX, INT, FLOAT, INT, MATRIX, MATRIX, VECTOR)
+
+SIGNATURE = OUTCOME(RHS, PROJECT, RESIDUAL, EVENTS,
+                    VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, INT,
+                    VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX, INDICES,
+                    *TABLEAU)
+
+
+@njit(SIGNATURE, cache=True, error_model="numpy", nogil=True)
+def embedded_run(rhs, project, constraint_residual, event_values,
+                 y, clock, counters, p, projecting, residual_max, t_end, rtol, atol, max_step, max_steps, pause_at,
+                 save_every, t_eval, ts, ys, directions, actions, ev_t, ev_y, ev_i,
+                 A, B, C, error_weights, error_norm, error_exponent, dense_kind, dense_weights, extra_A, extra_C):
+    """Integrate from (clock[0], y) towards t_end with the embedded pair given by the tableau arguments.
+
+    See the module docstring for the arguments, the return value and the algorithm.
+    """
+    n = y.shape[0]
+    cap = ts.shape[0]
+    n_eval = t_eval.shape[0]
+    use_t_eval = n_eval > 0
+    n_stages = B.shape[0]
+    n_k = n_stages + 1                  # stages and the FSAL stage
+    n_all = n_k + extra_C.shape[0]      # ... and the dense output's extra stages
+    contd8 = dense_kind == DENSE_CONTD8
+    n_special = 3 if contd8 else 0      # contd8's rows F0, F1, F2 from y, y_new, f_old, f_new
+    n_rows = n_special + dense_weights.shape[0]
+
+    # Work arrays, allocated once per call.
+    K = np.empty((n_all, n))
+    y_new = np.empty(n)
+    ytmp = np.empty(n)
+    f_stage = np.empty(n)
+    F = np.empty((n_rows, n))   # dense-output rows; F[0] is also the initial step's error scale
+    n_events = directions.shape[0]
+    g_old = np.empty(n_events)
+    g_new = np.empty(n_events)
+    g_work = np.empty(n_events)
+    crossed = np.zeros(n_events, dtype=np.bool_)
+    crossing_times = np.empty(n_events)
+
+    n_saved = 0
+    residual_bound = residual_max[1] if residual_max.shape[0] > 1 else np.inf
+    t = clock[0]
+    if t >= t_end:
+        return Status.DONE, n_saved
+    # Output points at or before the current time are never emitted here.
+    while counters[3] < n_eval and t_eval[counters[3]] <= t:
+        counters[3] += 1
+
+    # First stage of the first step (FSAL thereafter); events at the start.  ``status`` holds the
+    # outcome of a group of rhs calls: 0, the rhs status (> 0), or -1 for a non-finite value.
+    status = rhs(t, y, p, K[0])
+    counters[0] += 1
+    if n_events > 0:
+        event_values(t, y, p, g_old)
+    if status == 0:
+        for i in range(n):
+            if not (np.isfinite(y[i]) and np.isfinite(K[0, i])):
+                status = -1
+
+    h_abs = clock[1]
+    if status == 0 and h_abs <= 0.0:
+        # Initial step (step 1 of the module docstring): probe state in ytmp, probe derivative in
+        # y_new, error scale in F[0].
+        interval = t_end - t
+        if n == 0:
+            h_abs = min(interval, max_step)
+        else:
+            d0 = 0.0
+            d1 = 0.0
+            for i in range(n):
+                sc = atol + abs(y[i]) * rtol
+                F[0, i] = sc
+                r = y[i] / sc
+                d0 += r * r
+                r = K[0, i] / sc
+                d1 += r * r
+            d0 = np.sqrt(d0 / n)
+            d1 = np.sqrt(d1 / n)
+            if d0 >= 1e-5 and d1 >= 1e-5:   # (false for NaN)
+                h0 = 0.01 * d0 / d1
+            else:
+                h0 = 1e-6
+            h0 = min(h0, interval)
+            for i in range(n):
+                ytmp[i] = y[i] + h0 * K[0, i]
+            status = rhs(t + h0, ytmp, p, y_new)
+            counters[0] += 1
+            finite = True
+            d2 = 0.0
+            for i in range(n):
+                finite = finite and np.isfinite(y_new[i])
+                r = (y_new[i] - K[0, i]) / F[0, i]
+                d2 += r * r
+            if not finite:
+                h_abs = min(h0, max_step)
+            else:
+                d2 = np.sqrt(d2 / n) / h0
+                if d1 <= 1e-15 and d2 <= 1e-15:
+                    h1 = max(1e-6, h0 * 1e-3)
+                else:
+                    h1 = (0.01 / max(d1, d2)) ** (-error_exponent)
+                h_abs = min(100.0 * h0, h1, interval, max_step)
+        if status == 0:                     # (not after a failed probe)
+            clock[1] = h_abs
+    if status != 0:
+        return (Status.RHS_FAILED if status > 0 else Status.NONFINITE), n_saved
+
+    while True:
+        if t >= t_end:
+            return Status.DONE, n_saved
+        if counters[1] >= max_steps:
+            return Status.MAX_STEPS, n_saved
+        if counters[1] >= pause_at:
+            return Status.PAUSED, n_saved
+
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        if h_abs > max_step:
+            h_abs = max_step
+        elif h_abs < min_step:
+            h_abs = min_step
+
+        # Stop before a step whose outputs would not fit (never lose one).  The bound: the t_eval
+        # points in (t, t_reach] not yet emitted (counted up to room + 1), else 1 if the step is saved
+        # by decimation or may end at t_end.  Rejections only shorten the step.
+        room = cap - n_saved
+        t_reach = min(t + h_abs, t_end)
+        need = 0
+        if use_t_eval:
+            j = counters[3]
+            while j < n_eval and t_eval[j] <= t_reach and need <= room:
+                need += 1
+                j += 1
+        elif counters[4] + 1 >= save_every or t_reach >= t_end:
+            need = 1
+        if need > room and (n_saved > 0 or not use_t_eval):
+            return Status.BUFFER_FULL, n_saved
+        if counters[5] + n_events > ev_t.shape[0]:
+            return Status.BUFFER_FULL, n_saved
+        if n_events > 0 and not use_t_eval and n_saved >= cap:
+            return Status.BUFFER_FULL, n_saved    # a terminal event saves its row
+
+        # Trial loop: shrink until the error estimate is acceptable.
+        step_rejected = False
+        nonfinite = False
+        while True:
+            t_new = t + h_abs
+            if t_new > t_end:
+                t_new = t_end
+            # Too small, or NaN, or infinite (possible only with t_end = inf).
+            if not (h_abs >= min_step and t_new < np.inf):
+                if h_abs < min_step and not nonfinite:
+                    return Status.STEP_TOO_SMALL, n_saved
+                return Status.NONFINITE, n_saved
+            h = t_new - t
+            h_abs = abs(h)
+
+            # Stages K[1 .. s]: K[s] = f(t + c h, y + h sum_{j<s} a_j K[j]) with (a, c) = (A[s], C[s]),
+            # and for s = n_stages (B, 1): the stage argument is then y_new and the stage the FSAL
+            # derivative.  Zero coefficients are skipped (the tableaux are sparse).
+            status = 0
+            for s in range(1, n_stages + 1):
+                last = s == n_stages
+                c = 1.0 if last else C[s]
+                for i in range(n):
+                    ytmp[i] = 0.0
+                for j in range(s):
+                    a = B[j] if last else A[s, j]
+                    if a != 0.0:
+                        for i in range(n):
+                            ytmp[i] += a * K[j, i]
+                for i in range(n):
+                    ytmp[i] = y[i] + h * ytmp[i]
+                if last:
+                    for i in range(n):
+                        y_new[i] = ytmp[i]
+                        if not np.isfinite(ytmp[i]):
+                            status = -1
+                    if status != 0:
+                        break
+                status = rhs(t + c * h, ytmp, p, f_stage)
+                counters[0] += 1
+                for i in range(n):
+                    K[s, i] = f_stage[i]
+                    if status == 0 and not np.isfinite(f_stage[i]):
+                        status = -1
+                if status != 0:
+                    break
+            if status > 0:
+                return Status.RHS_FAILED, n_saved
+
+            # Error norm, infinite when a value was not finite.
+            err = np.inf
+            if status == 0:
+                if error_norm == ERROR_RMS:
+                    acc = 0.0
+                    for i in range(n):
+                        sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+                        e = 0.0
+                        for j in range(n_k):
+                            e += error_weights[0, j] * K[j, i]
+                        e = h * e / sc
+                        acc += e * e
+                    err = np.sqrt(acc / n) if n > 0 else 0.0
+                else:
+                    sum5 = 0.0
+                    sum3 = 0.0
+                    for i in range(n):
+                        sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+                        e5 = 0.0
+                        e3 = 0.0
+                        for j in range(n_k):
+                            e5 += error_weights[0, j] * K[j, i]
+                            e3 += error_weights[1, j] * K[j, i]
+                        e5 /= sc
+                        e3 /= sc
+                        sum5 += e5 * e5
+                        sum3 += e3 * e3
+                    if sum5 == 0.0 and sum3 == 0.0:      # (also for n = 0)
+                        err = 0.0
+                    else:
+                        err = abs(h) * sum5 / np.sqrt((sum5 + 0.01 * sum3) * n)
+
+            # Step-size control.
+            if err < 1.0:                           # (false for NaN)
+                if err == 0.0:
+                    factor = MAX_FACTOR
+                else:
+                    factor = min(MAX_FACTOR, SAFETY * err ** error_exponent)
+                if step_rejected:
+                    factor = min(1.0, factor)
+                h_abs *= factor
+                break
+            if np.isfinite(err):
+                h_abs *= max(MIN_FACTOR, SAFETY * err ** error_exponent)
+                nonfinite = False
+            else:
+                h_abs *= MIN_FACTOR
+                nonfinite = True
+            step_rejected = True
+            counters[2] += 1
+
+        # Events of the accepted step; the dense output when an event or a t_eval point lies inside
+        # it (first the extra stages K[n_k ..] (jj: stage index; j is the t_eval index), then the
+        # rows F); a terminal event cuts the step short.
+        n_crossed = 0
+        if n_events > 0:
+            event_values(t_new, y_new, p, g_new)
+            n_crossed = event_crossings(g_old, g_new, directions, actions, crossed)
+        j = counters[3]
+        if n_crossed > 0 or (use_t_eval and j < n_eval and t_eval[j] < t_new):
+            for s in range(n_k, n_all):
+                row = s - n_k
+                for i in range(n):
+                    ytmp[i] = 0.0
+                for jj in range(s):
+                    a = extra_A[row, jj]
+                    if a != 0.0:
+                        for i in range(n):
+                            ytmp[i] += a * K[jj, i]
+                for i in range(n):
+                    ytmp[i] = y[i] + h * ytmp[i]
+                status = rhs(t + extra_C[row] * h, ytmp, p, K[s])
+                counters[0] += 1
+                if status == 0:
+                    for i in range(n):
+                        if not np.isfinite(K[s, i]):
+                            status = -1
+                if status != 0:
+                    return (Status.RHS_FAILED if status > 0 else Status.NONFINITE), n_saved
+            if contd8:
+                for i in range(n):
+                    dy = y_new[i] - y[i]
+                    F[0, i] = dy
+                    F[1, i] = h * K[0, i] - dy
+                    F[2, i] = 2.0 * dy - h * (K[n_stages, i] + K[0, i])
+            for r in range(n_special, n_rows):
+                for i in range(n):
+                    F[r, i] = 0.0
+                for jj in range(n_all):
+                    w = dense_weights[r - n_special, jj]
+                    if w != 0.0:
+                        for i in range(n):
+                            F[r, i] += w * K[jj, i]
+                if contd8:
+                    for i in range(n):
+                        F[r, i] *= h
+        stop = False
+        if n_crossed > 0:
+            n_recorded, t_stop = record_events(event_values, dense_kind, F, y, t, h, p, g_old, g_new, crossed,
+                                               actions, crossing_times, ev_t, ev_y, ev_i, counters[5], ytmp, g_work)
+            counters[5] = n_recorded
+            if t_stop < np.inf:
+                stop = True
+                t_new = t_stop
+                dense_state(dense_kind, F, y, t, h, t_stop, y_new)
+
+        # Outputs of the accepted step t -> t_new.
+        if use_t_eval:
+            while j < n_eval and t_eval[j] <= t_new and n_saved < cap:
+                te = t_eval[j]
+                ts[n_saved] = te
+                if te == t_new:
+                    for i in range(n):
+                        ys[n_saved, i] = y_new[i]
+                else:
+                    dense_state(dense_kind, F, y, t, h, te, ys[n_saved])
+                n_saved += 1
+                j += 1
+            counters[3] = j
+            if j < n_eval and t_eval[j] <= t_new:
+                # Only when one step holds more points than a whole buffer: do not commit; the next
+                # call redoes this (deterministic) step and emits the remaining points.
+                return Status.BUFFER_FULL, n_saved
+        else:
+            counters[4] += 1
+            if counters[4] >= save_every or t_new >= t_end or stop:
+                ts[n_saved] = t_new
+                for i in range(n):
+                    ys[n_saved, i] = y_new[i]
+                n_saved += 1
+                counters[4] = 0
+
+        # Projection onto the constraints, after the outputs (the dense output interpolates the step
+        # as computed); the FSAL stage is then evaluated again at the projected state.
+        if projecting:
+            status = project(t_new, y_new, p)
+            if status == 0:
+                status = rhs(t_new, y_new, p, K[n_stages])
+                counters[0] += 1
+            if status != 0:
+                return Status.RHS_FAILED, n_saved
+        residual = constraint_residual(t_new, y_new, p)
+        if residual > residual_max[0]:
+            residual_max[0] = residual
+
+        # Commit the step; the FSAL stage becomes the next first stage.
+        for i in range(n):
+            y[i] = y_new[i]
+            K[0, i] = K[n_stages, i]
+        t = t_new
+        clock[0] = t
+        clock[1] = h_abs
+        counters[1] += 1
+        if residual > residual_bound:
+            return Status.RESIDUAL_EXCEEDED, n_saved
+        if stop:
+            return Status.TERMINATED, n_saved
+        if n_events > 0:
+            if projecting:
+                event_values(t, y, p, g_old)
+            else:
+                for ev in range(n_events):
+                    g_old[ev] = g_new[ev]
+
+
+SWEEP_SIGNATURE = types.none(RHS, PROJECT, RESIDUAL, EVENTS, ENERGY,
+                             MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean,
+                             INDICES, INDICES, MATRIX, VECTOR, INDICES, types.int64[:, ::1], types.float64[:, :, ::1],
+                             MATRIX, types.int64[:, ::1], types.float64[:, :, ::1], types.float64[:, :, :, ::1],
+                             *TABLEAU)
+
+
+@njit(SWEEP_SIGNATURE, cache=True, error_model="numpy", nogil=True)
+def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
+                   Y0, P, projecting, t0, t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial,
+                   directions, actions, final, t_final, status, counts, dense, energy_stats,
+                   event_count, event_t, event_y,
+                   A, B, C, error_weights, error_norm, error_exponent, dense_kind, dense_weights, extra_A, extra_C):
+    """Trajectory k from (t0, Y0[k]) with parameters P[k] to t_end by `embedded_run`, for every row k.
+
+    Each trajectory runs the resumable driver with a small row buffer (`SWEEP_ROWS`) and folds the
+    rows of every call into its outputs (`fold_rows`).  It releases the GIL: the caller runs disjoint
+    row ranges on several threads (`lagcomp.integrate.sweep`), and the result does not depend on how
+    many (trajectories share only the read-only inputs and write their own rows).  Outputs, per k:
+
+    * ``final[k]`` (2n,), ``t_final[k]``, ``status[k]``, ``counts[k]`` = [nfev, nsteps, nrejected];
+    * ``dense[k]`` (m, 2n): the saved rows in order (the ``t_eval`` rows, which hold the times after t0,
+      with the initial state first when ``save_initial``); m = 0 when not wanted;
+    * ``energy_stats[k]`` = [E0, largest |E - E0| over the saved rows], E = ``energy`` (T + V);
+    * ``event_count[k]`` (E,) occurrences of each event, the first ``cap`` of them in
+      ``event_t[k]`` (E, cap) and ``event_y[k]`` (E, cap, 2n).
+    """
+    n_traj = Y0.shape[0]
+    n2 = Y0.shape[1]
+    n_events = directions.shape[0]
+    cap = event_t.shape[2]
+    for k in range(n_traj):
+        y = Y0[k].copy()
+        p = P[k]
+        clock = np.zeros(2)
+        clock[0] = t0
+        counters = np.zeros(6, dtype=np.int64)
+        residual = np.zeros(1)
+        ts = np.empty(SWEEP_ROWS)
+        ys = np.empty((SWEEP_ROWS, n2))
+        rows_e = max(n_events, 1)
+        ev_t = np.empty(rows_e)
+        ev_y = np.empty((rows_e, n2))
+        ev_i = np.empty(rows_e, dtype=np.int64)
+        e0 = energy(t0, y, p)
+        deviation = 0.0
+        row = 0
+        if dense.shape[1] > 0 and save_initial:
+            for c in range(n2):
+                dense[k, 0, c] = y[c]
+            row = 1
+        for e in range(n_events):
+            event_count[k, e] = 0
+        while True:
+            counters[5] = 0
+            code, n_saved = embedded_run(rhs, project, constraint_residual, event_values,
+                                         y, clock, counters, p, projecting, residual, t_end, rtol, atol, max_step,
+                                         max_steps, NO_PAUSE, save_every, t_eval, ts, ys,
+                                         directions, actions, ev_t, ev_y, ev_i,
+                                         A, B, C, error_weights, error_norm, error_exponent, dense_kind,
+                                         dense_weights, extra_A, extra_C)
+            deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
+            for r in range(counters[5]):
+                e = ev_i[r]
+                j = event_count[k, e]
+                if j < cap:
+                    event_t[k, e, j] = ev_t[r]
+                    for c in range(n2):
+                        event_y[k, e, j, c] = ev_y[r, c]
+                event_count[k, e] = j + 1
+            if code != Status.BUFFER_FULL:
+                break
+        for c in range(n2):
+            final[k, c] = y[c]
+        t_final[k] = clock[0]
+        status[k] = code
+        counts[k, 0] = counters[0]
+        counts[k, 1] = counters[1]
+        counts[k, 2] = counters[2]
+        energy_stats[k, 0] = e0
+        energy_stats[k, 1] = deviation
