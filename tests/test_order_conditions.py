@@ -35,7 +35,7 @@ import pytest
 
 from lagcomp.integrate.collocation import GAUSS1, GAUSS2, GAUSS3
 from lagcomp.integrate.compositions import VERLET, YOSHIDA4, YOSHIDA6
-from lagcomp.integrate.tableaux import DOP853, DOPRI5, RK4
+from lagcomp.integrate.tableaux import BS3, DOP853, DOPRI5, RK4, TSIT5
 
 DPS = 40
 ULP = 2.0**-52
@@ -132,7 +132,7 @@ def _zero(tree):
     return mp.mpf(0)
 
 
-@pytest.mark.parametrize("tab", [RK4, DOPRI5, DOP853], ids=lambda t: t.name)
+@pytest.mark.parametrize("tab", [RK4, DOPRI5, DOP853, TSIT5, BS3], ids=lambda t: t.name)
 def test_runge_kutta_order_conditions(tab):
     weights = Weights(tab.A)
     for order in range(1, tab.order + 1):
@@ -151,8 +151,9 @@ def _with_fsal_stage(tab) -> np.ndarray:
     return A
 
 
-@pytest.mark.parametrize("tab, name, order", [(DOPRI5, "E", 4), (DOP853, "E5", 5), (DOP853, "E3", 3)],
-                         ids=["DOPRI5-E", "DOP853-E5", "DOP853-E3"])
+@pytest.mark.parametrize("tab, name, order", [(DOPRI5, "E", 4), (DOP853, "E5", 5), (DOP853, "E3", 3),
+                                              (TSIT5, "E", 4), (BS3, "E", 2)],
+                         ids=["DOPRI5-E", "DOP853-E5", "DOP853-E3", "TSIT5-E", "BS3-E"])
 def test_error_estimators_have_their_order(tab, name, order):
     """E = b − b̂ with both of order ≥ q: Σ E_i Φ_i(τ) = 0 for every tree up to q nodes, not for all of q + 1.
 
@@ -166,6 +167,24 @@ def test_error_estimators_have_their_order(tab, name, order):
         assert in_ulps <= ULPS, (name, n, in_ulps)
     _, relative = worst(weights, E, order + 1, _zero)
     assert relative > 1e-3  # measured: 0.097 (DOPRI5 E), 0.017 (E5), 0.10 (E3)
+
+
+@pytest.mark.parametrize("tab, order", [(DOPRI5, 4), (TSIT5, 4), (BS3, 3)], ids=lambda t: getattr(t, "name", ""))
+def test_dense_output_order_conditions(tab, order):
+    """The interpolant y + h Σ b_i(x) K_i, b_i(x) = Σ_m P[i, m] x^(m+1), has order `order` at every x:
+    Σ b_i(x) Φ_i(τ) = x^|τ| / γ(τ) for the trees up to `order` nodes (HNW II.6), i.e. power by power,
+    Σ_i P[i, m] Φ_i(τ) = [m + 1 = |τ|] / γ(τ); and not for all trees of order + 1 nodes at x = 1/2.
+    Tsit5's polynomials are the paper's, given to about 19 digits: allowed 4 ulps of each condition's size."""
+    weights = Weights(_with_fsal_stage(tab))
+    for m in range(tab.P.shape[1]):
+        for n in range(1, order + 1):
+            for tree in trees(n):
+                goal = mp.mpf(1) / density(tree) if n == m + 1 else mp.mpf(0)
+                residual, size = weights.condition(tab.P[:, m], tree, goal)
+                assert residual <= 2 * ULPS * ULP * size, (tab.name, m, tree, float(residual))
+    half = tab.P @ (0.5 ** np.arange(1, tab.P.shape[1] + 1))
+    _, relative = worst(weights, half, order + 1, lambda tree: mp.mpf(0.5) ** (order + 1) / density(tree))
+    assert relative > 1e-4
 
 
 # -- Gauss–Legendre collocation --------------------------------------------------------

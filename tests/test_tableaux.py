@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import scipy.integrate
 
-from lagcomp.integrate.tableaux import DOP853, DOPRI5, RK4, Tableau, driver_arguments
+from lagcomp.integrate.tableaux import BS3, DOP853, DOPRI5, RK4, TSIT5, Tableau, driver_arguments
 
-TABLEAUX = [RK4, DOPRI5, DOP853]
+TABLEAUX = [RK4, DOPRI5, DOP853, TSIT5, BS3]
 IDS = [t.name for t in TABLEAUX]
 ARRAY_NAMES = ("A", "B", "C", "E", "E3", "E5", "P", "D", "A_EXTRA", "C_EXTRA")
 
@@ -38,7 +38,7 @@ def test_error_weights_sum_to_zero(tab):
 
 @pytest.mark.parametrize("tab", TABLEAUX, ids=IDS)
 def test_order_conditions_up_to_four(tab):
-    """Butcher's order conditions for orders 1-4 (HNW I, table II.2.2)."""
+    """Butcher's order conditions for orders 1-4 (HNW I, table II.2.2), those up to the method's order."""
     A, b, c = tab.A, tab.B, tab.C
     conditions = [
         (b.sum(), 1.0),
@@ -50,7 +50,8 @@ def test_order_conditions_up_to_four(tab):
         (b @ A @ c**2, 1 / 12),
         (b @ A @ A @ c, 1 / 24),
     ]
-    for value, expected in conditions:
+    count = {1: 1, 2: 2, 3: 4}.get(tab.order, len(conditions))  # the conditions of orders up to tab.order
+    for value, expected in conditions[:count]:
         assert value == pytest.approx(expected, abs=1e-14)
 
 
@@ -92,22 +93,48 @@ def test_coefficients_are_scipys_bit_for_bit():
     assert (DOP853.order, DOP853.error_order) == (8, 7)
 
 
-@pytest.mark.parametrize(
-    "tab, names",
-    [
-        (RK4, ()),
-        (DOPRI5, ("A", "B", "C", "E", "P")),
-        (DOP853, ("A", "B", "C", "E3", "E5", "D", "A_EXTRA", "C_EXTRA")),
-    ],
-    ids=IDS,
-)
-def test_driver_arguments(tab, names):
-    args = driver_arguments(tab)
-    assert len(args) == len(names)
-    for arr, name in zip(args, names):
-        np.testing.assert_array_equal(arr, getattr(tab, name))
-        assert arr.dtype == np.float64 and arr.flags.c_contiguous and arr.flags.writeable
-        assert not np.shares_memory(arr, getattr(tab, name))
+def test_driver_arguments():
+    """The embedded driver's tableau data: stages, error weights and norm, exponent, dense output."""
+    from lagcomp.integrate.drivers.events import DENSE_CONTD8, DENSE_POWERS
+    from lagcomp.integrate.tableaux import ERROR_DOP853, ERROR_RMS
+
+    assert driver_arguments(RK4) == ()
+    for tab in (DOPRI5, TSIT5, BS3, DOP853):
+        args = driver_arguments(tab)
+        A, B, C, errors, norm, exponent, kind, dense, extra_A, extra_C = args
+        for arr, name in zip((A, B, C), "ABC"):
+            np.testing.assert_array_equal(arr, getattr(tab, name))
+        assert exponent == -1.0 / (tab.error_order + 1)
+        if tab is DOP853:
+            assert norm == ERROR_DOP853 and kind == DENSE_CONTD8
+            np.testing.assert_array_equal(errors, [tab.E5, tab.E3])
+            for arr, name in zip((dense, extra_A, extra_C), ("D", "A_EXTRA", "C_EXTRA")):
+                np.testing.assert_array_equal(arr, getattr(tab, name))
+        else:
+            assert norm == ERROR_RMS and kind == DENSE_POWERS
+            np.testing.assert_array_equal(errors, [tab.E])
+            np.testing.assert_array_equal(dense, tab.P.T)
+            assert extra_A.shape == (0, tab.n_stages + 1) and extra_C.shape == (0,)
+        for arr in (A, B, C, errors, dense, extra_A, extra_C):
+            assert arr.dtype == np.float64 and arr.flags.c_contiguous and arr.flags.writeable
+        assert not any(np.shares_memory(arr, getattr(tab, name)) for arr, name in zip((A, B, C), "ABC"))
+
+
+def test_bs3_is_scipys_rk23_bit_for_bit():
+    rk23 = scipy.integrate.RK23
+    for field in ("A", "B", "C", "E", "P"):
+        np.testing.assert_array_equal(getattr(BS3, field), getattr(rk23, field), err_msg=field)
+    assert (rk23.order, rk23.error_estimator_order) == (BS3.order, BS3.error_order) == (3, 2)
+
+
+def test_tsit5_dense_output_starts_with_f_and_ends_at_y_new():
+    """x = 0: slope f_old (P[:, 0] = e_0); x = 1: y_new (rows of P sum to [B, 0]); also the slope there is
+    f_new, the FSAL stage: the interpolant is C¹ across steps."""
+    s = TSIT5.n_stages
+    np.testing.assert_array_equal(TSIT5.P[:, 0], np.eye(s + 1)[0])
+    np.testing.assert_allclose(TSIT5.P.sum(axis=1), np.append(TSIT5.B, 0.0), rtol=0, atol=1e-14)
+    slope_at_1 = TSIT5.P @ np.arange(1, TSIT5.P.shape[1] + 1)
+    np.testing.assert_allclose(slope_at_1, np.eye(s + 1)[s], rtol=0, atol=1e-12)
 
 
 def _rk4_kwargs(**changes):

@@ -217,7 +217,9 @@ def cmd_run(args) -> int:
                    progress=False if args.quiet else None)
     if args.baumgarte:
         options["baumgarte"] = tuple(args.baumgarte)
-    if args.method not in ("dop853", "dopri5", "taylor"):  # fixed-step methods
+    from lagcomp.integrate.methods import get_method
+
+    if not get_method(args.method).adaptive:  # fixed-step methods
         options["dt"] = args.dt if args.dt is not None else 1e-3
     else:
         options.update(rtol=args.rtol, atol=args.atol)
@@ -478,12 +480,14 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--arg", action="append", metavar="K=V", help="argument of the example factory, e.g. n=5")
         return p
 
+    from lagcomp.integrate.methods import METHODS
+
     example("show", "print the derived equations (of a bundled example; for a model compiled earlier under NAME, "
                     "what the cache records) and the generated module's path").set_defaults(func=cmd_show)
     run = example("run", "simulate an example and print a summary")
     run.add_argument("--t-start", type=float, default=0.0)
     run.add_argument("--t-end", type=float, help="end time (default: the example's)")
-    run.add_argument("--method", default="dop853", choices=["dop853", "dopri5", "taylor", "rk4", "verlet", "yoshida4", "yoshida6", "gauss1", "gauss2", "gauss3"])
+    run.add_argument("--method", default="dop853", choices=list(METHODS))
     run.add_argument("--dt", type=float, help="step of fixed-step methods (default 1e-3); first step of adaptive ones")
     run.add_argument("--rtol", type=float, default=1e-10)
     run.add_argument("--atol", type=float, default=1e-10)
@@ -506,7 +510,6 @@ def _parser() -> argparse.ArgumentParser:
                      help="project inconsistent initial conditions onto the constraints")
     run.set_defaults(func=cmd_run)
     sweep = example("sweep", "integrate a grid of initial values and parameters on every core")
-    from lagcomp.integrate.methods import METHODS
 
     sweep.add_argument("--grid", "--q0-grid", action="append", metavar="NAME=LO:HI:N",
                        help="swept initial value or parameter, N evenly spaced values (coordinate, "

@@ -46,10 +46,11 @@ import numpy as np
 
 from lagcomp.cache import Cache, input_key, load_module
 from lagcomp.errors import InitialConditionError, ModelError, OptionError
+from lagcomp.integrate.methods import METHODS
 from lagcomp.runtime import Model
 
-#: Methods that take any first-order state y; the others need y = (q, q̇).
-KANE_METHODS = ("dop853", "dopri5", "rk4")
+#: Methods that take any first-order state y (the Runge-Kutta tableaux); the others need y = (q, q̇).
+KANE_METHODS = tuple(name for name, m in METHODS.items() if m.any_state)
 #: Options `compile(km, ...)` accepts for a KanesMethod.
 KANE_OPTIONS = ("name", "parameters", "defaults", "q0", "u0", "t_end", "description", "events")
 

@@ -10,7 +10,13 @@ import math
 import numpy as np
 
 from lagcomp.errors import OptionError
-from lagcomp.integrate.methods import RTOL_MIN
+from lagcomp.integrate.methods import METHODS, RTOL_MIN
+
+
+def _names(test) -> str:
+    """The registry's methods that pass `test`, as "a, b or c" (messages name what would work)."""
+    names = [name for name, m in METHODS.items() if test(m)]
+    return ", ".join(names[:-1]) + " or " + names[-1] if len(names) > 1 else names[0]
 
 
 def time_span(t_span) -> tuple[float, float]:
@@ -84,7 +90,8 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
         if unknown:
             raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.event_names)}.")
     if chosen and not m.adaptive:
-        raise OptionError(f"Events are located on dense output, which {m.name} lacks; use dop853 or dopri5.")
+        raise OptionError(f"Events are located on dense output, which {m.name} lacks; use "
+                          f"{_names(lambda m: m.adaptive)}.")
     directions = np.array([e.direction for e in declared], dtype=np.int64)
     actions = np.array([(2 if e.terminal else 1) if e.name in chosen else 0 for e in declared], dtype=np.int64)
     return directions, actions
@@ -94,9 +101,9 @@ def check_method(model, m) -> None:
     """Refuse a method that does not apply to `model` (separable-only or unconstrained-only methods,
     and the Taylor method where the module has no Taylor kernel: ``TAYLOR_REFUSED`` says why)."""
     kane = getattr(model, "speeds", None)
-    if kane is not None and m.name not in ("dop853", "dopri5", "rk4"):
+    if kane is not None and not m.any_state:
         raise OptionError(f"`{m.name}` needs the state (q, q̇) of Lagrange's equations; {model.name!r} is a Kane "
-                          "model with state (q, u). Use dop853, dopri5 or rk4.")
+                          f"model with state (q, u). Use {_names(lambda m: m.any_state)}.")
     refused = getattr(model.kernels, "TAYLOR_REFUSED", None) if m.name == "taylor" and not model.k else None
     if refused is not None:
         raise OptionError(f"`taylor` cannot integrate {model.name!r}: its equations hold {refused}. "
@@ -105,11 +112,11 @@ def check_method(model, m) -> None:
         raise OptionError(
             f"`{m.name}` needs a separable system (no constraints, a constant mass matrix and forces that do not "
             f"depend on velocities); {model.name!r} is not one. Use gauss2 (symplectic for any Lagrangian), "
-            "dop853, dopri5 or rk4."
+            f"{_names(lambda m: m.any_state)}."
         )
     if m.unconstrained_only and model.k:
         raise OptionError(f"`{m.name}` does not handle constraints yet; {model.name!r} has {list(model.constraints)}. "
-                          "Use dop853, dopri5 or rk4.")
+                          f"Use {_names(lambda m: m.any_state)}.")
 
 
 def known_options(function, options: dict, what: str) -> None:
