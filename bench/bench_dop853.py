@@ -8,7 +8,7 @@ state reported at t = 10 and 100 (issue 8's DOP853 target).  Prints:
 1. f-evaluations of each: lagcomp's counter, and numbalsoda's counted by its
    cfunc right-hand side (the hand-written numba one, bench/systems.py), so
    the two take the same steps or not;
-2. wall time of lagcomp's ``dop853_run`` called directly (no Python around
+2. wall time of lagcomp's DOP853 driver (``embedded_run``) called directly (no Python around
    it), of ``Model.simulate`` with its default options (the same driver plus
    the run's fixed cost), and of numbalsoda's dop853, timed round-robin;
    ratios are medians of per-round ratios against numbalsoda.
@@ -29,7 +29,7 @@ import numpy as np
 import lagcomp as lc
 from bench import systems
 from lagcomp import examples
-from lagcomp.integrate import tableaux
+from lagcomp.integrate.methods import get_method
 
 Y0 = np.array([2.0, 1.0, 0.0, 0.0])
 GRID = np.array([0.0, 10.0, 100.0])
@@ -57,15 +57,16 @@ def numbalsoda_run():
 
 
 def driver_run(model):
-    """``dop853_run`` called directly, as simulate calls it, in one call."""
-    arrays = tableaux.driver_arguments(tableaux.DOP853)
+    """The DOP853 driver called directly, as simulate calls it, in one call."""
+    method = get_method("dop853")
+    driver, arrays = method.bound_driver(model.kernels), method.driver_arguments()
     p = model.parameter_vector()
     no_events = (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(1), np.empty((1, 4)), np.empty(1, np.int64))
 
     def run():
         y, clock, counters = Y0.copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
-        model.kernels.dop853_run(y, clock, counters, p, 0, np.array([0.0, np.inf]), GRID[-1], TOL, TOL, np.inf,
-                                 10**9, 10**9, 1, GRID[1:], np.empty(2), np.empty((2, 4)), *no_events, *arrays)
+        driver(y, clock, counters, p, 0, np.array([0.0, np.inf]), GRID[-1], TOL, TOL, np.inf,
+               10**9, 10**9, 1, GRID[1:], np.empty(2), np.empty((2, 4)), *no_events, *arrays)
         return int(counters[0])
     return run
 
@@ -77,7 +78,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as cache_dir:
         model = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
         runners = {
-            "lagcomp dop853_run, called directly": driver_run(model),
+            "lagcomp DOP853 driver, called directly": driver_run(model),
             "lagcomp Model.simulate": lambda: model.simulate((0, GRID[-1]), method="dop853", rtol=TOL, atol=TOL,
                                                              t_eval=GRID[1:]).nfev,
             "numbalsoda dop853": numbalsoda_run(),

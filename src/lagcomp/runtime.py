@@ -509,14 +509,16 @@ class Model:
 
         Other Parameters
         ----------------
-        method : {"dop853", "dopri5", "taylor", "rk4", "verlet", "yoshida4", "yoshida6", "gauss1", "gauss2", "gauss3"}
-            Integration method (default "dop853"); verlet and yoshida4/6 are
+        method : str
+            Integration method (default "dop853"), a name of
+            `lagcomp.integrate.methods.METHODS`: the adaptive embedded pairs dop853,
+            dopri5, tsit5 and bs3, taylor, rk4, verlet, yoshida4/6, gauss1/2/3; verlet and yoshida4/6 are
             explicit symplectic methods for separable systems (`Model.separable`),
             gauss1/2/3 implicit symplectic ones for any unconstrained system,
             taylor an adaptive Taylor-series method (unconstrained systems of
             smooth functions; machine precision by default).
         dt : float
-            Step of fixed-step methods (required for all but dop853, dopri5, taylor).
+            Step of fixed-step methods (required for all but the adaptive ones).
         implicit_solver : {"fixed_point", "newton"}, optional
             How gauss1/2/3 solve their stage equations: fixed-point iteration
             (the default: cheapest per step on ordinary problems), or

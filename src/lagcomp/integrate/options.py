@@ -13,7 +13,7 @@ from lagcomp.errors import OptionError
 from lagcomp.integrate.methods import METHODS, RTOL_MIN
 
 
-def _names(test) -> str:
+def method_names(test) -> str:
     """The registry's methods that pass `test`, as "a, b or c" (messages name what would work)."""
     names = [name for name, m in METHODS.items() if test(m)]
     return ", ".join(names[:-1]) + " or " + names[-1] if len(names) > 1 else names[0]
@@ -91,7 +91,7 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
             raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.event_names)}.")
     if chosen and not m.adaptive:
         raise OptionError(f"Events are located on dense output, which {m.name} lacks; use "
-                          f"{_names(lambda m: m.adaptive)}.")
+                          f"{method_names(lambda m: m.adaptive)}.")
     directions = np.array([e.direction for e in declared], dtype=np.int64)
     actions = np.array([(2 if e.terminal else 1) if e.name in chosen else 0 for e in declared], dtype=np.int64)
     return directions, actions
@@ -103,7 +103,7 @@ def check_method(model, m) -> None:
     kane = getattr(model, "speeds", None)
     if kane is not None and not m.any_state:
         raise OptionError(f"`{m.name}` needs the state (q, q̇) of Lagrange's equations; {model.name!r} is a Kane "
-                          f"model with state (q, u). Use {_names(lambda m: m.any_state)}.")
+                          f"model with state (q, u). Use {method_names(lambda m: m.any_state)}.")
     refused = getattr(model.kernels, "TAYLOR_REFUSED", None) if m.name == "taylor" and not model.k else None
     if refused is not None:
         raise OptionError(f"`taylor` cannot integrate {model.name!r}: its equations hold {refused}. "
@@ -112,11 +112,11 @@ def check_method(model, m) -> None:
         raise OptionError(
             f"`{m.name}` needs a separable system (no constraints, a constant mass matrix and forces that do not "
             f"depend on velocities); {model.name!r} is not one. Use gauss2 (symplectic for any Lagrangian), "
-            f"{_names(lambda m: m.any_state)}."
+            f"{method_names(lambda m: m.any_state)}."
         )
     if m.unconstrained_only and model.k:
         raise OptionError(f"`{m.name}` does not handle constraints yet; {model.name!r} has {list(model.constraints)}. "
-                          f"Use {_names(lambda m: m.any_state)}.")
+                          f"Use {method_names(lambda m: m.any_state)}.")
 
 
 def known_options(function, options: dict, what: str) -> None:

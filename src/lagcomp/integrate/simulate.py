@@ -25,6 +25,7 @@ from lagcomp.integrate.options import (
     check_method,
     count,
     event_arguments,
+    method_names,
     positive,
     t_eval_points,
     time_span,
@@ -68,7 +69,8 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
     if options["dt"] is None:
         raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
     if t_eval is not None:
-        raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every` or dopri5/dop853.")
+        raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every` or "
+                          f"{method_names(lambda m: m.adaptive)}.")
     dt = positive(options["dt"], "dt")
     n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
     if n_steps > options["max_steps"]:

@@ -35,6 +35,7 @@ from lagcomp.integrate.options import (
     check_method,
     count,
     event_arguments,
+    method_names,
     positive,
     t_eval_points,
     time_span,
@@ -284,7 +285,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     want_events = "events" in output
     if want_events and not actions.any():
         raise OptionError(f"`output` asks for events but none are active ({model.name!r} declares "
-                          f"{list(model.event_names)}; events need dop853 or dopri5).")
+                          f"{list(model.event_names)}; events need {method_names(lambda m: m.adaptive)}).")
     cap = count(event_cap, "event_cap") if want_events else 0
     n_traj = values.shape[0]
 
