@@ -330,7 +330,8 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         if m.adaptive and (rows or want_events):
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "
                               "events yet); drop `batched` for those outputs.")
-        fixed, coefficients = (fixed[:7], m.driver_arguments()[:5]) if m.adaptive else (fixed, ())
+        lanes = tuple(np.array(getattr(m.tableau, k)) for k in ("A", "B", "C", "E3", "E5")) if m.name == "dop853" else ()
+        fixed, coefficients = (fixed[:7], lanes) if m.adaptive else (fixed, ())  # dop853_lanes: its stages, E3, E5
         if m.name == "taylor":
             spec, coefficients = _taylor_lanes_spec(model, rtol, atol), ()
         task = _Task(driver, m.adaptive, fixed, layout, coefficients, projecting)
