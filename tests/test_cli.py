@@ -156,3 +156,16 @@ def test_run_a_kane_model_from_its_initial_speeds(capsys, tmp_path):
                          defaults={"m": 1.0, "k": 4.0}, q0=(0.0,)), cache_dir=tmp_path)
     assert main(["--cache-dir", str(tmp_path), "run", "lagrange_spring", "--u0", "0.8", "--quiet"]) == 2
     assert "is a Lagrange model: give its initial velocities as `qd0` (--qd0" in capsys.readouterr().err
+
+
+def test_method_choices_are_the_registrys(capsys):
+    """`run` and `sweep` offer every method of the registry (tsit5 and bs3 with the others), no list of their own."""
+    import pytest
+
+    from lagcomp.integrate.methods import METHODS
+
+    for command in ("run", "sweep"):
+        with pytest.raises(SystemExit):
+            main([command, "double_pendulum", "--method", "no_such_method"])
+        message = capsys.readouterr().err
+        assert all(f"'{name}'" in message for name in METHODS) and "'tsit5'" in message and "'bs3'" in message

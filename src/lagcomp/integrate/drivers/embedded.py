@@ -108,8 +108,11 @@ kernels' types, not the kernels.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from numba import njit, types
+from numba.core.errors import NumbaExperimentalFeatureWarning
 
 from lagcomp.integrate.drivers.events import (
     DENSE_CONTD8,
@@ -504,7 +507,6 @@ SWEEP_SIGNATURE = types.none(RHS, PROJECT, RESIDUAL, EVENTS, ENERGY,
                              *TABLEAU)
 
 
-@njit(SWEEP_SIGNATURE, cache=True, error_model="numpy", nogil=True)
 def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
                    Y0, P, projecting, t0, t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial,
                    directions, actions, final, t_final, status, counts, dense, energy_stats,
@@ -578,3 +580,10 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
         counts[k, 2] = counters[2]
         energy_stats[k, 0] = e0
         energy_stats[k, 1] = deviation
+
+
+# Passing the kernels on to `embedded_run` is numba's first-class function feature, which it labels
+# experimental with a warning at this compile (once per installation); the drivers rely on it by design.
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+    sweep_embedded = njit(SWEEP_SIGNATURE, cache=True, error_model="numpy", nogil=True)(sweep_embedded)
