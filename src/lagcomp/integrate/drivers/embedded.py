@@ -141,6 +141,12 @@ from lagcomp.integrate.tableaux import ERROR_RMS
 #: factor on the optimal step, and the bounds of the factor by which one step may change the next.
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 
+#: Largest state whose stage sums accumulate component by component in a register (a one- or
+#: two-degree-of-freedom system): DOP853 on the double pendulum (4 components) takes 1.20 times the
+#: steps/s of the row-by-row sums, which vectorize and win from 10 components on (0.81 times at 10,
+#: 0.74 at 20; 1.02 at 6).  Both give the same bits.
+COMPONENTWISE_MAX = 4
+
 #: The tableau's arguments, after the run's: A, B, C, error_weights, error_norm, error_exponent,
 #: dense_kind, dense_weights, extra_A, extra_C.
 TABLEAU = (MATRIX, VECTOR, VECTOR, MATRIX, INT, FLOAT, INT, MATRIX, MATRIX, VECTOR)
@@ -303,20 +309,31 @@ def embedded_run(rhs, project, constraint_residual, event_values,
 
             # Stages K[1 .. s]: K[s] = f(t + c h, y + h sum_{j<s} a_j K[j]) with (a, c) = (A[s], C[s]),
             # and for s = n_stages (B, 1): the stage argument is then y_new and the stage the FSAL
-            # derivative.  Zero coefficients are skipped (the tableaux are sparse).
+            # derivative.  Zero coefficients are skipped (the tableaux are sparse).  The sum runs
+            # stage by stage over whole rows of K (which vectorizes), or for the smallest systems
+            # component by component in a register: the same operations in the same order.
             status = 0
             for s in range(1, n_stages + 1):
                 last = s == n_stages
                 c = 1.0 if last else C[s]
-                for i in range(n):
-                    ytmp[i] = 0.0
-                for j in range(s):
-                    a = B[j] if last else A[s, j]
-                    if a != 0.0:
-                        for i in range(n):
-                            ytmp[i] += a * K[j, i]
-                for i in range(n):
-                    ytmp[i] = y[i] + h * ytmp[i]
+                if n <= COMPONENTWISE_MAX:
+                    for i in range(n):
+                        acc = 0.0
+                        for j in range(s):
+                            a = B[j] if last else A[s, j]
+                            if a != 0.0:
+                                acc += a * K[j, i]
+                        ytmp[i] = y[i] + h * acc
+                else:
+                    for i in range(n):
+                        ytmp[i] = 0.0
+                    for j in range(s):
+                        a = B[j] if last else A[s, j]
+                        if a != 0.0:
+                            for i in range(n):
+                                ytmp[i] += a * K[j, i]
+                    for i in range(n):
+                        ytmp[i] = y[i] + h * ytmp[i]
                 if last:
                     for i in range(n):
                         y_new[i] = ytmp[i]
