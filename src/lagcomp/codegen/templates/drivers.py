@@ -25,19 +25,15 @@ calling ``rhs`` as a module-level global.  Every function here is
 compiled code and do not allocate (work arrays are allocated once at the start
 of each driver call).
 
-Public drivers (the calling convention is shared by all five):
+Public drivers (the calling convention is shared by all three, and by the
+library's fixed-step drivers, `lagcomp.integrate.drivers.fixed_step`: RK4 and
+the symplectic compositions):
 
-* ``rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
-  pause_at, t_end, save_every, ts, ys)``
 * ``dopri5_run(y, clock, counters, p, projecting, residual_max, t_end, rtol,
   atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
   directions, actions, ev_t, ev_y, ev_i, A, B, C, E, P)``
 * ``dop853_run(...)``: the same arguments as ``dopri5_run``, then
   ``A, B, C, E3, E5, D, A_EXTRA, C_EXTRA``;
-* ``composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
-  n_steps, pause_at, t_end, save_every, ts, ys, weights)``: symplectic compositions of
-  Störmer-Verlet for separable systems (in ``symplectic.py``, appended after
-  this file);
 * ``collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
   n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter,
   newton)``: implicit Gauss-Legendre collocation on the canonical equations
@@ -233,103 +229,6 @@ _ODE_NOT_CONVERGED = -5   # implicit stage equations not solved (step too large)
 _ODE_RESIDUAL = -6        # constraint residual above the bound residual_max[1]
 _ODE_BUFFER_FULL = 10     # the output buffer is full: call again with a fresh one
 _ODE_PAUSED = 11          # the call's step budget (``pause_at``) is used up: call again
-
-
-# ---------------------------------------------------------------------------
-# Fixed-step classic Runge-Kutta
-# ---------------------------------------------------------------------------
-
-@njit(cache=True, error_model="numpy")
-def rk4_run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps,
-            pause_at, t_end, save_every, ts, ys):
-    """Integrate with classic RK4 (HNW II.1) and a fixed step ``dt``; resumable.
-
-    Step k (0-based, ``k = counters[1]``) goes from ``t0 + k dt`` to
-    ``min(t0 + (k+1) dt, t_end)``, the last one (k = n_steps - 1) ending
-    exactly at ``t_end``.  Times are computed from k rather than accumulated,
-    so there is no drift.  A row is saved after a step when
-    ``counters[4]`` (steps since the last save) reaches ``save_every`` or it
-    is the last step.  Returns ``(status, n_saved)``; status 10 is returned
-    before a step whose row would not fit into ``ts``/``ys``.  The new state
-    is checked for finiteness every step (-1: state not updated); a non-zero
-    rhs status gives -2.  ``clock[0]`` always holds the time of ``y``.
-    """
-    n = y.shape[0]
-    cap = ts.shape[0]
-    K = np.empty((4, n))
-    ytmp = np.empty(n)
-    y_new = np.empty(n)
-    f_stage = np.empty(n)
-    n_saved = 0
-    residual_bound = residual_max[1] if residual_max.shape[0] > 1 else np.inf
-    while True:
-        k = counters[1]
-        if k >= n_steps:
-            return _ODE_DONE, n_saved
-        if k >= pause_at:
-            return _ODE_PAUSED, n_saved
-        last = k == n_steps - 1
-        if last or counters[4] + 1 >= save_every:
-            if n_saved >= cap:
-                return _ODE_BUFFER_FULL, n_saved
-        t_a = min(t0 + k * dt, t_end)
-        if last:
-            t_b = t_end
-        else:
-            t_b = min(t0 + (k + 1) * dt, t_end)
-
-        # One step of size h from (t_a, y): stage s is
-        # K[s] = f(t_a + c h, y + c h K[s-1]) with c = 0, 1/2, 1/2, 1 (one
-        # rhs call site instead of four: less code for numba and LLVM; no
-        # array views passed to it, as in dop853_run).
-        h = t_b - t_a
-        for s in range(4):
-            if s == 0:
-                c = 0.0
-            elif s == 3:
-                c = 1.0
-            else:
-                c = 0.5
-            if s == 0:
-                for i in range(n):
-                    ytmp[i] = y[i]
-            else:
-                for i in range(n):
-                    ytmp[i] = y[i] + c * h * K[s - 1, i]
-            status = rhs(t_a + c * h, ytmp, p, f_stage)
-            counters[0] += 1
-            if status != 0:
-                return _ODE_RHS_FAILED, n_saved
-            for i in range(n):
-                K[s, i] = f_stage[i]
-        sixth = h / 6.0
-        status = 0
-        for i in range(n):
-            y_new[i] = y[i] + sixth * (K[0, i] + 2.0 * K[1, i]
-                                       + 2.0 * K[2, i] + K[3, i])
-            if not np.isfinite(y_new[i]):
-                status = -1
-        if status != 0:
-            return _ODE_NONFINITE, n_saved
-        if projecting and project(t_b, y_new, p) != 0:
-            return _ODE_RHS_FAILED, n_saved
-        residual = constraint_residual(t_b, y_new, p)
-        if residual > residual_max[0]:
-            residual_max[0] = residual
-
-        for i in range(n):
-            y[i] = y_new[i]
-        clock[0] = t_b
-        counters[1] = k + 1
-        counters[4] += 1
-        if last or counters[4] >= save_every:
-            ts[n_saved] = t_b
-            for i in range(n):
-                ys[n_saved, i] = y[i]
-            n_saved += 1
-            counters[4] = 0
-        if residual > residual_bound:
-            return _ODE_RESIDUAL, n_saved
 
 
 # >>> events
