@@ -55,8 +55,23 @@ def fixed_step_call(driver, y0, p, dt, steps, coefficients=()):
     return run
 
 
+def sweep_call(loop, y0, p, dt, steps, trajectories, coefficients):
+    """A call of a fixed-step sweep loop over `trajectories` starts near y0, keeping the final states and energies."""
+    Y0 = np.repeat(y0[None, :], trajectories, axis=0)
+    Y0[:, 0] += np.linspace(-0.1, 0.1, trajectories)
+    P = np.repeat(p[None, :], trajectories, axis=0)
+
+    def run():
+        final, t_final = np.empty_like(Y0), np.empty(trajectories)
+        status, counts = np.empty(trajectories, dtype=np.int64), np.empty((trajectories, 3), dtype=np.int64)
+        dense, energy = np.empty((trajectories, 0, y0.size)), np.empty((trajectories, 2))
+        loop(Y0, P, 0, 0.0, dt, steps, steps * dt, 1, final, t_final, status, counts, dense, energy, *coefficients)
+        return final, energy
+    return run
+
+
 def case_rows(case: str, method: str, dt: float, steps: int, repeats: int, directory: Path) -> list[tuple]:
-    from lagcomp.integrate.drivers import fixed_step
+    from lagcomp.integrate.drivers import fixed_step, fixed_sweeps
     from lagcomp.integrate.methods import get_method
 
     module = template_module(case, directory)
@@ -76,6 +91,21 @@ def case_rows(case: str, method: str, dt: float, steps: int, repeats: int, direc
         template = fixed_step_call(module.composition_run, y0, p, dt, steps, coefficients)
         library = fixed_step_call(lambda *a: fixed_step.composition_run(module.rhs, *a), y0, p, dt, steps,
                                   coefficients)
+    # sweeps: 100 trajectories of steps / 100 steps each, every step's energy folded (save_every 1)
+    short = steps // 100
+    if method == "rk4":
+        template_sweep = sweep_call(module.sweep_rk4_run, y0, p, dt, short, 100, ((),))
+        library_sweep = sweep_call(
+            lambda *a: fixed_sweeps.runge_kutta_sweep(module.rhs, module.project, module.constraint_residual,
+                                                      module.energy, *a), y0, p, dt, short, 100, coefficients)
+    else:
+        template_sweep = sweep_call(module.sweep_composition_run, y0, p, dt, short, 100, (coefficients,))
+        library_sweep = sweep_call(lambda *a: fixed_sweeps.composition_sweep(module.rhs, module.energy, *a),
+                                   y0, p, dt, short, 100, coefficients)
+    for a, b in zip(template_sweep(), library_sweep()):
+        if not np.array_equal(a, b):
+            raise AssertionError(f"{case} {method}: the library sweep's outputs differ from the template's")
+    sweep_times = interleaved_times([template_sweep, library_sweep], repeats)
     check = (template(), library())
     if not np.array_equal(*check):
         raise AssertionError(f"{case} {method}: the library driver's state differs from the template's")
@@ -96,6 +126,10 @@ def case_rows(case: str, method: str, dt: float, steps: int, repeats: int, direc
         rate = stat_of([steps / t for t in ts])
         rows.append((case, label, f"{rate.median:.3g}", fmt_stat(paired(base, ts), "×"),
                      fmt_stat(paired(hand_times, ts), "×") if hand_times else ""))
+    for label, ts in zip((f"template {method} sweep (before #19)", f"library {method} sweep"), sweep_times):
+        rate = stat_of([steps / t for t in ts])
+        rows.append((case, label + " (100 trajectories, energy every step)", f"{rate.median:.3g}",
+                     fmt_stat(paired(sweep_times[0], ts), "×"), ""))
     return rows
 
 

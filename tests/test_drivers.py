@@ -321,6 +321,7 @@ def test_save_every(mod, method):
 
 # -- failures ---------------------------------------------------------------------
 
+@pytest.mark.parametrize("method", METHODS)
 def test_adaptive_nan_stops_just_before_blowup(mod, method):
     run = run_adaptive(mod, method, NAN_AFTER, 1e-6, p_extra=(1.0,))
     assert run.status in (-1, -3)

@@ -95,7 +95,7 @@ def test_coefficients_are_scipys_bit_for_bit():
 @pytest.mark.parametrize(
     "tab, names",
     [
-        (RK4, ()),
+        (RK4, ("A", "C")),   # then the weights over their common denominator (the test below)
         (DOPRI5, ("A", "B", "C", "E", "P")),
         (DOP853, ("A", "B", "C", "E3", "E5", "D", "A_EXTRA", "C_EXTRA")),
     ],
@@ -103,11 +103,20 @@ def test_coefficients_are_scipys_bit_for_bit():
 )
 def test_driver_arguments(tab, names):
     args = driver_arguments(tab)
-    assert len(args) == len(names)
+    assert len(args) == len(names) + (2 if tab is RK4 else 0)
     for arr, name in zip(args, names):
         np.testing.assert_array_equal(arr, getattr(tab, name))
         assert arr.dtype == np.float64 and arr.flags.c_contiguous and arr.flags.writeable
         assert not np.shares_memory(arr, getattr(tab, name))
+
+
+def test_fixed_step_weights_are_integers_over_their_common_denominator():
+    """RK4's B = (1/6, 1/3, 1/3, 1/6) reaches the driver as 1 2 2 1 over 6, which it multiplies exactly."""
+    *_, weights, denominator = driver_arguments(RK4)
+    np.testing.assert_array_equal(weights, [1.0, 2.0, 2.0, 1.0])
+    assert denominator == 6.0
+    np.testing.assert_array_equal(weights / denominator, RK4.B)
+    assert weights.flags.c_contiguous and weights.flags.writeable
 
 
 def _rk4_kwargs(**changes):
