@@ -34,7 +34,7 @@ PROBE = textwrap.dedent(
 
     model = lc.compile(examples.get("simple_pendulum"), cache_dir=sys.argv[1])
     sol = model.simulate((0, 1), method="rk4", dt=0.01)
-    stats = {name: getattr(model.kernels, name).stats for name in ("rk4_run", "observables")}
+    stats = {name: getattr(model.kernels, name).stats for name in ("rhs", "observables")}
     print(json.dumps({
         "batched_taylor": batched_taylor_misses(model),
         "from_cache": model.from_cache,
@@ -61,7 +61,7 @@ LOAD_PROBE = textwrap.dedent(
 
     model = lc.load("simple_pendulum", cache_dir=sys.argv[1])
     sol = model.simulate((0, 1), method="rk4", dt=0.01)
-    stats = {name: getattr(model.kernels, name).stats for name in ("rk4_run", "observables")}
+    stats = {name: getattr(model.kernels, name).stats for name in ("rhs", "observables")}
     print(json.dumps({
         "batched_taylor": batched_taylor_misses(model),
         "sympy_imported": "sympy" in sys.modules,
@@ -81,7 +81,7 @@ def _probe(cache_dir, probe=PROBE) -> dict:
 def test_second_process_does_no_derivation_and_no_numba_compilation(tmp_path):
     first = _probe(tmp_path)
     assert first == {**first, "from_cache": False, "derivations": 1, "batched_taylor": 1}
-    assert first["misses"] == 2  # rk4_run and observables compiled once, then saved
+    assert first["misses"] == 2  # rhs (for the rk4 driver) and observables compiled once, then saved
     second = _probe(tmp_path)
     assert second["from_cache"] is True and second["derivations"] == 0
     assert second["misses"] == 0 and second["hits"] == 2 and second["batched_taylor"] == 0

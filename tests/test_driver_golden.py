@@ -3,16 +3,19 @@
 import numpy as np
 import pytest
 
-from tests.golden_runs import GOLDEN, runs
+from tests.golden_runs import SETS, runs
 
 
 @pytest.fixture(scope="module")
-def computed(tmp_path_factory):
-    return runs(cache_dir=tmp_path_factory.mktemp("cache"))
+def cache_dir(tmp_path_factory):
+    return tmp_path_factory.mktemp("cache")
 
 
-def test_golden_trajectories_are_bitwise_equal(computed):
-    stored = np.load(GOLDEN)
+@pytest.mark.parametrize("name", list(SETS))
+def test_golden_trajectories_are_bitwise_equal(name, cache_dir):
+    path, states, options_by_label = SETS[name]
+    computed = runs(cache_dir=cache_dir, states=states, options_by_label=options_by_label)
+    stored = np.load(path)
     assert sorted(stored.files) == sorted(computed)
     different = [key for key in stored.files if not np.array_equal(stored[key], computed[key])]
     assert not different, f"trajectories changed: {different}"

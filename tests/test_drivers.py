@@ -1,17 +1,12 @@
-"""Tests of the compiled integration drivers: the embedded Runge-Kutta driver of the library
-(`lagcomp.integrate.drivers.embedded`) and, until it moves there too, the RK4 template.
+"""Tests of the embedded Runge-Kutta driver of the library (`lagcomp.integrate.drivers.embedded`).
 
-The drivers take the model's kernels as values: here hand-written njit kernels
-(tests/driver_kernels.py) instead of a generated module's.  The RK4 template is appended to a
-module importing the same kernels.  Results are checked against closed-form solutions and against
-scipy's ``solve_ivp``, which implements the same algorithms (RK45 = dopri5, DOP853, RK23 = bs3), and
-every check of the embedded driver runs on each of its pairs.
+The driver takes the model's kernels as values: here hand-written njit kernels
+(tests/driver_kernels.py) instead of a generated module's.  Results are checked against closed-form
+solutions and against scipy's ``solve_ivp``, which implements the same algorithms (RK45 = dopri5,
+DOP853, RK23 = bs3), and every check runs on each of the registry's embedded pairs.  The fixed-step
+drivers have their own tests (tests/test_fixed_step_drivers.py).
 """
 
-import importlib.util
-import re
-import sys
-import uuid
 
 import numpy as np
 import pytest
@@ -35,30 +30,6 @@ def embedded_run(*args):
     from lagcomp.integrate.drivers.embedded import embedded_run as driver
 
     return driver(*KERNELS, *args)
-
-
-def _template_text():
-    spec = importlib.util.find_spec("lagcomp")
-    package_dir = spec.submodule_search_locations[0]
-    with open(f"{package_dir}/codegen/templates/drivers.py", encoding="utf-8") as fh:
-        return fh.read()
-
-
-@pytest.fixture(scope="module")
-def mod(tmp_path_factory):
-    """The RK4 template appended to a module that imports the test kernels."""
-    name = f"lagcomp_test_drivers_{uuid.uuid4().hex}"
-    path = tmp_path_factory.mktemp("drivers") / f"{name}.py"
-    header = "from tests.driver_kernels import constraint_residual, event_values, project, rhs\n\n"
-    path.write_text(header + _template_text(), encoding="utf-8")
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module  # numba's cache locator needs the module registered
-    try:
-        spec.loader.exec_module(module)
-        yield module
-    finally:
-        sys.modules.pop(name, None)
 
 
 OSCILLATOR, KEPLER, NAN_AFTER, SINGULAR_AFTER, BLOWUP, REST = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0
@@ -142,20 +113,6 @@ def run_adaptive(method, kind, tol, *, atol=None, t_end=None, p_extra=(), t_eval
     return _collect(call, y, clock, counters, cap, max_calls)
 
 
-def run_rk4(mod, kind, dt, t_end, *, p_extra=(), save_every=1, cap=100_000, max_calls=1):
-    y = np.array(Y0[KEPLER if kind == KEPLER else OSCILLATOR], dtype=float)
-    n_steps = int(np.ceil(t_end / dt - 1e-9))
-    clock = np.zeros(2)
-    counters = np.zeros(6, dtype=np.int64)
-    p = np.array([kind, *p_extra], dtype=float)
-
-    def call(ts, ys):
-        return mod.rk4_run(y, clock, counters, p, 0, np.zeros(1), 0.0, dt, n_steps, NO_PAUSE, t_end, save_every,
-                           ts, ys)
-
-    return _collect(call, y, clock, counters, cap, max_calls)
-
-
 # -- accuracy against scipy and closed forms -----------------------------------
 
 #: scipy's pairs at two tolerances (BS3, of order 3, at 1e-9 only on the oscillator: tens of thousands of scipy steps)
@@ -224,27 +181,6 @@ def test_max_step_is_respected(method):
     assert np.diff(np.concatenate([[0.0], run.ts])).max() <= 0.05 * (1 + 1e-12)
 
 
-# -- RK4 -----------------------------------------------------------------------
-
-def test_rk4_convergence_order(mod):
-    errors = []
-    for dt in (0.1, 0.05, 0.025):
-        run = run_rk4(mod, OSCILLATOR, dt, 2.0)
-        assert run.status == 0 and run.clock[0] == 2.0 and run.ts[-1] == 2.0
-        assert run.counters[0] == 4 * run.counters[1] == 4 * round(2.0 / dt)
-        errors.append(np.abs(run.y - exact(OSCILLATOR, 2.0)).max())
-    ratios = [errors[0] / errors[1], errors[1] / errors[2]]
-    assert all(15.0 <= r <= 17.0 for r in ratios), ratios
-
-
-def test_rk4_grid_times_and_last_step(mod):
-    """Times are t0 + k dt (no accumulated drift); the last step is clipped."""
-    run = run_rk4(mod, OSCILLATOR, 0.1, 1.05)
-    assert run.status == 0 and run.counters[1] == 11
-    np.testing.assert_array_equal(run.ts[:-1], 0.1 * np.arange(1, 11))
-    assert run.ts[-1] == 1.05
-
-
 # -- chunked output buffers ----------------------------------------------------
 
 def _assert_same_trajectory(chunked, whole):
@@ -286,14 +222,6 @@ def test_chunked_with_more_points_per_step_than_buffer(method):
     assert chunked.counters[1] == whole.counters[1]
 
 
-def test_rk4_chunked_equals_single_call(mod):
-    for save_every in (1, 4):
-        whole = run_rk4(mod, KEPLER, 0.01, 7.0, save_every=save_every)
-        chunked = run_rk4(mod, KEPLER, 0.01, 7.0, save_every=save_every, cap=7, max_calls=10_000)
-        _assert_same_trajectory(chunked, whole)
-        np.testing.assert_array_equal(chunked.counters, whole.counters)  # no FSAL: no extra f
-
-
 # -- save_every decimation ---------------------------------------------------------
 
 def _expected_decimation(all_steps, k):
@@ -303,32 +231,18 @@ def _expected_decimation(all_steps, k):
     return idx
 
 
-@pytest.mark.parametrize("method", ["RK4", *EMBEDDED])
-def test_save_every(mod, method):
-    if method == "RK4":
-        every = run_rk4(mod, OSCILLATOR, 0.1, 3.05)
-    else:
-        every = run_adaptive(method, KEPLER, 1e-7)
+@pytest.mark.parametrize("method", EMBEDDED)
+def test_save_every(method):
+    every = run_adaptive(method, KEPLER, 1e-7)
     # A k that does not divide the step count, so the final step is an extra row.
     k = next(k for k in (4, 5, 7, 11) if len(every.ts) % k != 0)
-    if method == "RK4":
-        decimated = run_rk4(mod, OSCILLATOR, 0.1, 3.05, save_every=k)
-    else:
-        decimated = run_adaptive(method, KEPLER, 1e-7, save_every=k)
+    decimated = run_adaptive(method, KEPLER, 1e-7, save_every=k)
     idx = _expected_decimation(every, k)
     np.testing.assert_array_equal(decimated.ts, every.ts[idx])
     np.testing.assert_array_equal(decimated.ys, every.ys[idx])
 
 
 # -- failures ---------------------------------------------------------------------
-
-def test_rk4_nan_gives_status_minus_1(mod):
-    run = run_rk4(mod, NAN_AFTER, 0.1, 5.0, p_extra=(1.0,))
-    assert run.status == -1
-    assert 0.9 <= run.clock[0] <= 1.0 and run.counters[1] == 10
-    assert np.all(np.isfinite(run.y)) and np.all(np.isfinite(run.ys))
-    np.testing.assert_allclose(run.y, exact(OSCILLATOR, run.clock[0]), atol=1e-5)
-
 
 @pytest.mark.parametrize("method", EMBEDDED)
 def test_adaptive_nan_stops_just_before_blowup(method):
@@ -340,13 +254,9 @@ def test_adaptive_nan_stops_just_before_blowup(method):
     np.testing.assert_allclose(run.y, exact(OSCILLATOR, run.clock[0]), atol=1e-5)
 
 
-@pytest.mark.parametrize("method", ["RK4", *EMBEDDED])
-def test_rhs_failure_gives_status_minus_2(mod, method):
-    if method == "RK4":
-        run = run_rk4(mod, SINGULAR_AFTER, 0.1, 5.0, p_extra=(0.5,))
-        assert run.counters[1] == 5
-    else:
-        run = run_adaptive(method, SINGULAR_AFTER, 1e-6, p_extra=(0.5,))
+@pytest.mark.parametrize("method", EMBEDDED)
+def test_rhs_failure_gives_status_minus_2(method):
+    run = run_adaptive(method, SINGULAR_AFTER, 1e-6, p_extra=(0.5,))
     assert run.status == -2
     assert run.clock[0] <= 0.5
     if len(run.ts):
@@ -376,12 +286,11 @@ def test_max_steps_then_resume(method):
 def test_drivers_use_the_numpy_error_model_everywhere():
     """Under numba's default error model a division by zero raises
     ZeroDivisionError out of the compiled loop; the drivers rely on inf/NaN."""
-    from lagcomp.integrate.drivers import embedded, events, sweep_rows
+    from lagcomp.integrate.drivers import embedded, events, fixed_step, fixed_sweeps, sweep_rows
 
-    decorators = re.findall(r"^@njit\((.*)\)$", _template_text(), flags=re.M)
-    assert decorators and all('error_model="numpy"' in d for d in decorators)
     library = [embedded.embedded_run, embedded.sweep_embedded, sweep_rows.fold_rows, events.dense_state,
-               events.event_crossings, events.event_root, events.record_events]
+               events.event_crossings, events.event_root, events.record_events, fixed_step.runge_kutta_run,
+               fixed_step.composition_run, fixed_sweeps.runge_kutta_sweep, fixed_sweeps.composition_sweep]
     assert all(f.targetoptions.get("error_model") == "numpy" for f in library)
 
 
@@ -389,21 +298,14 @@ def blowup_exact(t):
     return 1.0 - np.log(1.0 - t)
 
 
-@pytest.mark.parametrize("method", ["RK4", *EMBEDDED])
-def test_division_by_zero_in_rhs_stops_the_run_before_the_singularity(mod, method):
+@pytest.mark.parametrize("method", EMBEDDED)
+def test_division_by_zero_in_rhs_stops_the_run_before_the_singularity(method):
     """f = 1 / (1 - t) is inf at t = 1 (and finite but of the wrong sign past it)."""
-    if method == "RK4":
-        run = run_rk4(mod, BLOWUP, 0.25, 2.0)
-        # The step 0.75 -> 1 evaluates f(1) = inf in its last stage.
-        assert run.status == -1 and run.counters[1] == 3 and run.clock[0] == 0.75
-        assert run.counters[0] == 16
-        rel = 1e-3
-    else:
-        run = run_adaptive(method, BLOWUP, 1e-8, t_end=2.0)
-        assert run.status in (-1, -3)
-        assert 1.0 - 1e-9 < run.clock[0] < 1.0
-        assert run.ts[-1] == run.clock[0]
-        rel = 1e-4
+    run = run_adaptive(method, BLOWUP, 1e-8, t_end=2.0)
+    assert run.status in (-1, -3)
+    assert 1.0 - 1e-9 < run.clock[0] < 1.0
+    assert run.ts[-1] == run.clock[0]
+    rel = 1e-4
     assert np.all(np.isfinite(run.y)) and np.all(np.isfinite(run.ys))
     np.testing.assert_allclose(run.y, [blowup_exact(run.clock[0]), 0.0], rtol=rel)
     np.testing.assert_allclose(run.ys[:, 0], blowup_exact(run.ts), rtol=rel)
@@ -510,22 +412,6 @@ def test_pausing_and_small_event_buffers_change_nothing(method):
     np.testing.assert_array_equal(whole[2], cut[2])
     assert [(e[0], e[2]) for e in whole[3]] == [(e[0], e[2]) for e in cut[3]]
     np.testing.assert_array_equal(whole[4][1:5], cut[4][1:5])
-
-
-def test_rk4_pauses_and_resumes_identically(mod):
-    """rk4_run with pause_at: the same rows as one call."""
-    whole = run_rk4(mod, OSCILLATOR, 0.01, 3.0)
-    y, clock, counters = Y0[OSCILLATOR].copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
-    rows = []
-    while True:
-        ts, ys = np.empty(1000), np.empty((1000, 2))
-        status, n = mod.rk4_run(y, clock, counters, np.array([OSCILLATOR]), 0, np.zeros(1), 0.0, 0.01, 300,
-                                counters[1] + 7, 3.0, 1, ts, ys)
-        rows.append(ys[:n].copy())
-        if status != Status.PAUSED:
-            break
-    assert status == 0
-    np.testing.assert_array_equal(np.concatenate(rows), whole.ys)
 
 
 @pytest.mark.parametrize("method", EMBEDDED)

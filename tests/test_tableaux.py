@@ -98,7 +98,9 @@ def test_driver_arguments():
     from lagcomp.integrate.drivers.events import DENSE_CONTD8, DENSE_POWERS
     from lagcomp.integrate.tableaux import ERROR_DOP853, ERROR_RMS
 
-    assert driver_arguments(RK4) == ()
+    A, C, _, _ = driver_arguments(RK4)
+    np.testing.assert_array_equal(A, RK4.A)
+    np.testing.assert_array_equal(C, RK4.C)
     for tab in (DOPRI5, TSIT5, BS3, DOP853):
         args = driver_arguments(tab)
         A, B, C, errors, norm, exponent, kind, dense, extra_A, extra_C = args
@@ -135,6 +137,15 @@ def test_tsit5_dense_output_starts_with_f_and_ends_at_y_new():
     np.testing.assert_allclose(TSIT5.P.sum(axis=1), np.append(TSIT5.B, 0.0), rtol=0, atol=1e-14)
     slope_at_1 = TSIT5.P @ np.arange(1, TSIT5.P.shape[1] + 1)
     np.testing.assert_allclose(slope_at_1, np.eye(s + 1)[s], rtol=0, atol=1e-12)
+
+
+def test_fixed_step_weights_are_integers_over_their_common_denominator():
+    """RK4's B = (1/6, 1/3, 1/3, 1/6) reaches the driver as 1 2 2 1 over 6, which it multiplies exactly."""
+    *_, weights, denominator = driver_arguments(RK4)
+    np.testing.assert_array_equal(weights, [1.0, 2.0, 2.0, 1.0])
+    assert denominator == 6.0
+    np.testing.assert_array_equal(weights / denominator, RK4.B)
+    assert weights.flags.c_contiguous and weights.flags.writeable
 
 
 def _rk4_kwargs(**changes):

@@ -35,6 +35,10 @@ RTOL_MIN = 100 * EPS
 #: Iterations (fixed-point sweeps or Newton steps) allowed per step before the run stops (status -5).
 MAX_STAGE_ITERATIONS = 100
 
+#: The library modules of the explicit fixed-step drivers and of their sweep loops.
+_FIXED_STEP = "lagcomp.integrate.drivers.fixed_step"
+_FIXED_SWEEPS = "lagcomp.integrate.drivers.fixed_sweeps"
+
 
 @dataclass(frozen=True)
 class Method:
@@ -109,18 +113,22 @@ def _embedded(name: str, tableau: Tableau, summary: str) -> Method:
 METHODS = {
     m.name: m
     for m in (
-        Method("rk4", 4, False, "rk4_run", tableaux.RK4, "classic Runge-Kutta, fixed step `dt`"),
+        Method("rk4", 4, False, f"{_FIXED_STEP}:runge_kutta_run", tableaux.RK4, "classic Runge-Kutta, fixed step `dt`",
+               kernels=("rhs", "project", "constraint_residual"), sweep=f"{_FIXED_SWEEPS}:runge_kutta_sweep"),
         _embedded("dopri5", tableaux.DOPRI5, "Dormand-Prince 5(4), adaptive, quartic dense output (scipy's RK45)"),
         _embedded("dop853", tableaux.DOP853,
                   "Dormand-Prince 8(5,3), adaptive, 7th-order dense output (Hairer's DOP853)"),
         _embedded("tsit5", tableaux.TSIT5, "Tsitouras 5(4), adaptive, quartic dense output"),
         _embedded("bs3", tableaux.BS3, "Bogacki-Shampine 3(2), adaptive, cubic dense output (scipy's RK23)"),
-        Method("verlet", 2, False, "composition_run", compositions.VERLET,
-               "Störmer-Verlet, symplectic, fixed step, separable systems", separable_only=True),
-        Method("yoshida4", 4, False, "composition_run", compositions.YOSHIDA4,
-               "Yoshida's triple-jump composition of Verlet, symplectic, order 4", separable_only=True),
-        Method("yoshida6", 6, False, "composition_run", compositions.YOSHIDA6,
-               "Yoshida's 7-stage composition of Verlet, symplectic, order 6", separable_only=True),
+        Method("verlet", 2, False, f"{_FIXED_STEP}:composition_run", compositions.VERLET,
+               "Störmer-Verlet, symplectic, fixed step, separable systems", separable_only=True,
+               kernels=("rhs",), sweep=f"{_FIXED_SWEEPS}:composition_sweep"),
+        Method("yoshida4", 4, False, f"{_FIXED_STEP}:composition_run", compositions.YOSHIDA4,
+               "Yoshida's triple-jump composition of Verlet, symplectic, order 4", separable_only=True,
+               kernels=("rhs",), sweep=f"{_FIXED_SWEEPS}:composition_sweep"),
+        Method("yoshida6", 6, False, f"{_FIXED_STEP}:composition_run", compositions.YOSHIDA6,
+               "Yoshida's 7-stage composition of Verlet, symplectic, order 6", separable_only=True,
+               kernels=("rhs",), sweep=f"{_FIXED_SWEEPS}:composition_sweep"),
         Method("gauss1", 2, False, "collocation_run", collocation.GAUSS1,
                "implicit midpoint rule on (q, p), symplectic for any Lagrangian", unconstrained_only=True),
         Method("gauss2", 4, False, "collocation_run", collocation.GAUSS2,

@@ -433,14 +433,15 @@ def _run_chunk(kernels, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str,
     out = _allocate(Y0.shape[0], task.layout)
     loop = task.loop(kernels)
     common = (out["final"], out["t_final"], out["status"], out["counts"], out["dense"], out["energy"])
+    # a library loop takes the coefficient arrays one by one, a module's sweep_<driver> as one tuple
+    coefficients = task.coefficients if task.sweep else (task.coefficients,)
     if task.driver in BATCHED.values():
         loop(Y0, P, *task.fixed, *common, *task.coefficients)
     elif task.adaptive:
-        coefficients = task.coefficients if task.sweep else (task.coefficients,)  # library loops take them flat
         loop(Y0, P, task.projecting, *task.fixed, *common, out["event_count"], out["event_t"], out["event_y"],
              *coefficients)
     else:
-        loop(Y0, P, task.projecting, *task.fixed, *common, task.coefficients)
+        loop(Y0, P, task.projecting, *task.fixed, *common, *coefficients)
     return out
 
 
@@ -463,7 +464,7 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
     n_traj = Y0.shape[0]
     threads = (os.cpu_count() or 1) if workers is None else count(workers, "workers")
     watched = getattr(kernels, task.kernels[0]) if task.sweep else getattr(kernels, f"sweep_{task.driver}", None)
-    first = numba_stage(watched, f"the {task.driver} sweep loop",
+    first = numba_stage(watched, f"the {task.driver.rpartition(':')[2]} sweep loop",
                         "preparing the sweep", progress)
     done = np.zeros(n_traj, dtype=bool)
     chunk = (FIRST_BATCHED_CHUNK_PER_THREAD if task.driver in BATCHED.values() else FIRST_CHUNK_PER_THREAD) * threads

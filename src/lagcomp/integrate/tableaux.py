@@ -25,14 +25,16 @@ scipy's step sequence; so are BS3's (``scipy.integrate.RK23``).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Optional
 
 import numpy as np
 
 from lagcomp.integrate import dormand_prince as dp
 
-__all__ = ["Tableau", "RK4", "DOPRI5", "DOP853", "TSIT5", "BS3", "driver_arguments"]
+__all__ = ["Tableau", "RK4", "DOPRI5", "DOP853", "TSIT5", "BS3", "driver_arguments", "over_common_denominator"]
 
 #: Absolute tolerance for the consistency checks.  The published rational
 #: coefficients are stored as rounded floats, so sums are exact only to a few
@@ -279,8 +281,9 @@ def driver_arguments(tableau: Tableau) -> tuple:
         (``extra_A`` (0, s + 1), ``extra_C`` (0,)), or for DOP853 DENSE_CONTD8 with D and its extra
         stages ``A_EXTRA``, ``C_EXTRA``;
 
-    * fixed-step methods without error estimate (RK4): ``()``, since ``rk4_run`` has its
-      coefficients built in.
+    * a fixed-step method without error estimate (RK4), for
+      `lagcomp.integrate.drivers.fixed_step.runge_kutta_run`: ``(A, C, weights, denominator)``,
+      the weights B as `over_common_denominator` writes them.
 
     The arrays are writable C-contiguous float64 copies (the drivers' signatures name that layout).
     Raises ``ValueError`` for a tableau no driver can use.
@@ -291,7 +294,7 @@ def driver_arguments(tableau: Tableau) -> tuple:
         return np.ascontiguousarray(array, dtype=np.float64).copy()
 
     if tableau.E3 is None and tableau.E is None:
-        return ()
+        return (copy(tableau.A), copy(tableau.C), *over_common_denominator(tableau.B))
     if tableau.E is not None:
         if tableau.P is None:
             raise ValueError(f"{tableau.name}: the embedded driver needs the dense-output matrix P")
@@ -304,3 +307,26 @@ def driver_arguments(tableau: Tableau) -> tuple:
         dense, stages = (DENSE_CONTD8, tableau.D), (tableau.A_EXTRA, tableau.C_EXTRA)
     return (copy(tableau.A), copy(tableau.B), copy(tableau.C), copy(np.vstack(errors)), norm,
             -1.0 / (tableau.error_order + 1), dense[0], copy(dense[1]), copy(stages[0]), copy(stages[1]))
+
+
+#: The largest denominator `over_common_denominator` looks for in a method's weights.
+DENOMINATOR_MAX = 1000
+
+
+def over_common_denominator(weights: np.ndarray) -> tuple[np.ndarray, float]:
+    """``(numerators, d)`` with ``weights = numerators / d``: integers over their least common denominator.
+
+    A fixed-step driver forms the new state as ``y + (h / d) * sum_j numerators[j] K[j]``.  When
+    every weight is a fraction with a small denominator (the float nearest it, as the tableau
+    stores it), the numerators are small integers, which multiply the stages exactly: RK4's
+    (1/6, 1/3, 1/3, 1/6) become ``[1, 2, 2, 1]`` over 6, and the driver rounds like the textbook
+    formula ``y + h/6 (K1 + 2 K2 + 2 K3 + K4)`` (the golden RK4 trajectories in tests/data fix that
+    rounding).  Other weights are returned as they are, over ``d = 1``.  The numerators are a
+    writable float64 array, ``d`` a float.
+    """
+    weights = np.asarray(weights, dtype=np.float64)
+    fractions = [Fraction(float(w)).limit_denominator(DENOMINATOR_MAX) for w in weights]
+    if any(float(f) != w for f, w in zip(fractions, weights)):
+        return weights.copy(), 1.0
+    d = math.lcm(*(f.denominator for f in fractions))
+    return np.array([float(f * d) for f in fractions]), float(d)
