@@ -106,9 +106,8 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y
         if k >= pause_at:
             return Status.PAUSED, n_saved
         last = k == n_steps - 1
-        if last or counters[4] + 1 >= save_every:
-            if n_saved >= cap:
-                return Status.BUFFER_FULL, n_saved
+        if (last or counters[4] + 1 >= save_every) and n_saved >= cap:
+            return Status.BUFFER_FULL, n_saved
         t_a = min(t0 + k * dt, t_end)
         if last:
             t_b = t_end

@@ -179,9 +179,9 @@ def lyapunov_run(velocities, momentum_rate, canonical_partials, x, W, steps, sum
                 W[i, c] += dt / _DENOMINATOR * (_WEIGHTS[0] * K1[i, c] + _WEIGHTS[1] * K2[i, c]
                                                 + _WEIGHTS[2] * K3[i, c] + _WEIGHTS[3] * K4[i, c])
         steps[0] += 1
-        if (step + 1) % renorm_every == 0 or step == n_steps - 1:
-            if _orthonormalize(W, sums) != Status.DONE:
-                return Status.NONFINITE
+        renormalize = (step + 1) % renorm_every == 0 or step == n_steps - 1
+        if renormalize and _orthonormalize(W, sums) != Status.DONE:
+            return Status.NONFINITE
     return Status.DONE
 
 
