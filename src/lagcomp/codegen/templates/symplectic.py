@@ -1,4 +1,4 @@
-"""Symplectic drivers: a *template*, appended verbatim to every generated module after ``drivers.py``.
+"""Symplectic driver: a *template*, appended verbatim to every generated module after ``drivers.py``.
 
 Like ``drivers.py`` (read its docstring first: the calling convention, the
 status codes, the chunked and resumable state in ``y``, ``clock`` and
@@ -6,18 +6,14 @@ status codes, the chunked and resumable state in ``y``, ``clock`` and
 text is not imported as part of lagcomp; it uses the module's kernels and
 the status constants of ``drivers.py`` as globals.
 
-* ``composition_run``: symmetric compositions of Störmer-Verlet (explicit,
-  separable systems only);
-* ``collocation_run``: implicit Gauss-Legendre collocation on the canonical
-  equations in (q, p), for any unconstrained Lagrangian; its stage equations
-  are solved by fixed-point iteration or by simplified Newton with
-  ``canonical_jacobian`` (``templates/hamiltonian.py``).
-
-Both are fixed-step: step k goes from ``t0 + k dt`` to ``t0 + (k+1) dt``, the
-last step landing exactly on ``t_end``, as in ``rk4_run``.
+``composition_run``: symmetric compositions of Störmer-Verlet (explicit,
+separable systems only); fixed-step: step k goes from ``t0 + k dt`` to
+``t0 + (k+1) dt``, the last step landing exactly on ``t_end``, as in
+``rk4_run``.  (The implicit Gauss-Legendre methods are library code:
+`lagcomp.integrate.drivers.collocation`.)
 """
 
-# ruff: noqa: F821  (rhs, velocities, momenta, _ODE_* ... are defined by the module this text is appended to)
+# ruff: noqa: F821  (rhs and _ODE_* are defined by the module this text is appended to)
 
 import numpy as np
 from numba import njit
@@ -111,203 +107,5 @@ def composition_run(y, clock, counters, p, projecting, residual_max, t0, dt,
             ts[n_saved] = t_b
             for i in range(n2):
                 ys[n_saved, i] = y[i]
-            n_saved += 1
-            counters[4] = 0
-
-
-# ---------------------------------------------------------------------------
-# Implicit Gauss-Legendre collocation on the canonical equations
-# ---------------------------------------------------------------------------
-
-@njit(cache=True, error_model="numpy")
-def collocation_run(y, clock, counters, p, projecting, residual_max, t0, dt,
-                    n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton):
-    """Implicit Runge-Kutta (Gauss-Legendre) on x = (q, p); fixed step ``dt``; resumable.
-
-    The canonical equations are evaluated without a symbolic inverse:
-    q̇ = ``velocities``(t, x) solves M q̇ = p − b, and ṗ = ``momentum_rate``
-    at (q, q̇) is ∂L/∂q + Q = −∂H/∂q + Q.  Saved rows and ``y`` stay in
-    (q, q̇); x is rebuilt from ``momenta`` at the start of each call.  The
-    stage equations K_i = f(t + c_i h, x + h Σ_j a_ij K_j), i = 1..s, are
-    solved from the previous step's stages extrapolated by E (zero on a
-    call's first step), by one of two iterations, chosen by ``newton``:
-
-    * fixed point (``newton`` None): K_i ← f(t + c_i h, x + h Σ_j a_ij K_j),
-      updating each stage as soon as it is computed; s evaluations of f per
-      sweep, and it contracts only while h ‖∂f/∂x‖ ‖A‖ < 1 (roughly);
-    * simplified Newton (``newton`` True): with J = ``canonical_jacobian`` at
-      the step's start (t, x), solve (I − h A ⊗ J) ΔK = F(K) − K, F_i(K) the
-      right-hand side above, and K ← K + ΔK; the (2ns)×(2ns) iteration
-      matrix is factored once per step (``_lu_factor``).  It converges for
-      steps far beyond the fixed point's reach (stiff or fast motions), at
-      the price of one Jacobian and one factorization per step.
-
-    None is a compile-time constant to numba, which drops the Newton branches
-    from the fixed-point specialisation: it compiles as fast as before
-    Newton was added (1.8 s instead of 3.0 s for the double pendulum).
-
-    Both stop when the change of h·K reaches rounding level (below 4e-16
-    relative to the larger of the state and h·K, or no longer decreasing
-    once below 1e-14); after ``max_iter`` sweeps, or when the iterates
-    become non-finite or the iteration matrix singular, the run stops with
-    -5 (the step is too large for the iteration to converge).  Explicit time
-    dependence is evaluated at the stage times t + c_i h, which is the method
-    applied to the autonomous system extended by t' = 1 (HLW, sec. VI.4).
-    Step times, saving and chunking follow ``rk4_run``.
-    """
-    n2 = y.shape[0]
-    n = n2 // 2
-    s = B.shape[0]
-    cap = ts.shape[0]
-    x = np.empty(n2)
-    xs = np.empty(n2)
-    y_stage = np.empty(n2)
-    qdot = np.empty(n)
-    pdot = np.empty(n)
-    K = np.empty((s, n2))
-    K_previous = np.zeros((s, n2))
-    J = np.empty((n2, n2))
-    newton_matrix = np.empty((s * n2, s * n2))
-    pivots = np.empty(s * n2, dtype=np.int64)
-    delta = np.empty(s * n2)
-    extrapolate = False
-    compensation = np.zeros(n2)
-    new_compensation = np.zeros(n2)
-    n_saved = 0
-    momenta(clock[0], y, p, pdot)
-    for c in range(n):
-        x[c] = y[c]
-        x[n + c] = pdot[c]
-    while True:
-        k = counters[1]
-        if k >= n_steps:
-            return _ODE_DONE, n_saved
-        if k >= pause_at:
-            return _ODE_PAUSED, n_saved
-        last = k == n_steps - 1
-        if last or counters[4] + 1 >= save_every:
-            if n_saved >= cap:
-                return _ODE_BUFFER_FULL, n_saved
-        t_a = min(t0 + k * dt, t_end)
-        if last:
-            t_b = t_end
-        else:
-            t_b = min(t0 + (k + 1) * dt, t_end)
-        h = t_b - t_a
-
-        scale = 1.0
-        for c in range(n2):
-            scale = max(scale, abs(x[c]))
-        for i in range(s):
-            for c in range(n2):
-                guess = 0.0
-                if extrapolate and not last:
-                    for j in range(s):
-                        guess += E[i, j] * K_previous[j, c]
-                K[i, c] = guess
-        converged = False
-        status = 0
-        sweeps = max_iter
-        if newton is not None:
-            status = canonical_jacobian(t_a, x, p, J)
-            for i in range(s):
-                for j in range(s):
-                    for a in range(n2):
-                        for b in range(n2):
-                            unit = 1.0 if i == j and a == b else 0.0
-                            newton_matrix[i * n2 + a, j * n2 + b] = unit - h * A[i, j] * J[a, b]
-            if status != 0 or _lu_factor(newton_matrix, pivots) != 0:
-                sweeps = 0  # M singular here (status > 0), or I − h A ⊗ J: not converged
-        previous = np.inf
-        for sweep in range(sweeps):
-            change = 0.0
-            size = 0.0
-            for i in range(s):
-                for c in range(n2):
-                    acc = x[c]
-                    for j in range(s):
-                        acc += h * A[i, j] * K[j, c]
-                    xs[c] = acc
-                t_stage = t_a + C[i] * h
-                status = velocities(t_stage, xs, p, qdot)
-                if status == 0:
-                    for c in range(n):
-                        y_stage[c] = xs[c]
-                        y_stage[n + c] = qdot[c]
-                    momentum_rate(t_stage, y_stage, p, pdot)
-                counters[0] += 1
-                if status != 0:
-                    break
-                for c in range(n):
-                    if newton is not None:
-                        delta[i * n2 + c] = qdot[c] - K[i, c]
-                        delta[i * n2 + n + c] = pdot[c] - K[i, n + c]
-                    else:  # np.maximum keeps a NaN, where max would drop it
-                        change = np.maximum(change, abs(h * (qdot[c] - K[i, c])))
-                        change = np.maximum(change, abs(h * (pdot[c] - K[i, n + c])))
-                        size = max(size, abs(qdot[c]), abs(pdot[c]))
-                        K[i, c] = qdot[c]
-                        K[i, n + c] = pdot[c]
-            if status != 0:
-                break
-            if newton is not None:
-                _lu_substitute(newton_matrix, pivots, delta)
-                for i in range(s):
-                    for c in range(n2):
-                        change = np.maximum(change, abs(h * delta[i * n2 + c]))
-                        K[i, c] += delta[i * n2 + c]
-                        size = max(size, abs(K[i, c]))
-            # rounding level: of the state, or of the stage increments h K when
-            # they are larger (stiff or fast motion: large terms that cancel)
-            change /= max(scale, h * size)
-            if not np.isfinite(change):
-                break  # the iteration diverged: not converged
-            if change <= 4e-16 or (change >= previous and change < 1e-14):
-                converged = True
-                break
-            previous = change
-        if status > 0:
-            return _ODE_RHS_FAILED, n_saved
-        if not converged:
-            return _ODE_NOT_CONVERGED, n_saved
-
-        # x ← x + h Σ b_i K_i with compensated (Kahan) summation: the
-        # increment's rounding is carried to the next step instead of lost,
-        # which removes the systematic energy drift of long runs.
-        for c in range(n2):
-            increment = 0.0
-            for i in range(s):
-                increment += h * B[i] * K[i, c]
-            increment -= compensation[c]
-            acc = x[c] + increment
-            new_compensation[c] = (acc - x[c]) - increment
-            xs[c] = acc
-            if not np.isfinite(acc):
-                status = -1
-        if status == 0:
-            status = velocities(t_b, xs, p, qdot)
-            if status > 0:
-                return _ODE_RHS_FAILED, n_saved
-        if status != 0:
-            return _ODE_NONFINITE, n_saved
-
-        for c in range(n):
-            x[c] = xs[c]
-            x[n + c] = xs[n + c]
-            y[c] = xs[c]
-            y[n + c] = qdot[c]
-        for c in range(n2):
-            compensation[c] = new_compensation[c]
-        for i in range(s):
-            for c in range(n2):
-                K_previous[i, c] = K[i, c]
-        extrapolate = True
-        clock[0] = t_b
-        counters[1] = k + 1
-        counters[4] += 1
-        if last or counters[4] >= save_every:
-            ts[n_saved] = t_b
-            for c in range(n2):
-                ys[n_saved, c] = y[c]
             n_saved += 1
             counters[4] = 0
