@@ -40,6 +40,8 @@ _KERNEL_TYPES = (VELOCITIES, MOMENTA, MOMENTUM_RATE, CANONICAL_PARTIALS)
 #: the iteration limit and whether the stage equations are solved by simplified Newton.
 _COEFFICIENTS = (MATRIX, VECTOR, VECTOR, MATRIX, INT, types.boolean)
 
+#: kernels, y, clock, counters, p, projecting, residual_max, t0, dt, n_steps, pause_at, t_end, save_every,
+#: ts, ys, then the coefficients: the fixed-step driver protocol (as the RK4 driver's).
 _RUN = OUTCOME(*_KERNEL_TYPES, VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, INT, INT, FLOAT, INT,
                VECTOR, MATRIX, *_COEFFICIENTS)
 
