@@ -35,7 +35,11 @@ import math
 import numpy as np
 from numba import njit, types
 
-from lagcomp.integrate.drivers.canonical import canonical_field, canonical_jacobian
+from lagcomp.integrate.drivers.canonical import (
+    canonical_field,
+    field_at_velocities,
+    jacobian_at_velocities,
+)
 from lagcomp.integrate.drivers.kernel_types import (
     CANONICAL_PARTIALS,
     FLOAT,
@@ -84,17 +88,24 @@ def _rk4_state(velocities, momentum_rate, t, x, p, dt, y, k1, k2, k3, k4, xt):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _tangent(velocities, canonical_partials, t, x, p, W, J, out):
-    """out = J(t, x) W, shape (2n, k); J (2n, 2n) work space. Returns a `Status`."""
-    if canonical_jacobian(velocities, canonical_partials, t, x, p, J):
+def _stage(velocities, momentum_rate, canonical_partials, t, x, p, W, J, y, v, k, K):
+    """One RK4 stage of the state and the tangent vectors: k = f(t, x) (2n,) and K = J(t, x) W (2n, k).
+
+    One solve for the velocities v (n,) serves both; J (2n, 2n) and y (2n,) are work space.
+    Returns a `Status`.
+    """
+    if velocities(t, x, p, v):
         return Status.RHS_FAILED
-    m, k = W.shape
+    if jacobian_at_velocities(canonical_partials, t, x, v, p, J):
+        return Status.RHS_FAILED
+    m, columns = W.shape
     for i in range(m):
-        for c in range(k):
+        for c in range(columns):
             s = 0.0
             for j in range(m):
                 s += J[i, j] * W[j, c]
-            out[i, c] = s
+            K[i, c] = s
+    field_at_velocities(momentum_rate, t, x, v, p, y, k)
     return Status.DONE
 
 
@@ -134,7 +145,7 @@ def lyapunov_run(velocities, momentum_rate, canonical_partials, x, W, steps, sum
     orthonormalization, the last one at the end of the call.
     """
     m, k = W.shape
-    y, xt = np.empty(m), np.empty(m)
+    y, xt, v = np.empty(m), np.empty(m), np.empty(m // 2)
     k1, k2, k3, k4 = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     J = np.empty((m, m))
     Wt = np.empty((m, k))
@@ -142,33 +153,29 @@ def lyapunov_run(velocities, momentum_rate, canonical_partials, x, W, steps, sum
     for step in range(n_steps):
         t = t0 + steps[0] * dt
         # stages of the variational equations, on the stages of the state
-        if _tangent(velocities, canonical_partials, t, x, p, W, J, K1) != Status.DONE:
-            return Status.RHS_FAILED
-        if canonical_field(velocities, momentum_rate, t, x, p, y, k1):
+        if _stage(velocities, momentum_rate, canonical_partials, t, x, p, W, J, y, v,
+                  k1, K1) != Status.DONE:
             return Status.RHS_FAILED
         for i in range(m):
             xt[i] = x[i] + _A[0] * dt * k1[i]
             for c in range(k):
                 Wt[i, c] = W[i, c] + _A[0] * dt * K1[i, c]
-        if _tangent(velocities, canonical_partials, t + _C[1] * dt, xt, p, Wt, J, K2) != Status.DONE:
-            return Status.RHS_FAILED
-        if canonical_field(velocities, momentum_rate, t + _C[1] * dt, xt, p, y, k2):
+        if _stage(velocities, momentum_rate, canonical_partials, t + _C[1] * dt, xt, p, Wt, J, y, v,
+                  k2, K2) != Status.DONE:
             return Status.RHS_FAILED
         for i in range(m):
             xt[i] = x[i] + _A[1] * dt * k2[i]
             for c in range(k):
                 Wt[i, c] = W[i, c] + _A[1] * dt * K2[i, c]
-        if _tangent(velocities, canonical_partials, t + _C[2] * dt, xt, p, Wt, J, K3) != Status.DONE:
-            return Status.RHS_FAILED
-        if canonical_field(velocities, momentum_rate, t + _C[2] * dt, xt, p, y, k3):
+        if _stage(velocities, momentum_rate, canonical_partials, t + _C[2] * dt, xt, p, Wt, J, y, v,
+                  k3, K3) != Status.DONE:
             return Status.RHS_FAILED
         for i in range(m):
             xt[i] = x[i] + _A[2] * dt * k3[i]
             for c in range(k):
                 Wt[i, c] = W[i, c] + _A[2] * dt * K3[i, c]
-        if _tangent(velocities, canonical_partials, t + _C[3] * dt, xt, p, Wt, J, K4) != Status.DONE:
-            return Status.RHS_FAILED
-        if canonical_field(velocities, momentum_rate, t + _C[3] * dt, xt, p, y, k4):
+        if _stage(velocities, momentum_rate, canonical_partials, t + _C[3] * dt, xt, p, Wt, J, y, v,
+                  k4, K4) != Status.DONE:
             return Status.RHS_FAILED
         for i in range(m):
             x[i] += dt / _DENOMINATOR * (_WEIGHTS[0] * k1[i] + _WEIGHTS[1] * k2[i] + _WEIGHTS[2] * k3[i]
