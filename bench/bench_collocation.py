@@ -7,9 +7,10 @@ initial state and parameters.  For each solver and step, integrates 1e5
 steps (save_every = 1000) and prints the best of 3 warm runs: wall time,
 steps per second, and the evaluations of the canonical equations f per step
 (Newton also evaluates one Jacobian per step); a failed run (status -5)
-counts the steps it took.  Then, in a fresh process with an empty cache, the
-first-call time of ``collocation_run`` for each solver (numba compilation;
-the kernels it calls are compiled beforehand and not counted).
+counts the steps it took.  Then, in a fresh process with an empty model cache, the
+first-call time of the gauss method for each solver: its library driver
+(`lagcomp.integrate.drivers.collocation`) is imported then, from numba's cache once
+compiled (the model's kernels are compiled beforehand and not counted).
 """
 
 from __future__ import annotations
@@ -34,9 +35,9 @@ name, method, solver, cache_dir = sys.argv[1:]
 model = lc.compile(examples.get(name), cache_dir=cache_dir)
 k, n = model.kernels, model.n
 y, p = model.initial_state(), model.parameter_vector()
-out, J = np.empty(n), np.empty((2 * n, 2 * n))
+out = np.empty(n)
 k.velocities(0.0, y, p, out), k.momenta(0.0, y, p, out), k.momentum_rate(0.0, y, p, out)
-k.canonical_jacobian(0.0, y, p, J)
+k.canonical_partials(0.0, y, p, np.empty((4, n, n)))
 k.observables(np.zeros(1), y[None, :], p, np.empty(1), np.empty(1), np.empty((1, n)))
 start = time.perf_counter()
 model.simulate((0, 0.01), method=method, dt=0.01, implicit_solver=solver)
@@ -81,7 +82,7 @@ def main(name: str = "double_pendulum", method: str = "gauss2", *rest: str) -> N
                 wall, sol = speed(model, method, solver, dt, settings)
                 steps = max(sol.nsteps, 1)
                 print(f"| {solver} | {dt} | {sol.status} | {wall:.3f} | {steps / wall:,.0f} | {sol.nfev / steps:.2f} |")
-    print("\n| solver | collocation_run first call s |\n|---|---|")
+    print("\n| solver | first gauss run s |\n|---|---|")
     for solver in IMPLICIT_SOLVERS:
         print(f"| {solver} | {compile_time(name, method, solver):.2f} |")
 

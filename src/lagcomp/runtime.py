@@ -473,12 +473,15 @@ class Model:
         The Legendre transform of L: the energy function at q̇ solved from
         p = M(q, t) q̇ + b(q, t).  Raises SingularMassMatrixError where M is singular.
         """
+        from lagcomp.integrate.drivers import canonical
+
         x = self._canonical_input(x, "hamiltonian")
         p = self.parameter_vector(params)
-        status = self.kernels.velocities(float(t), x, p, np.empty(self.n))
+        k = self.kernels
+        status = k.velocities(float(t), x, p, np.empty(self.n))
         if status:
             raise self._singular_mass_matrix(t, x, status)
-        return float(self.kernels.hamiltonian(float(t), x, p))
+        return float(canonical.hamiltonian(k.velocities, k.energy_function, float(t), x, p))
 
     def canonical_jacobian(self, t: float, x, params: dict | None = None) -> np.ndarray:
         """∂f/∂x, shape (2n, 2n), of the canonical equations ẋ = f(t, x) = (q̇, ṗ) at x = (q, p).
@@ -486,9 +489,13 @@ class Model:
         ṗ includes the non-conservative forces (∂L/∂q + Q − ∂D/∂q̇, at fixed q̇);
         rows are (q̇, ṗ), columns (q, p).  Raises SingularMassMatrixError where M is singular.
         """
+        from lagcomp.integrate.drivers import canonical
+
         x = self._canonical_input(x, "canonical_jacobian")
         out = np.empty((2 * self.n, 2 * self.n))
-        status = self.kernels.canonical_jacobian(float(t), x, self.parameter_vector(params), out)
+        k = self.kernels
+        status = canonical.canonical_jacobian(k.velocities, k.canonical_partials, float(t), x,
+                                              self.parameter_vector(params), out)
         if status:
             raise self._singular_mass_matrix(t, x, status)
         return out

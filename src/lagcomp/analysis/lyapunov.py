@@ -19,8 +19,8 @@ For a regular (quasi-periodic) orbit the estimate does not settle at a
 positive value but falls like log(t)/t: tangent vectors grow only linearly
 (shear between neighbouring tori).
 
-Both loops are numba code appended to every unconstrained module
-(`templates/lyapunov.py`, RK4 with a fixed step).  They run in chunks: each
+Both loops are library code taking the model's kernels
+(`lagcomp.integrate.drivers.lyapunov`, RK4 with a fixed step).  They run in chunks: each
 chunk's end gives one row of the running estimate (`Lyapunov.history`),
 moves the progress bar, and is where Ctrl-C stops the run cleanly.
 """
@@ -190,10 +190,13 @@ def lyapunov_exponents(model, t_span, q0=None, qd0=None, params: dict | None = N
     W = np.linalg.qr(np.random.default_rng(SEED).normal(size=(m, k)))[0]
     W = np.ascontiguousarray(W)
     sums = np.zeros(k)
-    run = model.kernels.lyapunov_run
+    from lagcomp.integrate.drivers.lyapunov import lyapunov_run
+
+    kernels = model.kernels
 
     def advance(steps, n_steps):
-        return run(x, W, steps, sums, p, t0, dt, n_steps, renorm_every)
+        return lyapunov_run(kernels.velocities, kernels.momentum_rate, kernels.canonical_partials, x, W, steps, sums,
+                            p, t0, dt, n_steps, renorm_every)
 
     status, times, history = _run(model, advance, t0, t1, dt, transient, renorm_every, samples, progress, sums)
     return _result(model, "variational", status, times, history, x, dt, renorm_every, p, throw)
@@ -221,10 +224,13 @@ def two_trajectory_lyapunov(model, t_span, q0=None, qd0=None, params: dict | Non
     u = np.random.default_rng(SEED).normal(size=x.size)
     xs = x + d0 * u / np.linalg.norm(u)
     sums = np.zeros(1)
-    run = model.kernels.divergence_run
+    from lagcomp.integrate.drivers.lyapunov import divergence_run
+
+    kernels = model.kernels
 
     def advance(steps, n_steps):
-        return run(x, xs, steps, sums, p, t0, dt, n_steps, renorm_every, d0)
+        return divergence_run(kernels.velocities, kernels.momentum_rate, x, xs, steps, sums, p, t0, dt, n_steps,
+                              renorm_every, d0)
 
     status, times, history = _run(model, advance, t0, t1, dt, transient, renorm_every, samples, progress, sums)
     return _result(model, "two-trajectory", status, times, history, x, dt, renorm_every, p, throw)

@@ -365,7 +365,7 @@ def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None) -> str
     parts.append(_OBSERVABLES)
     hamiltonian = () if ir.k else ("hamiltonian", "lyapunov")  # need `velocities`, which constrained modules lack
     lanes = ("lanes",) if any(k.lanes for k in ir.kernels) else ()
-    for name in ("trig", "linear_solvers", *hamiltonian, "drivers", "symplectic", *lanes):
+    for name in ("trig", "linear_solvers", *hamiltonian, "drivers", *lanes):
         parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")
         parts.append(template(name, events=bool(ir.event_names)))
     taylor = taylor_decomposition(ir) if taylor is None else taylor

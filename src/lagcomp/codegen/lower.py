@@ -303,7 +303,7 @@ def _canonical_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
     With P(q, q̇, t) = M q̇ + b (the momenta) and r(q, q̇, t) the momentum rate,
     P_q = ∂P/∂q, R_q = ∂r/∂q and R_v = ∂r/∂q̇ are partials at fixed q̇; the
-    template `canonical_jacobian` combines them (its docstring derives how).
+    library `lagcomp.integrate.drivers.canonical.canonical_jacobian` combines them (its docstring derives how).
     A force that jumps (Coulomb friction's sign(q̇)) contributes its derivative
     away from the jump: the DiracDelta at the jump is dropped.
     """

@@ -21,8 +21,8 @@ from lagcomp.integrate.compositions import Composition
 from lagcomp.integrate.tableaux import Tableau, driver_arguments
 
 #: How the Gauss-Legendre methods solve their stage equations: name -> the driver's ``newton``
-#: argument (`collocation_run` in templates/symplectic.py explains both, and why None).
-IMPLICIT_SOLVERS = {"fixed_point": None, "newton": True}
+#: argument (`lagcomp.integrate.drivers.collocation` explains both).
+IMPLICIT_SOLVERS = {"fixed_point": False, "newton": True}
 #: The faster of the two on the double pendulum with gauss2 at h = 0.01: 1e5 steps in 0.10 s
 #: (14 evaluations of f per step) against 0.19 s for Newton (9 evaluations, one Jacobian and one LU);
 #: measured with bench/bench_collocation.py, which also shows the stiff cases where Newton wins.
@@ -110,6 +110,11 @@ def _embedded(name: str, tableau: Tableau, summary: str) -> Method:
                   kernels=("rhs", "project", "constraint_residual", "event_values"), sweep=f"{module}:sweep_embedded")
 
 
+#: The Gauss-Legendre driver, its sweep loop and the kernels of the canonical equations they take.
+_COLLOCATION = "lagcomp.integrate.drivers.collocation:collocation_run"
+_COLLOCATION_SWEEP = "lagcomp.integrate.drivers.collocation:collocation_sweep"
+_CANONICAL_KERNELS = ("velocities", "momenta", "momentum_rate", "canonical_partials")
+
 METHODS = {
     m.name: m
     for m in (
@@ -129,12 +134,15 @@ METHODS = {
         Method("yoshida6", 6, False, f"{_FIXED_STEP}:composition_run", compositions.YOSHIDA6,
                "Yoshida's 7-stage composition of Verlet, symplectic, order 6", separable_only=True,
                kernels=("rhs",), sweep=f"{_FIXED_SWEEPS}:composition_sweep"),
-        Method("gauss1", 2, False, "collocation_run", collocation.GAUSS1,
-               "implicit midpoint rule on (q, p), symplectic for any Lagrangian", unconstrained_only=True),
-        Method("gauss2", 4, False, "collocation_run", collocation.GAUSS2,
-               "2-stage Gauss-Legendre on (q, p), symplectic, order 4", unconstrained_only=True),
-        Method("gauss3", 6, False, "collocation_run", collocation.GAUSS3,
-               "3-stage Gauss-Legendre on (q, p), symplectic, order 6", unconstrained_only=True),
+        Method("gauss1", 2, False, _COLLOCATION, collocation.GAUSS1,
+               "implicit midpoint rule on (q, p), symplectic for any Lagrangian", unconstrained_only=True,
+               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
+        Method("gauss2", 4, False, _COLLOCATION, collocation.GAUSS2,
+               "2-stage Gauss-Legendre on (q, p), symplectic, order 4", unconstrained_only=True,
+               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
+        Method("gauss3", 6, False, _COLLOCATION, collocation.GAUSS3,
+               "3-stage Gauss-Legendre on (q, p), symplectic, order 6", unconstrained_only=True,
+               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
         Method("taylor", 20, True, "taylor_run", None,
                "Taylor series to order ceil(-ln(tol)/2 + 1) (20 at machine precision), adaptive, dense "
                "output from the series (Jorba & Zou); unconstrained systems", unconstrained_only=True,

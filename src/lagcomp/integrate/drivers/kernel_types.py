@@ -35,3 +35,13 @@ RESIDUAL = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
 EVENTS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
 #: ``energy(t, y, p) -> float``: T + V at ``y`` (the sweeps' energy drift).
 ENERGY = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
+#: ``energy_function(t, y, p) -> float``: the energy function h = Σ q̇ ∂L/∂q̇ − L at ``y`` (the Hamiltonian's value).
+ENERGY_FUNCTION = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
+#: ``velocities(t, x, p, out) -> int`` (unconstrained models): ``out = q̇`` (n,) at x = (q, p) from M q̇ = p − b; 0, or k > 0.
+VELOCITIES = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, VECTOR))
+#: ``momenta(t, y, p, out)``: ``out = ∂L/∂q̇`` (n,), the conjugate momenta at y = (q, q̇).
+MOMENTA = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
+#: ``momentum_rate(t, y, p, out)``: ``out = ṗ = ∂L/∂q + Q − ∂D/∂q̇`` (n,) at y = (q, q̇).
+MOMENTUM_RATE = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
+#: ``canonical_partials(t, y, p, out)`` (unconstrained models): ``out`` (4, n, n) = M, ∂P/∂q, ∂ṗ/∂q, ∂ṗ/∂q̇ at y = (q, q̇).
+CANONICAL_PARTIALS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, types.float64[:, :, ::1]))

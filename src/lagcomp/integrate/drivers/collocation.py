@@ -1,0 +1,305 @@
+"""Implicit Gauss-Legendre collocation on the canonical equations in (q, p): gauss1, gauss2, gauss3.
+
+Symplectic for any unconstrained Lagrangian (HLW, *Geometric Numerical Integration*, sec. II.1 and
+VI.4): the method integrates x = (q, p), where the flow is symplectic, with the canonical vector
+field of `lagcomp.integrate.drivers.canonical`, while its saved rows and ``y`` stay in (q, q̇) like
+every other driver's.  The coefficients A, B, C and the extrapolation E of the first guess come
+from `lagcomp.integrate.collocation`.
+
+`collocation_run` is the resumable driver (the protocol of `lagcomp.integrate.drivers`), fixed-step
+like RK4: step k goes from ``t0 + k dt`` to ``t0 + (k+1) dt``, the last step landing exactly on
+``t_end``; `collocation_sweep` runs it over many trajectories.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, types
+
+from lagcomp.integrate.drivers.canonical import canonical_jacobian
+from lagcomp.integrate.drivers.kernel_types import (
+    CANONICAL_PARTIALS,
+    ENERGY,
+    FLOAT,
+    INDICES,
+    INT,
+    MATRIX,
+    MOMENTA,
+    MOMENTUM_RATE,
+    OUTCOME,
+    VECTOR,
+    VELOCITIES,
+)
+from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
+from lagcomp.integrate.status import Status
+from lagcomp.kernel_support.linear_solvers import lu_factor, lu_substitute
+
+#: The model kernels `collocation_run` takes first (`Method.kernels` of the gauss methods names them).
+_KERNEL_TYPES = (VELOCITIES, MOMENTA, MOMENTUM_RATE, CANONICAL_PARTIALS)
+#: The method's arrays and settings after the common arguments: A (s, s), B (s,), C (s,), E (s, s),
+#: the iteration limit and whether the stage equations are solved by simplified Newton.
+_COEFFICIENTS = (MATRIX, VECTOR, VECTOR, MATRIX, INT, types.boolean)
+
+#: kernels, y, clock, counters, p, projecting, residual_max, t0, dt, n_steps, pause_at, t_end, save_every,
+#: ts, ys, then the coefficients: the fixed-step driver protocol (as the RK4 driver's).
+_RUN = OUTCOME(*_KERNEL_TYPES, VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, INT, INT, FLOAT, INT,
+               VECTOR, MATRIX, *_COEFFICIENTS)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters, p, t0, dt,
+                       n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton):
+    """Implicit Runge-Kutta (Gauss-Legendre) on x = (q, p); fixed step ``dt``; resumable.
+
+    The canonical equations are evaluated without a symbolic inverse: q̇ = ``velocities``(t, x)
+    solves M q̇ = p − b, and ṗ = ``momentum_rate`` at (q, q̇) is ∂L/∂q + Q = −∂H/∂q + Q.  Saved
+    rows and ``y`` stay in (q, q̇); x is rebuilt from ``momenta`` at the start of each call.  The
+    stage equations K_i = f(t + c_i h, x + h Σ_j a_ij K_j), i = 1..s, are solved from the previous
+    step's stages extrapolated by E (zero on a call's first step), by one of two iterations, chosen
+    by ``newton``:
+
+    * fixed point (``newton`` None): K_i ← f(t + c_i h, x + h Σ_j a_ij K_j), updating each stage
+      as soon as it is computed; s evaluations of f per sweep, and it contracts only while
+      h ‖∂f/∂x‖ ‖A‖ < 1 (roughly);
+    * simplified Newton (``newton`` True): with J = `canonical_jacobian` at the step's start
+      (t, x), solve (I − h A ⊗ J) ΔK = F(K) − K, F_i(K) the right-hand side above, and
+      K ← K + ΔK; the (2ns)×(2ns) iteration matrix is factored once per step (``lu_factor``).  It
+      converges for steps far beyond the fixed point's reach (stiff or fast motions), at the price
+      of one Jacobian and one factorization per step.
+
+    ``newton`` is None or True, a compile-time constant to numba: ``newton is not None`` is decided
+    when the function is compiled, so the fixed-point specialisation has no Newton branch in its
+    inner loops, and the other way round.
+
+    Both stop when the change of h·K reaches rounding level (below 4e-16 relative to the larger of
+    the state and h·K, or no longer decreasing once below 1e-14); after ``max_iter`` sweeps, or when
+    the iterates become non-finite or the iteration matrix singular, the run stops with
+    NOT_CONVERGED (the step is too large for the iteration to converge).  Explicit time dependence
+    is evaluated at the stage times t + c_i h, which is the method applied to the autonomous system
+    extended by t' = 1 (HLW, sec. VI.4).  Step times, saving and chunking follow the RK4 driver.
+    """
+    n2 = y.shape[0]
+    n = n2 // 2
+    s = B.shape[0]
+    cap = ts.shape[0]
+    x = np.empty(n2)
+    xs = np.empty(n2)
+    y_stage = np.empty(n2)
+    qdot = np.empty(n)
+    pdot = np.empty(n)
+    K = np.empty((s, n2))
+    K_previous = np.zeros((s, n2))
+    J = np.empty((n2, n2))
+    newton_matrix = np.empty((s * n2, s * n2))
+    pivots = np.empty(s * n2, dtype=np.int64)
+    delta = np.empty(s * n2)
+    extrapolate = False
+    compensation = np.zeros(n2)
+    new_compensation = np.zeros(n2)
+    n_saved = 0
+    momenta(clock[0], y, p, pdot)
+    for c in range(n):
+        x[c] = y[c]
+        x[n + c] = pdot[c]
+    while True:
+        k = counters[1]
+        if k >= n_steps:
+            return Status.DONE, n_saved
+        if k >= pause_at:
+            return Status.PAUSED, n_saved
+        last = k == n_steps - 1
+        if (last or counters[4] + 1 >= save_every) and n_saved >= cap:
+            return Status.BUFFER_FULL, n_saved
+        t_a = min(t0 + k * dt, t_end)
+        if last:
+            t_b = t_end
+        else:
+            t_b = min(t0 + (k + 1) * dt, t_end)
+        h = t_b - t_a
+
+        scale = 1.0
+        for c in range(n2):
+            scale = max(scale, abs(x[c]))
+        for i in range(s):
+            for c in range(n2):
+                guess = 0.0
+                if extrapolate and not last:
+                    for j in range(s):
+                        guess += E[i, j] * K_previous[j, c]
+                K[i, c] = guess
+        converged = False
+        status = 0
+        sweeps = max_iter
+        if newton is not None:
+            status = canonical_jacobian(velocities, canonical_partials, t_a, x, p, J)
+            for i in range(s):
+                for j in range(s):
+                    for a in range(n2):
+                        for b in range(n2):
+                            unit = 1.0 if i == j and a == b else 0.0
+                            newton_matrix[i * n2 + a, j * n2 + b] = unit - h * A[i, j] * J[a, b]
+            if status != 0 or lu_factor(newton_matrix, pivots) != 0:
+                sweeps = 0  # M singular here (status > 0), or I − h A ⊗ J: not converged
+        previous = np.inf
+        for sweep in range(sweeps):
+            change = 0.0
+            size = 0.0
+            for i in range(s):
+                for c in range(n2):
+                    acc = x[c]
+                    for j in range(s):
+                        acc += h * A[i, j] * K[j, c]
+                    xs[c] = acc
+                t_stage = t_a + C[i] * h
+                status = velocities(t_stage, xs, p, qdot)
+                if status == 0:
+                    for c in range(n):
+                        y_stage[c] = xs[c]
+                        y_stage[n + c] = qdot[c]
+                    momentum_rate(t_stage, y_stage, p, pdot)
+                counters[0] += 1
+                if status != 0:
+                    break
+                for c in range(n):
+                    if newton is not None:
+                        delta[i * n2 + c] = qdot[c] - K[i, c]
+                        delta[i * n2 + n + c] = pdot[c] - K[i, n + c]
+                    else:  # np.maximum keeps a NaN, where max would drop it
+                        change = np.maximum(change, abs(h * (qdot[c] - K[i, c])))
+                        change = np.maximum(change, abs(h * (pdot[c] - K[i, n + c])))
+                        size = max(size, abs(qdot[c]), abs(pdot[c]))
+                        K[i, c] = qdot[c]
+                        K[i, n + c] = pdot[c]
+            if status != 0:
+                break
+            if newton is not None:
+                lu_substitute(newton_matrix, pivots, delta)
+                for i in range(s):
+                    for c in range(n2):
+                        change = np.maximum(change, abs(h * delta[i * n2 + c]))
+                        K[i, c] += delta[i * n2 + c]
+                        size = max(size, abs(K[i, c]))
+            # rounding level: of the state, or of the stage increments h K when
+            # they are larger (stiff or fast motion: large terms that cancel)
+            change /= max(scale, h * size)
+            if not np.isfinite(change):
+                break  # the iteration diverged: not converged
+            if change <= 4e-16 or (change >= previous and change < 1e-14):
+                converged = True
+                break
+            previous = change
+        if status > 0:
+            return Status.RHS_FAILED, n_saved
+        if not converged:
+            return Status.NOT_CONVERGED, n_saved
+
+        # x ← x + h Σ b_i K_i with compensated (Kahan) summation: the
+        # increment's rounding is carried to the next step instead of lost,
+        # which removes the systematic energy drift of long runs.
+        for c in range(n2):
+            increment = 0.0
+            for i in range(s):
+                increment += h * B[i] * K[i, c]
+            increment -= compensation[c]
+            acc = x[c] + increment
+            new_compensation[c] = (acc - x[c]) - increment
+            xs[c] = acc
+            if not np.isfinite(acc):
+                status = -1
+        if status == 0:
+            status = velocities(t_b, xs, p, qdot)
+            if status > 0:
+                return Status.RHS_FAILED, n_saved
+        if status != 0:
+            return Status.NONFINITE, n_saved
+
+        for c in range(n):
+            x[c] = xs[c]
+            x[n + c] = xs[n + c]
+            y[c] = xs[c]
+            y[n + c] = qdot[c]
+        for c in range(n2):
+            compensation[c] = new_compensation[c]
+        for i in range(s):
+            for c in range(n2):
+                K_previous[i, c] = K[i, c]
+        extrapolate = True
+        clock[0] = t_b
+        counters[1] = k + 1
+        counters[4] += 1
+        if last or counters[4] >= save_every:
+            ts[n_saved] = t_b
+            for c in range(n2):
+                ys[n_saved, c] = y[c]
+            n_saved += 1
+            counters[4] = 0
+
+
+@njit(_RUN, cache=True, error_model="numpy", nogil=True)
+def collocation_run(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters, p, projecting,
+                    residual_max, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter,
+                    newton):
+    """Gauss-Legendre collocation on x = (q, p); fixed step ``dt``; resumable (see `_collocation_steps`).
+
+    ``newton`` chooses how the stage equations are solved: simplified Newton (True) or fixed-point
+    iteration (False).  Each runs its own specialisation of `_collocation_steps`, from which numba
+    drops the other's branches (``projecting`` and ``residual_max`` are unused: unconstrained
+    systems only).
+    """
+    if newton:
+        return _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters, p, t0,
+                                  dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, True)
+    return _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters, p, t0,
+                              dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, None)
+
+
+_SWEEP = types.none(*_KERNEL_TYPES, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT, INT, FLOAT, INT, MATRIX, VECTOR,
+                    INDICES, types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, types.Tuple(_COEFFICIENTS))
+
+
+@njit(_SWEEP, cache=True, error_model="numpy", nogil=True)
+def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, energy, Y0, P, projecting, t0, dt,
+                      n_steps, t_end, save_every, final, t_final, status, counts, dense, energy_stats, coefficients):
+    """Trajectory k from (t0, Y0[k]) with parameters P[k], ``n_steps`` steps of ``dt`` by `collocation_run`.
+
+    The outputs and their shapes are those of every fixed-step sweep loop (`lagcomp.integrate.sweep`):
+    ``final`` (N, 2n), ``t_final`` (N,), ``status`` (N,), ``counts`` (N, 3) = [nfev, nsteps, nrejected],
+    ``dense`` (N, m, 2n) the initial state and the saved rows (m = 0: none kept), ``energy_stats``
+    (N, 2) = [E0, largest |E − E0| over the saved rows].  ``coefficients`` are the driver's trailing
+    arguments (A, B, C, E, max_iter, newton).
+    """
+    A, B, C, E, max_iter, newton = coefficients
+    n_traj = Y0.shape[0]
+    n2 = Y0.shape[1]
+    for k in range(n_traj):
+        y = Y0[k].copy()
+        p = P[k]
+        clock = np.zeros(2)
+        clock[0] = t0
+        counters = np.zeros(6, dtype=np.int64)
+        residual = np.zeros(1)
+        ts = np.empty(SWEEP_ROWS)
+        ys = np.empty((SWEEP_ROWS, n2))
+        e0 = energy(t0, y, p)
+        deviation = 0.0
+        row = 0
+        if dense.shape[1] > 0:
+            for c in range(n2):
+                dense[k, 0, c] = y[c]
+            row = 1
+        while True:
+            code, n_saved = collocation_run(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters,
+                                            p, projecting, residual, t0, dt, n_steps, NO_PAUSE, t_end, save_every, ts,
+                                            ys, A, B, C, E, max_iter, newton)
+            deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
+            if code != Status.BUFFER_FULL:
+                break
+        for c in range(n2):
+            final[k, c] = y[c]
+        t_final[k] = clock[0]
+        status[k] = code
+        counts[k, 0] = counters[0]
+        counts[k, 1] = counters[1]
+        counts[k, 2] = counters[2]
+        energy_stats[k, 0] = e0
+        energy_stats[k, 1] = deviation
