@@ -68,5 +68,9 @@ def runs(cache_dir=None):
 
 
 if __name__ == "__main__":
-    np.savez_compressed(GOLDEN, **runs())
-    print(f"wrote {GOLDEN}")
+    import sys
+
+    # python -m tests.golden_taylor [OUT CACHE_DIR]: the test computes the results in a process of their own
+    out, cache_dir = (sys.argv[1], sys.argv[2]) if len(sys.argv) > 2 else (GOLDEN, None)
+    np.savez_compressed(out, **runs(cache_dir))
+    print(f"wrote {out}")

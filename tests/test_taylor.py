@@ -289,7 +289,10 @@ def test_dense_output_is_the_series(pendulum):
 
 def test_chunked_run_equals_one_call(pendulum):
     whole = pendulum.simulate((0, 20), method="taylor", progress=False, save_every=7)
+    from lagcomp.integrate.drivers.taylor import taylor_run
+
     kernels = pendulum.kernels
+    model_parts = (kernels.taylor_coefficients, kernels.event_values, kernels.TAYLOR_PERIODIC, kernels.TAYLOR_WORK)
     y = np.array([2.0, 1.0, 0.0, 0.0])
     clock, counters = np.array([0.0, 0.0]), np.zeros(6, dtype=np.int64)
     p = pendulum.parameter_vector()
@@ -300,8 +303,8 @@ def test_chunked_run_equals_one_call(pendulum):
     carry = np.zeros(4)
     while True:
         ts, ys = np.empty(5), np.empty((5, 4))
-        status, n = kernels.taylor_run(y, clock, counters, p, 0, np.zeros(1), 20.0, eps, eps, math.inf, 10**9,
-                                       counters[1] + 13, 7, np.empty(0), ts, ys, *empty, carry)
+        status, n = taylor_run(*model_parts, y, clock, counters, p, 0, np.zeros(1), 20.0, eps, eps, math.inf, 10**9,
+                               counters[1] + 13, 7, np.empty(0), ts, ys, *empty, carry)
         rows.append(ys[:n].copy())
         if not Status(status).call_again:
             break
@@ -420,7 +423,7 @@ def test_terminal_event_stops_on_the_series(compiled, cache_dir):
 
 
 def test_sweep_equals_separate_runs(pendulum):
-    """sweep(method="taylor") runs the same driver per trajectory (sweep_taylor_run): the same final states."""
+    """sweep(method="taylor") runs the same driver per trajectory (sweep_taylor): the same final states."""
     angles = np.array([1.0, 1.5, 2.0])
     sweep = pendulum.sweep((0, 5), {"theta1": angles}, method="taylor", progress=False, workers=1)
     assert sweep.method == "taylor" and np.all(sweep.status == 0)

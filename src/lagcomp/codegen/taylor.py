@@ -36,7 +36,7 @@ out as its loop (`_INLINE`: numba passes arrays to a called function with
 reference counting, which costs more than these short loops: inline, the
 double pendulum runs 1.5x faster), each block commented with the statement of
 ``rhs`` it computes; plus ``TAYLOR_WORK`` (rows of the work array ``W``).
-The driver ``taylor_run`` comes from ``templates/taylor.py``.
+The driver is library code: ``lagcomp.integrate.drivers.taylor.taylor_run``.
 Systems the method does not cover (constraints, or a function without a
 recurrence here: sign, Abs, Piecewise, ...) get ``TAYLOR_REFUSED``, a
 string saying why, instead.
@@ -52,7 +52,6 @@ import sympy as sp
 from lagcomp.codegen.periodic import periodic_coordinates
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor_lanes import CALL
-from lagcomp.codegen.templating import template
 from lagcomp.ir import Kernel, LinearSolve, ModuleIR, target_local
 
 INDENT = "    "
@@ -623,18 +622,12 @@ def taylor_program(taylor: TaylorProgram | Unsupported) -> dict | None:
                 periodic=list(taylor.periodic))
 
 
-def taylor_source(taylor: TaylorProgram | Unsupported, events: bool) -> str:
-    """``taylor_coefficients`` and the driver template, or ``TAYLOR_REFUSED`` saying why there are none."""
+def taylor_source(taylor: TaylorProgram | Unsupported, events: bool = False) -> str:
+    """``taylor_coefficients`` with its data, or ``TAYLOR_REFUSED`` saying why the module has none.
+
+    The driver is library code (`lagcomp.integrate.drivers.taylor`); `events` is not used (the
+    driver takes the module's ``event_values`` kernel whether or not it has events).
+    """
     if isinstance(taylor, Unsupported):
         return f"\n\n#: Why this module has no Taylor integrator (method='taylor').\nTAYLOR_REFUSED = {str(taylor)!r}\n"
-    sweeps = template("sweeps")  # its generic adaptive loop, for taylor_run (as emit.sweeps_source does for the others)
-    start = sweeps.rindex("@njit", 0, sweeps.index("def sweep_adaptive("))
-    end = sweeps.rindex("@njit", 0, sweeps.index("def sweep_fixed("))
-    sweep = sweeps[start:end].replace("sweep_adaptive", "sweep_taylor_run").replace("ADAPTIVE_DRIVER", "taylor_run")
-    return (
-        emit_taylor(taylor)
-        + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/taylor.py\n\n"
-        + template("taylor", events=events)
-        + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py: sweep_adaptive for taylor_run\n\n"
-        + sweep.rstrip("\n") + "\n"
-    )
+    return emit_taylor(taylor)

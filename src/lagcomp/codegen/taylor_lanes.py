@@ -45,8 +45,6 @@ from __future__ import annotations
 import math
 import re
 
-from lagcomp.codegen.templating import template
-
 INDENT = "    "
 
 #: A helper call of the call notation (``w[k] = _taylor_mul(a, b, k)``); `taylor._inline` parses it too.
@@ -204,7 +202,7 @@ def taylor_lanes_source(program: dict, order: int, lanes: int) -> str:
         else:
             lines.append(re.sub(r"\bp\[(\d+)\]", lambda m: f"P[{int(m.group(1)) * lanes} + _l]", line))
     periodic = set(program.get("periodic", ()))
-    lines += [f"{_series(states[i], 0)} = _taylor_reduced(Y[{i * lanes} + _l], Y[{(n_state + i) * lanes} + _l])"
+    lines += [f"{_series(states[i], 0)} = reduced_angle(Y[{i * lanes} + _l], Y[{(n_state + i) * lanes} + _l])"
               if i in periodic else f"{_series(states[i], 0)} = Y[{i * lanes} + _l]" for i in range(n_state)]
     if program["uses_t"]:
         lines += [f"{_series('_t', 0)} = T[_l]", f"{_series('_t', 1)} = 1.0"]
@@ -291,18 +289,21 @@ def unrolled_terms(program: dict, order: int) -> int:
 
 
 def taylor_lanes_module(module_source: str, program: dict, order: int, lanes: int = LANES) -> str:
-    """A module for batched Taylor sweeps at `order`: the model's module, ``taylor_lanes`` and its driver.
+    """A module for batched Taylor sweeps at `order`: the model's module and its lane kernels of that order.
 
     The model's module comes first, whole, so that the new module stands on
     its own (numba caches it by its own file; a Dask worker builds it from
-    this text alone); numba compiles only the functions a sweep calls.
+    this text alone); numba compiles only the kernels a sweep calls.  The
+    loop around the kernels is library code
+    (`lagcomp.integrate.drivers.taylor_lanes.sweep_taylor_lanes`), which takes
+    ``TAYLOR_ORDER`` and ``TAYLOR_LANES`` with them.
     """
     return (
         module_source.rstrip("\n")
         + f"\n\n\n# {'-' * 76}\n# Batched Taylor sweeps at order {order}, {lanes} lanes"
         + " (lagcomp.codegen.taylor_lanes)\n\n"
-        + f"_TAYLOR_ORDER = {order}\n_TAYLOR_LANES = {lanes}\n\n\n"
+        + "from lagcomp.kernel_support.angles import reduced_angle  # noqa: E402\n\n"
+        + "#: The order and lane count of the lane kernels below.\n"
+        + f"TAYLOR_ORDER = {order}\nTAYLOR_LANES = {lanes}\n\n\n"
         + taylor_lanes_source(program, order, lanes)
-        + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/taylor_lanes.py\n\n"
-        + template("taylor_lanes")
     )

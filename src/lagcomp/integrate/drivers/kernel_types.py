@@ -35,3 +35,13 @@ RESIDUAL = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
 EVENTS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
 #: ``energy(t, y, p) -> float``: T + V at ``y`` (the sweeps' energy drift).
 ENERGY = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
+#: ``taylor_coefficients(t, y, p, X, W) -> int``: the normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!,
+#: k = 0..order (order = X.shape[1] − 1, any), of the solution through y at t; W (rows, order + 1) is work
+#: space of the model's ``TAYLOR_WORK`` rows.  0, or j > 0 when pivot j of M is not positive at t.
+TAYLOR = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, MATRIX, MATRIX))
+#: ``taylor_lanes(T, Y, P, X)``: the batched Taylor kernel of one order over L lanes (flat arrays, lane
+#: last; `lagcomp.codegen.taylor_lanes` gives the layout): every lane's coefficients, norms and pivot test.
+TAYLOR_LANES = types.FunctionType(types.none(VECTOR, VECTOR, VECTOR, VECTOR))
+#: ``taylor_lanes_advance(H, X, S, S_new)``: every lane's state and carry after its step H[l] (Horner's rule
+#: and compensated sums, as the scalar Taylor driver's).
+TAYLOR_ADVANCE = types.FunctionType(types.none(VECTOR, VECTOR, VECTOR, VECTOR))
