@@ -4,7 +4,7 @@
 
 The double pendulum (θ = (2, 1) at rest, the default tolerance, order 20)
 integrated by a copy of ``taylor_run``'s step loop (the module's own
-``taylor_coefficients`` and ``_taylor_reduced``) with one variant each:
+``taylor_coefficients`` and ``lagcomp.kernel_support.angles.reduced_angle``) with one variant each:
 
 * ``taylor_run``: as the driver does it: the series at the periodic
   coordinates reduced to [−π, π] with the carry folded in, compensated sums;
@@ -33,6 +33,7 @@ from numba import njit
 
 import lagcomp as lc
 from lagcomp import examples
+from lagcomp.kernel_support.angles import reduced_angle
 
 VARIANTS = {
     "taylor_run": dict(),
@@ -54,7 +55,7 @@ def _energy(th1, th2, w1, w2):
 
 def make_loop(kernels):
     """``taylor_run``'s step loop over the module's kernels, with the variants' switches."""
-    coefficients, reduced, work = kernels.taylor_coefficients, kernels._taylor_reduced, kernels.TAYLOR_WORK
+    coefficients, reduced, work = kernels.taylor_coefficients, reduced_angle, kernels.TAYLOR_WORK
 
     @njit(cache=False)
     def loop(y0, p, t_end, checks, order, reduce, compensate, norm_reduced, step_scale, out):

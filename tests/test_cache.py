@@ -25,8 +25,8 @@ PROBE = textwrap.dedent(
         # numba compilations of a batched Taylor sweep (its own module, written at the sweep)
         from lagcomp.integrate import sweep
         model.sweep((0, 1), {"theta": [0.1, 0.2]}, method="taylor", rtol=1e-6, atol=1e-6, batched=True)
-        (module,) = [m for m in sweep._WORKER_MODULES.values() if hasattr(m, "sweep_taylor_lanes")]
-        return sum(module.sweep_taylor_lanes.stats.cache_misses.values())
+        (module,) = [m for m in sweep._WORKER_MODULES.values() if hasattr(m, "taylor_lanes")]
+        return sum(module.taylor_lanes.stats.cache_misses.values())
 
     derivations = []
     original = lagrange.derive
@@ -56,8 +56,8 @@ LOAD_PROBE = textwrap.dedent(
         # numba compilations of a batched Taylor sweep (its own module, written at the sweep)
         from lagcomp.integrate import sweep
         model.sweep((0, 1), {"theta": [0.1, 0.2]}, method="taylor", rtol=1e-6, atol=1e-6, batched=True)
-        (module,) = [m for m in sweep._WORKER_MODULES.values() if hasattr(m, "sweep_taylor_lanes")]
-        return sum(module.sweep_taylor_lanes.stats.cache_misses.values())
+        (module,) = [m for m in sweep._WORKER_MODULES.values() if hasattr(m, "taylor_lanes")]
+        return sum(module.taylor_lanes.stats.cache_misses.values())
 
     model = lc.load("simple_pendulum", cache_dir=sys.argv[1])
     sol = model.simulate((0, 1), method="rk4", dt=0.01)

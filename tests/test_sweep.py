@@ -176,7 +176,7 @@ def test_dask_local_cluster_gives_the_local_result_compiling_once_per_worker(dou
         def loaded():
             from lagcomp.integrate import sweep as module
             return [len(m.rhs.signatures) for m in module._WORKER_MODULES.values()
-                    if not hasattr(m, "sweep_taylor_lanes")]
+                    if not hasattr(m, "taylor_lanes")]
 
         per_worker = client.run(loaded)
     np.testing.assert_array_equal(remote.final, local.final)

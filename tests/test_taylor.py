@@ -18,7 +18,8 @@ import sympy as sp
 
 import lagcomp as lc
 import lagcomp.examples
-from lagcomp.codegen.taylor import _INLINE, Unsupported, decompose
+from lagcomp.codegen.taylor import Unsupported, decompose
+from lagcomp.codegen.taylor_ops import Op, convolution_loop
 from lagcomp.errors import OptionError
 from lagcomp.integrate.status import Status
 from lagcomp.model import t
@@ -56,24 +57,23 @@ def _padded(coefficients, order=ORDER):
     return out
 
 
-CASES = {  # operation: (f(a, b) in mpmath, the arguments' names in the loop's template)
-    "_taylor_mul": (lambda a, b: a * b, {}),
-    "_taylor_square": (lambda a, b: a**2, {}),
-    "_taylor_div": (lambda a, b: a / b, {}),
-    "_taylor_rdiv": (lambda a, b: 2.5 / b, {"c": "2.5"}),
-    "_taylor_sqrt": (lambda a, b: mpmath.sqrt(a), {}),
-    "_taylor_pow": (lambda a, b: a ** mpmath.mpf(-1.5), {"c": "-1.5"}),
-    "_taylor_exp": (lambda a, b: mpmath.exp(a), {}),
-    "_taylor_log": (lambda a, b: mpmath.log(a), {}),
-    "_taylor_sin_cos": (None, {"w": "s", "b": "c"}),
+CASES = {  # operation: (f(a, b) in mpmath, the operation on the series a, b into w (sin_cos: s, c))
+    "mul": (lambda a, b: a * b, Op("mul", ("w",), ("a", "b"))),
+    "square": (lambda a, b: a**2, Op("square", ("w",), ("a",))),
+    "div": (lambda a, b: a / b, Op("div", ("w",), ("a", "b"))),
+    "rdiv": (lambda a, b: 2.5 / b, Op("rdiv", ("w",), ("b",), "2.5")),
+    "sqrt": (lambda a, b: mpmath.sqrt(a), Op("sqrt", ("w",), ("a",))),
+    "pow": (lambda a, b: a ** mpmath.mpf(-1.5), Op("pow", ("w",), ("a",), "-1.5")),
+    "exp": (lambda a, b: mpmath.exp(a), Op("exp", ("w",), ("a",))),
+    "log": (lambda a, b: mpmath.log(a), Op("log", ("w",), ("a",))),
+    "sin_cos": (None, Op("sin_cos", ("s", "c"), ("a",))),
 }
 
 
 def _recurrence(name):
-    """The emitted loop of operation `name` (`_INLINE`), run for k = 0..ORDER in plain Python."""
-    names = dict(w="w", a="a", b="b", c="c")
-    names.update(CASES[name][1])
-    body = "\n".join("        " + line.format(**names) for line in _INLINE[name][1])
+    """The emitted loop of operation `name` (`convolution_loop`), run for k = 0..ORDER in plain Python."""
+    _, loop = convolution_loop(CASES[name][1], lambda series, index: f"{series}[{index}]")
+    body = "\n".join("        " + line for line in loop)
     namespace = {"math": math, "_sin": math.sin, "_cos": math.cos}
     prelude = "        _ik = 1.0/k if k > 0 else 0.0\n"  # as at the top of taylor_coefficients' loop
     exec(f"def run(a, b, c, w, s):\n    for k in range({ORDER + 1}):\n{prelude}{body}\n", namespace)
@@ -86,22 +86,13 @@ def test_each_recurrence_against_an_independent_expansion(name):
     a, b = _padded(A), _padded(B)
     w, s, c = np.zeros(ORDER + 1), np.zeros(ORDER + 1), np.zeros(ORDER + 1)
     run = _recurrence(name)
-    if name == "_taylor_sin_cos":
+    if name == "sin_cos":
         run(a, None, c, None, s)
         np.testing.assert_allclose(s, _reference(lambda a, b: mpmath.sin(a)), rtol=1e-13, atol=1e-15)
         np.testing.assert_allclose(c, _reference(lambda a, b: mpmath.cos(a)), rtol=1e-13, atol=1e-15)
         return
-    run(a, b, 2.5, w, None)
+    run(a, b, None, w, None)
     np.testing.assert_allclose(w, _reference(CASES[name][0]), rtol=1e-13, atol=1e-15)
-
-
-#: Each operation in the call notation (`decompose`'s lines): its arguments, and the result's name.
-CALLS = {
-    "_taylor_mul": (["a", "b"], "w"), "_taylor_square": (["a"], "w"), "_taylor_div": (["a", "b", "w"], "w"),
-    "_taylor_rdiv": (["2.5", "b", "w"], "w"), "_taylor_sqrt": (["a", "w"], "w"),
-    "_taylor_pow": (["a", "-1.5", "w"], "w"), "_taylor_exp": (["a", "w"], "w"), "_taylor_log": (["a", "w"], "w"),
-    "_taylor_sin_cos": (["a", "s", "c"], None),
-}
 
 
 @pytest.mark.parametrize("name", list(CASES))
@@ -109,14 +100,13 @@ def test_each_unrolled_recurrence_against_an_independent_expansion(name):
     """The straight-line form of each operation (batched Taylor sweeps, taylor_lanes), against mpmath."""
     from lagcomp.codegen.taylor_lanes import _operation, _series
 
-    args, result = CALLS[name]
-    lines = [line for k in range(ORDER + 1) for line in _operation(name, args, result, k)]
+    lines = [line for k in range(ORDER + 1) for line in _operation(CASES[name][1], k)]
     namespace = {"math": math, "_vsin": math.sin, "_vcos": math.cos}
     for series, coefficients in (("a", A), ("b", B)):
         namespace.update({_series(series, k): x for k, x in enumerate(_padded(coefficients))})
     exec("\n".join(lines), namespace)
     got = lambda w: np.array([namespace[_series(w, k)] for k in range(ORDER + 1)])  # noqa: E731
-    if name == "_taylor_sin_cos":
+    if name == "sin_cos":
         np.testing.assert_allclose(got("s"), _reference(lambda a, b: mpmath.sin(a)), rtol=1e-13, atol=1e-15)
         np.testing.assert_allclose(got("c"), _reference(lambda a, b: mpmath.cos(a)), rtol=1e-13, atol=1e-15)
         return
@@ -289,7 +279,10 @@ def test_dense_output_is_the_series(pendulum):
 
 def test_chunked_run_equals_one_call(pendulum):
     whole = pendulum.simulate((0, 20), method="taylor", progress=False, save_every=7)
+    from lagcomp.integrate.drivers.taylor import taylor_run
+
     kernels = pendulum.kernels
+    model_parts = (kernels.taylor_coefficients, kernels.event_values, kernels.TAYLOR_PERIODIC, kernels.TAYLOR_WORK)
     y = np.array([2.0, 1.0, 0.0, 0.0])
     clock, counters = np.array([0.0, 0.0]), np.zeros(6, dtype=np.int64)
     p = pendulum.parameter_vector()
@@ -300,8 +293,8 @@ def test_chunked_run_equals_one_call(pendulum):
     carry = np.zeros(4)
     while True:
         ts, ys = np.empty(5), np.empty((5, 4))
-        status, n = kernels.taylor_run(y, clock, counters, p, 0, np.zeros(1), 20.0, eps, eps, math.inf, 10**9,
-                                       counters[1] + 13, 7, np.empty(0), ts, ys, *empty, carry)
+        status, n = taylor_run(*model_parts, y, clock, counters, p, 0, np.zeros(1), 20.0, eps, eps, math.inf, 10**9,
+                               counters[1] + 13, 7, np.empty(0), ts, ys, *empty, carry)
         rows.append(ys[:n].copy())
         if not Status(status).call_again:
             break
@@ -420,7 +413,7 @@ def test_terminal_event_stops_on_the_series(compiled, cache_dir):
 
 
 def test_sweep_equals_separate_runs(pendulum):
-    """sweep(method="taylor") runs the same driver per trajectory (sweep_taylor_run): the same final states."""
+    """sweep(method="taylor") runs the same driver per trajectory (sweep_taylor): the same final states."""
     angles = np.array([1.0, 1.5, 2.0])
     sweep = pendulum.sweep((0, 5), {"theta1": angles}, method="taylor", progress=False, workers=1)
     assert sweep.method == "taylor" and np.all(sweep.status == 0)

@@ -5,7 +5,7 @@ ulp(θ2), the angle fed that rounding into the rhs at every step, and the
 relative energy error to t = 10⁴ was 2.0e-11 rms over 16 starts 1 ulp apart
 (one realization 7.0e-11).  `taylor_run` now computes the series at each
 periodic coordinate reduced to [−π, π] with its compensated-sum carry
-(`lagcomp.codegen.periodic`, `_taylor_reduced`): 5.4e-13 rms (``python -m
+(`lagcomp.codegen.periodic`, `lagcomp.kernel_support.angles`): 5.4e-13 rms (``python -m
 bench.taylor_error_sources``).  References:
 conservation of energy, and mpmath for the reduction.
 """
@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 import lagcomp as lc
 from lagcomp.codegen.periodic import periodic_coordinates
 from lagcomp.ir import Kernel
+from lagcomp.kernel_support.angles import reduced_angle
 from lagcomp.model import t
 
 q0, q1, u0, u1, ell = sp.symbols("q0 q1 u0 u1 ell", real=True)
@@ -74,10 +75,10 @@ def test_compiled_modules_name_their_periodic_coordinates(compiled, cache_dir):
 
 @settings(max_examples=300, deadline=None)
 @given(y=st.floats(-6.4e6, 6.4e6), fraction=st.floats(-0.5, 0.5))
-def test_reduction_against_mpmath(compiled, y, fraction):
-    """_taylor_reduced(y, carry) is y − carry − 2πm, m = round(y/2π), to 1 ulp of the result."""
+def test_reduction_against_mpmath(y, fraction):
+    """reduced_angle(y, carry) is y − carry − 2πm, m = round(y/2π), to 1 ulp of the result."""
     carry = fraction * np.spacing(abs(y)) if y != 0 else 0.0
-    reduced = compiled("double_pendulum").kernels._taylor_reduced(y, carry)
+    reduced = reduced_angle(y, carry)
     with mpmath.workdps(60):
         exact = mpmath.mpf(y) - mpmath.mpf(carry)
         exact -= 2 * mpmath.pi * mpmath.nint(exact / (2 * mpmath.pi))

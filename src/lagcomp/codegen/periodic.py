@@ -13,7 +13,7 @@ radians in a chaotic run) is stored with ulp(θ) of absolute rounding, 256
 times that of |θ| < 2 at θ ≈ 500, and the rhs evaluated at that rounded θ
 feeds this rounding into every step.  ``taylor_run`` evaluates the series
 at the angle reduced to [−π, π] with its compensated-sum carry folded in
-(``_taylor_reduced``), so the rhs sees each periodic coordinate to the
+(`lagcomp.kernel_support.angles.reduced_angle`), so the rhs sees each periodic coordinate to the
 rounding of a number below π, however far it has wound (the double
 pendulum's relative energy error to t = 10⁴, rms over 16 starts 1 ulp
 apart: 2.0e-11 -> 5.4e-13, ``python -m bench.taylor_error_sources``).

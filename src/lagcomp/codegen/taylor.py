@@ -29,14 +29,16 @@ treated as a state whose derivative is 1.  Integer powers become products
 (a[0] = 0 is allowed, as for q̇² at rest); other powers use the pow
 recurrence, which needs a[0] ≠ 0.
 
-`decompose` writes the program in a call notation, one line per operation
-(``w[k] = _taylor_mul(a, b, k)``, ...); `taylor_source` prints it as one
-numba function ``taylor_coefficients(t, y, p, X, W)`` with each call written
-out as its loop (`_INLINE`: numba passes arrays to a called function with
-reference counting, which costs more than these short loops: inline, the
-double pendulum runs 1.5x faster), each block commented with the statement of
-``rhs`` it computes; plus ``TAYLOR_WORK`` (rows of the work array ``W``).
-The driver ``taylor_run`` comes from ``templates/taylor.py``.
+`decompose` writes the program as data, one record per operation
+(`lagcomp.codegen.taylor_ops.Op`: kind, series written and read, constant);
+`taylor_source` prints it as one numba function
+``taylor_coefficients(t, y, p, X, W)`` with each operation written out as
+its loop (`taylor_ops.convolution_loop`: numba passes arrays to a called
+function with reference counting, which costs more than these short loops:
+inline, the double pendulum runs 1.5x faster), each block commented with the
+statement of ``rhs`` it computes; plus ``TAYLOR_WORK`` (rows of the work
+array ``W``) and ``TAYLOR_PERIODIC``, the data the driver takes with it.
+The driver is library code: ``lagcomp.integrate.drivers.taylor.taylor_run``.
 Systems the method does not cover (constraints, or a function without a
 recurrence here: sign, Abs, Piecewise, ...) get ``TAYLOR_REFUSED``, a
 string saying why, instead.
@@ -44,15 +46,14 @@ string saying why, instead.
 
 from __future__ import annotations
 
-import re
+import dataclasses
 from dataclasses import dataclass, field
 
 import sympy as sp
 
 from lagcomp.codegen.periodic import periodic_coordinates
 from lagcomp.codegen.printer import to_code
-from lagcomp.codegen.taylor_lanes import CALL
-from lagcomp.codegen.templating import template
+from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, linear_line, pivot_test
 from lagcomp.ir import Kernel, LinearSolve, ModuleIR, target_local
 
 INDENT = "    "
@@ -62,28 +63,19 @@ class Unsupported(Exception):
     """The rhs holds something without a Taylor recurrence here (the message says what)."""
 
 
-@dataclass(frozen=True)
-class Op:
-    """One elementary operation at order k: ``line`` (template helper call or inline statement)."""
-
-    line: str
-    comment: str = ""
-
-
 @dataclass
 class TaylorProgram:
     """The decomposed rhs: scalar setup, the series rows, the per-order body.
 
-    ``setup`` are statements before the order loop (parameter loads and
-    constants), ``rows`` the names of the series held in rows of the work
-    array ``W`` (in order), ``body`` the operations of one order k, and
-    ``checks`` the pivots of M tested at k = 0 (name of d_j, name of m_jj);
-    ``periodic`` the coordinates the rhs sees only through sin and cos
+    ``setup`` are the statements before the order loop (state rows,
+    parameter loads, constants, constant pivot tests), ``rows`` the names of
+    the series held in rows of the work array ``W`` (in order), ``body`` the
+    operations of one order k; ``periodic`` the coordinates the rhs sees only through sin and cos
     (`lagcomp.codegen.periodic`), which ``taylor_run`` reduces to [−π, π].
     """
 
     n_state: int
-    setup: list[str] = field(default_factory=list)
+    setup: list[Setup] = field(default_factory=list)
     rows: list[str] = field(default_factory=list)
     body: list[Op] = field(default_factory=list)
     uses_t: bool = False
@@ -92,7 +84,7 @@ class TaylorProgram:
     @property
     def operation_count(self) -> int:
         """Series operations per order (pivot tests and comments not counted)."""
-        return sum(1 for op in self.body if not op.line.startswith(("if ", "#", INDENT)))
+        return sum(1 for op in self.body if op.kind not in ("pivot", "comment"))
 
 
 @dataclass(frozen=True)
@@ -145,11 +137,12 @@ class _Builder:
             name = f"_k{self.count}"
             self.count += 1
             self.scalars[expr] = _c(sp.Symbol(name, real=True))
-        self.program.setup.append(f"{name} = {to_code(expr)}")
+        self.program.setup.append(Setup("constant", name, to_code(expr)))
         return _c(sp.Symbol(name, real=True))
 
-    def _emit(self, line: str, comment: str = "") -> None:
-        self.program.body.append(Op(line, comment))
+    def _emit(self, kind: str, out: tuple[str, ...] = (), args: tuple[str, ...] = (), const: str = "",
+              index: int = 0) -> None:
+        self.program.body.append(Op(kind, out, args, const, index))
 
     def _op(self, key: tuple, make) -> Value:
         """A series operation; equal operations on the same arguments are computed once."""
@@ -170,14 +163,14 @@ class _Builder:
             if b.const == 0:
                 return a
             return self._op(("add_c", a.series, b.const), lambda w: self._emit(
-                f"{w}[k] = {a.series}[k] + {to_code(b.const)} if k == 0 else {a.series}[k]"))
+                "add_const", (w,), (a.series,), to_code(b.const)))
         key = ("add",) + tuple(sorted((a.series, b.series)))
-        return self._op(key, lambda w: self._emit(f"{w}[k] = {a.series}[k] + {b.series}[k]"))
+        return self._op(key, lambda w: self._emit("add", (w,), (a.series, b.series)))
 
     def neg(self, a: Value) -> Value:
         if a.is_const:
             return self._scalar(-a.const)
-        return self._op(("neg", a.series), lambda w: self._emit(f"{w}[k] = -{a.series}[k]"))
+        return self._op(("neg", a.series), lambda w: self._emit("neg", (w,), (a.series,)))
 
     def sub(self, a: Value, b: Value) -> Value:
         if b.is_const:
@@ -186,9 +179,8 @@ class _Builder:
             if a.const == 0:
                 return self.neg(b)
             return self._op(("rsub_c", a.const, b.series), lambda w: self._emit(
-                f"{w}[k] = {to_code(a.const)} - {b.series}[k] if k == 0 else -{b.series}[k]"))
-        return self._op(("sub", a.series, b.series), lambda w: self._emit(
-            f"{w}[k] = {a.series}[k] - {b.series}[k]"))
+                "rsub_const", (w,), (b.series,), to_code(a.const)))
+        return self._op(("sub", a.series, b.series), lambda w: self._emit("sub", (w,), (a.series, b.series)))
 
     def mul(self, a: Value, b: Value) -> Value:
         if a.is_const and b.is_const:
@@ -203,16 +195,16 @@ class _Builder:
             if b.const == -1:
                 return self.neg(a)
             return self._op(("scale", a.series, b.const), lambda w: self._emit(
-                f"{w}[k] = {to_code(b.const)}*{a.series}[k]"))
+                "scale", (w,), (a.series,), to_code(b.const)))
         if a.series == b.series:
             return self.square(a)
         key = ("mul",) + tuple(sorted((a.series, b.series)))
-        return self._op(key, lambda w: self._emit(f"{w}[k] = _taylor_mul({a.series}, {b.series}, k)"))
+        return self._op(key, lambda w: self._emit("mul", (w,), (a.series, b.series)))
 
     def square(self, a: Value) -> Value:
         if a.is_const:
             return self._scalar(a.const**2)
-        return self._op(("sqr", a.series), lambda w: self._emit(f"{w}[k] = _taylor_square({a.series}, k)"))
+        return self._op(("sqr", a.series), lambda w: self._emit("square", (w,), (a.series,)))
 
     def div(self, a: Value, b: Value) -> Value:
         if b.is_const:
@@ -223,14 +215,13 @@ class _Builder:
             if a.const == 0:
                 return _c(0)
             return self._op(("rdiv", a.const, b.series), lambda w: self._emit(
-                f"{w}[k] = _taylor_rdiv({to_code(a.const)}, {b.series}, {w}, k)"))
-        return self._op(("div", a.series, b.series), lambda w: self._emit(
-            f"{w}[k] = _taylor_div({a.series}, {b.series}, {w}, k)"))
+                "rdiv", (w,), (b.series,), to_code(a.const)))
+        return self._op(("div", a.series, b.series), lambda w: self._emit("div", (w,), (a.series, b.series)))
 
     def sqrt(self, a: Value) -> Value:
         if a.is_const:
             return self._scalar(sp.sqrt(a.const))
-        return self._op(("sqrt", a.series), lambda w: self._emit(f"{w}[k] = _taylor_sqrt({a.series}, {w}, k)"))
+        return self._op(("sqrt", a.series), lambda w: self._emit("sqrt", (w,), (a.series,)))
 
     def pow(self, a: Value, alpha: sp.Expr) -> Value:
         if a.is_const:
@@ -248,24 +239,24 @@ class _Builder:
         if alpha == sp.S.Half:
             return self.sqrt(a)
         return self._op(("pow", a.series, alpha), lambda w: self._emit(
-            f"{w}[k] = _taylor_pow({a.series}, {to_code(sp.Float(alpha, 17))}, {w}, k)"))
+            "pow", (w,), (a.series,), to_code(sp.Float(alpha, 17))))
 
     def exp(self, a: Value) -> Value:
         if a.is_const:
             return self._scalar(sp.exp(a.const))
-        return self._op(("exp", a.series), lambda w: self._emit(f"{w}[k] = _taylor_exp({a.series}, {w}, k)"))
+        return self._op(("exp", a.series), lambda w: self._emit("exp", (w,), (a.series,)))
 
     def log(self, a: Value) -> Value:
         if a.is_const:
             return self._scalar(sp.log(a.const))
-        return self._op(("log", a.series), lambda w: self._emit(f"{w}[k] = _taylor_log({a.series}, {w}, k)"))
+        return self._op(("log", a.series), lambda w: self._emit("log", (w,), (a.series,)))
 
     def sin_cos(self, a: Value) -> tuple[Value, Value]:
         if a.is_const:
             return self._scalar(sp.sin(a.const)), self._scalar(sp.cos(a.const))
         if a.series not in self.sincos:
             s, c = self._new_series(), self._new_series()
-            self._emit(f"_taylor_sin_cos({a.series}, {s}, {c}, k)")
+            self._emit("sin_cos", (s, c), (a.series,))
             self.sincos[a.series] = (Value(series=s), Value(series=c))
         return self.sincos[a.series]
 
@@ -365,7 +356,7 @@ class _Builder:
         """The Value of the statement ``name = expr`` of rhs; its last new series is renamed `name`."""
         if self.is_const(expr):
             return self._scalar(expr, name)
-        self._emit("#", f"{name} = {to_code(expr)}")
+        self._emit("comment", const=f"{name} = {to_code(expr)}")
         return self.name(self.value(expr), name)
 
     def name(self, v: Value, name: str, start: int | None = None) -> Value:
@@ -384,7 +375,7 @@ def _ldlt(b: _Builder, solve: LinearSolve) -> list[Value]:
     n = solve.n
     m = [[b.env[sp.Symbol(target_local(solve.m[i][j]), real=True)] for j in range(i + 1)] for i in range(n)]
     f = [b.env[sp.Symbol(target_local(solve.f[i]), real=True)] for i in range(n)]
-    b._emit("#", "Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.")
+    b._emit("comment", const="Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.")
     d, low = [], {}
     for j in range(n):
         dj = m[j][j]
@@ -396,14 +387,12 @@ def _ldlt(b: _Builder, solve: LinearSolve) -> list[Value]:
             dj = b.name(dj, f"_d{j}")
         d.append(dj)
         mjj = m[j][j]
-        scale = f"{mjj.series}[0]" if not mjj.is_const else to_code(mjj.const)
-        pivot = f"{dj.series}[0]" if not dj.is_const else to_code(dj.const)
-        test = f"not {pivot} > _PIVOT_TOLERANCE*abs({scale})"
-        if dj.is_const:
-            b.program.setup += [f"if {test}:", f"{INDENT}return {j + 1}"]
+        if dj.is_const:     # then so is m_jj (d_j is m_jj minus terms that vanish)
+            b.program.setup.append(Setup("check", code=pivot_test(to_code(dj.const), to_code(mjj.const)), index=j + 1))
+        elif mjj.is_const:
+            b._emit("pivot", args=(dj.series,), const=to_code(mjj.const), index=j + 1)
         else:
-            b._emit(f"if k == 0 and {test}:")
-            b._emit(f"{INDENT}return {j + 1}")
+            b._emit("pivot", args=(dj.series, mjj.series), index=j + 1)
         for i in range(j + 1, n):
             lij = m[i][j]
             for k in range(j):
@@ -434,12 +423,9 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
     b = _Builder(2 * n)
     for local, source in rhs.loads:
         symbol = sp.Symbol(local, real=True)
-        if source.startswith("y["):
-            b.program.setup.append(f"{local} = X[{int(source[2:-1])}]")
-            b.env[symbol] = Value(series=local)
-        else:
-            b.program.setup.append(f"{local} = {source}")
-            b.env[symbol] = _c(symbol)
+        array, index = source[0], int(source[2:-1])    # the IR loads "y[i]" and "p[i]"
+        b.program.setup.append(Setup("state" if array == "y" else "param", local, index=index))
+        b.env[symbol] = Value(series=local) if array == "y" else _c(symbol)
     b.env[sp.Symbol("t", real=True)] = Value(series="_t")
     for name, expr in rhs.temps:
         b.env[sp.Symbol(name, real=True)] = b.bind(name, expr)
@@ -452,94 +438,28 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
             b.env[sp.Symbol(local, real=True)] = b.bind(local, expr)
     for i, v in enumerate(_ldlt(b, rhs.solve)):
         derivative[rhs.solve.offset + i] = v
-    b._emit("#", "The state's next coefficient: y[k + 1] = f[k]/(k + 1).")
+    b._emit("comment", const="The state's next coefficient: y[k + 1] = f[k]/(k + 1).")
     for i, v in enumerate(derivative):
         if v.is_const:
-            b._emit(f"X[{i}, k + 1] = ({to_code(v.const)} if k == 0 else 0.0)*_ik1")
+            b._emit("state", const=to_code(v.const), index=i)
         else:
-            b._emit(f"X[{i}, k + 1] = {v.series}[k]*_ik1")
-    renamed = b.renamed
-    if renamed:
-        pattern = re.compile(r"\b(" + "|".join(map(re.escape, renamed)) + r")\b")
-        b.program.body = [Op(pattern.sub(lambda m: renamed[m.group(1)], op.line), op.comment)
-                          for op in b.program.body]
-        b.program.rows = [renamed.get(row, row) for row in b.program.rows]
+            b._emit("state", args=(v.series,), index=i)
+    b.program.body = [op.renamed(b.renamed) for op in b.program.body]
+    b.program.rows = [b.renamed.get(row, row) for row in b.program.rows]
     b.program.periodic = periodic_coordinates(rhs, n)
     return b.program
 
 
-#: Each operation of the call notation as the loop that computes coefficient k of its result from
-#: coefficients 0..k of its arguments and 0..k−1 of the result (``{w}`` the result, ``{a}``, ``{b}``
-#: the arguments, ``{c}`` a constant; sin/cos write {w} and {b}): (summary comment, lines).
-#: The frequent ones (mul, square, div, sin/cos) sum even and odd terms into two accumulators:
-#: a single running sum is a chain of dependent additions (the loops are too short for
-#: vectorization to pay), and halving the chain makes the double pendulum's coefficients
-#: 1.8x faster (4.1 -> 2.3 us per call at order 20).
-_INLINE = {
-    "_taylor_mul": ("{w} = {a}*{b}", ["_s = {a}[k]*{b}[0] if k % 2 == 0 else 0.0", "_r = 0.0",
-                                      "for _j in range(0, k, 2):", "    _s += {a}[_j]*{b}[k - _j]",
-                                      "    _r += {a}[_j + 1]*{b}[k - 1 - _j]", "{w}[k] = _s + _r"]),
-    "_taylor_square": ("{w} = {a}**2", ["_m = (k + 1)//2", "_s = {a}[_m - 1]*{a}[k - _m + 1] if _m % 2 == 1 else 0.0",
-                                       "_r = 0.0", "for _j in range(0, _m - 1, 2):", "    _s += {a}[_j]*{a}[k - _j]",
-                                       "    _r += {a}[_j + 1]*{a}[k - 1 - _j]",
-                                       "{w}[k] = 2.0*(_s + _r) + ({a}[k//2]*{a}[k//2] if k % 2 == 0 else 0.0)"]),
-    "_taylor_div": ("{w} = {a}/{b}", ["_s = {a}[k] - ({b}[k]*{w}[0] if k % 2 == 1 else 0.0)", "_r = 0.0",
-                                      "for _j in range(1, k, 2):", "    _s -= {b}[_j]*{w}[k - _j]",
-                                      "    _r += {b}[_j + 1]*{w}[k - 1 - _j]", "{w}[k] = (_s - _r)/{b}[0]"]),
-    "_taylor_rdiv": ("{w} = {c}/{b}", ["_s = ({c} if k == 0 else 0.0) - ({b}[k]*{w}[0] if k % 2 == 1 else 0.0)",
-                                       "_r = 0.0", "for _j in range(1, k, 2):", "    _s -= {b}[_j]*{w}[k - _j]",
-                                       "    _r += {b}[_j + 1]*{w}[k - 1 - _j]", "{w}[k] = (_s - _r)/{b}[0]"]),
-    "_taylor_sqrt": ("{w} = sqrt({a})", ["if k == 0:", "    {w}[0] = math.sqrt({a}[0])", "else:",
-                                            "    _s = {a}[k]", "    for _j in range(1, k):",
-                                            "        _s -= {w}[_j]*{w}[k - _j]", "    {w}[k] = _s/(2.0*{w}[0])"]),
-    "_taylor_pow": ("{w} = {a}**{c}", ["if k == 0:", "    {w}[0] = {a}[0]**{c}", "else:", "    _s = 0.0",
-                                          "    for _j in range(k):",
-                                          "        _s += ({c}*(k - _j) - _j)*{a}[k - _j]*{w}[_j]",
-                                          "    {w}[k] = _s*_ik/{a}[0]"]),
-    "_taylor_exp": ("{w} = exp({a})", ["if k == 0:", "    {w}[0] = math.exp({a}[0])", "else:", "    _s = 0.0",
-                                          "    for _j in range(1, k + 1):", "        _s += _j*{a}[_j]*{w}[k - _j]",
-                                          "    {w}[k] = _s*_ik"]),
-    "_taylor_log": ("{w} = log({a})", ["if k == 0:", "    {w}[0] = math.log({a}[0])", "else:", "    _s = 0.0",
-                                          "    for _j in range(1, k):", "        _s += _j*{w}[_j]*{a}[k - _j]",
-                                          "    {w}[k] = ({a}[k] - _s*_ik)/{a}[0]"]),
-    "_taylor_sin_cos": ("{w}, {b} = sin({a}), cos({a})",
-                        ["if k == 0:", "    {w}[0] = _sin({a}[0])", "    {b}[0] = _cos({a}[0])", "else:",
-                         "    _ja = k*{a}[k]", "    _s = _ja*{b}[0] if k % 2 == 1 else 0.0",
-                         "    _c = _ja*{w}[0] if k % 2 == 1 else 0.0", "    _r = 0.0", "    _d = 0.0",
-                         "    for _j in range(1, k, 2):", "        _ja = _j*{a}[_j]", "        _jb = (_j + 1)*{a}[_j + 1]",
-                         "        _s += _ja*{b}[k - _j]", "        _c += _ja*{w}[k - _j]",
-                         "        _r += _jb*{b}[k - 1 - _j]", "        _d += _jb*{w}[k - 1 - _j]",
-                         "    {w}[k] = (_s + _r)*_ik", "    {b}[k] = -(_c + _d)*_ik"]),
-}
-
-
-def _inline(line: str) -> list[str]:
-    """A helper-call line of the program as its loop (`_INLINE`), or the line itself."""
-    match = CALL.match(line)
-    if not match:
-        return [line]
-    f, args = match.group("f"), [a.strip() for a in match.group("args").split(",")]
-    if f == "_taylor_sin_cos":
-        names = dict(a=args[0], w=args[1], b=args[2])
-    elif f in ("_taylor_mul",):
-        names = dict(w=match.group("w"), a=args[0], b=args[1])
-    elif f == "_taylor_square":
-        names = dict(w=match.group("w"), a=args[0])
-    elif f == "_taylor_div":
-        names = dict(w=match.group("w"), a=args[0], b=args[1])
-    elif f == "_taylor_rdiv":
-        names = dict(w=match.group("w"), c=args[0], b=args[1])
-    elif f == "_taylor_pow":
-        names = dict(w=match.group("w"), a=args[0], c=args[1])
-    else:
-        names = dict(w=match.group("w"), a=args[0])
-    summary, lines = _INLINE[f]
-    return ["# " + summary.format(**names)] + [line.format(**names) for line in lines]
-
-
 def emit_taylor(program: TaylorProgram) -> str:
-    """The source of ``taylor_coefficients`` and ``TAYLOR_WORK`` for `program`."""
+    """The source of ``taylor_coefficients``, ``TAYLOR_WORK`` and ``TAYLOR_PERIODIC`` for `program`."""
     rows = (["_t"] if program.uses_t else []) + program.rows
+    states = {s.name: s.index for s in program.setup if s.kind == "state"}
+    array_of = {**{name: "W" for name in rows}, **{name: "X" for name in states}}
+
+    def at(name: str, index) -> str:
+        """Coefficient `index` of the series `name`: its row of X or W (indexing the 2-d arrays directly
+        instead of through row views is 8% faster: no views to build and count references to)."""
+        return f"{array_of[name]}[{name}, {index}]"
     lines = [
         '"""Normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!, k = 0..order (order = X.shape[1] − 1),',
         "of the solution through y at t; W is a work array of shape (TAYLOR_WORK, order + 1).",
@@ -549,38 +469,37 @@ def emit_taylor(program: TaylorProgram) -> str:
         'Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""',
         "order = X.shape[1] - 1",
     ]
-    x_rows, setup = {}, []
-    for line in program.setup:
-        match = re.fullmatch(r"(\w+) = X\[(\d+)\]", line)
-        if match:
-            x_rows[match.group(1)] = int(match.group(2))
-        else:
-            setup.append(line)
-    lines += setup
+    for statement in program.setup:
+        if statement.kind == "param":
+            lines.append(f"{statement.name} = p[{statement.index}]")
+        elif statement.kind == "constant":
+            lines.append(f"{statement.name} = {statement.code}")
+        elif statement.kind == "check":
+            lines += [f"if not {statement.code}:", f"{INDENT}return {statement.index}"]
     lines.append("# Row indices: a state component's series is a row of X, an intermediate value's a row of W.")
-    lines += [f"{name} = {i}" for name, i in x_rows.items()]
+    lines += [f"{name} = {i}" for name, i in states.items()]
     lines += [f"{row} = {i}" for i, row in enumerate(rows)]
-    start = len(lines)
     lines += [f"for i in range({program.n_state}):", f"{INDENT}X[i, 0] = y[i]"]
     if program.uses_t:
-        lines += ["for k in range(order + 1):", f"{INDENT}_t[k] = 0.0", "_t[0] = t", "if order > 0:",
-                  f"{INDENT}_t[1] = 1.0"]
-    lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order",
-              f"{INDENT}_ik1 = 1.0/(k + 1)"]
+        lines += ["for k in range(order + 1):", f"{INDENT}{at('_t', 'k')} = 0.0", f"{at('_t', 0)} = t",
+                  "if order > 0:", f"{INDENT}{at('_t', 1)} = 1.0"]
+    reciprocals = "_ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order"
+    lines += ["for k in range(order):", INDENT + reciprocals, f"{INDENT}_ik1 = 1.0/(k + 1)"]
     for op in program.body:
-        lines += [INDENT + line for line in ([f"# {op.comment}"] if op.line == "#" else _inline(op.line))]
+        if op.kind == "comment":
+            body = [f"# {op.const}"]
+        elif op.kind == "pivot":
+            scale = at(op.args[1], 0) if len(op.args) > 1 else op.const
+            body = [f"if k == 0 and not {pivot_test(at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
+        elif op.kind == "state":
+            body = [f"X[{op.index}, k + 1] = {linear_line(op, at)}*_ik1"]
+        elif op.kind in LINEAR:
+            body = [linear_line(op, at)]
+        else:
+            summary, loop = convolution_loop(op, at)
+            body = [f"# {summary}", *loop]
+        lines += [INDENT + line for line in body]
     lines.append("return 0")
-    # name[k] -> W[name, k] (or X[...]): indexing the 2-d arrays directly instead of through row views
-    # is 8% faster (no views to build and count references to at every call)
-    # (one pattern for any name, looked up in a dict: an alternation of every row name made this
-    # substitution quadratic, 18 s for the 24-link chain)
-    array_of = {**{name: "W" for name in rows}, **{name: "X" for name in x_rows}}
-
-    def indexed(match):
-        name = match.group(1)
-        return f"{array_of[name]}[{name}, " if name in array_of else match.group(0)
-    pattern = re.compile(r"\b([A-Za-z_]\w*)\[")
-    lines[start:] = [line if line.lstrip().startswith("#") else pattern.sub(indexed, line) for line in lines[start:]]
     body = "\n".join(INDENT + line if line else "" for line in lines)
     return (
         '\n\n@njit(cache=True, error_model="numpy", fastmath={"contract"})\n'
@@ -606,35 +525,30 @@ def taylor_decomposition(ir: ModuleIR) -> TaylorProgram | Unsupported:
 
 
 def taylor_program(taylor: TaylorProgram | Unsupported) -> dict | None:
-    """The program as plain data (the call notation), or None when the module has none.
+    """The program as plain data (JSON), or None when the module has none.
 
     Stored with the module (cache metadata): `lagcomp.codegen.taylor_lanes`
-    writes batched kernels of any order from it, without sympy.
+    writes batched kernels of any order from it, without sympy.  ``setup``
+    and ``body`` hold the fields of `Setup` and `Op`; ``states`` the series
+    name of each state component, in order.
     """
     if isinstance(taylor, Unsupported):
         return None
     states = [None] * taylor.n_state
-    for line in taylor.setup:
-        match = re.fullmatch(r"(\w+) = X\[(\d+)\]", line)
-        if match:
-            states[int(match.group(2))] = match.group(1)
-    return dict(n_state=taylor.n_state, setup=list(taylor.setup), states=states, uses_t=taylor.uses_t,
-                body=[op.line for op in taylor.body], operations=taylor.operation_count,
-                periodic=list(taylor.periodic))
+    for statement in taylor.setup:
+        if statement.kind == "state":
+            states[statement.index] = statement.name
+    return dict(n_state=taylor.n_state, setup=[dataclasses.asdict(s) for s in taylor.setup], states=states,
+                uses_t=taylor.uses_t, body=[dataclasses.asdict(op) for op in taylor.body],
+                operations=taylor.operation_count, periodic=list(taylor.periodic))
 
 
-def taylor_source(taylor: TaylorProgram | Unsupported, events: bool) -> str:
-    """``taylor_coefficients`` and the driver template, or ``TAYLOR_REFUSED`` saying why there are none."""
+def taylor_source(taylor: TaylorProgram | Unsupported, events: bool = False) -> str:
+    """``taylor_coefficients`` with its data, or ``TAYLOR_REFUSED`` saying why the module has none.
+
+    The driver is library code (`lagcomp.integrate.drivers.taylor`); `events` is not used (the
+    driver takes the module's ``event_values`` kernel whether or not it has events).
+    """
     if isinstance(taylor, Unsupported):
         return f"\n\n#: Why this module has no Taylor integrator (method='taylor').\nTAYLOR_REFUSED = {str(taylor)!r}\n"
-    sweeps = template("sweeps")  # its generic adaptive loop, for taylor_run (as emit.sweeps_source does for the others)
-    start = sweeps.rindex("@njit", 0, sweeps.index("def sweep_adaptive("))
-    end = sweeps.rindex("@njit", 0, sweeps.index("def sweep_fixed("))
-    sweep = sweeps[start:end].replace("sweep_adaptive", "sweep_taylor_run").replace("ADAPTIVE_DRIVER", "taylor_run")
-    return (
-        emit_taylor(taylor)
-        + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/taylor.py\n\n"
-        + template("taylor", events=events)
-        + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py: sweep_adaptive for taylor_run\n\n"
-        + sweep.rstrip("\n") + "\n"
-    )
+    return emit_taylor(taylor)

@@ -13,7 +13,7 @@ same shape as ``rhs_lanes``, and the loop over lanes around it vectorizes
 (4 lanes per AVX2 instruction).  heyoka's batch mode compiles the same way.
 
 The source depends on the order, so it is written when a sweep asks for it
-(`taylor_lanes_source`), from the program's call notation alone (no sympy):
+(`taylor_lanes_source`), from the program's records alone (no sympy):
 `lagcomp.codegen.taylor.taylor_program` stores it with the model's module
 (cache metadata).  Each operation
 sums its terms in the order of the loop kernel (even and odd terms in two
@@ -43,28 +43,15 @@ them it does not vectorize)::
 from __future__ import annotations
 
 import math
-import re
 
-from lagcomp.codegen.templating import template
+from lagcomp.codegen.taylor_ops import CONVOLUTIONS, LINEAR, Op, Setup, linear_line, pivot_test
 
 INDENT = "    "
-
-#: A helper call of the call notation (``w[k] = _taylor_mul(a, b, k)``); `taylor._inline` parses it too.
-CALL = re.compile(r"^(?:(?P<w>\w+)\[k\] = )?(?P<f>_taylor_\w+)\((?P<args>.*), k\)$")
-_PIVOT = re.compile(r"^if k == 0 and not (?P<test>.*):$")
-_STATE = re.compile(r"^X\[(?P<i>\d+), k \+ 1\] = (?P<value>.*)\*_ik1$")
-_INDEXED = re.compile(r"\b([A-Za-z_]\w*)\[(k|0)\]")
-_CONDITIONAL = re.compile(r"^(?P<w>\w+)\[k\] = (?P<first>.*) if k == 0 else (?P<rest>.*)$")
 
 
 def _series(name: str, k: int) -> str:
     """The local holding coefficient k of the series `name` (a prefix no parameter or rhs local has)."""
     return f"_o{k}_{name}"
-
-
-def _at(text: str, k: int) -> str:
-    """`text` with ``name[k]`` and ``name[0]`` replaced by the locals of order `k` and 0."""
-    return _INDEXED.sub(lambda m: _series(m.group(1), k if m.group(2) == "k" else 0), text)
 
 
 def _sum(terms: list[str]) -> str:
@@ -85,55 +72,53 @@ def _both(even: list[str], odd: list[str]) -> str:
     return f"({_sum(even)}) + ({_sum(odd)})"
 
 
-def _operation(f: str, args: list[str], w: str | None, k: int) -> list[str]:
-    """Coefficient k of one series operation of the call notation (the recurrences of `taylor`)."""
+def _operation(op: Op, k: int) -> list[str]:
+    """Coefficient k of one operation of `CONVOLUTIONS` (the recurrences of `lagcomp.codegen.taylor`)."""
     s = _series
     inverse_k = repr(1.0 / k) if k else "0.0"
-    if f == "_taylor_mul":
-        a, b = args
+    f, w, c = op.kind, op.out[0], op.const
+    if f == "mul":
+        a, b = op.args
         even, odd = _convolution(k, a, b)
         return [f"{s(w, k)} = {_both(even, odd)}"]
-    if f == "_taylor_square":
-        (a,) = args
+    if f == "square":
+        (a,) = op.args
         pairs = [f"{s(a, j)}*{s(a, k - j)}" for j in range((k + 1) // 2)]
         middle = f"{s(a, k // 2)}*{s(a, k // 2)}" if k % 2 == 0 else None
         if not pairs:
             return [f"{s(w, k)} = {middle}"]
         doubled = f"2.0*({_both(pairs[0::2], pairs[1::2])})"
         return [f"{s(w, k)} = {doubled}" + (f" + {middle}" if middle else "")]
-    if f in ("_taylor_div", "_taylor_rdiv"):
-        numerator, b = args[:2]
-        top = s(numerator, k) if f == "_taylor_div" else (numerator if k == 0 else "0.0")
+    if f in ("div", "rdiv"):
+        b = op.args[-1]
+        top = s(op.args[0], k) if f == "div" else (c if k == 0 else "0.0")
         even, odd = _convolution(k, b, w, first=1)
         if not even:
             return [f"{s(w, k)} = {top}/{s(b, 0)}"]
         return [f"{s(w, k)} = ({top} - ({_both(even, odd)}))/{s(b, 0)}"]
-    if f == "_taylor_sqrt":
-        a = args[0]
+    a = op.args[0]
+    if f == "sqrt":
         if k == 0:
             return [f"{s(w, 0)} = math.sqrt({s(a, 0)})"]
         terms = [f"{s(w, j)}*{s(w, k - j)}" for j in range(1, k)]
         return [f"{s(w, k)} = ({s(a, k)} - ({_sum(terms)}))/(2.0*{s(w, 0)})"]
-    if f == "_taylor_pow":
-        a, c = args[:2]
+    if f == "pow":
         if k == 0:
             return [f"{s(w, 0)} = {s(a, 0)}**{c}"]
         terms = [f"({c}*{k - j} - {j})*{s(a, k - j)}*{s(w, j)}" for j in range(k)]
         return [f"{s(w, k)} = ({_sum(terms)})*{inverse_k}/{s(a, 0)}"]
-    if f == "_taylor_exp":
-        a = args[0]
+    if f == "exp":
         if k == 0:
             return [f"{s(w, 0)} = math.exp({s(a, 0)})"]
         terms = [f"{j}.0*{s(a, j)}*{s(w, k - j)}" for j in range(1, k + 1)]
         return [f"{s(w, k)} = ({_sum(terms)})*{inverse_k}"]
-    if f == "_taylor_log":
-        a = args[0]
+    if f == "log":
         if k == 0:
             return [f"{s(w, 0)} = math.log({s(a, 0)})"]
         terms = [f"{j}.0*{s(w, j)}*{s(a, k - j)}" for j in range(1, k)]
         return [f"{s(w, k)} = ({s(a, k)} - ({_sum(terms)})*{inverse_k})/{s(a, 0)}"]
-    if f == "_taylor_sin_cos":
-        a, sine, cosine = args
+    if f == "sin_cos":
+        sine, cosine = op.out
         if k == 0:
             return [f"{s(sine, 0)} = _vsin({s(a, 0)})", f"{s(cosine, 0)} = _vcos({s(a, 0)})"]
         scaled = lambda j: f"{j}.0*{s(a, j)}"  # noqa: E731
@@ -147,71 +132,54 @@ def _operation(f: str, args: list[str], w: str | None, k: int) -> list[str]:
     raise ValueError(f"no unrolled form of {f}")
 
 
-def _order_lines(body: list[str], k: int, states: dict[int, str]) -> list[str]:
-    """The program's operations at order k (`body`: the lines of the call notation)."""
+def _order_lines(body: list[Op], k: int, states: dict[int, str]) -> list[str]:
+    """The statements of order `k`: every operation of the program at k, pivot tests at k = 0."""
+    def at(name: str, index: str) -> str:
+        return _series(name, k if index == "k" else int(index))
     lines = []
-    for line in body:
-        if line.startswith("#") or line.startswith(INDENT):     # comments; the pivot test's return line
+    for op in body:
+        if op.kind == "comment":
             continue
-        pivot = _PIVOT.match(line)
-        if pivot:
+        if op.kind == "pivot":
             if k == 0:
-                lines.append(f"_ok = _ok & ({_at(pivot.group('test'), 0)})")
-            continue
-        state = _STATE.match(line)
-        if state:
-            i = int(state.group("i"))
-            value = state.group("value")
-            conditional = re.fullmatch(r"\((?P<c>.*) if k == 0 else 0\.0\)", value)
-            if conditional:
-                value = conditional.group("c") if k == 0 else "0.0"
-            else:
-                value = _at(value, k)
-            lines.append(f"{_series(states[i], k + 1)} = {value}*{1.0 / (k + 1)!r}")
-            continue
-        call = CALL.match(line)
-        if call:
-            args = [a.strip() for a in call.group("args").split(",")]
-            lines += _operation(call.group("f"), args, call.group("w"), k)
-            continue
-        conditional = _CONDITIONAL.match(line)
-        if conditional:
-            value = conditional.group("first") if k == 0 else conditional.group("rest")
-            lines.append(f"{_series(conditional.group('w'), k)} = {_at(value, k)}")
-            continue
-        target, value = line.split(" = ", 1)       # "w[k] = <linear in the arguments' [k]>"
-        lines.append(f"{_series(target.removesuffix('[k]'), k)} = {_at(value, k)}")
+                scale = _series(op.args[1], 0) if len(op.args) > 1 else op.const
+                lines.append(f"_ok = _ok & ({pivot_test(_series(op.args[0], 0), scale)})")
+        elif op.kind == "state":
+            lines.append(f"{_series(states[op.index], k + 1)} = {linear_line(op, at, first=k == 0)}*{1.0 / (k + 1)!r}")
+        elif op.kind in LINEAR:
+            lines.append(linear_line(op, at, first=k == 0))
+        else:
+            lines += _operation(op, k)
     return lines
 
 
 def taylor_lanes_source(program: dict, order: int, lanes: int) -> str:
     """The source of ``taylor_lanes`` and ``taylor_lanes_advance`` at `order` for `program`.
 
-    `program` has ``n_state``, ``setup`` (statements before the order
-    loop, over the scalar parameter vector ``p``), ``states`` (series name of
-    each state component, in order), ``uses_t`` and ``body`` (the operations
-    of one order k in the call notation).
+    `program` is `lagcomp.codegen.taylor.taylor_program`'s data:
+    ``n_state``, ``setup`` and ``body`` (the fields of its `Setup` and `Op`
+    records, `lagcomp.codegen.taylor_ops`), ``states`` (series name of each state component, in order),
+    ``uses_t`` and ``periodic``.
     """
     n_state, states = program["n_state"], dict(enumerate(program["states"]))
+    body = [Op(op["kind"], tuple(op["out"]), tuple(op["args"]), op["const"], op["index"]) for op in program["body"]]
     lines = ["_ok = True"]
-    for line in program["setup"]:
-        if re.fullmatch(r"\w+ = X\[\d+\]", line):
-            continue
-        if line.startswith("if "):
-            lines.append(f"_ok = _ok & ({line[len('if not '):-1]})")
-        elif line.startswith(INDENT):
-            continue
-        else:
-            lines.append(re.sub(r"\bp\[(\d+)\]", lambda m: f"P[{int(m.group(1)) * lanes} + _l]", line))
+    for statement in (Setup(**entry) for entry in program["setup"]):
+        if statement.kind == "param":
+            lines.append(f"{statement.name} = P[{statement.index * lanes} + _l]")
+        elif statement.kind == "constant":
+            lines.append(f"{statement.name} = {statement.code}")
+        elif statement.kind == "check":
+            lines.append(f"_ok = _ok & ({statement.code})")
     periodic = set(program.get("periodic", ()))
-    lines += [f"{_series(states[i], 0)} = _taylor_reduced(Y[{i * lanes} + _l], Y[{(n_state + i) * lanes} + _l])"
+    lines += [f"{_series(states[i], 0)} = reduced_angle(Y[{i * lanes} + _l], Y[{(n_state + i) * lanes} + _l])"
               if i in periodic else f"{_series(states[i], 0)} = Y[{i * lanes} + _l]" for i in range(n_state)]
     if program["uses_t"]:
         lines += [f"{_series('_t', 0)} = T[_l]", f"{_series('_t', 1)} = 1.0"]
         lines += [f"{_series('_t', k)} = 0.0" for k in range(2, order + 1)]
     for k in range(order):
         lines.append(f"# order {k}")
-        lines += _order_lines(program["body"], k, states)
+        lines += _order_lines(body, k, states)
     # coefficient 0 is y itself, also for a periodic coordinate (as in taylor_run)
     lines += [f"X[{(i * (order + 1) + k) * lanes} + _l] = "
               + (f"Y[{i * lanes} + _l]" if k == 0 else _series(states[i], k))
@@ -280,29 +248,32 @@ TERMS_MAX = 12_000
 def unrolled_terms(program: dict, order: int) -> int:
     """About how many products and sums `taylor_lanes_source` writes for `program` at `order`.
 
-    A convolution (a call of the call notation) has k + 1 terms at order k,
+    A convolution (an operation of `CONVOLUTIONS`) has k + 1 terms at order k,
     sin and cos twice that; any other operation (comments and pivot tests
     aside) one per order.
     """
-    operations = [line for line in program["body"] if not line.startswith(("if ", "#", INDENT))]
-    calls = [line for line in operations if CALL.match(line)]
-    convolutions = sum(2 if "_taylor_sin_cos(" in line else 1 for line in calls)
+    operations = [op["kind"] for op in program["body"] if op["kind"] not in ("pivot", "comment")]
+    calls = [kind for kind in operations if kind in CONVOLUTIONS]
+    convolutions = sum(2 if kind == "sin_cos" else 1 for kind in calls)
     return convolutions * order * (order + 1) // 2 + (len(operations) - len(calls)) * order
 
 
 def taylor_lanes_module(module_source: str, program: dict, order: int, lanes: int = LANES) -> str:
-    """A module for batched Taylor sweeps at `order`: the model's module, ``taylor_lanes`` and its driver.
+    """A module for batched Taylor sweeps at `order`: the model's module and its lane kernels of that order.
 
     The model's module comes first, whole, so that the new module stands on
     its own (numba caches it by its own file; a Dask worker builds it from
-    this text alone); numba compiles only the functions a sweep calls.
+    this text alone); numba compiles only the kernels a sweep calls.  The
+    loop around the kernels is library code
+    (`lagcomp.integrate.drivers.taylor_lanes.sweep_taylor_lanes`), which takes
+    ``TAYLOR_ORDER`` and ``TAYLOR_LANES`` with them.
     """
     return (
         module_source.rstrip("\n")
         + f"\n\n\n# {'-' * 76}\n# Batched Taylor sweeps at order {order}, {lanes} lanes"
         + " (lagcomp.codegen.taylor_lanes)\n\n"
-        + f"_TAYLOR_ORDER = {order}\n_TAYLOR_LANES = {lanes}\n\n\n"
+        + "from lagcomp.kernel_support.angles import reduced_angle  # noqa: E402\n\n"
+        + "#: The order and lane count of the lane kernels below.\n"
+        + f"TAYLOR_ORDER = {order}\nTAYLOR_LANES = {lanes}\n\n\n"
         + taylor_lanes_source(program, order, lanes)
-        + f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/taylor_lanes.py\n\n"
-        + template("taylor_lanes")
     )

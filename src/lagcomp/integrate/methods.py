@@ -143,10 +143,13 @@ METHODS = {
         Method("gauss3", 6, False, _COLLOCATION, collocation.GAUSS3,
                "3-stage Gauss-Legendre on (q, p), symplectic, order 6", unconstrained_only=True,
                kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
-        Method("taylor", 20, True, "taylor_run", None,
+        Method("taylor", 20, True, "lagcomp.integrate.drivers.taylor:taylor_run", None,
                "Taylor series to order ceil(-ln(tol)/2 + 1) (20 at machine precision), adaptive, dense "
                "output from the series (Jorba & Zou); unconstrained systems", unconstrained_only=True,
-               default_rtol=EPS, default_atol=None, rtol_min=EPS),
+               default_rtol=EPS, default_atol=None, rtol_min=EPS,
+               # the model's Taylor kernel, its event values, and its data: periodic coordinates, work rows
+               kernels=("taylor_coefficients", "event_values", "TAYLOR_PERIODIC", "TAYLOR_WORK"),
+               sweep="lagcomp.integrate.drivers.taylor:sweep_taylor"),
     )
 }
 

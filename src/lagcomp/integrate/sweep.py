@@ -332,9 +332,10 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
                               "events yet); drop `batched` for those outputs.")
         lanes = tuple(np.array(getattr(m.tableau, k)) for k in ("A", "B", "C", "E3", "E5")) if m.name == "dop853" else ()
         fixed, coefficients = (fixed[:7], lanes) if m.adaptive else (fixed, ())  # dop853_lanes: its stages, E3, E5
-        if m.name == "taylor":
-            spec, coefficients = _taylor_lanes_spec(model, rtol, atol), ()
         task = _Task(driver, m.adaptive, fixed, layout, coefficients, projecting)
+        if m.name == "taylor":      # the library loop around the lane kernels of this order (a module of their own)
+            spec = _taylor_lanes_spec(model, rtol, atol)
+            task = _Task(driver, True, fixed, layout, (), projecting, *TAYLOR_LANES_LOOP)
     else:
         task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments(), projecting, m.sweep, m.kernels)
     if client is None:
@@ -375,9 +376,12 @@ def _consistent_initial_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, 
             raise InitialConditionError(f"Trajectory {k} of the sweep ({where}): {err}") from err
 
 
-#: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`; taylor: `taylor_lanes.py`,
-#: in a module of its own per order).
+#: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`; taylor: lane kernels in a
+#: module of their own per order, `lagcomp.codegen.taylor_lanes`, and the library loop `TAYLOR_LANES_LOOP`).
 BATCHED = {"rk4": "rk4_lanes", "dop853": "dop853_lanes", "taylor": "taylor_lanes"}
+#: The batched Taylor sweep's library loop and what it takes from the lanes module, by name (then ``energy``).
+TAYLOR_LANES_LOOP = ("lagcomp.integrate.drivers.taylor_lanes:sweep_taylor_lanes",
+                     ("taylor_lanes", "taylor_lanes_advance", "TAYLOR_ORDER", "TAYLOR_LANES"))
 
 
 def _batched_driver(model, m) -> str:

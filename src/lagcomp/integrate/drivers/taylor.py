@@ -1,0 +1,324 @@
+"""The Taylor-series method: its driver `taylor_run` and per-trajectory sweep `sweep_taylor`.
+
+The model gives the method its ``taylor_coefficients`` kernel (`lagcomp.codegen.taylor` emits it,
+the recurrences written out as loops, for unconstrained systems whose equations use only
+functions with a Taylor recurrence), and two pieces of data: ``TAYLOR_PERIODIC``, the
+coordinates its equations see only through sin and cos, and ``TAYLOR_WORK``, the rows of the
+kernel's work array.  Each step:
+
+1. Order and step (Jorba & Zou, "A software package for the numerical
+   integration of ODEs by means of high-order Taylor methods", Experiment.
+   Math. 14 (2005) 99-117, sec. 3.2; the rule heyoka uses): the order is
+   fixed for the run, ``p = ceil(−½ ln ε + 1)`` with ε = min(rtol, atol)
+   (20 at ε = 2.2e-16).  At each step the series of the solution to order p
+   is computed, and with ``‖·‖`` the max norm over the state,
+   ``ρ_j = (s / ‖y[j]‖)^(1/j)`` for j = p − 1 and p, s = ‖y‖ (relative
+   control) or 1 when ``rtol ‖y‖ ≤ atol`` (absolute control); the step is
+   ``h = min(ρ_{p−1}, ρ_p) · exp(−0.7/(p − 1)) / e²``, clamped to
+   ``max_step`` and to the end of the span.  Then the truncation term is
+   about ``s e^(−2p) ≤ ε s``: no step is ever rejected, and ``nrejected``
+   stays 0.  When both coefficients vanish (a polynomial solution) the step
+   is only limited by ``max_step`` and the span.  The series is computed
+   at y, except that each periodic coordinate enters reduced to [−π, π]
+   with the carry of step 2 folded in (`lagcomp.kernel_support.angles`):
+   an angle that has wound to θ ≈ 500 is stored to ulp(500) = 5.7e-14, and
+   the rhs evaluated there took in that rounding at every step (the double
+   pendulum's relative energy error at t = 10⁴, rms over 16 starts 1 ulp
+   apart, is 2.0e-11 without, 5.4e-13 with it: ``python -m
+   bench.taylor_error_sources``).  The norms of the step rule stay those of
+   y (with the reduced state: 2.4e-13, for 21% more steps).
+2. The new state is the series at h, summed by Horner's rule from the top
+   order down, and its increment added to y with compensated (Kahan)
+   summation (that energy error is 3.3e-11 with a plain sum, the same
+   bench); the carry is an argument, so that a run resumed chunk by chunk
+   is bitwise the same as one call (simulate keeps it; sweeps pass an empty
+   array and the carry restarts with each call).
+3. Dense output is the series itself: ``t_eval`` points and events inside
+   the step are evaluated on it exactly (`events.dense_state` of kind
+   ``DENSE_SERIES``), events located by Brent's method on it as for DOP853.
+
+``nfev`` counts evaluations of ``taylor_coefficients`` (one per step).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, types
+
+from lagcomp.integrate.drivers.events import DENSE_SERIES, dense_state, event_crossings, record_events
+from lagcomp.integrate.drivers.kernel_types import (
+    ENERGY,
+    EVENTS,
+    FLOAT,
+    INDICES,
+    INT,
+    MATRIX,
+    OUTCOME,
+    TAYLOR,
+    VECTOR,
+)
+from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
+from lagcomp.integrate.status import Status
+from lagcomp.kernel_support.angles import reduced_angle
+
+#: taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock, counters, p, projecting,
+#: residual_max, t_end, rtol, atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys, directions,
+#: actions, ev_t, ev_y, ev_i, carry)
+SIGNATURE = OUTCOME(TAYLOR, EVENTS, INDICES, INT, VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT,
+                    FLOAT, FLOAT, INT, INT, INT, VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX, INDICES,
+                    VECTOR)
+
+
+def taylor_order(rtol: float, atol: float) -> int:
+    """The order `taylor_run` uses for these tolerances: ceil(−½ ln min(rtol, atol) + 1), at least 2."""
+    return max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol)) + 1.0)))
+
+
+@njit(SIGNATURE, cache=True, error_model="numpy", nogil=True)
+def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock, counters, p, projecting,
+               residual_max, t_end, rtol, atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
+               directions, actions, ev_t, ev_y, ev_i, carry):
+    """Adaptive Taylor method of order p = ceil(−½ ln min(rtol, atol) + 1); see the module docstring.
+
+    ``taylor_coefficients`` and ``event_values`` are the model's kernels, ``periodic`` (int64, the
+    state indices reduced to [−π, π]) and ``work_rows`` its ``TAYLOR_PERIODIC`` and ``TAYLOR_WORK``.
+    The other arguments, statuses and resuming are those of the embedded Runge-Kutta driver
+    (`lagcomp.integrate.drivers`: the protocol); ``projecting`` and ``residual_max`` are unused (the
+    method takes unconstrained systems only).  ``carry`` float64[n] is the carry of the compensated
+    summation, kept across calls by the caller (start with zeros); with an empty array the carry
+    restarts at each call (sweeps).  ``clock[1]`` holds the last step taken.
+    """
+    n = y.shape[0]
+    cap = ts.shape[0]
+    n_eval = t_eval.shape[0]
+    use_t_eval = n_eval > 0
+    order = max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol)) + 1.0)))
+    rho_factor = math.exp(-0.7 / (order - 1)) / (math.e * math.e)
+
+    # Work arrays, allocated once per call.
+    X = np.empty((n, order + 1))
+    W = np.empty((work_rows, order + 1))
+    y_new = np.empty(n)
+    y_series = np.empty(n)              # where the series is computed: y, periodic coordinates reduced
+    compensation = carry if carry.shape[0] == n else np.zeros(n)   # no carry kept by the caller: one for this call
+    n_events = directions.shape[0]
+    g_old = np.empty(n_events)
+    g_new = np.empty(n_events)
+    g_work = np.empty(n_events)
+    y_work = np.empty(n)
+    crossed = np.zeros(n_events, dtype=np.bool_)
+    crossing_times = np.empty(n_events)
+
+    n_saved = 0
+    t = clock[0]
+    if t >= t_end:
+        return Status.DONE, n_saved
+    while counters[3] < n_eval and t_eval[counters[3]] <= t:
+        counters[3] += 1
+    if n_events > 0:
+        event_values(t, y, p, g_old)
+
+    while True:
+        if t >= t_end:
+            return Status.DONE, n_saved
+        if counters[1] >= max_steps:
+            return Status.MAX_STEPS, n_saved
+        if counters[1] >= pause_at:
+            return Status.PAUSED, n_saved
+
+        # The series at (t, y), and the step from its last two coefficients.
+        for i in range(n):
+            y_series[i] = y[i]
+        for i in periodic:
+            y_series[i] = reduced_angle(y[i], compensation[i])
+        status = taylor_coefficients(t, y_series, p, X, W)
+        counters[0] += 1
+        if status != 0:
+            return Status.RHS_FAILED, n_saved
+        for i in periodic:
+            X[i, 0] = y[i]                      # the dense output's constant term: y itself
+        # Non-finite coefficients: an infinite one among the last two would make the step 0 (-3, "too
+        # small"), so those are tested here; any other reaches y_new through the Horner sum, tested there.
+        norm_y = 0.0
+        norm_last = 0.0
+        norm_before = 0.0
+        for i in range(n):
+            norm_y = max(norm_y, abs(y[i]))
+            norm_last = max(norm_last, abs(X[i, order]))
+            norm_before = max(norm_before, abs(X[i, order - 1]))
+        if not (norm_last < np.inf and norm_before < np.inf):      # (also false for NaN)
+            return Status.NONFINITE, n_saved
+        scale = 1.0 if rtol * norm_y <= atol else norm_y
+        rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
+        h = min(rho * rho_factor, max_step)     # inf when both coefficients vanish
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        if not h >= min_step:                   # (true for NaN)
+            return Status.STEP_TOO_SMALL if h < min_step else Status.NONFINITE, n_saved
+        t_new = t + h
+        if t_new > t_end:
+            t_new = t_end
+        h = t_new - t
+
+        # Stop before a step whose outputs would not fit (as the embedded Runge-Kutta driver does).
+        room = cap - n_saved
+        need = 0
+        if use_t_eval:
+            j = counters[3]
+            while j < n_eval and t_eval[j] <= t_new and need <= room:
+                need += 1
+                j += 1
+        elif counters[4] + 1 >= save_every or t_new >= t_end:
+            need = 1
+        if need > room and (n_saved > 0 or not use_t_eval):
+            return Status.BUFFER_FULL, n_saved
+        if counters[5] + n_events > ev_t.shape[0]:
+            return Status.BUFFER_FULL, n_saved
+        if n_events > 0 and not use_t_eval and n_saved >= cap:
+            return Status.BUFFER_FULL, n_saved    # a terminal event saves its row
+
+        # The new state: the series at h (Horner), its increment added with compensation.
+        for i in range(n):
+            acc = 0.0
+            for kk in range(order, 0, -1):
+                acc = (acc + X[i, kk]) * h
+            increment = acc - compensation[i]
+            y_new[i] = y[i] + increment
+            compensation[i] = (y_new[i] - y[i]) - increment
+            if not np.isfinite(y_new[i]):
+                return Status.NONFINITE, n_saved
+
+        stop = False
+        if n_events > 0:
+            event_values(t_new, y_new, p, g_new)
+            if event_crossings(g_old, g_new, directions, actions, crossed) > 0:
+                n_recorded, t_stop = record_events(event_values, DENSE_SERIES, X, y, t, h, p, g_old, g_new, crossed,
+                                                   actions, crossing_times, ev_t, ev_y, ev_i, counters[5], y_work,
+                                                   g_work)
+                counters[5] = n_recorded
+                if t_stop < np.inf:
+                    stop = True
+                    t_new = t_stop
+                    dense_state(DENSE_SERIES, X, y, t, h, t_stop, y_new)
+                    for i in range(n):
+                        compensation[i] = 0.0
+
+        # Outputs of the step t -> t_new: t_eval points on the series, or every save_every-th step.
+        if use_t_eval:
+            j = counters[3]
+            while j < n_eval and t_eval[j] <= t_new and n_saved < cap:
+                te = t_eval[j]
+                ts[n_saved] = te
+                if te == t_new:
+                    for i in range(n):
+                        ys[n_saved, i] = y_new[i]
+                else:
+                    u = te - t
+                    for i in range(n):
+                        acc = 0.0
+                        for kk in range(order, 0, -1):
+                            acc = (acc + X[i, kk]) * u
+                        ys[n_saved, i] = y[i] + acc
+                n_saved += 1
+                j += 1
+            counters[3] = j
+            if j < n_eval and t_eval[j] <= t_new:
+                return Status.BUFFER_FULL, n_saved    # more points in one step than a whole buffer
+        else:
+            counters[4] += 1
+            if counters[4] >= save_every or t_new >= t_end or stop:
+                ts[n_saved] = t_new
+                for i in range(n):
+                    ys[n_saved, i] = y_new[i]
+                n_saved += 1
+                counters[4] = 0
+
+        # Commit the step.
+        for i in range(n):
+            y[i] = y_new[i]
+        t = t_new
+        clock[0] = t
+        clock[1] = h
+        counters[1] += 1
+        if stop:
+            return Status.TERMINATED, n_saved
+        for ev in range(n_events):
+            g_old[ev] = g_new[ev]
+
+
+#: sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy, Y0, P, projecting, t0, t_end,
+#: rtol, atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
+#: status, counts, dense, energy_stats, event_count, event_t, event_y, coefficients)
+SWEEP_SIGNATURE = types.none(TAYLOR, EVENTS, INDICES, INT, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT,
+                             FLOAT, INT, INT, VECTOR, types.boolean, INDICES, INDICES, MATRIX, VECTOR, INDICES,
+                             types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, types.int64[:, ::1],
+                             types.float64[:, :, ::1], types.float64[:, :, :, ::1], types.UniTuple(VECTOR, 1))
+
+
+@njit(SWEEP_SIGNATURE, cache=True, error_model="numpy", nogil=True)
+def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy, Y0, P, projecting, t0, t_end, rtol,
+                 atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
+                 status, counts, dense, energy_stats, event_count, event_t, event_y, coefficients):
+    """Trajectory k from (t0, Y0[k]) with parameters P[k] to t_end by `taylor_run`, for every k.
+
+    The outputs of a sweep (`lagcomp.integrate.sweep`): ``final`` (N, 2n), ``t_final``, ``status``,
+    ``counts`` (N, 3) = [nfev, nsteps, nrejected]; ``dense`` (N, m, 2n) the ``t_eval`` rows (after t0;
+    ``save_initial`` says whether t0 is one too); ``energy_stats`` (N, 2) the initial energy and the
+    largest |E − E₀| over the saved rows; ``event_count`` (N, E) and the first occurrences in ``event_t``
+    (N, E, cap) and ``event_y`` (N, E, cap, 2n).  ``coefficients`` holds the carry `taylor_run` takes
+    (empty: it restarts with each call).  The trajectories release the GIL: the caller runs disjoint
+    row ranges on several threads.
+    """
+    n_traj = Y0.shape[0]
+    n2 = Y0.shape[1]
+    n_events = directions.shape[0]
+    cap = event_t.shape[2]
+    for k in range(n_traj):
+        y = Y0[k].copy()
+        p = P[k]
+        clock = np.zeros(2)
+        clock[0] = t0
+        counters = np.zeros(6, dtype=np.int64)
+        residual = np.zeros(1)
+        ts = np.empty(SWEEP_ROWS)
+        ys = np.empty((SWEEP_ROWS, n2))
+        rows_e = max(n_events, 1)
+        ev_t = np.empty(rows_e)
+        ev_y = np.empty((rows_e, n2))
+        ev_i = np.empty(rows_e, dtype=np.int64)
+        e0 = energy(t0, y, p)
+        deviation = 0.0
+        row = 0
+        if dense.shape[1] > 0 and save_initial:
+            for c in range(n2):
+                dense[k, 0, c] = y[c]
+            row = 1
+        for e in range(n_events):
+            event_count[k, e] = 0
+        while True:
+            counters[5] = 0
+            code, n_saved = taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock, counters, p,
+                                       projecting, residual, t_end, rtol, atol, max_step, max_steps, NO_PAUSE,
+                                       save_every, t_eval, ts, ys, directions, actions, ev_t, ev_y, ev_i,
+                                       coefficients[0])
+            deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
+            for r in range(counters[5]):
+                e = ev_i[r]
+                j = event_count[k, e]
+                if j < cap:
+                    event_t[k, e, j] = ev_t[r]
+                    for c in range(n2):
+                        event_y[k, e, j, c] = ev_y[r, c]
+                event_count[k, e] = j + 1
+            if code != Status.BUFFER_FULL:
+                break
+        for c in range(n2):
+            final[k, c] = y[c]
+        t_final[k] = clock[0]
+        status[k] = code
+        counts[k, 0] = counters[0]
+        counts[k, 1] = counters[1]
+        counts[k, 2] = counters[2]
+        energy_stats[k, 0] = e0
+        energy_stats[k, 1] = deviation
