@@ -35,3 +35,7 @@ RESIDUAL = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
 EVENTS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
 #: ``energy(t, y, p) -> float``: T + V at ``y`` (the sweeps' energy drift).
 ENERGY = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
+#: bool[::1]: a flag per lane of a batch.
+FLAGS = types.boolean[::1]
+#: ``rhs_lanes(T, Y, P, out, bad)``: out[:, l] = y' of lane l; T, bad (B,), Y, out (2n, B), P (n_p, B); bad: M singular.
+RHS_LANES = types.FunctionType(types.none(VECTOR, MATRIX, MATRIX, MATRIX, FLAGS))
