@@ -329,10 +329,11 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         if m.adaptive and (rows or want_events):
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "
                               "events yet); drop `batched` for those outputs.")
-        fixed, coefficients = (fixed[:7], m.driver_arguments()[:5]) if m.adaptive else (fixed, ())
-        if m.name == "taylor":
-            spec, coefficients = _taylor_lanes_spec(model, rtol, atol), ()
-        task = _Task(driver, m.adaptive, fixed, layout, coefficients, projecting)
+        fixed = fixed[:7] if m.adaptive else fixed      # (the lane loops take their tableaux from `tableaux`)
+        task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",))
+        if m.name == "taylor":      # the template loop of the lanes module of this order (a module of its own)
+            spec = _taylor_lanes_spec(model, rtol, atol)
+            task = _Task(driver, m.adaptive, fixed, layout, (), projecting)
     else:
         task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments(), projecting, m.sweep, m.kernels)
     if client is None:
@@ -373,9 +374,11 @@ def _consistent_initial_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, 
             raise InitialConditionError(f"Trajectory {k} of the sweep ({where}): {err}") from err
 
 
-#: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`; taylor: `taylor_lanes.py`,
-#: in a module of its own per order).
-BATCHED = {"rk4": "rk4_lanes", "dop853": "dop853_lanes", "taylor": "taylor_lanes"}
+#: Batched (SIMD) sweep loops by method: library loops around the model's lane kernel ``rhs_lanes``
+#: (`lagcomp.integrate.drivers.lanes`); taylor: `taylor_lanes.py`, in a module of its own per order.
+BATCHED = {"rk4": "lagcomp.integrate.drivers.lanes:sweep_rk4_lanes",
+           "dop853": "lagcomp.integrate.drivers.lanes:sweep_dop853_lanes",
+           "taylor": "taylor_lanes"}
 
 
 def _batched_driver(model, m) -> str:
@@ -387,7 +390,7 @@ def _batched_driver(model, m) -> str:
         raise OptionError(f"`batched=True` is available for {sorted(BATCHED)}; not yet for {m.name}.")
     if m.name == "taylor":
         return BATCHED["taylor"]       # check_method has checked that the model has a Taylor program
-    if not hasattr(model.kernels, f"sweep_{BATCHED[m.name]}"):
+    if not hasattr(model.kernels, "rhs_lanes"):
         raise OptionError(f"{model.name!r} has no batched kernel (constrained, or more coordinates than "
                           "lagcomp.codegen.lower.UNROLL_MAX, whose LDLᵀ solve is a loop).")
     return BATCHED[m.name]
