@@ -6,7 +6,7 @@ scalar kernel's source, before both became library code and IR (#19):
     python -m tests.golden_lanes   # rewrites tests/data/lanes_golden.npz (only when a change is meant)
 
 The double pendulum (sin and cos in its lanes) and the driven pendulum (a time-dependent system:
-every lane reads its own time) over 45 trajectories: a full block of 32 lanes and a partial one.
+every lane reads its own time) over 45 trajectories: with the template's 32 lanes a full block and a partial one.
 """
 
 from __future__ import annotations

@@ -45,8 +45,8 @@ from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
 #: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread
-#: (batched drivers: enough trajectories to fill the 32 lanes of a batch several times over, so that
-#: few lanes idle while the last trajectories of the chunk finish).
+#: (batched drivers: enough trajectories to fill a block of lanes, 64 to 128 (`drivers.lanes`), or the 32
+#: lanes of a batched Taylor sweep several times over, so that few lanes idle while the last ones finish).
 CHUNK_SECONDS, FIRST_CHUNK_PER_THREAD, FIRST_BATCHED_CHUNK_PER_THREAD = 0.5, 8, 128
 #: Solution-style status of trajectories a Ctrl-C left unstarted.
 NOT_RUN = 2

@@ -1,4 +1,4 @@
-"""Batched (SIMD) sweeps: RK4 and DOP853 over blocks of 32 trajectories, one lane kernel call per stage.
+"""Batched (SIMD) sweeps: RK4 and DOP853 over blocks of trajectories, one lane kernel call per stage.
 
 The model's lane kernel ``rhs_lanes`` (emitted per model, `lagcomp.codegen.lower`) evaluates the
 right-hand side of B trajectories at once, laid out as structure of arrays (``Y[i, l]``: component
@@ -13,7 +13,7 @@ kernel evaluates a whole block, so calling it through its address costs nothing 
 `sweep_rk4_lanes` is the batched counterpart of the RK4 sweep: the arithmetic of ``rk4_run`` in
 the same order, lanes in lock-step (a fixed step makes every lane take the same steps).
 `sweep_dop853_lanes` is that of the DOP853 sweep: every lane with its own step-size control.
-Trajectories go in blocks of `LANES` whose work arrays stay in the L1 cache.  A lane whose mass
+Trajectories go in blocks of `RK4_LANES` and `DOP853_LANES`.  A lane whose mass
 matrix turns singular (`Status.RHS_FAILED`) or whose state turns non-finite (`Status.NONFINITE`)
 keeps its last good state and time, as the scalar drivers do.
 
@@ -35,8 +35,14 @@ from lagcomp.integrate.drivers.kernel_types import ENERGY, FLOAT, INT, MATRIX, R
 from lagcomp.integrate.status import Status
 from lagcomp.integrate.tableaux import DOP853, RK4, driver_arguments
 
-#: Trajectories per block: the lane kernel's batch width.
-LANES = 32
+#: Trajectories per block (the lane kernel's batch width B).  A kernel call and a step cost a fixed time per
+#: block besides their time per lane, so wider blocks are faster until their work arrays leave the caches
+#: or, for DOP853, until the lanes waiting for the block's slowest one cost more (RK4's lanes all take the
+#: same steps).  Against the 32-lane template loops (the loops alone, one thread, 512-1024 trajectories of
+#: the double pendulum, Hénon-Heiles, the 10-link chain): RK4 at 128 lanes 1.27x, 1.35x, 0.99x (the chain's
+#: kernel dominates), DOP853 at 64 lanes 1.10x, 1.07x, 0.99x (at 128: 0.99x, 0.91x, 0.92x); these loops at
+#: 32 lanes: RK4 1.00x, 0.95x, 0.99x, DOP853 1.05x, 1.02x, 1.01x.
+RK4_LANES, DOP853_LANES = 128, 64
 
 #: The outputs both loops write (after their settings): final, t_final, status, counts, dense, energy_stats.
 _OUTPUTS = (MATRIX, VECTOR, types.int64[::1], types.int64[:, ::1], types.float64[:, :, ::1], MATRIX)
@@ -79,7 +85,7 @@ _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
       cache=True, error_model="numpy", nogil=True)
 def sweep_rk4_lanes(rhs_lanes, energy, Y0, P, t0, dt, n_steps, t_end, save_every, final, t_final, status, counts,
                     dense, energy_stats):
-    """RK4 over the trajectories (Y0[k], P[k]) in blocks of `LANES`, ``n_steps`` steps of ``dt`` up to ``t_end``.
+    """RK4 over the trajectories (Y0[k], P[k]) in blocks of `RK4_LANES`, ``n_steps`` steps of ``dt`` to ``t_end``.
 
     Step k goes from ``t0 + k dt`` to ``min(t0 + (k+1) dt, t_end)``, the last one ending at ``t_end``,
     as in ``rk4_run``; a row (dense output, energy) is kept every ``save_every`` steps and after the last.
@@ -87,8 +93,8 @@ def sweep_rk4_lanes(rhs_lanes, energy, Y0, P, t0, dt, n_steps, t_end, save_every
     n_traj = Y0.shape[0]
     n2 = Y0.shape[1]
     n_p = P.shape[1]
-    for a in range(0, n_traj, LANES):
-        lanes = min(LANES, n_traj - a)
+    for a in range(0, n_traj, RK4_LANES):
+        lanes = min(RK4_LANES, n_traj - a)
         Y = np.empty((n2, lanes))
         Pl = np.empty((n_p, lanes))
         for l in range(lanes):
@@ -181,7 +187,7 @@ def sweep_rk4_lanes(rhs_lanes, energy, Y0, P, t0, dt, n_steps, t_end, save_every
       cache=True, error_model="numpy", nogil=True)
 def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step, max_steps, save_every, final,
                        t_final, status, counts, dense, energy_stats):
-    """DOP853 over the trajectories (Y0[k], P[k]) in blocks of `LANES`, each lane with its own steps.
+    """DOP853 over the trajectories (Y0[k], P[k]) in blocks of `DOP853_LANES`, each lane with its own steps.
 
     The lanes advance in lock-step *trials*: every iteration, each running
     lane tries one step of its own size h from its own t (the stages of all
@@ -196,8 +202,8 @@ def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step
     n_p = P.shape[1]
     n_stages = _B.shape[0]
     n_k = _E5.shape[0]
-    for a in range(0, n_traj, LANES):
-        lanes = min(LANES, n_traj - a)
+    for a in range(0, n_traj, DOP853_LANES):
+        lanes = min(DOP853_LANES, n_traj - a)
         Y = np.empty((n2, lanes))
         Pl = np.empty((n_p, lanes))
         for l in range(lanes):
