@@ -28,10 +28,10 @@ GRIDS = {
 
 #: run label -> sweep options (t_span first)
 RUNS = {
-    "rk4": dict(t_span=(0.0, 5.0), method="rk4", dt=1e-2, save_every=50, output=("dense", "energy")),
-    "rk4_last_step_short": dict(t_span=(0.0, 1.0), method="rk4", dt=0.3, output="energy"),
-    "dop853": dict(t_span=(0.0, 10.0), method="dop853", rtol=1e-10, atol=1e-10, output="energy"),
-    "dop853_loose": dict(t_span=(0.0, 10.0), method="dop853", rtol=1e-5, atol=1e-7, max_step=0.5),
+    "rk4": {"t_span": (0.0, 5.0), "method": "rk4", "dt": 1e-2, "save_every": 50, "output": ("dense", "energy")},
+    "rk4_last_step_short": {"t_span": (0.0, 1.0), "method": "rk4", "dt": 0.3, "output": "energy"},
+    "dop853": {"t_span": (0.0, 10.0), "method": "dop853", "rtol": 1e-10, "atol": 1e-10, "output": "energy"},
+    "dop853_loose": {"t_span": (0.0, 10.0), "method": "dop853", "rtol": 1e-5, "atol": 1e-7, "max_step": 0.5},
 }
 
 #: Sweep outputs compared.

@@ -18,8 +18,8 @@ def test_batched_sweeps_are_bitwise_equal(computed):
     assert not different, f"batched sweeps changed: {different}"
 
 
-@pytest.mark.parametrize("options", [dict(method="rk4", dt=0.01, output="energy"),
-                                     dict(method="dop853", rtol=1e-9, atol=1e-9, output="energy")])
+@pytest.mark.parametrize("options", [{"method": "rk4", "dt": 0.01, "output": "energy"},
+                                     {"method": "dop853", "rtol": 1e-9, "atol": 1e-9, "output": "energy"}])
 def test_blocks_of_lanes_do_not_change_a_trajectory(compiled, options):
     """Full and partial blocks of any width (the golden grids fit in one block): 300 trajectories at once
     give bitwise what the same trajectories give in sweeps of 45 (each its own partial block)."""

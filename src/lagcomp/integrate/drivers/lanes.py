@@ -31,7 +31,14 @@ from math import lcm
 import numpy as np
 from numba import njit, types
 
-from lagcomp.integrate.drivers.kernel_types import ENERGY, FLOAT, INT, MATRIX, RHS_LANES, VECTOR
+from lagcomp.integrate.drivers.kernel_types import (
+    ENERGY,
+    FLOAT,
+    INT,
+    MATRIX,
+    RHS_LANES,
+    VECTOR,
+)
 from lagcomp.integrate.status import Status
 from lagcomp.integrate.tableaux import DOP853, RK4, driver_arguments
 
@@ -319,9 +326,7 @@ def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step
                         nonfinite[l] = False
                         starting[l] = False
                 if running[l]:
-                    t_new = t[l] + h_abs[l]
-                    if t_new > t_end:
-                        t_new = t_end
+                    t_new = min(t[l] + h_abs[l], t_end)
                     if not (h_abs[l] >= min_step[l] and t_new < np.inf):
                         code[l] = Status.STEP_TOO_SMALL if h_abs[l] < min_step[l] and not nonfinite[l] \
                             else Status.NONFINITE
