@@ -630,9 +630,10 @@ class Model:
             Run the chunks as Dask tasks; workers rebuild the kernels from
             the emitted source (once per worker process).
         batched : bool
-            Advance blocks of 32 trajectories together through SIMD kernels
-            (final states and energy errors only).  rk4 and dop853: through
-            ``rhs_lanes``, each trajectory with its own steps for dop853,
+            Advance blocks of trajectories together through SIMD kernels
+            (final states and energy errors only).  rk4 and dop853: blocks
+            of 128 and 64 through ``rhs_lanes``, each trajectory with its own
+            steps for dop853,
             about 2x the throughput, with the arithmetic of the scalar path
             (sin and cos included, templates/trig.py): the same results
             bitwise while the arguments of sin and cos stay below 1e5 in size

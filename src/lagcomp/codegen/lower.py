@@ -81,23 +81,29 @@ def _baumgarte(eom: EOM) -> tuple[sp.Symbol, sp.Symbol]:
     return tuple(gains)
 
 
-def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
-    """Map each model symbol to a local symbol in the user namespace, and list the loads that bind them.
+def _slots(eom: EOM) -> list[tuple[sp.Symbol, str, str, int]]:
+    """Each model symbol with its local in the user namespace and where the kernels read it:
+    (symbol, local, array, index), the array ``y`` (state) or ``p`` (parameters).
 
     Coordinates and velocities are named after the coordinate (``q_x``, ``qd_x``; the velocity
     symbol's own name is ``x_dot``), parameters after themselves (``p_k``); the Baumgarte gains
     are lagcomp's, `BAUMGARTE`.
     """
     n, names = eom.n, eom.system.coordinate_names
-    sources = [(s, user_local("q", names[i], i), f"y[{i}]") for i, s in enumerate(eom.q)]
-    sources += [(s, user_local("qd", names[i], i), f"y[{n + i}]") for i, s in enumerate(eom.qd)]
-    sources += [(s, user_local("p", s.name, k), f"p[{k}]") for k, s in enumerate(eom.parameters)]
+    slots = [(s, user_local("q", names[i], i), "y", i) for i, s in enumerate(eom.q)]
+    slots += [(s, user_local("qd", names[i], i), "y", n + i) for i, s in enumerate(eom.qd)]
+    slots += [(s, user_local("p", s.name, k), "p", k) for k, s in enumerate(eom.parameters)]
     if eom.k:
-        sources += [(s, BAUMGARTE[i], f"p[{len(eom.parameters) + i}]") for i, s in enumerate(_baumgarte(eom))]
+        slots += [(s, BAUMGARTE[i], "p", len(eom.parameters) + i) for i, s in enumerate(_baumgarte(eom))]
+    return slots
+
+
+def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
+    """Map each model symbol to its local symbol (`_slots`), and list the loads that bind them (``y[0]``)."""
     mapping, loads = {}, []
-    for symbol, local, source in sources:
+    for symbol, local, array, index in _slots(eom):
         mapping[symbol] = sp.Symbol(local, real=True)
-        loads.append((local, source))
+        loads.append((local, f"{array}[{index}]"))
     # distinct by construction: prefixes per kind, and a System refuses two symbols of one name
     assert len({local for local, _ in loads}) == len(loads), loads
     mapping[t] = sp.Symbol("t", real=True)
@@ -329,7 +335,7 @@ def _canonical_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 
 def _rhs_kernel(eom: EOM, mapping, loads) -> Kernel:
-    """dy/dt = (q̇, q̈) of an unconstrained system, q̈ by LDLᵀ of M."""
+    """dy/dt = (q̇, q̈) of an unconstrained system, q̈ by LDLᵀ of M; stores q̇ into out[:n] first, then M, F."""
     n = eom.n
     stores, solve = _spd_solve(eom.M, list(eom.F), offset=n)
     return _kernel(
@@ -341,26 +347,29 @@ def _rhs_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
-def _lane_source(source: str) -> str:
-    """``y[i]`` → ``Y[i, _l]``, ``p[k]`` → ``P[k, _l]``, ``out[i]`` → ``out[i, _l]`` (structure of arrays)."""
-    return re.sub(r"^(y|p|out)\[(\d+)\]$", lambda m: f"{m.group(1).upper() if m.group(1) != 'out' else 'out'}"
-                  f"[{m.group(2)}, _l]", source)
+#: The lane kernel's arrays (structure of arrays): ``Y[i, _l]`` is ``y[i]`` of lane ``_l``, ``P[k, _l]`` its ``p[k]``.
+LANE_ARRAYS = {"y": "Y", "p": "P"}
 
 
-def _rhs_lanes_kernel(rhs: Kernel) -> Kernel:
+def _rhs_lanes_kernel(rhs: Kernel, eom: EOM) -> Kernel:
     """`rhs` over a batch of trajectories in lock-step (one SIMD lane each), from the same CSE.
 
-    Only for unrolled solves (n ≤ UNROLL_MAX): the looped LDLᵀ would need a
-    work array per lane.  Each lane has its own time (adaptive steps).
+    The same loads, temporaries and stores, each lane reading its own column: a local bound to
+    ``y[i]`` (`_slots`) reads ``Y[i, _l]``, one bound to ``p[k]`` reads ``P[k, _l]``, and the
+    velocities q̇_i that `_rhs_kernel` stores first, into ``out[i]``, go to ``out[i, _l]`` (the
+    solve's q̈ too: `Kernel.lanes`).  Only for unrolled solves (n ≤ UNROLL_MAX): the looped LDLᵀ
+    would need a work array per lane.  Each lane has its own time (adaptive steps).
     """
     n = rhs.solve.n
     uses_t = any(sp.Symbol("t", real=True) in e.free_symbols for _, e in rhs.temps + rhs.stores)
+    columns = {local: f"{LANE_ARRAYS[array]}[{index}, _l]" for _, local, array, index in _slots(eom)}
+    velocities = tuple((f"out[{i}, _l]", expr) for i, (_, expr) in enumerate(rhs.stores[:n]))
     return replace(
         rhs, name="rhs_lanes", args=("T", "Y", "P", "out", "bad"), lanes=True,
         doc="dy/dt of `rhs` for every lane l: T (B,) times, Y (2n, B) states, P (n_p, B) parameters,\n"
             f"out (2n, B); bad[l] is set when M is singular in lane l (n = {n}).",
-        loads=(("t", "T[_l]"),) * uses_t + tuple((local, _lane_source(src)) for local, src in rhs.loads),
-        stores=tuple((_lane_source(target), expr) for target, expr in rhs.stores),
+        loads=(("t", "T[_l]"),) * uses_t + tuple((local, columns[local]) for local, _ in rhs.loads),
+        stores=velocities + rhs.stores[n:],
     )
 
 
@@ -423,7 +432,7 @@ def lower(eom: EOM) -> ModuleIR:
         first = _constraint_kernels(eom, mapping, loads)
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
-        first = (rhs, _rhs_lanes_kernel(rhs)) if rhs.solve.unrolled else (rhs,)
+        first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled else (rhs,)
     kernels = first + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",

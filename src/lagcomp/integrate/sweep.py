@@ -46,8 +46,8 @@ from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
 #: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread
-#: (batched drivers: enough trajectories to fill the 32 lanes of a batch several times over, so that
-#: few lanes idle while the last trajectories of the chunk finish).
+#: (batched drivers: enough trajectories to fill a block of lanes, 64 to 128 (`drivers.lanes`), or the 32
+#: lanes of a batched Taylor sweep several times over, so that few lanes idle while the last ones finish).
 CHUNK_SECONDS, FIRST_CHUNK_PER_THREAD, FIRST_BATCHED_CHUNK_PER_THREAD = 0.5, 8, 128
 #: Solution-style status of trajectories a Ctrl-C left unstarted.
 NOT_RUN = 2
@@ -330,9 +330,8 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         if m.adaptive and (rows or want_events):
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "
                               "events yet); drop `batched` for those outputs.")
-        lanes = tuple(np.array(getattr(m.tableau, k)) for k in ("A", "B", "C", "E3", "E5")) if m.name == "dop853" else ()
-        fixed, coefficients = (fixed[:7], lanes) if m.adaptive else (fixed, ())  # dop853_lanes: its stages, E3, E5
-        task = _Task(driver, m.adaptive, fixed, layout, coefficients, projecting)
+        fixed = fixed[:7] if m.adaptive else fixed      # (the lane loops take their tableaux from `tableaux`)
+        task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",))
         if m.name == "taylor":      # the library loop around the lane kernels of this order (a module of their own)
             spec = _taylor_lanes_spec(model, rtol, atol)
             task = _Task(driver, True, fixed, layout, (), projecting, *TAYLOR_LANES_LOOP)
@@ -376,9 +375,12 @@ def _consistent_initial_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, 
             raise InitialConditionError(f"Trajectory {k} of the sweep ({where}): {err}") from err
 
 
-#: Batched (SIMD) sweep loops by method (`lagcomp/codegen/templates/lanes.py`; taylor: lane kernels in a
-#: module of their own per order, `lagcomp.codegen.taylor_lanes`, and the library loop `TAYLOR_LANES_LOOP`).
-BATCHED = {"rk4": "rk4_lanes", "dop853": "dop853_lanes", "taylor": "taylor_lanes"}
+#: Batched (SIMD) sweep loops by method: library loops around the model's lane kernel ``rhs_lanes``
+#: (`lagcomp.integrate.drivers.lanes`); taylor: lane kernels in a module of their own per order
+#: (`lagcomp.codegen.taylor_lanes`) and the library loop `TAYLOR_LANES_LOOP`.
+BATCHED = {"rk4": "lagcomp.integrate.drivers.lanes:sweep_rk4_lanes",
+           "dop853": "lagcomp.integrate.drivers.lanes:sweep_dop853_lanes",
+           "taylor": "taylor_lanes"}
 #: The batched Taylor sweep's library loop and what it takes from the lanes module, by name (then ``energy``).
 TAYLOR_LANES_LOOP = ("lagcomp.integrate.drivers.taylor_lanes:sweep_taylor_lanes",
                      ("taylor_lanes", "taylor_lanes_advance", "TAYLOR_ORDER", "TAYLOR_LANES"))
@@ -393,7 +395,7 @@ def _batched_driver(model, m) -> str:
         raise OptionError(f"`batched=True` is available for {sorted(BATCHED)}; not yet for {m.name}.")
     if m.name == "taylor":
         return BATCHED["taylor"]       # check_method has checked that the model has a Taylor program
-    if not hasattr(model.kernels, f"sweep_{BATCHED[m.name]}"):
+    if not hasattr(model.kernels, "rhs_lanes"):
         raise OptionError(f"{model.name!r} has no batched kernel (constrained, or more coordinates than "
                           "lagcomp.codegen.lower.UNROLL_MAX, whose LDLᵀ solve is a loop).")
     return BATCHED[m.name]

@@ -55,3 +55,7 @@ TAYLOR_LANES = types.FunctionType(types.none(VECTOR, VECTOR, VECTOR, VECTOR))
 #: ``taylor_lanes_advance(H, X, S, S_new)``: every lane's state and carry after its step H[l] (Horner's rule
 #: and compensated sums, as the scalar Taylor driver's).
 TAYLOR_ADVANCE = types.FunctionType(types.none(VECTOR, VECTOR, VECTOR, VECTOR))
+#: bool[::1]: a flag per lane of a batch.
+FLAGS = types.boolean[::1]
+#: ``rhs_lanes(T, Y, P, out, bad)``: out[:, l] = y' of lane l; T, bad (B,), Y, out (2n, B), P (n_p, B); bad: M singular.
+RHS_LANES = types.FunctionType(types.none(VECTOR, MATRIX, MATRIX, MATRIX, FLAGS))
