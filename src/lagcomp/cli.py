@@ -81,9 +81,9 @@ def _example_alias(args) -> str:
     It hashes the examples' and the compiler's source, so an edited example
     (or derivation) is compiled afresh instead of loaded.
     """
-    from lagcomp.cache import _compiler_digest
+    from lagcomp.cache import KERNEL_PRODUCERS, code_digest
 
-    digest = hashlib.sha256(_compiler_digest().encode())
+    digest = hashlib.sha256(code_digest(KERNEL_PRODUCERS).encode())
     for path in sorted((Path(__file__).parent / "examples").glob("*.py")):
         digest.update(path.read_bytes())
     arguments = "".join(f".{k}={v}" for k, v in sorted(_key_values(args.arg, "--arg").items()))
