@@ -156,3 +156,25 @@ def test_run_a_kane_model_from_its_initial_speeds(capsys, tmp_path):
                          defaults={"m": 1.0, "k": 4.0}, q0=(0.0,)), cache_dir=tmp_path)
     assert main(["--cache-dir", str(tmp_path), "run", "lagrange_spring", "--u0", "0.8", "--quiet"]) == 2
     assert "is a Lagrange model: give its initial velocities as `qd0` (--qd0" in capsys.readouterr().err
+
+
+def test_precompile_compiles_every_library_driver_of_the_registry(capsys, monkeypatch):
+    """Every `Method.driver` / `Method.sweep` in the library is imported (compiled, or loaded from numba's
+    cache) and reported with its time; a registry entry stands in for a driver family still to move."""
+    import dataclasses
+
+    from lagcomp.cli import library_drivers
+    from lagcomp.integrate import methods
+
+    stand_in = dataclasses.replace(methods.METHODS["rk4"], name="stand_in", sweep=None,
+                                   driver="lagcomp.integrate.drivers.sweep_rows:fold_rows")
+    monkeypatch.setitem(methods.METHODS, "stand_in", stand_in)
+    references = library_drivers()
+    assert stand_in.driver in references and len(references) == len(set(references))
+    assert main(["precompile"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == len(references) + 1 and out[-1].startswith(f"{len(references)} library drivers ready in ")
+    for i, (line, reference) in enumerate(zip(out, references), 1):
+        assert line.startswith(f"[{i}/{len(references)}] {reference}: ") and line.endswith(" s")
+        assert "compiled in" in line or "loaded from numba's cache in" in line
+

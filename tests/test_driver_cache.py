@@ -3,8 +3,8 @@
 Each process compiles a model it has never seen (into its own module cache, so numba compiles that
 model's kernels), integrates it with every library method the model admits (sweeping too where
 the method has a library sweep loop), then reports numba's dispatcher statistics of every library
-driver the method registry names (`Method.driver` and `Method.sweep` of the methods whose
-`Method.in_library` is true, and `sweep_rows.fold_rows`).  The second process must find each of
+driver the method registry names (`lagcomp.cli.library_drivers`: `Method.driver` and `Method.sweep`
+of the methods whose `Method.in_library` is true), and of `sweep_rows.fold_rows`.  The second process must find each of
 them in numba's cache, which the first process filled (or an earlier test run did): no miss.
 The list follows the registry, so each driver family is covered as it moves into the library.
 """
@@ -22,6 +22,7 @@ PROBE = textwrap.dedent(
     import json, sys
     import lagcomp as lc
     from lagcomp import examples
+    from lagcomp.cli import library_drivers
     from lagcomp.integrate.methods import METHODS, library_function
 
     model = lc.compile(examples.get(sys.argv[2]), cache_dir=sys.argv[1])
@@ -34,8 +35,7 @@ PROBE = textwrap.dedent(
         if m.sweep is not None:
             model.sweep((0, 0.1), {model.coordinates[0]: [0.1, 0.2]}, method=m.name, workers=1, progress=False,
                         **steps)
-    references = sorted({ref for m in METHODS.values() if m.in_library for ref in (m.driver, m.sweep) if ref}
-                        | {"lagcomp.integrate.drivers.sweep_rows:fold_rows"})
+    references = library_drivers() + ["lagcomp.integrate.drivers.sweep_rows:fold_rows"]
     print(json.dumps({
         "methods": [m.name for m in methods],
         "driver_misses": {ref: sum(library_function(ref).stats.cache_misses.values()) for ref in references},

@@ -128,7 +128,7 @@ def hashed_files(parts: tuple[str, ...]) -> list[Path]:
     return files
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def code_digest(parts: tuple[str, ...]) -> str:
     """sha256 over the paths and bytes of `hashed_files(parts)`."""
     package = Path(__file__).parent

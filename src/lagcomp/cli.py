@@ -4,6 +4,7 @@
     lagcomp show double_pendulum
     lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz --plot run.png
     lagcomp generate generated/          (add --check to only report stale files)
+    lagcomp precompile                   (compile every library driver now, not at its first use)
     lagcomp bench double_pendulum        (kernel ns/call, op counts, steps/s per method, compile times)
     lagcomp stability hoop_bead --param Omega --range 1 8 --set epsilon=0 --q 3.14159265 --plot eig.png
 """
@@ -319,6 +320,35 @@ def cmd_generate(args) -> int:
     return 0
 
 
+def library_drivers() -> list[str]:
+    """The library drivers and sweep loops the method registry names (``"module:function"``), each once."""
+    from lagcomp.integrate.methods import METHODS
+
+    references = (ref for m in METHODS.values() if m.in_library for ref in (m.driver, m.sweep) if ref is not None)
+    return list(dict.fromkeys(references))
+
+
+def cmd_precompile(args) -> int:
+    """Compile every library driver into numba's cache now, so that no run pays for it later.
+
+    Importing a driver compiles it from its explicit signature, or loads it
+    from numba's cache when an earlier process compiled it; each line says
+    which, and how long it took.
+    """
+    from lagcomp.integrate.methods import library_function
+
+    references = library_drivers()
+    started = time.perf_counter()
+    for i, reference in enumerate(references, 1):
+        before = time.perf_counter()
+        driver = library_function(reference)
+        compiled = sum(driver.stats.cache_misses.values())
+        how = "compiled" if compiled else "loaded from numba's cache"
+        print(f"[{i}/{len(references)}] {reference}: {how} in {time.perf_counter() - before:.2f} s", flush=True)
+    print(f"{len(references)} library drivers ready in {time.perf_counter() - started:.1f} s")
+    return 0
+
+
 def _grid_axis(spec: str, what: str) -> tuple[str, object]:
     """``name=LO:HI:N`` as (name, N evenly spaced values), or ``name=V`` as (name, float)."""
     name, sep, value = spec.partition("=")
@@ -560,6 +590,8 @@ def _parser() -> argparse.ArgumentParser:
     gen.add_argument("directory", nargs="?", default="generated")
     gen.add_argument("--check", action="store_true", help="only list stale files; exit 1 if any")
     gen.set_defaults(func=cmd_generate)
+    sub.add_parser("precompile", help="compile every library integration driver now (once per installation) "
+                                      "instead of at its first use").set_defaults(func=cmd_precompile)
     return parser
 
 
