@@ -171,10 +171,11 @@ def test_precompile_compiles_every_library_driver_of_the_registry(capsys, monkey
     monkeypatch.setitem(methods.METHODS, "stand_in", stand_in)
     references = library_drivers()
     assert stand_in.driver in references and len(references) == len(set(references))
+    modules = list(dict.fromkeys(reference.partition(":")[0] for reference in references))
     assert main(["precompile"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert len(out) == len(references) + 1 and out[-1].startswith(f"{len(references)} library drivers ready in ")
-    for i, (line, reference) in enumerate(zip(out, references), 1):
-        assert line.startswith(f"[{i}/{len(references)}] {reference}: ") and line.endswith(" s")
+    assert len(out) == len(modules) + 1 and out[-1].startswith(f"{len(references)} library drivers ready in ")
+    for i, (line, module) in enumerate(zip(out, modules), 1):
+        assert line.startswith(f"[{i}/{len(modules)}] {module} (") and line.endswith(" s")
         assert "compiled in" in line or "loaded from numba's cache in" in line
-
+    assert "sweep_rows (fold_rows): " in "\n".join(out)

@@ -331,21 +331,25 @@ def library_drivers() -> list[str]:
 def cmd_precompile(args) -> int:
     """Compile every library driver into numba's cache now, so that no run pays for it later.
 
-    Importing a driver compiles it from its explicit signature, or loads it
-    from numba's cache when an earlier process compiled it; each line says
-    which, and how long it took.
+    Importing a driver module compiles its drivers from their explicit
+    signatures, or loads them from numba's cache when an earlier process
+    compiled them; one line per module says which, and how long it took.
     """
     from lagcomp.integrate.methods import library_function
 
-    references = library_drivers()
+    modules: dict[str, list[str]] = {}
+    for reference in library_drivers():
+        module, _, _ = reference.partition(":")
+        modules.setdefault(module, []).append(reference)
     started = time.perf_counter()
-    for i, reference in enumerate(references, 1):
+    for i, (module, references) in enumerate(modules.items(), 1):
         before = time.perf_counter()
-        driver = library_function(reference)
-        compiled = sum(driver.stats.cache_misses.values())
+        drivers = [library_function(reference) for reference in references]
+        compiled = any(sum(driver.stats.cache_misses.values()) for driver in drivers)
+        names = ", ".join(reference.partition(":")[2] for reference in references)
         how = "compiled" if compiled else "loaded from numba's cache"
-        print(f"[{i}/{len(references)}] {reference}: {how} in {time.perf_counter() - before:.2f} s", flush=True)
-    print(f"{len(references)} library drivers ready in {time.perf_counter() - started:.1f} s")
+        print(f"[{i}/{len(modules)}] {module} ({names}): {how} in {time.perf_counter() - before:.2f} s", flush=True)
+    print(f"{sum(map(len, modules.values()))} library drivers ready in {time.perf_counter() - started:.1f} s")
     return 0
 
 
