@@ -271,12 +271,12 @@ def _warm_up(model, t0: float, t1: float, run: dict, options: dict) -> float:
     A run of one step (or a millionth of the span) with the same method and options: the timed run
     after it is integration only.  Bad options raise here, as they would in the run itself.
     """
-    from lagcomp.integrate.simulate import INTERRUPTED
+    from lagcomp.integrate.status import Status
 
     started = time.perf_counter()
     span = options.get("dt") or options.get("first_step") or 1e-6 * (t1 - t0)
     sol = model.simulate((t0, t0 + min(span, t1 - t0)), **run, **{**options, "record": "summary"})
-    if sol.status == INTERRUPTED:  # Ctrl-C while numba compiled: stop here, not after the whole run
+    if sol.status == Status.INTERRUPTED:  # Ctrl-C while numba compiled: stop here, not after the whole run
         raise KeyboardInterrupt
     return time.perf_counter() - started
 
