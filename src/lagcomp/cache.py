@@ -403,7 +403,8 @@ def load_module(entry: Entry) -> ModuleType:
         raise
     removed = numba_cache.heal(module)
     if removed:
-        warnings.warn(f"lagcomp found numba's cache files of {entry.path.name} unreadable and removed them "
+        warnings.warn(f"lagcomp found numba's cache files of {entry.path.name} (or of the kernel_support code its "
+                      "kernels call) unreadable and removed them "
                       f"({len(removed)} files, {removed[0]}, ...); numba compiles those functions again, once.",
                       CacheWarning, stacklevel=3)
     return module
