@@ -180,11 +180,12 @@ def project(t, y, p):
         J = np.empty((n_h, n_q))
         r = np.empty(n_h + n_v)
         mu = np.empty(n_h)
+        rows = np.arange(n_h)
         for _ in range(PROJECTION_ITERATIONS):
             constraint_residuals(t, y, p, r)
             configuration_jacobian(t, y, p, J)
             rhs_ = r[:n_h].copy()
-            status = gram_solve(J, np.arange(n_h), n_q, rhs_, mu)
+            status = gram_solve(J, rows, n_q, rhs_, mu)
             if status:
                 return status
             step, size = 0.0, 0.0
