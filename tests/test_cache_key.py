@@ -17,6 +17,12 @@ and checks their reactions against Newton's.
 
 from __future__ import annotations
 
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -24,7 +30,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
-from lagcomp.cache import Cache, input_key
+from lagcomp import cache as lagcomp_cache
+from lagcomp.cache import KERNEL_LIBRARY, KERNEL_PRODUCERS, Cache, hashed_files, input_key, source_key
 
 t = lc.t
 x, y, z = lc.coordinates("x y z")
@@ -236,6 +243,59 @@ def test_event_direction_and_terminal_flag_share_the_kernels():
     (name, expr, _, _), top = BASE["events"]
     flipped = _replace(BASE, "events", ((name, expr, -1, True), top))
     assert key(build(flipped)) == key(build(BASE))
+
+
+# -- what produced the kernels, and nothing else ------------------------------------------
+
+
+def test_the_keys_cover_what_produces_the_kernels_and_not_the_drivers():
+    """The emitter and kernel_support enter the keys; the drivers (lagcomp.integrate) do not, so a driver
+    change recompiles that driver once (numba's own cache) and keeps every model of the cache."""
+    package = Path(lc.__file__).parent
+    hashed = {path.relative_to(package).as_posix() for path in hashed_files(KERNEL_PRODUCERS)}
+    assert {"codegen/emit.py", "codegen/printer.py", "ir.py", "kernel_support/trig.py",
+            "kernel_support/linear_solvers.py", "mechanics/lagrange.py"} <= hashed
+    assert not any(name.startswith("integrate/") for name in hashed)
+    assert {path.relative_to(package).as_posix() for path in hashed_files(KERNEL_LIBRARY)} >= {
+        "kernel_support/trig.py", "kernel_support/linear_solvers.py"}
+
+
+def test_a_kernel_support_change_renames_the_module_file(monkeypatch):
+    """numba stamps a module's machine code on the module file, not on the kernel_support code compiled into
+    it: a change there must give the same source another file, whose kernels numba compiles afresh."""
+    before = source_key("# a module\n")
+    digest = lagcomp_cache.code_digest
+    monkeypatch.setattr(lagcomp_cache, "code_digest",
+                        lambda parts: "changed" if parts == KERNEL_LIBRARY else digest(parts))
+    assert source_key("# a module\n") != before
+
+
+KEYS_PROBE = (
+    "from lagcomp import examples; from lagcomp.cache import input_key, source_key; "
+    "print(input_key(examples.get('simple_pendulum').fingerprint(), {}), source_key('# a module'))"
+)
+
+
+def _keys_of_a_copy(tmp_path, name, edit=None):
+    """The probe's keys computed by a copy of the lagcomp package, with `edit` (a file of it) changed."""
+    copy = tmp_path / name
+    shutil.copytree(Path(lc.__file__).parent, copy / "lagcomp", ignore=shutil.ignore_patterns("__pycache__"))
+    if edit is not None:
+        with open(copy / "lagcomp" / edit, "a", encoding="utf-8") as f:
+            f.write("\n# an edit\n")
+    env = {**os.environ, "PYTHONPATH": str(copy)}
+    out = subprocess.run([sys.executable, "-c", KEYS_PROBE], capture_output=True, text=True, env=env, check=True)
+    return out.stdout.split()
+
+
+def test_a_driver_change_keeps_the_keys_and_an_emitter_change_does_not(tmp_path):
+    """Edited drivers (lagcomp.integrate) serve the models already cached; an edited emitter does not."""
+    original = _keys_of_a_copy(tmp_path, "original")
+    assert _keys_of_a_copy(tmp_path, "driver", edit="integrate/methods.py") == original
+    emitter = _keys_of_a_copy(tmp_path, "emitter", edit="codegen/emit.py")
+    assert emitter[0] != original[0] and emitter[1] == original[1]
+    support = _keys_of_a_copy(tmp_path, "support", edit="kernel_support/trig.py")
+    assert support[0] != original[0] and support[1] != original[1]
 
 
 # -- end to end ---------------------------------------------------------------------------

@@ -169,3 +169,24 @@ def test_method_choices_are_the_registrys(capsys):
             main([command, "double_pendulum", "--method", "no_such_method"])
         message = capsys.readouterr().err
         assert all(f"'{name}'" in message for name in METHODS) and "'tsit5'" in message and "'bs3'" in message
+def test_precompile_compiles_every_library_driver_of_the_registry(capsys, monkeypatch):
+    """Every `Method.driver` / `Method.sweep` in the library is imported (compiled, or loaded from numba's
+    cache) and reported with its time; a registry entry stands in for a driver family still to move."""
+    import dataclasses
+
+    from lagcomp.cli import library_drivers
+    from lagcomp.integrate import methods
+
+    stand_in = dataclasses.replace(methods.METHODS["rk4"], name="stand_in", sweep=None,
+                                   driver="lagcomp.integrate.drivers.sweep_rows:fold_rows")
+    monkeypatch.setitem(methods.METHODS, "stand_in", stand_in)
+    references = library_drivers()
+    assert stand_in.driver in references and len(references) == len(set(references))
+    modules = list(dict.fromkeys(reference.partition(":")[0] for reference in references))
+    assert main(["precompile"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == len(modules) + 1 and out[-1].startswith(f"{len(references)} library drivers ready in ")
+    for i, (line, module) in enumerate(zip(out, modules), 1):
+        assert line.startswith(f"[{i}/{len(modules)}] {module} (") and line.endswith(" s")
+        assert "compiled in" in line or "loaded from numba's cache in" in line
+    assert "sweep_rows (fold_rows): " in "\n".join(out)

@@ -200,7 +200,7 @@ def test_to_xarray_names_dimensions_after_the_swept_quantities(double_pendulum):
 
 def test_batched_rk4_matches_the_scalar_path(compiled, double_pendulum):
     """SIMD lanes do the scalar arithmetic in the same order, with the same polynomial sin and cos
-    (templates/trig.py): bitwise equal, without trigonometry (Hénon–Heiles) and with it."""
+    (`lagcomp.kernel_support.trig`): bitwise equal, without trigonometry (Hénon–Heiles) and with it."""
     henon = compiled("henon_heiles")
     grid = {"x": np.linspace(-0.3, 0.3, 7), "y": np.linspace(-0.3, 0.3, 11)}   # 77: two blocks, one partial
     scalar = henon.sweep((0, 5), grid, method="rk4", dt=0.01, output=("dense", "energy"), save_every=100)

@@ -14,15 +14,24 @@ Layout under the cache root::
 Two keys, so that a second process does neither sympy nor numba work:
 
 * the *source key* hashes the emitted source together with the numba and
-  Python versions; the source already names the lagcomp version.  A module
-  file is written once, atomically (temporary file, then `os.replace`), and
-  never rewritten while it is intact: numba stamps its cache on the source
-  file's mtime and size, so a rewrite would throw the machine code away.
+  Python versions and the code of `lagcomp.kernel_support` (sin, cos and the
+  linear solvers the kernels call, which numba compiles into each kernel's
+  machine code: a change there must not serve the old machine code); the
+  source already names the lagcomp version.  A module file is written once,
+  atomically (temporary file, then `os.replace`), and never rewritten while
+  it is intact: numba stamps its cache on the source file's mtime and size,
+  so a rewrite would throw the machine code away.
 * the *input key* hashes the system's canonical description, the compile
   options, the lagcomp, sympy, numba and Python versions and the source of
-  lagcomp's compiler itself (so a development change to the derivation or
-  the emitter never serves a module written by the old code).  An index
-  entry under it lets `compile` skip the derivation entirely.
+  what produces the kernels (`KERNEL_PRODUCERS`: the derivation, the IR, the
+  emitter and kernel_support), so that a development change there never
+  serves a module written by the old code.  An index entry under it lets
+  `compile` skip the derivation entirely.
+
+Neither key covers the integration drivers (`lagcomp.integrate`): they are
+library code that takes the kernels as function values, cached by numba
+beside their own files, so a driver change recompiles the driver once and
+keeps every model in the cache.
 
 An entry whose file is missing, truncated or altered (sha256 mismatch), or
 whose record names other lagcomp/numba/Python versions, is a miss: it is
@@ -102,19 +111,31 @@ def _sha256(text: str) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-#: The parts of lagcomp whose code decides what a module contains.
-_COMPILER_PARTS = ("model", "mechanics", "codegen", "ir.py")
+#: The parts of lagcomp whose code decides what a module's kernels compute: the derivation, the IR, the
+#: emitter and what the kernels call (not the drivers, which take the kernels as values).
+KERNEL_PRODUCERS = ("model", "mechanics", "ir.py", "codegen", "kernel_support")
+#: The part numba compiles into the kernels' machine code from outside their module file.
+KERNEL_LIBRARY = ("kernel_support",)
 
 
-@functools.lru_cache(maxsize=1)
-def _compiler_digest() -> str:
+def hashed_files(parts: tuple[str, ...]) -> list[Path]:
+    """The Python files of the package `parts` (directories or files of lagcomp), in a stable order."""
+    package = Path(__file__).parent
+    files = []
+    for part in parts:
+        root = package / part
+        files += sorted(root.rglob("*.py")) if root.is_dir() else [root]
+    return files
+
+
+@functools.cache
+def code_digest(parts: tuple[str, ...]) -> str:
+    """sha256 over the paths and bytes of `hashed_files(parts)`."""
     package = Path(__file__).parent
     digest = hashlib.sha256()
-    for part in _COMPILER_PARTS:
-        root = package / part
-        for path in sorted(root.rglob("*.py")) if root.is_dir() else [root]:
-            digest.update(path.relative_to(package).as_posix().encode())
-            digest.update(path.read_bytes())
+    for path in hashed_files(parts):
+        digest.update(path.relative_to(package).as_posix().encode())
+        digest.update(path.read_bytes())
     return digest.hexdigest()
 
 
@@ -125,7 +146,7 @@ def _sympy_version() -> str:
 
 
 def _versions() -> str:
-    return (f"lagcomp={__version__};compiler={_compiler_digest()};sympy={_sympy_version()};"
+    return (f"lagcomp={__version__};compiler={code_digest(KERNEL_PRODUCERS)};sympy={_sympy_version()};"
             f"numba={numba.__version__};python={sys.version_info[:3]}")
 
 
@@ -136,7 +157,8 @@ def input_key(fingerprint: str, options: dict) -> str:
 
 def source_key(source: str) -> str:
     """Key of an emitted module (names the module file)."""
-    return _sha256(f"{source}\nnumba={numba.__version__};python={sys.version_info[:3]}")[:16]
+    return _sha256(f"{source}\nnumba={numba.__version__};python={sys.version_info[:3]};"
+                   f"kernel_support={code_digest(KERNEL_LIBRARY)}")[:16]
 
 
 @dataclass(frozen=True)
@@ -381,7 +403,8 @@ def load_module(entry: Entry) -> ModuleType:
         raise
     removed = numba_cache.heal(module)
     if removed:
-        warnings.warn(f"lagcomp found numba's cache files of {entry.path.name} unreadable and removed them "
+        warnings.warn(f"lagcomp found numba's cache files of {entry.path.name} (or of the kernel_support code its "
+                      "kernels call) unreadable and removed them "
                       f"({len(removed)} files, {removed[0]}, ...); numba compiles those functions again, once.",
                       CacheWarning, stacklevel=3)
     return module

@@ -4,6 +4,7 @@
     lagcomp show double_pendulum
     lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz --plot run.png
     lagcomp generate generated/          (add --check to only report stale files)
+    lagcomp precompile                   (compile every library driver now, not at its first use)
     lagcomp bench double_pendulum        (kernel ns/call, op counts, steps/s per method, compile times)
     lagcomp stability hoop_bead --param Omega --range 1 8 --set epsilon=0 --q 3.14159265 --plot eig.png
 """
@@ -81,9 +82,9 @@ def _example_alias(args) -> str:
     It hashes the examples' and the compiler's source, so an edited example
     (or derivation) is compiled afresh instead of loaded.
     """
-    from lagcomp.cache import _compiler_digest
+    from lagcomp.cache import KERNEL_PRODUCERS, code_digest
 
-    digest = hashlib.sha256(_compiler_digest().encode())
+    digest = hashlib.sha256(code_digest(KERNEL_PRODUCERS).encode())
     for path in sorted((Path(__file__).parent / "examples").glob("*.py")):
         digest.update(path.read_bytes())
     arguments = "".join(f".{k}={v}" for k, v in sorted(_key_values(args.arg, "--arg").items()))
@@ -318,6 +319,39 @@ def cmd_generate(args) -> int:
         return 1 if stale else 0
     for path in stale:
         print(f"wrote {path}")
+    return 0
+
+
+def library_drivers() -> list[str]:
+    """The library drivers and sweep loops the method registry names (``"module:function"``), each once."""
+    from lagcomp.integrate.methods import METHODS
+
+    references = (ref for m in METHODS.values() if m.in_library for ref in (m.driver, m.sweep) if ref is not None)
+    return list(dict.fromkeys(references))
+
+
+def cmd_precompile(args) -> int:
+    """Compile every library driver into numba's cache now, so that no run pays for it later.
+
+    Importing a driver module compiles its drivers from their explicit
+    signatures, or loads them from numba's cache when an earlier process
+    compiled them; one line per module says which, and how long it took.
+    """
+    from lagcomp.integrate.methods import library_function
+
+    modules: dict[str, list[str]] = {}
+    for reference in library_drivers():
+        module, _, _ = reference.partition(":")
+        modules.setdefault(module, []).append(reference)
+    started = time.perf_counter()
+    for i, (module, references) in enumerate(modules.items(), 1):
+        before = time.perf_counter()
+        drivers = [library_function(reference) for reference in references]
+        compiled = any(sum(driver.stats.cache_misses.values()) for driver in drivers)
+        names = ", ".join(reference.partition(":")[2] for reference in references)
+        how = "compiled" if compiled else "loaded from numba's cache"
+        print(f"[{i}/{len(modules)}] {module} ({names}): {how} in {time.perf_counter() - before:.2f} s", flush=True)
+    print(f"{sum(map(len, modules.values()))} library drivers ready in {time.perf_counter() - started:.1f} s")
     return 0
 
 
@@ -563,6 +597,8 @@ def _parser() -> argparse.ArgumentParser:
     gen.add_argument("directory", nargs="?", default="generated")
     gen.add_argument("--check", action="store_true", help="only list stale files; exit 1 if any")
     gen.set_defaults(func=cmd_generate)
+    sub.add_parser("precompile", help="compile every library integration driver now (once per installation) "
+                                      "instead of at its first use").set_defaults(func=cmd_precompile)
     return parser
 
 

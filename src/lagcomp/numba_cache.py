@@ -1,4 +1,4 @@
-"""numba's own cache files of a generated module: found unreadable at load, removed, recompiled.
+"""numba's own cache files, of a generated module or of lagcomp's library code: unreadable ones removed, recompiled.
 
 numba keeps the machine code of each ``cache=True`` function in an index
 (``<module>.<function>-<line>.pyXY.nbi``) and data files (``….N.nbc``) under
@@ -10,15 +10,26 @@ millisecond for a model's twenty functions) and removes every file of a
 function whose files do not read back, so that numba compiles that function
 again, once, and writes fresh files.
 
-This uses numba's cache internals (``Dispatcher._cache._cache_file``, numba
+The library drivers (`lagcomp.integrate.drivers`) have explicit signatures,
+so numba reads their files while their module is imported, and a damaged file
+makes that import fail in every process.  `import_library_module` imports a
+driver module and, only if that fails, removes the unreadable files of the
+drivers and of `lagcomp.kernel_support` (found from the source files, as
+numba finds them: `heal_source`) and imports it again, so the cost is paid
+only by the process that finds the damage.
+
+This uses numba's cache internals (``Dispatcher._cache._cache_file``, the
+locators and ``IndexDataCacheFile`` of ``numba.core.caching``, numba
 0.5x–0.6x); where they are absent nothing is checked and numba behaves as
 it always does.
 """
 
 from __future__ import annotations
 
+import importlib
+import warnings
 from pathlib import Path
-from types import ModuleType
+from types import ModuleType, SimpleNamespace
 
 
 def _cache_files(module: ModuleType):
@@ -57,10 +68,11 @@ def _remove(cache_file) -> list[str]:
 
 
 def heal(module: ModuleType) -> list[str]:
-    """Remove the numba cache files of `module`'s functions that do not read back; the file names removed.
+    """Remove the numba cache files of `module`'s functions, and of the `lagcomp.kernel_support` functions
+    its kernels call, that do not read back; the file names removed.
 
-    Where they cannot be removed (a read-only cache), that function's disk
-    cache is switched off for this process: numba compiles it in memory.
+    Where a module function's files cannot be removed (a read-only cache),
+    its disk cache is switched off for this process: numba compiles it in memory.
     """
     from numba.core.caching import NullCache
 
@@ -73,5 +85,59 @@ def heal(module: ModuleType) -> list[str]:
         except OSError:
             dispatcher._cache = NullCache()
             removed.append(f"{Path(cache_file._index_path).name} (read-only: compiled in memory instead)")
+    support = Path(__file__).parent / "kernel_support"
+    return removed + [file for source in sorted(support.glob("*.py")) for file in heal_source(source)]
+
+
+def heal_source(source: Path) -> list[str]:
+    """Remove numba's unreadable cache files of the functions of the module file `source`, without importing it.
+
+    The cache directory is the one numba would use for `source` (its first
+    locator that accepts it); the names removed.
+    """
+    from numba.core import caching
+
+    implementation = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)  # renamed in 0.60
+    if implementation is None or not hasattr(caching, "IndexDataCacheFile"):
+        return []
+    stand_in = SimpleNamespace(__code__=SimpleNamespace(co_firstlineno=0))  # locators read only the line number
+    for locator_class in implementation._locator_classes:
+        locator = locator_class.from_function(stand_in, str(source))
+        if locator is not None:
+            break
+    else:
+        return []
+    removed = []
+    for index in sorted(Path(locator.get_cache_path()).glob(f"{source.stem}.*.nbi")):
+        cache_file = caching.IndexDataCacheFile(str(index.parent), index.name[: -len(".nbi")], locator.get_source_stamp())
+        if not _readable(cache_file):
+            try:
+                removed += _remove(cache_file)
+            except OSError:
+                pass  # read-only: numba reports the damage itself
     return removed
+
+
+#: The library code whose numba cache files `import_library_module` heals: the drivers and what they call.
+LIBRARY_PACKAGES = ("integrate/drivers", "kernel_support")
+
+
+def import_library_module(name: str) -> ModuleType:
+    """Import the library module `name`; if that fails on numba's damaged cache files, remove them and retry.
+
+    A failure that no removal explains is raised as it is.
+    """
+    try:
+        return importlib.import_module(name)
+    except Exception:  # numba's unpickling raises anything (UnpicklingError, EOFError, ...)
+        root = Path(__file__).parent
+        removed = [file for package in LIBRARY_PACKAGES for source in sorted((root / package).glob("*.py"))
+                   for file in heal_source(source)]
+        if not removed:
+            raise
+    from lagcomp.errors import CacheWarning
+
+    warnings.warn(f"lagcomp found numba's cache files of its drivers unreadable and removed them ({len(removed)} "
+                  f"files, {removed[0]}, ...); numba compiles those drivers again, once.", CacheWarning, stacklevel=3)
+    return importlib.import_module(name)
 

@@ -1,16 +1,16 @@
 """Emit the Python source of a generated module from its IR (pure, deterministic).
 
-The module holds, in order: a header naming the system, its state and
-parameter order and the lagcomp version; the kernels; the constraint hooks
-the drivers call (`project`, `constraint_residual`); `observables`, which
-evaluates the energies along a saved trajectory; then templates appended
-as text, the kernels' sin and cos (`templates/trig.py`), the linear solvers
-(`templates/linear_solvers.py`), for unconstrained
-systems the Hamiltonian and canonical Jacobian (`templates/hamiltonian.py`) and the
-Lyapunov-exponent loops (`templates/lyapunov.py`), and the
-integration drivers (`templates/drivers.py`, `templates/symplectic.py`), so that they call the kernels
-as module globals — that is what lets numba cache them across processes
-(DESIGN.md).
+The module holds the model's kernels only, in order: a header naming the
+system, its state and parameter order and the lagcomp version, and importing
+what the kernels call from `lagcomp.kernel_support` (sin and cos, the linear
+solvers); the kernels; the constraint hooks the drivers call (`project`,
+`constraint_residual`), with the constraint sizes they use as module
+constants; `observables`, which evaluates the energies along a saved
+trajectory; and the Taylor coefficients.  The drivers are library code
+(`lagcomp.integrate.drivers`) that take these kernels as function values.
+Until every driver family has moved there, the driver templates of
+`_DRIVER_TEMPLATES` and the sweep loops of `SWEPT_ADAPTIVE_DRIVERS` /
+`SWEPT_FIXED_STEP_DRIVERS` are still appended as text.
 The same IR always gives the same bytes: no timestamps, stable ordering.
 
 Kernels use numba's ``error_model="numpy"``: a division by zero gives inf or
@@ -21,6 +21,8 @@ and stop the run with the time of failure.
 from __future__ import annotations
 
 import unicodedata
+
+import sympy as sp
 
 from lagcomp import __version__
 from lagcomp.codegen.printer import to_code
@@ -65,8 +67,60 @@ def _header(ir: ModuleIR) -> str:
         _docstring(doc) + "\n\n"
         "import math\n\n"
         "import numpy as np\n"
-        "from numba import njit\n"
+        "from numba import njit\n\n"
+        + support_imports(_support_names(ir))
     )
+
+
+#: What kernels may call from `lagcomp.kernel_support`, by module.
+KERNEL_SUPPORT = {
+    "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "ldlt_solve",
+                                              "ldlt_solve_matrix", "lu_factor", "lu_solve", "lu_substitute"),
+    "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
+}
+#: The `KERNEL_SUPPORT` names the appended driver templates and the Taylor source call by their template-era
+#: names (``_sin``, ``_ldlt_solve``, ...): imported under those too until they are gone (empty it then).
+TEMPLATE_ERA_NAMES = ("PIVOT_TOLERANCE", "cos", "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
+                      "lu_substitute", "kkt_solve", "sin", "vcos", "vsin")
+
+
+def support_imports(names: set[str]) -> str:
+    """The import lines of the `KERNEL_SUPPORT` `names` a module's kernels call, and the `TEMPLATE_ERA_NAMES`."""
+    lines = [_import(module, [name for name in public if name in names]) for module, public in KERNEL_SUPPORT.items()]
+    if TEMPLATE_ERA_NAMES:
+        lines.append("# The same under the names the driver templates and the Taylor source below call them by.\n")
+        lines += [_import(module, [f"{name} as _{name}" for name in public if name in TEMPLATE_ERA_NAMES])
+                  for module, public in KERNEL_SUPPORT.items()]
+    return "".join(lines)
+
+
+def _import(module: str, names: list[str]) -> str:
+    """``from module import names`` (nothing for no names), one name per line when that is long."""
+    if not names:
+        return ""
+    line = f"from {module} import {', '.join(names)}\n"
+    return line if len(line) <= 100 else f"from {module} import (\n" + "".join(f"{INDENT}{n},\n" for n in names) + ")\n"
+
+
+def _support_names(ir: ModuleIR) -> set[str]:
+    """The `KERNEL_SUPPORT` names the kernels of `ir` and its constraint hooks call."""
+    return kernel_support_names(ir.kernels) | ({"gram_solve"} if ir.k else set())
+
+
+def kernel_support_names(kernels) -> set[str]:
+    """The `KERNEL_SUPPORT` names `kernels` (`lagcomp.ir.Kernel`) call: sin/cos, and their solve's solver."""
+    names = set()
+    for kernel in kernels:
+        expressions = [expr for _, expr in kernel.temps] + [expr for _, expr in kernel.stores]
+        for function, scalar, lanes in ((sp.sin, "sin", "vsin"), (sp.cos, "cos", "vcos")):
+            if any(isinstance(expr, sp.Basic) and expr.has(function) for expr in expressions):
+                names.add(lanes if kernel.lanes else scalar)
+        solve = kernel.solve
+        if isinstance(solve, AugmentedSolve):
+            names.add("kkt_solve")
+        elif isinstance(solve, LinearSolve):
+            names.add("PIVOT_TOLERANCE" if solve.unrolled or kernel.lanes else "ldlt_solve")
+    return names
 
 
 def _balanced(terms: list[str]) -> str:
@@ -110,9 +164,9 @@ def _unrolled_ldlt(solve: LinearSolve, lanes: bool = False) -> list[str]:
     for j in range(n):
         lines.append(f"_d{j} = {_minus(m[j][j], [f'{l(j, k)}*{w(j, k)}' for k in range(j)])}")
         if lanes:
-            lines.append(f"_ok{j} = _d{j} > _PIVOT_TOLERANCE*abs({m[j][j]})")
+            lines.append(f"_ok{j} = _d{j} > PIVOT_TOLERANCE*abs({m[j][j]})")
         else:
-            lines.append(f"if not _d{j} > _PIVOT_TOLERANCE*abs({m[j][j]}):")
+            lines.append(f"if not _d{j} > PIVOT_TOLERANCE*abs({m[j][j]}):")
             lines.append(f"{INDENT}return {j + 1}")
         lines.append(f"_r{j} = 1.0/_d{j}")
         for i in range(j + 1, n):
@@ -145,9 +199,9 @@ def _gathered(solve, symmetric: bool) -> list[str]:
 
 
 def _looped_ldlt(solve: LinearSolve) -> list[str]:
-    """M's lower triangle and f gathered into arrays, then the loop `_ldlt_solve` (linear_solvers.py)."""
+    """M's lower triangle and f gathered into arrays, then the loop `ldlt_solve` (`lagcomp.kernel_support`)."""
     lines = ["# Solve M x = f by LDLᵀ (loops); a non-positive pivot means M is singular here."]
-    return lines + _gathered(solve, symmetric=False) + [f"return _ldlt_solve(mm, ff, out, {solve.offset})"]
+    return lines + _gathered(solve, symmetric=False) + [f"return ldlt_solve(mm, ff, out, {solve.offset})"]
 
 
 def _symmetric_product(solve: SymmetricProduct) -> list[str]:
@@ -187,7 +241,7 @@ def _kernel_source(kernel: Kernel) -> str:
     for target, expr in kernel.stores:
         body.append(f"return {to_code(expr)}" if target == "return" else f"{target} = {to_code(expr)}")
     if isinstance(solve, AugmentedSolve):
-        body += [f"_status = _kkt_solve(_kkt, {solve.mass_block})", "if _status:", f"{INDENT}return _status"]
+        body += [f"_status = kkt_solve(_kkt, {solve.mass_block})", "if _status:", f"{INDENT}return _status"]
         body += [f"out[{solve.offset + i}] = _kkt[{solve.first + i}, {solve.size}]" for i in range(solve.count)]
         body.append("return 0")
     elif isinstance(solve, SymmetricProduct):
@@ -234,31 +288,12 @@ def project(t, y, p):
 
 _CONSTRAINED_HOOKS = '''
 
-#: Rows of the constraint matrix that belong to holonomic constraints.
-HOLONOMIC_ROWS = np.array({rows}, dtype=np.int64)
-
-
 @njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest |Φ| over the holonomic constraints and |Λ q̇ + b| over all constraints."""
-    r = np.empty({kh} + {k})
+    r = np.empty(HOLONOMIC_COUNT + CONSTRAINT_COUNT)
     constraint_residuals(t, y, p, r)
     return np.max(np.abs(r))
-
-
-@njit(cache=True, error_model="numpy")
-def _gram_solve(a, rows, rhs_, mu):
-    """mu = (A Aᵀ)⁻¹ rhs_ for the chosen rows of A = a[:, :n] (Euclidean least change)."""
-    m = rows.shape[0]
-    n = a.shape[1] - 1
-    g = np.empty((m, m))
-    for i in range(m):
-        for j in range(i + 1):
-            s = 0.0
-            for c in range(n):
-                s += a[rows[i], c] * a[rows[j], c]
-            g[i, j] = s
-    return _ldlt_solve(g, rhs_, mu, 0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -266,22 +301,23 @@ def project(t, y, p):
     """Move y onto the constraints at time t, in place, by the smallest Euclidean change.
 
     Coordinates: Gauss-Newton on Φ(q, t) = 0, q ← q − Jᵀ (J Jᵀ)⁻¹ Φ with J the
-    holonomic rows of Λ, until the correction is at rounding level.
+    holonomic rows of Λ, until the correction is at rounding level (at most
+    PROJECTION_ITERATIONS corrections).
     Velocities: q̇ ← q̇ − Λᵀ (Λ Λᵀ)⁻¹ (Λ q̇ + b) for all constraints.
     Returns 0, or j > 0 when Λ Λᵀ is singular (redundant constraints).
     """
-    n, k, kh = {n}, {k}, {kh}
+    n, k, kh = COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT
     a = np.empty((k, n + 1))
     r = np.empty(kh + k)
     rhs_ = np.empty(k)
     mu = np.empty(k)
-    for _ in range({newton}):
+    for _ in range(PROJECTION_ITERATIONS):
         if kh == 0:
             break
         constraint_residuals(t, y, p, r)
         constraint_matrix(t, y, p, a)
         rhs_[:kh] = r[:kh]
-        status = _gram_solve(a, HOLONOMIC_ROWS, rhs_[:kh], mu[:kh])
+        status = gram_solve(a, HOLONOMIC_ROWS, n, rhs_[:kh], mu[:kh])
         if status:
             return status
         step, size = 0.0, 0.0
@@ -300,7 +336,7 @@ def project(t, y, p):
         for c in range(n):
             s += a[i, c] * y[n + c]
         rhs_[i] = s
-    status = _gram_solve(a, np.arange(k), rhs_, mu)
+    status = gram_solve(a, np.arange(k), n, rhs_, mu)
     if status:
         return status
     for c in range(n):
@@ -324,27 +360,60 @@ def reactions_along(ts, ys, p, lam_out, residual_out):
     return 0
 '''
 
+#: Gauss-Newton corrections `project` makes at most per call (two or three reach rounding level).
+PROJECTION_ITERATIONS = 8
+
+
+def _constraint_sizes(ir: ModuleIR) -> str:
+    """The module constants the constrained hooks read: sizes, the holonomic rows of Λ, the iteration limit."""
+    rows = tuple(c for c in range(ir.k) if ir.holonomic[c])
+    return (
+        "\n\n#: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.\n"
+        f"COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = {ir.n}, {ir.k}, {len(rows)}\n"
+        "#: Rows of the constraint matrix that belong to holonomic constraints.\n"
+        f"HOLONOMIC_ROWS = np.array({list(rows)}, dtype=np.int64)\n"
+        "#: Gauss-Newton corrections `project` makes at most (two or three reach rounding level).\n"
+        f"PROJECTION_ITERATIONS = {PROJECTION_ITERATIONS}\n"
+    )
+
 
 def _constraint_hooks(ir: ModuleIR) -> str:
     """`project` and `constraint_residual`, which the drivers call after every step."""
     if not ir.k:
         return _UNCONSTRAINED_HOOKS
-    rows = [c for c in range(ir.k) if ir.holonomic[c]]
-    return _CONSTRAINED_HOOKS.format(rows=rows, n=ir.n, k=ir.k, kh=len(rows), newton=8)
+    return _constraint_sizes(ir) + _CONSTRAINED_HOOKS
 
 
-#: The drivers of ``templates/drivers.py`` and ``symplectic.py``, by calling convention.
-ADAPTIVE_DRIVERS = ("dopri5_run", "dop853_run")
-FIXED_STEP_DRIVERS = ("rk4_run", "composition_run", "collocation_run")
+#: The driver templates (``codegen/templates/<name>.py``) still appended to every module they apply to, until
+#: each family's driver is library code (`lagcomp.integrate.drivers`); empty, a module is its kernels only.
+_DRIVER_TEMPLATES = ("hamiltonian", "lyapunov", "drivers", "symplectic", "lanes")
+#: Of those, the templates that need `velocities` (which constrained modules lack), and the SIMD-lane ones.
+_UNCONSTRAINED_TEMPLATES, _LANE_TEMPLATES = ("hamiltonian", "lyapunov"), ("lanes",)
+
+#: The template drivers that still get their sweep loop copied into the module (``templates/sweeps.py``), by
+#: calling convention; a family whose library sweep loop (`Method.sweep`) has landed leaves these lists.
+SWEPT_ADAPTIVE_DRIVERS = ("dopri5_run", "dop853_run")
+SWEPT_FIXED_STEP_DRIVERS = ("rk4_run", "composition_run", "collocation_run")
 
 
-def sweeps_source(adaptive=ADAPTIVE_DRIVERS, fixed=FIXED_STEP_DRIVERS) -> str:
+def _applies(template_name: str, ir: ModuleIR) -> bool:
+    if template_name in _UNCONSTRAINED_TEMPLATES:
+        return not ir.k
+    if template_name in _LANE_TEMPLATES:
+        return any(k.lanes for k in ir.kernels)
+    return True
+
+
+def sweeps_source(adaptive=SWEPT_ADAPTIVE_DRIVERS, fixed=SWEPT_FIXED_STEP_DRIVERS) -> str:
     """``templates/sweeps.py`` with its two generic functions copied once per driver (see its docstring):
-    once per `adaptive` driver and once per `fixed`-step one (a Kane module has dopri5, dop853 and rk4 only)."""
+    once per `adaptive` driver and once per `fixed`-step one (a Kane module has dopri5, dop853 and rk4 only);
+    empty when there is none."""
+    if not (adaptive or fixed):
+        return ""
     text = template("sweeps")
     start = text.rindex("@njit", 0, text.index("def sweep_adaptive("))
     middle = text.rindex("@njit", 0, text.index("def sweep_fixed("))
-    parts = [text[:start]]
+    parts = [f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n", text[:start]]
     for generic, placeholder, drivers in (
         (text[start:middle], "ADAPTIVE_DRIVER", adaptive),
         (text[middle:].rstrip("\n") + "\n\n\n", "FIXED_DRIVER", fixed),
@@ -352,6 +421,12 @@ def sweeps_source(adaptive=ADAPTIVE_DRIVERS, fixed=FIXED_STEP_DRIVERS) -> str:
         name = "sweep_adaptive" if placeholder == "ADAPTIVE_DRIVER" else "sweep_fixed"
         parts += [generic.replace(name, f"sweep_{driver}").replace(placeholder, driver) for driver in drivers]
     return "".join(parts).rstrip("\n") + "\n"
+
+
+def appended_templates(names, events: bool) -> str:
+    """The text of the driver templates `names`, each under a heading (empty for none)."""
+    return "".join(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n" + template(name, events=events)
+                   for name in names)
 
 
 def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None) -> str:
@@ -363,13 +438,9 @@ def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None) -> str
     parts += [_kernel_source(k) for k in ir.kernels]
     parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
-    hamiltonian = () if ir.k else ("hamiltonian", "lyapunov")  # need `velocities`, which constrained modules lack
-    lanes = ("lanes",) if any(k.lanes for k in ir.kernels) else ()
-    for name in ("trig", "linear_solvers", *hamiltonian, "drivers", *lanes):
-        parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n")
-        parts.append(template(name, events=bool(ir.event_names)))
+    events = bool(ir.event_names)
+    parts.append(appended_templates([name for name in _DRIVER_TEMPLATES if _applies(name, ir)], events))
     taylor = taylor_decomposition(ir) if taylor is None else taylor
-    parts.append(taylor_source(taylor, events=bool(ir.event_names)))  # taylor_coefficients and taylor_run, or why not
-    parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n")
+    parts.append(taylor_source(taylor, events=events))  # taylor_coefficients and taylor_run, or why not
     parts.append(sweeps_source())
     return "".join(parts)

@@ -7,7 +7,7 @@ speeds, state length ``n_q + n_u``; same calling conventions as
 `lagcomp.ir`):
 
 - ``rhs(t, y, p, out)``: out[:n_q] = N, out[n_q:] = u̇ from M u̇ = F by LU
-  with partial pivoting (``_lu_solve``: M is square but not symmetric when
+  with partial pivoting (``lu_solve``: M is square but not symmetric when
   the velocity constraints are among its rows).  Returns 0, or j > 0 when
   pivot j is zero (M singular there).
 - ``kinematics(t, y, p, out)``: q̇ = N, shape (n_q,).
@@ -21,11 +21,16 @@ speeds, state length ``n_q + n_u``; same calling conventions as
 - ``event_values(t, y, p, out)``: g of each declared event (`lagcomp.Event`
   over q, u and t); without events a stub, and the drivers' event code is left out.
 
-Then the hooks the drivers call (``project``, ``constraint_residual``), ``observables`` and ``kinematics_along`` /
-``reactions_along`` over saved rows, and the templates ``trig``,
-``linear_solvers`` and ``drivers`` (rk4, dopri5, dop853, which are generic in
-the state's length), and ``sweeps`` (``sweep_<driver>`` of those three, for
-`lagcomp.integrate.sweep`).  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
+Then the hooks the drivers call (``project``, ``constraint_residual``, with
+the constraint sizes as module constants), ``observables`` and
+``kinematics_along`` / ``reactions_along`` over saved rows.  The kernels have
+the names and signatures of a Lagrange module's
+(`lagcomp.integrate.drivers.kernel_types`), so the library drivers take
+either; sin, cos and the solvers come from `lagcomp.kernel_support`.  Until
+their drivers are library code, the template ``drivers`` (rk4, dopri5,
+dop853) and the sweep loops of those three are appended
+(`KANE_DRIVER_TEMPLATES`, `KANE_SWEPT_ADAPTIVE_DRIVERS`,
+`KANE_SWEPT_FIXED_STEP_DRIVERS`).  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
 reaches the emitted code, so none can collide with it (DESIGN.md, "Names");
 the header lists which is which.
 """
@@ -35,15 +40,27 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp import __version__
-from lagcomp.codegen.emit import INDENT, sweeps_source
+from lagcomp.codegen.emit import (
+    INDENT,
+    PROJECTION_ITERATIONS,
+    appended_templates,
+    kernel_support_names,
+    support_imports,
+    sweeps_source,
+)
 from lagcomp.codegen.lower import _kernel
 from lagcomp.codegen.printer import to_code
-from lagcomp.codegen.templating import template
 from lagcomp.mechanics.first_order import FirstOrderForm
 from lagcomp.mechanics.kane import acceleration_symbols
 from lagcomp.model.system import t
 
 ARGS = ("t", "y", "p", "out")
+
+#: The driver templates still appended to Kane modules, and the template drivers given a sweep loop there
+#: (see `lagcomp.codegen.emit._DRIVER_TEMPLATES`): emptied as the drivers become library code.
+KANE_DRIVER_TEMPLATES = ("drivers",)
+KANE_SWEPT_ADAPTIVE_DRIVERS = ("dopri5_run", "dop853_run")
+KANE_SWEPT_FIXED_STEP_DRIVERS = ("rk4_run",)
 
 
 def _bindings(form: FirstOrderForm, reactions: bool):
@@ -81,7 +98,7 @@ def _rhs(form: FirstOrderForm, mapping, loads) -> tuple:
         "Returns 0, or j > 0 when pivot j of M is zero (M singular here); `out` is then invalid.",
         ARGS, stores, mapping, loads,
     )
-    after = ["_status = _lu_solve(_kkt)", "if _status:", f"{INDENT}return _status"]
+    after = ["_status = lu_solve(_kkt)", "if _status:", f"{INDENT}return _status"]
     after += [f"out[{n_q + i}] = _kkt[{i}, {n_u}]" for i in range(n_u)] + ["return 0"]
     return kernel, _function(kernel, before=[f"_kkt = np.zeros(({n_u}, {n_u + 1}))"], after=after)
 
@@ -144,25 +161,11 @@ _HOOKS = '''
 @njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest |Φ| and |Ψ| (0.0 without constraints)."""
-    if {n_r} == 0:
+    if HOLONOMIC_COUNT + VELOCITY_CONSTRAINT_COUNT == 0:
         return 0.0
-    r = np.empty({n_r})
+    r = np.empty(HOLONOMIC_COUNT + VELOCITY_CONSTRAINT_COUNT)
     constraint_residuals(t, y, p, r)
     return np.max(np.abs(r))
-
-
-@njit(cache=True, error_model="numpy")
-def _gram(a, columns, r, mu):
-    """mu = (A Aᵀ)⁻¹ r for A = a[:, :columns] (least Euclidean change)."""
-    m = a.shape[0]
-    g = np.empty((m, m))
-    for i in range(m):
-        for j in range(i + 1):
-            s = 0.0
-            for c in range(columns):
-                s += a[i, c] * a[j, c]
-            g[i, j] = s
-    return _ldlt_solve(g, r, mu, 0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -171,16 +174,18 @@ def project(t, y, p):
 
     Returns 0, or j > 0 when a Gram matrix is singular (dependent constraints).
     """
-    n_q, n_u, n_h, n_v = {n_q}, {n_u}, {n_h}, {n_v}
+    n_q, n_u = COORDINATE_COUNT, SPEED_COUNT
+    n_h, n_v = HOLONOMIC_COUNT, VELOCITY_CONSTRAINT_COUNT
     if n_h:
         J = np.empty((n_h, n_q))
         r = np.empty(n_h + n_v)
         mu = np.empty(n_h)
-        for _ in range(8):
+        rows = np.arange(n_h)
+        for _ in range(PROJECTION_ITERATIONS):
             constraint_residuals(t, y, p, r)
             configuration_jacobian(t, y, p, J)
             rhs_ = r[:n_h].copy()
-            status = _gram(J, n_q, rhs_, mu)
+            status = gram_solve(J, rows, n_q, rhs_, mu)
             if status:
                 return status
             step, size = 0.0, 0.0
@@ -203,7 +208,7 @@ def project(t, y, p):
             for c in range(n_u):
                 s += a[i, c] * y[n_q + c]
             rhs_[i] = s
-        status = _gram(a, n_u, rhs_, mu)
+        status = gram_solve(a, np.arange(n_v), n_u, rhs_, mu)
         if status:
             return status
         for c in range(n_u):
@@ -231,6 +236,17 @@ def kinematics_along(ts, ys, p, out):
 '''
 
 
+def _sizes(form: FirstOrderForm) -> str:
+    """The module constants the hooks read: the sizes of q, u, Φ and Ψ, and the projection's iteration limit."""
+    return (
+        "\n\n#: Coordinates q, speeds u, configuration constraints Φ, velocity constraints Ψ.\n"
+        f"COORDINATE_COUNT, SPEED_COUNT = {form.n_q}, {form.n_u}\n"
+        f"HOLONOMIC_COUNT, VELOCITY_CONSTRAINT_COUNT = {form.Phi.rows}, {form.Psi.rows}\n"
+        "#: Gauss-Newton corrections `project` makes at most on Φ (two or three reach rounding level).\n"
+        f"PROJECTION_ITERATIONS = {PROJECTION_ITERATIONS}\n"
+    )
+
+
 def _events(form: FirstOrderForm, events, mapping, loads) -> tuple:
     """The ``event_values`` kernel (g of each event into `out`) and its source; the stub without events."""
     if not events:
@@ -241,7 +257,7 @@ def _events(form: FirstOrderForm, events, mapping, loads) -> tuple:
     return kernel, _function(kernel)
 
 
-def _header(name: str, form: FirstOrderForm, reaction_names) -> str:
+def _header(name: str, form: FirstOrderForm, reaction_names, kernels) -> str:
     locals_ = ", ".join(f"_q{i}={c}" for i, c in enumerate(form.coordinate_names))
     locals_ += "; " + ", ".join(f"_u{i}={c}" for i, c in enumerate(form.speed_names))
     params = ", ".join(f"_p{k}={s.name}" for k, s in enumerate(form.parameters)) or "(none)"
@@ -251,7 +267,9 @@ def _header(name: str, form: FirstOrderForm, reaction_names) -> str:
         f"Parameters  p: {params}\n"
         f"Constraints Φ: {form.Phi.rows}, Ψ: {form.Psi.rows}; reactions {tuple(reaction_names)}\n\n"
         "Equations: q̇ = N(q, u, t), M u̇ = F as sympy's KanesMethod forms them (lagcomp.mechanics.kane).\n"
-        '"""\n\nimport math\n\nimport numpy as np\nfrom numba import njit\n'
+        '"""\n\nimport math\n\nimport numpy as np\nfrom numba import njit\n\n'
+        # rhs solves by LU, project by Gram matrices
+        + support_imports(kernel_support_names(kernels) | {"lu_solve", "gram_solve"})
     )
 
 
@@ -264,7 +282,7 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
     mapping, loads = _bindings(form, bool(reaction_names))
     rhs, rhs_source = _rhs(form, mapping, loads)
     kernels = [rhs] + _plain_kernels(form, energy, mapping, loads)
-    parts = [_header(name, form, reaction_names), rhs_source] + [_function(k) for k in kernels[1:]]
+    parts = [rhs_source] + [_function(k) for k in kernels[1:]]
     parts.append("\n\nenergy_function = energy\n")
     if reaction_names:
         kernel, source = _reactions(form, reaction_names, reactions, mapping, loads)
@@ -274,11 +292,7 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
     if event_kernel is not None:
         kernels.append(event_kernel)
     parts.append(event_source)
-    parts.append(_HOOKS.format(n_r=form.Phi.rows + form.Psi.rows, n_q=form.n_q, n_u=form.n_u, n_h=form.Phi.rows,
-                               n_v=form.Psi.rows))
-    for piece in ("trig", "linear_solvers", "drivers"):
-        parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{piece}.py\n\n")
-        parts.append(template(piece, events=bool(events)))
-    parts.append(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n")
-    parts.append(sweeps_source(adaptive=("dopri5_run", "dop853_run"), fixed=("rk4_run",)))
-    return "".join(parts), {k.name: k.operation_count for k in kernels}
+    parts.append(_sizes(form) + _HOOKS)
+    parts.append(appended_templates(KANE_DRIVER_TEMPLATES, events=bool(events)))
+    parts.append(sweeps_source(adaptive=KANE_SWEPT_ADAPTIVE_DRIVERS, fixed=KANE_SWEPT_FIXED_STEP_DRIVERS))
+    return _header(name, form, reaction_names, kernels) + "".join(parts), {k.name: k.operation_count for k in kernels}

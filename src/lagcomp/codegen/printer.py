@@ -2,8 +2,9 @@
 
 Symbols print as their names (the IR has already renamed them to locals).
 Scalar math goes through the `math` module (numba lowers it to LLVM
-intrinsics), except sin and cos, which call the module's own ``_sin`` and
-``_cos`` (``templates/trig.py``: polynomials, faster than libm's calls).
+intrinsics), except sin and cos, which call `sin` and `cos` of
+`lagcomp.kernel_support.trig` (polynomials, faster than libm's calls), which
+the generated module imports.
 Integer powers keep an int literal exponent (``x**2``), which numba expands
 into multiplications at compile time (a float exponent would call `pow`,
 20-40 ns); half-integer powers become a square root times an integer power
@@ -18,9 +19,9 @@ from sympy.printing.pycode import PythonCodePrinter
 
 
 class KernelPrinter(PythonCodePrinter):
-    """`PythonCodePrinter` with float literals, int-literal powers, `math.sqrt`, ``_sin``/``_cos``."""
+    """`PythonCodePrinter` with float literals, int-literal powers, `math.sqrt`, kernel_support's sin/cos."""
 
-    sin_name, cos_name = "_sin", "_cos"
+    sin_name, cos_name = "sin", "cos"
 
     def __init__(self):
         super().__init__({"fully_qualified_modules": True, "standard": "python3", "order": "none"})
@@ -63,11 +64,11 @@ class KernelPrinter(PythonCodePrinter):
 
 
 class LanePrinter(KernelPrinter):
-    """`KernelPrinter` for code that runs across SIMD lanes: sin and cos call ``_vsin``/``_vcos``
-    (``templates/trig.py``), the polynomials without ``_sin``'s branch to libm, so that LLVM can
-    vectorize the loop (a call keeps it scalar)."""
+    """`KernelPrinter` for code that runs across SIMD lanes: sin and cos call ``vsin``/``vcos``
+    (`lagcomp.kernel_support.trig`), the polynomials without ``sin``'s branch to libm, so that LLVM
+    can vectorize the loop (a call keeps it scalar)."""
 
-    sin_name, cos_name = "_vsin", "_vcos"
+    sin_name, cos_name = "vsin", "vcos"
 
 
 #: One printer of each kind, reused: building a printer costs more than printing a small expression.

@@ -10,7 +10,6 @@ module globals.
 from __future__ import annotations
 
 import functools
-import importlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -159,9 +158,15 @@ ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "rk23": "bs3", "leapfrog": "v
 
 
 def library_function(reference: str):
-    """The function ``"package.module:name"`` names, imported now (numba loads or compiles it then)."""
+    """The function ``"package.module:name"`` names, imported now (numba loads or compiles it then).
+
+    numba's cache files of the drivers that do not read back are removed and compiled again
+    (`lagcomp.numba_cache.import_library_module`).
+    """
+    from lagcomp.numba_cache import import_library_module
+
     module, _, name = reference.partition(":")
-    return getattr(importlib.import_module(module), name)
+    return getattr(import_library_module(module), name)
 
 
 def implicit_solver_for(method: Method, name: str | None) -> str:

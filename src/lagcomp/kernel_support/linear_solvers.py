@@ -18,8 +18,10 @@ function's first compile, and caches it with it.
 * ``lu_factor`` and ``lu_substitute``: the same elimination split in two,
   for a matrix factored once and applied to many right-hand sides (the
   simplified Newton iteration of ``collocation_run``).
+* ``gram_solve``: (A Aᵀ) μ = r for chosen rows and leading columns of a
+  constraint matrix, the least-change step of the ``project`` kernels.
 
-A pivot below ``_PIVOT_TOLERANCE`` times the matrix's scale counts as zero:
+A pivot below ``PIVOT_TOLERANCE`` times the matrix's scale counts as zero:
 the matrix is then singular to working precision (condition number ≳ 1e14),
 and the solver returns j + 1 for the failing pivot j instead of dividing.
 """
@@ -27,7 +29,8 @@ and the solver returns j + 1 for the failing pivot j instead of dividing.
 import numpy as np
 from numba import njit
 
-_PIVOT_TOLERANCE = 1e-14
+#: Pivots below this times the matrix's scale count as zero (also the unrolled LDLᵀ of the kernels).
+PIVOT_TOLERANCE = 1e-14
 
 
 @njit(cache=True, error_model="numpy")
@@ -42,7 +45,7 @@ def ldlt_solve(mm, ff, out, offset):
         d = mm[j, j]
         for k in range(j):
             d -= mm[j, k] * mm[j, k] * mm[k, k]
-        if not d > _PIVOT_TOLERANCE * abs(mm[j, j]):
+        if not d > PIVOT_TOLERANCE * abs(mm[j, j]):
             return j + 1
         mm[j, j] = d
         for i in range(j + 1, n):
@@ -74,7 +77,7 @@ def ldlt_solve_matrix(mm, b):
         d = mm[j, j]
         for k in range(j):
             d -= mm[j, k] * mm[j, k] * mm[k, k]
-        if not d > _PIVOT_TOLERANCE * abs(mm[j, j]):
+        if not d > PIVOT_TOLERANCE * abs(mm[j, j]):
             return j + 1
         mm[j, j] = d
         for i in range(j + 1, n):
@@ -100,7 +103,7 @@ def lu_solve(a):
 
     Gaussian elimination with partial pivoting (LU of A applied to r); the
     solution ends in a[:, N].  Returns 0, or j + 1 when pivot j is below
-    _PIVOT_TOLERANCE × max|A| (A singular to working precision).
+    PIVOT_TOLERANCE × max|A| (A singular to working precision).
     """
     size = a.shape[0]
     scale = 0.0
@@ -112,7 +115,7 @@ def lu_solve(a):
         for i in range(j + 1, size):
             if abs(a[i, j]) > abs(a[pivot, j]):
                 pivot = i
-        if not abs(a[pivot, j]) > _PIVOT_TOLERANCE * scale:
+        if not abs(a[pivot, j]) > PIVOT_TOLERANCE * scale:
             return j + 1
         if pivot != j:
             for c in range(j, size + 1):
@@ -135,7 +138,7 @@ def lu_factor(a, pivots):
 
     On return a holds U on and above the diagonal and the multipliers of L
     (unit diagonal) below it, and row j was swapped with row pivots[j] at
-    step j.  Returns 0, or j + 1 when pivot j is below _PIVOT_TOLERANCE ×
+    step j.  Returns 0, or j + 1 when pivot j is below PIVOT_TOLERANCE ×
     max|a| (a singular to working precision).
     """
     size = a.shape[0]
@@ -149,7 +152,7 @@ def lu_factor(a, pivots):
             if abs(a[i, j]) > abs(a[pivot, j]):
                 pivot = i
         pivots[j] = pivot
-        if not abs(a[pivot, j]) > _PIVOT_TOLERANCE * scale:
+        if not abs(a[pivot, j]) > PIVOT_TOLERANCE * scale:
             return j + 1
         if pivot != j:
             for c in range(size):
@@ -200,7 +203,7 @@ def kkt_solve(a, n):
         d = work[j, j]
         for m in range(j):
             d -= work[j, m] * work[j, m] * work[m, m]
-        if not d > _PIVOT_TOLERANCE * abs(a[j, j]):
+        if not d > PIVOT_TOLERANCE * abs(a[j, j]):
             return lu_solve(a)
         work[j, j] = d
         for i in range(j + 1, n):
@@ -241,3 +244,23 @@ def kkt_solve(a, n):
     for r in range(k):
         a[n + r, size] = lam[r]
     return 0
+
+
+@njit(cache=True, error_model="numpy")
+def gram_solve(a, rows, columns, rhs, mu):
+    """mu = (A Aᵀ)⁻¹ rhs for A = a[rows, :columns]: the multipliers of the least Euclidean change.
+
+    The ``project`` kernels move a state onto its constraints along Aᵀ mu, with A
+    the constraint rows (Jacobian or velocity matrix) of `a`.  The Gram matrix
+    A Aᵀ, shape (m, m) for m = len(rows), is solved by ``ldlt_solve``: returns 0,
+    or j + 1 when pivot j is not positive (dependent constraints).
+    """
+    m = rows.shape[0]
+    g = np.empty((m, m))
+    for i in range(m):
+        for j in range(i + 1):
+            s = 0.0
+            for c in range(columns):
+                s += a[rows[i], c] * a[rows[j], c]
+            g[i, j] = s
+    return ldlt_solve(g, rhs, mu, 0)
