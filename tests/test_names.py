@@ -92,7 +92,7 @@ def _identifiers(source: str) -> set[str]:
 
 
 def _probes() -> tuple[lc.System, lc.System]:
-    """Two small systems whose modules hold every template: events, Taylor, lanes; constraints."""
+    """Two small systems whose modules hold every kind of emitted code: events, Taylor, lanes; constraints."""
     x, z = lc.coordinates("x z")
     a, b = sp.symbols("a b", positive=True)
     free = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * x**2 + b * z**2,

@@ -323,10 +323,13 @@ def cmd_generate(args) -> int:
 
 
 def library_drivers() -> list[str]:
-    """The library drivers and sweep loops the method registry names (``"module:function"``), each once."""
+    """The library drivers and sweep loops (``"module:function"``), each once: those the method registry
+    names, then the batched sweep loops (`lagcomp.integrate.sweep.BATCHED`)."""
     from lagcomp.integrate.methods import METHODS
+    from lagcomp.integrate.sweep import BATCHED, TAYLOR_LANES_LOOP
 
-    references = (ref for m in METHODS.values() if m.in_library for ref in (m.driver, m.sweep) if ref is not None)
+    references = [ref for m in METHODS.values() for ref in (m.driver, m.sweep) if ref is not None]
+    references += [ref for ref in BATCHED.values() if ":" in ref] + [TAYLOR_LANES_LOOP[0]]
     return list(dict.fromkeys(references))
 
 

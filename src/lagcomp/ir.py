@@ -57,7 +57,7 @@ class SymmetricProduct:
 
 @dataclass(frozen=True)
 class AugmentedSolve:
-    """Solve the augmented system of a constrained system (`_kkt_solve`).
+    """Solve the augmented system of a constrained system (`lagcomp.kernel_support.linear_solvers.kkt_solve`).
 
     The stores fill the work array ``_kkt`` of shape (N, N + 1), zeros
     included by allocation: [[M, −Λᵀ], [Λ, 0]] in its first N columns and the

@@ -635,7 +635,7 @@ class Model:
             of 128 and 64 through ``rhs_lanes``, each trajectory with its own
             steps for dop853,
             about 2x the throughput, with the arithmetic of the scalar path
-            (sin and cos included, templates/trig.py): the same results
+            (sin and cos included, `lagcomp.kernel_support.trig`): the same results
             bitwise while the arguments of sin and cos stay below 1e5 in size
             (beyond, the scalar kernels call libm: within 2 ulp).  taylor:
             through the Taylor program unrolled at the order the tolerances

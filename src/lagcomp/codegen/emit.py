@@ -8,9 +8,6 @@ solvers); the kernels; the constraint hooks the drivers call (`project`,
 constants; `observables`, which evaluates the energies along a saved
 trajectory; and the Taylor coefficients.  The drivers are library code
 (`lagcomp.integrate.drivers`) that take these kernels as function values.
-Until every driver family has moved there, the driver templates of
-`_DRIVER_TEMPLATES` and the sweep loops of `SWEPT_ADAPTIVE_DRIVERS` /
-`SWEPT_FIXED_STEP_DRIVERS` are still appended as text.
 The same IR always gives the same bytes: no timestamps, stable ordering.
 
 Kernels use numba's ``error_model="numpy"``: a division by zero gives inf or
@@ -26,8 +23,13 @@ import sympy as sp
 
 from lagcomp import __version__
 from lagcomp.codegen.printer import to_code
-from lagcomp.codegen.taylor import TaylorProgram, Unsupported, taylor_decomposition, taylor_source
-from lagcomp.codegen.templating import template
+from lagcomp.codegen.taylor import (
+    TaylorProgram,
+    Unsupported,
+    taylor_decomposition,
+    taylor_source,
+    taylor_support_names,
+)
 from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR, SymmetricProduct
 
 INDENT = "    "
@@ -46,7 +48,7 @@ def _docstring(text: str) -> str:
     return '"""' + "".join(map(escaped, text)) + '"""'
 
 
-def _header(ir: ModuleIR) -> str:
+def _header(ir: ModuleIR, taylor: TaylorProgram | Unsupported) -> str:
     n = ir.n
     state = ", ".join(ir.coordinate_names + tuple(f"{c}_dot" for c in ir.coordinate_names))
     params = ", ".join(ir.parameter_names) or "(none)"
@@ -68,7 +70,7 @@ def _header(ir: ModuleIR) -> str:
         "import math\n\n"
         "import numpy as np\n"
         "from numba import njit\n\n"
-        + support_imports(_support_names(ir))
+        + support_imports(_support_names(ir) | taylor_support_names(taylor))
     )
 
 
@@ -78,20 +80,9 @@ KERNEL_SUPPORT = {
                                               "ldlt_solve_matrix", "lu_factor", "lu_solve", "lu_substitute"),
     "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
 }
-#: The `KERNEL_SUPPORT` names the appended driver templates and the Taylor source call by their template-era
-#: names (``_sin``, ``_ldlt_solve``, ...): imported under those too until they are gone (empty it then).
-TEMPLATE_ERA_NAMES = ("PIVOT_TOLERANCE", "cos", "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
-                      "lu_substitute", "kkt_solve", "sin", "vcos", "vsin")
-
-
 def support_imports(names: set[str]) -> str:
-    """The import lines of the `KERNEL_SUPPORT` `names` a module's kernels call, and the `TEMPLATE_ERA_NAMES`."""
-    lines = [_import(module, [name for name in public if name in names]) for module, public in KERNEL_SUPPORT.items()]
-    if TEMPLATE_ERA_NAMES:
-        lines.append("# The same under the names the driver templates and the Taylor source below call them by.\n")
-        lines += [_import(module, [f"{name} as _{name}" for name in public if name in TEMPLATE_ERA_NAMES])
-                  for module, public in KERNEL_SUPPORT.items()]
-    return "".join(lines)
+    """The import lines of the `KERNEL_SUPPORT` `names` a module's kernels call."""
+    return "".join(_import(module, [name for name in public if name in names]) for module, public in KERNEL_SUPPORT.items())
 
 
 def _import(module: str, names: list[str]) -> str:
@@ -384,63 +375,15 @@ def _constraint_hooks(ir: ModuleIR) -> str:
     return _constraint_sizes(ir) + _CONSTRAINED_HOOKS
 
 
-#: The driver templates (``codegen/templates/<name>.py``) still appended to every module they apply to, until
-#: each family's driver is library code (`lagcomp.integrate.drivers`); empty, a module is its kernels only.
-_DRIVER_TEMPLATES = ("hamiltonian", "lyapunov", "drivers", "symplectic", "lanes")
-#: Of those, the templates that need `velocities` (which constrained modules lack), and the SIMD-lane ones.
-_UNCONSTRAINED_TEMPLATES, _LANE_TEMPLATES = ("hamiltonian", "lyapunov"), ("lanes",)
-
-#: The template drivers that still get their sweep loop copied into the module (``templates/sweeps.py``), by
-#: calling convention; a family whose library sweep loop (`Method.sweep`) has landed leaves these lists.
-SWEPT_ADAPTIVE_DRIVERS = ("dopri5_run", "dop853_run")
-SWEPT_FIXED_STEP_DRIVERS = ("rk4_run", "composition_run", "collocation_run")
-
-
-def _applies(template_name: str, ir: ModuleIR) -> bool:
-    if template_name in _UNCONSTRAINED_TEMPLATES:
-        return not ir.k
-    if template_name in _LANE_TEMPLATES:
-        return any(k.lanes for k in ir.kernels)
-    return True
-
-
-def sweeps_source(adaptive=SWEPT_ADAPTIVE_DRIVERS, fixed=SWEPT_FIXED_STEP_DRIVERS) -> str:
-    """``templates/sweeps.py`` with its two generic functions copied once per driver (see its docstring):
-    once per `adaptive` driver and once per `fixed`-step one (a Kane module has dopri5, dop853 and rk4 only);
-    empty when there is none."""
-    if not (adaptive or fixed):
-        return ""
-    text = template("sweeps")
-    start = text.rindex("@njit", 0, text.index("def sweep_adaptive("))
-    middle = text.rindex("@njit", 0, text.index("def sweep_fixed("))
-    parts = [f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/sweeps.py, once per driver\n\n", text[:start]]
-    for generic, placeholder, drivers in (
-        (text[start:middle], "ADAPTIVE_DRIVER", adaptive),
-        (text[middle:].rstrip("\n") + "\n\n\n", "FIXED_DRIVER", fixed),
-    ):
-        name = "sweep_adaptive" if placeholder == "ADAPTIVE_DRIVER" else "sweep_fixed"
-        parts += [generic.replace(name, f"sweep_{driver}").replace(placeholder, driver) for driver in drivers]
-    return "".join(parts).rstrip("\n") + "\n"
-
-
-def appended_templates(names, events: bool) -> str:
-    """The text of the driver templates `names`, each under a heading (empty for none)."""
-    return "".join(f"\n\n# {'-' * 76}\n# lagcomp/codegen/templates/{name}.py\n\n" + template(name, events=events)
-                   for name in names)
-
-
 def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None) -> str:
     """The complete source text of the module for `ir`.
 
     `taylor` is `taylor_decomposition(ir)` when the caller has it already (it also stores the program).
     """
-    parts = [_header(ir)]
+    taylor = taylor_decomposition(ir) if taylor is None else taylor
+    parts = [_header(ir, taylor)]
     parts += [_kernel_source(k) for k in ir.kernels]
     parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
-    events = bool(ir.event_names)
-    parts.append(appended_templates([name for name in _DRIVER_TEMPLATES if _applies(name, ir)], events))
-    taylor = taylor_decomposition(ir) if taylor is None else taylor
-    parts.append(taylor_source(taylor, events=events))  # taylor_coefficients and taylor_run, or why not
-    parts.append(sweeps_source())
+    parts.append(taylor_source(taylor))  # taylor_coefficients with its data, or why the module has none
     return "".join(parts)

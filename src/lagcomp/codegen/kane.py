@@ -26,11 +26,7 @@ the constraint sizes as module constants), ``observables`` and
 ``kinematics_along`` / ``reactions_along`` over saved rows.  The kernels have
 the names and signatures of a Lagrange module's
 (`lagcomp.integrate.drivers.kernel_types`), so the library drivers take
-either; sin, cos and the solvers come from `lagcomp.kernel_support`.  Until
-their drivers are library code, the template ``drivers`` (rk4, dopri5,
-dop853) and the sweep loops of those three are appended
-(`KANE_DRIVER_TEMPLATES`, `KANE_SWEPT_ADAPTIVE_DRIVERS`,
-`KANE_SWEPT_FIXED_STEP_DRIVERS`).  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
+either; sin, cos and the solvers come from `lagcomp.kernel_support`.  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
 reaches the emitted code, so none can collide with it (DESIGN.md, "Names");
 the header lists which is which.
 """
@@ -43,10 +39,8 @@ from lagcomp import __version__
 from lagcomp.codegen.emit import (
     INDENT,
     PROJECTION_ITERATIONS,
-    appended_templates,
     kernel_support_names,
     support_imports,
-    sweeps_source,
 )
 from lagcomp.codegen.lower import _kernel
 from lagcomp.codegen.printer import to_code
@@ -55,13 +49,6 @@ from lagcomp.mechanics.kane import acceleration_symbols
 from lagcomp.model.system import t
 
 ARGS = ("t", "y", "p", "out")
-
-#: The driver templates still appended to Kane modules, and the template drivers given a sweep loop there
-#: (see `lagcomp.codegen.emit._DRIVER_TEMPLATES`): emptied as the drivers become library code.
-KANE_DRIVER_TEMPLATES = ("drivers",)
-KANE_SWEPT_ADAPTIVE_DRIVERS = ("dopri5_run", "dop853_run")
-KANE_SWEPT_FIXED_STEP_DRIVERS = ("rk4_run",)
-
 
 def _bindings(form: FirstOrderForm, reactions: bool):
     """Model symbol -> local symbol, and the loads binding the locals (u̇ too when `reactions`)."""
@@ -293,6 +280,4 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
         kernels.append(event_kernel)
     parts.append(event_source)
     parts.append(_sizes(form) + _HOOKS)
-    parts.append(appended_templates(KANE_DRIVER_TEMPLATES, events=bool(events)))
-    parts.append(sweeps_source(adaptive=KANE_SWEPT_ADAPTIVE_DRIVERS, fixed=KANE_SWEPT_FIXED_STEP_DRIVERS))
     return _header(name, form, reaction_names, kernels) + "".join(parts), {k.name: k.operation_count for k in kernels}

@@ -19,7 +19,7 @@ by construction:
 - no other name the emitted modules bind or read (arguments, locals, loop
   variables, kernels, helpers, module constants, imports, the builtins they
   call) is in the user namespace: generated locals start with ``_`` or are
-  the fixed names of the kernels and templates (``t``, ``y``, ``p``, ``out``,
+  the fixed names of the kernels (``t``, ``y``, ``p``, ``out``,
   ``X``, ``W``, ``k``, ``order``, ``range``, ``math``, ``np`` ...).
 
 So a user's ``k`` is ``p_k`` in every kernel and the Taylor program's order
@@ -44,7 +44,7 @@ from lagcomp.model.system import t
 
 #: The user namespace (module docstring): a prefix for each kind of user symbol, then ``_`` or a digit.
 USER_NAMESPACE = re.compile(r"(q|qd|p|mom)[_0-9]")
-#: Largest system whose LDLᵀ solve is emitted unrolled; larger ones call a loop (`_ldlt_solve`).
+#: Largest system whose LDLᵀ solve is emitted unrolled; larger ones call a loop (`lagcomp.kernel_support.linear_solvers.ldlt_solve`).
 #: Unrolled, the 10-link chain's rhs costs 462 ns in a compiled loop against 635 ns looped
 #: (`python -m bench --only kernels --cases n_link_pendulum_10` at aed6595 and at d880236, whose
 #: limit was 8), for about 0.4 s more numba compile time of rhs (1.1 s at 12 links).

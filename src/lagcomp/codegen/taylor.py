@@ -53,7 +53,7 @@ import sympy as sp
 
 from lagcomp.codegen.periodic import periodic_coordinates
 from lagcomp.codegen.printer import to_code
-from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, linear_line, pivot_test
+from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, linear_line, pivot_test, support_names
 from lagcomp.ir import Kernel, LinearSolve, ModuleIR, target_local
 
 INDENT = "    "
@@ -543,12 +543,19 @@ def taylor_program(taylor: TaylorProgram | Unsupported) -> dict | None:
                 operations=taylor.operation_count, periodic=list(taylor.periodic))
 
 
-def taylor_source(taylor: TaylorProgram | Unsupported, events: bool = False) -> str:
+def taylor_source(taylor: TaylorProgram | Unsupported) -> str:
     """``taylor_coefficients`` with its data, or ``TAYLOR_REFUSED`` saying why the module has none.
 
-    The driver is library code (`lagcomp.integrate.drivers.taylor`); `events` is not used (the
-    driver takes the module's ``event_values`` kernel whether or not it has events).
+    The driver is library code (`lagcomp.integrate.drivers.taylor`).
     """
     if isinstance(taylor, Unsupported):
         return f"\n\n#: Why this module has no Taylor integrator (method='taylor').\nTAYLOR_REFUSED = {str(taylor)!r}\n"
     return emit_taylor(taylor)
+
+
+def taylor_support_names(taylor: TaylorProgram | Unsupported) -> set[str]:
+    """The `lagcomp.kernel_support` names ``taylor_coefficients`` calls (none without a program)."""
+    if isinstance(taylor, Unsupported):
+        return set()
+    checks = any(statement.kind == "check" for statement in taylor.setup)
+    return support_names({op.kind for op in taylor.body}, checks, lanes=False)

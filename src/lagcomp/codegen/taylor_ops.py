@@ -60,9 +60,21 @@ class Setup:
     index: int = 0
 
 
+def support_names(kinds, checks: bool, lanes: bool) -> set[str]:
+    """The `lagcomp.kernel_support` names a Taylor program calls: sin and cos (vsin and vcos in lane
+    kernels) for a ``sin_cos`` among the operation `kinds`, and ``PIVOT_TOLERANCE`` for a pivot test
+    (a ``pivot`` operation, or setup `checks`)."""
+    names = set()
+    if "sin_cos" in kinds:
+        names |= {"vsin", "vcos"} if lanes else {"sin", "cos"}
+    if checks or "pivot" in kinds:
+        names.add("PIVOT_TOLERANCE")
+    return names
+
+
 def pivot_test(pivot: str, scale: str) -> str:
     """The condition that the pivot (code) is positive relative to M's diagonal entry `scale` (code)."""
-    return f"{pivot} > _PIVOT_TOLERANCE*abs({scale})"
+    return f"{pivot} > PIVOT_TOLERANCE*abs({scale})"
 
 
 def convolution_loop(op: Op, at) -> tuple[str, list[str]]:
@@ -79,7 +91,7 @@ def convolution_loop(op: Op, at) -> tuple[str, list[str]]:
     if kind == "sin_cos":
         (a,), (s, co) = op.args, op.out
         return f"{s}, {co} = sin({a}), cos({a})", [
-            "if k == 0:", f"    {at(s, 0)} = _sin({at(a, 0)})", f"    {at(co, 0)} = _cos({at(a, 0)})", "else:",
+            "if k == 0:", f"    {at(s, 0)} = sin({at(a, 0)})", f"    {at(co, 0)} = cos({at(a, 0)})", "else:",
             f"    _ja = k*{at(a, 'k')}", f"    _s = _ja*{at(co, 0)} if k % 2 == 1 else 0.0",
             f"    _c = _ja*{at(s, 0)} if k % 2 == 1 else 0.0", "    _r = 0.0", "    _d = 0.0",
             "    for _j in range(1, k, 2):", f"        _ja = _j*{at(a, '_j')}",

@@ -1,10 +1,9 @@
 """The integration methods `simulate` offers, as data (a registry, like scipy's METHODS).
 
-Each `Method` names its driver and the tableau whose arrays it takes.  A driver is either a
-library function of `lagcomp.integrate.drivers` (``"module:function"``), which takes the model
-kernels named by `Method.kernels` as its first arguments, or the name of a driver function still
-emitted into every generated module (`lagcomp/codegen/templates/`), which calls the kernels as
-module globals.
+Each `Method` names its driver and the tableau whose arrays it takes.  A driver is a library
+function of `lagcomp.integrate.drivers` (``"module:function"``), compiled once per installation,
+which takes the model kernels named by `Method.kernels` as its first arguments; `Method.sweep` is
+its loop over many trajectories, taking the same kernels and then ``energy``.
 """
 
 from __future__ import annotations
@@ -50,7 +49,7 @@ class Method:
     name: str
     order: int
     adaptive: bool
-    #: ``"lagcomp.integrate.drivers.<module>:<function>"``, or a function of the generated module.
+    #: ``"lagcomp.integrate.drivers.<module>:<function>"``.
     driver: str
     tableau: Tableau | Composition | Collocation | None
     summary: str
@@ -60,20 +59,14 @@ class Method:
     default_rtol: float = 1e-8
     default_atol: float | None = 1e-10
     rtol_min: float = RTOL_MIN
-    #: The model kernels a library driver takes first, by name (e.g. ``("rhs", "project", ...)``).
+    #: What the driver takes first from the model's generated module, by name: kernels (e.g. ``("rhs",
+    #: "project", ...)``) and, for the Taylor method, module data (``TAYLOR_PERIODIC``, ``TAYLOR_WORK``).
     kernels: tuple[str, ...] = ()
     #: The library sweep loop (``"module:function"``) that runs this method over many trajectories.
     sweep: str | None = None
 
-    @property
-    def in_library(self) -> bool:
-        """Whether the driver is library code (compiled once per installation) rather than emitted."""
-        return ":" in self.driver
-
     def bound_driver(self, kernels):
         """The driver with the model's `kernels` (its generated module) bound as its first arguments."""
-        if not self.in_library:
-            return getattr(kernels, self.driver)
         return functools.partial(library_function(self.driver), *(getattr(kernels, k) for k in self.kernels))
 
     @property

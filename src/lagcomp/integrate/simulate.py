@@ -155,8 +155,8 @@ def _numba_stage(model, m, progress):
     """What the first driver call of a run shows while numba compiles its kernels and driver."""
     from lagcomp.stages import numba_stage
 
-    first = m.kernels[0] if m.in_library else m.driver  # library drivers are compiled on import
-    return numba_stage(getattr(model.kernels, first, None), f"the kernels and the {m.name} driver",
+    # the first kernel stands for the model's: the library driver was compiled (or loaded) on import
+    return numba_stage(getattr(model.kernels, m.kernels[0], None), f"the kernels and the {m.name} driver",
                        f"preparing {model.name}", progress)
 
 

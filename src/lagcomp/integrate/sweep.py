@@ -2,8 +2,8 @@
 
 `sweep` builds the N initial states and parameter vectors of a grid, checks
 the memory its outputs need, and hands them to the compiled sweep loop of
-the method (``sweep_<driver>`` in the generated module, which releases the
-GIL; `lagcomp/codegen/templates/sweeps.py`) chunk by chunk, each chunk split
+the method (`Method.sweep`, a library loop taking the model's kernels, which
+releases the GIL; `lagcomp.integrate.drivers`) chunk by chunk, each chunk split
 across `workers` threads: Python runs once per chunk, so a long sweep shows progress and stops cleanly on Ctrl-C,
 keeping the chunks already done.  Trajectories are independent and each
 writes only its own output rows, so the result is identical — bitwise —
@@ -331,10 +331,11 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "
                               "events yet); drop `batched` for those outputs.")
         fixed = fixed[:7] if m.adaptive else fixed      # (the lane loops take their tableaux from `tableaux`)
-        task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",))
         if m.name == "taylor":      # the library loop around the lane kernels of this order (a module of their own)
             spec = _taylor_lanes_spec(model, rtol, atol)
             task = _Task(driver, True, fixed, layout, (), projecting, *TAYLOR_LANES_LOOP)
+        else:
+            task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",))
     else:
         task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments(), projecting, m.sweep, m.kernels)
     if client is None:
@@ -411,13 +412,11 @@ class _Task:
     layout: tuple          # (2n, dense rows, events, event cap)
     coefficients: tuple
     projecting: int        # constrained systems: project onto the constraints after every step (0 or 1)
-    sweep: str | None = None     # the library sweep loop (`Method.sweep`), else the module's sweep_<driver>
-    kernels: tuple = ()          # the kernels it takes first, by name (`Method.kernels`), then ``energy``
+    sweep: str             # the library sweep loop, ``"module:function"`` (`Method.sweep`)
+    kernels: tuple         # what it takes first from the generated module, by name (`Method.kernels`), then ``energy``
 
     def loop(self, kernels):
         """The compiled sweep loop of this task for the model's `kernels` (its generated module)."""
-        if self.sweep is None:
-            return getattr(kernels, f"sweep_{self.driver}")
         bound = (getattr(kernels, name) for name in (*self.kernels, "energy"))
         return functools.partial(library_function(self.sweep), *bound)
 
@@ -435,19 +434,17 @@ def _allocate(n_traj: int, layout: tuple) -> dict[str, np.ndarray]:
 
 
 def _run_chunk(kernels, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str, np.ndarray]:
-    """Integrate the trajectories Y0, P (a chunk) with the module's compiled sweep loop; their outputs."""
+    """Integrate the trajectories Y0, P (a chunk) with the task's compiled sweep loop; their outputs."""
     out = _allocate(Y0.shape[0], task.layout)
     loop = task.loop(kernels)
     common = (out["final"], out["t_final"], out["status"], out["counts"], out["dense"], out["energy"])
-    # a library loop takes the coefficient arrays one by one, a module's sweep_<driver> as one tuple
-    coefficients = task.coefficients if task.sweep else (task.coefficients,)
     if task.driver in BATCHED.values():
         loop(Y0, P, *task.fixed, *common, *task.coefficients)
     elif task.adaptive:
         loop(Y0, P, task.projecting, *task.fixed, *common, out["event_count"], out["event_t"], out["event_y"],
-             *coefficients)
+             *task.coefficients)
     else:
-        loop(Y0, P, task.projecting, *task.fixed, *common, *coefficients)
+        loop(Y0, P, task.projecting, *task.fixed, *common, *task.coefficients)
     return out
 
 
@@ -469,7 +466,7 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
 
     n_traj = Y0.shape[0]
     threads = (os.cpu_count() or 1) if workers is None else count(workers, "workers")
-    watched = getattr(kernels, task.kernels[0]) if task.sweep else getattr(kernels, f"sweep_{task.driver}", None)
+    watched = getattr(kernels, task.kernels[0], None)   # the library loop was compiled (or loaded) on import
     first = numba_stage(watched, f"the {task.driver.rpartition(':')[2]} sweep loop",
                         "preparing the sweep", progress)
     done = np.zeros(n_traj, dtype=bool)

@@ -17,8 +17,8 @@ Both follow the driver protocol of `lagcomp.integrate.drivers` and share its fix
 
 ``counters`` = [nfev, nsteps, nrejected (always 0 here), _, since_save, _]; ``clock`` = [t, _].
 The work arrays are allocated once per call; the step loops do not allocate.  Each driver is one
-function whose only callees are the kernels (see "Why each driver is one long function" in
-`lagcomp/codegen/templates/drivers.py`: a chain of small helpers costs compile time and, in the
+function whose only callees are the kernels (see "Why one long function" in
+`lagcomp.integrate.drivers.embedded`: a chain of small helpers costs compile time and, in the
 hot loop, speed).
 """
 

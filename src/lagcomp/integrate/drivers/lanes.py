@@ -4,8 +4,8 @@ The model's lane kernel ``rhs_lanes`` (emitted per model, `lagcomp.codegen.lower
 right-hand side of B trajectories at once, laid out as structure of arrays (``Y[i, l]``: component
 i of lane l), in a loop over lanes that LLVM vectorizes: 4 lanes per AVX2 instruction.  Two things
 would keep that loop scalar, and are avoided there: an early return (a singular mass matrix sets
-``bad[l]`` instead) and calls into libm (``sin`` and ``cos`` are the polynomials ``_vsin`` and
-``_vcos``).  On the double pendulum the kernel costs 18 ns per trajectory against 50 ns for the
+``bad[l]`` instead) and calls into libm (``sin`` and ``cos`` are the polynomials ``vsin`` and
+``vcos``).  On the double pendulum the kernel costs 18 ns per trajectory against 50 ns for the
 scalar ``rhs``.  That inlined, vectorized body is what makes the lanes fast, so it stays emitted
 per model; the loops around it are this module, compiled once per installation.  One call of the
 kernel evaluates a whole block, so calling it through its address, not inlined, costs little: at
