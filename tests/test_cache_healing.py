@@ -20,6 +20,7 @@ import sympy as sp
 
 import lagcomp as lc
 from lagcomp.model import t
+from lagcomp.numba_cache import cache_directory
 
 x, = lc.coordinates("x")
 m, k = sp.symbols("m k", positive=True)
@@ -47,7 +48,7 @@ def test_unreadable_numba_cache_files_are_removed_and_rebuilt(tmp_path):
     system = _oscillator("healing_oscillator")
     model = lc.compile(system, cache_dir=tmp_path)
     assert _period_error(model) < 1e-13  # RK4 at dt = 1e-3 over one period: measured 2.6e-15
-    pycache = tmp_path / "modules" / "__pycache__"
+    pycache = cache_directory(model.source_path)
     data_files = sorted(pycache.glob("*.nbc"))
     assert data_files, "numba wrote no cache files"
     rng = np.random.default_rng(24)
@@ -65,8 +66,9 @@ def test_unreadable_numba_cache_files_are_removed_and_rebuilt(tmp_path):
 
 def test_truncated_numba_index_is_removed_and_rebuilt(tmp_path):
     system = _oscillator("healing_index")
-    _period_error(lc.compile(system, cache_dir=tmp_path))
-    for path in (tmp_path / "modules" / "__pycache__").glob("*.nbi"):
+    model = lc.compile(system, cache_dir=tmp_path)
+    _period_error(model)
+    for path in cache_directory(model.source_path).glob("*.nbi"):
         path.write_bytes(path.read_bytes()[:20])
     with pytest.warns(lc.CacheWarning, match="unreadable"):
         model = _fresh_load(system, tmp_path)

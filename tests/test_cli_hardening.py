@@ -11,6 +11,7 @@ import lagcomp as lc
 from lagcomp import cli
 from lagcomp.cli import main
 from lagcomp.model import t
+from lagcomp.numba_cache import cache_directory
 
 x, = lc.coordinates("x")
 m, k = sp.symbols("m k", positive=True)
@@ -130,8 +131,8 @@ def test_ctrl_c_while_numba_compiles_stops_the_command(capsys, cache_dir, monkey
 
 
 def test_cache_warnings_are_one_line(capsys, tmp_path):
-    _user_model(tmp_path, name="cli_warned")
-    for data in (tmp_path / "modules" / "__pycache__").glob("*.nbi"):
+    model = _user_model(tmp_path, name="cli_warned")
+    for data in cache_directory(model.source_path).glob("*.nbi"):
         data.write_bytes(b"broken")
     import sys
 

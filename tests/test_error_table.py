@@ -23,6 +23,7 @@ import lagcomp as lc
 from lagcomp import analysis as an
 from lagcomp import cli
 from lagcomp.model import t
+from lagcomp.numba_cache import cache_directory
 
 TABLE = Path(__file__).resolve().parent.parent / "docs" / "errors.md"
 
@@ -120,7 +121,7 @@ def _cache_case(kind):
         if kind == "numba":
             model = lc.compile(oscillator(name="table_numba"), cache_dir=tmp_path)
             model.simulate((0, 0.1), method="rk4", dt=0.01, progress=False)  # numba writes its cache files
-            for data in (tmp_path / "modules" / "__pycache__").glob("table_numba*.nbc"):
+            for data in cache_directory(model.source_path).glob("table_numba*.nbc"):
                 data.write_bytes(b"\x80\x05 not a pickle")
             del sys.modules[model.kernels.__name__]  # as a new process: the module runs again, numba reads its files
             return lc.compile(oscillator(name="table_numba"), cache_dir=tmp_path)

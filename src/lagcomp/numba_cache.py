@@ -89,23 +89,37 @@ def heal(module: ModuleType) -> list[str]:
     return removed + [file for source in sorted(support.glob("*.py")) for file in heal_source(source)]
 
 
-def heal_source(source: Path) -> list[str]:
-    """Remove numba's unreadable cache files of the functions of the module file `source`, without importing it.
-
-    The cache directory is the one numba would use for `source` (its first
-    locator that accepts it); the names removed.
-    """
+def _locator(source: Path):
+    """numba's cache locator for the module file `source` (its first that accepts it), or None."""
     from numba.core import caching
 
     implementation = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)  # renamed in 0.60
-    if implementation is None or not hasattr(caching, "IndexDataCacheFile"):
-        return []
+    if implementation is None:
+        return None
     stand_in = SimpleNamespace(__code__=SimpleNamespace(co_firstlineno=0))  # locators read only the line number
     for locator_class in implementation._locator_classes:
         locator = locator_class.from_function(stand_in, str(source))
         if locator is not None:
-            break
-    else:
+            return locator
+    return None
+
+
+def cache_directory(source: Path) -> Path | None:
+    """Where numba keeps the cache files of the functions of the module file `source`: ``__pycache__``
+    beside it, or under ``$NUMBA_CACHE_DIR``; None if numba would not cache them."""
+    locator = _locator(source)
+    return None if locator is None else Path(locator.get_cache_path())
+
+
+def heal_source(source: Path) -> list[str]:
+    """Remove numba's unreadable cache files of the functions of the module file `source`, without importing it.
+
+    The cache directory is the one numba would use for `source` (`cache_directory`); the names removed.
+    """
+    from numba.core import caching
+
+    locator = _locator(source)
+    if locator is None or not hasattr(caching, "IndexDataCacheFile"):
         return []
     removed = []
     for index in sorted(Path(locator.get_cache_path()).glob(f"{source.stem}.*.nbi")):
