@@ -4,7 +4,7 @@ Each process compiles a model it has never seen (into its own module cache, so n
 model's kernels), integrates it with every library method the model admits (sweeping too where
 the method has a library sweep loop), then reports numba's dispatcher statistics of every library
 driver the method registry names (`lagcomp.cli.library_drivers`: `Method.driver` and `Method.sweep`
-of the methods whose `Method.in_library` is true), and of `sweep_rows.fold_rows`.  The second process must find each of
+of the registry's methods), and of `sweep_rows.fold_rows`.  The second process must find each of
 them in numba's cache, which the first process filled (or an earlier test run did): no miss.
 The list follows the registry, so each driver family is covered as it moves into the library.
 """
@@ -27,7 +27,7 @@ PROBE = textwrap.dedent(
 
     model = lc.compile(examples.get(sys.argv[2]), cache_dir=sys.argv[1])
     model.rhs(0.0, [0.1] * model.state_size)
-    methods = [m for m in METHODS.values() if m.in_library and (model.separable or not m.separable_only)
+    methods = [m for m in METHODS.values() if (model.separable or not m.separable_only)
                and (not model.k or not m.unconstrained_only)]
     for m in methods:
         steps = {"rtol": 1e-6, "atol": 1e-8} if m.adaptive else {"dt": 0.01}

@@ -74,7 +74,7 @@ def _recurrence(name):
     """The emitted loop of operation `name` (`convolution_loop`), run for k = 0..ORDER in plain Python."""
     _, loop = convolution_loop(CASES[name][1], lambda series, index: f"{series}[{index}]")
     body = "\n".join("        " + line for line in loop)
-    namespace = {"math": math, "_sin": math.sin, "_cos": math.cos}
+    namespace = {"math": math, "sin": math.sin, "cos": math.cos}
     prelude = "        _ik = 1.0/k if k > 0 else 0.0\n"  # as at the top of taylor_coefficients' loop
     exec(f"def run(a, b, c, w, s):\n    for k in range({ORDER + 1}):\n{prelude}{body}\n", namespace)
     return namespace["run"]
@@ -101,7 +101,7 @@ def test_each_unrolled_recurrence_against_an_independent_expansion(name):
     from lagcomp.codegen.taylor_lanes import _operation, _series
 
     lines = [line for k in range(ORDER + 1) for line in _operation(CASES[name][1], k)]
-    namespace = {"math": math, "_vsin": math.sin, "_vcos": math.cos}
+    namespace = {"math": math, "vsin": math.sin, "vcos": math.cos}
     for series, coefficients in (("a", A), ("b", B)):
         namespace.update({_series(series, k): x for k, x in enumerate(_padded(coefficients))})
     exec("\n".join(lines), namespace)

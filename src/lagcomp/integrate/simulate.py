@@ -19,7 +19,9 @@ import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
-from lagcomp.integrate.memory import MEMORY_LIMIT, check as check_memory, checked_limit, run_bytes
+from lagcomp.integrate.drivers.run_state import STEP, RunState
+from lagcomp.integrate.memory import MEMORY_LIMIT, checked_limit, run_bytes
+from lagcomp.integrate.memory import check as check_memory
 from lagcomp.integrate.methods import get_method, implicit_solver_for
 from lagcomp.integrate.options import (
     check_method,
@@ -42,30 +44,31 @@ FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
 CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
 
 
-def _adaptive_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
+def _adaptive_driver(m, kernels, state: RunState, p, run_args, t_eval, options):
     """The chunk call of an adaptive method, and the rows its output will need."""
-    t0, t1 = clock[0], options["t1"]
+    t0, t1 = state.t, options["t1"]
     if options["dt"] is not None:
         raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own (use `first_step`).")
     rtol, atol = tolerances(options["rtol"], options["atol"], m)
     if options["first_step"] is not None:
-        clock[1] = positive(options["first_step"], "first_step")
+        state.clock[STEP] = positive(options["first_step"], "first_step")
     max_step = options["max_step"]
     max_step = positive(max_step, "max_step") if max_step != math.inf else math.inf
     events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
     driver, tableau_arrays = m.bound_driver(kernels), m.driver_arguments()
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
-        tableau_arrays = (np.zeros(y.size),)
+        tableau_arrays = (np.zeros(state.y.size),)
 
     def advance(ts, ys, pause_at, event_buffers):
-        return driver(y, clock, counters, p, *run_args, t1, rtol, atol, max_step, options["max_steps"], pause_at,
-                      options["save_every"], events, ts, ys, *options["events"], *event_buffers, *tableau_arrays)
+        return driver(state.y, state.clock, state.counters, p, *run_args, t1, rtol, atol, max_step,
+                      options["max_steps"], pause_at, options["save_every"], events, ts, ys, *options["events"],
+                      *event_buffers, *tableau_arrays)
     return advance, (len(events) + 1 if t_eval is not None else None)
 
 
-def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, options):
+def _fixed_step_driver(m, kernels, state: RunState, p, run_args, t_eval, options):
     """The chunk call of a fixed-step method, and the rows its output will need."""
-    t0, t1 = clock[0], options["t1"]
+    t0, t1 = state.t, options["t1"]
     if options["dt"] is None:
         raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
     if t_eval is not None:
@@ -78,8 +81,8 @@ def _fixed_step_driver(m, kernels, y, clock, counters, p, run_args, t_eval, opti
     driver, coefficients = m.bound_driver(kernels), m.driver_arguments(options["implicit_solver"])
 
     def advance(ts, ys, pause_at, event_buffers):
-        return driver(y, clock, counters, p, *run_args, t0, dt, n_steps, pause_at, t1, options["save_every"], ts, ys,
-                      *coefficients)
+        return driver(state.y, state.clock, state.counters, p, *run_args, t0, dt, n_steps, pause_at, t1,
+                      options["save_every"], ts, ys, *coefficients)
     return advance, n_steps // options["save_every"] + 1
 
 
@@ -106,9 +109,9 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     projecting = int(bool(model.residual_labels) and (not m.adaptive if projection is None else bool(projection)))
     bound = math.inf if max_residual is None else positive(max_residual, "max_residual")
     residual_max = np.array([0.0, bound])  # running maximum, and the bound the drivers stop at
-    y, clock, counters = y0.copy(), np.array([t0, 0.0]), np.zeros(6, dtype=np.int64)
+    state = RunState(y0, t0)
     make = _adaptive_driver if m.adaptive else _fixed_step_driver
-    advance, rows = make(m, model.kernels, y, clock, counters, p, (projecting, residual_max), t_eval, options)
+    advance, rows = make(m, model.kernels, state, p, (projecting, residual_max), t_eval, options)
 
     recorder = Recorder(model, p, record)
     if t_eval is None or t_eval[0] == t0:
@@ -118,15 +121,14 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
     first = _numba_stage(model, m, progress)
     max_rows = memory_limit // run_bytes(1, model.n, model.k) if record == "trajectory" else math.inf
-    status = _run(advance, y, clock, counters, t1, (chunk, max_rows), recorder, n_events, event_parts, progress,
-                  first)
-    if status == Status.RHS_FAILED and counters[1] == 0:
+    status = _run(advance, state, t1, (chunk, max_rows), recorder, n_events, event_parts, progress, first)
+    if status == Status.RHS_FAILED and state.nsteps == 0:
         _refuse_singular_start(model, t0, y0, p)
-    if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != clock[0]):
-        recorder.add(np.array([clock[0]]), y[None, :])  # keep the last good state
-    run = dict(method=m.name, status=status, clock=clock, counters=counters, projected=projected,
+    if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
+        recorder.add(np.array([state.t]), state.y[None, :])  # keep the last good state
+    run = dict(method=m.name, status=status, state=state, projected=projected,
                residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
-    return _solution(model, p, recorder, y, run, throw)
+    return _solution(model, p, recorder, run, throw)
 
 
 def _check_memory(model, m, t_span, dt, t_eval, save_every: int, memory_limit) -> None:
@@ -160,23 +162,23 @@ def _numba_stage(model, m, progress):
                        f"preparing {model.name}", progress)
 
 
-def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts, progress, first=None) -> int:
+def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, progress, first=None) -> int:
     """Call the driver until the run ends; returns the run's `Status`.
 
     `first`, if not None, is a context around the first call (numba compiles there: `_numba_stage`).
     `chunk` is (rows of the first output buffer, rows the run may keep before it stops with MEMORY_FULL).
     """
     chunk, max_rows = chunk
-    n = y.size
-    budget, t0 = FIRST_BUDGET, clock[0]
+    n = state.y.size
+    budget, t0 = FIRST_BUDGET, state.t
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
         ts, ys = np.empty(chunk), np.empty((chunk, n))
         while True:
             event_buffers = (np.empty(max(n_events, 16)), np.empty((max(n_events, 16), n)),
                              np.empty(max(n_events, 16), dtype=np.int64))
-            counters[5] = 0
+            state.new_event_buffer()
             started = time.perf_counter()
-            steps_before = counters[1]
+            steps_before = state.nsteps
             with first or contextlib.nullcontext() as stages:
                 if stages is not None:
                     stages.start(stages.names[0])
@@ -187,13 +189,13 @@ def _run(advance, y, clock, counters, t1, chunk, recorder, n_events, event_parts
             recorder.add(ts[:n_saved], ys[:n_saved])
             if recorder.rows > max_rows and Status(status).call_again:
                 return Status.MEMORY_FULL  # what was computed is kept; a fixed-step or t_eval run was refused up front
-            if counters[5]:
-                event_parts.append(tuple(a[:counters[5]].copy() for a in event_buffers))
-            bar.update(clock[0] - t0 - bar.n)
+            if state.event_rows:
+                event_parts.append(tuple(a[:state.event_rows].copy() for a in event_buffers))
+            bar.update(state.t - t0 - bar.n)
             if status == Status.BUFFER_FULL and n_saved == chunk and chunk < MAX_CHUNK:
                 chunk = min(2 * chunk, MAX_CHUNK)
                 ts, ys = np.empty(chunk), np.empty((chunk, n))
-            if status == Status.PAUSED and counters[1] - steps_before == budget:
+            if status == Status.PAUSED and state.nsteps - steps_before == budget:
                 budget = int(budget * min(8.0, max(0.5, CALL_SECONDS / max(elapsed, 1e-6))))
                 budget = max(budget, 16)
             if not Status(status).call_again:
@@ -275,28 +277,28 @@ def _event_records(model, event_parts) -> dict:
     return records
 
 
-def _solution(model, p, recorder, y, run, throw) -> Solution:
+def _solution(model, p, recorder, run, throw) -> Solution:
     ts, ys, energy, energy_function, momenta = recorder.rows_kept()
-    status, clock, counters = run["status"], run["clock"], run["counters"]
+    status, run_state = run["status"], run["state"]
     t_failure = None
     message = Status(status).message
     if status < 0 or status == Status.INTERRUPTED:
-        state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, y))  # (q, q̇), or (q, u) of Kane
+        state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, run_state.y))  # (q, q̇), or (q, u)
         last = "state" if status == Status.RESIDUAL_EXCEEDED else "last good state"
-        message = f"{message} Stopped at t = {clock[0]:.10g}, {last} {state}."
+        message = f"{message} Stopped at t = {run_state.t:.10g}, {last} {state}."
         if status == Status.RESIDUAL_EXCEEDED:
             message += f" Residual {run['residual_max']:.3g} > max_residual = {run['max_residual']:g}."
-        t_failure = float(clock[0]) if status < 0 else None
+        t_failure = run_state.t if status < 0 else None
     if status == Status.TERMINATED:
-        fired = [name for name, record in run["events"].items() if record.t.size and record.t[-1] == clock[0]]
-        message = f"{message} Event {fired[0] if fired else '?'!r} at t = {clock[0]:.10g}."
+        fired = [name for name, record in run["events"].items() if record.t.size and record.t[-1] == run_state.t]
+        message = f"{message} Event {fired[0] if fired else '?'!r} at t = {run_state.t:.10g}."
     reactions, residuals = reactions_along(model, ts, ys, p)
     n = model.n
     solution = Solution(
         t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), energy=energy, energy_function=energy_function,
         momenta=momenta, cyclic=model.cyclic,
         status=status, message=message, t_failure=t_failure,
-        nfev=int(counters[0]), nsteps=int(counters[1]), nrejected=int(counters[2]),
+        nfev=run_state.nfev, nsteps=run_state.nsteps, nrejected=run_state.nrejected,
         method=run["method"], coordinates=model.coordinates,
         params=dict(zip(model.parameters, p.tolist())),
         reactions=reactions, constraint_residual=max(run["residual_max"], float(np.max(residuals, initial=0.0))),

@@ -14,7 +14,7 @@ Layers, from the user down:
    the drivers as first-class function values (`kernel_types` gives their types).
 
 The driver protocol: the kernels first, then the run's state in small in/out arrays (``y``,
-``clock = [t, h]``, ``counters``), the parameter vector, the run's settings, the output buffers
+``clock``, ``counters``, whose slots `run_state` names), the parameter vector, the run's settings, the output buffers
 and the method's coefficient arrays; every driver returns ``(status, n_saved)`` with status a
 `lagcomp.integrate.status.Status`, and a run continues with another call after ``BUFFER_FULL``
 or ``PAUSED``.

@@ -30,6 +30,14 @@ from lagcomp.integrate.drivers.kernel_types import (
     VECTOR,
     VELOCITIES,
 )
+from lagcomp.integrate.drivers.run_state import (
+    COUNTER_SLOTS,
+    NFEV,
+    NREJECTED,
+    NSTEPS,
+    SINCE_SAVE,
+    TIME,
+)
 from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.linear_solvers import lu_factor, lu_substitute
@@ -97,18 +105,18 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y
     compensation = np.zeros(n2)
     new_compensation = np.zeros(n2)
     n_saved = 0
-    momenta(clock[0], y, p, pdot)
+    momenta(clock[TIME], y, p, pdot)
     for c in range(n):
         x[c] = y[c]
         x[n + c] = pdot[c]
     while True:
-        k = counters[1]
+        k = counters[NSTEPS]
         if k >= n_steps:
             return Status.DONE, n_saved
         if k >= pause_at:
             return Status.PAUSED, n_saved
         last = k == n_steps - 1
-        if (last or counters[4] + 1 >= save_every) and n_saved >= cap:
+        if (last or counters[SINCE_SAVE] + 1 >= save_every) and n_saved >= cap:
             return Status.BUFFER_FULL, n_saved
         t_a = min(t0 + k * dt, t_end)
         if last:
@@ -157,7 +165,7 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y
                         y_stage[c] = xs[c]
                         y_stage[n + c] = qdot[c]
                     momentum_rate(t_stage, y_stage, p, pdot)
-                counters[0] += 1
+                counters[NFEV] += 1
                 if status != 0:
                     break
                 for c in range(n):
@@ -224,15 +232,15 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y
             for c in range(n2):
                 K_previous[i, c] = K[i, c]
         extrapolate = True
-        clock[0] = t_b
-        counters[1] = k + 1
-        counters[4] += 1
-        if last or counters[4] >= save_every:
+        clock[TIME] = t_b
+        counters[NSTEPS] = k + 1
+        counters[SINCE_SAVE] += 1
+        if last or counters[SINCE_SAVE] >= save_every:
             ts[n_saved] = t_b
             for c in range(n2):
                 ys[n_saved, c] = y[c]
             n_saved += 1
-            counters[4] = 0
+            counters[SINCE_SAVE] = 0
 
 
 @njit(_RUN, cache=True, error_model="numpy", nogil=True)
@@ -254,29 +262,29 @@ def collocation_run(velocities, momenta, momentum_rate, canonical_partials, y, c
 
 
 _SWEEP = types.none(*_KERNEL_TYPES, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT, INT, FLOAT, INT, MATRIX, VECTOR,
-                    INDICES, types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, types.Tuple(_COEFFICIENTS))
+                    INDICES, types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, *_COEFFICIENTS)
 
 
 @njit(_SWEEP, cache=True, error_model="numpy", nogil=True)
 def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, energy, Y0, P, projecting, t0, dt,
-                      n_steps, t_end, save_every, final, t_final, status, counts, dense, energy_stats, coefficients):
+                      n_steps, t_end, save_every, final, t_final, status, counts, dense, energy_stats, A, B, C, E,
+                      max_iter, newton):
     """Trajectory k from (t0, Y0[k]) with parameters P[k], ``n_steps`` steps of ``dt`` by `collocation_run`.
 
     The outputs and their shapes are those of every fixed-step sweep loop (`lagcomp.integrate.sweep`):
     ``final`` (N, 2n), ``t_final`` (N,), ``status`` (N,), ``counts`` (N, 3) = [nfev, nsteps, nrejected],
     ``dense`` (N, m, 2n) the initial state and the saved rows (m = 0: none kept), ``energy_stats``
-    (N, 2) = [E0, largest |E − E0| over the saved rows].  ``coefficients`` are the driver's trailing
-    arguments (A, B, C, E, max_iter, newton).
+    (N, 2) = [E0, largest |E − E0| over the saved rows].  Then the driver's trailing arguments
+    (A, B, C, E, max_iter, newton).
     """
-    A, B, C, E, max_iter, newton = coefficients
     n_traj = Y0.shape[0]
     n2 = Y0.shape[1]
     for k in range(n_traj):
         y = Y0[k].copy()
         p = P[k]
         clock = np.zeros(2)
-        clock[0] = t0
-        counters = np.zeros(6, dtype=np.int64)
+        clock[TIME] = t0
+        counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
         residual = np.zeros(1)
         ts = np.empty(SWEEP_ROWS)
         ys = np.empty((SWEEP_ROWS, n2))
@@ -296,10 +304,10 @@ def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, en
                 break
         for c in range(n2):
             final[k, c] = y[c]
-        t_final[k] = clock[0]
+        t_final[k] = clock[TIME]
         status[k] = code
-        counts[k, 0] = counters[0]
-        counts[k, 1] = counters[1]
-        counts[k, 2] = counters[2]
+        counts[k, 0] = counters[NFEV]
+        counts[k, 1] = counters[NSTEPS]
+        counts[k, 2] = counters[NREJECTED]
         energy_stats[k, 0] = e0
         energy_stats[k, 1] = deviation

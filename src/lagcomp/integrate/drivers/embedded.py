@@ -133,6 +133,17 @@ from lagcomp.integrate.drivers.kernel_types import (
     RHS,
     VECTOR,
 )
+from lagcomp.integrate.drivers.run_state import (
+    COUNTER_SLOTS,
+    EVENT_ROWS,
+    NEXT_EVAL,
+    NFEV,
+    NREJECTED,
+    NSTEPS,
+    SINCE_SAVE,
+    STEP,
+    TIME,
+)
 from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
 from lagcomp.integrate.status import Status
 from lagcomp.integrate.tableaux import ERROR_RMS
@@ -192,17 +203,17 @@ def embedded_run(rhs, project, constraint_residual, event_values,
 
     n_saved = 0
     residual_bound = residual_max[1] if residual_max.shape[0] > 1 else np.inf
-    t = clock[0]
+    t = clock[TIME]
     if t >= t_end:
         return Status.DONE, n_saved
     # Output points at or before the current time are never emitted here.
-    while counters[3] < n_eval and t_eval[counters[3]] <= t:
-        counters[3] += 1
+    while counters[NEXT_EVAL] < n_eval and t_eval[counters[NEXT_EVAL]] <= t:
+        counters[NEXT_EVAL] += 1
 
     # First stage of the first step (FSAL thereafter); events at the start.  ``status`` holds the
     # outcome of a group of rhs calls: 0, the rhs status (> 0), or -1 for a non-finite value.
     status = rhs(t, y, p, K[0])
-    counters[0] += 1
+    counters[NFEV] += 1
     if n_events > 0:
         event_values(t, y, p, g_old)
     if status == 0:
@@ -210,7 +221,7 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             if not (np.isfinite(y[i]) and np.isfinite(K[0, i])):
                 status = -1
 
-    h_abs = clock[1]
+    h_abs = clock[STEP]
     if status == 0 and h_abs <= 0.0:
         # Initial step (step 1 of the module docstring): probe state in ytmp, probe derivative in
         # y_new, error scale in F[0].
@@ -237,7 +248,7 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             for i in range(n):
                 ytmp[i] = y[i] + h0 * K[0, i]
             status = rhs(t + h0, ytmp, p, y_new)
-            counters[0] += 1
+            counters[NFEV] += 1
             finite = True
             d2 = 0.0
             for i in range(n):
@@ -254,16 +265,16 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                     h1 = (0.01 / max(d1, d2)) ** (-error_exponent)
                 h_abs = min(100.0 * h0, h1, interval, max_step)
         if status == 0:                     # (not after a failed probe)
-            clock[1] = h_abs
+            clock[STEP] = h_abs
     if status != 0:
         return (Status.RHS_FAILED if status > 0 else Status.NONFINITE), n_saved
 
     while True:
         if t >= t_end:
             return Status.DONE, n_saved
-        if counters[1] >= max_steps:
+        if counters[NSTEPS] >= max_steps:
             return Status.MAX_STEPS, n_saved
-        if counters[1] >= pause_at:
+        if counters[NSTEPS] >= pause_at:
             return Status.PAUSED, n_saved
 
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
@@ -279,15 +290,15 @@ def embedded_run(rhs, project, constraint_residual, event_values,
         t_reach = min(t + h_abs, t_end)
         need = 0
         if use_t_eval:
-            j = counters[3]
+            j = counters[NEXT_EVAL]
             while j < n_eval and t_eval[j] <= t_reach and need <= room:
                 need += 1
                 j += 1
-        elif counters[4] + 1 >= save_every or t_reach >= t_end:
+        elif counters[SINCE_SAVE] + 1 >= save_every or t_reach >= t_end:
             need = 1
         if need > room and (n_saved > 0 or not use_t_eval):
             return Status.BUFFER_FULL, n_saved
-        if counters[5] + n_events > ev_t.shape[0]:
+        if counters[EVENT_ROWS] + n_events > ev_t.shape[0]:
             return Status.BUFFER_FULL, n_saved
         if n_events > 0 and not use_t_eval and n_saved >= cap:
             return Status.BUFFER_FULL, n_saved    # a terminal event saves its row
@@ -342,7 +353,7 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                     if status != 0:
                         break
                 status = rhs(t + c * h, ytmp, p, f_stage)
-                counters[0] += 1
+                counters[NFEV] += 1
                 for i in range(n):
                     K[s, i] = f_stage[i]
                     if status == 0 and not np.isfinite(f_stage[i]):
@@ -401,7 +412,7 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                 h_abs *= MIN_FACTOR
                 nonfinite = True
             step_rejected = True
-            counters[2] += 1
+            counters[NREJECTED] += 1
 
         # Events of the accepted step; the dense output when an event or a t_eval point lies inside
         # it (first the extra stages K[n_k ..] (jj: stage index; j is the t_eval index), then the
@@ -410,7 +421,7 @@ def embedded_run(rhs, project, constraint_residual, event_values,
         if n_events > 0:
             event_values(t_new, y_new, p, g_new)
             n_crossed = event_crossings(g_old, g_new, directions, actions, crossed)
-        j = counters[3]
+        j = counters[NEXT_EVAL]
         if n_crossed > 0 or (use_t_eval and j < n_eval and t_eval[j] < t_new):
             for s in range(n_k, n_all):
                 row = s - n_k
@@ -424,7 +435,7 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                 for i in range(n):
                     ytmp[i] = y[i] + h * ytmp[i]
                 status = rhs(t + extra_C[row] * h, ytmp, p, K[s])
-                counters[0] += 1
+                counters[NFEV] += 1
                 if status == 0:
                     for i in range(n):
                         if not np.isfinite(K[s, i]):
@@ -451,8 +462,9 @@ def embedded_run(rhs, project, constraint_residual, event_values,
         stop = False
         if n_crossed > 0:
             n_recorded, t_stop = record_events(event_values, dense_kind, F, y, t, h, p, g_old, g_new, crossed,
-                                               actions, crossing_times, ev_t, ev_y, ev_i, counters[5], ytmp, g_work)
-            counters[5] = n_recorded
+                                               actions, crossing_times, ev_t, ev_y, ev_i, counters[EVENT_ROWS], ytmp,
+                                               g_work)
+            counters[EVENT_ROWS] = n_recorded
             if t_stop < np.inf:
                 stop = True
                 t_new = t_stop
@@ -470,19 +482,19 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                     dense_state(dense_kind, F, y, t, h, te, ys[n_saved])
                 n_saved += 1
                 j += 1
-            counters[3] = j
+            counters[NEXT_EVAL] = j
             if j < n_eval and t_eval[j] <= t_new:
                 # Only when one step holds more points than a whole buffer: do not commit; the next
                 # call redoes this (deterministic) step and emits the remaining points.
                 return Status.BUFFER_FULL, n_saved
         else:
-            counters[4] += 1
-            if counters[4] >= save_every or t_new >= t_end or stop:
+            counters[SINCE_SAVE] += 1
+            if counters[SINCE_SAVE] >= save_every or t_new >= t_end or stop:
                 ts[n_saved] = t_new
                 for i in range(n):
                     ys[n_saved, i] = y_new[i]
                 n_saved += 1
-                counters[4] = 0
+                counters[SINCE_SAVE] = 0
 
         # Projection onto the constraints, after the outputs (the dense output interpolates the step
         # as computed); the FSAL stage is then evaluated again at the projected state.
@@ -490,7 +502,7 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             status = project(t_new, y_new, p)
             if status == 0:
                 status = rhs(t_new, y_new, p, K[n_stages])
-                counters[0] += 1
+                counters[NFEV] += 1
             if status != 0:
                 return Status.RHS_FAILED, n_saved
         residual = constraint_residual(t_new, y_new, p)
@@ -502,9 +514,9 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             y[i] = y_new[i]
             K[0, i] = K[n_stages, i]
         t = t_new
-        clock[0] = t
-        clock[1] = h_abs
-        counters[1] += 1
+        clock[TIME] = t
+        clock[STEP] = h_abs
+        counters[NSTEPS] += 1
         if residual > residual_bound:
             return Status.RESIDUAL_EXCEEDED, n_saved
         if stop:
@@ -551,8 +563,8 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
         y = Y0[k].copy()
         p = P[k]
         clock = np.zeros(2)
-        clock[0] = t0
-        counters = np.zeros(6, dtype=np.int64)
+        clock[TIME] = t0
+        counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
         residual = np.zeros(1)
         ts = np.empty(SWEEP_ROWS)
         ys = np.empty((SWEEP_ROWS, n2))
@@ -570,7 +582,7 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
         for e in range(n_events):
             event_count[k, e] = 0
         while True:
-            counters[5] = 0
+            counters[EVENT_ROWS] = 0
             code, n_saved = embedded_run(rhs, project, constraint_residual, event_values,
                                          y, clock, counters, p, projecting, residual, t_end, rtol, atol, max_step,
                                          max_steps, NO_PAUSE, save_every, t_eval, ts, ys,
@@ -578,7 +590,7 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
                                          A, B, C, error_weights, error_norm, error_exponent, dense_kind,
                                          dense_weights, extra_A, extra_C)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
-            for r in range(counters[5]):
+            for r in range(counters[EVENT_ROWS]):
                 e = ev_i[r]
                 j = event_count[k, e]
                 if j < cap:
@@ -590,11 +602,11 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
                 break
         for c in range(n2):
             final[k, c] = y[c]
-        t_final[k] = clock[0]
+        t_final[k] = clock[TIME]
         status[k] = code
-        counts[k, 0] = counters[0]
-        counts[k, 1] = counters[1]
-        counts[k, 2] = counters[2]
+        counts[k, 0] = counters[NFEV]
+        counts[k, 1] = counters[NSTEPS]
+        counts[k, 2] = counters[NREJECTED]
         energy_stats[k, 0] = e0
         energy_stats[k, 1] = deviation
 

@@ -38,6 +38,7 @@ from lagcomp.integrate.drivers.kernel_types import (
     RHS,
     VECTOR,
 )
+from lagcomp.integrate.drivers.run_state import NFEV, NSTEPS, SINCE_SAVE, TIME
 from lagcomp.integrate.status import Status
 
 #: The arguments every fixed-step driver takes after its kernels and before its coefficients.
@@ -88,13 +89,13 @@ def runge_kutta_run(rhs, project, constraint_residual, y, clock, counters, p, pr
     n_saved = 0
     residual_bound = residual_max[1] if residual_max.shape[0] > 1 else np.inf
     while True:
-        k = counters[1]
+        k = counters[NSTEPS]
         if k >= n_steps:
             return Status.DONE, n_saved
         if k >= pause_at:
             return Status.PAUSED, n_saved
         last = k == n_steps - 1
-        if (last or counters[4] + 1 >= save_every) and n_saved >= cap:
+        if (last or counters[SINCE_SAVE] + 1 >= save_every) and n_saved >= cap:
             return Status.BUFFER_FULL, n_saved
         t_a = min(t0 + k * dt, t_end)
         if last:
@@ -112,7 +113,7 @@ def runge_kutta_run(rhs, project, constraint_residual, y, clock, counters, p, pr
                     for i in range(n):
                         ytmp[i] += a * K[j, i]
             status = rhs(t_a + C[s] * h, ytmp, p, f_stage)
-            counters[0] += 1
+            counters[NFEV] += 1
             if status != 0:
                 return Status.RHS_FAILED, n_saved
             w = weights[s]
@@ -140,15 +141,15 @@ def runge_kutta_run(rhs, project, constraint_residual, y, clock, counters, p, pr
 
         for i in range(n):
             y[i] = y_new[i]
-        clock[0] = t_b
-        counters[1] = k + 1
-        counters[4] += 1
-        if last or counters[4] >= save_every:
+        clock[TIME] = t_b
+        counters[NSTEPS] = k + 1
+        counters[SINCE_SAVE] += 1
+        if last or counters[SINCE_SAVE] >= save_every:
             ts[n_saved] = t_b
             for i in range(n):
                 ys[n_saved, i] = y[i]
             n_saved += 1
-            counters[4] = 0
+            counters[SINCE_SAVE] = 0
         if residual > residual_bound:
             return Status.RESIDUAL_EXCEEDED, n_saved
 
@@ -181,19 +182,19 @@ def composition_run(rhs, y, clock, counters, p, projecting, residual_max, t0, dt
     acc_new = np.empty(n2)
     y_new = np.empty(n2)
     n_saved = 0
-    if counters[1] < n_steps:
-        status = rhs(clock[0], y, p, acc)
-        counters[0] += 1
+    if counters[NSTEPS] < n_steps:
+        status = rhs(clock[TIME], y, p, acc)
+        counters[NFEV] += 1
         if status != 0:
             return Status.RHS_FAILED, n_saved
     while True:
-        k = counters[1]
+        k = counters[NSTEPS]
         if k >= n_steps:
             return Status.DONE, n_saved
         if k >= pause_at:
             return Status.PAUSED, n_saved
         last = k == n_steps - 1
-        if (last or counters[4] + 1 >= save_every) and n_saved >= cap:
+        if (last or counters[SINCE_SAVE] + 1 >= save_every) and n_saved >= cap:
             return Status.BUFFER_FULL, n_saved
         t_a = min(t0 + k * dt, t_end)
         if last:
@@ -215,7 +216,7 @@ def composition_run(rhs, y, clock, counters, p, projecting, residual_max, t0, dt
             elapsed += weights[j]
             t_sub = t_b if j == weights.shape[0] - 1 else t_a + elapsed * h
             status = rhs(t_sub, y_new, p, acc_new)
-            counters[0] += 1
+            counters[NFEV] += 1
             if status != 0:
                 break
             for i in range(n):
@@ -231,12 +232,12 @@ def composition_run(rhs, y, clock, counters, p, projecting, residual_max, t0, dt
         for i in range(n2):
             y[i] = y_new[i]
             acc[i] = acc_new[i]
-        clock[0] = t_b
-        counters[1] = k + 1
-        counters[4] += 1
-        if last or counters[4] >= save_every:
+        clock[TIME] = t_b
+        counters[NSTEPS] = k + 1
+        counters[SINCE_SAVE] += 1
+        if last or counters[SINCE_SAVE] >= save_every:
             ts[n_saved] = t_b
             for i in range(n2):
                 ys[n_saved, i] = y[i]
             n_saved += 1
-            counters[4] = 0
+            counters[SINCE_SAVE] = 0

@@ -33,6 +33,7 @@ from lagcomp.integrate.drivers.kernel_types import (
     RHS,
     VECTOR,
 )
+from lagcomp.integrate.drivers.run_state import COUNTER_SLOTS, TIME
 from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
 from lagcomp.integrate.status import Status
 
@@ -64,7 +65,7 @@ def record_end(k, y, clock, counters, code, e0, deviation, final, t_final, statu
     """Write how trajectory `k` ended (state, time, status, counters, energies) into row k of the outputs."""
     for c in range(y.shape[0]):
         final[k, c] = y[c]
-    t_final[k] = clock[0]
+    t_final[k] = clock[TIME]
     status[k] = code
     for c in range(3):
         counts[k, c] = counters[c]
@@ -79,7 +80,7 @@ def runge_kutta_sweep(rhs, project, constraint_residual, energy, Y0, P, projecti
     n2 = Y0.shape[1]
     for k in range(Y0.shape[0]):
         y, p = Y0[k].copy(), P[k]
-        clock, counters, residual = np.array([t0, 0.0]), np.zeros(6, dtype=np.int64), np.zeros(1)
+        clock, counters, residual = np.array([t0, 0.0]), np.zeros(COUNTER_SLOTS, dtype=np.int64), np.zeros(1)
         ts, ys = np.empty(SWEEP_ROWS), np.empty((SWEEP_ROWS, n2))
         e0, deviation, row = energy(t0, y, p), 0.0, first_row(Y0, dense, k)
         while True:
@@ -99,7 +100,7 @@ def composition_sweep(rhs, energy, Y0, P, projecting, t0, dt, n_steps, t_end, sa
     n2 = Y0.shape[1]
     for k in range(Y0.shape[0]):
         y, p = Y0[k].copy(), P[k]
-        clock, counters, residual = np.array([t0, 0.0]), np.zeros(6, dtype=np.int64), np.zeros(1)
+        clock, counters, residual = np.array([t0, 0.0]), np.zeros(COUNTER_SLOTS, dtype=np.int64), np.zeros(1)
         ts, ys = np.empty(SWEEP_ROWS), np.empty((SWEEP_ROWS, n2))
         e0, deviation, row = energy(t0, y, p), 0.0, first_row(Y0, dense, k)
         while True:

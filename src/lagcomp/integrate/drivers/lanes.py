@@ -27,9 +27,6 @@ none) and ``energy_stats[k]`` = (E0, largest |E - E0| over the saved rows).
 
 from __future__ import annotations
 
-from fractions import Fraction
-from math import lcm
-
 import numpy as np
 from numba import njit, types
 
@@ -42,7 +39,7 @@ from lagcomp.integrate.drivers.kernel_types import (
     VECTOR,
 )
 from lagcomp.integrate.status import Status
-from lagcomp.integrate.tableaux import DOP853, RK4, driver_arguments
+from lagcomp.integrate.tableaux import DOP853, RK4, over_common_denominator
 
 #: Trajectories per block (the lane kernel's batch width B).  A kernel call and a step cost a fixed time per
 #: block besides their time per lane, so wider blocks are faster until their work arrays leave the caches
@@ -57,17 +54,6 @@ RK4_LANES, DOP853_LANES = 128, 64
 _OUTPUTS = (MATRIX, VECTOR, types.int64[::1], types.int64[:, ::1], types.float64[:, :, ::1], MATRIX)
 
 
-def _integer_weights(weights) -> tuple[tuple[float, ...], float]:
-    """Weights b_j as integers over one denominator: RK4's (1/6, 1/3, 1/3, 1/6) as (1, 2, 2, 1) and 6.
-
-    ``h / 6 * (K0 + 2 K1 + 2 K2 + K3)`` is how RK4 has always rounded its update: the integer
-    weights multiply exactly, where 1/3 and 1/6 would each round.
-    """
-    fractions = [Fraction(float(b)).limit_denominator(1 << 16) for b in weights]
-    denominator = lcm(*(f.denominator for f in fractions))
-    return tuple(float(f * denominator) for f in fractions), float(denominator)
-
-
 def _rk4_stage_factors() -> tuple[float, ...]:
     """RK4's A[s, s-1] = C[s] per stage (0 for the first): stage s > 0 evaluates f at t + C[s] h,
     y + A[s, s-1] h K[s-1], as ``rk4_run`` does; refuses a tableau whose stages use more than the one before."""
@@ -78,14 +64,17 @@ def _rk4_stage_factors() -> tuple[float, ...]:
     return (0.0, *map(float, below))
 
 
-#: RK4 (`tableaux.RK4`): the stages' factors, and the update y + h/denominator * sum_j weight_j K[j].
+#: RK4 (`tableaux.RK4`): the stages' factors, and the update y + h/denominator * sum_j weight_j K[j]
+#: (`tableaux.over_common_denominator`).
 _RK4_FACTORS = _rk4_stage_factors()
-_RK4_WEIGHTS, _RK4_DENOMINATOR = _integer_weights(RK4.B)
+_RK4_NUMERATORS, _RK4_DENOMINATOR = over_common_denominator(RK4.B)  # 1, 2, 2, 1 over 6: the rounding RK4 always had
+_RK4_WEIGHTS = tuple(map(float, _RK4_NUMERATORS))
 _RK4_STAGES = len(_RK4_FACTORS)
 
 #: DOP853 (`tableaux.DOP853`): stage matrix, weights, nodes, the 3rd- and 5th-order error weights, and the
 #: step-size exponent -1/(q + 1) of its error order q = 7.
-_A, _B, _C, _E3, _E5 = driver_arguments(DOP853)[:5]
+_A, _B, _C, _E3, _E5 = (np.ascontiguousarray(getattr(DOP853, name), dtype=np.float64)
+                        for name in ("A", "B", "C", "E3", "E5"))
 _EXPONENT = -1.0 / (DOP853.error_order + 1)
 #: Step-size control of ``dop853_run``: safety factor, and the bounds of the step's change per step.
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0

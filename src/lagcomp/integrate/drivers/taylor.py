@@ -47,7 +47,12 @@ import math
 import numpy as np
 from numba import njit, types
 
-from lagcomp.integrate.drivers.events import DENSE_SERIES, dense_state, event_crossings, record_events
+from lagcomp.integrate.drivers.events import (
+    DENSE_SERIES,
+    dense_state,
+    event_crossings,
+    record_events,
+)
 from lagcomp.integrate.drivers.kernel_types import (
     ENERGY,
     EVENTS,
@@ -58,6 +63,17 @@ from lagcomp.integrate.drivers.kernel_types import (
     OUTCOME,
     TAYLOR,
     VECTOR,
+)
+from lagcomp.integrate.drivers.run_state import (
+    COUNTER_SLOTS,
+    EVENT_ROWS,
+    NEXT_EVAL,
+    NFEV,
+    NREJECTED,
+    NSTEPS,
+    SINCE_SAVE,
+    STEP,
+    TIME,
 )
 from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
 from lagcomp.integrate.status import Status
@@ -112,20 +128,20 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
     crossing_times = np.empty(n_events)
 
     n_saved = 0
-    t = clock[0]
+    t = clock[TIME]
     if t >= t_end:
         return Status.DONE, n_saved
-    while counters[3] < n_eval and t_eval[counters[3]] <= t:
-        counters[3] += 1
+    while counters[NEXT_EVAL] < n_eval and t_eval[counters[NEXT_EVAL]] <= t:
+        counters[NEXT_EVAL] += 1
     if n_events > 0:
         event_values(t, y, p, g_old)
 
     while True:
         if t >= t_end:
             return Status.DONE, n_saved
-        if counters[1] >= max_steps:
+        if counters[NSTEPS] >= max_steps:
             return Status.MAX_STEPS, n_saved
-        if counters[1] >= pause_at:
+        if counters[NSTEPS] >= pause_at:
             return Status.PAUSED, n_saved
 
         # The series at (t, y), and the step from its last two coefficients.
@@ -134,7 +150,7 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
         for i in periodic:
             y_series[i] = reduced_angle(y[i], compensation[i])
         status = taylor_coefficients(t, y_series, p, X, W)
-        counters[0] += 1
+        counters[NFEV] += 1
         if status != 0:
             return Status.RHS_FAILED, n_saved
         for i in periodic:
@@ -165,15 +181,15 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
         room = cap - n_saved
         need = 0
         if use_t_eval:
-            j = counters[3]
+            j = counters[NEXT_EVAL]
             while j < n_eval and t_eval[j] <= t_new and need <= room:
                 need += 1
                 j += 1
-        elif counters[4] + 1 >= save_every or t_new >= t_end:
+        elif counters[SINCE_SAVE] + 1 >= save_every or t_new >= t_end:
             need = 1
         if need > room and (n_saved > 0 or not use_t_eval):
             return Status.BUFFER_FULL, n_saved
-        if counters[5] + n_events > ev_t.shape[0]:
+        if counters[EVENT_ROWS] + n_events > ev_t.shape[0]:
             return Status.BUFFER_FULL, n_saved
         if n_events > 0 and not use_t_eval and n_saved >= cap:
             return Status.BUFFER_FULL, n_saved    # a terminal event saves its row
@@ -194,9 +210,9 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
             event_values(t_new, y_new, p, g_new)
             if event_crossings(g_old, g_new, directions, actions, crossed) > 0:
                 n_recorded, t_stop = record_events(event_values, DENSE_SERIES, X, y, t, h, p, g_old, g_new, crossed,
-                                                   actions, crossing_times, ev_t, ev_y, ev_i, counters[5], y_work,
-                                                   g_work)
-                counters[5] = n_recorded
+                                                   actions, crossing_times, ev_t, ev_y, ev_i, counters[EVENT_ROWS],
+                                                   y_work, g_work)
+                counters[EVENT_ROWS] = n_recorded
                 if t_stop < np.inf:
                     stop = True
                     t_new = t_stop
@@ -206,7 +222,7 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
 
         # Outputs of the step t -> t_new: t_eval points on the series, or every save_every-th step.
         if use_t_eval:
-            j = counters[3]
+            j = counters[NEXT_EVAL]
             while j < n_eval and t_eval[j] <= t_new and n_saved < cap:
                 te = t_eval[j]
                 ts[n_saved] = te
@@ -222,25 +238,25 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
                         ys[n_saved, i] = y[i] + acc
                 n_saved += 1
                 j += 1
-            counters[3] = j
+            counters[NEXT_EVAL] = j
             if j < n_eval and t_eval[j] <= t_new:
                 return Status.BUFFER_FULL, n_saved    # more points in one step than a whole buffer
         else:
-            counters[4] += 1
-            if counters[4] >= save_every or t_new >= t_end or stop:
+            counters[SINCE_SAVE] += 1
+            if counters[SINCE_SAVE] >= save_every or t_new >= t_end or stop:
                 ts[n_saved] = t_new
                 for i in range(n):
                     ys[n_saved, i] = y_new[i]
                 n_saved += 1
-                counters[4] = 0
+                counters[SINCE_SAVE] = 0
 
         # Commit the step.
         for i in range(n):
             y[i] = y_new[i]
         t = t_new
-        clock[0] = t
-        clock[1] = h
-        counters[1] += 1
+        clock[TIME] = t
+        clock[STEP] = h
+        counters[NSTEPS] += 1
         if stop:
             return Status.TERMINATED, n_saved
         for ev in range(n_events):
@@ -249,24 +265,24 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
 
 #: sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy, Y0, P, projecting, t0, t_end,
 #: rtol, atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
-#: status, counts, dense, energy_stats, event_count, event_t, event_y, coefficients)
+#: status, counts, dense, energy_stats, event_count, event_t, event_y, carry)
 SWEEP_SIGNATURE = types.none(TAYLOR, EVENTS, INDICES, INT, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT,
                              FLOAT, INT, INT, VECTOR, types.boolean, INDICES, INDICES, MATRIX, VECTOR, INDICES,
                              types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, types.int64[:, ::1],
-                             types.float64[:, :, ::1], types.float64[:, :, :, ::1], types.UniTuple(VECTOR, 1))
+                             types.float64[:, :, ::1], types.float64[:, :, :, ::1], VECTOR)
 
 
 @njit(SWEEP_SIGNATURE, cache=True, error_model="numpy", nogil=True)
 def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy, Y0, P, projecting, t0, t_end, rtol,
                  atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
-                 status, counts, dense, energy_stats, event_count, event_t, event_y, coefficients):
+                 status, counts, dense, energy_stats, event_count, event_t, event_y, carry):
     """Trajectory k from (t0, Y0[k]) with parameters P[k] to t_end by `taylor_run`, for every k.
 
     The outputs of a sweep (`lagcomp.integrate.sweep`): ``final`` (N, 2n), ``t_final``, ``status``,
     ``counts`` (N, 3) = [nfev, nsteps, nrejected]; ``dense`` (N, m, 2n) the ``t_eval`` rows (after t0;
     ``save_initial`` says whether t0 is one too); ``energy_stats`` (N, 2) the initial energy and the
     largest |E − E₀| over the saved rows; ``event_count`` (N, E) and the first occurrences in ``event_t``
-    (N, E, cap) and ``event_y`` (N, E, cap, 2n).  ``coefficients`` holds the carry `taylor_run` takes
+    (N, E, cap) and ``event_y`` (N, E, cap, 2n).  ``carry`` is the carry `taylor_run` takes
     (empty: it restarts with each call).  The trajectories release the GIL: the caller runs disjoint
     row ranges on several threads.
     """
@@ -278,8 +294,8 @@ def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy,
         y = Y0[k].copy()
         p = P[k]
         clock = np.zeros(2)
-        clock[0] = t0
-        counters = np.zeros(6, dtype=np.int64)
+        clock[TIME] = t0
+        counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
         residual = np.zeros(1)
         ts = np.empty(SWEEP_ROWS)
         ys = np.empty((SWEEP_ROWS, n2))
@@ -297,13 +313,13 @@ def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy,
         for e in range(n_events):
             event_count[k, e] = 0
         while True:
-            counters[5] = 0
+            counters[EVENT_ROWS] = 0
             code, n_saved = taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock, counters, p,
                                        projecting, residual, t_end, rtol, atol, max_step, max_steps, NO_PAUSE,
                                        save_every, t_eval, ts, ys, directions, actions, ev_t, ev_y, ev_i,
-                                       coefficients[0])
+                                       carry)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
-            for r in range(counters[5]):
+            for r in range(counters[EVENT_ROWS]):
                 e = ev_i[r]
                 j = event_count[k, e]
                 if j < cap:
@@ -315,10 +331,10 @@ def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy,
                 break
         for c in range(n2):
             final[k, c] = y[c]
-        t_final[k] = clock[0]
+        t_final[k] = clock[TIME]
         status[k] = code
-        counts[k, 0] = counters[0]
-        counts[k, 1] = counters[1]
-        counts[k, 2] = counters[2]
+        counts[k, 0] = counters[NFEV]
+        counts[k, 1] = counters[NSTEPS]
+        counts[k, 2] = counters[NREJECTED]
         energy_stats[k, 0] = e0
         energy_stats[k, 1] = deviation
