@@ -64,7 +64,10 @@ def count(value, name: str) -> int:
 def t_eval_points(t_eval, t0: float, t1: float) -> np.ndarray | None:
     if t_eval is None:
         return None
-    t_eval = np.asarray(t_eval, dtype=float).ravel()
+    try:
+        t_eval = np.asarray(t_eval, dtype=float).ravel()
+    except (TypeError, ValueError):
+        t_eval = np.empty(0)   # not numbers: the message below
     if t_eval.size == 0 or not np.all(np.isfinite(t_eval)):
         raise OptionError("`t_eval` must be a non-empty array of finite times.")
     if np.any(np.diff(t_eval) <= 0) or t_eval[0] < t0 or t_eval[-1] > t1:
@@ -99,8 +102,11 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     elif events is False:
         chosen = []
     else:
-        chosen = [events] if isinstance(events, str) else list(events)
-        unknown = [name for name in chosen if name not in model.event_names]
+        try:
+            chosen = [events] if isinstance(events, str) else list(events)
+        except TypeError:
+            chosen = [events]
+        unknown = [name for name in chosen if not isinstance(name, str) or name not in model.event_names]
         if unknown:
             raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.event_names)}.")
     if chosen and not m.adaptive:
@@ -213,11 +219,12 @@ def run_options(model, t_span, *, method="dop853", dt=None, rtol=None, atol=None
     are not known in advance); `where` says what they are.  It raises `OptionError` when the caller's
     outputs would not fit in `memory_limit` (simulate and sweep count their bytes differently).
     """
+    memory_limit = checked_limit(memory_limit)  # first: a sweep has used it to check its grid already
     t0, t1 = time_span(t_span)
     m = get_method(method)
     check_method(model, m)
     common = dict(
-        method=m, t0=t0, t1=t1, memory_limit=checked_limit(memory_limit),
+        method=m, t0=t0, t1=t1, memory_limit=memory_limit,
         save_every=count(save_every, "save_every"), max_steps=count(max_steps, "max_steps"),
         implicit_solver=implicit_solver_for(m, implicit_solver),
         projecting=int(bool(model.residual_labels) and (not m.adaptive if projection is None else bool(projection))),
