@@ -82,7 +82,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     bound = math.inf if max_residual is None else positive(max_residual, "max_residual")
     residual_max = np.array([0.0, bound])  # running maximum, and the bound the drivers stop at
     state = RunState(y0, t0)
-    make = _adaptive_driver if m.adaptive else _fixed_step_driver
+    make = _adaptive_driver if options.adaptive else _fixed_step_driver
     advance, rows = make(model.kernels, state, p, (options.projecting, residual_max), options)
 
     recorder = Recorder(model, p, record)

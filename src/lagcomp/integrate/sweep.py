@@ -273,7 +273,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if want_events and not actions.any():
         raise OptionError(f"`output` asks for events but none are active ({model.name!r} declares "
                           f"{list(model.event_names)}; events need {method_names(lambda m: m.adaptive)}).")
-    if m.adaptive:
+    if options.adaptive:
         if "dense" in output and options.t_eval is None:
             raise OptionError("`output='dense'` with an adaptive method needs the common times `t_eval`.")
         t_dense = options.t_eval if "dense" in output else None
