@@ -613,8 +613,10 @@ class Model:
         ----------------
         q0, qd0, params
             Values of everything not swept (defaults: the System's).
-        method, dt, rtol, atol, t_eval, save_every, max_step, max_steps, events
-            As for `simulate`; each trajectory has its own step-size control.
+        method, dt, rtol, atol, t_eval, save_every, max_step, max_steps, implicit_solver, events
+            As for `simulate`, checked by the same code with the same messages
+            (`lagcomp.integrate.options.run_options`); each trajectory has its own
+            step-size control.
         projection, baumgarte, project_initial
             Constrained systems, as for `simulate`: every initial state is
             checked against the constraints (an inconsistent one is refused,

@@ -1,16 +1,30 @@
-"""Checks of the options `simulate` and `sweep` share: each returns the checked value or raises
-`OptionError` naming the option, what it got and what it needs."""
+"""The options `simulate` and `sweep` share, checked in one place: `run_options` turns the user's
+arguments into a `RunOptions`, which both translate into their driver's or sweep loop's arguments.
+
+Each check returns the checked value or raises `OptionError` naming the option, what it got and what
+it needs; a mistake gets the same message from `simulate` and from `sweep`.
+"""
 
 from __future__ import annotations
 
 import difflib
 import inspect
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from lagcomp.errors import OptionError
-from lagcomp.integrate.methods import METHODS, RTOL_MIN
+from lagcomp.integrate.memory import checked_limit
+from lagcomp.integrate.methods import (
+    DEFAULT_IMPLICIT_SOLVER,
+    METHODS,
+    RTOL_MIN,
+    Method,
+    get_method,
+    implicit_solver_for,
+)
 
 
 def method_names(test) -> str:
@@ -50,7 +64,10 @@ def count(value, name: str) -> int:
 def t_eval_points(t_eval, t0: float, t1: float) -> np.ndarray | None:
     if t_eval is None:
         return None
-    t_eval = np.asarray(t_eval, dtype=float).ravel()
+    try:
+        t_eval = np.asarray(t_eval, dtype=float).ravel()
+    except (TypeError, ValueError):
+        t_eval = np.empty(0)   # not numbers: the message below
     if t_eval.size == 0 or not np.all(np.isfinite(t_eval)):
         raise OptionError("`t_eval` must be a non-empty array of finite times.")
     if np.any(np.diff(t_eval) <= 0) or t_eval[0] < t0 or t_eval[-1] > t1:
@@ -85,8 +102,11 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     elif events is False:
         chosen = []
     else:
-        chosen = [events] if isinstance(events, str) else list(events)
-        unknown = [name for name in chosen if name not in model.event_names]
+        try:
+            chosen = [events] if isinstance(events, str) else list(events)
+        except TypeError:
+            chosen = [events]
+        unknown = [name for name in chosen if not isinstance(name, str) or name not in model.event_names]
         if unknown:
             raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.event_names)}.")
     if chosen and not m.adaptive:
@@ -128,3 +148,115 @@ def known_options(function, options: dict, what: str) -> None:
         near = difflib.get_close_matches(unknown[0], accepted, n=1)
         hint = f" (did you mean `{near[0]}`?)" if near else ""
         raise OptionError(f"Unknown option(s) {unknown} for {what}{hint}; its options are {sorted(accepted)}.")
+
+
+@dataclass(frozen=True, eq=False)
+class RunOptions:
+    """The checked, normalised options of one run or sweep (built by `run_options` only).
+
+    Times in the model's time unit.  Adaptive methods have `rtol`, `atol`, `first_step` (None: the
+    driver picks one), `max_step` and `t_eval`; fixed-step ones `dt` and `n_steps` (`rtol`, `atol`,
+    `t_eval`, `dt` and `n_steps` are None where they do not apply).
+    """
+
+    method: Method
+    t0: float
+    t1: float
+    save_every: int
+    max_steps: int
+    #: (E,) int64 per declared event: its direction, and 0 off, 1 record, 2 record and stop.
+    directions: np.ndarray
+    actions: np.ndarray
+    #: Constrained systems: project onto the constraints after every step (0 or 1).
+    projecting: int
+    #: Bytes the run's or sweep's outputs may take.
+    memory_limit: float
+    implicit_solver: str = DEFAULT_IMPLICIT_SOLVER
+    rtol: float | None = None
+    atol: float | None = None
+    first_step: float | None = None
+    max_step: float = math.inf
+    #: (m,) strictly increasing times in [t0, t1], or None.
+    t_eval: np.ndarray | None = None
+    dt: float | None = None
+    n_steps: int | None = None
+
+    @property
+    def adaptive(self) -> bool:
+        return self.method.adaptive
+
+    def t_eval_after_start(self) -> np.ndarray:
+        """The `t_eval` times after t0, which the adaptive drivers fill by dense output (empty: none)."""
+        return self.t_eval[self.t_eval > self.t0] if self.t_eval is not None else np.empty(0)
+
+    def fixed_step_times(self) -> np.ndarray:
+        """Times of the rows a fixed-step run keeps: t0, every `save_every`-th step, and t1."""
+        steps = np.minimum(np.arange(0, self.n_steps + self.save_every, self.save_every), self.n_steps)
+        times = np.unique(np.minimum(self.t0 + steps * self.dt, self.t1))
+        times[-1] = self.t1
+        return times
+
+    def driver_arguments(self) -> tuple:
+        """The coefficient arrays (and settings) the method's driver or sweep loop takes last."""
+        return self.method.driver_arguments(self.implicit_solver)
+
+
+def fixed_step_count(t0: float, t1: float, dt: float) -> int:
+    """Steps of size `dt` from t0 to t1; the last one ends at t1 (a rounding of (t1 - t0) / dt just above an
+    integer adds no step)."""
+    return max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
+
+
+def run_options(model, t_span, *, method="dop853", dt=None, rtol=None, atol=None, t_eval=None, save_every=1,
+                first_step=None, max_step=math.inf, max_steps=100_000_000, implicit_solver=None, events=None,
+                projection=None, memory_limit,
+                check_rows: Callable[[int | None, str], None] | None = None) -> RunOptions:
+    """The options of a run or a sweep of `model` checked, in one order, each with one message.
+
+    `check_rows(times, where)`, if given, is called once the number of output times is known and
+    before `t_eval` is copied: `times` is the size of `t_eval`, or for a fixed-step method the number
+    of saved rows (`RunOptions.fixed_step_times`), or None (an adaptive run without `t_eval`: its rows
+    are not known in advance); `where` says what they are.  It raises `OptionError` when the caller's
+    outputs would not fit in `memory_limit` (simulate and sweep count their bytes differently).
+    """
+    memory_limit = checked_limit(memory_limit)  # first: a sweep has used it to check its grid already
+    t0, t1 = time_span(t_span)
+    m = get_method(method)
+    check_method(model, m)
+    common = dict(
+        method=m, t0=t0, t1=t1, memory_limit=memory_limit,
+        save_every=count(save_every, "save_every"), max_steps=count(max_steps, "max_steps"),
+        implicit_solver=implicit_solver_for(m, implicit_solver),
+        projecting=int(bool(model.residual_labels) and (not m.adaptive if projection is None else bool(projection))),
+    )
+    common["directions"], common["actions"] = event_arguments(model, m, events)
+    check_rows = check_rows or (lambda times, where: None)
+    if m.adaptive:
+        if dt is not None:
+            raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own "
+                              "(bound it with `max_step`).")
+        rtol, atol = tolerances(rtol, atol, m)
+        first_step = None if first_step is None else positive(first_step, "first_step")
+        max_step = math.inf if _is_inf(max_step) else positive(max_step, "max_step")
+        times = None if t_eval is None else int(np.size(t_eval))
+        check_rows(times, f"{times:,} `t_eval` times" if times is not None else "rows not known in advance")
+        return RunOptions(**common, rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
+                          t_eval=t_eval_points(t_eval, t0, t1))
+    if dt is None:
+        raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
+    if t_eval is not None:
+        raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every` or "
+                          f"{method_names(lambda m: m.adaptive)}.")
+    dt = positive(dt, "dt")
+    n_steps = fixed_step_count(t0, t1, dt)
+    if n_steps > common["max_steps"]:
+        raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {common['max_steps']}.")
+    save_every = common["save_every"]
+    rows = -(-n_steps // save_every) + 1
+    check_rows(rows, f"{rows:,} rows ({n_steps:,} steps of dt = {dt:g}, every {save_every}-th saved)")
+    return RunOptions(**common, dt=dt, n_steps=n_steps)
+
+
+def _is_inf(value) -> bool:
+    """Whether `value` is +inf (`max_step`'s default: no bound), without converting what is not a number."""
+    return isinstance(value, (int, float, np.floating)) and value == math.inf

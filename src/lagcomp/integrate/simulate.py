@@ -20,19 +20,9 @@ import numpy as np
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.drivers.run_state import STEP, RunState
-from lagcomp.integrate.memory import MEMORY_LIMIT, checked_limit, run_bytes
+from lagcomp.integrate.memory import MEMORY_LIMIT, run_bytes
 from lagcomp.integrate.memory import check as check_memory
-from lagcomp.integrate.methods import get_method, implicit_solver_for
-from lagcomp.integrate.options import (
-    check_method,
-    count,
-    event_arguments,
-    method_names,
-    positive,
-    t_eval_points,
-    time_span,
-    tolerances,
-)
+from lagcomp.integrate.options import RunOptions, positive, run_options
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
 from lagcomp.integrate.solution import EventRecord, Solution
@@ -44,46 +34,33 @@ FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
 CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
 
 
-def _adaptive_driver(m, kernels, state: RunState, p, run_args, t_eval, options):
-    """The chunk call of an adaptive method, and the rows its output will need."""
-    t0, t1 = state.t, options["t1"]
-    if options["dt"] is not None:
-        raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own (use `first_step`).")
-    rtol, atol = tolerances(options["rtol"], options["atol"], m)
-    if options["first_step"] is not None:
-        state.clock[STEP] = positive(options["first_step"], "first_step")
-    max_step = options["max_step"]
-    max_step = positive(max_step, "max_step") if max_step != math.inf else math.inf
-    events = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
-    driver, tableau_arrays = m.bound_driver(kernels), m.driver_arguments()
+def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions):
+    """The chunk call of an adaptive method, and the rows its output will need (None: not known)."""
+    m = options.method
+    if options.first_step is not None:
+        state.clock[STEP] = options.first_step
+    events = options.t_eval_after_start()
+    driver, tableau_arrays = m.bound_driver(kernels), options.driver_arguments()
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
         tableau_arrays = (np.zeros(state.y.size),)
+    t1, rtol, atol, max_step = options.t1, options.rtol, options.atol, options.max_step
 
     def advance(ts, ys, pause_at, event_buffers):
         return driver(state.y, state.clock, state.counters, p, *run_args, t1, rtol, atol, max_step,
-                      options["max_steps"], pause_at, options["save_every"], events, ts, ys, *options["events"],
-                      *event_buffers, *tableau_arrays)
-    return advance, (len(events) + 1 if t_eval is not None else None)
+                      options.max_steps, pause_at, options.save_every, events, ts, ys, options.directions,
+                      options.actions, *event_buffers, *tableau_arrays)
+    return advance, (len(events) + 1 if options.t_eval is not None else None)
 
 
-def _fixed_step_driver(m, kernels, state: RunState, p, run_args, t_eval, options):
+def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions):
     """The chunk call of a fixed-step method, and the rows its output will need."""
-    t0, t1 = state.t, options["t1"]
-    if options["dt"] is None:
-        raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
-    if t_eval is not None:
-        raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every` or "
-                          f"{method_names(lambda m: m.adaptive)}.")
-    dt = positive(options["dt"], "dt")
-    n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
-    if n_steps > options["max_steps"]:
-        raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {options['max_steps']}.")
-    driver, coefficients = m.bound_driver(kernels), m.driver_arguments(options["implicit_solver"])
+    driver, coefficients = options.method.bound_driver(kernels), options.driver_arguments()
+    t0, t1, dt, n_steps = options.t0, options.t1, options.dt, options.n_steps
 
     def advance(ts, ys, pause_at, event_buffers):
         return driver(state.y, state.clock, state.counters, p, *run_args, t0, dt, n_steps, pause_at, t1,
-                      options["save_every"], ts, ys, *coefficients)
-    return advance, n_steps // options["save_every"] + 1
+                      options.save_every, ts, ys, *coefficients)
+    return advance, n_steps // options.save_every + 1
 
 
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=None,
@@ -92,26 +69,21 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
              events=None, record="trajectory", progress=None, throw=False, max_residual=None,
              memory_limit=MEMORY_LIMIT) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
-    t0, t1 = time_span(t_span)
-    m = get_method(method)
-    check_method(model, m)
+    options = run_options(model, t_span, method=method, dt=dt, rtol=rtol, atol=atol, t_eval=t_eval,
+                          save_every=save_every, first_step=first_step, max_step=max_step, max_steps=max_steps,
+                          implicit_solver=implicit_solver, events=events, projection=projection,
+                          memory_limit=memory_limit,
+                          check_rows=_memory_check(model, memory_limit) if record == "trajectory" else None)
     if record not in RECORD_MODES:
         raise OptionError(f"`record` must be one of {RECORD_MODES}, got {record!r}.")
+    m, t0, t1, t_eval = options.method, options.t0, options.t1, options.t_eval
     p = model.parameter_vector(params, baumgarte)
-    options = dict(t1=t1, dt=dt, rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
-                   save_every=count(save_every, "save_every"), max_steps=count(max_steps, "max_steps"),
-                   events=event_arguments(model, m, events))
-    options["implicit_solver"] = implicit_solver_for(m, implicit_solver)
-    if record == "trajectory":
-        _check_memory(model, m, (t0, t1), dt, t_eval, options["save_every"], memory_limit)
-    t_eval = t_eval_points(t_eval, t0, t1)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
-    projecting = int(bool(model.residual_labels) and (not m.adaptive if projection is None else bool(projection)))
     bound = math.inf if max_residual is None else positive(max_residual, "max_residual")
     residual_max = np.array([0.0, bound])  # running maximum, and the bound the drivers stop at
     state = RunState(y0, t0)
-    make = _adaptive_driver if m.adaptive else _fixed_step_driver
-    advance, rows = make(m, model.kernels, state, p, (projecting, residual_max), t_eval, options)
+    make = _adaptive_driver if options.adaptive else _fixed_step_driver
+    advance, rows = make(model.kernels, state, p, (options.projecting, residual_max), options)
 
     recorder = Recorder(model, p, record)
     if t_eval is None or t_eval[0] == t0:
@@ -120,7 +92,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     event_parts: list[tuple] = []
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
     first = _numba_stage(model, m, progress)
-    max_rows = memory_limit // run_bytes(1, model.n, model.k) if record == "trajectory" else math.inf
+    max_rows = options.memory_limit // run_bytes(1, model.n, model.k) if record == "trajectory" else math.inf
     status = _run(advance, state, t1, (chunk, max_rows), recorder, n_events, event_parts, progress, first)
     if status == Status.RHS_FAILED and state.nsteps == 0:
         _refuse_singular_start(model, t0, y0, p)
@@ -131,26 +103,20 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     return _solution(model, p, recorder, run, throw)
 
 
-def _check_memory(model, m, t_span, dt, t_eval, save_every: int, memory_limit) -> None:
-    """Refuse a run whose saved rows would exceed `memory_limit`, before it starts (see `memory.run_bytes`).
+def _memory_check(model, memory_limit):
+    """`run_options`' `check_rows` for a run keeping every saved row: refuse, before it starts, a run whose
+    rows would exceed `memory_limit` (see `memory.run_bytes`).
 
     The rows are known up front for `t_eval` (its size: an array of 10⁹ times is refused before it is
     copied) and for fixed-step methods (steps / save_every); an adaptive run without `t_eval` saves
     every `save_every`-th accepted step, a number no one knows in advance.
     """
-    checked_limit(memory_limit)
-    if t_eval is not None:
-        rows = int(np.size(t_eval)) + 1
-        where = f"{rows - 1:,} `t_eval` times"
-    elif not m.adaptive and dt is not None:
-        steps = max(1, math.ceil((t_span[1] - t_span[0]) / positive(dt, "dt") * (1 - 1e-12)))
-        rows = steps // save_every + 1
-        where = f"{rows:,} rows ({steps:,} steps of dt = {dt:g}, every {save_every}-th saved)"
-    else:
-        return
-    check_memory(run_bytes(rows, model.n, model.k), memory_limit, "The run's saved rows", where,
-                 "save fewer rows (`save_every=K` keeps every K-th step; pass fewer `t_eval` points), "
-                 "keep only the first and last rows and running reductions (`record=\"summary\"`)")
+    def check_rows(rows: int | None, where: str) -> None:
+        if rows is not None:
+            check_memory(run_bytes(rows, model.n, model.k), memory_limit, "The run's saved rows", where,
+                         "save fewer rows (`save_every=K` keeps every K-th step; pass fewer `t_eval` points), "
+                         "keep only the first and last rows and running reductions (`record=\"summary\"`)")
+    return check_rows
 
 
 def _numba_stage(model, m, progress):

@@ -19,8 +19,8 @@ and takes the speeds not swept as `qd0` (its ``sweep`` passes `u0` there).
 from __future__ import annotations
 
 import contextlib
-import math
 import functools
+import math
 import os
 import time
 from dataclasses import dataclass, field
@@ -29,18 +29,10 @@ import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state
-from lagcomp.integrate.memory import MEMORY_LIMIT, check as check_memory, sweep_bytes
-from lagcomp.integrate.methods import get_method, library_function
-from lagcomp.integrate.options import (
-    check_method,
-    count,
-    event_arguments,
-    method_names,
-    positive,
-    t_eval_points,
-    time_span,
-    tolerances,
-)
+from lagcomp.integrate.memory import MEMORY_LIMIT, sweep_bytes
+from lagcomp.integrate.memory import check as check_memory
+from lagcomp.integrate.methods import library_function
+from lagcomp.integrate.options import count, method_names, run_options
 from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 
 #: Outputs a sweep can keep besides the final state and status.
@@ -249,13 +241,10 @@ def _row_every(save_every: int, output: tuple, n_steps: int) -> int:
 
 def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=None, params=None,
           method="dop853", dt=None, rtol=None, atol=None, t_eval=None, save_every=1, max_step=math.inf,
-          max_steps=100_000_000, events=None, event_cap=16, output=(), workers=None, client=None,
-          batched=False, progress=None, memory_limit=MEMORY_LIMIT, projection=None, baumgarte=(0.0, 0.0),
-          project_initial=False) -> Sweep:
+          max_steps=100_000_000, implicit_solver=None, events=None, event_cap=16, output=(), workers=None,
+          client=None, batched=False, progress=None, memory_limit=MEMORY_LIMIT, projection=None,
+          baumgarte=(0.0, 0.0), project_initial=False) -> Sweep:
     """Integrate every point of `grid`; see `lagcomp.Model.sweep` for the arguments."""
-    t0, t1 = time_span(t_span)
-    m = get_method(method)
-    check_method(model, m)
     try:
         output = (output,) if isinstance(output, str) else tuple(output)
     except TypeError:
@@ -264,65 +253,54 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if unknown:
         raise OptionError(f"Unknown sweep output(s) {unknown}; choose from {OUTPUTS} (the final state is always kept).")
     names, axes, shape, values = _grid(model, grid, combine, names, memory_limit)
-    n2 = model.state_size
+    n_traj, n2 = values.shape[0], model.state_size
+    want_events = "events" in output
+    cap = count(event_cap, "event_cap") if want_events else 0
+    n_events = len(model.events) if want_events else 0
+
+    def check_rows(times: int | None, where: str) -> None:
+        """The memory of the sweep's outputs: `times` dense rows per trajectory if they are kept."""
+        rows = (times or 0) if "dense" in output else 0
+        check_memory(sweep_bytes(n_traj, n2, rows, n_events, cap), memory_limit, "The sweep's outputs",
+                     f"{n_traj} trajectories", "save fewer rows (t_eval, save_every), fewer events (event_cap), "
+                     "split the grid")
+
+    options = run_options(model, t_span, method=method, dt=dt, rtol=rtol, atol=atol, t_eval=t_eval,
+                          save_every=save_every, max_step=max_step, max_steps=max_steps,
+                          implicit_solver=implicit_solver, events=events, projection=projection,
+                          memory_limit=memory_limit, check_rows=check_rows)
+    m, t0, t1, actions = options.method, options.t0, options.t1, options.actions
+    if want_events and not actions.any():
+        raise OptionError(f"`output` asks for events but none are active ({model.name!r} declares "
+                          f"{list(model.event_names)}; events need {method_names(lambda m: m.adaptive)}).")
+    if options.adaptive:
+        if "dense" in output and options.t_eval is None:
+            raise OptionError("`output='dense'` with an adaptive method needs the common times `t_eval`.")
+        t_dense = options.t_eval if "dense" in output else None
+        save_initial = options.t_eval is not None and options.t_eval[0] == t0
+        fixed = (t0, t1, options.rtol, options.atol, options.max_step, options.max_steps,
+                 _row_every(options.save_every, output, options.max_steps), options.t_eval_after_start(),
+                 save_initial, options.directions, actions)
+    else:
+        t_dense = options.fixed_step_times() if "dense" in output else None
+        fixed = (t0, options.dt, options.n_steps, t1, _row_every(options.save_every, output, options.n_steps))
+    rows = 0 if t_dense is None else t_dense.size
+
     y_base = model.initial_state(q0, qd0)
     p_base = model.parameter_vector(params, baumgarte)
-    Y0 = np.repeat(y_base[None, :], values.shape[0], axis=0)
-    P = np.repeat(p_base[None, :], values.shape[0], axis=0)
+    Y0 = np.repeat(y_base[None, :], n_traj, axis=0)
+    P = np.repeat(p_base[None, :], n_traj, axis=0)
     state_names = list(model.state_names)
     for column, name in enumerate(names):
         if name in state_names:
             Y0[:, state_names.index(name)] = values[:, column]
         else:
             P[:, list(model.parameters).index(name)] = values[:, column]
-    constrained = bool(model.residual_labels)  # (a Kane model's Φ and Ψ have no multipliers: model.k is 0)
-    if constrained:
+    if model.residual_labels:  # (a Kane model's Φ and Ψ have no multipliers: model.k is 0)
         _consistent_initial_states(model, t0, Y0, P, project_initial, names, values)
-    projecting = int(constrained and (not m.adaptive if projection is None else bool(projection)))
-    save_every = count(save_every, "save_every")
-    max_steps = count(max_steps, "max_steps")
-    directions, actions = event_arguments(model, m, events)
-    want_events = "events" in output
-    if want_events and not actions.any():
-        raise OptionError(f"`output` asks for events but none are active ({model.name!r} declares "
-                          f"{list(model.event_names)}; events need {method_names(lambda m: m.adaptive)}).")
-    cap = count(event_cap, "event_cap") if want_events else 0
-    n_traj = values.shape[0]
+    projecting = options.projecting
 
-    if m.adaptive:
-        if dt is not None:
-            raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own.")
-        rtol, atol = tolerances(rtol, atol, m)  # None: the method's defaults
-        max_step = positive(max_step, "max_step") if max_step != math.inf else math.inf
-        t_eval = t_eval_points(t_eval, t0, t1)
-        if "dense" in output and t_eval is None:
-            raise OptionError("`output='dense'` with an adaptive method needs the common times `t_eval`.")
-        t_dense = t_eval if "dense" in output else None
-        after_start = t_eval[t_eval > t0] if t_eval is not None else np.empty(0)
-        save_initial = t_eval is not None and t_eval[0] == t0
-        fixed = (t0, t1, rtol, atol, max_step, max_steps, _row_every(save_every, output, max_steps), after_start,
-                 save_initial, directions, actions)
-    else:
-        if dt is None:
-            raise OptionError(f"`{m.name}` is a fixed-step method: give the step `dt`.")
-        if t_eval is not None:
-            raise OptionError(f"`t_eval` needs dense output, which {m.name} lacks; use `save_every`.")
-        dt = positive(dt, "dt")
-        n_steps = max(1, math.ceil((t1 - t0) / dt * (1 - 1e-12)))
-        if n_steps > max_steps:
-            raise OptionError(f"{n_steps} steps of dt = {dt} exceed `max_steps` = {max_steps}.")
-        steps = np.minimum(np.arange(0, n_steps + save_every, save_every), n_steps)
-        t_dense = np.unique(np.minimum(t0 + steps * dt, t1)) if "dense" in output else None
-        if t_dense is not None:
-            t_dense[-1] = t1
-        fixed = (t0, dt, n_steps, t1, _row_every(save_every, output, n_steps))
-    rows = 0 if t_dense is None else t_dense.size
-    n_events = len(model.events) if want_events else 0
-    check_memory(sweep_bytes(n_traj, n2, rows, n_events, cap), memory_limit, "The sweep's outputs",
-                 f"{n_traj} trajectories", "save fewer rows (t_eval, save_every), fewer events (event_cap), "
-                 "split the grid")
-
-    layout = (n2, rows, len(directions), cap)
+    layout = (n2, rows, len(options.directions), cap)
     out = _allocate(n_traj, layout)
     spec = None        # the model's own module; a batched Taylor sweep has a module of its own
     if batched:
@@ -332,12 +310,12 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
                               "events yet); drop `batched` for those outputs.")
         fixed = fixed[:7] if m.adaptive else fixed      # (the lane loops take their tableaux from `tableaux`)
         if m.name == "taylor":      # the library loop around the lane kernels of this order (a module of their own)
-            spec = _taylor_lanes_spec(model, rtol, atol)
+            spec = _taylor_lanes_spec(model, options.rtol, options.atol)
             task = _Task(driver, True, fixed, layout, (), projecting, *TAYLOR_LANES_LOOP)
         else:
             task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",))
     else:
-        task = _Task(m.driver, m.adaptive, fixed, layout, m.driver_arguments(), projecting, m.sweep, m.kernels)
+        task = _Task(m.driver, m.adaptive, fixed, layout, options.driver_arguments(), projecting, m.sweep, m.kernels)
     if client is None:
         kernels = model.kernels if spec is None else _worker_kernels(spec)
         done = _run_locally(kernels, task, Y0, P, out, workers, progress)
