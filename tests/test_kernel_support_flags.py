@@ -12,7 +12,8 @@ Three processes share one numba cache (NUMBA_CACHE_DIR):
    link sin and cos from numba's cache) and runs the same.
 
 Runs 1 and 3 must be bitwise equal (they differed in the last bits before sin and cos had
-``fastmath=False``).  The drivers compile once, in process 1: about 30 s in all.
+``fastmath=False``).  The drivers compile once, in process 1: about 30 s in all.  And every
+kernel_support function that numba does not inline into its caller has flags of its own.
 
     python -m tests.test_kernel_support_flags runs OUT CACHE_DIR   # process 1 or 3
     python -m tests.test_kernel_support_flags trig                 # process 2
@@ -50,6 +51,17 @@ def recompile_trig_outside_kernels() -> None:
     from lagcomp.kernel_support import trig
 
     trig.sin(0.5), trig.cos(0.5)
+
+
+def test_every_function_numba_does_not_inline_has_its_own_fastmath_flags():
+    from numba.core.registry import CPUDispatcher
+
+    from lagcomp.kernel_support import angles, linear_solvers, trig
+
+    for module in (angles, linear_solvers, trig):
+        for name, function in vars(module).items():
+            if isinstance(function, CPUDispatcher) and function.targetoptions.get("inline") != "always":
+                assert function.targetoptions.get("fastmath") is False, f"{module.__name__}.{name}"
 
 
 def _run(tmp_path, *args):
