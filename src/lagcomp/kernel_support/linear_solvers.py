@@ -24,6 +24,10 @@ function's first compile, and caches it with it.
 A pivot below ``PIVOT_TOLERANCE`` times the matrix's scale counts as zero:
 the matrix is then singular to working precision (condition number ≳ 1e14),
 and the solver returns j + 1 for the failing pivot j instead of dividing.
+
+Each has ``fastmath=False``: without flags of its own a function takes those
+of the caller that first compiles it, and numba caches that version for every
+later caller (see `lagcomp.kernel_support.trig`).
 """
 
 import numpy as np
@@ -33,7 +37,7 @@ from numba import njit
 PIVOT_TOLERANCE = 1e-14
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath=False)
 def ldlt_solve(mm, ff, out, offset):
     """Solve mm x = ff (symmetric, lower triangle used) by LDLᵀ in place; x into out[offset:].
 
@@ -64,7 +68,7 @@ def ldlt_solve(mm, ff, out, offset):
     return 0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath=False)
 def ldlt_solve_matrix(mm, b):
     """Solve mm X = b for all m columns of b, shape (n, m), in place: X overwrites b.
 
@@ -97,7 +101,7 @@ def ldlt_solve_matrix(mm, b):
     return 0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath=False)
 def lu_solve(a):
     """Solve the N×N system stored as a = [A | r], shape (N, N + 1), in place.
 
@@ -132,7 +136,7 @@ def lu_solve(a):
     return 0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath=False)
 def lu_factor(a, pivots):
     """LU factorization with partial pivoting of the square a, in place: PA = LU.
 
@@ -164,7 +168,7 @@ def lu_factor(a, pivots):
     return 0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath=False)
 def lu_substitute(a, pivots, r):
     """Solve A x = r in place (x overwrites r), with a and pivots from ``lu_factor`` of A."""
     size = a.shape[0]
@@ -180,7 +184,7 @@ def lu_substitute(a, pivots, r):
         r[i] = x / a[i, i]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath=False)
 def kkt_solve(a, n):
     """Solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ), stored as a = [A | r], shape (n + k, n + k + 1).
 
@@ -246,7 +250,7 @@ def kkt_solve(a, n):
     return 0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath=False)
 def gram_solve(a, rows, columns, rhs, mu):
     """mu = (A Aᵀ)⁻¹ rhs for A = a[rows, :columns]: the multipliers of the least Euclidean change.
 

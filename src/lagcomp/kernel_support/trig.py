@@ -22,6 +22,21 @@ brought DOP853 from 1.42x to 1.21x numbalsoda's dop853 (``python -m bench
 * `vsin`/`vcos`: the same polynomials without the branch, for the
   batched lane kernels, whose loop over SIMD lanes LLVM vectorizes
   only when it holds no call.  Accurate while |x| < 1.6·10⁶.
+
+Why ``fastmath=False`` on `sin` and `cos`: numba compiles a function called
+by another with the caller's fastmath flags unless its own are given
+(``flags.inherit_if_not_set("fastmath")``, numba issue #7168), compiles one
+version per signature whoever calls next, and caches that version on disk.
+The Taylor kernels have ``fastmath={"contract"}``, so sin compiled first by
+one of them had FMAs in its polynomials (vfmadd, 18 in its machine code),
+sin compiled first by ``rhs`` had none, and every later kernel — of this
+process or, through numba's cache, of later ones — got that version: the
+double pendulum's trajectories differed in the last bits with the order of
+compilation (tests/test_kernel_support_flags.py).  Without contraction the
+scalar kernels compute what `vsin` and `vcos` compute inlined into
+``rhs_lanes`` (no fastmath), so the batched sweeps stay bitwise equal to the
+scalar ones.  `vsin`, `vcos` and `_quadrant` are inlined by numba
+(``inline="always"``): compiled as part of their caller, with its flags.
 """
 
 import math
@@ -71,7 +86,7 @@ def vcos(x):
 _TRIG_POLY_MAX = 1e5
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath=False)
 def sin(x):
     """sin x for the scalar kernels: the polynomial, or libm for huge or non-finite x."""
     if abs(x) <= _TRIG_POLY_MAX:
@@ -79,7 +94,7 @@ def sin(x):
     return math.sin(x)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath=False)
 def cos(x):
     """cos x for the scalar kernels: the polynomial, or libm for huge or non-finite x."""
     if abs(x) <= _TRIG_POLY_MAX:
