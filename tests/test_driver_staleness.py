@@ -22,6 +22,7 @@ from pathlib import Path
 
 import lagcomp
 from lagcomp import numba_cache
+from lagcomp.cache import hashed_files
 
 #: A driver module of the copy: its code inlines a constant from another library file, as every driver does.
 STALENESS_PROBE_MODULE = textwrap.dedent(
@@ -103,8 +104,8 @@ def _imported_files(path: Path, root: Path) -> set[Path]:
 
 
 def test_the_digest_covers_every_library_file_a_driver_imports():
-    root = Path(numba_cache.__file__).parent
-    sources = set(numba_cache.library_sources())
+    root = Path(lagcomp.__file__).parent
+    sources = set(hashed_files(numba_cache.LIBRARY_SOURCES))
     missing = {str(imported.relative_to(root)): str(source.relative_to(root))
                for source in sources for imported in _imported_files(source, root) - sources}
     assert not missing, f"add these to numba_cache.LIBRARY_SOURCES (imported by): {missing}"

@@ -37,7 +37,6 @@ it always does.
 
 from __future__ import annotations
 
-import hashlib
 import importlib
 import os
 import warnings
@@ -170,38 +169,23 @@ def import_library_module(name: str) -> ModuleType:
 
 
 
-#: What numba compiles into the library drivers, relative to the package: the drivers' own modules, the
-#: `kernel_support` functions they call, and the modules whose constants they read when compiled (status codes,
-#: tableaux and the Dormand–Prince coefficients these take).  `tests/test_driver_staleness.py` checks that
-#: every lagcomp module a driver imports is listed.
-LIBRARY_SOURCES = ("integrate/drivers/*.py", "kernel_support/*.py", "integrate/status.py", "integrate/tableaux.py",
+#: What numba compiles into the library drivers, as parts of the package (`lagcomp.cache.hashed_files`): the
+#: drivers' own modules, the `kernel_support` functions they call, and the modules whose constants they read
+#: when compiled (status codes, the tableaux and the Dormand–Prince coefficients these take).
+#: `tests/test_driver_staleness.py` checks that every lagcomp module a driver imports is in one of them.
+LIBRARY_SOURCES = ("integrate/drivers", "kernel_support", "integrate/status.py", "integrate/tableaux.py",
                    "integrate/dormand_prince.py")
-#: The stamp file beside the drivers' numba cache files: the `library_digest` they were compiled from.
+#: The stamp file beside the drivers' numba cache files: the digest of `LIBRARY_SOURCES` they were compiled from.
 STAMP_NAME = "lagcomp-library-sources.sha256"
-
-
-def library_sources() -> list[Path]:
-    """The source files of `LIBRARY_SOURCES`, sorted."""
-    root = Path(__file__).parent
-    return sorted({path for pattern in LIBRARY_SOURCES for path in root.glob(pattern)})
-
-
-def library_digest() -> str:
-    """sha256 over the path (relative to the package) and the bytes of every library source: about a millisecond."""
-    root = Path(__file__).parent
-    digest = hashlib.sha256()
-    for path in library_sources():
-        digest.update(path.relative_to(root).as_posix().encode() + b"\0")
-        digest.update(path.read_bytes() + b"\0")
-    return digest.hexdigest()
 
 
 def refresh_stale_drivers() -> list[str]:
     """Remove numba's cache files of the drivers if they were compiled from other library sources; the names removed.
 
-    Compares `library_digest` with the stamp file in the drivers' numba cache directory (`cache_directory`);
-    on a difference, or with no stamp beside existing cache files, removes every index and data file of the
-    drivers' modules there, warns once (`lagcomp.errors.CacheWarning`) and writes the new stamp.  Must run
+    Compares the digest of `LIBRARY_SOURCES` (`lagcomp.cache.code_digest`) with the stamp file in the drivers'
+    numba cache directory (`cache_directory`); on a difference, or with no stamp beside existing cache files,
+    removes every index and data file of the drivers' modules there, warns once (`lagcomp.errors.CacheWarning`)
+    and writes the new stamp.  Must run
     before a driver module is imported: numba loads a driver with an explicit signature at its import.
     Nothing is checked where numba would not cache the drivers.
     """
@@ -209,8 +193,10 @@ def refresh_stale_drivers() -> list[str]:
     directory = cache_directory(drivers / "__init__.py")
     if directory is None:
         return []
+    from lagcomp.cache import code_digest
+
     stamp = directory / STAMP_NAME
-    digest = library_digest()
+    digest = code_digest(LIBRARY_SOURCES)  # about a millisecond: some 180 kB
     try:
         if stamp.read_text() == digest:
             return []
