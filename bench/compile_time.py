@@ -14,7 +14,8 @@ driver loaded from numba's cache, the run, writing numba's cache); the
 pieces are timed by wrapping lagcomp's own stage functions, so they follow
 the pipeline as it is.  Warm start: a later fresh process that loads the
 model by name (`lagcomp.load`, no sympy) and runs it, timed from interpreter
-start (`bench/bench_compile.py` has the three-process version).  Each case
+start (`bench/bench_compile.py` has the three-process version), beside the
+floor under it: a process that imports numpy and numba only.  Each case
 runs under a time limit; a case that exceeds it is reported, not waited for.
 Ratios: against lagcomp's cold start of the same case.
 """
@@ -76,6 +77,9 @@ t3 = time.perf_counter()
 print(json.dumps(dict(stages, compile=t1 - t0, rhs=t2 - t1, kernels=kernels, run=t3 - t2 - sum(kernels.values()),
                       total=t3 - t0, from_cache=model.from_cache, ops=model.operations.get("rhs"))))
 """
+
+#: A fresh process that imports numpy and numba only: the floor under any warm start, and a gauge of the load.
+FLOOR_PROBE = "import json, numpy, numba; print(json.dumps({}))"
 
 PYDY_PROBE = r"""
 import json, sys, time
@@ -236,9 +240,14 @@ def section(ctx) -> Table:
                       f"load + first run {load.median:.3f} s; import lagcomp {imported:.3f} s; "
                       f"sympy imported: {sympy}; {len(runs)} runs")
             if case == "double_pendulum":
+                floors = [run_probe([FLOOR_PROBE], 120) for _ in runs]
+                floor = stat_of([r["process"] for r in floors if isinstance(r, dict)] or [float("nan")])
+                table.add(case, "floor: a fresh process importing numpy and numba only (no lagcomp)",
+                          f"{fmt(floor.median)} ({fmt(floor.low)}–{fmt(floor.high)})", f"{floor.median / total:.3f}×",
+                          f"the warm start is {process.median / floor.median:.2f}× this; {len(floors)} runs")
                 target = ctx.target("warm")
-                target.measured = (f"{process.median:.2f} s (min {process.low:.2f}; import lagcomp {imported:.2f} s), "
-                                   f"sympy imported: {sympy}")
+                target.measured = (f"{process.median:.2f} s (min {process.low:.2f}; import lagcomp {imported:.2f} s; "
+                                   f"importing numpy and numba alone {floor.median:.2f} s), sympy imported: {sympy}")
                 target.met = process.median <= WARM_TARGET and not sympy
         if case in ctx.peer_compile_cases():
             n = 2 if case == "double_pendulum" else int(case.rsplit("_", 1)[1])
