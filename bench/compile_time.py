@@ -15,7 +15,8 @@ pieces are timed by wrapping lagcomp's own stage functions, so they follow
 the pipeline as it is.  Warm start: a later fresh process that loads the
 model by name (`lagcomp.load`, no sympy) and runs it, timed from interpreter
 start (`bench/bench_compile.py` has the three-process version), beside the
-floor under it: a process that imports numpy and numba only.  Each case
+floor under it: a process that imports numpy and numba only; and numba's
+fixed cost of a cold start: its first compile in a fresh process.  Each case
 runs under a time limit; a case that exceeds it is reported, not waited for.
 Ratios: against lagcomp's cold start of the same case.
 """
@@ -80,6 +81,18 @@ print(json.dumps(dict(stages, compile=t1 - t0, rhs=t2 - t1, kernels=kernels, run
 
 #: A fresh process that imports numpy and numba only: the floor under any warm start, and a gauge of the load.
 FLOOR_PROBE = "import json, numpy, numba; print(json.dumps({}))"
+
+#: numba's fixed cost in a fresh process: its first compile (of a trivial function) sets up LLVM and the typing
+#: context, which a cold start's first kernel pays whatever the model.
+FIRST_COMPILE_PROBE = r"""
+import json, time
+import numba, numpy as np
+first = numba.njit(lambda y: y[0])
+y = np.ones(1)
+t0 = time.perf_counter()
+first(y)
+print(json.dumps({"compile": time.perf_counter() - t0}))
+"""
 
 PYDY_PROBE = r"""
 import json, sys, time
@@ -221,6 +234,12 @@ def section(ctx) -> Table:
         wanted = f"; target ≤ {limit:g} s ({before:g} s before issue 19)" if key else ""
         table.add(case, "lagcomp cold start: compile + first rhs + first dop853 run" + wanted, fmt(total), "1.00×",
                   pieces)
+        if case == "double_pendulum":
+            firsts = [run_probe([FIRST_COMPILE_PROBE], 120) for _ in range(3)]
+            first = stat_of([r["compile"] for r in firsts if isinstance(r, dict)] or [float("nan")])
+            table.add(case, "numba's fixed cost: its first compile in a fresh process (a trivial function)",
+                      f"{fmt(first.median)} ({fmt(first.low)}–{fmt(first.high)})", f"{first.median / total:.3f}×",
+                      f"paid by the first kernel of every cold start (here numba rhs); {len(firsts)} runs")
         if key:
             target = ctx.target(key)
             target.measured = f"{total:.2f} s ({pieces})"
@@ -232,12 +251,14 @@ def section(ctx) -> Table:
             process = stat_of([r["process"] for r in runs])
             load = stat_of([r["compile"] + r["first_run"] for r in runs])
             imported = stat_of([r["import"] for r in runs]).median
+            outside = stat_of([r["process"] - r["import"] - r["compile"] - r["first_run"] for r in runs]).median
             sympy = any(r["sympy"] for r in runs)
             wanted = f"; target ≤ {WARM_TARGET:g} s" if case == "double_pendulum" else ""
             table.add(case, "lagcomp warm start: whole process (interpreter start, import, load, first run)" + wanted,
                       f"{fmt(process.median)} ({fmt(process.low)}–{fmt(process.high)})",
                       f"{process.median / total:.3f}×",
-                      f"load + first run {load.median:.3f} s; import lagcomp {imported:.3f} s; "
+                      f"load + first run {load.median:.3f} s; import lagcomp {imported:.3f} s; interpreter start "
+                      f"and exit {outside:.3f} s; "
                       f"sympy imported: {sympy}; {len(runs)} runs")
             if case == "double_pendulum":
                 floors = [run_probe([FLOOR_PROBE], 120) for _ in runs]
