@@ -9,9 +9,11 @@ Reports, for a bundled example or a model compiled earlier under NAME:
   `dt` for `steps` steps, adaptive ones over the model's run length at
   rtol = atol = 1e-10), with each driver's first-call (numba) time;
 - compile times: this process's compile or load; for a bundled example, a
-  cold build in a fresh process with an empty cache (derivation, then
-  lowering + emission + cache write, then numba's compile of `rhs`); each
-  driver's numba time shows in its method's first call.
+  cold start in a fresh process with an empty cache, up to the first dop853
+  result (derivation, then lowering + emission + cache write, numba's compile
+  of `rhs`, of the other kernels that run needs, and the run itself); each
+  driver's numba time (a compile on first use, else a load from numba's cache)
+  shows in its method's first call.
 
 Times are medians of `repeats` runs with (min–max); this machine's load
 moves them, so compare models within one report rather than across runs.
@@ -101,10 +103,35 @@ def method_speed(model, method, repeats: int = 5, dt: float = 1e-3, steps: int =
             "first_call": first, "numba": max(first - median, 0.0)}
 
 
+def numba_compiles(run) -> tuple[object, dict[str, float]]:
+    """``run()``, and the seconds numba spent compiling during it per function compiled at the top level: {name: s}.
+
+    A function compiled because another one calls it counts in its caller's time; a function loaded
+    from numba's cache is no compile and does not appear (nor does writing the cache files).  Read
+    from numba's event API (``numba:compile``).
+    """
+    from numba.core import event
+
+    with event.install_recorder("numba:compile") as recorder:
+        result = run()
+    seconds, depth, started = {}, 0, 0.0
+    for timestamp, happened in recorder.buffer:
+        if happened.is_start:
+            started = timestamp if depth == 0 else started
+            depth += 1
+            continue
+        depth -= 1
+        if depth == 0:
+            name = happened.data["dispatcher"].py_func.__name__
+            seconds[name] = seconds.get(name, 0.0) + timestamp - started
+    return result, seconds
+
+
 COLD_PROBE = r"""
 import json, sys, time
 import numpy as np
 from lagcomp import examples
+from lagcomp.benchmark import numba_compiles
 from lagcomp.mechanics.lagrange import derive
 from lagcomp.runtime import compile
 system = examples.get(sys.argv[1], **json.loads(sys.argv[2]))
@@ -116,16 +143,22 @@ t2 = time.perf_counter()
 y, p = model.initial_state(), model.parameter_vector()
 model.kernels.rhs(0.0, y, p, np.empty(y.size))
 t3 = time.perf_counter()
-print(json.dumps({"derive": t1 - t0, "lower + emit + cache": t2 - t1, "numba rhs": t3 - t2, "total": t3 - t0}))
+_, kernels = numba_compiles(lambda: model.simulate((0.0, 1e-3), method="dop853", progress=False))
+t4 = time.perf_counter()
+print(json.dumps({"derive": t1 - t0, "lower + emit + cache": t2 - t1, "numba rhs": t3 - t2,
+                  "numba, other kernels of the first dop853 run": sum(kernels.values()),
+                  "first dop853 run, without those": t4 - t3 - sum(kernels.values()), "total": t4 - t0}))
 """
 
 
 def cold_compile(example: str, arguments: dict | None = None, timeout: float = 600) -> dict:
-    """Seconds of each stage of a cold build of a bundled example, in a fresh process with an empty cache.
+    """Seconds of each stage of a cold start of a bundled example: new model → first dop853 result.
 
-    A fresh process, because in this one the example's module (and its numba
-    code) may be loaded already.  The drivers' numba time is not included:
-    each method's first call in `report` shows it.
+    In a fresh process with an empty model cache, because in this one the
+    example's module (and its numba code) may be loaded already.  The
+    drivers come from numba's cache (`lagcomp precompile`; on a fresh
+    installation the first run compiles its driver once, and it shows in the
+    last stage).
     """
     import json
     import subprocess

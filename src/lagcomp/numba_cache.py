@@ -18,6 +18,17 @@ drivers and of `lagcomp.kernel_support` (found from the source files, as
 numba finds them: `heal_source`) and imports it again, so the cost is paid
 only by the process that finds the damage.
 
+numba keys a function's cache files on its own source file only (its
+modification time and size), but a driver's machine code holds what it
+calls and reads from other files: the event helpers, `kernel_support`, the
+status codes, the tableaux, the run-state slots.  Editing one of those alone
+(a developer's checkout, a reinstall that keeps modification times) would
+leave every driver's cached code stale.  `refresh_stale_drivers`, run by
+`lagcomp.integrate.drivers` before any driver module is imported, keeps a
+digest of those sources (`LIBRARY_SOURCES`) in a stamp file beside the
+drivers' cache files and removes the cache files when the digest differs, so
+that numba compiles the drivers again, once.
+
 This uses numba's cache internals (``Dispatcher._cache._cache_file``, the
 locators and ``IndexDataCacheFile`` of ``numba.core.caching``, numba
 0.5x–0.6x); where they are absent nothing is checked and numba behaves as
@@ -27,6 +38,7 @@ it always does.
 from __future__ import annotations
 
 import importlib
+import os
 import warnings
 from pathlib import Path
 from types import ModuleType, SimpleNamespace
@@ -155,3 +167,62 @@ def import_library_module(name: str) -> ModuleType:
                   f"files, {removed[0]}, ...); numba compiles those drivers again, once.", CacheWarning, stacklevel=3)
     return importlib.import_module(name)
 
+
+
+#: What numba compiles into the library drivers, as parts of the package (`lagcomp.cache.hashed_files`): the
+#: drivers' own modules, the `kernel_support` functions they call, and the modules whose constants they read
+#: when compiled (status codes, the tableaux and the Dormand–Prince coefficients these take).
+#: `tests/test_driver_staleness.py` checks that every lagcomp module a driver imports is in one of them.
+LIBRARY_SOURCES = ("integrate/drivers", "kernel_support", "integrate/status.py", "integrate/tableaux.py",
+                   "integrate/dormand_prince.py")
+#: The stamp file beside the drivers' numba cache files: the digest of `LIBRARY_SOURCES` they were compiled from.
+STAMP_NAME = "lagcomp-library-sources.sha256"
+
+
+def refresh_stale_drivers() -> list[str]:
+    """Remove numba's cache files of the drivers if they were compiled from other library sources; the names removed.
+
+    Compares the digest of `LIBRARY_SOURCES` (`lagcomp.cache.code_digest`) with the stamp file in the drivers'
+    numba cache directory (`cache_directory`); on a difference, or with no stamp beside existing cache files,
+    removes every index and data file of the drivers' modules there, warns once (`lagcomp.errors.CacheWarning`)
+    and writes the new stamp.  Must run
+    before a driver module is imported: numba loads a driver with an explicit signature at its import.
+    Nothing is checked where numba would not cache the drivers.
+    """
+    drivers = Path(__file__).parent / "integrate" / "drivers"
+    directory = cache_directory(drivers / "__init__.py")
+    if directory is None:
+        return []
+    from lagcomp.cache import code_digest
+
+    stamp = directory / STAMP_NAME
+    digest = code_digest(LIBRARY_SOURCES)  # about a millisecond: some 180 kB
+    try:
+        if stamp.read_text() == digest:
+            return []
+    except OSError:
+        pass  # no stamp yet: a new cache, or one written before stamps
+    cached = [path for source in sorted(drivers.glob("*.py"))
+              for path in sorted(directory.glob(f"{source.stem}.*.nb[ic]"))]
+    removed = []
+    try:
+        for path in cached:
+            path.unlink(missing_ok=True)
+            removed.append(path.name)
+        directory.mkdir(parents=True, exist_ok=True)
+        fresh = directory / f"{STAMP_NAME}.{os.getpid()}"
+        fresh.write_text(digest)
+        os.replace(fresh, stamp)  # whole, never half-written, for a process reading it meanwhile
+    except OSError as err:
+        from lagcomp.errors import CacheWarning
+
+        warnings.warn(f"lagcomp could not refresh numba's cache of its drivers in {directory} ({err}); drivers "
+                      f"compiled from older library sources may run.", CacheWarning, stacklevel=2)
+        return removed
+    if removed:
+        from lagcomp.errors import CacheWarning
+
+        warnings.warn(f"lagcomp's library sources changed since numba cached its drivers: removed {len(removed)} "
+                      f"cache files in {directory}; numba compiles the drivers again, once.", CacheWarning,
+                      stacklevel=2)
+    return removed

@@ -154,7 +154,8 @@ def library_function(reference: str):
     """The function ``"package.module:name"`` names, imported now (numba loads or compiles it then).
 
     numba's cache files of the drivers that do not read back are removed and compiled again
-    (`lagcomp.numba_cache.import_library_module`).
+    (`lagcomp.numba_cache.import_library_module`); those compiled from other library sources were
+    removed when the drivers' package was imported (`lagcomp.numba_cache.refresh_stale_drivers`).
     """
     from lagcomp.numba_cache import import_library_module
 

@@ -19,3 +19,7 @@ and the method's coefficient arrays; every driver returns ``(status, n_saved)`` 
 `lagcomp.integrate.status.Status`, and a run continues with another call after ``BUFFER_FULL``
 or ``PAUSED``.
 """
+
+from lagcomp.numba_cache import refresh_stale_drivers
+
+refresh_stale_drivers()  # before any driver module loads its cached code: numba keys that on the module's own file only
