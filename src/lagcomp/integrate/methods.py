@@ -12,10 +12,12 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
+from numba import types
 
 from lagcomp.integrate import collocation, compositions, tableaux
 from lagcomp.integrate.collocation import Collocation
 from lagcomp.integrate.compositions import Composition
+from lagcomp.integrate.drivers.kernel_types import AddressedKernel
 from lagcomp.integrate.tableaux import Tableau, driver_arguments
 
 #: How the Gauss-Legendre methods solve their stage equations: name -> the driver's ``newton``
@@ -64,10 +66,19 @@ class Method:
     kernels: tuple[str, ...] = ()
     #: The library sweep loop (``"module:function"``) that runs this method over many trajectories.
     sweep: str | None = None
+    #: Whether `bound_driver` binds the kernels as `AddressedKernel` (cheaper calls of the driver, each kernel
+    #: call one level deeper: worth it around large kernels).
+    addressed_kernels: bool = False
 
     def bound_driver(self, kernels):
         """The driver with the model's `kernels` (its generated module) bound as its first arguments."""
-        return functools.partial(library_function(self.driver), *(getattr(kernels, k) for k in self.kernels))
+        driver = library_function(self.driver)
+        bound = [getattr(kernels, k) for k in self.kernels]
+        if self.addressed_kernels:
+            kinds = driver.signatures[0]
+            bound = [AddressedKernel(value, kind) if isinstance(kind, types.FunctionType) else value
+                     for value, kind in zip(bound, kinds, strict=False)]
+        return functools.partial(driver, *bound)
 
     @property
     def implicit(self) -> bool:
@@ -141,7 +152,7 @@ METHODS = {
                default_rtol=EPS, default_atol=None, rtol_min=EPS,
                # the model's Taylor kernel, its event values, and its data: periodic coordinates, work rows
                kernels=("taylor_coefficients", "event_values", "TAYLOR_PERIODIC", "TAYLOR_WORK"),
-               sweep="lagcomp.integrate.drivers.taylor:sweep_taylor"),
+               sweep="lagcomp.integrate.drivers.taylor:sweep_taylor", addressed_kernels=True),
     )
 }
 

@@ -16,6 +16,7 @@ constraints or no events), so any driver can take any model.  Arrays are C-conti
 from __future__ import annotations
 
 from numba import types
+from numba.experimental import function_type
 
 #: float64[::1], float64[:, ::1], int64[::1]: the array types of every driver argument.
 VECTOR = types.float64[::1]
@@ -59,3 +60,33 @@ TAYLOR_ADVANCE = types.FunctionType(types.none(VECTOR, VECTOR, VECTOR, VECTOR))
 FLAGS = types.boolean[::1]
 #: ``rhs_lanes(T, Y, P, out, bad)``: out[:, l] = y' of lane l; T, bad (B,), Y, out (2n, B), P (n_p, B); bad: M singular.
 RHS_LANES = types.FunctionType(types.none(VECTOR, MATRIX, MATRIX, MATRIX, FLAGS))
+
+
+class AddressedKernel:
+    """A kernel as a driver argument that numba unboxes cheaply: its function type, and its address looked up once.
+
+    A dispatcher passed for a ``FunctionType`` argument costs, at every call of the driver from Python,
+    numba's compile-result and address look-ups in Python (`numba.experimental.function_type`): ~35 µs
+    of CPU time per kernel, 70 µs per call of the Taylor driver (~3 µs for the template driver with its
+    kernel as a global: `bench/taylor_library_vs_template.py`).  numba types an object by its
+    ``_numba_type_`` and takes its address from ``__wrapper_address__`` (its wrapper address protocol);
+    this one costs ~5 µs.  The driver then calls the kernel's cfunc wrapper, the C-ABI entry around the
+    same compiled function, one call deeper than the native entry it calls for a dispatcher: no
+    measurable cost per step around the Taylor kernel, 1.5% per step of DOP853 around the simple
+    pendulum's rhs (which is why `lagcomp.integrate.methods.Method` asks for it per method).
+
+    The address is looked up when numba first asks for it, at the first call of the driver, as for a
+    dispatcher: compiling the kernel earlier (before simulate's other kernels) changes the double
+    pendulum's Taylor results in the last bits (numba's code for the kernels depends on the order
+    they are compiled in a fresh cache).
+    """
+
+    def __init__(self, kernel, kind: types.FunctionType):
+        self._numba_type_ = kind
+        self.kernel = kernel                # keeps the compiled code at the address alive
+        self._address = None
+
+    def __wrapper_address__(self) -> int:
+        if self._address is None:
+            self._address = function_type._get_wrapper_address(self.kernel, self._numba_type_.signature)
+        return self._address
