@@ -76,9 +76,7 @@ class AddressedKernel:
     pendulum's rhs (which is why `lagcomp.integrate.methods.Method` asks for it per method).
 
     The address is looked up when numba first asks for it, at the first call of the driver, as for a
-    dispatcher: compiling the kernel earlier (before simulate's other kernels) changes the double
-    pendulum's Taylor results in the last bits (numba's code for the kernels depends on the order
-    they are compiled in a fresh cache).
+    dispatcher, so the kernel compiles where a dispatcher's would (under the run's compile stage).
     """
 
     def __init__(self, kernel, kind: types.FunctionType):
