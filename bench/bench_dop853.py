@@ -41,9 +41,12 @@ CHAIN = 10
 
 class Case:
     """One benchmark problem: the lagcomp system, the initial state, the output times (the first is the
-    start), and numbalsoda's right-hand side (the cfunc's body, on the state, ``data`` and the derivative)."""
+    start), and numbalsoda's right-hand side: a cfunc of the hand-written numba rhs (bench/systems.py) that
+    counts its calls in ``data[counter]``."""
 
     def __init__(self, name: str):
+        from numbalsoda import lsoda_sig
+
         if name == "double_pendulum":
             self.system = examples.get("double_pendulum")
             self.y0 = np.array([2.0, 1.0, 0.0, 0.0])
@@ -52,8 +55,10 @@ class Case:
             self.counter = 5
             rhs = systems.double_pendulum_rhs
 
-            def numbalsoda_rhs(t, y, data, dy):
-                rhs(t, y, data[:5], dy)
+            @numba.cfunc(lsoda_sig)
+            def f(t, u, du, data):
+                rhs(t, numba.carray(u, (4,)), numba.carray(data, (5,)), numba.carray(du, (4,)))
+                data[5] += 1.0
         elif name == "chain10":
             n, n_p = CHAIN, 2 * CHAIN + 1
             self.system = examples.n_link_pendulum(n)
@@ -62,33 +67,29 @@ class Case:
             # m1..mn, l1..ln, g; the call counter; the scratch a (n, n), f (n,), mu (n,) of chain_rhs_ws
             self.data = np.concatenate([np.ones(2 * n), [9.81, 0.0], np.zeros(n * n + 2 * n)])
             self.counter = n_p
-            rhs = systems.chain_rhs_ws
+            rhs, n_data = systems.chain_rhs_ws, self.data.shape[0]
 
-            def numbalsoda_rhs(t, y, data, dy):
-                work = data[n_p + 1:]
-                rhs(t, y, data[:n_p], dy, work[:n * n].reshape((n, n)), work[n * n:n * n + n], work[n * n + n:])
+            @numba.cfunc(lsoda_sig)
+            def f(t, u, du, data):
+                values = numba.carray(data, (n_data,))
+                work = values[n_p + 1:]
+                rhs(t, numba.carray(u, (2 * n,)), values[:n_p], numba.carray(du, (2 * n,)),
+                    work[:n * n].reshape((n, n)), work[n * n:n * n + n], work[n * n + n:])
+                data[n_p] += 1.0
         else:
             raise ValueError(f"unknown system {name!r}")
-        self.numbalsoda_rhs = numba.njit(numbalsoda_rhs)
+        self.numbalsoda_rhs = f
 
 
 def numbalsoda_run(case: Case):
-    """numbalsoda's dop853 on the hand-written rhs; the cfunc counts its calls in data[case.counter]."""
-    from numbalsoda import dop853, lsoda_sig
+    """numbalsoda's dop853 on the case's hand-written rhs; returns its number of rhs calls."""
+    from numbalsoda import dop853
 
-    rhs, n, n_data, counter = case.numbalsoda_rhs, case.y0.shape[0], case.data.shape[0], case.counter
-
-    @numba.cfunc(lsoda_sig)
-    def f(t, u, du, data):
-        values = numba.carray(data, (n_data,))
-        rhs(t, numba.carray(u, (n,)), values, numba.carray(du, (n,)))
-        values[counter] += 1.0
-
-    data = case.data
+    data, counter, address = case.data, case.counter, case.numbalsoda_rhs.address
 
     def run():
         data[counter] = 0.0
-        dop853(f.address, case.y0, case.grid, data=data, rtol=TOL, atol=TOL, mxstep=10**7)
+        dop853(address, case.y0, case.grid, data=data, rtol=TOL, atol=TOL, mxstep=10**7)
         return int(data[counter])
     return run
 

@@ -168,28 +168,6 @@ SIGNATURE = OUTCOME(RHS, PROJECT, RESIDUAL, EVENTS,
                     *TABLEAU)
 
 
-@njit(error_model="numpy", inline="always")
-def nonzero_terms(W):
-    """The nonzero entries of each row of W (r, c), in column order: ``(count, column, weight)`` of shapes
-    (r,), (r, c), (r, c), with ``W[k, column[k, m]] = weight[k, m]`` for m < count[k].
-
-    A sum over them has the bits of the sum over the whole row whenever the other factors are finite
-    (the stages are, when a sum is formed): it starts at +0.0 and, rounding to nearest, never becomes
-    -0.0, so a zero product (+0.0 or -0.0) added to it leaves it as it is.
-    """
-    rows, columns = W.shape
-    count = np.zeros(rows, dtype=np.int64)
-    column = np.empty((rows, columns), dtype=np.int64)
-    weight = np.empty((rows, columns))
-    for k in range(rows):
-        for j in range(columns):
-            if W[k, j] != 0.0:
-                column[k, count[k]] = j
-                weight[k, count[k]] = W[k, j]
-                count[k] += 1
-    return count, column, weight
-
-
 @njit(SIGNATURE, cache=True, error_model="numpy", nogil=True)
 def embedded_run(rhs, project, constraint_residual, event_values,
                  y, clock, counters, p, projecting, residual_max, t_end, rtol, atol, max_step, max_steps, pause_at,
@@ -209,17 +187,6 @@ def embedded_run(rhs, project, constraint_residual, event_values,
     contd8 = dense_kind == DENSE_CONTD8
     n_special = 3 if contd8 else 0      # contd8's rows F0, F1, F2 from y, y_new, f_old, f_new
     n_rows = n_special + dense_weights.shape[0]
-
-    # The nonzero terms of the stage sums (row s < n_stages: A[s]; row n_stages: the weights B) and of
-    # the error estimates, in stage order: the sums skip the zeros of the sparse tableaux.
-    stage_weights = np.zeros((n_k, n_stages))
-    for s in range(1, n_stages):
-        for j in range(s):
-            stage_weights[s, j] = A[s, j]
-    for j in range(n_stages):
-        stage_weights[n_stages, j] = B[j]
-    n_terms, term_stage, term_weight = nonzero_terms(stage_weights)
-    n_error_terms, error_stage, error_weight = nonzero_terms(error_weights)
 
     # Work arrays, allocated once per call.
     K = np.empty((n_all, n))
@@ -353,7 +320,7 @@ def embedded_run(rhs, project, constraint_residual, event_values,
 
             # Stages K[1 .. s]: K[s] = f(t + c h, y + h sum_{j<s} a_j K[j]) with (a, c) = (A[s], C[s]),
             # and for s = n_stages (B, 1): the stage argument is then y_new and the stage the FSAL
-            # derivative.  The sums run over the nonzero terms (`nonzero_terms`).  The sum runs
+            # derivative.  Zero coefficients are skipped (the tableaux are sparse).  The sum runs
             # stage by stage over whole rows of K (which vectorizes), or for the smallest systems
             # component by component in a register: the same operations in the same order.
             status = 0
@@ -363,17 +330,19 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                 if n <= COMPONENTWISE_MAX:
                     for i in range(n):
                         acc = 0.0
-                        for k in range(n_terms[s]):
-                            acc += term_weight[s, k] * K[term_stage[s, k], i]
+                        for j in range(s):
+                            a = B[j] if last else A[s, j]
+                            if a != 0.0:
+                                acc += a * K[j, i]
                         ytmp[i] = y[i] + h * acc
                 else:
                     for i in range(n):
                         ytmp[i] = 0.0
-                    for k in range(n_terms[s]):
-                        a = term_weight[s, k]
-                        j = term_stage[s, k]
-                        for i in range(n):
-                            ytmp[i] += a * K[j, i]
+                    for j in range(s):
+                        a = B[j] if last else A[s, j]
+                        if a != 0.0:
+                            for i in range(n):
+                                ytmp[i] += a * K[j, i]
                     for i in range(n):
                         ytmp[i] = y[i] + h * ytmp[i]
                 if last:
@@ -402,8 +371,8 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                     for i in range(n):
                         sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
                         e = 0.0
-                        for k in range(n_error_terms[0]):
-                            e += error_weight[0, k] * K[error_stage[0, k], i]
+                        for j in range(n_k):
+                            e += error_weights[0, j] * K[j, i]
                         e = h * e / sc
                         acc += e * e
                     err = np.sqrt(acc / n) if n > 0 else 0.0
@@ -414,10 +383,9 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                         sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
                         e5 = 0.0
                         e3 = 0.0
-                        for k in range(n_error_terms[0]):
-                            e5 += error_weight[0, k] * K[error_stage[0, k], i]
-                        for k in range(n_error_terms[1]):
-                            e3 += error_weight[1, k] * K[error_stage[1, k], i]
+                        for j in range(n_k):
+                            e5 += error_weights[0, j] * K[j, i]
+                            e3 += error_weights[1, j] * K[j, i]
                         e5 /= sc
                         e3 /= sc
                         sum5 += e5 * e5
