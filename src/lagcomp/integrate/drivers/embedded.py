@@ -328,7 +328,22 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                 last = s == n_stages
                 c = 1.0 if last else C[s]
                 if n <= COMPONENTWISE_MAX:
-                    for i in range(n):
+                    i0 = 0
+                    while i0 + 4 <= n:
+                        acc0 = acc1 = acc2 = acc3 = 0.0
+                        for j in range(s):
+                            a = B[j] if last else A[s, j]
+                            if a != 0.0:
+                                acc0 += a * K[j, i0]
+                                acc1 += a * K[j, i0 + 1]
+                                acc2 += a * K[j, i0 + 2]
+                                acc3 += a * K[j, i0 + 3]
+                        ytmp[i0] = y[i0] + h * acc0
+                        ytmp[i0 + 1] = y[i0 + 1] + h * acc1
+                        ytmp[i0 + 2] = y[i0 + 2] + h * acc2
+                        ytmp[i0 + 3] = y[i0 + 3] + h * acc3
+                        i0 += 4
+                    for i in range(i0, n):
                         acc = 0.0
                         for j in range(s):
                             a = B[j] if last else A[s, j]
@@ -368,7 +383,20 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             if status == 0:
                 if error_norm == ERROR_RMS:
                     acc = 0.0
-                    for i in range(n):
+                    i0 = 0
+                    while i0 + 4 <= n:
+                        e0 = e1 = e2 = e3 = 0.0
+                        for j in range(n_k):
+                            w = error_weights[0, j]
+                            e0 += w * K[j, i0]
+                            e1 += w * K[j, i0 + 1]
+                            e2 += w * K[j, i0 + 2]
+                            e3 += w * K[j, i0 + 3]
+                        for e, i in ((e0, i0), (e1, i0 + 1), (e2, i0 + 2), (e3, i0 + 3)):
+                            e = h * e / (atol + max(abs(y[i]), abs(y_new[i])) * rtol)
+                            acc += e * e
+                        i0 += 4
+                    for i in range(i0, n):
                         sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
                         e = 0.0
                         for j in range(n_k):
@@ -379,7 +407,30 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                 else:
                     sum5 = 0.0
                     sum3 = 0.0
-                    for i in range(n):
+                    i0 = 0
+                    while i0 + 4 <= n:
+                        e5_0 = e5_1 = e5_2 = e5_3 = 0.0
+                        e3_0 = e3_1 = e3_2 = e3_3 = 0.0
+                        for j in range(n_k):
+                            w5 = error_weights[0, j]
+                            w3 = error_weights[1, j]
+                            e5_0 += w5 * K[j, i0]
+                            e5_1 += w5 * K[j, i0 + 1]
+                            e5_2 += w5 * K[j, i0 + 2]
+                            e5_3 += w5 * K[j, i0 + 3]
+                            e3_0 += w3 * K[j, i0]
+                            e3_1 += w3 * K[j, i0 + 1]
+                            e3_2 += w3 * K[j, i0 + 2]
+                            e3_3 += w3 * K[j, i0 + 3]
+                        for e5, e3, i in ((e5_0, e3_0, i0), (e5_1, e3_1, i0 + 1), (e5_2, e3_2, i0 + 2),
+                                          (e5_3, e3_3, i0 + 3)):
+                            sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+                            e5 /= sc
+                            e3 /= sc
+                            sum5 += e5 * e5
+                            sum3 += e3 * e3
+                        i0 += 4
+                    for i in range(i0, n):
                         sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
                         e5 = 0.0
                         e3 = 0.0
