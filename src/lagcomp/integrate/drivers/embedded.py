@@ -104,6 +104,23 @@ from three places (first stage, initial-step probe, stages; four with DOP853's e
 compile time, which decided that layout when every model compiled its own copy, is now paid once
 per installation: numba caches this function for every model, since its signature names the
 kernels' types, not the kernels.
+
+Register blocks
+---------------
+
+A stage sum or an error estimate of one component is a chain of additions, each waiting for the
+one before.  For the smallest systems (stage sums, `COMPONENTWISE_MAX`) and for the error estimates
+of every system, four components are summed together, each in its own register: four independent
+chains that the processor overlaps, with the operations of each component in the same order (the
+same bits).  DOP853 on the double pendulum then takes 0.83 times the time of one chain per component
+(0.93-0.96 times numbalsoda's dop853, which was 1.13-1.16 times; the 10-link chain 0.95-0.97 times:
+``bench/bench_dop853.py``).  The model's ``rhs`` is then about two thirds of the run's time (perf).
+
+Not done, measured: a copy of this function per tableau with the tableau's arrays as compile-time
+constants (a closure, whose arrays numba freezes) took 0.96 times the time of this function with one
+register per component, and 1.07 times with the register blocks: LLVM does not unroll the stage loops
+(their length depends on the stage), so the coefficients stay loads and only the sizes are constants.
+Sums over tables of the nonzero terms (no test per coefficient) took 1.01 and 1.03 times.
 """
 
 from __future__ import annotations
@@ -152,10 +169,11 @@ from lagcomp.integrate.tableaux import ERROR_RMS
 #: factor on the optimal step, and the bounds of the factor by which one step may change the next.
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 
-#: Largest state whose stage sums accumulate component by component in a register (a one- or
-#: two-degree-of-freedom system): DOP853 on the double pendulum (4 components) takes 1.20 times the
-#: steps/s of the row-by-row sums, which vectorize and win from 10 components on (0.81 times at 10,
-#: 0.74 at 20; 1.02 at 6).  Both give the same bits.
+#: Largest state whose stage sums accumulate in registers (a one- or two-degree-of-freedom system),
+#: four components at a time and the rest one by one: DOP853 on the double pendulum (4 components)
+#: took 1.20 times the steps/s of the row-by-row sums with one register, which vectorize and win from
+#: 10 components on (0.81 times at 10, 0.74 at 20; 1.02 at 6); with four registers the 10-link chain
+#: takes the same time either way (1.01).  Both give the same bits.
 COMPONENTWISE_MAX = 4
 
 #: The tableau's arguments, after the run's: A, B, C, error_weights, error_norm, error_exponent,
@@ -321,8 +339,9 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             # Stages K[1 .. s]: K[s] = f(t + c h, y + h sum_{j<s} a_j K[j]) with (a, c) = (A[s], C[s]),
             # and for s = n_stages (B, 1): the stage argument is then y_new and the stage the FSAL
             # derivative.  Zero coefficients are skipped (the tableaux are sparse).  The sum runs
-            # stage by stage over whole rows of K (which vectorizes), or for the smallest systems
-            # component by component in a register: the same operations in the same order.
+            # stage by stage over whole rows of K (which vectorizes), or for the smallest systems in
+            # registers, four components at a time (see "Register blocks" in the module docstring):
+            # the same operations in the same order.
             status = 0
             for s in range(1, n_stages + 1):
                 last = s == n_stages
