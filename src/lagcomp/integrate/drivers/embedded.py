@@ -404,14 +404,14 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                     acc = 0.0
                     i0 = 0
                     while i0 + 4 <= n:
-                        e0 = e1 = e2 = e3 = 0.0
+                        e_0 = e_1 = e_2 = e_3 = 0.0
                         for j in range(n_k):
                             w = error_weights[0, j]
-                            e0 += w * K[j, i0]
-                            e1 += w * K[j, i0 + 1]
-                            e2 += w * K[j, i0 + 2]
-                            e3 += w * K[j, i0 + 3]
-                        for e, i in ((e0, i0), (e1, i0 + 1), (e2, i0 + 2), (e3, i0 + 3)):
+                            e_0 += w * K[j, i0]
+                            e_1 += w * K[j, i0 + 1]
+                            e_2 += w * K[j, i0 + 2]
+                            e_3 += w * K[j, i0 + 3]
+                        for e, i in ((e_0, i0), (e_1, i0 + 1), (e_2, i0 + 2), (e_3, i0 + 3)):
                             e = h * e / (atol + max(abs(y[i]), abs(y_new[i])) * rtol)
                             acc += e * e
                         i0 += 4
