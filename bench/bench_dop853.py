@@ -1,9 +1,12 @@
 """Where lagcomp's DOP853 stands against numbalsoda's: steps, driver alone, and through Model.simulate.
 
-    PYTHONPATH=src python -m bench.bench_dop853 [--rounds 15]
+    PYTHONPATH=src python -m bench.bench_dop853 [--rounds 15] [--system double_pendulum|chain10]
 
-The double pendulum from (2, 1, 0, 0), t ∈ [0, 100], rtol = atol = 1e-10, the
-state reported at t = 10 and 100 (issue 8's DOP853 target).  Prints:
+``double_pendulum`` (the default): from (2, 1, 0, 0), t ∈ [0, 100], rtol = atol = 1e-10, the state
+reported at t = 10 and 100 (issue 8's DOP853 target).  ``chain10``: the 10-link chain
+(``examples.n_link_pendulum(10)``, unit masses and lengths) from θ = 0.5, θ̇ = 0, t ∈ [0, 10], the state
+reported at t = 1 and 10, numbalsoda on the hand-written closed form (`systems.chain_rhs_ws`, its
+scratch in numbalsoda's data array after the parameters).  Prints:
 
 1. f-evaluations of each: lagcomp's counter, and numbalsoda's counted by its
    cfunc right-hand side (the hand-written numba one, bench/systems.py), so
@@ -31,42 +34,78 @@ from bench import systems
 from lagcomp import examples
 from lagcomp.integrate.methods import get_method
 
-Y0 = np.array([2.0, 1.0, 0.0, 0.0])
-GRID = np.array([0.0, 10.0, 100.0])
 TOL = 1e-10
+#: The chain's number of links.
+CHAIN = 10
 
 
-def numbalsoda_run():
-    """numbalsoda's dop853 on the hand-written rhs; the cfunc counts its calls in data[5]."""
-    from numbalsoda import dop853, lsoda_sig
+class Case:
+    """One benchmark problem: the lagcomp system, the initial state, the output times (the first is the
+    start), and numbalsoda's right-hand side: a cfunc of the hand-written numba rhs (bench/systems.py) that
+    counts its calls in ``data[counter]``."""
 
-    rhs = systems.double_pendulum_rhs
+    def __init__(self, name: str):
+        from numbalsoda import lsoda_sig
 
-    @numba.cfunc(lsoda_sig)
-    def f(t, u, du, data):
-        rhs(t, numba.carray(u, (4,)), numba.carray(data, (5,)), numba.carray(du, (4,)))
-        data[5] += 1.0
+        if name == "double_pendulum":
+            self.system = examples.get("double_pendulum")
+            self.y0 = np.array([2.0, 1.0, 0.0, 0.0])
+            self.grid = np.array([0.0, 10.0, 100.0])
+            self.data = np.array([1.0, 1.0, 1.0, 1.0, 9.81, 0.0])   # m1, m2, l1, l2, g; the call counter
+            self.counter = 5
+            rhs = systems.double_pendulum_rhs
 
-    data = np.array([1.0, 1.0, 1.0, 1.0, 9.81, 0.0])
+            @numba.cfunc(lsoda_sig)
+            def f(t, u, du, data):
+                rhs(t, numba.carray(u, (4,)), numba.carray(data, (5,)), numba.carray(du, (4,)))
+                data[5] += 1.0
+        elif name == "chain10":
+            n, n_p = CHAIN, 2 * CHAIN + 1
+            self.system = examples.n_link_pendulum(n)
+            self.y0 = np.concatenate([np.full(n, 0.5), np.zeros(n)])
+            self.grid = np.array([0.0, 1.0, 10.0])
+            # m1..mn, l1..ln, g; the call counter; the scratch a (n, n), f (n,), mu (n,) of chain_rhs_ws
+            self.data = np.concatenate([np.ones(2 * n), [9.81, 0.0], np.zeros(n * n + 2 * n)])
+            self.counter = n_p
+            rhs, n_data = systems.chain_rhs_ws, self.data.shape[0]
+
+            @numba.cfunc(lsoda_sig)
+            def f(t, u, du, data):
+                values = numba.carray(data, (n_data,))
+                work = values[n_p + 1:]
+                rhs(t, numba.carray(u, (2 * n,)), values[:n_p], numba.carray(du, (2 * n,)),
+                    work[:n * n].reshape((n, n)), work[n * n:n * n + n], work[n * n + n:])
+                data[n_p] += 1.0
+        else:
+            raise ValueError(f"unknown system {name!r}")
+        self.numbalsoda_rhs = f
+
+
+def numbalsoda_run(case: Case):
+    """numbalsoda's dop853 on the case's hand-written rhs; returns its number of rhs calls."""
+    from numbalsoda import dop853
+
+    data, counter, address = case.data, case.counter, case.numbalsoda_rhs.address
 
     def run():
-        data[5] = 0.0
-        dop853(f.address, Y0, GRID, data=data, rtol=TOL, atol=TOL, mxstep=10**7)
-        return int(data[5])
+        data[counter] = 0.0
+        dop853(address, case.y0, case.grid, data=data, rtol=TOL, atol=TOL, mxstep=10**7)
+        return int(data[counter])
     return run
 
 
-def driver_run(model):
+def driver_run(model, case: Case):
     """The DOP853 driver called directly, as simulate calls it, in one call."""
     method = get_method("dop853")
     driver, arrays = method.bound_driver(model.kernels), method.driver_arguments()
     p = model.parameter_vector()
-    no_events = (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(1), np.empty((1, 4)), np.empty(1, np.int64))
+    n = case.y0.shape[0]
+    no_events = (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(1), np.empty((1, n)), np.empty(1, np.int64))
 
     def run():
-        y, clock, counters = Y0.copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
-        driver(y, clock, counters, p, 0, np.array([0.0, np.inf]), GRID[-1], TOL, TOL, np.inf,
-               10**9, 10**9, 1, GRID[1:], np.empty(2), np.empty((2, 4)), *no_events, *arrays)
+        y, clock, counters = case.y0.copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
+        driver(y, clock, counters, p, 0, np.array([0.0, np.inf]), case.grid[-1], TOL, TOL, np.inf,
+               10**9, 10**9, 1, case.grid[1:], np.empty(2), np.empty((2, n)), *no_events, *arrays)
         return int(counters[0])
     return run
 
@@ -74,14 +113,17 @@ def driver_run(model):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=15)
+    parser.add_argument("--system", choices=("double_pendulum", "chain10"), default="double_pendulum")
     args = parser.parse_args()
+    case = Case(args.system)
     with tempfile.TemporaryDirectory() as cache_dir:
-        model = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
+        model = lc.compile(case.system, cache_dir=cache_dir)
         runners = {
-            "lagcomp DOP853 driver, called directly": driver_run(model),
-            "lagcomp Model.simulate": lambda: model.simulate((0, GRID[-1]), method="dop853", rtol=TOL, atol=TOL,
-                                                             t_eval=GRID[1:]).nfev,
-            "numbalsoda dop853": numbalsoda_run(),
+            "lagcomp DOP853 driver, called directly": driver_run(model, case),
+            "lagcomp Model.simulate": lambda: model.simulate((0, case.grid[-1]), *np.split(case.y0, 2),
+                                                             method="dop853", rtol=TOL, atol=TOL,
+                                                             t_eval=case.grid[1:]).nfev,
+            "numbalsoda dop853": numbalsoda_run(case),
         }
         evaluations = {name: run() for name, run in runners.items()}  # also compiles / loads everything
         times = {name: [] for name in runners}
@@ -95,7 +137,7 @@ def main() -> None:
     print("| run | f evaluations | ms, median (min–max) | × numbalsoda (median of per-round ratios) |")
     print("|---|---|---|---|")
     for name, samples in times.items():
-        ratio = statistics.median(a / b for a, b in zip(samples, baseline))
+        ratio = statistics.median(a / b for a, b in zip(samples, baseline, strict=True))
         print(f"| {name} | {evaluations[name]:,} | {statistics.median(samples):.2f} ({min(samples):.2f}–"
               f"{max(samples):.2f}) | {ratio:.2f}× |")
 

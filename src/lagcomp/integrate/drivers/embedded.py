@@ -104,6 +104,23 @@ from three places (first stage, initial-step probe, stages; four with DOP853's e
 compile time, which decided that layout when every model compiled its own copy, is now paid once
 per installation: numba caches this function for every model, since its signature names the
 kernels' types, not the kernels.
+
+Register blocks
+---------------
+
+A stage sum or an error estimate of one component is a chain of additions, each waiting for the
+one before.  For the smallest systems (stage sums, `COMPONENTWISE_MAX`) and for the error estimates
+of every system, four components are summed together, each in its own register: four independent
+chains that the processor overlaps, with the operations of each component in the same order (the
+same bits).  DOP853 on the double pendulum then takes 0.83 times the time of one chain per component
+(0.93-0.96 times numbalsoda's dop853, which was 1.13-1.16 times; the 10-link chain 0.95-0.97 times:
+``bench/bench_dop853.py``).  The model's ``rhs`` is then about two thirds of the run's time (perf).
+
+Not done, measured: a copy of this function per tableau with the tableau's arrays as compile-time
+constants (a closure, whose arrays numba freezes) took 0.96 times the time of this function with one
+register per component, and 1.07 times with the register blocks: LLVM does not unroll the stage loops
+(their length depends on the stage), so the coefficients stay loads and only the sizes are constants.
+Sums over tables of the nonzero terms (no test per coefficient) took 1.01 and 1.03 times.
 """
 
 from __future__ import annotations
@@ -152,10 +169,11 @@ from lagcomp.integrate.tableaux import ERROR_RMS
 #: factor on the optimal step, and the bounds of the factor by which one step may change the next.
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 
-#: Largest state whose stage sums accumulate component by component in a register (a one- or
-#: two-degree-of-freedom system): DOP853 on the double pendulum (4 components) takes 1.20 times the
-#: steps/s of the row-by-row sums, which vectorize and win from 10 components on (0.81 times at 10,
-#: 0.74 at 20; 1.02 at 6).  Both give the same bits.
+#: Largest state whose stage sums accumulate in registers (a one- or two-degree-of-freedom system),
+#: four components at a time and the rest one by one: DOP853 on the double pendulum (4 components)
+#: took 1.20 times the steps/s of the row-by-row sums with one register, which vectorize and win from
+#: 10 components on (0.81 times at 10, 0.74 at 20; 1.02 at 6); with four registers the 10-link chain
+#: takes the same time either way (1.01).  Both give the same bits.
 COMPONENTWISE_MAX = 4
 
 #: The tableau's arguments, after the run's: A, B, C, error_weights, error_norm, error_exponent,
@@ -321,14 +339,30 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             # Stages K[1 .. s]: K[s] = f(t + c h, y + h sum_{j<s} a_j K[j]) with (a, c) = (A[s], C[s]),
             # and for s = n_stages (B, 1): the stage argument is then y_new and the stage the FSAL
             # derivative.  Zero coefficients are skipped (the tableaux are sparse).  The sum runs
-            # stage by stage over whole rows of K (which vectorizes), or for the smallest systems
-            # component by component in a register: the same operations in the same order.
+            # stage by stage over whole rows of K (which vectorizes), or for the smallest systems in
+            # registers, four components at a time (see "Register blocks" in the module docstring):
+            # the same operations in the same order.
             status = 0
             for s in range(1, n_stages + 1):
                 last = s == n_stages
                 c = 1.0 if last else C[s]
                 if n <= COMPONENTWISE_MAX:
-                    for i in range(n):
+                    i0 = 0
+                    while i0 + 4 <= n:
+                        acc0 = acc1 = acc2 = acc3 = 0.0
+                        for j in range(s):
+                            a = B[j] if last else A[s, j]
+                            if a != 0.0:
+                                acc0 += a * K[j, i0]
+                                acc1 += a * K[j, i0 + 1]
+                                acc2 += a * K[j, i0 + 2]
+                                acc3 += a * K[j, i0 + 3]
+                        ytmp[i0] = y[i0] + h * acc0
+                        ytmp[i0 + 1] = y[i0 + 1] + h * acc1
+                        ytmp[i0 + 2] = y[i0 + 2] + h * acc2
+                        ytmp[i0 + 3] = y[i0 + 3] + h * acc3
+                        i0 += 4
+                    for i in range(i0, n):
                         acc = 0.0
                         for j in range(s):
                             a = B[j] if last else A[s, j]
@@ -368,7 +402,20 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             if status == 0:
                 if error_norm == ERROR_RMS:
                     acc = 0.0
-                    for i in range(n):
+                    i0 = 0
+                    while i0 + 4 <= n:
+                        e_0 = e_1 = e_2 = e_3 = 0.0
+                        for j in range(n_k):
+                            w = error_weights[0, j]
+                            e_0 += w * K[j, i0]
+                            e_1 += w * K[j, i0 + 1]
+                            e_2 += w * K[j, i0 + 2]
+                            e_3 += w * K[j, i0 + 3]
+                        for e, i in ((e_0, i0), (e_1, i0 + 1), (e_2, i0 + 2), (e_3, i0 + 3)):
+                            e = h * e / (atol + max(abs(y[i]), abs(y_new[i])) * rtol)
+                            acc += e * e
+                        i0 += 4
+                    for i in range(i0, n):
                         sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
                         e = 0.0
                         for j in range(n_k):
@@ -379,7 +426,30 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                 else:
                     sum5 = 0.0
                     sum3 = 0.0
-                    for i in range(n):
+                    i0 = 0
+                    while i0 + 4 <= n:
+                        e5_0 = e5_1 = e5_2 = e5_3 = 0.0
+                        e3_0 = e3_1 = e3_2 = e3_3 = 0.0
+                        for j in range(n_k):
+                            w5 = error_weights[0, j]
+                            w3 = error_weights[1, j]
+                            e5_0 += w5 * K[j, i0]
+                            e5_1 += w5 * K[j, i0 + 1]
+                            e5_2 += w5 * K[j, i0 + 2]
+                            e5_3 += w5 * K[j, i0 + 3]
+                            e3_0 += w3 * K[j, i0]
+                            e3_1 += w3 * K[j, i0 + 1]
+                            e3_2 += w3 * K[j, i0 + 2]
+                            e3_3 += w3 * K[j, i0 + 3]
+                        for e5, e3, i in ((e5_0, e3_0, i0), (e5_1, e3_1, i0 + 1), (e5_2, e3_2, i0 + 2),
+                                          (e5_3, e3_3, i0 + 3)):
+                            sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+                            e5 /= sc
+                            e3 /= sc
+                            sum5 += e5 * e5
+                            sum3 += e3 * e3
+                        i0 += 4
+                    for i in range(i0, n):
                         sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
                         e5 = 0.0
                         e3 = 0.0
