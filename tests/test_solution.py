@@ -71,3 +71,28 @@ def test_invariants_include_cyclic_momenta(compiled):
     np.testing.assert_allclose(values, m * l**2 * np.sin(sol.q[:, 0]) ** 2 * sol.qd[:, 1], rtol=1e-14)
     assert drift < 1e-10 and invariants["h"][1] < 1e-10
     assert sol.momenta.shape == sol.q.shape
+
+
+def test_energies_of_a_kept_trajectory_are_evaluated_on_first_read(compiled, monkeypatch):
+    """Bitwise what a summary run folds chunk by chunk; a pickled Solution carries the values, not the model."""
+    import pickle
+
+    model = compiled("double_pendulum")
+    monkeypatch.setattr(simulate_module, "FIRST_CHUNK", 16)
+    monkeypatch.setattr(simulate_module, "MAX_CHUNK", 64)
+    kept = model.simulate((0, 5), rtol=1e-10, atol=1e-12)
+    folded = model.simulate((0, 5), rtol=1e-10, atol=1e-12, record="summary")
+    assert kept.observed._values is None  # nothing evaluated by the run itself
+    assert len(kept.t) > 64
+    for name in ("energy", "energy_function", "momenta"):
+        ends = getattr(kept, name)[[0, -1]]
+        assert ends.tobytes() == getattr(folded, name).tobytes()
+    for field in ("rows", "energy_error", "energy_function_error", "momentum_errors"):
+        assert getattr(kept.summary, field) == getattr(folded.summary, field)
+    for field in ("q_min", "q_max", "qd_min", "qd_max"):
+        np.testing.assert_array_equal(getattr(kept.summary, field), getattr(folded.summary, field))
+    unevaluated = model.simulate((0, 1))
+    again = pickle.loads(pickle.dumps(unevaluated))
+    assert unevaluated.observed._values is not None and again.observed._evaluate is None
+    np.testing.assert_array_equal(again.energy, unevaluated.energy)
+    np.testing.assert_array_equal(again.momenta, unevaluated.momenta)

@@ -565,7 +565,10 @@ class Model:
             Keep every saved row (default), or only the first and last rows
             and `Solution.summary` (largest energy errors, coordinate ranges,
             reduced over every saved row), so memory stays O(1) however long
-            the run.
+            the run.  A kept trajectory evaluates `Solution.energy`,
+            `energy_function`, `momenta` and `summary` when first read (numba
+            compiles their kernel then, not before the run's first result);
+            ``"summary"`` evaluates them during the run.  Same values either way.
         progress : bool, optional
             Show a progress bar: None (default) for runs lasting over two
             seconds, True always, False never.  Ctrl-C stops a run between

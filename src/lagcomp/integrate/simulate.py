@@ -85,7 +85,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     make = _adaptive_driver if options.adaptive else _fixed_step_driver
     advance, rows = make(model.kernels, state, p, (options.projecting, residual_max), options)
 
-    recorder = Recorder(model, p, record)
+    recorder = Recorder(model, p, record, progress)
     if t_eval is None or t_eval[0] == t0:
         recorder.add(np.array([t0]), y0[None, :])
     n_events = len(model.events)
@@ -244,7 +244,7 @@ def _event_records(model, event_parts) -> dict:
 
 
 def _solution(model, p, recorder, run, throw) -> Solution:
-    ts, ys, energy, energy_function, momenta = recorder.rows_kept()
+    ts, ys, observed = recorder.result()
     status, run_state = run["status"], run["state"]
     t_failure = None
     message = Status(status).message
@@ -261,15 +261,14 @@ def _solution(model, p, recorder, run, throw) -> Solution:
     reactions, residuals = reactions_along(model, ts, ys, p)
     n = model.n
     solution = Solution(
-        t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), energy=energy, energy_function=energy_function,
-        momenta=momenta, cyclic=model.cyclic,
+        t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), observed=observed, cyclic=model.cyclic,
         status=status, message=message, t_failure=t_failure,
         nfev=run_state.nfev, nsteps=run_state.nsteps, nrejected=run_state.nrejected,
         method=run["method"], coordinates=model.coordinates,
         params=dict(zip(model.parameters, p.tolist())),
         reactions=reactions, constraint_residual=max(run["residual_max"], float(np.max(residuals, initial=0.0))),
         projected_initial_state=ys[0].copy() if run["projected"] else None,
-        events=run["events"], summary=recorder.summary(),
+        events=run["events"],
     )
     if throw and status < 0:
         raise IntegrationError(message, solution)

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lagcomp.integrate.recording import RunSummary
+from lagcomp.integrate.recording import Observed, RunSummary
 from lagcomp.integrate.status import MESSAGES  # noqa: F401  (re-exported: a failed run is a status, not an exception)
 
 @dataclass(frozen=True)
@@ -39,7 +39,9 @@ class Solution:
     q, qd : ndarray, shape (m, n)
         Coordinates and velocities at those times.
     energy : ndarray, shape (m,)
-        Total mechanical energy T + V, evaluated by the compiled kernel.
+        Total mechanical energy T + V, evaluated by the compiled kernel
+        (with `energy_function`, `momenta` and `summary`: when first read,
+        see `observed`).
     energy_function : ndarray, shape (m,)
         Energy function h (Jacobi integral), conserved for time-independent
         conservative systems even when T + V is not (imposed motions).
@@ -84,14 +86,17 @@ class Solution:
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
         ``record="summary"`` the arrays above hold only the first and last rows.
+    observed : Observed
+        Holds `energy`, `energy_function`, `momenta` and `summary`.  A run
+        keeping every row evaluates them on first read, once (numba compiles
+        the ``observables`` kernel then, not before the run's first result);
+        ``record="summary"`` evaluated them during the run.
     """
 
     t: np.ndarray
     q: np.ndarray
     qd: np.ndarray
-    energy: np.ndarray
-    energy_function: np.ndarray
-    momenta: np.ndarray
+    observed: Observed = field(repr=False, compare=False)
     cyclic: tuple
     status: int
     message: str
@@ -106,7 +111,6 @@ class Solution:
     constraint_residual: float = 0.0
     projected_initial_state: np.ndarray | None = None
     events: dict = field(default_factory=dict)
-    summary: RunSummary | None = None
     u: np.ndarray | None = None
     speeds: tuple = ()
 
@@ -114,6 +118,22 @@ class Solution:
     def success(self) -> bool:
         """The run reached the end of its span or a terminal event."""
         return self.status in (0, 1)
+
+    @property
+    def energy(self) -> np.ndarray:
+        return self.observed.values()[0]
+
+    @property
+    def energy_function(self) -> np.ndarray:
+        return self.observed.values()[1]
+
+    @property
+    def momenta(self) -> np.ndarray:
+        return self.observed.values()[2]
+
+    @property
+    def summary(self) -> RunSummary:
+        return self.observed.values()[3]
 
     @property
     def y(self) -> np.ndarray:
