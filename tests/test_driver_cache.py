@@ -85,7 +85,7 @@ def test_damaged_cache_files_of_a_driver_are_removed_and_the_driver_compiled_aga
     (index,) = tmp_path.rglob("sweep_rows.fold_rows-*.nbi")
     index.write_bytes(index.read_bytes()[:100])
     healed = probe()
-    assert healed["misses"] == 1 and len(healed["warnings"]) == 1 and index.name in healed["warnings"][0]
+    assert healed["misses"] == 1 and len(healed["warnings"]) == 1 and "sweep_rows." in healed["warnings"][0]
     assert probe() == {"misses": 0, "warnings": []}  # and cached afresh
 
 

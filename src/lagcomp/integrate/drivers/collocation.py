@@ -33,12 +33,16 @@ from lagcomp.integrate.drivers.kernel_types import (
 from lagcomp.integrate.drivers.run_state import (
     COUNTER_SLOTS,
     NFEV,
-    NREJECTED,
     NSTEPS,
     SINCE_SAVE,
     TIME,
 )
-from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
+from lagcomp.integrate.drivers.sweep_rows import (
+    NO_PAUSE,
+    SWEEP_ROWS,
+    fold_rows,
+    record_end,
+)
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.linear_solvers import lu_factor, lu_substitute
 
@@ -302,12 +306,4 @@ def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, en
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
             if code != Status.BUFFER_FULL:
                 break
-        for c in range(n2):
-            final[k, c] = y[c]
-        t_final[k] = clock[TIME]
-        status[k] = code
-        counts[k, 0] = counters[NFEV]
-        counts[k, 1] = counters[NSTEPS]
-        counts[k, 2] = counters[NREJECTED]
-        energy_stats[k, 0] = e0
-        energy_stats[k, 1] = deviation
+        record_end(k, y, clock, counters, code, e0, deviation, final, t_final, status, counts, energy_stats)

@@ -33,8 +33,14 @@ from lagcomp.integrate.drivers.kernel_types import (
     RHS,
     VECTOR,
 )
-from lagcomp.integrate.drivers.run_state import COUNTER_SLOTS, TIME
-from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
+from lagcomp.integrate.drivers.run_state import COUNTER_SLOTS
+from lagcomp.integrate.drivers.sweep_rows import (
+    NO_PAUSE,
+    SWEEP_ROWS,
+    first_row,
+    fold_rows,
+    record_end,
+)
 from lagcomp.integrate.status import Status
 
 #: Y0, P, projecting, t0, dt, n_steps, t_end, save_every, final, t_final, status, counts, dense, energy_stats.
@@ -44,34 +50,6 @@ FIXED_SWEEP = (MATRIX, MATRIX, INT, FLOAT, FLOAT, INT, FLOAT, INT,
 RUNGE_KUTTA_SWEEP = types.none(RHS, PROJECT, RESIDUAL, ENERGY, *FIXED_SWEEP, MATRIX, VECTOR, VECTOR, FLOAT)
 #: ``composition_sweep(rhs, energy, <FIXED_SWEEP>, weights)``.
 COMPOSITION_SWEEP = types.none(RHS, ENERGY, *FIXED_SWEEP, VECTOR)
-
-_FIRST_ROW = INT(MATRIX, types.float64[:, :, ::1], INT)
-_RECORD = types.none(INT, VECTOR, VECTOR, INDICES, INT, FLOAT, FLOAT, MATRIX, VECTOR, INDICES, types.int64[:, ::1],
-                     MATRIX)
-
-
-@njit(_FIRST_ROW, cache=True, error_model="numpy", nogil=True)
-def first_row(Y0, dense, k):
-    """Write the initial state of trajectory `k` as the first row of ``dense[k]`` (if it keeps rows); the next free row."""
-    if dense.shape[1] == 0:
-        return 0
-    for c in range(Y0.shape[1]):
-        dense[k, 0, c] = Y0[k, c]
-    return 1
-
-
-@njit(_RECORD, cache=True, error_model="numpy", nogil=True)
-def record_end(k, y, clock, counters, code, e0, deviation, final, t_final, status, counts, energy_stats):
-    """Write how trajectory `k` ended (state, time, status, counters, energies) into row k of the outputs."""
-    for c in range(y.shape[0]):
-        final[k, c] = y[c]
-    t_final[k] = clock[TIME]
-    status[k] = code
-    for c in range(3):
-        counts[k, c] = counters[c]
-    energy_stats[k, 0] = e0
-    energy_stats[k, 1] = deviation
-
 
 @njit(RUNGE_KUTTA_SWEEP, cache=True, error_model="numpy", nogil=True)
 def runge_kutta_sweep(rhs, project, constraint_residual, energy, Y0, P, projecting, t0, dt, n_steps, t_end,

@@ -69,13 +69,18 @@ from lagcomp.integrate.drivers.run_state import (
     EVENT_ROWS,
     NEXT_EVAL,
     NFEV,
-    NREJECTED,
     NSTEPS,
     SINCE_SAVE,
     STEP,
     TIME,
 )
-from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_rows
+from lagcomp.integrate.drivers.sweep_rows import (
+    NO_PAUSE,
+    SWEEP_ROWS,
+    fold_events,
+    fold_rows,
+    record_end,
+)
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.angles import reduced_angle
 
@@ -289,7 +294,6 @@ def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy,
     n_traj = Y0.shape[0]
     n2 = Y0.shape[1]
     n_events = directions.shape[0]
-    cap = event_t.shape[2]
     for k in range(n_traj):
         y = Y0[k].copy()
         p = P[k]
@@ -319,22 +323,7 @@ def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy,
                                        save_every, t_eval, ts, ys, directions, actions, ev_t, ev_y, ev_i,
                                        carry)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
-            for r in range(counters[EVENT_ROWS]):
-                e = ev_i[r]
-                j = event_count[k, e]
-                if j < cap:
-                    event_t[k, e, j] = ev_t[r]
-                    for c in range(n2):
-                        event_y[k, e, j, c] = ev_y[r, c]
-                event_count[k, e] = j + 1
+            fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_i, event_count, event_t, event_y, k)
             if code != Status.BUFFER_FULL:
                 break
-        for c in range(n2):
-            final[k, c] = y[c]
-        t_final[k] = clock[TIME]
-        status[k] = code
-        counts[k, 0] = counters[NFEV]
-        counts[k, 1] = counters[NSTEPS]
-        counts[k, 2] = counters[NREJECTED]
-        energy_stats[k, 0] = e0
-        energy_stats[k, 1] = deviation
+        record_end(k, y, clock, counters, code, e0, deviation, final, t_final, status, counts, energy_stats)
