@@ -15,7 +15,8 @@ pieces are timed by wrapping lagcomp's own stage functions, so they follow
 the pipeline as it is.  Warm start: a later fresh process that loads the
 model by name (`lagcomp.load`, no sympy) and runs it, timed from interpreter
 start (`bench/bench_compile.py` has the three-process version), beside the
-floor under it: a process that imports numpy and numba only; and numba's
+floors under it: a process that imports numpy and numba only, and one that
+loads a trivial function from numba's cache (no lagcomp); and numba's
 fixed cost of a cold start: its first compile in a fresh process.  Each case
 runs under a time limit; a case that exceeds it is reported, not waited for.
 Ratios: against lagcomp's cold start of the same case.
@@ -81,6 +82,14 @@ print(json.dumps(dict(stages, compile=t1 - t0, rhs=t2 - t1, kernels=kernels, run
 
 #: A fresh process that imports numpy and numba only: the floor under any warm start, and a gauge of the load.
 FLOOR_PROBE = "import json, numpy, numba; print(json.dumps({}))"
+
+#: A fresh process that loads one trivial function from numba's cache (no lagcomp): the floor under any warm
+#: start that runs numba-compiled code.  numba's first load from its cache sets up its target context (every
+#: implementation registry, which imports scipy.linalg for BLAS), whatever the function.
+CACHED_FLOOR_SOURCE = "import numba\n\n\n@numba.njit(cache=True)\ndef first(x):\n    return x + 1.0\n"
+CACHED_FLOOR_PROBE = ("import json, sys; sys.path.insert(0, sys.argv[1]); import cached_floor; "
+                      "cached_floor.first(1.0); "
+                      "print(json.dumps({}))")
 
 #: numba's fixed cost in a fresh process: its first compile (of a trivial function) sets up LLVM and the typing
 #: context, which a cold start's first kernel pays whatever the model.
@@ -184,6 +193,16 @@ def warm(case: str, cache_dir: str, repeats: int) -> list[dict] | str:
     return runs
 
 
+def cached_floor(repeats: int) -> list[float]:
+    """Seconds of `repeats` fresh processes running `CACHED_FLOOR_PROBE`, after one that fills numba's cache."""
+    with tempfile.TemporaryDirectory() as directory:
+        with open(os.path.join(directory, "cached_floor.py"), "w") as f:
+            f.write(CACHED_FLOOR_SOURCE)
+        env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(directory, "numba"))
+        runs = [run_probe([CACHED_FLOOR_PROBE, directory], 120, env) for _ in range(repeats + 1)][1:]
+    return [r["process"] for r in runs if isinstance(r, dict)]
+
+
 def _driver_rows(ctx, table: Table) -> None:
     """The one-time compile of the library drivers: total, then one row per module."""
     result = ctx.driver_compile
@@ -266,9 +285,15 @@ def section(ctx) -> Table:
                 table.add(case, "floor: a fresh process importing numpy and numba only (no lagcomp)",
                           f"{fmt(floor.median)} ({fmt(floor.low)}–{fmt(floor.high)})", f"{floor.median / total:.3f}×",
                           f"the warm start is {process.median / floor.median:.2f}× this; {len(floors)} runs")
+                cached = stat_of(cached_floor(len(runs)) or [float("nan")])
+                table.add(case, "floor: a fresh process loading one trivial function from numba's cache (no lagcomp)",
+                          f"{fmt(cached.median)} ({fmt(cached.low)}–{fmt(cached.high)})",
+                          f"{cached.median / total:.3f}×",
+                          f"the warm start is {process.median / cached.median:.2f}× this; {len(runs)} runs")
                 target = ctx.target("warm")
                 target.measured = (f"{process.median:.2f} s (min {process.low:.2f}; import lagcomp {imported:.2f} s; "
-                                   f"importing numpy and numba alone {floor.median:.2f} s), sympy imported: {sympy}")
+                                   f"importing numpy and numba alone {floor.median:.2f} s; loading one function from "
+                                   f"numba's cache alone {cached.median:.2f} s), sympy imported: {sympy}")
                 target.met = process.median <= WARM_TARGET and not sympy
         if case in ctx.peer_compile_cases():
             n = 2 if case == "double_pendulum" else int(case.rsplit("_", 1)[1])

@@ -286,9 +286,9 @@ def test_max_steps_then_resume(method):
 def test_drivers_use_the_numpy_error_model_everywhere():
     """Under numba's default error model a division by zero raises
     ZeroDivisionError out of the compiled loop; the drivers rely on inf/NaN."""
-    from lagcomp.integrate.drivers import embedded, events, fixed_step, fixed_sweeps, sweep_rows
+    from lagcomp.integrate.drivers import embedded, embedded_sweep, events, fixed_step, fixed_sweeps, sweep_rows
 
-    library = [embedded.embedded_run, embedded.sweep_embedded, sweep_rows.fold_rows, events.dense_state,
+    library = [embedded.embedded_run, embedded_sweep.sweep_embedded, sweep_rows.fold_rows, events.dense_state,
                events.event_crossings, events.event_root, events.record_events, fixed_step.runge_kutta_run,
                fixed_step.composition_run, fixed_sweeps.runge_kutta_sweep, fixed_sweeps.composition_sweep]
     assert all(f.targetoptions.get("error_model") == "numpy" for f in library)

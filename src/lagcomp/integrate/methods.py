@@ -110,7 +110,8 @@ def _embedded(name: str, tableau: Tableau, summary: str) -> Method:
     """An adaptive embedded Runge-Kutta pair: the library driver `embedded_run` with `tableau`'s data."""
     module = "lagcomp.integrate.drivers.embedded"
     return Method(name, tableau.order, True, f"{module}:embedded_run", tableau, summary,
-                  kernels=("rhs", "project", "constraint_residual", "event_values"), sweep=f"{module}:sweep_embedded")
+                  kernels=("rhs", "project", "constraint_residual", "event_values"),
+                  sweep=f"{module}_sweep:sweep_embedded")
 
 
 #: The Gauss-Legendre driver, its sweep loop and the kernels of the canonical equations they take.

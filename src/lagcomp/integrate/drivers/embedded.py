@@ -21,7 +21,7 @@ the pairs is data (`lagcomp.integrate.tableaux.driver_arguments`), in the spirit
   ``y(t + x h) = y + x (F0 + (1-x) (F1 + x (F2 + (1-x) (F3 + ...))))``).  Pairs without extra
   stages pass ``extra_A`` (0, s + 1) and ``extra_C`` (0,).
 
-`sweep_embedded` runs it over many trajectories (`lagcomp.integrate.sweep`).
+`lagcomp.integrate.drivers.embedded_sweep.sweep_embedded` runs it over many trajectories (`lagcomp.integrate.sweep`).
 
 Arguments, after the kernels (`kernel_types`) and before the tableau: the driver protocol of
 `lagcomp.integrate.drivers`, with
@@ -125,11 +125,8 @@ Sums over tables of the nonzero terms (no test per coefficient) took 1.01 and 1.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
-from numba import njit, types
-from numba.core.errors import NumbaExperimentalFeatureWarning
+from numba import njit
 
 from lagcomp.integrate.drivers.events import (
     DENSE_CONTD8,
@@ -138,7 +135,6 @@ from lagcomp.integrate.drivers.events import (
     record_events,
 )
 from lagcomp.integrate.drivers.kernel_types import (
-    ENERGY,
     EVENTS,
     FLOAT,
     INDICES,
@@ -151,7 +147,6 @@ from lagcomp.integrate.drivers.kernel_types import (
     VECTOR,
 )
 from lagcomp.integrate.drivers.run_state import (
-    COUNTER_SLOTS,
     EVENT_ROWS,
     NEXT_EVAL,
     NFEV,
@@ -160,13 +155,6 @@ from lagcomp.integrate.drivers.run_state import (
     SINCE_SAVE,
     STEP,
     TIME,
-)
-from lagcomp.integrate.drivers.sweep_rows import (
-    NO_PAUSE,
-    SWEEP_ROWS,
-    fold_events,
-    fold_rows,
-    record_end,
 )
 from lagcomp.integrate.status import Status
 from lagcomp.integrate.tableaux import ERROR_RMS
@@ -603,76 +591,3 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             else:
                 for ev in range(n_events):
                     g_old[ev] = g_new[ev]
-
-
-SWEEP_SIGNATURE = types.none(RHS, PROJECT, RESIDUAL, EVENTS, ENERGY,
-                             MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean,
-                             INDICES, INDICES, MATRIX, VECTOR, INDICES, types.int64[:, ::1], types.float64[:, :, ::1],
-                             MATRIX, types.int64[:, ::1], types.float64[:, :, ::1], types.float64[:, :, :, ::1],
-                             *TABLEAU)
-
-
-def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
-                   Y0, P, projecting, t0, t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial,
-                   directions, actions, final, t_final, status, counts, dense, energy_stats,
-                   event_count, event_t, event_y,
-                   A, B, C, error_weights, error_norm, error_exponent, dense_kind, dense_weights, extra_A, extra_C):
-    """Trajectory k from (t0, Y0[k]) with parameters P[k] to t_end by `embedded_run`, for every row k.
-
-    Each trajectory runs the resumable driver with a small row buffer (`SWEEP_ROWS`) and folds the
-    rows of every call into its outputs (`fold_rows`).  It releases the GIL: the caller runs disjoint
-    row ranges on several threads (`lagcomp.integrate.sweep`), and the result does not depend on how
-    many (trajectories share only the read-only inputs and write their own rows).  Outputs, per k:
-
-    * ``final[k]`` (2n,), ``t_final[k]``, ``status[k]``, ``counts[k]`` = [nfev, nsteps, nrejected];
-    * ``dense[k]`` (m, 2n): the saved rows in order (the ``t_eval`` rows, which hold the times after t0,
-      with the initial state first when ``save_initial``); m = 0 when not wanted;
-    * ``energy_stats[k]`` = [E0, largest |E - E0| over the saved rows], E = ``energy`` (T + V);
-    * ``event_count[k]`` (E,) occurrences of each event, the first ``cap`` of them in
-      ``event_t[k]`` (E, cap) and ``event_y[k]`` (E, cap, 2n).
-    """
-    n_traj = Y0.shape[0]
-    n2 = Y0.shape[1]
-    n_events = directions.shape[0]
-    for k in range(n_traj):
-        y = Y0[k].copy()
-        p = P[k]
-        clock = np.zeros(2)
-        clock[TIME] = t0
-        counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
-        residual = np.zeros(1)
-        ts = np.empty(SWEEP_ROWS)
-        ys = np.empty((SWEEP_ROWS, n2))
-        rows_e = max(n_events, 1)
-        ev_t = np.empty(rows_e)
-        ev_y = np.empty((rows_e, n2))
-        ev_i = np.empty(rows_e, dtype=np.int64)
-        e0 = energy(t0, y, p)
-        deviation = 0.0
-        row = 0
-        if dense.shape[1] > 0 and save_initial:
-            for c in range(n2):
-                dense[k, 0, c] = y[c]
-            row = 1
-        for e in range(n_events):
-            event_count[k, e] = 0
-        while True:
-            counters[EVENT_ROWS] = 0
-            code, n_saved = embedded_run(rhs, project, constraint_residual, event_values,
-                                         y, clock, counters, p, projecting, residual, t_end, rtol, atol, max_step,
-                                         max_steps, NO_PAUSE, save_every, t_eval, ts, ys,
-                                         directions, actions, ev_t, ev_y, ev_i,
-                                         A, B, C, error_weights, error_norm, error_exponent, dense_kind,
-                                         dense_weights, extra_A, extra_C)
-            deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
-            fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_i, event_count, event_t, event_y, k)
-            if code != Status.BUFFER_FULL:
-                break
-        record_end(k, y, clock, counters, code, e0, deviation, final, t_final, status, counts, energy_stats)
-
-
-# Passing the kernels on to `embedded_run` is numba's first-class function feature, which it labels
-# experimental with a warning at this compile (once per installation); the drivers rely on it by design.
-with warnings.catch_warnings():
-    warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-    sweep_embedded = njit(SWEEP_SIGNATURE, cache=True, error_model="numpy", nogil=True)(sweep_embedded)
