@@ -9,6 +9,7 @@ its loop over many trajectories, taking the same kernels and then ``energy``.
 from __future__ import annotations
 
 import functools
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -66,15 +67,31 @@ class Method:
     kernels: tuple[str, ...] = ()
     #: The library sweep loop (``"module:function"``) that runs this method over many trajectories.
     sweep: str | None = None
-    #: Whether `bound_driver` binds the kernels as `AddressedKernel` (cheaper calls of the driver, each kernel
-    #: call one level deeper: worth it around large kernels).
+    #: Whether `bound_driver` binds the kernels as `AddressedKernel` by default (cheaper calls of the driver,
+    #: each kernel call one level deeper: worth it around large kernels).
     addressed_kernels: bool = False
 
-    def bound_driver(self, kernels):
-        """The driver with the model's `kernels` (its generated module) bound as its first arguments."""
+    def bound_driver(self, kernels, addressed: bool | None = None):
+        """The driver with the model's `kernels` (its generated module) bound as its first arguments, as
+        `AddressedKernel`s if `addressed` (None: `addressed_kernels`).
+
+        Bound once per module, method and binding (`_BOUND_DRIVERS`): the `AddressedKernel`s then look
+        their addresses up at the first run only, not at every run.
+        """
+        addressed = self.addressed_kernels if addressed is None else addressed
+        try:
+            bound = _BOUND_DRIVERS.setdefault(kernels, {})
+        except TypeError:  # not weakly referenceable (a stand-in for a module): bound afresh
+            return self._bind(kernels, addressed)
+        key = (self.name, addressed)
+        if key not in bound:
+            bound[key] = self._bind(kernels, addressed)
+        return bound[key]
+
+    def _bind(self, kernels, addressed: bool):
         driver = library_function(self.driver)
         bound = [getattr(kernels, k) for k in self.kernels]
-        if self.addressed_kernels:
+        if addressed:
             kinds = driver.signatures[0]
             bound = [AddressedKernel(value, kind) if isinstance(kind, types.FunctionType) else value
                      for value, kind in zip(bound, kinds, strict=False)]
@@ -160,6 +177,10 @@ METHODS = {
 #: Other accepted spellings.
 ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "rk23": "bs3", "leapfrog": "verlet", "stormer_verlet": "verlet",
            "midpoint": "gauss1", "gl1": "gauss1", "gl2": "gauss2", "gl3": "gauss3"}
+
+
+#: {generated module: {(method name, addressed): its bound driver}} (`Method.bound_driver`).
+_BOUND_DRIVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def library_function(reference: str):

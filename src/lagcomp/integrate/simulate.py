@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import math
 import time
+import weakref
 
 import numpy as np
 
@@ -32,6 +33,14 @@ from lagcomp.integrate.status import Status
 FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
 #: Target wall time of one driver call, and the step budget of the first one.
 CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
+#: Target wall time of a run's first driver call once the model's step rate is known (`_STEP_RATES`):
+#: that call binds the kernels by address (`_bound_drivers`), cheap to make and ~1% slower per step, so
+#: it is kept short; a run that ends within it takes one call.
+FIRST_CALL_SECONDS = 0.0125
+#: Steps per second of each model's last call that spent its whole step budget, per method, {model:
+#: {method name: steps/s}}: a model's next run sizes its calls from it rather than from `FIRST_BUDGET`
+#: (each call costs up to ~0.15 ms of numba unboxing its kernels: a tenth of a 5000-step DOP853 run).
+_STEP_RATES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions):
@@ -40,27 +49,36 @@ def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions)
     if options.first_step is not None:
         state.clock[STEP] = options.first_step
     events = options.t_eval_after_start()
-    driver, tableau_arrays = m.bound_driver(kernels), options.driver_arguments()
+    drivers, tableau_arrays = _bound_drivers(m, kernels), options.driver_arguments()
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
         tableau_arrays = (np.zeros(state.y.size),)
     t1, rtol, atol, max_step = options.t1, options.rtol, options.atol, options.max_step
 
-    def advance(ts, ys, pause_at, event_buffers):
-        return driver(state.y, state.clock, state.counters, p, *run_args, t1, rtol, atol, max_step,
-                      options.max_steps, pause_at, options.save_every, events, ts, ys, options.directions,
-                      options.actions, *event_buffers, *tableau_arrays)
+    def advance(ts, ys, pause_at, event_buffers, first_call):
+        return drivers[first_call](state.y, state.clock, state.counters, p, *run_args, t1, rtol, atol, max_step,
+                                   options.max_steps, pause_at, options.save_every, events, ts, ys,
+                                   options.directions, options.actions, *event_buffers, *tableau_arrays)
     return advance, (len(events) + 1 if options.t_eval is not None else None)
 
 
 def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions):
     """The chunk call of a fixed-step method, and the rows its output will need."""
-    driver, coefficients = options.method.bound_driver(kernels), options.driver_arguments()
+    drivers, coefficients = _bound_drivers(options.method, kernels), options.driver_arguments()
     t0, t1, dt, n_steps = options.t0, options.t1, options.dt, options.n_steps
 
-    def advance(ts, ys, pause_at, event_buffers):
-        return driver(state.y, state.clock, state.counters, p, *run_args, t0, dt, n_steps, pause_at, t1,
-                      options.save_every, ts, ys, *coefficients)
+    def advance(ts, ys, pause_at, event_buffers, first_call):
+        return drivers[first_call](state.y, state.clock, state.counters, p, *run_args, t0, dt, n_steps, pause_at,
+                                   t1, options.save_every, ts, ys, *coefficients)
     return advance, n_steps // options.save_every + 1
+
+
+def _bound_drivers(m, kernels) -> tuple:
+    """The driver of method `m` bound to `kernels`, for later calls of a run and for its first (indexed by
+    `first_call`): the first binds them as `AddressedKernel`s, which numba unboxes in ~10 µs instead of
+    ~35 µs per kernel (a tenth of a short run), at ~1% per step of a small model (kernel calls through their
+    C wrappers); the later, long calls (`CALL_SECONDS`) bind the dispatchers, called at their native entry.
+    """
+    return m.bound_driver(kernels), m.bound_driver(kernels, addressed=True)
 
 
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=None,
@@ -93,7 +111,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
     first = _numba_stage(model, m, progress)
     max_rows = options.memory_limit // run_bytes(1, model.n, model.k) if record == "trajectory" else math.inf
-    status = _run(advance, state, t1, (chunk, max_rows), recorder, n_events, event_parts, progress, first)
+    status = _run(advance, state, t1, (chunk, max_rows), recorder, n_events, event_parts, progress, first,
+                  (_STEP_RATES.setdefault(model, {}), m.name))
     if status == Status.RHS_FAILED and state.nsteps == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
@@ -128,15 +147,22 @@ def _numba_stage(model, m, progress):
                        f"preparing {model.name}", progress)
 
 
-def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, progress, first=None) -> int:
+def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, progress, first=None,
+         learned=None) -> int:
     """Call the driver until the run ends; returns the run's `Status`.
 
     `first`, if not None, is a context around the first call (numba compiles there: `_numba_stage`).
     `chunk` is (rows of the first output buffer, rows the run may keep before it stops with MEMORY_FULL).
+    `learned`, if not None, is (rates, key): ``rates[key]``, if there, is the steps per second that sizes
+    the first call (`FIRST_CALL_SECONDS`) and the second (`CALL_SECONDS`); the rate of each call that
+    spends its whole budget outside numba's compilation is stored there for the next run.
     """
     chunk, max_rows = chunk
     n = state.y.size
-    budget, t0 = FIRST_BUDGET, state.t
+    rates, key = learned if learned is not None else ({}, None)
+    known = rates.get(key)
+    budget = FIRST_BUDGET if known is None else max(16, int(known * FIRST_CALL_SECONDS))
+    t0, first_call = state.t, True
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
         ts, ys = np.empty(chunk), np.empty((chunk, n))
         while True:
@@ -148,8 +174,10 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
             with first or contextlib.nullcontext() as stages:
                 if stages is not None:
                     stages.start(stages.names[0])
-                status, n_saved = advance(ts, ys, min(steps_before + budget, np.iinfo(np.int64).max), event_buffers)
-            if first is not None:  # numba was compiling: the run's bar times the run from here
+                status, n_saved = advance(ts, ys, min(steps_before + budget, np.iinfo(np.int64).max), event_buffers,
+                                          first_call)
+            compiled = first is not None
+            if compiled:  # numba was compiling: the run's bar times the run from here
                 first, bar.started = None, time.perf_counter()
             elapsed = time.perf_counter() - started
             recorder.add(ts[:n_saved], ys[:n_saved])
@@ -162,8 +190,13 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
                 chunk = min(2 * chunk, MAX_CHUNK)
                 ts, ys = np.empty(chunk), np.empty((chunk, n))
             if status == Status.PAUSED and state.nsteps - steps_before == budget:
-                budget = int(budget * min(8.0, max(0.5, CALL_SECONDS / max(elapsed, 1e-6))))
-                budget = max(budget, 16)
+                if not compiled:
+                    rates[key] = budget / max(elapsed, 1e-6)
+                if first_call and known is not None:
+                    budget = max(16, int(known * CALL_SECONDS))
+                else:
+                    budget = max(16, int(budget * min(8.0, max(0.5, CALL_SECONDS / max(elapsed, 1e-6)))))
+            first_call = False
             if not Status(status).call_again:
                 if status == Status.DONE and interrupted[0]:
                     return Status.INTERRUPTED  # Ctrl-C in the last call (often numba compiling): reported
