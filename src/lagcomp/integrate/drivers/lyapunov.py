@@ -51,14 +51,13 @@ from lagcomp.integrate.drivers.kernel_types import (
     VELOCITIES,
 )
 from lagcomp.integrate.status import Status
-from lagcomp.integrate.tableaux import RK4
+from lagcomp.integrate.tableaux import RK4, over_common_denominator
 
 #: RK4's nodes c, its stage coefficients a[s, s-1] (the only nonzero ones), and its weights as
-#: numerators over their common denominator (B * 6 is exactly (1, 2, 2, 1)).
+#: numerators over their common denominator (`tableaux.over_common_denominator`: 1, 2, 2, 1 over 6).
 _C = RK4.C
 _A = np.diag(RK4.A, -1).copy()
-_DENOMINATOR = 6.0
-_WEIGHTS = RK4.B * _DENOMINATOR
+_WEIGHTS, _DENOMINATOR = over_common_denominator(RK4.B)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
