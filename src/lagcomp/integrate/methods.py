@@ -67,18 +67,14 @@ class Method:
     kernels: tuple[str, ...] = ()
     #: The library sweep loop (``"module:function"``) that runs this method over many trajectories.
     sweep: str | None = None
-    #: Whether `bound_driver` binds the kernels as `AddressedKernel` by default (cheaper calls of the driver,
-    #: each kernel call one level deeper: worth it around large kernels).
-    addressed_kernels: bool = False
-
-    def bound_driver(self, kernels, addressed: bool | None = None):
-        """The driver with the model's `kernels` (its generated module) bound as its first arguments, as
-        `AddressedKernel`s if `addressed` (None: `addressed_kernels`).
+    def bound_driver(self, kernels, addressed: bool = False):
+        """The driver with the model's `kernels` (its generated module) bound as its first arguments: their
+        dispatchers, or if `addressed` `AddressedKernel`s (cheaper for numba to unbox at each driver call,
+        each kernel call one level deeper; `lagcomp.integrate.simulate` uses them for a run's first call).
 
         Bound once per module, method and binding (`_BOUND_DRIVERS`): the `AddressedKernel`s then look
         their addresses up at the first run only, not at every run.
         """
-        addressed = self.addressed_kernels if addressed is None else addressed
         try:
             bound = _BOUND_DRIVERS.setdefault(kernels, {})
         except TypeError:  # not weakly referenceable (a stand-in for a module): bound afresh
@@ -170,7 +166,7 @@ METHODS = {
                default_rtol=EPS, default_atol=None, rtol_min=EPS,
                # the model's Taylor kernel, its event values, and its data: periodic coordinates, work rows
                kernels=("taylor_coefficients", "event_values", "TAYLOR_PERIODIC", "TAYLOR_WORK"),
-               sweep="lagcomp.integrate.drivers.taylor:sweep_taylor", addressed_kernels=True),
+               sweep="lagcomp.integrate.drivers.taylor:sweep_taylor"),
     )
 }
 

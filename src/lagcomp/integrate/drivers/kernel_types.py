@@ -73,7 +73,8 @@ class AddressedKernel:
     this one costs ~5 µs.  The driver then calls the kernel's cfunc wrapper, the C-ABI entry around the
     same compiled function, one call deeper than the native entry it calls for a dispatcher: no
     measurable cost per step around the Taylor kernel, 1.5% per step of DOP853 around the simple
-    pendulum's rhs (which is why `lagcomp.integrate.methods.Method` asks for it per method).
+    pendulum's rhs (which is why `lagcomp.integrate.simulate` uses it for a run's short first call
+    only; `python -m bench.bench_call_cost` measures both costs).
 
     The address is looked up when numba first asks for it, at the first call of the driver, as for a
     dispatcher, so the kernel compiles where a dispatcher's would (under the run's compile stage).
