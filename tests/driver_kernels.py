@@ -11,6 +11,10 @@ inf/NaN for the drivers to detect.  Test problems, selected by p[0]:
 5. at rest: y' = 0, so that every norm of f vanishes (N = 2).
 
 Events: g0 = y[0] (the oscillator's position), g1 = t - p[1].
+
+`project` and `constraint_residual` are the no-op hooks of an unconstrained model; the fixed-step
+tests (tests/test_fixed_step_drivers.py) use `circle_projection` and `circle_residual` instead, the
+unit circle being the oscillator's orbit from (1, 0), and `oscillator_energy`.
 """
 
 import numpy as np
@@ -61,3 +65,22 @@ def event_values(t, y, p, out):
         out[0] = y[0]
     if out.shape[0] > 1:
         out[1] = t - p[1]
+
+
+@njit(cache=True, error_model="numpy")
+def circle_projection(t, y, p):
+    """Onto the unit circle y0² + y1² = 1 (the oscillator's orbit from (1, 0))."""
+    r = np.sqrt(y[0] * y[0] + y[1] * y[1])
+    y[0] /= r
+    y[1] /= r
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def circle_residual(t, y, p):
+    return abs(y[0] * y[0] + y[1] * y[1] - 1.0)
+
+
+@njit(cache=True, error_model="numpy")
+def oscillator_energy(t, y, p):
+    return 0.5 * (y[0] * y[0] + y[1] * y[1])

@@ -1,18 +1,21 @@
 """The library's explicit fixed-step drivers and their sweep loops (lagcomp.integrate.drivers.fixed_step, fixed_sweeps).
 
 The drivers take the kernels as function values, so the tests hand them small hand-written njit
-kernels, selected by ``p[0]`` as in tests/test_drivers.py, and check them against closed forms,
+kernels (tests/driver_kernels.py), selected by ``p[0]``, and check them against closed forms,
 against the textbook formula computed in Python, and against themselves (a run cut into calls by
 a small buffer or a step budget is the uninterrupted run).
 """
 
 import numpy as np
 import pytest
-from numba import njit
 
 from lagcomp.integrate import compositions, tableaux
 from lagcomp.integrate.drivers import fixed_step, fixed_sweeps
 from lagcomp.integrate.status import Status
+from tests.driver_kernels import circle_projection as project
+from tests.driver_kernels import circle_residual as constraint_residual
+from tests.driver_kernels import oscillator_energy as energy
+from tests.driver_kernels import rhs
 
 # Test problems, selected by p[0]:
 #   0  harmonic oscillator  y0' = y1, y1' = -y0 (separable: q = y0, q̇ = y1)
@@ -22,41 +25,6 @@ from lagcomp.integrate.status import Status
 OSCILLATOR, NAN_AFTER, SINGULAR_AFTER, BLOWUP = 0.0, 2.0, 3.0, 4.0
 NO_PAUSE = np.iinfo(np.int64).max
 COMPOSITIONS = {c.name: c for c in (compositions.VERLET, compositions.YOSHIDA4, compositions.YOSHIDA6)}
-
-
-@njit(cache=True, error_model="numpy")
-def rhs(t, y, p, out):
-    kind = int(p[0])
-    if kind == 4:
-        out[0] = 1.0 / (1.0 - t)
-        out[1] = 0.0
-        return 0
-    out[0] = y[1]
-    out[1] = -y[0]
-    if kind == 2 and t > p[1]:
-        out[1] = np.nan
-    if kind == 3 and t > p[1]:
-        return 3
-    return 0
-
-
-@njit(cache=True, error_model="numpy")
-def project(t, y, p):
-    """Onto the unit circle y0² + y1² = 1 (the oscillator's orbit from (1, 0))."""
-    r = np.sqrt(y[0] * y[0] + y[1] * y[1])
-    y[0] /= r
-    y[1] /= r
-    return 0
-
-
-@njit(cache=True, error_model="numpy")
-def constraint_residual(t, y, p):
-    return abs(y[0] * y[0] + y[1] * y[1] - 1.0)
-
-
-@njit(cache=True, error_model="numpy")
-def energy(t, y, p):
-    return 0.5 * (y[0] * y[0] + y[1] * y[1])
 
 
 def exact(t):
