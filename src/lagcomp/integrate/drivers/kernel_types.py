@@ -28,6 +28,9 @@ OUTCOME = types.UniTuple(types.int64, 2)
 
 #: ``rhs(t, y, p, out) -> int``: ``out = y'``; 0, or k > 0 when the mass matrix was singular at pivot k.
 RHS = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, VECTOR))
+#: ``rhs_jacobian(t, y, p, out) -> int``: ``out`` (N, N) = ∂f/∂y of y' = f(t, y), row i the component f_i,
+#: column j the variable y_j, exact (emitted from the symbolic equations); 0, or k > 0 as ``rhs`` returns.
+RHS_JACOBIAN = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, MATRIX))
 #: ``project(t, y, p) -> int``: moves ``y`` onto the constraints in place; 0, or k > 0 when impossible.
 PROJECT = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR))
 #: ``constraint_residual(t, y, p) -> float``: the largest constraint residual at ``y`` (0.0 without constraints).
