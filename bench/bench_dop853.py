@@ -14,7 +14,13 @@ scratch in numbalsoda's data array after the parameters).  Prints:
 2. wall time of lagcomp's DOP853 driver (``embedded_run``) called directly (no Python around
    it), of ``Model.simulate`` with its default options (the same driver plus
    the run's fixed cost), and of numbalsoda's dop853, timed round-robin;
-   ratios are medians of per-round ratios against numbalsoda.
+   ratios are medians of per-round ratios against numbalsoda;
+3. where the time goes: each right-hand side alone, called in a compiled loop through a function
+   value as the drivers call it (ns per call), and what is left per f-evaluation for the rest of
+   each integrator (its run time over its f-evaluations, less one rhs call); numbalsoda's row for the
+   double pendulum only (the chain's hand-written rhs takes its scratch from numbalsoda's data array).  The run of a
+   driver with no cost of its own would take f-evaluations × rhs: that bound, over numbalsoda's
+   time, is the last column.
 
 numbalsoda comes with the bench extra (``pip install '.[bench]'``, it needs gfortran).
 """
@@ -32,6 +38,7 @@ import numpy as np
 import lagcomp as lc
 from bench import systems
 from lagcomp import examples
+from lagcomp.integrate.drivers.kernel_types import RHS, VECTOR
 from lagcomp.integrate.methods import get_method
 
 TOL = 1e-10
@@ -42,7 +49,7 @@ CHAIN = 10
 class Case:
     """One benchmark problem: the lagcomp system, the initial state, the output times (the first is the
     start), and numbalsoda's right-hand side: a cfunc of the hand-written numba rhs (bench/systems.py) that
-    counts its calls in ``data[counter]``."""
+    counts its calls in ``data[counter]``; ``hand_written_rhs`` that rhs as ``rhs(t, y, p, out)``, where it is one."""
 
     def __init__(self, name: str):
         from numbalsoda import lsoda_sig
@@ -54,6 +61,7 @@ class Case:
             self.data = np.array([1.0, 1.0, 1.0, 1.0, 9.81, 0.0])   # m1, m2, l1, l2, g; the call counter
             self.counter = 5
             rhs = systems.double_pendulum_rhs
+            self.hand_written_rhs = rhs
 
             @numba.cfunc(lsoda_sig)
             def f(t, u, du, data):
@@ -68,6 +76,7 @@ class Case:
             self.data = np.concatenate([np.ones(2 * n), [9.81, 0.0], np.zeros(n * n + 2 * n)])
             self.counter = n_p
             rhs, n_data = systems.chain_rhs_ws, self.data.shape[0]
+            self.hand_written_rhs = None    # its scratch is numbalsoda's data: no rhs(t, y, p, out) alone
 
             @numba.cfunc(lsoda_sig)
             def f(t, u, du, data):
@@ -110,6 +119,28 @@ def driver_run(model, case: Case):
     return run
 
 
+@numba.njit(numba.float64(RHS, VECTOR, VECTOR, numba.int64))
+def _rhs_loop(rhs, y0, p, calls):
+    """``calls`` calls of ``rhs`` through a function value at states that differ in y[0] (no call folded)."""
+    y, out, total = y0.copy(), np.empty_like(y0), 0.0
+    for i in range(calls):
+        y[0] = y0[0] + 1e-9 * i
+        rhs(0.0, y, p, out)
+        total += out[-1]
+    return total
+
+
+def rhs_nanoseconds(rhs, y0, p, rounds: int, calls: int = 200_000) -> float:
+    """Median ns per call of ``rhs(t, y, p, out)`` in `_rhs_loop`."""
+    _rhs_loop(rhs, y0, p, 10)
+    samples = []
+    for _ in range(rounds):
+        start = time.perf_counter()
+        _rhs_loop(rhs, y0, p, calls)
+        samples.append((time.perf_counter() - start) / calls * 1e9)
+    return statistics.median(samples)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=15)
@@ -133,6 +164,11 @@ def main() -> None:
                 for _ in range(10):
                     run()
                 times[name].append((time.perf_counter() - start) / 10 * 1e3)
+        rhs_ns = {"lagcomp DOP853 driver, called directly":
+                  rhs_nanoseconds(model.kernels.rhs, case.y0, model.parameter_vector(), args.rounds)}
+        if case.hand_written_rhs is not None:
+            rhs_ns["numbalsoda dop853"] = rhs_nanoseconds(case.hand_written_rhs, case.y0,
+                                                          case.data[:case.counter].copy(), args.rounds)
     baseline = times["numbalsoda dop853"]
     print("| run | f evaluations | ms, median (min–max) | × numbalsoda (median of per-round ratios) |")
     print("|---|---|---|---|")
@@ -140,6 +176,15 @@ def main() -> None:
         ratio = statistics.median(a / b for a, b in zip(samples, baseline, strict=True))
         print(f"| {name} | {evaluations[name]:,} | {statistics.median(samples):.2f} ({min(samples):.2f}–"
               f"{max(samples):.2f}) | {ratio:.2f}× |")
+    print()
+    print("| integrator | rhs alone, ns per call | rest, ns per f-evaluation "
+          "| f-evaluations × rhs, × numbalsoda's run |")
+    print("|---|---|---|---|")
+    numbalsoda_ms = statistics.median(baseline)
+    for run, ns in rhs_ns.items():
+        per_eval = statistics.median(times[run]) * 1e6 / evaluations[run]
+        bound = evaluations[run] * ns * 1e-6 / numbalsoda_ms
+        print(f"| {run} | {ns:.1f} | {per_eval - ns:.1f} | {bound:.2f}× |")
 
 
 if __name__ == "__main__":
