@@ -12,10 +12,12 @@ Three processes share one numba cache (NUMBA_CACHE_DIR):
    link sin and cos from numba's cache) and runs the same.
 
 Runs 1 and 3 must be bitwise equal (they differed in the last bits before sin and cos had
-``fastmath=False``).  The drivers compile once, in process 1: about 30 s in all.  And every
-kernel_support function that numba does not inline into its caller has flags of its own.
+``fastmath=False``).  Process 1 starts from a copy of this process's numba cache of the drivers
+(`copy_driver_cache`), which call sin and cos only through the kernels: without it, compiling the
+Taylor and DOP853 drivers took 30 of the test's 36 s.  And every kernel_support function that numba
+does not inline into its caller has flags of its own.
 
-    python -m tests.test_kernel_support_flags runs OUT CACHE_DIR   # process 1 or 3
+    python -m tests.test_kernel_support_flags runs OUT CACHE_DIR [DRIVER_CACHE]   # process 1 or 3
     python -m tests.test_kernel_support_flags trig                 # process 2
 """
 
@@ -23,6 +25,7 @@ from __future__ import annotations
 
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
 
@@ -39,6 +42,18 @@ def runs(cache_dir) -> dict[str, np.ndarray]:
 
     model = lc.compile(get("double_pendulum"), cache_dir=cache_dir)
     return {method: model.simulate((0.0, 10.0), method=method, **OPTIONS).y for method in ("taylor", "dop853")}
+
+
+DRIVERS = ROOT / "src" / "lagcomp" / "integrate" / "drivers" / "__init__.py"
+
+
+def copy_driver_cache(source: str) -> None:
+    """Copy the drivers' numba cache files (and the stamp of what they were compiled from) from `source`
+    into this process's numba cache, before anything imports a driver."""
+    from lagcomp import numba_cache
+
+    if source and pathlib.Path(source).is_dir():
+        shutil.copytree(source, numba_cache.cache_directory(DRIVERS), dirs_exist_ok=True)
 
 
 def recompile_trig_outside_kernels() -> None:
@@ -71,7 +86,10 @@ def _run(tmp_path, *args):
 
 
 def test_runs_are_bitwise_equal_whoever_compiled_sin_and_cos(tmp_path):
-    _run(tmp_path, "runs", tmp_path / "first.npz", tmp_path / "cache_first")
+    from lagcomp import numba_cache
+
+    drivers_cache = numba_cache.cache_directory(DRIVERS) or ""
+    _run(tmp_path, "runs", tmp_path / "first.npz", tmp_path / "cache_first", drivers_cache)
     _run(tmp_path, "trig")
     _run(tmp_path, "runs", tmp_path / "second.npz", tmp_path / "cache_second")
     first, second = np.load(tmp_path / "first.npz"), np.load(tmp_path / "second.npz")
@@ -83,4 +101,5 @@ if __name__ == "__main__":
     if sys.argv[1] == "trig":
         recompile_trig_outside_kernels()
     else:
+        copy_driver_cache(sys.argv[4] if len(sys.argv) > 4 else "")
         np.savez(sys.argv[2], **runs(sys.argv[3]))
