@@ -194,6 +194,7 @@ def build(system, cache: Cache, key: str, eom=None, progress=None) -> Entry:
         "constraints": list(eom.constraint_names),
         "holonomic": list(eom.holonomic),
         "separable": eom.separable,
+        "holonomic_separable": eom.holonomic_separable,
         "operations": {**{k.name: k.operation_count for k in ir.kernels},
                        **({"taylor_coefficients": program["operations"]} if program else {})},
         "taylor_program": program,
@@ -247,6 +248,9 @@ class Model:
         Constraint names, the order of the multipliers λ (reactions).
     separable : bool
         Whether the explicit symplectic methods (verlet, yoshida4, yoshida6) apply.
+    holonomic_separable : bool
+        Whether RATTLE (method "rattle") applies: separable apart from constraints that are
+        all holonomic and scleronomic, Φ(q) = 0 (`lagcomp.mechanics.lagrange.EOM`).
     operations : dict
         Arithmetic operations per kernel after CSE.
     """
@@ -271,6 +275,7 @@ class Model:
         self.constraints = tuple(entry.metadata["constraints"])
         self.holonomic = tuple(entry.metadata["holonomic"])
         self.separable = bool(entry.metadata["separable"])
+        self.holonomic_separable = bool(entry.metadata["holonomic_separable"])
         self.operations = dict(entry.metadata["operations"])
         self._taylor_program = entry.metadata.get("taylor_program")  # for batched Taylor sweeps (taylor_lanes)
 
