@@ -151,7 +151,8 @@ def _not_holonomic_separable(model, m) -> str:
         better = "verlet (RATTLE without constraints is Störmer-Verlet)" if model.separable else \
             f"gauss2 (symplectic for any Lagrangian) or {method_names(lambda m: m.any_state)}"
         return f"`{m.name}` integrates constrained systems; {model.name!r} has no constraints: use {better}."
-    nonholonomic = [name for name, holonomic in zip(model.constraints, model.holonomic) if not holonomic]
+    nonholonomic = [name for name, holonomic in zip(model.constraints, model.holonomic, strict=True)
+                    if not holonomic]
     why = (f"its constraint(s) {nonholonomic} are nonholonomic" if nonholonomic else
            "its mass matrix depends on the coordinates or time, its forces on the velocities, or a constraint "
            "on time")

@@ -74,6 +74,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, types
 
+from lagcomp.integrate.drivers.fixed_step import FIXED_STEP_RUN
+from lagcomp.integrate.drivers.fixed_sweeps import FIXED_SWEEP
 from lagcomp.integrate.drivers.kernel_types import (
     CONSTRAINT_MATRIX,
     CONSTRAINT_RESIDUALS,
@@ -87,10 +89,20 @@ from lagcomp.integrate.drivers.kernel_types import (
     OUTCOME,
     VECTOR,
 )
-from lagcomp.integrate.drivers.fixed_step import FIXED_STEP_RUN
-from lagcomp.integrate.drivers.fixed_sweeps import FIXED_SWEEP
-from lagcomp.integrate.drivers.run_state import COUNTER_SLOTS, NFEV, NSTEPS, SINCE_SAVE, TIME
-from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, first_row, fold_rows, record_end
+from lagcomp.integrate.drivers.run_state import (
+    COUNTER_SLOTS,
+    NFEV,
+    NSTEPS,
+    SINCE_SAVE,
+    TIME,
+)
+from lagcomp.integrate.drivers.sweep_rows import (
+    NO_PAUSE,
+    SWEEP_ROWS,
+    first_row,
+    fold_rows,
+    record_end,
+)
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.linear_solvers import lu_factor, lu_substitute
 
