@@ -130,6 +130,11 @@ def test_rattle_refuses_other_systems_and_says_why(compiled, name, needle):
     assert needle in str(caught.value)
 
 
+def test_rattle_refuses_projection(cartesian):
+    with pytest.raises(OptionError, match="without projection"):
+        cartesian.simulate((0.0, 1.0), method="rattle", dt=0.01, projection=True)
+
+
 def test_the_explicit_symplectic_methods_point_a_holonomic_separable_system_to_rattle(cartesian):
     with pytest.raises(OptionError, match="Use rattle"):
         cartesian.simulate((0.0, 1.0), method="verlet", dt=0.01)

@@ -254,11 +254,15 @@ def run_options(model, t_span, *, method="dop853", dt=None, rtol=None, atol=None
     t0, t1 = time_span(t_span)
     m = get_method(method)
     check_method(model, m)
+    if m.holonomic_separable_only and projection:
+        raise OptionError(f"`{m.name}` holds the constraints to round-off at every step without projection; projecting "
+                          "would break its symplectic structure. Leave `projection` unset.")
     common = dict(
         method=m, t0=t0, t1=t1, memory_limit=memory_limit,
         save_every=count(save_every, "save_every"), max_steps=count(max_steps, "max_steps"),
         implicit_solver=implicit_solver_for(m, implicit_solver),
-        projecting=int(bool(model.residual_labels) and (not m.adaptive if projection is None else bool(projection))),
+        projecting=int(bool(model.residual_labels) and not m.holonomic_separable_only
+                       and (not m.adaptive if projection is None else bool(projection))),
     )
     common["directions"], common["actions"] = event_arguments(model, m, events)
     check_rows = check_rows or (lambda times, where: None)

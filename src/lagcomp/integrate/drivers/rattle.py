@@ -60,10 +60,11 @@ G(q_1) v_1 = 0 whatever the small residual of (q_0, v_0), so every state after t
 constraints to round-off.
 
 The driver protocol is `fixed_step`'s (step times from the step index, ``BUFFER_FULL``/``PAUSED``
-before a step, continuation bitwise equal to one uninterrupted call).  ``projecting`` is ignored: the
-constraints hold without projection, which would break the symplectic structure.  ``residual_max[0]``
-keeps the largest constraint residual (position and velocity level) of the accepted states and a
-second entry, if any, stops the run with ``RESIDUAL_EXCEEDED`` as in `fixed_step.runge_kutta_run`.
+before a step, continuation bitwise equal to one uninterrupted call).  ``projecting`` is ignored
+(`run_options` passes 0 and refuses ``projection=True``): the constraints hold without projection,
+which would break the symplectic structure.  ``residual_max[0]`` keeps the largest constraint
+residual (position and velocity level) of the accepted states and a second entry, if any, stops the
+run with ``RESIDUAL_EXCEEDED`` as in `fixed_step.runge_kutta_run`.
 ``counters`` = [nfev (``forcing`` calls), nsteps, 0, _, since_save, _]; ``clock`` = [t, _].
 A singular M or S (dependent constraints) stops the run with ``RHS_FAILED``, a non-finite state with
 ``NONFINITE``, ``y`` keeping the last good state.
