@@ -103,6 +103,11 @@ def test_rattle_energy_error_stays_bounded_over_1e5_steps(cartesian):
     assert last <= 1.5 * first, (first, last)
 
 
+def test_rattle_energy_error_is_of_order_2(cartesian):
+    errors = [_bounded_energy_error(cartesian, 100.0, h, 1000)[0] for h in (0.02, 0.01)]
+    assert abs(np.log2(errors[0] / errors[1]) - 2.0) < 0.1, errors
+
+
 @pytest.mark.slow
 def test_rattle_energy_error_stays_bounded_over_1e6_steps(cartesian):
     largest, first, last = _bounded_energy_error(cartesian, 10_000.0, 0.01, 10_000)

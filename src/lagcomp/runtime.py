@@ -524,8 +524,11 @@ class Model:
         method : str
             Integration method (default "dop853"), a name of
             `lagcomp.integrate.methods.METHODS`: the adaptive embedded pairs dop853,
-            dopri5, tsit5 and bs3, taylor, rk4, verlet, yoshida4/6, gauss1/2/3; verlet and yoshida4/6 are
-            explicit symplectic methods for separable systems (`Model.separable`),
+            dopri5, tsit5 and bs3, taylor, rk4, verlet, yoshida4/6, rattle, gauss1/2/3; verlet and yoshida4/6
+            are explicit symplectic methods for separable systems (`Model.separable`),
+            rattle their constrained counterpart of order 2 for separable systems with holonomic,
+            time-independent constraints (`Model.holonomic_separable`; the constraints hold to round-off
+            without projection),
             gauss1/2/3 implicit symplectic ones for any unconstrained system,
             taylor an adaptive Taylor-series method (unconstrained systems of
             smooth functions; machine precision by default).
