@@ -175,9 +175,9 @@ def rattle_run(forcing, mass_matrix, constraint_residuals, constraint_matrix, k,
         mass_matrix(clock[TIME], y, p, m_lu)
         if lu_factor(m_lu, m_pivots) != 0:
             return Status.RHS_FAILED, n_saved
-        singular = _at_position(forcing, constraint_matrix, clock[TIME], y, p, m_lu, m_pivots, a, c, w, s, s_pivots)
+        pivot = _at_position(forcing, constraint_matrix, clock[TIME], y, p, m_lu, m_pivots, a, c, w, s, s_pivots)
         counters[NFEV] += 1
-        if singular != 0:
+        if pivot != 0:
             return Status.RHS_FAILED, n_saved
     while True:
         step_index = counters[NSTEPS]
