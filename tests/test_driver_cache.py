@@ -28,7 +28,8 @@ PROBE = textwrap.dedent(
     model = lc.compile(examples.get(sys.argv[2]), cache_dir=sys.argv[1])
     model.rhs(0.0, [0.1] * model.state_size)
     methods = [m for m in METHODS.values() if (model.separable or not m.separable_only)
-               and (not model.k or not m.unconstrained_only)]
+               and (not model.k or not m.unconstrained_only)
+               and (model.holonomic_separable or not m.holonomic_separable_only)]
     for m in methods:
         steps = {"rtol": 1e-6, "atol": 1e-8} if m.adaptive else {"dt": 0.01}
         model.simulate((0, 0.1), method=m.name, **steps)

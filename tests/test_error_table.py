@@ -280,6 +280,7 @@ CASES = {
     "bad-t-eval": (_simulate("pendulum", t_eval=[0.5, 2.0]), "`t_eval`"),
     "unknown-method": (_simulate("pendulum", method="euler"), "'euler'"),
     "method-not-applicable": (_simulate("rod", method="verlet", dt=0.1), "`verlet`"),
+    "rattle-not-applicable": (_simulate("pendulum", method="rattle", dt=0.1), "`rattle` integrates constrained systems"),
     "taylor-not-applicable": (_simulate("friction", method="taylor"), "`taylor` cannot integrate 'rope_friction'"),
     "unknown-implicit-solver": (_simulate("pendulum", method="gauss2", dt=0.1, implicit_solver="broyden"), "broyden"),
     "bad-record": (_simulate("pendulum", record="everything"), "`record`"),
@@ -304,6 +305,7 @@ CASES = {
     "max-steps-reached": (_fail("pendulum", max_steps=3), "maximum number of steps"),
     "implicit-not-converged": (_fail("failing", t_span=(0, 0.9), params={"a": 1.0}, method="gauss2", dt=0.3),
                                "did not converge"),
+    "rattle-not-converged": (_fail("rod", method="rattle", dt=0.3), "did not converge"),
     "constraint-drift": (_fail("rod", rtol=1e-4, atol=1e-4, max_residual=1e-6), "max_residual = 1e-06"),
     "memory-limit-reached": (_fail("pendulum", t_span=(0, 1000), memory_limit=10_000), "`memory_limit`"),
     # the cache

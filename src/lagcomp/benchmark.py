@@ -72,11 +72,13 @@ def kernel_cost(model, repeats: int = 5, calls: int = 200_000) -> dict:
 
 
 def applicable_methods(model) -> list:
-    """The registry's methods that `model` accepts (separable-only and unconstrained-only checked)."""
+    """The registry's methods that `model` accepts (separable-only, holonomic-separable-only and unconstrained-only
+    checked)."""
     from lagcomp.integrate.methods import METHODS
 
     return [m for m in METHODS.values()
             if not (m.separable_only and not model.separable) and not (m.unconstrained_only and model.k)
+            and not (m.holonomic_separable_only and not model.holonomic_separable)
             and not (m.name == "taylor" and hasattr(model.kernels, "TAYLOR_REFUSED"))]
 
 

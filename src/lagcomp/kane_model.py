@@ -125,7 +125,8 @@ def _build(cache, key, name, form, energy, names, reactions, events):
     metadata = {
         "kane": True, "coordinates": list(form.coordinate_names), "speeds": list(form.speed_names),
         "parameters": [s.name for s in form.parameters], "cyclic": [], "constraints": [], "holonomic": [],
-        "separable": False, "operations": operations, "taylor_program": None, "reaction_names": list(names),
+        "separable": False, "holonomic_separable": False, "operations": operations, "taylor_program": None,
+        "reaction_names": list(names),
         "residual_labels": [[f"configuration_{i}", "position"] for i in range(form.Phi.rows)]
         + [[f"velocity_{i}", "velocity"] for i in range(form.Psi.rows)],
         "energy": energy is not None,

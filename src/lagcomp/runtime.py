@@ -194,6 +194,7 @@ def build(system, cache: Cache, key: str, eom=None, progress=None) -> Entry:
         "constraints": list(eom.constraint_names),
         "holonomic": list(eom.holonomic),
         "separable": eom.separable,
+        "holonomic_separable": eom.holonomic_separable,
         "operations": {**{k.name: k.operation_count for k in ir.kernels},
                        **({"taylor_coefficients": program["operations"]} if program else {})},
         "taylor_program": program,
@@ -247,6 +248,9 @@ class Model:
         Constraint names, the order of the multipliers λ (reactions).
     separable : bool
         Whether the explicit symplectic methods (verlet, yoshida4, yoshida6) apply.
+    holonomic_separable : bool
+        Whether RATTLE (method "rattle") applies: separable apart from constraints that are
+        all holonomic and scleronomic, Φ(q) = 0 (`lagcomp.mechanics.lagrange.EOM`).
     operations : dict
         Arithmetic operations per kernel after CSE.
     """
@@ -271,6 +275,7 @@ class Model:
         self.constraints = tuple(entry.metadata["constraints"])
         self.holonomic = tuple(entry.metadata["holonomic"])
         self.separable = bool(entry.metadata["separable"])
+        self.holonomic_separable = bool(entry.metadata["holonomic_separable"])
         self.operations = dict(entry.metadata["operations"])
         self._taylor_program = entry.metadata.get("taylor_program")  # for batched Taylor sweeps (taylor_lanes)
 
@@ -519,8 +524,11 @@ class Model:
         method : str
             Integration method (default "dop853"), a name of
             `lagcomp.integrate.methods.METHODS`: the adaptive embedded pairs dop853,
-            dopri5, tsit5 and bs3, taylor, rk4, verlet, yoshida4/6, gauss1/2/3; verlet and yoshida4/6 are
-            explicit symplectic methods for separable systems (`Model.separable`),
+            dopri5, tsit5 and bs3, taylor, rk4, verlet, yoshida4/6, rattle, gauss1/2/3; verlet and yoshida4/6
+            are explicit symplectic methods for separable systems (`Model.separable`),
+            rattle their constrained counterpart of order 2 for separable systems with holonomic,
+            time-independent constraints (`Model.holonomic_separable`; the constraints hold to round-off
+            without projection),
             gauss1/2/3 implicit symplectic ones for any unconstrained system,
             taylor an adaptive Taylor-series method (unconstrained systems of
             smooth functions; machine precision by default).

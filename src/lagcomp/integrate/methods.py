@@ -46,7 +46,8 @@ class Method:
     """An integration method: its driver, coefficients and what it accepts.
 
     ``separable_only`` methods need `Model.separable` (explicit symplectic
-    compositions); the others integrate any system.
+    compositions), ``holonomic_separable_only`` ones `Model.holonomic_separable`
+    (RATTLE); the others integrate any system.
     """
 
     name: str
@@ -57,6 +58,7 @@ class Method:
     tableau: Tableau | Composition | Collocation | None
     summary: str
     separable_only: bool = False
+    holonomic_separable_only: bool = False
     unconstrained_only: bool = False
     #: Default tolerances (None: atol follows rtol), and the smallest rtol accepted.
     default_rtol: float = 1e-8
@@ -151,6 +153,11 @@ METHODS = {
         Method("yoshida6", 6, False, f"{_FIXED_STEP}:composition_run", compositions.YOSHIDA6,
                "Yoshida's 7-stage composition of Verlet, symplectic, order 6", separable_only=True,
                kernels=("rhs",), sweep=f"{_FIXED_SWEEPS}:composition_sweep"),
+        Method("rattle", 2, False, "lagcomp.integrate.drivers.rattle:rattle_run", compositions.VERLET,
+               "RATTLE (constrained Störmer-Verlet), symplectic, fixed step, constraints held to round-off; "
+               "separable systems with holonomic scleronomic constraints", holonomic_separable_only=True,
+               kernels=("forcing", "mass_matrix", "constraint_residuals", "constraint_matrix", "CONSTRAINT_COUNT"),
+               sweep="lagcomp.integrate.drivers.rattle:rattle_sweep"),
         Method("gauss1", 2, False, _COLLOCATION, collocation.GAUSS1,
                "implicit midpoint rule on (q, p), symplectic for any Lagrangian", unconstrained_only=True,
                kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
@@ -172,6 +179,7 @@ METHODS = {
 
 #: Other accepted spellings.
 ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "rk23": "bs3", "leapfrog": "verlet", "stormer_verlet": "verlet",
+           "shake": "rattle",
            "midpoint": "gauss1", "gl1": "gauss1", "gl2": "gauss2", "gl3": "gauss3"}
 
 

@@ -119,8 +119,9 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
 
 
 def check_method(model, m) -> None:
-    """Refuse a method that does not apply to `model` (separable-only or unconstrained-only methods,
-    and the Taylor method where the module has no Taylor kernel: ``TAYLOR_REFUSED`` says why)."""
+    """Refuse a method that does not apply to `model` (separable-only, holonomic-separable-only (RATTLE) or
+    unconstrained-only methods, and the Taylor method where the module has no Taylor kernel: ``TAYLOR_REFUSED``
+    says why)."""
     kane = getattr(model, "speeds", None)
     if kane is not None and not m.any_state:
         raise OptionError(f"`{m.name}` needs the state (q, q̇) of Lagrange's equations; {model.name!r} is a Kane "
@@ -130,14 +131,36 @@ def check_method(model, m) -> None:
         raise OptionError(f"`taylor` cannot integrate {model.name!r}: its equations hold {refused}. "
                           "Use dop853 (adaptive, dense output, events) instead.")
     if m.separable_only and not model.separable:
+        symplectic = ("rattle (symplectic, holds its holonomic constraints)" if model.holonomic_separable else
+                      "gauss2 (symplectic for any Lagrangian)")
         raise OptionError(
             f"`{m.name}` needs a separable system (no constraints, a constant mass matrix and forces that do not "
-            f"depend on velocities); {model.name!r} is not one. Use gauss2 (symplectic for any Lagrangian), "
+            f"depend on velocities); {model.name!r} is not one. Use {symplectic}, "
             f"{method_names(lambda m: m.any_state)}."
         )
+    if m.holonomic_separable_only and not model.holonomic_separable:
+        raise OptionError(_not_holonomic_separable(model, m))
     if m.unconstrained_only and model.k:
         raise OptionError(f"`{m.name}` does not handle constraints yet; {model.name!r} has {list(model.constraints)}. "
                           f"Use {method_names(lambda m: m.any_state)}.")
+
+
+def _not_holonomic_separable(model, m) -> str:
+    """Why `m` (RATTLE) refuses `model`, and what to use instead."""
+    if not model.k:
+        better = "verlet (RATTLE without constraints is Störmer-Verlet)" if model.separable else \
+            f"gauss2 (symplectic for any Lagrangian) or {method_names(lambda m: m.any_state)}"
+        return f"`{m.name}` integrates constrained systems; {model.name!r} has no constraints: use {better}."
+    nonholonomic = [name for name, holonomic in zip(model.constraints, model.holonomic, strict=True)
+                    if not holonomic]
+    why = (f"its constraint(s) {nonholonomic} are nonholonomic" if nonholonomic else
+           "its mass matrix depends on the coordinates or time, its forces on the velocities, or a constraint "
+           "on time")
+    return (f"`{m.name}` needs a system that is separable apart from its constraints (a constant mass matrix, "
+            f"forces that depend on the coordinates and time only) and whose constraints are all holonomic and "
+            f"scleronomic (Φ(q) = 0, free of time); {model.name!r} is not one: {why}. Use "
+            f"{method_names(lambda m: m.any_state)} (projection=True or baumgarte=(alpha, beta) hold the "
+            "constraints).")
 
 
 def known_options(function, options: dict, what: str) -> None:
@@ -231,11 +254,15 @@ def run_options(model, t_span, *, method="dop853", dt=None, rtol=None, atol=None
     t0, t1 = time_span(t_span)
     m = get_method(method)
     check_method(model, m)
+    if m.holonomic_separable_only and projection:
+        raise OptionError(f"`{m.name}` holds the constraints to round-off at every step without projection; projecting "
+                          "would break its symplectic structure. Leave `projection` unset.")
     common = dict(
         method=m, t0=t0, t1=t1, memory_limit=memory_limit,
         save_every=count(save_every, "save_every"), max_steps=count(max_steps, "max_steps"),
         implicit_solver=implicit_solver_for(m, implicit_solver),
-        projecting=int(bool(model.residual_labels) and (not m.adaptive if projection is None else bool(projection))),
+        projecting=int(bool(model.residual_labels) and not m.holonomic_separable_only
+                       and (not m.adaptive if projection is None else bool(projection))),
     )
     common["directions"], common["actions"] = event_arguments(model, m, events)
     check_rows = check_rows or (lambda times, where: None)

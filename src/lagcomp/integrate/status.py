@@ -29,6 +29,7 @@ class Status(enum.IntEnum):
     NOT_CONVERGED = -5
     RESIDUAL_EXCEEDED = -6
     MEMORY_FULL = -7
+    CONSTRAINTS_NOT_CONVERGED = -8
     BUFFER_FULL = 10
     PAUSED = 11
 
@@ -57,6 +58,9 @@ _MESSAGES = {
                               "(tighten rtol/atol, or use projection=True or baumgarte=(alpha, beta)).",
     Status.MEMORY_FULL: "The saved rows reached `memory_limit`; the run stopped and kept them (save every K-th step "
                         "with `save_every`, keep only the summary with record=\"summary\", or raise `memory_limit`).",
+    Status.CONSTRAINTS_NOT_CONVERGED: "RATTLE's Newton iteration for the constraint multipliers did not converge "
+                                      "(the step moved the coordinates too far along the constraints' curvature): "
+                                      "reduce the step `dt`.",
     Status.BUFFER_FULL: "The output buffer is full: call again with a fresh one.",
     Status.PAUSED: "The call's step budget is used up: call again with a later one.",
 }

@@ -97,6 +97,11 @@ class EOM:
         Whether explicit symplectic methods apply: no constraints, M constant
         (free of q and t) and F free of q̇, i.e. H = ½ pᵀ M⁻¹ p + V(q, t)
         with forces depending on q and t only.
+    holonomic_separable : bool
+        Whether RATTLE applies: separable as above apart from constraints,
+        which are all holonomic and scleronomic, Φ(q) = 0 (free of t, so
+        b = 0): H = ½ pᵀ M⁻¹ p + V(q, t) on the manifold Φ(q) = 0.  False
+        without constraints (`separable` covers those).
     momentum_offset : Matrix, shape (n, 1)
         b(q, t) in p = M q̇ + b (momenta are affine in q̇).
     momentum_rate : Matrix, shape (n, 1)
@@ -126,6 +131,7 @@ class EOM:
     b: sp.Matrix
     gamma: sp.Matrix
     separable: bool
+    holonomic_separable: bool
     momentum_offset: sp.Matrix
     momentum_rate: sp.Matrix
     events: tuple = ()
@@ -231,11 +237,11 @@ def derive(system: System) -> EOM:
     momentum_rate = sp.Matrix([Q[i] - dD[i] + dL_dq[i] for i in range(n)])
     T1 = sum((bi * v for bi, v in zip(b, qd)), sp.S.Zero)
     energy = _tidy_small(T + V, variables)
-    separable = (
-        not system.constraints
-        and not any(entry.has(t, *q) for entry in M)
-        and not any(entry.has(*qd) for entry in F)
-    )
+    # H = ½ pᵀ M⁻¹ p + V(q, t): M free of q and t, F free of q̇; constraints aside
+    split = not any(entry.has(t, *q) for entry in M) and not any(entry.has(*qd) for entry in F)
+    separable = split and not system.constraints
+    holonomic_separable = (split and bool(system.constraints) and all(constraints["holonomic"])
+                           and not constraints["Phi"].has(t))
     cyclic = tuple(
         name for name, dLi, dDi, Qi in zip(system.coordinate_names, dL_dq, dD, Q) if dLi == 0 and Qi == 0 and dDi == 0
     )
@@ -244,7 +250,7 @@ def derive(system: System) -> EOM:
         M=M, F=F, T=T, V=V, L=T - V,
         energy=energy, energy_function=energy if T1 == 0 and T0 == 0 else _tidy_small(T - T1 - 2 * T0 + V, variables),
         momenta=momenta, cyclic=cyclic,
-        separable=separable, momentum_offset=b, momentum_rate=momentum_rate,
+        separable=separable, holonomic_separable=holonomic_separable, momentum_offset=b, momentum_rate=momentum_rate,
         events=tuple(plain(e.expr) for e in system.events), **constraints,
     )
 

@@ -92,3 +92,16 @@ class AddressedKernel:
         if self._address is None:
             self._address = function_type._get_wrapper_address(self.kernel, self._numba_type_.signature)
         return self._address
+
+
+# -- the kernels of M q̈ = F + Λᵀ λ one by one (the RATTLE driver, `lagcomp.integrate.drivers.rattle`) --------------
+# Constrained modules only: an unconstrained module has no ``constraint_residuals`` or ``constraint_matrix``.
+
+#: ``forcing(t, y, p, out)``: ``out = F(q, q̇, t)`` (n,), the right-hand side of M q̈ = F + Λᵀ λ.
+FORCING = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
+#: ``mass_matrix(t, y, p, out)``: ``out = M(q, t)`` (n, n), symmetric.
+MASS_MATRIX = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, MATRIX))
+#: ``constraint_residuals(t, y, p, out)``: ``out`` (k_h + k,) = Φ of the holonomic constraints, then Λ q̇ + b of all k.
+CONSTRAINT_RESIDUALS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
+#: ``constraint_matrix(t, y, p, out)``: ``out`` (k, n + 1) = [Λ | b] at y's coordinates.
+CONSTRAINT_MATRIX = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, MATRIX))
