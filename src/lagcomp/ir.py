@@ -85,12 +85,14 @@ NO_JACOBIAN = -1
 class JacobianSolve:
     """The frame of ``rhs_jacobian``: y' = (x', a) with M a = F, and out = ∂y'/∂y of shape (size, size).
 
-    Before its loads the kernel zeroes `out` and calls ``rhs(t, y, p, _ydot)``, returning its status
-    when it is not 0, so that loads can bind the accelerations ā to ``_ydot[size − n + i]``.  The
-    stores bind M's lower triangle to the scalar locals ``m[i][j]`` (i ≥ j, M symmetric) and write
-    the nonzero entries of out: the rows of x' and, in the last n rows, ∂(F − M ā)/∂y at ā = a.
-    Then those rows are overwritten with M⁻¹ times themselves: one LDLᵀ of M, a substitution per
-    column (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`), whose status is returned.
+    Before its loads the kernel calls ``rhs(t, y, p, _ydot)``, returning its status when it is not
+    0, so that loads can bind the accelerations ā to ``_ydot[size − n + i]``, and allocates the
+    work array ``_jac`` (size², zeros).  The stores bind M's lower triangle to the scalar locals
+    ``m[i][j]`` (i ≥ j, M symmetric) and write the nonzero entries of the Jacobian into ``_jac``,
+    row-major (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles faster than `out`):
+    the rows of x' and, in the last n rows, ∂(F − M ā)/∂y at ā = a.  Then ``_jac`` is copied into
+    `out` and its last n rows overwritten with M⁻¹ times themselves: one LDLᵀ of M, a substitution
+    per column (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`), whose status is returned.
     """
 
     n: int

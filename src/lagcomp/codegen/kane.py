@@ -44,7 +44,7 @@ from lagcomp.codegen.emit import (
     kernel_support_names,
     support_imports,
 )
-from lagcomp.codegen.lower import RHS_JACOBIAN_DOC, _kernel, acceleration_partials
+from lagcomp.codegen.lower import RHS_JACOBIAN_DOC, _kernel, acceleration_partials, jacobian_entry
 from lagcomp.codegen.printer import to_code
 from lagcomp.mechanics.first_order import FirstOrderForm
 from lagcomp.mechanics.kane import acceleration_symbols
@@ -98,17 +98,20 @@ def _rhs_jacobian(form: FirstOrderForm) -> tuple:
     Differentiating M u̇ = F along y = (q, u) gives M ∂u̇/∂y = ∂F/∂y − ∂(M ū)/∂y |_{ū = u̇}, with
     symbols ū for the accelerations held fixed while differentiating (`acceleration_partials`), bound
     to the u̇ that `rhs` solved.  The kernel calls `rhs` (returning its status when not 0), writes
-    ∂N/∂y and that block, then overwrites the block with M⁻¹ times itself (``lu_solve_matrix``: the
-    pivoting of `rhs`'s ``lu_solve``).  One CSE for ∂N/∂y, M and the block.
+    ∂N/∂y and that block (into the flat ``_jac``, as `lagcomp.ir.JacobianSolve` explains, then into
+    `out`), then overwrites the block with M⁻¹ times itself (``lu_solve_matrix``: the pivoting of
+    `rhs`'s ``lu_solve``).  One CSE for ∂N/∂y, M and the block.
     """
     n_q, n_u = form.n_q, form.n_u
     size, y = n_q + n_u, (*form.q, *form.u)
     mapping, loads = _bindings(form, reactions=True)  # binds ū (acceleration_symbols) to _ydot[n_q:]
     kinematic = form.N.jacobian(sp.Matrix(y))
     block = acceleration_partials(form.M, form.F, acceleration_symbols(form), y)
-    stores = [(f"out[{i}, {j}]", kinematic[i, j]) for i in range(n_q) for j in range(size) if kinematic[i, j] != 0]
+    stores = [(jacobian_entry(i, j, size), kinematic[i, j])
+              for i in range(n_q) for j in range(size) if kinematic[i, j] != 0]
     stores += [(f"_lu[{i}, {j}]", form.M[i, j]) for i in range(n_u) for j in range(n_u) if form.M[i, j] != 0]
-    stores += [(f"out[{n_q + i}, {j}]", block[i][j]) for i in range(n_u) for j in range(size) if block[i][j] != 0]
+    stores += [(jacobian_entry(n_q + i, j, size), block[i][j])
+               for i in range(n_u) for j in range(size) if block[i][j] != 0]
     kernel = _kernel(
         "rhs_jacobian",
         RHS_JACOBIAN_DOC +
@@ -121,8 +124,8 @@ def _rhs_jacobian(form: FirstOrderForm) -> tuple:
         ARGS, stores, mapping, loads,
     )
     before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:", f"{INDENT}return _status",
-              "out[:] = 0.0", f"_lu = np.zeros(({n_u}, {n_u}))"]
-    after = [f"return lu_solve_matrix(_lu, out[{n_q}:])"]
+              f"_jac = np.zeros({size * size})", f"_lu = np.zeros(({n_u}, {n_u}))"]
+    after = [f"out[:] = _jac.reshape(({size}, {size}))", f"return lu_solve_matrix(_lu, out[{n_q}:])"]
     return kernel, _function(kernel, before=before, after=after)
 
 
