@@ -239,3 +239,22 @@ def test_constrained_module_defines_a_jacobian_that_refuses(compiled):
     out = np.full((y.size, y.size), 7.0)
     assert model.kernels.rhs_jacobian(0.0, y, p, out) == NO_JACOBIAN and np.all(out == 7.0)
     assert "constraints" in model.kernels.RHS_JACOBIAN_REFUSED
+
+
+def test_kernels_are_values_of_the_drivers_jacobian_type(compiled, sleigh):
+    """Each kind of rhs_jacobian (LDLᵀ, LU, the stub) passes as `kernel_types.RHS_JACOBIAN`, as a driver takes it."""
+    from numba import njit, types
+
+    from lagcomp.integrate.drivers.kernel_types import FLOAT, MATRIX, RHS_JACOBIAN, VECTOR
+
+    @njit(types.int64(RHS_JACOBIAN, FLOAT, VECTOR, VECTOR, MATRIX))
+    def call(jacobian, time, y, p, out):
+        return jacobian(time, y, p, out)
+
+    rng = np.random.default_rng(7)
+    for model in (compiled("double_pendulum"), sleigh[1], compiled("spherical_pendulum_cartesian")):
+        y, p = rng.uniform(-1.0, 1.0, model.state_size), model.parameter_vector()
+        expected, out = _jacobian(model.kernels, 0.0, y, p)
+        via_type = np.full_like(out, np.nan)
+        assert call(model.kernels.rhs_jacobian, 0.0, y, p, via_type) == expected
+        assert np.array_equal(via_type, out, equal_nan=True)
