@@ -409,8 +409,8 @@ def _rhs_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     Differentiating M a = F along y = (q, q̇) gives M ∂a/∂y = ∂F/∂y − ∂(M ā)/∂y |_{ā = a}: symbols ā
     for the accelerations, held fixed while differentiating (`acceleration_partials`), then bound to
     the solved values.  So the kernel calls `rhs` for a (same LDLᵀ, same pivot status), evaluates the
-    (n, 2n) block with ā = a into out[n:], and overwrites it with M⁻¹ times itself by one LDLᵀ of M
-    and 2n substitutions (`JacobianSolve`); the upper rows are [0 | I].  One CSE for M and the block.
+    (n, 2n) block with ā = a, puts it in out[n:] below the rows [0 | I] and overwrites it with M⁻¹
+    times itself by one LDLᵀ of M and 2n substitutions (`JacobianSolve`).  One CSE for M and the block.
     """
     n = eom.n
     taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}
