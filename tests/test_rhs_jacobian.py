@@ -258,3 +258,17 @@ def test_kernels_are_values_of_the_drivers_jacobian_type(compiled, sleigh):
         via_type = np.full_like(out, np.nan)
         assert call(model.kernels.rhs_jacobian, 0.0, y, p, via_type) == expected
         assert np.array_equal(via_type, out, equal_nan=True)
+
+
+def test_whipple_bicycle_jacobian_agrees_with_central_differences(whipple_bicycle):
+    """sympy's test_kane3 bicycle (the session's model; its module run as plain Python): M with the
+    differentiated velocity constraints among its rows, the dependent coordinate q4, CRAMER's quotients."""
+    _, model = whipple_bicycle
+    module = python_kernels(model.source_path.read_text())
+    p, rng = model.parameter_vector(), np.random.default_rng(3)
+    y = rng.uniform(-0.3, 0.3, model.state_size)
+    out = np.full((y.size, y.size), np.nan)
+    assert module["rhs_jacobian"](0.0, y, p, out) == 0
+    D, tolerance = _differences(module["rhs"], 0.0, y, p, h=1e-2)
+    excess = np.abs(out - D) - tolerance
+    assert np.all(excess <= 0), f"off by {np.max(excess):.3g} beyond the tolerance"
