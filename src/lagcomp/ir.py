@@ -11,7 +11,9 @@ Kernel calling convention (all arrays float64, C-contiguous):
   module's documented order; ``t`` the time.
 - kernels with ``out`` write their result into it and return nothing, except
   ``rhs``, which returns an int status (0, or k > 0 when the mass matrix is
-  not positive definite at pivot k: the state is singular).
+  not positive definite at pivot k: the state is singular), and
+  ``rhs_jacobian``, which returns the same, or `NO_JACOBIAN` where the module
+  has no Jacobian.
 - scalar kernels (energies) return a float.
 """
 
@@ -74,6 +76,40 @@ class AugmentedSolve:
     offset: int
 
 
+#: What ``rhs_jacobian`` returns where its module has none (negative: never a pivot); the module constant
+#: ``RHS_JACOBIAN_REFUSED`` then says why.
+NO_JACOBIAN = -1
+
+
+@dataclass(frozen=True)
+class JacobianSolve:
+    """The frame of ``rhs_jacobian``: y' = (x', a) with M a = F, and out = ∂y'/∂y of shape (size, size).
+
+    Before its loads the kernel calls ``rhs(t, y, p, _ydot)``, returning its status when it is not
+    0, so that loads can bind the accelerations ā to ``_ydot[size − n + i]``, and allocates the
+    work array ``_jac`` (size², zeros).  The stores bind M's lower triangle to the scalar locals
+    ``m[i][j]`` (i ≥ j, M symmetric) and write the nonzero entries of the Jacobian into ``_jac``,
+    row-major (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles faster than `out`):
+    the rows of x' and, in the last n rows, ∂(F − M ā)/∂y at ā = a.  Then ``_jac`` is copied into
+    `out` and its last n rows overwritten with M⁻¹ times themselves: one LDLᵀ of M, a substitution
+    per column (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`), whose status is returned.
+    """
+
+    n: int
+    size: int
+    m: tuple[tuple[str, ...], ...]
+
+
+@dataclass(frozen=True)
+class Unavailable:
+    """A kernel the module defines (every module defines every kernel) but cannot compute: it writes
+    nothing and returns `status`; the module constant `constant` holds `reason`."""
+
+    status: int
+    constant: str
+    reason: str
+
+
 @dataclass(frozen=True)
 class Kernel:
     """One numba function: load inputs, compute temporaries, store outputs.
@@ -94,9 +130,10 @@ class Kernel:
     stores : tuple of (target, Expr)
         Output assignments; the target is an lvalue (``out[0]``, a local) or
         ``return`` for scalar kernels.
-    solve : LinearSolve, AugmentedSolve, SymmetricProduct or None
-        Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``),
-        or the matrix-vector product of ``momenta`` for large systems.
+    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, Unavailable or None
+        Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``,
+        M⁻¹ applied to the rows of ``rhs_jacobian``), the matrix-vector product of
+        ``momenta`` for large systems, or the status of a kernel that computes nothing.
     lanes : bool
         The body runs once per lane ``_l`` of a batch (structure of arrays:
         ``Y[i, _l]``, ``P[k, _l]``, ``out[i, _l]``), in a loop LLVM can
@@ -113,7 +150,7 @@ class Kernel:
     loads: tuple[tuple[str, str], ...]
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
-    solve: LinearSolve | AugmentedSolve | SymmetricProduct | None = None
+    solve: LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | Unavailable | None = None
     lanes: bool = False
     alias: str | None = None
 

@@ -30,7 +30,7 @@ from lagcomp.codegen.taylor import (
     taylor_source,
     taylor_support_names,
 )
-from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR, SymmetricProduct
+from lagcomp.ir import AugmentedSolve, JacobianSolve, Kernel, LinearSolve, ModuleIR, SymmetricProduct, Unavailable
 
 INDENT = "    "
 
@@ -77,7 +77,8 @@ def _header(ir: ModuleIR, taylor: TaylorProgram | Unsupported) -> str:
 #: What kernels may call from `lagcomp.kernel_support`, by module.
 KERNEL_SUPPORT = {
     "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "ldlt_solve",
-                                              "ldlt_solve_matrix", "lu_factor", "lu_solve", "lu_substitute"),
+                                              "ldlt_solve_matrix", "lu_factor", "lu_solve", "lu_solve_matrix",
+                                              "lu_substitute"),
     "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
 }
 def support_imports(names: set[str]) -> str:
@@ -111,6 +112,8 @@ def kernel_support_names(kernels) -> set[str]:
             names.add("kkt_solve")
         elif isinstance(solve, LinearSolve):
             names.add("PIVOT_TOLERANCE" if solve.unrolled or kernel.lanes else "ldlt_solve")
+        elif isinstance(solve, JacobianSolve):
+            names.add("ldlt_solve_matrix")
     return names
 
 
@@ -182,11 +185,27 @@ def _gathered(solve, symmetric: bool) -> list[str]:
     From tuples: numba compiles a tuple into an array several times faster
     than one store per element (a 24-link chain's 300 stores took ~3 s).
     """
-    n = solve.n
-    entry = lambda i, j: solve.m[i][j] if j <= i else (solve.m[j][i] if symmetric else "0.0")  # noqa: E731
-    one = "," if n == 1 else ""  # a tuple of one element
-    lines = ["mm = np.array(("] + [f"{INDENT}({', '.join(entry(i, j) for j in range(n))}{one})," for i in range(n)]
-    return lines + ["))", f"ff = np.array(({', '.join(solve.f)}{one}))"]
+    one = "," if solve.n == 1 else ""  # a tuple of one element
+    return _gathered_matrix(solve.n, solve.m, symmetric) + [f"ff = np.array(({', '.join(solve.f)}{one}))"]
+
+
+def _gathered_matrix(n: int, m, symmetric: bool) -> list[str]:
+    """``mm`` (n, n) from the locals ``m[i][j]`` (i ≥ j) of a symmetric M: lower triangle, or both when `symmetric`."""
+    entry = lambda i, j: m[i][j] if j <= i else (m[j][i] if symmetric else "0.0")  # noqa: E731
+    one = "," if n == 1 else ""
+    rows = [f"{INDENT}({', '.join(entry(i, j) for j in range(n))}{one})," for i in range(n)]
+    return ["mm = np.array(("] + rows + ["))"]
+
+
+def _jacobian_frame(solve: JacobianSolve) -> tuple[list[str], list[str]]:
+    """The lines of ``rhs_jacobian`` before its loads (`rhs` into ``_ydot``, `out` zeroed) and after its stores."""
+    size, rows = solve.size, solve.size - solve.n
+    before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:",
+              f"{INDENT}return _status", f"_jac = np.zeros({size * size})"]
+    after = [f"out[:] = _jac.reshape(({size}, {size}))",
+             f"# out[{rows}:] = M⁻¹ out[{rows}:]: one LDLᵀ of M (lower triangle), a substitution per column."]
+    return before, after + _gathered_matrix(solve.n, solve.m, symmetric=False) + [
+        f"return ldlt_solve_matrix(mm, out[{rows}:])"]
 
 
 def _looped_ldlt(solve: LinearSolve) -> list[str]:
@@ -224,8 +243,14 @@ def _kernel_source(kernel: Kernel) -> str:
     if kernel.lanes:
         return _decorated(kernel, _lanes_kernel_source(kernel))
     body = _docstring(kernel.doc).splitlines()
-    body += [f"{local} = {source}" for local, source in kernel.loads]
     solve = kernel.solve
+    if isinstance(solve, Unavailable):
+        constant = f"\n\n#: Why this module's {kernel.name} computes nothing.\n{solve.constant} = {solve.reason!r}\n"
+        return _decorated(kernel, body + [f"return {solve.status}"]) + constant
+    if isinstance(solve, JacobianSolve):
+        before, after = _jacobian_frame(solve)
+        body += before
+    body += [f"{local} = {source}" for local, source in kernel.loads]
     if isinstance(solve, AugmentedSolve):
         body.append(f"_kkt = np.zeros(({solve.size}, {solve.size + 1}))")
     body += [f"{name} = {to_code(expr)}" for name, expr in kernel.temps]
@@ -237,6 +262,8 @@ def _kernel_source(kernel: Kernel) -> str:
         body.append("return 0")
     elif isinstance(solve, SymmetricProduct):
         body += _symmetric_product(solve)
+    elif isinstance(solve, JacobianSolve):
+        body += after
     elif solve is not None:
         if solve.unrolled:
             body += _unrolled_ldlt(solve)

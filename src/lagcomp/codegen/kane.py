@@ -10,6 +10,8 @@ speeds, state length ``n_q + n_u``; same calling conventions as
   with partial pivoting (``lu_solve``: M is square but not symmetric when
   the velocity constraints are among its rows).  Returns 0, or j > 0 when
   pivot j is zero (M singular there).
+- ``rhs_jacobian(t, y, p, out)``: ∂(q̇, u̇)/∂(q, u), shape (n_q + n_u, n_q + n_u), exact
+  (`_rhs_jacobian` derives it); the status of ``rhs``, or of the LU of M.
 - ``kinematics(t, y, p, out)``: q̇ = N, shape (n_q,).
 - ``energy(t, y, p)``: T + V, NaN when it could not be formed; ``energy_function`` is the same kernel.
 - ``constraint_residuals(t, y, p, out)``: Φ (n_h), then Ψ (n_v);
@@ -42,7 +44,7 @@ from lagcomp.codegen.emit import (
     kernel_support_names,
     support_imports,
 )
-from lagcomp.codegen.lower import _kernel
+from lagcomp.codegen.lower import RHS_JACOBIAN_DOC, _kernel, acceleration_partials, jacobian_entry
 from lagcomp.codegen.printer import to_code
 from lagcomp.mechanics.first_order import FirstOrderForm
 from lagcomp.mechanics.kane import acceleration_symbols
@@ -88,6 +90,43 @@ def _rhs(form: FirstOrderForm, mapping, loads) -> tuple:
     after = ["_status = lu_solve(_kkt)", "if _status:", f"{INDENT}return _status"]
     after += [f"out[{n_q + i}] = _kkt[{i}, {n_u}]" for i in range(n_u)] + ["return 0"]
     return kernel, _function(kernel, before=[f"_kkt = np.zeros(({n_u}, {n_u + 1}))"], after=after)
+
+
+def _rhs_jacobian(form: FirstOrderForm) -> tuple:
+    """The exact Jacobian of y' = (N(q, u, t), u̇), M u̇ = F, as a kernel and its source.
+
+    Differentiating M u̇ = F along y = (q, u) gives M ∂u̇/∂y = ∂F/∂y − ∂(M ū)/∂y |_{ū = u̇}, with
+    symbols ū for the accelerations held fixed while differentiating (`acceleration_partials`), bound
+    to the u̇ that `rhs` solved.  The kernel calls `rhs` (returning its status when not 0), writes
+    ∂N/∂y and that block (into the flat ``_jac``, as `lagcomp.ir.JacobianSolve` explains, then into
+    `out`), then overwrites the block with M⁻¹ times itself (``lu_solve_matrix``: the pivoting of
+    `rhs`'s ``lu_solve``).  One CSE for ∂N/∂y, M and the block.
+    """
+    n_q, n_u = form.n_q, form.n_u
+    size, y = n_q + n_u, (*form.q, *form.u)
+    mapping, loads = _bindings(form, reactions=True)  # binds ū (acceleration_symbols) to _ydot[n_q:]
+    kinematic = form.N.jacobian(sp.Matrix(y))
+    block = acceleration_partials(form.M, form.F, acceleration_symbols(form), y)
+    stores = [(jacobian_entry(i, j, size), kinematic[i, j])
+              for i in range(n_q) for j in range(size) if kinematic[i, j] != 0]
+    stores += [(f"_lu[{i}, {j}]", form.M[i, j]) for i in range(n_u) for j in range(n_u) if form.M[i, j] != 0]
+    stores += [(jacobian_entry(n_q + i, j, size), block[i][j])
+               for i in range(n_u) for j in range(size) if block[i][j] != 0]
+    kernel = _kernel(
+        "rhs_jacobian",
+        RHS_JACOBIAN_DOC +
+        "With q̇ = N(q, u, t) and M u̇ = F solved by `rhs`: rows ∂N/∂y, then\n"
+        "  ∂u̇/∂y = M⁻¹ (∂F/∂y − ∂(M ū)/∂y |ū=u̇),\n"
+        "the accelerations ū held fixed while differentiating M ū.\n\n"
+        "Returns 0, or j > 0 when `rhs` returns j (pivot j of M zero), or when the LU of M here finds\n"
+        "pivot j zero (the same test: only within rounding of its threshold can the two differ);\n"
+        "`out` is then invalid.",
+        ARGS, stores, mapping, loads,
+    )
+    before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:", f"{INDENT}return _status",
+              f"_jac = np.zeros({size * size})", f"_lu = np.zeros(({n_u}, {n_u}))"]
+    after = [f"out[:] = _jac.reshape(({size}, {size}))", f"return lu_solve_matrix(_lu, out[{n_q}:])"]
+    return kernel, _function(kernel, before=before, after=after)
 
 
 def _plain_kernels(form: FirstOrderForm, energy, mapping, loads) -> list:
@@ -255,8 +294,8 @@ def _header(name: str, form: FirstOrderForm, reaction_names, kernels) -> str:
         f"Constraints Φ: {form.Phi.rows}, Ψ: {form.Psi.rows}; reactions {tuple(reaction_names)}\n\n"
         "Equations: q̇ = N(q, u, t), M u̇ = F as sympy's KanesMethod forms them (lagcomp.mechanics.kane).\n"
         '"""\n\nimport math\n\nimport numpy as np\nfrom numba import njit\n\n'
-        # rhs solves by LU, project by Gram matrices
-        + support_imports(kernel_support_names(kernels) | {"lu_solve", "gram_solve"})
+        # rhs and rhs_jacobian solve by LU, project by Gram matrices
+        + support_imports(kernel_support_names(kernels) | {"lu_solve", "lu_solve_matrix", "gram_solve"})
     )
 
 
@@ -268,8 +307,9 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
     """
     mapping, loads = _bindings(form, bool(reaction_names))
     rhs, rhs_source = _rhs(form, mapping, loads)
-    kernels = [rhs] + _plain_kernels(form, energy, mapping, loads)
-    parts = [rhs_source] + [_function(k) for k in kernels[1:]]
+    jacobian, jacobian_source = _rhs_jacobian(form)
+    kernels = [rhs, jacobian] + _plain_kernels(form, energy, mapping, loads)
+    parts = [rhs_source, jacobian_source] + [_function(k) for k in kernels[2:]]
     parts.append("\n\nenergy_function = energy\n")
     if reaction_names:
         kernel, source = _reactions(form, reaction_names, reactions, mapping, loads)

@@ -38,7 +38,16 @@ from dataclasses import replace
 import symengine as se
 import sympy as sp
 
-from lagcomp.ir import AugmentedSolve, Kernel, LinearSolve, ModuleIR, SymmetricProduct
+from lagcomp.ir import (
+    NO_JACOBIAN,
+    AugmentedSolve,
+    JacobianSolve,
+    Kernel,
+    LinearSolve,
+    ModuleIR,
+    SymmetricProduct,
+    Unavailable,
+)
 from lagcomp.mechanics.lagrange import EOM, rest_partials, symengine_ready
 from lagcomp.model.system import t
 
@@ -347,6 +356,103 @@ def _rhs_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+def acceleration_partials(M, F, accelerations, variables) -> list[list]:
+    """R_ij = ∂(F_i − Σ_k M_ik ā_k)/∂x_j for the symbols ā = `accelerations` held fixed, shape (rows of F, len(x)).
+
+    At ā = a, the solution of M a = F, differentiating M a = F gives M ∂a/∂x = R: the Jacobian of the
+    accelerations is M⁻¹ R (the `rhs_jacobian` kernels).  symengine differentiates when it can (as in
+    `_canonical_partials_kernel`); otherwise sympy, and a force that jumps (Coulomb friction's sign(q̇))
+    contributes its derivative away from the jump: the DiracDelta at the jump is dropped.
+    Entries are symengine or sympy expressions (`_kernel` takes either).
+    """
+    rows, columns = M.rows, len(accelerations)
+    residual = [F[i] - sum((M[i, k] * accelerations[k] for k in range(columns) if M[i, k] != 0), sp.S.Zero)
+                for i in range(rows)]
+    if symengine_ready(residual):
+        images, xs = [se.sympify(e) for e in residual], [se.sympify(x) for x in variables]
+        return [[image.diff(x) for x in xs] for image in images]
+    block = sp.Matrix(residual).jacobian(list(variables)).replace(sp.DiracDelta, lambda *args: sp.S.Zero)
+    return block.tolist()
+
+
+def fresh_symbols(stem: str, count: int, taken: set[str]) -> tuple[sp.Symbol, ...]:
+    """`count` real symbols ``<stem>0, <stem>1, ...``, each name lengthened by ``_`` until no name in `taken`
+    has it (symengine tells symbols apart by name only: a model symbol of the same name would merge with it)."""
+    symbols = []
+    for i in range(count):
+        name = f"{stem}{i}"
+        while name in taken:
+            name += "_"
+        symbols.append(sp.Symbol(name, real=True))
+    return tuple(symbols)
+
+
+def jacobian_entry(i: int, j: int, size: int) -> str:
+    """The store target of entry (i, j) of an ``rhs_jacobian``: the flat work array ``_jac``, row-major.
+
+    Stores into a 1-D local array compile several times faster than into the 2-D `out`: the
+    24-link chain's kernel took numba 16 s that way against 48 s (`JacobianSolve`).
+    """
+    return f"_jac[{i * size + j}]"
+
+
+#: The docstring of every ``rhs_jacobian`` kernel: what it computes; `_rhs_jacobian_kernel` adds how.
+RHS_JACOBIAN_DOC = (
+    "Jacobian of y' = f(t, y) as `rhs` computes it, shape (N, N) into `out` (N = len(y)): out[i, j] = ∂f_i/∂y_j,\n"
+    "exact (differentiated symbolically, no finite differences).\n\n"
+)
+
+
+def _rhs_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """The exact Jacobian of y' = f(t, y) = (q̇, a), M(q, t) a = F(q, q̇, t), of an unconstrained system.
+
+    Differentiating M a = F along y = (q, q̇) gives M ∂a/∂y = ∂F/∂y − ∂(M ā)/∂y |_{ā = a}: symbols ā
+    for the accelerations, held fixed while differentiating (`acceleration_partials`), then bound to
+    the solved values.  So the kernel calls `rhs` for a (same LDLᵀ, same pivot status), evaluates the
+    (n, 2n) block with ā = a, puts it in out[n:] below the rows [0 | I] and overwrites it with M⁻¹
+    times itself by one LDLᵀ of M and 2n substitutions (`JacobianSolve`).  One CSE for M and the block.
+    """
+    n = eom.n
+    taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}
+    taken |= {s.name for e in (*eom.M, *eom.F) for s in e.free_symbols}
+    accelerations = fresh_symbols("_acc", n, taken)
+    locals_ = [f"_acc{i}" for i in range(n)]
+    mapping = {**mapping, **{a: sp.Symbol(local, real=True) for a, local in zip(accelerations, locals_, strict=True)}}
+    loads = loads + tuple((local, f"_ydot[{n + i}]") for i, local in enumerate(locals_))
+    block = acceleration_partials(eom.M, eom.F, accelerations, (*eom.q, *eom.qd))
+    m = tuple(tuple(f"_m{i}_{j}" for j in range(i + 1)) for i in range(n))
+    stores = [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
+    stores += [(jacobian_entry(i, n + i, 2 * n), sp.S.One) for i in range(n)]
+    stores += [(jacobian_entry(n + i, j, 2 * n), block[i][j])
+               for i in range(n) for j in range(2 * n) if block[i][j] != 0]
+    return _kernel(
+        "rhs_jacobian",
+        RHS_JACOBIAN_DOC +
+        "With M a = F solved by `rhs` (a = q̈): rows [0 | I] for q̇, then\n"
+        "  ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a),   ∂a/∂q̇ = M⁻¹ ∂F/∂q̇,\n"
+        "the accelerations ā held fixed while differentiating M ā (M does not depend on q̇).\n\n"
+        "Returns 0, or k > 0 when `rhs` returns k (pivot k of M not positive), or when the LDLᵀ of M\n"
+        "here finds pivot k not positive (the same test: only within rounding of its threshold can\n"
+        "the two differ); `out` is then invalid.",
+        ("t", "y", "p", "out"), stores, mapping, loads, solve=JacobianSolve(n=n, size=2 * n, m=m),
+    )
+
+
+#: Why a constrained system's module has no Jacobian (its ``RHS_JACOBIAN_REFUSED``).
+CONSTRAINED_JACOBIAN_REFUSED = "constraints (the Jacobian of the augmented solve is not emitted yet)"
+
+
+def no_rhs_jacobian_kernel(reason: str) -> Kernel:
+    """An ``rhs_jacobian`` that writes nothing and returns `NO_JACOBIAN`; ``RHS_JACOBIAN_REFUSED`` = `reason`."""
+    return Kernel(
+        name="rhs_jacobian",
+        doc=RHS_JACOBIAN_DOC + f"Not available for this system: {reason}.\n"
+            f"Writes nothing and returns NO_JACOBIAN = {NO_JACOBIAN} (never a pivot; RHS_JACOBIAN_REFUSED says why).",
+        args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
+        solve=Unavailable(status=NO_JACOBIAN, constant="RHS_JACOBIAN_REFUSED", reason=reason),
+    )
+
+
 #: The lane kernel's arrays (structure of arrays): ``Y[i, _l]`` is ``y[i]`` of lane ``_l``, ``P[k, _l]`` its ``p[k]``.
 LANE_ARRAYS = {"y": "Y", "p": "P"}
 
@@ -429,10 +535,11 @@ def lower(eom: EOM) -> ModuleIR:
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
     if eom.k:
-        first = _constraint_kernels(eom, mapping, loads)
+        first = _constraint_kernels(eom, mapping, loads) + (no_rhs_jacobian_kernel(CONSTRAINED_JACOBIAN_REFUSED),)
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
         first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled else (rhs,)
+        first += (_rhs_jacobian_kernel(eom, mapping, loads),)
     kernels = first + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",

@@ -17,7 +17,8 @@ function's first compile, and caches it with it.
   matrix, which only needs the augmented matrix to be regular.
 * ``lu_factor`` and ``lu_substitute``: the same elimination split in two,
   for a matrix factored once and applied to many right-hand sides (the
-  simplified Newton iteration of ``collocation_run``).
+  simplified Newton iteration of ``collocation_run``); ``lu_solve_matrix``,
+  both for all columns of a matrix (M⁻¹ in a Kane model's ``rhs_jacobian``).
 * ``gram_solve``: (A Aᵀ) μ = r for chosen rows and leading columns of a
   constraint matrix, the least-change step of the ``project`` kernels.
 
@@ -182,6 +183,23 @@ def lu_substitute(a, pivots, r):
         for c in range(i + 1, size):
             x -= a[i, c] * r[c]
         r[i] = x / a[i, i]
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def lu_solve_matrix(a, b):
+    """Solve A X = b for all m columns of b, shape (n, m), in place: X overwrites b, LU overwrites a.
+
+    ``lu_factor`` of the square a, then ``lu_substitute`` for each column: the pivots and the
+    elimination of ``lu_solve``, so the same status for the same A.  Returns 0, or j + 1 when pivot
+    j is below PIVOT_TOLERANCE × max|a| (a singular to working precision); b is then invalid.
+    """
+    pivots = np.empty(a.shape[0], dtype=np.int64)
+    status = lu_factor(a, pivots)
+    if status:
+        return status
+    for c in range(b.shape[1]):
+        lu_substitute(a, pivots, b[:, c])
+    return 0
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
