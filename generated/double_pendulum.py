@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -109,6 +109,59 @@ def rhs_lanes(T, Y, P, out, bad):
         bad[_l] = not (_ok0 & _ok1)
         out[2, _l] = _x0
         out[3, _l] = _x1
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(4)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(16)
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    qd_theta1 = y[2]
+    qd_theta2 = y[3]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_l1 = p[2]
+    p_l2 = p[3]
+    p_g = p[4]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c0 = p_m1 + p_m2
+    _c1 = q_theta2 - q_theta1
+    _c2 = p_l2*p_m2
+    _c3 = _c2*p_l1
+    _c4 = _c3*cos(_c1)
+    _c5 = _c4*qd_theta2**2
+    _c6 = _c3*sin(_c1)
+    _c7 = _acc1*_c6
+    _c8 = 2.0*_c6
+    _c9 = _acc0*_c6
+    _c10 = _c4*qd_theta1**2
+    _m0_0 = _c0*p_l1**2
+    _m1_0 = _c4
+    _m1_1 = p_m2*p_l2**2
+    _jac[2] = 1.0
+    _jac[7] = 1.0
+    _jac[8] = -_c5 - _c7 - _c0*p_g*p_l1*cos(q_theta1)
+    _jac[9] = _c5 + _c7
+    _jac[11] = _c8*qd_theta2
+    _jac[12] = _c10 - _c9
+    _jac[13] = _c9 - _c10 - _c2*p_g*cos(q_theta2)
+    _jac[14] = -_c8*qd_theta1
+    out[:] = _jac.reshape((4, 4))
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0),
+        (_m1_0, _m1_1),
+    ))
+    return ldlt_solve_matrix(mm, out[2:])
 
 
 @njit(cache=True, error_model="numpy")

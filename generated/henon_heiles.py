@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
 
 
 @njit(cache=True, error_model="numpy")
@@ -91,6 +91,41 @@ def rhs_lanes(T, Y, P, out, bad):
         bad[_l] = not (_ok0 & _ok1)
         out[2, _l] = _x0
         out[3, _l] = _x1
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(4)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(16)
+    q_x = y[0]
+    q_y = y[1]
+    p_lam = p[0]
+    _c0 = 2.0*p_lam
+    _c1 = _c0*q_y
+    _c2 = -_c0*q_x
+    _m0_0 = 1.0
+    _m1_0 = 0.0
+    _m1_1 = 1.0
+    _jac[2] = 1.0
+    _jac[7] = 1.0
+    _jac[8] = -1.0 - _c1
+    _jac[9] = _c2
+    _jac[12] = _c2
+    _jac[13] = -1.0 + _c1
+    out[:] = _jac.reshape((4, 4))
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0),
+        (_m1_0, _m1_1),
+    ))
+    return ldlt_solve_matrix(mm, out[2:])
 
 
 @njit(cache=True, error_model="numpy")

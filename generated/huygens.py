@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -72,6 +72,42 @@ def rhs_lanes(T, Y, P, out, bad):
         _x0 = _z0*_r0
         bad[_l] = not (_ok0)
         out[1, _l] = _x0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(4)
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    _acc0 = _ydot[1]
+    _c0 = (0.5)*q_theta
+    _c1 = cos(_c0)
+    _c2 = p_m*p_R**2
+    _c3 = _c2*_c1**2
+    _c4 = qd_theta**2
+    _c5 = sin(_c0)
+    _c6 = 4.0*_c1*_c2*_c5
+    _m0_0 = 4.0*_c3
+    _jac[1] = 1.0
+    _jac[2] = _acc0*_c6 + _c3*_c4 - _c2*_c4*_c5**2 - p_R*p_g*p_m*cos(q_theta)
+    _jac[3] = _c6*qd_theta
+    out[:] = _jac.reshape((2, 2))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
 
 
 @njit(cache=True, error_model="numpy")

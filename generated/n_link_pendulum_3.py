@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -176,6 +176,104 @@ def rhs_lanes(T, Y, P, out, bad):
         out[3, _l] = _x0
         out[4, _l] = _x1
         out[5, _l] = _x2
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(36)
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_m3 = p[2]
+    p_l1 = p[3]
+    p_l2 = p[4]
+    p_l3 = p[5]
+    p_g = p[6]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c0 = p_m2 + p_m3
+    _c1 = _c0 + p_m1
+    _c2 = sin(q_theta2)
+    _c3 = sin(q_theta1)
+    _c4 = cos(q_theta2)
+    _c5 = cos(q_theta1)
+    _c6 = _c0*p_l2
+    _c7 = _c6*p_l1
+    _c8 = _c7*(_c2*_c3 + _c4*_c5)
+    _c9 = sin(q_theta3)
+    _c10 = cos(q_theta3)
+    _c11 = p_l3*p_m3
+    _c12 = _c11*p_l1
+    _c13 = _c12*(_c10*_c5 + _c3*_c9)
+    _c14 = _c11*p_l2
+    _c15 = _c14*(_c10*_c4 + _c2*_c9)
+    _c16 = qd_theta2**2
+    _c17 = _c16*_c8
+    _c18 = qd_theta3**2
+    _c19 = _c13*_c18
+    _c20 = _c7*(_c2*_c5 - _c3*_c4)
+    _c21 = _acc1*_c20
+    _c22 = _c12*(_c5*_c9 - _c10*_c3)
+    _c23 = _acc2*_c22
+    _c24 = 2.0*_c20
+    _c25 = 2.0*_c22
+    _c26 = qd_theta1**2
+    _c27 = _c26*_c8
+    _c28 = _acc0*_c20
+    _c29 = _c14*(_c10*_c2 - _c4*_c9)
+    _c30 = _acc2*_c29
+    _c31 = _c15*_c18
+    _c32 = 2.0*_c29
+    _c33 = _c13*_c26
+    _c34 = _acc0*_c22
+    _c35 = _c15*_c16
+    _c36 = _acc1*_c29
+    _m0_0 = _c1*p_l1**2
+    _m1_0 = _c8
+    _m1_1 = _c0*p_l2**2
+    _m2_0 = _c13
+    _m2_1 = _c15
+    _m2_2 = p_m3*p_l3**2
+    _jac[3] = 1.0
+    _jac[10] = 1.0
+    _jac[17] = 1.0
+    _jac[18] = -_c17 - _c19 - _c21 - _c23 - _c1*_c5*p_g*p_l1
+    _jac[19] = _c17 + _c21
+    _jac[20] = _c19 + _c23
+    _jac[22] = _c24*qd_theta2
+    _jac[23] = _c25*qd_theta3
+    _jac[24] = _c27 - _c28
+    _jac[25] = _c28 + _c30 - _c27 - _c31 - _c4*_c6*p_g
+    _jac[26] = _c31 - _c30
+    _jac[27] = -_c24*qd_theta1
+    _jac[29] = -_c32*qd_theta3
+    _jac[30] = _c33 - _c34
+    _jac[31] = _c35 + _c36
+    _jac[32] = _c34 - _c33 - _c35 - _c36 - _c10*_c11*p_g
+    _jac[33] = -_c25*qd_theta1
+    _jac[34] = _c32*qd_theta2
+    out[:] = _jac.reshape((6, 6))
+    # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0, 0.0),
+        (_m1_0, _m1_1, 0.0),
+        (_m2_0, _m2_1, _m2_2),
+    ))
+    return ldlt_solve_matrix(mm, out[3:])
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
 
 
 @njit(cache=True, error_model="numpy")
@@ -308,6 +308,157 @@ def rhs_lanes(T, Y, P, out, bad):
         out[9, _l] = _x3
         out[10, _l] = _x4
         out[11, _l] = _x5
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(12)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(144)
+    q_x1 = y[0]
+    q_y1 = y[1]
+    q_x2 = y[2]
+    q_y2 = y[3]
+    q_x3 = y[4]
+    q_y3 = y[5]
+    p_G = p[0]
+    p_m1 = p[1]
+    p_m2 = p[2]
+    p_m3 = p[3]
+    _c0 = q_x1 - q_x2
+    _c1 = _c0**2
+    _c2 = q_y1 - q_y2
+    _c3 = _c2**2
+    _c4 = _c1 + _c3
+    _c5 = p_G*p_m1*p_m2
+    _c6 = 3.0*_c5/(_c4**2*math.sqrt(_c4))
+    _c7 = _c1*_c6
+    _c8 = _c5/(_c4*math.sqrt(_c4))
+    _c9 = -_c8
+    _c10 = -q_x3
+    _c11 = _c10 + q_x1
+    _c12 = _c11**2
+    _c13 = -q_y3
+    _c14 = _c13 + q_y1
+    _c15 = _c14**2
+    _c16 = _c12 + _c15
+    _c17 = p_G*p_m3
+    _c18 = _c17*p_m1
+    _c19 = _c18/(_c16*math.sqrt(_c16))
+    _c20 = -_c19
+    _c21 = 3.0*_c18/(_c16**2*math.sqrt(_c16))
+    _c22 = _c12*_c21
+    _c23 = _c20 + _c22
+    _c24 = _c11*_c14*_c21
+    _c25 = _c0*_c2*_c6
+    _c26 = _c24 + _c25
+    _c27 = _c8 - _c7
+    _c28 = -_c25
+    _c29 = _c19 - _c22
+    _c30 = -_c24
+    _c31 = _c3*_c6
+    _c32 = _c15*_c21
+    _c33 = _c20 + _c32
+    _c34 = _c8 - _c31
+    _c35 = _c19 - _c32
+    _c36 = _c10 + q_x2
+    _c37 = _c36**2
+    _c38 = _c13 + q_y2
+    _c39 = _c38**2
+    _c40 = _c37 + _c39
+    _c41 = _c17*p_m2
+    _c42 = 3.0*_c41/(_c40**2*math.sqrt(_c40))
+    _c43 = _c37*_c42
+    _c44 = _c41/(_c40*math.sqrt(_c40))
+    _c45 = -_c44
+    _c46 = _c45 + _c9
+    _c47 = _c36*_c38*_c42
+    _c48 = _c25 + _c47
+    _c49 = _c44 - _c43
+    _c50 = -_c47
+    _c51 = _c39*_c42
+    _c52 = _c44 - _c51
+    _c53 = _c24 + _c47
+    _m0_0 = p_m1
+    _m1_0 = 0.0
+    _m1_1 = p_m1
+    _m2_0 = 0.0
+    _m2_1 = 0.0
+    _m2_2 = p_m2
+    _m3_0 = 0.0
+    _m3_1 = 0.0
+    _m3_2 = 0.0
+    _m3_3 = p_m2
+    _m4_0 = 0.0
+    _m4_1 = 0.0
+    _m4_2 = 0.0
+    _m4_3 = 0.0
+    _m4_4 = p_m3
+    _m5_0 = 0.0
+    _m5_1 = 0.0
+    _m5_2 = 0.0
+    _m5_3 = 0.0
+    _m5_4 = 0.0
+    _m5_5 = p_m3
+    _jac[6] = 1.0
+    _jac[19] = 1.0
+    _jac[32] = 1.0
+    _jac[45] = 1.0
+    _jac[58] = 1.0
+    _jac[71] = 1.0
+    _jac[72] = _c23 + _c7 + _c9
+    _jac[73] = _c26
+    _jac[74] = _c27
+    _jac[75] = _c28
+    _jac[76] = _c29
+    _jac[77] = _c30
+    _jac[84] = _c26
+    _jac[85] = _c31 + _c33 + _c9
+    _jac[86] = _c28
+    _jac[87] = _c34
+    _jac[88] = _c30
+    _jac[89] = _c35
+    _jac[96] = _c27
+    _jac[97] = _c28
+    _jac[98] = _c43 + _c46 + _c7
+    _jac[99] = _c48
+    _jac[100] = _c49
+    _jac[101] = _c50
+    _jac[108] = _c28
+    _jac[109] = _c34
+    _jac[110] = _c48
+    _jac[111] = _c31 + _c46 + _c51
+    _jac[112] = _c50
+    _jac[113] = _c52
+    _jac[120] = _c29
+    _jac[121] = _c30
+    _jac[122] = _c49
+    _jac[123] = _c50
+    _jac[124] = _c23 + _c43 + _c45
+    _jac[125] = _c53
+    _jac[132] = _c30
+    _jac[133] = _c35
+    _jac[134] = _c50
+    _jac[135] = _c52
+    _jac[136] = _c53
+    _jac[137] = _c33 + _c45 + _c51
+    out[:] = _jac.reshape((12, 12))
+    # out[6:] = M⁻¹ out[6:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0, 0.0, 0.0, 0.0, 0.0),
+        (_m1_0, _m1_1, 0.0, 0.0, 0.0, 0.0),
+        (_m2_0, _m2_1, _m2_2, 0.0, 0.0, 0.0),
+        (_m3_0, _m3_1, _m3_2, _m3_3, 0.0, 0.0),
+        (_m4_0, _m4_1, _m4_2, _m4_3, _m4_4, 0.0),
+        (_m5_0, _m5_1, _m5_2, _m5_3, _m5_4, _m5_5),
+    ))
+    return ldlt_solve_matrix(mm, out[6:])
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
 
 
 @njit(cache=True, error_model="numpy")
@@ -100,6 +100,52 @@ def rhs_lanes(T, Y, P, out, bad):
         bad[_l] = not (_ok0 & _ok1)
         out[2, _l] = _x0
         out[3, _l] = _x1
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(4)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(16)
+    q_x = y[0]
+    q_y = y[1]
+    p_mu = p[0]
+    _c0 = p_mu + q_x
+    _c1 = -1.0 + _c0
+    _c2 = _c1**2
+    _c3 = q_y**2
+    _c4 = _c2 + _c3
+    _c5 = 3.0*p_mu/(_c4**2*math.sqrt(_c4))
+    _c6 = _c0**2
+    _c7 = -1.0 + p_mu
+    _c8 = _c3 + _c6
+    _c9 = 3.0*_c7/(_c8**2*math.sqrt(_c8))
+    _c10 = 1.0 + _c7/(_c8*math.sqrt(_c8)) - p_mu/(_c4*math.sqrt(_c4))
+    _c11 = _c1*_c5*q_y - _c0*_c9*q_y
+    _m0_0 = 1.0
+    _m1_0 = 0.0
+    _m1_1 = 1.0
+    _jac[2] = 1.0
+    _jac[7] = 1.0
+    _jac[8] = _c10 + _c2*_c5 - _c6*_c9
+    _jac[9] = _c11
+    _jac[11] = 2.0
+    _jac[12] = _c11
+    _jac[13] = _c10 + _c3*_c5 - _c3*_c9
+    _jac[14] = -2.0
+    out[:] = _jac.reshape((4, 4))
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0),
+        (_m1_0, _m1_1),
+    ))
+    return ldlt_solve_matrix(mm, out[2:])
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -99,6 +99,54 @@ def rhs_lanes(T, Y, P, out, bad):
         bad[_l] = not (_ok0 & _ok1)
         out[2, _l] = _x0
         out[3, _l] = _x1
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(4)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(16)
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _acc1 = _ydot[3]
+    _c0 = p_m*p_l**2
+    _c1 = sin(q_theta)
+    _c2 = _c0*_c1**2
+    _c3 = qd_phi**2
+    _c4 = cos(q_theta)
+    _c5 = _c0*_c4**2
+    _c6 = _c0*_c1*_c4
+    _c7 = 2.0*_c6
+    _c8 = _c7*qd_phi
+    _c9 = 2.0*qd_theta
+    _c10 = _c9*qd_phi
+    _m0_0 = _c0
+    _m1_0 = 0.0
+    _m1_1 = _c2
+    _jac[2] = 1.0
+    _jac[7] = 1.0
+    _jac[8] = _c3*_c5 - _c2*_c3 - _c4*p_g*p_l*p_m
+    _jac[11] = _c8
+    _jac[12] = _c10*_c2 - _acc1*_c7 - _c10*_c5
+    _jac[14] = -_c8
+    _jac[15] = -_c6*_c9
+    out[:] = _jac.reshape((4, 4))
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0),
+        (_m1_0, _m1_1),
+    ))
+    return ldlt_solve_matrix(mm, out[2:])
 
 
 @njit(cache=True, error_model="numpy")

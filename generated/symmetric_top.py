@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -148,6 +148,76 @@ def rhs_lanes(T, Y, P, out, bad):
         out[3, _l] = _x0
         out[4, _l] = _x1
         out[5, _l] = _x2
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(36)
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _acc0 = _ydot[3]
+    _acc2 = _ydot[5]
+    _c0 = p_M*p_l**2
+    _c1 = p_I3 - _c0 - p_I1
+    _c2 = cos(q_theta)
+    _c3 = _c1*_c2**2
+    _c4 = _c0 + p_I1
+    _c5 = _c2*p_I3
+    _c6 = sin(q_theta)
+    _c7 = _c1*_c6**2
+    _c8 = 2.0*qd_psi
+    _c9 = _c8*qd_theta
+    _c10 = _c5*qd_theta
+    _c11 = _c1*_c2*_c6
+    _c12 = 2.0*_c11
+    _c13 = _c6*p_I3
+    _c14 = _c11*_c8
+    _c15 = _c13*qd_phi
+    _c16 = _c13*qd_theta
+    _c17 = qd_psi**2
+    _c18 = _c13*qd_psi
+    _m0_0 = _c3 + _c4
+    _m1_0 = 0.0
+    _m1_1 = _c4
+    _m2_0 = _c5
+    _m2_1 = 0.0
+    _m2_2 = p_I3
+    _jac[3] = 1.0
+    _jac[10] = 1.0
+    _jac[17] = 1.0
+    _jac[19] = _acc0*_c12 + _acc2*_c13 + _c10*qd_phi + _c3*_c9 - _c7*_c9
+    _jac[21] = _c12*qd_theta
+    _jac[22] = _c14 + _c15
+    _jac[23] = _c16
+    _jac[25] = _c17*_c7 - _c17*_c3 - _c5*qd_phi*qd_psi + _c2*p_M*p_g*p_l
+    _jac[27] = -_c14 - _c15
+    _jac[29] = -_c18
+    _jac[31] = _acc0*_c13 + _c10*qd_psi
+    _jac[33] = _c16
+    _jac[34] = _c18
+    out[:] = _jac.reshape((6, 6))
+    # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0, 0.0),
+        (_m1_0, _m1_1, 0.0),
+        (_m2_0, _m2_1, _m2_2),
+    ))
+    return ldlt_solve_matrix(mm, out[3:])
 
 
 @njit(cache=True, error_model="numpy")

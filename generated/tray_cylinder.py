@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin, vsin
 
 
@@ -71,6 +71,30 @@ def rhs_lanes(T, Y, P, out, bad):
         _x0 = _z0*_r0
         bad[_l] = not (_ok0)
         out[1, _l] = _x0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(4)
+    p_M = p[0]
+    p_R = p[1]
+    p_I = p[2]
+    _m0_0 = p_M + p_I/p_R**2
+    _jac[1] = 1.0
+    out[:] = _jac.reshape((2, 2))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
 
 
 @njit(cache=True, error_model="numpy")

@@ -115,12 +115,9 @@ def _rhs_jacobian(form: FirstOrderForm) -> tuple:
     kernel = _kernel(
         "rhs_jacobian",
         RHS_JACOBIAN_DOC +
-        "With q̇ = N(q, u, t) and M u̇ = F solved by `rhs`: rows ∂N/∂y, then\n"
-        "  ∂u̇/∂y = M⁻¹ (∂F/∂y − ∂(M ū)/∂y |ū=u̇),\n"
-        "the accelerations ū held fixed while differentiating M ū.\n\n"
-        "Returns 0, or j > 0 when `rhs` returns j (pivot j of M zero), or when the LU of M here finds\n"
-        "pivot j zero (the same test: only within rounding of its threshold can the two differ);\n"
-        "`out` is then invalid.",
+        "Rows ∂N/∂y of q̇ = N(q, u, t), then ∂u̇/∂y = M⁻¹ (∂F/∂y − ∂(M ū)/∂y |ū=u̇) (u̇ from `rhs`).\n"
+        "Returns 0, or j > 0 as `rhs` does, or when this LU of M finds pivot j zero (then `rhs` was\n"
+        "within rounding of its threshold); `out` is then invalid.",
         ARGS, stores, mapping, loads,
     )
     before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:", f"{INDENT}return _status",

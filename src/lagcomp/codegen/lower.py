@@ -398,8 +398,7 @@ def jacobian_entry(i: int, j: int, size: int) -> str:
 
 #: The docstring of every ``rhs_jacobian`` kernel: what it computes; `_rhs_jacobian_kernel` adds how.
 RHS_JACOBIAN_DOC = (
-    "Jacobian of y' = f(t, y) as `rhs` computes it, shape (N, N) into `out` (N = len(y)): out[i, j] = ∂f_i/∂y_j,\n"
-    "exact (differentiated symbolically, no finite differences).\n\n"
+    "Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).\n"
 )
 
 
@@ -428,12 +427,9 @@ def _rhs_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     return _kernel(
         "rhs_jacobian",
         RHS_JACOBIAN_DOC +
-        "With M a = F solved by `rhs` (a = q̈): rows [0 | I] for q̇, then\n"
-        "  ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a),   ∂a/∂q̇ = M⁻¹ ∂F/∂q̇,\n"
-        "the accelerations ā held fixed while differentiating M ā (M does not depend on q̇).\n\n"
-        "Returns 0, or k > 0 when `rhs` returns k (pivot k of M not positive), or when the LDLᵀ of M\n"
-        "here finds pivot k not positive (the same test: only within rounding of its threshold can\n"
-        "the two differ); `out` is then invalid.",
+        "Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).\n"
+        "Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`\n"
+        "was within rounding of its threshold); `out` is then invalid.",
         ("t", "y", "p", "out"), stores, mapping, loads, solve=JacobianSolve(n=n, size=2 * n, m=m),
     )
 

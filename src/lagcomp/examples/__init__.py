@@ -17,6 +17,7 @@ through the `EXAMPLES` registry:
 ``unbalanced_cylinder``    rolling cylinder whose centre of mass is off its axis
 ``driven_pendulum``        pendulum on a vertically vibrated support (Kapitza)
 ``henon_heiles``           star in a galactic potential; events for its Poincaré section
+``stiff_spring_pendulum``  pendulum on a stiff damped spring (k/m = 10⁶): a stiff problem
 ``hoop_bead_reaction``     the hoop bead with φ released: the hoop's normal push as λ
 ``unbalanced_cylinder_reactions``  the unbalanced cylinder with F_v and F_h from released constraints
 ``free_axle``              axle with two independent wheels on an incline (3 multipliers)
@@ -58,6 +59,7 @@ from lagcomp.examples.unconstrained import (
     rope_friction,
     simple_pendulum,
     sling,
+    stiff_spring_pendulum,
     tray_cylinder,
     unbalanced_cylinder,
 )
@@ -71,6 +73,7 @@ EXAMPLES: dict[str, Callable[..., System]] = {
     for f in (
         simple_pendulum, double_pendulum, n_link_pendulum, sling, rope, rope_friction,
         hoop_bead, huygens, tray_cylinder, unbalanced_cylinder, driven_pendulum, henon_heiles,
+        stiff_spring_pendulum,
     )
 }
 EXAMPLES.update(CONSTRAINED_EXAMPLES)

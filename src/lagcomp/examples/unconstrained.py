@@ -16,6 +16,7 @@ from lagcomp.model import Event, System, coordinates, t
 __all__ = [
     "simple_pendulum", "double_pendulum", "n_link_pendulum", "sling", "rope", "rope_friction",
     "hoop_bead", "huygens", "tray_cylinder", "unbalanced_cylinder", "driven_pendulum", "henon_heiles",
+    "stiff_spring_pendulum",
 ]
 
 
@@ -355,4 +356,39 @@ def henon_heiles() -> System:
         defaults={"lam": 1.0},
         q0=(0.0, float(y0)), qd0=(float(xd0), 0.0), t_end=200.0,
         events=(Event("section", x, direction=1), Event("y_turn", y.diff(t), direction=-1)),
+    )
+
+
+def stiff_spring_pendulum() -> System:
+    """Bob of mass m on a stiff, damped spring (stiffness k, rest length l0, damper c), swinging in gravity g.
+
+    A stiff problem: the spring's fast mode next to the slow swing.  Coordinates r (the spring's
+    length) and θ (its angle from the downward vertical); bob at (r sin θ, −r cos θ), y up.
+    T = ½ m (ṙ² + r² θ̇²),  V = ½ k (r − l0)² − m g r cos θ,  D = ½ c ṙ² (the damper along the spring).
+    Equations:
+        m r̈ = m r θ̇² − k (r − l0) + m g cos θ − c ṙ,
+        r θ̈ = −2 ṙ θ̇ − g sin θ.
+    Linearized about the stretched rest length, the spring's own mode is m x'' + c x' + k x = 0: with the
+    defaults k/m = 10⁶ s⁻² and c = 2 √(k m) (critical damping) both its eigenvalues are −c/(2m) = −1000 s⁻¹,
+    while the swing has a period near 2π √(l0/g) ≈ 2 s.  An explicit method's step is bounded by that
+    eigenvalue (h ≲ 3/1000 s for DOP853) however smooth the motion is; a stiff method's is not.
+    The default start is at rest with the spring stretched to balance gravity along it,
+    r0 = l0 + m g cos θ0 / k, so that the fast mode is hardly excited: the motion stays on its slow manifold.
+    T + V decreases only through D (the power −c ṙ²).
+    """
+    r, theta = coordinates("r theta")
+    m, k, c, l0, g = _params("m k c l0 g")
+    defaults = {"m": 1.0, "k": 1.0e6, "c": 2.0e3, "l0": 1.0, "g": 9.81}
+    theta0 = 1.0
+    r0 = defaults["l0"] + defaults["m"] * defaults["g"] * float(sp.cos(theta0)) / defaults["k"]
+    return System(
+        coordinates=(r, theta),
+        T=m * (r.diff(t) ** 2 + r**2 * theta.diff(t) ** 2) / 2,
+        V=k * (r - l0) ** 2 / 2 - m * g * r * sp.cos(theta),
+        dissipation=c * r.diff(t) ** 2 / 2,
+        parameters=(m, k, c, l0, g),
+        name="stiff_spring_pendulum",
+        description="Pendulum on a stiff damped spring (k/m = 1e6): a stiff problem for method='radau'.",
+        defaults=defaults,
+        q0=(r0, theta0), qd0=(0.0, 0.0), t_end=10.0,
     )

@@ -29,7 +29,8 @@ OUTCOME = types.UniTuple(types.int64, 2)
 #: ``rhs(t, y, p, out) -> int``: ``out = y'``; 0, or k > 0 when the mass matrix was singular at pivot k.
 RHS = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, VECTOR))
 #: ``rhs_jacobian(t, y, p, out) -> int``: ``out`` (N, N) = ∂f/∂y of y' = f(t, y), row i the component f_i,
-#: column j the variable y_j, exact (emitted from the symbolic equations); 0, or k > 0 as ``rhs`` returns.
+#: column j the variable y_j, exact (emitted from the symbolic equations); 0, or k > 0 as ``rhs`` returns, or
+#: ``lagcomp.ir.NO_JACOBIAN`` (-1) where the module has none (its ``RHS_JACOBIAN_REFUSED`` says why).
 RHS_JACOBIAN = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, MATRIX))
 #: ``project(t, y, p) -> int``: moves ``y`` onto the constraints in place; 0, or k > 0 when impossible.
 PROJECT = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR))
