@@ -29,6 +29,8 @@ class Status(enum.IntEnum):
     NOT_CONVERGED = -5
     RESIDUAL_EXCEEDED = -6
     MEMORY_FULL = -7
+    NEWTON_FAILED = -8
+    ITERATION_MATRIX_SINGULAR = -9
     BUFFER_FULL = 10
     PAUSED = 11
 
@@ -57,6 +59,12 @@ _MESSAGES = {
                               "(tighten rtol/atol, or use projection=True or baumgarte=(alpha, beta)).",
     Status.MEMORY_FULL: "The saved rows reached `memory_limit`; the run stopped and kept them (save every K-th step "
                         "with `save_every`, keep only the summary with record=\"summary\", or raise `memory_limit`).",
+    Status.NEWTON_FAILED: "The Newton iteration of the stage equations (radau) did not converge even at the "
+                          "smallest step: the Jacobian may not match the right-hand side, or the solution is "
+                          "singular here (check the model near this state, or loosen rtol/atol).",
+    Status.ITERATION_MATRIX_SINGULAR: "The iteration matrix γ/h·I − J of radau stayed singular down to the smallest "
+                                      "step (a degenerate Jacobian J): check the model near this state, or use an "
+                                      "explicit method (dop853).",
     Status.BUFFER_FULL: "The output buffer is full: call again with a fresh one.",
     Status.PAUSED: "The call's step budget is used up: call again with a later one.",
 }
