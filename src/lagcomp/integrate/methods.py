@@ -168,7 +168,8 @@ METHODS = {
         Method("radau", 5, True, "lagcomp.integrate.drivers.radau:radau_run", radau.RADAU5,
                "Radau IIA order 5 (Hairer-Wanner's RADAU5), implicit, adaptive, for stiff systems, with the "
                "model's exact Jacobian; unconstrained systems", unconstrained_only=True,
-               kernels=("rhs", "rhs_jacobian", "event_values"), carry="lagcomp.integrate.drivers.radau:new_carry"),
+               kernels=("rhs", "rhs_jacobian", "event_values"), carry="lagcomp.integrate.drivers.radau:new_carry",
+               sweep="lagcomp.integrate.drivers.radau_sweep:sweep_radau"),
         Method("taylor", 20, True, "lagcomp.integrate.drivers.taylor:taylor_run", None,
                "Taylor series to order ceil(-ln(tol)/2 + 1) (20 at machine precision), adaptive, dense "
                "output from the series (Jorba & Zou); unconstrained systems", unconstrained_only=True,
