@@ -237,3 +237,26 @@ def test_singular_iteration_matrix_is_detected():
     pivots = np.empty(2, dtype=np.int64), np.empty(2, dtype=np.int64)
     assert _factor(jacobian, h, RADAU5.MU.copy(), lu_real, pivots[0], lu_complex, pivots[1]) > 0
     assert _factor(np.zeros((2, 2)), h, RADAU5.MU.copy(), lu_real, pivots[0], lu_complex, pivots[1]) == 0
+
+
+def test_sweep_loop_gives_each_trajectory_of_the_driver():
+    """`sweep_radau` over three spring-damper stiffnesses: each row's final state and counts are those of the
+    driver run alone (bitwise), with its own carry."""
+    from lagcomp.integrate.drivers.radau_sweep import sweep_radau
+
+    stiffness = [1e4, 1e6, 1e8]
+    P = np.array([[SPRING, k, 2 * np.sqrt(k)] for k in stiffness])
+    Y0 = np.array([[1.0, 0.0]] * 3)
+    final, t_final = np.empty((3, 2)), np.empty(3)
+    status, counts = np.empty(3, dtype=np.int64), np.empty((3, 3), dtype=np.int64)
+    dense, energy = np.empty((3, 0, 2)), np.empty((3, 2))
+    event_count, event_t, event_y = np.empty((3, 0), np.int64), np.empty((3, 0, 1)), np.empty((3, 0, 1, 2))
+    sweep_radau(stiff_kernels.rhs, stiff_kernels.rhs_jacobian, driver_kernels.event_values,
+                driver_kernels.oscillator_energy, Y0, P, 0, 0.0, 0.01, 1e-8, 1e-8, np.inf, 10**9, 10**9, np.empty(0),
+                False, NO_EVENTS, NO_EVENTS, final, t_final, status, counts, dense, energy, event_count, event_t,
+                event_y, *RADAU5.driver_arguments())
+    for row, p in enumerate(P):
+        run = Run(p, [1.0, 0.0], 0.01, 1e-8, 1e-8)
+        assert run.solve()[0] == status[row] == Status.DONE
+        assert np.array_equal(final[row], run.state.y) and t_final[row] == 0.01
+        assert list(counts[row]) == [run.state.nfev, run.state.nsteps, run.state.nrejected]
