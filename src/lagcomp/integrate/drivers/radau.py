@@ -62,6 +62,22 @@ is written so that NaN rejects a step (``not err <= 1``) or ends the run (``not 
 a step whose error estimate is not finite is rejected with h × `MIN_FACTOR` (scipy would accept it).
 One deviation from scipy in a degenerate case: an error norm of exactly 0 is not remembered as the
 controller's err_old (it would give a factor 0 at the next step).
+
+Measured
+--------
+
+Steps: scipy's own at rtol 1e-3 .. 1e-9 on the stiff spring-damper, Robertson and the oscillator (equal
+counts of steps, f and J evaluations and LU factorisations; tests/test_radau_driver.py); on the stiff
+Van der Pol problem (ε = 1e-6) round-off steers the runs apart (a Newton iteration that converges one
+iteration later changes the step), within 1% in steps (e.g. 882 against 874 at rtol 1e-6).  The first
+step's re-filtered estimate (HNW's, not scipy's) changes the first step where its first trial fails.
+
+Speed (``python -m bench.bench_radau``: Van der Pol ε = 1e-6 and Robertson, hand-written kernels, the
+driver called directly, at equal error against an LSODA reference at rtol 1e-12): scipy's Radau on the
+same numba kernels takes 100-150 times as long; numbalsoda's LSODA 0.6-1.0 times (these systems have
+2 and 3 components, and LSODA needs fewer f evaluations for the same error there); DOP853 on the Van
+der Pol problem takes 600 000 steps, ~800 times as long.  A driver call costs ~16 µs besides its steps
+with `AddressedKernel` kernels (~120 µs with dispatchers: numba unboxes three kernels).
 """
 
 from __future__ import annotations
