@@ -83,10 +83,50 @@ def scipy_radau(p, y0, t_end, rtol, atol, **options):
                      **options)
 
 
-def test_constants_are_radau_iia_and_scipys():
-    """T, T⁻¹, the shifts, E and P as derived match scipy's literals; A⁻¹ T = T Λ with Hairer's normalisation."""
+def derived_constants() -> dict[str, np.ndarray]:
+    """RADAU5's constants from the Radau IIA tableau in 40-digit arithmetic, rounded once to float64
+    (the derivation `lagcomp.integrate.radau` documents)."""
+    import mpmath
+
+    with mpmath.workdps(40):
+        s6 = mpmath.sqrt(6)
+        c = [(4 - s6) / 10, (4 + s6) / 10, mpmath.mpf(1)]
+        a = mpmath.matrix(3, 3)         # a_ij = integral of the Lagrange polynomial l_j over [0, c_i]
+        for j in range(3):
+            m, k = (c[i] for i in range(3) if i != j)
+            scale = (c[j] - m) * (c[j] - k)
+            for i in range(3):
+                x = c[i]
+                a[i, j] = (x ** 3 / 3 - (m + k) * x ** 2 / 2 + m * k * x) / scale
+        a_inv = a ** -1
+        values, vectors = mpmath.eig(a_inv)
+        real = min(range(3), key=lambda i: abs(mpmath.im(values[i])))
+        pair = max(range(3), key=lambda i: mpmath.im(values[i]))
+        gamma = mpmath.re(values[real])
+        v_real = [mpmath.re(vectors[i, real] / vectors[2, real]) for i in range(3)]
+        v_pair = [vectors[i, pair] / vectors[2, pair] for i in range(3)]
+        t = mpmath.matrix([[v_real[i], mpmath.re(v_pair[i]), mpmath.im(v_pair[i])] for i in range(3)])
+        mu_complex = mpmath.conj(values[pair])
+        vander = mpmath.matrix([[1, 1, 1], c, [ci ** 2 for ci in c]])
+        b_hat = vander ** -1 * mpmath.matrix([1 - 1 / gamma, mpmath.mpf(1) / 2, mpmath.mpf(1) / 3])
+        error = [gamma * sum((b_hat[k] - a[2, k]) * a_inv[k, j] for k in range(3)) for j in range(3)]
+        dense = (mpmath.matrix([[ci ** (k + 1) for k in range(3)] for ci in c]) ** -1).T
+
+        def as_floats(m, shape):
+            return np.array(m.tolist() if hasattr(m, "tolist") else m, dtype=float).reshape(shape)
+
+        return dict(C=as_floats(c, 3), T=as_floats(t, (3, 3)), TI=as_floats(t ** -1, (3, 3)),
+                    MU=np.array([float(gamma), float(mpmath.re(mu_complex)), float(mpmath.im(mu_complex))]),
+                    ERROR_WEIGHTS=as_floats(error, 3), DENSE_WEIGHTS=as_floats(dense, (3, 3)))
+
+
+def test_constants_are_derived_from_the_tableau_and_are_scipys():
+    """The stored constants are the derivation's, bit for bit; they match scipy's literals to round-off;
+    A⁻¹ T = T Λ with Hairer's normalisation (T's last row (1, 1, 0))."""
     from scipy.integrate._ivp import radau as reference
 
+    for name, value in derived_constants().items():
+        assert np.array_equal(getattr(RADAU5, name), value), name
     assert np.allclose(RADAU5.C, reference.C, rtol=1e-15, atol=0)
     assert np.allclose(RADAU5.T, reference.T, rtol=1e-14, atol=1e-16)
     assert np.allclose(RADAU5.TI, reference.TI, rtol=1e-14, atol=1e-15)

@@ -1,4 +1,4 @@
-"""Radau IIA of order 5 as data: the constants of the RADAU5 scheme, derived from the tableau at import.
+"""Radau IIA of order 5 as data: the constants of the RADAU5 scheme, derived from the tableau.
 
 The three-stage Radau IIA method collocates at the zeros c of the Radau polynomial
 d²/dx² (x² (x - 1)³) (c = (4 ∓ √6)/10, 1); its stage matrix A (a_ij = ∫₀^{c_i} l_j, l_j the Lagrange
@@ -24,14 +24,15 @@ Dense output: the collocation polynomial u(t + x h) = y + Σ_k Q_k x^(k+1) (k = 
 y + Z_i at x = c_i, i.e. Q = V⁻¹ Z with V_ik = c_i^(k+1); `DENSE_WEIGHTS` P = (V⁻¹)ᵀ gives
 Q_k = Σ_i P_ik Z_i.
 
-Everything is computed in 40-digit arithmetic (mpmath) and rounded once to float64.
+The values below were computed in 40-digit arithmetic (mpmath) and rounded once to float64;
+tests/test_radau_driver.py derives them again from the tableau, bit for bit, and compares them with
+scipy's literals.  (Data rather than a derivation at import: mpmath would add ~25 ms to ``import lagcomp``.)
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import mpmath
 import numpy as np
 
 __all__ = ["RadauIIA", "RADAU5"]
@@ -61,48 +62,26 @@ class RadauIIA:
         return tuple(a.copy() for a in (self.C, self.T, self.TI, self.MU, self.ERROR_WEIGHTS, self.DENSE_WEIGHTS))
 
 
-def _derive() -> RadauIIA:
-    """The constants of RADAU5 from the Radau IIA tableau (see the module docstring)."""
-    with mpmath.workdps(40):
-        s6 = mpmath.sqrt(6)
-        c = [(4 - s6) / 10, (4 + s6) / 10, mpmath.mpf(1)]
-        a = mpmath.matrix(3, 3)
-        for j in range(3):
-            others = [c[m] for m in range(3) if m != j]
-            scale = (c[j] - others[0]) * (c[j] - others[1])
-            # l_j(x) = (x - c_m)(x - c_n)/scale = (x² - (c_m + c_n) x + c_m c_n)/scale, integrated from 0
-            for i in range(3):
-                x = c[i]
-                a[i, j] = (x ** 3 / 3 - (others[0] + others[1]) * x ** 2 / 2 + others[0] * others[1] * x) / scale
-        a_inv = a ** -1
-        values, vectors = mpmath.eig(a_inv)
-        real = min(range(3), key=lambda k: abs(mpmath.im(values[k])))
-        pair = max(range(3), key=lambda k: mpmath.im(values[k]))
-        gamma = mpmath.re(values[real])
-        v_real = [mpmath.re(vectors[i, real] / vectors[2, real]) for i in range(3)]
-        v_pair = [vectors[i, pair] / vectors[2, pair] for i in range(3)]
-        t = mpmath.matrix([[v_real[i], mpmath.re(v_pair[i]), mpmath.im(v_pair[i])] for i in range(3)])
-        ti = t ** -1
-        mu_complex = mpmath.conj(values[pair])
-        vander = mpmath.matrix([[1, 1, 1], c, [ci ** 2 for ci in c]])
-        b_hat = vander ** -1 * mpmath.matrix([1 - 1 / gamma, mpmath.mpf(1) / 2, mpmath.mpf(1) / 3])
-        error = [gamma * sum((b_hat[k] - a[2, k]) * a_inv[k, j] for k in range(3)) for j in range(3)]
-        powers = mpmath.matrix([[ci ** (k + 1) for k in range(3)] for ci in c])
-        dense = (powers ** -1).T
-
-        def floats(m, rows, cols=None):
-            if cols is None:
-                return np.array([float(m[i]) for i in range(rows)])
-            return np.array([[float(m[i, j]) for j in range(cols)] for i in range(rows)])
-
-        return RadauIIA(
-            "radau5", 5, C=floats(c, 3), T=floats(t, 3, 3), TI=floats(ti, 3, 3),
-            MU=np.array([float(gamma), float(mpmath.re(mu_complex)), float(mpmath.im(mu_complex))]),
-            ERROR_WEIGHTS=floats(error, 3), DENSE_WEIGHTS=floats(dense, 3, 3),
-        )
-
-
-#: Radau IIA, 3 stages, order 5, with RADAU5's constants.
-RADAU5 = _derive()
-for array in (RADAU5.C, RADAU5.T, RADAU5.TI, RADAU5.MU, RADAU5.ERROR_WEIGHTS, RADAU5.DENSE_WEIGHTS):
+def _frozen(values) -> np.ndarray:
+    array = np.array(values, dtype=np.float64)
     array.flags.writeable = False
+    return array
+
+
+#: Radau IIA, 3 stages, order 5, with RADAU5's constants: the 40-digit values rounded once to float64
+#: (tests/test_radau_driver.py derives them again and checks every bit).
+RADAU5 = RadauIIA(
+    "radau5", 5,
+    C=_frozen([0.1550510257216822, 0.6449489742783178, 1.0]),
+    T=_frozen([[0.09443876248897524, -0.1412552950209542, 0.030029194105147424],
+               [0.2502131229653333, 0.20412935229379994, -0.3829421127572619],
+               [1.0, 1.0, 0.0]]),
+    TI=_frozen([[4.178718591551905, 0.32768282076106237, 0.5233764454994495],
+                [-4.178718591551905, -0.32768282076106237, 0.47662355450055044],
+                [0.5028726349457868, -2.571926949855605, 0.5960392048282249]]),
+    MU=_frozen([3.637834252744496, 2.6810828736277523, -3.0504301992474105]),
+    ERROR_WEIGHTS=_frozen([-10.048809399827416, 1.382142733160749, -0.3333333333333333]),
+    DENSE_WEIGHTS=_frozen([[10.048809399827416, -25.62959144707664, 15.580782047249224],
+                           [-1.382142733160749, 10.296258113743306, -8.914115380582556],
+                           [0.3333333333333333, -2.6666666666666665, 3.3333333333333335]]),
+)
