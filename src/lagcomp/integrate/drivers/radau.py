@@ -164,9 +164,12 @@ def _factor(jacobian, h, MU, lu_real, pivots_real, lu_complex, pivots_complex):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _newton(rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, d_real, d_complex, lu_real, pivots_real, lu_complex,
+def _newton(rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, f_stage, d_real, d_complex, lu_real, pivots_real, lu_complex,
             pivots_complex, scale, tol):
     """Simplified Newton iteration for the stages Z (3, N), which hold the starting values on entry.
+
+    The stage derivatives go to F (3, N) by way of ``f_stage`` (N,): a row view F[s] per rhs call, built
+    and reference-counted by numba each time, cost more than the copy.
 
     Returns (status, converged, iterations, rate, f evaluations): status 0, the rhs status (> 0) or −1
     for a non-finite stage derivative; rate < 0 when fewer than two iterations were made.
@@ -186,14 +189,16 @@ def _newton(rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, d_real, d_complex, lu_
         for s in range(3):
             for i in range(n):
                 ytmp[i] = y[i] + Z[s, i]
-            status = rhs(t + C[s] * h, ytmp, p, F[s])
+            status = rhs(t + C[s] * h, ytmp, p, f_stage)
             nfev += 1
             if status != 0:
                 return status, False, iterations, rate, nfev
-        for s in range(3):
             for i in range(n):
-                if not np.isfinite(F[s, i]):
-                    return -1, False, iterations, rate, nfev
+                F[s, i] = f_stage[i]
+                if not np.isfinite(f_stage[i]):
+                    status = -1
+            if status != 0:
+                return status, False, iterations, rate, nfev
         for i in range(n):
             f0, f1, f2 = F[0, i], F[1, i], F[2, i]
             d_real[i] = TI[0, 0] * f0 + TI[0, 1] * f1 + TI[0, 2] * f2 - shift_real * W[0, i]
@@ -447,13 +452,15 @@ def radau_run(rhs, rhs_jacobian, event_values,
             h = t_new - t
             h_abs = h
 
-            # Starting values: the last step's polynomial at t + c_i h, less y.
-            if control[H_PREVIOUS] > 0.0:
+            # Starting values: the last step's polynomial at t + c_i h, less y (`dense_state`'s arithmetic,
+            # inline: its row views of ``previous`` cost more than the sums).
+            h_previous = control[H_PREVIOUS]
+            if h_previous > 0.0:
                 for s in range(3):
-                    dense_state(DENSE_POWERS, previous[:3], previous[3], control[T_PREVIOUS], control[H_PREVIOUS],
-                                t + h * C[s], ytmp)
+                    x = (t + h * C[s] - control[T_PREVIOUS]) / h_previous
                     for i in range(n):
-                        Z[s, i] = ytmp[i] - y[i]
+                        acc = ((previous[2, i] * x + previous[1, i]) * x + previous[0, i]) * x
+                        Z[s, i] = (previous[3, i] + h_previous * acc) - y[i]
             else:
                 for s in range(3):
                     for i in range(n):
@@ -475,7 +482,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
                         lu_step = h
                 if not singular:
                     status, converged, iterations, rate, nfev = _newton(
-                        rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, d_real, d_complex, lu_real, pivots_real,
+                        rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, ftmp, d_real, d_complex, lu_real, pivots_real,
                         lu_complex, pivots_complex, scale, newton_tol)
                     counters[NFEV] += nfev
                     if status > 0:
