@@ -78,9 +78,8 @@ same numba kernels takes 140-240 times as long; numbalsoda's LSODA 1.0-1.3 times
 finite-difference Jacobian; these systems have 2 and 3 components); DOP853 on the Van der Pol problem
 takes 600 000 steps, 230 ms (radau: 0.18 ms at rtol 1e-3 and a smaller error).  A driver call costs
 ~16 µs besides its steps with `AddressedKernel` kernels (~120 µs with dispatchers: numba unboxes three
-kernels).  Row views
-(``F[s]`` as the rhs output, ``previous[:3]`` for the starting values) cost 25-37% of the run: the loop
-has none.
+kernels).  Row views (``F[s]`` as the rhs output, ``previous[:3]`` for the starting values) cost
+25-37% of the run: the loop has none.
 """
 
 from __future__ import annotations
