@@ -15,10 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 from numba import types
 
-from lagcomp.integrate import collocation, compositions, tableaux
+from lagcomp.integrate import collocation, compositions, radau, tableaux
 from lagcomp.integrate.collocation import Collocation
 from lagcomp.integrate.compositions import Composition
 from lagcomp.integrate.drivers.kernel_types import AddressedKernel
+from lagcomp.integrate.radau import RadauIIA
 from lagcomp.integrate.tableaux import Tableau, driver_arguments
 
 #: How the Gauss-Legendre methods solve their stage equations: name -> the driver's ``newton``
@@ -55,7 +56,7 @@ class Method:
     adaptive: bool
     #: ``"lagcomp.integrate.drivers.<module>:<function>"``.
     driver: str
-    tableau: Tableau | Composition | Collocation | None
+    tableau: Tableau | Composition | Collocation | RadauIIA | None
     summary: str
     separable_only: bool = False
     holonomic_separable_only: bool = False
@@ -69,6 +70,10 @@ class Method:
     kernels: tuple[str, ...] = ()
     #: The library sweep loop (``"module:function"``) that runs this method over many trajectories.
     sweep: str | None = None
+    #: The library function (``"module:function"``) giving, for a state of N components, the arrays a run of
+    #: this method keeps from one driver call to the next besides (y, clock, counters), which `simulate`
+    #: passes after the coefficients (Radau's Jacobian and last collocation polynomial); None: none.
+    carry: str | None = None
     def bound_driver(self, kernels, addressed: bool = False):
         """The driver with the model's `kernels` (its generated module) bound as its first arguments: their
         dispatchers, or if `addressed` `AddressedKernel`s (cheaper for numba to unbox at each driver call,
@@ -110,7 +115,7 @@ class Method:
             return (*self.tableau.driver_arguments(), MAX_STAGE_ITERATIONS, IMPLICIT_SOLVERS[implicit_solver])
         if self.tableau is None:  # the Taylor method: its order follows from the tolerances; the empty
             return (np.zeros(0),)   # carry restarts with each call (simulate passes one of size n instead)
-        if isinstance(self.tableau, Composition):
+        if isinstance(self.tableau, Composition | RadauIIA):
             return self.tableau.driver_arguments()
         return driver_arguments(self.tableau)
 
@@ -167,6 +172,11 @@ METHODS = {
         Method("gauss3", 6, False, _COLLOCATION, collocation.GAUSS3,
                "3-stage Gauss-Legendre on (q, p), symplectic, order 6", unconstrained_only=True,
                kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
+        Method("radau", 5, True, "lagcomp.integrate.drivers.radau:radau_run", radau.RADAU5,
+               "Radau IIA order 5 (Hairer-Wanner's RADAU5), implicit, adaptive, for stiff systems, with the "
+               "model's exact Jacobian; unconstrained systems", unconstrained_only=True,
+               kernels=("rhs", "rhs_jacobian", "event_values"), carry="lagcomp.integrate.drivers.radau:new_carry",
+               sweep="lagcomp.integrate.drivers.radau_sweep:sweep_radau"),
         Method("taylor", 20, True, "lagcomp.integrate.drivers.taylor:taylor_run", None,
                "Taylor series to order ceil(-ln(tol)/2 + 1) (20 at machine precision), adaptive, dense "
                "output from the series (Jorba & Zou); unconstrained systems", unconstrained_only=True,

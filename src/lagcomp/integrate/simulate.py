@@ -23,6 +23,7 @@ from lagcomp.integrate.constraints import consistent_initial_state, reactions_al
 from lagcomp.integrate.drivers.run_state import STEP, RunState
 from lagcomp.integrate.memory import MEMORY_LIMIT, run_bytes
 from lagcomp.integrate.memory import check as check_memory
+from lagcomp.integrate.methods import library_function
 from lagcomp.integrate.options import RunOptions, positive, run_options
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
@@ -52,6 +53,8 @@ def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions)
     drivers, tableau_arrays = _bound_drivers(m, kernels), options.driver_arguments()
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
         tableau_arrays = (np.zeros(state.y.size),)
+    elif m.carry is not None:  # what the method keeps from call to call (Radau: its Jacobian and last polynomial)
+        tableau_arrays = (*tableau_arrays, *library_function(m.carry)(state.y.size))
     t1, rtol, atol, max_step = options.t1, options.rtol, options.atol, options.max_step
 
     def advance(ts, ys, pause_at, event_buffers, first_call):

@@ -30,6 +30,8 @@ class Status(enum.IntEnum):
     RESIDUAL_EXCEEDED = -6
     MEMORY_FULL = -7
     CONSTRAINTS_NOT_CONVERGED = -8
+    NEWTON_FAILED = -9
+    ITERATION_MATRIX_SINGULAR = -10
     BUFFER_FULL = 10
     PAUSED = 11
 
@@ -61,6 +63,12 @@ _MESSAGES = {
     Status.CONSTRAINTS_NOT_CONVERGED: "RATTLE's Newton iteration for the constraint multipliers did not converge "
                                       "(the step moved the coordinates too far along the constraints' curvature): "
                                       "reduce the step `dt`.",
+    Status.NEWTON_FAILED: "The Newton iteration of the stage equations (radau) did not converge even at the "
+                          "smallest step: the Jacobian may not match the right-hand side, or the solution is "
+                          "singular here (check the model near this state, or loosen rtol/atol).",
+    Status.ITERATION_MATRIX_SINGULAR: "The iteration matrix γ/h·I − J of radau stayed singular down to the smallest "
+                                      "step (a degenerate Jacobian J): check the model near this state, or use an "
+                                      "explicit method (dop853).",
     Status.BUFFER_FULL: "The output buffer is full: call again with a fresh one.",
     Status.PAUSED: "The call's step budget is used up: call again with a later one.",
 }

@@ -7,11 +7,12 @@ by the compiled drivers:
 * ``y`` (N,): the state, the last accepted one on return;
 * ``clock`` float64[2], indexed by `TIME` and `STEP`: the time of ``y``, and the next step size to
   try (adaptive drivers; h <= 0 asks for an initial step) or the last step taken (Taylor);
-* ``counters`` int64[6], indexed by `NFEV` (right-hand-side evaluations), `NSTEPS` (accepted steps
+* ``counters`` int64[8], indexed by `NFEV` (right-hand-side evaluations), `NSTEPS` (accepted steps
   since the run's start, which ``pause_at`` and ``max_steps`` count against), `NREJECTED`,
   `NEXT_EVAL` (index of the next ``t_eval`` point to fill), `SINCE_SAVE` (steps since the last
-  saved row, for ``save_every``) and `EVENT_ROWS` (event rows this call wrote: the caller resets it
-  with each fresh event buffer).
+  saved row, for ``save_every``), `EVENT_ROWS` (event rows this call wrote: the caller resets it
+  with each fresh event buffer), and for the implicit adaptive method (Radau) `NJEV` (Jacobian
+  evaluations) and `NLU` (LU factorisations); the other drivers leave these two at 0.
 
 The slot names are module constants, which numba compiles as literals: ``counters[NSTEPS]`` costs
 what ``counters[1]`` does.  `RunState` is the Python side: the three arrays of a new run, with
@@ -25,8 +26,8 @@ import numpy as np
 #: Slots of ``clock``.
 TIME, STEP = 0, 1
 #: Slots of ``counters``.
-NFEV, NSTEPS, NREJECTED, NEXT_EVAL, SINCE_SAVE, EVENT_ROWS = 0, 1, 2, 3, 4, 5
-CLOCK_SLOTS, COUNTER_SLOTS = 2, 6
+NFEV, NSTEPS, NREJECTED, NEXT_EVAL, SINCE_SAVE, EVENT_ROWS, NJEV, NLU = 0, 1, 2, 3, 4, 5, 6, 7
+CLOCK_SLOTS, COUNTER_SLOTS = 2, 8
 
 
 class RunState:
@@ -53,6 +54,14 @@ class RunState:
     @property
     def nrejected(self) -> int:
         return int(self.counters[NREJECTED])
+
+    @property
+    def njev(self) -> int:
+        return int(self.counters[NJEV])
+
+    @property
+    def nlu(self) -> int:
+        return int(self.counters[NLU])
 
     @property
     def event_rows(self) -> int:

@@ -1,0 +1,629 @@
+"""Adaptive Radau IIA of order 5 for stiff systems: Hairer & Wanner's RADAU5 scheme, the whole loop compiled.
+
+`radau_run` integrates y' = f(t, y) with the three-stage Radau IIA method (`lagcomp.integrate.radau`
+derives its constants), the model's exact Jacobian J = ∂f/∂y (``rhs_jacobian``), step-size control
+and dense output, following Hairer & Wanner, *Solving Ordinary Differential Equations II* (2nd ed.,
+1996), sec. IV.8, and scipy's ``Radau`` (``scipy/integrate/_ivp/radau.py``), whose accepted steps it
+takes up to round-off (tests/test_radau_driver.py compares them):
+
+1. Stage equations in the transformed variables W = T⁻¹ Z (Z_i = y(t + c_i h) − y), solved by the
+   simplified Newton iteration with one real LU of (γ/h I − J) and one complex LU of
+   ((α − iβ)/h I − J) (`lagcomp.kernel_support.linear_solvers.lu_factor`, complex for the second);
+   at most `NEWTON_MAXITER` iterations, stopped early when the convergence rate θ = ‖ΔWₖ‖/‖ΔWₖ₋₁‖
+   is ≥ 1 or predicts no convergence within the budget (θ^(maxiter−k)/(1−θ) ‖ΔW‖ > tol), converged
+   when θ/(1−θ) ‖ΔW‖ < tol with tol = max(10 eps/rtol, min(0.03, √rtol)).  Starting values: the
+   previous step's collocation polynomial extrapolated to t + c_i h (zero at the first step).
+2. Newton failure: with an old Jacobian, evaluate J at (t, y) and retry; with the current one, halve
+   the step.  A singular iteration matrix is handled the same way.
+3. Error: err = (γ/h I − J)⁻¹ (f(t, y) + E·Z/h), RMS norm with scale atol + max(|y|, |y_new|) rtol;
+   on the first step and after a rejection an estimate > 1 is filtered once more,
+   err = (γ/h I − J)⁻¹ (f(t, y + err) + E·Z/h) (HNW IV.8, (8.21); scipy does it after rejections only).
+4. Step size: Gustafsson's predictive controller, factor = min(1, h/h_old (err_old/err)^¼) err^(−¼)
+   times the safety 0.9 (2 maxiter + 1)/(2 maxiter + iterations), bounded by `MIN_FACTOR` on a
+   rejection and `MAX_FACTOR` after an accepted step.  After an accepted step the step is kept
+   (and with it the LU factors) when the factor is below 1.2 and J is not re-evaluated; J is
+   re-evaluated at the new state when the Newton iteration took more than 2 iterations at a rate
+   above 1e-3, else the old J is kept (and marked not current).
+5. Dense output: the collocation polynomial y + Σ_k Q_k x^(k+1), Q = Pᵀ Z (`events.DENSE_POWERS`
+   with rows Q/h): ``t_eval`` points, events (located on it by `events.record_events`, as the explicit
+   drivers do) and the next step's starting values.
+
+Arguments: the kernels ``rhs``, ``rhs_jacobian`` and ``event_values`` (`kernel_types`), then the driver
+protocol of `lagcomp.integrate.drivers` exactly as `lagcomp.integrate.drivers.embedded.embedded_run`
+takes it (``y``, ``clock``, ``counters``, ``p``, ``projecting``, ``residual_max``, ``t_end``, ``rtol``,
+``atol``, ``max_step``, ``max_steps``, ``pause_at``, ``save_every``, ``t_eval``, ``ts``, ``ys``,
+``directions``, ``actions``, ``ev_t``, ``ev_y``, ``ev_i``), so that `lagcomp.integrate.simulate`
+calls both alike; ``projecting`` and ``residual_max`` are unused (the method takes unconstrained
+systems only, as the Taylor driver; constrained ones will be solved as DAEs, not projected).  Then
+the method's constants (`RadauIIA.driver_arguments`: C, T, TI, MU, ERROR_WEIGHTS, DENSE_WEIGHTS) and
+its carry, the state a run keeps from call to call besides (y, clock, counters), owned by the caller
+(`new_carry`):
+
+* ``jacobian`` (N, N): the last J;
+* ``previous`` (4, N): the last step's dense rows Q/h (rows 0-2) and its initial state (row 3);
+* ``control`` float64[`CONTROL_SLOTS`]: the last step's proposed size and error norm (the
+  controller's memory; 0: none), whether J is current (evaluated at the last accepted state or
+  after it) and held at all, the step h of the LU factors held (0: none, refactored at the next
+  call's start: the factors are not kept between calls), and the start and size of the last step
+  (whose polynomial ``previous`` holds; size 0: none).
+
+Counters: besides `NFEV`, `NSTEPS`, `NREJECTED` (error rejections and Newton failures), `NJEV`
+Jacobian evaluations and `NLU` LU factorisations (two per factorisation of the pair, as scipy counts).
+
+It returns ``(status, n_saved)``: DONE; BUFFER_FULL or PAUSED (call again: the continuation takes the
+same steps, bit for bit, with one more f evaluation and, if factors were held, one more pair of LU
+factorisations per call); TERMINATED; NONFINITE, RHS_FAILED (``rhs`` or ``rhs_jacobian`` reported a
+singular mass matrix), STEP_TOO_SMALL, MAX_STEPS, NEWTON_FAILED, ITERATION_MATRIX_SINGULAR, with
+``y`` and ``clock[0]`` the last accepted state.  A step that holds more ``t_eval`` points than the
+output buffer is committed; the next call first writes its remaining points from ``previous``.
+
+The output-buffer, step-clamping and non-finite rules are embedded_run's (its docstring): every test
+is written so that NaN rejects a step (``not err <= 1``) or ends the run (``not h >= min_step``);
+a step whose error estimate is not finite is rejected with h × `MIN_FACTOR` (scipy would accept it).
+One deviation from scipy in a degenerate case: an error norm of exactly 0 is not remembered as the
+controller's err_old (it would give a factor 0 at the next step).
+
+Measured
+--------
+
+Steps: scipy's own at rtol 1e-3 .. 1e-9 on the stiff spring-damper, Robertson and the oscillator (equal
+counts of steps, f and J evaluations and LU factorisations; tests/test_radau_driver.py); on the stiff
+Van der Pol problem (ε = 1e-6) round-off steers the runs apart (a Newton iteration that converges one
+iteration later changes the step), within 1% in steps (e.g. 882 against 874 at rtol 1e-6).  The first
+step's re-filtered estimate (HNW's, not scipy's) changes the first step where its first trial fails.
+
+Speed (``python -m bench.bench_radau``: Van der Pol ε = 1e-6 and Robertson, hand-written kernels, the
+driver called directly, at equal error against an LSODA reference at rtol 1e-12): scipy's Radau on the
+same numba kernels takes 140-240 times as long; numbalsoda's LSODA 1.0-1.3 times (its own
+finite-difference Jacobian; these systems have 2 and 3 components); DOP853 on the Van der Pol problem
+takes 600 000 steps, 230 ms (radau: 0.18 ms at rtol 1e-3 and a smaller error).  A driver call costs
+~16 µs besides its steps with `AddressedKernel` kernels (~120 µs with dispatchers: numba unboxes three
+kernels).  Row views (``F[s]`` as the rhs output, ``previous[:3]`` for the starting values) cost
+25-37% of the run: the loop has none.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from lagcomp.integrate.drivers.events import DENSE_POWERS, dense_state, event_crossings, record_events
+from lagcomp.integrate.drivers.kernel_types import (
+    EVENTS,
+    FLOAT,
+    INDICES,
+    INT,
+    MATRIX,
+    OUTCOME,
+    RHS,
+    RHS_JACOBIAN,
+    VECTOR,
+)
+from lagcomp.integrate.drivers.run_state import (
+    EVENT_ROWS,
+    NEXT_EVAL,
+    NFEV,
+    NJEV,
+    NLU,
+    NREJECTED,
+    NSTEPS,
+    SINCE_SAVE,
+    STEP,
+    TIME,
+)
+from lagcomp.integrate.status import Status
+from lagcomp.kernel_support.linear_solvers import lu_factor, lu_substitute
+
+#: Newton iterations per step (HNW's NIT = 7 in radau5.f; scipy's 6, taken here).
+NEWTON_MAXITER = 6
+#: Bounds of the factor by which one step may change the next (scipy's).
+MIN_FACTOR, MAX_FACTOR = 0.2, 10.0
+#: After an accepted step the step (and the LU factors) is kept unless it would grow by this factor.
+KEEP_STEP_BELOW = 1.2
+#: J is evaluated again after a step whose Newton iteration took more than 2 iterations at a rate above this.
+JACOBIAN_RATE = 1e-3
+EPS = 2.220446049250313e-16
+
+#: Slots of ``control``: the last step's proposed size and error norm, J current (1.0) / held (1.0), the
+#: step of the LU factors held, the start and size of the last step (the polynomial in ``previous``).
+H_PROPOSED, ERR_PREVIOUS, JAC_CURRENT, JAC_HELD, LU_STEP, T_PREVIOUS, H_PREVIOUS = 0, 1, 2, 3, 4, 5, 6
+CONTROL_SLOTS = 7
+
+#: Why the last trial step failed: its error, a non-finite value, Newton, a singular iteration matrix.
+_ERROR, _NONFINITE, _NEWTON, _SINGULAR = 0, 1, 2, 3
+
+#: The method's constants (`lagcomp.integrate.radau.RadauIIA.driver_arguments`), then the carry.
+CONSTANTS = (VECTOR, MATRIX, MATRIX, VECTOR, VECTOR, MATRIX)
+CARRY = (MATRIX, MATRIX, VECTOR)
+
+SIGNATURE = OUTCOME(RHS, RHS_JACOBIAN, EVENTS,
+                    VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, INT,
+                    VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX, INDICES,
+                    *CONSTANTS, *CARRY)
+
+
+def new_carry(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The carry of a new run of an N-component system: (jacobian, previous, control), see the module docstring."""
+    return np.zeros((n, n)), np.zeros((4, n)), np.zeros(CONTROL_SLOTS)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _factor(jacobian, h, MU, lu_real, pivots_real, lu_complex, pivots_complex):
+    """LU factors of γ/h I − J and (α − iβ)/h I − J in place; 0, or k > 0 when one is singular (pivot k)."""
+    n = jacobian.shape[0]
+    shift_real = MU[0] / h
+    shift_complex = complex(MU[1], MU[2]) / h
+    for i in range(n):
+        for j in range(n):
+            lu_real[i, j] = -jacobian[i, j]
+            lu_complex[i, j] = -jacobian[i, j]
+        lu_real[i, i] += shift_real
+        lu_complex[i, i] += shift_complex
+    status = lu_factor(lu_real, pivots_real)
+    if status != 0:
+        return status
+    return lu_factor(lu_complex, pivots_complex)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _newton(rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, f_stage, d_real, d_complex, lu_real, pivots_real, lu_complex,
+            pivots_complex, scale, tol):
+    """Simplified Newton iteration for the stages Z (3, N), which hold the starting values on entry.
+
+    The stage derivatives go to F (3, N) by way of ``f_stage`` (N,): a row view F[s] per rhs call, built
+    and reference-counted by numba each time, cost more than the copy.
+
+    Returns (status, converged, iterations, rate, f evaluations): status 0, the rhs status (> 0) or −1
+    for a non-finite stage derivative; rate < 0 when fewer than two iterations were made.
+    """
+    n = y.shape[0]
+    shift_real = MU[0] / h
+    shift_complex = complex(MU[1], MU[2]) / h
+    for s in range(3):
+        for i in range(n):
+            W[s, i] = TI[s, 0] * Z[0, i] + TI[s, 1] * Z[1, i] + TI[s, 2] * Z[2, i]
+    norm_old = -1.0
+    rate = -1.0
+    nfev = 0
+    iterations = 0
+    for k in range(NEWTON_MAXITER):
+        iterations = k + 1
+        for s in range(3):
+            for i in range(n):
+                ytmp[i] = y[i] + Z[s, i]
+            status = rhs(t + C[s] * h, ytmp, p, f_stage)
+            nfev += 1
+            if status != 0:
+                return status, False, iterations, rate, nfev
+            for i in range(n):
+                F[s, i] = f_stage[i]
+                if not np.isfinite(f_stage[i]):
+                    status = -1
+            if status != 0:
+                return status, False, iterations, rate, nfev
+        for i in range(n):
+            f0, f1, f2 = F[0, i], F[1, i], F[2, i]
+            d_real[i] = TI[0, 0] * f0 + TI[0, 1] * f1 + TI[0, 2] * f2 - shift_real * W[0, i]
+            g = complex(TI[1, 0] * f0 + TI[1, 1] * f1 + TI[1, 2] * f2, TI[2, 0] * f0 + TI[2, 1] * f1 + TI[2, 2] * f2)
+            d_complex[i] = g - shift_complex * complex(W[1, i], W[2, i])
+        lu_substitute(lu_real, pivots_real, d_real)
+        lu_substitute(lu_complex, pivots_complex, d_complex)
+        acc = 0.0
+        for i in range(n):
+            a = d_real[i] / scale[i]
+            b = d_complex[i].real / scale[i]
+            c = d_complex[i].imag / scale[i]
+            acc += a * a + b * b + c * c
+        norm = np.sqrt(acc / (3 * n)) if n > 0 else 0.0
+        if not np.isfinite(norm):
+            return 0, False, iterations, rate, nfev
+        if norm_old >= 0.0:
+            rate = norm / norm_old
+            if rate >= 1.0 or rate ** (NEWTON_MAXITER - k) / (1.0 - rate) * norm > tol:
+                return 0, False, iterations, rate, nfev
+        for i in range(n):
+            W[0, i] += d_real[i]
+            W[1, i] += d_complex[i].real
+            W[2, i] += d_complex[i].imag
+        for s in range(3):
+            for i in range(n):
+                Z[s, i] = T[s, 0] * W[0, i] + T[s, 1] * W[1, i] + T[s, 2] * W[2, i]
+        if norm == 0.0 or (rate >= 0.0 and rate / (1.0 - rate) * norm < tol):
+            return 0, True, iterations, rate, nfev
+        norm_old = norm
+    return 0, False, iterations, rate, nfev
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _error_norm(err, y, y_new, rtol, atol):
+    """RMS norm of err scaled by atol + max(|y|, |y_new|) rtol (0 for N = 0)."""
+    n = y.shape[0]
+    acc = 0.0
+    for i in range(n):
+        e = err[i] / (atol + max(abs(y[i]), abs(y_new[i])) * rtol)
+        acc += e * e
+    return np.sqrt(acc / n) if n > 0 else 0.0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _predicted_factor(h_abs, h_proposed_old, err, err_old):
+    """Gustafsson's predictive step-size factor (HNW IV.8, (8.25)); the one-step formula without a history."""
+    multiplier = 1.0
+    if err_old > 0.0 and h_proposed_old > 0.0 and err != 0.0:
+        multiplier = h_abs / h_proposed_old * (err_old / err) ** 0.25
+    if err == 0.0:
+        return np.inf
+    return min(1.0, multiplier) * err ** -0.25
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _initial_step(rhs, t, y, f, p, t_end, rtol, atol, max_step, probe_y, probe_f):
+    """HNW I, sec. II.4's starting step for an estimate of order 3 (as scipy's Radau); (h, rhs status)."""
+    n = y.shape[0]
+    interval = t_end - t
+    if n == 0:
+        return min(interval, max_step), 0
+    d0 = 0.0
+    d1 = 0.0
+    for i in range(n):
+        sc = atol + abs(y[i]) * rtol
+        d0 += (y[i] / sc) ** 2
+        d1 += (f[i] / sc) ** 2
+    d0 = np.sqrt(d0 / n)
+    d1 = np.sqrt(d1 / n)
+    h0 = 0.01 * d0 / d1 if (d0 >= 1e-5 and d1 >= 1e-5) else 1e-6
+    h0 = min(h0, interval)
+    for i in range(n):
+        probe_y[i] = y[i] + h0 * f[i]
+    status = rhs(t + h0, probe_y, p, probe_f)
+    if status != 0:
+        return 0.0, status
+    d2 = 0.0
+    for i in range(n):
+        if not np.isfinite(probe_f[i]):
+            return min(h0, max_step), 0
+        sc = atol + abs(y[i]) * rtol
+        d2 += ((probe_f[i] - f[i]) / sc) ** 2
+    d2 = np.sqrt(d2 / n) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** 0.25
+    return min(100.0 * h0, h1, interval, max_step), 0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _jacobian(rhs_jacobian, t, y, p, jacobian):
+    """J at (t, y) into ``jacobian``: 0, the kernel's status (> 0), or −1 when an entry is not finite."""
+    status = rhs_jacobian(t, y, p, jacobian)
+    if status != 0:
+        return status
+    n = y.shape[0]
+    for i in range(n):
+        for j in range(n):
+            if not np.isfinite(jacobian[i, j]):
+                return -1
+    return 0
+
+
+@njit(SIGNATURE, cache=True, error_model="numpy", nogil=True)
+def radau_run(rhs, rhs_jacobian, event_values,
+              y, clock, counters, p, projecting, residual_max, t_end, rtol, atol, max_step, max_steps, pause_at,
+              save_every, t_eval, ts, ys, directions, actions, ev_t, ev_y, ev_i,
+              C, T, TI, MU, ERROR_WEIGHTS, DENSE_WEIGHTS, jacobian, previous, control):
+    """Integrate from (clock[0], y) towards t_end with Radau IIA of order 5.
+
+    See the module docstring for the arguments, the return value and the algorithm.
+    """
+    n = y.shape[0]
+    cap = ts.shape[0]
+    n_eval = t_eval.shape[0]
+    use_t_eval = n_eval > 0
+
+    f = np.empty(n)
+    y_new = np.empty(n)
+    ytmp = np.empty(n)
+    ftmp = np.empty(n)
+    err = np.empty(n)
+    z_error = np.empty(n)
+    scale = np.empty(n)
+    Z = np.empty((3, n))
+    W = np.empty((3, n))
+    F = np.empty((3, n))
+    dense = np.empty((3, n))
+    d_real = np.empty(n)
+    d_complex = np.empty(n, dtype=np.complex128)
+    lu_real = np.empty((n, n))
+    lu_complex = np.empty((n, n), dtype=np.complex128)
+    pivots_real = np.empty(n, dtype=np.int64)
+    pivots_complex = np.empty(n, dtype=np.int64)
+    n_events = directions.shape[0]
+    g_old = np.empty(n_events)
+    g_new = np.empty(n_events)
+    g_work = np.empty(n_events)
+    crossed = np.zeros(n_events, dtype=np.bool_)
+    crossing_times = np.empty(n_events)
+
+    n_saved = 0
+    t = clock[TIME]
+    # t_eval points up to t: those after the last step's start come from its polynomial (a step that held
+    # more points than the last call's buffer), the others were written or precede the run.
+    j = counters[NEXT_EVAL]
+    has_previous = control[H_PREVIOUS] > 0.0
+    while j < n_eval and t_eval[j] <= t:
+        if has_previous and t_eval[j] > control[T_PREVIOUS]:
+            if n_saved >= cap:
+                counters[NEXT_EVAL] = j
+                return Status.BUFFER_FULL, n_saved
+            ts[n_saved] = t_eval[j]
+            if t_eval[j] == t:
+                for i in range(n):
+                    ys[n_saved, i] = y[i]
+            else:
+                dense_state(DENSE_POWERS, previous[:3], previous[3], control[T_PREVIOUS], control[H_PREVIOUS],
+                            t_eval[j], ys[n_saved])
+            n_saved += 1
+        j += 1
+    counters[NEXT_EVAL] = j
+    if t >= t_end:
+        return Status.DONE, n_saved
+
+    status = rhs(t, y, p, f)
+    counters[NFEV] += 1
+    if n_events > 0:
+        event_values(t, y, p, g_old)
+    if status == 0:
+        for i in range(n):
+            if not (np.isfinite(y[i]) and np.isfinite(f[i])):
+                status = -1
+    h_abs = clock[STEP]
+    if status == 0 and h_abs <= 0.0:
+        h_abs, status = _initial_step(rhs, t, y, f, p, t_end, rtol, atol, max_step, ytmp, ftmp)
+        counters[NFEV] += 1
+        if status == 0:
+            clock[STEP] = h_abs
+    if status == 0 and control[JAC_HELD] == 0.0:
+        status = _jacobian(rhs_jacobian, t, y, p, jacobian)
+        counters[NJEV] += 1
+        control[JAC_HELD] = 1.0
+        control[JAC_CURRENT] = 1.0
+    if status != 0:
+        return (Status.RHS_FAILED if status > 0 else Status.NONFINITE), n_saved
+    lu_step = control[LU_STEP]
+    if lu_step != 0.0:
+        counters[NLU] += 2
+        if _factor(jacobian, lu_step, MU, lu_real, pivots_real, lu_complex, pivots_complex) != 0:
+            lu_step = 0.0       # (not after a successful factorisation of the same matrices)
+    jac_current = control[JAC_CURRENT] != 0.0
+    newton_tol = max(10.0 * EPS / rtol, min(0.03, np.sqrt(rtol)))
+
+    while True:
+        if t >= t_end:
+            return Status.DONE, n_saved
+        if counters[NSTEPS] >= max_steps:
+            return Status.MAX_STEPS, n_saved
+        if counters[NSTEPS] >= pause_at:
+            return Status.PAUSED, n_saved
+
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        h_proposed = h_abs
+        h_proposed_old = control[H_PROPOSED]
+        err_old = control[ERR_PREVIOUS]
+        if h_abs > max_step:
+            h_abs = max_step
+            h_proposed_old = 0.0
+            err_old = 0.0
+        elif h_abs < min_step:
+            h_abs = min_step
+            h_proposed_old = 0.0
+            err_old = 0.0
+
+        # Stop before a step whose outputs would not fit (embedded_run's rule).
+        room = cap - n_saved
+        t_reach = min(t + h_abs, t_end)
+        need = 0
+        if use_t_eval:
+            j = counters[NEXT_EVAL]
+            while j < n_eval and t_eval[j] <= t_reach and need <= room:
+                need += 1
+                j += 1
+        elif counters[SINCE_SAVE] + 1 >= save_every or t_reach >= t_end:
+            need = 1
+        if need > room and (n_saved > 0 or not use_t_eval):
+            return Status.BUFFER_FULL, n_saved
+        if counters[EVENT_ROWS] + n_events > ev_t.shape[0]:
+            return Status.BUFFER_FULL, n_saved
+        if n_events > 0 and not use_t_eval and n_saved >= cap:
+            return Status.BUFFER_FULL, n_saved
+
+        # Trial loop.
+        rejected = False
+        trouble = _ERROR
+        while True:
+            t_new = t + h_abs
+            if t_new > t_end:  # noqa: PLR1730 (a NaN t_new stays NaN: the test below ends the run)
+                t_new = t_end
+            if not (h_abs >= min_step and t_new < np.inf):
+                if trouble == _NEWTON:
+                    return Status.NEWTON_FAILED, n_saved
+                if trouble == _SINGULAR:
+                    return Status.ITERATION_MATRIX_SINGULAR, n_saved
+                if trouble == _ERROR and h_abs < min_step:
+                    return Status.STEP_TOO_SMALL, n_saved
+                return Status.NONFINITE, n_saved
+            h = t_new - t
+            h_abs = h
+
+            # Starting values: the last step's polynomial at t + c_i h, less y (`dense_state`'s arithmetic,
+            # inline: its row views of ``previous`` cost more than the sums).
+            h_previous = control[H_PREVIOUS]
+            if h_previous > 0.0:
+                for s in range(3):
+                    x = (t + h * C[s] - control[T_PREVIOUS]) / h_previous
+                    for i in range(n):
+                        acc = ((previous[2, i] * x + previous[1, i]) * x + previous[0, i]) * x
+                        Z[s, i] = (previous[3, i] + h_previous * acc) - y[i]
+            else:
+                for s in range(3):
+                    for i in range(n):
+                        Z[s, i] = 0.0
+            for i in range(n):
+                scale[i] = atol + abs(y[i]) * rtol
+
+            converged = False
+            iterations = 0
+            rate = -1.0
+            while True:
+                singular = False
+                if lu_step == 0.0:
+                    counters[NLU] += 2
+                    if _factor(jacobian, h, MU, lu_real, pivots_real, lu_complex, pivots_complex) != 0:
+                        singular = True
+                        trouble = _SINGULAR
+                    else:
+                        lu_step = h
+                if not singular:
+                    status, converged, iterations, rate, nfev = _newton(
+                        rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, ftmp, d_real, d_complex, lu_real, pivots_real,
+                        lu_complex, pivots_complex, scale, newton_tol)
+                    counters[NFEV] += nfev
+                    if status > 0:
+                        return Status.RHS_FAILED, n_saved
+                    trouble = _NONFINITE if status < 0 else _NEWTON
+                if converged or jac_current:
+                    break
+                status = _jacobian(rhs_jacobian, t, y, p, jacobian)
+                counters[NJEV] += 1
+                if status != 0:
+                    return (Status.RHS_FAILED if status > 0 else Status.NONFINITE), n_saved
+                jac_current = True
+                control[JAC_CURRENT] = 1.0
+                lu_step = 0.0
+            if not converged:
+                h_abs *= 0.5
+                lu_step = 0.0
+                counters[NREJECTED] += 1
+                continue
+
+            # Error estimate, filtered through the real LU (and once more on the first step or a retry).
+            for i in range(n):
+                y_new[i] = y[i] + Z[2, i]
+                z_error[i] = (ERROR_WEIGHTS[0] * Z[0, i] + ERROR_WEIGHTS[1] * Z[1, i]
+                              + ERROR_WEIGHTS[2] * Z[2, i]) / h
+                err[i] = f[i] + z_error[i]
+            lu_substitute(lu_real, pivots_real, err)
+            err_norm = _error_norm(err, y, y_new, rtol, atol)
+            safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iterations)
+            if (rejected or counters[NSTEPS] == 0) and err_norm > 1.0 and np.isfinite(err_norm):
+                for i in range(n):
+                    ytmp[i] = y[i] + err[i]
+                status = rhs(t, ytmp, p, ftmp)
+                counters[NFEV] += 1
+                if status > 0:
+                    return Status.RHS_FAILED, n_saved
+                for i in range(n):
+                    err[i] = ftmp[i] + z_error[i]
+                lu_substitute(lu_real, pivots_real, err)
+                err_norm = _error_norm(err, y, y_new, rtol, atol)
+            for i in range(n):
+                if not np.isfinite(y_new[i]):
+                    err_norm = np.nan
+            if err_norm <= 1.0:
+                break
+            if np.isfinite(err_norm):
+                factor = _predicted_factor(h_abs, h_proposed_old, err_norm, err_old)
+                h_abs *= max(MIN_FACTOR, safety * factor)
+                trouble = _ERROR
+            else:
+                h_abs *= MIN_FACTOR
+                trouble = _NONFINITE
+            lu_step = 0.0
+            rejected = True
+            counters[NREJECTED] += 1
+
+        # The next step size; the LU factors are kept with an unchanged step.
+        recompute_jacobian = iterations > 2 and rate > JACOBIAN_RATE
+        factor = min(MAX_FACTOR, safety * _predicted_factor(h_abs, h_proposed_old, err_norm, err_old))
+        if not recompute_jacobian and factor < KEEP_STEP_BELOW:
+            factor = 1.0
+        else:
+            lu_step = 0.0
+
+        # Dense rows Q/h of the step, events and outputs.
+        for k in range(3):
+            for i in range(n):
+                dense[k, i] = (DENSE_WEIGHTS[0, k] * Z[0, i] + DENSE_WEIGHTS[1, k] * Z[1, i]
+                               + DENSE_WEIGHTS[2, k] * Z[2, i]) / h
+        n_crossed = 0
+        if n_events > 0:
+            event_values(t_new, y_new, p, g_new)
+            n_crossed = event_crossings(g_old, g_new, directions, actions, crossed)
+        stop = False
+        if n_crossed > 0:
+            n_recorded, t_stop = record_events(event_values, DENSE_POWERS, dense, y, t, h, p, g_old, g_new, crossed,
+                                               actions, crossing_times, ev_t, ev_y, ev_i, counters[EVENT_ROWS],
+                                               ytmp, g_work)
+            counters[EVENT_ROWS] = n_recorded
+            if t_stop < np.inf:
+                stop = True
+                t_new = t_stop
+                dense_state(DENSE_POWERS, dense, y, t, h, t_stop, y_new)
+        if use_t_eval:
+            j = counters[NEXT_EVAL]
+            while j < n_eval and t_eval[j] <= t_new and n_saved < cap:
+                te = t_eval[j]
+                ts[n_saved] = te
+                if te == t_new:
+                    for i in range(n):
+                        ys[n_saved, i] = y_new[i]
+                else:
+                    dense_state(DENSE_POWERS, dense, y, t, h, te, ys[n_saved])
+                n_saved += 1
+                j += 1
+            counters[NEXT_EVAL] = j
+        else:
+            counters[SINCE_SAVE] += 1
+            if counters[SINCE_SAVE] >= save_every or t_new >= t_end or stop:
+                ts[n_saved] = t_new
+                for i in range(n):
+                    ys[n_saved, i] = y_new[i]
+                n_saved += 1
+                counters[SINCE_SAVE] = 0
+
+        # Commit: f and, if due, J at the new state, then the carry.
+        if not stop:
+            status = rhs(t_new, y_new, p, ftmp)
+            counters[NFEV] += 1
+            if status == 0:
+                for i in range(n):
+                    if not np.isfinite(ftmp[i]):
+                        status = -1
+            if status == 0 and recompute_jacobian:
+                status = _jacobian(rhs_jacobian, t_new, y_new, p, jacobian)
+                counters[NJEV] += 1
+            if status != 0:
+                return (Status.RHS_FAILED if status > 0 else Status.NONFINITE), n_saved
+            jac_current = recompute_jacobian
+        for i in range(n):
+            previous[3, i] = y[i]
+            for k in range(3):
+                previous[k, i] = dense[k, i]
+            y[i] = y_new[i]
+            f[i] = ftmp[i]
+        control[T_PREVIOUS] = t
+        control[H_PREVIOUS] = h
+        control[H_PROPOSED] = h_proposed
+        control[ERR_PREVIOUS] = err_norm
+        control[JAC_CURRENT] = 1.0 if jac_current else 0.0
+        control[LU_STEP] = lu_step
+        t = t_new
+        h_abs *= factor
+        clock[TIME] = t
+        clock[STEP] = h_abs
+        counters[NSTEPS] += 1
+        if stop:
+            return Status.TERMINATED, n_saved
+        if use_t_eval and counters[NEXT_EVAL] < n_eval and t_eval[counters[NEXT_EVAL]] <= t:
+            return Status.BUFFER_FULL, n_saved     # the rest of this step's points: at the next call's start
+        for ev in range(n_events):
+            g_old[ev] = g_new[ev]
