@@ -1,0 +1,152 @@
+"""A stiff mechanical model: lagcomp's Radau IIA against scipy's Radau, numbalsoda's LSODA, and DOP853.
+
+    PYTHONPATH=src python -m bench.bench_stiff [--rounds 5] [--t-end 10]
+
+The model is the bundled ``stiff_spring_pendulum``: a bob on a critically damped spring with
+k/m = 10⁶ s⁻² (the spring's eigenvalues −1000 s⁻¹, double) swinging with a period near 2 s, from
+its default start (at rest, spring stretched to balance gravity, θ = 1), over t ∈ [0, t_end].
+
+Every solver gets lagcomp's compiled kernels: scipy's ``solve_ivp(method="Radau")`` calls the
+model's ``rhs`` and its exact ``rhs_jacobian`` (Python callables around the numba kernels),
+numbalsoda's ``lsoda`` a cfunc around ``rhs`` (its own finite-difference Jacobian), lagcomp's
+``radau`` and ``dop853`` run through ``Model.simulate``.
+
+Error: the max norm of the state at t_end against a reference from scipy's DOP853 at
+rtol = atol = 1e-13 on the same rhs (an explicit method, independent of the Radau code; its own error
+is estimated from the same at 1e-12 and printed).  "At equal error" compares each peer row with the
+lagcomp ``radau`` rows at the peer's error: the last column is the peer's median time over radau's,
+interpolated log-log between radau's two rows whose errors bracket the peer's (– outside them).  All
+rows are timed round-robin.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import statistics
+import tempfile
+import time
+
+import numba
+import numpy as np
+from scipy.integrate import solve_ivp
+
+import lagcomp as lc
+from lagcomp import examples
+
+TOLERANCES = (1e-5, 1e-6, 1e-8, 1e-10)
+
+
+def reference(model, y0, t_end: float, rtol: float) -> np.ndarray:
+    """The state at t_end by scipy's DOP853 at rtol = atol = `rtol` on the model's compiled rhs."""
+    fun, _ = scipy_callables(model)
+    return solve_ivp(fun, (0.0, t_end), y0, method="DOP853", rtol=rtol, atol=rtol).y[:, -1]
+
+
+def scipy_callables(model):
+    """``fun(t, y)`` and ``jac(t, y)`` for solve_ivp around the model's numba kernels."""
+    p, n = model.parameter_vector(), 2 * model.n
+
+    def fun(t, y):
+        out = np.empty(n)
+        model.kernels.rhs(t, y, p, out)
+        return out
+
+    def jac(t, y):
+        out = np.empty((n, n))
+        model.kernels.rhs_jacobian(t, y, p, out)
+        return out
+    return fun, jac
+
+
+def numbalsoda_lsoda(model):
+    """A function (y0, t_end, tol) -> (state at t_end, f-evaluations) running numbalsoda's LSODA on the rhs."""
+    from numbalsoda import lsoda, lsoda_sig
+
+    n, rhs = 2 * model.n, model.kernels.rhs
+    n_p = model.parameter_vector().shape[0]
+    data = np.concatenate([model.parameter_vector(), [0.0]])   # parameters, then the call counter
+
+    @numba.cfunc(lsoda_sig)
+    def f(t, u, du, d):
+        rhs(t, numba.carray(u, (n,)), numba.carray(d, (n_p,)), numba.carray(du, (n,)))
+        d[n_p] += 1.0
+
+    def run(y0, t_end, tol):
+        data[n_p] = 0.0
+        usol, success = lsoda(f.address, y0, np.array([0.0, t_end]), data=data, rtol=tol, atol=tol, mxstep=10**7)
+        return usol[-1], int(data[n_p])
+    return run
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--t-end", type=float, default=10.0)
+    args = parser.parse_args()
+    system = examples.get("stiff_spring_pendulum")
+    t_end = args.t_end
+    with tempfile.TemporaryDirectory() as cache_dir:
+        model = lc.compile(system, cache_dir=cache_dir)
+        y0 = np.concatenate([system.q0, system.qd0]).astype(float)
+        fun, jac = scipy_callables(model)
+        exact = reference(model, y0, t_end, 1e-13)
+        reference_error = np.max(np.abs(reference(model, y0, t_end, 1e-12) - exact))
+
+        def lagcomp_run(method, tol):
+            def run():
+                s = model.simulate((0.0, t_end), method=method, rtol=tol, atol=tol, progress=False)
+                return s.y[-1], s.nfev
+            return run
+
+        def scipy_run(tol):
+            def run():
+                r = solve_ivp(fun, (0.0, t_end), y0, method="Radau", jac=jac, rtol=tol, atol=tol)
+                return r.y[:, -1], r.nfev
+            return run
+
+        try:
+            lsoda_run = numbalsoda_lsoda(model)
+        except ImportError:
+            lsoda_run = None
+        runs = {}
+        for tol in TOLERANCES:
+            runs[("lagcomp radau", tol)] = lagcomp_run("radau", tol)
+            runs[("scipy Radau (lagcomp's rhs and Jacobian)", tol)] = scipy_run(tol)
+        for tol in (*TOLERANCES, 1e-12) if lsoda_run is not None else ():
+            runs[("numbalsoda lsoda", tol)] = functools.partial(lsoda_run, y0, t_end, tol)
+        runs[("lagcomp dop853 (explicit, for contrast)", 1e-8)] = lagcomp_run("dop853", 1e-8)
+        results = {key: run() for key, run in runs.items()}          # compiles and loads everything
+        times = {key: [] for key in runs}
+        for _ in range(args.rounds):
+            for key, run in runs.items():
+                start = time.perf_counter()
+                run()
+                times[key].append(time.perf_counter() - start)
+    errors = {key: float(np.max(np.abs(results[key][0] - exact))) for key in runs}
+    radau = sorted((errors[key], statistics.median(times[key])) for key in runs if key[0] == "lagcomp radau")
+    print(f"stiff_spring_pendulum, t in [0, {t_end:g}]; reference: scipy DOP853 at 1e-13 "
+          f"(its distance from the same at 1e-12: {reference_error:.1e})\n")
+    print("| solver | rtol = atol | f-evaluations | ms, median | error at t_end | × lagcomp radau at equal error |")
+    print("|---|---|---|---|---|---|")
+    for key, samples in times.items():
+        name, tol = key
+        ratio = statistics.median(samples) / radau_time_at(radau, errors[key])
+        print(f"| {name} | {tol:.0e} | {results[key][1]:,} | {statistics.median(samples) * 1e3:.3g} | "
+              f"{errors[key]:.1e} | {'–' if np.isnan(ratio) else f'{ratio:.3g}×'} |")
+
+
+def radau_time_at(points: list[tuple[float, float]], error: float) -> float:
+    """lagcomp radau's time at `error`, interpolated log-log between its rows (error, time) sorted by error;
+    NaN outside them."""
+    for (e0, t0), (e1, t1) in zip(points, points[1:], strict=False):
+        if e0 <= error <= e1:
+            if e1 == e0:
+                return t0
+            x = np.log(error / e0) / np.log(e1 / e0)
+            return float(t0 * (t1 / t0) ** x)
+    return float("nan")
+
+
+if __name__ == "__main__":
+    main()
