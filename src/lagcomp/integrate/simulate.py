@@ -300,7 +300,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), observed=observed, cyclic=model.cyclic,
         status=status, message=message, t_failure=t_failure,
         nfev=run_state.nfev, nsteps=run_state.nsteps, nrejected=run_state.nrejected,
-        method=run["method"], coordinates=model.coordinates,
+        njev=run_state.njev, nlu=run_state.nlu, method=run["method"], coordinates=model.coordinates,
         params=dict(zip(model.parameters, p.tolist())),
         reactions=reactions, constraint_residual=max(run["residual_max"], float(np.max(residuals, initial=0.0))),
         projected_initial_state=ys[0].copy() if run["projected"] else None,

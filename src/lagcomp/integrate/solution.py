@@ -59,6 +59,9 @@ class Solution:
         Time of the last good state when the run failed.
     nfev, nsteps, nrejected : int
         Right-hand-side evaluations, accepted steps and rejected steps.
+    njev, nlu : int
+        Jacobian evaluations and LU factorizations of the iteration matrices
+        (``radau``; scipy's ``njev`` and ``nlu``); 0 for the other methods.
     method : str
         The integration method used.
     coordinates : tuple of str
@@ -113,6 +116,8 @@ class Solution:
     events: dict = field(default_factory=dict)
     u: np.ndarray | None = None
     speeds: tuple = ()
+    njev: int = 0
+    nlu: int = 0
 
     @property
     def success(self) -> bool:
@@ -165,8 +170,8 @@ class Solution:
             "status": np.asarray(self.status), "message": np.asarray(self.message),
             "t_failure": np.asarray(np.nan if self.t_failure is None else self.t_failure),
             "nfev": np.asarray(self.nfev), "nsteps": np.asarray(self.nsteps),
-            "nrejected": np.asarray(self.nrejected), "method": np.asarray(self.method),
-            "coordinates": np.asarray(self.coordinates),
+            "nrejected": np.asarray(self.nrejected), "njev": np.asarray(self.njev), "nlu": np.asarray(self.nlu),
+            "method": np.asarray(self.method), "coordinates": np.asarray(self.coordinates),
             "param_names": np.asarray(list(self.params)),
             "param_values": np.asarray(list(self.params.values()), dtype=float),
             "constraint_residual": np.asarray(self.constraint_residual),
