@@ -366,11 +366,14 @@ def acceleration_partials(M, F, accelerations, variables) -> list[list]:
     Entries are symengine or sympy expressions (`_kernel` takes either).
     """
     rows, columns = M.rows, len(accelerations)
+    if symengine_ready([*M, *F]):   # the residual built in symengine too: sympy's additions took 0.26 s at 24 links
+        bars, xs = [se.sympify(a) for a in accelerations], [se.sympify(x) for x in variables]
+        images = [se.sympify(F[i]) - sum((se.sympify(M[i, k]) * bars[k] for k in range(columns) if M[i, k] != 0),
+                                         se.Integer(0))
+                  for i in range(rows)]
+        return [[image.diff(x) for x in xs] for image in images]
     residual = [F[i] - sum((M[i, k] * accelerations[k] for k in range(columns) if M[i, k] != 0), sp.S.Zero)
                 for i in range(rows)]
-    if symengine_ready(residual):
-        images, xs = [se.sympify(e) for e in residual], [se.sympify(x) for x in variables]
-        return [[image.diff(x) for x in xs] for image in images]
     block = sp.Matrix(residual).jacobian(list(variables)).replace(sp.DiracDelta, lambda *args: sp.S.Zero)
     return block.tolist()
 
