@@ -162,6 +162,9 @@ LAGRANGES_METHOD = {
     "symmetric_top": (None, 1e-14, 1.2e-15), "tray_cylinder": (None, 1.5e-14, 2.4e-15),
     "turn_indicator": (None, 5e-11, 8.3e-12), "unbalanced_cylinder": (None, 5e-14, 1.1e-14),
     "wheel_jack": (None, 1e-14, 8.3e-16),
+    # stiff (eigenvalues -1000 s⁻¹): both DOP853 runs sit at their stability limit, where each one's error is
+    # at the tolerance and their step sequences differ, so the two agree to the tolerance, not to rounding
+    "stiff_spring_pendulum": (0.5, 5e-12, 8.9e-13),
 }
 
 
