@@ -166,6 +166,33 @@ def _factor(jacobian, h, MU, lu_real, pivots_real, lu_complex, pivots_complex):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex):
+    """`lu_substitute` of the real and the complex system at once, in place: the same operations in the same
+    order for each, so the same bits, but the two dependency chains of the triangular solves interleave
+    (each alone waits on its divisions and subtractions: ~25% less time for N = 4)."""
+    n = d_real.shape[0]
+    for j in range(n):
+        d_real[j], d_real[pivots_real[j]] = d_real[pivots_real[j]], d_real[j]
+        d_complex[j], d_complex[pivots_complex[j]] = d_complex[pivots_complex[j]], d_complex[j]
+    for i in range(n):
+        x = d_real[i]
+        z = d_complex[i]
+        for c in range(i):
+            x -= lu_real[i, c] * d_real[c]
+            z -= lu_complex[i, c] * d_complex[c]
+        d_real[i] = x
+        d_complex[i] = z
+    for i in range(n - 1, -1, -1):
+        x = d_real[i]
+        z = d_complex[i]
+        for c in range(i + 1, n):
+            x -= lu_real[i, c] * d_real[c]
+            z -= lu_complex[i, c] * d_complex[c]
+        d_real[i] = x / lu_real[i, i]
+        d_complex[i] = z / lu_complex[i, i]
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _newton(rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, f_stage, d_real, d_complex, lu_real, pivots_real, lu_complex,
             pivots_complex, scale, tol):
     """Simplified Newton iteration for the stages Z (3, N), which hold the starting values on entry.
@@ -206,8 +233,7 @@ def _newton(rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, f_stage, d_real, d_com
             d_real[i] = TI[0, 0] * f0 + TI[0, 1] * f1 + TI[0, 2] * f2 - shift_real * W[0, i]
             g = complex(TI[1, 0] * f0 + TI[1, 1] * f1 + TI[1, 2] * f2, TI[2, 0] * f0 + TI[2, 1] * f1 + TI[2, 2] * f2)
             d_complex[i] = g - shift_complex * complex(W[1, i], W[2, i])
-        lu_substitute(lu_real, pivots_real, d_real)
-        lu_substitute(lu_complex, pivots_complex, d_complex)
+        _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex)
         acc = 0.0
         for i in range(n):
             a = d_real[i] / scale[i]
