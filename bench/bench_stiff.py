@@ -12,15 +12,17 @@ numbalsoda's ``lsoda`` a cfunc around ``rhs`` (its own finite-difference Jacobia
 ``radau`` and ``dop853`` run through ``Model.simulate``.  The rows "radau driver call" time
 `radau_run` alone, called as ``simulate``'s first call calls it (kernels as `AddressedKernel`s, the
 same steps and bits), keeping only the end state as LSODA does: the difference from the ``simulate``
-rows is ``simulate``'s fixed cost, the same for every method (~0.14 ms with warm caches; ~0.35 ms
-here, where each lagcomp row follows a scipy run whose Python evicted the interpreter's caches).
+rows is ``simulate``'s fixed cost, the same for every method (~0.1-0.15 ms; more where a run needs more
+than one driver call: its first output buffer holds 1024 rows).
 
 Error: the max norm of the state at t_end against a reference from scipy's DOP853 at
 rtol = atol = 1e-13 on the same rhs (an explicit method, independent of the Radau code; its own error
 is estimated from the same at 1e-12 and printed).  "At equal error" compares each peer row with the
 lagcomp ``radau`` rows at the peer's error: the last two columns are the peer's median time over radau's
 through ``simulate`` and over the radau driver call's, interpolated log-log between the two radau rows
-whose errors bracket the peer's (– outside them).  All rows are timed round-robin.
+whose errors bracket the peer's (– outside them).  Rows are timed round-robin, scipy's rows (20-330 ms of
+Python each) apart from the others: after one of them the Python of ``simulate`` runs with cold caches,
+~0.35 ms instead of ~0.14 ms of fixed cost, which LSODA's rows, timed one after the other, did not pay.
 """
 
 from __future__ import annotations
@@ -148,11 +150,13 @@ def main() -> None:
         runs[("lagcomp dop853 (explicit, for contrast)", 1e-8)] = lagcomp_run("dop853", 1e-8)
         results = {key: run() for key, run in runs.items()}          # compiles and loads everything
         times = {key: [] for key in runs}
-        for _ in range(args.rounds):
-            for key, run in runs.items():
-                start = time.perf_counter()
-                run()
-                times[key].append(time.perf_counter() - start)
+        slow = [key for key in runs if key[0].startswith("scipy")]
+        for group in ([key for key in runs if key not in slow], slow):
+            for _ in range(args.rounds):
+                for key in group:
+                    start = time.perf_counter()
+                    runs[key]()
+                    times[key].append(time.perf_counter() - start)
     errors = {key: float(np.max(np.abs(results[key][0] - exact))) for key in runs}
     bases = [sorted((errors[key], statistics.median(times[key])) for key in runs if key[0] == name)
              for name in ("lagcomp radau", "lagcomp radau driver call (no simulate)")]

@@ -74,12 +74,19 @@ step's re-filtered estimate (HNW's, not scipy's) changes the first step where it
 
 Speed (``python -m bench.bench_radau``: Van der Pol ε = 1e-6 and Robertson, hand-written kernels, the
 driver called directly, at equal error against an LSODA reference at rtol 1e-12): scipy's Radau on the
-same numba kernels takes 140-240 times as long; numbalsoda's LSODA 1.0-1.3 times (its own
+same numba kernels takes 150-290 times as long; numbalsoda's LSODA 1.3-1.6 times (its own
 finite-difference Jacobian; these systems have 2 and 3 components); DOP853 on the Van der Pol problem
-takes 600 000 steps, 230 ms (radau: 0.18 ms at rtol 1e-3 and a smaller error).  A driver call costs
-~16 µs besides its steps with `AddressedKernel` kernels (~120 µs with dispatchers: numba unboxes three
-kernels).  Row views (``F[s]`` as the rhs output, ``previous[:3]`` for the starting values) cost
-25-37% of the run: the loop has none.
+takes 600 000 steps, 230 ms (radau: 0.18 ms at rtol 1e-3 and a smaller error).  On the bundled stiff
+spring pendulum (``python -m bench.bench_stiff``, 4 components) LSODA takes 1.4-1.7 times the driver
+call's time at equal error, 0.93-1.09 times ``Model.simulate``'s: simulate's own cost, the same for every
+method (0.1-0.2 ms), is as large as a short run.  A driver
+call costs ~16 µs besides its steps with `AddressedKernel` kernels (~120 µs with dispatchers: numba
+unboxes three kernels).  Where a run's time goes (``python -m bench.bench_radau --parts``, the spring
+pendulum at rtol 1e-8): the Newton iterations 67% (~270 ns each: f 3 × 24 ns, the two substitutions
+90 ns), the error estimate's substitution 7%, the other per-step work 19%, J and the LU factorisations
+4%.  Hence the loop has no row views (``F[s]`` as the rhs output, ``previous[:3]`` for the starting
+values cost 25-37% of the run), `_newton` is inlined and the two substitutions interleave
+(`_substitute_pair`): those two cut 15-20% of the driver's time, same bits.
 """
 
 from __future__ import annotations
