@@ -9,14 +9,20 @@ its default start (at rest, spring stretched to balance gravity, θ = 1), over t
 Every solver gets lagcomp's compiled kernels: scipy's ``solve_ivp(method="Radau")`` calls the
 model's ``rhs`` and its exact ``rhs_jacobian`` (Python callables around the numba kernels),
 numbalsoda's ``lsoda`` a cfunc around ``rhs`` (its own finite-difference Jacobian), lagcomp's
-``radau`` and ``dop853`` run through ``Model.simulate``.
+``radau`` and ``dop853`` run through ``Model.simulate``.  The rows "radau driver call" time
+`radau_run` alone, called as ``simulate``'s first call calls it (kernels as `AddressedKernel`s, the
+same steps and bits), keeping only the end state as LSODA does: the difference from the ``simulate``
+rows is ``simulate``'s fixed cost, the same for every method (~0.1-0.15 ms; more where a run needs more
+than one driver call: its first output buffer holds 1024 rows).
 
 Error: the max norm of the state at t_end against a reference from scipy's DOP853 at
 rtol = atol = 1e-13 on the same rhs (an explicit method, independent of the Radau code; its own error
 is estimated from the same at 1e-12 and printed).  "At equal error" compares each peer row with the
-lagcomp ``radau`` rows at the peer's error: the last column is the peer's median time over radau's,
-interpolated log-log between radau's two rows whose errors bracket the peer's (– outside them).  All
-rows are timed round-robin.
+lagcomp ``radau`` rows at the peer's error: the last two columns are the peer's median time over radau's
+through ``simulate`` and over the radau driver call's, interpolated log-log between the two radau rows
+whose errors bracket the peer's (– outside them).  Rows are timed round-robin, scipy's rows (20-330 ms of
+Python each) apart from the others: after one of them the Python of ``simulate`` runs with cold caches,
+~0.35 ms instead of ~0.14 ms of fixed cost, which LSODA's rows, timed one after the other, did not pay.
 """
 
 from __future__ import annotations
@@ -33,6 +39,10 @@ from scipy.integrate import solve_ivp
 
 import lagcomp as lc
 from lagcomp import examples
+from lagcomp.integrate.drivers.radau import new_carry
+from lagcomp.integrate.drivers.run_state import COUNTER_SLOTS, NFEV
+from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE
+from lagcomp.integrate.methods import METHODS
 
 TOLERANCES = (1e-5, 1e-6, 1e-8, 1e-10)
 
@@ -79,6 +89,26 @@ def numbalsoda_lsoda(model):
     return run
 
 
+def radau_driver_call(model, y0, t_end: float):
+    """A function tol -> (state at t_end, f-evaluations): one `radau_run` call as `simulate`'s first call makes it
+    (kernels bound as `AddressedKernel`s), saving the end state only."""
+    method = METHODS["radau"]
+    driver, constants = method.bound_driver(model.kernels, addressed=True), method.driver_arguments()
+    p, n = model.parameter_vector(), y0.size
+    no_events = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.empty(16), np.empty((16, n)),
+                 np.empty(16, dtype=np.int64))
+    ts, ys = np.empty(4), np.empty((4, n))
+
+    def run(tol):
+        y, clock, counters = y0.copy(), np.zeros(2), np.zeros(COUNTER_SLOTS, dtype=np.int64)
+        status, _ = driver(y, clock, counters, p, 0, np.zeros(2), t_end, tol, tol, np.inf, 10**9, NO_PAUSE, 10**9,
+                           np.empty(0), ts, ys, *no_events, *constants, *new_carry(n))
+        if status != 0:
+            raise RuntimeError(f"radau_run returned status {status}")
+        return y, int(counters[NFEV])
+    return run
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=5)
@@ -110,30 +140,36 @@ def main() -> None:
         except ImportError:
             lsoda_run = None
         runs = {}
+        driver_run = radau_driver_call(model, y0, t_end)
         for tol in TOLERANCES:
             runs[("lagcomp radau", tol)] = lagcomp_run("radau", tol)
+            runs[("lagcomp radau driver call (no simulate)", tol)] = functools.partial(driver_run, tol)
             runs[("scipy Radau (lagcomp's rhs and Jacobian)", tol)] = scipy_run(tol)
         for tol in (*TOLERANCES, 1e-12) if lsoda_run is not None else ():
             runs[("numbalsoda lsoda", tol)] = functools.partial(lsoda_run, y0, t_end, tol)
         runs[("lagcomp dop853 (explicit, for contrast)", 1e-8)] = lagcomp_run("dop853", 1e-8)
         results = {key: run() for key, run in runs.items()}          # compiles and loads everything
         times = {key: [] for key in runs}
-        for _ in range(args.rounds):
-            for key, run in runs.items():
-                start = time.perf_counter()
-                run()
-                times[key].append(time.perf_counter() - start)
+        slow = [key for key in runs if key[0].startswith("scipy")]
+        for group in ([key for key in runs if key not in slow], slow):
+            for _ in range(args.rounds):
+                for key in group:
+                    start = time.perf_counter()
+                    runs[key]()
+                    times[key].append(time.perf_counter() - start)
     errors = {key: float(np.max(np.abs(results[key][0] - exact))) for key in runs}
-    radau = sorted((errors[key], statistics.median(times[key])) for key in runs if key[0] == "lagcomp radau")
+    bases = [sorted((errors[key], statistics.median(times[key])) for key in runs if key[0] == name)
+             for name in ("lagcomp radau", "lagcomp radau driver call (no simulate)")]
     print(f"stiff_spring_pendulum, t in [0, {t_end:g}]; reference: scipy DOP853 at 1e-13 "
           f"(its distance from the same at 1e-12: {reference_error:.1e})\n")
-    print("| solver | rtol = atol | f-evaluations | ms, median | error at t_end | × lagcomp radau at equal error |")
-    print("|---|---|---|---|---|---|")
+    print("| solver | rtol = atol | f-evaluations | ms, median | error at t_end | at equal error: × lagcomp radau "
+          "(simulate) | × radau driver call |")
+    print("|---|---|---|---|---|---|---|")
     for key, samples in times.items():
         name, tol = key
-        ratio = statistics.median(samples) / radau_time_at(radau, errors[key])
+        ratios = [statistics.median(samples) / radau_time_at(base, errors[key]) for base in bases]
         print(f"| {name} | {tol:.0e} | {results[key][1]:,} | {statistics.median(samples) * 1e3:.3g} | "
-              f"{errors[key]:.1e} | {'–' if np.isnan(ratio) else f'{ratio:.3g}×'} |")
+              f"{errors[key]:.1e} | " + " | ".join('–' if np.isnan(r) else f'{r:.3g}×' for r in ratios) + " |")
 
 
 def radau_time_at(points: list[tuple[float, float]], error: float) -> float:

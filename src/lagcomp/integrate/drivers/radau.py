@@ -74,12 +74,19 @@ step's re-filtered estimate (HNW's, not scipy's) changes the first step where it
 
 Speed (``python -m bench.bench_radau``: Van der Pol ε = 1e-6 and Robertson, hand-written kernels, the
 driver called directly, at equal error against an LSODA reference at rtol 1e-12): scipy's Radau on the
-same numba kernels takes 140-240 times as long; numbalsoda's LSODA 1.0-1.3 times (its own
+same numba kernels takes 150-290 times as long; numbalsoda's LSODA 1.3-1.6 times (its own
 finite-difference Jacobian; these systems have 2 and 3 components); DOP853 on the Van der Pol problem
-takes 600 000 steps, 230 ms (radau: 0.18 ms at rtol 1e-3 and a smaller error).  A driver call costs
-~16 µs besides its steps with `AddressedKernel` kernels (~120 µs with dispatchers: numba unboxes three
-kernels).  Row views (``F[s]`` as the rhs output, ``previous[:3]`` for the starting values) cost
-25-37% of the run: the loop has none.
+takes 600 000 steps, 230 ms (radau: 0.18 ms at rtol 1e-3 and a smaller error).  On the bundled stiff
+spring pendulum (``python -m bench.bench_stiff``, 4 components) LSODA takes 1.4-1.7 times the driver
+call's time at equal error, 0.93-1.09 times ``Model.simulate``'s: simulate's own cost, the same for every
+method (0.1-0.2 ms), is as large as a short run.  A driver
+call costs ~16 µs besides its steps with `AddressedKernel` kernels (~120 µs with dispatchers: numba
+unboxes three kernels).  Where a run's time goes (``python -m bench.bench_radau --parts``, the spring
+pendulum at rtol 1e-8): the Newton iterations 67% (~270 ns each: f 3 × 24 ns, the two substitutions
+90 ns), the error estimate's substitution 7%, the other per-step work 19%, J and the LU factorisations
+4%.  Hence the loop has no row views (``F[s]`` as the rhs output, ``previous[:3]`` for the starting
+values cost 25-37% of the run), `_newton` is inlined and the two substitutions interleave
+(`_substitute_pair`): those two cut 15-20% of the driver's time, same bits.
 """
 
 from __future__ import annotations
@@ -166,12 +173,41 @@ def _factor(jacobian, h, MU, lu_real, pivots_real, lu_complex, pivots_complex):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex):
+    """`lu_substitute` of the real and the complex system at once, in place: the same operations in the same
+    order for each, so the same bits, but the two dependency chains of the triangular solves interleave
+    (each alone waits on its divisions and subtractions: ~25% less time for N = 4)."""
+    n = d_real.shape[0]
+    for j in range(n):
+        d_real[j], d_real[pivots_real[j]] = d_real[pivots_real[j]], d_real[j]
+        d_complex[j], d_complex[pivots_complex[j]] = d_complex[pivots_complex[j]], d_complex[j]
+    for i in range(n):
+        x = d_real[i]
+        z = d_complex[i]
+        for c in range(i):
+            x -= lu_real[i, c] * d_real[c]
+            z -= lu_complex[i, c] * d_complex[c]
+        d_real[i] = x
+        d_complex[i] = z
+    for i in range(n - 1, -1, -1):
+        x = d_real[i]
+        z = d_complex[i]
+        for c in range(i + 1, n):
+            x -= lu_real[i, c] * d_real[c]
+            z -= lu_complex[i, c] * d_complex[c]
+        d_real[i] = x / lu_real[i, i]
+        d_complex[i] = z / lu_complex[i, i]
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def _newton(rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, f_stage, d_real, d_complex, lu_real, pivots_real, lu_complex,
             pivots_complex, scale, tol):
     """Simplified Newton iteration for the stages Z (3, N), which hold the starting values on entry.
 
     The stage derivatives go to F (3, N) by way of ``f_stage`` (N,): a row view F[s] per rhs call, built
-    and reference-counted by numba each time, cost more than the copy.
+    and reference-counted by numba each time, cost more than the copy.  Inlined into the driver (numba's
+    ``inline="always"``): a call passes its 13 arrays as structs and reference-counts them, ~10% of the
+    driver's time on a 4-component model (bench/bench_radau.py).
 
     Returns (status, converged, iterations, rate, f evaluations): status 0, the rhs status (> 0) or −1
     for a non-finite stage derivative; rate < 0 when fewer than two iterations were made.
@@ -206,8 +242,7 @@ def _newton(rhs, t, y, h, p, C, T, TI, MU, Z, W, F, ytmp, f_stage, d_real, d_com
             d_real[i] = TI[0, 0] * f0 + TI[0, 1] * f1 + TI[0, 2] * f2 - shift_real * W[0, i]
             g = complex(TI[1, 0] * f0 + TI[1, 1] * f1 + TI[1, 2] * f2, TI[2, 0] * f0 + TI[2, 1] * f1 + TI[2, 2] * f2)
             d_complex[i] = g - shift_complex * complex(W[1, i], W[2, i])
-        lu_substitute(lu_real, pivots_real, d_real)
-        lu_substitute(lu_complex, pivots_complex, d_complex)
+        _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex)
         acc = 0.0
         for i in range(n):
             a = d_real[i] / scale[i]
