@@ -38,6 +38,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import lagcomp as lc
+from bench.harness import Table
 from lagcomp import examples
 from lagcomp.integrate.drivers.radau import new_carry
 from lagcomp.integrate.drivers.run_state import COUNTER_SLOTS, NFEV
@@ -109,15 +110,16 @@ def radau_driver_call(model, y0, t_end: float):
     return run
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rounds", type=int, default=5)
-    parser.add_argument("--t-end", type=float, default=10.0)
-    args = parser.parse_args()
+SCIPY, LSODA = "scipy Radau (lagcomp's rhs and Jacobian)", "numbalsoda lsoda"
+RADAU, RADAU_CALL = "lagcomp radau", "lagcomp radau driver call (no simulate)"
+
+
+def measure(t_end: float = 10.0, rounds: int = 5, use_peers: bool = True, cache_dir: str | None = None) -> Table:
+    """Every row of the comparison as a markdown `Table`; its ``ratios`` attribute maps (solver, tol) to the
+    solver's time over radau's (through simulate) at equal error, for the targets."""
     system = examples.get("stiff_spring_pendulum")
-    t_end = args.t_end
-    with tempfile.TemporaryDirectory() as cache_dir:
-        model = lc.compile(system, cache_dir=cache_dir)
+    with tempfile.TemporaryDirectory() as scratch:
+        model = lc.compile(system, cache_dir=cache_dir or scratch)
         y0 = np.concatenate([system.q0, system.qd0]).astype(float)
         fun, jac = scipy_callables(model)
         exact = reference(model, y0, t_end, 1e-13)
@@ -135,41 +137,68 @@ def main() -> None:
                 return r.y[:, -1], r.nfev
             return run
 
-        try:
-            lsoda_run = numbalsoda_lsoda(model)
-        except ImportError:
-            lsoda_run = None
+        lsoda_run = None
+        if use_peers:
+            try:
+                lsoda_run = numbalsoda_lsoda(model)
+            except ImportError:
+                pass
         runs = {}
         driver_run = radau_driver_call(model, y0, t_end)
         for tol in TOLERANCES:
-            runs[("lagcomp radau", tol)] = lagcomp_run("radau", tol)
-            runs[("lagcomp radau driver call (no simulate)", tol)] = functools.partial(driver_run, tol)
-            runs[("scipy Radau (lagcomp's rhs and Jacobian)", tol)] = scipy_run(tol)
+            runs[(RADAU, tol)] = lagcomp_run("radau", tol)
+            runs[(RADAU_CALL, tol)] = functools.partial(driver_run, tol)
+            runs[(SCIPY, tol)] = scipy_run(tol)
         for tol in (*TOLERANCES, 1e-12) if lsoda_run is not None else ():
-            runs[("numbalsoda lsoda", tol)] = functools.partial(lsoda_run, y0, t_end, tol)
+            runs[(LSODA, tol)] = functools.partial(lsoda_run, y0, t_end, tol)
         runs[("lagcomp dop853 (explicit, for contrast)", 1e-8)] = lagcomp_run("dop853", 1e-8)
         results = {key: run() for key, run in runs.items()}          # compiles and loads everything
         times = {key: [] for key in runs}
-        slow = [key for key in runs if key[0].startswith("scipy")]
+        slow = [key for key in runs if key[0] == SCIPY]
         for group in ([key for key in runs if key not in slow], slow):
-            for _ in range(args.rounds):
+            for _ in range(rounds):
                 for key in group:
                     start = time.perf_counter()
                     runs[key]()
                     times[key].append(time.perf_counter() - start)
     errors = {key: float(np.max(np.abs(results[key][0] - exact))) for key in runs}
     bases = [sorted((errors[key], statistics.median(times[key])) for key in runs if key[0] == name)
-             for name in ("lagcomp radau", "lagcomp radau driver call (no simulate)")]
-    print(f"stiff_spring_pendulum, t in [0, {t_end:g}]; reference: scipy DOP853 at 1e-13 "
-          f"(its distance from the same at 1e-12: {reference_error:.1e})\n")
-    print("| solver | rtol = atol | f-evaluations | ms, median | error at t_end | at equal error: × lagcomp radau "
-          "(simulate) | × radau driver call |")
-    print("|---|---|---|---|---|---|---|")
+             for name in (RADAU, RADAU_CALL)]
+    table = Table(f"Stiff: radau on stiff_spring_pendulum, t in [0, {t_end:g}] (issue 20)",
+                  ["solver", "rtol = atol", "f-evaluations", "ms, median", "error at t_end",
+                   "at equal error: × lagcomp radau (simulate)", "× radau driver call"],
+                  note=f"{__doc__.split(chr(10) + chr(10), 2)[2].strip()}  Reference: scipy DOP853 at 1e-13 (its "
+                       f"distance from the same at 1e-12: {reference_error:.1e}); {rounds} rounds. "
+                       "`python -m bench.bench_stiff` runs this table alone.")
+    table.ratios = {}
     for key, samples in times.items():
         name, tol = key
         ratios = [statistics.median(samples) / radau_time_at(base, errors[key]) for base in bases]
-        print(f"| {name} | {tol:.0e} | {results[key][1]:,} | {statistics.median(samples) * 1e3:.3g} | "
-              f"{errors[key]:.1e} | " + " | ".join('–' if np.isnan(r) else f'{r:.3g}×' for r in ratios) + " |")
+        table.ratios[key] = ratios[0]
+        table.add(name, f"{tol:.0e}", f"{results[key][1]:,}", f"{statistics.median(samples) * 1e3:.3g}",
+                  f"{errors[key]:.1e}", *("–" if np.isnan(r) else f"{r:.3g}×" for r in ratios))
+    return table
+
+
+def section(ctx) -> Table:
+    """`python -m bench` section ``stiff``: the table, and issue 20's two speed targets from it."""
+    table = measure(rounds=ctx.repeats, use_peers=ctx.use_peers, cache_dir=ctx.cache_dir)
+    for target, solver in (("radau_scipy", SCIPY), ("radau_lsoda", LSODA)):
+        ratios = [r for (name, _), r in table.ratios.items() if name == solver and not np.isnan(r)]
+        t = ctx.target(target)
+        if ratios:
+            t.measured = (f"{solver} takes {min(ratios):.3g}–{max(ratios):.3g}× radau's time at equal error "
+                          f"(through simulate)")
+            t.met = min(ratios) >= (20.0 if target == "radau_scipy" else 1.0)
+    return table
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--t-end", type=float, default=10.0)
+    args = parser.parse_args()
+    print(measure(args.t_end, args.rounds).markdown())
 
 
 def radau_time_at(points: list[tuple[float, float]], error: float) -> float:

@@ -20,7 +20,8 @@ from bench.harness import SKIPPED, Table, Target, peer
 FULL_CASES = ["double_pendulum", "kepler", "n_link_pendulum_2", "n_link_pendulum_4", "n_link_pendulum_8",
               "n_link_pendulum_10", "rolling_disc", "free_axle", "n_link_pendulum_16", "n_link_pendulum_24"]
 QUICK_CASES = ["double_pendulum", "kepler", "n_link_pendulum_4"]
-SECTIONS = ["compile", "kernels", "accuracy", "adaptive", "fixed", "sweeps", "ensembles", "long", "memory"]
+SECTIONS = ["compile", "kernels", "accuracy", "adaptive", "fixed", "sweeps", "ensembles", "long", "memory",
+            "stiff"]
 
 TARGETS = {
     "rhs_dp": ("double-pendulum RHS in a loop", "≤ 1.2× hand-written numba"),
@@ -40,6 +41,8 @@ TARGETS = {
                "≤ 15 s (31.6 s before issue 19)"),
     "warm": ("warm start of a cached model in a fresh process (double pendulum)",
              "≤ 0.6 s, no sympy import (0.8–1.0 s before issue 19)"),
+    "radau_scipy": ("radau, stiff spring pendulum (issue 20)", "≥ 20× faster than scipy Radau at equal error"),
+    "radau_lsoda": ("radau, stiff spring pendulum (issue 20)", "faster than numbalsoda's LSODA at equal error"),
 }
 
 
@@ -151,7 +154,7 @@ def machine() -> str:
 
 
 def targets_table(ctx) -> Table:
-    table = Table("Issue 8 targets (start-up: issue 19)", ["target", "wanted", "this run", "verdict"])
+    table = Table("Issue 8 targets (start-up: issue 19; stiff: issue 20)", ["target", "wanted", "this run", "verdict"])
     dp = ctx.kernel_results.get("double_pendulum")
     if dp:
         base, ours, ratio = dp
@@ -208,13 +211,14 @@ def main(argv: list[str] | None = None) -> int:
         if "compile" in sections:  # fills the cache; the compile section reports these
             compile_time.prepare(ctx)
         runners = {"compile": compile_time.section}
-        from bench import accuracy, adaptive, bench_sweep, bench_taylor, kernels, throughput
+        from bench import accuracy, adaptive, bench_rattle, bench_stiff, bench_sweep, bench_taylor, kernels, throughput
 
         runners.update(kernels=kernels.section, accuracy=accuracy.section, adaptive=adaptive.section,
                        fixed=throughput.fixed_section,
                        sweeps=throughput.sweep_section, ensembles=bench_sweep.section,
                        long=lambda ctx: [throughput.long_run_section(ctx), bench_taylor.long_run_table(ctx)],
-                       memory=throughput.memory_section)
+                       memory=throughput.memory_section,
+                       stiff=lambda ctx: [bench_stiff.section(ctx), bench_rattle.section(ctx)])
         for name in SECTIONS:
             if name in sections:
                 print(f"<!-- section {name} ... -->", file=sys.stderr, flush=True)
