@@ -238,7 +238,8 @@ def cmd_run(args) -> int:
         start = ", ".join(f"{v:.10g}" for v in sol.projected_initial_state)
         print(f"initial     projected onto the constraints: y0 = ({start})")
     print(f"method      {sol.method}   status {sol.status}: {sol.message}")
-    print(f"time span   [{sol.t[0]:g}, {sol.t[-1]:g}]   steps {sol.nsteps}   rejected {sol.nrejected}   rhs evaluations {sol.nfev}")
+    print(f"time span   [{sol.t[0]:g}, {sol.t[-1]:g}]   steps {sol.nsteps}   rejected {sol.nrejected}   rhs evaluations {sol.nfev}"
+          + (f"   Jacobians {sol.njev}   LU factorizations {sol.nlu}" if sol.njev else ""))
     print(f"wall time   {elapsed:.3f} s (integration; numba compilation or loading before it: {warmed:.2f} s)")
     summary = sol.summary
     print(f"energy      T+V: {sol.energy[0]:.12g} -> {sol.energy[-1]:.12g} (max relative drift {summary.energy_error:.3g})")
