@@ -27,6 +27,7 @@ from lagcomp.integrate.drivers.kernel_types import (
     VECTOR,
 )
 from lagcomp.integrate.drivers.run_state import (
+    CLOCK_SLOTS,
     COUNTER_SLOTS,
     EVENT_ROWS,
     TIME,
@@ -51,7 +52,8 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
                    Y0, P, projecting, t0, t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial,
                    directions, actions, final, t_final, status, counts, dense, energy_stats,
                    event_count, event_t, event_y,
-                   A, B, C, error_weights, error_norm, error_exponent, dense_kind, dense_weights, extra_A, extra_C):
+                   A, B, C, error_weights, error_norm, error_exponent, dense_kind, dense_weights, extra_A, extra_C,
+                   stiffness_bound):
     """Trajectory k from (t0, Y0[k]) with parameters P[k] to t_end by `embedded_run`, for every row k.
 
     Each trajectory runs the resumable driver with a small row buffer (`SWEEP_ROWS`) and folds the
@@ -72,7 +74,7 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
     for k in range(n_traj):
         y = Y0[k].copy()
         p = P[k]
-        clock = np.zeros(2)
+        clock = np.zeros(CLOCK_SLOTS)
         clock[TIME] = t0
         counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
         residual = np.zeros(1)
@@ -98,7 +100,7 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
                                          max_steps, NO_PAUSE, save_every, t_eval, ts, ys,
                                          directions, actions, ev_t, ev_y, ev_i,
                                          A, B, C, error_weights, error_norm, error_exponent, dense_kind,
-                                         dense_weights, extra_A, extra_C)
+                                         dense_weights, extra_A, extra_C, stiffness_bound)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
             fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_i, event_count, event_t, event_y, k)
             if code != Status.BUFFER_FULL:
