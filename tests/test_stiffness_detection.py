@@ -104,14 +104,17 @@ def test_the_advice_for_constrained_systems_names_what_exists():
     assert 'Use method="radau"' in stiffness_advice(constrained=False)
 
 
-def test_a_sweep_of_a_stiff_system_runs(compiled):
-    """Sweeps do not warn (yet): the test runs in each trajectory without disturbing it."""
+def test_a_sweep_warns_once_for_its_stiff_trajectories(compiled):
+    """One warning for the sweep, counting its stiff trajectories (k/m = 10⁶, not 100); each as its own run."""
     model = compiled("stiff_spring_pendulum")
-    messages, sweep = stiffness_warnings(lambda: model.sweep((0, 0.5), {"theta": [0.5, 1.0]}, method="dopri5",
-                                                             progress=False, **STIFF_TOL))
-    assert messages == [] and np.all(sweep.status == 0)
-    _, single = stiffness_warnings(lambda: model.simulate((0, 0.5), method="dopri5", progress=False,  # θ0 = 1
-                                                          **STIFF_TOL))
+    messages, sweep = stiffness_warnings(lambda: model.sweep(
+        (0, 0.5), {"k": [1e2, 1e6], "c": [20.0, 2e3]}, combine="zip", method="dopri5", progress=False, **STIFF_TOL))
+    assert np.all(sweep.status == 0)
+    assert len(messages) == 1 and "in 1 of the sweep's 2 trajectories" in messages[0], messages
+    assert 'method="radau"' in messages[0]
+    stiff_messages, single = stiffness_warnings(lambda: model.simulate((0, 0.5), method="dopri5", progress=False,
+                                                                       **STIFF_TOL))
+    assert len(stiff_messages) == 1
     np.testing.assert_array_equal(sweep.final[1], np.concatenate([single.q[-1], single.qd[-1]]))
 
 

@@ -2,13 +2,16 @@
 
 The embedded pairs test their steps for stiffness as they go (Hairer's test: "Stiffness detection" in
 `lagcomp.integrate.drivers.embedded`); `lagcomp.integrate.simulate` calls `warn_if_stiff` once the run has
-ended.  The advice names the method to use instead: ``radau`` for an unconstrained system; a constrained
-one has no implicit method yet, so the advice is to take the fast motion out of the model.
+ended, `lagcomp.integrate.sweep` `warn_if_sweep_stiff` once the sweep has.  The advice names the method to
+use instead: ``radau`` for an unconstrained system; a constrained one has no implicit method yet, so the
+advice is to take the fast motion out of the model.
 """
 
 from __future__ import annotations
 
 import warnings
+
+import numpy as np
 
 from lagcomp.errors import StiffnessWarning
 from lagcomp.integrate.status import Status
@@ -38,4 +41,17 @@ def warn_if_stiff(method: str, stiff_at, nsteps: int, nfev: int, constrained: bo
         f"The problem is stiff for {method}: from t = {t:.6g} (step {step:,}) its steps were limited by the "
         f"method's stability, not by its accuracy (Hairer's stiffness test); the run took {nsteps:,} steps and "
         f"{nfev:,} evaluations of the equations. {stiffness_advice(constrained)}",
+        StiffnessWarning, stacklevel=stacklevel + 1)
+
+
+def warn_if_sweep_stiff(method: str, stiff_steps: np.ndarray, constrained: bool, stacklevel: int) -> None:
+    """Warn once if any trajectory of a sweep was declared stiff; `stiff_steps` holds, per trajectory, the
+    step at which it was (0: not)."""
+    stiff = int(np.count_nonzero(stiff_steps))
+    if stiff == 0:
+        return
+    warnings.warn(
+        f"The problem is stiff for {method} in {stiff:,} of the sweep's {stiff_steps.size:,} trajectories: their "
+        f"steps were limited by the method's stability, not by its accuracy (Hairer's stiffness test). "
+        f"{stiffness_advice(constrained)}",
         StiffnessWarning, stacklevel=stacklevel + 1)

@@ -30,6 +30,7 @@ from lagcomp.integrate.drivers.run_state import (
     CLOCK_SLOTS,
     COUNTER_SLOTS,
     EVENT_ROWS,
+    STIFF_AT_STEP,
     TIME,
 )
 from lagcomp.integrate.drivers.sweep_rows import (
@@ -40,6 +41,9 @@ from lagcomp.integrate.drivers.sweep_rows import (
     record_end,
 )
 from lagcomp.integrate.status import Status
+
+#: The column of ``counts`` that holds the step at which a trajectory was declared stiff.
+STIFF_COLUMN = 3
 
 SWEEP_SIGNATURE = types.none(RHS, PROJECT, RESIDUAL, EVENTS, ENERGY,
                              MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean,
@@ -61,7 +65,9 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
     row ranges on several threads (`lagcomp.integrate.sweep`), and the result does not depend on how
     many (trajectories share only the read-only inputs and write their own rows).  Outputs, per k:
 
-    * ``final[k]`` (2n,), ``t_final[k]``, ``status[k]``, ``counts[k]`` = [nfev, nsteps, nrejected];
+    * ``final[k]`` (2n,), ``t_final[k]``, ``status[k]``, ``counts[k]`` = [nfev, nsteps, nrejected,
+      the step at which the stiffness test declared the trajectory stiff (0: not)] (the sweeps of the
+      other methods leave the last column alone);
     * ``dense[k]`` (m, 2n): the saved rows in order (the ``t_eval`` rows, which hold the times after t0,
       with the initial state first when ``save_initial``); m = 0 when not wanted;
     * ``energy_stats[k]`` = [E0, largest |E - E0| over the saved rows], E = ``energy`` (T + V);
@@ -106,6 +112,7 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
             if code != Status.BUFFER_FULL:
                 break
         record_end(k, y, clock, counters, code, e0, deviation, final, t_final, status, counts, energy_stats)
+        counts[k, STIFF_COLUMN] = counters[STIFF_AT_STEP]
 
 
 # Passing the kernels on to `embedded_run` is numba's first-class function feature, which it labels
