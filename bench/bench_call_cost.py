@@ -22,6 +22,7 @@ import numpy as np
 import lagcomp as lc
 from bench.harness import fmt_stat, interleaved_times, paired, stat_of
 from lagcomp.examples import get
+from lagcomp.integrate.drivers.run_state import CLOCK_SLOTS, COUNTER_SLOTS
 from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE
 from lagcomp.integrate.methods import METHODS
 
@@ -37,7 +38,7 @@ def driver_call(model, addressed: bool, t_end: float):
     ts, ys = np.empty(16), np.empty((16, y0.size))
 
     def call():
-        y, clock, counters = y0.copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
+        y, clock, counters = y0.copy(), np.zeros(CLOCK_SLOTS), np.zeros(COUNTER_SLOTS, dtype=np.int64)
         status, _ = driver(y, clock, counters, p, 0, np.zeros(1), t_end, 1e-10, 1e-10, np.inf, 10**9, NO_PAUSE,
                            10**9, np.empty(0), ts, ys, *no_events, *coefficients)
         if status not in (0, 10):

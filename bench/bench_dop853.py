@@ -39,6 +39,7 @@ import lagcomp as lc
 from bench import systems
 from lagcomp import examples
 from lagcomp.integrate.drivers.kernel_types import RHS, VECTOR
+from lagcomp.integrate.drivers.run_state import CLOCK_SLOTS, COUNTER_SLOTS
 from lagcomp.integrate.methods import get_method
 
 TOL = 1e-10
@@ -112,7 +113,7 @@ def driver_run(model, case: Case):
     no_events = (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(1), np.empty((1, n)), np.empty(1, np.int64))
 
     def run():
-        y, clock, counters = case.y0.copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
+        y, clock, counters = case.y0.copy(), np.zeros(CLOCK_SLOTS), np.zeros(COUNTER_SLOTS, dtype=np.int64)
         driver(y, clock, counters, p, 0, np.array([0.0, np.inf]), case.grid[-1], TOL, TOL, np.inf,
                10**9, 10**9, 1, case.grid[1:], np.empty(2), np.empty((2, n)), *no_events, *arrays)
         return int(counters[0])

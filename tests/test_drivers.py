@@ -13,6 +13,7 @@ import pytest
 import scipy.integrate
 from scipy.integrate import solve_ivp
 
+from lagcomp.integrate.drivers.run_state import CLOCK_SLOTS, COUNTER_SLOTS
 from lagcomp.integrate.methods import METHODS as REGISTRY
 from lagcomp.integrate.status import Status
 from tests import driver_kernels
@@ -100,8 +101,8 @@ def run_adaptive(method, kind, tol, *, atol=None, t_end=None, p_extra=(), t_eval
     y = Y0[base].copy()
     t_end = T_END[base] if t_end is None else t_end
     atol = tol if atol is None else atol
-    clock = np.array([0.0, first_step])
-    counters = np.zeros(6, dtype=np.int64)
+    clock = np.array([0.0, first_step, 0.0])
+    counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
     p = np.array([kind, *p_extra], dtype=float)
     t_eval = np.asarray(t_eval, dtype=float)
     args = REGISTRY[method].driver_arguments()
@@ -356,7 +357,7 @@ def test_non_finite_step_size_ends_the_run(method, first_step):
 def run_events(method, directions, actions, *, tol=1e-10, t_end=10.0, switch_time=np.inf, ev_cap=64,
                pause_every=None):
     """Oscillator y = (cos t, −sin t) with events g0 = y[0], g1 = t − switch_time; collects every call's rows."""
-    y, clock, counters = Y0[OSCILLATOR].copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
+    y, clock, counters = Y0[OSCILLATOR].copy(), np.zeros(CLOCK_SLOTS), np.zeros(COUNTER_SLOTS, dtype=np.int64)
     p = np.array([OSCILLATOR, switch_time])
     directions, actions = np.array(directions, dtype=np.int64), np.array(actions, dtype=np.int64)
     ts_all, ys_all, events = [], [], []
@@ -417,7 +418,7 @@ def test_pausing_and_small_event_buffers_change_nothing(method):
 @pytest.mark.parametrize("method", EMBEDDED)
 def test_terminal_event_row_has_room_with_decimated_output(method):
     """With save_every > 1 a terminal event still writes its row: the driver keeps room for it."""
-    y, clock, counters = Y0[OSCILLATOR].copy(), np.zeros(2), np.zeros(6, dtype=np.int64)
+    y, clock, counters = Y0[OSCILLATOR].copy(), np.zeros(CLOCK_SLOTS), np.zeros(COUNTER_SLOTS, dtype=np.int64)
     ts, ys = np.full(1, np.nan), np.full((1, 2), np.nan)
     calls = 0
     rows = []

@@ -77,6 +77,7 @@ def models(compiled, cache_dir):
                    name="table_walled", defaults={"m": 1.0, "g": 9.81, "l": 1.0}, q0=(1.0, 0.0))
     return {
         "pendulum": compiled("simple_pendulum"),
+        "stiff": compiled("stiff_spring_pendulum"),
         "rod": compiled("spherical_pendulum_cartesian"),
         "failing": lc.compile(failing, cache_dir=cache_dir),
         "degenerate": lc.compile(degenerate, cache_dir=cache_dir),
@@ -303,6 +304,7 @@ CASES = {
     "singular-during-run": (_fail("failing", t_span=(0, 2), params={"c": 1.0}, method="rk4", dt=0.1), "singular"),
     "step-size-underflow": (_fail("failing", t_span=(0, 2), params={"a": 1.0}), "step size became too small"),
     "max-steps-reached": (_fail("pendulum", max_steps=3), "maximum number of steps"),
+    "stiff-problem": (_simulate("stiff", method="dopri5", rtol=1e-6, atol=1e-6), 'method="radau"'),
     "implicit-not-converged": (_fail("failing", t_span=(0, 0.9), params={"a": 1.0}, method="gauss2", dt=0.3),
                                "did not converge"),
     "rattle-not-converged": (_fail("rod", method="rattle", dt=0.3), "did not converge"),

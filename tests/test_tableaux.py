@@ -94,7 +94,7 @@ def test_coefficients_are_scipys_bit_for_bit():
 
 
 def test_driver_arguments():
-    """The embedded driver's tableau data: stages, error weights and norm, exponent, dense output."""
+    """The embedded driver's tableau data: stages, error weights and norm, exponent, dense output, stiffness bound."""
     from lagcomp.integrate.drivers.events import DENSE_CONTD8, DENSE_POWERS
     from lagcomp.integrate.tableaux import ERROR_DOP853, ERROR_RMS
 
@@ -103,7 +103,8 @@ def test_driver_arguments():
     np.testing.assert_array_equal(C, RK4.C)
     for tab in (DOPRI5, TSIT5, BS3, DOP853):
         args = driver_arguments(tab)
-        A, B, C, errors, norm, exponent, kind, dense, extra_A, extra_C = args
+        A, B, C, errors, norm, exponent, kind, dense, extra_A, extra_C, stiffness_bound = args
+        assert type(stiffness_bound) is float and stiffness_bound == tab.stiffness_bound
         for arr, name in zip((A, B, C), "ABC"):
             np.testing.assert_array_equal(arr, getattr(tab, name))
         assert exponent == -1.0 / (tab.error_order + 1)

@@ -21,6 +21,7 @@ from lagcomp.errors import (
     OptionError as OptionError,
     ParameterError as ParameterError,
     SingularMassMatrixError as SingularMassMatrixError,
+    StiffnessWarning as StiffnessWarning,
     UndeclaredSymbolError as UndeclaredSymbolError,
 )
 from lagcomp.integrate.solution import Solution as Solution

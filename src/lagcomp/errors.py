@@ -55,3 +55,7 @@ class IntegrationError(LagcompError, RuntimeError):
 
 class CacheWarning(UserWarning):
     """A cache entry could not be used and was rebuilt."""
+
+
+class StiffnessWarning(UserWarning):
+    """An explicit method's steps were limited by its stability, not its accuracy: use ``method="radau"``."""

@@ -29,6 +29,7 @@ from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
 from lagcomp.integrate.solution import EventRecord, Solution
 from lagcomp.integrate.status import Status
+from lagcomp.integrate.stiffness import ADVISED_FAILURES, stiffness_advice, warn_if_stiff
 
 #: Rows per output chunk: small runs allocate little, long ones grow to this.
 FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
@@ -284,6 +285,10 @@ def _solution(model, p, recorder, run, throw) -> Solution:
     status, run_state = run["status"], run["state"]
     t_failure = None
     message = Status(status).message
+    stiff_at, constrained = run_state.stiff_at, model.k > 0
+    if stiff_at is not None and status in ADVISED_FAILURES:
+        message = f"{message} The steps were limited by stability from t = {stiff_at[1]:.6g}: the problem is " \
+                  f"stiff. {stiffness_advice(constrained)}"
     if status < 0 or status == Status.INTERRUPTED:
         state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, run_state.y))  # (q, q̇), or (q, u)
         last = "state" if status == Status.RESIDUAL_EXCEEDED else "last good state"
@@ -306,6 +311,8 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         projected_initial_state=ys[0].copy() if run["projected"] else None,
         events=run["events"],
     )
+    # simulate -> Model.simulate -> the user's call
+    warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, constrained, stacklevel=4)
     if throw and status < 0:
         raise IntegrationError(message, solution)
     return solution

@@ -34,6 +34,7 @@ from lagcomp.integrate.memory import check as check_memory
 from lagcomp.integrate.methods import library_function
 from lagcomp.integrate.options import count, method_names, run_options
 from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
+from lagcomp.integrate.stiffness import warn_if_sweep_stiff
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
@@ -323,6 +324,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         done = _run_on_dask(client, spec or _worker_spec(model), task, Y0, P, out, progress)
     statuses = out["status"]
     counts = out["counts"]
+    warn_if_sweep_stiff(m.name, counts[:, 3], model.k > 0, stacklevel=3)     # (column 3: embedded pairs only)
     e0, deviation = out["energy"][:, 0], out["energy"][:, 1]
     relative = np.where(e0 != 0, deviation / np.where(e0 != 0, np.abs(e0), 1.0), deviation)
     shaped = lambda a: a.reshape(*shape, *a.shape[1:])  # noqa: E731
@@ -404,7 +406,7 @@ def _allocate(n_traj: int, layout: tuple) -> dict[str, np.ndarray]:
     n2, rows, n_events, cap = layout
     return dict(
         final=np.full((n_traj, n2), np.nan), t_final=np.full(n_traj, np.nan),
-        status=np.full(n_traj, NOT_RUN, dtype=np.int64), counts=np.zeros((n_traj, 3), dtype=np.int64),
+        status=np.full(n_traj, NOT_RUN, dtype=np.int64), counts=np.zeros((n_traj, 4), dtype=np.int64),
         dense=np.full((n_traj, rows, n2), np.nan), energy=np.full((n_traj, 2), np.nan),
         event_count=np.zeros((n_traj, n_events), dtype=np.int64), event_t=np.full((n_traj, n_events, cap), np.nan),
         event_y=np.full((n_traj, n_events, cap, n2), np.nan),

@@ -16,6 +16,10 @@ Conventions (Hairer, Norsett & Wanner, *Solving ODEs I*, sec. II.1-II.6):
   BS3), ``y(t + x h) = y + h K^T P [x, x^2, ..., x^m]`` with K including the FSAL row.
 * ``A_EXTRA`` (n_extra, s + 1 + n_extra), ``C_EXTRA`` (n_extra,): extra stages
   for DOP853's dense output; ``D`` (m, s + 1 + n_extra) its coefficients.
+* ``stiffness_bound``: the h|λ| above which the embedded driver's stiffness test (Hairer's, HNW II,
+  sec. IV.2) finds a step at the method's stability limit, a little inside the interval of absolute
+  stability on the negative real axis; 0 for no test, which needs the last stage at t + h (c = 1)
+  next to the FSAL stage.
 
 DOPRI5 and DOP853 coefficients are scipy's own (``scipy.integrate.RK45`` /
 ``DOP853`` class attributes, copied into `lagcomp.integrate.dormand_prince` and
@@ -86,6 +90,7 @@ class Tableau:
     D: Optional[np.ndarray] = None
     A_EXTRA: Optional[np.ndarray] = None
     C_EXTRA: Optional[np.ndarray] = None
+    stiffness_bound: float = 0.0
 
     def __post_init__(self) -> None:
         ndims = {"A": 2, "B": 1, "C": 1, "E": 1, "E3": 1, "E5": 1,
@@ -117,6 +122,11 @@ class Tableau:
             raise ValueError(f"{self.name}: row sums of A must equal C")
         if abs(B.sum() - 1.0) > _TOL:
             raise ValueError(f"{self.name}: sum(B) must be 1")
+        if not self.stiffness_bound >= 0.0:
+            raise ValueError(f"{self.name}: stiffness_bound must be >= 0")
+        if self.stiffness_bound > 0.0 and C[-1] != 1.0:
+            raise ValueError(f"{self.name}: the stiffness test compares the last stage with the FSAL stage, both "
+                             f"at t + h: it needs C[-1] = 1, got {C[-1]}")
 
         # Error estimators.
         if (self.E3 is None) != (self.E5 is None):
@@ -200,6 +210,8 @@ DOPRI5 = Tableau(
     C=dp.RK45_C,
     E=dp.RK45_E,
     P=dp.RK45_P,
+    # dopri5.f's 3.25: the real stability interval is (-3.307, 0)
+    stiffness_bound=3.25,
 )
 
 #: Hairer's DOP853: 8th order, 5th/3rd-order error estimates, 7th-order dense
@@ -216,6 +228,8 @@ DOP853 = Tableau(
     D=dp.DOP853_D,
     A_EXTRA=dp.DOP853_A_EXTRA,
     C_EXTRA=dp.DOP853_C_EXTRA,
+    # dop853.f's 6.1: the real stability interval is (-6.394, 0)
+    stiffness_bound=6.1,
 )
 
 
@@ -246,6 +260,8 @@ TSIT5 = Tableau(
        [0.0, 37.50931341651104, -88.1789048947664, 47.37952196281928],
        [0.0, -27.896526289197286, 65.09189467479366, -34.87065786149661],
        [0.0, 1.5, -4.0, 2.5]],
+    # the real stability interval is (-3.507, 0): 3.45 lies as far inside it as dopri5.f's 3.25 inside DOPRI5's
+    stiffness_bound=3.45,
 )
 
 #: Bogacki & Shampine's 3(2) pair (P. Bogacki, L. F. Shampine, "A 3(2) pair of Runge-Kutta formulas",
@@ -273,13 +289,13 @@ def driver_arguments(tableau: Tableau) -> tuple:
 
     * an embedded pair (error weights present), for
       `lagcomp.integrate.drivers.embedded.embedded_run`: ``(A, B, C, error_weights, error_norm,
-      error_exponent, dense_kind, dense_weights, extra_A, extra_C)`` with
+      error_exponent, dense_kind, dense_weights, extra_A, extra_C, stiffness_bound)`` with
 
       - ``error_weights`` (1, s + 1) = [E] and ``error_norm`` ERROR_RMS, or for DOP853 (2, s + 1) =
         [E5, E3] and ERROR_DOP853; ``error_exponent`` = -1 / (error_order + 1);
       - ``dense_kind`` DENSE_POWERS with ``dense_weights`` = Pᵀ (m, s + 1) and no extra stages
         (``extra_A`` (0, s + 1), ``extra_C`` (0,)), or for DOP853 DENSE_CONTD8 with D and its extra
-        stages ``A_EXTRA``, ``C_EXTRA``;
+        stages ``A_EXTRA``, ``C_EXTRA``; ``stiffness_bound`` a float (0: no stiffness test);
 
     * a fixed-step method without error estimate (RK4), for
       `lagcomp.integrate.drivers.fixed_step.runge_kutta_run`: ``(A, C, weights, denominator)``,
@@ -306,7 +322,8 @@ def driver_arguments(tableau: Tableau) -> tuple:
         errors, norm = [tableau.E5, tableau.E3], ERROR_DOP853
         dense, stages = (DENSE_CONTD8, tableau.D), (tableau.A_EXTRA, tableau.C_EXTRA)
     return (copy(tableau.A), copy(tableau.B), copy(tableau.C), copy(np.vstack(errors)), norm,
-            -1.0 / (tableau.error_order + 1), dense[0], copy(dense[1]), copy(stages[0]), copy(stages[1]))
+            -1.0 / (tableau.error_order + 1), dense[0], copy(dense[1]), copy(stages[0]), copy(stages[1]),
+            float(tableau.stiffness_bound))
 
 
 #: The largest denominator `over_common_denominator` looks for in a method's weights.

@@ -27,8 +27,10 @@ from lagcomp.integrate.drivers.kernel_types import (
     VECTOR,
 )
 from lagcomp.integrate.drivers.run_state import (
+    CLOCK_SLOTS,
     COUNTER_SLOTS,
     EVENT_ROWS,
+    STIFF_AT_STEP,
     TIME,
 )
 from lagcomp.integrate.drivers.sweep_rows import (
@@ -39,6 +41,9 @@ from lagcomp.integrate.drivers.sweep_rows import (
     record_end,
 )
 from lagcomp.integrate.status import Status
+
+#: The column of ``counts`` that holds the step at which a trajectory was declared stiff.
+STIFF_COLUMN = 3
 
 SWEEP_SIGNATURE = types.none(RHS, PROJECT, RESIDUAL, EVENTS, ENERGY,
                              MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean,
@@ -51,7 +56,8 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
                    Y0, P, projecting, t0, t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial,
                    directions, actions, final, t_final, status, counts, dense, energy_stats,
                    event_count, event_t, event_y,
-                   A, B, C, error_weights, error_norm, error_exponent, dense_kind, dense_weights, extra_A, extra_C):
+                   A, B, C, error_weights, error_norm, error_exponent, dense_kind, dense_weights, extra_A, extra_C,
+                   stiffness_bound):
     """Trajectory k from (t0, Y0[k]) with parameters P[k] to t_end by `embedded_run`, for every row k.
 
     Each trajectory runs the resumable driver with a small row buffer (`SWEEP_ROWS`) and folds the
@@ -59,7 +65,9 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
     row ranges on several threads (`lagcomp.integrate.sweep`), and the result does not depend on how
     many (trajectories share only the read-only inputs and write their own rows).  Outputs, per k:
 
-    * ``final[k]`` (2n,), ``t_final[k]``, ``status[k]``, ``counts[k]`` = [nfev, nsteps, nrejected];
+    * ``final[k]`` (2n,), ``t_final[k]``, ``status[k]``, ``counts[k]`` = [nfev, nsteps, nrejected,
+      the step at which the stiffness test declared the trajectory stiff (0: not)] (the sweeps of the
+      other methods leave the last column alone);
     * ``dense[k]`` (m, 2n): the saved rows in order (the ``t_eval`` rows, which hold the times after t0,
       with the initial state first when ``save_initial``); m = 0 when not wanted;
     * ``energy_stats[k]`` = [E0, largest |E - E0| over the saved rows], E = ``energy`` (T + V);
@@ -72,7 +80,7 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
     for k in range(n_traj):
         y = Y0[k].copy()
         p = P[k]
-        clock = np.zeros(2)
+        clock = np.zeros(CLOCK_SLOTS)
         clock[TIME] = t0
         counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
         residual = np.zeros(1)
@@ -98,12 +106,13 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
                                          max_steps, NO_PAUSE, save_every, t_eval, ts, ys,
                                          directions, actions, ev_t, ev_y, ev_i,
                                          A, B, C, error_weights, error_norm, error_exponent, dense_kind,
-                                         dense_weights, extra_A, extra_C)
+                                         dense_weights, extra_A, extra_C, stiffness_bound)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
             fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_i, event_count, event_t, event_y, k)
             if code != Status.BUFFER_FULL:
                 break
         record_end(k, y, clock, counters, code, e0, deviation, final, t_final, status, counts, energy_stats)
+        counts[k, STIFF_COLUMN] = counters[STIFF_AT_STEP]
 
 
 # Passing the kernels on to `embedded_run` is numba's first-class function feature, which it labels
