@@ -38,8 +38,9 @@ def warn_if_stiff(method: str, stiff_at, nsteps: int, nfev: int, constrained: bo
         return
     step, t = stiff_at
     warnings.warn(
-        f"The problem is stiff for {method}: from t = {t:.6g} (step {step:,}) its steps were limited by the "
-        f"method's stability, not by its accuracy (Hairer's stiffness test); the run took {nsteps:,} steps and "
+        f"The problem looks stiff for {method}: from t = {t:.6g} (step {step:,}) its steps were limited by the "
+        f"method's stability, not by its accuracy (Hairer's stiffness test, an estimate: at rtol of 1e-3 or "
+        f"looser an oscillating system that is not stiff can trip it too); the run took {nsteps:,} steps and "
         f"{nfev:,} evaluations of the equations. {stiffness_advice(constrained)}",
         StiffnessWarning, stacklevel=stacklevel + 1)
 
@@ -51,7 +52,8 @@ def warn_if_sweep_stiff(method: str, stiff_steps: np.ndarray, constrained: bool,
     if stiff == 0:
         return
     warnings.warn(
-        f"The problem is stiff for {method} in {stiff:,} of the sweep's {stiff_steps.size:,} trajectories: their "
-        f"steps were limited by the method's stability, not by its accuracy (Hairer's stiffness test). "
+        f"The problem looks stiff for {method} in {stiff:,} of the sweep's {stiff_steps.size:,} trajectories: "
+        f"their steps were limited by the method's stability, not by its accuracy (Hairer's stiffness test, an "
+        f"estimate). "
         f"{stiffness_advice(constrained)}",
         StiffnessWarning, stacklevel=stacklevel + 1)
