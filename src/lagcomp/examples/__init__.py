@@ -25,6 +25,7 @@ through the `EXAMPLES` registry:
 ``chaplygin_sleigh``       rigid body on a knife edge (nonholonomic)
 ``spherical_pendulum_cartesian``  bob on a rod in Cartesian coordinates: λ gives the rod tension
 ``spherical_pendulum``     the same pendulum in spherical angles
+``four_bar_linkage``       crank, coupler and rocker closing a loop (2 holonomic constraints): λ is a pin force
 ``turn_indicator``         gyroscope in a gimbal of a banked, turning aircraft (moving frame, rigid body)
 ``compton_disc``           disc on a turning carousel at latitude λ, axis swung over (moving frame)
 ``driven_pendulum_support``  ``driven_pendulum`` written in the support's frame (driving inertial force)
