@@ -114,9 +114,10 @@ SCIPY, LSODA = "scipy Radau (lagcomp's rhs and Jacobian)", "numbalsoda lsoda"
 RADAU, RADAU_CALL = "lagcomp radau", "lagcomp radau driver call (no simulate)"
 
 
-def measure(t_end: float = 10.0, rounds: int = 5, use_peers: bool = True, cache_dir: str | None = None) -> Table:
-    """Every row of the comparison as a markdown `Table`; its ``ratios`` attribute maps (solver, tol) to the
-    solver's time over radau's (through simulate) at equal error, for the targets."""
+def measure(t_end: float = 10.0, rounds: int = 5, use_peers: bool = True,
+            cache_dir: str | None = None) -> tuple[Table, dict]:
+    """Every row of the comparison as a markdown `Table`, and for the targets a dict mapping (solver, tol) to
+    the solver's time over radau's (through simulate) at equal error (NaN outside radau's rows)."""
     system = examples.get("stiff_spring_pendulum")
     with tempfile.TemporaryDirectory() as scratch:
         model = lc.compile(system, cache_dir=cache_dir or scratch)
@@ -170,21 +171,21 @@ def measure(t_end: float = 10.0, rounds: int = 5, use_peers: bool = True, cache_
                   note=f"{__doc__.split(chr(10) + chr(10), 2)[2].strip()}  Reference: scipy DOP853 at 1e-13 (its "
                        f"distance from the same at 1e-12: {reference_error:.1e}); {rounds} rounds. "
                        "`python -m bench.bench_stiff` runs this table alone.")
-    table.ratios = {}
+    at_equal_error = {}
     for key, samples in times.items():
         name, tol = key
         ratios = [statistics.median(samples) / radau_time_at(base, errors[key]) for base in bases]
-        table.ratios[key] = ratios[0]
+        at_equal_error[key] = ratios[0]
         table.add(name, f"{tol:.0e}", f"{results[key][1]:,}", f"{statistics.median(samples) * 1e3:.3g}",
                   f"{errors[key]:.1e}", *("–" if np.isnan(r) else f"{r:.3g}×" for r in ratios))
-    return table
+    return table, at_equal_error
 
 
 def section(ctx) -> Table:
     """`python -m bench` section ``stiff``: the table, and issue 20's two speed targets from it."""
-    table = measure(rounds=ctx.repeats, use_peers=ctx.use_peers, cache_dir=ctx.cache_dir)
+    table, at_equal_error = measure(rounds=ctx.repeats, use_peers=ctx.use_peers, cache_dir=ctx.cache_dir)
     for target, solver in (("radau_scipy", SCIPY), ("radau_lsoda", LSODA)):
-        ratios = [r for (name, _), r in table.ratios.items() if name == solver and not np.isnan(r)]
+        ratios = [r for (name, _), r in at_equal_error.items() if name == solver and not np.isnan(r)]
         t = ctx.target(target)
         if ratios:
             t.measured = (f"{solver} takes {min(ratios):.3g}–{max(ratios):.3g}× radau's time at equal error "
@@ -198,7 +199,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--t-end", type=float, default=10.0)
     args = parser.parse_args()
-    print(measure(args.t_end, args.rounds).markdown())
+    print(measure(args.t_end, args.rounds)[0].markdown())
 
 
 def radau_time_at(points: list[tuple[float, float]], error: float) -> float:
