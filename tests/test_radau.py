@@ -7,8 +7,8 @@ emitted kernels drive it.  Checked:
   swing) against scipy's DOP853 at rtol = atol = 1e-13 on the same rhs (an explicit method that
   shares no code with Radau; its own error about 1e-13), with bounds about ten times the measured
   errors (7.4e-11 at rtol 1e-8, 3.1e-13 at 1e-10), so that a lost digit fails;
-* the same steps as scipy's ``solve_ivp(method="Radau")`` given the model's ``rhs`` and its exact
-  ``rhs_jacobian``: accepted steps, f and Jacobian evaluations and LU factorizations;
+* the same steps as scipy's ``solve_ivp(method="Radau")`` given ``Model.rhs`` and ``Model.jacobian``
+  (the exact ``rhs_jacobian`` kernel): accepted steps, f and Jacobian evaluations and LU factorizations;
 * order 5 on a damped linear oscillator with its closed form, the steps forced by ``first_step`` and
   ``max_step`` (linear, so the simplified Newton iteration solves the stages to rounding whatever
   the tolerance, and only the method's own error is left);
@@ -21,7 +21,7 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 import lagcomp as lc
-from lagcomp.errors import OptionError
+from lagcomp.errors import ModelError, OptionError
 
 STIFF = "stiff_spring_pendulum"
 
@@ -31,26 +31,9 @@ def stiff(compiled):
     return compiled(STIFF)
 
 
-def scipy_callables(model):
-    """``fun(t, y)`` and ``jac(t, y)`` for solve_ivp around the model's compiled kernels."""
-    p, n = model.parameter_vector(), 2 * model.n
-
-    def fun(t, y):
-        out = np.empty(n)
-        assert model.kernels.rhs(t, y, p, out) == 0
-        return out
-
-    def jac(t, y):
-        out = np.empty((n, n))
-        assert model.kernels.rhs_jacobian(t, y, p, out) == 0
-        return out
-    return fun, jac
-
-
 def test_stiff_spring_pendulum_agrees_with_an_explicit_reference(stiff):
-    fun, _ = scipy_callables(stiff)
     y0, t_end = stiff.initial_state(), 2.0
-    reference = solve_ivp(fun, (0.0, t_end), y0, method="DOP853", rtol=1e-13, atol=1e-13).y[:, -1]
+    reference = solve_ivp(stiff.rhs, (0.0, t_end), y0, method="DOP853", rtol=1e-13, atol=1e-13).y[:, -1]
     for tol, bound in ((1e-8, 1e-9), (1e-10, 3e-12)):    # measured 7.4e-11 and 3.1e-13
         s = stiff.simulate((0.0, t_end), method="radau", rtol=tol, atol=tol, progress=False)
         assert s.success and s.njev > 0 and s.nlu > 0
@@ -59,9 +42,9 @@ def test_stiff_spring_pendulum_agrees_with_an_explicit_reference(stiff):
 
 
 def test_radau_takes_scipys_steps_on_the_same_kernels(stiff):
-    fun, jac = scipy_callables(stiff)
     s = stiff.simulate((0.0, 10.0), method="radau", rtol=1e-6, atol=1e-6, progress=False)
-    r = solve_ivp(fun, (0.0, 10.0), stiff.initial_state(), method="Radau", jac=jac, rtol=1e-6, atol=1e-6)
+    r = solve_ivp(stiff.rhs, (0.0, 10.0), stiff.initial_state(), method="Radau", jac=stiff.jacobian, rtol=1e-6,
+                  atol=1e-6)
     assert (s.nsteps, s.nfev, s.njev, s.nlu) == (r.t.size - 1, r.nfev, r.njev, r.nlu)
     np.testing.assert_allclose(s.y[-1], r.y[:, -1], rtol=0, atol=1e-12)
 
@@ -97,9 +80,12 @@ def test_radau_is_of_order_5(oscillator):
 
 
 def test_a_constrained_model_is_refused_with_what_to_use(compiled):
+    model = compiled("spherical_pendulum_cartesian")
     with pytest.raises(OptionError, match="radau") as refused:
-        compiled("spherical_pendulum_cartesian").simulate((0.0, 1.0), method="radau", progress=False)
+        model.simulate((0.0, 1.0), method="radau", progress=False)
     assert "dop853" in str(refused.value)
+    with pytest.raises(ModelError, match="no Jacobian kernel: its equations hold constraints"):
+        model.jacobian(0.0, model.initial_state())
 
 
 def test_a_radau_sweep_is_bitwise_the_runs_it_sweeps(stiff):

@@ -372,6 +372,24 @@ class Model:
             raise self._singular_mass_matrix(t, y, status)
         return out
 
+    def jacobian(self, t: float, y, params: dict | None = None) -> np.ndarray:
+        """∂f/∂y of y' = f(t, y) at one state, shape (N, N) with N = `state_size` (row i the component f_i):
+        the exact Jacobian the model's ``rhs_jacobian`` kernel computes (the one ``method="radau"`` uses;
+        scipy's ``solve_ivp(..., jac=...)`` takes it as it is).
+
+        Raises SingularMassMatrixError where M is singular, ModelError where the model has no Jacobian
+        kernel (its ``RHS_JACOBIAN_REFUSED`` says why: constrained Lagrange models, today).
+        """
+        y = self._vector(y, self.state_size, "y")
+        out = np.empty((self.state_size, self.state_size))
+        status = self.kernels.rhs_jacobian(float(t), y, self.parameter_vector(params), out)
+        refused = getattr(self.kernels, "RHS_JACOBIAN_REFUSED", None)   # the stub's reason (no sympy import here)
+        if status and refused is not None:
+            raise ModelError(f"{self.name!r} has no Jacobian kernel: its equations hold {refused}.")
+        if status:
+            raise self._singular_mass_matrix(t, y, status)
+        return out
+
     def _singular_mass_matrix(self, t: float, state, status: int) -> SingularMassMatrixError:
         """The error for a kernel that found M singular (pivot `status`) at `state` = (q, ...)."""
         where = ", ".join(f"{c}={v:.6g}" for c, v in zip(self.coordinates, state[: self.n]))
