@@ -106,17 +106,8 @@ def lagcomp_dop853(problem, rtol, atol):
 
 
 def scipy_radau(problem, rtol, atol):
-    p, y0, t_end = np.array(problem["p"]), np.array(problem["y0"]), problem["t_end"]
-
-    def fun(t, y):
-        out = np.empty(y.size)
-        stiff_kernels.rhs(t, y, p, out)
-        return out
-
-    def jac(t, y):
-        out = np.empty((y.size, y.size))
-        stiff_kernels.rhs_jacobian(t, y, p, out)
-        return out
+    y0, t_end = np.array(problem["y0"]), problem["t_end"]
+    fun, jac = stiff_kernels.scipy_functions(problem["p"])
 
     def run():
         sol = solve_ivp(fun, (0.0, t_end), y0, method="Radau", rtol=rtol, atol=atol, jac=jac)

@@ -76,3 +76,19 @@ def rhs_jacobian(t, y, p, out):
     if kind == 6 and t > p[1]:
         return 3
     return 0
+
+
+def scipy_functions(p):
+    """``fun(t, y)`` and ``jac(t, y)`` for scipy's ``solve_ivp`` around `rhs` and `rhs_jacobian` at parameters `p`."""
+    p = np.asarray(p, dtype=float)
+
+    def fun(t, y):
+        out = np.empty(y.size)
+        rhs(t, y, p, out)
+        return out
+
+    def jac(t, y):
+        out = np.empty((y.size, y.size))
+        rhs_jacobian(t, y, p, out)
+        return out
+    return fun, jac

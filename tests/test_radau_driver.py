@@ -67,18 +67,7 @@ class Run:
 
 def scipy_radau(p, y0, t_end, rtol, atol, **options):
     """scipy's Radau on the same kernels and Jacobian."""
-    p = np.array(p, dtype=float)
-
-    def fun(t, y):
-        out = np.empty(y.size)
-        stiff_kernels.rhs(t, y, p, out)
-        return out
-
-    def jac(t, y):
-        out = np.empty((y.size, y.size))
-        stiff_kernels.rhs_jacobian(t, y, p, out)
-        return out
-
+    fun, jac = stiff_kernels.scipy_functions(p)
     return solve_ivp(fun, (0.0, t_end), np.array(y0, dtype=float), method="Radau", rtol=rtol, atol=atol, jac=jac,
                      **options)
 
