@@ -98,10 +98,11 @@ def test_max_steps_message_gives_the_advice(compiled):
         model.simulate((0, 2), method="dopri5", max_steps=300, throw=True, progress=False, **STIFF_TOL)
 
 
-def test_the_advice_for_constrained_systems_names_what_exists():
-    advice = stiffness_advice(constrained=True)
-    assert "does not take constraints" in advice and 'method="rattle"' in advice
-    assert 'Use method="radau"' in stiffness_advice(constrained=False)
+def test_the_advice_names_what_exists():
+    """radau for Lagrange's equations, constrained or not; a Kane model has no implicit method yet."""
+    advice = stiffness_advice(kane=True)
+    assert "does not take Kane models" in advice and "a constraint in its place" in advice
+    assert 'Use method="radau"' in stiffness_advice(kane=False)
 
 
 def test_a_sweep_warns_once_for_its_stiff_trajectories(compiled):

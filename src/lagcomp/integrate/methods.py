@@ -68,16 +68,24 @@ class Method:
     #: What the driver takes first from the model's generated module, by name: kernels (e.g. ``("rhs",
     #: "project", ...)``) and, for the Taylor method, module data (``TAYLOR_PERIODIC``, ``TAYLOR_WORK``).
     kernels: tuple[str, ...] = ()
+    #: What the driver takes instead of `kernels` for a constrained Lagrange model, which it then solves as an
+    #: index-2 DAE (`lagcomp.integrate.dae`); empty: such models are refused (`unconstrained_only`) or projected.
+    dae_kernels: tuple[str, ...] = ()
     #: The library sweep loop (``"module:function"``) that runs this method over many trajectories.
     sweep: str | None = None
     #: The library function (``"module:function"``) giving, for a state of N components, the arrays a run of
     #: this method keeps from one driver call to the next besides (y, clock, counters), which `simulate`
     #: passes after the coefficients (Radau's Jacobian and last collocation polynomial); None: none.
     carry: str | None = None
-    def bound_driver(self, kernels, addressed: bool = False):
+    def solves_dae(self, model) -> bool:
+        """Whether this method integrates `model` as an index-2 DAE (a constrained model, `dae_kernels`)."""
+        return bool(self.dae_kernels) and model.k > 0
+
+    def bound_driver(self, kernels, addressed: bool = False, dae: bool = False):
         """The driver with the model's `kernels` (its generated module) bound as its first arguments: their
         dispatchers, or if `addressed` `AddressedKernel`s (cheaper for numba to unbox at each driver call,
         each kernel call one level deeper; `lagcomp.integrate.simulate` uses them for a run's first call).
+        With `dae`, the kernels named by `dae_kernels` instead of `kernels`.
 
         Bound once per module, method and binding (`_BOUND_DRIVERS`): the `AddressedKernel`s then look
         their addresses up at the first run only, not at every run.
@@ -85,15 +93,15 @@ class Method:
         try:
             bound = _BOUND_DRIVERS.setdefault(kernels, {})
         except TypeError:  # not weakly referenceable (a stand-in for a module): bound afresh
-            return self._bind(kernels, addressed)
-        key = (self.name, addressed)
+            return self._bind(kernels, addressed, dae)
+        key = (self.name, addressed, dae)
         if key not in bound:
-            bound[key] = self._bind(kernels, addressed)
+            bound[key] = self._bind(kernels, addressed, dae)
         return bound[key]
 
-    def _bind(self, kernels, addressed: bool):
+    def _bind(self, kernels, addressed: bool, dae: bool):
         driver = library_function(self.driver)
-        bound = [getattr(kernels, k) for k in self.kernels]
+        bound = [getattr(kernels, k) for k in (self.dae_kernels if dae else self.kernels)]
         if addressed:
             kinds = driver.signatures[0]
             bound = [AddressedKernel(value, kind) if isinstance(kind, types.FunctionType) else value
@@ -174,8 +182,9 @@ METHODS = {
                kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
         Method("radau", 5, True, "lagcomp.integrate.drivers.radau:radau_run", radau.RADAU5,
                "Radau IIA order 5 (Hairer-Wanner's RADAU5), implicit, adaptive, for stiff systems, with the "
-               "model's exact Jacobian; unconstrained systems", unconstrained_only=True,
+               "model's exact Jacobian; constrained systems as index-2 DAEs, constraints held without projection",
                kernels=("rhs", "rhs_jacobian", "event_values"), carry="lagcomp.integrate.drivers.radau:new_carry",
+               dae_kernels=("dae_residual", "dae_jacobian", "event_values"),
                sweep="lagcomp.integrate.drivers.radau_sweep:sweep_radau"),
         Method("taylor", 20, True, "lagcomp.integrate.drivers.taylor:taylor_run", None,
                "Taylor series to order ceil(-ln(tol)/2 + 1) (20 at machine precision), adaptive, dense "

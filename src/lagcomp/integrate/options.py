@@ -254,6 +254,9 @@ def run_options(model, t_span, *, method="dop853", dt=None, rtol=None, atol=None
     t0, t1 = time_span(t_span)
     m = get_method(method)
     check_method(model, m)
+    if m.solves_dae(model) and projection:
+        raise OptionError(f"`{m.name}` solves {model.name!r} as a DAE: its constraints hold at every step without "
+                          "projection. Leave `projection` unset.")
     if m.holonomic_separable_only and projection:
         raise OptionError(f"`{m.name}` holds the constraints to round-off at every step without projection; projecting "
                           "would break its symplectic structure. Leave `projection` unset.")

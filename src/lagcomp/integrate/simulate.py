@@ -20,6 +20,7 @@ import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
+from lagcomp.integrate.dae import dae_state, differential_size
 from lagcomp.integrate.drivers.run_state import STEP, RunState
 from lagcomp.integrate.memory import MEMORY_LIMIT, run_bytes
 from lagcomp.integrate.memory import check as check_memory
@@ -45,13 +46,17 @@ FIRST_CALL_SECONDS = 0.0125
 _STEP_RATES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions):
-    """The chunk call of an adaptive method, and the rows its output will need (None: not known)."""
+def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions, differential: int):
+    """The chunk call of an adaptive method, and the rows its output will need (None: not known).
+
+    `differential`: the state's first components that are differential, the rest algebraic (a DAE's; Radau).
+    """
     m = options.method
     if options.first_step is not None:
         state.clock[STEP] = options.first_step
     events = options.t_eval_after_start()
-    drivers, tableau_arrays = _bound_drivers(m, kernels), options.driver_arguments()
+    dae = differential < state.y.size
+    drivers, tableau_arrays = _bound_drivers(m, kernels, dae), options.driver_arguments()
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
         tableau_arrays = (np.zeros(state.y.size),)
     elif m.carry is not None:  # what the method keeps from call to call (Radau: its Jacobian and last polynomial)
@@ -65,8 +70,9 @@ def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions)
     return advance, (len(events) + 1 if options.t_eval is not None else None)
 
 
-def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions):
-    """The chunk call of a fixed-step method, and the rows its output will need."""
+def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions, differential: int):
+    """The chunk call of a fixed-step method, and the rows its output will need (`differential`: unused, the
+    whole state is)."""
     drivers, coefficients = _bound_drivers(options.method, kernels), options.driver_arguments()
     t0, t1, dt, n_steps = options.t0, options.t1, options.dt, options.n_steps
 
@@ -76,13 +82,13 @@ def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOption
     return advance, n_steps // options.save_every + 1
 
 
-def _bound_drivers(m, kernels) -> tuple:
+def _bound_drivers(m, kernels, dae: bool = False) -> tuple:
     """The driver of method `m` bound to `kernels`, for later calls of a run and for its first (indexed by
     `first_call`): the first binds them as `AddressedKernel`s, which numba unboxes in ~10 µs instead of
     ~35 µs per kernel (a tenth of a short run), at ~1% per step of a small model (kernel calls through their
     C wrappers); the later, long calls (`CALL_SECONDS`) bind the dispatchers, called at their native entry.
     """
-    return m.bound_driver(kernels), m.bound_driver(kernels, addressed=True)
+    return m.bound_driver(kernels, dae=dae), m.bound_driver(kernels, addressed=True, dae=dae)
 
 
 def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", dt=None, rtol=None,
@@ -103,9 +109,19 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     bound = math.inf if max_residual is None else positive(max_residual, "max_residual")
     residual_max = np.array([0.0, bound])  # running maximum, and the bound the drivers stop at
-    state = RunState(y0, t0)
+    width = y0.size  # the columns of the state that are (q, q̇): all but a DAE's algebraic ones
+    if m.solves_dae(model):
+        if any(baumgarte):
+            raise OptionError(f"`{m.name}` solves {model.name!r} as a DAE whose constraints hold without "
+                              "stabilisation; leave `baumgarte` unset.")
+        start, singular = dae_state(model, t0, y0, p)
+        if singular:
+            _refuse_singular_start(model, t0, y0, p)
+        state, differential = RunState(start, t0), differential_size(model)
+    else:
+        state, differential = RunState(y0, t0), y0.size
     make = _adaptive_driver if options.adaptive else _fixed_step_driver
-    advance, rows = make(model.kernels, state, p, (options.projecting, residual_max), options)
+    advance, rows = make(model.kernels, state, p, (options.projecting, residual_max), options, differential)
 
     recorder = Recorder(model, p, record, progress)
     if t_eval is None or t_eval[0] == t0:
@@ -115,12 +131,12 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
     first = _numba_stage(model, m, progress)
     max_rows = options.memory_limit // run_bytes(1, model.n, model.k) if record == "trajectory" else math.inf
-    status = _run(advance, state, t1, (chunk, max_rows), recorder, n_events, event_parts, progress, first,
+    status = _run(advance, state, t1, (chunk, max_rows, width), recorder, n_events, event_parts, progress, first,
                   (_STEP_RATES.setdefault(model, {}), m.name))
     if status == Status.RHS_FAILED and state.nsteps == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
-        recorder.add(np.array([state.t]), state.y[None, :])  # keep the last good state
+        recorder.add(np.array([state.t]), state.y[None, :width])  # keep the last good state
     run = dict(method=m.name, status=status, state=state, projected=projected,
                residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
     return _solution(model, p, recorder, run, throw)
@@ -147,7 +163,8 @@ def _numba_stage(model, m, progress):
     from lagcomp.stages import numba_stage
 
     # the first kernel stands for the model's: the library driver was compiled (or loaded) on import
-    return numba_stage(getattr(model.kernels, m.kernels[0], None), f"the kernels and the {m.name} driver",
+    kernels = m.dae_kernels if m.solves_dae(model) else m.kernels
+    return numba_stage(getattr(model.kernels, kernels[0], None), f"the kernels and the {m.name} driver",
                        f"preparing {model.name}", progress)
 
 
@@ -156,12 +173,13 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
     """Call the driver until the run ends; returns the run's `Status`.
 
     `first`, if not None, is a context around the first call (numba compiles there: `_numba_stage`).
-    `chunk` is (rows of the first output buffer, rows the run may keep before it stops with MEMORY_FULL).
+    `chunk` is (rows of the first output buffer, rows the run may keep before it stops with MEMORY_FULL, the
+    leading columns of the state that are recorded: (q, q̇), not a DAE's algebraic components).
     `learned`, if not None, is (rates, key): ``rates[key]``, if there, is the steps per second that sizes
     the first call (`FIRST_CALL_SECONDS`) and the second (`CALL_SECONDS`); the rate of each call that
     spends its whole budget outside numba's compilation is stored there for the next run.
     """
-    chunk, max_rows = chunk
+    chunk, max_rows, width = chunk
     n = state.y.size
     rates, key = learned if learned is not None else ({}, None)
     known = rates.get(key)
@@ -184,7 +202,7 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
             if compiled:  # numba was compiling: the run's bar times the run from here
                 first, bar.started = None, time.perf_counter()
             elapsed = time.perf_counter() - started
-            recorder.add(ts[:n_saved], ys[:n_saved])
+            recorder.add(ts[:n_saved], ys[:n_saved, :width])
             if recorder.rows > max_rows and Status(status).call_again:
                 return Status.MEMORY_FULL  # what was computed is kept; a fixed-step or t_eval run was refused up front
             if state.event_rows:
@@ -276,7 +294,7 @@ def _event_records(model, event_parts) -> dict:
     records = {}
     for index, event in enumerate(model.events):
         hit = i_all == index
-        records[event.name] = EventRecord(t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:])
+        records[event.name] = EventRecord(t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:2 * n])
     return records
 
 
@@ -285,10 +303,10 @@ def _solution(model, p, recorder, run, throw) -> Solution:
     status, run_state = run["status"], run["state"]
     t_failure = None
     message = Status(status).message
-    stiff_at, constrained = run_state.stiff_at, model.k > 0
+    stiff_at, kane = run_state.stiff_at, getattr(model, "speeds", None) is not None
     if stiff_at is not None and status in ADVISED_FAILURES:
         message = f"{message} The steps were limited by stability from t = {stiff_at[1]:.6g}: the problem is " \
-                  f"stiff. {stiffness_advice(constrained)}"
+                  f"stiff. {stiffness_advice(kane)}"
     if status < 0 or status == Status.INTERRUPTED:
         state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, run_state.y))  # (q, q̇), or (q, u)
         last = "state" if status == Status.RESIDUAL_EXCEEDED else "last good state"
@@ -312,7 +330,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         events=run["events"],
     )
     # simulate -> Model.simulate -> the user's call
-    warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, constrained, stacklevel=4)
+    warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, kane, stacklevel=4)
     if throw and status < 0:
         raise IntegrationError(message, solution)
     return solution

@@ -3,8 +3,8 @@
 The embedded pairs test their steps for stiffness as they go (Hairer's test: "Stiffness detection" in
 `lagcomp.integrate.drivers.embedded`); `lagcomp.integrate.simulate` calls `warn_if_stiff` once the run has
 ended, `lagcomp.integrate.sweep` `warn_if_sweep_stiff` once the sweep has.  The advice names the method to
-use instead: ``radau`` for an unconstrained system; a constrained one has no implicit method yet, so the
-advice is to take the fast motion out of the model.
+use instead: ``radau`` for a model of Lagrange's equations (a constrained one it solves as a DAE); a Kane
+model has no implicit method yet, so the advice there is to take the fast motion out of the model.
 """
 
 from __future__ import annotations
@@ -20,18 +20,17 @@ from lagcomp.integrate.status import Status
 ADVISED_FAILURES = (Status.MAX_STEPS, Status.STEP_TOO_SMALL)
 
 
-def stiffness_advice(constrained: bool) -> str:
-    """Which method to use for a stiff system, in one or two sentences."""
-    if not constrained:
-        return ('Use method="radau" (Radau IIA, implicit, for stiff systems): its steps follow the accuracy '
-                "asked for, not the fast decay.")
-    return ('method="radau", the implicit method for stiff systems, does not take constraints yet. If a stiff '
-            "spring or a large gain makes the system stiff, a constraint in its place removes the fast motion "
-            '(a separable system with holonomic constraints then runs with method="rattle"); loosening '
-            "rtol/atol does not help: the step is set by stability.")
+def stiffness_advice(kane: bool) -> str:
+    """Which method to use for a stiff system, in one or two sentences (`kane`: a Kane model, state (q, u))."""
+    if not kane:
+        return ('Use method="radau" (Radau IIA, implicit, for stiff systems; constraints are solved with the '
+                "motion, without projection): its steps follow the accuracy asked for, not the fast decay.")
+    return ('method="radau", the implicit method for stiff systems, does not take Kane models (state (q, u)) '
+            "yet. If a stiff spring or a large gain makes the system stiff, a constraint in its place removes "
+            "the fast motion; loosening rtol/atol does not help: the step is set by stability.")
 
 
-def warn_if_stiff(method: str, stiff_at, nsteps: int, nfev: int, constrained: bool, stacklevel: int) -> None:
+def warn_if_stiff(method: str, stiff_at, nsteps: int, nfev: int, kane: bool, stacklevel: int) -> None:
     """Warn once if the run was declared stiff; `stiff_at` is (step number, time) from
     `lagcomp.integrate.drivers.run_state.RunState.stiff_at`, or None."""
     if stiff_at is None:
@@ -41,11 +40,11 @@ def warn_if_stiff(method: str, stiff_at, nsteps: int, nfev: int, constrained: bo
         f"The problem looks stiff for {method}: from t = {t:.6g} (step {step:,}) its steps were limited by the "
         f"method's stability, not by its accuracy (Hairer's stiffness test, an estimate: at rtol of 1e-3 or "
         f"looser an oscillating system that is not stiff can trip it too); the run took {nsteps:,} steps and "
-        f"{nfev:,} evaluations of the equations. {stiffness_advice(constrained)}",
+        f"{nfev:,} evaluations of the equations. {stiffness_advice(kane)}",
         StiffnessWarning, stacklevel=stacklevel + 1)
 
 
-def warn_if_sweep_stiff(method: str, stiff_steps: np.ndarray, constrained: bool, stacklevel: int) -> None:
+def warn_if_sweep_stiff(method: str, stiff_steps: np.ndarray, kane: bool, stacklevel: int) -> None:
     """Warn once if any trajectory of a sweep was declared stiff; `stiff_steps` holds, per trajectory, the
     step at which it was (0: not)."""
     stiff = int(np.count_nonzero(stiff_steps))
@@ -55,5 +54,5 @@ def warn_if_sweep_stiff(method: str, stiff_steps: np.ndarray, constrained: bool,
         f"The problem looks stiff for {method} in {stiff:,} of the sweep's {stiff_steps.size:,} trajectories: "
         f"their steps were limited by the method's stability, not by its accuracy (Hairer's stiffness test, an "
         f"estimate). "
-        f"{stiffness_advice(constrained)}",
+        f"{stiffness_advice(kane)}",
         StiffnessWarning, stacklevel=stacklevel + 1)

@@ -324,7 +324,8 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         done = _run_on_dask(client, spec or _worker_spec(model), task, Y0, P, out, progress)
     statuses = out["status"]
     counts = out["counts"]
-    warn_if_sweep_stiff(m.name, counts[:, 3], model.k > 0, stacklevel=3)     # (column 3: embedded pairs only)
+    kane = getattr(model, "speeds", None) is not None
+    warn_if_sweep_stiff(m.name, counts[:, 3], kane, stacklevel=3)     # (column 3: embedded pairs only)
     e0, deviation = out["energy"][:, 0], out["energy"][:, 1]
     relative = np.where(e0 != 0, deviation / np.where(e0 != 0, np.abs(e0), 1.0), deviation)
     shaped = lambda a: a.reshape(*shape, *a.shape[1:])  # noqa: E731
