@@ -502,14 +502,14 @@ def _dae_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
     n, k, kh, size = eom.n, eom.k, len(eom.Phi), dae_size(eom)
     taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}
     taken |= {s.name for e in (*eom.M, *eom.F, *eom.C, *eom.b, *eom.Phi) for s in e.free_symbols}
-    unknowns = [(fresh_symbols(stem, count, taken), stem, start)
-                for stem, count, start in (("_w", n, 2 * n), ("_lam", k, 3 * n), ("_mu", kh, 3 * n + k))]
-    for symbols, stem, start in unknowns:
-        mapping = {**mapping, **{s: sp.Symbol(f"{stem}{i}", real=True) for i, s in enumerate(symbols)}}
-        loads = loads + tuple((f"{stem}{i}", f"y[{start + i}]") for i in range(len(symbols)))
-    (w, _, _), (lam, _, _), (mu, _, _) = unknowns
-    residual = dae_residual(eom, w, lam, mu)
-    jacobian = dae_jacobian(residual, (*eom.q, *eom.qd, *w, *lam, *mu))
+    unknowns = {"_w": (n, 2 * n), "_lam": (k, 3 * n), "_mu": (kh, 3 * n + k)}  # locals' stem: count, index in z
+    symbols = {stem: fresh_symbols(stem, count, taken) for stem, (count, _) in unknowns.items()}
+    mapping = {**mapping, **{s: sp.Symbol(f"{stem}{i}", real=True)
+                             for stem, group in symbols.items() for i, s in enumerate(group)}}
+    loads = loads + tuple((f"{stem}{i}", f"y[{first + i}]") for stem, (count, first) in unknowns.items()
+                          for i in range(count))
+    residual = dae_residual(eom, *symbols.values())
+    jacobian = dae_jacobian(residual, (*eom.q, *eom.qd, *(s for group in symbols.values() for s in group)))
     layout = f"z = (q, v, w, λ, μ), DAE_SIZE = {size} (n = {n}, k = {k}, kh = {kh}); λ has the sign of `reactions`.\n"
     return (
         _kernel(
