@@ -9,7 +9,8 @@ a holonomic one, n = 5) and the hoop bead with its hoop released (a time-depende
     (Baumgarte gains 0), μ = 0: the differential rows of G are (v, w) exactly, the algebraic rows vanish
     to a few ε times the sum of the magnitudes of their terms.
 (b) Against sympy: G assembled here from the M, F, Λ, b, Φ that `lagcomp.mechanics` derives, differentiated
-    by sympy (`Matrix.jacobian`) and evaluated by mpmath with 40 digits at random z and t.
+    by sympy (`Matrix.jacobian`) and evaluated by mpmath with 40 digits at random z and t; and a rod
+    pendulum with Coulomb friction and drag (sign, Abs: the sympy path), its derivative taken away from the jump.
 (c) Hypothesis over random constrained systems (`random_systems.random_mechanism`, plus a drawn
     nonholonomic or time-dependent constraint; the module run as plain Python): ``dae_jacobian`` against
     Richardson-extrapolated central differences of ``dae_residual``.
