@@ -317,6 +317,37 @@ def test_a_parameter_named_like_a_baumgarte_gain(cache_dir):
     np.testing.assert_allclose(got[2:], expected, rtol=1e-14)
 
 
+@pytest.mark.parametrize("names", [("_w0", "_mu0", "_lam0"), ("_w0_", "_lam0_", "_jac"), ("out", "y", "DAE_SIZE")])
+def test_parameters_named_like_the_dae_kernels_locals(cache_dir, names):
+    """The rod pendulum of mass m, gravity g, length l under names the DAE kernels use themselves (their locals
+    for w, λ, μ, the fresh symbols' names, the work array): G and ∂G/∂z against closed forms, exactly (dyadic z).
+
+    Φ = x² + z² − l², Λ = (2x, 2z), M = m I, F = (0, −m g); z = (x, z, vx, vz, wx, wz, λ, μ):
+    G = (vx + 2x μ, vz + 2z μ, wx, wz, m wx − 2x λ, m wz + m g − 2z λ, 2x vx + 2z vz, x² + z² − l²).
+    """
+    from random_systems import python_kernels
+
+    x, z = lc.coordinates("x z")
+    mass, gravity, length = (sp.Symbol(name, positive=True) for name in names)
+    system = lc.System(coordinates=(x, z), T=mass * (x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=mass * gravity * z,
+                       constraints=[lc.Holonomic("rod", x**2 + z**2 - length**2)], parameters=(mass, gravity, length),
+                       name="dae_named")
+    module = python_kernels(lc.compile(system, cache_dir=cache_dir).source_path.read_text(encoding="utf-8"))
+    M, G_, L = 1.5, 9.75, 1.25
+    X, Z, VX, VZ, WX, WZ, LAM, MU = 0.75, -1.0, 0.5, 0.375, -2.25, 0.125, 3.5, -0.0625
+    p = np.array([M, G_, L, 0.0, 0.0])
+    G, J = np.empty(8), np.empty((8, 8))
+    state = np.array([X, Z, VX, VZ, WX, WZ, LAM, MU])
+    assert module["dae_residual"](0.0, state, p, G) == 0 and module["dae_jacobian"](0.0, state, p, J) == 0
+    np.testing.assert_array_equal(G, [VX + 2 * X * MU, VZ + 2 * Z * MU, WX, WZ, M * WX - 2 * X * LAM,
+                                      M * WZ + M * G_ - 2 * Z * LAM, 2 * X * VX + 2 * Z * VZ, X**2 + Z**2 - L**2])
+    np.testing.assert_array_equal(J, [
+        [2 * MU, 0, 1, 0, 0, 0, 0, 2 * X], [0, 2 * MU, 0, 1, 0, 0, 0, 2 * Z],
+        [0, 0, 0, 0, 1, 0, 0, 0], [0, 0, 0, 0, 0, 1, 0, 0],
+        [-2 * LAM, 0, 0, 0, M, 0, -2 * X, 0], [0, -2 * LAM, 0, 0, 0, M, -2 * Z, 0],
+        [2 * VX, 2 * VZ, 2 * X, 2 * Z, 0, 0, 0, 0], [2 * X, 2 * Z, 0, 0, 0, 0, 0, 0]])
+
+
 @pytest.mark.parametrize("make, culprit", [
     (lambda x, k: dict(V=k * x**2 + sp.Symbol("k") * x), "['k']"),  # two symbols named k
     (lambda x, k: dict(V=k * x**2 + sp.Symbol("t", real=True) * x), "symbol named t"),  # t is time

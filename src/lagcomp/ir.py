@@ -11,9 +11,9 @@ Kernel calling convention (all arrays float64, C-contiguous):
   module's documented order; ``t`` the time.
 - kernels with ``out`` write their result into it and return nothing, except
   ``rhs``, which returns an int status (0, or k > 0 when the mass matrix is
-  not positive definite at pivot k: the state is singular), and
+  not positive definite at pivot k: the state is singular),
   ``rhs_jacobian``, which returns the same, or `NO_JACOBIAN` where the module
-  has no Jacobian.
+  has no Jacobian, and the DAE kernels of constrained systems, which return 0.
 - scalar kernels (energies) return a float.
 """
 
@@ -101,6 +101,22 @@ class JacobianSolve:
 
 
 @dataclass(frozen=True)
+class ReturnZero:
+    """After the stores, ``return 0``: an `out` kernel that cannot fail, with the int status of the drivers'
+    kernel types (``dae_residual``)."""
+
+
+@dataclass(frozen=True)
+class FlatMatrix:
+    """The frame of a kernel whose stores fill a (size, size) matrix (``dae_jacobian``): before its temporaries
+    it allocates the work array ``_jac`` of size² zeros, the stores write the nonzero entries into it, row-major
+    (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles faster than `out`), and after them ``_jac``
+    is copied into `out`, every entry, and the kernel returns 0."""
+
+    size: int
+
+
+@dataclass(frozen=True)
 class Unavailable:
     """A kernel the module defines (every module defines every kernel) but cannot compute: it writes
     nothing and returns `status`; the module constant `constant` holds `reason`."""
@@ -130,10 +146,12 @@ class Kernel:
     stores : tuple of (target, Expr)
         Output assignments; the target is an lvalue (``out[0]``, a local) or
         ``return`` for scalar kernels.
-    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, Unavailable or None
+    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, ReturnZero, FlatMatrix, Unavailable or None
         Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``,
         M⁻¹ applied to the rows of ``rhs_jacobian``), the matrix-vector product of
-        ``momenta`` for large systems, or the status of a kernel that computes nothing.
+        ``momenta`` for large systems, the status 0 of a kernel that cannot fail (the DAE
+        kernels; ``dae_jacobian`` through its flat work array), or the status of a kernel
+        that computes nothing.
     lanes : bool
         The body runs once per lane ``_l`` of a batch (structure of arrays:
         ``Y[i, _l]``, ``P[k, _l]``, ``out[i, _l]``), in a loop LLVM can
@@ -150,7 +168,8 @@ class Kernel:
     loads: tuple[tuple[str, str], ...]
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
-    solve: LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | Unavailable | None = None
+    solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | ReturnZero | FlatMatrix | Unavailable
+            | None) = None
     lanes: bool = False
     alias: str | None = None
 

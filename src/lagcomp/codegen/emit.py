@@ -30,7 +30,17 @@ from lagcomp.codegen.taylor import (
     taylor_source,
     taylor_support_names,
 )
-from lagcomp.ir import AugmentedSolve, JacobianSolve, Kernel, LinearSolve, ModuleIR, SymmetricProduct, Unavailable
+from lagcomp.ir import (
+    AugmentedSolve,
+    FlatMatrix,
+    JacobianSolve,
+    Kernel,
+    LinearSolve,
+    ModuleIR,
+    ReturnZero,
+    SymmetricProduct,
+    Unavailable,
+)
 
 INDENT = "    "
 
@@ -253,6 +263,8 @@ def _kernel_source(kernel: Kernel) -> str:
     body += [f"{local} = {source}" for local, source in kernel.loads]
     if isinstance(solve, AugmentedSolve):
         body.append(f"_kkt = np.zeros(({solve.size}, {solve.size + 1}))")
+    elif isinstance(solve, FlatMatrix):
+        body.append(f"_jac = np.zeros({solve.size * solve.size})")
     body += [f"{name} = {to_code(expr)}" for name, expr in kernel.temps]
     for target, expr in kernel.stores:
         body.append(f"return {to_code(expr)}" if target == "return" else f"{target} = {to_code(expr)}")
@@ -264,6 +276,10 @@ def _kernel_source(kernel: Kernel) -> str:
         body += _symmetric_product(solve)
     elif isinstance(solve, JacobianSolve):
         body += after
+    elif isinstance(solve, FlatMatrix):
+        body += [f"out[:] = _jac.reshape(({solve.size}, {solve.size}))", "return 0"]
+    elif isinstance(solve, ReturnZero):
+        body.append("return 0")
     elif solve is not None:
         if solve.unrolled:
             body += _unrolled_ldlt(solve)
@@ -383,11 +399,14 @@ PROJECTION_ITERATIONS = 8
 
 
 def _constraint_sizes(ir: ModuleIR) -> str:
-    """The module constants the constrained hooks read: sizes, the holonomic rows of Λ, the iteration limit."""
+    """The module constants the constrained hooks read: sizes, the holonomic rows of Λ, the iteration limit;
+    and the DAE's size, which the runtime reads."""
     rows = tuple(c for c in range(ir.k) if ir.holonomic[c])
     return (
         "\n\n#: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.\n"
         f"COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = {ir.n}, {ir.k}, {len(rows)}\n"
+        "#: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.\n"
+        f"DAE_SIZE = {3 * ir.n + ir.k + len(rows)}\n"
         "#: Rows of the constraint matrix that belong to holonomic constraints.\n"
         f"HOLONOMIC_ROWS = np.array({list(rows)}, dtype=np.int64)\n"
         "#: Gauss-Newton corrections `project` makes at most (two or three reach rounding level).\n"

@@ -41,10 +41,12 @@ import sympy as sp
 from lagcomp.ir import (
     NO_JACOBIAN,
     AugmentedSolve,
+    FlatMatrix,
     JacobianSolve,
     Kernel,
     LinearSolve,
     ModuleIR,
+    ReturnZero,
     SymmetricProduct,
     Unavailable,
 )
@@ -391,7 +393,8 @@ def fresh_symbols(stem: str, count: int, taken: set[str]) -> tuple[sp.Symbol, ..
 
 
 def jacobian_entry(i: int, j: int, size: int) -> str:
-    """The store target of entry (i, j) of an ``rhs_jacobian``: the flat work array ``_jac``, row-major.
+    """The store target of entry (i, j) of an ``rhs_jacobian`` or ``dae_jacobian``: the flat work array ``_jac``,
+    row-major.
 
     Stores into a 1-D local array compile several times faster than into the 2-D `out`: the
     24-link chain's kernel took numba 16 s that way against 48 s (`JacobianSolve`).
@@ -449,6 +452,83 @@ def no_rhs_jacobian_kernel(reason: str) -> Kernel:
             f"Writes nothing and returns NO_JACOBIAN = {NO_JACOBIAN} (never a pivot; RHS_JACOBIAN_REFUSED says why).",
         args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
         solve=Unavailable(status=NO_JACOBIAN, constant="RHS_JACOBIAN_REFUSED", reason=reason),
+    )
+
+
+def dae_size(eom: EOM) -> int:
+    """N' = 3n + k + kh, the length of the DAE state z = (q, v, w, λ, μ) of a constrained system."""
+    return 3 * eom.n + eom.k + len(eom.Phi)
+
+
+def dae_residual(eom: EOM, w, lam, mu) -> list:
+    """G(t, z), N' entries, of the index-2 DAE Mdae z' = G (Gear–Gupta–Leimkuhler), Mdae = diag(1 × 2n, 0 × rest).
+
+    z = (q, v, w, λ, μ) with v where q̇ sits (F, M, Λ, b, Φ are evaluated at (q, v, t)); `w`, `lam`, `mu` are
+    the symbols of the last three.  Rows: v + Λ_hᵀ μ (q' of the differential part, Λ_h the holonomic rows),
+    w (v'), M w − F − Λᵀ λ, Λ v + b (all k rows), Φ (the kh holonomic rows).  At a solution μ = 0, w = q̈
+    and λ the multipliers `reactions` returns.
+    """
+    n, k = eom.n, eom.k
+    holonomic_rows = [c for c in range(k) if eom.holonomic[c]]
+    rows = [eom.qd[i] + sum((eom.C[c, i] * m for c, m in zip(holonomic_rows, mu, strict=True)), sp.S.Zero)
+            for i in range(n)]
+    rows += list(w)
+    rows += [sum((eom.M[i, j] * w[j] for j in range(n) if eom.M[i, j] != 0), sp.S.Zero) - eom.F[i]
+             - sum((eom.C[c, i] * lam[c] for c in range(k) if eom.C[c, i] != 0), sp.S.Zero) for i in range(n)]
+    rows += [_velocity_residual(eom, c) for c in range(k)]
+    return rows + list(eom.Phi)
+
+
+def dae_jacobian(residual: list, z) -> list[list]:
+    """∂G_i/∂z_j of `residual` (`dae_residual`), (N', N'), symengine's derivatives when it can (as
+    `acceleration_partials`), else sympy's with a force's jump (Coulomb friction's sign(v)) contributing its
+    derivative away from the jump: the DiracDelta is dropped.  Entries are symengine or sympy expressions."""
+    if symengine_ready(residual):
+        images, xs = [se.sympify(g) for g in residual], [se.sympify(x) for x in z]
+        return [[image.diff(x) for x in xs] for image in images]
+    return sp.Matrix(residual).jacobian(list(z)).replace(sp.DiracDelta, lambda *args: sp.S.Zero).tolist()
+
+
+#: The docstrings' common ending: where the formulation is described.
+DAE_SEE_ALSO = "See lagcomp.integrate.drivers.radau, DAEs."
+
+
+def _dae_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
+    """``dae_residual`` and ``dae_jacobian``: G(t, z) and ∂G/∂z of `dae_residual`, one CSE each.
+
+    The kernels read q, v from z[:2n] with the state's loads, and w, λ, μ from z[2n:] as the locals
+    ``_w<i>``, ``_lam<c>``, ``_mu<h>``, bound to fresh symbols (`fresh_symbols`).  No Baumgarte gains.
+    """
+    n, k, kh, size = eom.n, eom.k, len(eom.Phi), dae_size(eom)
+    taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}
+    taken |= {s.name for e in (*eom.M, *eom.F, *eom.C, *eom.b, *eom.Phi) for s in e.free_symbols}
+    unknowns = {"_w": (n, 2 * n), "_lam": (k, 3 * n), "_mu": (kh, 3 * n + k)}  # locals' stem: count, index in z
+    symbols = {stem: fresh_symbols(stem, count, taken) for stem, (count, _) in unknowns.items()}
+    mapping = {**mapping, **{s: sp.Symbol(f"{stem}{i}", real=True)
+                             for stem, group in symbols.items() for i, s in enumerate(group)}}
+    loads = loads + tuple((f"{stem}{i}", f"y[{first + i}]") for stem, (count, first) in unknowns.items()
+                          for i in range(count))
+    residual = dae_residual(eom, *symbols.values())
+    jacobian = dae_jacobian(residual, (*eom.q, *eom.qd, *(s for group in symbols.values() for s in group)))
+    layout = f"z = (q, v, w, λ, μ), DAE_SIZE = {size} (n = {n}, k = {k}, kh = {kh}); λ has the sign of `reactions`.\n"
+    return (
+        _kernel(
+            "dae_residual",
+            "Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),\n"
+            "Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.\n"
+            + layout + f"Returns 0. {DAE_SEE_ALSO}",
+            ("t", "y", "p", "out"), [(f"out[{i}]", g) for i, g in enumerate(residual)], mapping, loads,
+            solve=ReturnZero(),
+        ),
+        _kernel(
+            "dae_jacobian",
+            "Exact Jacobian out[i, j] = ∂G_i/∂z_j, (DAE_SIZE, DAE_SIZE), of `dae_residual` (symbolic, no\n"
+            "differences), every entry written.\n" + layout + f"Returns 0. {DAE_SEE_ALSO}",
+            ("t", "y", "p", "out"),
+            [(jacobian_entry(i, j, size), entry)
+             for i, row in enumerate(jacobian) for j, entry in enumerate(row) if entry != 0],
+            mapping, loads, solve=FlatMatrix(size=size),
+        ),
     )
 
 
@@ -529,12 +609,13 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 def lower(eom: EOM) -> ModuleIR:
     """Build the IR of the module for `eom`: rhs, mass_matrix, forcing, energies, momenta,
-    and for constrained systems reactions, constraint residuals and matrix."""
+    and for constrained systems reactions, constraint residuals and matrix, and the DAE's residual and Jacobian."""
     n = eom.n
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
     if eom.k:
         first = _constraint_kernels(eom, mapping, loads) + (no_rhs_jacobian_kernel(CONSTRAINED_JACOBIAN_REFUSED),)
+        first += _dae_kernels(eom, mapping, loads)
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
         first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled else (rhs,)
