@@ -26,8 +26,9 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from lagcomp.integrate.radau import RADAU5
 from lagcomp.integrate.status import Status
-from tests import dae_kernels
+from tests import dae_kernels, driver_kernels
 from tests.test_radau_driver import Run
 
 PENDULUM, REDUNDANT, LINE = 0.0, 1.0, 2.0
@@ -126,8 +127,8 @@ def test_orders_with_forced_steps_on_the_linear_dae():
 
 def test_events_on_the_dae_dense_output():
     """The pendulum's passes through the bottom (event g0 = x, both directions), located on the
-    collocation polynomial, at the angle ODE's zeros of θ within 1e-8; a terminal event at t = 10 stops
-    the run there."""
+    collocation polynomial, at the angle ODE's zeros of θ within ten times the measured 1.2e-11 (rtol 1e-9);
+    a terminal event at t = 10 stops the run there."""
     p = PENDULUM_P.copy()
     p[1] = 10.0
     run = dae_run(p, dae_kernels.consistent_state(THETA0, OMEGA0, p), 20.0, 1e-9,
@@ -138,7 +139,7 @@ def test_events_on_the_dae_dense_output():
     reference = angle_reference(10.0, events=lambda t, u: u[0]).t_events[0]
     crossings = ie == 0
     assert crossings.sum() == reference.size >= 9
-    np.testing.assert_allclose(te[crossings], reference, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(te[crossings], reference, rtol=0, atol=1.2e-10)
     assert np.abs(ze[crossings, 0]).max() < 1e-14
     assert list(ie[~crossings]) == [1]
 
@@ -157,7 +158,8 @@ def test_continuation_is_bitwise_the_same_dae_run():
 
 def test_redundant_constraint_is_iteration_matrix_singular():
     """The pendulum's constraint stated twice (rank-deficient Λ: the iteration matrices are singular at every
-    step): ITERATION_MATRIX_SINGULAR after halving the step down to the smallest, at the initial state."""
+    step): ITERATION_MATRIX_SINGULAR after halving the step down to the smallest (at t = 0, ~1000 halvings to
+    10 ulp of 0), with the initial state kept."""
     p = np.r_[REDUNDANT, PENDULUM_P[1:]]
     z0 = dae_kernels.consistent_state(THETA0, OMEGA0, p)
     run = dae_run(p, z0, 1.0, 1e-6)
@@ -165,3 +167,26 @@ def test_redundant_constraint_is_iteration_matrix_singular():
     assert status == Status.ITERATION_MATRIX_SINGULAR
     assert run.state.t == 0.0 and run.state.nsteps == 0 and ts.size == 0
     assert np.array_equal(run.state.y, z0)
+
+
+def test_sweep_passes_differential_to_each_run():
+    """`sweep_radau` over two starting angles of the pendulum DAE: each row's final state and counts are those
+    of the driver run alone (bitwise)."""
+    from lagcomp.integrate.drivers.radau_sweep import sweep_radau
+
+    angles = [0.4, 1.2]
+    Y0 = np.array([dae_kernels.consistent_state(angle, 0.0, PENDULUM_P) for angle in angles])
+    P = np.array([PENDULUM_P] * 2)
+    final, t_final = np.empty((2, 8)), np.empty(2)
+    status, counts = np.empty(2, dtype=np.int64), np.empty((2, 3), dtype=np.int64)
+    dense, energy = np.empty((2, 0, 8)), np.empty((2, 2))
+    event_count, event_t, event_y = np.empty((2, 0), np.int64), np.empty((2, 0, 1)), np.empty((2, 0, 1, 8))
+    no_events = np.zeros(0, dtype=np.int64)
+    sweep_radau(*KERNELS, driver_kernels.event_values, driver_kernels.oscillator_energy, Y0, P, 0, 0.0, 2.0, 1e-8,
+                1e-8, np.inf, 10**9, 10**9, np.empty(0), False, no_events, no_events, final, t_final, status, counts,
+                dense, energy, event_count, event_t, event_y, *RADAU5.driver_arguments(), DIFFERENTIAL)
+    for row, z0 in enumerate(Y0):
+        run = dae_run(PENDULUM_P, z0, 2.0, 1e-8)
+        assert run.solve()[0] == status[row] == Status.DONE
+        assert np.array_equal(final[row], run.state.y) and t_final[row] == 2.0
+        assert list(counts[row]) == [run.state.nfev, run.state.nsteps, run.state.nrejected]

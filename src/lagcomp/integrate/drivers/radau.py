@@ -72,8 +72,12 @@ As RADAU5 does for its index-2 components (IWORK(6)), the algebraic components' 
 trial step h: (atol + |y| rtol)/h in the Newton norm, (atol + max(|y|, |y_new|) rtol)/h in the error norm.
 The initial step is estimated from the differential components alone.  Orders (HNW II, sec. VII.4;
 Hairer, Lubich & Roche 1989): 5 for the differential components, 3 for the algebraic ones (measured in
-tests/test_radau_dae.py).  Loops over the components are split at d, so that for d = N (an ODE) every
-operation and its order are those of the ODE driver before the DAE form: the same bits.
+tests/test_radau_dae.py: on the Cartesian pendulum over 30 s, 1810, 5643, 17800 steps at rtol 1e-6, 1e-8,
+1e-10, positions to 1.9e-6, 6.5e-9, 2.1e-11, |Φ| ≤ 2e-13 at rtol 1e-8 without projection; J is
+re-evaluated at nearly every step, the Newton iteration taking 3 iterations at rates above 1e-3).  Loops
+over the components are split at d, so that for d = N (an ODE) every operation and its order are those of
+the ODE driver before the DAE form: the same bits, and the same time (same-process A/B against the
+ODE-only driver on bench_radau's problems: +1.0% on average over 15 processes, within their ±6% spread).
 
 The output-buffer, step-clamping and non-finite rules are embedded_run's (its docstring): every test
 is written so that NaN rejects a step (``not err <= 1``) or ends the run (``not h >= min_step``);
