@@ -83,7 +83,7 @@ def lagcomp_radau(problem, rtol, atol):
         y, clock, counters = y0.copy(), np.zeros(2), np.zeros(8, dtype=np.int64)
         status, _ = radau_run(*RADAU_KERNELS, y, clock, counters, p, 0, np.zeros(1), t_end, rtol, atol, np.inf,
                               10**9, 10**9, 10**9, np.empty(0), np.empty(1), np.empty((1, n)), NO_EVENTS, NO_EVENTS,
-                              np.empty(1), np.empty((1, n)), np.empty(1, np.int64), *constants, *new_carry(n))
+                              np.empty(1), np.empty((1, n)), np.empty(1, np.int64), *constants, n, *new_carry(n))
         assert status == 0, status
         return y, f"steps {counters[NSTEPS]}, f {counters[NFEV]}, J {counters[NJEV]}, LU {counters[NLU]}"
     return run
@@ -168,15 +168,15 @@ def _newton_calls(rhs, rhs_jacobian, y, p, h, C, T, TI, MU, calls):
     rhs_jacobian(0.0, y, p, jacobian)
     lu_real, lu_complex = np.empty((n, n)), np.empty((n, n), np.complex128)
     pivots_real, pivots_complex = np.empty(n, np.int64), np.empty(n, np.int64)
-    radau_driver._factor(jacobian, h, MU, lu_real, pivots_real, lu_complex, pivots_complex)
+    radau_driver._factor(jacobian, h, MU, n, lu_real, pivots_real, lu_complex, pivots_complex)
     Z, W, F = np.zeros((3, n)), np.empty((3, n)), np.empty((3, n))
     ytmp, f_stage, d_real, d_complex = np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.complex128)
     scale = 1e-8 + np.abs(y) * 1e-8
     iterations = 0
     for _ in range(calls):
         Z[:] = 0.0
-        iterations += radau_driver._newton(rhs, 0.0, y, h, p, C, T, TI, MU, Z, W, F, ytmp, f_stage, d_real, d_complex,
-                                           lu_real, pivots_real, lu_complex, pivots_complex, scale, 1e-4)[2]
+        iterations += radau_driver._newton(rhs, 0.0, y, h, p, C, T, TI, MU, n, Z, W, F, ytmp, f_stage, d_real,
+                                           d_complex, lu_real, pivots_real, lu_complex, pivots_complex, scale, 1e-4)[2]
     return iterations
 
 
@@ -189,7 +189,7 @@ def _kernel_calls(rhs, rhs_jacobian, y, p, h, MU, calls, part):
     rhs_jacobian(0.0, y, p, jacobian)
     lu_real, lu_complex = np.empty((n, n)), np.empty((n, n), np.complex128)
     pivots_real, pivots_complex = np.empty(n, np.int64), np.empty(n, np.int64)
-    radau_driver._factor(jacobian, h, MU, lu_real, pivots_real, lu_complex, pivots_complex)
+    radau_driver._factor(jacobian, h, MU, n, lu_real, pivots_real, lu_complex, pivots_complex)
     d_real, d_complex = np.empty(n), np.empty(n, np.complex128)
     acc = 0.0
     for k in range(calls):
@@ -201,7 +201,7 @@ def _kernel_calls(rhs, rhs_jacobian, y, p, h, MU, calls, part):
             rhs_jacobian(0.0, ytmp, p, jacobian)
             acc += jacobian[0, 0]
         elif part == 2:
-            radau_driver._factor(jacobian, h * (1.0 + k * 1e-15), MU, lu_real, pivots_real, lu_complex,
+            radau_driver._factor(jacobian, h * (1.0 + k * 1e-15), MU, n, lu_real, pivots_real, lu_complex,
                                  pivots_complex)
             acc += lu_real[0, 0]
         else:
@@ -245,7 +245,7 @@ def _split(model, method, rounds: int) -> None:
     def run():
         y, clock, counters = y0.copy(), np.zeros(2), np.zeros(8, dtype=np.int64)
         driver(y, clock, counters, p, 0, np.zeros(2), t_end, tol, tol, np.inf, 10**9, 10**9, 10**9, np.empty(0),
-               ts, ys, *no_events, *constants, *new_carry(n))
+               ts, ys, *no_events, *constants, n, *new_carry(n))
         return counters
 
     driver_seconds, counters = best(run, rounds)

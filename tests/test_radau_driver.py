@@ -25,11 +25,14 @@ NO_EVENTS = np.zeros(0, dtype=np.int64)
 
 
 class Run:
-    """A run of `radau_run` from (t0, y0), driven call after call like `lagcomp.integrate.simulate` drives it."""
+    """A run of `radau_run` from (t0, y0), driven call after call like `lagcomp.integrate.simulate` drives it;
+    `kernels` (rhs, rhs_jacobian) and `differential` (None: all components, an ODE) for a DAE."""
 
     def __init__(self, p, y0, t_end, rtol, atol, *, t_eval=(), save_every=1, max_step=np.inf, first_step=0.0,
-                 max_steps=10**9, events=None):
+                 max_steps=10**9, events=None, kernels=(stiff_kernels.rhs, stiff_kernels.rhs_jacobian),
+                 differential=None):
         self.p, self.t_end, self.rtol, self.atol = np.array(p, dtype=float), t_end, rtol, atol
+        self.kernels, self.differential = kernels, len(y0) if differential is None else differential
         self.state = RunState(np.array(y0, dtype=float), 0.0, first_step)
         self.carry = new_carry(len(y0))
         self.t_eval = np.array(t_eval, dtype=float)
@@ -45,10 +48,10 @@ class Run:
         ev = np.empty(16), np.empty((16, n)), np.empty(16, dtype=np.int64)
         self.state.new_event_buffer()
         status, n_saved = radau_run(
-            stiff_kernels.rhs, stiff_kernels.rhs_jacobian, driver_kernels.event_values,
+            *self.kernels, driver_kernels.event_values,
             self.state.y, self.state.clock, self.state.counters, self.p, 0, np.zeros(1), self.t_end, self.rtol,
             self.atol, self.max_step, self.max_steps, pause_at, self.save_every, self.t_eval, ts, ys,
-            self.directions, self.actions, *ev, *RADAU5.driver_arguments(), *self.carry)
+            self.directions, self.actions, *ev, *RADAU5.driver_arguments(), self.differential, *self.carry)
         self.calls += 1
         self.ts.append(ts[:n_saved].copy())
         self.ys.append(ys[:n_saved].copy())
@@ -264,8 +267,8 @@ def test_singular_iteration_matrix_is_detected():
     jacobian = RADAU5.MU[0] / h * np.eye(2)
     lu_real, lu_complex = np.empty((2, 2)), np.empty((2, 2), dtype=np.complex128)
     pivots = np.empty(2, dtype=np.int64), np.empty(2, dtype=np.int64)
-    assert _factor(jacobian, h, RADAU5.MU.copy(), lu_real, pivots[0], lu_complex, pivots[1]) > 0
-    assert _factor(np.zeros((2, 2)), h, RADAU5.MU.copy(), lu_real, pivots[0], lu_complex, pivots[1]) == 0
+    assert _factor(jacobian, h, RADAU5.MU.copy(), 2, lu_real, pivots[0], lu_complex, pivots[1]) > 0
+    assert _factor(np.zeros((2, 2)), h, RADAU5.MU.copy(), 2, lu_real, pivots[0], lu_complex, pivots[1]) == 0
 
 
 def test_sweep_loop_gives_each_trajectory_of_the_driver():
@@ -283,7 +286,7 @@ def test_sweep_loop_gives_each_trajectory_of_the_driver():
     sweep_radau(stiff_kernels.rhs, stiff_kernels.rhs_jacobian, driver_kernels.event_values,
                 driver_kernels.oscillator_energy, Y0, P, 0, 0.0, 0.01, 1e-8, 1e-8, np.inf, 10**9, 10**9, np.empty(0),
                 False, NO_EVENTS, NO_EVENTS, final, t_final, status, counts, dense, energy, event_count, event_t,
-                event_y, *RADAU5.driver_arguments())
+                event_y, *RADAU5.driver_arguments(), 2)
     for row, p in enumerate(P):
         run = Run(p, [1.0, 0.0], 0.01, 1e-8, 1e-8)
         assert run.solve()[0] == status[row] == Status.DONE

@@ -316,7 +316,10 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         else:
             task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",))
     else:
-        task = _Task(m.driver, m.adaptive, fixed, layout, options.driver_arguments(), projecting, m.sweep, m.kernels)
+        coefficients = options.driver_arguments()
+        if m.carry is not None:     # Radau: the count of differential components (all: an ODE)
+            coefficients = (*coefficients, n2)
+        task = _Task(m.driver, m.adaptive, fixed, layout, coefficients, projecting, m.sweep, m.kernels)
     if client is None:
         kernels = model.kernels if spec is None else _worker_kernels(spec)
         done = _run_locally(kernels, task, Y0, P, out, workers, progress)

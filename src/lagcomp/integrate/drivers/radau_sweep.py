@@ -34,16 +34,17 @@ SWEEP_SIGNATURE = types.none(RHS, RHS_JACOBIAN, EVENTS, ENERGY,
                              MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean,
                              INDICES, INDICES, MATRIX, VECTOR, INDICES, types.int64[:, ::1], types.float64[:, :, ::1],
                              MATRIX, types.int64[:, ::1], types.float64[:, :, ::1], types.float64[:, :, :, ::1],
-                             *CONSTANTS)
+                             *CONSTANTS, INT)
 
 
 def sweep_radau(rhs, rhs_jacobian, event_values, energy,
                 Y0, P, projecting, t0, t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial,
                 directions, actions, final, t_final, status, counts, dense, energy_stats,
                 event_count, event_t, event_y,
-                C, T, TI, MU, ERROR_WEIGHTS, DENSE_WEIGHTS):
+                C, T, TI, MU, ERROR_WEIGHTS, DENSE_WEIGHTS, differential):
     """Trajectory k from (t0, Y0[k]) with parameters P[k] to t_end by `radau_run`, for every row k.
 
+    ``differential``: `radau_run`'s (the count of differential components; the state size for an ODE).
     The outputs are `lagcomp.integrate.drivers.embedded_sweep.sweep_embedded`'s (its docstring).
     """
     n_traj = Y0.shape[0]
@@ -80,7 +81,8 @@ def sweep_radau(rhs, rhs_jacobian, event_values, energy,
                                       y, clock, counters, p, projecting, residual, t_end, rtol, atol, max_step,
                                       max_steps, NO_PAUSE, save_every, t_eval, ts, ys,
                                       directions, actions, ev_t, ev_y, ev_i,
-                                      C, T, TI, MU, ERROR_WEIGHTS, DENSE_WEIGHTS, jacobian, previous, control)
+                                      C, T, TI, MU, ERROR_WEIGHTS, DENSE_WEIGHTS, differential, jacobian, previous,
+                                      control)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
             fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_i, event_count, event_t, event_y, k)
             if code != Status.BUFFER_FULL:
