@@ -132,6 +132,76 @@ RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not 
 
 
 @njit(cache=True, error_model="numpy")
+def dae_residual(t, y, p, out):
+    """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
+    Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.
+    z = (q, v, w, λ, μ), DAE_SIZE = 10 (n = 3, k = 1, kh = 0); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
+    _w0 = y[6]
+    _w1 = y[7]
+    _w2 = y[8]
+    _lam0 = y[9]
+    _c0 = sin(q_theta)
+    _c1 = cos(q_theta)
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_theta
+    out[3] = _w0
+    out[4] = _w1
+    out[5] = _w2
+    out[6] = _c0*_lam0 + _w0*p_m
+    out[7] = _w1*p_m - _c1*_lam0
+    out[8] = _w2*p_I - _lam0*p_a
+    out[9] = _c1*qd_y + p_a*qd_theta - _c0*qd_x
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def dae_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂G_i/∂z_j, (DAE_SIZE, DAE_SIZE), of `dae_residual` (symbolic, no
+    differences), every entry written.
+    z = (q, v, w, λ, μ), DAE_SIZE = 10 (n = 3, k = 1, kh = 0); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
+    _lam0 = y[9]
+    _jac = np.zeros(100)
+    _c0 = cos(q_theta)
+    _c1 = sin(q_theta)
+    _jac[3] = 1.0
+    _jac[14] = 1.0
+    _jac[25] = 1.0
+    _jac[36] = 1.0
+    _jac[47] = 1.0
+    _jac[58] = 1.0
+    _jac[62] = _c0*_lam0
+    _jac[66] = p_m
+    _jac[69] = _c1
+    _jac[72] = _c1*_lam0
+    _jac[77] = p_m
+    _jac[79] = -_c0
+    _jac[88] = p_I
+    _jac[89] = -p_a
+    _jac[92] = -_c0*qd_x - _c1*qd_y
+    _jac[93] = -_c1
+    _jac[94] = _c0
+    _jac[95] = p_a
+    out[:] = _jac.reshape((10, 10))
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_m = p[0]
@@ -223,6 +293,8 @@ def rest_partials(t, y, p, out):
 
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 3, 1, 0
+#: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
+DAE_SIZE = 10
 #: Rows of the constraint matrix that belong to holonomic constraints.
 HOLONOMIC_ROWS = np.array([], dtype=np.int64)
 #: Gauss-Newton corrections `project` makes at most (two or three reach rounding level).

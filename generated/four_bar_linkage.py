@@ -229,6 +229,168 @@ RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not 
 
 
 @njit(cache=True, error_model="numpy")
+def dae_residual(t, y, p, out):
+    """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
+    Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.
+    z = (q, v, w, λ, μ), DAE_SIZE = 13 (n = 3, k = 2, kh = 2); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_d = p[3]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _w0 = y[6]
+    _w1 = y[7]
+    _w2 = y[8]
+    _lam0 = y[9]
+    _lam1 = y[10]
+    _mu0 = y[11]
+    _mu1 = y[12]
+    _c0 = sin(q_theta1)
+    _c1 = _c0*p_a
+    _c2 = cos(q_theta1)
+    _c3 = _c2*p_a
+    _c4 = sin(q_theta2)
+    _c5 = _c4*p_b
+    _c6 = cos(q_theta2)
+    _c7 = _c6*p_b
+    _c8 = p_c*sin(q_theta3)
+    _c9 = p_c*cos(q_theta3)
+    _c10 = (0.5)*p_a*p_b*p_m2*(_c2*_c4 - _c0*_c6)
+    _c11 = _w1*p_m2
+    _c12 = (0.5)*p_a*p_b*(_c0*_c4 + _c2*_c6)
+    _c13 = p_a**2
+    _c14 = (0.5)*p_g
+    out[0] = qd_theta1 + _c3*_mu1 - _c1*_mu0
+    out[1] = qd_theta2 + _c7*_mu1 - _c5*_mu0
+    out[2] = qd_theta3 + _c8*_mu0 - _c9*_mu1
+    out[3] = _w0
+    out[4] = _w1
+    out[5] = _w2
+    out[6] = _c1*_lam0 + _c11*_c12 + _w0*(_c13*(p_m2 + (0.25)*p_m1) + (0.08333333333333333)*_c13*p_m1) - _c10*qd_theta2**2 - _c3*_lam1 + _c3*p_g*(p_m2 + (0.5)*p_m1)
+    out[7] = _c10*qd_theta1**2 + _c5*_lam0 - _c7*_lam1 + (0.3333333333333333)*_c11*p_b**2 + _c12*_w0*p_m2 + _c14*_c7*p_m2
+    out[8] = _c9*_lam1 - _c8*_lam0 + _c14*_c9*p_m3 + (0.3333333333333333)*_w2*p_m3*p_c**2
+    out[9] = _c8*qd_theta3 - _c1*qd_theta1 - _c5*qd_theta2
+    out[10] = _c3*qd_theta1 + _c7*qd_theta2 - _c9*qd_theta3
+    out[11] = _c3 + _c7 - _c9 - p_d
+    out[12] = _c1 + _c5 - _c8
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def dae_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂G_i/∂z_j, (DAE_SIZE, DAE_SIZE), of `dae_residual` (symbolic, no
+    differences), every entry written.
+    z = (q, v, w, λ, μ), DAE_SIZE = 13 (n = 3, k = 2, kh = 2); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _w0 = y[6]
+    _w1 = y[7]
+    _lam0 = y[9]
+    _lam1 = y[10]
+    _mu0 = y[11]
+    _mu1 = y[12]
+    _jac = np.zeros(169)
+    _c0 = sin(q_theta1)
+    _c1 = _c0*p_a
+    _c2 = cos(q_theta1)
+    _c3 = _c2*p_a
+    _c4 = -_c1
+    _c5 = sin(q_theta2)
+    _c6 = _c5*p_b
+    _c7 = cos(q_theta2)
+    _c8 = _c7*p_b
+    _c9 = -_c6
+    _c10 = p_c*sin(q_theta3)
+    _c11 = p_c*cos(q_theta3)
+    _c12 = -_c11
+    _c13 = p_a*p_b*p_m2
+    _c14 = _c13*(_c2*_c5 - _c0*_c7)
+    _c15 = (0.5)*_c14
+    _c16 = _c15*_w1
+    _c17 = (0.5)*_c13*(_c0*_c5 + _c2*_c7)
+    _c18 = _c17*qd_theta2**2
+    _c19 = p_a**2
+    _c20 = _c15*_w0
+    _c21 = _c17*qd_theta1**2
+    _c22 = (0.5)*p_g
+    _jac[0] = -_c1*_mu1 - _c3*_mu0
+    _jac[3] = 1.0
+    _jac[11] = _c4
+    _jac[12] = _c3
+    _jac[14] = -_c6*_mu1 - _c8*_mu0
+    _jac[17] = 1.0
+    _jac[24] = _c9
+    _jac[25] = _c8
+    _jac[28] = _c10*_mu1 + _c11*_mu0
+    _jac[31] = 1.0
+    _jac[37] = _c10
+    _jac[38] = _c12
+    _jac[45] = 1.0
+    _jac[59] = 1.0
+    _jac[73] = 1.0
+    _jac[78] = _c16 + _c18 + _c1*_lam1 + _c3*_lam0 - _c1*p_g*(p_m2 + (0.5)*p_m1)
+    _jac[79] = -_c16 - _c18
+    _jac[82] = -_c14*qd_theta2
+    _jac[84] = _c19*(p_m2 + (0.25)*p_m1) + (0.08333333333333333)*_c19*p_m1
+    _jac[85] = _c17
+    _jac[87] = _c1
+    _jac[88] = -_c3
+    _jac[91] = _c20 - _c21
+    _jac[92] = _c21 - _c20 + _c6*_lam1 + _c8*_lam0 - _c22*_c6*p_m2
+    _jac[94] = _c14*qd_theta1
+    _jac[97] = _c17
+    _jac[98] = (0.3333333333333333)*p_m2*p_b**2
+    _jac[100] = _c6
+    _jac[101] = -_c8
+    _jac[106] = -_c10*_lam1 - _c11*_lam0 - _c10*_c22*p_m3
+    _jac[112] = (0.3333333333333333)*p_m3*p_c**2
+    _jac[113] = -_c10
+    _jac[114] = _c11
+    _jac[117] = -_c3*qd_theta1
+    _jac[118] = -_c8*qd_theta2
+    _jac[119] = _c11*qd_theta3
+    _jac[120] = _c4
+    _jac[121] = _c9
+    _jac[122] = _c10
+    _jac[130] = -_c1*qd_theta1
+    _jac[131] = -_c6*qd_theta2
+    _jac[132] = _c10*qd_theta3
+    _jac[133] = _c3
+    _jac[134] = _c8
+    _jac[135] = _c12
+    _jac[143] = _c4
+    _jac[144] = _c9
+    _jac[145] = _c10
+    _jac[156] = _c3
+    _jac[157] = _c8
+    _jac[158] = _c12
+    out[:] = _jac.reshape((13, 13))
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta1 = y[0]
@@ -398,6 +560,8 @@ def rest_partials(t, y, p, out):
 
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 3, 2, 2
+#: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
+DAE_SIZE = 13
 #: Rows of the constraint matrix that belong to holonomic constraints.
 HOLONOMIC_ROWS = np.array([0, 1], dtype=np.int64)
 #: Gauss-Newton corrections `project` makes at most (two or three reach rounding level).

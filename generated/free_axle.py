@@ -239,6 +239,137 @@ RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not 
 
 
 @njit(cache=True, error_model="numpy")
+def dae_residual(t, y, p, out):
+    """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
+    Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.
+    z = (q, v, w, λ, μ), DAE_SIZE = 19 (n = 5, k = 3, kh = 1); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _w0 = y[10]
+    _w1 = y[11]
+    _w2 = y[12]
+    _w3 = y[13]
+    _w4 = y[14]
+    _lam0 = y[15]
+    _lam1 = y[16]
+    _lam2 = y[17]
+    _mu0 = y[18]
+    _c0 = _mu0*p_R
+    _c1 = 2.0*p_m
+    _c2 = _lam2*p_R
+    _c3 = sin(q_theta)
+    _c4 = cos(q_theta)
+    _c5 = _c3*_lam0*p_R - _c4*_lam1*p_R
+    _c6 = p_R*qd_phi
+    _c7 = p_R*qd_phi_prime
+    out[0] = qd_X
+    out[1] = qd_Y
+    out[2] = qd_theta + _mu0*p_L
+    out[3] = _c0 + qd_phi
+    out[4] = qd_phi_prime - _c0
+    out[5] = _w0
+    out[6] = _w1
+    out[7] = _w2
+    out[8] = _w3
+    out[9] = _w4
+    out[10] = -2.0*_lam0 + _c1*_w0
+    out[11] = -2.0*_lam1 + _c1*_w1 - _c1*p_g*sin(p_alpha)
+    out[12] = _w2*(2.0*p_I1 + (0.5)*p_m*p_L**2) - _lam2*p_L
+    out[13] = _c5 - _c2 + _w3*p_I3
+    out[14] = _c2 + _c5 + _w4*p_I3
+    out[15] = 2.0*qd_X - _c3*_c6 - _c3*_c7
+    out[16] = 2.0*qd_Y + _c4*_c6 + _c4*_c7
+    out[17] = _c6 - _c7 + p_L*qd_theta
+    out[18] = p_L*q_theta + p_R*(q_phi - q_phi_prime)
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def dae_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂G_i/∂z_j, (DAE_SIZE, DAE_SIZE), of `dae_residual` (symbolic, no
+    differences), every entry written.
+    z = (q, v, w, λ, μ), DAE_SIZE = 19 (n = 5, k = 3, kh = 1); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_theta = y[2]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _lam0 = y[15]
+    _lam1 = y[16]
+    _jac = np.zeros(361)
+    _c0 = -p_R
+    _c1 = 2.0*p_m
+    _c2 = p_R*cos(q_theta)
+    _c3 = p_R*sin(q_theta)
+    _c4 = _c2*_lam0 + _c3*_lam1
+    _c5 = -_c2
+    _c6 = -_c3
+    _jac[5] = 1.0
+    _jac[25] = 1.0
+    _jac[45] = 1.0
+    _jac[56] = p_L
+    _jac[65] = 1.0
+    _jac[75] = p_R
+    _jac[85] = 1.0
+    _jac[94] = _c0
+    _jac[105] = 1.0
+    _jac[125] = 1.0
+    _jac[145] = 1.0
+    _jac[165] = 1.0
+    _jac[185] = 1.0
+    _jac[200] = _c1
+    _jac[205] = -2.0
+    _jac[220] = _c1
+    _jac[225] = -2.0
+    _jac[240] = 2.0*p_I1 + (0.5)*p_m*p_L**2
+    _jac[245] = -p_L
+    _jac[249] = _c4
+    _jac[260] = p_I3
+    _jac[262] = _c3
+    _jac[263] = _c5
+    _jac[264] = _c0
+    _jac[268] = _c4
+    _jac[280] = p_I3
+    _jac[281] = _c3
+    _jac[282] = _c5
+    _jac[283] = p_R
+    _jac[287] = -_c2*qd_phi - _c2*qd_phi_prime
+    _jac[290] = 2.0
+    _jac[293] = _c6
+    _jac[294] = _c6
+    _jac[306] = -_c3*qd_phi - _c3*qd_phi_prime
+    _jac[310] = 2.0
+    _jac[312] = _c2
+    _jac[313] = _c2
+    _jac[330] = p_L
+    _jac[331] = p_R
+    _jac[332] = _c0
+    _jac[344] = p_L
+    _jac[345] = p_R
+    _jac[346] = _c0
+    out[:] = _jac.reshape((19, 19))
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_m = p[0]
@@ -405,6 +536,8 @@ def rest_partials(t, y, p, out):
 
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 5, 3, 1
+#: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
+DAE_SIZE = 19
 #: Rows of the constraint matrix that belong to holonomic constraints.
 HOLONOMIC_ROWS = np.array([2], dtype=np.int64)
 #: Gauss-Newton corrections `project` makes at most (two or three reach rounding level).

@@ -130,6 +130,84 @@ RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not 
 
 
 @njit(cache=True, error_model="numpy")
+def dae_residual(t, y, p, out):
+    """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
+    Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.
+    z = (q, v, w, λ, μ), DAE_SIZE = 8 (n = 2, k = 1, kh = 1); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_theta = y[0]
+    q_phi = y[1]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
+    _w0 = y[4]
+    _w1 = y[5]
+    _lam0 = y[6]
+    _mu0 = y[7]
+    _c0 = p_m*p_R**2
+    _c1 = sin(q_theta)
+    _c2 = _c0*_c1*cos(q_theta)
+    _c3 = 2.0*t
+    out[0] = qd_theta
+    out[1] = _mu0 + qd_phi
+    out[2] = _w0
+    out[3] = _w1
+    out[4] = _c0*_w0 - _c2*qd_phi**2 - _c1*p_R*p_g*p_m
+    out[5] = -_lam0 + _c0*_w1*_c1**2 + 2.0*_c2*qd_phi*qd_theta
+    out[6] = qd_phi - p_Omega - 2.0*p_epsilon*cos(_c3)
+    out[7] = q_phi - p_Omega*t - p_epsilon*sin(_c3)
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def dae_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂G_i/∂z_j, (DAE_SIZE, DAE_SIZE), of `dae_residual` (symbolic, no
+    differences), every entry written.
+    z = (q, v, w, λ, μ), DAE_SIZE = 8 (n = 2, k = 1, kh = 1); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    _w1 = y[5]
+    _jac = np.zeros(64)
+    _c0 = qd_phi**2
+    _c1 = sin(q_theta)
+    _c2 = p_m*p_R**2
+    _c3 = _c2*_c1**2
+    _c4 = cos(q_theta)
+    _c5 = _c2*_c4**2
+    _c6 = 2.0*qd_phi
+    _c7 = _c1*_c2*_c4
+    _c8 = _c6*_c7
+    _c9 = _c6*qd_theta
+    _c10 = 2.0*_c7
+    _jac[2] = 1.0
+    _jac[11] = 1.0
+    _jac[15] = 1.0
+    _jac[20] = 1.0
+    _jac[29] = 1.0
+    _jac[32] = _c0*_c3 - _c0*_c5 - _c4*p_R*p_g*p_m
+    _jac[35] = -_c8
+    _jac[36] = _c2
+    _jac[40] = _c10*_w1 + _c5*_c9 - _c3*_c9
+    _jac[42] = _c8
+    _jac[43] = _c10*qd_theta
+    _jac[45] = _c3
+    _jac[46] = -1.0
+    _jac[51] = 1.0
+    _jac[57] = 1.0
+    out[:] = _jac.reshape((8, 8))
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[0]
@@ -225,6 +303,8 @@ def rest_partials(t, y, p, out):
 
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 2, 1, 1
+#: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
+DAE_SIZE = 8
 #: Rows of the constraint matrix that belong to holonomic constraints.
 HOLONOMIC_ROWS = np.array([0], dtype=np.int64)
 #: Gauss-Newton corrections `project` makes at most (two or three reach rounding level).

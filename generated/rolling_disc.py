@@ -231,6 +231,194 @@ RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not 
 
 
 @njit(cache=True, error_model="numpy")
+def dae_residual(t, y, p, out):
+    """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
+    Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.
+    z = (q, v, w, λ, μ), DAE_SIZE = 17 (n = 5, k = 2, kh = 0); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_psi = y[2]
+    q_theta = y[3]
+    qd_x = y[5]
+    qd_y = y[6]
+    qd_psi = y[7]
+    qd_theta = y[8]
+    qd_phi = y[9]
+    p_m = p[0]
+    p_r = p[1]
+    p_I1 = p[2]
+    p_I3 = p[3]
+    p_g = p[4]
+    _w0 = y[10]
+    _w1 = y[11]
+    _w2 = y[12]
+    _w3 = y[13]
+    _w4 = y[14]
+    _lam0 = y[15]
+    _lam1 = y[16]
+    _c0 = _w0*p_m
+    _c1 = p_r*cos(q_psi)
+    _c2 = sin(q_theta)
+    _c3 = _c2*_w2
+    _c4 = _c3*p_m
+    _c5 = p_r*sin(q_psi)
+    _c6 = _c2*p_m
+    _c7 = _c6*qd_theta**2
+    _c8 = cos(q_theta)
+    _c9 = _c5*_c8
+    _c10 = _w3*p_m
+    _c11 = _c2*qd_psi**2
+    _c12 = _c11*p_m
+    _c13 = _c8*qd_theta
+    _c14 = _c13*qd_psi
+    _c15 = 2.0*_c14*p_m
+    _c16 = _w1*p_m
+    _c17 = _c1*_c8
+    _c18 = _c8**2
+    _c19 = p_m*p_r**2
+    _c20 = _w4*p_I3
+    _c21 = _c13*p_I3
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_psi
+    out[3] = qd_theta
+    out[4] = qd_phi
+    out[5] = _w0
+    out[6] = _w1
+    out[7] = _w2
+    out[8] = _w3
+    out[9] = _w4
+    out[10] = _c0 - _lam0 + _c1*_c15 + _c1*_c4 + _c10*_c9 - _c12*_c5 - _c5*_c7
+    out[11] = _c16 - _lam1 + _c1*_c12 + _c1*_c7 + _c15*_c5 + _c4*_c5 - _c10*_c17
+    out[12] = _c2*_c20 + _c21*qd_phi + _w2*(_c19 + p_I3 + _c18*p_I1 - _c18*_c19 - _c18*p_I3) + _c0*_c1*_c2 + _c14*_c2*(-2.0*p_I1 + 2.0*_c19 + 2.0*p_I3) + _c16*_c2*_c5
+    out[13] = _c0*_c9 + _w3*(_c19 + p_I1) - _c16*_c17 + _c11*_c8*(p_I1 - _c19 - p_I3) - _c6*p_g*p_r - _c8*p_I3*qd_phi*qd_psi
+    out[14] = _c20 + _c1*_lam0 + _c21*qd_psi + _c3*p_I3 + _c5*_lam1
+    out[15] = qd_x - _c1*qd_phi
+    out[16] = qd_y - _c5*qd_phi
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def dae_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂G_i/∂z_j, (DAE_SIZE, DAE_SIZE), of `dae_residual` (symbolic, no
+    differences), every entry written.
+    z = (q, v, w, λ, μ), DAE_SIZE = 17 (n = 5, k = 2, kh = 0); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_psi = y[2]
+    q_theta = y[3]
+    qd_psi = y[7]
+    qd_theta = y[8]
+    qd_phi = y[9]
+    p_m = p[0]
+    p_r = p[1]
+    p_I1 = p[2]
+    p_I3 = p[3]
+    p_g = p[4]
+    _w0 = y[10]
+    _w1 = y[11]
+    _w2 = y[12]
+    _w3 = y[13]
+    _w4 = y[14]
+    _lam0 = y[15]
+    _lam1 = y[16]
+    _jac = np.zeros(289)
+    _c0 = cos(q_theta)
+    _c1 = p_r*sin(q_psi)
+    _c2 = _c1*p_m
+    _c3 = _c0*_c2
+    _c4 = qd_psi*qd_theta
+    _c5 = 2.0*_c4
+    _c6 = qd_psi**2
+    _c7 = sin(q_theta)
+    _c8 = p_r*cos(q_psi)
+    _c9 = _c8*p_m
+    _c10 = _c7*_c9
+    _c11 = _c0*_c9
+    _c12 = qd_theta**2
+    _c13 = _c2*_c7
+    _c14 = 2.0*qd_theta
+    _c15 = 2.0*qd_psi
+    _c16 = -_c11
+    _c17 = _c10*_w1 - _c13*_w0
+    _c18 = _c7**2
+    _c19 = 2.0*p_I1
+    _c20 = 2.0*p_I3
+    _c21 = p_m*p_r**2
+    _c22 = 2.0*_c21
+    _c23 = _c20 + _c22 - _c19
+    _c24 = _c23*_c4
+    _c25 = _c0**2
+    _c26 = _c7*p_I3
+    _c27 = _c26*qd_phi
+    _c28 = _c0*p_I3
+    _c29 = _c0*_c7
+    _c30 = _c11*_w0 + _c3*_w1
+    _c31 = _c23*_c29
+    _c32 = _c28*qd_phi
+    _c33 = _c28*qd_theta
+    _c34 = p_I1 - _c21 - p_I3
+    _c35 = _c34*_c6
+    _c36 = _c28*qd_psi
+    _jac[5] = 1.0
+    _jac[23] = 1.0
+    _jac[41] = 1.0
+    _jac[59] = 1.0
+    _jac[77] = 1.0
+    _jac[95] = 1.0
+    _jac[113] = 1.0
+    _jac[131] = 1.0
+    _jac[149] = 1.0
+    _jac[167] = 1.0
+    _jac[172] = _c11*_w3 - _c10*_c12 - _c10*_c6 - _c13*_w2 - _c3*_c5
+    _jac[173] = _c11*_w2 - _c10*_c5 - _c12*_c3 - _c13*_w3 - _c3*_c6
+    _jac[177] = _c11*_c14 - _c13*_c15
+    _jac[178] = _c11*_c15 - _c13*_c14
+    _jac[180] = p_m
+    _jac[182] = _c10
+    _jac[183] = _c3
+    _jac[185] = -1.0
+    _jac[189] = _c10*_w2 + _c11*_c5 + _c3*_w3 - _c12*_c13 - _c13*_c6
+    _jac[190] = _c10*_w3 + _c11*_c12 + _c11*_c6 + _c3*_w2 - _c13*_c5
+    _jac[194] = _c10*_c15 + _c14*_c3
+    _jac[195] = _c10*_c14 + _c15*_c3
+    _jac[198] = p_m
+    _jac[199] = _c13
+    _jac[200] = _c16
+    _jac[203] = -1.0
+    _jac[206] = _c17
+    _jac[207] = _c30 + _c24*_c25 + _c28*_w4 + _w2*(_c20*_c29 + _c22*_c29 - _c19*_c29) - _c18*_c24 - _c27*qd_theta
+    _jac[211] = _c31*qd_theta
+    _jac[212] = _c32 + _c31*qd_psi
+    _jac[213] = _c33
+    _jac[214] = _c10
+    _jac[215] = _c13
+    _jac[216] = _c21 + p_I3 + _c25*p_I1 - _c21*_c25 - _c25*p_I3
+    _jac[218] = _c26
+    _jac[223] = _c30
+    _jac[224] = _c17 + _c25*_c35 + _c27*qd_psi - _c18*_c35 - _c0*p_g*p_m*p_r
+    _jac[228] = -_c32 + _c15*_c29*_c34
+    _jac[230] = -_c36
+    _jac[231] = _c3
+    _jac[232] = _c16
+    _jac[234] = _c21 + p_I1
+    _jac[240] = _c8*_lam1 - _c1*_lam0
+    _jac[241] = _c28*_w2 - _c26*_c4
+    _jac[245] = _c33
+    _jac[246] = _c36
+    _jac[250] = _c26
+    _jac[252] = p_I3
+    _jac[253] = _c8
+    _jac[254] = _c1
+    _jac[257] = _c1*qd_phi
+    _jac[260] = 1.0
+    _jac[264] = -_c8
+    _jac[274] = -_c8*qd_phi
+    _jac[278] = 1.0
+    _jac[281] = -_c1
+    out[:] = _jac.reshape((17, 17))
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_psi = y[2]
@@ -484,6 +672,8 @@ def rest_partials(t, y, p, out):
 
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 5, 2, 0
+#: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
+DAE_SIZE = 17
 #: Rows of the constraint matrix that belong to holonomic constraints.
 HOLONOMIC_ROWS = np.array([], dtype=np.int64)
 #: Gauss-Newton corrections `project` makes at most (two or three reach rounding level).

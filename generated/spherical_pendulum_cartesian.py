@@ -143,6 +143,99 @@ RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not 
 
 
 @njit(cache=True, error_model="numpy")
+def dae_residual(t, y, p, out):
+    """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
+    Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.
+    z = (q, v, w, λ, μ), DAE_SIZE = 11 (n = 3, k = 1, kh = 1); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _w0 = y[6]
+    _w1 = y[7]
+    _w2 = y[8]
+    _lam0 = y[9]
+    _mu0 = y[10]
+    _c0 = 2.0*_mu0
+    _c1 = 2.0*q_x
+    _c2 = 2.0*q_y
+    _c3 = 2.0*q_z
+    out[0] = qd_x + _c0*q_x
+    out[1] = qd_y + _c0*q_y
+    out[2] = qd_z + _c0*q_z
+    out[3] = _w0
+    out[4] = _w1
+    out[5] = _w2
+    out[6] = _w0*p_m - _c1*_lam0
+    out[7] = _w1*p_m - _c2*_lam0
+    out[8] = _w2*p_m + p_g*p_m - _c3*_lam0
+    out[9] = _c1*qd_x + _c2*qd_y + _c3*qd_z
+    out[10] = q_x**2 + q_y**2 + q_z**2 - p_l**2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def dae_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂G_i/∂z_j, (DAE_SIZE, DAE_SIZE), of `dae_residual` (symbolic, no
+    differences), every entry written.
+    z = (q, v, w, λ, μ), DAE_SIZE = 11 (n = 3, k = 1, kh = 1); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    _lam0 = y[9]
+    _mu0 = y[10]
+    _jac = np.zeros(121)
+    _c0 = 2.0*_mu0
+    _c1 = 2.0*q_x
+    _c2 = 2.0*q_y
+    _c3 = 2.0*q_z
+    _c4 = -2.0*_lam0
+    _jac[0] = _c0
+    _jac[3] = 1.0
+    _jac[10] = _c1
+    _jac[12] = _c0
+    _jac[15] = 1.0
+    _jac[21] = _c2
+    _jac[24] = _c0
+    _jac[27] = 1.0
+    _jac[32] = _c3
+    _jac[39] = 1.0
+    _jac[51] = 1.0
+    _jac[63] = 1.0
+    _jac[66] = _c4
+    _jac[72] = p_m
+    _jac[75] = -_c1
+    _jac[78] = _c4
+    _jac[84] = p_m
+    _jac[86] = -_c2
+    _jac[90] = _c4
+    _jac[96] = p_m
+    _jac[97] = -_c3
+    _jac[99] = 2.0*qd_x
+    _jac[100] = 2.0*qd_y
+    _jac[101] = 2.0*qd_z
+    _jac[102] = _c1
+    _jac[103] = _c2
+    _jac[104] = _c3
+    _jac[110] = _c1
+    _jac[111] = _c2
+    _jac[112] = _c3
+    out[:] = _jac.reshape((11, 11))
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_m = p[0]
@@ -237,6 +330,8 @@ def rest_partials(t, y, p, out):
 
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 3, 1, 1
+#: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
+DAE_SIZE = 11
 #: Rows of the constraint matrix that belong to holonomic constraints.
 HOLONOMIC_ROWS = np.array([0], dtype=np.int64)
 #: Gauss-Newton corrections `project` makes at most (two or three reach rounding level).

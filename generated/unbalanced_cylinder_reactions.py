@@ -177,6 +177,111 @@ RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not 
 
 
 @njit(cache=True, error_model="numpy")
+def dae_residual(t, y, p, out):
+    """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
+    Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.
+    z = (q, v, w, λ, μ), DAE_SIZE = 13 (n = 3, k = 2, kh = 2); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _w0 = y[6]
+    _w1 = y[7]
+    _w2 = y[8]
+    _lam0 = y[9]
+    _lam1 = y[10]
+    _mu0 = y[11]
+    _mu1 = y[12]
+    _c0 = _w0*p_M
+    _c1 = p_a*sin(q_theta)
+    _c2 = p_M*qd_theta**2
+    _c3 = p_a*cos(q_theta)
+    _c4 = _w2*p_M
+    _c5 = _w1*p_M
+    _c6 = p_M*p_g
+    out[0] = _mu1 + qd_x
+    out[1] = _mu0 + qd_z
+    out[2] = qd_theta - _mu1*p_R
+    out[3] = _w0
+    out[4] = _w1
+    out[5] = _w2
+    out[6] = _c0 - _lam1 + _c1*_c2 - _c3*_c4
+    out[7] = _c5 + _c6 - _lam0 + _c1*_c4 + _c2*_c3
+    out[8] = _c1*_c5 + _c1*_c6 + _lam1*p_R + _w2*(p_I + p_M*p_a**2) - _c0*_c3
+    out[9] = qd_z
+    out[10] = qd_x - p_R*qd_theta
+    out[11] = q_z - p_R
+    out[12] = q_x - p_R*q_theta
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def dae_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂G_i/∂z_j, (DAE_SIZE, DAE_SIZE), of `dae_residual` (symbolic, no
+    differences), every entry written.
+    z = (q, v, w, λ, μ), DAE_SIZE = 13 (n = 3, k = 2, kh = 2); λ has the sign of `reactions`.
+    Returns 0. See lagcomp.integrate.drivers.radau, DAEs."""
+    q_theta = y[2]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _w0 = y[6]
+    _w1 = y[7]
+    _w2 = y[8]
+    _jac = np.zeros(169)
+    _c0 = -p_R
+    _c1 = p_M*p_a
+    _c2 = _c1*sin(q_theta)
+    _c3 = qd_theta**2
+    _c4 = _c1*cos(q_theta)
+    _c5 = 2.0*qd_theta
+    _c6 = -_c4
+    _jac[3] = 1.0
+    _jac[12] = 1.0
+    _jac[17] = 1.0
+    _jac[24] = 1.0
+    _jac[31] = 1.0
+    _jac[38] = _c0
+    _jac[45] = 1.0
+    _jac[59] = 1.0
+    _jac[73] = 1.0
+    _jac[80] = _c2*_w2 + _c3*_c4
+    _jac[83] = _c2*_c5
+    _jac[84] = p_M
+    _jac[86] = _c6
+    _jac[88] = -1.0
+    _jac[93] = _c4*_w2 - _c2*_c3
+    _jac[96] = _c4*_c5
+    _jac[98] = p_M
+    _jac[99] = _c2
+    _jac[100] = -1.0
+    _jac[106] = _c2*_w0 + _c4*_w1 + _c4*p_g
+    _jac[110] = _c6
+    _jac[111] = _c2
+    _jac[112] = p_I + p_M*p_a**2
+    _jac[114] = p_R
+    _jac[121] = 1.0
+    _jac[133] = 1.0
+    _jac[135] = _c0
+    _jac[144] = 1.0
+    _jac[156] = 1.0
+    _jac[158] = _c0
+    out[:] = _jac.reshape((13, 13))
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[2]
@@ -307,6 +412,8 @@ def rest_partials(t, y, p, out):
 
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 3, 2, 2
+#: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
+DAE_SIZE = 13
 #: Rows of the constraint matrix that belong to holonomic constraints.
 HOLONOMIC_ROWS = np.array([0, 1], dtype=np.int64)
 #: Gauss-Newton corrections `project` makes at most (two or three reach rounding level).

@@ -282,6 +282,8 @@ CASES = {
     "unknown-method": (_simulate("pendulum", method="euler"), "'euler'"),
     "method-not-applicable": (_simulate("rod", method="verlet", dt=0.1), "`verlet`"),
     "rattle-not-applicable": (_simulate("pendulum", method="rattle", dt=0.1), "`rattle` integrates constrained systems"),
+    "radau-constrained-options": (_simulate("rod", method="radau", projection=True), "without projection"),
+    "radau-dae-tolerance": (_simulate("rod", method="radau", rtol=1e-12), "rtol = 1e-12 asked"),
     "taylor-not-applicable": (_simulate("friction", method="taylor"), "`taylor` cannot integrate 'rope_friction'"),
     "unknown-implicit-solver": (_simulate("pendulum", method="gauss2", dt=0.1, implicit_solver="broyden"), "broyden"),
     "bad-record": (_simulate("pendulum", record="everything"), "`record`"),

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lagcomp.errors import OptionError
+from lagcomp.integrate.dae import DAE_RTOL_MIN
 from lagcomp.integrate.memory import checked_limit
 from lagcomp.integrate.methods import (
     DEFAULT_IMPLICIT_SOLVER,
@@ -274,6 +275,11 @@ def run_options(model, t_span, *, method="dop853", dt=None, rtol=None, atol=None
             raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own "
                               "(bound it with `max_step`).")
         rtol, atol = tolerances(rtol, atol, m)
+        if m.solves_dae(model) and rtol < DAE_RTOL_MIN:
+            raise OptionError(f"`{m.name}` solves the constraints of {model.name!r} with the motion (a DAE) to rtol "
+                              f"≥ {DAE_RTOL_MIN:g}; tighter, the constraints' rounding noise stalls its Newton "
+                              f"iteration (rtol = {rtol:g} asked; at rtol = {DAE_RTOL_MIN:g} the constraints hold to "
+                              "~1e-12). Use that, or dop853 with projection=True for tighter tolerances.")
         first_step = None if first_step is None else positive(first_step, "first_step")
         max_step = math.inf if _is_inf(max_step) else positive(max_step, "max_step")
         times = None if t_eval is None else int(np.size(t_eval))

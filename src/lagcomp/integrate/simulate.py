@@ -60,7 +60,7 @@ def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions,
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
         tableau_arrays = (np.zeros(state.y.size),)
     elif m.carry is not None:  # Radau: the count of differential components (all: an ODE), then what it keeps
-        tableau_arrays = (*tableau_arrays, state.y.size, *library_function(m.carry)(state.y.size))
+        tableau_arrays = (*tableau_arrays, differential, *library_function(m.carry)(state.y.size))
     t1, rtol, atol, max_step = options.t1, options.rtol, options.atol, options.max_step
 
     def advance(ts, ys, pause_at, event_buffers, first_call):

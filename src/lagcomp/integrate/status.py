@@ -66,9 +66,10 @@ _MESSAGES = {
     Status.NEWTON_FAILED: "The Newton iteration of the stage equations (radau) did not converge even at the "
                           "smallest step: the Jacobian may not match the right-hand side, or the solution is "
                           "singular here (check the model near this state, or loosen rtol/atol).",
-    Status.ITERATION_MATRIX_SINGULAR: "The iteration matrix γ/h·I − J of radau stayed singular down to the smallest "
-                                      "step (a degenerate Jacobian J): check the model near this state, or use an "
-                                      "explicit method (dop853).",
+    Status.ITERATION_MATRIX_SINGULAR: "The iteration matrix γ/h·M − J of radau (M = I; for constraints, the DAE's "
+                                      "diag(I, 0)) stayed singular down to the smallest step (a degenerate Jacobian "
+                                      "J, or constraints that are dependent here): check the model near this "
+                                      "state, or use an explicit method (dop853).",
     Status.BUFFER_FULL: "The output buffer is full: call again with a fresh one.",
     Status.PAUSED: "The call's step budget is used up: call again with a later one.",
 }
