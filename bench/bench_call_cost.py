@@ -8,7 +8,9 @@ On the double pendulum with DOP853 (rtol = atol = 1e-10), in one process, timed 
   `lagcomp.integrate.drivers.kernel_types.AddressedKernel`: numba's unboxing of the kernels;
 * one call running t ∈ [0, 1000] with each binding: the per-step price of calling the kernels
   through their cfunc wrappers (AddressedKernel) instead of their native entries;
-* `Model.simulate` over t ∈ [0, 0.1] (a few dozen steps): its whole fixed cost per call.
+* `Model.simulate` over t ∈ [0, 0.1] (a few dozen steps), and its fixed cost per call: its time less that
+  of the same run's driver call alone (bound as simulate's first call binds it, the same steps), paired
+  round by round: what simulate adds (options, initial state, recording, the Solution, ...).
 
 Ratios are medians of per-round ratios (`bench.harness.paired`).
 """
@@ -63,8 +65,12 @@ def main() -> None:
         print(f"| {label} | {fmt_stat(stat_of([v * scale for v in plain]))} | "
               f"{fmt_stat(stat_of([v * scale for v in addressed]))} | {fmt_stat(paired(addressed, plain), '×')} |")
     run = lambda: [model.simulate((0.0, 0.1), rtol=1e-10, atol=1e-10, progress=False) for _ in range(200)]  # noqa: E731
-    (times,) = interleaved_times([run], repeats=args.rounds, per_call=[200])
-    print(f"\n`Model.simulate` over t ∈ [0, 0.1]: {fmt_stat(stat_of([v * 1e6 for v in times]))} µs per call")
+    call = driver_call(model, True, 0.1)
+    alone = lambda: [call() for _ in range(200)]  # noqa: E731
+    times, driver = interleaved_times([run, alone], repeats=args.rounds, per_call=[200, 200])
+    print(f"\n`Model.simulate` over t ∈ [0, 0.1]: {fmt_stat(stat_of([v * 1e6 for v in times]))} µs per call; "
+          f"its driver call alone {fmt_stat(stat_of([v * 1e6 for v in driver]))} µs; "
+          f"simulate's fixed cost {fmt_stat(stat_of([(v - d) * 1e6 for v, d in zip(times, driver, strict=True)]))} µs per call")
 
 
 if __name__ == "__main__":

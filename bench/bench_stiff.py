@@ -12,8 +12,10 @@ numbalsoda's ``lsoda`` a cfunc around ``rhs`` (its own finite-difference Jacobia
 ``radau`` and ``dop853`` run through ``Model.simulate``.  The rows "radau driver call" time
 `radau_run` alone, called as ``simulate``'s first call calls it (kernels as `AddressedKernel`s, the
 same steps and bits), keeping only the end state as LSODA does: the difference from the ``simulate``
-rows is ``simulate``'s fixed cost, the same for every method (~0.1-0.15 ms; more where a run needs more
-than one driver call: its first output buffer holds 1024 rows).
+rows is ``simulate``'s fixed cost, the same for every method (~0.06 ms per run in a loop of runs,
+``python -m bench.bench_call_cost``; ~0.1-0.15 ms in this table's round-robin; more where a run needs more
+than one driver call: its first output buffer holds 1024 rows, and each later call binds the kernels as
+dispatchers, ~0.1 ms of numba unboxing).
 
 Error: the max norm of the state at t_end against a reference from scipy's DOP853 at
 rtol = atol = 1e-13 on the same rhs (an explicit method, independent of the Radau code; its own error

@@ -10,7 +10,9 @@ sympy, so a cached model is ready in well under a second.
 
 from __future__ import annotations
 
+import functools
 import math
+import operator
 import os
 import warnings
 from collections.abc import Mapping
@@ -214,6 +216,24 @@ def _baumgarte_gains(baumgarte) -> tuple[float, float]:
     return alpha, beta
 
 
+def _snapshot(values: dict) -> tuple:
+    """The keys and values of `values` (a model's defaults), to tell later whether it changed (`_unchanged`)."""
+    return tuple(values), tuple(values.values())
+
+
+def _unchanged(values: dict, snapshot: tuple) -> bool:
+    """Whether `values` holds the very objects of `snapshot`: same keys and values, in the same order (the
+    snapshot's values are floats, immutable, so identity tells that nothing was assigned since)."""
+    keys, kept = snapshot
+    return (len(values) == len(keys) and all(map(operator.is_, values, keys))
+            and all(map(operator.is_, values.values(), kept)))
+
+
+def _float_tuple(values) -> bool:
+    """Whether `values` is None or a tuple of floats: immutable, so kept results derived from it stay valid."""
+    return values is None or (type(values) is tuple and all(type(v) is float for v in values))
+
+
 class Model:
     """A compiled system: its kernels, parameter order and defaults.
 
@@ -278,6 +298,8 @@ class Model:
         self.holonomic_separable = bool(entry.metadata["holonomic_separable"])
         self.operations = dict(entry.metadata["operations"])
         self._taylor_program = entry.metadata.get("taylor_program")  # for batched Taylor sweeps (taylor_lanes)
+        self._default_parameters: tuple | None = None  # (defaults' snapshot, p): `parameter_vector`
+        self._default_state: tuple | None = None  # (q0, qd0, y): `initial_state`
 
     @property
     def event_names(self) -> tuple[str, ...]:
@@ -313,7 +335,18 @@ class Model:
 
         For constrained systems p ends with the Baumgarte gains (α, β), which
         add −2α (Λ q̇ + b) − β² Φ to the acceleration-level constraints.
+
+        With `params` None the values are the defaults', checked once and kept (`_default_parameters`)
+        until `defaults` changes: a run of a short simulation saves the ~3 µs of checking them again.
         """
+        if params is None:
+            kept = self._default_parameters
+            if kept is not None and _unchanged(self.defaults, kept[0]):
+                p = np.empty(kept[1].size + (2 if self.k else 0))
+                if self.k:
+                    p[-2:] = _baumgarte_gains(baumgarte)
+                p[:kept[1].size] = kept[1]
+                return p
         values = dict(self.defaults)
         if params is not None and not isinstance(params, Mapping):
             raise ParameterError(f"`params` must be a mapping of parameter name to value, like "
@@ -335,10 +368,21 @@ class Model:
                 raise ParameterError(f"Parameter `{name}` must be a number, got {values[name]!r}.") from err
             if not math.isfinite(p[k]):
                 raise ParameterError(f"Parameter `{name}` is {p[k]}; it must be finite.")
+        if params is None and all(type(value) is float for value in self.defaults.values()):
+            self._default_parameters = (_snapshot(self.defaults), p[:len(self.parameters)].copy())
         return p
 
     def initial_state(self, q0=None, qd0=None) -> np.ndarray:
-        """The state y = (q0, qd0), defaults from the System, checked for length and finiteness."""
+        """The state y = (q0, qd0), defaults from the System, checked for length and finiteness.
+
+        The default state (q0 and qd0 None) is checked once and kept (`_default_state`) while `q0` and
+        `qd0` are the same tuples of floats; each call returns a fresh copy.
+        """
+        from_defaults = q0 is None and qd0 is None
+        if from_defaults and self._default_state is not None:
+            kept_q0, kept_qd0, y = self._default_state
+            if kept_q0 is self.q0 and kept_qd0 is self.qd0:
+                return y.copy()
         parts = []
         for what, given, default in (("q0", q0, self.q0), ("qd0", qd0, self.qd0)):
             values = given if given is not None else default
@@ -359,7 +403,10 @@ class Model:
             if not np.all(np.isfinite(values)):
                 raise InitialConditionError(f"`{what}` = {values.tolist()} is not finite.")
             parts.append(values)
-        return np.concatenate(parts)
+        y = np.concatenate(parts)
+        if from_defaults and all(_float_tuple(v) for v in (self.q0, self.qd0)):  # immutable: identity tells a change
+            self._default_state = (self.q0, self.qd0, y.copy())
+        return y
 
     # -- kernels from Python --------------------------------------------------------
 
@@ -409,12 +456,12 @@ class Model:
             )
         return dict(zip(self.constraints, out.tolist()))
 
-    @property
+    @functools.cached_property
     def residual_labels(self) -> tuple[tuple[str, str], ...]:
         """(constraint, level) of each entry of the ``constraint_residuals`` kernel's output.
 
         Level "position" for Φ of the holonomic constraints, then "velocity"
-        for Λ q̇ + b of all constraints.
+        for Λ q̇ + b of all constraints.  Made once (every run reads it).
         """
         holonomic = tuple((c, "position") for c, h in zip(self.constraints, self.holonomic) if h)
         return holonomic + tuple((c, "velocity") for c in self.constraints)

@@ -44,11 +44,12 @@ def consistent_initial_state(model, t0: float, y0: np.ndarray, p: np.ndarray, pr
 
 
 
-def reactions_along(model, ts: np.ndarray, ys: np.ndarray, p: np.ndarray) -> tuple[dict, np.ndarray]:
-    """Multipliers by constraint name, each shape (m,), and the residual at each row."""
+def reactions_along(model, ts: np.ndarray, ys: np.ndarray, p: np.ndarray) -> tuple[dict, float]:
+    """Multipliers by constraint name, each shape (m,), and the largest residual over the rows (0.0 without
+    constraints, NaN if a row's is)."""
     if not model.k:
-        return {}, np.zeros(ts.size)
+        return {}, 0.0
     lam = np.full((ts.size, model.k), np.nan)
     residual = np.full(ts.size, np.nan)
     model.kernels.reactions_along(ts, ys, p, lam, residual)
-    return {name: lam[:, j].copy() for j, name in enumerate(model.constraints)}, residual
+    return {name: lam[:, j].copy() for j, name in enumerate(model.constraints)}, float(np.max(residual, initial=0.0))

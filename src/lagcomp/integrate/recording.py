@@ -82,10 +82,11 @@ class Recorder:
         self.first: tuple | None = None  # rows (t, y) and, in summary mode, (energy, energy_function, momenta)
         self.last: tuple | None = None
         self.rows = 0
-        self.cyclic = [model.coordinates.index(c) for c in model.cyclic]
-        size = model.state_size
-        self.extremes = np.array([np.full(size, np.inf), np.full(size, -np.inf)])
-        self.deviation = np.zeros(2 + len(self.cyclic))
+        if not self.keep:  # the running reductions (a run keeping its rows folds them in a new Recorder)
+            self.cyclic = [model.coordinates.index(c) for c in model.cyclic]
+            size = model.state_size
+            self.extremes = np.array([np.full(size, np.inf), np.full(size, -np.inf)])
+            self.deviation = np.zeros(2 + len(self.cyclic))
 
     def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
         """Take the rows ``ts`` (m,), ``ys`` (m, 2n) (copied: the caller reuses its buffers)."""

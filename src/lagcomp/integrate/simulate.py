@@ -12,6 +12,7 @@ bounded by what is kept: every saved row (`save_every`, `t_eval`) or, with
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import time
 import weakref
@@ -44,6 +45,11 @@ FIRST_CALL_SECONDS = 0.0125
 #: {method name: steps/s}}: a model's next run sizes its calls from it rather than from `FIRST_BUDGET`
 #: (each call costs up to ~0.15 ms of numba unboxing its kernels: a tenth of a 5000-step DOP853 run).
 _STEP_RATES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: `pause_at` of a call without a step budget.
+NO_PAUSE_AT = int(np.iinfo(np.int64).max)
+#: The library function a "module:function" reference names, looked up once per reference (a method's
+#: `Method.carry`; `library_function` checks the module's numba cache at each look-up, ~1.5 µs).
+_library_function = functools.cache(library_function)
 
 
 def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions, differential: int):
@@ -60,7 +66,7 @@ def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions,
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
         tableau_arrays = (np.zeros(state.y.size),)
     elif m.carry is not None:  # Radau: the count of differential components (all: an ODE), then what it keeps
-        tableau_arrays = (*tableau_arrays, differential, *library_function(m.carry)(state.y.size))
+        tableau_arrays = (*tableau_arrays, differential, *_library_function(m.carry)(state.y.size))
     t1, rtol, atol, max_step = options.t1, options.rtol, options.atol, options.max_step
 
     def advance(ts, ys, pause_at, event_buffers, first_call):
@@ -196,7 +202,7 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
             with first or contextlib.nullcontext() as stages:
                 if stages is not None:
                     stages.start(stages.names[0])
-                status, n_saved = advance(ts, ys, min(steps_before + budget, np.iinfo(np.int64).max), event_buffers,
+                status, n_saved = advance(ts, ys, min(steps_before + budget, NO_PAUSE_AT), event_buffers,
                                           first_call)
             compiled = first is not None
             if compiled:  # numba was compiling: the run's bar times the run from here
@@ -286,6 +292,8 @@ def _redundant_constraints(model, t0: float, y0: np.ndarray, p: np.ndarray) -> l
 
 def _event_records(model, event_parts) -> dict:
     """Occurrences of each declared event: {name: EventRecord(t, q, qd)}, in time order (qd: u of a Kane model)."""
+    if not model.events:
+        return {}
     n = model.n
     if event_parts:
         t_all, y_all, i_all = (np.concatenate(column) for column in zip(*event_parts))
@@ -317,7 +325,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
     if status == Status.TERMINATED:
         fired = [name for name, record in run["events"].items() if record.t.size and record.t[-1] == run_state.t]
         message = f"{message} Event {fired[0] if fired else '?'!r} at t = {run_state.t:.10g}."
-    reactions, residuals = reactions_along(model, ts, ys, p)
+    reactions, residual = reactions_along(model, ts, ys, p)
     n = model.n
     solution = Solution(
         t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), observed=observed, cyclic=model.cyclic,
@@ -325,7 +333,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         nfev=run_state.nfev, nsteps=run_state.nsteps, nrejected=run_state.nrejected,
         njev=run_state.njev, nlu=run_state.nlu, method=run["method"], coordinates=model.coordinates,
         params=dict(zip(model.parameters, p.tolist())),
-        reactions=reactions, constraint_residual=max(run["residual_max"], float(np.max(residuals, initial=0.0))),
+        reactions=reactions, constraint_residual=max(run["residual_max"], residual),
         projected_initial_state=ys[0].copy() if run["projected"] else None,
         events=run["events"],
     )
