@@ -160,3 +160,17 @@ def test_command_line(capsys, cache_dir):
     code = main(["--cache-dir", str(cache_dir), "run", "four_bar_linkage", "--method", "radau", "--t-end", "1"])
     assert code == 0
     assert "radau" in capsys.readouterr().out
+
+
+def test_a_sweep_is_bitwise_the_runs_it_sweeps(four_bar):
+    """The DAE in the sweep loop: each trajectory's final (q, q̇) and dense rows bit for bit those of its own run."""
+    rates = [8.0, 12.0]
+    ts = np.linspace(0.0, 1.0, 11)
+    swept = four_bar.sweep((0.0, 1.0), {"theta1_dot": rates}, method="radau", rtol=1e-8, atol=1e-8, t_eval=ts,
+                           output="dense", workers=1, progress=False, project_initial=True)
+    assert np.all(swept.status == 0) and swept.final.shape == (2, 2 * four_bar.n)
+    for i, rate in enumerate(rates):
+        run = four_bar.simulate((0.0, 1.0), qd0=[rate, *four_bar.initial_state()[4:]], method="radau", rtol=1e-8,
+                                atol=1e-8, t_eval=ts, project_initial=True, progress=False)
+        np.testing.assert_array_equal(swept.final[i], run.y[-1])
+        np.testing.assert_array_equal(swept.dense[i], run.y)

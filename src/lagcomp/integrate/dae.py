@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from lagcomp.errors import InitialConditionError, OptionError
+
 #: The tightest rtol `radau` takes for a DAE.  Below it the rounding noise of the constraints (Φ and Λ(q)
 #: evaluated at a q known to ulp(|q|)) stops the Newton iteration short of its tolerance: on the four-bar
 #: linkage over 30 s, rtol 1e-11 was less accurate than 1e-10 (1.7e-7 against 4.5e-8 from dop853 at 1e-13
@@ -52,3 +54,21 @@ def dae_state(model, t0: float, y0: np.ndarray, p: np.ndarray) -> tuple[np.ndarr
     status = model.kernels.rhs(t0, y0, plain, derivative) or model.kernels.reactions(t0, y0, plain, z[3 * n:3 * n + k])
     z[2 * n:3 * n] = derivative[n:]
     return z, status
+
+
+def refuse_stabilisation(method: str, model, baumgarte) -> None:
+    """Refuse Baumgarte gains for a run that solves `model` as a DAE: its constraints need none."""
+    if any(baumgarte):
+        raise OptionError(f"`{method}` solves {model.name!r} as a DAE whose constraints hold without stabilisation; "
+                          "leave `baumgarte` unset.")
+
+
+def dae_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, where) -> np.ndarray:
+    """`dae_state` of every row of Y0 (with the parameters P's row), shape (rows, 3n + k + kh); `where(i)` names
+    row i in the `InitialConditionError` raised when the augmented matrix is singular there."""
+    rows = [dae_state(model, t0, y, p) for y, p in zip(Y0, P, strict=True)]
+    for i, (_, singular) in enumerate(rows):
+        if singular:
+            raise InitialConditionError(f"{where(i)}: the augmented matrix [M Λᵀ; Λ 0] of {model.name!r} is singular "
+                                        "at the initial state (dependent constraints there, or a zero inertia).")
+    return np.array([z for z, _ in rows])

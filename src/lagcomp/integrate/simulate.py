@@ -21,7 +21,7 @@ import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
-from lagcomp.integrate.dae import dae_state, differential_size
+from lagcomp.integrate.dae import dae_state, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.run_state import STEP, RunState
 from lagcomp.integrate.memory import MEMORY_LIMIT, run_bytes
 from lagcomp.integrate.memory import check as check_memory
@@ -117,9 +117,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     residual_max = np.array([0.0, bound])  # running maximum, and the bound the drivers stop at
     width = y0.size  # the columns of the state that are (q, q̇): all but a DAE's algebraic ones
     if m.solves_dae(model):
-        if any(baumgarte):
-            raise OptionError(f"`{m.name}` solves {model.name!r} as a DAE whose constraints hold without "
-                              "stabilisation; leave `baumgarte` unset.")
+        refuse_stabilisation(m.name, model, baumgarte)
         start, singular = dae_state(model, t0, y0, p)
         if singular:
             _refuse_singular_start(model, t0, y0, p)

@@ -29,6 +29,7 @@ import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state
+from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
 from lagcomp.integrate.memory import MEMORY_LIMIT, sweep_bytes
 from lagcomp.integrate.memory import check as check_memory
 from lagcomp.integrate.methods import library_function
@@ -300,8 +301,12 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if model.residual_labels:  # (a Kane model's Φ and Ψ have no multipliers: model.k is 0)
         _consistent_initial_states(model, t0, Y0, P, project_initial, names, values)
     projecting = options.projecting
+    dae = m.solves_dae(model)       # then the loop runs z = (q, v, w, λ, μ); the outputs keep (q, v)
+    if dae:
+        refuse_stabilisation(m.name, model, baumgarte)
+        Y0 = dae_states(model, t0, Y0, P, lambda i: f"Trajectory {i} of the sweep ({_where(names, values[i])})")
 
-    layout = (n2, rows, len(options.directions), cap)
+    layout = (Y0.shape[1], rows, len(options.directions), cap)
     out = _allocate(n_traj, layout)
     spec = None        # the model's own module; a batched Taylor sweep has a module of its own
     if batched:
@@ -318,8 +323,9 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     else:
         coefficients = options.driver_arguments()
         if m.carry is not None:     # Radau: the count of differential components (all: an ODE)
-            coefficients = (*coefficients, n2)
-        task = _Task(m.driver, m.adaptive, fixed, layout, coefficients, projecting, m.sweep, m.kernels)
+            coefficients = (*coefficients, differential_size(model) if dae else n2)
+        task = _Task(m.driver, m.adaptive, fixed, layout, coefficients, projecting, m.sweep,
+                     m.dae_kernels if dae else m.kernels)
     if client is None:
         kernels = model.kernels if spec is None else _worker_kernels(spec)
         done = _run_locally(kernels, task, Y0, P, out, workers, progress)
@@ -336,16 +342,16 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if want_events:
         events_out = {
             event.name: {"count": shaped(out["event_count"][:, i]), "t": shaped(out["event_t"][:, i]),
-                         "y": shaped(out["event_y"][:, i])}
+                         "y": shaped(out["event_y"][:, i, :, :n2])}
             for i, event in enumerate(model.events) if actions[i]
         }
     return Sweep(
         names=names, combine=combine if isinstance(grid, dict) else "explicit", axes=axes, shape=shape,
-        final=shaped(out["final"]), t_final=shaped(out["t_final"]),
+        final=shaped(out["final"][:, :n2]), t_final=shaped(out["t_final"]),
         status=shaped(statuses), nfev=shaped(counts[:, 0]), nsteps=shaped(counts[:, 1]),
         nrejected=shaped(counts[:, 2]), done=shaped(done), coordinates=model.coordinates, method=m.name,
         speeds=tuple(getattr(model, "speeds", None) or ()),
-        t_dense=t_dense, dense=shaped(out["dense"]) if t_dense is not None else None,
+        t_dense=t_dense, dense=shaped(out["dense"][:, :, :n2]) if t_dense is not None else None,
         energy_error=shaped(relative) if "energy" in output else None, events=events_out,
     )
 
@@ -356,8 +362,12 @@ def _consistent_initial_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, 
         try:
             Y0[k], _ = consistent_initial_state(model, t0, Y0[k], P[k], project)
         except InitialConditionError as err:
-            where = ", ".join(f"{name}={value:g}" for name, value in zip(names, values[k]))
-            raise InitialConditionError(f"Trajectory {k} of the sweep ({where}): {err}") from err
+            raise InitialConditionError(f"Trajectory {k} of the sweep ({_where(names, values[k])}): {err}") from err
+
+
+def _where(names, values) -> str:
+    """A grid point as ``name=value, ...``."""
+    return ", ".join(f"{name}={value:g}" for name, value in zip(names, values, strict=True))
 
 
 #: Batched (SIMD) sweep loops by method: library loops around the model's lane kernel ``rhs_lanes``
