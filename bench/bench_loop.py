@@ -49,10 +49,14 @@ from __future__ import annotations
 import argparse
 import functools
 import tempfile
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from bench.harness import Table, fmt_stat, interleaved_times, stat_of
+
+if TYPE_CHECKING:
+    from lagcomp.integrate.solution import Solution
 
 T_END = 30.0
 TOLERANCES = (1e-6, 1e-8, 1e-10)
@@ -66,7 +70,7 @@ FORMULATIONS = {
 REFERENCE = dict(method="dop853", projection=True)
 
 
-def measure(rounds: int = 5, cache_dir: str | None = None) -> tuple[Table, dict]:
+def measure(rounds: int = 5, cache_dir: str | None = None) -> tuple[Table, Solution]:
     """The table, and radau's run at rtol 1e-10 (its `Solution`, every accepted step saved) for the target."""
     import lagcomp as lc
     from lagcomp.examples import get
