@@ -23,8 +23,9 @@ is estimated from the same at 1e-12 and printed).  "At equal error" compares eac
 lagcomp ``radau`` rows at the peer's error: the last two columns are the peer's median time over radau's
 through ``simulate`` and over the radau driver call's, interpolated log-log between the two radau rows
 whose errors bracket the peer's (– outside them).  Rows are timed round-robin, scipy's rows (20-330 ms of
-Python each) apart from the others: after one of them the Python of ``simulate`` runs with cold caches,
-~0.35 ms instead of ~0.14 ms of fixed cost, which LSODA's rows, timed one after the other, did not pay.
+Python each) apart from the others: after one of them the Python of ``simulate`` runs with cold caches
+(simulate's rows cost 0.10-0.12 ms more than the driver call's at 7d57512, ~0.06 ms in a loop of runs), which
+LSODA's rows, timed one after the other, do not pay.
 """
 
 from __future__ import annotations
