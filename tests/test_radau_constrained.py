@@ -14,6 +14,10 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+from random_systems import random_mechanism
+from test_dae_kernels import _extra_constraint
 from test_four_bar import _crank_times, newton_euler
 
 import lagcomp as lc
@@ -174,3 +178,33 @@ def test_a_sweep_is_bitwise_the_runs_it_sweeps(four_bar):
                                 atol=1e-8, t_eval=ts, project_initial=True, progress=False)
         np.testing.assert_array_equal(swept.final[i], run.y[-1])
         np.testing.assert_array_equal(swept.dense[i], run.y)
+
+
+@pytest.mark.slow  # each example compiles a new model (~1 min on 2 cores)
+@settings(max_examples=3, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(seed=st.integers(0, 2**32 - 1),
+       extra=st.sampled_from([("nonholonomic",), ("rheonomic",), ("nonholonomic", "rheonomic")]))
+def test_random_constrained_systems_agree_with_dop853_and_projection(cache_dir, seed, extra):
+    """Random mechanisms (tests/random_systems.py) with their holonomic constraints and a random nonholonomic
+    and/or time-dependent one: radau's DAE against dop853 with projection, over [0, 1] from the same projected
+    start (measured: states within DIFF, residual at the steps RESID)."""
+    mech, rng = random_mechanism(seed), np.random.default_rng(seed)
+    constraints = list(mech.system.constraints)
+    for kind in extra:
+        if len(constraints) < len(mech.coordinates):
+            constraints.append(_extra_constraint(kind, mech, rng))
+    system = dataclasses.replace(mech.system, constraints=tuple(constraints), name=f"random_dae_{seed}")
+    model = lc.compile(system, cache_dir=cache_dir)
+    start = dict(q0=mech.q0, qd0=mech.qd0, params=dict(zip(model.parameters, mech.values, strict=True)),
+                 project_initial=True, progress=False)
+    ts = np.linspace(0.0, 1.0, 11)
+    ref = model.simulate((0.0, 1.0), t_eval=ts, projection=True, **TIGHT, **start)
+    assume(ref.success)  # a random mechanism may reach a configuration where its constraints are dependent
+    sol = model.simulate((0.0, 1.0), t_eval=ts, **RADAU, **start)
+    steps = model.simulate((0.0, 1.0), **RADAU, **start)
+    assert sol.success and steps.success, (mech.description, sol.message)
+    scale = 1.0 + np.max(np.abs(ref.y))
+    print("MEASURED", mech.description, extra, np.max(np.abs(sol.y - ref.y)) / scale, steps.constraint_residual)
+    assert np.max(np.abs(sol.y - ref.y)) <= 1e-8 * scale, (mech.description, extra)
+    assert steps.constraint_residual <= 1e-10, (mech.description, extra)
