@@ -118,6 +118,25 @@ def test_events_of_a_kane_model_on_radaus_dense_output(cache_dir):
     assert abs(s.events["bottom"].qd[0, 0] + speed) < 1.5e-9     # `qd` holds u; measured 1.3e-10
 
 
+def test_event_records_hold_every_speed_when_n_u_exceeds_n_q(cache_dir):
+    """A particle pushed along x by a constant force F, q = (x,), u = (u1, u2) with u2 (across) held at 0 by a
+    velocity constraint: x = 1 is reached at t = √(2m/F) with u1 = √(2F/m); the record's `qd` holds (u1, u2)."""
+    x, u1, u2 = me.dynamicsymbols("x u1 u2")
+    m, F = sp.symbols("m F", positive=True)
+    N = me.ReferenceFrame("N")
+    P = me.Point("P")
+    P.set_vel(N, u1 * N.x + u2 * N.y)
+    km = me.KanesMethod(N, [x], [u1], kd_eqs=[x.diff(t) - u1], u_dependent=[u2], velocity_constraints=[u2])
+    km.kanes_equations([me.Particle("p", P, m)], [(P, F * N.x)])
+    model = lc.compile(km, cache_dir=cache_dir, name="kane_pushed_particle", defaults=dict(m=2.0, F=3.0),
+                       events=[lc.Event("x_one", x - 1, direction=1)])
+    s = model.simulate((0, 2), q0=[0.0], u0=[0.0, 0.0], method="radau", rtol=1e-10, atol=1e-10, progress=False)
+    record = s.events["x_one"]
+    assert record.q.shape == (1, 1) and record.qd.shape == (1, 2)
+    assert abs(record.t[0] - math.sqrt(2 * 2.0 / 3.0)) < 1e-12 and record.qd[0, 1] == 0.0
+    assert abs(record.qd[0, 0] - math.sqrt(2 * 3.0 / 2.0)) < 1e-12
+
+
 @pytest.fixture(scope="module")
 def bicycle(whipple_bicycle):
     """The bicycle at 5 m/s with a lean-rate kick (test_kane_interop's run), on its constraints."""
