@@ -150,6 +150,9 @@ def test_run_a_kane_model_from_its_initial_speeds(capsys, tmp_path):
     assert main([*argv, "--u0", "0.8"]) == 0
     final = float(capsys.readouterr().out.split("final       x=")[1].split()[0])
     assert abs(final - 0.4 * np.sin(2.0)) < 5e-9  # measured 7.3e-10: the 8 digits printed (the run's own error 4.4e-12)
+    assert main([*argv, "--u0", "0.8", "--method", "radau"]) == 0    # radau takes Kane models too
+    final = float(capsys.readouterr().out.split("final       x=")[1].split()[0])
+    assert abs(final - 0.4 * np.sin(2.0)) < 5e-9
     assert main([*argv, "--qd0", "0.8"]) == 2
     assert "give its initial speeds as `u0` (speeds ['w']; --u0 on the command line)" in capsys.readouterr().err
     lc.compile(lc.System([x], T=m * x.diff(lc.t) ** 2 / 2, V=k * x**2 / 2, name="lagrange_spring",

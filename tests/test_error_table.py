@@ -84,6 +84,8 @@ def models(compiled, cache_dir):
         "walled": lc.compile(walled, cache_dir=cache_dir),
         "friction": compiled("rope_friction"),
         "kane": lc.compile(_kane_slider(), name="table_kane_slider", cache_dir=cache_dir, defaults={"m": 1.0}),
+        "kane_across": lc.compile(_kane_slider(across=True), name="table_kane_slider_across", cache_dir=cache_dir,
+                                  defaults={"m": 1.0}),
         # a parameter named like the velocity of x: derived correctly, but "x_dot" is ambiguous in a sweep grid
         "clash": lc.compile(oscillator(V=sp.Symbol("x_dot") * x, name="table_clash",
                                        defaults={"m": 1.0, "x_dot": 1.0}), cache_dir=cache_dir),
@@ -176,15 +178,17 @@ def _rolling_disc_by_hand():
     return lc.compile(me.LagrangesMethod(me.Lagrangian(N, disc), [x], bodies=[disc], frame=N))
 
 
-def _kane_slider(formed=True, force=None):
-    """x' = w, a particle pushed along N.x by `force` (default none); KanesMethod, equations formed or not."""
+def _kane_slider(formed=True, force=None, across=False):
+    """x' = w, a particle pushed along N.x by `force` (default none); KanesMethod, equations formed or not.
+    `across`: a second speed v along N.y, held at 0 by a velocity constraint (v dependent)."""
     import sympy.physics.mechanics as me
 
-    w = me.dynamicsymbols("w")
+    w, v = me.dynamicsymbols("w v")
     N = me.ReferenceFrame("N")
     P = me.Point("P")
-    P.set_vel(N, w * N.x)
-    km = me.KanesMethod(N, [x], [w], kd_eqs=[x.diff(t) - w])
+    P.set_vel(N, w * N.x + (v * N.y if across else 0))
+    constraint = dict(u_dependent=[v], velocity_constraints=[v]) if across else {}
+    km = me.KanesMethod(N, [x], [w], kd_eqs=[x.diff(t) - w], **constraint)
     if formed:
         km.kanes_equations([me.Particle("p", P, m)], [(P, force * N.x)] if force is not None else [])
     return km
@@ -244,6 +248,8 @@ CASES = {
     "kane-equations-not-formed": (lambda: lc.compile(_kane_slider(formed=False)), "kanes_equations"),
     "kane-specified-function": (lambda: lc.compile(_kane_slider(force=me_function("F"))), "F(t)"),
     "kane-method-not-applicable": (_simulate("kane", q0=[0.0], method="gauss2", dt=0.1), "`gauss2`"),
+    "kane-radau-projection": (_simulate("kane_across", q0=[0.0], method="radau", projection=True),
+                              "`radau` does not project"),
     "kane-initial-velocities": (_simulate("kane", q0=[0.0], qd0=[1.0]), "`u0`"),
     "lagrange-initial-speeds": (_simulate("pendulum", u0=[1.0]), "'simple_pendulum' is a Lagrange model"),
     "kane-event-unknown-symbol": (lambda: lc.compile(_kane_slider(), events=[lc.Event("wall", x - sp.Symbol("w0"))]),

@@ -72,14 +72,20 @@ def kernel_cost(model, repeats: int = 5, calls: int = 200_000) -> dict:
 
 
 def applicable_methods(model) -> list:
-    """The registry's methods that `model` accepts (separable-only, holonomic-separable-only and unconstrained-only
-    checked)."""
+    """The registry's methods that `model` accepts: those `lagcomp.integrate.options.check_method` does not refuse
+    (separable-only, holonomic-separable-only, unconstrained-only, a Taylor kernel, and a Kane model's state (q, u))."""
+    from lagcomp.errors import OptionError
     from lagcomp.integrate.methods import METHODS
+    from lagcomp.integrate.options import check_method
 
-    return [m for m in METHODS.values()
-            if not (m.separable_only and not model.separable) and not (m.unconstrained_only and model.k)
-            and not (m.holonomic_separable_only and not model.holonomic_separable)
-            and not (m.name == "taylor" and hasattr(model.kernels, "TAYLOR_REFUSED"))]
+    accepted = []
+    for m in METHODS.values():
+        try:
+            check_method(model, m)
+        except OptionError:
+            continue
+        accepted.append(m)
+    return accepted
 
 
 def method_speed(model, method, repeats: int = 5, dt: float = 1e-3, steps: int = 100_000, rtol: float = 1e-10) -> dict:

@@ -16,21 +16,25 @@ A `KaneModel` is a `lagcomp.Model` with these differences:
   (u0 by speed name order, `speeds`); it must satisfy the configuration
   constraints Φ = 0 and velocity constraints Ψ = 0 to 1e-9 (the equations
   keep Ψ at its initial value), or be projected with ``project_initial=True``
-  (least change of q on Φ, then of u on Ψ).  Methods: dop853, dopri5 and rk4
-  (``projection=True`` projects after every step, the default for rk4);
-  the others need y = (q, q̇) and refuse with an OptionError.  No Baumgarte terms.
+  (least change of q on Φ, then of u on Ψ).  Methods: the Runge-Kutta ones
+  (dop853, dopri5, tsit5, bs3, rk4; ``projection=True`` projects after every
+  step, the default for rk4) and radau (stiff Kane models: Radau IIA with the
+  exact Jacobian ``rhs_jacobian`` of (q̇, u̇); it does not project, and refuses
+  ``projection=True``); the others need y = (q, q̇) and refuse with an
+  OptionError (`KANE_METHODS`).  No Baumgarte terms.
 - Events: ``compile(km, events=[lagcomp.Event(name, g, direction, terminal)])``
   with g in q(t), u(t), q̇ (through the kinematic equations), t and the
-  equations' parameters, located on the dense output of dop853/dopri5 as for
-  Lagrange models; in ``Solution.events`` an `EventRecord`'s ``qd`` holds u.
+  equations' parameters, located on the dense output of the adaptive methods as
+  for Lagrange models; in ``Solution.events`` an `EventRecord`'s ``qd`` holds u.
 - ``sweep(t_span, grid, q0, u0, ...)``: grids over coordinates, speeds (by
-  name) and parameters with dop853, dopri5 or rk4, through the same compiled
-  sweep loops as Lagrange models (not ``batched``).
+  name) and parameters with any method of `KANE_METHODS`, through the same
+  compiled sweep loops as Lagrange models (not ``batched``).
 - The `Solution` has ``q``, ``qd`` (q̇ = N(q, u) at each row), ``u`` and
   ``speeds``; ``y`` is (q, u).  ``energy`` is T + V where it can be formed
   (see `lagcomp.mechanics.kane.kane_energy`), else NaN; ``momenta`` are NaN.
   ``reactions`` holds the noncontributing forces of auxiliary speeds by name;
-  ``constraint_residual`` the largest |Φ|, |Ψ| over the steps.  In ``summary``,
+  ``constraint_residual`` the largest |Φ|, |Ψ| over the steps (radau, which
+  does not evaluate them as it steps: over the saved rows).  In ``summary``,
   ``qd_min``/``qd_max`` are the ranges of u.
 - ``first_order_form``: the `FirstOrderForm` compiled (None for a model from
   `lagcomp.load`), for linearization about steady motions; ``kanes_method``:
@@ -49,7 +53,7 @@ from lagcomp.errors import InitialConditionError, ModelError, OptionError
 from lagcomp.integrate.methods import METHODS
 from lagcomp.runtime import Model
 
-#: Methods that take any first-order state y (the Runge-Kutta tableaux); the others need y = (q, q̇).
+#: Methods that take any first-order state y (the Runge-Kutta tableaux and radau); the others need y = (q, q̇).
 KANE_METHODS = tuple(name for name, m in METHODS.items() if m.any_state)
 #: Options `compile(km, ...)` accepts for a KanesMethod.
 KANE_OPTIONS = ("name", "parameters", "defaults", "q0", "u0", "t_end", "description", "events")
@@ -175,7 +179,7 @@ class KaneKernels:
         except AttributeError:
             raise KaneKernelMissing(
                 f"{self._name!r} is a Kane model (state (q, u)): its module has no `{kernel}`, a kernel of Lagrange's "
-                "equations in (q, q̇). Kane models simulate and sweep with dop853, dopri5 or rk4; linearize them "
+                f"equations in (q, q̇). Kane models simulate and sweep with {', '.join(KANE_METHODS)}; linearize them "
                 "with lagcomp.analysis.linearize_steady (steady motions and equilibria, constraints included), or "
                 "use `model.first_order_form` and `model.rhs`."
             ) from None
@@ -296,7 +300,8 @@ class KaneModel(Model):
         return self._completed(solution)
 
     def _completed(self, solution):
-        """The Solution with q̇ from the kinematic equations, u by name and the auxiliary reactions."""
+        """The Solution with q̇ from the kinematic equations, u by name, the auxiliary reactions and, from a
+        method that does not evaluate the constraints as it steps (radau), their residual over the saved rows."""
         n, p = self.n, np.array([solution.params[k] for k in self.parameters], dtype=float)
         ts, u = solution.t, solution.qd
         y = np.ascontiguousarray(np.hstack([solution.q, u]))
@@ -307,14 +312,19 @@ class KaneModel(Model):
             values = np.full((ts.size, len(self.reaction_names)), np.nan)
             self.kernels.reactions_along(ts, y, p, values)
             reactions = {name: values[:, j].copy() for j, name in enumerate(self.reaction_names)}
-        return dataclasses.replace(solution, qd=qd, u=u, speeds=self.speeds, reactions=reactions)
+        residual = solution.constraint_residual
+        if self.residual_labels and "constraint_residual" not in METHODS[solution.method].kernels:
+            rows = [self.kernels.constraint_residual(t, row, p) for t, row in zip(ts.tolist(), y, strict=True)]
+            residual = float(np.max(rows, initial=residual))    # (NaN if a row's is)
+        return dataclasses.replace(solution, qd=qd, u=u, speeds=self.speeds, reactions=reactions,
+                                   constraint_residual=residual)
 
     def sweep(self, t_span, grid, q0=None, u0=None, **options):
         """Integrate every point of `grid` (see `lagcomp.Model.sweep`), the state being (q, u).
 
         Grid names are coordinates, speeds (initial u) and parameters; `q0`,
-        `u0` and `params` give what is not swept.  Methods dop853, dopri5 and
-        rk4, one trajectory per thread (no ``batched``); ``Sweep.final`` and
+        `u0` and `params` give what is not swept.  Methods of `KANE_METHODS`,
+        one trajectory per thread (no ``batched``); ``Sweep.final`` and
         ``dense`` hold (q, u), ``Sweep.speeds`` names the speeds.
         """
         from lagcomp.integrate.sweep import sweep

@@ -27,7 +27,7 @@ def symbolic_system(model, what: str):
         raise ModelError(
             f"{what} reads the Lagrangian (T, V, generalized forces) of a System; {model.name!r} is a Kane model, "
             "compiled from a KanesMethod's equations (state (q, u)), which has none. For a Kane model lagcomp "
-            "offers simulate and sweep (dop853, dopri5, rk4), rhs, energy (T + V where the loads have a "
+            "offers simulate and sweep (the Runge-Kutta methods and radau), rhs, energy (T + V where the loads have a "
             "potential; watch Solution.energy for conservation), constraint_residuals, reactions, and "
             "linearize_steady / stability_sweep about steady motions. For this analysis, build the model as a "
             "lagcomp.System or sympy LagrangesMethod (possible when its velocities are the time derivatives of "

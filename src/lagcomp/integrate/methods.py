@@ -129,9 +129,11 @@ class Method:
 
     @property
     def any_state(self) -> bool:
-        """Whether the method integrates y' = f(t, y) for any first-order state y (a Runge-Kutta tableau),
-        e.g. a Kane model's (q, u), rather than needing the (q, q̇) of Lagrange's equations."""
-        return isinstance(self.tableau, Tableau)
+        """Whether the method integrates y' = f(t, y) for any first-order state y, e.g. a Kane model's (q, u),
+        rather than needing the (q, q̇) of Lagrange's equations: the explicit Runge-Kutta tableaux, which
+        take ``rhs``, and Radau IIA, which takes ``rhs`` and its Jacobian ``rhs_jacobian`` (∂f/∂y, emitted
+        for Kane modules too)."""
+        return isinstance(self.tableau, Tableau | RadauIIA)
 
 
 def _embedded(name: str, tableau: Tableau, summary: str) -> Method:

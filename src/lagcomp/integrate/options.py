@@ -270,6 +270,10 @@ def run_options(model, t_span, *, method="dop853", dt=None, rtol=None, atol=None
     if m.holonomic_separable_only and projection:
         raise OptionError(f"`{m.name}` holds the constraints to round-off at every step without projection; projecting "
                           "would break its symplectic structure. Leave `projection` unset.")
+    if projection and model.residual_labels and "project" not in m.kernels:     # radau on a Kane model
+        raise OptionError(f"`{m.name}` does not project onto the constraints; {model.name!r} keeps them as well as "
+                          "its integration is accurate (`Solution.constraint_residual` reports the drift). Leave "
+                          f"`projection` unset, or project with {method_names(lambda m: 'project' in m.kernels)}.")
     common = dict(
         method=m, t0=t0, t1=t1, memory_limit=memory_limit,
         save_every=count(save_every, "save_every"), max_steps=count(max_steps, "max_steps"),

@@ -300,7 +300,7 @@ def _event_records(model, event_parts) -> dict:
     records = {}
     for index, event in enumerate(model.events):
         hit = i_all == index
-        records[event.name] = EventRecord(t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:2 * n])
+        records[event.name] = EventRecord(t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:model.state_size])
     return records
 
 
@@ -309,10 +309,10 @@ def _solution(model, p, recorder, run, throw) -> Solution:
     status, run_state = run["status"], run["state"]
     t_failure = None
     message = Status(status).message
-    stiff_at, kane = run_state.stiff_at, getattr(model, "speeds", None) is not None
+    stiff_at = run_state.stiff_at
     if stiff_at is not None and status in ADVISED_FAILURES:
         message = f"{message} The steps were limited by stability from t = {stiff_at[1]:.6g}: the problem is " \
-                  f"stiff. {stiffness_advice(kane)}"
+                  f"stiff. {stiffness_advice()}"
     if status < 0 or status == Status.INTERRUPTED:
         state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, run_state.y))  # (q, q̇), or (q, u)
         last = "state" if status == Status.RESIDUAL_EXCEEDED else "last good state"
@@ -336,7 +336,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         events=run["events"],
     )
     # simulate -> Model.simulate -> the user's call
-    warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, kane, stacklevel=4)
+    warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4)
     if throw and status < 0:
         raise IntegrationError(message, solution)
     return solution

@@ -3,8 +3,7 @@
 The embedded pairs test their steps for stiffness as they go (Hairer's test: "Stiffness detection" in
 `lagcomp.integrate.drivers.embedded`); `lagcomp.integrate.simulate` calls `warn_if_stiff` once the run has
 ended, `lagcomp.integrate.sweep` `warn_if_sweep_stiff` once the sweep has.  The advice names the method to
-use instead: ``radau`` for a model of Lagrange's equations (a constrained one it solves as a DAE); a Kane
-model has no implicit method yet, so the advice there is to take the fast motion out of the model.
+use instead: ``radau``, which takes every model (Lagrange's equations, a constrained one as a DAE, and Kane's).
 """
 
 from __future__ import annotations
@@ -20,17 +19,13 @@ from lagcomp.integrate.status import Status
 ADVISED_FAILURES = (Status.MAX_STEPS, Status.STEP_TOO_SMALL)
 
 
-def stiffness_advice(kane: bool) -> str:
-    """Which method to use for a stiff system, in one or two sentences (`kane`: a Kane model, state (q, u))."""
-    if not kane:
-        return ('Use method="radau" (Radau IIA, implicit, for stiff systems; constraints are solved with the '
-                "motion, without projection): its steps follow the accuracy asked for, not the fast decay.")
-    return ('method="radau", the implicit method for stiff systems, does not take Kane models (state (q, u)) '
-            "yet. If a stiff spring or a large gain makes the system stiff, a constraint in its place removes "
-            "the fast motion; loosening rtol/atol does not help: the step is set by stability.")
+def stiffness_advice() -> str:
+    """Which method to use for a stiff system, in one sentence."""
+    return ('Use method="radau" (Radau IIA, implicit, for stiff systems; constraints are solved with the '
+            "motion, without projection): its steps follow the accuracy asked for, not the fast decay.")
 
 
-def warn_if_stiff(method: str, stiff_at, nsteps: int, nfev: int, kane: bool, stacklevel: int) -> None:
+def warn_if_stiff(method: str, stiff_at, nsteps: int, nfev: int, stacklevel: int) -> None:
     """Warn once if the run was declared stiff; `stiff_at` is (step number, time) from
     `lagcomp.integrate.drivers.run_state.RunState.stiff_at`, or None."""
     if stiff_at is None:
@@ -40,11 +35,11 @@ def warn_if_stiff(method: str, stiff_at, nsteps: int, nfev: int, kane: bool, sta
         f"The problem looks stiff for {method}: from t = {t:.6g} (step {step:,}) its steps were limited by the "
         f"method's stability, not by its accuracy (Hairer's stiffness test, an estimate: at rtol of 1e-3 or "
         f"looser an oscillating system that is not stiff can trip it too); the run took {nsteps:,} steps and "
-        f"{nfev:,} evaluations of the equations. {stiffness_advice(kane)}",
+        f"{nfev:,} evaluations of the equations. {stiffness_advice()}",
         StiffnessWarning, stacklevel=stacklevel + 1)
 
 
-def warn_if_sweep_stiff(method: str, stiff_steps: np.ndarray, kane: bool, stacklevel: int) -> None:
+def warn_if_sweep_stiff(method: str, stiff_steps: np.ndarray, stacklevel: int) -> None:
     """Warn once if any trajectory of a sweep was declared stiff; `stiff_steps` holds, per trajectory, the
     step at which it was (0: not)."""
     stiff = int(np.count_nonzero(stiff_steps))
@@ -54,5 +49,5 @@ def warn_if_sweep_stiff(method: str, stiff_steps: np.ndarray, kane: bool, stackl
         f"The problem looks stiff for {method} in {stiff:,} of the sweep's {stiff_steps.size:,} trajectories: "
         f"their steps were limited by the method's stability, not by its accuracy (Hairer's stiffness test, an "
         f"estimate). "
-        f"{stiffness_advice(kane)}",
+        f"{stiffness_advice()}",
         StiffnessWarning, stacklevel=stacklevel + 1)

@@ -333,8 +333,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         done = _run_on_dask(client, spec or _worker_spec(model), task, Y0, P, out, progress)
     statuses = out["status"]
     counts = out["counts"]
-    kane = getattr(model, "speeds", None) is not None
-    warn_if_sweep_stiff(m.name, counts[:, 3], kane, stacklevel=3)     # (column 3: embedded pairs only)
+    warn_if_sweep_stiff(m.name, counts[:, 3], stacklevel=3)     # (column 3: embedded pairs only)
     e0, deviation = out["energy"][:, 0], out["energy"][:, 1]
     relative = np.where(e0 != 0, deviation / np.where(e0 != 0, np.abs(e0), 1.0), deviation)
     shaped = lambda a: a.reshape(*shape, *a.shape[1:])  # noqa: E731
@@ -385,7 +384,7 @@ def _batched_driver(model, m) -> str:
     if getattr(model, "speeds", None) is not None:
         raise OptionError(f"`batched=True` needs the SIMD kernels of Lagrange's equations; {model.name!r} is a Kane "
                           "model (state (q, u)) without them: drop `batched` (its sweep runs one trajectory per "
-                          "thread with dop853, dopri5 or rk4).")
+                          "thread with any method it takes).")
     if m.name not in BATCHED:
         raise OptionError(f"`batched=True` is available for {sorted(BATCHED)}; not yet for {m.name}.")
     if m.name == "taylor":
