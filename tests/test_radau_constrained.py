@@ -154,6 +154,8 @@ def test_projection_baumgarte_and_too_tight_tolerances_are_refused(four_bar):
         four_bar.simulate((0.0, 1.0), method="radau", projection=True)
     with pytest.raises(OptionError, match="baumgarte"):
         four_bar.simulate((0.0, 1.0), method="radau", baumgarte=(10.0, 100.0))
+    with pytest.raises(OptionError, match="`max_residual` stops a run"):
+        four_bar.simulate((0.0, 1.0), method="radau", max_residual=1e-9)
     with pytest.raises(OptionError, match="rtol ≥ 1e-10"):
         four_bar.simulate((0.0, 1.0), method="radau", rtol=1e-11)
 

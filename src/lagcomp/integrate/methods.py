@@ -71,6 +71,9 @@ class Method:
     #: What the driver takes instead of `kernels` for a constrained Lagrange model, which it then solves as an
     #: index-2 DAE (`lagcomp.integrate.dae`); empty: such models are refused (`unconstrained_only`) or projected.
     dae_kernels: tuple[str, ...] = ()
+    #: Whether the driver evaluates the constraint residual after each step, so that `max_residual` can stop it
+    #: (radau does not: it solves the constraints, or a Kane model's are eliminated).
+    checks_residual: bool = True
     #: The library sweep loop (``"module:function"``) that runs this method over many trajectories.
     sweep: str | None = None
     #: The library function (``"module:function"``) giving, for a state of N components, the arrays a run of
@@ -186,7 +189,7 @@ METHODS = {
                "Radau IIA order 5 (Hairer-Wanner's RADAU5), implicit, adaptive, for stiff systems, with the "
                "model's exact Jacobian; constrained systems as index-2 DAEs, constraints held without projection",
                kernels=("rhs", "rhs_jacobian", "event_values"), carry="lagcomp.integrate.drivers.radau:new_carry",
-               dae_kernels=("dae_residual", "dae_jacobian", "event_values"),
+               dae_kernels=("dae_residual", "dae_jacobian", "event_values"), checks_residual=False,
                sweep="lagcomp.integrate.drivers.radau_sweep:sweep_radau"),
         Method("taylor", 20, True, "lagcomp.integrate.drivers.taylor:taylor_run", None,
                "Taylor series to order ceil(-ln(tol)/2 + 1) (20 at machine precision), adaptive, dense "

@@ -113,6 +113,10 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     m, t0, t1, t_eval = options.method, options.t0, options.t1, options.t_eval
     p = model.parameter_vector(params, baumgarte)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
+    if max_residual is not None and not m.checks_residual:
+        raise OptionError(f"`max_residual` stops a run whose constraint residual drifts past it; `{m.name}` does not "
+                          "evaluate the residual during the run (it solves the constraints with the motion). "
+                          "Leave it unset and read `Solution.constraint_residual` after the run.")
     bound = math.inf if max_residual is None else positive(max_residual, "max_residual")
     residual_max = np.array([0.0, bound])  # running maximum, and the bound the drivers stop at
     width = y0.size  # the columns of the state that are (q, q̇): all but a DAE's algebraic ones
