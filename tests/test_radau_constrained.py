@@ -190,7 +190,8 @@ def test_a_sweep_is_bitwise_the_runs_it_sweeps(four_bar):
 def test_random_constrained_systems_agree_with_dop853_and_projection(cache_dir, seed, extra):
     """Random mechanisms (tests/random_systems.py) with their holonomic constraints and a random nonholonomic
     and/or time-dependent one: radau's DAE against dop853 with projection, over [0, 1] from the same projected
-    start (measured: states within DIFF, residual at the steps RESID)."""
+    start (measured on the three drawn: states within 3.8e-12 to 6.7e-12 of 1 + max|y|, residual at the steps
+    4.6e-15 to 1.7e-13)."""
     mech, rng = random_mechanism(seed), np.random.default_rng(seed)
     constraints = list(mech.system.constraints)
     for kind in extra:
@@ -207,6 +208,5 @@ def test_random_constrained_systems_agree_with_dop853_and_projection(cache_dir, 
     steps = model.simulate((0.0, 1.0), **RADAU, **start)
     assert sol.success and steps.success, (mech.description, sol.message)
     scale = 1.0 + np.max(np.abs(ref.y))
-    print("MEASURED", mech.description, extra, np.max(np.abs(sol.y - ref.y)) / scale, steps.constraint_residual)
-    assert np.max(np.abs(sol.y - ref.y)) <= 1e-8 * scale, (mech.description, extra)
+    assert np.max(np.abs(sol.y - ref.y)) <= 1e-10 * scale, (mech.description, extra)
     assert steps.constraint_residual <= 1e-10, (mech.description, extra)
