@@ -313,7 +313,7 @@ class KaneModel(Model):
             self.kernels.reactions_along(ts, y, p, values)
             reactions = {name: values[:, j].copy() for j, name in enumerate(self.reaction_names)}
         residual = solution.constraint_residual
-        if self.residual_labels and "constraint_residual" not in METHODS[solution.method].kernels:
+        if self.residual_labels and not METHODS[solution.method].checks_residual:
             rows = [self.kernels.constraint_residual(t, row, p) for t, row in zip(ts.tolist(), y, strict=True)]
             residual = float(np.max(rows, initial=residual))    # (NaN if a row's is)
         return dataclasses.replace(solution, qd=qd, u=u, speeds=self.speeds, reactions=reactions,
