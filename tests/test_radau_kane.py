@@ -144,6 +144,7 @@ def bicycle(whipple_bicycle):
     return model, _on_constraints(model, [0.0, 0.0, 0.0], [0.5, 5.0 / kane_models.RAD_REAR, 0.0])
 
 
+@pytest.mark.slow  # numba compiles the bicycle's rhs_jacobian for it: ~23 s on 2 cores, a tenth of the suite's growth
 def test_whipple_bicycle_agrees_with_dop853(bicycle):
     model, y0 = bicycle
     start = dict(q0=y0[:4], u0=y0[4:])
