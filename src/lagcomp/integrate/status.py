@@ -65,7 +65,8 @@ _MESSAGES = {
                                       "reduce the step `dt`.",
     Status.NEWTON_FAILED: "The Newton iteration of the stage equations (radau) did not converge even at the "
                           "smallest step: the Jacobian may not match the right-hand side, or the solution is "
-                          "singular here (check the model near this state, or loosen rtol/atol).",
+                          "singular here (check the model near this state, or loosen rtol/atol; with constraints, "
+                          "their rounding noise at large coordinates can stall it at tight tolerances).",
     Status.ITERATION_MATRIX_SINGULAR: "The iteration matrix γ/h·M − J of radau (M = I; for constraints, the DAE's "
                                       "diag(I, 0)) stayed singular down to the smallest step (a degenerate Jacobian "
                                       "J, or constraints that are dependent here): check the model near this "

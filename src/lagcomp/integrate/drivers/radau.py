@@ -525,12 +525,13 @@ def radau_run(rhs, rhs_jacobian, event_values,
         # Trial loop.
         rejected = False
         trouble = _ERROR
-        while True:
+        newton_failed = False   # a DAE's iteration matrix turns singular to working precision at tiny h (pivots ~h²):
+        while True:             # after a Newton failure that is the failure to report, not the matrix
             t_new = t + h_abs
             if t_new > t_end:  # noqa: PLR1730 (a NaN t_new stays NaN: the test below ends the run)
                 t_new = t_end
             if not (h_abs >= min_step and t_new < np.inf):
-                if trouble == _NEWTON:
+                if trouble == _NEWTON or (trouble == _SINGULAR and newton_failed):
                     return Status.NEWTON_FAILED, n_saved
                 if trouble == _SINGULAR:
                     return Status.ITERATION_MATRIX_SINGULAR, n_saved
@@ -578,6 +579,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
                     if status > 0:
                         return Status.RHS_FAILED, n_saved
                     trouble = _NONFINITE if status < 0 else _NEWTON
+                    newton_failed = newton_failed or (trouble == _NEWTON and not converged)
                 if converged or jac_current:
                     break
                 status = _jacobian(rhs_jacobian, t, y, p, jacobian)
