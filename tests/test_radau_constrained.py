@@ -44,8 +44,8 @@ def four_bar_run(four_bar):
 def test_four_bar_holds_its_loop_for_thirty_seconds_without_projection(four_bar, four_bar_run):
     """The issue's target: residual |Φ|, |Λ q̇| ≤ 1e-10 at every accepted step of a 30 s run, no projection.
 
-    Measured at rtol = atol = 1e-10 (75,232 steps): residual 2.6e-13, relative energy drift 1.3e-11, t(θ1(30))
-    from the energy quadrature 30 s − 2.7e-10 s (dop853 with projection: −4.1e-8 s at the same tolerances).
+    Measured at rtol = atol = 1e-10 (76,091 steps): residual 2.6e-13, relative energy drift 1.9e-11, t(θ1(30))
+    from the energy quadrature 30 s − 4.1e-10 s (dop853 with projection: −4.1e-8 s at the same tolerances).
     """
     sol = four_bar_run
     assert sol.projected_initial_state is None
@@ -78,14 +78,14 @@ def test_four_bar_agrees_with_dop853_and_projection(four_bar):
     ref = four_bar.simulate((0.0, 5.0), t_eval=ts, projection=True, **TIGHT)
     sol = four_bar.simulate((0.0, 5.0), t_eval=ts, **RADAU)
     assert sol.success and ref.success
-    np.testing.assert_allclose(sol.y, ref.y, rtol=0, atol=3e-8)  # measured 1.7e-9
+    np.testing.assert_allclose(sol.y, ref.y, rtol=0, atol=3e-8)  # measured 9.0e-10
 
 
 @pytest.mark.parametrize("V0, omega", [(1.0, 1.0), (0.5, -2.0)])
 def test_free_axle_follows_its_closed_form(compiled, V0, omega):
     """Two nonholonomic rows and a holonomic one (as tests/test_reactions.py checks dop853).
 
-    Measured: coordinates 5.4e-12, 8.0e-12 of 1 + max|q_j|; reactions 1.2e-11, 2.7e-11 N; residual at the
+    Measured: coordinates 5.3e-12, 8.1e-12 of 1 + max|q_j|; reactions 1.2e-11, 2.7e-11 N; residual at the
     `t_eval` points (dense output between steps) 2.4e-11, 2.2e-11, at the steps 3.5e-14, 3.5e-14.
     """
     model = compiled("free_axle", V0=V0, omega=omega)
@@ -101,7 +101,7 @@ def test_free_axle_follows_its_closed_form(compiled, V0, omega):
 
 
 def test_spherical_pendulum_in_cartesian_coordinates_against_angles(compiled):
-    """Measured: states 8.4e-11 from the angle model's (dop853, 1e-12), tension 1.3e-11 relative to Newton's,
+    """Measured: states 6.6e-11 from the angle model's (dop853, 1e-12), tension 1.4e-11 relative to Newton's,
     residual 4.8e-11 at the `t_eval` points."""
     cartesian, angles = compiled("spherical_pendulum_cartesian"), compiled("spherical_pendulum")
     d = cartesian.system.defaults
@@ -121,7 +121,7 @@ def test_spherical_pendulum_in_cartesian_coordinates_against_angles(compiled):
 
 def test_driven_hoop_follows_the_imposed_angle(compiled):
     """A time-dependent constraint φ − (Ωt + ε sin 2t) = 0: φ(t) exactly, θ(t) as with φ eliminated (measured:
-    8.6e-13 and 7.6e-11)."""
+    6.5e-13 and 7.2e-11)."""
     model = compiled("hoop_bead_reaction")
     d = model.system.defaults
     W, eps = d["Omega"], d["epsilon"]
@@ -135,7 +135,7 @@ def test_driven_hoop_follows_the_imposed_angle(compiled):
 
 def test_events_are_located_on_the_dae_solution(cache_dir):
     """Crossings of x = 0 by the Cartesian pendulum, located on radau's dense output of the DAE's (q, v),
-    against dop853 with projection at 1e-12 on the same model (measured: 11 crossings, times within 1.8e-12)."""
+    against dop853 with projection at 1e-12 on the same model (measured: 11 crossings, times within 2.2e-12)."""
     system = spherical_pendulum_cartesian()
     x = system.coordinates[0]
     model = lc.compile(dataclasses.replace(system, events=(lc.Event("crossing", x),)), cache_dir=cache_dir)

@@ -24,7 +24,7 @@ takes up to round-off (tests/test_radau_driver.py compares them):
    rejection and `MAX_FACTOR` after an accepted step.  After an accepted step the step is kept
    (and with it the LU factors) when the factor is below 1.2 and J is not re-evaluated; J is
    re-evaluated at the new state when the Newton iteration took more than 2 iterations at a rate
-   above 1e-3, else the old J is kept (and marked not current).
+   above `JACOBIAN_RATE` (`DAE_JACOBIAN_RATE` for a DAE), else the old J is kept (and marked not current).
 5. Dense output: the collocation polynomial y + Σ_k Q_k x^(k+1), Q = Pᵀ Z (`events.DENSE_POWERS`
    with rows Q/h): ``t_eval`` points, events (located on it by `events.record_events`, as the explicit
    drivers do) and the next step's starting values.
@@ -80,8 +80,20 @@ linkage over 30 s, whose crank angle reaches 360 rad: without that rule rtol 1e-
 (μ's increments stalled at 1e-3 of its scale atol/h, θ1 = 257), with it the run ends with the constraints
 at 4.6e-13; below rtol 1e-10 the noise wins anyway (`lagcomp.integrate.dae.DAE_RTOL_MIN`).
 Orders (HNW II, sec. VII.4; Hairer, Lubich & Roche 1989): 5 for the differential components, 3 for
-the algebraic ones (tests/test_radau_dae.py).  J is re-evaluated at nearly every step on these problems
-(the Newton iteration takes 3 iterations at rates above `JACOBIAN_RATE`).  Loops over the components are
+the algebraic ones (tests/test_radau_dae.py).  The Newton iteration takes ~3 iterations per step on these problems
+however old J is: on the pendulum of tests/test_radau_dae.py at rtol 1e-6, 1e-8, 1e-10 the first increment is 5,
+5, 2 error scales (the extrapolated polynomial's error) against Newton tolerances of 1e-3, 1e-4, 1e-5 of them, and
+the first rate 0.036, 0.012, 0.004 (geometric means) with J current at ~95% of the steps: J's change across the
+stages sets the rate, not J's age.  So a DAE's J is re-evaluated only above the rate `DAE_JACOBIAN_RATE` = 1e-2
+(HNW raise RADAU5's THET for an expensive J).  Measured against 1e-3 (same-process A/B, 7 rounds, the pendulum and
+bench/bench_loop.py's four-bar linkage): at rtol 1e-10, J evaluations 16,871 → 5,324 and 67,132 → 32,542, steps
++0.6% and +1.1%, iterations per step 2.96 → 3.00 and 3.02 → 3.07, time ×0.67 and ×0.70, error ×1.3 and ×1.6 (at
+equal error, interpolated along rtol 1e-8 .. 1e-10: ×0.71 and ×0.77 the time); at 1e-8 time ×0.82 and ×0.77
+(×0.84, ×0.82 at equal error); at 1e-6 the same.  What did not pay: rates 2e-2, 3e-2 and 0.1 (more iterations and
+error: 0.1 takes 4 per step), the algebraic components started at their values at y (+1 iteration per step,
+×1.2-1.4 the time), RADAU5's convergence factor carried from step to step (it never accepts the first iteration
+here: that increment is too large), a Newton tolerance 3 times looser for DAEs (error ×3-9 for a further 2-13% of
+the time).  Loops over the components are
 split at d, so that for d = N (an ODE) every operation and its order are those of the ODE driver before
 the DAE form: the same bits, and the same time (same-process A/B against the ODE-only driver on
 bench_radau's problems: +1.0% on average over 15 processes, within their ±6% spread).
@@ -158,6 +170,8 @@ MIN_FACTOR, MAX_FACTOR = 0.2, 10.0
 KEEP_STEP_BELOW = 1.2
 #: J is evaluated again after a step whose Newton iteration took more than 2 iterations at a rate above this.
 JACOBIAN_RATE = 1e-3
+#: The same for a DAE (differential < N), whose rate J does not set (module docstring, "DAEs").
+DAE_JACOBIAN_RATE = 1e-2
 #: A DAE's Newton iteration whose increments stop shrinking below this (in the norm of the error test) has reached
 #: the rounding noise of its constraints: its stages are taken as converged (module docstring, "DAEs").
 NEWTON_NOISE = 0.03
@@ -636,7 +650,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
             counters[NREJECTED] += 1
 
         # The next step size; the LU factors are kept with an unchanged step.
-        recompute_jacobian = iterations > 2 and rate > JACOBIAN_RATE
+        recompute_jacobian = iterations > 2 and rate > (JACOBIAN_RATE if differential == n else DAE_JACOBIAN_RATE)
         factor = min(MAX_FACTOR, safety * _predicted_factor(h_abs, h_proposed_old, err_norm, err_old))
         if not recompute_jacobian and factor < KEEP_STEP_BELOW:
             factor = 1.0
