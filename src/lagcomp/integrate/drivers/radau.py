@@ -92,8 +92,8 @@ equal error, interpolated along rtol 1e-8 .. 1e-10: ×0.71 and ×0.77 the time);
 (×0.84, ×0.82 at equal error); at 1e-6 the same.  What did not pay: rates 2e-2, 3e-2 and 0.1 (more iterations and
 error: 0.1 takes 4 per step), the algebraic components started at their values at y (+1 iteration per step,
 ×1.2-1.4 the time), RADAU5's convergence factor carried from step to step (it never accepts the first iteration
-here: that increment is too large), a Newton tolerance 3 times looser for DAEs (error ×3-9 for a further 2-13% of
-the time).  Loops over the components are
+here: that increment is too large), a Newton tolerance 3 times looser for DAEs (error up to ×9 for 1-13% less
+time).  Loops over the components are
 split at d, so that for d = N (an ODE) every operation and its order are those of the ODE driver before
 the DAE form: the same bits, and the same time (same-process A/B against the ODE-only driver on
 bench_radau's problems: +1.0% on average over 15 processes, within their ±6% spread).
