@@ -76,9 +76,8 @@ def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions,
     return advance, (len(events) + 1 if options.t_eval is not None else None)
 
 
-def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions, differential: int):
-    """The chunk call of a fixed-step method, and the rows its output will need (`differential`: unused, the
-    whole state is)."""
+def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions):
+    """The chunk call of a fixed-step method, and the rows its output will need."""
     drivers, coefficients = _bound_drivers(options.method, kernels), options.driver_arguments()
     t0, t1, dt, n_steps = options.t0, options.t1, options.dt, options.n_steps
 
@@ -128,8 +127,11 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         state, differential = RunState(start, t0), differential_size(model)
     else:
         state, differential = RunState(y0, t0), y0.size
-    make = _adaptive_driver if options.adaptive else _fixed_step_driver
-    advance, rows = make(model.kernels, state, p, (options.projecting, residual_max), options, differential)
+    run_args = (options.projecting, residual_max)
+    if options.adaptive:
+        advance, rows = _adaptive_driver(model.kernels, state, p, run_args, options, differential)
+    else:
+        advance, rows = _fixed_step_driver(model.kernels, state, p, run_args, options)
 
     recorder = Recorder(model, p, record, progress)
     if t_eval is None or t_eval[0] == t0:
