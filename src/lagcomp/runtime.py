@@ -328,6 +328,12 @@ class Model:
         origin = "cache" if self.from_cache else "fresh build"
         return f"Model({self.name!r}, n={self.n}, parameters={self.parameters}, from {origin}: {self.source_path})"
 
+    def _repr_html_(self) -> str:
+        """A compact HTML summary for Jupyter (`lagcomp.notebook.model_html`)."""
+        from lagcomp.notebook import model_html
+
+        return model_html(self)
+
     # -- inputs -------------------------------------------------------------------
 
     def parameter_vector(self, params: dict | None = None, baumgarte=(0.0, 0.0)) -> np.ndarray:

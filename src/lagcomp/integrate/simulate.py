@@ -339,7 +339,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         params=dict(zip(model.parameters, p.tolist())),
         reactions=reactions, constraint_residual=max(run["residual_max"], residual),
         projected_initial_state=ys[0].copy() if run["projected"] else None,
-        events=run["events"],
+        events=run["events"], model_name=model.name,
     )
     # simulate -> Model.simulate -> the user's call
     warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4)

@@ -85,6 +85,8 @@ class Solution:
         are `speeds`; `qd` then holds q̇ from the kinematic equations.
     speeds : tuple of str
         Names of the columns of `u` (empty for Lagrange models).
+    model_name : str
+        Name of the model that ran ("" for a Solution built by hand).
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
@@ -118,6 +120,7 @@ class Solution:
     speeds: tuple = ()
     njev: int = 0
     nlu: int = 0
+    model_name: str = ""
 
     @property
     def success(self) -> bool:
@@ -179,6 +182,40 @@ class Solution:
             **{f"event_{name}_{part}": getattr(record, part)
                for name, record in self.events.items() for part in ("t", "q", "qd")},
         }
+
+    def to_xarray(self):
+        """The run as an ``xarray.Dataset`` along the dimension (and coordinate) ``t``, for notebooks.
+
+        Data variables, each of shape (m,) along ``t``: one per coordinate (its name), one per velocity
+        (``<coordinate>_dot``, q̇; for a Kane model from its kinematic equations), a Kane model's speeds
+        (their names), ``energy`` (T + V), ``energy_function`` (h, only where it differs from T + V) and
+        ``reaction_<constraint>`` for each constraint's multiplier (a Kane model's auxiliary reactions by
+        name).  Each variable's ``attrs["role"]`` says which it is.  Each event ``<name>`` has its own
+        dimension ``event_<name>`` (its occurrences): ``event_<name>_t`` and ``event_<name>_state``
+        (occurrences × ``state``, the coordinates then the velocities, or the speeds of a Kane model).
+
+        ``attrs``: ``model`` (its name), ``method``, ``status``, ``message``, ``nfev``, ``nsteps``,
+        ``nrejected``, ``njev``, ``nlu``, ``constraint_residual``, ``t_failure`` (failed runs only),
+        ``record`` and one ``param_<name>`` per parameter value.  lagcomp models carry no units, so
+        the Dataset has none.
+
+        A ``record="summary"`` run kept only its first and last rows: the Dataset holds those two rows
+        (``attrs["record"] == "summary"``) and the summary's row count and energy errors as
+        ``summary_rows``, ``summary_energy_error`` and ``summary_energy_function_error``.
+
+        The values are the Solution's arrays themselves (bit for bit).  A name given twice (a coordinate
+        named ``x_dot`` beside one named ``x``, or one named ``t``) is a ValueError: use `to_dict` then.
+        Needs xarray (``pip install 'lagcomp[xarray]'``).
+        """
+        from lagcomp.notebook import solution_dataset
+
+        return solution_dataset(self)
+
+    def _repr_html_(self) -> str:
+        """A compact HTML summary for Jupyter (`lagcomp.notebook.solution_html`)."""
+        from lagcomp.notebook import solution_html
+
+        return solution_html(self)
 
     def save_npz(self, path: str | os.PathLike) -> None:
         """Write `to_dict()` to a compressed .npz file."""
