@@ -98,6 +98,7 @@ def test_kane_solution_has_speeds_velocities_and_reactions(cache_dir):
     assert _same_bits(ds["q_dot"].values, sol.qd[:, 0])  # q̇ = u / l from the kinematic equation
     assert _same_bits(ds["u"].values, sol.u[:, 0]) and ds["u"].attrs["role"] == "speed"
     assert _same_bits(ds["reaction_R"].values, sol.reactions["R"])
+    assert ds.attrs["model"] == "notebook_kane_pendulum"
     assert _same_bits(ds["energy"].values, sol.energy)
     page = model._repr_html_()
     assert "KaneModel" in page and "<code>u</code>" in page and "<code>R</code>" in page

@@ -137,7 +137,11 @@ def model_html(model) -> str:
 
 
 def solution_html(solution) -> str:
-    """A Solution as an HTML table: how the run ended, its counters, drifts and first and last states."""
+    """A Solution as an HTML table: how the run ended, its counters, drifts and first and last states.
+
+    The drifts come from `Solution.summary`: for a kept trajectory, reading it evaluates the energies on first
+    read (numba compiles the ``observables`` kernel then, 0.4 s for a double pendulum), once.
+    """
     t = solution.t
     counters = ", ".join(f"{name} {getattr(solution, name)}" for name in ("nsteps", "nfev", "nrejected", "njev", "nlu"))
     rows = [("method", f"<code>{_text(solution.method)}</code>"),
