@@ -180,6 +180,12 @@ class Solution:
                for name, record in self.events.items() for part in ("t", "q", "qd")},
         }
 
+    def animate(self, points: dict, **options):
+        """An animation of named points along this run: `lagcomp.animation.animate` (matplotlib)."""
+        from lagcomp.animation import animate
+
+        return animate(self, points, **options)
+
     def save_npz(self, path: str | os.PathLike) -> None:
         """Write `to_dict()` to a compressed .npz file."""
         np.savez_compressed(path, **self.to_dict())
