@@ -148,3 +148,35 @@ def test_without_matplotlib_the_message_says_how_to_install(double_run, monkeypa
     monkeypatch.setitem(sys.modules, "matplotlib.animation", None)
     with pytest.raises(ImportError, match=r"pip install 'lagcomp\[plots\]'"):
         lc.animate(double_run, {"bob": BOB1})
+
+
+def test_example_drawings_put_the_bobs_on_their_rods(compiled):
+    from lagcomp.animation import EXAMPLE_DRAWINGS, point_positions
+
+    chain = EXAMPLE_DRAWINGS["n_link_pendulum"](("theta1", "theta2", "theta3"))
+    assert chain["links"] == [("origin", "bob1"), ("bob1", "bob2"), ("bob2", "bob3")] and chain["trace"] == ["bob3"]
+    model = compiled("spherical_pendulum")
+    sol = model.simulate((0, 1), t_eval=np.linspace(0, 1, 11))
+    drawing = EXAMPLE_DRAWINGS["spherical_pendulum"](model.coordinates)
+    bob = point_positions(sol, drawing["points"], sol.t)["bob"]
+    assert bob.shape == (11, 3) and np.max(np.abs(np.linalg.norm(bob, axis=1) - sol.params["l"])) < 1e-14
+
+
+def test_cli_animates_an_example(cache_dir, tmp_path, capsys):
+    from lagcomp.cli import main
+
+    gif = tmp_path / "double.gif"
+    args = ["--cache-dir", str(cache_dir), "animate", "double_pendulum", "-o", str(gif), "--t-end", "1", "--fps", "4"]
+    assert main(args) == 0 and gif.read_bytes().startswith(b"GIF8")
+    assert "5 frames of t in [0, 1] at 4 fps" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("name, output, message", [
+    ("hoop_bead", "run.gif", "lagcomp animate draws"),
+    ("double_pendulum", "run.avi", r"give a .gif, .mp4 or .html file"),
+])
+def test_cli_refuses_before_running(name, output, message, cache_dir, tmp_path, capsys):
+    from lagcomp.cli import main
+
+    assert main(["--cache-dir", str(cache_dir), "animate", name, "-o", str(tmp_path / output)]) == 2
+    assert message in capsys.readouterr().err

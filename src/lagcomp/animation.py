@@ -136,6 +136,8 @@ def animate(sol, points: dict, *, links=(), trace=(), fps: float = 30, speed: fl
         Also write the clip, the writer chosen from the suffix: ``.gif``
         (pillow), ``.mp4`` (ffmpeg, when installed), ``.html`` (`to_jshtml`).
     """
+    if save is not None:
+        check_format(save)
     links = [tuple(link) for link in links]
     trace = list(trace)
     if any(len(link) != 2 for link in links):
@@ -159,11 +161,69 @@ def animate(sol, points: dict, *, links=(), trace=(), fps: float = 30, speed: fl
     return anim
 
 
+def _chain(coordinates: tuple[str, ...]) -> dict:
+    """Bobs on rods hung from the origin in a plane: rod ``l<i>`` at angle ``theta<i>`` from the downward vertical."""
+    import sympy as sp
+
+    from lagcomp.model import coordinates as functions
+
+    x = y = sp.S.Zero
+    points = {}
+    for name, angle in zip(coordinates, functions(" ".join(coordinates)), strict=True):
+        length = sp.Symbol("l" + name.removeprefix("theta"))
+        x, y = x + length * sp.sin(angle), y - length * sp.cos(angle)
+        points[f"bob{name.removeprefix('theta')}"] = (x, y)
+    names = ["origin", *points]
+    return dict(points=points, links=list(zip(names[:-1], names[1:], strict=True)), trace=[names[-1]])
+
+
+def _spherical(coordinates: tuple[str, ...]) -> dict:
+    """The bob of a spherical pendulum in angles (θ from the downward vertical, azimuth φ) on a rod of length l."""
+    import sympy as sp
+
+    from lagcomp.model import coordinates as functions
+
+    theta, phi = functions(" ".join(coordinates))
+    l = sp.Symbol("l")  # noqa: E741  (the examples' name)
+    bob = (l * sp.sin(theta) * sp.cos(phi), l * sp.sin(theta) * sp.sin(phi), -l * sp.cos(theta))
+    return dict(points={"bob": bob}, links=[("origin", "bob")], trace=["bob"])
+
+
+def _cartesian_bob(coordinates: tuple[str, ...]) -> dict:
+    """A bob whose coordinates are its position (x, y[, z]), on a rod from the origin."""
+    from lagcomp.model import coordinates as functions
+
+    return dict(points={"bob": functions(" ".join(coordinates))}, links=[("origin", "bob")], trace=["bob"])
+
+
+#: What ``lagcomp animate NAME`` draws for the bundled examples with an obvious picture: example name →
+#: function of the model's coordinate names giving `animate`'s ``points``, ``links`` and ``trace``.
+EXAMPLE_DRAWINGS = {
+    "simple_pendulum": _chain,
+    "double_pendulum": _chain,
+    "n_link_pendulum": _chain,
+    "spherical_pendulum": _spherical,
+    "spherical_pendulum_cartesian": _cartesian_bob,
+}
+
+
+#: File suffixes `save_animation` writes.
+FORMATS = (".gif", ".mp4", ".html")
+
+
+def check_format(path: str | os.PathLike) -> Path:
+    """`path` as a Path when its suffix is one of `FORMATS`; else an OptionError (before any work is done)."""
+    path = Path(path)
+    if path.suffix.lower() not in FORMATS:
+        raise OptionError(f"animate: cannot tell the format of {str(path)!r}: give a .gif, .mp4 or .html file.")
+    return path
+
+
 def save_animation(anim, path: str | os.PathLike) -> Path:
     """Write `anim` to `path`, the writer chosen from the suffix (.gif pillow, .mp4 ffmpeg, .html player)."""
     from matplotlib import animation as mpl_animation
 
-    path = Path(path)
+    path = check_format(path)
     suffix = path.suffix.lower()
     if suffix == ".gif":
         anim.save(path, writer=mpl_animation.PillowWriter(fps=anim.fps))
@@ -171,8 +231,6 @@ def save_animation(anim, path: str | os.PathLike) -> Path:
         if not mpl_animation.writers.is_available("ffmpeg"):
             raise OptionError(f"animate: saving {path.name} needs ffmpeg on the PATH; save a .gif or .html instead.")
         anim.save(path, writer=mpl_animation.FFMpegWriter(fps=anim.fps))
-    elif suffix == ".html":
-        path.write_text(anim.to_jshtml(fps=anim.fps), encoding="utf-8")
     else:
-        raise OptionError(f"animate: cannot tell the format of {str(path)!r}: give a .gif, .mp4 or .html file.")
+        path.write_text(anim.to_jshtml(fps=anim.fps), encoding="utf-8")
     return path
