@@ -43,7 +43,7 @@ def _at(sol, times, column):
 
 def test_frames_are_every_speed_over_fps_seconds_of_the_run(double_run):
     assert np.allclose(frame_times(double_run.t, 5, 1.0), np.arange(11) * 0.2, rtol=0, atol=1e-15)
-    assert np.allclose(frame_times(double_run.t, 5, 4.0), [0.0, 0.8, 1.6], rtol=0, atol=1e-15)
+    assert np.allclose(frame_times(double_run.t, np.int64(5), np.float32(4.0)), [0.0, 0.8, 1.6], rtol=0, atol=1e-15)
 
 
 def test_double_pendulum_draws_the_bobs_where_the_solution_puts_them(double_run, double_anim):
@@ -118,6 +118,7 @@ def test_html_player_holds_every_frame(double_run, tmp_path):
     ({"bob": BOB1}, {"trace": ["bob2"]}, lc.OptionError, r"\['bob2'\], not a point"),
     ({"bob": BOB1}, {"fps": 0}, lc.OptionError, "fps must be a positive number"),
     ({"bob": BOB1}, {"speed": float("nan")}, lc.OptionError, "speed must be a positive number"),
+    ({"bob": BOB1}, {"speed": True}, lc.OptionError, "speed must be a positive number"),
     ({"bob": BOB1}, {"save": "run.avi"}, lc.OptionError, r"\.gif, \.mp4 or \.html"),
 ])
 def test_errors_name_the_culprit(double_run, points, options, error, match, tmp_path, monkeypatch):

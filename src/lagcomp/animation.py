@@ -23,6 +23,7 @@ without naming points) are not here yet.
 
 from __future__ import annotations
 
+import numbers
 import os
 from pathlib import Path
 
@@ -36,7 +37,7 @@ ORIGIN = "origin"
 def frame_times(t: np.ndarray, fps: float, speed: float) -> np.ndarray:
     """Times of the frames: t[0] + k·speed/fps for k = 0, 1, ... while ≤ t[-1], shape (frames,)."""
     for name, value in (("fps", fps), ("speed", speed)):
-        if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+        if isinstance(value, bool) or not (isinstance(value, numbers.Real) and np.isfinite(value) and value > 0):
             raise OptionError(f"animate: {name} must be a positive number, got {value!r}.")
     if len(t) < 2 or not t[-1] > t[0]:
         raise OptionError(f"animate: the solution needs at least 2 saved rows spanning some time, got {len(t)} "
