@@ -5,7 +5,9 @@ Frames are few (fps 5, ~2 s of motion) so the GIF and HTML writers stay quick.
 
 from __future__ import annotations
 
+import gc
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -13,9 +15,6 @@ import sympy as sp
 
 pytest.importorskip("matplotlib")
 
-#: The tests draw frames by calling `draw(k)`, not through matplotlib's event loop, which warns when
-#: an animation it never ran is deleted.
-pytestmark = pytest.mark.filterwarnings("ignore:Animation was deleted without rendering anything")
 
 import lagcomp as lc  # noqa: E402
 from lagcomp.animation import frame_times  # noqa: E402
@@ -32,7 +31,20 @@ def double_run(compiled):
     return compiled("double_pendulum").simulate((0, 2), t_eval=np.linspace(0, 2, 201))
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(autouse=True)
+def _animations_freed_quietly():
+    """Collect each test's animations now, without matplotlib's warning that they were never run.
+
+    The tests draw frames by calling `draw(k)`, not through matplotlib's event loop, which warns
+    when it deletes an animation it never ran.
+    """
+    yield
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "Animation was deleted without rendering anything")
+        gc.collect()
+
+
+@pytest.fixture
 def double_anim(double_run):
     return lc.animate(double_run, {"bob1": BOB1, "bob2": BOB2}, links=RODS, trace=["bob2"], fps=5, dpi=40)
 
@@ -161,6 +173,29 @@ def test_example_drawings_put_the_bobs_on_their_rods(compiled):
     drawing = EXAMPLE_DRAWINGS["spherical_pendulum"](model.coordinates)
     bob = point_positions(sol, drawing["points"], sol.t)["bob"]
     assert bob.shape == (11, 3) and np.max(np.abs(np.linalg.norm(bob, axis=1) - sol.params["l"])) < 1e-14
+
+
+def test_symmetric_top_draws_its_centre_of_mass_where_the_frames_put_it(compiled):
+    from sympy.physics.vector import ReferenceFrame
+
+    from lagcomp.animation import EXAMPLE_DRAWINGS
+
+    model = compiled("symmetric_top")
+    drawing = EXAMPLE_DRAWINGS["symmetric_top"](model.coordinates)
+    psi, theta, _ = lc.coordinates("psi theta phi")
+    N = ReferenceFrame("N")
+    axis = lc.rotated(N, (psi, "z"), (theta, "x"), name="K").z  # the example's own construction
+    l = sp.Symbol("l")  # noqa: E741
+    expected = [l * axis.dot(N.x), l * axis.dot(N.y), l * axis.dot(N.z)]
+    assert all(sp.simplify(a - b) == 0 for a, b in zip(drawing["points"]["G"], expected, strict=True))
+    sol = model.simulate((0, 0.5), t_eval=np.linspace(0, 0.5, 51))
+    anim = lc.animate(sol, **drawing, fps=20, dpi=30)
+    for k in (0, 5, 10):
+        anim.draw(k)
+        s_, c_ = np.sin(_at(sol, anim.frame_times[k], 1)), np.cos(_at(sol, anim.frame_times[k], 1))
+        p_ = _at(sol, anim.frame_times[k], 0)
+        g = sol.params["l"] * np.array([s_ * np.sin(p_), -s_ * np.cos(p_), c_])
+        assert np.max(np.abs(np.array(anim.markers["G"].get_data_3d(), dtype=float)[:, 0] - g)) < 1e-12
 
 
 def test_cli_animates_an_example(cache_dir, tmp_path, capsys):

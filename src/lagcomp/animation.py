@@ -190,6 +190,18 @@ def _spherical(coordinates: tuple[str, ...]) -> dict:
     return dict(points={"bob": bob}, links=[("origin", "bob")], trace=["bob"])
 
 
+def _top_axis(coordinates: tuple[str, ...]) -> dict:
+    """The centre of mass G = l K.z of a top in z–x–z Euler angles (ψ, θ, φ): its axis, precessing and nutating."""
+    import sympy as sp
+
+    from lagcomp.model import coordinates as functions
+
+    psi, theta, _ = functions(" ".join(coordinates))
+    l = sp.Symbol("l")  # noqa: E741  (the example's name)
+    centre = (l * sp.sin(theta) * sp.sin(psi), -l * sp.sin(theta) * sp.cos(psi), l * sp.cos(theta))
+    return dict(points={"G": centre}, links=[("origin", "G")], trace=["G"])
+
+
 def _cartesian_bob(coordinates: tuple[str, ...]) -> dict:
     """A bob whose coordinates are its position (x, y[, z]), on a rod from the origin."""
     from lagcomp.model import coordinates as functions
@@ -205,6 +217,7 @@ EXAMPLE_DRAWINGS = {
     "n_link_pendulum": _chain,
     "spherical_pendulum": _spherical,
     "spherical_pendulum_cartesian": _cartesian_bob,
+    "symmetric_top": _top_axis,
 }
 
 

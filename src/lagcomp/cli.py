@@ -625,7 +625,7 @@ def _parser() -> argparse.ArgumentParser:
     stability.add_argument("--drop", nargs="+", metavar="NAME", help="ignorable coordinates/speeds to leave out")
     stability.add_argument("--plot", metavar="PNG", help="draw the eigenvalues vs the parameter (needs matplotlib)")
     stability.set_defaults(func=cmd_stability)
-    anim = example("animate", "draw a run of an example as a GIF, MP4 or HTML player (pendulums; needs matplotlib)")
+    anim = example("animate", "draw a run of an example as a GIF, MP4 or HTML player (pendulums, top; needs matplotlib)")
     anim.add_argument("-o", "--output", required=True, help="file to write: .gif, .mp4 (ffmpeg) or .html")
     anim.add_argument("--t-end", type=float, help="end time (default: the example's)")
     anim.add_argument("--fps", type=float, default=30.0, help="frames per second of the clip (default 30)")
