@@ -10,6 +10,7 @@
 
 __version__ = "0.1.0"
 
+from lagcomp.animation import animate as animate
 from lagcomp.errors import (
     CacheWarning as CacheWarning,
     CorruptCacheRecordError as CorruptCacheRecordError,

@@ -7,6 +7,7 @@
     lagcomp precompile                   (compile every library driver now, not at its first use)
     lagcomp bench double_pendulum        (kernel ns/call, op counts, steps/s per method, compile times)
     lagcomp stability hoop_bead --param Omega --range 1 8 --set epsilon=0 --q 3.14159265 --plot eig.png
+    lagcomp animate double_pendulum -o double_pendulum.gif --t-end 10 --fps 15
 """
 
 from __future__ import annotations
@@ -265,6 +266,33 @@ def cmd_run(args) -> int:
         except ImportError as err:  # matplotlib is an optional extra
             raise LagcompError(str(err)) from err
         print(f"plotted     {args.plot} (coordinates and energy error vs time)")
+    return 0 if sol.success else 1
+
+
+def cmd_animate(args) -> int:
+    _check_writable(args.output, "--output")
+    import importlib.util
+
+    from lagcomp.animation import EXAMPLE_DRAWINGS, animate, check_format, frame_times
+
+    check_format(args.output)
+
+    if args.name not in EXAMPLE_DRAWINGS:
+        raise LagcompError(f"lagcomp animate draws {sorted(EXAMPLE_DRAWINGS)}; for {args.name!r}, name the points "
+                           "to draw from Python: lagcomp.animate(sol, points={'bob': (x, y)}, ...).")
+    if importlib.util.find_spec("matplotlib") is None:  # known before the run, not after it
+        raise LagcompError("lagcomp animate needs matplotlib: pip install 'lagcomp[plots]'.")
+    model = _example_model(args)
+    import numpy as np
+
+    t_end = args.t_end if args.t_end is not None else model.t_end
+    times = frame_times(np.array([0.0, t_end]), args.fps, args.speed)
+    sol = model.simulate((0.0, t_end), q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"),
+                         t_eval=times, rtol=1e-10, atol=1e-10, progress=False)  # saved at the frames' times
+    drawing = EXAMPLE_DRAWINGS[args.name](model.coordinates)
+    animate(sol, **drawing, fps=args.fps, speed=args.speed, title=model.name, save=args.output)
+    print(f"animated    {args.output}: {len(times)} frames of t in [0, {sol.t[-1]:g}] at {args.fps:g} fps, "
+          f"speed {args.speed:g} ({sol.method}: {sol.message})")
     return 0 if sol.success else 1
 
 
@@ -597,6 +625,16 @@ def _parser() -> argparse.ArgumentParser:
     stability.add_argument("--drop", nargs="+", metavar="NAME", help="ignorable coordinates/speeds to leave out")
     stability.add_argument("--plot", metavar="PNG", help="draw the eigenvalues vs the parameter (needs matplotlib)")
     stability.set_defaults(func=cmd_stability)
+    anim = example("animate", "draw a run of an example as a GIF, MP4 or HTML player (pendulums, top; needs matplotlib)")
+    anim.add_argument("-o", "--output", required=True, help="file to write: .gif, .mp4 (ffmpeg) or .html")
+    anim.add_argument("--t-end", type=float, help="end time (default: the example's)")
+    anim.add_argument("--fps", type=float, default=30.0, help="frames per second of the clip (default 30)")
+    anim.add_argument("--speed", type=float, default=1.0,
+                      help="simulated seconds per second of clip (default 1; larger plays a long run faster)")
+    anim.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
+    anim.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
+    anim.add_argument("--qd0", type=float, nargs="+", help="initial velocities")
+    anim.set_defaults(func=cmd_animate)
     gen = sub.add_parser("generate", help="regenerate the emitted modules of the bundled examples")
     gen.add_argument("directory", nargs="?", default="generated")
     gen.add_argument("--check", action="store_true", help="only list stale files; exit 1 if any")

@@ -217,6 +217,12 @@ class Solution:
 
         return solution_html(self)
 
+    def animate(self, points: dict, **options):
+        """An animation of named points along this run: `lagcomp.animation.animate` (matplotlib)."""
+        from lagcomp.animation import animate
+
+        return animate(self, points, **options)
+
     def save_npz(self, path: str | os.PathLike) -> None:
         """Write `to_dict()` to a compressed .npz file."""
         np.savez_compressed(path, **self.to_dict())
