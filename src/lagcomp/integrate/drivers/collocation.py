@@ -17,6 +17,7 @@ import numpy as np
 from numba import njit, types
 
 from lagcomp.integrate.drivers.canonical import canonical_jacobian
+from lagcomp.integrate.drivers.fixed_step import fixed_step_window
 from lagcomp.integrate.drivers.kernel_types import (
     CANONICAL_PARTIALS,
     ENERGY,
@@ -115,18 +116,11 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y
         x[n + c] = pdot[c]
     while True:
         k = counters[NSTEPS]
-        if k >= n_steps:
-            return Status.DONE, n_saved
-        if k >= pause_at:
-            return Status.PAUSED, n_saved
+        stop, why, t_a, t_b = fixed_step_window(k, n_steps, pause_at, counters[SINCE_SAVE], save_every,
+                                                n_saved, cap, t0, dt, t_end)
+        if stop:
+            return why, n_saved
         last = k == n_steps - 1
-        if (last or counters[SINCE_SAVE] + 1 >= save_every) and n_saved >= cap:
-            return Status.BUFFER_FULL, n_saved
-        t_a = min(t0 + k * dt, t_end)
-        if last:
-            t_b = t_end
-        else:
-            t_b = min(t0 + (k + 1) * dt, t_end)
         h = t_b - t_a
 
         scale = 1.0

@@ -51,6 +51,30 @@ RUNGE_KUTTA_RUN = OUTCOME(RHS, PROJECT, RESIDUAL, *FIXED_STEP_RUN, MATRIX, VECTO
 COMPOSITION_RUN = OUTCOME(RHS, *FIXED_STEP_RUN, VECTOR)
 
 
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def fixed_step_window(step, n_steps, pause_at, since_save, save_every, n_saved, cap, t0, dt, t_end):
+    """Whether a fixed-step driver stops before step number `step`, and with which status, else the step's interval.
+
+    Returns (stop, status, t_a, t_b): stop with DONE after the last step, PAUSED at the step budget `pause_at`, or
+    BUFFER_FULL when the step would save a row (every `save_every`-th, and the last) into a full buffer of `cap`
+    rows; otherwise the step runs over [t_a, t_b] = [t0 + step dt, t0 + (step + 1) dt], clipped to t_end, the
+    last one ending at t_end exactly.  Inlined (numba's ``inline="always"``) into each fixed-step driver.
+    """
+    if step >= n_steps:
+        return True, Status.DONE, 0.0, 0.0
+    if step >= pause_at:
+        return True, Status.PAUSED, 0.0, 0.0
+    last = step == n_steps - 1
+    if (last or since_save + 1 >= save_every) and n_saved >= cap:
+        return True, Status.BUFFER_FULL, 0.0, 0.0
+    t_a = min(t0 + step * dt, t_end)
+    if last:
+        t_b = t_end
+    else:
+        t_b = min(t0 + (step + 1) * dt, t_end)
+    return False, Status.DONE, t_a, t_b
+
+
 @njit(RUNGE_KUTTA_RUN, cache=True, error_model="numpy", nogil=True)
 def runge_kutta_run(rhs, project, constraint_residual, y, clock, counters, p, projecting, residual_max, t0, dt,
                     n_steps, pause_at, t_end, save_every, ts, ys, A, C, weights, denominator):
@@ -90,18 +114,11 @@ def runge_kutta_run(rhs, project, constraint_residual, y, clock, counters, p, pr
     residual_bound = residual_max[1] if residual_max.shape[0] > 1 else np.inf
     while True:
         k = counters[NSTEPS]
-        if k >= n_steps:
-            return Status.DONE, n_saved
-        if k >= pause_at:
-            return Status.PAUSED, n_saved
+        stop, why, t_a, t_b = fixed_step_window(k, n_steps, pause_at, counters[SINCE_SAVE], save_every,
+                                                n_saved, cap, t0, dt, t_end)
+        if stop:
+            return why, n_saved
         last = k == n_steps - 1
-        if (last or counters[SINCE_SAVE] + 1 >= save_every) and n_saved >= cap:
-            return Status.BUFFER_FULL, n_saved
-        t_a = min(t0 + k * dt, t_end)
-        if last:
-            t_b = t_end
-        else:
-            t_b = min(t0 + (k + 1) * dt, t_end)
 
         h = t_b - t_a
         for s in range(stages):
@@ -189,18 +206,11 @@ def composition_run(rhs, y, clock, counters, p, projecting, residual_max, t0, dt
             return Status.RHS_FAILED, n_saved
     while True:
         k = counters[NSTEPS]
-        if k >= n_steps:
-            return Status.DONE, n_saved
-        if k >= pause_at:
-            return Status.PAUSED, n_saved
+        stop, why, t_a, t_b = fixed_step_window(k, n_steps, pause_at, counters[SINCE_SAVE], save_every,
+                                                n_saved, cap, t0, dt, t_end)
+        if stop:
+            return why, n_saved
         last = k == n_steps - 1
-        if (last or counters[SINCE_SAVE] + 1 >= save_every) and n_saved >= cap:
-            return Status.BUFFER_FULL, n_saved
-        t_a = min(t0 + k * dt, t_end)
-        if last:
-            t_b = t_end
-        else:
-            t_b = min(t0 + (k + 1) * dt, t_end)
         h = t_b - t_a
 
         for i in range(n2):

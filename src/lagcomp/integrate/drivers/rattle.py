@@ -75,7 +75,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, types
 
-from lagcomp.integrate.drivers.fixed_step import FIXED_STEP_RUN
+from lagcomp.integrate.drivers.fixed_step import FIXED_STEP_RUN, fixed_step_window
 from lagcomp.integrate.drivers.fixed_sweeps import FIXED_SWEEP
 from lagcomp.integrate.drivers.kernel_types import (
     CONSTRAINT_MATRIX,
@@ -181,18 +181,11 @@ def rattle_run(forcing, mass_matrix, constraint_residuals, constraint_matrix, k,
             return Status.RHS_FAILED, n_saved
     while True:
         step_index = counters[NSTEPS]
-        if step_index >= n_steps:
-            return Status.DONE, n_saved
-        if step_index >= pause_at:
-            return Status.PAUSED, n_saved
+        stop, why, t_a, t_b = fixed_step_window(step_index, n_steps, pause_at, counters[SINCE_SAVE], save_every,
+                                                n_saved, cap, t0, dt, t_end)
+        if stop:
+            return why, n_saved
         last = step_index == n_steps - 1
-        if (last or counters[SINCE_SAVE] + 1 >= save_every) and n_saved >= cap:
-            return Status.BUFFER_FULL, n_saved
-        t_a = min(t0 + step_index * dt, t_end)
-        if last:
-            t_b = t_end
-        else:
-            t_b = min(t0 + (step_index + 1) * dt, t_end)
         h = t_b - t_a
 
         for i in range(n2):
