@@ -173,6 +173,7 @@ BUILD_STAGES = ("deriving the equations of motion (sympy)", "lowering and CSE of
 def build(system, cache: Cache, key: str, eom=None, progress=None) -> Entry:
     """Derive (unless `eom` is given), lower and emit `system`, and store the module under `key`."""
     from lagcomp.codegen.emit import emit
+    from lagcomp.codegen.latex import lagrange_equations
     from lagcomp.codegen.lower import lower
     from lagcomp.codegen.taylor import taylor_decomposition, taylor_program
     from lagcomp.mechanics.lagrange import derive
@@ -188,7 +189,7 @@ def build(system, cache: Cache, key: str, eom=None, progress=None) -> Entry:
         taylor = taylor_decomposition(ir)
         program = taylor_program(taylor)
         stages.start(emit_)
-        source = emit(ir, taylor)
+        source = emit(ir, taylor, lagrange_equations(eom))
     metadata = {
         "coordinates": list(system.coordinate_names),
         "parameters": list(system.parameter_names),
@@ -333,6 +334,17 @@ class Model:
         from lagcomp.notebook import model_html
 
         return model_html(self)
+
+    def equations(self):
+        """The equations of motion, constraints and energy as LaTeX and text (`lagcomp.equations.Equations`).
+
+        ``.latex`` is an ``align*`` environment, ``str()`` plain text, and Jupyter renders the
+        result as math.  sympy rendered them when the model was compiled, into its module, so a
+        model from `load` has them too, without sympy.
+        """
+        from lagcomp.equations import Equations
+
+        return Equations(self.name, self.kernels.EQUATIONS)
 
     # -- inputs -------------------------------------------------------------------
 

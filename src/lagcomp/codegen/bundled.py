@@ -14,13 +14,15 @@ def bundled_sources() -> dict[str, str]:
     """File name -> emitted source, for every bundled example (factory defaults)."""
     from lagcomp import examples
     from lagcomp.codegen.emit import emit
+    from lagcomp.codegen.latex import lagrange_equations
     from lagcomp.codegen.lower import lower
     from lagcomp.mechanics.lagrange import derive
 
     sources = {}
     for factory in examples.EXAMPLES.values():
         system = factory()
-        sources[f"{system.name}.py"] = emit(lower(derive(system)))
+        eom = derive(system)
+        sources[f"{system.name}.py"] = emit(lower(eom), equations=lagrange_equations(eom))
     return sources
 
 

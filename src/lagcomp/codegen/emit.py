@@ -6,7 +6,8 @@ what the kernels call from `lagcomp.kernel_support` (sin and cos, the linear
 solvers); the kernels; the constraint hooks the drivers call (`project`,
 `constraint_residual`), with the constraint sizes they use as module
 constants; `observables`, which evaluates the energies along a saved
-trajectory; and the Taylor coefficients.  The drivers are library code
+trajectory; the Taylor coefficients; and the equations as LaTeX and text
+(`EQUATIONS`, `lagcomp.codegen.latex`), data for `Model.equations()`.  The drivers are library code
 (`lagcomp.integrate.drivers`) that take these kernels as function values.
 The same IR always gives the same bytes: no timestamps, stable ordering.
 
@@ -22,6 +23,7 @@ import unicodedata
 import sympy as sp
 
 from lagcomp import __version__
+from lagcomp.codegen.latex import equations_source
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor import (
     TaylorProgram,
@@ -30,6 +32,7 @@ from lagcomp.codegen.taylor import (
     taylor_source,
     taylor_support_names,
 )
+from lagcomp.equations import Equation
 from lagcomp.ir import (
     AugmentedSolve,
     FlatMatrix,
@@ -421,10 +424,13 @@ def _constraint_hooks(ir: ModuleIR) -> str:
     return _constraint_sizes(ir) + _CONSTRAINED_HOOKS
 
 
-def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None) -> str:
+def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None,
+         equations: tuple[Equation, ...] | None = None) -> str:
     """The complete source text of the module for `ir`.
 
     `taylor` is `taylor_decomposition(ir)` when the caller has it already (it also stores the program).
+    `equations` (`lagcomp.codegen.latex.lagrange_equations` of the derivation) become the constant
+    ``EQUATIONS``; the modules of a model have it, a module emitted only to test its kernels may leave it out.
     """
     taylor = taylor_decomposition(ir) if taylor is None else taylor
     parts = [_header(ir, taylor)]
@@ -432,4 +438,6 @@ def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None) -> str
     parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
     parts.append(taylor_source(taylor))  # taylor_coefficients with its data, or why the module has none
+    if equations is not None:
+        parts.append(equations_source(equations))
     return "".join(parts)

@@ -25,7 +25,8 @@ speeds, state length ``n_q + n_u``; same calling conventions as
 
 Then the hooks the drivers call (``project``, ``constraint_residual``, with
 the constraint sizes as module constants), ``observables`` and
-``kinematics_along`` / ``reactions_along`` over saved rows.  The kernels have
+``kinematics_along`` / ``reactions_along`` over saved rows, and the equations
+as LaTeX and text (``EQUATIONS``).  The kernels have
 the names and signatures of a Lagrange module's
 (`lagcomp.integrate.drivers.kernel_types`), so the library drivers take
 either; sin, cos and the solvers come from `lagcomp.kernel_support`.  Locals are ``_q<i>``, ``_u<i>``, ``_p<k>``: no user name
@@ -44,6 +45,7 @@ from lagcomp.codegen.emit import (
     kernel_support_names,
     support_imports,
 )
+from lagcomp.codegen.latex import equations_source, kane_equations
 from lagcomp.codegen.lower import RHS_JACOBIAN_DOC, _kernel, acceleration_partials, jacobian_entry
 from lagcomp.codegen.printer import to_code
 from lagcomp.mechanics.first_order import FirstOrderForm
@@ -301,6 +303,7 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
     """The module source for a Kane model, and the operation count of each kernel after CSE.
 
     `events` are (name, g) pairs, g over the plain symbols of `form` (`lagcomp.mechanics.kane.kane_events`).
+    The module ends with the equations as LaTeX and text (``EQUATIONS``, `lagcomp.codegen.latex`).
     """
     mapping, loads = _bindings(form, bool(reaction_names))
     rhs, rhs_source = _rhs(form, mapping, loads)
@@ -317,4 +320,5 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
         kernels.append(event_kernel)
     parts.append(event_source)
     parts.append(_sizes(form) + _HOOKS)
+    parts.append(equations_source(kane_equations(form, energy)))
     return _header(name, form, reaction_names, kernels) + "".join(parts), {k.name: k.operation_count for k in kernels}
