@@ -1,7 +1,7 @@
 """The `lagcomp` command line: list, show and run the bundled examples; regenerate `generated/`.
 
     lagcomp list
-    lagcomp show double_pendulum
+    lagcomp show double_pendulum         (add --latex for the equations as LaTeX)
     lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz --plot run.png
     lagcomp generate generated/          (add --check to only report stale files)
     lagcomp precompile                   (compile every library driver now, not at its first use)
@@ -139,7 +139,7 @@ def cmd_list(args) -> int:
 
 
 def _show_compiled(model) -> int:
-    """`show` for a user's model from the cache: what the cache records (the equations stay in its module)."""
+    """`show` for a user's model from the cache: what the cache records, and the equations its module keeps."""
     print(f"{model.name}: {model.description or '(no description)'}   [compiled model from the cache]\n")
     print(f"coordinates q  = ({', '.join(model.coordinates)})")
     print(f"parameters  p  = ({', '.join(model.parameters)})   [kernel order]")
@@ -154,13 +154,16 @@ def _show_compiled(model) -> int:
         print(f"constraints    = {kinds}")
     if model.events:
         print(f"events         = {', '.join(e.name for e in model.events)}")
+    print(f"\n{model.equations()}")
     print(f"\noperations after CSE: {model.operations}")
     print(f"generated module: {model.source_path}")
-    print("(the equations are in the generated module; lagcomp.compile(system) in Python derives them again)")
     return 0
 
 
 def cmd_show(args) -> int:
+    if args.latex:  # from the module (`Model.equations`): no sympy where the model is cached
+        print(_example_model(args).equations().latex)
+        return 0
     import sympy as sp
 
     from lagcomp.mechanics.lagrange import derive
@@ -548,8 +551,12 @@ def _parser() -> argparse.ArgumentParser:
 
     from lagcomp.integrate.methods import METHODS
 
-    example("show", "print the derived equations (of a bundled example; for a model compiled earlier under NAME, "
-                    "what the cache records) and the generated module's path").set_defaults(func=cmd_show)
+    show = example("show", "print the derived equations (of a bundled example; for a model compiled earlier under "
+                           "NAME, what the cache records) and the generated module's path")
+    show.add_argument("--latex", action="store_true",
+                      help="print only the equations of motion, constraints and energy as LaTeX (an align* "
+                           "environment; model.equations() in Python)")
+    show.set_defaults(func=cmd_show)
     run = example("run", "simulate an example and print a summary")
     run.add_argument("--t-start", type=float, default=0.0)
     run.add_argument("--t-end", type=float, help="end time (default: the example's)")

@@ -108,7 +108,8 @@ def _table(title: str, rows) -> str:
 
 
 def model_html(model) -> str:
-    """A Model (or KaneModel) as an HTML table: what it is, its inputs, constraints, events and methods."""
+    """A Model (or KaneModel) as an HTML table: what it is, its inputs, constraints, events and methods, and where
+    its equations are (`Model.equations`, which Jupyter renders as LaTeX: not repeated here)."""
     from lagcomp.benchmark import applicable_methods
 
     kane = hasattr(model, "speeds")
@@ -130,6 +131,7 @@ def model_html(model) -> str:
             rows += [("reactions", _names(model.reaction_names))]
     rows += [("parameters (defaults)", parameters), ("constraints", constraints), ("events", events),
              ("methods", _names(m.name for m in applicable_methods(model))),
+             ("equations", "<code>model.equations()</code> (LaTeX, rendered as math in a cell)"),
              ("kernels", f"<code>{_text(model.source_path)}</code> "
                          f"({'from the cache' if model.from_cache else 'fresh build'})")]
     title = f"<strong>{type(model).__name__}</strong> <code>{_text(model.name)}</code>"
