@@ -267,3 +267,21 @@ def test_a_pickled_solution_keeps_no_kernel(top_run):
     assert again.geometry.layout == top_run.geometry.layout and again.geometry.kernel is None
     with pytest.raises(lc.OptionError, match="carries no model geometry"):
         again.animate()
+
+
+def test_a_kane_model_has_an_empty_geometry(cache_dir):
+    """Kane modules define the no-op kernel (GEOMETRY = (), size 0): its runs are drawn from named points."""
+    from sympy.physics import mechanics as me
+
+    q, u = me.dynamicsymbols("q u")
+    k = sp.Symbol("k", positive=True)
+    N, P = me.ReferenceFrame("N"), me.Point("P")
+    P.set_vel(N, u * N.x)
+    km = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff(lc.t) - u])
+    km.kanes_equations([me.Particle("p", P, 1)], [(P, -k * q * N.x)])
+    model = lc.compile(km, name="geometry_kane_slider", cache_dir=cache_dir, defaults={"k": 1.0})
+    assert model.kernels.GEOMETRY == () and model.kernels.GEOMETRY_SIZE == 0
+    sol = model.simulate((0, 1), q0=[1.0], t_eval=np.linspace(0, 1, 11))
+    assert sol.geometry.layout == ()
+    with pytest.raises(lc.OptionError, match="has no bodies to draw"):
+        sol.animate()
