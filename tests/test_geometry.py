@@ -8,6 +8,7 @@ animations: what the artists hold equals the geometry at the frame times and the
 
 from __future__ import annotations
 
+import copy
 import gc
 import pickle
 import warnings
@@ -265,6 +266,7 @@ def test_a_system_without_bodies_needs_points(compiled):
 
 
 def test_a_pickled_solution_keeps_no_kernel(top_run):
+    assert copy.deepcopy(top_run).geometry.kernel is top_run.geometry.kernel is not None
     again = pickle.loads(pickle.dumps(top_run))
     assert again.geometry.layout == top_run.geometry.layout and again.geometry.kernel is None
     with pytest.raises(lc.OptionError, match="carries no model geometry"):

@@ -75,7 +75,12 @@ class BodyGeometry:
                    np.array(p, dtype=float), getattr(module, "geometry", None))
 
     def __reduce__(self):
+        """Pickled without the kernel: a numba function of a generated module another process may not have."""
         return BodyGeometry, (self.layout, self.size, self.p)
+
+    def __deepcopy__(self, memo) -> BodyGeometry:
+        """A copy that keeps the kernel (in this process it stays valid)."""
+        return BodyGeometry(self.layout, self.size, self.p.copy(), self.kernel)
 
     @property
     def names(self) -> tuple[str, ...]:
