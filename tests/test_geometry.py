@@ -135,10 +135,13 @@ def test_layout_of_unnamed_unoriented_and_unplaced_bodies():
     P.set_vel(N, x.diff(lc.t) * N.x)  # a velocity but no position: unplaced
     bodies = [lc.Particle(1, (x, 0, 0)), lc.Particle(1, (0, x, 0)),
               lc.RigidBody(1, (0, 0, x), (1, 1, 1), (0, 0, x.diff(lc.t)), name="wheel"),  # ω as components: centre only
-              lc.Particle(1, P, name="ghost")]
-    constants = _layout(lc.System([x], bodies=bodies, frame=lc.MovingFrame(axes=N), name="layout"))
+              lc.Particle(1, P, name="ghost"),
+              lc.Particle(1, (x + sp.Symbol("d"), 0, 0), name="offset")]  # d: no parameter, lost from T
+    system = lc.System([x], bodies=bodies, frame=lc.MovingFrame(axes=N), name="layout")
+    assert "d" not in system.parameter_names
+    constants = _layout(system)
     assert constants["GEOMETRY"] == (("particle[0]", "particle", 0), ("particle[1]", "particle", 3),
-                                     ("wheel", "centre", 6), ("ghost", "unplaced", 9))
+                                     ("wheel", "centre", 6), ("ghost", "unplaced", 9), ("offset", "unplaced", 9))
     assert constants["GEOMETRY_SIZE"] == 9
     assert _layout(lc.System([x], T=x.diff(lc.t) ** 2, name="plain")) == {"GEOMETRY": (), "GEOMETRY_SIZE": 0}
     assert unique_names(["a", "a", "a[1]"]) == ["a[0]", "a[1]_", "a[1]"]
@@ -289,3 +292,17 @@ def test_a_kane_model_has_an_empty_geometry(cache_dir):
     assert sol.geometry.layout == ()
     with pytest.raises(lc.OptionError, match="has no bodies to draw"):
         sol.animate()
+
+
+def test_an_unplaced_body_is_not_drawn_and_a_link_to_it_says_why(double):
+    from dataclasses import replace
+
+    from lagcomp.animation_bodies import BodyGeometry
+
+    sol = double.simulate((0, 1), t_eval=np.linspace(0, 1, 11))
+    layout = (*sol.geometry.layout, ("ghost", "unplaced", 6))
+    with_ghost = replace(sol, geometry=BodyGeometry(layout, 6, sol.geometry.p, sol.geometry.kernel))
+    pytest.importorskip("matplotlib")
+    assert list(lc.animate(with_ghost, fps=5, dpi=30).markers) == ["bob1", "bob2"]
+    with pytest.raises(lc.OptionError, match=r"\['ghost'\]: the model does not know where"):
+        lc.animate(with_ghost, links=[("bob1", "ghost")], fps=5, dpi=30)

@@ -118,8 +118,8 @@ def point_positions(sol, points: dict, times: np.ndarray) -> dict[str, np.ndarra
 def _check_names(what: str, names, known, unplaced=()) -> None:
     unknown = [n for n in names if n not in known]
     if unknown:
-        why = f" ({sorted(set(unknown) & set(unplaced))} cannot be placed: a sympy Point with no frame origin)" \
-            if set(unknown) & set(unplaced) else ""
+        why = f" ({sorted(set(unknown) & set(unplaced))}: the model does not know where, see " \
+            "lagcomp.codegen.geometry)" if set(unknown) & set(unplaced) else ""
         raise OptionError(f"animate: {what} names {unknown}, not a point or a body{why}; the points and bodies are "
                           f"{sorted(known)}.")
 

@@ -15,6 +15,11 @@ R is the System's `frame`, inertial when it is Galilean.  A `MovingFrame`'s own 
 given by its acceleration and angular velocity only, never by where it is, so the bodies of
 a system in a moving frame are drawn as seen from R.
 
+A body is "unplaced", not drawn, when the model does not know where it is: a sympy Point
+located from no origin of the frame (its velocity is all the kinetic energy needs), or a
+position with a symbol that is no parameter (the ``d`` of ``x + d``, lost from T).  A rigid
+body whose axes have such a symbol is drawn at its centre only.
+
 Which axes are the body's: the ReferenceFrame given as its angular velocity (the body's own
 frame, turning with it: the top's spin shows), else its `axes` (a ReferenceFrame, or the
 matrix C itself).  A rigid body with neither, its ω given as components, is drawn at its
@@ -36,19 +41,21 @@ from collections.abc import Callable
 from dataclasses import replace
 
 import sympy as sp
+from sympy.core.function import AppliedUndef
 from sympy.physics.vector import Point, ReferenceFrame
 
 from lagcomp.ir import Kernel
 from lagcomp.mechanics.lagrange import EOM, to_plain
 from lagcomp.model.bodies import Particle
 from lagcomp.model.frames import MovingFrame, as_frame, column
+from lagcomp.model.system import t
 
 #: What a body of each kind writes into ``out``: its number of values, and what they are.
 KINDS = {
     "particle": (3, "position"),
     "rigid": (12, "centre of mass, then the rotation matrix C row-major (columns: the body axes)"),
     "centre": (3, "centre of mass (a rigid body whose orientation the model does not know)"),
-    "unplaced": (0, "nothing: a sympy Point whose position is unknown (the frame has no origin)"),
+    "unplaced": (0, "nothing: the model does not know where it is"),
 }
 
 #: The kernel's signature: `out` has ``GEOMETRY_SIZE`` entries.
@@ -102,8 +109,8 @@ def body_geometry(eom: EOM) -> tuple[tuple[tuple[str, str, int], ...], list[tupl
     layout, values, offset = [], [], 0
     names = unique_names([body.name for body in system.bodies])
     for name, body in zip(names, system.bodies, strict=True):
-        r = position(body, frame)
-        rotation = None if r is None else orientation(body, frame)
+        r = _known(eom, position(body, frame))
+        rotation = None if r is None else _known(eom, orientation(body, frame))
         if r is None:
             kind, entries = "unplaced", []
         elif isinstance(body, Particle):
@@ -113,9 +120,23 @@ def body_geometry(eom: EOM) -> tuple[tuple[tuple[str, str, int], ...], list[tupl
         else:
             kind, entries = "rigid", list(r) + list(rotation)  # a Matrix iterates row-major
         layout.append((name, kind, offset))
-        values += [(offset + i, to_plain(sp.sympify(e), system, eom.q, eom.qd)) for i, e in enumerate(entries)]
+        values += list(enumerate(entries, start=offset))
         offset += KINDS[kind][0]
     return tuple(layout), values
+
+
+def _known(eom: EOM, matrix: sp.Matrix | None) -> list[sp.Expr] | None:
+    """The entries of `matrix` over the model's plain symbols (`lagcomp.mechanics.lagrange.to_plain`) when they
+    are functions of q, t and the parameters alone; else None (no matrix, or a symbol the kinetic energy lost:
+    the ``d`` of a constant offset ``x + d`` that no other expression has is no parameter, so the kernel could
+    not bind it)."""
+    if matrix is None:
+        return None
+    entries = [to_plain(sp.sympify(e), eom.system, eom.q, eom.qd) for e in matrix]
+    known = {*eom.q, *eom.parameters, t}
+    if any(e.free_symbols - known or e.atoms(AppliedUndef) for e in entries):
+        return None
+    return entries
 
 
 def geometry_kernel(eom: EOM, build: Callable[..., Kernel]) -> Kernel:
