@@ -33,6 +33,10 @@ has a kernel that writes nothing, ``GEOMETRY = ()`` and ``GEOMETRY_SIZE = 0``.
 
 Positions depend on q, t and the parameters, never on q̇ (`lagcomp.model.bodies` refuses
 velocities in them), so the kernel loads no velocity: a caller may pass any q̇.
+
+Cost (``python -m bench.bench_geometry``): lowering it takes 1.5–9 ms for the bundled examples
+built from bodies, 0.17–0.40 of their whole `lower` (9–22 ms); a call from Python, once per
+frame, about 2 µs, some 4·10⁻⁵ of drawing the frame with matplotlib.
 """
 
 from __future__ import annotations
