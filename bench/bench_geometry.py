@@ -43,7 +43,8 @@ def lowering_cost(name: str, rounds: int) -> str:
         geometry_kernel(eom, lambda *spec: lowering._kernel(*spec, mapping, loads))
 
     (whole_s, geometry_s), (_, ratio) = interleaved([whole, geometry], repeats=rounds)
-    return f"| {name} | lowering | {fmt_stat(geometry_s, 's')} | {fmt_stat(ratio)} of lower() ({fmt_stat(whole_s, 's')}) |"
+    return (f"| {name} | lowering | {fmt_stat(geometry_s, 's')} | {fmt_stat(ratio)} of lower() "
+            f"({fmt_stat(whole_s, 's')}) |")
 
 
 def frame_cost(name: str, rounds: int) -> str:
