@@ -175,27 +175,17 @@ def test_example_drawings_put_the_bobs_on_their_rods(compiled):
     assert bob.shape == (11, 3) and np.max(np.abs(np.linalg.norm(bob, axis=1) - sol.params["l"])) < 1e-14
 
 
-def test_symmetric_top_draws_its_centre_of_mass_where_the_frames_put_it(compiled):
-    from sympy.physics.vector import ReferenceFrame
-
-    from lagcomp.animation import EXAMPLE_DRAWINGS
-
-    model = compiled("symmetric_top")
-    drawing = EXAMPLE_DRAWINGS["symmetric_top"](model.coordinates)
+def test_a_named_point_of_the_symmetric_top_is_drawn_on_its_body(compiled):
+    """The top's centre of mass named by hand, G = l K.z, where its geometry kernel draws the body."""
     psi, theta, _ = lc.coordinates("psi theta phi")
-    N = ReferenceFrame("N")
-    axis = lc.rotated(N, (psi, "z"), (theta, "x"), name="K").z  # the example's own construction
-    l = sp.Symbol("l")  # noqa: E741
-    expected = [l * axis.dot(N.x), l * axis.dot(N.y), l * axis.dot(N.z)]
-    assert all(sp.simplify(a - b) == 0 for a, b in zip(drawing["points"]["G"], expected, strict=True))
-    sol = model.simulate((0, 0.5), t_eval=np.linspace(0, 0.5, 51))
-    anim = lc.animate(sol, **drawing, fps=20, dpi=30)
+    l = sp.Symbol("l")  # noqa: E741  (the example's name)
+    G = (l * sp.sin(theta) * sp.sin(psi), -l * sp.cos(psi) * sp.sin(theta), l * sp.cos(theta))
+    sol = compiled("symmetric_top").simulate((0, 0.5), t_eval=np.linspace(0, 0.5, 51))
+    anim = lc.animate(sol, {"G": G}, links=[("origin", "G")], trace=["top"], fps=20, dpi=30)
     for k in (0, 5, 10):
         anim.draw(k)
-        s_, c_ = np.sin(_at(sol, anim.frame_times[k], 1)), np.cos(_at(sol, anim.frame_times[k], 1))
-        p_ = _at(sol, anim.frame_times[k], 0)
-        g = sol.params["l"] * np.array([s_ * np.sin(p_), -s_ * np.cos(p_), c_])
-        assert np.max(np.abs(np.array(anim.markers["G"].get_data_3d(), dtype=float)[:, 0] - g)) < 1e-12
+        drawn = {name: np.array(anim.markers[name].get_data_3d(), dtype=float)[:, 0] for name in ("G", "top")}
+        assert np.max(np.abs(drawn["G"] - drawn["top"])) < 1e-12
 
 
 def test_cli_animates_an_example(cache_dir, tmp_path, capsys):

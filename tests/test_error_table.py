@@ -13,6 +13,7 @@ import math
 import sys
 import re
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -347,6 +348,12 @@ CASES = {
     "cli-unknown-example-argument": (lambda: _cli_system("n_link_pendulum", "m=3"), "the example 'n_link_pendulum' takes"),
     "cli-unwritable-output": (lambda tmp_path: cli._check_writable(str(tmp_path / "nonexistent" / "x.npz"), "--out"),
                               "does not exist"),
+    "animate-no-bodies": (lambda models: lc.animate(models["pendulum"].simulate((0, 1))), "'simple_pendulum'"),
+    "animate-no-geometry": (lambda models: replace(models["pendulum"].simulate((0, 1)), geometry=None).animate(),
+                            "no model geometry"),
+    "animate-unknown-name": (lambda models: lc.animate(models["pendulum"].simulate((0, 1)),
+                                                       {"bob": (lc.coordinates("theta")[0], 0)}, trace=["rod"]),
+                             "['rod'], not a point or a body"),
 }
 
 

@@ -21,6 +21,7 @@ import pytest
 import sympy as sp
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
+from sympy.physics.vector import ReferenceFrame
 
 import lagcomp as lc
 from lagcomp import examples
@@ -91,15 +92,20 @@ def _identifiers(source: str) -> set[str]:
     return found
 
 
-def _probes() -> tuple[lc.System, lc.System]:
-    """Two small systems whose modules hold every kind of emitted code: events, Taylor, lanes; constraints."""
+def _probes() -> tuple[lc.System, lc.System, lc.System]:
+    """Three small systems whose modules hold every kind of emitted code: events, Taylor, lanes; constraints;
+    bodies (the `geometry` kernel)."""
     x, z = lc.coordinates("x z")
     a, b = sp.symbols("a b", positive=True)
     free = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * x**2 + b * z**2,
                      events=[lc.Event("hit", x)], name="probe_free")
     rod = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * z,
                     constraints=[lc.Holonomic("rod", x**2 + z**2 - b**2)], name="probe_rod")
-    return free, rod
+    N = ReferenceFrame("N")
+    bodies = lc.System(coordinates=(x, z), bodies=[lc.Particle(a, (x, z, 0), name="bob"),
+                                                   lc.RigidBody(b, (0, 0, x), (1, 1, 1), lc.rotated(N, (z, "z")))],
+                       frame=N, name="probe_bodies")
+    return free, rod, bodies
 
 
 def _sources(model: lc.Model) -> list[str]:

@@ -1,24 +1,33 @@
-"""Animations of a run from points the user names (matplotlib, the ``plots`` extra).
+"""Animations of a run: the model's bodies, and points the user names (matplotlib, the ``plots`` extra).
 
+    anim = lc.animate(sol)                      # a system built from lc.Particle / lc.RigidBody
     anim = lc.animate(sol, {"bob1": (l1 * sin(th1), -l1 * cos(th1)), "bob2": (...)},
                       links=[("origin", "bob1"), ("bob1", "bob2")], trace=["bob2"])
     anim.save("run.gif", writer="pillow")      # or animate(..., save="run.gif")
     anim.to_jshtml()                            # an HTML player, in a notebook
 
-Each point is a tuple of sympy expressions in the model's coordinates (functions
-of t, as `lagcomp.coordinates` makes them), its parameters (by name, valued from
-``sol.params``) and t.  The expressions are evaluated with numpy (`sympy.lambdify`:
-this is drawing, not a kernel) at the frame times t₀ + k·speed/fps, k = 0, 1, ...
-up to the last saved time, from the coordinates interpolated *linearly* in t
-between the solution's saved rows: save densely enough (``t_eval`` or
-``save_every``) that the straight segments do not show.  ``speed`` is simulated
-seconds per wall-clock second, so a long run plays in a short clip.  Tuples of
-two give a 2-D picture, of three a 3-D one; the axes have equal scales and
-limits that hold the whole motion.  The name ``"origin"`` stands for the point
-at 0 in `links` and `trace` unless `points` defines it.
+Bodies.  A system built from bodies draws itself: its module's ``geometry`` kernel
+(`lagcomp.codegen.geometry`) gives each body's position and, for a rigid body, its
+orientation, in the axes of the frame the system is described in.  A particle is a
+marker; a rigid body a marker at its centre of mass with its axes x, y, z drawn from
+it (red, green, blue; ``axes_length``, by default half the motion's extent).  The
+picture is 2-D when every body stays in the plane z = 0 and turns only about z
+(exactly, at every frame), else 3-D.
 
-Bodies' geometry kernels (positions and orientations of a system's bodies,
-without naming points) are not here yet.
+Points.  Each point is a tuple of sympy expressions in the model's coordinates (functions
+of t, as `lagcomp.coordinates` makes them), its parameters (by name, valued from
+``sol.params``) and t, evaluated with numpy (`sympy.lambdify`: this is drawing, not a
+kernel).  Tuples of two give a 2-D picture, of three a 3-D one.  A system whose T is
+written directly has no bodies: name its points.  Points and bodies may be combined;
+`links` and `trace` take the names of both.
+
+Both are evaluated at the frame times t₀ + k·speed/fps, k = 0, 1, ... up to the last
+saved time, from the coordinates interpolated *linearly* in t between the solution's
+saved rows: save densely enough (``t_eval`` or ``save_every``) that the straight segments
+do not show.  ``speed`` is simulated seconds per wall-clock second, so a long run plays
+in a short clip.  The axes have equal scales and limits that hold the whole motion.  The
+name ``"origin"`` stands for the point at 0 in `links` and `trace` unless a point or
+body has that name.
 """
 
 from __future__ import annotations
@@ -29,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from lagcomp.animation_bodies import BodyFrames
 from lagcomp.errors import ModelError, OptionError
 
 ORIGIN = "origin"
@@ -105,28 +115,75 @@ def point_positions(sol, points: dict, times: np.ndarray) -> dict[str, np.ndarra
     return positions
 
 
-def _check_names(what: str, names, known) -> None:
+def _check_names(what: str, names, known, unplaced=()) -> None:
     unknown = [n for n in names if n not in known]
     if unknown:
-        raise OptionError(f"animate: {what} names {unknown}, not a point; the points are {sorted(known)}.")
+        why = f" ({sorted(set(unknown) & set(unplaced))}: the model does not know where, see " \
+            "lagcomp.codegen.geometry)" if set(unknown) & set(unplaced) else ""
+        raise OptionError(f"animate: {what} names {unknown}, not a point or a body{why}; the points and bodies are "
+                          f"{sorted(known)}.")
 
 
-def animate(sol, points: dict, *, links=(), trace=(), fps: float = 30, speed: float = 1.0,
+def body_frames(sol, times: np.ndarray, needed: bool = True) -> BodyFrames:
+    """The bodies of `sol`'s model at `times` (`lagcomp.animation_bodies`), from the interpolated coordinates.
+
+    A Solution without its model's geometry kernel has none to draw: an OptionError when they are `needed`
+    (no points named).
+    """
+    geometry = sol.geometry
+    if geometry is None or (geometry.layout and geometry.kernel is None):
+        if not needed:
+            return BodyFrames({}, {}, ())
+        raise OptionError("animate: this Solution carries no model geometry (built by hand, or unpickled): name the "
+                          "points to draw, points={'bob': (x, y)}, or animate the run where `simulate` returned it.")
+    if not geometry.layout:
+        return BodyFrames({}, {}, ())
+    return geometry.frames(times, interpolated_coordinates(sol, times))
+
+
+def default_axes_length(positions: dict[str, np.ndarray]) -> float:
+    """Half the largest extent of the drawn positions together with the origin; 1 when nothing moves from 0."""
+    every = np.concatenate([*positions.values(), np.zeros((1, next(iter(positions.values())).shape[1]))])
+    extent = float(np.max(every.max(axis=0) - every.min(axis=0)))
+    return 0.5 * extent if extent > 0 else 1.0
+
+
+def _dimension(points: dict, bodies: BodyFrames) -> int:
+    """2 or 3: the points' own, or for bodies alone 2 when they stay in the plane z = 0 (`BodyFrames.planar`)."""
+    planar = bodies.planar()
+    if not points:
+        return 2 if planar else 3
+    d = next(iter(points.values())).shape[1]
+    if d == 2 and not planar:
+        raise OptionError(f"animate: the points are 2-D but the bodies {sorted(bodies.centres)} leave the plane z = 0 "
+                          "or turn out of it: give the points as (x, y, z), or bodies=False.")
+    return d
+
+
+def animate(sol, points: dict | None = None, *, links=(), trace=(), bodies: bool = True,
+            axes_length: float | None = None, fps: float = 30, speed: float = 1.0,
             title: str | None = None, size: tuple[float, float] = (5.0, 5.0), dpi: float = 100,
             save: str | os.PathLike | None = None):
-    """An animation of named points of a `Solution`; returns a `MechanismAnimation` (a FuncAnimation).
+    """An animation of a `Solution`'s bodies and named points; returns a `MechanismAnimation` (a FuncAnimation).
 
     Parameters
     ----------
     sol : Solution
         The run; its coordinate names and ``params`` value the expressions.
-    points : dict of str to tuple
+    points : dict of str to tuple, optional
         ``{name: (x, y)}`` or ``{name: (x, y, z)}``: sympy expressions in the
         coordinates (functions of t), parameters and t (module docstring).
+        Needed for a system whose T is written directly, which has no bodies.
     links : iterable of (str, str)
-        Pairs of point names drawn as segments (rods); ``"origin"`` is 0.
+        Pairs of point or body names drawn as segments (rods); ``"origin"`` is 0.
     trace : iterable of str
-        Points whose paths are drawn as they move.
+        Points and bodies whose paths are drawn as they move (a body's centre).
+    bodies : bool
+        Draw the model's bodies (`lagcomp.Particle`, `lagcomp.RigidBody`): a marker at
+        each centre, and a rigid body's axes x, y, z (red, green, blue) from it.
+    axes_length : float, optional
+        Length of the drawn body axes, in the model's units of length; by default half
+        the largest extent of the motion (`default_axes_length`).
     fps : float
         Frames per second of the clip.
     speed : float
@@ -142,21 +199,33 @@ def animate(sol, points: dict, *, links=(), trace=(), fps: float = 30, speed: fl
     links = [tuple(link) for link in links]
     trace = list(trace)
     if any(len(link) != 2 for link in links):
-        raise OptionError(f"animate: links must be pairs of point names, got {links}.")
+        raise OptionError(f"animate: links must be pairs of point or body names, got {links}.")
+    if axes_length is not None and (isinstance(axes_length, bool) or not isinstance(axes_length, numbers.Real)
+                                    or not (np.isfinite(axes_length) and axes_length > 0)):
+        raise OptionError(f"animate: axes_length must be a positive number, got {axes_length!r}.")
     times = frame_times(np.asarray(sol.t, dtype=float), fps, speed)
-    positions = point_positions(sol, points, times)
-    d = next(iter(positions.values())).shape[1]
+    named = point_positions(sol, points, times) if points is not None else {}
+    drawn = body_frames(sol, times, needed=points is None) if bodies else BodyFrames({}, {}, ())
+    if not named and not drawn.centres:
+        raise OptionError(f"animate: {sol.model_name or 'this model'!r} has no bodies to draw (its T is written "
+                          "directly, or bodies=False): name the points, points={'bob': (x, y)}.")
+    clash = sorted(set(named) & set(drawn.centres))
+    if clash:
+        raise OptionError(f"animate: {clash} name both a point and a body: rename the point.")
+    d = _dimension(named, drawn)
+    positions = {**{name: centre[:, :d] for name, centre in drawn.centres.items()}, **named}
     known = set(positions) | {ORIGIN}
-    _check_names("a link", [n for link in links for n in link], known)
-    _check_names("trace", trace, known)
+    _check_names("a link", [n for link in links for n in link], known, drawn.unplaced)
+    _check_names("trace", trace, known, drawn.unplaced)
     if ORIGIN not in positions and (any(ORIGIN in link for link in links) or ORIGIN in trace):
         positions[ORIGIN] = np.zeros((len(times), d))
+    tips = drawn.axis_tips(axes_length or default_axes_length(positions), d)
     try:
         from lagcomp.animation_artists import MechanismAnimation
     except ImportError as err:
         raise ImportError("lagcomp's animations need matplotlib: pip install 'lagcomp[plots]'.") from err
-    anim = MechanismAnimation(times, positions, tuple(points), links=links, trace=trace, fps=fps, size=size, dpi=dpi,
-                              title=title or f"{sol.method}")
+    anim = MechanismAnimation(times, positions, (*drawn.centres, *named), links=links, trace=trace, axes=tips,
+                              fps=fps, size=size, dpi=dpi, title=title or f"{sol.method}")
     if save is not None:
         save_animation(anim, save)
     return anim
@@ -190,18 +259,6 @@ def _spherical(coordinates: tuple[str, ...]) -> dict:
     return dict(points={"bob": bob}, links=[("origin", "bob")], trace=["bob"])
 
 
-def _top_axis(coordinates: tuple[str, ...]) -> dict:
-    """The centre of mass G = l K.z of a top in z–x–z Euler angles (ψ, θ, φ): its axis, precessing and nutating."""
-    import sympy as sp
-
-    from lagcomp.model import coordinates as functions
-
-    psi, theta, _ = functions(" ".join(coordinates))
-    l = sp.Symbol("l")  # noqa: E741  (the example's name)
-    centre = (l * sp.sin(theta) * sp.sin(psi), -l * sp.sin(theta) * sp.cos(psi), l * sp.cos(theta))
-    return dict(points={"G": centre}, links=[("origin", "G")], trace=["G"])
-
-
 def _cartesian_bob(coordinates: tuple[str, ...]) -> dict:
     """A bob whose coordinates are its position (x, y[, z]), on a rod from the origin."""
     from lagcomp.model import coordinates as functions
@@ -209,15 +266,22 @@ def _cartesian_bob(coordinates: tuple[str, ...]) -> dict:
     return dict(points={"bob": functions(" ".join(coordinates))}, links=[("origin", "bob")], trace=["bob"])
 
 
-#: What ``lagcomp animate NAME`` draws for the bundled examples with an obvious picture: example name →
-#: function of the model's coordinate names giving `animate`'s ``points``, ``links`` and ``trace``.
+def body_drawing(sol) -> dict:
+    """What ``lagcomp animate`` draws of a bundled example built from bodies, besides the bodies: a rod from the
+    origin (the examples' pivot) to each body, and its path (`animate`'s ``links`` and ``trace``)."""
+    names = [name for name, kind, _ in sol.geometry.layout if kind != "unplaced"]
+    return dict(links=[(ORIGIN, name) for name in names], trace=names)
+
+
+#: What ``lagcomp animate NAME`` draws for the bundled examples with an obvious picture and no bodies: example
+#: name → function of the model's coordinate names giving `animate`'s ``points``, ``links`` and ``trace``.
+#: The examples built from bodies draw themselves (`body_drawing`).
 EXAMPLE_DRAWINGS = {
     "simple_pendulum": _chain,
     "double_pendulum": _chain,
     "n_link_pendulum": _chain,
     "spherical_pendulum": _spherical,
     "spherical_pendulum_cartesian": _cartesian_bob,
-    "symmetric_top": _top_axis,
 }
 
 

@@ -276,13 +276,15 @@ def cmd_animate(args) -> int:
     _check_writable(args.output, "--output")
     import importlib.util
 
-    from lagcomp.animation import EXAMPLE_DRAWINGS, animate, check_format, frame_times
+    from lagcomp.animation import EXAMPLE_DRAWINGS, animate, body_drawing, check_format, frame_times
+    from lagcomp.examples.bodies import BODIES_EXAMPLES
 
     check_format(args.output)
 
-    if args.name not in EXAMPLE_DRAWINGS:
-        raise LagcompError(f"lagcomp animate draws {sorted(EXAMPLE_DRAWINGS)}; for {args.name!r}, name the points "
-                           "to draw from Python: lagcomp.animate(sol, points={'bob': (x, y)}, ...).")
+    if args.name not in EXAMPLE_DRAWINGS and args.name not in BODIES_EXAMPLES:
+        raise LagcompError(f"lagcomp animate draws {sorted(EXAMPLE_DRAWINGS)} and the examples built from bodies "
+                           f"{sorted(BODIES_EXAMPLES)}; for {args.name!r}, name the points to draw from Python: "
+                           "lagcomp.animate(sol, points={'bob': (x, y)}, ...).")
     if importlib.util.find_spec("matplotlib") is None:  # known before the run, not after it
         raise LagcompError("lagcomp animate needs matplotlib: pip install 'lagcomp[plots]'.")
     model = _example_model(args)
@@ -292,7 +294,7 @@ def cmd_animate(args) -> int:
     times = frame_times(np.array([0.0, t_end]), args.fps, args.speed)
     sol = model.simulate((0.0, t_end), q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"),
                          t_eval=times, rtol=1e-10, atol=1e-10, progress=False)  # saved at the frames' times
-    drawing = EXAMPLE_DRAWINGS[args.name](model.coordinates)
+    drawing = EXAMPLE_DRAWINGS[args.name](model.coordinates) if args.name in EXAMPLE_DRAWINGS else body_drawing(sol)
     animate(sol, **drawing, fps=args.fps, speed=args.speed, title=model.name, save=args.output)
     print(f"animated    {args.output}: {len(times)} frames of t in [0, {sol.t[-1]:g}] at {args.fps:g} fps, "
           f"speed {args.speed:g} ({sol.method}: {sol.message})")
@@ -632,7 +634,8 @@ def _parser() -> argparse.ArgumentParser:
     stability.add_argument("--drop", nargs="+", metavar="NAME", help="ignorable coordinates/speeds to leave out")
     stability.add_argument("--plot", metavar="PNG", help="draw the eigenvalues vs the parameter (needs matplotlib)")
     stability.set_defaults(func=cmd_stability)
-    anim = example("animate", "draw a run of an example as a GIF, MP4 or HTML player (pendulums, top; needs matplotlib)")
+    anim = example("animate", "draw a run of an example as a GIF, MP4 or HTML player (pendulums, examples built "
+                   "from bodies; needs matplotlib)")
     anim.add_argument("-o", "--output", required=True, help="file to write: .gif, .mp4 (ffmpeg) or .html")
     anim.add_argument("--t-end", type=float, help="end time (default: the example's)")
     anim.add_argument("--fps", type=float, default=30.0, help="frames per second of the clip (default 30)")

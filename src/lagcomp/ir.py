@@ -160,6 +160,11 @@ class Kernel:
         The name of another kernel of the module that computes the same
         thing: this one is emitted as that function (``name = alias``), so
         numba compiles it once.
+    constants : tuple of (name, comment, value)
+        Module constants emitted after the kernel, ``name = repr(value)`` under the
+        comment ``#: comment``: data that describes the kernel's output to Python
+        callers (``geometry``'s layout, `lagcomp.codegen.geometry`).  Values are
+        Python literals (numbers, strings, tuples of them).
     """
 
     name: str
@@ -172,6 +177,7 @@ class Kernel:
             | None) = None
     lanes: bool = False
     alias: str | None = None
+    constants: tuple[tuple[str, str, object], ...] = ()
 
     @property
     def operation_count(self) -> int:

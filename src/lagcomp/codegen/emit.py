@@ -288,7 +288,17 @@ def _kernel_source(kernel: Kernel) -> str:
             body += _unrolled_ldlt(solve)
         else:
             body += _looped_ldlt(solve)
-    return _decorated(kernel, body)
+    return _decorated(kernel, body) + module_constants(kernel)
+
+
+def module_constants(kernel: Kernel) -> str:
+    """The source of `kernel`'s module constants (`Kernel.constants`), after its function; a long tuple
+    one item per line."""
+    def literal(value) -> str:
+        if isinstance(value, tuple) and len(repr(value)) > 100:
+            return "(\n" + "".join(f"{INDENT}{item!r},\n" for item in value) + ")"
+        return repr(value)
+    return "".join(f"\n\n#: {comment}\n{name} = {literal(value)}\n" for name, comment, value in kernel.constants)
 
 
 def _decorated(kernel: Kernel, body: list[str]) -> str:

@@ -22,6 +22,8 @@ speeds, state length ``n_q + n_u``; same calling conventions as
 
 - ``event_values(t, y, p, out)``: g of each declared event (`lagcomp.Event`
   over q, u and t); without events a stub, and the drivers' event code is left out.
+- ``geometry(t, y, p, out)``: writes nothing, ``GEOMETRY = ()``, ``GEOMETRY_SIZE = 0``
+  (`lagcomp.codegen.geometry`): a Kane model's bodies are not drawn yet.
 
 Then the hooks the drivers call (``project``, ``constraint_residual``, with
 the constraint sizes as module constants), ``observables`` and
@@ -43,8 +45,10 @@ from lagcomp.codegen.emit import (
     INDENT,
     PROJECTION_ITERATIONS,
     kernel_support_names,
+    module_constants,
     support_imports,
 )
+from lagcomp.codegen.geometry import no_geometry_kernel
 from lagcomp.codegen.latex import equations_source, kane_equations
 from lagcomp.codegen.lower import RHS_JACOBIAN_DOC, _kernel, acceleration_partials, jacobian_entry
 from lagcomp.codegen.printer import to_code
@@ -319,6 +323,9 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
     if event_kernel is not None:
         kernels.append(event_kernel)
     parts.append(event_source)
+    geometry = no_geometry_kernel()  # a Kane model's bodies are not drawn yet: size 0
+    kernels.append(geometry)
+    parts.append(_function(geometry) + module_constants(geometry))
     parts.append(_sizes(form) + _HOOKS)
     parts.append(equations_source(kane_equations(form, energy)))
     return _header(name, form, reaction_names, kernels) + "".join(parts), {k.name: k.operation_count for k in kernels}

@@ -38,6 +38,7 @@ from dataclasses import replace
 import symengine as se
 import sympy as sp
 
+from lagcomp.codegen.geometry import geometry_kernel
 from lagcomp.ir import (
     NO_JACOBIAN,
     AugmentedSolve,
@@ -609,7 +610,8 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 def lower(eom: EOM) -> ModuleIR:
     """Build the IR of the module for `eom`: rhs, mass_matrix, forcing, energies, momenta,
-    and for constrained systems reactions, constraint residuals and matrix, and the DAE's residual and Jacobian."""
+    and for constrained systems reactions, constraint residuals and matrix, and the DAE's residual and Jacobian;
+    last the bodies' `geometry` (`lagcomp.codegen.geometry`)."""
     n = eom.n
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
@@ -643,6 +645,7 @@ def lower(eom: EOM) -> ModuleIR:
         _event_kernel(eom, mapping, loads),
         _rest_partials_kernel(eom, mapping, loads),
     ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
+    kernels += (geometry_kernel(eom, lambda name, doc, args, stores: _kernel(name, doc, args, stores, mapping, loads)),)
     system = eom.system
     return ModuleIR(
         system_name=system.name, description=system.description,

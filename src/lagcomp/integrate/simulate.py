@@ -19,6 +19,7 @@ import weakref
 
 import numpy as np
 
+from lagcomp.animation_bodies import BodyGeometry
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.dae import dae_state, differential_size, refuse_stabilisation
@@ -339,7 +340,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         params=dict(zip(model.parameters, p.tolist())),
         reactions=reactions, constraint_residual=max(run["residual_max"], residual),
         projected_initial_state=ys[0].copy() if run["projected"] else None,
-        events=run["events"], model_name=model.name,
+        events=run["events"], model_name=model.name, geometry=BodyGeometry.of(model, p),
     )
     # simulate -> Model.simulate -> the user's call
     warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4)

@@ -87,6 +87,9 @@ class Solution:
         Names of the columns of `u` (empty for Lagrange models).
     model_name : str
         Name of the model that ran ("" for a Solution built by hand).
+    geometry : lagcomp.animation_bodies.BodyGeometry or None
+        The model's ``geometry`` kernel with the run's parameters, which `animate` draws the
+        bodies with (None for a Solution built by hand; a pickled one keeps no kernel).
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
@@ -121,6 +124,7 @@ class Solution:
     njev: int = 0
     nlu: int = 0
     model_name: str = ""
+    geometry: object = field(default=None, repr=False, compare=False)
 
     @property
     def success(self) -> bool:
@@ -217,8 +221,8 @@ class Solution:
 
         return solution_html(self)
 
-    def animate(self, points: dict, **options):
-        """An animation of named points along this run: `lagcomp.animation.animate` (matplotlib)."""
+    def animate(self, points: dict | None = None, **options):
+        """An animation of this run's bodies and named points: `lagcomp.animation.animate` (matplotlib)."""
         from lagcomp.animation import animate
 
         return animate(self, points, **options)

@@ -1,0 +1,104 @@
+"""The bodies of a run for `lagcomp.animation`: centres and axes from the model's ``geometry`` kernel.
+
+A Solution made by `simulate` carries a `BodyGeometry`: its model's ``geometry`` kernel, the
+layout the module describes it with (``GEOMETRY``, `lagcomp.codegen.geometry`) and the run's
+parameter vector.  `BodyGeometry.frames` calls the kernel once per frame, at the frame's time
+and the coordinates interpolated there; velocities are not needed, positions depend on q, t and
+the parameters only.  This module imports numpy alone: `simulate` builds a `BodyGeometry` for
+every run, drawn or not.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: The columns of a rotation matrix, the body's axes, as the animation labels them.
+AXIS_LABELS = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class BodyFrames:
+    """The bodies at each frame.
+
+    centres : dict of str to ndarray, shape (frames, 3)
+        Each drawn body's position (a particle's, a rigid body's centre of mass), by name.
+    rotations : dict of str to ndarray, shape (frames, 3, 3)
+        Each rigid body's rotation matrix C whose columns are its axes, by name (bodies whose
+        orientation the model knows).
+    unplaced : tuple of str
+        Bodies the model cannot place (a sympy Point with no frame origin): not drawn.
+    """
+
+    centres: dict
+    rotations: dict
+    unplaced: tuple
+
+    def planar(self) -> bool:
+        """Every centre stays at z = 0 and every body turns about z only, exactly, at every frame."""
+        centres = all(not np.any(c[:, 2]) for c in self.centres.values())
+        turns = all(not np.any(C[:, 2, :2]) and not np.any(C[:, :2, 2]) for C in self.rotations.values())
+        return centres and turns
+
+    def axis_tips(self, length: float, d: int) -> dict[tuple[str, str], np.ndarray]:
+        """The end of each body axis drawn from its centre, G + length · C[:, j], shape (frames, d), by
+        (body, axis label); in 2-D (`d` = 2) the x and y axes only, in the plane."""
+        return {(name, label): (self.centres[name] + length * C[:, :, j])[:, :d]
+                for name, C in self.rotations.items() for j, label in enumerate(AXIS_LABELS[:d])}
+
+
+@dataclass(frozen=True)
+class BodyGeometry:
+    """A model's ``geometry`` kernel with its layout and a run's parameters (module docstring).
+
+    layout : tuple of (name, kind, offset)
+        The module's ``GEOMETRY``; empty for a model without bodies.
+    size : int
+        ``GEOMETRY_SIZE``, the length of the kernel's output.
+    p : ndarray
+        The parameter vector the run used.
+    kernel : numba dispatcher or None
+        ``geometry(t, y, p, out)``; None once the Solution was pickled (the kernel is not kept).
+    """
+
+    layout: tuple
+    size: int
+    p: np.ndarray
+    kernel: object = field(default=None, repr=False, compare=False)
+
+    @classmethod
+    def of(cls, model, p: np.ndarray) -> BodyGeometry:
+        """The geometry of `model` (a Model or KaneModel: its generated module) for the parameters `p`."""
+        module = model.kernels
+        return cls(tuple(getattr(module, "GEOMETRY", ())), int(getattr(module, "GEOMETRY_SIZE", 0)),
+                   np.array(p, dtype=float), getattr(module, "geometry", None))
+
+    def __reduce__(self):
+        """Pickled without the kernel: a numba function of a generated module another process may not have."""
+        return BodyGeometry, (self.layout, self.size, self.p)
+
+    def __deepcopy__(self, memo) -> BodyGeometry:
+        """A copy that keeps the kernel (in this process it stays valid)."""
+        return BodyGeometry(self.layout, self.size, self.p.copy(), self.kernel)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(name for name, _, _ in self.layout)
+
+    def frames(self, times: np.ndarray, q: np.ndarray) -> BodyFrames:
+        """The bodies at `times` (frames,), the coordinates there `q` (frames, n)."""
+        out = np.zeros((len(times), self.size))
+        y = np.zeros(2 * q.shape[1])  # (q, q̇): the kernel reads no velocity
+        for k, time in enumerate(times):
+            y[:q.shape[1]] = q[k]
+            self.kernel(float(time), y, self.p, out[k])
+        centres, rotations, unplaced = {}, {}, []
+        for name, kind, offset in self.layout:
+            if kind == "unplaced":
+                unplaced.append(name)
+                continue
+            centres[name] = out[:, offset:offset + 3]
+            if kind == "rigid":
+                rotations[name] = out[:, offset + 3:offset + 12].reshape(-1, 3, 3)
+        return BodyFrames(centres, rotations, tuple(unplaced))
