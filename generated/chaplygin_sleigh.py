@@ -291,6 +291,19 @@ def rest_partials(t, y, p, out):
     out[1, 2, 2] = 0.0
 
 
+@njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 3, 1, 0
 #: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
@@ -384,3 +397,33 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
 
 #: Why this module has no Taylor integrator (method='taylor').
 TAYLOR_REFUSED = 'constraints (their multipliers are not covered)'
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "x",
+     r"m \ddot{x}",
+     r"- \sin{\left(\theta \right)} \lambda_{knife}",
+     "m*x_ddot = -sin(theta)*lambda_knife"),
+    ("motion", "y",
+     r"m \ddot{y}",
+     r"\cos{\left(\theta \right)} \lambda_{knife}",
+     "m*y_ddot = cos(theta)*lambda_knife"),
+    ("motion", "theta",
+     r"I \ddot{\theta}",
+     r"a \lambda_{knife}",
+     "I*theta_ddot = a*lambda_knife"),
+    ("constraint", "knife",
+     r"a \dot{\theta} - \dot{x} \sin{\left(\theta \right)} + \dot{y} \cos{\left(\theta \right)}",
+     "0",
+     "a*theta_dot - x_dot*sin(theta) + y_dot*cos(theta) = 0"),
+    ("energy", "T",
+     "T",
+     r"\frac{I \dot{\theta}^{2}}{2} + \frac{m \left(\dot{x}^{2} + \dot{y}^{2}\right)}{2}",
+     "T = I*theta_dot**2/2 + m*(x_dot**2 + y_dot**2)/2"),
+    ("energy", "V",
+     "V",
+     "0",
+     "V = 0"),
+)

@@ -221,6 +221,40 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are, shape (GEOMETRY_SIZE,) = (12,), into `out`: positions along the axes of the
+    system's frame from its origin, rotation matrices C (r_frame = C r_body) row-major. Reads no velocity.
+    out[0:12] disc: centre of mass, then the rotation matrix C row-major (columns: the body axes)"""
+    q_phi = y[0]
+    p_nu = p[4]
+    _c0 = cos(q_phi)
+    _c1 = sin(q_phi)
+    _c2 = math.pi*(0.5 - 0.5*cos(p_nu*t))
+    _c3 = cos(_c2)
+    _c4 = sin(_c2)
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = _c0
+    out[4] = 0.0
+    out[5] = _c1
+    out[6] = _c1*_c3
+    out[7] = -_c4
+    out[8] = -_c0*_c3
+    out[9] = _c1*_c4
+    out[10] = _c3
+    out[11] = -_c0*_c4
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = (('disc', 'rigid', 0),)
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 12
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -346,3 +380,21 @@ TAYLOR_WORK = 10
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "phi",
+     r"I_{Y} \ddot{\phi}",
+     r"\frac{\pi I_{Y} \nu \omega \sin{\left(\lambda \right)} \sin{\left(\nu t \right)} \cos{\left(\frac{\pi \cos{\left(\nu t \right)}}{2} \right)}}{2}",
+     "I_Y*phi_ddot = pi*I_Y*nu*omega*sin(lambda)*sin(nu*t)*cos(pi*cos(nu*t)/2)/2"),
+    ("energy", "T",
+     "T",
+     r"\frac{I \omega^{2} \sin^{2}{\left(\lambda \right)} \sin^{2}{\left(\pi \left(\frac{1}{2} - \frac{\cos{\left(\nu t \right)}}{2}\right) \right)}}{2} + \frac{I \left(\frac{\pi \nu \sin{\left(\nu t \right)}}{2} - \omega \cos{\left(\lambda \right)}\right)^{2}}{2} + \frac{I_{Y} \left(\omega \sin{\left(\lambda \right)} \cos{\left(\pi \left(\frac{1}{2} - \frac{\cos{\left(\nu t \right)}}{2}\right) \right)} + \dot{\phi}\right)^{2}}{2}",
+     "T = I*omega**2*sin(lambda)**2*sin(pi*(1/2 - cos(nu*t)/2))**2/2 + I*(pi*nu*sin(nu*t)/2 - omega*cos(lambda))**2/2 + I_Y*(omega*sin(lambda)*cos(pi*(1/2 - cos(nu*t)/2)) + phi_dot)**2/2"),
+    ("energy", "V",
+     "V",
+     "0",
+     "V = 0"),
+)

@@ -249,6 +249,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -376,3 +389,21 @@ TAYLOR_WORK = 10
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([0], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta",
+     r"l^{2} m \ddot{\theta}",
+     r"\left(A \Omega^{2} l m \cos{\left(\Omega t \right)} - g l m\right) \sin{\left(\theta \right)}",
+     "l**2*m*theta_ddot = (A*Omega**2*l*m*cos(Omega*t) - g*l*m)*sin(theta)"),
+    ("energy", "T",
+     "T",
+     r"\frac{m \left(l^{2} \dot{\theta}^{2} \cos^{2}{\left(\theta \right)} + \left(- A \Omega \sin{\left(\Omega t \right)} + l \dot{\theta} \sin{\left(\theta \right)}\right)^{2}\right)}{2}",
+     "T = m*(l**2*theta_dot**2*cos(theta)**2 + (-A*Omega*sin(Omega*t) + l*theta_dot*sin(theta))**2)/2"),
+    ("energy", "V",
+     "V",
+     r"g m \left(A \cos{\left(\Omega t \right)} - l \cos{\left(\theta \right)}\right)",
+     "V = g*m*(A*cos(Omega*t) - l*cos(theta))"),
+)

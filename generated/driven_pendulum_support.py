@@ -225,6 +225,26 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are, shape (GEOMETRY_SIZE,) = (3,), into `out`: positions along the axes of the
+    system's frame from its origin, rotation matrices C (r_frame = C r_body) row-major. Reads no velocity.
+    out[0:3] bob: position"""
+    q_theta = y[0]
+    p_l = p[1]
+    out[0] = p_l*sin(q_theta)
+    out[1] = -p_l*cos(q_theta)
+    out[2] = 0.0
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = (('bob', 'particle', 0),)
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 3
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -352,3 +372,21 @@ TAYLOR_WORK = 10
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([0], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta",
+     r"l^{2} m \ddot{\theta}",
+     r"\left(A \Omega^{2} l m \cos{\left(\Omega t \right)} - g l m\right) \sin{\left(\theta \right)}",
+     "l**2*m*theta_ddot = (A*Omega**2*l*m*cos(Omega*t) - g*l*m)*sin(theta)"),
+    ("energy", "T",
+     "T",
+     r"\frac{l^{2} m \dot{\theta}^{2}}{2}",
+     "T = l**2*m*theta_dot**2/2"),
+    ("energy", "V",
+     "V",
+     r"A \Omega^{2} l m \cos{\left(\theta \right)} \cos{\left(\Omega t \right)} - g l m \cos{\left(\theta \right)}",
+     "V = A*Omega**2*l*m*cos(theta)*cos(Omega*t) - g*l*m*cos(theta)"),
+)

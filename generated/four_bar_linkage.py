@@ -558,6 +558,19 @@ def rest_partials(t, y, p, out):
     out[1, 2, 2] = 0.0
 
 
+@njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 3, 2, 2
 #: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
@@ -651,3 +664,37 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
 
 #: Why this module has no Taylor integrator (method='taylor').
 TAYLOR_REFUSED = 'constraints (their multipliers are not covered)'
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta1",
+     r"\frac{a b m_{2} \cos{\left(\theta_{1} - \theta_{2} \right)} \ddot{\theta}_{2}}{2} + \left(\frac{a^{2} m_{1}}{12} + a^{2} \left(\frac{m_{1}}{4} + m_{2}\right)\right) \ddot{\theta}_{1}",
+     r"- \frac{a b m_{2} \dot{\theta}_{2}^{2} \sin{\left(\theta_{1} - \theta_{2} \right)}}{2} - a g \left(\frac{m_{1}}{2} + m_{2}\right) \cos{\left(\theta_{1} \right)} - a \sin{\left(\theta_{1} \right)} \lambda_{loop x} + a \cos{\left(\theta_{1} \right)} \lambda_{loop y}",
+     "a*b*m2*cos(theta1 - theta2)*theta2_ddot/2 + (a**2*m1/12 + a**2*(m1/4 + m2))*theta1_ddot = -a*b*m2*theta2_dot**2*sin(theta1 - theta2)/2 - a*g*(m1/2 + m2)*cos(theta1) - a*sin(theta1)*lambda_loop_x + a*cos(theta1)*lambda_loop_y"),
+    ("motion", "theta2",
+     r"\frac{a b m_{2} \cos{\left(\theta_{1} - \theta_{2} \right)} \ddot{\theta}_{1}}{2} + \frac{b^{2} m_{2} \ddot{\theta}_{2}}{3}",
+     r"\frac{a b m_{2} \dot{\theta}_{1}^{2} \sin{\left(\theta_{1} - \theta_{2} \right)}}{2} - \frac{b g m_{2} \cos{\left(\theta_{2} \right)}}{2} - b \sin{\left(\theta_{2} \right)} \lambda_{loop x} + b \cos{\left(\theta_{2} \right)} \lambda_{loop y}",
+     "a*b*m2*cos(theta1 - theta2)*theta1_ddot/2 + b**2*m2*theta2_ddot/3 = a*b*m2*theta1_dot**2*sin(theta1 - theta2)/2 - b*g*m2*cos(theta2)/2 - b*sin(theta2)*lambda_loop_x + b*cos(theta2)*lambda_loop_y"),
+    ("motion", "theta3",
+     r"\frac{c^{2} m_{3} \ddot{\theta}_{3}}{3}",
+     r"- \frac{c g m_{3} \cos{\left(\theta_{3} \right)}}{2} + c \sin{\left(\theta_{3} \right)} \lambda_{loop x} - c \cos{\left(\theta_{3} \right)} \lambda_{loop y}",
+     "c**2*m3*theta3_ddot/3 = -c*g*m3*cos(theta3)/2 + c*sin(theta3)*lambda_loop_x - c*cos(theta3)*lambda_loop_y"),
+    ("constraint", "loop_x",
+     r"a \cos{\left(\theta_{1} \right)} + b \cos{\left(\theta_{2} \right)} - c \cos{\left(\theta_{3} \right)} - d",
+     "0",
+     "a*cos(theta1) + b*cos(theta2) - c*cos(theta3) - d = 0"),
+    ("constraint", "loop_y",
+     r"a \sin{\left(\theta_{1} \right)} + b \sin{\left(\theta_{2} \right)} - c \sin{\left(\theta_{3} \right)}",
+     "0",
+     "a*sin(theta1) + b*sin(theta2) - c*sin(theta3) = 0"),
+    ("energy", "T",
+     "T",
+     r"\frac{a^{2} m_{1} \dot{\theta}_{1}^{2}}{24} + \frac{b^{2} m_{2} \dot{\theta}_{2}^{2}}{24} + \frac{c^{2} m_{3} \dot{\theta}_{3}^{2}}{24} + \frac{m_{1} \left(\frac{a^{2} \dot{\theta}_{1}^{2} \sin^{2}{\left(\theta_{1} \right)}}{4} + \frac{a^{2} \dot{\theta}_{1}^{2} \cos^{2}{\left(\theta_{1} \right)}}{4}\right)}{2} + \frac{m_{2} \left(\left(- a \dot{\theta}_{1} \sin{\left(\theta_{1} \right)} - \frac{b \dot{\theta}_{2} \sin{\left(\theta_{2} \right)}}{2}\right)^{2} + \left(a \dot{\theta}_{1} \cos{\left(\theta_{1} \right)} + \frac{b \dot{\theta}_{2} \cos{\left(\theta_{2} \right)}}{2}\right)^{2}\right)}{2} + \frac{m_{3} \left(\frac{c^{2} \dot{\theta}_{3}^{2} \sin^{2}{\left(\theta_{3} \right)}}{4} + \frac{c^{2} \dot{\theta}_{3}^{2} \cos^{2}{\left(\theta_{3} \right)}}{4}\right)}{2}",
+     "T = a**2*m1*theta1_dot**2/24 + b**2*m2*theta2_dot**2/24 + c**2*m3*theta3_dot**2/24 + m1*(a**2*theta1_dot**2*sin(theta1)**2/4 + a**2*theta1_dot**2*cos(theta1)**2/4)/2 + m2*((-a*theta1_dot*sin(theta1) - b*theta2_dot*sin(theta2)/2)**2 + (a*theta1_dot*cos(theta1) + b*theta2_dot*cos(theta2)/2)**2)/2 + m3*(c**2*theta3_dot**2*sin(theta3)**2/4 + c**2*theta3_dot**2*cos(theta3)**2/4)/2"),
+    ("energy", "V",
+     "V",
+     r"g \left(\frac{a m_{1} \sin{\left(\theta_{1} \right)}}{2} + \frac{c m_{3} \sin{\left(\theta_{3} \right)}}{2} + m_{2} \left(a \sin{\left(\theta_{1} \right)} + \frac{b \sin{\left(\theta_{2} \right)}}{2}\right)\right)",
+     "V = g*(a*m1*sin(theta1)/2 + c*m3*sin(theta3)/2 + m2*(a*sin(theta1) + b*sin(theta2)/2))"),
+)

@@ -534,6 +534,19 @@ def rest_partials(t, y, p, out):
     out[1, 4, 4] = 0.0
 
 
+@njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 5, 3, 1
 #: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
@@ -627,3 +640,49 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
 
 #: Why this module has no Taylor integrator (method='taylor').
 TAYLOR_REFUSED = 'constraints (their multipliers are not covered)'
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "X",
+     r"2 m \ddot{X}",
+     r"2 \lambda_{roll X}",
+     "2*m*X_ddot = 2*lambda_roll_X"),
+    ("motion", "Y",
+     r"2 m \ddot{Y}",
+     r"2 g m \sin{\left(\alpha \right)} + 2 \lambda_{roll Y}",
+     "2*m*Y_ddot = 2*g*m*sin(alpha) + 2*lambda_roll_Y"),
+    ("motion", "theta",
+     r"\left(2 I_{1} + \frac{L^{2} m}{2}\right) \ddot{\theta}",
+     r"L \lambda_{steer}",
+     "(2*I1 + L**2*m/2)*theta_ddot = L*lambda_steer"),
+    ("motion", "phi",
+     r"I_{3} \ddot{\phi}",
+     r"- R \sin{\left(\theta \right)} \lambda_{roll X} + R \cos{\left(\theta \right)} \lambda_{roll Y} + R \lambda_{steer}",
+     "I3*phi_ddot = -R*sin(theta)*lambda_roll_X + R*cos(theta)*lambda_roll_Y + R*lambda_steer"),
+    ("motion", "phi_prime",
+     r"I_{3} \ddot{\phi}_{prime}",
+     r"- R \sin{\left(\theta \right)} \lambda_{roll X} + R \cos{\left(\theta \right)} \lambda_{roll Y} - R \lambda_{steer}",
+     "I3*phi_prime_ddot = -R*sin(theta)*lambda_roll_X + R*cos(theta)*lambda_roll_Y - R*lambda_steer"),
+    ("constraint", "roll_X",
+     r"- R \dot{\phi} \sin{\left(\theta \right)} - R \dot{\phi}_{prime} \sin{\left(\theta \right)} + 2 \dot{X}",
+     "0",
+     "-R*phi_dot*sin(theta) - R*phi_prime_dot*sin(theta) + 2*X_dot = 0"),
+    ("constraint", "roll_Y",
+     r"R \dot{\phi} \cos{\left(\theta \right)} + R \dot{\phi}_{prime} \cos{\left(\theta \right)} + 2 \dot{Y}",
+     "0",
+     "R*phi_dot*cos(theta) + R*phi_prime_dot*cos(theta) + 2*Y_dot = 0"),
+    ("constraint", "steer",
+     r"L \theta + R \left(\phi - \phi_{prime}\right)",
+     "0",
+     "L*theta + R*(phi - phi_prime) = 0"),
+    ("energy", "T",
+     "T",
+     r"\frac{I_{3} \left(\dot{\phi}^{2} + \dot{\phi}_{prime}^{2}\right)}{2} + m \left(\dot{X}^{2} + \dot{Y}^{2}\right) + \dot{\theta}^{2} \left(I_{1} + \frac{L^{2} m}{4}\right)",
+     "T = I3*(phi_dot**2 + phi_prime_dot**2)/2 + m*(X_dot**2 + Y_dot**2) + theta_dot**2*(I1 + L**2*m/4)"),
+    ("energy", "V",
+     "V",
+     r"- 2 Y g m \sin{\left(\alpha \right)}",
+     "V = -2*Y*g*m*sin(alpha)"),
+)

@@ -273,6 +273,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -397,3 +410,25 @@ TAYLOR_WORK = 16
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "x",
+     r"\ddot{x}",
+     "- 2 lam x y - x",
+     "x_ddot = -2*lam*x*y - x"),
+    ("motion", "y",
+     r"\ddot{y}",
+     r"- lam \left(x^{2} - y^{2}\right) - y",
+     "y_ddot = -lam*(x**2 - y**2) - y"),
+    ("energy", "T",
+     "T",
+     r"\frac{\dot{x}^{2}}{2} + \frac{\dot{y}^{2}}{2}",
+     "T = x_dot**2/2 + y_dot**2/2"),
+    ("energy", "V",
+     "V",
+     r"lam \left(x^{2} y - \frac{y^{3}}{3}\right) + \frac{x^{2}}{2} + \frac{y^{2}}{2}",
+     "V = lam*(x**2*y - y**3/3) + x**2/2 + y**2/2"),
+)

@@ -262,6 +262,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -419,3 +432,21 @@ TAYLOR_WORK = 16
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([0], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta",
+     r"R^{2} m \ddot{\theta}",
+     r"R g m \sin{\left(\theta \right)} + \left(\Omega^{2} R^{2} m + 4 \Omega R^{2} \epsilon m \cos{\left(2 t \right)} + 4 R^{2} \epsilon^{2} m \cos^{2}{\left(2 t \right)}\right) \sin{\left(\theta \right)} \cos{\left(\theta \right)}",
+     "R**2*m*theta_ddot = R*g*m*sin(theta) + (Omega**2*R**2*m + 4*Omega*R**2*epsilon*m*cos(2*t) + 4*R**2*epsilon**2*m*cos(2*t)**2)*sin(theta)*cos(theta)"),
+    ("energy", "T",
+     "T",
+     r"\frac{R^{2} m \left(\dot{\theta}^{2} + \left(\Omega + 2 \epsilon \cos{\left(2 t \right)}\right)^{2} \sin^{2}{\left(\theta \right)}\right)}{2}",
+     "T = R**2*m*(theta_dot**2 + (Omega + 2*epsilon*cos(2*t))**2*sin(theta)**2)/2"),
+    ("energy", "V",
+     "V",
+     r"R g m \cos{\left(\theta \right)}",
+     "V = R*g*m*cos(theta)"),
+)

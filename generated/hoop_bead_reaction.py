@@ -301,6 +301,19 @@ def rest_partials(t, y, p, out):
     out[1, 1, 1] = 0.0
 
 
+@njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 2, 1, 1
 #: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
@@ -394,3 +407,29 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
 
 #: Why this module has no Taylor integrator (method='taylor').
 TAYLOR_REFUSED = 'constraints (their multipliers are not covered)'
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta",
+     r"R^{2} m \ddot{\theta}",
+     r"R^{2} m \dot{\phi}^{2} \sin{\left(\theta \right)} \cos{\left(\theta \right)} + R g m \sin{\left(\theta \right)}",
+     "R**2*m*theta_ddot = R**2*m*phi_dot**2*sin(theta)*cos(theta) + R*g*m*sin(theta)"),
+    ("motion", "phi",
+     r"R^{2} m \sin^{2}{\left(\theta \right)} \ddot{\phi}",
+     r"- 2 R^{2} m \dot{\phi} \dot{\theta} \sin{\left(\theta \right)} \cos{\left(\theta \right)} + \lambda_{drive}",
+     "R**2*m*sin(theta)**2*phi_ddot = -2*R**2*m*phi_dot*theta_dot*sin(theta)*cos(theta) + lambda_drive"),
+    ("constraint", "drive",
+     r"- \Omega t - \epsilon \sin{\left(2 t \right)} + \phi",
+     "0",
+     "-Omega*t - epsilon*sin(2*t) + phi = 0"),
+    ("energy", "T",
+     "T",
+     r"\frac{R^{2} m \left(\dot{\phi}^{2} \sin^{2}{\left(\theta \right)} + \dot{\theta}^{2}\right)}{2}",
+     "T = R**2*m*(phi_dot**2*sin(theta)**2 + theta_dot**2)/2"),
+    ("energy", "V",
+     "V",
+     r"R g m \cos{\left(\theta \right)}",
+     "V = R*g*m*cos(theta)"),
+)

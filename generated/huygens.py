@@ -231,6 +231,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -388,3 +401,21 @@ TAYLOR_WORK = 14
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta",
+     r"4 R^{2} m \cos^{2}{\left(\frac{\theta}{2} \right)} \ddot{\theta}",
+     r"2 R^{2} m \dot{\theta}^{2} \sin{\left(\frac{\theta}{2} \right)} \cos{\left(\frac{\theta}{2} \right)} - R g m \sin{\left(\theta \right)}",
+     "4*R**2*m*cos(theta/2)**2*theta_ddot = 2*R**2*m*theta_dot**2*sin(theta/2)*cos(theta/2) - R*g*m*sin(theta)"),
+    ("energy", "T",
+     "T",
+     r"2 R^{2} m \dot{\theta}^{2} \cos^{2}{\left(\frac{\theta}{2} \right)}",
+     "T = 2*R**2*m*theta_dot**2*cos(theta/2)**2"),
+    ("energy", "V",
+     "V",
+     r"R g m \left(1 - \cos{\left(\theta \right)}\right)",
+     "V = R*g*m*(1 - cos(theta))"),
+)

@@ -619,6 +619,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -1147,3 +1160,29 @@ TAYLOR_WORK = 79
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([0, 1, 2], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta1",
+     r"l_{1}^{2} \left(m_{1} + m_{2} + m_{3}\right) \ddot{\theta}_{1} + l_{1} l_{2} \left(m_{2} + m_{3}\right) \cos{\left(\theta_{1} - \theta_{2} \right)} \ddot{\theta}_{2} + l_{1} l_{3} m_{3} \cos{\left(\theta_{1} - \theta_{3} \right)} \ddot{\theta}_{3}",
+     r"- g l_{1} \left(m_{1} + m_{2} + m_{3}\right) \sin{\left(\theta_{1} \right)} - l_{1} l_{2} \dot{\theta}_{2}^{2} \left(m_{2} + m_{3}\right) \sin{\left(\theta_{1} - \theta_{2} \right)} - l_{1} l_{3} m_{3} \dot{\theta}_{3}^{2} \sin{\left(\theta_{1} - \theta_{3} \right)}",
+     "l1**2*(m1 + m2 + m3)*theta1_ddot + l1*l2*(m2 + m3)*cos(theta1 - theta2)*theta2_ddot + l1*l3*m3*cos(theta1 - theta3)*theta3_ddot = -g*l1*(m1 + m2 + m3)*sin(theta1) - l1*l2*theta2_dot**2*(m2 + m3)*sin(theta1 - theta2) - l1*l3*m3*theta3_dot**2*sin(theta1 - theta3)"),
+    ("motion", "theta2",
+     r"l_{1} l_{2} \left(m_{2} + m_{3}\right) \cos{\left(\theta_{1} - \theta_{2} \right)} \ddot{\theta}_{1} + l_{2}^{2} \left(m_{2} + m_{3}\right) \ddot{\theta}_{2} + l_{2} l_{3} m_{3} \cos{\left(\theta_{2} - \theta_{3} \right)} \ddot{\theta}_{3}",
+     r"- g l_{2} \left(m_{2} + m_{3}\right) \sin{\left(\theta_{2} \right)} + l_{1} l_{2} \dot{\theta}_{1}^{2} \left(m_{2} + m_{3}\right) \sin{\left(\theta_{1} - \theta_{2} \right)} - l_{2} l_{3} m_{3} \dot{\theta}_{3}^{2} \sin{\left(\theta_{2} - \theta_{3} \right)}",
+     "l1*l2*(m2 + m3)*cos(theta1 - theta2)*theta1_ddot + l2**2*(m2 + m3)*theta2_ddot + l2*l3*m3*cos(theta2 - theta3)*theta3_ddot = -g*l2*(m2 + m3)*sin(theta2) + l1*l2*theta1_dot**2*(m2 + m3)*sin(theta1 - theta2) - l2*l3*m3*theta3_dot**2*sin(theta2 - theta3)"),
+    ("motion", "theta3",
+     r"l_{1} l_{3} m_{3} \cos{\left(\theta_{1} - \theta_{3} \right)} \ddot{\theta}_{1} + l_{2} l_{3} m_{3} \cos{\left(\theta_{2} - \theta_{3} \right)} \ddot{\theta}_{2} + l_{3}^{2} m_{3} \ddot{\theta}_{3}",
+     r"- g l_{3} m_{3} \sin{\left(\theta_{3} \right)} + l_{1} l_{3} m_{3} \dot{\theta}_{1}^{2} \sin{\left(\theta_{1} - \theta_{3} \right)} + l_{2} l_{3} m_{3} \dot{\theta}_{2}^{2} \sin{\left(\theta_{2} - \theta_{3} \right)}",
+     "l1*l3*m3*cos(theta1 - theta3)*theta1_ddot + l2*l3*m3*cos(theta2 - theta3)*theta2_ddot + l3**2*m3*theta3_ddot = -g*l3*m3*sin(theta3) + l1*l3*m3*theta1_dot**2*sin(theta1 - theta3) + l2*l3*m3*theta2_dot**2*sin(theta2 - theta3)"),
+    ("energy", "T",
+     "T",
+     r"\frac{m_{1} \left(l_{1}^{2} \dot{\theta}_{1}^{2} \sin^{2}{\left(\theta_{1} \right)} + l_{1}^{2} \dot{\theta}_{1}^{2} \cos^{2}{\left(\theta_{1} \right)}\right)}{2} + \frac{m_{2} \left(\left(l_{1} \dot{\theta}_{1} \sin{\left(\theta_{1} \right)} + l_{2} \dot{\theta}_{2} \sin{\left(\theta_{2} \right)}\right)^{2} + \left(l_{1} \dot{\theta}_{1} \cos{\left(\theta_{1} \right)} + l_{2} \dot{\theta}_{2} \cos{\left(\theta_{2} \right)}\right)^{2}\right)}{2} + \frac{m_{3} \left(\left(l_{1} \dot{\theta}_{1} \sin{\left(\theta_{1} \right)} + l_{2} \dot{\theta}_{2} \sin{\left(\theta_{2} \right)} + l_{3} \dot{\theta}_{3} \sin{\left(\theta_{3} \right)}\right)^{2} + \left(l_{1} \dot{\theta}_{1} \cos{\left(\theta_{1} \right)} + l_{2} \dot{\theta}_{2} \cos{\left(\theta_{2} \right)} + l_{3} \dot{\theta}_{3} \cos{\left(\theta_{3} \right)}\right)^{2}\right)}{2}",
+     "T = m1*(l1**2*theta1_dot**2*sin(theta1)**2 + l1**2*theta1_dot**2*cos(theta1)**2)/2 + m2*((l1*theta1_dot*sin(theta1) + l2*theta2_dot*sin(theta2))**2 + (l1*theta1_dot*cos(theta1) + l2*theta2_dot*cos(theta2))**2)/2 + m3*((l1*theta1_dot*sin(theta1) + l2*theta2_dot*sin(theta2) + l3*theta3_dot*sin(theta3))**2 + (l1*theta1_dot*cos(theta1) + l2*theta2_dot*cos(theta2) + l3*theta3_dot*cos(theta3))**2)/2"),
+    ("energy", "V",
+     "V",
+     r"- g l_{1} m_{1} \cos{\left(\theta_{1} \right)} + g m_{2} \left(- l_{1} \cos{\left(\theta_{1} \right)} - l_{2} \cos{\left(\theta_{2} \right)}\right) + g m_{3} \left(- l_{1} \cos{\left(\theta_{1} \right)} - l_{2} \cos{\left(\theta_{2} \right)} - l_{3} \cos{\left(\theta_{3} \right)}\right)",
+     "V = -g*l1*m1*cos(theta1) + g*m2*(-l1*cos(theta1) - l2*cos(theta2)) + g*m3*(-l1*cos(theta1) - l2*cos(theta2) - l3*cos(theta3))"),
+)

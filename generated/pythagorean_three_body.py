@@ -1112,6 +1112,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -1730,3 +1743,41 @@ TAYLOR_WORK = 103
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "x1",
+     r"m_{1} \ddot{x}_{1}",
+     r"- \frac{G m_{1} m_{2} \left(x_{1} - x_{2}\right)}{\left(\left(x_{1} - x_{2}\right)^{2} + \left(y_{1} - y_{2}\right)^{2}\right)^{\frac{3}{2}}} - \frac{G m_{1} m_{3} \left(x_{1} - x_{3}\right)}{\left(\left(x_{1} - x_{3}\right)^{2} + \left(y_{1} - y_{3}\right)^{2}\right)^{\frac{3}{2}}}",
+     "m1*x1_ddot = -G*m1*m2*(x1 - x2)/((x1 - x2)**2 + (y1 - y2)**2)**(3/2) - G*m1*m3*(x1 - x3)/((x1 - x3)**2 + (y1 - y3)**2)**(3/2)"),
+    ("motion", "y1",
+     r"m_{1} \ddot{y}_{1}",
+     r"- \frac{G m_{1} m_{2} \left(y_{1} - y_{2}\right)}{\left(\left(x_{1} - x_{2}\right)^{2} + \left(y_{1} - y_{2}\right)^{2}\right)^{\frac{3}{2}}} - \frac{G m_{1} m_{3} \left(y_{1} - y_{3}\right)}{\left(\left(x_{1} - x_{3}\right)^{2} + \left(y_{1} - y_{3}\right)^{2}\right)^{\frac{3}{2}}}",
+     "m1*y1_ddot = -G*m1*m2*(y1 - y2)/((x1 - x2)**2 + (y1 - y2)**2)**(3/2) - G*m1*m3*(y1 - y3)/((x1 - x3)**2 + (y1 - y3)**2)**(3/2)"),
+    ("motion", "x2",
+     r"m_{2} \ddot{x}_{2}",
+     r"\frac{G m_{1} m_{2} \left(x_{1} - x_{2}\right)}{\left(\left(x_{1} - x_{2}\right)^{2} + \left(y_{1} - y_{2}\right)^{2}\right)^{\frac{3}{2}}} - \frac{G m_{2} m_{3} \left(x_{2} - x_{3}\right)}{\left(\left(x_{2} - x_{3}\right)^{2} + \left(y_{2} - y_{3}\right)^{2}\right)^{\frac{3}{2}}}",
+     "m2*x2_ddot = G*m1*m2*(x1 - x2)/((x1 - x2)**2 + (y1 - y2)**2)**(3/2) - G*m2*m3*(x2 - x3)/((x2 - x3)**2 + (y2 - y3)**2)**(3/2)"),
+    ("motion", "y2",
+     r"m_{2} \ddot{y}_{2}",
+     r"\frac{G m_{1} m_{2} \left(y_{1} - y_{2}\right)}{\left(\left(x_{1} - x_{2}\right)^{2} + \left(y_{1} - y_{2}\right)^{2}\right)^{\frac{3}{2}}} - \frac{G m_{2} m_{3} \left(y_{2} - y_{3}\right)}{\left(\left(x_{2} - x_{3}\right)^{2} + \left(y_{2} - y_{3}\right)^{2}\right)^{\frac{3}{2}}}",
+     "m2*y2_ddot = G*m1*m2*(y1 - y2)/((x1 - x2)**2 + (y1 - y2)**2)**(3/2) - G*m2*m3*(y2 - y3)/((x2 - x3)**2 + (y2 - y3)**2)**(3/2)"),
+    ("motion", "x3",
+     r"m_{3} \ddot{x}_{3}",
+     r"\frac{G m_{1} m_{3} \left(x_{1} - x_{3}\right)}{\left(\left(x_{1} - x_{3}\right)^{2} + \left(y_{1} - y_{3}\right)^{2}\right)^{\frac{3}{2}}} + \frac{G m_{2} m_{3} \left(x_{2} - x_{3}\right)}{\left(\left(x_{2} - x_{3}\right)^{2} + \left(y_{2} - y_{3}\right)^{2}\right)^{\frac{3}{2}}}",
+     "m3*x3_ddot = G*m1*m3*(x1 - x3)/((x1 - x3)**2 + (y1 - y3)**2)**(3/2) + G*m2*m3*(x2 - x3)/((x2 - x3)**2 + (y2 - y3)**2)**(3/2)"),
+    ("motion", "y3",
+     r"m_{3} \ddot{y}_{3}",
+     r"\frac{G m_{1} m_{3} \left(y_{1} - y_{3}\right)}{\left(\left(x_{1} - x_{3}\right)^{2} + \left(y_{1} - y_{3}\right)^{2}\right)^{\frac{3}{2}}} + \frac{G m_{2} m_{3} \left(y_{2} - y_{3}\right)}{\left(\left(x_{2} - x_{3}\right)^{2} + \left(y_{2} - y_{3}\right)^{2}\right)^{\frac{3}{2}}}",
+     "m3*y3_ddot = G*m1*m3*(y1 - y3)/((x1 - x3)**2 + (y1 - y3)**2)**(3/2) + G*m2*m3*(y2 - y3)/((x2 - x3)**2 + (y2 - y3)**2)**(3/2)"),
+    ("energy", "T",
+     "T",
+     r"\frac{m_{1} \left(\dot{x}_{1}^{2} + \dot{y}_{1}^{2}\right)}{2} + \frac{m_{2} \left(\dot{x}_{2}^{2} + \dot{y}_{2}^{2}\right)}{2} + \frac{m_{3} \left(\dot{x}_{3}^{2} + \dot{y}_{3}^{2}\right)}{2}",
+     "T = m1*(x1_dot**2 + y1_dot**2)/2 + m2*(x2_dot**2 + y2_dot**2)/2 + m3*(x3_dot**2 + y3_dot**2)/2"),
+    ("energy", "V",
+     "V",
+     r"- \frac{G m_{1} m_{2}}{\sqrt{\left(x_{1} - x_{2}\right)^{2} + \left(y_{1} - y_{2}\right)^{2}}} - \frac{G m_{1} m_{3}}{\sqrt{\left(x_{1} - x_{3}\right)^{2} + \left(y_{1} - y_{3}\right)^{2}}} - \frac{G m_{2} m_{3}}{\sqrt{\left(x_{2} - x_{3}\right)^{2} + \left(y_{2} - y_{3}\right)^{2}}}",
+     "V = -G*m1*m2/sqrt((x1 - x2)**2 + (y1 - y2)**2) - G*m1*m3/sqrt((x1 - x3)**2 + (y1 - y3)**2) - G*m2*m3/sqrt((x2 - x3)**2 + (y2 - y3)**2)"),
+)

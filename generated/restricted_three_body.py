@@ -334,6 +334,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -540,3 +553,25 @@ TAYLOR_WORK = 29
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "x",
+     r"\ddot{x}",
+     r"- \frac{\mu \left(\mu + x - 1\right)}{\left(y^{2} + \left(\mu + x - 1\right)^{2}\right)^{\frac{3}{2}}} + x + 2 \dot{y} + \frac{\left(\mu - 1\right) \left(\mu + x\right)}{\left(y^{2} + \left(\mu + x\right)^{2}\right)^{\frac{3}{2}}}",
+     "x_ddot = -mu*(mu + x - 1)/(y**2 + (mu + x - 1)**2)**(3/2) + x + 2*y_dot + (mu - 1)*(mu + x)/(y**2 + (mu + x)**2)**(3/2)"),
+    ("motion", "y",
+     r"\ddot{y}",
+     r"- \frac{\mu y}{\left(y^{2} + \left(\mu + x - 1\right)^{2}\right)^{\frac{3}{2}}} - 2 \dot{x} + \frac{y \left(\mu - 1\right)}{\left(y^{2} + \left(\mu + x\right)^{2}\right)^{\frac{3}{2}}} + y",
+     "y_ddot = -mu*y/(y**2 + (mu + x - 1)**2)**(3/2) - 2*x_dot + y*(mu - 1)/(y**2 + (mu + x)**2)**(3/2) + y"),
+    ("energy", "T",
+     "T",
+     r"\frac{\left(x + \dot{y}\right)^{2}}{2} + \frac{\left(\dot{x} - y\right)^{2}}{2}",
+     "T = (x + y_dot)**2/2 + (x_dot - y)**2/2"),
+    ("energy", "V",
+     "V",
+     r"- \frac{\mu}{\sqrt{y^{2} + \left(\mu + x - 1\right)^{2}}} + \frac{\mu - 1}{\sqrt{y^{2} + \left(\mu + x\right)^{2}}}",
+     "V = -mu/sqrt(y**2 + (mu + x - 1)**2) + (mu - 1)/sqrt(y**2 + (mu + x)**2)"),
+)

@@ -670,6 +670,19 @@ def rest_partials(t, y, p, out):
     out[1, 4, 4] = 0.0
 
 
+@njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 5, 2, 0
 #: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
@@ -763,3 +776,45 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
 
 #: Why this module has no Taylor integrator (method='taylor').
 TAYLOR_REFUSED = 'constraints (their multipliers are not covered)'
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "x",
+     r"m r \sin{\left(\psi \right)} \cos{\left(\theta \right)} \ddot{\theta} + m r \sin{\left(\theta \right)} \cos{\left(\psi \right)} \ddot{\psi} + m \ddot{x}",
+     r"m \dot{\psi}^{2} r \sin{\left(\psi \right)} \sin{\left(\theta \right)} - 2 m \dot{\psi} r \dot{\theta} \cos{\left(\psi \right)} \cos{\left(\theta \right)} + m r \dot{\theta}^{2} \sin{\left(\psi \right)} \sin{\left(\theta \right)} + \lambda_{roll x}",
+     "m*r*sin(psi)*cos(theta)*theta_ddot + m*r*sin(theta)*cos(psi)*psi_ddot + m*x_ddot = m*psi_dot**2*r*sin(psi)*sin(theta) - 2*m*psi_dot*r*theta_dot*cos(psi)*cos(theta) + m*r*theta_dot**2*sin(psi)*sin(theta) + lambda_roll_x"),
+    ("motion", "y",
+     r"m r \sin{\left(\psi \right)} \sin{\left(\theta \right)} \ddot{\psi} - m r \cos{\left(\psi \right)} \cos{\left(\theta \right)} \ddot{\theta} + m \ddot{y}",
+     r"- m \dot{\psi}^{2} r \sin{\left(\theta \right)} \cos{\left(\psi \right)} - 2 m \dot{\psi} r \dot{\theta} \sin{\left(\psi \right)} \cos{\left(\theta \right)} - m r \dot{\theta}^{2} \sin{\left(\theta \right)} \cos{\left(\psi \right)} + \lambda_{roll y}",
+     "m*r*sin(psi)*sin(theta)*psi_ddot - m*r*cos(psi)*cos(theta)*theta_ddot + m*y_ddot = -m*psi_dot**2*r*sin(theta)*cos(psi) - 2*m*psi_dot*r*theta_dot*sin(psi)*cos(theta) - m*r*theta_dot**2*sin(theta)*cos(psi) + lambda_roll_y"),
+    ("motion", "psi",
+     r"I_{3} \sin{\left(\theta \right)} \ddot{\phi} + m r \sin{\left(\psi \right)} \sin{\left(\theta \right)} \ddot{y} + m r \sin{\left(\theta \right)} \cos{\left(\psi \right)} \ddot{x} + \left(I_{1} \cos^{2}{\left(\theta \right)} - I_{3} \cos^{2}{\left(\theta \right)} + I_{3} - m r^{2} \cos^{2}{\left(\theta \right)} + m r^{2}\right) \ddot{\psi}",
+     r"- I_{3} \dot{\phi} \dot{\theta} \cos{\left(\theta \right)} - \dot{\psi} \dot{\theta} \left(- 2 I_{1} + 2 I_{3} + 2 m r^{2}\right) \sin{\left(\theta \right)} \cos{\left(\theta \right)}",
+     "I3*sin(theta)*phi_ddot + m*r*sin(psi)*sin(theta)*y_ddot + m*r*sin(theta)*cos(psi)*x_ddot + (I1*cos(theta)**2 - I3*cos(theta)**2 + I3 - m*r**2*cos(theta)**2 + m*r**2)*psi_ddot = -I3*phi_dot*theta_dot*cos(theta) - psi_dot*theta_dot*(-2*I1 + 2*I3 + 2*m*r**2)*sin(theta)*cos(theta)"),
+    ("motion", "theta",
+     r"m r \sin{\left(\psi \right)} \cos{\left(\theta \right)} \ddot{x} - m r \cos{\left(\psi \right)} \cos{\left(\theta \right)} \ddot{y} + \left(I_{1} + m r^{2}\right) \ddot{\theta}",
+     r"I_{3} \dot{\phi} \dot{\psi} \cos{\left(\theta \right)} + g m r \sin{\left(\theta \right)} - \dot{\psi}^{2} \left(I_{1} - I_{3} - m r^{2}\right) \sin{\left(\theta \right)} \cos{\left(\theta \right)}",
+     "m*r*sin(psi)*cos(theta)*x_ddot - m*r*cos(psi)*cos(theta)*y_ddot + (I1 + m*r**2)*theta_ddot = I3*phi_dot*psi_dot*cos(theta) + g*m*r*sin(theta) - psi_dot**2*(I1 - I3 - m*r**2)*sin(theta)*cos(theta)"),
+    ("motion", "phi",
+     r"I_{3} \sin{\left(\theta \right)} \ddot{\psi} + I_{3} \ddot{\phi}",
+     r"- I_{3} \dot{\psi} \dot{\theta} \cos{\left(\theta \right)} - r \sin{\left(\psi \right)} \lambda_{roll y} - r \cos{\left(\psi \right)} \lambda_{roll x}",
+     "I3*sin(theta)*psi_ddot + I3*phi_ddot = -I3*psi_dot*theta_dot*cos(theta) - r*sin(psi)*lambda_roll_y - r*cos(psi)*lambda_roll_x"),
+    ("constraint", "roll_x",
+     r"- \dot{\phi} r \cos{\left(\psi \right)} + \dot{x}",
+     "0",
+     "-phi_dot*r*cos(psi) + x_dot = 0"),
+    ("constraint", "roll_y",
+     r"- \dot{\phi} r \sin{\left(\psi \right)} + \dot{y}",
+     "0",
+     "-phi_dot*r*sin(psi) + y_dot = 0"),
+    ("energy", "T",
+     "T",
+     r"\frac{I_{1} \left(\dot{\psi}^{2} \cos^{2}{\left(\theta \right)} + \dot{\theta}^{2}\right)}{2} + \frac{I_{3} \left(\dot{\phi} + \dot{\psi} \sin{\left(\theta \right)}\right)^{2}}{2} + \frac{m \left(r^{2} \dot{\theta}^{2} \sin^{2}{\left(\theta \right)} + \left(\dot{\psi} r \sin{\left(\psi \right)} \sin{\left(\theta \right)} - r \dot{\theta} \cos{\left(\psi \right)} \cos{\left(\theta \right)} + \dot{y}\right)^{2} + \left(\dot{\psi} r \sin{\left(\theta \right)} \cos{\left(\psi \right)} + r \dot{\theta} \sin{\left(\psi \right)} \cos{\left(\theta \right)} + \dot{x}\right)^{2}\right)}{2}",
+     "T = I1*(psi_dot**2*cos(theta)**2 + theta_dot**2)/2 + I3*(phi_dot + psi_dot*sin(theta))**2/2 + m*(r**2*theta_dot**2*sin(theta)**2 + (psi_dot*r*sin(psi)*sin(theta) - r*theta_dot*cos(psi)*cos(theta) + y_dot)**2 + (psi_dot*r*sin(theta)*cos(psi) + r*theta_dot*sin(psi)*cos(theta) + x_dot)**2)/2"),
+    ("energy", "V",
+     "V",
+     r"g m r \cos{\left(\theta \right)}",
+     "V = g*m*r*cos(theta)"),
+)

@@ -194,6 +194,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -257,3 +270,21 @@ TAYLOR_WORK = 2
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "x",
+     r"M \ddot{x}",
+     r"\frac{M g x}{L}",
+     "M*x_ddot = M*g*x/L"),
+    ("energy", "T",
+     "T",
+     r"\frac{M \dot{x}^{2}}{2}",
+     "T = M*x_dot**2/2"),
+    ("energy", "V",
+     "V",
+     r"- \frac{M g x^{2}}{2 L}",
+     "V = -M*g*x**2/(2*L)"),
+)

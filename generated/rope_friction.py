@@ -212,6 +212,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -234,3 +247,21 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
 
 #: Why this module has no Taylor integrator (method='taylor').
 TAYLOR_REFUSED = 'the function Piecewise (no Taylor recurrence for it)'
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "x",
+     r"M \ddot{x}",
+     r"- \frac{M f g \left(L - x\right) \left(\begin{cases} \operatorname{sign}{\left(\dot{x} \right)} & \text{for}\: \dot{x} \neq 0 \\1 & \text{otherwise} \end{cases}\right)}{L} + \frac{M g x}{L}",
+     "M*x_ddot = -M*f*g*(L - x)*Piecewise((sign(x_dot), Ne(x_dot, 0)), (1, True))/L + M*g*x/L"),
+    ("energy", "T",
+     "T",
+     r"\frac{M \dot{x}^{2}}{2}",
+     "T = M*x_dot**2/2"),
+    ("energy", "V",
+     "V",
+     r"- \frac{M g x^{2}}{2 L}",
+     "V = -M*g*x**2/(2*L)"),
+)

@@ -191,6 +191,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -253,3 +266,21 @@ TAYLOR_WORK = 2
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "rho",
+     r"m \ddot{\rho}",
+     r"m \omega^{2} \rho",
+     "m*rho_ddot = m*omega**2*rho"),
+    ("energy", "T",
+     "T",
+     r"\frac{m \left(\omega^{2} \rho^{2} + \dot{\rho}^{2}\right)}{2}",
+     "T = m*(omega**2*rho**2 + rho_dot**2)/2"),
+    ("energy", "V",
+     "V",
+     "0",
+     "V = 0"),
+)

@@ -313,6 +313,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -488,3 +501,25 @@ TAYLOR_WORK = 20
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([0], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta",
+     r"l^{2} m \ddot{\theta}",
+     r"- g l m \sin{\left(\theta \right)} + l^{2} m \dot{\phi}^{2} \sin{\left(\theta \right)} \cos{\left(\theta \right)}",
+     "l**2*m*theta_ddot = -g*l*m*sin(theta) + l**2*m*phi_dot**2*sin(theta)*cos(theta)"),
+    ("motion", "phi",
+     r"l^{2} m \sin^{2}{\left(\theta \right)} \ddot{\phi}",
+     r"- 2 l^{2} m \dot{\phi} \dot{\theta} \sin{\left(\theta \right)} \cos{\left(\theta \right)}",
+     "l**2*m*sin(theta)**2*phi_ddot = -2*l**2*m*phi_dot*theta_dot*sin(theta)*cos(theta)"),
+    ("energy", "T",
+     "T",
+     r"\frac{l^{2} m \left(\dot{\phi}^{2} \sin^{2}{\left(\theta \right)} + \dot{\theta}^{2}\right)}{2}",
+     "T = l**2*m*(phi_dot**2*sin(theta)**2 + theta_dot**2)/2"),
+    ("energy", "V",
+     "V",
+     r"- g l m \cos{\left(\theta \right)}",
+     "V = -g*l*m*cos(theta)"),
+)

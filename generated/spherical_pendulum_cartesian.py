@@ -328,6 +328,19 @@ def rest_partials(t, y, p, out):
     out[1, 2, 2] = 0.0
 
 
+@njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 3, 1, 1
 #: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
@@ -421,3 +434,33 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
 
 #: Why this module has no Taylor integrator (method='taylor').
 TAYLOR_REFUSED = 'constraints (their multipliers are not covered)'
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "x",
+     r"m \ddot{x}",
+     r"2 x \lambda_{rod}",
+     "m*x_ddot = 2*x*lambda_rod"),
+    ("motion", "y",
+     r"m \ddot{y}",
+     r"2 y \lambda_{rod}",
+     "m*y_ddot = 2*y*lambda_rod"),
+    ("motion", "z",
+     r"m \ddot{z}",
+     r"- g m + 2 z \lambda_{rod}",
+     "m*z_ddot = -g*m + 2*z*lambda_rod"),
+    ("constraint", "rod",
+     "- l^{2} + x^{2} + y^{2} + z^{2}",
+     "0",
+     "-l**2 + x**2 + y**2 + z**2 = 0"),
+    ("energy", "T",
+     "T",
+     r"\frac{m \left(\dot{x}^{2} + \dot{y}^{2} + \dot{z}^{2}\right)}{2}",
+     "T = m*(x_dot**2 + y_dot**2 + z_dot**2)/2"),
+    ("energy", "V",
+     "V",
+     "g m z",
+     "V = g*m*z"),
+)

@@ -318,6 +318,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -511,3 +524,25 @@ TAYLOR_WORK = 28
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([1], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "r",
+     r"m \ddot{r}",
+     r"- c \dot{r} + g m \cos{\left(\theta \right)} - k \left(- l_{0} + r\right) + m r \dot{\theta}^{2}",
+     "m*r_ddot = -c*r_dot + g*m*cos(theta) - k*(-l0 + r) + m*r*theta_dot**2"),
+    ("motion", "theta",
+     r"m r^{2} \ddot{\theta}",
+     r"- g m r \sin{\left(\theta \right)} - 2 m r \dot{r} \dot{\theta}",
+     "m*r**2*theta_ddot = -g*m*r*sin(theta) - 2*m*r*r_dot*theta_dot"),
+    ("energy", "T",
+     "T",
+     r"\frac{m \left(r^{2} \dot{\theta}^{2} + \dot{r}^{2}\right)}{2}",
+     "T = m*(r**2*theta_dot**2 + r_dot**2)/2"),
+    ("energy", "V",
+     "V",
+     r"- g m r \cos{\left(\theta \right)} + \frac{k \left(- l_{0} + r\right)^{2}}{2}",
+     "V = -g*m*r*cos(theta) + k*(-l0 + r)**2/2"),
+)

@@ -479,6 +479,49 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are, shape (GEOMETRY_SIZE,) = (12,), into `out`: positions along the axes of the
+    system's frame from its origin, rotation matrices C (r_frame = C r_body) row-major. Reads no velocity.
+    out[0:12] top: centre of mass, then the rotation matrix C row-major (columns: the body axes)"""
+    q_psi = y[0]
+    q_theta = y[1]
+    q_phi = y[2]
+    p_l = p[1]
+    _c0 = sin(q_psi)
+    _c1 = sin(q_theta)
+    _c2 = _c0*_c1
+    _c3 = cos(q_psi)
+    _c4 = _c1*_c3
+    _c5 = cos(q_theta)
+    _c6 = cos(q_phi)
+    _c7 = _c3*_c6
+    _c8 = sin(q_phi)
+    _c9 = _c0*_c8
+    _c10 = _c3*_c8
+    _c11 = _c0*_c6
+    out[0] = _c2*p_l
+    out[1] = -_c4*p_l
+    out[2] = _c5*p_l
+    out[3] = _c7 - _c5*_c9
+    out[4] = -_c10 - _c11*_c5
+    out[5] = _c2
+    out[6] = _c11 + _c10*_c5
+    out[7] = -_c9 + _c5*_c7
+    out[8] = -_c4
+    out[9] = _c1*_c8
+    out[10] = _c1*_c6
+    out[11] = _c5
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = (('top', 'rigid', 0),)
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 12
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -873,3 +916,29 @@ TAYLOR_WORK = 53
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([1], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "psi",
+     r"I_{3} \cos{\left(\theta \right)} \ddot{\phi} + \left(I_{1} + M l^{2} + \left(- I_{1} + I_{3} - M l^{2}\right) \cos^{2}{\left(\theta \right)}\right) \ddot{\psi}",
+     r"I_{3} \dot{\phi} \dot{\theta} \sin{\left(\theta \right)} + 2 \dot{\psi} \dot{\theta} \left(- I_{1} + I_{3} - M l^{2}\right) \sin{\left(\theta \right)} \cos{\left(\theta \right)}",
+     "I3*cos(theta)*phi_ddot + (I1 + M*l**2 + (-I1 + I3 - M*l**2)*cos(theta)**2)*psi_ddot = I3*phi_dot*theta_dot*sin(theta) + 2*psi_dot*theta_dot*(-I1 + I3 - M*l**2)*sin(theta)*cos(theta)"),
+    ("motion", "theta",
+     r"\left(I_{1} + M l^{2}\right) \ddot{\theta}",
+     r"- I_{3} \dot{\phi} \dot{\psi} \sin{\left(\theta \right)} + M g l \sin{\left(\theta \right)} - \dot{\psi}^{2} \left(- I_{1} + I_{3} - M l^{2}\right) \sin{\left(\theta \right)} \cos{\left(\theta \right)}",
+     "(I1 + M*l**2)*theta_ddot = -I3*phi_dot*psi_dot*sin(theta) + M*g*l*sin(theta) - psi_dot**2*(-I1 + I3 - M*l**2)*sin(theta)*cos(theta)"),
+    ("motion", "phi",
+     r"I_{3} \cos{\left(\theta \right)} \ddot{\psi} + I_{3} \ddot{\phi}",
+     r"I_{3} \dot{\psi} \dot{\theta} \sin{\left(\theta \right)}",
+     "I3*cos(theta)*psi_ddot + I3*phi_ddot = I3*psi_dot*theta_dot*sin(theta)"),
+    ("energy", "T",
+     "T",
+     r"- \frac{I_{1} \dot{\psi}^{2} \cos^{2}{\left(\theta \right)}}{2} + \frac{I_{1} \dot{\psi}^{2}}{2} + \frac{I_{1} \dot{\theta}^{2}}{2} + \frac{I_{3} \dot{\phi}^{2}}{2} + I_{3} \dot{\phi} \dot{\psi} \cos{\left(\theta \right)} + \frac{I_{3} \dot{\psi}^{2} \cos^{2}{\left(\theta \right)}}{2} + \frac{M l^{2} \left(- \dot{\psi}^{2} \cos^{2}{\left(\theta \right)} + \dot{\psi}^{2} + \dot{\theta}^{2}\right)}{2}",
+     "T = -I1*psi_dot**2*cos(theta)**2/2 + I1*psi_dot**2/2 + I1*theta_dot**2/2 + I3*phi_dot**2/2 + I3*phi_dot*psi_dot*cos(theta) + I3*psi_dot**2*cos(theta)**2/2 + M*l**2*(-psi_dot**2*cos(theta)**2 + psi_dot**2 + theta_dot**2)/2"),
+    ("energy", "V",
+     "V",
+     r"M g l \cos{\left(\theta \right)}",
+     "V = M*g*l*cos(theta)"),
+)

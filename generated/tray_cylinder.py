@@ -214,6 +214,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -308,3 +321,21 @@ TAYLOR_WORK = 6
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "X",
+     r"\left(\frac{I}{R^{2}} + M\right) \ddot{X}",
+     r"- \frac{A I \Omega^{2} \sin{\left(\Omega t \right)}}{R^{2}}",
+     "(I/R**2 + M)*X_ddot = -A*I*Omega**2*sin(Omega*t)/R**2"),
+    ("energy", "T",
+     "T",
+     r"\frac{I \left(- A \Omega \cos{\left(\Omega t \right)} + \dot{X}\right)^{2}}{2 R^{2}} + \frac{M \dot{X}^{2}}{2}",
+     "T = I*(-A*Omega*cos(Omega*t) + X_dot)**2/(2*R**2) + M*X_dot**2/2"),
+    ("energy", "V",
+     "V",
+     "0",
+     "V = 0"),
+)

@@ -325,6 +325,47 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are, shape (GEOMETRY_SIZE,) = (12,), into `out`: positions along the axes of the
+    system's frame from its origin, rotation matrices C (r_frame = C r_body) row-major. Reads no velocity.
+    out[0:12] flywheel: centre of mass, then the rotation matrix C row-major (columns: the body axes)"""
+    q_theta = y[0]
+    p_Omega = p[2]
+    p_alpha = p[4]
+    _c0 = p_Omega*t
+    _c1 = cos(_c0)
+    _c2 = sin(_c0)
+    _c3 = cos(q_theta)
+    _c4 = sin(p_alpha)
+    _c5 = _c3*_c4
+    _c6 = sin(q_theta)
+    _c7 = cos(p_alpha)
+    _c8 = _c6*_c7
+    _c9 = -_c5 - _c8
+    _c10 = _c3*_c7 - _c4*_c6
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = _c1
+    out[4] = 0.0
+    out[5] = _c2
+    out[6] = -_c2*_c9
+    out[7] = _c10
+    out[8] = _c1*_c9
+    out[9] = -_c10*_c2
+    out[10] = _c5 + _c8
+    out[11] = _c1*_c10
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = (('flywheel', 'rigid', 0),)
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 12
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -474,3 +515,21 @@ TAYLOR_WORK = 19
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta",
+     r"I_{X} \ddot{\theta}",
+     r"- I \Omega \omega \sin{\left(\alpha \right)} \sin{\left(\theta \right)} + I \Omega \omega \cos{\left(\alpha \right)} \cos{\left(\theta \right)} - c \dot{\theta} - k \theta - \omega^{2} \left(I - I_{X}\right) \sin{\left(\alpha \right)} \sin^{2}{\left(\theta \right)} \cos{\left(\alpha \right)} + \omega^{2} \left(I - I_{X}\right) \sin{\left(\alpha \right)} \cos{\left(\alpha \right)} \cos^{2}{\left(\theta \right)} + \omega^{2} \left(- I \sin^{2}{\left(\alpha \right)} + I \cos^{2}{\left(\alpha \right)} + I_{X} \sin^{2}{\left(\alpha \right)} - I_{X} \cos^{2}{\left(\alpha \right)}\right) \sin{\left(\theta \right)} \cos{\left(\theta \right)}",
+     "I_X*theta_ddot = -I*Omega*omega*sin(alpha)*sin(theta) + I*Omega*omega*cos(alpha)*cos(theta) - c*theta_dot - k*theta - omega**2*(I - I_X)*sin(alpha)*sin(theta)**2*cos(alpha) + omega**2*(I - I_X)*sin(alpha)*cos(alpha)*cos(theta)**2 + omega**2*(-I*sin(alpha)**2 + I*cos(alpha)**2 + I_X*sin(alpha)**2 - I_X*cos(alpha)**2)*sin(theta)*cos(theta)"),
+    ("energy", "T",
+     "T",
+     r"\frac{I \left(\Omega + \omega \left(\sin{\left(\alpha \right)} \cos{\left(\theta \right)} + \sin{\left(\theta \right)} \cos{\left(\alpha \right)}\right)\right)^{2}}{2} + \frac{I_{X} \omega^{2} \left(- \sin{\left(\alpha \right)} \sin{\left(\theta \right)} + \cos{\left(\alpha \right)} \cos{\left(\theta \right)}\right)^{2}}{2} + \frac{I_{X} \dot{\theta}^{2}}{2}",
+     "T = I*(Omega + omega*(sin(alpha)*cos(theta) + sin(theta)*cos(alpha)))**2/2 + I_X*omega**2*(-sin(alpha)*sin(theta) + cos(alpha)*cos(theta))**2/2 + I_X*theta_dot**2/2"),
+    ("energy", "V",
+     "V",
+     "0",
+     "V = 0"),
+)

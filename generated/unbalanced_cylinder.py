@@ -242,6 +242,19 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -367,3 +380,21 @@ TAYLOR_WORK = 13
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([0], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta",
+     r"\left(I + M R^{2} - 2 M R a \cos{\left(\theta \right)} + M a^{2}\right) \ddot{\theta}",
+     r"- M R a \dot{\theta}^{2} \sin{\left(\theta \right)} - M a g \sin{\left(\theta \right)}",
+     "(I + M*R**2 - 2*M*R*a*cos(theta) + M*a**2)*theta_ddot = -M*R*a*theta_dot**2*sin(theta) - M*a*g*sin(theta)"),
+    ("energy", "T",
+     "T",
+     r"\frac{\dot{\theta}^{2} \left(I + M \left(R^{2} - 2 R a \cos{\left(\theta \right)} + a^{2}\right)\right)}{2}",
+     "T = theta_dot**2*(I + M*(R**2 - 2*R*a*cos(theta) + a**2))/2"),
+    ("energy", "V",
+     "V",
+     r"M g \left(R - a \cos{\left(\theta \right)}\right)",
+     "V = M*g*(R - a*cos(theta))"),
+)

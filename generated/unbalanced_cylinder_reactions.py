@@ -410,6 +410,19 @@ def rest_partials(t, y, p, out):
     out[1, 2, 2] = 0.0
 
 
+@njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are: this system has none (T written directly), writes nothing."""
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = ()
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 0
+
+
 #: Coordinates n, constraints k (rows of the constraint matrix Λ), holonomic constraints among them.
 COORDINATE_COUNT, CONSTRAINT_COUNT, HOLONOMIC_COUNT = 3, 2, 2
 #: Length 3n + k + kh of the DAE state z = (q, v, w, λ, μ) of `dae_residual` and `dae_jacobian`.
@@ -503,3 +516,37 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
 
 #: Why this module has no Taylor integrator (method='taylor').
 TAYLOR_REFUSED = 'constraints (their multipliers are not covered)'
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "x",
+     r"- M a \cos{\left(\theta \right)} \ddot{\theta} + M \ddot{x}",
+     r"- M a \dot{\theta}^{2} \sin{\left(\theta \right)} + \lambda_{friction}",
+     "-M*a*cos(theta)*theta_ddot + M*x_ddot = -M*a*theta_dot**2*sin(theta) + lambda_friction"),
+    ("motion", "z",
+     r"M a \sin{\left(\theta \right)} \ddot{\theta} + M \ddot{z}",
+     r"- M a \dot{\theta}^{2} \cos{\left(\theta \right)} - M g + \lambda_{normal}",
+     "M*a*sin(theta)*theta_ddot + M*z_ddot = -M*a*theta_dot**2*cos(theta) - M*g + lambda_normal"),
+    ("motion", "theta",
+     r"M a \sin{\left(\theta \right)} \ddot{z} - M a \cos{\left(\theta \right)} \ddot{x} + \left(I + M a^{2}\right) \ddot{\theta}",
+     r"- M a g \sin{\left(\theta \right)} - R \lambda_{friction}",
+     "M*a*sin(theta)*z_ddot - M*a*cos(theta)*x_ddot + (I + M*a**2)*theta_ddot = -M*a*g*sin(theta) - R*lambda_friction"),
+    ("constraint", "normal",
+     "- R + z",
+     "0",
+     "-R + z = 0"),
+    ("constraint", "friction",
+     r"- R \theta + x",
+     "0",
+     "-R*theta + x = 0"),
+    ("energy", "T",
+     "T",
+     r"\frac{I \dot{\theta}^{2}}{2} + \frac{M \left(\left(a \dot{\theta} \sin{\left(\theta \right)} + \dot{z}\right)^{2} + \left(- a \dot{\theta} \cos{\left(\theta \right)} + \dot{x}\right)^{2}\right)}{2}",
+     "T = I*theta_dot**2/2 + M*((a*theta_dot*sin(theta) + z_dot)**2 + (-a*theta_dot*cos(theta) + x_dot)**2)/2"),
+    ("energy", "V",
+     "V",
+     r"M g \left(- a \cos{\left(\theta \right)} + z\right)",
+     "V = M*g*(-a*cos(theta) + z)"),
+)

@@ -256,6 +256,39 @@ def canonical_partials(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def geometry(t, y, p, out):
+    """Where the bodies are, shape (GEOMETRY_SIZE,) = (12,), into `out`: positions along the axes of the
+    system's frame from its origin, rotation matrices C (r_frame = C r_body) row-major. Reads no velocity.
+    out[0:12] crank_and_screw: centre of mass, then the rotation matrix C row-major (columns: the body axes)"""
+    q_theta = y[0]
+    p_l = p[0]
+    p_h = p[1]
+    _c0 = 4.0*math.pi*p_l*cos(q_theta)/p_h
+    _c1 = cos(_c0)
+    _c2 = sin(_c0)
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = 1.0
+    out[4] = 0.0
+    out[5] = 0.0
+    out[6] = 0.0
+    out[7] = _c1
+    out[8] = _c2
+    out[9] = 0.0
+    out[10] = -_c2
+    out[11] = _c1
+
+
+#: The bodies `geometry` writes, (name, kind, offset into out); a kind's values: particle 3, rigid 12, centre 3, unplaced 0.
+GEOMETRY = (('crank_and_screw', 'rigid', 0),)
+
+
+#: Length of `geometry`'s out.
+GEOMETRY_SIZE = 12
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residual(t, y, p):
     """Largest constraint residual: always 0.0, this system has no constraints."""
     return 0.0
@@ -396,3 +429,21 @@ TAYLOR_WORK = 13
 #: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the
 #: series with them reduced to [−π, π] (lagcomp.codegen.periodic).
 TAYLOR_PERIODIC = np.array([0], dtype=np.int64)
+
+
+#: The equations as LaTeX and text, rendered by sympy when this module was generated
+#: (lagcomp.codegen.latex), for Model.equations(): (part, label, LaTeX lhs, LaTeX rhs, text) per line.
+EQUATIONS = (
+    ("motion", "theta",
+     r"\frac{16 \pi^{2} J l^{2} \sin^{2}{\left(\theta \right)} \ddot{\theta}}{h^{2}}",
+     r"\frac{4 \pi F a l \sin{\left(\theta \right)}}{h} - \frac{16 \pi^{2} J l^{2} \dot{\theta}^{2} \sin{\left(\theta \right)} \cos{\left(\theta \right)}}{h^{2}} - 2 P l \cos{\left(\theta \right)}",
+     "16*pi**2*J*l**2*sin(theta)**2*theta_ddot/h**2 = 4*pi*F*a*l*sin(theta)/h - 16*pi**2*J*l**2*theta_dot**2*sin(theta)*cos(theta)/h**2 - 2*P*l*cos(theta)"),
+    ("energy", "T",
+     "T",
+     r"\frac{8 \pi^{2} J l^{2} \dot{\theta}^{2} \sin^{2}{\left(\theta \right)}}{h^{2}}",
+     "T = 8*pi**2*J*l**2*theta_dot**2*sin(theta)**2/h**2"),
+    ("energy", "V",
+     "V",
+     "0",
+     "V = 0"),
+)
