@@ -299,10 +299,10 @@ class System:
         supplied by name."""
         names = [u.func.__name__ for u in self._inputs]
         _unique_names(names, "inputs")
-        taken = {*self.coordinate_names, *self.parameter_names, t.name}
+        taken = {*self.coordinate_names, *self.parameter_names}
         clash = sorted(set(names) & taken)
         if clash:
-            raise ModelError(f"Input(s) {clash} of {self.name!r} are named like a coordinate, a parameter or t; "
+            raise ModelError(f"Input(s) {clash} of {self.name!r} are named like a coordinate or a parameter; "
                              "inputs are supplied by name at run time: rename them.")
 
     @property
