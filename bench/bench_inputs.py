@@ -56,12 +56,12 @@ def measure(t_end: float = 10.0, repeats: int = 5, cache_dir=None) -> list[dict]
     for method in ("dop853", "dopri5"):
         for rtol in (1e-6, 1e-9, 1e-12):
             options = dict(method=method, rtol=rtol, atol=rtol, progress=False)
-            expr, expr_times = _timed(lambda: written.simulate((0.0, t_end), **options), repeats)
+            expr, expr_times = _timed(lambda o=options: written.simulate((0.0, t_end), **o), repeats)
             for spacing in (0.2, 0.1, 0.05, 0.025):
                 times = np.linspace(0.0, t_end, round(t_end / spacing) + 1)
                 table = lc.Tabulated(times, AMPLITUDE * np.sin(OMEGA * times))
-                sol, table_times = _timed(lambda: tabulated.simulate((0.0, t_end), inputs={"x_s": table},  # noqa: B023
-                                                                     **options), repeats)
+                sol, table_times = _timed(lambda o=options, x_s=table: tabulated.simulate(
+                    (0.0, t_end), inputs={"x_s": x_s}, **o), repeats)
                 rows.append(dict(method=method, rtol=rtol, spacing=spacing, joints=times.size - 2,
                                  steps=sol.nsteps, rejected=sol.nrejected, expr_steps=expr.nsteps,
                                  expr_rejected=expr.nrejected,

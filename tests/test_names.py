@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 import lagcomp as lc
 from lagcomp import examples
 from lagcomp.cli import main
-from lagcomp.codegen.lower import USER_NAMESPACE
+from lagcomp.codegen.lower import INPUT_PREFIXES, USER_NAMESPACE
 from lagcomp.errors import ModelError
 from lagcomp.codegen.taylor_lanes import taylor_lanes_module
 
@@ -91,15 +91,19 @@ def _identifiers(source: str) -> set[str]:
     return found
 
 
-def _probes() -> tuple[lc.System, lc.System]:
-    """Two small systems whose modules hold every kind of emitted code: events, Taylor, lanes; constraints."""
+def _probes() -> tuple[lc.System, ...]:
+    """Small systems whose modules hold every kind of emitted code: events, Taylor, lanes; constraints; an input
+    read with its first two derivatives (a support s(t) under a spring)."""
     x, z = lc.coordinates("x z")
     a, b = sp.symbols("a b", positive=True)
     free = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * x**2 + b * z**2,
                      events=[lc.Event("hit", x)], name="probe_free")
     rod = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * z,
                     constraints=[lc.Holonomic("rod", x**2 + z**2 - b**2)], name="probe_rod")
-    return free, rod
+    s = lc.Input("s")
+    driven = lc.System(coordinates=(x, z), T=((x.diff(lc.t) + s.diff(lc.t)) ** 2 + z.diff(lc.t) ** 2) / 2,
+                       V=a * (x - s) ** 2 + b * z**2, name="probe_driven")
+    return free, rod, driven
 
 
 def _sources(model: lc.Model) -> list[str]:
@@ -112,7 +116,10 @@ def _sources(model: lc.Model) -> list[str]:
 def _user_locals(model: lc.Model) -> set[str]:
     """The locals the kernels bind the model's symbols to (lagcomp.codegen.lower, docstring), identifiers only."""
     prefixes = ("q", "qd") if model.k else ("q", "qd", "mom")  # momenta: `velocities`, unconstrained only
-    return {f"{prefix}_{name}" for name in model.coordinates for prefix in prefixes} | {f"p_{name}" for name in model.parameters}
+    inputs = {f"{INPUT_PREFIXES[k]}_{name}" for name, order in zip(model.inputs, model.input_orders, strict=True)
+              for k in range(order + 1)}  # the probe reads s, ṡ and s̈
+    return ({f"{prefix}_{name}" for name in model.coordinates for prefix in prefixes}
+            | {f"p_{name}" for name in model.parameters} | inputs)
 
 
 @pytest.fixture(scope="module")
