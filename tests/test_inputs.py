@@ -303,3 +303,15 @@ def test_risky_input_names_integrate(cache_dir):
     sol = model.simulate((0.0, 2.0), inputs=pushes, rtol=1e-12, atol=1e-12)
     total = sum(pushes.values())  # ẍ = −x + 10 from rest: x = 10 (1 − cos t)
     assert abs(sol.q[-1, 0] - total * (1 - math.cos(2.0))) < 1e-10
+
+
+def test_an_input_may_move_a_frame():
+    """A frame accelerated by a(t) (an Input) gives the equations of the same frame accelerated by A sin ωt."""
+    def system(acceleration):
+        frame = lc.MovingFrame(acceleration=(acceleration, 0, 0))
+        return lc.System([x], bodies=[lc.Particle(m, (x, 0, 0))], loads=[lc.Force((-k * x, 0, 0), (x, 0, 0))],
+                         frame=frame, name="inputs_frame")
+    signal = lc.Input("a")
+    by_input, written = derive(system(signal)), derive(system(A * sp.sin(w * t)))
+    assert system(signal).input_names == ("a",)
+    assert sp.simplify(by_input.F[0].xreplace({signal: A * sp.sin(w * t)}) - written.F[0]) == 0
