@@ -133,6 +133,8 @@ def test_a_linear_table_of_a_force(cache_dir):
                              rtol=1e-12, atol=1e-12)
     reference = written.simulate((0.0, 5.0), rtol=1e-12, atol=1e-12)
     assert np.max(np.abs(sol.y[-1] - reference.y[-1])) < 1e-11
+    by_input = tabulated.simulate((0.0, 5.0), inputs={force: (times, 0.5 * times)}, rtol=1e-12, atol=1e-12)
+    assert np.max(np.abs(by_input.y[-1] - reference.y[-1])) < 1e-11  # keyed by the Input itself; cubic, exact too
     constant = tabulated.simulate((0.0, 1.0), inputs={"push": 0.0}, rtol=1e-12, atol=1e-12)
     assert abs(constant.q[-1, 0]) == 0.0  # at rest, no force: stays at rest
 

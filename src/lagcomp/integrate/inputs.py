@@ -111,6 +111,21 @@ def _signal(value, name: str) -> tuple[np.ndarray, np.ndarray, str]:
                       f"a scipy CubicSpline / PPoly or a number, got {type(value).__name__}.")
 
 
+def _by_name(inputs: Mapping) -> dict:
+    """`inputs` keyed by name: an input u(t) itself (`lagcomp.Input`) stands for its name, as a Symbol does
+    for a parameter's in `params`."""
+    named = {}
+    for key, value in inputs.items():
+        function = getattr(key, "func", None)
+        name = function.__name__ if getattr(function, "lagcomp_input", False) else key
+        if not isinstance(name, str):
+            raise OptionError(f"`inputs` keys must be input names (or the inputs themselves), got {key!r}.")
+        if name in named:
+            raise OptionError(f"`inputs` gives input `{name}` twice (by name and as the input).")
+        named[name] = value
+    return named
+
+
 def pack_inputs(names, orders, inputs, span, first: int) -> np.ndarray:
     """The headers and tables of the model's inputs, to append to p (`lagcomp.kernel_support.inputs`).
 
@@ -131,6 +146,7 @@ def pack_inputs(names, orders, inputs, span, first: int) -> np.ndarray:
     if not isinstance(inputs, Mapping):
         raise OptionError(f"`inputs` must be a mapping of input name to signal, like {{{names[0]!r}: (times, values)}}"
                           f", got {type(inputs).__name__}.")
+    inputs = _by_name(inputs)
     unknown = sorted(set(inputs) - set(names), key=str)
     if unknown:
         raise OptionError(f"Unknown input(s) {unknown}; the model's inputs are {list(names)}.")
