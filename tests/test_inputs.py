@@ -317,3 +317,23 @@ def test_an_input_may_move_a_frame():
     by_input, written = derive(system(signal)), derive(system(A * sp.sin(w * t)))
     assert system(signal).input_names == ("a",)
     assert sp.simplify(by_input.F[0].xreplace({signal: A * sp.sin(w * t)}) - written.F[0]) == 0
+
+
+def test_an_input_in_a_constraint_reads_its_table_after_the_baumgarte_gains(driven, cache_dir):
+    """The support as a coordinate held on the input by a constraint, x_c − x_s(t) = 0: the same motion as the
+    support written into T, through the augmented solve (dop853) and the DAE (radau)."""
+    xc = lc.coordinates("x_c")[0]
+    support = lc.Input("x_s")
+    px, py = xc + l * sp.sin(th), -l * sp.cos(th)
+    held = lc.compile(lc.System([xc, th], T=m * (px.diff(t) ** 2 + py.diff(t) ** 2) / 2, V=m * g * py,
+                                constraints=[lc.Holonomic("hold", xc - support)], name="inputs_held",
+                                defaults=PENDULUM, q0=(0.0, 0.3), qd0=(AMPLITUDE * OMEGA, 0.0)), cache_dir=cache_dir)
+    assert held.inputs == ("x_s",)
+    _, written = driven
+    signal = _support(0.01)
+    reference = written.simulate((0.0, 2.0), rtol=1e-12, atol=1e-12)
+    for method in ("dop853", "radau"):
+        sol = held.simulate((0.0, 2.0), inputs={"x_s": signal}, method=method, rtol=1e-10, atol=1e-10,
+                            progress=False, project_initial=True)  # (the spline's ẋ_s(0) is Aω to 4e-8)
+        assert sol.status == 0
+        assert abs(sol.q[-1, 1] - reference.q[-1, 0]) < 1e-6, method  # the table's error (measured 3.3e-8, 3.5e-11)
