@@ -119,20 +119,27 @@ def test_every_kind_of_method_takes_a_tabulated_input(driven):
         assert abs(sol.q[-1, 0] - reference.q[-1, 0]) < 1e-6, method  # the table's error (measured < 3e-7)
 
 
+def _pushed(force, name: str) -> lc.System:
+    """m ẍ = −k x + force, with an event where x passes a tenth of the force (an input in an event too)."""
+    return lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, forces=[force], name=name,
+                     events=[lc.Event("passes", x - force / 10)], defaults={"m": 1.0, "k": 4.0},
+                     q0=(0.0,))
+
+
 def test_a_linear_table_of_a_force(cache_dir):
     """m ẍ = −k x + u(t) with u a linear table of u = c t (exact for a linear table) equals the force c t."""
     force = lc.Input("push")
-    tabulated = lc.compile(lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, forces=[force], name="inputs_push",
-                                     defaults={"m": 1.0, "k": 4.0}, q0=(0.0,)), cache_dir=cache_dir)
-    written = lc.compile(lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, forces=[0.5 * t],
-                                   name="inputs_push_expr", defaults={"m": 1.0, "k": 4.0}, q0=(0.0,)),
-                         cache_dir=cache_dir)
+    tabulated = lc.compile(_pushed(force, "inputs_push"), cache_dir=cache_dir)
+    written = lc.compile(_pushed(0.5 * t, "inputs_push_expr"), cache_dir=cache_dir)
     assert tabulated.input_orders == (0,)
     times = np.linspace(0.0, 5.0, 7)
     sol = tabulated.simulate((0.0, 5.0), inputs={"push": lc.Tabulated(times, 0.5 * times, kind="linear")},
                              rtol=1e-12, atol=1e-12)
     reference = written.simulate((0.0, 5.0), rtol=1e-12, atol=1e-12)
     assert np.max(np.abs(sol.y[-1] - reference.y[-1])) < 1e-11
+    crossings = sol.events["passes"].t
+    assert len(crossings) == len(reference.events["passes"].t) > 0
+    assert np.max(np.abs(crossings - reference.events["passes"].t)) < 1e-10
     by_input = tabulated.simulate((0.0, 5.0), inputs={force: (times, 0.5 * times)}, rtol=1e-12, atol=1e-12)
     assert np.max(np.abs(by_input.y[-1] - reference.y[-1])) < 1e-11  # keyed by the Input itself; cubic, exact too
     constant = tabulated.simulate((0.0, 1.0), inputs={"push": 0.0}, rtol=1e-12, atol=1e-12)
@@ -199,6 +206,17 @@ def test_a_law_of_q_in_t_is_a_moving_support():
     assert sp.simplify(by_law.M[0, 0] - written.M[0, 0]) == 0 and sp.simplify(by_law.F[0] - written.F[0]) == 0
 
 
+def test_a_replaced_system_keeps_its_laws_and_bodies_once():
+    """`dataclasses.replace` of a System with bodies and a law: the totals are recognized, not counted twice."""
+    import dataclasses
+
+    tau = lc.Input("tau", law=-Kp * x)
+    system = lc.System([x], bodies=[lc.Particle(m, (x, 0, 0))], loads=[lc.Force((tau, 0, 0), (x, 0, 0))],
+                       name="inputs_replaced")
+    again = dataclasses.replace(system, name="inputs_replaced_again")
+    assert again.T == system.T and again.forces == system.forces == (-Kp * x,)
+
+
 def test_an_input_named_like_a_parameter_is_refused():
     with pytest.raises(ModelError, match=r"\['m'\]"):
         _driven_pendulum(lc.Input("m"), "inputs_clash")
@@ -239,6 +257,11 @@ def test_bad_inputs_are_refused(driven, inputs, culprit):
     with pytest.raises(OptionError) as err:
         driven[0].simulate((0.0, 1.0), inputs=inputs)
     assert culprit in str(err.value)
+
+
+def test_a_batched_sweep_is_refused_with_a_tabulated_input(driven):
+    with pytest.raises(OptionError, match="with inputs"):
+        driven[0].sweep((0.0, 1.0), {"theta": [0.1, 0.2]}, inputs={"x_s": _support(0.1)}, batched=True)
 
 
 def test_taylor_is_refused_with_a_tabulated_input(driven):
