@@ -80,6 +80,7 @@ def test_the_support_motion_reads_its_second_derivative(driven):
     assert tabulated.inputs == ("x_s",) and tabulated.input_orders == (2,)
     assert tabulated.parameters == ("g", "l", "m")
     assert "INPUTS = ('x_s',)" in tabulated.source_path.read_text(encoding="utf-8")
+    assert "<code>x_s</code> (up to d2/dt2)" in tabulated._repr_html_()
 
 
 def test_a_tabulated_support_motion_equals_the_expression_to_the_interpolants_error(driven):
