@@ -13,7 +13,8 @@ by construction:
   matching `USER_NAMESPACE`: ``q_<name>`` for a coordinate, ``qd_<name>`` for
   its velocity, ``p_<name>`` for a parameter, ``mom_<name>`` for a conjugate
   momentum (``p_k = p[3]``), ``u_<name>``, ``ud_<name>``, ``udd_<name>``,
-  ``uddd_<name>`` for an input and its derivatives (`input_slots`); a name that does not stay itself as a Python
+  ``uddd_<name>`` for an input and its derivatives (`input_slots`); a name
+  that does not stay itself as a Python
   identifier (``x.1``, a keyword-free but NFKC-unstable ``ﬁ``, ...) becomes
   ``<prefix><i>_<its letters>`` with i its position (``p3_x_1``), which no
   identifier name reaches (a digit, not ``_``, follows the prefix letters);
@@ -152,7 +153,8 @@ def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
     targets = [target for target, _ in stores]
     exprs = [e if isinstance(e, se.Basic) else sp.sympify(e) for _, e in stores]
     signals = {key: local for key, local in mapping.items() if not isinstance(key, sp.Symbol)}
-    if signals:  # inputs u(t), u̇(t), ...: their locals first (highest derivatives first), then ordinary symbols
+    if signals:  # inputs u(t), u̇(t), ... become their locals first (xreplace takes a derivative whole), so that
+        # what is left is symbols and functions symengine knows: its fast path applies to the rest
         exprs = [e if isinstance(e, se.Basic) else e.xreplace(signals) for e in exprs]
         _refuse_high_derivatives(exprs, name)
     if symengine_ready([e for e in exprs if not isinstance(e, se.Basic)]):
