@@ -42,6 +42,8 @@ class Tabulated:
         error O(Δ⁴) in u, O(Δ²) in ü for samples Δ apart of a smooth signal); "linear": the
         piecewise-linear interpolant (continuous u, u̇ piecewise constant, ü zero: refused for
         an input whose second derivative enters the equations).
+    name : str, optional
+        The input the table is for, named in error messages (`pack_inputs` gives it).
 
     Attributes
     ----------
@@ -50,17 +52,18 @@ class Tabulated:
         Row k multiplies (t − x_i)^(3 − k) on piece i (scipy's ``PPoly.c``).
     """
 
-    def __init__(self, times, values, kind: str = "cubic", name: str = "?"):
+    def __init__(self, times, values, kind: str = "cubic", name: str | None = None):
+        what = "lagcomp.Tabulated" if name is None else f"Input `{name}`"  # (`name`: the input being supplied)
         if kind not in KINDS:
-            raise OptionError(f"Input `{name}`: `kind` must be one of {KINDS}, got {kind!r}.")
-        x, y = _samples(times, "times", name), _samples(values, "values", name)
+            raise OptionError(f"{what}: `kind` must be one of {KINDS}, got {kind!r}.")
+        x, y = _samples(times, "times", what), _samples(values, "values", what)
         if x.size != y.size:
-            raise OptionError(f"Input `{name}`: {x.size} times but {y.size} values; give one value per time.")
+            raise OptionError(f"{what}: {x.size} times but {y.size} values; give one value per time.")
         if x.size < 2:
-            raise OptionError(f"Input `{name}`: a table needs at least two samples, got {x.size}.")
+            raise OptionError(f"{what}: a table needs at least two samples, got {x.size}.")
         if not np.all(np.diff(x) > 0):
             i = int(np.argmin(np.diff(x) > 0))
-            raise OptionError(f"Input `{name}`: times must be strictly increasing; times[{i}] = {x[i]} is followed "
+            raise OptionError(f"{what}: times must be strictly increasing; times[{i}] = {x[i]} is followed "
                               f"by {x[i + 1]}.")
         self.kind, self.breakpoints = kind, x
         if kind == "cubic":
@@ -76,15 +79,16 @@ class Tabulated:
         return f"Tabulated({x.size} samples on [{x[0]}, {x[-1]}], kind={self.kind!r})"
 
 
-def _samples(values, what: str, name: str) -> np.ndarray:
+def _samples(values, field: str, what: str) -> np.ndarray:
+    """`values` as a finite 1-D float array, or an OptionError naming `what` (the table) and the `field`."""
     try:
         array = np.asarray(values, dtype=float)
     except (TypeError, ValueError) as err:
-        raise OptionError(f"Input `{name}`: `{what}` must be numbers, got {values!r}.") from err
+        raise OptionError(f"{what}: `{field}` must be numbers, got {values!r}.") from err
     if array.ndim != 1:
-        raise OptionError(f"Input `{name}`: `{what}` must be one-dimensional, got shape {array.shape}.")
+        raise OptionError(f"{what}: `{field}` must be one-dimensional, got shape {array.shape}.")
     if not np.all(np.isfinite(array)):
-        raise OptionError(f"Input `{name}`: `{what}` holds non-finite values (NaN or inf) at "
+        raise OptionError(f"{what}: `{field}` holds non-finite values (NaN or inf) at "
                           f"{np.flatnonzero(~np.isfinite(array))[:5].tolist()}.")
     return array
 
