@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import ast
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -161,6 +163,27 @@ def test_a_new_table_compiles_nothing(driven):
     with numba_event.install_recorder("numba:compile") as recorder:  # the recorder does see a compilation
         njit(lambda a: a + 1.0)(1.0)
     assert recorder.buffer
+
+
+#: A later process: the model by name from the cache, a table it never saw, numba's compile events counted.
+LATER_PROCESS = """
+import sys
+import numpy as np
+from numba.core import event
+import lagcomp as lc
+model = lc.load("inputs_driven", cache_dir=sys.argv[1])
+times = np.linspace(0.0, 2.0, 33)
+with event.install_recorder("numba:compile") as recorder:
+    sol = model.simulate((0.0, 1.0), inputs={"x_s": (times, np.sin(times))}, progress=False)
+print(sol.status, len(recorder.buffer))
+"""
+
+
+def test_a_later_process_runs_a_new_table_without_compiling(driven, cache_dir):
+    driven[0].simulate((0.0, 1.0), inputs={"x_s": _support(0.1)}, progress=False)  # numba's cache is written
+    out = subprocess.run([sys.executable, "-c", LATER_PROCESS, str(cache_dir)], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.split() == ["0", "0"]
 
 
 # -- feedback laws -----------------------------------------------------------------------------
