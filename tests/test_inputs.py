@@ -241,6 +241,15 @@ def test_a_replaced_system_keeps_its_laws_and_bodies_once():
     assert again.T == system.T and again.forces == system.forces == (-Kp * x,)
 
 
+def test_a_law_may_use_other_inputs_with_laws_or_without():
+    c = sp.Symbol("c")
+    reference = lc.Input("r")
+    inner = lc.Input("a", law=c * (th - reference))
+    outer = lc.Input("b", law=-2 * inner - Kd * th.diff(t))
+    system = lc.System([th], T=m * th.diff(t) ** 2 / 2, forces=[outer], name="inputs_nested")
+    assert system.forces == (-2 * c * (th - reference) - Kd * th.diff(t),) and system.inputs == (reference,)
+
+
 def test_an_input_named_like_a_parameter_is_refused():
     with pytest.raises(ModelError, match=r"\['m'\]"):
         _driven_pendulum(lc.Input("m"), "inputs_clash")

@@ -81,55 +81,39 @@ def inputs_in(exprs) -> tuple:
 
 
 def substitute_laws(exprs: dict, velocities) -> dict:
-    """`exprs` (role -> expression) with every input that has a law replaced by it, recursively.
+    """`exprs` (role -> expression) with every input that has a law replaced by the law.
 
-    A law may use other inputs (a reference signal θ_ref(t) in τ = −Kp (θ − θ_ref)), and laws
-    that end up inside T or a constraint must not hold a velocity (`velocities`): T would no
-    longer be quadratic in q̇ and a constraint no longer of the form lagcomp solves, and the
-    equations would become implicit in q̈.  A law that refers to itself, directly or through
-    others, is refused.
+    A law may use other inputs (a reference signal θ_ref(t) in τ = −Kp (θ − θ_ref)), with laws of
+    their own or not.  Laws that end up inside T or a constraint must not hold a velocity
+    (`velocities`): T would no longer be quadratic in q̇ nor a constraint of the form lagcomp
+    solves, and the equations would become implicit in q̈.
     """
-    laws = {}
-    pending = [u for e in exprs.values() for u in inputs_in([e]) if law_of(u) is not None]
-    while pending:
-        u = pending.pop()
-        if u in laws:
-            continue
-        laws[u] = law_of(u)
-        pending += [v for v in inputs_in([laws[u]]) if law_of(v) is not None]
-    if not laws:
-        return exprs
-    resolved = {}
-    for u in laws:
-        law, seen = laws[u], {u}
-        while True:
-            inner = [v for v in inputs_in([law]) if v in laws]
-            if not inner:
-                break
-            loop = [v for v in inner if v in seen]
-            if loop:
-                raise ModelError(f"The law of Input `{u.func.__name__}` refers to itself (through "
-                                 f"`{loop[0].func.__name__}`): a feedback law must be explicit in q, q̇, t.")
-            seen |= set(inner)
-            law = law.xreplace({v: laws[v] for v in inner})
-        resolved[u] = law
     out = {}
     for role, expr in exprs.items():
-        used = [u for u in inputs_in([expr]) if u in resolved]
+        used = [u for u in inputs_in([expr]) if law_of(u) is not None]
         if not used:
             out[role] = expr
             continue
+        laws = {u: _resolved(u) for u in used}
         if role == "T" or role.startswith("constraint "):
-            _refuse_velocity_laws(used, resolved, velocities, role)
-        new = expr.xreplace({u: resolved[u] for u in used})  # u̇ of a law: Derivative(law, t), worked out
+            _refuse_velocity_laws(laws, velocities, role)
+        new = expr.xreplace(laws)  # u̇ of a law: Derivative(law, t), worked out
         out[role] = new.replace(lambda e: isinstance(e, sp.Derivative), lambda e: e.doit())
     return out
 
 
-def _refuse_velocity_laws(used, resolved, velocities, role) -> None:
+def _resolved(u) -> sp.Expr:
+    """The law of `u` with the inputs it uses that have laws replaced by theirs, recursively (a law is
+    given when its input is made, so it can only use inputs made before: there are no cycles)."""
+    law = law_of(u)
+    inner = [v for v in inputs_in([law]) if law_of(v) is not None]
+    return law.xreplace({v: _resolved(v) for v in inner}) if inner else law
+
+
+def _refuse_velocity_laws(laws: dict, velocities, role) -> None:
     """Refuse a law holding a velocity for an input that appears in T or a constraint (see `substitute_laws`)."""
-    for u in used:
-        if resolved[u].has(*velocities):
+    for u, law in laws.items():
+        if law.has(*velocities):
             raise ModelError(
                 f"The law of Input `{u.func.__name__}` depends on velocities and the input appears in {role}: "
                 "the equations would no longer be linear in q̈ (they would be implicit). Use velocity feedback "
@@ -148,11 +132,3 @@ def plain_inputs(exprs, inputs, order: int = MAX_ORDER) -> tuple[list, dict]:
         for k in range(order, -1, -1):
             mapping[u.diff(t, k) if k else u] = sp.Dummy(f"{u.func.__name__}_{k}", real=True)
     return [e.xreplace(mapping) for e in exprs], mapping
-
-
-def derivative_order(expr, u) -> int:
-    """The highest t-derivative of input `u` in `expr`: −1 when it does not appear, 0 for u itself."""
-    if not expr.has(u):
-        return -1
-    orders = [d.derivative_count for d in expr.atoms(sp.Derivative) if d.expr == u]
-    return max(orders, default=0)
