@@ -213,6 +213,7 @@ CASES = {
     "input-linear-needs-acceleration": (
         _simulate("driven", inputs={"s": lc.Tabulated([0.0, 2.0], [0.0, 1.0], kind="linear")}), "`s`"),
     "input-with-taylor": (_simulate("driven", inputs={"s": 0.0}, method="taylor"), "inputs supplied at run time"),
+    "input-one-state-evaluation": (lambda models: models["driven"].rhs(0.0, [0.0, 0.0]), "['s']"),
     "inputs-without-inputs": (_simulate("pendulum", inputs={"s": 0.0}), "has no inputs"),
     "plain-symbol-coordinate": (lambda: lc.System([sp.Symbol("q")], T=sp.Symbol("q") ** 2, name="bad"), "Coordinate q"),
     "repeated-coordinate": (lambda: lc.System([x, x], T=m * x.diff(t) ** 2), "(x(t), x(t))"),

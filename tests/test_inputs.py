@@ -302,6 +302,11 @@ def test_taylor_is_refused_with_a_tabulated_input(driven):
         driven[0].simulate((0.0, 1.0), inputs={"x_s": _support(0.1)}, method="taylor")
 
 
+def test_a_one_state_evaluation_says_it_needs_the_tables(driven):
+    with pytest.raises(OptionError, match=r"reads the input\(s\) \['x_s'\]"):
+        driven[0].rhs(0.0, [0.1, 0.0])
+
+
 def test_inputs_for_a_model_without_inputs_are_refused(pd):
     with pytest.raises(OptionError, match="has no inputs"):
         pd.simulate((0.0, 1.0), inputs={"tau": 1.0})

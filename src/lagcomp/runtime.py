@@ -360,8 +360,13 @@ class Model:
 
                 raise OptionError(f"`inputs` given, but {self.name!r} has no inputs (lagcomp.Input without a law).")
             return p
+        from lagcomp.errors import OptionError
         from lagcomp.integrate.inputs import pack_inputs
 
+        if inputs is None and span is None:  # a one-state evaluation (Model.rhs, lagcomp.analysis), which takes none
+            raise OptionError(f"{self.name!r} reads the input(s) {list(self.inputs)} from tables that `simulate` and "
+                              "`sweep` take (`inputs=`); its kernels cannot be evaluated at one state without them "
+                              "yet: compile a variant with the input written as a constant or a law for that.")
         return np.concatenate([p, pack_inputs(self.inputs, self.input_orders, inputs, span, p.size)])
 
     def _parameter_values(self, params, baumgarte) -> np.ndarray:
