@@ -87,6 +87,9 @@ def models(compiled, cache_dir):
         "kane": lc.compile(_kane_slider(), name="table_kane_slider", cache_dir=cache_dir, defaults={"m": 1.0}),
         "kane_across": lc.compile(_kane_slider(across=True), name="table_kane_slider_across", cache_dir=cache_dir,
                                   defaults={"m": 1.0}),
+        # a support moved by an input s(t): ẍ_s in the forcing (a linear table is refused for it)
+        "driven": lc.compile(oscillator(T=m * (x.diff(t) + lc.Input("s").diff(t)) ** 2 / 2, name="table_driven"),
+                             cache_dir=cache_dir),
         # a parameter named like the velocity of x: derived correctly, but "x_dot" is ambiguous in a sweep grid
         "clash": lc.compile(oscillator(V=sp.Symbol("x_dot") * x, name="table_clash",
                                        defaults={"m": 1.0, "x_dot": 1.0}), cache_dir=cache_dir),
@@ -199,6 +202,20 @@ CASES = {
     # the description: System(...) and compile
     "undeclared-symbol": (lambda: oscillator(V=k * x**2 / 2 + sp.Symbol("stray") * x, parameters=(m, k)), "stray"),
     "undeclared-function": (lambda: oscillator(V=k * (x - sp.Function("phi")(t)) ** 2), "phi(t)"),
+    "input-name-clash": (lambda: oscillator(forces=[lc.Input("k")]), "['k']"),
+    "input-law-with-velocities-in-T": (
+        lambda: oscillator(T=(m + lc.Input("lift", law=c * x.diff(t))) * x.diff(t) ** 2 / 2), "lift"),
+    "input-missing": (_simulate("driven"), "['s']"),
+    "input-unknown": (_simulate("driven", inputs={"s": 0.0, "r": 0.0}), "['r']"),
+    "input-times-not-increasing": (_simulate("driven", inputs={"s": ([0.0, 1.0, 0.5, 2.0], [0.0] * 4)}), "times[1]"),
+    "input-not-finite": (_simulate("driven", inputs={"s": ([0.0, 1.0, 2.0], [0.0, math.nan, 0.0])}), "`s`"),
+    "input-length-mismatch": (_simulate("driven", inputs={"s": ([0.0, 1.0, 2.0], [0.0, 0.0])}), "3 times but 2"),
+    "input-does-not-cover-run": (_simulate("driven", inputs={"s": ([0.0, 0.5], [0.0, 0.0])}), "[0.0, 0.5]"),
+    "input-linear-needs-acceleration": (
+        _simulate("driven", inputs={"s": lc.Tabulated([0.0, 2.0], [0.0, 1.0], kind="linear")}), "`s`"),
+    "input-with-taylor": (_simulate("driven", inputs={"s": 0.0}, method="taylor"), "inputs supplied at run time"),
+    "input-one-state-evaluation": (lambda models: models["driven"].rhs(0.0, [0.0, 0.0]), "['s']"),
+    "inputs-without-inputs": (_simulate("pendulum", inputs={"s": 0.0}), "has no inputs"),
     "plain-symbol-coordinate": (lambda: lc.System([sp.Symbol("q")], T=sp.Symbol("q") ** 2, name="bad"), "Coordinate q"),
     "repeated-coordinate": (lambda: lc.System([x, x], T=m * x.diff(t) ** 2), "(x(t), x(t))"),
     "bad-system-name": (lambda: oscillator(name="double-pendulum"), "'double-pendulum'"),

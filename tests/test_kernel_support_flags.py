@@ -71,9 +71,9 @@ def recompile_trig_outside_kernels() -> None:
 def test_every_function_numba_does_not_inline_has_its_own_fastmath_flags():
     from numba.core.registry import CPUDispatcher
 
-    from lagcomp.kernel_support import angles, linear_solvers, trig
+    from lagcomp.kernel_support import angles, inputs, linear_solvers, trig
 
-    for module in (angles, linear_solvers, trig):
+    for module in (angles, inputs, linear_solvers, trig):
         for name, function in vars(module).items():
             if isinstance(function, CPUDispatcher) and function.targetoptions.get("inline") != "always":
                 assert function.targetoptions.get("fastmath") is False, f"{module.__name__}.{name}"

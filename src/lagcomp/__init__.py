@@ -25,6 +25,7 @@ from lagcomp.errors import (
     StiffnessWarning as StiffnessWarning,
     UndeclaredSymbolError as UndeclaredSymbolError,
 )
+from lagcomp.integrate.inputs import Tabulated as Tabulated
 from lagcomp.integrate.solution import Solution as Solution
 from lagcomp.integrate.sweep import Sweep as Sweep
 from lagcomp.runtime import Model as Model, compile as compile, load as load  # noqa: A004
@@ -33,7 +34,7 @@ from lagcomp.runtime import Model as Model, compile as compile, load as load  # 
 #: use (PEP 562), because it imports sympy: a process that only runs a cached
 #: model (`lagcomp.load`) starts without sympy's ~0.5 s import.
 _MODEL_NAMES = (
-    "Damper", "Event", "Force", "Gravity", "Holonomic", "MovingFrame", "Nonholonomic", "Particle", "RigidBody",
+    "Damper", "Event", "Force", "Gravity", "Holonomic", "Input", "MovingFrame", "Nonholonomic", "Particle", "RigidBody",
     "Spring", "System", "Torque", "body_rates", "coordinates", "from_kanes_method", "from_lagranges_method",
     "rotated", "t",
 )

@@ -197,6 +197,10 @@ class ModuleIR:
     constraint_names: tuple[str, ...] = ()
     holonomic: tuple[bool, ...] = ()
     event_names: tuple[str, ...] = ()
+    #: Inputs supplied at run time, in the order of their headers in p, and the highest derivative of each
+    #: that the kernels read (`lagcomp.kernel_support.inputs`).
+    input_names: tuple[str, ...] = ()
+    input_orders: tuple[int, ...] = ()
 
     @property
     def k(self) -> int:

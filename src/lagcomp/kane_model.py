@@ -227,11 +227,11 @@ class KaneModel(Model):
         return (f"KaneModel({self.name!r}, n_q={self.n}, n_u={len(self.speeds)}, parameters={self.parameters}, "
                 f"from {'cache' if self.from_cache else 'fresh build'}: {self.source_path})")
 
-    def parameter_vector(self, params=None, baumgarte=(0.0, 0.0)) -> np.ndarray:
+    def parameter_vector(self, params=None, baumgarte=(0.0, 0.0), inputs=None, span=None) -> np.ndarray:
         if tuple(baumgarte) != (0.0, 0.0):
             raise OptionError("`baumgarte` does not apply to a Kane model: its equations hold the velocity "
                               "constraints among their rows; use projection=True or a tighter tolerance.")
-        return super().parameter_vector(params)
+        return super().parameter_vector(params, inputs=inputs)  # (a Kane model has no inputs: refused if given)
 
     def initial_state(self, q0=None, u0=None) -> np.ndarray:
         """y = (q0, u0), defaults from `compile`'s q0/u0 (u0 = 0 when none), checked."""

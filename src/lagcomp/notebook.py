@@ -129,7 +129,12 @@ def model_html(model) -> str:
         rows += [("speeds", _names(model.speeds))]
         if model.reaction_names:
             rows += [("reactions", _names(model.reaction_names))]
-    rows += [("parameters (defaults)", parameters), ("constraints", constraints), ("events", events),
+    rows += [("parameters (defaults)", parameters)]
+    if getattr(model, "inputs", ()):  # signals supplied at run time (lagcomp.Input), with the derivative read
+        rows += [("inputs", ", ".join(f"<code>{_text(name)}</code> (up to d{order}/dt{order})" if order > 0
+                                      else f"<code>{_text(name)}</code>"
+                                      for name, order in zip(model.inputs, model.input_orders, strict=True)))]
+    rows += [("constraints", constraints), ("events", events),
              ("methods", _names(m.name for m in applicable_methods(model))),
              ("equations", "<code>model.equations()</code> (LaTeX, rendered as math in a cell)"),
              ("kernels", f"<code>{_text(model.source_path)}</code> "

@@ -201,6 +201,7 @@ def build(system, cache: Cache, key: str, eom=None, progress=None) -> Entry:
         "operations": {**{k.name: k.operation_count for k in ir.kernels},
                        **({"taylor_coefficients": program["operations"]} if program else {})},
         "taylor_program": program,
+        **({"inputs": list(ir.input_names), "input_orders": list(ir.input_orders)} if ir.input_names else {}),
     }
     return cache.store(key, source, system.name, metadata)
 
@@ -274,6 +275,11 @@ class Model:
         all holonomic and scleronomic, Φ(q) = 0 (`lagcomp.mechanics.lagrange.EOM`).
     operations : dict
         Arithmetic operations per kernel after CSE.
+    inputs : tuple of str
+        The inputs supplied at run time (`lagcomp.Input` without a law), by name: ``simulate`` and
+        ``sweep`` take a signal for each in ``inputs={name: ...}`` (`lagcomp.integrate.inputs`).
+    input_orders : tuple of int
+        The highest derivative of each input the kernels read (2 for a support motion in T).
     """
 
     def __init__(self, system, kernels, entry: Entry, from_cache: bool, recorded: dict | None = None):
@@ -299,6 +305,8 @@ class Model:
         self.holonomic_separable = bool(entry.metadata["holonomic_separable"])
         self.operations = dict(entry.metadata["operations"])
         self._taylor_program = entry.metadata.get("taylor_program")  # for batched Taylor sweeps (taylor_lanes)
+        self.inputs = tuple(entry.metadata.get("inputs", ()))
+        self.input_orders = tuple(entry.metadata.get("input_orders", ()))
         self._default_parameters: tuple | None = None  # (defaults' snapshot, p): `parameter_vector`
         self._default_state: tuple | None = None  # (q0, qd0, y): `initial_state`
 
@@ -348,11 +356,33 @@ class Model:
 
     # -- inputs -------------------------------------------------------------------
 
-    def parameter_vector(self, params: dict | None = None, baumgarte=(0.0, 0.0)) -> np.ndarray:
+    def parameter_vector(self, params: dict | None = None, baumgarte=(0.0, 0.0), inputs=None,
+                         span=None) -> np.ndarray:
         """Parameter values by name (defaults filled in) as the kernel vector p.
 
-        For constrained systems p ends with the Baumgarte gains (α, β), which
-        add −2α (Λ q̇ + b) − β² Φ to the acceleration-level constraints.
+        For constrained systems p continues with the Baumgarte gains (α, β), which
+        add −2α (Λ q̇ + b) − β² Φ to the acceleration-level constraints.  A model with
+        inputs needs a signal for each in `inputs` (`lagcomp.integrate.inputs`): their
+        tables end p, and must cover the time `span` (t0, t1) when it is given.
+        """
+        p = self._parameter_values(params, baumgarte)
+        if not self.inputs:
+            if inputs:
+                from lagcomp.errors import OptionError
+
+                raise OptionError(f"`inputs` given, but {self.name!r} has no inputs (lagcomp.Input without a law).")
+            return p
+        from lagcomp.errors import OptionError
+        from lagcomp.integrate.inputs import pack_inputs
+
+        if inputs is None and span is None:  # a one-state evaluation (Model.rhs, lagcomp.analysis), which takes none
+            raise OptionError(f"{self.name!r} reads the input(s) {list(self.inputs)} from tables that `simulate` and "
+                              "`sweep` take (`inputs=`); its kernels cannot be evaluated at one state without them "
+                              "yet: compile a variant with the input written as a constant or a law for that.")
+        return np.concatenate([p, pack_inputs(self.inputs, self.input_orders, inputs, span, p.size)])
+
+    def _parameter_values(self, params, baumgarte) -> np.ndarray:
+        """p without the inputs' tables: the user parameters, then a constrained system's Baumgarte gains.
 
         With `params` None the values are the defaults', checked once and kept (`_default_parameters`)
         until `defaults` changes: a run of a short simulation saves the ~3 µs of checking them again.
@@ -601,6 +631,12 @@ class Model:
             Initial coordinates and velocities; default to the System's.
         params : dict, optional
             Parameter values by name; missing ones come from the System's defaults.
+        inputs : dict, optional
+            A signal for each input of the model (`Model.inputs`), by name:
+            ``lagcomp.Tabulated(times, values, kind="cubic" | "linear")``, a pair
+            ``(times, values)`` (cubic), a scipy CubicSpline / PPoly of degree ≤ 3,
+            or a number (constant).  Tables must cover `t_span`; changing them
+            never recompiles (`lagcomp.integrate.inputs`).
 
         Other Parameters
         ----------------
@@ -705,8 +741,9 @@ class Model:
 
         Other Parameters
         ----------------
-        q0, qd0, params
-            Values of everything not swept (defaults: the System's).
+        q0, qd0, params, inputs
+            Values of everything not swept (defaults: the System's); every
+            trajectory reads the same input tables.
         method, dt, rtol, atol, t_eval, save_every, max_step, max_steps, implicit_solver, events
             As for `simulate`, checked by the same code with the same messages
             (`lagcomp.integrate.options.run_options`); each trajectory has its own

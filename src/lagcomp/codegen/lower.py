@@ -12,7 +12,9 @@ by construction:
 - every local bound to a user symbol lies in the *user namespace*, the names
   matching `USER_NAMESPACE`: ``q_<name>`` for a coordinate, ``qd_<name>`` for
   its velocity, ``p_<name>`` for a parameter, ``mom_<name>`` for a conjugate
-  momentum (``p_k = p[3]``); a name that does not stay itself as a Python
+  momentum (``p_k = p[3]``), ``u_<name>``, ``ud_<name>``, ``udd_<name>``,
+  ``uddd_<name>`` for an input and its derivatives (`input_slots`); a name
+  that does not stay itself as a Python
   identifier (``x.1``, a keyword-free but NFKC-unstable ``ﬁ``, ...) becomes
   ``<prefix><i>_<its letters>`` with i its position (``p3_x_1``), which no
   identifier name reaches (a digit, not ``_``, follows the prefix letters);
@@ -39,6 +41,7 @@ import symengine as se
 import sympy as sp
 
 from lagcomp.codegen.geometry import geometry_kernel
+from lagcomp.errors import ModelError
 from lagcomp.ir import (
     NO_JACOBIAN,
     AugmentedSolve,
@@ -52,10 +55,11 @@ from lagcomp.ir import (
     Unavailable,
 )
 from lagcomp.mechanics.lagrange import EOM, rest_partials, symengine_ready
+from lagcomp.model.inputs import MAX_ORDER, is_input
 from lagcomp.model.system import t
 
 #: The user namespace (module docstring): a prefix for each kind of user symbol, then ``_`` or a digit.
-USER_NAMESPACE = re.compile(r"(q|qd|p|mom)[_0-9]")
+USER_NAMESPACE = re.compile(r"(q|qd|p|mom|u|ud|udd|uddd)[_0-9]")
 #: Largest system whose LDLᵀ solve is emitted unrolled; larger ones call a loop (`lagcomp.kernel_support.linear_solvers.ldlt_solve`).
 #: Unrolled, the 10-link chain's rhs costs 462 ns in a compiled loop against 635 ns looped
 #: (`python -m bench --only kernels --cases n_link_pendulum_10` at aed6595 and at d880236, whose
@@ -116,10 +120,30 @@ def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
     for symbol, local, array, index in _slots(eom):
         mapping[symbol] = sp.Symbol(local, real=True)
         loads.append((local, f"{array}[{index}]"))
+    for u, order, local, slot in input_slots(eom):
+        mapping[u.diff(t, order) if order else u] = sp.Symbol(local, real=True)
+        loads.append((local, f"input_value(t, p, {slot}, {order})"))
     # distinct by construction: prefixes per kind, and a System refuses two symbols of one name
     assert len({local for local, _ in loads}) == len(loads), loads
     mapping[t] = sp.Symbol("t", real=True)
     return mapping, tuple(loads)
+
+
+#: The locals of an input and of its derivatives, by order: ``u_x``, ``ud_x``, ``udd_x``, ``uddd_x``.
+INPUT_PREFIXES = ("u", "ud", "udd", "uddd")
+
+
+def input_slots(eom: EOM) -> list[tuple]:
+    """Each input u(t) supplied at run time, with each derivative order the kernels may read (0 to
+    `MAX_ORDER`): (u, order, local, header slot).
+
+    The header slot is the entry of p holding where the input's table starts: p holds the user
+    parameters, then the Baumgarte gains of a constrained system, then one header per input in
+    name order (`lagcomp.kernel_support.inputs` describes the tables after them).
+    """
+    first = len(eom.parameters) + (len(BAUMGARTE) if eom.k else 0)
+    return [(u, order, user_local(INPUT_PREFIXES[order], u.func.__name__, j), first + j)
+            for j, u in enumerate(eom.system.inputs) for order in range(MAX_ORDER + 1)]
 
 
 def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
@@ -129,6 +153,11 @@ def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
     """
     targets = [target for target, _ in stores]
     exprs = [e if isinstance(e, se.Basic) else sp.sympify(e) for _, e in stores]
+    signals = {key: local for key, local in mapping.items() if not isinstance(key, sp.Symbol)}
+    if signals:  # inputs u(t), u̇(t), ... become their locals first (xreplace takes a derivative whole), so that
+        # what is left is symbols and functions symengine knows: its fast path applies to the rest
+        exprs = [e if isinstance(e, se.Basic) else e.xreplace(signals) for e in exprs]
+        _refuse_high_derivatives(exprs, name)
     if symengine_ready([e for e in exprs if not isinstance(e, se.Basic)]):
         temps, reduced = _symengine_cse(exprs, mapping)
     else:
@@ -142,6 +171,16 @@ def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
         temps=tuple((s.name, e) for s, e in temps),
         stores=tuple(zip(targets, reduced)), solve=solve,
     )
+
+
+def _refuse_high_derivatives(exprs: list, kernel: str) -> None:
+    """Refuse an input derivative of order above `MAX_ORDER` left after binding the others (its pieces are
+    cubic: the kernels evaluate up to the third derivative)."""
+    for e in exprs:
+        left = [d for d in e.atoms(sp.Derivative) if is_input(d.expr)]
+        if left:
+            raise ModelError(f"The {kernel} kernel needs {left[0]}: lagcomp evaluates inputs' derivatives up to "
+                             f"order {MAX_ORDER} (their tables are piecewise cubic).")
 
 
 def _symengine_cse(exprs: list, mapping: dict) -> tuple[list, list]:
@@ -620,7 +659,8 @@ def lower(eom: EOM) -> ModuleIR:
         first += _dae_kernels(eom, mapping, loads)
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
-        first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled else (rhs,)
+        # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
+        first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled and not eom.system.inputs else (rhs,)
         first += (_rhs_jacobian_kernel(eom, mapping, loads),)
     kernels = first + (
         _kernel(
@@ -651,5 +691,15 @@ def lower(eom: EOM) -> ModuleIR:
         system_name=system.name, description=system.description,
         coordinate_names=system.coordinate_names, parameter_names=system.parameter_names,
         kernels=kernels, constraint_names=eom.constraint_names, holonomic=eom.holonomic,
-        event_names=system.event_names,
+        event_names=system.event_names, input_names=system.input_names, input_orders=_input_orders(eom, kernels),
     )
+
+
+def _input_orders(eom: EOM, kernels) -> tuple[int, ...]:
+    """The highest derivative of each input that some kernel reads (−1: none reads it)."""
+    read = {local for kernel in kernels for local, _ in kernel.loads}
+    highest = {u: -1 for u in eom.system.inputs}
+    for u, order, local, _ in input_slots(eom):
+        if local in read:
+            highest[u] = max(highest[u], order)
+    return tuple(highest[u] for u in eom.system.inputs)

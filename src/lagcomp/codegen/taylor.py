@@ -519,6 +519,8 @@ def taylor_decomposition(ir: ModuleIR) -> TaylorProgram | Unsupported:
     try:
         if ir.k:
             raise Unsupported("constraints (their multipliers are not covered)")
+        if ir.input_names:
+            raise Unsupported("inputs supplied at run time (their tables' Taylor coefficients are not emitted)")
         return decompose(ir.kernel("rhs"), ir.n)
     except Unsupported as err:
         return err

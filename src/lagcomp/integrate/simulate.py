@@ -101,7 +101,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
              atol=None, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
              events=None, record="trajectory", progress=None, throw=False, max_residual=None,
-             memory_limit=MEMORY_LIMIT) -> Solution:
+             memory_limit=MEMORY_LIMIT, inputs=None) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     options = run_options(model, t_span, method=method, dt=dt, rtol=rtol, atol=atol, t_eval=t_eval,
                           save_every=save_every, first_step=first_step, max_step=max_step, max_steps=max_steps,
@@ -111,7 +111,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     if record not in RECORD_MODES:
         raise OptionError(f"`record` must be one of {RECORD_MODES}, got {record!r}.")
     m, t0, t1, t_eval = options.method, options.t0, options.t1, options.t_eval
-    p = model.parameter_vector(params, baumgarte)
+    p = model.parameter_vector(params, baumgarte, inputs, (t0, t1))
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     if max_residual is not None and not m.checks_residual:
         raise OptionError(f"`max_residual` stops a run whose constraint residual drifts past it; `{m.name}` does not "

@@ -245,7 +245,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
           method="dop853", dt=None, rtol=None, atol=None, t_eval=None, save_every=1, max_step=math.inf,
           max_steps=100_000_000, implicit_solver=None, events=None, event_cap=16, output=(), workers=None,
           client=None, batched=False, progress=None, memory_limit=MEMORY_LIMIT, projection=None,
-          baumgarte=(0.0, 0.0), project_initial=False) -> Sweep:
+          baumgarte=(0.0, 0.0), project_initial=False, inputs=None) -> Sweep:
     """Integrate every point of `grid`; see `lagcomp.Model.sweep` for the arguments."""
     try:
         output = (output,) if isinstance(output, str) else tuple(output)
@@ -289,7 +289,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     rows = 0 if t_dense is None else t_dense.size
 
     y_base = model.initial_state(q0, qd0)
-    p_base = model.parameter_vector(params, baumgarte)
+    p_base = model.parameter_vector(params, baumgarte, inputs, (t0, t1))  # every trajectory: the same tables
     Y0 = np.repeat(y_base[None, :], n_traj, axis=0)
     P = np.repeat(p_base[None, :], n_traj, axis=0)
     state_names = list(model.state_names)
@@ -390,8 +390,8 @@ def _batched_driver(model, m) -> str:
     if m.name == "taylor":
         return BATCHED["taylor"]       # check_method has checked that the model has a Taylor program
     if not hasattr(model.kernels, "rhs_lanes"):
-        raise OptionError(f"{model.name!r} has no batched kernel (constrained, or more coordinates than "
-                          "lagcomp.codegen.lower.UNROLL_MAX, whose LDLᵀ solve is a loop).")
+        raise OptionError(f"{model.name!r} has no batched kernel (constrained, with inputs, or more coordinates "
+                          "than lagcomp.codegen.lower.UNROLL_MAX, whose LDLᵀ solve is a loop).")
     return BATCHED[m.name]
 
 

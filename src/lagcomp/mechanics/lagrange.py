@@ -52,6 +52,7 @@ import sympy as sp
 from lagcomp.errors import ModelError, SingularMassMatrixError
 from lagcomp.mechanics.tidy import tidy as _tidy, tidy_small as _tidy_small, tidy_symengine as _tidy_symengine
 from lagcomp.model.constraints import Holonomic
+from lagcomp.model.inputs import plain_inputs
 from lagcomp.model.system import System, t
 
 
@@ -466,11 +467,13 @@ def _check_mass_matrix(M: sp.Matrix, C: sp.Matrix, system: System, q) -> None:
                 f"T does not depend on the velocity of coordinate `{names[i]}` (its mass-matrix row is zero): "
                 "the kinetic energy must be positive definite in the velocities."
             )
-    args = (*q, t, *system.parameters)
     size = M.rows
     rows, cols = np.tril_indices(size)
+    # inputs u(t) and their derivatives as plain symbols: lambdify prints no undefined function
+    entries, signals = plain_inputs([M[i, j] for i, j in zip(rows, cols)], system.inputs)
+    args = (*q, t, *system.parameters, *signals.values())
     # M is symmetric; dummify: user names ("ﬁ" beside "fi", keywords) are no Python arguments here
-    lower = sp.lambdify(args, [M[i, j] for i, j in zip(rows, cols)], modules="numpy", dummify=True)
+    lower = sp.lambdify(args, entries, modules="numpy", dummify=True)
     rng = np.random.default_rng(20261122)
     negative = 0
     for _ in range(3):

@@ -59,6 +59,7 @@ import sympy as sp
 from sympy.physics.vector import Point, ReferenceFrame, Vector
 
 from lagcomp.errors import ModelError
+from lagcomp.model.inputs import is_input
 
 __all__ = ["MovingFrame", "as_frame", "column"]
 
@@ -94,8 +95,9 @@ def column(value, axes: ReferenceFrame | None, what: str) -> sp.Matrix:
 
 
 def _check_imposed(vec: sp.Matrix, what: str) -> None:
-    for e in vec:
-        bad = e.atoms(sp.core.function.AppliedUndef) | e.atoms(sp.Derivative)
+    for e in vec:  # inputs (lagcomp.Input) are imposed too: signals of t
+        bad = {f for f in e.atoms(sp.core.function.AppliedUndef) if not is_input(f)}
+        bad |= {d for d in e.atoms(sp.Derivative) if not is_input(d.expr)}
         if bad:
             raise ModelError(
                 f"{what} contains {sorted(map(str, bad))[0]}: the motion of a frame is imposed, an explicit "

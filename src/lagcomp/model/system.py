@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import sympy as sp
 from sympy.physics.mechanics import dynamicsymbols
@@ -34,6 +34,7 @@ from lagcomp.names import by_name
 from lagcomp.model.assemble import assemble
 from lagcomp.model.constraints import Holonomic, Nonholonomic
 from lagcomp.model.frames import as_frame
+from lagcomp.model.inputs import inputs_in, is_input, substitute_laws
 from lagcomp.model.events import Event
 from lagcomp.model.expressions import expression
 
@@ -174,6 +175,8 @@ class System:
     frame: object = None
     #: (what was written directly, the totals) when bodies or loads were merged in; see `_merge`.
     _written: tuple | None = field(default=None, repr=False, compare=False)
+    #: The inputs supplied at run time, u(t) of `lagcomp.model.inputs.Input` without a law, sorted by name.
+    _inputs: tuple = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self):
         coords = _coordinate_tuple(self.coordinates)
@@ -200,10 +203,12 @@ class System:
         roles = self._merge(coords)
         set_(self, "constraints", self._checked_constraints())
         set_(self, "events", self._checked_events())
+        self._substitute_laws()
         for role, expr in self.expressions().items():
             _refuse_non_real(expr, role)
         set_(self, "parameters", self._checked_parameters(coords, roles))
         _unique_names([s.name for s in self.parameters], "parameters")
+        self._check_input_names()
         set_(self, "defaults", self._checked_defaults())
         set_(self, "q0", self._checked_initial(self.q0, "q0"))
         set_(self, "qd0", self._checked_initial(self.qd0, "qd0"))
@@ -268,6 +273,46 @@ class System:
         if totals[0] == 0:
             raise ModelError(f"{self.name!r} has no kinetic energy: its bodies are all massless and T is not given.")
         return parts.roles
+
+    # -- inputs ---------------------------------------------------------------------
+
+    def _substitute_laws(self) -> None:
+        """Replace every Input that has a feedback law by the law, in every expression (and in the totals
+        `_written` keeps, so that `dataclasses.replace` still recognizes them); record the other inputs."""
+        set_ = object.__setattr__
+        velocities = [q.diff(t) for q in self.coordinates]
+        new = substitute_laws(self.expressions(), velocities)
+        if any(new[role] is not expr for role, expr in self.expressions().items()):
+            set_(self, "T", new["T"]), set_(self, "V", new["V"]), set_(self, "dissipation", new["dissipation"])
+            forces = tuple(new[f"forces[{q.func.__name__}]"] for q in self.coordinates)
+            set_(self, "forces", forces)
+            set_(self, "constraints", tuple(
+                replace(c, **{"Phi" if isinstance(c, Holonomic) else "expr": new[f"constraint {c.name}"]})
+                for c in self.constraints))
+            set_(self, "events", tuple(replace(e, expr=new[f"event {e.name}"]) for e in self.events))
+            if self._written is not None:
+                set_(self, "_written", (self._written[0], (self.T, self.V, forces, self.dissipation)))
+        set_(self, "_inputs", inputs_in(self.expressions().values()))
+
+    def _check_input_names(self) -> None:
+        """Refuse an input named like a coordinate or a parameter, or two inputs of one name: inputs are
+        supplied by name."""
+        names = [u.func.__name__ for u in self._inputs]
+        _unique_names(names, "inputs")
+        taken = {*self.coordinate_names, *self.parameter_names}
+        clash = sorted(set(names) & taken)
+        if clash:
+            raise ModelError(f"Input(s) {clash} of {self.name!r} are named like a coordinate or a parameter; "
+                             "inputs are supplied by name at run time: rename them.")
+
+    @property
+    def inputs(self) -> tuple:
+        """The inputs u(t) supplied at run time (those without a law), sorted by name."""
+        return self._inputs
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        return tuple(u.func.__name__ for u in self._inputs)
 
     # -- validation ---------------------------------------------------------------
 
@@ -335,10 +380,10 @@ class System:
         found: set[sp.Symbol] = set()
         for role, expr in {**(roles or {}), **self.expressions()}.items():
             for f in expr.atoms(sp.core.function.AppliedUndef):
-                if f not in coords:
+                if f not in coords and not (is_input(f) and f.args == (t,)):
                     raise UndeclaredSymbolError(
                         f"{f} in {role} is not a coordinate of {self.name!r}: add it to the coordinates, "
-                        "or write an imposed motion as an explicit expression of t."
+                        "write an imposed motion as an explicit expression of t, or make it an input (lagcomp.Input)."
                     )
             found |= {s for s in expr.free_symbols if s != t}
         impostor = next((s for s in found if s.name == t.name), None)
@@ -418,4 +463,6 @@ class System:
         parts = [self.name, repr(self.coordinate_names), repr(self.parameter_names)]
         parts += [f"{role}={sp.srepr(expr)}" for role, expr in self.expressions().items()]
         parts += [f"{type(c).__name__} {c.name}" for c in self.constraints]
+        if self._inputs:  # (an input prints as a function of t: its name says that it is one)
+            parts.append(f"inputs={self.input_names!r}")
         return "\n".join(parts)
