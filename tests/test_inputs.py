@@ -398,3 +398,39 @@ def test_an_input_in_a_constraint_reads_its_table_after_the_baumgarte_gains(driv
                             progress=False, project_initial=True)  # (the spline's ẋ_s(0) is Aω to 4e-8)
         assert sol.status == 0
         assert abs(sol.q[-1, 1] - reference.q[-1, 0]) < 1e-6, method  # the table's error (measured 3.3e-8, 3.5e-11)
+
+
+# -- inputs in the pictures: equations and bodies -------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def bob_on_support(cache_dir):
+    """The driven pendulum built from a Particle, its support x_s an input: the geometry kernel reads the table."""
+    x_s = lc.Input("x_s")
+    bob = lc.Particle(m, (x_s + l * sp.sin(th), -l * sp.cos(th), 0), name="bob")
+    system = lc.System([th], bodies=[bob], V=-m * g * l * sp.cos(th), name="inputs_bob", defaults=PENDULUM,
+                       q0=(0.3,))
+    return lc.compile(system, cache_dir=cache_dir)
+
+
+def test_the_equations_write_an_input_and_its_derivatives_like_a_coordinate(bob_on_support):
+    equations = bob_on_support.equations()
+    motion = equations.part("motion")[0]
+    assert r"\ddot{x}_{s} l m \cos{\left(\theta \right)}" in motion.rhs
+    assert "x_s_ddot*l*m*cos(theta)" in motion.text
+    assert "Derivative" not in str(equations) and r"\frac{d" not in equations.latex
+
+
+def test_a_body_moved_by_an_input_is_drawn_where_the_table_puts_it(bob_on_support):
+    pytest.importorskip("matplotlib")
+    times = np.linspace(0.0, 2.0, 41)
+    values = AMPLITUDE * np.sin(OMEGA * times)
+    sol = bob_on_support.simulate((0.0, 2.0), inputs={"x_s": (times, values)}, t_eval=np.linspace(0.0, 2.0, 21))
+    anim = sol.animate(fps=5, dpi=30)
+    support = CubicSpline(times, values)
+    l_ = PENDULUM["l"]
+    for k, time in enumerate(anim.frame_times):
+        anim.draw(k)
+        angle = np.interp(time, sol.t, sol.q[:, 0])
+        expected = (support(time) + l_ * np.sin(angle), -l_ * np.cos(angle))
+        assert np.max(np.abs(np.array(anim.markers["bob"].get_data(), dtype=float)[:, 0] - expected)) < 1e-12

@@ -52,6 +52,7 @@ from lagcomp.ir import Kernel
 from lagcomp.mechanics.lagrange import EOM, to_plain
 from lagcomp.model.bodies import Particle
 from lagcomp.model.frames import MovingFrame, as_frame, column
+from lagcomp.model.inputs import is_input
 from lagcomp.model.system import t
 
 #: What a body of each kind writes into ``out``: its number of values, and what they are.
@@ -131,14 +132,15 @@ def body_geometry(eom: EOM) -> tuple[tuple[tuple[str, str, int], ...], list[tupl
 
 def _known(eom: EOM, matrix: sp.Matrix | None) -> list[sp.Expr] | None:
     """The entries of `matrix` over the model's plain symbols (`lagcomp.mechanics.lagrange.to_plain`) when they
-    are functions of q, t and the parameters alone; else None (no matrix, or a symbol the kinetic energy lost:
+    are functions of q, t, the parameters and the inputs u(t) (`lagcomp.Input`, read from p like every kernel's) alone;
+    else None (no matrix, or a symbol the kinetic energy lost:
     the ``d`` of a constant offset ``x + d`` that no other expression has is no parameter, so the kernel could
     not bind it)."""
     if matrix is None:
         return None
     entries = [to_plain(sp.sympify(e), eom.system, eom.q, eom.qd) for e in matrix]
     known = {*eom.q, *eom.parameters, t}
-    if any(e.free_symbols - known or e.atoms(AppliedUndef) for e in entries):
+    if any(e.free_symbols - known or any(not is_input(f) for f in e.atoms(AppliedUndef)) for e in entries):
         return None
     return entries
 

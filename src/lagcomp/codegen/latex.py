@@ -20,6 +20,7 @@ from sympy.printing.conventions import split_super_sub
 from sympy.printing.str import StrPrinter
 
 from lagcomp.equations import Equation
+from lagcomp.model.system import t
 
 #: A side of an equation longer than this in LaTeX is replaced by a marker (`OMITTED`): the bicycle's mass
 #: matrix and forcing would be tens of kilobytes each, which nobody reads and every import of its module loads.
@@ -71,14 +72,15 @@ class _TextPrinter(StrPrinter):
 class _Renderer:
     """Sides and equations in LaTeX and text, under the names of `names`: symbol -> (LaTeX, text)."""
 
-    def __init__(self, names: dict):
+    def __init__(self, names: dict, signals: dict | None = None):
         self.latex_names = {s: latex for s, (latex, _) in names.items()}
         self.text = _TextPrinter({s: text for s, (_, text) in names.items()})
+        self.signals = signals or {}  # inputs u(t), u̇(t), ... -> their symbols (xreplace takes a derivative whole)
 
     def side(self, *terms) -> tuple[str, str]:
         """(LaTeX, text) of the sum of `terms`, each printed by sympy and joined in order (F, then Λᵀλ), or
         `OMITTED` when the LaTeX would be longer than MAX_CHARACTERS."""
-        terms = [term for term in map(sp.sympify, terms) if term != 0]
+        terms = [term for term in (sp.sympify(x).xreplace(self.signals) for x in terms) if term != 0]
         if _surely_too_long(terms):
             return OMITTED
         latex = _joined([sp.latex(term, symbol_names=self.latex_names) for term in terms])
@@ -117,6 +119,24 @@ def _state_names(names, q, qd, qdd=()) -> dict:
     return found
 
 
+#: The accents and text suffixes of an input's derivatives, by order (`_input_names`).
+_INPUT_ACCENTS = ((None, ""), (r"\dot", "_dot"), (r"\ddot", "_ddot"), (r"\dddot", "_dddot"))
+
+
+def _input_names(inputs) -> tuple[dict, dict]:
+    r"""Each input u(t) (`lagcomp.Input`) and its derivatives up to the third, written like the coordinates:
+    (replacements u(t), u̇(t), ... -> symbols, symbol -> (LaTeX, text)), so that a support motion reads
+    ``\ddot{x}_{s}`` rather than sympy's d²/dt² x_s(t)."""
+    replacements, names = {}, {}
+    for u in inputs:
+        name = u.func.__name__
+        for order, (accent, suffix) in enumerate(_INPUT_ACCENTS):
+            symbol = sp.Dummy(f"{name}{suffix}")
+            replacements[u.diff(t, order) if order else u] = symbol
+            names[symbol] = (dotted_latex(name, accent) if accent else symbol_latex(name), f"{name}{suffix}")
+    return replacements, names
+
+
 def lagrange_equations(eom) -> tuple[Equation, ...]:
     """The lines of Lagrange's equations `eom` (a `lagcomp.mechanics.lagrange.EOM`): motion, constraints, energy."""
     names = eom.system.coordinate_names
@@ -125,7 +145,9 @@ def lagrange_equations(eom) -> tuple[Equation, ...]:
     symbols = _state_names(names, eom.q, eom.qd, qdd)
     symbols.update({lam: (symbol_latex(f"lambda_{name}"), f"lambda_{name}")
                     for lam, name in zip(multipliers, eom.constraint_names, strict=True)})
-    render = _Renderer(symbols)
+    signals, signal_names = _input_names(eom.system.inputs)
+    symbols.update(signal_names)
+    render = _Renderer(symbols, signals)
     lines = [render.equation("motion", name, _products(eom.M.row(i), qdd),
                              (eom.F[i], _products(eom.C.col(i), multipliers)))
              for i, name in enumerate(names)]
