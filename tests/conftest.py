@@ -6,6 +6,9 @@ per session (and its numba machine code is cached in the per-run directory).
 
 from __future__ import annotations
 
+import gc
+import warnings
+
 import numpy as np
 import pytest
 
@@ -44,3 +47,13 @@ def whipple_bicycle(cache_dir):
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+@pytest.fixture
+def animations_freed_quietly():
+    """Collect the test's animations when it ends, without matplotlib's warning that they were never run
+    (the tests draw frames by hand, `MechanismAnimation.draw`, rather than running the animation)."""
+    yield
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "Animation was deleted without rendering anything")
+        gc.collect()

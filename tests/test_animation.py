@@ -5,9 +5,7 @@ Frames are few (fps 5, ~2 s of motion) so the GIF and HTML writers stay quick.
 
 from __future__ import annotations
 
-import gc
 import sys
-import warnings
 
 import numpy as np
 import pytest
@@ -18,6 +16,9 @@ pytest.importorskip("matplotlib")
 
 import lagcomp as lc  # noqa: E402
 from lagcomp.animation import frame_times  # noqa: E402
+
+#: Every test here draws frames by hand: its animations are collected quietly when it ends.
+pytestmark = pytest.mark.usefixtures("animations_freed_quietly")
 
 th1, th2 = lc.coordinates("theta1 theta2")
 l1, l2 = sp.symbols("l1 l2", positive=True)
@@ -31,17 +32,6 @@ def double_run(compiled):
     return compiled("double_pendulum").simulate((0, 2), t_eval=np.linspace(0, 2, 201))
 
 
-@pytest.fixture(autouse=True)
-def _animations_freed_quietly():
-    """Collect each test's animations now, without matplotlib's warning that they were never run.
-
-    The tests draw frames by calling `draw(k)`, not through matplotlib's event loop, which warns
-    when it deletes an animation it never ran.
-    """
-    yield
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", "Animation was deleted without rendering anything")
-        gc.collect()
 
 
 @pytest.fixture

@@ -9,9 +9,7 @@ animations: what the artists hold equals the geometry at the frame times and the
 from __future__ import annotations
 
 import copy
-import gc
 import pickle
-import warnings
 
 import numpy as np
 import pytest
@@ -22,6 +20,9 @@ import lagcomp as lc
 from lagcomp.codegen.geometry import unique_names
 from lagcomp.codegen.lower import lower
 from lagcomp.mechanics.lagrange import derive
+
+#: Every test here draws frames by hand: its animations are collected quietly when it ends.
+pytestmark = pytest.mark.usefixtures("animations_freed_quietly")
 
 th1, th2 = lc.coordinates("theta1 theta2")
 m1, m2, l1, l2, g = sp.symbols("m1 m2 l1 l2 g", positive=True)
@@ -48,13 +49,6 @@ def double(cache_dir):
     return lc.compile(particle_double_pendulum(), cache_dir=cache_dir)
 
 
-@pytest.fixture(autouse=True)
-def _animations_freed_quietly():
-    """Collect each test's animations now, without matplotlib's warning that they were never run."""
-    yield
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", "Animation was deleted without rendering anything")
-        gc.collect()
 
 
 def _geometry(model, t, q, params=None) -> np.ndarray:

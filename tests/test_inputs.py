@@ -421,7 +421,7 @@ def test_the_equations_write_an_input_and_its_derivatives_like_a_coordinate(bob_
     assert "Derivative" not in str(equations) and r"\frac{d" not in equations.latex
 
 
-def test_a_body_moved_by_an_input_is_drawn_where_the_table_puts_it(bob_on_support):
+def test_a_body_moved_by_an_input_is_drawn_where_the_table_puts_it(bob_on_support, animations_freed_quietly):
     pytest.importorskip("matplotlib")
     times = np.linspace(0.0, 2.0, 41)
     values = AMPLITUDE * np.sin(OMEGA * times)
