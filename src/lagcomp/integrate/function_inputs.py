@@ -30,7 +30,13 @@ that numba did not compile, or that does not compile for ``(float64,
 float64[::1], float64[::1]) -> float``; radau, whose Jacobian would miss ∂u/∂y
 (a law's Jacobian is exact); a sweep on a Dask `client` (the function would
 have to travel to the workers).  The Taylor method and batched sweeps are
-refused for every model with inputs supplied at run time.  Outside the run's
+refused for every model with inputs supplied at run time.
+
+The Gauss-Legendre methods call ``velocities`` at x = (q, p_momenta), not
+(q, q̇), and its wrapper evaluates u there too; that kernel solves
+M q̇ = p − b of T alone, so it reads an input only if T holds it, and then the
+equations hold its derivative, which functions are refused for: the value
+written before it is never read, and the next kernel writes its own.  Outside the run's
 driver the same wrappers serve the energies, momenta, reactions (per saved row)
 and the animation's geometry kernel, which gets (q, 0): a body placed by a
 function input of q̇ is drawn with q̇ = 0.
@@ -39,6 +45,7 @@ function input of q̇ is drawn with q̇ = 0.
 from __future__ import annotations
 
 import inspect
+import threading
 
 from numba import njit, types
 from numba.core.dispatcher import Dispatcher
@@ -135,15 +142,20 @@ class DrivenKernels:
         self._module, self._functions = module, functions
 
     def __getattr__(self, name):
-        value = getattr(self._module, name)
-        for function, slot in self._functions:
-            value = _wrapped(value, function, slot)
-        setattr(self, name, value)
-        return value
+        with _LOCK:  # (a sweep's threads bind their loops at once: one wrapper per kernel all the same)
+            if name in self.__dict__:
+                return self.__dict__[name]
+            value = getattr(self._module, name)
+            for function, slot in self._functions:
+                value = _wrapped(value, function, slot)
+            setattr(self, name, value)
+            return value
 
 
-#: {(generated module, functions): DrivenKernels}, for the process.
+#: {(generated module, functions): DrivenKernels}, for the process (as numba keeps its dispatchers).
 _DRIVEN: dict = {}
+#: Held while a kernel is wrapped.
+_LOCK = threading.RLock()
 #: {(kernel, function, slot): its wrapper}, for the process: a wrapper is compiled once per kernel and function.
 _WRAPPERS: dict = {}
 
