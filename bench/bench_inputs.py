@@ -8,7 +8,9 @@ expression written out.  For each method and tolerance: the accepted (and reject
 ratio of their wall times (median of `--repeats` runs in this process), and the difference of
 the final angle from the expression's run at rtol = atol = 1e-13 — the tolerance's error plus the
 interpolant's.  The drivers do not restart at the table's breakpoints (lagcomp.kernel_support.inputs).
-Last, the cost of reading a table per evaluation: rk4 over the same steps, table against expression.
+Then the cost of reading a table per evaluation: rk4 over the same steps, table against expression.
+Last, a feedback torque given as a numba function u(t, y, p) (`lagcomp.integrate.function_inputs`) against
+the same PD law compiled in: the ratio of their wall times over the same rk4 steps.
 """
 
 from __future__ import annotations
@@ -94,6 +96,46 @@ def fixed_step_cost(t_end: float = 10.0, repeats: int = 5, cache_dir=None) -> li
     return rows
 
 
+def function_cost(t_end: float = 10.0, repeats: int = 5, cache_dir=None) -> dict:
+    """The inverted pendulum under τ = −Kp θ − Kd θ̇ as a law compiled in and as a numba function of (t, y, p):
+    the ratio of wall times over the same 10⁶ rk4 steps is what the function input costs per kernel call (the
+    wrapper's call of the user's function, its store into p, the kernel's load of it) against the law's
+    arithmetic inlined in the kernel."""
+    import sympy as sp
+    from numba import njit
+
+    import lagcomp as lc
+
+    th, = lc.coordinates("theta")
+    m, l, g, kp, kd = sp.symbols("m l g K_p K_d", positive=True)  # noqa: E741
+
+    def pendulum(torque, name, **options):
+        return lc.System([th], T=m * l**2 * th.diff(lc.t) ** 2 / 2, V=m * g * l * sp.cos(th), forces=[torque],
+                         name=name, defaults={"m": 1.0, "l": 1.0, "g": 9.81, "K_p": 30.0, "K_d": 8.0}, q0=(0.3,),
+                         **options)
+    law = lc.compile(pendulum(lc.Input("tau", law=-kp * th - kd * th.diff(lc.t)), "bench_inputs_law"),
+                     cache_dir=cache_dir)
+    by_function = lc.compile(pendulum(lc.Input("tau"), "bench_inputs_function", parameters=(kd, kp, g, l, m)),
+                             cache_dir=cache_dir)
+
+    @njit
+    def pd(t, y, p):
+        return -p[1] * y[0] - p[0] * y[1]
+
+    options = dict(method="rk4", dt=t_end / 1_000_000, save_every=1_000_000, progress=False)
+    run_law = lambda: law.simulate((0.0, t_end), **options)  # noqa: E731
+    run_function = lambda: by_function.simulate((0.0, t_end), inputs={"tau": pd}, **options)  # noqa: E731
+    run_law(), run_function()  # (numba compiles the wrappers here)
+    ratios, law_times = [], []
+    for _ in range(repeats):  # interleaved, so that a slow moment of the machine hits both
+        _, law_time = _timed(run_law, 1)
+        _, function_time = _timed(run_function, 1)
+        ratios.append(function_time[0] / law_time[0])
+        law_times.append(law_time[0])
+    return dict(ratio=float(np.median(ratios)), low=float(np.min(ratios)), high=float(np.max(ratios)),
+                law_time=float(np.median(law_times)))
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--t-end", type=float, default=10.0)
@@ -109,6 +151,9 @@ def main(argv=None) -> None:
     print("\nrk4, 10⁵ steps: time with the table / with the expression (median, min–max)")
     for r in fixed_step_cost(args.t_end, args.repeats):
         print(f"  Δ = {r['spacing']:<6} ({r['pieces']} pieces): {r['ratio']:.2f} ({r['low']:.2f}–{r['high']:.2f})")
+    print("\nPD torque as a numba function / as a law compiled in, rk4, the same 10⁶ steps (median, min–max)")
+    r = function_cost(args.t_end, args.repeats)
+    print(f"  {r['ratio']:.2f} ({r['low']:.2f}–{r['high']:.2f}); the law's run {r['law_time'] * 1e3:.0f} ms")
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ import warnings
 from dataclasses import replace
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 import sympy as sp
@@ -90,6 +91,8 @@ def models(compiled, cache_dir):
         # a support moved by an input s(t): ẍ_s in the forcing (a linear table is refused for it)
         "driven": lc.compile(oscillator(T=m * (x.diff(t) + lc.Input("s").diff(t)) ** 2 / 2, name="table_driven"),
                              cache_dir=cache_dir),
+        # a force u(t) supplied at run time, read without derivatives: what a numba function may give
+        "pushed": lc.compile(oscillator(forces=[lc.Input("f")], name="table_pushed"), cache_dir=cache_dir),
         # a parameter named like the velocity of x: derived correctly, but "x_dot" is ambiguous in a sweep grid
         "clash": lc.compile(oscillator(V=sp.Symbol("x_dot") * x, name="table_clash",
                                        defaults={"m": 1.0, "x_dot": 1.0}), cache_dir=cache_dir),
@@ -214,6 +217,15 @@ CASES = {
     "input-linear-needs-acceleration": (
         _simulate("driven", inputs={"s": lc.Tabulated([0.0, 2.0], [0.0, 1.0], kind="linear")}), "`s`"),
     "input-with-taylor": (_simulate("driven", inputs={"s": 0.0}, method="taylor"), "inputs supplied at run time"),
+    "input-function-not-numba": (_simulate("pushed", inputs={"f": lambda t, y, p: 0.0}), "@numba.njit"),
+    "input-function-signature": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y: t)}),
+                                 "u(t: float64, y: float64[::1], p: float64[::1]) -> float64"),
+    "input-function-needs-derivative": (_simulate("driven", inputs={"s": numba.njit(lambda t, y, p: t)}),
+                                        "derivative of order 2"),
+    "input-function-with-radau": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y, p: 0.0)}, method="radau"),
+                                  "['f']"),
+    "input-function-on-dask": (lambda models: models["pushed"].sweep(
+        (0.0, 1.0), {"x": [0.0]}, inputs={"f": numba.njit(lambda t, y, p: 0.0)}, client=object()), "['f']"),
     "input-one-state-evaluation": (lambda models: models["driven"].rhs(0.0, [0.0, 0.0]), "['s']"),
     "inputs-without-inputs": (_simulate("pendulum", inputs={"s": 0.0}), "has no inputs"),
     "plain-symbol-coordinate": (lambda: lc.System([sp.Symbol("q")], T=sp.Symbol("q") ** 2, name="bad"), "Coordinate q"),

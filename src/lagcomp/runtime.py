@@ -635,8 +635,10 @@ class Model:
             A signal for each input of the model (`Model.inputs`), by name:
             ``lagcomp.Tabulated(times, values, kind="cubic" | "linear")``, a pair
             ``(times, values)`` (cubic), a scipy CubicSpline / PPoly of degree ≤ 3,
-            or a number (constant).  Tables must cover `t_span`; changing them
-            never recompiles (`lagcomp.integrate.inputs`).
+            a number (constant), or a numba function ``u(t, y, p) -> float`` of
+            the time, the state (q, q̇) and p (`lagcomp.integrate.function_inputs`;
+            values only, not with radau).  Tables must cover `t_span`; changing
+            them, or the function, never recompiles the model (`lagcomp.integrate.inputs`).
 
         Other Parameters
         ----------------
@@ -743,7 +745,8 @@ class Model:
         ----------------
         q0, qd0, params, inputs
             Values of everything not swept (defaults: the System's); every
-            trajectory reads the same input tables.
+            trajectory reads the same input tables, and calls the same input
+            functions with its own p (a swept gain read from p is its own).
         method, dt, rtol, atol, t_eval, save_every, max_step, max_steps, implicit_solver, events
             As for `simulate`, checked by the same code with the same messages
             (`lagcomp.integrate.options.run_options`); each trajectory has its own

@@ -9,10 +9,14 @@
 * a pair ``(times, values)``: the same as ``Tabulated(times, values)`` (cubic);
 * a scipy piecewise polynomial of degree ≤ 3 (``CubicSpline``, ``PchipInterpolator``,
   ``Akima1DInterpolator``, ``PPoly``): used as it is;
-* a number: a constant signal.
+* a number: a constant signal;
+* a numba function ``u(t, y, p) -> float`` of the time, the state and the
+  parameters (a controller): `lagcomp.integrate.function_inputs`.
 
 `pack_inputs` writes them after the parameters in the layout the kernels read
 (`lagcomp.kernel_support.inputs`).  A table is data: changing it never recompiles.
+A function packs as a one-piece constant table whose constant (NaN until then)
+the run writes before each kernel call.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from lagcomp.errors import OptionError
+from lagcomp.integrate import function_inputs
 
 #: The interpolants a `Tabulated` signal may use.
 KINDS = ("cubic", "linear")
@@ -112,10 +117,11 @@ def _signal(value, name: str) -> tuple[np.ndarray, np.ndarray, str]:
         table = Tabulated(*value, name=name)
         return table.breakpoints, table.coefficients, table.kind
     raise OptionError(f"Input `{name}` must be lagcomp.Tabulated(times, values, kind), a pair (times, values), "
-                      f"a scipy CubicSpline / PPoly or a number, got {type(value).__name__}.")
+                      f"a scipy CubicSpline / PPoly, a number or a numba function {function_inputs.SIGNATURE_TEXT}, "
+                      f"got {type(value).__name__}.")
 
 
-def _by_name(inputs: Mapping) -> dict:
+def inputs_by_name(inputs: Mapping) -> dict:
     """`inputs` keyed by name: an input u(t) itself (`lagcomp.Input`) stands for its name, as a Symbol does
     for a parameter's in `params`."""
     named = {}
@@ -150,23 +156,27 @@ def pack_inputs(names, orders, inputs, span, first: int) -> np.ndarray:
     if not isinstance(inputs, Mapping):
         raise OptionError(f"`inputs` must be a mapping of input name to signal, like {{{names[0]!r}: (times, values)}}"
                           f", got {type(inputs).__name__}.")
-    inputs = _by_name(inputs)
+    inputs = inputs_by_name(inputs)
     unknown = sorted(set(inputs) - set(names), key=str)
     if unknown:
         raise OptionError(f"Unknown input(s) {unknown}; the model's inputs are {list(names)}.")
     missing = [name for name in names if name not in inputs]
     if missing:
         raise OptionError(f"Missing input(s) {missing}: pass `inputs={{name: lagcomp.Tabulated(times, values)}}` "
-                          "(or a pair (times, values), or a number) for every input of the model.")
+                          "(or a pair (times, values), a number, or a numba function) for every input of the model.")
     headers, tables = np.empty(len(names)), []
     start = first + len(names)
     for j, (name, order) in enumerate(zip(names, orders, strict=True)):
-        x, c, kind = _signal(inputs[name], name)
+        if function_inputs.is_function(inputs[name]):  # a constant the run writes (NaN: read unwrapped, it shows)
+            function_inputs.check(inputs[name], name, order)
+            x, c, kind = np.array([0.0, 1.0]), np.array([[0.0], [0.0], [0.0], [math.nan]]), "function"
+        else:
+            x, c, kind = _signal(inputs[name], name)
         if kind == "linear" and order >= 2:
             raise OptionError(f"Input `{name}` enters the equations through its second derivative, which a linear "
                               "table has not (it would be zero between samples and infinite at them): use "
                               "kind=\"cubic\".")
-        if kind != "constant" and span is not None:
+        if kind not in ("constant", "function") and span is not None:
             lo, hi = min(span), max(span)
             if x[0] > lo or x[-1] < hi:
                 raise OptionError(f"Input `{name}`'s table covers [{x[0]}, {x[-1]}], not the run's time span "

@@ -24,6 +24,7 @@ from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixErro
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.dae import dae_state, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.run_state import STEP, RunState
+from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, run_bytes
 from lagcomp.integrate.memory import check as check_memory
 from lagcomp.integrate.methods import library_function
@@ -112,6 +113,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         raise OptionError(f"`record` must be one of {RECORD_MODES}, got {record!r}.")
     m, t0, t1, t_eval = options.method, options.t0, options.t1, options.t_eval
     p = model.parameter_vector(params, baumgarte, inputs, (t0, t1))
+    model = driven(model, inputs, p, m)  # function inputs: kernels that write their values into p first
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     if max_residual is not None and not m.checks_residual:
         raise OptionError(f"`max_residual` stops a run whose constraint residual drifts past it; `{m.name}` does not "

@@ -30,6 +30,7 @@ import numpy as np
 from lagcomp.errors import InitialConditionError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
+from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, sweep_bytes
 from lagcomp.integrate.memory import check as check_memory
 from lagcomp.integrate.methods import library_function
@@ -290,6 +291,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
 
     y_base = model.initial_state(q0, qd0)
     p_base = model.parameter_vector(params, baumgarte, inputs, (t0, t1))  # every trajectory: the same tables
+    model = driven(model, inputs, p_base, m, client)  # function inputs: each trajectory writes their values in its row
     Y0 = np.repeat(y_base[None, :], n_traj, axis=0)
     P = np.repeat(p_base[None, :], n_traj, axis=0)
     state_names = list(model.state_names)

@@ -22,6 +22,11 @@ value and the derivatives they need, ``u_x = input_value(t, p, slot, 0)``,
 ``ud_x = input_value(t, p, slot, 1)``, ...; the generated module lists its
 inputs and the highest derivative each needs (``INPUTS``, ``INPUT_ORDERS``).
 
+An input given as a numba function u(t, y, p) (`lagcomp.integrate.function_inputs`) has a
+one-piece table with a = b = c = 0 on [0, 1]: its constant d_0 is the value that a wrapper of each
+kernel writes there, p[slot] = u(t, y, p), before calling it (NaN until the first call, so that a
+kernel reading it unwrapped shows it).
+
 Outside [x_0, x_m] the table is evaluated at the nearest end (t is clamped):
 `simulate` refuses a table that does not cover the run, so this only guards
 the odd evaluation just past the end (a first-step estimate).
