@@ -12,8 +12,8 @@ Kernel calling convention (all arrays float64, C-contiguous):
 - kernels with ``out`` write their result into it and return nothing, except
   ``rhs``, which returns an int status (0, or k > 0 when the mass matrix is
   not positive definite at pivot k: the state is singular),
-  ``rhs_jacobian``, which returns the same, or `NO_JACOBIAN` where the module
-  has no Jacobian, and the DAE kernels of constrained systems, which return 0.
+  ``rhs_jacobian`` and ``rhs_parameter_jacobian``, which return the same, or
+  `NO_JACOBIAN` where the module has no such Jacobian, and the DAE kernels of constrained systems, which return 0.
 - scalar kernels (energies) return a float.
 """
 
@@ -76,28 +76,36 @@ class AugmentedSolve:
     offset: int
 
 
-#: What ``rhs_jacobian`` returns where its module has none (negative: never a pivot); the module constant
-#: ``RHS_JACOBIAN_REFUSED`` then says why.
+#: What ``rhs_jacobian`` and ``rhs_parameter_jacobian`` return where their module has none (negative: never a
+#: pivot); the module constant ``RHS_JACOBIAN_REFUSED`` (``RHS_PARAMETER_JACOBIAN_REFUSED``) then says why.
 NO_JACOBIAN = -1
 
 
 @dataclass(frozen=True)
 class JacobianSolve:
-    """The frame of ``rhs_jacobian``: y' = (x', a) with M a = F, and out = ∂y'/∂y of shape (size, size).
+    """The frame of ``rhs_jacobian``: y' = (x', a) with M a = F, and out = ∂y'/∂y of shape (size, size);
+    with `columns` that of ``rhs_parameter_jacobian``, out = ∂y'/∂p of shape (size, columns).
 
     Before its loads the kernel calls ``rhs(t, y, p, _ydot)``, returning its status when it is not
     0, so that loads can bind the accelerations ā to ``_ydot[size − n + i]``, and allocates the
-    work array ``_jac`` (size², zeros).  The stores bind M's lower triangle to the scalar locals
-    ``m[i][j]`` (i ≥ j, M symmetric) and write the nonzero entries of the Jacobian into ``_jac``,
-    row-major (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles faster than `out`):
-    the rows of x' and, in the last n rows, ∂(F − M ā)/∂y at ā = a.  Then ``_jac`` is copied into
-    `out` and its last n rows overwritten with M⁻¹ times themselves: one LDLᵀ of M, a substitution
-    per column (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`), whose status is returned.
+    work array ``_jac`` (size × width zeros, width = `columns`, or size when None).  The stores bind M's
+    lower triangle to the scalar locals ``m[i][j]`` (i ≥ j, M symmetric) and write the nonzero entries of
+    the Jacobian into ``_jac``, row-major (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles
+    faster than `out`): the rows of x' and, in the last n rows, ∂(F − M ā)/∂y (or ∂/∂p) at ā = a.  Then
+    ``_jac`` is copied into `out` and its last n rows overwritten with M⁻¹ times themselves: one LDLᵀ of
+    M, a substitution per column (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`), whose status
+    is returned.
     """
 
     n: int
     size: int
     m: tuple[tuple[str, ...], ...]
+    columns: int | None = None
+
+    @property
+    def width(self) -> int:
+        """The columns of `out`: `columns`, or `size` for the square ∂y'/∂y."""
+        return self.size if self.columns is None else self.columns
 
 
 @dataclass(frozen=True)

@@ -485,6 +485,24 @@ class Model:
             raise self._singular_mass_matrix(t, y, status)
         return out
 
+    def rhs_parameter_jacobian(self, t: float, y, params: dict | None = None) -> np.ndarray:
+        """∂f/∂p of y' = f(t, y, p) at one state, shape (N, P) with N = `state_size` and P = len(`parameters`),
+        column j the parameter ``parameters[j]``: the exact derivative the model's ``rhs_parameter_jacobian``
+        kernel computes (the parameter counterpart of `jacobian`, the columns of the forward sensitivities).
+
+        Raises SingularMassMatrixError where M is singular, ModelError where the model has no such kernel
+        (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why: constrained Lagrange models, today).
+        """
+        y = self._vector(y, self.state_size, "y")
+        out = np.empty((self.state_size, len(self.parameters)))
+        status = self.kernels.rhs_parameter_jacobian(float(t), y, self.parameter_vector(params), out)
+        refused = getattr(self.kernels, "RHS_PARAMETER_JACOBIAN_REFUSED", None)
+        if status and refused is not None:
+            raise ModelError(f"{self.name!r} has no parameter Jacobian kernel: its equations hold {refused}.")
+        if status:
+            raise self._singular_mass_matrix(t, y, status)
+        return out
+
     def _singular_mass_matrix(self, t: float, state, status: int) -> SingularMassMatrixError:
         """The error for a kernel that found M singular (pivot `status`) at `state` = (q, ...)."""
         where = ", ".join(f"{c}={v:.6g}" for c, v in zip(self.coordinates, state[: self.n]))

@@ -217,11 +217,12 @@ def _gathered_matrix(n: int, m, symmetric: bool) -> list[str]:
 
 
 def _jacobian_frame(solve: JacobianSolve) -> tuple[list[str], list[str]]:
-    """The lines of ``rhs_jacobian`` before its loads (`rhs` into ``_ydot``, `out` zeroed) and after its stores."""
-    size, rows = solve.size, solve.size - solve.n
+    """The lines of ``rhs_jacobian`` (``rhs_parameter_jacobian``) before its loads (`rhs` into ``_ydot``, the
+    work array zeroed) and after its stores."""
+    size, width, rows = solve.size, solve.width, solve.size - solve.n
     before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:",
-              f"{INDENT}return _status", f"_jac = np.zeros({size * size})"]
-    after = [f"out[:] = _jac.reshape(({size}, {size}))",
+              f"{INDENT}return _status", f"_jac = np.zeros({size * width})"]
+    after = [f"out[:] = _jac.reshape(({size}, {width}))",
              f"# out[{rows}:] = M⁻¹ out[{rows}:]: one LDLᵀ of M (lower triangle), a substitution per column."]
     return before, after + _gathered_matrix(solve.n, solve.m, symmetric=False) + [
         f"return ldlt_solve_matrix(mm, out[{rows}:])"]

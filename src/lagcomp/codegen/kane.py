@@ -12,6 +12,8 @@ speeds, state length ``n_q + n_u``; same calling conventions as
   pivot j is zero (M singular there).
 - ``rhs_jacobian(t, y, p, out)``: ∂(q̇, u̇)/∂(q, u), shape (n_q + n_u, n_q + n_u), exact
   (`_rhs_jacobian` derives it); the status of ``rhs``, or of the LU of M.
+- ``rhs_parameter_jacobian(t, y, p, out)``: ∂(q̇, u̇)/∂p, shape (n_q + n_u, P), P parameters,
+  exact (`_rhs_parameter_jacobian`); the same statuses.
 - ``kinematics(t, y, p, out)``: q̇ = N, shape (n_q,).
 - ``energy(t, y, p)``: T + V, NaN when it could not be formed; ``energy_function`` is the same kernel.
 - ``constraint_residuals(t, y, p, out)``: Φ (n_h), then Ψ (n_v);
@@ -50,7 +52,13 @@ from lagcomp.codegen.emit import (
 )
 from lagcomp.codegen.geometry import no_geometry_kernel
 from lagcomp.codegen.latex import equations_source, kane_equations
-from lagcomp.codegen.lower import RHS_JACOBIAN_DOC, _kernel, acceleration_partials, jacobian_entry
+from lagcomp.codegen.lower import (
+    RHS_JACOBIAN_DOC,
+    RHS_PARAMETER_JACOBIAN_DOC,
+    _kernel,
+    acceleration_partials,
+    jacobian_entry,
+)
 from lagcomp.codegen.printer import to_code
 from lagcomp.mechanics.first_order import FirstOrderForm
 from lagcomp.mechanics.kane import acceleration_symbols
@@ -129,6 +137,36 @@ def _rhs_jacobian(form: FirstOrderForm) -> tuple:
     before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:", f"{INDENT}return _status",
               f"_jac = np.zeros({size * size})", f"_lu = np.zeros(({n_u}, {n_u}))"]
     after = [f"out[:] = _jac.reshape(({size}, {size}))", f"return lu_solve_matrix(_lu, out[{n_q}:])"]
+    return kernel, _function(kernel, before=before, after=after)
+
+
+def _rhs_parameter_jacobian(form: FirstOrderForm) -> tuple:
+    """The exact parameter Jacobian ∂(N, u̇)/∂p of y' = (N(q, u, t, p), u̇), M u̇ = F, as a kernel and its source.
+
+    As `_rhs_jacobian` along the parameters: M ∂u̇/∂p = ∂F/∂p − ∂(M ū)/∂p |_{ū = u̇}, the rows ∂N/∂p
+    above (q̇ = N may depend on parameters: a wheel's radius), one CSE, one LU of M (``lu_solve_matrix``).
+    """
+    n_q, n_u = form.n_q, form.n_u
+    size, width = n_q + n_u, len(form.parameters)
+    mapping, loads = _bindings(form, reactions=True)  # binds ū (acceleration_symbols) to _ydot[n_q:]
+    kinematic = form.N.jacobian(sp.Matrix(form.parameters)) if width else sp.zeros(n_q, 0)
+    block = acceleration_partials(form.M, form.F, acceleration_symbols(form), form.parameters)
+    stores = [(jacobian_entry(i, j, width), kinematic[i, j])
+              for i in range(n_q) for j in range(width) if kinematic[i, j] != 0]
+    stores += [(f"_lu[{i}, {j}]", form.M[i, j]) for i in range(n_u) for j in range(n_u) if form.M[i, j] != 0]
+    stores += [(jacobian_entry(n_q + i, j, width), block[i][j])
+               for i in range(n_u) for j in range(width) if block[i][j] != 0]
+    kernel = _kernel(
+        "rhs_parameter_jacobian",
+        RHS_PARAMETER_JACOBIAN_DOC +
+        "Rows ∂N/∂p of q̇ = N(q, u, t), then ∂u̇/∂p = M⁻¹ (∂F/∂p − ∂(M ū)/∂p |ū=u̇) (u̇ from `rhs`).\n"
+        "Returns 0, or j > 0 as `rhs` does, or when this LU of M finds pivot j zero (then `rhs` was\n"
+        "within rounding of its threshold); `out` is then invalid.",
+        ARGS, stores, mapping, loads,
+    )
+    before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:", f"{INDENT}return _status",
+              f"_jac = np.zeros({size * width})", f"_lu = np.zeros(({n_u}, {n_u}))"]
+    after = [f"out[:] = _jac.reshape(({size}, {width}))", f"return lu_solve_matrix(_lu, out[{n_q}:])"]
     return kernel, _function(kernel, before=before, after=after)
 
 
@@ -312,8 +350,9 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
     mapping, loads = _bindings(form, bool(reaction_names))
     rhs, rhs_source = _rhs(form, mapping, loads)
     jacobian, jacobian_source = _rhs_jacobian(form)
-    kernels = [rhs, jacobian] + _plain_kernels(form, energy, mapping, loads)
-    parts = [rhs_source, jacobian_source] + [_function(k) for k in kernels[2:]]
+    parameter_jacobian, parameter_jacobian_source = _rhs_parameter_jacobian(form)
+    kernels = [rhs, jacobian, parameter_jacobian] + _plain_kernels(form, energy, mapping, loads)
+    parts = [rhs_source, jacobian_source, parameter_jacobian_source] + [_function(k) for k in kernels[3:]]
     parts.append("\n\nenergy_function = energy\n")
     if reaction_names:
         kernel, source = _reactions(form, reaction_names, reactions, mapping, loads)

@@ -433,8 +433,8 @@ def fresh_symbols(stem: str, count: int, taken: set[str]) -> tuple[sp.Symbol, ..
 
 
 def jacobian_entry(i: int, j: int, size: int) -> str:
-    """The store target of entry (i, j) of an ``rhs_jacobian`` or ``dae_jacobian``: the flat work array ``_jac``,
-    row-major.
+    """The store target of entry (i, j) of an ``rhs_jacobian``, ``rhs_parameter_jacobian`` or ``dae_jacobian``:
+    the flat work array ``_jac``, row-major, rows of `size` entries.
 
     Stores into a 1-D local array compile several times faster than into the 2-D `out`: the
     24-link chain's kernel took numba 16 s that way against 48 s (`JacobianSolve`).
@@ -458,14 +458,7 @@ def _rhs_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     times itself by one LDLᵀ of M and 2n substitutions (`JacobianSolve`).  One CSE for M and the block.
     """
     n = eom.n
-    taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}
-    taken |= {s.name for e in (*eom.M, *eom.F) for s in e.free_symbols}
-    accelerations = fresh_symbols("_acc", n, taken)
-    locals_ = [f"_acc{i}" for i in range(n)]
-    mapping = {**mapping, **{a: sp.Symbol(local, real=True) for a, local in zip(accelerations, locals_, strict=True)}}
-    loads = loads + tuple((local, f"_ydot[{n + i}]") for i, local in enumerate(locals_))
-    block = acceleration_partials(eom.M, eom.F, accelerations, (*eom.q, *eom.qd))
-    m = tuple(tuple(f"_m{i}_{j}" for j in range(i + 1)) for i in range(n))
+    block, m, mapping, loads = _acceleration_block(eom, (*eom.q, *eom.qd), mapping, loads)
     stores = [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
     stores += [(jacobian_entry(i, n + i, 2 * n), sp.S.One) for i in range(n)]
     stores += [(jacobian_entry(n + i, j, 2 * n), block[i][j])
@@ -480,8 +473,58 @@ def _rhs_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+def _acceleration_block(eom: EOM, variables, mapping, loads) -> tuple:
+    """R = ∂(F − M ā)/∂x for x = `variables` (`acceleration_partials`, (n, len(x))), the locals of M's lower
+    triangle, and `mapping`, `loads` extended by the symbols ā bound to the locals ``_acc<i>`` = ``_ydot[n + i]``
+    (the accelerations `rhs` solved; `JacobianSolve` calls it first)."""
+    n = eom.n
+    taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}
+    taken |= {s.name for e in (*eom.M, *eom.F) for s in e.free_symbols}
+    accelerations = fresh_symbols("_acc", n, taken)
+    locals_ = [f"_acc{i}" for i in range(n)]
+    mapping = {**mapping, **{a: sp.Symbol(local, real=True) for a, local in zip(accelerations, locals_, strict=True)}}
+    loads = loads + tuple((local, f"_ydot[{n + i}]") for i, local in enumerate(locals_))
+    m = tuple(tuple(f"_m{i}_{j}" for j in range(i + 1)) for i in range(n))
+    return acceleration_partials(eom.M, eom.F, accelerations, variables), m, mapping, loads
+
+
+#: The docstring of every ``rhs_parameter_jacobian`` kernel: what it computes; `_rhs_parameter_jacobian_kernel`
+#: adds how.
+RHS_PARAMETER_JACOBIAN_DOC = (
+    "Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,\n"
+    "no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the\n"
+    "inputs' tables that follow them).\n"
+)
+
+
+def _rhs_parameter_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """∂f/∂p of y' = f(t, y, p) = (q̇, a), M(q, t, p) a = F(q, q̇, t, p), of an unconstrained system.
+
+    As `_rhs_jacobian_kernel` along the parameters: M ∂a/∂p = ∂F/∂p − ∂(M ā)/∂p |_{ā = a}, the
+    accelerations ā held fixed while differentiating and bound to the values `rhs` solved; q̇ does not
+    depend on p, so out[:n] = 0.  One CSE for M and the (n, P) block, one LDLᵀ of M and P substitutions
+    (`JacobianSolve` with ``columns`` = P).  A feedback law's gains are parameters like any other (the law is
+    substituted before the derivation); inputs read from tables are not parameters and get no column.
+    """
+    n, width = eom.n, len(eom.parameters)
+    block, m, mapping, loads = _acceleration_block(eom, eom.parameters, mapping, loads)
+    stores = [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
+    stores += [(jacobian_entry(n + i, j, width), block[i][j])
+               for i in range(n) for j in range(width) if block[i][j] != 0]
+    return _kernel(
+        "rhs_parameter_jacobian",
+        RHS_PARAMETER_JACOBIAN_DOC +
+        "Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).\n"
+        "Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`\n"
+        "was within rounding of its threshold); `out` is then invalid.",
+        ("t", "y", "p", "out"), stores, mapping, loads, solve=JacobianSolve(n=n, size=2 * n, m=m, columns=width),
+    )
+
+
 #: Why a constrained system's module has no Jacobian (its ``RHS_JACOBIAN_REFUSED``).
 CONSTRAINED_JACOBIAN_REFUSED = "constraints (the Jacobian of the augmented solve is not emitted yet)"
+#: Why a constrained system's module has no parameter Jacobian (its ``RHS_PARAMETER_JACOBIAN_REFUSED``).
+CONSTRAINED_PARAMETER_JACOBIAN_REFUSED = "constraints: the derivative of the augmented solve is not emitted yet"
 
 
 def no_rhs_jacobian_kernel(reason: str) -> Kernel:
@@ -492,6 +535,19 @@ def no_rhs_jacobian_kernel(reason: str) -> Kernel:
             f"Writes nothing and returns NO_JACOBIAN = {NO_JACOBIAN} (never a pivot; RHS_JACOBIAN_REFUSED says why).",
         args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
         solve=Unavailable(status=NO_JACOBIAN, constant="RHS_JACOBIAN_REFUSED", reason=reason),
+    )
+
+
+def no_rhs_parameter_jacobian_kernel(reason: str) -> Kernel:
+    """An ``rhs_parameter_jacobian`` that writes nothing and returns `NO_JACOBIAN`;
+    ``RHS_PARAMETER_JACOBIAN_REFUSED`` = `reason`."""
+    return Kernel(
+        name="rhs_parameter_jacobian",
+        doc=RHS_PARAMETER_JACOBIAN_DOC + f"Not available for this system: {reason}.\n"
+            f"Writes nothing and returns NO_JACOBIAN = {NO_JACOBIAN} (never a pivot; RHS_PARAMETER_JACOBIAN_REFUSED "
+            "says why).",
+        args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
+        solve=Unavailable(status=NO_JACOBIAN, constant="RHS_PARAMETER_JACOBIAN_REFUSED", reason=reason),
     )
 
 
@@ -648,20 +704,22 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 
 def lower(eom: EOM) -> ModuleIR:
-    """Build the IR of the module for `eom`: rhs, mass_matrix, forcing, energies, momenta,
-    and for constrained systems reactions, constraint residuals and matrix, and the DAE's residual and Jacobian;
-    last the bodies' `geometry` (`lagcomp.codegen.geometry`)."""
+    """Build the IR of the module for `eom`: rhs, its Jacobians ∂f/∂y and ∂f/∂p (refusing stubs for constrained
+    systems), mass_matrix, forcing, energies, momenta, and for constrained systems reactions, constraint
+    residuals and matrix, and the DAE's residual and Jacobian; last the bodies' `geometry`
+    (`lagcomp.codegen.geometry`)."""
     n = eom.n
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
     if eom.k:
-        first = _constraint_kernels(eom, mapping, loads) + (no_rhs_jacobian_kernel(CONSTRAINED_JACOBIAN_REFUSED),)
-        first += _dae_kernels(eom, mapping, loads)
+        refused = (no_rhs_jacobian_kernel(CONSTRAINED_JACOBIAN_REFUSED),
+                   no_rhs_parameter_jacobian_kernel(CONSTRAINED_PARAMETER_JACOBIAN_REFUSED))
+        first = _constraint_kernels(eom, mapping, loads) + refused + _dae_kernels(eom, mapping, loads)
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
         # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
         first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled and not eom.system.inputs else (rhs,)
-        first += (_rhs_jacobian_kernel(eom, mapping, loads),)
+        first += (_rhs_jacobian_kernel(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
     kernels = first + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",
