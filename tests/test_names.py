@@ -264,6 +264,28 @@ def test_every_emitted_name_as_a_user_name(many_names):
     assert set(errors) == {"taylor", "rk4", "gauss2", "radau"}  # measured 1.4e-16, 2.0e-13, 3.4e-14, 2.3e-15
 
 
+def test_the_parameter_jacobian_under_every_emitted_name(many_names):
+    """``rhs_parameter_jacobian`` (the kernel of the sensitivities, whose locals are among the names) under the
+    ~670 colliding names, against the closed form of c̈_j = −κ_j c_j/m_j: ∂c̈_j/∂m_j = κ_j c_j/m_j²,
+    ∂c̈_j/∂a = −c_j/m_j for a in the group of j, 0 elsewhere.  Run as plain Python: numba would compile a
+    (12, ~360) kernel for the same names."""
+    from random_systems import python_kernels
+
+    model, spec = many_names
+    params, amplitude, _ = spec.values()
+    module = python_kernels(model.source_path.read_text(encoding="utf-8"))
+    n, column = len(spec.coordinates), {name: j for j, name in enumerate(model.parameters)}
+    c = amplitude + 0.125
+    out, expected = np.full((2 * n, len(column)), np.nan), np.zeros((2 * n, len(column)))
+    y = np.concatenate([c, np.linspace(-0.5, 0.5, n)])
+    assert module["rhs_parameter_jacobian"](0.0, y, model.parameter_vector(params), out) == 0
+    for j, (mass, group) in enumerate(zip(spec.masses, spec.groups, strict=True)):
+        expected[n + j, column[mass]] = sum(params[a] for a in group) * c[j] / params[mass] ** 2
+        for a in group:
+            expected[n + j, column[a]] = -c[j] / params[mass]
+    np.testing.assert_allclose(out, expected, rtol=1e-14, atol=0)
+
+
 @pytest.mark.slow
 def test_every_emitted_name_as_a_user_name_every_method(many_names):
     model, spec = many_names

@@ -15,7 +15,10 @@
 (b) Hypothesis over random small systems (`random_systems.random_mechanism`, the emitted module run as
     plain Python): the same 40-digit reference; constrained ones must return NO_JACOBIAN, write nothing,
     and say why in RHS_PARAMETER_JACOBIAN_REFUSED.
-(c) Where M is singular, the kernel returns the pivot ``rhs`` returns; inputs read from tables get no
+(c) sympy's Whipple bicycle (Kane, velocity constraints among the rows of M, q̇ = N depending on p), run as
+    plain Python, against central differences of its ``rhs`` along p extrapolated to order h⁴ (as
+    test_rhs_jacobian's, whose error bound it reuses).
+(d) Where M is singular, the kernel returns the pivot ``rhs`` returns; inputs read from tables get no
     column; every kind of kernel passes as `kernel_types.RHS_PARAMETER_JACOBIAN`; `Model.rhs_parameter_jacobian`.
 """
 
@@ -29,7 +32,11 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from random_systems import python_kernels, random_mechanism
 from test_inputs import Kd, Kp, _inverted_pendulum, th
-from test_rhs_jacobian import damped_double_pendulum, sleigh  # noqa: F401 (sleigh: a module fixture, compiled once)
+from test_rhs_jacobian import (
+    _differences,
+    damped_double_pendulum,
+    sleigh,  # noqa: F401 (a module fixture: the sleigh compiled once)
+)
 
 import lagcomp as lc
 from lagcomp.accuracy.reference import reference_equations
@@ -264,3 +271,15 @@ def test_kernels_are_values_of_the_drivers_parameter_jacobian_type(compiled, sle
         assert np.array_equal(via_type, out, equal_nan=True)
         if expected == 0:
             assert np.array_equal(model.rhs_parameter_jacobian(0.0, y), out)
+
+
+def test_whipple_bicycle_parameter_jacobian_agrees_with_central_differences(whipple_bicycle):
+    """The bicycle's ∂f/∂p against test_rhs_jacobian's extrapolated central differences, taken along p."""
+    _, model = whipple_bicycle
+    module = python_kernels(model.source_path.read_text(encoding="utf-8"))
+    p, y = model.parameter_vector(), np.random.default_rng(3).uniform(-0.3, 0.3, model.state_size)
+    out = np.full((y.size, p.size), np.nan)
+    assert module["rhs_parameter_jacobian"](0.0, y, p, out) == 0
+    D, bound = _differences(module["rhs"], 0.0, y, p, h=1e-2, along="p")
+    excess = np.abs(out - D) - bound
+    assert np.all(excess <= 0), f"off by {np.max(excess):.3g} beyond the tolerance"

@@ -163,24 +163,26 @@ def test_kane_jacobian_agrees_with_kanes_method_to_40_digits(sleigh, rng):
         assert error <= _reference_tolerance(J_reference, M), error
 
 
-def _differences(rhs, time, y, p, h) -> tuple[np.ndarray, np.ndarray]:
-    """Central differences of `rhs` extrapolated (Richardson) to order h⁴, and a bound on their error, both (N, N).
+def _differences(rhs, time, y, p, h, along="y") -> tuple[np.ndarray, np.ndarray]:
+    """Central differences of `rhs` extrapolated (Richardson) to order h⁴, and a bound on their error, both (N, N);
+    with ``along="p"`` along the parameters, both (N, len(p)) (test_parameter_jacobian).
 
     With D(h) the central difference, R(h) = D(h/2) + (D(h/2) − D(h))/3 errs by c h⁴ + O(h⁶), so
     R(h/2) errs by about |R(h) − R(h/2)|/15: we allow the whole difference.  Rounding: f is evaluated
     with relative error ≲ 64 ε (its CSE'd sums and the solve), which a difference quotient at step
     h/4 divides by h/4 and the extrapolations multiply by at most 5/3 twice: 3 × 64 ε max|f| / (h/4).
     """
-    size = y.size
+    size, x = y.size, (y if along == "y" else p)
     scale = np.ones(size)
+    arguments = (lambda v: (v, p)) if along == "y" else (lambda v: (y, v))
 
     def central(step):
-        D = np.empty((size, size))
-        for j in range(size):
-            plus, minus, f_plus, f_minus = y.copy(), y.copy(), np.empty(size), np.empty(size)
+        D = np.empty((size, x.size))
+        for j in range(x.size):
+            plus, minus, f_plus, f_minus = x.copy(), x.copy(), np.empty(size), np.empty(size)
             plus[j] += step
             minus[j] -= step
-            assert rhs(time, plus, p, f_plus) == 0 and rhs(time, minus, p, f_minus) == 0
+            assert rhs(time, *arguments(plus), f_plus) == 0 and rhs(time, *arguments(minus), f_minus) == 0
             D[:, j] = (f_plus - f_minus) / (2 * step)
             scale[:] = np.maximum(scale, np.maximum(np.abs(f_plus), np.abs(f_minus)))
         return D
