@@ -227,6 +227,18 @@ def test_singular_mass_matrix_gives_the_status_of_rhs(compiled):
             model.rhs_parameter_jacobian(0.0, y, {"m1": masses[0], "m2": masses[1]})
 
 
+def test_a_model_without_parameters_has_an_empty_parameter_jacobian():
+    """P = 0: out is (N, 0), and the kernel still returns the status of `rhs` (emitted module run as plain Python)."""
+    from lagcomp.codegen.emit import emit
+    from lagcomp.codegen.lower import lower
+    from lagcomp.mechanics.lagrange import derive
+
+    (x,) = lc.coordinates("x")
+    module = python_kernels(emit(lower(derive(lc.System(coordinates=(x,), T=x.diff(t) ** 2 / 2, V=x**4 / 4,
+                                                        name="quartic")))))
+    assert module["rhs_parameter_jacobian"](0.0, np.array([0.5, 0.1]), np.empty(0), np.empty((2, 0))) == 0
+
+
 def test_constrained_module_defines_a_parameter_jacobian_that_refuses(compiled):
     model = compiled("spherical_pendulum_cartesian")
     y, p = model.initial_state(), model.parameter_vector()  # p ends with the Baumgarte gains: no columns
