@@ -96,6 +96,48 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(10)
+    p_I_Y = p[1]
+    p_omega = p[2]
+    p_lambda = p[3]
+    p_nu = p[4]
+    _acc0 = _ydot[1]
+    _c0 = sin(p_lambda)
+    _c1 = p_nu*t
+    _c2 = (0.5)*math.pi
+    _c3 = _c2*cos(_c1)
+    _c4 = cos(_c3)
+    _c5 = sin(_c1)
+    _c6 = _c2*_c5*p_nu
+    _c7 = _c4*_c6*p_omega
+    _c8 = _c0*p_I_Y
+    _c9 = _c4*_c8
+    _c10 = _c9*p_omega
+    _m0_0 = p_I_Y
+    _jac[6] = -_acc0 + _c0*_c7
+    _jac[7] = _c6*_c9
+    _jac[8] = _c7*p_I_Y*cos(p_lambda)
+    _jac[9] = _c1*_c10*_c3 + _c10*_c2*_c5 + (0.25)*_c1*_c8*p_omega*math.pi**2*_c5**2*sin(_c3)
+    out[:] = _jac.reshape((2, 5))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_I_Y = p[1]

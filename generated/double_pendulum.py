@@ -165,6 +165,74 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(4)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(20)
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    qd_theta1 = y[2]
+    qd_theta2 = y[3]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_l1 = p[2]
+    p_l2 = p[3]
+    p_g = p[4]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c0 = p_m1 + p_m2
+    _c1 = p_l1**2
+    _c2 = q_theta2 - q_theta1
+    _c3 = cos(_c2)
+    _c4 = _c3*p_l1
+    _c5 = _c4*p_l2
+    _c6 = p_l2**2
+    _c7 = sin(q_theta1)
+    _c8 = _c7*p_l1
+    _c9 = -_acc0*_c1 - _c8*p_g
+    _c10 = qd_theta2**2
+    _c11 = sin(_c2)
+    _c12 = _c11*p_l1
+    _c13 = _c12*p_l2
+    _c14 = p_l2*p_m2
+    _c15 = _c11*_c14
+    _c16 = _acc1*p_m2
+    _c17 = _c16*p_l2
+    _c18 = _c12*p_m2
+    _c19 = _acc0*_c4
+    _c20 = qd_theta1**2
+    _c21 = sin(q_theta2)
+    _c22 = _c21*p_m2
+    _m0_0 = _c0*_c1
+    _m1_0 = _c5*p_m2
+    _m1_1 = _c6*p_m2
+    _jac[10] = _c9
+    _jac[11] = _c9 + _c10*_c13 - _acc1*_c5
+    _jac[12] = _c10*_c15 - _c17*_c3 - _c0*_c7*p_g - 2.0*_acc0*_c0*p_l1
+    _jac[13] = _c10*_c18 - _c16*_c4
+    _jac[14] = -_c0*_c8
+    _jac[16] = -_acc1*_c6 - _c13*_c20 - _c19*p_l2 - _c21*p_g*p_l2
+    _jac[17] = -_c15*_c20 - _acc0*_c14*_c3
+    _jac[18] = -2.0*_c17 - _c18*_c20 - _c19*p_m2 - _c22*p_g
+    _jac[19] = -_c22*p_l2
+    out[:] = _jac.reshape((4, 5))
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0),
+        (_m1_0, _m1_1),
+    ))
+    return ldlt_solve_matrix(mm, out[2:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta1 = y[0]

@@ -115,6 +115,57 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(10)
+    q_theta = y[0]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
+    _acc0 = _ydot[1]
+    _c0 = p_R**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_g
+    _c4 = 4.0*_c0
+    _c5 = cos(2.0*t)
+    _c6 = _c5*p_Omega*p_epsilon
+    _c7 = _c5**2
+    _c8 = _c7*p_epsilon**2
+    _c9 = p_Omega**2
+    _c10 = _c2*cos(q_theta)
+    _c11 = p_R*p_m
+    _c12 = 2.0*_c11
+    _c13 = 8.0*_c11
+    _c14 = _c1*p_epsilon
+    _c15 = 4.0*_c5
+    _c16 = _c1*p_Omega
+    _m0_0 = _c1
+    _jac[5] = _c10*(_c0*_c9 + _c4*_c6 + _c4*_c8) + _c3*p_R - _acc0*_c0
+    _jac[6] = _c10*(_c12*_c9 + _c13*_c6 + _c13*_c8) + _c3*p_m - _acc0*_c12
+    _jac[7] = _c11*_c2
+    _jac[8] = _c10*(2.0*_c16 + _c14*_c15)
+    _jac[9] = _c10*(_c15*_c16 + 8.0*_c14*_c7)
+    out[:] = _jac.reshape((2, 5))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_m = p[0]

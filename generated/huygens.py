@@ -111,6 +111,46 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(6)
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    _acc0 = _ydot[1]
+    _c0 = (0.5)*q_theta
+    _c1 = cos(_c0)
+    _c2 = _c1**2
+    _c3 = _c2*p_m
+    _c4 = p_R**2
+    _c5 = 4.0*_c4
+    _c6 = _c1*qd_theta**2*sin(_c0)
+    _c7 = sin(q_theta)
+    _c8 = _c7*p_R
+    _m0_0 = _c3*_c5
+    _jac[3] = -_c8*p_g + 2.0*_c4*_c6 - _acc0*_c2*_c5
+    _jac[4] = -_c7*p_g*p_m - 8.0*_acc0*_c3*p_R + 4.0*_c6*p_R*p_m
+    _jac[5] = -_c8*p_m
+    out[:] = _jac.reshape((2, 3))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[0]

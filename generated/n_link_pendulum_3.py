@@ -277,6 +277,123 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(42)
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_m3 = p[2]
+    p_l1 = p[3]
+    p_l2 = p[4]
+    p_l3 = p[5]
+    p_g = p[6]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c0 = p_l1**2
+    _c1 = p_m2 + p_m3
+    _c2 = _c1 + p_m1
+    _c3 = sin(q_theta2)
+    _c4 = sin(q_theta1)
+    _c5 = cos(q_theta2)
+    _c6 = cos(q_theta1)
+    _c7 = _c3*_c4 + _c5*_c6
+    _c8 = _c1*p_l2
+    _c9 = _c7*_c8
+    _c10 = p_l2**2
+    _c11 = sin(q_theta3)
+    _c12 = cos(q_theta3)
+    _c13 = _c11*_c4 + _c12*_c6
+    _c14 = p_l3*p_m3
+    _c15 = _c13*_c14
+    _c16 = _c11*_c3 + _c12*_c5
+    _c17 = _c16*p_l2
+    _c18 = p_l3**2
+    _c19 = _c4*p_l1
+    _c20 = -_acc0*_c0 - _c19*p_g
+    _c21 = qd_theta2**2
+    _c22 = _c3*_c6 - _c4*_c5
+    _c23 = _c22*p_l1
+    _c24 = _c21*_c23
+    _c25 = _acc1*p_l1
+    _c26 = _c7*p_l2
+    _c27 = _c20 + _c24*p_l2 - _c25*_c26
+    _c28 = _acc2*p_l1
+    _c29 = _c13*p_l3
+    _c30 = qd_theta3**2
+    _c31 = _c11*_c6 - _c12*_c4
+    _c32 = _c31*p_l1
+    _c33 = _c32*p_l3
+    _c34 = _acc1*_c8
+    _c35 = _c14*_c31
+    _c36 = _c22*_c8
+    _c37 = _acc0*p_l1
+    _c38 = _c1*_c7
+    _c39 = _c32*p_m3
+    _c40 = _c13*p_m3
+    _c41 = qd_theta1**2
+    _c42 = _c23*_c41
+    _c43 = _c3*p_l2
+    _c44 = -_acc1*_c10 - _c26*_c37 - _c42*p_l2 - _c43*p_g
+    _c45 = _c17*p_l3
+    _c46 = _c12*_c3 - _c11*_c5
+    _c47 = _c46*p_l2
+    _c48 = _c47*p_l3
+    _c49 = _c14*_c16
+    _c50 = _c14*_c46
+    _c51 = _c17*p_m3
+    _c52 = _c47*p_m3
+    _c53 = _c11*p_g
+    _m0_0 = _c0*_c2
+    _m1_0 = _c9*p_l1
+    _m1_1 = _c1*_c10
+    _m2_0 = _c15*p_l1
+    _m2_1 = _c14*_c17
+    _m2_2 = _c18*p_m3
+    _jac[21] = _c20
+    _jac[22] = _c27
+    _jac[23] = _c27 + _c30*_c33 - _c28*_c29
+    _jac[24] = _c21*_c36 + _c30*_c35 - _acc2*_c15 - _c34*_c7 - 2.0*_c2*_c37 - _c2*_c4*p_g
+    _jac[25] = _c1*_c24 - _c25*_c38
+    _jac[26] = _c30*_c39 - _c28*_c40
+    _jac[27] = -_c19*_c2
+    _jac[29] = _c44
+    _jac[30] = _c44 - _acc2*_c45 - _c30*_c48
+    _jac[31] = -_acc0*_c9 - _c36*_c41
+    _jac[32] = -2.0*_c34 - _acc2*_c49 - _c1*_c42 - _c30*_c50 - _c37*_c38 - _c1*_c3*p_g
+    _jac[33] = -_acc2*_c51 - _c30*_c52
+    _jac[34] = -_c1*_c43
+    _jac[37] = _c21*_c48 - _acc1*_c45 - _acc2*_c18 - _c29*_c37 - _c33*_c41 - _c53*p_l3
+    _jac[38] = -_acc0*_c15 - _c35*_c41
+    _jac[39] = _c21*_c50 - _acc1*_c49
+    _jac[40] = _c21*_c52 - _acc1*_c51 - _c37*_c40 - _c39*_c41 - _c53*p_m3 - 2.0*_acc2*_c14
+    _jac[41] = -_c11*_c14
+    out[:] = _jac.reshape((6, 7))
+    # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0, 0.0),
+        (_m1_0, _m1_1, 0.0),
+        (_m2_0, _m2_1, _m2_2),
+    ))
+    return ldlt_solve_matrix(mm, out[3:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta1 = y[0]

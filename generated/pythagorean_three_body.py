@@ -462,6 +462,134 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(12)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(48)
+    q_x1 = y[0]
+    q_y1 = y[1]
+    q_x2 = y[2]
+    q_y2 = y[3]
+    q_x3 = y[4]
+    q_y3 = y[5]
+    p_G = p[0]
+    p_m1 = p[1]
+    p_m2 = p[2]
+    p_m3 = p[3]
+    _acc0 = _ydot[6]
+    _acc1 = _ydot[7]
+    _acc2 = _ydot[8]
+    _acc3 = _ydot[9]
+    _acc4 = _ydot[10]
+    _acc5 = _ydot[11]
+    _c0 = -q_x3
+    _c1 = _c0 + q_x1
+    _c2 = -q_y3
+    _c3 = _c2 + q_y1
+    _c4 = 1.0/((_c1**2 + _c3**2)*math.sqrt(_c1**2 + _c3**2))
+    _c5 = _c4*p_m3
+    _c6 = _c5*p_m1
+    _c7 = _c1*_c6
+    _c8 = q_x1 - q_x2
+    _c9 = q_y1 - q_y2
+    _c10 = 1.0/((_c8**2 + _c9**2)*math.sqrt(_c8**2 + _c9**2))
+    _c11 = _c10*p_m1*p_m2
+    _c12 = _c11*_c8
+    _c13 = _c5*p_G
+    _c14 = _c1*_c13
+    _c15 = _c10*p_G
+    _c16 = _c15*_c8
+    _c17 = _c16*p_m2
+    _c18 = _c16*p_m1
+    _c19 = _c4*p_G*p_m1
+    _c20 = _c1*_c19
+    _c21 = _c3*_c6
+    _c22 = _c11*_c9
+    _c23 = _c15*_c9
+    _c24 = _c23*p_m2
+    _c25 = _c13*_c3
+    _c26 = _c23*p_m1
+    _c27 = _c19*_c3
+    _c28 = _c0 + q_x2
+    _c29 = _c2 + q_y2
+    _c30 = 1.0/((_c28**2 + _c29**2)*math.sqrt(_c28**2 + _c29**2))
+    _c31 = _c30*p_m2*p_m3
+    _c32 = _c28*_c31
+    _c33 = _c30*p_G
+    _c34 = _c28*_c33
+    _c35 = _c34*p_m3
+    _c36 = _c34*p_m2
+    _c37 = _c29*_c31
+    _c38 = _c29*_c33
+    _c39 = _c38*p_m3
+    _c40 = _c38*p_m2
+    _m0_0 = p_m1
+    _m1_0 = 0.0
+    _m1_1 = p_m1
+    _m2_0 = 0.0
+    _m2_1 = 0.0
+    _m2_2 = p_m2
+    _m3_0 = 0.0
+    _m3_1 = 0.0
+    _m3_2 = 0.0
+    _m3_3 = p_m2
+    _m4_0 = 0.0
+    _m4_1 = 0.0
+    _m4_2 = 0.0
+    _m4_3 = 0.0
+    _m4_4 = p_m3
+    _m5_0 = 0.0
+    _m5_1 = 0.0
+    _m5_2 = 0.0
+    _m5_3 = 0.0
+    _m5_4 = 0.0
+    _m5_5 = p_m3
+    _jac[24] = -_c12 - _c7
+    _jac[25] = -_acc0 - _c14 - _c17
+    _jac[26] = -_c18
+    _jac[27] = -_c20
+    _jac[28] = -_c21 - _c22
+    _jac[29] = -_acc1 - _c24 - _c25
+    _jac[30] = -_c26
+    _jac[31] = -_c27
+    _jac[32] = _c12 - _c32
+    _jac[33] = _c17
+    _jac[34] = _c18 - _acc2 - _c35
+    _jac[35] = -_c36
+    _jac[36] = _c22 - _c37
+    _jac[37] = _c24
+    _jac[38] = _c26 - _acc3 - _c39
+    _jac[39] = -_c40
+    _jac[40] = _c32 + _c7
+    _jac[41] = _c14
+    _jac[42] = _c35
+    _jac[43] = _c20 + _c36 - _acc4
+    _jac[44] = _c21 + _c37
+    _jac[45] = _c25
+    _jac[46] = _c39
+    _jac[47] = _c27 + _c40 - _acc5
+    out[:] = _jac.reshape((12, 4))
+    # out[6:] = M⁻¹ out[6:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0, 0.0, 0.0, 0.0, 0.0),
+        (_m1_0, _m1_1, 0.0, 0.0, 0.0, 0.0),
+        (_m2_0, _m2_1, _m2_2, 0.0, 0.0, 0.0),
+        (_m3_0, _m3_1, _m3_2, _m3_3, 0.0, 0.0),
+        (_m4_0, _m4_1, _m4_2, _m4_3, _m4_4, 0.0),
+        (_m5_0, _m5_1, _m5_2, _m5_3, _m5_4, _m5_5),
+    ))
+    return ldlt_solve_matrix(mm, out[6:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_m1 = p[1]

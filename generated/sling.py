@@ -90,6 +90,34 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(4)
+    q_rho = y[0]
+    p_m = p[0]
+    p_omega = p[1]
+    _acc0 = _ydot[1]
+    _m0_0 = p_m
+    _jac[2] = -_acc0 + q_rho*p_omega**2
+    _jac[3] = 2.0*p_m*p_omega*q_rho
+    out[:] = _jac.reshape((2, 2))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_m = p[0]

@@ -150,6 +150,56 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(4)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(12)
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c0 = p_l**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = cos(q_theta)
+    _c5 = _c4*qd_phi**2
+    _c6 = _c0*_c2
+    _c7 = _c2*p_l
+    _c8 = 2.0*p_l*p_m
+    _c9 = _c7*p_m
+    _c10 = _acc1*_c3
+    _c11 = _c4*qd_phi*qd_theta
+    _m0_0 = _c1
+    _m1_0 = 0.0
+    _m1_1 = _c1*_c3
+    _jac[6] = _c5*_c6 - _acc0*_c0 - _c7*p_g
+    _jac[7] = -_acc0*_c8 + 2.0*_c5*_c9 - _c2*p_g*p_m
+    _jac[8] = -_c9
+    _jac[9] = -_c0*_c10 - 2.0*_c11*_c6
+    _jac[10] = -_c10*_c8 - 4.0*_c11*_c9
+    out[:] = _jac.reshape((4, 3))
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0),
+        (_m1_0, _m1_1),
+    ))
+    return ldlt_solve_matrix(mm, out[2:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[0]

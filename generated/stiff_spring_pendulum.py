@@ -150,6 +150,51 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(4)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(20)
+    q_r = y[0]
+    q_theta = y[1]
+    qd_r = y[2]
+    qd_theta = y[3]
+    p_m = p[0]
+    p_k = p[1]
+    p_l0 = p[3]
+    p_g = p[4]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c0 = q_r**2
+    _c1 = cos(q_theta)
+    _c2 = q_r*sin(q_theta)
+    _m0_0 = p_m
+    _m1_0 = 0.0
+    _m1_1 = _c0*p_m
+    _jac[10] = -_acc0 + _c1*p_g + q_r*qd_theta**2
+    _jac[11] = p_l0 - q_r
+    _jac[12] = -qd_r
+    _jac[13] = p_k
+    _jac[14] = _c1*p_m
+    _jac[15] = -_acc1*_c0 - _c2*p_g - 2.0*q_r*qd_r*qd_theta
+    _jac[19] = -_c2*p_m
+    out[:] = _jac.reshape((4, 5))
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0),
+        (_m1_0, _m1_1),
+    ))
+    return ldlt_solve_matrix(mm, out[2:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_r = y[0]

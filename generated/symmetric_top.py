@@ -221,6 +221,71 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(30)
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c0 = p_l**2
+    _c1 = _c0*p_M
+    _c2 = cos(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1 + p_I1
+    _c5 = sin(q_theta)
+    _c6 = _c2*_c5
+    _c7 = _c6*qd_psi*qd_theta
+    _c8 = 2.0*_c7
+    _c9 = p_M*p_l
+    _c10 = 2.0*_c9
+    _c11 = _c5*qd_theta
+    _c12 = _c6*qd_psi**2
+    _c13 = _c5*p_l
+    _m0_0 = _c4 + _c3*(p_I3 - _c1 - p_I1)
+    _m1_0 = 0.0
+    _m1_1 = _c4
+    _m2_0 = _c2*p_I3
+    _m2_1 = 0.0
+    _m2_2 = p_I3
+    _jac[15] = -_acc0*(_c0 - _c0*_c3) - _c0*_c8
+    _jac[16] = -_acc0*(_c10 - _c10*_c3) - 4.0*_c7*_c9
+    _jac[18] = -_c8 - _acc0*(1.0 - _c3)
+    _jac[19] = _c8 + _c11*qd_phi - _acc0*_c3 - _acc2*_c2
+    _jac[20] = _c0*_c12 + _c13*p_g - _acc1*_c0
+    _jac[21] = _c10*_c12 - _acc1*_c10 + _c5*p_M*p_g
+    _jac[22] = _c13*p_M
+    _jac[23] = _c12 - _acc1
+    _jac[24] = -_c12 - _c5*qd_phi*qd_psi
+    _jac[29] = -_acc2 + _c11*qd_psi - _acc0*_c2
+    out[:] = _jac.reshape((6, 5))
+    # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0, 0.0, 0.0),
+        (_m1_0, _m1_1, 0.0),
+        (_m2_0, _m2_1, _m2_2),
+    ))
+    return ldlt_solve_matrix(mm, out[3:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[1]

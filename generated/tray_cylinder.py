@@ -98,6 +98,48 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(10)
+    p_M = p[0]
+    p_R = p[1]
+    p_I = p[2]
+    p_A = p[3]
+    p_Omega = p[4]
+    _acc0 = _ydot[1]
+    _c0 = 1.0/p_R**2
+    _c1 = _c0*p_I
+    _c2 = 2.0*p_I/p_R**3
+    _c3 = p_Omega**2
+    _c4 = p_Omega*t
+    _c5 = sin(_c4)
+    _c6 = _c3*_c5
+    _c7 = _c6*p_A
+    _c8 = _c1*p_A
+    _m0_0 = _c1 + p_M
+    _jac[5] = -_acc0
+    _jac[6] = _acc0*_c2 + _c2*_c7
+    _jac[7] = -_acc0*_c0 - _c0*_c7
+    _jac[8] = -_c1*_c6
+    _jac[9] = -2.0*_c5*_c8*p_Omega - _c3*_c8*t*cos(_c4)
+    out[:] = _jac.reshape((2, 5))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_M = p[0]

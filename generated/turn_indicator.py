@@ -137,6 +137,71 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(14)
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_I_X = p[0]
+    p_I = p[1]
+    p_Omega = p[2]
+    p_omega = p[3]
+    p_alpha = p[4]
+    _acc0 = _ydot[1]
+    _c0 = sin(p_alpha)
+    _c1 = cos(p_alpha)
+    _c2 = _c0*_c1
+    _c3 = p_omega**2
+    _c4 = cos(q_theta)
+    _c5 = _c4**2
+    _c6 = _c3*_c5
+    _c7 = _c2*_c6
+    _c8 = sin(q_theta)
+    _c9 = _c8**2
+    _c10 = _c3*_c9
+    _c11 = _c10*_c2
+    _c12 = _c1**2
+    _c13 = _c0**2
+    _c14 = _c4*_c8
+    _c15 = _c14*_c3
+    _c16 = p_Omega*p_omega
+    _c17 = _c0*_c8
+    _c18 = _c1*_c4
+    _c19 = p_I*p_omega
+    _c20 = p_I*p_Omega
+    _c21 = p_I - p_I_X
+    _c22 = 2.0*p_omega
+    _c23 = _c2*_c21*_c22
+    _c24 = _c16*p_I
+    _c25 = _c13*_c21
+    _c26 = 4.0*_c2
+    _c27 = _c12*_c21
+    _m0_0 = p_I_X
+    _jac[7] = _c11 - _acc0 - _c7 + _c15*(_c13 - _c12)
+    _jac[8] = _c7 - _c11 + _c15*(_c12 - _c13) + _c16*_c18 - _c16*_c17
+    _jac[9] = _c18*_c19 - _c17*_c19
+    _jac[10] = _c18*_c20 + _c23*_c5 - _c17*_c20 - _c23*_c9 + _c14*_c22*(_c12*p_I + _c13*p_I_X - _c12*p_I_X - _c13*p_I)
+    _jac[11] = _c10*_c25 + _c15*(_c26*p_I_X - _c26*p_I) + _c27*_c6 - _c10*_c27 - _c25*_c6 - _c0*_c24*_c4 - _c1*_c24*_c8
+    _jac[12] = -q_theta
+    _jac[13] = -qd_theta
+    out[:] = _jac.reshape((2, 7))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_I_X = p[0]

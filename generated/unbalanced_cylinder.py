@@ -112,6 +112,54 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(10)
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _acc0 = _ydot[1]
+    _c0 = p_R**2
+    _c1 = p_a**2
+    _c2 = cos(q_theta)
+    _c3 = 2.0*p_M
+    _c4 = _c3*p_a
+    _c5 = _c2*_c4
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_a
+    _c8 = qd_theta**2
+    _c9 = _c8*p_R
+    _c10 = _c3*p_R
+    _c11 = _c6*p_M
+    _c12 = _c11*p_a
+    _m0_0 = p_I + _c0*p_M + _c1*p_M - _c5*p_R
+    _jac[5] = -_acc0*(_c0 + _c1 - 2.0*_c2*p_R*p_a) - _c7*_c9 - _c7*p_g
+    _jac[6] = -_acc0*(_c10 - _c5) - _c12*_c8
+    _jac[7] = -_acc0*(_c4 - _c10*_c2) - _c11*_c9 - _c11*p_g
+    _jac[8] = -_acc0
+    _jac[9] = -_c12
+    out[:] = _jac.reshape((2, 5))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[0]

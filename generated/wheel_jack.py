@@ -120,6 +120,62 @@ def rhs_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_parameter_jacobian(t, y, p, out):
+    """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
+    no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
+    inputs' tables that follow them).
+    Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = np.empty(2)
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = np.zeros(12)
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_l = p[0]
+    p_h = p[1]
+    p_a = p[2]
+    p_P = p[3]
+    p_F = p[4]
+    p_J = p[5]
+    _acc0 = _ydot[1]
+    _c0 = p_l**2
+    _c1 = 16.0*_c0
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = math.pi**2
+    _c5 = 1.0/p_h**2
+    _c6 = _c4*_c5*p_J
+    _c7 = _c3*_c6
+    _c8 = _c2*p_l
+    _c9 = cos(q_theta)
+    _c10 = _c9*qd_theta**2
+    _c11 = 1.0/p_h
+    _c12 = 4.0*math.pi*p_F*p_a
+    _c13 = 2.0*_c9
+    _c14 = _acc0*_c3
+    _c15 = 32.0*_c0*_c4*p_J/p_h**3
+    _c16 = _c10*_c2
+    _c17 = 4.0*math.pi*_c11*_c8
+    _c18 = _c1*_c4*_c5
+    _m0_0 = _c1*_c7
+    _jac[6] = -_c13*p_P + _c11*_c12*_c2 - 32.0*_acc0*_c7*p_l - 32.0*_c10*_c6*_c8
+    _jac[7] = _c14*_c15 + _c15*_c16 - _c12*_c5*_c8
+    _jac[8] = _c17*p_F
+    _jac[9] = -_c13*p_l
+    _jac[10] = _c17*p_a
+    _jac[11] = -_c14*_c18 - _c16*_c18
+    out[:] = _jac.reshape((2, 6))
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    mm = np.array((
+        (_m0_0,),
+    ))
+    return ldlt_solve_matrix(mm, out[1:])
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[0]
