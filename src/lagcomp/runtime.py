@@ -725,7 +725,8 @@ class Model:
             ``theta1_dot``), a parameter name, or ``"q0:theta1"``-style names
             as `Solution.sensitivity_names` gives them.  Results in
             `Solution.sensitivities`, shape (m, 2n, k).  The step-size control
-            covers the state and the sensitivities together.  Refused for
+            covers the state only (``sensitivity_control="state"``, the
+            default: the plain run's steps) or both (``"both"``).  Refused for
             other methods, constrained models (no Jacobian kernel yet), located
             events (pass ``events=False``) and function inputs; see
             `lagcomp.integrate.sensitivities`.

@@ -13,12 +13,22 @@ model's kernels, compiled at the first run that needs it and kept for the proces
 compiled again.  J (N, N) and ∂f/∂p (N, P) are written into work space at the end of the run's p (the
 kernels read p only up to their parameters and input tables), so a call allocates nothing.
 
-Error control.  The embedded driver's error norm runs over every component of the state it is given (one
-scalar ``rtol``/``atol``): the step size is chosen for the state and the sensitivities together, as CVODES
-does by default (``errconS``).  The state columns then differ from a plain run's by the step choice, within
-the tolerance.  State-only control would need a driver argument giving the number of components the norm
-runs over (the first N), which changes the driver's signature (every driver call and sweep loop passes it);
-with it equal to the state size a plain run keeps its bits.
+Error control (``sensitivity_control``).  The embedded driver's error norm runs over every component of the
+state it is given, with one scalar ``rtol``/``atol``, and restricting it to the first N components would
+change the driver's signature (an argument every driver call and sweep loop passes).  Both controls come
+without that:
+
+* ``"both"``: the norm covers the state and the sensitivities together (CVODES' ``errconS = True``); the
+  steps then differ from a plain run's, the state within the tolerance.
+* ``"state"`` (the default): the sensitivity columns are integrated scaled by `STATE_ONLY_SCALE` = 2⁻³⁰⁰,
+  exactly (a power of two: the linear variational equations commute with it, and every Runge-Kutta sum is
+  scaled without rounding), so that with atol > 0 their scaled errors ε e_S / atol are ~1e-90 of the
+  threshold and the norm sees the state only; ``rtol`` and ``atol`` are divided by sqrt(1 + k), which
+  undoes the norms' division by the component count N (1 + k) instead of N (the RMS norm of DOPRI5, Tsit5,
+  BS3 and DOP853's combined one alike).  The driver then chooses a plain run's steps (up to the rounding
+  of that division), and the state columns match a plain run's to rounding.  The sensitivities are
+  unscaled exactly on output.  With atol = 0 the norm is scale-invariant, so it sees them again (as with
+  "both"); sensitivities below ~1e-218 lose precision as subnormal numbers.
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
 Lagrange models, today); located events (event-time sensitivities are a later step); projection; function
@@ -41,6 +51,10 @@ from lagcomp.errors import OptionError
 GROUPS = ("q0", "qd0", "params")
 #: The driver that integrates sensitivities (every embedded pair runs on it).
 EMBEDDED_DRIVER = "lagcomp.integrate.drivers.embedded:embedded_run"
+#: What the step-size control covers (see "Error control" above).
+CONTROLS = ("state", "both")
+#: The exact scale of the sensitivity columns under ``sensitivity_control="state"``.
+STATE_ONLY_SCALE = 2.0 ** -300
 
 
 @dataclass(frozen=True)
@@ -123,13 +137,28 @@ def check(model, method, options, cols: Columns, original_model) -> None:
                           "does not have: compile it again with this lagcomp, or ask for initial-state ones (q0, qd0).")
 
 
-def initial_state(y0: np.ndarray, cols: Columns) -> np.ndarray:
-    """(y0, S(0)) flat, N (1 + k): unit columns for the initial-state components, zero for parameters."""
+def scale_for(control) -> float:
+    """The factor the sensitivity columns are integrated with under `control` (one of `CONTROLS`)."""
+    if control not in CONTROLS:
+        raise OptionError(f"`sensitivity_control` must be one of {CONTROLS}, got {control!r}.")
+    return STATE_ONLY_SCALE if control == "state" else 1.0
+
+
+def driver_tolerances(rtol: float, atol: float, cols: Columns, scale: float) -> tuple[float, float]:
+    """The (rtol, atol) the driver gets: divided by sqrt(1 + k) for state-only control (see the docstring)."""
+    if scale == 1.0:
+        return rtol, atol
+    shrink = float(np.sqrt(1.0 + cols.k))
+    return rtol / shrink, atol / shrink
+
+
+def initial_state(y0: np.ndarray, cols: Columns, scale: float) -> np.ndarray:
+    """(y0, scale S(0)) flat, N (1 + k): unit columns for the initial-state components, zero for parameters."""
     n = y0.size
     augmented = np.zeros(n * (1 + cols.k))
     augmented[:n] = y0
     for c, i in enumerate(cols.state):
-        augmented[n * (1 + c) + i] = 1.0
+        augmented[n * (1 + c) + i] = scale
     return augmented
 
 
@@ -156,27 +185,28 @@ class SensitivityKernels:
         return getattr(self._module, name)
 
 
-#: {(generated module, n, state columns, parameter columns): SensitivityKernels}, for the process.
+#: {(generated module, n, state columns, parameter columns, scale): SensitivityKernels}, for the process.
 _AUGMENTED: dict = {}
 _LOCK = threading.Lock()
 
 
-def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns) -> SensitivityKernels:
-    """The one `SensitivityKernels` of `module` for `cols` in this process (its closure compiled at first use)."""
-    key = (module, n, cols.state, cols.parameters)
+def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
+    """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (its closure compiled at
+    first use)."""
+    key = (module, n, cols.state, cols.parameters, scale)
     with _LOCK:
         if key not in _AUGMENTED:
             parameter_jacobian = getattr(module, "rhs_parameter_jacobian", None) if cols.parameters else None
             rhs = augmented_rhs(module.rhs, module.rhs_jacobian, parameter_jacobian, n, len(cols.state),
-                                n_parameters, cols.parameters)
+                                n_parameters, cols.parameters, scale)
             _AUGMENTED[key] = SensitivityKernels(module, rhs)
         return _AUGMENTED[key]
 
 
 def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, k_state: int, n_parameters: int,
-                  parameter_columns: tuple[int, ...]):
+                  parameter_columns: tuple[int, ...], scale: float):
     """``rhs(t, y, p, out) -> int`` of the augmented state y = (x, S[:, 0], ..., S[:, k-1]) (column blocks of
-    n): out = (f(x), J S[:, c] + ∂f/∂p_j for the parameter columns).  Returns the kernels' status (0, or the
+    n, each times `scale`): out = (f(x), J S[:, c] + scale ∂f/∂p_j for the parameter columns).  Returns the kernels' status (0, or the
     singular pivot).  J sits in the last n² floats of p, ∂f/∂p (n, n_parameters) before it."""
     k_parameters = len(parameter_columns)
     columns_p = np.array(parameter_columns, dtype=np.int64)
@@ -218,7 +248,7 @@ def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, k_state: int, n_par
             base = n * (1 + k_state + c)
             j = columns_p[c]
             for i in range(n):
-                out[base + i] += Jp[i, j]
+                out[base + i] += scale * Jp[i, j]
         return 0
     return full_rhs
 
@@ -240,8 +270,8 @@ class SensitivityRecorder:
     keeping the sensitivity columns beside it: every row, or with ``record="summary"`` the first and last
     (the rows the summary keeps of the state)."""
 
-    def __init__(self, recorder, n: int, k: int):
-        self.recorder, self.n, self.k = recorder, n, k
+    def __init__(self, recorder, n: int, k: int, scale: float):
+        self.recorder, self.n, self.k, self.unscale = recorder, n, k, 1.0 / scale
         self.parts: list[np.ndarray] = []
 
     def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
@@ -264,7 +294,7 @@ class SensitivityRecorder:
 
     def sensitivities(self) -> np.ndarray:
         """(m, N, k) along the rows the state's recorder returns."""
-        rows = np.concatenate(self.parts)
+        rows = np.concatenate(self.parts) * self.unscale     # (exact: a power of two)
         if not self.recorder.keep and self.recorder.rows == 1:
             rows = rows[:1]
         return rows.reshape(rows.shape[0], self.k, self.n).transpose(0, 2, 1).copy()

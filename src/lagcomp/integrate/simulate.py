@@ -12,6 +12,7 @@ bounded by what is kept: every saved row (`save_every`, `t_eval`) or, with
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import math
 import time
@@ -103,10 +104,11 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
              atol=None, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
              events=None, record="trajectory", progress=None, throw=False, max_residual=None,
-             memory_limit=MEMORY_LIMIT, inputs=None, sensitivities=None) -> Solution:
+             memory_limit=MEMORY_LIMIT, inputs=None, sensitivities=None, sensitivity_control="state") -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     columns = None if sensitivities is None else sens.columns(model, sensitivities)
     k_columns = 0 if columns is None else columns.k
+    scale = sens.scale_for(sensitivity_control)
     options = run_options(model, t_span, method=method, dt=dt, rtol=rtol, atol=atol, t_eval=t_eval,
                           save_every=save_every, first_step=first_step, max_step=max_step, max_steps=max_steps,
                           implicit_solver=implicit_solver, events=events, projection=projection,
@@ -139,9 +141,11 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     run_args = (options.projecting, residual_max)
     kernels, p_run = model.kernels, p
     if columns is not None:  # the variational equations ride along: an augmented state, rhs and p
-        kernels = sens.sensitivity_kernels(model.kernels, y0.size, len(model.parameters), columns)
-        state, p_run = RunState(sens.initial_state(y0, columns), t0), sens.run_parameters(p, model, columns)
+        kernels = sens.sensitivity_kernels(model.kernels, y0.size, len(model.parameters), columns, scale)
+        state, p_run = RunState(sens.initial_state(y0, columns, scale), t0), sens.run_parameters(p, model, columns)
         differential = width = state.y.size
+        rtol, atol = sens.driver_tolerances(options.rtol, options.atol, columns, scale)
+        options = dataclasses.replace(options, rtol=rtol, atol=atol)
     if options.adaptive:
         advance, rows = _adaptive_driver(kernels, state, p_run, run_args, options, differential)
     else:
@@ -149,7 +153,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
 
     recorder = Recorder(model, p, record, progress)
     if columns is not None:
-        recorder = sens.SensitivityRecorder(recorder, y0.size, columns.k)
+        recorder = sens.SensitivityRecorder(recorder, y0.size, columns.k, scale)
     if t_eval is None or t_eval[0] == t0:
         recorder.add(np.array([t0]), state.y[None, :width] if columns is not None else y0[None, :])
     n_events = len(model.events)
