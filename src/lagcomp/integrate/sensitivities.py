@@ -206,8 +206,9 @@ def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale:
 def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, k_state: int, n_parameters: int,
                   parameter_columns: tuple[int, ...], scale: float):
     """``rhs(t, y, p, out) -> int`` of the augmented state y = (x, S[:, 0], ..., S[:, k-1]) (column blocks of
-    n, each times `scale`): out = (f(x), J S[:, c] + scale ∂f/∂p_j for the parameter columns).  Returns the kernels' status (0, or the
-    singular pivot).  J sits in the last n² floats of p, ∂f/∂p (n, n_parameters) before it."""
+    n, each times `scale`): out = (f(x), J S[:, c] + scale ∂f/∂p_j for the parameter columns).  Returns the
+    kernels' status (0, or the singular pivot).  J sits in the last n² floats of p, ∂f/∂p (n, n_parameters)
+    before it."""
     k_parameters = len(parameter_columns)
     columns_p = np.array(parameter_columns, dtype=np.int64)
     k = k_state + k_parameters
