@@ -62,7 +62,7 @@ def test_double_pendulum_against_richardson_extrapolated_differences(pendulum):
     reference = (4 * differences(5e-4) - differences(1e-3)) / 3
     sol = _pendulum_run(pendulum, PENDULUM_STATE, 1e-12, sensitivities=("q0", "qd0"))
     relative = np.abs(sol.sensitivities[-1] - reference).max() / np.abs(reference).max()
-    assert relative < 1e-8, relative           # measured 1.0e-10
+    assert relative < 1e-8, relative           # measured 1.2e-10 (1.0e-10 with sensitivity_control="both")
 
 
 def test_state_control_takes_the_plain_runs_steps(pendulum):
