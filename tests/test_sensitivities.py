@@ -200,3 +200,21 @@ def test_parameter_columns_through_a_stand_in_kernel(oscillator):
     assert np.abs(sol.sensitivities[:, 0, 1] - dx_dk).max() < 1e-9
     assert np.abs(sol.sensitivities[:, 0, 2] + OMEGA**2 * dx_dk).max() < 1e-9
     assert np.abs(sol.sensitivities[:, 0, 0] - s / OMEGA).max() < 1e-10
+
+
+def test_kane_model_state_is_q_and_u(cache_dir):
+    import sympy.physics.mechanics as me
+
+    w = me.dynamicsymbols("w")
+    frame, point = me.ReferenceFrame("N"), me.Point("P")
+    point.set_vel(frame, w * frame.x)
+    km = me.KanesMethod(frame, [x], [w], kd_eqs=[x.diff(t) - w])
+    km.kanes_equations([me.Particle("p", point, m)], [(point, -k * x * frame.x)])
+    model = lc.compile(km, name="sensitivity_kane_oscillator", cache_dir=cache_dir,
+                       defaults={"m": 1.0, "k": OMEGA**2})
+    sol = model.simulate((0.0, 5.0), [1.0], [0.5], rtol=1e-12, atol=1e-12, sensitivities=("q0", "u0"),
+                         progress=False)
+    assert sol.sensitivity_names == ("q0:x", "qd0:w") and sol.state_names == ("x", "w")
+    c, s = np.cos(OMEGA * sol.t), np.sin(OMEGA * sol.t)
+    exact = np.stack([np.stack([c, s / OMEGA], axis=-1), np.stack([-OMEGA * s, c], axis=-1)], axis=1)
+    assert np.abs(sol.sensitivities - exact).max() < 1e-10
