@@ -185,7 +185,7 @@ class SensitivityKernels:
         return getattr(self._module, name)
 
 
-#: {(generated module, n, state columns, parameter columns, scale): SensitivityKernels}, for the process.
+#: {(generated module, n, parameter columns, scale): SensitivityKernels}, for the process.
 _AUGMENTED: dict = {}
 _LOCK = threading.Lock()
 
@@ -193,25 +193,25 @@ _LOCK = threading.Lock()
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
     """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (its closure compiled at
     first use)."""
-    key = (module, n, cols.state, cols.parameters, scale)
+    key = (module, n, cols.parameters, scale)  # (the initial-state columns: as many as y's size says)
     with _LOCK:
         if key not in _AUGMENTED:
             parameter_jacobian = getattr(module, "rhs_parameter_jacobian", None) if cols.parameters else None
-            rhs = augmented_rhs(module.rhs, module.rhs_jacobian, parameter_jacobian, n, len(cols.state),
-                                n_parameters, cols.parameters, scale)
+            rhs = augmented_rhs(module.rhs, module.rhs_jacobian, parameter_jacobian, n, n_parameters,
+                                cols.parameters, scale)
             _AUGMENTED[key] = SensitivityKernels(module, rhs)
         return _AUGMENTED[key]
 
 
-def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, k_state: int, n_parameters: int,
-                  parameter_columns: tuple[int, ...], scale: float):
+def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, n_parameters: int, parameter_columns: tuple[int, ...],
+                  scale: float):
     """``rhs(t, y, p, out) -> int`` of the augmented state y = (x, S[:, 0], ..., S[:, k-1]) (column blocks of
     n, each times `scale`): out = (f(x), J S[:, c] + scale ∂f/∂p_j for the parameter columns).  Returns the
     kernels' status (0, or the singular pivot).  J sits in the last n² floats of p, ∂f/∂p (n, n_parameters)
-    before it."""
+    before it.  The parameter columns are the last; the initial-state ones before them are as many as y's
+    size says, so that one closure serves every choice of them (it compiles once per module, in ~0.8 s)."""
     k_parameters = len(parameter_columns)
     columns_p = np.array(parameter_columns, dtype=np.int64)
-    k = k_state + k_parameters
     jacobian_size = n * n
     if parameter_jacobian is None:
         @njit(error_model="numpy", nogil=True)
@@ -224,7 +224,7 @@ def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, k_state: int, n_par
             status = jacobian(t, y[:n], p, J)
             if status != 0:
                 return status
-            _multiply(J, y, out, n, k)
+            _multiply(J, y, out, n, y.shape[0] // n - 1)
             return 0
         return state_rhs
 
@@ -240,13 +240,14 @@ def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, k_state: int, n_par
         status = jacobian(t, y[:n], p, J)
         if status != 0:
             return status
+        k = y.shape[0] // n - 1
         _multiply(J, y, out, n, k)
         Jp = p[end - jacobian_size - parameter_size:end - jacobian_size].reshape((n, n_parameters))
         status = parameter_jacobian(t, y[:n], p, Jp)
         if status != 0:
             return status
         for c in range(k_parameters):
-            base = n * (1 + k_state + c)
+            base = n * (1 + k - k_parameters + c)
             j = columns_p[c]
             for i in range(n):
                 out[base + i] += scale * Jp[i, j]
