@@ -327,6 +327,7 @@ CASES = {
     "sensitivities-function-input": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y, p: 0.0)},
                                                sensitivities="q0"), "numba functions"),
     "sensitivities-unknown-name": (_simulate("pendulum", sensitivities=("q0", "theta0")), "'theta0'"),
+    "sensitivity-control-unknown": (_simulate("pendulum", sensitivities="q0", sensitivity_control="all"), "'all'"),
     "sensitivities-in-sweep": (lambda models: models["pendulum"].sweep((0.0, 1.0), {"theta": [0.1]},
                                                                       sensitivities="q0"), "a sweep"),
     "taylor-not-applicable": (_simulate("friction", method="taylor"), "`taylor` cannot integrate 'rope_friction'"),
