@@ -22,13 +22,13 @@ without that:
   steps then differ from a plain run's, the state within the tolerance.
 * ``"state"`` (the default): the sensitivity columns are integrated scaled by `STATE_ONLY_SCALE` = 2⁻³⁰⁰,
   exactly (a power of two: the linear variational equations commute with it, and every Runge-Kutta sum is
-  scaled without rounding), so that with atol > 0 their scaled errors ε e_S / atol are ~1e-90 of the
-  threshold and the norm sees the state only; ``rtol`` and ``atol`` are divided by sqrt(1 + k), which
+  scaled without rounding), so that their scaled errors ε e_S / atol are ~1e-90 of the threshold (atol > 0
+  always) and the norm sees the state only; ``rtol`` and ``atol`` are divided by sqrt(1 + k), which
   undoes the norms' division by the component count N (1 + k) instead of N (the RMS norm of DOPRI5, Tsit5,
   BS3 and DOP853's combined one alike).  The driver then chooses a plain run's steps (up to the rounding
   of that division), and the state columns match a plain run's to rounding.  The sensitivities are
-  unscaled exactly on output.  With atol = 0 the norm is scale-invariant, so it sees them again (as with
-  "both"); sensitivities below ~1e-218 lose precision as subnormal numbers.
+  unscaled exactly on output.  An atol below ~1e-80 times the sensitivities' errors would let the norm
+  see them again (as with "both"); sensitivities below ~1e-218 lose precision as subnormal numbers.
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
 Lagrange models, today); located events (event-time sensitivities are a later step); projection; function
