@@ -42,7 +42,10 @@ def solution_dataset(solution):
         _add(data, [(f"{dim}_t", record.t)], f"times of event {name!r}", dim=dim)
         _add(data, [(f"{dim}_state", np.hstack([record.q, record.qd]))], f"state at event {name!r}",
              dim=(dim, "state"))
-    if solution.events:
+    if solution.sensitivities is not None:
+        _add(data, [("sensitivities", solution.sensitivities)], "sensitivity ∂y(t)/∂w", dim=("t", "state", "wrt"))
+        coords["wrt"] = ("wrt", list(solution.sensitivity_names))
+    if solution.events or solution.sensitivities is not None:
         coords["state"] = ("state", state)
     taken = set(coords) | {d for dims, _, _ in data.values() for d in ((dims,) if isinstance(dims, str) else dims)}
     clashes = sorted(name for name in data if name in taken)

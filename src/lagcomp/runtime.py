@@ -735,6 +735,19 @@ class Model:
             request is refused with `OptionError` before anything runs; an
             adaptive run without `t_eval` stops with status -7 once its rows
             reach the limit, keeping them.
+        sensitivities : str or sequence of str, optional
+            Integrate the first-order variational equations with the state
+            (dop853, dopri5, tsit5, bs3): ∂y(t)/∂w for the columns w named by
+            "q0" (every coordinate's initial value), "qd0" (every velocity's),
+            "params" (every parameter), a state name (``theta1``,
+            ``theta1_dot``), a parameter name, or ``"q0:theta1"``-style names
+            as `Solution.sensitivity_names` gives them.  Results in
+            `Solution.sensitivities`, shape (m, 2n, k).  The step-size control
+            covers the state only (``sensitivity_control="state"``, the
+            default: the plain run's steps) or both (``"both"``).  Refused for
+            other methods, constrained models (no Jacobian kernel yet), located
+            events (pass ``events=False``) and function inputs; see
+            `lagcomp.integrate.sensitivities`.
         """
         from lagcomp.integrate.options import known_options
         from lagcomp.integrate.simulate import simulate

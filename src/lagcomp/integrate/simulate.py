@@ -12,6 +12,7 @@ bounded by what is kept: every saved row (`save_every`, `t_eval`) or, with
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import math
 import time
@@ -21,6 +22,7 @@ import numpy as np
 
 from lagcomp.animation_bodies import BodyGeometry
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
+from lagcomp.integrate import sensitivities as sens
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.dae import dae_state, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.run_state import STEP, RunState
@@ -102,18 +104,24 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
              atol=None, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
              events=None, record="trajectory", progress=None, throw=False, max_residual=None,
-             memory_limit=MEMORY_LIMIT, inputs=None) -> Solution:
+             memory_limit=MEMORY_LIMIT, inputs=None, sensitivities=None, sensitivity_control="state") -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
+    columns = None if sensitivities is None else sens.columns(model, sensitivities)
+    k_columns = 0 if columns is None else columns.k
+    scale = sens.scale_for(sensitivity_control)
     options = run_options(model, t_span, method=method, dt=dt, rtol=rtol, atol=atol, t_eval=t_eval,
                           save_every=save_every, first_step=first_step, max_step=max_step, max_steps=max_steps,
                           implicit_solver=implicit_solver, events=events, projection=projection,
                           memory_limit=memory_limit,
-                          check_rows=_memory_check(model, memory_limit) if record == "trajectory" else None)
+                          check_rows=_memory_check(model, memory_limit, k_columns) if record == "trajectory" else None)
     if record not in RECORD_MODES:
         raise OptionError(f"`record` must be one of {RECORD_MODES}, got {record!r}.")
     m, t0, t1, t_eval = options.method, options.t0, options.t1, options.t_eval
     p = model.parameter_vector(params, baumgarte, inputs, (t0, t1))
+    given = model
     model = driven(model, inputs, p, m)  # function inputs: kernels that write their values into p first
+    if columns is not None:
+        sens.check(model, m, options, columns, given)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     if max_residual is not None and not m.checks_residual:
         raise OptionError(f"`max_residual` stops a run whose constraint residual drifts past it; `{m.name}` does not "
@@ -131,33 +139,52 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     else:
         state, differential = RunState(y0, t0), y0.size
     run_args = (options.projecting, residual_max)
+    kernels, p_run = model.kernels, p
+    if columns is not None:  # the variational equations ride along: an augmented state, rhs and p
+        kernels = sens.sensitivity_kernels(model.kernels, y0.size, len(model.parameters), columns, scale)
+        state, p_run = RunState(sens.initial_state(y0, columns, scale), t0), sens.run_parameters(p, model, columns)
+        differential = width = state.y.size
+        rtol, atol = sens.driver_tolerances(options.rtol, options.atol, columns, scale)
+        options = dataclasses.replace(options, rtol=rtol, atol=atol)
     if options.adaptive:
-        advance, rows = _adaptive_driver(model.kernels, state, p, run_args, options, differential)
+        advance, rows = _adaptive_driver(kernels, state, p_run, run_args, options, differential)
     else:
         advance, rows = _fixed_step_driver(model.kernels, state, p, run_args, options)
 
     recorder = Recorder(model, p, record, progress)
+    if columns is not None:
+        recorder = sens.SensitivityRecorder(recorder, y0.size, columns.k, scale)
     if t_eval is None or t_eval[0] == t0:
-        recorder.add(np.array([t0]), y0[None, :])
+        recorder.add(np.array([t0]), state.y[None, :width] if columns is not None else y0[None, :])
     n_events = len(model.events)
     event_parts: list[tuple] = []
     chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
     first = _numba_stage(model, m, progress)
-    max_rows = options.memory_limit // run_bytes(1, model.n, model.k) if record == "trajectory" else math.inf
+    max_rows = (options.memory_limit // _row_bytes(model, k_columns) if record == "trajectory" else math.inf)
+    rate_key = m.name if columns is None else (m.name, columns.k)  # (a sensitivity run's steps cost more)
     status = _run(advance, state, t1, (chunk, max_rows, width), recorder, n_events, event_parts, progress, first,
-                  (_STEP_RATES.setdefault(model, {}), m.name))
+                  (_STEP_RATES.setdefault(model, {}), rate_key))
     if status == Status.RHS_FAILED and state.nsteps == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
         recorder.add(np.array([state.t]), state.y[None, :width])  # keep the last good state
     run = dict(method=m.name, status=status, state=state, projected=projected,
                residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
+    if columns is not None:
+        run.update(sensitivities=recorder.sensitivities(), sensitivity_names=columns.names)
+        recorder = recorder.recorder
     return _solution(model, p, recorder, run, throw)
 
 
-def _memory_check(model, memory_limit):
+def _row_bytes(model, k_columns: int) -> int:
+    """Peak bytes of one kept row (`memory.run_bytes`), with `k_columns` sensitivity columns of the state
+    (kept while the chunks are joined, then reshaped into `Solution.sensitivities`: twice)."""
+    return run_bytes(1, model.n, model.k) + 16 * model.state_size * k_columns
+
+
+def _memory_check(model, memory_limit, k_columns: int = 0):
     """`run_options`' `check_rows` for a run keeping every saved row: refuse, before it starts, a run whose
-    rows would exceed `memory_limit` (see `memory.run_bytes`).
+    rows would exceed `memory_limit` (see `memory.run_bytes`; `_row_bytes` with `k_columns` sensitivities).
 
     The rows are known up front for `t_eval` (its size: an array of 10⁹ times is refused before it is
     copied) and for fixed-step methods (steps / save_every); an adaptive run without `t_eval` saves
@@ -165,7 +192,7 @@ def _memory_check(model, memory_limit):
     """
     def check_rows(rows: int | None, where: str) -> None:
         if rows is not None:
-            check_memory(run_bytes(rows, model.n, model.k), memory_limit, "The run's saved rows", where,
+            check_memory(rows * _row_bytes(model, k_columns), memory_limit, "The run's saved rows", where,
                          "save fewer rows (`save_every=K` keeps every K-th step; pass fewer `t_eval` points), "
                          "keep only the first and last rows and running reductions (`record=\"summary\"`)")
     return check_rows
@@ -343,6 +370,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         reactions=reactions, constraint_residual=max(run["residual_max"], residual),
         projected_initial_state=ys[0].copy() if run["projected"] else None,
         events=run["events"], model_name=model.name, geometry=BodyGeometry.of(model, p),
+        sensitivities=run.get("sensitivities"), sensitivity_names=run.get("sensitivity_names", ()),
     )
     # simulate -> Model.simulate -> the user's call
     warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4)

@@ -90,6 +90,14 @@ class Solution:
     geometry : lagcomp.animation_bodies.BodyGeometry or None
         The model's ``geometry`` kernel with the run's parameters, which `animate` draws the
         bodies with (None for a Solution built by hand; a pickled one keeps no kernel).
+    sensitivities : ndarray, shape (m, N, k), or None
+        With ``simulate(..., sensitivities=...)``: ∂y(t)/∂w at each saved time for the k
+        columns w named by `sensitivity_names` (initial-state components and parameters);
+        rows of axis 1 are the state components of `state_names` (N = 2n, or n + n_u for
+        a Kane model).  None without.  See `lagcomp.integrate.sensitivities`.
+    sensitivity_names : tuple of str
+        The columns of `sensitivities`: ``"q0:<coordinate>"``, ``"qd0:<state name>"`` (a
+        velocity's ``<coordinate>_dot``, or a Kane model's speed) and ``"p:<parameter>"``.
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
@@ -125,6 +133,8 @@ class Solution:
     nlu: int = 0
     model_name: str = ""
     geometry: object = field(default=None, repr=False, compare=False)
+    sensitivities: np.ndarray | None = field(default=None, repr=False)
+    sensitivity_names: tuple = ()
 
     @property
     def success(self) -> bool:
@@ -146,6 +156,13 @@ class Solution:
     @property
     def summary(self) -> RunSummary:
         return self.observed.values()[3]
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the columns of `y` (and the rows of each `sensitivities` matrix): the coordinates, then
+        ``<coordinate>_dot`` (a Kane model: its speeds)."""
+        velocities = self.speeds if self.u is not None else tuple(f"{c}_dot" for c in self.coordinates)
+        return tuple(self.coordinates) + tuple(velocities)
 
     @property
     def y(self) -> np.ndarray:
@@ -185,6 +202,8 @@ class Solution:
             **{f"reaction_{name}": values for name, values in self.reactions.items()},
             **{f"event_{name}_{part}": getattr(record, part)
                for name, record in self.events.items() for part in ("t", "q", "qd")},
+            **({"sensitivities": self.sensitivities, "sensitivity_names": np.asarray(self.sensitivity_names)}
+               if self.sensitivities is not None else {}),
         }
 
     def to_xarray(self):
@@ -197,6 +216,8 @@ class Solution:
         name).  Each variable's ``attrs["role"]`` says which it is.  Each event ``<name>`` has its own
         dimension ``event_<name>`` (its occurrences): ``event_<name>_t`` and ``event_<name>_state``
         (occurrences × ``state``, the coordinates then the velocities, or the speeds of a Kane model).
+        A run with sensitivities adds ``sensitivities`` with dims (``t``, ``state``, ``wrt``), ``wrt`` the
+        `sensitivity_names`.
 
         ``attrs``: ``model`` (its name), ``method``, ``status``, ``message``, ``nfev``, ``nsteps``,
         ``nrejected``, ``njev``, ``nlu``, ``constraint_residual``, ``t_failure`` (failed runs only),

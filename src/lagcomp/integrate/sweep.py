@@ -246,8 +246,11 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
           method="dop853", dt=None, rtol=None, atol=None, t_eval=None, save_every=1, max_step=math.inf,
           max_steps=100_000_000, implicit_solver=None, events=None, event_cap=16, output=(), workers=None,
           client=None, batched=False, progress=None, memory_limit=MEMORY_LIMIT, projection=None,
-          baumgarte=(0.0, 0.0), project_initial=False, inputs=None) -> Sweep:
+          baumgarte=(0.0, 0.0), project_initial=False, inputs=None, sensitivities=None) -> Sweep:
     """Integrate every point of `grid`; see `lagcomp.Model.sweep` for the arguments."""
+    if sensitivities is not None:
+        raise OptionError("`sensitivities` are integrated by `simulate`, one trajectory at a time; a sweep does not "
+                          "integrate them yet: call model.simulate(..., sensitivities=...) per point.")
     try:
         output = (output,) if isinstance(output, str) else tuple(output)
     except TypeError:

@@ -1,0 +1,82 @@
+"""What forward sensitivities cost: a run with k columns against a plain run, in one process.
+
+    python -m bench.bench_sensitivities [--t-end 1000] [--rtol 1e-10] [--repeats 7]
+
+For each model (the double pendulum, n = 2; a 5-link pendulum, n = 5, both from a regular state) and
+k = 1 (∂y/∂θ₁(0)) and k = 2n (every initial-state component), and each `sensitivity_control` ("state":
+the plain run's steps; "both": the norm covers the sensitivities too, more steps): DOP853 at rtol = atol,
+the median over `--repeats` interleaved pairs of (time with k columns) / (time of the plain run), and the
+same per accepted step.
+Issue #22's target is a ratio ≤ 1.2 (1 + k).  Each evaluation of the augmented rhs
+(`lagcomp.integrate.sensitivities.augmented_rhs`) calls ``rhs``, then ``rhs_jacobian`` (which calls
+``rhs`` again inside and allocates its work arrays), then forms J S.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+
+def _timed(run) -> tuple[object, float]:
+    start = time.perf_counter()
+    sol = run()
+    return sol, time.perf_counter() - start
+
+
+def _runs(model, q0, t_end: float, rtol: float, columns, control):
+    """The plain run and the run with sensitivity `columns` under `control`, as functions of no argument."""
+    options = dict(rtol=rtol, atol=rtol, save_every=1_000_000, progress=False)
+
+    def plain():
+        return model.simulate((0.0, t_end), q0, **options)
+
+    def with_columns():
+        return model.simulate((0.0, t_end), q0, sensitivities=columns, sensitivity_control=control, **options)
+    return plain, with_columns
+
+
+def measure(t_end: float = 1000.0, rtol: float = 1e-10, repeats: int = 7, cache_dir=None) -> list[dict]:
+    import lagcomp as lc
+    from lagcomp import examples
+
+    rows = []
+    for name, kwargs in (("double_pendulum", {}), ("n_link_pendulum", {"n": 5})):
+        model = lc.compile(examples.get(name, **kwargs), cache_dir=cache_dir)
+        q0 = np.linspace(0.5, 0.2, model.n)
+        for columns, control in ((model.coordinates[0], "state"), (("q0", "qd0"), "state"),
+                                 (model.coordinates[0], "both"), (("q0", "qd0"), "both")):
+            plain, with_columns = _runs(model, q0, t_end, rtol, columns, control)
+            plain(), with_columns()  # numba compiles (or loads) the kernels and the augmented rhs here
+            ratios, step_ratios = [], []
+            for _ in range(repeats):  # interleaved, so that a slow moment of the machine hits both
+                base, base_time = _timed(plain)
+                sol, sol_time = _timed(with_columns)
+                ratios.append(sol_time / base_time)
+                step_ratios.append((sol_time / sol.nsteps) / (base_time / base.nsteps))
+            k = sol.sensitivities.shape[2]
+            rows.append(dict(model=model.name, n=model.n, k=k, control=control, steps=sol.nsteps,
+                             plain_steps=base.nsteps, ratio=float(np.median(ratios)),
+                             per_step=float(np.median(step_ratios)), target=1.2 * (1 + k), plain_ms=1e3 * base_time))
+    return rows
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--t-end", type=float, default=1000.0)
+    parser.add_argument("--rtol", type=float, default=1e-10)
+    parser.add_argument("--repeats", type=int, default=7)
+    args = parser.parse_args(argv)
+    print(f"DOP853, rtol = atol = {args.rtol:g}, t in [0, {args.t_end:g}]; time with k columns / plain run "
+          f"(median of {args.repeats})")
+    print(f"{'model':18} {'k':>3} {'control':>7} {'steps':>7} {'plain':>7} {'plain ms':>9} {'time ×':>7} "
+          f"{'per step ×':>11} {'target':>7}")
+    for r in measure(args.t_end, args.rtol, args.repeats):
+        print(f"{r['model']:18} {r['k']:3d} {r['control']:>7} {r['steps']:7d} {r['plain_steps']:7d} "
+              f"{r['plain_ms']:9.1f} {r['ratio']:7.2f} {r['per_step']:11.2f} {r['target']:7.1f}")
+
+
+if __name__ == "__main__":
+    main()

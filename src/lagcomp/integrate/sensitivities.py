@@ -1,0 +1,302 @@
+r"""Forward sensitivities: ``simulate(..., sensitivities=...)`` integrates the variational equations with the state.
+
+For y' = f(t, y, p) with y (N,), the sensitivities S = ∂y(t)/∂(y0_c, p_j) of k chosen columns obey
+
+    S' = J(t, y) S (+ ∂f/∂p_j in the column of parameter p_j),   S(0) = e_c (0 for a parameter),
+
+J = ∂f/∂y the model's exact ``rhs_jacobian`` kernel (emitted from the symbolic equations) and ∂f/∂p its
+``rhs_parameter_jacobian``.  The run integrates the augmented state (y, S[:, 0], ..., S[:, k-1]) of
+N (1 + k) components with the library's embedded Runge-Kutta driver (dop853, dopri5, tsit5, bs3), which
+takes as its ``rhs`` a small numba function (`augmented_rhs`) evaluating f and J S: a closure over the
+model's kernels, compiled at the first run that needs it and kept for the process (`_AUGMENTED`), as
+`lagcomp.integrate.function_inputs` does for its wrappers.  The model's kernels and the driver are not
+compiled again.  J (N, N) and ∂f/∂p (N, P) are written into work space at the end of the run's p (the
+kernels read p only up to their parameters and input tables), so a call allocates nothing.
+
+Error control (``sensitivity_control``).  The embedded driver's error norm runs over every component of the
+state it is given, with one scalar ``rtol``/``atol``, and restricting it to the first N components would
+change the driver's signature (an argument every driver call and sweep loop passes).  Both controls come
+without that:
+
+* ``"both"``: the norm covers the state and the sensitivities together (CVODES' ``errconS = True``); the
+  steps then differ from a plain run's, the state within the tolerance.
+* ``"state"`` (the default): the sensitivity columns are integrated scaled by `STATE_ONLY_SCALE` = 2⁻³⁰⁰,
+  exactly (a power of two: the linear variational equations commute with it, and every Runge-Kutta sum is
+  scaled without rounding), so that their scaled errors ε e_S / atol are ~1e-90 of the threshold (atol > 0
+  always) and the norm sees the state only; ``rtol`` and ``atol`` are divided by sqrt(1 + k), which
+  undoes the norms' division by the component count N (1 + k) instead of N (the RMS norm of DOPRI5, Tsit5,
+  BS3 and DOP853's combined one alike).  The driver then chooses a plain run's steps (up to the rounding
+  of that division), and the state columns match a plain run's to rounding.  The sensitivities are
+  unscaled exactly on output.  An atol below ~1e-80 times the sensitivities' errors would let the norm
+  see them again (as with "both"); sensitivities below ~1e-218 lose precision as subnormal numbers.
+
+Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
+Lagrange models, today); located events (event-time sensitivities are a later step); projection; function
+inputs (their ∂u/∂y is unknown); parameter columns when the model has no ``rhs_parameter_jacobian``; unknown
+names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from lagcomp.errors import OptionError
+
+#: The groups of columns `sensitivities` may name: every coordinate's initial value, every velocity's
+#: (a Kane model's speeds: also "u0"), every parameter.
+GROUPS = ("q0", "qd0", "params")
+#: The driver that integrates sensitivities (every embedded pair runs on it).
+EMBEDDED_DRIVER = "lagcomp.integrate.drivers.embedded:embedded_run"
+#: What the step-size control covers (see "Error control" above).
+CONTROLS = ("state", "both")
+#: The exact scale of the sensitivity columns under ``sensitivity_control="state"``.
+STATE_ONLY_SCALE = 2.0 ** -300
+
+
+@dataclass(frozen=True)
+class Columns:
+    """The sensitivity columns of a run: initial-state components (indices into y), then parameters (indices
+    into `Model.parameters`), and their names (``"q0:theta1"``, ``"qd0:theta1"``, ``"p:m"``)."""
+
+    state: tuple[int, ...]
+    parameters: tuple[int, ...]
+    names: tuple[str, ...]
+
+    @property
+    def k(self) -> int:
+        return len(self.state) + len(self.parameters)
+
+
+def columns(model, requested) -> Columns:
+    """The `Columns` `requested` names: a group of `GROUPS` (or "u0"), a state name (`Model.state_names`:
+    ``theta1``, ``theta1_dot``), a parameter name, or a column name as `Solution.sensitivity_names` gives
+    it (``"q0:theta1"``); a string alone or a sequence of them.  Initial-state columns come first, in state
+    order, then parameters in `Model.parameters` order, each once."""
+    if isinstance(requested, str):
+        requested = (requested,)
+    try:
+        requested = tuple(requested)
+    except TypeError:
+        raise OptionError(f"`sensitivities` must be a name or a sequence of names ({', '.join(GROUPS)}, state or "
+                          f"parameter names), got {requested!r}.") from None
+    n, size = model.n, model.state_size
+    state_names = tuple(model.state_names)
+    velocity_group = "qd0"
+    label = {i: f"{'q0' if i < n else velocity_group}:{state_names[i]}" for i in range(size)}
+    by_name = {"q0": range(n), "qd0": range(n, size), "u0": range(n, size)}
+    for i in range(size):
+        by_name[state_names[i]] = (i,)
+        by_name[label[i]] = (i,)
+    parameters = {"params": range(len(model.parameters))}
+    for j, name in enumerate(model.parameters):
+        parameters[name] = parameters[f"p:{name}"] = (j,)
+    state, chosen = set(), set()
+    for name in requested:
+        if not isinstance(name, str) or (name not in by_name and name not in parameters):
+            raise OptionError(f"Unknown sensitivity {name!r}: name {', '.join(GROUPS)}, a state component "
+                              f"{list(state_names)} or a parameter {list(model.parameters)}.")
+        (state if name in by_name else chosen).update(by_name.get(name, parameters.get(name)))
+    state, chosen = tuple(sorted(state)), tuple(sorted(chosen))
+    if not state and not chosen:
+        raise OptionError("`sensitivities` names no column: name q0, qd0, params, state components or parameters.")
+    names = tuple(label[i] for i in state) + tuple(f"p:{model.parameters[j]}" for j in chosen)
+    return Columns(state, chosen, names)
+
+
+def check(model, method, options, cols: Columns, original_model) -> None:
+    """Refuse what sensitivities cannot run with (see the module docstring); `original_model` is the model
+    before `function_inputs.driven` wrapped it (another object when the inputs hold numba functions)."""
+    if method.driver != EMBEDDED_DRIVER:
+        raise OptionError(f"`sensitivities` are integrated by the embedded Runge-Kutta pairs (dop853, dopri5, "
+                          f"tsit5, bs3); `{method.name}` does not integrate them yet: use dop853.")
+    refused = getattr(model.kernels, "RHS_JACOBIAN_REFUSED", None)
+    if refused is not None:
+        raise OptionError(f"`sensitivities` need the Jacobian ∂f/∂y of {model.name!r}, which has no Jacobian "
+                          f"kernel: its equations hold {refused}.")
+    located = [e.name for e, action in zip(model.events, options.actions.tolist(), strict=True) if action]
+    if located:
+        raise OptionError(f"`sensitivities` with events: {model.name!r} would locate its events {located}, whose "
+                          "times' sensitivities are not computed yet; pass events=False.")
+    if options.projecting:
+        raise OptionError("`sensitivities` with `projection=True`: the projection would move the state and not "
+                          "its sensitivities; leave `projection` unset.")
+    if model is not original_model:
+        raise OptionError("`sensitivities` with inputs given as numba functions: their derivatives ∂u/∂y are "
+                          "unknown, so the sensitivities would miss them; give the inputs as tables or laws.")
+    refused = getattr(model.kernels, "RHS_PARAMETER_JACOBIAN_REFUSED", None)
+    if cols.parameters and refused is not None:
+        raise OptionError(f"Parameter sensitivities {list(cols.names[len(cols.state):])} need ∂f/∂p of "
+                          f"{model.name!r}, which has no such kernel: its equations hold {refused}.")
+    if cols.parameters and not hasattr(model.kernels, "rhs_parameter_jacobian"):
+        raise OptionError(f"Parameter sensitivities {list(cols.names[len(cols.state):])} "
+                          f"need the kernel rhs_parameter_jacobian (∂f/∂p), which the module of {model.name!r} "
+                          "does not have: compile it again with this lagcomp, or ask for initial-state ones (q0, qd0).")
+
+
+def scale_for(control) -> float:
+    """The factor the sensitivity columns are integrated with under `control` (one of `CONTROLS`)."""
+    if control not in CONTROLS:
+        raise OptionError(f"`sensitivity_control` must be one of {CONTROLS}, got {control!r}.")
+    return STATE_ONLY_SCALE if control == "state" else 1.0
+
+
+def driver_tolerances(rtol: float, atol: float, cols: Columns, scale: float) -> tuple[float, float]:
+    """The (rtol, atol) the driver gets: divided by sqrt(1 + k) for state-only control (see the docstring)."""
+    if scale == 1.0:
+        return rtol, atol
+    shrink = float(np.sqrt(1.0 + cols.k))
+    return rtol / shrink, atol / shrink
+
+
+def initial_state(y0: np.ndarray, cols: Columns, scale: float) -> np.ndarray:
+    """(y0, scale S(0)) flat, N (1 + k): unit columns for the initial-state components, zero for parameters."""
+    n = y0.size
+    augmented = np.zeros(n * (1 + cols.k))
+    augmented[:n] = y0
+    for c, i in enumerate(cols.state):
+        augmented[n * (1 + c) + i] = scale
+    return augmented
+
+
+def run_parameters(p: np.ndarray, model, cols: Columns) -> np.ndarray:
+    """p followed by the work space `augmented_rhs` writes J and ∂f/∂p into (see `work_size`)."""
+    return np.concatenate([p, np.zeros(work_size(model.state_size, len(model.parameters), cols))])
+
+
+def work_size(n: int, n_parameters: int, cols: Columns) -> int:
+    """Floats at the end of p that `augmented_rhs` uses: J (n, n) last, before it ∂f/∂p (n, P) if asked."""
+    return n * n + (n * n_parameters if cols.parameters else 0)
+
+
+class SensitivityKernels:
+    """The generated `module`'s kernels with ``rhs`` replaced by `augmented_rhs` for `cols`; the others
+    (``project``, ``constraint_residual``, ``event_values``: no-ops here, or reading y's first N components)
+    as they are.  One instance per module and columns (`sensitivity_kernels`), so that `Method.bound_driver`
+    binds the driver once."""
+
+    def __init__(self, module, rhs):
+        self._module, self.rhs = module, rhs
+
+    def __getattr__(self, name):
+        return getattr(self._module, name)
+
+
+#: {(generated module, n, parameter columns, scale): SensitivityKernels}, for the process.
+_AUGMENTED: dict = {}
+_LOCK = threading.Lock()
+
+
+def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
+    """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (its closure compiled at
+    first use)."""
+    key = (module, n, cols.parameters, scale)  # (the initial-state columns: as many as y's size says)
+    with _LOCK:
+        if key not in _AUGMENTED:
+            parameter_jacobian = getattr(module, "rhs_parameter_jacobian", None) if cols.parameters else None
+            rhs = augmented_rhs(module.rhs, module.rhs_jacobian, parameter_jacobian, n, n_parameters,
+                                cols.parameters, scale)
+            _AUGMENTED[key] = SensitivityKernels(module, rhs)
+        return _AUGMENTED[key]
+
+
+def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, n_parameters: int, parameter_columns: tuple[int, ...],
+                  scale: float):
+    """``rhs(t, y, p, out) -> int`` of the augmented state y = (x, S[:, 0], ..., S[:, k-1]) (column blocks of
+    n, each times `scale`): out = (f(x), J S[:, c] + scale ∂f/∂p_j for the parameter columns).  Returns the
+    kernels' status (0, or the singular pivot).  J sits in the last n² floats of p, ∂f/∂p (n, n_parameters)
+    before it.  The parameter columns are the last; the initial-state ones before them are as many as y's
+    size says, so that one closure serves every choice of them (it compiles once per module, in ~0.8 s)."""
+    k_parameters = len(parameter_columns)
+    columns_p = np.array(parameter_columns, dtype=np.int64)
+    jacobian_size = n * n
+    if parameter_jacobian is None:
+        @njit(error_model="numpy", nogil=True)
+        def state_rhs(t, y, p, out):
+            status = rhs(t, y[:n], p, out[:n])
+            if status != 0:
+                return status
+            end = p.shape[0]
+            J = p[end - jacobian_size:].reshape((n, n))
+            status = jacobian(t, y[:n], p, J)
+            if status != 0:
+                return status
+            _multiply(J, y, out, n, y.shape[0] // n - 1)
+            return 0
+        return state_rhs
+
+    parameter_size = n * n_parameters
+
+    @njit(error_model="numpy", nogil=True)
+    def full_rhs(t, y, p, out):
+        status = rhs(t, y[:n], p, out[:n])
+        if status != 0:
+            return status
+        end = p.shape[0]
+        J = p[end - jacobian_size:].reshape((n, n))
+        status = jacobian(t, y[:n], p, J)
+        if status != 0:
+            return status
+        k = y.shape[0] // n - 1
+        _multiply(J, y, out, n, k)
+        Jp = p[end - jacobian_size - parameter_size:end - jacobian_size].reshape((n, n_parameters))
+        status = parameter_jacobian(t, y[:n], p, Jp)
+        if status != 0:
+            return status
+        for c in range(k_parameters):
+            base = n * (1 + k - k_parameters + c)
+            j = columns_p[c]
+            for i in range(n):
+                out[base + i] += scale * Jp[i, j]
+        return 0
+    return full_rhs
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _multiply(J, y, out, n, k):
+    """out[n (1 + c) + i] = sum_j J[i, j] y[n (1 + c) + j] for the k columns c: J S, column block by block."""
+    for c in range(k):
+        base = n * (1 + c)
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += J[i, j] * y[base + j]
+            out[base + i] = acc
+
+
+class SensitivityRecorder:
+    """A `lagcomp.integrate.recording.Recorder` of the state (the first `n` columns of the augmented rows),
+    keeping the sensitivity columns beside it: every row, or with ``record="summary"`` the first and last
+    (the rows the summary keeps of the state)."""
+
+    def __init__(self, recorder, n: int, k: int, scale: float):
+        self.recorder, self.n, self.k, self.unscale = recorder, n, k, 1.0 / scale
+        self.parts: list[np.ndarray] = []
+
+    def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
+        if ts.shape[0] == 0:
+            return
+        self.recorder.add(ts, ys[:, :self.n])
+        rows = ys[:, self.n:].copy()
+        if self.recorder.keep:
+            self.parts.append(rows)
+        else:  # the first row ever, and the last so far
+            self.parts = [self.parts[0] if self.parts else rows[:1], rows[-1:]]
+
+    @property
+    def rows(self) -> int:
+        return self.recorder.rows
+
+    @property
+    def last(self):
+        return self.recorder.last
+
+    def sensitivities(self) -> np.ndarray:
+        """(m, N, k) along the rows the state's recorder returns."""
+        rows = np.concatenate(self.parts) * self.unscale     # (exact: a power of two)
+        if not self.recorder.keep and self.recorder.rows == 1:
+            rows = rows[:1]
+        return rows.reshape(rows.shape[0], self.k, self.n).transpose(0, 2, 1).copy()

@@ -1,0 +1,220 @@
+"""Forward sensitivities through `simulate(..., sensitivities=...)` (`lagcomp.integrate.sensitivities`).
+
+Oracles: the closed form of a linear oscillator, and central finite differences of high-precision runs of
+the double pendulum with Richardson extrapolation (issue #22's target: 1e-8 relative at t = 10).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+import sympy as sp
+
+import lagcomp as lc
+from lagcomp.model import t
+
+x = lc.coordinates("x")[0]
+m, k = sp.symbols("m k", positive=True)
+OMEGA = 2.0                     # sqrt(k / m) with k = 4, m = 1
+#: A regular (not chaotic) motion of the double pendulum: finite differences converge there.
+PENDULUM_STATE = np.array([0.5, 0.3, 0.0, 0.0])
+
+
+@pytest.fixture(scope="module")
+def oscillator(cache_dir):
+    system = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="sensitivity_oscillator",
+                       defaults={"m": 1.0, "k": OMEGA**2}, q0=(1.0,), qd0=(0.5,))
+    return lc.compile(system, cache_dir=cache_dir)
+
+
+@pytest.fixture(scope="module")
+def pendulum(compiled):
+    return compiled("double_pendulum")
+
+
+def _pendulum_run(model, y0, rtol, **options):
+    return model.simulate((0.0, 10.0), y0[:2], y0[2:], rtol=rtol, atol=rtol, progress=False, **options)
+
+
+def test_oscillator_matches_the_closed_form(oscillator):
+    sol = oscillator.simulate((0.0, 10.0), rtol=1e-12, atol=1e-12, sensitivities=("q0", "qd0"), progress=False)
+    assert sol.success and sol.sensitivity_names == ("q0:x", "qd0:x_dot")
+    assert sol.sensitivities.shape == (sol.t.size, 2, 2) and sol.q.shape == (sol.t.size, 1)
+    c, s = np.cos(OMEGA * sol.t), np.sin(OMEGA * sol.t)
+    exact = np.stack([np.stack([c, s / OMEGA], axis=-1), np.stack([-OMEGA * s, c], axis=-1)], axis=1)
+    assert np.abs(sol.sensitivities - exact).max() < 1e-10
+    assert np.array_equal(sol.sensitivities[0], np.eye(2))
+
+
+def test_double_pendulum_against_richardson_extrapolated_differences(pendulum):
+    def end(y0):
+        return _pendulum_run(pendulum, y0, 1e-13).y[-1]
+
+    def differences(h):
+        columns = []
+        for j in range(4):
+            e = np.zeros(4)
+            e[j] = h
+            columns.append((end(PENDULUM_STATE + e) - end(PENDULUM_STATE - e)) / (2 * h))
+        return np.stack(columns, axis=1)
+
+    reference = (4 * differences(5e-4) - differences(1e-3)) / 3
+    sol = _pendulum_run(pendulum, PENDULUM_STATE, 1e-12, sensitivities=("q0", "qd0"))
+    relative = np.abs(sol.sensitivities[-1] - reference).max() / np.abs(reference).max()
+    assert relative < 1e-8, relative           # measured 1.2e-10 (1.0e-10 with sensitivity_control="both")
+
+
+def test_state_control_takes_the_plain_runs_steps(pendulum):
+    plain = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10)
+    sol = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10, sensitivities="q0")
+    assert sol.q.shape == plain.q.shape and sol.qd.shape == plain.qd.shape and sol.sensitivities.shape[1:] == (4, 2)
+    assert (sol.nsteps, sol.nrejected) == (plain.nsteps, plain.nrejected)
+    # the same steps up to the rounding of the tolerances' division (the step sizes differ at ~1e-7 relative)
+    assert np.abs(sol.t - plain.t).max() < 1e-6 and np.abs(sol.y[-1] - plain.y[-1]).max() < 1e-12
+
+
+def test_both_control_stays_within_the_tolerance_of_a_plain_run(pendulum):
+    plain = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10)
+    both = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10, sensitivities="q0", sensitivity_control="both")
+    state = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10, sensitivities="q0")
+    # the step control covers the sensitivities too: more steps, the same trajectory to the tolerance
+    assert both.nsteps > plain.nsteps
+    assert np.abs(both.y[-1] - plain.y[-1]).max() < 1e-8
+    assert np.abs(both.sensitivities[-1] - state.sensitivities[-1]).max() < 1e-7 * np.abs(state.sensitivities).max()
+
+
+def test_names_choose_columns_and_t_eval_interpolates_them(pendulum):
+    full = _pendulum_run(pendulum, PENDULUM_STATE, 1e-12, sensitivities=("q0", "qd0"), t_eval=[2.5, 10.0])
+    one = _pendulum_run(pendulum, PENDULUM_STATE, 1e-12, sensitivities=["theta2_dot", "q0:theta1"],
+                        t_eval=[2.5, 10.0])
+    assert one.sensitivity_names == ("q0:theta1", "qd0:theta2_dot") and np.array_equal(one.t, [2.5, 10.0])
+    scale = np.abs(full.sensitivities).max()
+    assert np.abs(one.sensitivities - full.sensitivities[:, :, [0, 3]]).max() < 1e-9 * scale
+
+
+def test_summary_runs_keep_the_first_and_last_rows(pendulum):
+    full = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10, sensitivities="qd0")
+    summary = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10, sensitivities="qd0", record="summary")
+    assert summary.sensitivities.shape == (2, 4, 2)
+    assert np.array_equal(summary.sensitivities, full.sensitivities[[0, -1]])
+
+
+def test_xarray_names_the_axes(pendulum):
+    pytest.importorskip("xarray")
+    sol = _pendulum_run(pendulum, PENDULUM_STATE, 1e-8, sensitivities="q0")
+    data = sol.to_xarray()["sensitivities"]
+    assert data.dims == ("t", "state", "wrt")
+    assert list(data["wrt"].values) == ["q0:theta1", "q0:theta2"]
+    assert list(data["state"].values) == list(sol.state_names) == ["theta1", "theta2", "theta1_dot", "theta2_dot"]
+    assert np.array_equal(data.values, sol.sensitivities)
+
+
+@pytest.mark.parametrize(("options", "culprit"), [
+    (dict(method="rk4", dt=0.01), "`rk4`"),
+    (dict(method="taylor"), "`taylor`"),
+    (dict(method="radau"), "`radau`"),
+    (dict(sensitivities="nonsense"), "'nonsense'"),
+    (dict(sensitivities=()), "names no column"),
+    (dict(sensitivity_control="all"), "'all'"),
+])
+def test_refusals(pendulum, options, culprit):
+    options = {"sensitivities": "q0", **options}
+    with pytest.raises(lc.OptionError) as info:
+        pendulum.simulate((0.0, 1.0), progress=False, **options)
+    assert culprit in str(info.value)
+
+
+def test_refusals_of_models_and_runs(compiled, oscillator, cache_dir):
+    with pytest.raises(lc.OptionError, match="no Jacobian kernel"):
+        compiled("spherical_pendulum_cartesian").simulate((0.0, 1.0), sensitivities="q0", progress=False)
+    with pytest.raises(lc.OptionError, match="events=False"):
+        compiled("henon_heiles").simulate((0.0, 1.0), sensitivities="q0", progress=False)
+    assert compiled("henon_heiles").simulate((0.0, 1.0), sensitivities="q0", events=False, progress=False).success
+    with pytest.raises(lc.OptionError, match="sweep does not"):
+        oscillator.sweep((0.0, 1.0), {"x": [0.0, 1.0]}, sensitivities="q0", progress=False)
+    pushed = lc.compile(lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, forces=[lc.Input("f")],
+                                  name="sensitivity_pushed", defaults={"m": 1.0, "k": 1.0}, q0=(1.0,)),
+                        cache_dir=cache_dir)
+    with pytest.raises(lc.OptionError, match="numba functions"):
+        pushed.simulate((0.0, 1.0), inputs={"f": numba.njit(lambda t, y, p: 0.0)}, sensitivities="q0",
+                        progress=False)
+
+
+def test_parameter_columns_need_the_parameter_jacobian_kernel(oscillator):
+    if hasattr(oscillator.kernels, "rhs_parameter_jacobian"):
+        pytest.skip("the module has rhs_parameter_jacobian: parameter columns run")
+    with pytest.raises(lc.OptionError, match="rhs_parameter_jacobian") as info:
+        oscillator.simulate((0.0, 1.0), sensitivities=("q0", "k"), progress=False)
+    assert "p:k" in str(info.value)
+
+
+def test_parameter_columns_match_the_closed_form(oscillator):
+    if not hasattr(oscillator.kernels, "rhs_parameter_jacobian"):
+        pytest.skip("the module has no rhs_parameter_jacobian (refused: the test above)")
+    sol = oscillator.simulate((0.0, 10.0), rtol=1e-12, atol=1e-12, sensitivities=("params", "q0"), progress=False)
+    assert sol.sensitivity_names == ("q0:x", "p:k", "p:m")
+    # x = x0 cos ωt + v0/ω sin ωt, ω = sqrt(k/m): ∂x/∂k = ∂x/∂ω / (2 m ω), ∂x/∂m = -(k/m) ∂x/∂k
+    x0, v0, tt = 1.0, 0.5, sol.t
+    c, s = np.cos(OMEGA * tt), np.sin(OMEGA * tt)
+    dx_domega = -x0 * tt * s + v0 * (tt * c / OMEGA - s / OMEGA**2)
+    dx_dk = dx_domega / (2 * OMEGA)
+    assert np.abs(sol.sensitivities[:, 0, 1] - dx_dk).max() < 1e-9
+    assert np.abs(sol.sensitivities[:, 0, 2] + OMEGA**2 * dx_dk).max() < 1e-9
+
+
+@numba.njit
+def _oscillator_parameter_jacobian(t, y, p, out):
+    """∂f/∂(k, m) of f = (v, -k x / m) (`Model.parameters` order), the interface of ``rhs_parameter_jacobian``."""
+    k_, m_ = p[0], p[1]
+    out[0, 0] = 0.0
+    out[0, 1] = 0.0
+    out[1, 0] = -y[0] / m_
+    out[1, 1] = k_ * y[0] / m_**2
+    return 0
+
+
+class _WithParameterJacobian:
+    """The oscillator as `simulate` sees it, its module holding a hand-written ``rhs_parameter_jacobian``
+    (the plumbing of parameter columns, before the compiler emits that kernel)."""
+
+    def __init__(self, model):
+        self._model = model
+        self.kernels = type("Kernels", (), {"__getattr__": lambda _, name: getattr(model.kernels, name),
+                                            "rhs_parameter_jacobian": staticmethod(_oscillator_parameter_jacobian)})()
+
+    def __getattr__(self, name):
+        return getattr(self._model, name)
+
+
+def test_parameter_columns_through_a_stand_in_kernel(oscillator):
+    from lagcomp.integrate.simulate import simulate
+
+    assert oscillator.parameters == ("k", "m")
+    sol = simulate(_WithParameterJacobian(oscillator), (0.0, 10.0), rtol=1e-12, atol=1e-12,
+                   sensitivities=("params", "qd0"), progress=False)
+    assert sol.sensitivity_names == ("qd0:x_dot", "p:k", "p:m")
+    x0, v0, tt = 1.0, 0.5, sol.t
+    c, s = np.cos(OMEGA * tt), np.sin(OMEGA * tt)
+    dx_dk = (-x0 * tt * s + v0 * (tt * c / OMEGA - s / OMEGA**2)) / (2 * OMEGA)
+    assert np.abs(sol.sensitivities[:, 0, 1] - dx_dk).max() < 1e-9
+    assert np.abs(sol.sensitivities[:, 0, 2] + OMEGA**2 * dx_dk).max() < 1e-9
+    assert np.abs(sol.sensitivities[:, 0, 0] - s / OMEGA).max() < 1e-10
+
+
+def test_kane_model_state_is_q_and_u(cache_dir):
+    import sympy.physics.mechanics as me
+
+    w = me.dynamicsymbols("w")
+    frame, point = me.ReferenceFrame("N"), me.Point("P")
+    point.set_vel(frame, w * frame.x)
+    km = me.KanesMethod(frame, [x], [w], kd_eqs=[x.diff(t) - w])
+    km.kanes_equations([me.Particle("p", point, m)], [(point, -k * x * frame.x)])
+    model = lc.compile(km, name="sensitivity_kane_oscillator", cache_dir=cache_dir,
+                       defaults={"m": 1.0, "k": OMEGA**2})
+    sol = model.simulate((0.0, 5.0), [1.0], [0.5], rtol=1e-12, atol=1e-12, sensitivities=("q0", "u0"),
+                         progress=False)
+    assert sol.sensitivity_names == ("q0:x", "qd0:w") and sol.state_names == ("x", "w")
+    c, s = np.cos(OMEGA * sol.t), np.sin(OMEGA * sol.t)
+    exact = np.stack([np.stack([c, s / OMEGA], axis=-1), np.stack([-OMEGA * s, c], axis=-1)], axis=1)
+    assert np.abs(sol.sensitivities - exact).max() < 1e-10
