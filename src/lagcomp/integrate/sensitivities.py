@@ -32,8 +32,8 @@ without that:
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
 Lagrange models, today); located events (event-time sensitivities are a later step); projection; function
-inputs (their ∂u/∂y is unknown); parameter columns when the model has no ``rhs_parameter_jacobian``; unknown
-names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
+inputs (their ∂u/∂y is unknown); parameter columns when the module's ``rhs_parameter_jacobian`` is a refusing stub
+(its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
 """
 
 from __future__ import annotations
@@ -131,10 +131,6 @@ def check(model, method, options, cols: Columns, original_model) -> None:
     if cols.parameters and refused is not None:
         raise OptionError(f"Parameter sensitivities {list(cols.names[len(cols.state):])} need ∂f/∂p of "
                           f"{model.name!r}, which has no such kernel: its equations hold {refused}.")
-    if cols.parameters and not hasattr(model.kernels, "rhs_parameter_jacobian"):
-        raise OptionError(f"Parameter sensitivities {list(cols.names[len(cols.state):])} "
-                          f"need the kernel rhs_parameter_jacobian (∂f/∂p), which the module of {model.name!r} "
-                          "does not have: compile it again with this lagcomp, or ask for initial-state ones (q0, qd0).")
 
 
 def scale_for(control) -> float:
@@ -196,7 +192,7 @@ def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale:
     key = (module, n, cols.parameters, scale)  # (the initial-state columns: as many as y's size says)
     with _LOCK:
         if key not in _AUGMENTED:
-            parameter_jacobian = getattr(module, "rhs_parameter_jacobian", None) if cols.parameters else None
+            parameter_jacobian = module.rhs_parameter_jacobian if cols.parameters else None
             rhs = augmented_rhs(module.rhs, module.rhs_jacobian, parameter_jacobian, n, n_parameters,
                                 cols.parameters, scale)
             _AUGMENTED[key] = SensitivityKernels(module, rhs)
