@@ -759,6 +759,52 @@ class Model:
         known_options(simulate, options, "Model.simulate")
         return simulate(self, t_span, q0, qd0, params, **options)
 
+    def fit(self, t=None, observations=None, params0: dict | None = None, **options):
+        """Fit parameters to measured trajectories by least squares with the exact Jacobian; a `FitResult`.
+
+        Parameters
+        ----------
+        t : array_like, shape (m,)
+            Data times, increasing, at or after `t0` (the run's start, default 0).
+        observations : array_like, shape (m, K)
+            The measured components `observe` at the times `t`.
+        params0 : dict
+            The parameters to fit and their starting values; the others come from `fixed`, then from the
+            System's defaults.
+
+        Other Parameters
+        ----------------
+        observe : str or sequence of str
+            The measured state components (``theta1``, ``theta1_dot``); default every coordinate.
+        fixed : dict
+            Values of parameters that are not fitted.
+        bounds : dict
+            ``{name: (low, high)}`` for some fitted parameters.
+        q0, qd0 : array_like
+            The experiment's initial state (default the System's).
+        t0 : float
+            The time of that initial state (default 0).
+        sigma : float or array_like (K,)
+            The noise's standard deviation (per observed component): residuals are divided by it and the
+            covariance is (JᵀJ)⁻¹ of the weighted Jacobian.  Without it, the covariance is scaled by the
+            reduced χ² (the noise level estimated from the residuals).
+        experiments : list of (t, observations, q0, qd0)
+            Several experiments fitted at once (their residuals stacked), instead of `t`, `observations`,
+            `q0`, `qd0`.
+        method, rtol, atol
+            The runs' (an embedded pair; rtol 1e-10, atol = rtol by default).
+        max_nfev, and other keywords
+            Passed to `scipy.optimize.least_squares`.
+
+        Each residual and Jacobian evaluation is one run per experiment with the fitted parameters'
+        sensitivities (`simulate(..., sensitivities=...)`); see `lagcomp.fitting`.  Refused (`OptionError`)
+        for unknown names, data of the wrong shape or not finite, and models whose runs cannot carry
+        sensitivities; a run failing during the fit raises `IntegrationError` naming the trial parameters.
+        """
+        from lagcomp.fitting import fit
+
+        return fit(self, t, observations, params0, **options)
+
     def sweep(self, t_span, grid, **options):
         """Integrate every point of a grid of initial values and parameters, on all cores; returns a `Sweep`.
 

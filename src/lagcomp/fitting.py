@@ -1,0 +1,316 @@
+r"""Parameter identification: ``Model.fit`` fits parameters to measured trajectories by least squares.
+
+For experiments e with data times t_e (m_e,), measured state components ``observe`` (K of them, rows of
+y = (q, q̇)) and observations d_e (m_e, K), the residual of the unknowns θ (parameters) is
+
+    r(θ) = ((y_e(t_e; θ)[:, observe] − d_e) / σ) flattened and stacked over the experiments,
+
+σ a scalar or one value per observable, and its Jacobian ∂r/∂θ = S[:, observe, :] / σ comes from the same
+run: ``simulate(..., t_eval=t_e, sensitivities=<the fitted parameters>)`` integrates the variational
+equations with the state (`lagcomp.integrate.sensitivities`), so J is exact up to the run's tolerance, not a
+finite difference.  `scipy.optimize.least_squares` (trust-region reflective, bounds allowed) calls the
+residual and the Jacobian separately at the same θ; `_Runs` keeps the last θ's runs so that each pair costs
+one run per experiment.
+
+The covariance of the estimates is (JᵀJ)⁻¹ with J the weighted Jacobian at the optimum: the covariance of a
+linearised model with independent Gaussian noise of standard deviations σ.  Without `sigma` (σ = 1), it is
+scaled by the reduced χ², s² = Σr² / (m − P), the usual estimate of an unknown common noise variance.
+
+Refused (`OptionError`, docs/errors.md): unknown or repeated parameter names, observations whose shape
+differs from (len(t), len(observe)), non-finite data, times that do not increase, a model whose runs cannot
+carry sensitivities (constrained models, today; the run's own refusal); a run failing at some trial
+parameters raises `IntegrationError` naming them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lagcomp.errors import IntegrationError, OptionError
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One measured run: data times `t` (m,), starting at or after the run's start `t0`, observations (m, K)
+    of the `observe` components, and the initial coordinates and velocities (None: the model's defaults)."""
+
+    t: np.ndarray
+    observations: np.ndarray
+    q0: tuple | None
+    qd0: tuple | None
+    t0: float
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """What `Model.fit` found.
+
+    Attributes
+    ----------
+    estimates : dict
+        The fitted parameters by name.
+    covariance : ndarray, shape (P, P)
+        Covariance of the estimates, in `names` order: (JᵀJ)⁻¹ of the σ-weighted Jacobian at the optimum,
+        scaled by the reduced χ² when no `sigma` was given (`sigma_given`).  NaN if J is rank-deficient
+        (parameters that the data cannot tell apart).
+    standard_errors : dict
+        Square roots of the covariance's diagonal, by name.
+    residuals : list of ndarray
+        Per experiment, model − data at the data times, shape (m_e, K) (unweighted, units of the state).
+    cost : float
+        ½ Σ r² of the weighted residuals at the optimum.
+    nfev, njev : int
+        Residual and Jacobian evaluations of least_squares (each pair of them at one θ costs one run per
+        experiment).
+    success : bool
+    message : str
+        least_squares' verdict.
+    names : tuple of str
+        The fitted parameters, the order of `covariance`'s rows.
+    observe : tuple of str
+        The measured state components.
+    """
+
+    estimates: dict
+    covariance: np.ndarray
+    standard_errors: dict
+    residuals: list
+    cost: float
+    nfev: int
+    njev: int
+    success: bool
+    message: str
+    names: tuple
+    observe: tuple
+    sigma_given: bool
+    experiments: tuple = field(repr=False)
+    _model: object = field(repr=False)
+    _fixed: dict = field(repr=False)
+    _run_options: dict = field(repr=False)
+
+    @property
+    def correlation(self) -> np.ndarray:
+        """The covariance normalised to unit diagonal, (P, P)."""
+        scale = np.sqrt(np.diag(self.covariance))
+        return self.covariance / np.outer(scale, scale)
+
+    def plot(self, points: int = 400):
+        """Fit against data: one panel per observed component, the data as dots and the fitted model's run
+        (at the estimates, `points` times per experiment) as lines, one colour per experiment; a Figure."""
+        from lagcomp.plots import _figure, _label
+
+        fig = _figure(7.0, 2.2 * len(self.observe) + 0.8)
+        axes = fig.subplots(len(self.observe), 1, sharex=True, squeeze=False)[:, 0]
+        params = {**self._fixed, **self.estimates}
+        columns = _state_indices(self._model, self.observe)
+        for e, experiment in enumerate(self.experiments):
+            dense = np.linspace(experiment.t0, experiment.t[-1], points)
+            sol = self._model.simulate((experiment.t0, experiment.t[-1]), experiment.q0, experiment.qd0, params,
+                                       t_eval=dense, **self._run_options)
+            for k, axis in enumerate(axes):
+                colour = f"C{e}"
+                axis.plot(experiment.t, experiment.observations[:, k], ".", color=colour, markersize=3,
+                          label=f"data {e}" if len(self.experiments) > 1 else "data")
+                axis.plot(sol.t, sol.y[:, columns[k]], "-", color=colour, linewidth=1.0,
+                          label=f"fit {e}" if len(self.experiments) > 1 else "fit")
+        for axis, name in zip(axes, self.observe, strict=True):
+            axis.set_ylabel(_label(name))
+        axes[0].legend(loc="best", fontsize="small")
+        axes[-1].set_xlabel("t")
+        estimates = ", ".join(f"{name} = {self.estimates[name]:.4g} ± {self.standard_errors[name]:.2g}"
+                              for name in self.names)
+        axes[0].set_title(estimates, fontsize="small")
+        return fig
+
+
+def fit(model, t=None, observations=None, params0: Mapping | None = None, *, observe=None, fixed=None,
+        bounds=None, q0=None, qd0=None, t0=0.0, sigma=None, experiments=None, method="dop853", rtol=1e-10,
+        atol=None, max_nfev=None, **least_squares_options) -> FitResult:
+    """Fit `params0`'s parameters of `model` to observations; see `lagcomp.Model.fit`."""
+    from scipy.optimize import least_squares
+
+    names, x0 = _unknowns(model, params0)
+    fixed = _fixed(model, fixed, names)
+    observe = _observed(model, observe)
+    experiments = _experiments(t, observations, q0, qd0, t0, experiments, len(observe))
+    weights = _weights(sigma, len(observe))
+    lower, upper = _bounds(bounds, names)
+    run_options = dict(method=method, rtol=rtol, atol=rtol if atol is None else atol, events=False, progress=False)
+    runs = _Runs(model, names, fixed, observe, experiments, weights, run_options)
+    runs.evaluate(x0)  # the model's refusals (constraints, method) before least_squares starts
+    result = least_squares(runs.residual, x0, jac=runs.jacobian, bounds=(lower, upper), x_scale="jac",
+                           max_nfev=max_nfev, **least_squares_options)
+    residuals, jacobian = runs.evaluate(result.x)
+    covariance = _covariance(jacobian, residuals, sigma is not None)
+    estimates = dict(zip(names, map(float, result.x), strict=True))
+    return FitResult(
+        estimates=estimates, covariance=covariance,
+        standard_errors=dict(zip(names, map(float, np.sqrt(np.diag(covariance))), strict=True)),
+        residuals=runs.unweighted(result.x), cost=float(0.5 * residuals @ residuals), nfev=int(result.nfev),
+        njev=int(result.njev or 0), success=bool(result.success), message=str(result.message), names=names,
+        observe=observe, sigma_given=sigma is not None, experiments=experiments, _model=model, _fixed=fixed,
+        _run_options=run_options)
+
+
+class _Runs:
+    """The residual and Jacobian of the unknowns θ, both from one run per experiment, the last θ's kept (the
+    key: θ's bytes) so that least_squares' separate ``fun`` and ``jac`` calls at one θ cost one run."""
+
+    def __init__(self, model, names, fixed, observe, experiments, weights, run_options):
+        self.model, self.names, self.fixed, self.experiments = model, names, fixed, experiments
+        self.columns = _state_indices(model, observe)
+        self.weights, self.run_options = weights, run_options
+        self._key, self._value = None, None
+
+    def evaluate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(r (M,), J (M, P)) at θ = x, M = Σ m_e K."""
+        key = np.asarray(x, dtype=float).tobytes()
+        if key != self._key:
+            parts = [self._run(x, experiment) for experiment in self.experiments]
+            self._value = (np.concatenate([r for r, _, _ in parts]), np.concatenate([j for _, j, _ in parts]))
+            self._unweighted = [d for _, _, d in parts]
+            self._key = key
+        return self._value
+
+    def residual(self, x):
+        return self.evaluate(x)[0]
+
+    def jacobian(self, x):
+        return self.evaluate(x)[1]
+
+    def unweighted(self, x) -> list:
+        self.evaluate(x)
+        return self._unweighted
+
+    def _run(self, x, experiment: Experiment):
+        params = {**self.fixed, **dict(zip(self.names, map(float, x), strict=True))}
+        sol = self.model.simulate((experiment.t0, float(experiment.t[-1])), experiment.q0, experiment.qd0, params,
+                                  t_eval=experiment.t, sensitivities=self.names, **self.run_options)
+        if not sol.success or sol.t.size != experiment.t.size:
+            shown = ", ".join(f"{name}={value:.17g}" for name, value in zip(self.names, x, strict=True))
+            raise IntegrationError(f"The fit's run failed at the trial parameters {shown} (status {sol.status}: "
+                                   f"{sol.message}); bound the parameters (`bounds=`) or start closer.", sol)
+        difference = sol.y[:, self.columns] - experiment.observations  # (m, K)
+        order = [sol.sensitivity_names.index(f"p:{name}") for name in self.names]
+        sensitivities = sol.sensitivities[:, self.columns, :][:, :, order]  # (m, K, P)
+        residual = (difference / self.weights).ravel()
+        jacobian = (sensitivities / self.weights[None, :, None]).reshape(residual.size, len(self.names))
+        return residual, jacobian, difference
+
+
+def _covariance(jacobian: np.ndarray, residuals: np.ndarray, sigma_given: bool) -> np.ndarray:
+    """(JᵀJ)⁻¹ by the SVD of J, times the reduced χ² without `sigma`; NaN where J is rank-deficient."""
+    _, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
+    size = jacobian.shape[1]
+    if singular[-1] <= np.finfo(float).eps * max(jacobian.shape) * singular[0]:
+        return np.full((size, size), np.nan)
+    covariance = (vt.T / singular**2) @ vt
+    if not sigma_given:
+        dof = residuals.size - size
+        covariance *= (residuals @ residuals) / dof if dof > 0 else np.nan
+    return covariance
+
+
+def _unknowns(model, params0) -> tuple[tuple[str, ...], np.ndarray]:
+    if not isinstance(params0, Mapping) or not params0:
+        raise OptionError("`params0` must be a dict of the parameters to fit and their starting values, "
+                          f"e.g. {{{model.parameters[0]!r}: 1.0}}, got {params0!r}." if model.parameters else
+                          f"{model.name!r} has no parameters to fit.")
+    unknown = [name for name in params0 if name not in model.parameters]
+    if unknown:
+        raise OptionError(f"`params0` names unknown parameters {unknown}; {model.name!r} has {list(model.parameters)}.")
+    names = tuple(params0)
+    x0 = np.array([params0[name] for name in names], dtype=float)
+    if not np.all(np.isfinite(x0)):
+        raise OptionError(f"`params0` holds non-finite starting values: {dict(params0)}.")
+    return names, x0
+
+
+def _fixed(model, fixed, names) -> dict:
+    fixed = dict(fixed or {})
+    unknown = [name for name in fixed if name not in model.parameters]
+    if unknown:
+        raise OptionError(f"`fixed` names unknown parameters {unknown}; {model.name!r} has {list(model.parameters)}.")
+    both = [name for name in fixed if name in names]
+    if both:
+        raise OptionError(f"Parameters {both} are both fitted (`params0`) and `fixed`: give each in one of them.")
+    return fixed
+
+
+def _observed(model, observe) -> tuple[str, ...]:
+    if observe is None:
+        return tuple(model.coordinates)
+    observe = (observe,) if isinstance(observe, str) else tuple(observe)
+    _state_indices(model, observe)
+    if not observe or len(set(observe)) != len(observe):
+        raise OptionError(f"`observe` must name each measured state component once, got {list(observe)}.")
+    return observe
+
+
+def _state_indices(model, observe) -> list[int]:
+    names = list(model.state_names)
+    unknown = [name for name in observe if name not in names]
+    if unknown:
+        raise OptionError(f"`observe` names unknown state components {unknown}; {model.name!r} has {names}.")
+    return [names.index(name) for name in observe]
+
+
+def _experiments(t, observations, q0, qd0, t0, experiments, width: int) -> tuple[Experiment, ...]:
+    """The experiments as `Experiment`s, checked: `experiments` is a list of (t, observations, q0, qd0)
+    replacing the single one of `t`, `observations`, `q0`, `qd0`."""
+    if experiments is None:
+        given = [(t, observations, q0, qd0)]
+    else:
+        if t is not None or observations is not None:
+            raise OptionError("Give either `t` and `observations` or `experiments` (a list of (t, observations, "
+                              "q0, qd0)), not both.")
+        given = list(experiments)
+        if not given:
+            raise OptionError("`experiments` is empty.")
+    checked = []
+    for e, entry in enumerate(given):
+        try:
+            times, data, start_q, start_qd = entry
+        except (TypeError, ValueError):
+            raise OptionError(f"Experiment {e} must be (t, observations, q0, qd0), got {entry!r}.") from None
+        label = "" if experiments is None else f"experiment {e}: "
+        times = np.asarray(times, dtype=float)
+        data = np.asarray(data, dtype=float)
+        if data.ndim == 1 and width == 1:
+            data = data[:, None]
+        if times.ndim != 1 or times.size < 1 or data.shape != (times.size, width):
+            raise OptionError(f"{label}observations of shape {data.shape} for {times.shape} times and {width} "
+                              f"observed components: need (len(t), len(observe)) = ({times.size}, {width}).")
+        if not (np.all(np.isfinite(times)) and np.all(np.isfinite(data))):
+            raise OptionError(f"{label}the data hold non-finite values (NaN or inf) in "
+                              f"{'`t`' if not np.all(np.isfinite(times)) else '`observations`'}: drop those rows.")
+        if np.any(np.diff(times) <= 0) or times[0] < t0 or times[-1] <= t0:
+            raise OptionError(f"{label}the times must increase strictly from t0 = {t0} on, and end after it.")
+        checked.append(Experiment(times, data, start_q, start_qd, float(t0)))
+    return tuple(checked)
+
+
+def _weights(sigma, width: int) -> np.ndarray:
+    """σ per observed component, (K,): ones without `sigma`."""
+    values = np.asarray(1.0 if sigma is None else sigma, dtype=float)
+    if (values.ndim > 1 or values.size not in (1, width) or not np.all(np.isfinite(values))
+            or np.any(values <= 0)):
+        raise OptionError(f"`sigma` must be a positive number or one per observed component ({width}), got {sigma!r}.")
+    return np.broadcast_to(values.reshape(-1), (width,)).copy()
+
+
+def _bounds(bounds, names) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) (P,) from `bounds`: None, or {name: (low, high)} for some of the fitted parameters."""
+    lower, upper = np.full(len(names), -np.inf), np.full(len(names), np.inf)
+    if bounds is None:
+        return lower, upper
+    if not isinstance(bounds, Mapping):
+        raise OptionError(f"`bounds` must be a dict {{name: (low, high)}} of fitted parameters, got {bounds!r}.")
+    for name, (low, high) in bounds.items():
+        if name not in names:
+            raise OptionError(f"`bounds` names {name!r}, which is not fitted ({list(names)}).")
+        lower[names.index(name)], upper[names.index(name)] = low, high
+    return lower, upper
