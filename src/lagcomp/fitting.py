@@ -137,7 +137,7 @@ def fit(model, t=None, observations=None, params0: Mapping | None = None, *, obs
     observe = _observed(model, observe)
     experiments = _experiments(t, observations, q0, qd0, t0, experiments, len(observe))
     weights = _weights(sigma, len(observe))
-    lower, upper = _bounds(bounds, names)
+    lower, upper = _bounds(bounds, names, x0)
     run_options = dict(method=method, rtol=rtol, atol=rtol if atol is None else atol, events=False, progress=False)
     runs = _Runs(model, names, fixed, observe, experiments, weights, run_options)
     runs.evaluate(x0)  # the model's refusals (constraints, method) before least_squares starts
@@ -302,15 +302,19 @@ def _weights(sigma, width: int) -> np.ndarray:
     return np.broadcast_to(values.reshape(-1), (width,)).copy()
 
 
-def _bounds(bounds, names) -> tuple[np.ndarray, np.ndarray]:
-    """(lower, upper) (P,) from `bounds`: None, or {name: (low, high)} for some of the fitted parameters."""
+def _bounds(bounds, names, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) (P,) from `bounds`: None, or {name: (low, high)} for some of the fitted parameters, which
+    must hold the starting values `x0`."""
     lower, upper = np.full(len(names), -np.inf), np.full(len(names), np.inf)
-    if bounds is None:
-        return lower, upper
-    if not isinstance(bounds, Mapping):
+    if bounds is not None and not isinstance(bounds, Mapping):
         raise OptionError(f"`bounds` must be a dict {{name: (low, high)}} of fitted parameters, got {bounds!r}.")
-    for name, (low, high) in bounds.items():
+    for name, (low, high) in (bounds or {}).items():
         if name not in names:
             raise OptionError(f"`bounds` names {name!r}, which is not fitted ({list(names)}).")
         lower[names.index(name)], upper[names.index(name)] = low, high
+    outside = [name for name, low, high, start in zip(names, lower, upper, x0, strict=True)
+               if not low <= start <= high or not low < high]
+    if outside:
+        raise OptionError(f"`params0` of {outside} lies outside its `bounds` (or the bounds are empty): start "
+                          "inside them.")
     return lower, upper
