@@ -140,7 +140,11 @@ def fit(model, t=None, observations=None, params0: Mapping | None = None, *, obs
     lower, upper = _bounds(bounds, names, x0)
     run_options = dict(method=method, rtol=rtol, atol=rtol if atol is None else atol, events=False, progress=False)
     runs = _Runs(model, names, fixed, observe, experiments, weights, run_options)
-    runs.evaluate(x0)  # the model's refusals (constraints, method) before least_squares starts
+    try:  # the run's refusals (a constrained model, a method without sensitivities) before least_squares starts
+        runs.evaluate(x0)
+    except OptionError as err:
+        raise OptionError(f"`fit` integrates the sensitivities of the fitted parameters {list(names)}, and the "
+                          f"run refuses: {err}") from err
     result = least_squares(runs.residual, x0, jac=runs.jacobian, bounds=(lower, upper), x_scale="jac",
                            max_nfev=max_nfev, **least_squares_options)
     residuals, jacobian = runs.evaluate(result.x)
