@@ -81,6 +81,22 @@ def test_two_experiments_at_once_with_velocities_observed(model):
     assert len(fit.residuals) == 2 and all(r.shape == (TIMES.size, 2) for r in fit.residuals)
 
 
+def test_initial_state_fitted_with_the_parameters(model):
+    starts = [((1.0, 0.5), (0.0, 0.0)), ((-0.3, 0.8), (1.0, 0.0))]
+    experiments = [(TIMES, _truth(model, q0, qd0)[:, :2], np.add(q0, 0.05), qd0) for q0, qd0 in starts]
+    fit = model.fit(params0=START, experiments=experiments, fit_initial=("theta1", "theta2", "theta1_dot"))
+    assert fit.names == tuple(START) + ("q0:theta1[0]", "q0:theta2[0]", "qd0:theta1_dot[0]",
+                                        "q0:theta1[1]", "q0:theta2[1]", "qd0:theta1_dot[1]")
+    for e, (q0, qd0) in enumerate(starts):
+        assert fit.estimates[f"q0:theta1[{e}]"] == pytest.approx(q0[0], abs=1e-9)
+        assert fit.estimates[f"qd0:theta1_dot[{e}]"] == pytest.approx(qd0[0], abs=1e-9)
+        assert np.allclose(fit.experiments[e].y0, np.concatenate([q0, qd0]), atol=1e-9, rtol=0)
+    relative = max(abs(fit.estimates[name] / value - 1) for name, value in TRUE.items())
+    assert fit.success and relative < 1e-8, relative
+    alone = model.fit(TIMES, experiments[0][1], q0=(0.9, 0.6), fit_initial=("theta1", "theta2"), fixed=TRUE)
+    assert alone.names == ("q0:theta1", "q0:theta2") and np.allclose(alone.experiments[0].y0[:2], (1.0, 0.5))
+
+
 def test_covariance_without_sigma_is_scaled_by_the_reduced_chi_square(model):
     data = _noisy(_truth(model)[:, :2], seed=5)
     weighted = model.fit(TIMES, data, START, sigma=SIGMA)

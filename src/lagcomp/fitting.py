@@ -5,7 +5,8 @@ y = (q, q̇)) and observations d_e (m_e, K), the residual of the unknowns θ (pa
 
     r(θ) = ((y_e(t_e; θ)[:, observe] − d_e) / σ) flattened and stacked over the experiments,
 
-σ a scalar or one value per observable, and its Jacobian ∂r/∂θ = S[:, observe, :] / σ comes from the same
+σ a scalar or one value per observable (θ may include components of each experiment's initial state,
+``fit_initial``), and its Jacobian ∂r/∂θ = S[:, observe, :] / σ comes from the same
 run: ``simulate(..., t_eval=t_e, sensitivities=<the fitted parameters>)`` integrates the variational
 equations with the state (`lagcomp.integrate.sensitivities`), so J is exact up to the run's tolerance, not a
 finite difference.  `scipy.optimize.least_squares` (trust-region reflective, bounds allowed) calls the
@@ -24,6 +25,7 @@ parameters raises `IntegrationError` naming them.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -35,12 +37,12 @@ from lagcomp.errors import IntegrationError, OptionError
 @dataclass(frozen=True)
 class Experiment:
     """One measured run: data times `t` (m,), starting at or after the run's start `t0`, observations (m, K)
-    of the `observe` components, and the initial coordinates and velocities (None: the model's defaults)."""
+    of the `observe` components, and the initial state y0 = (q0, q̇0) (2n,) (in a `FitResult`: with the fitted
+    initial components at their estimates)."""
 
     t: np.ndarray
     observations: np.ndarray
-    q0: tuple | None
-    qd0: tuple | None
+    y0: np.ndarray
     t0: float
 
 
@@ -51,7 +53,9 @@ class FitResult:
     Attributes
     ----------
     estimates : dict
-        The fitted parameters by name.
+        The fitted parameters by name, then the fitted initial-state components (`fit_initial`) named as
+        `Solution.sensitivity_names` names them (``"q0:theta1"``, ``"qd0:theta1_dot"``), with ``[e]``
+        appended for experiment e when there are several.
     covariance : ndarray, shape (P, P)
         Covariance of the estimates, in `names` order: (JᵀJ)⁻¹ of the σ-weighted Jacobian at the optimum,
         scaled by the reduced χ² when no `sigma` was given (`sigma_given`).  NaN if J is rank-deficient
@@ -69,7 +73,7 @@ class FitResult:
     message : str
         least_squares' verdict.
     names : tuple of str
-        The fitted parameters, the order of `covariance`'s rows.
+        The unknowns (parameters, then initial-state components), the order of `covariance`'s rows.
     observe : tuple of str
         The measured state components.
     """
@@ -104,11 +108,13 @@ class FitResult:
 
         fig = _figure(7.0, 2.2 * len(self.observe) + 0.8)
         axes = fig.subplots(len(self.observe), 1, sharex=True, squeeze=False)[:, 0]
-        params = {**self._fixed, **self.estimates}
+        params = {**self._fixed, **{name: self.estimates[name] for name in self._model.parameters
+                                     if name in self.estimates}}
+        n = self._model.n
         columns = _state_indices(self._model, self.observe)
         for e, experiment in enumerate(self.experiments):
             dense = np.linspace(experiment.t0, experiment.t[-1], points)
-            sol = self._model.simulate((experiment.t0, experiment.t[-1]), experiment.q0, experiment.qd0, params,
+            sol = self._model.simulate((experiment.t0, experiment.t[-1]), experiment.y0[:n], experiment.y0[n:], params,
                                        t_eval=dense, **self._run_options)
             for k, axis in enumerate(axes):
                 colour = f"C{e}"
@@ -127,24 +133,27 @@ class FitResult:
 
 
 def fit(model, t=None, observations=None, params0: Mapping | None = None, *, observe=None, fixed=None,
-        bounds=None, q0=None, qd0=None, t0=0.0, sigma=None, experiments=None, method="dop853", rtol=1e-10,
-        atol=None, max_nfev=None, **least_squares_options) -> FitResult:
+        bounds=None, q0=None, qd0=None, t0=0.0, sigma=None, experiments=None, fit_initial=(), method="dop853",
+        rtol=1e-10, atol=None, max_nfev=None, **least_squares_options) -> FitResult:
     """Fit `params0`'s parameters of `model` to observations; see `lagcomp.Model.fit`."""
     from scipy.optimize import least_squares
 
-    names, x0 = _unknowns(model, params0)
-    fixed = _fixed(model, fixed, names)
+    initial = _fit_initial(model, fit_initial)
+    parameters, x0 = _unknowns(model, params0, bool(initial))
+    fixed = _fixed(model, fixed, parameters)
     observe = _observed(model, observe)
-    experiments = _experiments(t, observations, q0, qd0, t0, experiments, len(observe))
+    experiments = _experiments(model, t, observations, q0, qd0, t0, experiments, len(observe))
     weights = _weights(sigma, len(observe))
-    lower, upper = _bounds(bounds, names, x0)
     run_options = dict(method=method, rtol=rtol, atol=rtol if atol is None else atol, events=False, progress=False)
-    runs = _Runs(model, names, fixed, observe, experiments, weights, run_options)
+    runs = _Runs(model, parameters, initial, fixed, observe, experiments, weights, run_options)
+    names = runs.names
+    x0 = np.concatenate([x0] + [experiment.y0[list(initial)] for experiment in experiments])
+    lower, upper = _bounds(bounds, names, x0)
     try:  # the run's refusals (a constrained model, a method without sensitivities) before least_squares starts
         runs.evaluate(x0)
     except OptionError as err:
-        raise OptionError(f"`fit` integrates the sensitivities of the fitted parameters {list(names)}, and the "
-                          f"run refuses: {err}") from err
+        raise OptionError(f"`fit` integrates the sensitivities of the unknowns {list(names)}, and the run "
+                          f"refuses: {err}") from err
     result = least_squares(runs.residual, x0, jac=runs.jacobian, bounds=(lower, upper), x_scale="jac",
                            max_nfev=max_nfev, **least_squares_options)
     residuals, jacobian = runs.evaluate(result.x)
@@ -155,25 +164,42 @@ def fit(model, t=None, observations=None, params0: Mapping | None = None, *, obs
         standard_errors=dict(zip(names, map(float, np.sqrt(np.diag(covariance))), strict=True)),
         residuals=runs.unweighted(result.x), cost=float(0.5 * residuals @ residuals), nfev=int(result.nfev),
         njev=int(result.njev or 0), success=bool(result.success), message=str(result.message), names=names,
-        observe=observe, sigma_given=sigma is not None, experiments=experiments, _model=model, _fixed=fixed,
-        _run_options=run_options)
+        observe=observe, sigma_given=sigma is not None, experiments=runs.fitted_experiments(result.x), _model=model,
+        _fixed=fixed, _run_options=runs.run_options)
 
 
 class _Runs:
     """The residual and Jacobian of the unknowns θ, both from one run per experiment, the last θ's kept (the
     key: θ's bytes) so that least_squares' separate ``fun`` and ``jac`` calls at one θ cost one run."""
 
-    def __init__(self, model, names, fixed, observe, experiments, weights, run_options):
-        self.model, self.names, self.fixed, self.experiments = model, names, fixed, experiments
+    def __init__(self, model, parameters, initial, fixed, observe, experiments, weights, run_options):
+        self.model, self.parameters, self.initial, self.fixed = model, parameters, initial, fixed
+        self.experiments, self.weights, self.run_options = experiments, weights, run_options
         self.columns = _state_indices(model, observe)
-        self.weights, self.run_options = weights, run_options
+        labels = [_initial_label(model, i) for i in initial]
+        suffixes = [""] if len(experiments) == 1 else [f"[{e}]" for e in range(len(experiments))]
+        self.names = parameters + tuple(label + suffix for suffix in suffixes for label in labels)
+        # the run's sensitivity columns: initial-state components first, then parameters (`Columns`)
+        self.requested = tuple(model.state_names[i] for i in initial) + parameters
+        self.order = labels + [f"p:{name}" for name in parameters]
         self._key, self._value = None, None
+
+    def fitted_experiments(self, x) -> tuple[Experiment, ...]:
+        """The experiments with their fitted initial components at `x`'s values."""
+        return tuple(dataclasses.replace(experiment, y0=self._initial_state(x, e))
+                     for e, experiment in enumerate(self.experiments))
+
+    def _initial_state(self, x, e: int) -> np.ndarray:
+        y0 = self.experiments[e].y0.copy()
+        start = len(self.parameters) + e * len(self.initial)
+        y0[list(self.initial)] = x[start:start + len(self.initial)]
+        return y0
 
     def evaluate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(r (M,), J (M, P)) at θ = x, M = Σ m_e K."""
         key = np.asarray(x, dtype=float).tobytes()
         if key != self._key:
-            parts = [self._run(x, experiment) for experiment in self.experiments]
+            parts = [self._run(x, e) for e in range(len(self.experiments))]
             self._value = (np.concatenate([r for r, _, _ in parts]), np.concatenate([j for _, j, _ in parts]))
             self._unweighted = [d for _, _, d in parts]
             self._key = key
@@ -189,19 +215,25 @@ class _Runs:
         self.evaluate(x)
         return self._unweighted
 
-    def _run(self, x, experiment: Experiment):
-        params = {**self.fixed, **dict(zip(self.names, map(float, x), strict=True))}
-        sol = self.model.simulate((experiment.t0, float(experiment.t[-1])), experiment.q0, experiment.qd0, params,
-                                  t_eval=experiment.t, sensitivities=self.names, **self.run_options)
+    def _run(self, x, e: int):
+        experiment, n, p = self.experiments[e], self.model.n, len(self.parameters)
+        params = {**self.fixed, **dict(zip(self.parameters, map(float, x[:p]), strict=True))}
+        y0 = self._initial_state(x, e)
+        sol = self.model.simulate((experiment.t0, float(experiment.t[-1])), y0[:n], y0[n:], params,
+                                  t_eval=experiment.t, sensitivities=self.requested, **self.run_options)
         if not sol.success or sol.t.size != experiment.t.size:
             shown = ", ".join(f"{name}={value:.17g}" for name, value in zip(self.names, x, strict=True))
             raise IntegrationError(f"The fit's run failed at the trial parameters {shown} (status {sol.status}: "
                                    f"{sol.message}); bound the parameters (`bounds=`) or start closer.", sol)
         difference = sol.y[:, self.columns] - experiment.observations  # (m, K)
-        order = [sol.sensitivity_names.index(f"p:{name}") for name in self.names]
-        sensitivities = sol.sensitivities[:, self.columns, :][:, :, order]  # (m, K, P)
+        order = [sol.sensitivity_names.index(label) for label in self.order]
+        sensitivities = sol.sensitivities[:, self.columns, :][:, :, order] / self.weights[None, :, None]  # (m, K, k)
         residual = (difference / self.weights).ravel()
-        jacobian = (sensitivities / self.weights[None, :, None]).reshape(residual.size, len(self.names))
+        jacobian = np.zeros((residual.size, len(self.names)))
+        k_initial = len(self.initial)
+        jacobian[:, :p] = sensitivities[:, :, k_initial:].reshape(residual.size, p)
+        start = p + e * k_initial
+        jacobian[:, start:start + k_initial] = sensitivities[:, :, :k_initial].reshape(residual.size, k_initial)
         return residual, jacobian, difference
 
 
@@ -218,8 +250,11 @@ def _covariance(jacobian: np.ndarray, residuals: np.ndarray, sigma_given: bool) 
     return covariance
 
 
-def _unknowns(model, params0) -> tuple[tuple[str, ...], np.ndarray]:
-    if not isinstance(params0, Mapping) or not params0:
+def _unknowns(model, params0, initial: bool) -> tuple[tuple[str, ...], np.ndarray]:
+    """The fitted parameters' names and starting values (none when only initial components are fitted)."""
+    if params0 is None and initial:
+        return (), np.zeros(0)
+    if not isinstance(params0, Mapping) or not (params0 or initial):
         raise OptionError("`params0` must be a dict of the parameters to fit and their starting values, "
                           f"e.g. {{{model.parameters[0]!r}: 1.0}}, got {params0!r}." if model.parameters else
                           f"{model.name!r} has no parameters to fit.")
@@ -231,6 +266,21 @@ def _unknowns(model, params0) -> tuple[tuple[str, ...], np.ndarray]:
     if not np.all(np.isfinite(x0)):
         raise OptionError(f"`params0` holds non-finite starting values: {dict(params0)}.")
     return names, x0
+
+
+def _fit_initial(model, fit_initial) -> tuple[int, ...]:
+    """The indices into y of the initial-state components `fit_initial` names (state names), in state order."""
+    fit_initial = (fit_initial,) if isinstance(fit_initial, str) else tuple(fit_initial or ())
+    names = list(model.state_names)
+    unknown = [name for name in fit_initial if name not in names]
+    if unknown:
+        raise OptionError(f"`fit_initial` names unknown state components {unknown}; {model.name!r} has {names}.")
+    return tuple(sorted({names.index(name) for name in fit_initial}))
+
+
+def _initial_label(model, i: int) -> str:
+    """The name of y0's component i as `Solution.sensitivity_names` gives it: ``q0:theta1``, ``qd0:theta1_dot``."""
+    return f"{'q0' if i < model.n else 'qd0'}:{model.state_names[i]}"
 
 
 def _fixed(model, fixed, names) -> dict:
@@ -262,7 +312,7 @@ def _state_indices(model, observe) -> list[int]:
     return [names.index(name) for name in observe]
 
 
-def _experiments(t, observations, q0, qd0, t0, experiments, width: int) -> tuple[Experiment, ...]:
+def _experiments(model, t, observations, q0, qd0, t0, experiments, width: int) -> tuple[Experiment, ...]:
     """The experiments as `Experiment`s, checked: `experiments` is a list of (t, observations, q0, qd0)
     replacing the single one of `t`, `observations`, `q0`, `qd0`."""
     if experiments is None:
@@ -293,7 +343,7 @@ def _experiments(t, observations, q0, qd0, t0, experiments, width: int) -> tuple
                               f"{'`t`' if not np.all(np.isfinite(times)) else '`observations`'}: drop those rows.")
         if np.any(np.diff(times) <= 0) or times[0] < t0 or times[-1] <= t0:
             raise OptionError(f"{label}the times must increase strictly from t0 = {t0} on, and end after it.")
-        checked.append(Experiment(times, data, start_q, start_qd, float(t0)))
+        checked.append(Experiment(times, data, model.initial_state(start_q, start_qd), float(t0)))
     return tuple(checked)
 
 
@@ -310,6 +360,7 @@ def _bounds(bounds, names, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(lower, upper) (P,) from `bounds`: None, or {name: (low, high)} for some of the fitted parameters, which
     must hold the starting values `x0`."""
     lower, upper = np.full(len(names), -np.inf), np.full(len(names), np.inf)
+    names = list(names)
     if bounds is not None and not isinstance(bounds, Mapping):
         raise OptionError(f"`bounds` must be a dict {{name: (low, high)}} of fitted parameters, got {bounds!r}.")
     for name, (low, high) in (bounds or {}).items():

@@ -791,6 +791,10 @@ class Model:
         experiments : list of (t, observations, q0, qd0)
             Several experiments fitted at once (their residuals stacked), instead of `t`, `observations`,
             `q0`, `qd0`.
+        fit_initial : sequence of str
+            State components whose initial values are fitted too (each experiment's own, starting from its
+            `q0`, `qd0`), named ``q0:theta1``, ``qd0:theta1_dot`` in the result (``...[e]`` for experiment e
+            of several).  `params0` may then be None.
         method, rtol, atol
             The runs' (an embedded pair; rtol 1e-10, atol = rtol by default).
         max_nfev, and other keywords
