@@ -76,6 +76,10 @@ class FitResult:
         The unknowns (parameters, then initial-state components), the order of `covariance`'s rows.
     observe : tuple of str
         The measured state components.
+    sigma_given : bool
+        Whether `sigma` weighted the residuals (else the covariance is scaled by the reduced χ²).
+    experiments : tuple of Experiment
+        The data fitted, each with its initial state at the estimates (what `plot` runs).
     """
 
     estimates: dict
