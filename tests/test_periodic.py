@@ -93,3 +93,27 @@ def test_refusals(pendulum, compiled):
         an.periodic_orbit(pendulum, [0.3, 0.4, 0.0, 0.0], -1.0)
     with pytest.raises(lc.OptionError, match="did not converge: max"):
         an.periodic_orbit(pendulum, [0.3, 0.4, 0.0, 0.0], 2.6, max_iterations=1)
+
+
+def test_figure_eight_choreography_of_three_bodies(compiled):
+    """Chenciner and Montgomery's figure eight (equal masses, G = 1) from a rough guess: Simó's initial state with the
+    positions 10 % too far out and the velocities 10 % too slow, at its period held."""
+    bodies, unit = compiled("pythagorean_three_body"), dict(G=1.0, m1=1.0, m2=1.0, m3=1.0)
+    r1, v3 = np.array([0.97000436, -0.24308753]), np.array([-0.93240737, -0.86473146])
+    q, qd = np.concatenate([r1, -r1, [0.0, 0.0]]), np.concatenate([-v3 / 2, -v3 / 2, v3])
+    period = 6.32591398
+    orbit = an.periodic_orbit(bodies, np.concatenate([1.1 * q, 0.9 * qd]), period, fix="period", params=unit)
+    assert orbit.residual <= 1e-10 and orbit.period == period                      # measured 2.7e-14
+    # the orbit Simó's 8 digits describe: its energy (−1.28714199) to their precision (measured 4e-9)
+    energy = bodies.energy(orbit.y0[:6], orbit.y0[6:], params=unit)
+    assert energy == pytest.approx(bodies.energy(q, qd, params=unit), abs=1e-7)
+    # a choreography: after a third of the period each body is where the one before it started
+    third = bodies.simulate((0.0, period), orbit.y0[:6], orbit.y0[6:], unit, t_eval=[period / 3], rtol=1e-12,
+                            atol=1e-12, progress=False).q[0].reshape(3, 2)
+    assert np.abs(third - np.roll(orbit.y0[:6].reshape(3, 2), 1, axis=0)).max() < 1e-9
+    # 8 trivial multipliers (energy, time, translations, momenta, rotation, angular momentum, scaling): Jordan
+    # blocks split by ~√(error of Φ) about 1; the other four on the unit circle (linearly stable, Simó 2002)
+    by_distance = orbit.multipliers[np.argsort(np.abs(orbit.multipliers - 1))]
+    trivial, other = by_distance[:8], by_distance[8:]
+    assert np.abs(trivial - 1).max() < 1e-4                                           # measured 6e-6
+    assert np.abs(np.abs(other) - 1).max() < 1e-10 and np.abs(other - 1).min() > 0.05   # measured 3e-12

@@ -22,13 +22,17 @@ That makes N + 2 equations for N + 1 unknowns, consistent: energy conservation m
 redundant (Φ − I has the flow direction f and the family's direction in its kernel, and the two conditions
 remove both).  Gauss-Newton on a consistent overdetermined system converges quadratically like Newton, so no
 equation has to be dropped by hand (which one would be a choice per system).
+A system with more symmetries keeps more directions in that kernel (the three bodies' translations and
+rotation); Levenberg-Marquardt's damping makes the step the least-norm one there, and the solve ends on one of
+the symmetric copies of the orbit (the figure eight of tests/test_periodic.py, translated and shifted in phase).
 
 The Floquet multipliers are the eigenvalues of Φ at the solution (they do not depend on the coordinates: Φ in
 (q, q̇) is similar to the symplectic one in (q, p) since φ_T(y0) = y0).  For an autonomous Hamiltonian system two
 equal 1 (the flow direction and the energy), and the others come in pairs μ, 1/μ: on the unit circle when the
 orbit is linearly stable.  The trivial pair is a Jordan block, so an error δ of Φ splits it by ~√δ about 1
 (the double pendulum's normal mode at rtol 1e-12: 1 ± 3e-8, their mean 1 to 1e-14), while the other
-multipliers move by ~δ (|μ| = 1 to ~1e-13 there).  Φ is integrated with ``sensitivity_control="both"``.
+multipliers move by ~δ (|μ| = 1 to ~1e-13 there).  Each further symmetry brings its own trivial multipliers
+(the planar three bodies: 8, within 6e-6 of 1; the figure eight's other four on the unit circle to 3e-12).  Φ is integrated with ``sensitivity_control="both"``.
 
 Refused (`OptionError`, docs/errors.md): models whose sensitivities `simulate` refuses (constrained Lagrange
 models: no Jacobian kernel), a guess of the wrong size or not finite, an unknown `fix`, a period that is not
