@@ -32,7 +32,8 @@ equal 1 (the flow direction and the energy), and the others come in pairs μ, 1/
 orbit is linearly stable.  The trivial pair is a Jordan block, so an error δ of Φ splits it by ~√δ about 1
 (the double pendulum's normal mode at rtol 1e-12: 1 ± 3e-8, their mean 1 to 1e-14), while the other
 multipliers move by ~δ (|μ| = 1 to ~1e-13 there).  Each further symmetry brings its own trivial multipliers
-(the planar three bodies: 8, within 6e-6 of 1; the figure eight's other four on the unit circle to 3e-12).  Φ is integrated with ``sensitivity_control="both"``.
+(the planar three bodies: 8, within 6e-6 of 1; the figure eight's other four on the unit circle to 3e-12).
+Φ is integrated with ``sensitivity_control="both"``.
 
 Refused (`OptionError`, docs/errors.md): models whose sensitivities `simulate` refuses (constrained Lagrange
 models: no Jacobian kernel), a guess of the wrong size or not finite, an unknown `fix`, a period that is not
