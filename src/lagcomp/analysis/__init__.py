@@ -1,5 +1,5 @@
 """Analysis on compiled models: equilibria, small oscillations, conserved quantities,
-phase portraits, Poincaré sections and Lyapunov exponents.
+phase portraits, Poincaré sections, Lyapunov exponents and periodic orbits.
 
 Each module has one job and works on a compiled `Model` (its kernels), with a
 symbolic counterpart where one is useful:
@@ -18,6 +18,8 @@ symbolic counterpart where one is useful:
 ``poincare``       `poincare_section` over many initial states, `on_energy_surface`
 ``lyapunov``       `lyapunov_exponents` (variational, QR), `lyapunov_spectrum`,
                    `two_trajectory_lyapunov`
+``periodic``       `periodic_orbit` by shooting on the monodromy matrix, with
+                   its Floquet multipliers
 =================  ===========================================================
 
 Pictures of all of these: `lagcomp.plots`.
@@ -37,6 +39,7 @@ from lagcomp.analysis.oscillations import (
     linearize_symbolic as linearize_symbolic,
     normal_modes as normal_modes,
 )
+from lagcomp.analysis.periodic import PeriodicOrbit as PeriodicOrbit, periodic_orbit as periodic_orbit
 from lagcomp.analysis.poincare import Section as Section, on_energy_surface as on_energy_surface
 from lagcomp.analysis.poincare import poincare_section as poincare_section
 from lagcomp.analysis.portrait import Portrait as Portrait, phase_portrait as phase_portrait

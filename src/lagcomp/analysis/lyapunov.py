@@ -4,7 +4,8 @@ The exponents measure the mean exponential rate at which nearby
 trajectories separate, λ = lim (1/t) log |δx(t)|/|δx(0)|.  They do not
 depend on the coordinates, so lagcomp computes them in the canonical
 variables x = (q, p), where the compiled Jacobian J = ∂f/∂x of ẋ = f(t, x)
-lives (`Model.canonical_jacobian`):
+lives (`Model.canonical_jacobian`: exact, from the emitted ``canonical_partials``
+kernel's symbolic partials, no finite difference; bench/bench_lyapunov.py measures it):
 
 * variational (Benettin et al. 1980): k tangent vectors W obey Ẇ = J W along
   the trajectory; every few steps W is orthonormalized by QR and the logs of
