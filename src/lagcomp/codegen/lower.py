@@ -685,6 +685,25 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+def _event_gradients_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """The partial derivatives of the event functions, (E, N + 1 + P): ∂g_e/∂y (y = (q, q̇)), ∂g_e/∂t, ∂g_e/∂p.
+
+    For the sensitivities of an event's time (`lagcomp.integrate.sensitivities.event_sensitivities`):
+    dt*/dw = −(∂g/∂y · ∂y/∂w + ∂g/∂p_w) / (∂g/∂y · f + ∂g/∂t).  ∂g/∂t holds the inputs' derivatives
+    (u(t) in g gives u̇(t), which the kernel reads from the input's table).  One CSE; no stores without events.
+    """
+    names, size, width = eom.system.event_names, 2 * eom.n, 2 * eom.n + 1 + len(eom.parameters)
+    variables = (*eom.q, *eom.qd, t, *eom.parameters)
+    stores = [(f"out[{e}, {j}]", g.diff(v)) for e, g in enumerate(eom.events) for j, v in enumerate(variables)]
+    return _kernel(
+        "event_gradients",
+        f"Partials of the event functions {names}, shape ({len(names)}, {width}), into `out`: row e is event e,\n"
+        f"columns ∂g_e/∂y_j (y = (q, q̇), {size} of them), then ∂g_e/∂t, then ∂g_e/∂p_j for the model's parameters\n"
+        "(symbolic, no differences; the sensitivities of the events' times).",
+        ("t", "y", "p", "out"), stores, mapping, loads,
+    )
+
+
 def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
     """∂F/∂q and ∂F/∂q̇ at rest (q̇ = 0), for equilibria and small oscillations (`lagcomp.analysis`).
 
@@ -741,6 +760,7 @@ def lower(eom: EOM) -> ModuleIR:
             (*state_args, "out"), [(f"out[{i}]", eom.momentum_rate[i]) for i in range(n)], mapping, loads,
         ),
         _event_kernel(eom, mapping, loads),
+        _event_gradients_kernel(eom, mapping, loads),
         _rest_partials_kernel(eom, mapping, loads),
     ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
     kernels += (geometry_kernel(eom, lambda name, doc, args, stores: _kernel(name, doc, args, stores, mapping, loads)),)

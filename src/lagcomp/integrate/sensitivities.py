@@ -30,8 +30,17 @@ without that:
   unscaled exactly on output.  An atol below ~1e-80 times the sensitivities' errors would let the norm
   see them again (as with "both"); sensitivities below ~1e-218 lose precision as subnormal numbers.
 
+Events.  The crossings are located on the state exactly as in a plain run: ``event_values`` reads y's first
+N components, and the event rows the driver writes from its dense output hold the whole augmented state, so
+S(t*) comes interpolated at the crossing as y(t*) does.  `event_sensitivities` then differentiates the
+crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the emitted ``event_gradients``:
+
+    dt*/dw = −(∂g/∂y · S(t*) + ∂g/∂w) / (∂g/∂y · f(t*) + ∂g/∂t),     dy(t*)/dw = S(t*) + f(t*) dt*/dw,
+
+∂g/∂w nonzero only for a parameter in g; a grazing crossing (denominator 0) gives inf or nan.
+
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
-Lagrange models, today); located events (event-time sensitivities are a later step); projection; function
+Lagrange models, today); located events of a module without ``event_gradients`` (Kane models); projection; function
 inputs (their ∂u/∂y is unknown); parameter columns when the module's ``rhs_parameter_jacobian`` is a refusing stub
 (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
 """
@@ -118,9 +127,10 @@ def check(model, method, options, cols: Columns, original_model) -> None:
         raise OptionError(f"`sensitivities` need the Jacobian ∂f/∂y of {model.name!r}, which has no Jacobian "
                           f"kernel: its equations hold {refused}.")
     located = [e.name for e, action in zip(model.events, options.actions.tolist(), strict=True) if action]
-    if located:
+    if located and not hasattr(model.kernels, "event_gradients"):
         raise OptionError(f"`sensitivities` with events: {model.name!r} would locate its events {located}, whose "
-                          "times' sensitivities are not computed yet; pass events=False.")
+                          "times' sensitivities need the partials of the event functions, a kernel its module "
+                          "lacks (a Kane model's, or a module generated before it existed); pass events=False.")
     if options.projecting:
         raise OptionError("`sensitivities` with `projection=True`: the projection would move the state and not "
                           "its sensitivities; leave `projection` unset.")
@@ -296,3 +306,36 @@ class SensitivityRecorder:
         if not self.recorder.keep and self.recorder.rows == 1:
             rows = rows[:1]
         return rows.reshape(rows.shape[0], self.k, self.n).transpose(0, 2, 1).copy()
+
+
+def event_sensitivities(model, p: np.ndarray, cols: Columns, scale: float, event_parts) -> dict:
+    """{event name: `EventSensitivities`} of a sensitivity run's located events (see "Events" above).
+
+    `event_parts` are the run's event rows as `simulate` collects them: (times (m,), augmented states
+    (m, N (1 + k)) with the columns scaled by `scale`, event indices (m,)) per driver call.  `p` is the run's
+    parameter vector without the work space.  A row whose ``rhs`` fails (a singular mass matrix there) is nan.
+    """
+    from lagcomp.integrate.solution import EventSensitivities
+
+    n, k, kernels = model.state_size, cols.k, model.kernels
+    if event_parts:
+        times, rows, which = (np.concatenate(column) for column in zip(*event_parts))
+    else:
+        times, rows, which = np.empty(0), np.empty((0, n * (1 + k))), np.empty(0, dtype=np.int64)
+    parameter_columns = n + 1 + np.array(cols.parameters, dtype=np.int64)
+    gradients, f = np.empty((len(model.events), n + 1 + len(model.parameters))), np.empty(n)
+    dt, dy = np.full((times.size, k), np.nan), np.full((times.size, n, k), np.nan)
+    for r in range(times.size):
+        x = rows[r, :n].copy()
+        S = rows[r, n:].reshape(k, n).T * (1.0 / scale)   # (exact: a power of two)
+        if kernels.rhs(times[r], x, p, f) != 0:
+            continue
+        kernels.event_gradients(times[r], x, p, gradients)
+        g = gradients[which[r]]
+        numerator = g[:n] @ S
+        numerator[len(cols.state):] += g[parameter_columns]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dt[r] = -numerator / (g[:n] @ f + g[n])
+        dy[r] = S + np.outer(f, dt[r])
+    return {event.name: EventSensitivities(t=dt[which == e], y=dy[which == e])
+            for e, event in enumerate(model.events)}

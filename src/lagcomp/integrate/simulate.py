@@ -171,7 +171,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     run = dict(method=m.name, status=status, state=state, projected=projected,
                residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
     if columns is not None:
-        run.update(sensitivities=recorder.sensitivities(), sensitivity_names=columns.names)
+        run.update(sensitivities=recorder.sensitivities(), sensitivity_names=columns.names,
+                   event_sensitivities=sens.event_sensitivities(model, p, columns, scale, event_parts))
         recorder = recorder.recorder
     return _solution(model, p, recorder, run, throw)
 
@@ -371,6 +372,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         projected_initial_state=ys[0].copy() if run["projected"] else None,
         events=run["events"], model_name=model.name, geometry=BodyGeometry.of(model, p),
         sensitivities=run.get("sensitivities"), sensitivity_names=run.get("sensitivity_names", ()),
+        event_sensitivities=run.get("event_sensitivities", {}),
     )
     # simulate -> Model.simulate -> the user's call
     warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4)

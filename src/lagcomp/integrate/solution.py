@@ -22,6 +22,19 @@ class EventRecord:
         return self.t.shape[0]
 
 
+@dataclass(frozen=True)
+class EventSensitivities:
+    """The sensitivities of one event's occurrences (`Solution.event_sensitivities`), columns w named by
+    `Solution.sensitivity_names`: of its times, t (count, k) = dt*/dw, and of the state there,
+    y (count, N, k) = d y(t*)/dw (the total derivative: the crossing moves with w)."""
+
+    t: np.ndarray
+    y: np.ndarray
+
+    def __len__(self) -> int:
+        return self.t.shape[0]
+
+
 def _relative_drift(values: np.ndarray) -> float:
     """max |v − v₀| / |v₀| (absolute when v₀ = 0)."""
     scale = abs(values[0]) if values[0] != 0 else 1.0
@@ -98,6 +111,9 @@ class Solution:
     sensitivity_names : tuple of str
         The columns of `sensitivities`: ``"q0:<coordinate>"``, ``"qd0:<state name>"`` (a
         velocity's ``<coordinate>_dot``, or a Kane model's speed) and ``"p:<parameter>"``.
+    event_sensitivities : dict
+        With sensitivities and located events: {event name: `EventSensitivities`}, the
+        sensitivities of each occurrence's time and of the state there; empty without.
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
@@ -135,6 +151,7 @@ class Solution:
     geometry: object = field(default=None, repr=False, compare=False)
     sensitivities: np.ndarray | None = field(default=None, repr=False)
     sensitivity_names: tuple = ()
+    event_sensitivities: dict = field(default_factory=dict, repr=False)
 
     @property
     def success(self) -> bool:
