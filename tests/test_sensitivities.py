@@ -128,9 +128,6 @@ def test_refusals(pendulum, options, culprit):
 def test_refusals_of_models_and_runs(compiled, oscillator, cache_dir):
     with pytest.raises(lc.OptionError, match="no Jacobian kernel"):
         compiled("spherical_pendulum_cartesian").simulate((0.0, 1.0), sensitivities="q0", progress=False)
-    with pytest.raises(lc.OptionError, match="events=False"):
-        compiled("henon_heiles").simulate((0.0, 1.0), sensitivities="q0", progress=False)
-    assert compiled("henon_heiles").simulate((0.0, 1.0), sensitivities="q0", events=False, progress=False).success
     with pytest.raises(lc.OptionError, match="sweep does not"):
         oscillator.sweep((0.0, 1.0), {"x": [0.0, 1.0]}, sensitivities="q0", progress=False)
     pushed = lc.compile(lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, forces=[lc.Input("f")],
@@ -182,10 +179,104 @@ def test_kane_model_state_is_q_and_u(cache_dir):
     km = me.KanesMethod(frame, [x], [w], kd_eqs=[x.diff(t) - w])
     km.kanes_equations([me.Particle("p", point, m)], [(point, -k * x * frame.x)])
     model = lc.compile(km, name="sensitivity_kane_oscillator", cache_dir=cache_dir,
-                       defaults={"m": 1.0, "k": OMEGA**2})
+                       defaults={"m": 1.0, "k": OMEGA**2}, events=[lc.Event("zero", x)])
+    with pytest.raises(lc.OptionError, match="partials of the event functions"):  # no event_gradients kernel
+        model.simulate((0.0, 5.0), [1.0], [0.5], sensitivities="q0", progress=False)
     sol = model.simulate((0.0, 5.0), [1.0], [0.5], rtol=1e-12, atol=1e-12, sensitivities=("q0", "u0"),
-                         progress=False)
+                         events=False, progress=False)
     assert sol.sensitivity_names == ("q0:x", "qd0:w") and sol.state_names == ("x", "w")
     c, s = np.cos(OMEGA * sol.t), np.sin(OMEGA * sol.t)
     exact = np.stack([np.stack([c, s / OMEGA], axis=-1), np.stack([-OMEGA * s, c], axis=-1)], axis=1)
     assert np.abs(sol.sensitivities - exact).max() < 1e-10
+
+
+@pytest.fixture(scope="module")
+def crossing_oscillator(cache_dir):
+    """The oscillator with two events: ``zero``, x = 0 either way (closed form), and ``line``, terminal, x crossing
+    the moving line k t / 40 downwards (its partials ∂g/∂t and ∂g/∂k nonzero)."""
+    system = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="sensitivity_crossings",
+                       defaults={"m": 1.0, "k": OMEGA**2}, q0=(1.0,), qd0=(0.5,),
+                       events=[lc.Event("zero", x), lc.Event("line", x - k * t / 40, direction=-1, terminal=True)])
+    return lc.compile(system, cache_dir=cache_dir)
+
+
+def _richardson(crossings, w0, scales):
+    """∂crossings/∂w at w0 by central differences of steps h scales_j (h = 1e-3, 5e-4), extrapolated: (…, len(w0))."""
+    def differences(h):
+        result = []
+        for j, scale in enumerate(scales):
+            step = np.zeros(w0.size)
+            step[j] = h * scale
+            result.append((crossings(w0 + step) - crossings(w0 - step)) / (2 * step[j]))
+        return np.stack(result, axis=-1)
+    return (4 * differences(5e-4) - differences(1e-3)) / 3
+
+
+def test_event_time_sensitivities_match_the_closed_form(crossing_oscillator):
+    """x = A cos(ω t − φ), A² = x0² + (v0/ω)², φ = atan2(v0/ω, x0): crossings t_j = (π/2 + φ + j π)/ω, whose
+    derivatives wrt x0, v0 are those of φ/ω, wrt ω −t_j/ω + ∂φ/∂ω / ω (k = ω² m, m = 1); there x stays 0 and
+    v = −(−1)^j ω A."""
+    options = dict(rtol=1e-12, atol=1e-12, events="zero", progress=False)
+    sol = crossing_oscillator.simulate((0.0, 10.0), sensitivities=("q0", "qd0", "params"), **options)
+    plain = crossing_oscillator.simulate((0.0, 10.0), **options)
+    assert sol.sensitivity_names == ("q0:x", "qd0:x_dot", "p:k", "p:m")
+    assert set(sol.event_sensitivities) == {"zero", "line"} and len(sol.event_sensitivities["line"]) == 0
+    times, found = sol.events["zero"].t, sol.event_sensitivities["zero"]
+    assert times.size == 6 == len(found) and np.abs(times - plain.events["zero"].t).max() < 1e-14
+    assert found.t.shape == (6, 4) and found.y.shape == (6, 2, 4)
+    x0, v0, b = 1.0, 0.5, 0.5 / OMEGA
+    a2, sign = x0**2 + b**2, (-1.0) ** np.arange(6)
+    d_omega = -times / OMEGA - x0 * v0 / (a2 * OMEGA**3)
+    exact_t = np.stack([np.full(6, -b / (a2 * OMEGA)), np.full(6, x0 / (a2 * OMEGA**2)),
+                        d_omega / (2 * OMEGA), -OMEGA / 2 * d_omega], axis=1)   # dω/dk = 1/(2ω), dω/dm = −ω/2
+    assert np.abs(found.t - exact_t).max() < 1e-10                   # measured 4.9e-12
+    assert np.abs(found.y[:, 0]).max() < 1e-12                       # the crossing stays on x = 0
+    amplitude = np.sqrt(a2)
+    assert np.abs(found.y[:, 1, 0] + sign * OMEGA * x0 / amplitude).max() < 1e-10
+    assert np.abs(found.y[:, 1, 1] + sign * v0 / (OMEGA * amplitude)).max() < 1e-10
+
+
+def test_terminal_event_with_time_and_parameter_against_differences(crossing_oscillator):
+    """The terminal ``line`` event (g = x − k t / 40: ∂g/∂t and ∂g/∂k count) against extrapolated differences of
+    rtol 1e-13 runs in x0, v0, k, m."""
+    def crossing(w):
+        sol = crossing_oscillator.simulate((0.0, 10.0), [w[0]], [w[1]], params={"k": w[2], "m": w[3]}, rtol=1e-13,
+                                           atol=1e-13, events="line", progress=False)
+        record = sol.events["line"]
+        return np.concatenate([record.t, record.q[0], record.qd[0]])
+
+    w0 = np.array([1.0, 0.5, OMEGA**2, 1.0])
+    reference = _richardson(crossing, w0, np.abs(w0))
+    sol = crossing_oscillator.simulate((0.0, 10.0), rtol=1e-12, atol=1e-12, events="line", progress=False,
+                                       sensitivities=("q0", "qd0", "params"))
+    assert sol.status == 1 and sol.t[-1] == sol.events["line"].t[0]
+    found = sol.event_sensitivities["line"]
+    got = np.concatenate([found.t, found.y[0]])
+    relative = np.abs(got - reference).max() / np.abs(reference).max()
+    assert relative < 1e-8, relative                   # measured 3.1e-12
+
+
+def test_poincare_section_of_henon_heiles_against_richardson_extrapolated_differences(compiled):
+    """The times and the states of four crossings of the Poincaré section x = 0 (upwards) of Hénon–Heiles over
+    t ∈ [0, 20], from off the section, against extrapolated differences of rtol 1e-13 runs: every column (x0, y0,
+    ẋ0, ẏ0, λ) to the issue's 1e-8 relative, and the crossings' times those of a plain run."""
+    model = compiled("henon_heiles")
+    w0 = np.array([-0.1, 0.1, 0.35, 0.0, 1.0])
+
+    def run(w, rtol, **options):
+        return model.simulate((0.0, 20.0), w[:2], w[2:4], params={"lam": w[4]}, rtol=rtol, atol=rtol,
+                              progress=False, **options)
+
+    def crossings(w):
+        record = run(w, 1e-13).events["section"]
+        return np.concatenate([record.t[:, None], record.q, record.qd], axis=1)
+
+    reference = _richardson(crossings, w0, (0.1, 0.1, 0.35, 0.1, 1.0))   # (ẏ0 = 0 has no scale of its own)
+    sol = run(w0, 1e-12, sensitivities=("q0", "qd0", "params"))
+    assert sol.sensitivity_names == ("q0:x", "q0:y", "qd0:x_dot", "qd0:y_dot", "p:lam")
+    found = sol.event_sensitivities["section"]
+    got = np.concatenate([found.t[:, None, :], found.y], axis=1)
+    assert got.shape == reference.shape == (4, 5, 5)
+    assert np.abs(sol.events["section"].t - run(w0, 1e-12).events["section"].t).max() < 1e-13
+    relative = np.abs(got - reference).max() / np.abs(reference).max()
+    assert relative < 1e-8, relative                   # measured 2.4e-11

@@ -319,7 +319,7 @@ def event_sensitivities(model, p: np.ndarray, cols: Columns, scale: float, event
 
     n, k, kernels = model.state_size, cols.k, model.kernels
     if event_parts:
-        times, rows, which = (np.concatenate(column) for column in zip(*event_parts))
+        times, rows, which = (np.concatenate(column) for column in zip(*event_parts, strict=True))
     else:
         times, rows, which = np.empty(0), np.empty((0, n * (1 + k))), np.empty(0, dtype=np.int64)
     parameter_columns = n + 1 + np.array(cols.parameters, dtype=np.int64)
