@@ -24,6 +24,8 @@ speeds, state length ``n_q + n_u``; same calling conventions as
 
 - ``event_values(t, y, p, out)``: g of each declared event (`lagcomp.Event`
   over q, u and t); without events a stub, and the drivers' event code is left out.
+  ``event_gradients(t, y, p, out)``: their partials ∂g/∂y, ∂g/∂t, ∂g/∂p, (E, N + 1 + P), for the
+  sensitivities of the events' times; a stub without events.
 - ``geometry(t, y, p, out)``: writes nothing, ``GEOMETRY = ()``, ``GEOMETRY_SIZE = 0``
   (`lagcomp.codegen.geometry`): a Kane model's bodies are not drawn yet.
 
@@ -221,6 +223,12 @@ _NO_EVENTS = '''
 def event_values(t, y, p, out):
     """No events: this model declares none."""
     pass
+
+
+@njit(cache=True, error_model="numpy")
+def event_gradients(t, y, p, out):
+    """No events: this model declares none."""
+    pass
 '''
 
 _HOOKS = '''
@@ -315,13 +323,25 @@ def _sizes(form: FirstOrderForm) -> str:
 
 
 def _events(form: FirstOrderForm, events, mapping, loads) -> tuple:
-    """The ``event_values`` kernel (g of each event into `out`) and its source; the stub without events."""
+    """The ``event_values`` and ``event_gradients`` kernels (g of each event, and its partials, into `out`) and
+    their source; stubs without events."""
     if not events:
-        return None, _NO_EVENTS
+        return (), _NO_EVENTS
     names = tuple(name for name, _ in events)
-    kernel = _kernel("event_values", f"Event functions g = {names} at one state, into `out`.", ARGS,
+    values = _kernel("event_values", f"Event functions g = {names} at one state, into `out`.", ARGS,
                      [(f"out[{i}]", g) for i, (_, g) in enumerate(events)], mapping, loads)
-    return kernel, _function(kernel)
+    size = form.n_q + form.n_u
+    stores = []
+    for i, (_, g) in enumerate(events):
+        stores += [(f"out[{i}, {j}]", g.diff(v)) for j, v in enumerate((*form.q, *form.u))]
+        stores.append((f"out[{i}, {size}]", sum((g.diff(s) for s in g.free_symbols if s.name == t.name), sp.S.Zero)))
+        stores += [(f"out[{i}, {size + 1 + j}]", g.diff(s)) for j, s in enumerate(form.parameters)]
+    gradients = _kernel(
+        "event_gradients",
+        f"Partials of the event functions {names}, shape ({len(names)}, {size + 1 + len(form.parameters)}), into\n"
+        f"`out`: row i is event i, columns ∂g_i/∂y_j (y = (q, u), {size} of them), then ∂g_i/∂t, then ∂g_i/∂p_j.",
+        ARGS, stores, mapping, loads)
+    return (values, gradients), _function(values) + _function(gradients)
 
 
 def _header(name: str, form: FirstOrderForm, reaction_names, kernels) -> str:
@@ -358,9 +378,8 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
         kernel, source = _reactions(form, reaction_names, reactions, mapping, loads)
         kernels.append(kernel)
         parts.append(source)
-    event_kernel, event_source = _events(form, events, mapping, loads)
-    if event_kernel is not None:
-        kernels.append(event_kernel)
+    event_kernels, event_source = _events(form, events, mapping, loads)
+    kernels += event_kernels
     parts.append(event_source)
     geometry = no_geometry_kernel()  # a Kane model's bodies are not drawn yet: size 0
     kernels.append(geometry)

@@ -40,7 +40,7 @@ crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the 
 ∂g/∂w nonzero only for a parameter in g; a grazing crossing (denominator 0) gives inf or nan.
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
-Lagrange models, today); located events of a module without ``event_gradients`` (Kane models); projection; function
+Lagrange models, today); located events of a module without ``event_gradients`` (generated before it existed); projection; function
 inputs (their ∂u/∂y is unknown); parameter columns when the module's ``rhs_parameter_jacobian`` is a refusing stub
 (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
 """
@@ -130,7 +130,8 @@ def check(model, method, options, cols: Columns, original_model) -> None:
     if located and not hasattr(model.kernels, "event_gradients"):
         raise OptionError(f"`sensitivities` with events: {model.name!r} would locate its events {located}, whose "
                           "times' sensitivities need the partials of the event functions, a kernel its module "
-                          "lacks (a Kane model's, or a module generated before it existed); pass events=False.")
+                          "lacks (generated before lagcomp emitted `event_gradients`): compile the model again, "
+                          "or pass events=False.")
     if options.projecting:
         raise OptionError("`sensitivities` with `projection=True`: the projection would move the state and not "
                           "its sensitivities; leave `projection` unset.")
