@@ -286,6 +286,22 @@ def test_the_parameter_jacobian_under_every_emitted_name(many_names):
     np.testing.assert_allclose(out, expected, rtol=1e-14, atol=0)
 
 
+def test_the_event_gradients_under_every_emitted_name(many_names):
+    """``event_gradients`` (the events' partials, for their times' sensitivities) under the ~670 colliding names:
+    the event g = c_0 has ∂g/∂y = e_0 and no ∂g/∂t, ∂g/∂p.  Plain Python, as the parameter Jacobian's test."""
+    from random_systems import python_kernels
+
+    model, spec = many_names
+    params, amplitude, _ = spec.values()
+    module = python_kernels(model.source_path.read_text(encoding="utf-8"))
+    n = len(spec.coordinates)
+    out = np.full((1, 2 * n + 1 + len(model.parameters)), np.nan)
+    module["event_gradients"](0.0, np.concatenate([amplitude, np.zeros(n)]), model.parameter_vector(params), out)
+    expected = np.zeros_like(out)
+    expected[0, 0] = 1.0
+    np.testing.assert_array_equal(out, expected)
+
+
 @pytest.mark.slow
 def test_every_emitted_name_as_a_user_name_every_method(many_names):
     model, spec = many_names
