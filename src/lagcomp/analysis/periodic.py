@@ -186,7 +186,7 @@ class _Shooting:
         self.options = dict(rtol=rtol, atol=atol, method=method, sensitivity_control="both")
         self._last = (None, None)
         if model.events:
-            self.options["events"] = False  # located events are refused with sensitivities; crossings do not matter
+            self.options["events"] = False  # the shooting needs no crossings: not locating them saves their work
         self.field(y_guess)  # the model's own refusals (singular M) before any integration
 
     def run(self, z):

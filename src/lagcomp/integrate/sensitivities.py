@@ -40,9 +40,10 @@ crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the 
 ∂g/∂w nonzero only for a parameter in g; a grazing crossing (denominator 0) gives inf or nan.
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
-Lagrange models, today); located events of a module without ``event_gradients`` (generated before it existed); projection; function
-inputs (their ∂u/∂y is unknown); parameter columns when the module's ``rhs_parameter_jacobian`` is a refusing stub
-(its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
+Lagrange models, today); located events of a module without ``event_gradients`` (generated before it
+existed); projection; function inputs (their ∂u/∂y is unknown); parameter columns when the module's
+``rhs_parameter_jacobian`` is a refusing stub (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown
+names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
 """
 
 from __future__ import annotations
@@ -323,20 +324,20 @@ def event_sensitivities(model, p: np.ndarray, cols: Columns, scale: float, event
         times, rows, which = (np.concatenate(column) for column in zip(*event_parts, strict=True))
     else:
         times, rows, which = np.empty(0), np.empty((0, n * (1 + k))), np.empty(0, dtype=np.int64)
-    parameter_columns = n + 1 + np.array(cols.parameters, dtype=np.int64)
-    gradients, f = np.empty((len(model.events), n + 1 + len(model.parameters))), np.empty(n)
-    dt, dy = np.full((times.size, k), np.nan), np.full((times.size, n, k), np.nan)
-    for r in range(times.size):
+    m = times.size
+    S = rows[:, n:].reshape(m, k, n).transpose(0, 2, 1) * (1.0 / scale)   # (m, N, k); exact: a power of two
+    f, gradients = np.full((m, n), np.nan), np.empty((len(model.events), n + 1 + len(model.parameters)))
+    g = np.empty((m, gradients.shape[1]))
+    for r in range(m):   # the kernels at each crossing (a failing rhs leaves its row nan)
         x = rows[r, :n].copy()
-        S = rows[r, n:].reshape(k, n).T * (1.0 / scale)   # (exact: a power of two)
-        if kernels.rhs(times[r], x, p, f) != 0:
-            continue
+        if kernels.rhs(times[r], x, p, f[r]) != 0:
+            f[r] = np.nan
         kernels.event_gradients(times[r], x, p, gradients)
-        g = gradients[which[r]]
-        numerator = g[:n] @ S
-        numerator[len(cols.state):] += g[parameter_columns]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            dt[r] = -numerator / (g[:n] @ f + g[n])
-        dy[r] = S + np.outer(f, dt[r])
+        g[r] = gradients[which[r]]
+    numerator = np.einsum("rj,rjc->rc", g[:, :n], S)
+    numerator[:, len(cols.state):] += g[:, n + 1 + np.array(cols.parameters, dtype=np.int64)]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dt = -numerator / (np.einsum("rj,rj->r", g[:, :n], f) + g[:, n])[:, None]
+    dy = S + f[:, :, None] * dt[:, None, :]
     return {event.name: EventSensitivities(t=dt[which == e], y=dy[which == e])
             for e, event in enumerate(model.events)}
