@@ -131,11 +131,16 @@ def test_refusals_of_models_and_runs(compiled, oscillator, cache_dir):
     with pytest.raises(lc.OptionError, match="sweep does not"):
         oscillator.sweep((0.0, 1.0), {"x": [0.0, 1.0]}, sensitivities="q0", progress=False)
     pushed = lc.compile(lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, forces=[lc.Input("f")],
-                                  name="sensitivity_pushed", defaults={"m": 1.0, "k": 1.0}, q0=(1.0,)),
+                                  name="sensitivity_pushed", defaults={"m": 1.0, "k": 1.0}, q0=(1.0,),
+                                  events=[lc.Event("follows", x - lc.Input("f"))]),
                         cache_dir=cache_dir)
     with pytest.raises(lc.OptionError, match="numba functions"):
         pushed.simulate((0.0, 1.0), inputs={"f": numba.njit(lambda t, y, p: 0.0)}, sensitivities="q0",
-                        progress=False)
+                        events=False, progress=False)
+    table = {"f": ([0.0, 1.0], [0.0, 0.5])}     # (a linear table: the event reads no derivative of f)
+    with pytest.raises(lc.OptionError, match="events that read inputs"):
+        pushed.simulate((0.0, 1.0), inputs=table, sensitivities="q0", progress=False)
+    assert pushed.simulate((0.0, 1.0), inputs=table, progress=False).success
 
 
 def test_parameter_columns_match_the_closed_form(oscillator):

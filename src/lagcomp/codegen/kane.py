@@ -24,8 +24,8 @@ speeds, state length ``n_q + n_u``; same calling conventions as
 
 - ``event_values(t, y, p, out)``: g of each declared event (`lagcomp.Event`
   over q, u and t); without events a stub, and the drivers' event code is left out.
-  ``event_gradients(t, y, p, out)``: their partials ∂g/∂y, ∂g/∂t, ∂g/∂p, (E, N + 1 + P), for the
-  sensitivities of the events' times; a stub without events.
+  ``event_gradients(t, y, p, out) -> 0``: their partials ∂g/∂y, ∂g/∂t, ∂g/∂p, (E, N + 1 + P), for
+  the sensitivities of the events' times; a stub without events.
 - ``geometry(t, y, p, out)``: writes nothing, ``GEOMETRY = ()``, ``GEOMETRY_SIZE = 0``
   (`lagcomp.codegen.geometry`): a Kane model's bodies are not drawn yet.
 
@@ -228,7 +228,7 @@ def event_values(t, y, p, out):
 @njit(cache=True, error_model="numpy")
 def event_gradients(t, y, p, out):
     """No events: this model declares none."""
-    pass
+    return 0
 '''
 
 _HOOKS = '''
@@ -339,9 +339,10 @@ def _events(form: FirstOrderForm, events, mapping, loads) -> tuple:
     gradients = _kernel(
         "event_gradients",
         f"Partials of the event functions {names}, shape ({len(names)}, {size + 1 + len(form.parameters)}), into\n"
-        f"`out`: row i is event i, columns ∂g_i/∂y_j (y = (q, u), {size} of them), then ∂g_i/∂t, then ∂g_i/∂p_j.",
+        f"`out`: row i is event i, columns ∂g_i/∂y_j (y = (q, u), {size} of them), then ∂g_i/∂t, then ∂g_i/∂p_j.\n"
+        "Returns 0.",
         ARGS, stores, mapping, loads)
-    return (values, gradients), _function(values) + _function(gradients)
+    return (values, gradients), _function(values) + _function(gradients, after=["return 0"])
 
 
 def _header(name: str, form: FirstOrderForm, reaction_names, kernels) -> str:

@@ -685,23 +685,36 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+#: Why a module whose events read inputs has no event partials (its ``EVENT_GRADIENTS_REFUSED``).
+EVENTS_WITH_INPUTS_REFUSED = ("events that read inputs: ∂g/∂t would need the inputs' derivatives, which a linear "
+                              "table does not have")
+
+
 def _event_gradients_kernel(eom: EOM, mapping, loads) -> Kernel:
     """The partial derivatives of the event functions, (E, N + 1 + P): ∂g_e/∂y (y = (q, q̇)), ∂g_e/∂t, ∂g_e/∂p.
 
     For the sensitivities of an event's time (`lagcomp.integrate.sensitivities.event_sensitivities`):
-    dt*/dw = −(∂g/∂y · ∂y/∂w + ∂g/∂p_w) / (∂g/∂y · f + ∂g/∂t).  ∂g/∂t holds the inputs' derivatives
-    (u(t) in g gives u̇(t), which the kernel reads from the input's table).  One CSE; no stores without events.
+    dt*/dw = −(∂g/∂y · ∂y/∂w + ∂g/∂p_w) / (∂g/∂y · f + ∂g/∂t).  One CSE; no stores without events.  Events
+    that read an input get a refusing stub (`EVENTS_WITH_INPUTS_REFUSED`): their u̇ would raise the order every
+    table of the input must have (`_input_orders`), in runs without sensitivities too.
     """
     names, size, width = eom.system.event_names, 2 * eom.n, 2 * eom.n + 1 + len(eom.parameters)
+    doc = (f"Partials of the event functions {names}, shape ({len(names)}, {width}), into `out`: row e is event e,\n"
+           f"columns ∂g_e/∂y_j (y = (q, q̇), {size} of them), then ∂g_e/∂t, then ∂g_e/∂p_j for the model's\n"
+           "parameters (symbolic, no differences; the sensitivities of the events' times).\n")
+    if any(is_input(u) for g in eom.events for u in g.atoms(sp.core.function.AppliedUndef)):
+        return Kernel(
+            name="event_gradients",
+            doc=doc + f"Not available for this system: {EVENTS_WITH_INPUTS_REFUSED}.\nWrites nothing and returns "
+                f"NO_JACOBIAN = {NO_JACOBIAN} (EVENT_GRADIENTS_REFUSED says why).",
+            args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
+            solve=Unavailable(status=NO_JACOBIAN, constant="EVENT_GRADIENTS_REFUSED",
+                              reason=EVENTS_WITH_INPUTS_REFUSED),
+        )
     variables = (*eom.q, *eom.qd, t, *eom.parameters)
     stores = [(f"out[{e}, {j}]", g.diff(v)) for e, g in enumerate(eom.events) for j, v in enumerate(variables)]
-    return _kernel(
-        "event_gradients",
-        f"Partials of the event functions {names}, shape ({len(names)}, {width}), into `out`: row e is event e,\n"
-        f"columns ∂g_e/∂y_j (y = (q, q̇), {size} of them), then ∂g_e/∂t, then ∂g_e/∂p_j for the model's parameters\n"
-        "(symbolic, no differences; the sensitivities of the events' times).",
-        ("t", "y", "p", "out"), stores, mapping, loads,
-    )
+    return _kernel("event_gradients", doc + "Returns 0.", ("t", "y", "p", "out"), stores, mapping, loads,
+                   solve=ReturnZero())
 
 
 def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:

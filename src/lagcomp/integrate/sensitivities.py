@@ -41,7 +41,7 @@ crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the 
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
 Lagrange models, today); located events of a module without ``event_gradients`` (generated before it
-existed); projection; function inputs (their ∂u/∂y is unknown); parameter columns when the module's
+existed) or whose events read inputs (``EVENT_GRADIENTS_REFUSED``); projection; function inputs (their ∂u/∂y is unknown); parameter columns when the module's
 ``rhs_parameter_jacobian`` is a refusing stub (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown
 names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
 """
@@ -133,6 +133,10 @@ def check(model, method, options, cols: Columns, original_model) -> None:
                           "times' sensitivities need the partials of the event functions, a kernel its module "
                           "lacks (generated before lagcomp emitted `event_gradients`): compile the model again, "
                           "or pass events=False.")
+    refused = getattr(model.kernels, "EVENT_GRADIENTS_REFUSED", None)
+    if located and refused is not None:
+        raise OptionError(f"`sensitivities` with events: the times of {model.name!r}'s events {located} have no "
+                          f"sensitivities: its module has no event partials ({refused}); pass events=False.")
     if options.projecting:
         raise OptionError("`sensitivities` with `projection=True`: the projection would move the state and not "
                           "its sensitivities; leave `projection` unset.")

@@ -43,9 +43,10 @@ PROJECT = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR))
 RESIDUAL = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
 #: ``event_values(t, y, p, out)``: the event functions' values at ``y`` (writes nothing without events).
 EVENTS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
-#: ``event_gradients(t, y, p, out)``: ``out`` (E, N + 1 + P) = ∂g/∂y, ∂g/∂t, ∂g/∂p of the event functions, exact
-#: (writes nothing without events); read by `lagcomp.integrate.sensitivities.event_sensitivities`, no driver.
-EVENT_GRADIENTS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, MATRIX))
+#: ``event_gradients(t, y, p, out) -> int``: ``out`` (E, N + 1 + P) = ∂g/∂y, ∂g/∂t, ∂g/∂p of the event functions,
+#: exact (writes nothing without events); 0, or ``lagcomp.ir.NO_JACOBIAN`` where the module has none (its
+#: ``EVENT_GRADIENTS_REFUSED`` says why).  Read by `lagcomp.integrate.sensitivities.event_sensitivities`, no driver.
+EVENT_GRADIENTS = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, MATRIX))
 #: ``energy(t, y, p) -> float``: T + V at ``y`` (the sweeps' energy drift).
 ENERGY = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
 #: ``energy_function(t, y, p) -> float``: the energy function h = Σ q̇ ∂L/∂q̇ − L at ``y`` (the Hamiltonian's value).
