@@ -41,9 +41,9 @@ crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the 
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
 Lagrange models, today); located events of a module without ``event_gradients`` (generated before it
-existed) or whose events read inputs (``EVENT_GRADIENTS_REFUSED``); projection; function inputs (their ∂u/∂y is unknown); parameter columns when the module's
-``rhs_parameter_jacobian`` is a refusing stub (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown
-names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
+existed) or whose events read inputs (``EVENT_GRADIENTS_REFUSED``); projection; function inputs (their
+∂u/∂y is unknown); parameter columns when the module's ``rhs_parameter_jacobian`` is a refusing stub (its
+``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
 """
 
 from __future__ import annotations
