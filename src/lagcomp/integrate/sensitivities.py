@@ -43,7 +43,8 @@ Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobia
 Lagrange models, today); located events of a module without ``event_gradients`` (generated before it
 existed) or whose events read inputs (``EVENT_GRADIENTS_REFUSED``); projection; function inputs (their
 ∂u/∂y is unknown); parameter columns when the module's ``rhs_parameter_jacobian`` is a refusing stub (its
-``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
+``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown names.  `lagcomp.integrate.sweep` refuses
+``sensitivities`` altogether.
 """
 
 from __future__ import annotations
