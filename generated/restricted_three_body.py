@@ -276,6 +276,15 @@ def event_values(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def event_gradients(t, y, p, out):
+    """Partials of the event functions (), shape (0, 6), into `out`: row e is event e,
+    columns ∂g_e/∂y_j (y = (q, q̇), 4 of them), then ∂g_e/∂t, then ∂g_e/∂p_j for the model's
+    parameters (symbolic, no differences; the sensitivities of the events' times).
+    Returns 0."""
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def rest_partials(t, y, p, out):
     """At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,
     column j the variable j). The velocities in `y` are ignored: the partials are those at rest."""

@@ -40,8 +40,8 @@ crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the 
 ∂g/∂w nonzero only for a parameter in g; a grazing crossing (denominator 0) gives inf or nan.
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
-Lagrange models, today); located events of a module without ``event_gradients`` (generated before it
-existed) or whose events read inputs (``EVENT_GRADIENTS_REFUSED``); projection; function inputs (their
+Lagrange models, today); located events that read inputs (their module's ``event_gradients`` is a
+refusing stub, ``EVENT_GRADIENTS_REFUSED`` says why); projection; function inputs (their
 ∂u/∂y is unknown); parameter columns when the module's ``rhs_parameter_jacobian`` is a refusing stub (its
 ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown names.  `lagcomp.integrate.sweep` refuses
 ``sensitivities`` altogether.
@@ -129,11 +129,6 @@ def check(model, method, options, cols: Columns, original_model) -> None:
         raise OptionError(f"`sensitivities` need the Jacobian ∂f/∂y of {model.name!r}, which has no Jacobian "
                           f"kernel: its equations hold {refused}.")
     located = [e.name for e, action in zip(model.events, options.actions.tolist(), strict=True) if action]
-    if located and not hasattr(model.kernels, "event_gradients"):
-        raise OptionError(f"`sensitivities` with events: {model.name!r} would locate its events {located}, whose "
-                          "times' sensitivities need the partials of the event functions, a kernel its module "
-                          "lacks (generated before lagcomp emitted `event_gradients`): compile the model again, "
-                          "or pass events=False.")
     refused = getattr(model.kernels, "EVENT_GRADIENTS_REFUSED", None)
     if located and refused is not None:
         raise OptionError(f"`sensitivities` with events: the times of {model.name!r}'s events {located} have no "
