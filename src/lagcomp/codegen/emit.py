@@ -35,6 +35,7 @@ from lagcomp.codegen.taylor import (
 from lagcomp.equations import Equation
 from lagcomp.ir import (
     AugmentedSolve,
+    Delegate,
     FlatMatrix,
     JacobianSolve,
     Kernel,
@@ -217,15 +218,19 @@ def _gathered_matrix(n: int, m, symmetric: bool) -> list[str]:
 
 
 def _jacobian_frame(solve: JacobianSolve) -> tuple[list[str], list[str]]:
-    """The lines of ``rhs_jacobian`` (``rhs_parameter_jacobian``) before its loads (`rhs` into ``_ydot``, the
-    work array zeroed) and after its stores."""
+    """The lines of ``rhs_with_jacobian`` (``rhs_parameter_jacobian``) before its loads (`rhs` into ``_ydot``,
+    `out` zeroed and seen flat as ``_jac``) and after its stores."""
     size, width, rows = solve.size, solve.width, solve.size - solve.n
-    before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:",
-              f"{INDENT}return _status", f"_jac = np.zeros({size * width})"]
-    after = [f"out[:] = _jac.reshape(({size}, {width}))",
-             f"# out[{rows}:] = M⁻¹ out[{rows}:]: one LDLᵀ of M (lower triangle), a substitution per column."]
+    before = ["_ydot = ydot" if solve.given_ydot else f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)",
+              "if _status:", f"{INDENT}return _status", f"_jac = out.reshape({size * width})", "_jac[:] = 0.0"]
+    after = [f"# out[{rows}:] = M⁻¹ out[{rows}:]: one LDLᵀ of M (lower triangle), a substitution per column."]
     return before, after + _gathered_matrix(solve.n, solve.m, symmetric=False) + [
         f"return ldlt_solve_matrix(mm, out[{rows}:])"]
+
+
+def delegated_call(solve: Delegate) -> str:
+    """The one line of a `Delegate` kernel: the other kernel's status, its scratch output dropped."""
+    return f"return {solve.kernel}(t, y, p, np.empty({solve.scratch}), out)"
 
 
 def _looped_ldlt(solve: LinearSolve) -> list[str]:
@@ -265,8 +270,11 @@ def _kernel_source(kernel: Kernel) -> str:
     body = _docstring(kernel.doc).splitlines()
     solve = kernel.solve
     if isinstance(solve, Unavailable):
-        constant = f"\n\n#: Why this module's {kernel.name} computes nothing.\n{solve.constant} = {solve.reason!r}\n"
+        constant = "" if solve.constant is None else (
+            f"\n\n#: Why this module's {kernel.name} computes nothing.\n{solve.constant} = {solve.reason!r}\n")
         return _decorated(kernel, body + [f"return {solve.status}"]) + constant
+    if isinstance(solve, Delegate):
+        return _decorated(kernel, body + [delegated_call(solve)])
     if isinstance(solve, JacobianSolve):
         before, after = _jacobian_frame(solve)
         body += before
