@@ -133,7 +133,7 @@ def kernel_support_names(kernels) -> set[str]:
         elif isinstance(solve, LinearSolve):
             names.add("PIVOT_TOLERANCE" if solve.unrolled or kernel.lanes else "ldlt_solve")
         elif isinstance(solve, JacobianSolve):
-            names.add("ldlt_solve_matrix")
+            names.add("PIVOT_TOLERANCE" if solve.n <= JACOBIAN_UNROLL_MAX else "ldlt_solve_matrix")
     return names
 
 
@@ -224,8 +224,45 @@ def _jacobian_frame(solve: JacobianSolve) -> tuple[list[str], list[str]]:
     before = ["_ydot = ydot" if solve.given_ydot else f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)",
               "if _status:", f"{INDENT}return _status", f"_jac = out.reshape({size * width})", "_jac[:] = 0.0"]
     after = [f"# out[{rows}:] = M⁻¹ out[{rows}:]: one LDLᵀ of M (lower triangle), a substitution per column."]
+    if solve.n <= JACOBIAN_UNROLL_MAX:
+        return before, after + _unrolled_ldlt_matrix(solve)
     return before, after + _gathered_matrix(solve.n, solve.m, symmetric=False) + [
         f"return ldlt_solve_matrix(mm, out[{rows}:])"]
+
+
+#: Largest n whose Jacobian kernels solve by M unrolled (`_unrolled_ldlt_matrix`); larger ones call the loop
+#: ``ldlt_solve_matrix``.  Its 2n substitutions are ~2n³ statements: 250 at n = 5.
+JACOBIAN_UNROLL_MAX = 6
+
+
+def _unrolled_ldlt_matrix(solve: JacobianSolve) -> list[str]:
+    """``ldlt_solve_matrix(mm, out[rows:])`` written out: the same operations in the same order (so the same
+    values bitwise: no reassociation, divisions kept), on scalar locals and the flat ``_jac`` instead of
+    loops over an allocated ``mm``.  Each sum is accumulated left to right as the loop's ``-=`` does."""
+    n, m, width, rows = solve.n, solve.m, solve.width, solve.size - solve.n
+
+    def factor(i: int, j: int) -> str:
+        """L[i, j], i > j: the loop's mm[i, j] after factoring."""
+        return f"_l{i}_{j}"
+
+    def entry(i: int, c: int) -> str:
+        """b[i, c] = out[rows + i, c], flat."""
+        return f"_jac[{(rows + i) * width + c}]"
+
+    lines = []
+    for j in range(n):
+        lines.append(f"_d{j} = {' - '.join([m[j][j]] + [f'{factor(j, k)}*{factor(j, k)}*_d{k}' for k in range(j)])}")
+        lines += [f"if not _d{j} > PIVOT_TOLERANCE*abs({m[j][j]}):", f"{INDENT}return {j + 1}"]
+        for i in range(j + 1, n):
+            terms = [m[i][j]] + [f"{factor(i, k)}*{factor(j, k)}*_d{k}" for k in range(j)]
+            lines.append(f"{factor(i, j)} = ({' - '.join(terms)})/_d{j}")
+    for c in range(width):
+        for i in range(n):
+            lines.append(f"_z{i} = {' - '.join([entry(i, c)] + [f'{factor(i, k)}*_z{k}' for k in range(i)])}")
+        for i in reversed(range(n)):
+            terms = [f"_z{i}/_d{i}"] + [f"{factor(k, i)}*_x{k}" for k in range(i + 1, n)]
+            lines += [f"_x{i} = {' - '.join(terms)}", f"{entry(i, c)} = _x{i}"]
+    return lines + ["return 0"]
 
 
 def delegated_call(solve: Delegate) -> str:
