@@ -96,7 +96,9 @@ class JacobianSolve:
     ``_jac``, row-major (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles faster than `out`):
     the rows of x' and, in the last n rows, ∂(F − M ā)/∂y (or ∂/∂p) at ā = a.  Then the last n rows of
     `out` are overwritten with M⁻¹ times themselves: one LDLᵀ of M, a substitution per column
-    (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`), whose status is returned.
+    (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`, or for n ≤
+    `lagcomp.codegen.emit.JACOBIAN_UNROLL_MAX` its operations written out, bitwise the same), whose
+    status is returned.
     """
 
     n: int
