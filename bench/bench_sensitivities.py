@@ -9,12 +9,12 @@ the median over `--repeats` interleaved pairs of (time with k columns) / (time o
 same per accepted step.
 Issue #22's target is a ratio ≤ 1.2 (1 + k).  Each evaluation of the augmented rhs
 (`lagcomp.integrate.sensitivities.augmented_rhs`) calls the module's ``rhs_with_jacobian`` (f and J in
-one call, J written straight into its work space), then forms J S.
+one call, J written straight into its work space, M's LDLᵀ written out for n ≤ 6), then forms J S.
 
 Measured (``--t-end 300 --repeats 5``, the "state" rows; the "both" rows take 1.3-1.5× the steps):
-double pendulum 4.2× (k = 1), 4.8× (k = 4); 5-link 4.8× (k = 1), 7.8× (k = 10).  Before
-``rhs_with_jacobian`` (``rhs``, then ``rhs_jacobian`` calling ``rhs`` again and copying J from a work
-array): 5.2×, 5.7×, 6.0×, 9.2×.
+double pendulum 3.2× (k = 1), 3.7× (k = 4); 5-link 3.0× (k = 1), 6.1× (k = 10).  Before
+``rhs_with_jacobian`` (``rhs``, then ``rhs_jacobian`` calling ``rhs`` again, copying J from a work
+array and solving by M in loops): 5.2×, 5.7×, 6.0×, 9.2×; with it but the loops: 4.2×, 4.8×, 4.8×, 7.8×.
 """
 
 from __future__ import annotations
