@@ -231,7 +231,10 @@ def _jacobian_frame(solve: JacobianSolve) -> tuple[list[str], list[str]]:
 
 
 #: Largest n whose Jacobian kernels solve by M unrolled (`_unrolled_ldlt_matrix`); larger ones call the loop
-#: ``ldlt_solve_matrix``.  Its 2n substitutions are ~2n³ statements: 250 at n = 5.
+#: ``ldlt_solve_matrix``.  Its 2n substitutions are ~2n³ statements (250 at n = 5): ``rhs_with_jacobian`` of an
+#: n-link chain compiled in 0.44 s against 0.64 s looped at n = 3, 1.4 s against 0.9 s at n = 5, 2.0 s against
+#: 1.0 s at n = 6 (numba compiles it at a model's first sensitivity or radau run, not for the other methods)
+#: and costs 354 against 494 ns (double pendulum), 1.08 against 1.90 µs (5-link) in a loaded process.
 JACOBIAN_UNROLL_MAX = 6
 
 
