@@ -118,7 +118,8 @@ def _rhs_jacobian(form: FirstOrderForm) -> tuple:
     symbols ū for the accelerations held fixed while differentiating (`acceleration_partials`), bound
     to the u̇ that `rhs` solved.  The kernel calls `rhs` (returning its status when not 0), writes
     ∂N/∂y and that block (into `out` seen flat as ``_jac``, as `lagcomp.ir.JacobianSolve` explains), then
-    overwrites the block with M⁻¹ times itself (``lu_solve_matrix``: the pivoting of `rhs`'s ``lu_solve``).  One CSE for ∂N/∂y, M and the block.
+    overwrites the block with M⁻¹ times itself (``lu_solve_matrix``: the pivoting of `rhs`'s ``lu_solve``).
+    One CSE for ∂N/∂y, M and the block.
     """
     n_q, n_u = form.n_q, form.n_u
     size, y = n_q + n_u, (*form.q, *form.u)
