@@ -262,6 +262,39 @@ def test_kernels_are_values_of_the_drivers_jacobian_type(compiled, sleigh):
         assert np.array_equal(via_type, out, equal_nan=True)
 
 
+def test_rhs_with_jacobian_is_rhs_and_rhs_jacobian_bitwise(compiled, sleigh):
+    """``rhs_with_jacobian`` (the sensitivities' kernel: f and J in one call) writes what ``rhs`` and
+    ``rhs_jacobian`` write, bitwise, with their statuses, called as `kernel_types.RHS_WITH_JACOBIAN` as the
+    augmented rhs does: Lagrange (LDLᵀ) and Kane (LU) modules, a singular M, and the constrained stub."""
+    from numba import njit, types
+
+    from lagcomp.integrate.drivers.kernel_types import FLOAT, MATRIX, RHS_WITH_JACOBIAN, VECTOR
+
+    @njit(types.int64(RHS_WITH_JACOBIAN, FLOAT, VECTOR, VECTOR, VECTOR, MATRIX))
+    def call(kernel, time, y, p, ydot, out):
+        return kernel(time, y, p, ydot, out)
+
+    rng = np.random.default_rng(11)
+    singular = compiled("double_pendulum").parameter_vector({"m2": 0.0})
+    for model in (compiled("double_pendulum"), sleigh[1], compiled("spherical_pendulum_cartesian")):
+        for p in (model.parameter_vector(), singular if model.name == "double_pendulum" else None):
+            if p is None:
+                continue
+            for _ in range(5):
+                y = rng.uniform(-1.0, 1.0, model.state_size)
+                f, J = np.full(y.size, np.nan), np.full((y.size, y.size), np.nan)
+                status = model.kernels.rhs(0.0, y, p, f)
+                expected = model.kernels.rhs_jacobian(0.0, y, p, J)
+                f2, J2 = np.full_like(f, np.nan), np.full_like(J, np.nan)
+                assert call(model.kernels.rhs_with_jacobian, 0.0, y, p, f2, J2) == expected
+                if expected == NO_JACOBIAN:
+                    assert np.all(np.isnan(J2)) and np.all(np.isnan(f2))
+                    continue
+                assert np.array_equal(f2, f, equal_nan=True)
+                if status == 0:
+                    assert np.array_equal(J2, J)
+
+
 def test_whipple_bicycle_jacobian_agrees_with_central_differences(whipple_bicycle):
     """sympy's test_kane3 bicycle (the session's model; its module run as plain Python): M with the
     differentiated velocity constraints among its rows, the dependent coordinate q4, CRAMER's quotients."""

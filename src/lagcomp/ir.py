@@ -12,7 +12,8 @@ Kernel calling convention (all arrays float64, C-contiguous):
 - kernels with ``out`` write their result into it and return nothing, except
   ``rhs``, which returns an int status (0, or k > 0 when the mass matrix is
   not positive definite at pivot k: the state is singular),
-  ``rhs_jacobian`` and ``rhs_parameter_jacobian``, which return the same, or
+  ``rhs_jacobian``, ``rhs_with_jacobian`` (``rhs`` into ``ydot`` and ``rhs_jacobian`` into ``out`` at
+  once) and ``rhs_parameter_jacobian``, which return the same, or
   `NO_JACOBIAN` where the module has no such Jacobian, and the DAE kernels of constrained systems, which return 0.
 - scalar kernels (energies) return a float.
 """
@@ -87,25 +88,39 @@ class JacobianSolve:
     with `columns` that of ``rhs_parameter_jacobian``, out = ∂y'/∂p of shape (size, columns).
 
     Before its loads the kernel calls ``rhs(t, y, p, _ydot)``, returning its status when it is not
-    0, so that loads can bind the accelerations ā to ``_ydot[size − n + i]``, and allocates the
-    work array ``_jac`` (size × width zeros, width = `columns`, or size when None).  The stores bind M's
-    lower triangle to the scalar locals ``m[i][j]`` (i ≥ j, M symmetric) and write the nonzero entries of
-    the Jacobian into ``_jac``, row-major (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles
-    faster than `out`): the rows of x' and, in the last n rows, ∂(F − M ā)/∂y (or ∂/∂p) at ā = a.  Then
-    ``_jac`` is copied into `out` and its last n rows overwritten with M⁻¹ times themselves: one LDLᵀ of
-    M, a substitution per column (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`), whose status
-    is returned.
+    0, so that loads can bind the accelerations ā to ``_ydot[size − n + i]``: ``_ydot`` is the kernel's
+    argument ``ydot`` with `given_ydot` (``rhs_with_jacobian``, which hands f back to its caller), else a
+    local array.  ``_jac`` is `out` seen flat (size × width, width = `columns`, or size when None; `out`
+    is C-contiguous), zeroed: no work array to allocate and copy.  The stores bind M's lower triangle to
+    the scalar locals ``m[i][j]`` (i ≥ j, M symmetric) and write the nonzero entries of the Jacobian into
+    ``_jac``, row-major (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles faster than `out`):
+    the rows of x' and, in the last n rows, ∂(F − M ā)/∂y (or ∂/∂p) at ā = a.  Then the last n rows of
+    `out` are overwritten with M⁻¹ times themselves: one LDLᵀ of M, a substitution per column
+    (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`, or for n ≤
+    `lagcomp.codegen.emit.JACOBIAN_UNROLL_MAX` its operations written out, bitwise the same), whose
+    status is returned.
     """
 
     n: int
     size: int
     m: tuple[tuple[str, ...], ...]
     columns: int | None = None
+    given_ydot: bool = False
 
     @property
     def width(self) -> int:
         """The columns of `out`: `columns`, or `size` for the square ∂y'/∂y."""
         return self.size if self.columns is None else self.columns
+
+
+@dataclass(frozen=True)
+class Delegate:
+    """The whole body: ``return kernel(t, y, p, np.empty(scratch), out)``, a kernel that computes what
+    `kernel` does and keeps only `out` (``rhs_jacobian`` from ``rhs_with_jacobian``, f dropped): one
+    compiled body for both, the same values bitwise."""
+
+    kernel: str
+    scratch: int
 
 
 @dataclass(frozen=True)
@@ -127,10 +142,11 @@ class FlatMatrix:
 @dataclass(frozen=True)
 class Unavailable:
     """A kernel the module defines (every module defines every kernel) but cannot compute: it writes
-    nothing and returns `status`; the module constant `constant` holds `reason`."""
+    nothing and returns `status`; the module constant `constant` holds `reason` (None: another kernel's
+    constant says it already)."""
 
     status: int
-    constant: str
+    constant: str | None
     reason: str
 
 
@@ -154,9 +170,11 @@ class Kernel:
     stores : tuple of (target, Expr)
         Output assignments; the target is an lvalue (``out[0]``, a local) or
         ``return`` for scalar kernels.
-    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, ReturnZero, FlatMatrix, Unavailable or None
+    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, Delegate, ReturnZero, FlatMatrix,
+        Unavailable or None
         Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``,
-        M⁻¹ applied to the rows of ``rhs_jacobian``), the matrix-vector product of
+        M⁻¹ applied to the rows of ``rhs_with_jacobian``), the call of another kernel
+        (``rhs_jacobian``), the matrix-vector product of
         ``momenta`` for large systems, the status 0 of a kernel that cannot fail (the DAE
         kernels; ``dae_jacobian`` through its flat work array), or the status of a kernel
         that computes nothing.
@@ -181,8 +199,8 @@ class Kernel:
     loads: tuple[tuple[str, str], ...]
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
-    solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | ReturnZero | FlatMatrix | Unavailable
-            | None) = None
+    solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | Delegate | ReturnZero | FlatMatrix
+            | Unavailable | None) = None
     lanes: bool = False
     alias: str | None = None
     constants: tuple[tuple[str, str, object], ...] = ()

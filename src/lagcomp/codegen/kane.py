@@ -10,8 +10,9 @@ speeds, state length ``n_q + n_u``; same calling conventions as
   with partial pivoting (``lu_solve``: M is square but not symmetric when
   the velocity constraints are among its rows).  Returns 0, or j > 0 when
   pivot j is zero (M singular there).
-- ``rhs_jacobian(t, y, p, out)``: ∂(q̇, u̇)/∂(q, u), shape (n_q + n_u, n_q + n_u), exact
-  (`_rhs_jacobian` derives it); the status of ``rhs``, or of the LU of M.
+- ``rhs_with_jacobian(t, y, p, ydot, out)``: ydot = f as ``rhs`` computes it, out = ∂(q̇, u̇)/∂(q, u),
+  shape (n_q + n_u, n_q + n_u), exact (`_rhs_jacobian` derives it); the status of ``rhs``, or of the LU
+  of M.  ``rhs_jacobian(t, y, p, out)``: the same without f.
 - ``rhs_parameter_jacobian(t, y, p, out)``: ∂(q̇, u̇)/∂p, shape (n_q + n_u, P), P parameters,
   exact (`_rhs_parameter_jacobian`); the same statuses.
 - ``kinematics(t, y, p, out)``: q̇ = N, shape (n_q,).
@@ -48,6 +49,7 @@ from lagcomp import __version__
 from lagcomp.codegen.emit import (
     INDENT,
     PROJECTION_ITERATIONS,
+    delegated_call,
     kernel_support_names,
     module_constants,
     support_imports,
@@ -55,11 +57,13 @@ from lagcomp.codegen.emit import (
 from lagcomp.codegen.geometry import no_geometry_kernel
 from lagcomp.codegen.latex import equations_source, kane_equations
 from lagcomp.codegen.lower import (
-    RHS_JACOBIAN_DOC,
     RHS_PARAMETER_JACOBIAN_DOC,
+    RHS_WITH_JACOBIAN_DOC,
+    WITH_JACOBIAN_ARGS,
     _kernel,
     acceleration_partials,
     jacobian_entry,
+    jacobian_only,
 )
 from lagcomp.codegen.printer import to_code
 from lagcomp.mechanics.first_order import FirstOrderForm
@@ -109,14 +113,15 @@ def _rhs(form: FirstOrderForm, mapping, loads) -> tuple:
 
 
 def _rhs_jacobian(form: FirstOrderForm) -> tuple:
-    """The exact Jacobian of y' = (N(q, u, t), u̇), M u̇ = F, as a kernel and its source.
+    """The exact Jacobian of y' = (N(q, u, t), u̇), M u̇ = F: ``rhs_with_jacobian`` (f into ``ydot`` too),
+    ``rhs_jacobian`` (the same, f dropped: `lagcomp.ir.Delegate`), and their source.
 
     Differentiating M u̇ = F along y = (q, u) gives M ∂u̇/∂y = ∂F/∂y − ∂(M ū)/∂y |_{ū = u̇}, with
     symbols ū for the accelerations held fixed while differentiating (`acceleration_partials`), bound
     to the u̇ that `rhs` solved.  The kernel calls `rhs` (returning its status when not 0), writes
-    ∂N/∂y and that block (into the flat ``_jac``, as `lagcomp.ir.JacobianSolve` explains, then into
-    `out`), then overwrites the block with M⁻¹ times itself (``lu_solve_matrix``: the pivoting of
-    `rhs`'s ``lu_solve``).  One CSE for ∂N/∂y, M and the block.
+    ∂N/∂y and that block (into `out` seen flat as ``_jac``, as `lagcomp.ir.JacobianSolve` explains), then
+    overwrites the block with M⁻¹ times itself (``lu_solve_matrix``: the pivoting of `rhs`'s ``lu_solve``).
+    One CSE for ∂N/∂y, M and the block.
     """
     n_q, n_u = form.n_q, form.n_u
     size, y = n_q + n_u, (*form.q, *form.u)
@@ -129,17 +134,19 @@ def _rhs_jacobian(form: FirstOrderForm) -> tuple:
     stores += [(jacobian_entry(n_q + i, j, size), block[i][j])
                for i in range(n_u) for j in range(size) if block[i][j] != 0]
     kernel = _kernel(
-        "rhs_jacobian",
-        RHS_JACOBIAN_DOC +
+        "rhs_with_jacobian",
+        RHS_WITH_JACOBIAN_DOC +
         "Rows ∂N/∂y of q̇ = N(q, u, t), then ∂u̇/∂y = M⁻¹ (∂F/∂y − ∂(M ū)/∂y |ū=u̇) (u̇ from `rhs`).\n"
         "Returns 0, or j > 0 as `rhs` does, or when this LU of M finds pivot j zero (then `rhs` was\n"
         "within rounding of its threshold); `out` is then invalid.",
-        ARGS, stores, mapping, loads,
+        WITH_JACOBIAN_ARGS, stores, mapping, loads,
     )
-    before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:", f"{INDENT}return _status",
-              f"_jac = np.zeros({size * size})", f"_lu = np.zeros(({n_u}, {n_u}))"]
-    after = [f"out[:] = _jac.reshape(({size}, {size}))", f"return lu_solve_matrix(_lu, out[{n_q}:])"]
-    return kernel, _function(kernel, before=before, after=after)
+    before = ["_ydot = ydot", "_status = rhs(t, y, p, _ydot)", "if _status:", f"{INDENT}return _status",
+              f"_jac = out.reshape({size * size})", "_jac[:] = 0.0", f"_lu = np.zeros(({n_u}, {n_u}))"]
+    after = [f"return lu_solve_matrix(_lu, out[{n_q}:])"]
+    only = jacobian_only(size)
+    source = _function(kernel, before=before, after=after) + _function(only, after=[delegated_call(only.solve)])
+    return kernel, only, source
 
 
 def _rhs_parameter_jacobian(form: FirstOrderForm) -> tuple:
@@ -167,8 +174,8 @@ def _rhs_parameter_jacobian(form: FirstOrderForm) -> tuple:
         ARGS, stores, mapping, loads,
     )
     before = [f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)", "if _status:", f"{INDENT}return _status",
-              f"_jac = np.zeros({size * width})", f"_lu = np.zeros(({n_u}, {n_u}))"]
-    after = [f"out[:] = _jac.reshape(({size}, {width}))", f"return lu_solve_matrix(_lu, out[{n_q}:])"]
+              f"_jac = out.reshape({size * width})", "_jac[:] = 0.0", f"_lu = np.zeros(({n_u}, {n_u}))"]
+    after = [f"return lu_solve_matrix(_lu, out[{n_q}:])"]
     return kernel, _function(kernel, before=before, after=after)
 
 
@@ -370,10 +377,10 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
     """
     mapping, loads = _bindings(form, bool(reaction_names))
     rhs, rhs_source = _rhs(form, mapping, loads)
-    jacobian, jacobian_source = _rhs_jacobian(form)
+    combined, jacobian, jacobian_source = _rhs_jacobian(form)
     parameter_jacobian, parameter_jacobian_source = _rhs_parameter_jacobian(form)
-    kernels = [rhs, jacobian, parameter_jacobian] + _plain_kernels(form, energy, mapping, loads)
-    parts = [rhs_source, jacobian_source, parameter_jacobian_source] + [_function(k) for k in kernels[3:]]
+    kernels = [rhs, combined, jacobian, parameter_jacobian] + _plain_kernels(form, energy, mapping, loads)
+    parts = [rhs_source, jacobian_source, parameter_jacobian_source] + [_function(k) for k in kernels[4:]]
     parts.append("\n\nenergy_function = energy\n")
     if reaction_names:
         kernel, source = _reactions(form, reaction_names, reactions, mapping, loads)

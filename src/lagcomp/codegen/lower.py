@@ -45,6 +45,7 @@ from lagcomp.errors import ModelError
 from lagcomp.ir import (
     NO_JACOBIAN,
     AugmentedSolve,
+    Delegate,
     FlatMatrix,
     JacobianSolve,
     Kernel,
@@ -442,20 +443,23 @@ def jacobian_entry(i: int, j: int, size: int) -> str:
     return f"_jac[{i * size + j}]"
 
 
-#: The docstring of every ``rhs_jacobian`` kernel: what it computes; `_rhs_jacobian_kernel` adds how.
+#: The docstring of every ``rhs_jacobian`` kernel: what it computes; `_rhs_jacobian_kernels` adds how.
 RHS_JACOBIAN_DOC = (
     "Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).\n"
 )
 
 
-def _rhs_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
-    """The exact Jacobian of y' = f(t, y) = (q̇, a), M(q, t) a = F(q, q̇, t), of an unconstrained system.
+def _rhs_jacobian_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
+    """``rhs_with_jacobian`` and ``rhs_jacobian``: the exact Jacobian of y' = f(t, y) = (q̇, a),
+    M(q, t) a = F(q, q̇, t), of an unconstrained system, with f (into ``ydot``) and without.
 
     Differentiating M a = F along y = (q, q̇) gives M ∂a/∂y = ∂F/∂y − ∂(M ā)/∂y |_{ā = a}: symbols ā
     for the accelerations, held fixed while differentiating (`acceleration_partials`), then bound to
     the solved values.  So the kernel calls `rhs` for a (same LDLᵀ, same pivot status), evaluates the
     (n, 2n) block with ā = a, puts it in out[n:] below the rows [0 | I] and overwrites it with M⁻¹
     times itself by one LDLᵀ of M and 2n substitutions (`JacobianSolve`).  One CSE for M and the block.
+    The sensitivities need f and J at every stage: ``rhs_with_jacobian`` hands back the f it computed;
+    ``rhs_jacobian`` (radau) calls it and drops f (`Delegate`), so that numba compiles the body once.
     """
     n = eom.n
     block, m, mapping, loads = _acceleration_block(eom, (*eom.q, *eom.qd), mapping, loads)
@@ -463,13 +467,33 @@ def _rhs_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     stores += [(jacobian_entry(i, n + i, 2 * n), sp.S.One) for i in range(n)]
     stores += [(jacobian_entry(n + i, j, 2 * n), block[i][j])
                for i in range(n) for j in range(2 * n) if block[i][j] != 0]
-    return _kernel(
-        "rhs_jacobian",
-        RHS_JACOBIAN_DOC +
+    combined = _kernel(
+        "rhs_with_jacobian",
+        RHS_WITH_JACOBIAN_DOC +
         "Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).\n"
         "Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`\n"
         "was within rounding of its threshold); `out` is then invalid.",
-        ("t", "y", "p", "out"), stores, mapping, loads, solve=JacobianSolve(n=n, size=2 * n, m=m),
+        WITH_JACOBIAN_ARGS, stores, mapping, loads, solve=JacobianSolve(n=n, size=2 * n, m=m, given_ydot=True),
+    )
+    return combined, jacobian_only(2 * n)
+
+
+#: The arguments of every ``rhs_with_jacobian`` kernel: f goes into ``ydot`` (N,), J into ``out`` (N, N).
+WITH_JACOBIAN_ARGS = ("t", "y", "p", "ydot", "out")
+#: The docstring of every ``rhs_with_jacobian`` kernel: what it computes; the emitters add how.
+RHS_WITH_JACOBIAN_DOC = (
+    "f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,\n"
+    "(N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).\n"
+)
+
+
+def jacobian_only(size: int) -> Kernel:
+    """``rhs_jacobian``: ``rhs_with_jacobian`` with f dropped (`Delegate`), the same values bitwise."""
+    return Kernel(
+        name="rhs_jacobian",
+        doc=RHS_JACOBIAN_DOC + "The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses.",
+        args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
+        solve=Delegate(kernel="rhs_with_jacobian", scratch=size),
     )
 
 
@@ -500,7 +524,7 @@ RHS_PARAMETER_JACOBIAN_DOC = (
 def _rhs_parameter_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     """∂f/∂p of y' = f(t, y, p) = (q̇, a), M(q, t, p) a = F(q, q̇, t, p), of an unconstrained system.
 
-    As `_rhs_jacobian_kernel` along the parameters: M ∂a/∂p = ∂F/∂p − ∂(M ā)/∂p |_{ā = a}, the
+    As `_rhs_jacobian_kernels` along the parameters: M ∂a/∂p = ∂F/∂p − ∂(M ā)/∂p |_{ā = a}, the
     accelerations ā held fixed while differentiating and bound to the values `rhs` solved; q̇ does not
     depend on p, so out[:n] = 0.  One CSE for M and the (n, P) block, one LDLᵀ of M and P substitutions
     (`JacobianSolve` with ``columns`` = P).  A feedback law's gains are parameters like any other (the law is
@@ -535,6 +559,18 @@ def no_rhs_jacobian_kernel(reason: str) -> Kernel:
             f"Writes nothing and returns NO_JACOBIAN = {NO_JACOBIAN} (never a pivot; RHS_JACOBIAN_REFUSED says why).",
         args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
         solve=Unavailable(status=NO_JACOBIAN, constant="RHS_JACOBIAN_REFUSED", reason=reason),
+    )
+
+
+def no_rhs_with_jacobian_kernel(reason: str) -> Kernel:
+    """An ``rhs_with_jacobian`` that writes nothing and returns `NO_JACOBIAN` (``RHS_JACOBIAN_REFUSED``,
+    which `no_rhs_jacobian_kernel` emits, says why: `reason`)."""
+    return Kernel(
+        name="rhs_with_jacobian",
+        doc=RHS_WITH_JACOBIAN_DOC + f"Not available for this system: {reason}.\n"
+            f"Writes nothing and returns NO_JACOBIAN = {NO_JACOBIAN} (never a pivot; RHS_JACOBIAN_REFUSED says why).",
+        args=WITH_JACOBIAN_ARGS, loads=(), temps=(), stores=(),
+        solve=Unavailable(status=NO_JACOBIAN, constant=None, reason=reason),
     )
 
 
@@ -745,13 +781,14 @@ def lower(eom: EOM) -> ModuleIR:
     state_args = ("t", "y", "p")
     if eom.k:
         refused = (no_rhs_jacobian_kernel(CONSTRAINED_JACOBIAN_REFUSED),
+                   no_rhs_with_jacobian_kernel(CONSTRAINED_JACOBIAN_REFUSED),
                    no_rhs_parameter_jacobian_kernel(CONSTRAINED_PARAMETER_JACOBIAN_REFUSED))
         first = _constraint_kernels(eom, mapping, loads) + refused + _dae_kernels(eom, mapping, loads)
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
         # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
         first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled and not eom.system.inputs else (rhs,)
-        first += (_rhs_jacobian_kernel(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
+        first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
     kernels = first + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",

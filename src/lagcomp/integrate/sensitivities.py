@@ -4,14 +4,16 @@ For y' = f(t, y, p) with y (N,), the sensitivities S = ∂y(t)/∂(y0_c, p_j) of
 
     S' = J(t, y) S (+ ∂f/∂p_j in the column of parameter p_j),   S(0) = e_c (0 for a parameter),
 
-J = ∂f/∂y the model's exact ``rhs_jacobian`` kernel (emitted from the symbolic equations) and ∂f/∂p its
-``rhs_parameter_jacobian``.  The run integrates the augmented state (y, S[:, 0], ..., S[:, k-1]) of
+J = ∂f/∂y the model's exact Jacobian (emitted from the symbolic equations: ``rhs_with_jacobian`` writes f and
+J in one call) and ∂f/∂p its ``rhs_parameter_jacobian``.
+The run integrates the augmented state (y, S[:, 0], ..., S[:, k-1]) of
 N (1 + k) components with the library's embedded Runge-Kutta driver (dop853, dopri5, tsit5, bs3), which
 takes as its ``rhs`` a small numba function (`augmented_rhs`) evaluating f and J S: a closure over the
 model's kernels, compiled at the first run that needs it and kept for the process (`_AUGMENTED`), as
 `lagcomp.integrate.function_inputs` does for its wrappers.  The model's kernels and the driver are not
 compiled again.  J (N, N) and ∂f/∂p (N, P) are written into work space at the end of the run's p (the
-kernels read p only up to their parameters and input tables), so a call allocates nothing.
+kernels read p only up to their parameters and input tables): a call allocates only what the kernels do
+(the factor of M in their LDLᵀ).
 
 Error control (``sensitivity_control``).  The embedded driver's error norm runs over every component of the
 state it is given, with one scalar ``rtol``/``atol``, and restricting it to the first N components would
@@ -205,31 +207,29 @@ def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale:
     with _LOCK:
         if key not in _AUGMENTED:
             parameter_jacobian = module.rhs_parameter_jacobian if cols.parameters else None
-            rhs = augmented_rhs(module.rhs, module.rhs_jacobian, parameter_jacobian, n, n_parameters,
-                                cols.parameters, scale)
+            rhs = augmented_rhs(module.rhs_with_jacobian, parameter_jacobian, n, n_parameters, cols.parameters, scale)
             _AUGMENTED[key] = SensitivityKernels(module, rhs)
         return _AUGMENTED[key]
 
 
-def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, n_parameters: int, parameter_columns: tuple[int, ...],
-                  scale: float):
+def augmented_rhs(rhs_with_jacobian, parameter_jacobian, n: int, n_parameters: int,
+                  parameter_columns: tuple[int, ...], scale: float):
     """``rhs(t, y, p, out) -> int`` of the augmented state y = (x, S[:, 0], ..., S[:, k-1]) (column blocks of
     n, each times `scale`): out = (f(x), J S[:, c] + scale ∂f/∂p_j for the parameter columns).  Returns the
-    kernels' status (0, or the singular pivot).  J sits in the last n² floats of p, ∂f/∂p (n, n_parameters)
-    before it.  The parameter columns are the last; the initial-state ones before them are as many as y's
-    size says, so that one closure serves every choice of them (it compiles once per module, in ~0.8 s)."""
+    kernels' status (0, or the singular pivot).  f and J come from one call of the module's
+    ``rhs_with_jacobian`` (f computed once, bitwise ``rhs``'s); J sits in the last n² floats of p, ∂f/∂p
+    (n, n_parameters) before it.  The parameter columns are the last; the initial-state ones before them are
+    as many as y's size says, so that one closure serves every choice of them (it compiles once per module,
+    in ~0.8 s)."""
     k_parameters = len(parameter_columns)
     columns_p = np.array(parameter_columns, dtype=np.int64)
     jacobian_size = n * n
     if parameter_jacobian is None:
         @njit(error_model="numpy", nogil=True)
         def state_rhs(t, y, p, out):
-            status = rhs(t, y[:n], p, out[:n])
-            if status != 0:
-                return status
             end = p.shape[0]
             J = p[end - jacobian_size:].reshape((n, n))
-            status = jacobian(t, y[:n], p, J)
+            status = rhs_with_jacobian(t, y[:n], p, out[:n], J)
             if status != 0:
                 return status
             _multiply(J, y, out, n, y.shape[0] // n - 1)
@@ -240,12 +240,9 @@ def augmented_rhs(rhs, jacobian, parameter_jacobian, n: int, n_parameters: int, 
 
     @njit(error_model="numpy", nogil=True)
     def full_rhs(t, y, p, out):
-        status = rhs(t, y[:n], p, out[:n])
-        if status != 0:
-            return status
         end = p.shape[0]
         J = p[end - jacobian_size:].reshape((n, n))
-        status = jacobian(t, y[:n], p, J)
+        status = rhs_with_jacobian(t, y[:n], p, out[:n], J)
         if status != 0:
             return status
         k = y.shape[0] // n - 1

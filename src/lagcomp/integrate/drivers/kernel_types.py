@@ -32,6 +32,9 @@ RHS = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, VECTOR))
 #: column j the variable y_j, exact (emitted from the symbolic equations); 0, or k > 0 as ``rhs`` returns, or
 #: ``lagcomp.ir.NO_JACOBIAN`` (-1) where the module has none (its ``RHS_JACOBIAN_REFUSED`` says why).
 RHS_JACOBIAN = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, MATRIX))
+#: ``rhs_with_jacobian(t, y, p, ydot, out) -> int``: ``ydot`` = f and ``out`` = ∂f/∂y at once, bitwise what ``rhs``
+#: and ``rhs_jacobian`` write (one call: f is computed once); their statuses.
+RHS_WITH_JACOBIAN = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, VECTOR, MATRIX))
 #: ``rhs_parameter_jacobian(t, y, p, out) -> int``: ``out`` (N, P) = ∂f/∂p of y' = f(t, y, p), P the model's
 #: parameters (the first P entries of p: not the Baumgarte gains nor the inputs' tables after them), exact; 0,
 #: or k > 0 as ``rhs`` returns, or ``lagcomp.ir.NO_JACOBIAN`` (-1) where the module has none (its
