@@ -239,6 +239,15 @@ RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not 
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_jacobian(t, y, p, ydot, out):
+    """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
+    (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
+    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
+    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
+    return -1
+
+
+@njit(cache=True, error_model="numpy")
 def rhs_parameter_jacobian(t, y, p, out):
     """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
     no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -179,16 +179,18 @@ def rhs_lanes(T, Y, P, out, bad):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+def rhs_with_jacobian(t, y, p, ydot, out):
+    """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
+    (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
     Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
     Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
     was within rounding of its threshold); `out` is then invalid."""
-    _ydot = np.empty(6)
+    _ydot = ydot
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(36)
+    _jac = out.reshape(36)
+    _jac[:] = 0.0
     q_theta1 = y[0]
     q_theta2 = y[1]
     q_theta3 = y[2]
@@ -266,14 +268,81 @@ def rhs_jacobian(t, y, p, out):
     _jac[32] = _c34 - _c33 - _c35 - _c36 - _c10*_c11*p_g
     _jac[33] = -_c25*qd_theta1
     _jac[34] = _c32*qd_theta2
-    out[:] = _jac.reshape((6, 6))
     # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0, 0.0),
-        (_m1_0, _m1_1, 0.0),
-        (_m2_0, _m2_1, _m2_2),
-    ))
-    return ldlt_solve_matrix(mm, out[3:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _l2_0 = (_m2_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _l2_1 = (_m2_1 - _l2_0*_l1_0*_d0)/_d1
+    _d2 = _m2_2 - _l2_0*_l2_0*_d0 - _l2_1*_l2_1*_d1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _z0 = _jac[18]
+    _z1 = _jac[24] - _l1_0*_z0
+    _z2 = _jac[30] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[30] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[24] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[18] = _x0
+    _z0 = _jac[19]
+    _z1 = _jac[25] - _l1_0*_z0
+    _z2 = _jac[31] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[31] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[25] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[19] = _x0
+    _z0 = _jac[20]
+    _z1 = _jac[26] - _l1_0*_z0
+    _z2 = _jac[32] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[32] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[26] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[20] = _x0
+    _z0 = _jac[21]
+    _z1 = _jac[27] - _l1_0*_z0
+    _z2 = _jac[33] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[33] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[27] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[21] = _x0
+    _z0 = _jac[22]
+    _z1 = _jac[28] - _l1_0*_z0
+    _z2 = _jac[34] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[34] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[28] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[22] = _x0
+    _z0 = _jac[23]
+    _z1 = _jac[29] - _l1_0*_z0
+    _z2 = _jac[35] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[35] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[29] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[23] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(6), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -288,7 +357,8 @@ def rhs_parameter_jacobian(t, y, p, out):
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(42)
+    _jac = out.reshape(42)
+    _jac[:] = 0.0
     q_theta1 = y[0]
     q_theta2 = y[1]
     q_theta3 = y[2]
@@ -383,14 +453,83 @@ def rhs_parameter_jacobian(t, y, p, out):
     _jac[39] = _c21*_c50 - _acc1*_c49
     _jac[40] = _c21*_c52 - _acc1*_c51 - _c37*_c40 - _c39*_c41 - _c53*p_m3 - 2.0*_acc2*_c14
     _jac[41] = -_c11*_c14
-    out[:] = _jac.reshape((6, 7))
     # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0, 0.0),
-        (_m1_0, _m1_1, 0.0),
-        (_m2_0, _m2_1, _m2_2),
-    ))
-    return ldlt_solve_matrix(mm, out[3:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _l2_0 = (_m2_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _l2_1 = (_m2_1 - _l2_0*_l1_0*_d0)/_d1
+    _d2 = _m2_2 - _l2_0*_l2_0*_d0 - _l2_1*_l2_1*_d1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _z0 = _jac[21]
+    _z1 = _jac[28] - _l1_0*_z0
+    _z2 = _jac[35] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[35] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[28] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[21] = _x0
+    _z0 = _jac[22]
+    _z1 = _jac[29] - _l1_0*_z0
+    _z2 = _jac[36] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[36] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[29] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[22] = _x0
+    _z0 = _jac[23]
+    _z1 = _jac[30] - _l1_0*_z0
+    _z2 = _jac[37] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[37] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[30] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[23] = _x0
+    _z0 = _jac[24]
+    _z1 = _jac[31] - _l1_0*_z0
+    _z2 = _jac[38] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[38] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[31] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[24] = _x0
+    _z0 = _jac[25]
+    _z1 = _jac[32] - _l1_0*_z0
+    _z2 = _jac[39] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[39] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[32] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[25] = _x0
+    _z0 = _jac[26]
+    _z1 = _jac[33] - _l1_0*_z0
+    _z2 = _jac[40] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[40] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[33] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[26] = _x0
+    _z0 = _jac[27]
+    _z1 = _jac[34] - _l1_0*_z0
+    _z2 = _jac[41] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[41] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[34] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[27] = _x0
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 
 
 @njit(cache=True, error_model="numpy")
@@ -311,16 +311,18 @@ def rhs_lanes(T, Y, P, out, bad):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+def rhs_with_jacobian(t, y, p, ydot, out):
+    """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
+    (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
     Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
     Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
     was within rounding of its threshold); `out` is then invalid."""
-    _ydot = np.empty(12)
+    _ydot = ydot
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(144)
+    _jac = out.reshape(144)
+    _jac[:] = 0.0
     q_x1 = y[0]
     q_y1 = y[1]
     q_x2 = y[2]
@@ -448,17 +450,264 @@ def rhs_jacobian(t, y, p, out):
     _jac[135] = _c52
     _jac[136] = _c53
     _jac[137] = _c33 + _c45 + _c51
-    out[:] = _jac.reshape((12, 12))
     # out[6:] = M⁻¹ out[6:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0, 0.0, 0.0, 0.0, 0.0),
-        (_m1_0, _m1_1, 0.0, 0.0, 0.0, 0.0),
-        (_m2_0, _m2_1, _m2_2, 0.0, 0.0, 0.0),
-        (_m3_0, _m3_1, _m3_2, _m3_3, 0.0, 0.0),
-        (_m4_0, _m4_1, _m4_2, _m4_3, _m4_4, 0.0),
-        (_m5_0, _m5_1, _m5_2, _m5_3, _m5_4, _m5_5),
-    ))
-    return ldlt_solve_matrix(mm, out[6:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _l2_0 = (_m2_0)/_d0
+    _l3_0 = (_m3_0)/_d0
+    _l4_0 = (_m4_0)/_d0
+    _l5_0 = (_m5_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _l2_1 = (_m2_1 - _l2_0*_l1_0*_d0)/_d1
+    _l3_1 = (_m3_1 - _l3_0*_l1_0*_d0)/_d1
+    _l4_1 = (_m4_1 - _l4_0*_l1_0*_d0)/_d1
+    _l5_1 = (_m5_1 - _l5_0*_l1_0*_d0)/_d1
+    _d2 = _m2_2 - _l2_0*_l2_0*_d0 - _l2_1*_l2_1*_d1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _l3_2 = (_m3_2 - _l3_0*_l2_0*_d0 - _l3_1*_l2_1*_d1)/_d2
+    _l4_2 = (_m4_2 - _l4_0*_l2_0*_d0 - _l4_1*_l2_1*_d1)/_d2
+    _l5_2 = (_m5_2 - _l5_0*_l2_0*_d0 - _l5_1*_l2_1*_d1)/_d2
+    _d3 = _m3_3 - _l3_0*_l3_0*_d0 - _l3_1*_l3_1*_d1 - _l3_2*_l3_2*_d2
+    if not _d3 > PIVOT_TOLERANCE*abs(_m3_3):
+        return 4
+    _l4_3 = (_m4_3 - _l4_0*_l3_0*_d0 - _l4_1*_l3_1*_d1 - _l4_2*_l3_2*_d2)/_d3
+    _l5_3 = (_m5_3 - _l5_0*_l3_0*_d0 - _l5_1*_l3_1*_d1 - _l5_2*_l3_2*_d2)/_d3
+    _d4 = _m4_4 - _l4_0*_l4_0*_d0 - _l4_1*_l4_1*_d1 - _l4_2*_l4_2*_d2 - _l4_3*_l4_3*_d3
+    if not _d4 > PIVOT_TOLERANCE*abs(_m4_4):
+        return 5
+    _l5_4 = (_m5_4 - _l5_0*_l4_0*_d0 - _l5_1*_l4_1*_d1 - _l5_2*_l4_2*_d2 - _l5_3*_l4_3*_d3)/_d4
+    _d5 = _m5_5 - _l5_0*_l5_0*_d0 - _l5_1*_l5_1*_d1 - _l5_2*_l5_2*_d2 - _l5_3*_l5_3*_d3 - _l5_4*_l5_4*_d4
+    if not _d5 > PIVOT_TOLERANCE*abs(_m5_5):
+        return 6
+    _z0 = _jac[72]
+    _z1 = _jac[84] - _l1_0*_z0
+    _z2 = _jac[96] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[108] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[120] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[132] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[132] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[120] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[108] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[96] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[84] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[72] = _x0
+    _z0 = _jac[73]
+    _z1 = _jac[85] - _l1_0*_z0
+    _z2 = _jac[97] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[109] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[121] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[133] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[133] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[121] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[109] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[97] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[85] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[73] = _x0
+    _z0 = _jac[74]
+    _z1 = _jac[86] - _l1_0*_z0
+    _z2 = _jac[98] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[110] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[122] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[134] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[134] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[122] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[110] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[98] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[86] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[74] = _x0
+    _z0 = _jac[75]
+    _z1 = _jac[87] - _l1_0*_z0
+    _z2 = _jac[99] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[111] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[123] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[135] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[135] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[123] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[111] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[99] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[87] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[75] = _x0
+    _z0 = _jac[76]
+    _z1 = _jac[88] - _l1_0*_z0
+    _z2 = _jac[100] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[112] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[124] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[136] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[136] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[124] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[112] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[100] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[88] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[76] = _x0
+    _z0 = _jac[77]
+    _z1 = _jac[89] - _l1_0*_z0
+    _z2 = _jac[101] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[113] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[125] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[137] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[137] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[125] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[113] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[101] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[89] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[77] = _x0
+    _z0 = _jac[78]
+    _z1 = _jac[90] - _l1_0*_z0
+    _z2 = _jac[102] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[114] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[126] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[138] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[138] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[126] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[114] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[102] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[90] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[78] = _x0
+    _z0 = _jac[79]
+    _z1 = _jac[91] - _l1_0*_z0
+    _z2 = _jac[103] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[115] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[127] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[139] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[139] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[127] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[115] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[103] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[91] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[79] = _x0
+    _z0 = _jac[80]
+    _z1 = _jac[92] - _l1_0*_z0
+    _z2 = _jac[104] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[116] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[128] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[140] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[140] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[128] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[116] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[104] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[92] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[80] = _x0
+    _z0 = _jac[81]
+    _z1 = _jac[93] - _l1_0*_z0
+    _z2 = _jac[105] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[117] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[129] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[141] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[141] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[129] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[117] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[105] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[93] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[81] = _x0
+    _z0 = _jac[82]
+    _z1 = _jac[94] - _l1_0*_z0
+    _z2 = _jac[106] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[118] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[130] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[142] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[142] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[130] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[118] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[106] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[94] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[82] = _x0
+    _z0 = _jac[83]
+    _z1 = _jac[95] - _l1_0*_z0
+    _z2 = _jac[107] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[119] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[131] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[143] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[143] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[131] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[119] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[107] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[95] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[83] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(12), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -473,7 +722,8 @@ def rhs_parameter_jacobian(t, y, p, out):
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(48)
+    _jac = out.reshape(48)
+    _jac[:] = 0.0
     q_x1 = y[0]
     q_y1 = y[1]
     q_x2 = y[2]
@@ -576,17 +826,113 @@ def rhs_parameter_jacobian(t, y, p, out):
     _jac[45] = _c25
     _jac[46] = _c39
     _jac[47] = _c27 + _c40 - _acc5
-    out[:] = _jac.reshape((12, 4))
     # out[6:] = M⁻¹ out[6:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0, 0.0, 0.0, 0.0, 0.0),
-        (_m1_0, _m1_1, 0.0, 0.0, 0.0, 0.0),
-        (_m2_0, _m2_1, _m2_2, 0.0, 0.0, 0.0),
-        (_m3_0, _m3_1, _m3_2, _m3_3, 0.0, 0.0),
-        (_m4_0, _m4_1, _m4_2, _m4_3, _m4_4, 0.0),
-        (_m5_0, _m5_1, _m5_2, _m5_3, _m5_4, _m5_5),
-    ))
-    return ldlt_solve_matrix(mm, out[6:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _l2_0 = (_m2_0)/_d0
+    _l3_0 = (_m3_0)/_d0
+    _l4_0 = (_m4_0)/_d0
+    _l5_0 = (_m5_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _l2_1 = (_m2_1 - _l2_0*_l1_0*_d0)/_d1
+    _l3_1 = (_m3_1 - _l3_0*_l1_0*_d0)/_d1
+    _l4_1 = (_m4_1 - _l4_0*_l1_0*_d0)/_d1
+    _l5_1 = (_m5_1 - _l5_0*_l1_0*_d0)/_d1
+    _d2 = _m2_2 - _l2_0*_l2_0*_d0 - _l2_1*_l2_1*_d1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _l3_2 = (_m3_2 - _l3_0*_l2_0*_d0 - _l3_1*_l2_1*_d1)/_d2
+    _l4_2 = (_m4_2 - _l4_0*_l2_0*_d0 - _l4_1*_l2_1*_d1)/_d2
+    _l5_2 = (_m5_2 - _l5_0*_l2_0*_d0 - _l5_1*_l2_1*_d1)/_d2
+    _d3 = _m3_3 - _l3_0*_l3_0*_d0 - _l3_1*_l3_1*_d1 - _l3_2*_l3_2*_d2
+    if not _d3 > PIVOT_TOLERANCE*abs(_m3_3):
+        return 4
+    _l4_3 = (_m4_3 - _l4_0*_l3_0*_d0 - _l4_1*_l3_1*_d1 - _l4_2*_l3_2*_d2)/_d3
+    _l5_3 = (_m5_3 - _l5_0*_l3_0*_d0 - _l5_1*_l3_1*_d1 - _l5_2*_l3_2*_d2)/_d3
+    _d4 = _m4_4 - _l4_0*_l4_0*_d0 - _l4_1*_l4_1*_d1 - _l4_2*_l4_2*_d2 - _l4_3*_l4_3*_d3
+    if not _d4 > PIVOT_TOLERANCE*abs(_m4_4):
+        return 5
+    _l5_4 = (_m5_4 - _l5_0*_l4_0*_d0 - _l5_1*_l4_1*_d1 - _l5_2*_l4_2*_d2 - _l5_3*_l4_3*_d3)/_d4
+    _d5 = _m5_5 - _l5_0*_l5_0*_d0 - _l5_1*_l5_1*_d1 - _l5_2*_l5_2*_d2 - _l5_3*_l5_3*_d3 - _l5_4*_l5_4*_d4
+    if not _d5 > PIVOT_TOLERANCE*abs(_m5_5):
+        return 6
+    _z0 = _jac[24]
+    _z1 = _jac[28] - _l1_0*_z0
+    _z2 = _jac[32] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[36] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[40] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[44] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[44] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[40] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[36] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[32] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[28] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[24] = _x0
+    _z0 = _jac[25]
+    _z1 = _jac[29] - _l1_0*_z0
+    _z2 = _jac[33] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[37] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[41] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[45] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[45] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[41] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[37] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[33] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[29] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[25] = _x0
+    _z0 = _jac[26]
+    _z1 = _jac[30] - _l1_0*_z0
+    _z2 = _jac[34] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[38] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[42] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[46] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[46] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[42] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[38] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[34] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[30] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[26] = _x0
+    _z0 = _jac[27]
+    _z1 = _jac[31] - _l1_0*_z0
+    _z2 = _jac[35] - _l2_0*_z0 - _l2_1*_z1
+    _z3 = _jac[39] - _l3_0*_z0 - _l3_1*_z1 - _l3_2*_z2
+    _z4 = _jac[43] - _l4_0*_z0 - _l4_1*_z1 - _l4_2*_z2 - _l4_3*_z3
+    _z5 = _jac[47] - _l5_0*_z0 - _l5_1*_z1 - _l5_2*_z2 - _l5_3*_z3 - _l5_4*_z4
+    _x5 = _z5/_d5
+    _jac[47] = _x5
+    _x4 = _z4/_d4 - _l5_4*_x5
+    _jac[43] = _x4
+    _x3 = _z3/_d3 - _l4_3*_x4 - _l5_3*_x5
+    _jac[39] = _x3
+    _x2 = _z2/_d2 - _l3_2*_x3 - _l4_2*_x4 - _l5_2*_x5
+    _jac[35] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2 - _l3_1*_x3 - _l4_1*_x4 - _l5_1*_x5
+    _jac[31] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2 - _l3_0*_x3 - _l4_0*_x4 - _l5_0*_x5
+    _jac[27] = _x0
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 
 
 @njit(cache=True, error_model="numpy")
@@ -66,27 +66,41 @@ def rhs_lanes(T, Y, P, out, bad):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+def rhs_with_jacobian(t, y, p, ydot, out):
+    """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
+    (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
     Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
     Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
     was within rounding of its threshold); `out` is then invalid."""
-    _ydot = np.empty(2)
+    _ydot = ydot
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(4)
+    _jac = out.reshape(4)
+    _jac[:] = 0.0
     p_m = p[0]
     p_omega = p[1]
     _m0_0 = p_m
     _jac[1] = 1.0
     _jac[2] = p_m*p_omega**2
-    out[:] = _jac.reshape((2, 2))
     # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0,),
-    ))
-    return ldlt_solve_matrix(mm, out[1:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _z0 = _jac[2]
+    _x0 = _z0/_d0
+    _jac[2] = _x0
+    _z0 = _jac[3]
+    _x0 = _z0/_d0
+    _jac[3] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(2), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -101,7 +115,8 @@ def rhs_parameter_jacobian(t, y, p, out):
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(4)
+    _jac = out.reshape(4)
+    _jac[:] = 0.0
     q_rho = y[0]
     p_m = p[0]
     p_omega = p[1]
@@ -109,12 +124,17 @@ def rhs_parameter_jacobian(t, y, p, out):
     _m0_0 = p_m
     _jac[2] = -_acc0 + q_rho*p_omega**2
     _jac[3] = 2.0*p_m*p_omega*q_rho
-    out[:] = _jac.reshape((2, 2))
     # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0,),
-    ))
-    return ldlt_solve_matrix(mm, out[1:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _z0 = _jac[2]
+    _x0 = _z0/_d0
+    _jac[2] = _x0
+    _z0 = _jac[3]
+    _x0 = _z0/_d0
+    _jac[3] = _x0
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -102,16 +102,18 @@ def rhs_lanes(T, Y, P, out, bad):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+def rhs_with_jacobian(t, y, p, ydot, out):
+    """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
+    (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
     Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
     Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
     was within rounding of its threshold); `out` is then invalid."""
-    _ydot = np.empty(4)
+    _ydot = ydot
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(16)
+    _jac = out.reshape(16)
+    _jac[:] = 0.0
     q_theta = y[0]
     qd_theta = y[2]
     qd_phi = y[3]
@@ -140,13 +142,46 @@ def rhs_jacobian(t, y, p, out):
     _jac[12] = _c10*_c2 - _acc1*_c7 - _c10*_c5
     _jac[14] = -_c8
     _jac[15] = -_c6*_c9
-    out[:] = _jac.reshape((4, 4))
     # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0),
-        (_m1_0, _m1_1),
-    ))
-    return ldlt_solve_matrix(mm, out[2:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _z0 = _jac[8]
+    _z1 = _jac[12] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[12] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[8] = _x0
+    _z0 = _jac[9]
+    _z1 = _jac[13] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[13] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[9] = _x0
+    _z0 = _jac[10]
+    _z1 = _jac[14] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[14] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[10] = _x0
+    _z0 = _jac[11]
+    _z1 = _jac[15] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[15] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[11] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(4), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -161,7 +196,8 @@ def rhs_parameter_jacobian(t, y, p, out):
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(12)
+    _jac = out.reshape(12)
+    _jac[:] = 0.0
     q_theta = y[0]
     qd_theta = y[2]
     qd_phi = y[3]
@@ -190,13 +226,33 @@ def rhs_parameter_jacobian(t, y, p, out):
     _jac[8] = -_c9
     _jac[9] = -_c0*_c10 - 2.0*_c11*_c6
     _jac[10] = -_c10*_c8 - 4.0*_c11*_c9
-    out[:] = _jac.reshape((4, 3))
     # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0),
-        (_m1_0, _m1_1),
-    ))
-    return ldlt_solve_matrix(mm, out[2:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _z0 = _jac[6]
+    _z1 = _jac[9] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[9] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[6] = _x0
+    _z0 = _jac[7]
+    _z1 = _jac[10] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[10] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[7] = _x0
+    _z0 = _jac[8]
+    _z1 = _jac[11] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[11] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[8] = _x0
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -104,16 +104,18 @@ def rhs_lanes(T, Y, P, out, bad):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+def rhs_with_jacobian(t, y, p, ydot, out):
+    """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
+    (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
     Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
     Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
     was within rounding of its threshold); `out` is then invalid."""
-    _ydot = np.empty(4)
+    _ydot = ydot
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(16)
+    _jac = out.reshape(16)
+    _jac[:] = 0.0
     q_r = y[0]
     q_theta = y[1]
     qd_r = y[2]
@@ -140,13 +142,46 @@ def rhs_jacobian(t, y, p, out):
     _jac[13] = -_c0*q_r*cos(q_theta)
     _jac[14] = -_c3
     _jac[15] = -_c2*qd_r
-    out[:] = _jac.reshape((4, 4))
     # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0),
-        (_m1_0, _m1_1),
-    ))
-    return ldlt_solve_matrix(mm, out[2:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _z0 = _jac[8]
+    _z1 = _jac[12] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[12] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[8] = _x0
+    _z0 = _jac[9]
+    _z1 = _jac[13] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[13] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[9] = _x0
+    _z0 = _jac[10]
+    _z1 = _jac[14] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[14] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[10] = _x0
+    _z0 = _jac[11]
+    _z1 = _jac[15] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[15] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[11] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(4), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -161,7 +196,8 @@ def rhs_parameter_jacobian(t, y, p, out):
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(20)
+    _jac = out.reshape(20)
+    _jac[:] = 0.0
     q_r = y[0]
     q_theta = y[1]
     qd_r = y[2]
@@ -185,13 +221,45 @@ def rhs_parameter_jacobian(t, y, p, out):
     _jac[14] = _c1*p_m
     _jac[15] = -_acc1*_c0 - _c2*p_g - 2.0*q_r*qd_r*qd_theta
     _jac[19] = -_c2*p_m
-    out[:] = _jac.reshape((4, 5))
     # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0),
-        (_m1_0, _m1_1),
-    ))
-    return ldlt_solve_matrix(mm, out[2:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _z0 = _jac[10]
+    _z1 = _jac[15] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[15] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[10] = _x0
+    _z0 = _jac[11]
+    _z1 = _jac[16] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[16] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[11] = _x0
+    _z0 = _jac[12]
+    _z1 = _jac[17] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[17] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[12] = _x0
+    _z0 = _jac[13]
+    _z1 = _jac[18] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[18] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[13] = _x0
+    _z0 = _jac[14]
+    _z1 = _jac[19] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[19] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[14] = _x0
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

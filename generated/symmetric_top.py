@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE, ldlt_solve_matrix
+from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -151,16 +151,18 @@ def rhs_lanes(T, Y, P, out, bad):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+def rhs_with_jacobian(t, y, p, ydot, out):
+    """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
+    (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
     Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).
     Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
     was within rounding of its threshold); `out` is then invalid."""
-    _ydot = np.empty(6)
+    _ydot = ydot
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(36)
+    _jac = out.reshape(36)
+    _jac[:] = 0.0
     q_theta = y[1]
     qd_psi = y[3]
     qd_theta = y[4]
@@ -210,14 +212,81 @@ def rhs_jacobian(t, y, p, out):
     _jac[31] = _acc0*_c10 + _c9*qd_psi
     _jac[33] = _c16
     _jac[34] = _c18
-    out[:] = _jac.reshape((6, 6))
     # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0, 0.0),
-        (_m1_0, _m1_1, 0.0),
-        (_m2_0, _m2_1, _m2_2),
-    ))
-    return ldlt_solve_matrix(mm, out[3:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _l2_0 = (_m2_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _l2_1 = (_m2_1 - _l2_0*_l1_0*_d0)/_d1
+    _d2 = _m2_2 - _l2_0*_l2_0*_d0 - _l2_1*_l2_1*_d1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _z0 = _jac[18]
+    _z1 = _jac[24] - _l1_0*_z0
+    _z2 = _jac[30] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[30] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[24] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[18] = _x0
+    _z0 = _jac[19]
+    _z1 = _jac[25] - _l1_0*_z0
+    _z2 = _jac[31] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[31] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[25] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[19] = _x0
+    _z0 = _jac[20]
+    _z1 = _jac[26] - _l1_0*_z0
+    _z2 = _jac[32] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[32] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[26] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[20] = _x0
+    _z0 = _jac[21]
+    _z1 = _jac[27] - _l1_0*_z0
+    _z2 = _jac[33] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[33] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[27] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[21] = _x0
+    _z0 = _jac[22]
+    _z1 = _jac[28] - _l1_0*_z0
+    _z2 = _jac[34] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[34] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[28] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[22] = _x0
+    _z0 = _jac[23]
+    _z1 = _jac[29] - _l1_0*_z0
+    _z2 = _jac[35] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[35] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[29] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[23] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(6), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -232,7 +301,8 @@ def rhs_parameter_jacobian(t, y, p, out):
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status
-    _jac = np.zeros(30)
+    _jac = out.reshape(30)
+    _jac[:] = 0.0
     q_theta = y[1]
     qd_psi = y[3]
     qd_theta = y[4]
@@ -275,14 +345,65 @@ def rhs_parameter_jacobian(t, y, p, out):
     _jac[23] = _c12 - _acc1
     _jac[24] = -_c12 - _c5*qd_phi*qd_psi
     _jac[29] = -_acc2 + _c11*qd_psi - _acc0*_c2
-    out[:] = _jac.reshape((6, 5))
     # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
-    mm = np.array((
-        (_m0_0, 0.0, 0.0),
-        (_m1_0, _m1_1, 0.0),
-        (_m2_0, _m2_1, _m2_2),
-    ))
-    return ldlt_solve_matrix(mm, out[3:])
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _l2_0 = (_m2_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _l2_1 = (_m2_1 - _l2_0*_l1_0*_d0)/_d1
+    _d2 = _m2_2 - _l2_0*_l2_0*_d0 - _l2_1*_l2_1*_d1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _z0 = _jac[15]
+    _z1 = _jac[20] - _l1_0*_z0
+    _z2 = _jac[25] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[25] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[20] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[15] = _x0
+    _z0 = _jac[16]
+    _z1 = _jac[21] - _l1_0*_z0
+    _z2 = _jac[26] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[26] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[21] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[16] = _x0
+    _z0 = _jac[17]
+    _z1 = _jac[22] - _l1_0*_z0
+    _z2 = _jac[27] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[27] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[22] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[17] = _x0
+    _z0 = _jac[18]
+    _z1 = _jac[23] - _l1_0*_z0
+    _z2 = _jac[28] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[28] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[23] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[18] = _x0
+    _z0 = _jac[19]
+    _z1 = _jac[24] - _l1_0*_z0
+    _z2 = _jac[29] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[29] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[24] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[19] = _x0
+    return 0
 
 
 @njit(cache=True, error_model="numpy")
