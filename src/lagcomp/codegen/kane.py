@@ -112,6 +112,22 @@ def _rhs(form: FirstOrderForm, mapping, loads) -> tuple:
     return kernel, _function(kernel, before=[f"_kkt = np.zeros(({n_u}, {n_u + 1}))"], after=after)
 
 
+def _partial_stores(form: FirstOrderForm, variables) -> list:
+    """The stores of ∂(N, u̇)/∂x, x = `variables` (the state (q, u), or the parameters), before the LU solve:
+    rows ∂N/∂x into ``_jac`` (row-major, len(x) wide), M into ``_lu``, and the block
+    ∂(F − M ū)/∂x |_{ū = u̇} (`acceleration_partials`) into the rows below, which ``lu_solve_matrix`` then
+    overwrites with M⁻¹ times themselves."""
+    n_q, n_u, width = form.n_q, form.n_u, len(variables)
+    kinematic = form.N.jacobian(sp.Matrix(variables)) if width else sp.zeros(n_q, 0)
+    block = acceleration_partials(form.M, form.F, acceleration_symbols(form), variables)
+    stores = [(jacobian_entry(i, j, width), kinematic[i, j])
+              for i in range(n_q) for j in range(width) if kinematic[i, j] != 0]
+    stores += [(f"_lu[{i}, {j}]", form.M[i, j]) for i in range(n_u) for j in range(n_u) if form.M[i, j] != 0]
+    stores += [(jacobian_entry(n_q + i, j, width), block[i][j])
+               for i in range(n_u) for j in range(width) if block[i][j] != 0]
+    return stores
+
+
 def _rhs_jacobian(form: FirstOrderForm) -> tuple:
     """The exact Jacobian of y' = (N(q, u, t), u̇), M u̇ = F: ``rhs_with_jacobian`` (f into ``ydot`` too),
     ``rhs_jacobian`` (the same, f dropped: `lagcomp.ir.Delegate`), and their source.
@@ -124,15 +140,9 @@ def _rhs_jacobian(form: FirstOrderForm) -> tuple:
     One CSE for ∂N/∂y, M and the block.
     """
     n_q, n_u = form.n_q, form.n_u
-    size, y = n_q + n_u, (*form.q, *form.u)
+    size = n_q + n_u
     mapping, loads = _bindings(form, reactions=True)  # binds ū (acceleration_symbols) to _ydot[n_q:]
-    kinematic = form.N.jacobian(sp.Matrix(y))
-    block = acceleration_partials(form.M, form.F, acceleration_symbols(form), y)
-    stores = [(jacobian_entry(i, j, size), kinematic[i, j])
-              for i in range(n_q) for j in range(size) if kinematic[i, j] != 0]
-    stores += [(f"_lu[{i}, {j}]", form.M[i, j]) for i in range(n_u) for j in range(n_u) if form.M[i, j] != 0]
-    stores += [(jacobian_entry(n_q + i, j, size), block[i][j])
-               for i in range(n_u) for j in range(size) if block[i][j] != 0]
+    stores = _partial_stores(form, (*form.q, *form.u))
     kernel = _kernel(
         "rhs_with_jacobian",
         RHS_WITH_JACOBIAN_DOC +
@@ -158,13 +168,7 @@ def _rhs_parameter_jacobian(form: FirstOrderForm) -> tuple:
     n_q, n_u = form.n_q, form.n_u
     size, width = n_q + n_u, len(form.parameters)
     mapping, loads = _bindings(form, reactions=True)  # binds ū (acceleration_symbols) to _ydot[n_q:]
-    kinematic = form.N.jacobian(sp.Matrix(form.parameters)) if width else sp.zeros(n_q, 0)
-    block = acceleration_partials(form.M, form.F, acceleration_symbols(form), form.parameters)
-    stores = [(jacobian_entry(i, j, width), kinematic[i, j])
-              for i in range(n_q) for j in range(width) if kinematic[i, j] != 0]
-    stores += [(f"_lu[{i}, {j}]", form.M[i, j]) for i in range(n_u) for j in range(n_u) if form.M[i, j] != 0]
-    stores += [(jacobian_entry(n_q + i, j, width), block[i][j])
-               for i in range(n_u) for j in range(width) if block[i][j] != 0]
+    stores = _partial_stores(form, form.parameters)
     kernel = _kernel(
         "rhs_parameter_jacobian",
         RHS_PARAMETER_JACOBIAN_DOC +
