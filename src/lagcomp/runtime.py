@@ -472,8 +472,8 @@ class Model:
         the exact Jacobian the model's ``rhs_jacobian`` kernel computes (the one ``method="radau"`` uses;
         scipy's ``solve_ivp(..., jac=...)`` takes it as it is).
 
-        Raises SingularMassMatrixError where M is singular, ModelError where the model has no Jacobian
-        kernel (its ``RHS_JACOBIAN_REFUSED`` says why: constrained Lagrange models, today).
+        Raises SingularMassMatrixError where M is singular (the augmented matrix, for a constrained model),
+        ModelError where the model has no Jacobian kernel (its ``RHS_JACOBIAN_REFUSED`` says why).
         """
         y = self._vector(y, self.state_size, "y")
         out = np.empty((self.state_size, self.state_size))
@@ -490,8 +490,8 @@ class Model:
         column j the parameter ``parameters[j]``: the exact derivative the model's ``rhs_parameter_jacobian``
         kernel computes (the parameter counterpart of `jacobian`, the columns of the forward sensitivities).
 
-        Raises SingularMassMatrixError where M is singular, ModelError where the model has no such kernel
-        (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why: constrained Lagrange models, today).
+        Raises SingularMassMatrixError where M is singular (the augmented matrix, for a constrained model),
+        ModelError where the model has no such kernel (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why).
         """
         y = self._vector(y, self.state_size, "y")
         out = np.empty((self.state_size, len(self.parameters)))
