@@ -186,6 +186,25 @@ def test_random_constrained_systems_agree_with_sympys_equations(seed):
         assert np.abs(exact - reference).max() <= EXACT_TOLERANCE * scale, mech.description
 
 
+@pytest.mark.parametrize("names", [("_acc0", "_mult0", "lam"), ("_acc0_", "_mult0_", "_lam"), ("_kkt", "_jac", "_i")])
+def test_parameters_named_like_the_kernels_locals(cache_dir, names):
+    """A rod pendulum whose mass, gravity and length are named like the Jacobian kernels' own symbols and locals
+    (the fresh symbols ā, λ̄ and the names they avoid, the work arrays): the kernels still differentiate it."""
+    import sympy as sp
+
+    import lagcomp as lc
+
+    x, z = lc.coordinates("x z")
+    mass, gravity, length = (sp.Symbol(name, positive=True) for name in names)
+    system = lc.System(coordinates=(x, z), T=mass * (x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=mass * gravity * z,
+                       constraints=[lc.Holonomic("rod", x**2 + z**2 - length**2)], parameters=(mass, gravity, length),
+                       name="jacobian_named")
+    model = lc.compile(system, cache_dir=cache_dir)
+    module = python_kernels(model.source_path.read_text(encoding="utf-8"))
+    y, p = np.array([0.6, -0.7, 0.4, 0.3]), np.array([1.5, 9.75, 1.25, *GAINS])
+    _check_kernels(module, 3, 1, y, p)
+
+
 @pytest.fixture(scope="module")
 def axle(compiled):
     """The free axle, its run to t = 6 with the sensitivities of every column, and the runs' options."""

@@ -66,8 +66,10 @@ class AugmentedSolve:
     included by allocation: [[M, −Λᵀ], [Λ, 0]] in its first N columns and the
     right-hand side (F, γ) in the last; M is the leading ``mass_block`` ×
     ``mass_block`` block.  Entries ``first .. first + count − 1`` of the
-    solution go to ``out[offset:]``.  Unlike `LinearSolve` it does not need
-    M to be regular (Schur complement where it is, LU with pivoting where not).
+    solution go to ``out[offset:]``, and with `multipliers` the multipliers
+    (the entries after M's block) to the argument ``lam`` too.  Unlike
+    `LinearSolve` it does not need M to be regular (Schur complement where it
+    is, LU with pivoting where not).
     """
 
     size: int
@@ -75,6 +77,7 @@ class AugmentedSolve:
     first: int
     count: int
     offset: int
+    multipliers: bool = False
 
 
 #: What ``rhs_jacobian`` and ``rhs_parameter_jacobian`` return where their module has none (negative: never a
@@ -119,11 +122,11 @@ class AugmentedJacobianSolve:
     z = (q̈, λ) solves K z = (F, γ̃), K = [M −Λᵀ; Λ 0], and the kernel writes rows of ∂z/∂x, x the `width`
     variables (y, p or both).
 
-    Before its loads the kernel calls ``rhs(t, y, p, _ydot)`` and ``reactions(t, y, p, _lam)``, returning
-    their status when it is not 0, so that loads can bind q̈ to ``_ydot[n + i]`` (``_ydot`` the argument
-    ``ydot`` with `given_ydot`, else a local) and λ to ``_lam[c]``.  It allocates ``_kkt`` (n + k, n + k)
-    and ``_jac`` ((n + k) × width, flat) zeroed; the stores fill K into ``_kkt`` and into ``_jac`` the
-    nonzero entries of ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at (ā, λ̄) = (q̈, λ), row-major.  Then
+    Before its loads the kernel calls ``rhs_and_reactions(t, y, p, _ydot, _lam)`` (``rhs`` and ``reactions`` at
+    once, bitwise), returning its status when it is not 0, so that loads can bind q̈ to ``_ydot[n + i]``
+    (``_ydot`` the argument ``ydot`` with `given_ydot`, else a local) and λ to ``_lam[c]``.  It allocates
+    ``_kkt`` (n + k, n + k) and ``_jac`` ((n + k) × width, flat) zeroed; the stores fill K into ``_kkt`` and
+    into ``_jac`` the nonzero entries of ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at (ā, λ̄) = (q̈, λ), row-major.  Then
     ``kkt_solve_matrix`` overwrites them with K⁻¹ times themselves (its status returned when not 0): rows
     ``first .. first + count − 1`` of the solution go to ``out[offset:]``, the other rows of `out` are
     zero, and with `identity` out[i, n + i] = 1 for i < n (the rows q̇ of ∂f/∂y).

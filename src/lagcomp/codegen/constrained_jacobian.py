@@ -13,8 +13,9 @@ differentiates by).  Differentiating K(x) z(x) = r(x) along any variable x (a st
                                                  = ∂/∂x [F − M ā + Λᵀ λ̄ ;  γ̃ − Λ ā] |_{(ā, λ̄) = (q̈, λ)},
 
 z̄ = (ā, λ̄) symbols held fixed while differentiating and then bound to the values ``rhs`` and ``reactions``
-solved (the unconstrained kernels' trick, `lagcomp.codegen.lower.acceleration_partials`, with the constraint
-rows added; the sign of λ̄'s term follows K's −Λᵀ).  So ∂(q̈, λ)/∂x = K⁻¹ R with R the partials above, all
+solve (one call of ``rhs_and_reactions``, bitwise both): the unconstrained kernels' trick
+(`lagcomp.codegen.lower.acceleration_partials`) with the constraint rows added; the sign of λ̄'s term follows
+K's −Λᵀ.  So ∂(q̈, λ)/∂x = K⁻¹ R with R the partials above, all
 columns from one factorization of K (`lagcomp.kernel_support.linear_solvers.kkt_solve_matrix`, the Schur
 complement path of ``kkt_solve``, LU where M is singular).  With y = (q, q̇) and f = (q̇, q̈):
 
@@ -87,7 +88,7 @@ def constrained_jacobian_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]
 def _augmented_residual(eom: EOM, mapping, loads) -> tuple[list, dict, tuple]:
     """The rows [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] (n + k, sympy) over fresh symbols ā, λ̄, and `mapping`, `loads`
     extended by them: ā_i bound to the local ``_acc<i>`` = ``_ydot[n + i]``, λ̄_c to ``_mult<c>`` = ``_lam[c]``
-    (what `rhs` and `reactions` solved; `AugmentedJacobianSolve` calls them first)."""
+    (what `rhs` and `reactions` solve: `AugmentedJacobianSolve` calls ``rhs_and_reactions`` first)."""
     n, k = eom.n, eom.k
     gamma = stabilized_gamma(eom)
     taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}

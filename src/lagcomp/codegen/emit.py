@@ -272,12 +272,11 @@ def _unrolled_ldlt_matrix(solve: JacobianSolve) -> list[str]:
 
 
 def _augmented_jacobian_frame(solve: AugmentedJacobianSolve) -> tuple[list[str], list[str]]:
-    """The lines of a constrained system's Jacobian kernel before its loads (`rhs` into ``_ydot``, `reactions`
-    into ``_lam``, the work arrays zeroed) and after its stores (one ``kkt_solve_matrix``, rows copied out)."""
+    """The lines of a constrained system's Jacobian kernel before its loads (`rhs_and_reactions` into ``_ydot``
+    and ``_lam``, the work arrays zeroed) and after its stores (one ``kkt_solve_matrix``, rows copied out)."""
     n, size, width = solve.n, solve.n + solve.k, solve.width
-    before = ["_ydot = ydot" if solve.given_ydot else f"_ydot = np.empty({2 * n})", "_status = rhs(t, y, p, _ydot)",
-              "if _status:", f"{INDENT}return _status", f"_lam = np.empty({solve.k})",
-              "_status = reactions(t, y, p, _lam)", "if _status:", f"{INDENT}return _status",
+    before = ["_ydot = ydot" if solve.given_ydot else f"_ydot = np.empty({2 * n})", f"_lam = np.empty({solve.k})",
+              "_status = rhs_and_reactions(t, y, p, _ydot, _lam)", "if _status:", f"{INDENT}return _status",
               f"_kkt = np.zeros(({size}, {size}))", f"_jac = np.zeros({size * width})"]
     after = ["# ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.",
              f"_rows = _jac.reshape(({size}, {width}))", f"_status = kkt_solve_matrix(_kkt, {n}, _rows)",
@@ -353,6 +352,9 @@ def _kernel_source(kernel: Kernel) -> str:
     if isinstance(solve, AugmentedSolve):
         body += [f"_status = kkt_solve(_kkt, {solve.mass_block})", "if _status:", f"{INDENT}return _status"]
         body += [f"out[{solve.offset + i}] = _kkt[{solve.first + i}, {solve.size}]" for i in range(solve.count)]
+        if solve.multipliers:
+            body += [f"lam[{c}] = _kkt[{solve.mass_block + c}, {solve.size}]"
+                     for c in range(solve.size - solve.mass_block)]
         body.append("return 0")
     elif isinstance(solve, SymmetricProduct):
         body += _symmetric_product(solve)

@@ -303,7 +303,7 @@ def stabilized_gamma(eom: EOM) -> list:
 
 
 def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
-    """rhs and reactions through the augmented system, and the constraint residuals and matrix."""
+    """rhs, reactions and both at once through the augmented system, and the constraint residuals and matrix."""
     n, k = eom.n, eom.k
     state_args = ("t", "y", "p")
     velocities = [(f"out[{i}]", eom.qd[i]) for i in range(n)]
@@ -323,9 +323,16 @@ def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
             "force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular.",
         stores=rhs.stores[n:], solve=AugmentedSolve(size=n + k, mass_block=n, first=n, count=k, offset=0),
     )
+    both = replace(
+        rhs, name="rhs_and_reactions", args=(*state_args, "out", "lam"),
+        doc="`rhs` into `out` and `reactions` into `lam` from one solve of the augmented system, both bitwise\n"
+            "(the same code): what the Jacobian kernels start from. Returns 0, or j > 0 when singular.",
+        solve=replace(rhs.solve, multipliers=True),
+    )
     return (
         rhs,
         reactions,
+        both,
         _kernel(
             "constraint_residuals",
             f"Residuals, shape ({kh + k},): Φ of the {kh} holonomic constraints, then Λ q̇ + b of all {k}.",
