@@ -17,6 +17,10 @@ double pendulum 3.2× (k = 1), 3.7× (k = 4); 5-link 3.0× (k = 1), 6.1× (k = 1
 ``rhs_with_jacobian`` (``rhs``, then ``rhs_jacobian`` calling ``rhs`` again, copying J from a work
 array and solving by M in loops): 5.2×, 5.7×, 6.0×, 9.2×; with it but the loops: 4.2×, 4.8×, 4.8×, 7.8×.
 With the defaults (t in [0, 1000], 7 repeats): 3.02×, 3.64×, 3.02×, 6.18× (before: 5.65×, 5.85×, 6.03×, 9.29×).
+The free axle (``--t-end 300 --repeats 5``, "state"): 6.5× (k = 1, ∂y/∂g: ``rhs_with_jacobian`` and
+``rhs_parameter_jacobian`` each solve the augmented system for (q̈, λ) and factor it again for their columns),
+5.05× (k = 10, within 1.2 (1 + k) = 13.2); 8.1× and 5.8× when those kernels called ``rhs`` and ``reactions``
+apart instead of ``rhs_and_reactions``.
 """
 
 from __future__ import annotations

@@ -265,6 +265,16 @@ def test_initial_state_sensitivities_along_a_consistent_perturbation(axle):
     assert state <= RUN_TOLERANCE and reactions <= RUN_TOLERANCE, (state, reactions)
 
 
+def test_reaction_sensitivities_are_named_in_to_dict_and_to_xarray(axle):
+    _, solution, _ = axle
+    assert solution.reaction_sensitivities.shape == (7, 3, 17)
+    assert np.array_equal(solution.to_dict()["reaction_sensitivities"], solution.reaction_sensitivities)
+    pytest.importorskip("xarray")
+    data = solution.to_xarray()["reaction_sensitivities"]
+    assert data.dims == ("t", "constraint", "wrt") and list(data["constraint"].values) == ["roll_X", "roll_Y", "steer"]
+    assert list(data["wrt"].values) == list(solution.sensitivity_names)
+
+
 def test_a_steady_motion_needs_the_sensitivities_in_the_error_control(compiled):
     """The rolling disc's default launch is steady rolling: its state is smooth enough for five steps a second,
     while its sensitivities wobble; with ``sensitivity_control="both"`` they match scipy's DOP853 of the same

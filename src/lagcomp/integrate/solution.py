@@ -247,7 +247,8 @@ class Solution:
         dimension ``event_<name>`` (its occurrences): ``event_<name>_t`` and ``event_<name>_state``
         (occurrences × ``state``, the coordinates then the velocities, or the speeds of a Kane model).
         A run with sensitivities adds ``sensitivities`` with dims (``t``, ``state``, ``wrt``), ``wrt`` the
-        `sensitivity_names`.
+        `sensitivity_names`, and for a model with multipliers ``reaction_sensitivities`` with dims (``t``,
+        ``constraint``, ``wrt``), ``constraint`` the `reaction_names`.
 
         ``attrs``: ``model`` (its name), ``method``, ``status``, ``message``, ``nfev``, ``nsteps``,
         ``nrejected``, ``njev``, ``nlu``, ``constraint_residual``, ``t_failure`` (failed runs only),
