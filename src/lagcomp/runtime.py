@@ -744,9 +744,10 @@ class Model:
             as `Solution.sensitivity_names` gives them.  Results in
             `Solution.sensitivities`, shape (m, 2n, k).  The step-size control
             covers the state only (``sensitivity_control="state"``, the
-            default: the plain run's steps) or both (``"both"``).  Refused for
-            other methods, constrained models (no Jacobian kernel yet), located
-            events (pass ``events=False``) and function inputs; see
+            default: the plain run's steps) or both (``"both"``).  A model with
+            constraints also gets dλ/dw in `Solution.reaction_sensitivities`
+            (m, k, columns).  Refused for other methods, projection, located
+            events that read inputs and function inputs; see
             `lagcomp.integrate.sensitivities`.
         """
         from lagcomp.integrate.options import known_options
@@ -802,8 +803,8 @@ class Model:
 
         Each residual and Jacobian evaluation is one run per experiment with the fitted parameters'
         sensitivities (`simulate(..., sensitivities=...)`); see `lagcomp.fitting`.  Refused (`OptionError`)
-        for unknown names, data of the wrong shape or not finite, and models whose runs cannot carry
-        sensitivities; a run failing during the fit raises `IntegrationError` naming the trial parameters.
+        for unknown names, data of the wrong shape or not finite, and runs that cannot carry
+        sensitivities (a method without them); a run failing during the fit raises `IntegrationError` naming the trial parameters.
         """
         from lagcomp.fitting import fit
 
