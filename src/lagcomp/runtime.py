@@ -804,7 +804,8 @@ class Model:
         Each residual and Jacobian evaluation is one run per experiment with the fitted parameters'
         sensitivities (`simulate(..., sensitivities=...)`); see `lagcomp.fitting`.  Refused (`OptionError`)
         for unknown names, data of the wrong shape or not finite, and runs that cannot carry
-        sensitivities (a method without them); a run failing during the fit raises `IntegrationError` naming the trial parameters.
+        sensitivities (a method without them); a run failing during the fit raises `IntegrationError`
+        naming the trial parameters.
         """
         from lagcomp.fitting import fit
 

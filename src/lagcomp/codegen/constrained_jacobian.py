@@ -15,9 +15,9 @@ differentiates by).  Differentiating K(x) z(x) = r(x) along any variable x (a st
 z̄ = (ā, λ̄) symbols held fixed while differentiating and then bound to the values ``rhs`` and ``reactions``
 solve (one call of ``rhs_and_reactions``, bitwise both): the unconstrained kernels' trick
 (`lagcomp.codegen.lower.acceleration_partials`) with the constraint rows added; the sign of λ̄'s term follows
-K's −Λᵀ.  So ∂(q̈, λ)/∂x = K⁻¹ R with R the partials above, all
-columns from one factorization of K (`lagcomp.kernel_support.linear_solvers.kkt_solve_matrix`, the Schur
-complement path of ``kkt_solve``, LU where M is singular).  With y = (q, q̇) and f = (q̇, q̈):
+K's −Λᵀ.  So ∂(q̈, λ)/∂x = K⁻¹ R with R the partials above, all columns from one factorization of K
+(`lagcomp.kernel_support.linear_solvers.kkt_solve_matrix`, the Schur complement path of ``kkt_solve``, LU
+where M is singular).  With y = (q, q̇) and f = (q̇, q̈):
 
     ∂f/∂y = [0  I ; ∂q̈/∂q  ∂q̈/∂q̇],    ∂f/∂p = [0 ; ∂q̈/∂p],    ∂λ/∂(y, p): the λ rows of K⁻¹ R.
 
