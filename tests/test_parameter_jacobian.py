@@ -16,8 +16,8 @@
     these seeds: double pendulum 0.71, 3-link chain 1.11, driven pendulum 1.24, damped 0.88, PD law 0.27,
     sleigh 0.61 ulps; the random systems 0.17-2.3 ulps, at most 0.13 of the tolerance.
 (b) Hypothesis over random small systems (`random_systems.random_mechanism`, the emitted module run as
-    plain Python): the same 40-digit reference; constrained ones must return NO_JACOBIAN, write nothing,
-    and say why in RHS_PARAMETER_JACOBIAN_REFUSED.
+    plain Python): the same 40-digit reference; constrained ones (which it does not cover) against central
+    differences extrapolated as in (c) (tests/test_constrained_sensitivities.py has exact references for them).
 (c) sympy's Whipple bicycle (Kane, velocity constraints among the rows of M, q̇ = N depending on p), run as
     plain Python, against central differences of its ``rhs`` along p extrapolated to order h⁴ (as
     test_rhs_jacobian's, whose error bound it reuses).
@@ -43,8 +43,6 @@ from test_rhs_jacobian import (
 
 import lagcomp as lc
 from lagcomp.accuracy.reference import reference_equations
-from lagcomp.errors import ModelError
-from lagcomp.ir import NO_JACOBIAN
 from lagcomp.model import t
 
 EPS = np.finfo(float).eps
@@ -205,12 +203,12 @@ def test_random_systems_agree_with_the_40_digit_reference(seed):
     p = np.concatenate([mech.values, np.zeros(2 if eom.k else 0)])
     y = np.concatenate([mech.q0, mech.qd0])
     out = np.full((2 * n, width), 7.0)
-    if eom.k:  # the derivative of the augmented solve is not emitted yet: the stub writes nothing and says why
-        assert module["rhs_parameter_jacobian"](0.3, y, p, out) == NO_JACOBIAN and np.all(out == 7.0)
-        assert "constraints" in module["RHS_PARAMETER_JACOBIAN_REFUSED"]
-        return
     assert "RHS_PARAMETER_JACOBIAN_REFUSED" not in module
     assert module["rhs_parameter_jacobian"](0.3, y, p, out) == 0
+    if eom.k:  # the derivative of the augmented solve, against differences along the parameters (gains dropped)
+        D, bound = _differences(module["rhs"], 0.3, y, p, h=1e-2, along="p")
+        assert np.all(np.abs(out - D[:, :width]) <= bound[:, :width]), mech.description
+        return
     J_reference, term = lagrange_reference(mech.system)(0.3, y, p)
     M = np.empty((n, n))
     module["mass_matrix"](0.3, y, p, M)
@@ -239,17 +237,6 @@ def test_a_model_without_parameters_has_an_empty_parameter_jacobian():
     assert module["rhs_parameter_jacobian"](0.0, np.array([0.5, 0.1]), np.empty(0), np.empty((2, 0))) == 0
 
 
-def test_constrained_module_defines_a_parameter_jacobian_that_refuses(compiled):
-    model = compiled("spherical_pendulum_cartesian")
-    y, p = model.initial_state(), model.parameter_vector()  # p ends with the Baumgarte gains: no columns
-    out = np.full((y.size, len(model.parameters)), 7.0)
-    assert model.kernels.rhs_parameter_jacobian(0.0, y, p, out) == NO_JACOBIAN and np.all(out == 7.0)
-    reason = model.kernels.RHS_PARAMETER_JACOBIAN_REFUSED
-    assert reason == "constraints: the derivative of the augmented solve is not emitted yet"
-    with pytest.raises(ModelError, match="derivative of the augmented solve"):
-        model.rhs_parameter_jacobian(0.0, y)
-
-
 def test_inputs_read_from_tables_are_not_parameters(cache_dir):
     """The inverted pendulum tracking r(t), a tabulated input, under τ = −K_p (θ − r) − K_d θ̇: P = 5 columns (no
     column for r, whose table follows the parameters in p), ∂θ̈/∂K_p = −(θ − r(t))/(m l²) with r read there."""
@@ -268,7 +255,7 @@ def test_inputs_read_from_tables_are_not_parameters(cache_dir):
 
 
 def test_kernels_are_values_of_the_drivers_parameter_jacobian_type(compiled, sleigh):  # noqa: F811
-    """Each kind (LDLᵀ, LU, the stub) passes as `kernel_types.RHS_PARAMETER_JACOBIAN`, as a driver takes it."""
+    """Each kind (LDLᵀ, LU, KKT) passes as `kernel_types.RHS_PARAMETER_JACOBIAN`, as a driver takes it."""
     from numba import njit, types
 
     from lagcomp.integrate.drivers.kernel_types import FLOAT, MATRIX, RHS_PARAMETER_JACOBIAN, VECTOR

@@ -17,7 +17,8 @@
     emitted module run as plain Python as in test_properties): against central differences of the
     emitted ``rhs``, extrapolated to order h⁴, with a tolerance derived from the steps (`_differences`):
     about 1e-10 of the entries' scale.  Constrained
-    systems among them must return NO_JACOBIAN and write nothing.
+    systems among them too (the derivative of the augmented solve; tests/test_constrained_sensitivities.py
+    has exact references for them).
 (c) Where M is singular, ``rhs_jacobian`` returns the pivot ``rhs`` returns.
 """
 
@@ -33,7 +34,6 @@ from hypothesis import strategies as st
 from random_systems import python_kernels, random_mechanism
 
 import lagcomp as lc
-from lagcomp.ir import NO_JACOBIAN
 from lagcomp.model import t
 
 EPS = np.finfo(float).eps
@@ -205,10 +205,6 @@ def test_random_systems_jacobian_agrees_with_central_differences(seed):
     p = np.concatenate([mech.values, np.zeros(2 if eom.k else 0)])
     y = np.concatenate([mech.q0, mech.qd0])
     out = np.full((2 * n, 2 * n), 7.0)
-    if eom.k:  # no Jacobian of the augmented system yet: the stub writes nothing and says why
-        assert module["rhs_jacobian"](0.3, y, p, out) == NO_JACOBIAN and np.all(out == 7.0)
-        assert "constraints" in module["RHS_JACOBIAN_REFUSED"]
-        return
     assert "RHS_JACOBIAN_REFUSED" not in module
     assert module["rhs_jacobian"](0.3, y, p, out) == 0
     D, tolerance = _differences(module["rhs"], 0.3, y, p, h=1e-2)
@@ -235,16 +231,8 @@ def test_kane_singular_mass_matrix_gives_the_status_of_rhs(sleigh):
     assert _jacobian(model.kernels, 0.0, y, p)[0] == status
 
 
-def test_constrained_module_defines_a_jacobian_that_refuses(compiled):
-    model = compiled("spherical_pendulum_cartesian")
-    y, p = model.initial_state(), model.parameter_vector()
-    out = np.full((y.size, y.size), 7.0)
-    assert model.kernels.rhs_jacobian(0.0, y, p, out) == NO_JACOBIAN and np.all(out == 7.0)
-    assert "constraints" in model.kernels.RHS_JACOBIAN_REFUSED
-
-
 def test_kernels_are_values_of_the_drivers_jacobian_type(compiled, sleigh):
-    """Each kind of rhs_jacobian (LDLᵀ, LU, the stub) passes as `kernel_types.RHS_JACOBIAN`, as a driver takes it."""
+    """Each kind of rhs_jacobian (LDLᵀ, LU, KKT) passes as `kernel_types.RHS_JACOBIAN`, as a driver takes it."""
     from numba import njit, types
 
     from lagcomp.integrate.drivers.kernel_types import FLOAT, MATRIX, RHS_JACOBIAN, VECTOR
@@ -265,7 +253,7 @@ def test_kernels_are_values_of_the_drivers_jacobian_type(compiled, sleigh):
 def test_rhs_with_jacobian_is_rhs_and_rhs_jacobian_bitwise(compiled, sleigh):
     """``rhs_with_jacobian`` (the sensitivities' kernel: f and J in one call) writes what ``rhs`` and
     ``rhs_jacobian`` write, bitwise, with their statuses, called as `kernel_types.RHS_WITH_JACOBIAN` as the
-    augmented rhs does: Lagrange (LDLᵀ) and Kane (LU) modules, a singular M, and the constrained stub."""
+    augmented rhs does: Lagrange (LDLᵀ) and Kane (LU) modules, a singular M, and a constrained module (KKT)."""
     from numba import njit, types
 
     from lagcomp.integrate.drivers.kernel_types import FLOAT, MATRIX, RHS_WITH_JACOBIAN, VECTOR
@@ -287,9 +275,6 @@ def test_rhs_with_jacobian_is_rhs_and_rhs_jacobian_bitwise(compiled, sleigh):
                 expected = model.kernels.rhs_jacobian(0.0, y, p, J)
                 f2, J2 = np.full_like(f, np.nan), np.full_like(J, np.nan)
                 assert call(model.kernels.rhs_with_jacobian, 0.0, y, p, f2, J2) == expected
-                if expected == NO_JACOBIAN:
-                    assert np.all(np.isnan(J2)) and np.all(np.isnan(f2))
-                    continue
                 assert np.array_equal(f2, f, equal_nan=True)
                 if status == 0:
                     assert np.array_equal(J2, J)

@@ -18,9 +18,9 @@ linearised model with independent Gaussian noise of standard deviations σ.  Wit
 scaled by the reduced χ², s² = Σr² / (m − P), the usual estimate of an unknown common noise variance.
 
 Refused (`OptionError`, docs/errors.md): unknown or repeated parameter names, observations whose shape
-differs from (len(t), len(observe)), non-finite data, times that do not increase, a model whose runs cannot
-carry sensitivities (constrained models, today; the run's own refusal); a run failing at some trial
-parameters raises `IntegrationError` naming them.
+differs from (len(t), len(observe)), non-finite data, times that do not increase, a run that cannot carry
+sensitivities (a method without them: the run's own refusal); a run failing at some trial parameters raises
+`IntegrationError` naming them.
 """
 
 from __future__ import annotations
@@ -153,7 +153,7 @@ def fit(model, t=None, observations=None, params0: Mapping | None = None, *, obs
     names = runs.names
     x0 = np.concatenate([x0] + [experiment.y0[list(initial)] for experiment in experiments])
     lower, upper = _bounds(bounds, names, x0)
-    try:  # the run's refusals (a constrained model, a method without sensitivities) before least_squares starts
+    try:  # the run's refusals (a method without sensitivities) before least_squares starts
         runs.evaluate(x0)
     except OptionError as err:
         raise OptionError(f"`fit` integrates the sensitivities of the unknowns {list(names)}, and the run "

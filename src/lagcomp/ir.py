@@ -13,7 +13,7 @@ Kernel calling convention (all arrays float64, C-contiguous):
   ``rhs``, which returns an int status (0, or k > 0 when the mass matrix is
   not positive definite at pivot k: the state is singular),
   ``rhs_jacobian``, ``rhs_with_jacobian`` (``rhs`` into ``ydot`` and ``rhs_jacobian`` into ``out`` at
-  once) and ``rhs_parameter_jacobian``, which return the same, or
+  once), ``rhs_parameter_jacobian`` and a constrained system's ``reaction_jacobian``, which return the same, or
   `NO_JACOBIAN` where the module has no such Jacobian, and the DAE kernels of constrained systems, which return 0.
 - scalar kernels (energies) return a float.
 """
@@ -66,8 +66,10 @@ class AugmentedSolve:
     included by allocation: [[M, −Λᵀ], [Λ, 0]] in its first N columns and the
     right-hand side (F, γ) in the last; M is the leading ``mass_block`` ×
     ``mass_block`` block.  Entries ``first .. first + count − 1`` of the
-    solution go to ``out[offset:]``.  Unlike `LinearSolve` it does not need
-    M to be regular (Schur complement where it is, LU with pivoting where not).
+    solution go to ``out[offset:]``, and with `multipliers` the multipliers
+    (the entries after M's block) to the argument ``lam`` too.  Unlike
+    `LinearSolve` it does not need M to be regular (Schur complement where it
+    is, LU with pivoting where not).
     """
 
     size: int
@@ -75,6 +77,7 @@ class AugmentedSolve:
     first: int
     count: int
     offset: int
+    multipliers: bool = False
 
 
 #: What ``rhs_jacobian`` and ``rhs_parameter_jacobian`` return where their module has none (negative: never a
@@ -111,6 +114,32 @@ class JacobianSolve:
     def width(self) -> int:
         """The columns of `out`: `columns`, or `size` for the square ∂y'/∂y."""
         return self.size if self.columns is None else self.columns
+
+
+@dataclass(frozen=True)
+class AugmentedJacobianSolve:
+    """The frame of the Jacobian kernels of a constrained system (`lagcomp.codegen.constrained_jacobian`):
+    z = (q̈, λ) solves K z = (F, γ̃), K = [M −Λᵀ; Λ 0], and the kernel writes rows of ∂z/∂x, x the `width`
+    variables (y, p or both).
+
+    Before its loads the kernel calls ``rhs_and_reactions(t, y, p, _ydot, _lam)`` (``rhs`` and ``reactions`` at
+    once, bitwise), returning its status when it is not 0, so that loads can bind q̈ to ``_ydot[n + i]``
+    (``_ydot`` the argument ``ydot`` with `given_ydot`, else a local) and λ to ``_lam[c]``.  It allocates
+    ``_kkt`` (n + k, n + k) and ``_jac`` ((n + k) × width, flat) zeroed; the stores fill K into ``_kkt`` and
+    into ``_jac`` the nonzero entries of ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at (ā, λ̄) = (q̈, λ), row-major.  Then
+    ``kkt_solve_matrix`` overwrites them with K⁻¹ times themselves (its status returned when not 0): rows
+    ``first .. first + count − 1`` of the solution go to ``out[offset:]``, the other rows of `out` are
+    zero, and with `identity` out[i, n + i] = 1 for i < n (the rows q̇ of ∂f/∂y).
+    """
+
+    n: int
+    k: int
+    width: int
+    first: int
+    count: int
+    offset: int
+    identity: bool = False
+    given_ydot: bool = False
 
 
 @dataclass(frozen=True)
@@ -170,8 +199,8 @@ class Kernel:
     stores : tuple of (target, Expr)
         Output assignments; the target is an lvalue (``out[0]``, a local) or
         ``return`` for scalar kernels.
-    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, Delegate, ReturnZero, FlatMatrix,
-        Unavailable or None
+    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, AugmentedJacobianSolve, Delegate,
+        ReturnZero, FlatMatrix, Unavailable or None
         Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``,
         M⁻¹ applied to the rows of ``rhs_with_jacobian``), the call of another kernel
         (``rhs_jacobian``), the matrix-vector product of
@@ -199,8 +228,8 @@ class Kernel:
     loads: tuple[tuple[str, str], ...]
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
-    solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | Delegate | ReturnZero | FlatMatrix
-            | Unavailable | None) = None
+    solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | AugmentedJacobianSolve | Delegate
+            | ReturnZero | FlatMatrix | Unavailable | None) = None
     lanes: bool = False
     alias: str | None = None
     constants: tuple[tuple[str, str, object], ...] = ()

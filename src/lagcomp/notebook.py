@@ -45,6 +45,10 @@ def solution_dataset(solution):
     if solution.sensitivities is not None:
         _add(data, [("sensitivities", solution.sensitivities)], "sensitivity ∂y(t)/∂w", dim=("t", "state", "wrt"))
         coords["wrt"] = ("wrt", list(solution.sensitivity_names))
+    if solution.reaction_sensitivities is not None:
+        _add(data, [("reaction_sensitivities", solution.reaction_sensitivities)], "sensitivity dλ(t)/dw",
+             dim=("t", "constraint", "wrt"))
+        coords["constraint"] = ("constraint", list(solution.reaction_names))
     if solution.events or solution.sensitivities is not None:
         coords["state"] = ("state", state)
     taken = set(coords) | {d for dims, _, _ in data.values() for d in ((dims,) if isinstance(dims, str) else dims)}

@@ -472,8 +472,8 @@ class Model:
         the exact Jacobian the model's ``rhs_jacobian`` kernel computes (the one ``method="radau"`` uses;
         scipy's ``solve_ivp(..., jac=...)`` takes it as it is).
 
-        Raises SingularMassMatrixError where M is singular, ModelError where the model has no Jacobian
-        kernel (its ``RHS_JACOBIAN_REFUSED`` says why: constrained Lagrange models, today).
+        Raises SingularMassMatrixError where M is singular (the augmented matrix, for a constrained model),
+        ModelError where the model has no Jacobian kernel (its ``RHS_JACOBIAN_REFUSED`` says why).
         """
         y = self._vector(y, self.state_size, "y")
         out = np.empty((self.state_size, self.state_size))
@@ -490,8 +490,8 @@ class Model:
         column j the parameter ``parameters[j]``: the exact derivative the model's ``rhs_parameter_jacobian``
         kernel computes (the parameter counterpart of `jacobian`, the columns of the forward sensitivities).
 
-        Raises SingularMassMatrixError where M is singular, ModelError where the model has no such kernel
-        (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why: constrained Lagrange models, today).
+        Raises SingularMassMatrixError where M is singular (the augmented matrix, for a constrained model),
+        ModelError where the model has no such kernel (its ``RHS_PARAMETER_JACOBIAN_REFUSED`` says why).
         """
         y = self._vector(y, self.state_size, "y")
         out = np.empty((self.state_size, len(self.parameters)))
@@ -744,9 +744,10 @@ class Model:
             as `Solution.sensitivity_names` gives them.  Results in
             `Solution.sensitivities`, shape (m, 2n, k).  The step-size control
             covers the state only (``sensitivity_control="state"``, the
-            default: the plain run's steps) or both (``"both"``).  Refused for
-            other methods, constrained models (no Jacobian kernel yet), located
-            events (pass ``events=False``) and function inputs; see
+            default: the plain run's steps) or both (``"both"``).  A model with
+            constraints also gets dλ/dw in `Solution.reaction_sensitivities`
+            (m, k, columns).  Refused for other methods, projection, located
+            events that read inputs and function inputs; see
             `lagcomp.integrate.sensitivities`.
         """
         from lagcomp.integrate.options import known_options
@@ -802,8 +803,9 @@ class Model:
 
         Each residual and Jacobian evaluation is one run per experiment with the fitted parameters'
         sensitivities (`simulate(..., sensitivities=...)`); see `lagcomp.fitting`.  Refused (`OptionError`)
-        for unknown names, data of the wrong shape or not finite, and models whose runs cannot carry
-        sensitivities; a run failing during the fit raises `IntegrationError` naming the trial parameters.
+        for unknown names, data of the wrong shape or not finite, and runs that cannot carry
+        sensitivities (a method without them); a run failing during the fit raises `IntegrationError`
+        naming the trial parameters.
         """
         from lagcomp.fitting import fit
 

@@ -36,8 +36,8 @@ multipliers move by ~δ (|μ| = 1 to ~1e-13 there).  Each further symmetry bring
 (the planar three bodies: 8, within 6e-6 of 1; the figure eight's other four on the unit circle to 3e-12).
 Φ is integrated with ``sensitivity_control="both"``.
 
-Refused (`OptionError`, docs/errors.md): models whose sensitivities `simulate` refuses (constrained Lagrange
-models: no Jacobian kernel), a guess of the wrong size or not finite, an unknown `fix`, a period that is not
+Refused (`OptionError`, docs/errors.md): models with Lagrange multipliers (Newton's steps on the whole state
+would leave their constraints), a guess of the wrong size or not finite, an unknown `fix`, a period that is not
 positive, and no convergence (the residual reached is in the message).
 """
 
@@ -120,10 +120,10 @@ def periodic_orbit(model, guess, period: float, *, fix: str | None = None, param
     method : str
         An embedded pair (dop853, dopri5, tsit5, bs3): the methods that integrate sensitivities.
     """
-    refused = getattr(model.kernels, "RHS_JACOBIAN_REFUSED", None)
-    if refused is not None:
-        raise OptionError(f"`periodic_orbit` needs the monodromy matrix, from the sensitivities of {model.name!r}, "
-                          f"which has no Jacobian kernel ∂f/∂y: its equations hold {refused}.")
+    if model.k:
+        raise OptionError(f"`periodic_orbit` shoots on the whole state (q, q̇) of {model.name!r}, whose constraints "
+                          f"{list(model.constraints)} its Newton steps would leave (and `simulate` refuses an "
+                          "inconsistent start).")
     names = tuple(model.state_names)
     size = len(names)
     try:

@@ -34,6 +34,7 @@ from lagcomp.codegen.taylor import (
 )
 from lagcomp.equations import Equation
 from lagcomp.ir import (
+    AugmentedJacobianSolve,
     AugmentedSolve,
     Delegate,
     FlatMatrix,
@@ -94,9 +95,9 @@ def _header(ir: ModuleIR, taylor: TaylorProgram | Unsupported) -> str:
 #: What kernels may call from `lagcomp.kernel_support`, by module.
 KERNEL_SUPPORT = {
     "lagcomp.kernel_support.inputs": ("input_value",),
-    "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "ldlt_solve",
-                                              "ldlt_solve_matrix", "lu_factor", "lu_solve", "lu_solve_matrix",
-                                              "lu_substitute"),
+    "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "kkt_solve_matrix",
+                                              "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
+                                              "lu_solve_matrix", "lu_substitute"),
     "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
 }
 def support_imports(names: set[str]) -> str:
@@ -134,6 +135,8 @@ def kernel_support_names(kernels) -> set[str]:
             names.add("PIVOT_TOLERANCE" if solve.unrolled or kernel.lanes else "ldlt_solve")
         elif isinstance(solve, JacobianSolve):
             names.add("PIVOT_TOLERANCE" if solve.n <= JACOBIAN_UNROLL_MAX else "ldlt_solve_matrix")
+        elif isinstance(solve, AugmentedJacobianSolve):
+            names.add("kkt_solve_matrix")
     return names
 
 
@@ -268,6 +271,23 @@ def _unrolled_ldlt_matrix(solve: JacobianSolve) -> list[str]:
     return lines + ["return 0"]
 
 
+def _augmented_jacobian_frame(solve: AugmentedJacobianSolve) -> tuple[list[str], list[str]]:
+    """The lines of a constrained system's Jacobian kernel before its loads (`rhs_and_reactions` into ``_ydot``
+    and ``_lam``, the work arrays zeroed) and after its stores (one ``kkt_solve_matrix``, rows copied out)."""
+    n, size, width = solve.n, solve.n + solve.k, solve.width
+    before = ["_ydot = ydot" if solve.given_ydot else f"_ydot = np.empty({2 * n})", f"_lam = np.empty({solve.k})",
+              "_status = rhs_and_reactions(t, y, p, _ydot, _lam)", "if _status:", f"{INDENT}return _status",
+              f"_kkt = np.zeros(({size}, {size}))", f"_jac = np.zeros({size * width})"]
+    after = ["# ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.",
+             f"_rows = _jac.reshape(({size}, {width}))", f"_status = kkt_solve_matrix(_kkt, {n}, _rows)",
+             "if _status:", f"{INDENT}return _status", "out[:] = 0.0"]
+    if solve.identity:
+        after += [f"for _i in range({n}):", f"{INDENT}out[_i, {n} + _i] = 1.0"]
+    last = solve.first + solve.count
+    after += [f"out[{solve.offset}:{solve.offset + solve.count}] = _rows[{solve.first}:{last}]", "return 0"]
+    return before, after
+
+
 def delegated_call(solve: Delegate) -> str:
     """The one line of a `Delegate` kernel: the other kernel's status, its scratch output dropped."""
     return f"return {solve.kernel}(t, y, p, np.empty({solve.scratch}), out)"
@@ -318,6 +338,9 @@ def _kernel_source(kernel: Kernel) -> str:
     if isinstance(solve, JacobianSolve):
         before, after = _jacobian_frame(solve)
         body += before
+    elif isinstance(solve, AugmentedJacobianSolve):
+        before, after = _augmented_jacobian_frame(solve)
+        body += before
     body += [f"{local} = {source}" for local, source in kernel.loads]
     if isinstance(solve, AugmentedSolve):
         body.append(f"_kkt = np.zeros(({solve.size}, {solve.size + 1}))")
@@ -329,10 +352,13 @@ def _kernel_source(kernel: Kernel) -> str:
     if isinstance(solve, AugmentedSolve):
         body += [f"_status = kkt_solve(_kkt, {solve.mass_block})", "if _status:", f"{INDENT}return _status"]
         body += [f"out[{solve.offset + i}] = _kkt[{solve.first + i}, {solve.size}]" for i in range(solve.count)]
+        if solve.multipliers:
+            body += [f"lam[{c}] = _kkt[{solve.mass_block + c}, {solve.size}]"
+                     for c in range(solve.size - solve.mass_block)]
         body.append("return 0")
     elif isinstance(solve, SymmetricProduct):
         body += _symmetric_product(solve)
-    elif isinstance(solve, JacobianSolve):
+    elif isinstance(solve, (JacobianSolve, AugmentedJacobianSolve)):
         body += after
     elif isinstance(solve, FlatMatrix):
         body += [f"out[:] = _jac.reshape(({solve.size}, {solve.size}))", "return 0"]

@@ -281,22 +281,29 @@ def _augmented_stores(eom: EOM) -> list:
     Unknowns (q̈, λ): M q̈ − Λᵀ λ = F and Λ q̈ = γ − 2α (Λ q̇ + b) − β² Φ.
     """
     n, k, N = eom.n, eom.k, eom.n + eom.k
-    alpha, beta = _baumgarte(eom)
     stores = [(f"_kkt[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(n) if eom.M[i, j] != 0]
     stores += [(f"_kkt[{i}, {n + c}]", -eom.C[c, i]) for i in range(n) for c in range(k) if eom.C[c, i] != 0]
     stores += [(f"_kkt[{i}, {N}]", eom.F[i]) for i in range(n)]
     stores += [(f"_kkt[{n + c}, {j}]", eom.C[c, j]) for c in range(k) for j in range(n) if eom.C[c, j] != 0]
-    holonomic_rows = [c for c in range(k) if eom.holonomic[c]]
-    for c in range(k):
+    return stores + [(f"_kkt[{n + c}, {N}]", gamma) for c, gamma in enumerate(stabilized_gamma(eom))]
+
+
+def stabilized_gamma(eom: EOM) -> list:
+    """γ̃_c = γ_c − 2α (Λ_c q̇ + b_c) − β² Φ_c (the last term for holonomic rows only), the right-hand side of
+    Λ q̈ = γ̃ with the Baumgarte gains α, β (`_baumgarte`), one per constraint."""
+    alpha, beta = _baumgarte(eom)
+    holonomic_rows = [c for c in range(eom.k) if eom.holonomic[c]]
+    rows = []
+    for c in range(eom.k):
         stabilized = eom.gamma[c] - 2 * alpha * _velocity_residual(eom, c)
         if eom.holonomic[c]:
             stabilized -= beta**2 * eom.Phi[holonomic_rows.index(c)]
-        stores.append((f"_kkt[{n + c}, {N}]", stabilized))
-    return stores
+        rows.append(stabilized)
+    return rows
 
 
 def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
-    """rhs and reactions through the augmented system, and the constraint residuals and matrix."""
+    """rhs, reactions and both at once through the augmented system, and the constraint residuals and matrix."""
     n, k = eom.n, eom.k
     state_args = ("t", "y", "p")
     velocities = [(f"out[{i}]", eom.qd[i]) for i in range(n)]
@@ -316,9 +323,16 @@ def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
             "force each constraint exerts along its row Λ_k. Returns 0, or j > 0 when singular.",
         stores=rhs.stores[n:], solve=AugmentedSolve(size=n + k, mass_block=n, first=n, count=k, offset=0),
     )
+    both = replace(
+        rhs, name="rhs_and_reactions", args=(*state_args, "out", "lam"),
+        doc="`rhs` into `out` and `reactions` into `lam` from one solve of the augmented system, both bitwise\n"
+            "(the same code): what the Jacobian kernels start from. Returns 0, or j > 0 when singular.",
+        solve=replace(rhs.solve, multipliers=True),
+    )
     return (
         rhs,
         reactions,
+        both,
         _kernel(
             "constraint_residuals",
             f"Residuals, shape ({kh + k},): Φ of the {kh} holonomic constraints, then Λ q̇ + b of all {k}.",
@@ -545,48 +559,6 @@ def _rhs_parameter_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
-#: Why a constrained system's module has no Jacobian (its ``RHS_JACOBIAN_REFUSED``).
-CONSTRAINED_JACOBIAN_REFUSED = "constraints (the Jacobian of the augmented solve is not emitted yet)"
-#: Why a constrained system's module has no parameter Jacobian (its ``RHS_PARAMETER_JACOBIAN_REFUSED``).
-CONSTRAINED_PARAMETER_JACOBIAN_REFUSED = "constraints: the derivative of the augmented solve is not emitted yet"
-
-
-def no_rhs_jacobian_kernel(reason: str) -> Kernel:
-    """An ``rhs_jacobian`` that writes nothing and returns `NO_JACOBIAN`; ``RHS_JACOBIAN_REFUSED`` = `reason`."""
-    return Kernel(
-        name="rhs_jacobian",
-        doc=RHS_JACOBIAN_DOC + f"Not available for this system: {reason}.\n"
-            f"Writes nothing and returns NO_JACOBIAN = {NO_JACOBIAN} (never a pivot; RHS_JACOBIAN_REFUSED says why).",
-        args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
-        solve=Unavailable(status=NO_JACOBIAN, constant="RHS_JACOBIAN_REFUSED", reason=reason),
-    )
-
-
-def no_rhs_with_jacobian_kernel(reason: str) -> Kernel:
-    """An ``rhs_with_jacobian`` that writes nothing and returns `NO_JACOBIAN` (``RHS_JACOBIAN_REFUSED``,
-    which `no_rhs_jacobian_kernel` emits, says why: `reason`)."""
-    return Kernel(
-        name="rhs_with_jacobian",
-        doc=RHS_WITH_JACOBIAN_DOC + f"Not available for this system: {reason}.\n"
-            f"Writes nothing and returns NO_JACOBIAN = {NO_JACOBIAN} (never a pivot; RHS_JACOBIAN_REFUSED says why).",
-        args=WITH_JACOBIAN_ARGS, loads=(), temps=(), stores=(),
-        solve=Unavailable(status=NO_JACOBIAN, constant=None, reason=reason),
-    )
-
-
-def no_rhs_parameter_jacobian_kernel(reason: str) -> Kernel:
-    """An ``rhs_parameter_jacobian`` that writes nothing and returns `NO_JACOBIAN`;
-    ``RHS_PARAMETER_JACOBIAN_REFUSED`` = `reason`."""
-    return Kernel(
-        name="rhs_parameter_jacobian",
-        doc=RHS_PARAMETER_JACOBIAN_DOC + f"Not available for this system: {reason}.\n"
-            f"Writes nothing and returns NO_JACOBIAN = {NO_JACOBIAN} (never a pivot; RHS_PARAMETER_JACOBIAN_REFUSED "
-            "says why).",
-        args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
-        solve=Unavailable(status=NO_JACOBIAN, constant="RHS_PARAMETER_JACOBIAN_REFUSED", reason=reason),
-    )
-
-
 def dae_size(eom: EOM) -> int:
     """N' = 3n + k + kh, the length of the DAE state z = (q, v, w, λ, μ) of a constrained system."""
     return 3 * eom.n + eom.k + len(eom.Phi)
@@ -772,18 +744,17 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 
 def lower(eom: EOM) -> ModuleIR:
-    """Build the IR of the module for `eom`: rhs, its Jacobians ∂f/∂y and ∂f/∂p (refusing stubs for constrained
-    systems), mass_matrix, forcing, energies, momenta, and for constrained systems reactions, constraint
-    residuals and matrix, and the DAE's residual and Jacobian; last the bodies' `geometry`
+    """Build the IR of the module for `eom`: rhs, its Jacobians ∂f/∂y and ∂f/∂p, mass_matrix, forcing, energies,
+    momenta, and for constrained systems reactions and their Jacobian (`lagcomp.codegen.constrained_jacobian`),
+    constraint residuals and matrix, and the DAE's residual and Jacobian; last the bodies' `geometry`
     (`lagcomp.codegen.geometry`)."""
     n = eom.n
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
     if eom.k:
-        refused = (no_rhs_jacobian_kernel(CONSTRAINED_JACOBIAN_REFUSED),
-                   no_rhs_with_jacobian_kernel(CONSTRAINED_JACOBIAN_REFUSED),
-                   no_rhs_parameter_jacobian_kernel(CONSTRAINED_PARAMETER_JACOBIAN_REFUSED))
-        first = _constraint_kernels(eom, mapping, loads) + refused + _dae_kernels(eom, mapping, loads)
+        from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels  # (it imports this module)
+        first = (_constraint_kernels(eom, mapping, loads) + constrained_jacobian_kernels(eom, mapping, loads)
+                 + _dae_kernels(eom, mapping, loads))
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
         # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot

@@ -41,12 +41,23 @@ crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the 
 
 ∂g/∂w nonzero only for a parameter in g; a grazing crossing (denominator 0) gives inf or nan.
 
-Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
-Lagrange models, today); located events that read inputs (their module's ``event_gradients`` is a
-refusing stub, ``EVENT_GRADIENTS_REFUSED`` says why); projection; function inputs (their
-∂u/∂y is unknown); parameter columns when the module's ``rhs_parameter_jacobian`` is a refusing stub (its
-``RHS_PARAMETER_JACOBIAN_REFUSED`` says why); unknown names.  `lagcomp.integrate.sweep` refuses
-``sensitivities`` altogether.
+Constrained systems (Lagrange multipliers).  Their ``rhs`` solves the augmented system for (q̈, λ), with the
+Baumgarte terms of the run's ``baumgarte=(α, β)``; its emitted Jacobians differentiate that solve exactly
+(`lagcomp.codegen.constrained_jacobian` derives them), so S obeys the variational equations of the ODE the run
+integrates, everywhere, not of the constrained motion alone.  The sensitivity columns are not projected (nor
+is the state: projection is refused).  A consistent perturbation — tangent to the constraint manifold at y0:
+a consistent change of the initial state, or a parameter absent from Φ and from Λ q̇ + b — stays tangent,
+since the manifold is invariant under the ODE and so its tangent spaces are under the linearised flow; S is
+then the sensitivity of the constrained motion.  A column off the manifold (one initial coordinate changed
+alone; a parameter of Φ or of Λ q̇ + b, whose change makes y0 inconsistent) is the ODE's response to an
+inconsistent start, which `simulate` itself refuses: the residual's change δΦ grows as δΦ(0) + δΦ̇(0) t
+without Baumgarte terms and is damped with α, β > 0 — not a motion the constrained system can make.
+The reactions' sensitivities follow after the run (`reaction_sensitivities`): dλ/dw =
+∂λ/∂y · S + ∂λ/∂p_w, with the module's ``reaction_jacobian``, at each saved row.
+
+Refused (`OptionError`, docs/errors.md): other methods; located events that read inputs (their module's
+``event_gradients`` is a refusing stub, ``EVENT_GRADIENTS_REFUSED`` says why); projection; function inputs
+(their ∂u/∂y is unknown); unknown names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
 """
 
 from __future__ import annotations
@@ -126,10 +137,6 @@ def check(model, method, options, cols: Columns, original_model) -> None:
     if method.driver != EMBEDDED_DRIVER:
         raise OptionError(f"`sensitivities` are integrated by the embedded Runge-Kutta pairs (dop853, dopri5, "
                           f"tsit5, bs3); `{method.name}` does not integrate them yet: use dop853.")
-    refused = getattr(model.kernels, "RHS_JACOBIAN_REFUSED", None)
-    if refused is not None:
-        raise OptionError(f"`sensitivities` need the Jacobian ∂f/∂y of {model.name!r}, which has no Jacobian "
-                          f"kernel: its equations hold {refused}.")
     located = [e.name for e, action in zip(model.events, options.actions.tolist(), strict=True) if action]
     refused = getattr(model.kernels, "EVENT_GRADIENTS_REFUSED", None)
     if located and refused is not None:
@@ -141,10 +148,6 @@ def check(model, method, options, cols: Columns, original_model) -> None:
     if model is not original_model:
         raise OptionError("`sensitivities` with inputs given as numba functions: their derivatives ∂u/∂y are "
                           "unknown, so the sensitivities would miss them; give the inputs as tables or laws.")
-    refused = getattr(model.kernels, "RHS_PARAMETER_JACOBIAN_REFUSED", None)
-    if cols.parameters and refused is not None:
-        raise OptionError(f"Parameter sensitivities {list(cols.names[len(cols.state):])} need ∂f/∂p of "
-                          f"{model.name!r}, which has no such kernel: its equations hold {refused}.")
 
 
 def scale_for(control) -> float:
@@ -338,3 +341,24 @@ def event_sensitivities(model, p: np.ndarray, cols: Columns, scale: float, event
     dy = S + f[:, :, None] * dt[:, None, :]
     return {event.name: EventSensitivities(t=dt[which == e], y=dy[which == e])
             for e, event in enumerate(model.events)}
+
+
+def reaction_sensitivities(model, ts: np.ndarray, ys: np.ndarray, p: np.ndarray, S: np.ndarray,
+                           cols: Columns) -> np.ndarray | None:
+    """dλ/dw, (m, K, k), of a constrained model's multipliers at the saved rows (ts (m,), ys (m, N)) from the
+    state's sensitivities S (m, N, k): ∂λ/∂y · S, plus ∂λ/∂p_j in the column of parameter p_j, with the
+    module's exact ``reaction_jacobian`` (K, N + P).  None for a model without it (no multipliers, or a Kane
+    model's auxiliary reactions); a row where the augmented matrix is singular is nan.  `p` is the run's
+    parameter vector without the work space."""
+    kernel = getattr(model.kernels, "reaction_jacobian", None)
+    if kernel is None:
+        return None
+    m, n = ts.size, model.state_size
+    jacobian = np.empty((model.k, n + len(model.parameters)))
+    out = np.full((m, model.k, cols.k), np.nan)
+    parameters = n + np.array(cols.parameters, dtype=np.int64)
+    for r in range(m):
+        if kernel(ts[r], ys[r], p, jacobian) == 0:
+            out[r] = jacobian[:, :n] @ S[r]
+            out[r, :, len(cols.state):] += jacobian[:, parameters]
+    return out

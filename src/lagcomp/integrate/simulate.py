@@ -171,7 +171,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     run = dict(method=m.name, status=status, state=state, projected=projected,
                residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
     if columns is not None:
-        run.update(sensitivities=recorder.sensitivities(), sensitivity_names=columns.names,
+        run.update(sensitivities=recorder.sensitivities(), sensitivity_columns=columns, sensitivity_names=columns.names,
                    event_sensitivities=sens.event_sensitivities(model, p, columns, scale, event_parts))
         recorder = recorder.recorder
     return _solution(model, p, recorder, run, throw)
@@ -361,6 +361,9 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         fired = [name for name, record in run["events"].items() if record.t.size and record.t[-1] == run_state.t]
         message = f"{message} Event {fired[0] if fired else '?'!r} at t = {run_state.t:.10g}."
     reactions, residual = reactions_along(model, ts, ys, p)
+    reaction_sensitivities = (None if run.get("sensitivities") is None else
+                              sens.reaction_sensitivities(model, ts, ys, p, run["sensitivities"],
+                                                          run["sensitivity_columns"]))
     n = model.n
     solution = Solution(
         t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), observed=observed, cyclic=model.cyclic,
@@ -372,7 +375,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         projected_initial_state=ys[0].copy() if run["projected"] else None,
         events=run["events"], model_name=model.name, geometry=BodyGeometry.of(model, p),
         sensitivities=run.get("sensitivities"), sensitivity_names=run.get("sensitivity_names", ()),
-        event_sensitivities=run.get("event_sensitivities", {}),
+        event_sensitivities=run.get("event_sensitivities", {}), reaction_sensitivities=reaction_sensitivities,
     )
     # simulate -> Model.simulate -> the user's call
     warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4)

@@ -114,6 +114,11 @@ class Solution:
     event_sensitivities : dict
         With sensitivities and located events: {event name: `EventSensitivities`}, the
         sensitivities of each occurrence's time and of the state there; empty without.
+    reaction_sensitivities : ndarray, shape (m, K, k), or None
+        With sensitivities, for a model with Lagrange multipliers: dλ/dw at each saved time,
+        rows the constraints of `reaction_names`, columns the `sensitivity_names` (exact
+        partials of λ times the sensitivities, `lagcomp.integrate.sensitivities.reaction_sensitivities`).
+        None without sensitivities or multipliers (a Kane model's auxiliary reactions have none).
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
@@ -152,6 +157,7 @@ class Solution:
     sensitivities: np.ndarray | None = field(default=None, repr=False)
     sensitivity_names: tuple = ()
     event_sensitivities: dict = field(default_factory=dict, repr=False)
+    reaction_sensitivities: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def success(self) -> bool:
@@ -173,6 +179,11 @@ class Solution:
     @property
     def summary(self) -> RunSummary:
         return self.observed.values()[3]
+
+    @property
+    def reaction_names(self) -> tuple[str, ...]:
+        """The constraints, in the order of the rows of each `reaction_sensitivities` matrix (`reactions`' keys)."""
+        return tuple(self.reactions)
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -221,6 +232,8 @@ class Solution:
                for name, record in self.events.items() for part in ("t", "q", "qd")},
             **({"sensitivities": self.sensitivities, "sensitivity_names": np.asarray(self.sensitivity_names)}
                if self.sensitivities is not None else {}),
+            **({"reaction_sensitivities": self.reaction_sensitivities}
+               if self.reaction_sensitivities is not None else {}),
         }
 
     def to_xarray(self):
@@ -234,7 +247,8 @@ class Solution:
         dimension ``event_<name>`` (its occurrences): ``event_<name>_t`` and ``event_<name>_state``
         (occurrences × ``state``, the coordinates then the velocities, or the speeds of a Kane model).
         A run with sensitivities adds ``sensitivities`` with dims (``t``, ``state``, ``wrt``), ``wrt`` the
-        `sensitivity_names`.
+        `sensitivity_names`, and for a model with multipliers ``reaction_sensitivities`` with dims (``t``,
+        ``constraint``, ``wrt``), ``constraint`` the `reaction_names`.
 
         ``attrs``: ``model`` (its name), ``method``, ``status``, ``message``, ``nfev``, ``nsteps``,
         ``nrejected``, ``njev``, ``nlu``, ``constraint_residual``, ``t_failure`` (failed runs only),

@@ -15,6 +15,8 @@ function's first compile, and caches it with it.
   singular — a massless rolling hoop carrying a point mass — it falls back
   to ``lu_solve``, Gaussian elimination with partial pivoting of the whole
   matrix, which only needs the augmented matrix to be regular.
+  ``kkt_solve_matrix``: the same for several right-hand sides at once, one
+  factorization (the Jacobians of a constrained system's q̈ and λ).
 * ``lu_factor`` and ``lu_substitute``: the same elimination split in two,
   for a matrix factored once and applied to many right-hand sides (the
   simplified Newton iteration of ``collocation_run``); ``lu_solve_matrix``,
@@ -265,6 +267,75 @@ def kkt_solve(a, n):
         a[i, size] = x
     for r in range(k):
         a[n + r, size] = lam[r]
+    return 0
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def kkt_solve_matrix(a, n, b):
+    """Solve [M −Λᵀ; Λ 0] X = b for all m columns of b, shape (n + k, m), in place: X overwrites b.
+
+    a, shape (n + k, n + k), holds the matrix as ``kkt_solve`` reads it (M's lower triangle, −Λᵀ, Λ).  The
+    same paths as ``kkt_solve``, factored once for all columns: with M = L D Lᵀ, W = M⁻¹ Λᵀ and U = M⁻¹ b_top
+    (n, m), the rows of λ solve (Λ W) Λ_x = b_bottom − Λ U by LDLᵀ and the top rows are U + W Λ_x; where M or
+    Λ W is not positive definite, LU with partial pivoting of the whole matrix (``lu_solve_matrix``, which
+    overwrites a).  Returns 0, or j + 1 for a zero pivot of the LU (a singular); b is then invalid.
+    """
+    size = a.shape[0]
+    k, m = size - n, b.shape[1]
+    # Columns of [Λᵀ | b_top]: W in work[:, n:n+k], U in work[:, n+k:].
+    work = np.empty((n, n + k + m))
+    for i in range(n):
+        for j in range(i + 1):
+            work[i, j] = a[i, j]
+        for c in range(k):
+            work[i, n + c] = -a[i, n + c]
+        for c in range(m):
+            work[i, n + k + c] = b[i, c]
+    for j in range(n):
+        d = work[j, j]
+        for r in range(j):
+            d -= work[j, r] * work[j, r] * work[r, r]
+        if not d > PIVOT_TOLERANCE * abs(a[j, j]):
+            return lu_solve_matrix(a, b)
+        work[j, j] = d
+        for i in range(j + 1, n):
+            s = work[i, j]
+            for r in range(j):
+                s -= work[i, r] * work[j, r] * work[r, r]
+            work[i, j] = s / d
+    for c in range(n, n + k + m):
+        for i in range(n):
+            for r in range(i):
+                work[i, c] -= work[i, r] * work[r, c]
+        for i in range(n - 1, -1, -1):
+            x = work[i, c] / work[i, i]
+            for r in range(i + 1, n):
+                x -= work[r, i] * work[r, c]
+            work[i, c] = x
+    # Schur complement S = Λ W (k × k) and its right-hand sides b_bottom − Λ U (k × m).
+    schur = np.empty((k, k))
+    lam = np.empty((k, m))
+    for r in range(k):
+        for c in range(m):
+            s = b[n + r, c]
+            for i in range(n):
+                s -= a[n + r, i] * work[i, n + k + c]
+            lam[r, c] = s
+        for c in range(r + 1):
+            s = 0.0
+            for i in range(n):
+                s += a[n + r, i] * work[i, n + c]
+            schur[r, c] = s
+    if ldlt_solve_matrix(schur, lam):
+        return lu_solve_matrix(a, b)
+    for c in range(m):
+        for i in range(n):
+            x = work[i, n + k + c]
+            for r in range(k):
+                x += work[i, n + r] * lam[r, c]
+            b[i, c] = x
+        for r in range(k):
+            b[n + r, c] = lam[r, c]
     return 0
 
 
