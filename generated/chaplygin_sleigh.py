@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
+from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve, kkt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin
 
 
@@ -98,6 +98,47 @@ def reactions(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_and_reactions(t, y, p, out, lam):
+    """`rhs` into `out` and `reactions` into `lam` from one solve of the augmented system, both bitwise
+    (the same code): what the Jacobian kernels start from. Returns 0, or j > 0 when singular."""
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
+    _baumgarte_alpha = p[3]
+    _kkt = np.zeros((4, 5))
+    _c0 = sin(q_theta)
+    _c1 = cos(q_theta)
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_theta
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_I
+    _kkt[0, 3] = _c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -p_a
+    _kkt[0, 4] = 0.0
+    _kkt[1, 4] = 0.0
+    _kkt[2, 4] = 0.0
+    _kkt[3, 0] = -_c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = p_a
+    _kkt[3, 4] = qd_theta*(_c0*qd_y + _c1*qd_x) - 2.0*_baumgarte_alpha*(_c1*qd_y + p_a*qd_theta - _c0*qd_x)
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    out[3] = _kkt[0, 4]
+    out[4] = _kkt[1, 4]
+    out[5] = _kkt[2, 4]
+    lam[0] = _kkt[3, 4]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (1,): Φ of the 0 holonomic constraints, then Λ q̇ + b of all 1."""
     q_theta = y[2]
@@ -120,24 +161,70 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
-
-
-#: Why this module's rhs_jacobian computes nothing.
-RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not emitted yet)'
-
-
-@njit(cache=True, error_model="numpy")
 def rhs_with_jacobian(t, y, p, ydot, out):
     """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
     (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows [0 | I], then ∂q̈/∂y: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(1)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((4, 4))
+    _jac = np.zeros(24)
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
+    _baumgarte_alpha = p[3]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _mult0 = _lam[0]
+    _c0 = sin(q_theta)
+    _c1 = cos(q_theta)
+    _c2 = _c1*qd_x
+    _c3 = _c0*qd_y
+    _c4 = 2.0*_baumgarte_alpha
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_I
+    _kkt[0, 3] = _c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -p_a
+    _kkt[3, 0] = -_c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = p_a
+    _jac[2] = -_c1*_mult0
+    _jac[8] = -_c0*_mult0
+    _jac[20] = _acc0*_c1 + _acc1*_c0 + qd_theta*(_c1*qd_y - _c0*qd_x) - _c4*(-_c2 - _c3)
+    _jac[21] = _c0*_c4 + _c1*qd_theta
+    _jac[22] = _c0*qd_theta - _c1*_c4
+    _jac[23] = _c2 + _c3 - _c4*p_a
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((4, 6))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(3):
+        out[_i, 3 + _i] = 1.0
+    out[3:6] = _rows[0:3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(6), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -145,13 +232,119 @@ def rhs_parameter_jacobian(t, y, p, out):
     """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
     no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
     inputs' tables that follow them).
-    Not available for this system: constraints: the derivative of the augmented solve is not emitted yet.
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_PARAMETER_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows 0 (q̇ does not depend on p), then ∂q̈/∂p: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _lam = np.empty(1)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((4, 4))
+    _jac = np.zeros(12)
+    q_theta = y[2]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
+    _baumgarte_alpha = p[3]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c0 = sin(q_theta)
+    _c1 = cos(q_theta)
+    _c2 = -_acc2
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_I
+    _kkt[0, 3] = _c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -p_a
+    _kkt[3, 0] = -_c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = p_a
+    _jac[0] = -_acc0
+    _jac[3] = -_acc1
+    _jac[7] = _c2
+    _jac[8] = _mult0
+    _jac[11] = _c2 - 2.0*_baumgarte_alpha*qd_theta
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((4, 3))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[3:6] = _rows[0:3]
+    return 0
 
 
-#: Why this module's rhs_parameter_jacobian computes nothing.
-RHS_PARAMETER_JACOBIAN_REFUSED = 'constraints: the derivative of the augmented solve is not emitted yet'
+@njit(cache=True, error_model="numpy")
+def reaction_jacobian(t, y, p, out):
+    """Exact Jacobian of the multipliers λ (`reactions`), shape (1, 9) into `out`: row c the constraint c of
+    ('knife',), columns ∂λ_c/∂y_j (y = (q, q̇), 6 of them), then ∂λ_c/∂p_j for the model's
+    parameters (not the Baumgarte gains nor the inputs' tables). Symbolic, no differences:
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _lam = np.empty(1)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((4, 4))
+    _jac = np.zeros(36)
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
+    _baumgarte_alpha = p[3]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c0 = sin(q_theta)
+    _c1 = cos(q_theta)
+    _c2 = -_acc2
+    _c3 = _c1*qd_x
+    _c4 = _c0*qd_y
+    _c5 = 2.0*_baumgarte_alpha
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_I
+    _kkt[0, 3] = _c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -p_a
+    _kkt[3, 0] = -_c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = p_a
+    _jac[2] = -_c1*_mult0
+    _jac[6] = -_acc0
+    _jac[11] = -_c0*_mult0
+    _jac[15] = -_acc1
+    _jac[25] = _c2
+    _jac[26] = _mult0
+    _jac[29] = _acc0*_c1 + _acc1*_c0 + qd_theta*(_c1*qd_y - _c0*qd_x) - _c5*(-_c3 - _c4)
+    _jac[30] = _c0*_c5 + _c1*qd_theta
+    _jac[31] = _c0*qd_theta - _c1*_c5
+    _jac[32] = _c3 + _c4 - _c5*p_a
+    _jac[35] = _c2 - _c5*qd_theta
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((4, 9))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[0:1] = _rows[3:4]
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

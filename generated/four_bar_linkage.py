@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
+from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve, kkt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin
 
 
@@ -173,6 +173,85 @@ def reactions(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_and_reactions(t, y, p, out, lam):
+    """`rhs` into `out` and `reactions` into `lam` from one solve of the augmented system, both bitwise
+    (the same code): what the Jacobian kernels start from. Returns 0, or j > 0 when singular."""
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_d = p[3]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _kkt = np.zeros((5, 6))
+    _c0 = p_a**2
+    _c1 = sin(q_theta2)
+    _c2 = sin(q_theta1)
+    _c3 = cos(q_theta2)
+    _c4 = cos(q_theta1)
+    _c5 = (0.5)*p_m2
+    _c6 = _c5*p_a*p_b
+    _c7 = _c6*(_c1*_c2 + _c3*_c4)
+    _c8 = _c2*p_a
+    _c9 = _c4*p_a
+    _c10 = _c1*p_b
+    _c11 = _c3*p_b
+    _c12 = p_c*sin(q_theta3)
+    _c13 = -_c12
+    _c14 = p_c*cos(q_theta3)
+    _c15 = qd_theta2**2
+    _c16 = _c6*(_c1*_c4 - _c2*_c3)
+    _c17 = qd_theta1**2
+    _c18 = -_c14
+    _c19 = qd_theta3**2
+    _c20 = _baumgarte_beta**2
+    _c21 = 2.0*_baumgarte_alpha
+    out[0] = qd_theta1
+    out[1] = qd_theta2
+    out[2] = qd_theta3
+    _kkt[0, 0] = _c0*(p_m2 + (0.25)*p_m1) + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c7
+    _kkt[1, 0] = _c7
+    _kkt[1, 1] = (0.3333333333333333)*p_m2*p_b**2
+    _kkt[2, 2] = (0.3333333333333333)*p_m3*p_c**2
+    _kkt[0, 3] = _c8
+    _kkt[0, 4] = -_c9
+    _kkt[1, 3] = _c10
+    _kkt[1, 4] = -_c11
+    _kkt[2, 3] = _c13
+    _kkt[2, 4] = _c14
+    _kkt[0, 5] = _c15*_c16 - _c9*p_g*(p_m2 + (0.5)*p_m1)
+    _kkt[1, 5] = -_c16*_c17 - _c11*_c5*p_g
+    _kkt[2, 5] = -0.5*_c14*p_g*p_m3
+    _kkt[3, 0] = -_c8
+    _kkt[3, 1] = -_c10
+    _kkt[3, 2] = _c12
+    _kkt[4, 0] = _c9
+    _kkt[4, 1] = _c11
+    _kkt[4, 2] = _c18
+    _kkt[3, 5] = _c11*_c15 + _c17*_c9 - _c14*_c19 - _c20*(_c11 + _c18 + _c9 - p_d) - _c21*(_c12*qd_theta3 - _c10*qd_theta2 - _c8*qd_theta1)
+    _kkt[4, 5] = _c10*_c15 + _c17*_c8 - _c12*_c19 - _c20*(_c10 + _c13 + _c8) - _c21*(_c11*qd_theta2 + _c9*qd_theta1 - _c14*qd_theta3)
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    out[3] = _kkt[0, 5]
+    out[4] = _kkt[1, 5]
+    out[5] = _kkt[2, 5]
+    lam[0] = _kkt[3, 5]
+    lam[1] = _kkt[4, 5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (4,): Φ of the 2 holonomic constraints, then Λ q̇ + b of all 2."""
     q_theta1 = y[0]
@@ -217,24 +296,131 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
-
-
-#: Why this module's rhs_jacobian computes nothing.
-RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not emitted yet)'
-
-
-@njit(cache=True, error_model="numpy")
 def rhs_with_jacobian(t, y, p, ydot, out):
     """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
     (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows [0 | I], then ∂q̈/∂y: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((5, 5))
+    _jac = np.zeros(30)
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c0 = p_a**2
+    _c1 = sin(q_theta2)
+    _c2 = sin(q_theta1)
+    _c3 = cos(q_theta2)
+    _c4 = cos(q_theta1)
+    _c5 = p_a*p_b*p_m2
+    _c6 = (0.5)*_c5
+    _c7 = _c6*(_c1*_c2 + _c3*_c4)
+    _c8 = _c2*p_a
+    _c9 = _c4*p_a
+    _c10 = _c1*p_b
+    _c11 = _c3*p_b
+    _c12 = p_c*sin(q_theta3)
+    _c13 = p_c*cos(q_theta3)
+    _c14 = _c1*_c4 - _c2*_c3
+    _c15 = _c14*_c6
+    _c16 = _acc1*_c15
+    _c17 = qd_theta2**2
+    _c18 = _c17*_c7
+    _c19 = _c14*_c5
+    _c20 = qd_theta1**2
+    _c21 = _c20*_c7
+    _c22 = _acc0*_c15
+    _c23 = (0.5)*p_g
+    _c24 = _baumgarte_beta**2
+    _c25 = 2.0*_baumgarte_alpha
+    _c26 = _c25*_c9
+    _c27 = _c11*_c25
+    _c28 = _c13*_c25
+    _c29 = qd_theta3**2
+    _c30 = _c25*_c8
+    _c31 = 2.0*qd_theta1
+    _c32 = _c10*_c25
+    _c33 = 2.0*qd_theta2
+    _c34 = _c12*_c25
+    _c35 = 2.0*qd_theta3
+    _kkt[0, 0] = _c0*(p_m2 + (0.25)*p_m1) + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c7
+    _kkt[1, 0] = _c7
+    _kkt[1, 1] = (0.3333333333333333)*p_m2*p_b**2
+    _kkt[2, 2] = (0.3333333333333333)*p_m3*p_c**2
+    _kkt[0, 3] = _c8
+    _kkt[0, 4] = -_c9
+    _kkt[1, 3] = _c10
+    _kkt[1, 4] = -_c11
+    _kkt[2, 3] = -_c12
+    _kkt[2, 4] = _c13
+    _kkt[3, 0] = -_c8
+    _kkt[3, 1] = -_c10
+    _kkt[3, 2] = _c12
+    _kkt[4, 0] = _c9
+    _kkt[4, 1] = _c11
+    _kkt[4, 2] = -_c13
+    _jac[0] = -_c16 - _c18 - _c8*_mult1 - _c9*_mult0 + _c8*p_g*(p_m2 + (0.5)*p_m1)
+    _jac[1] = _c16 + _c18
+    _jac[4] = _c19*qd_theta2
+    _jac[6] = _c21 - _c22
+    _jac[7] = _c22 - _c21 - _c10*_mult1 - _c11*_mult0 + _c10*_c23*p_m2
+    _jac[9] = -_c19*qd_theta1
+    _jac[14] = _c12*_mult1 + _c13*_mult0 + _c12*_c23*p_m3
+    _jac[18] = _acc0*_c9 + _c24*_c8 + _c26*qd_theta1 - _c20*_c8
+    _jac[19] = _acc1*_c11 + _c10*_c24 + _c27*qd_theta2 - _c10*_c17
+    _jac[20] = _c12*_c29 - _acc2*_c13 - _c12*_c24 - _c28*qd_theta3
+    _jac[21] = _c30 + _c31*_c9
+    _jac[22] = _c32 + _c11*_c33
+    _jac[23] = -_c34 - _c13*_c35
+    _jac[24] = _acc0*_c8 + _c20*_c9 + _c30*qd_theta1 - _c24*_c9
+    _jac[25] = _acc1*_c10 + _c11*_c17 + _c32*qd_theta2 - _c11*_c24
+    _jac[26] = _c13*_c24 - _acc2*_c12 - _c13*_c29 - _c34*qd_theta3
+    _jac[27] = -_c26 + _c31*_c8
+    _jac[28] = -_c27 + _c10*_c33
+    _jac[29] = _c28 - _c12*_c35
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((5, 6))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(3):
+        out[_i, 3 + _i] = 1.0
+    out[3:6] = _rows[0:3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(6), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -242,13 +428,302 @@ def rhs_parameter_jacobian(t, y, p, out):
     """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
     no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
     inputs' tables that follow them).
-    Not available for this system: constraints: the derivative of the augmented solve is not emitted yet.
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_PARAMETER_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows 0 (q̇ does not depend on p), then ∂q̈/∂p: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((5, 5))
+    _jac = np.zeros(40)
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c0 = p_a**2
+    _c1 = p_m2 + (0.25)*p_m1
+    _c2 = p_b*p_m2
+    _c3 = (0.5)*_c2
+    _c4 = sin(q_theta2)
+    _c5 = sin(q_theta1)
+    _c6 = cos(q_theta2)
+    _c7 = cos(q_theta1)
+    _c8 = _c4*_c5 + _c6*_c7
+    _c9 = _c8*p_a
+    _c10 = _c3*_c9
+    _c11 = (0.3333333333333333)*p_b**2
+    _c12 = (0.3333333333333333)*p_c**2
+    _c13 = _c5*p_a
+    _c14 = _c7*p_a
+    _c15 = _c4*p_b
+    _c16 = _c6*p_b
+    _c17 = sin(q_theta3)
+    _c18 = _c17*p_c
+    _c19 = cos(q_theta3)
+    _c20 = _c19*p_c
+    _c21 = p_m2 + (0.5)*p_m1
+    _c22 = _acc1*_c2
+    _c23 = qd_theta2**2
+    _c24 = _c4*_c7 - _c5*_c6
+    _c25 = _c24*_c3
+    _c26 = (0.5)*p_m2
+    _c27 = _c26*_c9
+    _c28 = _c24*p_a
+    _c29 = _c23*_c28
+    _c30 = _acc0*_c0
+    _c31 = _c14*p_g
+    _c32 = (0.5)*p_b
+    _c33 = _c32*_c9
+    _c34 = qd_theta1**2
+    _c35 = (0.5)*p_g
+    _c36 = _c28*_c34
+    _c37 = _baumgarte_beta**2
+    _c38 = 2.0*_baumgarte_alpha
+    _c39 = _c38*qd_theta1
+    _c40 = _c38*qd_theta2
+    _c41 = _c38*qd_theta3
+    _c42 = qd_theta3**2
+    _kkt[0, 0] = _c0*_c1 + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c10
+    _kkt[1, 0] = _c10
+    _kkt[1, 1] = _c11*p_m2
+    _kkt[2, 2] = _c12*p_m3
+    _kkt[0, 3] = _c13
+    _kkt[0, 4] = -_c14
+    _kkt[1, 3] = _c15
+    _kkt[1, 4] = -_c16
+    _kkt[2, 3] = -_c18
+    _kkt[2, 4] = _c20
+    _kkt[3, 0] = -_c13
+    _kkt[3, 1] = -_c15
+    _kkt[3, 2] = _c18
+    _kkt[4, 0] = _c14
+    _kkt[4, 1] = _c16
+    _kkt[4, 2] = -_c20
+    _jac[0] = _c23*_c25 + _c7*_mult1 - _acc0*(2.0*_c1*p_a + (0.16666666666666666)*p_a*p_m1) - _c5*_mult0 - 0.5*_c22*_c8 - _c21*_c7*p_g
+    _jac[1] = _c26*_c29 - _acc1*_c27
+    _jac[4] = -0.5*_c31 - 0.3333333333333333*_c30
+    _jac[5] = -_c30 - _c31 + _c29*_c32 - _acc1*_c33
+    _jac[7] = -_c14*_c21
+    _jac[8] = -_c25*_c34 - _acc0*_c3*_c8
+    _jac[9] = -0.6666666666666666*_c22 + _c6*_mult1 - _acc0*_c27 - _c26*_c36 - _c4*_mult0 - _c35*_c6*p_m2
+    _jac[13] = -_acc0*_c33 - _acc1*_c11 - _c16*_c35 - _c32*_c36
+    _jac[15] = -_c16*_c26
+    _jac[18] = _c17*_mult0 - _c19*_mult1 - _c19*_c35*p_m3 - 0.6666666666666666*_acc2*p_c*p_m3
+    _jac[22] = -_acc2*_c12 - _c20*_c35
+    _jac[23] = -0.5*_c20*p_m3
+    _jac[24] = _acc0*_c5 + _c34*_c7 + _c39*_c5 - _c37*_c7
+    _jac[25] = _acc1*_c4 + _c23*_c6 + _c4*_c40 - _c37*_c6
+    _jac[26] = _c19*_c37 - _acc2*_c17 - _c17*_c41 - _c19*_c42
+    _jac[27] = _c37
+    _jac[32] = _c34*_c5 - _acc0*_c7 - _c37*_c5 - _c39*_c7
+    _jac[33] = _c23*_c4 - _acc1*_c6 - _c37*_c4 - _c40*_c6
+    _jac[34] = _acc2*_c19 + _c17*_c37 + _c19*_c41 - _c17*_c42
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((5, 8))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[3:6] = _rows[0:3]
+    return 0
 
 
-#: Why this module's rhs_parameter_jacobian computes nothing.
-RHS_PARAMETER_JACOBIAN_REFUSED = 'constraints: the derivative of the augmented solve is not emitted yet'
+@njit(cache=True, error_model="numpy")
+def reaction_jacobian(t, y, p, out):
+    """Exact Jacobian of the multipliers λ (`reactions`), shape (2, 14) into `out`: row c the constraint c of
+    ('loop_x', 'loop_y'), columns ∂λ_c/∂y_j (y = (q, q̇), 6 of them), then ∂λ_c/∂p_j for the model's
+    parameters (not the Baumgarte gains nor the inputs' tables). Symbolic, no differences:
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((5, 5))
+    _jac = np.zeros(70)
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c0 = p_a**2
+    _c1 = p_m2 + (0.25)*p_m1
+    _c2 = (0.5)*p_a
+    _c3 = sin(q_theta2)
+    _c4 = sin(q_theta1)
+    _c5 = cos(q_theta2)
+    _c6 = cos(q_theta1)
+    _c7 = _c3*_c4 + _c5*_c6
+    _c8 = p_b*p_m2
+    _c9 = _c7*_c8
+    _c10 = _c2*_c9
+    _c11 = (0.3333333333333333)*p_b**2
+    _c12 = (0.3333333333333333)*p_c**2
+    _c13 = _c4*p_a
+    _c14 = _c6*p_a
+    _c15 = _c3*p_b
+    _c16 = _c5*p_b
+    _c17 = sin(q_theta3)
+    _c18 = _c17*p_c
+    _c19 = cos(q_theta3)
+    _c20 = _c19*p_c
+    _c21 = p_m2 + (0.5)*p_m1
+    _c22 = _c21*p_g
+    _c23 = _c3*_c6 - _c4*_c5
+    _c24 = _acc1*_c8
+    _c25 = _c2*_c23*_c24
+    _c26 = qd_theta2**2
+    _c27 = _c10*_c26
+    _c28 = _c23*_c8
+    _c29 = _c28*p_a
+    _c30 = _c23*_c26
+    _c31 = (0.5)*_c8
+    _c32 = (0.5)*p_m2
+    _c33 = _c32*p_a
+    _c34 = _c33*_c7
+    _c35 = _acc0*_c0
+    _c36 = _c14*p_g
+    _c37 = _c2*p_b
+    _c38 = _c37*_c7
+    _c39 = qd_theta1**2
+    _c40 = _c10*_c39
+    _c41 = _acc0*_c2*_c28
+    _c42 = _c32*p_g
+    _c43 = _c23*_c39
+    _c44 = (0.5)*p_g
+    _c45 = (0.5)*p_m3
+    _c46 = _c45*p_g
+    _c47 = _baumgarte_beta**2
+    _c48 = 2.0*_baumgarte_alpha
+    _c49 = _c14*_c48
+    _c50 = _acc0*_c6
+    _c51 = _c39*_c4
+    _c52 = _c16*_c48
+    _c53 = _acc1*_c5
+    _c54 = _c26*_c3
+    _c55 = _c20*_c48
+    _c56 = _acc2*_c19
+    _c57 = qd_theta3**2
+    _c58 = _c17*_c57
+    _c59 = _c13*_c48
+    _c60 = 2.0*qd_theta1
+    _c61 = _c15*_c48
+    _c62 = 2.0*qd_theta2
+    _c63 = _c18*_c48
+    _c64 = 2.0*qd_theta3
+    _c65 = _c48*qd_theta1
+    _c66 = _acc0*_c4
+    _c67 = _c39*_c6
+    _c68 = _c48*qd_theta2
+    _c69 = _acc1*_c3
+    _c70 = _c26*_c5
+    _c71 = _c48*qd_theta3
+    _c72 = _acc2*_c17
+    _c73 = _c19*_c57
+    _kkt[0, 0] = _c0*_c1 + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c10
+    _kkt[1, 0] = _c10
+    _kkt[1, 1] = _c11*p_m2
+    _kkt[2, 2] = _c12*p_m3
+    _kkt[0, 3] = _c13
+    _kkt[0, 4] = -_c14
+    _kkt[1, 3] = _c15
+    _kkt[1, 4] = -_c16
+    _kkt[2, 3] = -_c18
+    _kkt[2, 4] = _c20
+    _kkt[3, 0] = -_c13
+    _kkt[3, 1] = -_c15
+    _kkt[3, 2] = _c18
+    _kkt[4, 0] = _c14
+    _kkt[4, 1] = _c16
+    _kkt[4, 2] = -_c20
+    _jac[0] = -_c25 - _c27 + _c13*_c22 - _c13*_mult1 - _c14*_mult0
+    _jac[1] = _c25 + _c27
+    _jac[4] = _c29*qd_theta2
+    _jac[6] = _c30*_c31 + _c6*_mult1 - _acc0*(2.0*_c1*p_a + (0.16666666666666666)*p_a*p_m1) - _c22*_c6 - _c4*_mult0 - 0.5*_c24*_c7
+    _jac[7] = _c30*_c33 - _acc1*_c34
+    _jac[10] = -0.5*_c36 - 0.3333333333333333*_c35
+    _jac[11] = -_c35 - _c36 + _c30*_c37 - _acc1*_c38
+    _jac[13] = -_c14*_c21
+    _jac[14] = _c40 - _c41
+    _jac[15] = _c41 - _c40 + _c15*_c42 - _c15*_mult1 - _c16*_mult0
+    _jac[17] = -_c29*qd_theta1
+    _jac[20] = -_c31*_c43 - 0.5*_acc0*_c9
+    _jac[21] = -0.6666666666666666*_c24 + _c5*_mult1 - _acc0*_c34 - _c3*_mult0 - _c33*_c43 - _c42*_c5
+    _jac[25] = -_acc0*_c38 - _acc1*_c11 - _c16*_c44 - _c37*_c43
+    _jac[27] = -_c16*_c32
+    _jac[30] = _c18*_c46 + _c18*_mult1 + _c20*_mult0
+    _jac[36] = _c17*_mult0 - _c19*_c46 - _c19*_mult1 - 0.6666666666666666*_acc2*p_c*p_m3
+    _jac[40] = -_acc2*_c12 - _c20*_c44
+    _jac[41] = -_c20*_c45
+    _jac[42] = _c13*_c47 + _c49*qd_theta1 + _c50*p_a - _c51*p_a
+    _jac[43] = _c15*_c47 + _c52*qd_theta2 + _c53*p_b - _c54*p_b
+    _jac[44] = _c58*p_c - _c18*_c47 - _c55*qd_theta3 - _c56*p_c
+    _jac[45] = _c59 + _c14*_c60
+    _jac[46] = _c61 + _c16*_c62
+    _jac[47] = -_c63 - _c20*_c64
+    _jac[48] = _c66 + _c67 + _c4*_c65 - _c47*_c6
+    _jac[49] = _c69 + _c70 + _c3*_c68 - _c47*_c5
+    _jac[50] = -_c72 - _c73 + _c19*_c47 - _c17*_c71
+    _jac[51] = _c47
+    _jac[56] = _c59*qd_theta1 + _c66*p_a + _c67*p_a - _c14*_c47
+    _jac[57] = _c61*qd_theta2 + _c69*p_b + _c70*p_b - _c16*_c47
+    _jac[58] = _c20*_c47 - _c63*qd_theta3 - _c72*p_c - _c73*p_c
+    _jac[59] = -_c49 + _c13*_c60
+    _jac[60] = -_c52 + _c15*_c62
+    _jac[61] = _c55 - _c18*_c64
+    _jac[62] = _c51 - _c50 - _c4*_c47 - _c6*_c65
+    _jac[63] = _c54 - _c53 - _c3*_c47 - _c5*_c68
+    _jac[64] = _c56 - _c58 + _c17*_c47 + _c19*_c71
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((5, 14))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[0:2] = _rows[3:5]
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

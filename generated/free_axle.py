@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
+from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve, kkt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin
 
 
@@ -176,6 +176,89 @@ def reactions(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_and_reactions(t, y, p, out, lam):
+    """`rhs` into `out` and `reactions` into `lam` from one solve of the augmented system, both bitwise
+    (the same code): what the Jacobian kernels start from. Returns 0, or j > 0 when singular."""
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _kkt = np.zeros((8, 9))
+    _c0 = 2.0*p_m
+    _c1 = sin(q_theta)
+    _c2 = _c1*p_R
+    _c3 = p_R*cos(q_theta)
+    _c4 = -_c3
+    _c5 = -p_R
+    _c6 = -_c2
+    _c7 = p_R*qd_phi
+    _c8 = p_R*qd_phi_prime
+    _c9 = 2.0*_baumgarte_alpha
+    _c10 = qd_theta*(qd_phi + qd_phi_prime)
+    out[0] = qd_X
+    out[1] = qd_Y
+    out[2] = qd_theta
+    out[3] = qd_phi
+    out[4] = qd_phi_prime
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + (0.5)*p_m*p_L**2
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c2
+    _kkt[3, 6] = _c4
+    _kkt[3, 7] = _c5
+    _kkt[4, 5] = _c2
+    _kkt[4, 6] = _c4
+    _kkt[4, 7] = p_R
+    _kkt[0, 8] = 0.0
+    _kkt[1, 8] = _c0*p_g*sin(p_alpha)
+    _kkt[2, 8] = 0.0
+    _kkt[3, 8] = 0.0
+    _kkt[4, 8] = 0.0
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c6
+    _kkt[5, 4] = _c6
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c3
+    _kkt[6, 4] = _c3
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c5
+    _kkt[5, 8] = _c10*_c3 - _c9*(2.0*qd_X - _c1*_c7 - _c1*_c8)
+    _kkt[6, 8] = _c10*_c2 - _c9*(2.0*qd_Y + _c3*qd_phi + _c3*qd_phi_prime)
+    _kkt[7, 8] = -_c9*(_c7 - _c8 + p_L*qd_theta) - _baumgarte_beta**2*(p_L*q_theta + p_R*(q_phi - q_phi_prime))
+    _status = kkt_solve(_kkt, 5)
+    if _status:
+        return _status
+    out[5] = _kkt[0, 8]
+    out[6] = _kkt[1, 8]
+    out[7] = _kkt[2, 8]
+    out[8] = _kkt[3, 8]
+    out[9] = _kkt[4, 8]
+    lam[0] = _kkt[5, 8]
+    lam[1] = _kkt[6, 8]
+    lam[2] = _kkt[7, 8]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (4,): Φ of the 1 holonomic constraints, then Λ q̇ + b of all 3."""
     q_theta = y[2]
@@ -227,24 +310,112 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
-
-
-#: Why this module's rhs_jacobian computes nothing.
-RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not emitted yet)'
-
-
-@njit(cache=True, error_model="numpy")
 def rhs_with_jacobian(t, y, p, ydot, out):
     """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
     (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows [0 | I], then ∂q̈/∂y: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(3)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((8, 8))
+    _jac = np.zeros(80)
+    q_theta = y[2]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c0 = 2.0*p_m
+    _c1 = p_R*sin(q_theta)
+    _c2 = p_R*cos(q_theta)
+    _c3 = -_c2
+    _c4 = -p_R
+    _c5 = -_c1
+    _c6 = -_c1*_mult1 - _c2*_mult0
+    _c7 = qd_phi + qd_phi_prime
+    _c8 = _c1*_c7
+    _c9 = 2.0*_baumgarte_alpha
+    _c10 = -4.0*_baumgarte_alpha
+    _c11 = _c2*_c7
+    _c12 = _c1*_c9 + _c2*qd_theta
+    _c13 = _c1*qd_theta - _c2*_c9
+    _c14 = _baumgarte_beta**2
+    _c15 = _c14*p_R
+    _c16 = _c9*p_R
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + (0.5)*p_m*p_L**2
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c1
+    _kkt[3, 6] = _c3
+    _kkt[3, 7] = _c4
+    _kkt[4, 5] = _c1
+    _kkt[4, 6] = _c3
+    _kkt[4, 7] = p_R
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c5
+    _kkt[5, 4] = _c5
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c2
+    _kkt[6, 4] = _c2
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c4
+    _jac[32] = _c6
+    _jac[42] = _c6
+    _jac[52] = _acc3*_c2 + _acc4*_c2 - _c8*qd_theta - _c9*(-_c2*qd_phi - _c2*qd_phi_prime)
+    _jac[55] = _c10
+    _jac[57] = _c11
+    _jac[58] = _c12
+    _jac[59] = _c12
+    _jac[62] = _acc3*_c1 + _acc4*_c1 + _c11*qd_theta - _c9*(-_c1*qd_phi - _c1*qd_phi_prime)
+    _jac[66] = _c10
+    _jac[67] = _c8
+    _jac[68] = _c13
+    _jac[69] = _c13
+    _jac[72] = -_c14*p_L
+    _jac[73] = -_c15
+    _jac[74] = _c15
+    _jac[77] = -_c9*p_L
+    _jac[78] = -_c16
+    _jac[79] = _c16
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((8, 10))
+    _status = kkt_solve_matrix(_kkt, 5, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(5):
+        out[_i, 5 + _i] = 1.0
+    out[5:10] = _rows[0:5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(10), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -252,13 +423,237 @@ def rhs_parameter_jacobian(t, y, p, out):
     """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
     no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
     inputs' tables that follow them).
-    Not available for this system: constraints: the derivative of the augmented solve is not emitted yet.
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_PARAMETER_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows 0 (q̇ does not depend on p), then ∂q̈/∂p: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(10)
+    _lam = np.empty(3)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((8, 8))
+    _jac = np.zeros(56)
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _mult2 = _lam[2]
+    _c0 = 2.0*p_m
+    _c1 = (0.5)*p_L**2
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_R
+    _c4 = cos(q_theta)
+    _c5 = _c4*p_R
+    _c6 = -_c5
+    _c7 = -p_R
+    _c8 = -_c3
+    _c9 = sin(p_alpha)
+    _c10 = _c4*_mult1 - _c2*_mult0
+    _c11 = -_acc3
+    _c12 = 2.0*_baumgarte_alpha
+    _c13 = qd_theta*(qd_phi + qd_phi_prime)
+    _c14 = _baumgarte_beta**2
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + _c1*p_m
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c3
+    _kkt[3, 6] = _c6
+    _kkt[3, 7] = _c7
+    _kkt[4, 5] = _c3
+    _kkt[4, 6] = _c6
+    _kkt[4, 7] = p_R
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c8
+    _kkt[5, 4] = _c8
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c5
+    _kkt[6, 4] = _c5
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c7
+    _jac[0] = -2.0*_acc0
+    _jac[7] = -2.0*_acc1 + 2.0*_c9*p_g
+    _jac[12] = _c0*_c9
+    _jac[13] = _c0*p_g*cos(p_alpha)
+    _jac[14] = -_acc2*_c1
+    _jac[16] = _mult2 - _acc2*p_L*p_m
+    _jac[17] = -2.0*_acc2
+    _jac[22] = _c10 + _mult2
+    _jac[25] = _c11
+    _jac[29] = _c10 - _mult2
+    _jac[32] = -_acc4
+    _jac[36] = _acc3*_c2 + _acc4*_c2 + _c13*_c4 - _c12*(-_c2*qd_phi - _c2*qd_phi_prime)
+    _jac[43] = _c13*_c2 - _acc3*_c4 - _acc4*_c4 - _c12*(_c4*qd_phi + _c4*qd_phi_prime)
+    _jac[50] = _acc4 + _c11 - _c12*(qd_phi - qd_phi_prime) - _c14*(q_phi - q_phi_prime)
+    _jac[51] = -_acc2 - _c12*qd_theta - _c14*q_theta
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((8, 7))
+    _status = kkt_solve_matrix(_kkt, 5, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[5:10] = _rows[0:5]
+    return 0
 
 
-#: Why this module's rhs_parameter_jacobian computes nothing.
-RHS_PARAMETER_JACOBIAN_REFUSED = 'constraints: the derivative of the augmented solve is not emitted yet'
+@njit(cache=True, error_model="numpy")
+def reaction_jacobian(t, y, p, out):
+    """Exact Jacobian of the multipliers λ (`reactions`), shape (3, 17) into `out`: row c the constraint c of
+    ('roll_X', 'roll_Y', 'steer'), columns ∂λ_c/∂y_j (y = (q, q̇), 10 of them), then ∂λ_c/∂p_j for the model's
+    parameters (not the Baumgarte gains nor the inputs' tables). Symbolic, no differences:
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(10)
+    _lam = np.empty(3)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((8, 8))
+    _jac = np.zeros(136)
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _mult2 = _lam[2]
+    _c0 = 2.0*p_m
+    _c1 = (0.5)*p_L**2
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_R
+    _c4 = cos(q_theta)
+    _c5 = _c4*p_R
+    _c6 = -_c5
+    _c7 = -p_R
+    _c8 = -_c3
+    _c9 = sin(p_alpha)
+    _c10 = -_c3*_mult1 - _c5*_mult0
+    _c11 = _c4*_mult1 - _c2*_mult0
+    _c12 = -_acc3
+    _c13 = _acc3*_c4
+    _c14 = _acc4*_c4
+    _c15 = qd_phi + qd_phi_prime
+    _c16 = _c15*qd_theta
+    _c17 = _c4*qd_phi_prime
+    _c18 = 2.0*_baumgarte_alpha
+    _c19 = -4.0*_baumgarte_alpha
+    _c20 = _c18*_c3 + _c5*qd_theta
+    _c21 = _acc4*_c2
+    _c22 = _c2*qd_phi_prime
+    _c23 = _acc3*_c2
+    _c24 = _c3*qd_theta - _c18*_c5
+    _c25 = _baumgarte_beta**2
+    _c26 = _c25*p_R
+    _c27 = _c18*p_R
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + _c1*p_m
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c3
+    _kkt[3, 6] = _c6
+    _kkt[3, 7] = _c7
+    _kkt[4, 5] = _c3
+    _kkt[4, 6] = _c6
+    _kkt[4, 7] = p_R
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c8
+    _kkt[5, 4] = _c8
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c5
+    _kkt[6, 4] = _c5
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c7
+    _jac[10] = -2.0*_acc0
+    _jac[27] = -2.0*_acc1 + 2.0*_c9*p_g
+    _jac[32] = _c0*_c9
+    _jac[33] = _c0*p_g*cos(p_alpha)
+    _jac[44] = -_acc2*_c1
+    _jac[46] = _mult2 - _acc2*p_L*p_m
+    _jac[47] = -2.0*_acc2
+    _jac[53] = _c10
+    _jac[62] = _c11 + _mult2
+    _jac[65] = _c12
+    _jac[70] = _c10
+    _jac[79] = _c11 - _mult2
+    _jac[82] = -_acc4
+    _jac[87] = _c13*p_R + _c14*p_R - _c16*_c3 - _c18*(-_c17*p_R - _c5*qd_phi)
+    _jac[90] = _c19
+    _jac[92] = _c15*_c5
+    _jac[93] = _c20
+    _jac[94] = _c20
+    _jac[96] = _c21 + _c23 + _c16*_c4 - _c18*(-_c22 - _c2*qd_phi)
+    _jac[104] = _c16*_c5 + _c21*p_R + _c23*p_R - _c18*(-_c22*p_R - _c3*qd_phi)
+    _jac[108] = _c19
+    _jac[109] = _c15*_c3
+    _jac[110] = _c24
+    _jac[111] = _c24
+    _jac[113] = -_c13 - _c14 + _c16*_c2 - _c18*(_c17 + _c4*qd_phi)
+    _jac[121] = -_c25*p_L
+    _jac[122] = -_c26
+    _jac[123] = _c26
+    _jac[126] = -_c18*p_L
+    _jac[127] = -_c27
+    _jac[128] = _c27
+    _jac[130] = _acc4 + _c12 - _c18*(qd_phi - qd_phi_prime) - _c25*(q_phi - q_phi_prime)
+    _jac[131] = -_acc2 - _c18*qd_theta - _c25*q_theta
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((8, 17))
+    _status = kkt_solve_matrix(_kkt, 5, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[0:3] = _rows[5:8]
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
+from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve, kkt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin
 
 
@@ -96,6 +96,45 @@ def reactions(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_and_reactions(t, y, p, out, lam):
+    """`rhs` into `out` and `reactions` into `lam` from one solve of the augmented system, both bitwise
+    (the same code): what the Jacobian kernels start from. Returns 0, or j > 0 when singular."""
+    q_theta = y[0]
+    q_phi = y[1]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _kkt = np.zeros((3, 4))
+    _c0 = p_m*p_R**2
+    _c1 = sin(q_theta)
+    _c2 = _c0*_c1*cos(q_theta)
+    _c3 = 2.0*t
+    _c4 = p_epsilon*sin(_c3)
+    out[0] = qd_theta
+    out[1] = qd_phi
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0*_c1**2
+    _kkt[1, 2] = -1.0
+    _kkt[0, 3] = _c2*qd_phi**2 + _c1*p_R*p_g*p_m
+    _kkt[1, 3] = -2.0*_c2*qd_phi*qd_theta
+    _kkt[2, 1] = 1.0
+    _kkt[2, 3] = -4.0*_c4 - _baumgarte_beta**2*(q_phi - _c4 - p_Omega*t) - 2.0*_baumgarte_alpha*(qd_phi - p_Omega - 2.0*p_epsilon*cos(_c3))
+    _status = kkt_solve(_kkt, 2)
+    if _status:
+        return _status
+    out[2] = _kkt[0, 3]
+    out[3] = _kkt[1, 3]
+    lam[0] = _kkt[2, 3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (2,): Φ of the 1 holonomic constraints, then Λ q̇ + b of all 1."""
     q_phi = y[1]
@@ -118,24 +157,70 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
-
-
-#: Why this module's rhs_jacobian computes nothing.
-RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not emitted yet)'
-
-
-@njit(cache=True, error_model="numpy")
 def rhs_with_jacobian(t, y, p, ydot, out):
     """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
     (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows [0 | I], then ∂q̈/∂y: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(1)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((3, 3))
+    _jac = np.zeros(12)
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _acc1 = _ydot[3]
+    _c0 = p_m*p_R**2
+    _c1 = sin(q_theta)
+    _c2 = _c0*_c1**2
+    _c3 = qd_phi**2
+    _c4 = cos(q_theta)
+    _c5 = _c0*_c4**2
+    _c6 = 2.0*qd_phi
+    _c7 = _c0*_c1*_c4
+    _c8 = _c6*_c7
+    _c9 = _c6*qd_theta
+    _c10 = 2.0*_c7
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c2
+    _kkt[1, 2] = -1.0
+    _kkt[2, 1] = 1.0
+    _jac[0] = _c3*_c5 - _c2*_c3 + _c4*p_R*p_g*p_m
+    _jac[3] = _c8
+    _jac[4] = _c2*_c9 - _acc1*_c10 - _c5*_c9
+    _jac[6] = -_c8
+    _jac[7] = -_c10*qd_theta
+    _jac[9] = -_baumgarte_beta**2
+    _jac[11] = -2.0*_baumgarte_alpha
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((3, 4))
+    _status = kkt_solve_matrix(_kkt, 2, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(2):
+        out[_i, 2 + _i] = 1.0
+    out[2:4] = _rows[0:2]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(4), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -143,13 +228,143 @@ def rhs_parameter_jacobian(t, y, p, out):
     """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
     no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
     inputs' tables that follow them).
-    Not available for this system: constraints: the derivative of the augmented solve is not emitted yet.
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_PARAMETER_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows 0 (q̇ does not depend on p), then ∂q̈/∂p: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(4)
+    _lam = np.empty(1)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((3, 3))
+    _jac = np.zeros(15)
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c0 = p_R**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = cos(q_theta)
+    _c5 = _c4*qd_phi**2
+    _c6 = _c0*_c2
+    _c7 = _c2*p_R
+    _c8 = _c7*p_m
+    _c9 = 2.0*p_R*p_m
+    _c10 = _c4*qd_phi*qd_theta
+    _c11 = _acc1*_c3
+    _c12 = _baumgarte_beta**2
+    _c13 = 2.0*t
+    _c14 = sin(_c13)
+    _kkt[0, 0] = _c1
+    _kkt[1, 1] = _c1*_c3
+    _kkt[1, 2] = -1.0
+    _kkt[2, 1] = 1.0
+    _jac[0] = _c5*_c6 + _c7*p_g - _acc0*_c0
+    _jac[1] = -_acc0*_c9 + 2.0*_c5*_c8 + _c2*p_g*p_m
+    _jac[2] = _c8
+    _jac[5] = -_c0*_c11 - 2.0*_c10*_c6
+    _jac[6] = -_c11*_c9 - 4.0*_c10*_c8
+    _jac[13] = 2.0*_baumgarte_alpha + _c12*t
+    _jac[14] = -4.0*_c14 + _c12*_c14 + 4.0*_baumgarte_alpha*cos(_c13)
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((3, 5))
+    _status = kkt_solve_matrix(_kkt, 2, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[2:4] = _rows[0:2]
+    return 0
 
 
-#: Why this module's rhs_parameter_jacobian computes nothing.
-RHS_PARAMETER_JACOBIAN_REFUSED = 'constraints: the derivative of the augmented solve is not emitted yet'
+@njit(cache=True, error_model="numpy")
+def reaction_jacobian(t, y, p, out):
+    """Exact Jacobian of the multipliers λ (`reactions`), shape (1, 9) into `out`: row c the constraint c of
+    ('drive',), columns ∂λ_c/∂y_j (y = (q, q̇), 4 of them), then ∂λ_c/∂p_j for the model's
+    parameters (not the Baumgarte gains nor the inputs' tables). Symbolic, no differences:
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(4)
+    _lam = np.empty(1)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((3, 3))
+    _jac = np.zeros(27)
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c0 = p_R**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = qd_phi**2
+    _c6 = cos(q_theta)
+    _c7 = _c1*_c6**2
+    _c8 = p_R*p_m
+    _c9 = _c2*_c6
+    _c10 = _c1*_c9
+    _c11 = 2.0*_c10
+    _c12 = _c11*qd_phi
+    _c13 = _c0*_c9
+    _c14 = _c2*p_g
+    _c15 = _c2*_c8
+    _c16 = _c15*_c6
+    _c17 = 2.0*_c8
+    _c18 = 2.0*qd_theta
+    _c19 = _c18*qd_phi
+    _c20 = _acc1*_c3
+    _c21 = _baumgarte_beta**2
+    _c22 = 2.0*_baumgarte_alpha
+    _c23 = 2.0*t
+    _c24 = sin(_c23)
+    _kkt[0, 0] = _c1
+    _kkt[1, 1] = _c4
+    _kkt[1, 2] = -1.0
+    _kkt[2, 1] = 1.0
+    _jac[0] = _c5*_c7 - _c4*_c5 + _c6*_c8*p_g
+    _jac[3] = _c12
+    _jac[4] = _c13*_c5 + _c14*p_R - _acc0*_c0
+    _jac[5] = _c14*p_m - _acc0*_c17 + 2.0*_c16*_c5
+    _jac[6] = _c15
+    _jac[9] = _c19*_c4 - _acc1*_c11 - _c19*_c7
+    _jac[11] = -_c12
+    _jac[12] = -_c10*_c18
+    _jac[13] = -_c0*_c20 - _c13*_c19
+    _jac[14] = -_c17*_c20 - 4.0*_c16*qd_phi*qd_theta
+    _jac[19] = -_c21
+    _jac[21] = -_c22
+    _jac[25] = _c22 + _c21*t
+    _jac[26] = -4.0*_c24 + _c21*_c24 + 4.0*_baumgarte_alpha*cos(_c23)
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((3, 9))
+    _status = kkt_solve_matrix(_kkt, 2, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[0:1] = _rows[2:3]
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
+from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve, kkt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin
 
 
@@ -187,6 +187,94 @@ def reactions(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_and_reactions(t, y, p, out, lam):
+    """`rhs` into `out` and `reactions` into `lam` from one solve of the augmented system, both bitwise
+    (the same code): what the Jacobian kernels start from. Returns 0, or j > 0 when singular."""
+    q_psi = y[2]
+    q_theta = y[3]
+    qd_x = y[5]
+    qd_y = y[6]
+    qd_psi = y[7]
+    qd_theta = y[8]
+    qd_phi = y[9]
+    p_m = p[0]
+    p_r = p[1]
+    p_I1 = p[2]
+    p_I3 = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _kkt = np.zeros((7, 8))
+    _c0 = sin(q_theta)
+    _c1 = p_r*cos(q_psi)
+    _c2 = _c1*p_m
+    _c3 = _c0*_c2
+    _c4 = cos(q_theta)
+    _c5 = p_r*sin(q_psi)
+    _c6 = _c5*p_m
+    _c7 = _c4*_c6
+    _c8 = _c0*_c6
+    _c9 = -_c2*_c4
+    _c10 = _c4**2
+    _c11 = p_m*p_r**2
+    _c12 = _c0*p_I3
+    _c13 = _c0*qd_psi**2
+    _c14 = qd_theta**2
+    _c15 = _c4*qd_psi
+    _c16 = _c15*qd_theta
+    _c17 = 2.0*_c16
+    _c18 = p_I3*qd_phi
+    _c19 = _c1*qd_phi
+    _c20 = 2.0*_baumgarte_alpha
+    _c21 = _c5*qd_phi
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_psi
+    out[3] = qd_theta
+    out[4] = qd_phi
+    _kkt[0, 0] = p_m
+    _kkt[0, 2] = _c3
+    _kkt[0, 3] = _c7
+    _kkt[1, 1] = p_m
+    _kkt[1, 2] = _c8
+    _kkt[1, 3] = _c9
+    _kkt[2, 0] = _c3
+    _kkt[2, 1] = _c8
+    _kkt[2, 2] = _c11 + p_I3 + _c10*p_I1 - _c10*_c11 - _c10*p_I3
+    _kkt[2, 4] = _c12
+    _kkt[3, 0] = _c7
+    _kkt[3, 1] = _c9
+    _kkt[3, 3] = _c11 + p_I1
+    _kkt[4, 2] = _c12
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -1.0
+    _kkt[1, 6] = -1.0
+    _kkt[4, 5] = _c1
+    _kkt[4, 6] = _c5
+    _kkt[0, 7] = _c13*_c6 + _c14*_c8 - _c17*_c2
+    _kkt[1, 7] = -_c13*_c2 - _c14*_c3 - _c17*_c6
+    _kkt[2, 7] = -_c0*_c16*(-2.0*p_I1 + 2.0*_c11 + 2.0*p_I3) - _c18*_c4*qd_theta
+    _kkt[3, 7] = _c15*_c18 - _c13*_c4*(p_I1 - _c11 - p_I3) + _c0*p_g*p_m*p_r
+    _kkt[4, 7] = -_c16*p_I3
+    _kkt[5, 0] = 1.0
+    _kkt[5, 4] = -_c1
+    _kkt[6, 1] = 1.0
+    _kkt[6, 4] = -_c5
+    _kkt[5, 7] = -_c20*(qd_x - _c19) - _c21*qd_psi
+    _kkt[6, 7] = _c19*qd_psi - _c20*(qd_y - _c21)
+    _status = kkt_solve(_kkt, 5)
+    if _status:
+        return _status
+    out[5] = _kkt[0, 7]
+    out[6] = _kkt[1, 7]
+    out[7] = _kkt[2, 7]
+    out[8] = _kkt[3, 7]
+    out[9] = _kkt[4, 7]
+    lam[0] = _kkt[5, 7]
+    lam[1] = _kkt[6, 7]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (2,): Φ of the 0 holonomic constraints, then Λ q̇ + b of all 2."""
     q_psi = y[2]
@@ -219,24 +307,156 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
-
-
-#: Why this module's rhs_jacobian computes nothing.
-RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not emitted yet)'
-
-
-@njit(cache=True, error_model="numpy")
 def rhs_with_jacobian(t, y, p, ydot, out):
     """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
     (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows [0 | I], then ∂q̈/∂y: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((7, 7))
+    _jac = np.zeros(70)
+    q_psi = y[2]
+    q_theta = y[3]
+    qd_psi = y[7]
+    qd_theta = y[8]
+    qd_phi = y[9]
+    p_m = p[0]
+    p_r = p[1]
+    p_I1 = p[2]
+    p_I3 = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c0 = p_r*cos(q_psi)
+    _c1 = sin(q_theta)
+    _c2 = _c1*p_m
+    _c3 = _c0*_c2
+    _c4 = p_r*sin(q_psi)
+    _c5 = cos(q_theta)
+    _c6 = _c5*p_m
+    _c7 = _c4*_c6
+    _c8 = _c2*_c4
+    _c9 = _c0*_c6
+    _c10 = -_c9
+    _c11 = _c5**2
+    _c12 = p_m*p_r**2
+    _c13 = _c1*p_I3
+    _c14 = _c4*qd_psi
+    _c15 = 2.0*_c14
+    _c16 = _c15*_c6
+    _c17 = qd_theta**2
+    _c18 = qd_psi**2
+    _c19 = _c0*qd_psi
+    _c20 = 2.0*_c19
+    _c21 = _c2*_c20
+    _c22 = 2.0*qd_theta
+    _c23 = _c15*_c2
+    _c24 = _c20*_c6
+    _c25 = _acc0*_c8 - _acc1*_c3
+    _c26 = _c1**2
+    _c27 = 2.0*p_I1
+    _c28 = 2.0*p_I3
+    _c29 = 2.0*_c12
+    _c30 = _c28 + _c29 - _c27
+    _c31 = qd_psi*qd_theta
+    _c32 = _c30*_c31
+    _c33 = _c13*qd_phi
+    _c34 = _c5*p_I3
+    _c35 = _c1*_c5
+    _c36 = -_acc0*_c9 - _acc1*_c7
+    _c37 = _c30*_c35
+    _c38 = _c34*qd_phi
+    _c39 = -_c34*qd_theta
+    _c40 = p_I1 - _c12 - p_I3
+    _c41 = _c18*_c40
+    _c42 = _c34*qd_psi
+    _c43 = _c0*qd_phi
+    _c44 = 2.0*_baumgarte_alpha
+    _c45 = _c4*qd_phi
+    _c46 = -_c44
+    _kkt[0, 0] = p_m
+    _kkt[0, 2] = _c3
+    _kkt[0, 3] = _c7
+    _kkt[1, 1] = p_m
+    _kkt[1, 2] = _c8
+    _kkt[1, 3] = _c10
+    _kkt[2, 0] = _c3
+    _kkt[2, 1] = _c8
+    _kkt[2, 2] = _c12 + p_I3 + _c11*p_I1 - _c11*_c12 - _c11*p_I3
+    _kkt[2, 4] = _c13
+    _kkt[3, 0] = _c7
+    _kkt[3, 1] = _c10
+    _kkt[3, 3] = _c12 + p_I1
+    _kkt[4, 2] = _c13
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -1.0
+    _kkt[1, 6] = -1.0
+    _kkt[4, 5] = _c0
+    _kkt[4, 6] = _c4
+    _kkt[5, 0] = 1.0
+    _kkt[5, 4] = -_c0
+    _kkt[6, 1] = 1.0
+    _kkt[6, 4] = -_c4
+    _jac[2] = _acc2*_c8 + _c16*qd_theta + _c17*_c3 + _c18*_c3 - _acc3*_c9
+    _jac[3] = _acc3*_c8 + _c17*_c7 + _c18*_c7 + _c21*qd_theta - _acc2*_c9
+    _jac[7] = _c23 - _c22*_c9
+    _jac[8] = -_c24 + _c22*_c8
+    _jac[12] = _c17*_c8 + _c18*_c8 - _acc2*_c3 - _acc3*_c7 - _c24*qd_theta
+    _jac[13] = _c23*qd_theta - _acc2*_c7 - _acc3*_c3 - _c17*_c9 - _c18*_c9
+    _jac[17] = -_c21 - _c22*_c7
+    _jac[18] = -_c16 - _c22*_c3
+    _jac[22] = _c25
+    _jac[23] = _c36 + _c26*_c32 + _c33*qd_theta - _acc2*(_c28*_c35 + _c29*_c35 - _c27*_c35) - _acc4*_c34 - _c11*_c32
+    _jac[27] = -_c37*qd_theta
+    _jac[28] = -_c38 - _c37*qd_psi
+    _jac[29] = _c39
+    _jac[32] = _c36
+    _jac[33] = _c25 + _c26*_c41 - _c11*_c41 - _c33*qd_psi + _c6*p_g*p_r
+    _jac[37] = _c38 - 2.0*_c35*_c40*qd_psi
+    _jac[39] = _c42
+    _jac[42] = _c4*_mult0 - _c0*_mult1
+    _jac[43] = _c13*_c31 - _acc2*_c34
+    _jac[47] = _c39
+    _jac[48] = -_c42
+    _jac[52] = -_acc4*_c4 - _c43*qd_psi - _c44*_c45
+    _jac[55] = _c46
+    _jac[57] = -_c45
+    _jac[59] = -_c14 + _c0*_c44
+    _jac[62] = _acc4*_c0 + _c43*_c44 - _c14*qd_phi
+    _jac[66] = _c46
+    _jac[67] = _c43
+    _jac[69] = _c19 + _c4*_c44
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((7, 10))
+    _status = kkt_solve_matrix(_kkt, 5, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(5):
+        out[_i, 5 + _i] = 1.0
+    out[5:10] = _rows[0:5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(10), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -244,13 +464,315 @@ def rhs_parameter_jacobian(t, y, p, out):
     """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
     no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
     inputs' tables that follow them).
-    Not available for this system: constraints: the derivative of the augmented solve is not emitted yet.
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_PARAMETER_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows 0 (q̇ does not depend on p), then ∂q̈/∂p: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(10)
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((7, 7))
+    _jac = np.zeros(35)
+    q_psi = y[2]
+    q_theta = y[3]
+    qd_psi = y[7]
+    qd_theta = y[8]
+    qd_phi = y[9]
+    p_m = p[0]
+    p_r = p[1]
+    p_I1 = p[2]
+    p_I3 = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c0 = cos(q_psi)
+    _c1 = _c0*p_r
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_m
+    _c4 = _c1*_c3
+    _c5 = cos(q_theta)
+    _c6 = sin(q_psi)
+    _c7 = _c6*p_r
+    _c8 = _c5*_c7
+    _c9 = _c8*p_m
+    _c10 = _c3*_c7
+    _c11 = _c1*_c5
+    _c12 = -_c11*p_m
+    _c13 = _c5**2
+    _c14 = p_r**2
+    _c15 = _c14*p_m
+    _c16 = _c13*_c14
+    _c17 = _c2*p_I3
+    _c18 = _c5*qd_theta
+    _c19 = _c18*qd_psi
+    _c20 = 2.0*_c19
+    _c21 = _acc3*_c5
+    _c22 = qd_psi**2
+    _c23 = _c2*_c22
+    _c24 = _acc2*_c2
+    _c25 = qd_theta**2
+    _c26 = _c2*_c7
+    _c27 = 2.0*p_m
+    _c28 = _c19*_c27
+    _c29 = _c21*p_m
+    _c30 = _c24*p_m
+    _c31 = _c25*_c3
+    _c32 = _c23*p_m
+    _c33 = _c1*_c2
+    _c34 = _c2*_c20
+    _c35 = _c2*p_r
+    _c36 = _c35*p_m
+    _c37 = _c27*p_r
+    _c38 = _c23*_c5
+    _c39 = _c5*p_m
+    _c40 = qd_phi*qd_psi
+    _c41 = 2.0*_baumgarte_alpha*qd_phi
+    _kkt[0, 0] = p_m
+    _kkt[0, 2] = _c4
+    _kkt[0, 3] = _c9
+    _kkt[1, 1] = p_m
+    _kkt[1, 2] = _c10
+    _kkt[1, 3] = _c12
+    _kkt[2, 0] = _c4
+    _kkt[2, 1] = _c10
+    _kkt[2, 2] = _c15 + p_I3 + _c13*p_I1 - _c13*p_I3 - _c16*p_m
+    _kkt[2, 4] = _c17
+    _kkt[3, 0] = _c9
+    _kkt[3, 1] = _c12
+    _kkt[3, 3] = _c15 + p_I1
+    _kkt[4, 2] = _c17
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -1.0
+    _kkt[1, 6] = -1.0
+    _kkt[4, 5] = _c1
+    _kkt[4, 6] = _c7
+    _kkt[5, 0] = 1.0
+    _kkt[5, 4] = -_c1
+    _kkt[6, 1] = 1.0
+    _kkt[6, 4] = -_c7
+    _jac[0] = -_acc0 + _c23*_c7 + _c25*_c26 - _c1*_c20 - _c1*_c24 - _c21*_c7
+    _jac[1] = _c31*_c6 + _c32*_c6 - _c0*_c28 - _c0*_c30 - _c29*_c6
+    _jac[5] = -_acc1 + _c1*_c21 - _c1*_c23 - _c20*_c7 - _c24*_c7 - _c25*_c33
+    _jac[6] = _c0*_c29 - _c0*_c31 - _c0*_c32 - _c28*_c6 - _c30*_c6
+    _jac[10] = -_acc0*_c33 - _acc1*_c26 - _acc2*(_c14 - _c16) - _c14*_c34
+    _jac[11] = -_acc2*(_c37 - _c13*_c37) - 4.0*_c19*_c36 - _acc0*_c0*_c3 - _acc1*_c3*_c6
+    _jac[12] = _c34 - _acc2*_c13
+    _jac[13] = -_c34 - _acc2*(1.0 - _c13) - _acc4*_c2 - _c18*qd_phi
+    _jac[15] = _acc1*_c11 + _c14*_c38 + _c35*p_g - _acc0*_c8 - _acc3*_c14
+    _jac[16] = _c3*p_g - _acc3*_c37 + _acc1*_c0*_c39 - _acc0*_c39*_c6 + 2.0*_c22*_c36*_c5
+    _jac[17] = -_acc3 - _c38
+    _jac[18] = _c38 + _c40*_c5
+    _jac[19] = _c36
+    _jac[21] = -_c0*_mult0 - _c6*_mult1
+    _jac[23] = -_acc4 - _c19 - _c24
+    _jac[26] = _acc4*_c0 + _c0*_c41 - _c40*_c6
+    _jac[31] = _acc4*_c6 + _c0*_c40 + _c41*_c6
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((7, 5))
+    _status = kkt_solve_matrix(_kkt, 5, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[5:10] = _rows[0:5]
+    return 0
 
 
-#: Why this module's rhs_parameter_jacobian computes nothing.
-RHS_PARAMETER_JACOBIAN_REFUSED = 'constraints: the derivative of the augmented solve is not emitted yet'
+@njit(cache=True, error_model="numpy")
+def reaction_jacobian(t, y, p, out):
+    """Exact Jacobian of the multipliers λ (`reactions`), shape (2, 15) into `out`: row c the constraint c of
+    ('roll_x', 'roll_y'), columns ∂λ_c/∂y_j (y = (q, q̇), 10 of them), then ∂λ_c/∂p_j for the model's
+    parameters (not the Baumgarte gains nor the inputs' tables). Symbolic, no differences:
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(10)
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((7, 7))
+    _jac = np.zeros(105)
+    q_psi = y[2]
+    q_theta = y[3]
+    qd_psi = y[7]
+    qd_theta = y[8]
+    qd_phi = y[9]
+    p_m = p[0]
+    p_r = p[1]
+    p_I1 = p[2]
+    p_I3 = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c0 = cos(q_psi)
+    _c1 = _c0*p_r
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_m
+    _c4 = _c1*_c3
+    _c5 = cos(q_theta)
+    _c6 = sin(q_psi)
+    _c7 = _c6*p_r
+    _c8 = _c5*_c7
+    _c9 = _c8*p_m
+    _c10 = _c3*_c7
+    _c11 = _c1*_c5
+    _c12 = _c11*p_m
+    _c13 = -_c12
+    _c14 = _c5**2
+    _c15 = p_r**2
+    _c16 = _c15*p_m
+    _c17 = _c14*_c15
+    _c18 = _c2*p_I3
+    _c19 = _c7*p_m
+    _c20 = qd_psi*qd_theta
+    _c21 = _c20*_c5
+    _c22 = 2.0*_c21
+    _c23 = _acc3*_c11
+    _c24 = _acc2*_c2
+    _c25 = _c24*_c7
+    _c26 = qd_theta**2
+    _c27 = qd_psi**2
+    _c28 = 2.0*_c20
+    _c29 = 2.0*qd_theta
+    _c30 = _c7*qd_psi
+    _c31 = 2.0*_c3
+    _c32 = _c1*qd_psi
+    _c33 = 2.0*_c5
+    _c34 = _c33*p_m
+    _c35 = _acc3*_c8
+    _c36 = _c2*_c27
+    _c37 = _c1*_c24
+    _c38 = _c2*_c26
+    _c39 = _c0*p_m
+    _c40 = _c6*p_m
+    _c41 = _c40*_c5
+    _c42 = _c1*p_m
+    _c43 = _c39*_c5
+    _c44 = _acc0*_c2
+    _c45 = _acc1*_c2
+    _c46 = _c19*_c44 - _c42*_c45
+    _c47 = _c2**2
+    _c48 = 2.0*p_I1
+    _c49 = 2.0*_c16
+    _c50 = _c49 - _c48 + 2.0*p_I3
+    _c51 = _c20*_c50
+    _c52 = _c5*p_I3
+    _c53 = _c2*_c5
+    _c54 = -_acc0*_c12 - _acc1*_c9
+    _c55 = _c50*_c53
+    _c56 = _c52*qd_phi
+    _c57 = -_c52*qd_theta
+    _c58 = _c2*_c22
+    _c59 = p_m*p_r
+    _c60 = _c2*_c59
+    _c61 = 2.0*_c59
+    _c62 = _c5*qd_phi
+    _c63 = qd_phi*qd_psi
+    _c64 = p_I1 - _c16 - p_I3
+    _c65 = _c27*_c64
+    _c66 = _c52*qd_psi
+    _c67 = _c2*p_g
+    _c68 = _c27*_c53
+    _c69 = 2.0*_baumgarte_alpha
+    _c70 = _c7*qd_phi
+    _c71 = -_c69
+    _c72 = _c69*qd_phi
+    _c73 = _c1*qd_phi
+    _kkt[0, 0] = p_m
+    _kkt[0, 2] = _c4
+    _kkt[0, 3] = _c9
+    _kkt[1, 1] = p_m
+    _kkt[1, 2] = _c10
+    _kkt[1, 3] = _c13
+    _kkt[2, 0] = _c4
+    _kkt[2, 1] = _c10
+    _kkt[2, 2] = _c16 + p_I3 + _c14*p_I1 - _c14*p_I3 - _c17*p_m
+    _kkt[2, 4] = _c18
+    _kkt[3, 0] = _c9
+    _kkt[3, 1] = _c13
+    _kkt[3, 3] = _c16 + p_I1
+    _kkt[4, 2] = _c18
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -1.0
+    _kkt[1, 6] = -1.0
+    _kkt[4, 5] = _c1
+    _kkt[4, 6] = _c7
+    _kkt[5, 0] = 1.0
+    _kkt[5, 4] = -_c1
+    _kkt[6, 1] = 1.0
+    _kkt[6, 4] = -_c7
+    _jac[2] = _c19*_c22 + _c25*p_m + _c26*_c4 + _c27*_c4 - _c23*p_m
+    _jac[3] = _acc3*_c10 + _c26*_c9 + _c27*_c9 + _c28*_c4 - _acc2*_c12
+    _jac[7] = _c30*_c31 - _c12*_c29
+    _jac[8] = _c10*_c29 - _c32*_c34
+    _jac[10] = -_acc0 - _c35 - _c37 + _c36*_c7 + _c38*_c7 - _c1*_c22
+    _jac[11] = _c36*_c40 + _c38*_c40 - _acc3*_c41 - _c22*_c39 - _c24*_c39
+    _jac[17] = _c10*_c26 + _c10*_c27 - _c22*_c42 - _c35*p_m - _c37*p_m
+    _jac[18] = _c10*_c28 - _acc2*_c9 - _acc3*_c4 - _c12*_c26 - _c12*_c27
+    _jac[22] = -_c29*_c9 - _c31*_c32
+    _jac[23] = -_c29*_c4 - _c30*_c34
+    _jac[25] = _c23 - _acc1 - _c25 - _c1*_c36 - _c1*_c38 - _c22*_c7
+    _jac[26] = _acc3*_c43 - _c22*_c40 - _c24*_c40 - _c36*_c39 - _c38*_c39
+    _jac[32] = _c46
+    _jac[33] = _c54 + _c47*_c51 - _acc2*(_c18*_c33 + _c49*_c53 - _c48*_c53) - _acc4*_c52 - _c14*_c51 + _c18*qd_phi*qd_theta
+    _jac[37] = -_c55*qd_theta
+    _jac[38] = -_c56 - _c55*qd_psi
+    _jac[39] = _c57
+    _jac[40] = -_acc2*(_c15 - _c17) - _c1*_c44 - _c15*_c58 - _c45*_c7
+    _jac[41] = -_acc2*(_c61 - _c14*_c61) - _c39*_c44 - _c40*_c45 - 4.0*_c21*_c60
+    _jac[42] = _c58 - _acc2*_c14
+    _jac[43] = -_c58 - _acc2*(1.0 - _c14) - _acc4*_c2 - _c62*qd_theta
+    _jac[47] = _c54
+    _jac[48] = _c46 + _c47*_c65 - _c14*_c65 - _c18*_c63 + _c5*_c59*p_g
+    _jac[52] = _c56 - 2.0*_c53*_c64*qd_psi
+    _jac[54] = _c66
+    _jac[55] = _acc1*_c11 + _c15*_c68 + _c67*p_r - _acc0*_c8 - _acc3*_c15
+    _jac[56] = _acc1*_c43 + _c61*_c68 + _c67*p_m - _acc0*_c41 - _acc3*_c61
+    _jac[57] = -_acc3 - _c68
+    _jac[58] = _c68 + _c62*qd_psi
+    _jac[59] = _c60
+    _jac[62] = _c7*_mult0 - _c1*_mult1
+    _jac[63] = _c18*_c20 - _acc2*_c52
+    _jac[67] = _c57
+    _jac[68] = -_c66
+    _jac[71] = -_c0*_mult0 - _c6*_mult1
+    _jac[73] = -_acc4 - _c21 - _c24
+    _jac[77] = -_acc4*_c7 - _c1*_c63 - _c69*_c70
+    _jac[80] = _c71
+    _jac[82] = -_c70
+    _jac[84] = -_c30 + _c1*_c69
+    _jac[86] = _acc4*_c0 + _c0*_c72 - _c6*_c63
+    _jac[92] = _acc4*_c1 + _c69*_c73 - _c63*_c7
+    _jac[96] = _c71
+    _jac[97] = _c73
+    _jac[99] = _c32 + _c69*_c7
+    _jac[101] = _acc4*_c6 + _c0*_c63 + _c6*_c72
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((7, 15))
+    _status = kkt_solve_matrix(_kkt, 5, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[0:2] = _rows[5:7]
+    return 0
 
 
 @njit(cache=True, error_model="numpy")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
+from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve, kkt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin
 
 
@@ -135,6 +135,66 @@ def reactions(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_and_reactions(t, y, p, out, lam):
+    """`rhs` into `out` and `reactions` into `lam` from one solve of the augmented system, both bitwise
+    (the same code): what the Jacobian kernels start from. Returns 0, or j > 0 when singular."""
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _kkt = np.zeros((5, 6))
+    _c0 = p_M*p_a
+    _c1 = _c0*cos(q_theta)
+    _c2 = -_c1
+    _c3 = sin(q_theta)
+    _c4 = _c0*_c3
+    _c5 = qd_theta**2
+    _c6 = p_M*p_g
+    _c7 = -p_R
+    _c8 = _baumgarte_beta**2
+    _c9 = 2.0*_baumgarte_alpha
+    out[0] = qd_x
+    out[1] = qd_z
+    out[2] = qd_theta
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c2
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c4
+    _kkt[2, 0] = _c2
+    _kkt[2, 1] = _c4
+    _kkt[2, 2] = p_I + p_M*p_a**2
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[0, 5] = -_c4*_c5
+    _kkt[1, 5] = -_c6 - _c1*_c5
+    _kkt[2, 5] = -_c3*_c6*p_a
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = _c7
+    _kkt[3, 5] = -_c8*(_c7 + q_z) - _c9*qd_z
+    _kkt[4, 5] = -_c8*(q_x - p_R*q_theta) - _c9*(qd_x - p_R*qd_theta)
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    out[3] = _kkt[0, 5]
+    out[4] = _kkt[1, 5]
+    out[5] = _kkt[2, 5]
+    lam[0] = _kkt[3, 5]
+    lam[1] = _kkt[4, 5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def constraint_residuals(t, y, p, out):
     """Residuals, shape (4,): Φ of the 2 holonomic constraints, then Λ q̇ + b of all 2."""
     q_x = y[0]
@@ -165,24 +225,85 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
-def rhs_jacobian(t, y, p, out):
-    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
-
-
-#: Why this module's rhs_jacobian computes nothing.
-RHS_JACOBIAN_REFUSED = 'constraints (the Jacobian of the augmented solve is not emitted yet)'
-
-
-@njit(cache=True, error_model="numpy")
 def rhs_with_jacobian(t, y, p, ydot, out):
     """f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,
     (N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).
-    Not available for this system: constraints (the Jacobian of the augmented solve is not emitted yet).
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows [0 | I], then ∂q̈/∂y: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((5, 5))
+    _jac = np.zeros(30)
+    q_theta = y[2]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c0 = p_M*p_a
+    _c1 = _c0*cos(q_theta)
+    _c2 = -_c1
+    _c3 = _c0*sin(q_theta)
+    _c4 = qd_theta**2
+    _c5 = 2.0*qd_theta
+    _c6 = _baumgarte_beta**2
+    _c7 = -_c6
+    _c8 = 2.0*_baumgarte_alpha
+    _c9 = -_c8
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c2
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c3
+    _kkt[2, 0] = _c2
+    _kkt[2, 1] = _c3
+    _kkt[2, 2] = p_I + p_M*p_a**2
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = -p_R
+    _jac[2] = -_acc2*_c3 - _c1*_c4
+    _jac[5] = -_c3*_c5
+    _jac[8] = _c3*_c4 - _acc2*_c1
+    _jac[11] = -_c1*_c5
+    _jac[14] = -_acc0*_c3 - _acc1*_c1 - _c1*p_g
+    _jac[19] = _c7
+    _jac[22] = _c9
+    _jac[24] = _c7
+    _jac[26] = _c6*p_R
+    _jac[27] = _c9
+    _jac[29] = _c8*p_R
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((5, 6))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(3):
+        out[_i, 3 + _i] = 1.0
+    out[3:6] = _rows[0:3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_jacobian(t, y, p, out):
+    """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
+    The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
+    return rhs_with_jacobian(t, y, p, np.empty(6), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -190,13 +311,168 @@ def rhs_parameter_jacobian(t, y, p, out):
     """Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,
     no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the
     inputs' tables that follow them).
-    Not available for this system: constraints: the derivative of the augmented solve is not emitted yet.
-    Writes nothing and returns NO_JACOBIAN = -1 (never a pivot; RHS_PARAMETER_JACOBIAN_REFUSED says why)."""
-    return -1
+    Rows 0 (q̇ does not depend on p), then ∂q̈/∂p: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((5, 5))
+    _jac = np.zeros(25)
+    q_theta = y[2]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult1 = _lam[1]
+    _c0 = cos(q_theta)
+    _c1 = _c0*p_a
+    _c2 = -_c1*p_M
+    _c3 = sin(q_theta)
+    _c4 = _c3*p_M
+    _c5 = _c4*p_a
+    _c6 = p_a**2
+    _c7 = qd_theta**2
+    _c8 = _c3*p_a
+    _c9 = _c0*p_M
+    _c10 = _baumgarte_beta**2
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c2
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c5
+    _kkt[2, 0] = _c2
+    _kkt[2, 1] = _c5
+    _kkt[2, 2] = p_I + _c6*p_M
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = -p_R
+    _jac[0] = -_acc0 + _acc2*_c1 - _c7*_c8
+    _jac[2] = _acc2*_c9 - _c4*_c7
+    _jac[5] = -_acc1 - p_g - _acc2*_c8 - _c1*_c7
+    _jac[7] = -_acc2*_c4 - _c7*_c9
+    _jac[9] = -p_M
+    _jac[10] = _acc0*_c1 - _acc1*_c8 - _acc2*_c6 - _c8*p_g
+    _jac[11] = -_mult1
+    _jac[12] = _acc0*_c9 - _acc1*_c4 - _c4*p_g - 2.0*_acc2*p_M*p_a
+    _jac[13] = -_acc2
+    _jac[14] = -_c5
+    _jac[16] = _c10
+    _jac[21] = _acc2 + _c10*q_theta + 2.0*_baumgarte_alpha*qd_theta
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((5, 5))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[3:6] = _rows[0:3]
+    return 0
 
 
-#: Why this module's rhs_parameter_jacobian computes nothing.
-RHS_PARAMETER_JACOBIAN_REFUSED = 'constraints: the derivative of the augmented solve is not emitted yet'
+@njit(cache=True, error_model="numpy")
+def reaction_jacobian(t, y, p, out):
+    """Exact Jacobian of the multipliers λ (`reactions`), shape (2, 11) into `out`: row c the constraint c of
+    ('normal', 'friction'), columns ∂λ_c/∂y_j (y = (q, q̇), 6 of them), then ∂λ_c/∂p_j for the model's
+    parameters (not the Baumgarte gains nor the inputs' tables). Symbolic, no differences:
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = np.empty(6)
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((5, 5))
+    _jac = np.zeros(55)
+    q_theta = y[2]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult1 = _lam[1]
+    _c0 = cos(q_theta)
+    _c1 = _c0*p_a
+    _c2 = _c1*p_M
+    _c3 = -_c2
+    _c4 = sin(q_theta)
+    _c5 = _c4*p_a
+    _c6 = _c5*p_M
+    _c7 = p_a**2
+    _c8 = qd_theta**2
+    _c9 = 2.0*qd_theta
+    _c10 = _c4*p_M
+    _c11 = _c0*p_M
+    _c12 = _baumgarte_beta**2
+    _c13 = -_c12
+    _c14 = 2.0*_baumgarte_alpha
+    _c15 = -_c14
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c3
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c6
+    _kkt[2, 0] = _c3
+    _kkt[2, 1] = _c6
+    _kkt[2, 2] = p_I + _c7*p_M
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = -p_R
+    _jac[2] = -_acc2*_c6 - _c2*_c8
+    _jac[5] = -_c6*_c9
+    _jac[6] = -_acc0 + _acc2*_c1 - _c5*_c8
+    _jac[8] = _acc2*_c11 - _c10*_c8
+    _jac[13] = _c6*_c8 - _acc2*_c2
+    _jac[16] = -_c2*_c9
+    _jac[17] = -_acc1 - p_g - _acc2*_c5 - _c1*_c8
+    _jac[19] = -_acc2*_c10 - _c11*_c8
+    _jac[21] = -p_M
+    _jac[24] = -_acc0*_c6 - _acc1*_c2 - _c2*p_g
+    _jac[28] = _acc0*_c1 - _acc1*_c5 - _acc2*_c7 - _c5*p_g
+    _jac[29] = -_mult1
+    _jac[30] = _acc0*_c11 - _acc1*_c10 - _c10*p_g - 2.0*_acc2*p_M*p_a
+    _jac[31] = -_acc2
+    _jac[32] = -_c6
+    _jac[34] = _c13
+    _jac[37] = _c15
+    _jac[40] = _c12
+    _jac[44] = _c13
+    _jac[46] = _c12*p_R
+    _jac[47] = _c15
+    _jac[49] = _c14*p_R
+    _jac[51] = _acc2 + _c12*q_theta + _c14*qd_theta
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((5, 11))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    out[0:2] = _rows[3:5]
+    return 0
 
 
 @njit(cache=True, error_model="numpy")
