@@ -36,6 +36,7 @@ from lagcomp.equations import Equation
 from lagcomp.ir import (
     AugmentedSolve,
     Delegate,
+    EventResets,
     FlatMatrix,
     JacobianSolve,
     Kernel,
@@ -315,6 +316,8 @@ def _kernel_source(kernel: Kernel) -> str:
         return _decorated(kernel, body + [f"return {solve.status}"]) + constant
     if isinstance(solve, Delegate):
         return _decorated(kernel, body + [delegated_call(solve)])
+    if isinstance(solve, EventResets):
+        return _decorated(kernel, body + event_reset_body(solve))
     if isinstance(solve, JacobianSolve):
         before, after = _jacobian_frame(solve)
         body += before
@@ -344,6 +347,18 @@ def _kernel_source(kernel: Kernel) -> str:
         else:
             body += _looped_ldlt(solve)
     return _decorated(kernel, body) + module_constants(kernel)
+
+
+def event_reset_body(solve: EventResets) -> list[str]:
+    """``out`` = ``y``, then the branch of event ``e`` (if it has a reset) overwrites what its reset sets."""
+    body = [f"out[{i}] = y[{i}]" for i in range(solve.size)]
+    for number, (e, branch) in enumerate(solve.branches):
+        body.append(f"{'if' if number == 0 else 'elif'} e == {e}:")
+        inner = [f"{local} = {source}" for local, source in branch.loads]
+        inner += [f"{name} = {to_code(expr)}" for name, expr in branch.temps]
+        inner += [f"{target} = {to_code(expr)}" for target, expr in branch.stores]
+        body += [INDENT + line for line in inner]
+    return body + ["return 0"]
 
 
 def module_constants(kernel: Kernel) -> str:
