@@ -349,6 +349,11 @@ def _kernel_source(kernel: Kernel) -> str:
     return _decorated(kernel, body) + module_constants(kernel)
 
 
+def kernel_source(kernel: Kernel) -> str:
+    """The source of the module function of `kernel`, as `emit` writes it (the Kane modules' ``event_reset``)."""
+    return _kernel_source(kernel)
+
+
 def event_reset_body(solve: EventResets) -> list[str]:
     """``out`` = ``y``, then the branch of event ``e`` (if it has a reset) overwrites what its reset sets."""
     body = [f"out[{i}] = y[{i}]" for i in range(solve.size)]

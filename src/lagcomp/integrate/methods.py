@@ -143,7 +143,7 @@ def _embedded(name: str, tableau: Tableau, summary: str) -> Method:
     """An adaptive embedded Runge-Kutta pair: the library driver `embedded_run` with `tableau`'s data."""
     module = "lagcomp.integrate.drivers.embedded"
     return Method(name, tableau.order, True, f"{module}:embedded_run", tableau, summary,
-                  kernels=("rhs", "project", "constraint_residual", "event_values"),
+                  kernels=("rhs", "project", "constraint_residual", "event_values", "event_reset"),
                   sweep=f"{module}_sweep:sweep_embedded")
 
 
@@ -195,8 +195,8 @@ METHODS = {
                "Taylor series to order ceil(-ln(tol)/2 + 1) (20 at machine precision), adaptive, dense "
                "output from the series (Jorba & Zou); unconstrained systems", unconstrained_only=True,
                default_rtol=EPS, default_atol=None, rtol_min=EPS,
-               # the model's Taylor kernel, its event values, and its data: periodic coordinates, work rows
-               kernels=("taylor_coefficients", "event_values", "TAYLOR_PERIODIC", "TAYLOR_WORK"),
+               # the model's Taylor kernel, its events' values and resets, and its data: periodic coordinates, work rows
+               kernels=("taylor_coefficients", "event_values", "event_reset", "TAYLOR_PERIODIC", "TAYLOR_WORK"),
                sweep="lagcomp.integrate.drivers.taylor:sweep_taylor"),
     )
 }

@@ -32,6 +32,7 @@ class Status(enum.IntEnum):
     CONSTRAINTS_NOT_CONVERGED = -8
     NEWTON_FAILED = -9
     ITERATION_MATRIX_SINGULAR = -10
+    RESET_FAILED = -11
     BUFFER_FULL = 10
     PAUSED = 11
 
@@ -71,6 +72,8 @@ _MESSAGES = {
                                       "diag(I, 0)) stayed singular down to the smallest step (a degenerate Jacobian "
                                       "J, or constraints that are dependent here): check the model near this "
                                       "state, or use an explicit method (dop853).",
+    Status.RESET_FAILED: "An event's reset gave a non-finite state (or could not be computed): the run stopped at the "
+                         "event, with the state just before it (check the reset's expressions at that state).",
     Status.BUFFER_FULL: "The output buffer is full: call again with a fresh one.",
     Status.PAUSED: "The call's step budget is used up: call again with a later one.",
 }
