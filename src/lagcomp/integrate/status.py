@@ -33,6 +33,7 @@ class Status(enum.IntEnum):
     NEWTON_FAILED = -9
     ITERATION_MATRIX_SINGULAR = -10
     RESET_FAILED = -11
+    EVENTS_ACCUMULATED = -12
     BUFFER_FULL = 10
     PAUSED = 11
 
@@ -74,6 +75,10 @@ _MESSAGES = {
                                       "state, or use an explicit method (dop853).",
     Status.RESET_FAILED: "An event's reset gave a non-finite state (or could not be computed): the run stopped at the "
                          "event, with the state just before it (check the reset's expressions at that state).",
+    Status.EVENTS_ACCUMULATED: "An event with a reset fired again within the smallest step after its last reset: "
+                               "its occurrences accumulate here (a Zeno point, like a bouncing ball's bounces "
+                               "coming to rest); the run stopped at it. Stop the run before, or model the rest "
+                               "that follows (e.g. a terminal event on the rebound speed).",
     Status.BUFFER_FULL: "The output buffer is full: call again with a fresh one.",
     Status.PAUSED: "The call's step budget is used up: call again with a later one.",
 }

@@ -205,9 +205,12 @@ def kane_events(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple[tuple
 def kane_resets(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple:
     """Per event of `events` (`kane_events`' specs), its reset over the state (q, u) of `form`: ((state index,
     value), ...), () for none.  The keys are coordinates q(t) or speeds u(t) of `km` (a Kane state holds u, not
-    q̇); the values hold what g may (q, u, q̇ by N, t, the equations' parameters), as the state before the event."""
+    q̇); the values hold what g may (q, u, q̇ by N, t, the equations' parameters, and by name those `parameters`
+    declares besides), as the state before the event."""
     plain = _Plain(km)
     allowed = set(form.q) | set(form.u) | set(form.parameters) | {t}
+    # a parameter only `parameters` declares (a restitution the equations lack) is a plain real symbol: by name
+    declared = {s.name: s for s in form.parameters}
     index = {f: i for i, f in enumerate([*km.q, *km.u])}
     resets = []
     for event in events:
@@ -218,6 +221,7 @@ def kane_resets(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple:
                                  f"speed of the KanesMethod (q {list(km.q)}, u {list(km.u)}): a Kane model's state is "
                                  "(q, u), reset its speeds u(t).")
             v = plain(value, f"the reset of event `{event.name}`")
+            v = v.xreplace({s: declared[s.name] for s in v.free_symbols - allowed if s.name in declared})
             stray = sorted(str(x) for x in v.free_symbols - allowed)
             if stray:
                 raise ModelError(f"Event `{event.name}`: its reset of {key} holds {stray}, which are neither "

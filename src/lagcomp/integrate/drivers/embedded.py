@@ -622,6 +622,7 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                     for i in range(n):
                         F[r, i] *= h
         stop = False
+        accumulated = False  # an event with a reset fired again less than the smallest step after its last reset
         reset = -1          # the event whose reset ends the step, if one does
         first_row = counters[EVENT_ROWS]
         if n_crossed > 0 or restarting:
@@ -637,6 +638,9 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
             copy_rows(ev_y, ev_y_after, first_row, n_recorded)
             if t_stop < np.inf:
                 reset = resetting_event(ev_t, ev_i, actions, first_row, n_recorded, t_stop)
+                if reset >= 0 and at_zero[reset] != 0 and t_stop - t < min_step:
+                    accumulated = True
+                    reset = -1
                 stop = reset < 0
                 t_new = t_stop
                 dense_state(dense_kind, F, y, t, h, t_stop, y_new)
@@ -689,6 +693,10 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                 counters[NFEV] += 1
                 if status != 0:
                     return Status.RHS_FAILED, n_saved
+            # The next step at most the one cut at the event: the motion after a reset has nothing to do with
+            # the step the controller proposed from the motion before (a bounce's next flight is e times the
+            # last one, which this step covered at most); `restart_brackets` then samples it.
+            h_abs = min(h_abs, t_new - t)
 
         # Projection onto the constraints, after the outputs (the dense output interpolates the step
         # as computed); the FSAL stage is then evaluated again at the projected state.
@@ -728,7 +736,7 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
         if residual > residual_bound:
             return Status.RESIDUAL_EXCEEDED, n_saved
         if stop:
-            return Status.TERMINATED, n_saved
+            return (Status.EVENTS_ACCUMULATED if accumulated else Status.TERMINATED), n_saved
         if n_events > 0 and reset < 0:
             if projecting:
                 event_values(t, y, p, g_old)

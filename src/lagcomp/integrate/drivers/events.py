@@ -193,9 +193,9 @@ def record_events_between(event_values, kind, F, y, t, h, p, starts, g_start, en
     return n_recorded, t_stop
 
 
-#: Points per step (the end included) at which an event that starts the step at its zero is sampled
-#: (`restart_brackets`).
-RESTART_SAMPLES = 8
+#: Points per step at which an event that starts the step at its zero is sampled (`restart_brackets`): at
+#: h 2^-k, k = RESTART_SAMPLES - 1 .. 0, the first at h/2048.
+RESTART_SAMPLES = 12
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -217,17 +217,18 @@ def restart_brackets(event_values, kind, F, y, t, h, p, at_zero, g_new, directio
     That zero does not count, but g may leave it and come back within the step (a bouncing ball's whole flight,
     in one step of a method whose step the flight does not limit: a parabola is a Taylor series' best case), a
     crossing the signs at the step's ends do not show.  g is sampled on the dense output at `RESTART_SAMPLES`
-    points spread over the step: the first sign change after g left 0 in the event's direction is bracketed by
-    the samples around it.  A flight shorter than 1/`RESTART_SAMPLES` of the step is still missed.  ``side``
-    (E,) is work space.
+    points, dense near the start (t + h 2^-k: the step after a reset is the step before it, kept, often long
+    against the motion that follows): the first sign change after g left 0 in the event's direction is bracketed
+    by the samples around it.  A return to 0 before the first sample (h/2048) is still missed.  ``side`` (E,)
+    is work space.
     """
     n_events = g_new.shape[0]
     count = 0
     for e in range(n_events):
         side[e] = 0.0                   # the sign of g once it left its zero (0: not yet)
-    for j in range(1, RESTART_SAMPLES + 1):
-        if j < RESTART_SAMPLES:
-            tau = t + h * j / RESTART_SAMPLES
+    for j in range(RESTART_SAMPLES - 1, -1, -1):
+        if j > 0:
+            tau = t + h * 2.0 ** -j
             dense_state(kind, F, y, t, h, tau, ywork)
             event_values(tau, ywork, p, gwork)
         else:

@@ -154,11 +154,13 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
         return Status.DONE, n_saved
     while counters[NEXT_EVAL] < n_eval and t_eval[counters[NEXT_EVAL]] <= t:
         counters[NEXT_EVAL] += 1
+    h_limit = np.inf                    # the step just after a reset: at most the one cut at the event
     if n_events > 0:
         event_values(t, y, p, g_old)
         for e in range(n_events):
             if at_zero[e] != 0:         # just after its reset (a call before this one): at its zero
                 g_old[e] = 0.0
+                h_limit = clock[STEP]
 
     while True:
         if t >= t_end:
@@ -192,7 +194,8 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
             return Status.NONFINITE, n_saved
         scale = 1.0 if rtol * norm_y <= atol else norm_y
         rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
-        h = min(rho * rho_factor, max_step)     # inf when both coefficients vanish
+        h = min(rho * rho_factor, max_step, h_limit)     # inf when both coefficients vanish
+        h_limit = np.inf
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         if not h >= min_step:                   # (true for NaN)
             return Status.STEP_TOO_SMALL if h < min_step else Status.NONFINITE, n_saved
@@ -230,6 +233,7 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
                 return Status.NONFINITE, n_saved
 
         stop = False
+        accumulated = False  # an event with a reset fired again less than the smallest step after its last reset
         reset = -1          # the event whose reset ends the step, if one does
         first_row = counters[EVENT_ROWS]
         if n_events > 0:
@@ -252,6 +256,9 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
                 copy_rows(ev_y, ev_y_after, first_row, n_recorded)
                 if t_stop < np.inf:
                     reset = resetting_event(ev_t, ev_i, actions, first_row, n_recorded, t_stop)
+                    if reset >= 0 and at_zero[reset] != 0 and t_stop - t < min_step:
+                        accumulated = True
+                        reset = -1
                     stop = reset < 0
                     t_new = t_stop
                     dense_state(DENSE_SERIES, X, y, t, h, t_stop, y_new)
@@ -299,6 +306,8 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
                 for i in range(n):
                     ys[n_saved, i] = y_new[i]
                 n_saved += 1
+            h = t_new - t               # the next step at most this one (the embedded driver says why)
+            h_limit = h
 
         # Commit the step.
         for i in range(n):
@@ -311,7 +320,7 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
             for e in range(n_events):
                 at_zero[e] = 0
         if stop:
-            return Status.TERMINATED, n_saved
+            return (Status.EVENTS_ACCUMULATED if accumulated else Status.TERMINATED), n_saved
         if failed:
             return Status.RESET_FAILED, n_saved    # at the event, with the state just before it
         if reset < 0:
