@@ -185,9 +185,9 @@ def test_a_kane_model_resets_its_speeds(cache_dir):
     x, u = me.dynamicsymbols("x u")
     g, e = sp.symbols("g e", positive=True)
     N = me.ReferenceFrame("N")
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    P = O.locatenew("P", x * N.x)
+    origin = me.Point("O")
+    origin.set_vel(N, 0)
+    P = origin.locatenew("P", x * N.x)
     P.set_vel(N, u * N.x)
     ball = me.Particle("ball", P, 1)
     km = me.KanesMethod(N, q_ind=[x], u_ind=[u], kd_eqs=[x.diff(me.dynamicsymbols._t) - u])
@@ -257,7 +257,8 @@ def test_resets_with_sensitivities_or_batched_sweeps_are_refused(ball):
 def test_a_reset_to_a_non_finite_state_stops_the_run_at_the_event(cache_dir, method):
     (x,) = lc.coordinates("x")
     g = sp.Symbol("g", positive=True)
-    model = lc.compile(_ball(name="ball_nonfinite", reset={x.diff(lc.t): x.diff(lc.t) * sp.exp(1000 * g * sp.Symbol("e", positive=True))}),
+    e = sp.Symbol("e", positive=True)
+    model = lc.compile(_ball(name="ball_nonfinite", reset={x.diff(lc.t): x.diff(lc.t) * sp.exp(1000 * g * e)}),
                        cache_dir=cache_dir)
     sol = model.simulate((0.0, 1.0), method=method)
     assert sol.status == Status.RESET_FAILED, sol.message

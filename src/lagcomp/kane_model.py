@@ -80,7 +80,7 @@ def compile_kane(km, cache_dir=None, **options) -> "KaneModel":
                                                       ("Phi", form.Phi), ("Psi", form.Psi), ("energy", energy),
                                                       ("reactions", reactions))]
         + [f"event {e.name} {e.direction} {e.terminal}={_srepr(g)}" for e, g in zip(events, event_exprs)]
-        + [f"event {e.name} reset {i}={_srepr(v)}" for e, reset in zip(events, resets) for i, v in reset]
+        + [f"event {e.name} reset {i}={_srepr(v)}" for e, reset in zip(events, resets, strict=True) for i, v in reset]
     )
     cache = Cache(cache_dir)
     key = input_key(fingerprint, options={"kane": 1})

@@ -337,7 +337,8 @@ def _redundant_constraints(model, t0: float, y0: np.ndarray, p: np.ndarray) -> l
 def _refuse_resets_with_sensitivities(model, options: RunOptions) -> None:
     """Refuse `sensitivities=` on a run whose events reset the state: the jump of the sensitivities at a reset
     (the saltation matrix) is not computed."""
-    resetting = [e.name for e, action in zip(model.events, options.actions.tolist()) if action == ACTION_RESET]
+    resetting = [e.name for e, action in zip(model.events, options.actions.tolist(), strict=True)
+                 if action == ACTION_RESET]
     if resetting:
         raise OptionError(f"`sensitivities=` on a run whose event(s) {resetting} reset the state: the jump of the "
                           "sensitivities at a reset (its saltation matrix) is not computed yet. Run without "
@@ -352,7 +353,7 @@ def _event_records(model, event_parts) -> dict:
         return {}
     n, size = model.n, model.state_size
     if event_parts:
-        t_all, y_all, i_all, after_all = (np.concatenate(column) for column in zip(*event_parts))
+        t_all, y_all, i_all, after_all = (np.concatenate(column) for column in zip(*event_parts, strict=True))
     else:
         t_all, y_all, i_all = np.empty(0), np.empty((0, size)), np.empty(0, dtype=np.int64)
         after_all = y_all

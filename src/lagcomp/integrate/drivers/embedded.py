@@ -179,8 +179,8 @@ from lagcomp.integrate.drivers.events import (
     event_crossings,
     record_events_between,
     reset_state,
-    restart_brackets,
     resetting_event,
+    restart_brackets,
     step_brackets,
 )
 from lagcomp.integrate.drivers.kernel_types import (

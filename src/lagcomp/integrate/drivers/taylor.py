@@ -55,8 +55,8 @@ from lagcomp.integrate.drivers.events import (
     event_crossings,
     record_events_between,
     reset_state,
-    restart_brackets,
     resetting_event,
+    restart_brackets,
     step_brackets,
 )
 from lagcomp.integrate.drivers.kernel_types import (
@@ -328,12 +328,12 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
                 g_old[ev] = g_new[ev]
 
 
-#: sweep_taylor(taylor_coefficients, event_values, event_reset, periodic, work_rows, energy, Y0, P, projecting, t0, t_end,
-#: rtol, atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
+#: sweep_taylor(taylor_coefficients, event_values, event_reset, periodic, work_rows, energy, Y0, P, projecting, t0,
+#: t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
 #: status, counts, dense, energy_stats, event_count, event_t, event_y, carry)
 SWEEP_SIGNATURE = types.none(TAYLOR, EVENTS, EVENT_RESET, INDICES, INT, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT,
-                             FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean, INDICES, INDICES, MATRIX, VECTOR, INDICES,
-                             types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, types.int64[:, ::1],
+                             FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean, INDICES, INDICES, MATRIX, VECTOR,
+                             INDICES, types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, types.int64[:, ::1],
                              types.float64[:, :, ::1], types.float64[:, :, :, ::1], VECTOR)
 
 
