@@ -50,7 +50,11 @@ Arguments, after the kernels (`kernel_types`) and before the tableau: the driver
   there: the FSAL stage is evaluated again, the step size kept, and without ``t_eval`` the states before and
   after are both saved rows at that time.  ``ev_y_after`` (cap_e, N) gets each event row's state after the
   event (the reset's, or the row's own); a reset whose state is not finite ends the run at the event,
-  RESET_FAILED, with the state before it;
+  RESET_FAILED, with the state before it.  ``at_zero`` int64[E], kept by the caller across its calls (zeros
+  at the start), marks the events that start the next step at their zero, just after their reset
+  (`lagcomp.integrate.drivers.events.reset_state`): that step is at most the one cut at the event, and
+  samples them densely (`restart_brackets`); one of them firing again within the smallest step ends the
+  run there, EVENTS_ACCUMULATED (a Zeno point);
 
 It returns ``(status, n_saved)``, status a `Status`: DONE at ``t_end``; BUFFER_FULL or PAUSED: call
 again (with a fresh output buffer, a later ``pause_at``), and the continuation is identical to an
