@@ -77,6 +77,20 @@ def test_a_bouncing_ball_rebounds_with_ratio_e_at_the_closed_form_times(ball, me
     assert np.all(sol.q[:, 0] > -1e-12)  # no tunnelling through the floor
 
 
+@pytest.mark.parametrize("method", ["dop853", "taylor"])
+def test_a_flight_that_ends_exactly_with_a_step(ball, method):
+    """With e = 1/2 the flight after the first impact lasts as long as the fall before it, which Taylor takes in one
+    step: the step after the impact (at most that one) ends on the next impact, which the following step finds at
+    its very start.  Taylor stopped there with STEP_TOO_SMALL before the step after a reset was kept ≥ the
+    smallest step."""
+    for h0 in (0.6818181818181819, 0.75, 0.9090909090909092):
+        t_end = 0.9 * _accumulation(0.5, h0)
+        sol = ball.simulate((0.0, t_end), q0=(h0,), params={"e": 0.5}, method=method)
+        times, _ = _impacts(0.5, h0, t_end)
+        assert sol.status == Status.DONE, sol.message
+        np.testing.assert_allclose(sol.events["impact"].t, times, rtol=1e-12, atol=0)
+
+
 def test_the_states_after_the_events_in_to_xarray_and_npz(ball, tmp_path):
     sol = ball.simulate((0.0, 1.0))
     impact = sol.events["impact"]

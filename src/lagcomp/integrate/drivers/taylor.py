@@ -194,9 +194,11 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
             return Status.NONFINITE, n_saved
         scale = 1.0 if rtol * norm_y <= atol else norm_y
         rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
-        h = min(rho * rho_factor, max_step, h_limit)     # inf when both coefficients vanish
-        h_limit = np.inf
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        # inf when both coefficients vanish; after a reset at most the step cut at it, and at least min_step (the
+        # event may have been at the very start of that step)
+        h = min(rho * rho_factor, max_step, max(h_limit, min_step))
+        h_limit = np.inf
         if not h >= min_step:                   # (true for NaN)
             return Status.STEP_TOO_SMALL if h < min_step else Status.NONFINITE, n_saved
         t_new = t + h
