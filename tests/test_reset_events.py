@@ -11,6 +11,8 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 import lagcomp as lc
@@ -235,6 +237,20 @@ def test_a_reset_of_something_that_is_not_a_coordinate_is_refused():
         _ball(reset=[x])
     with pytest.raises(ModelError, match="empty"):
         _ball(reset={})
+
+
+_X = lc.coordinates("x")[0]
+#: Keys a reset may not have: numbers, symbols, expressions of the state, accelerations, other functions of t.
+BAD_KEYS = st.sampled_from([1, 2.5, sp.Symbol("x"), sp.Symbol("v"), _X**2, _X + 1, sp.sin(_X), 2 * _X.diff(lc.t),
+                            _X.diff(lc.t, 2), sp.Function("w")(lc.t), sp.Function("w")(lc.t).diff(lc.t), lc.t,
+                            sp.Function("x")(sp.Symbol("s"))])
+
+
+@settings(max_examples=40, deadline=None)
+@given(key=BAD_KEYS, value=st.sampled_from([0, 1.5, sp.Symbol("e", positive=True), -_X.diff(lc.t)]))
+def test_any_reset_of_something_that_is_not_a_coordinate_or_velocity_is_refused(key, value):
+    with pytest.raises(ModelError):
+        _ball(reset={key: value})
 
 
 def test_a_reset_with_an_undeclared_symbol_is_refused_at_build_time():
