@@ -735,7 +735,10 @@ def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping
            f"reset of e sets (events with a reset: {reset_names}; the others leave y as it is). Returns 0.\n"
            "Drivers pass a p of their own: a reset may one day write mode slots of p.")
     return Kernel(name="event_reset", doc=doc, args=("t", "y", "p", "e", "out"), loads=(), temps=(), stores=(),
-                  solve=EventResets(size=size, branches=branches))
+                  solve=EventResets(size=size, branches=branches),
+                  constants=(("RESET_EVENTS", "The events whose reset event_reset applies (none: the drivers take a "
+                              "library kernel that copies y, which numba has compiled already).",
+                              tuple(reset_names)),))
 
 
 #: Why a module whose events read inputs has no event partials (its ``EVENT_GRADIENTS_REFUSED``).

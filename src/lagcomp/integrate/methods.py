@@ -111,7 +111,7 @@ class Method:
     def _bind(self, kernels, addressed: bool, dae: bool):
         driver = library_function(self.driver)
         names = self.dae_kernels if dae else self.kernels
-        bound = [getattr(kernels, k) for k in names]
+        bound = [_kernel(kernels, k) for k in names]
         kinds = driver.signatures[0]
         bound = [AddressedKernel(value, kind) if isinstance(kind, types.FunctionType)
                  and (addressed or name in RARELY_CALLED) else value
@@ -216,6 +216,17 @@ ALIASES = {"rk45": "dopri5", "dopri853": "dop853", "rk23": "bs3", "leapfrog": "v
 
 #: {generated module: {(method name, addressed): its bound driver}} (`Method.bound_driver`).
 _BOUND_DRIVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _kernel(kernels, name: str):
+    """The kernel `name` of the generated module `kernels`, or for an ``event_reset`` that resets nothing
+    (``RESET_EVENTS`` empty) the library's `lagcomp.integrate.drivers.events.unchanged_state`, compiled once per
+    installation rather than once per model."""
+    if name == "event_reset" and not getattr(kernels, "RESET_EVENTS", True):
+        from lagcomp.integrate.drivers.events import unchanged_state
+
+        return unchanged_state
+    return getattr(kernels, name)
 
 
 def library_function(reference: str):

@@ -307,6 +307,16 @@ def reset_state(event_reset, event_values, t, y, p, e, work, g_old, g_work, te, 
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def unchanged_state(t, y, p, e, out):
+    """An ``event_reset`` kernel for models none of whose events resets the state: ``out`` = ``y``, 0.  The
+    drivers take it instead of the module's own (`lagcomp.integrate.methods.Method.bound_driver`), so that a new
+    model's first run does not wait for numba to compile a kernel that no event uses."""
+    for i in range(y.shape[0]):
+        out[i] = y[i]
+    return 0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def copy_rows(source, target, first_row, n_rows):
     """``target[r] = source[r]`` for the rows ``first_row`` to ``n_rows`` (the state after an event without a reset
     is the state at it)."""
