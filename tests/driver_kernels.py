@@ -68,6 +68,14 @@ def event_values(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def event_reset(t, y, p, e, out):
+    """No event resets the state: out = y."""
+    for i in range(y.shape[0]):
+        out[i] = y[i]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def circle_projection(t, y, p):
     """Onto the unit circle y0² + y1² = 1 (the oscillator's orbit from (1, 0))."""
     r = np.sqrt(y[0] * y[0] + y[1] * y[1])

@@ -24,7 +24,7 @@ from tests import driver_kernels
 EMBEDDED = [name for name, m in REGISTRY.items() if m.driver.endswith(":embedded_run")]
 SCIPY = {"dopri5": "RK45", "dop853": "DOP853", "bs3": "RK23"}
 KERNELS = (driver_kernels.rhs, driver_kernels.project, driver_kernels.constraint_residual,
-           driver_kernels.event_values)
+           driver_kernels.event_values, driver_kernels.event_reset)
 
 
 def embedded_run(*args):
@@ -68,7 +68,8 @@ def f_numpy(kind):
 
 
 NO_PAUSE = np.iinfo(np.int64).max
-NO_EVENTS = (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(0), np.empty((0, 0)), np.empty(0, np.int64))
+NO_EVENTS = (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(0), np.empty((0, 0)), np.empty(0, np.int64),
+             np.empty((0, 0)), np.empty(0, np.int64))
 
 
 class Run:
@@ -363,7 +364,8 @@ def run_events(method, directions, actions, *, tol=1e-10, t_end=10.0, switch_tim
     ts_all, ys_all, events = [], [], []
     for _ in range(100_000):
         ts, ys = np.empty(1000), np.empty((1000, 2))
-        ev = (np.empty(ev_cap), np.empty((ev_cap, 2)), np.empty(ev_cap, dtype=np.int64))
+        ev = (np.empty(ev_cap), np.empty((ev_cap, 2)), np.empty(ev_cap, dtype=np.int64), np.empty((ev_cap, 2)),
+              np.zeros(directions.size, dtype=np.int64))
         counters[5] = 0
         pause_at = NO_PAUSE if pause_every is None else counters[1] + pause_every
         status, n_saved = embedded_run(
@@ -424,7 +426,7 @@ def test_terminal_event_row_has_room_with_decimated_output(method):
     rows = []
     while True:
         calls += 1
-        ev = (np.empty(4), np.empty((4, 2)), np.empty(4, dtype=np.int64))
+        ev = (np.empty(4), np.empty((4, 2)), np.empty(4, dtype=np.int64), np.empty((4, 2)), np.zeros(2, np.int64))
         counters[5] = 0
         status, n = embedded_run(
             y, clock, counters, np.array([OSCILLATOR, 2.5]), 0, np.zeros(1), 10.0, 1e-8, 1e-8, np.inf, 10**7,

@@ -75,6 +75,12 @@ def models(compiled, cache_dir):
                         name="table_failing", defaults={"m": 1.0, "a": 0.0, "c": 0.0}, q0=(0.0,), qd0=(1.0,))
     degenerate = lc.System([x], T=m * x**2 * x.diff(t) ** 2 / 2, name="table_degenerate",
                            events=[lc.Event("origin", x)])
+    ball = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=m * g * x, name="table_ball", q0=(1.0,),
+                     defaults={"m": 1.0, "g": 9.81, "c": 0.8},
+                     events=[lc.Event("bounce", x, direction=-1, reset={x.diff(t): -c * x.diff(t)})])
+    blowup = replace(ball, name="table_ball_blowup",
+                     events=[lc.Event("bounce", x, direction=-1, reset={x.diff(t): x.diff(t) * sp.exp(1000 * g)})],
+                     defaults={"m": 1.0, "g": 9.81, "c": 0.8})
     walled = plane(constraints=[lc.Holonomic("rod", x**2 + y**2 - l**2), lc.Holonomic("wall", x - l)],
                    name="table_walled", defaults={"m": 1.0, "g": 9.81, "l": 1.0}, q0=(1.0, 0.0))
     return {
@@ -84,6 +90,8 @@ def models(compiled, cache_dir):
         "failing": lc.compile(failing, cache_dir=cache_dir),
         "degenerate": lc.compile(degenerate, cache_dir=cache_dir),
         "walled": lc.compile(walled, cache_dir=cache_dir),
+        "ball": lc.compile(ball, cache_dir=cache_dir),
+        "blowup": lc.compile(blowup, cache_dir=cache_dir),
         "friction": compiled("rope_friction"),
         "kane": lc.compile(_kane_slider(), name="table_kane_slider", cache_dir=cache_dir, defaults={"m": 1.0}),
         "kane_across": lc.compile(_kane_slider(across=True), name="table_kane_slider_across", cache_dir=cache_dir,
@@ -272,6 +280,19 @@ CASES = {
     "event-undeclared-symbol": (lambda: oscillator(events=[lc.Event("hit", x - sp.Symbol("wall"))], parameters=(m, k)),
                                 "wall appear in 'table_oscillator' (first in event hit)"),
     "event-bad-direction": (lambda: lc.Event("hit", x, direction=2), "got 2"),
+    "reset-terminal": (lambda: lc.Event("hit", x, terminal=True, reset={x.diff(t): 0}), "terminal"),
+    "reset-not-a-state": (lambda: lc.Event("hit", x, reset={x.diff(t, 2): 0}), "Derivative(x(t), (t, 2))"),
+    "reset-unknown-coordinate": (lambda: oscillator(events=[lc.Event("hit", x, reset={y.diff(t): 0})]), "y(t)"),
+    "reset-undeclared-symbol": (lambda: oscillator(parameters=(m, k), events=[
+        lc.Event("hit", x, reset={x.diff(t): -a * x.diff(t)})]), "event hit reset"),
+    "reset-reads-input": (lambda: oscillator(events=[lc.Event("hit", x, reset={x.diff(t): lc.Input("s")})]),
+                          "s(t)"),
+    "resets-method": (_simulate("ball", method="rk4", dt=0.01), "['bounce']"),
+    "resets-with-sensitivities": (_simulate("ball", sensitivities="q0"), "saltation"),
+    "resets-batched-sweep": (lambda models: models["ball"].sweep((0.0, 1.0), {"c": [0.5, 0.6]}, batched=True,
+                                                                 progress=False), "batched"),
+    "reset-non-finite": (_fail("blowup"), "reset"),
+    "events-accumulated": (_fail("ball", t_span=(0.0, 6.0)), "accumulate"),
     "default-unknown-parameter": (lambda: oscillator(defaults={"mass": 1.0}), "['mass']"),
     "default-not-a-number": (lambda: oscillator(defaults={"m": "heavy", "k": 1.0}), "`m`"),
     "default-initial-values": (lambda: oscillator(q0=("one",)), "`q0`"),

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ast
 import builtins
+import dataclasses
 import keyword
 import math
 import re
@@ -98,7 +99,8 @@ def _probes() -> tuple[lc.System, ...]:
     x, z = lc.coordinates("x z")
     a, b = sp.symbols("a b", positive=True)
     free = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * x**2 + b * z**2,
-                     events=[lc.Event("hit", x)], name="probe_free")
+                     events=[lc.Event("hit", x), lc.Event("kick", z, reset={z.diff(lc.t): -a * z.diff(lc.t)})],
+                     name="probe_free")
     rod = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * z,
                     constraints=[lc.Holonomic("rod", x**2 + z**2 - b**2)], name="probe_rod")
     N = ReferenceFrame("N")
@@ -301,6 +303,32 @@ def test_the_event_gradients_under_every_emitted_name(many_names):
     expected = np.zeros_like(out)
     expected[0, 0] = 1.0
     np.testing.assert_array_equal(out, expected)
+
+
+def test_the_event_reset_under_every_emitted_name(emitted_names, cache_dir):
+    """``event_reset`` under the ~670 colliding names: the oscillators' event on c_0 resets ċ_0 to −m_0 ċ_0 and c_1
+    to the sum of c_1's group times c_0, reading state, parameters and t (as the kernels' ``t``).  Plain Python,
+    as the parameter Jacobian's test."""
+    from random_systems import python_kernels
+
+    spec = _many_names(emitted_names, RISKY_COORDINATES)
+    system = spec.system()
+    c = system.coordinates
+    m0 = next(s for s in system.parameters if s.name == spec.masses[0])
+    group = [s for s in system.parameters if s.name in spec.groups[1]]
+    reset = {c[0].diff(lc.t): -m0 * c[0].diff(lc.t), c[1]: sp.Add(*group) * c[0] + lc.t}
+    event = lc.Event(spec.event, c[0], reset=reset)
+    model = lc.compile(dataclasses.replace(system, events=[event], name="names_reset"), cache_dir=cache_dir)
+    params, amplitude, _ = spec.values()
+    module = python_kernels(model.source_path.read_text(encoding="utf-8"))
+    n = len(c)
+    y = np.concatenate([amplitude, np.linspace(-0.5, 0.5, n)])
+    out = np.full(2 * n, np.nan)
+    assert module["event_reset"](0.25, y, model.parameter_vector(params), 0, out) == 0
+    expected = y.copy()
+    expected[n] = -params[spec.masses[0]] * y[n]
+    expected[1] = sum(params[a] for a in spec.groups[1]) * y[0] + 0.25
+    np.testing.assert_allclose(out, expected, rtol=1e-15, atol=0)
 
 
 @pytest.mark.slow

@@ -282,13 +282,14 @@ def test_chunked_run_equals_one_call(pendulum):
     from lagcomp.integrate.drivers.taylor import taylor_run
 
     kernels = pendulum.kernels
-    model_parts = (kernels.taylor_coefficients, kernels.event_values, kernels.TAYLOR_PERIODIC, kernels.TAYLOR_WORK)
+    model_parts = (kernels.taylor_coefficients, kernels.event_values, kernels.event_reset, kernels.TAYLOR_PERIODIC,
+                   kernels.TAYLOR_WORK)
     y = np.array([2.0, 1.0, 0.0, 0.0])
     clock, counters = np.array([0.0, 0.0]), np.zeros(6, dtype=np.int64)
     p = pendulum.parameter_vector()
     rows = []
     empty = (np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64), np.empty(16), np.empty((16, 4)),
-             np.empty(16, dtype=np.int64))
+             np.empty(16, dtype=np.int64), np.empty((16, 4)), np.empty(0, dtype=np.int64))
     eps = 2.220446049250313e-16
     carry = np.zeros(4)
     while True:

@@ -251,7 +251,8 @@ def cmd_run(args) -> int:
           f"(max relative drift {summary.energy_function_error:.3g})")
     for name, record in sol.events.items():
         when = f" at t = {record.t[0]:.10g} .. {record.t[-1]:.10g}" if len(record) else ""
-        print(f"event       {name}: {len(record)} occurrence(s){when}")
+        resets = " (each resets the state)" if len(record) and record.jumps else ""
+        print(f"event       {name}: {len(record)} occurrence(s){when}{resets}")
     for name, values in sol.reactions.items():
         print(f"reaction    {name}: {values[0]:.8g} -> {values[-1]:.8g} (range {values.min():.6g} .. {values.max():.6g})")
     if sol.reactions:

@@ -180,6 +180,16 @@ class Unavailable:
 
 
 @dataclass(frozen=True)
+class EventResets:
+    """The body of ``event_reset(t, y, p, e, out)``: ``out`` = ``y`` (`size` entries), then for the event e that
+    has a reset, the loads, temporaries and stores of its `Kernel` in `branches` ((event index, kernel), ...,
+    each CSE'd on its own: only one runs), and ``return 0``."""
+
+    size: int
+    branches: tuple
+
+
+@dataclass(frozen=True)
 class Kernel:
     """One numba function: load inputs, compute temporaries, store outputs.
 
@@ -205,8 +215,8 @@ class Kernel:
         M⁻¹ applied to the rows of ``rhs_with_jacobian``), the call of another kernel
         (``rhs_jacobian``), the matrix-vector product of
         ``momenta`` for large systems, the status 0 of a kernel that cannot fail (the DAE
-        kernels; ``dae_jacobian`` through its flat work array), or the status of a kernel
-        that computes nothing.
+        kernels; ``dae_jacobian`` through its flat work array), the status of a kernel
+        that computes nothing, or the branches of ``event_reset``.
     lanes : bool
         The body runs once per lane ``_l`` of a batch (structure of arrays:
         ``Y[i, _l]``, ``P[k, _l]``, ``out[i, _l]``), in a loop LLVM can
@@ -229,7 +239,7 @@ class Kernel:
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
     solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | AugmentedJacobianSolve | Delegate
-            | ReturnZero | FlatMatrix | Unavailable | None) = None
+            | ReturnZero | FlatMatrix | Unavailable | EventResets | None) = None
     lanes: bool = False
     alias: str | None = None
     constants: tuple[tuple[str, str, object], ...] = ()

@@ -61,7 +61,7 @@ KANE_OPTIONS = ("name", "parameters", "defaults", "q0", "u0", "t_end", "descript
 
 def compile_kane(km, cache_dir=None, **options) -> "KaneModel":
     """Compile the KanesMethod `km` (module docstring); `options` as in `KANE_OPTIONS`."""
-    from lagcomp.mechanics.kane import auxiliary_reactions, kane_energy, kane_events, kane_form
+    from lagcomp.mechanics.kane import auxiliary_reactions, kane_energy, kane_events, kane_form, kane_resets
 
     unknown = sorted(set(options) - set(KANE_OPTIONS))
     if unknown:
@@ -71,6 +71,7 @@ def compile_kane(km, cache_dir=None, **options) -> "KaneModel":
     names, reactions = auxiliary_reactions(km, form)
     energy = kane_energy(km, form)
     events, event_exprs = kane_events(km, form, options.get("events"))
+    resets = kane_resets(km, form, events)
     recorded = _run_defaults(form, options, events)
     fingerprint = "\n".join(
         ["kane", recorded["name"], repr(form.coordinate_names), repr(form.speed_names),
@@ -79,6 +80,7 @@ def compile_kane(km, cache_dir=None, **options) -> "KaneModel":
                                                       ("Phi", form.Phi), ("Psi", form.Psi), ("energy", energy),
                                                       ("reactions", reactions))]
         + [f"event {e.name} {e.direction} {e.terminal}={_srepr(g)}" for e, g in zip(events, event_exprs)]
+        + [f"event {e.name} reset {i}={_srepr(v)}" for e, reset in zip(events, resets, strict=True) for i, v in reset]
     )
     cache = Cache(cache_dir)
     key = input_key(fingerprint, options={"kane": 1})
@@ -88,7 +90,7 @@ def compile_kane(km, cache_dir=None, **options) -> "KaneModel":
             entry = cache.lookup(key)
             if entry is None:
                 entry, fresh = _build(cache, key, recorded["name"], form, energy, names, reactions,
-                                      tuple(zip((e.name for e in events), event_exprs))), True
+                                      tuple(zip((e.name for e in events), event_exprs)), resets), True
     model = KaneModel(None, load_module(entry), entry, from_cache=not fresh, recorded=recorded)
     model.first_order_form, model.kanes_method = form, km
     cache.remember(recorded["name"], key, recorded)
@@ -122,10 +124,10 @@ def _srepr(expr) -> str:
     return digest(expr)
 
 
-def _build(cache, key, name, form, energy, names, reactions, events):
+def _build(cache, key, name, form, energy, names, reactions, events, resets):
     from lagcomp.codegen.kane import emit_kane
 
-    source, operations = emit_kane(name, form, energy, names, reactions, events)
+    source, operations = emit_kane(name, form, energy, names, reactions, events, resets)
     metadata = {
         "kane": True, "coordinates": list(form.coordinate_names), "speeds": list(form.speed_names),
         "parameters": [s.name for s in form.parameters], "cyclic": [], "constraints": [], "holonomic": [],
@@ -152,7 +154,7 @@ def _run_defaults(form, options, events=()) -> dict:
         "name": options.get("name", "kane_model"), "description": options.get("description", ""),
         "defaults": defaults, "q0": floats(options.get("q0"), form.n_q, "q0"),
         "qd0": floats(options.get("u0"), form.n_u, "u0"), "t_end": float(options.get("t_end", 10.0)),
-        "events": [[e.name, e.direction, e.terminal] for e in events],
+        "events": [[e.name, e.direction, e.terminal, e.reset is not None] for e in events],
     }
 
 

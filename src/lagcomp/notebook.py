@@ -42,6 +42,9 @@ def solution_dataset(solution):
         _add(data, [(f"{dim}_t", record.t)], f"times of event {name!r}", dim=dim)
         _add(data, [(f"{dim}_state", np.hstack([record.q, record.qd]))], f"state at event {name!r}",
              dim=(dim, "state"))
+        if record.q_after is not None:
+            _add(data, [(f"{dim}_state_after", np.hstack([record.q_after, record.qd_after]))],
+                 f"state just after event {name!r}", dim=(dim, "state"))
     if solution.sensitivities is not None:
         _add(data, [("sensitivities", solution.sensitivities)], "sensitivity ∂y(t)/∂w", dim=("t", "state", "wrt"))
         coords["wrt"] = ("wrt", list(solution.sensitivity_names))

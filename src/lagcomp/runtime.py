@@ -122,11 +122,13 @@ def load(name: str, *, cache_dir: str | os.PathLike | None = None) -> "Model":
 
 
 class EventSpec(NamedTuple):
-    """What a run needs of a declared event (its expression lives in the ``event_values`` kernel)."""
+    """What a run needs of a declared event (its expression lives in the ``event_values`` kernel, its reset in
+    ``event_reset``)."""
 
     name: str
     direction: int
     terminal: bool
+    resets: bool = False
 
 
 def run_defaults(system) -> dict:
@@ -141,7 +143,7 @@ def run_defaults(system) -> dict:
         "q0": floats(system.q0),
         "qd0": floats(system.qd0),
         "t_end": float(system.t_end),
-        "events": [[e.name, int(e.direction), bool(e.terminal)] for e in system.events],
+        "events": [[e.name, int(e.direction), bool(e.terminal), e.reset is not None] for e in system.events],
     }
 
 
@@ -251,7 +253,7 @@ class Model:
     t_end : float
         The System's suggested run length.
     events : tuple of EventSpec
-        The declared events (name, direction, terminal), in kernel order.
+        The declared events (name, direction, terminal, resets), in kernel order.
     kernels : module
         The generated module (``rhs``, ``mass_matrix``, ``forcing``, ``energy``,
         ``energy_function``, ``momenta`` and the drivers), numba functions
@@ -291,7 +293,7 @@ class Model:
         self.q0 = None if recorded["q0"] is None else tuple(recorded["q0"])
         self.qd0 = None if recorded["qd0"] is None else tuple(recorded["qd0"])
         self.t_end = recorded["t_end"]
-        self.events = tuple(EventSpec(name, direction, terminal) for name, direction, terminal in recorded["events"])
+        self.events = tuple(EventSpec(*spec) for spec in recorded["events"])
         self.kernels = kernels
         self.source_path = entry.path
         self.cache_key = entry.key

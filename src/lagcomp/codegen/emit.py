@@ -37,6 +37,7 @@ from lagcomp.ir import (
     AugmentedJacobianSolve,
     AugmentedSolve,
     Delegate,
+    EventResets,
     FlatMatrix,
     JacobianSolve,
     Kernel,
@@ -335,6 +336,8 @@ def _kernel_source(kernel: Kernel) -> str:
         return _decorated(kernel, body + [f"return {solve.status}"]) + constant
     if isinstance(solve, Delegate):
         return _decorated(kernel, body + [delegated_call(solve)])
+    if isinstance(solve, EventResets):
+        return _decorated(kernel, body + event_reset_body(solve)) + module_constants(kernel)
     if isinstance(solve, JacobianSolve):
         before, after = _jacobian_frame(solve)
         body += before
@@ -370,6 +373,23 @@ def _kernel_source(kernel: Kernel) -> str:
         else:
             body += _looped_ldlt(solve)
     return _decorated(kernel, body) + module_constants(kernel)
+
+
+def kernel_source(kernel: Kernel) -> str:
+    """The source of the module function of `kernel`, as `emit` writes it (the Kane modules' ``event_reset``)."""
+    return _kernel_source(kernel)
+
+
+def event_reset_body(solve: EventResets) -> list[str]:
+    """``out`` = ``y``, then the branch of event ``e`` (if it has a reset) overwrites what its reset sets."""
+    body = [f"out[{i}] = y[{i}]" for i in range(solve.size)]
+    for number, (e, branch) in enumerate(solve.branches):
+        body.append(f"{'if' if number == 0 else 'elif'} e == {e}:")
+        inner = [f"{local} = {source}" for local, source in branch.loads]
+        inner += [f"{name} = {to_code(expr)}" for name, expr in branch.temps]
+        inner += [f"{target} = {to_code(expr)}" for target, expr in branch.stores]
+        body += [INDENT + line for line in inner]
+    return body + ["return 0"]
 
 
 def module_constants(kernel: Kernel) -> str:

@@ -50,6 +50,7 @@ from lagcomp.codegen.emit import (
     INDENT,
     PROJECTION_ITERATIONS,
     delegated_call,
+    kernel_source,
     kernel_support_names,
     module_constants,
     support_imports,
@@ -62,6 +63,7 @@ from lagcomp.codegen.lower import (
     WITH_JACOBIAN_ARGS,
     _kernel,
     acceleration_partials,
+    event_reset_kernel,
     jacobian_entry,
     jacobian_only,
 )
@@ -333,11 +335,12 @@ def _sizes(form: FirstOrderForm) -> str:
     )
 
 
-def _events(form: FirstOrderForm, events, mapping, loads) -> tuple:
-    """The ``event_values`` and ``event_gradients`` kernels (g of each event, and its partials, into `out`) and
-    their source; stubs without events."""
+def _events(form: FirstOrderForm, events, resets, mapping, loads) -> tuple:
+    """The ``event_values``, ``event_gradients`` and ``event_reset`` kernels (g of each event, its partials, the
+    state after it, into `out`) and their source; stubs without events."""
+    reset = event_reset_kernel(tuple(name for name, _ in events), resets, form.n_q + form.n_u, mapping, loads)
     if not events:
-        return (), _NO_EVENTS
+        return (reset,), _NO_EVENTS + kernel_source(reset)
     names = tuple(name for name, _ in events)
     values = _kernel("event_values", f"Event functions g = {names} at one state, into `out`.", ARGS,
                      [(f"out[{i}]", g) for i, (_, g) in enumerate(events)], mapping, loads)
@@ -353,7 +356,8 @@ def _events(form: FirstOrderForm, events, mapping, loads) -> tuple:
         f"`out`: row i is event i, columns ∂g_i/∂y_j (y = (q, u), {size} of them), then ∂g_i/∂t, then ∂g_i/∂p_j.\n"
         "Returns 0.",
         ARGS, stores, mapping, loads)
-    return (values, gradients), _function(values) + _function(gradients, after=["return 0"])
+    return ((values, gradients, reset),
+            _function(values) + _function(gradients, after=["return 0"]) + kernel_source(reset))
 
 
 def _header(name: str, form: FirstOrderForm, reaction_names, kernels) -> str:
@@ -373,10 +377,11 @@ def _header(name: str, form: FirstOrderForm, reaction_names, kernels) -> str:
 
 
 def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), reactions=None,
-              events=()) -> tuple[str, dict]:
+              events=(), resets=()) -> tuple[str, dict]:
     """The module source for a Kane model, and the operation count of each kernel after CSE.
 
-    `events` are (name, g) pairs, g over the plain symbols of `form` (`lagcomp.mechanics.kane.kane_events`).
+    `events` are (name, g) pairs, g over the plain symbols of `form` (`lagcomp.mechanics.kane.kane_events`);
+    `resets` their resets, ((state index, value), ...) per event (`lagcomp.mechanics.kane.kane_resets`).
     The module ends with the equations as LaTeX and text (``EQUATIONS``, `lagcomp.codegen.latex`).
     """
     mapping, loads = _bindings(form, bool(reaction_names))
@@ -390,7 +395,7 @@ def emit_kane(name: str, form: FirstOrderForm, energy=None, reaction_names=(), r
         kernel, source = _reactions(form, reaction_names, reactions, mapping, loads)
         kernels.append(kernel)
         parts.append(source)
-    event_kernels, event_source = _events(form, events, mapping, loads)
+    event_kernels, event_source = _events(form, events, resets or ((),) * len(events), mapping, loads)
     kernels += event_kernels
     parts.append(event_source)
     geometry = no_geometry_kernel()  # a Kane model's bodies are not drawn yet: size 0

@@ -46,6 +46,7 @@ from lagcomp.ir import (
     NO_JACOBIAN,
     AugmentedSolve,
     Delegate,
+    EventResets,
     FlatMatrix,
     JacobianSolve,
     Kernel,
@@ -693,6 +694,25 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping, loads) -> Kernel:
+    """``event_reset(t, y, p, e, out) -> int``: the state just after event e into `out` (size `size`): y, with
+    what e's reset sets (`resets[e]`: ((state index, value over the state before the event), ...)) overwritten.
+    Returns 0.  Shared by the Lagrange and Kane modules (their `mapping` and `loads`)."""
+    branches = tuple(
+        (e, _kernel("event_reset", "", ("t", "y", "p", "e", "out"), [(f"out[{i}]", v) for i, v in reset], mapping,
+                    loads))
+        for e, reset in enumerate(resets) if reset)
+    reset_names = [names[e] for e, _ in branches]
+    doc = (f"The state just after event e into `out`, shape ({size},): `y`, the state just before, with what the\n"
+           f"reset of e sets (events with a reset: {reset_names}; the others leave y as it is). Returns 0.\n"
+           "Drivers pass a p of their own: a reset may one day write mode slots of p.")
+    return Kernel(name="event_reset", doc=doc, args=("t", "y", "p", "e", "out"), loads=(), temps=(), stores=(),
+                  solve=EventResets(size=size, branches=branches),
+                  constants=(("RESET_EVENTS", "The events whose reset event_reset applies (none: the drivers take a "
+                              "library kernel that copies y, which numba has compiled already).",
+                              tuple(reset_names)),))
+
+
 #: Why a module whose events read inputs has no event partials (its ``EVENT_GRADIENTS_REFUSED``).
 EVENTS_WITH_INPUTS_REFUSED = ("events that read inputs: ∂g/∂t would need the inputs' derivatives, which a linear "
                               "table does not have")
@@ -748,7 +768,7 @@ def lower(eom: EOM) -> ModuleIR:
     momenta, and for constrained systems reactions and their Jacobian (`lagcomp.codegen.constrained_jacobian`),
     constraint residuals and matrix, and the DAE's residual and Jacobian; last the bodies' `geometry`
     (`lagcomp.codegen.geometry`)."""
-    n = eom.n
+    n, system = eom.n, eom.system
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
     if eom.k:
@@ -782,6 +802,7 @@ def lower(eom: EOM) -> ModuleIR:
         ),
         _event_kernel(eom, mapping, loads),
         _event_gradients_kernel(eom, mapping, loads),
+        event_reset_kernel(system.event_names, eom.resets, 2 * n, mapping, loads),
         _rest_partials_kernel(eom, mapping, loads),
     ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
     kernels += (geometry_kernel(eom, lambda name, doc, args, stores: _kernel(name, doc, args, stores, mapping, loads)),)

@@ -97,7 +97,12 @@ def tolerances(rtol, atol, m=None) -> tuple[float, float]:
 
 
 def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
-    """``directions`` and ``actions`` (0 off, 1 record, 2 record and stop) of the model's events."""
+    """``directions`` and ``actions`` (0 off, 1 record, 2 record and stop, 3 record and reset the state) of the
+    model's events.
+
+    An event with a reset changes the motion: a method that cannot apply it (`Method.kernels` without
+    ``event_reset``) is refused unless the run leaves the event out by name (``events=False`` or a list).
+    """
     declared = model.events
     if events is None or events is True:
         chosen = [e.name for e in declared] if (m.adaptive or events is True) else []
@@ -114,8 +119,14 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     if chosen and not m.adaptive:
         raise OptionError(f"Events are located on dense output, which {m.name} lacks; use "
                           f"{method_names(lambda m: m.adaptive)}.")
+    resetting = [e.name for e in declared if e.resets and (e.name in chosen or events is None)]
+    if resetting and "event_reset" not in m.kernels:
+        raise OptionError(f"Event(s) {resetting} of {model.name!r} reset the state, which `{m.name}` cannot do; use "
+                          f"{method_names(lambda m: 'event_reset' in m.kernels)}, or leave them out "
+                          "(`events=False`, or the names of the others) to integrate without the resets.")
     directions = np.array([e.direction for e in declared], dtype=np.int64)
-    actions = np.array([(2 if e.terminal else 1) if e.name in chosen else 0 for e in declared], dtype=np.int64)
+    actions = np.array([(3 if e.resets else 2 if e.terminal else 1) if e.name in chosen else 0 for e in declared],
+                       dtype=np.int64)
     return directions, actions
 
 
@@ -196,7 +207,7 @@ class RunOptions:
     t1: float
     save_every: int
     max_steps: int
-    #: (E,) int64 per declared event: its direction, and 0 off, 1 record, 2 record and stop.
+    #: (E,) int64 per declared event: its direction, and 0 off, 1 record, 2 record and stop, 3 record and reset.
     directions: np.ndarray
     actions: np.ndarray
     #: Constrained systems: project onto the constraints after every step (0 or 1).

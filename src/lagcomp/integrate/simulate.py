@@ -25,6 +25,7 @@ from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixErro
 from lagcomp.integrate import sensitivities as sens
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.dae import dae_state, differential_size, refuse_stabilisation
+from lagcomp.integrate.drivers.events import ACTION_RESET
 from lagcomp.integrate.drivers.run_state import STEP, RunState
 from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, run_bytes
@@ -72,11 +73,16 @@ def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions,
     elif m.carry is not None:  # Radau: the count of differential components (all: an ODE), then what it keeps
         tableau_arrays = (*tableau_arrays, differential, *_library_function(m.carry)(state.y.size))
     t1, rtol, atol, max_step = options.t1, options.rtol, options.atol, options.max_step
+    # the drivers that reset also write the states after the events, and keep which events are at their zero
+    resets = "event_reset" in m.kernels
+    buffers = 4 if resets else 3
+    at_zero = (np.zeros(options.directions.size, dtype=np.int64),) if resets else ()
 
     def advance(ts, ys, pause_at, event_buffers, first_call):
         return drivers[first_call](state.y, state.clock, state.counters, p, *run_args, t1, rtol, atol, max_step,
                                    options.max_steps, pause_at, options.save_every, events, ts, ys,
-                                   options.directions, options.actions, *event_buffers, *tableau_arrays)
+                                   options.directions, options.actions, *event_buffers[:buffers], *at_zero,
+                                   *tableau_arrays)
     return advance, (len(events) + 1 if options.t_eval is not None else None)
 
 
@@ -121,6 +127,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     given = model
     model = driven(model, inputs, p, m)  # function inputs: kernels that write their values into p first
     if columns is not None:
+        _refuse_resets_with_sensitivities(model, options)
         sens.check(model, m, options, columns, given)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     if max_residual is not None and not m.checks_residual:
@@ -172,7 +179,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
                residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
     if columns is not None:
         run.update(sensitivities=recorder.sensitivities(), sensitivity_columns=columns, sensitivity_names=columns.names,
-                   event_sensitivities=sens.event_sensitivities(model, p, columns, scale, event_parts))
+                   event_sensitivities=sens.event_sensitivities(model, p, columns, scale,
+                                                                [part[:3] for part in event_parts]))
         recorder = recorder.recorder
     return _solution(model, p, recorder, run, throw)
 
@@ -229,8 +237,9 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
         ts, ys = np.empty(chunk), np.empty((chunk, n))
         while True:
-            event_buffers = (np.empty(max(n_events, 16)), np.empty((max(n_events, 16), n)),
-                             np.empty(max(n_events, 16), dtype=np.int64))
+            rows_e = max(n_events, 16)
+            event_buffers = (np.empty(rows_e), np.empty((rows_e, n)), np.empty(rows_e, dtype=np.int64),
+                             np.full((rows_e, n), np.nan))  # times, states before, events, states after
             state.new_event_buffer()
             started = time.perf_counter()
             steps_before = state.nsteps
@@ -325,19 +334,35 @@ def _redundant_constraints(model, t0: float, y0: np.ndarray, p: np.ndarray) -> l
     return redundant
 
 
+def _refuse_resets_with_sensitivities(model, options: RunOptions) -> None:
+    """Refuse `sensitivities=` on a run whose events reset the state: the jump of the sensitivities at a reset
+    (the saltation matrix) is not computed."""
+    resetting = [e.name for e, action in zip(model.events, options.actions.tolist(), strict=True)
+                 if action == ACTION_RESET]
+    if resetting:
+        raise OptionError(f"`sensitivities=` on a run whose event(s) {resetting} reset the state: the jump of the "
+                          "sensitivities at a reset (its saltation matrix) is not computed yet. Run without "
+                          "`sensitivities`, or leave the events out (`events=False`).")
+
+
 def _event_records(model, event_parts) -> dict:
-    """Occurrences of each declared event: {name: EventRecord(t, q, qd)}, in time order (qd: u of a Kane model)."""
+    """Occurrences of each declared event: {name: EventRecord(t, q, qd, q_after, qd_after)}, in time order (qd: u of a
+    Kane model); the states after are those before for an event without a reset, NaN from a driver that does not
+    write them (radau, whose events cannot reset)."""
     if not model.events:
         return {}
-    n = model.n
+    n, size = model.n, model.state_size
     if event_parts:
-        t_all, y_all, i_all = (np.concatenate(column) for column in zip(*event_parts))
+        t_all, y_all, i_all, after_all = (np.concatenate(column) for column in zip(*event_parts, strict=True))
     else:
-        t_all, y_all, i_all = np.empty(0), np.empty((0, model.state_size)), np.empty(0, dtype=np.int64)
+        t_all, y_all, i_all = np.empty(0), np.empty((0, size)), np.empty(0, dtype=np.int64)
+        after_all = y_all
     records = {}
     for index, event in enumerate(model.events):
         hit = i_all == index
-        records[event.name] = EventRecord(t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:model.state_size])
+        after = after_all[hit, :size] if event.resets else y_all[hit, :size]
+        records[event.name] = EventRecord(t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:size],
+                                          q_after=after[:, :n], qd_after=after[:, n:])
     return records
 
 

@@ -12,14 +12,24 @@ from lagcomp.integrate.status import MESSAGES  # noqa: F401  (re-exported: a fai
 
 @dataclass(frozen=True)
 class EventRecord:
-    """The occurrences of one event: times (k,), and coordinates and velocities (k, n) there."""
+    """The occurrences of one event: times (k,), and coordinates and velocities (k, n) there, just before it
+    (``q``, ``qd``) and just after it (``q_after``, ``qd_after``: the state its reset gave; the same as before
+    for an event without a reset; None in a record built without them)."""
 
     t: np.ndarray
     q: np.ndarray
     qd: np.ndarray
+    q_after: np.ndarray | None = None
+    qd_after: np.ndarray | None = None
 
     def __len__(self) -> int:
         return self.t.shape[0]
+
+    @property
+    def jumps(self) -> bool:
+        """Whether some occurrence changed the state (a reset that moved it)."""
+        return self.q_after is not None and not (np.array_equal(self.q, self.q_after)
+                                                 and np.array_equal(self.qd, self.qd_after))
 
 
 @dataclass(frozen=True)
@@ -229,7 +239,8 @@ class Solution:
             "constraint_residual": np.asarray(self.constraint_residual),
             **{f"reaction_{name}": values for name, values in self.reactions.items()},
             **{f"event_{name}_{part}": getattr(record, part)
-               for name, record in self.events.items() for part in ("t", "q", "qd")},
+               for name, record in self.events.items() for part in ("t", "q", "qd", "q_after", "qd_after")
+               if getattr(record, part) is not None},
             **({"sensitivities": self.sensitivities, "sensitivity_names": np.asarray(self.sensitivity_names)}
                if self.sensitivities is not None else {}),
             **({"reaction_sensitivities": self.reaction_sensitivities}
@@ -244,7 +255,8 @@ class Solution:
         (their names), ``energy`` (T + V), ``energy_function`` (h, only where it differs from T + V) and
         ``reaction_<constraint>`` for each constraint's multiplier (a Kane model's auxiliary reactions by
         name).  Each variable's ``attrs["role"]`` says which it is.  Each event ``<name>`` has its own
-        dimension ``event_<name>`` (its occurrences): ``event_<name>_t`` and ``event_<name>_state``
+        dimension ``event_<name>`` (its occurrences): ``event_<name>_t``, ``event_<name>_state`` and
+        ``event_<name>_state_after`` (the state after it: its reset's)
         (occurrences × ``state``, the coordinates then the velocities, or the speeds of a Kane model).
         A run with sensitivities adds ``sensitivities`` with dims (``t``, ``state``, ``wrt``), ``wrt`` the
         `sensitivity_names`, and for a model with multipliers ``reaction_sensitivities`` with dims (``t``,

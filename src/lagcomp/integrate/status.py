@@ -32,6 +32,8 @@ class Status(enum.IntEnum):
     CONSTRAINTS_NOT_CONVERGED = -8
     NEWTON_FAILED = -9
     ITERATION_MATRIX_SINGULAR = -10
+    RESET_FAILED = -11
+    EVENTS_ACCUMULATED = -12
     BUFFER_FULL = 10
     PAUSED = 11
 
@@ -71,6 +73,12 @@ _MESSAGES = {
                                       "diag(I, 0)) stayed singular down to the smallest step (a degenerate Jacobian "
                                       "J, or constraints that are dependent here): check the model near this "
                                       "state, or use an explicit method (dop853).",
+    Status.RESET_FAILED: "An event's reset gave a non-finite state (or could not be computed): the run stopped at the "
+                         "event, with the state just before it (check the reset's expressions at that state).",
+    Status.EVENTS_ACCUMULATED: "An event with a reset fired again within the smallest step after its last reset: "
+                               "its occurrences accumulate here (a Zeno point, like a bouncing ball's bounces "
+                               "coming to rest); the run stopped at it. Stop the run before, or model the rest "
+                               "that follows (e.g. a terminal event on the rebound speed).",
     Status.BUFFER_FULL: "The output buffer is full: call again with a fresh one.",
     Status.PAUSED: "The call's step budget is used up: call again with a later one.",
 }

@@ -30,6 +30,7 @@ import numpy as np
 from lagcomp.errors import InitialConditionError, OptionError
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
+from lagcomp.integrate.drivers.events import ACTION_RESET
 from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, sweep_bytes
 from lagcomp.integrate.memory import check as check_memory
@@ -315,6 +316,11 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     out = _allocate(n_traj, layout)
     spec = None        # the model's own module; a batched Taylor sweep has a module of its own
     if batched:
+        resetting = [e.name for e, action in zip(model.events, actions.tolist(), strict=True) if action == ACTION_RESET]
+        if resetting:
+            raise OptionError(f"Event(s) {resetting} reset the state, which a batched sweep's lanes cannot do yet: "
+                              "drop `batched` (each trajectory then runs with its own resets), or leave the events "
+                              "out (`events=False`).")
         driver = _batched_driver(model, m)
         if m.adaptive and (rows or want_events):
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "

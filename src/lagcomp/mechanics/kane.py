@@ -202,6 +202,36 @@ def kane_events(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple[tuple
     return tuple(specs), tuple(exprs)
 
 
+def kane_resets(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple:
+    """Per event of `events` (`kane_events`' specs), its reset over the state (q, u) of `form`: ((state index,
+    value), ...), () for none.  The keys are coordinates q(t) or speeds u(t) of `km` (a Kane state holds u, not
+    q̇); the values hold what g may (q, u, q̇ by N, t, the equations' parameters, and by name those `parameters`
+    declares besides), as the state before the event."""
+    plain = _Plain(km)
+    allowed = set(form.q) | set(form.u) | set(form.parameters) | {t}
+    # a parameter only `parameters` declares (a restitution the equations lack) is a plain real symbol: by name
+    declared = {s.name: s for s in form.parameters}
+    index = {f: i for i, f in enumerate([*km.q, *km.u])}
+    resets = []
+    for event in events:
+        reset = []
+        for key, value in event.reset or ():
+            if key not in index:
+                raise ModelError(f"Event `{event.name}`: its reset sets {key}, which is neither a coordinate nor a "
+                                 f"speed of the KanesMethod (q {list(km.q)}, u {list(km.u)}): a Kane model's state is "
+                                 "(q, u), reset its speeds u(t).")
+            v = plain(value, f"the reset of event `{event.name}`")
+            v = v.xreplace({s: declared[s.name] for s in v.free_symbols - allowed if s.name in declared})
+            stray = sorted(str(x) for x in v.free_symbols - allowed)
+            if stray:
+                raise ModelError(f"Event `{event.name}`: its reset of {key} holds {stray}, which are neither "
+                                 "coordinates, speeds, t nor parameters of the KanesMethod's equations "
+                                 f"{[x.name for x in form.parameters]}.")
+            reset.append((index[key], v))
+        resets.append(tuple(reset))
+    return tuple(resets)
+
+
 def acceleration_symbols(form: FirstOrderForm) -> tuple:
     """The symbols standing for u̇ in `auxiliary_reactions` (``_<u>_dot``), in the order of u."""
     return tuple(sp.Symbol(f"_{s.name}_dot", real=True) for s in form.u)

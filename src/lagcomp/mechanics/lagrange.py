@@ -52,6 +52,7 @@ import sympy as sp
 from lagcomp.errors import ModelError, SingularMassMatrixError
 from lagcomp.mechanics.tidy import tidy as _tidy, tidy_small as _tidy_small, tidy_symengine as _tidy_symengine
 from lagcomp.model.constraints import Holonomic
+from lagcomp.model.events import reset_target
 from lagcomp.model.inputs import plain_inputs
 from lagcomp.model.system import System, t
 
@@ -110,6 +111,9 @@ class EOM:
         M q̇ = p − b this is Hamilton's ṗ = −∂H/∂q (+ non-conservative forces).
     events : tuple of Expr
         The event functions g(q, q̇, t) of `System.events`, in order.
+    resets : tuple of tuple
+        Per event, in order, its reset as ((state index, value), ...): index i < n the coordinate q_i,
+        n + i its velocity, the value over the plain symbols of the state before the event; () for none.
     """
 
     system: System
@@ -136,6 +140,7 @@ class EOM:
     momentum_offset: sp.Matrix
     momentum_rate: sp.Matrix
     events: tuple = ()
+    resets: tuple = ()
 
     @property
     def n(self) -> int:
@@ -252,8 +257,17 @@ def derive(system: System) -> EOM:
         energy=energy, energy_function=energy if T1 == 0 and T0 == 0 else _tidy_small(T - T1 - 2 * T0 + V, variables),
         momenta=momenta, cyclic=cyclic,
         separable=separable, holonomic_separable=holonomic_separable, momentum_offset=b, momentum_rate=momentum_rate,
-        events=tuple(plain(e.expr) for e in system.events), **constraints,
+        events=tuple(plain(e.expr) for e in system.events), resets=_resets(system, plain), **constraints,
     )
+
+
+def _resets(system: System, plain) -> tuple:
+    """`EOM.resets`: each event's reset with its keys as state indices, its values in plain symbols."""
+    n, index = system.n, {q: i for i, q in enumerate(system.coordinates)}
+    return tuple(
+        tuple((index[q] + n * order, plain(value)) for (q, order), value in
+              ((reset_target(key), value) for key, value in e.reset or ()))
+        for e in system.events)
 
 
 def _quadratic(coefficient, qd, tidy) -> sp.Expr:

@@ -35,7 +35,7 @@ from lagcomp.model.assemble import assemble
 from lagcomp.model.constraints import Holonomic, Nonholonomic
 from lagcomp.model.frames import as_frame
 from lagcomp.model.inputs import inputs_in, is_input, substitute_laws
-from lagcomp.model.events import Event
+from lagcomp.model.events import Event, reset_role, reset_target
 from lagcomp.model.expressions import expression
 
 #: The time symbol shared with ``sympy.physics.mechanics.dynamicsymbols``.
@@ -289,10 +289,17 @@ class System:
             set_(self, "constraints", tuple(
                 replace(c, **{"Phi" if isinstance(c, Holonomic) else "expr": new[f"constraint {c.name}"]})
                 for c in self.constraints))
-            set_(self, "events", tuple(replace(e, expr=new[f"event {e.name}"]) for e in self.events))
+            set_(self, "events", tuple(replace(e, expr=new[f"event {e.name}"], reset=None if e.reset is None else
+                                               tuple((k, new[reset_role(e, k)]) for k, _ in e.reset))
+                                       for e in self.events))
             if self._written is not None:
                 set_(self, "_written", (self._written[0], (self.T, self.V, forces, self.dissipation)))
         set_(self, "_inputs", inputs_in(self.expressions().values()))
+        for e in self.events:
+            read = inputs_in(value for _, value in e.reset or ())
+            if read:
+                raise ModelError(f"Event `{e.name}`: its reset reads the input {read[0]}, which resets cannot read "
+                                 "yet; write the value from the state, t and parameters, or give the input a law.")
 
     def _check_input_names(self) -> None:
         """Refuse an input named like a coordinate or a parameter, or two inputs of one name: inputs are
@@ -358,6 +365,12 @@ class System:
         repeated = sorted({n for n in names if names.count(n) > 1})
         if repeated:
             raise ModelError(f"Event names must be unique; repeated: {repeated}.")
+        for e in events:
+            for key, _ in e.reset or ():
+                coordinate, _ = reset_target(key)
+                if coordinate not in self.coordinates:
+                    raise ModelError(f"Event `{e.name}`: its reset sets {key}, but {coordinate} is not a coordinate "
+                                     f"of {self.name!r} (coordinates {list(self.coordinate_names)}).")
         return events
 
     def expressions(self) -> dict[str, sp.Expr]:
@@ -366,6 +379,7 @@ class System:
         exprs.update({f"forces[{q.func.__name__}]": Q for q, Q in zip(self.coordinates, self.forces)})
         exprs.update({f"constraint {c.name}": c.expr for c in self.constraints})
         exprs.update({f"event {e.name}": e.expr for e in self.events})
+        exprs.update({reset_role(e, key): value for e in self.events for key, value in e.reset or ()})
         return exprs
 
     @property

@@ -45,7 +45,16 @@ Arguments, after the kernels (`kernel_types`) and before the tableau: the driver
   only when they have room for one row per event.  After each accepted step the events are evaluated
   at its end and each sign change in an event's direction is located on the dense output
   (`lagcomp.integrate.drivers.events`); a terminal event ends the step, and the run, at its time:
-  its state is the last saved row and ``y``, status TERMINATED.
+  its state is the last saved row and ``y``, status TERMINATED.  ``actions`` 3: an event with a reset, which
+  ends the step at its time too; the ``event_reset`` kernel then moves the state, and the run goes on from
+  there: the FSAL stage is evaluated again, the step size kept, and without ``t_eval`` the states before and
+  after are both saved rows at that time.  ``ev_y_after`` (cap_e, N) gets each event row's state after the
+  event (the reset's, or the row's own); a reset whose state is not finite ends the run at the event,
+  RESET_FAILED, with the state before it.  ``at_zero`` int64[E], kept by the caller across its calls (zeros
+  at the start), marks the events that start the next step at their zero, just after their reset
+  (`lagcomp.integrate.drivers.events.reset_state`): that step is at most the one cut at the event, and
+  samples them densely (`restart_brackets`); one of them firing again within the smallest step ends the
+  run there, EVENTS_ACCUMULATED (a Zeno point);
 
 It returns ``(status, n_saved)``, status a `Status`: DONE at ``t_end``; BUFFER_FULL or PAUSED: call
 again (with a fresh output buffer, a later ``pause_at``), and the continuation is identical to an
@@ -167,12 +176,19 @@ import numpy as np
 from numba import njit
 
 from lagcomp.integrate.drivers.events import (
+    ACTION_RESET,
     DENSE_CONTD8,
+    copy_rows,
     dense_state,
     event_crossings,
-    record_events,
+    record_events_between,
+    reset_state,
+    resetting_event,
+    restart_brackets,
+    step_brackets,
 )
 from lagcomp.integrate.drivers.kernel_types import (
+    EVENT_RESET,
     EVENTS,
     FLOAT,
     INDICES,
@@ -222,16 +238,16 @@ STIFFNESS_TEST_EVERY, STIFF_TESTS_TO_DECLARE, CALM_TESTS_TO_RESET = 100, 15, 6
 #: dense_kind, dense_weights, extra_A, extra_C, stiffness_bound.
 TABLEAU = (MATRIX, VECTOR, VECTOR, MATRIX, INT, FLOAT, INT, MATRIX, MATRIX, VECTOR, FLOAT)
 
-SIGNATURE = OUTCOME(RHS, PROJECT, RESIDUAL, EVENTS,
+SIGNATURE = OUTCOME(RHS, PROJECT, RESIDUAL, EVENTS, EVENT_RESET,
                     VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, INT,
-                    VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX, INDICES,
+                    VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX, INDICES, MATRIX, INDICES,
                     *TABLEAU)
 
 
 @njit(SIGNATURE, cache=True, error_model="numpy", nogil=True)
-def embedded_run(rhs, project, constraint_residual, event_values,
+def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                  y, clock, counters, p, projecting, residual_max, t_end, rtol, atol, max_step, max_steps, pause_at,
-                 save_every, t_eval, ts, ys, directions, actions, ev_t, ev_y, ev_i,
+                 save_every, t_eval, ts, ys, directions, actions, ev_t, ev_y, ev_i, ev_y_after, at_zero,
                  A, B, C, error_weights, error_norm, error_exponent, dense_kind, dense_weights, extra_A, extra_C,
                  stiffness_bound):
     """Integrate from (clock[0], y) towards t_end with the embedded pair given by the tableau arguments.
@@ -261,6 +277,15 @@ def embedded_run(rhs, project, constraint_residual, event_values,
     g_work = np.empty(n_events)
     crossed = np.zeros(n_events, dtype=np.bool_)
     crossing_times = np.empty(n_events)
+    starts = np.empty(n_events)         # each event's bracket in the step (`restart_brackets`)
+    g_start = np.empty(n_events)
+    ends = np.empty(n_events)
+    g_end = np.empty(n_events)
+    side = np.empty(n_events)
+    rows_at_event = 1                   # output rows an event's step may add: 2 with a reset (before, after)
+    for e in range(n_events):
+        if actions[e] == ACTION_RESET:
+            rows_at_event = 2
 
     # The stiffness test, until the run is declared stiff; never with state arrays of another layout
     # (callers from before its slots existed), whose slots it would write past.
@@ -283,6 +308,9 @@ def embedded_run(rhs, project, constraint_residual, event_values,
     counters[NFEV] += 1
     if n_events > 0:
         event_values(t, y, p, g_old)
+        for e in range(n_events):
+            if at_zero[e] != 0:         # just after its reset (a call before this one): at its zero
+                g_old[e] = 0.0
     if status == 0:
         for i in range(n):
             if not (np.isfinite(y[i]) and np.isfinite(K[0, i])):
@@ -367,8 +395,8 @@ def embedded_run(rhs, project, constraint_residual, event_values,
             return Status.BUFFER_FULL, n_saved
         if counters[EVENT_ROWS] + n_events > ev_t.shape[0]:
             return Status.BUFFER_FULL, n_saved
-        if n_events > 0 and not use_t_eval and n_saved >= cap:
-            return Status.BUFFER_FULL, n_saved    # a terminal event saves its row
+        if n_events > 0 and not use_t_eval and n_saved + rows_at_event > cap:
+            return Status.BUFFER_FULL, n_saved    # a terminal event saves its row, a reset two
 
         # Trial loop: shrink until the error estimate is acceptable.
         step_rejected = False
@@ -552,11 +580,15 @@ def embedded_run(rhs, project, constraint_residual, event_values,
         # it (first the extra stages K[n_k ..] (jj: stage index; j is the t_eval index), then the
         # rows F); a terminal event cuts the step short.
         n_crossed = 0
+        restarting = False              # some event starts the step at its zero, after its reset
         if n_events > 0:
             event_values(t_new, y_new, p, g_new)
             n_crossed = event_crossings(g_old, g_new, directions, actions, crossed)
+            for e in range(n_events):
+                if at_zero[e] != 0:
+                    restarting = True
         j = counters[NEXT_EVAL]
-        if n_crossed > 0 or (use_t_eval and j < n_eval and t_eval[j] < t_new):
+        if n_crossed > 0 or restarting or (use_t_eval and j < n_eval and t_eval[j] < t_new):
             for s in range(n_k, n_all):
                 row = s - n_k
                 for i in range(n):
@@ -594,13 +626,26 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                     for i in range(n):
                         F[r, i] *= h
         stop = False
+        accumulated = False  # an event with a reset fired again less than the smallest step after its last reset
+        reset = -1          # the event whose reset ends the step, if one does
+        first_row = counters[EVENT_ROWS]
+        if n_crossed > 0 or restarting:
+            step_brackets(t, h, g_old, g_new, starts, g_start, ends, g_end)
+        if restarting:
+            n_crossed += restart_brackets(event_values, dense_kind, F, y, t, h, p, at_zero, g_new, directions, actions,
+                                          crossed, starts, g_start, ends, g_end, side, ytmp, g_work)
         if n_crossed > 0:
-            n_recorded, t_stop = record_events(event_values, dense_kind, F, y, t, h, p, g_old, g_new, crossed,
-                                               actions, crossing_times, ev_t, ev_y, ev_i, counters[EVENT_ROWS], ytmp,
-                                               g_work)
+            n_recorded, t_stop = record_events_between(event_values, dense_kind, F, y, t, h, p, starts, g_start, ends,
+                                                       g_end, crossed, actions, crossing_times, ev_t, ev_y, ev_i,
+                                                       first_row, ytmp, g_work)
             counters[EVENT_ROWS] = n_recorded
+            copy_rows(ev_y, ev_y_after, first_row, n_recorded)
             if t_stop < np.inf:
-                stop = True
+                reset = resetting_event(ev_t, ev_i, actions, first_row, n_recorded, t_stop)
+                if reset >= 0 and at_zero[reset] != 0 and t_stop - t < min_step:
+                    accumulated = True
+                    reset = -1
+                stop = reset < 0
                 t_new = t_stop
                 dense_state(dense_kind, F, y, t, h, t_stop, y_new)
 
@@ -623,12 +668,39 @@ def embedded_run(rhs, project, constraint_residual, event_values,
                 return Status.BUFFER_FULL, n_saved
         else:
             counters[SINCE_SAVE] += 1
-            if counters[SINCE_SAVE] >= save_every or t_new >= t_end or stop:
+            if counters[SINCE_SAVE] >= save_every or t_new >= t_end or stop or reset >= 0:
                 ts[n_saved] = t_new
                 for i in range(n):
                     ys[n_saved, i] = y_new[i]
                 n_saved += 1
                 counters[SINCE_SAVE] = 0
+
+        # A reset: the state jumps at t_new (the event's time, where the step ended); the state after it is a
+        # second row at that time.  The FSAL stage no longer holds: evaluated again (below, or after the
+        # projection), and the events' values are those after the reset (`reset_state`).
+        if reset >= 0:
+            status = reset_state(event_reset, event_values, t_new, y_new, p, reset, ytmp, g_old, g_work, ev_t, ev_i,
+                                 ev_y_after, first_row, counters[EVENT_ROWS], at_zero)
+            if status != 0:         # the run ends at the event, with the state just before it
+                for i in range(n):
+                    y[i] = y_new[i]
+                clock[TIME] = t_new
+                counters[NSTEPS] += 1
+                return Status.RESET_FAILED, n_saved
+            if not use_t_eval:
+                ts[n_saved] = t_new
+                for i in range(n):
+                    ys[n_saved, i] = y_new[i]
+                n_saved += 1
+            if not projecting:
+                status = rhs(t_new, y_new, p, K[n_stages])
+                counters[NFEV] += 1
+                if status != 0:
+                    return Status.RHS_FAILED, n_saved
+            # The next step at most the one cut at the event: the motion after a reset has nothing to do with
+            # the step the controller proposed from the motion before (a bounce's next flight is e times the
+            # last one, which this step covered at most); `restart_brackets` then samples it.
+            h_abs = min(h_abs, t_new - t)
 
         # Projection onto the constraints, after the outputs (the dense output interpolates the step
         # as computed); the FSAL stage is then evaluated again at the projected state.
@@ -651,6 +723,9 @@ def embedded_run(rhs, project, constraint_residual, event_values,
         clock[TIME] = t
         clock[STEP] = h_abs
         counters[NSTEPS] += 1
+        if reset < 0:
+            for e in range(n_events):
+                at_zero[e] = 0
         if h_lambda > stiffness_bound:          # (false for NaN)
             counters[NONSTIFF_TESTS] = 0
             counters[STIFF_TESTS] += 1
@@ -665,8 +740,8 @@ def embedded_run(rhs, project, constraint_residual, event_values,
         if residual > residual_bound:
             return Status.RESIDUAL_EXCEEDED, n_saved
         if stop:
-            return Status.TERMINATED, n_saved
-        if n_events > 0:
+            return (Status.EVENTS_ACCUMULATED if accumulated else Status.TERMINATED), n_saved
+        if n_events > 0 and reset < 0:
             if projecting:
                 event_values(t, y, p, g_old)
             else:

@@ -16,6 +16,7 @@ from numba.core.errors import NumbaExperimentalFeatureWarning
 from lagcomp.integrate.drivers.embedded import TABLEAU, embedded_run
 from lagcomp.integrate.drivers.kernel_types import (
     ENERGY,
+    EVENT_RESET,
     EVENTS,
     FLOAT,
     INDICES,
@@ -45,14 +46,14 @@ from lagcomp.integrate.status import Status
 #: The column of ``counts`` that holds the step at which a trajectory was declared stiff.
 STIFF_COLUMN = 3
 
-SWEEP_SIGNATURE = types.none(RHS, PROJECT, RESIDUAL, EVENTS, ENERGY,
+SWEEP_SIGNATURE = types.none(RHS, PROJECT, RESIDUAL, EVENTS, EVENT_RESET, ENERGY,
                              MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean,
                              INDICES, INDICES, MATRIX, VECTOR, INDICES, types.int64[:, ::1], types.float64[:, :, ::1],
                              MATRIX, types.int64[:, ::1], types.float64[:, :, ::1], types.float64[:, :, :, ::1],
                              *TABLEAU)
 
 
-def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
+def sweep_embedded(rhs, project, constraint_residual, event_values, event_reset, energy,
                    Y0, P, projecting, t0, t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial,
                    directions, actions, final, t_final, status, counts, dense, energy_stats,
                    event_count, event_t, event_y,
@@ -72,14 +73,16 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
       with the initial state first when ``save_initial``); m = 0 when not wanted;
     * ``energy_stats[k]`` = [E0, largest |E - E0| over the saved rows], E = ``energy`` (T + V);
     * ``event_count[k]`` (E,) occurrences of each event, the first ``cap`` of them in
-      ``event_t[k]`` (E, cap) and ``event_y[k]`` (E, cap, 2n).
+      ``event_t[k]`` (E, cap) and ``event_y[k]`` (E, cap, 2n) (the states just before them).
+
+    Each trajectory runs with a copy of its row of ``P``: a reset may one day write mode slots of its p.
     """
     n_traj = Y0.shape[0]
     n2 = Y0.shape[1]
     n_events = directions.shape[0]
     for k in range(n_traj):
         y = Y0[k].copy()
-        p = P[k]
+        p = P[k].copy()
         clock = np.zeros(CLOCK_SLOTS)
         clock[TIME] = t0
         counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
@@ -90,6 +93,8 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
         ev_t = np.empty(rows_e)
         ev_y = np.empty((rows_e, n2))
         ev_i = np.empty(rows_e, dtype=np.int64)
+        ev_y_after = np.empty((rows_e, n2))
+        at_zero = np.zeros(n_events, dtype=np.int64)
         e0 = energy(t0, y, p)
         deviation = 0.0
         row = 0
@@ -101,10 +106,10 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, energy,
             event_count[k, e] = 0
         while True:
             counters[EVENT_ROWS] = 0
-            code, n_saved = embedded_run(rhs, project, constraint_residual, event_values,
+            code, n_saved = embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                                          y, clock, counters, p, projecting, residual, t_end, rtol, atol, max_step,
                                          max_steps, NO_PAUSE, save_every, t_eval, ts, ys,
-                                         directions, actions, ev_t, ev_y, ev_i,
+                                         directions, actions, ev_t, ev_y, ev_i, ev_y_after, at_zero,
                                          A, B, C, error_weights, error_norm, error_exponent, dense_kind,
                                          dense_weights, extra_A, extra_C, stiffness_bound)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)

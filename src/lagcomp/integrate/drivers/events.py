@@ -3,7 +3,8 @@
 After each accepted step a driver evaluates the model's ``event_values`` kernel at the step's end;
 `event_crossings` flags the events whose sign changed in their direction, `record_events` locates
 each crossing on the step's interpolant (`dense_state`) by Brent's method (`event_root`) and
-records them in time order; a terminal event cuts the step short at its time.
+records them in time order; a terminal event cuts the step short at its time, and so does an event with a
+reset (`reset_state` then moves the state, and the run goes on from there).
 
 These are helpers of the drivers, typed at their call sites: numba compiles them into each
 driver that calls them, and caches them with it.
@@ -17,8 +18,9 @@ from numba import njit
 #: How a driver's dense output ``F`` is laid out (`dense_state`): the Taylor series, powers of the
 #: step fraction (DOPRI5, Tsit5, BS3), DOP853's ``contd8`` rows.
 DENSE_SERIES, DENSE_POWERS, DENSE_CONTD8 = 0, 1, 2
-#: ``actions[e]``: 0 ignores event e, 1 records its crossings, 2 records them and stops the run.
-ACTION_IGNORE, ACTION_RECORD, ACTION_TERMINAL = 0, 1, 2
+#: ``actions[e]``: 0 ignores event e, 1 records its crossings, 2 records them and stops the run, 3 records
+#: them and applies its reset (the model's ``event_reset``) at the first, after which the run goes on.
+ACTION_IGNORE, ACTION_RECORD, ACTION_TERMINAL, ACTION_RESET = 0, 1, 2, 3
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -152,14 +154,27 @@ def record_events(event_values, kind, F, y, t, h, p, g_old, g_new, crossed, acti
 
     Writes times, states and event indices to ``te``/``ye``/``ie`` from row
     ``n_recorded`` (the caller made room for one row per event).  Events
-    after the first terminal one are dropped.  Returns the new row count and
-    the time of the terminal event (inf when none fired).
+    after the first terminal or resetting one are dropped (a reset changes
+    what follows).  Returns the new row count and the time of that event
+    (inf when none fired).
     """
     n_events = g_old.shape[0]
+    return record_events_between(event_values, kind, F, y, t, h, p, np.full(n_events, t), g_old,
+                                 np.full(n_events, t + h), g_new, crossed, actions, times, te, ye, ie, n_recorded,
+                                 ywork, gwork)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def record_events_between(event_values, kind, F, y, t, h, p, starts, g_start, ends, g_end, crossed, actions, times,
+                          te, ye, ie, n_recorded, ywork, gwork):
+    """`record_events` with each flagged event's crossing bracketed by its own times inside the step: between
+    ``starts[e]`` and ``ends[e]``, where g is ``g_start[e]`` and ``g_end[e]`` (of opposite signs)."""
+    n_events = g_start.shape[0]
     for e in range(n_events):
         times[e] = np.inf
         if crossed[e]:
-            times[e] = event_root(event_values, kind, F, y, t, h, p, e, t, g_old[e], t + h, g_new[e], ywork, gwork)
+            times[e] = event_root(event_values, kind, F, y, t, h, p, e, starts[e], g_start[e], ends[e], g_end[e],
+                                  ywork, gwork)
     t_stop = np.inf
     while True:
         first = -1
@@ -172,7 +187,139 @@ def record_events(event_values, kind, F, y, t, h, p, g_old, g_new, crossed, acti
         dense_state(kind, F, y, t, h, times[first], ye[n_recorded])
         ie[n_recorded] = first
         n_recorded += 1
-        if actions[first] == ACTION_TERMINAL:
+        if actions[first] >= ACTION_TERMINAL:
             t_stop = times[first]
         times[first] = np.inf
     return n_recorded, t_stop
+
+
+#: Points per step at which an event that starts the step at its zero is sampled (`restart_brackets`): at
+#: h 2^-k, k = RESTART_SAMPLES - 1 .. 0, the first at h/2048.
+RESTART_SAMPLES = 12
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def step_brackets(t, h, g_old, g_new, starts, g_start, ends, g_end):
+    """Every event's bracket: the whole step (t, t + h), g from ``g_old`` to ``g_new``."""
+    for e in range(g_old.shape[0]):
+        starts[e] = t
+        g_start[e] = g_old[e]
+        ends[e] = t + h
+        g_end[e] = g_new[e]
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def restart_brackets(event_values, kind, F, y, t, h, p, at_zero, g_new, directions, actions, crossed, starts,
+                     g_start, ends, g_end, side, ywork, gwork):
+    """Crossings of the events that start the step (t, t + h) at their zero (``at_zero[e]``: the state just after
+    their reset), flagged in ``crossed`` with their brackets; returns their count.
+
+    That zero does not count, but g may leave it and come back within the step (a bouncing ball's whole flight,
+    in one step of a method whose step the flight does not limit: a parabola is a Taylor series' best case), a
+    crossing the signs at the step's ends do not show.  g is sampled on the dense output at `RESTART_SAMPLES`
+    points, dense near the start (t + h 2^-k: the step after a reset is the step before it, kept, often long
+    against the motion that follows): the first sign change after g left 0 in the event's direction is bracketed
+    by the samples around it.  A return to 0 before the first sample (h/2048) is still missed.  ``side`` (E,)
+    is work space.
+    """
+    n_events = g_new.shape[0]
+    count = 0
+    for e in range(n_events):
+        side[e] = 0.0                   # the sign of g once it left its zero (0: not yet)
+    for j in range(RESTART_SAMPLES - 1, -1, -1):
+        if j > 0:
+            tau = t + h * 2.0 ** -j
+            dense_state(kind, F, y, t, h, tau, ywork)
+            event_values(tau, ywork, p, gwork)
+        else:
+            tau = t + h
+            for e in range(n_events):
+                gwork[e] = g_new[e]
+        for e in range(n_events):
+            if at_zero[e] == 0 or actions[e] == ACTION_IGNORE or crossed[e]:
+                continue
+            v = gwork[e]
+            if side[e] != 0.0 and (v <= 0.0 if side[e] > 0.0 else v >= 0.0):
+                up = side[e] < 0.0
+                if (up and directions[e] >= 0) or (not up and directions[e] <= 0):
+                    crossed[e] = True
+                    ends[e] = tau
+                    g_end[e] = v
+                    count += 1
+                    continue
+            if v != 0.0:
+                side[e] = 1.0 if v > 0.0 else -1.0
+                starts[e] = tau
+                g_start[e] = v
+    return count
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def resetting_event(te, ie, actions, first_row, n_rows, t_stop):
+    """The event whose reset acts at ``t_stop``, from the rows ``first_row`` to ``n_rows`` a step recorded: the
+    first at that time with a reset; -1 when a terminal event fired then too (the run stops instead)."""
+    found = -1
+    for r in range(first_row, n_rows):
+        if te[r] == t_stop:
+            action = actions[ie[r]]
+            if action == ACTION_TERMINAL:
+                return -1
+            if action == ACTION_RESET and found < 0:
+                found = ie[r]
+    return found
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def reset_state(event_reset, event_values, t, y, p, e, work, g_old, g_work, te, ie, ye_after, first_row, n_rows,
+                at_zero):
+    """Apply the reset of event ``e`` at time ``t`` to ``y`` in place; the events' values there into ``g_old``.
+
+    The rows ``first_row`` to ``n_rows`` the step recorded get their state after the event in ``ye_after``:
+    the state after the reset for the rows at ``t``, their own state (``ye``, already copied there) for the
+    others.  An event recorded at ``t`` whose g the reset leaves as it was starts the next step at 0 exactly
+    (``at_zero[e]`` = 1, which the caller keeps across its calls until the next step is committed), so that its
+    zero there, a few roundings off 0 on either side, does not count again (the bouncing ball's height after
+    an impact: ±1e-17, growing); `restart_brackets` then watches it.  Returns 0; the kernel's status k > 0;
+    or -1 when the state after the reset is not finite (``y`` is then left as it was).
+    """
+    n = y.shape[0]
+    event_values(t, y, p, g_work)
+    status = event_reset(t, y, p, e, work)
+    if status != 0:
+        return status
+    for i in range(n):
+        if not np.isfinite(work[i]):
+            return -1
+    for i in range(n):
+        y[i] = work[i]
+    for r in range(first_row, n_rows):
+        if te[r] == t:
+            for i in range(n):
+                ye_after[r, i] = y[i]
+    event_values(t, y, p, g_old)
+    for ev in range(g_old.shape[0]):
+        at_zero[ev] = 0
+    for r in range(first_row, n_rows):
+        if te[r] == t and g_old[ie[r]] == g_work[ie[r]]:
+            g_old[ie[r]] = 0.0
+            at_zero[ie[r]] = 1
+    return 0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def unchanged_state(t, y, p, e, out):
+    """An ``event_reset`` kernel for models none of whose events resets the state: ``out`` = ``y``, 0.  The
+    drivers take it instead of the module's own (`lagcomp.integrate.methods.Method.bound_driver`), so that a new
+    model's first run does not wait for numba to compile a kernel that no event uses."""
+    for i in range(y.shape[0]):
+        out[i] = y[i]
+    return 0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def copy_rows(source, target, first_row, n_rows):
+    """``target[r] = source[r]`` for the rows ``first_row`` to ``n_rows`` (the state after an event without a reset
+    is the state at it)."""
+    for r in range(first_row, n_rows):
+        for i in range(source.shape[1]):
+            target[r, i] = source[r, i]

@@ -48,13 +48,20 @@ import numpy as np
 from numba import njit, types
 
 from lagcomp.integrate.drivers.events import (
+    ACTION_RESET,
     DENSE_SERIES,
+    copy_rows,
     dense_state,
     event_crossings,
-    record_events,
+    record_events_between,
+    reset_state,
+    resetting_event,
+    restart_brackets,
+    step_brackets,
 )
 from lagcomp.integrate.drivers.kernel_types import (
     ENERGY,
+    EVENT_RESET,
     EVENTS,
     FLOAT,
     INDICES,
@@ -84,12 +91,12 @@ from lagcomp.integrate.drivers.sweep_rows import (
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.angles import reduced_angle
 
-#: taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock, counters, p, projecting,
+#: taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_rows, y, clock, counters, p, projecting,
 #: residual_max, t_end, rtol, atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys, directions,
-#: actions, ev_t, ev_y, ev_i, carry)
-SIGNATURE = OUTCOME(TAYLOR, EVENTS, INDICES, INT, VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT,
-                    FLOAT, FLOAT, INT, INT, INT, VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX, INDICES,
-                    VECTOR)
+#: actions, ev_t, ev_y, ev_i, ev_y_after, at_zero, carry)
+SIGNATURE = OUTCOME(TAYLOR, EVENTS, EVENT_RESET, INDICES, INT, VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT,
+                    FLOAT, FLOAT, FLOAT, INT, INT, INT, VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX,
+                    INDICES, MATRIX, INDICES, VECTOR)
 
 
 def taylor_order(rtol: float, atol: float) -> int:
@@ -98,12 +105,12 @@ def taylor_order(rtol: float, atol: float) -> int:
 
 
 @njit(SIGNATURE, cache=True, error_model="numpy", nogil=True)
-def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock, counters, p, projecting,
+def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_rows, y, clock, counters, p, projecting,
                residual_max, t_end, rtol, atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
-               directions, actions, ev_t, ev_y, ev_i, carry):
+               directions, actions, ev_t, ev_y, ev_i, ev_y_after, at_zero, carry):
     """Adaptive Taylor method of order p = ceil(−½ ln min(rtol, atol) + 1); see the module docstring.
 
-    ``taylor_coefficients`` and ``event_values`` are the model's kernels, ``periodic`` (int64, the
+    ``taylor_coefficients``, ``event_values`` and ``event_reset`` are the model's kernels, ``periodic`` (int64, the
     state indices reduced to [−π, π]) and ``work_rows`` its ``TAYLOR_PERIODIC`` and ``TAYLOR_WORK``.
     The other arguments, statuses and resuming are those of the embedded Runge-Kutta driver
     (`lagcomp.integrate.drivers`: the protocol); ``projecting`` and ``residual_max`` are unused (the
@@ -131,6 +138,15 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
     y_work = np.empty(n)
     crossed = np.zeros(n_events, dtype=np.bool_)
     crossing_times = np.empty(n_events)
+    starts = np.empty(n_events)         # each event's bracket in the step (`restart_brackets`)
+    g_start = np.empty(n_events)
+    ends = np.empty(n_events)
+    g_end = np.empty(n_events)
+    side = np.empty(n_events)
+    rows_at_event = 1                   # output rows an event's step may add: 2 with a reset (before, after)
+    for e in range(n_events):
+        if actions[e] == ACTION_RESET:
+            rows_at_event = 2
 
     n_saved = 0
     t = clock[TIME]
@@ -138,8 +154,13 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
         return Status.DONE, n_saved
     while counters[NEXT_EVAL] < n_eval and t_eval[counters[NEXT_EVAL]] <= t:
         counters[NEXT_EVAL] += 1
+    h_limit = np.inf                    # the step just after a reset: at most the one cut at the event
     if n_events > 0:
         event_values(t, y, p, g_old)
+        for e in range(n_events):
+            if at_zero[e] != 0:         # just after its reset (a call before this one): at its zero
+                g_old[e] = 0.0
+                h_limit = clock[STEP]
 
     while True:
         if t >= t_end:
@@ -173,8 +194,11 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
             return Status.NONFINITE, n_saved
         scale = 1.0 if rtol * norm_y <= atol else norm_y
         rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
-        h = min(rho * rho_factor, max_step)     # inf when both coefficients vanish
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        # inf when both coefficients vanish; after a reset at most the step cut at it, and at least min_step (the
+        # event may have been at the very start of that step)
+        h = min(rho * rho_factor, max_step, max(h_limit, min_step))
+        h_limit = np.inf
         if not h >= min_step:                   # (true for NaN)
             return Status.STEP_TOO_SMALL if h < min_step else Status.NONFINITE, n_saved
         t_new = t + h
@@ -196,8 +220,8 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
             return Status.BUFFER_FULL, n_saved
         if counters[EVENT_ROWS] + n_events > ev_t.shape[0]:
             return Status.BUFFER_FULL, n_saved
-        if n_events > 0 and not use_t_eval and n_saved >= cap:
-            return Status.BUFFER_FULL, n_saved    # a terminal event saves its row
+        if n_events > 0 and not use_t_eval and n_saved + rows_at_event > cap:
+            return Status.BUFFER_FULL, n_saved    # a terminal event saves its row, a reset two
 
         # The new state: the series at h (Horner), its increment added with compensation.
         for i in range(n):
@@ -211,15 +235,33 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
                 return Status.NONFINITE, n_saved
 
         stop = False
+        accumulated = False  # an event with a reset fired again less than the smallest step after its last reset
+        reset = -1          # the event whose reset ends the step, if one does
+        first_row = counters[EVENT_ROWS]
         if n_events > 0:
             event_values(t_new, y_new, p, g_new)
-            if event_crossings(g_old, g_new, directions, actions, crossed) > 0:
-                n_recorded, t_stop = record_events(event_values, DENSE_SERIES, X, y, t, h, p, g_old, g_new, crossed,
-                                                   actions, crossing_times, ev_t, ev_y, ev_i, counters[EVENT_ROWS],
-                                                   y_work, g_work)
+            n_crossed = event_crossings(g_old, g_new, directions, actions, crossed)
+            restarting = False          # some event starts the step at its zero, after its reset
+            for e in range(n_events):
+                if at_zero[e] != 0:
+                    restarting = True
+            if n_crossed > 0 or restarting:
+                step_brackets(t, h, g_old, g_new, starts, g_start, ends, g_end)
+            if restarting:
+                n_crossed += restart_brackets(event_values, DENSE_SERIES, X, y, t, h, p, at_zero, g_new, directions,
+                                              actions, crossed, starts, g_start, ends, g_end, side, y_work, g_work)
+            if n_crossed > 0:
+                n_recorded, t_stop = record_events_between(event_values, DENSE_SERIES, X, y, t, h, p, starts, g_start,
+                                                           ends, g_end, crossed, actions, crossing_times, ev_t, ev_y,
+                                                           ev_i, first_row, y_work, g_work)
                 counters[EVENT_ROWS] = n_recorded
+                copy_rows(ev_y, ev_y_after, first_row, n_recorded)
                 if t_stop < np.inf:
-                    stop = True
+                    reset = resetting_event(ev_t, ev_i, actions, first_row, n_recorded, t_stop)
+                    if reset >= 0 and at_zero[reset] != 0 and t_stop - t < min_step:
+                        accumulated = True
+                        reset = -1
+                    stop = reset < 0
                     t_new = t_stop
                     dense_state(DENSE_SERIES, X, y, t, h, t_stop, y_new)
                     for i in range(n):
@@ -248,12 +290,26 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
                 return Status.BUFFER_FULL, n_saved    # more points in one step than a whole buffer
         else:
             counters[SINCE_SAVE] += 1
-            if counters[SINCE_SAVE] >= save_every or t_new >= t_end or stop:
+            if counters[SINCE_SAVE] >= save_every or t_new >= t_end or stop or reset >= 0:
                 ts[n_saved] = t_new
                 for i in range(n):
                     ys[n_saved, i] = y_new[i]
                 n_saved += 1
                 counters[SINCE_SAVE] = 0
+
+        # A reset (as in the embedded Runge-Kutta driver): the state jumps at the event's time, where the step
+        # ended; without t_eval the state after it is a second row at that time.
+        failed = False
+        if reset >= 0:
+            failed = reset_state(event_reset, event_values, t_new, y_new, p, reset, y_work, g_old, g_work, ev_t,
+                                 ev_i, ev_y_after, first_row, counters[EVENT_ROWS], at_zero) != 0
+            if not (failed or use_t_eval):
+                ts[n_saved] = t_new
+                for i in range(n):
+                    ys[n_saved, i] = y_new[i]
+                n_saved += 1
+            h = t_new - t               # the next step at most this one (the embedded driver says why)
+            h_limit = h
 
         # Commit the step.
         for i in range(n):
@@ -262,25 +318,31 @@ def taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock,
         clock[TIME] = t
         clock[STEP] = h
         counters[NSTEPS] += 1
+        if reset < 0:
+            for e in range(n_events):
+                at_zero[e] = 0
         if stop:
-            return Status.TERMINATED, n_saved
-        for ev in range(n_events):
-            g_old[ev] = g_new[ev]
+            return (Status.EVENTS_ACCUMULATED if accumulated else Status.TERMINATED), n_saved
+        if failed:
+            return Status.RESET_FAILED, n_saved    # at the event, with the state just before it
+        if reset < 0:
+            for ev in range(n_events):
+                g_old[ev] = g_new[ev]
 
 
-#: sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy, Y0, P, projecting, t0, t_end,
-#: rtol, atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
+#: sweep_taylor(taylor_coefficients, event_values, event_reset, periodic, work_rows, energy, Y0, P, projecting, t0,
+#: t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
 #: status, counts, dense, energy_stats, event_count, event_t, event_y, carry)
-SWEEP_SIGNATURE = types.none(TAYLOR, EVENTS, INDICES, INT, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT,
-                             FLOAT, INT, INT, VECTOR, types.boolean, INDICES, INDICES, MATRIX, VECTOR, INDICES,
-                             types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, types.int64[:, ::1],
+SWEEP_SIGNATURE = types.none(TAYLOR, EVENTS, EVENT_RESET, INDICES, INT, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT,
+                             FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean, INDICES, INDICES, MATRIX, VECTOR,
+                             INDICES, types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, types.int64[:, ::1],
                              types.float64[:, :, ::1], types.float64[:, :, :, ::1], VECTOR)
 
 
 @njit(SWEEP_SIGNATURE, cache=True, error_model="numpy", nogil=True)
-def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy, Y0, P, projecting, t0, t_end, rtol,
-                 atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
-                 status, counts, dense, energy_stats, event_count, event_t, event_y, carry):
+def sweep_taylor(taylor_coefficients, event_values, event_reset, periodic, work_rows, energy, Y0, P, projecting, t0,
+                 t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final,
+                 t_final, status, counts, dense, energy_stats, event_count, event_t, event_y, carry):
     """Trajectory k from (t0, Y0[k]) with parameters P[k] to t_end by `taylor_run`, for every k.
 
     The outputs of a sweep (`lagcomp.integrate.sweep`): ``final`` (N, 2n), ``t_final``, ``status``,
@@ -288,7 +350,8 @@ def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy,
     ``save_initial`` says whether t0 is one too); ``energy_stats`` (N, 2) the initial energy and the
     largest |E − E₀| over the saved rows; ``event_count`` (N, E) and the first occurrences in ``event_t``
     (N, E, cap) and ``event_y`` (N, E, cap, 2n).  ``carry`` is the carry `taylor_run` takes
-    (empty: it restarts with each call).  The trajectories release the GIL: the caller runs disjoint
+    (empty: it restarts with each call).  Each trajectory runs with a copy of its row of ``P`` (a reset may one
+    day write mode slots of its p).  The trajectories release the GIL: the caller runs disjoint
     row ranges on several threads.
     """
     n_traj = Y0.shape[0]
@@ -296,7 +359,7 @@ def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy,
     n_events = directions.shape[0]
     for k in range(n_traj):
         y = Y0[k].copy()
-        p = P[k]
+        p = P[k].copy()
         clock = np.zeros(2)
         clock[TIME] = t0
         counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
@@ -307,6 +370,8 @@ def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy,
         ev_t = np.empty(rows_e)
         ev_y = np.empty((rows_e, n2))
         ev_i = np.empty(rows_e, dtype=np.int64)
+        ev_y_after = np.empty((rows_e, n2))
+        at_zero = np.zeros(n_events, dtype=np.int64)
         e0 = energy(t0, y, p)
         deviation = 0.0
         row = 0
@@ -318,10 +383,11 @@ def sweep_taylor(taylor_coefficients, event_values, periodic, work_rows, energy,
             event_count[k, e] = 0
         while True:
             counters[EVENT_ROWS] = 0
-            code, n_saved = taylor_run(taylor_coefficients, event_values, periodic, work_rows, y, clock, counters, p,
+            code, n_saved = taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_rows, y, clock,
+                                       counters, p,
                                        projecting, residual, t_end, rtol, atol, max_step, max_steps, NO_PAUSE,
                                        save_every, t_eval, ts, ys, directions, actions, ev_t, ev_y, ev_i,
-                                       carry)
+                                       ev_y_after, at_zero, carry)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
             fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_i, event_count, event_t, event_y, k)
             if code != Status.BUFFER_FULL:
