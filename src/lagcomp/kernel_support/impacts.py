@@ -1,0 +1,167 @@
+"""Impulses of simultaneous frictionless impacts with Newton's restitution law.
+
+At an impact the velocities jump and the positions do not.  With M the mass
+matrix, G the c × n matrix whose rows are the gradients ∂g_i/∂q of the gaps
+of the c closed contacts, and their normal velocities v = G q̇ + ∂g/∂t, the
+contacts push with impulses P ≥ 0 along Gᵀ:
+
+    M (q̇⁺ − q̇⁻) = Gᵀ P    so    v⁺ = v⁻ + W P,    W = G M⁻¹ Gᵀ
+
+(W is the Delassus matrix: symmetric, positive definite when the contacts
+are independent).  Newton's law for each contact, written so that it also
+decides which contacts push (Glocker & Pfeiffer's complementarity form):
+
+    w = v⁺ + e v⁻ ≥ 0,    P ≥ 0,    w_i P_i = 0,
+
+a contact either pushes and leaves with v⁺ = −e v⁻, or does not push and
+separates no slower than that.  Substituting v⁺ gives the linear
+complementarity problem LCP(W, (1 + e) v⁻): w = W P + (1 + e) v⁻.  For one
+contact its solution is P = −(1 + e) v⁻ / W when v⁻ < 0, so v⁺ = −e v⁻.
+
+The problem is solved by Murty's least-index principal pivoting (K. G.
+Murty, *Linear Complementarity, Linear and Nonlinear Programming*, 1988,
+sec. 4.2): guess which contacts push, solve W_AA P_A = −q_A on them, and flip
+the first contact (lowest index) that violates a sign condition.  For a
+positive definite W it ends, in exact arithmetic, at the unique solution;
+the iterations are bounded (2^c + c) so rounding cannot make it cycle.
+
+The kinetic energy changes by ΔT = ½ Pᵀ (v⁺ + v⁻) for gaps that do not
+depend on t (M-weighted algebra from the jump above): with e = 1 that is
+½ Pᵀ w = 0 by complementarity, energy is conserved exactly, also for
+simultaneous impacts; with e < 1 it is ½ (1 − e) Pᵀ v⁻, a loss as long as the
+contacts that push were approaching.
+
+These are helpers of the emitted ``event_reset`` kernels: numba compiles them
+into the kernel that calls them.  They allocate small work arrays: impacts are
+rare events, not the inner loop.
+"""
+
+import numpy as np
+from numba import njit
+
+from lagcomp.kernel_support.linear_solvers import ldlt_solve, ldlt_solve_matrix
+
+#: Impacts solved: the complementarity problem's solution was found.
+IMPACT_SOLVED = 0
+#: W_AA of a guessed set of pushing contacts is singular: the contacts are not independent.
+IMPACT_DEPENDENT_CONTACTS = -1
+#: The pivoting did not settle within its bound (a Delassus matrix that is not positive definite).
+IMPACT_NOT_SETTLED = -2
+#: M is not positive definite.
+IMPACT_SINGULAR_MASS = -3
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _solve_on_set(W, q, pushing, z):
+    """P_A = −W_AA⁻¹ q_A on the contacts flagged in `pushing`, 0 elsewhere, into z; False if W_AA is singular."""
+    c = q.shape[0]
+    index = np.empty(c, dtype=np.int64)
+    m = 0
+    for i in range(c):
+        if pushing[i]:
+            index[m] = i
+            m += 1
+    block = np.empty((m, m))
+    rhs = np.empty(m)
+    for a in range(m):
+        rhs[a] = -q[index[a]]
+        for b in range(m):
+            block[a, b] = W[index[a], index[b]]
+    solution = np.empty(m)
+    if m > 0 and ldlt_solve(block, rhs, solution, 0) != 0:
+        return False
+    for i in range(c):
+        z[i] = 0.0
+    for a in range(m):
+        z[index[a]] = solution[a]
+    return True
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def solve_lcp(W, q, z, w):
+    """Solve w = W z + q, z ≥ 0, w ≥ 0, zᵢ wᵢ = 0 for a symmetric positive definite W, shape (c, c).
+
+    Writes z and w; returns `IMPACT_SOLVED` or a negative status.  A sign
+    condition counts as violated below −8 ε times the problem's scale, so
+    that rounding does not flip a contact back and forth.
+    """
+    c = q.shape[0]
+    scale = 0.0
+    for i in range(c):
+        scale = max(scale, abs(q[i]))
+    w_tolerance = 8.0 * 2.220446049250313e-16 * scale
+    pushing = np.zeros(c, dtype=np.bool_)
+    for i in range(c):
+        pushing[i] = q[i] < 0.0
+    for _ in range(2 ** min(c, 30) + c):
+        if not _solve_on_set(W, q, pushing, z):
+            return IMPACT_DEPENDENT_CONTACTS
+        z_scale = 0.0
+        for i in range(c):
+            z_scale = max(z_scale, abs(z[i]))
+        z_tolerance = 8.0 * 2.220446049250313e-16 * z_scale
+        for i in range(c):
+            s = q[i]
+            for j in range(c):
+                s += W[i, j] * z[j]
+            w[i] = 0.0 if pushing[i] else s
+        flip = -1
+        for i in range(c):
+            if (pushing[i] and z[i] < -z_tolerance) or (not pushing[i] and w[i] < -w_tolerance):
+                flip = i
+                break
+        if flip < 0:
+            for i in range(c):
+                z[i] = max(z[i], 0.0)
+            return IMPACT_SOLVED
+        pushing[flip] = not pushing[flip]
+    return IMPACT_NOT_SETTLED
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def impact_velocities(M, G, v_minus, restitution, qd, impulses):
+    """Apply the impacts of the closed contacts to the velocities ``qd`` (n) in place; impulses into ``impulses``.
+
+    M (n, n): the mass matrix (lower triangle read, not modified).  G (c, n):
+    the closed contacts' gap gradients ∂g/∂q.  v_minus (c): their normal
+    velocities before the impact, G q̇⁻ + ∂g/∂t (negative: approaching).
+    restitution (c): Newton's coefficients e in [0, 1].  Impulses are in the
+    units of the gaps' conjugate forces times time (N s for a gap in metres),
+    ≥ 0, zero for a contact that does not push.  Returns `IMPACT_SOLVED` or a
+    negative status (the velocities are then unchanged).
+    """
+    n = M.shape[0]
+    c = G.shape[0]
+    factor = np.empty((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            factor[i, j] = M[i, j]
+    minv_gt = np.empty((n, c))                  # M⁻¹ Gᵀ, column per contact
+    for i in range(n):
+        for a in range(c):
+            minv_gt[i, a] = G[a, i]
+    if ldlt_solve_matrix(factor, minv_gt) != 0:
+        return IMPACT_SINGULAR_MASS
+    delassus = np.empty((c, c))
+    for a in range(c):
+        for b in range(c):
+            s = 0.0
+            for i in range(n):
+                s += G[a, i] * minv_gt[i, b]
+            delassus[a, b] = s
+    for a in range(c):
+        if not delassus[a, a] > 0.0:             # a gap that does not depend on q (or NaN)
+            return IMPACT_DEPENDENT_CONTACTS
+    q = np.empty(c)
+    for a in range(c):
+        q[a] = (1.0 + restitution[a]) * v_minus[a]
+    w = np.empty(c)
+    status = solve_lcp(delassus, q, impulses, w)
+    if status != IMPACT_SOLVED:
+        return status
+    for i in range(n):
+        s = 0.0
+        for a in range(c):
+            s += minv_gt[i, a] * impulses[a]
+        qd[i] += s
+    return IMPACT_SOLVED

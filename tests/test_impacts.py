@@ -1,0 +1,116 @@
+"""The impact solver of kernel_support: Newton's restitution for simultaneous frictionless impacts.
+
+References nobody here wrote: the closed forms of one contact and of a three-ball chain, and, for
+random Delassus matrices, scipy's non-negative least squares (for a positive definite W the
+complementarity problem is the minimum of ½ zᵀ W z + qᵀ z over z ≥ 0, i.e. ‖Lᵀ z + L⁻¹ q‖ with
+W = L Lᵀ).
+"""
+
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.optimize
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lagcomp.kernel_support.impacts import (
+    IMPACT_DEPENDENT_CONTACTS,
+    IMPACT_SINGULAR_MASS,
+    IMPACT_SOLVED,
+    impact_velocities,
+    solve_lcp,
+)
+
+
+def _impact(M, G, v_minus, e, qd):
+    qd = np.array(qd, dtype=float)
+    impulses = np.empty(len(v_minus))
+    status = impact_velocities(np.array(M, float), np.array(G, float), np.array(v_minus, float),
+                               np.array(e, float), qd, impulses)
+    return status, qd, impulses
+
+
+@pytest.mark.parametrize("e", [0.0, 0.3, 0.9, 1.0])
+def test_one_contact_reverses_the_normal_velocity_by_e(e):
+    # A ball of mass 2 on a plane inclined by 30°: gap g = y cos a − x sin a, q = (x, y).
+    a = np.pi / 6
+    G = [[-np.sin(a), np.cos(a)]]
+    qd_minus = np.array([1.5, -2.0])
+    v_minus = np.dot(G[0], qd_minus)
+    status, qd, impulses = _impact(2.0 * np.eye(2), G, [v_minus], [e], qd_minus)
+    assert status == IMPACT_SOLVED
+    assert np.dot(G[0], qd) == pytest.approx(-e * v_minus, rel=1e-15, abs=1e-15)
+    assert impulses[0] == pytest.approx(-(1 + e) * v_minus * 2.0, rel=1e-15)
+    tangent = [np.cos(a), np.sin(a)]
+    assert np.dot(tangent, qd) == pytest.approx(np.dot(tangent, qd_minus), rel=1e-15)   # frictionless
+
+
+def test_three_ball_chain_newton_restitution():
+    # Balls of unit mass touching in a row, the first arriving at speed 1; gaps x2 − x1 − d, x3 − x2 − d.
+    G = [[-1.0, 1.0, 0.0], [0.0, -1.0, 1.0]]
+    for e, expected in ((1.0, [-1 / 3, 2 / 3, 2 / 3]), (0.0, [1 / 3, 1 / 3, 1 / 3])):
+        status, qd, impulses = _impact(np.eye(3), G, [-1.0, 0.0], [e, e], [1.0, 0.0, 0.0])
+        assert status == IMPACT_SOLVED
+        np.testing.assert_allclose(qd, expected, rtol=1e-15, atol=1e-15)
+        assert qd.sum() == pytest.approx(1.0, rel=1e-15)                     # momentum
+        if e == 1.0:
+            assert 0.5 * qd @ qd == pytest.approx(0.5, rel=1e-15)            # energy
+        assert (impulses > 0).all()
+
+
+def test_a_separating_contact_does_not_push():
+    # The second ball already leaves the third: only the first contact pushes.
+    G = [[-1.0, 1.0, 0.0], [0.0, -1.0, 1.0]]
+    status, qd, impulses = _impact(np.eye(3), G, [-1.0, 2.0], [1.0, 1.0], [1.0, 0.0, 2.0])
+    assert status == IMPACT_SOLVED
+    assert impulses[1] == 0.0
+    np.testing.assert_allclose(qd, [0.0, 1.0, 2.0], rtol=1e-15, atol=1e-15)
+
+
+def test_refusals():
+    status, qd, _ = _impact([[1.0, 0.0], [0.0, 0.0]], [[1.0, 0.0]], [-1.0], [1.0], [-1.0, 0.0])
+    assert status == IMPACT_SINGULAR_MASS
+    assert qd.tolist() == [-1.0, 0.0]
+    status, _, _ = _impact(np.eye(2), [[1.0, 0.0], [2.0, 0.0]], [-1.0, -2.0], [1.0, 1.0], [-1.0, 0.0])
+    assert status == IMPACT_DEPENDENT_CONTACTS
+    status, _, _ = _impact(np.eye(2), [[0.0, 0.0]], [-1.0], [1.0], [-1.0, 0.0])
+    assert status == IMPACT_DEPENDENT_CONTACTS
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(1, 7), st.integers(0, 2**32 - 1))
+def test_lcp_against_nonnegative_least_squares(c, seed):
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(c, c + 2))
+    W = A @ A.T / (c + 2) + 0.05 * np.eye(c)
+    q = rng.normal(size=c)
+    z = np.empty(c)
+    w = np.empty(c)
+    assert solve_lcp(W, q, z, w) == IMPACT_SOLVED
+    scale = np.abs(q).max()
+    assert (z >= 0).all() and (w >= -1e-14 * scale).all()
+    np.testing.assert_allclose(w, W @ z + q, atol=1e-13 * scale * np.linalg.cond(W))
+    assert np.abs(z * w).max() <= 1e-13 * scale * max(np.abs(z).max(), 1.0)
+    L = scipy.linalg.cholesky(W, lower=True)
+    reference, _ = scipy.optimize.nnls(L.T, -scipy.linalg.solve_triangular(L, q, lower=True))
+    np.testing.assert_allclose(z, reference, atol=1e-10 * scale * np.linalg.cond(W))
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(1, 6), st.integers(0, 2**32 - 1))
+def test_elastic_impacts_conserve_energy_and_push_along_the_normals(n, seed):
+    # ΔT = ½ Pᵀ(v⁺ + v⁻) = ½ Pᵀ w = 0 for e = 1, whatever the set of pushing contacts.
+    rng = np.random.default_rng(seed)
+    c = int(rng.integers(1, n + 1))
+    A = rng.normal(size=(n, n))
+    M = A @ A.T + 0.1 * np.eye(n)
+    G = rng.normal(size=(c, n))
+    qd_minus = rng.normal(size=n)
+    status, qd, impulses = _impact(M, G, G @ qd_minus, np.ones(c), qd_minus)
+    assert status == IMPACT_SOLVED
+    energy = 0.5 * qd_minus @ M @ qd_minus
+    assert 0.5 * qd @ M @ qd == pytest.approx(energy, rel=1e-11 * np.linalg.cond(M))
+    np.testing.assert_allclose(M @ (qd - qd_minus), G.T @ impulses, atol=1e-12 * np.abs(M).max() * np.abs(qd).max())
+    v_plus = G @ qd
+    pushing = impulses > 0
+    np.testing.assert_allclose(v_plus[pushing], -(G @ qd_minus)[pushing], atol=1e-10 * np.abs(qd).max())
