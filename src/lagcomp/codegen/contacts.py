@@ -46,3 +46,16 @@ def impact_branches(eom, restitutions: tuple, time, kernel) -> tuple:
         stores.append((f"_restitution[{d}]", sp.sympify(restitutions[e])))
     branch = kernel("event_reset", "", ("t", "y", "p", "e", "out"), stores, ContactImpact(n=n, events=events))
     return ((events, branch),)
+
+
+def contacts_constant(names: tuple[str, ...], restitutions: tuple) -> tuple:
+    """The module constant ``CONTACTS``: ((name, event index, restitution), ...), the restitution a float or
+    the name of its parameter, for the checks a run makes before it starts (`lagcomp.integrate.contacts`);
+    () without contacts (then no constant)."""
+    contacts = tuple(
+        (names[e], e, restitution.name if isinstance(restitution, sp.Symbol) else float(restitution))
+        for e, restitution in enumerate(restitutions) if restitution is not None)
+    if not contacts:
+        return ()
+    return (("CONTACTS", "The contacts: (name, event index, restitution: a number or its parameter's name).",
+             contacts),)

@@ -325,7 +325,7 @@ def _kernel_source(kernel: Kernel) -> str:
     if isinstance(solve, Delegate):
         return _decorated(kernel, body + [delegated_call(solve)])
     if isinstance(solve, EventResets):
-        return _decorated(kernel, body + event_reset_body(solve))
+        return _decorated(kernel, body + event_reset_body(solve)) + module_constants(kernel)
     if isinstance(solve, JacobianSolve):
         before, after = _jacobian_frame(solve)
         body += before

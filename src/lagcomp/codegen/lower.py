@@ -40,7 +40,7 @@ from dataclasses import replace
 import symengine as se
 import sympy as sp
 
-from lagcomp.codegen.contacts import impact_branches
+from lagcomp.codegen.contacts import contacts_constant, impact_branches
 from lagcomp.codegen.geometry import geometry_kernel
 from lagcomp.errors import ModelError
 from lagcomp.ir import (
@@ -723,10 +723,12 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
-def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping, loads, impacts=()) -> Kernel:
+def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping, loads, restitutions=(),
+                       impacts=()) -> Kernel:
     """``event_reset(t, y, p, e, out) -> int``: the state just after event e into `out` (size `size`): y, with
     what e's reset sets (`resets[e]`: ((state index, value over the state before the event), ...)) overwritten,
-    or the contacts' impact (`impacts`: the branch of `lagcomp.codegen.contacts.impact_branches`).
+    or the contacts' impact (`impacts`: the branch of `lagcomp.codegen.contacts.impact_branches`; `restitutions`
+    per event, None for an event that is not a contact, give the module's ``CONTACTS``).
     Returns 0 or the impact solver's status.  Shared by the Lagrange and Kane modules (their `mapping` and
     `loads`)."""
     branches = tuple(
@@ -743,7 +745,7 @@ def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping
                 "simultaneous impacts solved together); a negative return is the impact solver's failure\n"
                 "(lagcomp.kernel_support.impacts).")
     return Kernel(name="event_reset", doc=doc, args=("t", "y", "p", "e", "out"), loads=(), temps=(), stores=(),
-                  solve=EventResets(size=size, branches=branches))
+                  solve=EventResets(size=size, branches=branches), constants=contacts_constant(names, restitutions))
 
 
 #: Why a module whose events read inputs has no event partials (its ``EVENT_GRADIENTS_REFUSED``).
@@ -836,7 +838,7 @@ def lower(eom: EOM) -> ModuleIR:
         ),
         _event_kernel(eom, mapping, loads),
         _event_gradients_kernel(eom, mapping, loads),
-        event_reset_kernel(system.event_names, eom.resets, 2 * n, mapping, loads, impact_branches(
+        event_reset_kernel(system.event_names, eom.resets, 2 * n, mapping, loads, eom.restitutions, impact_branches(
             eom, eom.restitutions, t, lambda name, doc, args, stores, solve: _kernel(name, doc, args, stores, mapping,
                                                                                  loads, solve=solve))),
         _rest_partials_kernel(eom, mapping, loads),
