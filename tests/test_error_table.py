@@ -278,8 +278,8 @@ CASES = {
     "contact-gap-with-velocities": (lambda: lc.Contact("floor", x + x.diff(t)), "`floor`"),
     "contact-unknown-coordinate": (lambda: oscillator(events=[lc.Contact("floor", x - sp.Function("w")(t))]),
                                    "w(t)"),
-    "contact-with-constraints": (lambda: plane(events=[lc.Contact("floor", y)], constraints=[lc.Holonomic("rod", x - l)]),
-                                 "['floor']"),
+    "contact-with-constraints": (
+        lambda: plane(events=[lc.Contact("floor", y)], constraints=[lc.Holonomic("rod", x - l)]), "['floor']"),
     "contact-on-kanes-method": (lambda: lc.compile(_kane_slider(), events=[lc.Contact("wall", x)]), "`wall`"),
     "default-unknown-parameter": (lambda: oscillator(defaults={"mass": 1.0}), "['mass']"),
     "default-not-a-number": (lambda: oscillator(defaults={"m": "heavy", "k": 1.0}), "`m`"),
