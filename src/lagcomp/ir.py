@@ -180,10 +180,23 @@ class Unavailable:
 
 
 @dataclass(frozen=True)
+class ContactImpact:
+    """The solve of the contacts' branch of ``event_reset`` (`lagcomp.codegen.contacts`): the stores fill
+    ``_mass`` (n, n), ``_gap``, ``_gradient`` (C, n), ``_normal_velocity`` and ``_restitution`` (C) for the
+    C = len(`events`) contacts, whose events are `events` (in contact order); the branch then calls
+    ``contact_impacts`` on the contact of the event ``e`` that fired, writing the velocities ``out[n:2n]``,
+    and returns its status."""
+
+    n: int
+    events: tuple[int, ...]
+
+
+@dataclass(frozen=True)
 class EventResets:
     """The body of ``event_reset(t, y, p, e, out)``: ``out`` = ``y`` (`size` entries), then for the event e that
     has a reset, the loads, temporaries and stores of its `Kernel` in `branches` ((event index, kernel), ...,
-    each CSE'd on its own: only one runs), and ``return 0``."""
+    each CSE'd on its own: only one runs; the contacts' events share one branch, keyed by the tuple of their
+    indices, whose kernel's solve is a `ContactImpact`), and ``return 0``."""
 
     size: int
     branches: tuple

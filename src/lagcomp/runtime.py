@@ -143,7 +143,7 @@ def run_defaults(system) -> dict:
         "q0": floats(system.q0),
         "qd0": floats(system.qd0),
         "t_end": float(system.t_end),
-        "events": [[e.name, int(e.direction), bool(e.terminal), e.reset is not None] for e in system.events],
+        "events": [[e.name, int(e.direction), bool(e.terminal), e.changes_state] for e in system.events],
     }
 
 

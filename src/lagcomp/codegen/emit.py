@@ -36,6 +36,7 @@ from lagcomp.equations import Equation
 from lagcomp.ir import (
     AugmentedJacobianSolve,
     AugmentedSolve,
+    ContactImpact,
     Delegate,
     EventResets,
     FlatMatrix,
@@ -95,12 +96,15 @@ def _header(ir: ModuleIR, taylor: TaylorProgram | Unsupported) -> str:
 
 #: What kernels may call from `lagcomp.kernel_support`, by module.
 KERNEL_SUPPORT = {
+    "lagcomp.kernel_support.impacts": ("contact_impacts",),
     "lagcomp.kernel_support.inputs": ("input_value",),
     "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "kkt_solve_matrix",
                                               "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
                                               "lu_solve_matrix", "lu_substitute"),
     "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
 }
+
+
 def support_imports(names: set[str]) -> str:
     """The import lines of the `KERNEL_SUPPORT` `names` a module's kernels call."""
     return "".join(_import(module, [name for name in public if name in names]) for module, public in KERNEL_SUPPORT.items())
@@ -123,6 +127,10 @@ def kernel_support_names(kernels) -> set[str]:
     """The `KERNEL_SUPPORT` names `kernels` (`lagcomp.ir.Kernel`) call: sin/cos, and their solve's solver."""
     names = set()
     for kernel in kernels:
+        if isinstance(kernel.solve, EventResets):
+            names |= kernel_support_names(branch for _, branch in kernel.solve.branches)
+        if isinstance(kernel.solve, ContactImpact):
+            names.add("contact_impacts")
         expressions = [expr for _, expr in kernel.temps] + [expr for _, expr in kernel.stores]
         for function, scalar, lanes in ((sp.sin, "sin", "vsin"), (sp.cos, "cos", "vcos")):
             if any(isinstance(expr, sp.Basic) and expr.has(function) for expr in expressions):
@@ -384,12 +392,39 @@ def event_reset_body(solve: EventResets) -> list[str]:
     """``out`` = ``y``, then the branch of event ``e`` (if it has a reset) overwrites what its reset sets."""
     body = [f"out[{i}] = y[{i}]" for i in range(solve.size)]
     for number, (e, branch) in enumerate(solve.branches):
-        body.append(f"{'if' if number == 0 else 'elif'} e == {e}:")
+        keyword = "if" if number == 0 else "elif"
+        body.append(f"{keyword} e == {e}:" if isinstance(e, int) else f"{keyword} {_any_of('e', e)}:")
         inner = [f"{local} = {source}" for local, source in branch.loads]
+        if isinstance(branch.solve, ContactImpact):
+            inner += _impact_work(branch.solve)
         inner += [f"{name} = {to_code(expr)}" for name, expr in branch.temps]
         inner += [f"{target} = {to_code(expr)}" for target, expr in branch.stores]
+        if isinstance(branch.solve, ContactImpact):
+            inner += _impact_call(branch.solve)
         body += [INDENT + line for line in inner]
     return body + ["return 0"]
+
+
+def _any_of(name: str, values: tuple[int, ...]) -> str:
+    """``name == a or name == b ...``: the condition of a branch several events share."""
+    return " or ".join(f"{name} == {v}" for v in values)
+
+
+def _impact_work(solve: ContactImpact) -> list[str]:
+    """The work arrays of the contacts' branch (`lagcomp.ir.ContactImpact`), zeros where no store writes."""
+    n, c = solve.n, len(solve.events)
+    return [f"_mass = np.zeros(({n}, {n}))", f"_gap = np.empty({c})", f"_gradient = np.zeros(({c}, {n}))",
+            f"_normal_velocity = np.empty({c})", f"_restitution = np.empty({c})"]
+
+
+def _impact_call(solve: ContactImpact) -> list[str]:
+    """Which contact's event fired (``_firing``), then the impact solver on the velocities ``out[n:2n]``."""
+    firing = " else ".join(f"{d} if e == {e}" for d, e in enumerate(solve.events[:-1]))
+    firing = f"{firing} else {len(solve.events) - 1}" if firing else "0"
+    n = solve.n
+    return [f"_firing = {firing}",
+            f"return contact_impacts(_mass, _gap, _gradient, _normal_velocity, _restitution, y[:{n}], _firing, "
+            f"out[{n}:{2 * n}])"]
 
 
 def module_constants(kernel: Kernel) -> str:

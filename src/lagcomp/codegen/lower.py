@@ -40,6 +40,7 @@ from dataclasses import replace
 import symengine as se
 import sympy as sp
 
+from lagcomp.codegen.contacts import contacts_constant, impact_branches
 from lagcomp.codegen.geometry import geometry_kernel
 from lagcomp.errors import ModelError
 from lagcomp.ir import (
@@ -694,23 +695,34 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
-def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping, loads) -> Kernel:
+def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping, loads, restitutions=(),
+                       impacts=()) -> Kernel:
     """``event_reset(t, y, p, e, out) -> int``: the state just after event e into `out` (size `size`): y, with
-    what e's reset sets (`resets[e]`: ((state index, value over the state before the event), ...)) overwritten.
-    Returns 0.  Shared by the Lagrange and Kane modules (their `mapping` and `loads`)."""
+    what e's reset sets (`resets[e]`: ((state index, value over the state before the event), ...)) overwritten,
+    or the contacts' impact (`impacts`: the branch of `lagcomp.codegen.contacts.impact_branches`; `restitutions`
+    per event, None for an event that is not a contact, give the module's ``CONTACTS``).
+    Returns 0 or the impact solver's status.  Shared by the Lagrange and Kane modules (their `mapping` and
+    `loads`)."""
     branches = tuple(
         (e, _kernel("event_reset", "", ("t", "y", "p", "e", "out"), [(f"out[{i}]", v) for i, v in reset], mapping,
                     loads))
-        for e, reset in enumerate(resets) if reset)
-    reset_names = [names[e] for e, _ in branches]
+        for e, reset in enumerate(resets) if reset) + tuple(impacts)
+    reset_names = [names[e] for e, reset in enumerate(resets) if reset]
+    contact_names = [names[e] for events, _ in impacts for e in events]
     doc = (f"The state just after event e into `out`, shape ({size},): `y`, the state just before, with what the\n"
            f"reset of e sets (events with a reset: {reset_names}; the others leave y as it is). Returns 0.\n"
            "Drivers pass a p of their own: a reset may one day write mode slots of p.")
+    if contact_names:
+        doc += (f"\nThe contacts {contact_names} change the velocities by their impact (Newton's restitution,\n"
+                "simultaneous impacts solved together); a negative return is the impact solver's failure\n"
+                "(lagcomp.kernel_support.impacts).")
+    resetting = tuple(names[e] for e, restitution in enumerate(restitutions or (None,) * len(names))
+                      if resets[e] or restitution is not None)
     return Kernel(name="event_reset", doc=doc, args=("t", "y", "p", "e", "out"), loads=(), temps=(), stores=(),
                   solve=EventResets(size=size, branches=branches),
-                  constants=(("RESET_EVENTS", "The events whose reset event_reset applies (none: the drivers take a "
-                              "library kernel that copies y, which numba has compiled already).",
-                              tuple(reset_names)),))
+                  constants=(("RESET_EVENTS", "The events whose reset event_reset applies, the contacts' impacts "
+                              "included (none: the drivers take a library kernel that copies y, which numba has "
+                              "compiled already).", resetting),) + contacts_constant(names, restitutions))
 
 
 #: Why a module whose events read inputs has no event partials (its ``EVENT_GRADIENTS_REFUSED``).
@@ -802,7 +814,9 @@ def lower(eom: EOM) -> ModuleIR:
         ),
         _event_kernel(eom, mapping, loads),
         _event_gradients_kernel(eom, mapping, loads),
-        event_reset_kernel(system.event_names, eom.resets, 2 * n, mapping, loads),
+        event_reset_kernel(system.event_names, eom.resets, 2 * n, mapping, loads, eom.restitutions, impact_branches(
+            eom, eom.restitutions, t, lambda name, doc, args, stores, solve: _kernel(name, doc, args, stores, mapping,
+                                                                                 loads, solve=solve))),
         _rest_partials_kernel(eom, mapping, loads),
     ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
     kernels += (geometry_kernel(eom, lambda name, doc, args, stores: _kernel(name, doc, args, stores, mapping, loads)),)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lagcomp.errors import OptionError
+from lagcomp.integrate.contacts import contacts_of
 from lagcomp.integrate.dae import DAE_RTOL_MIN
 from lagcomp.integrate.memory import checked_limit
 from lagcomp.integrate.methods import (
@@ -102,6 +103,7 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
 
     An event with a reset changes the motion: a method that cannot apply it (`Method.kernels` without
     ``event_reset``) is refused unless the run leaves the event out by name (``events=False`` or a list).
+    A contact's event cannot be left out (`lagcomp.model.contacts`): its impacts are part of the motion.
     """
     declared = model.events
     if events is None or events is True:
@@ -116,6 +118,11 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
         unknown = [name for name in chosen if not isinstance(name, str) or name not in model.event_names]
         if unknown:
             raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.event_names)}.")
+    left_out = [name for name, _, _ in contacts_of(model) if name not in chosen]
+    if left_out:
+        raise OptionError(f"Contact(s) {left_out} of {model.name!r} are part of its motion, which a run cannot leave "
+                          f"out: use {method_names(lambda m: 'event_reset' in m.kernels)} (`{m.name}` cannot apply "
+                          "impacts) and keep them among `events`.")
     if chosen and not m.adaptive:
         raise OptionError(f"Events are located on dense output, which {m.name} lacks; use "
                           f"{method_names(lambda m: m.adaptive)}.")

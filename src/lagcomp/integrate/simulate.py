@@ -23,6 +23,7 @@ import numpy as np
 from lagcomp.animation_bodies import BodyGeometry
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate import sensitivities as sens
+from lagcomp.integrate.contacts import check_contacts
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.dae import dae_state, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
@@ -130,6 +131,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         _refuse_resets_with_sensitivities(model, options)
         sens.check(model, m, options, columns, given)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
+    check_contacts(model, t0, y0[None, :], p[None, :])
     if max_residual is not None and not m.checks_residual:
         raise OptionError(f"`max_residual` stops a run whose constraint residual drifts past it; `{m.name}` does not "
                           "evaluate the residual during the run (it solves the constraints with the motion). "

@@ -165,3 +165,43 @@ def impact_velocities(M, G, v_minus, restitution, qd, impulses):
             s += minv_gt[i, a] * impulses[a]
         qd[i] += s
     return IMPACT_SOLVED
+
+
+#: A contact other than the one whose event fired takes part in an impact when its gap is at most this times
+#: Σ_j |∂g/∂q_j| (|q_j| + 1): touching to rounding, on a scale of the coordinates or of 1 unit, whichever is
+#: larger (balls at rest in a row; an angle near 0).
+CLOSED_GAP = 1e-12
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd):
+    """The impact of contact ``firing`` (its gap just closed) and of every other contact closed with it.
+
+    mass (n, n) M, lower triangle; gaps, normal_velocities, restitution (C,) and gradients (C, n) of all C
+    contacts (`lagcomp.codegen.contacts`); q (n) the coordinates; qd (n) the velocities before the impact,
+    overwritten with those after.  Returns `IMPACT_SOLVED` or a negative status of `impact_velocities`.
+    """
+    n = q.shape[0]
+    taking = np.zeros(gaps.shape[0], dtype=np.bool_)
+    for d in range(gaps.shape[0]):
+        scale = 0.0
+        for j in range(n):
+            scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
+        taking[d] = d == firing or gaps[d] <= CLOSED_GAP * scale
+    c = 0
+    for d in range(gaps.shape[0]):
+        if taking[d]:
+            c += 1
+    G = np.empty((c, n))
+    v_minus = np.empty(c)
+    e = np.empty(c)
+    row = 0
+    for d in range(gaps.shape[0]):
+        if taking[d]:
+            for j in range(n):
+                G[row, j] = gradients[d, j]
+            v_minus[row] = normal_velocities[d]
+            e[row] = restitution[d]
+            row += 1
+    impulses = np.empty(c)
+    return impact_velocities(mass, G, v_minus, e, qd, impulses)

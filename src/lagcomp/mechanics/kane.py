@@ -181,6 +181,7 @@ def kane_events(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple[tuple
     and parameters of the equations; any other symbol is refused by name
     (a parameter the equations lack would have no slot in p).
     """
+    from lagcomp.model.contacts import Contact
     from lagcomp.model.events import Event
 
     plain = _Plain(km)
@@ -189,6 +190,9 @@ def kane_events(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple[tuple
     for event in events or ():
         if not isinstance(event, Event):
             raise ModelError(f"`events` of a KanesMethod are lagcomp.Event(name, g(q, u, t)), got {event!r}.")
+        if isinstance(event, Contact):
+            raise ModelError(f"Contact `{event.name}` on a KanesMethod: impacts need the Lagrange form (M from T); "
+                             "build the model as a lagcomp.System, or use an Event with a reset.")
         g = plain(event.expr, f"event `{event.name}`")
         stray = sorted(str(x) for x in g.free_symbols - allowed)
         if stray:

@@ -52,6 +52,7 @@ import sympy as sp
 from lagcomp.errors import ModelError, SingularMassMatrixError
 from lagcomp.mechanics.tidy import tidy as _tidy, tidy_small as _tidy_small, tidy_symengine as _tidy_symengine
 from lagcomp.model.constraints import Holonomic
+from lagcomp.model.contacts import Contact
 from lagcomp.model.events import reset_target
 from lagcomp.model.inputs import plain_inputs
 from lagcomp.model.system import System, t
@@ -114,6 +115,9 @@ class EOM:
     resets : tuple of tuple
         Per event, in order, its reset as ((state index, value), ...): index i < n the coordinate q_i,
         n + i its velocity, the value over the plain symbols of the state before the event; () for none.
+    restitutions : tuple
+        Per event, in order, Newton's coefficient e of a contact (`lagcomp.model.contacts.Contact`, whose
+        event function is its gap) as a plain expression (a number or a parameter); None for other events.
     """
 
     system: System
@@ -141,6 +145,7 @@ class EOM:
     momentum_rate: sp.Matrix
     events: tuple = ()
     resets: tuple = ()
+    restitutions: tuple = ()
 
     @property
     def n(self) -> int:
@@ -257,7 +262,8 @@ def derive(system: System) -> EOM:
         energy=energy, energy_function=energy if T1 == 0 and T0 == 0 else _tidy_small(T - T1 - 2 * T0 + V, variables),
         momenta=momenta, cyclic=cyclic,
         separable=separable, holonomic_separable=holonomic_separable, momentum_offset=b, momentum_rate=momentum_rate,
-        events=tuple(plain(e.expr) for e in system.events), resets=_resets(system, plain), **constraints,
+        events=tuple(plain(e.expr) for e in system.events), resets=_resets(system, plain),
+        restitutions=tuple(e.restitution if isinstance(e, Contact) else None for e in system.events), **constraints,
     )
 
 

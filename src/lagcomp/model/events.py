@@ -76,6 +76,11 @@ class Event:
         object.__setattr__(self, "terminal", bool(self.terminal))
         object.__setattr__(self, "reset", self._checked_reset())
 
+    @property
+    def changes_state(self) -> bool:
+        """Whether the event changes the state where it occurs (a reset; a contact's impact)."""
+        return self.reset is not None
+
     def _checked_reset(self) -> tuple | None:
         """`reset` as ((key, value), ...), keys q(t) or q(t).diff(t), values sympy expressions; None for none."""
         if self.reset is None:

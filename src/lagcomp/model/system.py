@@ -33,6 +33,7 @@ from lagcomp.errors import InitialConditionError, ModelError, ParameterError, Un
 from lagcomp.names import by_name
 from lagcomp.model.assemble import assemble
 from lagcomp.model.constraints import Holonomic, Nonholonomic
+from lagcomp.model.contacts import Contact
 from lagcomp.model.frames import as_frame
 from lagcomp.model.inputs import inputs_in, is_input, substitute_laws
 from lagcomp.model.events import Event, reset_role, reset_target
@@ -371,6 +372,10 @@ class System:
                 if coordinate not in self.coordinates:
                     raise ModelError(f"Event `{e.name}`: its reset sets {key}, but {coordinate} is not a coordinate "
                                      f"of {self.name!r} (coordinates {list(self.coordinate_names)}).")
+        contacts = [e.name for e in events if isinstance(e, Contact)]
+        if contacts and self.constraints:
+            raise ModelError(f"Contacts {contacts} on a system with constraints {list(self.constraint_names)}: an "
+                             "impact there must keep the constraints' velocities too, which is not supported yet.")
         return events
 
     def expressions(self) -> dict[str, sp.Expr]:
@@ -380,6 +385,7 @@ class System:
         exprs.update({f"constraint {c.name}": c.expr for c in self.constraints})
         exprs.update({f"event {e.name}": e.expr for e in self.events})
         exprs.update({reset_role(e, key): value for e in self.events for key, value in e.reset or ()})
+        exprs.update({f"contact {e.name} restitution": e.restitution for e in self.events if isinstance(e, Contact)})
         return exprs
 
     @property

@@ -1,0 +1,120 @@
+"""Contacts (`lagcomp.Contact`): the impact branch of ``event_reset`` and the refusals.
+
+References: Newton's restitution on one contact (v⁺ = −e v⁻), the three-ball chain's closed form
+(`tests/test_impacts.py` derives it), and the kinetic energy and momentum an elastic impact keeps.
+"""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import lagcomp as lc
+from lagcomp.errors import InitialConditionError, ModelError, ParameterError
+
+t = lc.t
+
+
+@pytest.fixture(scope="module")
+def ball(tmp_path_factory):
+    x, = lc.coordinates("x")
+    m, g, e = sp.symbols("m g e", positive=True)
+    system = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=m * g * x, events=[lc.Contact("floor", x, restitution=e)],
+                       name="contact_ball", defaults={"m": 2.0, "g": 9.81, "e": 0.9})
+    return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+@pytest.fixture(scope="module")
+def chain(tmp_path_factory):
+    x1, x2, x3 = lc.coordinates("x1 x2 x3")
+    d, m2 = sp.symbols("d m2", positive=True)
+    T = (x1.diff(t) ** 2 + m2 * x2.diff(t) ** 2 + x3.diff(t) ** 2) / 2
+    system = lc.System([x1, x2, x3], T=T, events=[lc.Contact("c12", x2 - x1 - d), lc.Contact("c23", x3 - x2 - d)],
+                       name="contact_chain", defaults={"d": 1.0, "m2": 1.0})
+    return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+def _reset(model, y, params, event):
+    out = np.empty(len(y))
+    p = model.parameter_vector(params)
+    status = model.kernels.event_reset(0.0, np.asarray(y, float), p, event, out)
+    return status, out
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 0.9, 1.0])
+def test_the_floor_reverses_the_velocity_by_e(ball, e):
+    status, out = _reset(ball, [0.0, -3.25], {"e": e}, 0)
+    assert status == 0
+    assert out[0] == 0.0
+    assert out[1] == pytest.approx(3.25 * e, rel=1e-15, abs=0.0)
+
+
+@pytest.mark.parametrize("m2", [1.0, 3.0])
+def test_three_balls_at_once(chain, m2):
+    # Ball 1 arrives at speed 1 on balls 2 and 3 touching at rest: both contacts take part.
+    y = [0.0, 1.0, 2.0, 1.0, 0.0, 0.0]
+    for event in (0, 1):            # whichever contact's event fires, the impact is the same
+        status, out = _reset(chain, y, {"m2": m2}, event)
+        assert status == 0
+        np.testing.assert_array_equal(out[:3], y[:3])
+        v = out[3:]
+        masses = np.array([1.0, m2, 1.0])
+        assert masses @ v == pytest.approx(1.0, rel=1e-15)                        # momentum
+        assert 0.5 * masses @ v**2 == pytest.approx(0.5, rel=1e-14)               # e = 1: energy
+        assert v[1] - v[0] >= 0 and v[2] - v[1] >= -1e-15                         # no approach left
+    if m2 == 1.0:
+        np.testing.assert_allclose(out[3:], [-1 / 3, 2 / 3, 2 / 3], rtol=1e-15)
+
+
+def test_an_open_contact_is_left_out(chain):
+    # Ball 3 is far away: only c12 acts, an exchange of velocities for equal masses.
+    status, out = _reset(chain, [0.0, 1.0, 5.0, 1.0, 0.0, 0.0], {"m2": 1.0}, 0)
+    assert status == 0
+    np.testing.assert_allclose(out[3:], [0.0, 1.0, 0.0], atol=1e-16)
+
+
+def test_contacts_constant(ball, chain):
+    assert ball.kernels.CONTACTS == (("floor", 0, "e"),)
+    assert chain.kernels.CONTACTS == (("c12", 0, 1.0), ("c23", 1, 1.0))
+
+
+@pytest.mark.parametrize("restitution", [-0.1, 1.5, "e", sp.Symbol("e") + 1, True, float("nan")])
+def test_bad_restitution_refused(restitution):
+    x, = lc.coordinates("x")
+    with pytest.raises(ModelError, match="restitution"):
+        lc.Contact("floor", x, restitution=restitution)
+
+
+def test_bad_contacts_refused():
+    x, = lc.coordinates("x")
+    with pytest.raises(ModelError, match="velocities"):
+        lc.Contact("floor", x.diff(t) + x)
+    with pytest.raises(ModelError, match="direction"):
+        lc.Contact("floor", x, direction=1)
+    y, = lc.coordinates("y")
+    with pytest.raises(ModelError, match="not a coordinate"):
+        lc.System([x], T=x.diff(t) ** 2 / 2, events=[lc.Contact("floor", y)], name="stray")
+    with pytest.raises(ModelError, match="constraints"):
+        lc.System([x, y], T=(x.diff(t) ** 2 + y.diff(t) ** 2) / 2, events=[lc.Contact("floor", y)],
+                  constraints=[lc.Holonomic("rod", x**2 + y**2 - 1)], name="rod")
+
+
+def test_run_refuses_penetration_and_restitution_out_of_range(ball):
+    with pytest.raises(InitialConditionError, match="gap is -0.01"):
+        ball.simulate((0.0, 1.0), [-0.01], [0.0])
+    with pytest.raises(ParameterError, match="outside"):
+        ball.simulate((0.0, 1.0), [1.0], [0.0], params={"e": 1.2})
+    with pytest.raises(ParameterError, match="trajectory 1"):
+        ball.sweep((0.0, 1.0), grid={"e": [0.5, 1.5]}, q0=[1.0], qd0=[0.0])
+
+
+def test_the_impact_under_the_names_of_its_own_code(tmp_path):
+    # The branch's locals, its solver and the kernel's arguments as the user's names (tests/test_names.py
+    # collects every emitted identifier; these are the ones the impact branch adds).
+    e_, out, mass, firing = sp.symbols("e out _mass _firing", positive=True)
+    c, = lc.coordinates("contact_impacts")
+    system = lc.System([c], T=mass * c.diff(t) ** 2 / 2, V=firing * c,
+                       events=[lc.Contact("np", c - out, restitution=e_)], name="contact_names")
+    model = lc.compile(system, cache_dir=tmp_path)
+    status, after = _reset(model, [0.5, -2.0], {"e": 0.25, "out": 0.5, "_mass": 3.0, "_firing": 1.0}, 0)
+    assert status == 0
+    np.testing.assert_array_equal(after, [0.5, 0.5])
