@@ -10,6 +10,7 @@ import sympy as sp
 
 import lagcomp as lc
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError
+from lagcomp.integrate.status import Status
 
 t = lc.t
 
@@ -118,3 +119,84 @@ def test_the_impact_under_the_names_of_its_own_code(tmp_path):
     status, after = _reset(model, [0.5, -2.0], {"e": 0.25, "out": 0.5, "_mass": 3.0, "_firing": 1.0}, 0)
     assert status == 0
     np.testing.assert_array_equal(after, [0.5, 0.5])
+
+
+# -- runs ---------------------------------------------------------------------------------------------
+
+
+def _impact_times(h0, g, e, count):
+    """The closed form of a ball dropped from rest at h0: t_1 = √(2 h0/g), then flights of 2 eᵏ v_1/g."""
+    v1 = np.sqrt(2 * g * h0)
+    times = [np.sqrt(2 * h0 / g)]
+    for k in range(1, count):
+        times.append(times[-1] + 2 * e**k * v1 / g)
+    return np.array(times), v1
+
+
+@pytest.mark.parametrize("method", ["dop853", "taylor"])
+def test_bouncing_ball_rebounds_by_e_at_the_closed_form_times(ball, method):
+    h0, g, e, count = 1.25, 9.81, 0.8, 12
+    times, v1 = _impact_times(h0, g, e, count)
+    t_end = times[-1] + 0.5 * (times[-1] - times[-2])
+    sol = ball.simulate((0.0, t_end), [h0], [0.0], params={"e": e, "g": g}, method=method, rtol=1e-13, atol=1e-13)
+    assert sol.status >= 0
+    floor = sol.events["floor"]
+    assert len(floor) == count
+    np.testing.assert_allclose(floor.t, times, rtol=1e-12)
+    np.testing.assert_allclose(floor.qd[:, 0], -v1 * e ** np.arange(count), rtol=1e-12)
+    np.testing.assert_allclose(floor.qd_after[:, 0] / floor.qd[:, 0], -e, rtol=1e-12)
+    assert np.abs(floor.q[:, 0]).max() < 1e-14                       # at the floor, not through it
+    assert sol.q[:, 0].min() > -1e-14
+
+
+def test_newtons_cradle_keeps_momentum_and_energy(chain):
+    # Ball 1 arrives at speed 1 on balls 2 and 3 at rest, touching: one simultaneous impact, then free flight.
+    sol = chain.simulate((0.0, 2.0), [-0.5, 1.0, 2.0], [1.0, 0.0, 0.0], params={"m2": 1.0}, rtol=1e-12, atol=1e-12)
+    impacts = sol.events["c12"]
+    assert len(impacts) == 1
+    assert impacts.t[0] == pytest.approx(0.5, rel=1e-14)
+    np.testing.assert_allclose(impacts.qd_after[0], [-1 / 3, 2 / 3, 2 / 3], rtol=1e-13)
+    momentum = sol.qd.sum(axis=1)
+    np.testing.assert_allclose(momentum, 1.0, rtol=1e-13)
+    np.testing.assert_allclose(sol.energy, 0.5, rtol=1e-13)
+    np.testing.assert_allclose(sol.q[-1], [-1.5 / 3, 1.0 + 1.5 * 2 / 3, 2.0 + 1.5 * 2 / 3], rtol=1e-12)
+
+
+def test_a_sweep_of_bouncing_balls_misses_no_impact(ball):
+    # Each trajectory its own impacts; where they accumulate before t_end (t∞ = t_1 + 2 e v_1 / (g (1 − e)),
+    # a Zeno point) the trajectory stops there with EVENTS_ACCUMULATED, at t∞ to 1e-9.
+    e = np.linspace(0.3, 0.9, 5)
+    h0 = np.linspace(0.5, 2.0, 4)
+    g, t_end, cap = 9.81, 3.0, 256
+    sweep = ball.sweep((0.0, t_end), grid={"e": e, "x": h0}, q0=[1.0], qd0=[0.0], params={"g": g}, rtol=1e-12,
+                       atol=1e-12, output="events", event_cap=cap, progress=False)
+    floor = sweep.events["floor"]
+    accumulated = 0
+    for i, ei in enumerate(e):
+        for j, hj in enumerate(h0):
+            times, v1 = _impact_times(hj, g, ei, cap)
+            t_infinity = times[0] + 2 * ei * v1 / (g * (1 - ei))
+            count = min(int(floor["count"][i, j]), cap)
+            if t_infinity < t_end:
+                accumulated += 1
+                assert sweep.status[i, j] == Status.EVENTS_ACCUMULATED
+                assert sweep.t_final[i, j] == pytest.approx(t_infinity, rel=1e-9)
+            else:
+                assert sweep.status[i, j] >= 0 and count == np.count_nonzero(times < t_end)
+            np.testing.assert_allclose(floor["t"][i, j, :count], times[:count], rtol=1e-11)
+    assert 0 < accumulated < e.size * h0.size
+
+
+@pytest.mark.parametrize("method", ["dop853", "dopri5", "taylor"])
+@pytest.mark.parametrize("rtol", [1e-12, 1e-8, 1e-6])
+def test_no_tunnelling_up_to_the_accumulation(ball, method, rtol):
+    # The bounces' flights shrink geometrically; once one is shorter than the step after its impact can
+    # resolve, the gap's first sample after the impact is already below 0: that is a return (bracketed
+    # below the sample, or, at the resolution of t, accumulated), never the ball passing through the floor.
+    h0, g, e = 0.5, 9.81, 0.45
+    times, v1 = _impact_times(h0, g, e, 2)
+    t_infinity = times[0] + 2 * e * v1 / (g * (1 - e))
+    sol = ball.simulate((0.0, 3.0), [h0], [0.0], params={"e": e, "g": g}, method=method, rtol=rtol, atol=rtol)
+    assert sol.status == Status.EVENTS_ACCUMULATED
+    assert sol.t[-1] == pytest.approx(t_infinity, rel=1e-9)
+    assert sol.q[:, 0].min() > -1e-15

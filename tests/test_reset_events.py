@@ -295,3 +295,16 @@ def test_a_reset_to_a_non_finite_state_stops_the_run_at_the_event(cache_dir, met
     assert "reset" in sol.message
     assert sol.t[-1] == pytest.approx(math.sqrt(2 * H0 / G), rel=1e-12)
     assert np.all(np.isfinite(sol.qd))
+
+
+@pytest.mark.parametrize("method", ["dop853", "dopri5", "taylor"])
+@pytest.mark.parametrize("rtol", [1e-12, 1e-8, 1e-6])
+@pytest.mark.parametrize("e, h0", [(0.45, 0.5), (0.8, 1.0), (0.3, 2.0)])
+def test_the_ball_never_passes_through_the_floor(ball, method, rtol, e, h0):
+    # Near t∞ a flight is shorter than the first sample after its impact (h/2048) or than the resolution of
+    # t: the first sample is already below the floor.  g left its zero upwards, so that is a return (bracketed,
+    # or at t: accumulated), never a ball falling through (before the fix: status 0 and x = -600 at t = 12).
+    sol = ball.simulate((0.0, 12.0), [h0], [0.0], params={"e": e}, method=method, rtol=rtol, atol=rtol)
+    assert sol.status == Status.EVENTS_ACCUMULATED
+    assert sol.t[-1] == pytest.approx(_accumulation(e, h0), rel=1e-9)
+    assert sol.q[:, 0].min() > -1e-14

@@ -19,6 +19,13 @@ import numpy as np
 from lagcomp.errors import OptionError
 from lagcomp.integrate.contacts import contacts_of
 from lagcomp.integrate.dae import DAE_RTOL_MIN
+from lagcomp.integrate.drivers.events import (
+    ACTION_IGNORE,
+    ACTION_IMPACT,
+    ACTION_RECORD,
+    ACTION_RESET,
+    ACTION_TERMINAL,
+)
 from lagcomp.integrate.memory import checked_limit
 from lagcomp.integrate.methods import (
     DEFAULT_IMPLICIT_SOLVER,
@@ -98,8 +105,8 @@ def tolerances(rtol, atol, m=None) -> tuple[float, float]:
 
 
 def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
-    """``directions`` and ``actions`` (0 off, 1 record, 2 record and stop, 3 record and reset the state) of the
-    model's events.
+    """``directions`` and ``actions`` (0 off, 1 record, 2 record and stop, 3 record and reset the state, 4 the
+    same for a contact's impact: `lagcomp.integrate.drivers.events`) of the model's events.
 
     An event with a reset changes the motion: a method that cannot apply it (`Method.kernels` without
     ``event_reset``) is refused unless the run leaves the event out by name (``events=False`` or a list).
@@ -132,7 +139,9 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
                           f"{method_names(lambda m: 'event_reset' in m.kernels)}, or leave them out "
                           "(`events=False`, or the names of the others) to integrate without the resets.")
     directions = np.array([e.direction for e in declared], dtype=np.int64)
-    actions = np.array([(3 if e.resets else 2 if e.terminal else 1) if e.name in chosen else 0 for e in declared],
+    impacts = {name for name, _, _ in contacts_of(model)}
+    actions = np.array([(ACTION_IMPACT if e.name in impacts else ACTION_RESET if e.resets else ACTION_TERMINAL
+                         if e.terminal else ACTION_RECORD) if e.name in chosen else ACTION_IGNORE for e in declared],
                        dtype=np.int64)
     return directions, actions
 

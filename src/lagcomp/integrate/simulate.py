@@ -340,7 +340,7 @@ def _refuse_resets_with_sensitivities(model, options: RunOptions) -> None:
     """Refuse `sensitivities=` on a run whose events reset the state: the jump of the sensitivities at a reset
     (the saltation matrix) is not computed."""
     resetting = [e.name for e, action in zip(model.events, options.actions.tolist(), strict=True)
-                 if action == ACTION_RESET]
+                 if action >= ACTION_RESET]
     if resetting:
         raise OptionError(f"`sensitivities=` on a run whose event(s) {resetting} reset the state: the jump of the "
                           "sensitivities at a reset (its saltation matrix) is not computed yet. Run without "

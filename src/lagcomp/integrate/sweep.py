@@ -318,7 +318,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     out = _allocate(n_traj, layout)
     spec = None        # the model's own module; a batched Taylor sweep has a module of its own
     if batched:
-        resetting = [e.name for e, action in zip(model.events, actions.tolist(), strict=True) if action == ACTION_RESET]
+        resetting = [e.name for e, action in zip(model.events, actions.tolist(), strict=True) if action >= ACTION_RESET]
         if resetting:
             raise OptionError(f"Event(s) {resetting} reset the state, which a batched sweep's lanes cannot do yet: "
                               "drop `batched` (each trajectory then runs with its own resets), or leave the events "

@@ -284,7 +284,7 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
     side = np.empty(n_events)
     rows_at_event = 1                   # output rows an event's step may add: 2 with a reset (before, after)
     for e in range(n_events):
-        if actions[e] == ACTION_RESET:
+        if actions[e] >= ACTION_RESET:
             rows_at_event = 2
 
     # The stiffness test, until the run is declared stiff; never with state arrays of another layout

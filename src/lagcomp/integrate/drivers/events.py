@@ -21,6 +21,10 @@ DENSE_SERIES, DENSE_POWERS, DENSE_CONTD8 = 0, 1, 2
 #: ``actions[e]``: 0 ignores event e, 1 records its crossings, 2 records them and stops the run, 3 records
 #: them and applies its reset (the model's ``event_reset``) at the first, after which the run goes on.
 ACTION_IGNORE, ACTION_RECORD, ACTION_TERMINAL, ACTION_RESET = 0, 1, 2, 3
+#: ``actions[e]`` 4: a reset that is a contact's impact (`lagcomp.model.contacts`): g is the gap, and the reset
+#: sends it away from its zero, never through it, so g found past its zero just after the impact is a return
+#: (`return_before`), never a departure.
+ACTION_IMPACT = 4
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -196,6 +200,56 @@ def record_events_between(event_values, kind, F, y, t, h, p, starts, g_start, en
 #: Points per step at which an event that starts the step at its zero is sampled (`restart_brackets`): at
 #: h 2^-k, k = RESTART_SAMPLES - 1 .. 0, the first at h/2048.
 RESTART_SAMPLES = 12
+#: How far below h/2048 `return_before` looks for g's departure from its zero: h 2^-k up to k = this (or until
+#: t + h 2^-k is t itself), below any time a double resolves next to t.
+REFINED_SAMPLES = 80
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def return_before(event_values, kind, F, y, t, h, p, e, direction, tau, g_tau, starts, g_start, ends, g_end,
+                  ywork, gwork):
+    """Whether event ``e``, at its zero at t after its reset (the state ``y``; g zero within rounding) and
+    found past it at ``tau`` (g = ``g_tau`` on the side the event fires into: below 0 for direction −1), came
+    back to it before ``tau`` rather than left it that way; a return's bracket goes to starts/ends[e].
+
+    g is sampled at t + (tau − t) 2^-k, k = `REFINED_SAMPLES`, ..., 1 (from the deepest that t can tell from t,
+    outwards), then at ``tau``.  The first sample where g differs from its value at t says which way g left its
+    zero: the way the event fires (a kick that carries on: False), or the other way (a bounce), and then g came
+    back: the bracket is [a sample on the other side, the next sample, past the zero], or, when no sample is on
+    the other side (g turned back within the rounding of t), [t, t], which the driver reports as accumulated
+    events.  ``gwork`` and ``ywork`` are overwritten.
+    """
+    event_values(t, y, p, gwork)
+    g_restart = gwork[e]                # (the drivers' g_old holds 0 for an event at its zero)
+    departed = 0.0                      # the sign g left its zero with (0: no sample told yet)
+    other_side = False                  # some sample on the side g left to
+    for k in range(REFINED_SAMPLES, -1, -1):
+        if k > 0:
+            inner = t + (tau - t) * 2.0 ** -k
+            if inner == t:
+                continue
+            dense_state(kind, F, y, t, h, inner, ywork)
+            event_values(inner, ywork, p, gwork)
+            g_inner = gwork[e]
+        else:
+            inner, g_inner = tau, g_tau
+        if departed == 0.0 and g_inner != g_restart:
+            departed = 1.0 if g_inner > g_restart else -1.0
+            if (departed < 0.0) == (direction < 0):
+                return False
+        if (g_inner > 0.0) if direction < 0 else (g_inner < 0.0):
+            other_side = True
+            starts[e] = inner
+            g_start[e] = g_inner
+        elif other_side:
+            ends[e] = inner
+            g_end[e] = g_inner
+            return True
+    if departed == 0.0:
+        return False
+    starts[e] = ends[e] = t
+    g_start[e] = g_end[e] = 0.0
+    return True
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -219,8 +273,11 @@ def restart_brackets(event_values, kind, F, y, t, h, p, at_zero, g_new, directio
     crossing the signs at the step's ends do not show.  g is sampled on the dense output at `RESTART_SAMPLES`
     points, dense near the start (t + h 2^-k: the step after a reset is the step before it, kept, often long
     against the motion that follows): the first sign change after g left 0 in the event's direction is bracketed
-    by the samples around it.  A return to 0 before the first sample (h/2048) is still missed.  ``side`` (E,)
-    is work space.
+    by the samples around it.  A return to 0 before the first sample (h/2048) shows as a first sample already
+    past the zero in the event's direction; `return_before` tells it from a departure that way (a kick that
+    carries on) by the way g left its zero, and brackets it.  After an impact (``ACTION_IMPACT``), whose gap
+    the impact sends away from its zero, a departure past it means the impacts accumulate at t.
+    ``side`` (E,) is work space.
     """
     n_events = g_new.shape[0]
     count = 0
@@ -229,6 +286,8 @@ def restart_brackets(event_values, kind, F, y, t, h, p, at_zero, g_new, directio
     for j in range(RESTART_SAMPLES - 1, -1, -1):
         if j > 0:
             tau = t + h * 2.0 ** -j
+            if tau == t:                # below the resolution of t: the state at t, not a sample after it
+                continue
             dense_state(kind, F, y, t, h, tau, ywork)
             event_values(tau, ywork, p, gwork)
         else:
@@ -247,11 +306,36 @@ def restart_brackets(event_values, kind, F, y, t, h, p, at_zero, g_new, directio
                     g_end[e] = v
                     count += 1
                     continue
+            if v != 0.0 and side[e] == 0.0 and directions[e] != 0 and (v < 0.0) == (directions[e] < 0):
+                # g's first sample after its reset is already past its zero: a return before it, or a departure
+                # that way, which an impact's gap never makes (the impacts then accumulate at t)
+                returned = return_before(event_values, kind, F, y, t, h, p, e, directions[e], tau, v, starts, g_start,
+                                         ends, g_end, ywork, gwork)
+                if returned or actions[e] == ACTION_IMPACT:
+                    if not returned:            # [t, t]: the impacts accumulate at t
+                        starts[e] = ends[e] = t
+                        g_start[e] = g_end[e] = 0.0
+                    crossed[e] = True
+                    count += 1
+                if j > 0:       # the other events' values at tau again (return_before used gwork)
+                    event_values(tau, ywork_at(kind, F, y, t, h, tau, ywork), p, gwork)
+                else:
+                    for other in range(n_events):
+                        gwork[other] = g_new[other]
+                if crossed[e]:
+                    continue
             if v != 0.0:
                 side[e] = 1.0 if v > 0.0 else -1.0
                 starts[e] = tau
                 g_start[e] = v
     return count
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def ywork_at(kind, F, y, t, h, tau, ywork):
+    """``ywork`` holding the state at ``tau`` on the step's dense output (`dense_state`), returned."""
+    dense_state(kind, F, y, t, h, tau, ywork)
+    return ywork
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -264,7 +348,7 @@ def resetting_event(te, ie, actions, first_row, n_rows, t_stop):
             action = actions[ie[r]]
             if action == ACTION_TERMINAL:
                 return -1
-            if action == ACTION_RESET and found < 0:
+            if action >= ACTION_RESET and found < 0:
                 found = ie[r]
     return found
 

@@ -145,7 +145,7 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
     side = np.empty(n_events)
     rows_at_event = 1                   # output rows an event's step may add: 2 with a reset (before, after)
     for e in range(n_events):
-        if actions[e] == ACTION_RESET:
+        if actions[e] >= ACTION_RESET:
             rows_at_event = 2
 
     n_saved = 0
