@@ -341,6 +341,22 @@ def event_gradients(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def event_reset(t, y, p, e, out):
+    """The state just after event e into `out`, shape (4,): `y`, the state just before, with what the
+    reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
+    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    out[0] = y[0]
+    out[1] = y[1]
+    out[2] = y[2]
+    out[3] = y[3]
+    return 0
+
+
+#: The events whose reset event_reset applies, the contacts' impacts included (none: the drivers take a library kernel that copies y, which numba has compiled already).
+RESET_EVENTS = ()
+
+
+@njit(cache=True, error_model="numpy")
 def rest_partials(t, y, p, out):
     """At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,
     column j the variable j). The velocities in `y` are ignored: the partials are those at rest."""
