@@ -200,3 +200,14 @@ def test_no_tunnelling_up_to_the_accumulation(ball, method, rtol):
     assert sol.status == Status.EVENTS_ACCUMULATED
     assert sol.t[-1] == pytest.approx(t_infinity, rel=1e-9)
     assert sol.q[:, 0].min() > -1e-15
+
+
+def test_impacts_record_their_impulses(ball, chain):
+    # One contact: P = m (v⁺ − v⁻) = m (1 + e) v⁻ (in N s for m in kg); three balls: the LCP's (4/3, 2/3).
+    sol = ball.simulate((0.0, 1.0), [1.25], [0.0], params={"e": 0.8, "g": 9.81, "m": 2.0}, rtol=1e-12, atol=1e-12)
+    floor = sol.events["floor"]
+    assert ball.contacts == ("floor",)
+    np.testing.assert_allclose(floor.impulses[:, 0], 2.0 * 1.8 * -floor.qd[:, 0], rtol=1e-13)
+    sol = chain.simulate((0.0, 1.0), [-0.5, 1.0, 2.0], [1.0, 0.0, 0.0], params={"m2": 1.0}, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(sol.events["c12"].impulses, [[4 / 3, 2 / 3]], rtol=1e-13)
+    assert sol.events["c23"].impulses.shape == (0, 2)

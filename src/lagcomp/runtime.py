@@ -317,6 +317,11 @@ class Model:
         return tuple(e.name for e in self.events)
 
     @property
+    def contacts(self) -> tuple[str, ...]:
+        """The names of the contacts (`lagcomp.Contact`), in order: the columns of an impact's ``impulses``."""
+        return tuple(name for name, _, _ in getattr(self.kernels, "CONTACTS", ()))
+
+    @property
     def n(self) -> int:
         return len(self.coordinates)
 

@@ -46,3 +46,33 @@ def check_contacts(model, t0: float, Y0: np.ndarray, P: np.ndarray, where=lambda
                 raise InitialConditionError(
                     f"Contact `{name}`{where(row)}: its gap is {values[event]:.6g} < 0 at t0 = {t0}: the bodies start "
                     "inside each other. Start with the gap >= 0 (touching is 0).")
+
+
+def impulses(model, p: np.ndarray, firing: int, t: np.ndarray, before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    """The contacts' normal impulses at the k impacts of event `firing` (a contact's): (k, C) at times `t` with
+    states `before` and `after` (k, N), columns the model's contacts in order (`contacts_of`).
+
+    From the jump itself: M (q̇⁺ − q̇⁻) = Gᵀ P over the contacts closed then (the firing one, and those whose gap
+    is within the impact solver's `CLOSED_GAP` scale), P by least squares (exact for independent contacts); 0
+    for the others.  In the units of
+    the gap's conjugate force times time (N s for a gap in metres).
+    """
+    contacts = contacts_of(model)
+    n, size = model.n, model.state_size
+    out = np.zeros((t.shape[0], len(contacts)))
+    events = [event for _, event, _ in contacts]
+    mass = np.empty((n, n))
+    values = np.empty(len(model.event_names))
+    gradients = np.empty((len(model.event_names), size + 1 + len(model.parameters)))
+    for row in range(t.shape[0]):
+        y = before[row]
+        model.kernels.mass_matrix(t[row], y, p, mass)
+        model.kernels.event_values(t[row], y, p, values)
+        model.kernels.event_gradients(t[row], y, p, gradients)
+        G = gradients[events, :n]
+        scale = np.abs(G) @ (np.abs(y[:n]) + 1.0)
+        closed = values[events] <= CLOSED_GAP * scale
+        closed[events.index(firing)] = True
+        jump = mass @ (after[row, n:size] - y[n:size])
+        out[row, closed] = np.linalg.lstsq(G[closed].T, jump, rcond=None)[0]
+    return out

@@ -23,8 +23,8 @@ import numpy as np
 from lagcomp.animation_bodies import BodyGeometry
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate import sensitivities as sens
-from lagcomp.integrate.contacts import check_contacts
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
+from lagcomp.integrate.contacts import check_contacts, contacts_of, impulses
 from lagcomp.integrate.dae import dae_state, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
 from lagcomp.integrate.drivers.run_state import STEP, RunState
@@ -37,7 +37,11 @@ from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
 from lagcomp.integrate.solution import EventRecord, Solution
 from lagcomp.integrate.status import Status
-from lagcomp.integrate.stiffness import ADVISED_FAILURES, stiffness_advice, warn_if_stiff
+from lagcomp.integrate.stiffness import (
+    ADVISED_FAILURES,
+    stiffness_advice,
+    warn_if_stiff,
+)
 
 #: Rows per output chunk: small runs allocate little, long ones grow to this.
 FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
@@ -178,7 +182,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
         recorder.add(np.array([state.t]), state.y[None, :width])  # keep the last good state
     run = dict(method=m.name, status=status, state=state, projected=projected,
-               residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, event_parts))
+               residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, p, event_parts))
     if columns is not None:
         run.update(sensitivities=recorder.sensitivities(), sensitivity_columns=columns, sensitivity_names=columns.names,
                    event_sensitivities=sens.event_sensitivities(model, p, columns, scale,
@@ -347,10 +351,10 @@ def _refuse_resets_with_sensitivities(model, options: RunOptions) -> None:
                           "`sensitivities`, or leave the events out (`events=False`).")
 
 
-def _event_records(model, event_parts) -> dict:
+def _event_records(model, p, event_parts) -> dict:
     """Occurrences of each declared event: {name: EventRecord(t, q, qd, q_after, qd_after)}, in time order (qd: u of a
     Kane model); the states after are those before for an event without a reset, NaN from a driver that does not
-    write them (radau, whose events cannot reset)."""
+    write them (radau, whose events cannot reset); a contact's impacts with their impulses."""
     if not model.events:
         return {}
     n, size = model.n, model.state_size
@@ -360,11 +364,14 @@ def _event_records(model, event_parts) -> dict:
         t_all, y_all, i_all = np.empty(0), np.empty((0, size)), np.empty(0, dtype=np.int64)
         after_all = y_all
     records = {}
+    contacts = {name for name, _, _ in contacts_of(model)}
     for index, event in enumerate(model.events):
         hit = i_all == index
         after = after_all[hit, :size] if event.resets else y_all[hit, :size]
-        records[event.name] = EventRecord(t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:size],
-                                          q_after=after[:, :n], qd_after=after[:, n:])
+        records[event.name] = EventRecord(
+            t=t_all[hit], q=y_all[hit, :n], qd=y_all[hit, n:size], q_after=after[:, :n], qd_after=after[:, n:],
+            impulses=(impulses(model, p, index, t_all[hit], y_all[hit, :size], after) if event.name in contacts
+                      else None))
     return records
 
 

@@ -14,13 +14,16 @@ from lagcomp.integrate.status import MESSAGES  # noqa: F401  (re-exported: a fai
 class EventRecord:
     """The occurrences of one event: times (k,), and coordinates and velocities (k, n) there, just before it
     (``q``, ``qd``) and just after it (``q_after``, ``qd_after``: the state its reset gave; the same as before
-    for an event without a reset; None in a record built without them)."""
+    for an event without a reset; None in a record built without them).  A contact's event (an impact) also
+    has ``impulses`` (k, C): the normal impulses of the model's contacts there (`Model.contacts`, in order; 0 for
+    a contact that did not take part), from M (q̇⁺ − q̇⁻) = Gᵀ P."""
 
     t: np.ndarray
     q: np.ndarray
     qd: np.ndarray
     q_after: np.ndarray | None = None
     qd_after: np.ndarray | None = None
+    impulses: np.ndarray | None = None
 
     def __len__(self) -> int:
         return self.t.shape[0]
@@ -239,7 +242,7 @@ class Solution:
             "constraint_residual": np.asarray(self.constraint_residual),
             **{f"reaction_{name}": values for name, values in self.reactions.items()},
             **{f"event_{name}_{part}": getattr(record, part)
-               for name, record in self.events.items() for part in ("t", "q", "qd", "q_after", "qd_after")
+               for name, record in self.events.items() for part in ("t", "q", "qd", "q_after", "qd_after", "impulses")
                if getattr(record, part) is not None},
             **({"sensitivities": self.sensitivities, "sensitivity_names": np.asarray(self.sensitivity_names)}
                if self.sensitivities is not None else {}),
