@@ -58,12 +58,15 @@ import numpy as np
 from numba import njit
 
 from lagcomp.errors import OptionError
+from lagcomp.integrate import taylor_sensitivities
 
 #: The groups of columns `sensitivities` may name: every coordinate's initial value, every velocity's
 #: (a Kane model's speeds: also "u0"), every parameter.
 GROUPS = ("q0", "qd0", "params")
 #: The driver that integrates sensitivities (every embedded pair runs on it).
 EMBEDDED_DRIVER = "lagcomp.integrate.drivers.embedded:embedded_run"
+#: The Taylor method's driver, which integrates them too (`lagcomp.integrate.taylor_sensitivities`).
+TAYLOR_DRIVER = "lagcomp.integrate.drivers.taylor:taylor_run"
 #: What the step-size control covers (see "Error control" above).
 CONTROLS = ("state", "both")
 #: The exact scale of the sensitivity columns under ``sensitivity_control="state"``.
@@ -123,9 +126,12 @@ def columns(model, requested) -> Columns:
 def check(model, method, options, cols: Columns, original_model) -> None:
     """Refuse what sensitivities cannot run with (see the module docstring); `original_model` is the model
     before `function_inputs.driven` wrapped it (another object when the inputs hold numba functions)."""
-    if method.driver != EMBEDDED_DRIVER:
+    if method.driver == TAYLOR_DRIVER:
+        taylor_sensitivities.check(model, cols)
+    elif method.driver != EMBEDDED_DRIVER:
         raise OptionError(f"`sensitivities` are integrated by the embedded Runge-Kutta pairs (dop853, dopri5, "
-                          f"tsit5, bs3); `{method.name}` does not integrate them yet: use dop853.")
+                          f"tsit5, bs3) and the Taylor method; `{method.name}` does not integrate them yet: use "
+                          "dop853.")
     refused = getattr(model.kernels, "RHS_JACOBIAN_REFUSED", None)
     if refused is not None:
         raise OptionError(f"`sensitivities` need the Jacobian ∂f/∂y of {model.name!r}, which has no Jacobian "
@@ -154,9 +160,11 @@ def scale_for(control) -> float:
     return STATE_ONLY_SCALE if control == "state" else 1.0
 
 
-def driver_tolerances(rtol: float, atol: float, cols: Columns, scale: float) -> tuple[float, float]:
-    """The (rtol, atol) the driver gets: divided by sqrt(1 + k) for state-only control (see the docstring)."""
-    if scale == 1.0:
+def driver_tolerances(rtol: float, atol: float, cols: Columns, scale: float, method=None) -> tuple[float, float]:
+    """The (rtol, atol) the driver gets: divided by sqrt(1 + k) for state-only control (see the docstring); the
+    Taylor method's as given (its step rule takes a max norm over the rows, which the scaled columns leave
+    alone)."""
+    if scale == 1.0 or (method is not None and method.driver == TAYLOR_DRIVER):
         return rtol, atol
     shrink = float(np.sqrt(1.0 + cols.k))
     return rtol / shrink, atol / shrink
@@ -198,6 +206,14 @@ class SensitivityKernels:
 #: {(generated module, n, parameter columns, scale): SensitivityKernels}, for the process.
 _AUGMENTED: dict = {}
 _LOCK = threading.Lock()
+
+
+def run_kernels(model, method, cols: Columns, scale: float):
+    """The kernels `method`'s driver takes for the augmented state: the Taylor method's variational kernel
+    (`lagcomp.integrate.taylor_sensitivities`), or the embedded pairs' `augmented_rhs` (`sensitivity_kernels`)."""
+    if method.driver == TAYLOR_DRIVER:
+        return taylor_sensitivities.taylor_kernels(model, cols.k)
+    return sensitivity_kernels(model.kernels, model.state_size, len(model.parameters), cols, scale)
 
 
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:

@@ -1,0 +1,218 @@
+r"""The Taylor program differentiated in forward mode: the series of the state and of its sensitivities.
+
+The Taylor program (`lagcomp.codegen.taylor`: elementary operations on series, stored with the model as data)
+computes the normalized coefficients u[k] of every intermediate value u(t) along the solution.  Differentiating
+each operation with respect to a direction of the initial state gives the tangent series u̇ (the sensitivity of
+u along that direction), one per sensitivity column; every recurrence has a tangent recurrence, linear in the
+tangents, from the derivative of the function (an identity between series, so exact in coefficients too):
+
+    w = a ± b, c a, a + c, c − a, −a     ẇ[k] = ȧ[k] ± ḃ[k], c ȧ[k], ȧ[k], −ȧ[k], −ȧ[k]
+    w = a b        ẇ[k] = Σ_{j=0..k} ȧ[j] b[k−j] + a[j] ḃ[k−j]
+    w = a²         ẇ[k] = 2 Σ_{j=0..k} a[j] ȧ[k−j]
+    w = a / b      ẇ = (ȧ − w ḃ)/b:  ẇ[k] = (ȧ[k] − Σ_{j=0..k} w[j] ḃ[k−j] − Σ_{j=1..k} b[j] ẇ[k−j]) / b[0]
+    w = c / b      the same with ȧ = 0
+    w = √a         ẇ = ȧ/(2w):  ẇ[k] = (ȧ[k] − 2 Σ_{j=1..k} w[j] ẇ[k−j]) / (2 w[0])
+    w = a^α        ẇ = α w ȧ/a:  ẇ[k] = (α Σ_{j=0..k} w[j] ȧ[k−j] − Σ_{j=1..k} a[j] ẇ[k−j]) / a[0]
+    w = exp a      ẇ = w ȧ:  ẇ[k] = Σ_{j=0..k} w[j] ȧ[k−j]
+    w = log a      ẇ = ȧ/a:  ẇ[k] = (ȧ[k] − Σ_{j=1..k} a[j] ẇ[k−j]) / a[0]
+    s, c = sin a, cos a
+                   ṡ[k] = Σ_{j=0..k} c[j] ȧ[k−j],  ċ[k] = −Σ_{j=0..k} s[j] ȧ[k−j]
+
+and the state's operation y[k+1] = f[k]/(k+1) gives Ṡ[k+1] = ḟ[k]/(k+1), ḟ = J S: the coefficients of the
+variational equations' solution S' = J S, with no Jacobian formed.  The tangents of order k need the values of
+order ≤ k (w[k] itself for a quotient): each order computes the values first, then the tangents column by column.
+Values that depend on the parameters only (the setup's scalars) and time have no tangent; a series computed from
+those alone has none either (`varying`).
+
+`variational_source` writes the kernel ``taylor_variational_coefficients(t, y, p, X, W)``, the signature of
+``taylor_coefficients`` (`lagcomp.integrate.drivers.kernel_types.TAYLOR`), over the augmented state
+y = (x, S[:, 0], ..., S[:, k−1]) of N (1 + k) components: X (N (1 + k), order + 1) the coefficients of x, then of
+each column of S, in y's layout; W (VARIATIONAL_ROWS (1 + k), order + 1) the work rows, the values first, then
+the tangents of each column.  k follows from y's size at run time, so one kernel serves every choice of initial-
+state columns.  The values are written by the same code as ``taylor_coefficients`` (`taylor_ops`), so the state
+rows of X are ``taylor_coefficients``'s.  `lagcomp.integrate.taylor_sensitivities` appends the kernel to the
+model's module and compiles it once per model (cached on disk like any module).
+
+Parameter columns are not covered: the setup's scalars are code over the parameters (the program stores them as
+text), so their partials ∂c/∂p are not in the data; the decomposition would have to store them.
+"""
+
+from __future__ import annotations
+
+from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, linear_line, pivot_test
+
+INDENT = "    "
+KERNEL = "taylor_variational_coefficients"
+
+
+def work_rows(program: dict) -> list[str]:
+    """The series held in rows of W, in order, as ``taylor_coefficients`` holds them (time first, if used)."""
+    outputs = [name for op in program["body"] for name in op["out"]]
+    return (["_t"] if program["uses_t"] else []) + outputs
+
+
+def _ops(program: dict) -> list[Op]:
+    return [Op(op["kind"], tuple(op["out"]), tuple(op["args"]), op["const"], op["index"]) for op in program["body"]]
+
+
+def varying(program: dict) -> set[str]:
+    """The series with a tangent: the state's, and those computed from one of them."""
+    names = set(program["states"])
+    for op in _ops(program):
+        if op.kind not in ("comment", "pivot", "state") and any(a in names for a in op.args):
+            names.update(op.out)
+    return names
+
+
+class _Writer:
+    """Code of coefficients of values (`at`) and of tangents of column ``_c`` (`tangent`)."""
+
+    def __init__(self, program: dict):
+        self.states = {name: i for i, name in enumerate(program["states"])}
+        self.rows = {name: i for i, name in enumerate(work_rows(program))}
+        self.varying = varying(program)
+
+    def at(self, name: str, index) -> str:
+        if name in self.states:
+            return f"X[{self.states[name]}, {index}]"
+        return f"W[{self.rows[name]}, {index}]"
+
+    def tangent(self, name: str, index) -> str:
+        if name in self.states:
+            return f"X[_bx + {self.states[name]}, {index}]"
+        return f"W[_bw + {self.rows[name]}, {index}]"
+
+    def moves(self, name: str) -> bool:
+        return name in self.varying
+
+    def _products(self, pairs: list[tuple[str, str]], first: int = 0) -> str:
+        """Σ_{j=first..k} of the products value a[j] × tangent b[k−j] for the pairs (a, b) whose b varies."""
+        terms = [f"{self.at(a, '_j')}*{self.tangent(b, 'k - _j')}" for a, b in pairs if self.moves(b)]
+        return " + ".join(terms)
+
+    def _loop(self, start: str, terms: str, first: int, sign: str = "+=") -> list[str]:
+        lines = [f"_s = {start}"]
+        if terms:
+            lines += [f"for _j in range({first}, k + 1):", f"{INDENT}_s {sign} {terms}"]
+        return lines
+
+    def tangent_lines(self, op: Op) -> list[str]:
+        """Coefficient k of the tangent of `op`'s result(s) in column ``_c`` (nothing when it has none)."""
+        kind, c = op.kind, op.const
+        if kind == "state":
+            (i,) = (op.index,)
+            value = (f"{self.tangent(op.args[0], 'k')}*_ik1" if op.args and self.moves(op.args[0]) else "0.0")
+            return [f"X[_bx + {i}, k + 1] = {value}"]
+        if kind in ("comment", "pivot") or not any(self.moves(a) for a in op.args):
+            return []
+        t, at = self.tangent, self.at
+        if kind in LINEAR:
+            (w,) = op.out
+            a, b = op.args[0], op.args[-1]
+            if kind == "add":
+                value = " + ".join(t(x, "k") for x in (a, b) if self.moves(x))
+            elif kind == "sub":
+                value = (f"{t(a, 'k')} - {t(b, 'k')}" if self.moves(a) and self.moves(b)
+                         else t(a, "k") if self.moves(a) else f"-{t(b, 'k')}")
+            else:
+                value = {"neg": f"-{t(a, 'k')}", "scale": f"{c}*{t(a, 'k')}", "add_const": t(a, "k"),
+                         "rsub_const": f"-{t(a, 'k')}"}[kind]
+            return [f"{t(w, 'k')} = {value}"]
+        if kind == "sin_cos":
+            (a,), (s, co) = op.args, op.out
+            return [*self._loop("0.0", self._products([(co, a)]), 0), f"{t(s, 'k')} = _s",
+                    *self._loop("0.0", self._products([(s, a)]), 0), f"{t(co, 'k')} = -_s"]
+        (w,) = op.out
+        a = op.args[0]
+        if kind == "mul":
+            b = op.args[1]
+            return [*self._loop("0.0", self._products([(b, a), (a, b)]), 0), f"{t(w, 'k')} = _s"]
+        if kind == "square":
+            return [*self._loop("0.0", self._products([(a, a)]), 0), f"{t(w, 'k')} = 2.0*_s"]
+        if kind == "exp":
+            return [*self._loop("0.0", self._products([(w, a)]), 0), f"{t(w, 'k')} = _s"]
+        if kind in ("div", "rdiv"):
+            b = op.args[-1]
+            top = t(a, "k") if kind == "div" and self.moves(a) else "0.0"
+            lines = [f"_s = {top}"]
+            if self.moves(b):
+                lines += ["for _j in range(0, k + 1):", f"{INDENT}_s -= {at(w, '_j')}*{t(b, 'k - _j')}"]
+            lines += ["for _j in range(1, k + 1):", f"{INDENT}_s -= {at(b, '_j')}*{t(w, 'k - _j')}"]
+            return [*lines, f"{t(w, 'k')} = _s/{at(b, 0)}"]
+        if kind == "sqrt":
+            return [f"_s = {t(a, 'k')}", "for _j in range(1, k + 1):",
+                    f"{INDENT}_s -= 2.0*{at(w, '_j')}*{t(w, 'k - _j')}", f"{t(w, 'k')} = _s/(2.0*{at(w, 0)})"]
+        if kind == "pow":
+            return [*self._loop("0.0", self._products([(w, a)]), 0), f"_s = {c}*_s",
+                    "for _j in range(1, k + 1):", f"{INDENT}_s -= {at(a, '_j')}*{t(w, 'k - _j')}",
+                    f"{t(w, 'k')} = _s/{at(a, 0)}"]
+        if kind == "log":
+            return [f"_s = {t(a, 'k')}", "for _j in range(1, k + 1):",
+                    f"{INDENT}_s -= {at(a, '_j')}*{t(w, 'k - _j')}", f"{t(w, 'k')} = _s/{at(a, 0)}"]
+        raise ValueError(f"no tangent recurrence for the operation {kind!r}")
+
+    def value_lines(self, op: Op) -> list[str]:
+        """Coefficient k of `op`'s value(s): the code of ``taylor_coefficients`` (`lagcomp.codegen.taylor`)."""
+        if op.kind == "comment":
+            return [f"# {op.const}"]
+        if op.kind == "pivot":
+            scale = self.at(op.args[1], 0) if len(op.args) > 1 else op.const
+            return [f"if k == 0 and not {pivot_test(self.at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
+        if op.kind == "state":
+            return [f"X[{op.index}, k + 1] = {linear_line(op, self.at)}*_ik1"]
+        if op.kind in LINEAR:
+            return [linear_line(op, self.at)]
+        summary, loop = convolution_loop(op, self.at)
+        return [f"# {summary}", *loop]
+
+
+def variational_source(program: dict) -> str:
+    """The source of ``taylor_variational_coefficients`` and ``VARIATIONAL_ROWS`` for `program` (see the
+    module docstring), to follow the model's module (it uses the module's imports: math, sin, cos, ...)."""
+    writer = _Writer(program)
+    n_state, rows, ops = program["n_state"], work_rows(program), _ops(program)
+    lines = [
+        '"""The Taylor coefficients of y = (x, S[:, 0], ..., S[:, k-1]): x\'s as `taylor_coefficients` computes',
+        "them (rows 0..N-1 of X), then those of each sensitivity column (rows N (1 + c) + i), from the",
+        "program differentiated in forward mode (lagcomp.codegen.taylor_variational); k = len(y)/N − 1.",
+        f"W: the work array, {max(len(rows), 1)} rows of values then as many per column.",
+        'Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""',
+        "order = X.shape[1] - 1",
+        f"_ncol = y.shape[0]//{n_state} - 1",
+    ]
+    for statement in (Setup(**entry) for entry in program["setup"]):
+        if statement.kind == "param":
+            lines.append(f"{statement.name} = p[{statement.index}]")
+        elif statement.kind == "constant":
+            lines.append(f"{statement.name} = {statement.code}")
+        elif statement.kind == "check":
+            lines += [f"if not {statement.code}:", f"{INDENT}return {statement.index}"]
+    lines += ["for i in range(y.shape[0]):", f"{INDENT}X[i, 0] = y[i]"]
+    if program["uses_t"]:
+        t_row = writer.at("_t", "k")
+        lines += ["for k in range(order + 1):", f"{INDENT}{t_row} = 0.0", f"{writer.at('_t', 0)} = t",
+                  "if order > 0:", f"{INDENT}{writer.at('_t', 1)} = 1.0"]
+    lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
+    lines += [INDENT + line for op in ops for line in writer.value_lines(op)]
+    lines += [f"{INDENT}# The tangents of order k, column by column.", f"{INDENT}for _c in range(_ncol):",
+              f"{INDENT * 2}_bx = {n_state}*(_c + 1)", f"{INDENT * 2}_bw = {max(len(rows), 1)}*(_c + 1)"]
+    for op in ops:
+        tangent = writer.tangent_lines(op)
+        if tangent and op.kind != "state":
+            tangent = [f"# d({', '.join(op.out)})", *tangent]
+        lines += [INDENT * 2 + line for line in tangent]
+    lines.append("return 0")
+    body = "\n".join(INDENT + line if line else "" for line in lines)
+    return (
+        '\n\n@njit(cache=True, error_model="numpy", fastmath={"contract"})\n'
+        f"def {KERNEL}(t, y, p, X, W):\n"
+        f"{body}\n\n\n"
+        f"#: Rows of the work array of `{KERNEL}` per column (values, then each column's tangents).\n"
+        f"VARIATIONAL_ROWS = {max(len(rows), 1)}\n"
+    )
+
+
+def variational_module(module_source: str, program: dict) -> str:
+    """The model's module (whole, so that it stands on its own for numba's cache) and the variational kernel."""
+    return (module_source.rstrip("\n") + f"\n\n\n# {'-' * 76}\n# The Taylor program differentiated in forward mode"
+            " (lagcomp.codegen.taylor_variational)\n" + variational_source(program))
