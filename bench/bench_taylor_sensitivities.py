@@ -1,0 +1,118 @@
+"""Taylor-method sensitivities: lagcomp's variational program against heyoka's ``var_ode_sys``, in one process.
+
+    python -m bench.bench_taylor_sensitivities [--repeats 7]
+
+The double pendulum (m = l = 1, g = 9.81) from a regular state (θ = (0.5, 0.3) at rest) and a chaotic one
+(θ = (2, 1)), the 4 × 4 sensitivities ∂y(t)/∂y(0) with the state, to t_end = 10 and 100:
+
+* lagcomp: ``simulate(method="taylor", sensitivities=("q0", "qd0"))`` (the Taylor program differentiated in
+  forward mode, `lagcomp.codegen.taylor_variational`; the state's steps), ``save_every`` large so that only the
+  end is kept;
+* heyoka: ``taylor_adaptive(var_ode_sys(sys, var_args.vars, order=1))`` on the hand-reduced ODE (the form
+  `bench.bench_taylor` uses), ``propagate_until``.
+
+Both at the same tolerance (machine precision, each one's default, and 1e-10).  The reference is heyoka's
+variational run in 80-bit long double at its default tolerance (ε = 1.1e-19), independent of both.  Errors are
+max abs over the components, relative to the reference's largest (state and sensitivities apart).  Times are of
+the integration only (both compiled before: heyoka's JIT and numba's kernels), the median of `--repeats`
+interleaved pairs; the ratio is lagcomp / heyoka (below 1: lagcomp faster).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from bench.harness import interleaved_times, paired
+
+P = [1.0, 1.0, 1.0, 1.0, 9.81]
+STARTS = {"regular": np.array([0.5, 0.3, 0.0, 0.0]), "chaotic": np.array([2.0, 1.0, 0.0, 0.0])}
+EPS = float(np.finfo(float).eps)
+
+
+def heyoka_system():
+    """The double pendulum's ODE in heyoka's expressions (as `bench.bench_taylor.heyoka_pendulum`'s reduced one)."""
+    import heyoka as hy
+
+    th1, th2, w1, w2 = hy.make_vars("th1", "th2", "w1", "w2")
+    m1, m2, l1, l2, g = (hy.par[i] for i in range(5))
+    d = th1 - th2
+    a11, a12, a22 = (m1 + m2) * l1**2, m2 * l1 * l2 * hy.cos(d), m2 * l2**2
+    f1 = -m2 * l1 * l2 * w2**2 * hy.sin(d) - (m1 + m2) * g * l1 * hy.sin(th1)
+    f2 = m2 * l1 * l2 * w1**2 * hy.sin(d) - m2 * g * l2 * hy.sin(th2)
+    det = a11 * a22 - a12**2
+    return [(th1, w1), (th2, w2), (w1, (a22 * f1 - a12 * f2) / det), (w2, (a11 * f2 - a12 * f1) / det)]
+
+
+def heyoka_runner(y0: np.ndarray, t_end: float, tol: float | None, long_double: bool = False):
+    """run() -> (state (4,), sensitivities (4, 4)) at t_end by heyoka's variational Taylor integrator."""
+    import heyoka as hy
+
+    system = hy.var_ode_sys(heyoka_system(), hy.var_args.vars, order=1)
+    kind = np.longdouble if long_double else float
+    options = dict(fp_type=np.longdouble) if long_double else {}
+    if tol is not None:
+        options["tol"] = kind(tol)
+    ta = hy.taylor_adaptive(system, [kind(v) for v in y0], pars=[kind(v) for v in P], **options)
+    start = np.array(ta.state, copy=True)     # y0 and the identity, as heyoka sets them
+
+    def run():
+        ta.time = kind(0.0)
+        ta.state[:] = start
+        ta.propagate_until(kind(t_end))
+        state = np.array(ta.state, dtype=float)
+        return state[:4], state[4:].reshape(4, 4)     # row i: ∂y_i/∂y_j(0), j along the row
+    return run
+
+
+def lagcomp_runner(model, y0: np.ndarray, t_end: float, tol: float):
+    def run():
+        sol = model.simulate((0.0, t_end), y0[:2], y0[2:], method="taylor", rtol=tol, atol=tol,
+                             sensitivities=("q0", "qd0"), save_every=1_000_000, progress=False)
+        return sol.y[-1], sol.sensitivities[-1]
+    return run
+
+
+def _errors(result, reference) -> tuple[float, float]:
+    (y, S), (y_ref, S_ref) = result, reference
+    return (float(np.abs(y - y_ref).max() / np.abs(y_ref).max()),
+            float(np.abs(S - S_ref).max() / np.abs(S_ref).max()))
+
+
+def measure(repeats: int = 7, cache_dir=None) -> list[dict]:
+    import lagcomp as lc
+    from lagcomp import examples
+
+    model = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
+    rows = []
+    for start, y0 in STARTS.items():
+        for t_end in (10.0, 100.0):
+            reference = heyoka_runner(y0, t_end, None, long_double=True)()
+            for tol in (EPS, 1e-10):
+                ours = lagcomp_runner(model, y0, t_end, tol)
+                theirs = heyoka_runner(y0, t_end, tol)
+                ours_times, theirs_times = interleaved_times([ours, theirs], repeats=repeats)
+                ratio = paired(ours_times, theirs_times)
+                rows.append(dict(start=start, t_end=t_end, tol=tol, lagcomp=_errors(ours(), reference),
+                                 heyoka=_errors(theirs(), reference), lagcomp_ms=1e3 * float(np.median(ours_times)),
+                                 heyoka_ms=1e3 * float(np.median(theirs_times)), ratio=ratio.median))
+    return rows
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=7)
+    args = parser.parse_args(argv)
+    print("double pendulum, ∂y(t)/∂y(0) (k = 4); errors vs heyoka in long double (relative max abs); "
+          f"time: median of {args.repeats} interleaved pairs")
+    print(f"{'start':8} {'t_end':>6} {'tol':>8} {'lc err y':>9} {'lc err S':>9} {'hy err y':>9} {'hy err S':>9} "
+          f"{'lc ms':>8} {'hy ms':>8} {'lc/hy':>6}")
+    for r in measure(args.repeats):
+        print(f"{r['start']:8} {r['t_end']:6g} {r['tol']:8.2g} {r['lagcomp'][0]:9.1e} {r['lagcomp'][1]:9.1e} "
+              f"{r['heyoka'][0]:9.1e} {r['heyoka'][1]:9.1e} {r['lagcomp_ms']:8.2f} {r['heyoka_ms']:8.2f} "
+              f"{r['ratio']:6.2f}")
+
+
+if __name__ == "__main__":
+    main()
