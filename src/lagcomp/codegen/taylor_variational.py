@@ -65,11 +65,13 @@ def varying(program: dict) -> set[str]:
 
 
 class _Writer:
-    """Code of coefficients of values (`at`) and of tangents of column ``_c`` (`tangent`)."""
+    """Code of coefficients of values (`at`) and of the tangents of column c (`tangent`), for `columns` columns."""
 
-    def __init__(self, program: dict):
+    def __init__(self, program: dict, columns: int):
+        self.n_state, self.columns = program["n_state"], columns
         self.states = {name: i for i, name in enumerate(program["states"])}
         self.rows = {name: i for i, name in enumerate(work_rows(program))}
+        self.row_count = max(len(self.rows), 1)
         self.varying = varying(program)
 
     def at(self, name: str, index) -> str:
@@ -77,78 +79,91 @@ class _Writer:
             return f"X[{self.states[name]}, {index}]"
         return f"W[{self.rows[name]}, {index}]"
 
-    def tangent(self, name: str, index) -> str:
+    def tangent(self, name: str, index, c: int) -> str:
+        """Coefficient `index` of the tangent of `name` in column `c`: a row of X (a state's) or W (constant)."""
         if name in self.states:
-            return f"X[_bx + {self.states[name]}, {index}]"
-        return f"W[_bw + {self.rows[name]}, {index}]"
+            return f"X[{self.n_state * (1 + c) + self.states[name]}, {index}]"
+        return f"W[{self.row_count * (1 + c) + self.rows[name]}, {index}]"
 
     def moves(self, name: str) -> bool:
         return name in self.varying
 
-    def _products(self, pairs: list[tuple[str, str]], first: int = 0) -> str:
-        """Σ_{j=first..k} of the products value a[j] × tangent b[k−j] for the pairs (a, b) whose b varies."""
-        terms = [f"{self.at(a, '_j')}*{self.tangent(b, 'k - _j')}" for a, b in pairs if self.moves(b)]
-        return " + ".join(terms)
+    def _columns(self, line) -> list[str]:
+        """``line(c)`` for every column."""
+        return [line(c) for c in range(self.columns)]
 
-    def _loop(self, start: str, terms: str, first: int, sign: str = "+=") -> list[str]:
-        lines = [f"_s = {start}"]
-        if terms:
-            lines += [f"for _j in range({first}, k + 1):", f"{INDENT}_s {sign} {terms}"]
-        return lines
+    def _sum_over(self, first: int, init, terms, finish) -> list[str]:
+        """Every column's accumulator(s) ``_s{c}`` (and ``_r{c}``): `init(c)` lines, then for j = first..k the
+        statements `terms(c)`, then `finish(c)`.  The columns' sums are independent chains in one loop over j:
+        the products of one j share their loads, and the chains overlap in the pipeline."""
+        lines = [line for c in range(self.columns) for line in init(c)]
+        lines += [f"for _j in range({first}, k + 1):"] + [INDENT + line for c in range(self.columns) for line in terms(c)]
+        return lines + [line for c in range(self.columns) for line in finish(c)]
 
     def tangent_lines(self, op: Op) -> list[str]:
-        """Coefficient k of the tangent of `op`'s result(s) in column ``_c`` (nothing when it has none)."""
-        kind, c = op.kind, op.const
+        """Coefficient k of the tangents of `op`'s result(s) in every column (nothing when it has none)."""
+        kind, const, t, at = op.kind, op.const, self.tangent, self.at
         if kind == "state":
-            (i,) = (op.index,)
-            value = (f"{self.tangent(op.args[0], 'k')}*_ik1" if op.args and self.moves(op.args[0]) else "0.0")
-            return [f"X[_bx + {i}, k + 1] = {value}"]
+            moves = op.args and self.moves(op.args[0])
+            return self._columns(lambda c: f"X[{self.n_state * (1 + c) + op.index}, k + 1] = "
+                                 + (f"{t(op.args[0], 'k', c)}*_ik1" if moves else "0.0"))
         if kind in ("comment", "pivot") or not any(self.moves(a) for a in op.args):
             return []
-        t, at = self.tangent, self.at
         if kind in LINEAR:
             (w,) = op.out
             a, b = op.args[0], op.args[-1]
-            if kind == "add":
-                value = " + ".join(t(x, "k") for x in (a, b) if self.moves(x))
-            elif kind == "sub":
-                value = (f"{t(a, 'k')} - {t(b, 'k')}" if self.moves(a) and self.moves(b)
-                         else t(a, "k") if self.moves(a) else f"-{t(b, 'k')}")
-            else:
-                value = {"neg": f"-{t(a, 'k')}", "scale": f"{c}*{t(a, 'k')}", "add_const": t(a, "k"),
-                         "rsub_const": f"-{t(a, 'k')}"}[kind]
-            return [f"{t(w, 'k')} = {value}"]
+
+            def value(c):
+                if kind == "add":
+                    return " + ".join(t(x, "k", c) for x in (a, b) if self.moves(x))
+                if kind == "sub":
+                    return (f"{t(a, 'k', c)} - {t(b, 'k', c)}" if self.moves(a) and self.moves(b)
+                            else t(a, "k", c) if self.moves(a) else f"-{t(b, 'k', c)}")
+                return {"neg": f"-{t(a, 'k', c)}", "scale": f"{const}*{t(a, 'k', c)}", "add_const": t(a, "k", c),
+                        "rsub_const": f"-{t(a, 'k', c)}"}[kind]
+            return self._columns(lambda c: f"{t(w, 'k', c)} = {value(c)}")
         if kind == "sin_cos":
             (a,), (s, co) = op.args, op.out
-            return [*self._loop("0.0", self._products([(co, a)]), 0), f"{t(s, 'k')} = _s",
-                    *self._loop("0.0", self._products([(s, a)]), 0), f"{t(co, 'k')} = -_s"]
+            return self._sum_over(
+                0, lambda c: [f"_s{c} = 0.0", f"_r{c} = 0.0"],
+                lambda c: [f"_s{c} += {at(co, '_j')}*{t(a, 'k - _j', c)}", f"_r{c} += {at(s, '_j')}*{t(a, 'k - _j', c)}"],
+                lambda c: [f"{t(s, 'k', c)} = _s{c}", f"{t(co, 'k', c)} = -_r{c}"])
         (w,) = op.out
         a = op.args[0]
         if kind == "mul":
             b = op.args[1]
-            return [*self._loop("0.0", self._products([(b, a), (a, b)]), 0), f"{t(w, 'k')} = _s"]
-        if kind == "square":
-            return [*self._loop("0.0", self._products([(a, a)]), 0), f"{t(w, 'k')} = 2.0*_s"]
-        if kind == "exp":
-            return [*self._loop("0.0", self._products([(w, a)]), 0), f"{t(w, 'k')} = _s"]
-        if kind in ("div", "rdiv"):
+
+            def terms(c):
+                products = [f"{t(a, '_j', c)}*{at(b, 'k - _j')}" for _ in (0,) if self.moves(a)]
+                products += [f"{at(a, '_j')}*{t(b, 'k - _j', c)}" for _ in (0,) if self.moves(b)]
+                return [f"_s{c} += {' + '.join(products)}"]
+            return self._sum_over(0, lambda c: [f"_s{c} = 0.0"], terms, lambda c: [f"{t(w, 'k', c)} = _s{c}"])
+        if kind in ("square", "exp"):
+            base, factor = (a, "2.0*") if kind == "square" else (w, "")
+            return self._sum_over(0, lambda c: [f"_s{c} = 0.0"], lambda c: [f"_s{c} += {at(base, '_j')}*{t(a, 'k - _j', c)}"],
+                                  lambda c: [f"{t(w, 'k', c)} = {factor}_s{c}"])
+        if kind in ("div", "rdiv"):   # ẇ[k] b[0] = ȧ[k] − w[0] ḃ[k] − Σ_{j=1..k} (w[j] ḃ[k−j] + b[j] ẇ[k−j])
             b = op.args[-1]
-            top = t(a, "k") if kind == "div" and self.moves(a) else "0.0"
-            lines = [f"_s = {top}"]
+            top = (lambda c: t(a, "k", c)) if kind == "div" and self.moves(a) else (lambda c: "0.0")
             if self.moves(b):
-                lines += ["for _j in range(0, k + 1):", f"{INDENT}_s -= {at(w, '_j')}*{t(b, 'k - _j')}"]
-            lines += ["for _j in range(1, k + 1):", f"{INDENT}_s -= {at(b, '_j')}*{t(w, 'k - _j')}"]
-            return [*lines, f"{t(w, 'k')} = _s/{at(b, 0)}"]
-        if kind == "sqrt":
-            return [f"_s = {t(a, 'k')}", "for _j in range(1, k + 1):",
-                    f"{INDENT}_s -= 2.0*{at(w, '_j')}*{t(w, 'k - _j')}", f"{t(w, 'k')} = _s/(2.0*{at(w, 0)})"]
-        if kind == "pow":
-            return [*self._loop("0.0", self._products([(w, a)]), 0), f"_s = {c}*_s",
-                    "for _j in range(1, k + 1):", f"{INDENT}_s -= {at(a, '_j')}*{t(w, 'k - _j')}",
-                    f"{t(w, 'k')} = _s/{at(a, 0)}"]
-        if kind == "log":
-            return [f"_s = {t(a, 'k')}", "for _j in range(1, k + 1):",
-                    f"{INDENT}_s -= {at(a, '_j')}*{t(w, 'k - _j')}", f"{t(w, 'k')} = _s/{at(a, 0)}"]
+                init = lambda c: [f"_s{c} = {top(c)} - {at(w, 0)}*{t(b, 'k', c)}"]  # noqa: E731
+                terms = lambda c: [f"_s{c} -= {at(w, '_j')}*{t(b, 'k - _j', c)} + {at(b, '_j')}*{t(w, 'k - _j', c)}"]  # noqa: E731
+            else:
+                init = lambda c: [f"_s{c} = {top(c)}"]  # noqa: E731
+                terms = lambda c: [f"_s{c} -= {at(b, '_j')}*{t(w, 'k - _j', c)}"]  # noqa: E731
+            return self._sum_over(1, init, terms, lambda c: [f"{t(w, 'k', c)} = _s{c}/{at(b, 0)}"])
+        if kind == "sqrt":            # 2 w[0] ẇ[k] = ȧ[k] − 2 Σ_{j=1..k} w[j] ẇ[k−j]
+            return self._sum_over(1, lambda c: [f"_s{c} = 0.0"], lambda c: [f"_s{c} += {at(w, '_j')}*{t(w, 'k - _j', c)}"],
+                                  lambda c: [f"{t(w, 'k', c)} = ({t(a, 'k', c)} - 2.0*_s{c})/(2.0*{at(w, 0)})"])
+        if kind == "pow":             # a[0] ẇ[k] = α Σ_{j=0..k} w[j] ȧ[k−j] − Σ_{j=1..k} a[j] ẇ[k−j]
+            return self._sum_over(
+                1, lambda c: [f"_s{c} = {at(w, 0)}*{t(a, 'k', c)}", f"_r{c} = 0.0"],
+                lambda c: [f"_s{c} += {at(w, '_j')}*{t(a, 'k - _j', c)}", f"_r{c} += {at(a, '_j')}*{t(w, 'k - _j', c)}"],
+                lambda c: [f"{t(w, 'k', c)} = ({const}*_s{c} - _r{c})/{at(a, 0)}"])
+        if kind == "log":             # a[0] ẇ[k] = ȧ[k] − Σ_{j=1..k} a[j] ẇ[k−j]
+            return self._sum_over(1, lambda c: [f"_s{c} = {t(a, 'k', c)}"],
+                                  lambda c: [f"_s{c} -= {at(a, '_j')}*{t(w, 'k - _j', c)}"],
+                                  lambda c: [f"{t(w, 'k', c)} = _s{c}/{at(a, 0)}"])
         raise ValueError(f"no tangent recurrence for the operation {kind!r}")
 
     def value_lines(self, op: Op) -> list[str]:
@@ -166,19 +181,19 @@ class _Writer:
         return [f"# {summary}", *loop]
 
 
-def variational_source(program: dict) -> str:
-    """The source of ``taylor_variational_coefficients`` and ``VARIATIONAL_ROWS`` for `program` (see the
-    module docstring), to follow the model's module (it uses the module's imports: math, sin, cos, ...)."""
-    writer = _Writer(program)
-    n_state, rows, ops = program["n_state"], work_rows(program), _ops(program)
+def variational_source(program: dict, columns: int) -> str:
+    """The source of ``taylor_variational_coefficients`` for `columns` sensitivity columns and of
+    ``VARIATIONAL_COLUMNS`` and ``VARIATIONAL_WORK`` (rows of W) for `program` (see the module docstring), to
+    follow the model's module (it uses the module's imports: math, sin, cos, ...)."""
+    writer = _Writer(program, columns)
+    n_state, ops, rows = program["n_state"], _ops(program), writer.row_count
     lines = [
-        '"""The Taylor coefficients of y = (x, S[:, 0], ..., S[:, k-1]): x\'s as `taylor_coefficients` computes',
-        "them (rows 0..N-1 of X), then those of each sensitivity column (rows N (1 + c) + i), from the",
-        "program differentiated in forward mode (lagcomp.codegen.taylor_variational); k = len(y)/N − 1.",
-        f"W: the work array, {max(len(rows), 1)} rows of values then as many per column.",
+        f'"""The Taylor coefficients of y = (x, S[:, 0], ..., S[:, {columns - 1}]): x\'s as `taylor_coefficients`',
+        "computes them (rows 0..N-1 of X), then those of each sensitivity column (rows N (1 + c) + i), from",
+        "the program differentiated in forward mode (lagcomp.codegen.taylor_variational).  W: the work",
+        f"array, {rows} rows of values, then as many of tangents per column.",
         'Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""',
         "order = X.shape[1] - 1",
-        f"_ncol = y.shape[0]//{n_state} - 1",
     ]
     for statement in (Setup(**entry) for entry in program["setup"]):
         if statement.kind == "param":
@@ -187,32 +202,31 @@ def variational_source(program: dict) -> str:
             lines.append(f"{statement.name} = {statement.code}")
         elif statement.kind == "check":
             lines += [f"if not {statement.code}:", f"{INDENT}return {statement.index}"]
-    lines += ["for i in range(y.shape[0]):", f"{INDENT}X[i, 0] = y[i]"]
+    lines += [f"for i in range({n_state * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
     if program["uses_t"]:
-        t_row = writer.at("_t", "k")
-        lines += ["for k in range(order + 1):", f"{INDENT}{t_row} = 0.0", f"{writer.at('_t', 0)} = t",
+        lines += ["for k in range(order + 1):", f"{INDENT}{writer.at('_t', 'k')} = 0.0", f"{writer.at('_t', 0)} = t",
                   "if order > 0:", f"{INDENT}{writer.at('_t', 1)} = 1.0"]
     lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
     lines += [INDENT + line for op in ops for line in writer.value_lines(op)]
-    lines += [f"{INDENT}# The tangents of order k, column by column.", f"{INDENT}for _c in range(_ncol):",
-              f"{INDENT * 2}_bx = {n_state}*(_c + 1)", f"{INDENT * 2}_bw = {max(len(rows), 1)}*(_c + 1)"]
+    lines.append(f"{INDENT}# The tangents of order k.")
     for op in ops:
         tangent = writer.tangent_lines(op)
         if tangent and op.kind != "state":
             tangent = [f"# d({', '.join(op.out)})", *tangent]
-        lines += [INDENT * 2 + line for line in tangent]
+        lines += [INDENT + line for line in tangent]
     lines.append("return 0")
     body = "\n".join(INDENT + line if line else "" for line in lines)
     return (
         '\n\n@njit(cache=True, error_model="numpy", fastmath={"contract"})\n'
         f"def {KERNEL}(t, y, p, X, W):\n"
         f"{body}\n\n\n"
-        f"#: Rows of the work array of `{KERNEL}` per column (values, then each column's tangents).\n"
-        f"VARIATIONAL_ROWS = {max(len(rows), 1)}\n"
+        f"#: The sensitivity columns of `{KERNEL}`, and the rows of its work array W.\n"
+        f"VARIATIONAL_COLUMNS = {columns}\nVARIATIONAL_WORK = {rows * (1 + columns)}\n"
     )
 
 
-def variational_module(module_source: str, program: dict) -> str:
-    """The model's module (whole, so that it stands on its own for numba's cache) and the variational kernel."""
+def variational_module(module_source: str, program: dict, columns: int) -> str:
+    """The model's module (whole, so that it stands on its own for numba's cache) and the variational kernel
+    for `columns` columns."""
     return (module_source.rstrip("\n") + f"\n\n\n# {'-' * 76}\n# The Taylor program differentiated in forward mode"
-            " (lagcomp.codegen.taylor_variational)\n" + variational_source(program))
+            f", {columns} columns (lagcomp.codegen.taylor_variational)\n" + variational_source(program, columns))

@@ -19,7 +19,7 @@ import threading
 
 from lagcomp.errors import OptionError
 
-#: {generated module: the module holding its variational kernel}, for the process.
+#: {(generated module, k): the module holding its variational kernel for k columns}, for the process.
 _MODULES: dict = {}
 _LOCK = threading.Lock()
 
@@ -36,30 +36,31 @@ def check(model, cols) -> None:
             "initial-state columns (q0, qd0) are integrated by it; use method='dop853' for parameter columns.")
 
 
-def variational_module(model):
-    """The module of `model`'s kernels with ``taylor_variational_coefficients`` appended (built once per process
-    and model; on disk in the model's cache root, so that numba compiles the kernel once)."""
+def variational_module(model, k: int):
+    """The module of `model`'s kernels with ``taylor_variational_coefficients`` for `k` columns appended (built
+    once per process, model and k; on disk in the model's cache root, so that numba compiles the kernel once)."""
     from lagcomp.cache import Cache, load_module, source_key
     from lagcomp.codegen.taylor_variational import variational_module as source_of
 
     with _LOCK:
-        if model.kernels not in _MODULES:
-            source = source_of(model.source_path.read_text(encoding="utf-8"), model._taylor_program)
+        key = (model.kernels, k)
+        if key not in _MODULES:
+            source = source_of(model.source_path.read_text(encoding="utf-8"), model._taylor_program, k)
             cache = Cache(str(model.source_path.parent.parent))
             entry = cache.store(f"variational-{source_key(source)}", source, model.name, {})
-            _MODULES[model.kernels] = load_module(entry)
-        return _MODULES[model.kernels]
+            _MODULES[key] = load_module(entry)
+        return _MODULES[key]
 
 
 class TaylorSensitivityKernels:
-    """The model's kernels as `taylor_run` takes them (`Method.kernels`) for an augmented state of `k` columns:
-    ``taylor_coefficients`` the variational kernel, ``TAYLOR_WORK`` its work rows for k columns; the others
-    (``event_values``, ``TAYLOR_PERIODIC``: they read x's components only) the model's."""
+    """The model's kernels as `taylor_run` takes them (`Method.kernels`) for an augmented state: ``taylor_coefficients``
+    the variational kernel of `variational` (a module of `variational_module`), ``TAYLOR_WORK`` its work rows; the
+    others (``event_values``, ``TAYLOR_PERIODIC``: they read x's components only) the model's."""
 
-    def __init__(self, module, variational, k: int):
+    def __init__(self, module, variational):
         self._module = module
         self.taylor_coefficients = variational.taylor_variational_coefficients
-        self.TAYLOR_WORK = variational.VARIATIONAL_ROWS * (1 + k)
+        self.TAYLOR_WORK = variational.VARIATIONAL_WORK
 
     def __getattr__(self, name):
         return getattr(self._module, name)
@@ -71,9 +72,9 @@ _KERNELS: dict = {}
 
 def taylor_kernels(model, k: int) -> TaylorSensitivityKernels:
     """The one `TaylorSensitivityKernels` of `model`'s module for `k` columns in this process."""
-    variational = variational_module(model)
+    variational = variational_module(model, k)
     with _LOCK:
         key = (model.kernels, k)
         if key not in _KERNELS:
-            _KERNELS[key] = TaylorSensitivityKernels(model.kernels, variational, k)
+            _KERNELS[key] = TaylorSensitivityKernels(model.kernels, variational)
         return _KERNELS[key]
