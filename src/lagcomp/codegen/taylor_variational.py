@@ -70,9 +70,13 @@ class _Writer:
     def __init__(self, program: dict, columns: int):
         self.n_state, self.columns = program["n_state"], columns
         self.states = {name: i for i, name in enumerate(program["states"])}
+        self.slots_state = list(program["states"])
         self.rows = {name: i for i, name in enumerate(work_rows(program))}
         self.row_count = max(len(self.rows), 1)
         self.varying = varying(program)
+        # the tangent series, states first: slot s holds coefficient j of column c at T[_t{s} + j*columns + c]
+        self.slots = {name: s for s, name in enumerate(
+            [*program["states"], *(name for name in work_rows(program) if name in self.varying)])}
 
     def at(self, name: str, index) -> str:
         if name in self.states:
@@ -80,10 +84,14 @@ class _Writer:
         return f"W[{self.rows[name]}, {index}]"
 
     def tangent(self, name: str, index, c: int) -> str:
-        """Coefficient `index` of the tangent of `name` in column `c`: a row of X (a state's) or W (constant)."""
-        if name in self.states:
-            return f"X[{self.n_state * (1 + c) + self.states[name]}, {index}]"
-        return f"W[{self.row_count * (1 + c) + self.rows[name]}, {index}]"
+        """Coefficient `index` of the tangent of `name` in column `c`, in T (the columns of a coefficient are
+        adjacent: the loads of a convolution's k chains are one vector)."""
+        return f"T[_t{self.slots[name]} + ({index})*{self.columns} + {c}]"
+
+    @property
+    def tangent_rows(self) -> int:
+        """Rows of W (of order + 1 floats) that T takes: every slot's coefficients of every column."""
+        return len(self.slots) * self.columns
 
     def moves(self, name: str) -> bool:
         return name in self.varying
@@ -105,8 +113,10 @@ class _Writer:
         kind, const, t, at = op.kind, op.const, self.tangent, self.at
         if kind == "state":
             moves = op.args and self.moves(op.args[0])
-            return self._columns(lambda c: f"X[{self.n_state * (1 + c) + op.index}, k + 1] = "
-                                 + (f"{t(op.args[0], 'k', c)}*_ik1" if moves else "0.0"))
+            state = self.slots_state[op.index]
+            return [line for c in range(self.columns) for line in (
+                f"{t(state, 'k + 1', c)} = " + (f"{t(op.args[0], 'k', c)}*_ik1" if moves else "0.0"),
+                f"X[{self.n_state * (1 + c) + op.index}, k + 1] = {t(state, 'k + 1', c)}")]
         if kind in ("comment", "pivot") or not any(self.moves(a) for a in op.args):
             return []
         if kind in LINEAR:
@@ -203,6 +213,10 @@ def variational_source(program: dict, columns: int) -> str:
         elif statement.kind == "check":
             lines += [f"if not {statement.code}:", f"{INDENT}return {statement.index}"]
     lines += [f"for i in range({n_state * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
+    lines += ["T = W.reshape(-1)   # the tangents, after the values' rows"]
+    lines += [f"_t{s} = ({rows} + {s * columns})*(order + 1)" for s in range(len(writer.slots))]
+    lines += [f"{writer.tangent(name, 0, c)} = y[{n_state * (1 + c) + i}]"
+              for i, name in enumerate(program["states"]) for c in range(columns)]
     if program["uses_t"]:
         lines += ["for k in range(order + 1):", f"{INDENT}{writer.at('_t', 'k')} = 0.0", f"{writer.at('_t', 0)} = t",
                   "if order > 0:", f"{INDENT}{writer.at('_t', 1)} = 1.0"]
@@ -221,7 +235,7 @@ def variational_source(program: dict, columns: int) -> str:
         f"def {KERNEL}(t, y, p, X, W):\n"
         f"{body}\n\n\n"
         f"#: The sensitivity columns of `{KERNEL}`, and the rows of its work array W.\n"
-        f"VARIATIONAL_COLUMNS = {columns}\nVARIATIONAL_WORK = {rows * (1 + columns)}\n"
+        f"VARIATIONAL_COLUMNS = {columns}\nVARIATIONAL_WORK = {rows + writer.tangent_rows}\n"
     )
 
 
