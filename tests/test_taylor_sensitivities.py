@@ -1,4 +1,4 @@
-"""Sensitivities with the Taylor method (`lagcomp.integrate.taylor_sensitivities`, `lagcomp.codegen.taylor_variational`).
+"""Sensitivities with the Taylor method (`lagcomp.integrate.taylor_sensitivities`, `codegen.taylor_variational`).
 
 Oracles: a linear oscillator's closed form; DOP853's sensitivities and Richardson-extrapolated central
 differences of Taylor runs for the double pendulum at t = 10 (issue #22: 1e-8 relative); DOP853's for a system

@@ -41,6 +41,11 @@ crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the 
 
 ∂g/∂w nonzero only for a parameter in g; a grazing crossing (denominator 0) gives inf or nan.
 
+Taylor method.  ``method="taylor"`` integrates the same augmented state with the library's Taylor driver, whose
+kernel is the model's Taylor program differentiated in forward mode (`lagcomp.integrate.taylor_sensitivities`):
+initial-state columns only (parameter columns refused), the state's steps under "state" (a max norm, which the
+scaled columns leave alone: no division of the tolerances), both under "both" (heyoka's ``var_ode_sys``'s rule).
+
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
 Lagrange models, today); located events that read inputs (their module's ``event_gradients`` is a
 refusing stub, ``EVENT_GRADIENTS_REFUSED`` says why); projection; function inputs (their
