@@ -86,7 +86,16 @@ def _errors(result, reference) -> tuple[float, float]:
             float(np.abs(S - S_ref).max() / np.abs(S_ref).max()))
 
 
-def measure(repeats: int = 7, cache_dir=None) -> list[dict]:
+def fixed_cost(model, repeats: int) -> float:
+    """Milliseconds of a lagcomp sensitivity run of one short step: what `simulate` costs besides the steps
+    (options, the recorder, the Solution), which a short run pays in full (heyoka's ``propagate_until``: µs)."""
+    run = lagcomp_runner(model, STARTS["regular"], 1e-9, EPS)
+    (times,) = interleaved_times([run], repeats=repeats)
+    return 1e3 * float(np.median(times))
+
+
+def measure(repeats: int = 7, cache_dir=None) -> tuple[list[dict], float]:
+    """The rows of the table, and lagcomp's fixed cost (`fixed_cost`)."""
     import lagcomp as lc
     from lagcomp import examples
 
@@ -101,7 +110,7 @@ def measure(repeats: int = 7, cache_dir=None) -> list[dict]:
             for name, run, own in zip(("heyoka", *(f"lagcomp {c}" for c in CONTROLS)), runs, times, strict=True):
                 rows.append(dict(start=start, t_end=t_end, tol=tol, run=name, errors=_errors(run(), reference),
                                  ms=1e3 * float(np.median(own)), ratio=paired(own, times[0]).median))
-    return rows
+    return rows, fixed_cost(model, repeats)
 
 
 def main(argv=None) -> None:
@@ -111,9 +120,11 @@ def main(argv=None) -> None:
     print("double pendulum, ∂y(t)/∂y(0) (k = 4); errors vs heyoka in long double (relative max abs); "
           f"time: median of {args.repeats} interleaved rounds, × heyoka: median of the per-round ratios")
     print(f"{'start':8} {'t_end':>6} {'tol':>8} {'run':16} {'err y':>8} {'err S':>8} {'ms':>8} {'× heyoka':>9}")
-    for r in measure(args.repeats):
+    rows, fixed = measure(args.repeats)
+    for r in rows:
         print(f"{r['start']:8} {r['t_end']:6g} {r['tol']:8.2g} {r['run']:16} {r['errors'][0]:8.1e} "
               f"{r['errors'][1]:8.1e} {r['ms']:8.2f} {r['ratio']:9.2f}")
+    print(f"lagcomp's fixed cost of a run (one short step, included above): {fixed:.2f} ms")
 
 
 if __name__ == "__main__":
