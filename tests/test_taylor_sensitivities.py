@@ -2,7 +2,8 @@
 
 Oracles: a linear oscillator's closed form; DOP853's sensitivities and Richardson-extrapolated central
 differences of Taylor runs for the double pendulum at t = 10 (issue #22: 1e-8 relative); DOP853's for a system
-whose program holds every operation with a tangent recurrence (div, sqrt, pow, exp, log, sin/cos, time).
+whose program holds every operation with a tangent recurrence (div, sqrt, pow, exp, log, sin/cos, time), and
+for parameter columns.
 """
 
 from __future__ import annotations
@@ -37,11 +38,13 @@ def pendulum(compiled):
 @pytest.fixture(scope="module")
 def zoo(cache_dir):
     """Every operation with a tangent recurrence: a mass matrix depending on y (div, LDLᵀ), sqrt, a real power,
-    exp, log, sin and cos, and time (a forcing in V)."""
-    T = ((2 + sp.cos(y)) * x.diff(t) ** 2 + y.diff(t) ** 2 + x.diff(t) * y.diff(t) * sp.sin(y)) / 2
-    V = (sp.exp(x / 3) + sp.sqrt(1 + y**2) + x * sp.log(2 + x**2) + (3 + x * y) ** sp.Rational(1, 3)
-         + x * sp.cos(t) / 4)
-    system = lc.System([x, y], T=T, V=V, name="taylor_sensitivity_zoo", q0=(0.3, -0.2), qd0=(0.1, 0.4))
+    exp, log, sin and cos, and time (a forcing in V); parameters in scalars of several kinds."""
+    a, b, c = sp.symbols("a b c", positive=True)
+    T = ((c + sp.cos(y)) * x.diff(t) ** 2 + y.diff(t) ** 2 + x.diff(t) * y.diff(t) * sp.sin(y)) / 2
+    V = (a * sp.exp(x / 3) + sp.sqrt(b + y**2) + x * sp.log(2 + x**2) + (3 + x * y) ** sp.Rational(1, 3)
+         + x * sp.cos(t) / (4 * a * b))
+    system = lc.System([x, y], T=T, V=V, name="taylor_sensitivity_zoo", defaults={"a": 1.0, "b": 1.5, "c": 2.0},
+                       q0=(0.3, -0.2), qd0=(0.1, 0.4))
     return lc.compile(system, cache_dir=cache_dir)
 
 
@@ -107,15 +110,27 @@ def test_both_control_takes_more_steps_and_agrees(pendulum):
     assert np.abs(both.sensitivities[-1] - state.sensitivities[-1]).max() < 1e-9 * scale
 
 
-def test_every_operation_against_dop853_with_t_eval(zoo):
+@pytest.mark.parametrize("control", ["state", "both"])
+def test_every_operation_against_dop853_with_t_eval(zoo, control):
     t_eval = np.linspace(0.0, 5.0, 11)
-    sol = zoo.simulate((0.0, 5.0), sensitivities=("q0", "qd0"), t_eval=t_eval, **TAYLOR)
+    columns = ("q0", "qd0", "params")
+    sol = zoo.simulate((0.0, 5.0), sensitivities=columns, sensitivity_control=control, t_eval=t_eval, **TAYLOR)
     ops = {op["kind"] for op in zoo._taylor_program["body"]}
     assert {"div", "sqrt", "pow", "exp", "log", "sin_cos", "mul", "square"} <= ops and zoo._taylor_program["uses_t"]
-    dop853 = zoo.simulate((0.0, 5.0), sensitivities=("q0", "qd0"), t_eval=t_eval, method="dop853", rtol=1e-13,
+    dop853 = zoo.simulate((0.0, 5.0), sensitivities=columns, t_eval=t_eval, method="dop853", rtol=1e-13,
                           atol=1e-13, progress=False)
-    scale = np.abs(sol.sensitivities).max()
-    assert np.abs(sol.sensitivities - dop853.sensitivities).max() < 1e-10 * scale   # measured 4.5e-13
+    assert sol.sensitivity_names[4:] == ("p:a", "p:b", "p:c")
+    error = np.abs(sol.sensitivities - dop853.sensitivities).max(axis=(0, 1))
+    assert (error < 1e-10 * np.abs(dop853.sensitivities).max(axis=(0, 1))).all(), error   # measured ≤ 5e-13
+
+
+def test_parameter_columns_of_the_double_pendulum(pendulum):
+    sol = _pendulum_run(pendulum, PENDULUM_STATE, sensitivities="params", **TAYLOR)
+    dop853 = _pendulum_run(pendulum, PENDULUM_STATE, sensitivities="params", method="dop853", rtol=1e-13, atol=1e-13,
+                           progress=False)
+    assert sol.sensitivity_names == ("p:m1", "p:m2", "p:l1", "p:l2", "p:g")
+    error = np.abs(sol.sensitivities[-1] - dop853.sensitivities[-1]).max(axis=0)
+    assert (error < 1e-10 * np.abs(dop853.sensitivities[-1]).max(axis=0)).all(), error   # measured ≤ 5e-12
 
 
 def test_event_sensitivities_match_dop853(compiled):
@@ -131,8 +146,11 @@ def test_event_sensitivities_match_dop853(compiled):
         assert np.abs(ours.y - theirs.y).max() < 1e-9 * np.abs(theirs.y).max()
 
 
-def test_refusals(pendulum, compiled):
-    with pytest.raises(lc.OptionError, match="method='taylor'"):
+def test_refusals(pendulum, compiled, monkeypatch):
+    older = {key: value for key, value in pendulum._taylor_program.items() if key != "parameter_partials"}
+    monkeypatch.setattr(pendulum, "_taylor_program", older)     # a program stored before the partials
+    with pytest.raises(lc.OptionError, match="compile the model again"):
         pendulum.simulate((0.0, 1.0), sensitivities=("q0", "params"), **TAYLOR)
+    monkeypatch.undo()
     with pytest.raises(lc.OptionError, match="constraints"):    # as Taylor refuses such models without them
         compiled("spherical_pendulum_cartesian").simulate((0.0, 1.0), sensitivities="q0", **TAYLOR)

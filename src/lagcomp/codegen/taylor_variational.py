@@ -37,13 +37,17 @@ written by the same code as ``taylor_coefficients`` (`taylor_ops`), so the state
 ``taylor_coefficients``'s.  `lagcomp.integrate.taylor_sensitivities` appends the kernel to the model's module
 and compiles it once per model and k (cached on disk like any module).
 
-Parameter columns are not covered: the setup's scalars are code over the parameters (the program stores them as
-text), so their partials ∂c/∂p are not in the data; the decomposition would have to store them.
+Parameter columns: the tangent with respect to p_j starts at 0 (the state does not depend on p_j at t0) and
+enters through the program's scalars: p_j itself (tangent 1), and every scalar computed from parameters, whose
+partial ∂c/∂p_j the decomposition stores with the setup (``partial`` statements, `lagcomp.codegen.taylor`).
+An operation with a scalar operand then gets its term: w = c a → ẇ = ċ a + c ȧ; w = a + c → ẇ[0] += ċ;
+w = c − a → ẇ[0] = ċ − ȧ[0]; w = c / b → the quotient's rule with ȧ = ċ at order 0; a constant derivative of
+the state → its tangent at order 0.  That is ∂f/∂p_j in the column's Ṡ, with no ∂f/∂p formed.
 """
 
 from __future__ import annotations
 
-from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, linear_line, pivot_test
+from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, linear_line, partial_name, pivot_test
 
 INDENT = "    "
 KERNEL = "taylor_variational_coefficients"
@@ -59,28 +63,60 @@ def _ops(program: dict) -> list[Op]:
     return [Op(op["kind"], tuple(op["out"]), tuple(op["args"]), op["const"], op["index"]) for op in program["body"]]
 
 
-def varying(program: dict) -> set[str]:
-    """The series with a tangent: the state's, and those computed from one of them."""
+class _Constants:
+    """The tangents of the program's scalars: a parameter's own column gets `scale` (the columns' factor,
+    `lagcomp.integrate.sensitivities`), a scalar its setup's ``partial`` (times `scale`), any other nothing."""
+
+    def __init__(self, program: dict, parameters: tuple[int, ...], scale: float):
+        self.parameters, self.scale = parameters, scale
+        self.own = {entry["name"]: entry["index"] for entry in program["setup"] if entry["kind"] == "param"}
+        self.partials = {entry["name"] for entry in program["setup"] if entry["kind"] == "partial"}
+
+    def tangent(self, const: str, j: int | None) -> str | None:
+        """The code of ∂const/∂p_j (times the scale), or None when it is 0 (j None: an initial-state column)."""
+        if j is None:
+            return None
+        if self.own.get(const) == j:
+            return repr(self.scale)
+        if partial_name(const, j) in self.partials:
+            partial = partial_name(const, j)
+            return partial if self.scale == 1.0 else f"{self.scale!r}*{partial}"
+        return None
+
+    def varies(self, const: str) -> bool:
+        return any(self.tangent(const, j) is not None for j in self.parameters)
+
+
+def varying(program: dict, constants: _Constants) -> set[str]:
+    """The series with a tangent: the state's, and those computed from one of them or from a scalar with one."""
     names = set(program["states"])
     for op in _ops(program):
-        if op.kind not in ("comment", "pivot", "state") and any(a in names for a in op.args):
+        if op.kind not in ("comment", "pivot", "state") and (any(a in names for a in op.args)
+                                                             or constants.varies(op.const)):
             names.update(op.out)
     return names
 
 
 class _Writer:
-    """Code of coefficients of values (`at`) and of the tangents of column c (`tangent`), for `columns` columns."""
+    """Code of coefficients of values (`at`) and of the tangents of column c (`tangent`), for `columns` columns,
+    the last of them those of the `parameters` (indices into p)."""
 
-    def __init__(self, program: dict, columns: int):
+    def __init__(self, program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0):
         self.n_state, self.columns = program["n_state"], columns
+        self.column_parameter = [None] * (columns - len(parameters)) + list(parameters)
+        self.constants = _Constants(program, parameters, scale)
         self.states = {name: i for i, name in enumerate(program["states"])}
         self.slots_state = list(program["states"])
         self.rows = {name: i for i, name in enumerate(work_rows(program))}
         self.row_count = max(len(self.rows), 1)
-        self.varying = varying(program)
+        self.varying = varying(program, self.constants)
         # the tangent series, states first: slot s holds coefficient j of column c at T[_t{s} + j*columns + c]
         self.slots = {name: s for s, name in enumerate(
             [*program["states"], *(name for name in work_rows(program) if name in self.varying)])}
+
+    def constant(self, const: str, c: int) -> str | None:
+        """The tangent of the scalar `const` in column `c` (code), None for 0."""
+        return self.constants.tangent(const, self.column_parameter[c])
 
     def at(self, name: str, index) -> str:
         if name in self.states:
@@ -117,25 +153,37 @@ class _Writer:
         """Coefficient k of the tangents of `op`'s result(s) in every column (nothing when it has none)."""
         kind, const, t, at = op.kind, op.const, self.tangent, self.at
         if kind == "state":
-            moves = op.args and self.moves(op.args[0])
+            def derivative(c):
+                if op.args:
+                    return f"{t(op.args[0], 'k', c)}*_ik1" if self.moves(op.args[0]) else "0.0"
+                tangent = self.constant(const, c)     # a constant derivative: its tangent at order 0 only
+                return "0.0" if tangent is None else f"({tangent} if k == 0 else 0.0)"
             state = self.slots_state[op.index]
             return [line for c in range(self.columns) for line in (
-                f"{t(state, 'k + 1', c)} = " + (f"{t(op.args[0], 'k', c)}*_ik1" if moves else "0.0"),
+                f"{t(state, 'k + 1', c)} = {derivative(c)}",
                 f"X[{self.n_state * (1 + c) + op.index}, k + 1] = {t(state, 'k + 1', c)}")]
-        if kind in ("comment", "pivot") or not any(self.moves(a) for a in op.args):
+        if kind in ("comment", "pivot") or not self.moves(op.out[0]):
             return []
         if kind in LINEAR:
             (w,) = op.out
             a, b = op.args[0], op.args[-1]
 
             def value(c):
-                if kind == "add":
-                    return " + ".join(t(x, "k", c) for x in (a, b) if self.moves(x))
-                if kind == "sub":
-                    return (f"{t(a, 'k', c)} - {t(b, 'k', c)}" if self.moves(a) and self.moves(b)
-                            else t(a, "k", c) if self.moves(a) else f"-{t(b, 'k', c)}")
-                return {"neg": f"-{t(a, 'k', c)}", "scale": f"{const}*{t(a, 'k', c)}", "add_const": t(a, "k", c),
-                        "rsub_const": f"-{t(a, 'k', c)}"}[kind]
+                if kind in ("add", "sub"):
+                    terms = [f"+ {t(a, 'k', c)}"] if self.moves(a) else []
+                    terms += [f"{'+' if kind == 'add' else '-'} {t(b, 'k', c)}"] if self.moves(b) else []
+                else:   # ẇ = c ȧ + ċ a (scale), ȧ + ċ δ_k0 (add_const), ċ δ_k0 − ȧ (rsub_const), −ȧ (neg)
+                    sign = "-" if kind in ("neg", "rsub_const") else "+"
+                    factor = f"{const}*" if kind == "scale" else ""
+                    terms = [f"{sign} {factor}{t(a, 'k', c)}"] if self.moves(a) else []
+                    tangent = self.constant(const, c) if kind != "neg" else None
+                    if tangent is not None:
+                        terms.append(f"+ {tangent}*{at(a, 'k')}" if kind == "scale"
+                                     else f"+ ({tangent} if k == 0 else 0.0)")
+                if not terms:
+                    return "0.0"
+                first = terms[0][2:] if terms[0].startswith("+") else f"-{terms[0][2:]}"
+                return " ".join([first, *terms[1:]])
             return self._columns(lambda c: f"{t(w, 'k', c)} = {value(c)}")
         if kind == "sin_cos":
             (a,), (s, co) = op.args, op.out
@@ -161,7 +209,12 @@ class _Writer:
                                   lambda c: [f"{t(w, 'k', c)} = {factor}_s{c}"])
         if kind in ("div", "rdiv"):   # ẇ[k] b[0] = ȧ[k] − w[0] ḃ[k] − Σ_{j=1..k} (w[j] ḃ[k−j] + b[j] ẇ[k−j])
             b = op.args[-1]
-            top = (lambda c: t(a, "k", c)) if kind == "div" and self.moves(a) else (lambda c: "0.0")
+
+            def top(c):   # ȧ[k] (div), or ċ δ_k0 for a constant numerator (rdiv)
+                if kind == "div":
+                    return t(a, "k", c) if self.moves(a) else "0.0"
+                tangent = self.constant(const, c)
+                return "0.0" if tangent is None else f"({tangent} if k == 0 else 0.0)"
             if self.moves(b):
                 init = lambda c: [f"_s{c} = {top(c)} - {at(w, 0)}*{t(b, 'k', c)}"]  # noqa: E731
                 terms = lambda c: [f"_s{c} -= {at(w, '_j')}*{t(b, 'k - _j', c)} + {at(b, '_j')}*{t(w, 'k - _j', c)}"]  # noqa: E731
@@ -200,11 +253,13 @@ class _Writer:
         return [f"# {summary}", *loop]
 
 
-def variational_source(program: dict, columns: int) -> str:
-    """The source of ``taylor_variational_coefficients`` for `columns` sensitivity columns and of
-    ``VARIATIONAL_COLUMNS`` and ``VARIATIONAL_WORK`` (rows of W) for `program` (see the module docstring), to
-    follow the model's module (it uses the module's imports: math, sin, cos, ...)."""
-    writer = _Writer(program, columns)
+def variational_source(program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0) -> str:
+    """The source of ``taylor_variational_coefficients`` for `columns` sensitivity columns, the last of them
+    those of `parameters` (indices into p), and of ``VARIATIONAL_COLUMNS`` and ``VARIATIONAL_WORK`` (rows of W)
+    for `program` (see the module docstring), to follow the model's module (it uses the module's imports:
+    math, sin, cos, ...).  `scale` is the columns' factor (`lagcomp.integrate.sensitivities`): the seeds of
+    the parameter columns, the initial-state ones' coming with y."""
+    writer = _Writer(program, columns, parameters, scale)
     n_state, ops, rows = program["n_state"], _ops(program), writer.row_count
     lines = [
         f'"""The Taylor coefficients of y = (x, S[:, 0], ..., S[:, {columns - 1}]): x\'s as `taylor_coefficients`',
@@ -221,6 +276,8 @@ def variational_source(program: dict, columns: int) -> str:
             lines.append(f"{statement.name} = {statement.code}")
         elif statement.kind == "check":
             lines += [f"if not {statement.code}:", f"{INDENT}return {statement.index}"]
+        elif statement.kind == "partial" and statement.index in parameters:
+            lines.append(f"{statement.name} = {statement.code}")
     lines += [f"for i in range({n_state * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
     lines += ["T = W.reshape(-1)   # the tangents, after the values' rows"]
     lines += [f"_t{s} = ({rows} + {s * columns})*(order + 1)" for s in range(len(writer.slots))]
@@ -248,8 +305,10 @@ def variational_source(program: dict, columns: int) -> str:
     )
 
 
-def variational_module(module_source: str, program: dict, columns: int) -> str:
+def variational_module(module_source: str, program: dict, columns: int, parameters: tuple[int, ...] = (),
+                       scale: float = 1.0) -> str:
     """The model's module (whole, so that it stands on its own for numba's cache) and the variational kernel
-    for `columns` columns."""
+    (`variational_source`)."""
     return (module_source.rstrip("\n") + f"\n\n\n# {'-' * 76}\n# The Taylor program differentiated in forward mode"
-            f", {columns} columns (lagcomp.codegen.taylor_variational)\n" + variational_source(program, columns))
+            f", {columns} columns (lagcomp.codegen.taylor_variational)\n"
+            + variational_source(program, columns, parameters, scale))

@@ -43,7 +43,7 @@ crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the 
 
 Taylor method.  ``method="taylor"`` integrates the same augmented state with the library's Taylor driver, whose
 kernel is the model's Taylor program differentiated in forward mode (`lagcomp.integrate.taylor_sensitivities`):
-initial-state columns only (parameter columns refused), the state's steps under "state" (a max norm, which the
+every column (a parameter's through the partials of the program's scalars), the state's steps under "state" (a max norm, which the
 scaled columns leave alone: no division of the tolerances), both under "both" (heyoka's ``var_ode_sys``'s rule).
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
@@ -217,7 +217,7 @@ def run_kernels(model, method, cols: Columns, scale: float):
     """The kernels `method`'s driver takes for the augmented state: the Taylor method's variational kernel
     (`lagcomp.integrate.taylor_sensitivities`), or the embedded pairs' `augmented_rhs` (`sensitivity_kernels`)."""
     if method.driver == TAYLOR_DRIVER:
-        return taylor_sensitivities.taylor_kernels(model, cols.k)
+        return taylor_sensitivities.taylor_kernels(model, cols, scale)
     return sensitivity_kernels(model.kernels, model.state_size, len(model.parameters), cols, scale)
 
 
