@@ -42,9 +42,10 @@ crossing condition g(t*(w), y(t*(w), w), w) = 0, with the exact partials of the 
 ∂g/∂w nonzero only for a parameter in g; a grazing crossing (denominator 0) gives inf or nan.
 
 Taylor method.  ``method="taylor"`` integrates the same augmented state with the library's Taylor driver, whose
-kernel is the model's Taylor program differentiated in forward mode (`lagcomp.integrate.taylor_sensitivities`):
-every column (a parameter's through the partials of the program's scalars), the state's steps under "state" (a max norm, which the
-scaled columns leave alone: no division of the tolerances), both under "both" (heyoka's ``var_ode_sys``'s rule).
+kernel is the model's Taylor program differentiated in forward mode (`lagcomp.integrate.taylor_sensitivities`;
+a parameter's column through the partials of the program's scalars).  Its step rule takes a max norm, which the
+scaled columns leave alone, so the tolerances are not divided: the state's steps under "state", the steps of
+both under "both" (the rule of heyoka's ``var_ode_sys``).
 
 Refused (`OptionError`, docs/errors.md): other methods; models without a Jacobian kernel (constrained
 Lagrange models, today); located events that read inputs (their module's ``event_gradients`` is a
