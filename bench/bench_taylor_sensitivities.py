@@ -3,7 +3,8 @@
     python -m bench.bench_taylor_sensitivities [--repeats 7]
 
 The double pendulum (m = l = 1, g = 9.81) from a regular state (θ = (0.5, 0.3) at rest) and a chaotic one
-(θ = (2, 1)), the 4 × 4 sensitivities ∂y(t)/∂y(0) with the state, to t_end = 10 and 100:
+(θ = (2, 1)), the 4 × 4 sensitivities ∂y(t)/∂y(0) with the state, to t_end = 10 and 100, and once with the
+five parameters' columns too (k = 9; heyoka: ``var_args.vars | var_args.params``):
 
 * lagcomp: ``simulate(method="taylor", sensitivities=("q0", "qd0"))`` (the Taylor program differentiated in
   forward mode, `lagcomp.codegen.taylor_variational`; the state's steps), ``save_every`` large so that only the
@@ -29,8 +30,9 @@ from bench.harness import interleaved_times, paired
 P = [1.0, 1.0, 1.0, 1.0, 9.81]
 STARTS = {"regular": np.array([0.5, 0.3, 0.0, 0.0]), "chaotic": np.array([2.0, 1.0, 0.0, 0.0])}
 EPS = float(np.finfo(float).eps)
-#: (start, t_end): the chaotic start loses every digit of S by t = 100 (|S| ~ 1e8), so it stops at 10.
-CASES = (("regular", 10.0), ("regular", 100.0), ("chaotic", 10.0))
+#: (start, t_end, parameter columns too): the chaotic start loses every digit of S by t = 100 (|S| ~ 1e8), so
+#: it stops at 10.
+CASES = (("regular", 10.0, False), ("regular", 100.0, False), ("chaotic", 10.0, False), ("regular", 100.0, True))
 #: lagcomp's `sensitivity_control`s: "both" is heyoka's (its step rule's norm covers the variational
 #: components too: the same steps and errors), "state" lagcomp's default (a plain run's steps).
 CONTROLS = ("both", "state")
@@ -50,11 +52,13 @@ def heyoka_system():
     return [(th1, w1), (th2, w2), (w1, (a22 * f1 - a12 * f2) / det), (w2, (a11 * f2 - a12 * f1) / det)]
 
 
-def heyoka_runner(y0: np.ndarray, t_end: float, tol: float | None, long_double: bool = False):
-    """run() -> (state (4,), sensitivities (4, 4)) at t_end by heyoka's variational Taylor integrator."""
+def heyoka_runner(y0: np.ndarray, t_end: float, tol: float | None, long_double: bool = False, params=False):
+    """run() -> (state (4,), sensitivities (4, k)) at t_end by heyoka's variational Taylor integrator: k = 4
+    columns ∂/∂y(0), then with `params` the 5 ∂/∂p."""
     import heyoka as hy
 
-    system = hy.var_ode_sys(heyoka_system(), hy.var_args.vars, order=1)
+    wrt = hy.var_args.vars | hy.var_args.params if params else hy.var_args.vars
+    system = hy.var_ode_sys(heyoka_system(), wrt, order=1)
     kind = np.longdouble if long_double else float
     options = dict(fp_type=np.longdouble) if long_double else {}
     if tol is not None:
@@ -67,14 +71,16 @@ def heyoka_runner(y0: np.ndarray, t_end: float, tol: float | None, long_double: 
         ta.state[:] = start
         ta.propagate_until(kind(t_end))
         state = np.array(ta.state, dtype=float)
-        return state[:4], state[4:].reshape(4, 4)     # row i: ∂y_i/∂y_j(0), j along the row
+        return state[:4], state[4:].reshape(4, -1)     # row i: ∂y_i/∂y_j(0) (then ∂y_i/∂p_j) along the row
     return run
 
 
-def lagcomp_runner(model, y0: np.ndarray, t_end: float, tol: float, control: str = "both"):
+def lagcomp_runner(model, y0: np.ndarray, t_end: float, tol: float, control: str = "both", params=False):
+    columns = ("q0", "qd0", "params") if params else ("q0", "qd0")
+
     def run():
         sol = model.simulate((0.0, t_end), y0[:2], y0[2:], method="taylor", rtol=tol, atol=tol,
-                             sensitivities=("q0", "qd0"), sensitivity_control=control, save_every=1_000_000,
+                             sensitivities=columns, sensitivity_control=control, save_every=1_000_000,
                              progress=False)
         return sol.y[-1], sol.sensitivities[-1]
     return run
@@ -101,14 +107,16 @@ def measure(repeats: int = 7, cache_dir=None) -> tuple[list[dict], float]:
 
     model = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
     rows = []
-    for start, t_end in CASES:
+    for start, t_end, params in CASES:
         y0 = STARTS[start]
-        reference = heyoka_runner(y0, t_end, None, long_double=True)()
+        reference = heyoka_runner(y0, t_end, None, long_double=True, params=params)()
         for tol in (EPS, 1e-10):
-            runs = [heyoka_runner(y0, t_end, tol)] + [lagcomp_runner(model, y0, t_end, tol, c) for c in CONTROLS]
+            runs = [heyoka_runner(y0, t_end, tol, params=params)]
+            runs += [lagcomp_runner(model, y0, t_end, tol, c, params) for c in CONTROLS]
             times = interleaved_times(runs, repeats=repeats)
             for name, run, own in zip(("heyoka", *(f"lagcomp {c}" for c in CONTROLS)), runs, times, strict=True):
-                rows.append(dict(start=start, t_end=t_end, tol=tol, run=name, errors=_errors(run(), reference),
+                rows.append(dict(start=start, t_end=t_end, k=9 if params else 4, tol=tol, run=name,
+                                 errors=_errors(run(), reference),
                                  ms=1e3 * float(np.median(own)), ratio=paired(own, times[0]).median))
     return rows, fixed_cost(model, repeats)
 
@@ -117,12 +125,14 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args(argv)
-    print("double pendulum, ∂y(t)/∂y(0) (k = 4); errors vs heyoka in long double (relative max abs); "
-          f"time: median of {args.repeats} interleaved rounds, × heyoka: median of the per-round ratios")
-    print(f"{'start':8} {'t_end':>6} {'tol':>8} {'run':16} {'err y':>8} {'err S':>8} {'ms':>8} {'× heyoka':>9}")
+    print("double pendulum, ∂y(t)/∂y(0) (k = 4), and ∂y(t)/∂p (k = 9); errors vs heyoka in long double "
+          f"(relative max abs); time: median of {args.repeats} interleaved rounds, × heyoka: median of the "
+          "per-round ratios")
+    print(f"{'start':8} {'t_end':>6} {'k':>2} {'tol':>8} {'run':16} {'err y':>8} {'err S':>8} {'ms':>8} "
+          f"{'× heyoka':>9}")
     rows, fixed = measure(args.repeats)
     for r in rows:
-        print(f"{r['start']:8} {r['t_end']:6g} {r['tol']:8.2g} {r['run']:16} {r['errors'][0]:8.1e} "
+        print(f"{r['start']:8} {r['t_end']:6g} {r['k']:2d} {r['tol']:8.2g} {r['run']:16} {r['errors'][0]:8.1e} "
               f"{r['errors'][1]:8.1e} {r['ms']:8.2f} {r['ratio']:9.2f}")
     print(f"lagcomp's fixed cost of a run (one short step, included above): {fixed:.2f} ms")
 
