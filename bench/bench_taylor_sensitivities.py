@@ -16,7 +16,7 @@ Both at the same tolerance (machine precision, each one's default, and 1e-10).  
 variational run in 80-bit long double at its default tolerance (ε = 1.1e-19), independent of both.  Errors are
 max abs over the components, relative to the reference's largest (state and sensitivities apart).  Times are of
 the integration only (both compiled before: heyoka's JIT and numba's kernels), the median of `--repeats`
-interleaved pairs; the ratio is lagcomp / heyoka (below 1: lagcomp faster).
+interleaved rounds; the ratio (the median of the per-round ratios) is lagcomp / heyoka (below 1: lagcomp faster).
 
 Measured (``--repeats 15``, × heyoka; "both" is heyoka's step rule, so the same steps and errors): k = 4,
 machine precision: 0.98 / 0.90 / 0.89 ("both"; regular t = 10, 100, chaotic t = 10), 0.84 / 0.76 / 0.76
