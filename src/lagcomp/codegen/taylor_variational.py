@@ -51,8 +51,22 @@ from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, line
 
 INDENT = "    "
 KERNEL = "taylor_variational_coefficients"
-#: Columns summed in one loop (`_Writer._sum_over`): an AVX2 vector of float64.
-BLOCK = 9
+#: Up to this many columns are written out in one pass (`block_width`); more take a loop over blocks of `BLOCK`.
+UNROLLED_COLUMNS = 9
+#: Columns of one pass of the loop over blocks: an AVX2 vector of float64.
+BLOCK = 4
+#: Most columns × operations written out in one pass (`block_width`): numba's compile time grows faster than
+#: the code (n_link_pendulum(5), 261 operations, 10 columns in one pass: 12 minutes).
+COLUMN_OPERATIONS_MAX = 600
+
+
+def block_width(program: dict, columns: int) -> int:
+    """The columns of one pass of the kernel's loop over them.  Every column written out is fastest (the double
+    pendulum, order 20: 8 columns in one pass 11 µs, in two of 4 in a loop 18 µs: in a loop LLVM no longer makes
+    a block's chains one vector), up to `UNROLLED_COLUMNS`; then blocks of `BLOCK`; fewer when the program is
+    so large that compiling them would take minutes (`COLUMN_OPERATIONS_MAX`)."""
+    width = columns if columns <= UNROLLED_COLUMNS else BLOCK
+    return max(1, min(width, COLUMN_OPERATIONS_MAX // max(program["operations"], 1)))
 
 
 def work_rows(program: dict) -> list[str]:
@@ -104,7 +118,9 @@ class _Writer:
     the last of them those of the `parameters` (indices into p)."""
 
     def __init__(self, program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0):
-        self.n_state, self.columns = program["n_state"], columns
+        self.n_state, self.total = program["n_state"], columns
+        self.columns = block_width(program, columns)           # the columns of one pass of the block loop
+        self.padded = -(-columns // self.columns) * self.columns   # the columns held: whole blocks
         self.column_parameter = [None] * (columns - len(parameters)) + list(parameters)
         self.constants = _Constants(program, parameters, scale)
         self.states = {name: i for i, name in enumerate(program["states"])}
@@ -112,13 +128,18 @@ class _Writer:
         self.rows = {name: i for i, name in enumerate(work_rows(program))}
         self.row_count = max(len(self.rows), 1)
         self.varying = varying(program, self.constants)
-        # the tangent series, states first: slot s holds coefficient j of column c at T[_t{s} + j*columns + c]
+        # the tangent series, states first: slot s holds coefficient j of column c at T[_t{s} + j*padded + c]
         self.slots = {name: s for s, name in enumerate(
             [*program["states"], *(name for name in work_rows(program) if name in self.varying)])}
+        # the scalars with a tangent (parameters and what depends on them): column c's at T[_g{i} + c]
+        names = [*self.constants.own, *(entry["name"] for entry in program["setup"] if entry["kind"] == "constant")]
+        self.scalars = {name: i for i, name in enumerate(n for n in names if self.constants.varies(n))}
 
     def constant(self, const: str, c: int) -> str | None:
-        """The tangent of the scalar `const` in column `c` (code), None for 0."""
-        return self.constants.tangent(const, self.column_parameter[c])
+        """The tangent of the scalar `const` in column ``_b + c`` of the block loop (code), None for 0."""
+        if const not in self.scalars:
+            return None
+        return f"T[_g{self.scalars[const]} + _b + {c}]"
 
     def at(self, name: str, index) -> str:
         if name in self.states:
@@ -126,14 +147,15 @@ class _Writer:
         return f"W[{self.rows[name]}, {index}]"
 
     def tangent(self, name: str, index, c: int) -> str:
-        """Coefficient `index` of the tangent of `name` in column `c`, in T (the columns of a coefficient are
-        adjacent: the loads of a convolution's k chains are one vector)."""
-        return f"T[_t{self.slots[name]} + ({index})*{self.columns} + {c}]"
+        """Coefficient `index` of the tangent of `name` in column ``_b + c`` of the block loop, in T (the columns
+        of a coefficient are adjacent: the loads of a convolution's chains in a block are one vector)."""
+        return f"T[_t{self.slots[name]} + ({index})*{self.padded} + _b + {c}]"
 
     @property
     def tangent_rows(self) -> int:
-        """Rows of W (of order + 1 floats) that T takes: every slot's coefficients of every column."""
-        return len(self.slots) * self.columns
+        """Rows of W (of order + 1 floats, at least one) that T takes: every slot's coefficients of every column,
+        and the scalars' tangents."""
+        return (len(self.slots) + len(self.scalars)) * self.padded
 
     def moves(self, name: str) -> bool:
         return name in self.varying
@@ -144,18 +166,13 @@ class _Writer:
 
     def _sum_over(self, first: int, init, terms, finish) -> list[str]:
         """Every column's accumulator(s) ``_s{c}`` (and ``_r{c}``): `init(c)` lines, then for j = first..k the
-        statements `terms(c)`, then `finish(c)`.  The sums of a block of `BLOCK` columns are independent chains
-        in one loop over j: the products of one j share their loads, and LLVM makes the block's chains one
-        vector; more columns take one loop per block (all in one loop, 12 columns ran 3x slower than 8)."""
-        lines = []
-        blocks = -(-self.columns // BLOCK)
-        for b in range(blocks):     # as many columns in each block as can be
-            columns = range(b * self.columns // blocks, (b + 1) * self.columns // blocks)
-            lines += [line for c in columns for line in init(c)]
-            lines.append(f"for _j in range({first}, k + 1):")
-            lines += [INDENT + line for c in columns for line in terms(c)]
-            lines += [line for c in columns for line in finish(c)]
-        return lines
+        statements `terms(c)`, then `finish(c)`.  The sums of the block's columns are independent chains in one
+        loop over j: the products of one j share their loads, and LLVM makes the chains one vector."""
+        columns = range(self.columns)
+        lines = [line for c in columns for line in init(c)]
+        lines.append(f"for _j in range({first}, k + 1):")
+        lines += [INDENT + line for c in columns for line in terms(c)]
+        return lines + [line for c in columns for line in finish(c)]
 
     def tangent_lines(self, op: Op) -> list[str]:
         """Coefficient k of the tangents of `op`'s result(s) in every column (nothing when it has none)."""
@@ -167,9 +184,13 @@ class _Writer:
                 tangent = self.constant(const, c)     # a constant derivative: its tangent at order 0 only
                 return "0.0" if tangent is None else f"({tangent} if k == 0 else 0.0)"
             state = self.slots_state[op.index]
-            return [line for c in range(self.columns) for line in (
-                f"{t(state, 'k + 1', c)} = {derivative(c)}",
-                f"X[{self.n_state * (1 + c) + op.index}, k + 1] = {t(state, 'k + 1', c)}")]
+            lines = []
+            for c in range(self.columns):
+                store = f"X[{self.n_state}*(_b + {c} + 1) + {op.index}, k + 1] = {t(state, 'k + 1', c)}"
+                lines.append(f"{t(state, 'k + 1', c)} = {derivative(c)}")
+                # (a padding column of the last block has no row in X)
+                lines += [store] if self.padded == self.total else [f"if _b + {c} < {self.total}:", INDENT + store]
+            return lines
         if kind in ("comment", "pivot") or not self.moves(op.out[0]):
             return []
         if kind in LINEAR:
@@ -288,20 +309,34 @@ def variational_source(program: dict, columns: int, parameters: tuple[int, ...] 
             lines.append(f"{statement.name} = {statement.code}")
     lines += [f"for i in range({n_state * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
     lines += ["T = W.reshape(-1)   # the tangents, after the values' rows"]
-    lines += [f"_t{s} = ({rows} + {s * columns})*(order + 1)" for s in range(len(writer.slots))]
-    lines += [f"{writer.tangent(name, 0, c)} = y[{n_state * (1 + c) + i}]"
-              for i, name in enumerate(program["states"]) for c in range(columns)]
+    padded, base = writer.padded, f"{rows}*(order + 1)"
+    lines += [f"_t{s} = {base} + {s * padded}*(order + 1)" for s in range(len(writer.slots))]
+    scalars = f"{base} + {len(writer.slots) * padded}*(order + 1)"
+    lines += [f"_g{i} = {scalars} + {i * padded}" for i in range(len(writer.scalars))]
+    lines += [f"for _c in range({padded}):   # the initial-state columns' seeds come with y; padding: 0"]
+    lines += [f"{INDENT}T[_t{i} + _c] = y[{n_state}*(_c + 1) + {i}] if _c < {columns} else 0.0"
+              for i in range(n_state)]
+    if writer.scalars:
+        lines += [f"for _c in range({len(writer.scalars) * padded}):", f"{INDENT}T[_g0 + _c] = 0.0"]
+        for position, j in enumerate(parameters):
+            column = columns - len(parameters) + position
+            for name, i in writer.scalars.items():
+                tangent = writer.constants.tangent(name, j)
+                if tangent is not None:
+                    lines.append(f"T[_g{i} + {column}] = {tangent}")
     if program["uses_t"]:
         lines += ["for k in range(order + 1):", f"{INDENT}{writer.at('_t', 'k')} = 0.0", f"{writer.at('_t', 0)} = t",
                   "if order > 0:", f"{INDENT}{writer.at('_t', 1)} = 1.0"]
     lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
     lines += [INDENT + line for op in ops for line in writer.value_lines(op)]
-    lines.append(f"{INDENT}# The tangents of order k.")
+    lines += [f"{INDENT}# The tangents of order k, {writer.columns} columns at a time.",
+              f"{INDENT}for _b in range(0, {padded}, {writer.columns}):" if padded > writer.columns
+              else f"{INDENT}for _b in (0,):"]
     for op in ops:
         tangent = writer.tangent_lines(op)
         if tangent and op.kind != "state":
             tangent = [f"# d({', '.join(op.out)})", *tangent]
-        lines += [INDENT + line for line in tangent]
+        lines += [INDENT * 2 + line for line in tangent]
     lines.append("return 0")
     body = "\n".join(INDENT + line if line else "" for line in lines)
     return (
