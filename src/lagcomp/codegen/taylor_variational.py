@@ -29,13 +29,15 @@ the signature of ``taylor_coefficients`` (`lagcomp.integrate.drivers.kernel_type
 state y = (x, S[:, 0], ..., S[:, k−1]) of N (1 + k) components: X (N (1 + k), order + 1) the coefficients of x,
 then of each column of S, in y's layout (what the driver sums and interpolates); W (``VARIATIONAL_WORK``,
 order + 1) the values' rows as ``taylor_coefficients`` has them, then the tangents T in a layout of their own:
-per series (the states' first), per order, the k columns adjacent.  The k columns are written out (a kernel per
-k), so each convolution sums them as k independent chains in one loop over j, and with the columns adjacent
-LLVM makes those chains one vector: the double pendulum's kernel at k = 4 (per call, order 13 / 20) took 5.2 /
-10.7 µs with a loop over the columns inside, 3.1 / 6.1 µs so (the plain kernel: 0.9 / 1.7 µs).  The values are
-written by the same code as ``taylor_coefficients`` (`taylor_ops`), so the state rows of X are bitwise
-``taylor_coefficients``'s.  `lagcomp.integrate.taylor_sensitivities` appends the kernel to the model's module
-and compiles it once per model and k (cached on disk like any module).
+per series (the states' first), per order, the columns adjacent; then the tangents of the scalars.  The columns
+of one pass (`block_width`: all of them up to 9) are written out, so each convolution sums them as independent
+chains in one loop over j, and with the columns adjacent LLVM makes those chains one vector: the double
+pendulum's kernel at k = 4 (per call, order 13 / 20) took 5.2 / 10.7 µs with a loop over the columns inside,
+3.1 / 6.1 µs so (the plain kernel: 0.9 / 1.7 µs).  More columns, or a large program, take a loop over blocks
+of columns, whose code numba compiles in bounded time.  The values are written by the same code as
+``taylor_coefficients`` (`taylor_ops`), so the state rows of X are bitwise ``taylor_coefficients``'s.
+`lagcomp.integrate.taylor_sensitivities` appends the kernel to the model's module and compiles it once per
+model and choice of columns (cached on disk like any module).
 
 Parameter columns: the tangent with respect to p_j starts at 0 (the state does not depend on p_j at t0) and
 enters through the program's scalars: p_j itself (tangent 1), and every scalar computed from parameters, whose
