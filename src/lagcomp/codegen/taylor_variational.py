@@ -138,7 +138,10 @@ class _Writer:
         self.scalars = {name: i for i, name in enumerate(n for n in names if self.constants.varies(n))}
 
     def constant(self, const: str, c: int) -> str | None:
-        """The tangent of the scalar `const` in column ``_b + c`` of the block loop (code), None for 0."""
+        """The tangent of the scalar `const` in column ``_b + c`` of the block loop (code), None for 0: in one
+        pass, the code of the column's partial (none in an initial-state column); in a loop, data in T."""
+        if self.padded == self.columns:
+            return self.constants.tangent(const, self.column_parameter[c])
         if const not in self.scalars:
             return None
         return f"T[_g{self.scalars[const]} + _b + {c}]"
@@ -331,14 +334,14 @@ def variational_source(program: dict, columns: int, parameters: tuple[int, ...] 
                   "if order > 0:", f"{INDENT}{writer.at('_t', 1)} = 1.0"]
     lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
     lines += [INDENT + line for op in ops for line in writer.value_lines(op)]
+    looped = padded > writer.columns
     lines += [f"{INDENT}# The tangents of order k, {writer.columns} columns at a time.",
-              f"{INDENT}for _b in range(0, {padded}, {writer.columns}):" if padded > writer.columns
-              else f"{INDENT}for _b in (0,):"]
+              f"{INDENT}for _b in range(0, {padded}, {writer.columns}):" if looped else f"{INDENT}_b = 0"]
     for op in ops:
         tangent = writer.tangent_lines(op)
         if tangent and op.kind != "state":
             tangent = [f"# d({', '.join(op.out)})", *tangent]
-        lines += [INDENT * 2 + line for line in tangent]
+        lines += [INDENT * (2 if looped else 1) + line for line in tangent]
     lines.append("return 0")
     body = "\n".join(INDENT + line if line else "" for line in lines)
     return (
