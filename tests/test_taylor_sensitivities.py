@@ -171,3 +171,19 @@ def test_refusals(pendulum, compiled, monkeypatch):
     monkeypatch.undo()
     with pytest.raises(lc.OptionError, match="constraints"):    # as Taylor refuses such models without them
         compiled("spherical_pendulum_cartesian").simulate((0.0, 1.0), sensitivities="q0", **TAYLOR)
+
+
+def test_the_loop_over_blocks_of_columns_agrees(zoo, monkeypatch):
+    from lagcomp.codegen import taylor_variational
+    from lagcomp.integrate import taylor_sensitivities
+
+    columns = ("q0", "qd0", "params")
+    unrolled = zoo.simulate((0.0, 5.0), sensitivities=columns, **TAYLOR)      # 7 columns in one pass
+    monkeypatch.setattr(taylor_variational, "UNROLLED_COLUMNS", 2)             # blocks of 4: 8 columns, one padding
+    monkeypatch.setattr(taylor_sensitivities, "_MODULES", {})                  # (so that the kernel is written anew)
+    monkeypatch.setattr(taylor_sensitivities, "_KERNELS", {})
+    assert "_b in range(0, 8, 4)" in taylor_variational.variational_source(zoo._taylor_program, 7, (0, 1, 2))
+    looped = zoo.simulate((0.0, 5.0), sensitivities=columns, **TAYLOR)
+    assert np.array_equal(looped.y, unrolled.y)
+    scale = np.abs(unrolled.sensitivities).max()
+    assert np.abs(looped.sensitivities - unrolled.sensitivities).max() < 1e-13 * scale
