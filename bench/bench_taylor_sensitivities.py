@@ -19,9 +19,9 @@ the integration only (both compiled before: heyoka's JIT and numba's kernels), t
 interleaved rounds; the ratio (the median of the per-round ratios) is lagcomp / heyoka (below 1: lagcomp faster).
 
 Measured (``--repeats 15``, × heyoka; "both" is heyoka's step rule, so the same steps and errors): k = 4,
-machine precision: 0.98 / 0.90 / 0.89 ("both"; regular t = 10, 100, chaotic t = 10), 0.84 / 0.76 / 0.76
-("state"); tol 1e-10: 1.24 / 1.06 / 1.19 and 1.01 / 0.85 / 0.93 (lagcomp's fixed cost of a run, 0.19 ms, is a
-fifth of the 1-ms runs).  k = 9 (regular, t = 100): 1.46 / 1.30 at machine precision, 1.76 / 1.52 at 1e-10.
+machine precision: 1.01 / 0.92 / 0.97 ("both"; regular t = 10, 100, chaotic t = 10), 0.86 / 0.78 / 0.81
+("state"); tol 1e-10: 1.27 / 1.05 / 1.17 and 1.02 / 0.83 / 0.90 (lagcomp's fixed cost of a run, 0.2 ms, is a
+fifth of the 1-ms runs).  k = 9 (regular, t = 100): 1.54 / 1.36 at machine precision, 1.88 / 1.62 at 1e-10.
 Before the k columns were written out (a loop over them inside each operation) k = 4 "both" took 1.5x heyoka's.
 """
 
