@@ -112,7 +112,6 @@ def test_xarray_names_the_axes(pendulum):
 
 @pytest.mark.parametrize(("options", "culprit"), [
     (dict(method="rk4", dt=0.01), "`rk4`"),
-    (dict(method="taylor"), "`taylor`"),
     (dict(method="radau"), "`radau`"),
     (dict(sensitivities="nonsense"), "'nonsense'"),
     (dict(sensitivities=()), "names no column"),

@@ -53,7 +53,16 @@ import sympy as sp
 
 from lagcomp.codegen.periodic import periodic_coordinates
 from lagcomp.codegen.printer import to_code
-from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, linear_line, pivot_test, support_names
+from lagcomp.codegen.taylor_ops import (
+    LINEAR,
+    Op,
+    Setup,
+    convolution_loop,
+    linear_line,
+    partial_name,
+    pivot_test,
+    support_names,
+)
 from lagcomp.ir import Kernel, LinearSolve, ModuleIR, target_local
 
 INDENT = "    "
@@ -117,6 +126,9 @@ class _Builder:
         self.memo: dict[tuple, Value] = {}
         self.renamed: dict[str, str] = {}
         self.scalars: dict[sp.Expr, Value] = {}
+        #: {parameter local: its index in p}; {scalar name: {parameter index: its partial's name}}
+        self.parameters: dict[str, int] = {}
+        self.partials: dict[str, dict[int, str]] = {}
 
     # -- naming ---------------------------------------------------------------------------
 
@@ -138,7 +150,27 @@ class _Builder:
             self.count += 1
             self.scalars[expr] = _c(sp.Symbol(name, real=True))
         self.program.setup.append(Setup("constant", name, to_code(expr)))
+        self._partials(name, expr)
         return _c(sp.Symbol(name, real=True))
+
+    def _partials(self, name: str, expr: sp.Expr) -> None:
+        """Setup statements ``partial`` of the scalar `name` = `expr`: ∂name/∂p_j for every parameter j it
+        depends on, by the chain rule over the parameters and scalars in `expr` (their partials named before);
+        `lagcomp.codegen.taylor_variational` differentiates the program with respect to parameters with them."""
+        for j in sorted(set(self.parameters.values())):
+            total = sp.S.Zero
+            for symbol in expr.free_symbols:
+                if self.parameters.get(symbol.name) == j:
+                    inner = sp.S.One
+                elif j in self.partials.get(symbol.name, {}):
+                    inner = sp.Symbol(self.partials[symbol.name][j], real=True)
+                else:
+                    continue
+                total += sp.diff(expr, symbol) * inner
+            if total != 0:
+                partial = partial_name(name, j)
+                self.partials.setdefault(name, {})[j] = partial
+                self.program.setup.append(Setup("partial", partial, to_code(total), index=j))
 
     def _emit(self, kind: str, out: tuple[str, ...] = (), args: tuple[str, ...] = (), const: str = "",
               index: int = 0) -> None:
@@ -426,6 +458,8 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
         array, index = source[0], int(source[2:-1])    # the IR loads "y[i]" and "p[i]"
         b.program.setup.append(Setup("state" if array == "y" else "param", local, index=index))
         b.env[symbol] = Value(series=local) if array == "y" else _c(symbol)
+        if array != "y":
+            b.parameters[local] = index
     b.env[sp.Symbol("t", real=True)] = Value(series="_t")
     for name, expr in rhs.temps:
         b.env[sp.Symbol(name, real=True)] = b.bind(name, expr)
@@ -542,7 +576,7 @@ def taylor_program(taylor: TaylorProgram | Unsupported) -> dict | None:
             states[statement.index] = statement.name
     return dict(n_state=taylor.n_state, setup=[dataclasses.asdict(s) for s in taylor.setup], states=states,
                 uses_t=taylor.uses_t, body=[dataclasses.asdict(op) for op in taylor.body],
-                operations=taylor.operation_count, periodic=list(taylor.periodic))
+                operations=taylor.operation_count, periodic=list(taylor.periodic), parameter_partials=True)
 
 
 def taylor_source(taylor: TaylorProgram | Unsupported) -> str:

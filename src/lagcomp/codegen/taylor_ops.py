@@ -51,13 +51,20 @@ class Setup:
     ``kind`` ``"state"``: the series ``name`` is row ``index`` of X (the state);
     ``"param"``: ``name = p[index]``; ``"constant"``: ``name = code``, over the
     parameters; ``"check"``: return ``index`` unless ``code`` (a constant pivot
-    test) holds.
+    test) holds; ``"partial"``: ``name = code``, the partial derivative of a
+    constant with respect to parameter ``index`` (only the variational kernel,
+    `lagcomp.codegen.taylor_variational`, evaluates these).
     """
 
     kind: str
     name: str = ""
     code: str = ""
     index: int = 0
+
+
+def partial_name(name: str, parameter: int) -> str:
+    """The name of the setup's ``partial`` of the scalar `name` with respect to parameter `parameter`."""
+    return f"_dp{parameter}{name}"
 
 
 def support_names(kinds, checks: bool, lanes: bool) -> set[str]:

@@ -55,6 +55,12 @@ without Baumgarte terms and is damped with α, β > 0 — not a motion the const
 The reactions' sensitivities follow after the run (`reaction_sensitivities`): dλ/dw =
 ∂λ/∂y · S + ∂λ/∂p_w, with the module's ``reaction_jacobian``, at each saved row.
 
+Taylor method.  ``method="taylor"`` integrates the same augmented state with the library's Taylor driver, whose
+kernel is the model's Taylor program differentiated in forward mode (`lagcomp.integrate.taylor_sensitivities`;
+a parameter's column through the partials of the program's scalars).  Its step rule takes a max norm, which the
+scaled columns leave alone, so the tolerances are not divided: the state's steps under "state", the steps of
+both under "both" (the rule of heyoka's ``var_ode_sys``).
+
 Refused (`OptionError`, docs/errors.md): other methods; located events that read inputs (their module's
 ``event_gradients`` is a refusing stub, ``EVENT_GRADIENTS_REFUSED`` says why); projection; function inputs
 (their ∂u/∂y is unknown); unknown names.  `lagcomp.integrate.sweep` refuses ``sensitivities`` altogether.
@@ -69,12 +75,15 @@ import numpy as np
 from numba import njit
 
 from lagcomp.errors import OptionError
+from lagcomp.integrate import taylor_sensitivities
 
 #: The groups of columns `sensitivities` may name: every coordinate's initial value, every velocity's
 #: (a Kane model's speeds: also "u0"), every parameter.
 GROUPS = ("q0", "qd0", "params")
 #: The driver that integrates sensitivities (every embedded pair runs on it).
 EMBEDDED_DRIVER = "lagcomp.integrate.drivers.embedded:embedded_run"
+#: The Taylor method's driver, which integrates them too (`lagcomp.integrate.taylor_sensitivities`).
+TAYLOR_DRIVER = "lagcomp.integrate.drivers.taylor:taylor_run"
 #: What the step-size control covers (see "Error control" above).
 CONTROLS = ("state", "both")
 #: The exact scale of the sensitivity columns under ``sensitivity_control="state"``.
@@ -134,9 +143,12 @@ def columns(model, requested) -> Columns:
 def check(model, method, options, cols: Columns, original_model) -> None:
     """Refuse what sensitivities cannot run with (see the module docstring); `original_model` is the model
     before `function_inputs.driven` wrapped it (another object when the inputs hold numba functions)."""
-    if method.driver != EMBEDDED_DRIVER:
+    if method.driver == TAYLOR_DRIVER:
+        taylor_sensitivities.check(model, cols)
+    elif method.driver != EMBEDDED_DRIVER:
         raise OptionError(f"`sensitivities` are integrated by the embedded Runge-Kutta pairs (dop853, dopri5, "
-                          f"tsit5, bs3); `{method.name}` does not integrate them yet: use dop853.")
+                          f"tsit5, bs3) and the Taylor method; `{method.name}` does not integrate them yet: use "
+                          "dop853.")
     located = [e.name for e, action in zip(model.events, options.actions.tolist(), strict=True) if action]
     refused = getattr(model.kernels, "EVENT_GRADIENTS_REFUSED", None)
     if located and refused is not None:
@@ -157,9 +169,11 @@ def scale_for(control) -> float:
     return STATE_ONLY_SCALE if control == "state" else 1.0
 
 
-def driver_tolerances(rtol: float, atol: float, cols: Columns, scale: float) -> tuple[float, float]:
-    """The (rtol, atol) the driver gets: divided by sqrt(1 + k) for state-only control (see the docstring)."""
-    if scale == 1.0:
+def driver_tolerances(rtol: float, atol: float, cols: Columns, scale: float, method=None) -> tuple[float, float]:
+    """The (rtol, atol) the driver gets: divided by sqrt(1 + k) for state-only control (see the docstring); the
+    Taylor method's as given (its step rule takes a max norm over the rows, which the scaled columns leave
+    alone)."""
+    if scale == 1.0 or (method is not None and method.driver == TAYLOR_DRIVER):
         return rtol, atol
     shrink = float(np.sqrt(1.0 + cols.k))
     return rtol / shrink, atol / shrink
@@ -201,6 +215,14 @@ class SensitivityKernels:
 #: {(generated module, n, parameter columns, scale): SensitivityKernels}, for the process.
 _AUGMENTED: dict = {}
 _LOCK = threading.Lock()
+
+
+def run_kernels(model, method, cols: Columns, scale: float):
+    """The kernels `method`'s driver takes for the augmented state: the Taylor method's variational kernel
+    (`lagcomp.integrate.taylor_sensitivities`), or the embedded pairs' `augmented_rhs` (`sensitivity_kernels`)."""
+    if method.driver == TAYLOR_DRIVER:
+        return taylor_sensitivities.taylor_kernels(model, cols, scale)
+    return sensitivity_kernels(model.kernels, model.state_size, len(model.parameters), cols, scale)
 
 
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:

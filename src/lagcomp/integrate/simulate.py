@@ -154,10 +154,10 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     run_args = (options.projecting, residual_max)
     kernels, p_run = model.kernels, p
     if columns is not None:  # the variational equations ride along: an augmented state, rhs and p
-        kernels = sens.sensitivity_kernels(model.kernels, y0.size, len(model.parameters), columns, scale)
+        kernels = sens.run_kernels(model, m, columns, scale)
         state, p_run = RunState(sens.initial_state(y0, columns, scale), t0), sens.run_parameters(p, model, columns)
         differential = width = state.y.size
-        rtol, atol = sens.driver_tolerances(options.rtol, options.atol, columns, scale)
+        rtol, atol = sens.driver_tolerances(options.rtol, options.atol, columns, scale, m)
         options = dataclasses.replace(options, rtol=rtol, atol=atol)
     if options.adaptive:
         advance, rows = _adaptive_driver(kernels, state, p_run, run_args, options, differential)

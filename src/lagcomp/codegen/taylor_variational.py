@@ -1,0 +1,362 @@
+r"""The Taylor program differentiated in forward mode: the series of the state and of its sensitivities.
+
+The Taylor program (`lagcomp.codegen.taylor`: elementary operations on series, stored with the model as data)
+computes the normalized coefficients u[k] of every intermediate value u(t) along the solution.  Differentiating
+each operation with respect to a direction of the initial state gives the tangent series u̇ (the sensitivity of
+u along that direction), one per sensitivity column; every recurrence has a tangent recurrence, linear in the
+tangents, from the derivative of the function (an identity between series, so exact in coefficients too):
+
+    w = a ± b, c a, a + c, c − a, −a     ẇ[k] = ȧ[k] ± ḃ[k], c ȧ[k], ȧ[k], −ȧ[k], −ȧ[k]
+    w = a b        ẇ[k] = Σ_{j=0..k} ȧ[j] b[k−j] + a[j] ḃ[k−j]
+    w = a²         ẇ[k] = 2 Σ_{j=0..k} a[j] ȧ[k−j]
+    w = a / b      ẇ = (ȧ − w ḃ)/b:  ẇ[k] = (ȧ[k] − Σ_{j=0..k} w[j] ḃ[k−j] − Σ_{j=1..k} b[j] ẇ[k−j]) / b[0]
+    w = c / b      the same with ȧ = 0
+    w = √a         ẇ = ȧ/(2w):  ẇ[k] = (ȧ[k] − 2 Σ_{j=1..k} w[j] ẇ[k−j]) / (2 w[0])
+    w = a^α        ẇ = α w ȧ/a:  ẇ[k] = (α Σ_{j=0..k} w[j] ȧ[k−j] − Σ_{j=1..k} a[j] ẇ[k−j]) / a[0]
+    w = exp a      ẇ = w ȧ:  ẇ[k] = Σ_{j=0..k} w[j] ȧ[k−j]
+    w = log a      ẇ = ȧ/a:  ẇ[k] = (ȧ[k] − Σ_{j=1..k} a[j] ẇ[k−j]) / a[0]
+    s, c = sin a, cos a
+                   ṡ[k] = Σ_{j=0..k} c[j] ȧ[k−j],  ċ[k] = −Σ_{j=0..k} s[j] ȧ[k−j]
+
+and the state's operation y[k+1] = f[k]/(k+1) gives Ṡ[k+1] = ḟ[k]/(k+1), ḟ = J S: the coefficients of the
+variational equations' solution S' = J S, with no Jacobian formed.  The tangents of order k need the values of
+order ≤ k (w[k] itself for a quotient): each order computes the values first, then the tangents.
+Values that depend on the parameters only (the setup's scalars) and time have no tangent; a series computed from
+those alone has none either (`varying`).
+
+`variational_source` writes the kernel ``taylor_variational_coefficients(t, y, p, X, W)`` for k columns, with
+the signature of ``taylor_coefficients`` (`lagcomp.integrate.drivers.kernel_types.TAYLOR`), over the augmented
+state y = (x, S[:, 0], ..., S[:, k−1]) of N (1 + k) components: X (N (1 + k), order + 1) the coefficients of x,
+then of each column of S, in y's layout (what the driver sums and interpolates); W (``VARIATIONAL_WORK``,
+order + 1) the values' rows as ``taylor_coefficients`` has them, then the tangents T in a layout of their own:
+per series (the states' first), per order, the columns adjacent; then the tangents of the scalars.  The columns
+of one pass (`block_width`: all of them up to 9) are written out, so each convolution sums them as independent
+chains in one loop over j, and with the columns adjacent LLVM makes those chains one vector: the double
+pendulum's kernel at k = 4 (per call, order 13 / 20) took 5.2 / 10.7 µs with a loop over the columns inside,
+3.1 / 6.1 µs so (the plain kernel: 0.9 / 1.7 µs).  More columns, or a large program, take a loop over blocks
+of columns, whose code numba compiles in bounded time.  The values are written by the same code as
+``taylor_coefficients`` (`taylor_ops`), so the state rows of X are bitwise ``taylor_coefficients``'s.
+`lagcomp.integrate.taylor_sensitivities` appends the kernel to the model's module and compiles it once per
+model and choice of columns (cached on disk like any module).
+
+Parameter columns: the tangent with respect to p_j starts at 0 (the state does not depend on p_j at t0) and
+enters through the program's scalars: p_j itself (tangent 1), and every scalar computed from parameters, whose
+partial ∂c/∂p_j the decomposition stores with the setup (``partial`` statements, `lagcomp.codegen.taylor`).
+An operation with a scalar operand then gets its term: w = c a → ẇ = ċ a + c ȧ; w = a + c → ẇ[0] += ċ;
+w = c − a → ẇ[0] = ċ − ȧ[0]; w = c / b → the quotient's rule with ȧ = ċ at order 0; a constant derivative of
+the state → its tangent at order 0.  That is ∂f/∂p_j in the column's Ṡ, with no ∂f/∂p formed.
+"""
+
+from __future__ import annotations
+
+from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, linear_line, partial_name, pivot_test
+
+INDENT = "    "
+KERNEL = "taylor_variational_coefficients"
+#: Up to this many columns are written out in one pass (`block_width`); more take a loop over blocks of `BLOCK`.
+UNROLLED_COLUMNS = 9
+#: Columns of one pass of the loop over blocks: an AVX2 vector of float64.
+BLOCK = 4
+#: Most columns × operations written out in one pass (`block_width`): numba's compile time grows faster than
+#: the code (n_link_pendulum(5), 261 operations, 10 columns in one pass: 12 minutes).
+COLUMN_OPERATIONS_MAX = 600
+
+
+def block_width(program: dict, columns: int) -> int:
+    """The columns of one pass of the kernel's loop over them.  Every column written out is fastest (the double
+    pendulum, order 20: 8 columns in one pass 11 µs, in two of 4 in a loop 18 µs: in a loop LLVM no longer makes
+    a block's chains one vector), up to `UNROLLED_COLUMNS`; then blocks of `BLOCK`; fewer when the program is
+    so large that compiling them would take minutes (`COLUMN_OPERATIONS_MAX`)."""
+    width = columns if columns <= UNROLLED_COLUMNS else BLOCK
+    return max(1, min(width, COLUMN_OPERATIONS_MAX // max(program["operations"], 1)))
+
+
+def work_rows(program: dict) -> list[str]:
+    """The series held in rows of W, in order, as ``taylor_coefficients`` holds them (time first, if used)."""
+    outputs = [name for op in program["body"] for name in op["out"]]
+    return (["_t"] if program["uses_t"] else []) + outputs
+
+
+def _ops(program: dict) -> list[Op]:
+    return [Op(op["kind"], tuple(op["out"]), tuple(op["args"]), op["const"], op["index"]) for op in program["body"]]
+
+
+class _Constants:
+    """The tangents of the program's scalars: a parameter's own column gets `scale` (the columns' factor,
+    `lagcomp.integrate.sensitivities`), a scalar its setup's ``partial`` (times `scale`), any other nothing."""
+
+    def __init__(self, program: dict, parameters: tuple[int, ...], scale: float):
+        self.parameters, self.scale = parameters, scale
+        self.own = {entry["name"]: entry["index"] for entry in program["setup"] if entry["kind"] == "param"}
+        self.partials = {entry["name"] for entry in program["setup"] if entry["kind"] == "partial"}
+
+    def tangent(self, const: str, j: int | None) -> str | None:
+        """The code of ∂const/∂p_j (times the scale), or None when it is 0 (j None: an initial-state column)."""
+        if j is None:
+            return None
+        if self.own.get(const) == j:
+            return repr(self.scale)
+        if partial_name(const, j) in self.partials:
+            partial = partial_name(const, j)
+            return partial if self.scale == 1.0 else f"{self.scale!r}*{partial}"
+        return None
+
+    def varies(self, const: str) -> bool:
+        return any(self.tangent(const, j) is not None for j in self.parameters)
+
+
+def varying(program: dict, constants: _Constants) -> set[str]:
+    """The series with a tangent: the state's, and those computed from one of them or from a scalar with one."""
+    names = set(program["states"])
+    for op in _ops(program):
+        if op.kind not in ("comment", "pivot", "state") and (any(a in names for a in op.args)
+                                                             or constants.varies(op.const)):
+            names.update(op.out)
+    return names
+
+
+class _Writer:
+    """Code of coefficients of values (`at`) and of the tangents of column c (`tangent`), for `columns` columns,
+    the last of them those of the `parameters` (indices into p)."""
+
+    def __init__(self, program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0):
+        self.n_state, self.total = program["n_state"], columns
+        self.columns = block_width(program, columns)           # the columns of one pass of the block loop
+        self.padded = -(-columns // self.columns) * self.columns   # the columns held: whole blocks
+        self.column_parameter = [None] * (columns - len(parameters)) + list(parameters)
+        self.constants = _Constants(program, parameters, scale)
+        self.states = {name: i for i, name in enumerate(program["states"])}
+        self.slots_state = list(program["states"])
+        self.rows = {name: i for i, name in enumerate(work_rows(program))}
+        self.row_count = max(len(self.rows), 1)
+        self.varying = varying(program, self.constants)
+        # the tangent series, states first: slot s holds coefficient j of column c at T[_t{s} + j*padded + c]
+        self.slots = {name: s for s, name in enumerate(
+            [*program["states"], *(name for name in work_rows(program) if name in self.varying)])}
+        # the scalars with a tangent (parameters and what depends on them): column c's at T[_g{i} + c]
+        names = [*self.constants.own, *(entry["name"] for entry in program["setup"] if entry["kind"] == "constant")]
+        self.scalars = {name: i for i, name in enumerate(n for n in names if self.constants.varies(n))}
+
+    def constant(self, const: str, c: int) -> str | None:
+        """The tangent of the scalar `const` in column ``_b + c`` of the block loop (code), None for 0: in one
+        pass, the code of the column's partial (none in an initial-state column); in a loop, data in T."""
+        if self.padded == self.columns:
+            return self.constants.tangent(const, self.column_parameter[c])
+        if const not in self.scalars:
+            return None
+        return f"T[_g{self.scalars[const]} + _b + {c}]"
+
+    def at(self, name: str, index) -> str:
+        if name in self.states:
+            return f"X[{self.states[name]}, {index}]"
+        return f"W[{self.rows[name]}, {index}]"
+
+    def tangent(self, name: str, index, c: int) -> str:
+        """Coefficient `index` of the tangent of `name` in column ``_b + c`` of the block loop, in T (the columns
+        of a coefficient are adjacent: the loads of a convolution's chains in a block are one vector)."""
+        return f"T[_t{self.slots[name]} + ({index})*{self.padded} + _b + {c}]"
+
+    @property
+    def tangent_rows(self) -> int:
+        """Rows of W (of order + 1 floats, at least one) that T takes: every slot's coefficients of every column,
+        and the scalars' tangents."""
+        return (len(self.slots) + len(self.scalars)) * self.padded
+
+    def moves(self, name: str) -> bool:
+        return name in self.varying
+
+    def _columns(self, line) -> list[str]:
+        """``line(c)`` for every column."""
+        return [line(c) for c in range(self.columns)]
+
+    def _sum_over(self, first: int, init, terms, finish) -> list[str]:
+        """Every column's accumulator(s) ``_s{c}`` (and ``_r{c}``): `init(c)` lines, then for j = first..k the
+        statements `terms(c)`, then `finish(c)`.  The sums of the block's columns are independent chains in one
+        loop over j: the products of one j share their loads, and LLVM makes the chains one vector."""
+        columns = range(self.columns)
+        lines = [line for c in columns for line in init(c)]
+        lines.append(f"for _j in range({first}, k + 1):")
+        lines += [INDENT + line for c in columns for line in terms(c)]
+        return lines + [line for c in columns for line in finish(c)]
+
+    def tangent_lines(self, op: Op) -> list[str]:
+        """Coefficient k of the tangents of `op`'s result(s) in every column (nothing when it has none)."""
+        kind, const, t, at = op.kind, op.const, self.tangent, self.at
+        if kind == "state":
+            def derivative(c):
+                if op.args:
+                    return f"{t(op.args[0], 'k', c)}*_ik1" if self.moves(op.args[0]) else "0.0"
+                tangent = self.constant(const, c)     # a constant derivative: its tangent at order 0 only
+                return "0.0" if tangent is None else f"({tangent} if k == 0 else 0.0)"
+            state = self.slots_state[op.index]
+            lines = []
+            for c in range(self.columns):
+                store = f"X[{self.n_state}*(_b + {c} + 1) + {op.index}, k + 1] = {t(state, 'k + 1', c)}"
+                lines.append(f"{t(state, 'k + 1', c)} = {derivative(c)}")
+                # (a padding column of the last block has no row in X)
+                lines += [store] if self.padded == self.total else [f"if _b + {c} < {self.total}:", INDENT + store]
+            return lines
+        if kind in ("comment", "pivot") or not self.moves(op.out[0]):
+            return []
+        if kind in LINEAR:
+            (w,) = op.out
+            a, b = op.args[0], op.args[-1]
+
+            def value(c):
+                if kind in ("add", "sub"):
+                    terms = [f"+ {t(a, 'k', c)}"] if self.moves(a) else []
+                    terms += [f"{'+' if kind == 'add' else '-'} {t(b, 'k', c)}"] if self.moves(b) else []
+                else:   # ẇ = c ȧ + ċ a (scale), ȧ + ċ δ_k0 (add_const), ċ δ_k0 − ȧ (rsub_const), −ȧ (neg)
+                    sign = "-" if kind in ("neg", "rsub_const") else "+"
+                    factor = f"{const}*" if kind == "scale" else ""
+                    terms = [f"{sign} {factor}{t(a, 'k', c)}"] if self.moves(a) else []
+                    tangent = self.constant(const, c) if kind != "neg" else None
+                    if tangent is not None:
+                        terms.append(f"+ {tangent}*{at(a, 'k')}" if kind == "scale"
+                                     else f"+ ({tangent} if k == 0 else 0.0)")
+                if not terms:
+                    return "0.0"
+                first = terms[0][2:] if terms[0].startswith("+") else f"-{terms[0][2:]}"
+                return " ".join([first, *terms[1:]])
+            return self._columns(lambda c: f"{t(w, 'k', c)} = {value(c)}")
+        if kind == "sin_cos":
+            (a,), (s, co) = op.args, op.out
+            return self._sum_over(
+                0, lambda c: [f"_s{c} = 0.0", f"_r{c} = 0.0"],
+                lambda c: [f"_s{c} += {at(co, '_j')}*{t(a, 'k - _j', c)}",
+                           f"_r{c} += {at(s, '_j')}*{t(a, 'k - _j', c)}"],
+                lambda c: [f"{t(s, 'k', c)} = _s{c}", f"{t(co, 'k', c)} = -_r{c}"])
+        (w,) = op.out
+        a = op.args[0]
+        if kind == "mul":
+            b = op.args[1]
+
+            def terms(c):
+                products = [f"{t(a, '_j', c)}*{at(b, 'k - _j')}" for _ in (0,) if self.moves(a)]
+                products += [f"{at(a, '_j')}*{t(b, 'k - _j', c)}" for _ in (0,) if self.moves(b)]
+                return [f"_s{c} += {' + '.join(products)}"]
+            return self._sum_over(0, lambda c: [f"_s{c} = 0.0"], terms, lambda c: [f"{t(w, 'k', c)} = _s{c}"])
+        if kind in ("square", "exp"):
+            base, factor = (a, "2.0*") if kind == "square" else (w, "")
+            return self._sum_over(0, lambda c: [f"_s{c} = 0.0"],
+                                  lambda c: [f"_s{c} += {at(base, '_j')}*{t(a, 'k - _j', c)}"],
+                                  lambda c: [f"{t(w, 'k', c)} = {factor}_s{c}"])
+        if kind in ("div", "rdiv"):   # ẇ[k] b[0] = ȧ[k] − w[0] ḃ[k] − Σ_{j=1..k} (w[j] ḃ[k−j] + b[j] ẇ[k−j])
+            b = op.args[-1]
+
+            def top(c):   # ȧ[k] (div), or ċ δ_k0 for a constant numerator (rdiv)
+                if kind == "div":
+                    return t(a, "k", c) if self.moves(a) else "0.0"
+                tangent = self.constant(const, c)
+                return "0.0" if tangent is None else f"({tangent} if k == 0 else 0.0)"
+            if self.moves(b):
+                init = lambda c: [f"_s{c} = {top(c)} - {at(w, 0)}*{t(b, 'k', c)}"]  # noqa: E731
+                terms = lambda c: [f"_s{c} -= {at(w, '_j')}*{t(b, 'k - _j', c)} + {at(b, '_j')}*{t(w, 'k - _j', c)}"]  # noqa: E731
+            else:
+                init = lambda c: [f"_s{c} = {top(c)}"]  # noqa: E731
+                terms = lambda c: [f"_s{c} -= {at(b, '_j')}*{t(w, 'k - _j', c)}"]  # noqa: E731
+            return self._sum_over(1, init, terms, lambda c: [f"{t(w, 'k', c)} = _s{c}/{at(b, 0)}"])
+        if kind == "sqrt":            # 2 w[0] ẇ[k] = ȧ[k] − 2 Σ_{j=1..k} w[j] ẇ[k−j]
+            return self._sum_over(1, lambda c: [f"_s{c} = 0.0"],
+                                  lambda c: [f"_s{c} += {at(w, '_j')}*{t(w, 'k - _j', c)}"],
+                                  lambda c: [f"{t(w, 'k', c)} = ({t(a, 'k', c)} - 2.0*_s{c})/(2.0*{at(w, 0)})"])
+        if kind == "pow":             # a[0] ẇ[k] = α Σ_{j=0..k} w[j] ȧ[k−j] − Σ_{j=1..k} a[j] ẇ[k−j]
+            return self._sum_over(
+                1, lambda c: [f"_s{c} = {at(w, 0)}*{t(a, 'k', c)}", f"_r{c} = 0.0"],
+                lambda c: [f"_s{c} += {at(w, '_j')}*{t(a, 'k - _j', c)}",
+                           f"_r{c} += {at(a, '_j')}*{t(w, 'k - _j', c)}"],
+                lambda c: [f"{t(w, 'k', c)} = ({const}*_s{c} - _r{c})/{at(a, 0)}"])
+        if kind == "log":             # a[0] ẇ[k] = ȧ[k] − Σ_{j=1..k} a[j] ẇ[k−j]
+            return self._sum_over(1, lambda c: [f"_s{c} = {t(a, 'k', c)}"],
+                                  lambda c: [f"_s{c} -= {at(a, '_j')}*{t(w, 'k - _j', c)}"],
+                                  lambda c: [f"{t(w, 'k', c)} = _s{c}/{at(a, 0)}"])
+        raise ValueError(f"no tangent recurrence for the operation {kind!r}")
+
+    def value_lines(self, op: Op) -> list[str]:
+        """Coefficient k of `op`'s value(s): the code of ``taylor_coefficients`` (`lagcomp.codegen.taylor`)."""
+        if op.kind == "comment":
+            return [f"# {op.const}"]
+        if op.kind == "pivot":
+            scale = self.at(op.args[1], 0) if len(op.args) > 1 else op.const
+            return [f"if k == 0 and not {pivot_test(self.at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
+        if op.kind == "state":
+            return [f"X[{op.index}, k + 1] = {linear_line(op, self.at)}*_ik1"]
+        if op.kind in LINEAR:
+            return [linear_line(op, self.at)]
+        summary, loop = convolution_loop(op, self.at)
+        return [f"# {summary}", *loop]
+
+
+def variational_source(program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0) -> str:
+    """The source of ``taylor_variational_coefficients`` for `columns` sensitivity columns, the last of them
+    those of `parameters` (indices into p), and of ``VARIATIONAL_COLUMNS`` and ``VARIATIONAL_WORK`` (rows of W)
+    for `program` (see the module docstring), to follow the model's module (it uses the module's imports:
+    math, sin, cos, ...).  `scale` is the columns' factor (`lagcomp.integrate.sensitivities`): the seeds of
+    the parameter columns, the initial-state ones' coming with y."""
+    writer = _Writer(program, columns, parameters, scale)
+    n_state, ops, rows = program["n_state"], _ops(program), writer.row_count
+    lines = [
+        f'"""The Taylor coefficients of y = (x, S[:, 0], ..., S[:, {columns - 1}]): x\'s as `taylor_coefficients`',
+        "computes them (rows 0..N-1 of X), then those of each sensitivity column (rows N (1 + c) + i), from",
+        "the program differentiated in forward mode (lagcomp.codegen.taylor_variational).  W: the work",
+        f"array, {rows} rows of values, then as many of tangents per column.",
+        'Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""',
+        "order = X.shape[1] - 1",
+    ]
+    for statement in (Setup(**entry) for entry in program["setup"]):
+        if statement.kind == "param":
+            lines.append(f"{statement.name} = p[{statement.index}]")
+        elif statement.kind == "constant":
+            lines.append(f"{statement.name} = {statement.code}")
+        elif statement.kind == "check":
+            lines += [f"if not {statement.code}:", f"{INDENT}return {statement.index}"]
+        elif statement.kind == "partial" and statement.index in parameters:
+            lines.append(f"{statement.name} = {statement.code}")
+    lines += [f"for i in range({n_state * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
+    lines += ["T = W.reshape(-1)   # the tangents, after the values' rows"]
+    padded, base = writer.padded, f"{rows}*(order + 1)"
+    lines += [f"_t{s} = {base} + {s * padded}*(order + 1)" for s in range(len(writer.slots))]
+    scalars = f"{base} + {len(writer.slots) * padded}*(order + 1)"
+    lines += [f"_g{i} = {scalars} + {i * padded}" for i in range(len(writer.scalars))]
+    lines += [f"for _c in range({padded}):   # the initial-state columns' seeds come with y; padding: 0"]
+    lines += [f"{INDENT}T[_t{i} + _c] = y[{n_state}*(_c + 1) + {i}] if _c < {columns} else 0.0"
+              for i in range(n_state)]
+    if writer.scalars:
+        lines += [f"for _c in range({len(writer.scalars) * padded}):", f"{INDENT}T[_g0 + _c] = 0.0"]
+        for position, j in enumerate(parameters):
+            column = columns - len(parameters) + position
+            for name, i in writer.scalars.items():
+                tangent = writer.constants.tangent(name, j)
+                if tangent is not None:
+                    lines.append(f"T[_g{i} + {column}] = {tangent}")
+    if program["uses_t"]:
+        lines += ["for k in range(order + 1):", f"{INDENT}{writer.at('_t', 'k')} = 0.0", f"{writer.at('_t', 0)} = t",
+                  "if order > 0:", f"{INDENT}{writer.at('_t', 1)} = 1.0"]
+    lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
+    lines += [INDENT + line for op in ops for line in writer.value_lines(op)]
+    looped = padded > writer.columns
+    lines += [f"{INDENT}# The tangents of order k, {writer.columns} columns at a time.",
+              f"{INDENT}for _b in range(0, {padded}, {writer.columns}):" if looped else f"{INDENT}_b = 0"]
+    for op in ops:
+        tangent = writer.tangent_lines(op)
+        if tangent and op.kind != "state":
+            tangent = [f"# d({', '.join(op.out)})", *tangent]
+        lines += [INDENT * (2 if looped else 1) + line for line in tangent]
+    lines.append("return 0")
+    body = "\n".join(INDENT + line if line else "" for line in lines)
+    return (
+        '\n\n@njit(cache=True, error_model="numpy", fastmath={"contract"})\n'
+        f"def {KERNEL}(t, y, p, X, W):\n"
+        f"{body}\n\n\n"
+        f"#: The sensitivity columns of `{KERNEL}`, and the rows of its work array W.\n"
+        f"VARIATIONAL_COLUMNS = {columns}\nVARIATIONAL_WORK = {rows + writer.tangent_rows}\n"
+    )
+
+
+def variational_module(module_source: str, program: dict, columns: int, parameters: tuple[int, ...] = (),
+                       scale: float = 1.0) -> str:
+    """The model's module (whole, so that it stands on its own for numba's cache) and the variational kernel
+    (`variational_source`)."""
+    return (module_source.rstrip("\n") + f"\n\n\n# {'-' * 76}\n# The Taylor program differentiated in forward mode"
+            f", {columns} columns (lagcomp.codegen.taylor_variational)\n"
+            + variational_source(program, columns, parameters, scale))
