@@ -62,12 +62,12 @@ def test_double_pendulum_against_richardson_extrapolated_differences(pendulum):
     reference = (4 * differences(5e-4) - differences(1e-3)) / 3
     sol = _pendulum_run(pendulum, PENDULUM_STATE, 1e-12, sensitivities=("q0", "qd0"))
     relative = np.abs(sol.sensitivities[-1] - reference).max() / np.abs(reference).max()
-    assert relative < 1e-8, relative           # measured 1.2e-10 (1.0e-10 with sensitivity_control="both")
+    assert relative < 1e-8, relative           # measured 1.0e-10 (1.2e-10 with sensitivity_control="state")
 
 
 def test_state_control_takes_the_plain_runs_steps(pendulum):
     plain = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10)
-    sol = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10, sensitivities="q0")
+    sol = _pendulum_run(pendulum, PENDULUM_STATE, 1e-10, sensitivities="q0", sensitivity_control="state")
     assert sol.q.shape == plain.q.shape and sol.qd.shape == plain.qd.shape and sol.sensitivities.shape[1:] == (4, 2)
     assert (sol.nsteps, sol.nrejected) == (plain.nsteps, plain.nrejected)
     # the same steps up to the rounding of the tolerances' division (the step sizes differ at ~1e-7 relative)
@@ -169,7 +169,7 @@ def test_double_pendulum_parameter_columns_against_richardson_extrapolated_diffe
     sol = _pendulum_run(pendulum, PENDULUM_STATE, 1e-12, sensitivities="params")
     assert sol.sensitivity_names == tuple(f"p:{name}" for name in pendulum.parameters)
     relative = np.abs(sol.sensitivities[-1] - reference).max() / np.abs(reference).max()
-    assert relative < 1e-8, relative           # measured 5.6e-10 (5.5e-10 with sensitivity_control="both")
+    assert relative < 1e-8, relative           # measured 5.5e-10 (5.6e-10 with sensitivity_control="state")
 
 
 def test_kane_model_state_is_q_and_u(cache_dir):
@@ -221,7 +221,8 @@ def test_event_time_sensitivities_match_the_closed_form(crossing_oscillator):
     derivatives wrt x0, v0 are those of φ/ω, wrt ω −t_j/ω + ∂φ/∂ω / ω (k = ω² m, m = 1); there x stays 0 and
     v = −(−1)^j ω A."""
     options = dict(rtol=1e-12, atol=1e-12, events="zero", progress=False)
-    sol = crossing_oscillator.simulate((0.0, 10.0), sensitivities=("q0", "qd0", "params"), **options)
+    sol = crossing_oscillator.simulate((0.0, 10.0), sensitivities=("q0", "qd0", "params"),
+                                       sensitivity_control="state", **options)   # the plain run's steps
     plain = crossing_oscillator.simulate((0.0, 10.0), **options)
     assert sol.sensitivity_names == ("q0:x", "qd0:x_dot", "p:k", "p:m")
     assert set(sol.event_sensitivities) == {"zero", "line"} and len(sol.event_sensitivities["line"]) == 0
@@ -276,7 +277,7 @@ def test_poincare_section_of_henon_heiles_against_richardson_extrapolated_differ
         return np.concatenate([record.t[:, None], record.q, record.qd], axis=1)
 
     reference = _richardson(crossings, w0, (0.1, 0.1, 0.35, 0.1, 1.0))   # (ẏ0 = 0 has no scale of its own)
-    sol = run(w0, 1e-12, sensitivities=("q0", "qd0", "params"))
+    sol = run(w0, 1e-12, sensitivities=("q0", "qd0", "params"), sensitivity_control="state")  # the plain steps
     assert sol.sensitivity_names == ("q0:x", "q0:y", "qd0:x_dot", "qd0:y_dot", "p:lam")
     found = sol.event_sensitivities["section"]
     got = np.concatenate([found.t[:, None, :], found.y], axis=1)

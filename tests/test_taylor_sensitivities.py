@@ -87,21 +87,25 @@ def test_double_pendulum_against_dop853_and_extrapolated_differences(pendulum):
 
 def test_state_control_keeps_the_plain_run_bitwise(pendulum):
     plain = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, **TAYLOR)
-    sol = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities="qd0", **TAYLOR)
+    sol = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities="qd0",
+                        sensitivity_control="state", **TAYLOR)
     assert np.array_equal(sol.t, plain.t) and np.array_equal(sol.y, plain.y)
     assert sol.sensitivities.shape == (sol.t.size, 4, 2) and sol.nfev == plain.nfev
 
 
 def test_a_column_alone_is_the_same_column_of_all(pendulum):
-    full = _pendulum_run(pendulum, PENDULUM_STATE, sensitivities=("q0", "qd0"), **TAYLOR)
-    one = _pendulum_run(pendulum, PENDULUM_STATE, sensitivities="theta2_dot", **TAYLOR)    # a kernel of its own (k = 1)
+    # under "state" both take the plain run's steps (under "both" each its own)
+    full = _pendulum_run(pendulum, PENDULUM_STATE, sensitivities=("q0", "qd0"), sensitivity_control="state", **TAYLOR)
+    one = _pendulum_run(pendulum, PENDULUM_STATE, sensitivities="theta2_dot", sensitivity_control="state",
+                        **TAYLOR)    # a kernel of its own (k = 1)
     assert one.sensitivity_names == ("qd0:theta2_dot",) and np.array_equal(one.t, full.t)
     scale = np.abs(full.sensitivities).max()
     assert np.abs(one.sensitivities[:, :, 0] - full.sensitivities[:, :, 3]).max() < 1e-14 * scale
 
 
 def test_both_control_takes_more_steps_and_agrees(pendulum):
-    state = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities="q0", **TAYLOR)
+    state = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities="q0",
+                          sensitivity_control="state", **TAYLOR)
     both = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities="q0",
                          sensitivity_control="both", **TAYLOR)
     assert both.nsteps > state.nsteps

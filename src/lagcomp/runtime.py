@@ -750,8 +750,10 @@ class Model:
             ``theta1_dot``), a parameter name, or ``"q0:theta1"``-style names
             as `Solution.sensitivity_names` gives them.  Results in
             `Solution.sensitivities`, shape (m, 2n, k).  The step-size control
-            covers the state only (``sensitivity_control="state"``, the
-            default: the plain run's steps) or both (``"both"``).  A model with
+            covers the state and the sensitivities (``sensitivity_control=
+            "both"``, the default) or the state only (``"state"``: the plain
+            run's steps, faster, but wrong where those steps do not resolve
+            the sensitivities, as on a steady motion).  A model with
             constraints also gets dλ/dw in `Solution.reaction_sensitivities`
             (m, k, columns).  Refused for other methods, projection, located
             events that read inputs and function inputs; see

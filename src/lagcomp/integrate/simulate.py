@@ -115,7 +115,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
              atol=None, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
              events=None, record="trajectory", progress=None, throw=False, max_residual=None,
-             memory_limit=MEMORY_LIMIT, inputs=None, sensitivities=None, sensitivity_control="state") -> Solution:
+             memory_limit=MEMORY_LIMIT, inputs=None, sensitivities=None, sensitivity_control="both") -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     columns = None if sensitivities is None else sens.columns(model, sensitivities)
     k_columns = 0 if columns is None else columns.k
