@@ -65,8 +65,8 @@ def test_a_driver_is_compiled_again_when_a_library_file_it_inlines_changes(tmp_p
     assert probe() == {"value": 2, "misses": 0, "warnings": []}  # and loaded from it
     events = copy / "lagcomp" / "integrate" / "drivers" / "events.py"
     source = events.read_text()
-    edited = source.replace("ACTION_IGNORE, ACTION_RECORD, ACTION_TERMINAL = 0, 1, 2",
-                            "ACTION_IGNORE, ACTION_RECORD, ACTION_TERMINAL = 0, 1, 5")
+    edited = source.replace("ACTION_IGNORE, ACTION_RECORD, ACTION_TERMINAL, ACTION_RESET = 0, 1, 2, 3",
+                            "ACTION_IGNORE, ACTION_RECORD, ACTION_TERMINAL, ACTION_RESET = 0, 1, 5, 3")
     assert edited != source and len(edited) == len(source)
     events.write_text(edited)
     refreshed = probe()
