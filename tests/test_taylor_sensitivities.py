@@ -114,7 +114,7 @@ def test_both_control_takes_more_steps_and_agrees(pendulum):
     assert np.abs(both.sensitivities[-1] - state.sensitivities[-1]).max() < 1e-9 * scale
 
 
-@pytest.mark.parametrize("control", ["state", "both"])
+@pytest.mark.parametrize("control", [pytest.param("state", marks=pytest.mark.slow), "both"])  # 25 s each, cold
 def test_every_operation_against_dop853_with_t_eval(zoo, control):
     t_eval = np.linspace(0.0, 5.0, 11)
     columns = ("q0", "qd0", "params")
@@ -177,6 +177,7 @@ def test_refusals(pendulum, compiled, monkeypatch):
         compiled("spherical_pendulum_cartesian").simulate((0.0, 1.0), sensitivities="q0", **TAYLOR)
 
 
+@pytest.mark.slow  # 20 s: a kernel of its own, compiled cold
 def test_the_loop_over_blocks_of_columns_agrees(zoo, monkeypatch):
     from lagcomp.codegen import taylor_variational
     from lagcomp.integrate import taylor_sensitivities
