@@ -2,15 +2,18 @@
 
     python -m bench.bench_reset_sweep [--e-min 0.8] [--h-min 1.0] [--side 100] [--repeats 3]
 
-The ball: ẍ = −g, an event x = 0 downwards whose reset is ẋ → −e ẋ (`lagcomp.Event(..., reset=...)`).  Each
-trajectory runs to 0.9 times the earliest accumulation point of the grid (t∞ = t₁ + 2 v₁ e/(g (1 − e))), with
-dop853 (rtol = atol = 1e-10) and taylor, on 1 and 2 threads; printed: trajectories per second (the best of
-`--repeats`, after a warm-up sweep that compiles), the impacts in all, the trajectories whose impact count differs
-from the closed form (t₁ = √(2 h₀/g), then intervals 2 eᵏ v₁/g), and the worst relative error of their times.
+The ball: ẍ = −g on a floor at x = 0, written two ways: an event x = 0 downwards whose reset is ẋ → −e ẋ
+(`lagcomp.Event(..., reset=...)`), and a contact (`lagcomp.Contact("floor", x, restitution=e)`, whose impact
+the kernels derive from M and the gap's gradient).  Each trajectory runs to 0.9 times the earliest
+accumulation point of the grid (t∞ = t₁ + 2 v₁ e/(g (1 − e))), with dop853 (rtol = atol = 1e-10) and taylor;
+printed: trajectories per second (the best of `--repeats`, after a warm-up sweep that compiles), the impacts in
+all, the trajectories whose impact count differs from the closed form (t₁ = √(2 h₀/g), then intervals
+2 eᵏ v₁/g), and the worst relative error of their times.  `python -m bench` runs the contact's rows as its
+"impacts" section, each against the same sweep without the floor (free fall: the cost of the impacts).
 
 Measured (defaults, e in [0.8, 0.9], h₀ in [1, 2], to t = 3.66, 49 896 impacts; 2 cores shared with other work,
-so the second thread gained nothing): dop853 47 400/s, taylor 72 500/s; no trajectory with a wrong count; impact
-times to 3.9e-14 (dop853) and 7.8e-16 (taylor).
+so the second thread gained nothing), the reset event: dop853 47 400/s, taylor 72 500/s; no trajectory with a
+wrong count; impact times to 3.9e-14 (dop853) and 7.8e-16 (taylor).
 """
 
 from __future__ import annotations
@@ -23,16 +26,19 @@ import numpy as np
 import sympy as sp
 
 import lagcomp as lc
+from bench.harness import Table
 
 G = 9.81
 
 
-def ball() -> lc.System:
+def ball(floor: str = "reset") -> lc.System:
+    """The ball with its floor as a reset event ("reset"), a contact ("contact") or none ("none")."""
     (x,) = lc.coordinates("x")
     g, e = sp.symbols("g e", positive=True)
-    return lc.System(coordinates=(x,), T=x.diff(lc.t) ** 2 / 2, V=g * x, name="bench_ball",
-                     defaults={"g": G, "e": 0.8}, q0=(1.0,), qd0=(0.0,),
-                     events=[lc.Event("impact", x, direction=-1, reset={x.diff(lc.t): -e * x.diff(lc.t)})])
+    events = {"reset": [lc.Event("impact", x, direction=-1, reset={x.diff(lc.t): -e * x.diff(lc.t)})],
+              "contact": [lc.Contact("impact", x, restitution=e)], "none": []}[floor]
+    return lc.System(coordinates=(x,), T=x.diff(lc.t) ** 2 / 2, V=g * x, name=f"bench_ball_{floor}",
+                     parameters=(g, e), defaults={"g": G, "e": 0.8}, q0=(1.0,), qd0=(0.0,), events=events)
 
 
 def impact_times(e: float, h0: float, t_end: float) -> np.ndarray:
@@ -48,6 +54,62 @@ def accumulation(e: float, h0: float) -> float:
     return math.sqrt(2 * h0 / G) + 2 * math.sqrt(2 * G * h0) * e / (G * (1 - e))
 
 
+METHODS = (("dop853", dict(rtol=1e-10, atol=1e-10)), ("taylor", {}))
+
+
+def grid(side: int, e_min: float = 0.8, h_min: float = 1.0) -> tuple[np.ndarray, np.ndarray, float]:
+    """The restitutions, the drop heights, and the common end time: 0.9 × the grid's earliest t∞."""
+    es, hs = np.linspace(e_min, 0.9, side), np.linspace(h_min, 2.0, side)
+    return es, hs, 0.9 * min(accumulation(e, h) for e in es for h in hs)
+
+
+def measure(model, es, hs, t_end: float, method: str, options: dict, workers: int, repeats: int) -> dict:
+    """The best time of `repeats` sweeps (after one that compiles), the impacts found, the trajectories whose
+    count differs from the closed form, and the worst relative error of the impact times (no floor: only the
+    time)."""
+    events = ("events",) if model.event_names else ()
+    model.sweep((0.0, t_end), {"e": es[:2], "x": hs[:2]}, output=events, method=method, progress=False, **options)
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = model.sweep((0.0, t_end), {"e": es, "x": hs}, output=events, method=method, workers=workers,
+                             event_cap=64, progress=False, **options)
+        best = min(best, time.perf_counter() - start)
+    found = {"seconds": best, "rate": result.status.size / best, "statuses": np.unique(result.status).tolist()}
+    if events:
+        record = result.events["impact"]
+        wrong, worst = 0, 0.0
+        for i, e in enumerate(es):
+            for j, h in enumerate(hs):
+                times, count = impact_times(e, h, t_end), int(record["count"][i, j])
+                if count != times.size:
+                    wrong += 1
+                else:
+                    worst = max(worst, float(np.max(np.abs(record["t"][i, j, :count] / times - 1))))
+        found.update(impacts=int(record["count"].sum()), wrong=wrong, worst=worst)
+    return found
+
+
+def section(ctx) -> Table:
+    """`python -m bench`'s "impacts" section: 10⁴ balls on a `lagcomp.Contact` floor (20² with --quick), each
+    method against the same sweep without the floor."""
+    side = 20 if ctx.quick else 100
+    es, hs, t_end = grid(side)
+    contact = lc.compile(ball("contact"), cache_dir=ctx.cache_dir)
+    free = lc.compile(ball("none"), cache_dir=ctx.cache_dir)
+    table = Table(f"Impacts: {side * side} bouncing balls on a contact (issue 21)",
+                  ["method", "trajectories/s", "impacts", "wrong counts", "worst time error", "time / no floor"],
+                  note=f"e in [0.8, 0.9] × h₀ in [1, 2], to t = {t_end:.3g} (0.9 × the earliest t∞); 1 thread; "
+                       "the best of the repeats; counts and times against the closed form.")
+    for method, options in METHODS:
+        repeats = min(ctx.repeats, 3)
+        hit = measure(contact, es, hs, t_end, method, options, 1, repeats)
+        plain = measure(free, es, hs, t_end, method, options, 1, repeats)
+        table.add(method, f"{hit['rate']:,.0f}", hit["impacts"], hit["wrong"], f"{hit['worst']:.1e}",
+                  f"{hit['seconds'] / plain['seconds']:.1f}×")
+    return table
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--e-min", type=float, default=0.8)
@@ -55,32 +117,16 @@ def main() -> None:
     parser.add_argument("--side", type=int, default=100, help="grid points per axis (side² trajectories)")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
-    model = lc.compile(ball())
-    es, hs = np.linspace(args.e_min, 0.9, args.side), np.linspace(args.h_min, 2.0, args.side)
-    t_end = 0.9 * min(accumulation(e, h) for e in es for h in hs)
-    grid = {"e": es, "x": hs}
-    for method, options in (("dop853", dict(rtol=1e-10, atol=1e-10)), ("taylor", {})):
-        model.sweep((0.0, t_end), {"e": es[:2], "x": hs[:2]}, output="events", method=method, progress=False,
-                    **options)
-        for workers in (1, 2):
-            best = math.inf
-            for _ in range(args.repeats):
-                start = time.perf_counter()
-                result = model.sweep((0.0, t_end), grid, output="events", method=method, workers=workers,
-                                     event_cap=64, progress=False, **options)
-                best = min(best, time.perf_counter() - start)
-            record = result.events["impact"]
-            wrong, worst = 0, 0.0
-            for i, e in enumerate(es):
-                for j, h in enumerate(hs):
-                    times, count = impact_times(e, h, t_end), int(record["count"][i, j])
-                    if count != times.size:
-                        wrong += 1
-                    else:
-                        worst = max(worst, float(np.max(np.abs(record["t"][i, j, :count] / times - 1))))
-            print(f"{method:7s} {workers} thread(s): {result.status.size / best:9.0f} trajectories/s  "
-                  f"({result.status.size} to t = {t_end:.3g}, {int(record['count'].sum())} impacts; "
-                  f"wrong counts {wrong}; worst relative time error {worst:.2g}; statuses {np.unique(result.status)})")
+    es, hs, t_end = grid(args.side, args.e_min, args.h_min)
+    for floor in ("reset", "contact"):
+        model = lc.compile(ball(floor))
+        for method, options in METHODS:
+            for workers in (1, 2):
+                found = measure(model, es, hs, t_end, method, options, workers, args.repeats)
+                print(f"{floor:7s} {method:7s} {workers} thread(s): {found['rate']:9.0f} trajectories/s  "
+                      f"({es.size * hs.size} to t = {t_end:.3g}, {found['impacts']} impacts; wrong counts "
+                      f"{found['wrong']}; worst relative time error {found['worst']:.2g}; statuses "
+                      f"{found['statuses']})")
 
 
 if __name__ == "__main__":
