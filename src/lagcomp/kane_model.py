@@ -154,7 +154,7 @@ def _run_defaults(form, options, events=()) -> dict:
         "name": options.get("name", "kane_model"), "description": options.get("description", ""),
         "defaults": defaults, "q0": floats(options.get("q0"), form.n_q, "q0"),
         "qd0": floats(options.get("u0"), form.n_u, "u0"), "t_end": float(options.get("t_end", 10.0)),
-        "events": [[e.name, e.direction, e.terminal, e.reset is not None] for e in events],
+        "events": [[e.name, e.direction, e.terminal, e.changes_state] for e in events],
     }
 
 

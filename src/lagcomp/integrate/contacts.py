@@ -15,6 +15,12 @@ from lagcomp.errors import InitialConditionError, ParameterError
 from lagcomp.kernel_support.impacts import CLOSED_GAP
 
 
+def touching(gradients: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The gaps (C,) that count as touching for contacts of gradients ∂g/∂q (C, n) at q: `CLOSED_GAP` Σ_j
+    |∂g/∂q_j| (|q_j| + 1), the impact solver's own scale (`lagcomp.kernel_support.impacts.contact_impacts`)."""
+    return CLOSED_GAP * (np.abs(gradients) @ (np.abs(q) + 1.0))
+
+
 def contacts_of(model) -> tuple:
     """The model's contacts as (name, event index, restitution), () for a module without them."""
     return tuple(getattr(model.kernels, "CONTACTS", ()))
@@ -40,9 +46,9 @@ def check_contacts(model, t0: float, Y0: np.ndarray, P: np.ndarray, where=lambda
                                      "[0, 1] (1 elastic, 0 plastic).")
         model.kernels.event_values(t0, y, p, values)
         model.kernels.event_gradients(t0, y, p, gradients)
+        allowed = touching(gradients[:, :n], y[:n])
         for name, event, _ in contacts:
-            scale = float(np.sum(np.abs(gradients[event, :n]) * (np.abs(y[:n]) + 1.0)))
-            if values[event] < -CLOSED_GAP * scale:
+            if values[event] < -allowed[event]:
                 raise InitialConditionError(
                     f"Contact `{name}`{where(row)}: its gap is {values[event]:.6g} < 0 at t0 = {t0}: the bodies start "
                     "inside each other. Start with the gap >= 0 (touching is 0).")
@@ -70,8 +76,7 @@ def impulses(model, p: np.ndarray, firing: int, t: np.ndarray, before: np.ndarra
         model.kernels.event_values(t[row], y, p, values)
         model.kernels.event_gradients(t[row], y, p, gradients)
         G = gradients[events, :n]
-        scale = np.abs(G) @ (np.abs(y[:n]) + 1.0)
-        closed = values[events] <= CLOSED_GAP * scale
+        closed = values[events] <= touching(G, y[:n])
         closed[events.index(firing)] = True
         jump = mass @ (after[row, n:size] - y[n:size])
         out[row, closed] = np.linalg.lstsq(G[closed].T, jump, rcond=None)[0]
