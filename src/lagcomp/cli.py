@@ -249,10 +249,14 @@ def cmd_run(args) -> int:
     print(f"energy      T+V: {sol.energy[0]:.12g} -> {sol.energy[-1]:.12g} (max relative drift {summary.energy_error:.3g})")
     print(f"            h:   {sol.energy_function[0]:.12g} -> {sol.energy_function[-1]:.12g} "
           f"(max relative drift {summary.energy_function_error:.3g})")
+    from lagcomp.event_report import occurrence_lines
+
     for name, record in sol.events.items():
         when = f" at t = {record.t[0]:.10g} .. {record.t[-1]:.10g}" if len(record) else ""
-        resets = " (each resets the state)" if len(record) and record.jumps else ""
-        print(f"event       {name}: {len(record)} occurrence(s){when}{resets}")
+        resets = " (impacts)" if record.impulses is not None else " (each resets the state)" if record.jumps else ""
+        print(f"event       {name}: {len(record)} occurrence(s){when}{resets if len(record) else ''}")
+        for line in occurrence_lines(record, sol.state_names, model.contacts):
+            print(line)
     for name, values in sol.reactions.items():
         print(f"reaction    {name}: {values[0]:.8g} -> {values[-1]:.8g} (range {values.min():.6g} .. {values.max():.6g})")
     if sol.reactions:
@@ -502,8 +506,11 @@ def cmd_sweep(args) -> int:
         if finite.size:
             print(f"energy      largest relative error per trajectory: median {np.median(finite):.3g}, "
                   f"max {finite.max():.3g}")
+    from lagcomp.event_report import sweep_event_summary
+
     for name, record in (sweep.events or {}).items():
-        print(f"event       {name}: {int(record['count'].sum())} occurrence(s) in all")
+        print(f"event       {name}: {int(record['count'].sum())} occurrence(s) in all"
+              f"{sweep_event_summary(record, model.contacts)}")
     if args.out:
         sweep.save_npz(args.out)
         print(f"saved       {args.out}")

@@ -6,7 +6,8 @@ notebook by leaving it as a cell's value, or write it with
 ``fig.savefig("out.png")``.
 
 =========================  ===================================================
-`plot_coordinates`         q(t) (and optionally q̇(t)) of a Solution
+`plot_coordinates`         q(t) (and optionally q̇(t)) of a Solution, its
+                           resets and impacts marked
 `plot_energy_error`        |h(t) − h(0)| / |h(0)| of a Solution, log scale
 `plot_run`                 the two above stacked (``lagcomp run --plot``)
 `plot_phase_portrait`      a Portrait's level curves and separatrices, or a
@@ -37,14 +38,36 @@ def _label(name: str) -> str:
     return f"{name[:-4]}'" if name.endswith("_dot") else name
 
 
-def plot_coordinates(sol, *, velocities: bool = False, title: str | None = None):
-    """Each coordinate q_i(t) of a `Solution` (and q̇_i(t) in a second panel with ``velocities=True``)."""
+def _jumping_events(sol) -> dict:
+    """The times (k,) of each event of `sol` that changed the state: a reset that moved it, or a contact's impacts."""
+    return {name: record.t for name, record in getattr(sol, "events", {}).items()
+            if len(record) and (record.impulses is not None or record.jumps)}
+
+
+def _mark_events(axes, sol) -> None:
+    """Thin vertical lines at the times of the resets and impacts of `sol` on each of `axes`, one colour per
+    event after the coordinates' colours; the first axes' legend names them (one entry per event)."""
+    for j, (name, times) in enumerate(_jumping_events(sol).items()):
+        colour = f"C{(len(sol.coordinates) + j) % 10}"
+        for a, ax in enumerate(axes):
+            ax.vlines(times, 0.0, 1.0, transform=ax.get_xaxis_transform(), colors=colour, linestyles=":",
+                      linewidths=0.8, alpha=0.7, zorder=0, label=f"{name} ({len(times)})" if a == 0 else None)
+
+
+def plot_coordinates(sol, *, velocities: bool = False, events: bool = True, title: str | None = None):
+    """Each coordinate q_i(t) of a `Solution` (and q̇_i(t) in a second panel with ``velocities=True``).
+
+    With `events`, the times of the events that changed the state (resets, a contact's impacts) are dotted
+    vertical lines, named in the legend with their count.
+    """
     fig = _figure(7.0, 6.0 if velocities else 4.0)
     axes = fig.subplots(2 if velocities else 1, 1, sharex=True, squeeze=False)[:, 0]
     for i, name in enumerate(sol.coordinates):
         axes[0].plot(sol.t, sol.q[:, i], lw=1.0, label=name)
         if velocities:
             axes[1].plot(sol.t, sol.qd[:, i], lw=1.0, label=_label(f"{name}_dot"))
+    if events:
+        _mark_events(axes, sol)
     axes[0].set_ylabel("coordinates")
     if velocities:
         axes[1].set_ylabel("velocities")
@@ -82,12 +105,15 @@ def plot_energy_error(sol, *, which: str = "energy_function", title: str | None 
     return fig
 
 
-def plot_run(sol, *, title: str | None = None):
-    """Coordinates vs time above the energy error: the figure of ``lagcomp run --plot``."""
+def plot_run(sol, *, events: bool = True, title: str | None = None):
+    """Coordinates vs time above the energy error: the figure of ``lagcomp run --plot``; with `events`, the
+    resets and impacts marked on both (as `plot_coordinates` marks them)."""
     fig = _figure(7.0, 6.5)
     top, bottom = fig.subplots(2, 1, sharex=True)
     for i, name in enumerate(sol.coordinates):
         top.plot(sol.t, sol.q[:, i], lw=1.0, label=name)
+    if events:
+        _mark_events((top, bottom), sol)
     top.set_ylabel("coordinates")
     top.legend(loc="upper right", fontsize="small")
     top.grid(alpha=0.3)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
-from lagcomp.integrate.contacts import check_contacts
+from lagcomp.integrate.contacts import check_contacts, contacts_of, impulses
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
@@ -42,6 +42,8 @@ from lagcomp.integrate.stiffness import warn_if_sweep_stiff
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
+#: The arrays of an event's record in a sweep (`Sweep.events`), the longest suffix first (as `load_npz` reads them).
+EVENT_PARTS = ("y_after", "impulses", "count", "t", "y")
 #: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread
 #: (batched drivers: enough trajectories to fill a block of lanes, 64 to 128 (`drivers.lanes`), or the 32
 #: lanes of a batched Taylor sweep several times over, so that few lanes idle while the last ones finish).
@@ -82,7 +84,11 @@ class Sweep:
         saved rows (every step unless `save_every`/`t_eval` say otherwise).
     events : dict of str to dict, or None
         Per event: ``count`` (shape), ``t`` (*shape, cap) and ``y``
-        (*shape, cap, n_y) of the first `event_cap` occurrences (NaN beyond).
+        (*shape, cap, n_y) of the first `event_cap` occurrences (NaN beyond);
+        for an event that resets the state ``y_after`` (*shape, cap, n_y),
+        the state its reset gave, and for a contact ``impulses`` (*shape,
+        cap, C), the normal impulses of the model's contacts: what a single
+        run's `EventRecord` keeps (``q_after``, ``qd_after``, ``impulses``).
     done : ndarray of bool, shape
         Which trajectories ran (all, unless Ctrl-C interrupted the sweep).
     coordinates : tuple of str
@@ -143,8 +149,8 @@ class Sweep:
         names = tuple(arrays.pop("names").tolist())
         events: dict = {}
         for key in [k for k in arrays if k.startswith("event_")]:
-            name, part = key[len("event_"):].rsplit("_", 1)
-            events.setdefault(name, {})[part] = arrays.pop(key)
+            part = next(part for part in EVENT_PARTS if key.endswith(f"_{part}"))
+            events.setdefault(key[len("event_"):-len(part) - 1], {})[part] = arrays.pop(key)
         return cls(
             names=names, axes={name: arrays.pop(f"axis_{name}") for name in names},
             shape=tuple(arrays.pop("shape").tolist()), coordinates=tuple(arrays.pop("coordinates").tolist()),
@@ -265,11 +271,13 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     want_events = "events" in output
     cap = count(event_cap, "event_cap") if want_events else 0
     n_events = len(model.events) if want_events else 0
+    after_width = n2 if want_events and any(event.resets for event in model.events) else 0  # states after resets
 
     def check_rows(times: int | None, where: str) -> None:
         """The memory of the sweep's outputs: `times` dense rows per trajectory if they are kept."""
         rows = (times or 0) if "dense" in output else 0
-        check_memory(sweep_bytes(n_traj, n2, rows, n_events, cap), memory_limit, "The sweep's outputs",
+        check_memory(sweep_bytes(n_traj, n2, rows, n_events, cap) + 8 * n_traj * n_events * cap * after_width,
+                     memory_limit, "The sweep's outputs",
                      f"{n_traj} trajectories", "save fewer rows (t_eval, save_every), fewer events (event_cap), "
                      "split the grid")
 
@@ -314,7 +322,8 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         refuse_stabilisation(m.name, model, baumgarte)
         Y0 = dae_states(model, t0, Y0, P, lambda i: f"Trajectory {i} of the sweep ({_where(names, values[i])})")
 
-    layout = (Y0.shape[1], rows, len(options.directions), cap)
+    resetting = want_events and bool((actions >= ACTION_RESET).any())  # then event rows keep the state after too
+    layout = (Y0.shape[1], rows, len(options.directions), cap, (2 if resetting else 1) * Y0.shape[1])
     out = _allocate(n_traj, layout)
     spec = None        # the model's own module; a batched Taylor sweep has a module of its own
     if batched:
@@ -350,13 +359,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     e0, deviation = out["energy"][:, 0], out["energy"][:, 1]
     relative = np.where(e0 != 0, deviation / np.where(e0 != 0, np.abs(e0), 1.0), deviation)
     shaped = lambda a: a.reshape(*shape, *a.shape[1:])  # noqa: E731
-    events_out = None
-    if want_events:
-        events_out = {
-            event.name: {"count": shaped(out["event_count"][:, i]), "t": shaped(out["event_t"][:, i]),
-                         "y": shaped(out["event_y"][:, i, :, :n2])}
-            for i, event in enumerate(model.events) if actions[i]
-        }
+    events_out = _event_outputs(model, out, actions, P, Y0.shape[1], shaped) if want_events else None
     return Sweep(
         names=names, combine=combine if isinstance(grid, dict) else "explicit", axes=axes, shape=shape,
         final=shaped(out["final"][:, :n2]), t_final=shaped(out["t_final"]),
@@ -366,6 +369,44 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         t_dense=t_dense, dense=shaped(out["dense"][:, :, :n2]) if t_dense is not None else None,
         energy_error=shaped(relative) if "energy" in output else None, events=events_out,
     )
+
+
+def _event_outputs(model, out: dict, actions: np.ndarray, P: np.ndarray, width: int, shaped) -> dict:
+    """Each active event's record in a sweep: ``count`` (*shape), and of its first `cap` occurrences ``t``
+    (*shape, cap) and ``y`` (*shape, cap, n_y), the state just before; for an event that resets the state
+    ``y_after`` (*shape, cap, n_y) too, and for a contact ``impulses`` (*shape, cap, C), the normal impulses of
+    the model's contacts (`Model.contacts`) computed from each jump as `simulate` does (`contacts.impulses`):
+    what a single run's `EventRecord` holds, per trajectory.  NaN beyond each trajectory's count.
+
+    `width` is the width of the loop's state (the DAE state of radau: larger than n_y); ``out["event_y"]``
+    holds the states after in its columns `width` to 2 `width` when some event resets.
+    """
+    n_y = model.state_size
+    contacts = {name for name, _, _ in contacts_of(model)}
+    records = {}
+    for i, event in enumerate(model.events):
+        if not actions[i]:
+            continue
+        count, times, before = out["event_count"][:, i], out["event_t"][:, i], out["event_y"][:, i, :, :n_y]
+        record = {"count": shaped(count), "t": shaped(times), "y": shaped(before)}
+        if actions[i] >= ACTION_RESET:
+            after = out["event_y"][:, i, :, width:width + n_y]
+            record["y_after"] = shaped(after)
+            if event.name in contacts:
+                record["impulses"] = shaped(_impulses(model, i, P, count, times, before, after))
+        records[event.name] = record
+    return records
+
+
+def _impulses(model, event: int, P, count, times, before, after) -> np.ndarray:
+    """The contacts' impulses (N, cap, C) at the kept impacts of contact event `event` in each trajectory."""
+    n_traj, cap = times.shape
+    values = np.full((n_traj, cap, len(contacts_of(model))), np.nan)
+    for k in range(n_traj):
+        kept = min(int(count[k]), cap)
+        if kept:
+            values[k, :kept] = impulses(model, P[k], event, times[k, :kept], before[k, :kept], after[k, :kept])
+    return values
 
 
 def _consistent_initial_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, project: bool, names, values) -> None:
@@ -415,7 +456,7 @@ class _Task:
     driver: str
     adaptive: bool
     fixed: tuple
-    layout: tuple          # (2n, dense rows, events, event cap)
+    layout: tuple          # (2n, dense rows, events, event cap, width of an event row: 2n, or 4n with states after)
     coefficients: tuple
     projecting: int        # constrained systems: project onto the constraints after every step (0 or 1)
     sweep: str             # the library sweep loop, ``"module:function"`` (`Method.sweep`)
@@ -429,13 +470,13 @@ class _Task:
 
 def _allocate(n_traj: int, layout: tuple) -> dict[str, np.ndarray]:
     """Output arrays of `n_traj` trajectories, NaN (or status "not run") until they run."""
-    n2, rows, n_events, cap = layout
+    n2, rows, n_events, cap, event_width = layout
     return dict(
         final=np.full((n_traj, n2), np.nan), t_final=np.full(n_traj, np.nan),
         status=np.full(n_traj, NOT_RUN, dtype=np.int64), counts=np.zeros((n_traj, 4), dtype=np.int64),
         dense=np.full((n_traj, rows, n2), np.nan), energy=np.full((n_traj, 2), np.nan),
         event_count=np.zeros((n_traj, n_events), dtype=np.int64), event_t=np.full((n_traj, n_events, cap), np.nan),
-        event_y=np.full((n_traj, n_events, cap, n2), np.nan),
+        event_y=np.full((n_traj, n_events, cap, event_width), np.nan),
     )
 
 

@@ -73,7 +73,8 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, event_reset,
       with the initial state first when ``save_initial``); m = 0 when not wanted;
     * ``energy_stats[k]`` = [E0, largest |E - E0| over the saved rows], E = ``energy`` (T + V);
     * ``event_count[k]`` (E,) occurrences of each event, the first ``cap`` of them in
-      ``event_t[k]`` (E, cap) and ``event_y[k]`` (E, cap, 2n) (the states just before them).
+      ``event_t[k]`` (E, cap) and ``event_y[k]`` (E, cap, 2n) (the states just before them; with 4n columns, the
+      states after them in the last 2n: `fold_events`).
 
     Each trajectory runs with a copy of its row of ``P``: a reset may one day write mode slots of its p.
     """
@@ -113,7 +114,7 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, event_reset,
                                          A, B, C, error_weights, error_norm, error_exponent, dense_kind,
                                          dense_weights, extra_A, extra_C, stiffness_bound)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
-            fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_i, event_count, event_t, event_y, k)
+            fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_y_after, ev_i, event_count, event_t, event_y, k)
             if code != Status.BUFFER_FULL:
                 break
         record_end(k, y, clock, counters, code, e0, deviation, final, t_final, status, counts, energy_stats)

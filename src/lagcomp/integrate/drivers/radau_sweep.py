@@ -84,7 +84,7 @@ def sweep_radau(rhs, rhs_jacobian, event_values, energy,
                                       C, T, TI, MU, ERROR_WEIGHTS, DENSE_WEIGHTS, differential, jacobian, previous,
                                       control)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
-            fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_i, event_count, event_t, event_y, k)
+            fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_y, ev_i, event_count, event_t, event_y, k)
             if code != Status.BUFFER_FULL:
                 break
         record_end(k, y, clock, counters, code, e0, deviation, final, t_final, status, counts, energy_stats)

@@ -60,23 +60,30 @@ def first_row(Y0, dense, k):
     return 1
 
 
-_EVENTS = types.none(INT, VECTOR, MATRIX, INDICES, types.int64[:, ::1], types.float64[:, :, ::1],
+_EVENTS = types.none(INT, VECTOR, MATRIX, MATRIX, INDICES, types.int64[:, ::1], types.float64[:, :, ::1],
                      types.float64[:, :, :, ::1], INT)
 
 
 @njit(_EVENTS, cache=True, error_model="numpy", nogil=True)
-def fold_events(n_rows, ev_t, ev_y, ev_i, event_count, event_t, event_y, k):
-    """Fold the `n_rows` event rows a driver call wrote (time ``ev_t``, state ``ev_y``, event ``ev_i``) into
-    trajectory `k`'s outputs: ``event_count[k, e]`` counts every occurrence of event e, ``event_t[k, e]``
-    and ``event_y[k, e]`` keep the first ``event_t.shape[2]`` of them."""
+def fold_events(n_rows, ev_t, ev_y, ev_y_after, ev_i, event_count, event_t, event_y, k):
+    """Fold the `n_rows` event rows a driver call wrote (time ``ev_t``, state ``ev_y`` just before, ``ev_y_after``
+    just after, event ``ev_i``) into trajectory `k`'s outputs: ``event_count[k, e]`` counts every occurrence of
+    event e, ``event_t[k, e]`` and ``event_y[k, e]`` keep the first ``event_t.shape[2]`` of them.  A row of
+    ``event_y`` holds the state before (its first N columns, N = ``ev_y.shape[1]``) and, when it is 2N wide (a
+    sweep of a model whose events reset the state), the state after in the next N."""
     cap = event_t.shape[2]
+    width = ev_y.shape[1]
+    after = event_y.shape[3] >= 2 * width
     for r in range(n_rows):
         e = ev_i[r]
         j = event_count[k, e]
         if j < cap:
             event_t[k, e, j] = ev_t[r]
-            for c in range(ev_y.shape[1]):
+            for c in range(width):
                 event_y[k, e, j, c] = ev_y[r, c]
+            if after:
+                for c in range(width):
+                    event_y[k, e, j, width + c] = ev_y_after[r, c]
         event_count[k, e] = j + 1
 
 

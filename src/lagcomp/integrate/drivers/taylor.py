@@ -349,7 +349,7 @@ def sweep_taylor(taylor_coefficients, event_values, event_reset, periodic, work_
     ``counts`` (N, 3) = [nfev, nsteps, nrejected]; ``dense`` (N, m, 2n) the ``t_eval`` rows (after t0;
     ``save_initial`` says whether t0 is one too); ``energy_stats`` (N, 2) the initial energy and the
     largest |E − E₀| over the saved rows; ``event_count`` (N, E) and the first occurrences in ``event_t``
-    (N, E, cap) and ``event_y`` (N, E, cap, 2n).  ``carry`` is the carry `taylor_run` takes
+    (N, E, cap) and ``event_y`` (N, E, cap, 2n; or 4n: then the states after the events too, `fold_events`).  ``carry`` is the carry `taylor_run` takes
     (empty: it restarts with each call).  Each trajectory runs with a copy of its row of ``P`` (a reset may one
     day write mode slots of its p).  The trajectories release the GIL: the caller runs disjoint
     row ranges on several threads.
@@ -389,7 +389,7 @@ def sweep_taylor(taylor_coefficients, event_values, event_reset, periodic, work_
                                        save_every, t_eval, ts, ys, directions, actions, ev_t, ev_y, ev_i,
                                        ev_y_after, at_zero, carry)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
-            fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_i, event_count, event_t, event_y, k)
+            fold_events(counters[EVENT_ROWS], ev_t, ev_y, ev_y_after, ev_i, event_count, event_t, event_y, k)
             if code != Status.BUFFER_FULL:
                 break
         record_end(k, y, clock, counters, code, e0, deviation, final, t_final, status, counts, energy_stats)
