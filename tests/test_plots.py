@@ -84,3 +84,43 @@ def test_cli_run_writes_a_plot(tmp_path, cache_dir, capsys):
     assert main(["--cache-dir", str(cache_dir), "run", "sling", "--t-end", "1", "--quiet", "--plot", str(png)]) == 0
     assert "plotted" in capsys.readouterr().out
     assert png.read_bytes().startswith(PNG)
+
+
+@pytest.fixture(scope="module")
+def bouncing_run(cache_dir):
+    """A ball on a contact floor with an apex event (which changes nothing, so it is not marked)."""
+    import sympy as sp
+
+    import lagcomp as lc
+
+    x, = lc.coordinates("x")
+    g, e = sp.symbols("g e", positive=True)
+    model = lc.compile(lc.System([x], T=x.diff(lc.t) ** 2 / 2, V=g * x, name="plotted_ball",
+                                 events=[lc.Contact("floor", x, restitution=e),
+                                         lc.Event("apex", x.diff(lc.t), direction=-1)],
+                                 defaults={"g": 9.81, "e": 0.8}, q0=(1.0,), qd0=(0.0,)), cache_dir=cache_dir)
+    return model.simulate((0.0, 3.0), rtol=1e-10, atol=1e-10)
+
+
+def _marks(ax) -> dict:
+    """The vertical event lines of `ax`: {legend label: their x positions}."""
+    from matplotlib.collections import LineCollection
+
+    return {c.get_label(): np.array([segment[0, 0] for segment in c.get_segments()])
+            for c in ax.collections if isinstance(c, LineCollection)}
+
+
+def test_plots_mark_the_impacts_one_legend_entry_per_event(bouncing_run, pendulum_run, tmp_path):
+    impacts = bouncing_run.events["floor"].t
+    assert len(impacts) == 6 and len(bouncing_run.events["apex"]) == 6      # t₁ = 0.45, then every 2 e^k v₁/g
+    label = f"floor ({len(impacts)})"
+    for fig in (plots.plot_run(bouncing_run), plots.plot_coordinates(bouncing_run, velocities=True)):
+        top, bottom = fig.axes[:2]
+        marks = _marks(top)
+        assert list(marks) == [label]                           # the apex changes nothing: not marked
+        np.testing.assert_array_equal(marks[label], impacts)
+        np.testing.assert_array_equal(next(iter(_marks(bottom).values())), impacts)
+        assert [t.get_text() for t in top.get_legend().get_texts()] == ["x", label]
+        _render(fig, tmp_path / "marked.png")
+    assert _marks(plots.plot_run(bouncing_run, events=False).axes[0]) == {}
+    assert _marks(plots.plot_run(pendulum_run).axes[0]) == {}

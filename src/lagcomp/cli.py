@@ -252,7 +252,8 @@ def cmd_run(args) -> int:
     from lagcomp.event_report import occurrence_lines
 
     for name, record in sol.events.items():
-        when = f" at t = {record.t[0]:.10g} .. {record.t[-1]:.10g}" if len(record) else ""
+        when = f" at t = {record.t[0]:.10g}" + (f" .. {record.t[-1]:.10g}" if len(record) > 1 else "") \
+            if len(record) else ""
         resets = " (impacts)" if record.impulses is not None else " (each resets the state)" if record.jumps else ""
         print(f"event       {name}: {len(record)} occurrence(s){when}{resets if len(record) else ''}")
         for line in occurrence_lines(record, sol.state_names, model.contacts):

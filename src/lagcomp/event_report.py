@@ -66,11 +66,11 @@ def sweep_event_summary(record, contacts) -> str:
     for a contact the range of each contact's impulses over the occurrences kept (`event_cap` per trajectory)."""
     if "y_after" not in record:
         return ""
-    text = " (each resets the state)"
-    if "impulses" in record:
-        impulses = record["impulses"].reshape(-1, len(contacts))
-        kept = impulses[~np.isnan(impulses).any(axis=1)]
-        if kept.size:
-            ranges = (f"{name} {kept[:, c].min():.6g} .. {kept[:, c].max():.6g}" for c, name in enumerate(contacts))
-            text += f"; impulses over the {kept.shape[0]} kept: " + ", ".join(ranges)
-    return text
+    if "impulses" not in record:
+        return " (each resets the state)"
+    impulses = record["impulses"].reshape(-1, len(contacts))
+    kept = impulses[~np.isnan(impulses).any(axis=1)]
+    if not kept.size:
+        return " (impacts)"
+    ranges = (f"{name} {kept[:, c].min():.6g} .. {kept[:, c].max():.6g}" for c, name in enumerate(contacts))
+    return f" (impacts); impulses over the {kept.shape[0]} kept: " + ", ".join(ranges)
