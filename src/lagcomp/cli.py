@@ -364,12 +364,12 @@ def cmd_generate(args) -> int:
 
 def library_drivers() -> list[str]:
     """The library drivers and sweep loops (``"module:function"``), each once: those the method registry
-    names, then the batched sweep loops (`lagcomp.integrate.sweep.BATCHED`)."""
+    names, then the batched sweep loops (`lagcomp.integrate.sweep.BATCHED`) and a sweep's impulse loop."""
     from lagcomp.integrate.methods import METHODS
-    from lagcomp.integrate.sweep import BATCHED, TAYLOR_LANES_LOOP
+    from lagcomp.integrate.sweep import BATCHED, IMPULSES, TAYLOR_LANES_LOOP
 
     references = [ref for m in METHODS.values() for ref in (m.driver, m.sweep) if ref is not None]
-    references += [ref for ref in BATCHED.values() if ":" in ref] + [TAYLOR_LANES_LOOP[0]]
+    references += [ref for ref in BATCHED.values() if ":" in ref] + [TAYLOR_LANES_LOOP[0], IMPULSES]
     return list(dict.fromkeys(references))
 
 

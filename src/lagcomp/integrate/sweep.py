@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
-from lagcomp.integrate.contacts import check_contacts, contacts_of, impulses
+from lagcomp.integrate.contacts import check_contacts, contacts_of
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
@@ -42,6 +42,8 @@ from lagcomp.integrate.stiffness import warn_if_sweep_stiff
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
+#: The compiled loop that computes the impulses of the impacts a sweep kept (`_event_outputs`).
+IMPULSES = "lagcomp.integrate.drivers.sweep_impulses:contact_impulses"
 #: The arrays of an event's record in a sweep (`Sweep.events`), the longest suffix first (as `load_npz` reads them).
 EVENT_PARTS = ("y_after", "impulses", "count", "t", "y")
 #: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread
@@ -399,13 +401,16 @@ def _event_outputs(model, out: dict, actions: np.ndarray, P: np.ndarray, width: 
 
 
 def _impulses(model, event: int, P, count, times, before, after) -> np.ndarray:
-    """The contacts' impulses (N, cap, C) at the kept impacts of contact event `event` in each trajectory."""
-    n_traj, cap = times.shape
-    values = np.full((n_traj, cap, len(contacts_of(model))), np.nan)
-    for k in range(n_traj):
-        kept = min(int(count[k]), cap)
-        if kept:
-            values[k, :kept] = impulses(model, P[k], event, times[k, :kept], before[k, :kept], after[k, :kept])
+    """The contacts' impulses (N, cap, C) at the kept impacts of contact event `event` in each trajectory
+    (`lagcomp.integrate.drivers.sweep_impulses`: `simulate`'s arithmetic, compiled), NaN beyond them."""
+    contact_impulses = library_function(IMPULSES)
+    contacts = np.array([index for _, index, _ in contacts_of(model)], dtype=np.int64)
+    n, n_events = model.n, len(model.event_names)
+    values = np.full((*times.shape, contacts.size), np.nan)
+    contact_impulses(model.kernels.mass_matrix, model.kernels.event_values, model.kernels.event_gradients, contacts,
+                     event, n, np.ascontiguousarray(P), np.ascontiguousarray(count), np.ascontiguousarray(times),
+                     np.ascontiguousarray(before), np.ascontiguousarray(after), np.empty((n, n)), np.empty(n_events),
+                     np.empty((n_events, model.state_size + 1 + len(model.parameters))), values)
     return values
 
 
