@@ -37,8 +37,8 @@ def models(cache_dir):
     return str(cache_dir)
 
 
-def _run(cache, name, t_end, capsys) -> list[str]:
-    code = main(["--cache-dir", cache, "run", name, "--t-end", str(t_end), "--quiet"])
+def _run(cache, name, t_end, capsys, *options) -> list[str]:
+    code = main(["--cache-dir", cache, "run", name, "--t-end", str(t_end), "--quiet", *options])
     out = capsys.readouterr().out
     assert code == 0, out
     return out.splitlines()
@@ -63,8 +63,10 @@ def test_a_bouncing_balls_impacts_are_listed_first_few_then_the_last(models, cap
     assert len({line.index("impulse") for line in rows}) == 1 and len({line.index("x_dot") for line in rows}) == 1
 
 
-def test_a_reset_events_jumps_are_listed_without_impulses(models, capsys):
-    lines = _run(models, "cli_reset_ball", 1.0, capsys)
+def test_a_reset_events_jumps_are_listed_without_impulses(models, capsys, tmp_path):
+    lines = _run(models, "cli_reset_ball", 1.0, capsys, "--plot", str(tmp_path / "ball.png"))
+    assert f"plotted     {tmp_path / 'ball.png'} (coordinates and energy error vs time; resets and impacts marked)" \
+        in lines
     start = next(i for i, line in enumerate(lines) if line.startswith("event       bounce:"))
     assert lines[start].endswith("(each resets the state)") and " 1 occurrence(s) at t = 0.4515236" in lines[start]
     row = lines[start + 1].split()

@@ -274,7 +274,9 @@ def cmd_run(args) -> int:
             plot_run(sol, title=f"{model.name}: {sol.method}, {len(sol.t)} points").savefig(args.plot, dpi=120)
         except ImportError as err:  # matplotlib is an optional extra
             raise LagcompError(str(err)) from err
-        print(f"plotted     {args.plot} (coordinates and energy error vs time)")
+        marked = any(len(r) and (r.impulses is not None or r.jumps) for r in sol.events.values())
+        print(f"plotted     {args.plot} (coordinates and energy error vs time"
+              f"{'; resets and impacts marked' if marked else ''})")
     return 0 if sol.success else 1
 
 
