@@ -2,7 +2,8 @@
 own mode history"): the states after a reset (``y_after``) and a contact's impulses (``impulses``).
 
 Reference: `Model.simulate` of the same grid point, whose records the sweep's must equal bitwise (the same driver,
-the same kernels, the impulses from the same jump by the same function).
+the same kernels; the impulses from the same jump by the same arithmetic, compiled for the sweep in
+`lagcomp.integrate.drivers.sweep_impulses`: bitwise equal so far, to rounding at worst).
 """
 
 from __future__ import annotations
