@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lagcomp.errors import InitialConditionError, ParameterError
+from lagcomp.errors import InitialConditionError, OptionError, ParameterError
 from lagcomp.kernel_support.impacts import CLOSED_GAP
 
 
@@ -65,6 +65,7 @@ def impulses(model, p: np.ndarray, firing: int, t: np.ndarray, before: np.ndarra
     """
     contacts = contacts_of(model)
     n, size = model.n, model.state_size
+    p = with_open_contacts(model, p)            # (event_values: the gaps)
     out = np.zeros((t.shape[0], len(contacts)))
     events = [event for _, event, _ in contacts]
     mass = np.empty((n, n))
@@ -80,4 +81,128 @@ def impulses(model, p: np.ndarray, firing: int, t: np.ndarray, before: np.ndarra
         closed[events.index(firing)] = True
         jump = mass @ (after[row, n:size] - y[n:size])
         out[row, closed] = np.linalg.lstsq(G[closed].T, jump, rcond=None)[0]
+    return out
+
+
+def mode_slots(model) -> tuple[int, int] | None:
+    """(first slot of p, count) of the model's contact modes (`lagcomp.ir.ContactModes`), None without them;
+    the closing flag is the slot after them."""
+    first = getattr(model.kernels, "CONTACT_MODES", None)
+    return None if first is None else (first, len(contacts_of(model)))
+
+
+def with_open_contacts(model, p: np.ndarray) -> np.ndarray:
+    """`p` (or rows of it) with every contact open and closing not allowed: its ``event_values`` are the gaps."""
+    slots = mode_slots(model)
+    if slots is None:
+        return p
+    first, count = slots
+    p = p.copy()
+    p[..., first:first + count + 1] = 0.0
+    return p
+
+
+def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, where=lambda row: "") -> None:
+    """Write into each row of P (rows, *) the contacts' modes at the start and whether impacts may close them.
+
+    Impacts may close a contact when `method` integrates the module's ``rhs`` (which reads the modes); the
+    Taylor method's program is the motion without contacts, so its runs keep every contact open, and refuse to
+    start with one closed (`OptionError`).  A contact starts closed when it touches (its gap within `touching`
+    of 0), its normal velocity ġ is 0 to the same scale (Σ_j |∂g/∂q_j| (|q̇_j| + 1)), and its normal force with
+    the touching contacts closed is positive: those whose force would pull are opened, one pass per contact at
+    most, until the forces of the rest all push.
+    """
+    slots = mode_slots(model)
+    if slots is None:
+        return
+    first, count = slots
+    n = model.n
+    events = [event for _, event, _ in contacts_of(model)]
+    closing = 1.0 if "rhs" in method.kernels else 0.0
+    values = np.empty(len(model.event_names))
+    gradients = np.empty((len(model.event_names), Y0.shape[1] + 1 + len(model.parameters)))
+    forces = np.empty(count)
+    for row in range(Y0.shape[0]):
+        y, p = Y0[row], P[row]
+        p[first:first + count + 1] = 0.0
+        model.kernels.event_values(t0, y, p, values)
+        if model.kernels.event_gradients(t0, y, p, gradients) != 0:
+            continue                    # (no partials: events that read inputs) contacts start open
+        G = gradients[events, :n]
+        rate = G @ y[n:2 * n] + gradients[events, 2 * n]
+        candidates = (values[events] <= touching(G, y[:n])) & (np.abs(rate) <= touching(G, y[n:2 * n]))
+        for _ in range(count):
+            if not candidates.any():
+                break
+            p[first:first + count] = candidates
+            if model.kernels.contact_forces(t0, y, p, forces) != 0:
+                candidates[:] = False
+                break
+            pushing = candidates & (forces > 0.0)
+            if (pushing == candidates).all():
+                break
+            candidates = pushing
+        p[first:first + count] = candidates
+        if candidates.any() and not closing:
+            names = [name for (name, _, _), closed in zip(contacts_of(model), candidates, strict=True) if closed]
+            from lagcomp.integrate.options import method_names  # (it imports this module)
+
+            raise OptionError(f"Contact(s) {names}{where(row)} start closed (touching, at rest, pressed shut), which "
+                              f"`{method.name}` cannot integrate: its program is the motion without contacts. Use "
+                              f"{method_names(lambda m: 'rhs' in m.kernels and 'event_reset' in m.kernels)}.")
+        p[first + count] = closing
+
+
+def contact_switches(model, p: np.ndarray, t: np.ndarray, y: np.ndarray, event: np.ndarray,
+                     accumulated: bool) -> tuple:
+    """The contacts' mode switches along a run: ((time, contact name, closed), ...) in time order.
+
+    Replays the run's resets on a copy of `p` (the modes at the start): at the event rows (t, states before y,
+    event indices `event`), the first resetting row at each time is the reset the driver applied (the others at
+    that time it did not, nor the last row of a run whose events `accumulated`); a contact's ``event_reset`` on
+    the copy writes the modes as the driver's did, bitwise.
+    """
+    slots = mode_slots(model)
+    if slots is None:
+        return ()
+    first, count = slots
+    contacts = contacts_of(model)
+    contact_of = {event_index: d for d, (_, event_index, _) in enumerate(contacts)}
+    resetting = [e.resets or e.name in {name for name, _, _ in contacts} for e in model.events]
+    work, out = p.copy(), np.empty(y.shape[1])
+    switches, applied_at = [], None
+    rows = t.shape[0] - (1 if accumulated and t.shape[0] else 0)
+    for r in range(rows):
+        e = int(event[r])
+        if not resetting[e] or t[r] == applied_at:
+            continue
+        applied_at = t[r]
+        if e not in contact_of:
+            continue
+        before = work[first:first + count].copy()
+        model.kernels.event_reset(float(t[r]), y[r], work, e, out)
+        switches += [(float(t[r]), contacts[d][0], bool(work[first + d])) for d in range(count)
+                     if work[first + d] != before[d]]
+    return tuple(switches)
+
+
+def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, switches: tuple) -> np.ndarray | None:
+    """The normal forces (rows, C) at the saved rows (ts, ys), 0 while a contact is open; None without modes.
+
+    The modes at a row are those at the start (`p`) changed by the `switches` before it; at a switch's time the
+    first row is the state before the switch and a second row at the same time the state after."""
+    slots = mode_slots(model)
+    if slots is None:
+        return None
+    first, count = slots
+    names = [name for name, _, _ in contacts_of(model)]
+    work, out = p.copy(), np.zeros((ts.shape[0], count))
+    k = 0
+    for r in range(ts.shape[0]):
+        while k < len(switches) and (switches[k][0] < ts[r] or (switches[k][0] == ts[r] and r > 0
+                                                                 and ts[r - 1] == ts[r])):
+            work[first + names.index(switches[k][1])] = 1.0 if switches[k][2] else 0.0
+            k += 1
+        if work[first:first + count].any():
+            model.kernels.contact_forces(float(ts[r]), ys[r], work, out[r])
     return out
