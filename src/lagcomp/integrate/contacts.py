@@ -1,4 +1,9 @@
-"""What a run checks of a model's contacts before it starts (`lagcomp.model.contacts.Contact`).
+"""What a run does with a model's contacts before it starts and after it (`lagcomp.model.contacts.Contact`).
+
+Before: the checks below, and the contacts' modes at the start (`set_initial_modes`: closed when at rest on
+their zero and pressed shut); each run and each sweep trajectory then works on its own copy of p, whose modes
+only the drivers' ``event_reset`` writes.  After: the mode switches (`contact_switches`, the resets replayed on
+the modes at the start), the normal forces at the saved rows (`contact_forces_along`) and the impulses.
 
 The module's ``CONTACTS`` lists each contact as (name, event index, restitution), the restitution a
 number or the name of the parameter that holds it.  A run refuses a restitution outside [0, 1]
@@ -26,32 +31,44 @@ def contacts_of(model) -> tuple:
     return tuple(getattr(model.kernels, "CONTACTS", ()))
 
 
-def check_contacts(model, t0: float, Y0: np.ndarray, P: np.ndarray, where=lambda row: "") -> None:
-    """Refuse restitutions outside [0, 1] and penetrating starts, for each row of Y0 (rows, N) and P (rows, *).
+def check_contacts(model, t0: float, Y0: np.ndarray, P: np.ndarray, where=lambda row: "") -> np.ndarray | None:
+    """Refuse restitutions outside [0, 1] and penetrating starts, for each row of Y0 (rows, N) and P (rows, *),
+    whose contacts are open (`parameter_vector`'s modes).
 
-    `where`(row) says which trajectory a row is, for the message of a sweep ("" for a single run).
+    `where`(row) says which trajectory a row is, for the message of a sweep ("" for a single run).  Returns which
+    contacts are at rest on their zero at the start (rows, C): the gap and ġ within `touching`'s scale (of q and
+    q̇), candidates for closed contacts (`set_initial_modes`); None without contacts.
     """
     contacts = contacts_of(model)
     if not contacts:
-        return
-    n = model.n
-    values = np.empty(len(model.event_names))
-    gradients = np.empty((len(model.event_names), Y0.shape[1] + 1 + len(model.parameters)))
-    for row in range(Y0.shape[0]):
-        y, p = Y0[row], P[row]
-        for name, _, restitution in contacts:
-            e = float(p[model.parameters.index(restitution)]) if isinstance(restitution, str) else restitution
-            if not 0.0 <= e <= 1.0:
-                raise ParameterError(f"Contact `{name}`{where(row)}: its restitution {restitution} = {e} is outside "
-                                     "[0, 1] (1 elastic, 0 plastic).")
-        model.kernels.event_values(t0, y, p, values)
-        model.kernels.event_gradients(t0, y, p, gradients)
-        allowed = touching(gradients[:, :n], y[:n])
-        for name, event, _ in contacts:
-            if values[event] < -allowed[event]:
-                raise InitialConditionError(
-                    f"Contact `{name}`{where(row)}: its gap is {values[event]:.6g} < 0 at t0 = {t0}: the bodies start "
-                    "inside each other. Start with the gap >= 0 (touching is 0).")
+        return None
+    for name, _, restitution in contacts:
+        e = P[:, model.parameters.index(restitution)] if isinstance(restitution, str) else np.array([restitution])
+        bad = np.flatnonzero(~((e >= 0.0) & (e <= 1.0)))
+        if bad.size:
+            row = int(bad[0])
+            raise ParameterError(f"Contact `{name}`{where(row)}: its restitution {restitution} = {e[row]} is outside "
+                                 "[0, 1] (1 elastic, 0 plastic).")
+    n, rows = model.n, Y0.shape[0]
+    events = [event for _, event, _ in contacts]
+    values = np.empty((rows, len(model.event_names)))
+    gradients = np.empty((rows, len(model.event_names), Y0.shape[1] + 1 + len(model.parameters)))
+    partials = np.empty(rows, dtype=bool)       # (no partials: events that read inputs)
+    for row in range(rows):                     # (the kernels one row at a time; the tests below on all rows)
+        model.kernels.event_values(t0, Y0[row], P[row], values[row])
+        partials[row] = model.kernels.event_gradients(t0, Y0[row], P[row], gradients[row]) == 0
+    G = gradients[:, events, :n]                                        # (rows, C, n)
+    gaps = values[:, events]
+    allowed = CLOSED_GAP * np.einsum("rcj,rj->rc", np.abs(G), np.abs(Y0[:, :n]) + 1.0)   # `touching`, per row
+    inside = np.argwhere(gaps < -allowed)
+    if inside.size:
+        row, c = (int(i) for i in inside[0])
+        raise InitialConditionError(
+            f"Contact `{contacts[c][0]}`{where(row)}: its gap is {gaps[row, c]:.6g} < 0 at t0 = {t0}: the bodies "
+            "start inside each other. Start with the gap >= 0 (touching is 0).")
+    rate = np.einsum("rcj,rj->rc", G, Y0[:, n:2 * n]) + gradients[:, events, 2 * n]
+    still = np.abs(rate) <= CLOSED_GAP * np.einsum("rcj,rj->rc", np.abs(G), np.abs(Y0[:, n:2 * n]) + 1.0)
+    return (gaps <= allowed) & still & partials[:, None]
 
 
 def impulses(model, p: np.ndarray, firing: int, t: np.ndarray, before: np.ndarray, after: np.ndarray) -> np.ndarray:
@@ -102,55 +119,44 @@ def with_open_contacts(model, p: np.ndarray) -> np.ndarray:
     return p
 
 
-def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, where=lambda row: "") -> None:
+def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, resting: np.ndarray | None,
+                      where=lambda row: "") -> None:
     """Write into each row of P (rows, *) the contacts' modes at the start and whether impacts may close them.
 
     Impacts may close a contact when `method` integrates the module's ``rhs`` (which reads the modes); the
     Taylor method's program is the motion without contacts, so its runs keep every contact open, and refuse to
-    start with one closed (`OptionError`).  A contact starts closed when it touches (its gap within `touching`
-    of 0), its normal velocity ġ is 0 to the same scale (Σ_j |∂g/∂q_j| (|q̇_j| + 1)), and its normal force with
-    the touching contacts closed is positive: those whose force would pull are opened, one pass per contact at
-    most, until the forces of the rest all push.
+    start with one closed (`OptionError`).  A contact starts closed when it is at rest on its zero (`resting`
+    (rows, C), from `check_contacts`) and its normal force with those contacts closed is positive: the ones whose
+    force would pull are opened, one pass per contact at most, until the forces of the rest all push.
     """
     slots = mode_slots(model)
     if slots is None:
         return
     first, count = slots
-    n = model.n
-    events = [event for _, event, _ in contacts_of(model)]
     closing = 1.0 if "rhs" in method.kernels else 0.0
-    values = np.empty(len(model.event_names))
-    gradients = np.empty((len(model.event_names), Y0.shape[1] + 1 + len(model.parameters)))
+    P[:, first:first + count] = 0.0
+    P[:, first + count] = closing
     forces = np.empty(count)
-    for row in range(Y0.shape[0]):
-        y, p = Y0[row], P[row]
-        p[first:first + count + 1] = 0.0
-        model.kernels.event_values(t0, y, p, values)
-        if model.kernels.event_gradients(t0, y, p, gradients) != 0:
-            continue                    # (no partials: events that read inputs) contacts start open
-        G = gradients[events, :n]
-        rate = G @ y[n:2 * n] + gradients[events, 2 * n]
-        candidates = (values[events] <= touching(G, y[:n])) & (np.abs(rate) <= touching(G, y[n:2 * n]))
+    for row in np.flatnonzero(resting.any(axis=1)):
+        y, p, candidates = Y0[row], P[row], resting[row].copy()
         for _ in range(count):
-            if not candidates.any():
-                break
             p[first:first + count] = candidates
             if model.kernels.contact_forces(t0, y, p, forces) != 0:
                 candidates[:] = False
                 break
             pushing = candidates & (forces > 0.0)
-            if (pushing == candidates).all():
+            if (pushing == candidates).all() or not pushing.any():
+                candidates = pushing
                 break
             candidates = pushing
         p[first:first + count] = candidates
         if candidates.any() and not closing:
-            names = [name for (name, _, _), closed in zip(contacts_of(model), candidates, strict=True) if closed]
             from lagcomp.integrate.options import method_names  # (it imports this module)
 
+            names = [name for (name, _, _), closed in zip(contacts_of(model), candidates, strict=True) if closed]
             raise OptionError(f"Contact(s) {names}{where(row)} start closed (touching, at rest, pressed shut), which "
                               f"`{method.name}` cannot integrate: its program is the motion without contacts. Use "
                               f"{method_names(lambda m: 'rhs' in m.kernels and 'event_reset' in m.kernels)}.")
-        p[first + count] = closing
 
 
 def contact_switches(model, p: np.ndarray, t: np.ndarray, y: np.ndarray, event: np.ndarray,

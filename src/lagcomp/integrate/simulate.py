@@ -142,8 +142,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         _refuse_resets_with_sensitivities(model, options)
         sens.check(model, m, options, columns, given)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
-    check_contacts(model, t0, y0[None, :], p[None, :])
-    set_initial_modes(model, m, t0, y0[None, :], p[None, :])  # (p is this run's own: parameter_vector's)
+    resting = check_contacts(model, t0, y0[None, :], p[None, :])
+    set_initial_modes(model, m, t0, y0[None, :], p[None, :], resting)  # (p is this run's own: parameter_vector's)
     if max_residual is not None and not m.checks_residual:
         raise OptionError(f"`max_residual` stops a run whose constraint residual drifts past it; `{m.name}` does not "
                           "evaluate the residual during the run (it solves the constraints with the motion). "
