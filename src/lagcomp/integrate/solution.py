@@ -269,6 +269,11 @@ class Solution:
                if self.sensitivities is not None else {}),
             **({"reaction_sensitivities": self.reaction_sensitivities}
                if self.reaction_sensitivities is not None else {}),
+            **({"contact_forces": self.contact_forces,
+                "contact_switch_t": np.array([s.t for s in self.contact_switches], dtype=float),
+                "contact_switch_contact": np.array([s.contact for s in self.contact_switches], dtype=str),
+                "contact_switch_closed": np.array([s.closed for s in self.contact_switches], dtype=bool)}
+               if self.contact_forces is not None else {}),
         }
 
     def to_xarray(self):
