@@ -156,3 +156,12 @@ def test_a_sweep_gives_each_trajectory_its_own_modes(ball):
         v1 = np.sqrt(2 * G * h0[i])
         last = sweep.events["floor"]["t"][i, counts[i] - 1]
         assert last == pytest.approx(v1 / G + 2 * e * v1 / (G * (1 - e)), abs=1e-9)
+
+
+def test_the_switches_and_forces_are_saved(ball, tmp_path):
+    sol = ball.simulate((0.0, 3.0), [1.0], [0.0], params={"e": 0.5}, rtol=1e-12, atol=1e-12)
+    sol.save_npz(tmp_path / "rest.npz")
+    saved = np.load(tmp_path / "rest.npz")
+    np.testing.assert_array_equal(saved["contact_forces"], sol.contact_forces)
+    assert saved["contact_switch_t"].tolist() == [sol.contact_switches[0].t]
+    assert saved["contact_switch_contact"].tolist() == ["floor"] and saved["contact_switch_closed"].tolist() == [True]
