@@ -165,3 +165,27 @@ def test_the_switches_and_forces_are_saved(ball, tmp_path):
     np.testing.assert_array_equal(saved["contact_forces"], sol.contact_forces)
     assert saved["contact_switch_t"].tolist() == [sol.contact_switches[0].t]
     assert saved["contact_switch_contact"].tolist() == ["floor"] and saved["contact_switch_closed"].tolist() == [True]
+
+
+@pytest.fixture(scope="module")
+def corner(tmp_path_factory):
+    x, y = lc.coordinates("x y")
+    m, g = sp.symbols("m g", positive=True)
+    system = lc.System([x, y], T=m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=m * g * (0.6 * x + y),
+                       events=[lc.Contact("wall", x, restitution=0.5), lc.Contact("floor", y, restitution=0.7)],
+                       name="resting_corner", defaults={"m": 1.0, "g": G})
+    return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+@pytest.mark.parametrize(("q0", "closings"), [([1.0, 2.0], ["wall", "floor"]), ([1.0, 0.0], ["wall"])])
+def test_a_particle_comes_to_rest_in_a_corner(corner, q0, closings):
+    # Pulled into the corner (0.6 g towards the wall, g towards the floor): bounces on both, or slides along the
+    # closed floor into the wall (an impact with another contact closed), then rests pushed by (0.6 m g, m g).
+    sol = corner.simulate((0.0, 8.0), q0, [0.0, 0.0], rtol=1e-12, atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    assert [(s.contact, s.closed) for s in sol.contact_switches] == [(c, True) for c in closings]
+    np.testing.assert_allclose(sol.contact_forces[-1], [0.6 * G, G], rtol=1e-12)
+    assert np.abs(sol.q[-1]).max() < 1e-15 and not sol.qd[-1].any()
+    if q0[1] == 0.0:                        # sliding on the closed floor: x = 1 − 0.3 g t², at the wall at √(1/(0.3 g))
+        assert sol.events["wall"].t[0] == pytest.approx(np.sqrt(1 / (0.3 * G)), rel=1e-12)
+        assert not sol.q[:, 1].any()

@@ -13,10 +13,15 @@ the normal force (in the units of the force conjugate to g: N for a gap in metre
 An impact under a pressing free normal acceleration a = G q̈_free + b < 0 (gravity on a bouncing ball) leaves the
 contact with normal velocity v⁺ = −e v⁻; the bounces that follow, all under that acceleration, last
 2 v⁺ / (|a| (1 − e)) in all (a geometric series) and end at rest.  When that is shorter than
-`ZENO_TIME` max(1, |t|), the impact is made plastic (e = 0: v⁺ = 0) and the contact closes: the error in the
-time the ball comes to rest is that remaining time, and the heights of the bounces left out are
-v⁺²/(2|a|) < (ZENO_TIME |a| / 2)² / (2 |a|), far below rounding.  A plastic impact (e = 0) under pressing
-closes the contact at once.
+`ZENO_TIME` max(1, |t|), or the next bounce 2 v⁺/|a| shorter than `BOUNCE_TIME` max(1, |t|) (e near 1), the
+impact is made plastic (e = 0: v⁺ = 0) and the contact closes: the error in the time the ball comes to rest is
+the remaining time, and the heights of the bounces left out are v⁺²/(2|a|) < (ZENO_TIME |a| / 2)² / (2 |a|), far
+below rounding.  A plastic impact (e = 0) under pressing closes the contact at once.
+
+Why those scales: the drivers resolve a bounce down to about 2048 × 2 ε |t| ≈ 1e-12 |t| (an impact located to
+2 ε |t| leaves the gap a rounding below 0, and the bounce after it must reach above 0 by the first sample of the
+step after the reset, 1/2048 of the step before it); below that a run ends with EVENTS_ACCUMULATED.  With both
+criteria every bounce a run resolves is ≥ 1e-11 |t| (a ball sliding into a wall, e = 0.5, stalled at 1e-12).
 
 Drift: while a contact is closed, g̈ = 0 holds to rounding, and ġ starts at 0 (within the impact's rounding,
 or checked at the start of a run), so g keeps its closing value up to the integration error of the step
@@ -38,9 +43,12 @@ from lagcomp.kernel_support.linear_solvers import ldlt_solve, ldlt_solve_matrix
 DEPENDENT_CLOSED_CONTACTS = 1_000_000
 
 #: An impact under pressing closes its contact when the bounces it would start last less than this times
-#: max(1, |t|) in all: a few hundred units of rounding of t, so that each bounce before it still spans many
-#: of the drivers' smallest steps (10 ulp(t)), yet the time of rest is off by less than 1e-12 max(1, |t|).
-ZENO_TIME = 1e-12
+#: max(1, |t|) in all: the time of rest is off by less than that (5.7e-10 for a ball at rest from t∞ = 5.7 s).
+ZENO_TIME = 1e-10
+#: ... or when the next bounce would last less than this times max(1, |t|): ten times the drivers' resolution of a
+#: bounce (module docstring), for e near 1, whose bounces shrink slowly (the time of rest then off by up to
+#: BOUNCE_TIME max(1, |t|)/(1 − e)).
+BOUNCE_TIME = 1e-11
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
@@ -106,8 +114,9 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
     jump.  An open one's impact is `lagcomp.kernel_support.impacts.contact_impacts`, the velocities ``qd`` (n)
     overwritten; then, when ``closing`` is 1, each contact taking part whose free normal acceleration
     a = G q̈_free + b presses it shut (a < 0) and whose bounces would end within `ZENO_TIME` max(1, |t|)
-    (2 v⁺ < ZENO_TIME max(1, |t|) |a| (1 − e)) closes: the impact is done again with e = 0 for those, and their
-    modes become 1, unless the closed contacts' forces would not all push (then none closes).
+    (2 v⁺ < ZENO_TIME max(1, |t|) |a| (1 − e)), or the next within `BOUNCE_TIME` max(1, |t|), closes: the
+    impact is done again with e = 0 for those, and their modes become 1, unless the closed contacts' forces
+    would not all push (then none closes).
     mass (n, n) lower triangle, gaps, normal_velocities, restitution, bias (C,), gradients (C, n) as in
     `contact_impacts`; qdd_free (n): q̈ without contacts at the state before.  Returns the impact's status.
     """
@@ -120,7 +129,7 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
     status = contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd)
     if status != IMPACT_SOLVED or closing == 0.0:
         return status
-    resolution = ZENO_TIME * max(1.0, abs(t))
+    scale_t = max(1.0, abs(t))
     plastic = restitution.copy()
     closed = modes.copy()
     any_closing = False
@@ -137,7 +146,8 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
         for j in range(n):
             pressing += gradients[d, j] * qdd_free[j]
             v_after += gradients[d, j] * (qd[j] - before[j])
-        if pressing < 0.0 and 2.0 * v_after < resolution * -pressing * (1.0 - restitution[d]):
+        if pressing < 0.0 and (2.0 * v_after < ZENO_TIME * scale_t * -pressing * (1.0 - restitution[d])
+                               or 2.0 * v_after < BOUNCE_TIME * scale_t * -pressing):
             plastic[d] = 0.0
             closed[d] = 1.0
             any_closing = True
