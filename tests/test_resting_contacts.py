@@ -12,6 +12,7 @@ References, all closed forms:
   sin(ω t) = m g/F0.
 """
 
+import numba
 import numpy as np
 import pytest
 import sympy as sp
@@ -189,3 +190,20 @@ def test_a_particle_comes_to_rest_in_a_corner(corner, q0, closings):
     if q0[1] == 0.0:                        # sliding on the closed floor: x = 1 − 0.3 g t², at the wall at √(1/(0.3 g))
         assert sol.events["wall"].t[0] == pytest.approx(np.sqrt(1 / (0.3 * G)), rel=1e-12)
         assert not sol.q[:, 1].any()
+
+
+def test_the_modes_sit_before_the_inputs_headers(tmp_path):
+    # The pull as an input (a numba function of t): p holds the parameters, the modes, then the input's header.
+    y, = lc.coordinates("y")
+    m, g = sp.symbols("m g", positive=True)
+    system = lc.System([y], T=m * y.diff(t) ** 2 / 2, V=m * g * y, forces=[lc.Input("f")],
+                       events=[lc.Contact("floor", y, restitution=0.5)], name="resting_input",
+                       defaults={"m": 2.0, "g": G})
+    model = lc.compile(system, cache_dir=tmp_path)
+
+    @numba.njit
+    def pull(time, state, p):
+        return 30.0 * np.sin(3.0 * time)
+
+    sol = model.simulate((0.0, 0.5), [0.0], [0.0], inputs={"f": pull}, rtol=1e-12, atol=1e-12, max_step=0.05)
+    assert sol.contact_switches[0].t == pytest.approx(np.arcsin(2.0 * G / 30.0) / 3.0, abs=1e-10)

@@ -375,8 +375,11 @@ class Model:
         tables end p, and must cover the time `span` (t0, t1) when it is given.
         """
         p = self._parameter_values(params, baumgarte)
-        if hasattr(self.kernels, "CONTACT_MODES"):  # the contacts' modes, all open, and closing not allowed
-            p = np.concatenate([p, np.zeros(len(self.kernels.CONTACTS) + 1)])  # (`lagcomp.ir.ContactModes`)
+        from lagcomp.integrate.contacts import mode_slot_count
+
+        modes = mode_slot_count(self.kernels)
+        if modes:  # the contacts' modes, all open, and closing not allowed (`lagcomp.ir.ContactModes`)
+            p = np.concatenate([p, np.zeros(modes)])
         if not self.inputs:
             if inputs:
                 from lagcomp.errors import OptionError

@@ -108,6 +108,12 @@ def mode_slots(model) -> tuple[int, int] | None:
     return None if first is None else (first, len(contacts_of(model)))
 
 
+def mode_slot_count(kernels) -> int:
+    """The slots of p a module's contact modes take (its contacts and the closing flag; 0 without modes): after
+    the parameters, before the inputs' headers (`lagcomp.codegen.contacts.mode_slots`)."""
+    return len(kernels.CONTACTS) + 1 if hasattr(kernels, "CONTACT_MODES") else 0
+
+
 def with_open_contacts(model, p: np.ndarray) -> np.ndarray:
     """`p` (or rows of it) with every contact open and closing not allowed: its ``event_values`` are the gaps."""
     slots = mode_slots(model)
