@@ -207,3 +207,15 @@ def test_the_modes_sit_before_the_inputs_headers(tmp_path):
 
     sol = model.simulate((0.0, 0.5), [0.0], [0.0], inputs={"f": pull}, rtol=1e-12, atol=1e-12, max_step=0.05)
     assert sol.contact_switches[0].t == pytest.approx(np.arcsin(2.0 * G / 30.0) / 3.0, abs=1e-10)
+
+
+@pytest.mark.parametrize("method", ["dop853", "bs3"])
+def test_a_lively_ball_comes_to_rest_too(ball, method):
+    # e = 0.95: 436 bounces, the last ones shorter than any the remaining-time criterion would wait for.
+    e, h0 = 0.95, 1.0
+    v1 = np.sqrt(2 * G * h0)
+    t_infinity = v1 / G + 2 * e * v1 / (G * (1 - e))
+    sol = ball.simulate((0.0, 1.2 * t_infinity), [h0], [0.0], params={"e": e}, method=method, rtol=1e-10, atol=1e-10)
+    assert sol.status == Status.DONE, sol.message
+    assert abs(sol.contact_switches[0].t - t_infinity) < 1e-10 * t_infinity
+    assert sol.q[:, 0].min() > -1e-14 and sol.qd[-1, 0] == 0.0
