@@ -19,8 +19,8 @@ import sympy as sp
 
 import lagcomp as lc
 from lagcomp.errors import OptionError
-from lagcomp.kernel_support.resting import BOUNCE_TIME
 from lagcomp.integrate.status import Status
+from lagcomp.kernel_support.resting import BOUNCE_TIME
 
 t = lc.t
 G = 9.81
