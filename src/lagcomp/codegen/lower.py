@@ -803,9 +803,10 @@ def lower(eom: EOM) -> ModuleIR:
         first = (_constraint_kernels(eom, mapping, loads) + constrained_jacobian_kernels(eom, mapping, loads)
                  + _dae_kernels(eom, mapping, loads))
     elif mode_slots(eom):   # contacts that may close: rhs is rhs_free corrected for them (no lanes: they reset)
+        free = _rhs_kernel(eom, mapping, loads)
+        free = replace(free, name="rhs_free", doc="The motion without contacts (all open): " + free.doc)
         first = (*resting_kernels(eom, t, _first_mode(eom), lambda name, doc, args, stores, solve: _kernel(
-            name, doc, args, stores, mapping, loads, solve=solve)), replace(_rhs_kernel(eom, mapping, loads),
-                                                                             name="rhs_free"))
+            name, doc, args, stores, mapping, loads, solve=solve)), free)
         first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
