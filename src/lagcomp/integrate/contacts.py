@@ -166,13 +166,14 @@ def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, r
 
 
 def contact_switches(model, p: np.ndarray, t: np.ndarray, y: np.ndarray, event: np.ndarray,
-                     accumulated: bool) -> tuple:
+                     stopped_at_last: bool) -> tuple:
     """The contacts' mode switches along a run: ((time, contact name, closed), ...) in time order.
 
     Replays the run's resets on a copy of `p` (the modes at the start): at the event rows (t, states before y,
     event indices `event`), the first resetting row at each time is the reset the driver applied (the others at
-    that time it did not, nor the last row of a run whose events `accumulated`); a contact's ``event_reset`` on
-    the copy writes the modes as the driver's did, bitwise.
+    that time it did not, nor any at the last row's time when the run `stopped_at_last` there: a terminal event,
+    accumulated events, a failed reset); a contact's ``event_reset`` on the copy writes the modes as the driver's
+    did, bitwise.
     """
     slots = mode_slots(model)
     if slots is None:
@@ -183,10 +184,9 @@ def contact_switches(model, p: np.ndarray, t: np.ndarray, y: np.ndarray, event: 
     resetting = [e.resets or e.name in {name for name, _, _ in contacts} for e in model.events]
     work, out = p.copy(), np.empty(y.shape[1])
     switches, applied_at = [], None
-    rows = t.shape[0] - (1 if accumulated and t.shape[0] else 0)
-    for r in range(rows):
+    for r in range(t.shape[0]):
         e = int(event[r])
-        if not resetting[e] or t[r] == applied_at:
+        if not resetting[e] or t[r] == applied_at or (stopped_at_last and t[r] == t[-1]):
             continue
         applied_at = t[r]
         if e not in contact_of:

@@ -389,7 +389,8 @@ def _switches(model, p, event_parts, status) -> tuple:
     if not event_parts:
         return ()
     t_all, y_all, i_all = (np.concatenate(column) for column in list(zip(*event_parts, strict=True))[:3])
-    return contact_switches(model, p, t_all, y_all, i_all, status == Status.EVENTS_ACCUMULATED)
+    stopped = status in (Status.TERMINATED, Status.EVENTS_ACCUMULATED, Status.RESET_FAILED)  # (no reset at its end)
+    return contact_switches(model, p, t_all, y_all, i_all, stopped)
 
 
 def _solution(model, p, recorder, run, throw) -> Solution:
