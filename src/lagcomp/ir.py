@@ -203,9 +203,10 @@ class ContactModes:
     reads the modes), 0 otherwise.  The solve of the kernels that read them:
 
     * ``rhs``: ``rhs_free`` (today's q̈ of M q̈ = F), then, when some mode is 1, ``closed_contacts``;
-    * ``closed_contacts(t, y, p, out, forces)``: the stores fill ``_mass`` (n, n, lower triangle),
+    * ``closed_contacts(t, y, p, out, forces, unilateral)``: the stores fill ``_mass`` (n, n, lower triangle),
       ``_gradient`` (C, n) and ``_bias`` (C) = ġ's partials times (q̇, 1): g̈ = G q̈ + b; then
-      `lagcomp.kernel_support.resting.closed_contact_accelerations` corrects ``out[n:2n]``;
+      `lagcomp.kernel_support.resting.closed_contact_accelerations` corrects ``out[n:2n]`` (``rhs``: no pulling
+      force, ``unilateral`` 1);
     * ``contact_forces(t, y, p, out)``: the normal forces (C,), 0 for an open contact;
     * ``event_values``: after its stores, a closed contact's value is its normal force (`events`: the contacts'
       event indices, in contact order).

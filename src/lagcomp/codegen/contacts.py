@@ -62,7 +62,7 @@ def resting_kernels(eom, time, first: int, kernel) -> tuple:
     events = contact_events(eom.restitutions)
     n, count = eom.n, len(events)
     rhs = kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,): ``rhs_free`` (M q̈ = F), and while some\n"
-                 f"contact is closed (its mode p[{first} + d] = 1) q̈ corrected by its normal force\n"
+                 f"contact is closed (its mode p[{first} + d] = 1) q̈ corrected by its normal force, ≥ 0\n"
                  "(closed_contacts).\n\n"
                  "Returns 0, or k > 0 when M (or the closed contacts' W) is singular here; `out` is then invalid.",
                  ("t", "y", "p", "out"), [], ContactModes("rhs", n, count, first))
@@ -73,9 +73,10 @@ def resting_kernels(eom, time, first: int, kernel) -> tuple:
         stores.append((f"_bias[{d}]", _bias(gap, eom, time)))
     closed = kernel("closed_contacts",
                     "q̈ in out[n:2n] (the free one on entry) with the closed contacts' normal forces, which go into\n"
-                    f"`forces` ({count},), 0 for an open contact (lagcomp.kernel_support.resting). Returns 0 or the\n"
-                    "status of a singular M or W.",
-                    ("t", "y", "p", "out", "forces"), stores, ContactModes("closed", n, count, first))
+                    f"`forces` ({count},), 0 for an open contact; with `unilateral` 1 a closed contact whose force\n"
+                    "would pull pushes with 0 instead (lagcomp.kernel_support.resting). Returns 0 or the status of\n"
+                    "a singular M or W.",
+                    ("t", "y", "p", "out", "forces", "unilateral"), stores, ContactModes("closed", n, count, first))
     forces = kernel("contact_forces",
                     f"The contacts' normal forces ({count},) into `out` at y under the modes in p, 0 for an open\n"
                     "contact: the multipliers of the closed contacts' constraints g = const (units of the force\n"
@@ -136,14 +137,14 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     all_open = " and ".join(f"p[{first + d}] == 0.0" for d in range(count))
     if solve.kind == "rhs":
         return [], ["_status = rhs_free(t, y, p, out)", f"if _status != 0 or ({all_open}):", f"{indent}return _status",
-                    f"return closed_contacts(t, y, p, out, np.empty({count}))"]
+                    f"return closed_contacts(t, y, p, out, np.empty({count}), 1.0)"]
     if solve.kind == "forces":
         return [], [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
-                    f"{indent}return _status", "return closed_contacts(t, y, p, _ydot, out)"]
+                    f"{indent}return _status", "return closed_contacts(t, y, p, _ydot, out, 0.0)"]
     if solve.kind == "closed":
         work = [f"_mass = np.zeros(({n}, {n}))", f"_gradient = np.zeros(({count}, {n}))", f"_bias = np.empty({count})"]
         return work, [f"return closed_contact_accelerations(_mass, _gradient, _bias, p[{first}:{first + count}], "
-                      f"out[{n}:{2 * n}], forces)"]
+                      f"out[{n}:{2 * n}], forces, unilateral)"]
     after = [f"if not ({all_open}):", f"{indent}_forces = np.empty({count})",
              f"{indent}if contact_forces(t, y, p, _forces) == 0:"]
     for d, e in enumerate(solve.events):

@@ -35,8 +35,8 @@ kernel that calls them.  They allocate small work arrays, only while some contac
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.impacts import CLOSED_GAP, IMPACT_SOLVED, contact_impacts
-from lagcomp.kernel_support.linear_solvers import ldlt_solve, ldlt_solve_matrix
+from lagcomp.kernel_support.impacts import CLOSED_GAP, IMPACT_SOLVED, _solve_on_set, contact_impacts
+from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix
 
 #: The closed contacts' constraints are dependent (W singular): ``rhs`` returns this positive status, as for a
 #: singular mass matrix (the drivers stop with RHS_FAILED).
@@ -52,12 +52,18 @@ BOUNCE_TIME = 1e-11
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces):
+def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, unilateral):
     """Correct the free accelerations ``qdd`` (n) in place for the contacts closed in ``modes`` (C,); their normal
     forces λ into ``forces`` (C,), 0 for the open ones.
 
     mass (n, n): M, lower triangle (overwritten); gradients (C, n): ∂g/∂q of every contact; bias (C): b, so that
-    g̈ = G q̈ + b.  Returns 0; 1 (the status of a singular first pivot) when M is not positive definite, or
+    g̈ = G q̈ + b.  With ``unilateral`` 1 a closed contact whose λ would pull (λ < 0) pushes with 0 instead, as an
+    open one (the most negative first, then the others' forces again, until none pulls): the complementarity
+    λ ≥ 0, g̈ ≥ 0, λ g̈ = 0 of a unilateral contact.  That is what ``rhs`` uses, so that a step's stages see the
+    lift-off its ends may not show (a body at rest, whose pull passes its weight and falls back within one step,
+    leaves the step's error estimate large: the step is rejected, shorter ones find λ's zero); with 0 the
+    multipliers of the constraints as they are, of either sign (``contact_forces``: the lift-off events).
+    Returns 0; 1 (the status of a singular first pivot) when M is not positive definite, or
     `DEPENDENT_CLOSED_CONTACTS` when the closed contacts' W is singular: ``rhs`` returns it, the drivers stop.
     """
     n = qdd.shape[0]
@@ -81,20 +87,29 @@ def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces):
     if ldlt_solve_matrix(mass, minv_gt) != 0:
         return 1
     delassus = np.empty((c, c))
-    rhs = np.empty(c)
+    free = np.empty(c)                          # g̈ without the contacts' forces: G q̈_free + b
     for a in range(c):
         s = bias[index[a]]
         for i in range(n):
             s += gradients[index[a], i] * qdd[i]
-        rhs[a] = -s
+        free[a] = s
         for b in range(c):
             s = 0.0
             for i in range(n):
                 s += gradients[index[a], i] * minv_gt[i, b]
             delassus[a, b] = s
+    active = np.ones(c, dtype=np.bool_)
     lam = np.empty(c)
-    if ldlt_solve(delassus, rhs, lam, 0) != 0:
-        return DEPENDENT_CLOSED_CONTACTS
+    for _ in range(c + 1):                      # (each pass but the last drops a contact)
+        if not _solve_on_set(delassus, free, active, lam):       # λ_A = −W_AA⁻¹ (G_A q̈_free + b_A)
+            return DEPENDENT_CLOSED_CONTACTS
+        pulling = -1
+        for a in range(c):
+            if unilateral != 0.0 and active[a] and lam[a] < 0.0 and (pulling < 0 or lam[a] < lam[pulling]):
+                pulling = a
+        if pulling < 0:
+            break
+        active[pulling] = False
     for i in range(n):
         s = 0.0
         for a in range(c):
@@ -156,7 +171,7 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
     accelerations = qdd_free.copy()
     forces = np.empty(count)
     work = mass.copy()
-    if closed_contact_accelerations(work, gradients, bias, closed, accelerations, forces) != 0:
+    if closed_contact_accelerations(work, gradients, bias, closed, accelerations, forces, 0.0) != 0:
         return status
     for d in range(count):
         if closed[d] != 0.0 and not forces[d] > 0.0:
