@@ -223,3 +223,13 @@ def test_a_lively_ball_comes_to_rest_too(ball, method):
     assert sol.status == Status.DONE, sol.message
     assert abs(sol.contact_switches[0].t - t_infinity) < BOUNCE_TIME * t_infinity / (1 - e)
     assert sol.q[:, 0].min() > -1e-14 and sol.qd[-1, 0] == 0.0
+
+
+def test_each_run_starts_from_its_own_modes(ball):
+    # The drivers' resets write the modes into the run's copy of p: a run that closed the floor leaves the next
+    # run's start as it was (open, the ball dropped), and the parameters reported are the run's start.
+    first = ball.simulate((0.0, 3.0), [1.0], [0.0], params={"e": 0.5}, rtol=1e-12, atol=1e-12)
+    second = ball.simulate((0.0, 3.0), [1.0], [0.0], params={"e": 0.5}, rtol=1e-12, atol=1e-12)
+    assert first.contact_switches == second.contact_switches and len(first.contact_switches) == 1
+    np.testing.assert_array_equal(first.q, second.q)
+    assert first.params == {"e": 0.5, "g": G, "m": 2.0}
