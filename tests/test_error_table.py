@@ -338,6 +338,8 @@ CASES = {
     "contact-gap-negative-at-start": (_simulate("bouncer", q0=[0.0, -0.1]), "`floor`"),
     "contact-restitution-parameter-out-of-range": (_simulate("bouncer", q0=[0.0, 1.0], params={"c": 2.0}),
                                                    "`floor`"),
+    "contact-closed-at-start-with-taylor": (_simulate("bouncer", q0=[0.0, 0.0], method="taylor"),
+                                            "['floor'] start closed"),
     "singular-at-initial-state": (_simulate("degenerate", q0=[0.0], params={"m": 1.0}, method="rk4", dt=0.1), "x=0"),
     "parameter-makes-M-singular": (_simulate("pendulum", params={"m": 0.0}), "['m'] are zero"),
     "redundant-constraints-at-initial-state": (_simulate("walled", method="rk4", dt=0.01), "['wall']"),

@@ -189,6 +189,34 @@ class ContactImpact:
 
     n: int
     events: tuple[int, ...]
+    #: The first mode slot of p (`ContactModes`), or None for a module without modes (a Kane model's): then
+    #: the branch is the impact alone; with them, `lagcomp.kernel_support.resting.contact_event` (lift-off of a
+    #: closed contact, an impact that may close it); ``_bias`` is stored too.
+    modes: int | None = None
+
+
+@dataclass(frozen=True)
+class ContactModes:
+    """Where a module's contacts keep their modes (`lagcomp.codegen.contacts`): ``p[first + d]`` is 0 while
+    contact d is open, 1 while it is closed (a holonomic constraint g_d = 0 whose multiplier is its normal
+    force), and ``p[first + count]`` is 1 when an impact may close a contact (the runs of methods whose rhs
+    reads the modes), 0 otherwise.  The solve of the kernels that read them:
+
+    * ``rhs``: ``rhs_free`` (today's q̈ of M q̈ = F), then, when some mode is 1, ``closed_contacts``;
+    * ``closed_contacts(t, y, p, out, forces, unilateral)``: the stores fill ``_mass`` (n, n, lower triangle),
+      ``_gradient`` (C, n) and ``_bias`` (C) = ġ's partials times (q̇, 1): g̈ = G q̈ + b; then
+      `lagcomp.kernel_support.resting.closed_contact_accelerations` corrects ``out[n:2n]`` (``rhs``: no pulling
+      force, ``unilateral`` 1);
+    * ``contact_forces(t, y, p, out)``: the normal forces (C,), 0 for an open contact;
+    * ``event_values``: after its stores, a closed contact's value is its normal force (`events`: the contacts'
+      event indices, in contact order).
+    """
+
+    kind: str
+    n: int
+    count: int
+    first: int
+    events: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -252,7 +280,7 @@ class Kernel:
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
     solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | AugmentedJacobianSolve | Delegate
-            | ReturnZero | FlatMatrix | Unavailable | EventResets | None) = None
+            | ReturnZero | FlatMatrix | Unavailable | EventResets | ContactModes | None) = None
     lanes: bool = False
     alias: str | None = None
     constants: tuple[tuple[str, str, object], ...] = ()

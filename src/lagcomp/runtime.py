@@ -368,11 +368,18 @@ class Model:
         """Parameter values by name (defaults filled in) as the kernel vector p.
 
         For constrained systems p continues with the Baumgarte gains (α, β), which
-        add −2α (Λ q̇ + b) − β² Φ to the acceleration-level constraints.  A model with
+        add −2α (Λ q̇ + b) − β² Φ to the acceleration-level constraints; a model with contacts with
+        their modes (0: open) and the flag that lets an impact close one (0; `lagcomp.integrate.contacts`
+        sets both for a run).  A model with
         inputs needs a signal for each in `inputs` (`lagcomp.integrate.inputs`): their
         tables end p, and must cover the time `span` (t0, t1) when it is given.
         """
         p = self._parameter_values(params, baumgarte)
+        from lagcomp.integrate.contacts import mode_slot_count
+
+        modes = mode_slot_count(self.kernels)
+        if modes:  # the contacts' modes, all open, and closing not allowed (`lagcomp.ir.ContactModes`)
+            p = np.concatenate([p, np.zeros(modes)])
         if not self.inputs:
             if inputs:
                 from lagcomp.errors import OptionError

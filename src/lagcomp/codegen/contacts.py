@@ -14,24 +14,90 @@ other contact closed at that instant and adds M⁻¹ Gᵀ P to the velocities th
 (``out[n:]``, a copy of q̇ before the impact).  Every contact is written
 because an impact on one may involve the others (three balls in a row); one
 branch serves all the contacts' events.
+
+Modes (`lagcomp.ir.ContactModes`, unconstrained Lagrange modules): each contact has a slot of p, 0 open, 1
+closed, after the parameters (before the inputs' headers, whose tables end p at lengths each run chooses), and
+one more slot, 1 when an impact may close a contact.  Such a module's ``rhs`` is ``rhs_free`` (M q̈ = F) and,
+when some contact is closed, ``closed_contacts`` (`lagcomp.kernel_support.resting`); its ``event_values`` gives
+a closed contact's normal force instead of its gap (lift-off when it would turn negative), ``contact_forces``
+the normal forces for the saved rows, and the impact branch also stores ``_bias`` (g̈ = G q̈ + b) for
+`lagcomp.kernel_support.resting.contact_event`.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import sympy as sp
 
-from lagcomp.ir import ContactImpact
+from lagcomp.ir import ContactImpact, ContactModes
 
 
-def impact_branches(eom, restitutions: tuple, time, kernel) -> tuple:
+def contact_events(restitutions: tuple) -> tuple[int, ...]:
+    """The event indices of the contacts, in contact order (`restitutions`: e per event, None for another)."""
+    return tuple(e for e, restitution in enumerate(restitutions) if restitution is not None)
+
+
+def mode_slots(eom) -> int:
+    """How many slots of p the contacts' modes take: one per contact and the closing flag (`ContactModes`); 0
+    without contacts, or for a constrained system (which has none)."""
+    count = len(contact_events(eom.restitutions))
+    return count + 1 if count and not eom.k else 0
+
+
+def _gap_rate(gap, eom, time):
+    """ġ = Σ_j ∂g/∂q_j q̇_j + ∂g/∂t."""
+    return sum((gap.diff(q) * qd for q, qd in zip(eom.q, eom.qd, strict=True)), gap.diff(time))
+
+
+def _bias(gap, eom, time):
+    """b of g̈ = G q̈ + b: Σ_j ∂ġ/∂q_j q̇_j + ∂ġ/∂t (ġ's dependence on q̇ is G, which multiplies q̈)."""
+    return _gap_rate(_gap_rate(gap, eom, time), eom, time)
+
+
+def resting_kernels(eom, time, first: int, kernel) -> tuple:
+    """The kernels of a module with contact modes: ``rhs`` (``rhs_free`` then ``closed_contacts`` when some
+    contact is closed), ``closed_contacts`` and ``contact_forces`` (`ContactModes`); `first` is the first mode
+    slot of p, `kernel`(name, doc, args, stores, solve) builds a CSE'd kernel over the module's loads."""
+    events = contact_events(eom.restitutions)
+    n, count = eom.n, len(events)
+    rhs = kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,): ``rhs_free`` (M q̈ = F), and while some\n"
+                 f"contact is closed (its mode p[{first} + d] = 1) q̈ corrected by its normal force, ≥ 0\n"
+                 "(closed_contacts).\n\n"
+                 "Returns 0, or k > 0 when M (or the closed contacts' W) is singular here; `out` is then invalid.",
+                 ("t", "y", "p", "out"), [], ContactModes("rhs", n, count, first))
+    stores = [(f"_mass[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(i + 1) if eom.M[i, j] != 0]
+    for d, e in enumerate(events):
+        gap = eom.events[e]
+        stores += [(f"_gradient[{d}, {j}]", gap.diff(q)) for j, q in enumerate(eom.q) if gap.diff(q) != 0]
+        stores.append((f"_bias[{d}]", _bias(gap, eom, time)))
+    closed = kernel("closed_contacts",
+                    "q̈ in out[n:2n] (the free one on entry) with the closed contacts' normal forces, which go into\n"
+                    f"`forces` ({count},), 0 for an open contact; with `unilateral` 1 a closed contact whose force\n"
+                    "would pull pushes with 0 instead (lagcomp.kernel_support.resting). Returns 0 or the status of\n"
+                    "a singular M or W.",
+                    ("t", "y", "p", "out", "forces", "unilateral"), stores, ContactModes("closed", n, count, first))
+    forces = kernel("contact_forces",
+                    f"The contacts' normal forces ({count},) into `out` at y under the modes in p, 0 for an open\n"
+                    "contact: the multipliers of the closed contacts' constraints g = const (units of the force\n"
+                    "conjugate to g). Returns 0 or the status of rhs.",
+                    ("t", "y", "p", "out"), [], ContactModes("forces", n, count, first, events))
+    forces = replace(forces, constants=(
+        ("CONTACT_MODES", "The first slot of p holding the contacts' modes (0 open, 1 closed), one per contact in "
+                          "the order of CONTACTS, then the flag that lets an impact close a contact.", first),))
+    return rhs, closed, forces
+
+
+def impact_branches(eom, restitutions: tuple, time, kernel, modes: int | None = None) -> tuple:
     """The branch of ``event_reset`` shared by the events of `eom` that are contacts: ((their event indices,
     branch `Kernel`),), or () when there are none.
 
     `restitutions` holds, per event, e (a plain expression) for a contact and None for another event;
     `time` is the time symbol of the plain expressions; `kernel`(name, doc, args, stores, solve) builds a
-    CSE'd `Kernel` over the module's loads (`lagcomp.codegen.lower._kernel`).
+    CSE'd `Kernel` over the module's loads (`lagcomp.codegen.lower._kernel`); `modes`: the first mode slot of p
+    (`ContactModes`), then the branch also stores ``_bias`` and calls the resting contacts' reset.
     """
-    events = tuple(e for e, restitution in enumerate(restitutions) if restitution is not None)
+    events = contact_events(restitutions)
     if not events:
         return ()
     n = eom.n
@@ -44,7 +110,10 @@ def impact_branches(eom, restitutions: tuple, time, kernel) -> tuple:
         rate = sum((g * qd for g, qd in zip(gradient, eom.qd, strict=True)), gap.diff(time))
         stores.append((f"_normal_velocity[{d}]", rate))
         stores.append((f"_restitution[{d}]", sp.sympify(restitutions[e])))
-    branch = kernel("event_reset", "", ("t", "y", "p", "e", "out"), stores, ContactImpact(n=n, events=events))
+        if modes is not None:
+            stores.append((f"_bias[{d}]", _bias(gap, eom, time)))
+    branch = kernel("event_reset", "", ("t", "y", "p", "e", "out"), stores,
+                    ContactImpact(n=n, events=events, modes=modes))
     return ((events, branch),)
 
 
@@ -59,3 +128,34 @@ def contacts_constant(names: tuple[str, ...], restitutions: tuple) -> tuple:
         return ()
     return (("CONTACTS", "The contacts: (name, event index, restitution: a number or its parameter's name).",
              contacts),)
+
+
+def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
+    """The emitted lines of a kernel whose solve is `solve`: (after its loads, before its temporaries; after its
+    stores)."""
+    n, count, first = solve.n, solve.count, solve.first
+    all_open = " and ".join(f"p[{first + d}] == 0.0" for d in range(count))
+    if solve.kind == "rhs":
+        return [], ["_status = rhs_free(t, y, p, out)", f"if _status != 0 or ({all_open}):", f"{indent}return _status",
+                    f"return closed_contacts(t, y, p, out, np.empty({count}), 1.0)"]
+    if solve.kind == "forces":
+        return [], [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
+                    f"{indent}return _status", "return closed_contacts(t, y, p, _ydot, out, 0.0)"]
+    if solve.kind == "closed":
+        work = [f"_mass = np.zeros(({n}, {n}))", f"_gradient = np.zeros(({count}, {n}))", f"_bias = np.empty({count})"]
+        return work, [f"return closed_contact_accelerations(_mass, _gradient, _bias, p[{first}:{first + count}], "
+                      f"out[{n}:{2 * n}], forces, unilateral)"]
+    after = [f"if not ({all_open}):", f"{indent}_forces = np.empty({count})",
+             f"{indent}if contact_forces(t, y, p, _forces) == 0:"]
+    for d, e in enumerate(solve.events):
+        after += [f"{indent * 2}if p[{first + d}] != 0.0:", f"{indent * 3}out[{e}] = _forces[{d}]"]
+    return [], after
+
+
+def contact_event_call(n: int, count: int, first: int, firing: str, indent: str) -> list[str]:
+    """The end of the impact branch of a module with modes: q̈ without contacts, then
+    `lagcomp.kernel_support.resting.contact_event` on the mode slots of p."""
+    return [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
+            f"{indent}return _status", f"_firing = {firing}",
+            f"return contact_event(_mass, _gap, _gradient, _normal_velocity, _restitution, _bias, _ydot[{n}:{2 * n}], "
+            f"y[:{n}], t, _firing, p[{first}:{first + count}], p[{first + count}], out[{n}:{2 * n}])"]

@@ -23,6 +23,7 @@ import unicodedata
 import sympy as sp
 
 from lagcomp import __version__
+from lagcomp.codegen.contacts import contact_event_call, mode_lines
 from lagcomp.codegen.latex import equations_source
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor import (
@@ -37,6 +38,7 @@ from lagcomp.ir import (
     AugmentedJacobianSolve,
     AugmentedSolve,
     ContactImpact,
+    ContactModes,
     Delegate,
     EventResets,
     FlatMatrix,
@@ -101,6 +103,7 @@ KERNEL_SUPPORT = {
     "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "kkt_solve_matrix",
                                               "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
                                               "lu_solve_matrix", "lu_substitute"),
+    "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "contact_event"),
     "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
 }
 
@@ -130,7 +133,9 @@ def kernel_support_names(kernels) -> set[str]:
         if isinstance(kernel.solve, EventResets):
             names |= kernel_support_names(branch for _, branch in kernel.solve.branches)
         if isinstance(kernel.solve, ContactImpact):
-            names.add("contact_impacts")
+            names.add("contact_impacts" if kernel.solve.modes is None else "contact_event")
+        if isinstance(kernel.solve, ContactModes) and kernel.solve.kind == "closed":
+            names.add("closed_contact_accelerations")
         expressions = [expr for _, expr in kernel.temps] + [expr for _, expr in kernel.stores]
         for function, scalar, lanes in ((sp.sin, "sin", "vsin"), (sp.cos, "cos", "vcos")):
             if any(isinstance(expr, sp.Basic) and expr.has(function) for expr in expressions):
@@ -353,6 +358,9 @@ def _kernel_source(kernel: Kernel) -> str:
         before, after = _augmented_jacobian_frame(solve)
         body += before
     body += [f"{local} = {source}" for local, source in kernel.loads]
+    if isinstance(solve, ContactModes):
+        before, after = mode_lines(solve, INDENT)
+        body += before
     if isinstance(solve, AugmentedSolve):
         body.append(f"_kkt = np.zeros(({solve.size}, {solve.size + 1}))")
     elif isinstance(solve, FlatMatrix):
@@ -369,7 +377,7 @@ def _kernel_source(kernel: Kernel) -> str:
         body.append("return 0")
     elif isinstance(solve, SymmetricProduct):
         body += _symmetric_product(solve)
-    elif isinstance(solve, (JacobianSolve, AugmentedJacobianSolve)):
+    elif isinstance(solve, (JacobianSolve, AugmentedJacobianSolve, ContactModes)):
         body += after
     elif isinstance(solve, FlatMatrix):
         body += [f"out[:] = _jac.reshape(({solve.size}, {solve.size}))", "return 0"]
@@ -414,7 +422,8 @@ def _impact_work(solve: ContactImpact) -> list[str]:
     """The work arrays of the contacts' branch (`lagcomp.ir.ContactImpact`), zeros where no store writes."""
     n, c = solve.n, len(solve.events)
     return [f"_mass = np.zeros(({n}, {n}))", f"_gap = np.empty({c})", f"_gradient = np.zeros(({c}, {n}))",
-            f"_normal_velocity = np.empty({c})", f"_restitution = np.empty({c})"]
+            f"_normal_velocity = np.empty({c})", f"_restitution = np.empty({c})"] + (
+        [] if solve.modes is None else [f"_bias = np.empty({c})"])
 
 
 def _impact_call(solve: ContactImpact) -> list[str]:
@@ -422,6 +431,8 @@ def _impact_call(solve: ContactImpact) -> list[str]:
     firing = " else ".join(f"{d} if e == {e}" for d, e in enumerate(solve.events[:-1]))
     firing = f"{firing} else {len(solve.events) - 1}" if firing else "0"
     n = solve.n
+    if solve.modes is not None:
+        return contact_event_call(n, len(solve.events), solve.modes, firing, INDENT)
     return [f"_firing = {firing}",
             f"return contact_impacts(_mass, _gap, _gradient, _normal_velocity, _restitution, y[:{n}], _firing, "
             f"out[{n}:{2 * n}])"]

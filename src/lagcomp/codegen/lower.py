@@ -40,12 +40,13 @@ from dataclasses import replace
 import symengine as se
 import sympy as sp
 
-from lagcomp.codegen.contacts import contacts_constant, impact_branches
+from lagcomp.codegen.contacts import contact_events, contacts_constant, impact_branches, mode_slots, resting_kernels
 from lagcomp.codegen.geometry import geometry_kernel
 from lagcomp.errors import ModelError
 from lagcomp.ir import (
     NO_JACOBIAN,
     AugmentedSolve,
+    ContactModes,
     Delegate,
     EventResets,
     FlatMatrix,
@@ -141,10 +142,11 @@ def input_slots(eom: EOM) -> list[tuple]:
     `MAX_ORDER`): (u, order, local, header slot).
 
     The header slot is the entry of p holding where the input's table starts: p holds the user
-    parameters, then the Baumgarte gains of a constrained system, then one header per input in
-    name order (`lagcomp.kernel_support.inputs` describes the tables after them).
+    parameters, then the Baumgarte gains of a constrained system or the contacts' modes
+    (`lagcomp.codegen.contacts.mode_slots`), then one header per input in name order
+    (`lagcomp.kernel_support.inputs` describes the tables after them).
     """
-    first = len(eom.parameters) + (len(BAUMGARTE) if eom.k else 0)
+    first = len(eom.parameters) + (len(BAUMGARTE) if eom.k else 0) + mode_slots(eom)
     return [(u, order, user_local(INPUT_PREFIXES[order], u.func.__name__, j), first + j)
             for j, u in enumerate(eom.system.inputs) for order in range(MAX_ORDER + 1)]
 
@@ -686,13 +688,23 @@ def _energy_function_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 
 def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
-    """The event functions g_e(t, q, q̇), all at once (a kernel with no stores when there are none)."""
+    """The event functions g_e(t, q, q̇), all at once (a kernel with no stores when there are none); with contact
+    modes, a closed contact's value is its normal force (`lagcomp.ir.ContactModes`)."""
     names = eom.system.event_names
-    return _kernel(
-        "event_values",
-        f"Event functions g, shape ({len(names)},), in order {names}, into `out`; the drivers locate their zeros.",
-        ("t", "y", "p", "out"), [(f"out[{e}]", g) for e, g in enumerate(eom.events)], mapping, loads,
-    )
+    doc = f"Event functions g, shape ({len(names)},), in order {names}, into `out`; the drivers locate their zeros."
+    solve = None
+    if mode_slots(eom):
+        events = contact_events(eom.restitutions)
+        solve = ContactModes("events", eom.n, len(events), _first_mode(eom), events)
+        doc += "\nA closed contact's value is its normal force (contact_forces): its lift-off when it turns negative."
+    return _kernel("event_values", doc, ("t", "y", "p", "out"), [(f"out[{e}]", g) for e, g in enumerate(eom.events)],
+                   mapping, loads, solve=solve)
+
+
+def _first_mode(eom: EOM) -> int:
+    """The first slot of p of the contacts' modes: after the parameters (a system with contacts has no
+    constraints, so no Baumgarte gains)."""
+    return len(eom.parameters)
 
 
 def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping, loads, restitutions=(),
@@ -716,6 +728,9 @@ def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping
         doc += (f"\nThe contacts {contact_names} change the velocities by their impact (Newton's restitution,\n"
                 "simultaneous impacts solved together); a negative return is the impact solver's failure\n"
                 "(lagcomp.kernel_support.impacts).")
+    if any(branch.solve.modes is not None for _, branch in impacts):
+        doc += ("\nWith modes in p (CONTACT_MODES): a closed contact's event opens it (lift-off), an impact may\n"
+                "close one (lagcomp.kernel_support.resting.contact_event); the reset writes them into p.")
     resetting = tuple(names[e] for e, restitution in enumerate(restitutions or (None,) * len(names))
                       if resets[e] or restitution is not None)
     return Kernel(name="event_reset", doc=doc, args=("t", "y", "p", "e", "out"), loads=(), temps=(), stores=(),
@@ -787,6 +802,12 @@ def lower(eom: EOM) -> ModuleIR:
         from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels  # (it imports this module)
         first = (_constraint_kernels(eom, mapping, loads) + constrained_jacobian_kernels(eom, mapping, loads)
                  + _dae_kernels(eom, mapping, loads))
+    elif mode_slots(eom):   # contacts that may close: rhs is rhs_free corrected for them (no lanes: they reset)
+        free = _rhs_kernel(eom, mapping, loads)
+        free = replace(free, name="rhs_free", doc="The motion without contacts (all open): " + free.doc)
+        first = (*resting_kernels(eom, t, _first_mode(eom), lambda name, doc, args, stores, solve: _kernel(
+            name, doc, args, stores, mapping, loads, solve=solve)), free)
+        first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
         # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
@@ -816,7 +837,8 @@ def lower(eom: EOM) -> ModuleIR:
         _event_gradients_kernel(eom, mapping, loads),
         event_reset_kernel(system.event_names, eom.resets, 2 * n, mapping, loads, eom.restitutions, impact_branches(
             eom, eom.restitutions, t, lambda name, doc, args, stores, solve: _kernel(name, doc, args, stores, mapping,
-                                                                                 loads, solve=solve))),
+                                                                                 loads, solve=solve),
+            _first_mode(eom) if mode_slots(eom) else None)),
         _rest_partials_kernel(eom, mapping, loads),
     ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
     kernels += (geometry_kernel(eom, lambda name, doc, args, stores: _kernel(name, doc, args, stores, mapping, loads)),)

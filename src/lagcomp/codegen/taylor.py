@@ -555,7 +555,9 @@ def taylor_decomposition(ir: ModuleIR) -> TaylorProgram | Unsupported:
             raise Unsupported("constraints (their multipliers are not covered)")
         if ir.input_names:
             raise Unsupported("inputs supplied at run time (their tables' Taylor coefficients are not emitted)")
-        return decompose(ir.kernel("rhs"), ir.n)
+        # a module with contact modes: the motion without contacts (its runs keep them open)
+        free = "rhs_free" if any(kernel.name == "rhs_free" for kernel in ir.kernels) else "rhs"
+        return decompose(ir.kernel(free), ir.n)
     except Unsupported as err:
         return err
 

@@ -1,4 +1,9 @@
-"""What a run checks of a model's contacts before it starts (`lagcomp.model.contacts.Contact`).
+"""What a run does with a model's contacts before it starts and after it (`lagcomp.model.contacts.Contact`).
+
+Before: the checks below, and the contacts' modes at the start (`set_initial_modes`: closed when at rest on
+their zero and pressed shut); each run and each sweep trajectory then works on its own copy of p, whose modes
+only the drivers' ``event_reset`` writes.  After: the mode switches (`contact_switches`, the resets replayed on
+the modes at the start), the normal forces at the saved rows (`contact_forces_along`) and the impulses.
 
 The module's ``CONTACTS`` lists each contact as (name, event index, restitution), the restitution a
 number or the name of the parameter that holds it.  A run refuses a restitution outside [0, 1]
@@ -11,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lagcomp.errors import InitialConditionError, ParameterError
+from lagcomp.errors import InitialConditionError, OptionError, ParameterError
 from lagcomp.kernel_support.impacts import CLOSED_GAP
 
 
@@ -26,32 +31,44 @@ def contacts_of(model) -> tuple:
     return tuple(getattr(model.kernels, "CONTACTS", ()))
 
 
-def check_contacts(model, t0: float, Y0: np.ndarray, P: np.ndarray, where=lambda row: "") -> None:
-    """Refuse restitutions outside [0, 1] and penetrating starts, for each row of Y0 (rows, N) and P (rows, *).
+def check_contacts(model, t0: float, Y0: np.ndarray, P: np.ndarray, where=lambda row: "") -> np.ndarray | None:
+    """Refuse restitutions outside [0, 1] and penetrating starts, for each row of Y0 (rows, N) and P (rows, *),
+    whose contacts are open (`parameter_vector`'s modes).
 
-    `where`(row) says which trajectory a row is, for the message of a sweep ("" for a single run).
+    `where`(row) says which trajectory a row is, for the message of a sweep ("" for a single run).  Returns which
+    contacts are at rest on their zero at the start (rows, C): the gap and ġ within `touching`'s scale (of q and
+    q̇), candidates for closed contacts (`set_initial_modes`); None without contacts.
     """
     contacts = contacts_of(model)
     if not contacts:
-        return
-    n = model.n
-    values = np.empty(len(model.event_names))
-    gradients = np.empty((len(model.event_names), Y0.shape[1] + 1 + len(model.parameters)))
-    for row in range(Y0.shape[0]):
-        y, p = Y0[row], P[row]
-        for name, _, restitution in contacts:
-            e = float(p[model.parameters.index(restitution)]) if isinstance(restitution, str) else restitution
-            if not 0.0 <= e <= 1.0:
-                raise ParameterError(f"Contact `{name}`{where(row)}: its restitution {restitution} = {e} is outside "
-                                     "[0, 1] (1 elastic, 0 plastic).")
-        model.kernels.event_values(t0, y, p, values)
-        model.kernels.event_gradients(t0, y, p, gradients)
-        allowed = touching(gradients[:, :n], y[:n])
-        for name, event, _ in contacts:
-            if values[event] < -allowed[event]:
-                raise InitialConditionError(
-                    f"Contact `{name}`{where(row)}: its gap is {values[event]:.6g} < 0 at t0 = {t0}: the bodies start "
-                    "inside each other. Start with the gap >= 0 (touching is 0).")
+        return None
+    for name, _, restitution in contacts:
+        e = P[:, model.parameters.index(restitution)] if isinstance(restitution, str) else np.array([restitution])
+        bad = np.flatnonzero(~((e >= 0.0) & (e <= 1.0)))
+        if bad.size:
+            row = int(bad[0])
+            raise ParameterError(f"Contact `{name}`{where(row)}: its restitution {restitution} = {e[row]} is outside "
+                                 "[0, 1] (1 elastic, 0 plastic).")
+    n, rows = model.n, Y0.shape[0]
+    events = [event for _, event, _ in contacts]
+    values = np.empty((rows, len(model.event_names)))
+    gradients = np.empty((rows, len(model.event_names), Y0.shape[1] + 1 + len(model.parameters)))
+    partials = np.empty(rows, dtype=bool)       # (no partials: events that read inputs)
+    for row in range(rows):                     # (the kernels one row at a time; the tests below on all rows)
+        model.kernels.event_values(t0, Y0[row], P[row], values[row])
+        partials[row] = model.kernels.event_gradients(t0, Y0[row], P[row], gradients[row]) == 0
+    G = gradients[:, events, :n]                                        # (rows, C, n)
+    gaps = values[:, events]
+    allowed = CLOSED_GAP * np.einsum("rcj,rj->rc", np.abs(G), np.abs(Y0[:, :n]) + 1.0)   # `touching`, per row
+    inside = np.argwhere(gaps < -allowed)
+    if inside.size:
+        row, c = (int(i) for i in inside[0])
+        raise InitialConditionError(
+            f"Contact `{contacts[c][0]}`{where(row)}: its gap is {gaps[row, c]:.6g} < 0 at t0 = {t0}: the bodies "
+            "start inside each other. Start with the gap >= 0 (touching is 0).")
+    rate = np.einsum("rcj,rj->rc", G, Y0[:, n:2 * n]) + gradients[:, events, 2 * n]
+    still = np.abs(rate) <= CLOSED_GAP * np.einsum("rcj,rj->rc", np.abs(G), np.abs(Y0[:, n:2 * n]) + 1.0)
+    return (gaps <= allowed) & still & partials[:, None]
 
 
 def impulses(model, p: np.ndarray, firing: int, t: np.ndarray, before: np.ndarray, after: np.ndarray) -> np.ndarray:
@@ -65,6 +82,7 @@ def impulses(model, p: np.ndarray, firing: int, t: np.ndarray, before: np.ndarra
     """
     contacts = contacts_of(model)
     n, size = model.n, model.state_size
+    p = with_open_contacts(model, p)            # (event_values: the gaps)
     out = np.zeros((t.shape[0], len(contacts)))
     events = [event for _, event, _ in contacts]
     mass = np.empty((n, n))
@@ -80,4 +98,123 @@ def impulses(model, p: np.ndarray, firing: int, t: np.ndarray, before: np.ndarra
         closed[events.index(firing)] = True
         jump = mass @ (after[row, n:size] - y[n:size])
         out[row, closed] = np.linalg.lstsq(G[closed].T, jump, rcond=None)[0]
+    return out
+
+
+def mode_slots(model) -> tuple[int, int] | None:
+    """(first slot of p, count) of the model's contact modes (`lagcomp.ir.ContactModes`), None without them;
+    the closing flag is the slot after them."""
+    first = getattr(model.kernels, "CONTACT_MODES", None)
+    return None if first is None else (first, len(contacts_of(model)))
+
+
+def mode_slot_count(kernels) -> int:
+    """The slots of p a module's contact modes take (its contacts and the closing flag; 0 without modes): after
+    the parameters, before the inputs' headers (`lagcomp.codegen.contacts.mode_slots`)."""
+    return len(kernels.CONTACTS) + 1 if hasattr(kernels, "CONTACT_MODES") else 0
+
+
+def with_open_contacts(model, p: np.ndarray) -> np.ndarray:
+    """`p` (or rows of it) with every contact open and closing not allowed: its ``event_values`` are the gaps."""
+    slots = mode_slots(model)
+    if slots is None:
+        return p
+    first, count = slots
+    p = p.copy()
+    p[..., first:first + count + 1] = 0.0
+    return p
+
+
+def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, resting: np.ndarray | None,
+                      where=lambda row: "") -> None:
+    """Write into each row of P (rows, *) the contacts' modes at the start and whether impacts may close them.
+
+    Impacts may close a contact when `method` integrates the module's ``rhs`` (which reads the modes); the
+    Taylor method's program is the motion without contacts, so its runs keep every contact open, and refuse to
+    start with one closed (`OptionError`).  A contact starts closed when it is at rest on its zero (`resting`
+    (rows, C), from `check_contacts`) and its normal force with those contacts closed is positive: the ones whose
+    force would pull are opened, one pass per contact at most, until the forces of the rest all push.
+    """
+    slots = mode_slots(model)
+    if slots is None:
+        return
+    first, count = slots
+    closing = 1.0 if "rhs" in method.kernels else 0.0
+    P[:, first:first + count] = 0.0
+    P[:, first + count] = closing
+    forces = np.empty(count)
+    for row in np.flatnonzero(resting.any(axis=1)):
+        y, p, candidates = Y0[row], P[row], resting[row].copy()
+        for _ in range(count):
+            p[first:first + count] = candidates
+            if model.kernels.contact_forces(t0, y, p, forces) != 0:
+                candidates[:] = False
+                break
+            pushing = candidates & (forces > 0.0)
+            if (pushing == candidates).all() or not pushing.any():
+                candidates = pushing
+                break
+            candidates = pushing
+        p[first:first + count] = candidates
+        if candidates.any() and not closing:
+            from lagcomp.integrate.options import method_names  # (it imports this module)
+
+            names = [name for (name, _, _), closed in zip(contacts_of(model), candidates, strict=True) if closed]
+            raise OptionError(f"Contact(s) {names}{where(row)} start closed (touching, at rest, pressed shut), which "
+                              f"`{method.name}` cannot integrate: its program is the motion without contacts. Use "
+                              f"{method_names(lambda m: 'rhs' in m.kernels and 'event_reset' in m.kernels)}.")
+
+
+def contact_switches(model, p: np.ndarray, t: np.ndarray, y: np.ndarray, event: np.ndarray,
+                     stopped_at_last: bool) -> tuple:
+    """The contacts' mode switches along a run: ((time, contact name, closed), ...) in time order.
+
+    Replays the run's resets on a copy of `p` (the modes at the start): at the event rows (t, states before y,
+    event indices `event`), the first resetting row at each time is the reset the driver applied (the others at
+    that time it did not, nor any at the last row's time when the run `stopped_at_last` there: a terminal event,
+    accumulated events, a failed reset); a contact's ``event_reset`` on the copy writes the modes as the driver's
+    did, bitwise.
+    """
+    slots = mode_slots(model)
+    if slots is None:
+        return ()
+    first, count = slots
+    contacts = contacts_of(model)
+    contact_of = {event_index: d for d, (_, event_index, _) in enumerate(contacts)}
+    resetting = [e.resets or e.name in {name for name, _, _ in contacts} for e in model.events]
+    work, out = p.copy(), np.empty(y.shape[1])
+    switches, applied_at = [], None
+    for r in range(t.shape[0]):
+        e = int(event[r])
+        if not resetting[e] or t[r] == applied_at or (stopped_at_last and t[r] == t[-1]):
+            continue
+        applied_at = t[r]
+        if e not in contact_of:
+            continue
+        before = work[first:first + count].copy()
+        model.kernels.event_reset(float(t[r]), y[r], work, e, out)
+        switches += [(float(t[r]), contacts[d][0], bool(work[first + d])) for d in range(count)
+                     if work[first + d] != before[d]]
+    return tuple(switches)
+
+
+def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, switches: tuple) -> np.ndarray | None:
+    """The normal forces (rows, C) at the saved rows (ts, ys), 0 while a contact is open; None without modes.
+
+    The modes at a row are those at the start (`p`) changed by the `switches` before it; at a switch's time the
+    first row is the state before the switch and a second row at the same time the state after."""
+    slots = mode_slots(model)
+    if slots is None:
+        return None
+    first, count = slots
+    names = [name for name, _, _ in contacts_of(model)]
+    work, out = p.copy(), np.zeros((ts.shape[0], count))
+    k = 0
+    for r in range(ts.shape[0]):
+        while k < len(switches) and (switches[k][0] < ts[r] or (switches[k][0] == ts[r] and r > 0
+                                                                 and ts[r - 1] == ts[r])):
+            work[first + names.index(switches[k][1])] = 1.0 if switches[k][2] else 0.0
+            k += 1
+        if work[first:first + count].any():
+            model.kernels.contact_forces(float(ts[r]), ys[r], work, out[r])
     return out

@@ -51,6 +51,7 @@ from numba import njit, types
 from numba.core.dispatcher import Dispatcher
 
 from lagcomp.errors import OptionError
+from lagcomp.integrate.contacts import mode_slot_count
 
 #: The argument types a function input is compiled for: t, y, p.
 SIGNATURE = (types.float64, types.float64[::1], types.float64[::1])
@@ -96,8 +97,8 @@ def check(function, name: str, order: int) -> None:
 def value_slots(model, functions: dict, p) -> tuple[tuple, ...]:
     """((function, value slot in p), ...) of the inputs of `model` given as `functions` (name -> function),
     in the model's input order; p holds the headers after the parameters and a constrained system's
-    Baumgarte gains (`lagcomp.kernel_support.inputs`)."""
-    first = len(model.parameters) + (2 if model.k else 0)
+    Baumgarte gains or the contacts' modes (`lagcomp.kernel_support.inputs`)."""
+    first = len(model.parameters) + (2 if model.k else 0) + mode_slot_count(model.kernels)
     return tuple((functions[name], int(p[first + j]) + VALUE_OFFSET)
                  for j, name in enumerate(model.inputs) if name in functions)
 

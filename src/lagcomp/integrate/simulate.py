@@ -24,7 +24,14 @@ from lagcomp.animation_bodies import BodyGeometry
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate import sensitivities as sens
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
-from lagcomp.integrate.contacts import check_contacts, contacts_of, impulses
+from lagcomp.integrate.contacts import (
+    check_contacts,
+    contact_forces_along,
+    contact_switches,
+    contacts_of,
+    impulses,
+    set_initial_modes,
+)
 from lagcomp.integrate.dae import dae_state, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
 from lagcomp.integrate.drivers.run_state import STEP, RunState
@@ -35,7 +42,7 @@ from lagcomp.integrate.methods import library_function
 from lagcomp.integrate.options import RunOptions, positive, run_options
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
-from lagcomp.integrate.solution import EventRecord, Solution
+from lagcomp.integrate.solution import ContactSwitch, EventRecord, Solution
 from lagcomp.integrate.status import Status
 from lagcomp.integrate.stiffness import (
     ADVISED_FAILURES,
@@ -135,7 +142,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         _refuse_resets_with_sensitivities(model, options)
         sens.check(model, m, options, columns, given)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
-    check_contacts(model, t0, y0[None, :], p[None, :])
+    resting = check_contacts(model, t0, y0[None, :], p[None, :])
+    set_initial_modes(model, m, t0, y0[None, :], p[None, :], resting)  # (p is this run's own: parameter_vector's)
     if max_residual is not None and not m.checks_residual:
         raise OptionError(f"`max_residual` stops a run whose constraint residual drifts past it; `{m.name}` does not "
                           "evaluate the residual during the run (it solves the constraints with the motion). "
@@ -152,7 +160,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     else:
         state, differential = RunState(y0, t0), y0.size
     run_args = (options.projecting, residual_max)
-    kernels, p_run = model.kernels, p
+    kernels, p_run = model.kernels, p.copy()    # (the drivers' resets write the contacts' modes into p_run)
     if columns is not None:  # the variational equations ride along: an augmented state, rhs and p
         kernels = sens.run_kernels(model, m, columns, scale)
         state, p_run = RunState(sens.initial_state(y0, columns, scale), t0), sens.run_parameters(p, model, columns)
@@ -182,7 +190,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
         recorder.add(np.array([state.t]), state.y[None, :width])  # keep the last good state
     run = dict(method=m.name, status=status, state=state, projected=projected,
-               residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, p, event_parts))
+               residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, p, event_parts),
+               switches=_switches(model, p, event_parts, status))
     if columns is not None:
         run.update(sensitivities=recorder.sensitivities(), sensitivity_columns=columns, sensitivity_names=columns.names,
                    event_sensitivities=sens.event_sensitivities(model, p, columns, scale,
@@ -375,6 +384,15 @@ def _event_records(model, p, event_parts) -> dict:
     return records
 
 
+def _switches(model, p, event_parts, status) -> tuple:
+    """The contacts' mode switches (`lagcomp.integrate.contacts.contact_switches`) from the run's event rows."""
+    if not event_parts:
+        return ()
+    t_all, y_all, i_all = (np.concatenate(column) for column in list(zip(*event_parts, strict=True))[:3])
+    stopped = status in (Status.TERMINATED, Status.EVENTS_ACCUMULATED, Status.RESET_FAILED)  # (no reset at its end)
+    return contact_switches(model, p, t_all, y_all, i_all, stopped)
+
+
 def _solution(model, p, recorder, run, throw) -> Solution:
     ts, ys, observed = recorder.result()
     status, run_state = run["status"], run["state"]
@@ -408,6 +426,8 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         reactions=reactions, constraint_residual=max(run["residual_max"], residual),
         projected_initial_state=ys[0].copy() if run["projected"] else None,
         events=run["events"], model_name=model.name, geometry=BodyGeometry.of(model, p),
+        contact_switches=tuple(ContactSwitch(*switch) for switch in run.get("switches", ())),
+        contact_forces=contact_forces_along(model, p, ts, ys, run.get("switches", ())),
         sensitivities=run.get("sensitivities"), sensitivity_names=run.get("sensitivity_names", ()),
         event_sensitivities=run.get("event_sensitivities", {}), reaction_sensitivities=reaction_sensitivities,
     )

@@ -36,6 +36,17 @@ class EventRecord:
 
 
 @dataclass(frozen=True)
+class ContactSwitch:
+    """A contact's mode switch (`Solution.contact_switches`): at time `t` the contact `contact` closed (`closed`
+    True: an impact under pressing ended its bounces, `lagcomp.kernel_support.resting`) or lifted off (False:
+    its normal force reached 0)."""
+
+    t: float
+    contact: str
+    closed: bool
+
+
+@dataclass(frozen=True)
 class EventSensitivities:
     """The sensitivities of one event's occurrences (`Solution.event_sensitivities`), columns w named by
     `Solution.sensitivity_names`: of its times, t (count, k) = dt*/dw, and of the state there,
@@ -132,6 +143,14 @@ class Solution:
         rows the constraints of `reaction_names`, columns the `sensitivity_names` (exact
         partials of λ times the sensitivities, `lagcomp.integrate.sensitivities.reaction_sensitivities`).
         None without sensitivities or multipliers (a Kane model's auxiliary reactions have none).
+    contact_switches : tuple of ContactSwitch
+        The contacts' closings and lift-offs, in time order (empty without contacts).  A lift-off is
+        also an occurrence of the contact's event (in `events`, with no jump and zero impulse); a closing
+        is the impact it ends with.
+    contact_forces : ndarray, shape (m, C), or None
+        The contacts' normal forces at the saved times (`Model.contacts`' order), 0 while a contact is
+        open; at a switch's time the first row is before it, a second row at that time after it.  None
+        for a model without contact modes (Kane models).
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
@@ -171,6 +190,8 @@ class Solution:
     sensitivity_names: tuple = ()
     event_sensitivities: dict = field(default_factory=dict, repr=False)
     reaction_sensitivities: np.ndarray | None = field(default=None, repr=False)
+    contact_switches: tuple = ()
+    contact_forces: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def success(self) -> bool:
@@ -248,6 +269,11 @@ class Solution:
                if self.sensitivities is not None else {}),
             **({"reaction_sensitivities": self.reaction_sensitivities}
                if self.reaction_sensitivities is not None else {}),
+            **({"contact_forces": self.contact_forces,
+                "contact_switch_t": np.array([s.t for s in self.contact_switches], dtype=float),
+                "contact_switch_contact": np.array([s.contact for s in self.contact_switches], dtype=str),
+                "contact_switch_closed": np.array([s.closed for s in self.contact_switches], dtype=bool)}
+               if self.contact_forces is not None else {}),
         }
 
     def to_xarray(self):

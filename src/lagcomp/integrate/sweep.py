@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
-from lagcomp.integrate.contacts import check_contacts, contacts_of
+from lagcomp.integrate.contacts import check_contacts, contacts_of, set_initial_modes
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
@@ -317,7 +317,9 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             P[:, list(model.parameters).index(name)] = values[:, column]
     if model.residual_labels:  # (a Kane model's Φ and Ψ have no multipliers: model.k is 0)
         _consistent_initial_states(model, t0, Y0, P, project_initial, names, values)
-    check_contacts(model, t0, Y0, P, lambda i: f" in trajectory {i} of the sweep ({_where(names, values[i])})")
+    where = lambda i: f" in trajectory {i} of the sweep ({_where(names, values[i])})"  # noqa: E731
+    resting = check_contacts(model, t0, Y0, P, where)
+    set_initial_modes(model, m, t0, Y0, P, resting, where)  # each row its own modes (the drivers copy their row)
     projecting = options.projecting
     dae = m.solves_dae(model)       # then the loop runs z = (q, v, w, λ, μ); the outputs keep (q, v)
     if dae:

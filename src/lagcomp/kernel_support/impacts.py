@@ -52,7 +52,7 @@ IMPACT_SINGULAR_MASS = -3
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def _solve_on_set(W, q, pushing, z):
+def solve_on_set(W, q, pushing, z):
     """P_A = −W_AA⁻¹ q_A on the contacts flagged in `pushing`, 0 elsewhere, into z; False if W_AA is singular."""
     c = q.shape[0]
     index = np.empty(c, dtype=np.int64)
@@ -94,7 +94,7 @@ def solve_lcp(W, q, z, w):
     for i in range(c):
         pushing[i] = q[i] < 0.0
     for _ in range(2 ** min(c, 30) + c):
-        if not _solve_on_set(W, q, pushing, z):
+        if not solve_on_set(W, q, pushing, z):
             return IMPACT_DEPENDENT_CONTACTS
         z_scale = 0.0
         for i in range(c):

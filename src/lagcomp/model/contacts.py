@@ -17,9 +17,11 @@ Conventions and limits of this first form:
 * the restitution coefficient e is a number in [0, 1] or one parameter
   (checked against [0, 1] when a run gets its value): 1 is elastic (kinetic
   energy kept), 0 plastic;
-* persistent (resting) contact is not modelled yet: under a force that
-  presses a contact shut, impacts repeat at shrinking intervals (a bouncing
-  ball's accumulation) until the run's step limit;
+* a contact pressed shut stays shut (`lagcomp.kernel_support.resting`): a
+  constraint whose multiplier is the normal force, released when that force
+  would turn negative (lift-off); impacts that accumulate under a pressing
+  force (a bouncing ball's Zeno point) close it; the Taylor method keeps
+  contacts open (its runs end at such a point with EVENTS_ACCUMULATED);
 * contacts are frictionless, on systems without bilateral constraints, with
   the Lagrange formulation (M from T).
 """

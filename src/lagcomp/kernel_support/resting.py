@@ -1,0 +1,194 @@
+"""Closed contacts: resting contact as an active constraint, lift-off, and impacts that close a contact (Zeno).
+
+A contact (`lagcomp.model.contacts.Contact`) is open or closed, its mode kept in p (`lagcomp.ir.ContactModes`).
+While closed its gap g(q, t) is held at its value by a holonomic constraint: with G the closed contacts' gap
+gradients ∂g/∂q (c × n) and b = Σ_j ∂ġ/∂q_j q̇_j + ∂ġ/∂t (so that g̈ = G q̈ + b),
+
+    M q̈ = F + Gᵀ λ,    G q̈ + b = 0    so    W λ = −(G q̈_free + b),    W = G M⁻¹ Gᵀ,    q̈ = q̈_free + M⁻¹ Gᵀ λ,
+
+q̈_free = M⁻¹ F the motion without the contacts (the module's ``rhs_free``).  λ ≥ 0 pushes the gap open: it is
+the normal force (in the units of the force conjugate to g: N for a gap in metres).  The contact lifts off when
+λ would turn negative: the event of a closed contact is λ (direction −1), and its reset only opens the contact.
+
+An impact under a pressing free normal acceleration a = G q̈_free + b < 0 (gravity on a bouncing ball) leaves the
+contact with normal velocity v⁺ = −e v⁻; the bounces that follow, all under that acceleration, last
+2 v⁺ / (|a| (1 − e)) in all (a geometric series) and end at rest.  When that is shorter than
+`ZENO_TIME` max(1, |t|), or the next bounce 2 v⁺/|a| shorter than `BOUNCE_TIME` max(1, |t|) (e near 1), the
+impact is made plastic (e = 0: v⁺ = 0) and the contact closes: the error in the time the ball comes to rest is
+the remaining time, and the heights of the bounces left out are v⁺²/(2|a|) < (ZENO_TIME |a| / 2)² / (2 |a|), far
+below rounding.  A plastic impact (e = 0) under pressing closes the contact at once.
+
+Why those scales: the drivers resolve a bounce down to about 2048 × 2 ε |t| ≈ 1e-12 |t| (an impact located to
+2 ε |t| leaves the gap a rounding below 0, and the bounce after it must reach above 0 by the first sample of the
+step after the reset, 1/2048 of the step before it); below that a run ends with EVENTS_ACCUMULATED.  With both
+criteria every bounce a run resolves is ≥ 1e-11 |t| (a ball sliding into a wall, e = 0.5, stalled at 1e-12).
+
+Within a step the contact never pulls: the ``rhs`` stages hold λ ≥ 0 (`closed_contact_accelerations` with
+``unilateral``), so a stage past a lift-off sees the body free, and a step that jumps over a lift-off and a
+touch-down (a body at rest, whose steps grow tenfold each, pulled past its weight for a while) is rejected by
+its own error estimate instead of holding the body down.
+
+Drift: while a contact is closed, g̈ = 0 holds to rounding, and ġ starts at 0 (within the impact's rounding,
+or checked at the start of a run), so g keeps its closing value up to the integration error of the step
+controller: a particle held on the inside of a ring by its speed, 100 turns with dop853, drifts off it by
+1.1e-11, 1.3e-9, 2.4e-7, 4.2e-5 at rtol = atol = 1e-12, 1e-10, 1e-8, 1e-6, half the relative error of its
+speed² at each; a ball at rest keeps g = 0 exactly (q̈ = 0 to the last bit).  So no stabilisation terms are
+added: they would trade that drift, of the size of the run's own error, for a stiffer rhs and the exact rest,
+as lagcomp's bilateral constraints do by default (``baumgarte=(0, 0)``).
+
+These are helpers of the emitted kernels (``closed_contacts``, ``event_reset``): numba compiles them into the
+kernel that calls them.  They allocate small work arrays, only while some contact is closed or at an event.
+"""
+
+import numpy as np
+from numba import njit
+
+from lagcomp.kernel_support.impacts import CLOSED_GAP, IMPACT_SOLVED, contact_impacts, solve_on_set
+from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix
+
+#: The closed contacts' constraints are dependent (W singular): ``rhs`` returns this positive status, as for a
+#: singular mass matrix (the drivers stop with RHS_FAILED).
+DEPENDENT_CLOSED_CONTACTS = 1_000_000
+
+#: An impact under pressing closes its contact when the bounces it would start last less than this times
+#: max(1, |t|) in all: the time of rest is off by less than that (5.7e-10 for a ball at rest from t∞ = 5.7 s).
+ZENO_TIME = 1e-10
+#: ... or when the next bounce would last less than this times max(1, |t|): ten times the drivers' resolution of a
+#: bounce (module docstring), for e near 1, whose bounces shrink slowly (the time of rest then off by up to
+#: BOUNCE_TIME max(1, |t|)/(1 − e)).
+BOUNCE_TIME = 1e-11
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, unilateral):
+    """Correct the free accelerations ``qdd`` (n) in place for the contacts closed in ``modes`` (C,); their normal
+    forces λ into ``forces`` (C,), 0 for the open ones.
+
+    mass (n, n): M, lower triangle (overwritten); gradients (C, n): ∂g/∂q of every contact; bias (C): b, so that
+    g̈ = G q̈ + b.  With ``unilateral`` 1 a closed contact whose λ would pull (λ < 0) pushes with 0 instead, as an
+    open one (the most negative first, then the others' forces again, until none pulls): the complementarity
+    λ ≥ 0, g̈ ≥ 0, λ g̈ = 0 of a unilateral contact.  That is what ``rhs`` uses, so that a step's stages see the
+    lift-off its ends may not show (a body at rest, whose pull passes its weight and falls back within one step,
+    leaves the step's error estimate large: the step is rejected, shorter ones find λ's zero); with 0 the
+    multipliers of the constraints as they are, of either sign (``contact_forces``: the lift-off events).
+    Returns 0; 1 (the status of a singular first pivot) when M is not positive definite, or
+    `DEPENDENT_CLOSED_CONTACTS` when the closed contacts' W is singular: ``rhs`` returns it, the drivers stop.
+    """
+    n = qdd.shape[0]
+    count = modes.shape[0]
+    c = 0
+    for d in range(count):
+        forces[d] = 0.0
+        if modes[d] != 0.0:
+            c += 1
+    if c == 0:
+        return 0
+    index = np.empty(c, dtype=np.int64)
+    minv_gt = np.empty((n, c))                  # M⁻¹ G_Aᵀ, column per closed contact
+    a = 0
+    for d in range(count):
+        if modes[d] != 0.0:
+            index[a] = d
+            for i in range(n):
+                minv_gt[i, a] = gradients[d, i]
+            a += 1
+    if ldlt_solve_matrix(mass, minv_gt) != 0:
+        return 1
+    delassus = np.empty((c, c))
+    free = np.empty(c)                          # g̈ without the contacts' forces: G q̈_free + b
+    for a in range(c):
+        s = bias[index[a]]
+        for i in range(n):
+            s += gradients[index[a], i] * qdd[i]
+        free[a] = s
+        for b in range(c):
+            s = 0.0
+            for i in range(n):
+                s += gradients[index[a], i] * minv_gt[i, b]
+            delassus[a, b] = s
+    active = np.ones(c, dtype=np.bool_)
+    lam = np.empty(c)
+    for _ in range(c + 1):                      # (each pass but the last drops a contact)
+        if not solve_on_set(delassus, free, active, lam):       # λ_A = −W_AA⁻¹ (G_A q̈_free + b_A)
+            return DEPENDENT_CLOSED_CONTACTS
+        pulling = -1
+        for a in range(c):
+            if unilateral != 0.0 and active[a] and lam[a] < 0.0 and (pulling < 0 or lam[a] < lam[pulling]):
+                pulling = a
+        if pulling < 0:
+            break
+        active[pulling] = False
+    for i in range(n):
+        s = 0.0
+        for a in range(c):
+            s += minv_gt[i, a] * lam[a]
+        qdd[i] += s
+    for a in range(c):
+        forces[index[a]] = lam[a]
+    return 0
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes, closing,
+                  qd):
+    """The reset of contact ``firing``'s event: the lift-off of a closed contact, or the impact of an open one.
+
+    A closed contact (``modes[firing]`` 1) whose force reached 0 opens: its mode becomes 0, the velocities do not
+    jump.  An open one's impact is `lagcomp.kernel_support.impacts.contact_impacts`, the velocities ``qd`` (n)
+    overwritten; then, when ``closing`` is 1, each contact taking part whose free normal acceleration
+    a = G q̈_free + b presses it shut (a < 0) and whose bounces would end within `ZENO_TIME` max(1, |t|)
+    (2 v⁺ < ZENO_TIME max(1, |t|) |a| (1 − e)), or the next within `BOUNCE_TIME` max(1, |t|), closes: the
+    impact is done again with e = 0 for those, and their modes become 1, unless the closed contacts' forces
+    would not all push (then none closes).
+    mass (n, n) lower triangle, gaps, normal_velocities, restitution, bias (C,), gradients (C, n) as in
+    `contact_impacts`; qdd_free (n): q̈ without contacts at the state before.  Returns the impact's status.
+    """
+    if modes[firing] != 0.0:
+        modes[firing] = 0.0
+        return IMPACT_SOLVED
+    n = q.shape[0]
+    count = gaps.shape[0]
+    before = qd.copy()
+    status = contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd)
+    if status != IMPACT_SOLVED or closing == 0.0:
+        return status
+    scale_t = max(1.0, abs(t))
+    plastic = restitution.copy()
+    closed = modes.copy()
+    any_closing = False
+    for d in range(count):
+        if modes[d] != 0.0:
+            continue
+        scale = 0.0
+        for j in range(n):
+            scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
+        if d != firing and gaps[d] > CLOSED_GAP * scale:
+            continue
+        pressing = bias[d]
+        v_after = normal_velocities[d]
+        for j in range(n):
+            pressing += gradients[d, j] * qdd_free[j]
+            v_after += gradients[d, j] * (qd[j] - before[j])
+        if pressing < 0.0 and (2.0 * v_after < ZENO_TIME * scale_t * -pressing * (1.0 - restitution[d])
+                               or 2.0 * v_after < BOUNCE_TIME * scale_t * -pressing):
+            plastic[d] = 0.0
+            closed[d] = 1.0
+            any_closing = True
+    if not any_closing:
+        return status
+    accelerations = qdd_free.copy()
+    forces = np.empty(count)
+    work = mass.copy()
+    if closed_contact_accelerations(work, gradients, bias, closed, accelerations, forces, 0.0) != 0:
+        return status
+    for d in range(count):
+        if closed[d] != 0.0 and not forces[d] > 0.0:
+            return status                       # a closed contact would pull: leave them open, the impact as is
+    for j in range(n):
+        qd[j] = before[j]
+    status = contact_impacts(mass, gaps, gradients, normal_velocities, plastic, q, firing, qd)
+    if status == IMPACT_SOLVED:
+        for d in range(count):
+            modes[d] = closed[d]
+    return status
+
