@@ -15,12 +15,12 @@ Measured again after the tunnelling fix (drivers/events.py `return_before`) and 
 states after each impact and the contact's impulses (`Sweep.events[...]["y_after"]`, ``["impulses"]``), the
 defaults (e in [0.8, 0.9], h₀ in [1, 2], to t = 3.66): 49 896 impacts for either floor, no trajectory with a
 wrong count, impact times to 3.9e-14 (reset, dop853), 7.8e-16 (reset, taylor), 4.1e-14 (contact, dop853),
-1.1e-15 (contact, taylor); the reset rows' counts and errors are those measured before the fix.  Throughput, 1 thread, load average 1.7 on the 2
-shared cores: reset dop853 47 400/s, taylor 72 000/s; contact dop853 27 200/s, taylor 34 700/s (the second
-thread gained nothing; with the load at 3, repeated runs ranged 31 000–48 000/s (reset, dop853) and
-18 500–34 000/s (contact, dop853), this commit and the one before it alike).  In one process, of a 0.43 s
-contact sweep (dop853) the impulses of its 49 896 kept impacts took 0.09 s (`drivers/sweep_impulses`;
-timed around `lagcomp.integrate.sweep._event_outputs`).
+1.1e-15 (contact, taylor); the reset rows' counts and errors are those measured before the fix.
+Throughput, 1 thread, load average 1.7 on the 2 shared cores: reset dop853 47 400/s, taylor 72 000/s;
+contact dop853 27 200/s, taylor 34 700/s (the second thread gained nothing; with the load at 3, repeated
+runs ranged 31 000–48 000/s (reset, dop853) and 18 500–34 000/s (contact, dop853), this commit and the one
+before it alike).  In one process, of a 0.43 s contact sweep (dop853) the impulses of its 49 896 kept
+impacts took 0.09 s (`drivers/sweep_impulses`; timed around `lagcomp.integrate.sweep._event_outputs`).
 """
 
 from __future__ import annotations

@@ -349,10 +349,10 @@ def sweep_taylor(taylor_coefficients, event_values, event_reset, periodic, work_
     ``counts`` (N, 3) = [nfev, nsteps, nrejected]; ``dense`` (N, m, 2n) the ``t_eval`` rows (after t0;
     ``save_initial`` says whether t0 is one too); ``energy_stats`` (N, 2) the initial energy and the
     largest |E − E₀| over the saved rows; ``event_count`` (N, E) and the first occurrences in ``event_t``
-    (N, E, cap) and ``event_y`` (N, E, cap, 2n; or 4n: then the states after the events too, `fold_events`).  ``carry`` is the carry `taylor_run` takes
-    (empty: it restarts with each call).  Each trajectory runs with a copy of its row of ``P`` (a reset may one
-    day write mode slots of its p).  The trajectories release the GIL: the caller runs disjoint
-    row ranges on several threads.
+    (N, E, cap) and ``event_y`` (N, E, cap, 2n; or 4n: then the states after the events too, `fold_events`).
+    ``carry`` is the carry `taylor_run` takes (empty: it restarts with each call).  Each trajectory runs with a
+    copy of its row of ``P`` (a contact's event_reset writes the mode slots of its p).  The trajectories release
+    the GIL: the caller runs disjoint row ranges on several threads.
     """
     n_traj = Y0.shape[0]
     n2 = Y0.shape[1]
