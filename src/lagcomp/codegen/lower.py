@@ -723,7 +723,7 @@ def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping
     contact_names = [names[e] for events, _ in impacts for e in events]
     doc = (f"The state just after event e into `out`, shape ({size},): `y`, the state just before, with what the\n"
            f"reset of e sets (events with a reset: {reset_names}; the others leave y as it is). Returns 0.\n"
-           "Drivers pass a p of their own: a reset may one day write mode slots of p.")
+           "Drivers pass a p of their own run: a contact's reset writes its mode slots there.")
     if contact_names:
         doc += (f"\nThe contacts {contact_names} change the velocities by their impact (Newton's restitution,\n"
                 "simultaneous impacts solved together); a negative return is the impact solver's failure\n"

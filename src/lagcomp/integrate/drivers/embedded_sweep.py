@@ -76,7 +76,7 @@ def sweep_embedded(rhs, project, constraint_residual, event_values, event_reset,
       ``event_t[k]`` (E, cap) and ``event_y[k]`` (E, cap, 2n) (the states just before them; with 4n columns, the
       states after them in the last 2n: `fold_events`).
 
-    Each trajectory runs with a copy of its row of ``P``: a reset may one day write mode slots of its p.
+    Each trajectory runs with a copy of its row of ``P``: a contact's reset writes mode slots of its p.
     """
     n_traj = Y0.shape[0]
     n2 = Y0.shape[1]

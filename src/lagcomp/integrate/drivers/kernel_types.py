@@ -47,8 +47,8 @@ RESIDUAL = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
 #: ``event_values(t, y, p, out)``: the event functions' values at ``y`` (writes nothing without events).
 EVENTS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
 #: ``event_reset(t, y, p, e, out) -> int``: ``out`` = the state just after event ``e`` (its reset applied to ``y``, the
-#: state just before; ``y`` itself for an event without one); 0, or k > 0 when it cannot be computed.  May one day
-#: write mode slots of ``p``: the drivers pass a ``p`` of their own run (a sweep's row, not shared).
+#: state just before; ``y`` itself for an event without one); 0, or k > 0 when it cannot be computed.  A contact's
+#: reset writes its mode slots of ``p``: the drivers pass a ``p`` of their own run (a sweep's row, not shared).
 EVENT_RESET = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, INT, VECTOR))
 #: ``event_gradients(t, y, p, out) -> int``: ``out`` (E, N + 1 + P) = ∂g/∂y, ∂g/∂t, ∂g/∂p of the event functions,
 #: exact (writes nothing without events); 0, or ``lagcomp.ir.NO_JACOBIAN`` where the module has none (its
