@@ -233,3 +233,32 @@ def test_each_run_starts_from_its_own_modes(ball):
     assert first.contact_switches == second.contact_switches and len(first.contact_switches) == 1
     np.testing.assert_array_equal(first.q, second.q)
     assert first.params == {"e": 0.5, "g": G, "m": 2.0}
+
+
+@pytest.fixture(scope="module")
+def stack(tmp_path_factory):
+    x1, x2 = lc.coordinates("x1 x2")
+    g, e = sp.symbols("g e", positive=True)
+    system = lc.System([x1, x2], T=(x1.diff(t) ** 2 + x2.diff(t) ** 2) / 2, V=g * (x1 + x2),
+                       events=[lc.Contact("floor", x1, restitution=e), lc.Contact("balls", x2 - x1, restitution=e)],
+                       name="resting_stack", defaults={"g": G, "e": 0.5})
+    return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+def test_an_impact_on_a_resting_body_pushes_through_its_closed_contact(stack):
+    """Ball 2 (unit masses, point-like) dropped from h on ball 1 resting on the floor: with G = [[1, 0], [−1, 1]]
+    (floor, balls) both contacts push, W P = −(1 + e) v⁻ gives P = ((1 + e) v, (1 + e) v), v = √(2 g h): ball 1
+    stays, ball 2 leaves at e v.  The floor's impulse counts only if its closed contact is taken as touching
+    (its event value is then its force, not its gap): in a single run and in a sweep alike."""
+    h, e = 1.0, 0.5
+    v = np.sqrt(2 * G * h)
+    sol = stack.simulate((0, 0.5), q0=[0.0, h], qd0=[0.0, 0.0], method="dop853", rtol=1e-12, atol=1e-12)
+    hit = sol.events["balls"]
+    assert hit.t[0] == pytest.approx(np.sqrt(2 * h / G), rel=1e-12)
+    np.testing.assert_allclose(hit.impulses[0], [(1 + e) * v, (1 + e) * v], rtol=1e-11)
+    np.testing.assert_allclose(hit.qd_after[0], [0.0, e * v], atol=1e-11)
+    sweep = stack.sweep((0, 0.5), {"e": [e, 0.8]}, q0=[0.0, h], qd0=[0.0, 0.0], method="dop853", rtol=1e-12,
+                        atol=1e-12, output="events")
+    impulses = sweep.events["balls"]["impulses"]
+    np.testing.assert_array_equal(impulses[0, 0], hit.impulses[0])
+    np.testing.assert_allclose(impulses[1, 0], [1.8 * v, 1.8 * v], rtol=1e-11)

@@ -19,7 +19,6 @@ import time
 import warnings
 from pathlib import Path
 
-
 from lagcomp.errors import LagcompError, ModelError
 
 
@@ -284,7 +283,13 @@ def cmd_animate(args) -> int:
     _check_writable(args.output, "--output")
     import importlib.util
 
-    from lagcomp.animation import EXAMPLE_DRAWINGS, animate, body_drawing, check_format, frame_times
+    from lagcomp.animation import (
+        EXAMPLE_DRAWINGS,
+        animate,
+        body_drawing,
+        check_format,
+        frame_times,
+    )
     from lagcomp.examples.bodies import BODIES_EXAMPLES
 
     check_format(args.output)
@@ -367,8 +372,9 @@ def cmd_generate(args) -> int:
 def library_drivers() -> list[str]:
     """The library drivers and sweep loops (``"module:function"``), each once: those the method registry
     names, then the batched sweep loops (`lagcomp.integrate.sweep.BATCHED`) and a sweep's impulse loop."""
+    from lagcomp.integrate.contacts import IMPULSES
     from lagcomp.integrate.methods import METHODS
-    from lagcomp.integrate.sweep import BATCHED, IMPULSES, TAYLOR_LANES_LOOP
+    from lagcomp.integrate.sweep import BATCHED, TAYLOR_LANES_LOOP
 
     references = [ref for m in METHODS.values() for ref in (m.driver, m.sweep) if ref is not None]
     references += [ref for ref in BATCHED.values() if ":" in ref] + [TAYLOR_LANES_LOOP[0], IMPULSES]

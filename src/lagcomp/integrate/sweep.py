@@ -28,8 +28,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
-from lagcomp.integrate.contacts import check_contacts, contacts_of, set_initial_modes
 from lagcomp.integrate.constraints import consistent_initial_state
+from lagcomp.integrate.contacts import (
+    check_contacts,
+    contacts_of,
+    set_initial_modes,
+    sweep_impulses,
+)
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
 from lagcomp.integrate.function_inputs import driven
@@ -42,8 +47,6 @@ from lagcomp.integrate.stiffness import warn_if_sweep_stiff
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
-#: The compiled loop that computes the impulses of the impacts a sweep kept (`_event_outputs`).
-IMPULSES = "lagcomp.integrate.drivers.sweep_impulses:contact_impulses"
 #: The arrays of an event's record in a sweep (`Sweep.events`), the longest suffix first (as `load_npz` reads them).
 EVENT_PARTS = ("y_after", "impulses", "count", "t", "y")
 #: Target wall time of one chunk (progress and Ctrl-C granularity), and the first chunk's size per thread
@@ -379,7 +382,7 @@ def _event_outputs(model, out: dict, actions: np.ndarray, P: np.ndarray, width: 
     """Each active event's record in a sweep: ``count`` (*shape), and of its first `cap` occurrences ``t``
     (*shape, cap) and ``y`` (*shape, cap, n_y), the state just before; for an event that resets the state
     ``y_after`` (*shape, cap, n_y) too, and for a contact ``impulses`` (*shape, cap, C), the normal impulses of
-    the model's contacts (`Model.contacts`) computed from each jump as `simulate` does (`contacts.impulses`):
+    the model's contacts (`Model.contacts`) computed from each jump as `simulate` does (`contacts.sweep_impulses`):
     what a single run's `EventRecord` holds, per trajectory.  NaN beyond each trajectory's count.
 
     `width` is the width of the loop's state (the DAE state of radau: larger than n_y); ``out["event_y"]``
@@ -397,23 +400,9 @@ def _event_outputs(model, out: dict, actions: np.ndarray, P: np.ndarray, width: 
             after = out["event_y"][:, i, :, width:width + n_y]
             record["y_after"] = shaped(after)
             if event.name in contacts:
-                record["impulses"] = shaped(_impulses(model, i, P, count, times, before, after))
+                record["impulses"] = shaped(sweep_impulses(model, i, P, count, times, before, after))
         records[event.name] = record
     return records
-
-
-def _impulses(model, event: int, P, count, times, before, after) -> np.ndarray:
-    """The contacts' impulses (N, cap, C) at the kept impacts of contact event `event` in each trajectory
-    (`lagcomp.integrate.drivers.sweep_impulses`: `simulate`'s arithmetic, compiled), NaN beyond them."""
-    contact_impulses = library_function(IMPULSES)
-    contacts = np.array([index for _, index, _ in contacts_of(model)], dtype=np.int64)
-    n, n_events = model.n, len(model.event_names)
-    values = np.full((*times.shape, contacts.size), np.nan)
-    contact_impulses(model.kernels.mass_matrix, model.kernels.event_values, model.kernels.event_gradients, contacts,
-                     event, n, np.ascontiguousarray(P), np.ascontiguousarray(count), np.ascontiguousarray(times),
-                     np.ascontiguousarray(before), np.ascontiguousarray(after), np.empty((n, n)), np.empty(n_events),
-                     np.empty((n_events, model.state_size + 1 + len(model.parameters))), values)
-    return values
 
 
 def _consistent_initial_states(model, t0: float, Y0: np.ndarray, P: np.ndarray, project: bool, names, values) -> None:

@@ -1,13 +1,12 @@
-"""The contacts' impulses at the impacts a sweep kept (`lagcomp.integrate.sweep`), compiled.
+"""The contacts' impulses at the impacts a run or a sweep kept (`lagcomp.integrate.contacts.sweep_impulses`),
+compiled.
 
-A single run computes them in Python from each jump (`lagcomp.integrate.contacts.impulses`): M (q̇⁺ − q̇⁻) =
-Gᵀ P over the contacts closed at the impact, P by least squares.  A sweep of 10⁴ bouncing balls keeps some
-5·10⁴ impacts, which that Python loop (three kernel calls and a least-squares solve each) took 1 s over,
-three times the sweep itself; this loop does the same arithmetic in numba (0.09 s), and rounds alike (the
-same LAPACK driver, gelsd, reached through another binding: the tests find the impulses bitwise equal).  Which
-contacts count as closed is decided on the impact solver's own scale, written as its loop
+Each comes from its jump: M (q̇⁺ − q̇⁻) = Gᵀ P over the contacts closed at the impact, P by least squares.  A
+sweep of 10⁴ bouncing balls keeps some 5·10⁴ impacts, which a Python loop (three kernel calls and a
+least-squares solve each) took 1 s over, three times the sweep itself; this loop takes 0.09 s.  Which contacts
+count as closed is decided on the impact solver's own scale, written as its loop
 (`lagcomp.kernel_support.impacts.contact_impacts`; `contacts.touching` is the same sum as a matrix product).
-A module of its own, imported only by a sweep that keeps a contact's impacts.
+A module of its own, imported only by a run that keeps a contact's impacts.
 """
 
 from __future__ import annotations
