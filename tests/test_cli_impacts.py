@@ -63,6 +63,15 @@ def test_a_bouncing_balls_impacts_are_listed_first_few_then_the_last(models, cap
     assert len({line.index("impulse") for line in rows}) == 1 and len({line.index("x_dot") for line in rows}) == 1
 
 
+def test_the_impact_that_closes_the_floor_says_so(models, capsys):
+    """Past t∞ = t₁ (1 + 2 e/(1 − e)) = 8.58 the ball rests: the last impact closes the floor."""
+    lines = _run(models, "cli_contact_ball", 10.0, capsys)
+    start = next(i for i, line in enumerate(lines) if line.startswith("event       floor:"))
+    listed = lines[start + 1:start + FIRST_SHOWN + 3]
+    assert listed[-1].endswith("floor closes")
+    assert not any("closes" in line or "lifts off" in line for line in listed[:-1])
+
+
 def test_a_reset_events_jumps_are_listed_without_impulses(models, capsys, tmp_path):
     lines = _run(models, "cli_reset_ball", 1.0, capsys, "--plot", str(tmp_path / "ball.png"))
     assert f"plotted     {tmp_path / 'ball.png'} (coordinates and energy error vs time; resets and impacts marked)" \

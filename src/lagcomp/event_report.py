@@ -39,10 +39,17 @@ def _aligned(rows: list[list[str]]) -> list[str]:
     return ["   ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip() for row in rows]
 
 
-def occurrence_lines(record, state_names, contacts) -> list[str]:
+def _switches_at(switches, t: float) -> str:
+    """``floor closes, wall lifts off``: the contacts that switched their mode at `t` (`Solution.contact_switches`;
+    an impact of one contact may close another)."""
+    return ", ".join(f"{s.contact} {'closes' if s.closed else 'lifts off'}" for s in switches if s.t == t)
+
+
+def occurrence_lines(record, state_names, contacts, switches=()) -> list[str]:
     """The occurrences of one event of a `Solution` that changes the state (``record.jumps``, or a contact's
     impacts: ``record.impulses``), one line each, aligned; [] for other events.  `state_names` names the
-    columns of (q, q̇) (`Solution.state_names`), `contacts` the columns of the impulses (`Model.contacts`)."""
+    columns of (q, q̇) (`Solution.state_names`), `contacts` the columns of the impulses (`Model.contacts`);
+    `switches` (`Solution.contact_switches`) marks the occurrences at which contacts closed or lifted off."""
     if len(record) == 0 or not (record.impulses is not None or record.jumps):
         return []
     before = np.hstack([record.q, record.qd])
@@ -54,7 +61,7 @@ def occurrence_lines(record, state_names, contacts) -> list[str]:
         row = [f"#{k + 1}", f"t = {record.t[k]:.10g}"]
         if record.impulses is not None:
             row.append(_impulses(contacts, record.impulses[k]))
-        rows.append([*row, _changes(state_names, before[k], after[k])])
+        rows.append([*row, _changes(state_names, before[k], after[k]), _switches_at(switches, record.t[k])])
     lines = [INDENT + line for line in _aligned(rows)]
     if len(shown) < count:
         lines.insert(FIRST_SHOWN, f"{INDENT}... {count - len(shown)} more ...")
