@@ -143,6 +143,18 @@ class AugmentedJacobianSolve:
 
 
 @dataclass(frozen=True)
+class DirectionalSolve:
+    """The frame of ``rhs_directional`` (`lagcomp.codegen.directional`): before its loads the kernel calls
+    ``rhs(t, y, p, ydot)`` (with `multipliers` k > 0, a constrained system's ``rhs_and_reactions(t, y, p, ydot,
+    _lam)``, ``_lam`` a local of k entries), returning its status when it is not 0, so that loads can bind the
+    accelerations (and multipliers) it solved; after the stores, `solve` (M's LDLᵀ, or K's ``kkt_solve``) writes
+    the direction's accelerations into ``out[n:]``."""
+
+    solve: LinearSolve | AugmentedSolve
+    multipliers: int = 0
+
+
+@dataclass(frozen=True)
 class Delegate:
     """The whole body: ``return kernel(t, y, p, np.empty(scratch), out)``, a kernel that computes what
     `kernel` does and keeps only `out` (``rhs_jacobian`` from ``rhs_with_jacobian``, f dropped): one
@@ -222,8 +234,8 @@ class Kernel:
     stores : tuple of (target, Expr)
         Output assignments; the target is an lvalue (``out[0]``, a local) or
         ``return`` for scalar kernels.
-    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, AugmentedJacobianSolve, Delegate,
-        ReturnZero, FlatMatrix, Unavailable or None
+    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, AugmentedJacobianSolve,
+        DirectionalSolve, Delegate, ReturnZero, FlatMatrix, Unavailable or None
         Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``,
         M⁻¹ applied to the rows of ``rhs_with_jacobian``), the call of another kernel
         (``rhs_jacobian``), the matrix-vector product of
@@ -251,8 +263,8 @@ class Kernel:
     loads: tuple[tuple[str, str], ...]
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
-    solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | AugmentedJacobianSolve | Delegate
-            | ReturnZero | FlatMatrix | Unavailable | EventResets | None) = None
+    solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | AugmentedJacobianSolve
+            | DirectionalSolve | Delegate | ReturnZero | FlatMatrix | Unavailable | EventResets | None) = None
     lanes: bool = False
     alias: str | None = None
     constants: tuple[tuple[str, str, object], ...] = ()

@@ -38,6 +38,7 @@ from lagcomp.ir import (
     AugmentedSolve,
     ContactImpact,
     Delegate,
+    DirectionalSolve,
     EventResets,
     FlatMatrix,
     JacobianSolve,
@@ -137,7 +138,7 @@ def kernel_support_names(kernels) -> set[str]:
                 names.add(lanes if kernel.lanes else scalar)
         if any(source.startswith("input_value(") for _, source in kernel.loads):
             names.add("input_value")
-        solve = kernel.solve
+        solve = kernel.solve.solve if isinstance(kernel.solve, DirectionalSolve) else kernel.solve
         if isinstance(solve, AugmentedSolve):
             names.add("kkt_solve")
         elif isinstance(solve, LinearSolve):
@@ -297,6 +298,16 @@ def _augmented_jacobian_frame(solve: AugmentedJacobianSolve) -> tuple[list[str],
     return before, after
 
 
+def _directional_frame(solve: DirectionalSolve) -> list[str]:
+    """The lines of ``rhs_directional`` before its loads: f into ``ydot`` by ``rhs`` (``rhs_and_reactions``, the
+    multipliers into a local ``_lam``), its status returned when not 0."""
+    if not solve.multipliers:
+        call = ["_status = rhs(t, y, p, _ydot)"]
+    else:
+        call = [f"_lam = np.empty({solve.multipliers})", "_status = rhs_and_reactions(t, y, p, _ydot, _lam)"]
+    return ["_ydot = ydot", *call, "if _status:", f"{INDENT}return _status"]
+
+
 def delegated_call(solve: Delegate) -> str:
     """The one line of a `Delegate` kernel: the other kernel's status, its scratch output dropped."""
     return f"return {solve.kernel}(t, y, p, np.empty({solve.scratch}), out)"
@@ -352,6 +363,9 @@ def _kernel_source(kernel: Kernel) -> str:
     elif isinstance(solve, AugmentedJacobianSolve):
         before, after = _augmented_jacobian_frame(solve)
         body += before
+    elif isinstance(solve, DirectionalSolve):
+        body += _directional_frame(solve)
+        solve = solve.solve
     body += [f"{local} = {source}" for local, source in kernel.loads]
     if isinstance(solve, AugmentedSolve):
         body.append(f"_kkt = np.zeros(({solve.size}, {solve.size + 1}))")

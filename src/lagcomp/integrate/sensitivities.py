@@ -216,7 +216,12 @@ class SensitivityKernels:
         return getattr(self._module, name)
 
 
-#: {(generated module, n, parameter columns, scale): SensitivityKernels}, for the process.
+#: The most columns whose derivatives the closure takes along each column (``rhs_directional``, one call per
+#: column) rather than from the full Jacobians J and ∂f/∂p (`augmented_rhs`); chosen by measurement
+#: (`bench.bench_sensitivities`).
+DIRECTIONAL_MAX_COLUMNS = 2
+
+#: {(generated module, n, parameter columns, scale, directional): SensitivityKernels}, for the process.
 _AUGMENTED: dict = {}
 _LOCK = threading.Lock()
 
@@ -232,13 +237,45 @@ def run_kernels(model, method, cols: Columns, scale: float):
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
     """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (its closure compiled at
     first use)."""
-    key = (module, n, cols.parameters, scale)  # (the initial-state columns: as many as y's size says)
+    directional = cols.k <= DIRECTIONAL_MAX_COLUMNS and hasattr(module, "rhs_directional")  # (not Kane modules)
+    key = (module, n, cols.parameters, scale, directional)  # (the initial-state columns: as y's size says)
     with _LOCK:
         if key not in _AUGMENTED:
-            parameter_jacobian = module.rhs_parameter_jacobian if cols.parameters else None
-            rhs = augmented_rhs(module.rhs_with_jacobian, parameter_jacobian, n, n_parameters, cols.parameters, scale)
+            if directional:
+                rhs = directional_rhs(module.rhs_directional, n, n_parameters, cols.parameters, scale)
+            else:
+                parameter_jacobian = module.rhs_parameter_jacobian if cols.parameters else None
+                rhs = augmented_rhs(module.rhs_with_jacobian, parameter_jacobian, n, n_parameters, cols.parameters,
+                                    scale)
             _AUGMENTED[key] = SensitivityKernels(module, rhs)
         return _AUGMENTED[key]
+
+
+def directional_rhs(rhs_directional, n: int, n_parameters: int, parameter_columns: tuple[int, ...], scale: float):
+    """``rhs(t, y, p, out) -> int`` of the augmented state as `augmented_rhs` computes it, column by column: out
+    = (f(x), J S[:, c] + scale ∂f/∂p_j) by one call of the module's ``rhs_directional`` per column c, along
+    (S[:, c], w_c), w_c = scale e_j for the column of parameter j, else 0.  The first call writes f (bitwise
+    ``rhs``'s); the others write theirs into the last n floats of p's work space.  For few columns: each call
+    costs about one ``rhs`` and one substitution, against N (N + P) entries and N + P substitutions for the
+    full Jacobians."""
+    k_parameters = len(parameter_columns)
+    directions = np.zeros((1 + k_parameters, n_parameters))   # row 0 for the initial-state columns
+    for c, j in enumerate(parameter_columns):
+        directions[1 + c, j] = scale
+
+    @njit(error_model="numpy", nogil=True)
+    def column_rhs(t, y, p, out):
+        x, k = y[:n], y.shape[0] // n - 1
+        first_parameter = k - k_parameters
+        f = out[:n]
+        for c in range(k):
+            w = directions[0] if c < first_parameter else directions[1 + c - first_parameter]
+            status = rhs_directional(t, x, p, y[n * (1 + c):n * (2 + c)], w, f, out[n * (1 + c):n * (2 + c)])
+            if status != 0:
+                return status
+            f = p[p.shape[0] - n:]
+        return 0
+    return column_rhs
 
 
 def augmented_rhs(rhs_with_jacobian, parameter_jacobian, n: int, n_parameters: int,
