@@ -144,14 +144,27 @@ class AugmentedJacobianSolve:
 
 @dataclass(frozen=True)
 class DirectionalSolve:
-    """The frame of ``rhs_directional`` (`lagcomp.codegen.directional`): before its loads the kernel calls
-    ``rhs(t, y, p, ydot)`` (with `multipliers` k > 0, a constrained system's ``rhs_and_reactions(t, y, p, ydot,
-    _lam)``, ``_lam`` a local of k entries), returning its status when it is not 0, so that loads can bind the
-    accelerations (and multipliers) it solved; after the stores, `solve` (M's LDLᵀ, or K's ``kkt_solve``) writes
-    the direction's accelerations into ``out[n:]``."""
+    """The frame of ``rhs_directional`` (`lagcomp.codegen.directional`): f and its derivative along a direction
+    from one CSE, in two phases around the solve for the accelerations.
 
-    solve: LinearSolve | AugmentedSolve
+    The first `phase_one` stores (f's rows q̇ into ``ydot[:n]``; M's lower triangle into the locals `m` and F
+    into `f`, or K and its right-hand side (F, γ̃) into ``_kkt`` (n + k, n + k + 1) for a constrained system
+    with `multipliers` k > 0) need no acceleration; then the solve writes q̈ into ``ydot[n:]`` (``_lam`` the
+    multipliers' view), and the loads of `solved` (the accelerations ā, multipliers λ̄ the residual's partials
+    are taken at), the temporaries that read them, and the other stores follow: the direction's right-hand side
+    into the locals `g` (or the last column of ``_direction``, a copy of K made before the first solve), which a
+    second substitution by the same LDLᵀ of M (a second ``kkt_solve``) turns into ``out[n:]``.  `unrolled`:
+    the LDLᵀ written out (n ≤ `lagcomp.codegen.lower.UNROLL_MAX`), else ``ldlt_solve`` twice.
+    """
+
+    n: int
+    phase_one: int
+    solved: tuple[str, ...]
     multipliers: int = 0
+    m: tuple[tuple[str, ...], ...] = ()
+    f: tuple[str, ...] = ()
+    g: tuple[str, ...] = ()
+    unrolled: bool = True
 
 
 @dataclass(frozen=True)

@@ -15,10 +15,11 @@ and F, and one LDLᵀ substitution gives da.  With y = (q, q̇), f = (q̇, a):
 
 A constrained system (Lagrange multipliers) solves K z = r for z = (q̈, λ), K = [M −Λᵀ; Λ 0]; along dx,
 K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ) (`lagcomp.codegen.constrained_jacobian`, the residual with the
-Baumgarte terms): one ``kkt_solve`` of the direction's right-hand side, the first n entries of dz the
-accelerations' derivative.  ``rhs`` (``rhs_and_reactions``) runs first, as in the Jacobian kernels, so f comes
-back bitwise ``rhs``'s.  The derivative agrees with the full Jacobians' product to rounding (another order of
-the same sums).
+Baumgarte terms): a second ``kkt_solve`` of the direction's right-hand side (K copied before the first), the
+first n entries of dz the accelerations' derivative.  f and the direction come from one CSE, so that the
+sines, cosines and products of M, F (K, γ̃) serve both, and an unconstrained M is factored once for both
+(`lagcomp.ir.DirectionalSolve`): a call costs about one ``rhs`` and one substitution.  f agrees with ``rhs``'s,
+and the derivative with the full Jacobians' product, to rounding (other orders of the same sums).
 """
 
 from __future__ import annotations
@@ -27,8 +28,8 @@ import symengine as se
 import sympy as sp
 
 from lagcomp.codegen.constrained_jacobian import _augmented_residual, _matrix_stores, _partials
-from lagcomp.codegen.lower import UNROLL_MAX, _acceleration_block, _kernel, fresh_symbols
-from lagcomp.ir import AugmentedSolve, DirectionalSolve, Kernel, LinearSolve
+from lagcomp.codegen.lower import UNROLL_MAX, _acceleration_block, _kernel, fresh_symbols, stabilized_gamma
+from lagcomp.ir import DirectionalSolve, Kernel
 from lagcomp.mechanics.lagrange import EOM
 from lagcomp.model.system import t
 
@@ -38,15 +39,16 @@ DIRECTIONAL_ARGS = ("t", "y", "p", "v", "w", "ydot", "out")
 
 #: The docstring of every ``rhs_directional`` kernel: what it computes; `directional_kernel` adds how.
 RHS_DIRECTIONAL_DOC = (
-    "f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (bitwise),\n"
+    "f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),\n"
     "out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).\n"
-    "Symbolic, no differences: the product the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`\n"
-    "give, to rounding, at the cost of one extra substitution (the sensitivities' kernel for few columns).\n"
+    "Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`\n"
+    "to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).\n"
 )
 
 
 def directional_kernel(eom: EOM, mapping, loads) -> Kernel:
-    """``rhs_directional`` of `eom`, unconstrained (LDLᵀ of M) or constrained (one ``kkt_solve`` of K)."""
+    """``rhs_directional`` of `eom`, unconstrained (LDLᵀ of M) or constrained (``kkt_solve`` of K), one CSE for
+    f and the direction (`lagcomp.ir.DirectionalSolve` orders it around the solve)."""
     n = eom.n
     variables = (*eom.q, *eom.qd, *eom.parameters)
     taken = {s.name for s in (*variables, t)}
@@ -56,31 +58,33 @@ def directional_kernel(eom: EOM, mapping, loads) -> Kernel:
     sources = [f"v[{i}]" for i in range(2 * n)] + [f"w[{j}]" for j in range(len(eom.parameters))]
     mapping = {**mapping, **{d: sp.Symbol(local, real=True) for d, local in zip(directions, locals_, strict=True)}}
     loads = loads + tuple(zip(locals_, sources, strict=True))
+    velocities = [(f"ydot[{i}]", eom.qd[i]) for i in range(n)]
     velocity_rows = [(f"out[{i}]", directions[n + i]) for i in range(n)]
     if eom.k:
         residual, mapping, loads = _augmented_residual(eom, mapping, loads)
-        size = n + eom.k
-        stores = _matrix_stores(eom) + [(f"_kkt[{r}, {size}]", _contracted(row, directions))
-                                        for r, row in enumerate(_partials(residual, variables))]
-        solve = AugmentedSolve(size=size, mass_block=n, first=0, count=n, offset=n)
-        how = ("K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ) from `rhs_and_reactions`, K = [M −Λᵀ; Λ 0], r with\n"
-               "the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).\n"
-               "Returns 0, or j > 0 as `rhs` does, or when the factorization of K finds pivot j zero; `out` is then "
-               "invalid.")
-        multipliers = eom.k
+        size, k = n + eom.k, eom.k
+        right = [*eom.F, *stabilized_gamma(eom)]
+        first = velocities + _matrix_stores(eom) + [(f"_kkt[{r}, {size}]", right[r]) for r in range(size)]
+        second = velocity_rows + [(f"_direction[{r}, {size}]", _contracted(row, directions))
+                                  for r, row in enumerate(_partials(residual, variables))]
+        solved = tuple(f"_acc{i}" for i in range(n)) + tuple(f"_mult{c}" for c in range(k))
+        solve = DirectionalSolve(n=n, phase_one=len(first), solved=solved, multipliers=k)
+        how = ("K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃\n"
+               "with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).\n"
+               "Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid.")
     else:
         block, m, mapping, loads = _acceleration_block(eom, variables, mapping, loads)
-        f = tuple(f"_f{i}" for i in range(n))
-        stores = [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
-        stores += [(f[i], _contracted(row, directions)) for i, row in enumerate(block)]
-        solve = LinearSolve(n=n, m=m, f=f, offset=n, unrolled=n <= UNROLL_MAX)
-        how = ("M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ from `rhs`; out = (v[n:], da) (see "
-               "lagcomp.codegen.directional).\n"
-               "Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive; `out` is then "
-               "invalid.")
-        multipliers = 0
-    return _kernel("rhs_directional", RHS_DIRECTIONAL_DOC + how, DIRECTIONAL_ARGS, velocity_rows + stores, mapping,
-                   loads, solve=DirectionalSolve(solve=solve, multipliers=multipliers))
+        f, g = tuple(f"_f{i}" for i in range(n)), tuple(f"_g{i}" for i in range(n))
+        first = velocities + [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
+        first += list(zip(f, eom.F, strict=True))
+        second = velocity_rows + [(g[i], _contracted(row, directions)) for i, row in enumerate(block)]
+        solve = DirectionalSolve(n=n, phase_one=len(first), solved=tuple(f"_acc{i}" for i in range(n)), m=m, f=f,
+                                 g=g, unrolled=n <= UNROLL_MAX)
+        how = ("M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)\n"
+               "(see lagcomp.codegen.directional).\n"
+               "Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid.")
+    return _kernel("rhs_directional", RHS_DIRECTIONAL_DOC + how, DIRECTIONAL_ARGS, first + second, mapping, loads,
+                   solve=solve)
 
 
 def _contracted(row, directions):

@@ -217,9 +217,13 @@ class SensitivityKernels:
 
 
 #: The most columns whose derivatives the closure takes along each column (``rhs_directional``, one call per
-#: column) rather than from the full Jacobians J and ∂f/∂p (`augmented_rhs`); chosen by measurement
-#: (`bench.bench_sensitivities`).
-DIRECTIONAL_MAX_COLUMNS = 2
+#: column, `directional_rhs`) rather than from the full Jacobians J and ∂f/∂p (`augmented_rhs`), without and with
+#: a parameter's column among them (then the full path calls ``rhs_parameter_jacobian`` too).  Measured
+#: (``python -m bench.bench_sensitivities --calls``, ns per call of the augmented rhs, full / directional): one
+#: initial-state column 150 / 104 (double pendulum), 424 / 346 (5-link), 1132 / 598 (free axle); two: 302 / 362,
+#: 464 / 665, 1178 / 1171; one of them a parameter's: 383 / 228, 890 / 698, 2195 / 1169; three with a
+#: parameter's: 417 / 277, 1273 / 1405, 2209 / 1740.
+DIRECTIONAL_MAX_COLUMNS = {False: 1, True: 2}
 
 #: {(generated module, n, parameter columns, scale, directional): SensitivityKernels}, for the process.
 _AUGMENTED: dict = {}
@@ -237,7 +241,8 @@ def run_kernels(model, method, cols: Columns, scale: float):
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
     """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (its closure compiled at
     first use)."""
-    directional = cols.k <= DIRECTIONAL_MAX_COLUMNS and hasattr(module, "rhs_directional")  # (not Kane modules)
+    directional = (cols.k <= DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)]
+                   and hasattr(module, "rhs_directional"))  # (Kane modules have none)
     key = (module, n, cols.parameters, scale, directional)  # (the initial-state columns: as y's size says)
     with _LOCK:
         if key not in _AUGMENTED:
@@ -255,7 +260,7 @@ def directional_rhs(rhs_directional, n: int, n_parameters: int, parameter_column
     """``rhs(t, y, p, out) -> int`` of the augmented state as `augmented_rhs` computes it, column by column: out
     = (f(x), J S[:, c] + scale ∂f/∂p_j) by one call of the module's ``rhs_directional`` per column c, along
     (S[:, c], w_c), w_c = scale e_j for the column of parameter j, else 0.  The first call writes f (bitwise
-    ``rhs``'s); the others write theirs into the last n floats of p's work space.  For few columns: each call
+    ``rhs``'s, to rounding); the others write theirs into the last n floats of p's work space.  For few columns: each call
     costs about one ``rhs`` and one substitution, against N (N + P) entries and N + P substitutions for the
     full Jacobians."""
     k_parameters = len(parameter_columns)
