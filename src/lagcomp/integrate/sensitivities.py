@@ -259,10 +259,10 @@ def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale:
 def directional_rhs(rhs_directional, n: int, n_parameters: int, parameter_columns: tuple[int, ...], scale: float):
     """``rhs(t, y, p, out) -> int`` of the augmented state as `augmented_rhs` computes it, column by column: out
     = (f(x), J S[:, c] + scale ∂f/∂p_j) by one call of the module's ``rhs_directional`` per column c, along
-    (S[:, c], w_c), w_c = scale e_j for the column of parameter j, else 0.  The first call writes f (bitwise
-    ``rhs``'s, to rounding); the others write theirs into the last n floats of p's work space.  For few columns: each call
-    costs about one ``rhs`` and one substitution, against N (N + P) entries and N + P substitutions for the
-    full Jacobians."""
+    (S[:, c], w_c), w_c = scale e_j for the column of parameter j, else 0.  The first call writes f (``rhs``'s
+    to rounding: another CSE); the others write theirs into the last n floats of p's work space.  Each call
+    costs about one ``rhs`` and one substitution, against N (N + P) entries and N + P substitutions for the full
+    Jacobians: the path for few columns (`DIRECTIONAL_MAX_COLUMNS`)."""
     k_parameters = len(parameter_columns)
     directions = np.zeros((1 + k_parameters, n_parameters))   # row 0 for the initial-state columns
     for c, j in enumerate(parameter_columns):
