@@ -1,26 +1,38 @@
 """What forward sensitivities cost: a run with k columns against a plain run, in one process.
 
-    python -m bench.bench_sensitivities [--t-end 1000] [--rtol 1e-10] [--repeats 7]
+    python -m bench.bench_sensitivities [--t-end 1000] [--rtol 1e-10] [--repeats 7] [--calls]
 
 For each model (the double pendulum, n = 2; a 5-link pendulum, n = 5, both from a regular state; the free
 axle, n = 5 with 3 constraints (Lagrange multipliers: its kernels solve the augmented system), from its launch)
-and k = 1 (∂y/∂θ₁(0); the free axle's ∂y/∂g) and k = 2n (every initial-state component), and each
-`sensitivity_control` ("state": the plain run's steps; "both": the norm covers the sensitivities too, more
-steps): DOP853 at rtol = atol, the median over `--repeats` interleaved pairs of (time with k columns) / (time
-of the plain run), and the same per accepted step.
-Issue #22's target is a ratio ≤ 1.2 (1 + k).  Each evaluation of the augmented rhs
-(`lagcomp.integrate.sensitivities.augmented_rhs`) calls the module's ``rhs_with_jacobian`` (f and J in
-one call, J written straight into its work space, M's LDLᵀ written out for n ≤ 6), then forms J S.
+and k = 1 (∂y/∂θ₁(0); the free axle's ∂y/∂g), k = 2 (θ(0) of the double pendulum, θ₁(0), θ₂(0) of the 5-link,
+the free axle's ∂y/∂(g, α)) and k = 2n (every initial-state component), and each `sensitivity_control`
+("state": the plain run's steps; "both": the norm covers the sensitivities too, more steps): DOP853 at rtol =
+atol, the median over `--repeats` interleaved triples of (time with k columns) / (time of the plain run), and
+the same per accepted step, for both ways `lagcomp.integrate.sensitivities` evaluates J S: the full Jacobians
+("jacobian": ``rhs_with_jacobian``, or with a parameter's column ``rhs_with_full_jacobian``, then J S) and one
+``rhs_directional`` per column ("directional").  It takes the second for one column, or two with a parameter's
+(`DIRECTIONAL_MAX_COLUMNS`), from ``--calls``: ns per call of each path's augmented rhs at one state, k = 1 to 2n.
+Issue #22's target is a ratio ≤ 1.2 (1 + k).
 
-Measured (``--t-end 300 --repeats 5``, the "state" rows; the "both" rows take 1.3-1.5× the steps):
-double pendulum 3.2× (k = 1), 3.7× (k = 4); 5-link 3.0× (k = 1), 6.1× (k = 10).  Before
-``rhs_with_jacobian`` (``rhs``, then ``rhs_jacobian`` calling ``rhs`` again, copying J from a work
-array and solving by M in loops): 5.2×, 5.7×, 6.0×, 9.2×; with it but the loops: 4.2×, 4.8×, 4.8×, 7.8×.
-With the defaults (t in [0, 1000], 7 repeats): 3.02×, 3.64×, 3.02×, 6.18× (before: 5.65×, 5.85×, 6.03×, 9.29×).
-The free axle (``--t-end 300 --repeats 5``, "state"): 6.5× (k = 1, ∂y/∂g: ``rhs_with_jacobian`` and
-``rhs_parameter_jacobian`` each solve the augmented system for (q̈, λ) and factor it again for their columns),
-5.05× (k = 10, within 1.2 (1 + k) = 13.2); 8.1× and 5.8× when those kernels called ``rhs`` and ``reactions``
-apart instead of ``rhs_and_reactions``.
+Measured (``--t-end 300 --repeats 5``), jacobian × / directional × ("state"; "both"):
+  k = 1   double pendulum 3.14 / 2.36; 4.07 / 2.99 (1.33× the steps, 2.25 per step)   target 2.4
+          5-link          2.96 / 1.89; 4.14 / 2.65 (1.47× the steps)
+          free axle       4.59 / 1.99; 4.45 / 1.98
+  k = 2   double pendulum 3.25 / 3.77; 4.22 / 4.88                                     target 3.6
+          5-link          3.35 / 3.46; 4.65 / 4.85
+          free axle       4.86 / 3.71; 4.95 / 3.84 (two parameters' columns)
+  k = 2n  double pendulum 3.65; 4.70 (k = 4, target 6.0); 5-link 6.02; 8.10 (k = 10, target 13.2);
+          free axle 4.94; 5.14 (k = 10)
+Before the directional path and ``rhs_with_full_jacobian`` (the same command at 6f5c921): k = 1 3.28, 3.01,
+6.56 ("state"), 4.23, 4.21, 6.15 ("both"); free axle k = 10 5.15, 5.19.  Per call (``--calls``), jacobian /
+directional ns: one initial-state column 148 / 105 (double pendulum), 424 / 249 (5-link), 1123 / 591 (free
+axle; ``rhs`` 37, 113, 271); two 152 / 192, 464 / 481, 1159 / 1159; one parameter's 193 / 104, 580 / 247,
+1526 / 595 (with ``rhs_with_jacobian`` and ``rhs_parameter_jacobian`` apart: 315, 855, 2116); two with a
+parameter's 200 / 193, 621 / 478, 1549 / 1167; three 204 / 277, 658 / 710, 1587 / 1746.
+Earlier: ``rhs_with_jacobian`` (f and J in one call, J written straight into its work space, M's LDLᵀ written
+out for n ≤ 6) took the "state" k = 1 rows from 5.2×, 6.0× (``rhs``, then ``rhs_jacobian`` calling ``rhs``
+again, copying J and solving by M in loops) to 3.2×, 3.0×; the free axle's kernels calling
+``rhs_and_reactions`` instead of ``rhs`` and ``reactions`` apart from 8.1× to 6.5×.
 """
 
 from __future__ import annotations

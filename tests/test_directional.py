@@ -1,9 +1,11 @@
 """``rhs_directional`` (lagcomp.codegen.directional): f and J v + (∂f/∂p) w in one kernel, and the sensitivity
-runs that use it for few columns (issue 22).
+runs that use it for few columns (issue 22); ``rhs_with_full_jacobian``, f and [J | ∂f/∂p] from one
+factorization, which they use for more columns with a parameter's.
 
-(a) Against the full Jacobians' product: ``rhs_with_jacobian`` and ``rhs_parameter_jacobian`` at the same state,
-    J v + Jp w, to rounding (1e-13 of |J| |v| + |Jp| |w|, the size of the terms the sums add), and f against
-    ``rhs`` alike: hypothesis over directions for the double pendulum and the free axle (Baumgarte gains on,
+(a) Against the full Jacobians' product J v + Jp w (``rhs_with_jacobian``, ``rhs_parameter_jacobian`` at the
+    same state) to rounding, 1e-13 of |J| |v| + |Jp| |w| (the size of the terms the sums add), f against
+    ``rhs`` alike, and ``rhs_with_full_jacobian`` against [J | Jp] to 1e-12 of their largest entry:
+    hypothesis over directions for the double pendulum and the free axle (Baumgarte gains on,
     a state off the constraint manifold), over random systems with and without constraints (the module as
     plain Python; `RANDOM_TOLERANCE`), and a 13-link chain, whose M is solved by loops (n > UNROLL_MAX).
 (b) Against central differences of ``rhs`` along (v, w), extrapolated twice (Richardson), to 1e-10 relative.
@@ -39,6 +41,10 @@ def _product_errors(kernels, y, p, v, w, n_parameters, t=0.3) -> tuple[float, fl
     f, J, Jp = np.empty(N), np.empty((N, N)), np.empty((N, n_parameters))
     assert kernels["rhs_with_jacobian"](t, y, p, f, J) == 0
     assert kernels["rhs_parameter_jacobian"](t, y, p, Jp) == 0
+    full, both = np.full(N, np.nan), np.full((N, N + n_parameters), np.nan)
+    assert kernels["rhs_with_full_jacobian"](t, y, p, full, both) == 0
+    assert np.array_equal(full, f)  # (both call rhs)
+    assert np.abs(both - np.hstack([J, Jp])).max() <= 1e-12 * max(np.abs(J).max(), np.abs(Jp).max())
     ydot, out = np.full(N, np.nan), np.full(N, np.nan)
     assert kernels["rhs_directional"](t, y, p, v, w, ydot, out) == 0
     size = np.abs(J) @ np.abs(v) + np.abs(Jp) @ np.abs(w[:n_parameters])
@@ -48,7 +54,7 @@ def _product_errors(kernels, y, p, v, w, n_parameters, t=0.3) -> tuple[float, fl
 
 def _kernels(model) -> dict:
     return {name: getattr(model.kernels, name) for name in ("rhs", "rhs_with_jacobian", "rhs_parameter_jacobian",
-                                                           "rhs_directional")}
+                                                           "rhs_with_full_jacobian", "rhs_directional")}
 
 
 @pytest.fixture(scope="module", params=["double_pendulum", "free_axle"])
@@ -129,9 +135,11 @@ def test_a_long_chain_solves_by_loops(cache_dir):
 
 
 @pytest.mark.parametrize(("name", "columns"), [("double_pendulum", "theta1"), ("double_pendulum", ("theta2", "m2")),
-                                               ("free_axle", "g")])
+                                               ("double_pendulum", ("theta1", "theta2", "m2")), ("free_axle", "g"),
+                                               ("free_axle", ("g", "alpha", "m"))])
 def test_runs_through_either_path_agree(compiled, monkeypatch, name, columns):
-    """(c): the same run with the directional path (the default for these columns) and the full Jacobians'."""
+    """(c): the same run with the directional path and the full Jacobians' (``rhs_with_full_jacobian`` where a
+    parameter's column is among them)."""
     model = compiled(name)
     q0 = None if model.k else (0.5, 0.2)
     runs = {}

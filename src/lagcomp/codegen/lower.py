@@ -561,6 +561,37 @@ def _rhs_parameter_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+#: The docstring of every ``rhs_with_full_jacobian`` kernel: what it computes; the emitters add how.
+RHS_WITH_FULL_JACOBIAN_DOC = (
+    "f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =\n"
+    "[∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the\n"
+    "model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel\n"
+    "for parameter columns).\n"
+)
+
+
+def _rhs_with_full_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """``rhs_with_full_jacobian``: `_rhs_jacobian_kernels`' rows along (q, q̇) and the parameters together,
+    M ∂a/∂x = ∂(F − M ā)/∂x |_{ā = a} for x = (y, p), one CSE, one LDLᵀ of M and 2n + P substitutions
+    (`JacobianSolve` with ``columns`` = 2n + P), where ``rhs_with_jacobian`` and ``rhs_parameter_jacobian`` call
+    `rhs` and factor M each."""
+    n, width = eom.n, 2 * eom.n + len(eom.parameters)
+    block, m, mapping, loads = _acceleration_block(eom, (*eom.q, *eom.qd, *eom.parameters), mapping, loads)
+    stores = [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
+    stores += [(jacobian_entry(i, n + i, width), sp.S.One) for i in range(n)]
+    stores += [(jacobian_entry(n + i, j, width), block[i][j])
+               for i in range(n) for j in range(width) if block[i][j] != 0]
+    return _kernel(
+        "rhs_with_full_jacobian",
+        RHS_WITH_FULL_JACOBIAN_DOC +
+        "Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).\n"
+        "Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`\n"
+        "was within rounding of its threshold); `out` is then invalid.",
+        WITH_JACOBIAN_ARGS, stores, mapping, loads,
+        solve=JacobianSolve(n=n, size=2 * n, m=m, columns=width, given_ydot=True),
+    )
+
+
 def dae_size(eom: EOM) -> int:
     """N' = 3n + k + kh, the length of the DAE state z = (q, v, w, λ, μ) of a constrained system."""
     return 3 * eom.n + eom.k + len(eom.Phi)
@@ -794,7 +825,7 @@ def lower(eom: EOM) -> ModuleIR:
         # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
         first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled and not eom.system.inputs else (rhs,)
         first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads),
-                  directional_kernel(eom, mapping, loads))
+                  _rhs_with_full_jacobian_kernel(eom, mapping, loads), directional_kernel(eom, mapping, loads))
     kernels = first + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",

@@ -199,7 +199,8 @@ def run_parameters(p: np.ndarray, model, cols: Columns) -> np.ndarray:
 
 
 def work_size(n: int, n_parameters: int, cols: Columns) -> int:
-    """Floats at the end of p that `augmented_rhs` uses: J (n, n) last, before it ∂f/∂p (n, P) if asked."""
+    """Floats at the end of p that `augmented_rhs` uses: J (n, n) last, before it ∂f/∂p (n, P) if asked
+    (`full_jacobian_rhs`: [J | ∂f/∂p] (n, n + P) in the same floats)."""
     return n * n + (n * n_parameters if cols.parameters else 0)
 
 
@@ -217,12 +218,11 @@ class SensitivityKernels:
 
 
 #: The most columns whose derivatives the closure takes along each column (``rhs_directional``, one call per
-#: column, `directional_rhs`) rather than from the full Jacobians J and ∂f/∂p (`augmented_rhs`), without and with
-#: a parameter's column among them (then the full path calls ``rhs_parameter_jacobian`` too).  Measured
-#: (``python -m bench.bench_sensitivities --calls``, ns per call of the augmented rhs, full / directional): one
-#: initial-state column 150 / 104 (double pendulum), 424 / 346 (5-link), 1132 / 598 (free axle); two: 302 / 362,
-#: 464 / 665, 1178 / 1171; one of them a parameter's: 383 / 228, 890 / 698, 2195 / 1169; three with a
-#: parameter's: 417 / 277, 1273 / 1405, 2209 / 1740.
+#: column, `directional_rhs`) rather than from the full Jacobians (`augmented_rhs`, `full_jacobian_rhs`), without
+#: and with a parameter's column among them.  Measured (``python -m bench.bench_sensitivities --calls``, ns per
+#: call of the augmented rhs, full / directional, double pendulum, 5-link, free axle): one column 148 / 105,
+#: 424 / 249, 1123 / 591; two 152 / 192, 464 / 481, 1159 / 1159; a parameter's 193 / 104, 580 / 247,
+#: 1526 / 595; two with a parameter's 200 / 193, 621 / 478, 1549 / 1167; three 204 / 277, 658 / 710, 1587 / 1746.
 DIRECTIONAL_MAX_COLUMNS = {False: 1, True: 2}
 
 #: {(generated module, n, parameter columns, scale, directional): SensitivityKernels}, for the process.
@@ -248,6 +248,8 @@ def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale:
         if key not in _AUGMENTED:
             if directional:
                 rhs = directional_rhs(module.rhs_directional, n, n_parameters, cols.parameters, scale)
+            elif cols.parameters and hasattr(module, "rhs_with_full_jacobian"):
+                rhs = full_jacobian_rhs(module.rhs_with_full_jacobian, n, n_parameters, cols.parameters, scale)
             else:
                 parameter_jacobian = module.rhs_parameter_jacobian if cols.parameters else None
                 rhs = augmented_rhs(module.rhs_with_jacobian, parameter_jacobian, n, n_parameters, cols.parameters,
@@ -327,6 +329,33 @@ def augmented_rhs(rhs_with_jacobian, parameter_jacobian, n: int, n_parameters: i
             j = columns_p[c]
             for i in range(n):
                 out[base + i] += scale * Jp[i, j]
+        return 0
+    return full_rhs
+
+
+def full_jacobian_rhs(rhs_with_full_jacobian, n: int, n_parameters: int, parameter_columns: tuple[int, ...],
+                      scale: float):
+    """`augmented_rhs` with parameter columns from one call of the module's ``rhs_with_full_jacobian``: f and
+    [J | ∂f/∂p] (n, n + n_parameters) written into the work space at the end of p, from one solve for f and one
+    factorization of M (K) for both, where ``rhs_with_jacobian`` and ``rhs_parameter_jacobian`` take two each."""
+    k_parameters = len(parameter_columns)
+    columns_p = n + np.array(parameter_columns, dtype=np.int64)
+    width = n + n_parameters
+
+    @njit(error_model="numpy", nogil=True)
+    def full_rhs(t, y, p, out):
+        end = p.shape[0]
+        jacobians = p[end - n * width:].reshape((n, width))
+        status = rhs_with_full_jacobian(t, y[:n], p, out[:n], jacobians)
+        if status != 0:
+            return status
+        k = y.shape[0] // n - 1
+        _multiply(jacobians[:, :n], y, out, n, k)
+        for c in range(k_parameters):
+            base = n * (1 + k - k_parameters + c)
+            j = columns_p[c]
+            for i in range(n):
+                out[base + i] += scale * jacobians[i, j]
         return 0
     return full_rhs
 
