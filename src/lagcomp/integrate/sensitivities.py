@@ -5,15 +5,19 @@ For y' = f(t, y, p) with y (N,), the sensitivities S = ∂y(t)/∂(y0_c, p_j) of
     S' = J(t, y) S (+ ∂f/∂p_j in the column of parameter p_j),   S(0) = e_c (0 for a parameter),
 
 J = ∂f/∂y the model's exact Jacobian (emitted from the symbolic equations: ``rhs_with_jacobian`` writes f and
-J in one call) and ∂f/∂p its ``rhs_parameter_jacobian``.
+J in one call) and ∂f/∂p its ``rhs_parameter_jacobian`` (both at once, from one factorization of M or K:
+``rhs_with_full_jacobian``).
 The run integrates the augmented state (y, S[:, 0], ..., S[:, k-1]) of
 N (1 + k) components with the library's embedded Runge-Kutta driver (dop853, dopri5, tsit5, bs3), which
-takes as its ``rhs`` a small numba function (`augmented_rhs`) evaluating f and J S: a closure over the
-model's kernels, compiled at the first run that needs it and kept for the process (`_AUGMENTED`), as
+takes as its ``rhs`` a small numba function evaluating f and J S: a closure over the model's kernels,
+compiled at the first run that needs it and kept for the process (`_AUGMENTED`), as
 `lagcomp.integrate.function_inputs` does for its wrappers.  The model's kernels and the driver are not
-compiled again.  J (N, N) and ∂f/∂p (N, P) are written into work space at the end of the run's p (the
-kernels read p only up to their parameters and input tables): a call allocates only what the kernels do
-(the factor of M in their LDLᵀ).
+compiled again.  For one column (two with a parameter's: `DIRECTIONAL_MAX_COLUMNS`, measured) it calls the
+emitted ``rhs_directional`` once per column (`directional_rhs`: f and J S[:, c] + ∂f/∂p w_c from one CSE, at
+about the cost of ``rhs`` and a substitution; `lagcomp.codegen.directional`); for more, the full Jacobians
+(`augmented_rhs`, `full_jacobian_rhs`), J (N, N) and ∂f/∂p (N, P) written into work space at the end of the
+run's p (the kernels read p only up to their parameters and input tables): a call allocates only what the
+kernels do (the factor of M in their LDLᵀ).  Kane modules have neither new kernel: the full Jacobians apart.
 
 Error control (``sensitivity_control``).  The embedded driver's error norm runs over every component of the
 state it is given, with one scalar ``rtol``/``atol``, and restricting it to the first N components would
