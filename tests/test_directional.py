@@ -7,7 +7,7 @@ factorization, which they use for more columns with a parameter's.
     ``rhs`` alike, and ``rhs_with_full_jacobian`` against [J | Jp] to 1e-12 of their largest entry:
     hypothesis over directions for the double pendulum and the free axle (Baumgarte gains on,
     a state off the constraint manifold), over random systems with and without constraints (the module as
-    plain Python; `RANDOM_TOLERANCE`), and a 13-link chain, whose M is solved by loops (n > UNROLL_MAX).
+    plain Python; `RANDOM_TOLERANCE`).  A larger system (n > LARGEST_SYSTEM) has neither kernel.
 (b) Against central differences of ``rhs`` along (v, w), extrapolated twice (Richardson), to 1e-10 relative.
 (c) Sensitivity runs through the directional path against the full Jacobians' path: as many steps under
     "state" control, the end state to 1e-12 and the end sensitivities to 1e-10 relative.
@@ -119,19 +119,18 @@ def test_random_systems_directional_is_the_jacobians_product(seed):
     assert f_error <= RANDOM_TOLERANCE and error <= 100 * RANDOM_TOLERANCE, (mech.description, f_error, error)
 
 
-def test_a_long_chain_solves_by_loops(cache_dir):
-    """n = 13 > UNROLL_MAX: M gathered and solved by ``ldlt_solve`` for f, then again for the direction."""
+def test_a_larger_system_takes_the_full_jacobians(cache_dir):
+    """n = 7 > LARGEST_SYSTEM: no ``rhs_directional`` nor ``rhs_with_full_jacobian`` is emitted (their sums cost
+    every model codegen time), and one column's closure is the full Jacobians'."""
     import lagcomp as lc
     from lagcomp import examples
+    from lagcomp.codegen.directional import LARGEST_SYSTEM
 
-    model = lc.compile(examples.get("n_link_pendulum", n=13), cache_dir=cache_dir)
-    source = model.source_path.read_text(encoding="utf-8")
-    assert "gg = np.array((" in source
-    module = python_kernels(source)
-    rng = np.random.default_rng(3)
-    y, P = rng.uniform(-0.5, 0.5, 26), len(model.parameters)
-    f_error, error = _product_errors(module, y, model.parameter_vector(), rng.normal(size=26), rng.normal(size=P), P)
-    assert f_error <= 1e-14 and error <= PRODUCT_TOLERANCE, (f_error, error)
+    model = lc.compile(examples.get("n_link_pendulum", n=LARGEST_SYSTEM + 1), cache_dir=cache_dir)
+    assert not hasattr(model.kernels, "rhs_directional") and not hasattr(model.kernels, "rhs_with_full_jacobian")
+    cols = sensitivities.columns(model, ("theta1", "m1"))
+    kernels = sensitivities.sensitivity_kernels(model.kernels, model.state_size, len(model.parameters), cols, 1.0)
+    assert kernels is sensitivities._AUGMENTED[(model.kernels, model.state_size, cols.parameters, 1.0, False)]
 
 
 @pytest.mark.parametrize(("name", "columns"), [("double_pendulum", "theta1"), ("double_pendulum", ("theta2", "m2")),

@@ -153,8 +153,8 @@ class DirectionalSolve:
     multipliers' view), and the loads of `solved` (the accelerations ā, multipliers λ̄ the residual's partials
     are taken at), the temporaries that read them, and the other stores follow: the direction's right-hand side
     into the locals `g` (or the last column of ``_direction``, a copy of K made before the first solve), which a
-    second substitution by the same LDLᵀ of M (a second ``kkt_solve``) turns into ``out[n:]``.  `unrolled`:
-    the LDLᵀ written out (n ≤ `lagcomp.codegen.lower.UNROLL_MAX`), else ``ldlt_solve`` twice.
+    second substitution by the same LDLᵀ of M, written out (n is small: `lagcomp.codegen.directional`), or a
+    second ``kkt_solve``, turns into ``out[n:]``.
     """
 
     n: int
@@ -164,7 +164,6 @@ class DirectionalSolve:
     m: tuple[tuple[str, ...], ...] = ()
     f: tuple[str, ...] = ()
     g: tuple[str, ...] = ()
-    unrolled: bool = True
 
 
 @dataclass(frozen=True)

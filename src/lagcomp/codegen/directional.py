@@ -28,10 +28,18 @@ import symengine as se
 import sympy as sp
 
 from lagcomp.codegen.constrained_jacobian import _augmented_residual, _matrix_stores, _partials
-from lagcomp.codegen.lower import UNROLL_MAX, _acceleration_block, _kernel, fresh_symbols, stabilized_gamma
+from lagcomp.codegen.lower import _acceleration_block, _kernel, fresh_symbols, stabilized_gamma
 from lagcomp.ir import DirectionalSolve, Kernel
 from lagcomp.mechanics.lagrange import EOM
 from lagcomp.model.system import t
+
+#: The largest n whose module has ``rhs_directional`` (and, unconstrained, ``rhs_with_full_jacobian``): their
+#: sums over the 2n + P columns grow as the full Jacobians do, and are paid by every model at codegen.  Measured
+#: for the n-link chain at n = 12 (`lagcomp.compile` 2.3 → 3.4 s, ``rhs_directional`` 4786 operations after CSE
+#: against 966 for ``rhs``, and its numba compilation at the first sensitivity run 3.7 → 8.0 s); at n = 5: 0.44 →
+#: 0.64 s, 834 operations, first sensitivity run 1.7 → 1.5 s (it replaces two kernels there).  Larger systems'
+#: sensitivities take the full Jacobians.
+LARGEST_SYSTEM = 6
 
 #: The arguments of every ``rhs_directional`` kernel: the direction (v (N,), w (P,)), then f into ``ydot``
 #: (N,) and the derivative into ``out`` (N,).
@@ -47,8 +55,9 @@ RHS_DIRECTIONAL_DOC = (
 
 
 def directional_kernel(eom: EOM, mapping, loads) -> Kernel:
-    """``rhs_directional`` of `eom`, unconstrained (LDLᵀ of M) or constrained (``kkt_solve`` of K), one CSE for
-    f and the direction (`lagcomp.ir.DirectionalSolve` orders it around the solve)."""
+    """``rhs_directional`` of `eom` (n ≤ `LARGEST_SYSTEM`), unconstrained (LDLᵀ of M, written out) or constrained
+    (``kkt_solve`` of K), one CSE for f and the direction (`lagcomp.ir.DirectionalSolve` orders it around the
+    solve)."""
     n = eom.n
     variables = (*eom.q, *eom.qd, *eom.parameters)
     taken = {s.name for s in (*variables, t)}
@@ -79,7 +88,7 @@ def directional_kernel(eom: EOM, mapping, loads) -> Kernel:
         first += list(zip(f, eom.F, strict=True))
         second = velocity_rows + [(g[i], _contracted(row, directions)) for i, row in enumerate(block)]
         solve = DirectionalSolve(n=n, phase_one=len(first), solved=tuple(f"_acc{i}" for i in range(n)), m=m, f=f,
-                                 g=g, unrolled=n <= UNROLL_MAX)
+                                 g=g)
         how = ("M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)\n"
                "(see lagcomp.codegen.directional).\n"
                "Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid.")

@@ -142,7 +142,7 @@ def kernel_support_names(kernels) -> set[str]:
         if isinstance(solve, AugmentedSolve) or isinstance(solve, DirectionalSolve) and solve.multipliers:
             names.add("kkt_solve")
         elif isinstance(solve, DirectionalSolve):
-            names.add("PIVOT_TOLERANCE" if solve.unrolled else "ldlt_solve")
+            names.add("PIVOT_TOLERANCE")
         elif isinstance(solve, LinearSolve):
             names.add("PIVOT_TOLERANCE" if solve.unrolled or kernel.lanes else "ldlt_solve")
         elif isinstance(solve, JacobianSolve):
@@ -339,14 +339,6 @@ def _directional_body(kernel: Kernel) -> list[str]:
         body += [f"_status = kkt_solve(_direction, {n})", "if _status:", f"{INDENT}return _status"]
         return body + [f"out[{n + i}] = _direction[{i}, {size}]" for i in range(n)] + ["return 0"]
     body += temps[False] + stores[:solve.phase_one]
-    if not solve.unrolled:
-        call = f"ldlt_solve(mm, {{}}, {{}}, {n})"
-        body += ["# Solve M x = f by LDLᵀ (loops), then the direction by a second one."]
-        body += _gathered_matrix(n, solve.m, symmetric=False) + [f"ff = np.array(({', '.join(solve.f)},))"]
-        body += [f"_status = {call.format('ff', '_ydot')}", "if _status:", f"{INDENT}return _status"]
-        body += solved + temps[True] + stores[solve.phase_one:]
-        body += _gathered_matrix(n, solve.m, symmetric=False) + [f"gg = np.array(({', '.join(solve.g)},))"]
-        return body + [f"return {call.format('gg', 'out')}"]
     body += ["# Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors."]
     body += _ldlt_factor(n, solve.m) + _ldlt_substitution(n, solve.f)
     body += [f"_ydot[{n + i}] = _x{i}" for i in range(n)]

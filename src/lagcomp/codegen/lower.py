@@ -807,25 +807,28 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 
 def lower(eom: EOM) -> ModuleIR:
-    """Build the IR of the module for `eom`: rhs, its Jacobians ∂f/∂y and ∂f/∂p and its directional derivative
-    (`lagcomp.codegen.directional`), mass_matrix, forcing, energies,
+    """Build the IR of the module for `eom`: rhs, its Jacobians ∂f/∂y and ∂f/∂p (for n ≤
+    `lagcomp.codegen.directional.LARGEST_SYSTEM` both at once too) and its directional derivative (that n
+    only), mass_matrix, forcing, energies,
     momenta, and for constrained systems reactions and their Jacobian (`lagcomp.codegen.constrained_jacobian`),
     constraint residuals and matrix, and the DAE's residual and Jacobian; last the bodies' `geometry`
     (`lagcomp.codegen.geometry`)."""
     n, system = eom.n, eom.system
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
-    from lagcomp.codegen.directional import directional_kernel  # (these import this module)
+    from lagcomp.codegen.directional import LARGEST_SYSTEM, directional_kernel  # (these import this module)
+    directional = (directional_kernel(eom, mapping, loads),) if n <= LARGEST_SYSTEM else ()
     if eom.k:
         from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels
         first = (_constraint_kernels(eom, mapping, loads) + constrained_jacobian_kernels(eom, mapping, loads)
-                 + (directional_kernel(eom, mapping, loads),) + _dae_kernels(eom, mapping, loads))
+                 + directional + _dae_kernels(eom, mapping, loads))
     else:
         rhs = _rhs_kernel(eom, mapping, loads)
         # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
         first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled and not eom.system.inputs else (rhs,)
-        first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads),
-                  _rhs_with_full_jacobian_kernel(eom, mapping, loads), directional_kernel(eom, mapping, loads))
+        first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
+        if directional:
+            first += (_rhs_with_full_jacobian_kernel(eom, mapping, loads), *directional)
     kernels = first + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",

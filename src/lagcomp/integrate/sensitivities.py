@@ -17,7 +17,9 @@ emitted ``rhs_directional`` once per column (`directional_rhs`: f and J S[:, c] 
 about the cost of ``rhs`` and a substitution; `lagcomp.codegen.directional`); for more, the full Jacobians
 (`augmented_rhs`, `full_jacobian_rhs`), J (N, N) and ∂f/∂p (N, P) written into work space at the end of the
 run's p (the kernels read p only up to their parameters and input tables): a call allocates only what the
-kernels do (the factor of M in their LDLᵀ).  Kane modules have neither new kernel: the full Jacobians apart.
+kernels do (the factor of M in their LDLᵀ).  Kane modules and systems larger than
+`lagcomp.codegen.directional.LARGEST_SYSTEM` have no ``rhs_directional`` (unconstrained: nor
+``rhs_with_full_jacobian``): the full Jacobians, apart where need be.
 
 Error control (``sensitivity_control``).  The embedded driver's error norm runs over every component of the
 state it is given, with one scalar ``rtol``/``atol``, and restricting it to the first N components would
