@@ -23,6 +23,8 @@ Measured (``--t-end 300 --repeats 5``), jacobian × / directional × ("state"; "
           free axle       4.86 / 3.71; 4.95 / 3.84 (two parameters' columns)
   k = 2n  double pendulum 3.65; 4.70 (k = 4, target 6.0); 5-link 6.02; 8.10 (k = 10, target 13.2);
           free axle 4.94; 5.14 (k = 10)
+A second run: k = 1 "state" 2.45, 1.91, 2.05 (jacobian 3.28, 3.00, 4.72), "both" 3.17, 2.69, 1.96: the
+ratios move by ~4% between runs on a shared machine.
 Before the directional path and ``rhs_with_full_jacobian`` (the same command at 6f5c921): k = 1 3.28, 3.01,
 6.56 ("state"), 4.23, 4.21, 6.15 ("both"); free axle k = 10 5.15, 5.19.  Per call (``--calls``), jacobian /
 directional ns: one initial-state column 148 / 105 (double pendulum), 424 / 249 (5-link), 1123 / 591 (free
