@@ -1,26 +1,40 @@
 """What forward sensitivities cost: a run with k columns against a plain run, in one process.
 
-    python -m bench.bench_sensitivities [--t-end 1000] [--rtol 1e-10] [--repeats 7]
+    python -m bench.bench_sensitivities [--t-end 1000] [--rtol 1e-10] [--repeats 7] [--calls]
 
 For each model (the double pendulum, n = 2; a 5-link pendulum, n = 5, both from a regular state; the free
 axle, n = 5 with 3 constraints (Lagrange multipliers: its kernels solve the augmented system), from its launch)
-and k = 1 (∂y/∂θ₁(0); the free axle's ∂y/∂g) and k = 2n (every initial-state component), and each
-`sensitivity_control` ("state": the plain run's steps; "both": the norm covers the sensitivities too, more
-steps): DOP853 at rtol = atol, the median over `--repeats` interleaved pairs of (time with k columns) / (time
-of the plain run), and the same per accepted step.
-Issue #22's target is a ratio ≤ 1.2 (1 + k).  Each evaluation of the augmented rhs
-(`lagcomp.integrate.sensitivities.augmented_rhs`) calls the module's ``rhs_with_jacobian`` (f and J in
-one call, J written straight into its work space, M's LDLᵀ written out for n ≤ 6), then forms J S.
+and k = 1 (∂y/∂θ₁(0); the free axle's ∂y/∂g), k = 2 (θ(0) of the double pendulum, θ₁(0), θ₂(0) of the 5-link,
+the free axle's ∂y/∂(g, α)) and k = 2n (every initial-state component), and each `sensitivity_control`
+("state": the plain run's steps; "both": the norm covers the sensitivities too, more steps): DOP853 at rtol =
+atol, the median over `--repeats` interleaved triples of (time with k columns) / (time of the plain run), and
+the same per accepted step, for both ways `lagcomp.integrate.sensitivities` evaluates J S: the full Jacobians
+("jacobian": ``rhs_with_jacobian``, or with a parameter's column ``rhs_with_full_jacobian``, then J S) and one
+``rhs_directional`` per column ("directional").  It takes the second for one column, or two with a parameter's
+(`DIRECTIONAL_MAX_COLUMNS`), from ``--calls``: ns per call of each path's augmented rhs at one state, k = 1 to 2n.
+Issue #22's target is a ratio ≤ 1.2 (1 + k).
 
-Measured (``--t-end 300 --repeats 5``, the "state" rows; the "both" rows take 1.3-1.5× the steps):
-double pendulum 3.2× (k = 1), 3.7× (k = 4); 5-link 3.0× (k = 1), 6.1× (k = 10).  Before
-``rhs_with_jacobian`` (``rhs``, then ``rhs_jacobian`` calling ``rhs`` again, copying J from a work
-array and solving by M in loops): 5.2×, 5.7×, 6.0×, 9.2×; with it but the loops: 4.2×, 4.8×, 4.8×, 7.8×.
-With the defaults (t in [0, 1000], 7 repeats): 3.02×, 3.64×, 3.02×, 6.18× (before: 5.65×, 5.85×, 6.03×, 9.29×).
-The free axle (``--t-end 300 --repeats 5``, "state"): 6.5× (k = 1, ∂y/∂g: ``rhs_with_jacobian`` and
-``rhs_parameter_jacobian`` each solve the augmented system for (q̈, λ) and factor it again for their columns),
-5.05× (k = 10, within 1.2 (1 + k) = 13.2); 8.1× and 5.8× when those kernels called ``rhs`` and ``reactions``
-apart instead of ``rhs_and_reactions``.
+Measured (``--t-end 300 --repeats 5``), jacobian × / directional × ("state"; "both"):
+  k = 1   double pendulum 3.14 / 2.36; 4.07 / 2.99 (1.33× the steps, 2.25 per step)   target 2.4
+          5-link          2.96 / 1.89; 4.14 / 2.65 (1.47× the steps)
+          free axle       4.59 / 1.99; 4.45 / 1.98
+  k = 2   double pendulum 3.25 / 3.77; 4.22 / 4.88                                     target 3.6
+          5-link          3.35 / 3.46; 4.65 / 4.85
+          free axle       4.86 / 3.71; 4.95 / 3.84 (two parameters' columns)
+  k = 2n  double pendulum 3.65; 4.70 (k = 4, target 6.0); 5-link 6.02; 8.10 (k = 10, target 13.2);
+          free axle 4.94; 5.14 (k = 10)
+A second run: k = 1 "state" 2.45, 1.91, 2.05 (jacobian 3.28, 3.00, 4.72), "both" 3.17, 2.69, 1.96: the
+ratios move by ~4% between runs on a shared machine.
+Before the directional path and ``rhs_with_full_jacobian`` (the same command at 6f5c921): k = 1 3.28, 3.01,
+6.56 ("state"), 4.23, 4.21, 6.15 ("both"); free axle k = 10 5.15, 5.19.  Per call (``--calls``), jacobian /
+directional ns: one initial-state column 148 / 105 (double pendulum), 424 / 249 (5-link), 1123 / 591 (free
+axle; ``rhs`` 37, 113, 271); two 152 / 192, 464 / 481, 1159 / 1159; one parameter's 193 / 104, 580 / 247,
+1526 / 595 (with ``rhs_with_jacobian`` and ``rhs_parameter_jacobian`` apart: 315, 855, 2116); two with a
+parameter's 200 / 193, 621 / 478, 1549 / 1167; three 204 / 277, 658 / 710, 1587 / 1746.
+Earlier: ``rhs_with_jacobian`` (f and J in one call, J written straight into its work space, M's LDLᵀ written
+out for n ≤ 6) took the "state" k = 1 rows from 5.2×, 6.0× (``rhs``, then ``rhs_jacobian`` calling ``rhs``
+again, copying J and solving by M in loops) to 3.2×, 3.0×; the free axle's kernels calling
+``rhs_and_reactions`` instead of ``rhs`` and ``reactions`` apart from 8.1× to 6.5×.
 """
 
 from __future__ import annotations
@@ -29,6 +43,16 @@ import argparse
 import time
 
 import numpy as np
+from numba import njit
+
+#: The models: (example, its arguments, the k = 1 and k = 2 columns; the third row takes every initial-state
+#: component).  The free axle's columns are parameters absent from its constraints: its launch stays consistent.
+MODELS = (("double_pendulum", {}, "theta1", "q0"),
+          ("n_link_pendulum", {"n": 5}, "theta1", ("theta1", "theta2")),
+          ("free_axle", {}, "g", ("g", "alpha")))
+#: The two ways `lagcomp.integrate.sensitivities` evaluates J S: the full Jacobians, or ``rhs_directional`` per
+#: column (the value of `DIRECTIONAL_MAX_COLUMNS` that forces each).
+PATHS = (("jacobian", {False: 0, True: 0}), ("directional", {False: 1_000_000, True: 1_000_000}))
 
 
 def _timed(run) -> tuple[object, float]:
@@ -49,29 +73,106 @@ def _runs(model, q0, t_end: float, rtol: float, columns, control):
     return plain, with_columns
 
 
-def measure(t_end: float = 1000.0, rtol: float = 1e-10, repeats: int = 7, cache_dir=None) -> list[dict]:
+def _with_path(limit, run):
+    """`run` with `DIRECTIONAL_MAX_COLUMNS` = `limit` (each path's closure is kept apart, keyed by it)."""
+    from lagcomp.integrate import sensitivities
+
+    def run_on_path():
+        kept, sensitivities.DIRECTIONAL_MAX_COLUMNS = sensitivities.DIRECTIONAL_MAX_COLUMNS, limit
+        try:
+            return run()
+        finally:
+            sensitivities.DIRECTIONAL_MAX_COLUMNS = kept
+    return run_on_path
+
+
+def _model(name, kwargs, cache_dir):
     import lagcomp as lc
     from lagcomp import examples
 
+    model = lc.compile(examples.get(name, **kwargs), cache_dir=cache_dir)
+    # the constrained free axle from its own (consistent) launch
+    return model, (None if model.k else np.linspace(0.5, 0.2, model.n))
+
+
+def measure(t_end: float = 1000.0, rtol: float = 1e-10, repeats: int = 7, cache_dir=None) -> list[dict]:
+    """One row per model, k and control: the time of each path over the plain run's (median of `repeats`
+    interleaved triples: a slow moment of the machine hits all three), and per accepted step."""
     rows = []
-    for name, kwargs in (("double_pendulum", {}), ("n_link_pendulum", {"n": 5}), ("free_axle", {})):
-        model = lc.compile(examples.get(name, **kwargs), cache_dir=cache_dir)
-        # the constrained free axle from its own (consistent) launch, k = 1 a parameter (the launch stays consistent)
-        q0 = None if model.k else np.linspace(0.5, 0.2, model.n)
-        first = "g" if model.k else model.coordinates[0]
-        for columns, control in ((first, "state"), (("q0", "qd0"), "state"), (first, "both"), (("q0", "qd0"), "both")):
-            plain, with_columns = _runs(model, q0, t_end, rtol, columns, control)
-            plain(), with_columns()  # numba compiles (or loads) the kernels and the augmented rhs here
-            ratios, step_ratios = [], []
-            for _ in range(repeats):  # interleaved, so that a slow moment of the machine hits both
-                base, base_time = _timed(plain)
-                sol, sol_time = _timed(with_columns)
-                ratios.append(sol_time / base_time)
-                step_ratios.append((sol_time / sol.nsteps) / (base_time / base.nsteps))
-            k = sol.sensitivities.shape[2]
-            rows.append(dict(model=model.name, n=model.n, k=k, control=control, steps=sol.nsteps,
-                             plain_steps=base.nsteps, ratio=float(np.median(ratios)),
-                             per_step=float(np.median(step_ratios)), target=1.2 * (1 + k), plain_ms=1e3 * base_time))
+    for name, kwargs, one, two in MODELS:
+        model, q0 = _model(name, kwargs, cache_dir)
+        for columns in (one, two, ("q0", "qd0")):
+            for control in ("state", "both"):
+                plain, with_columns = _runs(model, q0, t_end, rtol, columns, control)
+                paths = {path: _with_path(limit, with_columns) for path, limit in PATHS}
+                plain()
+                for run in paths.values():
+                    run()  # numba compiles (or loads) the kernels and the augmented rhs here
+                ratios = {path: [] for path in paths}
+                per_step = {path: [] for path in paths}
+                for _ in range(repeats):
+                    base, base_time = _timed(plain)
+                    for path, run in paths.items():
+                        sol, sol_time = _timed(run)
+                        ratios[path].append(sol_time / base_time)
+                        per_step[path].append((sol_time / sol.nsteps) / (base_time / base.nsteps))
+                k = sol.sensitivities.shape[2]
+                rows.append(dict(model=model.name, n=model.n, k=k, control=control, steps=sol.nsteps,
+                                 plain_steps=base.nsteps, plain_ms=1e3 * base_time, target=1.2 * (1 + k),
+                                 **{path: float(np.median(ratios[path])) for path in paths},
+                                 **{f"{path}_per_step": float(np.median(per_step[path])) for path in paths}))
+    return rows
+
+
+@njit(cache=True)
+def _calls(rhs, y, p, out, times):
+    """`times` calls of `rhs` (a kernel or an augmented rhs) at one state, for their cost per call."""
+    status = 0
+    for i in range(times):
+        status += rhs(0.5 + 1e-9 * i, y, p, out)
+    return status
+
+
+def call_costs(times: int = 200_000, repeats: int = 5, cache_dir=None) -> list[dict]:
+    """ns per call of ``rhs`` and of the augmented rhs of each path for k = 1 .. 2n initial-state columns (+ one
+    parameter column), at one state (median of `repeats`): where the directional path stops paying."""
+    from lagcomp.integrate import sensitivities as sens
+
+    rows = []
+    for name, kwargs, _, _ in MODELS:
+        model, q0 = _model(name, kwargs, cache_dir)
+        n, p = model.state_size, model.parameter_vector(None)
+        y = (model.simulate((0.0, 0.1), q0, progress=False).y[-1]).copy()
+        out = np.empty(n)
+
+        def cost(rhs, state, parameters, output):
+            _calls(rhs, state, parameters, output, 10)
+            samples = []
+            for _ in range(repeats):
+                start = time.perf_counter()
+                _calls(rhs, state, parameters, output, times)
+                samples.append((time.perf_counter() - start) / times * 1e9)
+            return float(np.median(samples))
+
+        rhs_ns = cost(model.kernels.rhs, y, p, out)
+        for with_parameter in (False, True):
+            for k_state in range(1 if not with_parameter else 0, n + 1):
+                requested = tuple(model.state_names[:k_state]) + ((model.parameters[-1],) if with_parameter else ())
+                if not requested:
+                    continue
+                cols = sens.columns(model, requested)
+                augmented = sens.initial_state(y, cols, 1.0)
+                augmented[n:] += np.linspace(-0.3, 0.4, augmented.size - n)
+                p_run = sens.run_parameters(p, model, cols)
+                row = dict(model=model.name, k=cols.k, parameter=with_parameter, rhs=rhs_ns)
+                for path, limit in PATHS:
+                    kept, sens.DIRECTIONAL_MAX_COLUMNS = sens.DIRECTIONAL_MAX_COLUMNS, limit
+                    try:
+                        kernels = sens.sensitivity_kernels(model.kernels, n, len(model.parameters), cols, 1.0)
+                    finally:
+                        sens.DIRECTIONAL_MAX_COLUMNS = kept
+                    row[path] = cost(kernels.rhs, augmented, p_run, np.empty(augmented.size))
+                rows.append(row)
     return rows
 
 
@@ -80,14 +181,24 @@ def main(argv=None) -> None:
     parser.add_argument("--t-end", type=float, default=1000.0)
     parser.add_argument("--rtol", type=float, default=1e-10)
     parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--calls", action="store_true", help="the cost per call of each path, k = 1 .. 2n, instead")
     args = parser.parse_args(argv)
+    if args.calls:
+        print("ns per call at one state: rhs, and the augmented rhs of each path (k columns; +p: the last is a "
+              "parameter's)")
+        print(f"{'model':18} {'k':>3} {'+p':>3} {'rhs':>7} {'jacobian':>9} {'directional':>12} {'dir/jac':>8}")
+        for r in call_costs(repeats=args.repeats):
+            print(f"{r['model']:18} {r['k']:3d} {'+p' if r['parameter'] else '':>3} {r['rhs']:7.0f} "
+                  f"{r['jacobian']:9.0f} {r['directional']:12.0f} {r['directional'] / r['jacobian']:8.2f}")
+        return
     print(f"DOP853, rtol = atol = {args.rtol:g}, t in [0, {args.t_end:g}]; time with k columns / plain run "
-          f"(median of {args.repeats})")
-    print(f"{'model':18} {'k':>3} {'control':>7} {'steps':>7} {'plain':>7} {'plain ms':>9} {'time ×':>7} "
-          f"{'per step ×':>11} {'target':>7}")
+          f"(median of {args.repeats}), the full Jacobians' path and the directional one in the same run")
+    print(f"{'model':18} {'k':>3} {'control':>7} {'steps':>7} {'plain':>7} {'plain ms':>9} {'jacobian ×':>11} "
+          f"{'directional ×':>14} {'per step':>9} {'target':>7}")
     for r in measure(args.t_end, args.rtol, args.repeats):
         print(f"{r['model']:18} {r['k']:3d} {r['control']:>7} {r['steps']:7d} {r['plain_steps']:7d} "
-              f"{r['plain_ms']:9.1f} {r['ratio']:7.2f} {r['per_step']:11.2f} {r['target']:7.1f}")
+              f"{r['plain_ms']:9.1f} {r['jacobian']:11.2f} {r['directional']:14.2f} "
+              f"{r['directional_per_step']:9.2f} {r['target']:7.1f}")
 
 
 if __name__ == "__main__":

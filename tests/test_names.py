@@ -289,6 +289,40 @@ def test_the_parameter_jacobian_under_every_emitted_name(many_names):
     np.testing.assert_allclose(out, expected, rtol=1e-14, atol=0)
 
 
+def test_the_directional_and_full_jacobian_kernels_under_every_emitted_name(many_names):
+    """``rhs_directional`` and ``rhs_with_full_jacobian`` (the sensitivities' kernels, whose locals ``_dy<i>``,
+    ``_dp<j>``, ``_g<i>`` and arguments ``v``, ``w`` are among the names) under the ~670 colliding names, against
+    the closed form of c̈_j = −κ_j c_j/m_j, κ_j the sum of group j.  Plain Python, as the parameter Jacobian's."""
+    from random_systems import python_kernels
+
+    model, spec = many_names
+    params, amplitude, _ = spec.values()
+    module = python_kernels(model.source_path.read_text(encoding="utf-8"))
+    n, column = len(spec.coordinates), {name: j for j, name in enumerate(model.parameters)}
+    N, P = 2 * n, len(column)
+    c, cd = amplitude + 0.125, np.linspace(-0.5, 0.5, n)
+    y, p = np.concatenate([c, cd]), model.parameter_vector(params)
+    expected = np.zeros((N, N + P))
+    expected[np.arange(n), n + np.arange(n)] = 1.0
+    for j, (mass, group) in enumerate(zip(spec.masses, spec.groups, strict=True)):
+        kappa = sum(params[a] for a in group)
+        expected[n + j, j] = -kappa / params[mass]
+        expected[n + j, N + column[mass]] = kappa * c[j] / params[mass] ** 2
+        for a in group:
+            expected[n + j, N + column[a]] = -c[j] / params[mass]
+    f = np.concatenate([cd, [-sum(params[a] for a in group) * c[j] / params[mass]
+                             for j, (mass, group) in enumerate(zip(spec.masses, spec.groups, strict=True))]])
+    ydot, out = np.full(N, np.nan), np.full((N, N + P), np.nan)
+    assert module["rhs_with_full_jacobian"](0.0, y, p, ydot, out) == 0
+    np.testing.assert_allclose(ydot, f, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(out, expected, rtol=1e-14, atol=0)
+    v, w = np.linspace(-1.0, 1.0, N), np.linspace(0.5, -0.5, P)
+    ydot, derivative = np.full(N, np.nan), np.full(N, np.nan)
+    assert module["rhs_directional"](0.0, y, p, v, w, ydot, derivative) == 0
+    np.testing.assert_allclose(ydot, f, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(derivative, expected @ np.concatenate([v, w]), rtol=1e-12, atol=1e-14)
+
+
 def test_the_event_gradients_under_every_emitted_name(many_names):
     """``event_gradients`` (the events' partials, for their times' sensitivities) under the ~670 colliding names:
     the event g = c_0 has ∂g/∂y = e_0 and no ∂g/∂t, ∂g/∂p.  Plain Python, as the parameter Jacobian's test."""

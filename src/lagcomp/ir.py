@@ -143,6 +143,30 @@ class AugmentedJacobianSolve:
 
 
 @dataclass(frozen=True)
+class DirectionalSolve:
+    """The frame of ``rhs_directional`` (`lagcomp.codegen.directional`): f and its derivative along a direction
+    from one CSE, in two phases around the solve for the accelerations.
+
+    The first `phase_one` stores (f's rows q̇ into ``ydot[:n]``; M's lower triangle into the locals `m` and F
+    into `f`, or K and its right-hand side (F, γ̃) into ``_kkt`` (n + k, n + k + 1) for a constrained system
+    with `multipliers` k > 0) need no acceleration; then the solve writes q̈ into ``ydot[n:]`` (``_lam`` the
+    multipliers' view), and the loads of `solved` (the accelerations ā, multipliers λ̄ the residual's partials
+    are taken at), the temporaries that read them, and the other stores follow: the direction's right-hand side
+    into the locals `g` (or the last column of ``_direction``, a copy of K made before the first solve), which a
+    second substitution by the same LDLᵀ of M, written out (n is small: `lagcomp.codegen.directional`), or a
+    second ``kkt_solve``, turns into ``out[n:]``.
+    """
+
+    n: int
+    phase_one: int
+    solved: tuple[str, ...]
+    multipliers: int = 0
+    m: tuple[tuple[str, ...], ...] = ()
+    f: tuple[str, ...] = ()
+    g: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
 class Delegate:
     """The whole body: ``return kernel(t, y, p, np.empty(scratch), out)``, a kernel that computes what
     `kernel` does and keeps only `out` (``rhs_jacobian`` from ``rhs_with_jacobian``, f dropped): one
@@ -250,8 +274,8 @@ class Kernel:
     stores : tuple of (target, Expr)
         Output assignments; the target is an lvalue (``out[0]``, a local) or
         ``return`` for scalar kernels.
-    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, AugmentedJacobianSolve, Delegate,
-        ReturnZero, FlatMatrix, Unavailable or None
+    solve : LinearSolve, AugmentedSolve, SymmetricProduct, JacobianSolve, AugmentedJacobianSolve,
+        DirectionalSolve, Delegate, ReturnZero, FlatMatrix, Unavailable or None
         Linear solve appended after the stores (the q̈ of ``rhs``, the λ of ``reactions``,
         M⁻¹ applied to the rows of ``rhs_with_jacobian``), the call of another kernel
         (``rhs_jacobian``), the matrix-vector product of
@@ -279,8 +303,9 @@ class Kernel:
     loads: tuple[tuple[str, str], ...]
     temps: tuple[tuple[str, sp.Expr], ...]
     stores: tuple[tuple[str, sp.Expr], ...]
-    solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | AugmentedJacobianSolve | Delegate
-            | ReturnZero | FlatMatrix | Unavailable | EventResets | ContactModes | None) = None
+    solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | AugmentedJacobianSolve
+            | DirectionalSolve | Delegate | ReturnZero | FlatMatrix | Unavailable | EventResets | ContactModes
+            | None) = None
     lanes: bool = False
     alias: str | None = None
     constants: tuple[tuple[str, str, object], ...] = ()

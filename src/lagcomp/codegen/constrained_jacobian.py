@@ -33,6 +33,7 @@ import sympy as sp
 
 from lagcomp.codegen.lower import (
     RHS_PARAMETER_JACOBIAN_DOC,
+    RHS_WITH_FULL_JACOBIAN_DOC,
     RHS_WITH_JACOBIAN_DOC,
     WITH_JACOBIAN_ARGS,
     _kernel,
@@ -50,8 +51,9 @@ STATUSES = ("Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factor
 
 
 def constrained_jacobian_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
-    """``rhs_with_jacobian``, ``rhs_jacobian`` (delegating), ``rhs_parameter_jacobian`` and ``reaction_jacobian``
-    of the constrained `eom` (module docstring), one CSE each."""
+    """``rhs_with_jacobian``, ``rhs_jacobian`` (delegating), ``rhs_parameter_jacobian``, ``rhs_with_full_jacobian``
+    (both Jacobians from one factorization of K, for the sensitivities) and ``reaction_jacobian`` of the
+    constrained `eom` (module docstring), one CSE each."""
     n, k, parameters = eom.n, eom.k, tuple(eom.parameters)
     state = (*eom.q, *eom.qd)
     residual, mapping, loads = _augmented_residual(eom, mapping, loads)
@@ -76,6 +78,10 @@ def constrained_jacobian_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]
         kernel("rhs_parameter_jacobian",
                RHS_PARAMETER_JACOBIAN_DOC + "Rows 0 (q̇ does not depend on p), then ∂q̈/∂p: " + how + STATUSES,
                ("t", "y", "p", "out"), parameters, first=0, count=n, offset=n),
+        kernel("rhs_with_full_jacobian",
+               RHS_WITH_FULL_JACOBIAN_DOC + "Rows [0 | I | 0], then ∂q̈/∂(y, p), one factorization of K for both: "
+               + how + STATUSES,
+               WITH_JACOBIAN_ARGS, (*state, *parameters), first=0, count=n, offset=n, identity=True, given_ydot=True),
         kernel("reaction_jacobian",
                f"Exact Jacobian of the multipliers λ (`reactions`), shape ({k}, {2 * n + len(parameters)}) into "
                f"`out`: row c the constraint c of\n{eom.constraint_names}, columns ∂λ_c/∂y_j (y = (q, q̇), "

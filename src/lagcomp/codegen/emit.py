@@ -40,6 +40,7 @@ from lagcomp.ir import (
     ContactImpact,
     ContactModes,
     Delegate,
+    DirectionalSolve,
     EventResets,
     FlatMatrix,
     JacobianSolve,
@@ -143,8 +144,10 @@ def kernel_support_names(kernels) -> set[str]:
         if any(source.startswith("input_value(") for _, source in kernel.loads):
             names.add("input_value")
         solve = kernel.solve
-        if isinstance(solve, AugmentedSolve):
+        if isinstance(solve, AugmentedSolve) or isinstance(solve, DirectionalSolve) and solve.multipliers:
             names.add("kkt_solve")
+        elif isinstance(solve, DirectionalSolve):
+            names.add("PIVOT_TOLERANCE")
         elif isinstance(solve, LinearSolve):
             names.add("PIVOT_TOLERANCE" if solve.unrolled or kernel.lanes else "ldlt_solve")
         elif isinstance(solve, JacobianSolve):
@@ -188,8 +191,21 @@ def _unrolled_ldlt(solve: LinearSolve, lanes: bool = False) -> list[str]:
     keep LLVM from vectorizing the loop over lanes: the pivot tests are
     collected into ``bad[_l]`` instead.
     """
-    n, m, f = solve.n, solve.m, solve.f
     lines = ["# Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here."]
+    lines += _ldlt_factor(solve.n, solve.m, lanes) + _ldlt_substitution(solve.n, solve.f)
+    n = solve.n
+    if lanes:
+        lines.append(f"bad[_l] = not ({' & '.join(f'_ok{j}' for j in range(n))})")
+        lines += [f"out[{solve.offset + i}, _l] = _x{i}" for i in range(n)]
+        return lines
+    lines += [f"out[{solve.offset + i}] = _x{i}" for i in range(n)]
+    lines.append("return 0")
+    return lines
+
+
+def _ldlt_factor(n: int, m, lanes: bool = False) -> list[str]:
+    """The factorization of `_unrolled_ldlt`: pivots ``_d``, reciprocals ``_r``, ``_l`` = L, ``_w`` = L D."""
+    lines = []
     l = lambda i, j: f"_l{i}_{j}"  # noqa: E731  L[i, j], i > j
     w = lambda i, j: f"_w{i}_{j}"  # noqa: E731  L[i, j] D[j]
     for j in range(n):
@@ -203,16 +219,16 @@ def _unrolled_ldlt(solve: LinearSolve, lanes: bool = False) -> list[str]:
         for i in range(j + 1, n):
             lines.append(f"{l(i, j)} = ({_minus(m[i][j], [f'{l(i, k)}*{w(j, k)}' for k in range(j)])})*_r{j}")
             lines.append(f"{w(i, j)} = {l(i, j)}*_d{j}")
+    return lines
+
+
+def _ldlt_substitution(n: int, f) -> list[str]:
+    """x = M⁻¹ f into the locals ``_x<i>`` with the factors of `_ldlt_factor` (`f`: the locals of f)."""
+    lines = []
     for i in range(n):
-        lines.append(f"_z{i} = {_minus(f[i], [f'{l(i, k)}*_z{k}' for k in range(i)])}")
+        lines.append(f"_z{i} = {_minus(f[i], [f'_l{i}_{k}*_z{k}' for k in range(i)])}")
     for i in reversed(range(n)):
-        lines.append(f"_x{i} = {_minus(f'_z{i}*_r{i}', [f'{l(k, i)}*_x{k}' for k in reversed(range(i + 1, n))])}")
-    if lanes:
-        lines.append(f"bad[_l] = not ({' & '.join(f'_ok{j}' for j in range(n))})")
-        lines += [f"out[{solve.offset + i}, _l] = _x{i}" for i in range(n)]
-        return lines
-    lines += [f"out[{solve.offset + i}] = _x{i}" for i in range(n)]
-    lines.append("return 0")
+        lines.append(f"_x{i} = {_minus(f'_z{i}*_r{i}', [f'_l{k}_{i}*_x{k}' for k in reversed(range(i + 1, n))])}")
     return lines
 
 
@@ -302,6 +318,39 @@ def _augmented_jacobian_frame(solve: AugmentedJacobianSolve) -> tuple[list[str],
     return before, after
 
 
+def _directional_body(kernel: Kernel) -> list[str]:
+    """The body of ``rhs_directional`` (`lagcomp.ir.DirectionalSolve`): what needs no acceleration, the solve for
+    f, then the loads of the solved values, the temporaries that read them, the direction's stores and its
+    substitution.  A temporary reads them when its expression names a solved local or such a temporary."""
+    solve = kernel.solve
+    n, late = solve.n, set(solve.solved)
+    temps = {True: [], False: []}
+    for name, expr in kernel.temps:
+        after = any(symbol.name in late for symbol in expr.free_symbols)
+        if after:
+            late.add(name)
+        temps[after].append(f"{name} = {to_code(expr)}")
+    stores = [f"{target} = {to_code(expr)}" for target, expr in kernel.stores]
+    body = ["_ydot = ydot"] + [f"{local} = {source}" for local, source in kernel.loads if local not in solve.solved]
+    solved = [f"{local} = {source}" for local, source in kernel.loads if local in solve.solved]
+    if solve.multipliers:
+        size = n + solve.multipliers
+        body += [f"_kkt = np.zeros(({size}, {size + 1}))"] + temps[False] + stores[:solve.phase_one]
+        body += ["# K is factored twice (kkt_solve may overwrite it): for f, then for the direction.",
+                 "_direction = _kkt.copy()", f"_status = kkt_solve(_kkt, {n})", "if _status:",
+                 f"{INDENT}return _status"]
+        body += [f"_ydot[{n + i}] = _kkt[{i}, {size}]" for i in range(n)] + [f"_lam = _kkt[{n}:, {size}]"]
+        body += solved + temps[True] + stores[solve.phase_one:]
+        body += [f"_status = kkt_solve(_direction, {n})", "if _status:", f"{INDENT}return _status"]
+        return body + [f"out[{n + i}] = _direction[{i}, {size}]" for i in range(n)] + ["return 0"]
+    body += temps[False] + stores[:solve.phase_one]
+    body += ["# Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors."]
+    body += _ldlt_factor(n, solve.m) + _ldlt_substitution(n, solve.f)
+    body += [f"_ydot[{n + i}] = _x{i}" for i in range(n)]
+    body += solved + temps[True] + stores[solve.phase_one:] + _ldlt_substitution(n, solve.g)
+    return body + [f"out[{n + i}] = _x{i}" for i in range(n)] + ["return 0"]
+
+
 def delegated_call(solve: Delegate) -> str:
     """The one line of a `Delegate` kernel: the other kernel's status, its scratch output dropped."""
     return f"return {solve.kernel}(t, y, p, np.empty({solve.scratch}), out)"
@@ -357,6 +406,8 @@ def _kernel_source(kernel: Kernel) -> str:
     elif isinstance(solve, AugmentedJacobianSolve):
         before, after = _augmented_jacobian_frame(solve)
         body += before
+    elif isinstance(solve, DirectionalSolve):
+        return _decorated(kernel, body + _directional_body(kernel))
     body += [f"{local} = {source}" for local, source in kernel.loads]
     if isinstance(solve, ContactModes):
         before, after = mode_lines(solve, INDENT)

@@ -563,6 +563,37 @@ def _rhs_parameter_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+#: The docstring of every ``rhs_with_full_jacobian`` kernel: what it computes; the emitters add how.
+RHS_WITH_FULL_JACOBIAN_DOC = (
+    "f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =\n"
+    "[∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the\n"
+    "model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel\n"
+    "for parameter columns).\n"
+)
+
+
+def _rhs_with_full_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """``rhs_with_full_jacobian``: `_rhs_jacobian_kernels`' rows along (q, q̇) and the parameters together,
+    M ∂a/∂x = ∂(F − M ā)/∂x |_{ā = a} for x = (y, p), one CSE, one LDLᵀ of M and 2n + P substitutions
+    (`JacobianSolve` with ``columns`` = 2n + P), where ``rhs_with_jacobian`` and ``rhs_parameter_jacobian`` call
+    `rhs` and factor M each."""
+    n, width = eom.n, 2 * eom.n + len(eom.parameters)
+    block, m, mapping, loads = _acceleration_block(eom, (*eom.q, *eom.qd, *eom.parameters), mapping, loads)
+    stores = [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
+    stores += [(jacobian_entry(i, n + i, width), sp.S.One) for i in range(n)]
+    stores += [(jacobian_entry(n + i, j, width), block[i][j])
+               for i in range(n) for j in range(width) if block[i][j] != 0]
+    return _kernel(
+        "rhs_with_full_jacobian",
+        RHS_WITH_FULL_JACOBIAN_DOC +
+        "Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).\n"
+        "Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`\n"
+        "was within rounding of its threshold); `out` is then invalid.",
+        WITH_JACOBIAN_ARGS, stores, mapping, loads,
+        solve=JacobianSolve(n=n, size=2 * n, m=m, columns=width, given_ydot=True),
+    )
+
+
 def dae_size(eom: EOM) -> int:
     """N' = 3n + k + kh, the length of the DAE state z = (q, v, w, λ, μ) of a constrained system."""
     return 3 * eom.n + eom.k + len(eom.Phi)
@@ -791,18 +822,23 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 
 def lower(eom: EOM) -> ModuleIR:
-    """Build the IR of the module for `eom`: rhs, its Jacobians ∂f/∂y and ∂f/∂p, mass_matrix, forcing, energies,
+    """Build the IR of the module for `eom`: rhs, its Jacobians ∂f/∂y and ∂f/∂p (for n ≤
+    `lagcomp.codegen.directional.LARGEST_SYSTEM` both at once too) and its directional derivative (that n
+    only), mass_matrix, forcing, energies,
     momenta, and for constrained systems reactions and their Jacobian (`lagcomp.codegen.constrained_jacobian`),
     constraint residuals and matrix, and the DAE's residual and Jacobian; last the bodies' `geometry`
     (`lagcomp.codegen.geometry`)."""
     n, system = eom.n, eom.system
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
+    from lagcomp.codegen.directional import LARGEST_SYSTEM, directional_kernel  # (these import this module)
+    directional = (directional_kernel(eom, mapping, loads),) if n <= LARGEST_SYSTEM else ()
     if eom.k:
-        from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels  # (it imports this module)
+        from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels
         first = (_constraint_kernels(eom, mapping, loads) + constrained_jacobian_kernels(eom, mapping, loads)
-                 + _dae_kernels(eom, mapping, loads))
-    elif mode_slots(eom):   # contacts that may close: rhs is rhs_free corrected for them (no lanes: they reset)
+                 + directional + _dae_kernels(eom, mapping, loads))
+    elif mode_slots(eom):   # contacts that may close: rhs is rhs_free corrected for them (no lanes: they reset;
+        # no directional kernels: sensitivities refuse contacts)
         free = _rhs_kernel(eom, mapping, loads)
         free = replace(free, name="rhs_free", doc="The motion without contacts (all open): " + free.doc)
         first = (*resting_kernels(eom, t, _first_mode(eom), lambda name, doc, args, stores, solve: _kernel(
@@ -813,6 +849,8 @@ def lower(eom: EOM) -> ModuleIR:
         # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
         first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled and not eom.system.inputs else (rhs,)
         first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
+        if directional:
+            first += (_rhs_with_full_jacobian_kernel(eom, mapping, loads), *directional)
     kernels = first + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",

@@ -5,15 +5,21 @@ For y' = f(t, y, p) with y (N,), the sensitivities S = ∂y(t)/∂(y0_c, p_j) of
     S' = J(t, y) S (+ ∂f/∂p_j in the column of parameter p_j),   S(0) = e_c (0 for a parameter),
 
 J = ∂f/∂y the model's exact Jacobian (emitted from the symbolic equations: ``rhs_with_jacobian`` writes f and
-J in one call) and ∂f/∂p its ``rhs_parameter_jacobian``.
+J in one call) and ∂f/∂p its ``rhs_parameter_jacobian`` (both at once, from one factorization of M or K:
+``rhs_with_full_jacobian``).
 The run integrates the augmented state (y, S[:, 0], ..., S[:, k-1]) of
 N (1 + k) components with the library's embedded Runge-Kutta driver (dop853, dopri5, tsit5, bs3), which
-takes as its ``rhs`` a small numba function (`augmented_rhs`) evaluating f and J S: a closure over the
-model's kernels, compiled at the first run that needs it and kept for the process (`_AUGMENTED`), as
+takes as its ``rhs`` a small numba function evaluating f and J S: a closure over the model's kernels,
+compiled at the first run that needs it and kept for the process (`_AUGMENTED`), as
 `lagcomp.integrate.function_inputs` does for its wrappers.  The model's kernels and the driver are not
-compiled again.  J (N, N) and ∂f/∂p (N, P) are written into work space at the end of the run's p (the
-kernels read p only up to their parameters and input tables): a call allocates only what the kernels do
-(the factor of M in their LDLᵀ).
+compiled again.  For one column (two with a parameter's: `DIRECTIONAL_MAX_COLUMNS`, measured) it calls the
+emitted ``rhs_directional`` once per column (`directional_rhs`: f and J S[:, c] + ∂f/∂p w_c from one CSE, at
+about the cost of ``rhs`` and a substitution; `lagcomp.codegen.directional`); for more, the full Jacobians
+(`augmented_rhs`, `full_jacobian_rhs`), J (N, N) and ∂f/∂p (N, P) written into work space at the end of the
+run's p (the kernels read p only up to their parameters and input tables): a call allocates only what the
+kernels do (the factor of M in their LDLᵀ).  Kane modules and systems larger than
+`lagcomp.codegen.directional.LARGEST_SYSTEM` have no ``rhs_directional`` (unconstrained: nor
+``rhs_with_full_jacobian``): the full Jacobians, apart where need be.
 
 Error control (``sensitivity_control``).  The embedded driver's error norm runs over every component of the
 state it is given, with one scalar ``rtol``/``atol``, and restricting it to the first N components would
@@ -199,7 +205,8 @@ def run_parameters(p: np.ndarray, model, cols: Columns) -> np.ndarray:
 
 
 def work_size(n: int, n_parameters: int, cols: Columns) -> int:
-    """Floats at the end of p that `augmented_rhs` uses: J (n, n) last, before it ∂f/∂p (n, P) if asked."""
+    """Floats at the end of p that `augmented_rhs` uses: J (n, n) last, before it ∂f/∂p (n, P) if asked
+    (`full_jacobian_rhs`: [J | ∂f/∂p] (n, n + P) in the same floats)."""
     return n * n + (n * n_parameters if cols.parameters else 0)
 
 
@@ -216,7 +223,15 @@ class SensitivityKernels:
         return getattr(self._module, name)
 
 
-#: {(generated module, n, parameter columns, scale): SensitivityKernels}, for the process.
+#: The most columns whose derivatives the closure takes along each column (``rhs_directional``, one call per
+#: column, `directional_rhs`) rather than from the full Jacobians (`augmented_rhs`, `full_jacobian_rhs`), without
+#: and with a parameter's column among them.  Measured (``python -m bench.bench_sensitivities --calls``, ns per
+#: call of the augmented rhs, full / directional, double pendulum, 5-link, free axle): one column 148 / 105,
+#: 424 / 249, 1123 / 591; two 152 / 192, 464 / 481, 1159 / 1159; a parameter's 193 / 104, 580 / 247,
+#: 1526 / 595; two with a parameter's 200 / 193, 621 / 478, 1549 / 1167; three 204 / 277, 658 / 710, 1587 / 1746.
+DIRECTIONAL_MAX_COLUMNS = {False: 1, True: 2}
+
+#: {(generated module, n, parameter columns, scale, directional): SensitivityKernels}, for the process.
 _AUGMENTED: dict = {}
 _LOCK = threading.Lock()
 
@@ -232,13 +247,48 @@ def run_kernels(model, method, cols: Columns, scale: float):
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
     """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (its closure compiled at
     first use)."""
-    key = (module, n, cols.parameters, scale)  # (the initial-state columns: as many as y's size says)
+    directional = (cols.k <= DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)]
+                   and hasattr(module, "rhs_directional"))  # (Kane modules have none)
+    key = (module, n, cols.parameters, scale, directional)  # (the initial-state columns: as y's size says)
     with _LOCK:
         if key not in _AUGMENTED:
-            parameter_jacobian = module.rhs_parameter_jacobian if cols.parameters else None
-            rhs = augmented_rhs(module.rhs_with_jacobian, parameter_jacobian, n, n_parameters, cols.parameters, scale)
+            if directional:
+                rhs = directional_rhs(module.rhs_directional, n, n_parameters, cols.parameters, scale)
+            elif cols.parameters and hasattr(module, "rhs_with_full_jacobian"):
+                rhs = full_jacobian_rhs(module.rhs_with_full_jacobian, n, n_parameters, cols.parameters, scale)
+            else:
+                parameter_jacobian = module.rhs_parameter_jacobian if cols.parameters else None
+                rhs = augmented_rhs(module.rhs_with_jacobian, parameter_jacobian, n, n_parameters, cols.parameters,
+                                    scale)
             _AUGMENTED[key] = SensitivityKernels(module, rhs)
         return _AUGMENTED[key]
+
+
+def directional_rhs(rhs_directional, n: int, n_parameters: int, parameter_columns: tuple[int, ...], scale: float):
+    """``rhs(t, y, p, out) -> int`` of the augmented state as `augmented_rhs` computes it, column by column: out
+    = (f(x), J S[:, c] + scale ∂f/∂p_j) by one call of the module's ``rhs_directional`` per column c, along
+    (S[:, c], w_c), w_c = scale e_j for the column of parameter j, else 0.  The first call writes f (``rhs``'s
+    to rounding: another CSE); the others write theirs into the last n floats of p's work space.  Each call
+    costs about one ``rhs`` and one substitution, against N (N + P) entries and N + P substitutions for the full
+    Jacobians: the path for few columns (`DIRECTIONAL_MAX_COLUMNS`)."""
+    k_parameters = len(parameter_columns)
+    directions = np.zeros((1 + k_parameters, n_parameters))   # row 0 for the initial-state columns
+    for c, j in enumerate(parameter_columns):
+        directions[1 + c, j] = scale
+
+    @njit(error_model="numpy", nogil=True)
+    def column_rhs(t, y, p, out):
+        x, k = y[:n], y.shape[0] // n - 1
+        first_parameter = k - k_parameters
+        f = out[:n]
+        for c in range(k):
+            w = directions[0] if c < first_parameter else directions[1 + c - first_parameter]
+            status = rhs_directional(t, x, p, y[n * (1 + c):n * (2 + c)], w, f, out[n * (1 + c):n * (2 + c)])
+            if status != 0:
+                return status
+            f = p[p.shape[0] - n:]
+        return 0
+    return column_rhs
 
 
 def augmented_rhs(rhs_with_jacobian, parameter_jacobian, n: int, n_parameters: int,
@@ -285,6 +335,33 @@ def augmented_rhs(rhs_with_jacobian, parameter_jacobian, n: int, n_parameters: i
             j = columns_p[c]
             for i in range(n):
                 out[base + i] += scale * Jp[i, j]
+        return 0
+    return full_rhs
+
+
+def full_jacobian_rhs(rhs_with_full_jacobian, n: int, n_parameters: int, parameter_columns: tuple[int, ...],
+                      scale: float):
+    """`augmented_rhs` with parameter columns from one call of the module's ``rhs_with_full_jacobian``: f and
+    [J | ∂f/∂p] (n, n + n_parameters) written into the work space at the end of p, from one solve for f and one
+    factorization of M (K) for both, where ``rhs_with_jacobian`` and ``rhs_parameter_jacobian`` take two each."""
+    k_parameters = len(parameter_columns)
+    columns_p = n + np.array(parameter_columns, dtype=np.int64)
+    width = n + n_parameters
+
+    @njit(error_model="numpy", nogil=True)
+    def full_rhs(t, y, p, out):
+        end = p.shape[0]
+        jacobians = p[end - n * width:].reshape((n, width))
+        status = rhs_with_full_jacobian(t, y[:n], p, out[:n], jacobians)
+        if status != 0:
+            return status
+        k = y.shape[0] // n - 1
+        _multiply(jacobians[:, :n], y, out, n, k)
+        for c in range(k_parameters):
+            base = n * (1 + k - k_parameters + c)
+            j = columns_p[c]
+            for i in range(n):
+                out[base + i] += scale * jacobians[i, j]
         return 0
     return full_rhs
 

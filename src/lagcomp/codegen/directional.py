@@ -1,0 +1,104 @@
+r"""``rhs_directional``: f and one directional derivative J v + (∂f/∂p) w in one CSE'd kernel.
+
+A run with k sensitivity columns needs J S (+ ∂f/∂p in a parameter's column) at every stage.  The full
+Jacobians (``rhs_with_jacobian``, ``rhs_parameter_jacobian``) cost N (N + P) entries and N + P substitutions
+by M (or K) whatever k is; for few columns the derivative along each column is cheaper: forward mode on the
+symbolic accelerations.  Differentiating M(x) a(x) = F(x) along the direction dx = (v, w) of x = (y, p):
+
+    M da = dF − dM ā |_{ā = a} = Σ_j ∂(F − M ā)/∂x_j dx_j,
+
+the residual's partials of `lagcomp.codegen.lower.acceleration_partials` (ā held fixed, then bound to the
+accelerations ``rhs`` solved) contracted with the direction symbolically, so that one CSE shares them with M
+and F, and one LDLᵀ substitution gives da.  With y = (q, q̇), f = (q̇, a):
+
+    J v + (∂f/∂p) w = (v[n:2n], da).
+
+A constrained system (Lagrange multipliers) solves K z = r for z = (q̈, λ), K = [M −Λᵀ; Λ 0]; along dx,
+K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ) (`lagcomp.codegen.constrained_jacobian`, the residual with the
+Baumgarte terms): a second ``kkt_solve`` of the direction's right-hand side (K copied before the first), the
+first n entries of dz the accelerations' derivative.  f and the direction come from one CSE, so that the
+sines, cosines and products of M, F (K, γ̃) serve both, and an unconstrained M is factored once for both
+(`lagcomp.ir.DirectionalSolve`): a call costs about one ``rhs`` and one substitution.  f agrees with ``rhs``'s,
+and the derivative with the full Jacobians' product, to rounding (other orders of the same sums).
+"""
+
+from __future__ import annotations
+
+import symengine as se
+import sympy as sp
+
+from lagcomp.codegen.constrained_jacobian import _augmented_residual, _matrix_stores, _partials
+from lagcomp.codegen.lower import _acceleration_block, _kernel, fresh_symbols, stabilized_gamma
+from lagcomp.ir import DirectionalSolve, Kernel
+from lagcomp.mechanics.lagrange import EOM
+from lagcomp.model.system import t
+
+#: The largest n whose module has ``rhs_directional`` (and, unconstrained, ``rhs_with_full_jacobian``): their
+#: sums over the 2n + P columns grow as the full Jacobians do, and are paid by every model at codegen.  Measured
+#: for the n-link chain at n = 12 (`lagcomp.compile` 2.3 → 3.4 s, ``rhs_directional`` 4786 operations after CSE
+#: against 966 for ``rhs``, and its numba compilation at the first sensitivity run 3.7 → 8.0 s); at n = 5: 0.44 →
+#: 0.64 s, 834 operations, first sensitivity run 1.7 → 1.5 s (it replaces two kernels there).  Larger systems'
+#: sensitivities take the full Jacobians.
+LARGEST_SYSTEM = 6
+
+#: The arguments of every ``rhs_directional`` kernel: the direction (v (N,), w (P,)), then f into ``ydot``
+#: (N,) and the derivative into ``out`` (N,).
+DIRECTIONAL_ARGS = ("t", "y", "p", "v", "w", "ydot", "out")
+
+#: The docstring of every ``rhs_directional`` kernel: what it computes; `directional_kernel` adds how.
+RHS_DIRECTIONAL_DOC = (
+    "f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),\n"
+    "out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).\n"
+    "Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`\n"
+    "to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).\n"
+)
+
+
+def directional_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """``rhs_directional`` of `eom` (n ≤ `LARGEST_SYSTEM`), unconstrained (LDLᵀ of M, written out) or constrained
+    (``kkt_solve`` of K), one CSE for f and the direction (`lagcomp.ir.DirectionalSolve` orders it around the
+    solve)."""
+    n = eom.n
+    variables = (*eom.q, *eom.qd, *eom.parameters)
+    taken = {s.name for s in (*variables, t)}
+    taken |= {s.name for e in (*eom.M, *eom.F, *eom.C) for s in e.free_symbols}
+    directions = fresh_symbols("_dx", len(variables), taken)
+    locals_ = [f"_dy{i}" for i in range(2 * n)] + [f"_dp{j}" for j in range(len(eom.parameters))]
+    sources = [f"v[{i}]" for i in range(2 * n)] + [f"w[{j}]" for j in range(len(eom.parameters))]
+    mapping = {**mapping, **{d: sp.Symbol(local, real=True) for d, local in zip(directions, locals_, strict=True)}}
+    loads = loads + tuple(zip(locals_, sources, strict=True))
+    velocities = [(f"ydot[{i}]", eom.qd[i]) for i in range(n)]
+    velocity_rows = [(f"out[{i}]", directions[n + i]) for i in range(n)]
+    if eom.k:
+        residual, mapping, loads = _augmented_residual(eom, mapping, loads)
+        size, k = n + eom.k, eom.k
+        right = [*eom.F, *stabilized_gamma(eom)]
+        first = velocities + _matrix_stores(eom) + [(f"_kkt[{r}, {size}]", right[r]) for r in range(size)]
+        second = velocity_rows + [(f"_direction[{r}, {size}]", _contracted(row, directions))
+                                  for r, row in enumerate(_partials(residual, variables))]
+        solved = tuple(f"_acc{i}" for i in range(n)) + tuple(f"_mult{c}" for c in range(k))
+        solve = DirectionalSolve(n=n, phase_one=len(first), solved=solved, multipliers=k)
+        how = ("K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃\n"
+               "with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).\n"
+               "Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid.")
+    else:
+        block, m, mapping, loads = _acceleration_block(eom, variables, mapping, loads)
+        f, g = tuple(f"_f{i}" for i in range(n)), tuple(f"_g{i}" for i in range(n))
+        first = velocities + [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
+        first += list(zip(f, eom.F, strict=True))
+        second = velocity_rows + [(g[i], _contracted(row, directions)) for i, row in enumerate(block)]
+        solve = DirectionalSolve(n=n, phase_one=len(first), solved=tuple(f"_acc{i}" for i in range(n)), m=m, f=f,
+                                 g=g)
+        how = ("M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)\n"
+               "(see lagcomp.codegen.directional).\n"
+               "Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid.")
+    return _kernel("rhs_directional", RHS_DIRECTIONAL_DOC + how, DIRECTIONAL_ARGS, first + second, mapping, loads,
+                   solve=solve)
+
+
+def _contracted(row, directions):
+    """Σ_j row_j dx_j over the nonzero partials `row` (symengine or sympy entries), in symengine when it can."""
+    terms = [(entry, d) for entry, d in zip(row, directions, strict=True) if entry != 0]
+    if all(isinstance(entry, se.Basic) for entry, _ in terms):
+        return sum((entry * se.sympify(d) for entry, d in terms), se.Integer(0))
+    return sum((sp.sympify(entry) * d for entry, d in terms), sp.S.Zero)
