@@ -283,6 +283,75 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂q̈/∂(y, p), one factorization of K for both: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(1)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((4, 4))
+    _jac = np.zeros(36)
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
+    _baumgarte_alpha = p[3]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c0 = sin(q_theta)
+    _c1 = cos(q_theta)
+    _c2 = -_acc2
+    _c3 = _c1*qd_x
+    _c4 = _c0*qd_y
+    _c5 = 2.0*_baumgarte_alpha
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_I
+    _kkt[0, 3] = _c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -p_a
+    _kkt[3, 0] = -_c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = p_a
+    _jac[2] = -_c1*_mult0
+    _jac[6] = -_acc0
+    _jac[11] = -_c0*_mult0
+    _jac[15] = -_acc1
+    _jac[25] = _c2
+    _jac[26] = _mult0
+    _jac[29] = _acc0*_c1 + _acc1*_c0 + qd_theta*(_c1*qd_y - _c0*qd_x) - _c5*(-_c3 - _c4)
+    _jac[30] = _c0*_c5 + _c1*qd_theta
+    _jac[31] = _c0*qd_theta - _c1*_c5
+    _jac[32] = _c3 + _c4 - _c5*p_a
+    _jac[35] = _c2 - _c5*qd_theta
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((4, 9))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(3):
+        out[_i, 3 + _i] = 1.0
+    out[3:6] = _rows[0:3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def reaction_jacobian(t, y, p, out):
     """Exact Jacobian of the multipliers λ (`reactions`), shape (1, 9) into `out`: row c the constraint c of
     ('knife',), columns ∂λ_c/∂y_j (y = (q, q̇), 6 of them), then ∂λ_c/∂p_j for the model's
@@ -344,6 +413,85 @@ def reaction_jacobian(t, y, p, out):
         return _status
     out[:] = 0.0
     out[0:1] = _rows[3:4]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = ydot
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_m = p[0]
+    p_I = p[1]
+    p_a = p[2]
+    _baumgarte_alpha = p[3]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dy4 = v[4]
+    _dy5 = v[5]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _kkt = np.zeros((4, 5))
+    _c0 = sin(q_theta)
+    _c1 = cos(q_theta)
+    _c2 = _c1*qd_x
+    _c3 = _c0*qd_y
+    _c4 = _c2 + _c3
+    _c5 = _c1*qd_y - _c0*qd_x
+    _c6 = 2.0*_baumgarte_alpha
+    ydot[0] = qd_x
+    ydot[1] = qd_y
+    ydot[2] = qd_theta
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_I
+    _kkt[0, 3] = _c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -p_a
+    _kkt[3, 0] = -_c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = p_a
+    _kkt[0, 4] = 0.0
+    _kkt[1, 4] = 0.0
+    _kkt[2, 4] = 0.0
+    _kkt[3, 4] = _c4*qd_theta - _c6*(_c5 + p_a*qd_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 4]
+    _ydot[4] = _kkt[1, 4]
+    _ydot[5] = _kkt[2, 4]
+    _lam = _kkt[3:, 4]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c7 = _dy2*_mult0
+    out[0] = _dy3
+    out[1] = _dy4
+    out[2] = _dy5
+    _direction[0, 4] = -_acc0*_dp0 - _c1*_c7
+    _direction[1, 4] = -_acc1*_dp0 - _c0*_c7
+    _direction[2, 4] = _dp2*_mult0 - _acc2*_dp1
+    _direction[3, 4] = _dp2*(-_acc2 - _c6*qd_theta) + _dy2*(_acc0*_c1 + _acc1*_c0 + _c5*qd_theta - _c6*(-_c2 - _c3)) + _dy3*(_c0*_c6 + _c1*qd_theta) + _dy4*(_c0*qd_theta - _c1*_c6) + _dy5*(_c4 - _c6*p_a)
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[3] = _direction[0, 4]
+    out[4] = _direction[1, 4]
+    out[5] = _direction[2, 4]
     return 0
 
 
@@ -496,7 +644,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (6,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

@@ -551,6 +551,186 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂q̈/∂(y, p), one factorization of K for both: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((5, 5))
+    _jac = np.zeros(70)
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c0 = p_a**2
+    _c1 = p_m2 + (0.25)*p_m1
+    _c2 = (0.5)*p_a
+    _c3 = sin(q_theta2)
+    _c4 = sin(q_theta1)
+    _c5 = cos(q_theta2)
+    _c6 = cos(q_theta1)
+    _c7 = _c3*_c4 + _c5*_c6
+    _c8 = p_b*p_m2
+    _c9 = _c7*_c8
+    _c10 = _c2*_c9
+    _c11 = (0.3333333333333333)*p_b**2
+    _c12 = (0.3333333333333333)*p_c**2
+    _c13 = _c4*p_a
+    _c14 = _c6*p_a
+    _c15 = _c3*p_b
+    _c16 = _c5*p_b
+    _c17 = sin(q_theta3)
+    _c18 = _c17*p_c
+    _c19 = cos(q_theta3)
+    _c20 = _c19*p_c
+    _c21 = p_m2 + (0.5)*p_m1
+    _c22 = _c21*p_g
+    _c23 = _c3*_c6 - _c4*_c5
+    _c24 = _acc1*_c8
+    _c25 = _c2*_c23*_c24
+    _c26 = qd_theta2**2
+    _c27 = _c10*_c26
+    _c28 = _c23*_c8
+    _c29 = _c28*p_a
+    _c30 = _c23*_c26
+    _c31 = (0.5)*_c8
+    _c32 = (0.5)*p_m2
+    _c33 = _c32*p_a
+    _c34 = _c33*_c7
+    _c35 = _acc0*_c0
+    _c36 = _c14*p_g
+    _c37 = _c2*p_b
+    _c38 = _c37*_c7
+    _c39 = qd_theta1**2
+    _c40 = _c10*_c39
+    _c41 = _acc0*_c2*_c28
+    _c42 = _c32*p_g
+    _c43 = _c23*_c39
+    _c44 = (0.5)*p_g
+    _c45 = (0.5)*p_m3
+    _c46 = _c45*p_g
+    _c47 = _baumgarte_beta**2
+    _c48 = 2.0*_baumgarte_alpha
+    _c49 = _c14*_c48
+    _c50 = _acc0*_c6
+    _c51 = _c39*_c4
+    _c52 = _c16*_c48
+    _c53 = _acc1*_c5
+    _c54 = _c26*_c3
+    _c55 = _c20*_c48
+    _c56 = _acc2*_c19
+    _c57 = qd_theta3**2
+    _c58 = _c17*_c57
+    _c59 = _c13*_c48
+    _c60 = 2.0*qd_theta1
+    _c61 = _c15*_c48
+    _c62 = 2.0*qd_theta2
+    _c63 = _c18*_c48
+    _c64 = 2.0*qd_theta3
+    _c65 = _c48*qd_theta1
+    _c66 = _acc0*_c4
+    _c67 = _c39*_c6
+    _c68 = _c48*qd_theta2
+    _c69 = _acc1*_c3
+    _c70 = _c26*_c5
+    _c71 = _c48*qd_theta3
+    _c72 = _acc2*_c17
+    _c73 = _c19*_c57
+    _kkt[0, 0] = _c0*_c1 + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c10
+    _kkt[1, 0] = _c10
+    _kkt[1, 1] = _c11*p_m2
+    _kkt[2, 2] = _c12*p_m3
+    _kkt[0, 3] = _c13
+    _kkt[0, 4] = -_c14
+    _kkt[1, 3] = _c15
+    _kkt[1, 4] = -_c16
+    _kkt[2, 3] = -_c18
+    _kkt[2, 4] = _c20
+    _kkt[3, 0] = -_c13
+    _kkt[3, 1] = -_c15
+    _kkt[3, 2] = _c18
+    _kkt[4, 0] = _c14
+    _kkt[4, 1] = _c16
+    _kkt[4, 2] = -_c20
+    _jac[0] = -_c25 - _c27 + _c13*_c22 - _c13*_mult1 - _c14*_mult0
+    _jac[1] = _c25 + _c27
+    _jac[4] = _c29*qd_theta2
+    _jac[6] = _c30*_c31 + _c6*_mult1 - _acc0*(2.0*_c1*p_a + (0.16666666666666666)*p_a*p_m1) - _c22*_c6 - _c4*_mult0 - 0.5*_c24*_c7
+    _jac[7] = _c30*_c33 - _acc1*_c34
+    _jac[10] = -0.5*_c36 - 0.3333333333333333*_c35
+    _jac[11] = -_c35 - _c36 + _c30*_c37 - _acc1*_c38
+    _jac[13] = -_c14*_c21
+    _jac[14] = _c40 - _c41
+    _jac[15] = _c41 - _c40 + _c15*_c42 - _c15*_mult1 - _c16*_mult0
+    _jac[17] = -_c29*qd_theta1
+    _jac[20] = -_c31*_c43 - 0.5*_acc0*_c9
+    _jac[21] = -0.6666666666666666*_c24 + _c5*_mult1 - _acc0*_c34 - _c3*_mult0 - _c33*_c43 - _c42*_c5
+    _jac[25] = -_acc0*_c38 - _acc1*_c11 - _c16*_c44 - _c37*_c43
+    _jac[27] = -_c16*_c32
+    _jac[30] = _c18*_c46 + _c18*_mult1 + _c20*_mult0
+    _jac[36] = _c17*_mult0 - _c19*_c46 - _c19*_mult1 - 0.6666666666666666*_acc2*p_c*p_m3
+    _jac[40] = -_acc2*_c12 - _c20*_c44
+    _jac[41] = -_c20*_c45
+    _jac[42] = _c13*_c47 + _c49*qd_theta1 + _c50*p_a - _c51*p_a
+    _jac[43] = _c15*_c47 + _c52*qd_theta2 + _c53*p_b - _c54*p_b
+    _jac[44] = _c58*p_c - _c18*_c47 - _c55*qd_theta3 - _c56*p_c
+    _jac[45] = _c59 + _c14*_c60
+    _jac[46] = _c61 + _c16*_c62
+    _jac[47] = -_c63 - _c20*_c64
+    _jac[48] = _c66 + _c67 + _c4*_c65 - _c47*_c6
+    _jac[49] = _c69 + _c70 + _c3*_c68 - _c47*_c5
+    _jac[50] = -_c72 - _c73 + _c19*_c47 - _c17*_c71
+    _jac[51] = _c47
+    _jac[56] = _c59*qd_theta1 + _c66*p_a + _c67*p_a - _c14*_c47
+    _jac[57] = _c61*qd_theta2 + _c69*p_b + _c70*p_b - _c16*_c47
+    _jac[58] = _c20*_c47 - _c63*qd_theta3 - _c72*p_c - _c73*p_c
+    _jac[59] = -_c49 + _c13*_c60
+    _jac[60] = -_c52 + _c15*_c62
+    _jac[61] = _c55 - _c18*_c64
+    _jac[62] = _c51 - _c50 - _c4*_c47 - _c6*_c65
+    _jac[63] = _c54 - _c53 - _c3*_c47 - _c5*_c68
+    _jac[64] = _c56 - _c58 + _c17*_c47 + _c19*_c71
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((5, 14))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(3):
+        out[_i, 3 + _i] = 1.0
+    out[3:6] = _rows[0:3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def reaction_jacobian(t, y, p, out):
     """Exact Jacobian of the multipliers λ (`reactions`), shape (2, 14) into `out`: row c the constraint c of
     ('loop_x', 'loop_y'), columns ∂λ_c/∂y_j (y = (q, q̇), 6 of them), then ∂λ_c/∂p_j for the model's
@@ -723,6 +903,188 @@ def reaction_jacobian(t, y, p, out):
         return _status
     out[:] = 0.0
     out[0:2] = _rows[3:5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = ydot
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_d = p[3]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dy4 = v[4]
+    _dy5 = v[5]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _dp5 = w[5]
+    _dp6 = w[6]
+    _dp7 = w[7]
+    _kkt = np.zeros((5, 6))
+    _c0 = p_a**2
+    _c1 = p_m2 + (0.25)*p_m1
+    _c2 = sin(q_theta2)
+    _c3 = sin(q_theta1)
+    _c4 = cos(q_theta2)
+    _c5 = cos(q_theta1)
+    _c6 = _c2*_c3 + _c4*_c5
+    _c7 = (0.5)*p_a
+    _c8 = _c7*p_b
+    _c9 = _c6*_c8*p_m2
+    _c10 = (0.3333333333333333)*p_b**2
+    _c11 = (0.3333333333333333)*p_c**2
+    _c12 = _c3*p_a
+    _c13 = _c5*p_a
+    _c14 = _c2*p_b
+    _c15 = _c4*p_b
+    _c16 = sin(q_theta3)
+    _c17 = _c16*p_c
+    _c18 = -_c17
+    _c19 = cos(q_theta3)
+    _c20 = _c19*p_c
+    _c21 = -_c20
+    _c22 = qd_theta2**2
+    _c23 = _c2*_c5 - _c3*_c4
+    _c24 = _c23*_c8
+    _c25 = _c22*_c24
+    _c26 = p_m2 + (0.5)*p_m1
+    _c27 = _c13*p_g
+    _c28 = qd_theta1**2
+    _c29 = _c24*_c28
+    _c30 = (0.5)*p_g
+    _c31 = _c30*p_m2
+    _c32 = _c30*p_m3
+    _c33 = qd_theta3**2
+    _c34 = _c19*_c33
+    _c35 = -_c34*p_c
+    _c36 = _c22*_c4
+    _c37 = _c36*p_b
+    _c38 = _c28*_c5
+    _c39 = _c38*p_a
+    _c40 = _baumgarte_beta**2
+    _c41 = _c14*qd_theta2
+    _c42 = _c12*qd_theta1
+    _c43 = _c17*qd_theta3
+    _c44 = 2.0*_baumgarte_alpha
+    _c45 = _c16*_c33
+    _c46 = _c45*p_c
+    _c47 = _c2*_c22
+    _c48 = _c47*p_b
+    _c49 = _c28*_c3
+    _c50 = _c49*p_a
+    _c51 = _c20*qd_theta3
+    _c52 = _c15*qd_theta2
+    _c53 = _c13*qd_theta1
+    _c55 = _c6*_c7
+    _c56 = _c55*p_m2
+    _c57 = _c23*p_m2
+    _c58 = _c22*_c57
+    _c59 = _c26*p_g
+    _c62 = (0.5)*p_b
+    _c64 = _c22*_c9
+    _c65 = _c57*p_a*p_b
+    _c66 = (0.5)*_dp7
+    _c67 = _c28*_c57
+    _c69 = _c28*_c9
+    _c71 = _c3*_c40
+    _c73 = _c19*_c40
+    _c74 = _c44*qd_theta3
+    _c76 = _c44*qd_theta2
+    _c78 = _c2*_c40
+    _c80 = _c40*_c5
+    _c81 = _c44*qd_theta1
+    _c83 = _c16*_c40
+    ydot[0] = qd_theta1
+    ydot[1] = qd_theta2
+    ydot[2] = qd_theta3
+    _kkt[0, 0] = _c0*_c1 + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c9
+    _kkt[1, 0] = _c9
+    _kkt[1, 1] = _c10*p_m2
+    _kkt[2, 2] = _c11*p_m3
+    _kkt[0, 3] = _c12
+    _kkt[0, 4] = -_c13
+    _kkt[1, 3] = _c14
+    _kkt[1, 4] = -_c15
+    _kkt[2, 3] = _c18
+    _kkt[2, 4] = _c20
+    _kkt[3, 0] = -_c12
+    _kkt[3, 1] = -_c14
+    _kkt[3, 2] = _c17
+    _kkt[4, 0] = _c13
+    _kkt[4, 1] = _c15
+    _kkt[4, 2] = _c21
+    _kkt[0, 5] = _c25*p_m2 - _c26*_c27
+    _kkt[1, 5] = -_c15*_c31 - _c29*p_m2
+    _kkt[2, 5] = -_c20*_c32
+    _kkt[3, 5] = _c35 + _c37 + _c39 - _c40*(_c13 + _c15 + _c21 - p_d) - _c44*(_c43 - _c41 - _c42)
+    _kkt[4, 5] = _c48 + _c50 - _c46 - _c40*(_c12 + _c14 + _c18) - _c44*(_c52 + _c53 - _c51)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c54 = _acc0*_c0
+    _c60 = _acc1*p_b
+    _c61 = _c60*p_m2
+    _c63 = _c23*_c61*_c7
+    _c68 = _acc0*_c6
+    _c70 = _acc0*_c24*p_m2
+    _c72 = _acc0*_c5
+    _c75 = _acc2*_c16
+    _c77 = _acc1*_c2
+    _c79 = _acc1*_c4
+    _c82 = _acc0*_c3
+    _c84 = _acc2*_c19
+    out[0] = _dy3
+    out[1] = _dy4
+    out[2] = _dy5
+    _direction[0, 5] = _dp0*(_c5*_mult1 + _c58*_c62 - _acc0*(2.0*_c1*p_a + (0.16666666666666666)*p_a*p_m1) - _c3*_mult0 - _c5*_c59 - 0.5*_c6*_c61) + _dp1*(_c58*_c7 - _acc1*_c56) + _dp4*(-0.5*_c27 - 0.3333333333333333*_c54) + _dp5*(_c25 - _c27 - _c54 - _c55*_c60) + _dy0*(-_c63 - _c64 + _c12*_c59 - _c12*_mult1 - _c13*_mult0) + _dy1*(_c63 + _c64) + _c65*_dy4*qd_theta2 - _c13*_c26*_dp7
+    _direction[1, 5] = _dp0*(-_c62*_c67 - _c62*_c68*p_m2) + _dp1*(-0.6666666666666666*_c61 + _c4*_mult1 - _acc0*_c56 - _c2*_mult0 - _c31*_c4 - _c67*_c7) + _dp5*(-_c29 - _acc1*_c10 - _c15*_c30 - _c68*_c8) + _dy0*(_c69 - _c70) + _dy1*(_c70 - _c69 + _c14*_c31 - _c14*_mult1 - _c15*_mult0) - _c15*_c66*p_m2 - _c65*_dy3*qd_theta1
+    _direction[2, 5] = _dp2*(_c16*_mult0 - _c19*_c32 - _c19*_mult1 - 0.6666666666666666*_acc2*p_c*p_m3) + _dp6*(-_acc2*_c11 - _c20*_c30) + _dy2*(_c17*_c32 + _c17*_mult1 + _c20*_mult0) - _c20*_c66*p_m3
+    _direction[3, 5] = _c40*_dp3 + _dp0*(_c38 + _c82 - _c80 + _c3*_c81) + _dp1*(_c36 + _c77 + _c2*_c76 - _c4*_c40) + _dp2*(_c73 - _c34 - _c75 - _c16*_c74) + _dy0*(-_c50 + _c44*_c53 + _c71*p_a + _c72*p_a) + _dy1*(-_c48 + _c44*_c52 + _c78*p_b + _c79*p_b) + _dy2*(_c46 - _c44*_c51 - _c83*p_c - _c84*p_c) + _dy3*(2.0*_c53 + _c12*_c44) + _dy4*(2.0*_c52 + _c14*_c44) + _dy5*(-2.0*_c51 - _c17*_c44)
+    _direction[4, 5] = _dp0*(_c49 - _c71 - _c72 - _c5*_c81) + _dp1*(_c47 - _c78 - _c79 - _c4*_c76) + _dp2*(_c83 + _c84 - _c45 + _c19*_c74) + _dy0*(_c39 + _c42*_c44 + _c82*p_a - _c80*p_a) + _dy1*(_c37 + _c41*_c44 + _c77*p_b - _c15*_c40) + _dy2*(_c35 + _c73*p_c - _c43*_c44 - _c75*p_c) + _dy3*(2.0*_c42 - _c13*_c44) + _dy4*(2.0*_c41 - _c15*_c44) + _dy5*(-2.0*_c43 + _c20*_c44)
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[3] = _direction[0, 5]
+    out[4] = _direction[1, 5]
+    out[5] = _direction[2, 5]
     return 0
 
 
@@ -1034,7 +1396,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (6,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

@@ -523,6 +523,144 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂q̈/∂(y, p), one factorization of K for both: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(3)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((8, 8))
+    _jac = np.zeros(136)
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _mult2 = _lam[2]
+    _c0 = 2.0*p_m
+    _c1 = (0.5)*p_L**2
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_R
+    _c4 = cos(q_theta)
+    _c5 = _c4*p_R
+    _c6 = -_c5
+    _c7 = -p_R
+    _c8 = -_c3
+    _c9 = sin(p_alpha)
+    _c10 = -_c3*_mult1 - _c5*_mult0
+    _c11 = _c4*_mult1 - _c2*_mult0
+    _c12 = -_acc3
+    _c13 = _acc3*_c4
+    _c14 = _acc4*_c4
+    _c15 = qd_phi + qd_phi_prime
+    _c16 = _c15*qd_theta
+    _c17 = _c4*qd_phi_prime
+    _c18 = 2.0*_baumgarte_alpha
+    _c19 = -4.0*_baumgarte_alpha
+    _c20 = _c18*_c3 + _c5*qd_theta
+    _c21 = _acc4*_c2
+    _c22 = _c2*qd_phi_prime
+    _c23 = _acc3*_c2
+    _c24 = _c3*qd_theta - _c18*_c5
+    _c25 = _baumgarte_beta**2
+    _c26 = _c25*p_R
+    _c27 = _c18*p_R
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + _c1*p_m
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c3
+    _kkt[3, 6] = _c6
+    _kkt[3, 7] = _c7
+    _kkt[4, 5] = _c3
+    _kkt[4, 6] = _c6
+    _kkt[4, 7] = p_R
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c8
+    _kkt[5, 4] = _c8
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c5
+    _kkt[6, 4] = _c5
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c7
+    _jac[10] = -2.0*_acc0
+    _jac[27] = -2.0*_acc1 + 2.0*_c9*p_g
+    _jac[32] = _c0*_c9
+    _jac[33] = _c0*p_g*cos(p_alpha)
+    _jac[44] = -_acc2*_c1
+    _jac[46] = _mult2 - _acc2*p_L*p_m
+    _jac[47] = -2.0*_acc2
+    _jac[53] = _c10
+    _jac[62] = _c11 + _mult2
+    _jac[65] = _c12
+    _jac[70] = _c10
+    _jac[79] = _c11 - _mult2
+    _jac[82] = -_acc4
+    _jac[87] = _c13*p_R + _c14*p_R - _c16*_c3 - _c18*(-_c17*p_R - _c5*qd_phi)
+    _jac[90] = _c19
+    _jac[92] = _c15*_c5
+    _jac[93] = _c20
+    _jac[94] = _c20
+    _jac[96] = _c21 + _c23 + _c16*_c4 - _c18*(-_c22 - _c2*qd_phi)
+    _jac[104] = _c16*_c5 + _c21*p_R + _c23*p_R - _c18*(-_c22*p_R - _c3*qd_phi)
+    _jac[108] = _c19
+    _jac[109] = _c15*_c3
+    _jac[110] = _c24
+    _jac[111] = _c24
+    _jac[113] = -_c13 - _c14 + _c16*_c2 - _c18*(_c17 + _c4*qd_phi)
+    _jac[121] = -_c25*p_L
+    _jac[122] = -_c26
+    _jac[123] = _c26
+    _jac[126] = -_c18*p_L
+    _jac[127] = -_c27
+    _jac[128] = _c27
+    _jac[130] = _acc4 + _c12 - _c18*(qd_phi - qd_phi_prime) - _c25*(q_phi - q_phi_prime)
+    _jac[131] = -_acc2 - _c18*qd_theta - _c25*q_theta
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((8, 17))
+    _status = kkt_solve_matrix(_kkt, 5, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(5):
+        out[_i, 5 + _i] = 1.0
+    out[5:10] = _rows[0:5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def reaction_jacobian(t, y, p, out):
     """Exact Jacobian of the multipliers λ (`reactions`), shape (3, 17) into `out`: row c the constraint c of
     ('roll_X', 'roll_Y', 'steer'), columns ∂λ_c/∂y_j (y = (q, q̇), 10 of them), then ∂λ_c/∂p_j for the model's
@@ -653,6 +791,160 @@ def reaction_jacobian(t, y, p, out):
         return _status
     out[:] = 0.0
     out[0:3] = _rows[5:8]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = ydot
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dy4 = v[4]
+    _dy5 = v[5]
+    _dy6 = v[6]
+    _dy7 = v[7]
+    _dy8 = v[8]
+    _dy9 = v[9]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _dp5 = w[5]
+    _dp6 = w[6]
+    _kkt = np.zeros((8, 9))
+    _c0 = 2.0*p_m
+    _c1 = (0.5)*p_L**2
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_R
+    _c4 = cos(q_theta)
+    _c5 = _c4*p_R
+    _c6 = -_c5
+    _c7 = -p_R
+    _c8 = -_c3
+    _c9 = sin(p_alpha)
+    _c10 = _c9*p_g
+    _c11 = _c2*qd_phi_prime
+    _c12 = -_c11*p_R - _c3*qd_phi
+    _c13 = 2.0*_baumgarte_alpha
+    _c14 = qd_phi + qd_phi_prime
+    _c15 = _c5*qd_theta
+    _c16 = _c14*_c15
+    _c17 = _c5*qd_phi
+    _c18 = _c5*qd_phi_prime
+    _c19 = _c3*qd_theta
+    _c20 = _c14*_c19
+    _c21 = q_phi - q_phi_prime
+    _c22 = _baumgarte_beta**2
+    _c25 = _c14*_dy7
+    _c26 = _c15 + _c13*_c3
+    _c27 = 4.0*_baumgarte_alpha
+    _c28 = _c14*qd_theta
+    _c29 = _c19 - _c13*_c5
+    _c30 = _c22*p_R
+    _c31 = _c13*p_R
+    ydot[0] = qd_X
+    ydot[1] = qd_Y
+    ydot[2] = qd_theta
+    ydot[3] = qd_phi
+    ydot[4] = qd_phi_prime
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + _c1*p_m
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c3
+    _kkt[3, 6] = _c6
+    _kkt[3, 7] = _c7
+    _kkt[4, 5] = _c3
+    _kkt[4, 6] = _c6
+    _kkt[4, 7] = p_R
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c8
+    _kkt[5, 4] = _c8
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c5
+    _kkt[6, 4] = _c5
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c7
+    _kkt[0, 8] = 0.0
+    _kkt[1, 8] = _c0*_c10
+    _kkt[2, 8] = 0.0
+    _kkt[3, 8] = 0.0
+    _kkt[4, 8] = 0.0
+    _kkt[5, 8] = _c16 - _c13*(_c12 + 2.0*qd_X)
+    _kkt[6, 8] = _c20 - _c13*(_c17 + _c18 + 2.0*qd_Y)
+    _kkt[7, 8] = -_c13*(p_L*qd_theta + p_R*qd_phi - p_R*qd_phi_prime) - _c22*(_c21*p_R + p_L*q_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 5)
+    if _status:
+        return _status
+    _ydot[5] = _kkt[0, 8]
+    _ydot[6] = _kkt[1, 8]
+    _ydot[7] = _kkt[2, 8]
+    _ydot[8] = _kkt[3, 8]
+    _ydot[9] = _kkt[4, 8]
+    _lam = _kkt[5:, 8]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _mult2 = _lam[2]
+    _c23 = _c4*_mult1 - _c2*_mult0
+    _c24 = _dy2*(-_c3*_mult1 - _c5*_mult0)
+    out[0] = _dy5
+    out[1] = _dy6
+    out[2] = _dy7
+    out[3] = _dy8
+    out[4] = _dy9
+    _direction[0, 8] = -2.0*_acc0*_dp0
+    _direction[1, 8] = _dp0*(-2.0*_acc1 + 2.0*_c10) + _c0*_c9*_dp5 + _c0*_dp6*p_g*cos(p_alpha)
+    _direction[2, 8] = _dp2*(_mult2 - _acc2*p_L*p_m) - 2.0*_acc2*_dp3 - _acc2*_c1*_dp0
+    _direction[3, 8] = _c24 + _dp1*(_c23 + _mult2) - _acc3*_dp4
+    _direction[4, 8] = _c24 + _dp1*(_c23 - _mult2) - _acc4*_dp4
+    _direction[5, 8] = _c25*_c5 + _c26*_dy8 + _c26*_dy9 + _dp1*(_acc3*_c2 + _acc4*_c2 + _c28*_c4 - _c13*(-_c11 - _c2*qd_phi)) + _dy2*(-_c20 + _acc3*_c5 + _acc4*_c5 - _c13*(-_c17 - _c18)) - _c27*_dy5
+    _direction[6, 8] = _c25*_c3 + _c29*_dy8 + _c29*_dy9 + _dp1*(_c2*_c28 - _acc3*_c4 - _acc4*_c4 - _c13*(_c4*qd_phi + _c4*qd_phi_prime)) + _dy2*(_c16 + _acc3*_c3 + _acc4*_c3 - _c12*_c13) - _c27*_dy6
+    _direction[7, 8] = _c30*_dy4 + _c31*_dy9 + _dp1*(_acc4 - _acc3 - _c13*(qd_phi - qd_phi_prime) - _c21*_c22) + _dp2*(-_acc2 - _c13*qd_theta - _c22*q_theta) - _c30*_dy3 - _c31*_dy8 - _c13*_dy7*p_L - _c22*_dy2*p_L
+    _status = kkt_solve(_direction, 5)
+    if _status:
+        return _status
+    out[5] = _direction[0, 8]
+    out[6] = _direction[1, 8]
+    out[7] = _direction[2, 8]
+    out[8] = _direction[3, 8]
+    out[9] = _direction[4, 8]
     return 0
 
 
@@ -909,7 +1201,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (10,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

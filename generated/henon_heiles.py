@@ -202,6 +202,141 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = ydot
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = out.reshape(20)
+    _jac[:] = 0.0
+    q_x = y[0]
+    q_y = y[1]
+    p_lam = p[0]
+    _c0 = 2.0*p_lam*q_y
+    _c1 = 2.0*q_x
+    _c2 = -_c1*p_lam
+    _m0_0 = 1.0
+    _m1_0 = 0.0
+    _m1_1 = 1.0
+    _jac[2] = 1.0
+    _jac[8] = 1.0
+    _jac[10] = -1.0 - _c0
+    _jac[11] = _c2
+    _jac[14] = -_c1*q_y
+    _jac[15] = _c2
+    _jac[16] = -1.0 + _c0
+    _jac[19] = q_y**2 - q_x**2
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _z0 = _jac[10]
+    _z1 = _jac[15] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[15] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[10] = _x0
+    _z0 = _jac[11]
+    _z1 = _jac[16] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[16] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[11] = _x0
+    _z0 = _jac[12]
+    _z1 = _jac[17] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[17] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[12] = _x0
+    _z0 = _jac[13]
+    _z1 = _jac[18] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[18] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[13] = _x0
+    _z0 = _jac[14]
+    _z1 = _jac[19] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[19] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[14] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = ydot
+    q_x = y[0]
+    q_y = y[1]
+    qd_x = y[2]
+    qd_y = y[3]
+    p_lam = p[0]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dp0 = w[0]
+    _c0 = 2.0*q_y
+    _c1 = _c0*p_lam
+    _c2 = q_x**2
+    _c3 = q_y**2
+    _c4 = 2.0*p_lam*q_x
+    ydot[0] = qd_x
+    ydot[1] = qd_y
+    _m0_0 = 1.0
+    _m1_0 = 0.0
+    _m1_1 = 1.0
+    _f0 = -q_x - _c1*q_x
+    _f1 = -q_y - p_lam*(_c2 - _c3)
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    out[0] = _dy2
+    out[1] = _dy3
+    _g0 = _dy0*(-1.0 - _c1) - _c4*_dy1 - _c0*_dp0*q_x
+    _g1 = _dp0*(_c3 - _c2) + _dy1*(-1.0 + _c1) - _c4*_dy0
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    out[2] = _x0
+    out[3] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     out[0, 0] = 1.0
@@ -290,7 +425,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (4,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

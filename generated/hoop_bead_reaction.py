@@ -288,6 +288,90 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂q̈/∂(y, p), one factorization of K for both: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(1)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((3, 3))
+    _jac = np.zeros(27)
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c0 = p_R**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = qd_phi**2
+    _c6 = cos(q_theta)
+    _c7 = _c1*_c6**2
+    _c8 = p_R*p_m
+    _c9 = _c2*_c6
+    _c10 = _c1*_c9
+    _c11 = 2.0*_c10
+    _c12 = _c11*qd_phi
+    _c13 = _c0*_c9
+    _c14 = _c2*p_g
+    _c15 = _c2*_c8
+    _c16 = _c15*_c6
+    _c17 = 2.0*_c8
+    _c18 = 2.0*qd_theta
+    _c19 = _c18*qd_phi
+    _c20 = _acc1*_c3
+    _c21 = _baumgarte_beta**2
+    _c22 = 2.0*_baumgarte_alpha
+    _c23 = 2.0*t
+    _c24 = sin(_c23)
+    _kkt[0, 0] = _c1
+    _kkt[1, 1] = _c4
+    _kkt[1, 2] = -1.0
+    _kkt[2, 1] = 1.0
+    _jac[0] = _c5*_c7 - _c4*_c5 + _c6*_c8*p_g
+    _jac[3] = _c12
+    _jac[4] = _c13*_c5 + _c14*p_R - _acc0*_c0
+    _jac[5] = _c14*p_m - _acc0*_c17 + 2.0*_c16*_c5
+    _jac[6] = _c15
+    _jac[9] = _c19*_c4 - _acc1*_c11 - _c19*_c7
+    _jac[11] = -_c12
+    _jac[12] = -_c10*_c18
+    _jac[13] = -_c0*_c20 - _c13*_c19
+    _jac[14] = -_c17*_c20 - 4.0*_c16*qd_phi*qd_theta
+    _jac[19] = -_c21
+    _jac[21] = -_c22
+    _jac[25] = _c22 + _c21*t
+    _jac[26] = -4.0*_c24 + _c21*_c24 + 4.0*_baumgarte_alpha*cos(_c23)
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((3, 9))
+    _status = kkt_solve_matrix(_kkt, 2, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(2):
+        out[_i, 2 + _i] = 1.0
+    out[2:4] = _rows[0:2]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def reaction_jacobian(t, y, p, out):
     """Exact Jacobian of the multipliers λ (`reactions`), shape (1, 9) into `out`: row c the constraint c of
     ('drive',), columns ∂λ_c/∂y_j (y = (q, q̇), 4 of them), then ∂λ_c/∂p_j for the model's
@@ -364,6 +448,98 @@ def reaction_jacobian(t, y, p, out):
         return _status
     out[:] = 0.0
     out[0:1] = _rows[2:3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = ydot
+    q_theta = y[0]
+    q_phi = y[1]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _kkt = np.zeros((3, 4))
+    _c0 = p_R**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_g
+    _c6 = _c5*p_m
+    _c7 = cos(q_theta)
+    _c8 = qd_phi**2
+    _c9 = _c7*_c8
+    _c10 = _c2*_c9
+    _c11 = 2.0*qd_theta
+    _c12 = _c11*qd_phi
+    _c13 = _c2*_c7
+    _c14 = _c12*_c13
+    _c15 = 2.0*t
+    _c16 = sin(_c15)
+    _c17 = _baumgarte_beta**2
+    _c18 = 4.0*_c16
+    _c19 = cos(_c15)
+    _c20 = 2.0*_baumgarte_alpha
+    _c21 = _c1*_c7**2
+    _c22 = p_R*p_m
+    _c23 = _c1*_c13
+    _c24 = 2.0*_c23
+    _c25 = _c24*qd_phi
+    _c26 = _c2*_c22
+    _c27 = 2.0*_c22
+    ydot[0] = qd_theta
+    ydot[1] = qd_phi
+    _kkt[0, 0] = _c1
+    _kkt[1, 1] = _c4
+    _kkt[1, 2] = -1.0
+    _kkt[2, 1] = 1.0
+    _kkt[0, 3] = _c1*_c10 + _c6*p_R
+    _kkt[1, 3] = -_c1*_c14
+    _kkt[2, 3] = -_c17*(q_phi - _c16*p_epsilon - p_Omega*t) - _c18*p_epsilon - _c20*(qd_phi - p_Omega - 2.0*_c19*p_epsilon)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 2)
+    if _status:
+        return _status
+    _ydot[2] = _kkt[0, 3]
+    _ydot[3] = _kkt[1, 3]
+    _lam = _kkt[2:, 3]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c28 = _acc1*_c3
+    out[0] = _dy2
+    out[1] = _dy3
+    _direction[0, 3] = _c25*_dy3 + _c26*_dp2 + _dp0*(_c0*_c10 + _c5*p_R - _acc0*_c0) + _dp1*(_c6 - _acc0*_c27 + 2.0*_c26*_c9) + _dy0*(_c21*_c8 - _c4*_c8 + _c22*_c7*p_g)
+    _direction[1, 3] = _dp0*(-_c0*_c14 - _c0*_c28) + _dp1*(-_c27*_c28 - 4.0*_c26*_c7*qd_phi*qd_theta) + _dy0*(_c12*_c4 - _acc1*_c24 - _c12*_c21) - _c25*_dy2 - _c11*_c23*_dy3
+    _direction[2, 3] = _dp3*(_c20 + _c17*t) + _dp4*(-_c18 + _c16*_c17 + 4.0*_baumgarte_alpha*_c19) - _c17*_dy1 - _c20*_dy3
+    _status = kkt_solve(_direction, 2)
+    if _status:
+        return _status
+    out[2] = _direction[0, 3]
+    out[3] = _direction[1, 3]
     return 0
 
 
@@ -534,7 +710,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (4,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

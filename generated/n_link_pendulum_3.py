@@ -533,6 +533,470 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = ydot
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = out.reshape(78)
+    _jac[:] = 0.0
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_m3 = p[2]
+    p_l1 = p[3]
+    p_l2 = p[4]
+    p_l3 = p[5]
+    p_g = p[6]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c0 = p_l1**2
+    _c1 = p_m2 + p_m3
+    _c2 = _c1 + p_m1
+    _c3 = sin(q_theta2)
+    _c4 = sin(q_theta1)
+    _c5 = cos(q_theta2)
+    _c6 = cos(q_theta1)
+    _c7 = _c3*_c4 + _c5*_c6
+    _c8 = _c7*p_l2
+    _c9 = _c8*p_l1
+    _c10 = _c1*_c9
+    _c11 = p_l2**2
+    _c12 = p_l3*p_m3
+    _c13 = sin(q_theta3)
+    _c14 = cos(q_theta3)
+    _c15 = _c13*_c4 + _c14*_c6
+    _c16 = _c15*p_l1
+    _c17 = _c12*_c16
+    _c18 = _c13*_c3 + _c14*_c5
+    _c19 = _c18*p_l2
+    _c20 = _c12*_c19
+    _c21 = p_l3**2
+    _c22 = qd_theta2**2
+    _c23 = _c10*_c22
+    _c24 = qd_theta3**2
+    _c25 = _c17*_c24
+    _c26 = _c13*_c6 - _c14*_c4
+    _c27 = _c26*p_l1
+    _c28 = _acc2*_c12
+    _c29 = _c27*_c28
+    _c30 = _c2*p_g
+    _c31 = _acc1*_c1
+    _c32 = _c31*p_l1
+    _c33 = _c3*_c6 - _c4*_c5
+    _c34 = _c33*p_l2
+    _c35 = _c32*_c34
+    _c36 = 2.0*p_l2
+    _c37 = _c33*p_l1
+    _c38 = _c1*_c37
+    _c39 = _c36*_c38
+    _c40 = _c12*qd_theta3
+    _c41 = 2.0*_c27
+    _c42 = _c4*p_l1
+    _c43 = -_acc0*_c0 - _c42*p_g
+    _c44 = _c37*p_l2
+    _c45 = _c43 + _c22*_c44 - _acc1*_c9
+    _c46 = _acc2*_c16
+    _c47 = _c27*p_l3
+    _c48 = _c12*_c26
+    _c49 = _c1*_c34
+    _c50 = _c12*_c15
+    _c51 = _acc0*p_l1
+    _c52 = _c27*p_m3
+    _c53 = qd_theta1**2
+    _c54 = _c10*_c53
+    _c55 = _c1*_c51
+    _c56 = _c34*_c55
+    _c57 = _c1*p_g
+    _c58 = _c14*_c3 - _c13*_c5
+    _c59 = _c58*p_l2
+    _c60 = _c28*_c59
+    _c61 = _c20*_c24
+    _c62 = _c36*_c58
+    _c63 = _c3*p_l2
+    _c64 = -_acc1*_c11 - _c44*_c53 - _c51*_c8 - _c63*p_g
+    _c65 = p_l2*p_l3
+    _c66 = _c18*_c65
+    _c67 = _c24*_c58
+    _c68 = _c12*_c18
+    _c69 = _c19*p_m3
+    _c70 = p_l2*p_m3
+    _c71 = _c17*_c53
+    _c72 = _c48*_c51
+    _c73 = _c20*_c22
+    _c74 = _acc1*_c12*_c59
+    _c75 = _c22*_c58
+    _c76 = _c13*p_g
+    _c77 = _c15*_c51
+    _m0_0 = _c0*_c2
+    _m1_0 = _c10
+    _m1_1 = _c1*_c11
+    _m2_0 = _c17
+    _m2_1 = _c20
+    _m2_2 = _c21*p_m3
+    _jac[3] = 1.0
+    _jac[17] = 1.0
+    _jac[31] = 1.0
+    _jac[39] = -_c23 - _c25 - _c29 - _c35 - _c30*_c6*p_l1
+    _jac[40] = _c23 + _c35
+    _jac[41] = _c25 + _c29
+    _jac[43] = _c39*qd_theta2
+    _jac[44] = _c40*_c41
+    _jac[45] = _c43
+    _jac[46] = _c45
+    _jac[47] = _c45 + _c24*_c47 - _c46*p_l3
+    _jac[48] = _c22*_c49 + _c24*_c48 - _acc2*_c50 - _c30*_c4 - _c31*_c8 - 2.0*_c2*_c51
+    _jac[49] = _c22*_c38 - _c32*_c7
+    _jac[50] = _c24*_c52 - _c46*p_m3
+    _jac[51] = -_c2*_c42
+    _jac[52] = _c54 - _c56
+    _jac[53] = _c56 + _c60 - _c54 - _c61 - _c5*_c57*p_l2
+    _jac[54] = _c61 - _c60
+    _jac[55] = -_c39*qd_theta1
+    _jac[57] = -_c40*_c62
+    _jac[59] = _c64
+    _jac[60] = _c64 - _acc2*_c66 - _c65*_c67
+    _jac[61] = -_c49*_c53 - _acc0*_c1*_c8
+    _jac[62] = -_acc2*_c68 - _c12*_c67 - _c3*_c57 - _c31*_c36 - _c38*_c53 - _c55*_c7
+    _jac[63] = -_acc2*_c69 - _c67*_c70
+    _jac[64] = -_c1*_c63
+    _jac[65] = _c71 - _c72
+    _jac[66] = _c73 + _c74
+    _jac[67] = _c72 - _c71 - _c73 - _c74 - _c12*_c14*p_g
+    _jac[68] = -_c12*_c41*qd_theta1
+    _jac[69] = _c12*_c62*qd_theta2
+    _jac[73] = _c65*_c75 - _acc1*_c66 - _acc2*_c21 - _c47*_c53 - _c76*p_l3 - _c77*p_l3
+    _jac[74] = -_acc0*_c50 - _c48*_c53
+    _jac[75] = _c12*_c75 - _acc1*_c68
+    _jac[76] = -2.0*_c28 + _c70*_c75 - _acc1*_c69 - _c52*_c53 - _c76*p_m3 - _c77*p_m3
+    _jac[77] = -_c12*_c13
+    # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _l2_0 = (_m2_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _l2_1 = (_m2_1 - _l2_0*_l1_0*_d0)/_d1
+    _d2 = _m2_2 - _l2_0*_l2_0*_d0 - _l2_1*_l2_1*_d1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _z0 = _jac[39]
+    _z1 = _jac[52] - _l1_0*_z0
+    _z2 = _jac[65] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[65] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[52] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[39] = _x0
+    _z0 = _jac[40]
+    _z1 = _jac[53] - _l1_0*_z0
+    _z2 = _jac[66] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[66] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[53] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[40] = _x0
+    _z0 = _jac[41]
+    _z1 = _jac[54] - _l1_0*_z0
+    _z2 = _jac[67] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[67] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[54] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[41] = _x0
+    _z0 = _jac[42]
+    _z1 = _jac[55] - _l1_0*_z0
+    _z2 = _jac[68] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[68] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[55] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[42] = _x0
+    _z0 = _jac[43]
+    _z1 = _jac[56] - _l1_0*_z0
+    _z2 = _jac[69] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[69] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[56] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[43] = _x0
+    _z0 = _jac[44]
+    _z1 = _jac[57] - _l1_0*_z0
+    _z2 = _jac[70] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[70] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[57] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[44] = _x0
+    _z0 = _jac[45]
+    _z1 = _jac[58] - _l1_0*_z0
+    _z2 = _jac[71] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[71] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[58] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[45] = _x0
+    _z0 = _jac[46]
+    _z1 = _jac[59] - _l1_0*_z0
+    _z2 = _jac[72] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[72] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[59] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[46] = _x0
+    _z0 = _jac[47]
+    _z1 = _jac[60] - _l1_0*_z0
+    _z2 = _jac[73] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[73] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[60] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[47] = _x0
+    _z0 = _jac[48]
+    _z1 = _jac[61] - _l1_0*_z0
+    _z2 = _jac[74] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[74] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[61] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[48] = _x0
+    _z0 = _jac[49]
+    _z1 = _jac[62] - _l1_0*_z0
+    _z2 = _jac[75] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[75] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[62] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[49] = _x0
+    _z0 = _jac[50]
+    _z1 = _jac[63] - _l1_0*_z0
+    _z2 = _jac[76] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[76] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[63] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[50] = _x0
+    _z0 = _jac[51]
+    _z1 = _jac[64] - _l1_0*_z0
+    _z2 = _jac[77] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[77] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[64] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[51] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = ydot
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_m3 = p[2]
+    p_l1 = p[3]
+    p_l2 = p[4]
+    p_l3 = p[5]
+    p_g = p[6]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dy4 = v[4]
+    _dy5 = v[5]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _dp5 = w[5]
+    _dp6 = w[6]
+    _c0 = p_l1**2
+    _c1 = p_m2 + p_m3
+    _c2 = _c1 + p_m1
+    _c3 = sin(q_theta2)
+    _c4 = sin(q_theta1)
+    _c5 = cos(q_theta2)
+    _c6 = cos(q_theta1)
+    _c7 = _c3*_c4 + _c5*_c6
+    _c8 = _c7*p_l1
+    _c9 = _c8*p_l2
+    _c10 = _c1*_c9
+    _c11 = p_l2**2
+    _c12 = sin(q_theta3)
+    _c13 = cos(q_theta3)
+    _c14 = _c12*_c4 + _c13*_c6
+    _c15 = p_l3*p_m3
+    _c16 = _c15*p_l1
+    _c17 = _c14*_c16
+    _c18 = _c12*_c3 + _c13*_c5
+    _c19 = _c18*p_l2
+    _c20 = _c15*_c19
+    _c21 = p_l3**2
+    _c22 = qd_theta3**2
+    _c23 = _c12*_c6 - _c13*_c4
+    _c24 = _c16*_c23
+    _c25 = qd_theta2**2
+    _c26 = _c1*p_l2
+    _c27 = _c3*_c6 - _c4*_c5
+    _c28 = _c27*p_l1
+    _c29 = _c26*_c28
+    _c30 = _c4*p_g
+    _c31 = _c2*_c30
+    _c32 = _c22*p_l2
+    _c33 = _c13*_c3 - _c12*_c5
+    _c34 = _c15*_c33
+    _c35 = qd_theta1**2
+    _c36 = _c28*_c35
+    _c37 = _c3*p_g
+    _c38 = _c37*p_l2
+    _c39 = _c25*p_l2
+    _c40 = _c12*p_g
+    _c41 = _c40*p_m3
+    _c42 = _c1*_c28
+    _c43 = _c1*_c8
+    _c47 = _c2*p_l1
+    _c48 = _c10*_c25
+    _c49 = _c17*_c22
+    _c53 = _dy4*qd_theta2
+    _c54 = 2.0*_c29
+    _c55 = _dy5*qd_theta3
+    _c56 = 2.0*_c24
+    _c57 = p_l1*p_m3
+    _c58 = _c23*_c57
+    _c60 = _c15*_c23
+    _c61 = _c26*_c27
+    _c62 = p_l1*p_l3
+    _c63 = _c23*_c62
+    _c64 = _c19*p_l3
+    _c65 = _c33*p_l3
+    _c67 = _c34*p_l2
+    _c68 = 2.0*_c67
+    _c70 = _c20*_c22
+    _c71 = _c19*p_m3
+    _c72 = _c33*p_m3
+    _c73 = _c15*_c18
+    _c75 = _dy3*qd_theta1
+    _c76 = _c10*_c35
+    _c79 = _c17*_c35
+    _c80 = _c20*_c25
+    ydot[0] = qd_theta1
+    ydot[1] = qd_theta2
+    ydot[2] = qd_theta3
+    _m0_0 = _c0*_c2
+    _m1_0 = _c10
+    _m1_1 = _c1*_c11
+    _m2_0 = _c17
+    _m2_1 = _c20
+    _m2_2 = _c21*p_m3
+    _f0 = _c22*_c24 + _c25*_c29 - _c31*p_l1
+    _f1 = -_c1*_c38 - _c26*_c36 - _c32*_c34
+    _f2 = _c34*_c39 - _c24*_c35 - _c41*p_l3
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c44 = _acc1*p_l2
+    _c45 = -_acc0*_c0 - _c30*p_l1
+    _c46 = _c45 + _c28*_c39 - _c44*_c8
+    _c50 = _acc2*_c24
+    _c51 = _c1*_c44
+    _c52 = _c28*_c51
+    _c59 = _acc2*_c14
+    _c66 = -_c38 - _acc0*_c9 - _acc1*_c11 - _c36*p_l2
+    _c69 = _acc2*_c67
+    _c74 = _acc0*_c26
+    _c77 = _c28*_c74
+    _c78 = _acc0*_c14
+    _c81 = _c34*_c44
+    _c82 = _acc0*_c24
+    out[0] = _dy3
+    out[1] = _dy4
+    out[2] = _dy5
+    _g0 = _c45*_dp0 + _c46*_dp1 + _c53*_c54 + _c55*_c56 + _dp2*(_c46 + _c22*_c63 - _c59*_c62) + _dp3*(-_c31 + _c22*_c60 + _c25*_c61 - _c15*_c59 - _c51*_c7 - 2.0*_acc0*_c47) + _dp4*(_c25*_c42 - _acc1*_c43) + _dp5*(_c22*_c58 - _c57*_c59) + _dy0*(-_c48 - _c49 - _c50 - _c52 - _c47*_c6*p_g) + _dy1*(_c48 + _c52) + _dy2*(_c49 + _c50) - _c4*_c47*_dp6
+    _g1 = _c66*_dp1 + _dp2*(_c66 - _acc2*_c64 - _c32*_c65) + _dp3*(-_c35*_c61 - _c7*_c74) + _dp4*(-2.0*_c51 - _acc0*_c43 - _acc2*_c73 - _c1*_c37 - _c22*_c34 - _c35*_c42) + _dp5*(-_acc2*_c71 - _c32*_c72) + _dy0*(_c76 - _c77) + _dy1*(_c69 + _c77 - _c70 - _c76 - _c26*_c5*p_g) + _dy2*(_c70 - _c69) - _c54*_c75 - _c55*_c68 - _c26*_c3*_dp6
+    _g2 = _c53*_c68 + _dp2*(_c39*_c65 - _acc1*_c64 - _acc2*_c21 - _c35*_c63 - _c40*p_l3 - _c62*_c78) + _dp3*(-_c15*_c78 - _c35*_c60) + _dp4*(_c25*_c34 - _acc1*_c73) + _dp5*(-_c41 + _c39*_c72 - _acc1*_c71 - _c35*_c58 - _c57*_c78 - 2.0*_acc2*_c15) + _dy0*(_c79 - _c82) + _dy1*(_c80 + _c81) + _dy2*(_c82 - _c79 - _c80 - _c81 - _c13*_c15*p_g) - _c56*_c75 - _c12*_c15*_dp6
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    out[3] = _x0
+    out[4] = _x1
+    out[5] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta1 = y[0]
@@ -700,7 +1164,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (6,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

@@ -588,6 +588,198 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂q̈/∂(y, p), one factorization of K for both: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((7, 7))
+    _jac = np.zeros(105)
+    q_psi = y[2]
+    q_theta = y[3]
+    qd_psi = y[7]
+    qd_theta = y[8]
+    qd_phi = y[9]
+    p_m = p[0]
+    p_r = p[1]
+    p_I1 = p[2]
+    p_I3 = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c0 = cos(q_psi)
+    _c1 = _c0*p_r
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_m
+    _c4 = _c1*_c3
+    _c5 = cos(q_theta)
+    _c6 = sin(q_psi)
+    _c7 = _c6*p_r
+    _c8 = _c5*_c7
+    _c9 = _c8*p_m
+    _c10 = _c3*_c7
+    _c11 = _c1*_c5
+    _c12 = _c11*p_m
+    _c13 = -_c12
+    _c14 = _c5**2
+    _c15 = p_r**2
+    _c16 = _c15*p_m
+    _c17 = _c14*_c15
+    _c18 = _c2*p_I3
+    _c19 = _c7*p_m
+    _c20 = qd_psi*qd_theta
+    _c21 = _c20*_c5
+    _c22 = 2.0*_c21
+    _c23 = _acc3*_c11
+    _c24 = _acc2*_c2
+    _c25 = _c24*_c7
+    _c26 = qd_theta**2
+    _c27 = qd_psi**2
+    _c28 = 2.0*_c20
+    _c29 = 2.0*qd_theta
+    _c30 = _c7*qd_psi
+    _c31 = 2.0*_c3
+    _c32 = _c1*qd_psi
+    _c33 = 2.0*_c5
+    _c34 = _c33*p_m
+    _c35 = _acc3*_c8
+    _c36 = _c2*_c27
+    _c37 = _c1*_c24
+    _c38 = _c2*_c26
+    _c39 = _c0*p_m
+    _c40 = _c6*p_m
+    _c41 = _c40*_c5
+    _c42 = _c1*p_m
+    _c43 = _c39*_c5
+    _c44 = _acc0*_c2
+    _c45 = _acc1*_c2
+    _c46 = _c19*_c44 - _c42*_c45
+    _c47 = _c2**2
+    _c48 = 2.0*p_I1
+    _c49 = 2.0*_c16
+    _c50 = _c49 - _c48 + 2.0*p_I3
+    _c51 = _c20*_c50
+    _c52 = _c5*p_I3
+    _c53 = _c2*_c5
+    _c54 = -_acc0*_c12 - _acc1*_c9
+    _c55 = _c50*_c53
+    _c56 = _c52*qd_phi
+    _c57 = -_c52*qd_theta
+    _c58 = _c2*_c22
+    _c59 = p_m*p_r
+    _c60 = _c2*_c59
+    _c61 = 2.0*_c59
+    _c62 = _c5*qd_phi
+    _c63 = qd_phi*qd_psi
+    _c64 = p_I1 - _c16 - p_I3
+    _c65 = _c27*_c64
+    _c66 = _c52*qd_psi
+    _c67 = _c2*p_g
+    _c68 = _c27*_c53
+    _c69 = 2.0*_baumgarte_alpha
+    _c70 = _c7*qd_phi
+    _c71 = -_c69
+    _c72 = _c69*qd_phi
+    _c73 = _c1*qd_phi
+    _kkt[0, 0] = p_m
+    _kkt[0, 2] = _c4
+    _kkt[0, 3] = _c9
+    _kkt[1, 1] = p_m
+    _kkt[1, 2] = _c10
+    _kkt[1, 3] = _c13
+    _kkt[2, 0] = _c4
+    _kkt[2, 1] = _c10
+    _kkt[2, 2] = _c16 + p_I3 + _c14*p_I1 - _c14*p_I3 - _c17*p_m
+    _kkt[2, 4] = _c18
+    _kkt[3, 0] = _c9
+    _kkt[3, 1] = _c13
+    _kkt[3, 3] = _c16 + p_I1
+    _kkt[4, 2] = _c18
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -1.0
+    _kkt[1, 6] = -1.0
+    _kkt[4, 5] = _c1
+    _kkt[4, 6] = _c7
+    _kkt[5, 0] = 1.0
+    _kkt[5, 4] = -_c1
+    _kkt[6, 1] = 1.0
+    _kkt[6, 4] = -_c7
+    _jac[2] = _c19*_c22 + _c25*p_m + _c26*_c4 + _c27*_c4 - _c23*p_m
+    _jac[3] = _acc3*_c10 + _c26*_c9 + _c27*_c9 + _c28*_c4 - _acc2*_c12
+    _jac[7] = _c30*_c31 - _c12*_c29
+    _jac[8] = _c10*_c29 - _c32*_c34
+    _jac[10] = -_acc0 - _c35 - _c37 + _c36*_c7 + _c38*_c7 - _c1*_c22
+    _jac[11] = _c36*_c40 + _c38*_c40 - _acc3*_c41 - _c22*_c39 - _c24*_c39
+    _jac[17] = _c10*_c26 + _c10*_c27 - _c22*_c42 - _c35*p_m - _c37*p_m
+    _jac[18] = _c10*_c28 - _acc2*_c9 - _acc3*_c4 - _c12*_c26 - _c12*_c27
+    _jac[22] = -_c29*_c9 - _c31*_c32
+    _jac[23] = -_c29*_c4 - _c30*_c34
+    _jac[25] = _c23 - _acc1 - _c25 - _c1*_c36 - _c1*_c38 - _c22*_c7
+    _jac[26] = _acc3*_c43 - _c22*_c40 - _c24*_c40 - _c36*_c39 - _c38*_c39
+    _jac[32] = _c46
+    _jac[33] = _c54 + _c47*_c51 - _acc2*(_c18*_c33 + _c49*_c53 - _c48*_c53) - _acc4*_c52 - _c14*_c51 + _c18*qd_phi*qd_theta
+    _jac[37] = -_c55*qd_theta
+    _jac[38] = -_c56 - _c55*qd_psi
+    _jac[39] = _c57
+    _jac[40] = -_acc2*(_c15 - _c17) - _c1*_c44 - _c15*_c58 - _c45*_c7
+    _jac[41] = -_acc2*(_c61 - _c14*_c61) - _c39*_c44 - _c40*_c45 - 4.0*_c21*_c60
+    _jac[42] = _c58 - _acc2*_c14
+    _jac[43] = -_c58 - _acc2*(1.0 - _c14) - _acc4*_c2 - _c62*qd_theta
+    _jac[47] = _c54
+    _jac[48] = _c46 + _c47*_c65 - _c14*_c65 - _c18*_c63 + _c5*_c59*p_g
+    _jac[52] = _c56 - 2.0*_c53*_c64*qd_psi
+    _jac[54] = _c66
+    _jac[55] = _acc1*_c11 + _c15*_c68 + _c67*p_r - _acc0*_c8 - _acc3*_c15
+    _jac[56] = _acc1*_c43 + _c61*_c68 + _c67*p_m - _acc0*_c41 - _acc3*_c61
+    _jac[57] = -_acc3 - _c68
+    _jac[58] = _c68 + _c62*qd_psi
+    _jac[59] = _c60
+    _jac[62] = _c7*_mult0 - _c1*_mult1
+    _jac[63] = _c18*_c20 - _acc2*_c52
+    _jac[67] = _c57
+    _jac[68] = -_c66
+    _jac[71] = -_c0*_mult0 - _c6*_mult1
+    _jac[73] = -_acc4 - _c21 - _c24
+    _jac[77] = -_acc4*_c7 - _c1*_c63 - _c69*_c70
+    _jac[80] = _c71
+    _jac[82] = -_c70
+    _jac[84] = -_c30 + _c1*_c69
+    _jac[86] = _acc4*_c0 + _c0*_c72 - _c6*_c63
+    _jac[92] = _acc4*_c1 + _c69*_c73 - _c63*_c7
+    _jac[96] = _c71
+    _jac[97] = _c73
+    _jac[99] = _c32 + _c69*_c7
+    _jac[101] = _acc4*_c6 + _c0*_c63 + _c6*_c72
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((7, 15))
+    _status = kkt_solve_matrix(_kkt, 5, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(5):
+        out[_i, 5 + _i] = 1.0
+    out[5:10] = _rows[0:5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def reaction_jacobian(t, y, p, out):
     """Exact Jacobian of the multipliers λ (`reactions`), shape (2, 15) into `out`: row c the constraint c of
     ('roll_x', 'roll_y'), columns ∂λ_c/∂y_j (y = (q, q̇), 10 of them), then ∂λ_c/∂p_j for the model's
@@ -772,6 +964,204 @@ def reaction_jacobian(t, y, p, out):
         return _status
     out[:] = 0.0
     out[0:2] = _rows[5:7]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = ydot
+    q_psi = y[2]
+    q_theta = y[3]
+    qd_x = y[5]
+    qd_y = y[6]
+    qd_psi = y[7]
+    qd_theta = y[8]
+    qd_phi = y[9]
+    p_m = p[0]
+    p_r = p[1]
+    p_I1 = p[2]
+    p_I3 = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dy5 = v[5]
+    _dy6 = v[6]
+    _dy7 = v[7]
+    _dy8 = v[8]
+    _dy9 = v[9]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _kkt = np.zeros((7, 8))
+    _c0 = cos(q_psi)
+    _c1 = _c0*p_r
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_m
+    _c4 = _c1*_c3
+    _c5 = cos(q_theta)
+    _c6 = sin(q_psi)
+    _c7 = _c6*p_r
+    _c8 = _c5*_c7
+    _c9 = _c8*p_m
+    _c10 = _c3*_c7
+    _c11 = _c1*_c5
+    _c12 = _c11*p_m
+    _c13 = -_c12
+    _c14 = _c5**2
+    _c15 = p_r**2
+    _c16 = _c15*p_m
+    _c17 = _c14*_c15
+    _c18 = _c2*p_I3
+    _c19 = qd_psi**2
+    _c20 = _c19*_c2
+    _c21 = _c20*_c7
+    _c22 = qd_theta**2
+    _c23 = _c2*_c22
+    _c24 = _c23*_c7
+    _c25 = _c5*qd_theta
+    _c26 = _c25*qd_psi
+    _c27 = 2.0*_c26
+    _c28 = _c1*p_m
+    _c29 = _c21*p_m + _c24*p_m - _c27*_c28
+    _c30 = _c1*_c20
+    _c31 = _c30*p_m
+    _c32 = _c1*_c23
+    _c33 = _c32*p_m
+    _c34 = _c7*p_m
+    _c35 = _c27*_c34
+    _c36 = _c5*p_I3
+    _c37 = _c36*qd_phi
+    _c38 = 2.0*p_I1
+    _c39 = 2.0*p_I3
+    _c40 = 2.0*_c16
+    _c41 = _c39 + _c40 - _c38
+    _c42 = _c2*_c41
+    _c43 = qd_phi*qd_psi
+    _c44 = p_I1 - _c16 - p_I3
+    _c45 = _c20*_c5
+    _c46 = _c2*p_g
+    _c47 = _c46*p_m
+    _c48 = _c36*qd_psi
+    _c49 = _c1*qd_phi
+    _c50 = 2.0*_baumgarte_alpha
+    _c51 = -_c43*_c7
+    _c52 = _c7*qd_phi
+    _c53 = _c1*_c43
+    _c54 = _c1*qd_psi
+    _c55 = 2.0*qd_theta
+    _c56 = _c3*_c55
+    _c57 = 2.0*_c25
+    _c58 = _c7*qd_psi
+    _c59 = 2.0*_c58
+    _c62 = _c5*p_m
+    _c63 = 2.0*_c54
+    _c66 = _c0*p_m
+    _c68 = _c6*p_m
+    _c73 = _c36*qd_theta
+    _c74 = _c2**2
+    _c75 = _c41*qd_psi
+    _c76 = _c75*qd_theta
+    _c77 = _c18*qd_theta
+    _c78 = _c2*_c5
+    _c80 = _c2*_c27
+    _c81 = p_m*p_r
+    _c82 = _c2*_c81
+    _c83 = 2.0*_c81
+    _c84 = _c19*_c44
+    _c85 = _c50*qd_phi
+    ydot[0] = qd_x
+    ydot[1] = qd_y
+    ydot[2] = qd_psi
+    ydot[3] = qd_theta
+    ydot[4] = qd_phi
+    _kkt[0, 0] = p_m
+    _kkt[0, 2] = _c4
+    _kkt[0, 3] = _c9
+    _kkt[1, 1] = p_m
+    _kkt[1, 2] = _c10
+    _kkt[1, 3] = _c13
+    _kkt[2, 0] = _c4
+    _kkt[2, 1] = _c10
+    _kkt[2, 2] = _c16 + p_I3 + _c14*p_I1 - _c14*p_I3 - _c17*p_m
+    _kkt[2, 4] = _c18
+    _kkt[3, 0] = _c9
+    _kkt[3, 1] = _c13
+    _kkt[3, 3] = _c16 + p_I1
+    _kkt[4, 2] = _c18
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -1.0
+    _kkt[1, 6] = -1.0
+    _kkt[4, 5] = _c1
+    _kkt[4, 6] = _c7
+    _kkt[5, 0] = 1.0
+    _kkt[5, 4] = -_c1
+    _kkt[6, 1] = 1.0
+    _kkt[6, 4] = -_c7
+    _kkt[0, 7] = _c29
+    _kkt[1, 7] = -_c31 - _c33 - _c35
+    _kkt[2, 7] = -_c26*_c42 - _c37*qd_theta
+    _kkt[3, 7] = _c36*_c43 + _c47*p_r - _c44*_c45
+    _kkt[4, 7] = -_c48*qd_theta
+    _kkt[5, 7] = _c51 - _c50*(qd_x - _c49)
+    _kkt[6, 7] = _c53 - _c50*(qd_y - _c52)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 5)
+    if _status:
+        return _status
+    _ydot[5] = _kkt[0, 7]
+    _ydot[6] = _kkt[1, 7]
+    _ydot[7] = _kkt[2, 7]
+    _ydot[8] = _kkt[3, 7]
+    _ydot[9] = _kkt[4, 7]
+    _lam = _kkt[5:, 7]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c60 = _acc3*_c8
+    _c61 = _acc2*_c2
+    _c64 = _acc3*_c11
+    _c65 = _c61*_c7
+    _c67 = _acc3*_c5
+    _c69 = _c61*p_m
+    _c70 = _acc0*_c2
+    _c71 = _acc1*_c2
+    _c72 = _c34*_c70 - _c28*_c71
+    _c79 = -_acc0*_c12 - _acc1*_c9
+    out[0] = _dy5
+    out[1] = _dy6
+    out[2] = _dy7
+    out[3] = _dy8
+    out[4] = _dy9
+    _direction[0, 7] = _dp0*(_c21 + _c24 - _acc0 - _c60 - _c1*_c27 - _c1*_c61) + _dp1*(_c20*_c68 + _c23*_c68 - _c0*_c69 - _c27*_c66 - _c67*_c68) + _dy2*(_c31 + _c33 + _c35 + _c65*p_m - _c64*p_m) + _dy3*(_acc3*_c10 + _c19*_c9 + _c22*_c9 + _c54*_c56 - _acc2*_c12) + _dy7*(_c3*_c59 - _c28*_c57) + _dy8*(_c10*_c55 - _c62*_c63)
+    _direction[1, 7] = _dp0*(_c64 - _acc1 - _c30 - _c32 - _c65 - _c27*_c7) + _dp1*(_c66*_c67 - _c20*_c66 - _c23*_c66 - _c27*_c68 - _c6*_c69) + _dy2*(_c29 - _c1*_c69 - _c60*p_m) + _dy3*(_c56*_c58 - _acc2*_c9 - _acc3*_c4 - _c12*_c19 - _c12*_c22) + _dy7*(-_c3*_c63 - _c34*_c57) + _dy8*(-_c4*_c55 - _c59*_c62)
+    _direction[2, 7] = _c72*_dy2 + _dp0*(-_acc2*(_c15 - _c17) - _c1*_c70 - _c15*_c80 - _c7*_c71) + _dp1*(-_acc2*(_c83 - _c14*_c83) - _c66*_c70 - _c68*_c71 - 4.0*_c26*_c82) + _dp2*(_c80 - _acc2*_c14) + _dp3*(-_c80 - _acc2*(1.0 - _c14) - _acc4*_c2 - _c25*qd_phi) + _dy3*(_c79 + _c74*_c76 + _c77*qd_phi - _acc2*(_c39*_c78 + _c40*_c78 - _c38*_c78) - _acc4*_c36 - _c14*_c76) + _dy8*(-_c37 - _c75*_c78) - _c73*_dy9 - _c25*_c42*_dy7
+    _direction[3, 7] = _c48*_dy9 + _c79*_dy2 + _c82*_dp4 + _dp0*(_acc1*_c11 + _c15*_c45 + _c46*p_r - _acc0*_c8 - _acc3*_c15) + _dp1*(_c47 + _c45*_c83 - _acc3*_c83 + _acc1*_c5*_c66 - _acc0*_c5*_c68) + _dp2*(-_acc3 - _c45) + _dp3*(_c45 + _c43*_c5) + _dy3*(_c72 + _c74*_c84 - _c14*_c84 - _c18*_c43 + _c5*_c81*p_g) + _dy7*(_c37 - 2.0*_c44*_c78*qd_psi)
+    _direction[4, 7] = _dp1*(-_c0*_mult0 - _c6*_mult1) + _dp3*(-_acc4 - _c26 - _c61) + _dy2*(_c7*_mult0 - _c1*_mult1) + _dy3*(_c77*qd_psi - _acc2*_c36) - _c48*_dy8 - _c73*_dy7
+    _direction[5, 7] = _dp1*(_acc4*_c0 + _c0*_c85 - _c43*_c6) + _dy2*(-_c53 - _acc4*_c7 - _c50*_c52) + _dy9*(-_c58 + _c1*_c50) - _c50*_dy5 - _c52*_dy7
+    _direction[6, 7] = _c49*_dy7 + _dp1*(_acc4*_c6 + _c0*_c43 + _c6*_c85) + _dy2*(_c51 + _acc4*_c1 + _c49*_c50) + _dy9*(_c54 + _c50*_c7) - _c50*_dy6
+    _status = kkt_solve(_direction, 5)
+    if _status:
+        return _status
+    out[5] = _direction[0, 7]
+    out[6] = _direction[1, 7]
+    out[7] = _direction[2, 7]
+    out[8] = _direction[3, 7]
+    out[9] = _direction[4, 7]
     return 0
 
 
@@ -1168,7 +1558,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (10,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

@@ -166,6 +166,121 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = ydot
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = out.reshape(12)
+    _jac[:] = 0.0
+    q_x = y[0]
+    qd_x = y[1]
+    p_M = p[0]
+    p_L = p[1]
+    p_g = p[2]
+    p_f = p[3]
+    _acc0 = _ydot[1]
+    _c0 = 1.0/p_L
+    _c1 = _c0*p_g
+    _c2 = _c1*p_M
+    _c3 = ((np.sign(qd_x)) if (qd_x != 0.0) else (1.0))
+    _c4 = _c3*p_f
+    _c5 = _c2*_c4
+    _c6 = p_L - q_x
+    _c7 = _c4*_c6
+    _c8 = 1.0/p_L**2
+    _m0_0 = p_M
+    _jac[1] = 1.0
+    _jac[6] = _c2 + _c5
+    _jac[8] = -_acc0 - _c1*_c7 + _c0*p_g*q_x
+    _jac[9] = -_c5 - _c8*p_M*p_g*q_x + _c3*_c6*_c8*p_M*p_f*p_g
+    _jac[10] = _c0*p_M*q_x - _c0*_c7*p_M
+    _jac[11] = -_c2*_c3*_c6
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _z0 = _jac[6]
+    _x0 = _z0/_d0
+    _jac[6] = _x0
+    _z0 = _jac[7]
+    _x0 = _z0/_d0
+    _jac[7] = _x0
+    _z0 = _jac[8]
+    _x0 = _z0/_d0
+    _jac[8] = _x0
+    _z0 = _jac[9]
+    _x0 = _z0/_d0
+    _jac[9] = _x0
+    _z0 = _jac[10]
+    _x0 = _z0/_d0
+    _jac[10] = _x0
+    _z0 = _jac[11]
+    _x0 = _z0/_d0
+    _jac[11] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = ydot
+    q_x = y[0]
+    qd_x = y[1]
+    p_M = p[0]
+    p_L = p[1]
+    p_g = p[2]
+    p_f = p[3]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _c0 = 1.0/p_L
+    _c1 = p_M*p_g
+    _c2 = _c0*_c1
+    _c3 = p_L - q_x
+    _c4 = ((np.sign(qd_x)) if (qd_x != 0.0) else (1.0))
+    _c5 = _c4*p_f
+    _c6 = _c3*_c5
+    _c7 = _c2*_c5
+    _c8 = _c0*_c6
+    _c9 = 1.0/p_L**2
+    ydot[0] = qd_x
+    _m0_0 = p_M
+    _f0 = -_c2*_c6 + _c0*p_M*p_g*q_x
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    out[0] = _dy1
+    _g0 = _dp0*(-_acc0 - _c8*p_g + _c0*p_g*q_x) + _dp1*(-_c7 - _c1*_c9*q_x + _c3*_c4*_c9*p_M*p_f*p_g) + _dp2*(-_c8*p_M + _c0*p_M*q_x) + _dy0*(_c2 + _c7) - _c2*_c3*_c4*_dp3
+    _z0 = _g0
+    _x0 = _z0*_r0
+    out[1] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_M = p[0]
@@ -241,7 +356,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (2,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     return 0

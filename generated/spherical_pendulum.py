@@ -256,6 +256,200 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = ydot
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = out.reshape(28)
+    _jac[:] = 0.0
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c0 = p_l**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = qd_phi**2
+    _c6 = cos(q_theta)
+    _c7 = _c1*_c6**2
+    _c8 = p_g*p_l
+    _c9 = _c2*_c6
+    _c10 = _c1*_c9
+    _c11 = 2.0*_c10
+    _c12 = _c11*qd_phi
+    _c13 = _c0*_c9
+    _c14 = 2.0*p_l*p_m
+    _c15 = _c2*p_m
+    _c16 = _c15*p_l
+    _c17 = _c16*_c6
+    _c18 = 2.0*qd_theta
+    _c19 = _c18*qd_phi
+    _c20 = _acc1*_c3
+    _m0_0 = _c1
+    _m1_0 = 0.0
+    _m1_1 = _c4
+    _jac[2] = 1.0
+    _jac[10] = 1.0
+    _jac[14] = _c5*_c7 - _c4*_c5 - _c6*_c8*p_m
+    _jac[17] = _c12
+    _jac[18] = _c13*_c5 - _acc0*_c0 - _c2*_c8
+    _jac[19] = -_acc0*_c14 - _c15*p_g + 2.0*_c17*_c5
+    _jac[20] = -_c16
+    _jac[21] = _c19*_c4 - _acc1*_c11 - _c19*_c7
+    _jac[23] = -_c12
+    _jac[24] = -_c10*_c18
+    _jac[25] = -_c0*_c20 - _c13*_c19
+    _jac[26] = -_c14*_c20 - 4.0*_c17*qd_phi*qd_theta
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _z0 = _jac[14]
+    _z1 = _jac[21] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[21] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[14] = _x0
+    _z0 = _jac[15]
+    _z1 = _jac[22] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[22] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[15] = _x0
+    _z0 = _jac[16]
+    _z1 = _jac[23] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[23] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[16] = _x0
+    _z0 = _jac[17]
+    _z1 = _jac[24] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[24] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[17] = _x0
+    _z0 = _jac[18]
+    _z1 = _jac[25] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[25] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[18] = _x0
+    _z0 = _jac[19]
+    _z1 = _jac[26] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[26] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[19] = _x0
+    _z0 = _jac[20]
+    _z1 = _jac[27] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[27] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[20] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = ydot
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _dy0 = v[0]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _c0 = p_l**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_g
+    _c6 = _c5*p_m
+    _c7 = qd_phi**2
+    _c8 = cos(q_theta)
+    _c9 = _c2*_c8
+    _c10 = _c7*_c9
+    _c11 = 2.0*_c9
+    _c12 = qd_phi*qd_theta
+    _c13 = _c11*_c12
+    _c14 = _c1*_c11
+    _c15 = _c14*qd_phi
+    _c16 = _c1*_c8**2
+    _c17 = p_l*p_m
+    _c18 = 2.0*_c17
+    _c20 = 2.0*_c12
+    ydot[0] = qd_theta
+    ydot[1] = qd_phi
+    _m0_0 = _c1
+    _m1_0 = 0.0
+    _m1_1 = _c4
+    _f0 = _c1*_c10 - _c6*p_l
+    _f1 = -_c1*_c13
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c19 = _acc1*_c3
+    out[0] = _dy2
+    out[1] = _dy3
+    _g0 = _c15*_dy3 + _dp0*(_c0*_c10 - _acc0*_c0 - _c5*p_l) + _dp1*(-_c6 + _c10*_c18 - _acc0*_c18) + _dy0*(_c16*_c7 - _c4*_c7 - _c17*_c8*p_g) - _c17*_c2*_dp2
+    _g1 = _dp0*(-_c0*_c13 - _c0*_c19) + _dp1*(-_c18*_c19 - 4.0*_c12*_c17*_c9) + _dy0*(_c20*_c4 - _acc1*_c14 - _c16*_c20) - _c15*_dy2 - _c14*_dy3*qd_theta
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    out[2] = _x0
+    out[3] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[0]
@@ -344,7 +538,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (4,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

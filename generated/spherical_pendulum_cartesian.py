@@ -307,6 +307,84 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂q̈/∂(y, p), one factorization of K for both: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(1)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((4, 4))
+    _jac = np.zeros(36)
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[3]
+    _baumgarte_beta = p[4]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c0 = 2.0*q_x
+    _c1 = 2.0*q_y
+    _c2 = 2.0*q_z
+    _c3 = 2.0*_mult0
+    _c4 = 4.0*qd_x
+    _c5 = _baumgarte_beta**2
+    _c6 = 4.0*qd_y
+    _c7 = 4.0*qd_z
+    _c8 = 4.0*_baumgarte_alpha
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_m
+    _kkt[0, 3] = -_c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -_c2
+    _kkt[3, 0] = _c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = _c2
+    _jac[0] = _c3
+    _jac[6] = -_acc0
+    _jac[10] = _c3
+    _jac[15] = -_acc1
+    _jac[20] = _c3
+    _jac[24] = -_acc2 - p_g
+    _jac[26] = -p_m
+    _jac[27] = -2.0*_acc0 - _baumgarte_alpha*_c4 - _c0*_c5
+    _jac[28] = -2.0*_acc1 - _baumgarte_alpha*_c6 - _c1*_c5
+    _jac[29] = -2.0*_acc2 - _baumgarte_alpha*_c7 - _c2*_c5
+    _jac[30] = -_c4 - _c8*q_x
+    _jac[31] = -_c6 - _c8*q_y
+    _jac[32] = -_c7 - _c8*q_z
+    _jac[34] = 2.0*_c5*p_l
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((4, 9))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(3):
+        out[_i, 3 + _i] = 1.0
+    out[3:6] = _rows[0:3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def reaction_jacobian(t, y, p, out):
     """Exact Jacobian of the multipliers λ (`reactions`), shape (1, 9) into `out`: row c the constraint c of
     ('rod',), columns ∂λ_c/∂y_j (y = (q, q̇), 6 of them), then ∂λ_c/∂p_j for the model's
@@ -377,6 +455,91 @@ def reaction_jacobian(t, y, p, out):
         return _status
     out[:] = 0.0
     out[0:1] = _rows[3:4]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = ydot
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[3]
+    _baumgarte_beta = p[4]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dy4 = v[4]
+    _dy5 = v[5]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _kkt = np.zeros((4, 5))
+    _c0 = 2.0*q_x
+    _c1 = 2.0*q_y
+    _c2 = 2.0*q_z
+    _c3 = _baumgarte_beta**2
+    _c5 = 4.0*qd_y
+    _c6 = 4.0*qd_x
+    _c7 = 4.0*_baumgarte_alpha
+    _c8 = 4.0*qd_z
+    ydot[0] = qd_x
+    ydot[1] = qd_y
+    ydot[2] = qd_z
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_m
+    _kkt[0, 3] = -_c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -_c2
+    _kkt[3, 0] = _c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = _c2
+    _kkt[0, 4] = 0.0
+    _kkt[1, 4] = 0.0
+    _kkt[2, 4] = -p_g*p_m
+    _kkt[3, 4] = -2.0*qd_x**2 - 2.0*qd_y**2 - 2.0*qd_z**2 - _c3*(q_x**2 + q_y**2 + q_z**2 - p_l**2) - 2.0*_baumgarte_alpha*(_c0*qd_x + _c1*qd_y + _c2*qd_z)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 4]
+    _ydot[4] = _kkt[1, 4]
+    _ydot[5] = _kkt[2, 4]
+    _lam = _kkt[3:, 4]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c4 = 2.0*_mult0
+    out[0] = _dy3
+    out[1] = _dy4
+    out[2] = _dy5
+    _direction[0, 4] = _c4*_dy0 - _acc0*_dp0
+    _direction[1, 4] = _c4*_dy1 - _acc1*_dp0
+    _direction[2, 4] = _c4*_dy2 + _dp0*(-_acc2 - p_g) - _dp2*p_m
+    _direction[3, 4] = _dy0*(-2.0*_acc0 - _baumgarte_alpha*_c6 - _c0*_c3) + _dy1*(-2.0*_acc1 - _baumgarte_alpha*_c5 - _c1*_c3) + _dy2*(-2.0*_acc2 - _baumgarte_alpha*_c8 - _c2*_c3) + _dy3*(-_c6 - _c7*q_x) + _dy4*(-_c5 - _c7*q_y) + _dy5*(-_c8 - _c7*q_z) + 2.0*_c3*_dp1*p_l
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[3] = _direction[0, 4]
+    out[4] = _direction[1, 4]
+    out[5] = _direction[2, 4]
     return 0
 
 
@@ -555,7 +718,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (6,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

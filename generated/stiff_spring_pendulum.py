@@ -263,6 +263,210 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = ydot
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = out.reshape(36)
+    _jac[:] = 0.0
+    q_r = y[0]
+    q_theta = y[1]
+    qd_r = y[2]
+    qd_theta = y[3]
+    p_m = p[0]
+    p_k = p[1]
+    p_c = p[2]
+    p_l0 = p[3]
+    p_g = p[4]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c0 = q_r**2
+    _c1 = qd_theta**2
+    _c2 = sin(q_theta)
+    _c3 = -_c2*p_g*p_m
+    _c4 = p_m*q_r
+    _c5 = 2.0*_c4
+    _c6 = _c5*qd_theta
+    _c7 = cos(q_theta)
+    _c8 = _c7*p_g
+    _c9 = 2.0*qd_r*qd_theta
+    _c10 = _c2*q_r
+    _m0_0 = p_m
+    _m1_0 = 0.0
+    _m1_1 = _c0*p_m
+    _jac[2] = 1.0
+    _jac[12] = 1.0
+    _jac[18] = -p_k + _c1*p_m
+    _jac[19] = _c3
+    _jac[20] = -p_c
+    _jac[21] = _c6
+    _jac[22] = _c8 - _acc0 + _c1*q_r
+    _jac[23] = p_l0 - q_r
+    _jac[24] = -qd_r
+    _jac[25] = p_k
+    _jac[26] = _c7*p_m
+    _jac[27] = _c3 - _acc1*_c5 - _c9*p_m
+    _jac[28] = -_c4*_c8
+    _jac[29] = -_c6
+    _jac[30] = -_c5*qd_r
+    _jac[31] = -_acc1*_c0 - _c10*p_g - _c9*q_r
+    _jac[35] = -_c10*p_m
+    # out[2:] = M⁻¹ out[2:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _z0 = _jac[18]
+    _z1 = _jac[27] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[27] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[18] = _x0
+    _z0 = _jac[19]
+    _z1 = _jac[28] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[28] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[19] = _x0
+    _z0 = _jac[20]
+    _z1 = _jac[29] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[29] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[20] = _x0
+    _z0 = _jac[21]
+    _z1 = _jac[30] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[30] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[21] = _x0
+    _z0 = _jac[22]
+    _z1 = _jac[31] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[31] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[22] = _x0
+    _z0 = _jac[23]
+    _z1 = _jac[32] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[32] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[23] = _x0
+    _z0 = _jac[24]
+    _z1 = _jac[33] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[33] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[24] = _x0
+    _z0 = _jac[25]
+    _z1 = _jac[34] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[34] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[25] = _x0
+    _z0 = _jac[26]
+    _z1 = _jac[35] - _l1_0*_z0
+    _x1 = _z1/_d1
+    _jac[35] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1
+    _jac[26] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = ydot
+    q_r = y[0]
+    q_theta = y[1]
+    qd_r = y[2]
+    qd_theta = y[3]
+    p_m = p[0]
+    p_k = p[1]
+    p_c = p[2]
+    p_l0 = p[3]
+    p_g = p[4]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _c0 = q_r**2
+    _c1 = qd_theta**2
+    _c2 = _c1*q_r
+    _c3 = cos(q_theta)
+    _c4 = _c3*p_g
+    _c5 = _c4*p_m
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_g
+    _c8 = _c7*p_m
+    _c9 = 2.0*q_r
+    _c10 = qd_r*qd_theta
+    _c11 = _c10*_c9
+    _c12 = _dp4*p_m
+    _c13 = _c9*p_m
+    _c14 = _c13*_dy3
+    ydot[0] = qd_r
+    ydot[1] = qd_theta
+    _m0_0 = p_m
+    _m1_0 = 0.0
+    _m1_1 = _c0*p_m
+    _f0 = _c5 + _c2*p_m - p_c*qd_r - p_k*(q_r - p_l0)
+    _f1 = -_c11*p_m - _c8*q_r
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    out[0] = _dy2
+    out[1] = _dy3
+    _g0 = _c12*_c3 + _c14*qd_theta + _dp0*(_c2 + _c4 - _acc0) + _dp1*(p_l0 - q_r) + _dp3*p_k + _dy0*(-p_k + _c1*p_m) - _c8*_dy1 - _dp2*qd_r - _dy2*p_c
+    _g1 = _dp0*(-_c11 - _acc1*_c0 - _c7*q_r) + _dy0*(-_c8 - _acc1*_c13 - 2.0*_c10*p_m) - _c14*qd_r - _c12*_c6*q_r - _c13*_dy2*qd_theta - _c5*_dy1*q_r
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    out[2] = _x0
+    out[3] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_r = y[0]
@@ -355,7 +559,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (4,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

@@ -407,6 +407,327 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = ydot
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = out.reshape(66)
+    _jac[:] = 0.0
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c0 = p_l**2
+    _c1 = _c0*p_M
+    _c2 = p_I3 - _c1 - p_I1
+    _c3 = cos(q_theta)
+    _c4 = _c3**2
+    _c5 = _c2*_c4
+    _c6 = _c1 + p_I1
+    _c7 = _c3*p_I3
+    _c8 = sin(q_theta)
+    _c9 = _acc0*_c3
+    _c10 = 2.0*_c2
+    _c11 = _c7*qd_theta
+    _c12 = _c8*p_I3
+    _c13 = _c2*_c8**2
+    _c14 = 2.0*qd_psi*qd_theta
+    _c15 = _c8*qd_theta
+    _c16 = _c3*_c8
+    _c17 = _c10*_c16*qd_psi
+    _c18 = _c12*qd_phi
+    _c19 = _c15*p_I3
+    _c20 = _c15*qd_psi
+    _c21 = _c20*_c3
+    _c22 = 2.0*_c21
+    _c23 = p_M*p_l
+    _c24 = 2.0*_c23
+    _c25 = qd_psi**2
+    _c26 = qd_phi*qd_psi
+    _c27 = p_M*p_g
+    _c28 = _c12*qd_psi
+    _c29 = _c16*_c25
+    _c30 = _c8*p_l
+    _m0_0 = _c5 + _c6
+    _m1_0 = 0.0
+    _m1_1 = _c6
+    _m2_0 = _c7
+    _m2_1 = 0.0
+    _m2_2 = p_I3
+    _jac[3] = 1.0
+    _jac[15] = 1.0
+    _jac[27] = 1.0
+    _jac[34] = _acc2*_c12 + _c11*qd_phi + _c14*_c5 - _c13*_c14 + _c10*_c8*_c9
+    _jac[36] = _c10*_c15*_c3
+    _jac[37] = _c17 + _c18
+    _jac[38] = _c19
+    _jac[39] = -_acc0*(_c0 - _c0*_c4) - _c0*_c22
+    _jac[40] = -_acc0*(_c24 - _c24*_c4) - 4.0*_c21*_c23
+    _jac[42] = -_c22 - _acc0*(1.0 - _c4)
+    _jac[43] = _c22 + _c15*qd_phi - _acc0*_c4 - _acc2*_c3
+    _jac[45] = _c13*_c25 - _c25*_c5 - _c26*_c7 + _c27*_c3*p_l
+    _jac[47] = -_c17 - _c18
+    _jac[49] = -_c28
+    _jac[50] = _c0*_c29 + _c30*p_g - _acc1*_c0
+    _jac[51] = _c24*_c29 + _c27*_c8 - _acc1*_c24
+    _jac[52] = _c30*p_M
+    _jac[53] = _c29 - _acc1
+    _jac[54] = -_c29 - _c26*_c8
+    _jac[56] = _acc0*_c12 + _c11*qd_psi
+    _jac[58] = _c19
+    _jac[59] = _c28
+    _jac[65] = _c20 - _acc2 - _c9
+    # out[3:] = M⁻¹ out[3:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _l1_0 = (_m1_0)/_d0
+    _l2_0 = (_m2_0)/_d0
+    _d1 = _m1_1 - _l1_0*_l1_0*_d0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _l2_1 = (_m2_1 - _l2_0*_l1_0*_d0)/_d1
+    _d2 = _m2_2 - _l2_0*_l2_0*_d0 - _l2_1*_l2_1*_d1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _z0 = _jac[33]
+    _z1 = _jac[44] - _l1_0*_z0
+    _z2 = _jac[55] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[55] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[44] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[33] = _x0
+    _z0 = _jac[34]
+    _z1 = _jac[45] - _l1_0*_z0
+    _z2 = _jac[56] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[56] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[45] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[34] = _x0
+    _z0 = _jac[35]
+    _z1 = _jac[46] - _l1_0*_z0
+    _z2 = _jac[57] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[57] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[46] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[35] = _x0
+    _z0 = _jac[36]
+    _z1 = _jac[47] - _l1_0*_z0
+    _z2 = _jac[58] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[58] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[47] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[36] = _x0
+    _z0 = _jac[37]
+    _z1 = _jac[48] - _l1_0*_z0
+    _z2 = _jac[59] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[59] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[48] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[37] = _x0
+    _z0 = _jac[38]
+    _z1 = _jac[49] - _l1_0*_z0
+    _z2 = _jac[60] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[60] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[49] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[38] = _x0
+    _z0 = _jac[39]
+    _z1 = _jac[50] - _l1_0*_z0
+    _z2 = _jac[61] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[61] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[50] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[39] = _x0
+    _z0 = _jac[40]
+    _z1 = _jac[51] - _l1_0*_z0
+    _z2 = _jac[62] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[62] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[51] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[40] = _x0
+    _z0 = _jac[41]
+    _z1 = _jac[52] - _l1_0*_z0
+    _z2 = _jac[63] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[63] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[52] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[41] = _x0
+    _z0 = _jac[42]
+    _z1 = _jac[53] - _l1_0*_z0
+    _z2 = _jac[64] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[64] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[53] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[42] = _x0
+    _z0 = _jac[43]
+    _z1 = _jac[54] - _l1_0*_z0
+    _z2 = _jac[65] - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2/_d2
+    _jac[65] = _x2
+    _x1 = _z1/_d1 - _l2_1*_x2
+    _jac[54] = _x1
+    _x0 = _z0/_d0 - _l1_0*_x1 - _l2_0*_x2
+    _jac[43] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = ydot
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _dy1 = v[1]
+    _dy3 = v[3]
+    _dy4 = v[4]
+    _dy5 = v[5]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _c0 = p_l**2
+    _c1 = _c0*p_M
+    _c2 = p_I3 - _c1 - p_I1
+    _c3 = cos(q_theta)
+    _c4 = _c3**2
+    _c5 = _c2*_c4
+    _c6 = _c1 + p_I1
+    _c7 = _c3*p_I3
+    _c8 = sin(q_theta)
+    _c9 = _c8*p_I3
+    _c10 = _c9*qd_phi
+    _c11 = 2.0*_c2
+    _c12 = _c3*_c8
+    _c13 = _c12*qd_psi
+    _c14 = _c11*_c13
+    _c15 = p_M*p_l
+    _c16 = _c8*p_g
+    _c17 = qd_psi**2
+    _c18 = _c12*_c17
+    _c19 = _c9*qd_psi
+    _c21 = _c7*qd_theta
+    _c22 = _c2*_c8**2
+    _c23 = 2.0*qd_theta
+    _c24 = _c23*qd_psi
+    _c25 = _c13*_c23
+    _c26 = _c9*qd_theta
+    _c27 = 2.0*_c15
+    _c28 = _c8*qd_theta
+    _c29 = qd_phi*qd_psi
+    ydot[0] = qd_psi
+    ydot[1] = qd_theta
+    ydot[2] = qd_phi
+    _m0_0 = _c5 + _c6
+    _m1_0 = 0.0
+    _m1_1 = _c6
+    _m2_0 = _c7
+    _m2_1 = 0.0
+    _m2_2 = p_I3
+    _f0 = _c10*qd_theta + _c14*qd_theta
+    _f1 = _c15*_c16 - _c10*qd_psi - _c18*_c2
+    _f2 = _c19*qd_theta
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c20 = _acc0*_c3
+    out[0] = _dy3
+    out[1] = _dy4
+    out[2] = _dy5
+    _g0 = _c26*_dy5 + _dp0*(-_acc0*(_c0 - _c0*_c4) - _c0*_c25) + _dp1*(-_acc0*(_c27 - _c27*_c4) - 4.0*_c13*_c15*qd_theta) + _dp3*(-_c25 - _acc0*(1.0 - _c4)) + _dp4*(_c25 + _c28*qd_phi - _acc0*_c4 - _acc2*_c3) + _dy1*(_acc2*_c9 + _c21*qd_phi + _c24*_c5 - _c22*_c24 + _c11*_c20*_c8) + _dy4*(_c10 + _c14) + _c11*_c12*_dy3*qd_theta
+    _g1 = _dp0*(_c0*_c18 + _c16*p_l - _acc1*_c0) + _dp1*(_c16*p_M + _c18*_c27 - _acc1*_c27) + _dp3*(_c18 - _acc1) + _dp4*(-_c18 - _c29*_c8) + _dy1*(_c17*_c22 - _c17*_c5 - _c29*_c7 + _c15*_c3*p_g) + _dy3*(-_c10 - _c14) - _c19*_dy5 + _c15*_c8*_dp2
+    _g2 = _c19*_dy4 + _c26*_dy3 + _dp4*(-_acc2 - _c20 + _c28*qd_psi) + _dy1*(_acc0*_c9 + _c21*qd_psi)
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    out[3] = _x0
+    out[4] = _x1
+    out[5] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[1]
@@ -532,7 +853,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (6,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

@@ -237,6 +237,188 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = ydot
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = out.reshape(18)
+    _jac[:] = 0.0
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_I_X = p[0]
+    p_I = p[1]
+    p_Omega = p[2]
+    p_omega = p[3]
+    p_alpha = p[4]
+    p_k = p[5]
+    p_c = p[6]
+    _acc0 = _ydot[1]
+    _c0 = cos(q_theta)
+    _c1 = _c0**2
+    _c2 = cos(p_alpha)
+    _c3 = _c2**2
+    _c4 = sin(p_alpha)
+    _c5 = _c4**2
+    _c6 = _c3*p_I + _c5*p_I_X - _c3*p_I_X - _c5*p_I
+    _c7 = p_omega**2
+    _c8 = _c6*_c7
+    _c9 = sin(q_theta)
+    _c10 = _c9**2
+    _c11 = p_I - p_I_X
+    _c12 = _c11*_c7
+    _c13 = _c0*_c2
+    _c14 = p_Omega*p_omega
+    _c15 = _c4*p_I
+    _c16 = _c14*_c9
+    _c17 = -_c0*_c14*_c15 - _c16*_c2*p_I
+    _c18 = _c2*_c4
+    _c19 = _c18*_c7
+    _c20 = _c1*_c19
+    _c21 = _c10*_c19
+    _c22 = _c0*_c9
+    _c23 = _c22*_c7
+    _c24 = _c15*_c9
+    _c25 = _c13*p_I
+    _c26 = 2.0*p_omega
+    _c27 = _c11*_c18*_c26
+    _c28 = _c1*_c12
+    _c29 = 4.0*_c2
+    _c30 = _c10*_c12
+    _m0_0 = p_I_X
+    _jac[1] = 1.0
+    _jac[9] = _c17 - p_k + _c1*_c8 - _c10*_c8 - 4.0*_c12*_c13*_c4*_c9
+    _jac[10] = -p_c
+    _jac[11] = _c21 - _acc0 - _c20 + _c23*(_c5 - _c3)
+    _jac[12] = _c20 - _c21 + _c13*_c14 + _c23*(_c3 - _c5) - _c16*_c4
+    _jac[13] = _c25*p_omega - _c24*p_omega
+    _jac[14] = _c1*_c27 + _c25*p_Omega - _c10*_c27 - _c24*p_Omega + _c22*_c26*_c6
+    _jac[15] = _c17 + _c23*(-_c15*_c29 + _c29*_c4*p_I_X) + _c28*_c3 + _c30*_c5 - _c28*_c5 - _c3*_c30
+    _jac[16] = -q_theta
+    _jac[17] = -qd_theta
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _z0 = _jac[9]
+    _x0 = _z0/_d0
+    _jac[9] = _x0
+    _z0 = _jac[10]
+    _x0 = _z0/_d0
+    _jac[10] = _x0
+    _z0 = _jac[11]
+    _x0 = _z0/_d0
+    _jac[11] = _x0
+    _z0 = _jac[12]
+    _x0 = _z0/_d0
+    _jac[12] = _x0
+    _z0 = _jac[13]
+    _x0 = _z0/_d0
+    _jac[13] = _x0
+    _z0 = _jac[14]
+    _x0 = _z0/_d0
+    _jac[14] = _x0
+    _z0 = _jac[15]
+    _x0 = _z0/_d0
+    _jac[15] = _x0
+    _z0 = _jac[16]
+    _x0 = _z0/_d0
+    _jac[16] = _x0
+    _z0 = _jac[17]
+    _x0 = _z0/_d0
+    _jac[17] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = ydot
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_I_X = p[0]
+    p_I = p[1]
+    p_Omega = p[2]
+    p_omega = p[3]
+    p_alpha = p[4]
+    p_k = p[5]
+    p_c = p[6]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _dp5 = w[5]
+    _dp6 = w[6]
+    _c0 = sin(q_theta)
+    _c1 = _c0**2
+    _c2 = p_omega**2
+    _c3 = p_I - p_I_X
+    _c4 = _c2*_c3
+    _c5 = _c1*_c4
+    _c6 = sin(p_alpha)
+    _c7 = cos(p_alpha)
+    _c8 = _c6*_c7
+    _c9 = _c7**2
+    _c10 = _c6**2
+    _c11 = _c10*p_I_X + _c9*p_I - _c10*p_I - _c9*p_I_X
+    _c12 = _c11*_c2
+    _c13 = cos(q_theta)
+    _c14 = _c0*_c13
+    _c15 = _c7*p_I
+    _c16 = p_Omega*p_omega
+    _c17 = _c13*_c16
+    _c18 = _c13**2
+    _c19 = _c18*_c4
+    _c20 = _c0*_c6
+    _c21 = _c16*_c20
+    _c22 = _c2*_c8
+    _c23 = _c18*_c22
+    _c24 = _c1*_c22
+    _c25 = _c14*_c2
+    _c26 = 4.0*_c6
+    _c27 = _c26*_c7
+    _c28 = -_c0*_c15*_c16 - _c17*_c6*p_I
+    _c29 = _c20*p_I
+    _c30 = _c13*_c15
+    _c31 = 2.0*p_omega
+    _c32 = _c3*_c31*_c8
+    ydot[0] = qd_theta
+    _m0_0 = p_I_X
+    _f0 = _c12*_c14 + _c15*_c17 + _c19*_c8 - _c21*p_I - _c5*_c8 - p_c*qd_theta - p_k*q_theta
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    out[0] = _dy1
+    _g0 = _dp0*(_c24 - _acc0 - _c23 + _c25*(_c10 - _c9)) + _dp1*(_c23 - _c21 - _c24 + _c17*_c7 + _c25*(_c9 - _c10)) + _dp2*(_c30*p_omega - _c29*p_omega) + _dp3*(_c18*_c32 + _c30*p_Omega - _c1*_c32 - _c29*p_Omega + _c11*_c14*_c31) + _dp4*(_c28 + _c10*_c5 + _c19*_c9 + _c25*(_c27*p_I_X - _c15*_c26) - _c10*_c19 - _c5*_c9) + _dy0*(_c28 - p_k + _c12*_c18 - _c1*_c12 - _c25*_c27*_c3) - _dp5*q_theta - _dp6*qd_theta - _dy1*p_c
+    _z0 = _g0
+    _x0 = _z0*_r0
+    out[1] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_I_X = p[0]
@@ -361,7 +543,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (2,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     return 0

@@ -189,6 +189,144 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).
+    Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
+    was within rounding of its threshold); `out` is then invalid."""
+    _ydot = ydot
+    _status = rhs(t, y, p, _ydot)
+    if _status:
+        return _status
+    _jac = out.reshape(14)
+    _jac[:] = 0.0
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _acc0 = _ydot[1]
+    _c0 = p_R**2
+    _c1 = p_a**2
+    _c2 = cos(q_theta)
+    _c3 = 2.0*p_M
+    _c4 = _c3*p_a
+    _c5 = _c2*_c4
+    _c6 = sin(q_theta)
+    _c7 = _c4*_c6*p_R
+    _c8 = _c2*p_M
+    _c9 = qd_theta**2
+    _c10 = _c9*p_R
+    _c11 = _c10*p_a
+    _c12 = p_a*p_g
+    _c13 = _c3*p_R
+    _c14 = _c6*p_M
+    _c15 = _c14*p_a
+    _m0_0 = p_I + _c0*p_M + _c1*p_M - _c5*p_R
+    _jac[1] = 1.0
+    _jac[7] = -_acc0*_c7 - _c11*_c8 - _c12*_c8
+    _jac[8] = -_c7*qd_theta
+    _jac[9] = -_acc0*(_c0 + _c1 - 2.0*_c2*p_R*p_a) - _c11*_c6 - _c12*_c6
+    _jac[10] = -_acc0*(_c13 - _c5) - _c15*_c9
+    _jac[11] = -_acc0*(_c4 - _c13*_c2) - _c10*_c14 - _c14*p_g
+    _jac[12] = -_acc0
+    _jac[13] = -_c15
+    # out[1:] = M⁻¹ out[1:]: one LDLᵀ of M (lower triangle), a substitution per column.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _z0 = _jac[7]
+    _x0 = _z0/_d0
+    _jac[7] = _x0
+    _z0 = _jac[8]
+    _x0 = _z0/_d0
+    _jac[8] = _x0
+    _z0 = _jac[9]
+    _x0 = _z0/_d0
+    _jac[9] = _x0
+    _z0 = _jac[10]
+    _x0 = _z0/_d0
+    _jac[10] = _x0
+    _z0 = _jac[11]
+    _x0 = _z0/_d0
+    _jac[11] = _x0
+    _z0 = _jac[12]
+    _x0 = _z0/_d0
+    _jac[12] = _x0
+    _z0 = _jac[13]
+    _x0 = _z0/_d0
+    _jac[13] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = ydot
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _c0 = p_R**2
+    _c1 = p_a**2
+    _c2 = cos(q_theta)
+    _c3 = 2.0*p_M
+    _c4 = _c3*p_R
+    _c5 = _c2*_c4
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_g
+    _c8 = _c7*p_M
+    _c9 = p_R*p_a
+    _c10 = qd_theta**2
+    _c11 = _c10*_c6
+    _c12 = _c11*_c9
+    _c13 = _c4*_c6*p_a
+    _c14 = _c2*_c9
+    _c15 = p_M*p_a
+    _c16 = _c3*p_a
+    _c17 = _c11*p_M
+    ydot[0] = qd_theta
+    _m0_0 = p_I + _c0*p_M + _c1*p_M - _c5*p_a
+    _f0 = -_c12*p_M - _c8*p_a
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    out[0] = _dy1
+    _g0 = _dp0*(-_c12 - _acc0*(_c0 + _c1 - 2.0*_c14) - _c7*p_a) + _dp1*(-_acc0*(_c4 - _c16*_c2) - _c17*p_a) + _dp2*(-_c8 - _acc0*(_c16 - _c5) - _c17*p_R) + _dy0*(-_acc0*_c13 - _c10*_c14*p_M - _c15*_c2*p_g) - _acc0*_dp3 - _c13*_dy1*qd_theta - _c15*_c6*_dp4
+    _z0 = _g0
+    _x0 = _z0*_r0
+    out[1] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[0]
@@ -274,7 +412,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (2,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     return 0

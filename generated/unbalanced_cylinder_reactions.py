@@ -384,6 +384,102 @@ def rhs_parameter_jacobian(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_with_full_jacobian(t, y, p, ydot, out):
+    """f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =
+    [∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the
+    model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel
+    for parameter columns).
+    Rows [0 | I | 0], then ∂q̈/∂(y, p), one factorization of K for both: 
+    (q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with
+    R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte
+    terms (see lagcomp.codegen.constrained_jacobian).
+    Returns 0, or j > 0 as `rhs` (`reactions`) does, or when the factorization of the augmented matrix
+    [M −Λᵀ; Λ 0] finds pivot j zero (then `rhs` was within rounding of it); `out` is then invalid."""
+    _ydot = ydot
+    _lam = np.empty(2)
+    _status = rhs_and_reactions(t, y, p, _ydot, _lam)
+    if _status:
+        return _status
+    _kkt = np.zeros((5, 5))
+    _jac = np.zeros(55)
+    q_theta = y[2]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult1 = _lam[1]
+    _c0 = cos(q_theta)
+    _c1 = _c0*p_a
+    _c2 = _c1*p_M
+    _c3 = -_c2
+    _c4 = sin(q_theta)
+    _c5 = _c4*p_a
+    _c6 = _c5*p_M
+    _c7 = p_a**2
+    _c8 = qd_theta**2
+    _c9 = 2.0*qd_theta
+    _c10 = _c4*p_M
+    _c11 = _c0*p_M
+    _c12 = _baumgarte_beta**2
+    _c13 = -_c12
+    _c14 = 2.0*_baumgarte_alpha
+    _c15 = -_c14
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c3
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c6
+    _kkt[2, 0] = _c3
+    _kkt[2, 1] = _c6
+    _kkt[2, 2] = p_I + _c7*p_M
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = -p_R
+    _jac[2] = -_acc2*_c6 - _c2*_c8
+    _jac[5] = -_c6*_c9
+    _jac[6] = -_acc0 + _acc2*_c1 - _c5*_c8
+    _jac[8] = _acc2*_c11 - _c10*_c8
+    _jac[13] = _c6*_c8 - _acc2*_c2
+    _jac[16] = -_c2*_c9
+    _jac[17] = -_acc1 - p_g - _acc2*_c5 - _c1*_c8
+    _jac[19] = -_acc2*_c10 - _c11*_c8
+    _jac[21] = -p_M
+    _jac[24] = -_acc0*_c6 - _acc1*_c2 - _c2*p_g
+    _jac[28] = _acc0*_c1 - _acc1*_c5 - _acc2*_c7 - _c5*p_g
+    _jac[29] = -_mult1
+    _jac[30] = _acc0*_c11 - _acc1*_c10 - _c10*p_g - 2.0*_acc2*p_M*p_a
+    _jac[31] = -_acc2
+    _jac[32] = -_c6
+    _jac[34] = _c13
+    _jac[37] = _c15
+    _jac[40] = _c12
+    _jac[44] = _c13
+    _jac[46] = _c12*p_R
+    _jac[47] = _c15
+    _jac[49] = _c14*p_R
+    _jac[51] = _acc2 + _c12*q_theta + _c14*qd_theta
+    # ∂(q̈, λ)/∂x = K⁻¹ (the partials above): one factorization of K, a substitution per column.
+    _rows = _jac.reshape((5, 11))
+    _status = kkt_solve_matrix(_kkt, 3, _rows)
+    if _status:
+        return _status
+    out[:] = 0.0
+    for _i in range(3):
+        out[_i, 3 + _i] = 1.0
+    out[3:6] = _rows[0:3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def reaction_jacobian(t, y, p, out):
     """Exact Jacobian of the multipliers λ (`reactions`), shape (2, 11) into `out`: row c the constraint c of
     ('normal', 'friction'), columns ∂λ_c/∂y_j (y = (q, q̇), 6 of them), then ∂λ_c/∂p_j for the model's
@@ -472,6 +568,111 @@ def reaction_jacobian(t, y, p, out):
         return _status
     out[:] = 0.0
     out[0:2] = _rows[3:5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_directional(t, y, p, v, w, ydot, out):
+    """f and its derivative along one direction at once: ydot = f(t, y, p) as `rhs` computes it (to rounding),
+    out = ∂f/∂y v + ∂f/∂p w, (N,), for v (N,) and w (P,) (P = the model's parameters, in the order of p).
+    Symbolic, no differences: the product of the full Jacobians `rhs_with_jacobian` and `rhs_parameter_jacobian`
+    to rounding, at about the cost of `rhs` and one substitution (the sensitivities' kernel for few columns).
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = ydot
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _dy0 = v[0]
+    _dy1 = v[1]
+    _dy2 = v[2]
+    _dy3 = v[3]
+    _dy4 = v[4]
+    _dy5 = v[5]
+    _dp0 = w[0]
+    _dp1 = w[1]
+    _dp2 = w[2]
+    _dp3 = w[3]
+    _dp4 = w[4]
+    _kkt = np.zeros((5, 6))
+    _c0 = cos(q_theta)
+    _c1 = _c0*p_a
+    _c2 = _c1*p_M
+    _c3 = -_c2
+    _c4 = sin(q_theta)
+    _c5 = _c4*p_a
+    _c6 = _c5*p_M
+    _c7 = p_a**2
+    _c8 = -p_R
+    _c9 = qd_theta**2
+    _c10 = _c6*_c9
+    _c11 = p_M*p_g
+    _c12 = -_c2*_c9
+    _c13 = _baumgarte_beta**2
+    _c14 = 2.0*_baumgarte_alpha
+    _c15 = 2.0*_dy5*qd_theta
+    _c16 = _c4*p_M
+    _c17 = _c0*p_M
+    _c18 = _dp4*p_M
+    ydot[0] = qd_x
+    ydot[1] = qd_z
+    ydot[2] = qd_theta
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c3
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c6
+    _kkt[2, 0] = _c3
+    _kkt[2, 1] = _c6
+    _kkt[2, 2] = p_I + _c7*p_M
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = _c8
+    _kkt[0, 5] = -_c10
+    _kkt[1, 5] = _c12 - _c11
+    _kkt[2, 5] = -_c11*_c5
+    _kkt[3, 5] = -_c13*(_c8 + q_z) - _c14*qd_z
+    _kkt[4, 5] = -_c13*(q_x - p_R*q_theta) - _c14*(qd_x - p_R*qd_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult1 = _lam[1]
+    out[0] = _dy3
+    out[1] = _dy4
+    out[2] = _dy5
+    _direction[0, 5] = _dp0*(-_acc0 + _acc2*_c1 - _c5*_c9) + _dp2*(_acc2*_c17 - _c16*_c9) + _dy2*(_c12 - _acc2*_c6) - _c15*_c6
+    _direction[1, 5] = -_c18 + _dp0*(-_acc1 - p_g - _acc2*_c5 - _c1*_c9) + _dp2*(-_acc2*_c16 - _c17*_c9) + _dy2*(_c10 - _acc2*_c2) - _c15*_c2
+    _direction[2, 5] = _dp0*(_acc0*_c1 - _acc1*_c5 - _acc2*_c7 - _c5*p_g) + _dp2*(_acc0*_c17 - _acc1*_c16 - _c11*_c4 - 2.0*_acc2*p_M*p_a) + _dy2*(-_acc0*_c6 - _acc1*_c2 - _c1*_c11) - _acc2*_dp3 - _c18*_c5 - _dp1*_mult1
+    _direction[3, 5] = _c13*_dp1 - _c13*_dy1 - _c14*_dy4
+    _direction[4, 5] = _dp1*(_acc2 + _c13*q_theta + _c14*qd_theta) - _c13*_dy0 - _c14*_dy3 + _c13*_dy2*p_R + _c14*_dy5*p_R
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[3] = _direction[0, 5]
+    out[4] = _direction[1, 5]
+    out[5] = _direction[2, 5]
     return 0
 
 
@@ -694,7 +895,7 @@ def event_gradients(t, y, p, out):
 def event_reset(t, y, p, e, out):
     """The state just after event e into `out`, shape (6,): `y`, the state just before, with what the
     reset of e sets (events with a reset: []; the others leave y as it is). Returns 0.
-    Drivers pass a p of their own: a reset may one day write mode slots of p."""
+    Drivers pass a p of their own run: a contact's reset writes its mode slots there."""
     out[0] = y[0]
     out[1] = y[1]
     out[2] = y[2]

@@ -821,6 +821,14 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
+def _directional_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
+    """(``rhs_directional``,) for systems of at most `lagcomp.codegen.directional.LARGEST_SYSTEM` coordinates, ()
+    for larger ones, whose sensitivities take the full Jacobians."""
+    from lagcomp.codegen.directional import LARGEST_SYSTEM, directional_kernel  # (it imports this module)
+
+    return (directional_kernel(eom, mapping, loads),) if eom.n <= LARGEST_SYSTEM else ()
+
+
 def lower(eom: EOM) -> ModuleIR:
     """Build the IR of the module for `eom`: rhs, its Jacobians ∂f/∂y and ∂f/∂p (for n ≤
     `lagcomp.codegen.directional.LARGEST_SYSTEM` both at once too) and its directional derivative (that n
@@ -831,12 +839,11 @@ def lower(eom: EOM) -> ModuleIR:
     n, system = eom.n, eom.system
     mapping, loads = _bindings(eom)
     state_args = ("t", "y", "p")
-    from lagcomp.codegen.directional import LARGEST_SYSTEM, directional_kernel  # (these import this module)
-    directional = (directional_kernel(eom, mapping, loads),) if n <= LARGEST_SYSTEM else ()
+    from lagcomp.codegen.directional import LARGEST_SYSTEM  # (it imports this module)
     if eom.k:
         from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels
         first = (_constraint_kernels(eom, mapping, loads) + constrained_jacobian_kernels(eom, mapping, loads)
-                 + directional + _dae_kernels(eom, mapping, loads))
+                 + _directional_kernels(eom, mapping, loads) + _dae_kernels(eom, mapping, loads))
     elif mode_slots(eom):   # contacts that may close: rhs is rhs_free corrected for them (no lanes: they reset;
         # no directional kernels: sensitivities refuse contacts)
         free = _rhs_kernel(eom, mapping, loads)
@@ -849,8 +856,8 @@ def lower(eom: EOM) -> ModuleIR:
         # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
         first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled and not eom.system.inputs else (rhs,)
         first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
-        if directional:
-            first += (_rhs_with_full_jacobian_kernel(eom, mapping, loads), *directional)
+        if n <= LARGEST_SYSTEM:
+            first += (_rhs_with_full_jacobian_kernel(eom, mapping, loads), *_directional_kernels(eom, mapping, loads))
     kernels = first + (
         _kernel(
             "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",
