@@ -34,6 +34,7 @@ from lagcomp.names import by_name
 from lagcomp.model.assemble import assemble
 from lagcomp.model.constraints import Holonomic, Nonholonomic
 from lagcomp.model.contacts import Contact
+from lagcomp.model.friction import Friction
 from lagcomp.model.frames import as_frame
 from lagcomp.model.inputs import inputs_in, is_input, substitute_laws
 from lagcomp.model.events import Event, reset_role, reset_target
@@ -372,9 +373,9 @@ class System:
                 if coordinate not in self.coordinates:
                     raise ModelError(f"Event `{e.name}`: its reset sets {key}, but {coordinate} is not a coordinate "
                                      f"of {self.name!r} (coordinates {list(self.coordinate_names)}).")
-        contacts = [e.name for e in events if isinstance(e, Contact)]
+        contacts = [e.name for e in events if isinstance(e, Contact | Friction)]
         if contacts and self.constraints:
-            raise ModelError(f"Contacts {contacts} on a system with constraints {list(self.constraint_names)}: an "
+            raise ModelError(f"Contacts/friction {contacts} on a system with constraints {list(self.constraint_names)}: an "
                              "impact there must keep the constraints' velocities too, which is not supported yet.")
         return events
 
@@ -386,6 +387,8 @@ class System:
         exprs.update({f"event {e.name}": e.expr for e in self.events})
         exprs.update({reset_role(e, key): value for e in self.events for key, value in e.reset or ()})
         exprs.update({f"contact {e.name} restitution": e.restitution for e in self.events if isinstance(e, Contact)})
+        exprs.update({f"friction {e.name} {part}": getattr(e, part) for e in self.events if isinstance(e, Friction)
+                      for part in ("normal", "static", "kinetic")})
         return exprs
 
     @property
