@@ -120,7 +120,7 @@ def mode_slots(model) -> tuple[int, int] | None:
 
 def mode_slot_of(model) -> dict[str, int]:
     """The slot of p of each contact's and friction element's mode, by name."""
-    first, count = mode_slots(model)
+    first, _ = mode_slots(model)
     slots = {name: first + d for d, (name, _, _) in enumerate(contacts_of(model))}
     return slots | {name: slot for name, _, slot, _, _ in frictions_of(model)}
 

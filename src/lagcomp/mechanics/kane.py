@@ -182,8 +182,8 @@ def kane_events(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple[tuple
     (a parameter the equations lack would have no slot in p).
     """
     from lagcomp.model.contacts import Contact
-    from lagcomp.model.friction import Friction
     from lagcomp.model.events import Event
+    from lagcomp.model.friction import Friction
 
     plain = _Plain(km)
     allowed = set(form.q) | set(form.u) | set(form.parameters) | {t}
