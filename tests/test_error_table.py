@@ -309,6 +309,9 @@ CASES = {
                                           "`slide`"),
     "friction-velocity-not-linear": (lambda: lc.compile(oscillator(events=[
         lc.Friction("slide", x.diff(t) ** 3, normal=m * g, static=0.5)])), "`slide`"),
+    "friction-with-contacts": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction("slide", x.diff(t),
+                                                                                           normal=m * g, static=0.5)]),
+                               "['floor']"),
     "friction-on-a-contact": (lambda: lc.Friction("slide", x.diff(t), normal="floor", static=0.5), "'floor'"),
     "default-unknown-parameter": (lambda: oscillator(defaults={"mass": 1.0}), "['mass']"),
     "default-not-a-number": (lambda: oscillator(defaults={"m": "heavy", "k": 1.0}), "`m`"),
