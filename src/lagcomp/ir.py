@@ -214,7 +214,7 @@ class ContactModes:
     Friction elements (`lagcomp.model.friction.Friction`, event indices `frictions`) have their modes after the
     closing flag, ``p[first + count + 1 + f]``: 0 stick (a row of ``closed_contacts``, held two-sided, after the
     contacts' rows; its multiplier the friction force, after the normal forces in ``contact_forces``), ±1 slip;
-    their ``event_values`` are s·v while slipping and μs N − |λ_f| (``friction_limits``) while sticking.
+    their ``event_values`` are s·v while slipping and μs |N| − |λ_f| (``friction_limits``) while sticking.
     """
 
     kind: str

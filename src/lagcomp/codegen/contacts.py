@@ -25,7 +25,7 @@ the normal forces for the saved rows, and the impact branch also stores ``_bias`
 
 Friction elements (`lagcomp.model.friction.Friction`) share that mechanism: their modes follow the closing flag,
 a sticking element is one more held row of ``closed_contacts`` (after the contacts'), ``contact_forces`` gives
-its friction force after the normal forces, ``friction_limits`` the static limits μs N, and each element's event
+its friction force after the normal forces, ``friction_limits`` the static limits μs |N|, and each element's event
 has its own branch of ``event_reset`` (`friction_branches`) that writes its new mode.
 """
 
@@ -116,10 +116,10 @@ def resting_kernels(eom, time, first: int, kernel) -> tuple:
     if not elements:
         return rhs, closed, forces
     limits = kernel("friction_limits",
-                    f"The friction elements' static limits μs N ({len(elements)},) into `out` at y (N the normal\n"
+                    f"The friction elements' static limits μs |N| ({len(elements)},) into `out` at y (N the normal\n"
                     "force, in the units of the friction force). Returns 0.",
                     ("t", "y", "p", "out"),
-                    [(f"out[{f}]", eom.frictions[e][1] * eom.frictions[e][0]) for f, e in enumerate(elements)],
+                    [(f"out[{f}]", eom.frictions[e][1] * sp.Abs(eom.frictions[e][0])) for f, e in enumerate(elements)],
                     ReturnZero())
     names = eom.system.event_names
     limits = replace(limits, constants=(

@@ -713,7 +713,7 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
             doc += ("\nA closed contact's value is its normal force (contact_forces): its lift-off when it turns "
                     "negative.")
         if solve.frictions:
-            doc += ("\nA friction element's value is s·v while it slips (mode s = ±1: v reaching 0), μs N − |λ_f| "
+            doc += ("\nA friction element's value is s·v while it slips (mode s = ±1: v reaching 0), μs |N| − |λ_f| "
                     "while it sticks\n(friction_limits, contact_forces: the force needed reaching its limit).")
     return _kernel("event_values", doc, ("t", "y", "p", "out"), [(f"out[{e}]", g) for e, g in enumerate(eom.events)],
                    mapping, loads, solve=solve)

@@ -189,7 +189,7 @@ def _set_friction_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray,
     """Write each friction element's mode at the start into the rows of P, after checking its coefficients.
 
     v ≠ 0 (beyond `CLOSED_GAP` Σ_j |∂v/∂q̇_j| (|q̇_j| + 1), the contacts' scale of rest): slip with s = sign v.
-    v ≈ 0: stick when the force that holds it is within μs N (the elements at rest tried together; the one most
+    v ≈ 0: stick when the force that holds it is within μs |N| (the elements at rest tried together; the one most
     beyond its limit slips, one pass per element at most), else slip against that force (toward the free motion).
     Refuses (`OptionError`) methods that do not integrate the module's ``rhs``: the Taylor program has no rows for
     a sticking element (its runs would be silently wrong at the first stick).

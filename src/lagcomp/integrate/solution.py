@@ -50,7 +50,7 @@ class ContactSwitch:
 class FrictionSwitch:
     """A friction element's mode switch (`Solution.friction_switches`, `lagcomp.model.friction.Friction`): at
     time `t` the element `friction` began to stick (`mode` 0: v reached 0 with the force that holds it within
-    μs N) or to slip (`mode` ±1, the sign of v from then: its force reached μs N, or v reached 0 with a force
+    μs N) or to slip (`mode` ±1, the sign of v from then: its force reached μs |N|, or v reached 0 with a force
     beyond it)."""
 
     t: float
@@ -169,7 +169,7 @@ class Solution:
     friction_forces : ndarray, shape (m, F), or None
         The friction elements' forces along their velocity v at the saved times, while sticking (the
         multiplier that holds v = 0, in the units of the force conjugate to v's coordinate); 0 while slipping
-        (the slip force there is −μk N sign v).  None without friction.
+        (the slip force there is −μk |N| sign v).  None without friction.
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With

@@ -161,7 +161,7 @@ def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, 
 @njit(cache=True, error_model="numpy", fastmath=False)
 def friction_mode_after(mode, force, limit):
     """A friction element's mode after its event (`lagcomp.model.friction.Friction`): from stick (``mode`` 0,
-    its force reached ``limit`` = μs N) slip against the force that held it, −sign ``force``; from slip (v reached
+    its force reached ``limit`` = μs |N|) slip against the force that held it, −sign ``force``; from slip (v reached
     0) stick when the ``force`` needed to hold v = 0 is within ``limit``, else slip against it (the other way)."""
     if mode != 0.0 and abs(force) <= limit:
         return 0.0

@@ -122,7 +122,7 @@ class EOM:
     frictions : tuple
         Per event, in order, (N, μs, μk) of a friction element (`lagcomp.model.friction.Friction`, whose event
         function is its sliding velocity v), N in plain symbols; None for other events.  Its slip force
-        −μk N s ∂v/∂q̇ is part of F (and of ṗ), s the element's mode symbol (`slip_symbol`, in element order).
+        −μk |N| s ∂v/∂q̇ is part of F (and of ṗ), s the element's mode symbol (`slip_symbol`, in element order).
     """
 
     system: System
@@ -293,13 +293,14 @@ def _frictions(system: System, plain, qd) -> tuple:
 
 
 def _slip_forces(system: System, frictions: tuple, plain, qd) -> list:
-    """Σ_f −μk_f N_f s_f ∂v_f/∂q̇_i per coordinate i: the slipping elements' generalized forces, s_f the mode
-    symbol of element f (`lagcomp.model.friction.slip_symbol`; 0 while it sticks)."""
+    """Σ_f −μk_f |N_f| s_f ∂v_f/∂q̇_i per coordinate i: the slipping elements' generalized forces, s_f the mode
+    symbol of element f (`lagcomp.model.friction.slip_symbol`; 0 while it sticks).  |N|: a normal force written
+    with a sign (m g cos θ on a curved track) presses either way; sympy drops the bars where N is positive."""
     forces = [sp.S.Zero] * len(qd)
     elements = [(e, friction) for e, friction in zip(system.events, frictions, strict=True) if friction is not None]
     for f, (event, (normal, _, kinetic)) in enumerate(elements):
         v = plain(event.expr)
-        forces = [Qi - kinetic * normal * slip_symbol(f) * v.diff(a) for Qi, a in zip(forces, qd, strict=True)]
+        forces = [Qi - kinetic * sp.Abs(normal) * slip_symbol(f) * v.diff(a) for Qi, a in zip(forces, qd, strict=True)]
     return forces
 
 

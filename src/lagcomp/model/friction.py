@@ -1,23 +1,24 @@
-"""Coulomb friction with stick–slip on a velocity: an element that sticks (v = 0 held) or slips (force −μk N sign v).
+"""Coulomb friction with stick–slip on a velocity: an element that sticks (v = 0 held) or slips (force −μk |N| sign v).
 
 A friction element acts on a relative velocity v(q, q̇, t), linear in q̇ (v = a(q, t)·q̇ + c(q, t)), pressed by
-a normal force N(q, q̇, t) ≥ 0 given as an expression (the rope on a table: N = μ g (L − x)).  Its mode is a slot
-of p, like a contact's (`lagcomp.ir.ContactModes`): 0 stick, ±1 slip with s = sign v.
+a normal force N(q, q̇, t) given as an expression (the rope on a table: N = μ g (L − x)), whose magnitude |N|
+the law uses (a signed N, m g cos θ on a curved track, presses either way).  Its mode is a slot of p, like a contact's (`lagcomp.ir.ContactModes`): 0 stick, ±1 slip with s = sign v.
 
-* slip: the generalized force −μk N s ∂v/∂q̇, which enters the equations of motion (``rhs_free``) with s read
+* slip: the generalized force −μk |N| s ∂v/∂q̇, which enters the equations of motion (``rhs_free``) with s read
   from p, so every kernel built from F (and the Taylor program) sees it; the event is s·v (direction −1: v
   reaching 0);
 * stick: v = 0 held by the row a q̈ + b = 0 (b = Σ_j ∂v/∂q_j q̇_j + ∂v/∂t: v̇ = a q̈ + b), added to the closed
   contacts' rows (`lagcomp.kernel_support.resting`); its multiplier λ_f is the friction force (two-sided); the
-  event is μs N − |λ_f| (direction −1: the force needed reaching the static limit);
+  event is μs |N| − |λ_f| (direction −1: the force needed reaching the static limit);
 * the switches (``event_reset``, no velocity jump): stick → slip with s = −sign λ_f (the motion goes against the
-  force that held it); slip at v = 0 → stick when the force needed there is within μs N, else slip with
+  force that held it); slip at v = 0 → stick when the force needed there is within μs |N|, else slip with
   s = −sign λ_f (the other way).
 
 The element is an `Event` whose expression is v: its occurrences are the switches (`Solution.events`), listed
 with the new modes in `Solution.friction_switches`.  Limits of this first form: N is an expression (a contact's
 normal force is a later increment), the system has no bilateral constraints and is a Lagrange one (M from T);
-the Taylor method refuses models with friction (its program has no stick rows).
+no contacts in the same system (an impact would leave the modes stale); the Taylor method refuses models with
+friction (its program has no stick rows).
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ class Friction(Event):
     expr : sympy expression
         The sliding velocity v, linear in the velocities q_i(t).diff(t); may hold q, t and parameters.
     normal : sympy expression
-        The normal force N ≥ 0 pressing the surfaces (q, q̇, t, parameters), in the units of the force
+        The normal force N pressing the surfaces (q, q̇, t, parameters; |N| is used), in the units of the force
         conjugate to v's coordinate (N for v in m/s).  A contact's name (its normal force) is not supported yet.
     static, kinetic : float or sympy Symbol
         μs and μk ≥ 0 with μk ≤ μs (kinetic defaults to static), numbers or parameters.
@@ -87,7 +88,7 @@ class Friction(Event):
 
 def slip_symbol(index: int) -> sp.Symbol:
     """The symbol of friction element `index`'s mode slot (0 stick, ±1 slip) in the equations of motion: the
-    kernels read it from p (`lagcomp.codegen.lower`), the slip force −μk N s ∂v/∂q̇ is linear in it."""
+    kernels read it from p (`lagcomp.codegen.lower`), the slip force −μk |N| s ∂v/∂q̇ is linear in it."""
     return sp.Symbol(f"_slip_mode_{index}", real=True)
 
 
