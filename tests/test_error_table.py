@@ -312,6 +312,8 @@ CASES = {
     "friction-with-contacts": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction("slide", x.diff(t),
                                                                                            normal=m * g, static=0.5)]),
                                "['floor']"),
+    "friction-with-constraints": (lambda: plane(events=[lc.Friction("slide", x.diff(t), normal=m * g, static=0.5)],
+                                                constraints=[lc.Holonomic("rod", x - l)]), "['slide']"),
     "friction-on-a-contact": (lambda: lc.Friction("slide", x.diff(t), normal="floor", static=0.5), "'floor'"),
     "default-unknown-parameter": (lambda: oscillator(defaults={"mass": 1.0}), "['mass']"),
     "default-not-a-number": (lambda: oscillator(defaults={"m": "heavy", "k": 1.0}), "`m`"),

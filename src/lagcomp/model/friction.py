@@ -2,7 +2,8 @@
 
 A friction element acts on a relative velocity v(q, q̇, t), linear in q̇ (v = a(q, t)·q̇ + c(q, t)), pressed by
 a normal force N(q, q̇, t) given as an expression (the rope on a table: N = μ g (L − x)), whose magnitude |N|
-the law uses (a signed N, m g cos θ on a curved track, presses either way).  Its mode is a slot of p, like a contact's (`lagcomp.ir.ContactModes`): 0 stick, ±1 slip with s = sign v.
+the law uses (a signed N, m g cos θ on a curved track, presses either way).  Its mode is a slot of p, like a
+contact's (`lagcomp.ir.ContactModes`): 0 stick, ±1 slip with s = sign v.
 
 * slip: the generalized force −μk |N| s ∂v/∂q̇, which enters the equations of motion (``rhs_free``) with s read
   from p, so every kernel built from F (and the Taylor program) sees it; the event is s·v (direction −1: v

@@ -373,15 +373,19 @@ class System:
                 if coordinate not in self.coordinates:
                     raise ModelError(f"Event `{e.name}`: its reset sets {key}, but {coordinate} is not a coordinate "
                                      f"of {self.name!r} (coordinates {list(self.coordinate_names)}).")
-        contacts = [e.name for e in events if isinstance(e, Contact | Friction)]
+        contacts = [e.name for e in events if isinstance(e, Contact)]
         frictions = [e.name for e in events if isinstance(e, Friction)]
-        if frictions and len(frictions) < len(contacts):
-            raise ModelError(f"Friction {frictions} and contacts {sorted(set(contacts) - set(frictions))} in one "
-                             "system: an impact would change the sliding velocities without updating the friction "
-                             "modes, which is not supported yet; model them in separate systems.")
+        if frictions and contacts:
+            raise ModelError(f"Friction {frictions} and contacts {contacts} in one system: an impact would change the "
+                             "sliding velocities without updating the friction modes, which is not supported yet; "
+                             "model them in separate systems.")
         if contacts and self.constraints:
-            raise ModelError(f"Contacts/friction {contacts} on a system with constraints {list(self.constraint_names)}: an "
+            raise ModelError(f"Contacts {contacts} on a system with constraints {list(self.constraint_names)}: an "
                              "impact there must keep the constraints' velocities too, which is not supported yet.")
+        if frictions and self.constraints:
+            raise ModelError(f"Friction {frictions} on a system with constraints {list(self.constraint_names)}: a "
+                             "sticking element's row would join the constraints' KKT system, which is not supported "
+                             "yet.")
         return events
 
     def expressions(self) -> dict[str, sp.Expr]:
