@@ -111,6 +111,21 @@ def test_a_sliding_block_stops_where_the_kinetic_friction_brakes_it(incline):
     assert abs(sol.qd[-1, 0]) < 1e-12
 
 
+def test_a_block_launched_up_a_steep_incline_stops_and_slides_back(incline):
+    # tan α > μs: up the slope (v < 0) it decelerates by g (sin α + μk cos α); at v = 0 the force that would hold
+    # it, m g sin α, exceeds μs m g cos α: it slips the other way at once, accelerating by g (sin α − μk cos α)
+    alpha, mu_k, v0 = 0.7, 0.4, -2.0
+    up, down = G * (np.sin(alpha) + mu_k * np.cos(alpha)), G * (np.sin(alpha) - mu_k * np.cos(alpha))
+    t_top = -v0 / up
+    sol = incline.simulate((0.0, 2 * t_top), [0.0], [v0], params={"alpha": alpha}, rtol=1e-12, atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    assert [(s.friction, s.mode) for s in sol.friction_switches] == [("slope", 1)]
+    assert sol.friction_switches[0].t == pytest.approx(t_top, abs=1e-12)
+    tau = sol.t - t_top
+    expected = np.where(tau < 0, v0 * sol.t + up * sol.t**2 / 2, v0 * t_top / 2 + down * tau**2 / 2)
+    np.testing.assert_allclose(sol.q[:, 0], expected, rtol=0, atol=1e-12)
+
+
 # -- the stick–slip oscillator on a belt ----------------------------------------------------------------------------
 
 def _belt_switches(mu_s, mu_k, periods, m=1.0, k=4.0, v_b=0.5):
