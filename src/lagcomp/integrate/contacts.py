@@ -214,7 +214,8 @@ def _set_friction_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray,
         y, p = Y0[row], P[row]
         p[slots] = 1.0                                          # (event_values: v itself)
         model.kernels.event_values(t0, y, p, values)
-        model.kernels.event_gradients(t0, y, p, gradients)
+        if model.kernels.event_gradients(t0, y, p, gradients) != 0:     # (events that read inputs: no partials)
+            gradients[:] = 1.0
         v, a = values[events], gradients[events, n:2 * n]
         rest = np.abs(v) <= CLOSED_GAP * (np.abs(a) @ (np.abs(y[n:2 * n]) + 1.0))
         p[slots] = np.where(rest, 0.0, np.sign(v))
