@@ -386,7 +386,8 @@ def _event_records(model, p, event_parts) -> dict:
 
 
 def _switches(model, p, event_parts, status) -> tuple:
-    """The contacts' and friction elements' mode switches (`lagcomp.integrate.contacts.contact_switches`) from the run's event rows."""
+    """The contacts' and friction elements' mode switches (`lagcomp.integrate.contacts.contact_switches`) from the
+    run's event rows."""
     if not event_parts:
         return ()
     t_all, y_all, i_all = (np.concatenate(column) for column in list(zip(*event_parts, strict=True))[:3])
