@@ -201,3 +201,4 @@ def test_the_friction_switches_and_forces_are_saved(belt, tmp_path):
     assert saved["friction_switch_friction"].tolist() == ["belt"] * len(sol.friction_switches)
     assert saved["friction_switch_mode"].tolist() == [s.mode for s in sol.friction_switches]
     assert sol.contact_forces is None and sol.contact_switches == ()
+    assert belt.frictions == ("belt",) and belt.contacts == ()
