@@ -94,14 +94,19 @@ def _identifiers(source: str) -> set[str]:
 
 
 def _probes() -> tuple[lc.System, ...]:
-    """Small systems whose modules hold every kind of emitted code: events, a contact, Taylor, lanes; constraints;
-    bodies (the `geometry` kernel); an input read with its first two derivatives (a support s(t) under a spring)."""
+    """Small systems whose modules hold every kind of emitted code: events, a contact, friction, Taylor, lanes;
+    constraints; bodies (the `geometry` kernel); an input read with its first two derivatives (a support s(t)
+    under a spring)."""
     x, z = lc.coordinates("x z")
     a, b = sp.symbols("a b", positive=True)
     free = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * x**2 + b * z**2,
                      events=[lc.Event("hit", x), lc.Event("kick", z, reset={z.diff(lc.t): -a * z.diff(lc.t)}),
                              lc.Contact("wall", z + b, restitution=a)],
                      name="probe_free")
+    rubbing = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * x**2 + b * z**2,
+                        events=[lc.Event("hit", x),
+                                lc.Friction("rub", x.diff(lc.t) - b, normal=a * z**2, static=b, kinetic=a)],
+                        name="probe_friction")
     rod = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * z,
                     constraints=[lc.Holonomic("rod", x**2 + z**2 - b**2)], name="probe_rod")
     N = ReferenceFrame("N")
@@ -111,7 +116,7 @@ def _probes() -> tuple[lc.System, ...]:
     s = lc.Input("s")
     driven = lc.System(coordinates=(x, z), T=((x.diff(lc.t) + s.diff(lc.t)) ** 2 + z.diff(lc.t) ** 2) / 2,
                        V=a * (x - s) ** 2 + b * z**2, name="probe_driven")
-    return free, rod, bodies, driven
+    return free, rubbing, rod, bodies, driven
 
 
 def _sources(model: lc.Model) -> list[str]:

@@ -34,9 +34,9 @@ from lagcomp.runtime import Model as Model, compile as compile, load as load  # 
 #: use (PEP 562), because it imports sympy: a process that only runs a cached
 #: model (`lagcomp.load`) starts without sympy's ~0.5 s import.
 _MODEL_NAMES = (
-    "Contact", "Damper", "Event", "Force", "Gravity", "Holonomic", "Input", "MovingFrame", "Nonholonomic", "Particle",
-    "RigidBody", "Spring", "System", "Torque", "body_rates", "coordinates", "from_kanes_method", "from_lagranges_method",
-    "rotated", "t",
+    "Contact", "Damper", "Event", "Force", "Friction", "Gravity", "Holonomic", "Input", "MovingFrame", "Nonholonomic",
+    "Particle", "RigidBody", "Spring", "System", "Torque", "body_rates", "coordinates", "from_kanes_method",
+    "from_lagranges_method", "rotated", "t",
 )
 
 

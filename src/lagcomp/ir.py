@@ -234,6 +234,11 @@ class ContactModes:
     * ``contact_forces(t, y, p, out)``: the normal forces (C,), 0 for an open contact;
     * ``event_values``: after its stores, a closed contact's value is its normal force (`events`: the contacts'
       event indices, in contact order).
+
+    Friction elements (`lagcomp.model.friction.Friction`, event indices `frictions`) have their modes after the
+    closing flag, ``p[first + count + 1 + f]``: 0 stick (a row of ``closed_contacts``, held two-sided, after the
+    contacts' rows; its multiplier the friction force, after the normal forces in ``contact_forces``), ±1 slip;
+    their ``event_values`` are s·v while slipping and μs |N| − |λ_f| (``friction_limits``) while sticking.
     """
 
     kind: str
@@ -241,6 +246,31 @@ class ContactModes:
     count: int
     first: int
     events: tuple[int, ...] = ()
+    frictions: tuple[int, ...] = ()
+
+    @property
+    def rows(self) -> int:
+        """The rows ``closed_contacts`` may hold: the contacts', then the friction elements'."""
+        return self.count + len(self.frictions)
+
+    def friction_slot(self, f: int) -> int:
+        """The slot of p of friction element f's mode."""
+        return self.first + self.count + 1 + f
+
+
+@dataclass(frozen=True)
+class FrictionSwitch:
+    """The solve of a friction element's branch of ``event_reset`` (`lagcomp.codegen.contacts`): the element's new
+    mode into p (`lagcomp.kernel_support.resting.friction_mode_after`) from the force that holds it
+    (``contact_forces`` with the element sticking, its entry `row` of `rows`) and its static limit
+    (``friction_limits``, entry `element` of `elements`); its mode is ``p[slot]``.  No stores; the state does not
+    jump."""
+
+    slot: int
+    row: int
+    rows: int
+    element: int
+    elements: int
 
 
 @dataclass(frozen=True)
@@ -305,7 +335,7 @@ class Kernel:
     stores: tuple[tuple[str, sp.Expr], ...]
     solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | AugmentedJacobianSolve
             | DirectionalSolve | Delegate | ReturnZero | FlatMatrix | Unavailable | EventResets | ContactModes
-            | None) = None
+            | FrictionSwitch | None) = None
     lanes: bool = False
     alias: str | None = None
     constants: tuple[tuple[str, str, object], ...] = ()

@@ -322,6 +322,12 @@ class Model:
         return tuple(name for name, _, _ in getattr(self.kernels, "CONTACTS", ()))
 
     @property
+    def frictions(self) -> tuple[str, ...]:
+        """The names of the friction elements (`lagcomp.Friction`), in order: the columns of
+        `Solution.friction_forces`."""
+        return tuple(name for name, *_ in getattr(self.kernels, "FRICTIONS", ()))
+
+    @property
     def n(self) -> int:
         return len(self.coordinates)
 

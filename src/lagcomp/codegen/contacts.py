@@ -22,6 +22,11 @@ when some contact is closed, ``closed_contacts`` (`lagcomp.kernel_support.restin
 a closed contact's normal force instead of its gap (lift-off when it would turn negative), ``contact_forces``
 the normal forces for the saved rows, and the impact branch also stores ``_bias`` (g̈ = G q̈ + b) for
 `lagcomp.kernel_support.resting.contact_event`.
+
+Friction elements (`lagcomp.model.friction.Friction`) share that mechanism: their modes follow the closing flag,
+a sticking element is one more held row of ``closed_contacts`` (after the contacts'), ``contact_forces`` gives
+its friction force after the normal forces, ``friction_limits`` the static limits μs |N|, and each element's event
+has its own branch of ``event_reset`` (`friction_branches`) that writes its new mode.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ from dataclasses import replace
 
 import sympy as sp
 
-from lagcomp.ir import ContactImpact, ContactModes
+from lagcomp.ir import ContactImpact, ContactModes, FrictionSwitch, ReturnZero
 
 
 def contact_events(restitutions: tuple) -> tuple[int, ...]:
@@ -38,11 +43,23 @@ def contact_events(restitutions: tuple) -> tuple[int, ...]:
     return tuple(e for e, restitution in enumerate(restitutions) if restitution is not None)
 
 
+def friction_events(frictions: tuple) -> tuple[int, ...]:
+    """The event indices of the friction elements, in element order (`frictions`: (N, μs, μk) per event, None for
+    another)."""
+    return tuple(e for e, friction in enumerate(frictions) if friction is not None)
+
+
 def mode_slots(eom) -> int:
-    """How many slots of p the contacts' modes take: one per contact and the closing flag (`ContactModes`); 0
-    without contacts, or for a constrained system (which has none)."""
-    count = len(contact_events(eom.restitutions))
-    return count + 1 if count and not eom.k else 0
+    """How many slots of p the modes take: one per contact, the closing flag, one per friction element
+    (`ContactModes`); 0 without contacts and friction, or for a constrained system (which has none)."""
+    count, elements = len(contact_events(eom.restitutions)), len(friction_events(eom.frictions))
+    return count + 1 + elements if (count or elements) and not eom.k else 0
+
+
+def modes_of(eom, kind: str, first: int) -> ContactModes:
+    """The `ContactModes` of kernel `kind` of `eom`, whose modes start at slot `first` of p."""
+    return ContactModes(kind, eom.n, len(contact_events(eom.restitutions)), first, contact_events(eom.restitutions),
+                        friction_events(eom.frictions))
 
 
 def _gap_rate(gap, eom, time):
@@ -56,36 +73,87 @@ def _bias(gap, eom, time):
 
 
 def resting_kernels(eom, time, first: int, kernel) -> tuple:
-    """The kernels of a module with contact modes: ``rhs`` (``rhs_free`` then ``closed_contacts`` when some
-    contact is closed), ``closed_contacts`` and ``contact_forces`` (`ContactModes`); `first` is the first mode
-    slot of p, `kernel`(name, doc, args, stores, solve) builds a CSE'd kernel over the module's loads."""
-    events = contact_events(eom.restitutions)
-    n, count = eom.n, len(events)
+    """The kernels of a module with modes: ``rhs`` (``rhs_free`` then ``closed_contacts`` when some contact is
+    closed or some friction element sticks), ``closed_contacts``, ``contact_forces`` and, with friction,
+    ``friction_limits`` (`ContactModes`); `first` is the first mode slot of p, `kernel`(name, doc, args, stores,
+    solve) builds a CSE'd kernel over the module's loads."""
+    events, elements = contact_events(eom.restitutions), friction_events(eom.frictions)
+    n, count, rows = eom.n, len(events), len(events) + len(elements)
+    friction_doc = ("\nFriction elements (FRICTIONS): a sticking one's mode (0) holds v = 0 too, a row of\n"
+                    "closed_contacts after the contacts'; a slipping one's force is part of rhs_free."
+                    if elements else "")
     rhs = kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,): ``rhs_free`` (M q̈ = F), and while some\n"
                  f"contact is closed (its mode p[{first} + d] = 1) q̈ corrected by its normal force, ≥ 0\n"
                  "(closed_contacts).\n\n"
-                 "Returns 0, or k > 0 when M (or the closed contacts' W) is singular here; `out` is then invalid.",
-                 ("t", "y", "p", "out"), [], ContactModes("rhs", n, count, first))
+                 "Returns 0, or k > 0 when M (or the closed contacts' W) is singular here; `out` is then invalid."
+                 + friction_doc, ("t", "y", "p", "out"), [], modes_of(eom, "rhs", first))
     stores = [(f"_mass[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(i + 1) if eom.M[i, j] != 0]
     for d, e in enumerate(events):
         gap = eom.events[e]
         stores += [(f"_gradient[{d}, {j}]", gap.diff(q)) for j, q in enumerate(eom.q) if gap.diff(q) != 0]
         stores.append((f"_bias[{d}]", _bias(gap, eom, time)))
+    for f, e in enumerate(elements):    # v̇ = a q̈ + b: a = ∂v/∂q̇, b = v's partials in q and t times (q̇, 1)
+        velocity = eom.events[e]
+        stores += [(f"_gradient[{count + f}, {j}]", velocity.diff(qd)) for j, qd in enumerate(eom.qd)
+                   if velocity.diff(qd) != 0]
+        stores.append((f"_bias[{count + f}]", _gap_rate(velocity, eom, time)))
+    friction_doc = (f"\nWith friction: {rows} entries, the contacts' then the friction elements' forces along v\n"
+                    "(held while sticking: the multiplier of v = 0; 0 while slipping)." if elements else "")
     closed = kernel("closed_contacts",
                     "q̈ in out[n:2n] (the free one on entry) with the closed contacts' normal forces, which go into\n"
                     f"`forces` ({count},), 0 for an open contact; with `unilateral` 1 a closed contact whose force\n"
                     "would pull pushes with 0 instead (lagcomp.kernel_support.resting). Returns 0 or the status of\n"
-                    "a singular M or W.",
-                    ("t", "y", "p", "out", "forces", "unilateral"), stores, ContactModes("closed", n, count, first))
+                    "a singular M or W." + friction_doc,
+                    ("t", "y", "p", "out", "forces", "unilateral"), stores, modes_of(eom, "closed", first))
     forces = kernel("contact_forces",
                     f"The contacts' normal forces ({count},) into `out` at y under the modes in p, 0 for an open\n"
                     "contact: the multipliers of the closed contacts' constraints g = const (units of the force\n"
-                    "conjugate to g). Returns 0 or the status of rhs.",
-                    ("t", "y", "p", "out"), [], ContactModes("forces", n, count, first, events))
+                    "conjugate to g). Returns 0 or the status of rhs." + friction_doc,
+                    ("t", "y", "p", "out"), [], modes_of(eom, "forces", first))
     forces = replace(forces, constants=(
         ("CONTACT_MODES", "The first slot of p holding the contacts' modes (0 open, 1 closed), one per contact in "
                           "the order of CONTACTS, then the flag that lets an impact close a contact.", first),))
-    return rhs, closed, forces
+    if not elements:
+        return rhs, closed, forces
+    limits = kernel("friction_limits",
+                    f"The friction elements' static limits μs |N| ({len(elements)},) into `out` at y (N the normal\n"
+                    "force, in the units of the friction force). Returns 0.",
+                    ("t", "y", "p", "out"),
+                    [(f"out[{f}]", eom.frictions[e][1] * sp.Abs(eom.frictions[e][0])) for f, e in enumerate(elements)],
+                    ReturnZero())
+    names = eom.system.event_names
+    limits = replace(limits, constants=(
+        ("FRICTIONS", "The friction elements: (name, event index, slot of p of its mode (0 stick, ±1 slip), static "
+                      "and kinetic coefficients: numbers or their parameters' names).",
+         tuple((names[e], e, first + count + 1 + f, *(_number_or_name(mu) for mu in eom.frictions[e][1:]))
+               for f, e in enumerate(elements))),))
+    return rhs, closed, forces, limits
+
+
+def _number_or_name(value):
+    """A coefficient as the module's constants keep it: a float, or the name of its parameter."""
+    return value.name if isinstance(value, sp.Symbol) else float(value)
+
+
+def friction_branches(eom, first: int, kernel) -> tuple:
+    """The branches of ``event_reset`` of the friction elements' events: ((event index, `Kernel`), ...), each
+    writing its element's new mode (`FrictionSwitch`); () without friction."""
+    events, elements = contact_events(eom.restitutions), friction_events(eom.frictions)
+    count = len(events)
+    return tuple(
+        (e, kernel("event_reset", "", ("t", "y", "p", "e", "out"), [],
+                   FrictionSwitch(slot=first + count + 1 + f, row=count + f, rows=count + len(elements), element=f,
+                                  elements=len(elements))))
+        for f, e in enumerate(elements))
+
+
+def friction_switch_lines(solve: FrictionSwitch, indent: str) -> list[str]:
+    """The emitted lines of a friction element's branch of ``event_reset`` (`FrictionSwitch`)."""
+    return [f"_mode = p[{solve.slot}]", f"p[{solve.slot}] = 0.0", f"_forces = np.empty({solve.rows})",
+            "_status = contact_forces(t, y, p, _forces)", f"p[{solve.slot}] = _mode", "if _status != 0:",
+            f"{indent}return _status", f"_limits = np.empty({solve.elements})", "friction_limits(t, y, p, _limits)",
+            f"p[{solve.slot}] = friction_mode_after(_mode, _forces[{solve.row}], _limits[{solve.element}])",
+            "return 0"]
 
 
 def impact_branches(eom, restitutions: tuple, time, kernel, modes: int | None = None) -> tuple:
@@ -133,22 +201,31 @@ def contacts_constant(names: tuple[str, ...], restitutions: tuple) -> tuple:
 def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     """The emitted lines of a kernel whose solve is `solve`: (after its loads, before its temporaries; after its
     stores)."""
-    n, count, first = solve.n, solve.count, solve.first
-    all_open = " and ".join(f"p[{first + d}] == 0.0" for d in range(count))
+    n, count, first, rows = solve.n, solve.count, solve.first, solve.rows
+    slots = [solve.friction_slot(f) for f in range(len(solve.frictions))]
+    none_held = " and ".join([f"p[{first + d}] == 0.0" for d in range(count)] + [f"p[{s}] != 0.0" for s in slots])
     if solve.kind == "rhs":
-        return [], ["_status = rhs_free(t, y, p, out)", f"if _status != 0 or ({all_open}):", f"{indent}return _status",
-                    f"return closed_contacts(t, y, p, out, np.empty({count}), 1.0)"]
+        return [], ["_status = rhs_free(t, y, p, out)", f"if _status != 0 or ({none_held}):", f"{indent}return _status",
+                    f"return closed_contacts(t, y, p, out, np.empty({rows}), 1.0)"]
     if solve.kind == "forces":
         return [], [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
                     f"{indent}return _status", "return closed_contacts(t, y, p, _ydot, out, 0.0)"]
     if solve.kind == "closed":
-        work = [f"_mass = np.zeros(({n}, {n}))", f"_gradient = np.zeros(({count}, {n}))", f"_bias = np.empty({count})"]
-        return work, [f"return closed_contact_accelerations(_mass, _gradient, _bias, p[{first}:{first + count}], "
-                      f"out[{n}:{2 * n}], forces, unilateral)"]
-    after = [f"if not ({all_open}):", f"{indent}_forces = np.empty({count})",
-             f"{indent}if contact_forces(t, y, p, _forces) == 0:"]
+        work = [f"_mass = np.zeros(({n}, {n}))", f"_gradient = np.zeros(({rows}, {n}))", f"_bias = np.empty({rows})"]
+        if not slots:
+            return work, [f"return closed_contact_accelerations(_mass, _gradient, _bias, p[{first}:{first + count}], "
+                          f"out[{n}:{2 * n}], forces, unilateral)"]
+        return work, [f"return frictional_accelerations(_mass, _gradient, _bias, p[{first}:{first + count}], "
+                      f"p[{slots[0]}:{slots[-1] + 1}], out[{n}:{2 * n}], forces, unilateral)"]
+    after = [f"out[{e}] = p[{s}] * out[{e}]" for e, s in zip(solve.frictions, slots, strict=True)]   # slip: s·v
+    after += [f"if not ({none_held}):", f"{indent}_forces = np.empty({rows})",
+              f"{indent}if contact_forces(t, y, p, _forces) == 0:"]
     for d, e in enumerate(solve.events):
         after += [f"{indent * 2}if p[{first + d}] != 0.0:", f"{indent * 3}out[{e}] = _forces[{d}]"]
+    if slots:
+        after += [f"{indent * 2}_limits = np.empty({len(slots)})", f"{indent * 2}friction_limits(t, y, p, _limits)"]
+    for f, (e, s) in enumerate(zip(solve.frictions, slots, strict=True)):
+        after += [f"{indent * 2}if p[{s}] == 0.0:", f"{indent * 3}out[{e}] = _limits[{f}] - abs(_forces[{count + f}])"]
     return [], after
 
 

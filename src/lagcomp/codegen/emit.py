@@ -23,7 +23,7 @@ import unicodedata
 import sympy as sp
 
 from lagcomp import __version__
-from lagcomp.codegen.contacts import contact_event_call, mode_lines
+from lagcomp.codegen.contacts import contact_event_call, friction_switch_lines, mode_lines
 from lagcomp.codegen.latex import equations_source
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor import (
@@ -43,6 +43,7 @@ from lagcomp.ir import (
     DirectionalSolve,
     EventResets,
     FlatMatrix,
+    FrictionSwitch,
     JacobianSolve,
     Kernel,
     LinearSolve,
@@ -104,7 +105,8 @@ KERNEL_SUPPORT = {
     "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "kkt_solve_matrix",
                                               "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
                                               "lu_solve_matrix", "lu_substitute"),
-    "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "contact_event"),
+    "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "contact_event", "friction_mode_after",
+                                       "frictional_accelerations"),
     "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
 }
 
@@ -136,7 +138,9 @@ def kernel_support_names(kernels) -> set[str]:
         if isinstance(kernel.solve, ContactImpact):
             names.add("contact_impacts" if kernel.solve.modes is None else "contact_event")
         if isinstance(kernel.solve, ContactModes) and kernel.solve.kind == "closed":
-            names.add("closed_contact_accelerations")
+            names.add("frictional_accelerations" if kernel.solve.frictions else "closed_contact_accelerations")
+        if isinstance(kernel.solve, FrictionSwitch):
+            names.add("friction_mode_after")
         expressions = [expr for _, expr in kernel.temps] + [expr for _, expr in kernel.stores]
         for function, scalar, lanes in ((sp.sin, "sin", "vsin"), (sp.cos, "cos", "vcos")):
             if any(isinstance(expr, sp.Basic) and expr.has(function) for expr in expressions):
@@ -460,6 +464,8 @@ def event_reset_body(solve: EventResets) -> list[str]:
         inner += [f"{target} = {to_code(expr)}" for target, expr in branch.stores]
         if isinstance(branch.solve, ContactImpact):
             inner += _impact_call(branch.solve)
+        if isinstance(branch.solve, FrictionSwitch):
+            inner += friction_switch_lines(branch.solve, INDENT)
         body += [INDENT + line for line in inner]
     return body + ["return 0"]
 

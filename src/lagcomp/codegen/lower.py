@@ -40,13 +40,21 @@ from dataclasses import replace
 import symengine as se
 import sympy as sp
 
-from lagcomp.codegen.contacts import contact_events, contacts_constant, impact_branches, mode_slots, resting_kernels
+from lagcomp.codegen.contacts import (
+    contact_events,
+    contacts_constant,
+    friction_branches,
+    friction_events,
+    impact_branches,
+    mode_slots,
+    modes_of,
+    resting_kernels,
+)
 from lagcomp.codegen.geometry import geometry_kernel
 from lagcomp.errors import ModelError
 from lagcomp.ir import (
     NO_JACOBIAN,
     AugmentedSolve,
-    ContactModes,
     Delegate,
     EventResets,
     FlatMatrix,
@@ -59,6 +67,7 @@ from lagcomp.ir import (
     Unavailable,
 )
 from lagcomp.mechanics.lagrange import EOM, rest_partials, symengine_ready
+from lagcomp.model.friction import slip_symbol
 from lagcomp.model.inputs import MAX_ORDER, is_input
 from lagcomp.model.system import t
 
@@ -115,6 +124,11 @@ def _slots(eom: EOM) -> list[tuple[sp.Symbol, str, str, int]]:
     slots += [(s, user_local("p", s.name, k), "p", k) for k, s in enumerate(eom.parameters)]
     if eom.k:
         slots += [(s, BAUMGARTE[i], "p", len(eom.parameters) + i) for i, s in enumerate(_baumgarte(eom))]
+    elements = friction_events(eom.frictions)
+    if elements:    # the friction elements' modes (their slip force is linear in them): `ContactModes`
+        first = _first_mode(eom) + len(contact_events(eom.restitutions)) + 1
+        slots += [(slip_symbol(f), user_local("slip", eom.system.event_names[e], f), "p", first + f)
+                  for f, e in enumerate(elements)]
     return slots
 
 
@@ -725,9 +739,13 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
     doc = f"Event functions g, shape ({len(names)},), in order {names}, into `out`; the drivers locate their zeros."
     solve = None
     if mode_slots(eom):
-        events = contact_events(eom.restitutions)
-        solve = ContactModes("events", eom.n, len(events), _first_mode(eom), events)
-        doc += "\nA closed contact's value is its normal force (contact_forces): its lift-off when it turns negative."
+        solve = modes_of(eom, "events", _first_mode(eom))
+        if solve.events:
+            doc += ("\nA closed contact's value is its normal force (contact_forces): its lift-off when it turns "
+                    "negative.")
+        if solve.frictions:
+            doc += ("\nA friction element's value is s·v while it slips (mode s = ±1: v reaching 0), μs |N| − |λ_f| "
+                    "while it sticks\n(friction_limits, contact_forces: the force needed reaching its limit).")
     return _kernel("event_values", doc, ("t", "y", "p", "out"), [(f"out[{e}]", g) for e, g in enumerate(eom.events)],
                    mapping, loads, solve=solve)
 
@@ -739,17 +757,18 @@ def _first_mode(eom: EOM) -> int:
 
 
 def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping, loads, restitutions=(),
-                       impacts=()) -> Kernel:
+                       impacts=(), switches=()) -> Kernel:
     """``event_reset(t, y, p, e, out) -> int``: the state just after event e into `out` (size `size`): y, with
     what e's reset sets (`resets[e]`: ((state index, value over the state before the event), ...)) overwritten,
     or the contacts' impact (`impacts`: the branch of `lagcomp.codegen.contacts.impact_branches`; `restitutions`
-    per event, None for an event that is not a contact, give the module's ``CONTACTS``).
+    per event, None for an event that is not a contact, give the module's ``CONTACTS``), or a friction element's
+    switch of mode (`switches`: `lagcomp.codegen.contacts.friction_branches`).
     Returns 0 or the impact solver's status.  Shared by the Lagrange and Kane modules (their `mapping` and
     `loads`)."""
     branches = tuple(
         (e, _kernel("event_reset", "", ("t", "y", "p", "e", "out"), [(f"out[{i}]", v) for i, v in reset], mapping,
                     loads))
-        for e, reset in enumerate(resets) if reset) + tuple(impacts)
+        for e, reset in enumerate(resets) if reset) + tuple(impacts) + tuple(switches)
     reset_names = [names[e] for e, reset in enumerate(resets) if reset]
     contact_names = [names[e] for events, _ in impacts for e in events]
     doc = (f"The state just after event e into `out`, shape ({size},): `y`, the state just before, with what the\n"
@@ -762,8 +781,12 @@ def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping
     if any(branch.solve.modes is not None for _, branch in impacts):
         doc += ("\nWith modes in p (CONTACT_MODES): a closed contact's event opens it (lift-off), an impact may\n"
                 "close one (lagcomp.kernel_support.resting.contact_event); the reset writes them into p.")
+    if switches:
+        doc += ("\nA friction element's event switches its mode in p (FRICTIONS; lagcomp.kernel_support.resting."
+                "friction_mode_after),\nthe state unchanged.")
+    switching = {e for e, _ in switches}
     resetting = tuple(names[e] for e, restitution in enumerate(restitutions or (None,) * len(names))
-                      if resets[e] or restitution is not None)
+                      if resets[e] or restitution is not None or e in switching)
     return Kernel(name="event_reset", doc=doc, args=("t", "y", "p", "e", "out"), loads=(), temps=(), stores=(),
                   solve=EventResets(size=size, branches=branches),
                   constants=(("RESET_EVENTS", "The events whose reset event_reset applies, the contacts' impacts "
@@ -883,7 +906,9 @@ def lower(eom: EOM) -> ModuleIR:
         event_reset_kernel(system.event_names, eom.resets, 2 * n, mapping, loads, eom.restitutions, impact_branches(
             eom, eom.restitutions, t, lambda name, doc, args, stores, solve: _kernel(name, doc, args, stores, mapping,
                                                                                  loads, solve=solve),
-            _first_mode(eom) if mode_slots(eom) else None)),
+            _first_mode(eom) if mode_slots(eom) else None),
+            friction_branches(eom, _first_mode(eom), lambda name, doc, args, stores, solve: _kernel(
+                name, doc, args, stores, mapping, loads, solve=solve))),
         _rest_partials_kernel(eom, mapping, loads),
     ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
     kernels += (geometry_kernel(eom, lambda name, doc, args, stores: _kernel(name, doc, args, stores, mapping, loads)),)

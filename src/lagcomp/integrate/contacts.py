@@ -10,6 +10,10 @@ number or the name of the parameter that holds it.  A run refuses a restitution 
 (`ParameterError`) and a gap that is negative at the start (`InitialConditionError`): a body that
 starts inside another has no impact to apply, and its motion would be meaningless.  "Negative" allows
 rounding: g < −`CLOSED_GAP` Σ_j |∂g/∂q_j| (|q_j| + 1), the scale the impact solver uses for "touching".
+
+Friction elements (`lagcomp.model.friction.Friction`, the module's ``FRICTIONS``) share the modes: a run checks
+their coefficients given as parameters (μ ≥ 0, μk ≤ μs), starts each sticking or slipping (`set_initial_modes`),
+and reports their switches and forces with the contacts' (`contact_switches`, `contact_forces_along`).
 """
 
 from __future__ import annotations
@@ -110,6 +114,12 @@ def sweep_impulses(model, firing: int, P: np.ndarray, count: np.ndarray, times: 
     return values
 
 
+def frictions_of(model) -> tuple:
+    """The model's friction elements as (name, event index, mode slot of p, μs, μk), each μ a number or the name
+    of its parameter; () without them."""
+    return tuple(getattr(model.kernels, "FRICTIONS", ()))
+
+
 def mode_slots(model) -> tuple[int, int] | None:
     """(first slot of p, count) of the model's contact modes (`lagcomp.ir.ContactModes`), None without them;
     the closing flag is the slot after them."""
@@ -117,10 +127,19 @@ def mode_slots(model) -> tuple[int, int] | None:
     return None if first is None else (first, len(contacts_of(model)))
 
 
+def mode_slot_of(model) -> dict[str, int]:
+    """The slot of p of each contact's and friction element's mode, by name."""
+    first, _ = mode_slots(model)
+    slots = {name: first + d for d, (name, _, _) in enumerate(contacts_of(model))}
+    return slots | {name: slot for name, _, slot, _, _ in frictions_of(model)}
+
+
 def mode_slot_count(kernels) -> int:
     """The slots of p a module's contact modes take (its contacts and the closing flag; 0 without modes): after
     the parameters, before the inputs' headers (`lagcomp.codegen.contacts.mode_slots`)."""
-    return len(kernels.CONTACTS) + 1 if hasattr(kernels, "CONTACT_MODES") else 0
+    if not hasattr(kernels, "CONTACT_MODES"):
+        return 0
+    return len(getattr(kernels, "CONTACTS", ())) + 1 + len(getattr(kernels, "FRICTIONS", ()))
 
 
 def with_open_contacts(model, p: np.ndarray) -> np.ndarray:
@@ -151,15 +170,16 @@ def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, r
     closing = 1.0 if "rhs" in method.kernels else 0.0
     P[:, first:first + count] = 0.0
     P[:, first + count] = closing
-    forces = np.empty(count)
-    for row in np.flatnonzero(resting.any(axis=1)):
+    _set_friction_modes(model, method, t0, Y0, P, where)
+    forces = np.empty(count + len(frictions_of(model)))
+    for row in np.flatnonzero(resting.any(axis=1)) if resting is not None else ():
         y, p, candidates = Y0[row], P[row], resting[row].copy()
         for _ in range(count):
             p[first:first + count] = candidates
             if model.kernels.contact_forces(t0, y, p, forces) != 0:
                 candidates[:] = False
                 break
-            pushing = candidates & (forces > 0.0)
+            pushing = candidates & (forces[:count] > 0.0)
             if (pushing == candidates).all() or not pushing.any():
                 candidates = pushing
                 break
@@ -174,9 +194,70 @@ def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, r
                               f"{method_names(lambda m: 'rhs' in m.kernels and 'event_reset' in m.kernels)}.")
 
 
+def _set_friction_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, where) -> None:
+    """Write each friction element's mode at the start into the rows of P, after checking its coefficients.
+
+    v ≠ 0 (beyond `CLOSED_GAP` Σ_j |∂v/∂q̇_j| (|q̇_j| + 1), the contacts' scale of rest): slip with s = sign v.
+    v ≈ 0: stick when the force that holds it is within μs |N| (the elements at rest tried together; the one most
+    beyond its limit slips, one pass per element at most), else slip against that force (toward the free motion).
+    Refuses (`OptionError`) methods that do not integrate the module's ``rhs``: the Taylor program has no rows for
+    a sticking element (its runs would be silently wrong at the first stick).
+    """
+    frictions = frictions_of(model)
+    if not frictions:
+        return
+    if "rhs" not in method.kernels or "event_reset" not in method.kernels:
+        from lagcomp.integrate.options import method_names  # (it imports this module)
+
+        raise OptionError(f"Friction element(s) {[f[0] for f in frictions]} of {model.name!r} stick and slip, which "
+                          f"`{method.name}` cannot integrate (its program has no rows for a sticking element). Use "
+                          f"{method_names(lambda m: 'rhs' in m.kernels and 'event_reset' in m.kernels)}.")
+    _check_coefficients(model, frictions, P, where)
+    n, slots = model.n, np.array([slot for _, _, slot, _, _ in frictions])
+    events = [event for _, event, _, _, _ in frictions]
+    count = len(contacts_of(model))
+    values = np.empty(len(model.event_names))
+    gradients = np.empty((len(model.event_names), Y0.shape[1] + 1 + len(model.parameters)))
+    forces, limits = np.empty(count + len(frictions)), np.empty(len(frictions))
+    for row in range(Y0.shape[0]):
+        y, p = Y0[row], P[row]
+        p[slots] = 1.0                                          # (event_values: v itself)
+        model.kernels.event_values(t0, y, p, values)
+        if model.kernels.event_gradients(t0, y, p, gradients) != 0:     # (events that read inputs: no partials)
+            gradients[:] = 1.0
+        v, a = values[events], gradients[events, n:2 * n]
+        rest = np.abs(v) <= CLOSED_GAP * (np.abs(a) @ (np.abs(y[n:2 * n]) + 1.0))
+        p[slots] = np.where(rest, 0.0, np.sign(v))
+        for _ in range(len(frictions)):
+            if not rest.any() or model.kernels.contact_forces(t0, y, p, forces) != 0:
+                break
+            model.kernels.friction_limits(t0, y, p, limits)
+            excess = np.where(rest, np.abs(forces[count:]) - limits, -np.inf)
+            worst = int(np.argmax(excess))
+            if excess[worst] <= 0.0:
+                break
+            p[slots[worst]] = -np.sign(forces[count + worst]) or 1.0
+            rest[worst] = False
+
+
+def _check_coefficients(model, frictions, P: np.ndarray, where) -> None:
+    """Refuse friction coefficients (those given as parameters) below 0, or μk > μs (`ParameterError`)."""
+    def values(mu):
+        return P[:, model.parameters.index(mu)] if isinstance(mu, str) else np.full(P.shape[0], mu)
+
+    for name, _, _, static, kinetic in frictions:
+        mu_s, mu_k = values(static), values(kinetic)
+        bad = np.flatnonzero(~((mu_k >= 0.0) & (mu_k <= mu_s)))
+        if bad.size:
+            row = int(bad[0])
+            raise ParameterError(f"Friction `{name}`{where(row)}: its coefficients μs = {mu_s[row]}, μk = {mu_k[row]} "
+                                 "must satisfy 0 <= μk <= μs.")
+
+
 def contact_switches(model, p: np.ndarray, t: np.ndarray, y: np.ndarray, event: np.ndarray,
                      stopped_at_last: bool) -> tuple:
-    """The contacts' mode switches along a run: ((time, contact name, closed), ...) in time order.
+    """The mode switches along a run: ((time, element name, new mode), ...) in time order, an element a contact
+    (mode 1 closed, 0 open) or a friction element (0 stick, ±1 slip).
 
     Replays the run's resets on a copy of `p` (the modes at the start): at the event rows (t, states before y,
     event indices `event`), the first resetting row at each time is the reset the driver applied (the others at
@@ -187,10 +268,10 @@ def contact_switches(model, p: np.ndarray, t: np.ndarray, y: np.ndarray, event: 
     slots = mode_slots(model)
     if slots is None:
         return ()
-    first, count = slots
-    contacts = contacts_of(model)
-    contact_of = {event_index: d for d, (_, event_index, _) in enumerate(contacts)}
-    resetting = [e.resets or e.name in {name for name, _, _ in contacts} for e in model.events]
+    contacts, frictions = contacts_of(model), frictions_of(model)
+    slot_of = mode_slot_of(model)
+    element_of = {event_index: name for name, event_index, *_ in contacts + frictions}
+    resetting = [e.resets or e.name in slot_of for e in model.events]
     work, out = p.copy(), np.empty(y.shape[1])
     switches, applied_at = [], None
     for r in range(t.shape[0]):
@@ -198,17 +279,18 @@ def contact_switches(model, p: np.ndarray, t: np.ndarray, y: np.ndarray, event: 
         if not resetting[e] or t[r] == applied_at or (stopped_at_last and t[r] == t[-1]):
             continue
         applied_at = t[r]
-        if e not in contact_of:
+        if e not in element_of:
             continue
-        before = work[first:first + count].copy()
+        before = work.copy()
         model.kernels.event_reset(float(t[r]), y[r], work, e, out)
-        switches += [(float(t[r]), contacts[d][0], bool(work[first + d])) for d in range(count)
-                     if work[first + d] != before[d]]
+        switches += [(float(t[r]), name, float(work[slot])) for name, slot in slot_of.items()
+                     if work[slot] != before[slot]]
     return tuple(switches)
 
 
 def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, switches: tuple) -> np.ndarray | None:
-    """The normal forces (rows, C) at the saved rows (ts, ys), 0 while a contact is open; None without modes.
+    """The normal forces (rows, C), then the friction forces along v (0 while slipping), at the saved rows
+    (ts, ys), 0 while a contact is open; None without modes.
 
     The modes at a row are those at the start (`p`) changed by the `switches` before it; at a switch's time the
     first row is the state before the switch and a second row at the same time the state after."""
@@ -216,14 +298,15 @@ def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, s
     if slots is None:
         return None
     first, count = slots
-    names = [name for name, _, _ in contacts_of(model)]
-    work, out = p.copy(), np.zeros((ts.shape[0], count))
+    slot_of = mode_slot_of(model)
+    sticking = np.array([slot for _, _, slot, _, _ in frictions_of(model)], dtype=np.int64)
+    work, out = p.copy(), np.zeros((ts.shape[0], count + sticking.size))
     k = 0
     for r in range(ts.shape[0]):
         while k < len(switches) and (switches[k][0] < ts[r] or (switches[k][0] == ts[r] and r > 0
                                                                  and ts[r - 1] == ts[r])):
-            work[first + names.index(switches[k][1])] = 1.0 if switches[k][2] else 0.0
+            work[slot_of[switches[k][1]]] = float(switches[k][2])
             k += 1
-        if work[first:first + count].any():
+        if work[first:first + count].any() or (work[sticking] == 0.0).any():
             model.kernels.contact_forces(float(ts[r]), ys[r], work, out[r])
     return out

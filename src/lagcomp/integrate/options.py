@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lagcomp.errors import OptionError
-from lagcomp.integrate.contacts import contacts_of
+from lagcomp.integrate.contacts import contacts_of, frictions_of
 from lagcomp.integrate.dae import DAE_RTOL_MIN
 from lagcomp.integrate.drivers.events import (
     ACTION_IGNORE,
@@ -125,7 +125,7 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
         unknown = [name for name in chosen if not isinstance(name, str) or name not in model.event_names]
         if unknown:
             raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.event_names)}.")
-    left_out = [name for name, _, _ in contacts_of(model) if name not in chosen]
+    left_out = [name for name, *_ in contacts_of(model) + frictions_of(model) if name not in chosen]
     if left_out:
         raise OptionError(f"Contact(s) {left_out} of {model.name!r} are part of its motion, which a run cannot leave "
                           f"out: use {method_names(lambda m: 'event_reset' in m.kernels)} (`{m.name}` cannot apply "

@@ -29,6 +29,7 @@ from lagcomp.integrate.contacts import (
     contact_forces_along,
     contact_switches,
     contacts_of,
+    frictions_of,
     impulses,
     set_initial_modes,
 )
@@ -42,7 +43,7 @@ from lagcomp.integrate.methods import library_function
 from lagcomp.integrate.options import RunOptions, positive, run_options
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
-from lagcomp.integrate.solution import ContactSwitch, EventRecord, Solution
+from lagcomp.integrate.solution import ContactSwitch, EventRecord, FrictionSwitch, Solution
 from lagcomp.integrate.status import Status
 from lagcomp.integrate.stiffness import (
     ADVISED_FAILURES,
@@ -385,12 +386,25 @@ def _event_records(model, p, event_parts) -> dict:
 
 
 def _switches(model, p, event_parts, status) -> tuple:
-    """The contacts' mode switches (`lagcomp.integrate.contacts.contact_switches`) from the run's event rows."""
+    """The contacts' and friction elements' mode switches (`lagcomp.integrate.contacts.contact_switches`) from the
+    run's event rows."""
     if not event_parts:
         return ()
     t_all, y_all, i_all = (np.concatenate(column) for column in list(zip(*event_parts, strict=True))[:3])
     stopped = status in (Status.TERMINATED, Status.EVENTS_ACCUMULATED, Status.RESET_FAILED)  # (no reset at its end)
     return contact_switches(model, p, t_all, y_all, i_all, stopped)
+
+
+def _modes_along(model, p, ts, ys, switches) -> dict:
+    """The `Solution` fields of the modes: the contacts' and friction elements' switches and forces."""
+    forces = contact_forces_along(model, p, ts, ys, switches)
+    count, frictions = len(contacts_of(model)), {name for name, *_ in frictions_of(model)}
+    return dict(
+        contact_switches=tuple(ContactSwitch(t, name, bool(mode)) for t, name, mode in switches
+                               if name not in frictions),
+        contact_forces=None if forces is None or (frictions and not count) else forces[:, :count],
+        friction_switches=tuple(FrictionSwitch(t, name, int(mode)) for t, name, mode in switches if name in frictions),
+        friction_forces=forces[:, count:] if frictions else None)
 
 
 def _solution(model, p, recorder, run, throw) -> Solution:
@@ -426,8 +440,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         reactions=reactions, constraint_residual=max(run["residual_max"], residual),
         projected_initial_state=ys[0].copy() if run["projected"] else None,
         events=run["events"], model_name=model.name, geometry=BodyGeometry.of(model, p),
-        contact_switches=tuple(ContactSwitch(*switch) for switch in run.get("switches", ())),
-        contact_forces=contact_forces_along(model, p, ts, ys, run.get("switches", ())),
+        **_modes_along(model, p, ts, ys, run.get("switches", ())),
         sensitivities=run.get("sensitivities"), sensitivity_names=run.get("sensitivity_names", ()),
         event_sensitivities=run.get("event_sensitivities", {}), reaction_sensitivities=reaction_sensitivities,
     )

@@ -47,6 +47,18 @@ class ContactSwitch:
 
 
 @dataclass(frozen=True)
+class FrictionSwitch:
+    """A friction element's mode switch (`Solution.friction_switches`, `lagcomp.model.friction.Friction`): at
+    time `t` the element `friction` began to stick (`mode` 0: v reached 0 with the force that holds it within
+    μs N) or to slip (`mode` ±1, the sign of v from then: its force reached μs |N|, or v reached 0 with a force
+    beyond it)."""
+
+    t: float
+    friction: str
+    mode: int
+
+
+@dataclass(frozen=True)
 class EventSensitivities:
     """The sensitivities of one event's occurrences (`Solution.event_sensitivities`), columns w named by
     `Solution.sensitivity_names`: of its times, t (count, k) = dt*/dw, and of the state there,
@@ -150,7 +162,14 @@ class Solution:
     contact_forces : ndarray, shape (m, C), or None
         The contacts' normal forces at the saved times (`Model.contacts`' order), 0 while a contact is
         open; at a switch's time the first row is before it, a second row at that time after it.  None
-        for a model without contact modes (Kane models).
+        for a model without contact modes (Kane models) or without contacts.
+    friction_switches : tuple of FrictionSwitch
+        The friction elements' switches between stick and slip, in time order (empty without friction); each
+        is also an occurrence of the element's event (in `events`, no jump).
+    friction_forces : ndarray, shape (m, F), or None
+        The friction elements' forces (`Model.frictions`' order) along v at the saved times, while sticking (the
+        multiplier that holds v = 0, in the units of the force conjugate to v's coordinate); 0 while slipping
+        (the slip force there is −μk |N| sign v).  None without friction.
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
@@ -192,6 +211,8 @@ class Solution:
     reaction_sensitivities: np.ndarray | None = field(default=None, repr=False)
     contact_switches: tuple = ()
     contact_forces: np.ndarray | None = field(default=None, repr=False)
+    friction_switches: tuple = ()
+    friction_forces: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def success(self) -> bool:
@@ -274,6 +295,11 @@ class Solution:
                 "contact_switch_contact": np.array([s.contact for s in self.contact_switches], dtype=str),
                 "contact_switch_closed": np.array([s.closed for s in self.contact_switches], dtype=bool)}
                if self.contact_forces is not None else {}),
+            **({"friction_forces": self.friction_forces,
+                "friction_switch_t": np.array([s.t for s in self.friction_switches], dtype=float),
+                "friction_switch_friction": np.array([s.friction for s in self.friction_switches], dtype=str),
+                "friction_switch_mode": np.array([s.mode for s in self.friction_switches], dtype=np.int64)}
+               if self.friction_forces is not None else {}),
         }
 
     def to_xarray(self):

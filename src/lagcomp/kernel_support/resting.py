@@ -74,20 +74,49 @@ def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, unil
     Returns 0; 1 (the status of a singular first pivot) when M is not positive definite, or
     `DEPENDENT_CLOSED_CONTACTS` when the closed contacts' W is singular: ``rhs`` returns it, the drivers stop.
     """
-    n = qdd.shape[0]
     count = modes.shape[0]
-    c = 0
+    active = np.empty(count, dtype=np.bool_)
     for d in range(count):
+        active[d] = modes[d] != 0.0
+    return held_row_accelerations(mass, gradients, bias, active, count, qdd, forces, unilateral)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def frictional_accelerations(mass, gradients, bias, modes, frictions, qdd, forces, unilateral):
+    """`closed_contact_accelerations` with friction elements (`lagcomp.model.friction.Friction`): rows C.. of
+    ``gradients`` (C + F, n) and ``bias`` (C + F) are the elements' a = ∂v/∂q̇ and b (v̇ = a q̈ + b), held
+    (two-sided) while the element sticks (its mode in ``frictions`` (F,) is 0); their multipliers, the friction
+    forces along v, go into ``forces`` (C + F) after the contacts' normal forces (0 while slipping)."""
+    count, elements = modes.shape[0], frictions.shape[0]
+    active = np.empty(count + elements, dtype=np.bool_)
+    for d in range(count):
+        active[d] = modes[d] != 0.0
+    for f in range(elements):
+        active[count + f] = frictions[f] == 0.0
+    return held_row_accelerations(mass, gradients, bias, active, count, qdd, forces, unilateral)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, unilateral):
+    """Correct ``qdd`` (n) in place for the rows r of G q̈ + b = 0 that are ``held`` (R,): M q̈ = M q̈_free + Gᵀ λ,
+    W λ = −(G q̈_free + b) on the held rows, λ into ``forces`` (R,), 0 for the others.  The first `one_sided`
+    rows are contacts: with ``unilateral`` 1 one whose λ would pull is dropped (`closed_contact_accelerations`);
+    the rows after them (sticking friction) hold with a λ of either sign.  Returns 0, 1 (M not positive definite)
+    or `DEPENDENT_CLOSED_CONTACTS`."""
+    n = qdd.shape[0]
+    rows = held.shape[0]
+    c = 0
+    for d in range(rows):
         forces[d] = 0.0
-        if modes[d] != 0.0:
+        if held[d]:
             c += 1
     if c == 0:
         return 0
     index = np.empty(c, dtype=np.int64)
-    minv_gt = np.empty((n, c))                  # M⁻¹ G_Aᵀ, column per closed contact
+    minv_gt = np.empty((n, c))                  # M⁻¹ G_Aᵀ, column per held row
     a = 0
-    for d in range(count):
-        if modes[d] != 0.0:
+    for d in range(rows):
+        if held[d]:
             index[a] = d
             for i in range(n):
                 minv_gt[i, a] = gradients[d, i]
@@ -95,7 +124,7 @@ def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, unil
     if ldlt_solve_matrix(mass, minv_gt) != 0:
         return 1
     delassus = np.empty((c, c))
-    free = np.empty(c)                          # g̈ without the contacts' forces: G q̈_free + b
+    free = np.empty(c)                          # the rows' G q̈_free + b, without their forces
     for a in range(c):
         s = bias[index[a]]
         for i in range(n):
@@ -113,7 +142,8 @@ def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, unil
             return DEPENDENT_CLOSED_CONTACTS
         pulling = -1
         for a in range(c):
-            if unilateral != 0.0 and active[a] and lam[a] < 0.0 and (pulling < 0 or lam[a] < lam[pulling]):
+            if (unilateral != 0.0 and index[a] < one_sided and active[a] and lam[a] < 0.0
+                    and (pulling < 0 or lam[a] < lam[pulling])):
                 pulling = a
         if pulling < 0:
             break
@@ -126,6 +156,16 @@ def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, unil
     for a in range(c):
         forces[index[a]] = lam[a]
     return 0
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def friction_mode_after(mode, force, limit):
+    """A friction element's mode after its event (`lagcomp.model.friction.Friction`): from stick (``mode`` 0,
+    its force reached ``limit`` = μs |N|) slip against the force that held it, −sign ``force``; from slip (v reached
+    0) stick when the ``force`` needed to hold v = 0 is within ``limit``, else slip against it (the other way)."""
+    if mode != 0.0 and abs(force) <= limit:
+        return 0.0
+    return -1.0 if force > 0.0 else 1.0
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)

@@ -183,6 +183,7 @@ def kane_events(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple[tuple
     """
     from lagcomp.model.contacts import Contact
     from lagcomp.model.events import Event
+    from lagcomp.model.friction import Friction
 
     plain = _Plain(km)
     allowed = set(form.q) | set(form.u) | set(form.parameters) | {t}
@@ -190,6 +191,9 @@ def kane_events(km: me.KanesMethod, form: FirstOrderForm, events) -> tuple[tuple
     for event in events or ():
         if not isinstance(event, Event):
             raise ModelError(f"`events` of a KanesMethod are lagcomp.Event(name, g(q, u, t)), got {event!r}.")
+        if isinstance(event, Friction):
+            raise ModelError(f"Friction `{event.name}` on a KanesMethod: stick-slip needs the Lagrange form (M from "
+                             "T); build the model as a lagcomp.System.")
         if isinstance(event, Contact):
             raise ModelError(f"Contact `{event.name}` on a KanesMethod: impacts need the Lagrange form (M from T); "
                              "build the model as a lagcomp.System, or use an Event with a reset.")

@@ -54,6 +54,7 @@ from lagcomp.mechanics.tidy import tidy as _tidy, tidy_small as _tidy_small, tid
 from lagcomp.model.constraints import Holonomic
 from lagcomp.model.contacts import Contact
 from lagcomp.model.events import reset_target
+from lagcomp.model.friction import Friction, slip_symbol
 from lagcomp.model.inputs import plain_inputs
 from lagcomp.model.system import System, t
 
@@ -118,6 +119,10 @@ class EOM:
     restitutions : tuple
         Per event, in order, Newton's coefficient e of a contact (`lagcomp.model.contacts.Contact`, whose
         event function is its gap) as a plain expression (a number or a parameter); None for other events.
+    frictions : tuple
+        Per event, in order, (N, μs, μk) of a friction element (`lagcomp.model.friction.Friction`, whose event
+        function is its sliding velocity v), N in plain symbols; None for other events.  Its slip force
+        −μk |N| s ∂v/∂q̇ is part of F (and of ṗ), s the element's mode symbol (`slip_symbol`, in element order).
     """
 
     system: System
@@ -146,6 +151,7 @@ class EOM:
     events: tuple = ()
     resets: tuple = ()
     restitutions: tuple = ()
+    frictions: tuple = ()
 
     @property
     def n(self) -> int:
@@ -218,6 +224,8 @@ def derive(system: System) -> EOM:
     if V.has(*qd):
         raise ModelError("The potential V depends on velocities; put velocity-dependent forces in `forces`.")
     _check_differentiable(system, (*q, *qd), T, V, D, Q, plain)
+    frictions = _frictions(system, plain, qd)
+    Q = [Qi + slip for Qi, slip in zip(Q, _slip_forces(system, frictions, plain, qd), strict=True)]
     n, variables = system.n, (*q, *qd, t)
     tidy = lambda expr: _tidy(expr, variables)  # noqa: E731
 
@@ -263,8 +271,37 @@ def derive(system: System) -> EOM:
         momenta=momenta, cyclic=cyclic,
         separable=separable, holonomic_separable=holonomic_separable, momentum_offset=b, momentum_rate=momentum_rate,
         events=tuple(plain(e.expr) for e in system.events), resets=_resets(system, plain),
-        restitutions=tuple(e.restitution if isinstance(e, Contact) else None for e in system.events), **constraints,
+        restitutions=tuple(e.restitution if isinstance(e, Contact) else None for e in system.events),
+        frictions=frictions, **constraints,
     )
+
+
+def _frictions(system: System, plain, qd) -> tuple:
+    """`EOM.frictions`: (N, μs, μk) per friction element's event, None for the others; a velocity that is not
+    linear in q̇ is a ModelError (its stick row a q̈ + b = 0 needs v = a(q, t)·q̇ + c(q, t))."""
+    out = []
+    for e in system.events:
+        if not isinstance(e, Friction):
+            out.append(None)
+            continue
+        v = plain(e.expr)
+        if not any(v.diff(a) != 0 for a in qd) or any(v.diff(a).diff(b) != 0 for a in qd for b in qd):
+            raise ModelError(f"Friction `{e.name}`: its velocity must be linear in the velocities q̇ (a(q, t)·q̇ + "
+                             f"c(q, t), not constant in them); got {e.expr}.")
+        out.append((plain(e.normal), e.static, e.kinetic))
+    return tuple(out)
+
+
+def _slip_forces(system: System, frictions: tuple, plain, qd) -> list:
+    """Σ_f −μk_f |N_f| s_f ∂v_f/∂q̇_i per coordinate i: the slipping elements' generalized forces, s_f the mode
+    symbol of element f (`lagcomp.model.friction.slip_symbol`; 0 while it sticks).  |N|: a normal force written
+    with a sign (m g cos θ on a curved track) presses either way; sympy drops the bars where N is positive."""
+    forces = [sp.S.Zero] * len(qd)
+    elements = [(e, friction) for e, friction in zip(system.events, frictions, strict=True) if friction is not None]
+    for f, (event, (normal, _, kinetic)) in enumerate(elements):
+        v = plain(event.expr)
+        forces = [Qi - kinetic * sp.Abs(normal) * slip_symbol(f) * v.diff(a) for Qi, a in zip(forces, qd, strict=True)]
+    return forces
 
 
 def _resets(system: System, plain) -> tuple:

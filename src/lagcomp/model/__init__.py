@@ -4,6 +4,7 @@ from lagcomp.model.system import System as System, coordinates as coordinates, t
 from lagcomp.model.constraints import Holonomic as Holonomic, Nonholonomic as Nonholonomic
 from lagcomp.model.events import Event as Event
 from lagcomp.model.contacts import Contact as Contact
+from lagcomp.model.friction import Friction as Friction
 from lagcomp.model.inputs import Input as Input
 from lagcomp.model.bodies import Particle as Particle, RigidBody as RigidBody, body_rates as body_rates, rotated as rotated
 from lagcomp.model.frames import MovingFrame as MovingFrame

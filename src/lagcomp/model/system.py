@@ -34,6 +34,7 @@ from lagcomp.names import by_name
 from lagcomp.model.assemble import assemble
 from lagcomp.model.constraints import Holonomic, Nonholonomic
 from lagcomp.model.contacts import Contact
+from lagcomp.model.friction import Friction
 from lagcomp.model.frames import as_frame
 from lagcomp.model.inputs import inputs_in, is_input, substitute_laws
 from lagcomp.model.events import Event, reset_role, reset_target
@@ -373,9 +374,18 @@ class System:
                     raise ModelError(f"Event `{e.name}`: its reset sets {key}, but {coordinate} is not a coordinate "
                                      f"of {self.name!r} (coordinates {list(self.coordinate_names)}).")
         contacts = [e.name for e in events if isinstance(e, Contact)]
+        frictions = [e.name for e in events if isinstance(e, Friction)]
+        if frictions and contacts:
+            raise ModelError(f"Friction {frictions} and contacts {contacts} in one system: an impact would change the "
+                             "sliding velocities without updating the friction modes, which is not supported yet; "
+                             "model them in separate systems.")
         if contacts and self.constraints:
             raise ModelError(f"Contacts {contacts} on a system with constraints {list(self.constraint_names)}: an "
                              "impact there must keep the constraints' velocities too, which is not supported yet.")
+        if frictions and self.constraints:
+            raise ModelError(f"Friction {frictions} on a system with constraints {list(self.constraint_names)}: a "
+                             "sticking element's row would join the constraints' KKT system, which is not supported "
+                             "yet.")
         return events
 
     def expressions(self) -> dict[str, sp.Expr]:
@@ -386,6 +396,8 @@ class System:
         exprs.update({f"event {e.name}": e.expr for e in self.events})
         exprs.update({reset_role(e, key): value for e in self.events for key, value in e.reset or ()})
         exprs.update({f"contact {e.name} restitution": e.restitution for e in self.events if isinstance(e, Contact)})
+        exprs.update({f"friction {e.name} {part}": getattr(e, part) for e in self.events if isinstance(e, Friction)
+                      for part in ("normal", "static", "kinetic")})
         return exprs
 
     @property

@@ -1,0 +1,109 @@
+"""Coulomb friction with stick–slip on a velocity: an element that sticks (v = 0 held) or slips (force −μk |N| sign v).
+
+A friction element acts on a relative velocity v(q, q̇, t), linear in q̇ (v = a(q, t)·q̇ + c(q, t)), pressed by
+a normal force N(q, q̇, t) given as an expression (the rope on a table: N = μ g (L − x)), whose magnitude |N|
+the law uses (a signed N, m g cos θ on a curved track, presses either way).  Its mode is a slot of p, like a
+contact's (`lagcomp.ir.ContactModes`): 0 stick, ±1 slip with s = sign v.
+
+* slip: the generalized force −μk |N| s ∂v/∂q̇, which enters the equations of motion (``rhs_free``) with s read
+  from p, so every kernel built from F (and the Taylor program) sees it; the event is s·v (direction −1: v
+  reaching 0);
+* stick: v = 0 held by the row a q̈ + b = 0 (b = Σ_j ∂v/∂q_j q̇_j + ∂v/∂t: v̇ = a q̈ + b), added to the closed
+  contacts' rows (`lagcomp.kernel_support.resting`); its multiplier λ_f is the friction force (two-sided); the
+  event is μs |N| − |λ_f| (direction −1: the force needed reaching the static limit);
+* the switches (``event_reset``, no velocity jump): stick → slip with s = −sign λ_f (the motion goes against the
+  force that held it); slip at v = 0 → stick when the force needed there is within μs |N|, else slip with
+  s = −sign λ_f (the other way).
+
+The element is an `Event` whose expression is v: its occurrences are the switches (`Solution.events`), listed
+with the new modes in `Solution.friction_switches`.  Limits of this first form: N is an expression (a contact's
+normal force is a later increment), the system has no bilateral constraints and is a Lagrange one (M from T);
+no contacts in the same system (an impact would leave the modes stale); the Taylor method refuses models with
+friction (its program has no stick rows).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from lagcomp.errors import ModelError
+from lagcomp.model.events import Event
+from lagcomp.model.expressions import expression
+
+
+@dataclass(frozen=True)
+class Friction(Event):
+    """A named Coulomb friction element on the velocity ``expr`` = v(q, q̇, t), linear in q̇.
+
+    Written ``Friction("table", x.diff(t), normal=m*g, static=0.5, kinetic=0.4)``.  It is an `Event` with
+    direction −1 whose action is the switch of mode; ``direction``, ``terminal`` and ``reset`` are fixed by that
+    and refused if given.
+
+    Parameters
+    ----------
+    name : str
+        Identifier under which the switches are reported.
+    expr : sympy expression
+        The sliding velocity v, linear in the velocities q_i(t).diff(t); may hold q, t and parameters.
+    normal : sympy expression
+        The normal force N pressing the surfaces (q, q̇, t, parameters; |N| is used), in the units of the force
+        conjugate to v's coordinate (N for v in m/s).  A contact's name (its normal force) is not supported yet.
+    static, kinetic : float or sympy Symbol
+        μs and μk ≥ 0 with μk ≤ μs (kinetic defaults to static), numbers or parameters.
+    """
+
+    normal: object = None
+    static: object = None
+    kinetic: object = None
+
+    def __post_init__(self):
+        if self.direction not in (-1, 0) or self.terminal or self.reset is not None:
+            raise ModelError(f"Friction `{self.name}`: its event is the switch between stick and slip (direction "
+                             "-1, the run goes on); leave `direction`, `terminal` and `reset` unset.")
+        object.__setattr__(self, "direction", -1)
+        super().__post_init__()
+        if isinstance(self.normal, str):
+            raise ModelError(f"Friction `{self.name}`: normal={self.normal!r} names a contact; friction pressed by a "
+                             "contact's normal force is not supported yet: give N as an expression of q, q̇, t and "
+                             "parameters.")
+        if self.normal is None or self.static is None:
+            raise ModelError(f"Friction `{self.name}`: give the normal force (normal=N) and the static coefficient "
+                             "(static=μs; kinetic=μk defaults to it).")
+        object.__setattr__(self, "normal", expression(self.normal, f"Friction `{self.name}`: the normal force"))
+        static = _coefficient(self.name, "static", self.static)
+        kinetic = static if self.kinetic is None else _coefficient(self.name, "kinetic", self.kinetic)
+        if static.is_number and kinetic.is_number and kinetic > static:
+            raise ModelError(f"Friction `{self.name}`: the kinetic coefficient {float(kinetic)} exceeds the static "
+                             f"one {float(static)}; Coulomb's law needs μk ≤ μs.")
+        object.__setattr__(self, "static", static)
+        object.__setattr__(self, "kinetic", kinetic)
+
+    @property
+    def changes_state(self) -> bool:
+        """The drivers apply its ``event_reset``: a switch writes the element's mode into p (the state itself does
+        not jump)."""
+        return True
+
+
+def slip_symbol(index: int) -> sp.Symbol:
+    """The symbol of friction element `index`'s mode slot (0 stick, ±1 slip) in the equations of motion: the
+    kernels read it from p (`lagcomp.codegen.lower`), the slip force −μk |N| s ∂v/∂q̇ is linear in it."""
+    return sp.Symbol(f"_slip_mode_{index}", real=True)
+
+
+def _coefficient(name: str, which: str, value) -> sp.Expr:
+    """μ ≥ 0 as a sympy Rational (printed back as the same double), or a parameter Symbol; else a ModelError."""
+    if isinstance(value, sp.Symbol):
+        return value
+    try:
+        number = None if isinstance(value, bool) else float(value)
+    except (TypeError, ValueError):
+        number = None
+    if number is None or isinstance(value, sp.Basic) and not value.is_number:
+        raise ModelError(f"Friction `{name}`: the {which} coefficient must be a number >= 0 or a parameter symbol, "
+                         f"got {value!r}.")
+    if not number >= 0.0 or number == float("inf"):
+        raise ModelError(f"Friction `{name}`: the {which} coefficient must be >= 0 (and finite), got {number}.")
+    return sp.Rational(repr(number))
