@@ -289,8 +289,9 @@ def contact_switches(model, p: np.ndarray, t: np.ndarray, y: np.ndarray, event: 
 
 
 def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, switches: tuple) -> np.ndarray | None:
-    """The normal forces (rows, C), then the friction forces along v (0 while slipping), at the saved rows
-    (ts, ys), 0 while a contact is open; None without modes.
+    """The normal forces (rows, C), then the friction forces along v (rows, F), at the saved rows (ts, ys); None
+    without modes.  A contact's force is 0 while it is open; a friction element's is the multiplier that holds
+    v = 0 while it sticks and −μk |N| s while it slips with s = sign v (μk |N| = (μk/μs) ``friction_limits``).
 
     The modes at a row are those at the start (`p`) changed by the `switches` before it; at a switch's time the
     first row is the state before the switch and a second row at the same time the state after."""
@@ -299,8 +300,13 @@ def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, s
         return None
     first, count = slots
     slot_of = mode_slot_of(model)
-    sticking = np.array([slot for _, _, slot, _, _ in frictions_of(model)], dtype=np.int64)
+    frictions = frictions_of(model)
+    sticking = np.array([slot for _, _, slot, _, _ in frictions], dtype=np.int64)
+    kinetic_over_static = np.array([_coefficient(model, p, mu_k) / _coefficient(model, p, mu_s)
+                                    if _coefficient(model, p, mu_s) > 0.0 else 0.0
+                                    for _, _, _, mu_s, mu_k in frictions])
     work, out = p.copy(), np.zeros((ts.shape[0], count + sticking.size))
+    limits = np.empty(sticking.size)
     k = 0
     for r in range(ts.shape[0]):
         while k < len(switches) and (switches[k][0] < ts[r] or (switches[k][0] == ts[r] and r > 0
@@ -309,4 +315,13 @@ def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, s
             k += 1
         if work[first:first + count].any() or (work[sticking] == 0.0).any():
             model.kernels.contact_forces(float(ts[r]), ys[r], work, out[r])
+        slipping = work[sticking]
+        if slipping.any():
+            model.kernels.friction_limits(float(ts[r]), ys[r], work, limits)
+            out[r, count:] = np.where(slipping != 0.0, -slipping * kinetic_over_static * limits, out[r, count:])
     return out
+
+
+def _coefficient(model, p: np.ndarray, mu) -> float:
+    """A friction coefficient as `FRICTIONS` keeps it (a number or its parameter's name), valued in `p`."""
+    return float(p[model.parameters.index(mu)]) if isinstance(mu, str) else float(mu)

@@ -167,9 +167,9 @@ class Solution:
         The friction elements' switches between stick and slip, in time order (empty without friction); each
         is also an occurrence of the element's event (in `events`, no jump).
     friction_forces : ndarray, shape (m, F), or None
-        The friction elements' forces (`Model.frictions`' order) along v at the saved times, while sticking (the
-        multiplier that holds v = 0, in the units of the force conjugate to v's coordinate); 0 while slipping
-        (the slip force there is −μk |N| sign v).  None without friction.
+        The friction elements' forces (`Model.frictions`' order) along v at the saved times (in the units of the
+        force conjugate to v's coordinate): while sticking the multiplier that holds v = 0, while slipping
+        −μk |N| sign v.  None without friction.
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
