@@ -354,6 +354,8 @@ CASES = {
     "friction-coefficient-parameter-out-of-range": (_simulate("slider", q0=[0.0], qd0=[1.0], params={"a": 0.9}),
                                                     "`slide`"),
     "friction-with-taylor": (_simulate("slider", q0=[0.0], qd0=[1.0], method="taylor"), "['slide']"),
+    "contacts-method": (_simulate("bouncer", q0=[0.0, 1.0], method="rk4", dt=0.01), "use dopri5, dop853"),
+    "contacts-left-out": (_simulate("slider", q0=[0.0], qd0=[1.0], events=False), "['slide']"),
     "contact-closed-at-start-with-taylor": (_simulate("bouncer", q0=[0.0, 0.0], method="taylor"),
                                             "['floor'] start closed"),
     "singular-at-initial-state": (_simulate("degenerate", q0=[0.0], params={"m": 1.0}, method="rk4", dt=0.1), "x=0"),

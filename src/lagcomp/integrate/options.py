@@ -125,11 +125,16 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
         unknown = [name for name in chosen if not isinstance(name, str) or name not in model.event_names]
         if unknown:
             raise OptionError(f"Unknown event(s) {unknown}; {model.name!r} declares {list(model.event_names)}.")
-    left_out = [name for name, *_ in contacts_of(model) + frictions_of(model) if name not in chosen]
+    # contacts' impacts and friction's stick–slip are part of the motion: never left out, only capable methods
+    inherent = [name for name, *_ in contacts_of(model) + frictions_of(model)]
+    if inherent and "event_reset" not in m.kernels:
+        capable = method_names(lambda m: "event_reset" in m.kernels and not (m.name == "taylor" and frictions_of(model)))
+        raise OptionError(f"The contacts and friction elements {inherent} of {model.name!r} switch and jump within "
+                          f"its motion, which `{m.name}` cannot do; use {capable}.")
+    left_out = [name for name in inherent if name not in chosen]
     if left_out:
-        raise OptionError(f"Contact(s) {left_out} of {model.name!r} are part of its motion, which a run cannot leave "
-                          f"out: use {method_names(lambda m: 'event_reset' in m.kernels)} (`{m.name}` cannot apply "
-                          "impacts) and keep them among `events`.")
+        raise OptionError(f"The contacts and friction elements {left_out} of {model.name!r} are part of its motion, "
+                          "which a run cannot leave out: keep them among `events`.")
     if chosen and not m.adaptive:
         raise OptionError(f"Events are located on dense output, which {m.name} lacks; use "
                           f"{method_names(lambda m: m.adaptive)}.")
