@@ -128,7 +128,8 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     # contacts' impacts and friction's stick–slip are part of the motion: never left out, only capable methods
     inherent = [name for name, *_ in contacts_of(model) + frictions_of(model)]
     if inherent and "event_reset" not in m.kernels:
-        capable = method_names(lambda m: "event_reset" in m.kernels and not (m.name == "taylor" and frictions_of(model)))
+        capable = method_names(lambda m: "event_reset" in m.kernels
+                               and not (m.name == "taylor" and frictions_of(model)))
         raise OptionError(f"The contacts and friction elements {inherent} of {model.name!r} switch and jump within "
                           f"its motion, which `{m.name}` cannot do; use {capable}.")
     left_out = [name for name in inherent if name not in chosen]
