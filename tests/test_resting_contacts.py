@@ -262,3 +262,32 @@ def test_an_impact_on_a_resting_body_pushes_through_its_closed_contact(stack):
     impulses = sweep.events["balls"]["impulses"]
     np.testing.assert_array_equal(impulses[0, 0], hit.impulses[0])
     np.testing.assert_allclose(impulses[1, 0], [1.8 * v, 1.8 * v], rtol=1e-11)
+
+
+@pytest.fixture(scope="module")
+def ladder(tmp_path_factory):
+    X, Y, th = lc.coordinates("X Y theta")
+    m, g, L = sp.symbols("m g L", positive=True)
+    T = m * (X.diff(t) ** 2 + Y.diff(t) ** 2) / 2 + m * L**2 / 12 * th.diff(t) ** 2 / 2
+    system = lc.System([X, Y, th], T=T, V=m * g * Y, name="resting_ladder", defaults={"m": 3.0, "g": G, "L": 2.0},
+                       events=[lc.Contact("wall", X - L / 2 * sp.sin(th), restitution=0.0),
+                               lc.Contact("floor", Y - L / 2 * sp.cos(th), restitution=0.0)])
+    return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+@pytest.mark.parametrize("theta0", [0.2, 0.6])
+def test_a_ladder_leaves_the_wall_at_two_thirds_of_its_height(ladder, theta0):
+    """A uniform ladder (length L, mass m, angle θ from the wall) released at rest against a smooth wall on a
+    smooth floor: both contacts start closed; while they hold, its centre moves on the circle of radius L/2,
+    energy gives θ̇² = (3 g/L)(cos θ0 − cos θ), and the wall pushes with m Ẍ = (3/4) m g sin θ (3 cos θ − 2 cos θ0),
+    zero at cos θ = (2/3) cos θ0: the top leaves the wall at 2/3 of its height, the floor still pushing."""
+    m, L = 3.0, 2.0
+    q0 = [L / 2 * np.sin(theta0), L / 2 * np.cos(theta0), theta0]
+    sol = ladder.simulate((0, 3.0), q0=q0, qd0=[0.0, 0.0, 0.0], method="dop853", rtol=1e-12, atol=1e-12)
+    first = sol.contact_switches[0]
+    assert (first.contact, first.closed) == ("wall", False)
+    row = np.searchsorted(sol.t, first.t)
+    assert np.cos(sol.q[row, 2]) == pytest.approx(2 / 3 * np.cos(theta0), abs=1e-10)
+    np.testing.assert_allclose(sol.contact_forces[0], [0.75 * m * G * np.sin(theta0) * np.cos(theta0),
+                                                        m * G * (1 - 0.75 * np.sin(theta0) ** 2)], rtol=1e-12)
+    assert sol.contact_forces[row, 1] > 0.0
