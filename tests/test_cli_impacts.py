@@ -34,6 +34,10 @@ def models(cache_dir):
     T = (x1.diff(t) ** 2 + x2.diff(t) ** 2 + x3.diff(t) ** 2) / 2
     lc.compile(lc.System([x1, x2, x3], T=T, events=[lc.Contact("c12", x2 - x1 - 1), lc.Contact("c23", x3 - x2 - 1)],
                          name="cli_cradle", q0=(-0.5, 1.0, 2.0), qd0=(1.0, 0.0, 0.0)), cache_dir=cache_dir)
+    k, v_b = sp.symbols("k v_b", positive=True)
+    lc.compile(lc.System([x], T=x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="cli_belt", q0=(0.0,), qd0=(0.5,),
+                         events=[lc.Friction("belt", x.diff(t) - v_b, normal=g, static=0.6, kinetic=0.4)],
+                         defaults={"k": 4.0, "g": G, "v_b": 0.5}), cache_dir=cache_dir)
     return str(cache_dir)
 
 
@@ -70,6 +74,17 @@ def test_the_impact_that_closes_the_floor_says_so(models, capsys):
     listed = lines[start + 1:start + FIRST_SHOWN + 3]
     assert listed[-1].endswith("floor closes")
     assert not any("closes" in line or "lifts off" in line for line in listed[:-1])
+
+
+def test_the_belt_oscillators_switches_are_listed(models, capsys):
+    """Stuck on the belt from x = 0 it breaks away at k x = μs g (t = μs g/(k v_b)) slipping slower than the belt,
+    then sticks again when ẋ = v_b (design: tests/test_friction.py's closed form)."""
+    lines = _run(models, "cli_belt", 5.0, capsys)
+    start = next(i for i, line in enumerate(lines) if line.startswith("event       belt:"))
+    first, second = lines[start + 1].split(), lines[start + 2].split()
+    assert first[0] == "#1" and lines[start + 1].endswith("belt slips (v < 0)")
+    assert float(first[3]) == pytest.approx(0.6 * G / (4.0 * 0.5), rel=1e-9)
+    assert second[0] == "#2" and lines[start + 2].endswith("belt sticks")
 
 
 def test_a_reset_events_jumps_are_listed_without_impulses(models, capsys, tmp_path):

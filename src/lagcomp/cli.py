@@ -255,7 +255,8 @@ def cmd_run(args) -> int:
             if len(record) else ""
         resets = " (impacts)" if record.impulses is not None else " (each resets the state)" if record.jumps else ""
         print(f"event       {name}: {len(record)} occurrence(s){when}{resets if len(record) else ''}")
-        for line in occurrence_lines(record, sol.state_names, model.contacts, sol.contact_switches):
+        for line in occurrence_lines(record, sol.state_names, model.contacts,
+                                     sol.contact_switches + sol.friction_switches):
             print(line)
     for name, values in sol.reactions.items():
         print(f"reaction    {name}: {values[0]:.8g} -> {values[-1]:.8g} (range {values.min():.6g} .. {values.max():.6g})")

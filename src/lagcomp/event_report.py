@@ -39,18 +39,27 @@ def _aligned(rows: list[list[str]]) -> list[str]:
     return ["   ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip() for row in rows]
 
 
+def _switch_text(switch) -> str:
+    """``floor closes``, ``floor lifts off``, ``belt sticks``, ``belt slips (v < 0)``: one mode switch."""
+    if hasattr(switch, "contact"):
+        return f"{switch.contact} {'closes' if switch.closed else 'lifts off'}"
+    return f"{switch.friction} " + ("sticks" if switch.mode == 0 else f"slips (v {'>' if switch.mode > 0 else '<'} 0)")
+
+
 def _switches_at(switches, t: float) -> str:
-    """``floor closes, wall lifts off``: the contacts that switched their mode at `t` (`Solution.contact_switches`;
-    an impact of one contact may close another)."""
-    return ", ".join(f"{s.contact} {'closes' if s.closed else 'lifts off'}" for s in switches if s.t == t)
+    """The mode switches at `t` (`Solution.contact_switches`, ``friction_switches``; an impact of one contact may
+    close another), comma-separated."""
+    return ", ".join(_switch_text(s) for s in switches if s.t == t)
 
 
 def occurrence_lines(record, state_names, contacts, switches=()) -> list[str]:
     """The occurrences of one event of a `Solution` that changes the state (``record.jumps``, or a contact's
     impacts: ``record.impulses``), one line each, aligned; [] for other events.  `state_names` names the
     columns of (q, q̇) (`Solution.state_names`), `contacts` the columns of the impulses (`Model.contacts`);
-    `switches` (`Solution.contact_switches`) marks the occurrences at which contacts closed or lifted off."""
-    if len(record) == 0 or not (record.impulses is not None or record.jumps):
+    `switches` (`Solution.contact_switches` and ``friction_switches``) marks the occurrences at which contacts
+    closed or lifted off and friction elements began to stick or slip (those events are listed too)."""
+    switching = any(s.t in record.t for s in switches)
+    if len(record) == 0 or not (record.impulses is not None or record.jumps or switching):
         return []
     before = np.hstack([record.q, record.qd])
     after = np.hstack([record.q_after, record.qd_after])
