@@ -110,6 +110,24 @@ def _marks(ax) -> dict:
             for c in ax.collections if isinstance(c, LineCollection)}
 
 
+def test_plots_mark_a_friction_elements_switches(cache_dir):
+    import sympy as sp
+
+    import lagcomp as lc
+
+    x, = lc.coordinates("x")
+    k, g, v_b = sp.symbols("k g v_b", positive=True)
+    model = lc.compile(lc.System([x], T=x.diff(lc.t) ** 2 / 2, V=k * x**2 / 2, name="plotted_belt",
+                                 events=[lc.Friction("belt", x.diff(lc.t) - v_b, normal=g, static=0.6, kinetic=0.4)],
+                                 defaults={"k": 4.0, "g": 9.81, "v_b": 0.5}), cache_dir=cache_dir)
+    sol = model.simulate((0.0, 6.0), q0=[0.0], qd0=[0.5], rtol=1e-10, atol=1e-10)
+    switches = [s.t for s in sol.friction_switches]
+    assert len(switches) >= 2
+    marks = _marks(plots.plot_run(sol).axes[0])
+    assert list(marks) == [f"belt ({len(switches)})"]
+    np.testing.assert_array_equal(marks[f"belt ({len(switches)})"], switches)
+
+
 def test_plots_mark_the_impacts_one_legend_entry_per_event(bouncing_run, pendulum_run, tmp_path):
     impacts = bouncing_run.events["floor"].t
     assert len(impacts) == 6 and len(bouncing_run.events["apex"]) == 6      # t₁ = 0.45, then every 2 e^k v₁/g

@@ -7,7 +7,7 @@ notebook by leaving it as a cell's value, or write it with
 
 =========================  ===================================================
 `plot_coordinates`         q(t) (and optionally q̇(t)) of a Solution, its
-                           resets and impacts marked
+                           resets, impacts and mode switches marked
 `plot_energy_error`        |h(t) − h(0)| / |h(0)| of a Solution, log scale
 `plot_run`                 the two above stacked (``lagcomp run --plot``)
 `plot_phase_portrait`      a Portrait's level curves and separatrices, or a
@@ -39,14 +39,16 @@ def _label(name: str) -> str:
 
 
 def _jumping_events(sol) -> dict:
-    """The times (k,) of each event of `sol` that changed the state: a reset that moved it, or a contact's impacts."""
+    """The times (k,) of each event of `sol` that changed the motion: a reset that moved the state, a contact's
+    impacts and lift-offs, a friction element's switches between stick and slip."""
+    frictions = {switch.friction for switch in getattr(sol, "friction_switches", ())}
     return {name: record.t for name, record in getattr(sol, "events", {}).items()
-            if len(record) and (record.impulses is not None or record.jumps)}
+            if len(record) and (record.impulses is not None or record.jumps or name in frictions)}
 
 
 def _mark_events(axes, sol) -> None:
-    """Thin vertical lines at the times of the resets and impacts of `sol` on each of `axes`, one colour per
-    event after the coordinates' colours; the first axes' legend names them (one entry per event)."""
+    """Thin vertical lines at the times of the resets, impacts and mode switches of `sol` on each of `axes`, one
+    colour per event after the coordinates' colours; the first axes' legend names them (one entry per event)."""
     for j, (name, times) in enumerate(_jumping_events(sol).items()):
         colour = f"C{(len(sol.coordinates) + j) % 10}"
         for a, ax in enumerate(axes):
@@ -57,8 +59,8 @@ def _mark_events(axes, sol) -> None:
 def plot_coordinates(sol, *, velocities: bool = False, events: bool = True, title: str | None = None):
     """Each coordinate q_i(t) of a `Solution` (and q̇_i(t) in a second panel with ``velocities=True``).
 
-    With `events`, the times of the events that changed the state (resets, a contact's impacts) are dotted
-    vertical lines, named in the legend with their count.
+    With `events`, the times of the events that changed the motion (resets, a contact's impacts and lift-offs,
+    friction's switches) are dotted vertical lines, named in the legend with their count.
     """
     fig = _figure(7.0, 6.0 if velocities else 4.0)
     axes = fig.subplots(2 if velocities else 1, 1, sharex=True, squeeze=False)[:, 0]
@@ -107,7 +109,7 @@ def plot_energy_error(sol, *, which: str = "energy_function", title: str | None 
 
 def plot_run(sol, *, events: bool = True, title: str | None = None):
     """Coordinates vs time above the energy error: the figure of ``lagcomp run --plot``; with `events`, the
-    resets and impacts marked on both (as `plot_coordinates` marks them)."""
+    resets, impacts and mode switches marked on both (as `plot_coordinates` marks them)."""
     fig = _figure(7.0, 6.5)
     top, bottom = fig.subplots(2, 1, sharex=True)
     for i, name in enumerate(sol.coordinates):
