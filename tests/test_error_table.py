@@ -309,9 +309,6 @@ CASES = {
                                           "`slide`"),
     "friction-velocity-not-linear": (lambda: lc.compile(oscillator(events=[
         lc.Friction("slide", x.diff(t) ** 3, normal=m * g, static=0.5)])), "`slide`"),
-    "friction-with-contacts": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction("slide", x.diff(t),
-                                                                                           normal=m * g, static=0.5)]),
-                               "['floor']"),
     "friction-with-constraints": (lambda: plane(events=[lc.Friction("slide", x.diff(t), normal=m * g, static=0.5)],
                                                 constraints=[lc.Holonomic("rod", x - l)]), "['slide']"),
     "friction-on-a-contact": (lambda: lc.Friction("slide", x.diff(t), normal="floor", static=0.5), "'floor'"),

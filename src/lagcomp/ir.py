@@ -217,6 +217,10 @@ class ContactImpact:
     #: the branch is the impact alone; with them, `lagcomp.kernel_support.resting.contact_event` (lift-off of a
     #: closed contact, an impact that may close it); ``_bias`` is stored too.
     modes: int | None = None
+    #: The friction elements of a module with modes (their mode slots follow the closing flag): the branch also
+    #: stores ``_slip_gradient`` (F, n) = ∂v/∂q̇ and ``_slip_offset`` (F) = v at q̇ = 0, and decides their modes
+    #: again from the velocities after the contact's event (`lagcomp.kernel_support.resting`).
+    elements: int = 0
 
 
 @dataclass(frozen=True)

@@ -180,8 +180,14 @@ def impact_branches(eom, restitutions: tuple, time, kernel, modes: int | None = 
         stores.append((f"_restitution[{d}]", sp.sympify(restitutions[e])))
         if modes is not None:
             stores.append((f"_bias[{d}]", _bias(gap, eom, time)))
+    elements = friction_events(eom.frictions) if modes is not None else ()
+    for f, e in enumerate(elements):    # v = a·q̇ + c, to decide the modes again from q̇ after the event
+        velocity = eom.events[e]
+        stores += [(f"_slip_gradient[{f}, {j}]", velocity.diff(qd)) for j, qd in enumerate(eom.qd)
+                   if velocity.diff(qd) != 0]
+        stores.append((f"_slip_offset[{f}]", velocity.subs({qd: 0 for qd in eom.qd})))
     branch = kernel("event_reset", "", ("t", "y", "p", "e", "out"), stores,
-                    ContactImpact(n=n, events=events, modes=modes))
+                    ContactImpact(n=n, events=events, modes=modes, elements=len(elements)))
     return ((events, branch),)
 
 
@@ -229,10 +235,25 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     return [], after
 
 
-def contact_event_call(n: int, count: int, first: int, firing: str, indent: str) -> list[str]:
+def contact_event_call(n: int, count: int, first: int, firing: str, indent: str, elements: int = 0) -> list[str]:
     """The end of the impact branch of a module with modes: q̈ without contacts, then
-    `lagcomp.kernel_support.resting.contact_event` on the mode slots of p."""
-    return [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
-            f"{indent}return _status", f"_firing = {firing}",
-            f"return contact_event(_mass, _gap, _gradient, _normal_velocity, _restitution, _bias, _ydot[{n}:{2 * n}], "
-            f"y[:{n}], t, _firing, p[{first}:{first + count}], p[{first + count}], out[{n}:{2 * n}])"]
+    `lagcomp.kernel_support.resting.contact_event` on the mode slots of p; with `elements` friction elements,
+    their modes decided again from the state after the event (`friction_modes_after_jump`: slip along v ≠ 0,
+    stick at v = 0 unless the holding force exceeds μs |N|, then `slip_most_overloaded`), so that no mode is
+    stale after an impact, a closing or a lift-off."""
+    call = (f"contact_event(_mass, _gap, _gradient, _normal_velocity, _restitution, _bias, _ydot[{n}:{2 * n}], "
+            f"y[:{n}], t, _firing, p[{first}:{first + count}], p[{first + count}], out[{n}:{2 * n}])")
+    lines = [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
+             f"{indent}return _status", f"_firing = {firing}"]
+    if not elements:
+        return lines + [f"return {call}"]
+    frictions = f"p[{first + count + 1}:{first + count + 1 + elements}]"
+    return lines + [f"_status = {call}", "if _status != 0:", f"{indent}return _status",
+                    f"if friction_modes_after_jump(_slip_gradient, _slip_offset, out[{n}:{2 * n}], {frictions}):",
+                    f"{indent}_forces = np.empty({count + elements})", f"{indent}_limits = np.empty({elements})",
+                    f"{indent}for _pass in range({elements}):",
+                    f"{indent * 2}if contact_forces(t, out, p, _forces) != 0:", f"{indent * 3}break",
+                    f"{indent * 2}friction_limits(t, out, p, _limits)",
+                    f"{indent * 2}if not slip_most_overloaded(_forces[{count}:], _limits, {frictions}):",
+                    f"{indent * 3}break",
+                    "return 0"]

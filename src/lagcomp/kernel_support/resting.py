@@ -232,3 +232,45 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
             modes[d] = closed[d]
     return status
 
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def friction_modes_after_jump(slip_gradients, slip_offsets, qd, frictions):
+    """The friction elements' modes (F,) after a contact's event (an impact, a closing, a lift-off), decided again
+    from the velocities ``qd`` (n) after it, into ``frictions``: slip with s = sign v where v = a·q̇ + c (rows of
+    ``slip_gradients`` (F, n) = ∂v/∂q̇, ``slip_offsets`` (F) = c) is beyond rounding (`CLOSED_GAP` Σ_j |a_j|
+    (|q̇_j| + 1), the scale a run starts with), else stick.  An impact reverses or stops a sliding body: a mode
+    kept from before would push it along its old direction.  Returns True when some element sticks, whose holding
+    force the caller checks against its limit (`slip_most_overloaded`)."""
+    n = qd.shape[0]
+    any_stuck = False
+    for f in range(frictions.shape[0]):
+        v = slip_offsets[f]
+        scale = 0.0
+        for j in range(n):
+            v += slip_gradients[f, j] * qd[j]
+            scale += abs(slip_gradients[f, j]) * (abs(qd[j]) + 1.0)
+        if abs(v) > CLOSED_GAP * scale:
+            frictions[f] = 1.0 if v > 0.0 else -1.0
+        else:
+            frictions[f] = 0.0
+            any_stuck = True
+    return any_stuck
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def slip_most_overloaded(forces, limits, frictions):
+    """Of the sticking elements (mode 0 in ``frictions`` (F,)) whose holding force (``forces`` (F,), the friction
+    rows of ``contact_forces``) exceeds its static limit (``limits`` (F,) = μs |N|), the one most beyond it slips
+    against its force (−sign λ_f, the free motion's way).  Returns True when one did: the others' forces change,
+    the caller computes them again (one pass per element at most, as a run's start does)."""
+    worst = -1
+    excess = 0.0
+    for f in range(frictions.shape[0]):
+        if frictions[f] == 0.0 and abs(forces[f]) - limits[f] > excess:
+            worst = f
+            excess = abs(forces[f]) - limits[f]
+    if worst < 0:
+        return False
+    frictions[worst] = -1.0 if forces[worst] > 0.0 else 1.0
+    return True

@@ -18,8 +18,10 @@ contact's (`lagcomp.ir.ContactModes`): 0 stick, ±1 slip with s = sign v.
 The element is an `Event` whose expression is v: its occurrences are the switches (`Solution.events`), listed
 with the new modes in `Solution.friction_switches`.  Limits of this first form: N is an expression (a contact's
 normal force is a later increment), the system has no bilateral constraints and is a Lagrange one (M from T);
-no contacts in the same system (an impact would leave the modes stale); the Taylor method refuses models with
-friction (its program has no stick rows).
+the Taylor method refuses models with friction (its program has no stick rows).  Contacts in the same system: a
+contact's event (impact, closing, lift-off) decides the friction modes again from the state after it, in the
+same ``event_reset`` branch (`lagcomp.codegen.contacts.contact_event_call`): slip along v ≠ 0, stick at v = 0
+unless the holding force exceeds μs |N|.
 """
 
 from __future__ import annotations

@@ -375,10 +375,6 @@ class System:
                                      f"of {self.name!r} (coordinates {list(self.coordinate_names)}).")
         contacts = [e.name for e in events if isinstance(e, Contact)]
         frictions = [e.name for e in events if isinstance(e, Friction)]
-        if frictions and contacts:
-            raise ModelError(f"Friction {frictions} and contacts {contacts} in one system: an impact would change the "
-                             "sliding velocities without updating the friction modes, which is not supported yet; "
-                             "model them in separate systems.")
         if contacts and self.constraints:
             raise ModelError(f"Contacts {contacts} on a system with constraints {list(self.constraint_names)}: an "
                              "impact there must keep the constraints' velocities too, which is not supported yet.")
