@@ -1,7 +1,14 @@
 """Friction and contacts in one system (issue 21): a contact's event (an impact, a closing, a lift-off) decides the
-friction modes again from the state after it, in the same ``event_reset``, so that no mode is stale.
+friction modes again from the state after it, in the same ``event_reset``, so that no mode is stale; friction
+pressed by a contact's normal force (``normal="floor"``).
 
-Reference, a closed form: a block (mass m) sliding on a table (friction on ẋ, N = m g, μs, μk) toward a wall at
+References, closed forms (g = 9.81, a block of mass m on a floor contact, gap y, friction on ẋ pressed by it):
+
+* pushed by F = c t from rest: it sticks (friction −c t) until c t_s = μs m g, then ẍ = (c t − μk m g)/m;
+* launched at v0: it stops at x = v0²/(2 μk g), t = v0/(μk g), then stays (N = m g, friction 0);
+* on a floor inclined at α (gap −x sin α + y cos α, friction on the velocity along it): it stays iff
+  tan α ≤ μs (friction m g sin α up the slope), else slides with g (sin α − μk cos α);
+* a block sliding toward a wall: a block (mass m) sliding on a table (friction on ẋ, N = m g, μs, μk) toward a wall at
 x = L (a contact with gap L − x, restitution e), from x = 0 at v0: it decelerates by μk g and reaches the wall at
 v_w = √(v0² − 2 μk g L), t_w = (v0 − v_w)/(μk g); it leaves at −e v_w (slipping the other way: the friction force
 turns round with it) and stops at x = L − (e v_w)²/(2 μk g), t = t_w + e v_w/(μk g), where it stays (sticking,
@@ -29,6 +36,82 @@ def block_and_wall(tmp_path_factory):
                        name="friction_wall", defaults={"m": 2.0, "g": G, "L": 1.0, "e": 0.5, "mu_s": 0.5,
                                                        "mu_k": 0.3})
     return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+@pytest.fixture(scope="module")
+def block_on_floor(tmp_path_factory):
+    x, y = lc.coordinates("x y")
+    m, g, c, mu_s, mu_k = sp.symbols("m g c mu_s mu_k", positive=True)
+    system = lc.System([x, y], T=m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=m * g * y, forces=[c * t, 0],
+                       events=[lc.Contact("floor", y, restitution=0.0),
+                               lc.Friction("ground", x.diff(t), normal="floor", static=mu_s, kinetic=mu_k)],
+                       name="friction_pressed_block", defaults={"m": 2.0, "g": G, "c": 3.0, "mu_s": 0.5, "mu_k": 0.3})
+    return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+@pytest.fixture(scope="module")
+def block_on_incline(tmp_path_factory):
+    x, y = lc.coordinates("x y")
+    m, g, alpha, mu_s, mu_k = sp.symbols("m g alpha mu_s mu_k", positive=True)
+    along = x.diff(t) * sp.cos(alpha) + y.diff(t) * sp.sin(alpha)
+    system = lc.System([x, y], T=m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=m * g * y,
+                       events=[lc.Contact("slope", -x * sp.sin(alpha) + y * sp.cos(alpha), restitution=0.0),
+                               lc.Friction("grip", along, normal="slope", static=mu_s, kinetic=mu_k)],
+                       name="friction_pressed_incline", defaults={"m": 2.0, "g": G, "alpha": 0.4, "mu_s": 0.5,
+                                                                  "mu_k": 0.3})
+    return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+def test_a_block_pushed_harder_and_harder_breaks_away_at_the_static_limit(block_on_floor):
+    m, c, mu_s, mu_k = 2.0, 3.0, 0.5, 0.3
+    t_s = mu_s * m * G / c
+    sol = block_on_floor.simulate((0.0, 5.0), [0.0, 0.0], [0.0, 0.0], rtol=1e-12, atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    assert [(s.friction, s.mode) for s in sol.friction_switches] == [("ground", 1)]
+    assert abs(sol.friction_switches[0].t - t_s) < 1e-10
+    tau = sol.t - t_s
+    after = tau > 0
+    x = (c * (sol.t**3 - t_s**3) / 6 - c * t_s**2 * tau / 2 - mu_k * m * G * tau**2 / 2) / m
+    np.testing.assert_allclose(sol.q[after, 0], x[after], rtol=1e-9, atol=1e-12)
+    assert np.abs(sol.q[~after, 0]).max() < 1e-12 and np.abs(sol.q[:, 1]).max() < 1e-12
+    np.testing.assert_allclose(sol.contact_forces[:, 0], m * G, rtol=1e-12)
+    holding = sol.t < t_s
+    np.testing.assert_allclose(sol.friction_forces[holding, 0], -c * sol.t[holding], rtol=1e-10, atol=1e-12)
+    slid = sol.t > t_s + 1e-6
+    np.testing.assert_allclose(sol.friction_forces[slid, 0], -mu_k * m * G, rtol=1e-12)
+
+
+def test_a_block_launched_along_the_floor_stops_where_friction_says_and_stays(block_on_floor):
+    m, mu_k, v0 = 2.0, 0.3, 3.0
+    sol = block_on_floor.simulate((0.0, 3.0), [0.0, 0.0], [v0, 0.0], params={"c": 0.0}, rtol=1e-12, atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    assert [(s.friction, s.mode) for s in sol.friction_switches] == [("ground", 0)]
+    np.testing.assert_allclose(sol.friction_switches[0].t, v0 / (mu_k * G), rtol=1e-11)
+    np.testing.assert_allclose(sol.q[-1, 0], v0**2 / (2 * mu_k * G), rtol=1e-11)
+    assert abs(sol.qd[-1, 0]) < 1e-13
+    np.testing.assert_allclose(sol.contact_forces[:, 0], m * G, rtol=1e-12)
+    moving = sol.t < sol.friction_switches[0].t
+    np.testing.assert_allclose(sol.friction_forces[moving, 0], -mu_k * m * G, rtol=1e-12)
+    assert np.abs(sol.friction_forces[sol.t > sol.friction_switches[0].t, 0]).max() < 1e-12
+
+
+@pytest.mark.parametrize("alpha", [0.4, 0.5])      # tan α = 0.42, 0.55 against μs = 0.5
+def test_a_block_on_an_inclined_floor_sticks_iff_the_slope_is_within_the_static_coefficient(block_on_incline,
+                                                                                            alpha):
+    m, mu_s, mu_k = 2.0, 0.5, 0.3
+    sol = block_on_incline.simulate((0.0, 1.0), [0.0, 0.0], [0.0, 0.0], params={"alpha": alpha}, rtol=1e-12,
+                                    atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    assert sol.friction_switches == ()
+    np.testing.assert_allclose(sol.contact_forces[:, 0], m * G * np.cos(alpha), rtol=1e-12)
+    s = sol.q[:, 0] * np.cos(alpha) + sol.q[:, 1] * np.sin(alpha)      # along the slope, up
+    if np.tan(alpha) <= mu_s:
+        assert np.abs(sol.q).max() < 1e-12
+        np.testing.assert_allclose(sol.friction_forces[:, 0], m * G * np.sin(alpha), rtol=1e-12)
+    else:
+        np.testing.assert_allclose(s, -G * (np.sin(alpha) - mu_k * np.cos(alpha)) * sol.t**2 / 2, rtol=1e-10,
+                                   atol=1e-14)
+        np.testing.assert_allclose(sol.friction_forces[1:, 0], mu_k * m * G * np.cos(alpha), rtol=1e-12)
 
 
 def test_a_block_bouncing_off_a_wall_slides_back_against_friction_and_stops(block_and_wall):

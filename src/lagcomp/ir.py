@@ -251,6 +251,9 @@ class ContactModes:
     first: int
     events: tuple[int, ...] = ()
     frictions: tuple[int, ...] = ()
+    #: Per friction element, the index (in contact order) of the contact whose normal force presses it, −1 for an
+    #: N given as an expression; () when no element is pressed by a contact (`lagcomp.codegen.contacts`).
+    pressing: tuple[int, ...] = ()
 
     @property
     def rows(self) -> int:
@@ -275,6 +278,9 @@ class FrictionSwitch:
     rows: int
     element: int
     elements: int
+    #: Some element is pressed by a contact: the limit too is taken with the element sticking (λ_c depends on
+    #: the modes), not after its mode is restored.
+    pressed: bool = False
 
 
 @dataclass(frozen=True)

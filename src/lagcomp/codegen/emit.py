@@ -107,7 +107,7 @@ KERNEL_SUPPORT = {
                                               "lu_solve_matrix", "lu_substitute"),
     "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "contact_event", "friction_mode_after",
                                        "friction_modes_after_jump", "frictional_accelerations",
-                                       "slip_most_overloaded"),
+                                       "pressed_frictional_accelerations", "slip_most_overloaded"),
     "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
 }
 
@@ -141,7 +141,8 @@ def kernel_support_names(kernels) -> set[str]:
             if kernel.solve.elements:
                 names |= {"friction_modes_after_jump", "slip_most_overloaded"}
         if isinstance(kernel.solve, ContactModes) and kernel.solve.kind == "closed":
-            names.add("frictional_accelerations" if kernel.solve.frictions else "closed_contact_accelerations")
+            names.add("pressed_frictional_accelerations" if kernel.solve.pressing else
+                      "frictional_accelerations" if kernel.solve.frictions else "closed_contact_accelerations")
         if isinstance(kernel.solve, FrictionSwitch):
             names.add("friction_mode_after")
         expressions = [expr for _, expr in kernel.temps] + [expr for _, expr in kernel.stores]

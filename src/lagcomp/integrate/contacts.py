@@ -235,7 +235,7 @@ def _set_friction_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray,
             if not rest.any() or model.kernels.contact_forces(t0, y, p, forces) != 0:
                 break
             model.kernels.friction_limits(t0, y, p, limits)
-            excess = np.where(rest, np.abs(forces[count:]) - limits, -np.inf)
+            excess = np.where(rest, np.where(limits > 0.0, np.abs(forces[count:]) - limits, np.inf), -np.inf)
             worst = int(np.argmax(excess))
             if excess[worst] <= 0.0:
                 break

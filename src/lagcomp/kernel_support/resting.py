@@ -44,7 +44,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.impacts import CLOSED_GAP, IMPACT_SOLVED, contact_impacts, solve_on_set
-from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix
+from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix, lu_solve
 
 #: The closed contacts' constraints are dependent (W singular): ``rhs`` returns this positive status, as for a
 #: singular mass matrix (the drivers stop with RHS_FAILED).
@@ -97,12 +97,54 @@ def frictional_accelerations(mass, gradients, bias, modes, frictions, qdd, force
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
+def pressed_frictional_accelerations(mass, gradients, bias, modes, frictions, pressing, kinetic, qdd, forces,
+                                     unilateral):
+    """`frictional_accelerations` where some friction elements are pressed by a contact's normal force
+    (``pressing`` (F,): the contact's index, −1 for an element whose N is an expression; ``kinetic`` (F,): μk).
+
+    Such an element acts only while its contact is closed (an open contact presses with 0: the element is held
+    neither way).  Slipping (mode s = ±1), its force −μk s λ_c along v is the generalized force
+    −μk s λ_c aᵀ (a = ∂v/∂q̇): linear in the contact's multiplier, it joins that contact's column,
+
+        M q̈ = F + Σ_c (G_cᵀ − Σ_f μk_f s_f a_fᵀ) λ_c + Σ_stick a_fᵀ λ_f,
+
+    so W = G_A M⁻¹ C_Aᵀ with columns C ≠ rows G: not symmetric (`held_row_accelerations` then solves by LU).
+    Sticking, its row a q̈ + b = 0 is held beside the contact's, its multiplier λ_f the friction force (the
+    limit μs λ_c is the event's business, ``friction_limits``).  Without a slipping pressed element on a closed
+    contact the columns are the rows and the solve that of `frictional_accelerations`."""
+    count, elements = modes.shape[0], frictions.shape[0]
+    active = np.empty(count + elements, dtype=np.bool_)
+    for d in range(count):
+        active[d] = modes[d] != 0.0
+    columns = gradients.copy()
+    coupled = False
+    for f in range(elements):
+        d = pressing[f]
+        active[count + f] = frictions[f] == 0.0 and (d < 0 or modes[d] != 0.0)
+        if d >= 0 and modes[d] != 0.0 and frictions[f] != 0.0:
+            coupled = True
+            for j in range(columns.shape[1]):
+                columns[d, j] -= kinetic[f] * frictions[f] * gradients[count + f, j]
+    return coupled_row_accelerations(mass, gradients, columns, bias, active, count, qdd, forces, unilateral,
+                                     not coupled)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
 def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, unilateral):
     """Correct ``qdd`` (n) in place for the rows r of G q̈ + b = 0 that are ``held`` (R,): M q̈ = M q̈_free + Gᵀ λ,
     W λ = −(G q̈_free + b) on the held rows, λ into ``forces`` (R,), 0 for the others.  The first `one_sided`
     rows are contacts: with ``unilateral`` 1 one whose λ would pull is dropped (`closed_contact_accelerations`);
     the rows after them (sticking friction) hold with a λ of either sign.  Returns 0, 1 (M not positive definite)
     or `DEPENDENT_CLOSED_CONTACTS`."""
+    return coupled_row_accelerations(mass, gradients, gradients, bias, held, one_sided, qdd, forces, unilateral,
+                                     True)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def coupled_row_accelerations(mass, gradients, columns, bias, held, one_sided, qdd, forces, unilateral, symmetric):
+    """`held_row_accelerations` with the forces' directions ``columns`` (R, n) apart from the rows ``gradients``:
+    M q̈ = M q̈_free + Cᵀ λ, W = G_A M⁻¹ C_Aᵀ (slip coupled to a normal force,
+    `pressed_frictional_accelerations`); ``symmetric`` (C is G) solves W by LDLᵀ, else by LU."""
     n = qdd.shape[0]
     rows = held.shape[0]
     c = 0
@@ -119,7 +161,7 @@ def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, 
         if held[d]:
             index[a] = d
             for i in range(n):
-                minv_gt[i, a] = gradients[d, i]
+                minv_gt[i, a] = columns[d, i]
             a += 1
     if ldlt_solve_matrix(mass, minv_gt) != 0:
         return 1
@@ -138,7 +180,9 @@ def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, 
     active = np.ones(c, dtype=np.bool_)
     lam = np.empty(c)
     for _ in range(c + 1):                      # (each pass but the last drops a contact)
-        if not solve_on_set(delassus, free, active, lam):       # λ_A = −W_AA⁻¹ (G_A q̈_free + b_A)
+        solved = solve_on_set(delassus, free, active, lam) if symmetric else lu_solve_on_set(delassus, free, active,
+                                                                                             lam)
+        if not solved:                          # λ_A = −W_AA⁻¹ (G_A q̈_free + b_A)
             return DEPENDENT_CLOSED_CONTACTS
         pulling = -1
         for a in range(c):
@@ -159,11 +203,38 @@ def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, 
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
+def lu_solve_on_set(W, q, active, z):
+    """`lagcomp.kernel_support.impacts.solve_on_set` for a W that is not symmetric: z_A = −W_AA⁻¹ q_A by LU with
+    partial pivoting, 0 elsewhere; False if W_AA is singular."""
+    c = q.shape[0]
+    index = np.empty(c, dtype=np.int64)
+    m = 0
+    for i in range(c):
+        if active[i]:
+            index[m] = i
+            m += 1
+    augmented = np.empty((m, m + 1))
+    for a in range(m):
+        augmented[a, m] = -q[index[a]]
+        for b in range(m):
+            augmented[a, b] = W[index[a], index[b]]
+    if m > 0 and lu_solve(augmented) != 0:
+        return False
+    for i in range(c):
+        z[i] = 0.0
+    for a in range(m):
+        z[index[a]] = augmented[a, m]
+    return True
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
 def friction_mode_after(mode, force, limit):
     """A friction element's mode after its event (`lagcomp.model.friction.Friction`): from stick (``mode`` 0,
     its force reached ``limit`` = μs |N|) slip against the force that held it, −sign ``force``; from slip (v reached
-    0) stick when the ``force`` needed to hold v = 0 is within ``limit``, else slip against it (the other way)."""
-    if mode != 0.0 and abs(force) <= limit:
+    0) stick when the ``force`` needed to hold v = 0 is within ``limit``, else slip against it (the other way).
+    A limit of 0 (no normal force: an open contact presses with none) never sticks: the element is idle, its slip
+    force 0, and a held row would hold v = 0 with no force to spare."""
+    if mode != 0.0 and abs(force) <= limit and limit > 0.0:
         return 0.0
     return -1.0 if force > 0.0 else 1.0
 
@@ -262,14 +333,15 @@ def friction_modes_after_jump(slip_gradients, slip_offsets, qd, frictions):
 def slip_most_overloaded(forces, limits, frictions):
     """Of the sticking elements (mode 0 in ``frictions`` (F,)) whose holding force (``forces`` (F,), the friction
     rows of ``contact_forces``) exceeds its static limit (``limits`` (F,) = μs |N|), the one most beyond it slips
-    against its force (−sign λ_f, the free motion's way).  Returns True when one did: the others' forces change,
+    against its force (−sign λ_f, the free motion's way; one with a limit of 0 first).  Returns True when one did: the others' forces change,
     the caller computes them again (one pass per element at most, as a run's start does)."""
     worst = -1
     excess = 0.0
     for f in range(frictions.shape[0]):
-        if frictions[f] == 0.0 and abs(forces[f]) - limits[f] > excess:
+        beyond = np.inf if not limits[f] > 0.0 else abs(forces[f]) - limits[f]    # (no normal force: never sticks)
+        if frictions[f] == 0.0 and beyond > excess:
             worst = f
-            excess = abs(forces[f]) - limits[f]
+            excess = beyond
     if worst < 0:
         return False
     frictions[worst] = -1.0 if forces[worst] > 0.0 else 1.0

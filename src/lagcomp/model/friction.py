@@ -49,9 +49,10 @@ class Friction(Event):
         Identifier under which the switches are reported.
     expr : sympy expression
         The sliding velocity v, linear in the velocities q_i(t).diff(t); may hold q, t and parameters.
-    normal : sympy expression
+    normal : sympy expression or str
         The normal force N pressing the surfaces (q, q̇, t, parameters; |N| is used), in the units of the force
-        conjugate to v's coordinate (N for v in m/s).  A contact's name (its normal force) is not supported yet.
+        conjugate to v's coordinate (N for v in m/s); or the name of a `Contact` of the same System, whose normal
+        force λ_c presses (0 while it is open: the element is then idle).
     static, kinetic : float or sympy Symbol
         μs and μk ≥ 0 with μk ≤ μs (kinetic defaults to static), numbers or parameters.
     """
@@ -66,14 +67,11 @@ class Friction(Event):
                              "-1, the run goes on); leave `direction`, `terminal` and `reset` unset.")
         object.__setattr__(self, "direction", -1)
         super().__post_init__()
-        if isinstance(self.normal, str):
-            raise ModelError(f"Friction `{self.name}`: normal={self.normal!r} names a contact; friction pressed by a "
-                             "contact's normal force is not supported yet: give N as an expression of q, q̇, t and "
-                             "parameters.")
         if self.normal is None or self.static is None:
             raise ModelError(f"Friction `{self.name}`: give the normal force (normal=N) and the static coefficient "
                              "(static=μs; kinetic=μk defaults to it).")
-        object.__setattr__(self, "normal", expression(self.normal, f"Friction `{self.name}`: the normal force"))
+        if not isinstance(self.normal, str):    # (a contact's name: the System checks it names one of its contacts)
+            object.__setattr__(self, "normal", expression(self.normal, f"Friction `{self.name}`: the normal force"))
         static = _coefficient(self.name, "static", self.static)
         kinetic = static if self.kinetic is None else _coefficient(self.name, "kinetic", self.kinetic)
         if static.is_number and kinetic.is_number and kinetic > static:
