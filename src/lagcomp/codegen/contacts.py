@@ -132,8 +132,8 @@ def resting_kernels(eom, time, first: int, kernel) -> tuple:
     limits = kernel("friction_limits",
                     f"The friction elements' static limits μs |N| ({len(elements)},) into `out` at y (N the normal\n"
                     "force, in the units of the friction force). Returns 0."
-                    + ("\nAn element pressed by a contact: N = its normal force under the modes in p (contact_forces),\n"
-                       "0 while it is open." if pressed else ""),
+                    + ("\nAn element pressed by a contact: N = its normal force under the modes in p\n"
+                       "(contact_forces), 0 while it is open." if pressed else ""),
                     ("t", "y", "p", "out"),
                     [(f"out[{f}]", eom.frictions[e][1] * (1 if isinstance(eom.frictions[e][0], str)
                                                           else sp.Abs(eom.frictions[e][0])))
@@ -169,8 +169,9 @@ def friction_switch_lines(solve: FrictionSwitch, indent: str) -> list[str]:
     """The emitted lines of a friction element's branch of ``event_reset`` (`FrictionSwitch`)."""
     limits = [f"_limits = np.empty({solve.elements})", "friction_limits(t, y, p, _limits)"]
     restore = [f"p[{solve.slot}] = _mode", "if _status != 0:", f"{indent}return _status"]
-    return [f"_mode = p[{solve.slot}]", f"p[{solve.slot}] = 0.0", f"_forces = np.empty({solve.rows})",
-            "_status = contact_forces(t, y, p, _forces)"] + (limits + restore if solve.pressed else restore + limits) + [
+    held = [f"_mode = p[{solve.slot}]", f"p[{solve.slot}] = 0.0", f"_forces = np.empty({solve.rows})",
+            "_status = contact_forces(t, y, p, _forces)"]
+    return held + (limits + restore if solve.pressed else restore + limits) + [
             f"p[{solve.slot}] = friction_mode_after(_mode, _forces[{solve.row}], _limits[{solve.element}])",
             "return 0"]
 

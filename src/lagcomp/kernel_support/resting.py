@@ -333,8 +333,9 @@ def friction_modes_after_jump(slip_gradients, slip_offsets, qd, frictions):
 def slip_most_overloaded(forces, limits, frictions):
     """Of the sticking elements (mode 0 in ``frictions`` (F,)) whose holding force (``forces`` (F,), the friction
     rows of ``contact_forces``) exceeds its static limit (``limits`` (F,) = μs |N|), the one most beyond it slips
-    against its force (−sign λ_f, the free motion's way; one with a limit of 0 first).  Returns True when one did: the others' forces change,
-    the caller computes them again (one pass per element at most, as a run's start does)."""
+    against its force (−sign λ_f, the free motion's way; one with a limit of 0 first).  Returns True when one
+    did: the others' forces change, the caller computes them again (one pass per element at most, as a run's
+    start does)."""
     worst = -1
     excess = 0.0
     for f in range(frictions.shape[0]):
