@@ -8,6 +8,9 @@ References, closed forms (g = 9.81, a block of mass m on a floor contact, gap y,
 * launched at v0: it stops at x = v0²/(2 μk g), t = v0/(μk g), then stays (N = m g, friction 0);
 * on a floor inclined at α (gap −x sin α + y cos α, friction on the velocity along it): it stays iff
   tan α ≤ μs (friction m g sin α up the slope), else slides with g (sin α − μk cos α);
+* a point mass falling from h onto that floor (restitution e) at a tangential speed v_t: the impact leaves it
+  v_n⁺ = e |v_n|, v_n = √(2 g h), and v_t⁺ = v_t − μk (1 + e) |v_n| sign v_t when |v_t| > μs (1 + e) |v_n|, else 0
+  (the impulse that stops it is within μs P_n: stick);
 * a block sliding toward a wall: a block (mass m) sliding on a table (friction on ẋ, N = m g, μs, μk) toward a wall at
 x = L (a contact with gap L − x, restitution e), from x = 0 at v0: it decelerates by μk g and reaches the wall at
 v_w = √(v0² − 2 μk g L), t_w = (v0 − v_w)/(μk g); it leaves at −e v_w (slipping the other way: the friction force
@@ -41,11 +44,12 @@ def block_and_wall(tmp_path_factory):
 @pytest.fixture(scope="module")
 def block_on_floor(tmp_path_factory):
     x, y = lc.coordinates("x y")
-    m, g, c, mu_s, mu_k = sp.symbols("m g c mu_s mu_k", positive=True)
+    m, g, c, e, mu_s, mu_k = sp.symbols("m g c e mu_s mu_k", positive=True)
     system = lc.System([x, y], T=m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=m * g * y, forces=[c * t, 0],
-                       events=[lc.Contact("floor", y, restitution=0.0),
+                       events=[lc.Contact("floor", y, restitution=e),
                                lc.Friction("ground", x.diff(t), normal="floor", static=mu_s, kinetic=mu_k)],
-                       name="friction_pressed_block", defaults={"m": 2.0, "g": G, "c": 3.0, "mu_s": 0.5, "mu_k": 0.3})
+                       name="friction_pressed_block", defaults={"m": 2.0, "g": G, "c": 3.0, "e": 0.0, "mu_s": 0.5,
+                                                                "mu_k": 0.3})
     return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
 
 
@@ -112,6 +116,26 @@ def test_a_block_on_an_inclined_floor_sticks_iff_the_slope_is_within_the_static_
         np.testing.assert_allclose(s, -G * (np.sin(alpha) - mu_k * np.cos(alpha)) * sol.t**2 / 2, rtol=1e-10,
                                    atol=1e-14)
         np.testing.assert_allclose(sol.friction_forces[1:, 0], mu_k * m * G * np.cos(alpha), rtol=1e-12)
+
+
+@pytest.mark.parametrize("v_t", [5.0, -5.0, 1.0])
+def test_a_point_mass_hitting_a_frictional_floor_obliquely_loses_tangential_speed_by_coulombs_law(block_on_floor, v_t):
+    h, e, mu_s, mu_k = 1.0, 0.5, 0.5, 0.3
+    v_n = np.sqrt(2 * G * h)
+    sol = block_on_floor.simulate((0.0, 0.5), [0.0, h], [v_t, 0.0], params={"c": 0.0, "e": e}, rtol=1e-12,
+                                  atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    impact = sol.events["floor"]
+    assert len(impact) == 1
+    np.testing.assert_allclose(impact.qd[0], [v_t, -v_n], rtol=1e-12)
+    slipping = abs(v_t) > mu_s * (1 + e) * v_n
+    expected = v_t - mu_k * (1 + e) * v_n * np.sign(v_t) if slipping else 0.0
+    assert not slipping or np.sign(expected) == np.sign(v_t)
+    np.testing.assert_allclose(impact.qd_after[0], [expected, e * v_n], rtol=1e-12, atol=1e-15)
+    # in the air again: no friction, ẋ constant
+    after = sol.t > impact.t[0]
+    np.testing.assert_allclose(sol.qd[after, 0], expected, rtol=1e-12, atol=1e-15)
+    assert np.abs(sol.friction_forces[:, 0]).max() == 0.0
 
 
 def test_a_block_bouncing_off_a_wall_slides_back_against_friction_and_stops(block_and_wall):

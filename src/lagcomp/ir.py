@@ -221,6 +221,10 @@ class ContactImpact:
     #: stores ``_slip_gradient`` (F, n) = ∂v/∂q̇ and ``_slip_offset`` (F) = v at q̇ = 0, and decides their modes
     #: again from the velocities after the contact's event (`lagcomp.kernel_support.resting`).
     elements: int = 0
+    #: Per friction element, the contact (in contact order) that presses it or −1; () when none is pressed by a
+    #: contact.  Then the branch also stores ``_static``, ``_kinetic`` (F) and an impact is frictional
+    #: (`lagcomp.kernel_support.resting.pressed_contact_event`).
+    pressing: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -206,8 +206,12 @@ def impact_branches(eom, restitutions: tuple, time, kernel, modes: int | None = 
         stores += [(f"_slip_gradient[{f}, {j}]", velocity.diff(qd)) for j, qd in enumerate(eom.qd)
                    if velocity.diff(qd) != 0]
         stores.append((f"_slip_offset[{f}]", velocity.subs({qd: 0 for qd in eom.qd})))
+        if pressing(eom):
+            stores += [(f"_static[{f}]", sp.sympify(eom.frictions[e][1])),
+                       (f"_kinetic[{f}]", sp.sympify(eom.frictions[e][2]))]
     branch = kernel("event_reset", "", ("t", "y", "p", "e", "out"), stores,
-                    ContactImpact(n=n, events=events, modes=modes, elements=len(elements)))
+                    ContactImpact(n=n, events=events, modes=modes, elements=len(elements),
+                                  pressing=pressing(eom) if modes is not None else ()))
     return ((events, branch),)
 
 
@@ -265,14 +269,19 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     return [], after
 
 
-def contact_event_call(n: int, count: int, first: int, firing: str, indent: str, elements: int = 0) -> list[str]:
+def contact_event_call(n: int, count: int, first: int, firing: str, indent: str, elements: int = 0,
+                       pressed: tuple[int, ...] = ()) -> list[str]:
     """The end of the impact branch of a module with modes: q̈ without contacts, then
     `lagcomp.kernel_support.resting.contact_event` on the mode slots of p; with `elements` friction elements,
     their modes decided again from the state after the event (`friction_modes_after_jump`: slip along v ≠ 0,
     stick at v = 0 unless the holding force exceeds μs |N|, then `slip_most_overloaded`), so that no mode is
-    stale after an impact, a closing or a lift-off."""
+    stale after an impact, a closing or a lift-off.  With friction elements `pressed` by a contact (their
+    contact's index or −1 each), the impact is `pressed_contact_event`'s: frictional."""
     call = (f"contact_event(_mass, _gap, _gradient, _normal_velocity, _restitution, _bias, _ydot[{n}:{2 * n}], "
             f"y[:{n}], t, _firing, p[{first}:{first + count}], p[{first + count}], out[{n}:{2 * n}])")
+    if pressed:
+        call = (f"pressed_{call[:-1]}, _slip_gradient, _slip_offset, np.array({list(pressed)}, dtype=np.int64), "
+                "_static, _kinetic)")
     lines = [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
              f"{indent}return _status", f"_firing = {firing}"]
     if not elements:

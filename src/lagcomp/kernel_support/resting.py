@@ -43,7 +43,13 @@ kernel that calls them.  They allocate small work arrays, only while some contac
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.impacts import CLOSED_GAP, IMPACT_SOLVED, contact_impacts, solve_on_set
+from lagcomp.kernel_support.impacts import (
+    CLOSED_GAP,
+    IMPACT_SOLVED,
+    contact_impacts,
+    frictional_impact,
+    solve_on_set,
+)
 from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix, lu_solve
 
 #: The closed contacts' constraints are dependent (W singular): ``rhs`` returns this positive status, as for a
@@ -347,3 +353,60 @@ def slip_most_overloaded(forces, limits, frictions):
         return False
     frictions[worst] = -1.0 if forces[worst] > 0.0 else 1.0
     return True
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes,
+                          closing, qd, slip_gradients, slip_offsets, pressing, static, kinetic):
+    """`contact_event` where friction elements are pressed by contacts (``pressing`` (F,): the contact's index or
+    −1; ``static``, ``kinetic`` (F,): μs, μk; ``slip_gradients`` (F, n), ``slip_offsets`` (F): v = a·q̇ + c).
+
+    The impact of an open contact that presses an element, alone at that instant (no other contact closed or
+    touching), is frictional: `lagcomp.kernel_support.impacts.frictional_impact` (Newton on the normal, the
+    tangential impulse within μ P_n), with the Zeno closing of `contact_event` (done again with e = 0, the
+    contact closed, when the bounces left would end within `ZENO_TIME` or the next last less than
+    `BOUNCE_TIME`).  Every other event is `contact_event`'s, frictionless: simultaneous impacts with friction are
+    not solved (their tangential impulses would need a complementarity problem of their own)."""
+    if modes[firing] != 0.0:
+        modes[firing] = 0.0
+        return IMPACT_SOLVED
+    n = q.shape[0]
+    element = -1
+    for f in range(pressing.shape[0]):
+        if pressing[f] == firing and element < 0:
+            element = f
+    alone = element >= 0
+    for d in range(gaps.shape[0]):
+        scale = 0.0
+        for j in range(n):
+            scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
+        if d != firing and (modes[d] != 0.0 or gaps[d] <= CLOSED_GAP * scale):
+            alone = False
+    if not alone:
+        return contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing,
+                             modes, closing, qd)
+    before = qd.copy()
+    slip_velocity = slip_offsets[element]
+    for j in range(n):
+        slip_velocity += slip_gradients[element, j] * qd[j]
+    e = restitution[firing]
+    status = frictional_impact(mass, gradients[firing], normal_velocities[firing], e, slip_gradients[element],
+                               slip_velocity, static[element], kinetic[element], qd)
+    if status != IMPACT_SOLVED or closing == 0.0:
+        return status
+    pressing_acceleration = bias[firing]
+    v_after = normal_velocities[firing]
+    for j in range(n):
+        pressing_acceleration += gradients[firing, j] * qdd_free[j]
+        v_after += gradients[firing, j] * (qd[j] - before[j])
+    scale_t = max(1.0, abs(t))
+    if pressing_acceleration < 0.0 and (
+            2.0 * v_after < ZENO_TIME * scale_t * -pressing_acceleration * (1.0 - e)
+            or 2.0 * v_after < BOUNCE_TIME * scale_t * -pressing_acceleration):
+        for j in range(n):
+            qd[j] = before[j]
+        status = frictional_impact(mass, gradients[firing], normal_velocities[firing], 0.0, slip_gradients[element],
+                                   slip_velocity, static[element], kinetic[element], qd)
+        if status == IMPACT_SOLVED:
+            modes[firing] = 1.0
+    return status
