@@ -26,7 +26,15 @@ the normal forces for the saved rows, and the impact branch also stores ``_bias`
 Friction elements (`lagcomp.model.friction.Friction`) share that mechanism: their modes follow the closing flag,
 a sticking element is one more held row of ``closed_contacts`` (after the contacts'), ``contact_forces`` gives
 its friction force after the normal forces, ``friction_limits`` the static limits μs |N|, and each element's event
-has its own branch of ``event_reset`` (`friction_branches`) that writes its new mode.
+has its own branch of ``event_reset`` (`friction_branches`) that writes its new mode.  The contacts' branch decides
+the friction modes again after its event (`contact_event_call`).
+
+An element pressed by a contact (``normal="floor"``, `pressing`): its N is the contact's normal force λ_c, so its
+slip force is not part of ``rhs_free``; ``closed_contacts`` stores μk (``_kinetic``) and calls
+`lagcomp.kernel_support.resting.pressed_frictional_accelerations`, whose derivation is there (the slip force joins
+the contact's column: W = G M⁻¹ Cᵀ), ``friction_limits`` multiplies μs by λ_c from ``contact_forces`` (0 while
+open), and the contacts' branch stores μs, μk for the frictional impact (`pressed_contact_event`).  Modules
+without such an element are emitted as before.
 """
 
 from __future__ import annotations

@@ -16,8 +16,17 @@ contact's (`lagcomp.ir.ContactModes`): 0 stick, ±1 slip with s = sign v.
   s = −sign λ_f (the other way).
 
 The element is an `Event` whose expression is v: its occurrences are the switches (`Solution.events`), listed
-with the new modes in `Solution.friction_switches`.  Limits of this first form: N is an expression (a contact's
-normal force is a later increment), the system has no bilateral constraints and is a Lagrange one (M from T);
+with the new modes in `Solution.friction_switches`.
+
+Pressed by a contact (``normal="floor"``, a `Contact` of the same System): N = λ_c, the contact's normal force,
+0 while it is open (the element idles: it never sticks on a limit of 0).  Slipping, the force −μk s λ_c ∂v/∂q̇ is
+linear in λ_c: it joins the contact's column of the held-row system, M q̈ = F + (G_cᵀ − μk s aᵀ) λ_c, G_c q̈ + b_c
+= 0, a non-symmetric W = G_c M⁻¹ (G_c − μk s a)ᵀ (`lagcomp.kernel_support.resting.pressed_frictional_accelerations`;
+the all-open path costs nothing more: ``rhs`` is ``rhs_free`` then).  Sticking, both rows are held, λ_f the
+friction force; the event is μs λ_c − |λ_f|.  An impact of that contact alone is frictional
+(`lagcomp.kernel_support.impacts.frictional_impact`).
+
+Limits: the system has no bilateral constraints and is a Lagrange one (M from T);
 the Taylor method refuses models with friction (its program has no stick rows).  Contacts in the same system: a
 contact's event (impact, closing, lift-off) decides the friction modes again from the state after it, in the
 same ``event_reset`` branch (`lagcomp.codegen.contacts.contact_event_call`): slip along v ≠ 0, stick at v = 0
