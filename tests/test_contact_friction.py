@@ -11,6 +11,9 @@ References, closed forms (g = 9.81, a block of mass m on a floor contact, gap y,
 * a point mass falling from h onto that floor (restitution e) at a tangential speed v_t: the impact leaves it
   v_n⁺ = e |v_n|, v_n = √(2 g h), and v_t⁺ = v_t − μk (1 + e) |v_n| sign v_t when |v_t| > μs (1 + e) |v_n|, else 0
   (the impulse that stops it is within μs P_n: stick);
+* bouncing on (v0 along, dropped from h, e): every impact takes μk (1 + e) |v_n| off, the bounces' |v_n| sum to
+  v1/(1 − e) (v1 = √(2 g h)), so the block lands for good at t∞ = v1/g + 2 e v1/(g (1 − e)) sliding at
+  v_c = v0 − μk v1 (1 + e)/(1 − e), and stops v_c/(μk g) later, v_c²/(2 μk g) further;
 * a block sliding toward a wall: a block (mass m) sliding on a table (friction on ẋ, N = m g, μs, μk) toward a wall at
 x = L (a contact with gap L − x, restitution e), from x = 0 at v0: it decelerates by μk g and reaches the wall at
 v_w = √(v0² − 2 μk g L), t_w = (v0 − v_w)/(μk g); it leaves at −e v_w (slipping the other way: the friction force
@@ -136,6 +139,28 @@ def test_a_point_mass_hitting_a_frictional_floor_obliquely_loses_tangential_spee
     after = sol.t > impact.t[0]
     np.testing.assert_allclose(sol.qd[after, 0], expected, rtol=1e-12, atol=1e-15)
     assert np.abs(sol.friction_forces[:, 0]).max() == 0.0
+
+
+def test_a_block_bouncing_along_the_floor_lands_for_good_and_slides_to_a_stop(block_on_floor):
+    h, e, mu_k, v0 = 1.0, 0.5, 0.3, 9.0
+    v1 = np.sqrt(2 * G * h)
+    t_land = v1 / G + 2 * e * v1 / (G * (1 - e))
+    v_c = v0 - mu_k * v1 * (1 + e) / (1 - e)
+    k = np.arange(1, 200)
+    speeds = v0 - mu_k * (1 + e) * v1 * (1 - e**k) / (1 - e)               # along, after impact k
+    x_land = v0 * v1 / G + np.sum(speeds * 2 * e**k * v1 / G)
+    sol = block_on_floor.simulate((0.0, 5.0), [0.0, h], [v0, 0.0], params={"c": 0.0, "e": e}, rtol=1e-12,
+                                  atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    [closing] = sol.contact_switches
+    assert (closing.contact, closing.closed) == ("floor", True)
+    assert abs(closing.t - t_land) < 1e-9                                   # (the Zeno closing: ~1e-10)
+    np.testing.assert_allclose(sol.events["floor"].qd_after[:5, 0], speeds[:5], rtol=1e-12)
+    [stop] = sol.friction_switches[-1:]
+    assert stop.mode == 0
+    np.testing.assert_allclose(stop.t, t_land + v_c / (mu_k * G), rtol=1e-9)
+    np.testing.assert_allclose(sol.q[-1], [x_land + v_c**2 / (2 * mu_k * G), 0.0], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(sol.contact_forces[-1, 0], 2.0 * G, rtol=1e-12)
 
 
 def test_a_block_bouncing_off_a_wall_slides_back_against_friction_and_stops(block_and_wall):
