@@ -309,12 +309,10 @@ CASES = {
                                           "`slide`"),
     "friction-velocity-not-linear": (lambda: lc.compile(oscillator(events=[
         lc.Friction("slide", x.diff(t) ** 3, normal=m * g, static=0.5)])), "`slide`"),
-    "friction-with-contacts": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction("slide", x.diff(t),
-                                                                                           normal=m * g, static=0.5)]),
-                               "['floor']"),
     "friction-with-constraints": (lambda: plane(events=[lc.Friction("slide", x.diff(t), normal=m * g, static=0.5)],
                                                 constraints=[lc.Holonomic("rod", x - l)]), "['slide']"),
-    "friction-on-a-contact": (lambda: lc.Friction("slide", x.diff(t), normal="floor", static=0.5), "'floor'"),
+    "friction-unknown-contact": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction(
+        "slide", x.diff(t), normal="ground", static=0.5)]), "'ground'"),
     "default-unknown-parameter": (lambda: oscillator(defaults={"mass": 1.0}), "['mass']"),
     "default-not-a-number": (lambda: oscillator(defaults={"m": "heavy", "k": 1.0}), "`m`"),
     "default-initial-values": (lambda: oscillator(q0=("one",)), "`q0`"),

@@ -217,6 +217,14 @@ class ContactImpact:
     #: the branch is the impact alone; with them, `lagcomp.kernel_support.resting.contact_event` (lift-off of a
     #: closed contact, an impact that may close it); ``_bias`` is stored too.
     modes: int | None = None
+    #: The friction elements of a module with modes (their mode slots follow the closing flag): the branch also
+    #: stores ``_slip_gradient`` (F, n) = ∂v/∂q̇ and ``_slip_offset`` (F) = v at q̇ = 0, and decides their modes
+    #: again from the velocities after the contact's event (`lagcomp.kernel_support.resting`).
+    elements: int = 0
+    #: Per friction element, the contact (in contact order) that presses it or −1; () when none is pressed by a
+    #: contact.  Then the branch also stores ``_static``, ``_kinetic`` (F) and an impact is frictional
+    #: (`lagcomp.kernel_support.resting.pressed_contact_event`).
+    pressing: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -247,6 +255,9 @@ class ContactModes:
     first: int
     events: tuple[int, ...] = ()
     frictions: tuple[int, ...] = ()
+    #: Per friction element, the index (in contact order) of the contact whose normal force presses it, −1 for an
+    #: N given as an expression; () when no element is pressed by a contact (`lagcomp.codegen.contacts`).
+    pressing: tuple[int, ...] = ()
 
     @property
     def rows(self) -> int:
@@ -271,6 +282,9 @@ class FrictionSwitch:
     rows: int
     element: int
     elements: int
+    #: Some element is pressed by a contact: the limit too is taken with the element sticking (λ_c depends on
+    #: the modes), not after its mode is restored.
+    pressed: bool = False
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,15 @@ the normal forces for the saved rows, and the impact branch also stores ``_bias`
 Friction elements (`lagcomp.model.friction.Friction`) share that mechanism: their modes follow the closing flag,
 a sticking element is one more held row of ``closed_contacts`` (after the contacts'), ``contact_forces`` gives
 its friction force after the normal forces, ``friction_limits`` the static limits μs |N|, and each element's event
-has its own branch of ``event_reset`` (`friction_branches`) that writes its new mode.
+has its own branch of ``event_reset`` (`friction_branches`) that writes its new mode.  The contacts' branch decides
+the friction modes again after its event (`contact_event_call`).
+
+An element pressed by a contact (``normal="floor"``, `pressing`): its N is the contact's normal force λ_c, so its
+slip force is not part of ``rhs_free``; ``closed_contacts`` stores μk (``_kinetic``) and calls
+`lagcomp.kernel_support.resting.pressed_frictional_accelerations`, whose derivation is there (the slip force joins
+the contact's column: W = G M⁻¹ Cᵀ), ``friction_limits`` multiplies μs by λ_c from ``contact_forces`` (0 while
+open), and the contacts' branch stores μs, μk for the frictional impact (`pressed_contact_event`).  Modules
+without such an element are emitted as before.
 """
 
 from __future__ import annotations
@@ -56,10 +64,21 @@ def mode_slots(eom) -> int:
     return count + 1 + elements if (count or elements) and not eom.k else 0
 
 
+def pressing(eom) -> tuple[int, ...]:
+    """Per friction element, the index in contact order of the contact that presses it (its ``normal`` names
+    one), −1 for an N given as an expression; () when no element is pressed by a contact."""
+    names = eom.system.event_names
+    contact_of = {names[e]: d for d, e in enumerate(contact_events(eom.restitutions))}
+    normals = [eom.frictions[e][0] for e in friction_events(eom.frictions)]
+    if not any(isinstance(normal, str) for normal in normals):
+        return ()
+    return tuple(contact_of[normal] if isinstance(normal, str) else -1 for normal in normals)
+
+
 def modes_of(eom, kind: str, first: int) -> ContactModes:
     """The `ContactModes` of kernel `kind` of `eom`, whose modes start at slot `first` of p."""
     return ContactModes(kind, eom.n, len(contact_events(eom.restitutions)), first, contact_events(eom.restitutions),
-                        friction_events(eom.frictions))
+                        friction_events(eom.frictions), pressing(eom))
 
 
 def _gap_rate(gap, eom, time):
@@ -97,6 +116,8 @@ def resting_kernels(eom, time, first: int, kernel) -> tuple:
         stores += [(f"_gradient[{count + f}, {j}]", velocity.diff(qd)) for j, qd in enumerate(eom.qd)
                    if velocity.diff(qd) != 0]
         stores.append((f"_bias[{count + f}]", _gap_rate(velocity, eom, time)))
+        if pressing(eom):
+            stores.append((f"_kinetic[{f}]", sp.sympify(eom.frictions[e][2])))
     friction_doc = (f"\nWith friction: {rows} entries, the contacts' then the friction elements' forces along v\n"
                     "(held while sticking: the multiplier of v = 0; 0 while slipping)." if elements else "")
     closed = kernel("closed_contacts",
@@ -115,12 +136,17 @@ def resting_kernels(eom, time, first: int, kernel) -> tuple:
                           "the order of CONTACTS, then the flag that lets an impact close a contact.", first),))
     if not elements:
         return rhs, closed, forces
+    pressed = pressing(eom)
     limits = kernel("friction_limits",
                     f"The friction elements' static limits μs |N| ({len(elements)},) into `out` at y (N the normal\n"
-                    "force, in the units of the friction force). Returns 0.",
+                    "force, in the units of the friction force). Returns 0."
+                    + ("\nAn element pressed by a contact: N = its normal force under the modes in p\n"
+                       "(contact_forces), 0 while it is open." if pressed else ""),
                     ("t", "y", "p", "out"),
-                    [(f"out[{f}]", eom.frictions[e][1] * sp.Abs(eom.frictions[e][0])) for f, e in enumerate(elements)],
-                    ReturnZero())
+                    [(f"out[{f}]", eom.frictions[e][1] * (1 if isinstance(eom.frictions[e][0], str)
+                                                          else sp.Abs(eom.frictions[e][0])))
+                     for f, e in enumerate(elements)],
+                    modes_of(eom, "limits", first) if pressed else ReturnZero())
     names = eom.system.event_names
     limits = replace(limits, constants=(
         ("FRICTIONS", "The friction elements: (name, event index, slot of p of its mode (0 stick, ±1 slip), static "
@@ -143,15 +169,17 @@ def friction_branches(eom, first: int, kernel) -> tuple:
     return tuple(
         (e, kernel("event_reset", "", ("t", "y", "p", "e", "out"), [],
                    FrictionSwitch(slot=first + count + 1 + f, row=count + f, rows=count + len(elements), element=f,
-                                  elements=len(elements))))
+                                  elements=len(elements), pressed=bool(pressing(eom)))))
         for f, e in enumerate(elements))
 
 
 def friction_switch_lines(solve: FrictionSwitch, indent: str) -> list[str]:
     """The emitted lines of a friction element's branch of ``event_reset`` (`FrictionSwitch`)."""
-    return [f"_mode = p[{solve.slot}]", f"p[{solve.slot}] = 0.0", f"_forces = np.empty({solve.rows})",
-            "_status = contact_forces(t, y, p, _forces)", f"p[{solve.slot}] = _mode", "if _status != 0:",
-            f"{indent}return _status", f"_limits = np.empty({solve.elements})", "friction_limits(t, y, p, _limits)",
+    limits = [f"_limits = np.empty({solve.elements})", "friction_limits(t, y, p, _limits)"]
+    restore = [f"p[{solve.slot}] = _mode", "if _status != 0:", f"{indent}return _status"]
+    held = [f"_mode = p[{solve.slot}]", f"p[{solve.slot}] = 0.0", f"_forces = np.empty({solve.rows})",
+            "_status = contact_forces(t, y, p, _forces)"]
+    return held + (limits + restore if solve.pressed else restore + limits) + [
             f"p[{solve.slot}] = friction_mode_after(_mode, _forces[{solve.row}], _limits[{solve.element}])",
             "return 0"]
 
@@ -180,8 +208,18 @@ def impact_branches(eom, restitutions: tuple, time, kernel, modes: int | None = 
         stores.append((f"_restitution[{d}]", sp.sympify(restitutions[e])))
         if modes is not None:
             stores.append((f"_bias[{d}]", _bias(gap, eom, time)))
+    elements = friction_events(eom.frictions) if modes is not None else ()
+    for f, e in enumerate(elements):    # v = a·q̇ + c, to decide the modes again from q̇ after the event
+        velocity = eom.events[e]
+        stores += [(f"_slip_gradient[{f}, {j}]", velocity.diff(qd)) for j, qd in enumerate(eom.qd)
+                   if velocity.diff(qd) != 0]
+        stores.append((f"_slip_offset[{f}]", velocity.subs({qd: 0 for qd in eom.qd})))
+        if pressing(eom):
+            stores += [(f"_static[{f}]", sp.sympify(eom.frictions[e][1])),
+                       (f"_kinetic[{f}]", sp.sympify(eom.frictions[e][2]))]
     branch = kernel("event_reset", "", ("t", "y", "p", "e", "out"), stores,
-                    ContactImpact(n=n, events=events, modes=modes))
+                    ContactImpact(n=n, events=events, modes=modes, elements=len(elements),
+                                  pressing=pressing(eom) if modes is not None else ()))
     return ((events, branch),)
 
 
@@ -210,8 +248,18 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     if solve.kind == "forces":
         return [], [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
                     f"{indent}return _status", "return closed_contacts(t, y, p, _ydot, out, 0.0)"]
+    if solve.kind == "limits":      # the pressed elements' μs times their contact's normal force, 0 while open
+        after = [f"_normal = np.empty({rows})", "_status = contact_forces(t, y, p, _normal)"]
+        after += [f"out[{f}] = out[{f}] * max(_normal[{d}], 0.0) if _status == 0 else 0.0"
+                  for f, d in enumerate(solve.pressing) if d >= 0]
+        return [], after + ["return 0"]
     if solve.kind == "closed":
         work = [f"_mass = np.zeros(({n}, {n}))", f"_gradient = np.zeros(({rows}, {n}))", f"_bias = np.empty({rows})"]
+        if solve.pressing:
+            return work + [f"_kinetic = np.zeros({len(slots)})"], [
+                f"return pressed_frictional_accelerations(_mass, _gradient, _bias, p[{first}:{first + count}], "
+                f"p[{slots[0]}:{slots[-1] + 1}], np.array({list(solve.pressing)}, dtype=np.int64), _kinetic, "
+                f"out[{n}:{2 * n}], forces, unilateral)"]
         if not slots:
             return work, [f"return closed_contact_accelerations(_mass, _gradient, _bias, p[{first}:{first + count}], "
                           f"out[{n}:{2 * n}], forces, unilateral)"]
@@ -229,10 +277,30 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     return [], after
 
 
-def contact_event_call(n: int, count: int, first: int, firing: str, indent: str) -> list[str]:
+def contact_event_call(n: int, count: int, first: int, firing: str, indent: str, elements: int = 0,
+                       pressed: tuple[int, ...] = ()) -> list[str]:
     """The end of the impact branch of a module with modes: q̈ without contacts, then
-    `lagcomp.kernel_support.resting.contact_event` on the mode slots of p."""
-    return [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
-            f"{indent}return _status", f"_firing = {firing}",
-            f"return contact_event(_mass, _gap, _gradient, _normal_velocity, _restitution, _bias, _ydot[{n}:{2 * n}], "
-            f"y[:{n}], t, _firing, p[{first}:{first + count}], p[{first + count}], out[{n}:{2 * n}])"]
+    `lagcomp.kernel_support.resting.contact_event` on the mode slots of p; with `elements` friction elements,
+    their modes decided again from the state after the event (`friction_modes_after_jump`: slip along v ≠ 0,
+    stick at v = 0 unless the holding force exceeds μs |N|, then `slip_most_overloaded`), so that no mode is
+    stale after an impact, a closing or a lift-off.  With friction elements `pressed` by a contact (their
+    contact's index or −1 each), the impact is `pressed_contact_event`'s: frictional."""
+    call = (f"contact_event(_mass, _gap, _gradient, _normal_velocity, _restitution, _bias, _ydot[{n}:{2 * n}], "
+            f"y[:{n}], t, _firing, p[{first}:{first + count}], p[{first + count}], out[{n}:{2 * n}])")
+    if pressed:
+        call = (f"pressed_{call[:-1]}, _slip_gradient, _slip_offset, np.array({list(pressed)}, dtype=np.int64), "
+                "_static, _kinetic)")
+    lines = [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
+             f"{indent}return _status", f"_firing = {firing}"]
+    if not elements:
+        return lines + [f"return {call}"]
+    frictions = f"p[{first + count + 1}:{first + count + 1 + elements}]"
+    return lines + [f"_status = {call}", "if _status != 0:", f"{indent}return _status",
+                    f"if friction_modes_after_jump(_slip_gradient, _slip_offset, out[{n}:{2 * n}], {frictions}):",
+                    f"{indent}_forces = np.empty({count + elements})", f"{indent}_limits = np.empty({elements})",
+                    f"{indent}for _pass in range({elements}):",
+                    f"{indent * 2}if contact_forces(t, out, p, _forces) != 0:", f"{indent * 3}break",
+                    f"{indent * 2}friction_limits(t, out, p, _limits)",
+                    f"{indent * 2}if not slip_most_overloaded(_forces[{count}:], _limits, {frictions}):",
+                    f"{indent * 3}break",
+                    "return 0"]

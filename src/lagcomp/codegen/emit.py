@@ -106,7 +106,9 @@ KERNEL_SUPPORT = {
                                               "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
                                               "lu_solve_matrix", "lu_substitute"),
     "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "contact_event", "friction_mode_after",
-                                       "frictional_accelerations"),
+                                       "friction_modes_after_jump", "frictional_accelerations",
+                                       "pressed_contact_event", "pressed_frictional_accelerations",
+                                       "slip_most_overloaded"),
     "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
 }
 
@@ -137,8 +139,13 @@ def kernel_support_names(kernels) -> set[str]:
             names |= kernel_support_names(branch for _, branch in kernel.solve.branches)
         if isinstance(kernel.solve, ContactImpact):
             names.add("contact_impacts" if kernel.solve.modes is None else "contact_event")
+            if kernel.solve.elements:
+                names |= {"friction_modes_after_jump", "slip_most_overloaded"}
+            if kernel.solve.pressing:
+                names.add("pressed_contact_event")
         if isinstance(kernel.solve, ContactModes) and kernel.solve.kind == "closed":
-            names.add("frictional_accelerations" if kernel.solve.frictions else "closed_contact_accelerations")
+            names.add("pressed_frictional_accelerations" if kernel.solve.pressing else
+                      "frictional_accelerations" if kernel.solve.frictions else "closed_contact_accelerations")
         if isinstance(kernel.solve, FrictionSwitch):
             names.add("friction_mode_after")
         expressions = [expr for _, expr in kernel.temps] + [expr for _, expr in kernel.stores]
@@ -480,7 +487,10 @@ def _impact_work(solve: ContactImpact) -> list[str]:
     n, c = solve.n, len(solve.events)
     return [f"_mass = np.zeros(({n}, {n}))", f"_gap = np.empty({c})", f"_gradient = np.zeros(({c}, {n}))",
             f"_normal_velocity = np.empty({c})", f"_restitution = np.empty({c})"] + (
-        [] if solve.modes is None else [f"_bias = np.empty({c})"])
+        [] if solve.modes is None else [f"_bias = np.empty({c})"]) + (
+        [f"_slip_gradient = np.zeros(({solve.elements}, {n}))", f"_slip_offset = np.empty({solve.elements})"]
+        if solve.elements else []) + (
+        [f"_static = np.empty({solve.elements})", f"_kinetic = np.empty({solve.elements})"] if solve.pressing else [])
 
 
 def _impact_call(solve: ContactImpact) -> list[str]:
@@ -489,7 +499,7 @@ def _impact_call(solve: ContactImpact) -> list[str]:
     firing = f"{firing} else {len(solve.events) - 1}" if firing else "0"
     n = solve.n
     if solve.modes is not None:
-        return contact_event_call(n, len(solve.events), solve.modes, firing, INDENT)
+        return contact_event_call(n, len(solve.events), solve.modes, firing, INDENT, solve.elements, solve.pressing)
     return [f"_firing = {firing}",
             f"return contact_impacts(_mass, _gap, _gradient, _normal_velocity, _restitution, y[:{n}], _firing, "
             f"out[{n}:{2 * n}])"]

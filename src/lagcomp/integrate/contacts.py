@@ -12,8 +12,9 @@ starts inside another has no impact to apply, and its motion would be meaningles
 rounding: g < −`CLOSED_GAP` Σ_j |∂g/∂q_j| (|q_j| + 1), the scale the impact solver uses for "touching".
 
 Friction elements (`lagcomp.model.friction.Friction`, the module's ``FRICTIONS``) share the modes: a run checks
-their coefficients given as parameters (μ ≥ 0, μk ≤ μs), starts each sticking or slipping (`set_initial_modes`),
-and reports their switches and forces with the contacts' (`contact_switches`, `contact_forces_along`).
+their coefficients given as parameters (μ ≥ 0, μk ≤ μs), starts each sticking or slipping (`set_initial_modes`,
+again after the contacts that start closed), and reports their switches and forces with the contacts'
+(`contact_switches`, `contact_forces_along`); a contact's event decides them again in the same reset.
 """
 
 from __future__ import annotations
@@ -185,6 +186,8 @@ def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, r
                 break
             candidates = pushing
         p[first:first + count] = candidates
+        if candidates.any():        # the holding forces of sticking elements change with the closed contacts
+            _set_friction_modes(model, method, t0, Y0[row:row + 1], P[row:row + 1], where)
         if candidates.any() and not closing:
             from lagcomp.integrate.options import method_names  # (it imports this module)
 
@@ -232,7 +235,7 @@ def _set_friction_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray,
             if not rest.any() or model.kernels.contact_forces(t0, y, p, forces) != 0:
                 break
             model.kernels.friction_limits(t0, y, p, limits)
-            excess = np.where(rest, np.abs(forces[count:]) - limits, -np.inf)
+            excess = np.where(rest, np.where(limits > 0.0, np.abs(forces[count:]) - limits, np.inf), -np.inf)
             worst = int(np.argmax(excess))
             if excess[worst] <= 0.0:
                 break

@@ -205,3 +205,55 @@ def contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, fi
             row += 1
     impulses = np.empty(c)
     return impact_velocities(mass, G, v_minus, e, qd, impulses)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def frictional_impact(mass, gradient, normal_velocity, restitution, slip_gradient, slip_velocity, static, kinetic,
+                      qd):
+    """The impact of one contact with Coulomb friction along one sliding velocity (a point on a floor).
+
+    Impulses P_n along the gap's gradient G and P_t along the sliding velocity's a = ∂v/∂q̇:
+    M (q̇⁺ − q̇⁻) = Gᵀ P_n + aᵀ P_t, so with W = [G; a] M⁻¹ [Gᵀ aᵀ] (2 × 2, symmetric)
+
+        v_n⁺ = v_n⁻ + W_nn P_n + W_nt P_t = −e v_n⁻    (Newton's restitution on the normal),
+        v_t⁺ = v_t⁻ + W_tn P_n + W_tt P_t,              |P_t| ≤ μ P_n (Coulomb).
+
+    Stick first: v_t⁺ = 0 with the normal law, a 2 × 2 solve; kept when P_n ≥ 0 and |P_t| ≤ μs P_n.  Else slip:
+    P_t = −μk s P_n, s = sign v_t⁻, so P_n = −(1 + e) v_n⁻ / (W_nn − μk s W_nt); if that would reverse v_t
+    (s v_t⁺ < 0: the impulse that stops it is less than μk P_n, possible only when W_nt couples the two), the
+    stick impulses are taken (v_t⁺ = 0).  For a point mass on a flat floor (W_nt = 0, W_nn = W_tt = 1/m):
+    v_t⁺ = v_t⁻ − μk (1 + e) |v_n⁻| sign v_t⁻ when |v_t⁻| > μs (1 + e) |v_n⁻|, else 0.
+    No impulse when the contact is not approaching (v_n⁻ ≥ 0).  mass (n, n) lower triangle (not written);
+    gradient, slip_gradient (n); qd (n) before, overwritten with after.  Returns `IMPACT_SOLVED`, or
+    `IMPACT_SINGULAR_MASS` / `IMPACT_DEPENDENT_CONTACTS` (G and a parallel) with qd unchanged.
+    """
+    n = qd.shape[0]
+    if not normal_velocity < 0.0:
+        return IMPACT_SOLVED
+    columns = np.empty((n, 2))                  # M⁻¹ Gᵀ, M⁻¹ aᵀ
+    for j in range(n):
+        columns[j, 0] = gradient[j]
+        columns[j, 1] = slip_gradient[j]
+    if ldlt_solve_matrix(mass.copy(), columns) != 0:
+        return IMPACT_SINGULAR_MASS
+    w_nn = w_nt = w_tn = w_tt = 0.0
+    for j in range(n):
+        w_nn += gradient[j] * columns[j, 0]
+        w_nt += gradient[j] * columns[j, 1]
+        w_tn += slip_gradient[j] * columns[j, 0]
+        w_tt += slip_gradient[j] * columns[j, 1]
+    determinant = w_nn * w_tt - w_nt * w_tn
+    if not determinant > 1e-12 * w_nn * w_tt:
+        return IMPACT_DEPENDENT_CONTACTS
+    normal_rhs = -(1.0 + restitution) * normal_velocity
+    p_n = (normal_rhs * w_tt + slip_velocity * w_nt) / determinant            # stick: v_t⁺ = 0
+    p_t = (-slip_velocity * w_nn - normal_rhs * w_tn) / determinant
+    if p_n < 0.0 or abs(p_t) > static * p_n:
+        s = 1.0 if slip_velocity > 0.0 else -1.0 if slip_velocity < 0.0 else (-1.0 if p_t > 0.0 else 1.0)
+        slip_n = normal_rhs / (w_nn - kinetic * s * w_nt)
+        slip_t = -kinetic * s * slip_n
+        if slip_n >= 0.0 and s * (slip_velocity + w_tn * slip_n + w_tt * slip_t) >= 0.0:
+            p_n, p_t = slip_n, slip_t
+    for j in range(n):
+        qd[j] += columns[j, 0] * p_n + columns[j, 1] * p_t
+    return IMPACT_SOLVED

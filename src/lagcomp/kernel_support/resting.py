@@ -43,8 +43,14 @@ kernel that calls them.  They allocate small work arrays, only while some contac
 import numpy as np
 from numba import njit
 
-from lagcomp.kernel_support.impacts import CLOSED_GAP, IMPACT_SOLVED, contact_impacts, solve_on_set
-from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix
+from lagcomp.kernel_support.impacts import (
+    CLOSED_GAP,
+    IMPACT_SOLVED,
+    contact_impacts,
+    frictional_impact,
+    solve_on_set,
+)
+from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix, lu_solve
 
 #: The closed contacts' constraints are dependent (W singular): ``rhs`` returns this positive status, as for a
 #: singular mass matrix (the drivers stop with RHS_FAILED).
@@ -97,12 +103,54 @@ def frictional_accelerations(mass, gradients, bias, modes, frictions, qdd, force
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
+def pressed_frictional_accelerations(mass, gradients, bias, modes, frictions, pressing, kinetic, qdd, forces,
+                                     unilateral):
+    """`frictional_accelerations` where some friction elements are pressed by a contact's normal force
+    (``pressing`` (F,): the contact's index, −1 for an element whose N is an expression; ``kinetic`` (F,): μk).
+
+    Such an element acts only while its contact is closed (an open contact presses with 0: the element is held
+    neither way).  Slipping (mode s = ±1), its force −μk s λ_c along v is the generalized force
+    −μk s λ_c aᵀ (a = ∂v/∂q̇): linear in the contact's multiplier, it joins that contact's column,
+
+        M q̈ = F + Σ_c (G_cᵀ − Σ_f μk_f s_f a_fᵀ) λ_c + Σ_stick a_fᵀ λ_f,
+
+    so W = G_A M⁻¹ C_Aᵀ with columns C ≠ rows G: not symmetric (`held_row_accelerations` then solves by LU).
+    Sticking, its row a q̈ + b = 0 is held beside the contact's, its multiplier λ_f the friction force (the
+    limit μs λ_c is the event's business, ``friction_limits``).  Without a slipping pressed element on a closed
+    contact the columns are the rows and the solve that of `frictional_accelerations`."""
+    count, elements = modes.shape[0], frictions.shape[0]
+    active = np.empty(count + elements, dtype=np.bool_)
+    for d in range(count):
+        active[d] = modes[d] != 0.0
+    columns = gradients.copy()
+    coupled = False
+    for f in range(elements):
+        d = pressing[f]
+        active[count + f] = frictions[f] == 0.0 and (d < 0 or modes[d] != 0.0)
+        if d >= 0 and modes[d] != 0.0 and frictions[f] != 0.0:
+            coupled = True
+            for j in range(columns.shape[1]):
+                columns[d, j] -= kinetic[f] * frictions[f] * gradients[count + f, j]
+    return coupled_row_accelerations(mass, gradients, columns, bias, active, count, qdd, forces, unilateral,
+                                     not coupled)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
 def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, unilateral):
     """Correct ``qdd`` (n) in place for the rows r of G q̈ + b = 0 that are ``held`` (R,): M q̈ = M q̈_free + Gᵀ λ,
     W λ = −(G q̈_free + b) on the held rows, λ into ``forces`` (R,), 0 for the others.  The first `one_sided`
     rows are contacts: with ``unilateral`` 1 one whose λ would pull is dropped (`closed_contact_accelerations`);
     the rows after them (sticking friction) hold with a λ of either sign.  Returns 0, 1 (M not positive definite)
     or `DEPENDENT_CLOSED_CONTACTS`."""
+    return coupled_row_accelerations(mass, gradients, gradients, bias, held, one_sided, qdd, forces, unilateral,
+                                     True)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def coupled_row_accelerations(mass, gradients, columns, bias, held, one_sided, qdd, forces, unilateral, symmetric):
+    """`held_row_accelerations` with the forces' directions ``columns`` (R, n) apart from the rows ``gradients``:
+    M q̈ = M q̈_free + Cᵀ λ, W = G_A M⁻¹ C_Aᵀ (slip coupled to a normal force,
+    `pressed_frictional_accelerations`); ``symmetric`` (C is G) solves W by LDLᵀ, else by LU."""
     n = qdd.shape[0]
     rows = held.shape[0]
     c = 0
@@ -119,7 +167,7 @@ def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, 
         if held[d]:
             index[a] = d
             for i in range(n):
-                minv_gt[i, a] = gradients[d, i]
+                minv_gt[i, a] = columns[d, i]
             a += 1
     if ldlt_solve_matrix(mass, minv_gt) != 0:
         return 1
@@ -138,7 +186,9 @@ def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, 
     active = np.ones(c, dtype=np.bool_)
     lam = np.empty(c)
     for _ in range(c + 1):                      # (each pass but the last drops a contact)
-        if not solve_on_set(delassus, free, active, lam):       # λ_A = −W_AA⁻¹ (G_A q̈_free + b_A)
+        solved = solve_on_set(delassus, free, active, lam) if symmetric else lu_solve_on_set(delassus, free, active,
+                                                                                             lam)
+        if not solved:                          # λ_A = −W_AA⁻¹ (G_A q̈_free + b_A)
             return DEPENDENT_CLOSED_CONTACTS
         pulling = -1
         for a in range(c):
@@ -159,11 +209,38 @@ def held_row_accelerations(mass, gradients, bias, held, one_sided, qdd, forces, 
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
+def lu_solve_on_set(W, q, active, z):
+    """`lagcomp.kernel_support.impacts.solve_on_set` for a W that is not symmetric: z_A = −W_AA⁻¹ q_A by LU with
+    partial pivoting, 0 elsewhere; False if W_AA is singular."""
+    c = q.shape[0]
+    index = np.empty(c, dtype=np.int64)
+    m = 0
+    for i in range(c):
+        if active[i]:
+            index[m] = i
+            m += 1
+    augmented = np.empty((m, m + 1))
+    for a in range(m):
+        augmented[a, m] = -q[index[a]]
+        for b in range(m):
+            augmented[a, b] = W[index[a], index[b]]
+    if m > 0 and lu_solve(augmented) != 0:
+        return False
+    for i in range(c):
+        z[i] = 0.0
+    for a in range(m):
+        z[index[a]] = augmented[a, m]
+    return True
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
 def friction_mode_after(mode, force, limit):
     """A friction element's mode after its event (`lagcomp.model.friction.Friction`): from stick (``mode`` 0,
     its force reached ``limit`` = μs |N|) slip against the force that held it, −sign ``force``; from slip (v reached
-    0) stick when the ``force`` needed to hold v = 0 is within ``limit``, else slip against it (the other way)."""
-    if mode != 0.0 and abs(force) <= limit:
+    0) stick when the ``force`` needed to hold v = 0 is within ``limit``, else slip against it (the other way).
+    A limit of 0 (no normal force: an open contact presses with none) never sticks: the element is idle, its slip
+    force 0, and a held row would hold v = 0 with no force to spare."""
+    if mode != 0.0 and abs(force) <= limit and limit > 0.0:
         return 0.0
     return -1.0 if force > 0.0 else 1.0
 
@@ -232,3 +309,104 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
             modes[d] = closed[d]
     return status
 
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def friction_modes_after_jump(slip_gradients, slip_offsets, qd, frictions):
+    """The friction elements' modes (F,) after a contact's event (an impact, a closing, a lift-off), decided again
+    from the velocities ``qd`` (n) after it, into ``frictions``: slip with s = sign v where v = a·q̇ + c (rows of
+    ``slip_gradients`` (F, n) = ∂v/∂q̇, ``slip_offsets`` (F) = c) is beyond rounding (`CLOSED_GAP` Σ_j |a_j|
+    (|q̇_j| + 1), the scale a run starts with), else stick.  An impact reverses or stops a sliding body: a mode
+    kept from before would push it along its old direction.  Returns True when some element sticks, whose holding
+    force the caller checks against its limit (`slip_most_overloaded`)."""
+    n = qd.shape[0]
+    any_stuck = False
+    for f in range(frictions.shape[0]):
+        v = slip_offsets[f]
+        scale = 0.0
+        for j in range(n):
+            v += slip_gradients[f, j] * qd[j]
+            scale += abs(slip_gradients[f, j]) * (abs(qd[j]) + 1.0)
+        if abs(v) > CLOSED_GAP * scale:
+            frictions[f] = 1.0 if v > 0.0 else -1.0
+        else:
+            frictions[f] = 0.0
+            any_stuck = True
+    return any_stuck
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def slip_most_overloaded(forces, limits, frictions):
+    """Of the sticking elements (mode 0 in ``frictions`` (F,)) whose holding force (``forces`` (F,), the friction
+    rows of ``contact_forces``) exceeds its static limit (``limits`` (F,) = μs |N|), the one most beyond it slips
+    against its force (−sign λ_f, the free motion's way; one with a limit of 0 first).  Returns True when one
+    did: the others' forces change, the caller computes them again (one pass per element at most, as a run's
+    start does)."""
+    worst = -1
+    excess = 0.0
+    for f in range(frictions.shape[0]):
+        beyond = np.inf if not limits[f] > 0.0 else abs(forces[f]) - limits[f]    # (no normal force: never sticks)
+        if frictions[f] == 0.0 and beyond > excess:
+            worst = f
+            excess = beyond
+    if worst < 0:
+        return False
+    frictions[worst] = -1.0 if forces[worst] > 0.0 else 1.0
+    return True
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes,
+                          closing, qd, slip_gradients, slip_offsets, pressing, static, kinetic):
+    """`contact_event` where friction elements are pressed by contacts (``pressing`` (F,): the contact's index or
+    −1; ``static``, ``kinetic`` (F,): μs, μk; ``slip_gradients`` (F, n), ``slip_offsets`` (F): v = a·q̇ + c).
+
+    The impact of an open contact that presses an element, alone at that instant (no other contact closed or
+    touching), is frictional: `lagcomp.kernel_support.impacts.frictional_impact` (Newton on the normal, the
+    tangential impulse within μ P_n), with the Zeno closing of `contact_event` (done again with e = 0, the
+    contact closed, when the bounces left would end within `ZENO_TIME` or the next last less than
+    `BOUNCE_TIME`).  Every other event is `contact_event`'s, frictionless: simultaneous impacts with friction are
+    not solved (their tangential impulses would need a complementarity problem of their own)."""
+    if modes[firing] != 0.0:
+        modes[firing] = 0.0
+        return IMPACT_SOLVED
+    n = q.shape[0]
+    element = -1
+    for f in range(pressing.shape[0]):
+        if pressing[f] == firing and element < 0:
+            element = f
+    alone = element >= 0
+    for d in range(gaps.shape[0]):
+        scale = 0.0
+        for j in range(n):
+            scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
+        if d != firing and (modes[d] != 0.0 or gaps[d] <= CLOSED_GAP * scale):
+            alone = False
+    if not alone:
+        return contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing,
+                             modes, closing, qd)
+    before = qd.copy()
+    slip_velocity = slip_offsets[element]
+    for j in range(n):
+        slip_velocity += slip_gradients[element, j] * qd[j]
+    e = restitution[firing]
+    status = frictional_impact(mass, gradients[firing], normal_velocities[firing], e, slip_gradients[element],
+                               slip_velocity, static[element], kinetic[element], qd)
+    if status != IMPACT_SOLVED or closing == 0.0:
+        return status
+    pressing_acceleration = bias[firing]
+    v_after = normal_velocities[firing]
+    for j in range(n):
+        pressing_acceleration += gradients[firing, j] * qdd_free[j]
+        v_after += gradients[firing, j] * (qd[j] - before[j])
+    scale_t = max(1.0, abs(t))
+    if pressing_acceleration < 0.0 and (
+            2.0 * v_after < ZENO_TIME * scale_t * -pressing_acceleration * (1.0 - e)
+            or 2.0 * v_after < BOUNCE_TIME * scale_t * -pressing_acceleration):
+        for j in range(n):
+            qd[j] = before[j]
+        status = frictional_impact(mass, gradients[firing], normal_velocities[firing], 0.0, slip_gradients[element],
+                                   slip_velocity, static[element], kinetic[element], qd)
+        if status == IMPACT_SOLVED:
+            modes[firing] = 1.0
+    return status

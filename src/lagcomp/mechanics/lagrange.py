@@ -123,6 +123,8 @@ class EOM:
         Per event, in order, (N, μs, μk) of a friction element (`lagcomp.model.friction.Friction`, whose event
         function is its sliding velocity v), N in plain symbols; None for other events.  Its slip force
         −μk |N| s ∂v/∂q̇ is part of F (and of ṗ), s the element's mode symbol (`slip_symbol`, in element order).
+        N is the name of a contact (a str) for an element pressed by that contact's normal force: its slip force
+        is not part of F (`lagcomp.codegen.contacts`).
     """
 
     system: System
@@ -288,7 +290,7 @@ def _frictions(system: System, plain, qd) -> tuple:
         if not any(v.diff(a) != 0 for a in qd) or any(v.diff(a).diff(b) != 0 for a in qd for b in qd):
             raise ModelError(f"Friction `{e.name}`: its velocity must be linear in the velocities q̇ (a(q, t)·q̇ + "
                              f"c(q, t), not constant in them); got {e.expr}.")
-        out.append((plain(e.normal), e.static, e.kinetic))
+        out.append((e.normal if isinstance(e.normal, str) else plain(e.normal), e.static, e.kinetic))
     return tuple(out)
 
 
@@ -299,6 +301,8 @@ def _slip_forces(system: System, frictions: tuple, plain, qd) -> list:
     forces = [sp.S.Zero] * len(qd)
     elements = [(e, friction) for e, friction in zip(system.events, frictions, strict=True) if friction is not None]
     for f, (event, (normal, _, kinetic)) in enumerate(elements):
+        if isinstance(normal, str):     # pressed by a contact: its slip force joins the contact's column
+            continue                    # (`lagcomp.kernel_support.resting.pressed_frictional_accelerations`)
         v = plain(event.expr)
         forces = [Qi - kinetic * sp.Abs(normal) * slip_symbol(f) * v.diff(a) for Qi, a in zip(forces, qd, strict=True)]
     return forces

@@ -22,8 +22,11 @@ Conventions and limits of this first form:
   would turn negative (lift-off); impacts that accumulate under a pressing
   force (a bouncing ball's Zeno point) close it; the Taylor method keeps
   contacts open (its runs end at such a point with EVENTS_ACCUMULATED);
-* contacts are frictionless, on systems without bilateral constraints, with
-  the Lagrange formulation (M from T).
+* a contact is frictionless unless a `lagcomp.model.friction.Friction` names it
+  (``normal="floor"``): its normal force then presses that element, and an
+  impact of it alone is frictional (`lagcomp.kernel_support.impacts.frictional_impact`);
+  contacts are on systems without bilateral constraints, with the Lagrange
+  formulation (M from T).
 """
 
 from __future__ import annotations

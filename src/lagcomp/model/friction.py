@@ -16,10 +16,21 @@ contact's (`lagcomp.ir.ContactModes`): 0 stick, ±1 slip with s = sign v.
   s = −sign λ_f (the other way).
 
 The element is an `Event` whose expression is v: its occurrences are the switches (`Solution.events`), listed
-with the new modes in `Solution.friction_switches`.  Limits of this first form: N is an expression (a contact's
-normal force is a later increment), the system has no bilateral constraints and is a Lagrange one (M from T);
-no contacts in the same system (an impact would leave the modes stale); the Taylor method refuses models with
-friction (its program has no stick rows).
+with the new modes in `Solution.friction_switches`.
+
+Pressed by a contact (``normal="floor"``, a `Contact` of the same System): N = λ_c, the contact's normal force,
+0 while it is open (the element idles: it never sticks on a limit of 0).  Slipping, the force −μk s λ_c ∂v/∂q̇ is
+linear in λ_c: it joins the contact's column of the held-row system, M q̈ = F + (G_cᵀ − μk s aᵀ) λ_c, G_c q̈ + b_c
+= 0, a non-symmetric W = G_c M⁻¹ (G_c − μk s a)ᵀ (`lagcomp.kernel_support.resting.pressed_frictional_accelerations`;
+the all-open path costs nothing more: ``rhs`` is ``rhs_free`` then).  Sticking, both rows are held, λ_f the
+friction force; the event is μs λ_c − |λ_f|.  An impact of that contact alone is frictional
+(`lagcomp.kernel_support.impacts.frictional_impact`).
+
+Limits: the system has no bilateral constraints and is a Lagrange one (M from T);
+the Taylor method refuses models with friction (its program has no stick rows).  Contacts in the same system: a
+contact's event (impact, closing, lift-off) decides the friction modes again from the state after it, in the
+same ``event_reset`` branch (`lagcomp.codegen.contacts.contact_event_call`): slip along v ≠ 0, stick at v = 0
+unless the holding force exceeds μs |N|.
 """
 
 from __future__ import annotations
@@ -47,9 +58,10 @@ class Friction(Event):
         Identifier under which the switches are reported.
     expr : sympy expression
         The sliding velocity v, linear in the velocities q_i(t).diff(t); may hold q, t and parameters.
-    normal : sympy expression
+    normal : sympy expression or str
         The normal force N pressing the surfaces (q, q̇, t, parameters; |N| is used), in the units of the force
-        conjugate to v's coordinate (N for v in m/s).  A contact's name (its normal force) is not supported yet.
+        conjugate to v's coordinate (N for v in m/s); or the name of a `Contact` of the same System, whose normal
+        force λ_c presses (0 while it is open: the element is then idle).
     static, kinetic : float or sympy Symbol
         μs and μk ≥ 0 with μk ≤ μs (kinetic defaults to static), numbers or parameters.
     """
@@ -64,14 +76,11 @@ class Friction(Event):
                              "-1, the run goes on); leave `direction`, `terminal` and `reset` unset.")
         object.__setattr__(self, "direction", -1)
         super().__post_init__()
-        if isinstance(self.normal, str):
-            raise ModelError(f"Friction `{self.name}`: normal={self.normal!r} names a contact; friction pressed by a "
-                             "contact's normal force is not supported yet: give N as an expression of q, q̇, t and "
-                             "parameters.")
         if self.normal is None or self.static is None:
             raise ModelError(f"Friction `{self.name}`: give the normal force (normal=N) and the static coefficient "
                              "(static=μs; kinetic=μk defaults to it).")
-        object.__setattr__(self, "normal", expression(self.normal, f"Friction `{self.name}`: the normal force"))
+        if not isinstance(self.normal, str):    # (a contact's name: the System checks it names one of its contacts)
+            object.__setattr__(self, "normal", expression(self.normal, f"Friction `{self.name}`: the normal force"))
         static = _coefficient(self.name, "static", self.static)
         kinetic = static if self.kinetic is None else _coefficient(self.name, "kinetic", self.kinetic)
         if static.is_number and kinetic.is_number and kinetic > static:

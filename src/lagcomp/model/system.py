@@ -375,10 +375,10 @@ class System:
                                      f"of {self.name!r} (coordinates {list(self.coordinate_names)}).")
         contacts = [e.name for e in events if isinstance(e, Contact)]
         frictions = [e.name for e in events if isinstance(e, Friction)]
-        if frictions and contacts:
-            raise ModelError(f"Friction {frictions} and contacts {contacts} in one system: an impact would change the "
-                             "sliding velocities without updating the friction modes, which is not supported yet; "
-                             "model them in separate systems.")
+        for e in events:
+            if isinstance(e, Friction) and isinstance(e.normal, str) and e.normal not in contacts:
+                raise ModelError(f"Friction `{e.name}`: normal={e.normal!r} names no contact of this system "
+                                 f"(contacts {contacts}); give a Contact's name or N as an expression.")
         if contacts and self.constraints:
             raise ModelError(f"Contacts {contacts} on a system with constraints {list(self.constraint_names)}: an "
                              "impact there must keep the constraints' velocities too, which is not supported yet.")
@@ -397,7 +397,7 @@ class System:
         exprs.update({reset_role(e, key): value for e in self.events for key, value in e.reset or ()})
         exprs.update({f"contact {e.name} restitution": e.restitution for e in self.events if isinstance(e, Contact)})
         exprs.update({f"friction {e.name} {part}": getattr(e, part) for e in self.events if isinstance(e, Friction)
-                      for part in ("normal", "static", "kinetic")})
+                      for part in ("normal", "static", "kinetic") if not isinstance(getattr(e, part), str)})
         return exprs
 
     @property
