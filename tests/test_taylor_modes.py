@@ -90,6 +90,24 @@ def test_the_particle_leaves_the_sphere_at_two_thirds_of_cos_theta0_with_taylor(
     np.testing.assert_allclose(sol.contact_forces[on, 0], m * G * (3 * cos - 2 * np.cos(theta0)), rtol=1e-9, atol=1e-9)
 
 
+def test_a_pulled_mass_lifts_off_when_the_force_exceeds_its_weight_with_taylor(tmp_path):
+    # At rest the held program is exact (q̈ = 0) and the steps grow long: λ = m g − F0 sin ω t turns negative within
+    # one, and its event locates the zero on the step's series.
+    y, = lc.coordinates("y")
+    m, g, F0, w = sp.symbols("m g F0 omega", positive=True)
+    system = lc.System([y], T=m * y.diff(t) ** 2 / 2, V=m * g * y - F0 * sp.sin(w * t) * y,
+                       events=[lc.Contact("floor", y, restitution=0.5)],
+                       name="taylor_modes_pulled", defaults={"m": 2.0, "g": G, "F0": 30.0, "omega": 3.0})
+    pulled = lc.compile(system, cache_dir=tmp_path)
+    t_off = np.arcsin(2.0 * G / 30.0) / 3.0
+    sol = pulled.simulate((0.0, 1.0), [0.0], [0.0], method="taylor", rtol=1e-12, atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    assert (sol.contact_switches[0].contact, sol.contact_switches[0].closed) == ("floor", False)
+    assert sol.contact_switches[0].t == pytest.approx(t_off, abs=1e-10)
+    assert not sol.q[sol.t < t_off].any()
+    assert sol.q[sol.t > t_off + 0.01, 0].min() > 0.0
+
+
 def _belt_switches(mu_s, mu_k, periods, m=1.0, k=4.0, v_b=0.5):
     """The closed form's switching times (stick → slip, slip → stick, ...) over `periods` periods from x = 0 stuck
     (tests/test_friction.py)."""
