@@ -90,6 +90,8 @@ class TaylorProgram:
     body: list[Op] = field(default_factory=list)
     uses_t: bool = False
     periodic: tuple[int, ...] = ()
+    #: The series of the held rows' multipliers λ (`_held_rows`), rows 0.. of W: the driver's step bounds them too
+    multipliers: tuple[str, ...] = ()
 
     @property
     def operation_count(self) -> int:
@@ -485,8 +487,9 @@ def decompose(rhs: Kernel, n: int, closed: Kernel | None = None, held: tuple[int
     b._emit("comment", const="Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.")
     d, low = _factor(b, m)
     accelerations = _substitute(b, d, low, f)
+    multipliers = ()
     if held:
-        accelerations = _held_rows(b, closed, held, d, low, accelerations)
+        accelerations, multipliers = _held_rows(b, closed, held, d, low, accelerations)
     for i, v in enumerate(accelerations):
         derivative[rhs.solve.offset + i] = v
     b._emit("comment", const="The state's next coefficient: y[k + 1] = f[k]/(k + 1).")
@@ -497,6 +500,8 @@ def decompose(rhs: Kernel, n: int, closed: Kernel | None = None, held: tuple[int
             b._emit("state", args=(v.series,), index=i)
     b.program.body = [op.renamed(b.renamed) for op in b.program.body]
     b.program.rows = [b.renamed.get(row, row) for row in b.program.rows]
+    series = [b.renamed.get(v.series, v.series) for v in multipliers if not v.is_const]
+    b.program.multipliers = tuple(dict.fromkeys(name for name in series if name in b.program.rows))
     b.program.periodic = periodic_coordinates(rhs, n)
     if closed is not None:      # (the reduction to [−π, π] applies to every mode's program)
         b.program.periodic = tuple(i for i in b.program.periodic if i in periodic_coordinates(closed, n))
@@ -504,7 +509,7 @@ def decompose(rhs: Kernel, n: int, closed: Kernel | None = None, held: tuple[int
 
 
 def _held_rows(b: _Builder, closed: Kernel, held: tuple[int, ...], d: list[Value], low: dict,
-               free: list[Value]) -> list[Value]:
+               free: list[Value]) -> tuple[list[Value], list[Value]]:
     """q̈ with the rows `held` of ``closed_contacts`` (closed contacts, sticking friction elements: G_A q̈ + b_A = 0)
     held, from q̈_free `free` and the LDLᵀ factors (d, low) of M, in series arithmetic
     (`lagcomp.kernel_support.resting.held_row_accelerations`, written out for one set of rows):
@@ -513,7 +518,7 @@ def _held_rows(b: _Builder, closed: Kernel, held: tuple[int, ...], d: list[Value
 
     λ_A has either sign: a series cannot clip a pulling contact (as ``rhs``'s stages do), and needs not, since
     a closed contact's event is its λ, located on the series where it turns negative (`ModePrograms`).  A W_AA
-    pivot that is not positive at order 0 returns `DEPENDENT_CLOSED_CONTACTS`, as ``rhs`` does.
+    pivot that is not positive at order 0 returns `DEPENDENT_CLOSED_CONTACTS`, as ``rhs`` does.  Returns (q̈, λ_A).
     """
     n = len(free)
     for local, source in closed.loads:
@@ -548,7 +553,8 @@ def _held_rows(b: _Builder, closed: Kernel, held: tuple[int, ...], d: list[Value
                              f"{DEPENDENT_CLOSED_CONTACTS}).")
     dw, lw = _factor(b, delassus, tag="w", status=DEPENDENT_CLOSED_CONTACTS)
     multipliers = _substitute(b, dw, lw, residual, tag="w")
-    return [b.name(dot([column[i] for column in columns], multipliers, free[i]), f"_a{i}") for i in range(n)]
+    accelerations = [b.name(dot([column[i] for column in columns], multipliers, free[i]), f"_a{i}") for i in range(n)]
+    return accelerations, multipliers
 
 
 #: The docstring of ``taylor_coefficients`` (lines).
@@ -570,7 +576,8 @@ def emit_taylor(program: TaylorProgram) -> str:
 
 def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ...]) -> str:
     """The source of the njit function `name`(t, y, p, X, W) that writes the coefficients of `program`."""
-    rows = (["_t"] if program.uses_t else []) + program.rows
+    multipliers = list(program.multipliers)
+    rows = multipliers + (["_t"] if program.uses_t else []) + [row for row in program.rows if row not in multipliers]
     states = {s.name: s.index for s in program.setup if s.kind == "state"}
     array_of = {**{name: "W" for name in rows}, **{name: "X" for name in states}}
 
@@ -609,7 +616,7 @@ def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ..
             summary, loop = convolution_loop(op, at)
             body = [f"# {summary}", *loop]
         lines += [INDENT + line for line in body]
-    lines.append("return 0")
+    lines.append(f"return {-len(multipliers)}" if multipliers else "return 0")
     body = "\n".join(INDENT + line if line else "" for line in lines)
     return f'\n\n@njit(cache=True, error_model="numpy", fastmath={{"contract"}})\ndef {name}(t, y, p, X, W):\n{body}\n'
 
@@ -644,8 +651,10 @@ def emit_mode_programs(modes: ModePrograms) -> str:
     lines = [*COEFFICIENTS_DOC[:-1],
              "Branches on the modes in p to the program of the rows held now (bit r of _held: row r of",
              "closed_contacts, a closed contact or a sticking friction element, is held).",
-             "Returns 0, j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t, or",
-             'DEPENDENT_CLOSED_CONTACTS (lagcomp.kernel_support.resting) when the held rows are dependent."""',
+             "Returns 0; −c when rows 0..c−1 of W hold the series (orders 0..order−1) of the held rows'",
+             "multipliers λ, whose steps taylor_run bounds as the state's (λ of a body at rest may vary",
+             "while the state does not); j > 0 when pivot j of the LDLᵀ factorization of M is not positive",
+             'at t, or DEPENDENT_CLOSED_CONTACTS (lagcomp.kernel_support.resting) when the held rows are dependent."""',
              "_held = 0"]
     for r, test in enumerate(tests):
         lines += [f"if {test}:", f"{INDENT}_held += {1 << r}"]
