@@ -98,11 +98,12 @@ def models(compiled, cache_dir):
         "slider": lc.compile(oscillator(V=0, name="table_slider", defaults={"m": 1.0, "g": 9.81, "c": 0.5, "a": 0.3},
                                         events=[lc.Friction("slide", x.diff(t), normal=m * g, static=c, kinetic=a)]),
                              cache_dir=cache_dir),
-        # four contacts (and a friction element): 2^4 mode sets, more than the Taylor method's programs
+        # four contacts, four friction elements: 2^4 mode sets each, more than the Taylor method's programs
         "crowd": lc.compile(plane(events=_walls(), name="table_crowd", defaults={"m": 1.0, "g": 9.81}),
                             cache_dir=cache_dir),
-        "crowd_slider": lc.compile(plane(events=[*_walls(), lc.Friction("slide", x.diff(t), normal=m * g, static=c,
-                                                                        kinetic=a)],
+        "crowd_slider": lc.compile(plane(events=[lc.Friction(name, v, normal=m * g, static=c, kinetic=a) for name, v in
+                                                 (("slide", x.diff(t)), ("drift", y.diff(t)),
+                                                  ("skid", x.diff(t) + y.diff(t)), ("spin", x.diff(t) - y.diff(t)))],
                                          name="table_crowd_slider", defaults={"m": 1.0, "g": 9.81, "c": 0.5, "a": 0.3}),
                                    cache_dir=cache_dir),
         "kane": lc.compile(_kane_slider(), name="table_kane_slider", cache_dir=cache_dir, defaults={"m": 1.0}),
@@ -367,7 +368,7 @@ CASES = {
     "friction-coefficient-parameter-out-of-range": (_simulate("slider", q0=[0.0], qd0=[1.0], params={"a": 0.9}),
                                                     "`slide`"),
     "friction-with-taylor": (_simulate("crowd_slider", q0=[0.5, 0.5], qd0=[1.0, 0.0], method="taylor"),
-                             "['slide']"),
+                             "['slide', 'drift', 'skid', 'spin']"),
     "contacts-method": (_simulate("bouncer", q0=[0.0, 1.0], method="rk4", dt=0.01), "use dopri5, dop853"),
     "contacts-left-out": (_simulate("slider", q0=[0.0], qd0=[1.0], events=False), "['slide']"),
     "contact-closed-at-start-with-taylor": (_simulate("crowd", q0=[0.5, 0.0], method="taylor"),
