@@ -42,6 +42,12 @@ The driver is library code: ``lagcomp.integrate.drivers.taylor.taylor_run``.
 Systems the method does not cover (constraints, or a function without a
 recurrence here: sign, Abs, Piecewise, ...) get ``TAYLOR_REFUSED``, a
 string saying why, instead.
+
+A module with contacts or friction (modes in p, `lagcomp.ir.ContactModes`) gets one program per set of
+held rows (closed contacts, sticking friction elements), each the motion of that mode set
+(`_held_rows`: q̈_free corrected by the held rows' multipliers, in series arithmetic), and a
+``taylor_coefficients`` that branches on the modes to the current set's (`ModePrograms`), up to
+`MODE_PROGRAMS_MAX` sets; beyond, the program of ``rhs_free``, the motion with every contact open.
 """
 
 from __future__ import annotations
