@@ -26,6 +26,7 @@ import pytest
 import sympy as sp
 
 import lagcomp as lc
+from lagcomp.errors import OptionError
 from lagcomp.integrate.status import Status
 
 t = lc.t
@@ -183,3 +184,10 @@ def test_a_block_bouncing_off_a_wall_slides_back_against_friction_and_stops(bloc
     # along the way: −μk m g sign ẋ while it slides, 0 at rest
     slid = np.abs(sol.qd[:, 0]) > 1e-9
     np.testing.assert_allclose(sol.friction_forces[slid, 0], -mu_k * 2.0 * G * np.sign(sol.qd[slid, 0]), rtol=1e-12)
+
+
+def test_taylor_refuses_friction_pressed_by_a_contact(block_on_floor):
+    """The Taylor programs of the held rows have no column for the slip force −μk s λ_c ∂v/∂q̇ (it lives in the
+    held-row system, not in rhs_free): refused, not integrated as if the floor had no friction."""
+    with pytest.raises(OptionError, match="pressed by a contact"):
+        block_on_floor.simulate((0.0, 1.0), [0.0, 1.0], [1.0, 0.0], params={"c": 0.0}, method="taylor")

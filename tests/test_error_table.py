@@ -98,6 +98,14 @@ def models(compiled, cache_dir):
         "slider": lc.compile(oscillator(V=0, name="table_slider", defaults={"m": 1.0, "g": 9.81, "c": 0.5, "a": 0.3},
                                         events=[lc.Friction("slide", x.diff(t), normal=m * g, static=c, kinetic=a)]),
                              cache_dir=cache_dir),
+        # four contacts, four friction elements: 2^4 mode sets each, more than the Taylor method's programs
+        "crowd": lc.compile(plane(events=_walls(), name="table_crowd", defaults={"m": 1.0, "g": 9.81}),
+                            cache_dir=cache_dir),
+        "crowd_slider": lc.compile(plane(events=[lc.Friction(name, v, normal=m * g, static=c, kinetic=a) for name, v in
+                                                 (("slide", x.diff(t)), ("drift", y.diff(t)),
+                                                  ("skid", x.diff(t) + y.diff(t)), ("spin", x.diff(t) - y.diff(t)))],
+                                         name="table_crowd_slider", defaults={"m": 1.0, "g": 9.81, "c": 0.5, "a": 0.3}),
+                                   cache_dir=cache_dir),
         "kane": lc.compile(_kane_slider(), name="table_kane_slider", cache_dir=cache_dir, defaults={"m": 1.0}),
         "kane_across": lc.compile(_kane_slider(across=True), name="table_kane_slider_across", cache_dir=cache_dir,
                                   defaults={"m": 1.0}),
@@ -113,6 +121,12 @@ def models(compiled, cache_dir):
         "clash": lc.compile(oscillator(V=sp.Symbol("x_dot") * x, name="table_clash",
                                        defaults={"m": 1.0, "x_dot": 1.0}), cache_dir=cache_dir),
     }
+
+
+def _walls() -> list:
+    """Four contacts around the unit square of `plane`: 16 mode sets."""
+    return [lc.Contact("floor", y, restitution=0.5), lc.Contact("ceiling", 1 - y, restitution=0.5),
+            lc.Contact("left", x, restitution=0.5), lc.Contact("right", 1 - x, restitution=0.5)]
 
 
 def _close_approach(model, points):
@@ -351,10 +365,11 @@ CASES = {
                                                    "`floor`"),
     "friction-coefficient-parameter-out-of-range": (_simulate("slider", q0=[0.0], qd0=[1.0], params={"a": 0.9}),
                                                     "`slide`"),
-    "friction-with-taylor": (_simulate("slider", q0=[0.0], qd0=[1.0], method="taylor"), "['slide']"),
+    "friction-with-taylor": (_simulate("crowd_slider", q0=[0.5, 0.5], qd0=[1.0, 0.0], method="taylor"),
+                             "['slide', 'drift', 'skid', 'spin']"),
     "contacts-method": (_simulate("bouncer", q0=[0.0, 1.0], method="rk4", dt=0.01), "use dopri5, dop853"),
     "contacts-left-out": (_simulate("slider", q0=[0.0], qd0=[1.0], events=False), "['slide']"),
-    "contact-closed-at-start-with-taylor": (_simulate("bouncer", q0=[0.0, 0.0], method="taylor"),
+    "contact-closed-at-start-with-taylor": (_simulate("crowd", q0=[0.5, 0.0], method="taylor"),
                                             "['floor'] start closed"),
     "singular-at-initial-state": (_simulate("degenerate", q0=[0.0], params={"m": 1.0}, method="rk4", dt=0.1), "x=0"),
     "parameter-makes-M-singular": (_simulate("pendulum", params={"m": 0.0}), "['m'] are zero"),

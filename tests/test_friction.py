@@ -17,7 +17,6 @@ import pytest
 import sympy as sp
 
 import lagcomp as lc
-from lagcomp.errors import OptionError
 from lagcomp.integrate.status import Status
 
 t = lc.t
@@ -190,11 +189,6 @@ def test_a_sweep_gives_each_trajectory_its_own_friction_modes(belt):
         expected = expected[expected < 6.0]
         count = sweep.events["belt"]["count"][i]
         np.testing.assert_allclose(sweep.events["belt"]["t"][i, :count], expected, rtol=0, atol=1e-10)
-
-
-def test_taylor_refuses_friction(belt):
-    with pytest.raises(OptionError, match="belt"):
-        belt.simulate((0.0, 1.0), [0.0], [0.5], method="taylor")
 
 
 def test_the_friction_switches_and_forces_are_saved(belt, tmp_path):

@@ -18,7 +18,6 @@ import pytest
 import sympy as sp
 
 import lagcomp as lc
-from lagcomp.errors import OptionError
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.resting import BOUNCE_TIME
 
@@ -135,15 +134,6 @@ def test_a_pulled_mass_lifts_off_when_the_force_exceeds_its_weight(pulled, metho
                                atol=1e-12)
     assert not sol.q[on].any()
     assert sol.q[sol.t > t_off + 0.01, 0].min() > 0.0                    # lifted
-
-
-def test_taylor_keeps_the_contacts_open(ball):
-    # Its program is the motion without contacts: a closed start is refused, a Zeno point still ends the run.
-    with pytest.raises(OptionError, match="start closed"):
-        ball.simulate((0.0, 1.0), [0.0], [0.0], method="taylor")
-    sol = ball.simulate((0.0, 3.0), [1.0], [0.0], params={"e": 0.5}, method="taylor", rtol=1e-12, atol=1e-12)
-    assert sol.status == Status.EVENTS_ACCUMULATED
-    assert sol.contact_switches == ()
 
 
 def test_a_sweep_gives_each_trajectory_its_own_modes(ball):

@@ -42,6 +42,12 @@ The driver is library code: ``lagcomp.integrate.drivers.taylor.taylor_run``.
 Systems the method does not cover (constraints, or a function without a
 recurrence here: sign, Abs, Piecewise, ...) get ``TAYLOR_REFUSED``, a
 string saying why, instead.
+
+A module with contacts or friction (modes in p, `lagcomp.ir.ContactModes`) gets one program per set of
+held rows (closed contacts, sticking friction elements), each the motion of that mode set
+(`_held_rows`: q̈_free corrected by the held rows' multipliers, in series arithmetic), and a
+``taylor_coefficients`` that branches on the modes to the current set's (`ModePrograms`), up to
+`MODE_PROGRAMS_MAX` sets; beyond, the program of ``rhs_free``, the motion with every contact open.
 """
 
 from __future__ import annotations
@@ -63,7 +69,8 @@ from lagcomp.codegen.taylor_ops import (
     pivot_test,
     support_names,
 )
-from lagcomp.ir import Kernel, LinearSolve, ModuleIR, target_local
+from lagcomp.ir import ContactModes, Kernel, LinearSolve, ModuleIR, target_local
+from lagcomp.kernel_support.resting import DEPENDENT_CLOSED_CONTACTS
 
 INDENT = "    "
 
@@ -89,6 +96,8 @@ class TaylorProgram:
     body: list[Op] = field(default_factory=list)
     uses_t: bool = False
     periodic: tuple[int, ...] = ()
+    #: The series of the held rows' multipliers λ (`_held_rows`), rows 0.. of W: the driver's step bounds them too
+    multipliers: tuple[str, ...] = ()
 
     @property
     def operation_count(self) -> int:
@@ -399,54 +408,68 @@ class _Builder:
         return v
 
 
-def _ldlt(b: _Builder, solve: LinearSolve) -> list[Value]:
-    """x = M⁻¹ f by LDLᵀ in series arithmetic (the factorization ``_unrolled_ldlt`` emits, in plain form).
-
-    The pivots are tested at order 0 (the value at t): k = 0 returns j + 1 there, as ``rhs`` does.
-    """
-    n = solve.n
-    m = [[b.env[sp.Symbol(target_local(solve.m[i][j]), real=True)] for j in range(i + 1)] for i in range(n)]
-    f = [b.env[sp.Symbol(target_local(solve.f[i]), real=True)] for i in range(n)]
-    b._emit("comment", const="Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.")
+def _factor(b: _Builder, m: list[list[Value]], tag: str = "", status: int | None = None) -> tuple[list, dict]:
+    """The LDLᵀ factors (d, l) of the symmetric matrix whose lower triangle is `m` (Values), series named with
+    `tag`: the factorization ``_unrolled_ldlt`` emits, in series arithmetic.  The pivots are tested at order 0
+    (the value at t): a pivot j that is not positive returns `status` there (default j + 1, as ``rhs`` does)."""
+    n = len(m)
     d, low = [], {}
     for j in range(n):
         dj = m[j][j]
         for k in range(j):
             dj = b.sub(dj, b.mul(b.square(low[j, k]), d[k]))
         if dj.is_const:
-            dj = b._scalar(dj.const, f"_d{j}") if not dj.const.is_Symbol else dj
+            dj = b._scalar(dj.const, f"_d{tag}{j}") if not dj.const.is_Symbol else dj
         else:
-            dj = b.name(dj, f"_d{j}")
+            dj = b.name(dj, f"_d{tag}{j}")
         d.append(dj)
         mjj = m[j][j]
+        index = j + 1 if status is None else status
         if dj.is_const:     # then so is m_jj (d_j is m_jj minus terms that vanish)
-            b.program.setup.append(Setup("check", code=pivot_test(to_code(dj.const), to_code(mjj.const)), index=j + 1))
+            b.program.setup.append(Setup("check", code=pivot_test(to_code(dj.const), to_code(mjj.const)), index=index))
         elif mjj.is_const:
-            b._emit("pivot", args=(dj.series,), const=to_code(mjj.const), index=j + 1)
+            b._emit("pivot", args=(dj.series,), const=to_code(mjj.const), index=index)
         else:
-            b._emit("pivot", args=(dj.series, mjj.series), index=j + 1)
+            b._emit("pivot", args=(dj.series, mjj.series), index=index)
         for i in range(j + 1, n):
             lij = m[i][j]
             for k in range(j):
                 lij = b.sub(lij, b.mul(b.mul(low[i, k], low[j, k]), d[k]))
-            low[i, j] = b.name(b.div(lij, dj), f"_l{i}_{j}")
+            low[i, j] = b.name(b.div(lij, dj), f"_l{tag}{i}_{j}")
+    return d, low
+
+
+def _substitute(b: _Builder, d: list[Value], low: dict, f: list[Value], tag: str = "") -> list[Value]:
+    """x of L D Lᵀ x = f by forward and back substitution (series named with `tag`)."""
+    n = len(d)
     z = []
     for i in range(n):
         zi = f[i]
         for k in range(i):
             zi = b.sub(zi, b.mul(low[i, k], z[k]))
-        z.append(b.name(zi, f"_z{i}"))
+        z.append(b.name(zi, f"_z{tag}{i}"))
     x = [None] * n
     for i in reversed(range(n)):
         xi = b.div(z[i], d[i])
         for k in range(i + 1, n):
             xi = b.sub(xi, b.mul(low[k, i], x[k]))
-        x[i] = b.name(xi, f"_x{i}")
+        x[i] = b.name(xi, f"_x{tag}{i}")
     return x
 
 
-def decompose(rhs: Kernel, n: int) -> TaylorProgram:
-    """The Taylor program of an unconstrained ``rhs`` kernel (n coordinates, state size 2n).
+def _load(b: _Builder, local: str, source: str) -> None:
+    """Bind the kernel load ``local = source`` ("y[i]": a state series, "p[i]": a parameter scalar)."""
+    symbol = sp.Symbol(local, real=True)
+    array, index = source[0], int(source[2:-1])    # the IR loads "y[i]" and "p[i]"
+    b.program.setup.append(Setup("state" if array == "y" else "param", local, index=index))
+    b.env[symbol] = Value(series=local) if array == "y" else _c(symbol)
+    if array != "y":
+        b.parameters[local] = index
+
+
+def decompose(rhs: Kernel, n: int, closed: Kernel | None = None, held: tuple[int, ...] = ()) -> TaylorProgram:
+    """The Taylor program of an unconstrained ``rhs`` kernel (n coordinates, state size 2n); with the module's
+    ``closed_contacts`` kernel `closed`, the program of the motion that holds its rows `held` (`_held_rows`).
 
     Raises `Unsupported` for anything without a recurrence here.
     """
@@ -454,12 +477,7 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
         raise Unsupported("constraints (the augmented system is solved with pivoting)")
     b = _Builder(2 * n)
     for local, source in rhs.loads:
-        symbol = sp.Symbol(local, real=True)
-        array, index = source[0], int(source[2:-1])    # the IR loads "y[i]" and "p[i]"
-        b.program.setup.append(Setup("state" if array == "y" else "param", local, index=index))
-        b.env[symbol] = Value(series=local) if array == "y" else _c(symbol)
-        if array != "y":
-            b.parameters[local] = index
+        _load(b, local, source)
     b.env[sp.Symbol("t", real=True)] = Value(series="_t")
     for name, expr in rhs.temps:
         b.env[sp.Symbol(name, real=True)] = b.bind(name, expr)
@@ -470,7 +488,15 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
         else:
             local = target_local(target)
             b.env[sp.Symbol(local, real=True)] = b.bind(local, expr)
-    for i, v in enumerate(_ldlt(b, rhs.solve)):
+    m = [[b.env[sp.Symbol(target_local(rhs.solve.m[i][j]), real=True)] for j in range(i + 1)] for i in range(n)]
+    f = [b.env[sp.Symbol(target_local(rhs.solve.f[i]), real=True)] for i in range(n)]
+    b._emit("comment", const="Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.")
+    d, low = _factor(b, m)
+    accelerations = _substitute(b, d, low, f)
+    multipliers = ()
+    if held:
+        accelerations, multipliers = _held_rows(b, closed, held, d, low, accelerations)
+    for i, v in enumerate(accelerations):
         derivative[rhs.solve.offset + i] = v
     b._emit("comment", const="The state's next coefficient: y[k + 1] = f[k]/(k + 1).")
     for i, v in enumerate(derivative):
@@ -480,13 +506,84 @@ def decompose(rhs: Kernel, n: int) -> TaylorProgram:
             b._emit("state", args=(v.series,), index=i)
     b.program.body = [op.renamed(b.renamed) for op in b.program.body]
     b.program.rows = [b.renamed.get(row, row) for row in b.program.rows]
+    series = [b.renamed.get(v.series, v.series) for v in multipliers if not v.is_const]
+    b.program.multipliers = tuple(dict.fromkeys(name for name in series if name in b.program.rows))
     b.program.periodic = periodic_coordinates(rhs, n)
+    if closed is not None:      # (the reduction to [−π, π] applies to every mode's program)
+        b.program.periodic = tuple(i for i in b.program.periodic if i in periodic_coordinates(closed, n))
     return b.program
+
+
+def _held_rows(b: _Builder, closed: Kernel, held: tuple[int, ...], d: list[Value], low: dict,
+               free: list[Value]) -> tuple[list[Value], list[Value]]:
+    """q̈ with the rows `held` of ``closed_contacts`` (closed contacts, sticking friction elements: G_A q̈ + b_A = 0)
+    held, from q̈_free `free` and the LDLᵀ factors (d, low) of M, in series arithmetic
+    (`lagcomp.kernel_support.resting.held_row_accelerations`, written out for one set of rows):
+
+        q̈ = q̈_free + M⁻¹ G_Aᵀ λ_A,    W_AA λ_A = −(G_A q̈_free + b_A),    W_AA = G_A M⁻¹ G_Aᵀ.
+
+    λ_A has either sign: a series cannot clip a pulling contact (as ``rhs``'s stages do), and needs not, since
+    a closed contact's event is its λ, located on the series where it turns negative (`ModePrograms`).  A W_AA
+    pivot that is not positive at order 0 returns `DEPENDENT_CLOSED_CONTACTS`, as ``rhs`` does.  Returns (q̈, λ_A).
+    """
+    n = len(free)
+    for local, source in closed.loads:
+        if sp.Symbol(local, real=True) not in b.env:
+            _load(b, local, source)
+    for name, expr in closed.temps:         # (renamed: the two kernels' temporaries share names)
+        b.env[sp.Symbol(name, real=True)] = b.bind(f"_h{name}", expr)
+    gradients = {r: [_c(0)] * n for r in held}
+    biases = {}
+    for target, expr in closed.stores:
+        array, index = target[:-1].split("[")
+        row = int(index.split(", ")[0])
+        if row not in gradients:
+            continue
+        if array == "_gradient":
+            j = int(index.split(", ")[1])
+            gradients[row][j] = b.bind(f"_g{row}_{j}", expr)
+        elif array == "_bias":
+            biases[row] = b.bind(f"_b{row}", expr)
+
+    def dot(u: list[Value], v: list[Value], start: Value) -> Value:
+        total = start
+        for ui, vi in zip(u, v, strict=True):
+            total = b.add(total, b.mul(ui, vi))
+        return total
+
+    b._emit("comment", const=f"Rows {list(held)} held: W λ = −(G q̈_free + b), W = G M⁻¹ Gᵀ; q̈ = q̈_free + M⁻¹ Gᵀ λ.")
+    columns = [_substitute(b, d, low, gradients[r], tag=f"h{r}_") for r in held]     # M⁻¹ G_aᵀ
+    delassus = [[dot(gradients[r], columns[c], _c(0)) for c in range(a + 1)] for a, r in enumerate(held)]
+    residual = [b.neg(dot(gradients[r], free, biases.get(r, _c(0)))) for r in held]
+    b._emit("comment", const=f"W's pivots: one not positive means dependent held rows (status "
+                             f"{DEPENDENT_CLOSED_CONTACTS}).")
+    dw, lw = _factor(b, delassus, tag="w", status=DEPENDENT_CLOSED_CONTACTS)
+    multipliers = _substitute(b, dw, lw, residual, tag="w")
+    accelerations = [b.name(dot([column[i] for column in columns], multipliers, free[i]), f"_a{i}") for i in range(n)]
+    return accelerations, multipliers
+
+
+#: The docstring of ``taylor_coefficients`` (lines).
+COEFFICIENTS_DOC = (
+    '"""Normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!, k = 0..order (order = X.shape[1] − 1),',
+    "of the solution through y at t; W is a work array of shape (TAYLOR_WORK, order + 1).",
+    "",
+    "One pass over the operations of `rhs` per order k (lagcomp.codegen.taylor gives the",
+    "recurrences); each block is commented with the statement of `rhs` it computes.",
+    'Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""',
+)
 
 
 def emit_taylor(program: TaylorProgram) -> str:
     """The source of ``taylor_coefficients``, ``TAYLOR_WORK`` and ``TAYLOR_PERIODIC`` for `program`."""
-    rows = (["_t"] if program.uses_t else []) + program.rows
+    return (_coefficients_function(program, "taylor_coefficients", COEFFICIENTS_DOC)
+            + _taylor_data(program.operation_count, len(program.rows) + program.uses_t, program.periodic))
+
+
+def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ...]) -> str:
+    """The source of the njit function `name`(t, y, p, X, W) that writes the coefficients of `program`."""
+    multipliers = list(program.multipliers)
+    rows = multipliers + (["_t"] if program.uses_t else []) + [row for row in program.rows if row not in multipliers]
     states = {s.name: s.index for s in program.setup if s.kind == "state"}
     array_of = {**{name: "W" for name in rows}, **{name: "X" for name in states}}
 
@@ -494,15 +591,7 @@ def emit_taylor(program: TaylorProgram) -> str:
         """Coefficient `index` of the series `name`: its row of X or W (indexing the 2-d arrays directly
         instead of through row views is 8% faster: no views to build and count references to)."""
         return f"{array_of[name]}[{name}, {index}]"
-    lines = [
-        '"""Normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!, k = 0..order (order = X.shape[1] − 1),',
-        "of the solution through y at t; W is a work array of shape (TAYLOR_WORK, order + 1).",
-        "",
-        "One pass over the operations of `rhs` per order k (lagcomp.codegen.taylor gives the",
-        "recurrences); each block is commented with the statement of `rhs` it computes.",
-        'Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""',
-        "order = X.shape[1] - 1",
-    ]
+    lines = [*doc, "order = X.shape[1] - 1"]
     for statement in program.setup:
         if statement.kind == "param":
             lines.append(f"{statement.name} = p[{statement.index}]")
@@ -533,31 +622,110 @@ def emit_taylor(program: TaylorProgram) -> str:
             summary, loop = convolution_loop(op, at)
             body = [f"# {summary}", *loop]
         lines += [INDENT + line for line in body]
-    lines.append("return 0")
+    lines.append(f"return {-len(multipliers)}" if multipliers else "return 0")
     body = "\n".join(INDENT + line if line else "" for line in lines)
+    return f'\n\n@njit(cache=True, error_model="numpy", fastmath={{"contract"}})\ndef {name}(t, y, p, X, W):\n{body}\n'
+
+
+def _taylor_data(operations: int, rows: int, periodic: tuple[int, ...]) -> str:
+    """``TAYLOR_WORK`` (`rows` of the work array, `operations` series operations per order) and
+    ``TAYLOR_PERIODIC``."""
     return (
-        '\n\n@njit(cache=True, error_model="numpy", fastmath={"contract"})\n'
-        "def taylor_coefficients(t, y, p, X, W):\n"
-        f"{body}\n\n\n"
-        f"#: Rows of the work array of `taylor_coefficients` ({program.operation_count} series operations "
+        "\n\n"
+        f"#: Rows of the work array of `taylor_coefficients` ({operations} series operations "
         "per order).\n"
-        f"TAYLOR_WORK = {max(len(rows), 1)}\n\n"
+        f"TAYLOR_WORK = {max(rows, 1)}\n\n"
         "#: The coordinates (state indices) the rhs sees only through sin and cos: taylor_run evaluates the\n"
         "#: series with them reduced to [−π, π] (lagcomp.codegen.periodic).\n"
-        f"TAYLOR_PERIODIC = np.array({list(program.periodic)}, dtype=np.int64)\n"
+        f"TAYLOR_PERIODIC = np.array({list(periodic)}, dtype=np.int64)\n"
     )
 
 
-def taylor_decomposition(ir: ModuleIR) -> TaylorProgram | Unsupported:
-    """The Taylor program of `ir`, or the `Unsupported` saying why it has none (computed once per module)."""
+def emit_mode_programs(modes: ModePrograms) -> str:
+    """``taylor_coefficients`` of a module with modes: one function per set of held rows, and
+    ``taylor_coefficients`` branching on the mode slots of p to the one of the current set; its data, with
+    ``TAYLOR_MODE_PROGRAMS``."""
+    solve = modes.modes
+    parts = []
+    for mask, program in enumerate(modes.programs):
+        held = modes.held(mask)
+        doc = (f'"""`taylor_coefficients` while the rows {list(held)} of closed_contacts are held (closed contacts,',
+               'sticking friction elements), the others not; returns as taylor_coefficients does."""')
+        parts.append(_coefficients_function(program, f"_taylor_held_{mask}", doc))
+    tests = [f"p[{solve.first + r}] != 0.0" for r in range(solve.count)]
+    tests += [f"p[{solve.friction_slot(f)}] == 0.0" for f in range(len(solve.frictions))]
+    lines = [*COEFFICIENTS_DOC[:-1],
+             "Branches on the modes in p to the program of the rows held now (bit r of _held: row r of",
+             "closed_contacts, a closed contact or a sticking friction element, is held).",
+             "Returns 0; −c when rows 0..c−1 of W hold the series (orders 0..order−1) of the held rows'",
+             "multipliers λ, whose steps taylor_run bounds as the state's (λ of a body at rest may vary",
+             "while the state does not); j > 0 when pivot j of the LDLᵀ factorization of M is not positive",
+             'at t, or DEPENDENT_CLOSED_CONTACTS (lagcomp.kernel_support.resting) when the held rows are dependent."""',
+             "_held = 0"]
+    for r, test in enumerate(tests):
+        lines += [f"if {test}:", f"{INDENT}_held += {1 << r}"]
+    for mask in range(len(modes.programs) - 1):
+        lines += [f"if _held == {mask}:", f"{INDENT}return _taylor_held_{mask}(t, y, p, X, W)"]
+    lines.append(f"return _taylor_held_{len(modes.programs) - 1}(t, y, p, X, W)")
+    body = "\n".join(INDENT + line if line else "" for line in lines)
+    parts.append(f'\n\n@njit(cache=True, error_model="numpy", fastmath={{"contract"}})\n'
+                 f"def taylor_coefficients(t, y, p, X, W):\n{body}\n")
+    operations = max(program.operation_count for program in modes.programs)
+    rows = max(len(program.rows) + program.uses_t for program in modes.programs)
+    periodic = tuple(sorted(set.intersection(*(set(program.periodic) for program in modes.programs))))
+    return "".join(parts) + _taylor_data(operations, rows, periodic) + (
+        "\n#: The programs `taylor_coefficients` branches to, one per set of held rows (lagcomp.codegen.taylor).\n"
+        f"TAYLOR_MODE_PROGRAMS = {len(modes.programs)}\n")
+
+
+#: The most programs one ``taylor_coefficients`` of a module with modes branches to (2^rows, rows its contacts and
+#: friction elements): beyond, its program is the motion with every row free, and its Taylor runs keep contacts
+#: open and refuse friction (`lagcomp.integrate.contacts`).
+MODE_PROGRAMS_MAX = 8
+
+
+@dataclass
+class ModePrograms:
+    """The Taylor programs of a module with modes (`lagcomp.ir.ContactModes` `modes`): ``programs[mask]`` holds the
+    rows r of ``closed_contacts`` with bit r of mask set (contacts first, then friction elements).
+
+    Each is the symbolic motion of its mode set (`_held_rows`); the drivers switch programs where ``event_reset``
+    switches modes.  Within a step a held contact's λ is not clipped at 0 as ``rhs``'s stages clip it: its event,
+    λ, is a function of the state on the series' dense output, whose sign change the drivers locate, and the
+    program of the next step has the contact open.  A step whose λ dips below 0 and back within it (between the
+    drivers' samples of its dense output) would miss that lift-off, as an embedded method misses a bounce that
+    short.
+    """
+
+    modes: ContactModes
+    programs: list[TaylorProgram]
+
+    def held(self, mask: int) -> tuple[int, ...]:
+        """The rows held by program `mask`."""
+        return tuple(r for r in range(self.modes.rows) if mask >> r & 1)
+
+
+def taylor_decomposition(ir: ModuleIR) -> TaylorProgram | ModePrograms | Unsupported:
+    """The Taylor program of `ir` (programs, with modes), or the `Unsupported` saying why it has none (computed
+    once per module)."""
     try:
         if ir.k:
             raise Unsupported("constraints (their multipliers are not covered)")
         if ir.input_names:
             raise Unsupported("inputs supplied at run time (their tables' Taylor coefficients are not emitted)")
-        # a module with contact modes: the motion without contacts (its runs keep them open)
-        free = "rhs_free" if any(kernel.name == "rhs_free" for kernel in ir.kernels) else "rhs"
-        return decompose(ir.kernel(free), ir.n)
+        if not any(kernel.name == "rhs_free" for kernel in ir.kernels):
+            return decompose(ir.kernel("rhs"), ir.n)
+        closed = ir.kernel("closed_contacts")
+        modes = closed.solve
+        # the motion without contacts (its runs keep them open, and refuse friction): beyond the bound, or with
+        # friction pressed by a contact, whose slip force is a column of the held rows (`lagcomp.kernel_support.
+        # resting`), not a term of rhs_free that the programs of the held rows would take
+        if 2 ** modes.rows > MODE_PROGRAMS_MAX or any(d >= 0 for d in modes.pressing):
+            return decompose(ir.kernel("rhs_free"), ir.n)
+        programs = ModePrograms(modes, [])
+        programs.programs = [decompose(ir.kernel("rhs_free"), ir.n, closed, programs.held(mask))
+                             for mask in range(2 ** modes.rows)]
+        return programs
     except Unsupported as err:
         return err
 
@@ -570,7 +738,7 @@ def taylor_program(taylor: TaylorProgram | Unsupported) -> dict | None:
     and ``body`` hold the fields of `Setup` and `Op`; ``states`` the series
     name of each state component, in order.
     """
-    if isinstance(taylor, Unsupported):
+    if isinstance(taylor, Unsupported | ModePrograms):     # (batched sweeps, variational: one program)
         return None
     states = [None] * taylor.n_state
     for statement in taylor.setup:
@@ -588,6 +756,8 @@ def taylor_source(taylor: TaylorProgram | Unsupported) -> str:
     """
     if isinstance(taylor, Unsupported):
         return f"\n\n#: Why this module has no Taylor integrator (method='taylor').\nTAYLOR_REFUSED = {str(taylor)!r}\n"
+    if isinstance(taylor, ModePrograms):
+        return emit_mode_programs(taylor)
     return emit_taylor(taylor)
 
 
@@ -595,5 +765,6 @@ def taylor_support_names(taylor: TaylorProgram | Unsupported) -> set[str]:
     """The `lagcomp.kernel_support` names ``taylor_coefficients`` calls (none without a program)."""
     if isinstance(taylor, Unsupported):
         return set()
-    checks = any(statement.kind == "check" for statement in taylor.setup)
-    return support_names({op.kind for op in taylor.body}, checks, lanes=False)
+    programs = taylor.programs if isinstance(taylor, ModePrograms) else [taylor]
+    checks = any(statement.kind == "check" for program in programs for statement in program.setup)
+    return support_names({op.kind for program in programs for op in program.body}, checks, lanes=False)

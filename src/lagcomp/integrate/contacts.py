@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lagcomp.codegen.taylor import MODE_PROGRAMS_MAX
 from lagcomp.errors import InitialConditionError, OptionError, ParameterError
 from lagcomp.integrate.methods import library_function
 from lagcomp.kernel_support.impacts import CLOSED_GAP
@@ -143,6 +144,13 @@ def mode_slot_count(kernels) -> int:
     return len(getattr(kernels, "CONTACTS", ())) + 1 + len(getattr(kernels, "FRICTIONS", ()))
 
 
+def integrates_modes(model, method) -> bool:
+    """Whether `method` integrates the model's modes (closed contacts, sticking friction): it integrates the
+    module's ``rhs``, which reads them, or it is the Taylor method and the module's ``taylor_coefficients`` branches
+    on them (``TAYLOR_MODE_PROGRAMS``: at most `lagcomp.codegen.taylor.MODE_PROGRAMS_MAX` mode sets)."""
+    return "rhs" in method.kernels or (method.name == "taylor" and hasattr(model.kernels, "TAYLOR_MODE_PROGRAMS"))
+
+
 def with_open_contacts(model, p: np.ndarray) -> np.ndarray:
     """`p` (or rows of it) with every contact open and closing not allowed: its ``event_values`` are the gaps."""
     slots = mode_slots(model)
@@ -158,17 +166,17 @@ def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, r
                       where=lambda row: "") -> None:
     """Write into each row of P (rows, *) the contacts' modes at the start and whether impacts may close them.
 
-    Impacts may close a contact when `method` integrates the module's ``rhs`` (which reads the modes); the
-    Taylor method's program is the motion without contacts, so its runs keep every contact open, and refuse to
-    start with one closed (`OptionError`).  A contact starts closed when it is at rest on its zero (`resting`
-    (rows, C), from `check_contacts`) and its normal force with those contacts closed is positive: the ones whose
-    force would pull are opened, one pass per contact at most, until the forces of the rest all push.
+    Impacts may close a contact when `method` integrates the modes (`integrates_modes`); a Taylor program that is
+    the motion without contacts (a module with more mode sets than the Taylor method's bound) keeps every contact
+    open, and refuses to start with one closed (`OptionError`).  A contact starts closed when it is at rest on its
+    zero (`resting` (rows, C), from `check_contacts`) and its normal force with those contacts closed is positive:
+    the ones whose force would pull are opened, one pass per contact at most, until the forces of the rest all push.
     """
     slots = mode_slots(model)
     if slots is None:
         return
     first, count = slots
-    closing = 1.0 if "rhs" in method.kernels else 0.0
+    closing = 1.0 if integrates_modes(model, method) else 0.0
     P[:, first:first + count] = 0.0
     P[:, first + count] = closing
     _set_friction_modes(model, method, t0, Y0, P, where)
@@ -193,7 +201,8 @@ def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, r
 
             names = [name for (name, _, _), closed in zip(contacts_of(model), candidates, strict=True) if closed]
             raise OptionError(f"Contact(s) {names}{where(row)} start closed (touching, at rest, pressed shut), which "
-                              f"`{method.name}` cannot integrate: its program is the motion without contacts. Use "
+                              f"`{method.name}` cannot integrate: its program is the motion without contacts (more "
+                              f"than {MODE_PROGRAMS_MAX} mode sets, or friction pressed by a contact). Use "
                               f"{method_names(lambda m: 'rhs' in m.kernels and 'event_reset' in m.kernels)}.")
 
 
@@ -203,18 +212,19 @@ def _set_friction_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray,
     v ≠ 0 (beyond `CLOSED_GAP` Σ_j |∂v/∂q̇_j| (|q̇_j| + 1), the contacts' scale of rest): slip with s = sign v.
     v ≈ 0: stick when the force that holds it is within μs |N| (the elements at rest tried together; the one most
     beyond its limit slips, one pass per element at most), else slip against that force (toward the free motion).
-    Refuses (`OptionError`) methods that do not integrate the module's ``rhs``: the Taylor program has no rows for
-    a sticking element (its runs would be silently wrong at the first stick).
+    Refuses (`OptionError`) methods that do not integrate the modes (`integrates_modes`): a Taylor program beyond
+    the bound on mode sets has no rows for a sticking element (its runs would be silently wrong at the first stick).
     """
     frictions = frictions_of(model)
     if not frictions:
         return
-    if "rhs" not in method.kernels or "event_reset" not in method.kernels:
+    if not integrates_modes(model, method) or "event_reset" not in method.kernels:
         from lagcomp.integrate.options import method_names  # (it imports this module)
 
         raise OptionError(f"Friction element(s) {[f[0] for f in frictions]} of {model.name!r} stick and slip, which "
-                          f"`{method.name}` cannot integrate (its program has no rows for a sticking element). Use "
-                          f"{method_names(lambda m: 'rhs' in m.kernels and 'event_reset' in m.kernels)}.")
+                          f"`{method.name}` cannot integrate (its program has no rows for a sticking element: more "
+                          f"than {MODE_PROGRAMS_MAX} mode sets, or friction pressed by a contact). Use "
+                          f"{method_names(lambda m: integrates_modes(model, m) and 'event_reset' in m.kernels)}.")
     _check_coefficients(model, frictions, P, where)
     n, slots = model.n, np.array([slot for _, _, slot, _, _ in frictions])
     events = [event for _, event, _, _, _ in frictions]

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lagcomp.errors import OptionError
-from lagcomp.integrate.contacts import contacts_of, frictions_of
+from lagcomp.integrate.contacts import contacts_of, frictions_of, integrates_modes
 from lagcomp.integrate.dae import DAE_RTOL_MIN
 from lagcomp.integrate.drivers.events import (
     ACTION_IGNORE,
@@ -129,7 +129,7 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     inherent = [name for name, *_ in contacts_of(model) + frictions_of(model)]
     if inherent and "event_reset" not in m.kernels:
         capable = method_names(lambda m: "event_reset" in m.kernels
-                               and not (m.name == "taylor" and frictions_of(model)))
+                               and (integrates_modes(model, m) or not frictions_of(model)))
         raise OptionError(f"The contacts and friction elements {inherent} of {model.name!r} switch and jump within "
                           f"its motion, which `{m.name}` cannot do; use {capable}.")
     left_out = [name for name in inherent if name not in chosen]

@@ -68,7 +68,8 @@ MOMENTUM_RATE = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
 CANONICAL_PARTIALS = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, types.float64[:, :, ::1]))
 #: ``taylor_coefficients(t, y, p, X, W) -> int``: the normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!,
 #: k = 0..order (order = X.shape[1] − 1, any), of the solution through y at t; W (rows, order + 1) is work
-#: space of the model's ``TAYLOR_WORK`` rows.  0, or j > 0 when pivot j of M is not positive at t.
+#: space of the model's ``TAYLOR_WORK`` rows.  0; −c when rows 0..c−1 of W hold held rows' multipliers (modes:
+#: `lagcomp.codegen.taylor.ModePrograms`); or j > 0 when pivot j of M is not positive at t.
 TAYLOR = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, MATRIX, MATRIX))
 #: ``taylor_lanes(T, Y, P, X)``: the batched Taylor kernel of one order over L lanes (flat arrays, lane
 #: last; `lagcomp.codegen.taylor_lanes` gives the layout): every lane's coefficients, norms and pivot test.

@@ -91,6 +91,24 @@ from lagcomp.integrate.drivers.sweep_rows import (
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.angles import reduced_angle
 
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def multiplier_radius(W, rows, order, rtol, atol):
+    """The step rule's ρ for the series of the held rows' multipliers λ in rows 0..rows−1 of W (orders 0..order−1:
+    ``taylor_coefficients`` returned −rows), from their last two coefficients as for the state.  A body held at rest
+    has a state series that vanishes beyond order 0 while λ varies (a pull growing past its weight): without this
+    the step would span the lift-off, λ positive at both its ends (`lagcomp.codegen.taylor.ModePrograms`)."""
+    norm = 0.0
+    norm_last = 0.0
+    norm_before = 0.0
+    for r in range(rows):
+        norm = max(norm, abs(W[r, 0]))
+        norm_last = max(norm_last, abs(W[r, order - 1]))
+        norm_before = max(norm_before, abs(W[r, order - 2]))
+    scale = 1.0 if rtol * norm <= atol else norm
+    return min((scale / norm_last) ** (1.0 / (order - 1)), (scale / norm_before) ** (1.0 / (order - 2)))
+
+
 #: taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_rows, y, clock, counters, p, projecting,
 #: residual_max, t_end, rtol, atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys, directions,
 #: actions, ev_t, ev_y, ev_i, ev_y_after, at_zero, carry)
@@ -177,7 +195,7 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
             y_series[i] = reduced_angle(y[i], compensation[i])
         status = taylor_coefficients(t, y_series, p, X, W)
         counters[NFEV] += 1
-        if status != 0:
+        if status > 0:
             return Status.RHS_FAILED, n_saved
         for i in periodic:
             X[i, 0] = y[i]                      # the dense output's constant term: y itself
@@ -194,6 +212,8 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
             return Status.NONFINITE, n_saved
         scale = 1.0 if rtol * norm_y <= atol else norm_y
         rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
+        if status < 0 and order > 2:
+            rho = min(rho, multiplier_radius(W, -status, order, rtol, atol))
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         # inf when both coefficients vanish; after a reset at most the step cut at it, and at least min_step (the
         # event may have been at the very start of that step)
