@@ -191,3 +191,31 @@ def test_taylor_refuses_friction_pressed_by_a_contact(block_on_floor):
     held-row system, not in rhs_free): refused, not integrated as if the floor had no friction."""
     with pytest.raises(OptionError, match="pressed by a contact"):
         block_on_floor.simulate((0.0, 1.0), [0.0, 1.0], [1.0, 0.0], params={"c": 0.0}, method="taylor")
+
+
+@pytest.fixture(scope="module")
+def leaning_wall(tmp_path_factory):
+    x, y = lc.coordinates("x y")
+    g, k = sp.symbols("g k", positive=True)
+    system = lc.System([x, y], T=(x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=g * y,
+                       events=[lc.Contact("floor", y, restitution=0.0),
+                               lc.Contact("wall", 1 - x - k * y, restitution=0.5),
+                               lc.Friction("ground", x.diff(t), normal="floor", static=0.2, kinetic=0.2)],
+                       name="contact_friction_leaning_wall", defaults={"g": G, "k": 0.0})
+    return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+def test_an_impact_that_pushes_a_sliding_pressed_contact_stops_the_run(leaning_wall):
+    """A point sliding on a frictional floor (μ = 0.2) into the wall 1 − x − k y ≥ 0.  Upright (k = 0) the wall's
+    impulse is horizontal, the floor takes none, and the frictionless impact is exact: it leaves at −e times its
+    arrival speed v_w = √(v0² − 2 μ g).  Leaning over the floor (k > 0) the wall pushes the point into the floor,
+    which pushes back while the point slides: Coulomb's tangential impulse there is not solved, so the run stops
+    at the impact (RESET_FAILED), with the state just before it, instead of leaving friction out."""
+    v0 = 3.0
+    v_w = np.sqrt(v0**2 - 2 * 0.2 * G)
+    upright = leaning_wall.simulate((0.0, 0.5), [0.0, 0.0], [v0, 0.0], rtol=1e-12, atol=1e-12)
+    assert upright.status == Status.DONE, upright.message
+    np.testing.assert_allclose(upright.events["wall"].qd_after[0], [-0.5 * v_w, 0.0], rtol=1e-10, atol=1e-12)
+    leaning = leaning_wall.simulate((0.0, 0.5), [0.0, 0.0], [v0, 0.0], params={"k": 0.5}, rtol=1e-12, atol=1e-12)
+    assert leaning.status == Status.RESET_FAILED and "friction" in leaning.message
+    assert leaning.qd[-1, 0] == pytest.approx(v_w, rel=1e-10)

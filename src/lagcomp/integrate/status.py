@@ -74,7 +74,9 @@ _MESSAGES = {
                                       "J, or constraints that are dependent here): check the model near this "
                                       "state, or use an explicit method (dop853).",
     Status.RESET_FAILED: "An event's reset gave a non-finite state (or could not be computed): the run stopped at the "
-                         "event, with the state just before it (check the reset's expressions at that state).",
+                         "event, with the state just before it (check the reset's expressions at that state; for "
+                         "contacts: dependent contacts, or simultaneous impacts that push a contact pressing a "
+                         "sliding friction element, whose tangential impulses lagcomp does not solve yet).",
     Status.EVENTS_ACCUMULATED: "An event with a reset fired again within the smallest step after its last reset: "
                                "its occurrences accumulate here (a Zeno point, like a bouncing ball's bounces "
                                "coming to rest); the run stopped at it. Stop the run before, or model the rest "

@@ -49,6 +49,9 @@ IMPACT_DEPENDENT_CONTACTS = -1
 IMPACT_NOT_SETTLED = -2
 #: M is not positive definite.
 IMPACT_SINGULAR_MASS = -3
+#: Simultaneous impacts gave a normal impulse to a contact that presses a sliding friction element: the tangential
+#: impulse Coulomb's law would add there is not solved (`lagcomp.kernel_support.resting.pressed_contact_event`).
+IMPACT_FRICTION_UNSOLVED = -4
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)

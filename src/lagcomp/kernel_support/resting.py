@@ -45,6 +45,7 @@ from numba import njit
 
 from lagcomp.kernel_support.impacts import (
     CLOSED_GAP,
+    IMPACT_FRICTION_UNSOLVED,
     IMPACT_SOLVED,
     contact_impacts,
     frictional_impact,
@@ -356,6 +357,57 @@ def slip_most_overloaded(forces, limits, frictions):
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
+def _friction_left_out(mass, gaps, gradients, q, before, after, firing, modes, pressing, slip_gradients,
+                       slip_offsets):
+    """Whether the frictionless impact that took the velocities from ``before`` to ``after`` (n) gave a normal
+    impulse to a contact that presses a friction element sliding before or after it (v beyond the scale of rest
+    `CLOSED_GAP` Σ_j |a_j| (|q̇_j| + 1)), where Coulomb's law would have added a tangential impulse.  The impulses
+    of the contacts that took part (the firing one, the closed and the touching ones, set A) from the jump:
+    M Δq̇ = G_Aᵀ P, so W_AA P = G_A Δq̇, W = G M⁻¹ Gᵀ; a P_d above 1e-10 of the largest counts.  True too when
+    W_AA is singular (the impulses cannot be told apart)."""
+    n, count = q.shape[0], gaps.shape[0]
+    involved = np.zeros(count, dtype=np.bool_)
+    for d in range(count):
+        scale = 0.0
+        for j in range(n):
+            scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
+        involved[d] = d == firing or modes[d] != 0.0 or gaps[d] <= CLOSED_GAP * scale
+    minv_gt = np.zeros((n, count))
+    for d in range(count):
+        if involved[d]:
+            for j in range(n):
+                minv_gt[j, d] = gradients[d, j]
+    if ldlt_solve_matrix(mass.copy(), minv_gt) != 0:
+        return True
+    delassus = np.zeros((count, count))
+    jump = np.zeros(count)                  # −G Δq̇: solve_on_set gives P = −W⁻¹ (−G Δq̇)
+    for a in range(count):
+        for j in range(n):
+            jump[a] -= gradients[a, j] * (after[j] - before[j])
+        for b in range(count):
+            for j in range(n):
+                delassus[a, b] += gradients[a, j] * minv_gt[j, b]
+    impulses = np.zeros(count)
+    if not solve_on_set(delassus, jump, involved, impulses):
+        return True
+    largest = 0.0
+    for d in range(count):
+        largest = max(largest, abs(impulses[d]))
+    for f in range(pressing.shape[0]):
+        d = pressing[f]
+        if d < 0 or not involved[d] or not impulses[d] > 1e-10 * largest:
+            continue
+        rest, v_before, v_after = 0.0, slip_offsets[f], slip_offsets[f]
+        for j in range(n):
+            rest += abs(slip_gradients[f, j]) * (abs(after[j]) + 1.0)
+            v_before += slip_gradients[f, j] * before[j]
+            v_after += slip_gradients[f, j] * after[j]
+        if abs(v_before) > CLOSED_GAP * rest or abs(v_after) > CLOSED_GAP * rest:
+            return True
+    return False
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
 def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes,
                           closing, qd, slip_gradients, slip_offsets, pressing, static, kinetic):
     """`contact_event` where friction elements are pressed by contacts (``pressing`` (F,): the contact's index or
@@ -365,8 +417,10 @@ def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution,
     touching), is frictional: `lagcomp.kernel_support.impacts.frictional_impact` (Newton on the normal, the
     tangential impulse within μ P_n), with the Zeno closing of `contact_event` (done again with e = 0, the
     contact closed, when the bounces left would end within `ZENO_TIME` or the next last less than
-    `BOUNCE_TIME`).  Every other event is `contact_event`'s, frictionless: simultaneous impacts with friction are
-    not solved (their tangential impulses would need a complementarity problem of their own)."""
+    `BOUNCE_TIME`).  Every other event is `contact_event`'s, frictionless, which is right as long as no contact
+    that presses a sliding element takes a normal impulse (a block sliding on a floor into a smooth wall: the floor
+    takes none); otherwise (`_friction_left_out`) the tangential impulses would need a complementarity problem of
+    their own, not solved yet: `IMPACT_FRICTION_UNSOLVED`, and the run stops at the impact (RESET_FAILED)."""
     if modes[firing] != 0.0:
         modes[firing] = 0.0
         return IMPACT_SOLVED
@@ -382,10 +436,14 @@ def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution,
             scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
         if d != firing and (modes[d] != 0.0 or gaps[d] <= CLOSED_GAP * scale):
             alone = False
-    if not alone:
-        return contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing,
-                             modes, closing, qd)
     before = qd.copy()
+    if not alone:
+        status = contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing,
+                               modes, closing, qd)
+        if status == IMPACT_SOLVED and _friction_left_out(mass, gaps, gradients, q, before, qd, firing, modes,
+                                                          pressing, slip_gradients, slip_offsets):
+            return IMPACT_FRICTION_UNSOLVED
+        return status
     slip_velocity = slip_offsets[element]
     for j in range(n):
         slip_velocity += slip_gradients[element, j] * qd[j]
