@@ -177,6 +177,17 @@ CLOSED_GAP = 1e-12
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
+def touching(gap, gradients, row, q):
+    """Whether a contact of gap `gap` and gradient ``gradients[row]`` (∂g/∂q) counts as touching at q:
+    g ≤ `CLOSED_GAP` Σ_j |∂g/∂q_j| (|q_j| + 1), the one test of the impact solver, the resting contacts and the
+    impulses read from a jump (`lagcomp.integrate.contacts.touching` is the same sum as a matrix product)."""
+    scale = 0.0
+    for j in range(q.shape[0]):
+        scale += abs(gradients[row, j]) * (abs(q[j]) + 1.0)
+    return gap <= CLOSED_GAP * scale
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
 def contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd):
     """The impact of contact ``firing`` (its gap just closed) and of every other contact closed with it.
 
@@ -187,10 +198,7 @@ def contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, fi
     n = q.shape[0]
     taking = np.zeros(gaps.shape[0], dtype=np.bool_)
     for d in range(gaps.shape[0]):
-        scale = 0.0
-        for j in range(n):
-            scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
-        taking[d] = d == firing or gaps[d] <= CLOSED_GAP * scale
+        taking[d] = d == firing or touching(gaps[d], gradients, d, q)
     c = 0
     for d in range(gaps.shape[0]):
         if taking[d]:

@@ -50,6 +50,7 @@ from lagcomp.kernel_support.impacts import (
     contact_impacts,
     frictional_impact,
     solve_on_set,
+    touching,
 )
 from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix, lu_solve
 
@@ -277,10 +278,7 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
     for d in range(count):
         if modes[d] != 0.0:
             continue
-        scale = 0.0
-        for j in range(n):
-            scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
-        if d != firing and gaps[d] > CLOSED_GAP * scale:
+        if d != firing and not touching(gaps[d], gradients, d, q):
             continue
         pressing = bias[d]
         v_after = normal_velocities[d]
@@ -368,10 +366,7 @@ def _friction_left_out(mass, gaps, gradients, q, before, after, firing, modes, p
     n, count = q.shape[0], gaps.shape[0]
     involved = np.zeros(count, dtype=np.bool_)
     for d in range(count):
-        scale = 0.0
-        for j in range(n):
-            scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
-        involved[d] = d == firing or modes[d] != 0.0 or gaps[d] <= CLOSED_GAP * scale
+        involved[d] = d == firing or modes[d] != 0.0 or touching(gaps[d], gradients, d, q)
     minv_gt = np.zeros((n, count))
     for d in range(count):
         if involved[d]:
@@ -431,10 +426,7 @@ def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution,
             element = f
     alone = element >= 0
     for d in range(gaps.shape[0]):
-        scale = 0.0
-        for j in range(n):
-            scale += abs(gradients[d, j]) * (abs(q[j]) + 1.0)
-        if d != firing and (modes[d] != 0.0 or gaps[d] <= CLOSED_GAP * scale):
+        if d != firing and (modes[d] != 0.0 or touching(gaps[d], gradients, d, q)):
             alone = False
     before = qd.copy()
     if not alone:

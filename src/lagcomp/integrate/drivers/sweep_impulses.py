@@ -23,7 +23,7 @@ from lagcomp.integrate.drivers.kernel_types import (
     MATRIX,
     VECTOR,
 )
-from lagcomp.kernel_support.impacts import CLOSED_GAP
+from lagcomp.kernel_support.impacts import touching
 
 #: contact_impulses(mass_matrix, event_values, event_gradients, contact_events, firing, n, P, count, times,
 #: before, after, mass, values, gradients, out)
@@ -53,10 +53,8 @@ def contact_impulses(mass_matrix, event_values, event_gradients, contact_events,
             closed = np.empty(c_all, dtype=np.bool_)
             m = 0
             for a in range(c_all):
-                scale = 0.0
-                for j in range(n):
-                    scale += abs(gradients[contact_events[a], j]) * (abs(y[j]) + 1.0)
-                closed[a] = contact_events[a] == firing or values[contact_events[a]] <= CLOSED_GAP * scale
+                event = contact_events[a]
+                closed[a] = event == firing or touching(values[event], gradients, event, y[:n])
                 m += closed[a]
             transposed = np.empty((n, m))
             column = 0
