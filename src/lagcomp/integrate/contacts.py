@@ -316,9 +316,10 @@ def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, s
     slot_of = mode_slot_of(model)
     frictions = frictions_of(model)
     sticking = np.array([slot for _, _, slot, _, _ in frictions], dtype=np.int64)
-    kinetic_over_static = np.array([_coefficient(model, p, mu_k) / _coefficient(model, p, mu_s)
-                                    if _coefficient(model, p, mu_s) > 0.0 else 0.0
-                                    for _, _, _, mu_s, mu_k in frictions])
+    coefficients = np.array([(_coefficient(model, p, mu_s), _coefficient(model, p, mu_k))
+                             for _, _, _, mu_s, mu_k in frictions]).reshape(-1, 2)
+    static = coefficients[:, 0]
+    kinetic_over_static = np.divide(coefficients[:, 1], static, out=np.zeros_like(static), where=static > 0.0)
     work, out = p.copy(), np.zeros((ts.shape[0], count + sticking.size))
     limits = np.empty(sticking.size)
     k = 0
