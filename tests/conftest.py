@@ -1,12 +1,14 @@
 """Shared fixtures: one cache directory per test run, compiled models shared across tests.
 
 numba compilation dominates the test time, so every model is compiled once
-per session (and its numba machine code is cached in the per-run directory).
+per session (and its numba machine code is cached in the per-run directory,
+which pytest-xdist's workers share).
 """
 
 from __future__ import annotations
 
 import gc
+import os
 import warnings
 
 import numpy as np
@@ -18,6 +20,13 @@ from lagcomp import examples
 
 @pytest.fixture(scope="session")
 def cache_dir(tmp_path_factory):
+    """The run's cache directory.  Under pytest-xdist (the default: ``-n auto`` in pyproject.toml) one directory
+    for all workers, in the run's shared temporary root, so that a model one worker compiled the others load
+    (the cache is safe for processes compiling at once: tests/test_cache_faults.py)."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        shared = tmp_path_factory.getbasetemp().parent / "lagcomp-cache"
+        shared.mkdir(exist_ok=True)
+        return shared
     return tmp_path_factory.mktemp("lagcomp-cache")
 
 

@@ -4,14 +4,12 @@ momenta from gathered arrays)."""
 import numpy as np
 import pytest
 
-import lagcomp as lc
-from lagcomp import examples
 from lagcomp.codegen.lower import UNROLL_MAX
 
 
 @pytest.mark.parametrize("n", [UNROLL_MAX, UNROLL_MAX + 1])
-def test_kernels_agree_with_mass_matrix_and_forcing(cache_dir, n):
-    model = lc.compile(examples.n_link_pendulum(n), cache_dir=cache_dir)
+def test_kernels_agree_with_mass_matrix_and_forcing(compiled, n):
+    model = compiled("n_link_pendulum", n=n)
     k = model.kernels
     rng = np.random.default_rng(8)
     for _ in range(3):
@@ -29,3 +27,14 @@ def test_kernels_agree_with_mass_matrix_and_forcing(cache_dir, n):
         assert k.velocities(0.0, np.concatenate([y[:n], momenta]), p, velocities) == 0
         np.testing.assert_allclose(velocities, y[n:], rtol=1e-9, atol=1e-12)
         assert k.energy_function(0.0, y, p) == k.energy(0.0, y, p)  # h = T + V: the same kernel
+
+
+def test_looped_solve_for_large_systems_matches_numpy(compiled, rng):
+    n = UNROLL_MAX + 1     # the smallest looped solve: the model above, compiled once
+    model = compiled("n_link_pendulum", n=n)
+    assert "return ldlt_solve(mm, ff, out, " in model.source_path.read_text()
+    for _ in range(5):
+        q, qd = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n)
+        qdd = model.rhs(0.0, np.concatenate([q, qd]))[n:]
+        expected = np.linalg.solve(model.mass_matrix(q), model.forcing(q, qd))
+        np.testing.assert_allclose(qdd, expected, rtol=1e-10, atol=1e-10)
