@@ -199,8 +199,14 @@ def initial_state(y0: np.ndarray, cols: Columns, scale: float) -> np.ndarray:
     return augmented
 
 
-def run_parameters(p: np.ndarray, model, cols: Columns) -> np.ndarray:
-    """p followed by the work space `augmented_rhs` writes J and ∂f/∂p into (see `work_size`)."""
+def run_parameters(p: np.ndarray, model, cols: Columns, scale: float = 1.0) -> np.ndarray:
+    """p followed by the work space of the run's rhs: for one column through a tangent kernel (`tangent_kernel`),
+    the direction w (P,) of ``rhs_tangent_parameters`` (`scale` e_j for parameter j's column, else 0); else the
+    floats `augmented_rhs` writes J and ∂f/∂p into (see `work_size`)."""
+    if tangent_kernel(model.kernels, cols) is not None:
+        direction = np.zeros(len(model.parameters))
+        direction[list(cols.parameters)] = scale
+        return np.concatenate([p, direction])
     return np.concatenate([p, np.zeros(work_size(model.state_size, len(model.parameters), cols))])
 
 
@@ -244,15 +250,31 @@ def run_kernels(model, method, cols: Columns, scale: float):
     return sensitivity_kernels(model.kernels, model.state_size, len(model.parameters), cols, scale)
 
 
+def tangent_kernel(module, cols: Columns):
+    """The kernel of `module` that is the whole augmented rhs of the one column of `cols`, or None: for one
+    column on the directional path (`DIRECTIONAL_MAX_COLUMNS`), ``rhs_tangent`` (an initial-state column) or
+    ``rhs_tangent_parameters`` (a parameter's, its direction at the end of p: `run_parameters`), which the
+    driver calls itself.  A closure over ``rhs_directional`` cost twice as much per call, measured on the double
+    pendulum through the drivers' function type: 104 ns against 54 (65 with a parameter's), ``rhs`` 37; its
+    views of y and out, its loop over columns, the seven arrays of each call (see
+    `lagcomp.codegen.directional.tangent_kernels`)."""
+    if cols.k != 1 or DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)] < 1 or not hasattr(module, "rhs_tangent"):
+        return None  # (Kane modules, and modules generated before the tangent kernels, have none)
+    return module.rhs_tangent_parameters if cols.parameters else module.rhs_tangent
+
+
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
     """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (its closure compiled at
-    first use)."""
+    first use; none for one column: `tangent_kernel`)."""
     directional = (cols.k <= DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)]
                    and hasattr(module, "rhs_directional"))  # (Kane modules have none)
-    key = (module, n, cols.parameters, scale, directional)  # (the initial-state columns: as y's size says)
+    tangent = tangent_kernel(module, cols)
+    key = (module, n, cols.parameters, scale, directional, tangent is not None)  # (initial-state columns: y's size)
     with _LOCK:
         if key not in _AUGMENTED:
-            if directional:
+            if tangent is not None:
+                rhs = tangent
+            elif directional:
                 rhs = directional_rhs(module.rhs_directional, n, n_parameters, cols.parameters, scale)
             elif cols.parameters and hasattr(module, "rhs_with_full_jacobian"):
                 rhs = full_jacobian_rhs(module.rhs_with_full_jacobian, n, n_parameters, cols.parameters, scale)
