@@ -12,9 +12,12 @@ N (1 + k) components with the library's embedded Runge-Kutta driver (dop853, dop
 takes as its ``rhs`` a small numba function evaluating f and J S: a closure over the model's kernels,
 compiled at the first run that needs it and kept for the process (`_AUGMENTED`), as
 `lagcomp.integrate.function_inputs` does for its wrappers.  The model's kernels and the driver are not
-compiled again.  For one column (two with a parameter's: `DIRECTIONAL_MAX_COLUMNS`, measured) it calls the
-emitted ``rhs_directional`` once per column (`directional_rhs`: f and J S[:, c] + ∂f/∂p w_c from one CSE, at
-about the cost of ``rhs`` and a substitution; `lagcomp.codegen.directional`); for more, the full Jacobians
+compiled again.  One column's rhs is no closure but the module's tangent kernel (`tangent_kernel`:
+``rhs_tangent``, or ``rhs_tangent_parameters`` with the parameters' direction at the end of p), ``rhs_directional``'s
+CSE reading (y, S) and writing (f, J S + ∂f/∂p w) itself, which the driver calls as it calls ``rhs``.  For two
+with a parameter's (`DIRECTIONAL_MAX_COLUMNS`, measured) it calls the emitted ``rhs_directional`` once per column
+(`directional_rhs`: f and J S[:, c] + ∂f/∂p w_c from one CSE, at about the cost of ``rhs`` and a substitution;
+`lagcomp.codegen.directional`); for more, the full Jacobians
 (`augmented_rhs`, `full_jacobian_rhs`), J (N, N) and ∂f/∂p (N, P) written into work space at the end of the
 run's p (the kernels read p only up to their parameters and input tables): a call allocates only what the
 kernels do (the factor of M in their LDLᵀ).  Kane modules and systems larger than
