@@ -163,12 +163,12 @@ def call_costs(times: int = 200_000, repeats: int = 5, cache_dir=None) -> list[d
                 cols = sens.columns(model, requested)
                 augmented = sens.initial_state(y, cols, 1.0)
                 augmented[n:] += np.linspace(-0.3, 0.4, augmented.size - n)
-                p_run = sens.run_parameters(p, model, cols)
                 row = dict(model=model.name, k=cols.k, parameter=with_parameter, rhs=rhs_ns)
                 for path, limit in PATHS:
                     kept, sens.DIRECTIONAL_MAX_COLUMNS = sens.DIRECTIONAL_MAX_COLUMNS, limit
-                    try:
+                    try:  # (each path's work space at the end of p: the tangent kernel's direction, or J's floats)
                         kernels = sens.sensitivity_kernels(model.kernels, n, len(model.parameters), cols, 1.0)
+                        p_run = sens.run_parameters(p, model, cols)
                     finally:
                         sens.DIRECTIONAL_MAX_COLUMNS = kept
                     row[path] = cost(kernels.rhs, augmented, p_run, np.empty(augmented.size))
