@@ -20,6 +20,12 @@ first n entries of dz the accelerations' derivative.  f and the direction come f
 sines, cosines and products of M, F (K, γ̃) serve both, and an unconstrained M is factored once for both
 (`lagcomp.ir.DirectionalSolve`): a call costs about one ``rhs`` and one substitution.  f agrees with ``rhs``'s,
 and the derivative with the full Jacobians' product, to rounding (other orders of the same sums).
+
+The tangent kernels (`tangent_kernels`) are the same CSE with other arrays: ``rhs_tangent(t, y, p, out)`` reads
+the direction v from y = (x, v) and writes (f, J v) into out (2N,), w's terms dropped, and
+``rhs_tangent_parameters`` reads w from the end of p too.  They have ``rhs``'s signature, so that a run of one
+sensitivity column passes the kernel itself to the driver, which calls it as it calls ``rhs``: no closure
+between them, whose views of y and out and seven array arguments per call cost as much as the kernel.
 """
 
 from __future__ import annotations

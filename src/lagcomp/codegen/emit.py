@@ -330,9 +330,10 @@ def _augmented_jacobian_frame(solve: AugmentedJacobianSolve) -> tuple[list[str],
 
 
 def _directional_body(kernel: Kernel) -> list[str]:
-    """The body of ``rhs_directional`` (`lagcomp.ir.DirectionalSolve`): what needs no acceleration, the solve for
-    f, then the loads of the solved values, the temporaries that read them, the direction's stores and its
-    substitution.  A temporary reads them when its expression names a solved local or such a temporary."""
+    """The body of ``rhs_directional`` and its tangent kernels (`lagcomp.ir.DirectionalSolve`): what needs no
+    acceleration, the solve for f, then the loads of the solved values, the temporaries that read them, the
+    direction's stores and its substitution.  A temporary reads them when its expression names a solved local or
+    such a temporary."""
     solve = kernel.solve
     n, late = solve.n, set(solve.solved)
     temps = {True: [], False: []}
