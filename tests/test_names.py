@@ -297,7 +297,8 @@ def test_the_parameter_jacobian_under_every_emitted_name(many_names):
 def test_the_directional_and_full_jacobian_kernels_under_every_emitted_name(many_names):
     """``rhs_directional``, its tangent kernels and ``rhs_with_full_jacobian`` (the sensitivities' kernels, whose
     locals ``_dy<i>``, ``_dp<j>``, ``_g<i>`` and arguments ``v``, ``w`` are among the names) under the ~670 colliding
-    names, against the closed form of c̈_j = −κ_j c_j/m_j, κ_j the sum of group j.  Plain Python, as the parameter Jacobian's."""
+    names, against the closed form of c̈_j = −κ_j c_j/m_j, κ_j the sum of group j.  Plain Python, as the parameter
+    Jacobian's."""
     from random_systems import python_kernels
 
     model, spec = many_names
