@@ -144,35 +144,3 @@ def test_augmented_solver_matches_numpy(rng, singular_mass):
     redundant = np.hstack([np.block([[M, -np.vstack([C[0], C[0]]).T], [np.vstack([C[0], C[0]]), np.zeros((k, k))]]),
                            rhs[:, None]])
     assert kkt_solve(redundant, n) > 0
-
-
-@pytest.mark.parametrize("singular_mass", [False, True])
-def test_augmented_factors_solve_as_kkt_solve(rng, singular_mass):
-    """``kkt_factor`` once, then ``kkt_substitute`` for one right-hand side after another (the constrained
-    ``rhs_directional``): ``kkt_solve``'s solution, bitwise on its Schur path (M positive definite), to rounding on
-    its LU path (M singular); a left as it was; a redundant constraint's zero pivot as a status."""
-    from lagcomp.kernel_support.linear_solvers import kkt_factor, kkt_solve, kkt_substitute
-
-    n, k = 5, 3
-    for _ in range(20):
-        B = rng.normal(size=(n, n))
-        M = B @ B.T + 0.1 * np.eye(n)
-        if singular_mass:
-            M[:, -1] = M[-1, :] = 0.0
-        C = rng.normal(size=(k, n))
-        packed = np.hstack([np.block([[M, -C.T], [C, np.zeros((k, k))]]), rng.normal(size=(n + k, 1))])
-        kept = packed.copy()
-        factors, pivots = np.full((n + k, n + k + 1), np.nan), np.zeros(n + k, dtype=np.int64)
-        assert kkt_factor(packed, n, factors, pivots) == 0 and np.array_equal(packed, kept)
-        assert (pivots[0] >= 0) == singular_mass
-        for rhs in (packed[:, -1].copy(), rng.normal(size=n + k)):
-            expected = np.hstack([kept[:, :-1], rhs[:, None]])
-            assert kkt_solve(expected, n) == 0
-            kkt_substitute(factors, pivots, n, rhs)
-            if singular_mass:
-                np.testing.assert_allclose(rhs, expected[:, -1], rtol=1e-12, atol=1e-12)
-            else:
-                assert np.array_equal(rhs, expected[:, -1])
-    redundant = np.block([[M, -np.vstack([C[0], C[0]]).T], [np.vstack([C[0], C[0]]), np.zeros((2, 2))]])
-    assert kkt_factor(np.hstack([redundant, np.zeros((n + 2, 1))]), n, np.empty((n + 2, n + 3)),
-                      np.empty(n + 2, dtype=np.int64)) > 0

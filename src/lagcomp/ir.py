@@ -150,11 +150,11 @@ class DirectionalSolve:
     The first `phase_one` stores (f's rows q̇ into ``ydot[:n]``; M's lower triangle into the locals `m` and F
     into `f`, or K and its right-hand side (F, γ̃) into ``_kkt`` (n + k, n + k + 1) for a constrained system
     with `multipliers` k > 0) need no acceleration; then the solve writes q̈ into ``ydot[n:]`` (``_lam`` the
-    multipliers' view; K factored by ``kkt_factor`` into ``_factors``), and the loads of `solved` (the
-    accelerations ā, multipliers λ̄ the residual's partials are taken at), the temporaries that read them, and
-    the other stores follow: the direction's right-hand side into the locals `g` (or ``_direction`` (n + k,)),
-    which a second substitution by the same LDLᵀ of M, written out (n is small:
-    `lagcomp.codegen.directional`), or by K's factors (``kkt_substitute``), turns into ``out[offset + n:]``.  `ydot` names the array f goes to: ``ydot``, or
+    multipliers' view), and the loads of `solved` (the accelerations ā, multipliers λ̄ the residual's partials
+    are taken at), the temporaries that read them, and the other stores follow: the direction's right-hand side
+    into the locals `g` (or the last column of ``_direction``, a copy of K made before the first solve), which a
+    second substitution by the same LDLᵀ of M, written out (n is small: `lagcomp.codegen.directional`), or a
+    second ``kkt_solve``, turns into ``out[offset + n:]``.  `ydot` names the array f goes to: ``ydot``, or
     ``out`` itself for the tangent kernels (``rhs_tangent``: f into ``out[:2n]``, the direction at `offset` =
     2n).
     """

@@ -15,8 +15,8 @@ and F, and one LDLᵀ substitution gives da.  With y = (q, q̇), f = (q̇, a):
 
 A constrained system (Lagrange multipliers) solves K z = r for z = (q̈, λ), K = [M −Λᵀ; Λ 0]; along dx,
 K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ) (`lagcomp.codegen.constrained_jacobian`, the residual with the
-Baumgarte terms): K factored once (``kkt_factor``), a substitution for z and one for the direction's right-hand
-side (``kkt_substitute``), the first n entries of dz the accelerations' derivative.  f and the direction come from one CSE, so that the
+Baumgarte terms): a second ``kkt_solve`` of the direction's right-hand side (K copied before the first), the
+first n entries of dz the accelerations' derivative.  f and the direction come from one CSE, so that the
 sines, cosines and products of M, F (K, γ̃) serve both, and an unconstrained M is factored once for both
 (`lagcomp.ir.DirectionalSolve`): a call costs about one ``rhs`` and one substitution.  f agrees with ``rhs``'s,
 and the derivative with the full Jacobians' product, to rounding (other orders of the same sums).
@@ -82,14 +82,13 @@ def directional_kernel(eom: EOM, mapping, loads) -> Kernel:
         size, k = n + eom.k, eom.k
         right = [*eom.F, *stabilized_gamma(eom)]
         first = velocities + _matrix_stores(eom) + [(f"_kkt[{r}, {size}]", right[r]) for r in range(size)]
-        second = velocity_rows + [(f"_direction[{r}]", _contracted(row, directions))
+        second = velocity_rows + [(f"_direction[{r}, {size}]", _contracted(row, directions))
                                   for r, row in enumerate(_partials(residual, variables))]
         solved = tuple(f"_acc{i}" for i in range(n)) + tuple(f"_mult{c}" for c in range(k))
         solve = DirectionalSolve(n=n, phase_one=len(first), solved=solved, multipliers=k)
         how = ("K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃\n"
-               "with the Baumgarte terms, K factored once for both; out = (v[n:], dz[:n]) (see\n"
-               "lagcomp.codegen.directional).\n"
-               "Returns 0, or j > 0 when the factorization of K finds pivot j zero; `out` is then invalid.")
+               "with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).\n"
+               "Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid.")
     else:
         block, m, mapping, loads = _acceleration_block(eom, variables, mapping, loads)
         f, g = tuple(f"_f{i}" for i in range(n)), tuple(f"_g{i}" for i in range(n))

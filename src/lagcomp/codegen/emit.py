@@ -102,8 +102,8 @@ def _header(ir: ModuleIR, taylor: TaylorProgram | Unsupported) -> str:
 KERNEL_SUPPORT = {
     "lagcomp.kernel_support.impacts": ("contact_impacts",),
     "lagcomp.kernel_support.inputs": ("input_value",),
-    "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_factor", "kkt_solve",
-                                              "kkt_solve_matrix", "kkt_substitute", "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
+    "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "kkt_solve_matrix",
+                                              "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
                                               "lu_solve_matrix", "lu_substitute"),
     "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "contact_event", "friction_mode_after",
                                        "friction_modes_after_jump", "frictional_accelerations",
@@ -155,10 +155,8 @@ def kernel_support_names(kernels) -> set[str]:
         if any(source.startswith("input_value(") for _, source in kernel.loads):
             names.add("input_value")
         solve = kernel.solve
-        if isinstance(solve, AugmentedSolve):
+        if isinstance(solve, AugmentedSolve) or isinstance(solve, DirectionalSolve) and solve.multipliers:
             names.add("kkt_solve")
-        elif isinstance(solve, DirectionalSolve) and solve.multipliers:
-            names.update(("kkt_factor", "kkt_substitute"))
         elif isinstance(solve, DirectionalSolve):
             names.add("PIVOT_TOLERANCE")
         elif isinstance(solve, LinearSolve):
@@ -351,14 +349,13 @@ def _directional_body(kernel: Kernel) -> list[str]:
     if solve.multipliers:
         size = n + solve.multipliers
         body += [f"_kkt = np.zeros(({size}, {size + 1}))"] + temps[False] + stores[:solve.phase_one]
-        body += ["# K is factored once, for f and then for the direction (whose right-hand side reads f).",
-                 f"_factors = np.empty(({size}, {size + 1}))", f"_pivots = np.empty({size}, np.int64)",
-                 f"_status = kkt_factor(_kkt, {n}, _factors, _pivots)", "if _status:", f"{INDENT}return _status",
-                 f"kkt_substitute(_factors, _pivots, {n}, _kkt[:, {size}])"]
+        body += ["# K is factored twice (kkt_solve may overwrite it): for f, then for the direction.",
+                 "_direction = _kkt.copy()", f"_status = kkt_solve(_kkt, {n})", "if _status:",
+                 f"{INDENT}return _status"]
         body += [f"_ydot[{n + i}] = _kkt[{i}, {size}]" for i in range(n)] + [f"_lam = _kkt[{n}:, {size}]"]
-        body += [f"_direction = np.empty({size})"] + solved + temps[True] + stores[solve.phase_one:]
-        body += [f"kkt_substitute(_factors, _pivots, {n}, _direction)"]
-        return body + [f"out[{solve.offset + n + i}] = _direction[{i}]" for i in range(n)] + ["return 0"]
+        body += solved + temps[True] + stores[solve.phase_one:]
+        body += [f"_status = kkt_solve(_direction, {n})", "if _status:", f"{INDENT}return _status"]
+        return body + [f"out[{solve.offset + n + i}] = _direction[{i}, {size}]" for i in range(n)] + ["return 0"]
     body += temps[False] + stores[:solve.phase_one]
     body += ["# Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors."]
     body += _ldlt_factor(n, solve.m) + _ldlt_substitution(n, solve.f)

@@ -16,9 +16,7 @@ function's first compile, and caches it with it.
   to ``lu_solve``, Gaussian elimination with partial pivoting of the whole
   matrix, which only needs the augmented matrix to be regular.
   ``kkt_solve_matrix``: the same for several right-hand sides at once, one
-  factorization (the Jacobians of a constrained system's q̈ and λ); ``kkt_factor``
-  and ``kkt_substitute``: the same split in two, for right-hand sides that come
-  one after the other (the constrained ``rhs_directional``).
+  factorization (the Jacobians of a constrained system's q̈ and λ).
 * ``lu_factor`` and ``lu_substitute``: the same elimination split in two,
   for a matrix factored once and applied to many right-hand sides (the
   simplified Newton iteration of ``collocation_run``); ``lu_solve_matrix``,
@@ -270,102 +268,6 @@ def kkt_solve(a, n):
     for r in range(k):
         a[n + r, size] = lam[r]
     return 0
-
-
-@njit(cache=True, error_model="numpy", fastmath=False)
-def kkt_factor(a, n, factors, pivots):
-    """Factor [M −Λᵀ; Λ 0], stored in a (size, ≥ size) as ``kkt_solve`` reads it, for ``kkt_substitute``: one
-    factorization for right-hand sides that come one after the other (the constrained ``rhs_directional`` solves
-    for z = (q̈, λ), then along a direction whose right-hand side is computed from z).  a is left as it is.
-
-    The paths of ``kkt_solve``.  Where M and Λ W are positive definite: `factors` (size, size + 1) holds the
-    LDLᵀ of M and W = M⁻¹ Λᵀ in its first n rows (columns :n, n:size), the LDLᵀ of Λ W and Λ itself in its
-    last k rows (columns :k, k:size), and pivots[0] = −1.  Else the LU with partial pivoting of the whole
-    matrix in factors[:, :size], its row swaps in `pivots` (int64, (size,); ``lu_factor``).  Returns 0, or
-    j + 1 when the LU finds pivot j zero.
-    """
-    size = a.shape[0]
-    k = size - n
-    pivots[0] = -1
-    for i in range(n):
-        for j in range(i + 1):
-            factors[i, j] = a[i, j]
-        for j in range(k):
-            factors[i, n + j] = -a[i, n + j]
-    if _ldlt_factor(factors[:n, :n]) == 0:
-        for c in range(n, size):
-            _ldlt_substitute(factors[:n, :n], factors[:n, c])
-        for r in range(k):
-            for i in range(n):
-                factors[n + r, k + i] = a[n + r, i]
-            for c in range(r + 1):
-                s = 0.0
-                for i in range(n):
-                    s += a[n + r, i] * factors[i, n + c]
-                factors[n + r, c] = s
-        if _ldlt_factor(factors[n:, :k]) == 0:
-            return 0
-    for i in range(size):
-        for j in range(size):
-            factors[i, j] = a[i, j]
-    return lu_factor(factors[:, :size], pivots)
-
-
-@njit(cache=True, error_model="numpy", fastmath=False)
-def kkt_substitute(factors, pivots, n, r):
-    """Solve [M −Λᵀ; Λ 0] z = r in place (z overwrites r, (size,)) with the factors of ``kkt_factor``: on its
-    Schur path u = M⁻¹ r[:n], λ = (Λ W)⁻¹ (r[n:] − Λ u), q̈ = u + W λ, as ``kkt_solve`` computes them."""
-    size = r.shape[0]
-    k = size - n
-    if pivots[0] >= 0:
-        lu_substitute(factors[:, :size], pivots, r)
-        return
-    _ldlt_substitute(factors[:n, :n], r[:n])
-    for q in range(k):
-        s = r[n + q]
-        for i in range(n):
-            s -= factors[n + q, k + i] * r[i]
-        r[n + q] = s
-    _ldlt_substitute(factors[n:, :k], r[n:])
-    for i in range(n):
-        x = r[i]
-        for q in range(k):
-            x += factors[i, n + q] * r[n + q]
-        r[i] = x
-
-
-@njit(cache=True, error_model="numpy", fastmath=False)
-def _ldlt_factor(mm):
-    """LDLᵀ of the symmetric mm (lower triangle read) in place, as ``ldlt_solve`` factors: L below the diagonal,
-    D on it.  Returns 0, or j + 1 when pivot j is not positive."""
-    n = mm.shape[0]
-    for j in range(n):
-        d = mm[j, j]
-        for k in range(j):
-            d -= mm[j, k] * mm[j, k] * mm[k, k]
-        if not d > PIVOT_TOLERANCE * abs(mm[j, j]):
-            return j + 1
-        mm[j, j] = d
-        for i in range(j + 1, n):
-            s = mm[i, j]
-            for k in range(j):
-                s -= mm[i, k] * mm[j, k] * mm[k, k]
-            mm[i, j] = s / d
-    return 0
-
-
-@njit(cache=True, error_model="numpy", fastmath=False)
-def _ldlt_substitute(mm, x):
-    """x = (L D Lᵀ)⁻¹ x in place, mm from `_ldlt_factor`."""
-    n = x.shape[0]
-    for i in range(n):
-        for k in range(i):
-            x[i] -= mm[i, k] * x[k]
-    for i in range(n - 1, -1, -1):
-        y = x[i] / mm[i, i]
-        for k in range(i + 1, n):
-            y -= mm[k, i] * x[k]
-        x[i] = y
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
