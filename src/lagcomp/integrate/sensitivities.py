@@ -232,12 +232,13 @@ class SensitivityKernels:
         return getattr(self._module, name)
 
 
-#: The most columns whose derivatives the closure takes along each column (``rhs_directional``, one call per
-#: column, `directional_rhs`) rather than from the full Jacobians (`augmented_rhs`, `full_jacobian_rhs`), without
-#: and with a parameter's column among them.  Measured (``python -m bench.bench_sensitivities --calls``, ns per
-#: call of the augmented rhs, full / directional, double pendulum, 5-link, free axle): one column 148 / 105,
-#: 424 / 249, 1123 / 591; two 152 / 192, 464 / 481, 1159 / 1159; a parameter's 193 / 104, 580 / 247,
-#: 1526 / 595; two with a parameter's 200 / 193, 621 / 478, 1549 / 1167; three 204 / 277, 658 / 710, 1587 / 1746.
+#: The most columns whose derivatives the run takes along each column (one column: the module's tangent kernel,
+#: `tangent_kernel`; more: ``rhs_directional``, one call per column, `directional_rhs`) rather than from the full
+#: Jacobians (`augmented_rhs`, `full_jacobian_rhs`), without and with a parameter's column among them.  Measured
+#: (``python -m bench.bench_sensitivities --calls``, ns per call of the augmented rhs, full / directional, double
+#: pendulum, 5-link, free axle): one column 152 / 56, 430 / 168, 1139 / 526; two 153 / 190, 469 / 482,
+#: 1183 / 1170; a parameter's 191 / 65, 586 / 231, 1537 / 595; two with a parameter's 195 / 192, 633 / 483,
+#: 1564 / 1186; three 205 / 277, 665 / 716, 1591 / 1773.
 DIRECTIONAL_MAX_COLUMNS = {False: 1, True: 2}
 
 #: {(generated module, n, parameter columns, scale, directional): SensitivityKernels}, for the process.
