@@ -296,7 +296,8 @@ def directional_rhs(rhs_directional, n: int, n_parameters: int, parameter_column
     (S[:, c], w_c), w_c = scale e_j for the column of parameter j, else 0.  The first call writes f (``rhs``'s
     to rounding: another CSE); the others write theirs into the last n floats of p's work space.  Each call
     costs about one ``rhs`` and one substitution, against N (N + P) entries and N + P substitutions for the full
-    Jacobians: the path for few columns (`DIRECTIONAL_MAX_COLUMNS`)."""
+    Jacobians: the path for two columns with a parameter's (`DIRECTIONAL_MAX_COLUMNS`; one column takes the
+    module's tangent kernel itself, `tangent_kernel`)."""
     k_parameters = len(parameter_columns)
     directions = np.zeros((1 + k_parameters, n_parameters))   # row 0 for the initial-state columns
     for c, j in enumerate(parameter_columns):
