@@ -10,27 +10,36 @@ the free axle's ∂y/∂(g, α)) and k = 2n (every initial-state component), and
 atol, the median over `--repeats` interleaved triples of (time with k columns) / (time of the plain run), and
 the same per accepted step, for both ways `lagcomp.integrate.sensitivities` evaluates J S: the full Jacobians
 ("jacobian": ``rhs_with_jacobian``, or with a parameter's column ``rhs_with_full_jacobian``, then J S) and one
-``rhs_directional`` per column ("directional").  It takes the second for one column, or two with a parameter's
+``rhs_directional`` per column, for one column the module's tangent kernel ("directional").  It takes the second for one column, or two with a parameter's
 (`DIRECTIONAL_MAX_COLUMNS`), from ``--calls``: ns per call of each path's augmented rhs at one state, k = 1 to 2n.
 Issue #22's target is a ratio ≤ 1.2 (1 + k).
 
-Measured (``--t-end 300 --repeats 5``), jacobian × / directional × ("state"; "both"):
-  k = 1   double pendulum 3.14 / 2.36; 4.07 / 2.99 (1.33× the steps, 2.25 per step)   target 2.4
-          5-link          2.96 / 1.89; 4.14 / 2.65 (1.47× the steps)
-          free axle       4.59 / 1.99; 4.45 / 1.98
-  k = 2   double pendulum 3.25 / 3.77; 4.22 / 4.88                                     target 3.6
-          5-link          3.35 / 3.46; 4.65 / 4.85
-          free axle       4.86 / 3.71; 4.95 / 3.84 (two parameters' columns)
-  k = 2n  double pendulum 3.65; 4.70 (k = 4, target 6.0); 5-link 6.02; 8.10 (k = 10, target 13.2);
-          free axle 4.94; 5.14 (k = 10)
-A second run: k = 1 "state" 2.45, 1.91, 2.05 (jacobian 3.28, 3.00, 4.72), "both" 3.17, 2.69, 1.96: the
-ratios move by ~4% between runs on a shared machine.
-Before the directional path and ``rhs_with_full_jacobian`` (the same command at 6f5c921): k = 1 3.28, 3.01,
-6.56 ("state"), 4.23, 4.21, 6.15 ("both"); free axle k = 10 5.15, 5.19.  Per call (``--calls``), jacobian /
-directional ns: one initial-state column 148 / 105 (double pendulum), 424 / 249 (5-link), 1123 / 591 (free
-axle; ``rhs`` 37, 113, 271); two 152 / 192, 464 / 481, 1159 / 1159; one parameter's 193 / 104, 580 / 247,
-1526 / 595 (with ``rhs_with_jacobian`` and ``rhs_parameter_jacobian`` apart: 315, 855, 2116); two with a
-parameter's 200 / 193, 621 / 478, 1549 / 1167; three 204 / 277, 658 / 710, 1587 / 1746.
+Measured (``--t-end 300 --repeats 5``, CPU time), jacobian × / directional × ("state"; "both"):
+  k = 1   double pendulum 3.20 / 1.69; 4.13 / 2.12 (1.33× the steps, 1.59 per step)   target 2.4
+          5-link          2.97 / 1.38; 4.12 / 1.91 (1.47× the steps)
+          free axle       4.61 / 1.85; 4.40 / 1.81
+  k = 2   double pendulum 3.34 / 3.86; 4.31 / 5.05                                     target 3.6
+          5-link          3.36 / 3.43; 4.72 / 4.79
+          free axle       4.75 / 3.70; 4.89 / 3.74 (two parameters' columns)
+  k = 2n  double pendulum 3.68; 4.76 (k = 4, target 6.0); 5-link 6.02; 8.21 (k = 10, target 13.2);
+          free axle 4.81; 5.08 (k = 10)
+One column's directional path is the module's tangent kernel (``rhs_tangent``, ``rhs_tangent_parameters``) as
+the driver's rhs.  Before it, through a closure calling ``rhs_directional`` (at 8427c72, wall time): k = 1
+"state" 2.36, 1.89, 1.99, "both" 2.99, 2.65, 1.98; both ways in one process by CPU time, 11 runs each (closure /
+tangent kernel): "state" 2.46 / 1.59, 1.91 / 1.38, 2.02 / 1.87, "both" 3.13 / 2.05, 2.45 / 1.76, 1.95 / 1.82.
+Per call through the drivers' function type (double pendulum): the closure 104 ns, ``rhs_tangent`` 54,
+``rhs_tangent_parameters`` 65, ``rhs`` 37.  A plain DOP853 step costs ~1.0 µs, ~530 ns of it the driver's own
+(with a trivial kernel of 4 components; 983 ns with 8): the k = 1 step is now mostly the driver's.  Under
+"both" the extra steps are genuine: |S| grows to 420 (|y| ≤ 2.4), and against a run at rtol 1e-13 the
+sensitivities' error at rtol 1e-10 is 2.2e-4 under "both", 1.9e-3 under "state" (6.7e-4 with "state" at rtol
+3e-11, 8779 steps).  The free axle's ``rhs_tangent`` (534 ns, ``rhs`` 274) solves K twice; factoring it once
+for both solves (tried: 529 ns, the same bits) does not pay, nor would sparing ``kkt_solve``'s allocations.
+Per call (``--calls``, CPU time, from a compiled loop), jacobian / directional ns: one initial-state column
+152 / 56 (double pendulum), 430 / 168 (5-link), 1139 / 526 (free axle; ``rhs`` 37, 113, 273); two 153 / 190,
+469 / 482, 1183 / 1170; one parameter's 191 / 65, 586 / 231, 1537 / 595; two with a parameter's 195 / 192,
+633 / 483, 1564 / 1186; three 205 / 277, 665 / 716, 1591 / 1773.
+Before (at 6f5c921, the full Jacobians for every k, wall time): k = 1 3.28, 3.01, 6.56 ("state"), 4.23, 4.21,
+6.15 ("both"); free axle k = 10 5.15, 5.19.
 Earlier: ``rhs_with_jacobian`` (f and J in one call, J written straight into its work space, M's LDLᵀ written
 out for n ≤ 6) took the "state" k = 1 rows from 5.2×, 6.0× (``rhs``, then ``rhs_jacobian`` calling ``rhs``
 again, copying J and solving by M in loops) to 3.2×, 3.0×; the free axle's kernels calling
@@ -56,9 +65,12 @@ PATHS = (("jacobian", {False: 0, True: 0}), ("directional", {False: 1_000_000, T
 
 
 def _timed(run) -> tuple[object, float]:
-    start = time.perf_counter()
+    """`run`'s result and the CPU time it took (`time.process_time`): on a shared machine wall time also counts
+    other processes' time slices, and the ratios moved by 30% between runs at a load of 2-3 on 2 cores, where CPU
+    time agreed to a few % (the drivers run in the calling thread)."""
+    start = time.process_time()
     sol = run()
-    return sol, time.perf_counter() - start
+    return sol, time.process_time() - start
 
 
 def _runs(model, q0, t_end: float, rtol: float, columns, control):
@@ -149,9 +161,9 @@ def call_costs(times: int = 200_000, repeats: int = 5, cache_dir=None) -> list[d
             _calls(rhs, state, parameters, output, 10)
             samples = []
             for _ in range(repeats):
-                start = time.perf_counter()
+                start = time.process_time()
                 _calls(rhs, state, parameters, output, times)
-                samples.append((time.perf_counter() - start) / times * 1e9)
+                samples.append((time.process_time() - start) / times * 1e9)
             return float(np.median(samples))
 
         rhs_ns = cost(model.kernels.rhs, y, p, out)
@@ -163,12 +175,12 @@ def call_costs(times: int = 200_000, repeats: int = 5, cache_dir=None) -> list[d
                 cols = sens.columns(model, requested)
                 augmented = sens.initial_state(y, cols, 1.0)
                 augmented[n:] += np.linspace(-0.3, 0.4, augmented.size - n)
-                p_run = sens.run_parameters(p, model, cols)
                 row = dict(model=model.name, k=cols.k, parameter=with_parameter, rhs=rhs_ns)
                 for path, limit in PATHS:
                     kept, sens.DIRECTIONAL_MAX_COLUMNS = sens.DIRECTIONAL_MAX_COLUMNS, limit
-                    try:
+                    try:  # (each path's work space at the end of p: the tangent kernel's direction, or J's floats)
                         kernels = sens.sensitivity_kernels(model.kernels, n, len(model.parameters), cols, 1.0)
+                        p_run = sens.run_parameters(p, model, cols)
                     finally:
                         sens.DIRECTIONAL_MAX_COLUMNS = kept
                     row[path] = cost(kernels.rhs, augmented, p_run, np.empty(augmented.size))
@@ -191,7 +203,7 @@ def main(argv=None) -> None:
             print(f"{r['model']:18} {r['k']:3d} {'+p' if r['parameter'] else '':>3} {r['rhs']:7.0f} "
                   f"{r['jacobian']:9.0f} {r['directional']:12.0f} {r['directional'] / r['jacobian']:8.2f}")
         return
-    print(f"DOP853, rtol = atol = {args.rtol:g}, t in [0, {args.t_end:g}]; time with k columns / plain run "
+    print(f"DOP853, rtol = atol = {args.rtol:g}, t in [0, {args.t_end:g}]; CPU time with k columns / plain run "
           f"(median of {args.repeats}), the full Jacobians' path and the directional one in the same run")
     print(f"{'model':18} {'k':>3} {'control':>7} {'steps':>7} {'plain':>7} {'plain ms':>9} {'jacobian ×':>11} "
           f"{'directional ×':>14} {'per step':>9} {'target':>7}")

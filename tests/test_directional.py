@@ -12,6 +12,8 @@ factorization, which they use for more columns with a parameter's.
 (c) Sensitivity runs through the directional path against the full Jacobians' path: as many steps under
     "state" control, the end state to 1e-12 and the end sensitivities to 1e-10 relative.
 (d) Names: parameters named like the kernel's locals and arguments.
+The tangent kernels (``rhs_tangent``, ``rhs_tangent_parameters``: one column's augmented rhs) with (a): the second
+bitwise ``rhs_directional``'s, the first's f too, and its derivative J v to rounding.
 """
 
 from __future__ import annotations
@@ -48,13 +50,21 @@ def _product_errors(kernels, y, p, v, w, n_parameters, t=0.3) -> tuple[float, fl
     ydot, out = np.full(N, np.nan), np.full(N, np.nan)
     assert kernels["rhs_directional"](t, y, p, v, w, ydot, out) == 0
     size = np.abs(J) @ np.abs(v) + np.abs(Jp) @ np.abs(w[:n_parameters])
+    # the tangent kernels: rhs_directional's CSE on (y, v) in one array, w at the end of p (none: dropped)
+    tangent = np.full(2 * N, np.nan)
+    assert kernels["rhs_tangent_parameters"](t, np.concatenate([y, v]), np.concatenate([p, w]), tangent) == 0
+    assert np.array_equal(tangent, np.concatenate([ydot, out]))
+    assert kernels["rhs_tangent"](t, np.concatenate([y, v]), p, tangent) == 0
+    assert np.array_equal(tangent[:N], ydot)
+    state_error = np.max(np.abs(tangent[N:] - J @ v) / np.maximum(np.abs(J) @ np.abs(v), 1e-300))
     return (float(np.max(np.abs(ydot - f)) / np.max(np.abs(f))),
-            float(np.max(np.abs(out - (J @ v + Jp @ w)) / np.maximum(size, 1e-300))))
+            float(max(np.max(np.abs(out - (J @ v + Jp @ w)) / np.maximum(size, 1e-300)), state_error)))
 
 
 def _kernels(model) -> dict:
     return {name: getattr(model.kernels, name) for name in ("rhs", "rhs_with_jacobian", "rhs_parameter_jacobian",
-                                                           "rhs_with_full_jacobian", "rhs_directional")}
+                                                           "rhs_with_full_jacobian", "rhs_directional",
+                                                           "rhs_tangent", "rhs_tangent_parameters")}
 
 
 @pytest.fixture(scope="module", params=["double_pendulum", "free_axle"])
@@ -127,10 +137,12 @@ def test_a_larger_system_takes_the_full_jacobians(cache_dir):
     from lagcomp.codegen.directional import LARGEST_SYSTEM
 
     model = lc.compile(examples.get("n_link_pendulum", n=LARGEST_SYSTEM + 1), cache_dir=cache_dir)
-    assert not hasattr(model.kernels, "rhs_directional") and not hasattr(model.kernels, "rhs_with_full_jacobian")
+    assert not any(hasattr(model.kernels, name) for name in ("rhs_directional", "rhs_with_full_jacobian",
+                                                             "rhs_tangent", "rhs_tangent_parameters"))
     cols = sensitivities.columns(model, ("theta1", "m1"))
     kernels = sensitivities.sensitivity_kernels(model.kernels, model.state_size, len(model.parameters), cols, 1.0)
-    assert kernels is sensitivities._AUGMENTED[(model.kernels, model.state_size, cols.parameters, 1.0, False)]
+    assert kernels is sensitivities._AUGMENTED[(model.kernels, model.state_size, cols.parameters, 1.0, False, False)]
+    assert sensitivities.tangent_kernel(model.kernels, sensitivities.columns(model, "theta1")) is None
 
 
 @pytest.mark.parametrize(("name", "columns"), [("double_pendulum", "theta1"), ("double_pendulum", ("theta2", "m2")),
@@ -146,7 +158,7 @@ def test_runs_through_either_path_agree(compiled, monkeypatch, name, columns):
         monkeypatch.setattr(sensitivities, "DIRECTIONAL_MAX_COLUMNS", limit)
         runs[path] = model.simulate((0.0, 3.0), q0, rtol=1e-11, atol=1e-11, sensitivities=columns,
                                     sensitivity_control="state", progress=False)
-    assert {key[-1] for key in sensitivities._AUGMENTED if key[0] is model.kernels} == {True, False}  # both paths
+    assert {key[-2] for key in sensitivities._AUGMENTED if key[0] is model.kernels} == {True, False}  # both paths
     directional, jacobian = runs["directional"], runs["jacobian"]
     # the steps' sizes come from error estimates ~1e-11, whose rounding differs: the rows' times differ by ~1e-8
     assert directional.status == jacobian.status == 0 and directional.nsteps == jacobian.nsteps
@@ -155,10 +167,21 @@ def test_runs_through_either_path_agree(compiled, monkeypatch, name, columns):
     assert np.all(np.abs(directional.sensitivities[-1] - jacobian.sensitivities[-1]).max(axis=0) <= 1e-10 * scale)
 
 
-def test_default_choice_of_path():
-    """One column, or two when one is a parameter's: the directional path (`DIRECTIONAL_MAX_COLUMNS`)."""
+def test_default_choice_of_path(compiled):
+    """One column, or two when one is a parameter's: the directional path (`DIRECTIONAL_MAX_COLUMNS`); one column
+    alone: the module's tangent kernel is the run's rhs itself, with its direction at the end of p."""
     limit = sensitivities.DIRECTIONAL_MAX_COLUMNS
     assert limit[False] == 1 and limit[True] == 2
+    model = compiled("double_pendulum")
+    kernels, P = model.kernels, len(model.parameters)
+    for requested, kernel in (("theta1", kernels.rhs_tangent), ("m2", kernels.rhs_tangent_parameters)):
+        cols = sensitivities.columns(model, requested)
+        assert sensitivities.sensitivity_kernels(kernels, model.state_size, P, cols, 0.5).rhs is kernel
+        p = model.parameter_vector(None)
+        run_p = sensitivities.run_parameters(p, model, cols, 0.5)
+        assert np.array_equal(run_p[:p.size], p) and np.array_equal(run_p[p.size:], 0.5 * np.eye(P)[1] * (
+            requested == "m2"))
+    assert sensitivities.tangent_kernel(kernels, sensitivities.columns(model, ("theta1", "m2"))) is None
 
 
 @pytest.mark.parametrize("names", [("_dy0", "_dp0", "_g0"), ("v", "w", "_direction"), ("_dx0", "_dx1", "ydot")])

@@ -295,9 +295,10 @@ def test_the_parameter_jacobian_under_every_emitted_name(many_names):
 
 
 def test_the_directional_and_full_jacobian_kernels_under_every_emitted_name(many_names):
-    """``rhs_directional`` and ``rhs_with_full_jacobian`` (the sensitivities' kernels, whose locals ``_dy<i>``,
-    ``_dp<j>``, ``_g<i>`` and arguments ``v``, ``w`` are among the names) under the ~670 colliding names, against
-    the closed form of c̈_j = −κ_j c_j/m_j, κ_j the sum of group j.  Plain Python, as the parameter Jacobian's."""
+    """``rhs_directional``, its tangent kernels and ``rhs_with_full_jacobian`` (the sensitivities' kernels, whose
+    locals ``_dy<i>``, ``_dp<j>``, ``_g<i>`` and arguments ``v``, ``w`` are among the names) under the ~670 colliding
+    names, against the closed form of c̈_j = −κ_j c_j/m_j, κ_j the sum of group j.  Plain Python, as the parameter
+    Jacobian's."""
     from random_systems import python_kernels
 
     model, spec = many_names
@@ -326,6 +327,11 @@ def test_the_directional_and_full_jacobian_kernels_under_every_emitted_name(many
     assert module["rhs_directional"](0.0, y, p, v, w, ydot, derivative) == 0
     np.testing.assert_allclose(ydot, f, rtol=1e-14, atol=0)
     np.testing.assert_allclose(derivative, expected @ np.concatenate([v, w]), rtol=1e-12, atol=1e-14)
+    tangent = np.full(2 * N, np.nan)  # (one column's augmented rhs: y = (x, v), w at the end of p, or none)
+    assert module["rhs_tangent_parameters"](0.0, np.concatenate([y, v]), np.concatenate([p, w]), tangent) == 0
+    assert np.array_equal(tangent, np.concatenate([ydot, derivative]))
+    assert module["rhs_tangent"](0.0, np.concatenate([y, v]), p, tangent) == 0
+    np.testing.assert_allclose(tangent, np.concatenate([f, expected[:, :N] @ v]), rtol=1e-12, atol=1e-14)
 
 
 def test_the_event_gradients_under_every_emitted_name(many_names):

@@ -154,7 +154,9 @@ class DirectionalSolve:
     are taken at), the temporaries that read them, and the other stores follow: the direction's right-hand side
     into the locals `g` (or the last column of ``_direction``, a copy of K made before the first solve), which a
     second substitution by the same LDLᵀ of M, written out (n is small: `lagcomp.codegen.directional`), or a
-    second ``kkt_solve``, turns into ``out[n:]``.
+    second ``kkt_solve``, turns into ``out[offset + n:]``.  `ydot` names the array f goes to: ``ydot``, or
+    ``out`` itself for the tangent kernels (``rhs_tangent``: f into ``out[:2n]``, the direction at `offset` =
+    2n).
     """
 
     n: int
@@ -164,6 +166,8 @@ class DirectionalSolve:
     m: tuple[tuple[str, ...], ...] = ()
     f: tuple[str, ...] = ()
     g: tuple[str, ...] = ()
+    ydot: str = "ydot"
+    offset: int = 0
 
 
 @dataclass(frozen=True)

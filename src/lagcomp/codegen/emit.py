@@ -330,9 +330,10 @@ def _augmented_jacobian_frame(solve: AugmentedJacobianSolve) -> tuple[list[str],
 
 
 def _directional_body(kernel: Kernel) -> list[str]:
-    """The body of ``rhs_directional`` (`lagcomp.ir.DirectionalSolve`): what needs no acceleration, the solve for
-    f, then the loads of the solved values, the temporaries that read them, the direction's stores and its
-    substitution.  A temporary reads them when its expression names a solved local or such a temporary."""
+    """The body of ``rhs_directional`` and its tangent kernels (`lagcomp.ir.DirectionalSolve`): what needs no
+    acceleration, the solve for f, then the loads of the solved values, the temporaries that read them, the
+    direction's stores and its substitution.  A temporary reads them when its expression names a solved local or
+    such a temporary."""
     solve = kernel.solve
     n, late = solve.n, set(solve.solved)
     temps = {True: [], False: []}
@@ -342,7 +343,8 @@ def _directional_body(kernel: Kernel) -> list[str]:
             late.add(name)
         temps[after].append(f"{name} = {to_code(expr)}")
     stores = [f"{target} = {to_code(expr)}" for target, expr in kernel.stores]
-    body = ["_ydot = ydot"] + [f"{local} = {source}" for local, source in kernel.loads if local not in solve.solved]
+    body = [f"_ydot = {solve.ydot}"] + [f"{local} = {source}" for local, source in kernel.loads
+                                        if local not in solve.solved]
     solved = [f"{local} = {source}" for local, source in kernel.loads if local in solve.solved]
     if solve.multipliers:
         size = n + solve.multipliers
@@ -353,13 +355,13 @@ def _directional_body(kernel: Kernel) -> list[str]:
         body += [f"_ydot[{n + i}] = _kkt[{i}, {size}]" for i in range(n)] + [f"_lam = _kkt[{n}:, {size}]"]
         body += solved + temps[True] + stores[solve.phase_one:]
         body += [f"_status = kkt_solve(_direction, {n})", "if _status:", f"{INDENT}return _status"]
-        return body + [f"out[{n + i}] = _direction[{i}, {size}]" for i in range(n)] + ["return 0"]
+        return body + [f"out[{solve.offset + n + i}] = _direction[{i}, {size}]" for i in range(n)] + ["return 0"]
     body += temps[False] + stores[:solve.phase_one]
     body += ["# Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors."]
     body += _ldlt_factor(n, solve.m) + _ldlt_substitution(n, solve.f)
     body += [f"_ydot[{n + i}] = _x{i}" for i in range(n)]
     body += solved + temps[True] + stores[solve.phase_one:] + _ldlt_substitution(n, solve.g)
-    return body + [f"out[{n + i}] = _x{i}" for i in range(n)] + ["return 0"]
+    return body + [f"out[{solve.offset + n + i}] = _x{i}" for i in range(n)] + ["return 0"]
 
 
 def delegated_call(solve: Delegate) -> str:

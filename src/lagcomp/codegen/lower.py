@@ -845,11 +845,15 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 
 def _directional_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
-    """(``rhs_directional``,) for systems of at most `lagcomp.codegen.directional.LARGEST_SYSTEM` coordinates, ()
-    for larger ones, whose sensitivities take the full Jacobians."""
-    from lagcomp.codegen.directional import LARGEST_SYSTEM, directional_kernel  # (it imports this module)
+    """(``rhs_directional``, ``rhs_tangent``, ``rhs_tangent_parameters``) for systems of at most
+    `lagcomp.codegen.directional.LARGEST_SYSTEM` coordinates, () for larger ones, whose sensitivities take the full
+    Jacobians."""
+    from lagcomp.codegen.directional import LARGEST_SYSTEM, directional_kernel, tangent_kernels  # (imports this)
 
-    return (directional_kernel(eom, mapping, loads),) if eom.n <= LARGEST_SYSTEM else ()
+    if eom.n > LARGEST_SYSTEM:
+        return ()
+    directional = directional_kernel(eom, mapping, loads)
+    return (directional, *tangent_kernels(directional, len(eom.parameters)))
 
 
 def lower(eom: EOM) -> ModuleIR:

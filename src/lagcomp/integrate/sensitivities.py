@@ -12,9 +12,12 @@ N (1 + k) components with the library's embedded Runge-Kutta driver (dop853, dop
 takes as its ``rhs`` a small numba function evaluating f and J S: a closure over the model's kernels,
 compiled at the first run that needs it and kept for the process (`_AUGMENTED`), as
 `lagcomp.integrate.function_inputs` does for its wrappers.  The model's kernels and the driver are not
-compiled again.  For one column (two with a parameter's: `DIRECTIONAL_MAX_COLUMNS`, measured) it calls the
-emitted ``rhs_directional`` once per column (`directional_rhs`: f and J S[:, c] + ∂f/∂p w_c from one CSE, at
-about the cost of ``rhs`` and a substitution; `lagcomp.codegen.directional`); for more, the full Jacobians
+compiled again.  One column's rhs is no closure but the module's tangent kernel (`tangent_kernel`:
+``rhs_tangent``, or ``rhs_tangent_parameters`` with the parameters' direction at the end of p), ``rhs_directional``'s
+CSE reading (y, S) and writing (f, J S + ∂f/∂p w) itself, which the driver calls as it calls ``rhs``.  For two
+with a parameter's (`DIRECTIONAL_MAX_COLUMNS`, measured) it calls the emitted ``rhs_directional`` once per column
+(`directional_rhs`: f and J S[:, c] + ∂f/∂p w_c from one CSE, at about the cost of ``rhs`` and a substitution;
+`lagcomp.codegen.directional`); for more, the full Jacobians
 (`augmented_rhs`, `full_jacobian_rhs`), J (N, N) and ∂f/∂p (N, P) written into work space at the end of the
 run's p (the kernels read p only up to their parameters and input tables): a call allocates only what the
 kernels do (the factor of M in their LDLᵀ).  Kane modules and systems larger than
@@ -199,8 +202,14 @@ def initial_state(y0: np.ndarray, cols: Columns, scale: float) -> np.ndarray:
     return augmented
 
 
-def run_parameters(p: np.ndarray, model, cols: Columns) -> np.ndarray:
-    """p followed by the work space `augmented_rhs` writes J and ∂f/∂p into (see `work_size`)."""
+def run_parameters(p: np.ndarray, model, cols: Columns, scale: float = 1.0) -> np.ndarray:
+    """p followed by the work space of the run's rhs: for one column through a tangent kernel (`tangent_kernel`),
+    the direction w (P,) of ``rhs_tangent_parameters`` (`scale` e_j for parameter j's column, else 0); else the
+    floats `augmented_rhs` writes J and ∂f/∂p into (see `work_size`)."""
+    if tangent_kernel(model.kernels, cols) is not None:
+        direction = np.zeros(len(model.parameters))
+        direction[list(cols.parameters)] = scale
+        return np.concatenate([p, direction])
     return np.concatenate([p, np.zeros(work_size(model.state_size, len(model.parameters), cols))])
 
 
@@ -223,12 +232,13 @@ class SensitivityKernels:
         return getattr(self._module, name)
 
 
-#: The most columns whose derivatives the closure takes along each column (``rhs_directional``, one call per
-#: column, `directional_rhs`) rather than from the full Jacobians (`augmented_rhs`, `full_jacobian_rhs`), without
-#: and with a parameter's column among them.  Measured (``python -m bench.bench_sensitivities --calls``, ns per
-#: call of the augmented rhs, full / directional, double pendulum, 5-link, free axle): one column 148 / 105,
-#: 424 / 249, 1123 / 591; two 152 / 192, 464 / 481, 1159 / 1159; a parameter's 193 / 104, 580 / 247,
-#: 1526 / 595; two with a parameter's 200 / 193, 621 / 478, 1549 / 1167; three 204 / 277, 658 / 710, 1587 / 1746.
+#: The most columns whose derivatives the run takes along each column (one column: the module's tangent kernel,
+#: `tangent_kernel`; more: ``rhs_directional``, one call per column, `directional_rhs`) rather than from the full
+#: Jacobians (`augmented_rhs`, `full_jacobian_rhs`), without and with a parameter's column among them.  Measured
+#: (``python -m bench.bench_sensitivities --calls``, ns per call of the augmented rhs, full / directional, double
+#: pendulum, 5-link, free axle): one column 152 / 56, 430 / 168, 1139 / 526; two 153 / 190, 469 / 482,
+#: 1183 / 1170; a parameter's 191 / 65, 586 / 231, 1537 / 595; two with a parameter's 195 / 192, 633 / 483,
+#: 1564 / 1186; three 205 / 277, 665 / 716, 1591 / 1773.
 DIRECTIONAL_MAX_COLUMNS = {False: 1, True: 2}
 
 #: {(generated module, n, parameter columns, scale, directional): SensitivityKernels}, for the process.
@@ -244,15 +254,31 @@ def run_kernels(model, method, cols: Columns, scale: float):
     return sensitivity_kernels(model.kernels, model.state_size, len(model.parameters), cols, scale)
 
 
+def tangent_kernel(module, cols: Columns):
+    """The kernel of `module` that is the whole augmented rhs of the one column of `cols`, or None: for one
+    column on the directional path (`DIRECTIONAL_MAX_COLUMNS`), ``rhs_tangent`` (an initial-state column) or
+    ``rhs_tangent_parameters`` (a parameter's, its direction at the end of p: `run_parameters`), which the
+    driver calls itself.  A closure over ``rhs_directional`` cost twice as much per call, measured on the double
+    pendulum through the drivers' function type: 104 ns against 54 (65 with a parameter's), ``rhs`` 37; its
+    views of y and out, its loop over columns, the seven arrays of each call (see
+    `lagcomp.codegen.directional.tangent_kernels`)."""
+    if cols.k != 1 or DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)] < 1 or not hasattr(module, "rhs_tangent"):
+        return None  # (Kane modules, and modules generated before the tangent kernels, have none)
+    return module.rhs_tangent_parameters if cols.parameters else module.rhs_tangent
+
+
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
     """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (its closure compiled at
-    first use)."""
+    first use; none for one column: `tangent_kernel`)."""
     directional = (cols.k <= DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)]
                    and hasattr(module, "rhs_directional"))  # (Kane modules have none)
-    key = (module, n, cols.parameters, scale, directional)  # (the initial-state columns: as y's size says)
+    tangent = tangent_kernel(module, cols)
+    key = (module, n, cols.parameters, scale, directional, tangent is not None)  # (initial-state columns: y's size)
     with _LOCK:
         if key not in _AUGMENTED:
-            if directional:
+            if tangent is not None:
+                rhs = tangent
+            elif directional:
                 rhs = directional_rhs(module.rhs_directional, n, n_parameters, cols.parameters, scale)
             elif cols.parameters and hasattr(module, "rhs_with_full_jacobian"):
                 rhs = full_jacobian_rhs(module.rhs_with_full_jacobian, n, n_parameters, cols.parameters, scale)
@@ -270,7 +296,8 @@ def directional_rhs(rhs_directional, n: int, n_parameters: int, parameter_column
     (S[:, c], w_c), w_c = scale e_j for the column of parameter j, else 0.  The first call writes f (``rhs``'s
     to rounding: another CSE); the others write theirs into the last n floats of p's work space.  Each call
     costs about one ``rhs`` and one substitution, against N (N + P) entries and N + P substitutions for the full
-    Jacobians: the path for few columns (`DIRECTIONAL_MAX_COLUMNS`)."""
+    Jacobians: the path for two columns with a parameter's (`DIRECTIONAL_MAX_COLUMNS`; one column takes the
+    module's tangent kernel itself, `tangent_kernel`)."""
     k_parameters = len(parameter_columns)
     directions = np.zeros((1 + k_parameters, n_parameters))   # row 0 for the initial-state columns
     for c, j in enumerate(parameter_columns):

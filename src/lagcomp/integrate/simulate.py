@@ -164,7 +164,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     kernels, p_run = model.kernels, p.copy()    # (the drivers' resets write the contacts' modes into p_run)
     if columns is not None:  # the variational equations ride along: an augmented state, rhs and p
         kernels = sens.run_kernels(model, m, columns, scale)
-        state, p_run = RunState(sens.initial_state(y0, columns, scale), t0), sens.run_parameters(p, model, columns)
+        state = RunState(sens.initial_state(y0, columns, scale), t0)
+        p_run = sens.run_parameters(p, model, columns, scale)
         differential = width = state.y.size
         rtol, atol = sens.driver_tolerances(options.rtol, options.atol, columns, scale, m)
         options = dataclasses.replace(options, rtol=rtol, atol=atol)
