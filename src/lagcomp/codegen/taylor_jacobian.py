@@ -33,12 +33,10 @@ pendulum: 33 + 8 per column against 19 per column (forward), so from k = 3 on.
 
 from __future__ import annotations
 
+from lagcomp.codegen import taylor_variational as variational
 from lagcomp.codegen.taylor_ops import LINEAR, Op
 from lagcomp.codegen.taylor_variational import (
-    BLOCK,
-    COLUMN_OPERATIONS_MAX,
     INDENT,
-    UNROLLED_COLUMNS,
     _Constants,
     _ops,
     kernel_source,
@@ -304,8 +302,8 @@ class _Sweeps:
 def column_width(program: dict, columns: int, convolutions: int) -> int:
     """The columns of one pass of the column update (`lagcomp.codegen.taylor_variational.block_width`'s rule,
     with J's `convolutions` per column for the program's operations)."""
-    width = columns if columns <= UNROLLED_COLUMNS else BLOCK
-    return max(1, min(width, COLUMN_OPERATIONS_MAX // max(convolutions, 1)))
+    width = columns if columns <= variational.UNROLLED_COLUMNS else variational.BLOCK
+    return max(1, min(width, variational.COLUMN_OPERATIONS_MAX // max(convolutions, 1)))
 
 
 def jacobian_products(program: dict, columns: int, parameters: tuple[int, ...] = ()) -> int:
