@@ -86,10 +86,11 @@ def test_every_operation_matches_forward_mode(zoo, monkeypatch):  # noqa: F811
         _agree(zoo, kernels, np.concatenate([rng.uniform(-0.5, 0.5, 4), rng.normal(size=4 * 7)]), 7)
 
 
-def test_the_kernel_with_fewer_products_is_chosen(pendulum, compiled):
+def test_the_faster_kernel_is_chosen(pendulum, compiled):
     program = pendulum._taylor_program     # J: identity rows, two rows of 4 entries (8 convolutions per column)
     assert jacobian_products(program, 4) < forward_products(program, 4)
     assert variational_source(program, 4) == jacobian_source(program, 4)
-    bodies = compiled("pythagorean_three_body")._taylor_program    # J dense: 36 convolutions per column
-    assert jacobian_products(bodies, 12) > forward_products(bodies, 12)
-    assert variational_source(bodies, 12) == forward_source(bodies, 12)
+    # J dense (36 convolutions per column): forward mode for one column (1.7x faster), not for 12 (0.86x)
+    bodies = compiled("pythagorean_three_body")._taylor_program
+    assert variational_source(bodies, 1) == forward_source(bodies, 1)
+    assert variational_source(bodies, 12) == jacobian_source(bodies, 12)

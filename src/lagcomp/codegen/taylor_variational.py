@@ -388,14 +388,24 @@ def forward_source(program: dict, columns: int, parameters: tuple[int, ...] = ()
     return kernel_source(docstring, lines, columns, rows + writer.tangent_rows)
 
 
+#: The time of a product of `lagcomp.codegen.taylor_jacobian`'s kernel, in products of forward mode's: its
+#: convolutions are independent chains (the directions', the columns') in a loop, forward mode's a column's
+#: chain (k < 4) or a vector of columns.  Per call at order 20 (jacobian / forward: time, products): double
+#: pendulum k = 1, 4, 9 (with the parameters): 0.89, 0.80, 0.61 for 28/19, 52/76, 124/171; n_link_pendulum(3)
+#: k = 1, 2, 6: 1.03, 0.73, 0.54 for 134/70, 152/140, 224/420; the three bodies (J dense) k = 1, 4, 12: 1.69,
+#: 1.18, 0.86 for 108/30, 216/120, 504/360: the crossover where the products' ratio is 1.5 to 1.9.
+JACOBIAN_PRODUCT_COST = 2 / 3
+
+
 def variational_source(program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0) -> str:
     """The source of ``taylor_variational_coefficients`` (and its constants) for `columns` sensitivity columns,
     the last of them those of `parameters`, by whichever of `forward_source` and
-    `lagcomp.codegen.taylor_jacobian.jacobian_source` takes fewer products per order (`forward_products`,
-    `jacobian_products`)."""
+    `lagcomp.codegen.taylor_jacobian.jacobian_source` takes less time per order: their products per order
+    (`forward_products`, `jacobian_products`), the latter's weighted by `JACOBIAN_PRODUCT_COST`."""
     from lagcomp.codegen.taylor_jacobian import jacobian_products, jacobian_source
 
-    if jacobian_products(program, columns, parameters) < forward_products(program, columns, parameters):
+    jacobian = JACOBIAN_PRODUCT_COST * jacobian_products(program, columns, parameters)
+    if jacobian < forward_products(program, columns, parameters):
         return jacobian_source(program, columns, parameters, scale)
     return forward_source(program, columns, parameters, scale)
 
