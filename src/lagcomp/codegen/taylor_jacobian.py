@@ -97,6 +97,19 @@ class _Kernel:
         self.slots = 0
         #: {(the two series' codes at _j, sorted): the slot of their convolution}
         self.convolutions: dict[tuple[str, str], str] = {}
+        #: {series: (c, u)}: the series is c u, u a series not so computed (a scale or a negation of one)
+        self.multiples: dict[str, tuple[str, str]] = {}
+        for op in _ops(program):
+            if op.kind in ("scale", "neg"):
+                factor, root = self.multiples.get(op.args[0], ("1.0", op.args[0]))
+                self.multiples[op.out[0]] = _product(op.const if op.kind == "scale" else "-1.0", factor), root
+
+    def value(self, factor: str, name: str) -> Term:
+        """The term `factor` × the value series `name`, as a multiple of the series it is one of (`multiples`):
+        so that the terms of a tangent in proportional series merge, and their convolutions are shared (the
+        double pendulum's M₁₀ = c cos(θ₁ − θ₂) and L₁₀ = M₁₀/M₀₀: cos(θ₁ − θ₂)'s multiples)."""
+        own, root = self.multiples.get(name, ("1.0", name))
+        return _product(factor, own), "value", root
 
     def at(self, name: str, index) -> str:
         if name in self.states:
@@ -192,7 +205,7 @@ class _Sweep:
                 "add": lambda: combine(("1.0", a), ("1.0", b)),
                 "sub": lambda: combine(("1.0", a), ("-1.0", b)),
                 "neg": lambda: combine(("-1.0", a)),
-                "scale": lambda: combine((const, a), ("1.0", tuple((f, "value", op.args[0])
+                "scale": lambda: combine((const, a), ("1.0", tuple(self.kernel.value(f, op.args[0])
                                                                    for f, _, _ in self.constant(const)))),
                 "add_const": lambda: combine(("1.0", a), ("1.0", self.constant(const))),
                 "rsub_const": lambda: combine(("1.0", self.constant(const)), ("-1.0", a)),
@@ -226,9 +239,11 @@ class _Sweep:
         the convolution of the two series, a slot computed once per kernel (the sweeps of other directions
         reuse it: sin(θ₁ − θ₂)'s partials in θ₁ and θ₂ are the same series but for the sign)."""
         factor, kind, series = term
-        if kind == "one":
-            return factor, "value", value
         kernel = self.kernel
+        if kind == "one":
+            return kernel.value(factor, value)
+        own, value = kernel.multiples.get(value, ("1.0", value))
+        factor = _product(factor, own)
         read = (lambda i: kernel.at(series, i)) if kind == "value" else (lambda i: kernel.slot(series, i))
         key = tuple(sorted((read("_j"), kernel.at(value, "_j"))))
         if key not in kernel.convolutions:
