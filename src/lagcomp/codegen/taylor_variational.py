@@ -39,6 +39,12 @@ of columns, whose code numba compiles in bounded time.  The values are written b
 `lagcomp.integrate.taylor_sensitivities` appends the kernel to the model's module and compiles it once per
 model and choice of columns (cached on disk like any module).
 
+A column costs about a program here.  `lagcomp.codegen.taylor_jacobian` writes the same kernel from the
+series of J's nonzero entries (and ∂f/∂p's), computed once per order for all columns, then nnz(J)
+convolutions per column: `variational_source` writes whichever takes less time by their products per order
+(`forward_products`, `jacobian_products`, `JACOBIAN_PRODUCT_COST`): the Jacobian's for a sparse J (the
+double pendulum, from k = 1), forward mode for a dense J and few columns (the three bodies at k < 12).
+
 Parameter columns: the tangent with respect to p_j starts at 0 (the state does not depend on p_j at t0) and
 enters through the program's scalars: p_j itself (tangent 1), and every scalar computed from parameters, whose
 partial ∂c/∂p_j the decomposition stores with the setup (``partial`` statements, `lagcomp.codegen.taylor`).
