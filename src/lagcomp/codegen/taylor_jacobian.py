@@ -339,28 +339,27 @@ def jacobian_products(program: dict, columns: int, parameters: tuple[int, ...] =
 
 def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padded: int) -> list[str]:
     """The code of column ``_b + c``'s coefficient k + 1, for c < `width`: Ṡ_i[k] = Σ_j (J_ij ⊛ S_j)[k] + F_i
-    (F: the parameters' terms ∂f/∂p[k], 0 in the others), into S (the columns adjacent, ``_S``) and X."""
+    (F: the parameters' terms ∂f/∂p[k], 0 in the others), into S (the columns adjacent, ``_S``) and X.  A row's
+    convolutions sum into one accumulator per column: a pass's accumulators stay a few vectors (one per entry
+    and column, the double pendulum's 72 at k = 9, spill: 6.1 against 4.6 µs per call at order 13)."""
     kernel = sweeps.kernel
 
     def s(i, index, c):     # coefficient `index` of S_i in column _b + c
         return f"_S[({i}*(order + 1) + {index})*{padded} + _b + {c}]"
-    init, loop, stores, convolutions = [], [], [], 0
-    terms: dict[int, list] = {i: [] for i in range(n_state)}     # row i: (factor, the code in column c)
-    for i, j, (factor, kind, series) in sweeps.entries(n_state):
-        if kind == "one":
-            terms[i].append((factor, lambda c, j=j: s(j, "k", c)))
-            continue
-        read = kernel.at(series, "_j") if kind == "value" else kernel.slot(series, "_j")
-        start = kernel.at(series, 0) if kind == "value" else kernel.slot(series, 0)
-        for c in range(width):
-            init.append(f"_a{convolutions}_{c} = {start}*{s(j, 'k', c)}")
-            loop.append(f"{INDENT}_a{convolutions}_{c} += {read}*{s(j, 'k - _j', c)}")
-        terms[i].append((factor, lambda c, n=convolutions: f"_a{n}_{c}"))
-        convolutions += 1
+    init, loop, stores = [], [], []
+    entries = sweeps.entries(n_state)
     for i in range(n_state):
+        ones = [(factor, j) for row, j, (factor, kind, _) in entries if row == i and kind == "one"]
+        series = [(factor, j, kernel.at if kind == "value" else kernel.slot, name)
+                  for row, j, (factor, kind, name) in entries if row == i and kind != "one"]
         for c in range(width):
-            total = " + ".join(_scaled(f, code(c)) for f, code in terms[i])
-            stores.append(f"_v = ({total} + _F[{i * padded} + _b + {c}])*_ik1" if total
+            if series:
+                init.append(f"_a{i}_{c} = " + " + ".join(f"{_scaled(f, read(name, 0))}*{s(j, 'k', c)}"
+                                                         for f, j, read, name in series))
+                loop.append(f"{INDENT}_a{i}_{c} += " + " + ".join(f"{_scaled(f, read(name, '_j'))}*{s(j, 'k - _j', c)}"
+                                                                  for f, j, read, name in series))
+            total = [f"_a{i}_{c}"] * bool(series) + [_scaled(f, s(j, "k", c)) for f, j in ones]
+            stores.append(f"_v = ({' + '.join(total)} + _F[{i * padded} + _b + {c}])*_ik1" if total
                           else f"_v = _F[{i * padded} + _b + {c}]*_ik1")
             stores.append(f"{s(i, 'k + 1', c)} = _v")
             store = f"X[{n_state}*(_b + {c} + 1) + {i}, k + 1] = _v"
