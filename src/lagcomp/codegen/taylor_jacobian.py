@@ -38,8 +38,8 @@ to rounding.  `jacobian_products` counts its products per order (the convolution
 double pendulum: 20 (J's series) + 8 per column, + 23 for ∂f/∂p's five columns, against 19 per column in
 forward mode; per call (the two kernels interleaved in one process), k = 4: 5.2 against 6.6 µs at order 20;
 k = 9 with the parameters: 8.7 against 17.5 µs at order 20, 4.6 against 8.9 at order 13.  Compiling it takes
-no longer than forward mode's kernel (cold, CPU shared: k = 9, 11 s against 12 s; n_link_pendulum(3), k = 6,
-67 s against 125 s).
+no longer than forward mode's kernel (cold, CPU shared: k = 4, 4.7 s against 6.1 s; k = 9, 12.7 against 12.9;
+n_link_pendulum(3), k = 6, 67 against 125).
 """
 
 from __future__ import annotations
