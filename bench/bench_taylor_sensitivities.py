@@ -6,9 +6,9 @@ The double pendulum (m = l = 1, g = 9.81) from a regular state (θ = (0.5, 0.3) 
 (θ = (2, 1)), the 4 × 4 sensitivities ∂y(t)/∂y(0) with the state, to t_end = 10 and 100, and once with the
 five parameters' columns too (k = 9; heyoka: ``var_args.vars | var_args.params``):
 
-* lagcomp: ``simulate(method="taylor", sensitivities=("q0", "qd0"))`` (the Taylor program differentiated in
-  forward mode, `lagcomp.codegen.taylor_variational`; the state's steps), ``save_every`` large so that only the
-  end is kept;
+* lagcomp: ``simulate(method="taylor", sensitivities=("q0", "qd0"))`` (the kernel from the series of J's
+  entries, `lagcomp.codegen.taylor_jacobian`, which `lagcomp.codegen.taylor_variational` picks for this model;
+  the state's steps), ``save_every`` large so that only the end is kept;
 * heyoka: ``taylor_adaptive(var_ode_sys(sys, var_args.vars, order=1))`` on the hand-reduced ODE (the form
   `bench.bench_taylor` uses), ``propagate_until``.
 
@@ -19,10 +19,15 @@ the integration only (both compiled before: heyoka's JIT and numba's kernels), t
 interleaved rounds; the ratio (the median of the per-round ratios) is lagcomp / heyoka (below 1: lagcomp faster).
 
 Measured (``--repeats 15``, × heyoka; "both" is heyoka's step rule, so the same steps and errors): k = 4,
-machine precision: 1.01 / 0.92 / 0.97 ("both"; regular t = 10, 100, chaotic t = 10), 0.86 / 0.78 / 0.81
-("state"); tol 1e-10: 1.27 / 1.05 / 1.17 and 1.02 / 0.83 / 0.90 (lagcomp's fixed cost of a run, 0.2 ms, is a
-fifth of the 1-ms runs).  k = 9 (regular, t = 100): 1.54 / 1.36 at machine precision, 1.88 / 1.62 at 1e-10.
-Before the k columns were written out (a loop over them inside each operation) k = 4 "both" took 1.5x heyoka's.
+machine precision: 0.78 / 0.73 / 0.83 ("both"; regular t = 10, 100, chaotic t = 10), 0.67 / 0.60 / 0.66
+("state"); tol 1e-10: 0.98 / 0.85 / 0.97 and 0.83 / 0.68 / 0.78.  k = 9 (regular, t = 100): 0.81 / 0.72 at
+machine precision, 1.08 / 0.87 at 1e-10 ("both"/"state").  lagcomp's fixed cost of a run: 0.19 ms, a fifth of
+the 1-ms runs (heyoka's ``propagate_until``: µs): Python around the driver, spread out (the options, the
+columns and initial state, the Solution, numba's dispatch of the kernels as function values), 0.11 ms of it a
+plain run's.  Before (forward mode, `lagcomp.codegen.taylor_variational`, in the same conditions,
+``--repeats 7``): k = 4 machine precision 1.08 / 0.94 / 1.03 and 0.91 / 0.80 / 0.94, tol 1e-10 1.34 / 1.10 /
+1.19 and 1.21 / 0.87 / 0.98; k = 9 1.62 / 0.94 and 1.92 / 1.64; the fixed cost 0.31 ms.  Before the k columns
+were written out (a loop over them inside each operation) k = 4 "both" took 1.5x heyoka's.
 """
 
 from __future__ import annotations

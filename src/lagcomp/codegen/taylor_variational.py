@@ -39,6 +39,12 @@ of columns, whose code numba compiles in bounded time.  The values are written b
 `lagcomp.integrate.taylor_sensitivities` appends the kernel to the model's module and compiles it once per
 model and choice of columns (cached on disk like any module).
 
+A column costs about a program here.  `lagcomp.codegen.taylor_jacobian` writes the same kernel from the
+series of J's nonzero entries (and ∂f/∂p's), computed once per order for all columns, then nnz(J)
+convolutions per column: `variational_source` writes whichever takes less time by their products per order
+(`forward_products`, `jacobian_products`, `JACOBIAN_PRODUCT_COST`): the Jacobian's for a sparse J (the
+double pendulum, from k = 1), forward mode for a dense J and few columns (the three bodies at k < 12).
+
 Parameter columns: the tangent with respect to p_j starts at 0 (the state does not depend on p_j at t0) and
 enters through the program's scalars: p_j itself (tangent 1), and every scalar computed from parameters, whose
 partial ∂c/∂p_j the decomposition stores with the setup (``partial`` statements, `lagcomp.codegen.taylor`).
@@ -272,37 +278,28 @@ class _Writer:
                                   lambda c: [f"{t(w, 'k', c)} = _s{c}/{at(a, 0)}"])
         raise ValueError(f"no tangent recurrence for the operation {kind!r}")
 
-    def value_lines(self, op: Op) -> list[str]:
-        """Coefficient k of `op`'s value(s): the code of ``taylor_coefficients`` (`lagcomp.codegen.taylor`)."""
-        if op.kind == "comment":
-            return [f"# {op.const}"]
-        if op.kind == "pivot":
-            scale = self.at(op.args[1], 0) if len(op.args) > 1 else op.const
-            return [f"if k == 0 and not {pivot_test(self.at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
-        if op.kind == "state":
-            return [f"X[{op.index}, k + 1] = {linear_line(op, self.at)}*_ik1"]
-        if op.kind in LINEAR:
-            return [linear_line(op, self.at)]
-        summary, loop = convolution_loop(op, self.at)
-        return [f"# {summary}", *loop]
 
 
-def variational_source(program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0) -> str:
-    """The source of ``taylor_variational_coefficients`` for `columns` sensitivity columns, the last of them
-    those of `parameters` (indices into p), and of ``VARIATIONAL_COLUMNS`` and ``VARIATIONAL_WORK`` (rows of W)
-    for `program` (see the module docstring), to follow the model's module (it uses the module's imports:
-    math, sin, cos, ...).  `scale` is the columns' factor (`lagcomp.integrate.sensitivities`): the seeds of
-    the parameter columns, the initial-state ones' coming with y."""
-    writer = _Writer(program, columns, parameters, scale)
-    n_state, ops, rows = program["n_state"], _ops(program), writer.row_count
-    lines = [
-        f'"""The Taylor coefficients of y = (x, S[:, 0], ..., S[:, {columns - 1}]): x\'s as `taylor_coefficients`',
-        "computes them (rows 0..N-1 of X), then those of each sensitivity column (rows N (1 + c) + i), from",
-        "the program differentiated in forward mode (lagcomp.codegen.taylor_variational).  W: the work",
-        f"array, {rows} rows of values, then as many of tangents per column.",
-        'Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."""',
-        "order = X.shape[1] - 1",
-    ]
+def value_lines(op: Op, at) -> list[str]:
+    """Coefficient k of `op`'s value(s): the code of ``taylor_coefficients`` (`lagcomp.codegen.taylor`), with
+    ``at(name, index)`` the code of a coefficient (`_Writer.at`)."""
+    if op.kind == "comment":
+        return [f"# {op.const}"]
+    if op.kind == "pivot":
+        scale = at(op.args[1], 0) if len(op.args) > 1 else op.const
+        return [f"if k == 0 and not {pivot_test(at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
+    if op.kind == "state":
+        return [f"X[{op.index}, k + 1] = {linear_line(op, at)}*_ik1"]
+    if op.kind in LINEAR:
+        return [linear_line(op, at)]
+    summary, loop = convolution_loop(op, at)
+    return [f"# {summary}", *loop]
+
+
+def setup_lines(program: dict, columns: int, parameters: tuple[int, ...]) -> list[str]:
+    """The kernel's statements before its order loop: the setup's scalars (and the partials of the `parameters`'
+    columns), the pivot checks, coefficient 0 of y (all N (1 + `columns`) rows of X) and the time's series."""
+    lines = ["order = X.shape[1] - 1"]
     for statement in (Setup(**entry) for entry in program["setup"]):
         if statement.kind == "param":
             lines.append(f"{statement.name} = p[{statement.index}]")
@@ -312,7 +309,61 @@ def variational_source(program: dict, columns: int, parameters: tuple[int, ...] 
             lines += [f"if not {statement.code}:", f"{INDENT}return {statement.index}"]
         elif statement.kind == "partial" and statement.index in parameters:
             lines.append(f"{statement.name} = {statement.code}")
-    lines += [f"for i in range({n_state * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
+    lines += [f"for i in range({program['n_state'] * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
+    if program["uses_t"]:
+        time = work_rows(program).index("_t")
+        lines += ["for k in range(order + 1):", f"{INDENT}W[{time}, k] = 0.0", f"W[{time}, 0] = t",
+                  "if order > 0:", f"{INDENT}W[{time}, 1] = 1.0"]
+    return lines
+
+
+def kernel_source(docstring: list[str], lines: list[str], columns: int, work: int) -> str:
+    """The kernel ``taylor_variational_coefficients`` of the body `lines` (and its `docstring`'s lines), then
+    ``VARIATIONAL_COLUMNS`` (`columns`) and ``VARIATIONAL_WORK`` (`work`, the rows of W)."""
+    docstring = [f'"""{docstring[0]}', *docstring[1:-1], f'{docstring[-1]}"""']
+    body = "\n".join(INDENT + line if line else "" for line in [*docstring, *lines])
+    return (
+        '\n\n@njit(cache=True, error_model="numpy", fastmath={"contract"})\n'
+        f"def {KERNEL}(t, y, p, X, W):\n"
+        f"{body}\n\n\n"
+        f"#: The sensitivity columns of `{KERNEL}`, and the rows of its work array W.\n"
+        f"VARIATIONAL_COLUMNS = {columns}\nVARIATIONAL_WORK = {work}\n"
+    )
+
+
+#: The products of a tangent recurrence per term of its sums, by operation (a mul's: per moving operand).
+_TANGENT_PRODUCTS = {"sin_cos": 2, "square": 1, "exp": 1, "sqrt": 1, "log": 1, "pow": 2, "rdiv": 1, "div": 1}
+
+
+def forward_products(program: dict, columns: int, parameters: tuple[int, ...] = ()) -> int:
+    """The products per term of the convolutions (the cost of an order, at order ≫ 1) of `forward_source`'s
+    tangents: each operation's tangent recurrence, in every column."""
+    writer = _Writer(program, columns, parameters)
+    count = 0
+    for op in _ops(program):
+        if op.kind in ("comment", "pivot", "state") or op.kind in LINEAR or not writer.moves(op.out[0]):
+            continue
+        moving = sum(writer.moves(a) for a in op.args)
+        count += moving if op.kind == "mul" else _TANGENT_PRODUCTS[op.kind] + (op.kind in ("div", "rdiv")
+                                                                               and writer.moves(op.args[-1]))
+    return count * columns
+
+
+def forward_source(program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0) -> str:
+    """The source of ``taylor_variational_coefficients`` for `columns` sensitivity columns, the last of them
+    those of `parameters` (indices into p), and of ``VARIATIONAL_COLUMNS`` and ``VARIATIONAL_WORK`` (rows of W)
+    for `program` (see the module docstring), to follow the model's module (it uses the module's imports:
+    math, sin, cos, ...).  `scale` is the columns' factor (`lagcomp.integrate.sensitivities`): the seeds of
+    the parameter columns, the initial-state ones' coming with y."""
+    writer = _Writer(program, columns, parameters, scale)
+    n_state, ops, rows = program["n_state"], _ops(program), writer.row_count
+    docstring = [
+        f"The Taylor coefficients of y = (x, S[:, 0], ..., S[:, {columns - 1}]): x's as `taylor_coefficients`",
+        "computes them (rows 0..N-1 of X), then those of each sensitivity column (rows N (1 + c) + i), from",
+        "the program differentiated in forward mode (lagcomp.codegen.taylor_variational).  W: the work",
+        f"array, {rows} rows of values, then as many of tangents per column.",
+        "Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."]
+    lines = setup_lines(program, columns, parameters)
     lines += ["T = W.reshape(-1)   # the tangents, after the values' rows"]
     padded, base = writer.padded, f"{rows}*(order + 1)"
     lines += [f"_t{s} = {base} + {s * padded}*(order + 1)" for s in range(len(writer.slots))]
@@ -329,11 +380,8 @@ def variational_source(program: dict, columns: int, parameters: tuple[int, ...] 
                 tangent = writer.constants.tangent(name, j)
                 if tangent is not None:
                     lines.append(f"T[_g{i} + {column}] = {tangent}")
-    if program["uses_t"]:
-        lines += ["for k in range(order + 1):", f"{INDENT}{writer.at('_t', 'k')} = 0.0", f"{writer.at('_t', 0)} = t",
-                  "if order > 0:", f"{INDENT}{writer.at('_t', 1)} = 1.0"]
     lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
-    lines += [INDENT + line for op in ops for line in writer.value_lines(op)]
+    lines += [INDENT + line for op in ops for line in value_lines(op, writer.at)]
     looped = padded > writer.columns
     lines += [f"{INDENT}# The tangents of order k, {writer.columns} columns at a time.",
               f"{INDENT}for _b in range(0, {padded}, {writer.columns}):" if looped else f"{INDENT}_b = 0"]
@@ -343,14 +391,29 @@ def variational_source(program: dict, columns: int, parameters: tuple[int, ...] 
             tangent = [f"# d({', '.join(op.out)})", *tangent]
         lines += [INDENT * (2 if looped else 1) + line for line in tangent]
     lines.append("return 0")
-    body = "\n".join(INDENT + line if line else "" for line in lines)
-    return (
-        '\n\n@njit(cache=True, error_model="numpy", fastmath={"contract"})\n'
-        f"def {KERNEL}(t, y, p, X, W):\n"
-        f"{body}\n\n\n"
-        f"#: The sensitivity columns of `{KERNEL}`, and the rows of its work array W.\n"
-        f"VARIATIONAL_COLUMNS = {columns}\nVARIATIONAL_WORK = {rows + writer.tangent_rows}\n"
-    )
+    return kernel_source(docstring, lines, columns, rows + writer.tangent_rows)
+
+
+#: The time of a product of `lagcomp.codegen.taylor_jacobian`'s kernel, in products of forward mode's: its
+#: convolutions are independent chains (the directions', the columns') in a loop, forward mode's a column's
+#: chain (k < 4) or a vector of columns.  Per call at order 20 (jacobian / forward: time, products): double
+#: pendulum k = 1, 4, 9 (with the parameters): 0.89, 0.80, 0.61 for 28/19, 52/76, 124/171; n_link_pendulum(3)
+#: k = 1, 2, 6: 1.03, 0.73, 0.54 for 134/70, 152/140, 224/420; the three bodies (J dense) k = 1, 4, 12: 1.69,
+#: 1.18, 0.86 for 108/30, 216/120, 504/360: the crossover where the products' ratio is 1.5 to 1.9.
+JACOBIAN_PRODUCT_COST = 2 / 3
+
+
+def variational_source(program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0) -> str:
+    """The source of ``taylor_variational_coefficients`` (and its constants) for `columns` sensitivity columns,
+    the last of them those of `parameters`, by whichever of `forward_source` and
+    `lagcomp.codegen.taylor_jacobian.jacobian_source` takes less time per order: their products per order
+    (`forward_products`, `jacobian_products`), the latter's weighted by `JACOBIAN_PRODUCT_COST`."""
+    from lagcomp.codegen.taylor_jacobian import jacobian_products, jacobian_source
+
+    jacobian = JACOBIAN_PRODUCT_COST * jacobian_products(program, columns, parameters)
+    if jacobian < forward_products(program, columns, parameters):
+        return jacobian_source(program, columns, parameters, scale)
+    return forward_source(program, columns, parameters, scale)
 
 
 def variational_module(module_source: str, program: dict, columns: int, parameters: tuple[int, ...] = (),

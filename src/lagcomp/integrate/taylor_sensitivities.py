@@ -3,7 +3,8 @@
 `lagcomp.integrate.sensitivities` integrates y = (x, S[:, 0], ..., S[:, k−1]) (N (1 + k) components).  With
 ``method="taylor"`` the library driver `taylor_run` runs it unchanged: its kernel is
 ``taylor_variational_coefficients`` (`lagcomp.codegen.taylor_variational`: the model's Taylor program
-differentiated in forward mode), which writes the series of x and of every column of S.  The driver's step
+differentiated in forward mode, or `lagcomp.codegen.taylor_jacobian`: from the series of J's entries, whichever
+is faster for the model and columns), which writes the series of x and of every column of S.  The driver's step
 rule takes the max norm of the last two coefficients over all rows; under ``sensitivity_control="state"`` the
 columns are integrated times 2⁻³⁰⁰ (exact: the tangent recurrences are linear in them), so the norms, hence
 the order, the steps and x itself, are a plain Taylor run's; under ``"both"`` the norms cover S too.  Dense

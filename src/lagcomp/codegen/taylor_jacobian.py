@@ -1,0 +1,413 @@
+r"""The sensitivities' series from the series of the Jacobian's entries: the variational kernel heyoka's way.
+
+`lagcomp.codegen.taylor_variational` differentiates every operation of the Taylor program in every sensitivity
+column (forward mode): a column costs about a program.  The variational equations S' = J S (+ ∂f/∂p) need less:
+with the series of J's nonzero entries along the solution, column c's coefficients are
+
+    Ṡ_i[k] = Σ_j Σ_{m=0..k} J_ij[m] S_j[k−m]  (+ ∂f_i/∂p[k] for a parameter's column),   S_i[k+1] = Ṡ_i[k]/(k+1),
+
+nnz(J) convolutions per column.  The series of J's column j is a sweep of the program's tangents in direction
+e_j with the state's tangent held at the constant unit series (not evolved: then u̇ = ∂u/∂y_j along y(t), a
+series like any other), once per order for all columns; ∂f/∂p_j's the same sweep from the scalars' partials
+(the setup's ``partial`` statements), with the state's tangent 0.  heyoka's ``var_ode_sys`` differentiates the
+ODE symbolically and decomposes J's entries with CSE; a sweep gets the same simplifications as it writes the
+code, by carrying each tangent as a sum of terms rather than a series:
+
+* ``one``: c δ_k0 (the unit series of the direction's own state; a constant's partial);
+* ``value``: c u, a value series of the program times a scalar (c code: a number, a scalar, their product);
+* ``slot``: c T, a series the sweep computes (a row of W after the values').
+
+A linear operation combines terms; a product with a ``one`` term is a ``value`` one (sin θ's tangent in θ's
+direction is cos θ itself, no convolution); only products of two series are convolutions, each computed once
+per kernel into a slot (sin(θ₁ − θ₂)'s partials in θ₁ and θ₂ are one series but for the sign: the sweeps share
+it); a linear result of more than one series is summed into a slot, so that its users convolve once; an
+operation whose tangent is 0 in a direction (it does not depend on it) has no code there.  The quotient, root,
+power and log keep their tangent recurrences (`lagcomp.codegen.taylor_variational`), one direction at a time.
+The code goes operation by operation, every direction's convolutions of the operation independent chains of
+one loop over j (so they overlap: a single chain waits on its additions).
+
+The columns' update is written out over the columns of a pass (`column_width`: all up to 9), with S's
+coefficients in W with the columns adjacent (as forward mode's tangents), so that LLVM makes a J entry's
+convolution in the pass's columns one vector; the parameters' terms ∂f/∂p[k] come in as F.
+
+`jacobian_source` writes the kernel, with the signature, the layout of X and the constants of
+`lagcomp.codegen.taylor_variational.forward_source`'s; the values are written by the same code as
+``taylor_coefficients`` (the state rows of X are bitwise its), the columns' rows agree with the forward mode's
+to rounding.  `jacobian_products` counts its products per order (the convolutions' terms), which
+`lagcomp.codegen.taylor_variational.variational_source` weighs against the forward mode's to pick one.  The
+double pendulum: 20 (J's series) + 8 per column, + 23 for ∂f/∂p's five columns, against 19 per column in
+forward mode; per call (the two kernels interleaved in one process), k = 4: 5.2 against 6.6 µs at order 20;
+k = 9 with the parameters: 8.7 against 17.5 µs at order 20, 4.6 against 8.9 at order 13.  Compiling it takes
+no longer than forward mode's kernel (cold, CPU shared: k = 4, 4.7 s against 6.1 s; k = 9, 12.7 against 12.9;
+n_link_pendulum(3), k = 6, 67 against 125).
+"""
+
+from __future__ import annotations
+
+from lagcomp.codegen import taylor_variational as variational
+from lagcomp.codegen.taylor_ops import LINEAR, Op
+from lagcomp.codegen.taylor_variational import (
+    INDENT,
+    _Constants,
+    _ops,
+    kernel_source,
+    setup_lines,
+    value_lines,
+    work_rows,
+)
+
+#: A term of a tangent: (factor (code), kind ("one", "value" or "slot"), series (a value's name, a slot's index)).
+Term = tuple[str, str, str]
+#: The operations whose tangent is a sum of products of a value series with the operand's tangent:
+#: mul (ȧ b + a ḃ), square (2 a ȧ), exp (w ȧ), sin_cos (c ȧ, −s ȧ).
+BILINEAR = ("mul", "square", "exp", "sin_cos")
+
+
+def _product(a: str, b: str) -> str:
+    """The code of the product of the factors `a` and `b` (codes), the signs and unit factors folded."""
+    negative = a.startswith("-") != b.startswith("-")
+    a, b = a.removeprefix("-"), b.removeprefix("-")
+    body = b if a == "1.0" else a if b == "1.0" else f"{a}*{b}"
+    return f"-{body}" if negative else body
+
+
+def _scaled(factor: str, code: str) -> str:
+    return code if factor == "1.0" else f"-{code}" if factor == "-1.0" else f"{factor}*{code}"
+
+
+def combine(*parts: tuple[str, tuple[Term, ...]]) -> tuple[Term, ...]:
+    """Σ factor · tangent over the (factor, tangent) `parts`, the terms of one series merged."""
+    merged: dict[tuple[str, str], str] = {}
+    for factor, tangent in parts:
+        for own, kind, name in tangent:
+            term = _product(factor, own)
+            merged[kind, name] = f"({merged[kind, name]} + {term})" if (kind, name) in merged else term
+    return tuple((factor, kind, name) for (kind, name), factor in merged.items())
+
+
+def _series_terms(tangent: tuple[Term, ...]) -> int:
+    return sum(kind != "one" for _, kind, _ in tangent)
+
+
+class _Kernel:
+    """What the sweeps share: the code of the values' coefficients, the slots, the convolutions computed."""
+
+    def __init__(self, program: dict, parameters: tuple[int, ...], scale: float):
+        self.states = {name: i for i, name in enumerate(program["states"])}
+        self.rows = {name: i for i, name in enumerate(work_rows(program))}
+        self.row_count = max(len(self.rows), 1)
+        self.constants = _Constants(program, parameters, scale)
+        self.slots = 0
+        #: {(the two series' codes at _j, sorted): the slot of their convolution}
+        self.convolutions: dict[tuple[str, str], str] = {}
+        #: {series: (c, u)}: the series is c u, u a series not so computed (a scale or a negation of one)
+        self.multiples: dict[str, tuple[str, str]] = {}
+        for op in _ops(program):
+            if op.kind in ("scale", "neg"):
+                factor, root = self.multiples.get(op.args[0], ("1.0", op.args[0]))
+                self.multiples[op.out[0]] = _product(op.const if op.kind == "scale" else "-1.0", factor), root
+
+    def value(self, factor: str, name: str) -> Term:
+        """The term `factor` × the value series `name`, as a multiple of the series it is one of (`multiples`):
+        so that the terms of a tangent in proportional series merge, and their convolutions are shared (the
+        double pendulum's M₁₀ = c cos(θ₁ − θ₂) and L₁₀ = M₁₀/M₀₀: cos(θ₁ − θ₂)'s multiples)."""
+        own, root = self.multiples.get(name, ("1.0", name))
+        return _product(factor, own), "value", root
+
+    def at(self, name: str, index) -> str:
+        if name in self.states:
+            return f"X[{self.states[name]}, {index}]"
+        return f"W[{self.rows[name]}, {index}]"
+
+    def slot(self, slot: str, index) -> str:
+        return f"W[{self.row_count + int(slot)}, {index}]"
+
+    def new_slot(self) -> str:
+        self.slots += 1
+        return str(self.slots - 1)
+
+    def term_at(self, term: Term, index) -> str:
+        """Coefficient `index` of the term (a ``one`` term: at index k)."""
+        factor, kind, name = term
+        if kind == "one":
+            return f"({factor} if k == 0 else 0.0)"
+        return _scaled(factor, self.at(name, index) if kind == "value" else self.slot(name, index))
+
+    def sum_at(self, tangent: tuple[Term, ...], index="k") -> str:
+        return " + ".join(self.term_at(term, index) for term in tangent) or "0.0"
+
+
+class _Code:
+    """The code of one operation's tangents in every direction: lines before a loop over j = 1..k, the
+    statements of that loop (each direction's sums independent chains in it), lines after; `products` its
+    products per term."""
+
+    def __init__(self):
+        self.before: list[str] = []
+        self.loop: list[str] = []
+        self.after: list[str] = []
+        self.products = 0
+        self.accumulators = 0
+
+    def accumulator(self, start: str) -> str:
+        """A new accumulator of the loop, set to `start` (code) before it."""
+        self.accumulators += 1
+        self.before.append(f"_a{self.accumulators - 1} = {start}")
+        return f"_a{self.accumulators - 1}"
+
+    def lines(self) -> list[str]:
+        loop = ["for _j in range(1, k + 1):", *(INDENT + line for line in self.loop)] if self.loop else []
+        return [*self.before, *loop, *self.after]
+
+
+class _Sweep:
+    """The tangents of the program's series in one direction: a state's (its tangent the unit series) or a
+    parameter's (`parameter`: its index in p), as sums of terms, and the tangent of each state's derivative
+    (`derivatives`: J's column, or ∂f/∂p_j)."""
+
+    def __init__(self, kernel: _Kernel, state: str | None = None, parameter: int | None = None):
+        self.kernel, self.parameter = kernel, parameter
+        self.tangents: dict[str, tuple[Term, ...]] = {state: (("1.0", "one", ""),)} if state is not None else {}
+        self.derivatives: dict[int, tuple[Term, ...]] = {}
+
+    def of(self, name: str) -> tuple[Term, ...]:
+        return self.tangents.get(name, ())
+
+    def constant(self, const: str) -> tuple[Term, ...]:
+        """The tangent of the scalar `const`: its partial as a ``one`` term (none in a state's direction)."""
+        tangent = self.kernel.constants.tangent(const, self.parameter)
+        return () if tangent is None else ((tangent, "one", ""),)
+
+    def materialized(self, tangent: tuple[Term, ...], lines: list[str]) -> str:
+        """A slot holding the series `tangent` (its own, when it is one slot), computed by a line appended to
+        `lines`."""
+        if len(tangent) == 1 and tangent[0][1] == "slot" and tangent[0][0] == "1.0":
+            return tangent[0][2]
+        slot = self.kernel.new_slot()
+        lines.append(f"{self.kernel.slot(slot, 'k')} = {self.kernel.sum_at(tangent)}")
+        return slot
+
+    def _set(self, name: str, tangent: tuple[Term, ...], code: _Code) -> None:
+        """The tangent of `name`, as one slot when it has more than one series (so that a user convolves once;
+        after `code`'s loop, whose results it may sum)."""
+        if _series_terms(tangent) > 1:
+            tangent = (("1.0", "slot", self.materialized(tangent, code.after)),)
+        if tangent:
+            self.tangents[name] = tangent
+
+    def add(self, op: Op, code: _Code) -> None:
+        """The tangent(s) of `op`'s result(s), their code (the new series') into `code`."""
+        kind, const = op.kind, op.const
+        if kind in ("comment", "pivot"):
+            return
+        if kind == "state":
+            self.derivatives[op.index] = self.of(op.args[0]) if op.args else self.constant(const)
+        elif kind in LINEAR:
+            a, b = self.of(op.args[0]), self.of(op.args[-1])
+            tangent = {
+                "add": lambda: combine(("1.0", a), ("1.0", b)),
+                "sub": lambda: combine(("1.0", a), ("-1.0", b)),
+                "neg": lambda: combine(("-1.0", a)),
+                "scale": lambda: combine((const, a), ("1.0", tuple(self.kernel.value(f, op.args[0])
+                                                                   for f, _, _ in self.constant(const)))),
+                "add_const": lambda: combine(("1.0", a), ("1.0", self.constant(const))),
+                "rsub_const": lambda: combine(("1.0", self.constant(const)), ("-1.0", a)),
+            }[kind]()
+            self._set(op.out[0], tangent, code)
+        elif kind in BILINEAR:
+            self._bilinear(op, code)
+        else:
+            self._recurrence(op, code)
+
+    def _bilinear(self, op: Op, code: _Code) -> None:
+        """An operation of `BILINEAR`: per result, Σ factor (term ⊛ value series) (`_times`)."""
+        a = op.args[0]
+        if op.kind == "mul":
+            b = op.args[1]
+            outputs = {op.out[0]: [("1.0", t, b) for t in self.of(a)] + [("1.0", t, a) for t in self.of(b)]}
+        elif op.kind == "square":
+            outputs = {op.out[0]: [("2.0", t, a) for t in self.of(a)]}
+        elif op.kind == "exp":
+            outputs = {op.out[0]: [("1.0", t, op.out[0]) for t in self.of(a)]}
+        else:
+            s, c = op.out
+            outputs = {s: [("1.0", t, c) for t in self.of(a)], c: [("-1.0", t, s) for t in self.of(a)]}
+        tangents = {name: combine(*((f, (self._times(term, v, code),)) for f, term, v in products))
+                    for name, products in outputs.items()}
+        for name, tangent in tangents.items():
+            self._set(name, tangent, code)
+
+    def _times(self, term: Term, value: str, code: _Code) -> Term:
+        """The term ⊛ the value series `value`: a ``one`` term's factor times `value`; otherwise the factor times
+        the convolution of the two series, a slot computed once per kernel (the sweeps of other directions
+        reuse it: sin(θ₁ − θ₂)'s partials in θ₁ and θ₂ are the same series but for the sign)."""
+        factor, kind, series = term
+        kernel = self.kernel
+        if kind == "one":
+            return kernel.value(factor, value)
+        own, value = kernel.multiples.get(value, ("1.0", value))
+        factor = _product(factor, own)
+        read = (lambda i: kernel.at(series, i)) if kind == "value" else (lambda i: kernel.slot(series, i))
+        key = tuple(sorted((read("_j"), kernel.at(value, "_j"))))
+        if key not in kernel.convolutions:
+            slot = kernel.convolutions[key] = kernel.new_slot()
+            total = code.accumulator(f"{read(0)}*{kernel.at(value, 'k')}")
+            code.loop.append(f"{total} += {read('_j')}*{kernel.at(value, 'k - _j')}")
+            code.after.append(f"{kernel.slot(slot, 'k')} = {total}")
+            code.products += 1
+        return factor, "slot", kernel.convolutions[key]
+
+    def _recurrence(self, op: Op, code: _Code) -> None:
+        """A quotient, root, power or log: its tangent recurrence (`lagcomp.codegen.taylor_variational`), the
+        operands' tangents read at k as terms, or in the loop over j from a slot."""
+        kind, (w,), kernel = op.kind, op.out, self.kernel
+        a, b = op.args[0], op.args[-1]
+        top = self.of(a) if kind != "rdiv" else self.constant(op.const)
+        moves_b = kind in ("div", "rdiv") and bool(self.of(b))
+        if not top and not moves_b:
+            return
+        slot = kernel.new_slot()
+        own, at, loop, after = (lambda index: kernel.slot(slot, index)), kernel.at, code.loop, code.after
+        if kind in ("div", "rdiv"):   # ẇ[k] b[0] = ȧ[k] − w[0] ḃ[k] − Σ_{j=1..k} (w[j] ḃ[k−j] + b[j] ẇ[k−j])
+            if moves_b:
+                db = self.materialized(self.of(b), code.before)
+                total = code.accumulator(f"{kernel.sum_at(top)} - {at(w, 0)}*{kernel.slot(db, 'k')}")
+                loop.append(f"{total} -= {at(w, '_j')}*{kernel.slot(db, 'k - _j')} + {at(b, '_j')}*{own('k - _j')}")
+            else:
+                total = code.accumulator(kernel.sum_at(top))
+                loop.append(f"{total} -= {at(b, '_j')}*{own('k - _j')}")
+            after.append(f"{own('k')} = {total}/{at(b, 0)}")
+            code.products += 1 + moves_b
+        elif kind == "sqrt":          # 2 w[0] ẇ[k] = ȧ[k] − 2 Σ_{j=1..k} w[j] ẇ[k−j]
+            total = code.accumulator("0.0")
+            loop.append(f"{total} += {at(w, '_j')}*{own('k - _j')}")
+            after.append(f"{own('k')} = ({kernel.sum_at(top)} - 2.0*{total})/(2.0*{at(w, 0)})")
+            code.products += 1
+        elif kind == "pow":           # a[0] ẇ[k] = α Σ_{j=0..k} w[j] ȧ[k−j] − Σ_{j=1..k} a[j] ẇ[k−j]
+            da = self.materialized(top, code.before)
+            total = code.accumulator(f"{op.const}*{at(w, 0)}*{kernel.slot(da, 'k')}")
+            loop.append(f"{total} += {op.const}*{at(w, '_j')}*{kernel.slot(da, 'k - _j')} - "
+                        f"{at(a, '_j')}*{own('k - _j')}")
+            after.append(f"{own('k')} = {total}/{at(a, 0)}")
+            code.products += 2
+        elif kind == "log":           # a[0] ẇ[k] = ȧ[k] − Σ_{j=1..k} a[j] ẇ[k−j]
+            total = code.accumulator(kernel.sum_at(top))
+            loop.append(f"{total} -= {at(a, '_j')}*{own('k - _j')}")
+            after.append(f"{own('k')} = {total}/{at(a, 0)}")
+            code.products += 1
+        else:
+            raise ValueError(f"no tangent recurrence for the operation {kind!r}")
+        self.tangents[w] = (("1.0", "slot", slot),)
+
+
+class _Sweeps:
+    """Every direction's sweep of `program` (the states', J's columns; the `parameters'`, ∂f/∂p's, their
+    scalars' partials times `scale`), and their code per order: operation by operation, the directions'
+    convolutions independent chains of one loop."""
+
+    def __init__(self, program: dict, parameters: tuple[int, ...], scale: float):
+        self.kernel = _Kernel(program, parameters, scale)
+        self.states = [_Sweep(self.kernel, state=name) for name in program["states"]]
+        self.parameters = [_Sweep(self.kernel, parameter=j) for j in parameters]
+        self.lines: list[str] = []
+        self.products = 0
+        for op in _ops(program):
+            code = _Code()
+            for sweep in (*self.states, *self.parameters):
+                sweep.add(op, code)
+            if code.before or code.after:
+                self.lines += [f"# d({', '.join(op.out)})", *code.lines()]
+            self.products += code.products
+
+    def entries(self, n_state: int) -> list[tuple[int, int, Term]]:
+        """J's nonzero entries, (i, j, term) per term of J_ij's tangent, by row."""
+        return [(i, j, term) for i in range(n_state) for j, sweep in enumerate(self.states)
+                for term in sweep.derivatives.get(i, ())]
+
+
+def column_width(program: dict, columns: int, convolutions: int) -> int:
+    """The columns of one pass of the column update (`lagcomp.codegen.taylor_variational.block_width`'s rule,
+    with J's `convolutions` per column for the program's operations)."""
+    width = columns if columns <= variational.UNROLLED_COLUMNS else variational.BLOCK
+    return max(1, min(width, variational.COLUMN_OPERATIONS_MAX // max(convolutions, 1)))
+
+
+def jacobian_products(program: dict, columns: int, parameters: tuple[int, ...] = ()) -> int:
+    """The products per term of the convolutions (the cost of an order, at order ≫ 1) of `jacobian_source`'s
+    kernel: the sweeps', and the columns' (J's entries that are series, per column)."""
+    sweeps = _Sweeps(program, parameters, 1.0)
+    per_column = sum(term[1] != "one" for _, _, term in sweeps.entries(program["n_state"]))
+    return sweeps.products + columns * per_column
+
+
+def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padded: int) -> list[str]:
+    """The code of column ``_b + c``'s coefficient k + 1, for c < `width`: Ṡ_i[k] = Σ_j (J_ij ⊛ S_j)[k] + F_i
+    (F: the parameters' terms ∂f/∂p[k], 0 in the others), into S (the columns adjacent, ``_S``) and X.  A row's
+    convolutions sum into one accumulator per column: a pass's accumulators stay a few vectors (one per entry
+    and column, the double pendulum's 72 at k = 9, spill: 6.1 against 4.6 µs per call at order 13)."""
+    kernel = sweeps.kernel
+
+    def s(i, index, c):     # coefficient `index` of S_i in column _b + c
+        return f"_S[({i}*(order + 1) + {index})*{padded} + _b + {c}]"
+    init, loop, stores = [], [], []
+    entries = sweeps.entries(n_state)
+    for i in range(n_state):
+        ones = [(factor, j) for row, j, (factor, kind, _) in entries if row == i and kind == "one"]
+        series = [(factor, j, kernel.at if kind == "value" else kernel.slot, name)
+                  for row, j, (factor, kind, name) in entries if row == i and kind != "one"]
+        for c in range(width):
+            if series:
+                init.append(f"_a{i}_{c} = " + " + ".join(f"{_scaled(f, read(name, 0))}*{s(j, 'k', c)}"
+                                                         for f, j, read, name in series))
+                loop.append(f"{INDENT}_a{i}_{c} += " + " + ".join(f"{_scaled(f, read(name, '_j'))}*{s(j, 'k - _j', c)}"
+                                                                  for f, j, read, name in series))
+            total = [f"_a{i}_{c}"] * bool(series) + [_scaled(f, s(j, "k", c)) for f, j in ones]
+            stores.append(f"_v = ({' + '.join(total)} + _F[{i * padded} + _b + {c}])*_ik1" if total
+                          else f"_v = _F[{i * padded} + _b + {c}]*_ik1")
+            stores.append(f"{s(i, 'k + 1', c)} = _v")
+            store = f"X[{n_state}*(_b + {c} + 1) + {i}, k + 1] = _v"
+            stores += [store] if padded == columns else [f"if _b + {c} < {columns}:", INDENT + store]
+    loop = ["for _j in range(1, k + 1):", *loop] if loop else []
+    return [*init, *loop, *stores]
+
+
+def jacobian_source(program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0) -> str:
+    """The source of ``taylor_variational_coefficients`` (as `lagcomp.codegen.taylor_variational.forward_source`'s:
+    `columns` columns, the last of them those of `parameters`, `scale` their seeds' factor) from the series of
+    J's entries and of ∂f/∂p's (see the module docstring)."""
+    n_state = program["n_state"]
+    sweeps = _Sweeps(program, parameters, scale)
+    kernel = sweeps.kernel
+    entries = sum(term[1] != "one" for _, _, term in sweeps.entries(n_state))
+    width = column_width(program, columns, entries)
+    padded = -(-columns // width) * width
+    docstring = [
+        f"The Taylor coefficients of y = (x, S[:, 0], ..., S[:, {columns - 1}]): x's as `taylor_coefficients`",
+        "computes them (rows 0..N-1 of X), then those of each sensitivity column (rows N (1 + c) + i) from",
+        "the series of the Jacobian's entries (lagcomp.codegen.taylor_jacobian).  W: the work array, the",
+        f"values' {kernel.row_count} rows, the sweeps' series, then S's coefficients (the columns adjacent)",
+        "and the parameters' terms of order k.",
+        "Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."]
+    base = f"{kernel.row_count + kernel.slots}*(order + 1)"
+    lines = setup_lines(program, columns, parameters)
+    lines += [f"_S = W.reshape(-1)[{base}:{base} + {n_state * padded}*(order + 1)]   # S_i[m] of column c: "
+              f"_S[(i*(order + 1) + m)*{padded} + c]",
+              f"_F = W.reshape(-1)[{base} + {n_state * padded}*(order + 1):{base} + {n_state * padded}*(order + 2)]"
+              f"   # F_i of column c (the parameters' ∂f/∂p[k]): _F[i*{padded} + c]",
+              "_F[:] = 0.0", f"for _c in range({padded}):   # (padding: 0)"]
+    lines += [f"{INDENT}_S[{i}*(order + 1)*{padded} + _c] = y[{n_state}*(_c + 1) + {i}] if _c < {columns} else 0.0"
+              for i in range(n_state)]
+    lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
+    lines += [INDENT + line for op in _ops(program) for line in value_lines(op, kernel.at)]
+    lines += [f"{INDENT}# The series of J's entries and of ∂f/∂p, order k"] + [INDENT + line for line in sweeps.lines]
+    for position, sweep in enumerate(sweeps.parameters):
+        column = columns - len(parameters) + position
+        lines += [f"{INDENT}_F[{i * padded + column}] = {kernel.sum_at(tangent)}"
+                  for i, tangent in sorted(sweep.derivatives.items()) if tangent]
+    looped = padded > width
+    lines += [f"{INDENT}# Every column: Ṡ = J S + F, {width} columns at a time",
+              f"{INDENT}for _b in range(0, {padded}, {width}):" if looped else f"{INDENT}_b = 0"]
+    lines += [INDENT * (2 if looped else 1) + line for line in _update_lines(sweeps, n_state, columns, width, padded)]
+    lines.append("return 0")
+    # (S: N × padded rows of order + 1; F: N × padded floats, at most as many rows)
+    return kernel_source(docstring, lines, columns, kernel.row_count + kernel.slots + 2 * n_state * padded)
