@@ -317,6 +317,7 @@ CASES = {
                                                                  progress=False), "batched"),
     "reset-non-finite": (_fail("blowup"), "reset"),
     "events-accumulated": (_fail("ball", t_span=(0.0, 6.0)), "accumulate"),
+    "reset-gone-through": (_simulate("ball", params={"c": 0.0}), "lc.Contact"),
     "simultaneous-frictional-impact": (_fail("leaning", t_span=(0.0, 0.5), q0=[0.0, 0.0], qd0=[3.0, 0.0]),
                                        "sliding friction element"),
     "contact-restitution-out-of-range": (lambda: lc.Contact("floor", x, restitution=1.5), "`floor`"),

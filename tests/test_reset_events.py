@@ -7,6 +7,7 @@ and scipy's DOP853 restarted by hand at each event (a pendulum kicked at each up
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -141,6 +142,21 @@ def test_past_the_accumulation_point_the_run_stops_there_with_a_clear_status(bal
     assert sol.nsteps < 1000                                   # measured 171 (dop853), 157 (taylor)
     assert abs(sol.t[-1] - _accumulation(E, H0)) < 1e-9 * _accumulation(E, H0)
     assert len(sol.events["impact"]) > 100 and np.all(sol.q[:, 0] > -1e-12)
+
+
+@pytest.mark.parametrize("method", ["dop853", "taylor"])
+def test_a_reset_that_stops_the_fall_warns_when_the_ball_then_sinks_through_the_floor(ball, method):
+    """A "plastic floor" written as a reset (e = 0: ẋ⁺ = 0 at x = 0): gravity then takes the ball below the floor,
+    which leaves the event's zero rather than crossing it, so the event does not fire again.  The run warns and
+    names lc.Contact; a bounce (e = 0.5) does not warn, nor does a kick that carries on (the kicked pendulum)."""
+    with pytest.warns(lc.ResetWarning, match=r"event 'impact': its reset at t = 0\.4515.*lc\.Contact"):
+        sol = ball.simulate((0.0, 1.0), params={"e": 0.0}, method=method)
+    assert sol.status == Status.DONE and len(sol.events["impact"]) == 1
+    assert sol.q[-1, 0] < -0.5 * G * (1.0 - math.sqrt(2 * H0 / G)) ** 2 * (1 - 1e-9)   # it did sink: −g τ²/2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", lc.ResetWarning)
+        bounced = ball.simulate((0.0, 1.0), params={"e": 0.5}, method=method)
+    assert len(bounced.events["impact"]) == 2 and bounced.q[-1, 0] > 0       # impacts at 0.4515 and 0.9030
 
 
 # -- a reset coupling the state and time, against scipy restarted by hand ---------------------------------------

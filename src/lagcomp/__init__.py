@@ -21,6 +21,7 @@ from lagcomp.errors import (
     ModelError as ModelError,
     OptionError as OptionError,
     ParameterError as ParameterError,
+    ResetWarning as ResetWarning,
     SingularMassMatrixError as SingularMassMatrixError,
     StiffnessWarning as StiffnessWarning,
     UndeclaredSymbolError as UndeclaredSymbolError,

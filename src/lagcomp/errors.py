@@ -57,5 +57,10 @@ class CacheWarning(UserWarning):
     """A cache entry could not be used and was rebuilt."""
 
 
+class ResetWarning(UserWarning):
+    """An event's reset stopped the motion across its surface, and the body then went through the surface without
+    the event firing again (`lagcomp.integrate.reset_checks`): a floor that holds is ``lc.Contact``."""
+
+
 class StiffnessWarning(UserWarning):
     """An explicit method's steps were limited by its stability, not its accuracy: use ``method="radau"``."""

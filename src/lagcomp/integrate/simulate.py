@@ -42,8 +42,14 @@ from lagcomp.integrate.memory import check as check_memory
 from lagcomp.integrate.methods import library_function
 from lagcomp.integrate.options import RunOptions, positive, run_options
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
+from lagcomp.integrate.reset_checks import warn_of_resets_gone_through
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
-from lagcomp.integrate.solution import ContactSwitch, EventRecord, FrictionSwitch, Solution
+from lagcomp.integrate.solution import (
+    ContactSwitch,
+    EventRecord,
+    FrictionSwitch,
+    Solution,
+)
 from lagcomp.integrate.status import Status
 from lagcomp.integrate.stiffness import (
     ADVISED_FAILURES,
@@ -199,7 +205,11 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
                    event_sensitivities=sens.event_sensitivities(model, p, columns, scale,
                                                                 [part[:3] for part in event_parts]))
         recorder = recorder.recorder
-    return _solution(model, p, recorder, run, throw)
+    solution = _solution(model, p, recorder, run, throw)
+    if model.events:
+        warn_of_resets_gone_through(model, p, options.actions, solution.events, solution.t,
+                                    np.hstack([solution.q, solution.qd]))
+    return solution
 
 
 def _row_bytes(model, k_columns: int) -> int:
