@@ -26,6 +26,12 @@ the direction v from y = (x, v) and writes (f, J v) into out (2N,), w's terms dr
 ``rhs_tangent_parameters`` reads w from the end of p too.  They have ``rhs``'s signature, so that a run of one
 sensitivity column passes the kernel itself to the driver, which calls it as it calls ``rhs``: no closure
 between them, whose views of y and out and seven array arguments per call cost as much as the kernel.
+
+The kernels of many columns (`tangents_kernels`: ``rhs_tangents``, ``rhs_tangents_parameters``) take
+y = (x, S[:, 0], ..., S[:, m-1]) for any m: their CSE holds f, M (K) and the residual's nonzero partials
+∂(F − M ā)/∂x_j as locals, computed once, and an emitted loop over the columns contracts them with each column
+and substitutes by the one factorization (`lagcomp.ir.DirectionalSolve.columns`): a column costs about N
+(nonzeros of a row) products and a substitution, and numba compiles the loop body once whatever m.
 """
 
 from __future__ import annotations
@@ -174,8 +180,11 @@ def tangents_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
     columns of S (`lagcomp.ir.DirectionalSolve.columns`) contracts them per column and substitutes by the one
     factorization of M (constrained: one ``kkt_solve_matrix`` of all columns).  ``rhs_tangents`` is the same
     CSE without the parameters' partials (the temporaries only they read left out).  A column then costs its
-    contraction, N·(nonzero partials of its row) products, and a substitution; the shared part about
-    ``rhs_tangent``'s."""
+    contraction (the nonzero partials of the rows' products) and a substitution; the shared part about
+    ``rhs_tangent``'s (ns per call, double pendulum: k = 2 66, k = 4 72, ``rhs_tangent`` 54, ``rhs`` 37).
+    Measured at codegen (`lagcomp.compile`, CPU s, three fresh caches, before / after): double pendulum 0.11 /
+    0.12-0.13, 5-link 0.64-0.73 / 0.72-0.78; the first run with k = 2 columns (numba compiling the kernel) 0.98
+    / 0.29 s and 1.86 / 1.15 s (before: the full Jacobians' closure)."""
     n = eom.n
     size = 2 * n
     variables = (*eom.q, *eom.qd, *eom.parameters)
