@@ -24,11 +24,11 @@ Measured (``--t-end 300 --repeats 5``, CPU time), jacobian × / directional × (
           free axle       4.73 / 2.36; 4.74 / 2.41 (two parameters' columns)
   k = 2n  double pendulum 3.76 / 2.16; 4.79 / 2.78 (k = 4, target 6.0); 5-link 5.98 / 3.29; 8.07 / 4.44
           (k = 10, target 13.2); free axle 4.84 / 3.68; 5.12 / 3.99 (k = 10)
-Per call (``--calls --repeats 3``, ns, jacobian / directional): double pendulum (``rhs`` 37) k = 1 150 / 54, 2 156 / 66,
-4 170 / 72, with a parameter's 190 / 65 (k = 1) to 216 / 88 (k = 5); 5-link (``rhs`` 112) 426 / 169, 461 / 178, 760 / 320
-(k = 10), with a parameter's 584 / 228 to 974 / 380 (k = 11); free axle (``rhs`` 284) 1152 / 542, 1195 / 658, 1518 /
-1095 (k = 10), with a parameter's 1583 / 581 to 2012 / 1177 (k = 11).  ``rhs_tangents`` at k = 1 costs 64, 166, 591 ns
-against ``rhs_tangent``'s 54, 167, 531, hence one column keeps the latter.
+Per call (``--calls --repeats 3``, ns, jacobian / directional): double pendulum (``rhs`` 37) k = 1 150 / 54,
+2 156 / 66, 4 170 / 72, with a parameter's 190 / 65 (k = 1) to 216 / 88 (k = 5); 5-link (``rhs`` 112) 426 / 169,
+461 / 178, 760 / 320 (k = 10), with a parameter's 584 / 228 to 974 / 380 (k = 11); free axle (``rhs`` 284) 1152 /
+542, 1195 / 658, 1518 / 1095 (k = 10), with a parameter's 1583 / 581 to 2012 / 1177 (k = 11).  ``rhs_tangents`` at
+k = 1 costs 64, 166, 591 ns against ``rhs_tangent``'s 54, 167, 531, hence one column keeps the latter.
 Before ``rhs_tangents`` (at c68c8bd: k = 2 through a closure calling ``rhs_directional`` per column, with a
 parameter's, else the full Jacobians): k = 2 "state" 3.34, 3.36, 3.70; "both" 4.31, 4.72, 3.74; per call two
 columns 153 (full), 469 (full), 1170 (closure) ns.
