@@ -271,11 +271,10 @@ def tangent_kernel(module, cols: Columns):
     `lagcomp.codegen.directional.tangent_kernels`).  One column keeps its own kernels: ``rhs_tangents`` at k = 1
     costs 64 ns against 54, 166 against 167, 591 against 531 (double pendulum, 5-link, free axle; with a
     parameter's 70 / 65, 197 / 230, 631 / 559)."""
-    if cols.k > DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)] or not hasattr(module, "rhs_tangents"):
-        return None  # (Kane modules, and modules generated before the tangent kernels, have none)
-    if cols.k == 1:
-        return module.rhs_tangent_parameters if cols.parameters else module.rhs_tangent
-    return module.rhs_tangents_parameters if cols.parameters else module.rhs_tangents
+    if cols.k > DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)]:
+        return None
+    name = ("rhs_tangent" if cols.k == 1 else "rhs_tangents") + ("_parameters" if cols.parameters else "")
+    return getattr(module, name, None)  # (Kane modules, and modules generated before the kernel, have none)
 
 
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
