@@ -351,7 +351,8 @@ def _directional_body(kernel: Kernel) -> list[str]:
     if solve.multipliers:
         size = n + solve.multipliers
         body += [f"_kkt = np.zeros(({size}, {size + 1}))"] + temps[False] + stores[:solve.phase_one]
-        body += ["# K is factored twice (kkt_solve may overwrite it): for f, then for the direction.",
+        body += ["# K is factored twice (kkt_solve may overwrite it): for f, then for the direction." if not
+                 solve.columns else "# K is factored twice (kkt_solve may overwrite it): for f, then for all columns.",
                  "_direction = _kkt.copy()", f"_status = kkt_solve(_kkt, {n})", "if _status:",
                  f"{INDENT}return _status"]
         body += [f"_ydot[{n + i}] = _kkt[{i}, {size}]" for i in range(n)] + [f"_lam = _kkt[{n}:, {size}]"]
@@ -361,7 +362,8 @@ def _directional_body(kernel: Kernel) -> list[str]:
         body += [f"_status = kkt_solve(_direction, {n})", "if _status:", f"{INDENT}return _status"]
         return body + [f"out[{solve.offset + n + i}] = _direction[{i}, {size}]" for i in range(n)] + ["return 0"]
     body += temps[False] + stores[:solve.phase_one]
-    body += ["# Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors."]
+    body += [f"# Solve M x = f by LDLᵀ (unrolled), then {'each column' if solve.columns else 'the direction'} by the "
+             "same factors."]
     body += _ldlt_factor(n, solve.m) + _ldlt_substitution(n, solve.f)
     body += [f"_ydot[{n + i}] = _x{i}" for i in range(n)]
     body += solved + temps[True] + stores[solve.phase_one:]
