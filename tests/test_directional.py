@@ -13,7 +13,9 @@ factorization, which they use for more columns with a parameter's.
     "state" control, the end state to 1e-12 and the end sensitivities to 1e-10 relative.
 (d) Names: parameters named like the kernel's locals and arguments.
 The tangent kernels (``rhs_tangent``, ``rhs_tangent_parameters``: one column's augmented rhs) with (a): the second
-bitwise ``rhs_directional``'s, the first's f too, and its derivative J v to rounding.
+bitwise ``rhs_directional``'s, the first's f too, and its derivative J v to rounding; the kernels of many columns
+(``rhs_tangents``, ``rhs_tangents_parameters``) with (a) and against ``rhs_directional`` column by column over
+states and columns (hypothesis), to rounding (another CSE).
 """
 
 from __future__ import annotations
@@ -111,6 +113,41 @@ def test_directional_is_the_jacobians_product(bundled, data):
     w = np.array(data.draw(st.lists(entries, min_size=P, max_size=P)))
     f_error, error = _product_errors(_kernels(model), y, p, v, w, P)
     assert f_error <= 1e-14 and error <= PRODUCT_TOLERANCE, (f_error, error)
+
+
+@settings(max_examples=25, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_many_columns_are_rhs_directional_column_by_column(bundled, data):
+    """``rhs_tangents_parameters`` and ``rhs_tangents`` over states, m = 1 to 4 columns and their parameters
+    (−1: none) and scale: f and each column against ``rhs_directional`` along (S[:, c], s e_j), to rounding
+    (`PRODUCT_TOLERANCE` of the terms' size |J| |S[:, c]| + s |∂f/∂p_j|)."""
+    model, _, p = bundled
+    N, P = model.state_size, len(model.parameters)
+    y = np.array(data.draw(st.lists(st.floats(0.2, 1.0), min_size=N, max_size=N)))
+    m = data.draw(st.integers(1, 4))
+    S = np.array(data.draw(st.lists(st.floats(-10.0, 10.0), min_size=N * m, max_size=N * m))).reshape(m, N).T
+    parameters = data.draw(st.lists(st.integers(-1, P - 1), min_size=m, max_size=m))
+    scale = data.draw(st.sampled_from([1.0, 0.5, 2.0**-300]))
+    J, Jp = np.empty((N, N)), np.empty((N, P))
+    assert model.kernels.rhs_with_jacobian(0.3, y, p, np.empty(N), J) == 0
+    assert model.kernels.rhs_parameter_jacobian(0.3, y, p, Jp) == 0
+    out, state_out = np.full(N * (1 + m), np.nan), np.full(N * (1 + m), np.nan)
+    Y = np.concatenate([y, S.T.ravel()])
+    assert model.kernels.rhs_tangents_parameters(0.3, Y, np.concatenate([p, parameters, [scale]]), out) == 0
+    assert model.kernels.rhs_tangents(0.3, Y, p, state_out) == 0
+    for c, j in enumerate(parameters):
+        w = np.zeros(P)
+        if j >= 0:
+            w[j] = scale
+        ydot, derivative = np.empty(N), np.empty(N)
+        assert model.kernels.rhs_directional(0.3, y, p, S[:, c], w, ydot, derivative) == 0
+        assert np.abs(out[:N] - ydot).max() <= 1e-14 * np.abs(ydot).max()
+        size = np.maximum(np.abs(J) @ np.abs(S[:, c]) + np.abs(Jp) @ np.abs(w), 1e-300)
+        assert np.all(np.abs(out[N * (1 + c):N * (2 + c)] - derivative) <= PRODUCT_TOLERANCE * size)
+        if j < 0:
+            assert np.all(np.abs(state_out[N * (1 + c):N * (2 + c)] - derivative) <= PRODUCT_TOLERANCE * size)
+    assert np.array_equal(state_out[:N], out[:N])
 
 
 def test_directional_agrees_with_extrapolated_differences(bundled):
