@@ -9,20 +9,29 @@ the free axle's ∂y/∂(g, α)) and k = 2n (every initial-state component), and
 ("state": the plain run's steps; "both": the norm covers the sensitivities too, more steps): DOP853 at rtol =
 atol, the median over `--repeats` interleaved triples of (time with k columns) / (time of the plain run), and
 the same per accepted step, for both ways `lagcomp.integrate.sensitivities` evaluates J S: the full Jacobians
-("jacobian": ``rhs_with_jacobian``, or with a parameter's column ``rhs_with_full_jacobian``, then J S) and one
-``rhs_directional`` per column, for one column the module's tangent kernel ("directional").  It takes the second for one column, or two with a parameter's
-(`DIRECTIONAL_MAX_COLUMNS`), from ``--calls``: ns per call of each path's augmented rhs at one state, k = 1 to 2n.
+("jacobian": ``rhs_with_jacobian``, or with a parameter's column ``rhs_with_full_jacobian``, then J S) and the
+module's tangent kernels ("directional": for one column ``rhs_tangent``, for more ``rhs_tangents``, the shared
+part once and a loop over the columns).  It takes the second for every k (`DIRECTIONAL_MAX_COLUMNS`), from
+``--calls``: ns per call of each path's augmented rhs at one state, k = 1 to 2n.
 Issue #22's target is a ratio ≤ 1.2 (1 + k).
 
 Measured (``--t-end 300 --repeats 5``, CPU time), jacobian × / directional × ("state"; "both"):
-  k = 1   double pendulum 3.20 / 1.69; 4.13 / 2.12 (1.33× the steps, 1.59 per step)   target 2.4
-          5-link          2.97 / 1.38; 4.12 / 1.91 (1.47× the steps)
-          free axle       4.61 / 1.85; 4.40 / 1.81
-  k = 2   double pendulum 3.34 / 3.86; 4.31 / 5.05                                     target 3.6
-          5-link          3.36 / 3.43; 4.72 / 4.79
-          free axle       4.75 / 3.70; 4.89 / 3.74 (two parameters' columns)
-  k = 2n  double pendulum 3.68; 4.76 (k = 4, target 6.0); 5-link 6.02; 8.21 (k = 10, target 13.2);
-          free axle 4.81; 5.08 (k = 10)
+  k = 1   double pendulum 3.08 / 1.53; 4.02 / 2.04 (1.33× the steps, 1.53 per step)   target 2.4
+          5-link          2.98 / 1.38; 4.14 / 1.92 (1.47× the steps)
+          free axle       4.55 / 1.92; 4.44 / 1.87
+  k = 2   double pendulum 3.28 / 1.93; 4.24 / 2.40                                     target 3.6
+          5-link          3.39 / 1.64; 4.68 / 2.31
+          free axle       4.73 / 2.36; 4.74 / 2.41 (two parameters' columns)
+  k = 2n  double pendulum 3.76 / 2.16; 4.79 / 2.78 (k = 4, target 6.0); 5-link 5.98 / 3.29; 8.07 / 4.44
+          (k = 10, target 13.2); free axle 4.84 / 3.68; 5.12 / 3.99 (k = 10)
+Per call (``--calls --repeats 3``, ns, jacobian / directional): double pendulum (``rhs`` 37) k = 1 150 / 54,
+2 156 / 66, 4 170 / 72, with a parameter's 190 / 65 (k = 1) to 216 / 88 (k = 5); 5-link (``rhs`` 112) 426 / 169,
+461 / 178, 760 / 320 (k = 10), with a parameter's 584 / 228 to 974 / 380 (k = 11); free axle (``rhs`` 284) 1152 /
+542, 1195 / 658, 1518 / 1095 (k = 10), with a parameter's 1583 / 581 to 2012 / 1177 (k = 11).  ``rhs_tangents`` at
+k = 1 costs 64, 166, 591 ns against ``rhs_tangent``'s 54, 167, 531, hence one column keeps the latter.
+Before ``rhs_tangents`` (at c68c8bd: k = 2 through a closure calling ``rhs_directional`` per column, with a
+parameter's, else the full Jacobians): k = 2 "state" 3.34, 3.36, 3.70; "both" 4.31, 4.72, 3.74; per call two
+columns 153 (full), 469 (full), 1170 (closure) ns.
 One column's directional path is the module's tangent kernel (``rhs_tangent``, ``rhs_tangent_parameters``) as
 the driver's rhs.  Before it, through a closure calling ``rhs_directional`` (at 8427c72, wall time): k = 1
 "state" 2.36, 1.89, 1.99, "both" 2.99, 2.65, 1.98; both ways in one process by CPU time, 11 runs each (closure /
@@ -34,10 +43,6 @@ Per call through the drivers' function type (double pendulum): the closure 104 n
 sensitivities' error at rtol 1e-10 is 2.2e-4 under "both", 1.9e-3 under "state" (6.7e-4 with "state" at rtol
 3e-11, 8779 steps).  The free axle's ``rhs_tangent`` (534 ns, ``rhs`` 274) solves K twice; factoring it once
 for both solves (tried: 529 ns, the same bits) does not pay, nor would sparing ``kkt_solve``'s allocations.
-Per call (``--calls``, CPU time, from a compiled loop), jacobian / directional ns: one initial-state column
-152 / 56 (double pendulum), 430 / 168 (5-link), 1139 / 526 (free axle; ``rhs`` 37, 113, 273); two 153 / 190,
-469 / 482, 1183 / 1170; one parameter's 191 / 65, 586 / 231, 1537 / 595; two with a parameter's 195 / 192,
-633 / 483, 1564 / 1186; three 205 / 277, 665 / 716, 1591 / 1773.
 Before (at 6f5c921, the full Jacobians for every k, wall time): k = 1 3.28, 3.01, 6.56 ("state"), 4.23, 4.21,
 6.15 ("both"); free axle k = 10 5.15, 5.19.
 Earlier: ``rhs_with_jacobian`` (f and J in one call, J written straight into its work space, M's LDLᵀ written
@@ -59,8 +64,8 @@ from numba import njit
 MODELS = (("double_pendulum", {}, "theta1", "q0"),
           ("n_link_pendulum", {"n": 5}, "theta1", ("theta1", "theta2")),
           ("free_axle", {}, "g", ("g", "alpha")))
-#: The two ways `lagcomp.integrate.sensitivities` evaluates J S: the full Jacobians, or ``rhs_directional`` per
-#: column (the value of `DIRECTIONAL_MAX_COLUMNS` that forces each).
+#: The two ways `lagcomp.integrate.sensitivities` evaluates J S: the full Jacobians, or the module's tangent
+#: kernels (the value of `DIRECTIONAL_MAX_COLUMNS` that forces each).
 PATHS = (("jacobian", {False: 0, True: 0}), ("directional", {False: 1_000_000, True: 1_000_000}))
 
 

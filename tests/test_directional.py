@@ -13,7 +13,9 @@ factorization, which they use for more columns with a parameter's.
     "state" control, the end state to 1e-12 and the end sensitivities to 1e-10 relative.
 (d) Names: parameters named like the kernel's locals and arguments.
 The tangent kernels (``rhs_tangent``, ``rhs_tangent_parameters``: one column's augmented rhs) with (a): the second
-bitwise ``rhs_directional``'s, the first's f too, and its derivative J v to rounding.
+bitwise ``rhs_directional``'s, the first's f too, and its derivative J v to rounding; the kernels of many columns
+(``rhs_tangents``, ``rhs_tangents_parameters``) with (a) and against ``rhs_directional`` column by column over
+states and columns (hypothesis), to rounding (another CSE).
 """
 
 from __future__ import annotations
@@ -57,14 +59,40 @@ def _product_errors(kernels, y, p, v, w, n_parameters, t=0.3) -> tuple[float, fl
     assert kernels["rhs_tangent"](t, np.concatenate([y, v]), p, tangent) == 0
     assert np.array_equal(tangent[:N], ydot)
     state_error = np.max(np.abs(tangent[N:] - J @ v) / np.maximum(np.abs(J) @ np.abs(v), 1e-300))
-    return (float(np.max(np.abs(ydot - f)) / np.max(np.abs(f))),
-            float(max(np.max(np.abs(out - (J @ v + Jp @ w)) / np.maximum(size, 1e-300)), state_error)))
+    columns_f_error, columns_error = _columns_errors(kernels, t, y, p, v, f, J, Jp)
+    return (float(max(np.max(np.abs(ydot - f)), columns_f_error) / np.max(np.abs(f))),
+            float(max(np.max(np.abs(out - (J @ v + Jp @ w)) / np.maximum(size, 1e-300)), state_error,
+                      columns_error)))
+
+
+def _columns_errors(kernels, t, y, p, v, f, J, Jp) -> tuple[float, float]:
+    """The kernels of many columns (``rhs_tangents``, ``rhs_tangents_parameters``) on S = (v, v reversed, −v),
+    the third column the last parameter's (scale 0.5; −1 marks the initial-state columns at the end of p), and
+    on S's first two columns without parameters: (f's largest error, the columns' error relative to the terms'
+    size |J| |S| + 0.5 |∂f/∂p_j|), against ``rhs_with_jacobian`` and ``rhs_parameter_jacobian``."""
+    N, P = y.size, Jp.shape[1]
+    S, scale = np.stack([v, v[::-1], -v], axis=1), 0.5
+    parameters = [-1.0, -1.0, float(P - 1)]
+    expected, size = J @ S, np.abs(J) @ np.abs(S)
+    if P:
+        expected[:, 2] += scale * Jp[:, P - 1]
+        size[:, 2] += scale * np.abs(Jp[:, P - 1])
+    wide, narrow = np.full(4 * N, np.nan), np.full(3 * N, np.nan)
+    assert kernels["rhs_tangents_parameters"](t, np.concatenate([y, S.T.ravel()]),
+                                              np.concatenate([p, parameters, [scale]]), wide) == 0
+    assert kernels["rhs_tangents"](t, np.concatenate([y, S[:, :2].T.ravel()]), p, narrow) == 0
+    f_error = max(np.max(np.abs(wide[:N] - f)), np.max(np.abs(narrow[:N] - f)))
+    wide_error = np.abs(wide[N:].reshape(3, N).T - expected) / np.maximum(size, 1e-300)
+    narrow_error = np.abs(narrow[N:].reshape(2, N).T - J @ S[:, :2]) / np.maximum(np.abs(J) @ np.abs(S[:, :2]),
+                                                                                   1e-300)
+    return float(f_error), float(max(wide_error.max(), narrow_error.max()))
 
 
 def _kernels(model) -> dict:
     return {name: getattr(model.kernels, name) for name in ("rhs", "rhs_with_jacobian", "rhs_parameter_jacobian",
                                                            "rhs_with_full_jacobian", "rhs_directional",
-                                                           "rhs_tangent", "rhs_tangent_parameters")}
+                                                           "rhs_tangent", "rhs_tangent_parameters", "rhs_tangents",
+                                                           "rhs_tangents_parameters")}
 
 
 @pytest.fixture(scope="module", params=["double_pendulum", "free_axle"])
@@ -85,6 +113,41 @@ def test_directional_is_the_jacobians_product(bundled, data):
     w = np.array(data.draw(st.lists(entries, min_size=P, max_size=P)))
     f_error, error = _product_errors(_kernels(model), y, p, v, w, P)
     assert f_error <= 1e-14 and error <= PRODUCT_TOLERANCE, (f_error, error)
+
+
+@settings(max_examples=25, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_many_columns_are_rhs_directional_column_by_column(bundled, data):
+    """``rhs_tangents_parameters`` and ``rhs_tangents`` over states, m = 1 to 4 columns and their parameters
+    (−1: none) and scale: f and each column against ``rhs_directional`` along (S[:, c], s e_j), to rounding
+    (`PRODUCT_TOLERANCE` of the terms' size |J| |S[:, c]| + s |∂f/∂p_j|)."""
+    model, _, p = bundled
+    N, P = model.state_size, len(model.parameters)
+    y = np.array(data.draw(st.lists(st.floats(0.2, 1.0), min_size=N, max_size=N)))
+    m = data.draw(st.integers(1, 4))
+    S = np.array(data.draw(st.lists(st.floats(-10.0, 10.0), min_size=N * m, max_size=N * m))).reshape(m, N).T
+    parameters = data.draw(st.lists(st.integers(-1, P - 1), min_size=m, max_size=m))
+    scale = data.draw(st.sampled_from([1.0, 0.5, 2.0**-300]))
+    J, Jp = np.empty((N, N)), np.empty((N, P))
+    assert model.kernels.rhs_with_jacobian(0.3, y, p, np.empty(N), J) == 0
+    assert model.kernels.rhs_parameter_jacobian(0.3, y, p, Jp) == 0
+    out, state_out = np.full(N * (1 + m), np.nan), np.full(N * (1 + m), np.nan)
+    Y = np.concatenate([y, S.T.ravel()])
+    assert model.kernels.rhs_tangents_parameters(0.3, Y, np.concatenate([p, parameters, [scale]]), out) == 0
+    assert model.kernels.rhs_tangents(0.3, Y, p, state_out) == 0
+    for c, j in enumerate(parameters):
+        w = np.zeros(P)
+        if j >= 0:
+            w[j] = scale
+        ydot, derivative = np.empty(N), np.empty(N)
+        assert model.kernels.rhs_directional(0.3, y, p, S[:, c], w, ydot, derivative) == 0
+        assert np.abs(out[:N] - ydot).max() <= 1e-14 * np.abs(ydot).max()
+        size = np.maximum(np.abs(J) @ np.abs(S[:, c]) + np.abs(Jp) @ np.abs(w), 1e-300)
+        assert np.all(np.abs(out[N * (1 + c):N * (2 + c)] - derivative) <= PRODUCT_TOLERANCE * size)
+        if j < 0:
+            assert np.all(np.abs(state_out[N * (1 + c):N * (2 + c)] - derivative) <= PRODUCT_TOLERANCE * size)
+    assert np.array_equal(state_out[:N], out[:N])
 
 
 def test_directional_agrees_with_extrapolated_differences(bundled):
@@ -138,15 +201,17 @@ def test_a_larger_system_takes_the_full_jacobians(cache_dir):
 
     model = lc.compile(examples.get("n_link_pendulum", n=LARGEST_SYSTEM + 1), cache_dir=cache_dir)
     assert not any(hasattr(model.kernels, name) for name in ("rhs_directional", "rhs_with_full_jacobian",
-                                                             "rhs_tangent", "rhs_tangent_parameters"))
+                                                             "rhs_tangent", "rhs_tangent_parameters",
+                                                             "rhs_tangents", "rhs_tangents_parameters"))
     cols = sensitivities.columns(model, ("theta1", "m1"))
     kernels = sensitivities.sensitivity_kernels(model.kernels, model.state_size, len(model.parameters), cols, 1.0)
-    assert kernels is sensitivities._AUGMENTED[(model.kernels, model.state_size, cols.parameters, 1.0, False, False)]
+    assert kernels is sensitivities._AUGMENTED[(model.kernels, model.state_size, cols.parameters, 1.0, None)]
     assert sensitivities.tangent_kernel(model.kernels, sensitivities.columns(model, "theta1")) is None
 
 
 @pytest.mark.parametrize(("name", "columns"), [("double_pendulum", "theta1"), ("double_pendulum", ("theta2", "m2")),
-                                               ("double_pendulum", ("theta1", "theta2", "m2")), ("free_axle", "g"),
+                                               ("double_pendulum", ("theta1", "theta2", "m2")),
+                                               ("double_pendulum", ("q0", "qd0")), ("free_axle", "g"),
                                                ("free_axle", ("g", "alpha", "m"))])
 def test_runs_through_either_path_agree(compiled, monkeypatch, name, columns):
     """(c): the same run with the directional path and the full Jacobians' (``rhs_with_full_jacobian`` where a
@@ -158,7 +223,7 @@ def test_runs_through_either_path_agree(compiled, monkeypatch, name, columns):
         monkeypatch.setattr(sensitivities, "DIRECTIONAL_MAX_COLUMNS", limit)
         runs[path] = model.simulate((0.0, 3.0), q0, rtol=1e-11, atol=1e-11, sensitivities=columns,
                                     sensitivity_control="state", progress=False)
-    assert {key[-2] for key in sensitivities._AUGMENTED if key[0] is model.kernels} == {True, False}  # both paths
+    assert {key[-1] is None for key in sensitivities._AUGMENTED if key[0] is model.kernels} == {True, False}
     directional, jacobian = runs["directional"], runs["jacobian"]
     # the steps' sizes come from error estimates ~1e-11, whose rounding differs: the rows' times differ by ~1e-8
     assert directional.status == jacobian.status == 0 and directional.nsteps == jacobian.nsteps
@@ -168,20 +233,22 @@ def test_runs_through_either_path_agree(compiled, monkeypatch, name, columns):
 
 
 def test_default_choice_of_path(compiled):
-    """One column, or two when one is a parameter's: the directional path (`DIRECTIONAL_MAX_COLUMNS`); one column
-    alone: the module's tangent kernel is the run's rhs itself, with its direction at the end of p."""
+    """Every k takes the tangent kernels (`DIRECTIONAL_MAX_COLUMNS`), which the run passes to the driver itself:
+    one column its own kernel, with its direction at the end of p; more ``rhs_tangents``, with each column's
+    parameter (−1: none) and the scale at the end of p."""
     limit = sensitivities.DIRECTIONAL_MAX_COLUMNS
-    assert limit[False] == 1 and limit[True] == 2
     model = compiled("double_pendulum")
+    assert min(limit.values()) >= model.state_size + len(model.parameters)
     kernels, P = model.kernels, len(model.parameters)
-    for requested, kernel in (("theta1", kernels.rhs_tangent), ("m2", kernels.rhs_tangent_parameters)):
+    p = model.parameter_vector(None)
+    for requested, kernel, tail in (("theta1", kernels.rhs_tangent, np.zeros(P)),
+                                    ("m2", kernels.rhs_tangent_parameters, 0.5 * np.eye(P)[1]),
+                                    (("q0", "qd0"), kernels.rhs_tangents, [-1.0] * 4 + [0.5]),
+                                    (("theta1", "m2", "g"), kernels.rhs_tangents_parameters, [-1.0, 1.0, 4.0, 0.5])):
         cols = sensitivities.columns(model, requested)
         assert sensitivities.sensitivity_kernels(kernels, model.state_size, P, cols, 0.5).rhs is kernel
-        p = model.parameter_vector(None)
         run_p = sensitivities.run_parameters(p, model, cols, 0.5)
-        assert np.array_equal(run_p[:p.size], p) and np.array_equal(run_p[p.size:], 0.5 * np.eye(P)[1] * (
-            requested == "m2"))
-    assert sensitivities.tangent_kernel(kernels, sensitivities.columns(model, ("theta1", "m2"))) is None
+        assert np.array_equal(run_p[:p.size], p) and np.array_equal(run_p[p.size:], tail)
 
 
 @pytest.mark.parametrize("names", [("_dy0", "_dp0", "_g0"), ("v", "w", "_direction"), ("_dx0", "_dx1", "ydot")])

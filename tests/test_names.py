@@ -296,9 +296,9 @@ def test_the_parameter_jacobian_under_every_emitted_name(many_names):
 
 def test_the_directional_and_full_jacobian_kernels_under_every_emitted_name(many_names):
     """``rhs_directional``, its tangent kernels and ``rhs_with_full_jacobian`` (the sensitivities' kernels, whose
-    locals ``_dy<i>``, ``_dp<j>``, ``_g<i>`` and arguments ``v``, ``w`` are among the names) under the ~670 colliding
-    names, against the closed form of c̈_j = −κ_j c_j/m_j, κ_j the sum of group j.  Plain Python, as the parameter
-    Jacobian's."""
+    locals ``_dy<i>``, ``_dp<j>``, ``_g<i>``, ``_part<r>_<j>`` and arguments ``v``, ``w`` are among the names) under
+    the ~670 colliding names, against the closed form of c̈_j = −κ_j c_j/m_j, κ_j the sum of group j.  Plain
+    Python, as the parameter Jacobian's."""
     from random_systems import python_kernels
 
     model, spec = many_names
@@ -332,6 +332,16 @@ def test_the_directional_and_full_jacobian_kernels_under_every_emitted_name(many
     assert np.array_equal(tangent, np.concatenate([ydot, derivative]))
     assert module["rhs_tangent"](0.0, np.concatenate([y, v]), p, tangent) == 0
     np.testing.assert_allclose(tangent, np.concatenate([f, expected[:, :N] @ v]), rtol=1e-12, atol=1e-14)
+    # many columns (locals _part<r>_<j>, _col, _at, _columns, _j): S = (v, −v), the second the last parameter's
+    S, columns = np.stack([v, -v], axis=1), np.full(3 * N, np.nan)
+    assert module["rhs_tangents_parameters"](0.0, np.concatenate([y, S.T.ravel()]),
+                                             np.concatenate([p, [-1.0, P - 1.0, 0.5]]), columns) == 0
+    derivatives = expected[:, :N] @ S
+    derivatives[:, 1] += 0.5 * expected[:, N + P - 1]
+    np.testing.assert_allclose(columns, np.concatenate([f, derivatives.T.ravel()]), rtol=1e-12, atol=1e-14)
+    assert module["rhs_tangents"](0.0, np.concatenate([y, S.T.ravel()]), p, columns) == 0
+    np.testing.assert_allclose(columns, np.concatenate([f, (expected[:, :N] @ S).T.ravel()]), rtol=1e-12,
+                               atol=1e-14)
 
 
 def test_the_event_gradients_under_every_emitted_name(many_names):

@@ -157,6 +157,13 @@ class DirectionalSolve:
     second ``kkt_solve``, turns into ``out[offset + n:]``.  `ydot` names the array f goes to: ``ydot``, or
     ``out`` itself for the tangent kernels (``rhs_tangent``: f into ``out[:2n]``, the direction at `offset` =
     2n).
+
+    `columns` non-empty makes the kernel one of many columns (``rhs_tangents``, `lagcomp.codegen.directional`):
+    the stores after `phase_one` write the residual's partials into locals, and a loop over the columns of S
+    in y = (x, S[:, 0], ..., S[:, m-1]) (m from y's size) contracts them with each column and substitutes by
+    the factors (or solves all columns with one ``kkt_solve_matrix``).  ``columns[r]`` lists the nonzero
+    partials of residual row r as (variable index, local): a state component below 2n, else parameter
+    index − 2n, whose column is chosen per column of S by p's tail (see the kernel's docstring).
     """
 
     n: int
@@ -168,6 +175,7 @@ class DirectionalSolve:
     g: tuple[str, ...] = ()
     ydot: str = "ydot"
     offset: int = 0
+    columns: tuple[tuple[tuple[int, str], ...], ...] = ()
 
 
 @dataclass(frozen=True)

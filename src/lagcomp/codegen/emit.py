@@ -157,6 +157,8 @@ def kernel_support_names(kernels) -> set[str]:
         solve = kernel.solve
         if isinstance(solve, AugmentedSolve) or isinstance(solve, DirectionalSolve) and solve.multipliers:
             names.add("kkt_solve")
+            if isinstance(solve, DirectionalSolve) and solve.columns:
+                names.add("kkt_solve_matrix")
         elif isinstance(solve, DirectionalSolve):
             names.add("PIVOT_TOLERANCE")
         elif isinstance(solve, LinearSolve):
@@ -349,19 +351,59 @@ def _directional_body(kernel: Kernel) -> list[str]:
     if solve.multipliers:
         size = n + solve.multipliers
         body += [f"_kkt = np.zeros(({size}, {size + 1}))"] + temps[False] + stores[:solve.phase_one]
-        body += ["# K is factored twice (kkt_solve may overwrite it): for f, then for the direction.",
+        body += ["# K is factored twice (kkt_solve may overwrite it): for f, then for the direction." if not
+                 solve.columns else "# K is factored twice (kkt_solve may overwrite it): for f, then for all columns.",
                  "_direction = _kkt.copy()", f"_status = kkt_solve(_kkt, {n})", "if _status:",
                  f"{INDENT}return _status"]
         body += [f"_ydot[{n + i}] = _kkt[{i}, {size}]" for i in range(n)] + [f"_lam = _kkt[{n}:, {size}]"]
         body += solved + temps[True] + stores[solve.phase_one:]
+        if solve.columns:
+            return body + _tangent_columns(solve)
         body += [f"_status = kkt_solve(_direction, {n})", "if _status:", f"{INDENT}return _status"]
         return body + [f"out[{solve.offset + n + i}] = _direction[{i}, {size}]" for i in range(n)] + ["return 0"]
     body += temps[False] + stores[:solve.phase_one]
-    body += ["# Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors."]
+    body += [f"# Solve M x = f by LDLᵀ (unrolled), then {'each column' if solve.columns else 'the direction'} by the "
+             "same factors."]
     body += _ldlt_factor(n, solve.m) + _ldlt_substitution(n, solve.f)
     body += [f"_ydot[{n + i}] = _x{i}" for i in range(n)]
-    body += solved + temps[True] + stores[solve.phase_one:] + _ldlt_substitution(n, solve.g)
+    body += solved + temps[True] + stores[solve.phase_one:]
+    if solve.columns:
+        return body + _tangent_columns(solve)
+    body += _ldlt_substitution(n, solve.g)
     return body + [f"out[{solve.offset + n + i}] = _x{i}" for i in range(n)] + ["return 0"]
+
+
+def _tangent_columns(solve: DirectionalSolve) -> list[str]:
+    """The loop of ``rhs_tangents`` over the m columns of S in y = (x, S[:, 0], ..., S[:, m-1]), after the
+    shared part (f, M's factors or K, the residual's partials in the locals of `solve.columns`): per column c,
+    out's block c = (S[n:, c], the accelerations' derivative), whose right-hand side ``_g`` = Σ_j ∂r/∂x_j S[j, c]
+    (+ p[-1] ∂r/∂p_j where p[-1 - m + c] = j ≥ 0) is substituted by the same LDLᵀ of M, or gathered for one
+    ``kkt_solve_matrix`` of all columns (constrained).  One body for any m: numba compiles it once."""
+    n, size, rows = solve.n, 2 * solve.n, solve.columns
+    g = tuple(f"_g{r}" for r in range(len(rows)))
+    inner = [f"out[_at + {i}] = y[_at + {n + i}]" for i in range(n)]
+    for r, row in enumerate(rows):
+        terms = [f"{local}*y[_at + {j}]" for j, local in row if j < size]
+        inner.append(f"{g[r]} = {_balanced(terms) if terms else '0.0'}")
+    parameters = sorted({j for row in rows for j, _ in row if j >= size})
+    if parameters:
+        inner += ["_j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none"]
+        for number, j in enumerate(parameters):
+            inner.append(f"{'if' if number == 0 else 'elif'} _j == {j - size}:")
+            inner += [f"{INDENT}{g[r]} += p[p.shape[0] - 1]*{local}"
+                      for r, row in enumerate(rows) for jj, local in row if jj == j]
+    lines = [f"_columns = y.shape[0] // {size} - 1"]
+    if solve.multipliers:
+        lines += [f"_rhs = np.empty(({len(rows)}, _columns))", "for _col in range(_columns):",
+                  f"{INDENT}_at = {size}*(1 + _col)"]
+        lines += [INDENT + line for line in inner] + [f"{INDENT}_rhs[{r}, _col] = {g[r]}" for r in range(len(rows))]
+        lines += ["# K dz = _rhs for every column at once: K factored once (it was copied before f's solve).",
+                  f"_status = kkt_solve_matrix(_direction, {n}, _rhs)", "if _status:", f"{INDENT}return _status",
+                  "for _col in range(_columns):", f"{INDENT}_at = {size}*(1 + _col)"]
+        return lines + [f"{INDENT}out[_at + {n + i}] = _rhs[{i}, _col]" for i in range(n)] + ["return 0"]
+    inner += _ldlt_substitution(n, g) + [f"out[_at + {n + i}] = _x{i}" for i in range(n)]
+    lines += ["for _col in range(_columns):", f"{INDENT}_at = {size}*(1 + _col)"]
+    return lines + [INDENT + line for line in inner] + ["return 0"]
 
 
 def delegated_call(solve: Delegate) -> str:

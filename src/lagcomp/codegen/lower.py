@@ -845,15 +845,20 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
 
 
 def _directional_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
-    """(``rhs_directional``, ``rhs_tangent``, ``rhs_tangent_parameters``) for systems of at most
-    `lagcomp.codegen.directional.LARGEST_SYSTEM` coordinates, () for larger ones, whose sensitivities take the full
-    Jacobians."""
-    from lagcomp.codegen.directional import LARGEST_SYSTEM, directional_kernel, tangent_kernels  # (imports this)
+    """(``rhs_directional``, ``rhs_tangent``, ``rhs_tangent_parameters``, ``rhs_tangents``,
+    ``rhs_tangents_parameters``) for systems of at most `lagcomp.codegen.directional.LARGEST_SYSTEM` coordinates,
+    () for larger ones, whose sensitivities take the full Jacobians."""
+    from lagcomp.codegen.directional import (  # (it imports this module)
+        LARGEST_SYSTEM,
+        directional_kernel,
+        tangent_kernels,
+        tangents_kernels,
+    )
 
     if eom.n > LARGEST_SYSTEM:
         return ()
     directional = directional_kernel(eom, mapping, loads)
-    return (directional, *tangent_kernels(directional, len(eom.parameters)))
+    return (directional, *tangent_kernels(directional, len(eom.parameters)), *tangents_kernels(eom, mapping, loads))
 
 
 def lower(eom: EOM) -> ModuleIR:

@@ -12,16 +12,17 @@ N (1 + k) components with the library's embedded Runge-Kutta driver (dop853, dop
 takes as its ``rhs`` a small numba function evaluating f and J S: a closure over the model's kernels,
 compiled at the first run that needs it and kept for the process (`_AUGMENTED`), as
 `lagcomp.integrate.function_inputs` does for its wrappers.  The model's kernels and the driver are not
-compiled again.  One column's rhs is no closure but the module's tangent kernel (`tangent_kernel`:
-``rhs_tangent``, or ``rhs_tangent_parameters`` with the parameters' direction at the end of p), ``rhs_directional``'s
-CSE reading (y, S) and writing (f, J S + ∂f/∂p w) itself, which the driver calls as it calls ``rhs``.  For two
-with a parameter's (`DIRECTIONAL_MAX_COLUMNS`, measured) it calls the emitted ``rhs_directional`` once per column
-(`directional_rhs`: f and J S[:, c] + ∂f/∂p w_c from one CSE, at about the cost of ``rhs`` and a substitution;
-`lagcomp.codegen.directional`); for more, the full Jacobians
+compiled again.  Up to `DIRECTIONAL_MAX_COLUMNS` columns the rhs is no closure but one of the module's tangent
+kernels (`tangent_kernel`), which the driver calls as it calls ``rhs``: for one column ``rhs_tangent``, or
+``rhs_tangent_parameters`` with the parameters' direction at the end of p (``rhs_directional``'s CSE reading
+(y, S) and writing (f, J S + ∂f/∂p w) itself); for more ``rhs_tangents`` (``rhs_tangents_parameters`` with
+each column's parameter and the scale at the end of p), which computes f, the factors of M (or K) and the
+residual's partials once and loops over the columns, a contraction and a substitution each
+(`lagcomp.codegen.directional`).  Beyond, the full Jacobians
 (`augmented_rhs`, `full_jacobian_rhs`), J (N, N) and ∂f/∂p (N, P) written into work space at the end of the
 run's p (the kernels read p only up to their parameters and input tables): a call allocates only what the
 kernels do (the factor of M in their LDLᵀ).  Kane modules and systems larger than
-`lagcomp.codegen.directional.LARGEST_SYSTEM` have no ``rhs_directional`` (unconstrained: nor
+`lagcomp.codegen.directional.LARGEST_SYSTEM` have no tangent kernels (unconstrained: nor
 ``rhs_with_full_jacobian``): the full Jacobians, apart where need be.
 
 Error control (``sensitivity_control``).  The embedded driver's error norm runs over every component of the
@@ -81,6 +82,7 @@ Refused (`OptionError`, docs/errors.md): other methods; located events that read
 
 from __future__ import annotations
 
+import sys
 import threading
 from dataclasses import dataclass
 
@@ -204,13 +206,16 @@ def initial_state(y0: np.ndarray, cols: Columns, scale: float) -> np.ndarray:
 
 def run_parameters(p: np.ndarray, model, cols: Columns, scale: float = 1.0) -> np.ndarray:
     """p followed by the work space of the run's rhs: for one column through a tangent kernel (`tangent_kernel`),
-    the direction w (P,) of ``rhs_tangent_parameters`` (`scale` e_j for parameter j's column, else 0); else the
-    floats `augmented_rhs` writes J and ∂f/∂p into (see `work_size`)."""
-    if tangent_kernel(model.kernels, cols) is not None:
+    the direction w (P,) of ``rhs_tangent_parameters`` (`scale` e_j for parameter j's column, else 0); for more,
+    each column's parameter index (−1 for an initial-state column) and `scale` (``rhs_tangents_parameters``);
+    else the floats `augmented_rhs` writes J and ∂f/∂p into (see `work_size`)."""
+    if tangent_kernel(model.kernels, cols) is None:
+        return np.concatenate([p, np.zeros(work_size(model.state_size, len(model.parameters), cols))])
+    if cols.k == 1:
         direction = np.zeros(len(model.parameters))
         direction[list(cols.parameters)] = scale
         return np.concatenate([p, direction])
-    return np.concatenate([p, np.zeros(work_size(model.state_size, len(model.parameters), cols))])
+    return np.concatenate([p, [-1.0] * len(cols.state), np.array(cols.parameters, dtype=float), [scale]])
 
 
 def work_size(n: int, n_parameters: int, cols: Columns) -> int:
@@ -232,16 +237,17 @@ class SensitivityKernels:
         return getattr(self._module, name)
 
 
-#: The most columns whose derivatives the run takes along each column (one column: the module's tangent kernel,
-#: `tangent_kernel`; more: ``rhs_directional``, one call per column, `directional_rhs`) rather than from the full
-#: Jacobians (`augmented_rhs`, `full_jacobian_rhs`), without and with a parameter's column among them.  Measured
-#: (``python -m bench.bench_sensitivities --calls``, ns per call of the augmented rhs, full / directional, double
-#: pendulum, 5-link, free axle): one column 152 / 56, 430 / 168, 1139 / 526; two 153 / 190, 469 / 482,
-#: 1183 / 1170; a parameter's 191 / 65, 586 / 231, 1537 / 595; two with a parameter's 195 / 192, 633 / 483,
-#: 1564 / 1186; three 205 / 277, 665 / 716, 1591 / 1773.
-DIRECTIONAL_MAX_COLUMNS = {False: 1, True: 2}
+#: The most columns whose derivatives the run takes from the module's tangent kernels (one column: ``rhs_tangent``;
+#: more: ``rhs_tangents``, the shared part once and a loop over the columns; `tangent_kernel`) rather than from
+#: the full Jacobians (`augmented_rhs`, `full_jacobian_rhs`), without and with a parameter's column among them:
+#: every k, since the tangent kernels cost 0.34-0.72 of the full Jacobians' path at every k measured
+#: (``python -m bench.bench_sensitivities --calls``, ns per call of the augmented rhs, full / tangent kernels,
+#: double pendulum, 5-link, free axle): k = 1 150 / 54, 426 / 169, 1152 / 542; k = 2 156 / 66, 461 / 178,
+#: 1195 / 658; k = 2n 170 / 72, 760 / 320, 1518 / 1095; a parameter's and 2n initial-state columns 216 / 88,
+#: 974 / 380, 2012 / 1177.  A value below 2n + P forces the full Jacobians above it (the bench, the tests).
+DIRECTIONAL_MAX_COLUMNS = {False: sys.maxsize, True: sys.maxsize}
 
-#: {(generated module, n, parameter columns, scale, directional): SensitivityKernels}, for the process.
+#: {(generated module, n, parameter columns, scale, tangent kernel or None): SensitivityKernels}, for the process.
 _AUGMENTED: dict = {}
 _LOCK = threading.Lock()
 
@@ -255,31 +261,31 @@ def run_kernels(model, method, cols: Columns, scale: float):
 
 
 def tangent_kernel(module, cols: Columns):
-    """The kernel of `module` that is the whole augmented rhs of the one column of `cols`, or None: for one
-    column on the directional path (`DIRECTIONAL_MAX_COLUMNS`), ``rhs_tangent`` (an initial-state column) or
-    ``rhs_tangent_parameters`` (a parameter's, its direction at the end of p: `run_parameters`), which the
-    driver calls itself.  A closure over ``rhs_directional`` cost twice as much per call, measured on the double
-    pendulum through the drivers' function type: 104 ns against 54 (65 with a parameter's), ``rhs`` 37; its
-    views of y and out, its loop over columns, the seven arrays of each call (see
-    `lagcomp.codegen.directional.tangent_kernels`)."""
-    if cols.k != 1 or DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)] < 1 or not hasattr(module, "rhs_tangent"):
-        return None  # (Kane modules, and modules generated before the tangent kernels, have none)
-    return module.rhs_tangent_parameters if cols.parameters else module.rhs_tangent
+    """The kernel of `module` that is the whole augmented rhs of the columns `cols`, or None (the full
+    Jacobians): up to `DIRECTIONAL_MAX_COLUMNS` columns, for one ``rhs_tangent`` (an initial-state column) or
+    ``rhs_tangent_parameters`` (a parameter's, its direction at the end of p: `run_parameters`), for more
+    ``rhs_tangents`` or ``rhs_tangents_parameters`` (each column's parameter and the scale at the end of p), which
+    the driver calls itself.  A closure over ``rhs_directional`` cost twice as much per call, measured on the
+    double pendulum through the drivers' function type: 104 ns against 54 (65 with a parameter's), ``rhs`` 37;
+    its views of y and out, its loop over columns, the seven arrays of each call (see
+    `lagcomp.codegen.directional.tangent_kernels`).  One column keeps its own kernels: ``rhs_tangents`` at k = 1
+    costs 64 ns against 54, 166 against 167, 591 against 531 (double pendulum, 5-link, free axle; with a
+    parameter's 70 / 65, 197 / 230, 631 / 559)."""
+    if cols.k > DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)]:
+        return None
+    name = ("rhs_tangent" if cols.k == 1 else "rhs_tangents") + ("_parameters" if cols.parameters else "")
+    return getattr(module, name, None)  # (Kane modules, and modules generated before the kernel, have none)
 
 
 def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale: float) -> SensitivityKernels:
-    """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (its closure compiled at
-    first use; none for one column: `tangent_kernel`)."""
-    directional = (cols.k <= DIRECTIONAL_MAX_COLUMNS[bool(cols.parameters)]
-                   and hasattr(module, "rhs_directional"))  # (Kane modules have none)
+    """The one `SensitivityKernels` of `module` for `cols` and `scale` in this process (the full Jacobians'
+    closure compiled at first use; none with a tangent kernel: `tangent_kernel`)."""
     tangent = tangent_kernel(module, cols)
-    key = (module, n, cols.parameters, scale, directional, tangent is not None)  # (initial-state columns: y's size)
+    key = (module, n, cols.parameters, scale, tangent)  # (initial-state columns: y's size)
     with _LOCK:
         if key not in _AUGMENTED:
             if tangent is not None:
                 rhs = tangent
-            elif directional:
-                rhs = directional_rhs(module.rhs_directional, n, n_parameters, cols.parameters, scale)
             elif cols.parameters and hasattr(module, "rhs_with_full_jacobian"):
                 rhs = full_jacobian_rhs(module.rhs_with_full_jacobian, n, n_parameters, cols.parameters, scale)
             else:
@@ -288,34 +294,6 @@ def sensitivity_kernels(module, n: int, n_parameters: int, cols: Columns, scale:
                                     scale)
             _AUGMENTED[key] = SensitivityKernels(module, rhs)
         return _AUGMENTED[key]
-
-
-def directional_rhs(rhs_directional, n: int, n_parameters: int, parameter_columns: tuple[int, ...], scale: float):
-    """``rhs(t, y, p, out) -> int`` of the augmented state as `augmented_rhs` computes it, column by column: out
-    = (f(x), J S[:, c] + scale ∂f/∂p_j) by one call of the module's ``rhs_directional`` per column c, along
-    (S[:, c], w_c), w_c = scale e_j for the column of parameter j, else 0.  The first call writes f (``rhs``'s
-    to rounding: another CSE); the others write theirs into the last n floats of p's work space.  Each call
-    costs about one ``rhs`` and one substitution, against N (N + P) entries and N + P substitutions for the full
-    Jacobians: the path for two columns with a parameter's (`DIRECTIONAL_MAX_COLUMNS`; one column takes the
-    module's tangent kernel itself, `tangent_kernel`)."""
-    k_parameters = len(parameter_columns)
-    directions = np.zeros((1 + k_parameters, n_parameters))   # row 0 for the initial-state columns
-    for c, j in enumerate(parameter_columns):
-        directions[1 + c, j] = scale
-
-    @njit(error_model="numpy", nogil=True)
-    def column_rhs(t, y, p, out):
-        x, k = y[:n], y.shape[0] // n - 1
-        first_parameter = k - k_parameters
-        f = out[:n]
-        for c in range(k):
-            w = directions[0] if c < first_parameter else directions[1 + c - first_parameter]
-            status = rhs_directional(t, x, p, y[n * (1 + c):n * (2 + c)], w, f, out[n * (1 + c):n * (2 + c)])
-            if status != 0:
-                return status
-            f = p[p.shape[0] - n:]
-        return 0
-    return column_rhs
 
 
 def augmented_rhs(rhs_with_jacobian, parameter_jacobian, n: int, n_parameters: int,
