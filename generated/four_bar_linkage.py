@@ -1089,6 +1089,789 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_d = p[3]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _dy0 = y[6]
+    _dy1 = y[7]
+    _dy2 = y[8]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _kkt = np.zeros((5, 6))
+    _c0 = p_a**2
+    _c1 = p_m2 + (0.25)*p_m1
+    _c2 = sin(q_theta2)
+    _c3 = sin(q_theta1)
+    _c4 = cos(q_theta2)
+    _c5 = cos(q_theta1)
+    _c6 = _c2*_c3 + _c4*_c5
+    _c7 = (0.5)*p_a
+    _c8 = _c7*p_b
+    _c9 = _c6*_c8*p_m2
+    _c10 = (0.3333333333333333)*p_b**2
+    _c11 = (0.3333333333333333)*p_c**2
+    _c12 = _c3*p_a
+    _c13 = _c5*p_a
+    _c14 = _c2*p_b
+    _c15 = _c4*p_b
+    _c16 = sin(q_theta3)
+    _c17 = _c16*p_c
+    _c18 = -_c17
+    _c19 = cos(q_theta3)
+    _c20 = _c19*p_c
+    _c21 = -_c20
+    _c22 = qd_theta2**2
+    _c23 = _c2*_c5 - _c3*_c4
+    _c24 = _c23*_c8
+    _c25 = _c22*_c24
+    _c26 = p_m2 + (0.5)*p_m1
+    _c27 = _c13*p_g
+    _c28 = qd_theta1**2
+    _c29 = _c24*_c28
+    _c30 = (0.5)*p_g
+    _c31 = _c30*p_m2
+    _c32 = _c30*p_m3
+    _c33 = qd_theta3**2
+    _c34 = _c19*_c33
+    _c35 = -_c34*p_c
+    _c36 = _c22*_c4
+    _c37 = _c36*p_b
+    _c38 = _c28*_c5
+    _c39 = _c38*p_a
+    _c40 = _baumgarte_beta**2
+    _c41 = _c14*qd_theta2
+    _c42 = _c12*qd_theta1
+    _c43 = _c17*qd_theta3
+    _c44 = 2.0*_baumgarte_alpha
+    _c45 = _c16*_c33
+    _c46 = _c45*p_c
+    _c47 = _c2*_c22
+    _c48 = _c47*p_b
+    _c49 = _c28*_c3
+    _c50 = _c49*p_a
+    _c51 = _c20*qd_theta3
+    _c52 = _c15*qd_theta2
+    _c53 = _c13*qd_theta1
+    _c57 = _c23*p_m2
+    _c59 = _c26*p_g
+    _c64 = _c22*_c9
+    _c65 = _c57*p_a*p_b
+    _c69 = _c28*_c9
+    _c71 = _c3*_c40
+    _c73 = _c19*_c40
+    _c78 = _c2*_c40
+    _c80 = _c40*_c5
+    _c83 = _c16*_c40
+    out[0] = qd_theta1
+    out[1] = qd_theta2
+    out[2] = qd_theta3
+    _kkt[0, 0] = _c0*_c1 + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c9
+    _kkt[1, 0] = _c9
+    _kkt[1, 1] = _c10*p_m2
+    _kkt[2, 2] = _c11*p_m3
+    _kkt[0, 3] = _c12
+    _kkt[0, 4] = -_c13
+    _kkt[1, 3] = _c14
+    _kkt[1, 4] = -_c15
+    _kkt[2, 3] = _c18
+    _kkt[2, 4] = _c20
+    _kkt[3, 0] = -_c12
+    _kkt[3, 1] = -_c14
+    _kkt[3, 2] = _c17
+    _kkt[4, 0] = _c13
+    _kkt[4, 1] = _c15
+    _kkt[4, 2] = _c21
+    _kkt[0, 5] = _c25*p_m2 - _c26*_c27
+    _kkt[1, 5] = -_c15*_c31 - _c29*p_m2
+    _kkt[2, 5] = -_c20*_c32
+    _kkt[3, 5] = _c35 + _c37 + _c39 - _c40*(_c13 + _c15 + _c21 - p_d) - _c44*(_c43 - _c41 - _c42)
+    _kkt[4, 5] = _c48 + _c50 - _c46 - _c40*(_c12 + _c14 + _c18) - _c44*(_c52 + _c53 - _c51)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c60 = _acc1*p_b
+    _c61 = _c60*p_m2
+    _c63 = _c23*_c61*_c7
+    _c70 = _acc0*_c24*p_m2
+    _c72 = _acc0*_c5
+    _c75 = _acc2*_c16
+    _c77 = _acc1*_c2
+    _c79 = _acc1*_c4
+    _c82 = _acc0*_c3
+    _c84 = _acc2*_c19
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _direction[0, 5] = _dy0*(-_c63 - _c64 + _c12*_c59 - _c12*_mult1 - _c13*_mult0) + _dy1*(_c63 + _c64) + _c65*_dy4*qd_theta2
+    _direction[1, 5] = _dy0*(_c69 - _c70) + _dy1*(_c70 - _c69 + _c14*_c31 - _c14*_mult1 - _c15*_mult0) - _c65*_dy3*qd_theta1
+    _direction[2, 5] = _dy2*(_c17*_c32 + _c17*_mult1 + _c20*_mult0)
+    _direction[3, 5] = _dy0*(-_c50 + _c44*_c53 + _c71*p_a + _c72*p_a) + _dy1*(-_c48 + _c44*_c52 + _c78*p_b + _c79*p_b) + _dy2*(_c46 - _c44*_c51 - _c83*p_c - _c84*p_c) + _dy3*(2.0*_c53 + _c12*_c44) + _dy4*(2.0*_c52 + _c14*_c44) + _dy5*(-2.0*_c51 - _c17*_c44)
+    _direction[4, 5] = _dy0*(_c39 + _c42*_c44 + _c82*p_a - _c80*p_a) + _dy1*(_c37 + _c41*_c44 + _c77*p_b - _c15*_c40) + _dy2*(_c35 + _c73*p_c - _c43*_c44 - _c75*p_c) + _dy3*(2.0*_c42 - _c13*_c44) + _dy4*(2.0*_c41 - _c15*_c44) + _dy5*(-2.0*_c43 + _c20*_c44)
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[9] = _direction[0, 5]
+    out[10] = _direction[1, 5]
+    out[11] = _direction[2, 5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_d = p[3]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _dy0 = y[6]
+    _dy1 = y[7]
+    _dy2 = y[8]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _dp0 = p[p.shape[0] - 8]
+    _dp1 = p[p.shape[0] - 7]
+    _dp2 = p[p.shape[0] - 6]
+    _dp3 = p[p.shape[0] - 5]
+    _dp4 = p[p.shape[0] - 4]
+    _dp5 = p[p.shape[0] - 3]
+    _dp6 = p[p.shape[0] - 2]
+    _dp7 = p[p.shape[0] - 1]
+    _kkt = np.zeros((5, 6))
+    _c0 = p_a**2
+    _c1 = p_m2 + (0.25)*p_m1
+    _c2 = sin(q_theta2)
+    _c3 = sin(q_theta1)
+    _c4 = cos(q_theta2)
+    _c5 = cos(q_theta1)
+    _c6 = _c2*_c3 + _c4*_c5
+    _c7 = (0.5)*p_a
+    _c8 = _c7*p_b
+    _c9 = _c6*_c8*p_m2
+    _c10 = (0.3333333333333333)*p_b**2
+    _c11 = (0.3333333333333333)*p_c**2
+    _c12 = _c3*p_a
+    _c13 = _c5*p_a
+    _c14 = _c2*p_b
+    _c15 = _c4*p_b
+    _c16 = sin(q_theta3)
+    _c17 = _c16*p_c
+    _c18 = -_c17
+    _c19 = cos(q_theta3)
+    _c20 = _c19*p_c
+    _c21 = -_c20
+    _c22 = qd_theta2**2
+    _c23 = _c2*_c5 - _c3*_c4
+    _c24 = _c23*_c8
+    _c25 = _c22*_c24
+    _c26 = p_m2 + (0.5)*p_m1
+    _c27 = _c13*p_g
+    _c28 = qd_theta1**2
+    _c29 = _c24*_c28
+    _c30 = (0.5)*p_g
+    _c31 = _c30*p_m2
+    _c32 = _c30*p_m3
+    _c33 = qd_theta3**2
+    _c34 = _c19*_c33
+    _c35 = -_c34*p_c
+    _c36 = _c22*_c4
+    _c37 = _c36*p_b
+    _c38 = _c28*_c5
+    _c39 = _c38*p_a
+    _c40 = _baumgarte_beta**2
+    _c41 = _c14*qd_theta2
+    _c42 = _c12*qd_theta1
+    _c43 = _c17*qd_theta3
+    _c44 = 2.0*_baumgarte_alpha
+    _c45 = _c16*_c33
+    _c46 = _c45*p_c
+    _c47 = _c2*_c22
+    _c48 = _c47*p_b
+    _c49 = _c28*_c3
+    _c50 = _c49*p_a
+    _c51 = _c20*qd_theta3
+    _c52 = _c15*qd_theta2
+    _c53 = _c13*qd_theta1
+    _c55 = _c6*_c7
+    _c56 = _c55*p_m2
+    _c57 = _c23*p_m2
+    _c58 = _c22*_c57
+    _c59 = _c26*p_g
+    _c62 = (0.5)*p_b
+    _c64 = _c22*_c9
+    _c65 = _c57*p_a*p_b
+    _c66 = (0.5)*_dp7
+    _c67 = _c28*_c57
+    _c69 = _c28*_c9
+    _c71 = _c3*_c40
+    _c73 = _c19*_c40
+    _c74 = _c44*qd_theta3
+    _c76 = _c44*qd_theta2
+    _c78 = _c2*_c40
+    _c80 = _c40*_c5
+    _c81 = _c44*qd_theta1
+    _c83 = _c16*_c40
+    out[0] = qd_theta1
+    out[1] = qd_theta2
+    out[2] = qd_theta3
+    _kkt[0, 0] = _c0*_c1 + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c9
+    _kkt[1, 0] = _c9
+    _kkt[1, 1] = _c10*p_m2
+    _kkt[2, 2] = _c11*p_m3
+    _kkt[0, 3] = _c12
+    _kkt[0, 4] = -_c13
+    _kkt[1, 3] = _c14
+    _kkt[1, 4] = -_c15
+    _kkt[2, 3] = _c18
+    _kkt[2, 4] = _c20
+    _kkt[3, 0] = -_c12
+    _kkt[3, 1] = -_c14
+    _kkt[3, 2] = _c17
+    _kkt[4, 0] = _c13
+    _kkt[4, 1] = _c15
+    _kkt[4, 2] = _c21
+    _kkt[0, 5] = _c25*p_m2 - _c26*_c27
+    _kkt[1, 5] = -_c15*_c31 - _c29*p_m2
+    _kkt[2, 5] = -_c20*_c32
+    _kkt[3, 5] = _c35 + _c37 + _c39 - _c40*(_c13 + _c15 + _c21 - p_d) - _c44*(_c43 - _c41 - _c42)
+    _kkt[4, 5] = _c48 + _c50 - _c46 - _c40*(_c12 + _c14 + _c18) - _c44*(_c52 + _c53 - _c51)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c54 = _acc0*_c0
+    _c60 = _acc1*p_b
+    _c61 = _c60*p_m2
+    _c63 = _c23*_c61*_c7
+    _c68 = _acc0*_c6
+    _c70 = _acc0*_c24*p_m2
+    _c72 = _acc0*_c5
+    _c75 = _acc2*_c16
+    _c77 = _acc1*_c2
+    _c79 = _acc1*_c4
+    _c82 = _acc0*_c3
+    _c84 = _acc2*_c19
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _direction[0, 5] = _dp0*(_c5*_mult1 + _c58*_c62 - _acc0*(2.0*_c1*p_a + (0.16666666666666666)*p_a*p_m1) - _c3*_mult0 - _c5*_c59 - 0.5*_c6*_c61) + _dp1*(_c58*_c7 - _acc1*_c56) + _dp4*(-0.5*_c27 - 0.3333333333333333*_c54) + _dp5*(_c25 - _c27 - _c54 - _c55*_c60) + _dy0*(-_c63 - _c64 + _c12*_c59 - _c12*_mult1 - _c13*_mult0) + _dy1*(_c63 + _c64) + _c65*_dy4*qd_theta2 - _c13*_c26*_dp7
+    _direction[1, 5] = _dp0*(-_c62*_c67 - _c62*_c68*p_m2) + _dp1*(-0.6666666666666666*_c61 + _c4*_mult1 - _acc0*_c56 - _c2*_mult0 - _c31*_c4 - _c67*_c7) + _dp5*(-_c29 - _acc1*_c10 - _c15*_c30 - _c68*_c8) + _dy0*(_c69 - _c70) + _dy1*(_c70 - _c69 + _c14*_c31 - _c14*_mult1 - _c15*_mult0) - _c15*_c66*p_m2 - _c65*_dy3*qd_theta1
+    _direction[2, 5] = _dp2*(_c16*_mult0 - _c19*_c32 - _c19*_mult1 - 0.6666666666666666*_acc2*p_c*p_m3) + _dp6*(-_acc2*_c11 - _c20*_c30) + _dy2*(_c17*_c32 + _c17*_mult1 + _c20*_mult0) - _c20*_c66*p_m3
+    _direction[3, 5] = _c40*_dp3 + _dp0*(_c38 + _c82 - _c80 + _c3*_c81) + _dp1*(_c36 + _c77 + _c2*_c76 - _c4*_c40) + _dp2*(_c73 - _c34 - _c75 - _c16*_c74) + _dy0*(-_c50 + _c44*_c53 + _c71*p_a + _c72*p_a) + _dy1*(-_c48 + _c44*_c52 + _c78*p_b + _c79*p_b) + _dy2*(_c46 - _c44*_c51 - _c83*p_c - _c84*p_c) + _dy3*(2.0*_c53 + _c12*_c44) + _dy4*(2.0*_c52 + _c14*_c44) + _dy5*(-2.0*_c51 - _c17*_c44)
+    _direction[4, 5] = _dp0*(_c49 - _c71 - _c72 - _c5*_c81) + _dp1*(_c47 - _c78 - _c79 - _c4*_c76) + _dp2*(_c83 + _c84 - _c45 + _c19*_c74) + _dy0*(_c39 + _c42*_c44 + _c82*p_a - _c80*p_a) + _dy1*(_c37 + _c41*_c44 + _c77*p_b - _c15*_c40) + _dy2*(_c35 + _c73*p_c - _c43*_c44 - _c75*p_c) + _dy3*(2.0*_c42 - _c13*_c44) + _dy4*(2.0*_c41 - _c15*_c44) + _dy5*(-2.0*_c43 + _c20*_c44)
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[9] = _direction[0, 5]
+    out[10] = _direction[1, 5]
+    out[11] = _direction[2, 5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_d = p[3]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _kkt = np.zeros((5, 6))
+    _c0 = p_a**2
+    _c1 = p_m2 + (0.25)*p_m1
+    _c2 = sin(q_theta2)
+    _c3 = sin(q_theta1)
+    _c4 = cos(q_theta2)
+    _c5 = cos(q_theta1)
+    _c6 = _c2*_c3 + _c4*_c5
+    _c7 = _c6*p_a
+    _c8 = (0.5)*p_m2
+    _c9 = _c8*p_b
+    _c10 = _c7*_c9
+    _c11 = (0.3333333333333333)*p_b**2
+    _c12 = (0.3333333333333333)*p_c**2
+    _c13 = _c3*p_a
+    _c14 = _c5*p_a
+    _c15 = _c2*p_b
+    _c16 = _c4*p_b
+    _c17 = sin(q_theta3)
+    _c18 = _c17*p_c
+    _c19 = -_c18
+    _c20 = cos(q_theta3)
+    _c21 = _c20*p_c
+    _c22 = -_c21
+    _c23 = _c2*_c5 - _c3*_c4
+    _c24 = _c23*p_a
+    _c25 = qd_theta2**2
+    _c26 = _c25*p_b
+    _c27 = _c24*_c26
+    _c28 = p_m2 + (0.5)*p_m1
+    _c29 = _c14*p_g
+    _c30 = qd_theta1**2
+    _c31 = _c24*_c30
+    _c32 = _c31*_c8
+    _c33 = _c16*_c8
+    _c34 = (0.5)*p_m3
+    _c35 = _c21*_c34
+    _c36 = qd_theta3**2
+    _c37 = _c20*_c36
+    _c38 = -_c37*p_c
+    _c39 = _c25*_c4
+    _c40 = _c39*p_b
+    _c41 = _c30*_c5
+    _c42 = _c41*p_a
+    _c43 = _baumgarte_beta**2
+    _c44 = _c15*qd_theta2
+    _c45 = _c13*qd_theta1
+    _c46 = _c18*qd_theta3
+    _c47 = 2.0*_baumgarte_alpha
+    _c48 = _c17*_c36
+    _c49 = _c48*p_c
+    _c50 = _c2*_c25
+    _c51 = _c50*p_b
+    _c52 = _c3*_c30
+    _c53 = _c52*p_a
+    _c54 = _c21*qd_theta3
+    _c55 = _c16*qd_theta2
+    _c56 = _c14*qd_theta1
+    _c57 = _c28*p_g
+    _c58 = _c24*_c8
+    _c59 = _c58*p_b
+    _c61 = _c7*_c8
+    _c62 = _c26*_c61
+    _c63 = p_b*p_m2
+    _c64 = _c24*_c63
+    _c70 = _c30*p_b
+    _c71 = _c61*_c70
+    _c73 = _c8*p_g
+    _c76 = _c34*p_g
+    out[0] = qd_theta1
+    out[1] = qd_theta2
+    out[2] = qd_theta3
+    _kkt[0, 0] = _c0*_c1 + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c10
+    _kkt[1, 0] = _c10
+    _kkt[1, 1] = _c11*p_m2
+    _kkt[2, 2] = _c12*p_m3
+    _kkt[0, 3] = _c13
+    _kkt[0, 4] = -_c14
+    _kkt[1, 3] = _c15
+    _kkt[1, 4] = -_c16
+    _kkt[2, 3] = _c19
+    _kkt[2, 4] = _c21
+    _kkt[3, 0] = -_c13
+    _kkt[3, 1] = -_c15
+    _kkt[3, 2] = _c18
+    _kkt[4, 0] = _c14
+    _kkt[4, 1] = _c16
+    _kkt[4, 2] = _c22
+    _kkt[0, 5] = _c27*_c8 - _c28*_c29
+    _kkt[1, 5] = -_c32*p_b - _c33*p_g
+    _kkt[2, 5] = -_c35*p_g
+    _kkt[3, 5] = _c38 + _c40 + _c42 - _c43*(_c14 + _c16 + _c22 - p_d) - _c47*(_c46 - _c44 - _c45)
+    _kkt[4, 5] = _c51 + _c53 - _c49 - _c43*(_c13 + _c15 + _c19) - _c47*(_c55 + _c56 - _c54)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c60 = _acc1*_c59
+    _c72 = _acc0*_c59
+    _c77 = _acc0*_c5
+    _c78 = _acc1*_c4
+    _c79 = _acc2*_c20
+    _c81 = _acc0*_c3
+    _c83 = _acc1*_c2
+    _c85 = _acc2*_c17
+    _part0_0 = -_c60 - _c62 + _c13*_c57 - _c13*_mult1 - _c14*_mult0
+    _part0_1 = _c60 + _c62
+    _part0_4 = _c64*qd_theta2
+    _part1_0 = _c71 - _c72
+    _part1_1 = _c72 - _c71 + _c15*_c73 - _c15*_mult1 - _c16*_mult0
+    _part1_3 = -_c64*qd_theta1
+    _part2_2 = _c18*_c76 + _c18*_mult1 + _c21*_mult0
+    _part3_0 = -_c53 + _c13*_c43 + _c47*_c56 + _c77*p_a
+    _part3_1 = -_c51 + _c15*_c43 + _c47*_c55 + _c78*p_b
+    _part3_2 = _c49 - _c18*_c43 - _c47*_c54 - _c79*p_c
+    _part3_3 = 2.0*_c56 + _c13*_c47
+    _part3_4 = 2.0*_c55 + _c15*_c47
+    _part3_5 = -2.0*_c54 - _c18*_c47
+    _part4_0 = _c42 + _c45*_c47 + _c81*p_a - _c14*_c43
+    _part4_1 = _c40 + _c44*_c47 + _c83*p_b - _c16*_c43
+    _part4_2 = _c38 + _c21*_c43 - _c46*_c47 - _c85*p_c
+    _part4_3 = 2.0*_c45 - _c14*_c47
+    _part4_4 = 2.0*_c44 - _c16*_c47
+    _part4_5 = -2.0*_c46 + _c21*_c47
+    _columns = y.shape[0] // 6 - 1
+    _rhs = np.empty((5, _columns))
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = (_part0_0*y[_at + 0] + (_part0_1*y[_at + 1] + _part0_4*y[_at + 4]))
+        _g1 = (_part1_0*y[_at + 0] + (_part1_1*y[_at + 1] + _part1_3*y[_at + 3]))
+        _g2 = _part2_2*y[_at + 2]
+        _g3 = ((_part3_0*y[_at + 0] + (_part3_1*y[_at + 1] + _part3_2*y[_at + 2])) + (_part3_3*y[_at + 3] + (_part3_4*y[_at + 4] + _part3_5*y[_at + 5])))
+        _g4 = ((_part4_0*y[_at + 0] + (_part4_1*y[_at + 1] + _part4_2*y[_at + 2])) + (_part4_3*y[_at + 3] + (_part4_4*y[_at + 4] + _part4_5*y[_at + 5])))
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+        _rhs[3, _col] = _g3
+        _rhs[4, _col] = _g4
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 3, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 3] = _rhs[0, _col]
+        out[_at + 4] = _rhs[1, _col]
+        out[_at + 5] = _rhs[2, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_d = p[3]
+    p_m1 = p[4]
+    p_m2 = p[5]
+    p_m3 = p[6]
+    p_g = p[7]
+    _baumgarte_alpha = p[8]
+    _baumgarte_beta = p[9]
+    _kkt = np.zeros((5, 6))
+    _c0 = p_a**2
+    _c1 = p_m2 + (0.25)*p_m1
+    _c2 = sin(q_theta2)
+    _c3 = sin(q_theta1)
+    _c4 = cos(q_theta2)
+    _c5 = cos(q_theta1)
+    _c6 = _c2*_c3 + _c4*_c5
+    _c7 = _c6*p_a
+    _c8 = (0.5)*p_m2
+    _c9 = _c8*p_b
+    _c10 = _c7*_c9
+    _c11 = (0.3333333333333333)*p_b**2
+    _c12 = (0.3333333333333333)*p_c**2
+    _c13 = _c3*p_a
+    _c14 = _c5*p_a
+    _c15 = _c2*p_b
+    _c16 = _c4*p_b
+    _c17 = sin(q_theta3)
+    _c18 = _c17*p_c
+    _c19 = -_c18
+    _c20 = cos(q_theta3)
+    _c21 = _c20*p_c
+    _c22 = -_c21
+    _c23 = _c2*_c5 - _c3*_c4
+    _c24 = _c23*p_a
+    _c25 = qd_theta2**2
+    _c26 = _c25*p_b
+    _c27 = _c24*_c26
+    _c28 = p_m2 + (0.5)*p_m1
+    _c29 = _c14*p_g
+    _c30 = qd_theta1**2
+    _c31 = _c24*_c30
+    _c32 = _c31*_c8
+    _c33 = _c16*_c8
+    _c34 = (0.5)*p_m3
+    _c35 = _c21*_c34
+    _c36 = qd_theta3**2
+    _c37 = _c20*_c36
+    _c38 = -_c37*p_c
+    _c39 = _c25*_c4
+    _c40 = _c39*p_b
+    _c41 = _c30*_c5
+    _c42 = _c41*p_a
+    _c43 = _baumgarte_beta**2
+    _c44 = _c15*qd_theta2
+    _c45 = _c13*qd_theta1
+    _c46 = _c18*qd_theta3
+    _c47 = 2.0*_baumgarte_alpha
+    _c48 = _c17*_c36
+    _c49 = _c48*p_c
+    _c50 = _c2*_c25
+    _c51 = _c50*p_b
+    _c52 = _c3*_c30
+    _c53 = _c52*p_a
+    _c54 = _c21*qd_theta3
+    _c55 = _c16*qd_theta2
+    _c56 = _c14*qd_theta1
+    _c57 = _c28*p_g
+    _c58 = _c24*_c8
+    _c59 = _c58*p_b
+    _c61 = _c7*_c8
+    _c62 = _c26*_c61
+    _c63 = p_b*p_m2
+    _c64 = _c24*_c63
+    _c65 = _c6*_c9
+    _c66 = _c23*_c8
+    _c69 = (0.5)*p_b
+    _c70 = _c30*p_b
+    _c71 = _c61*_c70
+    _c73 = _c8*p_g
+    _c75 = (0.5)*p_g
+    _c76 = _c34*p_g
+    _c80 = _c47*qd_theta1
+    _c82 = _c47*qd_theta2
+    _c84 = _c47*qd_theta3
+    out[0] = qd_theta1
+    out[1] = qd_theta2
+    out[2] = qd_theta3
+    _kkt[0, 0] = _c0*_c1 + (0.08333333333333333)*_c0*p_m1
+    _kkt[0, 1] = _c10
+    _kkt[1, 0] = _c10
+    _kkt[1, 1] = _c11*p_m2
+    _kkt[2, 2] = _c12*p_m3
+    _kkt[0, 3] = _c13
+    _kkt[0, 4] = -_c14
+    _kkt[1, 3] = _c15
+    _kkt[1, 4] = -_c16
+    _kkt[2, 3] = _c19
+    _kkt[2, 4] = _c21
+    _kkt[3, 0] = -_c13
+    _kkt[3, 1] = -_c15
+    _kkt[3, 2] = _c18
+    _kkt[4, 0] = _c14
+    _kkt[4, 1] = _c16
+    _kkt[4, 2] = _c22
+    _kkt[0, 5] = _c27*_c8 - _c28*_c29
+    _kkt[1, 5] = -_c32*p_b - _c33*p_g
+    _kkt[2, 5] = -_c35*p_g
+    _kkt[3, 5] = _c38 + _c40 + _c42 - _c43*(_c14 + _c16 + _c22 - p_d) - _c47*(_c46 - _c44 - _c45)
+    _kkt[4, 5] = _c51 + _c53 - _c49 - _c43*(_c13 + _c15 + _c19) - _c47*(_c55 + _c56 - _c54)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _c60 = _acc1*_c59
+    _c67 = _acc1*_c7
+    _c68 = _acc0*_c0
+    _c72 = _acc0*_c59
+    _c74 = _acc0*_c7
+    _c77 = _acc0*_c5
+    _c78 = _acc1*_c4
+    _c79 = _acc2*_c20
+    _c81 = _acc0*_c3
+    _c83 = _acc1*_c2
+    _c85 = _acc2*_c17
+    _part0_0 = -_c60 - _c62 + _c13*_c57 - _c13*_mult1 - _c14*_mult0
+    _part0_1 = _c60 + _c62
+    _part0_4 = _c64*qd_theta2
+    _part0_6 = _c26*_c66 + _c5*_mult1 - _acc0*(2.0*_c1*p_a + (0.16666666666666666)*p_a*p_m1) - _acc1*_c65 - _c3*_mult0 - _c5*_c57
+    _part0_7 = _c25*_c58 - _c67*_c8
+    _part0_10 = -0.5*_c29 - 0.3333333333333333*_c68
+    _part0_11 = (0.5)*_c27 - _c29 - _c68 - _c67*_c69
+    _part0_13 = -_c14*_c28
+    _part1_0 = _c71 - _c72
+    _part1_1 = _c72 - _c71 + _c15*_c73 - _c15*_mult1 - _c16*_mult0
+    _part1_3 = -_c64*qd_theta1
+    _part1_6 = -_acc0*_c65 - _c66*_c70
+    _part1_7 = -_c32 + _c4*_mult1 - _c2*_mult0 - _c4*_c73 - _c74*_c8 - 0.6666666666666666*_acc1*_c63
+    _part1_11 = -_acc1*_c11 - _c16*_c75 - _c31*_c69 - _c69*_c74
+    _part1_13 = -_c33
+    _part2_2 = _c18*_c76 + _c18*_mult1 + _c21*_mult0
+    _part2_8 = _c17*_mult0 - _c20*_c76 - _c20*_mult1 - 0.6666666666666666*_acc2*p_c*p_m3
+    _part2_12 = -_acc2*_c12 - _c21*_c75
+    _part2_13 = -_c35
+    _part3_0 = -_c53 + _c13*_c43 + _c47*_c56 + _c77*p_a
+    _part3_1 = -_c51 + _c15*_c43 + _c47*_c55 + _c78*p_b
+    _part3_2 = _c49 - _c18*_c43 - _c47*_c54 - _c79*p_c
+    _part3_3 = 2.0*_c56 + _c13*_c47
+    _part3_4 = 2.0*_c55 + _c15*_c47
+    _part3_5 = -2.0*_c54 - _c18*_c47
+    _part3_6 = _c41 + _c81 + _c3*_c80 - _c43*_c5
+    _part3_7 = _c39 + _c83 + _c2*_c82 - _c4*_c43
+    _part3_8 = -_c37 - _c85 + _c20*_c43 - _c17*_c84
+    _part3_9 = _c43
+    _part4_0 = _c42 + _c45*_c47 + _c81*p_a - _c14*_c43
+    _part4_1 = _c40 + _c44*_c47 + _c83*p_b - _c16*_c43
+    _part4_2 = _c38 + _c21*_c43 - _c46*_c47 - _c85*p_c
+    _part4_3 = 2.0*_c45 - _c14*_c47
+    _part4_4 = 2.0*_c44 - _c16*_c47
+    _part4_5 = -2.0*_c46 + _c21*_c47
+    _part4_6 = _c52 - _c77 - _c3*_c43 - _c5*_c80
+    _part4_7 = _c50 - _c78 - _c2*_c43 - _c4*_c82
+    _part4_8 = _c79 - _c48 + _c17*_c43 + _c20*_c84
+    _columns = y.shape[0] // 6 - 1
+    _rhs = np.empty((5, _columns))
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = (_part0_0*y[_at + 0] + (_part0_1*y[_at + 1] + _part0_4*y[_at + 4]))
+        _g1 = (_part1_0*y[_at + 0] + (_part1_1*y[_at + 1] + _part1_3*y[_at + 3]))
+        _g2 = _part2_2*y[_at + 2]
+        _g3 = ((_part3_0*y[_at + 0] + (_part3_1*y[_at + 1] + _part3_2*y[_at + 2])) + (_part3_3*y[_at + 3] + (_part3_4*y[_at + 4] + _part3_5*y[_at + 5])))
+        _g4 = ((_part4_0*y[_at + 0] + (_part4_1*y[_at + 1] + _part4_2*y[_at + 2])) + (_part4_3*y[_at + 3] + (_part4_4*y[_at + 4] + _part4_5*y[_at + 5])))
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+            _g1 += p[p.shape[0] - 1]*_part1_6
+            _g3 += p[p.shape[0] - 1]*_part3_6
+            _g4 += p[p.shape[0] - 1]*_part4_6
+        elif _j == 1:
+            _g0 += p[p.shape[0] - 1]*_part0_7
+            _g1 += p[p.shape[0] - 1]*_part1_7
+            _g3 += p[p.shape[0] - 1]*_part3_7
+            _g4 += p[p.shape[0] - 1]*_part4_7
+        elif _j == 2:
+            _g2 += p[p.shape[0] - 1]*_part2_8
+            _g3 += p[p.shape[0] - 1]*_part3_8
+            _g4 += p[p.shape[0] - 1]*_part4_8
+        elif _j == 3:
+            _g3 += p[p.shape[0] - 1]*_part3_9
+        elif _j == 4:
+            _g0 += p[p.shape[0] - 1]*_part0_10
+        elif _j == 5:
+            _g0 += p[p.shape[0] - 1]*_part0_11
+            _g1 += p[p.shape[0] - 1]*_part1_11
+        elif _j == 6:
+            _g2 += p[p.shape[0] - 1]*_part2_12
+        elif _j == 7:
+            _g0 += p[p.shape[0] - 1]*_part0_13
+            _g1 += p[p.shape[0] - 1]*_part1_13
+            _g2 += p[p.shape[0] - 1]*_part2_13
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+        _rhs[3, _col] = _g3
+        _rhs[4, _col] = _g4
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 3, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 3] = _rhs[0, _col]
+        out[_at + 4] = _rhs[1, _col]
+        out[_at + 5] = _rhs[2, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def dae_residual(t, y, p, out):
     """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
     Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.

@@ -949,6 +949,685 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _dy2 = y[12]
+    _dy3 = y[13]
+    _dy4 = y[14]
+    _dy5 = y[15]
+    _dy6 = y[16]
+    _dy7 = y[17]
+    _dy8 = y[18]
+    _dy9 = y[19]
+    _kkt = np.zeros((8, 9))
+    _c0 = 2.0*p_m
+    _c1 = (0.5)*p_L**2
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_R
+    _c4 = cos(q_theta)
+    _c5 = _c4*p_R
+    _c6 = -_c5
+    _c7 = -p_R
+    _c8 = -_c3
+    _c9 = sin(p_alpha)
+    _c10 = _c9*p_g
+    _c11 = _c2*qd_phi_prime
+    _c12 = -_c11*p_R - _c3*qd_phi
+    _c13 = 2.0*_baumgarte_alpha
+    _c14 = qd_phi + qd_phi_prime
+    _c15 = _c5*qd_theta
+    _c16 = _c14*_c15
+    _c17 = _c5*qd_phi
+    _c18 = _c5*qd_phi_prime
+    _c19 = _c3*qd_theta
+    _c20 = _c14*_c19
+    _c21 = q_phi - q_phi_prime
+    _c22 = _baumgarte_beta**2
+    _c25 = _c14*_dy7
+    _c26 = _c15 + _c13*_c3
+    _c27 = 4.0*_baumgarte_alpha
+    _c29 = _c19 - _c13*_c5
+    _c30 = _c22*p_R
+    _c31 = _c13*p_R
+    out[0] = qd_X
+    out[1] = qd_Y
+    out[2] = qd_theta
+    out[3] = qd_phi
+    out[4] = qd_phi_prime
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + _c1*p_m
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c3
+    _kkt[3, 6] = _c6
+    _kkt[3, 7] = _c7
+    _kkt[4, 5] = _c3
+    _kkt[4, 6] = _c6
+    _kkt[4, 7] = p_R
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c8
+    _kkt[5, 4] = _c8
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c5
+    _kkt[6, 4] = _c5
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c7
+    _kkt[0, 8] = 0.0
+    _kkt[1, 8] = _c0*_c10
+    _kkt[2, 8] = 0.0
+    _kkt[3, 8] = 0.0
+    _kkt[4, 8] = 0.0
+    _kkt[5, 8] = _c16 - _c13*(_c12 + 2.0*qd_X)
+    _kkt[6, 8] = _c20 - _c13*(_c17 + _c18 + 2.0*qd_Y)
+    _kkt[7, 8] = -_c13*(p_L*qd_theta + p_R*qd_phi - p_R*qd_phi_prime) - _c22*(_c21*p_R + p_L*q_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 5)
+    if _status:
+        return _status
+    _ydot[5] = _kkt[0, 8]
+    _ydot[6] = _kkt[1, 8]
+    _ydot[7] = _kkt[2, 8]
+    _ydot[8] = _kkt[3, 8]
+    _ydot[9] = _kkt[4, 8]
+    _lam = _kkt[5:, 8]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _mult2 = _lam[2]
+    _c24 = _dy2*(-_c3*_mult1 - _c5*_mult0)
+    out[10] = _dy5
+    out[11] = _dy6
+    out[12] = _dy7
+    out[13] = _dy8
+    out[14] = _dy9
+    _direction[0, 8] = 0.0
+    _direction[1, 8] = 0.0
+    _direction[2, 8] = 0.0
+    _direction[3, 8] = _c24
+    _direction[4, 8] = _c24
+    _direction[5, 8] = _c25*_c5 + _c26*_dy8 + _c26*_dy9 + _dy2*(-_c20 + _acc3*_c5 + _acc4*_c5 - _c13*(-_c17 - _c18)) - _c27*_dy5
+    _direction[6, 8] = _c25*_c3 + _c29*_dy8 + _c29*_dy9 + _dy2*(_c16 + _acc3*_c3 + _acc4*_c3 - _c12*_c13) - _c27*_dy6
+    _direction[7, 8] = _c30*_dy4 + _c31*_dy9 - _c30*_dy3 - _c31*_dy8 - _c13*_dy7*p_L - _c22*_dy2*p_L
+    _status = kkt_solve(_direction, 5)
+    if _status:
+        return _status
+    out[15] = _direction[0, 8]
+    out[16] = _direction[1, 8]
+    out[17] = _direction[2, 8]
+    out[18] = _direction[3, 8]
+    out[19] = _direction[4, 8]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _dy2 = y[12]
+    _dy3 = y[13]
+    _dy4 = y[14]
+    _dy5 = y[15]
+    _dy6 = y[16]
+    _dy7 = y[17]
+    _dy8 = y[18]
+    _dy9 = y[19]
+    _dp0 = p[p.shape[0] - 7]
+    _dp1 = p[p.shape[0] - 6]
+    _dp2 = p[p.shape[0] - 5]
+    _dp3 = p[p.shape[0] - 4]
+    _dp4 = p[p.shape[0] - 3]
+    _dp5 = p[p.shape[0] - 2]
+    _dp6 = p[p.shape[0] - 1]
+    _kkt = np.zeros((8, 9))
+    _c0 = 2.0*p_m
+    _c1 = (0.5)*p_L**2
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_R
+    _c4 = cos(q_theta)
+    _c5 = _c4*p_R
+    _c6 = -_c5
+    _c7 = -p_R
+    _c8 = -_c3
+    _c9 = sin(p_alpha)
+    _c10 = _c9*p_g
+    _c11 = _c2*qd_phi_prime
+    _c12 = -_c11*p_R - _c3*qd_phi
+    _c13 = 2.0*_baumgarte_alpha
+    _c14 = qd_phi + qd_phi_prime
+    _c15 = _c5*qd_theta
+    _c16 = _c14*_c15
+    _c17 = _c5*qd_phi
+    _c18 = _c5*qd_phi_prime
+    _c19 = _c3*qd_theta
+    _c20 = _c14*_c19
+    _c21 = q_phi - q_phi_prime
+    _c22 = _baumgarte_beta**2
+    _c25 = _c14*_dy7
+    _c26 = _c15 + _c13*_c3
+    _c27 = 4.0*_baumgarte_alpha
+    _c28 = _c14*qd_theta
+    _c29 = _c19 - _c13*_c5
+    _c30 = _c22*p_R
+    _c31 = _c13*p_R
+    out[0] = qd_X
+    out[1] = qd_Y
+    out[2] = qd_theta
+    out[3] = qd_phi
+    out[4] = qd_phi_prime
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + _c1*p_m
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c3
+    _kkt[3, 6] = _c6
+    _kkt[3, 7] = _c7
+    _kkt[4, 5] = _c3
+    _kkt[4, 6] = _c6
+    _kkt[4, 7] = p_R
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c8
+    _kkt[5, 4] = _c8
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c5
+    _kkt[6, 4] = _c5
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c7
+    _kkt[0, 8] = 0.0
+    _kkt[1, 8] = _c0*_c10
+    _kkt[2, 8] = 0.0
+    _kkt[3, 8] = 0.0
+    _kkt[4, 8] = 0.0
+    _kkt[5, 8] = _c16 - _c13*(_c12 + 2.0*qd_X)
+    _kkt[6, 8] = _c20 - _c13*(_c17 + _c18 + 2.0*qd_Y)
+    _kkt[7, 8] = -_c13*(p_L*qd_theta + p_R*qd_phi - p_R*qd_phi_prime) - _c22*(_c21*p_R + p_L*q_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 5)
+    if _status:
+        return _status
+    _ydot[5] = _kkt[0, 8]
+    _ydot[6] = _kkt[1, 8]
+    _ydot[7] = _kkt[2, 8]
+    _ydot[8] = _kkt[3, 8]
+    _ydot[9] = _kkt[4, 8]
+    _lam = _kkt[5:, 8]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _mult2 = _lam[2]
+    _c23 = _c4*_mult1 - _c2*_mult0
+    _c24 = _dy2*(-_c3*_mult1 - _c5*_mult0)
+    out[10] = _dy5
+    out[11] = _dy6
+    out[12] = _dy7
+    out[13] = _dy8
+    out[14] = _dy9
+    _direction[0, 8] = -2.0*_acc0*_dp0
+    _direction[1, 8] = _dp0*(-2.0*_acc1 + 2.0*_c10) + _c0*_c9*_dp5 + _c0*_dp6*p_g*cos(p_alpha)
+    _direction[2, 8] = _dp2*(_mult2 - _acc2*p_L*p_m) - 2.0*_acc2*_dp3 - _acc2*_c1*_dp0
+    _direction[3, 8] = _c24 + _dp1*(_c23 + _mult2) - _acc3*_dp4
+    _direction[4, 8] = _c24 + _dp1*(_c23 - _mult2) - _acc4*_dp4
+    _direction[5, 8] = _c25*_c5 + _c26*_dy8 + _c26*_dy9 + _dp1*(_acc3*_c2 + _acc4*_c2 + _c28*_c4 - _c13*(-_c11 - _c2*qd_phi)) + _dy2*(-_c20 + _acc3*_c5 + _acc4*_c5 - _c13*(-_c17 - _c18)) - _c27*_dy5
+    _direction[6, 8] = _c25*_c3 + _c29*_dy8 + _c29*_dy9 + _dp1*(_c2*_c28 - _acc3*_c4 - _acc4*_c4 - _c13*(_c4*qd_phi + _c4*qd_phi_prime)) + _dy2*(_c16 + _acc3*_c3 + _acc4*_c3 - _c12*_c13) - _c27*_dy6
+    _direction[7, 8] = _c30*_dy4 + _c31*_dy9 + _dp1*(_acc4 - _acc3 - _c13*(qd_phi - qd_phi_prime) - _c21*_c22) + _dp2*(-_acc2 - _c13*qd_theta - _c22*q_theta) - _c30*_dy3 - _c31*_dy8 - _c13*_dy7*p_L - _c22*_dy2*p_L
+    _status = kkt_solve(_direction, 5)
+    if _status:
+        return _status
+    out[15] = _direction[0, 8]
+    out[16] = _direction[1, 8]
+    out[17] = _direction[2, 8]
+    out[18] = _direction[3, 8]
+    out[19] = _direction[4, 8]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _kkt = np.zeros((8, 9))
+    _c0 = 2.0*p_m
+    _c1 = (0.5)*p_L**2
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_R
+    _c4 = cos(q_theta)
+    _c5 = _c4*p_R
+    _c6 = -_c5
+    _c7 = -p_R
+    _c8 = -_c3
+    _c9 = sin(p_alpha)
+    _c10 = _c9*p_g
+    _c11 = -_c3*qd_phi - _c3*qd_phi_prime
+    _c12 = 2.0*_baumgarte_alpha
+    _c13 = qd_phi + qd_phi_prime
+    _c14 = _c13*_c5
+    _c15 = _c14*qd_theta
+    _c16 = _c5*qd_phi
+    _c17 = _c4*qd_phi_prime
+    _c18 = _c17*p_R
+    _c19 = _c3*qd_theta
+    _c20 = _c13*_c19
+    _c21 = q_phi - q_phi_prime
+    _c22 = _baumgarte_beta**2
+    _c26 = -4.0*_baumgarte_alpha
+    _c27 = _c12*_c3 + _c5*qd_theta
+    _c29 = _c19 - _c12*_c5
+    _c30 = _c22*p_R
+    _c31 = _c12*p_R
+    out[0] = qd_X
+    out[1] = qd_Y
+    out[2] = qd_theta
+    out[3] = qd_phi
+    out[4] = qd_phi_prime
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + _c1*p_m
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c3
+    _kkt[3, 6] = _c6
+    _kkt[3, 7] = _c7
+    _kkt[4, 5] = _c3
+    _kkt[4, 6] = _c6
+    _kkt[4, 7] = p_R
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c8
+    _kkt[5, 4] = _c8
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c5
+    _kkt[6, 4] = _c5
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c7
+    _kkt[0, 8] = 0.0
+    _kkt[1, 8] = _c0*_c10
+    _kkt[2, 8] = 0.0
+    _kkt[3, 8] = 0.0
+    _kkt[4, 8] = 0.0
+    _kkt[5, 8] = _c15 - _c12*(_c11 + 2.0*qd_X)
+    _kkt[6, 8] = _c20 - _c12*(_c16 + _c18 + 2.0*qd_Y)
+    _kkt[7, 8] = -_c12*(p_L*qd_theta + p_R*qd_phi - p_R*qd_phi_prime) - _c22*(_c21*p_R + p_L*q_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 5)
+    if _status:
+        return _status
+    _ydot[5] = _kkt[0, 8]
+    _ydot[6] = _kkt[1, 8]
+    _ydot[7] = _kkt[2, 8]
+    _ydot[8] = _kkt[3, 8]
+    _ydot[9] = _kkt[4, 8]
+    _lam = _kkt[5:, 8]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _mult2 = _lam[2]
+    _c23 = -_c3*_mult1 - _c5*_mult0
+    _part3_2 = _c23
+    _part4_2 = _c23
+    _part5_2 = -_c20 + _acc3*_c5 + _acc4*_c5 - _c12*(-_c16 - _c18)
+    _part5_5 = _c26
+    _part5_7 = _c14
+    _part5_8 = _c27
+    _part5_9 = _c27
+    _part6_2 = _c15 + _acc3*_c3 + _acc4*_c3 - _c11*_c12
+    _part6_6 = _c26
+    _part6_7 = _c13*_c3
+    _part6_8 = _c29
+    _part6_9 = _c29
+    _part7_2 = -_c22*p_L
+    _part7_3 = -_c30
+    _part7_4 = _c30
+    _part7_7 = -_c12*p_L
+    _part7_8 = -_c31
+    _part7_9 = _c31
+    _columns = y.shape[0] // 10 - 1
+    _rhs = np.empty((8, _columns))
+    for _col in range(_columns):
+        _at = 10*(1 + _col)
+        out[_at + 0] = y[_at + 5]
+        out[_at + 1] = y[_at + 6]
+        out[_at + 2] = y[_at + 7]
+        out[_at + 3] = y[_at + 8]
+        out[_at + 4] = y[_at + 9]
+        _g0 = 0.0
+        _g1 = 0.0
+        _g2 = 0.0
+        _g3 = _part3_2*y[_at + 2]
+        _g4 = _part4_2*y[_at + 2]
+        _g5 = ((_part5_2*y[_at + 2] + _part5_5*y[_at + 5]) + (_part5_7*y[_at + 7] + (_part5_8*y[_at + 8] + _part5_9*y[_at + 9])))
+        _g6 = ((_part6_2*y[_at + 2] + _part6_6*y[_at + 6]) + (_part6_7*y[_at + 7] + (_part6_8*y[_at + 8] + _part6_9*y[_at + 9])))
+        _g7 = ((_part7_2*y[_at + 2] + (_part7_3*y[_at + 3] + _part7_4*y[_at + 4])) + (_part7_7*y[_at + 7] + (_part7_8*y[_at + 8] + _part7_9*y[_at + 9])))
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+        _rhs[3, _col] = _g3
+        _rhs[4, _col] = _g4
+        _rhs[5, _col] = _g5
+        _rhs[6, _col] = _g6
+        _rhs[7, _col] = _g7
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 5, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 10*(1 + _col)
+        out[_at + 5] = _rhs[0, _col]
+        out[_at + 6] = _rhs[1, _col]
+        out[_at + 7] = _rhs[2, _col]
+        out[_at + 8] = _rhs[3, _col]
+        out[_at + 9] = _rhs[4, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_m = p[0]
+    p_R = p[1]
+    p_L = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    p_g = p[5]
+    p_alpha = p[6]
+    _baumgarte_alpha = p[7]
+    _baumgarte_beta = p[8]
+    _kkt = np.zeros((8, 9))
+    _c0 = 2.0*p_m
+    _c1 = (0.5)*p_L**2
+    _c2 = sin(q_theta)
+    _c3 = _c2*p_R
+    _c4 = cos(q_theta)
+    _c5 = _c4*p_R
+    _c6 = -_c5
+    _c7 = -p_R
+    _c8 = -_c3
+    _c9 = sin(p_alpha)
+    _c10 = _c9*p_g
+    _c11 = -_c3*qd_phi - _c3*qd_phi_prime
+    _c12 = 2.0*_baumgarte_alpha
+    _c13 = qd_phi + qd_phi_prime
+    _c14 = _c13*_c5
+    _c15 = _c14*qd_theta
+    _c16 = _c5*qd_phi
+    _c17 = _c4*qd_phi_prime
+    _c18 = _c17*p_R
+    _c19 = _c3*qd_theta
+    _c20 = _c13*_c19
+    _c21 = q_phi - q_phi_prime
+    _c22 = _baumgarte_beta**2
+    _c26 = -4.0*_baumgarte_alpha
+    _c27 = _c12*_c3 + _c5*qd_theta
+    _c28 = _c13*qd_theta
+    _c29 = _c19 - _c12*_c5
+    _c30 = _c22*p_R
+    _c31 = _c12*p_R
+    out[0] = qd_X
+    out[1] = qd_Y
+    out[2] = qd_theta
+    out[3] = qd_phi
+    out[4] = qd_phi_prime
+    _kkt[0, 0] = _c0
+    _kkt[1, 1] = _c0
+    _kkt[2, 2] = 2.0*p_I1 + _c1*p_m
+    _kkt[3, 3] = p_I3
+    _kkt[4, 4] = p_I3
+    _kkt[0, 5] = -2.0
+    _kkt[1, 6] = -2.0
+    _kkt[2, 7] = -p_L
+    _kkt[3, 5] = _c3
+    _kkt[3, 6] = _c6
+    _kkt[3, 7] = _c7
+    _kkt[4, 5] = _c3
+    _kkt[4, 6] = _c6
+    _kkt[4, 7] = p_R
+    _kkt[5, 0] = 2.0
+    _kkt[5, 3] = _c8
+    _kkt[5, 4] = _c8
+    _kkt[6, 1] = 2.0
+    _kkt[6, 3] = _c5
+    _kkt[6, 4] = _c5
+    _kkt[7, 2] = p_L
+    _kkt[7, 3] = p_R
+    _kkt[7, 4] = _c7
+    _kkt[0, 8] = 0.0
+    _kkt[1, 8] = _c0*_c10
+    _kkt[2, 8] = 0.0
+    _kkt[3, 8] = 0.0
+    _kkt[4, 8] = 0.0
+    _kkt[5, 8] = _c15 - _c12*(_c11 + 2.0*qd_X)
+    _kkt[6, 8] = _c20 - _c12*(_c16 + _c18 + 2.0*qd_Y)
+    _kkt[7, 8] = -_c12*(p_L*qd_theta + p_R*qd_phi - p_R*qd_phi_prime) - _c22*(_c21*p_R + p_L*q_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 5)
+    if _status:
+        return _status
+    _ydot[5] = _kkt[0, 8]
+    _ydot[6] = _kkt[1, 8]
+    _ydot[7] = _kkt[2, 8]
+    _ydot[8] = _kkt[3, 8]
+    _ydot[9] = _kkt[4, 8]
+    _lam = _kkt[5:, 8]
+    _acc0 = _ydot[5]
+    _acc1 = _ydot[6]
+    _acc2 = _ydot[7]
+    _acc3 = _ydot[8]
+    _acc4 = _ydot[9]
+    _mult0 = _lam[0]
+    _mult1 = _lam[1]
+    _mult2 = _lam[2]
+    _c23 = -_c3*_mult1 - _c5*_mult0
+    _c24 = _c4*_mult1 - _c2*_mult0
+    _c25 = -_acc3
+    _part0_10 = -2.0*_acc0
+    _part1_10 = -2.0*_acc1 + 2.0*_c10
+    _part1_15 = _c0*_c9
+    _part1_16 = _c0*p_g*cos(p_alpha)
+    _part2_10 = -_acc2*_c1
+    _part2_12 = _mult2 - _acc2*p_L*p_m
+    _part2_13 = -2.0*_acc2
+    _part3_2 = _c23
+    _part3_11 = _c24 + _mult2
+    _part3_14 = _c25
+    _part4_2 = _c23
+    _part4_11 = _c24 - _mult2
+    _part4_14 = -_acc4
+    _part5_2 = -_c20 + _acc3*_c5 + _acc4*_c5 - _c12*(-_c16 - _c18)
+    _part5_5 = _c26
+    _part5_7 = _c14
+    _part5_8 = _c27
+    _part5_9 = _c27
+    _part5_11 = _acc3*_c2 + _acc4*_c2 + _c28*_c4 - _c12*(-_c2*qd_phi - _c2*qd_phi_prime)
+    _part6_2 = _c15 + _acc3*_c3 + _acc4*_c3 - _c11*_c12
+    _part6_6 = _c26
+    _part6_7 = _c13*_c3
+    _part6_8 = _c29
+    _part6_9 = _c29
+    _part6_11 = _c2*_c28 - _acc3*_c4 - _acc4*_c4 - _c12*(_c17 + _c4*qd_phi)
+    _part7_2 = -_c22*p_L
+    _part7_3 = -_c30
+    _part7_4 = _c30
+    _part7_7 = -_c12*p_L
+    _part7_8 = -_c31
+    _part7_9 = _c31
+    _part7_11 = _acc4 + _c25 - _c12*(qd_phi - qd_phi_prime) - _c21*_c22
+    _part7_12 = -_acc2 - _c12*qd_theta - _c22*q_theta
+    _columns = y.shape[0] // 10 - 1
+    _rhs = np.empty((8, _columns))
+    for _col in range(_columns):
+        _at = 10*(1 + _col)
+        out[_at + 0] = y[_at + 5]
+        out[_at + 1] = y[_at + 6]
+        out[_at + 2] = y[_at + 7]
+        out[_at + 3] = y[_at + 8]
+        out[_at + 4] = y[_at + 9]
+        _g0 = 0.0
+        _g1 = 0.0
+        _g2 = 0.0
+        _g3 = _part3_2*y[_at + 2]
+        _g4 = _part4_2*y[_at + 2]
+        _g5 = ((_part5_2*y[_at + 2] + _part5_5*y[_at + 5]) + (_part5_7*y[_at + 7] + (_part5_8*y[_at + 8] + _part5_9*y[_at + 9])))
+        _g6 = ((_part6_2*y[_at + 2] + _part6_6*y[_at + 6]) + (_part6_7*y[_at + 7] + (_part6_8*y[_at + 8] + _part6_9*y[_at + 9])))
+        _g7 = ((_part7_2*y[_at + 2] + (_part7_3*y[_at + 3] + _part7_4*y[_at + 4])) + (_part7_7*y[_at + 7] + (_part7_8*y[_at + 8] + _part7_9*y[_at + 9])))
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_10
+            _g1 += p[p.shape[0] - 1]*_part1_10
+            _g2 += p[p.shape[0] - 1]*_part2_10
+        elif _j == 1:
+            _g3 += p[p.shape[0] - 1]*_part3_11
+            _g4 += p[p.shape[0] - 1]*_part4_11
+            _g5 += p[p.shape[0] - 1]*_part5_11
+            _g6 += p[p.shape[0] - 1]*_part6_11
+            _g7 += p[p.shape[0] - 1]*_part7_11
+        elif _j == 2:
+            _g2 += p[p.shape[0] - 1]*_part2_12
+            _g7 += p[p.shape[0] - 1]*_part7_12
+        elif _j == 3:
+            _g2 += p[p.shape[0] - 1]*_part2_13
+        elif _j == 4:
+            _g3 += p[p.shape[0] - 1]*_part3_14
+            _g4 += p[p.shape[0] - 1]*_part4_14
+        elif _j == 5:
+            _g1 += p[p.shape[0] - 1]*_part1_15
+        elif _j == 6:
+            _g1 += p[p.shape[0] - 1]*_part1_16
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+        _rhs[3, _col] = _g3
+        _rhs[4, _col] = _g4
+        _rhs[5, _col] = _g5
+        _rhs[6, _col] = _g6
+        _rhs[7, _col] = _g7
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 5, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 10*(1 + _col)
+        out[_at + 5] = _rhs[0, _col]
+        out[_at + 6] = _rhs[1, _col]
+        out[_at + 7] = _rhs[2, _col]
+        out[_at + 8] = _rhs[3, _col]
+        out[_at + 9] = _rhs[4, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def dae_residual(t, y, p, out):
     """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
     Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.

@@ -337,6 +337,266 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_y = y[1]
+    qd_x = y[2]
+    qd_y = y[3]
+    p_lam = p[0]
+    _dy0 = y[4]
+    _dy1 = y[5]
+    _dy2 = y[6]
+    _dy3 = y[7]
+    _c0 = 2.0*q_y
+    _c1 = _c0*p_lam
+    _c2 = q_x**2
+    _c3 = q_y**2
+    _c4 = 2.0*p_lam*q_x
+    out[0] = qd_x
+    out[1] = qd_y
+    _m0_0 = 1.0
+    _m1_0 = 0.0
+    _m1_1 = 1.0
+    _f0 = -q_x - _c1*q_x
+    _f1 = -q_y - p_lam*(_c2 - _c3)
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    out[4] = _dy2
+    out[5] = _dy3
+    _g0 = _dy0*(-1.0 - _c1) - _c4*_dy1
+    _g1 = _dy1*(-1.0 + _c1) - _c4*_dy0
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    out[6] = _x0
+    out[7] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_y = y[1]
+    qd_x = y[2]
+    qd_y = y[3]
+    p_lam = p[0]
+    _dy0 = y[4]
+    _dy1 = y[5]
+    _dy2 = y[6]
+    _dy3 = y[7]
+    _dp0 = p[p.shape[0] - 1]
+    _c0 = 2.0*q_y
+    _c1 = _c0*p_lam
+    _c2 = q_x**2
+    _c3 = q_y**2
+    _c4 = 2.0*p_lam*q_x
+    out[0] = qd_x
+    out[1] = qd_y
+    _m0_0 = 1.0
+    _m1_0 = 0.0
+    _m1_1 = 1.0
+    _f0 = -q_x - _c1*q_x
+    _f1 = -q_y - p_lam*(_c2 - _c3)
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    out[4] = _dy2
+    out[5] = _dy3
+    _g0 = _dy0*(-1.0 - _c1) - _c4*_dy1 - _c0*_dp0*q_x
+    _g1 = _dp0*(_c3 - _c2) + _dy1*(-1.0 + _c1) - _c4*_dy0
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    out[6] = _x0
+    out[7] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_y = y[1]
+    qd_x = y[2]
+    qd_y = y[3]
+    p_lam = p[0]
+    _c0 = 2.0*q_x
+    _c1 = _c0*q_y
+    _c2 = q_x**2
+    _c3 = q_y**2
+    _c4 = 2.0*p_lam*q_y
+    _c5 = -_c0*p_lam
+    out[0] = qd_x
+    out[1] = qd_y
+    _m0_0 = 1.0
+    _m1_0 = 0.0
+    _m1_1 = 1.0
+    _f0 = -q_x - _c1*p_lam
+    _f1 = -q_y - p_lam*(_c2 - _c3)
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _part0_0 = -1.0 - _c4
+    _part0_1 = _c5
+    _part1_0 = _c5
+    _part1_1 = -1.0 + _c4
+    _columns = y.shape[0] // 4 - 1
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 0] = y[_at + 2]
+        out[_at + 1] = y[_at + 3]
+        _g0 = (_part0_0*y[_at + 0] + _part0_1*y[_at + 1])
+        _g1 = (_part1_0*y[_at + 0] + _part1_1*y[_at + 1])
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _x1 = _z1*_r1
+        _x0 = _z0*_r0 - _l1_0*_x1
+        out[_at + 2] = _x0
+        out[_at + 3] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_y = y[1]
+    qd_x = y[2]
+    qd_y = y[3]
+    p_lam = p[0]
+    _c0 = 2.0*q_x
+    _c1 = _c0*q_y
+    _c2 = q_x**2
+    _c3 = q_y**2
+    _c4 = 2.0*p_lam*q_y
+    _c5 = -_c0*p_lam
+    out[0] = qd_x
+    out[1] = qd_y
+    _m0_0 = 1.0
+    _m1_0 = 0.0
+    _m1_1 = 1.0
+    _f0 = -q_x - _c1*p_lam
+    _f1 = -q_y - p_lam*(_c2 - _c3)
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _part0_0 = -1.0 - _c4
+    _part0_1 = _c5
+    _part0_4 = -_c1
+    _part1_0 = _c5
+    _part1_1 = -1.0 + _c4
+    _part1_4 = _c3 - _c2
+    _columns = y.shape[0] // 4 - 1
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 0] = y[_at + 2]
+        out[_at + 1] = y[_at + 3]
+        _g0 = (_part0_0*y[_at + 0] + _part0_1*y[_at + 1])
+        _g1 = (_part1_0*y[_at + 0] + _part1_1*y[_at + 1])
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_4
+            _g1 += p[p.shape[0] - 1]*_part1_4
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _x1 = _z1*_r1
+        _x0 = _z0*_r0 - _l1_0*_x1
+        out[_at + 2] = _x0
+        out[_at + 3] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     out[0, 0] = 1.0

@@ -544,6 +544,400 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    q_phi = y[1]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _dy0 = y[4]
+    _dy1 = y[5]
+    _dy2 = y[6]
+    _dy3 = y[7]
+    _kkt = np.zeros((3, 4))
+    _c0 = p_R**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_g
+    _c6 = _c5*p_m
+    _c7 = cos(q_theta)
+    _c8 = qd_phi**2
+    _c9 = _c7*_c8
+    _c10 = _c2*_c9
+    _c11 = 2.0*qd_theta
+    _c12 = _c11*qd_phi
+    _c13 = _c2*_c7
+    _c14 = _c12*_c13
+    _c15 = 2.0*t
+    _c16 = sin(_c15)
+    _c17 = _baumgarte_beta**2
+    _c18 = 4.0*_c16
+    _c19 = cos(_c15)
+    _c20 = 2.0*_baumgarte_alpha
+    _c21 = _c1*_c7**2
+    _c22 = p_R*p_m
+    _c23 = _c1*_c13
+    _c24 = 2.0*_c23
+    _c25 = _c24*qd_phi
+    out[0] = qd_theta
+    out[1] = qd_phi
+    _kkt[0, 0] = _c1
+    _kkt[1, 1] = _c4
+    _kkt[1, 2] = -1.0
+    _kkt[2, 1] = 1.0
+    _kkt[0, 3] = _c1*_c10 + _c6*p_R
+    _kkt[1, 3] = -_c1*_c14
+    _kkt[2, 3] = -_c17*(q_phi - _c16*p_epsilon - p_Omega*t) - _c18*p_epsilon - _c20*(qd_phi - p_Omega - 2.0*_c19*p_epsilon)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 2)
+    if _status:
+        return _status
+    _ydot[2] = _kkt[0, 3]
+    _ydot[3] = _kkt[1, 3]
+    _lam = _kkt[2:, 3]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    out[4] = _dy2
+    out[5] = _dy3
+    _direction[0, 3] = _c25*_dy3 + _dy0*(_c21*_c8 - _c4*_c8 + _c22*_c7*p_g)
+    _direction[1, 3] = _dy0*(_c12*_c4 - _acc1*_c24 - _c12*_c21) - _c25*_dy2 - _c11*_c23*_dy3
+    _direction[2, 3] = -_c17*_dy1 - _c20*_dy3
+    _status = kkt_solve(_direction, 2)
+    if _status:
+        return _status
+    out[6] = _direction[0, 3]
+    out[7] = _direction[1, 3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    q_phi = y[1]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _dy0 = y[4]
+    _dy1 = y[5]
+    _dy2 = y[6]
+    _dy3 = y[7]
+    _dp0 = p[p.shape[0] - 5]
+    _dp1 = p[p.shape[0] - 4]
+    _dp2 = p[p.shape[0] - 3]
+    _dp3 = p[p.shape[0] - 2]
+    _dp4 = p[p.shape[0] - 1]
+    _kkt = np.zeros((3, 4))
+    _c0 = p_R**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_g
+    _c6 = _c5*p_m
+    _c7 = cos(q_theta)
+    _c8 = qd_phi**2
+    _c9 = _c7*_c8
+    _c10 = _c2*_c9
+    _c11 = 2.0*qd_theta
+    _c12 = _c11*qd_phi
+    _c13 = _c2*_c7
+    _c14 = _c12*_c13
+    _c15 = 2.0*t
+    _c16 = sin(_c15)
+    _c17 = _baumgarte_beta**2
+    _c18 = 4.0*_c16
+    _c19 = cos(_c15)
+    _c20 = 2.0*_baumgarte_alpha
+    _c21 = _c1*_c7**2
+    _c22 = p_R*p_m
+    _c23 = _c1*_c13
+    _c24 = 2.0*_c23
+    _c25 = _c24*qd_phi
+    _c26 = _c2*_c22
+    _c27 = 2.0*_c22
+    out[0] = qd_theta
+    out[1] = qd_phi
+    _kkt[0, 0] = _c1
+    _kkt[1, 1] = _c4
+    _kkt[1, 2] = -1.0
+    _kkt[2, 1] = 1.0
+    _kkt[0, 3] = _c1*_c10 + _c6*p_R
+    _kkt[1, 3] = -_c1*_c14
+    _kkt[2, 3] = -_c17*(q_phi - _c16*p_epsilon - p_Omega*t) - _c18*p_epsilon - _c20*(qd_phi - p_Omega - 2.0*_c19*p_epsilon)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 2)
+    if _status:
+        return _status
+    _ydot[2] = _kkt[0, 3]
+    _ydot[3] = _kkt[1, 3]
+    _lam = _kkt[2:, 3]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c28 = _acc1*_c3
+    out[4] = _dy2
+    out[5] = _dy3
+    _direction[0, 3] = _c25*_dy3 + _c26*_dp2 + _dp0*(_c0*_c10 + _c5*p_R - _acc0*_c0) + _dp1*(_c6 - _acc0*_c27 + 2.0*_c26*_c9) + _dy0*(_c21*_c8 - _c4*_c8 + _c22*_c7*p_g)
+    _direction[1, 3] = _dp0*(-_c0*_c14 - _c0*_c28) + _dp1*(-_c27*_c28 - 4.0*_c26*_c7*qd_phi*qd_theta) + _dy0*(_c12*_c4 - _acc1*_c24 - _c12*_c21) - _c25*_dy2 - _c11*_c23*_dy3
+    _direction[2, 3] = _dp3*(_c20 + _c17*t) + _dp4*(-_c18 + _c16*_c17 + 4.0*_baumgarte_alpha*_c19) - _c17*_dy1 - _c20*_dy3
+    _status = kkt_solve(_direction, 2)
+    if _status:
+        return _status
+    out[6] = _direction[0, 3]
+    out[7] = _direction[1, 3]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    q_phi = y[1]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _kkt = np.zeros((3, 4))
+    _c0 = p_R**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_g
+    _c6 = _c5*p_m
+    _c7 = qd_phi**2
+    _c8 = _c1*_c7
+    _c9 = cos(q_theta)
+    _c10 = _c2*_c9
+    _c11 = 2.0*_c1
+    _c12 = qd_phi*qd_theta
+    _c13 = _c11*_c12
+    _c14 = 2.0*t
+    _c15 = sin(_c14)
+    _c16 = _baumgarte_beta**2
+    _c17 = 4.0*_c15
+    _c18 = cos(_c14)
+    _c19 = 2.0*_baumgarte_alpha
+    _c20 = _c9**2
+    _c21 = p_R*p_m
+    _c22 = _c10*_c11
+    _c23 = _c22*qd_phi
+    _c28 = 2.0*_c12
+    out[0] = qd_theta
+    out[1] = qd_phi
+    _kkt[0, 0] = _c1
+    _kkt[1, 1] = _c4
+    _kkt[1, 2] = -1.0
+    _kkt[2, 1] = 1.0
+    _kkt[0, 3] = _c10*_c8 + _c6*p_R
+    _kkt[1, 3] = -_c10*_c13
+    _kkt[2, 3] = -_c16*(q_phi - _c15*p_epsilon - p_Omega*t) - _c17*p_epsilon - _c19*(qd_phi - p_Omega - 2.0*_c18*p_epsilon)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 2)
+    if _status:
+        return _status
+    _ydot[2] = _kkt[0, 3]
+    _ydot[3] = _kkt[1, 3]
+    _lam = _kkt[2:, 3]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _part0_0 = _c20*_c8 - _c4*_c7 + _c21*_c9*p_g
+    _part0_3 = _c23
+    _part1_0 = _c28*_c4 - _acc1*_c22 - _c13*_c20
+    _part1_2 = -_c23
+    _part1_3 = -_c22*qd_theta
+    _part2_1 = -_c16
+    _part2_3 = -_c19
+    _columns = y.shape[0] // 4 - 1
+    _rhs = np.empty((3, _columns))
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 0] = y[_at + 2]
+        out[_at + 1] = y[_at + 3]
+        _g0 = (_part0_0*y[_at + 0] + _part0_3*y[_at + 3])
+        _g1 = (_part1_0*y[_at + 0] + (_part1_2*y[_at + 2] + _part1_3*y[_at + 3]))
+        _g2 = (_part2_1*y[_at + 1] + _part2_3*y[_at + 3])
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 2, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 2] = _rhs[0, _col]
+        out[_at + 3] = _rhs[1, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    q_phi = y[1]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_R = p[1]
+    p_g = p[2]
+    p_Omega = p[3]
+    p_epsilon = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _kkt = np.zeros((3, 4))
+    _c0 = p_R**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_g
+    _c6 = _c5*p_m
+    _c7 = qd_phi**2
+    _c8 = _c1*_c7
+    _c9 = cos(q_theta)
+    _c10 = _c2*_c9
+    _c11 = 2.0*_c1
+    _c12 = qd_phi*qd_theta
+    _c13 = _c11*_c12
+    _c14 = 2.0*t
+    _c15 = sin(_c14)
+    _c16 = _baumgarte_beta**2
+    _c17 = 4.0*_c15
+    _c18 = cos(_c14)
+    _c19 = 2.0*_baumgarte_alpha
+    _c20 = _c9**2
+    _c21 = p_R*p_m
+    _c22 = _c10*_c11
+    _c23 = _c22*qd_phi
+    _c24 = _c0*_c10
+    _c25 = _c2*_c21
+    _c26 = _c25*_c9
+    _c27 = 2.0*_c21
+    _c28 = 2.0*_c12
+    out[0] = qd_theta
+    out[1] = qd_phi
+    _kkt[0, 0] = _c1
+    _kkt[1, 1] = _c4
+    _kkt[1, 2] = -1.0
+    _kkt[2, 1] = 1.0
+    _kkt[0, 3] = _c10*_c8 + _c6*p_R
+    _kkt[1, 3] = -_c10*_c13
+    _kkt[2, 3] = -_c16*(q_phi - _c15*p_epsilon - p_Omega*t) - _c17*p_epsilon - _c19*(qd_phi - p_Omega - 2.0*_c18*p_epsilon)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 2)
+    if _status:
+        return _status
+    _ydot[2] = _kkt[0, 3]
+    _ydot[3] = _kkt[1, 3]
+    _lam = _kkt[2:, 3]
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c29 = _acc1*_c3
+    _part0_0 = _c20*_c8 - _c4*_c7 + _c21*_c9*p_g
+    _part0_3 = _c23
+    _part0_4 = _c24*_c7 + _c5*p_R - _acc0*_c0
+    _part0_5 = _c6 - _acc0*_c27 + 2.0*_c26*_c7
+    _part0_6 = _c25
+    _part1_0 = _c28*_c4 - _acc1*_c22 - _c13*_c20
+    _part1_2 = -_c23
+    _part1_3 = -_c22*qd_theta
+    _part1_4 = -_c0*_c29 - _c24*_c28
+    _part1_5 = -_c27*_c29 - 4.0*_c12*_c26
+    _part2_1 = -_c16
+    _part2_3 = -_c19
+    _part2_7 = _c19 + _c16*t
+    _part2_8 = -_c17 + _c15*_c16 + 4.0*_baumgarte_alpha*_c18
+    _columns = y.shape[0] // 4 - 1
+    _rhs = np.empty((3, _columns))
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 0] = y[_at + 2]
+        out[_at + 1] = y[_at + 3]
+        _g0 = (_part0_0*y[_at + 0] + _part0_3*y[_at + 3])
+        _g1 = (_part1_0*y[_at + 0] + (_part1_2*y[_at + 2] + _part1_3*y[_at + 3]))
+        _g2 = (_part2_1*y[_at + 1] + _part2_3*y[_at + 3])
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_4
+            _g1 += p[p.shape[0] - 1]*_part1_4
+        elif _j == 1:
+            _g0 += p[p.shape[0] - 1]*_part0_5
+            _g1 += p[p.shape[0] - 1]*_part1_5
+        elif _j == 2:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+        elif _j == 3:
+            _g2 += p[p.shape[0] - 1]*_part2_7
+        elif _j == 4:
+            _g2 += p[p.shape[0] - 1]*_part2_8
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 2, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 2] = _rhs[0, _col]
+        out[_at + 3] = _rhs[1, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def dae_residual(t, y, p, out):
     """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
     Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.

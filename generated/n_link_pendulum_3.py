@@ -997,6 +997,744 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_m3 = p[2]
+    p_l1 = p[3]
+    p_l2 = p[4]
+    p_l3 = p[5]
+    p_g = p[6]
+    _dy0 = y[6]
+    _dy1 = y[7]
+    _dy2 = y[8]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _c0 = p_l1**2
+    _c1 = p_m2 + p_m3
+    _c2 = _c1 + p_m1
+    _c3 = sin(q_theta2)
+    _c4 = sin(q_theta1)
+    _c5 = cos(q_theta2)
+    _c6 = cos(q_theta1)
+    _c7 = _c3*_c4 + _c5*_c6
+    _c8 = _c7*p_l1
+    _c9 = _c8*p_l2
+    _c10 = _c1*_c9
+    _c11 = p_l2**2
+    _c12 = sin(q_theta3)
+    _c13 = cos(q_theta3)
+    _c14 = _c12*_c4 + _c13*_c6
+    _c15 = p_l3*p_m3
+    _c16 = _c15*p_l1
+    _c17 = _c14*_c16
+    _c18 = _c12*_c3 + _c13*_c5
+    _c19 = _c18*p_l2
+    _c20 = _c15*_c19
+    _c21 = p_l3**2
+    _c22 = qd_theta3**2
+    _c23 = _c12*_c6 - _c13*_c4
+    _c24 = _c16*_c23
+    _c25 = qd_theta2**2
+    _c26 = _c1*p_l2
+    _c27 = _c3*_c6 - _c4*_c5
+    _c28 = _c27*p_l1
+    _c29 = _c26*_c28
+    _c30 = _c4*p_g
+    _c31 = _c2*_c30
+    _c32 = _c22*p_l2
+    _c33 = _c13*_c3 - _c12*_c5
+    _c34 = _c15*_c33
+    _c35 = qd_theta1**2
+    _c36 = _c28*_c35
+    _c37 = _c3*p_g
+    _c38 = _c37*p_l2
+    _c39 = _c25*p_l2
+    _c40 = _c12*p_g
+    _c41 = _c40*p_m3
+    _c47 = _c2*p_l1
+    _c48 = _c10*_c25
+    _c49 = _c17*_c22
+    _c53 = _dy4*qd_theta2
+    _c54 = 2.0*_c29
+    _c55 = _dy5*qd_theta3
+    _c56 = 2.0*_c24
+    _c67 = _c34*p_l2
+    _c68 = 2.0*_c67
+    _c70 = _c20*_c22
+    _c75 = _dy3*qd_theta1
+    _c76 = _c10*_c35
+    _c79 = _c17*_c35
+    _c80 = _c20*_c25
+    out[0] = qd_theta1
+    out[1] = qd_theta2
+    out[2] = qd_theta3
+    _m0_0 = _c0*_c2
+    _m1_0 = _c10
+    _m1_1 = _c1*_c11
+    _m2_0 = _c17
+    _m2_1 = _c20
+    _m2_2 = _c21*p_m3
+    _f0 = _c22*_c24 + _c25*_c29 - _c31*p_l1
+    _f1 = -_c1*_c38 - _c26*_c36 - _c32*_c34
+    _f2 = _c34*_c39 - _c24*_c35 - _c41*p_l3
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c44 = _acc1*p_l2
+    _c50 = _acc2*_c24
+    _c51 = _c1*_c44
+    _c52 = _c28*_c51
+    _c69 = _acc2*_c67
+    _c74 = _acc0*_c26
+    _c77 = _c28*_c74
+    _c81 = _c34*_c44
+    _c82 = _acc0*_c24
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _g0 = _c53*_c54 + _c55*_c56 + _dy0*(-_c48 - _c49 - _c50 - _c52 - _c47*_c6*p_g) + _dy1*(_c48 + _c52) + _dy2*(_c49 + _c50)
+    _g1 = _dy0*(_c76 - _c77) + _dy1*(_c69 + _c77 - _c70 - _c76 - _c26*_c5*p_g) + _dy2*(_c70 - _c69) - _c54*_c75 - _c55*_c68
+    _g2 = _c53*_c68 + _dy0*(_c79 - _c82) + _dy1*(_c80 + _c81) + _dy2*(_c82 - _c79 - _c80 - _c81 - _c13*_c15*p_g) - _c56*_c75
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    out[9] = _x0
+    out[10] = _x1
+    out[11] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_m3 = p[2]
+    p_l1 = p[3]
+    p_l2 = p[4]
+    p_l3 = p[5]
+    p_g = p[6]
+    _dy0 = y[6]
+    _dy1 = y[7]
+    _dy2 = y[8]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _dp0 = p[p.shape[0] - 7]
+    _dp1 = p[p.shape[0] - 6]
+    _dp2 = p[p.shape[0] - 5]
+    _dp3 = p[p.shape[0] - 4]
+    _dp4 = p[p.shape[0] - 3]
+    _dp5 = p[p.shape[0] - 2]
+    _dp6 = p[p.shape[0] - 1]
+    _c0 = p_l1**2
+    _c1 = p_m2 + p_m3
+    _c2 = _c1 + p_m1
+    _c3 = sin(q_theta2)
+    _c4 = sin(q_theta1)
+    _c5 = cos(q_theta2)
+    _c6 = cos(q_theta1)
+    _c7 = _c3*_c4 + _c5*_c6
+    _c8 = _c7*p_l1
+    _c9 = _c8*p_l2
+    _c10 = _c1*_c9
+    _c11 = p_l2**2
+    _c12 = sin(q_theta3)
+    _c13 = cos(q_theta3)
+    _c14 = _c12*_c4 + _c13*_c6
+    _c15 = p_l3*p_m3
+    _c16 = _c15*p_l1
+    _c17 = _c14*_c16
+    _c18 = _c12*_c3 + _c13*_c5
+    _c19 = _c18*p_l2
+    _c20 = _c15*_c19
+    _c21 = p_l3**2
+    _c22 = qd_theta3**2
+    _c23 = _c12*_c6 - _c13*_c4
+    _c24 = _c16*_c23
+    _c25 = qd_theta2**2
+    _c26 = _c1*p_l2
+    _c27 = _c3*_c6 - _c4*_c5
+    _c28 = _c27*p_l1
+    _c29 = _c26*_c28
+    _c30 = _c4*p_g
+    _c31 = _c2*_c30
+    _c32 = _c22*p_l2
+    _c33 = _c13*_c3 - _c12*_c5
+    _c34 = _c15*_c33
+    _c35 = qd_theta1**2
+    _c36 = _c28*_c35
+    _c37 = _c3*p_g
+    _c38 = _c37*p_l2
+    _c39 = _c25*p_l2
+    _c40 = _c12*p_g
+    _c41 = _c40*p_m3
+    _c42 = _c1*_c28
+    _c43 = _c1*_c8
+    _c47 = _c2*p_l1
+    _c48 = _c10*_c25
+    _c49 = _c17*_c22
+    _c53 = _dy4*qd_theta2
+    _c54 = 2.0*_c29
+    _c55 = _dy5*qd_theta3
+    _c56 = 2.0*_c24
+    _c57 = p_l1*p_m3
+    _c58 = _c23*_c57
+    _c60 = _c15*_c23
+    _c61 = _c26*_c27
+    _c62 = p_l1*p_l3
+    _c63 = _c23*_c62
+    _c64 = _c19*p_l3
+    _c65 = _c33*p_l3
+    _c67 = _c34*p_l2
+    _c68 = 2.0*_c67
+    _c70 = _c20*_c22
+    _c71 = _c19*p_m3
+    _c72 = _c33*p_m3
+    _c73 = _c15*_c18
+    _c75 = _dy3*qd_theta1
+    _c76 = _c10*_c35
+    _c79 = _c17*_c35
+    _c80 = _c20*_c25
+    out[0] = qd_theta1
+    out[1] = qd_theta2
+    out[2] = qd_theta3
+    _m0_0 = _c0*_c2
+    _m1_0 = _c10
+    _m1_1 = _c1*_c11
+    _m2_0 = _c17
+    _m2_1 = _c20
+    _m2_2 = _c21*p_m3
+    _f0 = _c22*_c24 + _c25*_c29 - _c31*p_l1
+    _f1 = -_c1*_c38 - _c26*_c36 - _c32*_c34
+    _f2 = _c34*_c39 - _c24*_c35 - _c41*p_l3
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c44 = _acc1*p_l2
+    _c45 = -_acc0*_c0 - _c30*p_l1
+    _c46 = _c45 + _c28*_c39 - _c44*_c8
+    _c50 = _acc2*_c24
+    _c51 = _c1*_c44
+    _c52 = _c28*_c51
+    _c59 = _acc2*_c14
+    _c66 = -_c38 - _acc0*_c9 - _acc1*_c11 - _c36*p_l2
+    _c69 = _acc2*_c67
+    _c74 = _acc0*_c26
+    _c77 = _c28*_c74
+    _c78 = _acc0*_c14
+    _c81 = _c34*_c44
+    _c82 = _acc0*_c24
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _g0 = _c45*_dp0 + _c46*_dp1 + _c53*_c54 + _c55*_c56 + _dp2*(_c46 + _c22*_c63 - _c59*_c62) + _dp3*(-_c31 + _c22*_c60 + _c25*_c61 - _c15*_c59 - _c51*_c7 - 2.0*_acc0*_c47) + _dp4*(_c25*_c42 - _acc1*_c43) + _dp5*(_c22*_c58 - _c57*_c59) + _dy0*(-_c48 - _c49 - _c50 - _c52 - _c47*_c6*p_g) + _dy1*(_c48 + _c52) + _dy2*(_c49 + _c50) - _c4*_c47*_dp6
+    _g1 = _c66*_dp1 + _dp2*(_c66 - _acc2*_c64 - _c32*_c65) + _dp3*(-_c35*_c61 - _c7*_c74) + _dp4*(-2.0*_c51 - _acc0*_c43 - _acc2*_c73 - _c1*_c37 - _c22*_c34 - _c35*_c42) + _dp5*(-_acc2*_c71 - _c32*_c72) + _dy0*(_c76 - _c77) + _dy1*(_c69 + _c77 - _c70 - _c76 - _c26*_c5*p_g) + _dy2*(_c70 - _c69) - _c54*_c75 - _c55*_c68 - _c26*_c3*_dp6
+    _g2 = _c53*_c68 + _dp2*(_c39*_c65 - _acc1*_c64 - _acc2*_c21 - _c35*_c63 - _c40*p_l3 - _c62*_c78) + _dp3*(-_c15*_c78 - _c35*_c60) + _dp4*(_c25*_c34 - _acc1*_c73) + _dp5*(-_c41 + _c39*_c72 - _acc1*_c71 - _c35*_c58 - _c57*_c78 - 2.0*_acc2*_c15) + _dy0*(_c79 - _c82) + _dy1*(_c80 + _c81) + _dy2*(_c82 - _c79 - _c80 - _c81 - _c13*_c15*p_g) - _c56*_c75 - _c12*_c15*_dp6
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    out[9] = _x0
+    out[10] = _x1
+    out[11] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_m3 = p[2]
+    p_l1 = p[3]
+    p_l2 = p[4]
+    p_l3 = p[5]
+    p_g = p[6]
+    _c0 = p_l1**2
+    _c1 = p_m2 + p_m3
+    _c2 = _c1 + p_m1
+    _c3 = sin(q_theta2)
+    _c4 = sin(q_theta1)
+    _c5 = cos(q_theta2)
+    _c6 = cos(q_theta1)
+    _c7 = _c3*_c4 + _c5*_c6
+    _c8 = _c7*p_l2
+    _c9 = _c8*p_l1
+    _c10 = _c1*_c9
+    _c11 = p_l2**2
+    _c12 = sin(q_theta3)
+    _c13 = cos(q_theta3)
+    _c14 = _c12*_c4 + _c13*_c6
+    _c15 = p_l3*p_m3
+    _c16 = _c14*_c15
+    _c17 = _c16*p_l1
+    _c18 = _c12*_c3 + _c13*_c5
+    _c19 = _c18*p_l2
+    _c20 = _c15*_c19
+    _c21 = p_l3**2
+    _c22 = qd_theta3**2
+    _c23 = _c12*_c6 - _c13*_c4
+    _c24 = _c23*p_l1
+    _c25 = _c15*_c24
+    _c26 = qd_theta2**2
+    _c27 = _c3*_c6 - _c4*_c5
+    _c28 = _c27*p_l1
+    _c29 = _c28*p_l2
+    _c30 = _c26*_c29
+    _c31 = _c4*p_l1
+    _c32 = _c2*_c31
+    _c33 = _c13*_c3 - _c12*_c5
+    _c34 = _c15*_c33
+    _c35 = _c22*_c34
+    _c36 = qd_theta1**2
+    _c37 = _c29*_c36
+    _c38 = _c3*p_l2
+    _c39 = _c1*_c38
+    _c40 = _c26*_c34
+    _c41 = _c12*p_g
+    _c42 = _c41*p_l3
+    _c43 = _c10*_c26
+    _c44 = _c17*_c22
+    _c47 = _c2*p_g
+    _c50 = _c27*p_l2
+    _c52 = 2.0*p_l2
+    _c53 = _c1*_c28*_c52
+    _c54 = 2.0*_c25
+    _c60 = _c15*_c23
+    _c65 = _c10*_c36
+    _c68 = _c1*p_g
+    _c69 = _c34*p_l2
+    _c71 = _c20*_c22
+    _c72 = _c34*_c52
+    _c81 = _c17*_c36
+    _c83 = _c20*_c26
+    out[0] = qd_theta1
+    out[1] = qd_theta2
+    out[2] = qd_theta3
+    _m0_0 = _c0*_c2
+    _m1_0 = _c10
+    _m1_1 = _c1*_c11
+    _m2_0 = _c17
+    _m2_1 = _c20
+    _m2_2 = _c21*p_m3
+    _f0 = _c1*_c30 + _c22*_c25 - _c32*p_g
+    _f1 = -_c1*_c37 - _c35*p_l2 - _c39*p_g
+    _f2 = _c40*p_l2 - _c25*_c36 - _c42*p_m3
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c45 = _acc2*_c15
+    _c46 = _c24*_c45
+    _c48 = _acc1*_c1
+    _c49 = _c48*p_l1
+    _c51 = _c49*_c50
+    _c62 = _acc0*p_l1
+    _c66 = _c1*_c62
+    _c67 = _c50*_c66
+    _c70 = _acc2*_c69
+    _c82 = _c60*_c62
+    _c84 = _acc1*_c69
+    _part0_0 = -_c43 - _c44 - _c46 - _c51 - _c47*_c6*p_l1
+    _part0_1 = _c43 + _c51
+    _part0_2 = _c44 + _c46
+    _part0_4 = _c53*qd_theta2
+    _part0_5 = _c54*qd_theta3
+    _part1_0 = _c65 - _c67
+    _part1_1 = _c67 + _c70 - _c65 - _c71 - _c5*_c68*p_l2
+    _part1_2 = _c71 - _c70
+    _part1_3 = -_c53*qd_theta1
+    _part1_5 = -_c72*qd_theta3
+    _part2_0 = _c81 - _c82
+    _part2_1 = _c83 + _c84
+    _part2_2 = _c82 - _c81 - _c83 - _c84 - _c13*_c15*p_g
+    _part2_3 = -_c54*qd_theta1
+    _part2_4 = _c72*qd_theta2
+    _columns = y.shape[0] // 6 - 1
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = ((_part0_0*y[_at + 0] + _part0_1*y[_at + 1]) + (_part0_2*y[_at + 2] + (_part0_4*y[_at + 4] + _part0_5*y[_at + 5])))
+        _g1 = ((_part1_0*y[_at + 0] + _part1_1*y[_at + 1]) + (_part1_2*y[_at + 2] + (_part1_3*y[_at + 3] + _part1_5*y[_at + 5])))
+        _g2 = ((_part2_0*y[_at + 0] + _part2_1*y[_at + 1]) + (_part2_2*y[_at + 2] + (_part2_3*y[_at + 3] + _part2_4*y[_at + 4])))
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+        _x2 = _z2*_r2
+        _x1 = _z1*_r1 - _l2_1*_x2
+        _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+        out[_at + 3] = _x0
+        out[_at + 4] = _x1
+        out[_at + 5] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_m1 = p[0]
+    p_m2 = p[1]
+    p_m3 = p[2]
+    p_l1 = p[3]
+    p_l2 = p[4]
+    p_l3 = p[5]
+    p_g = p[6]
+    _c0 = p_l1**2
+    _c1 = p_m2 + p_m3
+    _c2 = _c1 + p_m1
+    _c3 = sin(q_theta2)
+    _c4 = sin(q_theta1)
+    _c5 = cos(q_theta2)
+    _c6 = cos(q_theta1)
+    _c7 = _c3*_c4 + _c5*_c6
+    _c8 = _c7*p_l2
+    _c9 = _c8*p_l1
+    _c10 = _c1*_c9
+    _c11 = p_l2**2
+    _c12 = sin(q_theta3)
+    _c13 = cos(q_theta3)
+    _c14 = _c12*_c4 + _c13*_c6
+    _c15 = p_l3*p_m3
+    _c16 = _c14*_c15
+    _c17 = _c16*p_l1
+    _c18 = _c12*_c3 + _c13*_c5
+    _c19 = _c18*p_l2
+    _c20 = _c15*_c19
+    _c21 = p_l3**2
+    _c22 = qd_theta3**2
+    _c23 = _c12*_c6 - _c13*_c4
+    _c24 = _c23*p_l1
+    _c25 = _c15*_c24
+    _c26 = qd_theta2**2
+    _c27 = _c3*_c6 - _c4*_c5
+    _c28 = _c27*p_l1
+    _c29 = _c28*p_l2
+    _c30 = _c26*_c29
+    _c31 = _c4*p_l1
+    _c32 = _c2*_c31
+    _c33 = _c13*_c3 - _c12*_c5
+    _c34 = _c15*_c33
+    _c35 = _c22*_c34
+    _c36 = qd_theta1**2
+    _c37 = _c29*_c36
+    _c38 = _c3*p_l2
+    _c39 = _c1*_c38
+    _c40 = _c26*_c34
+    _c41 = _c12*p_g
+    _c42 = _c41*p_l3
+    _c43 = _c10*_c26
+    _c44 = _c17*_c22
+    _c47 = _c2*p_g
+    _c50 = _c27*p_l2
+    _c52 = 2.0*p_l2
+    _c53 = _c1*_c28*_c52
+    _c54 = 2.0*_c25
+    _c58 = _c14*p_l3
+    _c59 = _c24*p_l3
+    _c60 = _c15*_c23
+    _c61 = _c1*_c26
+    _c63 = _c24*p_m3
+    _c64 = _c14*p_m3
+    _c65 = _c10*_c36
+    _c68 = _c1*p_g
+    _c69 = _c34*p_l2
+    _c71 = _c20*_c22
+    _c72 = _c34*_c52
+    _c74 = _c19*p_l3
+    _c75 = _c33*p_l2
+    _c76 = _c75*p_l3
+    _c77 = _c1*_c36
+    _c78 = _c15*_c18
+    _c79 = _c19*p_m3
+    _c80 = _c75*p_m3
+    _c81 = _c17*_c36
+    _c83 = _c20*_c26
+    out[0] = qd_theta1
+    out[1] = qd_theta2
+    out[2] = qd_theta3
+    _m0_0 = _c0*_c2
+    _m1_0 = _c10
+    _m1_1 = _c1*_c11
+    _m2_0 = _c17
+    _m2_1 = _c20
+    _m2_2 = _c21*p_m3
+    _f0 = _c1*_c30 + _c22*_c25 - _c32*p_g
+    _f1 = -_c1*_c37 - _c35*p_l2 - _c39*p_g
+    _f2 = _c40*p_l2 - _c25*_c36 - _c42*p_m3
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c45 = _acc2*_c15
+    _c46 = _c24*_c45
+    _c48 = _acc1*_c1
+    _c49 = _c48*p_l1
+    _c51 = _c49*_c50
+    _c55 = -_acc0*_c0 - _c31*p_g
+    _c56 = _c30 + _c55 - _acc1*_c9
+    _c57 = _acc2*p_l1
+    _c62 = _acc0*p_l1
+    _c66 = _c1*_c62
+    _c67 = _c50*_c66
+    _c70 = _acc2*_c69
+    _c73 = -_c37 - _acc1*_c11 - _c38*p_g - _c62*_c8
+    _c82 = _c60*_c62
+    _c84 = _acc1*_c69
+    _part0_0 = -_c43 - _c44 - _c46 - _c51 - _c47*_c6*p_l1
+    _part0_1 = _c43 + _c51
+    _part0_2 = _c44 + _c46
+    _part0_4 = _c53*qd_theta2
+    _part0_5 = _c54*qd_theta3
+    _part0_6 = _c55
+    _part0_7 = _c56
+    _part0_8 = _c56 + _c22*_c59 - _c57*_c58
+    _part0_9 = _c22*_c60 + _c50*_c61 - _acc2*_c16 - _c4*_c47 - _c48*_c8 - 2.0*_c2*_c62
+    _part0_10 = _c28*_c61 - _c49*_c7
+    _part0_11 = _c22*_c63 - _c57*_c64
+    _part0_12 = -_c32
+    _part1_0 = _c65 - _c67
+    _part1_1 = _c67 + _c70 - _c65 - _c71 - _c5*_c68*p_l2
+    _part1_2 = _c71 - _c70
+    _part1_3 = -_c53*qd_theta1
+    _part1_5 = -_c72*qd_theta3
+    _part1_7 = _c73
+    _part1_8 = _c73 - _acc2*_c74 - _c22*_c76
+    _part1_9 = -_c50*_c77 - _acc0*_c1*_c8
+    _part1_10 = -_c35 - _acc2*_c78 - _c28*_c77 - _c3*_c68 - _c48*_c52 - _c66*_c7
+    _part1_11 = -_acc2*_c79 - _c22*_c80
+    _part1_12 = -_c39
+    _part2_0 = _c81 - _c82
+    _part2_1 = _c83 + _c84
+    _part2_2 = _c82 - _c81 - _c83 - _c84 - _c13*_c15*p_g
+    _part2_3 = -_c54*qd_theta1
+    _part2_4 = _c72*qd_theta2
+    _part2_8 = -_c42 + _c26*_c76 - _acc1*_c74 - _acc2*_c21 - _c36*_c59 - _c58*_c62
+    _part2_9 = -_acc0*_c16 - _c36*_c60
+    _part2_10 = _c40 - _acc1*_c78
+    _part2_11 = -2.0*_c45 + _c26*_c80 - _acc1*_c79 - _c36*_c63 - _c41*p_m3 - _c62*_c64
+    _part2_12 = -_c12*_c15
+    _columns = y.shape[0] // 6 - 1
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = ((_part0_0*y[_at + 0] + _part0_1*y[_at + 1]) + (_part0_2*y[_at + 2] + (_part0_4*y[_at + 4] + _part0_5*y[_at + 5])))
+        _g1 = ((_part1_0*y[_at + 0] + _part1_1*y[_at + 1]) + (_part1_2*y[_at + 2] + (_part1_3*y[_at + 3] + _part1_5*y[_at + 5])))
+        _g2 = ((_part2_0*y[_at + 0] + _part2_1*y[_at + 1]) + (_part2_2*y[_at + 2] + (_part2_3*y[_at + 3] + _part2_4*y[_at + 4])))
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+        elif _j == 1:
+            _g0 += p[p.shape[0] - 1]*_part0_7
+            _g1 += p[p.shape[0] - 1]*_part1_7
+        elif _j == 2:
+            _g0 += p[p.shape[0] - 1]*_part0_8
+            _g1 += p[p.shape[0] - 1]*_part1_8
+            _g2 += p[p.shape[0] - 1]*_part2_8
+        elif _j == 3:
+            _g0 += p[p.shape[0] - 1]*_part0_9
+            _g1 += p[p.shape[0] - 1]*_part1_9
+            _g2 += p[p.shape[0] - 1]*_part2_9
+        elif _j == 4:
+            _g0 += p[p.shape[0] - 1]*_part0_10
+            _g1 += p[p.shape[0] - 1]*_part1_10
+            _g2 += p[p.shape[0] - 1]*_part2_10
+        elif _j == 5:
+            _g0 += p[p.shape[0] - 1]*_part0_11
+            _g1 += p[p.shape[0] - 1]*_part1_11
+            _g2 += p[p.shape[0] - 1]*_part2_11
+        elif _j == 6:
+            _g0 += p[p.shape[0] - 1]*_part0_12
+            _g1 += p[p.shape[0] - 1]*_part1_12
+            _g2 += p[p.shape[0] - 1]*_part2_12
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+        _x2 = _z2*_r2
+        _x1 = _z1*_r1 - _l2_1*_x2
+        _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+        out[_at + 3] = _x0
+        out[_at + 4] = _x1
+        out[_at + 5] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta1 = y[0]

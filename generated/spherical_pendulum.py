@@ -450,6 +450,348 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _dy0 = y[4]
+    _dy2 = y[6]
+    _dy3 = y[7]
+    _c0 = p_l**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_g
+    _c6 = _c5*p_m
+    _c7 = qd_phi**2
+    _c8 = cos(q_theta)
+    _c9 = _c2*_c8
+    _c10 = _c7*_c9
+    _c11 = 2.0*_c9
+    _c12 = qd_phi*qd_theta
+    _c13 = _c11*_c12
+    _c14 = _c1*_c11
+    _c15 = _c14*qd_phi
+    _c16 = _c1*_c8**2
+    _c17 = p_l*p_m
+    _c20 = 2.0*_c12
+    out[0] = qd_theta
+    out[1] = qd_phi
+    _m0_0 = _c1
+    _m1_0 = 0.0
+    _m1_1 = _c4
+    _f0 = _c1*_c10 - _c6*p_l
+    _f1 = -_c1*_c13
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    out[4] = _dy2
+    out[5] = _dy3
+    _g0 = _c15*_dy3 + _dy0*(_c16*_c7 - _c4*_c7 - _c17*_c8*p_g)
+    _g1 = _dy0*(_c20*_c4 - _acc1*_c14 - _c16*_c20) - _c15*_dy2 - _c14*_dy3*qd_theta
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    out[6] = _x0
+    out[7] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _dy0 = y[4]
+    _dy2 = y[6]
+    _dy3 = y[7]
+    _dp0 = p[p.shape[0] - 3]
+    _dp1 = p[p.shape[0] - 2]
+    _dp2 = p[p.shape[0] - 1]
+    _c0 = p_l**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_g
+    _c6 = _c5*p_m
+    _c7 = qd_phi**2
+    _c8 = cos(q_theta)
+    _c9 = _c2*_c8
+    _c10 = _c7*_c9
+    _c11 = 2.0*_c9
+    _c12 = qd_phi*qd_theta
+    _c13 = _c11*_c12
+    _c14 = _c1*_c11
+    _c15 = _c14*qd_phi
+    _c16 = _c1*_c8**2
+    _c17 = p_l*p_m
+    _c18 = 2.0*_c17
+    _c20 = 2.0*_c12
+    out[0] = qd_theta
+    out[1] = qd_phi
+    _m0_0 = _c1
+    _m1_0 = 0.0
+    _m1_1 = _c4
+    _f0 = _c1*_c10 - _c6*p_l
+    _f1 = -_c1*_c13
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c19 = _acc1*_c3
+    out[4] = _dy2
+    out[5] = _dy3
+    _g0 = _c15*_dy3 + _dp0*(_c0*_c10 - _acc0*_c0 - _c5*p_l) + _dp1*(-_c6 + _c10*_c18 - _acc0*_c18) + _dy0*(_c16*_c7 - _c4*_c7 - _c17*_c8*p_g) - _c17*_c2*_dp2
+    _g1 = _dp0*(-_c0*_c13 - _c0*_c19) + _dp1*(-_c18*_c19 - 4.0*_c12*_c17*_c9) + _dy0*(_c20*_c4 - _acc1*_c14 - _c16*_c20) - _c15*_dy2 - _c14*_dy3*qd_theta
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    out[6] = _x0
+    out[7] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _c0 = p_l**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_m
+    _c6 = _c5*p_g
+    _c7 = qd_phi**2
+    _c8 = cos(q_theta)
+    _c9 = _c2*_c8
+    _c10 = _c7*_c9
+    _c11 = 2.0*qd_theta
+    _c12 = _c1*_c9
+    _c13 = _c11*_c12
+    _c14 = _c1*_c8**2
+    _c15 = p_g*p_l
+    _c16 = 2.0*_c12
+    _c17 = _c16*qd_phi
+    _c21 = _c11*qd_phi
+    out[0] = qd_theta
+    out[1] = qd_phi
+    _m0_0 = _c1
+    _m1_0 = 0.0
+    _m1_1 = _c4
+    _f0 = _c1*_c10 - _c6*p_l
+    _f1 = -_c13*qd_phi
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _part0_0 = _c14*_c7 - _c4*_c7 - _c15*_c8*p_m
+    _part0_3 = _c17
+    _part1_0 = _c21*_c4 - _acc1*_c16 - _c14*_c21
+    _part1_2 = -_c17
+    _part1_3 = -_c13
+    _columns = y.shape[0] // 4 - 1
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 0] = y[_at + 2]
+        out[_at + 1] = y[_at + 3]
+        _g0 = (_part0_0*y[_at + 0] + _part0_3*y[_at + 3])
+        _g1 = (_part1_0*y[_at + 0] + (_part1_2*y[_at + 2] + _part1_3*y[_at + 3]))
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _x1 = _z1*_r1
+        _x0 = _z0*_r0 - _l1_0*_x1
+        out[_at + 2] = _x0
+        out[_at + 3] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[2]
+    qd_phi = y[3]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _c0 = p_l**2
+    _c1 = _c0*p_m
+    _c2 = sin(q_theta)
+    _c3 = _c2**2
+    _c4 = _c1*_c3
+    _c5 = _c2*p_m
+    _c6 = _c5*p_g
+    _c7 = qd_phi**2
+    _c8 = cos(q_theta)
+    _c9 = _c2*_c8
+    _c10 = _c7*_c9
+    _c11 = 2.0*qd_theta
+    _c12 = _c1*_c9
+    _c13 = _c11*_c12
+    _c14 = _c1*_c8**2
+    _c15 = p_g*p_l
+    _c16 = 2.0*_c12
+    _c17 = _c16*qd_phi
+    _c18 = 2.0*p_l*p_m
+    _c19 = _c5*p_l
+    _c20 = _c19*_c8
+    _c21 = _c11*qd_phi
+    out[0] = qd_theta
+    out[1] = qd_phi
+    _m0_0 = _c1
+    _m1_0 = 0.0
+    _m1_1 = _c4
+    _f0 = _c1*_c10 - _c6*p_l
+    _f1 = -_c13*qd_phi
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _c22 = _acc1*_c3
+    _part0_0 = _c14*_c7 - _c4*_c7 - _c15*_c8*p_m
+    _part0_3 = _c17
+    _part0_4 = _c0*_c10 - _acc0*_c0 - _c15*_c2
+    _part0_5 = -_c6 - _acc0*_c18 + 2.0*_c20*_c7
+    _part0_6 = -_c19
+    _part1_0 = _c21*_c4 - _acc1*_c16 - _c14*_c21
+    _part1_2 = -_c17
+    _part1_3 = -_c13
+    _part1_4 = -_c0*_c22 - _c0*_c21*_c9
+    _part1_5 = -_c18*_c22 - 4.0*_c20*qd_phi*qd_theta
+    _columns = y.shape[0] // 4 - 1
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 0] = y[_at + 2]
+        out[_at + 1] = y[_at + 3]
+        _g0 = (_part0_0*y[_at + 0] + _part0_3*y[_at + 3])
+        _g1 = (_part1_0*y[_at + 0] + (_part1_2*y[_at + 2] + _part1_3*y[_at + 3]))
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_4
+            _g1 += p[p.shape[0] - 1]*_part1_4
+        elif _j == 1:
+            _g0 += p[p.shape[0] - 1]*_part0_5
+            _g1 += p[p.shape[0] - 1]*_part1_5
+        elif _j == 2:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _x1 = _z1*_r1
+        _x0 = _z0*_r0 - _l1_0*_x1
+        out[_at + 2] = _x0
+        out[_at + 3] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[0]

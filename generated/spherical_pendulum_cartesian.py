@@ -544,6 +544,380 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[3]
+    _baumgarte_beta = p[4]
+    _dy0 = y[6]
+    _dy1 = y[7]
+    _dy2 = y[8]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _kkt = np.zeros((4, 5))
+    _c0 = 2.0*q_x
+    _c1 = 2.0*q_y
+    _c2 = 2.0*q_z
+    _c3 = _baumgarte_beta**2
+    _c5 = 4.0*qd_y
+    _c6 = 4.0*qd_x
+    _c7 = 4.0*_baumgarte_alpha
+    _c8 = 4.0*qd_z
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_z
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_m
+    _kkt[0, 3] = -_c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -_c2
+    _kkt[3, 0] = _c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = _c2
+    _kkt[0, 4] = 0.0
+    _kkt[1, 4] = 0.0
+    _kkt[2, 4] = -p_g*p_m
+    _kkt[3, 4] = -2.0*qd_x**2 - 2.0*qd_y**2 - 2.0*qd_z**2 - _c3*(q_x**2 + q_y**2 + q_z**2 - p_l**2) - 2.0*_baumgarte_alpha*(_c0*qd_x + _c1*qd_y + _c2*qd_z)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 4]
+    _ydot[4] = _kkt[1, 4]
+    _ydot[5] = _kkt[2, 4]
+    _lam = _kkt[3:, 4]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c4 = 2.0*_mult0
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _direction[0, 4] = _c4*_dy0
+    _direction[1, 4] = _c4*_dy1
+    _direction[2, 4] = _c4*_dy2
+    _direction[3, 4] = _dy0*(-2.0*_acc0 - _baumgarte_alpha*_c6 - _c0*_c3) + _dy1*(-2.0*_acc1 - _baumgarte_alpha*_c5 - _c1*_c3) + _dy2*(-2.0*_acc2 - _baumgarte_alpha*_c8 - _c2*_c3) + _dy3*(-_c6 - _c7*q_x) + _dy4*(-_c5 - _c7*q_y) + _dy5*(-_c8 - _c7*q_z)
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[9] = _direction[0, 4]
+    out[10] = _direction[1, 4]
+    out[11] = _direction[2, 4]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[3]
+    _baumgarte_beta = p[4]
+    _dy0 = y[6]
+    _dy1 = y[7]
+    _dy2 = y[8]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _dp0 = p[p.shape[0] - 3]
+    _dp1 = p[p.shape[0] - 2]
+    _dp2 = p[p.shape[0] - 1]
+    _kkt = np.zeros((4, 5))
+    _c0 = 2.0*q_x
+    _c1 = 2.0*q_y
+    _c2 = 2.0*q_z
+    _c3 = _baumgarte_beta**2
+    _c5 = 4.0*qd_y
+    _c6 = 4.0*qd_x
+    _c7 = 4.0*_baumgarte_alpha
+    _c8 = 4.0*qd_z
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_z
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_m
+    _kkt[0, 3] = -_c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -_c2
+    _kkt[3, 0] = _c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = _c2
+    _kkt[0, 4] = 0.0
+    _kkt[1, 4] = 0.0
+    _kkt[2, 4] = -p_g*p_m
+    _kkt[3, 4] = -2.0*qd_x**2 - 2.0*qd_y**2 - 2.0*qd_z**2 - _c3*(q_x**2 + q_y**2 + q_z**2 - p_l**2) - 2.0*_baumgarte_alpha*(_c0*qd_x + _c1*qd_y + _c2*qd_z)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 4]
+    _ydot[4] = _kkt[1, 4]
+    _ydot[5] = _kkt[2, 4]
+    _lam = _kkt[3:, 4]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c4 = 2.0*_mult0
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _direction[0, 4] = _c4*_dy0 - _acc0*_dp0
+    _direction[1, 4] = _c4*_dy1 - _acc1*_dp0
+    _direction[2, 4] = _c4*_dy2 + _dp0*(-_acc2 - p_g) - _dp2*p_m
+    _direction[3, 4] = _dy0*(-2.0*_acc0 - _baumgarte_alpha*_c6 - _c0*_c3) + _dy1*(-2.0*_acc1 - _baumgarte_alpha*_c5 - _c1*_c3) + _dy2*(-2.0*_acc2 - _baumgarte_alpha*_c8 - _c2*_c3) + _dy3*(-_c6 - _c7*q_x) + _dy4*(-_c5 - _c7*q_y) + _dy5*(-_c8 - _c7*q_z) + 2.0*_c3*_dp1*p_l
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[9] = _direction[0, 4]
+    out[10] = _direction[1, 4]
+    out[11] = _direction[2, 4]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[3]
+    _baumgarte_beta = p[4]
+    _kkt = np.zeros((4, 5))
+    _c0 = 2.0*q_x
+    _c1 = 2.0*q_y
+    _c2 = 2.0*q_z
+    _c3 = _baumgarte_beta**2
+    _c5 = 4.0*qd_x
+    _c6 = 4.0*qd_y
+    _c7 = 4.0*qd_z
+    _c8 = 4.0*_baumgarte_alpha
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_z
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_m
+    _kkt[0, 3] = -_c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -_c2
+    _kkt[3, 0] = _c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = _c2
+    _kkt[0, 4] = 0.0
+    _kkt[1, 4] = 0.0
+    _kkt[2, 4] = -p_g*p_m
+    _kkt[3, 4] = -2.0*qd_x**2 - 2.0*qd_y**2 - 2.0*qd_z**2 - _c3*(q_x**2 + q_y**2 + q_z**2 - p_l**2) - 2.0*_baumgarte_alpha*(_c0*qd_x + _c1*qd_y + _c2*qd_z)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 4]
+    _ydot[4] = _kkt[1, 4]
+    _ydot[5] = _kkt[2, 4]
+    _lam = _kkt[3:, 4]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c4 = 2.0*_mult0
+    _part0_0 = _c4
+    _part1_1 = _c4
+    _part2_2 = _c4
+    _part3_0 = -2.0*_acc0 - _baumgarte_alpha*_c5 - _c0*_c3
+    _part3_1 = -2.0*_acc1 - _baumgarte_alpha*_c6 - _c1*_c3
+    _part3_2 = -2.0*_acc2 - _baumgarte_alpha*_c7 - _c2*_c3
+    _part3_3 = -_c5 - _c8*q_x
+    _part3_4 = -_c6 - _c8*q_y
+    _part3_5 = -_c7 - _c8*q_z
+    _columns = y.shape[0] // 6 - 1
+    _rhs = np.empty((4, _columns))
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = _part0_0*y[_at + 0]
+        _g1 = _part1_1*y[_at + 1]
+        _g2 = _part2_2*y[_at + 2]
+        _g3 = ((_part3_0*y[_at + 0] + (_part3_1*y[_at + 1] + _part3_2*y[_at + 2])) + (_part3_3*y[_at + 3] + (_part3_4*y[_at + 4] + _part3_5*y[_at + 5])))
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+        _rhs[3, _col] = _g3
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 3, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 3] = _rhs[0, _col]
+        out[_at + 4] = _rhs[1, _col]
+        out[_at + 5] = _rhs[2, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_m = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    _baumgarte_alpha = p[3]
+    _baumgarte_beta = p[4]
+    _kkt = np.zeros((4, 5))
+    _c0 = 2.0*q_x
+    _c1 = 2.0*q_y
+    _c2 = 2.0*q_z
+    _c3 = _baumgarte_beta**2
+    _c5 = 4.0*qd_x
+    _c6 = 4.0*qd_y
+    _c7 = 4.0*qd_z
+    _c8 = 4.0*_baumgarte_alpha
+    out[0] = qd_x
+    out[1] = qd_y
+    out[2] = qd_z
+    _kkt[0, 0] = p_m
+    _kkt[1, 1] = p_m
+    _kkt[2, 2] = p_m
+    _kkt[0, 3] = -_c0
+    _kkt[1, 3] = -_c1
+    _kkt[2, 3] = -_c2
+    _kkt[3, 0] = _c0
+    _kkt[3, 1] = _c1
+    _kkt[3, 2] = _c2
+    _kkt[0, 4] = 0.0
+    _kkt[1, 4] = 0.0
+    _kkt[2, 4] = -p_g*p_m
+    _kkt[3, 4] = -2.0*qd_x**2 - 2.0*qd_y**2 - 2.0*qd_z**2 - _c3*(q_x**2 + q_y**2 + q_z**2 - p_l**2) - 2.0*_baumgarte_alpha*(_c0*qd_x + _c1*qd_y + _c2*qd_z)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 4]
+    _ydot[4] = _kkt[1, 4]
+    _ydot[5] = _kkt[2, 4]
+    _lam = _kkt[3:, 4]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult0 = _lam[0]
+    _c4 = 2.0*_mult0
+    _part0_0 = _c4
+    _part0_6 = -_acc0
+    _part1_1 = _c4
+    _part1_6 = -_acc1
+    _part2_2 = _c4
+    _part2_6 = -_acc2 - p_g
+    _part2_8 = -p_m
+    _part3_0 = -2.0*_acc0 - _baumgarte_alpha*_c5 - _c0*_c3
+    _part3_1 = -2.0*_acc1 - _baumgarte_alpha*_c6 - _c1*_c3
+    _part3_2 = -2.0*_acc2 - _baumgarte_alpha*_c7 - _c2*_c3
+    _part3_3 = -_c5 - _c8*q_x
+    _part3_4 = -_c6 - _c8*q_y
+    _part3_5 = -_c7 - _c8*q_z
+    _part3_7 = 2.0*_c3*p_l
+    _columns = y.shape[0] // 6 - 1
+    _rhs = np.empty((4, _columns))
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = _part0_0*y[_at + 0]
+        _g1 = _part1_1*y[_at + 1]
+        _g2 = _part2_2*y[_at + 2]
+        _g3 = ((_part3_0*y[_at + 0] + (_part3_1*y[_at + 1] + _part3_2*y[_at + 2])) + (_part3_3*y[_at + 3] + (_part3_4*y[_at + 4] + _part3_5*y[_at + 5])))
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+            _g1 += p[p.shape[0] - 1]*_part1_6
+            _g2 += p[p.shape[0] - 1]*_part2_6
+        elif _j == 1:
+            _g3 += p[p.shape[0] - 1]*_part3_7
+        elif _j == 2:
+            _g2 += p[p.shape[0] - 1]*_part2_8
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+        _rhs[3, _col] = _g3
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 3, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 3] = _rhs[0, _col]
+        out[_at + 4] = _rhs[1, _col]
+        out[_at + 5] = _rhs[2, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def dae_residual(t, y, p, out):
     """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
     Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.

@@ -467,6 +467,353 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_r = y[0]
+    q_theta = y[1]
+    qd_r = y[2]
+    qd_theta = y[3]
+    p_m = p[0]
+    p_k = p[1]
+    p_c = p[2]
+    p_l0 = p[3]
+    p_g = p[4]
+    _dy0 = y[4]
+    _dy1 = y[5]
+    _dy2 = y[6]
+    _dy3 = y[7]
+    _c0 = q_r**2
+    _c1 = qd_theta**2
+    _c2 = _c1*q_r
+    _c3 = cos(q_theta)
+    _c4 = _c3*p_g
+    _c5 = _c4*p_m
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_g
+    _c8 = _c7*p_m
+    _c9 = 2.0*q_r
+    _c10 = qd_r*qd_theta
+    _c11 = _c10*_c9
+    _c13 = _c9*p_m
+    _c14 = _c13*_dy3
+    out[0] = qd_r
+    out[1] = qd_theta
+    _m0_0 = p_m
+    _m1_0 = 0.0
+    _m1_1 = _c0*p_m
+    _f0 = _c5 + _c2*p_m - p_c*qd_r - p_k*(q_r - p_l0)
+    _f1 = -_c11*p_m - _c8*q_r
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    out[4] = _dy2
+    out[5] = _dy3
+    _g0 = _c14*qd_theta + _dy0*(-p_k + _c1*p_m) - _c8*_dy1 - _dy2*p_c
+    _g1 = _dy0*(-_c8 - _acc1*_c13 - 2.0*_c10*p_m) - _c14*qd_r - _c13*_dy2*qd_theta - _c5*_dy1*q_r
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    out[6] = _x0
+    out[7] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_r = y[0]
+    q_theta = y[1]
+    qd_r = y[2]
+    qd_theta = y[3]
+    p_m = p[0]
+    p_k = p[1]
+    p_c = p[2]
+    p_l0 = p[3]
+    p_g = p[4]
+    _dy0 = y[4]
+    _dy1 = y[5]
+    _dy2 = y[6]
+    _dy3 = y[7]
+    _dp0 = p[p.shape[0] - 5]
+    _dp1 = p[p.shape[0] - 4]
+    _dp2 = p[p.shape[0] - 3]
+    _dp3 = p[p.shape[0] - 2]
+    _dp4 = p[p.shape[0] - 1]
+    _c0 = q_r**2
+    _c1 = qd_theta**2
+    _c2 = _c1*q_r
+    _c3 = cos(q_theta)
+    _c4 = _c3*p_g
+    _c5 = _c4*p_m
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_g
+    _c8 = _c7*p_m
+    _c9 = 2.0*q_r
+    _c10 = qd_r*qd_theta
+    _c11 = _c10*_c9
+    _c12 = _dp4*p_m
+    _c13 = _c9*p_m
+    _c14 = _c13*_dy3
+    out[0] = qd_r
+    out[1] = qd_theta
+    _m0_0 = p_m
+    _m1_0 = 0.0
+    _m1_1 = _c0*p_m
+    _f0 = _c5 + _c2*p_m - p_c*qd_r - p_k*(q_r - p_l0)
+    _f1 = -_c11*p_m - _c8*q_r
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    out[4] = _dy2
+    out[5] = _dy3
+    _g0 = _c12*_c3 + _c14*qd_theta + _dp0*(_c2 + _c4 - _acc0) + _dp1*(p_l0 - q_r) + _dp3*p_k + _dy0*(-p_k + _c1*p_m) - _c8*_dy1 - _dp2*qd_r - _dy2*p_c
+    _g1 = _dp0*(-_c11 - _acc1*_c0 - _c7*q_r) + _dy0*(-_c8 - _acc1*_c13 - 2.0*_c10*p_m) - _c14*qd_r - _c12*_c6*q_r - _c13*_dy2*qd_theta - _c5*_dy1*q_r
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    out[6] = _x0
+    out[7] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_r = y[0]
+    q_theta = y[1]
+    qd_r = y[2]
+    qd_theta = y[3]
+    p_m = p[0]
+    p_k = p[1]
+    p_c = p[2]
+    p_l0 = p[3]
+    p_g = p[4]
+    _c0 = q_r**2
+    _c1 = qd_theta**2
+    _c2 = _c1*q_r
+    _c3 = cos(q_theta)
+    _c4 = _c3*p_g
+    _c5 = _c4*p_m
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_m
+    _c8 = _c7*p_g
+    _c9 = 2.0*q_r*qd_r
+    _c10 = _c9*p_m
+    _c11 = -_c8
+    _c12 = 2.0*p_m
+    _c13 = _c12*qd_theta
+    _c14 = _c13*q_r
+    out[0] = qd_r
+    out[1] = qd_theta
+    _m0_0 = p_m
+    _m1_0 = 0.0
+    _m1_1 = _c0*p_m
+    _f0 = _c5 + _c2*p_m - p_c*qd_r - p_k*(q_r - p_l0)
+    _f1 = -_c10*qd_theta - _c8*q_r
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _part0_0 = -p_k + _c1*p_m
+    _part0_1 = _c11
+    _part0_2 = -p_c
+    _part0_3 = _c14
+    _part1_0 = _c11 - _c13*qd_r - _acc1*_c12*q_r
+    _part1_1 = -_c5*q_r
+    _part1_2 = -_c14
+    _part1_3 = -_c10
+    _columns = y.shape[0] // 4 - 1
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 0] = y[_at + 2]
+        out[_at + 1] = y[_at + 3]
+        _g0 = ((_part0_0*y[_at + 0] + _part0_1*y[_at + 1]) + (_part0_2*y[_at + 2] + _part0_3*y[_at + 3]))
+        _g1 = ((_part1_0*y[_at + 0] + _part1_1*y[_at + 1]) + (_part1_2*y[_at + 2] + _part1_3*y[_at + 3]))
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _x1 = _z1*_r1
+        _x0 = _z0*_r0 - _l1_0*_x1
+        out[_at + 2] = _x0
+        out[_at + 3] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_r = y[0]
+    q_theta = y[1]
+    qd_r = y[2]
+    qd_theta = y[3]
+    p_m = p[0]
+    p_k = p[1]
+    p_c = p[2]
+    p_l0 = p[3]
+    p_g = p[4]
+    _c0 = q_r**2
+    _c1 = qd_theta**2
+    _c2 = _c1*q_r
+    _c3 = cos(q_theta)
+    _c4 = _c3*p_g
+    _c5 = _c4*p_m
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_m
+    _c8 = _c7*p_g
+    _c9 = 2.0*q_r*qd_r
+    _c10 = _c9*p_m
+    _c11 = -_c8
+    _c12 = 2.0*p_m
+    _c13 = _c12*qd_theta
+    _c14 = _c13*q_r
+    out[0] = qd_r
+    out[1] = qd_theta
+    _m0_0 = p_m
+    _m1_0 = 0.0
+    _m1_1 = _c0*p_m
+    _f0 = _c5 + _c2*p_m - p_c*qd_r - p_k*(q_r - p_l0)
+    _f1 = -_c10*qd_theta - _c8*q_r
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0 - _l1_0*_x1
+    _ydot[2] = _x0
+    _ydot[3] = _x1
+    _acc0 = _ydot[2]
+    _acc1 = _ydot[3]
+    _part0_0 = -p_k + _c1*p_m
+    _part0_1 = _c11
+    _part0_2 = -p_c
+    _part0_3 = _c14
+    _part0_4 = _c2 + _c4 - _acc0
+    _part0_5 = p_l0 - q_r
+    _part0_6 = -qd_r
+    _part0_7 = p_k
+    _part0_8 = _c3*p_m
+    _part1_0 = _c11 - _c13*qd_r - _acc1*_c12*q_r
+    _part1_1 = -_c5*q_r
+    _part1_2 = -_c14
+    _part1_3 = -_c10
+    _part1_4 = -_acc1*_c0 - _c9*qd_theta - _c6*p_g*q_r
+    _part1_8 = -_c7*q_r
+    _columns = y.shape[0] // 4 - 1
+    for _col in range(_columns):
+        _at = 4*(1 + _col)
+        out[_at + 0] = y[_at + 2]
+        out[_at + 1] = y[_at + 3]
+        _g0 = ((_part0_0*y[_at + 0] + _part0_1*y[_at + 1]) + (_part0_2*y[_at + 2] + _part0_3*y[_at + 3]))
+        _g1 = ((_part1_0*y[_at + 0] + _part1_1*y[_at + 1]) + (_part1_2*y[_at + 2] + _part1_3*y[_at + 3]))
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_4
+            _g1 += p[p.shape[0] - 1]*_part1_4
+        elif _j == 1:
+            _g0 += p[p.shape[0] - 1]*_part0_5
+        elif _j == 2:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+        elif _j == 3:
+            _g0 += p[p.shape[0] - 1]*_part0_7
+        elif _j == 4:
+            _g0 += p[p.shape[0] - 1]*_part0_8
+            _g1 += p[p.shape[0] - 1]*_part1_8
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _x1 = _z1*_r1
+        _x0 = _z0*_r0 - _l1_0*_x1
+        out[_at + 2] = _x0
+        out[_at + 3] = _x1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_r = y[0]

@@ -728,6 +728,514 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _dy1 = y[7]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _c0 = p_l**2
+    _c1 = _c0*p_M
+    _c2 = p_I3 - _c1 - p_I1
+    _c3 = cos(q_theta)
+    _c4 = _c3**2
+    _c5 = _c2*_c4
+    _c6 = _c1 + p_I1
+    _c7 = _c3*p_I3
+    _c8 = sin(q_theta)
+    _c9 = _c8*p_I3
+    _c10 = _c9*qd_phi
+    _c11 = 2.0*_c2
+    _c12 = _c3*_c8
+    _c13 = _c12*qd_psi
+    _c14 = _c11*_c13
+    _c15 = p_M*p_l
+    _c16 = _c8*p_g
+    _c17 = qd_psi**2
+    _c18 = _c12*_c17
+    _c19 = _c9*qd_psi
+    _c21 = _c7*qd_theta
+    _c22 = _c2*_c8**2
+    _c23 = 2.0*qd_theta
+    _c24 = _c23*qd_psi
+    _c26 = _c9*qd_theta
+    _c29 = qd_phi*qd_psi
+    out[0] = qd_psi
+    out[1] = qd_theta
+    out[2] = qd_phi
+    _m0_0 = _c5 + _c6
+    _m1_0 = 0.0
+    _m1_1 = _c6
+    _m2_0 = _c7
+    _m2_1 = 0.0
+    _m2_2 = p_I3
+    _f0 = _c10*qd_theta + _c14*qd_theta
+    _f1 = _c15*_c16 - _c10*qd_psi - _c18*_c2
+    _f2 = _c19*qd_theta
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c20 = _acc0*_c3
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _g0 = _c26*_dy5 + _dy1*(_acc2*_c9 + _c21*qd_phi + _c24*_c5 - _c22*_c24 + _c11*_c20*_c8) + _dy4*(_c10 + _c14) + _c11*_c12*_dy3*qd_theta
+    _g1 = _dy1*(_c17*_c22 - _c17*_c5 - _c29*_c7 + _c15*_c3*p_g) + _dy3*(-_c10 - _c14) - _c19*_dy5
+    _g2 = _c19*_dy4 + _c26*_dy3 + _dy1*(_acc0*_c9 + _c21*qd_psi)
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    out[9] = _x0
+    out[10] = _x1
+    out[11] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _dy1 = y[7]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _dp0 = p[p.shape[0] - 5]
+    _dp1 = p[p.shape[0] - 4]
+    _dp2 = p[p.shape[0] - 3]
+    _dp3 = p[p.shape[0] - 2]
+    _dp4 = p[p.shape[0] - 1]
+    _c0 = p_l**2
+    _c1 = _c0*p_M
+    _c2 = p_I3 - _c1 - p_I1
+    _c3 = cos(q_theta)
+    _c4 = _c3**2
+    _c5 = _c2*_c4
+    _c6 = _c1 + p_I1
+    _c7 = _c3*p_I3
+    _c8 = sin(q_theta)
+    _c9 = _c8*p_I3
+    _c10 = _c9*qd_phi
+    _c11 = 2.0*_c2
+    _c12 = _c3*_c8
+    _c13 = _c12*qd_psi
+    _c14 = _c11*_c13
+    _c15 = p_M*p_l
+    _c16 = _c8*p_g
+    _c17 = qd_psi**2
+    _c18 = _c12*_c17
+    _c19 = _c9*qd_psi
+    _c21 = _c7*qd_theta
+    _c22 = _c2*_c8**2
+    _c23 = 2.0*qd_theta
+    _c24 = _c23*qd_psi
+    _c25 = _c13*_c23
+    _c26 = _c9*qd_theta
+    _c27 = 2.0*_c15
+    _c28 = _c8*qd_theta
+    _c29 = qd_phi*qd_psi
+    out[0] = qd_psi
+    out[1] = qd_theta
+    out[2] = qd_phi
+    _m0_0 = _c5 + _c6
+    _m1_0 = 0.0
+    _m1_1 = _c6
+    _m2_0 = _c7
+    _m2_1 = 0.0
+    _m2_2 = p_I3
+    _f0 = _c10*qd_theta + _c14*qd_theta
+    _f1 = _c15*_c16 - _c10*qd_psi - _c18*_c2
+    _f2 = _c19*qd_theta
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c20 = _acc0*_c3
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _g0 = _c26*_dy5 + _dp0*(-_acc0*(_c0 - _c0*_c4) - _c0*_c25) + _dp1*(-_acc0*(_c27 - _c27*_c4) - 4.0*_c13*_c15*qd_theta) + _dp3*(-_c25 - _acc0*(1.0 - _c4)) + _dp4*(_c25 + _c28*qd_phi - _acc0*_c4 - _acc2*_c3) + _dy1*(_acc2*_c9 + _c21*qd_phi + _c24*_c5 - _c22*_c24 + _c11*_c20*_c8) + _dy4*(_c10 + _c14) + _c11*_c12*_dy3*qd_theta
+    _g1 = _dp0*(_c0*_c18 + _c16*p_l - _acc1*_c0) + _dp1*(_c16*p_M + _c18*_c27 - _acc1*_c27) + _dp3*(_c18 - _acc1) + _dp4*(-_c18 - _c29*_c8) + _dy1*(_c17*_c22 - _c17*_c5 - _c29*_c7 + _c15*_c3*p_g) + _dy3*(-_c10 - _c14) - _c19*_dy5 + _c15*_c8*_dp2
+    _g2 = _c19*_dy4 + _c26*_dy3 + _dp4*(-_acc2 - _c20 + _c28*qd_psi) + _dy1*(_acc0*_c9 + _c21*qd_psi)
+    _z0 = _g0
+    _z1 = _g1 - _l1_0*_z0
+    _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    out[9] = _x0
+    out[10] = _x1
+    out[11] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = p_l**2
+    _c1 = _c0*p_M
+    _c2 = p_I3 - _c1 - p_I1
+    _c3 = cos(q_theta)
+    _c4 = _c3**2
+    _c5 = _c2*_c4
+    _c6 = _c1 + p_I1
+    _c7 = _c3*p_I3
+    _c8 = sin(q_theta)
+    _c9 = _c8*qd_theta
+    _c10 = _c9*qd_phi
+    _c11 = 2.0*_c2
+    _c12 = _c9*qd_psi
+    _c13 = _c12*_c3
+    _c14 = _c8*qd_phi
+    _c15 = _c14*qd_psi
+    _c16 = _c8*p_l
+    _c17 = _c16*p_g
+    _c18 = qd_psi**2
+    _c19 = _c3*_c8
+    _c20 = _c18*_c19
+    _c22 = _c7*qd_theta
+    _c23 = _c8*p_I3
+    _c24 = _c2*_c8**2
+    _c25 = 2.0*qd_psi*qd_theta
+    _c26 = _c11*_c19*qd_psi
+    _c27 = _c14*p_I3
+    _c28 = _c9*p_I3
+    _c32 = p_M*p_g
+    _c33 = _c23*qd_psi
+    out[0] = qd_psi
+    out[1] = qd_theta
+    out[2] = qd_phi
+    _m0_0 = _c5 + _c6
+    _m1_0 = 0.0
+    _m1_1 = _c6
+    _m2_0 = _c7
+    _m2_1 = 0.0
+    _m2_2 = p_I3
+    _f0 = _c10*p_I3 + _c11*_c13
+    _f1 = _c17*p_M - _c15*p_I3 - _c2*_c20
+    _f2 = _c12*p_I3
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c21 = _acc0*_c3
+    _part0_1 = _acc2*_c23 + _c22*qd_phi + _c25*_c5 - _c24*_c25 + _c11*_c21*_c8
+    _part0_3 = _c11*_c3*_c9
+    _part0_4 = _c26 + _c27
+    _part0_5 = _c28
+    _part1_1 = _c18*_c24 - _c18*_c5 + _c3*_c32*p_l - _c7*qd_phi*qd_psi
+    _part1_3 = -_c26 - _c27
+    _part1_5 = -_c33
+    _part2_1 = _acc0*_c23 + _c22*qd_psi
+    _part2_3 = _c28
+    _part2_4 = _c33
+    _columns = y.shape[0] // 6 - 1
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = ((_part0_1*y[_at + 1] + _part0_3*y[_at + 3]) + (_part0_4*y[_at + 4] + _part0_5*y[_at + 5]))
+        _g1 = (_part1_1*y[_at + 1] + (_part1_3*y[_at + 3] + _part1_5*y[_at + 5]))
+        _g2 = (_part2_1*y[_at + 1] + (_part2_3*y[_at + 3] + _part2_4*y[_at + 4]))
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+        _x2 = _z2*_r2
+        _x1 = _z1*_r1 - _l2_1*_x2
+        _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+        out[_at + 3] = _x0
+        out[_at + 4] = _x1
+        out[_at + 5] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[1]
+    qd_psi = y[3]
+    qd_theta = y[4]
+    qd_phi = y[5]
+    p_M = p[0]
+    p_l = p[1]
+    p_g = p[2]
+    p_I1 = p[3]
+    p_I3 = p[4]
+    _c0 = p_l**2
+    _c1 = _c0*p_M
+    _c2 = p_I3 - _c1 - p_I1
+    _c3 = cos(q_theta)
+    _c4 = _c3**2
+    _c5 = _c2*_c4
+    _c6 = _c1 + p_I1
+    _c7 = _c3*p_I3
+    _c8 = sin(q_theta)
+    _c9 = _c8*qd_theta
+    _c10 = _c9*qd_phi
+    _c11 = 2.0*_c2
+    _c12 = _c9*qd_psi
+    _c13 = _c12*_c3
+    _c14 = _c8*qd_phi
+    _c15 = _c14*qd_psi
+    _c16 = _c8*p_l
+    _c17 = _c16*p_g
+    _c18 = qd_psi**2
+    _c19 = _c3*_c8
+    _c20 = _c18*_c19
+    _c22 = _c7*qd_theta
+    _c23 = _c8*p_I3
+    _c24 = _c2*_c8**2
+    _c25 = 2.0*qd_psi*qd_theta
+    _c26 = _c11*_c19*qd_psi
+    _c27 = _c14*p_I3
+    _c28 = _c9*p_I3
+    _c29 = 2.0*_c13
+    _c30 = p_M*p_l
+    _c31 = 2.0*_c30
+    _c32 = p_M*p_g
+    _c33 = _c23*qd_psi
+    out[0] = qd_psi
+    out[1] = qd_theta
+    out[2] = qd_phi
+    _m0_0 = _c5 + _c6
+    _m1_0 = 0.0
+    _m1_1 = _c6
+    _m2_0 = _c7
+    _m2_1 = 0.0
+    _m2_2 = p_I3
+    _f0 = _c10*p_I3 + _c11*_c13
+    _f1 = _c17*p_M - _c15*p_I3 - _c2*_c20
+    _f2 = _c12*p_I3
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _l1_0 = (_m1_0)*_r0
+    _w1_0 = _l1_0*_d0
+    _l2_0 = (_m2_0)*_r0
+    _w2_0 = _l2_0*_d0
+    _d1 = _m1_1 - _l1_0*_w1_0
+    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
+        return 2
+    _r1 = 1.0/_d1
+    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
+    _w2_1 = _l2_1*_d1
+    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
+    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
+        return 3
+    _r2 = 1.0/_d2
+    _z0 = _f0
+    _z1 = _f1 - _l1_0*_z0
+    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1 - _l2_1*_x2
+    _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+    _ydot[3] = _x0
+    _ydot[4] = _x1
+    _ydot[5] = _x2
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _c21 = _acc0*_c3
+    _part0_1 = _acc2*_c23 + _c22*qd_phi + _c25*_c5 - _c24*_c25 + _c11*_c21*_c8
+    _part0_3 = _c11*_c3*_c9
+    _part0_4 = _c26 + _c27
+    _part0_5 = _c28
+    _part0_6 = -_acc0*(_c0 - _c0*_c4) - _c0*_c29
+    _part0_7 = -_acc0*(_c31 - _c31*_c4) - 4.0*_c13*_c30
+    _part0_9 = -_c29 - _acc0*(1.0 - _c4)
+    _part0_10 = _c10 + _c29 - _acc0*_c4 - _acc2*_c3
+    _part1_1 = _c18*_c24 - _c18*_c5 + _c3*_c32*p_l - _c7*qd_phi*qd_psi
+    _part1_3 = -_c26 - _c27
+    _part1_5 = -_c33
+    _part1_6 = _c17 + _c0*_c20 - _acc1*_c0
+    _part1_7 = _c20*_c31 + _c32*_c8 - _acc1*_c31
+    _part1_8 = _c16*p_M
+    _part1_9 = _c20 - _acc1
+    _part1_10 = -_c15 - _c20
+    _part2_1 = _acc0*_c23 + _c22*qd_psi
+    _part2_3 = _c28
+    _part2_4 = _c33
+    _part2_10 = _c12 - _acc2 - _c21
+    _columns = y.shape[0] // 6 - 1
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = ((_part0_1*y[_at + 1] + _part0_3*y[_at + 3]) + (_part0_4*y[_at + 4] + _part0_5*y[_at + 5]))
+        _g1 = (_part1_1*y[_at + 1] + (_part1_3*y[_at + 3] + _part1_5*y[_at + 5]))
+        _g2 = (_part2_1*y[_at + 1] + (_part2_3*y[_at + 3] + _part2_4*y[_at + 4]))
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+            _g1 += p[p.shape[0] - 1]*_part1_6
+        elif _j == 1:
+            _g0 += p[p.shape[0] - 1]*_part0_7
+            _g1 += p[p.shape[0] - 1]*_part1_7
+        elif _j == 2:
+            _g1 += p[p.shape[0] - 1]*_part1_8
+        elif _j == 3:
+            _g0 += p[p.shape[0] - 1]*_part0_9
+            _g1 += p[p.shape[0] - 1]*_part1_9
+        elif _j == 4:
+            _g0 += p[p.shape[0] - 1]*_part0_10
+            _g1 += p[p.shape[0] - 1]*_part1_10
+            _g2 += p[p.shape[0] - 1]*_part2_10
+        _z0 = _g0
+        _z1 = _g1 - _l1_0*_z0
+        _z2 = _g2 - _l2_0*_z0 - _l2_1*_z1
+        _x2 = _z2*_r2
+        _x1 = _z1*_r1 - _l2_1*_x2
+        _x0 = _z0*_r0 - _l2_0*_x2 - _l1_0*_x1
+        out[_at + 3] = _x0
+        out[_at + 4] = _x1
+        out[_at + 5] = _x2
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[1]

@@ -419,6 +419,324 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_I_X = p[0]
+    p_I = p[1]
+    p_Omega = p[2]
+    p_omega = p[3]
+    p_alpha = p[4]
+    p_k = p[5]
+    p_c = p[6]
+    _dy0 = y[2]
+    _dy1 = y[3]
+    _c0 = sin(q_theta)
+    _c1 = _c0**2
+    _c2 = p_omega**2
+    _c3 = p_I - p_I_X
+    _c4 = _c2*_c3
+    _c5 = _c1*_c4
+    _c6 = sin(p_alpha)
+    _c7 = cos(p_alpha)
+    _c8 = _c6*_c7
+    _c9 = _c7**2
+    _c10 = _c6**2
+    _c11 = _c10*p_I_X + _c9*p_I - _c10*p_I - _c9*p_I_X
+    _c12 = _c11*_c2
+    _c13 = cos(q_theta)
+    _c14 = _c0*_c13
+    _c15 = _c7*p_I
+    _c16 = p_Omega*p_omega
+    _c17 = _c13*_c16
+    _c18 = _c13**2
+    _c19 = _c18*_c4
+    _c20 = _c0*_c6
+    _c21 = _c16*_c20
+    _c25 = _c14*_c2
+    _c26 = 4.0*_c6
+    _c27 = _c26*_c7
+    _c28 = -_c0*_c15*_c16 - _c17*_c6*p_I
+    out[0] = qd_theta
+    _m0_0 = p_I_X
+    _f0 = _c12*_c14 + _c15*_c17 + _c19*_c8 - _c21*p_I - _c5*_c8 - p_c*qd_theta - p_k*q_theta
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    out[2] = _dy1
+    _g0 = _dy0*(_c28 - p_k + _c12*_c18 - _c1*_c12 - _c25*_c27*_c3) - _dy1*p_c
+    _z0 = _g0
+    _x0 = _z0*_r0
+    out[3] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_I_X = p[0]
+    p_I = p[1]
+    p_Omega = p[2]
+    p_omega = p[3]
+    p_alpha = p[4]
+    p_k = p[5]
+    p_c = p[6]
+    _dy0 = y[2]
+    _dy1 = y[3]
+    _dp0 = p[p.shape[0] - 7]
+    _dp1 = p[p.shape[0] - 6]
+    _dp2 = p[p.shape[0] - 5]
+    _dp3 = p[p.shape[0] - 4]
+    _dp4 = p[p.shape[0] - 3]
+    _dp5 = p[p.shape[0] - 2]
+    _dp6 = p[p.shape[0] - 1]
+    _c0 = sin(q_theta)
+    _c1 = _c0**2
+    _c2 = p_omega**2
+    _c3 = p_I - p_I_X
+    _c4 = _c2*_c3
+    _c5 = _c1*_c4
+    _c6 = sin(p_alpha)
+    _c7 = cos(p_alpha)
+    _c8 = _c6*_c7
+    _c9 = _c7**2
+    _c10 = _c6**2
+    _c11 = _c10*p_I_X + _c9*p_I - _c10*p_I - _c9*p_I_X
+    _c12 = _c11*_c2
+    _c13 = cos(q_theta)
+    _c14 = _c0*_c13
+    _c15 = _c7*p_I
+    _c16 = p_Omega*p_omega
+    _c17 = _c13*_c16
+    _c18 = _c13**2
+    _c19 = _c18*_c4
+    _c20 = _c0*_c6
+    _c21 = _c16*_c20
+    _c22 = _c2*_c8
+    _c23 = _c18*_c22
+    _c24 = _c1*_c22
+    _c25 = _c14*_c2
+    _c26 = 4.0*_c6
+    _c27 = _c26*_c7
+    _c28 = -_c0*_c15*_c16 - _c17*_c6*p_I
+    _c29 = _c20*p_I
+    _c30 = _c13*_c15
+    _c31 = 2.0*p_omega
+    _c32 = _c3*_c31*_c8
+    out[0] = qd_theta
+    _m0_0 = p_I_X
+    _f0 = _c12*_c14 + _c15*_c17 + _c19*_c8 - _c21*p_I - _c5*_c8 - p_c*qd_theta - p_k*q_theta
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    out[2] = _dy1
+    _g0 = _dp0*(_c24 - _acc0 - _c23 + _c25*(_c10 - _c9)) + _dp1*(_c23 - _c21 - _c24 + _c17*_c7 + _c25*(_c9 - _c10)) + _dp2*(_c30*p_omega - _c29*p_omega) + _dp3*(_c18*_c32 + _c30*p_Omega - _c1*_c32 - _c29*p_Omega + _c11*_c14*_c31) + _dp4*(_c28 + _c10*_c5 + _c19*_c9 + _c25*(_c27*p_I_X - _c15*_c26) - _c10*_c19 - _c5*_c9) + _dy0*(_c28 - p_k + _c12*_c18 - _c1*_c12 - _c25*_c27*_c3) - _dp5*q_theta - _dp6*qd_theta - _dy1*p_c
+    _z0 = _g0
+    _x0 = _z0*_r0
+    out[3] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_I_X = p[0]
+    p_I = p[1]
+    p_Omega = p[2]
+    p_omega = p[3]
+    p_alpha = p[4]
+    p_k = p[5]
+    p_c = p[6]
+    _c0 = cos(p_alpha)
+    _c1 = sin(p_alpha)
+    _c2 = _c0*_c1
+    _c3 = sin(q_theta)
+    _c4 = _c3**2
+    _c5 = p_omega**2
+    _c6 = p_I - p_I_X
+    _c7 = _c5*_c6
+    _c8 = _c4*_c7
+    _c9 = _c0**2
+    _c10 = _c1**2
+    _c11 = _c10*p_I_X + _c9*p_I - _c10*p_I - _c9*p_I_X
+    _c12 = _c11*_c5
+    _c13 = cos(q_theta)
+    _c14 = _c13*_c3
+    _c15 = p_Omega*p_omega
+    _c16 = _c0*_c13
+    _c17 = _c15*_c16
+    _c18 = _c13**2
+    _c19 = _c18*_c7
+    _c20 = _c1*_c3
+    _c21 = _c15*_c20
+    _c22 = _c14*_c5
+    _c23 = 4.0*_c2
+    _c24 = _c15*p_I
+    _c25 = -_c0*_c24*_c3 - _c1*_c13*_c24
+    out[0] = qd_theta
+    _m0_0 = p_I_X
+    _f0 = _c12*_c14 + _c17*p_I + _c19*_c2 - _c2*_c8 - _c21*p_I - p_c*qd_theta - p_k*q_theta
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    _part0_0 = _c25 - p_k + _c12*_c18 - _c12*_c4 - _c22*_c23*_c6
+    _part0_1 = -p_c
+    _columns = y.shape[0] // 2 - 1
+    for _col in range(_columns):
+        _at = 2*(1 + _col)
+        out[_at + 0] = y[_at + 1]
+        _g0 = (_part0_0*y[_at + 0] + _part0_1*y[_at + 1])
+        _z0 = _g0
+        _x0 = _z0*_r0
+        out[_at + 1] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_I_X = p[0]
+    p_I = p[1]
+    p_Omega = p[2]
+    p_omega = p[3]
+    p_alpha = p[4]
+    p_k = p[5]
+    p_c = p[6]
+    _c0 = cos(p_alpha)
+    _c1 = sin(p_alpha)
+    _c2 = _c0*_c1
+    _c3 = sin(q_theta)
+    _c4 = _c3**2
+    _c5 = p_omega**2
+    _c6 = p_I - p_I_X
+    _c7 = _c5*_c6
+    _c8 = _c4*_c7
+    _c9 = _c0**2
+    _c10 = _c1**2
+    _c11 = _c10*p_I_X + _c9*p_I - _c10*p_I - _c9*p_I_X
+    _c12 = _c11*_c5
+    _c13 = cos(q_theta)
+    _c14 = _c13*_c3
+    _c15 = p_Omega*p_omega
+    _c16 = _c0*_c13
+    _c17 = _c15*_c16
+    _c18 = _c13**2
+    _c19 = _c18*_c7
+    _c20 = _c1*_c3
+    _c21 = _c15*_c20
+    _c22 = _c14*_c5
+    _c23 = 4.0*_c2
+    _c24 = _c15*p_I
+    _c25 = -_c0*_c24*_c3 - _c1*_c13*_c24
+    _c26 = _c2*_c5
+    _c27 = _c18*_c26
+    _c28 = _c26*_c4
+    _c29 = p_I*p_omega
+    _c30 = p_I*p_Omega
+    _c31 = 2.0*p_omega
+    _c32 = _c2*_c31*_c6
+    out[0] = qd_theta
+    _m0_0 = p_I_X
+    _f0 = _c12*_c14 + _c17*p_I + _c19*_c2 - _c2*_c8 - _c21*p_I - p_c*qd_theta - p_k*q_theta
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    _part0_0 = _c25 - p_k + _c12*_c18 - _c12*_c4 - _c22*_c23*_c6
+    _part0_1 = -p_c
+    _part0_2 = _c28 - _acc0 - _c27 + _c22*(_c10 - _c9)
+    _part0_3 = _c17 + _c27 - _c21 - _c28 + _c22*(_c9 - _c10)
+    _part0_4 = _c16*_c29 - _c20*_c29
+    _part0_5 = _c16*_c30 + _c18*_c32 - _c20*_c30 - _c32*_c4 + _c11*_c14*_c31
+    _part0_6 = _c25 + _c10*_c8 + _c19*_c9 + _c22*(_c23*p_I_X - _c23*p_I) - _c10*_c19 - _c8*_c9
+    _part0_7 = -q_theta
+    _part0_8 = -qd_theta
+    _columns = y.shape[0] // 2 - 1
+    for _col in range(_columns):
+        _at = 2*(1 + _col)
+        out[_at + 0] = y[_at + 1]
+        _g0 = (_part0_0*y[_at + 0] + _part0_1*y[_at + 1])
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_2
+        elif _j == 1:
+            _g0 += p[p.shape[0] - 1]*_part0_3
+        elif _j == 2:
+            _g0 += p[p.shape[0] - 1]*_part0_4
+        elif _j == 3:
+            _g0 += p[p.shape[0] - 1]*_part0_5
+        elif _j == 4:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+        elif _j == 5:
+            _g0 += p[p.shape[0] - 1]*_part0_7
+        elif _j == 6:
+            _g0 += p[p.shape[0] - 1]*_part0_8
+        _z0 = _g0
+        _x0 = _z0*_r0
+        out[_at + 1] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_I_X = p[0]

@@ -327,6 +327,256 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _dy0 = y[2]
+    _dy1 = y[3]
+    _c0 = p_R**2
+    _c1 = p_a**2
+    _c2 = cos(q_theta)
+    _c3 = 2.0*p_M
+    _c4 = _c3*p_R
+    _c5 = _c2*_c4
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_g
+    _c8 = _c7*p_M
+    _c9 = p_R*p_a
+    _c10 = qd_theta**2
+    _c11 = _c10*_c6
+    _c12 = _c11*_c9
+    _c13 = _c4*_c6*p_a
+    _c14 = _c2*_c9
+    _c15 = p_M*p_a
+    out[0] = qd_theta
+    _m0_0 = p_I + _c0*p_M + _c1*p_M - _c5*p_a
+    _f0 = -_c12*p_M - _c8*p_a
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    out[2] = _dy1
+    _g0 = _dy0*(-_acc0*_c13 - _c10*_c14*p_M - _c15*_c2*p_g) - _c13*_dy1*qd_theta
+    _z0 = _g0
+    _x0 = _z0*_r0
+    out[3] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _dy0 = y[2]
+    _dy1 = y[3]
+    _dp0 = p[p.shape[0] - 5]
+    _dp1 = p[p.shape[0] - 4]
+    _dp2 = p[p.shape[0] - 3]
+    _dp3 = p[p.shape[0] - 2]
+    _dp4 = p[p.shape[0] - 1]
+    _c0 = p_R**2
+    _c1 = p_a**2
+    _c2 = cos(q_theta)
+    _c3 = 2.0*p_M
+    _c4 = _c3*p_R
+    _c5 = _c2*_c4
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_g
+    _c8 = _c7*p_M
+    _c9 = p_R*p_a
+    _c10 = qd_theta**2
+    _c11 = _c10*_c6
+    _c12 = _c11*_c9
+    _c13 = _c4*_c6*p_a
+    _c14 = _c2*_c9
+    _c15 = p_M*p_a
+    _c16 = _c3*p_a
+    _c17 = _c11*p_M
+    out[0] = qd_theta
+    _m0_0 = p_I + _c0*p_M + _c1*p_M - _c5*p_a
+    _f0 = -_c12*p_M - _c8*p_a
+    # Solve M x = f by LDLᵀ (unrolled), then the direction by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    out[2] = _dy1
+    _g0 = _dp0*(-_c12 - _acc0*(_c0 + _c1 - 2.0*_c14) - _c7*p_a) + _dp1*(-_acc0*(_c4 - _c16*_c2) - _c17*p_a) + _dp2*(-_c8 - _acc0*(_c16 - _c5) - _c17*p_R) + _dy0*(-_acc0*_c13 - _c10*_c14*p_M - _c15*_c2*p_g) - _acc0*_dp3 - _c13*_dy1*qd_theta - _c15*_c6*_dp4
+    _z0 = _g0
+    _x0 = _z0*_r0
+    out[3] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _c0 = p_R**2
+    _c1 = p_a**2
+    _c2 = cos(q_theta)
+    _c3 = 2.0*p_M
+    _c4 = _c3*p_a
+    _c5 = _c2*_c4
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_a
+    _c8 = _c7*p_g
+    _c9 = _c7*p_M
+    _c10 = qd_theta**2
+    _c11 = _c10*p_R
+    _c12 = _c4*_c6*p_R
+    _c13 = _c2*p_a
+    _c14 = _c13*p_M
+    out[0] = qd_theta
+    _m0_0 = p_I + _c0*p_M + _c1*p_M - _c5*p_R
+    _f0 = -_c11*_c9 - _c8*p_M
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    _part0_0 = -_acc0*_c12 - _c11*_c14 - _c14*p_g
+    _part0_1 = -_c12*qd_theta
+    _columns = y.shape[0] // 2 - 1
+    for _col in range(_columns):
+        _at = 2*(1 + _col)
+        out[_at + 0] = y[_at + 1]
+        _g0 = (_part0_0*y[_at + 0] + _part0_1*y[_at + 1])
+        _z0 = _g0
+        _x0 = _z0*_r0
+        out[_at + 1] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    M q̈ = F, then M da_c = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M, per column c
+    (see lagcomp.codegen.directional).
+    Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid."""
+    _ydot = out
+    q_theta = y[0]
+    qd_theta = y[1]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _c0 = p_R**2
+    _c1 = p_a**2
+    _c2 = cos(q_theta)
+    _c3 = 2.0*p_M
+    _c4 = _c3*p_a
+    _c5 = _c2*_c4
+    _c6 = sin(q_theta)
+    _c7 = _c6*p_a
+    _c8 = _c7*p_g
+    _c9 = _c7*p_M
+    _c10 = qd_theta**2
+    _c11 = _c10*p_R
+    _c12 = _c4*_c6*p_R
+    _c13 = _c2*p_a
+    _c14 = _c13*p_M
+    _c15 = _c3*p_R
+    _c16 = _c6*p_M
+    out[0] = qd_theta
+    _m0_0 = p_I + _c0*p_M + _c1*p_M - _c5*p_R
+    _f0 = -_c11*_c9 - _c8*p_M
+    # Solve M x = f by LDLᵀ (unrolled), then each column by the same factors.
+    _d0 = _m0_0
+    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
+        return 1
+    _r0 = 1.0/_d0
+    _z0 = _f0
+    _x0 = _z0*_r0
+    _ydot[1] = _x0
+    _acc0 = _ydot[1]
+    _part0_0 = -_acc0*_c12 - _c11*_c14 - _c14*p_g
+    _part0_1 = -_c12*qd_theta
+    _part0_2 = -_c8 - _acc0*(_c0 + _c1 - 2.0*_c13*p_R) - _c11*_c7
+    _part0_3 = -_acc0*(_c15 - _c5) - _c10*_c9
+    _part0_4 = -_acc0*(_c4 - _c15*_c2) - _c11*_c16 - _c16*p_g
+    _part0_5 = -_acc0
+    _part0_6 = -_c9
+    _columns = y.shape[0] // 2 - 1
+    for _col in range(_columns):
+        _at = 2*(1 + _col)
+        out[_at + 0] = y[_at + 1]
+        _g0 = (_part0_0*y[_at + 0] + _part0_1*y[_at + 1])
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_2
+        elif _j == 1:
+            _g0 += p[p.shape[0] - 1]*_part0_3
+        elif _j == 2:
+            _g0 += p[p.shape[0] - 1]*_part0_4
+        elif _j == 3:
+            _g0 += p[p.shape[0] - 1]*_part0_5
+        elif _j == 4:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+        _z0 = _g0
+        _x0 = _z0*_r0
+        out[_at + 1] = _x0
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta = y[0]

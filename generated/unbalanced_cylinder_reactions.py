@@ -677,6 +677,483 @@ def rhs_directional(t, y, p, v, w, ydot, out):
 
 
 @njit(cache=True, error_model="numpy")
+def rhs_tangent(t, y, p, out):
+    """The augmented rhs of one initial-state sensitivity column: y = (x, v) (2N,), out = (f(x), ∂f/∂y v)
+    (2N,): `rhs_directional` along (v, 0) with its arrays in y and out (the same CSE, the terms of w dropped):
+    f as `rhs_directional` computes it, bitwise; the derivative to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _dy0 = y[6]
+    _dy1 = y[7]
+    _dy2 = y[8]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _kkt = np.zeros((5, 6))
+    _c0 = cos(q_theta)
+    _c1 = _c0*p_a
+    _c2 = _c1*p_M
+    _c3 = -_c2
+    _c4 = sin(q_theta)
+    _c5 = _c4*p_a
+    _c6 = _c5*p_M
+    _c7 = p_a**2
+    _c8 = -p_R
+    _c9 = qd_theta**2
+    _c10 = _c6*_c9
+    _c11 = p_M*p_g
+    _c12 = -_c2*_c9
+    _c13 = _baumgarte_beta**2
+    _c14 = 2.0*_baumgarte_alpha
+    _c15 = 2.0*_dy5*qd_theta
+    out[0] = qd_x
+    out[1] = qd_z
+    out[2] = qd_theta
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c3
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c6
+    _kkt[2, 0] = _c3
+    _kkt[2, 1] = _c6
+    _kkt[2, 2] = p_I + _c7*p_M
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = _c8
+    _kkt[0, 5] = -_c10
+    _kkt[1, 5] = _c12 - _c11
+    _kkt[2, 5] = -_c11*_c5
+    _kkt[3, 5] = -_c13*(_c8 + q_z) - _c14*qd_z
+    _kkt[4, 5] = -_c13*(q_x - p_R*q_theta) - _c14*(qd_x - p_R*qd_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult1 = _lam[1]
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _direction[0, 5] = _dy2*(_c12 - _acc2*_c6) - _c15*_c6
+    _direction[1, 5] = _dy2*(_c10 - _acc2*_c2) - _c15*_c2
+    _direction[2, 5] = _dy2*(-_acc0*_c6 - _acc1*_c2 - _c1*_c11)
+    _direction[3, 5] = -_c13*_dy1 - _c14*_dy4
+    _direction[4, 5] = -_c13*_dy0 - _c14*_dy3 + _c13*_dy2*p_R + _c14*_dy5*p_R
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[9] = _direction[0, 5]
+    out[10] = _direction[1, 5]
+    out[11] = _direction[2, 5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangent_parameters(t, y, p, out):
+    """The augmented rhs of one sensitivity column with a parameter direction: y = (x, v) (2N,), out = (f(x),
+    ∂f/∂y v + ∂f/∂p w) (2N,), w (P,) the last P floats of p (the run's work space, after the model's
+    parameters, gains, modes and tables): `rhs_directional` along (v, w) with its arrays in y, p and out
+    (the same CSE), bitwise.
+    K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃
+    with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _dy0 = y[6]
+    _dy1 = y[7]
+    _dy2 = y[8]
+    _dy3 = y[9]
+    _dy4 = y[10]
+    _dy5 = y[11]
+    _dp0 = p[p.shape[0] - 5]
+    _dp1 = p[p.shape[0] - 4]
+    _dp2 = p[p.shape[0] - 3]
+    _dp3 = p[p.shape[0] - 2]
+    _dp4 = p[p.shape[0] - 1]
+    _kkt = np.zeros((5, 6))
+    _c0 = cos(q_theta)
+    _c1 = _c0*p_a
+    _c2 = _c1*p_M
+    _c3 = -_c2
+    _c4 = sin(q_theta)
+    _c5 = _c4*p_a
+    _c6 = _c5*p_M
+    _c7 = p_a**2
+    _c8 = -p_R
+    _c9 = qd_theta**2
+    _c10 = _c6*_c9
+    _c11 = p_M*p_g
+    _c12 = -_c2*_c9
+    _c13 = _baumgarte_beta**2
+    _c14 = 2.0*_baumgarte_alpha
+    _c15 = 2.0*_dy5*qd_theta
+    _c16 = _c4*p_M
+    _c17 = _c0*p_M
+    _c18 = _dp4*p_M
+    out[0] = qd_x
+    out[1] = qd_z
+    out[2] = qd_theta
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c3
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c6
+    _kkt[2, 0] = _c3
+    _kkt[2, 1] = _c6
+    _kkt[2, 2] = p_I + _c7*p_M
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = _c8
+    _kkt[0, 5] = -_c10
+    _kkt[1, 5] = _c12 - _c11
+    _kkt[2, 5] = -_c11*_c5
+    _kkt[3, 5] = -_c13*(_c8 + q_z) - _c14*qd_z
+    _kkt[4, 5] = -_c13*(q_x - p_R*q_theta) - _c14*(qd_x - p_R*qd_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for the direction.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult1 = _lam[1]
+    out[6] = _dy3
+    out[7] = _dy4
+    out[8] = _dy5
+    _direction[0, 5] = _dp0*(-_acc0 + _acc2*_c1 - _c5*_c9) + _dp2*(_acc2*_c17 - _c16*_c9) + _dy2*(_c12 - _acc2*_c6) - _c15*_c6
+    _direction[1, 5] = -_c18 + _dp0*(-_acc1 - p_g - _acc2*_c5 - _c1*_c9) + _dp2*(-_acc2*_c16 - _c17*_c9) + _dy2*(_c10 - _acc2*_c2) - _c15*_c2
+    _direction[2, 5] = _dp0*(_acc0*_c1 - _acc1*_c5 - _acc2*_c7 - _c5*p_g) + _dp2*(_acc0*_c17 - _acc1*_c16 - _c11*_c4 - 2.0*_acc2*p_M*p_a) + _dy2*(-_acc0*_c6 - _acc1*_c2 - _c1*_c11) - _acc2*_dp3 - _c18*_c5 - _dp1*_mult1
+    _direction[3, 5] = _c13*_dp1 - _c13*_dy1 - _c14*_dy4
+    _direction[4, 5] = _dp1*(_acc2 + _c13*q_theta + _c14*qd_theta) - _c13*_dy0 - _c14*_dy3 + _c13*_dy2*p_R + _c14*_dy5*p_R
+    _status = kkt_solve(_direction, 3)
+    if _status:
+        return _status
+    out[9] = _direction[0, 5]
+    out[10] = _direction[1, 5]
+    out[11] = _direction[2, 5]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents(t, y, p, out):
+    """The augmented rhs of m initial-state sensitivity columns, any m: y = (x, S[:, 0], ..., S[:, m-1])
+    (N (1 + m),), out = (f(x), ∂f/∂y S[:, 0], ..., ∂f/∂y S[:, m-1]), m = len(y) / N − 1.  What does not
+    depend on the column is computed once (f, M's factors or K, the residual's partials ∂r/∂x into the locals
+    ``_part<r>_<j>``); then a loop over the columns contracts the partials with each column and substitutes
+    (one body whatever m: numba compiles it once).  `rhs_directional` column by column, to rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _kkt = np.zeros((5, 6))
+    _c0 = cos(q_theta)
+    _c1 = p_M*p_a
+    _c2 = _c0*_c1
+    _c3 = -_c2
+    _c4 = sin(q_theta)
+    _c5 = _c1*_c4
+    _c6 = p_a**2
+    _c7 = -p_R
+    _c8 = qd_theta**2
+    _c9 = _c8*p_M
+    _c10 = _c4*_c9
+    _c11 = _c10*p_a
+    _c12 = p_M*p_g
+    _c13 = _c0*_c9
+    _c14 = -_c13*p_a
+    _c15 = _c12*_c4
+    _c16 = _baumgarte_beta**2
+    _c17 = 2.0*_baumgarte_alpha
+    _c18 = 2.0*qd_theta
+    _c20 = _c0*p_a
+    _c24 = -_c16
+    _c25 = -_c17
+    out[0] = qd_x
+    out[1] = qd_z
+    out[2] = qd_theta
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c3
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c5
+    _kkt[2, 0] = _c3
+    _kkt[2, 1] = _c5
+    _kkt[2, 2] = p_I + _c6*p_M
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = _c7
+    _kkt[0, 5] = -_c11
+    _kkt[1, 5] = _c14 - _c12
+    _kkt[2, 5] = -_c15*p_a
+    _kkt[3, 5] = -_c16*(_c7 + q_z) - _c17*qd_z
+    _kkt[4, 5] = -_c16*(q_x - p_R*q_theta) - _c17*(qd_x - p_R*qd_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult1 = _lam[1]
+    _part0_2 = _c14 - _acc2*_c5
+    _part0_5 = -_c18*_c5
+    _part1_2 = _c11 - _acc2*_c2
+    _part1_5 = -_c18*_c2
+    _part2_2 = -_acc0*_c5 - _acc1*_c2 - _c12*_c20
+    _part3_1 = _c24
+    _part3_4 = _c25
+    _part4_0 = _c24
+    _part4_2 = _c16*p_R
+    _part4_3 = _c25
+    _part4_5 = _c17*p_R
+    _columns = y.shape[0] // 6 - 1
+    _rhs = np.empty((5, _columns))
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = (_part0_2*y[_at + 2] + _part0_5*y[_at + 5])
+        _g1 = (_part1_2*y[_at + 2] + _part1_5*y[_at + 5])
+        _g2 = _part2_2*y[_at + 2]
+        _g3 = (_part3_1*y[_at + 1] + _part3_4*y[_at + 4])
+        _g4 = ((_part4_0*y[_at + 0] + _part4_2*y[_at + 2]) + (_part4_3*y[_at + 3] + _part4_5*y[_at + 5]))
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+        _rhs[3, _col] = _g3
+        _rhs[4, _col] = _g4
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 3, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 3] = _rhs[0, _col]
+        out[_at + 4] = _rhs[1, _col]
+        out[_at + 5] = _rhs[2, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_tangents_parameters(t, y, p, out):
+    """The augmented rhs of m sensitivity columns, any m, some of them a parameter's: `rhs_tangents` with
+    out's block c = ∂f/∂y S[:, c] + s ∂f/∂p_j where p[-1 - m + c] = j ≥ 0 (−1: an initial-state column) and
+    s = p[-1] (the run's scale of S): the last m + 1 floats of p are the run's work space, after the model's
+    parameters, gains, modes and tables.  `rhs_directional` along (S[:, c], s e_j) column by column, to
+    rounding.
+    K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =
+    (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).
+    Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid."""
+    _ydot = out
+    q_x = y[0]
+    q_z = y[1]
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_z = y[4]
+    qd_theta = y[5]
+    p_M = p[0]
+    p_R = p[1]
+    p_a = p[2]
+    p_I = p[3]
+    p_g = p[4]
+    _baumgarte_alpha = p[5]
+    _baumgarte_beta = p[6]
+    _kkt = np.zeros((5, 6))
+    _c0 = cos(q_theta)
+    _c1 = p_M*p_a
+    _c2 = _c0*_c1
+    _c3 = -_c2
+    _c4 = sin(q_theta)
+    _c5 = _c1*_c4
+    _c6 = p_a**2
+    _c7 = -p_R
+    _c8 = qd_theta**2
+    _c9 = _c8*p_M
+    _c10 = _c4*_c9
+    _c11 = _c10*p_a
+    _c12 = p_M*p_g
+    _c13 = _c0*_c9
+    _c14 = -_c13*p_a
+    _c15 = _c12*_c4
+    _c16 = _baumgarte_beta**2
+    _c17 = 2.0*_baumgarte_alpha
+    _c18 = 2.0*qd_theta
+    _c19 = _c8*p_a
+    _c20 = _c0*p_a
+    _c22 = _c4*p_a
+    _c24 = -_c16
+    _c25 = -_c17
+    out[0] = qd_x
+    out[1] = qd_z
+    out[2] = qd_theta
+    _kkt[0, 0] = p_M
+    _kkt[0, 2] = _c3
+    _kkt[1, 1] = p_M
+    _kkt[1, 2] = _c5
+    _kkt[2, 0] = _c3
+    _kkt[2, 1] = _c5
+    _kkt[2, 2] = p_I + _c6*p_M
+    _kkt[0, 4] = -1.0
+    _kkt[1, 3] = -1.0
+    _kkt[2, 4] = p_R
+    _kkt[3, 1] = 1.0
+    _kkt[4, 0] = 1.0
+    _kkt[4, 2] = _c7
+    _kkt[0, 5] = -_c11
+    _kkt[1, 5] = _c14 - _c12
+    _kkt[2, 5] = -_c15*p_a
+    _kkt[3, 5] = -_c16*(_c7 + q_z) - _c17*qd_z
+    _kkt[4, 5] = -_c16*(q_x - p_R*q_theta) - _c17*(qd_x - p_R*qd_theta)
+    # K is factored twice (kkt_solve may overwrite it): for f, then for all columns.
+    _direction = _kkt.copy()
+    _status = kkt_solve(_kkt, 3)
+    if _status:
+        return _status
+    _ydot[3] = _kkt[0, 5]
+    _ydot[4] = _kkt[1, 5]
+    _ydot[5] = _kkt[2, 5]
+    _lam = _kkt[3:, 5]
+    _acc0 = _ydot[3]
+    _acc1 = _ydot[4]
+    _acc2 = _ydot[5]
+    _mult1 = _lam[1]
+    _c21 = _acc2*p_M
+    _c23 = _acc0*_c0
+    _part0_2 = _c14 - _acc2*_c5
+    _part0_5 = -_c18*_c5
+    _part0_6 = -_acc0 + _acc2*_c20 - _c19*_c4
+    _part0_8 = -_c10 + _c0*_c21
+    _part1_2 = _c11 - _acc2*_c2
+    _part1_5 = -_c18*_c2
+    _part1_6 = -_acc1 - p_g - _acc2*_c22 - _c0*_c19
+    _part1_8 = -_c13 - _c21*_c4
+    _part1_10 = -p_M
+    _part2_2 = -_acc0*_c5 - _acc1*_c2 - _c12*_c20
+    _part2_6 = _c23*p_a - _acc1*_c22 - _acc2*_c6 - _c22*p_g
+    _part2_7 = -_mult1
+    _part2_8 = -_c15 + _c23*p_M - 2.0*_acc2*_c1 - _acc1*_c4*p_M
+    _part2_9 = -_acc2
+    _part2_10 = -_c5
+    _part3_1 = _c24
+    _part3_4 = _c25
+    _part3_7 = _c16
+    _part4_0 = _c24
+    _part4_2 = _c16*p_R
+    _part4_3 = _c25
+    _part4_5 = _c17*p_R
+    _part4_7 = _acc2 + _c16*q_theta + _c17*qd_theta
+    _columns = y.shape[0] // 6 - 1
+    _rhs = np.empty((5, _columns))
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 0] = y[_at + 3]
+        out[_at + 1] = y[_at + 4]
+        out[_at + 2] = y[_at + 5]
+        _g0 = (_part0_2*y[_at + 2] + _part0_5*y[_at + 5])
+        _g1 = (_part1_2*y[_at + 2] + _part1_5*y[_at + 5])
+        _g2 = _part2_2*y[_at + 2]
+        _g3 = (_part3_1*y[_at + 1] + _part3_4*y[_at + 4])
+        _g4 = ((_part4_0*y[_at + 0] + _part4_2*y[_at + 2]) + (_part4_3*y[_at + 3] + _part4_5*y[_at + 5]))
+        _j = int(p[p.shape[0] - 1 - _columns + _col])  # this column's parameter, or -1: none
+        if _j == 0:
+            _g0 += p[p.shape[0] - 1]*_part0_6
+            _g1 += p[p.shape[0] - 1]*_part1_6
+            _g2 += p[p.shape[0] - 1]*_part2_6
+        elif _j == 1:
+            _g2 += p[p.shape[0] - 1]*_part2_7
+            _g3 += p[p.shape[0] - 1]*_part3_7
+            _g4 += p[p.shape[0] - 1]*_part4_7
+        elif _j == 2:
+            _g0 += p[p.shape[0] - 1]*_part0_8
+            _g1 += p[p.shape[0] - 1]*_part1_8
+            _g2 += p[p.shape[0] - 1]*_part2_8
+        elif _j == 3:
+            _g2 += p[p.shape[0] - 1]*_part2_9
+        elif _j == 4:
+            _g1 += p[p.shape[0] - 1]*_part1_10
+            _g2 += p[p.shape[0] - 1]*_part2_10
+        _rhs[0, _col] = _g0
+        _rhs[1, _col] = _g1
+        _rhs[2, _col] = _g2
+        _rhs[3, _col] = _g3
+        _rhs[4, _col] = _g4
+    # K dz = _rhs for every column at once: K factored once (it was copied before f's solve).
+    _status = kkt_solve_matrix(_direction, 3, _rhs)
+    if _status:
+        return _status
+    for _col in range(_columns):
+        _at = 6*(1 + _col)
+        out[_at + 3] = _rhs[0, _col]
+        out[_at + 4] = _rhs[1, _col]
+        out[_at + 5] = _rhs[2, _col]
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
 def dae_residual(t, y, p, out):
     """Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),
     Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.
