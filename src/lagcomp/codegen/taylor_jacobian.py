@@ -20,9 +20,12 @@ code, by carrying each tangent as a sum of terms rather than a series:
 A linear operation combines terms; a product with a ``one`` term is a ``value`` one (sin θ's tangent in θ's
 direction is cos θ itself, no convolution); only products of two series are convolutions, each computed once
 per kernel into a slot (sin(θ₁ − θ₂)'s partials in θ₁ and θ₂ are one series but for the sign: the sweeps share
-it); a linear result of more than one series is summed into a slot, so that its users convolve once; an
-operation whose tangent is 0 in a direction (it does not depend on it) has no code there.  The quotient, root,
-power and log keep their tangent recurrences (`lagcomp.codegen.taylor_variational`), one direction at a time.
+it); a tangent of several series is convolved term by term when the directions share those convolutions
+(a parameter's tangents are multiples of a few value series: ∂f₀/∂p_j = a_j sin θ₁ + b_j u, for every j), else
+summed into a slot first (one convolution); an operation whose tangent is 0 in a direction (it does not depend
+on it) has no code there.  The quotient, root, power and log keep their tangent recurrences
+(`lagcomp.codegen.taylor_variational`), one direction at a time, the quotient's w ⊛ ḃ term by term as a
+product's (its 1 product per direction the recurrence's).
 The code goes operation by operation, every direction's convolutions of the operation independent chains of
 one loop over j (so they overlap: a single chain waits on its additions).
 
@@ -44,6 +47,8 @@ n_link_pendulum(3), k = 6, 67 against 125).
 
 from __future__ import annotations
 
+from collections import Counter
+
 from lagcomp.codegen import taylor_variational as variational
 from lagcomp.codegen.taylor_ops import LINEAR, Op
 from lagcomp.codegen.taylor_variational import (
@@ -61,6 +66,8 @@ Term = tuple[str, str, str]
 #: The operations whose tangent is a sum of products of a value series with the operand's tangent:
 #: mul (ȧ b + a ḃ), square (2 a ȧ), exp (w ȧ), sin_cos (c ȧ, −s ȧ).
 BILINEAR = ("mul", "square", "exp", "sin_cos")
+#: The series a tangent keeps as terms (beyond: summed into a slot, so that its code stays short).
+TERMS_KEPT = 4
 
 
 def _product(a: str, b: str) -> str:
@@ -100,6 +107,10 @@ class _Kernel:
         self.slots = 0
         #: {(the two series' codes at _j, sorted): the slot of their convolution}
         self.convolutions: dict[tuple[str, str], str] = {}
+        #: {convolution key: the directions convolving it in the operation at hand} (`_Sweep._convolved`)
+        self.demand: Counter = Counter()
+        #: {tangent of more than one series: the slot summing it} (`_Sweep.materialized`)
+        self.sums: dict[tuple[Term, ...], str] = {}
         #: {series: (c, u)}: the series is c u, u a series not so computed (a scale or a negation of one)
         self.multiples: dict[str, tuple[str, str]] = {}
         for op in _ops(program):
@@ -125,6 +136,13 @@ class _Kernel:
     def new_slot(self) -> str:
         self.slots += 1
         return str(self.slots - 1)
+
+    def convolution_key(self, term: Term, value: str) -> tuple[str, str]:
+        """The key in `convolutions` of the series term (``value`` or ``slot``) ⊛ the value series `value`."""
+        _, kind, series = term
+        value = self.multiples.get(value, ("1.0", value))[1]
+        read = self.at(series, "_j") if kind == "value" else self.slot(series, "_j")
+        return tuple(sorted((read, self.at(value, "_j"))))
 
     def term_at(self, term: Term, index) -> str:
         """Coefficient `index` of the term (a ``one`` term: at index k)."""
@@ -179,18 +197,20 @@ class _Sweep:
         return () if tangent is None else ((tangent, "one", ""),)
 
     def materialized(self, tangent: tuple[Term, ...], lines: list[str]) -> str:
-        """A slot holding the series `tangent` (its own, when it is one slot), computed by a line appended to
-        `lines`."""
+        """A slot holding the series `tangent` (its own, when it is one slot; the same slot for the same sum in
+        every direction), computed by a line appended to `lines`."""
         if len(tangent) == 1 and tangent[0][1] == "slot" and tangent[0][0] == "1.0":
             return tangent[0][2]
-        slot = self.kernel.new_slot()
-        lines.append(f"{self.kernel.slot(slot, 'k')} = {self.kernel.sum_at(tangent)}")
-        return slot
+        if tangent not in self.kernel.sums:
+            slot = self.kernel.sums[tangent] = self.kernel.new_slot()
+            lines.append(f"{self.kernel.slot(slot, 'k')} = {self.kernel.sum_at(tangent)}")
+        return self.kernel.sums[tangent]
 
     def _set(self, name: str, tangent: tuple[Term, ...], code: _Code) -> None:
-        """The tangent of `name`, as one slot when it has more than one series (so that a user convolves once;
-        after `code`'s loop, whose results it may sum)."""
-        if _series_terms(tangent) > 1:
+        """The tangent of `name`: its terms, summed into one slot (after `code`'s loop, whose results it may sum)
+        only beyond `TERMS_KEPT` series (a sum is convolved term by term, `_convolved`, so that the terms'
+        convolutions are shared across directions: a parameter's tangents are multiples of the values')."""
+        if _series_terms(tangent) > TERMS_KEPT:
             tangent = (("1.0", "slot", self.materialized(tangent, code.after)),)
         if tangent:
             self.tangents[name] = tangent
@@ -201,7 +221,10 @@ class _Sweep:
         if kind in ("comment", "pivot"):
             return
         if kind == "state":
-            self.derivatives[op.index] = self.of(op.args[0]) if op.args else self.constant(const)
+            tangent = self.of(op.args[0]) if op.args else self.constant(const)
+            if self.parameter is None and _series_terms(tangent) > 1:   # (J's entry: one series per column update)
+                tangent = (("1.0", "slot", self.materialized(tangent, code.after)),)
+            self.derivatives[op.index] = tangent
         elif kind in LINEAR:
             a, b = self.of(op.args[0]), self.of(op.args[-1])
             tangent = {
@@ -219,23 +242,48 @@ class _Sweep:
         else:
             self._recurrence(op, code)
 
-    def _bilinear(self, op: Op, code: _Code) -> None:
-        """An operation of `BILINEAR`: per result, Σ factor (term ⊛ value series) (`_times`)."""
+    def _bilinear_products(self, op: Op) -> dict[str, list[tuple[str, tuple[Term, ...], str]]]:
+        """{result of an operation of `BILINEAR`: [(factor, an operand's tangent, value series)]}: its tangent is
+        Σ factor (tangent ⊛ value series)."""
         a = op.args[0]
         if op.kind == "mul":
             b = op.args[1]
-            outputs = {op.out[0]: [("1.0", t, b) for t in self.of(a)] + [("1.0", t, a) for t in self.of(b)]}
-        elif op.kind == "square":
-            outputs = {op.out[0]: [("2.0", t, a) for t in self.of(a)]}
-        elif op.kind == "exp":
-            outputs = {op.out[0]: [("1.0", t, op.out[0]) for t in self.of(a)]}
-        else:
-            s, c = op.out
-            outputs = {s: [("1.0", t, c) for t in self.of(a)], c: [("-1.0", t, s) for t in self.of(a)]}
-        tangents = {name: combine(*((f, (self._times(term, v, code),)) for f, term, v in products))
-                    for name, products in outputs.items()}
+            return {op.out[0]: [("1.0", self.of(a), b), ("1.0", self.of(b), a)]}
+        if op.kind == "square":
+            return {op.out[0]: [("2.0", self.of(a), a)]}
+        if op.kind == "exp":
+            return {op.out[0]: [("1.0", self.of(a), op.out[0])]}
+        s, c = op.out
+        return {s: [("1.0", self.of(a), c)], c: [("-1.0", self.of(a), s)]}
+
+    def convolutions_of(self, op: Op) -> list[tuple[tuple[Term, ...], str]]:
+        """The (tangent, value series) pairs `op`'s tangent convolves (`_convolved`) in this direction."""
+        if op.kind in BILINEAR:
+            return [(tangent, value) for products in self._bilinear_products(op).values()
+                    for _, tangent, value in products]
+        if op.kind in ("div", "rdiv"):
+            return [(self.of(op.args[-1]), op.out[0])]
+        return []
+
+    def _bilinear(self, op: Op, code: _Code) -> None:
+        """An operation of `BILINEAR`: per result, Σ factor (operand's tangent ⊛ value series) (`_convolved`)."""
+        tangents = {name: combine(*((f, self._convolved(tangent, v, code)) for f, tangent, v in products))
+                    for name, products in self._bilinear_products(op).items()}
         for name, tangent in tangents.items():
             self._set(name, tangent, code)
+
+    def _convolved(self, tangent: tuple[Term, ...], value: str, code: _Code) -> tuple[Term, ...]:
+        """The tangent ⊛ the value series `value`: term by term (`_times`) when its share of the terms' new
+        convolutions (each 1 / the directions that convolve it, `_Kernel.demand`) is at most one convolution,
+        else the tangent's series summed into a slot first (one convolution of its own).  A parameter's
+        tangents are multiples of a few value series: their convolutions serve every parameter."""
+        kernel = self.kernel
+        series = tuple(term for term in tangent if term[1] != "one")
+        keys = [kernel.convolution_key(term, value) for term in series]
+        if sum(1 / kernel.demand[key] for key in keys if key not in kernel.convolutions) > 1:
+            tangent = (*(term for term in tangent if term[1] == "one"),
+                       ("1.0", "slot", self.materialized(series, code.before)))
+        return tuple(self._times(term, value, code) for term in tangent)
 
     def _times(self, term: Term, value: str, code: _Code) -> Term:
         """The term ⊛ the value series `value`: a ``one`` term's factor times `value`; otherwise the factor times
@@ -248,7 +296,7 @@ class _Sweep:
         own, value = kernel.multiples.get(value, ("1.0", value))
         factor = _product(factor, own)
         read = (lambda i: kernel.at(series, i)) if kind == "value" else (lambda i: kernel.slot(series, i))
-        key = tuple(sorted((read("_j"), kernel.at(value, "_j"))))
+        key = kernel.convolution_key(term, value)
         if key not in kernel.convolutions:
             slot = kernel.convolutions[key] = kernel.new_slot()
             total = code.accumulator(f"{read(0)}*{kernel.at(value, 'k')}")
@@ -268,16 +316,14 @@ class _Sweep:
             return
         slot = kernel.new_slot()
         own, at, loop, after = (lambda index: kernel.slot(slot, index)), kernel.at, code.loop, code.after
-        if kind in ("div", "rdiv"):   # ẇ[k] b[0] = ȧ[k] − w[0] ḃ[k] − Σ_{j=1..k} (w[j] ḃ[k−j] + b[j] ẇ[k−j])
-            if moves_b:
-                db = self.materialized(self.of(b), code.before)
-                total = code.accumulator(f"{kernel.sum_at(top)} - {at(w, 0)}*{kernel.slot(db, 'k')}")
-                loop.append(f"{total} -= {at(w, '_j')}*{kernel.slot(db, 'k - _j')} + {at(b, '_j')}*{own('k - _j')}")
-            else:
-                total = code.accumulator(kernel.sum_at(top))
-                loop.append(f"{total} -= {at(b, '_j')}*{own('k - _j')}")
-            after.append(f"{own('k')} = {total}/{at(b, 0)}")
-            code.products += 1 + moves_b
+        if kind in ("div", "rdiv"):   # ẇ[k] b[0] = ȧ[k] − (w ⊛ ḃ)[k] − Σ_{j=1..k} b[j] ẇ[k−j]
+            # (w ⊛ ḃ term by term, `_convolved`: a parameter's ḃ is multiples of value series, whose
+            # convolutions with w the directions share)
+            numerator = combine(("1.0", top), ("-1.0", self._convolved(self.of(b), w, code)))
+            total = code.accumulator("0.0")
+            loop.append(f"{total} += {at(b, '_j')}*{own('k - _j')}")
+            after.append(f"{own('k')} = ({kernel.sum_at(numerator)} - {total})/{at(b, 0)}")
+            code.products += 1
         elif kind == "sqrt":          # 2 w[0] ẇ[k] = ȧ[k] − 2 Σ_{j=1..k} w[j] ẇ[k−j]
             total = code.accumulator("0.0")
             loop.append(f"{total} += {at(w, '_j')}*{own('k - _j')}")
@@ -313,10 +359,13 @@ class _Sweeps:
         self.products = 0
         for op in _ops(program):
             code = _Code()
+            self.kernel.demand = Counter(
+                self.kernel.convolution_key(term, value) for sweep in (*self.states, *self.parameters)
+                for tangent, value in sweep.convolutions_of(op) for term in tangent if term[1] != "one")
             for sweep in (*self.states, *self.parameters):
                 sweep.add(op, code)
             if code.before or code.after:
-                self.lines += [f"# d({', '.join(op.out)})", *code.lines()]
+                self.lines += [f"# d({', '.join(op.out) or 'f'})", *code.lines()]
             self.products += code.products
 
     def entries(self, n_state: int) -> list[tuple[int, int, Term]]:
