@@ -38,9 +38,11 @@ convolution in the pass's columns one vector; the parameters' terms ∂f/∂p[k]
 ``taylor_coefficients`` (the state rows of X are bitwise its), the columns' rows agree with the forward mode's
 to rounding.  `jacobian_products` counts its products per order (the convolutions' terms), which
 `lagcomp.codegen.taylor_variational.variational_source` weighs against the forward mode's to pick one.  The
-double pendulum: 20 (J's series) + 8 per column, + 23 for ∂f/∂p's five columns, against 19 per column in
-forward mode; per call (the two kernels interleaved in one process), k = 4: 5.2 against 6.6 µs at order 20;
-k = 9 with the parameters: 8.7 against 17.5 µs at order 20, 4.6 against 8.9 at order 13.  Compiling it takes
+double pendulum: 19 (J's series) + 8 per column, + 19 for ∂f/∂p's five columns (23 when a sum of series was
+always summed into a slot first), against 19 per column in forward mode; per call (the two kernels interleaved
+in one process), k = 4: 5.2 against 6.6 µs at order 20; k = 9 with the parameters: 8.7 against 17.5 µs at
+order 20, 4.6 against 8.9 at order 13 (then 8.1 and 4.2 with the parameters' convolutions shared, the same
+load: 0.93 and 0.92 of the figures before).  Compiling it takes
 no longer than forward mode's kernel (cold, CPU shared: k = 4, 4.7 s against 6.1 s; k = 9, 12.7 against 12.9;
 n_link_pendulum(3), k = 6, 67 against 125).
 """
