@@ -107,6 +107,7 @@ class _Kernel:
         self.row_count = max(len(self.rows), 1)
         self.constants = _Constants(program, parameters, scale)
         self.slots = 0
+        self.accumulators = 0
         #: {(the two series' codes at _j, sorted): the slot of their convolution}
         self.convolutions: dict[tuple[str, str], str] = {}
         #: {convolution key: the directions convolving it in the operation at hand} (`_Sweep._convolved`)
@@ -158,26 +159,45 @@ class _Kernel:
 
 
 class _Code:
-    """The code of one operation's tangents in every direction: lines before a loop over j = 1..k, the
-    statements of that loop (each direction's sums independent chains in it), lines after; `products` its
-    products per term."""
+    """The code of operations' tangents in every direction: lines before a loop over j = 1..k, the statements
+    of that loop (each direction's sums independent chains in it), lines after; `products` its products per
+    term; the slots its lines before and its loop read (`reads`: of order k, written by earlier operations) and
+    the slots it writes (`writes`), so that a later operation that reads none of them joins its loop
+    (`absorb`)."""
 
-    def __init__(self):
+    def __init__(self, kernel: _Kernel, name: str):
+        self.kernel, self.names = kernel, [name]
         self.before: list[str] = []
         self.loop: list[str] = []
         self.after: list[str] = []
         self.products = 0
-        self.accumulators = 0
+        self.reads: set[str] = set()
+        self.writes: set[str] = set()
 
     def accumulator(self, start: str) -> str:
-        """A new accumulator of the loop, set to `start` (code) before it."""
-        self.accumulators += 1
-        self.before.append(f"_a{self.accumulators - 1} = {start}")
-        return f"_a{self.accumulators - 1}"
+        """A new accumulator of the loop, set to `start` (code) before it (named across the kernel)."""
+        self.kernel.accumulators += 1
+        self.before.append(f"_a{self.kernel.accumulators - 1} = {start}")
+        return f"_a{self.kernel.accumulators - 1}"
+
+    def absorb(self, other: _Code) -> bool:
+        """Take the later operations' code `other` into this one (its loop's chains into this loop: more
+        chains to overlap, one loop less per order) when it reads none of this code's slots; whether it did.
+        Each chain's sum is the same, term by term: the series are bitwise as in a loop of their own."""
+        if other.reads & self.writes:
+            return False
+        self.names += other.names
+        self.before += other.before
+        self.loop += other.loop
+        self.after += other.after
+        self.products += other.products
+        self.reads |= other.reads
+        self.writes |= other.writes
+        return True
 
     def lines(self) -> list[str]:
         loop = ["for _j in range(1, k + 1):", *(INDENT + line for line in self.loop)] if self.loop else []
-        return [*self.before, *loop, *self.after]
+        return [f"# d({', '.join(self.names)})", *self.before, *loop, *self.after]
 
 
 class _Sweep:
@@ -198,14 +218,18 @@ class _Sweep:
         tangent = self.kernel.constants.tangent(const, self.parameter)
         return () if tangent is None else ((tangent, "one", ""),)
 
-    def materialized(self, tangent: tuple[Term, ...], lines: list[str]) -> str:
+    def materialized(self, tangent: tuple[Term, ...], code: _Code, before: bool = False) -> str:
         """A slot holding the series `tangent` (its own, when it is one slot; the same slot for the same sum in
-        every direction), computed by a line appended to `lines`."""
+        every direction), computed by a line of `code` after its loop, or `before` it (for the loop to read)."""
+        if before:
+            code.reads |= {name for _, kind, name in tangent if kind == "slot"}
         if len(tangent) == 1 and tangent[0][1] == "slot" and tangent[0][0] == "1.0":
             return tangent[0][2]
         if tangent not in self.kernel.sums:
             slot = self.kernel.sums[tangent] = self.kernel.new_slot()
-            lines.append(f"{self.kernel.slot(slot, 'k')} = {self.kernel.sum_at(tangent)}")
+            (code.before if before else code.after).append(f"{self.kernel.slot(slot, 'k')} = "
+                                                           f"{self.kernel.sum_at(tangent)}")
+            code.writes.add(slot)
         return self.kernel.sums[tangent]
 
     def _set(self, name: str, tangent: tuple[Term, ...], code: _Code) -> None:
@@ -213,7 +237,7 @@ class _Sweep:
         only beyond `TERMS_KEPT` series (a sum is convolved term by term, `_convolved`, so that the terms'
         convolutions are shared across directions: a parameter's tangents are multiples of the values')."""
         if _series_terms(tangent) > TERMS_KEPT:
-            tangent = (("1.0", "slot", self.materialized(tangent, code.after)),)
+            tangent = (("1.0", "slot", self.materialized(tangent, code)),)
         if tangent:
             self.tangents[name] = tangent
 
@@ -225,7 +249,7 @@ class _Sweep:
         if kind == "state":
             tangent = self.of(op.args[0]) if op.args else self.constant(const)
             if self.parameter is None and _series_terms(tangent) > 1:   # (J's entry: one series per column update)
-                tangent = (("1.0", "slot", self.materialized(tangent, code.after)),)
+                tangent = (("1.0", "slot", self.materialized(tangent, code)),)
             self.derivatives[op.index] = tangent
         elif kind in LINEAR:
             a, b = self.of(op.args[0]), self.of(op.args[-1])
@@ -284,7 +308,7 @@ class _Sweep:
         keys = [kernel.convolution_key(term, value) for term in series]
         if sum(1 / kernel.demand[key] for key in keys if key not in kernel.convolutions) > 1:
             tangent = (*(term for term in tangent if term[1] == "one"),
-                       ("1.0", "slot", self.materialized(series, code.before)))
+                       ("1.0", "slot", self.materialized(series, code, before=True)))
         return tuple(self._times(term, value, code) for term in tangent)
 
     def _times(self, term: Term, value: str, code: _Code) -> Term:
@@ -301,6 +325,9 @@ class _Sweep:
         key = kernel.convolution_key(term, value)
         if key not in kernel.convolutions:
             slot = kernel.convolutions[key] = kernel.new_slot()
+            code.writes.add(slot)
+            if kind == "slot":
+                code.reads.add(series)
             total = code.accumulator(f"{read(0)}*{kernel.at(value, 'k')}")
             code.loop.append(f"{total} += {read('_j')}*{kernel.at(value, 'k - _j')}")
             code.after.append(f"{kernel.slot(slot, 'k')} = {total}")
@@ -317,6 +344,7 @@ class _Sweep:
         if not top and not moves_b:
             return
         slot = kernel.new_slot()
+        code.writes.add(slot)
         own, at, loop, after = (lambda index: kernel.slot(slot, index)), kernel.at, code.loop, code.after
         if kind in ("div", "rdiv"):   # ẇ[k] b[0] = ȧ[k] − (w ⊛ ḃ)[k] − Σ_{j=1..k} b[j] ẇ[k−j]
             # (w ⊛ ḃ term by term, `_convolved`: a parameter's ḃ is multiples of value series, whose
@@ -332,7 +360,7 @@ class _Sweep:
             after.append(f"{own('k')} = ({kernel.sum_at(top)} - 2.0*{total})/(2.0*{at(w, 0)})")
             code.products += 1
         elif kind == "pow":           # a[0] ẇ[k] = α Σ_{j=0..k} w[j] ȧ[k−j] − Σ_{j=1..k} a[j] ẇ[k−j]
-            da = self.materialized(top, code.before)
+            da = self.materialized(top, code, before=True)
             total = code.accumulator(f"{op.const}*{at(w, 0)}*{kernel.slot(da, 'k')}")
             loop.append(f"{total} += {op.const}*{at(w, '_j')}*{kernel.slot(da, 'k - _j')} - "
                         f"{at(a, '_j')}*{own('k - _j')}")
@@ -351,24 +379,25 @@ class _Sweep:
 class _Sweeps:
     """Every direction's sweep of `program` (the states', J's columns; the `parameters'`, ∂f/∂p's, their
     scalars' partials times `scale`), and their code per order: operation by operation, the directions'
-    convolutions independent chains of one loop."""
+    convolutions independent chains of one loop, shared with the operations before when they read none of
+    their slots (`_Code.absorb`)."""
 
     def __init__(self, program: dict, parameters: tuple[int, ...], scale: float):
         self.kernel = _Kernel(program, parameters, scale)
         self.states = [_Sweep(self.kernel, state=name) for name in program["states"]]
         self.parameters = [_Sweep(self.kernel, parameter=j) for j in parameters]
-        self.lines: list[str] = []
-        self.products = 0
+        codes: list[_Code] = []
         for op in _ops(program):
-            code = _Code()
+            code = _Code(self.kernel, ", ".join(op.out) or "f")
             self.kernel.demand = Counter(
                 self.kernel.convolution_key(term, value) for sweep in (*self.states, *self.parameters)
                 for tangent, value in sweep.convolutions_of(op) for term in tangent if term[1] != "one")
             for sweep in (*self.states, *self.parameters):
                 sweep.add(op, code)
-            if code.before or code.after:
-                self.lines += [f"# d({', '.join(op.out) or 'f'})", *code.lines()]
-            self.products += code.products
+            if (code.before or code.after) and not (codes and codes[-1].absorb(code)):
+                codes.append(code)
+        self.lines = [line for code in codes for line in code.lines()]
+        self.products = sum(code.products for code in codes)
 
     def entries(self, n_state: int) -> list[tuple[int, int, Term]]:
         """J's nonzero entries, (i, j, term) per term of J_ij's tangent, by row."""
