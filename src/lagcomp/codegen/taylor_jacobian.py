@@ -27,7 +27,8 @@ on it) has no code there.  The quotient, root, power and log keep their tangent 
 (`lagcomp.codegen.taylor_variational`), one direction at a time, the quotient's w ⊛ ḃ term by term as a
 product's (its 1 product per direction the recurrence's).
 The code goes operation by operation, every direction's convolutions of the operation independent chains of
-one loop over j (so they overlap: a single chain waits on its additions).
+one loop over j (so they overlap: a single chain waits on its additions), which the operations after join
+while they read none of the slots it writes (the double pendulum: 3 loops per order, not 6).
 
 The columns' update is written out over the columns of a pass (`column_width`: all up to 9), with S's
 coefficients in W with the columns adjacent (as forward mode's tangents), so that LLVM makes a J entry's
