@@ -18,16 +18,20 @@ max abs over the components, relative to the reference's largest (state and sens
 the integration only (both compiled before: heyoka's JIT and numba's kernels), the median of `--repeats`
 interleaved rounds; the ratio (the median of the per-round ratios) is lagcomp / heyoka (below 1: lagcomp faster).
 
-Measured (``--repeats 15``, × heyoka; "both" is heyoka's step rule, so the same steps and errors): k = 4,
-machine precision: 0.78 / 0.73 / 0.83 ("both"; regular t = 10, 100, chaotic t = 10), 0.67 / 0.60 / 0.66
-("state"); tol 1e-10: 0.98 / 0.85 / 0.97 and 0.83 / 0.68 / 0.78.  k = 9 (regular, t = 100): 0.81 / 0.72 at
-machine precision, 1.08 / 0.87 at 1e-10 ("both"/"state").  lagcomp's fixed cost of a run: 0.19 ms, a fifth of
-the 1-ms runs (heyoka's ``propagate_until``: µs): Python around the driver, spread out (the options, the
-columns and initial state, the Solution, numba's dispatch of the kernels as function values), 0.11 ms of it a
-plain run's.  Before (forward mode, `lagcomp.codegen.taylor_variational`, in the same conditions,
-``--repeats 7``): k = 4 machine precision 1.08 / 0.94 / 1.03 and 0.91 / 0.80 / 0.94, tol 1e-10 1.34 / 1.10 /
-1.19 and 1.21 / 0.87 / 0.98; k = 9 1.62 / 0.94 and 1.92 / 1.64; the fixed cost 0.31 ms.  Before the k columns
-were written out (a loop over them inside each operation) k = 4 "both" took 1.5x heyoka's.
+Measured (``--repeats 15``, × heyoka, load 0.3-0.6; "both" is heyoka's step rule, so the same steps and
+errors): k = 4, machine precision: 0.77 / 0.72 / 0.74 ("both"; regular t = 10, 100, chaotic t = 10), 0.66 /
+0.59 / 0.61 ("state"); tol 1e-10: 0.92 / 0.79 / 0.86 and 0.78 / 0.62 / 0.70.  k = 9 (regular, t = 100): 0.74
+/ 0.63 at machine precision, 0.86 / 0.70 at 1e-10 ("both"/"state").  The closest row, k = 4 regular t = 10
+at 1e-10 "both" (288 steps in 0.9 ms), moves by ±0.04 from run to run (0.92, 0.92, 0.99, 0.96 in four runs of
+``--repeats 41``): a sixth of it is lagcomp's fixed cost of a run, 0.16 ms (heyoka's ``propagate_until``:
+µs): Python around the driver, spread out (the options, the recorder, the Solution, numba's dispatch of the
+kernels as function values), 0.11 ms of it a plain run's.  Before the parameters' convolutions were shared,
+the operations' loops merged (`lagcomp.codegen.taylor_jacobian`) and the fixed cost cut (0.19 ms), k = 9 at
+1e-10 took 1.08 / 0.87 and k = 4 at 1e-10 0.98 / 0.85 / 0.97 ("both").  Before (forward mode,
+`lagcomp.codegen.taylor_variational`, in the same conditions, ``--repeats 7``): k = 4 machine precision 1.08 /
+0.94 / 1.03 and 0.91 / 0.80 / 0.94, tol 1e-10 1.34 / 1.10 / 1.19 and 1.21 / 0.87 / 0.98; k = 9 1.62 / 0.94
+and 1.92 / 1.64; the fixed cost 0.31 ms.  Before the k columns were written out (a loop over them inside each
+operation) k = 4 "both" took 1.5x heyoka's.
 """
 
 from __future__ import annotations

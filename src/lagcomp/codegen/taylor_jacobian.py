@@ -20,11 +20,15 @@ code, by carrying each tangent as a sum of terms rather than a series:
 A linear operation combines terms; a product with a ``one`` term is a ``value`` one (sin θ's tangent in θ's
 direction is cos θ itself, no convolution); only products of two series are convolutions, each computed once
 per kernel into a slot (sin(θ₁ − θ₂)'s partials in θ₁ and θ₂ are one series but for the sign: the sweeps share
-it); a linear result of more than one series is summed into a slot, so that its users convolve once; an
-operation whose tangent is 0 in a direction (it does not depend on it) has no code there.  The quotient, root,
-power and log keep their tangent recurrences (`lagcomp.codegen.taylor_variational`), one direction at a time.
+it); a tangent of several series is convolved term by term when the directions share those convolutions
+(a parameter's tangents are multiples of a few value series: ∂f₀/∂p_j = a_j sin θ₁ + b_j u, for every j), else
+summed into a slot first (one convolution); an operation whose tangent is 0 in a direction (it does not depend
+on it) has no code there.  The quotient, root, power and log keep their tangent recurrences
+(`lagcomp.codegen.taylor_variational`), one direction at a time, the quotient's w ⊛ ḃ term by term as a
+product's (its 1 product per direction the recurrence's).
 The code goes operation by operation, every direction's convolutions of the operation independent chains of
-one loop over j (so they overlap: a single chain waits on its additions).
+one loop over j (so they overlap: a single chain waits on its additions), which the operations after join
+while they read none of the slots it writes (the double pendulum: 3 loops per order, not 6).
 
 The columns' update is written out over the columns of a pass (`column_width`: all up to 9), with S's
 coefficients in W with the columns adjacent (as forward mode's tangents), so that LLVM makes a J entry's
@@ -35,14 +39,18 @@ convolution in the pass's columns one vector; the parameters' terms ∂f/∂p[k]
 ``taylor_coefficients`` (the state rows of X are bitwise its), the columns' rows agree with the forward mode's
 to rounding.  `jacobian_products` counts its products per order (the convolutions' terms), which
 `lagcomp.codegen.taylor_variational.variational_source` weighs against the forward mode's to pick one.  The
-double pendulum: 20 (J's series) + 8 per column, + 23 for ∂f/∂p's five columns, against 19 per column in
-forward mode; per call (the two kernels interleaved in one process), k = 4: 5.2 against 6.6 µs at order 20;
-k = 9 with the parameters: 8.7 against 17.5 µs at order 20, 4.6 against 8.9 at order 13.  Compiling it takes
+double pendulum: 19 (J's series) + 8 per column, + 19 for ∂f/∂p's five columns (23 when a sum of series was
+always summed into a slot first), against 19 per column in forward mode; per call (the two kernels interleaved
+in one process), k = 4: 5.2 against 6.6 µs at order 20; k = 9 with the parameters: 8.7 against 17.5 µs at
+order 20, 4.6 against 8.9 at order 13 (then 8.1 and 4.2 with the parameters' convolutions shared, the same
+load: 0.93 and 0.92 of the figures before).  Compiling it takes
 no longer than forward mode's kernel (cold, CPU shared: k = 4, 4.7 s against 6.1 s; k = 9, 12.7 against 12.9;
 n_link_pendulum(3), k = 6, 67 against 125).
 """
 
 from __future__ import annotations
+
+from collections import Counter
 
 from lagcomp.codegen import taylor_variational as variational
 from lagcomp.codegen.taylor_ops import LINEAR, Op
@@ -61,6 +69,8 @@ Term = tuple[str, str, str]
 #: The operations whose tangent is a sum of products of a value series with the operand's tangent:
 #: mul (ȧ b + a ḃ), square (2 a ȧ), exp (w ȧ), sin_cos (c ȧ, −s ȧ).
 BILINEAR = ("mul", "square", "exp", "sin_cos")
+#: The series a tangent keeps as terms (beyond: summed into a slot, so that its code stays short).
+TERMS_KEPT = 4
 
 
 def _product(a: str, b: str) -> str:
@@ -98,8 +108,13 @@ class _Kernel:
         self.row_count = max(len(self.rows), 1)
         self.constants = _Constants(program, parameters, scale)
         self.slots = 0
+        self.accumulators = 0
         #: {(the two series' codes at _j, sorted): the slot of their convolution}
         self.convolutions: dict[tuple[str, str], str] = {}
+        #: {convolution key: the directions convolving it in the operation at hand} (`_Sweep._convolved`)
+        self.demand: Counter = Counter()
+        #: {tangent of more than one series: the slot summing it} (`_Sweep.materialized`)
+        self.sums: dict[tuple[Term, ...], str] = {}
         #: {series: (c, u)}: the series is c u, u a series not so computed (a scale or a negation of one)
         self.multiples: dict[str, tuple[str, str]] = {}
         for op in _ops(program):
@@ -126,6 +141,13 @@ class _Kernel:
         self.slots += 1
         return str(self.slots - 1)
 
+    def convolution_key(self, term: Term, value: str) -> tuple[str, str]:
+        """The key in `convolutions` of the series term (``value`` or ``slot``) ⊛ the value series `value`."""
+        _, kind, series = term
+        value = self.multiples.get(value, ("1.0", value))[1]
+        read = self.at(series, "_j") if kind == "value" else self.slot(series, "_j")
+        return tuple(sorted((read, self.at(value, "_j"))))
+
     def term_at(self, term: Term, index) -> str:
         """Coefficient `index` of the term (a ``one`` term: at index k)."""
         factor, kind, name = term
@@ -138,26 +160,45 @@ class _Kernel:
 
 
 class _Code:
-    """The code of one operation's tangents in every direction: lines before a loop over j = 1..k, the
-    statements of that loop (each direction's sums independent chains in it), lines after; `products` its
-    products per term."""
+    """The code of operations' tangents in every direction: lines before a loop over j = 1..k, the statements
+    of that loop (each direction's sums independent chains in it), lines after; `products` its products per
+    term; the slots its lines before and its loop read (`reads`: of order k, written by earlier operations) and
+    the slots it writes (`writes`), so that a later operation that reads none of them joins its loop
+    (`absorb`)."""
 
-    def __init__(self):
+    def __init__(self, kernel: _Kernel, name: str):
+        self.kernel, self.names = kernel, [name]
         self.before: list[str] = []
         self.loop: list[str] = []
         self.after: list[str] = []
         self.products = 0
-        self.accumulators = 0
+        self.reads: set[str] = set()
+        self.writes: set[str] = set()
 
     def accumulator(self, start: str) -> str:
-        """A new accumulator of the loop, set to `start` (code) before it."""
-        self.accumulators += 1
-        self.before.append(f"_a{self.accumulators - 1} = {start}")
-        return f"_a{self.accumulators - 1}"
+        """A new accumulator of the loop, set to `start` (code) before it (named across the kernel)."""
+        self.kernel.accumulators += 1
+        self.before.append(f"_a{self.kernel.accumulators - 1} = {start}")
+        return f"_a{self.kernel.accumulators - 1}"
+
+    def absorb(self, other: _Code) -> bool:
+        """Take the later operations' code `other` into this one (its loop's chains into this loop: more
+        chains to overlap, one loop less per order) when it reads none of this code's slots; whether it did.
+        Each chain's sum is the same, term by term: the series are bitwise as in a loop of their own."""
+        if other.reads & self.writes:
+            return False
+        self.names += other.names
+        self.before += other.before
+        self.loop += other.loop
+        self.after += other.after
+        self.products += other.products
+        self.reads |= other.reads
+        self.writes |= other.writes
+        return True
 
     def lines(self) -> list[str]:
         loop = ["for _j in range(1, k + 1):", *(INDENT + line for line in self.loop)] if self.loop else []
-        return [*self.before, *loop, *self.after]
+        return [f"# d({', '.join(self.names)})", *self.before, *loop, *self.after]
 
 
 class _Sweep:
@@ -178,20 +219,26 @@ class _Sweep:
         tangent = self.kernel.constants.tangent(const, self.parameter)
         return () if tangent is None else ((tangent, "one", ""),)
 
-    def materialized(self, tangent: tuple[Term, ...], lines: list[str]) -> str:
-        """A slot holding the series `tangent` (its own, when it is one slot), computed by a line appended to
-        `lines`."""
+    def materialized(self, tangent: tuple[Term, ...], code: _Code, before: bool = False) -> str:
+        """A slot holding the series `tangent` (its own, when it is one slot; the same slot for the same sum in
+        every direction), computed by a line of `code` after its loop, or `before` it (for the loop to read)."""
+        if before:
+            code.reads |= {name for _, kind, name in tangent if kind == "slot"}
         if len(tangent) == 1 and tangent[0][1] == "slot" and tangent[0][0] == "1.0":
             return tangent[0][2]
-        slot = self.kernel.new_slot()
-        lines.append(f"{self.kernel.slot(slot, 'k')} = {self.kernel.sum_at(tangent)}")
-        return slot
+        if tangent not in self.kernel.sums:
+            slot = self.kernel.sums[tangent] = self.kernel.new_slot()
+            (code.before if before else code.after).append(f"{self.kernel.slot(slot, 'k')} = "
+                                                           f"{self.kernel.sum_at(tangent)}")
+            code.writes.add(slot)
+        return self.kernel.sums[tangent]
 
     def _set(self, name: str, tangent: tuple[Term, ...], code: _Code) -> None:
-        """The tangent of `name`, as one slot when it has more than one series (so that a user convolves once;
-        after `code`'s loop, whose results it may sum)."""
-        if _series_terms(tangent) > 1:
-            tangent = (("1.0", "slot", self.materialized(tangent, code.after)),)
+        """The tangent of `name`: its terms, summed into one slot (after `code`'s loop, whose results it may sum)
+        only beyond `TERMS_KEPT` series (a sum is convolved term by term, `_convolved`, so that the terms'
+        convolutions are shared across directions: a parameter's tangents are multiples of the values')."""
+        if _series_terms(tangent) > TERMS_KEPT:
+            tangent = (("1.0", "slot", self.materialized(tangent, code)),)
         if tangent:
             self.tangents[name] = tangent
 
@@ -201,7 +248,10 @@ class _Sweep:
         if kind in ("comment", "pivot"):
             return
         if kind == "state":
-            self.derivatives[op.index] = self.of(op.args[0]) if op.args else self.constant(const)
+            tangent = self.of(op.args[0]) if op.args else self.constant(const)
+            if self.parameter is None and _series_terms(tangent) > 1:   # (J's entry: one series per column update)
+                tangent = (("1.0", "slot", self.materialized(tangent, code)),)
+            self.derivatives[op.index] = tangent
         elif kind in LINEAR:
             a, b = self.of(op.args[0]), self.of(op.args[-1])
             tangent = {
@@ -219,23 +269,48 @@ class _Sweep:
         else:
             self._recurrence(op, code)
 
-    def _bilinear(self, op: Op, code: _Code) -> None:
-        """An operation of `BILINEAR`: per result, Σ factor (term ⊛ value series) (`_times`)."""
+    def _bilinear_products(self, op: Op) -> dict[str, list[tuple[str, tuple[Term, ...], str]]]:
+        """{result of an operation of `BILINEAR`: [(factor, an operand's tangent, value series)]}: its tangent is
+        Σ factor (tangent ⊛ value series)."""
         a = op.args[0]
         if op.kind == "mul":
             b = op.args[1]
-            outputs = {op.out[0]: [("1.0", t, b) for t in self.of(a)] + [("1.0", t, a) for t in self.of(b)]}
-        elif op.kind == "square":
-            outputs = {op.out[0]: [("2.0", t, a) for t in self.of(a)]}
-        elif op.kind == "exp":
-            outputs = {op.out[0]: [("1.0", t, op.out[0]) for t in self.of(a)]}
-        else:
-            s, c = op.out
-            outputs = {s: [("1.0", t, c) for t in self.of(a)], c: [("-1.0", t, s) for t in self.of(a)]}
-        tangents = {name: combine(*((f, (self._times(term, v, code),)) for f, term, v in products))
-                    for name, products in outputs.items()}
+            return {op.out[0]: [("1.0", self.of(a), b), ("1.0", self.of(b), a)]}
+        if op.kind == "square":
+            return {op.out[0]: [("2.0", self.of(a), a)]}
+        if op.kind == "exp":
+            return {op.out[0]: [("1.0", self.of(a), op.out[0])]}
+        s, c = op.out
+        return {s: [("1.0", self.of(a), c)], c: [("-1.0", self.of(a), s)]}
+
+    def convolutions_of(self, op: Op) -> list[tuple[tuple[Term, ...], str]]:
+        """The (tangent, value series) pairs `op`'s tangent convolves (`_convolved`) in this direction."""
+        if op.kind in BILINEAR:
+            return [(tangent, value) for products in self._bilinear_products(op).values()
+                    for _, tangent, value in products]
+        if op.kind in ("div", "rdiv"):
+            return [(self.of(op.args[-1]), op.out[0])]
+        return []
+
+    def _bilinear(self, op: Op, code: _Code) -> None:
+        """An operation of `BILINEAR`: per result, Σ factor (operand's tangent ⊛ value series) (`_convolved`)."""
+        tangents = {name: combine(*((f, self._convolved(tangent, v, code)) for f, tangent, v in products))
+                    for name, products in self._bilinear_products(op).items()}
         for name, tangent in tangents.items():
             self._set(name, tangent, code)
+
+    def _convolved(self, tangent: tuple[Term, ...], value: str, code: _Code) -> tuple[Term, ...]:
+        """The tangent ⊛ the value series `value`: term by term (`_times`) when its share of the terms' new
+        convolutions (each 1 / the directions that convolve it, `_Kernel.demand`) is at most one convolution,
+        else the tangent's series summed into a slot first (one convolution of its own).  A parameter's
+        tangents are multiples of a few value series: their convolutions serve every parameter."""
+        kernel = self.kernel
+        series = tuple(term for term in tangent if term[1] != "one")
+        keys = [kernel.convolution_key(term, value) for term in series]
+        if sum(1 / kernel.demand[key] for key in keys if key not in kernel.convolutions) > 1:
+            tangent = (*(term for term in tangent if term[1] == "one"),
+                       ("1.0", "slot", self.materialized(series, code, before=True)))
+        return tuple(self._times(term, value, code) for term in tangent)
 
     def _times(self, term: Term, value: str, code: _Code) -> Term:
         """The term ⊛ the value series `value`: a ``one`` term's factor times `value`; otherwise the factor times
@@ -248,9 +323,12 @@ class _Sweep:
         own, value = kernel.multiples.get(value, ("1.0", value))
         factor = _product(factor, own)
         read = (lambda i: kernel.at(series, i)) if kind == "value" else (lambda i: kernel.slot(series, i))
-        key = tuple(sorted((read("_j"), kernel.at(value, "_j"))))
+        key = kernel.convolution_key(term, value)
         if key not in kernel.convolutions:
             slot = kernel.convolutions[key] = kernel.new_slot()
+            code.writes.add(slot)
+            if kind == "slot":
+                code.reads.add(series)
             total = code.accumulator(f"{read(0)}*{kernel.at(value, 'k')}")
             code.loop.append(f"{total} += {read('_j')}*{kernel.at(value, 'k - _j')}")
             code.after.append(f"{kernel.slot(slot, 'k')} = {total}")
@@ -267,24 +345,23 @@ class _Sweep:
         if not top and not moves_b:
             return
         slot = kernel.new_slot()
+        code.writes.add(slot)
         own, at, loop, after = (lambda index: kernel.slot(slot, index)), kernel.at, code.loop, code.after
-        if kind in ("div", "rdiv"):   # ẇ[k] b[0] = ȧ[k] − w[0] ḃ[k] − Σ_{j=1..k} (w[j] ḃ[k−j] + b[j] ẇ[k−j])
-            if moves_b:
-                db = self.materialized(self.of(b), code.before)
-                total = code.accumulator(f"{kernel.sum_at(top)} - {at(w, 0)}*{kernel.slot(db, 'k')}")
-                loop.append(f"{total} -= {at(w, '_j')}*{kernel.slot(db, 'k - _j')} + {at(b, '_j')}*{own('k - _j')}")
-            else:
-                total = code.accumulator(kernel.sum_at(top))
-                loop.append(f"{total} -= {at(b, '_j')}*{own('k - _j')}")
-            after.append(f"{own('k')} = {total}/{at(b, 0)}")
-            code.products += 1 + moves_b
+        if kind in ("div", "rdiv"):   # ẇ[k] b[0] = ȧ[k] − (w ⊛ ḃ)[k] − Σ_{j=1..k} b[j] ẇ[k−j]
+            # (w ⊛ ḃ term by term, `_convolved`: a parameter's ḃ is multiples of value series, whose
+            # convolutions with w the directions share)
+            numerator = combine(("1.0", top), ("-1.0", self._convolved(self.of(b), w, code)))
+            total = code.accumulator("0.0")
+            loop.append(f"{total} += {at(b, '_j')}*{own('k - _j')}")
+            after.append(f"{own('k')} = ({kernel.sum_at(numerator)} - {total})/{at(b, 0)}")
+            code.products += 1
         elif kind == "sqrt":          # 2 w[0] ẇ[k] = ȧ[k] − 2 Σ_{j=1..k} w[j] ẇ[k−j]
             total = code.accumulator("0.0")
             loop.append(f"{total} += {at(w, '_j')}*{own('k - _j')}")
             after.append(f"{own('k')} = ({kernel.sum_at(top)} - 2.0*{total})/(2.0*{at(w, 0)})")
             code.products += 1
         elif kind == "pow":           # a[0] ẇ[k] = α Σ_{j=0..k} w[j] ȧ[k−j] − Σ_{j=1..k} a[j] ẇ[k−j]
-            da = self.materialized(top, code.before)
+            da = self.materialized(top, code, before=True)
             total = code.accumulator(f"{op.const}*{at(w, 0)}*{kernel.slot(da, 'k')}")
             loop.append(f"{total} += {op.const}*{at(w, '_j')}*{kernel.slot(da, 'k - _j')} - "
                         f"{at(a, '_j')}*{own('k - _j')}")
@@ -303,21 +380,25 @@ class _Sweep:
 class _Sweeps:
     """Every direction's sweep of `program` (the states', J's columns; the `parameters'`, ∂f/∂p's, their
     scalars' partials times `scale`), and their code per order: operation by operation, the directions'
-    convolutions independent chains of one loop."""
+    convolutions independent chains of one loop, shared with the operations before when they read none of
+    their slots (`_Code.absorb`)."""
 
     def __init__(self, program: dict, parameters: tuple[int, ...], scale: float):
         self.kernel = _Kernel(program, parameters, scale)
         self.states = [_Sweep(self.kernel, state=name) for name in program["states"]]
         self.parameters = [_Sweep(self.kernel, parameter=j) for j in parameters]
-        self.lines: list[str] = []
-        self.products = 0
+        codes: list[_Code] = []
         for op in _ops(program):
-            code = _Code()
+            code = _Code(self.kernel, ", ".join(op.out) or "f")
+            self.kernel.demand = Counter(
+                self.kernel.convolution_key(term, value) for sweep in (*self.states, *self.parameters)
+                for tangent, value in sweep.convolutions_of(op) for term in tangent if term[1] != "one")
             for sweep in (*self.states, *self.parameters):
                 sweep.add(op, code)
-            if code.before or code.after:
-                self.lines += [f"# d({', '.join(op.out)})", *code.lines()]
-            self.products += code.products
+            if (code.before or code.after) and not (codes and codes[-1].absorb(code)):
+                codes.append(code)
+        self.lines = [line for code in codes for line in code.lines()]
+        self.products = sum(code.products for code in codes)
 
     def entries(self, n_state: int) -> list[tuple[int, int, Term]]:
         """J's nonzero entries, (i, j, term) per term of J_ij's tangent, by row."""
@@ -340,9 +421,11 @@ def jacobian_products(program: dict, columns: int, parameters: tuple[int, ...] =
     return sweeps.products + columns * per_column
 
 
-def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padded: int) -> list[str]:
+def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padded: int,
+                  forced: set[int]) -> list[str]:
     """The code of column ``_b + c``'s coefficient k + 1, for c < `width`: Ṡ_i[k] = Σ_j (J_ij ⊛ S_j)[k] + F_i
-    (F: the parameters' terms ∂f/∂p[k], 0 in the others), into S (the columns adjacent, ``_S``) and X.  A row's
+    (F: the parameters' terms ∂f/∂p[k], 0 in the others; only in the rows of `forced`), into S (the columns
+    adjacent, ``_S``) and X.  A row's
     convolutions sum into one accumulator per column: a pass's accumulators stay a few vectors (one per entry
     and column, the double pendulum's 72 at k = 9, spill: 6.1 against 4.6 µs per call at order 13)."""
     kernel = sweeps.kernel
@@ -362,8 +445,8 @@ def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padde
                 loop.append(f"{INDENT}_a{i}_{c} += " + " + ".join(f"{_scaled(f, read(name, '_j'))}*{s(j, 'k - _j', c)}"
                                                                   for f, j, read, name in series))
             total = [f"_a{i}_{c}"] * bool(series) + [_scaled(f, s(j, "k", c)) for f, j in ones]
-            stores.append(f"_v = ({' + '.join(total)} + _F[{i * padded} + _b + {c}])*_ik1" if total
-                          else f"_v = _F[{i * padded} + _b + {c}]*_ik1")
+            total += [f"_F[{i * padded} + _b + {c}]"] * (i in forced)
+            stores.append(f"_v = ({' + '.join(total)})*_ik1" if total else "_v = 0.0")
             stores.append(f"{s(i, 'k + 1', c)} = _v")
             store = f"X[{n_state}*(_b + {c} + 1) + {i}, k + 1] = _v"
             stores += [store] if padded == columns else [f"if _b + {c} < {columns}:", INDENT + store]
@@ -389,12 +472,14 @@ def jacobian_source(program: dict, columns: int, parameters: tuple[int, ...] = (
         "and the parameters' terms of order k.",
         "Returns 0, or j > 0 when pivot j of the LDLᵀ factorization of M is not positive at t."]
     base = f"{kernel.row_count + kernel.slots}*(order + 1)"
+    # the rows whose derivative depends on a parameter of the columns: F's (none without parameter columns)
+    forced = {i for sweep in sweeps.parameters for i, tangent in sweep.derivatives.items() if tangent}
     lines = setup_lines(program, columns, parameters)
     lines += [f"_S = W.reshape(-1)[{base}:{base} + {n_state * padded}*(order + 1)]   # S_i[m] of column c: "
               f"_S[(i*(order + 1) + m)*{padded} + c]",
               f"_F = W.reshape(-1)[{base} + {n_state * padded}*(order + 1):{base} + {n_state * padded}*(order + 2)]"
               f"   # F_i of column c (the parameters' ∂f/∂p[k]): _F[i*{padded} + c]",
-              "_F[:] = 0.0", f"for _c in range({padded}):   # (padding: 0)"]
+              *["_F[:] = 0.0"] * bool(forced), f"for _c in range({padded}):   # (padding: 0)"]
     lines += [f"{INDENT}_S[{i}*(order + 1)*{padded} + _c] = y[{n_state}*(_c + 1) + {i}] if _c < {columns} else 0.0"
               for i in range(n_state)]
     lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
@@ -407,7 +492,8 @@ def jacobian_source(program: dict, columns: int, parameters: tuple[int, ...] = (
     looped = padded > width
     lines += [f"{INDENT}# Every column: Ṡ = J S + F, {width} columns at a time",
               f"{INDENT}for _b in range(0, {padded}, {width}):" if looped else f"{INDENT}_b = 0"]
-    lines += [INDENT * (2 if looped else 1) + line for line in _update_lines(sweeps, n_state, columns, width, padded)]
+    lines += [INDENT * (2 if looped else 1) + line
+              for line in _update_lines(sweeps, n_state, columns, width, padded, forced)]
     lines.append("return 0")
     # (S: N × padded rows of order + 1; F: N × padded floats, at most as many rows)
     return kernel_source(docstring, lines, columns, kernel.row_count + kernel.slots + 2 * n_state * padded)

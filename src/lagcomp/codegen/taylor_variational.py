@@ -43,7 +43,7 @@ A column costs about a program here.  `lagcomp.codegen.taylor_jacobian` writes t
 series of J's nonzero entries (and ∂f/∂p's), computed once per order for all columns, then nnz(J)
 convolutions per column: `variational_source` writes whichever takes less time by their products per order
 (`forward_products`, `jacobian_products`, `JACOBIAN_PRODUCT_COST`): the Jacobian's for a sparse J (the
-double pendulum, from k = 1), forward mode for a dense J and few columns (the three bodies at k < 12).
+double pendulum, from k = 1), forward mode for a dense J and few columns (the three bodies at k < 4).
 
 Parameter columns: the tangent with respect to p_j starts at 0 (the state does not depend on p_j at t0) and
 enters through the program's scalars: p_j itself (tangent 1), and every scalar computed from parameters, whose
@@ -396,11 +396,14 @@ def forward_source(program: dict, columns: int, parameters: tuple[int, ...] = ()
 
 #: The time of a product of `lagcomp.codegen.taylor_jacobian`'s kernel, in products of forward mode's: its
 #: convolutions are independent chains (the directions', the columns') in a loop, forward mode's a column's
-#: chain (k < 4) or a vector of columns.  Per call at order 20 (jacobian / forward: time, products): double
-#: pendulum k = 1, 4, 9 (with the parameters): 0.89, 0.80, 0.61 for 28/19, 52/76, 124/171; n_link_pendulum(3)
-#: k = 1, 2, 6: 1.03, 0.73, 0.54 for 134/70, 152/140, 224/420; the three bodies (J dense) k = 1, 4, 12: 1.69,
-#: 1.18, 0.86 for 108/30, 216/120, 504/360: the crossover where the products' ratio is 1.5 to 1.9.
-JACOBIAN_PRODUCT_COST = 2 / 3
+#: chain (k < 4) or a vector of columns.  Per call at order 13 / 20, the two kernels interleaved (jacobian /
+#: forward: time, products; in brackets the weight at which the products' rule ties): double pendulum k = 1:
+#: 0.89 / 0.95 for 27/19 (0.63 / 0.67), k = 2: 0.92 / 0.96 for 35/38 (1.0); the three bodies (J dense) k = 1:
+#: 1.15 / 1.60 for 108/30 (0.32 / 0.45), k = 2: 0.93 / 0.96 for 144/60 (0.40), k = 4: 0.89 / 0.89 for
+#: 216/120 (0.50), k = 6: 0.47 / 0.48 for 288/180 (0.30).  1/2 picks the faster kernel in each but the three
+#: bodies' k = 2, a tie.  (2/3 before the column update's accumulators per row, when the three bodies' k = 4
+#: took 1.18x forward mode's time; it now took forward mode up to k = 8, at k = 6 twice as slow.)
+JACOBIAN_PRODUCT_COST = 1 / 2
 
 
 def variational_source(program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0) -> str:

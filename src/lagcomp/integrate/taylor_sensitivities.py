@@ -81,8 +81,9 @@ def taylor_kernels(model, cols, scale: float) -> TaylorSensitivityKernels:
     """The one `TaylorSensitivityKernels` of `model`'s module for the columns `cols` and `scale` in this process
     (the initial-state columns are seeded by y; the parameter ones, and so the kernel, depend on which)."""
     key = (model.kernels, cols.k, cols.parameters, scale)
-    variational = variational_module(model, *key[1:])
-    with _LOCK:
-        if key not in _KERNELS:
-            _KERNELS[key] = TaylorSensitivityKernels(model.kernels, variational)
-        return _KERNELS[key]
+    kernels = _KERNELS.get(key)     # (a short run's look-up: one dict's, no lock)
+    if kernels is None:
+        variational = variational_module(model, *key[1:])
+        with _LOCK:
+            kernels = _KERNELS.setdefault(key, TaylorSensitivityKernels(model.kernels, variational))
+    return kernels
