@@ -48,8 +48,8 @@ EPS = float(np.finfo(float).eps)
 #: (start, t_end, parameter columns too): the chaotic start loses every digit of S by t = 100 (|S| ~ 1e8), so
 #: it stops at 10.
 CASES = (("regular", 10.0, False), ("regular", 100.0, False), ("chaotic", 10.0, False), ("regular", 100.0, True))
-#: lagcomp's `sensitivity_control`s: "both" is heyoka's (its step rule's norm covers the variational
-#: components too: the same steps and errors), "state" lagcomp's default (a plain run's steps).
+#: lagcomp's `sensitivity_control`s: "both", the default, is heyoka's (its step rule's norm covers the variational
+#: components too: the same steps and errors); "state" takes a plain run's steps.
 CONTROLS = ("both", "state")
 
 
