@@ -18,6 +18,7 @@ import warnings
 import numpy as np
 
 from lagcomp.errors import ResetWarning
+from lagcomp.integrate.contacts import contacts_of, frictions_of
 from lagcomp.integrate.drivers.events import ACTION_RESET
 
 #: |ġ| just after a reset at most this fraction of |ġ| just before: the reset stopped the motion across the surface.
@@ -32,24 +33,28 @@ CHECKED_ROWS = 1000
 
 
 def warn_of_resets_gone_through(model, p, actions, records, ts, ys) -> None:
-    """Warn (`ResetWarning`, once per event) when a reset left ġ = 0 on its event's surface and a saved row after it,
-    before the event's next occurrence, lies past the zero on the side the event fires into.  `actions`: the run's
-    event actions; `records`: {name: EventRecord}; `ts` (rows,), `ys` (rows, ≥ N): the saved rows."""
+    """Warn (`ResetWarning`, once per event) when a reset stopped a motion across its event's surface (ġ ≠ 0 before,
+    0 after) and a saved row after it, before the event's next occurrence, lies past the zero on the side the event
+    fires into.  The user's events only: a contact's or friction element's events switch modes, whose motion
+    the module itself holds.  `actions`: the run's event actions; `records`: {name: EventRecord}; `ts` (rows,),
+    `ys` (rows, ≥ N): the saved rows."""
     kernels, size = model.kernels, model.state_size
     if actions is None or not hasattr(kernels, "event_gradients"):
         return
+    elements = {name for name, *_ in (*contacts_of(model), *frictions_of(model))}
     values, gradients = np.empty(len(model.events)), np.empty((len(model.events), size + 1 + len(model.parameters)))
     ydot = np.empty(size)
     for e, (event, action) in enumerate(zip(model.events, actions.tolist(), strict=True)):
         record = records.get(event.name)
-        if action != ACTION_RESET or event.direction == 0 or record is None or record.t.size == 0:
+        if (action != ACTION_RESET or event.name in elements or event.direction == 0 or record is None
+                or record.t.size == 0):
             continue
         before = np.hstack([record.q, record.qd])
         after = np.hstack([record.q_after, record.qd_after])
         for r, t in enumerate(record.t.tolist()):
             approach = _rate(kernels, t, before[r], p, e, gradients, ydot)
             leaving = _rate(kernels, t, after[r], p, e, gradients, ydot)
-            if approach is None or leaving is None or not abs(leaving) <= STOPPED * abs(approach):
+            if approach is None or leaving is None or approach == 0.0 or not abs(leaving) <= STOPPED * abs(approach):
                 continue
             following = record.t[r + 1] if r + 1 < record.t.size else np.inf
             for row in np.flatnonzero((ts > t) & (ts <= following))[:CHECKED_ROWS].tolist():
