@@ -74,16 +74,21 @@ def test_progress_bar_appears_once_a_run_is_long(pendulum, capfd, monkeypatch):
 
 def test_ctrl_c_returns_the_partial_solution(pendulum):
     """SIGINT during a long run: the driver call in progress finishes, then the run stops with status 2,
-    keeping every row computed and the state reached (to resume from)."""
+    keeping every row computed and the state reached (to resume from).  The process's handler is Python's default
+    before, as in a user's session (a test run before in the same pytest-xdist worker may have left SIGINT
+    ignored: CI saw it once), and must be so again after."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
     timer.start()
     try:
         sol = pendulum.simulate((0, 1e5), method="verlet", dt=1e-4, save_every=10_000, max_steps=10**9 + 1,
                                 progress=False)  # 1e9 steps: far longer than the 0.5 s before SIGINT
+        handler_after = signal.getsignal(signal.SIGINT)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert sol.status == 2 and not sol.success and "Ctrl-C" in sol.message
     assert 0 < sol.t[-1] < 1e5 and sol.nsteps >= 10_000 * (sol.t.size - 2)
     assert np.all(np.diff(sol.t) > 0)
     assert sol.energy_drift() < 1e-5
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert handler_after is signal.default_int_handler
