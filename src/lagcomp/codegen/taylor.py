@@ -67,6 +67,7 @@ from lagcomp.codegen.taylor_ops import (
     linear_line,
     partial_name,
     pivot_test,
+    setup_statements,
     support_names,
 )
 from lagcomp.ir import ContactModes, Kernel, LinearSolve, ModuleIR, target_local
@@ -591,14 +592,7 @@ def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ..
         """Coefficient `index` of the series `name`: its row of X or W (indexing the 2-d arrays directly
         instead of through row views is 8% faster: no views to build and count references to)."""
         return f"{array_of[name]}[{name}, {index}]"
-    lines = [*doc, "order = X.shape[1] - 1"]
-    for statement in program.setup:
-        if statement.kind == "param":
-            lines.append(f"{statement.name} = p[{statement.index}]")
-        elif statement.kind == "constant":
-            lines.append(f"{statement.name} = {statement.code}")
-        elif statement.kind == "check":
-            lines += [f"if not {statement.code}:", f"{INDENT}return {statement.index}"]
+    lines = [*doc, "order = X.shape[1] - 1", *setup_statements(program.setup, indent=INDENT)]
     lines.append("# Row indices: a state component's series is a row of X, an intermediate value's a row of W.")
     lines += [f"{name} = {i}" for name, i in states.items()]
     lines += [f"{row} = {i}" for i, row in enumerate(rows)]

@@ -62,6 +62,23 @@ class Setup:
     index: int = 0
 
 
+def setup_statements(setup, parameters: tuple[int, ...] = (), indent: str = "    ") -> list[str]:
+    """The lines of the `Setup` statements of a kernel that reads p itself (``taylor_coefficients``, the
+    variational kernels): the parameters' and constants' scalars, the pivot checks returning their index, and the
+    partials with respect to the `parameters` (the variational kernels' parameter columns; none otherwise).  The
+    lanes' kernel reads P by lane and folds its checks into a flag: `lagcomp.codegen.taylor_lanes` writes its
+    own."""
+    lines = []
+    for statement in setup:
+        if statement.kind == "param":
+            lines.append(f"{statement.name} = p[{statement.index}]")
+        elif statement.kind == "constant" or (statement.kind == "partial" and statement.index in parameters):
+            lines.append(f"{statement.name} = {statement.code}")
+        elif statement.kind == "check":
+            lines += [f"if not {statement.code}:", f"{indent}return {statement.index}"]
+    return lines
+
+
 def partial_name(name: str, parameter: int) -> str:
     """The name of the setup's ``partial`` of the scalar `name` with respect to parameter `parameter`."""
     return f"_dp{parameter}{name}"

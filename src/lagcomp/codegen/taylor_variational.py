@@ -55,7 +55,16 @@ the state → its tangent at order 0.  That is ∂f/∂p_j in the column's Ṡ, 
 
 from __future__ import annotations
 
-from lagcomp.codegen.taylor_ops import LINEAR, Op, Setup, convolution_loop, linear_line, partial_name, pivot_test
+from lagcomp.codegen.taylor_ops import (
+    LINEAR,
+    Op,
+    Setup,
+    convolution_loop,
+    linear_line,
+    partial_name,
+    pivot_test,
+    setup_statements,
+)
 
 INDENT = "    "
 KERNEL = "taylor_variational_coefficients"
@@ -299,16 +308,8 @@ def value_lines(op: Op, at) -> list[str]:
 def setup_lines(program: dict, columns: int, parameters: tuple[int, ...]) -> list[str]:
     """The kernel's statements before its order loop: the setup's scalars (and the partials of the `parameters`'
     columns), the pivot checks, coefficient 0 of y (all N (1 + `columns`) rows of X) and the time's series."""
-    lines = ["order = X.shape[1] - 1"]
-    for statement in (Setup(**entry) for entry in program["setup"]):
-        if statement.kind == "param":
-            lines.append(f"{statement.name} = p[{statement.index}]")
-        elif statement.kind == "constant":
-            lines.append(f"{statement.name} = {statement.code}")
-        elif statement.kind == "check":
-            lines += [f"if not {statement.code}:", f"{INDENT}return {statement.index}"]
-        elif statement.kind == "partial" and statement.index in parameters:
-            lines.append(f"{statement.name} = {statement.code}")
+    lines = ["order = X.shape[1] - 1", *setup_statements((Setup(**entry) for entry in program["setup"]), parameters,
+                                                          INDENT)]
     lines += [f"for i in range({program['n_state'] * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
     if program["uses_t"]:
         time = work_rows(program).index("_t")
