@@ -159,7 +159,6 @@ def free_axle(V0: float = 1.0, omega: float = 1.0) -> System:
       X, Y      position of the axle's midpoint O (at height R above the plane);
       θ         heading: angle from e_X to u = OC/|OC|, counter-clockwise about K;
       φ, φ′     rotation angles of wheel C and of wheel C′ about +u (the same
-
                 axis for both wheels).
 
     With v = K × u = (−sin θ, cos θ): C = O + (L/2) u, C′ = O − (L/2) u, and
@@ -258,25 +257,17 @@ def free_axle_closed_form(t, params: dict, V0: float, omega: float) -> dict:
     Parameters
     ----------
     t : float or ndarray
-
         Times.
-
     params : dict
-
         Parameter values by name (m, R, L, g, alpha and I3; I1 is not needed).
-
     V0 : float
-
         Initial speed of the axle's midpoint, down the slope (+Y).
-
     omega : float
-
         Initial (and constant) turning rate θ̇ of the axle.
 
     Returns
     -------
     dict of ndarray
-
         The coordinates by name (``X, Y, theta, phi, phi_prime``), their rates
         (``X_dot`` …) and accelerations (``X_ddot`` …), and the multipliers by
         constraint name (``roll_X, roll_Y, steer``).
@@ -286,36 +277,26 @@ def free_axle_closed_form(t, params: dict, V0: float, omega: float) -> dict:
     Derivation (see `free_axle` for the axes, T, V and the constraint rows):
 
     1. Equations of motion M q̈ = F + Λᵀ λ:
-
        m Ẍ = λ1, m Ÿ = m g sin α + λ2, 2(I1 + mL²/4) θ̈ = L λ3,
        I3 φ̈ = R(−sin θ λ1 + cos θ λ2 + λ3), I3 φ̈′ = R(−sin θ λ1 + cos θ λ2 − λ3).
-
     2. Substitute σ = (φ + φ′)/2, δ = φ − φ′.  The difference of the wheel
-
        equations is I3 δ̈ = 2 R λ3; the holonomic constraint, differentiated
        twice, is L θ̈ = −R δ̈.  So λ3 = −I3 L θ̈/(2R²), and the θ equation
        becomes [2 I1 + m L²/2 + I3 L²/(2R²)] θ̈ = 0: θ̈ = 0, θ = ω t, λ3 = 0,
        δ = −(L ω/R) t.
-
     3. The rolling constraints say V_O = s v, v = (−sin θ, cos θ), s = −R σ̇.
-
        Differentiating, (Ẍ, Ÿ)·v = ṡ.  The sum of the wheel equations is
        I3 σ̈ = R (λ1, λ2)·v = R [m ṡ − m g sin α cos θ]; with σ̈ = −ṡ/R this is
        (m + I3/R²) ṡ = m g sin α cos θ, i.e. ṡ = A cos ωt, A = m g R² sin α/(I3 + m R²).
-
     4. Integrate with s(0) = V0: s = V0 + (A/ω) sin ωt.  Then
-
        Ẋ = −s sin ωt = −V0 sin ωt − (A/ω) sin² ωt,
        Ẏ = s cos ωt = V0 cos ωt + (A/(2ω)) sin 2ωt,
        and with X(0) = Y(0) = 0:
        X = (V0/ω)(cos ωt − 1) − (A/(4ω²))(2ωt − sin 2ωt),
        Y = (V0/ω) sin ωt + (A/(4ω²))(1 − cos 2ωt),
        σ = −(1/R) ∫ s = −V0 t/R − (A/(Rω²))(1 − cos ωt),  φ = σ + δ/2, φ′ = σ − δ/2.
-
     5. Back in step 1: λ1 = m Ẍ = −m (V0 ω cos ωt + A sin 2ωt),
-
        λ2 = m Ÿ − m g sin α = −m (V0 ω sin ωt − A cos 2ωt + g sin α).
-
     For ω = 0 the limits are X = 0, Y = V0 t + A t²/2, φ = φ′ = −(V0 t + A t²/2)/R.
     """
     t = np.asarray(t, dtype=float)
@@ -595,9 +576,7 @@ def four_bar_linkage(theta1: float = 0.0, theta1_dot: float = 10.0) -> System:
         A = a e1,   B = A + b e2 = D + c e3,
         centres G1 = (a/2) e1,  G2 = A + (b/2) e2,  G3 = D + (c/2) e3,
         T = ½ Σ_i [m_i |Ġ_i|² + (m_i L_i²/12) θ̇_i²]
-
           = ½ (m1 a²/3) θ̇1² + ½ m2 [a² θ̇1² + a b cos(θ1 − θ2) θ̇1 θ̇2 + b² θ̇2²/3] + ½ (m3 c²/3) θ̇3²,
-
         V = g Σ_i m_i y_Gi = g [(m1/2 + m2) a sin θ1 + (m2/2) b sin θ2 + (m3/2) c sin θ3].
 
     The mass matrix depends on θ1 − θ2 (so RATTLE does not apply).
