@@ -97,8 +97,45 @@ def _escape_bars(line: str) -> str:
 
 
 def _plain_bars(app, what, name, obj, options, lines):
-    lines[:] = [_escape_bars(line) for line in lines]
+    literal = False  # inside a literal block (after a "::" line, set by _formula_blocks): text as it stands
+    for i, line in enumerate(lines):
+        if line.strip() == "::":
+            literal = True
+        elif literal and line.strip() and not line.startswith(" "):
+            literal = False
+        if not literal:
+            lines[i] = _escape_bars(line)
+
+
+def _time_symbol(app, what, name, obj, options, lines):
+    # `lagcomp.t` is a sympy Symbol, whose own docstring is sympy's class documentation.
+    if name == "lagcomp.t":
+        lines[:] = ["The time symbol, sympy.physics.mechanics' ``dynamicsymbols._t``: coordinates are functions of it",
+                    "(`lagcomp.coordinates`), and imposed motions and inputs are expressions of it."]
+
+
+def _formula_blocks(app, what, name, obj, options, lines):
+    """The bundled examples' docstrings set their formulas off by indentation, aligned by hand: show each
+    indented block as preformatted text (a literal block), up to the first numpydoc section."""
+    if not name.startswith("lagcomp.examples."):
+        return
+    out, in_block = [], False
+    for i, line in enumerate(lines):
+        if line.strip() and i + 1 < len(lines) and set(lines[i + 1].strip()) == {"-"}:
+            out += ([""] if in_block else []) + lines[i:]
+            break
+        indented = line.startswith(" ") and bool(line.strip())
+        if indented and not in_block:
+            out += ["", "::", ""]
+            in_block = True
+        elif in_block and line.strip() and not indented:
+            out.append("")
+            in_block = False
+        out.append(line)
+    lines[:] = out
 
 
 def setup(app):
+    app.connect("autodoc-process-docstring", _time_symbol, priority=50)
+    app.connect("autodoc-process-docstring", _formula_blocks, priority=60)
     app.connect("autodoc-process-docstring", _plain_bars, priority=100)

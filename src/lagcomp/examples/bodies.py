@@ -43,10 +43,8 @@ def turn_indicator() -> System:
 
     With β = θ + α the flywheel's absolute angular velocity in gimbal axes is
     (θ̇, Ω + ω sin β, ω cos β), so (mass irrelevant: the centre does not move)
-
         T = ½ I_X (θ̇² + ω² cos² β) + ½ I (Ω + ω sin β)²,
         I_X θ̈ + ½ (I_X − I) ω² sin 2β − I ω Ω cos β = −k θ − c θ̇.
-
     Steady tilt θ*: k θ* = I ω Ω cos(θ* + α) + ½ (I − I_X) ω² sin 2(θ* + α), to
     first order in ω/Ω the pilot's reading ω ≈ k θ*/(I Ω cos(θ* + α)).
     Defaults: a small gyro (I = 2·10⁻⁴ kg m², Ω = 2000 rad/s), a standard-rate
@@ -87,9 +85,7 @@ def compton_disc() -> System:
     coordinate φ about Y_P.
 
     Absolute angular velocity in P axes: (θ̇ − ω cos λ, φ̇ + ω sin λ cos θ, −ω sin λ sin θ),
-
         T = ½ I [(θ̇ − ω cos λ)² + ω² sin² λ sin² θ] + ½ I_Y (φ̇ + ω sin λ cos θ)².
-
     φ is cyclic: p_φ = I_Y (φ̇ + ω sin λ cos θ) is conserved, so from rest on the
     carousel with the axis up, φ̇(t) = ω sin λ (1 − cos θ(t)): 2 ω sin λ once
     the axis is reversed, nothing at the equator.
@@ -120,10 +116,8 @@ def driven_pendulum_support() -> System:
     support's frame (a MovingFrame translating with a_e = ḧ e_y, y up) the bob
     is a Particle at (l sin θ, −l cos θ, 0), gravity (0, −g, 0).  lagcomp adds
     the driving force −m a_e as the potential m ḧ y, so
-
         T = ½ m l² θ̇²,   V = −m (g + ḧ) l cos θ,
         θ̈ + (g + ḧ)/l sin θ = 0,   ḧ = −A Ω² cos(Ω t):
-
     the same equation as `driven_pendulum` (inertial frame), same parameters and defaults.
     """
     (theta,) = coordinates("theta")
@@ -152,14 +146,10 @@ def symmetric_top() -> System:
     diameter through G) and I3 (about the axis).  Rigid body with com l e_3,
     inertia in the non-spinning axes reached by (ψ about z, θ about x); gravity (0, 0, −g).
     With I1′ = I1 + M l² (moment about O),
-
         T = ½ I1′ (θ̇² + ψ̇² sin² θ) + ½ I3 (φ̇ + ψ̇ cos θ)²,   V = M g l cos θ.
-
     ψ and φ are cyclic: p_φ = I3 (φ̇ + ψ̇ cos θ) and p_ψ = I1′ ψ̇ sin² θ + p_φ cos θ
     are conserved with E = T + V.  With u = cos θ and E′ = E − p_φ²/(2 I3),
-
         u̇² = f(u) = (2/I1′)(E′ − M g l u)(1 − u²) − (p_ψ − p_φ u)²/I1′²,
-
     a cubic; θ nutates between the arccosines of its two roots in [−1, 1].
     Defaults: a fast top (spin 100 rad/s) released with θ̇ = ψ̇ = 0 at θ = 0.5:
     cusped nutation, period ≈ 0.14 s, slow precession ≈ 3 rad/s.
@@ -192,18 +182,14 @@ def wheel_jack() -> System:
     length DB = 2 l cos θ.  Coordinate θ: the angle between a side and the
     stem.  The crank (arm a) turns the stem about its axis by α; a screw of
     pitch h shortens DB by h per turn, so up to a constant
-
         α(θ) = −4π l cos θ / h,     α′(θ) = 4π l sin θ / h.
-
     Loads: the weight P on A, Force (0, −P) at A; the effort F pushing the
     crank handle, the Torque F a about the stem axis on the crank.
 
     Virtual work for δθ: δW = F a δα − P δy_A = (4π a l F sin θ / h − 2 l P cos θ) δθ,
     so the generalized force is Q_θ = 2 l (2π a F sin θ / h − P cos θ), and the
     jack holds the load (d'Alembert: Q_θ = 0) when
-
         P / F = 2π a tan θ / h
-
     (a = 20 cm, h = 2 mm, θ = 30°: P/F ≈ 363).  The balance is unstable:
     ∂Q_θ/∂θ > 0, a frictionless jack lifts under any excess effort and runs
     down under any deficit.  The only inertia is the crank and screw's moment J

@@ -56,20 +56,14 @@ def hoop_bead_reaction() -> System:
     φ(t) = Ω t + ε sin 2t.  Coordinates θ (angle of the bead from the UPWARD
     vertical through the centre, θ = π at the bottom) and φ (the hoop's angle);
     bead at R (sin θ cos φ, sin θ sin φ, cos θ).
-
         T = ½ m R² (θ̇² + φ̇² sin² θ),   V = m g R cos θ.
-
     Constraint ``drive``: Φ = φ − (Ω t + ε sin 2t) = 0, so Λ = (0, 1).
     Equations:
-
         θ̈ = sin θ (g/R + φ̇² cos θ)                  (as in `hoop_bead`),
         d/dt (m R² sin² θ φ̇) = λ,   φ̇ = Ω + 2ε cos 2t,  φ̈ = −4ε sin 2t.
-
     The multiplier is the torque about the axis that the hoop exerts to keep
     the bead turning with it: λ = R sin θ · f with
-
         f = m R (2 φ̇ θ̇ cos θ + φ̈ sin θ),
-
     the hoop's push on the bead normal to the hoop's plane, positive in the
     direction of increasing φ (Coriolis plus azimuthal-acceleration terms).
     Defaults as in `hoop_bead`, so θ(t) can be compared with it;
@@ -100,24 +94,18 @@ def unbalanced_cylinder_reactions() -> System:
     horizontal ground, gravity g.  Axes: x along the ground, z up.
     Coordinates x, z (position of the axis C) and θ (rotation, clockwise, so
     that rolling toward +x increases θ; θ = 0 has G straight below C):
-
         G = (x − a sin θ, z − a cos θ),
         T = ½ M (ẋ_G² + ż_G²) + ½ I θ̇²,   V = M g z_G.
-
     Constraints: ``normal`` Φ = z − R (Λ = (0, 1, 0)) and ``friction``
     Φ = x − R θ (Λ = (1, 0, −R)).
     Reactions.  Let the ground push on the cylinder with (F_h, F_v) at the
     contact point P = C − (0, R).  A virtual displacement moves the body's
     material point at P by (δx − R δθ, δz), so the contact force has the
     generalized components (F_h, F_v, −R F_h) = F_v Λ_normal + F_h Λ_friction:
-
         λ_normal = F_v   (vertical reaction, positive upward),
         λ_friction = F_h (horizontal friction on the cylinder, positive toward +x),
-
     exactly, in newtons.  The x and z equations are Newton's for G:
-
         M ẍ_G = λ_friction,   M z̈_G = λ_normal − M g,
-
     so F_v = M (g + z̈_G) and F_h = M ẍ_G.  On the constraints (x = R θ, z = R)
     θ obeys the equation of `unbalanced_cylinder`.  The cylinder takes off where
     F_v would turn negative and slips where |F_h| > μ F_v.
@@ -155,39 +143,29 @@ def free_axle(V0: float = 1.0, omega: float = 1.0) -> System:
     Axes in the plane: Y down the line of steepest slope, X horizontal, to the
     right of someone facing downhill, so that K = e_X × e_Y is the upward
     normal to the plane.  Coordinates:
-
       X, Y      position of the axle's midpoint O (at height R above the plane);
       θ         heading: angle from e_X to u = OC/|OC|, counter-clockwise about K;
       φ, φ′     rotation angles of wheel C and of wheel C′ about +u (the same
                 axis for both wheels).
-
     With v = K × u = (−sin θ, cos θ): C = O + (L/2) u, C′ = O − (L/2) u, and
     wheel C turns with ω_C = θ̇ K + φ̇ u (ω_C′ = θ̇ K + φ̇′ u).
-
         T = m (Ẋ² + Ẏ²) + (I1 + m L²/4) θ̇² + ½ I3 (φ̇² + φ̇′²),
         V = −2 m g sin α · Y      (the normal component of gravity does no work).
-
     Rolling.  The material point at the contact H = C − R K moves with
     V_O + (L θ̇/2 + R φ̇) v, and at H′ with V_O + (−L θ̇/2 + R φ̇′) v.  Both vanish
     when V_O·u = 0, V_O·v = −R (φ̇ + φ̇′)/2 and L θ̇ + R (φ̇ − φ̇′) = 0; equivalently
-
         ``roll_X`` (nonholonomic)  2 Ẋ − R (φ̇ + φ̇′) sin θ = 0,  Λ1 = (2, 0, 0, −R sin θ, −R sin θ),
         ``roll_Y`` (nonholonomic)  2 Ẏ + R (φ̇ + φ̇′) cos θ = 0,  Λ2 = (0, 2, 0, R cos θ, R cos θ),
         ``steer``  (holonomic)     Φ = L θ + R (φ − φ′) = 0,      Λ3 = (0, 0, L, R, −R).
-
     Equations (M q̈ = F + Λᵀ λ):
-
         m Ẍ = λ1,   m Ÿ = m g sin α + λ2,   2 (I1 + m L²/4) θ̈ = L λ3,
         I3 φ̈  = −R sin θ λ1 + R cos θ λ2 + R λ3,
         I3 φ̈′ = −R sin θ λ1 + R cos θ λ2 − R λ3.
-
     Multipliers.  With in-plane contact forces F, F′ on wheels C, C′, virtual
     work gives the generalized force (F_X + F′_X, F_Y + F′_Y, (L/2)(F − F′)·v,
     R F·v, R F′·v), which equals Λᵀ λ with
-
         λ1 = (F_X + F′_X)/2,  λ2 = (F_Y + F′_Y)/2  (mean friction force per wheel
         along X and along Y, down the slope),  λ3 = (F − F′)·v / 2.
-
     Only the sum of the components along the axle is determined (the problem
     is hyperstatic there, like a four-legged table).
 
@@ -197,21 +175,17 @@ def free_axle(V0: float = 1.0, omega: float = 1.0) -> System:
     θ = θ0 + ω t, λ3 = 0 and δ = δ0 − L ω t/R, for every initial condition.
     Rolling gives V_O = s v with s = −R σ̇, and the sum of the wheel equations
     with λ1, λ2 from Newton's equations gives
-
         (I3 + m R²) σ̈ = −m g R sin α cos θ,   i.e.  ṡ = A cos θ,  A = m g R² sin α / (I3 + m R²)
-
     (A = 4Γ of the reference text; gravity's pull along v, reduced by the wheels' inertia).
     Launch (the defaults): O at the origin, axle horizontal (θ(0) = 0, u = e_X,
     v = e_Y), moving DOWN the slope with speed V0 (s(0) = V0), spin θ̇(0) = ω,
     φ(0) = φ′(0) = 0.  Then s = V0 + (A/ω) sin ωt and
-
         θ = ω t,   λ3 = 0,
         X(t) = (V0/ω)(cos ωt − 1) − (A/(4ω²)) (2ωt − sin 2ωt),
         Y(t) = (V0/ω) sin ωt + (A/(4ω²)) (1 − cos 2ωt),
         φ, φ′ = −V0 t/R − (A/(R ω²))(1 − cos ωt) ∓ L ω t/(2R),
         λ1(t) = −m (V0 ω cos ωt + A sin 2ωt),
         λ2(t) = −m (V0 ω sin ωt − A cos 2ωt + g sin α).
-
     The midpoint drifts along −X at mean speed A/(2ω) while looping with period
     2π/ω.  `free_axle_closed_form` evaluates these.  (The reference text's X, Y
     and λ are for a launch up its upward Y axis; its σ equation has cos α for
@@ -339,32 +313,24 @@ def rolling_disc() -> System:
     for m = 1, r = 0.1).  Fixed axes x, y horizontal, z up.  Frames: A is
     turned by ψ about z; B is A leaned by θ about A_x; the disc is B turned by φ
     about B_y (its axis).  Coordinates:
-
       x, y   the contact point P on the plane (a geometric point, not a material one);
       ψ      heading: the direction of rolling is A_x = (cos ψ, sin ψ, 0);
       θ      lean from the vertical (θ = 0 upright; θ > 0 tilts the top toward −A_y);
       φ      spin about the disc's axis B_y = (−sin ψ cos θ, cos ψ cos θ, sin θ).
-
     The centre is G = P + r B_z, B_z = (sin ψ sin θ, −cos ψ sin θ, cos θ).
     Angular velocity ω = ψ̇ z + θ̇ A_x + φ̇ B_y, in B: (θ̇, φ̇ + ψ̇ sin θ, ψ̇ cos θ).
-
         T = ½ m |Ġ|² + ½ [I1 (θ̇² + ψ̇² cos² θ) + I3 (φ̇ + ψ̇ sin θ)²],
         V = m g r cos θ.
-
     Rolling: the disc's material point at P has velocity Ġ + ω × (−r B_z) =
     (ẋ, ẏ, 0) − r φ̇ A_x, so (the vertical component vanishes identically)
-
         ``roll_x``: ẋ − r φ̇ cos ψ = 0,   ``roll_y``: ẏ − r φ̇ sin ψ = 0.
-
     Multipliers: a virtual displacement moves that material point by
     (δx − r δφ cos ψ, δy − r δφ sin ψ, 0), so λ_roll_x and λ_roll_y are exactly
     the x and y components of the friction force of the plane on the disc (the
     normal force does no virtual work in these coordinates).
     Steady turning: θ = θ0, ψ̇ = Ω, φ̇ = p constant (the contact point on a
     circle of radius r p/|Ω|) solves the equations when
-
         m g r sin θ0 + (I3 + m r²) p Ω cos θ0 + (I3 + m r² − I1) Ω² sin θ0 cos θ0 = 0
-
     (θ̈ = 0 in the constrained equations at that state; ψ̈ = φ̈ = 0 there
     identically).  Leaning toward −A_y (θ0 > 0) while rolling forward (p > 0)
     turns toward −A_y (Ω < 0).  The defaults start on such a turn: lean
@@ -425,22 +391,16 @@ def chaplygin_sleigh() -> System:
     Body of mass m and moment of inertia I about its centre of mass G; the
     knife edge is at K = G + a e1 on the body axis e1 = (cos θ, sin θ), and
     e2 = (−sin θ, cos θ).  Coordinates x, y (of G) and θ (heading of e1).
-
         T = ½ m (ẋ² + ẏ²) + ½ I θ̇²,   V = 0.
-
     Constraint ``knife``: v_K · e2 = −ẋ sin θ + ẏ cos θ + a θ̇ = 0,
     Λ = (−sin θ, cos θ, a).  A virtual displacement moves K by δG + a δθ e2,
     so the multiplier is exactly the sideways force F of the plane on the
     blade, along e2, in newtons.
     With the body-frame velocity of G, v = v_G·e1 and v_G·e2 = −a ω (ω = θ̇):
-
         m v̇ = −m a ω²,   J ω̇ = m a v ω,   J = I + m a²,   F = m (v ω − a ω̇).
-
     The energy E = ½ m v² + ½ J ω² is conserved and, with V = √(2E/m),
     k = a m V/J:
-
         v(t) = −V tanh(k (t − t0)),   ω(t) = ±√(2E/J) sech(k (t − t0)),
-
     t0 = atanh(v(0)/V)/k, the sign of ω that of ω(0).  Whatever the start, the
     sleigh ends up gliding straight along −e1, blade trailing; the heading
     turns by θ(t) − θ(0) = ±(1/a)√(J/m) · [gd(k(t − t0)) + gd(k t0)],
@@ -473,19 +433,13 @@ def spherical_pendulum_cartesian() -> System:
 
     Bob of mass m at r = (x, y, z), z up, on a massless rod of length l
     pivoted at the origin; gravity g.
-
         T = ½ m (ẋ² + ẏ² + ż²),   V = m g z.
-
     Constraint ``rod``: Φ = x² + y² + z² − l² = 0, so Λ = 2 (x, y, z), and the
     rod's force on the bob is Λᵀ λ = 2 λ r.  The tension N (positive when the
     rod pulls the bob toward the pivot) is therefore
-
         N = −2 λ l,
-
     and Newton's law along r̂ = r/l (r̂·r̈ = −|v|²/l on the sphere) gives
-
         N = m (|v|²/l − g z/l)      (m v²/l + m g hanging straight down).
-
     Equations: m r̈ = −m g e_z + 2 λ r, with 2 λ l² = m (g z − |v|²).
     The same motion in angles: `spherical_pendulum`; `spherical_to_cartesian`
     converts initial conditions.  The defaults start at θ = 1 rad from the
@@ -517,10 +471,8 @@ def spherical_pendulum() -> System:
 
     Coordinates θ (polar angle of the rod from the DOWNWARD vertical) and φ
     (azimuth about the vertical, from the x axis):
-
         r = l (sin θ cos φ, sin θ sin φ, −cos θ),
         T = ½ m l² (θ̇² + φ̇² sin² θ),   V = −m g l cos θ.
-
     Equations: θ̈ = φ̇² sin θ cos θ − (g/l) sin θ,  d/dt (sin² θ φ̇) = 0.
     φ is cyclic: p_φ = m l² sin² θ φ̇ (the vertical angular momentum) and the
     energy are conserved.  Conical motion θ = θ0 needs φ̇² = g/(l cos θ0).
@@ -566,34 +518,26 @@ def four_bar_linkage(theta1: float = 0.0, theta1_dot: float = 10.0) -> System:
     Ground link between the fixed pivots O = (0, 0) and D = (d, 0); x along OD,
     y up, gravity g along −y.  Three uniform rods, each of mass m_i and moment
     of inertia m_i L_i²/12 about its centre:
-
       crank   OA, length a, mass m1, angle θ1;
       coupler AB, length b, mass m2, angle θ2;
       rocker  DB, length c, mass m3, angle θ3,
-
     every angle absolute, from +x, counter-clockwise.  With e_i = (cos θ_i, sin θ_i):
-
         A = a e1,   B = A + b e2 = D + c e3,
         centres G1 = (a/2) e1,  G2 = A + (b/2) e2,  G3 = D + (c/2) e3,
         T = ½ Σ_i [m_i |Ġ_i|² + (m_i L_i²/12) θ̇_i²]
           = ½ (m1 a²/3) θ̇1² + ½ m2 [a² θ̇1² + a b cos(θ1 − θ2) θ̇1 θ̇2 + b² θ̇2²/3] + ½ (m3 c²/3) θ̇3²,
         V = g Σ_i m_i y_Gi = g [(m1/2 + m2) a sin θ1 + (m2/2) b sin θ2 + (m3/2) c sin θ3].
-
     The mass matrix depends on θ1 − θ2 (so RATTLE does not apply).
     Loop closure, B reached along the crank and coupler minus B reached along
     the rocker (two holonomic constraints):
-
         ``loop_x``: Φ_x = a cos θ1 + b cos θ2 − c cos θ3 − d = 0,
         ``loop_y``: Φ_y = a sin θ1 + b sin θ2 − c sin θ3 = 0,
-
     rows Λ_x = (−a sin θ1, −b sin θ2, c sin θ3), Λ_y = (a cos θ1, b cos θ2, −c cos θ3).
     Multipliers.  Cut the pin at B and let the rocker push the coupler with
     F = (F_x, F_y) at B (the coupler pushes the rocker with −F).  Its virtual
     work is F·δB_coupler − F·δB_rocker = F·δΦ = (Λ_xᵀ F_x + Λ_yᵀ F_y)·δq, so the
     generalized force of the pin is Λᵀ λ with
-
         λ_loop_x = F_x,   λ_loop_y = F_y:
-
     the multipliers are exactly the Cartesian force, in newtons, that the
     rocker exerts ON THE COUPLER at the pin B (the opposite acts on the rocker).
     The forces at O, A and D follow from Newton's law for each rod

@@ -69,9 +69,7 @@ def restricted_three_body() -> System:
     T = ½ ((ẋ − y)² + (ẏ + x)²),  V = −(1 − μ)/r1 − μ/r2,
     r1 = √((x + μ)² + y²),  r2 = √((x − 1 + μ)² + y²).
     Equations: ẍ − 2ẏ − x = −(1 − μ)(x + μ)/r1³ − μ(x − 1 + μ)/r2³,
-
                ÿ + 2ẋ − y = −(1 − μ) y/r1³ − μ y/r2³.
-
     The Jacobi integral h = ½(ẋ² + ẏ²) − ½(x² + y²) + V is conserved.  The defaults are the
     Arenstorf orbit of Hairer, Nørsett & Wanner (Solving ODEs I, §II.0): μ = 0.012277471,
     (x, y, ẋ, ẏ) = (0.994, 0, 0, −2.00158510637908252240537862224), periodic with period

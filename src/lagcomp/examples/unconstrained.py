@@ -59,10 +59,8 @@ def double_pendulum() -> System:
     x1 = l1 sin θ1, y1 = −l1 cos θ1, x2 = x1 + l2 sin θ2, y2 = y1 − l2 cos θ2 (y up);
     T = ½ m1 (ẋ1² + ẏ1²) + ½ m2 (ẋ2² + ẏ2²),  V = g (m1 y1 + m2 y2).
     With δ = θ1 − θ2 the equations are
-
         (m1 + m2) l1 θ̈1 + m2 l2 (θ̈2 cos δ + θ̇2² sin δ) + (m1 + m2) g sin θ1 = 0,
         l2 θ̈2 + l1 (θ̈1 cos δ − θ̇1² sin δ) + g sin θ2 = 0.
-
     No closed form (chaotic at large energy); T + V is conserved.
     """
     th1, th2 = coordinates("theta1 theta2")
@@ -87,13 +85,9 @@ def n_link_pendulum(n: int = 3) -> System:
     Coordinates θ1..θn: absolute angles of the rods from the downward vertical.
     Mass i sits at (Σ_{k≤i} l_k sin θ_k, −Σ_{k≤i} l_k cos θ_k).  With the mass
     carried below rod k, μ_k = Σ_{i≥k} m_i,
-
         T = ½ Σ_{j,k} μ_max(j,k) l_j l_k cos(θj − θk) θ̇j θ̇k,   V = −g Σ_k μ_k l_k cos θk,
-
     and the equation for θj is
-
         Σ_k μ_max(j,k) l_j l_k [cos(θj − θk) θ̈k + sin(θj − θk) θ̇k²] + μ_j g l_j sin θj = 0.
-
     n = 1 is the simple pendulum, n = 2 the double pendulum.  Parameters:
     m1..mn, l1..ln, g (2n + 1 in all).  The System is named ``n_link_pendulum_<n>``.
     """
@@ -190,9 +184,7 @@ def rope_friction() -> System:
     Coordinate x, T and V as in `rope` (μ = M/L).  The table part, of length
     L − x, presses with μ g (L − x); friction opposes its motion, giving the
     generalized force
-
         Q = −f μ g (L − x) s,  s = sign(ẋ) if ẋ ≠ 0, s = 1 at rest.
-
     The choice s = 1 at rest is limiting static friction for a rope about to
     slide toward +x: the weight μ g x beats f μ g (L − x) above the critical
     length l0 = f L/(1 + f), and below l0 a real rope would stay put (the model
@@ -287,9 +279,7 @@ def unbalanced_cylinder() -> System:
     inertia about the line through G parallel to the axis.  Axes: x along the
     ground, y up.  Coordinate θ: rotation angle, clockwise, so the cylinder rolls
     toward +x as θ grows; θ = 0 has G straight below the axis C.
-
         C = (R θ, R),  G = (R θ − a sin θ, R − a cos θ).
-
     T = ½ M |Ġ|² + ½ I θ̇² = ½ [M (R² + a² − 2 a R cos θ) + I] θ̇²,
     V = M g (R − a cos θ).
     Equation: [M (R² + a² − 2 a R cos θ) + I] θ̈ + M a R sin θ θ̇² + M g a sin θ = 0.
@@ -376,10 +366,8 @@ def stiff_spring_pendulum() -> System:
     length) and θ (its angle from the downward vertical); bob at (r sin θ, −r cos θ), y up.
     T = ½ m (ṙ² + r² θ̇²),  V = ½ k (r − l0)² − m g r cos θ,  D = ½ c ṙ² (the damper along the spring).
     Equations:
-
         m r̈ = m r θ̇² − k (r − l0) + m g cos θ − c ṙ,
         r θ̈ = −2 ṙ θ̇ − g sin θ.
-
     Linearized about the stretched rest length, the spring's own mode is m x'' + c x' + k x = 0: with the
     defaults k/m = 10⁶ s⁻² and c = 2 √(k m) (critical damping) both its eigenvalues are −c/(2m) = −1000 s⁻¹,
     while the swing has a period near 2π √(l0/g) ≈ 2 s.  An explicit method's step is bounded by that
