@@ -31,6 +31,18 @@ from lagcomp.integrate.solution import Solution as Solution
 from lagcomp.integrate.sweep import Sweep as Sweep
 from lagcomp.runtime import Model as Model, compile as compile, load as load  # noqa: A004
 
+#: The public names: `from lagcomp import *`, and what the API reference documents
+#: (tests/test_docs_reference.py checks both).
+__all__ = [
+    "animate", "compile", "load", "Model", "Solution", "Sweep", "Tabulated", "kernel_accuracy",
+    "Contact", "Damper", "Event", "Force", "Friction", "Gravity", "Holonomic", "Input", "MovingFrame", "Nonholonomic",
+    "Particle", "RigidBody", "Spring", "System", "Torque", "body_rates", "coordinates", "from_kanes_method",
+    "from_lagranges_method", "rotated", "t",
+    "LagcompError", "ModelError", "UndeclaredSymbolError", "ParameterError", "OptionError", "InitialConditionError",
+    "SingularMassMatrixError", "IntegrationError", "LinearizationError", "CorruptCacheRecordError", "CacheWarning",
+    "StiffnessWarning", "ResetWarning",
+]
+
 #: What `lagcomp.model` contributes to the namespace.  It is imported on first
 #: use (PEP 562), because it imports sympy: a process that only runs a cached
 #: model (`lagcomp.load`) starts without sympy's ~0.5 s import.

@@ -24,6 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["plot_coordinates", "plot_energy_error", "plot_run", "plot_phase_portrait", "plot_poincare", "plot_sweep",
+           "plot_lyapunov", "plot_stability"]
+
 
 def _figure(width: float = 7.0, height: float = 4.5):
     try:

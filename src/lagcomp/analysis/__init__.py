@@ -60,3 +60,11 @@ from lagcomp.analysis.statics import (
     find_equilibrium as find_equilibrium,
     generalized_forces as generalized_forces,
 )
+
+__all__ = [
+    "Conserved", "Equilibrium", "Linearization", "Lyapunov", "Modes", "PeriodicOrbit", "Portrait", "Section",
+    "StabilityChange", "StabilitySweep", "SteadyLinearization", "balance", "conserved_quantities", "consistent_speeds",
+    "find_equilibria", "find_equilibrium", "generalized_forces", "linearize", "linearize_steady", "linearize_symbolic",
+    "lyapunov_exponents", "lyapunov_spectrum", "normal_modes", "on_energy_surface", "periodic_orbit", "phase_portrait",
+    "poincare_section", "stability_sweep", "two_trajectory_lyapunov",
+]

@@ -4,36 +4,36 @@ Each factory returns a `lagcomp.model.System` with parameter defaults,
 initial conditions and a run length.  Look them up by name with `get` or
 through the `EXAMPLES` registry:
 
-=========================  ========================================================
-``simple_pendulum``        point mass on a massless rod
-``double_pendulum``        two point masses on two massless rods
-``n_link_pendulum``        planar chain of n point masses (name ``n_link_pendulum_<n>``)
-``sling``                  bead on a rod turning at a constant rate in a horizontal plane
-``rope``                   rope slipping off a frictionless table edge
-``rope_friction``          the same rope with Coulomb friction on the table
-``hoop_bead``              bead on a hoop turned about its vertical diameter by φ(t)
-``huygens``                Huygens' isochronous cycloidal pendulum
-``tray_cylinder``          cylinder rolling without slipping on a tray moved along a(t)
-``unbalanced_cylinder``    rolling cylinder whose centre of mass is off its axis
-``driven_pendulum``        pendulum on a vertically vibrated support (Kapitza)
-``henon_heiles``           star in a galactic potential; events for its Poincaré section
-``stiff_spring_pendulum``  pendulum on a stiff damped spring (k/m = 10⁶): a stiff problem
-``hoop_bead_reaction``     the hoop bead with φ released: the hoop's normal push as λ
-``unbalanced_cylinder_reactions``  the unbalanced cylinder with F_v and F_h from released constraints
-``free_axle``              axle with two independent wheels on an incline (3 multipliers)
-``rolling_disc``           thin disc rolling without slipping on a plane (nonholonomic, 3D)
-``chaplygin_sleigh``       rigid body on a knife edge (nonholonomic)
-``spherical_pendulum_cartesian``  bob on a rod in Cartesian coordinates: λ gives the rod tension
-``spherical_pendulum``     the same pendulum in spherical angles
-``four_bar_linkage``       crank, coupler and rocker closing a loop (2 holonomic constraints): λ is a pin force
-``turn_indicator``         gyroscope in a gimbal of a banked, turning aircraft (moving frame, rigid body)
-``compton_disc``           disc on a turning carousel at latitude λ, axis swung over (moving frame)
-``driven_pendulum_support``  ``driven_pendulum`` written in the support's frame (driving inertial force)
-``symmetric_top``          heavy symmetric top in Euler angles (rigid body, gravity)
-``wheel_jack``             crank, screw and lozenge holding a load: statics by virtual work
-``pythagorean_three_body``  Burrau's three bodies (masses 3, 4, 5) from rest: close approaches
-``restricted_three_body``  circular restricted three-body problem, rotating frame (Arenstorf orbit)
-=========================  ========================================================
+==================================  ========================================================
+``simple_pendulum``                 point mass on a massless rod
+``double_pendulum``                 two point masses on two massless rods
+``n_link_pendulum``                 planar chain of n point masses (name ``n_link_pendulum_<n>``)
+``sling``                           bead on a rod turning at a constant rate in a horizontal plane
+``rope``                            rope slipping off a frictionless table edge
+``rope_friction``                   the same rope with Coulomb friction on the table
+``hoop_bead``                       bead on a hoop turned about its vertical diameter by φ(t)
+``huygens``                         Huygens' isochronous cycloidal pendulum
+``tray_cylinder``                   cylinder rolling without slipping on a tray moved along a(t)
+``unbalanced_cylinder``             rolling cylinder whose centre of mass is off its axis
+``driven_pendulum``                 pendulum on a vertically vibrated support (Kapitza)
+``henon_heiles``                    star in a galactic potential; events for its Poincaré section
+``stiff_spring_pendulum``           pendulum on a stiff damped spring (k/m = 10⁶): a stiff problem
+``hoop_bead_reaction``              the hoop bead with φ released: the hoop's normal push as λ
+``unbalanced_cylinder_reactions``   the unbalanced cylinder with F_v and F_h from released constraints
+``free_axle``                       axle with two independent wheels on an incline (3 multipliers)
+``rolling_disc``                    thin disc rolling without slipping on a plane (nonholonomic, 3D)
+``chaplygin_sleigh``                rigid body on a knife edge (nonholonomic)
+``spherical_pendulum_cartesian``    bob on a rod in Cartesian coordinates: λ gives the rod tension
+``spherical_pendulum``              the same pendulum in spherical angles
+``four_bar_linkage``                crank, coupler and rocker closing a loop (2 holonomic constraints): λ is a pin force
+``turn_indicator``                  gyroscope in a gimbal of a banked, turning aircraft (moving frame, rigid body)
+``compton_disc``                    disc on a turning carousel at latitude λ, axis swung over (moving frame)
+``driven_pendulum_support``         ``driven_pendulum`` written in the support's frame (driving inertial force)
+``symmetric_top``                   heavy symmetric top in Euler angles (rigid body, gravity)
+``wheel_jack``                      crank, screw and lozenge holding a load: statics by virtual work
+``pythagorean_three_body``          Burrau's three bodies (masses 3, 4, 5) from rest: close approaches
+``restricted_three_body``           circular restricted three-body problem, rotating frame (Arenstorf orbit)
+==================================  ========================================================
 
 The factories live in `unconstrained`, `constrained`, `bodies` (systems
 built from Particle / RigidBody, loads and moving frames) and `gravitation`; each docstring states

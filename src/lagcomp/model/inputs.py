@@ -40,7 +40,7 @@ t = dynamicsymbols._t
 
 
 def Input(name: str, law=None) -> sp.Expr:  # noqa: N802 (a constructor, like sympy's Function)
-    """An input signal ``name``(t), supplied at run time or given by a feedback `law`.
+    """An input signal u(t) named ``name``, supplied at run time or given by a feedback `law`.
 
     Parameters
     ----------
