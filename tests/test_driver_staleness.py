@@ -157,3 +157,14 @@ def test_the_digest_covers_every_library_file_a_driver_imports():
     missing = {str(imported.relative_to(root)): str(source.relative_to(root))
                for source in sources for imported in _imported_files(source, root) - sources}
     assert not missing, f"add these to numba_cache.LIBRARY_SOURCES (imported by): {missing}"
+
+
+def test_the_digest_covers_every_library_file_kernel_support_imports():
+    """The sources kernel_support's cache is keyed on are closed under its imports, and they are those the generated
+    modules' file names are keyed on (`lagcomp.cache.source_key`): a generated module compiles only those in."""
+    root = Path(lagcomp.__file__).parent
+    sources = set(hashed_files(numba_cache.KERNEL_SUPPORT_SOURCES))
+    missing = {str(imported.relative_to(root)): str(source.relative_to(root))
+               for source in sources for imported in _imported_files(source, root) - sources}
+    assert not missing, f"add these to numba_cache.KERNEL_SUPPORT_SOURCES (imported by): {missing}"
+    assert numba_cache.KERNEL_SUPPORT_SOURCES == lagcomp.cache.KERNEL_LIBRARY
