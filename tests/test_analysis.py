@@ -98,12 +98,12 @@ def test_wheel_jack_ratio_from_the_compiled_residual(compiled):
         eq = an.find_equilibrium(model, [0.7], dict(F=effort))
         assert eq.success and eq.steady
         ratio = 2 * math.pi * d["a"] * math.tan(eq.q[0]) / d["h"]
-        assert d["P"] / effort == pytest.approx(ratio, rel=1e-12)
+        assert d["P"] / effort == pytest.approx(ratio, rel=1e-12, abs=0)
         thetas.append(eq.q[0])
     assert np.all(np.diff(thetas) < 0) and thetas[0] > 1.2 and thetas[-1] < 0.1  # several θ, from steep to flat
     # the textbook's numbers: a = 20 cm, h = 2 mm, θ = 30°
     eq = an.find_equilibrium(model, [0.5], dict(F=4000.0 / (2 * math.pi * 0.2 * math.tan(math.pi / 6) / 0.002)))
-    assert eq.q[0] == pytest.approx(math.pi / 6, rel=1e-12)
+    assert eq.q[0] == pytest.approx(math.pi / 6, rel=1e-12, abs=0)
     assert an.normal_modes(model, eq.q).stability == "unstable"  # a frictionless jack never holds still
 
 
@@ -128,10 +128,10 @@ def test_hoop_bead_relative_equilibria_and_frequency(compiled):
         star = math.acos(-g / (R * Omega**2))
         np.testing.assert_allclose(angles, [0.0, star, math.pi, 2 * math.pi - star], rtol=0, atol=1e-13)
         assert all(e.steady for e in found)
-        assert math.cos(math.pi - angles[1]) == pytest.approx(g / (Omega**2 * R), rel=1e-13)
+        assert math.cos(math.pi - angles[1]) == pytest.approx(g / (Omega**2 * R), rel=1e-13, abs=0)
         modes = an.normal_modes(model, found[1].q, params)
         assert modes.stability == "stable"
-        assert modes.frequencies[0] == pytest.approx(math.sqrt(Omega**2 - g**2 / (R**2 * Omega**2)), rel=1e-12)
+        assert modes.frequencies[0] == pytest.approx(math.sqrt(Omega**2 - g**2 / (R**2 * Omega**2)), rel=1e-12, abs=0)
         assert an.normal_modes(model, [math.pi], params).stability == "unstable"
     for Omega in (0.95 * threshold, 1.0):
         params = dict(Omega=Omega, epsilon=0.0)
@@ -139,8 +139,8 @@ def test_hoop_bead_relative_equilibria_and_frequency(compiled):
         np.testing.assert_allclose([e.q[0] for e in found], [0.0, math.pi], atol=1e-13)
         bottom = an.normal_modes(model, [math.pi], params)
         assert bottom.stability == "stable"
-        assert bottom.frequencies[0] == pytest.approx(math.sqrt(g / R - Omega**2), rel=1e-12)
-        assert an.normal_modes(model, [0.0], params).omega2[0] == pytest.approx(-(g / R + Omega**2), rel=1e-12)
+        assert bottom.frequencies[0] == pytest.approx(math.sqrt(g / R - Omega**2), rel=1e-12, abs=0)
+        assert an.normal_modes(model, [0.0], params).omega2[0] == pytest.approx(-(g / R + Omega**2), rel=1e-12, abs=0)
 
 
 def test_hoop_bead_symbolic_frequency():
@@ -165,11 +165,11 @@ def test_turn_indicator_steady_tilt(compiled):
     assert eq.success and eq.steady
     b = eq.q[0] + d["alpha"]
     rhs = d["I"] * d["omega"] * d["Omega"] * math.cos(b) + 0.5 * (d["I"] - d["I_X"]) * d["omega"] ** 2 * math.sin(2 * b)
-    assert d["k"] * eq.q[0] == pytest.approx(rhs, rel=1e-13)
+    assert d["k"] * eq.q[0] == pytest.approx(rhs, rel=1e-13, abs=0)
     modes = an.normal_modes(model, eq.q)
     assert modes.stability == "asymptotically stable"
     lin = modes.linearization
-    assert lin.D[0, 0] == pytest.approx(d["c"], rel=1e-13)
+    assert lin.D[0, 0] == pytest.approx(d["c"], rel=1e-13, abs=0)
     # K = k − I ω Ω sin β·(−1)... checked as the growth rate of the damped oscillator: Re λ = −c/(2 I_X)
     assert modes.growth_rate == pytest.approx(-d["c"] / (2 * d["I_X"]), rel=1e-10)
 
@@ -253,7 +253,7 @@ def test_unbalanced_cylinder_portrait(compiled):
     E_min, E_s = M * g * (R - a), M * g * (R + a)
     energies = [0.9 * E_min, E_min + 0.3 * (E_s - E_min), E_s, 1.4 * E_s]
     portrait = an.phase_portrait(model, energies, (-math.pi, math.pi), periodic=True)
-    assert portrait.separatrices == pytest.approx([E_s], rel=1e-13)
+    assert portrait.separatrices == pytest.approx([E_s], rel=1e-13, abs=0)
     assert portrait.regimes == ("no motion", "oscillation", "separatrix", "revolution")
     theta = portrait.q
     J = M * (R**2 + a**2 - 2 * a * R * np.cos(theta)) + I

@@ -122,7 +122,7 @@ def test_a_block_on_an_inclined_floor_sticks_iff_the_slope_is_within_the_static_
         np.testing.assert_allclose(sol.friction_forces[1:, 0], mu_k * m * G * np.cos(alpha), rtol=1e-12)
 
 
-@pytest.mark.parametrize("v_t", [5.0, -5.0, 1.0])
+@pytest.mark.parametrize("v_t", [5.0, -5.0, 1.0, 2.5, -2.5])   # 2.5: between μk and μs (1 + e) v_n (1.99, 3.32)
 def test_a_point_mass_hitting_a_frictional_floor_obliquely_loses_tangential_speed_by_coulombs_law(block_on_floor, v_t):
     h, e, mu_s, mu_k = 1.0, 0.5, 0.5, 0.3
     v_n = np.sqrt(2 * G * h)

@@ -20,6 +20,8 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
+
 import lagcomp
 from lagcomp import numba_cache
 from lagcomp.cache import hashed_files
@@ -76,6 +78,52 @@ def test_a_driver_is_compiled_again_when_a_library_file_it_inlines_changes(tmp_p
     assert probe() == {"value": 5, "misses": 0, "warnings": []}  # the new code cached, the stamp renewed
 
 
+#: A bouncing ball compiled and run by `lagcomp.compile` in a fresh process: its impact goes through the generated
+#: ``event_reset``, `kernel_support.resting.contact_event` and `kernel_support.impacts.contact_impacts`.
+BALL = textwrap.dedent(
+    """
+    import json, warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        import lagcomp as lc
+
+        x, = lc.coordinates("x")
+        ball = lc.System([x], T=x.diff(lc.t) ** 2 / 2, V=9.81 * x, name="stale_ball",
+                         events=[lc.Contact("floor", x, restitution=0.5)])
+        impact = lc.compile(ball).simulate((0.0, 0.5), [1.0], [0.0], method="dopri5").events["floor"]
+    print(json.dumps({"v": [float(impact.qd[0][0]), float(impact.qd_after[0][0])],
+                      "warnings": [str(w.message) for w in caught if w.category.__name__ == "CacheWarning"]}))
+    """
+)
+
+
+def test_a_model_runs_the_new_code_of_a_kernel_support_function_called_from_an_unchanged_file(tmp_path):
+    """The impact law of `impacts.py` is edited in a copy of the package (restitution e → e/4); `resting.py`, whose
+    cached machine code holds the old law, is not.  The next process must see the new law: v⁺ = −(e/4) v⁻."""
+    copy = tmp_path / "site"
+    shutil.copytree(Path(lagcomp.__file__).parent, copy / "lagcomp", ignore=shutil.ignore_patterns("__pycache__"))
+    env = {**os.environ, "PYTHONPATH": str(copy), "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+           "LAGCOMP_CACHE_DIR": str(tmp_path / "lagcomp")}
+
+    def run() -> dict:
+        out = subprocess.run([sys.executable, "-c", BALL], capture_output=True, text=True, env=env)
+        assert out.returncode == 0, out.stderr
+        return json.loads(out.stdout.strip().splitlines()[-1])
+
+    before = run()
+    v_minus, v_plus = before["v"]
+    assert v_minus < 0.0 and v_plus == pytest.approx(-0.5 * v_minus, rel=1e-15, abs=0) and before["warnings"] == []
+    impacts = copy / "lagcomp" / "kernel_support" / "impacts.py"
+    source = impacts.read_text()
+    edited = source.replace("e[row] = restitution[d]", "e[row] = 0.25 * restitution[d]")
+    assert edited.count("0.25 * restitution[d]") == 1
+    impacts.write_text(edited)
+    after = run()
+    assert after["v"][0] == v_minus and after["v"][1] == pytest.approx(-0.125 * v_minus, rel=1e-15, abs=0), after
+    assert any("lagcomp.kernel_support" in warning for warning in after["warnings"]), after["warnings"]
+
+
 #: Imported by the drivers' package to run the refresh: it compiles nothing into a driver.
 NOT_COMPILED_IN = {"lagcomp.numba_cache"}
 
@@ -109,3 +157,14 @@ def test_the_digest_covers_every_library_file_a_driver_imports():
     missing = {str(imported.relative_to(root)): str(source.relative_to(root))
                for source in sources for imported in _imported_files(source, root) - sources}
     assert not missing, f"add these to numba_cache.LIBRARY_SOURCES (imported by): {missing}"
+
+
+def test_the_digest_covers_every_library_file_kernel_support_imports():
+    """The sources kernel_support's cache is keyed on are closed under its imports, and they are those the generated
+    modules' file names are keyed on (`lagcomp.cache.source_key`): a generated module compiles only those in."""
+    root = Path(lagcomp.__file__).parent
+    sources = set(hashed_files(numba_cache.KERNEL_SUPPORT_SOURCES))
+    missing = {str(imported.relative_to(root)): str(source.relative_to(root))
+               for source in sources for imported in _imported_files(source, root) - sources}
+    assert not missing, f"add these to numba_cache.KERNEL_SUPPORT_SOURCES (imported by): {missing}"
+    assert numba_cache.KERNEL_SUPPORT_SOURCES == lagcomp.cache.KERNEL_LIBRARY

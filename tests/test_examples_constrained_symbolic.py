@@ -288,15 +288,18 @@ def test_free_axle_closed_form_formulas():
     cf = ex.free_axle_closed_form(ts, d, V0, w)
     A = d["m"] * d["g"] * d["R"] ** 2 * math.sin(d["alpha"]) / (d["I3"] + d["m"] * d["R"] ** 2)
     wt = w * ts
-    assert np.allclose(cf["X"], V0 / w * (np.cos(wt) - 1) - A / (4 * w**2) * (2 * wt - np.sin(2 * wt)))
-    assert np.allclose(cf["Y"], V0 / w * np.sin(wt) + A / (4 * w**2) * (1 - np.cos(2 * wt)))
-    assert np.allclose(cf["roll_X"], -d["m"] * (V0 * w * np.cos(wt) + A * np.sin(2 * wt)))
     gs = d["g"] * math.sin(d["alpha"])
-    assert np.allclose(cf["roll_Y"], -d["m"] * (V0 * w * np.sin(wt) - A * np.cos(2 * wt) + gs))
+    printed = {"X": V0 / w * (np.cos(wt) - 1) - A / (4 * w**2) * (2 * wt - np.sin(2 * wt)),
+               "Y": V0 / w * np.sin(wt) + A / (4 * w**2) * (1 - np.cos(2 * wt)),
+               "roll_X": -d["m"] * (V0 * w * np.cos(wt) + A * np.sin(2 * wt)),
+               "roll_Y": -d["m"] * (V0 * w * np.sin(wt) - A * np.cos(2 * wt) + gs)}
+    for k, formula in printed.items():   # the same formulas evaluated twice: equal to a few roundings of their terms
+        np.testing.assert_allclose(cf[k], formula, rtol=1e-13, atol=1e-13 * np.abs(formula).max(), err_msg=k)
     # drift along −X at mean speed A/(2ω) after whole turns
     period = 2 * math.pi / w
     one = ex.free_axle_closed_form(np.array([period, 2 * period]), d, V0, w)
-    assert np.allclose(np.diff(one["X"]) / period, -A / (2 * w)) and np.allclose(one["Y"], 0, atol=1e-12)
+    np.testing.assert_allclose(np.diff(one["X"]) / period, -A / (2 * w), rtol=1e-12, atol=0)
+    assert np.allclose(one["Y"], 0, atol=1e-12)
 
 
 def test_free_axle_heading_turns_uniformly_and_steer_multiplier_vanishes():

@@ -99,6 +99,26 @@ def test_a_block_on_an_incline_sticks_iff_tan_alpha_is_at_most_mu_s(incline, tan
         np.testing.assert_allclose(sol.friction_forces[:, 0], -mu_k * m * G * np.cos(alpha), rtol=1e-12)
 
 
+@pytest.mark.parametrize("static, kinetic", [(0, None), (0.0, 0.0), (0.5, 0)])
+def test_a_coefficient_of_zero_is_accepted(static, kinetic):
+    """μ ≥ 0, as the docstring says: μ = 0 is a frictionless element (μk = 0: slides freely once it slips)."""
+    s, = lc.coordinates("s")
+    element = lc.Friction("slope", s.diff(t), normal=G, static=static, kinetic=kinetic)
+    assert float(element.static) == static and float(element.kinetic) == 0.0
+
+
+def test_a_block_on_a_frictionless_incline_slides_as_without_the_element(cache_dir):
+    """μs = μk = 0 given as numbers: s = g sin α t²/2 down the slope, the friction force 0."""
+    s, = lc.coordinates("s")
+    m, alpha = 2.0, 0.1
+    system = lc.System([s], T=m * s.diff(t) ** 2 / 2, V=-m * G * np.sin(alpha) * s, name="friction_none",
+                       events=[lc.Friction("slope", s.diff(t), normal=m * G * np.cos(alpha), static=0, kinetic=0)])
+    sol = lc.compile(system, cache_dir=cache_dir).simulate((0.0, 1.0), [0.0], [0.0], rtol=1e-12, atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    np.testing.assert_allclose(sol.q[:, 0], G * np.sin(alpha) * sol.t**2 / 2, rtol=1e-10, atol=0)
+    assert np.abs(sol.friction_forces[:, 0]).max() == 0.0
+
+
 def test_a_sliding_block_stops_where_the_kinetic_friction_brakes_it(incline):
     # tan α < μk: launched down the slope it decelerates by g (μk cos α − sin α), then sticks for good
     alpha, mu_k, v0 = 0.2, 0.4, 1.5

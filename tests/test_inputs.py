@@ -335,6 +335,25 @@ def test_the_kernel_interpolates_as_scipys_cubic_spline(gaps, values, start, fra
             assert abs(input_value(s, p, 2, order) - spline(s, order)) <= tolerance, (s, order)
 
 
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(0.01, 2.0), min_size=2, max_size=30), st.lists(st.floats(-1e3, 1e3), min_size=31,
+       max_size=31), st.floats(0.0, 1.0))
+def test_at_a_breakpoint_the_kernel_reads_the_piece_that_starts_there(gaps, values, start):
+    """Exactly at an interior breakpoint x_k the table is read on piece k (x_k ≤ t < x_(k+1)), as scipy's PPoly
+    does: a cubic's third derivative (which jumps there) is 6 a_k, a linear table's slope that of [x_k, x_(k+1)]."""
+    times = start + np.concatenate([[0.0], np.cumsum(gaps)])
+    samples = np.asarray(values[: times.size])
+    spline = CubicSpline(times, samples)
+    p = pack_inputs(("u",), (3,), {"u": spline}, None, 0)
+    linear = pack_inputs(("u",), (1,), {"u": lc.Tabulated(times, samples, kind="linear")}, None, 0)
+    for k in range(1, times.size - 1):
+        for order in range(4):
+            assert input_value(times[k], p, 0, order) == spline(times[k], order), (k, order)
+        slope = (samples[k + 1] - samples[k]) / (times[k + 1] - times[k])
+        assert input_value(times[k], linear, 0, 1) == pytest.approx(slope, rel=4 * np.finfo(float).eps, abs=0), k
+        assert input_value(times[k], linear, 0, 0) == samples[k]
+
+
 RISKY = ("k", "t", "p", "y", "out", "x.1", "u_k", "ud_k", "_c0", "input_value", "range")
 
 

@@ -16,6 +16,8 @@ import numba
 import numpy as np
 import pytest
 import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import lagcomp as lc
 from lagcomp.integrate.status import Status
@@ -181,7 +183,7 @@ def test_a_particle_comes_to_rest_in_a_corner(corner, q0, closings):
     np.testing.assert_allclose(sol.contact_forces[-1], [0.6 * G, G], rtol=1e-12)
     assert np.abs(sol.q[-1]).max() < 1e-15 and not sol.qd[-1].any()
     if q0[1] == 0.0:                        # sliding on the closed floor: x = 1 − 0.3 g t², at the wall at √(1/(0.3 g))
-        assert sol.events["wall"].t[0] == pytest.approx(np.sqrt(1 / (0.3 * G)), rel=1e-12)
+        assert sol.events["wall"].t[0] == pytest.approx(np.sqrt(1 / (0.3 * G)), rel=1e-12, abs=0)
         assert not sol.q[:, 1].any()
 
 
@@ -244,7 +246,7 @@ def test_an_impact_on_a_resting_body_pushes_through_its_closed_contact(stack):
     v = np.sqrt(2 * G * h)
     sol = stack.simulate((0, 0.5), q0=[0.0, h], qd0=[0.0, 0.0], method="dop853", rtol=1e-12, atol=1e-12)
     hit = sol.events["balls"]
-    assert hit.t[0] == pytest.approx(np.sqrt(2 * h / G), rel=1e-12)
+    assert hit.t[0] == pytest.approx(np.sqrt(2 * h / G), rel=1e-12, abs=0)
     np.testing.assert_allclose(hit.impulses[0], [(1 + e) * v, (1 + e) * v], rtol=1e-11)
     np.testing.assert_allclose(hit.qd_after[0], [0.0, e * v], atol=1e-11)
     sweep = stack.sweep((0, 0.5), {"e": [e, 0.8]}, q0=[0.0, h], qd0=[0.0, 0.0], method="dop853", rtol=1e-12,
@@ -281,3 +283,51 @@ def test_a_ladder_leaves_the_wall_at_two_thirds_of_its_height(ladder, theta0):
     np.testing.assert_allclose(sol.contact_forces[0], [0.75 * m * G * np.sin(theta0) * np.cos(theta0),
                                                         m * G * (1 - 0.75 * np.sin(theta0) ** 2)], rtol=1e-12)
     assert sol.contact_forces[row, 1] > 0.0
+
+
+# -- the kernel helpers, called directly -----------------------------------------------------------------------------
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.floats(-0.95, -0.05), st.floats(0.1, 10.0), st.floats(0.05, 0.95), st.floats(0.5, 5.0))
+def test_of_two_pulling_contacts_the_most_negative_is_released_and_the_other_pushes(c, a, fraction, m):
+    """Two closed contacts of a point mass m in the plane, gap gradients g1 = (1, 0) and g2 = (c, √(1 − c²)) (unit,
+    at an obtuse angle: c < 0), with G q̈_free + b = (a, f) at q̈_free = 0, a > 0 and c a < f < 0.  Holding both,
+    W = (1/m) [[1, c], [c, 1]] and λ = −m W̃⁻¹ (a, f) = −m/(1 − c²) (a − c f, f − c a): both pull, λ1 < λ2 (as a > f).
+    Releasing contact 1 (the most negative) leaves contact 2 alone with λ2 = −m f > 0: it pushes and stays, and
+    q̈ = −f g2.  Releasing contact 2 first would leave contact 1 alone with λ1 = −m a < 0: both released."""
+    from lagcomp.kernel_support.resting import held_row_accelerations
+
+    f = fraction * c * a
+    g2 = np.array([c, np.sqrt(1.0 - c * c)])
+    both = -m / (1.0 - c * c) * np.array([a - c * f, f - c * a])
+    assert both[0] < both[1] < 0.0                                  # the premise: both pull, contact 1 the more
+    qdd, forces = np.zeros(2), np.empty(2)
+    status = held_row_accelerations(m * np.eye(2), np.array([[1.0, 0.0], g2]), np.array([a, f]),
+                                    np.array([True, True]), 2, qdd, forces, 1.0)
+    assert status == 0
+    assert forces[0] == 0.0
+    assert forces[1] == pytest.approx(-m * f, rel=1e-13, abs=0)
+    np.testing.assert_allclose(qdd, -f * g2, rtol=1e-13, atol=1e-15 * abs(f))
+    assert qdd[0] + a > 0.0                                          # contact 1, released, opens
+
+
+@pytest.mark.parametrize("mode", [1.0, -1.0])
+@pytest.mark.parametrize("force", [0.0, 1e-300, -2.5])
+def test_a_slipping_element_with_no_normal_force_never_sticks(mode, force):
+    """With limit μs |N| = 0 (an open contact presses with no force) a slipping element stays slipping, even when
+    the force needed to hold it is 0: it slips against that force (+1 for a force of 0 or less)."""
+    from lagcomp.kernel_support.resting import friction_mode_after
+
+    assert friction_mode_after(mode, force, 0.0) == (-1.0 if force > 0.0 else 1.0)
+
+
+@pytest.mark.parametrize("mode, force, limit, after", [
+    (1.0, 0.3, 0.5, 0.0), (-1.0, -0.5, 0.5, 0.0),       # from slip, held within μs |N|: sticks
+    (1.0, 0.7, 0.5, -1.0), (-1.0, -0.7, 0.5, 1.0),      # from slip, beyond it: slips against the force
+    (0.0, 0.5, 0.5, -1.0), (0.0, -0.5, 0.5, 1.0),       # from stick (its force reached the limit): slips against it
+])
+def test_the_mode_after_a_friction_event_follows_coulombs_law(mode, force, limit, after):
+    from lagcomp.kernel_support.resting import friction_mode_after
+
+    assert friction_mode_after(mode, force, limit) == after

@@ -130,7 +130,7 @@ def test_sleeping_top_critical_spin_is_found(top):
                             drop=("phi", "phi_dot"))
     assert [(c.becomes, c.crossing) for c in sweep.changes] == [("stable", "marginal")]
     # measured: relative error 3e-14
-    assert sweep.changes[0].value == pytest.approx(critical, rel=1e-12)
+    assert sweep.changes[0].value == pytest.approx(critical, rel=1e-12, abs=0)
     assert sweep.unstable[0] and not sweep.unstable[-1]
 
 
@@ -195,7 +195,7 @@ def test_thin_disc_rolls_upright_stably_above_the_closed_form_spin(disc):
     sweep = stability_sweep(disc, "phi_dot", np.linspace(1.0, 12.0, 12), [0.0] * 5, None, params, drop=DISC_DROP)
     assert [(c.becomes, c.crossing) for c in sweep.changes] == [("stable", "marginal")]
     # ω² = g/(3r); measured relative error 6e-14
-    assert sweep.changes[0].value == pytest.approx(math.sqrt(9.81 / 0.3), rel=1e-12)
+    assert sweep.changes[0].value == pytest.approx(math.sqrt(9.81 / 0.3), rel=1e-12, abs=0)
 
 
 def test_kane_rolling_disc_matches_sympys_linearizer():
@@ -264,7 +264,7 @@ def test_cartesian_spherical_pendulum_hanging_and_on_a_cone():
     theta0 = 0.7
     rho, Omega = math.sin(theta0), math.sqrt(9.81 / math.cos(theta0))
     cone = linearize_steady(system, [rho, 0.0, -math.cos(theta0)], [0.0, rho * Omega, 0.0], params)
-    assert cone.residual == pytest.approx(9.81 * math.tan(theta0), rel=1e-12)
+    assert cone.residual == pytest.approx(9.81 * math.tan(theta0), rel=1e-12, abs=0)
 
 
 # -- non-smooth equations (sympy's derivatives, DiracDelta away from kinks) -----------
@@ -397,7 +397,7 @@ def test_cli_stability_finds_the_hoop_beads_critical_rate(capsys, tmp_path):
     out = capsys.readouterr().out
     line = next(row for row in out.splitlines() if row.startswith("becomes unstable at Omega = "))
     # measured: 1e-13 relative (printed to 12 digits)
-    assert float(line.split("= ")[1].split()[0]) == pytest.approx(math.sqrt(9.81 / 0.5), rel=1e-11)
+    assert float(line.split("= ")[1].split()[0]) == pytest.approx(math.sqrt(9.81 / 0.5), rel=1e-11, abs=0)
     assert (tmp_path / "hoop.png").exists()
 
 
@@ -462,7 +462,7 @@ def test_lagranges_method_conical_pendulum_matches_sympys_linearizer(cache_dir):
     assert np.max(np.abs(lin.eigenvalues.real)) < 1e-12
     steady = linearize_steady(model, q, u, drop=["phi"])  # the cyclic φ dropped: a steady motion, residual 0
     assert steady.states == ("theta", "theta_dot", "phi_dot") and steady.residual < 1e-13  # measured 1.1e-15
-    assert steady.drift == {"phi": pytest.approx(Omega, rel=1e-15)} and steady.stability == "marginal"
+    assert steady.drift == {"phi": pytest.approx(Omega, rel=1e-15, abs=0)} and steady.stability == "marginal"
 
 
 def test_lagranges_method_sleigh_matches_sympys_linearizer_and_its_closed_form(cache_dir):
@@ -501,5 +501,5 @@ def test_lagranges_method_sleigh_matches_sympys_linearizer_and_its_closed_form(c
     np.testing.assert_allclose(lin.A, reference, rtol=0, atol=1e-12)
     J = values["I"] + values["m"] * values["a"] ** 2
     decay = -values["m"] * values["a"] * v0 / J
-    assert lin.eigenvalues[-1] == pytest.approx(decay, rel=1e-13) and np.all(np.abs(lin.eigenvalues[:-1]) < 1e-12)
-    assert np.sort(np.linalg.eigvals(reference).real)[0] == pytest.approx(decay, rel=1e-13)
+    assert lin.eigenvalues[-1] == pytest.approx(decay, rel=1e-13, abs=0) and np.all(np.abs(lin.eigenvalues[:-1]) < 1e-12)
+    assert np.sort(np.linalg.eigvals(reference).real)[0] == pytest.approx(decay, rel=1e-13, abs=0)

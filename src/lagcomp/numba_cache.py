@@ -19,15 +19,20 @@ numba finds them: `heal_source`) and imports it again, so the cost is paid
 only by the process that finds the damage.
 
 numba keys a function's cache files on its own source file only (its
-modification time and size), but a driver's machine code holds what it
-calls and reads from other files: the event helpers, `kernel_support`, the
-status codes, the tableaux, the run-state slots.  Editing one of those alone
-(a developer's checkout, a reinstall that keeps modification times) would
-leave every driver's cached code stale.  `refresh_stale_drivers`, run by
-`lagcomp.integrate.drivers` before any driver module is imported, keeps a
-digest of those sources (`LIBRARY_SOURCES`) in a stamp file beside the
-drivers' cache files and removes the cache files when the digest differs, so
-that numba compiles the drivers again, once.
+modification time and size), but a function's machine code holds what it
+calls and reads from other files: a driver holds the event helpers,
+`kernel_support`, the status codes, the tableaux, the run-state slots; a
+`kernel_support` function holds the others it calls (`resting` calls
+`impacts`).  Editing one of those alone (a developer's checkout, an upgrade
+that keeps modification times) would leave the callers' cached code stale.
+`refresh_stale` keeps a digest of the sources a package's functions are
+compiled from in a stamp file beside their cache files and removes the files
+when the digest differs, so that numba compiles them again, once: the drivers'
+package runs it for `LIBRARY_SOURCES` (`refresh_stale_drivers`), the
+`kernel_support` package for its own files (`refresh_stale_kernel_support`),
+each before any of its modules is imported.  A generated module needs no stamp:
+its file is named after a key that holds the digest of `kernel_support`
+(`lagcomp.cache.source_key`), so a change there compiles a new file.
 
 This uses numba's cache internals (``Dispatcher._cache._cache_file``, the
 locators and ``IndexDataCacheFile`` of ``numba.core.caching``, numba
@@ -175,34 +180,52 @@ def import_library_module(name: str) -> ModuleType:
 #: `tests/test_driver_staleness.py` checks that every lagcomp module a driver imports is in one of them.
 LIBRARY_SOURCES = ("integrate/drivers", "kernel_support", "integrate/status.py", "integrate/tableaux.py",
                    "integrate/dormand_prince.py")
-#: The stamp file beside the drivers' numba cache files: the digest of `LIBRARY_SOURCES` they were compiled from.
+#: What numba compiles into the `kernel_support` functions: their own package (`resting` calls `impacts`, which
+#: calls `linear_solvers`; `trig` and `angles` are inlined).  `tests/test_driver_staleness.py` checks it is closed.
+KERNEL_SUPPORT_SOURCES = ("kernel_support",)
+#: The stamp file beside a library package's numba cache files: the digest of the sources they were compiled from.
 STAMP_NAME = "lagcomp-library-sources.sha256"
 
 
 def refresh_stale_drivers() -> list[str]:
-    """Remove numba's cache files of the drivers if they were compiled from other library sources; the names removed.
+    """`refresh_stale` for the drivers (`lagcomp.integrate.drivers`) and `LIBRARY_SOURCES`; run by their package
+    before any driver module is imported: numba loads a driver with an explicit signature at its import."""
+    return refresh_stale("integrate/drivers", LIBRARY_SOURCES)
 
-    Compares the digest of `LIBRARY_SOURCES` (`lagcomp.cache.code_digest`) with the stamp file in the drivers'
-    numba cache directory (`cache_directory`); on a difference, or with no stamp beside existing cache files,
-    removes every index and data file of the drivers' modules there, warns once (`lagcomp.errors.CacheWarning`)
-    and writes the new stamp.  Must run
-    before a driver module is imported: numba loads a driver with an explicit signature at its import.
-    Nothing is checked where numba would not cache the drivers.
+
+def refresh_stale_kernel_support() -> list[str]:
+    """`refresh_stale` for `lagcomp.kernel_support` and `KERNEL_SUPPORT_SOURCES`; run by that package before any
+    of its modules is imported (numba loads their cached code at a function's first compilation, from a generated
+    module, a driver or a test: all import the package first)."""
+    return refresh_stale("kernel_support", KERNEL_SUPPORT_SOURCES)
+
+
+def refresh_stale(package: str, sources: tuple[str, ...]) -> list[str]:
+    """Remove numba's cache files of the library `package` if they were compiled from other `sources`; the names
+    removed.
+
+    numba keys a function's cache files on its own source file only (its modification time and size), but its
+    machine code holds what it calls and reads from other files: a change there alone (a developer's checkout, an
+    upgrade that keeps modification times) would leave the cached code stale.  So the digest of `sources`
+    (`lagcomp.cache.code_digest`, about a millisecond) is kept in a stamp file in the package's numba cache
+    directory (`cache_directory`); on a difference, or with no stamp beside existing cache files, every index and
+    data file of the package's modules there is removed, with one `lagcomp.errors.CacheWarning`, and the new stamp
+    written: numba compiles those functions again, once.  Nothing is checked where numba would not cache them.
     """
-    drivers = Path(__file__).parent / "integrate" / "drivers"
-    directory = cache_directory(drivers / "__init__.py")
+    root = Path(__file__).parent / package
+    directory = cache_directory(root / "__init__.py")
     if directory is None:
         return []
     from lagcomp.cache import code_digest
 
     stamp = directory / STAMP_NAME
-    digest = code_digest(LIBRARY_SOURCES)  # about a millisecond: some 180 kB
+    digest = code_digest(sources)
     try:
         if stamp.read_text() == digest:
             return []
     except OSError:
         pass  # no stamp yet: a new cache, or one written before stamps
-    cached = [path for source in sorted(drivers.glob("*.py"))
+    cached = [path for source in sorted(root.glob("*.py"))
               for path in sorted(directory.glob(f"{source.stem}.*.nb[ic]"))]
     removed = []
     try:
@@ -216,13 +239,14 @@ def refresh_stale_drivers() -> list[str]:
     except OSError as err:
         from lagcomp.errors import CacheWarning
 
-        warnings.warn(f"lagcomp could not refresh numba's cache of its drivers in {directory} ({err}); drivers "
-                      f"compiled from older library sources may run.", CacheWarning, stacklevel=2)
+        warnings.warn(f"lagcomp could not refresh numba's cache of lagcomp.{package.replace('/', '.')} in "
+                      f"{directory} ({err}); code compiled from older library sources may run.", CacheWarning,
+                      stacklevel=3)
         return removed
     if removed:
         from lagcomp.errors import CacheWarning
 
-        warnings.warn(f"lagcomp's library sources changed since numba cached its drivers: removed {len(removed)} "
-                      f"cache files in {directory}; numba compiles the drivers again, once.", CacheWarning,
-                      stacklevel=2)
+        warnings.warn(f"lagcomp's library sources changed since numba cached lagcomp.{package.replace('/', '.')}: "
+                      f"removed {len(removed)} cache files in {directory}; numba compiles those functions again, "
+                      "once.", CacheWarning, stacklevel=3)
     return removed
