@@ -1,0 +1,85 @@
+"""Issue 36, parts 2 and 3: inputs that were answered silently (or wrongly), or with a raw traceback.
+
+Each test reproduces what a user met, through the public API only, and checks
+the answer lagcomp gives now: a refusal naming the culprit, or the right result.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import lagcomp as lc
+from lagcomp.model import t
+
+x, y = lc.coordinates("x y")
+theta = lc.coordinates("theta")[0]
+m, k, c, g, l = sp.symbols("m k c g l", positive=True)
+
+
+def oscillator(**overrides) -> lc.System:
+    spec = dict(coordinates=[x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="silent_oscillator",
+                defaults={"m": 1.0, "k": 1.0}, q0=(1.0,))
+    spec.update(overrides)
+    return lc.System(**spec)
+
+
+@pytest.fixture(scope="module")
+def model(cache_dir):
+    return lc.compile(oscillator(), cache_dir=cache_dir)
+
+
+# -- 2.1: a Rayleigh function must be a quadratic form in the velocities -----------------
+
+
+@pytest.mark.parametrize("dissipation", [c * theta**2 / 2, c * theta * theta.diff(t), c * theta.diff(t) ** 4 / 4,
+                                         c * theta.diff(t) ** 2 / 2 + c * theta**2 / 2])
+def test_dissipation_that_is_no_quadratic_form_in_the_velocities_is_refused(dissipation, tmp_path):
+    system = lc.System([theta], T=theta.diff(t) ** 2 / 2, V=-sp.cos(theta), dissipation=dissipation,
+                       name="silent_damped")
+    with pytest.raises(lc.ModelError, match=r"dissipation function D of 'silent_damped'.*quadratic form"):
+        lc.compile(system, cache_dir=tmp_path)
+
+
+def test_quadratic_dissipation_damps_at_the_rate_it_says(cache_dir):
+    """D = c θ̇²/2 with q-dependent coefficients still compiles: θ̈ = −θ − c θ̇ (linear), energy loss rate = −2D."""
+    system = lc.System([theta], T=theta.diff(t) ** 2 / 2, V=theta**2 / 2,
+                       dissipation=c * (1 + theta**2) * theta.diff(t) ** 2 / 2, name="silent_quadratic_damping")
+    model = lc.compile(system, cache_dir=cache_dir)
+    out = np.empty(2)
+    model.kernels.rhs(0.0, np.array([0.5, 2.0]), model.parameter_vector({"c": 0.3}), out)
+    assert out[1] == pytest.approx(-0.5 - 0.3 * (1 + 0.25) * 2.0, rel=1e-15)
+
+
+# -- 2.6: a cache directory given with ~ ----------------------------------------------
+
+
+def test_cache_dir_with_tilde_is_the_users_home(tmp_path, monkeypatch):
+    home, elsewhere = tmp_path / "home", tmp_path / "cwd"
+    home.mkdir(), elsewhere.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(elsewhere)
+    system = oscillator(name="silent_tilde")
+    lc.compile(system, cache_dir="~/lc-cache")
+    assert not (elsewhere / "~").exists()
+    assert any((home / "lc-cache" / "modules").glob("silent_tilde*.py"))
+    monkeypatch.setenv("LAGCOMP_CACHE_DIR", "~/lc-env-cache")
+    lc.compile(system)
+    assert not (elsewhere / "~").exists()
+    assert any((home / "lc-env-cache" / "modules").glob("silent_tilde*.py"))
+    assert lc.load("silent_tilde", cache_dir=Path("~") / "lc-cache").parameters == ("k", "m")
+
+
+# -- 2.7: booleans are no parameter values ----------------------------------------------
+
+
+@pytest.mark.parametrize("value", [True, False, np.bool_(True)])
+def test_boolean_parameter_values_are_refused(model, value):
+    with pytest.raises(lc.ParameterError, match=r"`m`.*boolean"):
+        model.simulate((0.0, 0.1), params={"m": value})
+    with pytest.raises(lc.ParameterError, match=r"`k`.*boolean"):
+        oscillator(defaults={"m": 1.0, "k": value})
