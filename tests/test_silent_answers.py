@@ -83,3 +83,41 @@ def test_boolean_parameter_values_are_refused(model, value):
         model.simulate((0.0, 0.1), params={"m": value})
     with pytest.raises(lc.ParameterError, match=r"`k`.*boolean"):
         oscillator(defaults={"m": 1.0, "k": value})
+
+
+# -- 2.2: normal modes only about an equilibrium ----------------------------------------
+
+
+@pytest.mark.parametrize("mass", [1.0, 1e-6, 1e6])
+def test_normal_modes_away_from_an_equilibrium_are_refused_with_the_distance(compiled, mass):
+    """The pendulum at θ = 1: F = −m g l sin 1, the force scale m g l |cos 1| (largest |∂F/∂θ|), whatever m."""
+    from lagcomp import analysis as an
+
+    pendulum = compiled("simple_pendulum")
+    params = {"m": mass, "l": 1.0, "g": 9.81}
+    ratio = np.sin(1.0) / np.cos(1.0)
+    with pytest.raises(lc.LinearizationError, match=rf"not an equilibrium.*{ratio:.3g} times") as info:
+        an.normal_modes(pendulum, [1.0], params)
+    assert "find_equilibrium" in str(info.value)
+    with pytest.raises(lc.LinearizationError, match="not an equilibrium"):
+        an.normal_modes(an.linearize(pendulum, [1.0], params))
+    # at the equilibria themselves, rounding aside (sin π ≈ 1.2e-16), the verdicts stand
+    assert an.normal_modes(pendulum, [np.pi], params).stability == "unstable"
+    assert an.normal_modes(pendulum, [0.0], params).frequencies == pytest.approx([np.sqrt(9.81)], rel=1e-14)
+
+
+# -- 2.9: a fit that wanders where the model cannot run ----------------------------------
+
+
+def test_fit_of_an_inseparable_pair_wandering_to_a_singular_mass_says_to_bound_it(cache_dir):
+    """A damped free particle identifies c/m only: unbounded, least_squares takes m through 0."""
+    system = lc.System([x], T=m * x.diff(t) ** 2 / 2, dissipation=c * x.diff(t) ** 2 / 2, name="silent_pair",
+                       defaults={"m": 1.0, "c": 0.3}, q0=(0.0,), qd0=(1.0,))
+    model = lc.compile(system, cache_dir=cache_dir)
+    times = np.linspace(0.1, 5.0, 30)
+    observed = model.simulate((0.0, 5.0), t_eval=times).y[:, 0] + 1e-3 * np.sin(7 * times)
+    with pytest.raises(lc.IntegrationError, match=r"trial parameters c=.*m=.*bound the parameters") as info:
+        model.fit(times, observed, {"c": 1.0, "m": 0.2})
+    assert isinstance(info.value.__cause__, lc.SingularMassMatrixError)
+    bounded = model.fit(times, observed, {"c": 1.0, "m": 0.2}, bounds={"m": (0.1, 10.0)}, fixed={})
+    assert bounded.estimates["c"] / bounded.estimates["m"] == pytest.approx(0.3, rel=1e-2)
