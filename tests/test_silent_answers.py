@@ -121,3 +121,42 @@ def test_fit_of_an_inseparable_pair_wandering_to_a_singular_mass_says_to_bound_i
     assert isinstance(info.value.__cause__, lc.SingularMassMatrixError)
     bounded = model.fit(times, observed, {"c": 1.0, "m": 0.2}, bounds={"m": (0.1, 10.0)}, fixed={})
     assert bounded.estimates["c"] / bounded.estimates["m"] == pytest.approx(0.3, rel=1e-2)
+
+
+# -- 2.11: stiffness advice the model can follow ------------------------------------------
+
+
+def _stiffness_messages(run) -> list[str]:
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run()
+    return [str(w.message) for w in caught if issubclass(w.category, lc.StiffnessWarning)]
+
+
+def test_stiffness_advice_does_not_send_a_model_with_contacts_or_function_inputs_to_radau(cache_dir):
+    """A heavily damped x (rates −1e4 and −1e−4: stiff) beside a ball over a floor, and pushed by a function."""
+    import numba
+
+    damped = dict(T=m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=m * g * y + k * x**2 / 2,
+                  dissipation=c * x.diff(t) ** 2 / 2, defaults={"m": 1.0, "g": 9.81, "k": 1.0, "c": 1e4})
+    floor = lc.compile(lc.System([x, y], **damped, events=[lc.Contact("floor", y, restitution=0.5)],
+                                 name="silent_stiff_floor", q0=(1.0, 1.0)), cache_dir=cache_dir)
+    pushed = lc.compile(lc.System([x, y], **damped, forces=[lc.Input("f"), 0], name="silent_stiff_pushed",
+                                  q0=(1.0, 1.0)), cache_dir=cache_dir)
+    options = dict(method="dopri5", rtol=1e-6, atol=1e-6)
+    (contact,) = _stiffness_messages(lambda: floor.simulate((0.0, 2.0), **options))
+    assert 'Use method="radau"' not in contact and "['floor']" in contact and "max_steps" in contact
+    with pytest.raises(lc.OptionError):  # what the advice keeps away from
+        floor.simulate((0.0, 2.0), method="radau")
+    function = numba.njit(lambda t, y, p: 0.0)
+    (driven,) = _stiffness_messages(lambda: pushed.simulate((0.0, 2.0), inputs={"f": function}, **options))
+    assert 'Use method="radau"' not in driven and "['f']" in driven and "law" in driven
+    (swept,) = _stiffness_messages(lambda: pushed.sweep((0.0, 2.0), {"c": [1e4, 2e4]}, inputs={"f": function},
+                                                        progress=False, **options))
+    assert 'Use method="radau"' not in swept and "['f']" in swept
+    # the same model given the input as a table: radau takes it, and the advice says so
+    (tabled,) = _stiffness_messages(lambda: pushed.simulate((0.0, 2.0), inputs={"f": 0.0}, **options))
+    assert 'Use method="radau"' in tabled
+    assert pushed.simulate((0.0, 2.0), inputs={"f": 0.0}, method="radau").status == 0

@@ -119,15 +119,16 @@ def driven(model, inputs, p, method, client=None):
     if client is not None:
         raise OptionError(f"Input(s) {names} are numba functions, which a Dask sweep cannot send to its workers: "
                           "sweep on this machine (drop `client`), or give them as tables or laws.")
-    return DrivenModel(model, driven_kernels(model.kernels, value_slots(model, functions, p)))
+    return DrivenModel(model, driven_kernels(model.kernels, value_slots(model, functions, p)), tuple(names))
 
 
 class DrivenModel:
     """A model whose `kernels` write its function inputs' values into p before each call; everything else
-    is the model's (what `simulate` and `sweep` read of a model, and the `Solution` they build)."""
+    is the model's (what `simulate` and `sweep` read of a model, and the `Solution` they build).
+    `function_inputs`: the names of the inputs given as functions."""
 
-    def __init__(self, model, kernels: DrivenKernels):
-        self._model, self.kernels = model, kernels
+    def __init__(self, model, kernels: DrivenKernels, function_inputs: tuple = ()):
+        self._model, self.kernels, self.function_inputs = model, kernels, function_inputs
 
     def __getattr__(self, name):
         return getattr(self._model, name)

@@ -441,7 +441,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
     stiff_at = run_state.stiff_at
     if stiff_at is not None and status in ADVISED_FAILURES:
         message = f"{message} The steps were limited by stability from t = {stiff_at[1]:.6g}: the problem is " \
-                  f"stiff. {stiffness_advice()}"
+                  f"stiff. {stiffness_advice(model)}"
     if status < 0 or status == Status.INTERRUPTED:
         state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, run_state.y))  # (q, q̇), or (q, u)
         last = "state" if status == Status.RESIDUAL_EXCEEDED else "last good state"
@@ -471,7 +471,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         event_sensitivities=run.get("event_sensitivities", {}), reaction_sensitivities=reaction_sensitivities,
     )
     # simulate -> Model.simulate -> the user's call
-    warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4)
+    warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4, model=model)
     if throw and status < 0:
         raise IntegrationError(message, solution)
     return solution

@@ -362,7 +362,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         done = _run_on_dask(client, spec or _worker_spec(model), task, Y0, P, out, progress)
     statuses = out["status"]
     counts = out["counts"]
-    warn_if_sweep_stiff(m.name, counts[:, 3], stacklevel=3)     # (column 3: embedded pairs only)
+    warn_if_sweep_stiff(m.name, counts[:, 3], stacklevel=3, model=model)     # (column 3: embedded pairs only)
     e0, deviation = out["energy"][:, 0], out["energy"][:, 1]
     relative = np.where(e0 != 0, deviation / np.where(e0 != 0, np.abs(e0), 1.0), deviation)
     shaped = lambda a: a.reshape(*shape, *a.shape[1:])  # noqa: E731
