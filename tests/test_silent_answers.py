@@ -160,3 +160,50 @@ def test_stiffness_advice_does_not_send_a_model_with_contacts_or_function_inputs
     (tabled,) = _stiffness_messages(lambda: pushed.simulate((0.0, 2.0), inputs={"f": 0.0}, **options))
     assert 'Use method="radau"' in tabled
     assert pushed.simulate((0.0, 2.0), inputs={"f": 0.0}, method="radau").status == 0
+
+
+# -- 2.3: function inputs read only what they are given -----------------------------------
+
+
+@pytest.fixture(scope="module")
+def pushed(cache_dir):
+    """m ẍ = −k x + f(t): two parameters, one input."""
+    return lc.compile(oscillator(forces=[lc.Input("f")], name="silent_pushed"), cache_dir=cache_dir)
+
+
+def test_function_input_reading_past_the_parameters_or_the_state_is_refused(pushed):
+    import numba
+
+    for function in (numba.njit(lambda t, y, p: p[40]), numba.njit(lambda t, y, p: y[7]),
+                     numba.njit(lambda t, y, p: p[2])):
+        with pytest.raises(lc.OptionError, match=r"Input `f`.*outside.*`y` holds the 2 values.*`p` the 2 param"):
+            pushed.simulate((0.0, 1.0), inputs={"f": function})
+        with pytest.raises(lc.OptionError, match=r"Input `f`.*outside"):
+            pushed.sweep((0.0, 1.0), {"k": [1.0, 2.0]}, inputs={"f": function}, progress=False)
+
+
+def test_function_input_sees_the_parameters_in_order_and_the_state(pushed):
+    """p is the parameters, in `Model.parameters` order (k, m), and nothing after them; y is (x, ẋ)."""
+    import numba
+
+    assert pushed.parameters == ("k", "m")
+    cancel = numba.njit(lambda t, y, p: p[0] * y[0])  # f = k x: the spring cancelled, x = 1 + ẋ0 t
+    sol = pushed.simulate((0.0, 1.0), qd0=[0.5], inputs={"f": cancel}, params={"k": 3.0}, rtol=1e-12, atol=1e-12)
+    assert sol.q[-1, 0] == pytest.approx(1.5, rel=1e-12)
+    sizes = numba.njit(lambda t, y, p: 1000.0 * p.size + y.size)  # f = 2002: x = 2002 t²/2 with k = 0, m = 1
+    sol = pushed.simulate((0.0, 1e-3), q0=[0.0], inputs={"f": sizes}, params={"k": 0.0}, rtol=1e-12, atol=1e-12)
+    assert sol.q[-1, 0] == pytest.approx(2002 * 1e-6 / 2, rel=1e-12)
+
+
+# -- part 3: what gave a raw traceback -------------------------------------------------------
+
+
+def test_input_on_a_system_without_parameters_compiles_and_runs(cache_dir):
+    """θ̈ = −sin θ + F with F = 0.5 constant: the energy ½θ̇² − cos θ − F θ is conserved."""
+    system = lc.System([theta], T=theta.diff(t) ** 2 / 2, V=-sp.cos(theta), forces=[lc.Input("F")],
+                       name="silent_no_parameters")
+    model = lc.compile(system, cache_dir=cache_dir)
+    assert model.parameters == () and model.inputs == ("F",)
+    sol = model.simulate((0.0, 3.0), q0=[0.1], inputs={"F": 0.5}, rtol=1e-12, atol=1e-12)
+    energy = sol.qd[:, 0] ** 2 / 2 - np.cos(sol.q[:, 0]) - 0.5 * sol.q[:, 0]
+    assert sol.status == 0 and np.max(np.abs(energy - energy[0])) < 1e-10
