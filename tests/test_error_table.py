@@ -181,6 +181,22 @@ def _cache_case(kind):
     return provoke
 
 
+def _plots():
+    pytest.importorskip("matplotlib")
+    from lagcomp import plots
+
+    return plots
+
+
+def _sweep(models):
+    return models["pendulum"].sweep((0, 1), {"l": [1.0, 2.0]}, progress=False)
+
+
+def _saved_solution(models, tmp_path):
+    models["pendulum"].simulate((0, 1)).save_npz(tmp_path / "run.npz")
+    return tmp_path / "run.npz"
+
+
 def _cli_system(name, *arguments):
     """What `lagcomp run NAME --arg ...` builds before anything else."""
     return cli._system(argparse.Namespace(name=name, arg=list(arguments)))
@@ -255,6 +271,8 @@ CASES = {
     "input-function-not-numba": (_simulate("pushed", inputs={"f": lambda t, y, p: 0.0}), "@numba.njit"),
     "input-function-signature": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y: t)}),
                                  "u(t: float64, y: float64[::1], p: float64[::1]) -> float64"),
+    "input-function-reads-outside": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y, p: p[40])}),
+                                     "Input `f`"),
     "input-function-needs-derivative": (_simulate("driven", inputs={"s": numba.njit(lambda t, y, p: t)}),
                                         "derivative of order 2"),
     "input-function-with-radau": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y, p: 0.0)}, method="radau"),
@@ -481,6 +499,12 @@ CASES = {
     "cli-unknown-example-argument": (lambda: _cli_system("n_link_pendulum", "m=3"), "the example 'n_link_pendulum' takes"),
     "cli-unwritable-output": (lambda tmp_path: cli._check_writable(str(tmp_path / "nonexistent" / "x.npz"), "--out"),
                               "does not exist"),
+    "plot-wrong-result": (lambda models: _plots().plot_run(_sweep(models)), "plot_run draws a Solution"),
+    "plot-unknown-quantity": (lambda models: _plots().plot_sweep(_sweep(models), "energy"), "'energy'"),
+    "save-missing-directory": (lambda models, tmp_path: models["pendulum"].simulate((0, 1)).save_npz(
+        tmp_path / "nonexistent" / "run.npz"), "nonexistent"),
+    "load-not-a-sweep": (lambda models, tmp_path: lc.Sweep.load_npz(_saved_solution(models, tmp_path)), "run.npz"),
+    "event-not-in-run": (lambda models: models["ball"].simulate((0, 1)).events["impact"], "'impact'"),
     "animate-no-bodies": (lambda models: lc.animate(models["pendulum"].simulate((0, 1))), "'simple_pendulum'"),
     "animate-no-geometry": (lambda models: replace(models["pendulum"].simulate((0, 1)), geometry=None).animate(),
                             "no model geometry"),

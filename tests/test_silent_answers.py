@@ -207,3 +207,54 @@ def test_input_on_a_system_without_parameters_compiles_and_runs(cache_dir):
     sol = model.simulate((0.0, 3.0), q0=[0.1], inputs={"F": 0.5}, rtol=1e-12, atol=1e-12)
     energy = sol.qd[:, 0] ** 2 / 2 - np.cos(sol.q[:, 0]) - 0.5 * sol.q[:, 0]
     assert sol.status == 0 and np.max(np.abs(energy - energy[0])) < 1e-10
+
+
+def test_plots_given_the_wrong_result_say_what_they_draw(model):
+    pytest.importorskip("matplotlib")
+    from lagcomp import plots
+
+    sweep = model.sweep((0.0, 1.0), {"k": [1.0, 2.0]}, progress=False)
+    sol = model.simulate((0.0, 1.0))
+    with pytest.raises(lc.OptionError, match=r"'energy'.*energy_error") as info:
+        plots.plot_sweep(sweep, "energy")
+    assert "t_final" in str(info.value)
+    with pytest.raises(lc.OptionError, match=r"plot_run draws a Solution.*Sweep.*plot_sweep"):
+        plots.plot_run(sweep)
+    with pytest.raises(lc.OptionError, match=r"plot_coordinates draws a Solution"):
+        plots.plot_coordinates(sweep)
+    with pytest.raises(lc.OptionError, match=r"plot_sweep draws a Sweep.*Solution"):
+        plots.plot_sweep(sol)
+    assert plots.plot_sweep(sweep, "t_final") is not None and plots.plot_run(sol) is not None
+
+
+def test_saving_into_a_missing_directory_names_it(model, tmp_path):
+    sol = model.simulate((0.0, 1.0))
+    sweep = model.sweep((0.0, 1.0), {"k": [1.0, 2.0]}, progress=False)
+    missing = tmp_path / "nonexistent" / "dir"
+    for result in (sol, sweep):
+        with pytest.raises(lc.OptionError, match=rf"{missing}.*does not exist"):
+            result.save_npz(missing / "run.npz")
+        assert not missing.exists()
+
+
+def test_loading_a_solution_file_as_a_sweep_says_what_it_holds(model, tmp_path):
+    sol = model.simulate((0.0, 1.0))
+    sol.save_npz(tmp_path / "run.npz")
+    with pytest.raises(lc.OptionError, match=r"run\.npz.*not a Sweep.*Solution"):
+        lc.Sweep.load_npz(tmp_path / "run.npz")
+    np.savez(tmp_path / "other.npz", a=np.zeros(3))
+    with pytest.raises(lc.OptionError, match=r"other\.npz.*not a Sweep"):
+        lc.Sweep.load_npz(tmp_path / "other.npz")
+    model.sweep((0.0, 1.0), {"k": [1.0, 2.0]}, progress=False).save_npz(tmp_path / "sweep.npz")
+    assert lc.Sweep.load_npz(tmp_path / "sweep.npz").names == ("k",)
+
+
+def test_an_event_the_run_has_not_is_named_with_those_it_has(cache_dir):
+    ball = lc.compile(oscillator(V=m * g * x, defaults={"m": 1.0, "g": 9.81}, name="silent_ball",
+                                 events=[lc.Event("floor", x, direction=-1, terminal=True)]), cache_dir=cache_dir)
+    sol = ball.simulate((0.0, 2.0))
+    assert len(sol.events["floor"]) == 1
+    with pytest.raises(lc.OptionError, match=r"'impact'.*\['floor'\]") as info:
+        sol.events["impact"]
+    assert isinstance(info.value, KeyError) and "impact" in str(info.value)
+    assert sol.events.get("impact") is None and "impact" not in sol.events

@@ -25,6 +25,7 @@ from lagcomp.errors import (
     SingularMassMatrixError as SingularMassMatrixError,
     StiffnessWarning as StiffnessWarning,
     UndeclaredSymbolError as UndeclaredSymbolError,
+    UnknownEventError as UnknownEventError,
 )
 from lagcomp.integrate.inputs import Tabulated as Tabulated
 from lagcomp.integrate.solution import Solution as Solution
