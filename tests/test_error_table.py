@@ -197,6 +197,17 @@ def _saved_solution(models, tmp_path):
     return tmp_path / "run.npz"
 
 
+def _unpickle_without_entry(tmp_path):
+    """A pickled model from `lc.load` (no System), its cache removed before it is unpickled."""
+    import pickle
+    import shutil
+
+    lc.compile(oscillator(name="table_cached"), cache_dir=tmp_path / "gone")
+    blob = pickle.dumps(lc.load("table_cached", cache_dir=tmp_path / "gone"))
+    shutil.rmtree(tmp_path / "gone")
+    return pickle.loads(blob)
+
+
 def _cli_system(name, *arguments):
     """What `lagcomp run NAME --arg ...` builds before anything else."""
     return cli._system(argparse.Namespace(name=name, arg=list(arguments)))
@@ -468,6 +479,7 @@ CASES = {
     "corrupt-cache-entry": (_cache_case("corrupt"), "sha256"),
     "stale-cache-entry": (_cache_case("stale"), "another lagcomp or numba version"),
     "unwritable-cache": (_cache_case("unwritable"), "cannot write its cache"),
+    "unpickle-without-entry": (lambda models, tmp_path: _unpickle_without_entry(tmp_path), "'table_cached'"),
     "load-unknown-name": (lambda models, tmp_path: lc.load("never_compiled", cache_dir=tmp_path), "'never_compiled'"),
     "linearize-constrained": (lambda models: an.linearize(models["rod"], [0.0, 0.0, -1.0]), "linearize_steady"),
     "periodic-constrained": (lambda models: an.periodic_orbit(models["rod"], np.zeros(6), 1.0),

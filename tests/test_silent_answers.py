@@ -258,3 +258,72 @@ def test_an_event_the_run_has_not_is_named_with_those_it_has(cache_dir):
         sol.events["impact"]
     assert isinstance(info.value, KeyError) and "impact" in str(info.value)
     assert sol.events.get("impact") is None and "impact" not in sol.events
+
+
+# -- part 3: models pickle (multiprocessing, joblib) ----------------------------------------
+
+
+def test_a_model_pickles_as_its_cache_entry_and_runs_the_same(cache_dir, tmp_path):
+    import pickle
+    import subprocess
+    import sys
+
+    model = lc.compile(oscillator(name="silent_pickled"), cache_dir=cache_dir)
+    model.defaults["k"] = 4.0  # run defaults changed after compiling travel too
+    again = pickle.loads(pickle.dumps(model))
+    assert (again.name, again.cache_key, again.defaults, again.q0) == ("silent_pickled", model.cache_key,
+                                                                        {"k": 4.0, "m": 1.0}, (1.0,))
+    expected = model.simulate((0.0, 1.0)).y
+    assert np.array_equal(again.simulate((0.0, 1.0)).y, expected)
+    assert again.system.fingerprint() == model.system.fingerprint()
+    # another process: loaded from the cache, no compilation
+    (tmp_path / "model.pickle").write_bytes(pickle.dumps(model))
+    script = ("import pickle, sys, numpy as np; m = pickle.loads(open(sys.argv[1], 'rb').read()); "
+              "np.save(sys.argv[2], m.simulate((0.0, 1.0)).y); print(m.from_cache)")
+    env = {**os.environ, "PYTHONPATH": str(Path(lc.__file__).parent.parent)}
+    done = subprocess.run([sys.executable, "-c", script, str(tmp_path / "model.pickle"), str(tmp_path / "y.npy")],
+                          capture_output=True, text=True, env=env, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split()[-1] == "True" and np.array_equal(np.load(tmp_path / "y.npy"), expected)
+
+
+def test_an_unpickled_model_whose_entry_is_gone_is_compiled_again_from_its_system(tmp_path):
+    import pickle
+    import shutil
+
+    first = tmp_path / "first"
+    model = lc.compile(oscillator(name="silent_moved"), cache_dir=first)
+    blob, loaded = pickle.dumps(model), pickle.dumps(lc.load("silent_moved", cache_dir=first))
+    shutil.rmtree(first)
+    again = pickle.loads(blob)
+    assert again.source_path.exists() and again.cache_key == model.cache_key and not again.from_cache
+    with pytest.raises(lc.ModelError, match=r"'silent_moved'.*no System"):
+        shutil.rmtree(first)
+        pickle.loads(loaded)
+
+
+# -- part 3: Ctrl-C while numba compiles stops the script ------------------------------------
+
+
+def test_ctrl_c_during_the_first_compile_raises_keyboard_interrupt(tmp_path):
+    """SIGINT 0.3 s into the first radau run of a model (numba compiling its Jacobian kernel for a second or more;
+    a dop853 run before compiled what every run's set-up calls): the compile finishes (its machine code kept),
+    then KeyboardInterrupt, not a run returned with status 2; the next run compiles nothing and ends normally."""
+    import signal
+    import threading
+    import time
+
+    model = lc.compile(oscillator(V=k * x**2 / 2 + x**4 / 4, name="silent_interrupted"), cache_dir=tmp_path)
+    model.simulate((0.0, 1.0), progress=False)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    try:
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            model.simulate((0.0, 1.0), method="radau", progress=False)
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGINT, previous)
+    started = time.process_time()
+    assert model.simulate((0.0, 1.0), method="radau", progress=False).status == 0
+    assert time.process_time() - started < 0.2  # compiled, not thrown away (the first compile took a second or more)
