@@ -327,3 +327,22 @@ def test_ctrl_c_during_the_first_compile_raises_keyboard_interrupt(tmp_path):
     started = time.process_time()
     assert model.simulate((0.0, 1.0), method="radau", progress=False).status == 0
     assert time.process_time() - started < 0.2  # compiled, not thrown away (the first compile took a second or more)
+
+
+# -- 2.10: projection=True saves the states the integrator continues from -------------------
+
+
+@pytest.mark.parametrize("example", ["spherical_pendulum_cartesian", "four_bar_linkage"])
+def test_projected_runs_save_the_projected_states(compiled, example):
+    """With projection every accepted state is moved onto Φ = 0 (and Λ q̇ + b = 0) before the next step: the saved
+    rows, at the steps and at t_eval points between them (projected too), are on the constraints to rounding."""
+    model = compiled(example)
+    sol = model.simulate((0.0, 5.0), projection=True)
+    assert sol.status == 0 and sol.constraint_residual < 1e-13
+    dense = model.simulate((0.0, 5.0), projection=True, t_eval=np.linspace(0.0, 5.0, 51))
+    assert dense.status == 0 and dense.constraint_residual < 1e-13
+    unprojected = model.simulate((0.0, 5.0))
+    assert unprojected.constraint_residual > 1e-10  # (what the projection removes: the steps' drift)
+    # the rows at the steps are the same states either way, the t_eval points between them the steps' own
+    assert np.array_equal(dense.t, np.linspace(0.0, 5.0, 51))
+    assert np.max(np.abs(np.interp(dense.t, sol.t, sol.q[:, 0]) - dense.q[:, 0])) < 0.05
