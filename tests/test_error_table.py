@@ -488,6 +488,8 @@ CASES = {
     "periodic-no-convergence": (lambda models: an.periodic_orbit(models["pendulum"], [1.0, 0.0], 2.0,
                                                                  max_iterations=1), "did not converge"),
     "modes-not-at-equilibrium": (lambda models: an.normal_modes(models["pendulum"], [1.0]), "theta=1"),
+    "periodic-degenerate": (lambda models: an.periodic_orbit(models["pendulum"], [0.1, 0.0], 1.0, fix="period"),
+                            "no orbit"),
     "steady-off-constraints": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -2.0]), "residual"),
     "steady-singular-point": (lambda: an.linearize_steady(lc.System([x], T=m * x**2 * x.diff(t) ** 2 / 2,
                                                                     name="table_degenerate"), [0.0], None, {"m": 1.0}),

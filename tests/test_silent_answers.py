@@ -346,3 +346,61 @@ def test_projected_runs_save_the_projected_states(compiled, example):
     # the rows at the steps are the same states either way, the t_eval points between them the steps' own
     assert np.array_equal(dense.t, np.linspace(0.0, 5.0, 51))
     assert np.max(np.abs(np.interp(dense.t, sol.t, sol.q[:, 0]) - dense.q[:, 0])) < 0.05
+
+
+# -- 2.8: periodic orbits that are none, and answers that vary ------------------------------
+
+SIMO_Q = np.array([0.97000436, -0.24308753, -0.97000436, 0.24308753, 0.0, 0.0])
+SIMO_QD = np.array([0.466203685, 0.43236573, 0.466203685, 0.43236573, -0.93240737, -0.86473146])
+SIMO_PERIOD = 6.32591398
+UNIT = dict(G=1.0, m1=1.0, m2=1.0, m3=1.0)
+
+
+def test_a_fixed_period_that_only_the_equilibrium_has_is_refused(cache_dir):
+    """ẍ = −x has periodic orbits of period 2π only; asked for T = 3 the shooting can only close at x = ẋ = 0."""
+    from lagcomp import analysis as an
+
+    model = lc.compile(oscillator(name="silent_harmonic"), cache_dir=cache_dir)
+    with pytest.raises(lc.OptionError, match=r"no orbit: over the period T = 3 its state moves by .* an equilibrium"):
+        an.periodic_orbit(model, [0.5, 0.0], 3.0, fix="period")
+    orbit = an.periodic_orbit(model, [0.5, 0.0], 3.0)  # the amplitude held: the period comes out, 2π
+    assert orbit.residual < 1e-10 and orbit.period == pytest.approx(2 * np.pi, rel=1e-10)
+
+
+def _scribbled(rng):
+    """Garbage left on the heap: arrays of a solver's sizes, filled with numbers of any size, then freed."""
+    junk = [rng.standard_normal(size) * 10.0 ** rng.integers(-300, 300) for size in (13, 14, 182, 169, 26) * 4]
+    del junk
+
+
+def test_the_figure_eight_from_a_rough_guess_is_the_same_whatever_the_heap(compiled):
+    """Simó's state with positions 10 % too far out and velocities 10 % too slow (tests/test_periodic.py): the same
+    orbit, bit for bit, with different garbage on the heap before each solve (MINPACK's lm read some of it)."""
+    from lagcomp import analysis as an
+
+    bodies = compiled("pythagorean_three_body")
+    guess = np.concatenate([1.1 * SIMO_Q, 0.9 * SIMO_QD])
+    rng = np.random.default_rng(7)
+    found = set()
+    for _ in range(8):
+        _scribbled(rng)
+        orbit = an.periodic_orbit(bodies, guess, SIMO_PERIOD, fix="period", params=UNIT)
+        found.add(orbit.y0.tobytes())
+    assert len(found) == 1 and orbit.residual < 1e-10
+
+
+def test_the_figure_eight_from_both_10_percent_too_large_is_no_answer_in_disguise(compiled):
+    """Positions and velocities both 10 % too large: once a "stable periodic orbit" of bodies 1e6 apart moving at
+    1e-11; now either the figure eight (its energy) or a refusal, never a degenerate motion."""
+    from lagcomp import analysis as an
+
+    bodies = compiled("pythagorean_three_body")
+    try:
+        orbit = an.periodic_orbit(bodies, np.concatenate([1.1 * SIMO_Q, 1.1 * SIMO_QD]), SIMO_PERIOD, fix="period",
+                                  params=UNIT)
+    except lc.OptionError as refusal:
+        assert "did not converge" in str(refusal) or "no orbit" in str(refusal)
+    else:
+        energy = bodies.energy(SIMO_Q, SIMO_QD, params=UNIT)
+        assert bodies.energy(orbit.y0[:6], orbit.y0[6:], params=UNIT) == pytest.approx(energy, abs=1e-6)
+        assert np.abs(orbit.y0[6:]).max() > 0.1
