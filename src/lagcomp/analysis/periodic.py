@@ -23,9 +23,9 @@ redundant (Φ − I has the flow direction f and the family's direction in its k
 remove both).  Gauss-Newton on a consistent overdetermined system converges quadratically like Newton, so no
 equation has to be dropped by hand (which one would be a choice per system).
 A system with more symmetries keeps more directions in that kernel (the three bodies' translations and
-rotation); the trust-region step (from the SVD of the scaled J) has no component along it (in scipy's scaled norm), and the solve
-ends on one of the symmetric copies of the orbit (the figure eight of tests/test_periodic.py, translated and
-shifted in phase).
+rotation); the trust-region step (from the SVD of the scaled J) has no component along it (in scipy's
+scaled norm), and the solve ends on one of the symmetric copies of the orbit (the figure eight of
+tests/test_periodic.py, translated and shifted in phase).
 
 The Floquet multipliers are the eigenvalues of Φ at the solution (they do not depend on the coordinates: Φ in
 (q, q̇) is similar to the symplectic one in (q, p) since φ_T(y0) = y0).  For an autonomous Hamiltonian system two

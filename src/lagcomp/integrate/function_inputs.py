@@ -14,8 +14,9 @@ function of
 returning the input's value (a float).  Such an input packs as a one-piece
 constant table (`lagcomp.integrate.inputs.pack_inputs`) whose constant is the
 *value slot*: every kernel the run calls is wrapped by a small numba function
-that writes ``p[slot] = u(t, y, p[:P])`` (P parameters) and then calls the model's kernel with
-the same p, which reads the value like any table's (`input_value`).
+that writes ``p[slot] = u(t, y, p[:P])`` (P parameters) and then calls the
+model's kernel with the same p, which reads the value like any table's
+(`input_value`).
 
 numba checks no bounds: a function reading ``p[40]`` of a model with four
 parameters would read whatever memory follows, without a word.  So before a
@@ -105,9 +106,9 @@ def check(function, name: str, order: int) -> None:
 
 
 def value_slots(model, functions: dict, p) -> tuple[tuple, ...]:
-    """((function, value slot in p, count of parameters), ...) of the inputs of `model` given as `functions` (name -> function),
-    in the model's input order; p holds the headers after the parameters and a constrained system's
-    Baumgarte gains or the contacts' modes (`lagcomp.kernel_support.inputs`)."""
+    """((function, value slot in p, count of parameters), ...) of the inputs of `model` given as `functions`
+    (name -> function), in the model's input order; p holds the headers after the parameters and a constrained
+    system's Baumgarte gains or the contacts' modes (`lagcomp.kernel_support.inputs`)."""
     first = len(model.parameters) + (2 if model.k else 0) + mode_slot_count(model.kernels)
     count = len(model.parameters)
     return tuple((functions[name], int(p[first + j]) + VALUE_OFFSET, count)
@@ -162,12 +163,12 @@ def check_bounds(function, name: str, model, p) -> None:
                           f"the {2 * model.n} values {list(model.state_names)}, `p` the {count} parameters "
                           f"{list(model.parameters)}; numba checks no bounds in the run, where such a read returns "
                           "whatever memory follows. Index within them (pass other values as parameters).") from err
-    except Exception:  # noqa: BLE001 - its other failures at y = 0 (a division by zero) are not this check's
+    except Exception:  # noqa: BLE001, S110 - its other failures at y = 0 (a division by zero) are not this check's
         pass
 
 
 class DrivenKernels:
-    """The generated `module`'s kernels, each wrapped to evaluate `functions` ((function, value slot), ...)
+    """The generated `module`'s kernels, each wrapped to evaluate `functions` ((function, value slot, count), ...)
     first; its other attributes (data such as ``CONSTRAINT_COUNT``) as they are.  Kernels are wrapped at
     their first look-up (`Method.bound_driver` looks up those its driver takes, then caches the bound
     driver per instance: `driven_kernels` keeps one instance per module and functions)."""

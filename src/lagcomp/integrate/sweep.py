@@ -36,8 +36,8 @@ from lagcomp.integrate.contacts import (
     sweep_impulses,
 )
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
-from lagcomp.integrate.files import output_path
 from lagcomp.integrate.drivers.events import ACTION_RESET
+from lagcomp.integrate.files import output_path
 from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, sweep_bytes
 from lagcomp.integrate.memory import check as check_memory

@@ -34,9 +34,10 @@ Arguments, after the kernels (`kernel_types`) and before the tableau: the driver
   `lagcomp.integrate.drivers.run_state`;
 * ``projecting`` 1 projects each accepted state onto the constraints (after the step's dense output,
   and the FSAL stage is then evaluated again at the projected state): the rows saved are the projected
-  states, and the rows of ``t_eval`` points inside a step the interpolated states projected; ``residual_max`` [running maximum
-  of ``constraint_residual`` over accepted states] or [.., bound]: the step whose residual exceeds the
-  bound is committed (and saved if due), then the driver returns RESIDUAL_EXCEEDED;
+  states, and the rows of ``t_eval`` points inside a step the interpolated states, projected;
+  ``residual_max`` [running maximum of ``constraint_residual`` over accepted states] or [.., bound]: the
+  step whose residual exceeds the bound is committed (and saved if due), then the driver returns
+  RESIDUAL_EXCEEDED;
 * ``pause_at``: return PAUSED before step number ``pause_at`` (counted from the run's start,
   ``counters[1]``), so that Python can show progress and honour Ctrl-C between calls;
 * ``t_eval`` (points after the start; empty: save every ``save_every``-th step and the last one),
