@@ -102,9 +102,10 @@ def test_wheel_jack_ratio_from_the_compiled_residual(compiled):
         thetas.append(eq.q[0])
     assert np.all(np.diff(thetas) < 0) and thetas[0] > 1.2 and thetas[-1] < 0.1  # several θ, from steep to flat
     # the textbook's numbers: a = 20 cm, h = 2 mm, θ = 30°
-    eq = an.find_equilibrium(model, [0.5], dict(F=4000.0 / (2 * math.pi * 0.2 * math.tan(math.pi / 6) / 0.002)))
+    effort = dict(F=4000.0 / (2 * math.pi * 0.2 * math.tan(math.pi / 6) / 0.002))
+    eq = an.find_equilibrium(model, [0.5], effort)
     assert eq.q[0] == pytest.approx(math.pi / 6, rel=1e-12, abs=0)
-    assert an.normal_modes(model, eq.q).stability == "unstable"  # a frictionless jack never holds still
+    assert an.normal_modes(model, eq.q, effort).stability == "unstable"  # a frictionless jack never holds still
 
 
 # -- relative equilibria: the bead on the spun hoop -----------------------------------------

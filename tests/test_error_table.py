@@ -181,6 +181,33 @@ def _cache_case(kind):
     return provoke
 
 
+def _plots():
+    pytest.importorskip("matplotlib")
+    from lagcomp import plots
+
+    return plots
+
+
+def _sweep(models):
+    return models["pendulum"].sweep((0, 1), {"l": [1.0, 2.0]}, progress=False)
+
+
+def _saved_solution(models, tmp_path):
+    models["pendulum"].simulate((0, 1)).save_npz(tmp_path / "run.npz")
+    return tmp_path / "run.npz"
+
+
+def _unpickle_without_entry(tmp_path):
+    """A pickled model from `lc.load` (no System), its cache removed before it is unpickled."""
+    import pickle
+    import shutil
+
+    lc.compile(oscillator(name="table_cached"), cache_dir=tmp_path / "gone")
+    blob = pickle.dumps(lc.load("table_cached", cache_dir=tmp_path / "gone"))
+    shutil.rmtree(tmp_path / "gone")
+    return pickle.loads(blob)
+
+
 def _cli_system(name, *arguments):
     """What `lagcomp run NAME --arg ...` builds before anything else."""
     return cli._system(argparse.Namespace(name=name, arg=list(arguments)))
@@ -255,6 +282,8 @@ CASES = {
     "input-function-not-numba": (_simulate("pushed", inputs={"f": lambda t, y, p: 0.0}), "@numba.njit"),
     "input-function-signature": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y: t)}),
                                  "u(t: float64, y: float64[::1], p: float64[::1]) -> float64"),
+    "input-function-reads-outside": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y, p: p[40])}),
+                                     "Input `f`"),
     "input-function-needs-derivative": (_simulate("driven", inputs={"s": numba.njit(lambda t, y, p: t)}),
                                         "derivative of order 2"),
     "input-function-with-radau": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y, p: 0.0)}, method="radau"),
@@ -283,6 +312,7 @@ CASES = {
                      "T of 'table_oscillator' contains Piecewise"),
     "non-smooth-constraint": (lambda: lc.compile(plane(constraints=[lc.Holonomic("kink", sp.Abs(x) - y)])),
                               "constraint `kink`"),
+    "dissipation-not-quadratic": (lambda: lc.compile(oscillator(dissipation=c * x**2 / 2)), "table_oscillator"),
     "jump-in-potential": (lambda: lc.compile(oscillator(V=k * sp.Heaviside(x))), "Heaviside(x)"),
     "zero-inertia-coordinate": (lambda: lc.compile(plane(T=m * x.diff(t) ** 2 / 2)), "`y`"),
     "singular-mass-matrix": (lambda: lc.compile(plane(T=m * (x.diff(t) + y.diff(t)) ** 2 / 2)), "x, y"),
@@ -358,6 +388,7 @@ CASES = {
     "unknown-parameter": (_simulate("pendulum", params={"mass": 1.0}), "['mass']"),
     "missing-parameter": (lambda models: models["degenerate"].simulate((0, 1), q0=[1.0], params={}), "['m']"),
     "non-finite-parameter": (_simulate("pendulum", params={"g": math.inf}), "`g` is inf"),
+    "parameter-boolean": (_simulate("pendulum", params={"m": np.bool_(True)}), "`m`"),
     "parameter-not-a-number": (_simulate("pendulum", params={"l": [1.0, 2.0]}), "`l`"),
     "params-not-a-mapping": (_simulate("pendulum", params=[1.0, 1.0, 9.81]), "`params`"),
     "params-keys-not-names": (_simulate("pendulum", params={3: 1.0}), "`params` keys"),
@@ -448,6 +479,7 @@ CASES = {
     "corrupt-cache-entry": (_cache_case("corrupt"), "sha256"),
     "stale-cache-entry": (_cache_case("stale"), "another lagcomp or numba version"),
     "unwritable-cache": (_cache_case("unwritable"), "cannot write its cache"),
+    "unpickle-without-entry": (lambda models, tmp_path: _unpickle_without_entry(tmp_path), "'table_cached'"),
     "load-unknown-name": (lambda models, tmp_path: lc.load("never_compiled", cache_dir=tmp_path), "'never_compiled'"),
     "linearize-constrained": (lambda models: an.linearize(models["rod"], [0.0, 0.0, -1.0]), "linearize_steady"),
     "periodic-constrained": (lambda models: an.periodic_orbit(models["rod"], np.zeros(6), 1.0),
@@ -455,6 +487,9 @@ CASES = {
     "periodic-guess-size": (lambda models: an.periodic_orbit(models["pendulum"], [1.0], 2.0), "2 numbers"),
     "periodic-no-convergence": (lambda models: an.periodic_orbit(models["pendulum"], [1.0, 0.0], 2.0,
                                                                  max_iterations=1), "did not converge"),
+    "modes-not-at-equilibrium": (lambda models: an.normal_modes(models["pendulum"], [1.0]), "theta=1"),
+    "periodic-degenerate": (lambda models: an.periodic_orbit(models["pendulum"], [0.1, 0.0], 1.0, fix="period"),
+                            "no orbit"),
     "steady-off-constraints": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -2.0]), "residual"),
     "steady-singular-point": (lambda: an.linearize_steady(lc.System([x], T=m * x**2 * x.diff(t) ** 2 / 2,
                                                                     name="table_degenerate"), [0.0], None, {"m": 1.0}),
@@ -478,6 +513,12 @@ CASES = {
     "cli-unknown-example-argument": (lambda: _cli_system("n_link_pendulum", "m=3"), "the example 'n_link_pendulum' takes"),
     "cli-unwritable-output": (lambda tmp_path: cli._check_writable(str(tmp_path / "nonexistent" / "x.npz"), "--out"),
                               "does not exist"),
+    "plot-wrong-result": (lambda models: _plots().plot_run(_sweep(models)), "plot_run draws a Solution"),
+    "plot-unknown-quantity": (lambda models: _plots().plot_sweep(_sweep(models), "energy"), "'energy'"),
+    "save-missing-directory": (lambda models, tmp_path: models["pendulum"].simulate((0, 1)).save_npz(
+        tmp_path / "nonexistent" / "run.npz"), "nonexistent"),
+    "load-not-a-sweep": (lambda models, tmp_path: lc.Sweep.load_npz(_saved_solution(models, tmp_path)), "run.npz"),
+    "event-not-in-run": (lambda models: models["ball"].simulate((0, 1)).events["impact"], "'impact'"),
     "animate-no-bodies": (lambda models: lc.animate(models["pendulum"].simulate((0, 1))), "'simple_pendulum'"),
     "animate-no-geometry": (lambda models: replace(models["pendulum"].simulate((0, 1)), geometry=None).animate(),
                             "no model geometry"),

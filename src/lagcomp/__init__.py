@@ -25,6 +25,7 @@ from lagcomp.errors import (
     SingularMassMatrixError as SingularMassMatrixError,
     StiffnessWarning as StiffnessWarning,
     UndeclaredSymbolError as UndeclaredSymbolError,
+    UnknownEventError as UnknownEventError,
 )
 from lagcomp.integrate.inputs import Tabulated as Tabulated
 from lagcomp.integrate.solution import Solution as Solution
@@ -40,7 +41,7 @@ __all__ = [
     "from_lagranges_method", "rotated", "t",
     "LagcompError", "ModelError", "UndeclaredSymbolError", "ParameterError", "OptionError", "InitialConditionError",
     "SingularMassMatrixError", "IntegrationError", "LinearizationError", "CorruptCacheRecordError", "CacheWarning",
-    "StiffnessWarning", "ResetWarning",
+    "StiffnessWarning", "ResetWarning", "UnknownEventError",
 ]
 
 #: What `lagcomp.model` contributes to the namespace.  It is imported on first

@@ -97,13 +97,17 @@ LAYOUT_VERSION = "1"
 
 
 def cache_root(cache_dir: str | os.PathLike | None = None) -> Path:
-    """The cache directory: `cache_dir`, else $LAGCOMP_CACHE_DIR, else the user cache dir."""
+    """The cache directory: `cache_dir`, else $LAGCOMP_CACHE_DIR, else the user cache dir.
+
+    A leading ``~`` or ``~user`` of either is the user's home (`Path.expanduser`), as a shell would read it:
+    ``cache_dir="~/lc-cache"`` is not a directory named ``~`` in the working directory.
+    """
     if cache_dir is not None:
         if not isinstance(cache_dir, (str, os.PathLike)) or not os.fspath(cache_dir):
             raise OptionError(f"`cache_dir` must be a directory path (str or pathlib.Path), got {cache_dir!r}.")
-        return Path(cache_dir)
+        return Path(cache_dir).expanduser()
     if os.environ.get(ENV_VAR):
-        return Path(os.environ[ENV_VAR])
+        return Path(os.environ[ENV_VAR]).expanduser()
     return Path(platformdirs.user_cache_dir("lagcomp")) / f"v{LAYOUT_VERSION}"
 
 

@@ -45,6 +45,13 @@ class OptionError(LagcompError, ValueError):
     """An integration option (time span, step, tolerance, method...) is out of range."""
 
 
+class UnknownEventError(OptionError, KeyError):
+    """`Solution.events[name]` of a name the run has no record of (a KeyError too, as a dict's)."""
+
+    def __str__(self) -> str:  # (KeyError's own would quote the message)
+        return str(self.args[0]) if self.args else ""
+
+
 class IntegrationError(LagcompError, RuntimeError):
     """An integration failed; the partial solution is attached as ``.solution``."""
 

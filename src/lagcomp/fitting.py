@@ -19,8 +19,9 @@ scaled by the reduced χ², s² = Σr² / (m − P), the usual estimate of an un
 
 Refused (`OptionError`, docs/errors.md): unknown or repeated parameter names, observations whose shape
 differs from (len(t), len(observe)), non-finite data, times that do not increase, a run that cannot carry
-sensitivities (a method without them: the run's own refusal); a run failing at some trial parameters raises
-`IntegrationError` naming them.
+sensitivities (a method without them: the run's own refusal); a run failing at some trial parameters, or
+refused at them (a mass through zero: `SingularMassMatrixError`, the cause), raises `IntegrationError`
+naming them and advising bounds.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lagcomp.errors import IntegrationError, OptionError
+from lagcomp.errors import IntegrationError, OptionError, ParameterError, SingularMassMatrixError
 
 
 @dataclass(frozen=True)
@@ -223,10 +224,15 @@ class _Runs:
         experiment, n, p = self.experiments[e], self.model.n, len(self.parameters)
         params = {**self.fixed, **dict(zip(self.parameters, map(float, x[:p]), strict=True))}
         y0 = self._initial_state(x, e)
-        sol = self.model.simulate((experiment.t0, float(experiment.t[-1])), y0[:n], y0[n:], params,
-                                  t_eval=experiment.t, sensitivities=self.requested, **self.run_options)
+        shown = ", ".join(f"{name}={value:.17g}" for name, value in zip(self.names, x, strict=True))
+        try:  # trial values where the model cannot start (a mass through zero, a restitution above 1)
+            sol = self.model.simulate((experiment.t0, float(experiment.t[-1])), y0[:n], y0[n:], params,
+                                      t_eval=experiment.t, sensitivities=self.requested, **self.run_options)
+        except (SingularMassMatrixError, ParameterError) as err:
+            raise IntegrationError(f"The fit's run failed at the trial parameters {shown}, which the model "
+                                   f"refuses ({err}); bound the parameters (`bounds=`) to where the model runs, "
+                                   "or start closer.") from err
         if not sol.success or sol.t.size != experiment.t.size:
-            shown = ", ".join(f"{name}={value:.17g}" for name, value in zip(self.names, x, strict=True))
             raise IntegrationError(f"The fit's run failed at the trial parameters {shown} (status {sol.status}: "
                                    f"{sol.message}); bound the parameters (`bounds=`) or start closer.", sol)
         difference = sol.y[:, self.columns] - experiment.observations  # (m, K)

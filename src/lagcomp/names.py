@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import numpy as np
+
 from lagcomp.errors import ParameterError
 
 
@@ -12,7 +14,8 @@ def by_name(values: Mapping, what: str, parameters) -> dict:
 
     `what` names the argument in messages (``params``, ``defaults``); `parameters`
     lists the names it may use.  A key that is neither a str nor a Symbol, or a
-    parameter given twice (once by name, once by Symbol), is a ParameterError.
+    parameter given twice (once by name, once by Symbol), or a boolean value (``True`` is no mass), is a
+    ParameterError.
     """
     named = {}
     for key, value in values.items():
@@ -22,5 +25,7 @@ def by_name(values: Mapping, what: str, parameters) -> dict:
                                  f"the parameters are {list(parameters)}.")
         if name in named:
             raise ParameterError(f"`{what}` gives parameter `{name}` twice (by name and by Symbol).")
+        if isinstance(value, (bool, np.bool_)):  # float(True) is 1.0: a flag passed where a number was meant
+            raise ParameterError(f"`{what}` gives parameter `{name}` the boolean {value!r}; give it a number.")
         named[name] = value
     return named

@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from lagcomp.errors import OptionError
+
 __all__ = ["plot_coordinates", "plot_energy_error", "plot_run", "plot_phase_portrait", "plot_poincare", "plot_sweep",
            "plot_lyapunov", "plot_stability"]
 
@@ -34,6 +36,46 @@ def _figure(width: float = 7.0, height: float = 4.5):
     except ImportError as err:
         raise ImportError("lagcomp's plots need matplotlib: pip install 'lagcomp[plots]'.") from err
     return Figure(figsize=(width, height), layout="constrained")
+
+
+def _require(result, kind: str, function: str):
+    """`result` itself when it is a `kind` ("Solution" or "Sweep"), else an OptionError saying what to pass."""
+    from lagcomp.integrate.solution import Solution
+    from lagcomp.integrate.sweep import Sweep
+
+    wanted = {"Solution": Solution, "Sweep": Sweep}[kind]
+    if not isinstance(result, wanted):
+        instead = {"Sweep": "plot_sweep(sweep, quantity)", "Solution": "plot_run(sol) or plot_coordinates(sol)"}
+        given = type(result).__name__
+        hint = f"; for a {given} use {instead[given]}" if given in instead else ""
+        raise OptionError(f"{function} draws a {kind} ({'model.simulate' if kind == 'Solution' else 'model.sweep'}'s "
+                          f"result), got {given}{hint}.")
+    return result
+
+
+def _sweep_values(sweep, quantity) -> tuple[np.ndarray, str]:
+    """(values shaped like the grid, label) of `quantity`: a per-trajectory field of the Sweep named, or an array."""
+    import dataclasses
+
+    shape = tuple(sweep.shape)
+    if not isinstance(quantity, str):
+        values = np.asarray(quantity, dtype=float)
+        if values.shape != shape:
+            raise OptionError(f"`quantity` must have the grid's shape {shape}, got {values.shape}.")
+        return values, "value"
+    fields = [f.name for f in dataclasses.fields(sweep)
+              if isinstance(getattr(sweep, f.name), np.ndarray) and getattr(sweep, f.name).shape == shape]
+    if quantity not in fields:
+        import difflib
+
+        names = [f.name for f in dataclasses.fields(sweep)]
+        near = difflib.get_close_matches(quantity, names, 1, 0.5)
+        why = ("this sweep did not keep it (`output` of model.sweep)" if getattr(sweep, quantity, 0) is None else
+               f"did you mean {near[0]!r}? (kept only when `output` of model.sweep asks for it)" if near and
+               getattr(sweep, near[0]) is None else f"did you mean {near[0]!r}?" if near else "no such field")
+        raise OptionError(f"`quantity` {quantity!r} is no per-trajectory quantity of this sweep ({why}): it has "
+                          f"{fields} (or pass an array of the grid's shape {shape}, e.g. sweep.final[..., 0]).")
+    return np.asarray(getattr(sweep, quantity), dtype=float), quantity
 
 
 def _label(name: str) -> str:
@@ -65,6 +107,7 @@ def plot_coordinates(sol, *, velocities: bool = False, events: bool = True, titl
     With `events`, the times of the events that changed the motion (resets, a contact's impacts and lift-offs,
     friction's switches) are dotted vertical lines, named in the legend with their count.
     """
+    _require(sol, "Solution", "plot_coordinates")
     fig = _figure(7.0, 6.0 if velocities else 4.0)
     axes = fig.subplots(2 if velocities else 1, 1, sharex=True, squeeze=False)[:, 0]
     for i, name in enumerate(sol.coordinates):
@@ -103,6 +146,7 @@ def plot_energy_error(sol, *, which: str = "energy_function", title: str | None 
     Exact zeros (the initial point) are drawn at a tenth of the smallest
     non-zero error, so the log scale keeps them in view.
     """
+    _require(sol, "Solution", "plot_energy_error")
     fig = _figure(7.0, 4.0)
     ax = fig.add_subplot()
     _energy_error_axes(ax, sol, which)
@@ -113,6 +157,7 @@ def plot_energy_error(sol, *, which: str = "energy_function", title: str | None 
 def plot_run(sol, *, events: bool = True, title: str | None = None):
     """Coordinates vs time above the energy error: the figure of ``lagcomp run --plot``; with `events`, the
     resets, impacts and mode switches marked on both (as `plot_coordinates` marks them)."""
+    _require(sol, "Solution", "plot_run")
     fig = _figure(7.0, 6.5)
     top, bottom = fig.subplots(2, 1, sharex=True)
     for i, name in enumerate(sol.coordinates):
@@ -152,7 +197,7 @@ def plot_phase_portrait(portrait, *, title: str | None = None):
         ax.legend(loc="upper right", fontsize="x-small")
     else:
         if portrait.q.shape[1] != 1:
-            raise ValueError("A phase portrait from a Solution needs one coordinate; pass a Portrait instead.")
+            raise OptionError("A phase portrait from a Solution needs one coordinate; pass a Portrait instead.")
         name = portrait.coordinates[0]
         ax.plot(portrait.q[:, 0], portrait.qd[:, 0], lw=0.8)
     ax.set_xlabel(name)
@@ -191,10 +236,8 @@ def plot_sweep(sweep, quantity="energy_error", *, label: str | None = None, log:
     """
     from matplotlib.colors import LogNorm, Normalize
 
-    values = np.asarray(getattr(sweep, quantity) if isinstance(quantity, str) else quantity, dtype=float)
-    label = label or (quantity if isinstance(quantity, str) else "value")
-    if values.shape != tuple(sweep.shape):
-        raise ValueError(f"`quantity` must have the grid's shape {tuple(sweep.shape)}, got {values.shape}.")
+    values, name = _sweep_values(_require(sweep, "Sweep", "plot_sweep"), quantity)
+    label = label or name
     finite = values[np.isfinite(values)]
     if log is None:
         log = finite.size > 0 and finite.min() > 0 and finite.max() > 100 * finite.min()
@@ -221,7 +264,7 @@ def plot_sweep(sweep, quantity="energy_error", *, label: str | None = None, log:
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     else:
-        raise ValueError(f"plot_sweep draws grids of one or two swept names; this one has {list(sweep.names)}.")
+        raise OptionError(f"plot_sweep draws grids of one or two swept names; this one has {list(sweep.names)}.")
     ax.set_title(title or f"sweep ({sweep.method}): {label}")
     return fig
 

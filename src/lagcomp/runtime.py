@@ -346,6 +346,12 @@ class Model:
         """Number of constraints."""
         return len(self.constraints)
 
+    def __reduce__(self):
+        """Pickle as the cache entry, run defaults and System (`lagcomp.pickling`): the module itself cannot."""
+        from lagcomp.pickling import model_state, restore_model
+
+        return restore_model, (model_state(self),)
+
     def __repr__(self) -> str:
         origin = "cache" if self.from_cache else "fresh build"
         return f"Model({self.name!r}, n={self.n}, parameters={self.parameters}, from {origin}: {self.source_path})"

@@ -104,4 +104,10 @@ class RestForces:
         bead of 0.1 kg and a jack lifting 4000 N.
         """
         stiffness, _ = self.partials(q)
-        return max(float(np.max(np.abs(stiffness))) * max(1.0, float(np.max(np.abs(q)))), 1e-300)
+        return force_scale(stiffness, q)
+
+
+def force_scale(stiffness: np.ndarray, q) -> float:
+    """`RestForces.force_scale` from ∂F/∂q at q: the largest |∂F/∂q| times max(1, max |q|), at least 1e-300."""
+    return max(float(np.max(np.abs(stiffness), initial=0.0)) * max(1.0, float(np.max(np.abs(q), initial=0.0))),
+               1e-300)

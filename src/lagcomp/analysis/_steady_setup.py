@@ -13,6 +13,7 @@ from scipy import linalg
 from lagcomp.analysis._form_jacobians import evaluator
 from lagcomp.errors import InitialConditionError, LinearizationError, ModelError, ParameterError
 from lagcomp.mechanics.first_order import FirstOrderForm, from_eom
+from lagcomp.names import by_name
 
 #: Largest constraint residual accepted at the point, relative to the constraint Jacobians' scale.
 CONSISTENT = 1e-8
@@ -86,7 +87,7 @@ def first_order_form(system) -> tuple[FirstOrderForm, dict]:
 def parameter_vector(form: FirstOrderForm, params, defaults: dict) -> tuple[np.ndarray, dict]:
     """The form's parameter values in its order, from `params` by name over `defaults`, checked."""
     names = [str(s) for s in form.parameters]
-    values = {**defaults, **(params or {})}
+    values = {**defaults, **by_name(params or {}, "params", names)}
     unknown = sorted(set(values) - set(names))
     if unknown:
         raise ParameterError(f"Unknown parameter(s) {unknown}; the parameters are {names}.")

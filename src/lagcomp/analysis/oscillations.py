@@ -28,8 +28,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg
 
-from lagcomp.analysis._common import RestForces, coordinates_vector
-from lagcomp.errors import ModelError
+from lagcomp.analysis._common import RestForces, coordinates_vector, force_scale
+from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
+from lagcomp.errors import LinearizationError, ModelError
 
 #: Relative size below which G₀, D₀, asymmetry and Re λ count as zero.
 ZERO = 1e-10
@@ -151,11 +152,14 @@ def normal_modes(model_or_linearization, q=None, params: dict | None = None, *, 
     """Normal-mode frequencies and shapes and the stability verdict at an equilibrium.
 
     Pass a `Linearization`, or a model and the equilibrium coordinates `q`
-    (with `params`, `t`).  See the module docstring for the two cases.
+    (with `params`, `t`).  See the module docstring for the two cases.  A q
+    that is no equilibrium is a LinearizationError (`_check_equilibrium`): the
+    modes of the linearization about it say nothing of the motion there.
     """
     lin = model_or_linearization
     if not isinstance(lin, Linearization):
         lin = linearize(lin, q, params, t=t)
+    _check_equilibrium(lin)
     quadratic = _quadratic_eigenvalues(lin)
     growth = float(np.max(quadratic.real))
     scale = _rate_scale(lin)
@@ -184,6 +188,24 @@ def normal_modes(model_or_linearization, q=None, params: dict | None = None, *, 
     vectors = _quadratic_vectors(lin, quadratic[order])
     return Modes(frequencies=quadratic.imag[order], shapes=vectors, omega2=None, eigenvalues=quadratic,
                  growth_rate=growth, stability=stability, linearization=lin)
+
+
+def _check_equilibrium(lin: Linearization) -> None:
+    """Refuse a linearization about a q where F(q, 0, t) ≠ 0.
+
+    "F = 0" is judged as `find_equilibrium` judges it: max |F| against the force scale
+    (`lagcomp.analysis._common.force_scale`: the largest |K₀| times max(1, |q|)), with the same
+    `RESIDUAL_TOLERANCE`, so every equilibrium it reports as found passes.
+    """
+    scale = force_scale(lin.K, lin.q)
+    if not lin.residual <= RESIDUAL_TOLERANCE * scale:
+        point = ", ".join(f"{name}={value:.6g}" for name, value in zip(lin.coordinates, lin.q))
+        raise LinearizationError(
+            f"q = ({point}) is not an equilibrium: max |F(q, 0, t)| = {lin.residual:.3g} is {lin.residual / scale:.3g} "
+            f"times the force scale {scale:.3g} (largest |∂F/∂q| times max(1, |q|)), above the {RESIDUAL_TOLERANCE:g} "
+            "that counts as zero, so the bodies accelerate there and its normal modes would describe no motion. "
+            "Find an equilibrium with lagcomp.analysis.find_equilibrium (or equilibria), or for a steady motion "
+            "use linearize_steady.")
 
 
 def _rate_scale(lin: Linearization) -> float:

@@ -4,7 +4,7 @@ An orbit of ẏ = f(y) is periodic with period T when the flow φ brings its ini
 
     R(y0, T) = φ_T(y0) − y0 = 0       (N equations, N = 2n).
 
-The unknowns z = (y0, T) are found by `scipy.optimize.least_squares` (Levenberg-Marquardt) with the exact
+The unknowns z = (y0, T) are found by `scipy.optimize.least_squares` (trust-region, below) with the exact
 Jacobian ∂R/∂(y0, T) = [Φ − I | f(φ_T(y0))]: the monodromy matrix Φ = ∂φ_T/∂y0 comes from
 ``simulate(..., sensitivities=("q0", "qd0"))`` (the variational equations with the emitted ``rhs_jacobian``),
 in the same run as φ_T(y0), and f from the model's ``rhs`` kernel.  Two equations more make the solution unique:
@@ -23,9 +23,9 @@ redundant (Φ − I has the flow direction f and the family's direction in its k
 remove both).  Gauss-Newton on a consistent overdetermined system converges quadratically like Newton, so no
 equation has to be dropped by hand (which one would be a choice per system).
 A system with more symmetries keeps more directions in that kernel (the three bodies' translations and
-rotation); Levenberg-Marquardt's damped step has no component along it (in scipy's scaled norm), and the solve
-ends on one of the symmetric copies of the orbit (the figure eight of tests/test_periodic.py, translated and
-shifted in phase).
+rotation); the trust-region step (from the SVD of the scaled J) has no component along it (in scipy's
+scaled norm), and the solve ends on one of the symmetric copies of the orbit (the figure eight of
+tests/test_periodic.py, translated and shifted in phase).
 
 The Floquet multipliers are the eigenvalues of Φ at the solution (they do not depend on the coordinates: Φ in
 (q, q̇) is similar to the symplectic one in (q, p) since φ_T(y0) = y0).  For an autonomous Hamiltonian system two
@@ -36,9 +36,17 @@ multipliers move by ~δ (|μ| = 1 to ~1e-13 there).  Each further symmetry bring
 (the planar three bodies: 8, within 6e-6 of 1; the figure eight's other four on the unit circle to 3e-12).
 Φ is integrated with ``sensitivity_control="both"``.
 
+The solver is scipy's trust-region reflective ``least_squares(method="trf")`` with the same scaling
+(``x_scale="jac"``).  Levenberg-Marquardt (``method="lm"``, scipy's MINPACK) was used before: scipy 1.17's MINPACK
+reads memory it has not written (with the same residuals and Jacobians, the first step differed with the garbage
+left on the heap before the call: 60 of 200 calls one way, 140 the other), so the orbit found from a guess that
+is not close — Simó's figure eight with positions and velocities both 10 % too large — depended on the process.
+
 Refused (`OptionError`, docs/errors.md): models with Lagrange multipliers (Newton's steps on the whole state
 would leave their constraints), a guess of the wrong size or not finite, an unknown `fix`, a period that is not
-positive, and no convergence (the residual reached is in the message).
+positive, no convergence (the residual reached is in the message), and a degenerate solution: a state that over
+the period moves by at most `DEGENERATE` times what the guess's does (an equilibrium, bodies escaping: periodic
+with any period, no orbit).
 """
 
 from __future__ import annotations
@@ -50,6 +58,10 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from lagcomp.errors import OptionError
+
+#: A solution whose state moves by at most this fraction of what the guess's moves over the period is refused
+#: (`_refuse_degenerate`): an equilibrium or an escape, not an orbit.
+DEGENERATE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -156,8 +168,8 @@ def periodic_orbit(model, guess, period: float, *, fix: str | None = None, param
         return np.vstack([block, phase_row, fixed_row])
 
     start = np.append(y_guess, period)
-    result = least_squares(residual, start, jac=jacobian, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15,
-                           max_nfev=max(1, int(max_iterations)), x_scale="jac")
+    result = least_squares(residual, start, jac=jacobian, method="trf", xtol=1e-15, ftol=1e-15, gtol=1e-15,
+                           max_nfev=max(1, int(max_iterations)), x_scale="jac")  # (not "lm": see the module docstring)
     z = result.x
     sol = shooting.run(z)
     closing = float(np.max(np.abs(sol.y[-1] - z[:size])))
@@ -165,12 +177,33 @@ def periodic_orbit(model, guess, period: float, *, fix: str | None = None, param
         raise OptionError(f"`periodic_orbit` of {model.name!r} did not converge: max |φ_T(y0) − y0| reached "
                           f"{closing:.3g} (tol {tol:g}) at T = {z[size]:.6g} after {result.njev} iterations "
                           f"({result.message}); start from a closer guess or period.")
+    _refuse_degenerate(shooting, sol, y_guess, period)
     monodromy = sol.sensitivities[-1].copy()
     multipliers = np.linalg.eigvals(monodromy)
     multipliers = multipliers[np.argsort(-np.abs(multipliers), kind="stable")]
     return PeriodicOrbit(y0=z[:size].copy(), period=float(z[size]), multipliers=multipliers, monodromy=monodromy,
                          residual=closing, iterations=int(result.njev or 0), evaluations=int(result.nfev), fix=fix,
                          solution=sol)
+
+
+def _extent(sol) -> float:
+    """How far a run's state moves from its start: max over its rows of max_i |y_i(t) − y_i(0)|."""
+    return float(np.max(np.abs(sol.y - sol.y[0])))
+
+
+def _refuse_degenerate(shooting, sol, y_guess, period: float) -> None:
+    """Refuse a solution of the shooting equations that is no orbit: nothing moving, on the scale of the motion
+    the guess makes over the period (`DEGENERATE`: an equilibrium, or bodies so far apart that they hardly move,
+    both "periodic" with any period)."""
+    moved, sought = _extent(sol), _extent(shooting.plain_run(y_guess, period))
+    if not moved > DEGENERATE * sought:
+        state = ", ".join(f"{name}={value:.6g}" for name, value in zip(shooting.model.state_names, sol.y[0]))
+        raise OptionError(
+            f"`periodic_orbit` of {shooting.model.name!r} converged to a motion that is no orbit: over the period "
+            f"T = {sol.t[-1]:.6g} its state moves by {moved:.3g}, {moved / sought if sought else 0.0:.3g} times what "
+            f"the guess's moves ({sought:.3g}), from ({state}): an equilibrium, or bodies escaping so far apart that "
+            "they hardly move, which repeat with any period. Start from a closer guess or period (or hold an "
+            "amplitude, `fix=`, rather than the period).")
 
 
 class _Shooting:
@@ -200,6 +233,12 @@ class _Shooting:
                                   progress=False, throw=True, **self.options)
         self._last = (z.copy(), sol)
         return sol
+
+    def plain_run(self, y, T: float):
+        """φ_t(y) over [0, T], without sensitivities (the guess's motion, `_refuse_degenerate`)."""
+        options = {key: value for key, value in self.options.items() if key != "sensitivity_control"}
+        return self.model.simulate((0.0, T), y[:self.n], y[self.n:], self.params, progress=False, throw=True,
+                                   **options)
 
     def field(self, y) -> np.ndarray:
         """f(y) at t = 0 (the model is autonomous: any t), shape (N,)."""

@@ -441,6 +441,8 @@ def acceleration_partials(M, F, accelerations, variables) -> list[list]:
     Entries are symengine or sympy expressions (`_kernel` takes either).
     """
     rows, columns = M.rows, len(accelerations)
+    if not variables:   # a model without parameters: its (n, 0) parameter block (sympy's jacobian refuses no x)
+        return [[] for _ in range(rows)]
     if symengine_ready([*M, *F]):   # the residual built in symengine too: sympy's additions took 0.26 s at 24 links
         bars, xs = [se.sympify(a) for a in accelerations], [se.sympify(x) for x in variables]
         images = [se.sympify(F[i]) - sum((se.sympify(M[i, k]) * bars[k] for k in range(columns) if M[i, k] != 0),

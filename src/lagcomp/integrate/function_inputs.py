@@ -6,14 +6,24 @@ function of
 * ``t`` (float): the time;
 * ``y`` (float64[::1], shape (2n,)): the state as the kernels get it, q then q̇
   (Kane models take no inputs);
-* ``p`` (float64[::1]): the parameter vector, `Model.parameters` in order first
-  (the function may read gains there, and a sweep may sweep them);
+* ``p`` (float64[::1], shape (len(Model.parameters),)): the parameters, in
+  `Model.parameters` order (the function may read gains there, and a sweep may
+  sweep them) — a view of the kernels' parameter vector that ends where the
+  parameters do, not the vector itself (which goes on with the inputs' tables);
 
 returning the input's value (a float).  Such an input packs as a one-piece
 constant table (`lagcomp.integrate.inputs.pack_inputs`) whose constant is the
 *value slot*: every kernel the run calls is wrapped by a small numba function
-that writes ``p[slot] = u(t, y, p)`` and then calls the model's kernel with
-the same p, which reads the value like any table's (`input_value`).  The
+that writes ``p[slot] = u(t, y, p[:P])`` (P parameters) and then calls the
+model's kernel with the same p, which reads the value like any table's
+(`input_value`).
+
+numba checks no bounds: a function reading ``p[40]`` of a model with four
+parameters would read whatever memory follows, without a word.  So before a
+run (`driven`) each function is called once, compiled again with numba's
+bounds checking, at t = 0, y = 0 and the run's parameters (`check_bounds`): an
+index outside y or p there is an `OptionError`.  An index that depends on the
+state or time and leaves the arrays only later is not caught.  The
 wrappers are closures over the generated module's dispatcher and the user's
 function, compiled at the first run that needs them and kept for the process
 (`_WRAPPERS`): the model's kernels and the library drivers are not compiled
@@ -47,6 +57,7 @@ from __future__ import annotations
 import inspect
 import threading
 
+import numpy as np
 from numba import njit, types
 from numba.core.dispatcher import Dispatcher
 
@@ -95,11 +106,12 @@ def check(function, name: str, order: int) -> None:
 
 
 def value_slots(model, functions: dict, p) -> tuple[tuple, ...]:
-    """((function, value slot in p), ...) of the inputs of `model` given as `functions` (name -> function),
-    in the model's input order; p holds the headers after the parameters and a constrained system's
-    Baumgarte gains or the contacts' modes (`lagcomp.kernel_support.inputs`)."""
+    """((function, value slot in p, count of parameters), ...) of the inputs of `model` given as `functions`
+    (name -> function), in the model's input order; p holds the headers after the parameters and a constrained
+    system's Baumgarte gains or the contacts' modes (`lagcomp.kernel_support.inputs`)."""
     first = len(model.parameters) + (2 if model.k else 0) + mode_slot_count(model.kernels)
-    return tuple((functions[name], int(p[first + j]) + VALUE_OFFSET)
+    count = len(model.parameters)
+    return tuple((functions[name], int(p[first + j]) + VALUE_OFFSET, count)
                  for j, name in enumerate(model.inputs) if name in functions)
 
 
@@ -119,22 +131,44 @@ def driven(model, inputs, p, method, client=None):
     if client is not None:
         raise OptionError(f"Input(s) {names} are numba functions, which a Dask sweep cannot send to its workers: "
                           "sweep on this machine (drop `client`), or give them as tables or laws.")
-    return DrivenModel(model, driven_kernels(model.kernels, value_slots(model, functions, p)))
+    for name in names:
+        check_bounds(functions[name], name, model, p)
+    return DrivenModel(model, driven_kernels(model.kernels, value_slots(model, functions, p)), tuple(names))
 
 
 class DrivenModel:
     """A model whose `kernels` write its function inputs' values into p before each call; everything else
-    is the model's (what `simulate` and `sweep` read of a model, and the `Solution` they build)."""
+    is the model's (what `simulate` and `sweep` read of a model, and the `Solution` they build).
+    `function_inputs`: the names of the inputs given as functions."""
 
-    def __init__(self, model, kernels: DrivenKernels):
-        self._model, self.kernels = model, kernels
+    def __init__(self, model, kernels: DrivenKernels, function_inputs: tuple = ()):
+        self._model, self.kernels, self.function_inputs = model, kernels, function_inputs
 
     def __getattr__(self, name):
         return getattr(self._model, name)
 
 
+def check_bounds(function, name: str, model, p) -> None:
+    """Call `function` once, compiled with bounds checking, at t = 0, y = 0 (2n values) and the parameters of
+    p: an index outside y or p there is an OptionError (in the run numba checks none)."""
+    count = len(model.parameters)
+    with _LOCK:
+        if function not in _BOUNDS_CHECKED:
+            _BOUNDS_CHECKED[function] = njit(boundscheck=True)(function.py_func)
+        checked = _BOUNDS_CHECKED[function]
+    try:
+        checked(0.0, np.zeros(2 * model.n), np.array(p[:count], dtype=float))
+    except IndexError as err:
+        raise OptionError(f"Input `{name}`: the function reads outside the arrays it is given ({err}): `y` holds "
+                          f"the {2 * model.n} values {list(model.state_names)}, `p` the {count} parameters "
+                          f"{list(model.parameters)}; numba checks no bounds in the run, where such a read returns "
+                          "whatever memory follows. Index within them (pass other values as parameters).") from err
+    except Exception:  # noqa: BLE001, S110 - its other failures at y = 0 (a division by zero) are not this check's
+        pass
+
+
 class DrivenKernels:
-    """The generated `module`'s kernels, each wrapped to evaluate `functions` ((function, value slot), ...)
+    """The generated `module`'s kernels, each wrapped to evaluate `functions` ((function, value slot, count), ...)
     first; its other attributes (data such as ``CONSTRAINT_COUNT``) as they are.  Kernels are wrapped at
     their first look-up (`Method.bound_driver` looks up those its driver takes, then caches the bound
     driver per instance: `driven_kernels` keeps one instance per module and functions)."""
@@ -147,8 +181,8 @@ class DrivenKernels:
             if name in self.__dict__:
                 return self.__dict__[name]
             value = getattr(self._module, name)
-            for function, slot in self._functions:
-                value = _wrapped(value, function, slot)
+            for function, slot, count in self._functions:
+                value = _wrapped(value, function, slot, count)
             setattr(self, name, value)
             return value
 
@@ -157,8 +191,11 @@ class DrivenKernels:
 _DRIVEN: dict = {}
 #: Held while a kernel is wrapped.
 _LOCK = threading.RLock()
-#: {(kernel, function, slot): its wrapper}, for the process: a wrapper is compiled once per kernel and function.
+#: {(kernel, function, slot, count): its wrapper}, for the process: a wrapper is compiled once per kernel and
+#: function.
 _WRAPPERS: dict = {}
+#: {function: it compiled with bounds checking}, for the process (`check_bounds`).
+_BOUNDS_CHECKED: dict = {}
 
 
 def driven_kernels(module, functions: tuple) -> DrivenKernels:
@@ -169,8 +206,8 @@ def driven_kernels(module, functions: tuple) -> DrivenKernels:
     return _DRIVEN[key]
 
 
-def _wrapped(kernel, function, slot: int):
-    """`kernel` wrapped to write ``p[slot] = function(t, y, p)`` first: a pointwise kernel ``(t, y, p, ...)``
+def _wrapped(kernel, function, slot: int, count: int):
+    """`kernel` wrapped to write ``p[slot] = function(t, y, p[:count])`` first: a pointwise kernel ``(t, y, p, ...)``
     before its one call, a row kernel ``(ts, ys, p, outs...)`` (observables, reactions) before each row's;
     anything else (module data, `input_value`) as it is."""
     if not isinstance(kernel, Dispatcher):
@@ -185,53 +222,53 @@ def _wrapped(kernel, function, slot: int):
     if factory is None:
         raise OptionError(f"Function inputs cannot wrap the kernel {kernel.__name__}{arguments} (no wrapper of "
                           f"{len(arguments)} arguments); give the inputs as tables or laws.")
-    key = (kernel, function, slot)
+    key = (kernel, function, slot, count)
     if key not in _WRAPPERS:
-        _WRAPPERS[key] = factory(kernel, function, slot)
+        _WRAPPERS[key] = factory(kernel, function, slot, count)
     return _WRAPPERS[key]
 
 
 # -- the wrappers, by the kernel's arguments (numba compiles closures of a fixed arity) --------------------------
 
 
-def _pointwise3(kernel, u, slot):
+def _pointwise3(kernel, u, slot, count):
     @njit(error_model="numpy", nogil=True)
     def wrapped(t, y, p):
-        p[slot] = u(t, y, p)
+        p[slot] = u(t, y, p[:count])
         return kernel(t, y, p)
     return wrapped
 
 
-def _pointwise4(kernel, u, slot):
+def _pointwise4(kernel, u, slot, count):
     @njit(error_model="numpy", nogil=True)
     def wrapped(t, y, p, out):
-        p[slot] = u(t, y, p)
+        p[slot] = u(t, y, p[:count])
         return kernel(t, y, p, out)
     return wrapped
 
 
-def _pointwise5(kernel, u, slot):
+def _pointwise5(kernel, u, slot, count):
     @njit(error_model="numpy", nogil=True)
     def wrapped(t, y, p, a, b):
-        p[slot] = u(t, y, p)
+        p[slot] = u(t, y, p[:count])
         return kernel(t, y, p, a, b)
     return wrapped
 
 
-def _rows5(kernel, u, slot):
+def _rows5(kernel, u, slot, count):
     @njit(error_model="numpy", nogil=True)
     def wrapped(ts, ys, p, a, b):
         for k in range(ts.shape[0]):
-            p[slot] = u(ts[k], ys[k], p)
+            p[slot] = u(ts[k], ys[k], p[:count])
             kernel(ts[k:k + 1], ys[k:k + 1], p, a[k:k + 1], b[k:k + 1])
     return wrapped
 
 
-def _rows6(kernel, u, slot):
+def _rows6(kernel, u, slot, count):
     @njit(error_model="numpy", nogil=True)
     def wrapped(ts, ys, p, a, b, c):
         for k in range(ts.shape[0]):
-            p[slot] = u(ts[k], ys[k], p)
+            p[slot] = u(ts[k], ys[k], p[:count])
             kernel(ts[k:k + 1], ys[k:k + 1], p, a[k:k + 1], b[k:k + 1], c[k:k + 1])
     return wrapped
 

@@ -207,7 +207,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     max_rows = (options.memory_limit // _row_bytes(model, k_columns) if record == "trajectory" else math.inf)
     rate_key = m.name if columns is None else (m.name, columns.k)  # (a sensitivity run's steps cost more)
     status = _run(advance, state, t1, (chunk, max_rows, width), recorder, n_events, event_parts, progress, first,
-                  (_STEP_RATES.setdefault(model, {}), rate_key))
+                  (_STEP_RATES.setdefault(model, {}), rate_key), _kernels_of(model, m))
     if status == Status.RHS_FAILED and state.nsteps == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
@@ -249,21 +249,33 @@ def _memory_check(model, memory_limit, k_columns: int = 0):
     return check_rows
 
 
+def _kernels_of(model, m) -> tuple:
+    """The numba dispatchers among the kernels the run's driver takes (numba compiles those it has not yet in
+    the driver's first call: the library driver itself was compiled, or loaded, on import)."""
+    names = m.dae_kernels if m.solves_dae(model) else m.kernels
+    return tuple(kernel for kernel in (getattr(model.kernels, name, None) for name in names)
+                 if hasattr(kernel, "signatures"))
+
+
 def _numba_stage(model, m, progress):
     """What the first driver call of a run shows while numba compiles its kernels and driver."""
     from lagcomp.stages import numba_stage
 
-    # the first kernel stands for the model's: the library driver was compiled (or loaded) on import
+    # the first kernel stands for the model's
     kernels = m.dae_kernels if m.solves_dae(model) else m.kernels
     return numba_stage(getattr(model.kernels, kernels[0], None), f"the kernels and the {m.name} driver",
                        f"preparing {model.name}", progress)
 
 
 def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, progress, first=None,
-         learned=None) -> int:
+         learned=None, watched=()) -> int:
     """Call the driver until the run ends; returns the run's `Status`.
 
     `first`, if not None, is a context around the first call (numba compiles there: `_numba_stage`).
+    `watched`: the run's kernels (`_kernels_of`).  Ctrl-C during a first call in which numba compiled one of
+    them meant to stop the script, not to keep a run that had barely begun: the compilation finishes (its
+    machine code kept, in the process and numba's disk cache), then KeyboardInterrupt.  Ctrl-C at any other
+    time stops the run with status INTERRUPTED, its rows kept.
     `chunk` is (rows of the first output buffer, rows the run may keep before it stops with MEMORY_FULL, the
     leading columns of the state that are recorded: (q, q̇), not a DAE's algebraic components).
     `learned`, if not None, is (rates, key): ``rates[key]``, if there, is the steps per second that sizes
@@ -276,6 +288,7 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
     known = rates.get(key)
     budget = FIRST_BUDGET if known is None else max(16, int(known * FIRST_CALL_SECONDS))
     t0, first_call = state.t, True
+    signatures = [len(kernel.signatures) for kernel in watched]
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
         ts, ys = np.empty(chunk), np.empty((chunk, n))
         while True:
@@ -293,6 +306,8 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
             compiled = first is not None
             if compiled:  # numba was compiling: the run's bar times the run from here
                 first, bar.started = None, time.perf_counter()
+            if first_call and interrupted[0] and signatures != [len(kernel.signatures) for kernel in watched]:
+                raise KeyboardInterrupt
             elapsed = time.perf_counter() - started
             recorder.add(ts[:n_saved], ys[:n_saved, :width])
             if recorder.rows > max_rows and Status(status).call_again:
@@ -441,7 +456,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
     stiff_at = run_state.stiff_at
     if stiff_at is not None and status in ADVISED_FAILURES:
         message = f"{message} The steps were limited by stability from t = {stiff_at[1]:.6g}: the problem is " \
-                  f"stiff. {stiffness_advice()}"
+                  f"stiff. {stiffness_advice(model)}"
     if status < 0 or status == Status.INTERRUPTED:
         state = ", ".join(f"{name}={v:.6g}" for name, v in zip(model.state_names, run_state.y))  # (q, q̇), or (q, u)
         last = "state" if status == Status.RESIDUAL_EXCEEDED else "last good state"
@@ -471,7 +486,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         event_sensitivities=run.get("event_sensitivities", {}), reaction_sensitivities=reaction_sensitivities,
     )
     # simulate -> Model.simulate -> the user's call
-    warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4)
+    warn_if_stiff(run["method"], stiff_at, run_state.nsteps, run_state.nfev, stacklevel=4, model=model)
     if throw and status < 0:
         raise IntegrationError(message, solution)
     return solution

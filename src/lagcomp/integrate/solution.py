@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lagcomp.errors import UnknownEventError
+from lagcomp.integrate.files import output_path
 from lagcomp.integrate.recording import Observed, RunSummary
 from lagcomp.integrate.status import MESSAGES  # noqa: F401  (re-exported: a failed run is a status, not an exception)
 
@@ -33,6 +35,16 @@ class EventRecord:
         """Whether some occurrence changed the state (a reset that moved it)."""
         return self.q_after is not None and not (np.array_equal(self.q, self.q_after)
                                                  and np.array_equal(self.qd, self.qd_after))
+
+
+class EventRecords(dict):
+    """{event name: `EventRecord}` of a run (`Solution.events`): a name the run has no record of is an
+    `UnknownEventError` (a KeyError) naming those it has, not a bare KeyError."""
+
+    def __missing__(self, name):
+        raise UnknownEventError(f"No event {name!r} in this run: its events are {sorted(self)} (a declared event "
+                                "is recorded when the run locates it: not with events=False or a list without it, "
+                                "nor by a fixed-step method).")
 
 
 @dataclass(frozen=True)
@@ -214,6 +226,10 @@ class Solution:
     friction_switches: tuple = ()
     friction_forces: np.ndarray | None = field(default=None, repr=False)
 
+    def __post_init__(self):
+        if not isinstance(self.events, EventRecords):
+            object.__setattr__(self, "events", EventRecords(self.events))
+
     @property
     def success(self) -> bool:
         """The run reached the end of its span or a terminal event."""
@@ -347,8 +363,9 @@ class Solution:
         return animate(self, points, **options)
 
     def save_npz(self, path: str | os.PathLike) -> None:
-        """Write `to_dict()` to a compressed .npz file."""
-        np.savez_compressed(path, **self.to_dict())
+        """Write `to_dict()` to a compressed .npz file (numpy adds ``.npz`` to a name without it); a directory
+        that does not exist is an OptionError."""
+        np.savez_compressed(output_path(path, "Solution.save_npz"), **self.to_dict())
 
     def __repr__(self) -> str:
         return (

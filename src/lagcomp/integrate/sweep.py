@@ -37,6 +37,7 @@ from lagcomp.integrate.contacts import (
 )
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
+from lagcomp.integrate.files import output_path
 from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, sweep_bytes
 from lagcomp.integrate.memory import check as check_memory
@@ -145,12 +146,20 @@ class Sweep:
         return arrays
 
     def save_npz(self, path) -> None:
-        np.savez_compressed(path, **self.to_numpy())
+        """Write `to_numpy()` to a compressed .npz file; a directory that does not exist is an OptionError."""
+        np.savez_compressed(output_path(path, "Sweep.save_npz"), **self.to_numpy())
 
     @classmethod
     def load_npz(cls, path) -> Sweep:
+        """The Sweep `save_npz` wrote to `path`; a file without a sweep's arrays is an OptionError."""
         with np.load(path) as data:
             arrays = {key: data[key] for key in data.files}
+        missing = sorted({"names", "shape", "combine", "method", "coordinates"} - set(arrays))
+        if missing:
+            written = ("a Solution's arrays (Solution.save_npz): read them with numpy.load"
+                       if {"t", "q", "qd", "status"} <= set(arrays) else f"the arrays {sorted(arrays)[:8]}")
+            raise OptionError(f"Sweep.load_npz: {path} is not a Sweep's file (Sweep.save_npz): it lacks {missing} "
+                              f"and holds {written}.")
         names = tuple(arrays.pop("names").tolist())
         events: dict = {}
         for key in [k for k in arrays if k.startswith("event_")]:
@@ -362,7 +371,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         done = _run_on_dask(client, spec or _worker_spec(model), task, Y0, P, out, progress)
     statuses = out["status"]
     counts = out["counts"]
-    warn_if_sweep_stiff(m.name, counts[:, 3], stacklevel=3)     # (column 3: embedded pairs only)
+    warn_if_sweep_stiff(m.name, counts[:, 3], stacklevel=3, model=model)     # (column 3: embedded pairs only)
     e0, deviation = out["energy"][:, 0], out["energy"][:, 1]
     relative = np.where(e0 != 0, deviation / np.where(e0 != 0, np.abs(e0), 1.0), deviation)
     shaped = lambda a: a.reshape(*shape, *a.shape[1:])  # noqa: E731

@@ -232,6 +232,7 @@ def derive(system: System) -> EOM:
     tidy = lambda expr: _tidy(expr, variables)  # noqa: E731
 
     M, b, T0 = _kinetic_parts(T, qd, variables)
+    _check_dissipation(system, D, qd, variables)
     constraints = _constraints(system, q, qd, plain)
     _check_mass_matrix(M, constraints["C"], system, q)
 
@@ -347,6 +348,26 @@ def _diff_dependent(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
     """∂expr/∂x, the factors of a product that do not contain x (sums of masses) left alone."""
     constant, dependent = expr.as_independent(x, as_Add=False)
     return constant * dependent.diff(x)
+
+
+def _check_dissipation(system: System, D: sp.Expr, qd, variables) -> None:
+    """Refuse a Rayleigh function D that is not a quadratic form ½ q̇ᵀ C(q, t) q̇ in the velocities.
+
+    The forces −∂D/∂q̇ are what D is for: a part of D without velocities (c θ²/2) adds no force at all, and
+    a part linear in q̇ a force that does not damp, so both would be dropped or misread without a word.
+    """
+    if D == 0:
+        return
+    try:
+        _, b, D0 = _kinetic_parts(D, qd, variables)
+    except ModelError:
+        b, D0 = None, None
+    if b is None or any(entry != 0 for entry in b) or D0 != 0:
+        raise ModelError(
+            f"The dissipation function D of {system.name!r} must be a quadratic form in the velocities, "
+            f"D = ½ q̇ᵀ C(q, t) q̇ (its forces are −∂D/∂q̇ = −C q̇), got D = {system.dissipation}. "
+            "Write the Rayleigh function as such (c*x.diff(t)**2/2 for a damper on x), and put other forces, "
+            "velocity-dependent or not, in `forces`.")
 
 
 NOT_QUADRATIC = "The kinetic energy T is not quadratic in the velocities (its Hessian in q̇ depends on q̇)."

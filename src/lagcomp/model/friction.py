@@ -26,8 +26,13 @@ the all-open path costs nothing more: ``rhs`` is ``rhs_free`` then).  Sticking, 
 friction force; the event is μs λ_c − |λ_f|.  An impact of that contact alone is frictional
 (`lagcomp.kernel_support.impacts.frictional_impact`).
 
-Limits: the system has no bilateral constraints and is a Lagrange one (M from T);
-the Taylor method refuses models with friction (its program has no stick rows).  Contacts in the same system: a
+Limits: the system has no bilateral constraints and is a Lagrange one (M from T).  The Taylor method
+integrates friction with one program per mode set, stick rows included (`lagcomp.codegen.taylor.ModePrograms`),
+while the contacts and friction elements make at most `lagcomp.codegen.taylor.MODE_PROGRAMS_MAX` mode sets and
+no element is pressed by a contact; beyond, or pressed (``normal="floor"``), it refuses them (docs/errors.md,
+``friction-with-taylor``).  It also refuses a normal force whose magnitude |N| stays an ``Abs`` of the state
+(N that changes sign with q, as the rope's μ g (L − x)): Abs has no Taylor recurrence (``taylor-not-applicable``).
+Contacts in the same system: a
 contact's event (impact, closing, lift-off) decides the friction modes again from the state after it, in the
 same ``event_reset`` branch (`lagcomp.codegen.contacts.contact_event_call`): slip along v ≠ 0, stick at v = 0
 unless the holding force exceeds μs |N|.

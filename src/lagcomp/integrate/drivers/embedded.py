@@ -32,10 +32,12 @@ Arguments, after the kernels (`kernel_types`) and before the tableau: the driver
   nrejected, i_eval, since_save, n_events, -, -, stiffness test..], n_events the event rows this call
   wrote (the caller resets it with each fresh event buffer); the slots are those of
   `lagcomp.integrate.drivers.run_state`;
-* ``projecting`` 1 projects each accepted state onto the constraints (after the step's outputs, and
-  the FSAL stage is then evaluated again at the projected state); ``residual_max`` [running maximum
-  of ``constraint_residual`` over accepted states] or [.., bound]: the step whose residual exceeds the
-  bound is committed (and saved if due), then the driver returns RESIDUAL_EXCEEDED;
+* ``projecting`` 1 projects each accepted state onto the constraints (after the step's dense output,
+  and the FSAL stage is then evaluated again at the projected state): the rows saved are the projected
+  states, and the rows of ``t_eval`` points inside a step the interpolated states, projected;
+  ``residual_max`` [running maximum of ``constraint_residual`` over accepted states] or [.., bound]: the
+  step whose residual exceeds the bound is committed (and saved if due), then the driver returns
+  RESIDUAL_EXCEEDED;
 * ``pause_at``: return PAUSED before step number ``pause_at`` (counted from the run's start,
   ``counters[1]``), so that Python can show progress and honour Ctrl-C between calls;
 * ``t_eval`` (points after the start; empty: save every ``save_every``-th step and the last one),
@@ -649,7 +651,9 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                 t_new = t_stop
                 dense_state(dense_kind, F, y, t, h, t_stop, y_new)
 
-        # Outputs of the accepted step t -> t_new.
+        # Outputs of the accepted step t -> t_new.  Projecting, the row of the state the run continues from
+        # (`continued`) gets it after its projection below, and the rows between steps are projected here.
+        continued = -1
         if use_t_eval:
             while j < n_eval and t_eval[j] <= t_new and n_saved < cap:
                 te = t_eval[j]
@@ -657,8 +661,11 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                 if te == t_new:
                     for i in range(n):
                         ys[n_saved, i] = y_new[i]
+                    continued = n_saved
                 else:
                     dense_state(dense_kind, F, y, t, h, te, ys[n_saved])
+                    if projecting:  # (a row the projection cannot move stays as interpolated)
+                        project(te, ys[n_saved], p)
                 n_saved += 1
                 j += 1
             counters[NEXT_EVAL] = j
@@ -672,6 +679,7 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                 ts[n_saved] = t_new
                 for i in range(n):
                     ys[n_saved, i] = y_new[i]
+                continued = n_saved
                 n_saved += 1
                 counters[SINCE_SAVE] = 0
 
@@ -687,10 +695,12 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                 clock[TIME] = t_new
                 counters[NSTEPS] += 1
                 return Status.RESET_FAILED, n_saved
+            continued = -1      # the row before the reset is not the state the run continues from
             if not use_t_eval:
                 ts[n_saved] = t_new
                 for i in range(n):
                     ys[n_saved, i] = y_new[i]
+                continued = n_saved
                 n_saved += 1
             if not projecting:
                 status = rhs(t_new, y_new, p, K[n_stages])
@@ -702,8 +712,8 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
             # last one, which this step covered at most); `restart_brackets` then samples it.
             h_abs = min(h_abs, t_new - t)
 
-        # Projection onto the constraints, after the outputs (the dense output interpolates the step
-        # as computed); the FSAL stage is then evaluated again at the projected state.
+        # Projection onto the constraints, after the dense output (it interpolates the step as computed); the
+        # FSAL stage is then evaluated again at the projected state, which its saved row gets.
         if projecting:
             status = project(t_new, y_new, p)
             if status == 0:
@@ -711,6 +721,9 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                 counters[NFEV] += 1
             if status != 0:
                 return Status.RHS_FAILED, n_saved
+            if continued >= 0:
+                for i in range(n):
+                    ys[continued, i] = y_new[i]
         residual = constraint_residual(t_new, y_new, p)
         if residual > residual_max[0]:  # noqa: PLR1730 (a NaN residual leaves the maximum as it was)
             residual_max[0] = residual
