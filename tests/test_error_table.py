@@ -7,7 +7,6 @@ reads the table, so a row without a case (or a case without a row) fails.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import re
@@ -23,7 +22,8 @@ import sympy as sp
 
 import lagcomp as lc
 from lagcomp import analysis as an
-from lagcomp import cli
+from lagcomp.cli_support import models as cli_models
+from lagcomp.cli_support import outputs as cli_outputs
 from lagcomp.model import t
 from lagcomp.numba_cache import cache_directory
 
@@ -183,7 +183,7 @@ def _cache_case(kind):
 
 def _cli_system(name, *arguments):
     """What `lagcomp run NAME --arg ...` builds before anything else."""
-    return cli._system(argparse.Namespace(name=name, arg=list(arguments)))
+    return cli_models.example_system(name, list(arguments))
 
 
 def _inertia():
@@ -476,7 +476,7 @@ CASES = {
     "corrupt-name-record": (_cache_case("name record"), "was corrupt"),
     "unreadable-numba-cache": (_cache_case("numba"), "unreadable and removed"),
     "cli-unknown-example-argument": (lambda: _cli_system("n_link_pendulum", "m=3"), "the example 'n_link_pendulum' takes"),
-    "cli-unwritable-output": (lambda tmp_path: cli._check_writable(str(tmp_path / "nonexistent" / "x.npz"), "--out"),
+    "cli-unwritable-output": (lambda tmp_path: cli_outputs.check_writable(str(tmp_path / "nonexistent" / "x.npz"), "--out"),
                               "does not exist"),
     "animate-no-bodies": (lambda models: lc.animate(models["pendulum"].simulate((0, 1))), "'simple_pendulum'"),
     "animate-no-geometry": (lambda models: replace(models["pendulum"].simulate((0, 1)), geometry=None).animate(),
