@@ -216,7 +216,7 @@ def _python_source(spec: str, args) -> ModelSource:
     module = _import(where)
     name, value = _pick(module, where, attribute)
     system = _built(value, name, where, key_values(args.arg, "--arg"))
-    origin = f"{name} in {where}" if attribute or name != getattr(system, "name", name) else where
+    origin = f"{name}{'' if system is value else '()'} in {where}"
 
     def model():
         from lagcomp.runtime import Model, compile
@@ -225,7 +225,7 @@ def _python_source(spec: str, args) -> ModelSource:
 
     from lagcomp.runtime import Model
 
-    return ModelSource(kind="python", label=f"{getattr(system, 'name', name)}: the System from {origin}",
+    return ModelSource(kind="python", label=f"{getattr(system, 'name', name)}: {origin}",
                        system=None if isinstance(system, Model) else (lambda: system), model=model)
 
 
