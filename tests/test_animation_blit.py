@@ -9,7 +9,7 @@ import sympy as sp
 
 pytest.importorskip("matplotlib")
 
-import lagcomp as lc  # noqa: E402
+import lagcomp as lc
 
 pytestmark = pytest.mark.usefixtures("animations_freed_quietly")
 

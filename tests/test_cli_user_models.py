@@ -14,7 +14,8 @@ import pytest
 import sympy as sp
 
 import lagcomp as lc
-from lagcomp.cli import EXAMPLES, main
+from lagcomp.cli import main
+from lagcomp.cli_support.help import EXAMPLES
 from lagcomp.model import t
 
 REPOSITORY = Path(__file__).resolve().parents[1]

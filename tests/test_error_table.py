@@ -25,8 +25,8 @@ import lagcomp as lc
 from lagcomp import analysis as an
 from lagcomp import cli
 from lagcomp.cli_support import models as cli_models
-from lagcomp.cli_support import run_inputs as cli_inputs
 from lagcomp.cli_support import outputs as cli_outputs
+from lagcomp.cli_support import run_inputs as cli_inputs
 from lagcomp.model import t
 from lagcomp.numba_cache import cache_directory
 
@@ -546,7 +546,7 @@ def test_row(case, models, tmp_path):
     trigger, culprit = CASES[case]
     arguments = {"models": models, "tmp_path": tmp_path}
     names = trigger.__code__.co_varnames[: trigger.__code__.co_argcount]
-    call = lambda: trigger(*(arguments[name] for name in names))  # noqa: E731
+    call = lambda: trigger(*(arguments[name] for name in names))
     if issubclass(expected, Warning):
         with pytest.warns(expected) as record:
             call()

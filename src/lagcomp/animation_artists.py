@@ -79,7 +79,7 @@ class MechanismAnimation(FuncAnimation):
             ax.set_aspect("equal")
             ax.grid(alpha=0.3)
         empty = [[]] * d
-        moving = dict(animated=True)
+        moving = {"animated": True}
         self.segments = {link: ax.plot(*empty, "-", color="0.3", lw=2.0, zorder=2, **moving)[0] for link in links}
         self.body_axes = {key: ax.plot(*empty, "-", color=AXIS_COLOURS[key[1]], lw=1.5, zorder=2, **moving)[0]
                           for key in self.axis_tips}
@@ -196,4 +196,4 @@ def player_html(frames, fps: float) -> str:
 
     urls = [f"data:image/png;base64,{png_base64(frame)}" for frame in frames]
     return PLAYER.format(id=f"lagcomp-{uuid.uuid4().hex}", last=len(urls) - 1,
-                         frames=json.dumps(urls), interval=max(int(round(1000 / fps)), 1))
+                         frames=json.dumps(urls), interval=max(round(1000 / fps), 1))

@@ -1,26 +1,40 @@
-"""The `lagcomp` command line: list, show and run the bundled examples; regenerate `generated/`.
+"""The `lagcomp` command line: run, sweep, show, bench, analyse and animate a model; regenerate `generated/`.
 
     lagcomp list
     lagcomp show double_pendulum         (add --latex for the equations as LaTeX)
     lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz --plot run.png
-    lagcomp generate generated/          (add --check to only report stale files)
-    lagcomp precompile                   (compile every library driver now, not at its first use)
+    lagcomp run my_models.py:cart_pole --input F=push.csv --config run.toml --out run.csv
+    lagcomp sweep simple_pendulum --grid theta=0.1:1.5:8 --out sweep.nc
     lagcomp bench double_pendulum        (kernel ns/call, op counts, steps/s per method, compile times)
     lagcomp stability hoop_bead --param Omega --range 1 8 --set epsilon=0 --q 3.14159265 --plot eig.png
     lagcomp animate double_pendulum -o double_pendulum.gif --t-end 10 --fps 15
+    lagcomp generate generated/          (add --check to only report stale files)
+    lagcomp precompile                   (compile every library driver now, not at its first use)
+
+The MODEL of every model command is a bundled example, a model compiled earlier under a name, or a System in
+a file or module, by the rule `lagcomp.cli_support.models` states; each command prints which one it ran.
+Inputs, parameters and initial state come from flags and ``--config`` (`lagcomp.cli_support.run_inputs`);
+results go to the format their file's suffix names (`lagcomp.cli_support.outputs`).  docs/cli.md has it all.
 """
 
 from __future__ import annotations
 
 import argparse
-import hashlib
 import sys
 import time
 import warnings
 from pathlib import Path
 
+from lagcomp.cli_support.help import MODEL_HELP, examples_epilog, initial_state_flags
 from lagcomp.cli_support.models import key_values, resolve
-from lagcomp.cli_support.outputs import check_plot_path, check_result_path, check_writable, write_solution, write_sweep
+from lagcomp.cli_support.outputs import (
+    check_plot_path,
+    check_result_path,
+    check_writable,
+    write_solution,
+    write_sweep,
+)
+from lagcomp.cli_support.reports import run_lines
 from lagcomp.cli_support.run_inputs import check_inputs, run_values
 from lagcomp.errors import LagcompError
 
@@ -160,26 +174,8 @@ def cmd_run(args) -> int:
     print(f"time span   [{sol.t[0]:g}, {sol.t[-1]:g}]   steps {sol.nsteps}   rejected {sol.nrejected}   rhs evaluations {sol.nfev}"
           + (f"   Jacobians {sol.njev}   LU factorizations {sol.nlu}" if sol.njev else ""))
     print(f"wall time   {elapsed:.3f} s (integration; numba compilation or loading before it: {warmed:.2f} s)")
-    summary = sol.summary
-    print(f"energy      T+V: {sol.energy[0]:.12g} -> {sol.energy[-1]:.12g} (max relative drift {summary.energy_error:.3g})")
-    print(f"            h:   {sol.energy_function[0]:.12g} -> {sol.energy_function[-1]:.12g} "
-          f"(max relative drift {summary.energy_function_error:.3g})")
-    from lagcomp.event_report import occurrence_lines
-
-    for name, record in sol.events.items():
-        when = f" at t = {record.t[0]:.10g}" + (f" .. {record.t[-1]:.10g}" if len(record) > 1 else "") \
-            if len(record) else ""
-        resets = " (impacts)" if record.impulses is not None else " (each resets the state)" if record.jumps else ""
-        print(f"event       {name}: {len(record)} occurrence(s){when}{resets if len(record) else ''}")
-        for line in occurrence_lines(record, sol.state_names, model.contacts,
-                                     sol.contact_switches + sol.friction_switches):
-            print(line)
-    for name, values in sol.reactions.items():
-        print(f"reaction    {name}: {values[0]:.8g} -> {values[-1]:.8g} (range {values.min():.6g} .. {values.max():.6g})")
-    if sol.reactions:
-        print(f"            largest constraint residual {sol.constraint_residual:.3g}")
-    final = ", ".join(f"{c}={v:.8g}" for c, v in zip(sol.coordinates, sol.q[-1]))
-    print(f"final       {final}")
+    for line in run_lines(sol, model):
+        print(line)
     if args.out:
         print(f"saved       {write_solution(sol, args.out)} ({len(sol.t)} points)")
     if args.plot:
@@ -199,7 +195,13 @@ def cmd_animate(args) -> int:
     check_writable(args.output, "--output")
     import importlib.util
 
-    from lagcomp.animation import EXAMPLE_DRAWINGS, animate, body_drawing, check_format, frame_times
+    from lagcomp.animation import (
+        EXAMPLE_DRAWINGS,
+        animate,
+        body_drawing,
+        check_format,
+        frame_times,
+    )
 
     check_format(args.output)
     if importlib.util.find_spec("matplotlib") is None:  # known before the run, not after it
@@ -485,43 +487,6 @@ def cmd_stability(args) -> int:
     return 0
 
 
-#: What a MODEL argument may be (`lagcomp.cli_support.models`).
-MODEL_HELP = ("a bundled example (lagcomp list), else a model compiled earlier under that name; or a file "
-              "path/to/model.py[:NAME] or module package.module[:NAME] defining a System (NAME: the System, or a "
-              "function returning one; without it, the one System the file defines). A model of yours named like "
-              "a bundled example: --cached, or its file")
-
-#: Commands each subcommand's help shows; `tests/test_cli_user_models.py` runs every one from the repository's
-#: root (the files under examples/cli/ are there).
-EXAMPLES = {
-    "show": ["lagcomp show double_pendulum", "lagcomp show examples/cli/cart_pole.py --latex"],
-    "run": ["lagcomp run double_pendulum --t-end 5 --param g=9.81 --out run.npz",
-            "lagcomp run examples/cli/cart_pole.py --input F=examples/cli/push.csv --out run.csv --plot run.png",
-            "lagcomp run examples/cli/cart_pole.py:cart_pole --config examples/cli/cart_pole.toml --input F=0.5"],
-    "sweep": ["lagcomp sweep simple_pendulum --grid theta=0.1:1.5:8 --t-end 5 --out sweep.csv",
-              "lagcomp sweep examples/cli/cart_pole.py --param m=0.1:0.5:3 --input F=examples/cli/push.csv "
-              "--out sweep.nc"],
-    "bench": ["lagcomp bench examples/cli/cart_pole.py --input F=1.0 --methods rk4 dop853 --repeats 1 "
-              "--steps 2000"],
-    "stability": ["lagcomp stability hoop_bead --param Omega --range 1 8 --set epsilon=0 --q 3.14159265",
-                  "lagcomp stability examples/cli/cart_pole.py:pendulum_on_cart --arg pushed=0 --param l --range 0.2 1 "
-                  "--num 5 --q 0 0"],
-    "animate": ["lagcomp animate double_pendulum -o double_pendulum.gif --t-end 2 --fps 15",
-                "lagcomp animate examples/cli/cart_pole.py --config examples/cli/cart_pole.toml -o cart_pole.html"],
-}
-
-
-def _examples(command: str) -> str:
-    return "examples:\n" + "\n".join(f"  {line}" for line in EXAMPLES[command])
-
-
-def _initial_state_flags(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
-    p.add_argument("--q0", type=float, nargs="+", help="initial coordinates (default: the model's)")
-    p.add_argument("--qd0", type=float, nargs="+",
-                   help="initial velocities q̇ (Lagrange models: one per coordinate; default: the model's, else 0)")
-
-
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lagcomp", description="Compile and simulate Lagrangian systems.")
     parser.add_argument("--cache-dir", help="cache root (default: $LAGCOMP_CACHE_DIR or the user cache directory)")
@@ -531,7 +496,7 @@ def _parser() -> argparse.ArgumentParser:
     from lagcomp.integrate.methods import METHODS
 
     def model_command(name, help_, *, inputs=True):
-        p = sub.add_parser(name, help=help_, description=help_, epilog=_examples(name),
+        p = sub.add_parser(name, help=help_, description=help_, epilog=examples_epilog(name),
                            formatter_class=argparse.RawDescriptionHelpFormatter)
         p.add_argument("name", metavar="MODEL", help=MODEL_HELP)
         p.add_argument("--arg", action="append", metavar="K=V",
@@ -563,7 +528,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--rtol", type=float, default=1e-10)
     run.add_argument("--atol", type=float, default=1e-10)
     run.add_argument("--save-every", type=int, default=1, metavar="K")
-    _initial_state_flags(run)
+    initial_state_flags(run)
     run.add_argument("--u0", type=float, nargs="+",
                      help="initial speeds u (a model compiled from a KanesMethod, state (q, u): one per speed, "
                           "in its order `speeds`; such a model refuses --qd0)")
@@ -617,7 +582,7 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--methods", nargs="+", metavar="METHOD", help="time only these methods (default: all that apply)")
     bench.add_argument("--no-cold", action="store_true", help="skip the cold compile in a fresh process (bundled "
                                                               "examples only)")
-    _initial_state_flags(bench)
+    initial_state_flags(bench)
     stability = model_command("stability", "eigenvalues of a steady motion along a parameter; where stability "
                                            "changes (needs the System: a bundled example, a file or a module)",
                               inputs=False)
@@ -641,7 +606,7 @@ def _parser() -> argparse.ArgumentParser:
     anim.add_argument("--speed", type=float, default=1.0,
                       help="simulated seconds per second of clip (default 1; larger plays a long run faster)")
     anim.add_argument("--quiet", action="store_true", help="no progress bar while the frames are drawn")
-    _initial_state_flags(anim)
+    initial_state_flags(anim)
     anim.set_defaults(func=cmd_animate)
     gen = sub.add_parser("generate", help="regenerate the emitted modules of the bundled examples")
     gen.add_argument("directory", nargs="?", default="generated")

@@ -193,7 +193,7 @@ def read_table(path: Path, column: str | None, what: str) -> tuple[np.ndarray, n
         raise LagcompError(f"{what}: {path} has no header row, so no column {column!r}; name its columns "
                            "in a first row (time,value,...).")
     if header is None or column is None:
-        if len((header or rows[0])) != 2:
+        if len(header or rows[0]) != 2:
             raise LagcompError(f"{what}: {path} has {len(header or rows[0])} columns; give two (time,value) or "
                                f"name the column: {path}:COLUMN.")
         picked = (0, 1)
