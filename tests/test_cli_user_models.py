@@ -170,3 +170,11 @@ def test_every_help_example_runs(command, capsys, cache_dir, tmp_path, monkeypat
         quiet = ["--quiet"] if command in ("run", "sweep", "animate") else []
         assert main(["--cache-dir", str(cache_dir), *words[1:], *quiet]) == 0, (line, capsys.readouterr())
         capsys.readouterr()
+
+
+def test_animate_a_chain_named_by_its_length(capsys, cache_dir, tmp_path):
+    """`n_link_pendulum_3` is drawn as the chain it is (before: refused, as no example of that name draws)."""
+    clip = tmp_path / "chain.html"
+    assert main(["--cache-dir", str(cache_dir), "animate", "n_link_pendulum_3", "-o", str(clip), "--t-end", "0.4",
+                 "--fps", "5", "--quiet"]) == 0
+    assert "3 frames" in capsys.readouterr().out and clip.read_text(encoding="utf-8").count("data:image/png") == 3

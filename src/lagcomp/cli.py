@@ -20,6 +20,7 @@ results go to the format their file's suffix names (`lagcomp.cli_support.outputs
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 import warnings
@@ -209,7 +210,8 @@ def cmd_animate(args) -> int:
     values = run_values(args)
     source, model = _model(args)
     check_inputs(model, values.inputs)
-    drawing = EXAMPLE_DRAWINGS.get(args.name) if source.kind == "example" else None
+    family = re.sub(r"_\d+$", "", args.name) if args.name.startswith("n_link_pendulum") else args.name
+    drawing = EXAMPLE_DRAWINGS.get(family) if source.kind == "example" else None
     if drawing is None and not getattr(model.kernels, "GEOMETRY", ()):
         raise LagcompError(f"lagcomp animate draws the bodies of a model built from lc.Particle / lc.RigidBody, and the "
                            f"pendulums {sorted(EXAMPLE_DRAWINGS)}; {model.name!r} has no bodies: build it from "

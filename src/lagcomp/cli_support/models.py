@@ -91,9 +91,9 @@ def is_example(name: str) -> bool:
 
 
 def _is_python_spec(spec: str) -> bool:
-    """A file (``.py`` or a path) or a module (dotted, or ``module:NAME``) rather than a bare name."""
-    path = spec.rsplit(":", 1)[0] if re.search(r":\w+$", spec) else spec
-    return path.endswith(".py") or "/" in path or "\\" in path or "." in path or ":" in spec
+    """A file (a path, ``.py``) or a module (dotted, or ``module:NAME``) rather than a bare name: bundled examples
+    and System names are identifiers."""
+    return any(mark in spec for mark in "/\\.:")
 
 
 # -- bundled examples ------------------------------------------------------------------
@@ -168,13 +168,14 @@ def _example_source(args) -> ModelSource:
     name, arg, cache_dir = args.name, args.arg, args.cache_dir
     return ModelSource(kind="example", label=f"{name}: the bundled example (lagcomp list)",
                        system=lambda: example_system(name, arg), model=lambda: _example_model(name, arg, cache_dir),
-                       note=lambda model: _namesake_note(name, model, cache_dir))
+                       note=lambda model: _namesake_note(model, cache_dir))
 
 
-def _namesake_note(name: str, model, cache_dir) -> str | None:
-    """What to say when the cache records another model than the bundled example under `name`."""
+def _namesake_note(model, cache_dir) -> str | None:
+    """What to say when the cache records another model than the bundled example `model` under its name."""
     from lagcomp.cache import Cache
 
+    name = model.name
     found = _recorded(Cache(cache_dir), name)
     if found is None or found[0].key == model.cache_key:
         return None
@@ -204,7 +205,8 @@ def _cached_source(name: str, cache_dir, unknown_example: bool = False) -> Model
                            f"name of a model compiled with lagcomp.compile() into the cache {Cache(cache_dir).root}; "
                            "a model in a file runs as path/to/model.py[:NAME].") from None
 
-    return ModelSource(kind="cache", label=f"{name}: compiled earlier under this name (lagcomp.load, cache {Cache(cache_dir).root})",
+    root = Cache(cache_dir).root
+    return ModelSource(kind="cache", label=f"{name}: compiled earlier under this name (lagcomp.load, cache {root})",
                        system=None, model=model)
 
 
