@@ -5,6 +5,7 @@ JSON file, and every subcommand's help examples run."""
 from __future__ import annotations
 
 import json
+import re
 import shlex
 import shutil
 from pathlib import Path
@@ -12,6 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import lagcomp as lc
 from lagcomp.cli import main
@@ -178,3 +181,57 @@ def test_animate_a_chain_named_by_its_length(capsys, cache_dir, tmp_path):
     assert main(["--cache-dir", str(cache_dir), "animate", "n_link_pendulum_3", "-o", str(clip), "--t-end", "0.4",
                  "--fps", "5", "--quiet"]) == 0
     assert "3 frames" in capsys.readouterr().out and clip.read_text(encoding="utf-8").count("data:image/png") == 3
+
+
+finite = st.floats(-1e300, 1e300, allow_nan=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(rows=st.lists(st.tuples(finite, finite), min_size=2, max_size=20), header=st.booleans())
+def test_a_table_reads_back_the_numbers_written(rows, header, tmp_path_factory):
+    """Any finite numbers written with repr come back bit for bit, with or without a header row; times and values
+    in their columns."""
+    from lagcomp.cli_support.run_inputs import read_table
+
+    path = tmp_path_factory.mktemp("tables") / "table.csv"
+    lines = (["time,value"] if header else []) + [f"{a!r},{b!r}" for a, b in rows]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    times, values = read_table(path, None, "--input F")
+    np.testing.assert_array_equal(times, [a for a, _ in rows])
+    np.testing.assert_array_equal(values, [b for _, b in rows])
+
+
+@pytest.mark.parametrize("text, spec, message", [
+    ("0,1,2\n1,2,3\n", "F=t.csv", "has 3 columns"),
+    ("time,value\n0,1\n1,x\n", "F=t.csv", "line 3"),
+    ("0,1\n1,2\n", "F=t.csv:force", "no header row"),
+    ("a,b\n0,1\n", "F=t.csv:b", "no column time (or t)"),
+    ("", "F=t.csv", "is empty"),
+    ("time,value\n0,1\n", "F=t.csv@spline", "@cubic (the default) or @linear"),
+    ("time,value\n0,1\n", "F", "must look like NAME=2.5"),
+    ("time,value\n0,1\n", "F=missing.csv", "cannot read"),
+])
+def test_a_bad_input_is_a_message_naming_it(text, spec, message, tmp_path):
+    from lagcomp.cli_support.run_inputs import parse_input
+
+    (tmp_path / "t.csv").write_text(text, encoding="utf-8")
+    with pytest.raises(lc.LagcompError, match=re.escape(message)):
+        parse_input(spec, tmp_path)
+
+
+@pytest.mark.parametrize("text, suffix, message", [
+    ('{"params": {"m": true}}', ".json", "params.m must be a number"),
+    ('{"q0": "zero"}', ".json", "q0 must be a number"),
+    ("[1, 2]", ".json", "expected a table of keys"),
+    ("q0 = [", ".toml", "not valid TOML"),
+    ("{", ".json", "not valid JSON"),
+    ("m: 1", ".yaml", "the suffix names the format: .toml or .json"),
+    ('params = 3', ".toml", "`params` must be a table"),
+])
+def test_a_bad_config_file_is_a_message_naming_it(text, suffix, message, tmp_path):
+    from lagcomp.cli_support.run_inputs import read_config
+
+    path = tmp_path / f"run{suffix}"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(lc.LagcompError, match=re.escape(message)):
+        read_config(str(path))
