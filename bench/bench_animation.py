@@ -37,7 +37,7 @@ def _animation(name: str, seconds: float, fps: float, dpi: float, cache_dir):
     from lagcomp import examples
     from lagcomp.animation import EXAMPLE_DRAWINGS, body_drawing, frame_times
 
-    model = lc.compile(examples.get(name), cache_dir=cache_dir)
+    model = lc.compile(examples.get(name), cache_dir=cache_dir, progress=False)
     times = frame_times(np.array([0.0, seconds]), fps, 1.0)
     sol = model.simulate((0.0, seconds), t_eval=times, rtol=1e-10, atol=1e-10, progress=False)
     drawing = EXAMPLE_DRAWINGS[name](model.coordinates) if name in EXAMPLE_DRAWINGS else body_drawing(sol)
