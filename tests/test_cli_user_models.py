@@ -235,3 +235,13 @@ def test_a_bad_config_file_is_a_message_naming_it(text, suffix, message, tmp_pat
     path.write_text(text, encoding="utf-8")
     with pytest.raises(lc.LagcompError, match=re.escape(message)):
         read_config(str(path))
+
+
+def test_a_swept_parameter_wins_over_its_value_in_the_config(capsys, cache_dir, workdir):
+    """m ẍ = 2 from rest: x(1) = 1/m over m in the sweep, although the config file sets m = 3."""
+    (workdir / "run.json").write_text(json.dumps({"params": {"m": 3.0}, "inputs": {"F": 2.0}}), encoding="utf-8")
+    assert main(["--cache-dir", str(cache_dir), "sweep", "mass.py", "--config", "run.json", "--param", "m=1:2:2",
+                 "--t-end", "1", "--quiet", "--out", "sweep.csv"]) == 0
+    assert "2 trajectories over m" in capsys.readouterr().out
+    rows = np.loadtxt("sweep.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(rows[:, 3], [1.0, 0.5], rtol=1e-12)

@@ -396,6 +396,8 @@ def cmd_sweep(args) -> int:
     for spec in (args.param or []):
         name, value = _grid_axis(spec, "--param")
         (params if isinstance(value, float) else grid)[name] = value
+    for name in grid:  # a swept name wins over its value in --config
+        params.pop(name, None)
     if not grid:
         raise LagcompError("Nothing to sweep: give at least one --grid NAME=LO:HI:N (a coordinate, "
                            "<coordinate>_dot or a parameter) or --param NAME=LO:HI:N.")
