@@ -56,7 +56,7 @@ def test_lagcomp_bench_of_an_unknown_name_is_a_clear_error(cache_dir, capsys):
     from lagcomp.cli import main
 
     assert main(["--cache-dir", str(cache_dir), "bench", "no_such_model_anywhere"]) == 2
-    assert "No compiled model named 'no_such_model_anywhere'" in capsys.readouterr().err
+    assert "'no_such_model_anywhere' is neither a bundled example" in capsys.readouterr().err  # as run, sweep, show say
 
 
 def test_python_dash_m_bench_help_runs():

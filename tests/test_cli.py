@@ -127,7 +127,7 @@ def test_run_and_sweep_a_users_model_by_the_name_it_was_compiled_under(capsys, t
                  "--quiet"]) == 0
     assert "3 trajectories over k (3 values)" in capsys.readouterr().out
     assert main(["--cache-dir", str(tmp_path), "run", "not_a_model"]) == 2
-    assert "Nor is it the name of a model compiled with lagcomp.compile()" in capsys.readouterr().err
+    assert "nor the name of a model compiled with lagcomp.compile()" in capsys.readouterr().err
 
 
 def test_run_a_kane_model_from_its_initial_speeds(capsys, tmp_path):

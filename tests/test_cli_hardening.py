@@ -8,8 +8,8 @@ from __future__ import annotations
 import sympy as sp
 
 import lagcomp as lc
-from lagcomp import cli
 from lagcomp.cli import main
+from lagcomp.cli_support.outputs import check_writable
 from lagcomp.model import t
 from lagcomp.numba_cache import cache_directory
 
@@ -113,8 +113,8 @@ def test_run_separates_numba_compilation_from_integration(capsys, cache_dir):
 
 def test_check_writable_accepts_a_plain_file_name(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    cli._check_writable("x.npz", "--out")  # the current directory
-    cli._check_writable(str(tmp_path / "x.npz"), "--out")
+    check_writable("x.npz", "--out")  # the current directory
+    check_writable(str(tmp_path / "x.npz"), "--out")
 
 
 def test_ctrl_c_while_numba_compiles_stops_the_command(capsys, cache_dir, monkeypatch):

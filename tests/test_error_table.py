@@ -24,6 +24,9 @@ import sympy as sp
 import lagcomp as lc
 from lagcomp import analysis as an
 from lagcomp import cli
+from lagcomp.cli_support import models as cli_models
+from lagcomp.cli_support import outputs as cli_outputs
+from lagcomp.cli_support import run_inputs as cli_inputs
 from lagcomp.model import t
 from lagcomp.numba_cache import cache_directory
 
@@ -208,9 +211,41 @@ def _unpickle_without_entry(tmp_path):
     return pickle.loads(blob)
 
 
+def _cli_args(name, tmp_path, **flags):
+    return argparse.Namespace(name=name, arg=None, cached=False, cache_dir=str(tmp_path / "cache"), **flags)
+
+
+def _cli_model(name, tmp_path):
+    return cli_models.resolve(_cli_args(str(name), tmp_path)).model()
+
+
+def _model_file(tmp_path, text):
+    path = tmp_path / "table_model.py"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _cli_input(tmp_path, spec):
+    (tmp_path / "push.csv").write_text("time,value\n0,0\n1,1\n", encoding="utf-8")
+    return cli_inputs.parse_input(spec, tmp_path)
+
+
+def _cli_config(tmp_path, text):
+    (tmp_path / "run.toml").write_text(text, encoding="utf-8")
+    return cli_inputs.read_config(str(tmp_path / "run.toml"))
+
+
+def _cli_stability_of_cached(models):
+    """`lagcomp stability simple_pendulum --cached`: the model the cache holds under that name has no System."""
+    cache = str(models["pendulum"].source_path.parents[1])
+    return cli.cmd_stability(argparse.Namespace(name="simple_pendulum", arg=None, cached=True, cache_dir=cache,
+                                                param="l", range=[1.0, 2.0], num=3, set=None, q=None, u=None,
+                                                drop=None, plot=None, config=None))
+
+
 def _cli_system(name, *arguments):
     """What `lagcomp run NAME --arg ...` builds before anything else."""
-    return cli._system(argparse.Namespace(name=name, arg=list(arguments)))
+    return cli_models.example_system(name, list(arguments))
 
 
 def _inertia():
@@ -511,7 +546,7 @@ CASES = {
     "corrupt-name-record": (_cache_case("name record"), "was corrupt"),
     "unreadable-numba-cache": (_cache_case("numba"), "unreadable and removed"),
     "cli-unknown-example-argument": (lambda: _cli_system("n_link_pendulum", "m=3"), "the example 'n_link_pendulum' takes"),
-    "cli-unwritable-output": (lambda tmp_path: cli._check_writable(str(tmp_path / "nonexistent" / "x.npz"), "--out"),
+    "cli-unwritable-output": (lambda tmp_path: cli_outputs.check_writable(str(tmp_path / "nonexistent" / "x.npz"), "--out"),
                               "does not exist"),
     "plot-wrong-result": (lambda models: _plots().plot_run(_sweep(models)), "plot_run draws a Solution"),
     "plot-unknown-quantity": (lambda models: _plots().plot_sweep(_sweep(models), "energy"), "'energy'"),
@@ -519,6 +554,18 @@ CASES = {
         tmp_path / "nonexistent" / "run.npz"), "nonexistent"),
     "load-not-a-sweep": (lambda models, tmp_path: lc.Sweep.load_npz(_saved_solution(models, tmp_path)), "run.npz"),
     "event-not-in-run": (lambda models: models["ball"].simulate((0, 1)).events["impact"], "'impact'"),
+    "cli-unknown-model": (lambda tmp_path: _cli_model("no_such_model", tmp_path), "neither a bundled example"),
+    "cli-model-file": (lambda tmp_path: _cli_model(_model_file(tmp_path, "raise RuntimeError('broken model')"),
+                                                   tmp_path), "raised RuntimeError: broken model"),
+    "cli-model-not-in-file": (lambda tmp_path: _cli_model(_model_file(tmp_path, "answer = 42"), tmp_path),
+                              "defines no System"),
+    "cli-output-format": (lambda tmp_path: cli_outputs.check_result_path(str(tmp_path / "run.txt")),
+                          "use .npz (numpy), .csv (a table) or .nc"),
+    "cli-input-signal": (lambda tmp_path: _cli_input(tmp_path, "F=push.csv:force"), "no column 'force'"),
+    "cli-missing-input": (lambda models: cli_inputs.check_inputs(models["driven"], {}), "--input s="),
+    "cli-config-file": (lambda tmp_path: _cli_config(tmp_path, "q0 = [1.0]\nparameters = {}\n"),
+                        "unknown key(s) ['parameters']"),
+    "cli-stability-needs-system": (_cli_stability_of_cached, "path/to/model.py"),
     "animate-no-bodies": (lambda models: lc.animate(models["pendulum"].simulate((0, 1))), "'simple_pendulum'"),
     "animate-no-geometry": (lambda models: replace(models["pendulum"].simulate((0, 1)), geometry=None).animate(),
                             "no model geometry"),
@@ -540,7 +587,7 @@ def test_row(case, models, tmp_path):
     trigger, culprit = CASES[case]
     arguments = {"models": models, "tmp_path": tmp_path}
     names = trigger.__code__.co_varnames[: trigger.__code__.co_argcount]
-    call = lambda: trigger(*(arguments[name] for name in names))  # noqa: E731
+    call = lambda: trigger(*(arguments[name] for name in names))
     if issubclass(expected, Warning):
         with pytest.warns(expected) as record:
             call()

@@ -163,7 +163,7 @@ def _dimension(points: dict, bodies: BodyFrames) -> int:
 def animate(sol, points: dict | None = None, *, links=(), trace=(), bodies: bool = True,
             axes_length: float | None = None, fps: float = 30, speed: float = 1.0,
             title: str | None = None, size: tuple[float, float] = (5.0, 5.0), dpi: float = 100,
-            save: str | os.PathLike | None = None):
+            save: str | os.PathLike | None = None, progress: bool | None = None):
     """An animation of a `Solution`'s bodies and named points; returns a `MechanismAnimation` (a FuncAnimation).
 
     Parameters
@@ -193,6 +193,15 @@ def animate(sol, points: dict | None = None, *, links=(), trace=(), bodies: bool
     save : path, optional
         Also write the clip, the writer chosen from the suffix: ``.gif``
         (pillow), ``.mp4`` (ffmpeg, when installed), ``.html`` (`to_jshtml`).
+    progress : bool, optional
+        While `save` renders: a progress bar (tqdm) over the frames; None (default) shows one
+        only when the rendering lasts more than two seconds, True always, False never.
+
+    Notes
+    -----
+    The returned animation is a matplotlib ``FuncAnimation`` whose figure is laid out once and
+    whose frames are blitted (`lagcomp.animation_artists`).  In a notebook it displays as an
+    HTML player (``anim.to_jshtml()``, also its ``_repr_html_``): play, pause, step, a slider.
     """
     if save is not None:
         check_format(save)
@@ -227,7 +236,7 @@ def animate(sol, points: dict | None = None, *, links=(), trace=(), bodies: bool
     anim = MechanismAnimation(times, positions, (*drawn.centres, *named), links=links, trace=trace, axes=tips,
                               fps=fps, size=size, dpi=dpi, title=title or f"{sol.method}")
     if save is not None:
-        save_animation(anim, save)
+        save_animation(anim, save, progress=progress)
     return anim
 
 
@@ -297,18 +306,29 @@ def check_format(path: str | os.PathLike) -> Path:
     return path
 
 
-def save_animation(anim, path: str | os.PathLike) -> Path:
-    """Write `anim` to `path`, the writer chosen from the suffix (.gif pillow, .mp4 ffmpeg, .html player)."""
+def save_animation(anim, path: str | os.PathLike, progress: bool | None = None) -> Path:
+    """Write `anim` to `path`, the format from the suffix: .gif (Pillow) and .html (`to_jshtml`'s player) from
+    the blitted frames (`MechanismAnimation.rgba_frames`), .mp4 through matplotlib's ffmpeg writer (which draws
+    the whole figure per frame).  `progress`: a tqdm bar over the frames, as in `animate`."""
     from matplotlib import animation as mpl_animation
 
     path = check_format(path)
     suffix = path.suffix.lower()
     if suffix == ".gif":
-        anim.save(path, writer=mpl_animation.PillowWriter(fps=anim.fps))
+        from PIL import Image
+
+        images = [Image.fromarray(frame[..., :3]) for frame in anim.rgba_frames(progress)]
+        # one palette, from the first frame (every colour drawn is in it: the legend holds the markers'): quicker
+        # than a palette per frame, and a smaller file
+        palette = images[0].quantize(colors=255, method=Image.Quantize.MEDIANCUT)
+        frames = [image.quantize(palette=palette, dither=Image.Dither.NONE) for image in images]
+        frames[0].save(path, save_all=True, append_images=frames[1:], duration=int(1000 / anim.fps), loop=0)
     elif suffix == ".mp4":
         if not mpl_animation.writers.is_available("ffmpeg"):
             raise OptionError(f"animate: saving {path.name} needs ffmpeg on the PATH; save a .gif or .html instead.")
         anim.save(path, writer=mpl_animation.FFMpegWriter(fps=anim.fps))
     else:
-        path.write_text(anim.to_jshtml(fps=anim.fps), encoding="utf-8")
+        from lagcomp.animation_artists import player_html
+
+        path.write_text(player_html(anim.rgba_frames(progress), anim.fps), encoding="utf-8")
     return path

@@ -54,9 +54,13 @@ def _median(run, repeats: int, per_call: int = 1) -> tuple[float, float, float]:
     return statistics.median(times), min(times), max(times)
 
 
-def kernel_cost(model, repeats: int = 5, calls: int = 200_000) -> dict:
-    """ns per `rhs` call in a compiled loop and from Python: {"loop": (median, min, max), "python": ...}."""
-    y0, p = model.initial_state(), model.parameter_vector()
+def kernel_cost(model, repeats: int = 5, calls: int = 200_000, inputs: dict | None = None) -> dict:
+    """ns per `rhs` call in a compiled loop and from Python: {"loop": (median, min, max), "python": ...}.
+
+    A model with inputs (`Model.inputs`) needs their signals in `inputs` (as `simulate` takes them), over
+    (0, t_end)."""
+    y0 = model.initial_state()
+    p = model.parameter_vector(inputs=inputs, span=(0.0, model.t_end)) if inputs else model.parameter_vector()
     out = np.empty(y0.size)
     loop = looped(model.kernels.rhs)
     loop(y0.copy(), p, out, 10)
@@ -88,8 +92,10 @@ def applicable_methods(model) -> list:
     return accepted
 
 
-def method_speed(model, method, repeats: int = 5, dt: float = 1e-3, steps: int = 100_000, rtol: float = 1e-10) -> dict:
-    """Steps/s of one method; the first call's extra time (numba compiling or loading the driver)."""
+def method_speed(model, method, repeats: int = 5, dt: float = 1e-3, steps: int = 100_000, rtol: float = 1e-10,
+                 inputs: dict | None = None) -> dict:
+    """Steps/s of one method; the first call's extra time (numba compiling or loading the driver).  `inputs`:
+    the model's input signals (`simulate`'s ``inputs``), covering the run's span."""
     if method.adaptive:
         options = dict(rtol=max(rtol, method.rtol_min), atol=max(rtol, method.rtol_min))
         span = (0.0, model.t_end)
@@ -99,7 +105,8 @@ def method_speed(model, method, repeats: int = 5, dt: float = 1e-3, steps: int =
     result = {}
 
     def run():
-        result["sol"] = model.simulate(span, method=method.name, progress=False, **options)
+        result["sol"] = model.simulate(span, method=method.name, progress=False, **options,
+                                       **({"inputs": inputs} if inputs else {}))
     start = time.perf_counter()
     run()
     first = time.perf_counter() - start
@@ -184,14 +191,15 @@ def _stat(values, unit: str = "", digits: int = 3) -> str:
 
 
 def report(model, *, example: tuple[str, dict] | None = None, load_seconds: float | None = None, repeats: int = 5,
-           dt: float = 1e-3, steps: int = 100_000, methods=None, cold: bool = True) -> str:
+           dt: float = 1e-3, steps: int = 100_000, methods=None, cold: bool = True, inputs: dict | None = None) -> str:
     """The markdown report of `lagcomp bench` for `model`.
 
     `example` = (name, factory arguments) of a bundled example, for the cold
-    compile; `methods` restricts the methods timed (default: every applicable one).
+    compile; `methods` restricts the methods timed (default: every applicable one);
+    `inputs` the model's input signals (`simulate`'s ``inputs``).
     """
     lines = [f"# {model.name}: n = {model.n}, {model.k} constraint(s), {len(model.parameters)} parameter(s)", ""]
-    cost = kernel_cost(model, repeats)
+    cost = kernel_cost(model, repeats, inputs=inputs)
     rhs_ops = model.operations.get("rhs", 0)
     lines += ["| kernel cost | ns/call, median (min–max) |", "|---|---|",
               f"| rhs in a compiled loop | {_stat(cost['loop'])} |",
@@ -205,7 +213,7 @@ def report(model, *, example: tuple[str, dict] | None = None, load_seconds: floa
         if methods and method.name not in methods:
             continue
         try:
-            r = method_speed(model, method, repeats, dt, steps)
+            r = method_speed(model, method, repeats, dt, steps, inputs=inputs)
         except Exception as err:  # a method that cannot run this model is reported, not fatal
             lines.append(f"| {method.name} | | | failed: {type(err).__name__}: {str(err)[:100]} | | |")
             continue
@@ -218,6 +226,6 @@ def report(model, *, example: tuple[str, dict] | None = None, load_seconds: floa
         for stage, seconds in cold_compile(*example).items():
             lines.append(f"| cold (fresh process, empty cache), {stage} | {seconds:.2f} |")
     elif example is None:
-        lines.append("| cold | not measured: a model from the cache, not a bundled example |")
+        lines.append("| cold | not measured: not a bundled example |")
     lines += ["", f"Medians of {repeats} runs; driver compile times are in the methods' first calls."]
     return "\n".join(lines) + "\n"

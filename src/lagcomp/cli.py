@@ -1,131 +1,59 @@
-"""The `lagcomp` command line: list, show and run the bundled examples; regenerate `generated/`.
+"""The `lagcomp` command line: run, sweep, show, bench, analyse and animate a model; regenerate `generated/`.
 
     lagcomp list
     lagcomp show double_pendulum         (add --latex for the equations as LaTeX)
     lagcomp run double_pendulum --t-end 20 --method dop853 --param g=9.81 --out run.npz --plot run.png
-    lagcomp generate generated/          (add --check to only report stale files)
-    lagcomp precompile                   (compile every library driver now, not at its first use)
+    lagcomp run my_models.py:cart_pole --input F=push.csv --config run.toml --out run.csv
+    lagcomp sweep simple_pendulum --grid theta=0.1:1.5:8 --out sweep.nc
     lagcomp bench double_pendulum        (kernel ns/call, op counts, steps/s per method, compile times)
     lagcomp stability hoop_bead --param Omega --range 1 8 --set epsilon=0 --q 3.14159265 --plot eig.png
     lagcomp animate double_pendulum -o double_pendulum.gif --t-end 10 --fps 15
+    lagcomp generate generated/          (add --check to only report stale files)
+    lagcomp precompile                   (compile every library driver now, not at its first use)
+
+The MODEL of every model command is a bundled example, a model compiled earlier under a name, or a System in
+a file or module, by the rule `lagcomp.cli_support.models` states; each command prints which one it ran.
+Inputs, parameters and initial state come from flags and ``--config`` (`lagcomp.cli_support.run_inputs`);
+results go to the format their file's suffix names (`lagcomp.cli_support.outputs`).  docs/guide/cli.md has it all.
 """
 
 from __future__ import annotations
 
 import argparse
-import hashlib
+import re
 import sys
 import time
 import warnings
 from pathlib import Path
 
-from lagcomp.errors import LagcompError, ModelError
+from lagcomp.cli_support.help import MODEL_HELP, examples_epilog, initial_state_flags
+from lagcomp.cli_support.models import key_values, resolve
+from lagcomp.cli_support.outputs import (
+    check_plot_path,
+    check_result_path,
+    check_writable,
+    write_solution,
+    write_sweep,
+)
+from lagcomp.cli_support.reports import run_lines
+from lagcomp.cli_support.run_inputs import check_inputs, run_values
+from lagcomp.errors import LagcompError
 
 
-def _key_values(pairs: list[str], what: str) -> dict:
-    values = {}
-    for pair in pairs or []:
-        key, sep, value = pair.partition("=")
-        if not sep or not key:
-            raise LagcompError(f"{what} {pair!r} must look like name=value.")
-        try:
-            values[key] = int(value) if value.lstrip("-").isdigit() else float(value)
-        except ValueError as err:
-            raise LagcompError(f"{what} {pair!r}: {value!r} is not a number.") from err
-    return values
+def _model(args):
+    """The model the command names (`lagcomp.cli_support.models`: the rule for names, files and modules), and
+    its `ModelSource`; prints which model it is, and a note when a model of the user's shares its name."""
+    source = resolve(args)
+    model = source.model()
+    _say_which(source, model)
+    return source, model
 
 
-def _system(args):
-    """The bundled example `args.name` built with the --arg values; a wrong argument is a message."""
-    import inspect
-    import re
-
-    from lagcomp import examples
-
-    arguments = _key_values(args.arg, "--arg")
-    factory = examples.EXAMPLES.get(args.name)
-    if factory is None and re.fullmatch(r"n_link_pendulum_\d+", args.name):
-        factory = examples.EXAMPLES["n_link_pendulum"]
-    if factory is not None and arguments:
-        accepted = list(inspect.signature(factory).parameters)
-        unknown = sorted(set(arguments) - set(accepted))
-        if unknown:
-            raise LagcompError(f"--arg {', '.join(unknown)}: the example {args.name!r} takes "
-                               f"{', '.join(f'{a}=...' for a in accepted) or 'no arguments'}.")
-    try:
-        return examples.get(args.name, **arguments)
-    except LagcompError:
-        raise
-    except (TypeError, ValueError, ArithmeticError) as err:
-        raise LagcompError(f"The example {args.name!r} refused --arg {arguments}: {err}.") from err
-
-
-def _check_writable(path: str | None, what: str) -> None:
-    """Refuse an output path that cannot be written, before any work whose results it would hold."""
-    if path is None:
-        return
-    import os
-
-    target = Path(path)
-    if target.is_dir():
-        raise LagcompError(f"{what} {path} is a directory; give a file name.")
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise LagcompError(f"{what} {path}: the directory {folder} does not exist; create it first.")
-    if not os.access(folder, os.W_OK) or (target.exists() and not os.access(target, os.W_OK)):
-        raise LagcompError(f"{what} {path} cannot be written (permission denied).")
-
-
-def _example_alias(args) -> str:
-    """The cache name under which `run` remembers a bundled example built with `args`.
-
-    It hashes the examples' and the compiler's source, so an edited example
-    (or derivation) is compiled afresh instead of loaded.
-    """
-    from lagcomp.cache import KERNEL_PRODUCERS, code_digest
-
-    digest = hashlib.sha256(code_digest(KERNEL_PRODUCERS).encode())
-    for path in sorted((Path(__file__).parent / "examples").glob("*.py")):
-        digest.update(path.read_bytes())
-    arguments = "".join(f".{k}={v}" for k, v in sorted(_key_values(args.arg, "--arg").items()))
-    return f"example.{args.name}{arguments}.{digest.hexdigest()[:16]}"
-
-
-def _example_model(args):
-    """The model named on the command line: a bundled example (loaded by name when this lagcomp
-    compiled it before, so no sympy; else compiled), or a user's model compiled earlier under that name."""
-    from lagcomp.cache import Cache
-    from lagcomp.runtime import compile, load, run_defaults
-
-    alias = _example_alias(args)
-    try:
-        return load(alias, cache_dir=args.cache_dir)
-    except ModelError:
-        pass
-    try:
-        system = _system(args)
-    except ModelError as unknown:
-        if args.arg:
-            raise
-        return _users_model(args, unknown)
-    model = compile(system, cache_dir=args.cache_dir)
-    Cache(args.cache_dir).remember(alias, model.cache_key, run_defaults(system))
-    return model
-
-
-def _users_model(args, unknown: ModelError):
-    """The model compiled earlier under `args.name` (`lagcomp.load`), for a name that is no bundled example."""
-    from lagcomp.cache import Cache
-    from lagcomp.errors import CorruptCacheRecordError
-    from lagcomp.runtime import load
-
-    try:
-        return load(args.name, cache_dir=args.cache_dir)
-    except CorruptCacheRecordError:
-        raise
-    except ModelError:
-        raise LagcompError(f"{unknown} Nor is it the name of a model compiled with lagcomp.compile() into "
-                           f"the cache {Cache(args.cache_dir).root}.") from None
+def _say_which(source, model=None) -> None:
+    print(f"model       {source.label}")
+    note = None if model is None else source.note(model)
+    if note:
+        print(f"lagcomp: note: {note}", file=sys.stderr)
 
 
 def cmd_list(args) -> int:
@@ -160,22 +88,26 @@ def _show_compiled(model) -> int:
 
 
 def cmd_show(args) -> int:
-    if args.latex:  # from the module (`Model.equations`): no sympy where the model is cached
-        print(_example_model(args).equations().latex)
-        return 0
+    source = resolve(args)
+    if args.latex or source.system is None:  # from the module (`Model.equations`): no sympy where it is cached
+        model = source.model()
+        if args.latex:
+            print(model.equations().latex)
+            return 0
+        _say_which(source, model)
+        return _show_compiled(model)
     import sympy as sp
 
     from lagcomp.mechanics.lagrange import derive
-    from lagcomp.runtime import compile
+    from lagcomp.runtime import Model, compile
 
-    try:
-        system = _system(args)
-    except ModelError as unknown:
-        if args.arg:
-            raise
-        return _show_compiled(_users_model(args, unknown))
+    system = source.system()
+    if isinstance(system, Model):
+        _say_which(source, system)
+        return _show_compiled(system)
     eom = derive(system)
     model = compile(system, cache_dir=args.cache_dir, eom=eom)
+    _say_which(source, model)
     print(f"{system.name}: {system.description}\n")
     print(f"coordinates q  = ({', '.join(system.coordinate_names)})")
     print(f"parameters  p  = ({', '.join(system.parameter_names)})   [kernel order]")
@@ -204,15 +136,12 @@ def cmd_show(args) -> int:
 
 
 def cmd_run(args) -> int:
-    _check_writable(args.out, "--out")
-    _check_writable(args.plot, "--plot")
-    if args.plot:
-        import importlib.util
-
-        if importlib.util.find_spec("matplotlib") is None:  # known before the run, not after it
-            raise LagcompError("--plot needs matplotlib: pip install 'lagcomp[plots]'.")
+    check_result_path(args.out, "--out")
+    check_plot_path(args.plot, "--plot")
+    values = run_values(args)
     started = time.perf_counter()
-    model = _example_model(args)
+    _, model = _model(args)
+    check_inputs(model, values.inputs)
     compiled = time.perf_counter()
     origin = "from cache" if model.from_cache else "derived and emitted"
     print(f"{model.name}: {origin} in {compiled - started:.2f} s ({model.source_path})", file=sys.stderr)
@@ -229,13 +158,15 @@ def cmd_run(args) -> int:
         options.update(rtol=args.rtol, atol=args.atol)
         if args.dt is not None:
             options["first_step"] = args.dt
-    t_end = args.t_end if args.t_end is not None else model.t_end
-    run = dict(q0=args.q0, qd0=args.qd0, u0=args.u0, params=_key_values(args.param, "--param"))
-    warmed = _warm_up(model, args.t_start, t_end, run, options)
+    t_start = values.t_start if values.t_start is not None else 0.0
+    t_end = values.t_end if values.t_end is not None else model.t_end
+    run = dict(q0=values.q0, qd0=values.qd0, u0=values.u0, params=values.params,
+               **({"inputs": values.inputs} if values.inputs else {}))
+    warmed = _warm_up(model, t_start, t_end, run, options)
     print(f"numba: kernels and driver ready in {warmed:.2f} s (compiled on a first run, then loaded from its cache)",
           file=sys.stderr)
     begun = time.perf_counter()
-    sol = model.simulate((args.t_start, t_end), **run, **options)
+    sol = model.simulate((t_start, t_end), **run, **options)
     elapsed = time.perf_counter() - begun
     if sol.projected_initial_state is not None:
         start = ", ".join(f"{v:.10g}" for v in sol.projected_initial_state)
@@ -244,29 +175,10 @@ def cmd_run(args) -> int:
     print(f"time span   [{sol.t[0]:g}, {sol.t[-1]:g}]   steps {sol.nsteps}   rejected {sol.nrejected}   rhs evaluations {sol.nfev}"
           + (f"   Jacobians {sol.njev}   LU factorizations {sol.nlu}" if sol.njev else ""))
     print(f"wall time   {elapsed:.3f} s (integration; numba compilation or loading before it: {warmed:.2f} s)")
-    summary = sol.summary
-    print(f"energy      T+V: {sol.energy[0]:.12g} -> {sol.energy[-1]:.12g} (max relative drift {summary.energy_error:.3g})")
-    print(f"            h:   {sol.energy_function[0]:.12g} -> {sol.energy_function[-1]:.12g} "
-          f"(max relative drift {summary.energy_function_error:.3g})")
-    from lagcomp.event_report import occurrence_lines
-
-    for name, record in sol.events.items():
-        when = f" at t = {record.t[0]:.10g}" + (f" .. {record.t[-1]:.10g}" if len(record) > 1 else "") \
-            if len(record) else ""
-        resets = " (impacts)" if record.impulses is not None else " (each resets the state)" if record.jumps else ""
-        print(f"event       {name}: {len(record)} occurrence(s){when}{resets if len(record) else ''}")
-        for line in occurrence_lines(record, sol.state_names, model.contacts,
-                                     sol.contact_switches + sol.friction_switches):
-            print(line)
-    for name, values in sol.reactions.items():
-        print(f"reaction    {name}: {values[0]:.8g} -> {values[-1]:.8g} (range {values.min():.6g} .. {values.max():.6g})")
-    if sol.reactions:
-        print(f"            largest constraint residual {sol.constraint_residual:.3g}")
-    final = ", ".join(f"{c}={v:.8g}" for c, v in zip(sol.coordinates, sol.q[-1]))
-    print(f"final       {final}")
+    for line in run_lines(sol, model):
+        print(line)
     if args.out:
-        sol.save_npz(args.out)
-        print(f"saved       {args.out} ({len(sol.t)} points)")
+        print(f"saved       {write_solution(sol, args.out)} ({len(sol.t)} points)")
     if args.plot:
         from lagcomp.plots import plot_run
 
@@ -281,7 +193,7 @@ def cmd_run(args) -> int:
 
 
 def cmd_animate(args) -> int:
-    _check_writable(args.output, "--output")
+    check_writable(args.output, "--output")
     import importlib.util
 
     from lagcomp.animation import (
@@ -291,27 +203,32 @@ def cmd_animate(args) -> int:
         check_format,
         frame_times,
     )
-    from lagcomp.examples.bodies import BODIES_EXAMPLES
 
     check_format(args.output)
-
-    if args.name not in EXAMPLE_DRAWINGS and args.name not in BODIES_EXAMPLES:
-        raise LagcompError(f"lagcomp animate draws {sorted(EXAMPLE_DRAWINGS)} and the examples built from bodies "
-                           f"{sorted(BODIES_EXAMPLES)}; for {args.name!r}, name the points to draw from Python: "
-                           "lagcomp.animate(sol, points={'bob': (x, y)}, ...).")
     if importlib.util.find_spec("matplotlib") is None:  # known before the run, not after it
         raise LagcompError("lagcomp animate needs matplotlib: pip install 'lagcomp[plots]'.")
-    model = _example_model(args)
+    values = run_values(args)
+    source, model = _model(args)
+    check_inputs(model, values.inputs)
+    family = re.sub(r"_\d+$", "", args.name) if args.name.startswith("n_link_pendulum") else args.name
+    drawing = EXAMPLE_DRAWINGS.get(family) if source.kind == "example" else None
+    if drawing is None and not getattr(model.kernels, "GEOMETRY", ()):
+        raise LagcompError(f"lagcomp animate draws the bodies of a model built from lc.Particle / lc.RigidBody, and the "
+                           f"pendulums {sorted(EXAMPLE_DRAWINGS)}; {model.name!r} has no bodies: build it from "
+                           "bodies, or name the points to draw from Python: lagcomp.animate(sol, points={'bob': (x, y)}).")
     import numpy as np
 
-    t_end = args.t_end if args.t_end is not None else model.t_end
-    times = frame_times(np.array([0.0, t_end]), args.fps, args.speed)
-    sol = model.simulate((0.0, t_end), q0=args.q0, qd0=args.qd0, params=_key_values(args.param, "--param"),
+    t_start = values.t_start if values.t_start is not None else 0.0
+    t_end = values.t_end if values.t_end is not None else model.t_end
+    times = frame_times(np.array([t_start, t_end]), args.fps, args.speed)
+    sol = model.simulate((t_start, t_end), q0=values.q0, qd0=values.qd0, params=values.params,
+                         **({"inputs": values.inputs} if values.inputs else {}),
                          t_eval=times, rtol=1e-10, atol=1e-10, progress=False)  # saved at the frames' times
-    drawing = EXAMPLE_DRAWINGS[args.name](model.coordinates) if args.name in EXAMPLE_DRAWINGS else body_drawing(sol)
-    animate(sol, **drawing, fps=args.fps, speed=args.speed, title=model.name, save=args.output)
-    print(f"animated    {args.output}: {len(times)} frames of t in [0, {sol.t[-1]:g}] at {args.fps:g} fps, "
-          f"speed {args.speed:g} ({sol.method}: {sol.message})")
+    shown = drawing(model.coordinates) if drawing is not None else body_drawing(sol)
+    animate(sol, **shown, fps=args.fps, speed=args.speed, title=model.name, save=args.output,
+            progress=False if args.quiet else None)
+    print(f"animated    {Path(args.output)}: {len(times)} frames of t in [{t_start:g}, {sol.t[-1]:g}] at "
+          f"{args.fps:g} fps, speed {args.speed:g} ({sol.method}: {sol.message})")
     return 0 if sol.success else 1
 
 
@@ -333,27 +250,24 @@ def _warm_up(model, t0: float, t1: float, run: dict, options: dict) -> float:
 
 def cmd_bench(args) -> int:
     """Kernel cost, op counts, steps/s of every applicable method and compile times of one model."""
-    from lagcomp import examples
     from lagcomp.benchmark import report
-    from lagcomp.runtime import compile, load
 
+    values = run_values(args)
     started = time.perf_counter()
-    example = None
-    if args.name in examples.EXAMPLES or args.name.startswith("n_link_pendulum"):
-        model = compile(_system(args), cache_dir=args.cache_dir)
-        example = (args.name, _key_values(args.arg, "--arg"))
-    else:  # a user's own model, compiled earlier under this name
-        model = load(args.name, cache_dir=args.cache_dir)
+    source, model = _model(args)
+    check_inputs(model, values.inputs)
     loaded = time.perf_counter() - started
-    params = _key_values(args.param, "--param")
-    model.initial_state(args.q0, args.qd0), model.parameter_vector(params)  # checked: a message, not a traceback
-    if args.q0 is not None:  # the values the benchmark runs from, for this process only
-        model.q0 = tuple(args.q0)
-    if args.qd0 is not None:
-        model.qd0 = tuple(args.qd0)
-    model.defaults.update(params)
+    example = (args.name, key_values(args.arg, "--arg")) if source.kind == "example" else None  # the cold compile needs its name
+    model.initial_state(values.q0, values.qd0)  # checked: a message, not a traceback
+    model.parameter_vector(values.params, **({"inputs": values.inputs, "span": (0.0, model.t_end)}
+                                             if values.inputs else {}))
+    if values.q0 is not None:  # the values the benchmark runs from, for this process only
+        model.q0 = tuple(values.q0)
+    if values.qd0 is not None:
+        model.qd0 = tuple(values.qd0)
+    model.defaults.update(values.params)
     print(report(model, example=example, load_seconds=loaded, repeats=args.repeats, dt=args.dt, steps=args.steps,
-                 methods=args.methods, cold=not args.no_cold), end="")
+                 methods=args.methods, cold=not args.no_cold, inputs=values.inputs or None), end="")
     return 0
 
 
@@ -468,17 +382,22 @@ def cmd_sweep(args) -> int:
     from lagcomp.integrate.methods import get_method
     from lagcomp.integrate.sweep import NOT_RUN
 
-    _check_writable(args.out, "--out")
-    model = _example_model(args)
+    check_result_path(args.out, "--out")
+    values = run_values(args, params_flag=None)  # --param may sweep: read below
+    _, model = _model(args)
+    check_inputs(model, values.inputs)
     method = get_method(args.method)
-    t_span = (args.t_start, args.t_end if args.t_end is not None else model.t_end)
-    grid, params = {}, {}  # axes in order: the --grid ones, then the swept --param ones
+    t_span = (values.t_start if values.t_start is not None else 0.0,
+              values.t_end if values.t_end is not None else model.t_end)
+    grid, params = {}, dict(values.params)  # axes in order: the --grid ones, then the swept --param ones
     for spec in (args.grid or []):
         name, value = _grid_axis(spec, "--grid")
         grid[name] = np.atleast_1d(value)
     for spec in (args.param or []):
         name, value = _grid_axis(spec, "--param")
         (params if isinstance(value, float) else grid)[name] = value
+    for name in grid:  # a swept name wins over its value in --config
+        params.pop(name, None)
     if not grid:
         raise LagcompError("Nothing to sweep: give at least one --grid NAME=LO:HI:N (a coordinate, "
                            "<coordinate>_dot or a parameter) or --param NAME=LO:HI:N.")
@@ -497,7 +416,9 @@ def cmd_sweep(args) -> int:
             raise LagcompError("--scheduler needs dask.distributed: pip install 'lagcomp[dask]'.") from err
         client = Client(args.scheduler)
     started = time.perf_counter()
-    sweep = model.sweep(t_span, grid, combine=args.combine, q0=args.q0, qd0=args.qd0, params=params,
+    if values.inputs:
+        options["inputs"] = values.inputs
+    sweep = model.sweep(t_span, grid, combine=args.combine, q0=values.q0, qd0=values.qd0, params=params,
                         method=method.name, output=outputs, workers=args.workers, client=client,
                         batched=args.batched, project_initial=args.project_initial,
                         progress=False if args.quiet else None, **options)
@@ -522,24 +443,37 @@ def cmd_sweep(args) -> int:
         print(f"event       {name}: {int(record['count'].sum())} occurrence(s) in all"
               f"{sweep_event_summary(record, model.contacts)}")
     if args.out:
-        sweep.save_npz(args.out)
-        print(f"saved       {args.out}")
+        written = write_sweep(sweep, args.out)
+        dense = " (final states; the saved time series are in .npz and .nc files)" \
+            if written.suffix.lower() == ".csv" and sweep.dense is not None else ""
+        print(f"saved       {written}{dense}")
     if client is not None:
         client.close()
     return 0 if sweep.done.all() else 130
 
 
 def cmd_stability(args) -> int:
-    """Eigenvalues of a steady motion of an example along a parameter or speed, and where stability changes."""
+    """Eigenvalues of a steady motion of a model along a parameter or speed, and where stability changes."""
     import numpy as np
 
     from lagcomp.analysis import stability_sweep
 
-    system = _system(args)
-    q = system.q0 if args.q is None else args.q
+    check_plot_path(args.plot, "--plot")
+    run = run_values(args, params_flag="set")
+    source = resolve(args)
+    if source.system is None:
+        raise LagcompError(f"lagcomp stability linearizes the symbolic System, which a compiled model does not keep: "
+                           f"give the file that defines {args.name!r} (path/to/model.py:NAME) or its module.")
+    system = source.system()
+    _say_which(source)
+    if system.input_names:
+        raise LagcompError(f"lagcomp stability linearizes a model without run-time inputs; {system.name!r} reads "
+                           f"{', '.join(system.input_names)}: linearize a variant with each input a parameter "
+                           "(or a law lc.Input(name, law=...)).")
+    q = args.q if args.q is not None else run.q0 if run.q0 is not None else system.q0
     u = [0.0] * len(system.coordinates) if args.u is None else args.u
     values = np.linspace(args.range[0], args.range[1], args.num)
-    sweep = stability_sweep(system, args.param, values, q, u, _key_values(args.set, "--set"), drop=args.drop or ())
+    sweep = stability_sweep(system, args.param, values, q, u, run.params, drop=args.drop or ())
     print(f"{system.name}: eigenvalues of the linearization about q = {list(q)}, u = {list(u)} "
           f"in the reduced state ({', '.join(sweep.states)})")
     for value, unstable, row in zip(sweep.values, sweep.unstable, sweep.eigenvalues):
@@ -563,36 +497,49 @@ def _parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("list", help="list the bundled examples").set_defaults(func=cmd_list)
 
-    def example(name, help_):
-        p = sub.add_parser(name, help=help_)
-        p.add_argument("name", help="example name (see `lagcomp list`)")
-        p.add_argument("--arg", action="append", metavar="K=V", help="argument of the example factory, e.g. n=5")
-        return p
-
     from lagcomp.integrate.methods import METHODS
 
-    show = example("show", "print the derived equations (of a bundled example; for a model compiled earlier under "
-                           "NAME, what the cache records) and the generated module's path")
+    def model_command(name, help_, *, inputs=True):
+        p = sub.add_parser(name, help=help_, description=help_, epilog=examples_epilog(name),
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
+        p.add_argument("name", metavar="MODEL", help=MODEL_HELP)
+        p.add_argument("--arg", action="append", metavar="K=V",
+                       help="argument of the example's factory, or of the function MODEL names, e.g. n=5")
+        p.add_argument("--cached", action="store_true",
+                       help="MODEL is the model compiled earlier under that name (lagcomp.load), even when a "
+                            "bundled example has the name")
+        p.add_argument("--config", metavar="FILE",
+                       help="parameters, initial state, inputs and time span from a .toml or .json file (keys "
+                            "params, inputs, q0, qd0, u0, t_start, t_end); flags given as well win")
+        if inputs:
+            p.add_argument("--input", action="append", metavar="NAME=SIGNAL",
+                           help="an input of the model (lagcomp.Input): NAME=2.5 (constant), NAME=table.csv "
+                                "(columns time,value), NAME=table.csv:COLUMN, NAME=...@linear (straight segments), "
+                                "NAME=file.py:FUNCTION (a numba function u(t, y, p))")
+        return p
+
+    show = model_command("show", "print the derived equations (of a model compiled earlier, what the cache "
+                                 "records) and the generated module's path", inputs=False)
     show.add_argument("--latex", action="store_true",
                       help="print only the equations of motion, constraints and energy as LaTeX (an align* "
                            "environment; model.equations() in Python)")
     show.set_defaults(func=cmd_show)
-    run = example("run", "simulate an example and print a summary")
-    run.add_argument("--t-start", type=float, default=0.0)
-    run.add_argument("--t-end", type=float, help="end time (default: the example's)")
+    run = model_command("run", "simulate a model and print a summary")
+    run.add_argument("--t-start", type=float, help="start time (default 0)")
+    run.add_argument("--t-end", type=float, help="end time (default: the model's)")
     run.add_argument("--method", default="dop853", choices=list(METHODS))
     run.add_argument("--dt", type=float, help="step of fixed-step methods (default 1e-3); first step of adaptive ones")
     run.add_argument("--rtol", type=float, default=1e-10)
     run.add_argument("--atol", type=float, default=1e-10)
     run.add_argument("--save-every", type=int, default=1, metavar="K")
-    run.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
-    run.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
-    run.add_argument("--qd0", type=float, nargs="+", help="initial velocities q̇ (Lagrange models: one per coordinate)")
+    initial_state_flags(run)
     run.add_argument("--u0", type=float, nargs="+",
                      help="initial speeds u (a model compiled from a KanesMethod, state (q, u): one per speed, "
                           "in its order `speeds`; such a model refuses --qd0)")
-    run.add_argument("--out", help="write the solution to this .npz file")
-    run.add_argument("--plot", metavar="PNG", help="draw coordinates and energy error vs time to this image (needs matplotlib)")
+    run.add_argument("--out", metavar="FILE", help="write the solution; the suffix names the format: .npz (every "
+                                                   "array), .csv (t, state, energy, reactions), .nc (netCDF, xarray)")
+    run.add_argument("--plot", metavar="IMAGE", help="draw coordinates and energy error vs time to this image, "
+                                                     "format by suffix: .png, .pdf, .svg, ... (needs matplotlib)")
     run.add_argument("--summary", action="store_true",
                      help="keep only the first and last states and running reductions (O(1) memory for long runs)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -602,8 +549,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--project-initial", action="store_true",
                      help="project inconsistent initial conditions onto the constraints")
     run.set_defaults(func=cmd_run)
-    sweep = example("sweep", "integrate a grid of initial values and parameters on every core")
-
+    sweep = model_command("sweep", "integrate a grid of initial values and parameters on every core")
     sweep.add_argument("--grid", "--q0-grid", action="append", metavar="NAME=LO:HI:N",
                        help="swept initial value or parameter, N evenly spaced values (coordinate, "
                             "<coordinate>_dot or parameter name)")
@@ -613,8 +559,8 @@ def _parser() -> argparse.ArgumentParser:
                        help="Cartesian product of the axes (default) or element-wise")
     sweep.add_argument("--output", action="append", metavar="KIND",
                        help="final (default), every=K (fixed-step), times=N (adaptive), max-energy-error, events")
-    sweep.add_argument("--t-start", type=float, default=0.0)
-    sweep.add_argument("--t-end", type=float, help="end time (default: the example's)")
+    sweep.add_argument("--t-start", type=float, help="start time (default 0)")
+    sweep.add_argument("--t-end", type=float, help="end time (default: the model's)")
     sweep.add_argument("--method", default="dop853", choices=sorted(METHODS))
     sweep.add_argument("--dt", type=float, help="step of fixed-step methods (default 1e-3)")
     sweep.add_argument("--rtol", type=float, default=1e-10)
@@ -628,40 +574,43 @@ def _parser() -> argparse.ArgumentParser:
                        help="project onto the constraints after every step (default: on for fixed-step methods)")
     sweep.add_argument("--project-initial", action="store_true",
                        help="project inconsistent initial states onto the constraints")
-    sweep.add_argument("--out", help="write the sweep to this .npz file")
+    sweep.add_argument("--out", metavar="FILE", help="write the sweep; the suffix names the format: .npz (every "
+                                                     "array), .csv (one row per trajectory), .nc (netCDF, xarray)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(func=cmd_sweep)
-    bench = example("bench", "time one model (a bundled example, or one compiled earlier under NAME): "
-                             "kernel ns/call, op counts, steps/s per method, compile times")
+    bench = model_command("bench", "time one model: kernel ns/call, op counts, steps/s per method, compile times")
     bench.set_defaults(func=cmd_bench)
     bench.add_argument("--repeats", type=int, default=5, help="timed repeats per figure (medians)")
     bench.add_argument("--dt", type=float, default=1e-3, help="step of the fixed-step methods")
     bench.add_argument("--steps", type=int, default=100_000, help="steps of each fixed-step run")
     bench.add_argument("--methods", nargs="+", metavar="METHOD", help="time only these methods (default: all that apply)")
-    bench.add_argument("--no-cold", action="store_true", help="skip the cold compile in a fresh process")
-    bench.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
-    bench.add_argument("--q0", type=float, nargs="+", help="initial coordinates (default: the model's)")
-    bench.add_argument("--qd0", type=float, nargs="+", help="initial velocities (default: the model's, else 0)")
-    stability = example("stability", "eigenvalues of a steady motion along a parameter; where stability changes")
+    bench.add_argument("--no-cold", action="store_true", help="skip the cold compile in a fresh process (bundled "
+                                                              "examples only)")
+    initial_state_flags(bench)
+    stability = model_command("stability", "eigenvalues of a steady motion along a parameter; where stability "
+                                           "changes (needs the System: a bundled example, a file or a module)",
+                              inputs=False)
     stability.add_argument("--param", required=True, help="swept parameter, or speed (<coordinate>_dot)")
     stability.add_argument("--range", type=float, nargs=2, required=True, metavar=("LO", "HI"))
     stability.add_argument("--num", type=int, default=41, help="values in the range (default 41)")
     stability.add_argument("--set", action="append", metavar="K=V", help="value of another parameter, e.g. g=9.81")
-    stability.add_argument("--q", type=float, nargs="+", help="coordinates of the steady motion (default: the example's q0)")
+    stability.add_argument("--q", type=float, nargs="+",
+                           help="coordinates of the steady motion (default: --config's q0, else the model's q0)")
     stability.add_argument("--u", type=float, nargs="+", help="its speeds (default: zero but the swept one; dependent ones completed)")
     stability.add_argument("--drop", nargs="+", metavar="NAME", help="ignorable coordinates/speeds to leave out")
-    stability.add_argument("--plot", metavar="PNG", help="draw the eigenvalues vs the parameter (needs matplotlib)")
+    stability.add_argument("--plot", metavar="IMAGE", help="draw the eigenvalues vs the parameter, format by suffix "
+                                                           "(needs matplotlib)")
     stability.set_defaults(func=cmd_stability)
-    anim = example("animate", "draw a run of an example as a GIF, MP4 or HTML player (pendulums, examples built "
-                   "from bodies; needs matplotlib)")
+    anim = model_command("animate", "draw a run as a GIF, MP4 or HTML player: the bodies of a model built from "
+                                    "lc.Particle / lc.RigidBody, or a bundled pendulum (needs matplotlib)")
     anim.add_argument("-o", "--output", required=True, help="file to write: .gif, .mp4 (ffmpeg) or .html")
-    anim.add_argument("--t-end", type=float, help="end time (default: the example's)")
+    anim.add_argument("--t-start", type=float, help="start time (default 0)")
+    anim.add_argument("--t-end", type=float, help="end time (default: the model's)")
     anim.add_argument("--fps", type=float, default=30.0, help="frames per second of the clip (default 30)")
     anim.add_argument("--speed", type=float, default=1.0,
                       help="simulated seconds per second of clip (default 1; larger plays a long run faster)")
-    anim.add_argument("--param", action="append", metavar="K=V", help="parameter value, e.g. g=9.81")
-    anim.add_argument("--q0", type=float, nargs="+", help="initial coordinates")
-    anim.add_argument("--qd0", type=float, nargs="+", help="initial velocities")
+    anim.add_argument("--quiet", action="store_true", help="no progress bar while the frames are drawn")
+    initial_state_flags(anim)
     anim.set_defaults(func=cmd_animate)
     gen = sub.add_parser("generate", help="regenerate the emitted modules of the bundled examples")
     gen.add_argument("directory", nargs="?", default="generated")
