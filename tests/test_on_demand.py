@@ -146,3 +146,49 @@ def test_equations_are_kept_beside_the_entry(tmp_path):
     eom = pickle.loads(kept.read_bytes())
     original = model.kernels.companion.eom
     assert eom.M == original.M and eom.F == original.F and eom.energy == original.energy
+
+
+#: A process that compiles the example, waits for the file `go`, then asks for an on-demand kernel; reports
+#: whether it built the companion module itself.
+RACE = textwrap.dedent("""
+    import json, sys, time
+    from pathlib import Path
+    import lagcomp as lc
+    import lagcomp.companion as companion
+    from lagcomp import examples
+
+    root = sys.argv[1]
+    builds = []
+    original = companion.build_companion
+    companion.build_companion = lambda *args: builds.append(1) or original(*args)
+    model = lc.compile(examples.get("simple_pendulum"), cache_dir=root)
+    Path(root, f"ready-{sys.argv[2]}").touch()
+    while not Path(root, "go").exists():
+        time.sleep(0.01)
+    jacobian = model.jacobian(0.0, [0.3, 0.0])
+    print(json.dumps({"builds": len(builds), "jacobian": jacobian.tolist(), "path": str(model.on_demand_entry.path)}))
+""")
+
+
+def test_processes_asking_at_once_build_the_companion_once(tmp_path):
+    """Two processes that read an on-demand kernel at the same moment: one builds the companion (the lock of
+    its key), the other waits and loads it; one module file, the same Jacobian."""
+    lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path)     # the eager entry, so both start alike
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    processes = [subprocess.Popen([sys.executable, "-c", RACE, str(tmp_path), str(i)], stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE, text=True, env=env) for i in range(2)]
+    import time
+
+    deadline = time.monotonic() + 300
+    while not all((tmp_path / f"ready-{i}").exists() for i in range(2)) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    (tmp_path / "go").touch()
+    results = []
+    for process in processes:
+        out, err = process.communicate(timeout=600)
+        assert process.returncode == 0, err[-3000:]
+        results.append(json.loads(out.strip().splitlines()[-1]))
+    assert sum(r["builds"] for r in results) == 1
+    assert results[0]["jacobian"] == results[1]["jacobian"] and results[0]["path"] == results[1]["path"]
+    assert len(list((tmp_path / "modules").glob("*_on_demand_*.py"))) == 1
+    assert not list(tmp_path.rglob("*.tmp"))
