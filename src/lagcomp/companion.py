@@ -136,11 +136,13 @@ class ModelKernels:
         if name in ("_module", "_companion"):   # (while unpickling or copying, before __init__ set them)
             raise AttributeError(name)
         try:
-            return getattr(self._module, name)   # (the module's own names too: __name__, __file__, ...)
+            value = getattr(self._module, name)   # (the module's own names too: __name__, __file__, ...)
         except AttributeError:
             if not on_demand(name):
                 raise
-        return getattr(self._companion.module(name), name)
+            value = getattr(self._companion.module(name), name)
+        self.__dict__[name] = value     # (later reads find it without this call: the modules never change)
+        return value
 
     @property
     def companion(self) -> Companion:
