@@ -200,7 +200,7 @@ def test_parameters_named_like_the_kernels_locals(cache_dir, names):
                        constraints=[lc.Holonomic("rod", x**2 + z**2 - length**2)], parameters=(mass, gravity, length),
                        name="jacobian_named")
     model = lc.compile(system, cache_dir=cache_dir)
-    module = python_kernels(model.source_path.read_text(encoding="utf-8"))
+    module = python_kernels(model.whole_source())
     y, p = np.array([0.6, -0.7, 0.4, 0.3]), np.array([1.5, 9.75, 1.25, *GAINS])
     _check_kernels(module, 3, 1, y, p)
 

@@ -298,6 +298,17 @@ def _kane_slider(formed=True, force=None, across=False):
     return km
 
 
+def _on_demand_without_equations(tmp_path):
+    """A loaded model whose entry keeps no equations, asked for its Jacobian (an on-demand kernel)."""
+    from lagcomp import runtime
+
+    lc.compile(oscillator(), cache_dir=tmp_path)
+    for kept in (tmp_path / "equations").glob("*.pickle"):
+        kept.unlink()
+    runtime._NAMESPACES.clear()     # (as in a new process)
+    lc.load(oscillator().name, cache_dir=tmp_path).jacobian(0.0, [0.1, 0.0])
+
+
 CASES = {
     # the description: System(...) and compile
     "undeclared-symbol": (lambda: oscillator(V=k * x**2 / 2 + sp.Symbol("stray") * x, parameters=(m, k)), "stray"),
@@ -516,6 +527,7 @@ CASES = {
     "unwritable-cache": (_cache_case("unwritable"), "cannot write its cache"),
     "unpickle-without-entry": (lambda models, tmp_path: _unpickle_without_entry(tmp_path), "'table_cached'"),
     "load-unknown-name": (lambda models, tmp_path: lc.load("never_compiled", cache_dir=tmp_path), "'never_compiled'"),
+    "on-demand-without-equations": (lambda tmp_path: _on_demand_without_equations(tmp_path), "`rhs_jacobian`"),
     "linearize-constrained": (lambda models: an.linearize(models["rod"], [0.0, 0.0, -1.0]), "linearize_steady"),
     "periodic-constrained": (lambda models: an.periodic_orbit(models["rod"], np.zeros(6), 1.0),
                              "'spherical_pendulum_cartesian'"),

@@ -120,10 +120,12 @@ def _probes() -> tuple[lc.System, ...]:
 
 
 def _sources(model: lc.Model) -> list[str]:
-    """The model's module and, when it has a Taylor program, the batched Taylor module (written at sweep time)."""
+    """The model's eager module, its companion module (the on-demand kernels, built here) and, when it has a
+    Taylor program, the batched Taylor module (written at sweep time)."""
     source = model.source_path.read_text(encoding="utf-8")
+    companion = model.on_demand_entry.path.read_text(encoding="utf-8")
     program = model._taylor_program
-    return [source] + ([taylor_lanes_module(source, program, order=3)] if program is not None else [])
+    return [source, companion] + ([taylor_lanes_module(companion, program, order=3)] if program is not None else [])
 
 
 def _user_locals(model: lc.Model) -> set[str]:
@@ -281,7 +283,7 @@ def test_the_parameter_jacobian_under_every_emitted_name(many_names):
 
     model, spec = many_names
     params, amplitude, _ = spec.values()
-    module = python_kernels(model.source_path.read_text(encoding="utf-8"))
+    module = python_kernels(model.whole_source())
     n, column = len(spec.coordinates), {name: j for j, name in enumerate(model.parameters)}
     c = amplitude + 0.125
     out, expected = np.full((2 * n, len(column)), np.nan), np.zeros((2 * n, len(column)))
@@ -303,7 +305,7 @@ def test_the_directional_and_full_jacobian_kernels_under_every_emitted_name(many
 
     model, spec = many_names
     params, amplitude, _ = spec.values()
-    module = python_kernels(model.source_path.read_text(encoding="utf-8"))
+    module = python_kernels(model.whole_source())
     n, column = len(spec.coordinates), {name: j for j, name in enumerate(model.parameters)}
     N, P = 2 * n, len(column)
     c, cd = amplitude + 0.125, np.linspace(-0.5, 0.5, n)
@@ -468,7 +470,7 @@ def test_parameters_named_like_the_dae_kernels_locals(cache_dir, names):
     system = lc.System(coordinates=(x, z), T=mass * (x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=mass * gravity * z,
                        constraints=[lc.Holonomic("rod", x**2 + z**2 - length**2)], parameters=(mass, gravity, length),
                        name="dae_named")
-    module = python_kernels(lc.compile(system, cache_dir=cache_dir).source_path.read_text(encoding="utf-8"))
+    module = python_kernels(lc.compile(system, cache_dir=cache_dir).whole_source())
     M, G_, L = 1.5, 9.75, 1.25
     X, Z, VX, VZ, WX, WZ, LAM, MU = 0.75, -1.0, 0.5, 0.375, -2.25, 0.125, 3.5, -0.0625
     p = np.array([M, G_, L, 0.0, 0.0])

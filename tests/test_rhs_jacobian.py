@@ -284,7 +284,7 @@ def test_whipple_bicycle_jacobian_agrees_with_central_differences(whipple_bicycl
     """sympy's test_kane3 bicycle (the session's model; its module run as plain Python): M with the
     differentiated velocity constraints among its rows, the dependent coordinate q4, CRAMER's quotients."""
     _, model = whipple_bicycle
-    module = python_kernels(model.source_path.read_text())
+    module = python_kernels(model.whole_source())
     p, rng = model.parameter_vector(), np.random.default_rng(3)
     y = rng.uniform(-0.3, 0.3, model.state_size)
     out = np.full((y.size, y.size), np.nan)

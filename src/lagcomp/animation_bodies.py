@@ -10,7 +10,7 @@ every run, drawn or not.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -48,7 +48,6 @@ class BodyFrames:
                 for name, C in self.rotations.items() for j, label in enumerate(AXIS_LABELS[:d])}
 
 
-@dataclass(frozen=True)
 class BodyGeometry:
     """A model's ``geometry`` kernel with its layout and a run's parameters (module docstring).
 
@@ -60,27 +59,52 @@ class BodyGeometry:
         The parameter vector the run used.
     kernel : numba dispatcher or None
         ``geometry(t, y, p, out)``; None once the Solution was pickled (the kernel is not kept).
+
+    `of` reads the three from the model's kernels when one of them is first read, not before: ``geometry``
+    is an on-demand kernel (`lagcomp.codegen.kinds`), built the first time an animation or a plot asks.
     """
 
-    layout: tuple
-    size: int
-    p: np.ndarray
-    kernel: object = field(default=None, repr=False, compare=False)
+    def __init__(self, layout: tuple, size: int, p: np.ndarray, kernel=None, kernels=None):
+        self._layout, self._size, self.p, self._kernel = layout, size, p, kernel
+        self._kernels = kernels     # (the model's kernels, until they are read: `_read`)
+
+    def _read(self) -> None:
+        if self._kernels is not None:
+            module, self._kernels = self._kernels, None
+            self._layout = tuple(getattr(module, "GEOMETRY", ()))
+            self._size = int(getattr(module, "GEOMETRY_SIZE", 0))
+            self._kernel = getattr(module, "geometry", None)
+
+    @property
+    def layout(self) -> tuple:
+        self._read()
+        return self._layout
+
+    @property
+    def size(self) -> int:
+        self._read()
+        return self._size
+
+    @property
+    def kernel(self):
+        self._read()
+        return self._kernel
 
     @classmethod
     def of(cls, model, p: np.ndarray) -> BodyGeometry:
-        """The geometry of `model` (a Model or KaneModel: its generated module) for the parameters `p`."""
-        module = model.kernels
-        return cls(tuple(getattr(module, "GEOMETRY", ())), int(getattr(module, "GEOMETRY_SIZE", 0)),
-                   np.array(p, dtype=float), getattr(module, "geometry", None))
+        """The geometry of `model` (a Model or KaneModel: its generated modules) for the parameters `p`."""
+        return cls((), 0, np.array(p, dtype=float), None, model.kernels)
 
     def __reduce__(self):
         """Pickled without the kernel: a numba function of a generated module another process may not have."""
         return BodyGeometry, (self.layout, self.size, self.p)
 
     def __deepcopy__(self, memo) -> BodyGeometry:
-        """A copy that keeps the kernel (in this process it stays valid)."""
-        return BodyGeometry(self.layout, self.size, self.p.copy(), self.kernel)
+        """A copy that keeps the kernel (in this process it stays valid), read or not yet."""
+        return BodyGeometry(self._layout, self._size, self.p.copy(), self._kernel, self._kernels)
+
+    def __repr__(self) -> str:
+        return f"BodyGeometry(layout={self.layout!r}, size={self.size!r}, p={self.p!r})"
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -7,6 +7,11 @@ Layout under the cache root::
     modules/__pycache__/...              code is cached beside it (cache=True)
     index/<input key>.json               input key -> module file, its sha256,
                                          and the metadata a Model needs
+    index/<input key>-on-demand.json     the same for the companion module, whose
+                                         kernels are built on first use
+                                         (`lagcomp.codegen.kinds`, `lagcomp.companion`)
+    equations/<input key>.pickle         the derived equations, from which a
+                                         later process lowers the companion
     names/<system name>.json             the input key last compiled under that
                                          name and the System's run defaults
                                          (what `lagcomp.load` reads)
@@ -175,11 +180,12 @@ class Entry:
     metadata: dict
 
 
-def _atomic_write(path: Path, text: str) -> None:
+def _atomic_write(path: Path, text: str | bytes) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
+        with os.fdopen(fd, "wb" if isinstance(text, bytes) else "w", **({} if isinstance(text, bytes) else
+                                                                       {"encoding": "utf-8"})) as f:
             f.write(text)
         os.replace(tmp, path)
     except BaseException:
@@ -312,6 +318,22 @@ class Cache:
         record = {"module": path.name, "sha256": digest, "metadata": metadata, "versions": _versions()}
         _atomic_write(self._index_file(key), json.dumps(record, indent=1, sort_keys=True))
         return Entry(key=key, path=path, module_name=_module_name(path), metadata=metadata)
+
+    def store_equations(self, key: str, data: bytes) -> None:
+        """Keep `data` (the pickled equations of the system under input `key`) beside its entry, so that a later
+        process lowers the on-demand kernels without deriving again (`lagcomp.companion`).  Best effort: a
+        cache that cannot be written keeps none, and that process derives them (or says why it cannot)."""
+        try:
+            _atomic_write(self.root / "equations" / f"{key}.pickle", data)
+        except OSError:
+            pass
+
+    def equations(self, key: str) -> bytes | None:
+        """The data `store_equations` kept under `key`, or None (never stored, or unreadable)."""
+        try:
+            return (self.root / "equations" / f"{key}.pickle").read_bytes()
+        except OSError:
+            return None
 
     def _name_file(self, name: str) -> Path:
         safe = name if re.fullmatch(r"[A-Za-z0-9_.-]{1,100}", name) else f"_{_sha256(name)[:32]}"

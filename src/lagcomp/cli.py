@@ -10,6 +10,7 @@
     lagcomp animate double_pendulum -o double_pendulum.gif --t-end 10 --fps 15
     lagcomp generate generated/          (add --check to only report stale files)
     lagcomp precompile                   (compile every library driver now, not at its first use)
+    lagcomp precompile NAME --all        (compile a model and build its on-demand kernels now)
 
 The MODEL of every model command is a bundled example, a model compiled earlier under a name, or a System in
 a file or module, by the rule `lagcomp.cli_support.models` states; each command prints which one it ran.
@@ -305,6 +306,8 @@ def cmd_precompile(args) -> int:
     """
     from lagcomp.integrate.methods import library_function
 
+    if args.name is not None:
+        return _precompile_model(args)
     modules: dict[str, list[str]] = {}
     for reference in library_drivers():
         module, _, _ = reference.partition(":")
@@ -318,6 +321,18 @@ def cmd_precompile(args) -> int:
         how = "compiled" if compiled else "loaded from numba's cache"
         print(f"[{i}/{len(modules)}] {module} ({names}): {how} in {time.perf_counter() - before:.2f} s", flush=True)
     print(f"{sum(map(len, modules.values()))} library drivers ready in {time.perf_counter() - started:.1f} s")
+    return 0
+
+
+def _precompile_model(args) -> int:
+    """``lagcomp precompile MODEL [--all]``: compile the model MODEL names (the rule of every model command) into the cache, and with ``--all`` its on-demand kernels too (`lagcomp.codegen.kinds`), so that no
+    later feature lowers anything (nor needs sympy); numba compiles each kernel at its first call."""
+    _, model = _model(args)
+    print(f"{model.name}: eager module {model.source_path}")
+    if args.all:
+        entry = model.on_demand_entry
+        if entry is not None:
+            print(f"{model.name}: on-demand kernels {entry.path}")
     return 0
 
 
@@ -616,8 +631,14 @@ def _parser() -> argparse.ArgumentParser:
     gen.add_argument("directory", nargs="?", default="generated")
     gen.add_argument("--check", action="store_true", help="only list stale files; exit 1 if any")
     gen.set_defaults(func=cmd_generate)
-    sub.add_parser("precompile", help="compile every library integration driver now (once per installation) "
-                                      "instead of at its first use").set_defaults(func=cmd_precompile)
+    pre = sub.add_parser("precompile", help="compile every library integration driver now (once per "
+                                            "installation) instead of at its first use; or, given a model, "
+                                            "that model (--all: its on-demand kernels too)")
+    pre.add_argument("name", nargs="?", metavar="MODEL", help=MODEL_HELP + " (default: the library drivers)")
+    pre.add_argument("--cached", action="store_true", help="MODEL is the model compiled earlier under that name")
+    pre.add_argument("--arg", action="append", metavar="K=V", help="argument of the example factory, e.g. n=5")
+    pre.add_argument("--all", action="store_true", help="build the model's on-demand kernels now as well")
+    pre.set_defaults(func=cmd_precompile)
     return parser
 
 

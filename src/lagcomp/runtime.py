@@ -21,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from lagcomp.cache import Cache, Entry, input_key, load_module
+from lagcomp.companion import Companion, ModelKernels
 from lagcomp.errors import CacheWarning, InitialConditionError, ModelError, ParameterError, SingularMassMatrixError
 from lagcomp.names import by_name
 
@@ -82,8 +83,8 @@ def _compiled(system, cache: Cache, key: str, eom, progress=None) -> "Model":
         entry = None if damaged else cache.lookup(key)  # stored by another process while this one waited?
         if entry is not None:
             return Model(system, load_module(entry), entry, from_cache=True)
-        entry = build(system, cache, key, eom, progress)
-    return Model(system, load_module(entry), entry, from_cache=False)
+        entry, eom = build(system, cache, key, eom, progress)
+    return Model(system, load_module(entry), entry, from_cache=False, eom=eom)
 
 
 def load(name: str, *, cache_dir: str | os.PathLike | None = None) -> "Model":
@@ -168,30 +169,28 @@ def _as_system(system, system_kwargs: dict):
 
 
 #: The stages of a build, as its progress bar names them (see `lagcomp.stages`).
-BUILD_STAGES = ("deriving the equations of motion (sympy)", "lowering and CSE of the kernels",
-                "Taylor-series program", "emitting and storing the module")
+BUILD_STAGES = ("deriving the equations of motion (sympy)", "lowering and CSE of the kernels a run calls",
+                "emitting and storing the module")
 
 
-def build(system, cache: Cache, key: str, eom=None, progress=None) -> Entry:
-    """Derive (unless `eom` is given), lower and emit `system`, and store the module under `key`."""
-    from lagcomp.codegen.emit import emit
-    from lagcomp.codegen.latex import lagrange_equations
+def build(system, cache: Cache, key: str, eom=None, progress=None) -> tuple[Entry, object]:
+    """Derive (unless `eom` is given), lower and emit the eager module of `system` (`lagcomp.codegen.kinds`),
+    store it under `key` with the equations its companion module is lowered from later
+    (`lagcomp.companion`); returns the entry and the equations."""
+    from lagcomp.codegen.emit import emit_eager
     from lagcomp.codegen.lower import lower
-    from lagcomp.codegen.taylor import taylor_decomposition, taylor_program
+    from lagcomp.companion import keep_equations
     from lagcomp.mechanics.lagrange import derive
     from lagcomp.stages import Stages
 
-    derive_, lower_, taylor_, emit_ = BUILD_STAGES
+    derive_, lower_, emit_ = BUILD_STAGES
     with Stages(f"compiling {system.name}", BUILD_STAGES, progress) as stages:
         stages.start(derive_)
         eom = derive(system) if eom is None else eom
         stages.start(lower_)
-        ir = lower(eom)
-        stages.start(taylor_)
-        taylor = taylor_decomposition(ir)
-        program = taylor_program(taylor)
+        ir = lower(eom, "eager")
         stages.start(emit_)
-        source = emit(ir, taylor, lagrange_equations(eom))
+        source = emit_eager(ir)
     metadata = {
         "coordinates": list(system.coordinate_names),
         "parameters": list(system.parameter_names),
@@ -200,12 +199,33 @@ def build(system, cache: Cache, key: str, eom=None, progress=None) -> Entry:
         "holonomic": list(eom.holonomic),
         "separable": eom.separable,
         "holonomic_separable": eom.holonomic_separable,
-        "operations": {**{k.name: k.operation_count for k in ir.kernels},
-                       **({"taylor_coefficients": program["operations"]} if program else {})},
-        "taylor_program": program,
+        "operations": {k.name: k.operation_count for k in ir.kernels},
+        "on_demand": True,
         **({"inputs": list(ir.input_names), "input_orders": list(ir.input_orders)} if ir.input_names else {}),
     }
-    return cache.store(key, source, system.name, metadata)
+    keep_equations(cache, key, eom)
+    return cache.store(key, source, system.name, metadata), eom
+
+
+#: The kernels' namespace of each eager module loaded in this process, by module name: the Models of one cache
+#: entry share it (and the drivers bound to it, and its companion module).
+_NAMESPACES: dict = {}
+
+
+def _namespace(module, entry: Entry, name: str, system, eom):
+    """``Model.kernels``: `module` itself for an entry without a companion module, else the `ModelKernels`
+    of the eager `module` and its companion (`lagcomp.companion`), one per module and process."""
+    if not entry.metadata.get("on_demand"):
+        return module
+    kernels = _NAMESPACES.get(entry.module_name)
+    if kernels is None or kernels.eager_module is not module:
+        kernels = _NAMESPACES[entry.module_name] = ModelKernels(module, Companion(entry, name, system, eom))
+    companion = kernels.companion
+    if companion.system is None and system is not None:   # (a later compile can build it: loaded models cannot)
+        companion.system = system
+    if companion.eom is None and eom is not None:
+        companion.eom = eom
+    return kernels
 
 
 def _baumgarte_gains(baumgarte) -> tuple[float, float]:
@@ -254,12 +274,14 @@ class Model:
         The System's suggested run length.
     events : tuple of EventSpec
         The declared events (name, direction, terminal, resets), in kernel order.
-    kernels : module
-        The generated module (``rhs``, ``mass_matrix``, ``forcing``, ``energy``,
-        ``energy_function``, ``momenta`` and the drivers), numba functions
-        following the conventions of `lagcomp.ir`.
+    kernels : lagcomp.companion.ModelKernels
+        The generated kernels (``rhs``, ``mass_matrix``, ``forcing``, ``energy``,
+        ``energy_function``, ``momenta``, ...), numba functions following the
+        conventions of `lagcomp.ir`: those a plain run calls from the eager
+        module, the others (`lagcomp.codegen.kinds`) from the companion module,
+        built the first time one of them is read (`lagcomp.companion`).
     source_path : pathlib.Path
-        The generated module's file.
+        The eager module's file (`on_demand_entry` has the companion's).
     cache_key : str
         The cache's input key of the compiled description.
     from_cache : bool
@@ -276,7 +298,7 @@ class Model:
         Whether RATTLE (method "rattle") applies: separable apart from constraints that are
         all holonomic and scleronomic, Φ(q) = 0 (`lagcomp.mechanics.lagrange.EOM`).
     operations : dict
-        Arithmetic operations per kernel after CSE.
+        Arithmetic operations per kernel after CSE (reading it builds the on-demand kernels).
     inputs : tuple of str
         The inputs supplied at run time (`lagcomp.Input` without a law), by name: ``simulate`` and
         ``sweep`` take a signal for each in ``inputs={name: ...}`` (`lagcomp.integrate.inputs`).
@@ -284,7 +306,7 @@ class Model:
         The highest derivative of each input the kernels read (2 for a support motion in T).
     """
 
-    def __init__(self, system, kernels, entry: Entry, from_cache: bool, recorded: dict | None = None):
+    def __init__(self, system, kernels, entry: Entry, from_cache: bool, recorded: dict | None = None, eom=None):
         self.system = system
         recorded = run_defaults(system) if system is not None else recorded
         self.name = recorded["name"]
@@ -294,7 +316,7 @@ class Model:
         self.qd0 = None if recorded["qd0"] is None else tuple(recorded["qd0"])
         self.t_end = recorded["t_end"]
         self.events = tuple(EventSpec(*spec) for spec in recorded["events"])
-        self.kernels = kernels
+        self.kernels = _namespace(kernels, entry, recorded["name"], system, eom)
         self.source_path = entry.path
         self.cache_key = entry.key
         self.from_cache = from_cache
@@ -305,12 +327,43 @@ class Model:
         self.holonomic = tuple(entry.metadata["holonomic"])
         self.separable = bool(entry.metadata["separable"])
         self.holonomic_separable = bool(entry.metadata["holonomic_separable"])
-        self.operations = dict(entry.metadata["operations"])
-        self._taylor_program = entry.metadata.get("taylor_program")  # for batched Taylor sweeps (taylor_lanes)
+        self._operations = dict(entry.metadata["operations"])
+        self._taylor_program_kept = entry.metadata.get("taylor_program")  # (an entry without a companion)
         self.inputs = tuple(entry.metadata.get("inputs", ()))
         self.input_orders = tuple(entry.metadata.get("input_orders", ()))
         self._default_parameters: tuple | None = None  # (defaults' snapshot, p): `parameter_vector`
         self._default_state: tuple | None = None  # (q0, qd0, y): `initial_state`
+
+    @property
+    def operations(self) -> dict:
+        """Arithmetic operations per kernel after CSE, the on-demand kernels' (`lagcomp.codegen.kinds`) included:
+        reading it builds them if they are not yet."""
+        companion = self.on_demand_entry
+        return {**self._operations, **(companion.metadata["operations"] if companion is not None else {})}
+
+    @property
+    def on_demand_entry(self) -> Entry | None:
+        """The cache entry of the companion module (the on-demand kernels, `lagcomp.companion`), built first if
+        needed; None for a model whose one module holds every kernel (a Kane model)."""
+        return self.kernels.companion.entry() if isinstance(self.kernels, ModelKernels) else None
+
+    def whole_source(self) -> str:
+        """The source of one module with every kernel of the model: the eager module's, then the companion
+        module's (built first if needed; `lagcomp.codegen.kinds`), whose copy of ``rhs`` is the eager one's line
+        for line.  What the modules of batched Taylor sweeps, Taylor sensitivities and Dask workers start from,
+        so that each stands on its own."""
+        source = self.source_path.read_text(encoding="utf-8")
+        companion = self.on_demand_entry
+        if companion is None:
+            return source
+        return source.rstrip("\n") + "\n\n\n" + companion.path.read_text(encoding="utf-8")
+
+    @property
+    def _taylor_program(self) -> dict | None:
+        """The Taylor program (`lagcomp.codegen.taylor.taylor_program`), from the companion module's entry:
+        for batched Taylor sweeps and Taylor sensitivities."""
+        companion = self.on_demand_entry
+        return self._taylor_program_kept if companion is None else companion.metadata["taylor_program"]
 
     @property
     def event_names(self) -> tuple[str, ...]:

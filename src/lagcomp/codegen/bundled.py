@@ -1,5 +1,6 @@
 """Emit the modules of the bundled examples into a directory (the repository's `generated/`).
 
+Each example has two files there, its eager module and its companion module (`lagcomp.codegen.kinds`).
 `generated/` lets a reviewer see, in a diff, what a compiler change does to
 the code lagcomp writes; a test fails when a file there is stale.
 Regenerate with ``lagcomp generate generated/``.
@@ -11,9 +12,11 @@ from pathlib import Path
 
 
 def bundled_sources() -> dict[str, str]:
-    """File name -> emitted source, for every bundled example (factory defaults)."""
+    """File name -> emitted source, for every bundled example (factory defaults): its eager module
+    ``<name>.py`` and its companion module ``<name>_on_demand.py`` (`lagcomp.codegen.kinds`), as the cache
+    stores them."""
     from lagcomp import examples
-    from lagcomp.codegen.emit import emit
+    from lagcomp.codegen.emit import emit_companion, emit_eager
     from lagcomp.codegen.latex import lagrange_equations
     from lagcomp.codegen.lower import lower
     from lagcomp.mechanics.lagrange import derive
@@ -22,7 +25,9 @@ def bundled_sources() -> dict[str, str]:
     for factory in examples.EXAMPLES.values():
         system = factory()
         eom = derive(system)
-        sources[f"{system.name}.py"] = emit(lower(eom), equations=lagrange_equations(eom))
+        sources[f"{system.name}.py"] = emit_eager(lower(eom, "eager"))
+        sources[f"{system.name}_on_demand.py"] = emit_companion(lower(eom, "on_demand"),
+                                                                equations=lagrange_equations(eom))
     return sources
 
 

@@ -863,66 +863,32 @@ def _directional_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
     return (directional, *tangent_kernels(directional, len(eom.parameters)), *tangents_kernels(eom, mapping, loads))
 
 
-def lower(eom: EOM) -> ModuleIR:
+#: What `lower` builds: the kernels of every kind, those of the eager module, or those of the companion module
+#: (`lagcomp.codegen.kinds`; with the motion kernels the companion copies and its Taylor program starts from).
+PARTS = ("all", "eager", "on_demand")
+
+
+def lower(eom: EOM, part: str = "all") -> ModuleIR:
     """Build the IR of the module for `eom`: rhs, its Jacobians ∂f/∂y and ∂f/∂p (for n ≤
     `lagcomp.codegen.directional.LARGEST_SYSTEM` both at once too) and its directional derivative (that n
     only), mass_matrix, forcing, energies,
     momenta, and for constrained systems reactions and their Jacobian (`lagcomp.codegen.constrained_jacobian`),
     constraint residuals and matrix, and the DAE's residual and Jacobian; last the bodies' `geometry`
-    (`lagcomp.codegen.geometry`)."""
-    n, system = eom.n, eom.system
+    (`lagcomp.codegen.geometry`).
+
+    `part` (`PARTS`) chooses which kinds are lowered (`lagcomp.codegen.kinds`): "eager" the kernels of the
+    eager module, "on_demand" those of the companion module and the motion kernels (``rhs`` and what comes
+    with it), "all" every kernel.  A kernel is the same whichever part it is lowered in.
+    """
+    from lagcomp.codegen.kinds import ON_DEMAND
+
+    if part not in PARTS:
+        raise ValueError(f"part must be one of {PARTS}, got {part!r}")
     mapping, loads = _bindings(eom)
-    state_args = ("t", "y", "p")
-    from lagcomp.codegen.directional import LARGEST_SYSTEM  # (it imports this module)
-    if eom.k:
-        from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels
-        first = (_constraint_kernels(eom, mapping, loads) + constrained_jacobian_kernels(eom, mapping, loads)
-                 + _directional_kernels(eom, mapping, loads) + _dae_kernels(eom, mapping, loads))
-    elif mode_slots(eom):   # contacts that may close: rhs is rhs_free corrected for them (no lanes: they reset;
-        # no directional kernels: sensitivities refuse contacts)
-        free = _rhs_kernel(eom, mapping, loads)
-        free = replace(free, name="rhs_free", doc="The motion without contacts (all open): " + free.doc)
-        first = (*resting_kernels(eom, t, _first_mode(eom), lambda name, doc, args, stores, solve: _kernel(
-            name, doc, args, stores, mapping, loads, solve=solve)), free)
-        first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
-    else:
-        rhs = _rhs_kernel(eom, mapping, loads)
-        # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
-        first = (rhs, _rhs_lanes_kernel(rhs, eom)) if rhs.solve.unrolled and not eom.system.inputs else (rhs,)
-        first += (*_rhs_jacobian_kernels(eom, mapping, loads), _rhs_parameter_jacobian_kernel(eom, mapping, loads))
-        if n <= LARGEST_SYSTEM:
-            first += (_rhs_with_full_jacobian_kernel(eom, mapping, loads), *_directional_kernels(eom, mapping, loads))
-    kernels = first + (
-        _kernel(
-            "mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",
-            (*state_args, "out"),
-            [(f"out[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(n)], mapping, loads,
-        ),
-        _kernel(
-            "forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`.",
-            (*state_args, "out"), [(f"out[{i}]", eom.F[i]) for i in range(n)], mapping, loads,
-        ),
-        _kernel(
-            "energy", "Total mechanical energy T + V.", state_args, [("return", eom.energy)], mapping, loads,
-        ),
-        _energy_function_kernel(eom, mapping, loads),
-        _momenta_kernel(eom, mapping, loads),
-        _kernel(
-            "momentum_rate",
-            "ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces.",
-            (*state_args, "out"), [(f"out[{i}]", eom.momentum_rate[i]) for i in range(n)], mapping, loads,
-        ),
-        _event_kernel(eom, mapping, loads),
-        _event_gradients_kernel(eom, mapping, loads),
-        event_reset_kernel(system.event_names, eom.resets, 2 * n, mapping, loads, eom.restitutions, impact_branches(
-            eom, eom.restitutions, t, lambda name, doc, args, stores, solve: _kernel(name, doc, args, stores, mapping,
-                                                                                 loads, solve=solve),
-            _first_mode(eom) if mode_slots(eom) else None),
-            friction_branches(eom, _first_mode(eom), lambda name, doc, args, stores, solve: _kernel(
-                name, doc, args, stores, mapping, loads, solve=solve))),
-        _rest_partials_kernel(eom, mapping, loads),
-    ) + (() if eom.k else (_velocities_kernel(eom, mapping, loads), _canonical_partials_kernel(eom, mapping, loads)))
-    kernels += (geometry_kernel(eom, lambda name, doc, args, stores: _kernel(name, doc, args, stores, mapping, loads)),)
+    on_demand = {kind.name for kind in ON_DEMAND}
+    wanted = {"all": lambda kind: True, "eager": lambda kind: kind not in on_demand,
+              "on_demand": lambda kind: kind in on_demand or kind == "motion"}[part]
+    kernels = tuple(kernel for kind, build in _builders(eom, mapping, loads) if wanted(kind) for kernel in build())
     system = eom.system
     return ModuleIR(
         system_name=system.name, description=system.description,
@@ -930,6 +896,84 @@ def lower(eom: EOM) -> ModuleIR:
         kernels=kernels, constraint_names=eom.constraint_names, holonomic=eom.holonomic,
         event_names=system.event_names, input_names=system.input_names, input_orders=_input_orders(eom, kernels),
     )
+
+
+def _builders(eom: EOM, mapping, loads) -> list:
+    """(kind, build) for every kernel of `eom`, in module order: build() returns the kind's kernels (lowered when
+    called: `lower` calls only the builders of the kinds it wants).  Kinds are those of `lagcomp.codegen.kinds`,
+    "motion" (rhs and what the same CSE gives) and "eager" (the rest of the eager module)."""
+    from lagcomp.codegen.directional import LARGEST_SYSTEM  # (it imports this module)
+
+    n = eom.n
+    rhs = _once(lambda: _rhs_kernel(eom, mapping, loads))
+
+    def kernel(name, doc, args, stores, solve=None):
+        return _kernel(name, doc, args, stores, mapping, loads, solve=solve)
+
+    if eom.k:
+        from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels
+        first = [("motion", lambda: _constraint_kernels(eom, mapping, loads)),
+                 ("jacobians", lambda: constrained_jacobian_kernels(eom, mapping, loads)),
+                 ("directional", lambda: _directional_kernels(eom, mapping, loads)),
+                 ("dae", lambda: _dae_kernels(eom, mapping, loads))]
+    elif mode_slots(eom):   # contacts that may close: rhs is rhs_free corrected for them (no lanes: they reset;
+        # no directional kernels: sensitivities refuse contacts)
+        def motion():
+            free = _rhs_kernel(eom, mapping, loads)
+            free = replace(free, name="rhs_free", doc="The motion without contacts (all open): " + free.doc)
+            return (*resting_kernels(eom, t, _first_mode(eom), kernel), free)
+        first = [("motion", motion), ("jacobians", lambda: (*_rhs_jacobian_kernels(eom, mapping, loads),
+                                                             _rhs_parameter_jacobian_kernel(eom, mapping, loads)))]
+    else:
+        # no lanes with inputs: each lane would read its own tables, which a SIMD loop cannot
+        lanes = n <= UNROLL_MAX and not eom.system.inputs   # (rhs's LDLᵀ is unrolled: `_spd_solve`)
+        first = [("motion", lambda: (rhs(),)), ("lanes", lambda: (_rhs_lanes_kernel(rhs(), eom),) if lanes else ()),
+                 ("jacobians", lambda: (*_rhs_jacobian_kernels(eom, mapping, loads),
+                                        _rhs_parameter_jacobian_kernel(eom, mapping, loads))
+                  + ((_rhs_with_full_jacobian_kernel(eom, mapping, loads),) if n <= LARGEST_SYSTEM else ())),
+                 ("directional", lambda: _directional_kernels(eom, mapping, loads) if n <= LARGEST_SYSTEM else ())]
+    return first + [
+        ("eager", lambda: (kernel("mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",
+                                  ("t", "y", "p", "out"),
+                                  [(f"out[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(n)]),
+                           kernel("forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`.",
+                                  ("t", "y", "p", "out"), [(f"out[{i}]", eom.F[i]) for i in range(n)]),
+                           kernel("energy", "Total mechanical energy T + V.", ("t", "y", "p"),
+                                  [("return", eom.energy)]),
+                           _energy_function_kernel(eom, mapping, loads), _momenta_kernel(eom, mapping, loads))),
+        ("canonical", lambda: (kernel(
+            "momentum_rate",
+            "ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces.",
+            ("t", "y", "p", "out"), [(f"out[{i}]", eom.momentum_rate[i]) for i in range(n)]),)),
+        ("eager", lambda: (_event_kernel(eom, mapping, loads), _event_gradients_kernel(eom, mapping, loads),
+                           _event_reset_kernel(eom, mapping, loads))),
+        ("analysis", lambda: (_rest_partials_kernel(eom, mapping, loads),)),
+        ("canonical", lambda: () if eom.k else (_velocities_kernel(eom, mapping, loads),
+                                                _canonical_partials_kernel(eom, mapping, loads))),
+        ("geometry", lambda: (geometry_kernel(eom, lambda name, doc, args, stores: kernel(name, doc, args, stores)),)),
+    ]
+
+
+def _once(build):
+    """`build`, called at most once: later calls return its first result (a kernel two kinds start from)."""
+    done = []
+
+    def call():
+        if not done:
+            done.append(build())
+        return done[0]
+    return call
+
+
+def _event_reset_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """``event_reset`` of `eom`: its events' resets, the contacts' impacts and the friction elements' switches."""
+    def kernel(name, doc, args, stores, solve):
+        return _kernel(name, doc, args, stores, mapping, loads, solve=solve)
+
+    first = _first_mode(eom) if mode_slots(eom) else None
+    return event_reset_kernel(eom.system.event_names, eom.resets, 2 * eom.n, mapping, loads, eom.restitutions,
+                              impact_branches(eom, eom.restitutions, t, kernel, first),
+                              friction_branches(eom, _first_mode(eom), kernel))
 
 
 def _input_orders(eom: EOM, kernels) -> tuple[int, ...]:

@@ -368,7 +368,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         kernels = model.kernels if spec is None else _worker_kernels(spec)
         done = _run_locally(kernels, task, Y0, P, out, workers, progress)
     else:
-        done = _run_on_dask(client, spec or _worker_spec(model), task, Y0, P, out, progress)
+        done = _run_on_dask(client, spec or _worker_spec(model, task.kernels), task, Y0, P, out, progress)
     statuses = out["status"]
     counts = out["counts"]
     warn_if_sweep_stiff(m.name, counts[:, 3], stacklevel=3, model=model)     # (column 3: embedded pairs only)
@@ -556,9 +556,17 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
 _WORKER_MODULES: dict = {}
 
 
-def _worker_spec(model) -> tuple[str, str, str]:
-    """What a worker needs to load the model's kernels: the emitted source, the system name, a cache root."""
-    return model.source_path.read_text(encoding="utf-8"), model.name, str(model.source_path.parent.parent)
+def _worker_spec(model, names: tuple[str, ...]) -> tuple[str, str, str]:
+    """What a worker needs to load the model's kernels `names`: the emitted source, the system name, a cache root.
+
+    The eager module's source, or the whole model's (`Model.whole_source`) when one of `names` is an on-demand
+    kernel (`lagcomp.codegen.kinds`).
+    """
+    from lagcomp.codegen.kinds import on_demand
+
+    whole = any(map(on_demand, names))
+    source = model.whole_source() if whole else model.source_path.read_text(encoding="utf-8")
+    return source, model.name, str(model.source_path.parent.parent)
 
 
 def _taylor_lanes_spec(model, rtol: float, atol: float) -> tuple[str, str, str]:
@@ -579,7 +587,7 @@ def _taylor_lanes_spec(model, rtol: float, atol: float) -> tuple[str, str, str]:
             f"A batched Taylor sweep of {model.name!r} at order {order} (rtol={rtol:g}, atol={atol:g}) would unroll "
             f"about {terms:,} terms, above lagcomp.codegen.taylor_lanes.TERMS_MAX = {taylor_lanes.TERMS_MAX:,} "
             "(numba's compile time grows with them): loosen the tolerances, or drop `batched`.")
-    source = taylor_lanes.taylor_lanes_module(model.source_path.read_text(encoding="utf-8"), program, order)
+    source = taylor_lanes.taylor_lanes_module(model.whole_source(), program, order)
     return source, model.name, str(model.source_path.parent.parent)
 
 

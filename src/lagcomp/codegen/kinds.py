@@ -1,0 +1,69 @@
+"""The kinds of kernels a model has: which `lagcomp.compile` builds, which are built the first time a feature asks.
+
+A model's cache entry holds two generated modules (`lagcomp.cache`, `lagcomp.runtime`):
+
+* the **eager module**, written by `lagcomp.compile`: what a plain run with the default method
+  (``simulate``, ``sweep``, ``lagcomp run``: dop853, the fixed-step explicit methods, rattle) calls:
+  ``rhs`` (with ``reactions``, ``rhs_and_reactions``, the constraint residuals and matrix of a
+  constrained model, the contact kernels of a model with contacts), ``mass_matrix``, ``forcing``,
+  the energies and momenta with ``observables``, the events (``event_values``, ``event_gradients``,
+  ``event_reset``), the constraint hooks (``project``, ``constraint_residual``, ``reactions_along``);
+* the **companion module** ("on demand"), lowered, emitted, stored and numba-compiled the first time a
+  feature asks for one of the names of `ON_DEMAND` (kinds below), all of them at once, from the
+  equations the entry keeps.  It stands on its own: it holds a copy of the eager kernels its kernels
+  call (`CALLED`), so that numba compiles it from its own file.
+
+Every name that is not in an on-demand kind is eager: a new kernel kind is eager unless it is added here.
+To add an on-demand kind: build its kernels in `lagcomp.codegen.lower` under the kind's name (its
+`_builders`), list the names its module defines (kernels and module constants) in a `KernelKind` below,
+and say which feature asks for it (the message when it cannot be built).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class KernelKind:
+    """Kernels built together on demand: the names they define in the companion module, and what asks for them."""
+
+    name: str
+    names: tuple[str, ...]
+    feature: str
+
+
+#: The on-demand kinds, in the order their kernels are lowered (`lagcomp.codegen.lower`).
+ON_DEMAND = (
+    KernelKind("lanes", ("rhs_lanes",), "batched sweeps (sweep(..., batched=True))"),
+    KernelKind("jacobians", ("rhs_with_jacobian", "rhs_jacobian", "rhs_parameter_jacobian", "rhs_with_full_jacobian",
+                             "reaction_jacobian", "RHS_JACOBIAN_REFUSED", "RHS_PARAMETER_JACOBIAN_REFUSED"),
+               "the exact Jacobians (method='radau', sensitivities, fits, Model.jacobian)"),
+    KernelKind("directional", ("rhs_directional", "rhs_tangent", "rhs_tangent_parameters", "rhs_tangents",
+                               "rhs_tangents_parameters"), "forward sensitivities (simulate(..., sensitivities=...))"),
+    KernelKind("dae", ("dae_residual", "dae_jacobian"), "method='radau' on a constrained model"),
+    KernelKind("canonical", ("momentum_rate", "velocities", "canonical_partials"),
+               "the Hamiltonian form (gauss1/2/3, Lyapunov exponents, Model.hamiltonian)"),
+    KernelKind("analysis", ("rest_partials",), "equilibria and small oscillations (lagcomp.analysis)"),
+    KernelKind("geometry", ("geometry", "GEOMETRY", "GEOMETRY_SIZE"), "the bodies' positions (animation, plots)"),
+    KernelKind("taylor", ("taylor_coefficients", "TAYLOR_WORK", "TAYLOR_PERIODIC", "TAYLOR_REFUSED",
+                          "TAYLOR_MODE_PROGRAMS"), "method='taylor'"),
+    KernelKind("equations", ("EQUATIONS",), "Model.equations()"),
+)
+
+#: Every name a companion module may define, and the kind that defines it.
+KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}
+
+#: The eager kernels that on-demand kernels call (the Jacobians start from ``rhs``, a constrained model's from
+#: ``rhs_and_reactions``): the companion module holds a copy of each, so that it stands on its own.
+CALLED = ("rhs", "rhs_and_reactions")
+
+
+def on_demand(name: str) -> bool:
+    """Whether the kernel or module constant `name` lives in the companion module (else in the eager one)."""
+    return name in KIND_OF
+
+
+def feature(name: str) -> str:
+    """What asks for the on-demand `name` (for messages)."""
+    return KIND_OF[name].feature

@@ -1,0 +1,194 @@
+"""Kernels on demand (`lagcomp.codegen.kinds`, `lagcomp.companion`): a plain run compiles only the eager
+kernels; the first call of a feature that needs more builds the companion module once, and a second process
+reuses it (no lowering, no sympy with `lagcomp.load`, no numba compilation of any kernel)."""
+
+from __future__ import annotations
+
+import json
+import os
+import pickle
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+import lagcomp as lc
+from lagcomp import examples
+from lagcomp.codegen.kinds import CALLED, on_demand
+from lagcomp.errors import ModelError
+
+#: One fresh process: compile (or, with "load", `lagcomp.load`) the example, then run `feature`; report which
+#: kernels of the generated modules numba compiled (numba's "numba:compile" events fire on compilation only,
+#: never on a load from its disk cache), whether sympy and the lowering were imported, and the cache's files.
+SCRIPT = textwrap.dedent("""
+    import json, sys
+    from pathlib import Path
+    from numba.core import event
+
+    compiled = []
+
+    class Compiles(event.Listener):
+        def on_start(self, ev):
+            function = ev.data["dispatcher"].py_func
+            if function.__module__.startswith("lagcomp_generated_"):
+                compiled.append([function.__module__, function.__name__])
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", Compiles())
+    import lagcomp as lc
+
+    name, feature, how, root = sys.argv[1:5]
+    if how == "load":
+        model = lc.load(name, cache_dir=root)
+    else:
+        from lagcomp import examples
+        model = lc.compile(examples.get(name), cache_dir=root)
+    if feature == "plain":
+        sol = model.simulate((0, 0.5), progress=False)     # the default method, dop853
+        sol.energy, sol.energy_function, sol.summary
+    elif feature == "radau":
+        model.simulate((0, 0.5), method="radau", progress=False)
+    elif feature == "sensitivities":
+        model.simulate((0, 0.5), sensitivities="params", progress=False)
+    elif feature == "taylor":
+        model.simulate((0, 0.5), method="taylor", progress=False)
+    elif feature == "geometry":
+        sol = model.simulate((0, 0.5), progress=False)
+        sol.geometry.frames(sol.t[:3], sol.q[:3])
+    modules = sorted(p.name for p in Path(root, "modules").glob("*.py"))
+    print(json.dumps({"compiled": compiled, "modules": modules, "sympy": "sympy" in sys.modules,
+                      "lowering": "lagcomp.codegen.lower" in sys.modules}))
+""")
+
+
+def _run(name: str, feature: str, how: str, root) -> dict:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    done = subprocess.run([sys.executable, "-c", SCRIPT, name, feature, how, str(root)], capture_output=True,
+                          text=True, env=env, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def _companions(modules: list[str]) -> list[str]:
+    return [m for m in modules if "_on_demand_" in m]
+
+
+def test_a_plain_run_compiles_only_eager_kernels(tmp_path):
+    """compile + the default method + energies: the eager module alone is written, and every kernel numba
+    compiles is one of its kernels."""
+    result = _run("double_pendulum", "plain", "compile", tmp_path)
+    assert len(result["modules"]) == 1 and not _companions(result["modules"])
+    names = {function for _, function in result["compiled"]}
+    assert "rhs" in names and "observables" in names
+    assert not [name for name in names if on_demand(name)], names
+
+
+@pytest.mark.parametrize(("name", "feature", "kernels"), [
+    ("simple_pendulum", "radau", {"rhs_jacobian", "rhs_with_jacobian"}),
+    ("simple_pendulum", "sensitivities", {"rhs_tangents_parameters"}),
+    ("simple_pendulum", "taylor", {"taylor_coefficients"}),
+    ("wheel_jack", "geometry", {"geometry"}),
+])
+def test_a_feature_builds_its_kernels_once_and_a_second_process_reuses_them(tmp_path, name, feature, kernels):
+    """The first process builds the companion module (once: one file) and numba compiles the feature's
+    kernels from it; a second process, from `lagcomp.load`, runs the feature with no lowering, no sympy and no
+    numba compilation of any kernel."""
+    first = _run(name, feature, "compile", tmp_path)
+    (companion,) = _companions(first["modules"])
+    assert len(first["modules"]) == 2
+    from_companion = {function for module, function in first["compiled"] if module.endswith(companion[:-3])}
+    assert kernels <= from_companion, first["compiled"]
+    assert all(on_demand(function) or function in CALLED for function in from_companion)
+    second = _run(name, feature, "load", tmp_path)
+    assert second["modules"] == first["modules"]
+    assert second["compiled"] == [] and not second["sympy"] and not second["lowering"]
+
+
+def test_the_companion_equals_the_bundled_one_after_a_round_trip_of_the_equations(tmp_path):
+    """A later process lowers the companion from the equations the entry keeps (pickled): the same source as
+    from the derivation (the bundled `generated/` file)."""
+    from pathlib import Path
+
+    model = lc.compile(examples.get("double_pendulum"), cache_dir=tmp_path)
+    model.kernels.companion.eom = None       # as in a later process: the kept equations, not this one's
+    source = model.on_demand_entry.path.read_text(encoding="utf-8")
+    bundled = Path(__file__).resolve().parents[1] / "generated" / "double_pendulum_on_demand.py"
+    assert source == bundled.read_text(encoding="utf-8")
+
+
+def test_a_loaded_model_without_kept_equations_names_the_feature(tmp_path):
+    """`lagcomp.load` of an entry that keeps no equations: the on-demand kernel's read raises a ModelError
+    naming the kernel and the feature, and how to build it ahead."""
+    model = lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path)
+    for kept in (tmp_path / "equations").glob("*.pickle"):
+        kept.unlink()
+    from lagcomp import runtime
+
+    runtime._NAMESPACES.clear()     # (as in a new process)
+    loaded = lc.load("simple_pendulum", cache_dir=tmp_path)
+    assert loaded.simulate((0, 0.1), progress=False).success     # eager kernels: no equations needed
+    with pytest.raises(ModelError, match=r"`rhs_jacobian` \(the exact Jacobians.*precompile simple_pendulum --all"):
+        loaded.jacobian(0.0, [0.1, 0.0])
+    assert model.system is not None
+    runtime._NAMESPACES.clear()
+    again = lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path)   # a System at hand: derived again
+    assert again.jacobian(0.0, [0.1, 0.0]).shape == (2, 2)
+
+
+def test_equations_are_kept_beside_the_entry(tmp_path):
+    """The equations the companion is lowered from are stored with the entry, and read back equal."""
+    model = lc.compile(examples.get("double_pendulum"), cache_dir=tmp_path)
+    (kept,) = (tmp_path / "equations").glob("*.pickle")
+    assert kept.stem == model.cache_key
+    eom = pickle.loads(kept.read_bytes())
+    original = model.kernels.companion.eom
+    assert eom.M == original.M and eom.F == original.F and eom.energy == original.energy
+
+
+#: A process that compiles the example, waits for the file `go`, then asks for an on-demand kernel; reports
+#: whether it built the companion module itself.
+RACE = textwrap.dedent("""
+    import json, sys, time
+    from pathlib import Path
+    import lagcomp as lc
+    import lagcomp.companion as companion
+    from lagcomp import examples
+
+    root = sys.argv[1]
+    builds = []
+    original = companion.build_companion
+    companion.build_companion = lambda *args: builds.append(1) or original(*args)
+    model = lc.compile(examples.get("simple_pendulum"), cache_dir=root)
+    Path(root, f"ready-{sys.argv[2]}").touch()
+    while not Path(root, "go").exists():
+        time.sleep(0.01)
+    jacobian = model.jacobian(0.0, [0.3, 0.0])
+    print(json.dumps({"builds": len(builds), "jacobian": jacobian.tolist(), "path": str(model.on_demand_entry.path)}))
+""")
+
+
+def test_processes_asking_at_once_build_the_companion_once(tmp_path):
+    """Two processes that read an on-demand kernel at the same moment: one builds the companion (the lock of
+    its key), the other waits and loads it; one module file, the same Jacobian."""
+    lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path)     # the eager entry, so both start alike
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    processes = [subprocess.Popen([sys.executable, "-c", RACE, str(tmp_path), str(i)], stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE, text=True, env=env) for i in range(2)]
+    import time
+
+    deadline = time.monotonic() + 300
+    while not all((tmp_path / f"ready-{i}").exists() for i in range(2)) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    (tmp_path / "go").touch()
+    results = []
+    for process in processes:
+        out, err = process.communicate(timeout=600)
+        assert process.returncode == 0, err[-3000:]
+        results.append(json.loads(out.strip().splitlines()[-1]))
+    assert sum(r["builds"] for r in results) == 1
+    assert results[0]["jacobian"] == results[1]["jacobian"] and results[0]["path"] == results[1]["path"]
+    assert len(list((tmp_path / "modules").glob("*_on_demand_*.py"))) == 1
+    assert not list(tmp_path.rglob("*.tmp"))
