@@ -58,13 +58,17 @@ from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix, lu_solve
 #: singular mass matrix (the drivers stop with RHS_FAILED).
 DEPENDENT_CLOSED_CONTACTS = 1_000_000
 
-#: An impact under pressing closes its contact when the bounces it would start last less than this times
-#: max(1, |t|) in all: the time of rest is off by less than that (5.7e-10 for a ball at rest from t∞ = 5.7 s).
+#: An impact under pressing closes its contact when the bounces it would start last less than this times |t| in
+#: all: the time of rest is off by less than that (5.7e-10 for a ball at rest from t∞ = 5.7 s).
 ZENO_TIME = 1e-10
-#: ... or when the next bounce would last less than this times max(1, |t|): ten times the drivers' resolution of a
-#: bounce (module docstring), for e near 1, whose bounces shrink slowly (the time of rest then off by up to
-#: BOUNCE_TIME max(1, |t|)/(1 − e)).
+#: ... or when the next bounce would last less than this times |t|: ten times the drivers' resolution of a bounce in
+#: time (module docstring), for e near 1, whose bounces shrink slowly (the time of rest then off by up to
+#: BOUNCE_TIME |t|/(1 − e)).
 BOUNCE_TIME = 1e-11
+#: ... or when the next bounce would rise less than this many roundings of the gap, ε Σ_j |∂g/∂q_j| |q_j| (a floor at
+#: height H: ε H), above it: the gap cannot see it (module docstring).
+BOUNCE_HEIGHT = 64.0
+EPS = 2.220446049250313e-16
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
@@ -248,6 +252,25 @@ def friction_mode_after(mode, force, limit):
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
+def bounces_unresolved(v_after, pressing, restitution, t, gradient, q):
+    """Whether an impact that leaves a contact at normal velocity ``v_after`` under the free normal acceleration
+    ``pressing`` (< 0: pressed shut) should close it instead: the bounces it starts, 2 v⁺/(|a| (1 − e)) in all,
+    end within `ZENO_TIME` |t|, or the next, 2 v⁺/|a|, lasts less than `BOUNCE_TIME` |t| (time's rounding) or rises
+    v⁺²/(2|a|) < `BOUNCE_HEIGHT` ε Σ_j |∂g/∂q_j| |q_j| (the gap's rounding at q; ``gradient`` (n,): ∂g/∂q).
+
+    Each side is in one unit (time, or the gap's): the rule is the same in any units."""
+    if not pressing < 0.0:
+        return False
+    a = -pressing
+    if 2.0 * v_after < ZENO_TIME * abs(t) * a * (1.0 - restitution) or 2.0 * v_after < BOUNCE_TIME * abs(t) * a:
+        return True
+    rounding = 0.0
+    for j in range(q.shape[0]):
+        rounding += abs(gradient[j]) * abs(q[j])
+    return v_after * v_after < 2.0 * a * BOUNCE_HEIGHT * EPS * rounding
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
 def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes, closing,
                   qd):
     """The reset of contact ``firing``'s event: the lift-off of a closed contact, or the impact of an open one.
@@ -271,7 +294,6 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
     status = contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd)
     if status != IMPACT_SOLVED or closing == 0.0:
         return status
-    scale_t = max(1.0, abs(t))
     plastic = restitution.copy()
     closed = modes.copy()
     any_closing = False
@@ -285,8 +307,7 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
         for j in range(n):
             pressing += gradients[d, j] * qdd_free[j]
             v_after += gradients[d, j] * (qd[j] - before[j])
-        if pressing < 0.0 and (2.0 * v_after < ZENO_TIME * scale_t * -pressing * (1.0 - restitution[d])
-                               or 2.0 * v_after < BOUNCE_TIME * scale_t * -pressing):
+        if bounces_unresolved(v_after, pressing, restitution[d], t, gradients[d], q):
             plastic[d] = 0.0
             closed[d] = 1.0
             any_closing = True
@@ -449,10 +470,7 @@ def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution,
     for j in range(n):
         pressing_acceleration += gradients[firing, j] * qdd_free[j]
         v_after += gradients[firing, j] * (qd[j] - before[j])
-    scale_t = max(1.0, abs(t))
-    if pressing_acceleration < 0.0 and (
-            2.0 * v_after < ZENO_TIME * scale_t * -pressing_acceleration * (1.0 - e)
-            or 2.0 * v_after < BOUNCE_TIME * scale_t * -pressing_acceleration):
+    if bounces_unresolved(v_after, pressing_acceleration, e, t, gradients[firing], q):
         for j in range(n):
             qd[j] = before[j]
         status = frictional_impact(mass, gradients[firing], normal_velocities[firing], 0.0, slip_gradients[element],
