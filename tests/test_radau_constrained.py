@@ -213,13 +213,12 @@ def test_random_constrained_systems_agree_with_dop853_and_projection(cache_dir, 
 
 
 def test_below_the_tolerance_floor_the_newton_iteration_fails_and_says_so(four_bar, monkeypatch):
-    """Why `DAE_RTOL_MIN` refuses rtol < 1e-10: let rtol = 1e-12 through and the run ends (at t = 2.6 s) with
-    NEWTON_FAILED, not a singular iteration matrix (the factorization is equilibrated: its pivots do not shrink
-    with h as the raw matrix's ~h² did)."""
+    """Why `DAE_RTOL_MIN` refuses rtol < 1e-10: let rtol = 1e-12 through and the run ends (at t = 6.3 s, crank at
+    ~100 rad) with NEWTON_FAILED, not a singular iteration matrix, whose pivots ~h² the step halvings reach."""
     from lagcomp.integrate import options
     from lagcomp.integrate.status import Status
 
     monkeypatch.setattr(options, "DAE_RTOL_MIN", 1e-13)
     sol = four_bar.simulate((0.0, 10.0), method="radau", rtol=1e-12, atol=1e-12, progress=False)
-    assert sol.status == Status.NEWTON_FAILED and 1.0 < sol.t[-1] < 10.0, (sol.status, sol.t[-1])
+    assert sol.status == Status.NEWTON_FAILED and 5.0 < sol.t[-1] < 10.0, (sol.status, sol.t[-1])
     assert "rounding noise" in sol.message

@@ -71,23 +71,25 @@ started consistently (μ = 0, w and λ from the augmented solve).  M enters the 
 Newton right-hand sides T⁻¹F − (shift/h) M W and the error estimate as written above (HNW II, sec. VI.6;
 RADAU5 with IMAS = 1).  The initial step is estimated from the differential components alone.
 Units.  The algebraic components are in the units of neither the state nor each other (w an acceleration,
-λ a force, μ a position over a time), and ``atol`` is in the state's.  RADAU5 divides their scales
-(atol + |y| rtol) by h (IWORK(6)), which mixes their units with atol's and time's (the bundled four-bar
-linkage scaled to millimetres, or by 1e3, then ended at t = 0 with NEWTON_FAILED).  Here an algebraic z_j is
-measured by what it does to the differential components (`_algebraic_scales`): an error δz_j moves their
-derivatives by J_ij δz_j, their values over the step by h J_ij δz_j, so its scale is min_i scale_i/|J_ij| over
-the differential rows i that depend on it, divided by h (for w, whose row is v' = w: the velocity's scale over
-h, where RADAU5 takes the acceleration's own over h; λ, which enters no differential row, is left out: its error
-is w's).  The same scales in the Newton and the error norms, and the iteration matrices factored equilibrated
-(`_equilibrate`, powers of two), so that the pivot test does not depend on the units of their blocks either:
-a run takes the same steps in any units.  Measured against RADAU5's scales (errors against a reference at rtol
-1e-13 and steps): the pendulum of tests/test_radau_dae.py over 30 s at rtol 1e-8, 1e-9, 1e-10, 4.6e-9,
-3.2e-10, 1.9e-11 in 6108, 10804, 19269 steps against 7.2e-9, 4.5e-10, 2.8e-11 in 5640, 10053, 17900 (the
-same error per step); the four-bar linkage over 10 s at rtol 1e-6, 1e-8, 1e-10, 1.6e-5, 7.4e-8, 5.2e-10 in 3283,
-10096, 32254 steps against 9.5e-6, 5.3e-8, 3.0e-10 in 2502, 7894, 25264 (~40% more steps at equal error:
-its accelerations, ~ω = 20/s times its rates, made RADAU5's scale for w that much looser in seconds, and
-tighter than this one in milliseconds).  Leaving the algebraic components out of the norms altogether (the
-simplest invariant choice) made the pendulum's error erratic in rtol (1.2e-8 at 1e-7, 1.7e-10 at 1e-10).
+λ a force, μ a position over a time), and ``atol`` is in the state's.  RADAU5 scales them by
+(atol + |z| rtol)/h (IWORK(6)), which mixes their units with atol's and with the unit of time (the bundled
+four-bar linkage scaled to millimetres, or by 1e3, then ended at t = 0 with NEWTON_FAILED).  Here
+(`_algebraic_scales`) the scale of z_j is (a_j + rtol |z_j| τ)/h: τ the motion's own time scale
+(`_time_scale`: min(‖y‖/‖y'‖, ‖y'‖/‖y''‖) of the differential components, ~1/ω) where RADAU5 has the unit of
+time, and a_j the absolute part the differential scales imply: an error δz_j moves the derivatives of the
+differential rows i that depend on it by J_ij δz_j, so a_j = min_i scale_i/|J_ij| (λ enters no differential
+row: its error is w's, and it is left out).  The same scales in the Newton and the error norms; and the
+iteration matrices are factored equilibrated (`_equilibrate`, powers of two), so that the pivot test does not
+depend on the units of their blocks either: a run takes the same steps in any units.  What did not do:
+leaving the algebraic components out of the norms (the pendulum's error erratic in rtol: 1.2e-8 at 1e-7,
+1.7e-10 at 1e-10), or a_j/h alone (RADAU5's relative part dropped: the spherical pendulum in Cartesian
+coordinates at rtol 1e-9, atol 1e-12, whose v_x starts at 0, ended with ITERATION_MATRIX_SINGULAR, its w's
+error estimate, O(1/h) as index-2 estimates are, measured against atol/h).  Measured against RADAU5's scales
+(errors against a reference at rtol 1e-13, and steps): the pendulum of tests/test_radau_dae.py over 30 s at
+rtol 1e-6, 1e-8, 1e-10, 1.1e-6, 7.0e-9, 1.8e-11 in 1827, 5689, 18059 steps against 1.9e-6, 7.2e-9, 2.8e-11 in
+1811, 5640, 17900; the four-bar linkage over 10 s, 2.5e-5, 1.2e-7, 8.6e-10 in 2933, 9048, 28865 steps against
+9.5e-6, 5.3e-8, 3.0e-10 in 2502, 7894, 25264 (the same steps in millimetres or kilometres, where RADAU5's
+failed).
 The Newton increments carry the rounding noise of the constraints (Φ and Λ(q) evaluated at a q known to
 ulp(|q|)) amplified by ~γ/h through the iteration matrix, and the velocities carry it unamplified (v is
 solved from Λ v + b = 0, not integrated); at tight tolerances and large |q| the increments stop shrinking
@@ -95,7 +97,7 @@ above the Newton tolerance.  So an iteration whose increment was already below `
 scale when it stopped shrinking is taken as converged (the ODE path never does).  Measured on the four-bar
 linkage over 30 s, whose crank angle reaches 360 rad: without that rule rtol 1e-10 failed at t = 21 s
 (with RADAU5's scales), with it the run ends with the constraints at 2.5e-13; below rtol 1e-10 the noise
-wins anyway (`lagcomp.integrate.dae.DAE_RTOL_MIN`).
+wins anyway (`lagcomp.integrate.dae.DAE_RTOL_MIN`: rtol 1e-12 ends with NEWTON_FAILED at t = 6.3 s).
 Orders (HNW II, sec. VII.4; Hairer, Lubich & Roche 1989): 5 for the differential components, 3 for
 the algebraic ones (tests/test_radau_dae.py).  The Newton iteration takes ~3 iterations per step on these problems
 however old J is: on the pendulum of tests/test_radau_dae.py at rtol 1e-6, 1e-8, 1e-10 the first increment is 5,
@@ -407,14 +409,14 @@ def _newton(rhs, t, y, h, p, C, T, TI, MU, differential, Z, W, F, ytmp, f_stage,
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, scale):
+def _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, time_scale, scale):
     """RMS norm of err scaled by atol + max(|y|, |y_new|) rtol for the differential components, and for the
-    algebraic ones (from ``differential`` on) by the scale those imply (`_algebraic_scales`, with ``jacobian``);
-    ``scale`` (N,) is work space.  0 for N = 0."""
+    algebraic ones (from ``differential`` on) by the scales `_algebraic_scales` gives (with ``jacobian`` and
+    ``time_scale``); ``scale`` (N,) is work space.  0 for N = 0."""
     n = y.shape[0]
     for i in range(differential):
         scale[i] = atol + max(abs(y[i]), abs(y_new[i])) * rtol
-    _algebraic_scales(jacobian, differential, h, scale)
+    _algebraic_scales(jacobian, differential, h, rtol, y, y_new, time_scale, scale)
     acc = 0.0
     for i in range(n):
         e = err[i] / scale[i]
@@ -423,13 +425,14 @@ def _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, scale):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _algebraic_scales(jacobian, differential, h, scale):
-    """The algebraic components' scales (from ``differential`` on) implied by the differential ones in ``scale``:
-    for component j, min over the differential rows i that depend on it of scale_i/|J_ij|, divided by h (∞ when
-    none does: j is left out of the norms).
+def _algebraic_scales(jacobian, differential, h, rtol, y, y_new, time_scale, scale):
+    """The algebraic components' scales (from ``differential`` on), RADAU5's (atol + rtol |z_j|)/h in units of
+    z_j: (a_j + rtol max(|z_j|, |z_new,j|) τ)/h, τ = ``time_scale`` (`_time_scale`), a_j the absolute part the
+    differential scales in ``scale`` imply, min over the differential rows i that depend on z_j of
+    scale_i/|J_ij| (∞ when none does: then z_j is left out of the norms).
 
-    An error δz_j moves the differential derivatives by J_ij δz_j, their values over a step by h J_ij δz_j: this
-    scale measures it in theirs, whatever the units of z_j (module docstring, "DAEs")."""
+    An error δz_j moves the differential derivatives by J_ij δz_j, their values over a time τ by τ J_ij δz_j,
+    so a_j measures it in their units; RADAU5's time is the unit of time (module docstring, "DAEs")."""
     n = scale.shape[0]
     for j in range(differential, n):
         implied = np.inf
@@ -437,7 +440,30 @@ def _algebraic_scales(jacobian, differential, h, scale):
             coupling = abs(jacobian[i, j])
             if coupling > 0.0:
                 implied = min(implied, scale[i] / coupling)
-        scale[j] = implied / h
+        scale[j] = (implied + rtol * max(abs(y[j]), abs(y_new[j])) * time_scale) / h
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _time_scale(y, f, previous, h_previous, rtol, atol, differential, interval):
+    """How long the differential components take to change by their own size, or their rates by theirs, whichever
+    is shorter: min(‖y‖/‖f‖, ‖f‖/‖y''‖) in the RMS norm of the scales atol + |y| rtol, y'' at the end of the last
+    step from its polynomial (``previous``, ``h_previous`` > 0; none at a run's first step); ``interval`` when
+    nothing moves.  A time the problem defines, in its units: the motion's time scale (~1/ω for an oscillator)."""
+    d0 = 0.0
+    d1 = 0.0
+    d2 = 0.0
+    for i in range(differential):
+        sc = atol + abs(y[i]) * rtol
+        d0 += (y[i] / sc) ** 2
+        d1 += (f[i] / sc) ** 2
+        if h_previous > 0.0:
+            d2 += ((2.0 * previous[1, i] + 6.0 * previous[2, i]) / h_previous / sc) ** 2
+    scale = interval
+    if d1 > 0.0:
+        scale = min(scale, np.sqrt(d0 / d1))
+    if d2 > 0.0:
+        scale = min(scale, np.sqrt(d1 / d2))
+    return scale
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -640,6 +666,9 @@ def radau_run(rhs, rhs_jacobian, event_values,
             return Status.BUFFER_FULL, n_saved
 
         # Trial loop.
+        time_scale = 0.0
+        if differential < n:
+            time_scale = _time_scale(y, f, previous, control[H_PREVIOUS], rtol, atol, differential, t_end - t)
         rejected = False
         trouble = _ERROR
         newton_failed = False   # a DAE's iteration matrix turns singular to working precision at tiny h (pivots ~h²):
@@ -673,7 +702,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
                         Z[s, i] = 0.0
             for i in range(differential):
                 scale[i] = atol + abs(y[i]) * rtol
-            _algebraic_scales(jacobian, differential, h, scale)
+            _algebraic_scales(jacobian, differential, h, rtol, y, y, time_scale, scale)
 
             converged = False
             iterations = 0
@@ -723,7 +752,8 @@ def radau_run(rhs, rhs_jacobian, event_values,
                 z_error[i] = 0.0        # M E·Z/h: mass 0
                 err[i] = f[i]
             _substitute_real(lu_real, pivots_real, err, rows, columns)
-            err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, err_scale)
+            err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, time_scale,
+                                       err_scale)
             safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iterations)
             if (rejected or counters[NSTEPS] == 0) and err_norm > 1.0 and np.isfinite(err_norm):
                 for i in range(n):
@@ -735,7 +765,8 @@ def radau_run(rhs, rhs_jacobian, event_values,
                 for i in range(n):
                     err[i] = ftmp[i] + z_error[i]
                 _substitute_real(lu_real, pivots_real, err, rows, columns)
-                err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, err_scale)
+                err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, time_scale,
+                                       err_scale)
             for i in range(n):
                 if not np.isfinite(y_new[i]):
                     err_norm = np.nan
