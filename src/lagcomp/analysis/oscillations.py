@@ -66,9 +66,22 @@ class Linearization:
         """The whole velocity matrix G + D = −∂F/∂q̇."""
         return self.G + self.D
 
-    def _small(self, a: np.ndarray) -> bool:
-        scale = max(float(np.max(np.abs(self.K))), float(np.max(np.abs(self.M))), 1e-300)
-        return float(np.max(np.abs(a))) <= ZERO * scale
+    def normalized(self, a: np.ndarray) -> np.ndarray:
+        """``a`` (n, n) in the coordinates' own units: D a D with D = diag(1/√M_ii), so that D M D has a unit
+        diagonal, D K D is in 1/time², D C D in 1/time, whatever the units of each coordinate."""
+        d = 1.0 / np.sqrt(np.abs(np.diag(self.M)))
+        return d[:, None] * a * d[None, :]
+
+    @property
+    def rate_scale(self) -> float:
+        """A rate (1/time) for judging Re λ and the velocity terms: √max|D K D| + max|D C D| (`normalized`), in
+        the units of time only (0 when K and C vanish)."""
+        return float(np.sqrt(np.max(np.abs(self.normalized(self.K)))) + np.max(np.abs(self.normalized(self.C))))
+
+    def _small(self, a: np.ndarray, power: int) -> bool:
+        """Whether ``a`` is negligible against the rate scale to ``power`` (1 for G, D; 2 for a stiffness),
+        in the normalized coordinates (the same verdict in any units)."""
+        return float(np.max(np.abs(self.normalized(a)))) <= ZERO * self.rate_scale ** power
 
     def __repr__(self) -> str:
         where = ", ".join(f"{c}={v:.8g}" for c, v in zip(self.coordinates, self.q))
@@ -78,7 +91,7 @@ class Linearization:
     @property
     def conservative(self) -> bool:
         """No gyroscopic or damping terms and a symmetric stiffness: the eigh case."""
-        return self._small(self.G) and self._small(self.D) and self._small(self.K - self.K.T)
+        return self._small(self.G, 1) and self._small(self.D, 1) and self._small(self.K - self.K.T, 2)
 
 
 @dataclass(frozen=True)
@@ -158,7 +171,7 @@ def normal_modes(model_or_linearization, q=None, params: dict | None = None, *, 
         lin = linearize(lin, q, params, t=t)
     quadratic = _quadratic_eigenvalues(lin)
     growth = float(np.max(quadratic.real))
-    scale = _rate_scale(lin)
+    scale = lin.rate_scale
     if lin.conservative:
         K = (lin.K + lin.K.T) / 2
         omega2, vectors = linalg.eigh(K, lin.M)
@@ -184,12 +197,6 @@ def normal_modes(model_or_linearization, q=None, params: dict | None = None, *, 
     vectors = _quadratic_vectors(lin, quadratic[order])
     return Modes(frequencies=quadratic.imag[order], shapes=vectors, omega2=None, eigenvalues=quadratic,
                  growth_rate=growth, stability=stability, linearization=lin)
-
-
-def _rate_scale(lin: Linearization) -> float:
-    """A rate (1/time) for judging Re λ: √(|K|/|M|) + |C|/|M|."""
-    m = max(float(np.max(np.abs(lin.M))), 1e-300)
-    return float(np.sqrt(np.max(np.abs(lin.K)) / m) + np.max(np.abs(lin.C)) / m) or 1.0
 
 
 def _quadratic_eigenvalues(lin: Linearization) -> np.ndarray:
