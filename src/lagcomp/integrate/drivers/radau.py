@@ -285,15 +285,17 @@ def _equilibrate(a, rows, columns):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex, rows, columns):
+def _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex, rows, columns, scaled):
     """`lu_substitute` of the real and the complex system at once, in place: the same operations in the same
     order for each, so the same bits, but the two dependency chains of the triangular solves interleave
-    (each alone waits on its divisions and subtractions: ~25% less time for N = 4).  The factors are those of
-    R A C (`_factor`): the right-hand sides are scaled by R first, the solutions by C after (powers of two)."""
+    (each alone waits on its divisions and subtractions: ~25% less time for N = 4).  With ``scaled`` (a DAE)
+    the factors are those of R A C (`_factor`): the right-hand sides are scaled by R first, the solutions by C
+    after (powers of two)."""
     n = d_real.shape[0]
-    for i in range(n):
-        d_real[i] *= rows[i]
-        d_complex[i] *= rows[i]
+    if scaled:
+        for i in range(n):
+            d_real[i] *= rows[i]
+            d_complex[i] *= rows[i]
     for j in range(n):
         d_real[j], d_real[pivots_real[j]] = d_real[pivots_real[j]], d_real[j]
         d_complex[j], d_complex[pivots_complex[j]] = d_complex[pivots_complex[j]], d_complex[j]
@@ -313,20 +315,23 @@ def _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d
             z -= lu_complex[i, c] * d_complex[c]
         d_real[i] = x / lu_real[i, i]
         d_complex[i] = z / lu_complex[i, i]
-    for i in range(n):
-        d_real[i] *= columns[i]
-        d_complex[i] *= columns[i]
+    if scaled:
+        for i in range(n):
+            d_real[i] *= columns[i]
+            d_complex[i] *= columns[i]
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _substitute_real(lu_real, pivots_real, r, rows, columns):
-    """`lu_substitute` with the real factors of R A C (`_factor`): A x = r solved in place."""
+def _substitute_real(lu_real, pivots_real, r, rows, columns, scaled):
+    """`lu_substitute` with the real factors (of R A C with ``scaled``, `_factor`): A x = r solved in place."""
     n = r.shape[0]
-    for i in range(n):
-        r[i] *= rows[i]
+    if scaled:
+        for i in range(n):
+            r[i] *= rows[i]
     lu_substitute(lu_real, pivots_real, r)
-    for i in range(n):
-        r[i] *= columns[i]
+    if scaled:
+        for i in range(n):
+            r[i] *= columns[i]
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
@@ -380,7 +385,8 @@ def _newton(rhs, t, y, h, p, C, T, TI, MU, differential, Z, W, F, ytmp, f_stage,
             d_real[i] = TI[0, 0] * f0 + TI[0, 1] * f1 + TI[0, 2] * f2
             d_complex[i] = complex(TI[1, 0] * f0 + TI[1, 1] * f1 + TI[1, 2] * f2,
                                    TI[2, 0] * f0 + TI[2, 1] * f1 + TI[2, 2] * f2)
-        _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex, rows, columns)
+        _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex, rows, columns,
+                         differential < n)
         acc = 0.0
         for i in range(n):
             a = d_real[i] / scale[i]
@@ -751,7 +757,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
                 y_new[i] = y[i] + Z[2, i]
                 z_error[i] = 0.0        # M E·Z/h: mass 0
                 err[i] = f[i]
-            _substitute_real(lu_real, pivots_real, err, rows, columns)
+            _substitute_real(lu_real, pivots_real, err, rows, columns, differential < n)
             err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, time_scale,
                                        err_scale)
             safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iterations)
@@ -764,7 +770,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
                     return Status.RHS_FAILED, n_saved
                 for i in range(n):
                     err[i] = ftmp[i] + z_error[i]
-                _substitute_real(lu_real, pivots_real, err, rows, columns)
+                _substitute_real(lu_real, pivots_real, err, rows, columns, differential < n)
                 err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, time_scale,
                                        err_scale)
             for i in range(n):
