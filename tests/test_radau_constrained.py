@@ -213,7 +213,7 @@ def test_random_constrained_systems_agree_with_dop853_and_projection(cache_dir, 
 
 
 def test_below_the_tolerance_floor_the_newton_iteration_fails_and_says_so(four_bar, monkeypatch):
-    """Why `DAE_RTOL_MIN` refuses rtol < 1e-10: let rtol = 1e-12 through and the run ends (at t = 6.2 s, crank at
+    """Why `DAE_RTOL_MIN` refuses rtol < 1e-10: let rtol = 1e-12 through and the run ends (at t = 6.3 s, crank at
     ~100 rad) with NEWTON_FAILED, not a singular iteration matrix, whose pivots ~h² the step halvings reach."""
     from lagcomp.integrate import options
     from lagcomp.integrate.status import Status

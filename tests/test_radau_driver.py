@@ -267,8 +267,10 @@ def test_singular_iteration_matrix_is_detected():
     jacobian = RADAU5.MU[0] / h * np.eye(2)
     lu_real, lu_complex = np.empty((2, 2)), np.empty((2, 2), dtype=np.complex128)
     pivots = np.empty(2, dtype=np.int64), np.empty(2, dtype=np.int64)
-    assert _factor(jacobian, h, RADAU5.MU.copy(), 2, lu_real, pivots[0], lu_complex, pivots[1]) > 0
-    assert _factor(np.zeros((2, 2)), h, RADAU5.MU.copy(), 2, lu_real, pivots[0], lu_complex, pivots[1]) == 0
+    rows, columns = np.empty(2), np.empty(2)
+    assert _factor(jacobian, h, RADAU5.MU.copy(), 2, lu_real, pivots[0], lu_complex, pivots[1], rows, columns) > 0
+    assert _factor(np.zeros((2, 2)), h, RADAU5.MU.copy(), 2, lu_real, pivots[0], lu_complex, pivots[1], rows,
+                   columns) == 0
 
 
 def test_sweep_loop_gives_each_trajectory_of_the_driver():

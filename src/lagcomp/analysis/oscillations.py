@@ -67,9 +67,22 @@ class Linearization:
         """The whole velocity matrix G + D = −∂F/∂q̇."""
         return self.G + self.D
 
-    def _small(self, a: np.ndarray) -> bool:
-        scale = max(float(np.max(np.abs(self.K))), float(np.max(np.abs(self.M))), 1e-300)
-        return float(np.max(np.abs(a))) <= ZERO * scale
+    def normalized(self, a: np.ndarray) -> np.ndarray:
+        """``a`` (n, n) in the coordinates' own units: D a D with D = diag(1/√M_ii), so that D M D has a unit
+        diagonal, D K D is in 1/time², D C D in 1/time, whatever the units of each coordinate."""
+        d = 1.0 / np.sqrt(np.abs(np.diag(self.M)))
+        return d[:, None] * a * d[None, :]
+
+    @property
+    def rate_scale(self) -> float:
+        """A rate (1/time) for judging Re λ and the velocity terms: √max|D K D| + max|D C D| (`normalized`), in
+        the units of time only (0 when K and C vanish)."""
+        return float(np.sqrt(np.max(np.abs(self.normalized(self.K)))) + np.max(np.abs(self.normalized(self.C))))
+
+    def _small(self, a: np.ndarray, power: int) -> bool:
+        """Whether ``a`` is negligible against the rate scale to ``power`` (1 for G, D; 2 for a stiffness),
+        in the normalized coordinates (the same verdict in any units)."""
+        return float(np.max(np.abs(self.normalized(a)))) <= ZERO * self.rate_scale ** power
 
     def __repr__(self) -> str:
         where = ", ".join(f"{c}={v:.8g}" for c, v in zip(self.coordinates, self.q))
@@ -79,7 +92,7 @@ class Linearization:
     @property
     def conservative(self) -> bool:
         """No gyroscopic or damping terms and a symmetric stiffness: the eigh case."""
-        return self._small(self.G) and self._small(self.D) and self._small(self.K - self.K.T)
+        return self._small(self.G, 1) and self._small(self.D, 1) and self._small(self.K - self.K.T, 2)
 
 
 @dataclass(frozen=True)
@@ -162,7 +175,7 @@ def normal_modes(model_or_linearization, q=None, params: dict | None = None, *, 
     _check_equilibrium(lin)
     quadratic = _quadratic_eigenvalues(lin)
     growth = float(np.max(quadratic.real))
-    scale = _rate_scale(lin)
+    scale = lin.rate_scale
     if lin.conservative:
         K = (lin.K + lin.K.T) / 2
         omega2, vectors = linalg.eigh(K, lin.M)
@@ -206,12 +219,6 @@ def _check_equilibrium(lin: Linearization) -> None:
             "that counts as zero, so the bodies accelerate there and its normal modes would describe no motion. "
             "Find an equilibrium with lagcomp.analysis.find_equilibrium (or equilibria), or for a steady motion "
             "use linearize_steady.")
-
-
-def _rate_scale(lin: Linearization) -> float:
-    """A rate (1/time) for judging Re λ: √(|K|/|M|) + |C|/|M|."""
-    m = max(float(np.max(np.abs(lin.M))), 1e-300)
-    return float(np.sqrt(np.max(np.abs(lin.K)) / m) + np.max(np.abs(lin.C)) / m) or 1.0
 
 
 def _quadratic_eigenvalues(lin: Linearization) -> np.ndarray:

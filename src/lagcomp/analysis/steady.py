@@ -139,15 +139,18 @@ class SteadyLinearization:
 
     @property
     def rate_scale(self) -> float:
-        """A rate (1/time) against which Re λ is judged: the largest |λ| or |A_ij| (at least 1e-300).
+        """A rate (1/time) against which Re λ is judged: the largest |λ| or |B_ij| of the balanced B = T⁻¹ A T
+        (`balanced`; at least 1e-300).
 
-        |A| and not |λ| alone: the rounding error of computed eigenvalues
-        scales with |A|, and near a collision of eigenvalues at 0 (where
+        |B| and not |λ| alone: the rounding error of computed eigenvalues
+        scales with it, and near a collision of eigenvalues at 0 (where
         stability changes in conservative and gyroscopic systems) every |λ|
-        is small while their rounding errors are not.
+        is small while their rounding errors are not.  B and not A: A's
+        entries are in the units of its states (positions and angles, their
+        rates), B's are rates whatever those units.
         """
         largest = float(np.max(np.abs(self.eigenvalues))) if self.eigenvalues.size else 0.0
-        return max(largest, float(np.max(np.abs(self.A), initial=0.0)), 1e-300)
+        return max(largest, float(np.max(np.abs(balanced(self.A)), initial=0.0)), 1e-300)
 
     @property
     def stability(self) -> str:
@@ -260,6 +263,13 @@ def _tangent_basis(point: FormPoint, choice: Choice) -> np.ndarray:
         B_uq[ud] = -linalg.solve(Psi_ud, v["Psi_q"] @ B_q)
         B_uu[ud] = -linalg.solve(Psi_ud, v["Psi_u"][:, ui])
     return np.block([[B_q, np.zeros((form.n_q, len(ui)))], [B_uq, B_uu]])
+
+
+def balanced(A: np.ndarray) -> np.ndarray:
+    """B = T⁻¹ A T balanced (LAPACK's gebal, as `scipy.linalg.eig` does before computing eigenvalues; no
+    permutation, T diagonal, powers of two): its entries no longer depend on the units of A's states (a change of
+    units is a diagonal similarity, which the balancing absorbs), and ε |B| is the eigenvalues' rounding."""
+    return A if A.size == 0 else linalg.matrix_balance(A, permute=False)[0]
 
 
 def _check_ignorable(A: np.ndarray, choice: Choice, kept: list) -> None:

@@ -27,8 +27,8 @@ from lagcomp.errors import InitialConditionError, OptionError
 
 #: The tightest rtol `radau` takes for a DAE.  Below it the rounding noise of the constraints (Φ and Λ(q)
 #: evaluated at a q known to ulp(|q|)) stops the Newton iteration short of its tolerance: on the four-bar
-#: linkage over 30 s, rtol 1e-11 was less accurate than 1e-10 (1.7e-7 against 4.5e-8 from dop853 at 1e-13
-#: with projection) and 1e-12 failed at t = 6.2 s (`lagcomp.integrate.drivers.radau`, "DAEs").
+#: linkage over 10 s, rtol 1e-11 gains less than a factor 2 on 1e-10 (errors 4.9e-10 and 8.6e-10 against dop853
+#: at 1e-13 with projection), and 1e-12 fails at t = 6.3 s (`lagcomp.integrate.drivers.radau`, "DAEs").
 DAE_RTOL_MIN = 1e-10
 
 

@@ -16,7 +16,8 @@ takes up to round-off (tests/test_radau_driver.py compares them):
    previous step's collocation polynomial extrapolated to t + c_i h (zero at the first step).
 2. Newton failure: with an old Jacobian, evaluate J at (t, y) and retry; with the current one, halve
    the step.  A singular iteration matrix is handled the same way.
-3. Error: err = (γ/h M − J)⁻¹ (f(t, y) + M E·Z/h), RMS norm with scale atol + max(|y|, |y_new|) rtol;
+3. Error: err = (γ/h M − J)⁻¹ (f(t, y) + M E·Z/h), RMS norm with scale atol + max(|y|, |y_new|) rtol
+   (of the differential components: "DAEs");
    on the first step and after a rejection an estimate > 1 is filtered once more,
    err = (γ/h M − J)⁻¹ (f(t, y + err) + M E·Z/h) (HNW IV.8, (8.21); scipy does it after rejections only).
 4. Step size: Gustafsson's predictive controller, factor = min(1, h/h_old (err_old/err)^¼) err^(−¼)
@@ -69,16 +70,34 @@ DAE is the stabilised index-2 (Gear–Gupta–Leimkuhler) form of a constrained 
 started consistently (μ = 0, w and λ from the augmented solve).  M enters the iteration matrices, the
 Newton right-hand sides T⁻¹F − (shift/h) M W and the error estimate as written above (HNW II, sec. VI.6;
 RADAU5 with IMAS = 1).  The initial step is estimated from the differential components alone.
-As RADAU5 does for its index-2 components (IWORK(6)), the algebraic components' scales are divided by the
-trial step h: (atol + |y| rtol)/h in the Newton norm, (atol + max(|y|, |y_new|) rtol)/h in the error norm.
-Their Newton increments carry the rounding noise of the constraints (Φ and Λ(q) evaluated at a q known to
+Units.  The algebraic components are in the units of neither the state nor each other (w an acceleration,
+λ a force, μ a position over a time), and ``atol`` is in the state's.  RADAU5 scales them by
+(atol + |z| rtol)/h (IWORK(6)), which mixes their units with atol's and with the unit of time (the bundled
+four-bar linkage scaled to millimetres, or by 1e3, then ended at t = 0 with NEWTON_FAILED).  Here
+(`_algebraic_scales`) the scale of z_j is (a_j + rtol |z_j| τ)/h: τ the motion's own time scale
+(`_time_scale`: min(‖y‖/‖y'‖, ‖y'‖/‖y''‖) of the differential components, ~1/ω) where RADAU5 has the unit of
+time, and a_j the absolute part the differential scales imply: an error δz_j moves the derivatives of the
+differential rows i that depend on it by J_ij δz_j, so a_j = min_i scale_i/|J_ij| (λ enters no differential
+row: its error is w's, and it is left out).  The same scales in the Newton and the error norms; and the
+iteration matrices are factored equilibrated (`_equilibrate`, powers of two), so that the pivot test does not
+depend on the units of their blocks either: a run takes the same steps in any units.  What did not do:
+leaving the algebraic components out of the norms (the pendulum's error erratic in rtol: 1.2e-8 at 1e-7,
+1.7e-10 at 1e-10), or a_j/h alone (RADAU5's relative part dropped: the spherical pendulum in Cartesian
+coordinates at rtol 1e-9, atol 1e-12, whose v_x starts at 0, ended with ITERATION_MATRIX_SINGULAR, its w's
+error estimate, O(1/h) as index-2 estimates are, measured against atol/h).  Measured against RADAU5's scales
+(errors against a reference at rtol 1e-13, and steps): the pendulum of tests/test_radau_dae.py over 30 s at
+rtol 1e-6, 1e-8, 1e-10, 1.1e-6, 7.0e-9, 1.8e-11 in 1827, 5689, 18059 steps against 1.9e-6, 7.2e-9, 2.8e-11 in
+1811, 5640, 17900; the four-bar linkage over 10 s, 2.5e-5, 1.2e-7, 8.6e-10 in 2933, 9048, 28865 steps against
+9.5e-6, 5.3e-8, 3.0e-10 in 2502, 7894, 25264 (the same steps in millimetres or kilometres, where RADAU5's
+failed).
+The Newton increments carry the rounding noise of the constraints (Φ and Λ(q) evaluated at a q known to
 ulp(|q|)) amplified by ~γ/h through the iteration matrix, and the velocities carry it unamplified (v is
 solved from Λ v + b = 0, not integrated); at tight tolerances and large |q| the increments stop shrinking
 above the Newton tolerance.  So an iteration whose increment was already below `NEWTON_NOISE` of the error
 scale when it stopped shrinking is taken as converged (the ODE path never does).  Measured on the four-bar
 linkage over 30 s, whose crank angle reaches 360 rad: without that rule rtol 1e-10 failed at t = 21 s
-(μ's increments stalled at 1e-3 of its scale atol/h, θ1 = 257), with it the run ends with the constraints
-at 4.6e-13; below rtol 1e-10 the noise wins anyway (`lagcomp.integrate.dae.DAE_RTOL_MIN`).
+(with RADAU5's scales), with it the run ends with the constraints at 2.5e-13; below rtol 1e-10 the noise
+wins anyway (`lagcomp.integrate.dae.DAE_RTOL_MIN`: rtol 1e-12 ends with NEWTON_FAILED at t = 6.3 s).
 Orders (HNW II, sec. VII.4; Hairer, Lubich & Roche 1989): 5 for the differential components, 3 for
 the algebraic ones (tests/test_radau_dae.py).  The Newton iteration takes ~3 iterations per step on these problems
 however old J is: on the pendulum of tests/test_radau_dae.py at rtol 1e-6, 1e-8, 1e-10 the first increment is 5,
@@ -131,6 +150,8 @@ values cost 25-37% of the run), `_newton` is inlined and the two substitutions i
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
@@ -201,19 +222,33 @@ def new_carry(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _factor(jacobian, h, MU, differential, lu_real, pivots_real, lu_complex, pivots_complex):
+def _factor(jacobian, h, MU, differential, lu_real, pivots_real, lu_complex, pivots_complex, rows, columns):
     """LU factors of γ/h M − J and (α − iβ)/h M − J in place, M = diag(1 × differential, 0 × the rest);
-    0, or k > 0 when one is singular (pivot k)."""
+    0, or k > 0 when one is singular (pivot k).
+
+    A DAE's matrices are equilibrated first (`_equilibrate`): both factored as R A C, with the powers of two
+    R = diag(``rows``), C = diag(``columns``) of the real one; an ODE's are factored as they are (R = C = I:
+    the same bits as without).
+    """
     n = jacobian.shape[0]
     shift_real = MU[0] / h
     shift_complex = complex(MU[1], MU[2]) / h
     for i in range(n):
         for j in range(n):
             lu_real[i, j] = -jacobian[i, j]
-            lu_complex[i, j] = -jacobian[i, j]
     for i in range(differential):
         lu_real[i, i] += shift_real
-        lu_complex[i, i] += shift_complex
+    if differential < n:
+        _equilibrate(lu_real, rows, columns)
+    else:
+        for i in range(n):
+            rows[i] = 1.0
+            columns[i] = 1.0
+    for i in range(n):
+        for j in range(n):
+            lu_complex[i, j] = -jacobian[i, j] * rows[i] * columns[j]
+    for i in range(differential):
+        lu_complex[i, i] += shift_complex * rows[i] * columns[i]
     status = lu_factor(lu_real, pivots_real)
     if status != 0:
         return status
@@ -221,11 +256,46 @@ def _factor(jacobian, h, MU, differential, lu_real, pivots_real, lu_complex, piv
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex):
+def _equilibrate(a, rows, columns):
+    """Scale the square ``a`` in place to R a C, rows first then columns, each scale the power of two that brings
+    the row's (then the column's) largest magnitude into [1/2, 1) (LAPACK's ``dgeequ``, rounded to powers of two:
+    exact, and the factors' bits independent of the units).
+
+    A DAE's iteration matrix has blocks in the units of its equations and its variables (positions, velocities,
+    accelerations, forces): `lu_factor`'s pivot test, relative to max|a|, would call it singular or not depending on
+    the units (a millimetre four-bar linkage: ITERATION_MATRIX_SINGULAR at t = 0).  R a C does not depend on them
+    (a change of units is a diagonal D_r a D_c, which the scales absorb up to their rounding to powers of two).
+    A zero row or column keeps the scale 1 (the factorization then reports it).
+    """
+    n = a.shape[0]
+    for i in range(n):
+        largest = 0.0
+        for j in range(n):
+            largest = max(largest, abs(a[i, j]))
+        rows[i] = math.ldexp(1.0, -math.frexp(largest)[1]) if largest > 0.0 and np.isfinite(largest) else 1.0
+        for j in range(n):
+            a[i, j] *= rows[i]
+    for j in range(n):
+        largest = 0.0
+        for i in range(n):
+            largest = max(largest, abs(a[i, j]))
+        columns[j] = math.ldexp(1.0, -math.frexp(largest)[1]) if largest > 0.0 and np.isfinite(largest) else 1.0
+        for i in range(n):
+            a[i, j] *= columns[j]
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex, rows, columns, scaled):
     """`lu_substitute` of the real and the complex system at once, in place: the same operations in the same
     order for each, so the same bits, but the two dependency chains of the triangular solves interleave
-    (each alone waits on its divisions and subtractions: ~25% less time for N = 4)."""
+    (each alone waits on its divisions and subtractions: ~25% less time for N = 4).  With ``scaled`` (a DAE)
+    the factors are those of R A C (`_factor`): the right-hand sides are scaled by R first, the solutions by C
+    after (powers of two)."""
     n = d_real.shape[0]
+    if scaled:
+        for i in range(n):
+            d_real[i] *= rows[i]
+            d_complex[i] *= rows[i]
     for j in range(n):
         d_real[j], d_real[pivots_real[j]] = d_real[pivots_real[j]], d_real[j]
         d_complex[j], d_complex[pivots_complex[j]] = d_complex[pivots_complex[j]], d_complex[j]
@@ -245,11 +315,28 @@ def _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d
             z -= lu_complex[i, c] * d_complex[c]
         d_real[i] = x / lu_real[i, i]
         d_complex[i] = z / lu_complex[i, i]
+    if scaled:
+        for i in range(n):
+            d_real[i] *= columns[i]
+            d_complex[i] *= columns[i]
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _substitute_real(lu_real, pivots_real, r, rows, columns, scaled):
+    """`lu_substitute` with the real factors (of R A C with ``scaled``, `_factor`): A x = r solved in place."""
+    n = r.shape[0]
+    if scaled:
+        for i in range(n):
+            r[i] *= rows[i]
+    lu_substitute(lu_real, pivots_real, r)
+    if scaled:
+        for i in range(n):
+            r[i] *= columns[i]
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def _newton(rhs, t, y, h, p, C, T, TI, MU, differential, Z, W, F, ytmp, f_stage, d_real, d_complex, lu_real,
-            pivots_real, lu_complex, pivots_complex, scale, tol):
+            pivots_real, lu_complex, pivots_complex, rows, columns, scale, tol):
     """Simplified Newton iteration for the stages Z (3, N), which hold the starting values on entry.
 
     The right-hand sides are T⁻¹F − (shift/h) M W with M = diag(1 × differential, 0 × the rest): the
@@ -298,7 +385,8 @@ def _newton(rhs, t, y, h, p, C, T, TI, MU, differential, Z, W, F, ytmp, f_stage,
             d_real[i] = TI[0, 0] * f0 + TI[0, 1] * f1 + TI[0, 2] * f2
             d_complex[i] = complex(TI[1, 0] * f0 + TI[1, 1] * f1 + TI[1, 2] * f2,
                                    TI[2, 0] * f0 + TI[2, 1] * f1 + TI[2, 2] * f2)
-        _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex)
+        _substitute_pair(lu_real, pivots_real, d_real, lu_complex, pivots_complex, d_complex, rows, columns,
+                         differential < n)
         acc = 0.0
         for i in range(n):
             a = d_real[i] / scale[i]
@@ -327,18 +415,61 @@ def _newton(rhs, t, y, h, p, C, T, TI, MU, differential, Z, W, F, ytmp, f_stage,
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _error_norm(err, y, y_new, rtol, atol, differential, h):
-    """RMS norm of err scaled by atol + max(|y|, |y_new|) rtol, that scale divided by the step h for the
-    algebraic components (from ``differential`` on); 0 for N = 0."""
+def _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, time_scale, scale):
+    """RMS norm of err scaled by atol + max(|y|, |y_new|) rtol for the differential components, and for the
+    algebraic ones (from ``differential`` on) by the scales `_algebraic_scales` gives (with ``jacobian`` and
+    ``time_scale``); ``scale`` (N,) is work space.  0 for N = 0."""
     n = y.shape[0]
-    acc = 0.0
     for i in range(differential):
-        e = err[i] / (atol + max(abs(y[i]), abs(y_new[i])) * rtol)
-        acc += e * e
-    for i in range(differential, n):
-        e = err[i] / ((atol + max(abs(y[i]), abs(y_new[i])) * rtol) / h)
+        scale[i] = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+    _algebraic_scales(jacobian, differential, h, rtol, y, y_new, time_scale, scale)
+    acc = 0.0
+    for i in range(n):
+        e = err[i] / scale[i]
         acc += e * e
     return np.sqrt(acc / n) if n > 0 else 0.0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _algebraic_scales(jacobian, differential, h, rtol, y, y_new, time_scale, scale):
+    """The algebraic components' scales (from ``differential`` on), RADAU5's (atol + rtol |z_j|)/h in units of
+    z_j: (a_j + rtol max(|z_j|, |z_new,j|) τ)/h, τ = ``time_scale`` (`_time_scale`), a_j the absolute part the
+    differential scales in ``scale`` imply, min over the differential rows i that depend on z_j of
+    scale_i/|J_ij| (∞ when none does: then z_j is left out of the norms).
+
+    An error δz_j moves the differential derivatives by J_ij δz_j, their values over a time τ by τ J_ij δz_j,
+    so a_j measures it in their units; RADAU5's time is the unit of time (module docstring, "DAEs")."""
+    n = scale.shape[0]
+    for j in range(differential, n):
+        implied = np.inf
+        for i in range(differential):
+            coupling = abs(jacobian[i, j])
+            if coupling > 0.0:
+                implied = min(implied, scale[i] / coupling)
+        scale[j] = (implied + rtol * max(abs(y[j]), abs(y_new[j])) * time_scale) / h
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _time_scale(y, f, previous, h_previous, rtol, atol, differential, interval):
+    """How long the differential components take to change by their own size, or their rates by theirs, whichever
+    is shorter: min(‖y‖/‖f‖, ‖f‖/‖y''‖) in the RMS norm of the scales atol + |y| rtol, y'' at the end of the last
+    step from its polynomial (``previous``, ``h_previous`` > 0; none at a run's first step); ``interval`` when
+    nothing moves.  A time the problem defines, in its units: the motion's time scale (~1/ω for an oscillator)."""
+    d0 = 0.0
+    d1 = 0.0
+    d2 = 0.0
+    for i in range(differential):
+        sc = atol + abs(y[i]) * rtol
+        d0 += (y[i] / sc) ** 2
+        d1 += (f[i] / sc) ** 2
+        if h_previous > 0.0:
+            d2 += ((2.0 * previous[1, i] + 6.0 * previous[2, i]) / h_previous / sc) ** 2
+    scale = interval
+    if d1 > 0.0:
+        scale = min(scale, np.sqrt(d0 / d1))
+    if d2 > 0.0:
+        scale = min(scale, np.sqrt(d1 / d2))
+    return scale
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -427,6 +558,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
     err = np.empty(n)
     z_error = np.empty(n)
     scale = np.empty(n)
+    err_scale = np.empty(n)
     Z = np.empty((3, n))
     W = np.empty((3, n))
     F = np.empty((3, n))
@@ -437,6 +569,8 @@ def radau_run(rhs, rhs_jacobian, event_values,
     lu_complex = np.empty((n, n), dtype=np.complex128)
     pivots_real = np.empty(n, dtype=np.int64)
     pivots_complex = np.empty(n, dtype=np.int64)
+    rows = np.ones(n)
+    columns = np.ones(n)
     n_events = directions.shape[0]
     g_old = np.empty(n_events)
     g_new = np.empty(n_events)
@@ -492,7 +626,8 @@ def radau_run(rhs, rhs_jacobian, event_values,
     lu_step = control[LU_STEP]
     if lu_step != 0.0:
         counters[NLU] += 2
-        if _factor(jacobian, lu_step, MU, differential, lu_real, pivots_real, lu_complex, pivots_complex) != 0:
+        if _factor(jacobian, lu_step, MU, differential, lu_real, pivots_real, lu_complex, pivots_complex, rows,
+                   columns) != 0:
             lu_step = 0.0       # (not after a successful factorisation of the same matrices)
     jac_current = control[JAC_CURRENT] != 0.0
     newton_tol = max(10.0 * EPS / rtol, min(0.03, np.sqrt(rtol)))
@@ -537,6 +672,9 @@ def radau_run(rhs, rhs_jacobian, event_values,
             return Status.BUFFER_FULL, n_saved
 
         # Trial loop.
+        time_scale = 0.0
+        if differential < n:
+            time_scale = _time_scale(y, f, previous, control[H_PREVIOUS], rtol, atol, differential, t_end - t)
         rejected = False
         trouble = _ERROR
         newton_failed = False   # a DAE's iteration matrix turns singular to working precision at tiny h (pivots ~h²):
@@ -570,8 +708,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
                         Z[s, i] = 0.0
             for i in range(differential):
                 scale[i] = atol + abs(y[i]) * rtol
-            for i in range(differential, n):
-                scale[i] = (atol + abs(y[i]) * rtol) / h
+            _algebraic_scales(jacobian, differential, h, rtol, y, y, time_scale, scale)
 
             converged = False
             iterations = 0
@@ -580,7 +717,8 @@ def radau_run(rhs, rhs_jacobian, event_values,
                 singular = False
                 if lu_step == 0.0:
                     counters[NLU] += 2
-                    if _factor(jacobian, h, MU, differential, lu_real, pivots_real, lu_complex, pivots_complex) != 0:
+                    if _factor(jacobian, h, MU, differential, lu_real, pivots_real, lu_complex, pivots_complex,
+                               rows, columns) != 0:
                         singular = True
                         trouble = _SINGULAR
                     else:
@@ -588,7 +726,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
                 if not singular:
                     status, converged, iterations, rate, nfev = _newton(
                         rhs, t, y, h, p, C, T, TI, MU, differential, Z, W, F, ytmp, ftmp, d_real, d_complex, lu_real,
-                        pivots_real, lu_complex, pivots_complex, scale, newton_tol)
+                        pivots_real, lu_complex, pivots_complex, rows, columns, scale, newton_tol)
                     counters[NFEV] += nfev
                     if status > 0:
                         return Status.RHS_FAILED, n_saved
@@ -619,8 +757,9 @@ def radau_run(rhs, rhs_jacobian, event_values,
                 y_new[i] = y[i] + Z[2, i]
                 z_error[i] = 0.0        # M E·Z/h: mass 0
                 err[i] = f[i]
-            lu_substitute(lu_real, pivots_real, err)
-            err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h)
+            _substitute_real(lu_real, pivots_real, err, rows, columns, differential < n)
+            err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, time_scale,
+                                       err_scale)
             safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + iterations)
             if (rejected or counters[NSTEPS] == 0) and err_norm > 1.0 and np.isfinite(err_norm):
                 for i in range(n):
@@ -631,8 +770,9 @@ def radau_run(rhs, rhs_jacobian, event_values,
                     return Status.RHS_FAILED, n_saved
                 for i in range(n):
                     err[i] = ftmp[i] + z_error[i]
-                lu_substitute(lu_real, pivots_real, err)
-                err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h)
+                _substitute_real(lu_real, pivots_real, err, rows, columns, differential < n)
+                err_norm = _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, time_scale,
+                                       err_scale)
             for i in range(n):
                 if not np.isfinite(y_new[i]):
                     err_norm = np.nan
