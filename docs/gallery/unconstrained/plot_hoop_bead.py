@@ -15,8 +15,9 @@ from lagcomp import examples, plots
 
 hoop = lc.compile(examples.get("hoop_bead"))
 spun = dict(Omega=6.0, epsilon=0.0)
-for eq in an.find_equilibria(hoop, (-1, 2 * np.pi - 1), spun):
+equilibria = an.find_equilibria(hoop, (-1, 2 * np.pi - 1), spun)
+for eq in equilibria:
     print(eq)
-print(an.normal_modes(hoop, [2.1472], spun))
+print(an.normal_modes(hoop, equilibria[1].q, spun))   # about θ*, where cos θ* = −g/(RΩ²)
 sol = hoop.simulate((0, 10), q0=[2.5], params=spun)
 fig = plots.plot_phase_portrait(sol)
