@@ -35,14 +35,15 @@ is resolved, not its figure.  Reactions are not in this table: their agreement w
 tests/test_radau_constrained.py's.
 
 Time and steps are the price of an implicit method on a loop that is not stiff, measured here rather than
-assumed.  Measured once (`python -m bench.bench_loop`, 2 cores shared with a test run, 5 rounds): at rtol 1e-10
-radau took 76,091 steps and 394 ms, 22× the steps and 23× the time of dop853 with projection (3,414, 17.1 ms),
-with J evaluated at 43% of its steps (radau's order is 5, dop853's 8; before `DAE_JACOBIAN_RATE` of
-`lagcomp.integrate.drivers.radau`, 89% and 29× the time); at equal error (radau at 1e-8 against dop853 with
-projection at 1e-10, 2.5e-6 and 1.6e-6) 8.6× the time.  What radau buys: residual 2.6e-13 and energy drift
-1.9e-11 at every step with nothing added to the equations, against 5.9e-11 and 2.0e-9 for the projected steps
-as computed.  Baumgarte's gains cost dop853 more than projection does (144,104 steps and 445-646 ms at 1e-10,
-more than radau's time) and hold the loop to 5.6e-10 only.
+assumed.  Measured once (`python -m bench.bench_loop`, idle 2-core machine, 5 rounds, session 26, after radau's
+algebraic components were scaled in their own units): at rtol 1e-10 radau took 86,834 steps and 416 ms, 25× the
+steps and the time of dop853 with projection (3,414, 16.6 ms), with J evaluated at 41% of its steps (radau's order
+is 5, dop853's 8); at equal error (radau at 1e-8 against dop853 with projection at 1e-10, 5.7e-6 and 1.6e-6) 8.6×
+the time.  (Before the units change, in a run shared with the tests: 76,091 steps at 1e-10 and errors 2.4-2.6× smaller
+at each rtol, but a millimetre or kilometre linkage stopped at t = 0.)  What radau buys: residual 2.5e-13 and
+energy drift 3.4e-11 with nothing added to the equations, against 2.0e-9 energy drift for dop853 with projection,
+whose saved rows are the projected states (residual 5.8e-15).  Baumgarte's gains cost dop853 more than projection
+does (144,104 steps and 436 ms at 1e-10, more than radau's time) and hold the loop to 5.6e-10 only.
 """
 
 from __future__ import annotations
