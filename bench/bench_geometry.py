@@ -24,6 +24,8 @@ import lagcomp as lc
 from bench.harness import fmt_stat, interleaved
 from lagcomp.animation import frame_times, interpolated_coordinates
 from lagcomp.codegen import lower as lowering
+from lagcomp.codegen.bindings import symbol_bindings
+from lagcomp.codegen.cse import cse_kernel
 from lagcomp.codegen.geometry import geometry_kernel
 from lagcomp.examples import get
 from lagcomp.examples.bodies import BODIES_EXAMPLES
@@ -32,7 +34,7 @@ from lagcomp.mechanics.lagrange import derive
 
 def lowering_cost(name: str, rounds: int) -> str:
     eom = derive(get(name))
-    mapping, loads = lowering._bindings(eom)
+    mapping, loads = symbol_bindings(eom)
 
     def whole():
         clear_cache()
@@ -40,7 +42,7 @@ def lowering_cost(name: str, rounds: int) -> str:
 
     def geometry():
         clear_cache()
-        geometry_kernel(eom, lambda *spec: lowering._kernel(*spec, mapping, loads))
+        geometry_kernel(eom, lambda *spec: cse_kernel(*spec, mapping, loads))
 
     (whole_s, geometry_s), (_, ratio) = interleaved([whole, geometry], repeats=rounds)
     return (f"| {name} | lowering | {fmt_stat(geometry_s, 's')} | {fmt_stat(ratio)} of lower() "

@@ -24,8 +24,9 @@ from scipy.optimize import brentq
 
 import lagcomp as lc
 from lagcomp import analysis as an
+from lagcomp.codegen.bindings import USER_NAMESPACE, user_local
 from lagcomp.codegen.emit import emit
-from lagcomp.codegen.lower import USER_NAMESPACE, lower, user_local
+from lagcomp.codegen.lower import lower
 from lagcomp.errors import ModelError, OptionError
 from lagcomp.integrate.inputs import pack_inputs
 from lagcomp.kernel_support.inputs import input_value

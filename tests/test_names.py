@@ -27,9 +27,9 @@ from sympy.physics.vector import ReferenceFrame
 import lagcomp as lc
 from lagcomp import examples
 from lagcomp.cli import main
-from lagcomp.codegen.lower import INPUT_PREFIXES, USER_NAMESPACE
-from lagcomp.errors import ModelError
+from lagcomp.codegen.bindings import INPUT_PREFIXES, USER_NAMESPACE
 from lagcomp.codegen.taylor_lanes import taylor_lanes_module
+from lagcomp.errors import ModelError
 
 
 def _spring(stiffness: str, mass: str, length: str, coordinate: str) -> lc.System:

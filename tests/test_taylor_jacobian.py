@@ -75,10 +75,10 @@ def test_every_operation_matches_forward_mode(zoo, monkeypatch):  # noqa: F811
     # the quotient, root, power and log keep their recurrences (one column each); time; parameters' partials.
     # Forward mode in its loop over blocks of 4 columns (test_taylor_sensitivities' block test runs the zoo's
     # choice, this kernel), this kernel with its 7 columns in one pass
-    from lagcomp.codegen import taylor_variational
+    from lagcomp.codegen import taylor_kernel_frame
 
     jacobian = _kernel(zoo, jacobian_source, 7, (0, 1, 2))
-    monkeypatch.setattr(taylor_variational, "UNROLLED_COLUMNS", 2)
+    monkeypatch.setattr(taylor_kernel_frame, "UNROLLED_COLUMNS", 2)
     assert "_b in range(0, 8, 4)" in forward_source(zoo._taylor_program, 7, (0, 1, 2))
     kernels = [_kernel(zoo, forward_source, 7, (0, 1, 2)), jacobian]
     rng = np.random.default_rng(5)

@@ -180,12 +180,12 @@ def test_refusals(pendulum, compiled, monkeypatch):
 
 @pytest.mark.slow  # 20 s: a kernel of its own, compiled cold
 def test_the_loop_over_blocks_of_columns_agrees(zoo, monkeypatch):
-    from lagcomp.codegen import taylor_variational
+    from lagcomp.codegen import taylor_kernel_frame, taylor_variational
     from lagcomp.integrate import taylor_sensitivities
 
     columns = ("q0", "qd0", "params")
     unrolled = zoo.simulate((0.0, 5.0), sensitivities=columns, **TAYLOR)      # 7 columns in one pass
-    monkeypatch.setattr(taylor_variational, "UNROLLED_COLUMNS", 2)             # blocks of 4: 8 columns, one padding
+    monkeypatch.setattr(taylor_kernel_frame, "UNROLLED_COLUMNS", 2)            # blocks of 4: 8 columns, one padding
     monkeypatch.setattr(taylor_sensitivities, "_MODULES", {})                  # (so that the kernel is written anew)
     monkeypatch.setattr(taylor_sensitivities, "_KERNELS", {})
     assert "_b in range(0, 8, 4)" in taylor_variational.variational_source(zoo._taylor_program, 7, (0, 1, 2))

@@ -96,7 +96,7 @@ class JacobianSolve:
     local array.  ``_jac`` is `out` seen flat (size × width, width = `columns`, or size when None; `out`
     is C-contiguous), zeroed: no work array to allocate and copy.  The stores bind M's lower triangle to
     the scalar locals ``m[i][j]`` (i ≥ j, M symmetric) and write the nonzero entries of the Jacobian into
-    ``_jac``, row-major (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles faster than `out`):
+    ``_jac``, row-major (`lagcomp.codegen.jacobian_blocks.jacobian_entry`: a 1-D array compiles faster than `out`):
     the rows of x' and, in the last n rows, ∂(F − M ā)/∂y (or ∂/∂p) at ā = a.  Then the last n rows of
     `out` are overwritten with M⁻¹ times themselves: one LDLᵀ of M, a substitution per column
     (`lagcomp.kernel_support.linear_solvers.ldlt_solve_matrix`, or for n ≤
@@ -198,7 +198,7 @@ class ReturnZero:
 class FlatMatrix:
     """The frame of a kernel whose stores fill a (size, size) matrix (``dae_jacobian``): before its temporaries
     it allocates the work array ``_jac`` of size² zeros, the stores write the nonzero entries into it, row-major
-    (`lagcomp.codegen.lower.jacobian_entry`: a 1-D array compiles faster than `out`), and after them ``_jac``
+    (`lagcomp.codegen.jacobian_blocks.jacobian_entry`: a 1-D array compiles faster than `out`), and after them ``_jac``
     is copied into `out`, every entry, and the kernel returns 0."""
 
     size: int

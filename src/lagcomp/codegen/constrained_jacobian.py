@@ -6,7 +6,7 @@ The constrained ``rhs`` solves, at each state, the augmented (KKT) system for z 
                     [Λ    0 ]        [γ̃]
 
 with M(q, t, p), Λ(q, t, p), F(q, q̇, t, p) and γ̃ = γ − 2α (Λ q̇ + b) − β² Φ the constraints' right-hand side
-with the Baumgarte terms (`lagcomp.codegen.lower.stabilized_gamma`; α, β read from p, not parameters one
+with the Baumgarte terms (`lagcomp.codegen.stabilization.stabilized_gamma`; α, β read from p, not parameters one
 differentiates by).  Differentiating K(x) z(x) = r(x) along any variable x (a state component or a parameter):
 
     (∂K/∂x) z + K ∂z/∂x = ∂r/∂x    ⇒    K ∂z/∂x = ∂/∂x (r − K z̄) |_{z̄ = z}
@@ -14,7 +14,7 @@ differentiates by).  Differentiating K(x) z(x) = r(x) along any variable x (a st
 
 z̄ = (ā, λ̄) symbols held fixed while differentiating and then bound to the values ``rhs`` and ``reactions``
 solve (one call of ``rhs_and_reactions``, bitwise both): the unconstrained kernels' trick
-(`lagcomp.codegen.lower.acceleration_partials`) with the constraint rows added; the sign of λ̄'s term follows
+(`lagcomp.codegen.jacobian_blocks.acceleration_partials`) with the constraint rows added; the sign of λ̄'s term follows
 K's −Λᵀ.  So ∂(q̈, λ)/∂x = K⁻¹ R with R the partials above, all columns from one factorization of K
 (`lagcomp.kernel_support.linear_solvers.kkt_solve_matrix`, the Schur complement path of ``kkt_solve``, LU
 where M is singular).  With y = (q, q̇) and f = (q̇, q̈):
@@ -31,16 +31,16 @@ from __future__ import annotations
 import symengine as se
 import sympy as sp
 
-from lagcomp.codegen.lower import (
+from lagcomp.codegen.cse import cse_kernel
+from lagcomp.codegen.jacobian_blocks import (
     RHS_PARAMETER_JACOBIAN_DOC,
     RHS_WITH_FULL_JACOBIAN_DOC,
     RHS_WITH_JACOBIAN_DOC,
     WITH_JACOBIAN_ARGS,
-    _kernel,
     fresh_symbols,
     jacobian_only,
-    stabilized_gamma,
 )
+from lagcomp.codegen.stabilization import stabilized_gamma
 from lagcomp.ir import AugmentedJacobianSolve, Kernel
 from lagcomp.mechanics.lagrange import EOM, symengine_ready
 from lagcomp.model.system import t
@@ -56,16 +56,16 @@ def constrained_jacobian_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]
     constrained `eom` (module docstring), one CSE each."""
     n, k, parameters = eom.n, eom.k, tuple(eom.parameters)
     state = (*eom.q, *eom.qd)
-    residual, mapping, loads = _augmented_residual(eom, mapping, loads)
+    residual, mapping, loads = augmented_residual(eom, mapping, loads)
 
     def kernel(name, doc, args, variables, first, count, offset, identity=False, given_ydot=False) -> Kernel:
         width = len(variables)
-        stores = _matrix_stores(eom) + [(f"_jac[{r * width + j}]", entry)
-                                        for r, row in enumerate(_partials(residual, variables))
+        stores = matrix_stores(eom) + [(f"_jac[{r * width + j}]", entry)
+                                        for r, row in enumerate(residual_partials(residual, variables))
                                         for j, entry in enumerate(row) if entry != 0]
         solve = AugmentedJacobianSolve(n=n, k=k, width=width, first=first, count=count, offset=offset,
                                        identity=identity, given_ydot=given_ydot)
-        return _kernel(name, doc, args, stores, mapping, loads, solve=solve)
+        return cse_kernel(name, doc, args, stores, mapping, loads, solve=solve)
 
     how = ("\n(q̈, λ) solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ̃), so ∂(q̈, λ)/∂x = [M −Λᵀ; Λ 0]⁻¹ R with\n"
            "R = ∂/∂x [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] at ā = q̈ (`rhs`), λ̄ = λ (`reactions`), γ̃ with the Baumgarte\n"
@@ -91,7 +91,7 @@ def constrained_jacobian_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]
     )
 
 
-def _augmented_residual(eom: EOM, mapping, loads) -> tuple[list, dict, tuple]:
+def augmented_residual(eom: EOM, mapping, loads) -> tuple[list, dict, tuple]:
     """The rows [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] (n + k, sympy) over fresh symbols ā, λ̄, and `mapping`, `loads`
     extended by them: ā_i bound to the local ``_acc<i>`` = ``_ydot[n + i]``, λ̄_c to ``_mult<c>`` = ``_lam[c]``
     (what `rhs` and `reactions` solve: `AugmentedJacobianSolve` calls ``rhs_and_reactions`` first)."""
@@ -112,7 +112,7 @@ def _augmented_residual(eom: EOM, mapping, loads) -> tuple[list, dict, tuple]:
     return rows, mapping, loads
 
 
-def _matrix_stores(eom: EOM) -> list:
+def matrix_stores(eom: EOM) -> list:
     """Stores filling ``_kkt`` = [M −Λᵀ; Λ 0], (n + k, n + k), its nonzero entries."""
     n, k = eom.n, eom.k
     stores = [(f"_kkt[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(n) if eom.M[i, j] != 0]
@@ -120,9 +120,9 @@ def _matrix_stores(eom: EOM) -> list:
     return stores + [(f"_kkt[{n + c}, {j}]", eom.C[c, j]) for c in range(k) for j in range(n) if eom.C[c, j] != 0]
 
 
-def _partials(rows: list, variables) -> list[list]:
+def residual_partials(rows: list, variables) -> list[list]:
     """∂rows_r/∂x_j, (len(rows), len(variables)): symengine's derivatives when it can (as
-    `lagcomp.codegen.lower.acceleration_partials`), else sympy's with a force's jump contributing its
+    `lagcomp.codegen.jacobian_blocks.acceleration_partials`), else sympy's with a force's jump contributing its
     derivative away from the jump (the DiracDelta dropped).  Entries are symengine or sympy expressions."""
     if not variables:
         return [[] for _ in rows]

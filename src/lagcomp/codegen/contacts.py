@@ -190,7 +190,7 @@ def impact_branches(eom, restitutions: tuple, time, kernel, modes: int | None = 
 
     `restitutions` holds, per event, e (a plain expression) for a contact and None for another event;
     `time` is the time symbol of the plain expressions; `kernel`(name, doc, args, stores, solve) builds a
-    CSE'd `Kernel` over the module's loads (`lagcomp.codegen.lower._kernel`); `modes`: the first mode slot of p
+    CSE'd `Kernel` over the module's loads (`lagcomp.codegen.cse.cse_kernel`); `modes`: the first mode slot of p
     (`ContactModes`), then the branch also stores ``_bias`` and calls the resting contacts' reset.
     """
     events = contact_events(restitutions)

@@ -7,7 +7,7 @@ symbolic accelerations.  Differentiating M(x) a(x) = F(x) along the direction dx
 
     M da = dF − dM ā |_{ā = a} = Σ_j ∂(F − M ā)/∂x_j dx_j,
 
-the residual's partials of `lagcomp.codegen.lower.acceleration_partials` (ā held fixed, then bound to the
+the residual's partials of `lagcomp.codegen.jacobian_blocks.acceleration_partials` (ā held fixed, then bound to the
 accelerations ``rhs`` solved) contracted with the direction symbolically, so that one CSE shares them with M
 and F, and one LDLᵀ substitution gives da.  With y = (q, q̇), f = (q̇, a):
 
@@ -41,8 +41,14 @@ import dataclasses
 import symengine as se
 import sympy as sp
 
-from lagcomp.codegen.constrained_jacobian import _augmented_residual, _matrix_stores, _partials
-from lagcomp.codegen.lower import _acceleration_block, _kernel, fresh_symbols, stabilized_gamma
+from lagcomp.codegen.constrained_jacobian import (
+    augmented_residual,
+    matrix_stores,
+    residual_partials,
+)
+from lagcomp.codegen.cse import cse_kernel
+from lagcomp.codegen.jacobian_blocks import acceleration_block, fresh_symbols
+from lagcomp.codegen.stabilization import stabilized_gamma
 from lagcomp.ir import DirectionalSolve, Kernel
 from lagcomp.mechanics.lagrange import EOM
 from lagcomp.model.system import t
@@ -84,19 +90,19 @@ def directional_kernel(eom: EOM, mapping, loads) -> Kernel:
     velocities = [(f"ydot[{i}]", eom.qd[i]) for i in range(n)]
     velocity_rows = [(f"out[{i}]", directions[n + i]) for i in range(n)]
     if eom.k:
-        residual, mapping, loads = _augmented_residual(eom, mapping, loads)
+        residual, mapping, loads = augmented_residual(eom, mapping, loads)
         size, k = n + eom.k, eom.k
         right = [*eom.F, *stabilized_gamma(eom)]
-        first = velocities + _matrix_stores(eom) + [(f"_kkt[{r}, {size}]", right[r]) for r in range(size)]
+        first = velocities + matrix_stores(eom) + [(f"_kkt[{r}, {size}]", right[r]) for r in range(size)]
         second = velocity_rows + [(f"_direction[{r}, {size}]", _contracted(row, directions))
-                                  for r, row in enumerate(_partials(residual, variables))]
+                                  for r, row in enumerate(residual_partials(residual, variables))]
         solved = tuple(f"_acc{i}" for i in range(n)) + tuple(f"_mult{c}" for c in range(k))
         solve = DirectionalSolve(n=n, phase_one=len(first), solved=solved, multipliers=k)
         how = ("K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0], γ̃\n"
                "with the Baumgarte terms; out = (v[n:], dz[:n]) (see lagcomp.codegen.directional).\n"
                "Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid.")
     else:
-        block, m, mapping, loads = _acceleration_block(eom, variables, mapping, loads)
+        block, m, mapping, loads = acceleration_block(eom, variables, mapping, loads)
         f, g = tuple(f"_f{i}" for i in range(n)), tuple(f"_g{i}" for i in range(n))
         first = velocities + [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
         first += list(zip(f, eom.F, strict=True))
@@ -106,7 +112,7 @@ def directional_kernel(eom: EOM, mapping, loads) -> Kernel:
         how = ("M q̈ = F, then M da = Σ_j ∂(F − M ā)/∂x_j dx_j at ā = q̈ by the same LDLᵀ of M; out = (v[n:], da)\n"
                "(see lagcomp.codegen.directional).\n"
                "Returns 0, or k > 0 as `rhs` does when pivot k of M's LDLᵀ is not positive; `out` is then invalid.")
-    return _kernel("rhs_directional", RHS_DIRECTIONAL_DOC + how, DIRECTIONAL_ARGS, first + second, mapping, loads,
+    return cse_kernel("rhs_directional", RHS_DIRECTIONAL_DOC + how, DIRECTIONAL_ARGS, first + second, mapping, loads,
                    solve=solve)
 
 
@@ -176,7 +182,7 @@ RHS_TANGENTS_PARAMETERS_DOC = (
 def tangents_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
     """``rhs_tangents`` and ``rhs_tangents_parameters`` of `eom` (n ≤ `LARGEST_SYSTEM`): one CSE of f, M and F
     (or K and its right-hand side) and the residual's nonzero partials ∂(F − M ā)/∂x (constrained: of
-    `_augmented_residual`) at the solved ā (λ̄), x = (y, p), stored into locals; the emitted loop over the
+    `augmented_residual`) at the solved ā (λ̄), x = (y, p), stored into locals; the emitted loop over the
     columns of S (`lagcomp.ir.DirectionalSolve.columns`) contracts them per column and substitutes by the one
     factorization of M (constrained: one ``kkt_solve_matrix`` of all columns).  ``rhs_tangents`` is the same
     CSE without the parameters' partials (the temporaries only they read left out).  A column then costs its
@@ -190,18 +196,18 @@ def tangents_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
     variables = (*eom.q, *eom.qd, *eom.parameters)
     velocities = [(f"out[{i}]", eom.qd[i]) for i in range(n)]
     if eom.k:
-        residual, mapping, loads = _augmented_residual(eom, mapping, loads)
+        residual, mapping, loads = augmented_residual(eom, mapping, loads)
         right = [*eom.F, *stabilized_gamma(eom)]
         rank = n + eom.k
-        first = velocities + _matrix_stores(eom) + [(f"_kkt[{r}, {rank}]", right[r]) for r in range(rank)]
-        rows = _partials(residual, variables)
+        first = velocities + matrix_stores(eom) + [(f"_kkt[{r}, {rank}]", right[r]) for r in range(rank)]
+        rows = residual_partials(residual, variables)
         solved = tuple(f"_acc{i}" for i in range(n)) + tuple(f"_mult{c}" for c in range(eom.k))
         frame = DirectionalSolve(n=n, phase_one=len(first), solved=solved, multipliers=eom.k, ydot="out")
         how = ("K (q̈, λ) = (F, γ̃), then K dz_c = Σ_j ∂(r − K z̄)/∂x_j dx_j for every column c at once at z̄ =\n"
                "(q̈, λ), K = [M −Λᵀ; Λ 0], γ̃ with the Baumgarte terms (see lagcomp.codegen.directional).\n"
                "Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid.")
     else:
-        rows, m, mapping, loads = _acceleration_block(eom, variables, mapping, loads)
+        rows, m, mapping, loads = acceleration_block(eom, variables, mapping, loads)
         f = tuple(f"_f{i}" for i in range(n))
         first = velocities + [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
         first += list(zip(f, eom.F, strict=True))
@@ -214,7 +220,7 @@ def tangents_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
                 if entry != 0]
     columns = lambda width: tuple(tuple((j, local) for rr, j, local, _ in partials if rr == r and j < width)  # noqa: E731
                                   for r in range(len(rows)))
-    both = _kernel("rhs_tangents_parameters", RHS_TANGENTS_PARAMETERS_DOC + how, ("t", "y", "p", "out"),
+    both = cse_kernel("rhs_tangents_parameters", RHS_TANGENTS_PARAMETERS_DOC + how, ("t", "y", "p", "out"),
                    first + [(local, entry) for _, _, local, entry in partials], mapping, loads,
                    solve=dataclasses.replace(frame, columns=columns(len(variables))))
     state = {local for _, j, local, _ in partials if j < size}

@@ -149,7 +149,7 @@ def geometry_kernel(eom: EOM, build: Callable[..., Kernel]) -> Kernel:
     """The ``geometry`` kernel of `eom`'s bodies, with its ``GEOMETRY`` and ``GEOMETRY_SIZE`` constants.
 
     `build(name, doc, args, stores)` makes the Kernel with one CSE over the stores, in the module's
-    bindings (`lagcomp.codegen.lower`).
+    bindings (`lagcomp.codegen.bindings.symbol_bindings`).
     """
     layout, values = body_geometry(eom)
     size = sum(KINDS[kind][0] for _, kind, _ in layout)

@@ -46,6 +46,7 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp import __version__
+from lagcomp.codegen.cse import cse_kernel
 from lagcomp.codegen.emit import (
     INDENT,
     PROJECTION_ITERATIONS,
@@ -56,17 +57,16 @@ from lagcomp.codegen.emit import (
     support_imports,
 )
 from lagcomp.codegen.geometry import no_geometry_kernel
-from lagcomp.codegen.latex import equations_source, kane_equations
-from lagcomp.codegen.lower import (
+from lagcomp.codegen.jacobian_blocks import (
     RHS_PARAMETER_JACOBIAN_DOC,
     RHS_WITH_JACOBIAN_DOC,
     WITH_JACOBIAN_ARGS,
-    _kernel,
     acceleration_partials,
-    event_reset_kernel,
     jacobian_entry,
     jacobian_only,
 )
+from lagcomp.codegen.latex import equations_source, kane_equations
+from lagcomp.codegen.lower import event_reset_kernel
 from lagcomp.codegen.printer import to_code
 from lagcomp.mechanics.first_order import FirstOrderForm
 from lagcomp.mechanics.kane import acceleration_symbols
@@ -104,7 +104,7 @@ def _rhs(form: FirstOrderForm, mapping, loads) -> tuple:
     stores = [(f"out[{i}]", form.N[i]) for i in range(n_q)]
     stores += [(f"_kkt[{i}, {j}]", form.M[i, j]) for i in range(n_u) for j in range(n_u) if form.M[i, j] != 0]
     stores += [(f"_kkt[{i}, {n_u}]", form.F[i]) for i in range(n_u)]
-    kernel = _kernel(
+    kernel = cse_kernel(
         "rhs", f"dy/dt = (q̇, u̇), shape ({n_q + n_u},): q̇ = N(q, u, t) and M u̇ = F by LU with pivoting.\n\n"
         "Returns 0, or j > 0 when pivot j of M is zero (M singular here); `out` is then invalid.",
         ARGS, stores, mapping, loads,
@@ -145,7 +145,7 @@ def _rhs_jacobian(form: FirstOrderForm) -> tuple:
     size = n_q + n_u
     mapping, loads = _bindings(form, reactions=True)  # binds ū (acceleration_symbols) to _ydot[n_q:]
     stores = _partial_stores(form, (*form.q, *form.u))
-    kernel = _kernel(
+    kernel = cse_kernel(
         "rhs_with_jacobian",
         RHS_WITH_JACOBIAN_DOC +
         "Rows ∂N/∂y of q̇ = N(q, u, t), then ∂u̇/∂y = M⁻¹ (∂F/∂y − ∂(M ū)/∂y |ū=u̇) (u̇ from `rhs`).\n"
@@ -171,7 +171,7 @@ def _rhs_parameter_jacobian(form: FirstOrderForm) -> tuple:
     size, width = n_q + n_u, len(form.parameters)
     mapping, loads = _bindings(form, reactions=True)  # binds ū (acceleration_symbols) to _ydot[n_q:]
     stores = _partial_stores(form, form.parameters)
-    kernel = _kernel(
+    kernel = cse_kernel(
         "rhs_parameter_jacobian",
         RHS_PARAMETER_JACOBIAN_DOC +
         "Rows ∂N/∂p of q̇ = N(q, u, t), then ∂u̇/∂p = M⁻¹ (∂F/∂p − ∂(M ū)/∂p |ū=u̇) (u̇ from `rhs`).\n"
@@ -205,12 +205,12 @@ def _plain_kernels(form: FirstOrderForm, energy, mapping, loads) -> list:
          [(f"out[{i}, {j}]", A[i, j]) for i in range(n_v) for j in range(n_u)]
          + [(f"out[{i}, {n_u}]", form.Psi[i].xreplace(at_rest)) for i in range(n_v)]),
     ]
-    return [_kernel(name, doc, args, stores, mapping, loads) for name, doc, args, stores in specs]
+    return [cse_kernel(name, doc, args, stores, mapping, loads) for name, doc, args, stores in specs]
 
 
 def _reactions(form: FirstOrderForm, names, expressions, mapping, loads) -> tuple:
     n = form.n_q + form.n_u
-    kernel = _kernel(
+    kernel = cse_kernel(
         "reactions", f"Noncontributing forces {tuple(names)} at the u̇ of `rhs`, into `out`.\n"
         "Returns 0, or the status of `rhs` when M is singular.",
         ARGS, [(f"out[{i}]", e) for i, e in enumerate(expressions)], mapping, loads,
@@ -342,7 +342,7 @@ def _events(form: FirstOrderForm, events, resets, mapping, loads) -> tuple:
     if not events:
         return (reset,), _NO_EVENTS + kernel_source(reset)
     names = tuple(name for name, _ in events)
-    values = _kernel("event_values", f"Event functions g = {names} at one state, into `out`.", ARGS,
+    values = cse_kernel("event_values", f"Event functions g = {names} at one state, into `out`.", ARGS,
                      [(f"out[{i}]", g) for i, (_, g) in enumerate(events)], mapping, loads)
     size = form.n_q + form.n_u
     stores = []
@@ -350,7 +350,7 @@ def _events(form: FirstOrderForm, events, resets, mapping, loads) -> tuple:
         stores += [(f"out[{i}, {j}]", g.diff(v)) for j, v in enumerate((*form.q, *form.u))]
         stores.append((f"out[{i}, {size}]", sum((g.diff(s) for s in g.free_symbols if s.name == t.name), sp.S.Zero)))
         stores += [(f"out[{i}, {size + 1 + j}]", g.diff(s)) for j, s in enumerate(form.parameters)]
-    gradients = _kernel(
+    gradients = cse_kernel(
         "event_gradients",
         f"Partials of the event functions {names}, shape ({len(names)}, {size + 1 + len(form.parameters)}), into\n"
         f"`out`: row i is event i, columns ∂g_i/∂y_j (y = (q, u), {size} of them), then ∂g_i/∂t, then ∂g_i/∂p_j.\n"

@@ -2,7 +2,7 @@
 
 Each kernel's outputs go through a single `sympy.cse` together, so that the
 mass matrix and forcing of ``rhs`` share their sines, cosines and products.
-Symbols are renamed to the locals the emitted code binds them to (`user_local`),
+Symbols are renamed to the locals the emitted code binds them to (`lagcomp.codegen.bindings.user_local`),
 and ``_c0, _c1, ...`` for common subexpressions.
 
 Names (DESIGN.md, "Two contracts of the emitted code").  A user may name a
@@ -10,10 +10,10 @@ coordinate or parameter anything; the emitted code cannot collide with it,
 by construction:
 
 - every local bound to a user symbol lies in the *user namespace*, the names
-  matching `USER_NAMESPACE`: ``q_<name>`` for a coordinate, ``qd_<name>`` for
+  matching `lagcomp.codegen.bindings.USER_NAMESPACE`: ``q_<name>`` for a coordinate, ``qd_<name>`` for
   its velocity, ``p_<name>`` for a parameter, ``mom_<name>`` for a conjugate
   momentum (``p_k = p[3]``), ``u_<name>``, ``ud_<name>``, ``udd_<name>``,
-  ``uddd_<name>`` for an input and its derivatives (`input_slots`); a name
+  ``uddd_<name>`` for an input and its derivatives (`lagcomp.codegen.bindings.input_slots`); a name
   that does not stay itself as a Python
   identifier (``x.1``, a keyword-free but NFKC-unstable ``ﬁ``, ...) becomes
   ``<prefix><i>_<its letters>`` with i its position (``p3_x_1``), which no
@@ -33,29 +33,50 @@ user's own names.
 
 from __future__ import annotations
 
-import re
-import unicodedata
 from dataclasses import replace
 
 import symengine as se
 import sympy as sp
 
+from lagcomp.codegen.bindings import (
+    first_mode_slot,
+    input_slots,
+    symbol_bindings,
+    symbol_slots,
+    user_local,
+)
+from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels
 from lagcomp.codegen.contacts import (
-    contact_events,
     contacts_constant,
     friction_branches,
-    friction_events,
     impact_branches,
     mode_slots,
     modes_of,
     resting_kernels,
 )
+from lagcomp.codegen.cse import cse_kernel
+from lagcomp.codegen.directional import (
+    LARGEST_SYSTEM,
+    directional_kernel,
+    tangent_kernels,
+    tangents_kernels,
+)
 from lagcomp.codegen.geometry import geometry_kernel
-from lagcomp.errors import ModelError
+from lagcomp.codegen.jacobian_blocks import (
+    RHS_PARAMETER_JACOBIAN_DOC,
+    RHS_WITH_FULL_JACOBIAN_DOC,
+    RHS_WITH_JACOBIAN_DOC,
+    WITH_JACOBIAN_ARGS,
+    acceleration_block,
+    fresh_symbols,
+    jacobian_entry,
+    jacobian_only,
+)
+from lagcomp.codegen.kinds import ON_DEMAND
+from lagcomp.codegen.stabilization import stabilized_gamma, velocity_residual
 from lagcomp.ir import (
     NO_JACOBIAN,
     AugmentedSolve,
-    Delegate,
     EventResets,
     FlatMatrix,
     JacobianSolve,
@@ -67,215 +88,14 @@ from lagcomp.ir import (
     Unavailable,
 )
 from lagcomp.mechanics.lagrange import EOM, rest_partials, symengine_ready
-from lagcomp.model.friction import slip_symbol
-from lagcomp.model.inputs import MAX_ORDER, is_input
+from lagcomp.model.inputs import is_input
 from lagcomp.model.system import t
 
-#: The user namespace (module docstring): a prefix for each kind of user symbol, then ``_`` or a digit.
-USER_NAMESPACE = re.compile(r"(q|qd|p|mom|u|ud|udd|uddd)[_0-9]")
 #: Largest system whose LDLᵀ solve is emitted unrolled; larger ones call a loop (`lagcomp.kernel_support.linear_solvers.ldlt_solve`).
 #: Unrolled, the 10-link chain's rhs costs 462 ns in a compiled loop against 635 ns looped
 #: (`python -m bench --only kernels --cases n_link_pendulum_10` at aed6595 and at d880236, whose
 #: limit was 8), for about 0.4 s more numba compile time of rhs (1.1 s at 12 links).
 UNROLL_MAX = 12
-
-
-def user_local(prefix: str, name: str, index: int) -> str:
-    """The local of the user symbol `name`, the `index`-th of its kind `prefix` (q, qd, p or mom).
-
-    ``<prefix>_<name>`` when that is an identifier Python keeps as written (NFKC-stable), else
-    ``<prefix><index>_`` and the name's letters, other characters as ``_``: distinct names of one
-    kind always get distinct locals, and no local of one kind is one of another.
-    """
-    local = f"{prefix}_{name}"
-    if local.isidentifier() and unicodedata.normalize("NFKC", local) == local:
-        return local
-    letters = "".join(c if f"a{c}".isidentifier() and unicodedata.normalize("NFKC", c) == c else "_"
-                      for c in name)
-    return f"{prefix}{index}_{letters}"
-
-
-#: The locals of the Baumgarte gains α, β, stored after the user parameters in p for constrained systems.
-BAUMGARTE = ("_baumgarte_alpha", "_baumgarte_beta")
-
-
-def _baumgarte(eom: EOM) -> tuple[sp.Symbol, sp.Symbol]:
-    """The symbols of the Baumgarte gains: named like their locals, unless a parameter has that name
-    (the symengine CSE tells symbols apart by name only, not by assumptions)."""
-    taken, gains = {s.name for s in eom.parameters}, []
-    for name in BAUMGARTE:
-        while name in taken:
-            name += "_"
-        gains.append(sp.Symbol(name, real=True))
-    return tuple(gains)
-
-
-def _slots(eom: EOM) -> list[tuple[sp.Symbol, str, str, int]]:
-    """Each model symbol with its local in the user namespace and where the kernels read it:
-    (symbol, local, array, index), the array ``y`` (state) or ``p`` (parameters).
-
-    Coordinates and velocities are named after the coordinate (``q_x``, ``qd_x``; the velocity
-    symbol's own name is ``x_dot``), parameters after themselves (``p_k``); the Baumgarte gains
-    are lagcomp's, `BAUMGARTE`.
-    """
-    n, names = eom.n, eom.system.coordinate_names
-    slots = [(s, user_local("q", names[i], i), "y", i) for i, s in enumerate(eom.q)]
-    slots += [(s, user_local("qd", names[i], i), "y", n + i) for i, s in enumerate(eom.qd)]
-    slots += [(s, user_local("p", s.name, k), "p", k) for k, s in enumerate(eom.parameters)]
-    if eom.k:
-        slots += [(s, BAUMGARTE[i], "p", len(eom.parameters) + i) for i, s in enumerate(_baumgarte(eom))]
-    elements = friction_events(eom.frictions)
-    if elements:    # the friction elements' modes (their slip force is linear in them): `ContactModes`
-        first = _first_mode(eom) + len(contact_events(eom.restitutions)) + 1
-        slots += [(slip_symbol(f), user_local("slip", eom.system.event_names[e], f), "p", first + f)
-                  for f, e in enumerate(elements)]
-    return slots
-
-
-def _bindings(eom: EOM) -> tuple[dict, tuple[tuple[str, str], ...]]:
-    """Map each model symbol to its local symbol (`_slots`), and list the loads that bind them (``y[0]``)."""
-    mapping, loads = {}, []
-    for symbol, local, array, index in _slots(eom):
-        mapping[symbol] = sp.Symbol(local, real=True)
-        loads.append((local, f"{array}[{index}]"))
-    for u, order, local, slot in input_slots(eom):
-        mapping[u.diff(t, order) if order else u] = sp.Symbol(local, real=True)
-        loads.append((local, f"input_value(t, p, {slot}, {order})"))
-    # distinct by construction: prefixes per kind, and a System refuses two symbols of one name
-    assert len({local for local, _ in loads}) == len(loads), loads
-    mapping[t] = sp.Symbol("t", real=True)
-    return mapping, tuple(loads)
-
-
-#: The locals of an input and of its derivatives, by order: ``u_x``, ``ud_x``, ``udd_x``, ``uddd_x``.
-INPUT_PREFIXES = ("u", "ud", "udd", "uddd")
-
-
-def input_slots(eom: EOM) -> list[tuple]:
-    """Each input u(t) supplied at run time, with each derivative order the kernels may read (0 to
-    `MAX_ORDER`): (u, order, local, header slot).
-
-    The header slot is the entry of p holding where the input's table starts: p holds the user
-    parameters, then the Baumgarte gains of a constrained system or the contacts' modes
-    (`lagcomp.codegen.contacts.mode_slots`), then one header per input in name order
-    (`lagcomp.kernel_support.inputs` describes the tables after them).
-    """
-    first = len(eom.parameters) + (len(BAUMGARTE) if eom.k else 0) + mode_slots(eom)
-    return [(u, order, user_local(INPUT_PREFIXES[order], u.func.__name__, j), first + j)
-            for j, u in enumerate(eom.system.inputs) for order in range(MAX_ORDER + 1)]
-
-
-def _kernel(name, doc, args, stores, mapping, loads, solve=None) -> Kernel:
-    """CSE the stores together and keep only the loads the code uses.
-
-    Expressions are sympy's, or symengine's over the same symbols (`_partials`).
-    """
-    targets = [target for target, _ in stores]
-    exprs = [e if isinstance(e, se.Basic) else sp.sympify(e) for _, e in stores]
-    signals = {key: local for key, local in mapping.items() if not isinstance(key, sp.Symbol)}
-    if signals:  # inputs u(t), u̇(t), ... become their locals first (xreplace takes a derivative whole), so that
-        # what is left is symbols and functions symengine knows: its fast path applies to the rest
-        exprs = [e if isinstance(e, se.Basic) else e.xreplace(signals) for e in exprs]
-        _refuse_high_derivatives(exprs, name)
-    if symengine_ready([e for e in exprs if not isinstance(e, se.Basic)]):
-        temps, reduced = _symengine_cse(exprs, mapping)
-    else:
-        exprs = [e.xreplace(mapping) for e in exprs]
-        temps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("_c", real=True), order="canonical")
-    used = set().union(*(e.free_symbols for e in reduced), *(e.free_symbols for _, e in temps))
-    used_names = {s.name for s in used}
-    needed = tuple((local, src) for local, src in loads if local in used_names)
-    return Kernel(
-        name=name, doc=doc, args=args, loads=needed,
-        temps=tuple((s.name, e) for s, e in temps),
-        stores=tuple(zip(targets, reduced)), solve=solve,
-    )
-
-
-def _refuse_high_derivatives(exprs: list, kernel: str) -> None:
-    """Refuse an input derivative of order above `MAX_ORDER` left after binding the others (its pieces are
-    cubic: the kernels evaluate up to the third derivative)."""
-    for e in exprs:
-        left = [d for d in e.atoms(sp.Derivative) if is_input(d.expr)]
-        if left:
-            raise ModelError(f"The {kernel} kernel needs {left[0]}: lagcomp evaluates inputs' derivatives up to "
-                             f"order {MAX_ORDER} (their tables are piecewise cubic).")
-
-
-def _symengine_cse(exprs: list, mapping: dict) -> tuple[list, list]:
-    """`sympy.cse` of `exprs` after renaming by `mapping`, done by symengine: 10-100× faster on
-    long chains, with no more operations.  Temporaries are ``_c0, _c1, ...``; every symbol
-    comes back real, as in the sympy path."""
-    rename = {se.sympify(k): se.Symbol(v.name) for k, v in mapping.items()}
-    images = [se.sympify(e).xreplace(rename) for e in exprs]
-    angles = _angle_sums(images)
-    pairs, reduced = se.cse([e.xreplace(angles) for e in images] if angles else images)
-    symbols = {str(symbol): sp.Symbol(f"_c{k}", real=True) for k, (symbol, _) in enumerate(pairs)}
-    back = _SympyFromSymengine(symbols)
-    return [(symbols[str(s)], back(e)) for s, e in pairs], [back(e) for e in reduced]
-
-
-def _angle_sums(images: list) -> dict:
-    """sin and cos of ±a ± b (a, b symbols) as products of sin and cos of a and b, where that
-    leaves fewer calls of sin and cos: a chain's sin(θi − θj) and cos(θi − θj) for every pair,
-    n(n − 1) calls, become products of the 2n values sin θi, cos θi.  A call costs 10-20 ns at
-    run time, a product about 1 ns; the double pendulum (4 calls either way) is left as it is.
-    """
-    trig = set().union(*(e.atoms(se.sin, se.cos) for e in images))
-    sums = {}
-    for f in trig:
-        terms = f.args[0].as_coefficients_dict()
-        angles = {s: c for s, c in terms.items() if c != 0}
-        if len(angles) == 2 and all(isinstance(s, se.Symbol) and c in (1, -1) for s, c in angles.items()):
-            sums[f] = angles
-    singles = {g(s) for angles in sums.values() for s in angles for g in (se.sin, se.cos)}
-    if len((trig - sums.keys()) | singles) >= len(trig):
-        return {}
-    replacement = {}
-    for f, angles in sums.items():
-        (a, ca), (b, cb) = sorted(angles.items(), key=lambda item: str(item[0]))
-        sin_a, sin_b = ca * se.sin(a), cb * se.sin(b)  # sin(±a) = ±sin a
-        if type(f).__name__ == "sin":
-            replacement[f] = sin_a * se.cos(b) + se.cos(a) * sin_b
-        else:
-            replacement[f] = se.cos(a) * se.cos(b) - sin_a * sin_b
-    return replacement
-
-
-class _SympyFromSymengine:
-    """Converts symengine expressions back to sympy, a symbol named x becoming `symbols`[x]
-    (by default the real symbol x), subexpressions converted once."""
-
-    FUNCTIONS = {"sin": sp.sin, "cos": sp.cos, "tan": sp.tan, "cot": sp.cot, "exp": sp.exp, "log": sp.log,
-                 "sinh": sp.sinh, "cosh": sp.cosh, "tanh": sp.tanh, "asin": sp.asin, "acos": sp.acos,
-                 "atan": sp.atan, "atan2": sp.atan2}
-
-    def __init__(self, symbols: dict):
-        self.symbols = symbols
-        self.memo: dict = {}
-
-    def __call__(self, image):
-        done = self.memo.get(image)
-        if done is None:
-            done = self.memo[image] = self._convert(image)
-        return done
-
-    def _convert(self, image):
-        if isinstance(image, se.Symbol):
-            name = str(image)
-            if name not in self.symbols:
-                self.symbols[name] = sp.Symbol(name, real=True)
-            return self.symbols[name]
-        if isinstance(image, se.Add):
-            return sp.Add(*map(self, image.args))
-        if isinstance(image, se.Mul):
-            return sp.Mul(*map(self, image.args))
-        if isinstance(image, se.Pow):
-            return sp.Pow(*map(self, image.args))
-        function = self.FUNCTIONS.get(type(image).__name__)
-        if function is not None:
-            return function(*map(self, image.args))
-        return sp.sympify(image)  # a number or a constant (pi, E)
 
 
 def _spd_solve(M: sp.Matrix, rhs: list, offset: int) -> tuple[list, LinearSolve]:
@@ -286,11 +106,6 @@ def _spd_solve(M: sp.Matrix, rhs: list, offset: int) -> tuple[list, LinearSolve]
     f = tuple(f"_f{i}" for i in range(n))
     stores = [(m[i][j], M[i, j]) for i in range(n) for j in range(i + 1)] + list(zip(f, rhs))
     return stores, LinearSolve(n=n, m=m, f=f, offset=offset, unrolled=unrolled)
-
-
-def _velocity_residual(eom: EOM, c: int) -> sp.Expr:
-    """Λ_c · q̇ + b_c, which vanishes on the constraint."""
-    return sum((eom.C[c, j] * eom.qd[j] for j in range(eom.n)), eom.b[c])
 
 
 def _augmented_stores(eom: EOM) -> list:
@@ -306,27 +121,13 @@ def _augmented_stores(eom: EOM) -> list:
     return stores + [(f"_kkt[{n + c}, {N}]", gamma) for c, gamma in enumerate(stabilized_gamma(eom))]
 
 
-def stabilized_gamma(eom: EOM) -> list:
-    """γ̃_c = γ_c − 2α (Λ_c q̇ + b_c) − β² Φ_c (the last term for holonomic rows only), the right-hand side of
-    Λ q̈ = γ̃ with the Baumgarte gains α, β (`_baumgarte`), one per constraint."""
-    alpha, beta = _baumgarte(eom)
-    holonomic_rows = [c for c in range(eom.k) if eom.holonomic[c]]
-    rows = []
-    for c in range(eom.k):
-        stabilized = eom.gamma[c] - 2 * alpha * _velocity_residual(eom, c)
-        if eom.holonomic[c]:
-            stabilized -= beta**2 * eom.Phi[holonomic_rows.index(c)]
-        rows.append(stabilized)
-    return rows
-
-
 def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
     """rhs, reactions and both at once through the augmented system, and the constraint residuals and matrix."""
     n, k = eom.n, eom.k
     state_args = ("t", "y", "p")
     velocities = [(f"out[{i}]", eom.qd[i]) for i in range(n)]
     kh = len(eom.Phi)
-    rhs = _kernel(
+    rhs = cse_kernel(
         "rhs",
         "State derivative dy/dt = (q̇, q̈), shape (2n,), from the augmented system\n"
         "M q̈ = F + Λᵀ λ, Λ q̈ = γ (Baumgarte terms from the last two entries of p).\n\n"
@@ -351,15 +152,15 @@ def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
         rhs,
         reactions,
         both,
-        _kernel(
+        cse_kernel(
             "constraint_residuals",
             f"Residuals, shape ({kh + k},): Φ of the {kh} holonomic constraints, then Λ q̇ + b of all {k}.",
             (*state_args, "out"),
             [(f"out[{h}]", eom.Phi[h]) for h in range(kh)]
-            + [(f"out[{kh + c}]", _velocity_residual(eom, c)) for c in range(k)],
+            + [(f"out[{kh + c}]", velocity_residual(eom, c)) for c in range(k)],
             mapping, loads,
         ),
-        _kernel(
+        cse_kernel(
             "constraint_matrix",
             f"Constraint matrix [Λ | b], shape ({k}, {n + 1}), into `out`.",
             (*state_args, "out"),
@@ -380,7 +181,7 @@ def _velocities_kernel(eom: EOM, mapping, loads) -> Kernel:
     momenta = [sp.Symbol(user_local("mom", name, i), real=True) for i, name in enumerate(eom.system.coordinate_names)]
     loads += tuple((s.name, f"y[{n + i}]") for i, s in enumerate(momenta))
     stores, solve = _spd_solve(eom.M, [momenta[i] - eom.momentum_offset[i] for i in range(n)], offset=0)
-    return _kernel(
+    return cse_kernel(
         "velocities",
         "Velocities q̇, shape (n,), at x = (q, p) (here `y` holds q then the momenta p), from\n"
         "M(q, t) q̇ = p − b(q, t). Returns 0, or k > 0 when pivot k of M is not positive.",
@@ -407,7 +208,7 @@ def _canonical_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
         blocks = (eom.M, eom.momenta.jacobian(eom.q), eom.momentum_rate.jacobian(eom.q),
                   eom.momentum_rate.jacobian(eom.qd))
         blocks = [block.replace(sp.DiracDelta, lambda *args: sp.S.Zero).tolist() for block in blocks]
-    return _kernel(
+    return cse_kernel(
         "canonical_partials",
         "At y = (q, q̇), shape (4, n, n) into `out`: out[0] = M, out[1] = ∂P/∂q, out[2] = ∂r/∂q,\n"
         "out[3] = ∂r/∂q̇ (P = M q̇ + b the momenta, r = ∂L/∂q + Q − ∂D/∂q̇ their rate; row i is\n"
@@ -422,65 +223,13 @@ def _rhs_kernel(eom: EOM, mapping, loads) -> Kernel:
     """dy/dt = (q̇, q̈) of an unconstrained system, q̈ by LDLᵀ of M; stores q̇ into out[:n] first, then M, F."""
     n = eom.n
     stores, solve = _spd_solve(eom.M, list(eom.F), offset=n)
-    return _kernel(
+    return cse_kernel(
         "rhs",
         "State derivative dy/dt = (q̇, q̈), shape (2n,), with M(q, t) q̈ = F(q, q̇, t).\n\n"
         "Returns 0, or k > 0 when pivot k of the LDLᵀ factorization of M is not\n"
         "positive (M is singular or indefinite at this state); `out` is then invalid.",
         ("t", "y", "p", "out"), [(f"out[{i}]", eom.qd[i]) for i in range(n)] + stores, mapping, loads, solve=solve,
     )
-
-
-def acceleration_partials(M, F, accelerations, variables) -> list[list]:
-    """R_ij = ∂(F_i − Σ_k M_ik ā_k)/∂x_j for the symbols ā = `accelerations` held fixed, shape (rows of F, len(x)).
-
-    At ā = a, the solution of M a = F, differentiating M a = F gives M ∂a/∂x = R: the Jacobian of the
-    accelerations is M⁻¹ R (the `rhs_jacobian` kernels).  symengine differentiates when it can (as in
-    `_canonical_partials_kernel`); otherwise sympy, and a force that jumps (Coulomb friction's sign(q̇))
-    contributes its derivative away from the jump: the DiracDelta at the jump is dropped.
-    Entries are symengine or sympy expressions (`_kernel` takes either).
-    """
-    rows, columns = M.rows, len(accelerations)
-    if not variables:   # a model without parameters: its (n, 0) parameter block (sympy's jacobian refuses no x)
-        return [[] for _ in range(rows)]
-    if symengine_ready([*M, *F]):   # the residual built in symengine too: sympy's additions took 0.26 s at 24 links
-        bars, xs = [se.sympify(a) for a in accelerations], [se.sympify(x) for x in variables]
-        images = [se.sympify(F[i]) - sum((se.sympify(M[i, k]) * bars[k] for k in range(columns) if M[i, k] != 0),
-                                         se.Integer(0))
-                  for i in range(rows)]
-        return [[image.diff(x) for x in xs] for image in images]
-    residual = [F[i] - sum((M[i, k] * accelerations[k] for k in range(columns) if M[i, k] != 0), sp.S.Zero)
-                for i in range(rows)]
-    block = sp.Matrix(residual).jacobian(list(variables)).replace(sp.DiracDelta, lambda *args: sp.S.Zero)
-    return block.tolist()
-
-
-def fresh_symbols(stem: str, count: int, taken: set[str]) -> tuple[sp.Symbol, ...]:
-    """`count` real symbols ``<stem>0, <stem>1, ...``, each name lengthened by ``_`` until no name in `taken`
-    has it (symengine tells symbols apart by name only: a model symbol of the same name would merge with it)."""
-    symbols = []
-    for i in range(count):
-        name = f"{stem}{i}"
-        while name in taken:
-            name += "_"
-        symbols.append(sp.Symbol(name, real=True))
-    return tuple(symbols)
-
-
-def jacobian_entry(i: int, j: int, size: int) -> str:
-    """The store target of entry (i, j) of an ``rhs_jacobian``, ``rhs_parameter_jacobian`` or ``dae_jacobian``:
-    the flat work array ``_jac``, row-major, rows of `size` entries.
-
-    Stores into a 1-D local array compile several times faster than into the 2-D `out`: the
-    24-link chain's kernel took numba 16 s that way against 48 s (`JacobianSolve`).
-    """
-    return f"_jac[{i * size + j}]"
-
-
-#: The docstring of every ``rhs_jacobian`` kernel: what it computes; `_rhs_jacobian_kernels` adds how.
-RHS_JACOBIAN_DOC = (
-    "Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).\n"
-)
 
 
 def _rhs_jacobian_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
@@ -496,12 +245,12 @@ def _rhs_jacobian_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
     ``rhs_jacobian`` (radau) calls it and drops f (`Delegate`), so that numba compiles the body once.
     """
     n = eom.n
-    block, m, mapping, loads = _acceleration_block(eom, (*eom.q, *eom.qd), mapping, loads)
+    block, m, mapping, loads = acceleration_block(eom, (*eom.q, *eom.qd), mapping, loads)
     stores = [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
     stores += [(jacobian_entry(i, n + i, 2 * n), sp.S.One) for i in range(n)]
     stores += [(jacobian_entry(n + i, j, 2 * n), block[i][j])
                for i in range(n) for j in range(2 * n) if block[i][j] != 0]
-    combined = _kernel(
+    combined = cse_kernel(
         "rhs_with_jacobian",
         RHS_WITH_JACOBIAN_DOC +
         "Rows [0 | I], then ∂a/∂q = M⁻¹ (∂F/∂q − ∂(M ā)/∂q |ā=a), ∂a/∂q̇ = M⁻¹ ∂F/∂q̇ (a = q̈ from `rhs`).\n"
@@ -510,49 +259,6 @@ def _rhs_jacobian_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
         WITH_JACOBIAN_ARGS, stores, mapping, loads, solve=JacobianSolve(n=n, size=2 * n, m=m, given_ydot=True),
     )
     return combined, jacobian_only(2 * n)
-
-
-#: The arguments of every ``rhs_with_jacobian`` kernel: f goes into ``ydot`` (N,), J into ``out`` (N, N).
-WITH_JACOBIAN_ARGS = ("t", "y", "p", "ydot", "out")
-#: The docstring of every ``rhs_with_jacobian`` kernel: what it computes; the emitters add how.
-RHS_WITH_JACOBIAN_DOC = (
-    "f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise), out[i, j] = ∂f_i/∂y_j,\n"
-    "(N, N), symbolic, no differences (what `rhs_jacobian` returns, bitwise).\n"
-)
-
-
-def jacobian_only(size: int) -> Kernel:
-    """``rhs_jacobian``: ``rhs_with_jacobian`` with f dropped (`Delegate`), the same values bitwise."""
-    return Kernel(
-        name="rhs_jacobian",
-        doc=RHS_JACOBIAN_DOC + "The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses.",
-        args=("t", "y", "p", "out"), loads=(), temps=(), stores=(),
-        solve=Delegate(kernel="rhs_with_jacobian", scratch=size),
-    )
-
-
-def _acceleration_block(eom: EOM, variables, mapping, loads) -> tuple:
-    """R = ∂(F − M ā)/∂x for x = `variables` (`acceleration_partials`, (n, len(x))), the locals of M's lower
-    triangle, and `mapping`, `loads` extended by the symbols ā bound to the locals ``_acc<i>`` = ``_ydot[n + i]``
-    (the accelerations `rhs` solved; `JacobianSolve` calls it first)."""
-    n = eom.n
-    taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}
-    taken |= {s.name for e in (*eom.M, *eom.F) for s in e.free_symbols}
-    accelerations = fresh_symbols("_acc", n, taken)
-    locals_ = [f"_acc{i}" for i in range(n)]
-    mapping = {**mapping, **{a: sp.Symbol(local, real=True) for a, local in zip(accelerations, locals_, strict=True)}}
-    loads = loads + tuple((local, f"_ydot[{n + i}]") for i, local in enumerate(locals_))
-    m = tuple(tuple(f"_m{i}_{j}" for j in range(i + 1)) for i in range(n))
-    return acceleration_partials(eom.M, eom.F, accelerations, variables), m, mapping, loads
-
-
-#: The docstring of every ``rhs_parameter_jacobian`` kernel: what it computes; `_rhs_parameter_jacobian_kernel`
-#: adds how.
-RHS_PARAMETER_JACOBIAN_DOC = (
-    "Exact parameter Jacobian out[i, j] = ∂f_i/∂p_j, (N, P), of y' = f(t, y, p) as `rhs` computes it (symbolic,\n"
-    "no differences): P = the model's parameters, in the order of p (not the Baumgarte gains nor the\n"
-    "inputs' tables that follow them).\n"
-)
 
 
 def _rhs_parameter_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
@@ -565,11 +271,11 @@ def _rhs_parameter_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     substituted before the derivation); inputs read from tables are not parameters and get no column.
     """
     n, width = eom.n, len(eom.parameters)
-    block, m, mapping, loads = _acceleration_block(eom, eom.parameters, mapping, loads)
+    block, m, mapping, loads = acceleration_block(eom, eom.parameters, mapping, loads)
     stores = [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
     stores += [(jacobian_entry(n + i, j, width), block[i][j])
                for i in range(n) for j in range(width) if block[i][j] != 0]
-    return _kernel(
+    return cse_kernel(
         "rhs_parameter_jacobian",
         RHS_PARAMETER_JACOBIAN_DOC +
         "Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).\n"
@@ -579,27 +285,18 @@ def _rhs_parameter_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     )
 
 
-#: The docstring of every ``rhs_with_full_jacobian`` kernel: what it computes; the emitters add how.
-RHS_WITH_FULL_JACOBIAN_DOC = (
-    "f and both its exact Jacobians at once: ydot = f(t, y) as `rhs` computes it (bitwise), out (N, N + P) =\n"
-    "[∂f/∂y | ∂f/∂p] (what `rhs_with_jacobian` and `rhs_parameter_jacobian` give, to rounding: another CSE), P the\n"
-    "model's parameters in the order of p; one solve for f, one factorization for both (the sensitivities' kernel\n"
-    "for parameter columns).\n"
-)
-
-
 def _rhs_with_full_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     """``rhs_with_full_jacobian``: `_rhs_jacobian_kernels`' rows along (q, q̇) and the parameters together,
     M ∂a/∂x = ∂(F − M ā)/∂x |_{ā = a} for x = (y, p), one CSE, one LDLᵀ of M and 2n + P substitutions
     (`JacobianSolve` with ``columns`` = 2n + P), where ``rhs_with_jacobian`` and ``rhs_parameter_jacobian`` call
     `rhs` and factor M each."""
     n, width = eom.n, 2 * eom.n + len(eom.parameters)
-    block, m, mapping, loads = _acceleration_block(eom, (*eom.q, *eom.qd, *eom.parameters), mapping, loads)
+    block, m, mapping, loads = acceleration_block(eom, (*eom.q, *eom.qd, *eom.parameters), mapping, loads)
     stores = [(m[i][j], eom.M[i, j]) for i in range(n) for j in range(i + 1)]
     stores += [(jacobian_entry(i, n + i, width), sp.S.One) for i in range(n)]
     stores += [(jacobian_entry(n + i, j, width), block[i][j])
                for i in range(n) for j in range(width) if block[i][j] != 0]
-    return _kernel(
+    return cse_kernel(
         "rhs_with_full_jacobian",
         RHS_WITH_FULL_JACOBIAN_DOC +
         "Rows [0 | I | 0], then ∂a/∂x = M⁻¹ (∂F/∂x − ∂(M ā)/∂x |ā=a), x = (q, q̇, p) (a = q̈ from `rhs`).\n"
@@ -630,7 +327,7 @@ def dae_residual(eom: EOM, w, lam, mu) -> list:
     rows += list(w)
     rows += [sum((eom.M[i, j] * w[j] for j in range(n) if eom.M[i, j] != 0), sp.S.Zero) - eom.F[i]
              - sum((eom.C[c, i] * lam[c] for c in range(k) if eom.C[c, i] != 0), sp.S.Zero) for i in range(n)]
-    rows += [_velocity_residual(eom, c) for c in range(k)]
+    rows += [velocity_residual(eom, c) for c in range(k)]
     return rows + list(eom.Phi)
 
 
@@ -667,7 +364,7 @@ def _dae_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
     jacobian = dae_jacobian(residual, (*eom.q, *eom.qd, *(s for group in symbols.values() for s in group)))
     layout = f"z = (q, v, w, λ, μ), DAE_SIZE = {size} (n = {n}, k = {k}, kh = {kh}); λ has the sign of `reactions`.\n"
     return (
-        _kernel(
+        cse_kernel(
             "dae_residual",
             "Residual G(t, z), shape (DAE_SIZE,), of the constrained system as the index-2 DAE Mdae z' = G(t, z),\n"
             "Mdae = diag(1 × 2n, 0 × (n + k + kh)): rows v + Λ_hᵀ μ, w, M w − F − Λᵀ λ, Λ v + b, Φ.\n"
@@ -675,7 +372,7 @@ def _dae_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, Kernel]:
             ("t", "y", "p", "out"), [(f"out[{i}]", g) for i, g in enumerate(residual)], mapping, loads,
             solve=ReturnZero(),
         ),
-        _kernel(
+        cse_kernel(
             "dae_jacobian",
             "Exact Jacobian out[i, j] = ∂G_i/∂z_j, (DAE_SIZE, DAE_SIZE), of `dae_residual` (symbolic, no\n"
             "differences), every entry written.\n" + layout + f"Returns 0. {DAE_SEE_ALSO}",
@@ -695,14 +392,14 @@ def _rhs_lanes_kernel(rhs: Kernel, eom: EOM) -> Kernel:
     """`rhs` over a batch of trajectories in lock-step (one SIMD lane each), from the same CSE.
 
     The same loads, temporaries and stores, each lane reading its own column: a local bound to
-    ``y[i]`` (`_slots`) reads ``Y[i, _l]``, one bound to ``p[k]`` reads ``P[k, _l]``, and the
+    ``y[i]`` (`symbol_slots`) reads ``Y[i, _l]``, one bound to ``p[k]`` reads ``P[k, _l]``, and the
     velocities q̇_i that `_rhs_kernel` stores first, into ``out[i]``, go to ``out[i, _l]`` (the
     solve's q̈ too: `Kernel.lanes`).  Only for unrolled solves (n ≤ UNROLL_MAX): the looped LDLᵀ
     would need a work array per lane.  Each lane has its own time (adaptive steps).
     """
     n = rhs.solve.n
     uses_t = any(sp.Symbol("t", real=True) in e.free_symbols for _, e in rhs.temps + rhs.stores)
-    columns = {local: f"{LANE_ARRAYS[array]}[{index}, _l]" for _, local, array, index in _slots(eom)}
+    columns = {local: f"{LANE_ARRAYS[array]}[{index}, _l]" for _, local, array, index in symbol_slots(eom)}
     velocities = tuple((f"out[{i}, _l]", expr) for i, (_, expr) in enumerate(rhs.stores[:n]))
     return replace(
         rhs, name="rhs_lanes", args=("T", "Y", "P", "out", "bad"), lanes=True,
@@ -718,10 +415,10 @@ def _momenta_kernel(eom: EOM, mapping, loads) -> Kernel:
     of M, which halves the operations numba compiles (a 24-link chain: 2400 -> 1220)."""
     n, doc, args = eom.n, "Conjugate momenta ∂L/∂q̇_i, shape (n,), into `out`.", ("t", "y", "p", "out")
     if n <= UNROLL_MAX:
-        return _kernel("momenta", doc, args, [(f"out[{i}]", eom.momenta[i]) for i in range(n)], mapping, loads)
+        return cse_kernel("momenta", doc, args, [(f"out[{i}]", eom.momenta[i]) for i in range(n)], mapping, loads)
     stores, solve = _spd_solve(eom.M, list(eom.momentum_offset), offset=0)
     solve = SymmetricProduct(n=n, m=solve.m, f=solve.f, start=n, offset=0)
-    return _kernel("momenta", doc, args, stores, mapping, loads, solve=solve)
+    return cse_kernel("momenta", doc, args, stores, mapping, loads, solve=solve)
 
 
 def _energy_function_kernel(eom: EOM, mapping, loads) -> Kernel:
@@ -731,7 +428,7 @@ def _energy_function_kernel(eom: EOM, mapping, loads) -> Kernel:
         doc += "\nHere T is homogeneous quadratic in q̇, so h = T + V: the kernel `energy`."
         return Kernel(name="energy_function", doc=doc, args=("t", "y", "p"), loads=(), temps=(), stores=(),
                       alias="energy")
-    return _kernel("energy_function", doc, ("t", "y", "p"), [("return", eom.energy_function)], mapping, loads)
+    return cse_kernel("energy_function", doc, ("t", "y", "p"), [("return", eom.energy_function)], mapping, loads)
 
 
 def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
@@ -741,21 +438,15 @@ def _event_kernel(eom: EOM, mapping, loads) -> Kernel:
     doc = f"Event functions g, shape ({len(names)},), in order {names}, into `out`; the drivers locate their zeros."
     solve = None
     if mode_slots(eom):
-        solve = modes_of(eom, "events", _first_mode(eom))
+        solve = modes_of(eom, "events", first_mode_slot(eom))
         if solve.events:
             doc += ("\nA closed contact's value is its normal force (contact_forces): its lift-off when it turns "
                     "negative.")
         if solve.frictions:
             doc += ("\nA friction element's value is s·v while it slips (mode s = ±1: v reaching 0), μs |N| − |λ_f| "
                     "while it sticks\n(friction_limits, contact_forces: the force needed reaching its limit).")
-    return _kernel("event_values", doc, ("t", "y", "p", "out"), [(f"out[{e}]", g) for e, g in enumerate(eom.events)],
+    return cse_kernel("event_values", doc, ("t", "y", "p", "out"), [(f"out[{e}]", g) for e, g in enumerate(eom.events)],
                    mapping, loads, solve=solve)
-
-
-def _first_mode(eom: EOM) -> int:
-    """The first slot of p of the contacts' modes: after the parameters (a system with contacts has no
-    constraints, so no Baumgarte gains)."""
-    return len(eom.parameters)
 
 
 def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping, loads, restitutions=(),
@@ -768,7 +459,7 @@ def event_reset_kernel(names: tuple[str, ...], resets: tuple, size: int, mapping
     Returns 0 or the impact solver's status.  Shared by the Lagrange and Kane modules (their `mapping` and
     `loads`)."""
     branches = tuple(
-        (e, _kernel("event_reset", "", ("t", "y", "p", "e", "out"), [(f"out[{i}]", v) for i, v in reset], mapping,
+        (e, cse_kernel("event_reset", "", ("t", "y", "p", "e", "out"), [(f"out[{i}]", v) for i, v in reset], mapping,
                     loads))
         for e, reset in enumerate(resets) if reset) + tuple(impacts) + tuple(switches)
     reset_names = [names[e] for e, reset in enumerate(resets) if reset]
@@ -824,7 +515,7 @@ def _event_gradients_kernel(eom: EOM, mapping, loads) -> Kernel:
         )
     variables = (*eom.q, *eom.qd, t, *eom.parameters)
     stores = [(f"out[{e}, {j}]", g.diff(v)) for e, g in enumerate(eom.events) for j, v in enumerate(variables)]
-    return _kernel("event_gradients", doc + "Returns 0.", ("t", "y", "p", "out"), stores, mapping, loads,
+    return cse_kernel("event_gradients", doc + "Returns 0.", ("t", "y", "p", "out"), stores, mapping, loads,
                    solve=ReturnZero())
 
 
@@ -836,7 +527,7 @@ def _rest_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
     """
     n = eom.n
     blocks = [block.replace(sp.DiracDelta, lambda *args: sp.S.Zero) for block in rest_partials(eom)]
-    return _kernel(
+    return cse_kernel(
         "rest_partials",
         "At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,\n"
         "column j the variable j). The velocities in `y` are ignored: the partials are those at rest.",
@@ -850,13 +541,6 @@ def _directional_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
     """(``rhs_directional``, ``rhs_tangent``, ``rhs_tangent_parameters``, ``rhs_tangents``,
     ``rhs_tangents_parameters``) for systems of at most `lagcomp.codegen.directional.LARGEST_SYSTEM` coordinates,
     () for larger ones, whose sensitivities take the full Jacobians."""
-    from lagcomp.codegen.directional import (  # (it imports this module)
-        LARGEST_SYSTEM,
-        directional_kernel,
-        tangent_kernels,
-        tangents_kernels,
-    )
-
     if eom.n > LARGEST_SYSTEM:
         return ()
     directional = directional_kernel(eom, mapping, loads)
@@ -880,11 +564,9 @@ def lower(eom: EOM, part: str = "all") -> ModuleIR:
     eager module, "on_demand" those of the companion module and the motion kernels (``rhs`` and what comes
     with it), "all" every kernel.  A kernel is the same whichever part it is lowered in.
     """
-    from lagcomp.codegen.kinds import ON_DEMAND
-
     if part not in PARTS:
         raise ValueError(f"part must be one of {PARTS}, got {part!r}")
-    mapping, loads = _bindings(eom)
+    mapping, loads = symbol_bindings(eom)
     on_demand = {kind.name for kind in ON_DEMAND}
     wanted = {"all": lambda kind: True, "eager": lambda kind: kind not in on_demand,
               "on_demand": lambda kind: kind in on_demand or kind == "motion"}[part]
@@ -902,16 +584,13 @@ def _builders(eom: EOM, mapping, loads) -> list:
     """(kind, build) for every kernel of `eom`, in module order: build() returns the kind's kernels (lowered when
     called: `lower` calls only the builders of the kinds it wants).  Kinds are those of `lagcomp.codegen.kinds`,
     "motion" (rhs and what the same CSE gives) and "eager" (the rest of the eager module)."""
-    from lagcomp.codegen.directional import LARGEST_SYSTEM  # (it imports this module)
-
     n = eom.n
     rhs = _once(lambda: _rhs_kernel(eom, mapping, loads))
 
     def kernel(name, doc, args, stores, solve=None):
-        return _kernel(name, doc, args, stores, mapping, loads, solve=solve)
+        return cse_kernel(name, doc, args, stores, mapping, loads, solve=solve)
 
     if eom.k:
-        from lagcomp.codegen.constrained_jacobian import constrained_jacobian_kernels
         first = [("motion", lambda: _constraint_kernels(eom, mapping, loads)),
                  ("jacobians", lambda: constrained_jacobian_kernels(eom, mapping, loads)),
                  ("directional", lambda: _directional_kernels(eom, mapping, loads)),
@@ -921,7 +600,7 @@ def _builders(eom: EOM, mapping, loads) -> list:
         def motion():
             free = _rhs_kernel(eom, mapping, loads)
             free = replace(free, name="rhs_free", doc="The motion without contacts (all open): " + free.doc)
-            return (*resting_kernels(eom, t, _first_mode(eom), kernel), free)
+            return (*resting_kernels(eom, t, first_mode_slot(eom), kernel), free)
         first = [("motion", motion), ("jacobians", lambda: (*_rhs_jacobian_kernels(eom, mapping, loads),
                                                              _rhs_parameter_jacobian_kernel(eom, mapping, loads)))]
     else:
@@ -968,12 +647,12 @@ def _once(build):
 def _event_reset_kernel(eom: EOM, mapping, loads) -> Kernel:
     """``event_reset`` of `eom`: its events' resets, the contacts' impacts and the friction elements' switches."""
     def kernel(name, doc, args, stores, solve):
-        return _kernel(name, doc, args, stores, mapping, loads, solve=solve)
+        return cse_kernel(name, doc, args, stores, mapping, loads, solve=solve)
 
-    first = _first_mode(eom) if mode_slots(eom) else None
+    first = first_mode_slot(eom) if mode_slots(eom) else None
     return event_reset_kernel(eom.system.event_names, eom.resets, 2 * eom.n, mapping, loads, eom.restitutions,
                               impact_branches(eom, eom.restitutions, t, kernel, first),
-                              friction_branches(eom, _first_mode(eom), kernel))
+                              friction_branches(eom, first_mode_slot(eom), kernel))
 
 
 def _input_orders(eom: EOM, kernels) -> tuple[int, ...]:

@@ -52,17 +52,17 @@ from __future__ import annotations
 
 from collections import Counter
 
-from lagcomp.codegen import taylor_variational as variational
-from lagcomp.codegen.taylor_ops import LINEAR, Op
-from lagcomp.codegen.taylor_variational import (
+from lagcomp.codegen import taylor_kernel_frame as frame
+from lagcomp.codegen.taylor_kernel_frame import (
     INDENT,
-    _Constants,
-    _ops,
+    ScalarTangents,
     kernel_source,
+    program_ops,
     setup_lines,
     value_lines,
     work_rows,
 )
+from lagcomp.codegen.taylor_ops import LINEAR, Op
 
 #: A term of a tangent: (factor (code), kind ("one", "value" or "slot"), series (a value's name, a slot's index)).
 Term = tuple[str, str, str]
@@ -106,7 +106,7 @@ class _Kernel:
         self.states = {name: i for i, name in enumerate(program["states"])}
         self.rows = {name: i for i, name in enumerate(work_rows(program))}
         self.row_count = max(len(self.rows), 1)
-        self.constants = _Constants(program, parameters, scale)
+        self.constants = ScalarTangents(program, parameters, scale)
         self.slots = 0
         self.accumulators = 0
         #: {(the two series' codes at _j, sorted): the slot of their convolution}
@@ -117,7 +117,7 @@ class _Kernel:
         self.sums: dict[tuple[Term, ...], str] = {}
         #: {series: (c, u)}: the series is c u, u a series not so computed (a scale or a negation of one)
         self.multiples: dict[str, tuple[str, str]] = {}
-        for op in _ops(program):
+        for op in program_ops(program):
             if op.kind in ("scale", "neg"):
                 factor, root = self.multiples.get(op.args[0], ("1.0", op.args[0]))
                 self.multiples[op.out[0]] = _product(op.const if op.kind == "scale" else "-1.0", factor), root
@@ -388,7 +388,7 @@ class _Sweeps:
         self.states = [_Sweep(self.kernel, state=name) for name in program["states"]]
         self.parameters = [_Sweep(self.kernel, parameter=j) for j in parameters]
         codes: list[_Code] = []
-        for op in _ops(program):
+        for op in program_ops(program):
             code = _Code(self.kernel, ", ".join(op.out) or "f")
             self.kernel.demand = Counter(
                 self.kernel.convolution_key(term, value) for sweep in (*self.states, *self.parameters)
@@ -407,10 +407,10 @@ class _Sweeps:
 
 
 def column_width(program: dict, columns: int, convolutions: int) -> int:
-    """The columns of one pass of the column update (`lagcomp.codegen.taylor_variational.block_width`'s rule,
+    """The columns of one pass of the column update (`lagcomp.codegen.taylor_kernel_frame.block_width`'s rule,
     with J's `convolutions` per column for the program's operations)."""
-    width = columns if columns <= variational.UNROLLED_COLUMNS else variational.BLOCK
-    return max(1, min(width, variational.COLUMN_OPERATIONS_MAX // max(convolutions, 1)))
+    width = columns if columns <= frame.UNROLLED_COLUMNS else frame.BLOCK
+    return max(1, min(width, frame.COLUMN_OPERATIONS_MAX // max(convolutions, 1)))
 
 
 def jacobian_products(program: dict, columns: int, parameters: tuple[int, ...] = ()) -> int:
@@ -483,7 +483,7 @@ def jacobian_source(program: dict, columns: int, parameters: tuple[int, ...] = (
     lines += [f"{INDENT}_S[{i}*(order + 1)*{padded} + _c] = y[{n_state}*(_c + 1) + {i}] if _c < {columns} else 0.0"
               for i in range(n_state)]
     lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
-    lines += [INDENT + line for op in _ops(program) for line in value_lines(op, kernel.at)]
+    lines += [INDENT + line for op in program_ops(program) for line in value_lines(op, kernel.at)]
     lines += [f"{INDENT}# The series of J's entries and of ∂f/∂p, order k"] + [INDENT + line for line in sweeps.lines]
     for position, sweep in enumerate(sweeps.parameters):
         column = columns - len(parameters) + position

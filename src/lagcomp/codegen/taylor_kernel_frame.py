@@ -1,0 +1,118 @@
+"""The frame of a ``taylor_variational_coefficients`` kernel, shared by its two writers: forward mode
+(`lagcomp.codegen.taylor_variational`) and the Jacobian's series (`lagcomp.codegen.taylor_jacobian`).
+
+Both write the same kernel around a body of their own: the columns of one pass (`block_width` and its
+limits), the rows of W (`work_rows`), the tangents of the program's scalars (`ScalarTangents`), the
+statements before the order loop (`setup_lines`), a value's coefficient k (`value_lines`, the code of
+``taylor_coefficients``, so that the state rows of X are bitwise its) and the function around the body
+with its constants (`kernel_source`).
+"""
+
+from __future__ import annotations
+
+from lagcomp.codegen.taylor_ops import (
+    LINEAR,
+    Op,
+    Setup,
+    convolution_loop,
+    linear_line,
+    partial_name,
+    pivot_test,
+    setup_statements,
+)
+
+INDENT = "    "
+KERNEL = "taylor_variational_coefficients"
+#: Up to this many columns are written out in one pass (`block_width`); more take a loop over blocks of `BLOCK`.
+UNROLLED_COLUMNS = 9
+#: Columns of one pass of the loop over blocks: an AVX2 vector of float64.
+BLOCK = 4
+#: Most columns × operations written out in one pass (`block_width`): numba's compile time grows faster than
+#: the code (n_link_pendulum(5), 261 operations, 10 columns in one pass: 12 minutes).
+COLUMN_OPERATIONS_MAX = 600
+
+
+def block_width(program: dict, columns: int) -> int:
+    """The columns of one pass of the kernel's loop over them.  Every column written out is fastest (the double
+    pendulum, order 20: 8 columns in one pass 11 µs, in two of 4 in a loop 18 µs: in a loop LLVM no longer makes
+    a block's chains one vector), up to `UNROLLED_COLUMNS`; then blocks of `BLOCK`; fewer when the program is
+    so large that compiling them would take minutes (`COLUMN_OPERATIONS_MAX`)."""
+    width = columns if columns <= UNROLLED_COLUMNS else BLOCK
+    return max(1, min(width, COLUMN_OPERATIONS_MAX // max(program["operations"], 1)))
+
+
+def work_rows(program: dict) -> list[str]:
+    """The series held in rows of W, in order, as ``taylor_coefficients`` holds them (time first, if used)."""
+    outputs = [name for op in program["body"] for name in op["out"]]
+    return (["_t"] if program["uses_t"] else []) + outputs
+
+
+def program_ops(program: dict) -> list[Op]:
+    return [Op(op["kind"], tuple(op["out"]), tuple(op["args"]), op["const"], op["index"]) for op in program["body"]]
+
+
+class ScalarTangents:
+    """The tangents of the program's scalars: a parameter's own column gets `scale` (the columns' factor,
+    `lagcomp.integrate.sensitivities`), a scalar its setup's ``partial`` (times `scale`), any other nothing."""
+
+    def __init__(self, program: dict, parameters: tuple[int, ...], scale: float):
+        self.parameters, self.scale = parameters, scale
+        self.own = {entry["name"]: entry["index"] for entry in program["setup"] if entry["kind"] == "param"}
+        self.partials = {entry["name"] for entry in program["setup"] if entry["kind"] == "partial"}
+
+    def tangent(self, const: str, j: int | None) -> str | None:
+        """The code of ∂const/∂p_j (times the scale), or None when it is 0 (j None: an initial-state column)."""
+        if j is None:
+            return None
+        if self.own.get(const) == j:
+            return repr(self.scale)
+        if partial_name(const, j) in self.partials:
+            partial = partial_name(const, j)
+            return partial if self.scale == 1.0 else f"{self.scale!r}*{partial}"
+        return None
+
+    def varies(self, const: str) -> bool:
+        return any(self.tangent(const, j) is not None for j in self.parameters)
+
+
+def value_lines(op: Op, at) -> list[str]:
+    """Coefficient k of `op`'s value(s): the code of ``taylor_coefficients`` (`lagcomp.codegen.taylor`), with
+    ``at(name, index)`` the code of a coefficient (a writer's ``at``)."""
+    if op.kind == "comment":
+        return [f"# {op.const}"]
+    if op.kind == "pivot":
+        scale = at(op.args[1], 0) if len(op.args) > 1 else op.const
+        return [f"if k == 0 and not {pivot_test(at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
+    if op.kind == "state":
+        return [f"X[{op.index}, k + 1] = {linear_line(op, at)}*_ik1"]
+    if op.kind in LINEAR:
+        return [linear_line(op, at)]
+    summary, loop = convolution_loop(op, at)
+    return [f"# {summary}", *loop]
+
+
+def setup_lines(program: dict, columns: int, parameters: tuple[int, ...]) -> list[str]:
+    """The kernel's statements before its order loop: the setup's scalars (and the partials of the `parameters`'
+    columns), the pivot checks, coefficient 0 of y (all N (1 + `columns`) rows of X) and the time's series."""
+    lines = ["order = X.shape[1] - 1", *setup_statements((Setup(**entry) for entry in program["setup"]), parameters,
+                                                          INDENT)]
+    lines += [f"for i in range({program['n_state'] * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
+    if program["uses_t"]:
+        time = work_rows(program).index("_t")
+        lines += ["for k in range(order + 1):", f"{INDENT}W[{time}, k] = 0.0", f"W[{time}, 0] = t",
+                  "if order > 0:", f"{INDENT}W[{time}, 1] = 1.0"]
+    return lines
+
+
+def kernel_source(docstring: list[str], lines: list[str], columns: int, work: int) -> str:
+    """The kernel ``taylor_variational_coefficients`` of the body `lines` (and its `docstring`'s lines), then
+    ``VARIATIONAL_COLUMNS`` (`columns`) and ``VARIATIONAL_WORK`` (`work`, the rows of W)."""
+    docstring = [f'"""{docstring[0]}', *docstring[1:-1], f'{docstring[-1]}"""']
+    body = "\n".join(INDENT + line if line else "" for line in [*docstring, *lines])
+    return (
+        '\n\n@njit(cache=True, error_model="numpy", fastmath={"contract"})\n'
+        f"def {KERNEL}(t, y, p, X, W):\n"
+        f"{body}\n\n\n"
+        f"#: The sensitivity columns of `{KERNEL}`, and the rows of its work array W.\n"
+        f"VARIATIONAL_COLUMNS = {columns}\nVARIATIONAL_WORK = {work}\n"
+    )
