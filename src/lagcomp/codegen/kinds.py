@@ -49,6 +49,7 @@ ON_DEMAND = (
     KernelKind("taylor", ("taylor_coefficients", "TAYLOR_WORK", "TAYLOR_PERIODIC", "TAYLOR_REFUSED",
                           "TAYLOR_MODE_PROGRAMS"), "method='taylor'"),
     KernelKind("equations", ("EQUATIONS",), "Model.equations()"),
+    KernelKind("power", ("power",), "the energy balance (Solution.energy_balance)"),
 )
 
 #: Every name a companion module may define, and the kind that defines it.

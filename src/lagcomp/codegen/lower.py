@@ -73,6 +73,7 @@ from lagcomp.codegen.jacobian_blocks import (
     jacobian_only,
 )
 from lagcomp.codegen.kinds import ON_DEMAND
+from lagcomp.codegen.power import power_kernel
 from lagcomp.codegen.stabilization import stabilized_gamma, velocity_residual
 from lagcomp.ir import (
     NO_JACOBIAN,
@@ -630,6 +631,7 @@ def _builders(eom: EOM, mapping, loads) -> list:
         ("canonical", lambda: () if eom.k else (_velocities_kernel(eom, mapping, loads),
                                                 _canonical_partials_kernel(eom, mapping, loads))),
         ("geometry", lambda: (geometry_kernel(eom, lambda name, doc, args, stores: kernel(name, doc, args, stores)),)),
+        ("power", lambda: (power_kernel(eom, mapping, loads),)),
     ]
 
 

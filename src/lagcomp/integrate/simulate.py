@@ -44,6 +44,7 @@ from lagcomp.integrate.options import RunOptions, positive, run_options
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.reset_checks import warn_of_resets_gone_through
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
+from lagcomp.integrate.energy_balance import PowerSource
 from lagcomp.integrate.solution import (
     ContactSwitch,
     EventRecord,
@@ -481,6 +482,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         reactions=reactions, constraint_residual=max(run["residual_max"], residual),
         projected_initial_state=ys[0].copy() if run["projected"] else None,
         events=run["events"], model_name=model.name, geometry=BodyGeometry.of(model, p),
+        power_source=PowerSource.of(model, p),
         **_modes_along(model, p, ts, ys, run.get("switches", ())),
         sensitivities=run.get("sensitivities"), sensitivity_names=run.get("sensitivity_names", ()),
         event_sensitivities=run.get("event_sensitivities", {}), reaction_sensitivities=reaction_sensitivities,

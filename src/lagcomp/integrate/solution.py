@@ -182,6 +182,9 @@ class Solution:
         The friction elements' forces (`Model.frictions`' order) along v at the saved times (in the units of the
         force conjugate to v's coordinate): while sticking the multiplier that holds v = 0, while slipping
         −μk |N| sign v.  None without friction.
+    power_source : lagcomp.integrate.energy_balance.PowerSource or None
+        The run's kernels and parameters, which `energy_balance` evaluates the power with (None for a
+        Solution built by hand; a pickled one keeps none).
     summary : RunSummary or None
         Running reductions over every saved row (`lagcomp.integrate.recording`):
         the largest energy errors, coordinate ranges.  With
@@ -225,6 +228,7 @@ class Solution:
     contact_forces: np.ndarray | None = field(default=None, repr=False)
     friction_switches: tuple = ()
     friction_forces: np.ndarray | None = field(default=None, repr=False)
+    power_source: object = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         if not isinstance(self.events, EventRecords):
@@ -271,6 +275,31 @@ class Solution:
     def energy_drift(self, which: str = "energy") -> float:
         """Largest relative deviation of `energy` (or `energy_function`) from its initial value."""
         return _relative_drift(getattr(self, which))
+
+    def energy_balance(self):
+        """h(t) − h(0) against the work of the forces, dissipation, imposed motions and moving constraints.
+
+        The energy function h (T + V when T is homogeneous quadratic in q̇) changes at the rate
+        dh/dt = Q·q̇ − 2D − ∂L/∂t − λ·b; the residual h(t) − h(0) − ∫ dh/dt dt (less the jumps at resets) is
+        the integration error, where `energy_drift` means nothing for a driven or damped run.  The integral
+        is taken along the saved rows (cubic Hermite interpolation, 3-point Gauss): save them densely
+        (``t_eval``) for a residual at the run's tolerance; ``quadrature_error`` estimates their share.
+
+        Returns
+        -------
+        lagcomp.integrate.energy_balance.EnergyBalance
+            ``change``, ``work`` by term, ``jumps``, ``residual`` (m,) and ``max_residual``,
+            ``relative_residual``.
+
+        Raises
+        ------
+        ModelError
+            For a Kane model, a model with contacts or friction elements, a ``record="summary"`` run, or a
+            Solution that keeps no kernels (pickled, built by hand).
+        """
+        from lagcomp.integrate.energy_balance import energy_balance
+
+        return energy_balance(self)
 
     def invariants(self) -> dict[str, tuple[np.ndarray, float]]:
         """The candidate conserved quantities along the run, with their largest relative drift.

@@ -1,0 +1,201 @@
+r"""The energy balance of a run: h(t) − h(0) against the work of the non-conservative forces.
+
+Along a motion the energy function h = q̇·∂L/∂q̇ − L changes at the rate (`lagcomp.codegen.power`)
+
+    dh/dt = P = Q·q̇ − 2D − ∂L/∂t − λ·b,
+
+the power of the generalized forces and inputs, of the Rayleigh dissipation, of the explicit time
+(imposed motions, inputs in L) and of moving constraints.  So
+
+    r(t) = h(t) − h(0) − ∫₀ᵗ P dt − J(t)
+
+is zero on the exact motion (J: the jumps of h at events that reset the state), and along a computed one
+it is the integration error: the drift of a conservative run's energy, generalized to driven and
+dissipative systems.  h is T + V when T is homogeneous quadratic in q̇; otherwise (a moving frame, an
+imposed motion in T) T + V is not balanced by anything simple and h is the quantity followed.
+
+The integral is taken along the saved rows: on each interval [tᵢ, tᵢ₊₁], the cubic Hermite interpolant
+of the state through yᵢ, yᵢ₊₁ and the slopes f(yᵢ), f(yᵢ₊₁) (the model's ``rhs``), and 3-point
+Gauss–Legendre on it.  Its error is O(Δ⁵) per interval (Δ = tᵢ₊₁ − tᵢ) with the constant of the
+state's fourth derivative: for r to measure the integration alone, save rows densely enough (a
+``t_eval`` grid); `EnergyBalance.quadrature_error` estimates this part (Richardson: the same integrals
+over every other row).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from lagcomp.errors import ModelError
+
+#: The power's terms, in the order of the ``power`` kernel's output (`lagcomp.codegen.power.TERMS`).
+TERMS = ("forces", "dissipation", "time", "constraints")
+
+#: 3-point Gauss–Legendre on [0, 1]: nodes and weights.
+_NODES = 0.5 + np.array([-1.0, 0.0, 1.0]) * np.sqrt(0.15)
+_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 18.0
+
+
+@dataclass(frozen=True)
+class EnergyBalance:
+    """h(t) − h(0) against the work of each power term, along a run's saved rows (module docstring).
+
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+        The saved times.
+    quantity : str
+        What is balanced: ``"T + V"`` when the energy function is the mechanical energy, else ``"h"``
+        (the Jacobi integral q̇·∂L/∂q̇ − L).
+    change : ndarray, shape (m,)
+        h(t) − h(0), in the model's units of energy.
+    work : dict of str to ndarray, shape (m,)
+        ∫₀ᵗ of each power term: ``"forces"`` (Q·q̇, inputs included), ``"dissipation"`` (−2D, ≤ 0),
+        ``"time"`` (−∂L/∂t: imposed motions), ``"constraints"`` (−λ·b: moving constraints).
+    jumps : ndarray, shape (m,)
+        The sum of the changes of h at the events up to t that reset the state (two rows at one time).
+    residual : ndarray, shape (m,)
+        change − Σ work − jumps: the integration error (plus `quadrature_error`).
+    h0 : float
+        h at the first row.
+    quadrature_error : float
+        An estimate of the largest error of the integrals from the rows' spacing alone.
+    """
+
+    t: np.ndarray
+    quantity: str
+    change: np.ndarray
+    work: dict
+    jumps: np.ndarray
+    residual: np.ndarray
+    h0: float
+    quadrature_error: float
+
+    @property
+    def scale(self) -> float:
+        """The size the residual is judged against: the largest of |h(0)|, |change| and each |work| (at least
+        1e-300)."""
+        sizes = [np.max(np.abs(a), initial=0.0) for a in (self.change, self.jumps, *self.work.values())]
+        return max(1e-300, *sizes, abs(self.h0))
+
+    @property
+    def max_residual(self) -> float:
+        """max |residual| over the run, in units of energy."""
+        return float(np.max(np.abs(self.residual), initial=0.0))
+
+    @property
+    def relative_residual(self) -> float:
+        """`max_residual` / `scale`: comparable with the run's relative tolerance."""
+        return self.max_residual / self.scale
+
+    def __repr__(self) -> str:
+        works = ", ".join(f"{name}={values[-1]:.6g}" for name, values in self.work.items() if np.any(values))
+        return (f"EnergyBalance({self.quantity}: change={self.change[-1]:.6g}, work[{works}], "
+                f"max_residual={self.max_residual:.3g} (relative {self.relative_residual:.3g}))")
+
+
+class PowerSource:
+    """A run's model kernels and parameter vector, for `Solution.energy_balance` (None for a Solution built by
+    hand or pickled: the kernels are not kept), or why the balance is refused."""
+
+    def __init__(self, kernels, p: np.ndarray, n: int, k: int, refused: str | None = None):
+        self.kernels, self.p, self.n, self.k, self.refused = kernels, p, n, k, refused
+
+    @classmethod
+    def of(cls, model, p: np.ndarray) -> PowerSource:
+        """The source of `model`'s runs with parameters `p`: refused for Kane models and models with contacts
+        or friction elements (their forces are not among Q, D and λ: the balance would not close)."""
+        refused = None
+        if getattr(model, "speeds", None) is not None:
+            refused = "a Kane model (its equations are not Lagrange's: no energy function h is derived)"
+        elif model.contacts or model.frictions:
+            refused = ("contacts or friction elements (their normal and friction forces are not generalized "
+                       "forces of the System: the balance would not close)")
+        return cls(model.kernels, p, model.n, model.k, refused)
+
+    def __reduce__(self):
+        return _unpickled, ()
+
+
+def _unpickled():
+    return None
+
+
+def energy_balance(solution) -> EnergyBalance:
+    """The `EnergyBalance` of `solution` (module docstring); a ModelError where it is refused."""
+    source = solution.power_source
+    if source is None:
+        raise ModelError("This Solution keeps no model kernels (built by hand, pickled or loaded): its energy "
+                         "balance needs the run's model; simulate again in this process.")
+    if source.refused:
+        raise ModelError(f"The energy balance of {solution.model_name!r} is not available for {source.refused}.")
+    if solution.summary.rows != solution.t.size:
+        raise ModelError("The energy balance integrates the power along the saved rows; a record='summary' run "
+                         "keeps only two: run with record='trajectory'.")
+    ts, ys = solution.t, np.hstack([solution.q, solution.qd])
+    h = solution.energy_function
+    slopes = _slopes(source, ts, ys)
+    work = _work(source, ts, ys, slopes)
+    flat = np.diff(ts) == 0                                   # an event's reset: two rows at one time
+    jumps = np.concatenate([[0.0], np.cumsum(np.where(flat, np.diff(h), 0.0))])
+    change = h - h[0]
+    return EnergyBalance(
+        t=ts, quantity="T + V" if np.array_equal(h, solution.energy) else "h", change=change,
+        work={name: work[:, j] for j, name in enumerate(TERMS)}, jumps=jumps,
+        residual=change - work.sum(axis=1) - jumps, h0=float(h[0]),
+        quadrature_error=_quadrature_error(source, ts, ys, slopes, work, flat))
+
+
+def _work(source: PowerSource, ts: np.ndarray, ys: np.ndarray, slopes: np.ndarray) -> np.ndarray:
+    """∫ from ts[0] to each row of each power term, (m, 4): Gauss–Legendre on the Hermite interpolant of each
+    interval (module docstring); nothing across an interval of length 0 (an event's reset)."""
+    steps = np.diff(ts)
+    nodes_t = ts[:-1, None] + steps[:, None] * _NODES[None, :]
+    nodes_y = np.stack([_hermite(s, ys, slopes, steps) for s in _NODES], axis=1)
+    power = _power(source, nodes_t.ravel(), nodes_y.reshape(-1, ys.shape[1])).reshape(*nodes_t.shape, -1)
+    increments = steps[:, None] * np.einsum("g,igk->ik", _WEIGHTS, power)
+    increments[steps == 0] = 0.0
+    return np.vstack([np.zeros(len(TERMS)), np.cumsum(increments, axis=0)])
+
+
+def _hermite(s: float, ys, slopes, steps) -> np.ndarray:
+    """The cubic Hermite interpolant of every interval at its fraction `s`, (m − 1, 2n)."""
+    h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
+    return h00 * ys[:-1] + h10 * steps[:, None] * slopes[:-1] + h01 * ys[1:] + h11 * steps[:, None] * slopes[1:]
+
+
+def _slopes(source: PowerSource, ts: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """f(tᵢ, yᵢ) at every row (the model's ``rhs``), (m, 2n)."""
+    out = np.empty_like(ys)
+    for i in range(ts.size):
+        source.kernels.rhs(float(ts[i]), ys[i], source.p, out[i])
+    return out
+
+
+def _power(source: PowerSource, ts: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """The power's terms at the states `ys` (r, 2n), (r, 4): the multipliers there from ``reactions_along``."""
+    lam = np.zeros((ts.size, source.k))
+    if source.k:
+        residual = np.empty(ts.size)
+        source.kernels.reactions_along(ts, ys, source.p, lam, residual)
+    out = np.empty((ts.size, len(TERMS)))
+    power = source.kernels.power
+    for i in range(ts.size):
+        power(float(ts[i]), ys[i], source.p, lam[i], out[i])
+    return out
+
+
+def _quadrature_error(source, ts, ys, slopes, work, flat) -> float:
+    """The rows' spacing's share of the residual, estimated by Richardson: the same integrals over every other
+    row differ from these by about 2⁴ − 1 = 15 times their error (O(Δ⁵) per interval).  Pairs of intervals
+    with an event's reset inside keep the fine values (no difference).  0 with fewer than three rows."""
+    if ts.size < 3:
+        return 0.0
+    even = np.arange(0, ts.size, 2)
+    coarse = _work(source, ts[even], ys[even], slopes[even]).sum(axis=1)
+    fine = work[even].sum(axis=1)
+    pairs = np.diff(fine - coarse)
+    crossing = flat[even[:-1]] | flat[np.minimum(even[:-1] + 1, flat.size - 1)]
+    return float(np.max(np.abs(np.cumsum(np.where(crossing, 0.0, pairs))), initial=0.0) / 15)
