@@ -446,6 +446,8 @@ CASES = {
     "initial-missing": (lambda models: models["degenerate"].simulate((0, 1), params={"m": 1.0}), "`q0` is required"),
     "inconsistent-initial-conditions": (_simulate("rod", q0=[1.0, 0.0, -1.0]), "constraint `rod` at position level"),
     "contact-gap-negative-at-start": (_simulate("bouncer", q0=[0.0, -0.1]), "`floor`"),
+    "energy-balance-refused": (lambda models: models["bouncer"].simulate((0.0, 1.0), q0=[0.0, 1.0]).energy_balance(),
+                               "'table_bouncer'"),
     "contact-restitution-parameter-out-of-range": (_simulate("bouncer", q0=[0.0, 1.0], params={"c": 2.0}),
                                                    "`floor`"),
     "friction-coefficient-parameter-out-of-range": (_simulate("slider", q0=[0.0], qd0=[1.0], params={"a": 0.9}),

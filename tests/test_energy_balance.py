@@ -1,0 +1,175 @@
+"""Solution.energy_balance and the on-demand ``power`` kernel (issue 37, part 4).
+
+dh/dt = Q·q̇ − 2D − ∂L/∂t − λ·b (`lagcomp.codegen.power`).  Checked against closed forms derived here (the
+damped and the forced oscillator, a bead on a rod turned at a constant rate), against the power terms worked
+out by hand at random states (hypothesis), and by the residual: at the run's tolerance, falling with it.
+"""
+
+from __future__ import annotations
+
+import math
+import pickle
+
+import numpy as np
+import pytest
+import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.interpolate import CubicSpline
+
+import lagcomp as lc
+from lagcomp.model import t
+
+x, y, th = lc.coordinates("x y th")
+m, k, c, l, g, F0, W, a = sp.symbols("m k c l g F0 W a", positive=True)
+DENSE = np.linspace(0.0, 6.0, 3001)
+RTOL = 1e-8
+
+
+def _run(model, q0, qd0, rtol=RTOL, **options):
+    return model.simulate((0.0, 6.0), q0, qd0, rtol=rtol, atol=rtol * 1e-2, t_eval=DENSE, **options)
+
+
+@pytest.fixture(scope="module")
+def damped(cache_dir):
+    s = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, dissipation=c * x.diff(t) ** 2 / 2,
+                  name="balance_damped", defaults={"m": 1.0, "k": 4.0, "c": 0.4})
+    return lc.compile(s, cache_dir=cache_dir)
+
+
+@pytest.fixture(scope="module")
+def forced(cache_dir):
+    s = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, forces=[F0 * sp.cos(W * t)],
+                  name="balance_forced", defaults={"m": 1.0, "k": 4.0, "F0": 0.7, "W": 1.3})
+    return lc.compile(s, cache_dir=cache_dir)
+
+
+@pytest.fixture(scope="module")
+def shaken(cache_dir):
+    """A pendulum whose pivot is moved along x by x_s = a sin(W t): T is not homogeneous in the velocities."""
+    xs = a * sp.sin(W * t)
+    px, py = xs + l * sp.sin(th), -l * sp.cos(th)
+    s = lc.System([th], T=m * (px.diff(t) ** 2 + py.diff(t) ** 2) / 2, V=m * g * py, name="balance_shaken",
+                  defaults={"m": 1.0, "l": 1.0, "g": 9.81, "a": 0.2, "W": 3.0})
+    return lc.compile(s, cache_dir=cache_dir)
+
+
+@pytest.fixture(scope="module")
+def driven(cache_dir):
+    """A spring-mass pushed by an input force f(t) and carried by a support s(t) that is an input too."""
+    s = lc.System([x], T=m * (x.diff(t) + lc.Input("s").diff(t)) ** 2 / 2, V=k * x**2 / 2, forces=[lc.Input("f")],
+                  dissipation=c * x.diff(t) ** 2 / 2, name="balance_driven", defaults={"m": 1.5, "k": 4.0, "c": 0.1})
+    return lc.compile(s, cache_dir=cache_dir)
+
+
+@pytest.fixture(scope="module")
+def bead(cache_dir):
+    """A bead on a rod turned at the rate W about the origin: the constraint −x sin(Wt) + y cos(Wt) = 0 moves."""
+    s = lc.System([x, y], T=m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2,
+                  constraints=[lc.Holonomic("rod", -x * sp.sin(W * t) + y * sp.cos(W * t))],
+                  name="balance_bead", defaults={"m": 2.0, "W": 0.5})
+    return lc.compile(s, cache_dir=cache_dir)
+
+
+def _power(model, t_, y_, lam=(), inputs=None):
+    out = np.empty(4)
+    p = model.parameter_vector(None, inputs=inputs)
+    model.kernels.power(float(t_), np.asarray(y_, dtype=float), p, np.asarray(lam, dtype=float), out)
+    return out
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 10))
+def test_power_terms_by_hand(damped, forced, shaken, x_, v_, t_):
+    # damped: −2D = −c v²; forced: Q·q̇ = F0 cos(W t) v; shaken: −∂L/∂t = −m ẍs (ẋs + l cos θ θ̇)
+    assert np.array_equal(_power(damped, t_, [x_, v_])[[0, 2, 3]], [0.0, 0.0, 0.0])
+    assert _power(damped, t_, [x_, v_])[1] == pytest.approx(-0.4 * v_**2, rel=1e-14, abs=1e-300)
+    assert _power(forced, t_, [x_, v_])[0] == pytest.approx(0.7 * math.cos(1.3 * t_) * v_, rel=1e-14, abs=1e-300)
+    xs_d, xs_dd = 0.2 * 3.0 * math.cos(3.0 * t_), -0.2 * 9.0 * math.sin(3.0 * t_)
+    expected = -1.0 * xs_dd * (xs_d + math.cos(x_) * v_)
+    assert _power(shaken, t_, [x_, v_])[2] == pytest.approx(expected, rel=1e-12, abs=1e-14)
+
+
+def test_damped_oscillator_closed_form(damped):
+    # x'' + 0.4 x' + 4 x = 0, x(0) = 1, x'(0) = 0: x = e^(−ζω t) (cos ωd t + ζω/ωd sin ωd t), ζω = 0.2
+    sol = _run(damped, [1.0], [0.0])
+    wd = math.sqrt(4.0 - 0.04)
+    e = np.exp(-0.2 * DENSE)
+    xs = e * (np.cos(wd * DENSE) + 0.2 / wd * np.sin(wd * DENSE))
+    vs = -e * (0.2**2 / wd + wd) * np.sin(wd * DENSE)
+    energy = vs**2 / 2 + 2.0 * xs**2
+    b = sol.energy_balance()
+    assert b.quantity == "T + V"
+    assert np.max(np.abs(b.work["dissipation"] - (energy - 2.0))) < RTOL * 2.0   # (E0 = 2; measured 3.3e-9)
+    assert np.max(np.abs(b.change - (energy - 2.0))) < 5 * RTOL * 2.0   # (measured 3.6e-8: the state's error)
+    assert b.relative_residual < 10 * RTOL and b.quadrature_error < RTOL * b.scale
+    assert not np.any(b.work["forces"]) and not np.any(b.work["time"]) and not np.any(b.jumps)
+
+
+def test_residual_is_the_integration_error(damped):
+    loose, tight = (_run(damped, [1.0], [0.0], rtol=r).energy_balance().relative_residual for r in (1e-5, 1e-9))
+    assert 1e-7 < loose < 1e-4 and tight < 1e-8 and loose > 300 * tight
+    # the plain drift of T + V says nothing here: the damper takes most of the energy
+    assert _run(damped, [1.0], [0.0]).energy_drift() > 0.5
+
+
+def test_forced_oscillator_closed_form(forced):
+    # x'' + 4 x = 0.7 cos(1.3 t), x(0) = 1, x'(0) = 0: x = A cos(1.3 t) + (1 − A) cos(2 t), A = 0.7 / (4 − 1.69)
+    A = 0.7 / (4.0 - 1.69)
+    xs = A * np.cos(1.3 * DENSE) + (1 - A) * np.cos(2.0 * DENSE)
+    vs = -1.3 * A * np.sin(1.3 * DENSE) - 2.0 * (1 - A) * np.sin(2.0 * DENSE)
+    b = _run(forced, [1.0], [0.0]).energy_balance()
+    assert np.max(np.abs(b.work["forces"] - (vs**2 / 2 + 2.0 * xs**2 - 2.0))) < RTOL * 2.0
+    assert b.relative_residual < 10 * RTOL
+
+
+def test_imposed_motion_balances_h_not_the_energy(shaken):
+    sol = _run(shaken, [0.3], [0.0])
+    b = sol.energy_balance()
+    assert b.quantity == "h" and np.max(np.abs(b.work["time"])) > 0.1
+    assert b.relative_residual < 10 * RTOL
+    # T + V against the same work: off by the order of the work itself
+    assert np.max(np.abs(sol.energy - sol.energy[0] - b.work["time"])) > 0.05
+
+
+def test_input_driven_system(driven):
+    times = np.linspace(-1.0, 7.0, 801)
+    inputs = {"f": lc.Tabulated(times, 0.5 * np.sin(2.0 * times)), "s": CubicSpline(times, times**3 / 50)}
+    sol = _run(driven, [0.2], [0.0], inputs=inputs)
+    b = sol.energy_balance()
+    assert b.quantity == "h"
+    assert min(np.max(np.abs(b.work[name])) for name in ("forces", "dissipation", "time")) > 1e-3
+    assert b.relative_residual < 10 * RTOL
+    # the kernel reads u̇ and ü from the tables: −∂L/∂t = −m (ẋ + ṡ) s̈, s = t³/50 (a cubic spline is exact)
+    t_, v_ = 2.5, -0.7
+    expected = -1.5 * (v_ + 3 * t_**2 / 50) * (6 * t_ / 50)
+    assert _power(driven, t_, [0.1, v_], inputs=inputs)[2] == pytest.approx(expected, rel=1e-12)
+
+
+def test_moving_constraint_closed_form(bead):
+    # r'' = W² r on the rod: r = r0 cosh(W t), so T = m W² r0² cosh(2 W t) / 2, all of it the rod's work
+    sol = _run(bead, [1.0, 0.0], [0.0, 0.5])
+    b = sol.energy_balance()
+    expected = 2.0 * 0.25 * (np.cosh(2 * 0.5 * DENSE) - 1) / 2
+    assert np.max(np.abs(b.work["constraints"] - expected)) < 1e-8 * expected[-1]
+    assert b.relative_residual < 10 * RTOL
+
+
+def test_sparse_rows_report_their_quadrature_error(damped):
+    sol = damped.simulate((0.0, 6.0), [1.0], [0.0], rtol=1e-10, atol=1e-12)   # the steps' rows only
+    b = sol.energy_balance()
+    # the rows' spacing dominates the residual, and the estimate says so (within a factor 3)
+    assert b.max_residual > 100 * 1e-10 * b.scale
+    assert b.max_residual / 3 < b.quadrature_error < 3 * b.max_residual
+
+
+def test_refusals(damped, cache_dir):
+    sol = _run(damped, [1.0], [0.0])
+    with pytest.raises(lc.ModelError, match="keeps no model kernels"):
+        pickle.loads(pickle.dumps(sol)).energy_balance()
+    with pytest.raises(lc.ModelError, match="record='summary'"):
+        _run(damped, [1.0], [0.0], record="summary").energy_balance()
+    with pytest.raises(lc.ModelError, match="contacts or friction"):
+        ball = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=m * g * x, events=[lc.Contact("floor", x, restitution=0.5)],
+                         name="balance_ball", defaults={"m": 1.0, "g": 9.81})
+        lc.compile(ball, cache_dir=cache_dir).simulate((0.0, 1.0), [1.0], [0.0]).energy_balance()
