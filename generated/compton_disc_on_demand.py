@@ -575,6 +575,33 @@ GEOMETRY = (('disc', 'rigid', 0),)
 GEOMETRY_SIZE = 12
 
 
+@njit(cache=True, error_model="numpy")
+def power(t, y, p, lam, out):
+    """The rate of change of the energy function h = q̇·∂L/∂q̇ − L, term by term, into `out` (4,):
+    out[0] = Q·q̇ (generalized forces and inputs), out[1] = −2D (Rayleigh dissipation), out[2] = −∂L/∂t
+    (explicit time: imposed motions, inputs in L), out[3] = −λ·b (work of moving constraints, λ = `lam`).
+    dh/dt is their sum along a motion (lagcomp.codegen.power). Returns 0."""
+    qd_phi = y[1]
+    p_I = p[0]
+    p_I_Y = p[1]
+    p_omega = p[2]
+    p_lambda = p[3]
+    p_nu = p[4]
+    _c0 = p_nu*t
+    _c1 = (0.5)*math.pi*p_nu*sin(_c0)
+    _c2 = (0.5)*cos(_c0)
+    _c3 = math.pi*(0.5 - _c2)
+    _c4 = cos(_c3)
+    _c5 = sin(p_lambda)
+    _c6 = _c5*p_omega
+    _c7 = _c1*sin(_c3)
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = _c6*_c7*p_I_Y*(qd_phi + _c4*_c6) - math.pi*_c2*p_I*p_nu**2*(_c1 - p_omega*cos(p_lambda)) - _c4*_c7*p_I*_c5**2*p_omega**2
+    out[3] = 0.0
+    return 0
+
+
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def taylor_coefficients(t, y, p, X, W):
     """Normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!, k = 0..order (order = X.shape[1] − 1),

@@ -555,6 +555,25 @@ GEOMETRY = ()
 GEOMETRY_SIZE = 0
 
 
+@njit(cache=True, error_model="numpy")
+def power(t, y, p, lam, out):
+    """The rate of change of the energy function h = q̇·∂L/∂q̇ − L, term by term, into `out` (4,):
+    out[0] = Q·q̇ (generalized forces and inputs), out[1] = −2D (Rayleigh dissipation), out[2] = −∂L/∂t
+    (explicit time: imposed motions, inputs in L), out[3] = −λ·b (work of moving constraints, λ = `lam`).
+    dh/dt is their sum along a motion (lagcomp.codegen.power). Returns 0."""
+    qd_X = y[1]
+    p_R = p[1]
+    p_I = p[2]
+    p_A = p[3]
+    p_Omega = p[4]
+    _c0 = p_Omega*t
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = -p_A*p_I*p_Omega**2*(qd_X - p_A*p_Omega*cos(_c0))*sin(_c0)/p_R**2
+    out[3] = 0.0
+    return 0
+
+
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def taylor_coefficients(t, y, p, X, W):
     """Normalized Taylor coefficients X[i, k] = y_i⁽ᵏ⁾(t)/k!, k = 0..order (order = X.shape[1] − 1),
