@@ -455,9 +455,9 @@ class Model:
         from lagcomp.integrate.inputs import pack_inputs
 
         if inputs is None and span is None:  # a one-state evaluation (Model.rhs, lagcomp.analysis), which takes none
-            raise OptionError(f"{self.name!r} reads the input(s) {list(self.inputs)} from tables that `simulate` and "
-                              "`sweep` take (`inputs=`); its kernels cannot be evaluated at one state without them "
-                              "yet: compile a variant with the input written as a constant or a law for that.")
+            raise OptionError(f"{self.name!r} reads the input(s) {list(self.inputs)}: evaluating it at one state "
+                              f"needs their values there, `inputs={{{self.inputs[0]!r}: value, ...}}` (a number, or a "
+                              "signal as `simulate` takes).")
         return np.concatenate([p, pack_inputs(self.inputs, self.input_orders, inputs, span, p.size)])
 
     def _parameter_values(self, params, baumgarte) -> np.ndarray:
@@ -537,16 +537,19 @@ class Model:
 
     # -- kernels from Python --------------------------------------------------------
 
-    def rhs(self, t: float, y, params: dict | None = None) -> np.ndarray:
-        """dy/dt at one state y = (q, q̇); raises SingularMassMatrixError where M is singular."""
+    def rhs(self, t: float, y, params: dict | None = None, inputs: dict | None = None) -> np.ndarray:
+        """dy/dt at one state y = (q, q̇); raises SingularMassMatrixError where M is singular.
+
+        A model with inputs (`lagcomp.Input`) takes their signals in `inputs` as `simulate` does (a number: a
+        constant; a table is evaluated at `t`)."""
         y = self._vector(y, 2 * self.n, "y")
         out = np.empty(2 * self.n)
-        status = self.kernels.rhs(float(t), y, self.parameter_vector(params), out)
+        status = self.kernels.rhs(float(t), y, self.parameter_vector(params, inputs=inputs), out)
         if status:
             raise self._singular_mass_matrix(t, y, status)
         return out
 
-    def jacobian(self, t: float, y, params: dict | None = None) -> np.ndarray:
+    def jacobian(self, t: float, y, params: dict | None = None, inputs: dict | None = None) -> np.ndarray:
         """∂f/∂y of y' = f(t, y) at one state, shape (N, N) with N = `state_size` (row i the component f_i):
         the exact Jacobian the model's ``rhs_jacobian`` kernel computes (the one ``method="radau"`` uses;
         scipy's ``solve_ivp(..., jac=...)`` takes it as it is).
@@ -556,7 +559,7 @@ class Model:
         """
         y = self._vector(y, self.state_size, "y")
         out = np.empty((self.state_size, self.state_size))
-        status = self.kernels.rhs_jacobian(float(t), y, self.parameter_vector(params), out)
+        status = self.kernels.rhs_jacobian(float(t), y, self.parameter_vector(params, inputs=inputs), out)
         refused = getattr(self.kernels, "RHS_JACOBIAN_REFUSED", None)   # the stub's reason (no sympy import here)
         if status and refused is not None:
             raise ModelError(f"{self.name!r} has no Jacobian kernel: its equations hold {refused}.")
@@ -578,6 +581,31 @@ class Model:
         refused = getattr(self.kernels, "RHS_PARAMETER_JACOBIAN_REFUSED", None)
         if status and refused is not None:
             raise ModelError(f"{self.name!r} has no parameter Jacobian kernel: its equations hold {refused}.")
+        if status:
+            raise self._singular_mass_matrix(t, y, status)
+        return out
+
+    def rhs_input_jacobian(self, t: float, y, params: dict | None = None, inputs: dict | None = None) -> np.ndarray:
+        """∂f/∂u of y' = f(t, y, p, u) at one state, shape (N, U), column j the input ``inputs[j]`` of the model
+        (`inputs` names its signals, as for `rhs`): the exact derivative the on-demand ``rhs_input_jacobian``
+        kernel computes, the input matrix B of a state-space model (`lagcomp.analysis.linearize`).
+
+        Raises ModelError for a model without inputs, a constrained one (`lagcomp.analysis.linearize_steady`
+        gives its B) or one with contacts, and where the equations read an input's derivatives (its
+        ``RHS_INPUT_JACOBIAN_REFUSED`` says which); SingularMassMatrixError where M is singular.
+        """
+        if not self.inputs:
+            raise ModelError(f"{self.name!r} has no inputs (lagcomp.Input without a law): no input matrix.")
+        if self.k or self.contacts or self.frictions or getattr(self, "speeds", None) is not None:
+            raise ModelError(f"rhs_input_jacobian is built for unconstrained Lagrange models without contacts; "
+                             f"{self.name!r} is not one: lagcomp.analysis.linearize_steady(..., inputs=...) gives "
+                             "the input matrix B of a constrained system.")
+        y = self._vector(y, self.state_size, "y")
+        out = np.empty((self.state_size, len(self.inputs)))
+        status = self.kernels.rhs_input_jacobian(float(t), y, self.parameter_vector(params, inputs=inputs), out)
+        refused = getattr(self.kernels, "RHS_INPUT_JACOBIAN_REFUSED", None)
+        if status and refused is not None:
+            raise ModelError(f"{self.name!r} has no input matrix: its equations hold {refused}.")
         if status:
             raise self._singular_mass_matrix(t, y, status)
         return out

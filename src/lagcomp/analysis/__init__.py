@@ -13,6 +13,8 @@ symbolic counterpart where one is useful:
                    (reduced state matrix, eigenvalues, modes); `consistent_speeds`
 ``stability``      `stability_sweep`: eigenvalues along a parameter, where
                    stability changes
+``state_space``    `StateSpace` (A, B, C, D) for control, from `linearize` and
+                   `linearize_steady` with ``inputs=``; scipy / python-control
 ``conserved``      `conserved_quantities`: first integrals and why
 ``portrait``       `phase_portrait` of 1-DoF systems from the energy integral
 ``poincare``       `poincare_section` over many initial states, `on_energy_surface`
@@ -43,6 +45,7 @@ from lagcomp.analysis.periodic import PeriodicOrbit as PeriodicOrbit, periodic_o
 from lagcomp.analysis.poincare import Section as Section, on_energy_surface as on_energy_surface
 from lagcomp.analysis.poincare import poincare_section as poincare_section
 from lagcomp.analysis.portrait import Portrait as Portrait, phase_portrait as phase_portrait
+from lagcomp.analysis.state_space import StateSpace as StateSpace
 from lagcomp.analysis.steady import (
     SteadyLinearization as SteadyLinearization,
     consistent_speeds as consistent_speeds,
@@ -63,7 +66,7 @@ from lagcomp.analysis.statics import (
 
 __all__ = [
     "Conserved", "Equilibrium", "Linearization", "Lyapunov", "Modes", "PeriodicOrbit", "Portrait", "Section",
-    "StabilityChange", "StabilitySweep", "SteadyLinearization", "balance", "conserved_quantities", "consistent_speeds",
+    "StabilityChange", "StabilitySweep", "StateSpace", "SteadyLinearization", "balance", "conserved_quantities", "consistent_speeds",
     "find_equilibria", "find_equilibrium", "generalized_forces", "linearize", "linearize_steady", "linearize_symbolic",
     "lyapunov_exponents", "lyapunov_spectrum", "normal_modes", "on_energy_surface", "periodic_orbit", "phase_portrait",
     "poincare_section", "stability_sweep", "two_trajectory_lyapunov",

@@ -70,9 +70,10 @@ class RestForces:
     it thousands of times without re-validating the parameters each time.
     """
 
-    def __init__(self, model, params: dict | None, t: float):
+    def __init__(self, model, params: dict | None, t: float, inputs=None):
         self.model, self.t = model, float(t)
-        self.p = model.parameter_vector(params)
+        self.p = model.parameter_vector(params, inputs=inputs)
+        self.params_given = params
         self.params = dict(zip(model.parameters, self.p.tolist()))
         self._y = np.zeros(2 * model.n)
         self._blocks = np.empty((2, model.n, model.n))

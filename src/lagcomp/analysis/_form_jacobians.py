@@ -72,10 +72,20 @@ class FormJacobians:
 
     def residual_partials(self, q, u, a, l, p, t: float) -> tuple[np.ndarray, np.ndarray]:
         """(∂[R; S]/∂q, ∂[R; S]/∂u) at (q, u, a, λ, t), shapes (n_u + k, n_q) and (n_u + k, n_u)."""
-        G_q, G_u = self._partials(np.concatenate([q, u, a, l, p, [t]]))
+        G_q, G_u, *_ = self._partials(np.concatenate([q, u, a, l, p, [t]]))
         rows = self.form.n_u + self.form.C.rows
         return (np.array(G_q, dtype=float).reshape(rows, self.form.n_q),
                 np.array(G_u, dtype=float).reshape(rows, self.form.n_u))
+
+    def input_partials(self, q, u, a, l, p, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(∂N/∂w, ∂[R; S]/∂w) at (q, u, a, λ, t) along the inputs w held constant (`FirstOrderForm.input_names`),
+        shapes (n_q, U) and (n_u + k, U)."""
+        U = len(self.form.input_names)
+        rows = self.form.n_u + self.form.C.rows
+        if not U:
+            return np.zeros((self.form.n_q, 0)), np.zeros((rows, 0))
+        _, _, N_w, G_w = self._partials(np.concatenate([q, u, a, l, p, [t]]))
+        return (np.array(N_w, dtype=float).reshape(self.form.n_q, U), np.array(G_w, dtype=float).reshape(rows, U))
 
     def _point_shapes(self):
         f = self.form
@@ -106,6 +116,8 @@ def _build(form) -> FormJacobians:
     residual = (form.M * a_col - form.F - form.C.T * l_col).col_join(form.C * a_col - form.gamma)
     plain = [form.N, form.M, form.F, form.C, form.gamma, form.Phi, form.Psi]
     jacobians = [(form.N, q), (form.N, u), (form.Phi, q), (form.Psi, q), (form.Psi, u), (residual, q), (residual, u)]
+    w = p[len(p) - len(form.input_names):] if form.input_names else []
+    jacobians += [(form.N, w), (residual, w)] if w else []
     point_args, partial_args = q + u + p + [TIME], q + u + a + l + p + [TIME]
     everything = [e for m in plain + [residual] for e in m]
     if symengine_ready(everything):

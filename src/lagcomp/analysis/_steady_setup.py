@@ -4,6 +4,7 @@ independent coordinates and speeds (for `lagcomp.analysis.steady`)."""
 from __future__ import annotations
 
 import math
+import numbers
 from collections import OrderedDict
 from dataclasses import dataclass
 
@@ -11,8 +12,8 @@ import numpy as np
 from scipy import linalg
 
 from lagcomp.analysis._form_jacobians import evaluator
-from lagcomp.errors import InitialConditionError, LinearizationError, ModelError, ParameterError
-from lagcomp.mechanics.first_order import FirstOrderForm, from_eom
+from lagcomp.errors import InitialConditionError, LinearizationError, ModelError, OptionError, ParameterError
+from lagcomp.mechanics.first_order import FirstOrderForm, from_eom, inputs_as_parameters
 from lagcomp.names import by_name
 
 #: Largest constraint residual accepted at the point, relative to the constraint Jacobians' scale.
@@ -78,16 +79,23 @@ def first_order_form(system) -> tuple[FirstOrderForm, dict]:
         raise ModelError(f"linearize_steady takes a Model, a System or a FirstOrderForm, got {type(system).__name__}.")
     key = source.fingerprint()
     if key not in _FORMS:
-        _FORMS[key] = from_eom(derive(source))
+        _FORMS[key] = inputs_as_parameters(from_eom(derive(source)), source.inputs)
         while len(_FORMS) > 16:
             _FORMS.popitem(last=False)
     return _FORMS[key], dict(source.defaults)
 
 
-def parameter_vector(form: FirstOrderForm, params, defaults: dict) -> tuple[np.ndarray, dict]:
-    """The form's parameter values in its order, from `params` by name over `defaults`, checked."""
-    names = [str(s) for s in form.parameters]
+def parameter_vector(form: FirstOrderForm, params, defaults: dict, inputs=None) -> tuple[np.ndarray, dict]:
+    """The form's parameter values in its order, from `params` by name over `defaults`, checked; then the values
+    its inputs are held at (`inputs`, by name: numbers)."""
+    held = list(form.input_names)
+    names = [str(s) for s in form.parameters][:len(form.parameters) - len(held)]
     values = {**defaults, **by_name(params or {}, "params", names)}
+    if held:
+        values.update(_input_values(held, inputs))
+        names += held
+    elif inputs:
+        raise OptionError(f"`inputs` given, but the system has no inputs (lagcomp.Input without a law): {inputs!r}.")
     unknown = sorted(set(values) - set(names))
     if unknown:
         raise ParameterError(f"Unknown parameter(s) {unknown}; the parameters are {names}.")
@@ -99,6 +107,23 @@ def parameter_vector(form: FirstOrderForm, params, defaults: dict) -> tuple[np.n
     if bad:
         raise ParameterError(f"Parameter(s) {bad} are not finite.")
     return p, dict(zip(names, p.tolist()))
+
+
+def _input_values(held: list, inputs) -> dict:
+    """{input: value} of the inputs `held` constant, from `inputs`, or an OptionError naming what is missing."""
+    from lagcomp.integrate.inputs import inputs_by_name
+
+    given = inputs_by_name(inputs or {})
+    unknown, missing = sorted(set(given) - set(held)), [name for name in held if name not in given]
+    if unknown or missing:
+        raise OptionError(f"The linearization holds the input(s) {held} at constant values: pass `inputs="
+                          f"{{{held[0]!r}: value, ...}}` with a number for each (unknown {unknown}, missing "
+                          f"{missing}).")
+    bad = [name for name in held if isinstance(given[name], bool) or not isinstance(given[name], numbers.Real)]
+    if bad:
+        raise OptionError(f"Input(s) {bad}: a linearization holds each input at a constant, a number; got "
+                          f"{[given[name] for name in bad]!r}.")
+    return {name: float(given[name]) for name in held}
 
 
 def state_vector(values, names, what: str) -> np.ndarray:
@@ -118,18 +143,18 @@ def state_vector(values, names, what: str) -> np.ndarray:
     return x
 
 
-def _evaluated(system, q, u, params, t: float):
+def _evaluated(system, q, u, params, t: float, inputs=None):
     """(form, q, u, p, named parameters, values at the point), the inputs checked."""
     form, defaults = first_order_form(system)
-    p, named = parameter_vector(form, params, defaults)
+    p, named = parameter_vector(form, params, defaults, inputs)
     q = state_vector(q, form.coordinate_names, "q")
     u = np.zeros(form.n_u) if u is None else state_vector(u, form.speed_names, "u")
     return form, q, u, p, named, evaluator(form).point(q, u, p, float(t))
 
 
-def form_point(system, q, u, params, t: float) -> FormPoint:
+def form_point(system, q, u, params, t: float, inputs=None) -> FormPoint:
     """Evaluate the form at (q, u): constraints checked, accelerations and multipliers from the KKT system."""
-    form, q, u, p, named, values = _evaluated(system, q, u, params, t)
+    form, q, u, p, named, values = _evaluated(system, q, u, params, t, inputs)
     _check_consistent(form, q, u, values)
     k = form.C.rows
     kkt = np.block([[values["M"], -values["C"].T], [values["C"], np.zeros((k, k))]])
@@ -209,14 +234,15 @@ def _dependent(jacobian: np.ndarray, names: list, independent: list, drop: tuple
     return dependent
 
 
-def consistent_speeds(system, q, u, params: dict | None = None, *, t: float = 0.0, independent=None) -> np.ndarray:
+def consistent_speeds(system, q, u, params: dict | None = None, *, t: float = 0.0, independent=None,
+                      inputs=None) -> np.ndarray:
     """`u` with its dependent speeds solved from the velocity constraints Ψ(q, u, t) = 0 (linear in u).
 
     The speeds named in `independent` keep their values, and so do the
     other independent ones (chosen by pivoted QR of Ψ_u).  The speeds of a steady motion, e.g. a
     disc's spin with its contact point's velocity completed.
     """
-    form, q, u, p, _, values = _evaluated(system, q, u, params, t)
+    form, q, u, p, _, values = _evaluated(system, q, u, params, t, inputs)
     names = list(form.speed_names)
     dependent = _dependent(values["Psi_u"], names, [n for n in (independent or ()) if n in names], (), "speeds")
     u = u.copy()

@@ -50,6 +50,12 @@ class Linearization:
         max |F(q, 0, t)|: the linearization is about an equilibrium only when it is ~0.
     coordinates : tuple of str
     params : dict
+    inputs : tuple of str
+        The model's inputs (`lagcomp.Input` supplied at run time), held at the values `linearize` was given.
+    H : ndarray, shape (n, U), or None
+        ∂F/∂u at the point: the generalized forces per unit of each input (M₀ δq̈ + ... = H δu); None without
+        inputs, or where the equations read an input's derivatives (`input_refused` says so).
+    input_refused : str or None
     """
 
     q: np.ndarray
@@ -61,6 +67,25 @@ class Linearization:
     residual: float
     coordinates: tuple
     params: dict = field(default_factory=dict)
+    inputs: tuple = ()
+    H: np.ndarray | None = None
+    input_refused: str | None = None
+
+    def state_space(self, outputs=None):
+        """ẋ = A x + B w, z = C x + D w (`lagcomp.analysis.StateSpace`) with x = (δq, δq̇), w = δu:
+        A = [[0, I], [−M₀⁻¹K₀, −M₀⁻¹C₀]], B = [[0], [M₀⁻¹H]]; z the states named in `outputs` (coordinates,
+        ``<coordinate>_dot``; all by default).  LinearizationError where no B exists (`input_refused`)."""
+        from lagcomp.analysis.state_space import StateSpace
+
+        if self.input_refused:
+            raise LinearizationError(f"No input matrix B: {self.input_refused}")
+        n = len(self.coordinates)
+        A = np.block([[np.zeros((n, n)), np.eye(n)],
+                      [-linalg.solve(self.M, self.K, assume_a="sym"), -linalg.solve(self.M, self.C, assume_a="sym")]])
+        H = np.zeros((n, 0)) if self.H is None else self.H
+        B = np.vstack([np.zeros_like(H), linalg.solve(self.M, H, assume_a="sym")])
+        states = (*self.coordinates, *(f"{c}_dot" for c in self.coordinates))
+        return StateSpace.of_states(A, B, states, self.inputs, outputs)
 
     @property
     def C(self) -> np.ndarray:
@@ -138,8 +163,12 @@ class Modes:
                 f"growth_rate={self.growth_rate:.3g})")
 
 
-def linearize(model, q, params: dict | None = None, *, t: float = 0.0) -> Linearization:
+def linearize(model, q, params: dict | None = None, *, t: float = 0.0, inputs=None) -> Linearization:
     """M₀, K₀, G₀, D₀ about the configuration `q` (an equilibrium, e.g. `find_equilibrium(...).q`).
+
+    A model with inputs (`lagcomp.Input` supplied at run time) is linearized with them held at `inputs`
+    (a number per input, by name), and `Linearization.H` = ∂F/∂u there gives the input matrix of
+    `Linearization.state_space` (the exact ``rhs_input_jacobian`` kernel, built on first use).
 
     Constrained systems, and steady motions (q̇ ≠ 0), are linearized by
     `lagcomp.analysis.linearize_steady` (a first-order state matrix on the
@@ -152,13 +181,28 @@ def linearize(model, q, params: dict | None = None, *, t: float = 0.0) -> Linear
             "linearization to independent coordinates and speeds on the constraints."
         )
     q = coordinates_vector(model, q)
-    rest = RestForces(model, params, t)
+    rest = RestForces(model, params, t, inputs)
     F_q, F_v = rest.partials(q)
-    C = -F_v
+    C, M = -F_v, rest.mass_matrix(q)
+    H, refused = _input_forces(model, q, M, rest, inputs)
     return Linearization(
-        q=q, t=float(t), M=rest.mass_matrix(q), K=-F_q, G=(C - C.T) / 2, D=(C + C.T) / 2,
-        residual=float(np.max(np.abs(rest.force(q)))), coordinates=model.coordinates, params=rest.params,
+        q=q, t=float(t), M=M, K=-F_q, G=(C - C.T) / 2, D=(C + C.T) / 2,
+        residual=float(np.max(np.abs(rest.force(q)))), coordinates=model.coordinates,
+        params=rest.params, inputs=model.inputs, H=H,
+        input_refused=refused,
     )
+
+
+def _input_forces(model, q, M, rest: RestForces, inputs) -> tuple[np.ndarray | None, str | None]:
+    """(H = ∂F/∂u at (q, 0), None) from the ``rhs_input_jacobian`` kernel (M ∂q̈/∂u), or (None, why not)."""
+    if not model.inputs:
+        return None, None
+    y = np.concatenate([q, np.zeros(model.n)])
+    try:
+        jacobian = model.rhs_input_jacobian(rest.t, y, rest.params_given, inputs)
+    except ModelError as err:
+        return None, str(err)
+    return M @ jacobian[model.n:], None
 
 
 def normal_modes(model_or_linearization, q=None, params: dict | None = None, *, t: float = 0.0) -> Modes:

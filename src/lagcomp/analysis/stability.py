@@ -83,7 +83,7 @@ class StabilitySweep:
 
 
 def stability_sweep(system, parameter, values, q, u=None, params: dict | None = None, *, t: float = 0.0,
-                    drop=(), independent=None, label: str | None = None) -> StabilitySweep:
+                    drop=(), independent=None, label: str | None = None, inputs=None) -> StabilitySweep:
     """Follow the eigenvalues of the steady motion (q, u) as `parameter` runs through `values`.
 
     Parameters
@@ -95,8 +95,9 @@ def stability_sweep(system, parameter, values, q, u=None, params: dict | None = 
         independent), or a function ``value -> dict`` giving any of ``q``,
         ``u``, ``params`` (merged over the base point) for each value.
     values : sequence of float, increasing, at least 2
-    q, u, params, t, drop, independent
-        The base point and the options of `linearize_steady`.
+    q, u, params, t, drop, independent, inputs
+        The base point and the options of `linearize_steady` (`inputs`: the values the system's inputs are
+        held at).
     label : str, optional
         The parameter's name in results and plots (default: `parameter`'s
         name, or the function's).
@@ -104,12 +105,12 @@ def stability_sweep(system, parameter, values, q, u=None, params: dict | None = 
     values = np.asarray(values, dtype=float).ravel()
     if values.size < 2 or not np.all(np.isfinite(values)) or np.any(np.diff(values) <= 0):
         raise OptionError(f"`values` must be at least 2 finite, increasing numbers; got {values[:5].tolist()}...")
-    at = _point_function(system, parameter, q, u, params, t, independent)
+    at = _point_function(system, parameter, q, u, params, t, independent, inputs)
 
     def linearize(value):
         point = at(value)
         return linearize_steady(system, point["q"], point["u"], point["params"], t=t, drop=drop,
-                                independent=independent)
+                                independent=independent, inputs=inputs)
 
     results = [linearize(v) for v in values]
     eigenvalues = _follow([r.eigenvalues for r in results])
@@ -123,7 +124,7 @@ def stability_sweep(system, parameter, values, q, u=None, params: dict | None = 
                           changes=changes, states=results[0].states)
 
 
-def _point_function(system, parameter, q, u, params, t, independent):
+def _point_function(system, parameter, q, u, params, t, independent, inputs=None):
     """value -> dict(q, u, params) of the point at that value of `parameter`."""
     base = {"q": q, "u": u, "params": dict(params or {})}
     if callable(parameter):
@@ -132,7 +133,7 @@ def _point_function(system, parameter, q, u, params, t, independent):
             return {**base, **point, "params": {**base["params"], **point.get("params", {})}}
         return given
     form, _ = first_order_form(system)
-    if parameter in [str(s) for s in form.parameters]:
+    if parameter in [str(s) for s in form.parameters[:len(form.parameters) - len(form.input_names)]]:
         return lambda value: {**base, "params": {**base["params"], parameter: value}}
     if parameter in form.speed_names:
         k = list(form.speed_names).index(parameter)
@@ -142,10 +143,11 @@ def _point_function(system, parameter, q, u, params, t, independent):
         def speeds(value):
             new = start.copy()
             new[k] = value
-            return {**base, "u": consistent_speeds(system, q, new, base["params"], t=t, independent=keep)}
+            return {**base, "u": consistent_speeds(system, q, new, base["params"], t=t, independent=keep,
+                                                    inputs=inputs)}
         return speeds
     raise LinearizationError(f"Unknown sweep parameter {parameter!r}: name a parameter "
-                             f"{[str(s) for s in form.parameters]} or a speed {list(form.speed_names)}, "
+                             f"{[str(s) for s in form.parameters if str(s) not in form.input_names]} or a speed {list(form.speed_names)}, "
                              "or pass a function value -> dict(q=..., u=..., params=...).")
 
 

@@ -114,6 +114,13 @@ class SteadyLinearization:
     dropped_eigenvalues : ndarray of complex
         Eigenvalues of the dropped block of the reduced A (0 for truly
         cyclic coordinates; the rest of the spectrum, not in `stability`).
+    B : ndarray, shape (m, U)
+        Input matrix ∂ẏ/∂w of the inputs held constant (`inputs`; U = 0 without), rows as A's.
+    inputs : tuple of str
+        The inputs, the columns of B.
+    input_derivatives : tuple of str
+        Inputs whose derivatives the equations read: B (with respect to w alone) describes no response to
+        them, and `state_space` refuses.
     """
 
     A: np.ndarray
@@ -131,6 +138,20 @@ class SteadyLinearization:
     residual: float
     drift: dict = field(default_factory=dict)
     dropped_eigenvalues: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=complex))
+    B: np.ndarray | None = None
+    inputs: tuple = ()
+    input_derivatives: tuple = ()
+
+    def state_space(self, outputs=None):
+        """ẏ = A y + B w, z = C y + D w (`lagcomp.analysis.StateSpace`): y the reduced state `states`, w the
+        deviations of the inputs from the values held, z the states named in `outputs` (all by default).
+
+        Raises LinearizationError where an input's derivatives enter the equations (`input_derivatives`:
+        the motion responds to u̇ too, which no B describes).
+        """
+        from lagcomp.analysis.state_space import StateSpace
+
+        return StateSpace.of_states(self.A, self.B, self.states, self.inputs, outputs, self.input_derivatives)
 
     @property
     def growth_rate(self) -> float:
@@ -184,7 +205,7 @@ class SteadyLinearization:
 
 
 def linearize_steady(system, q, u=None, params: dict | None = None, *, t: float = 0.0,
-                     independent=None, drop=()) -> SteadyLinearization:
+                     independent=None, drop=(), inputs=None) -> SteadyLinearization:
     """Linearize about the steady motion (q, u) (an equilibrium when u = 0) on the constraint manifold.
 
     Parameters
@@ -203,6 +224,9 @@ def linearize_steady(system, q, u=None, params: dict | None = None, *, t: float 
     drop : sequence of str
         Ignorable coordinates and speeds to remove from the reduced state
         (cyclic coordinates that drift on the steady motion).
+    inputs : dict, optional
+        A number per input of the system (`lagcomp.Input` supplied at run time), by name: the inputs are
+        held at these values (their derivatives 0), and `SteadyLinearization.B` is ∂ẏ/∂u there.
 
     Raises
     ------
@@ -212,7 +236,7 @@ def linearize_steady(system, q, u=None, params: dict | None = None, *, t: float 
         A named independent set leaves a singular block, the constraints are
         singular at the point, or a dropped coordinate is not ignorable.
     """
-    point = form_point(system, q, u, params, t)
+    point = form_point(system, q, u, params, t, inputs)
     values = point.values
     choice = choose_states(point, independent, drop)
     A_full = _full_state_matrix(point)
@@ -222,6 +246,7 @@ def linearize_steady(system, q, u=None, params: dict | None = None, *, t: float 
     gone = [j for j in range(len(choice.states)) if j not in kept]
     _check_ignorable(A, choice, kept)
     A_kept = A[np.ix_(kept, kept)]
+    B = _full_input_matrix(point)[choice.rows][kept]
     eigenvalues, vectors = linalg.eig(A_kept)
     order = np.lexsort((-eigenvalues.imag, -eigenvalues.real))
     rates = np.concatenate([values["N"][:, 0], point.acceleration])
@@ -234,6 +259,7 @@ def linearize_steady(system, q, u=None, params: dict | None = None, *, t: float 
         residual=float(np.max(np.abs(state_rates[kept]), initial=0.0)),
         drift={choice.states[j]: float(state_rates[j]) for j in range(len(choice.states)) if j not in kept},
         dropped_eigenvalues=linalg.eigvals(A[np.ix_(gone, gone)]) if gone else np.zeros(0, dtype=complex),
+        B=B, inputs=point.form.input_names, input_derivatives=point.form.input_derivatives,
     )
 
 
@@ -245,6 +271,14 @@ def _full_state_matrix(point: FormPoint) -> np.ndarray:
     sensitivity = -linalg.solve(point.kkt, np.hstack([G_q, G_u]))
     n_u = point.form.n_u
     return np.block([[v["N_q"], v["N_u"]], [sensitivity[:n_u]]])
+
+
+def _full_input_matrix(point: FormPoint) -> np.ndarray:
+    """B_full = [[N_w], [a_w]], ∂(q̇, u̇)/∂w along the inputs w held constant, ∂(a, λ)/∂w = −J⁻¹ ∂G/∂w as for A."""
+    N_w, G_w = evaluator(point.form).input_partials(point.q, point.u, point.acceleration, point.multipliers,
+                                                  point.p, point.t)
+    return np.vstack([N_w, -linalg.solve(point.kkt, G_w)[:point.form.n_u]]) if G_w.size else \
+        np.zeros((point.form.n_q + point.form.n_u, G_w.shape[1]))
 
 
 def _tangent_basis(point: FormPoint, choice: Choice) -> np.ndarray:

@@ -50,6 +50,8 @@ ON_DEMAND = (
                           "TAYLOR_MODE_PROGRAMS"), "method='taylor'"),
     KernelKind("equations", ("EQUATIONS",), "Model.equations()"),
     KernelKind("power", ("power",), "the energy balance (Solution.energy_balance)"),
+    KernelKind("input_jacobian", ("rhs_input_jacobian", "RHS_INPUT_JACOBIAN_REFUSED"),
+               "state-space models (lagcomp.analysis.linearize(..., inputs=...), Model.rhs_input_jacobian)"),
 )
 
 #: Every name a companion module may define, and the kind that defines it.

@@ -72,6 +72,7 @@ from lagcomp.codegen.jacobian_blocks import (
     jacobian_entry,
     jacobian_only,
 )
+from lagcomp.codegen.input_jacobian import input_jacobian_kernel
 from lagcomp.codegen.kinds import ON_DEMAND
 from lagcomp.codegen.power import power_kernel
 from lagcomp.codegen.stabilization import stabilized_gamma, velocity_residual
@@ -632,6 +633,8 @@ def _builders(eom: EOM, mapping, loads) -> list:
                                                 _canonical_partials_kernel(eom, mapping, loads))),
         ("geometry", lambda: (geometry_kernel(eom, lambda name, doc, args, stores: kernel(name, doc, args, stores)),)),
         ("power", lambda: (power_kernel(eom, mapping, loads),)),
+        ("input_jacobian", lambda: () if eom.k or mode_slots(eom) or not eom.system.inputs
+         else (input_jacobian_kernel(eom, mapping, loads),)),
     ]
 
 

@@ -22,7 +22,7 @@ reduced to them has n_q − n_h + n_u − n_v states.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import sympy as sp
 
@@ -53,6 +53,12 @@ class FirstOrderForm:
         Velocity constraints Ψ(q, u, t), linear in u.
     multiplier_names : tuple of str
         Names of the k multipliers, in the row order of C.
+    input_names : tuple of str
+        Inputs (`lagcomp.Input` supplied at run time) held at constant values: the last parameters, one
+        symbol per input named like it (`inputs_as_parameters`); () when none.
+    input_derivatives : tuple of str
+        Those of `input_names` whose derivatives the equations read (u̇, ü dropped with the inputs held
+        constant): no input matrix B with respect to them alone.
     """
 
     q: tuple
@@ -68,6 +74,8 @@ class FirstOrderForm:
     Phi: sp.Matrix
     Psi: sp.Matrix
     multiplier_names: tuple = ()
+    input_names: tuple = ()
+    input_derivatives: tuple = ()
 
     @property
     def n_q(self) -> int:
@@ -76,6 +84,26 @@ class FirstOrderForm:
     @property
     def n_u(self) -> int:
         return len(self.u)
+
+
+def inputs_as_parameters(form: FirstOrderForm, inputs) -> FirstOrderForm:
+    """`form` with each input u(t) of `inputs` (`lagcomp.Input`, supplied at run time) held constant: u a
+    parameter (a symbol of its name, after the others), its time derivatives 0.  For linearizations about a
+    steady motion under constant inputs, whose input matrix B is the derivative along those parameters."""
+    if not inputs:
+        return form
+    from lagcomp.model.inputs import MAX_ORDER
+    from lagcomp.model.system import t
+
+    symbols = [sp.Symbol(u.func.__name__, real=True) for u in inputs]
+    still = {u.diff(t, k): sp.S.Zero for u in inputs for k in range(MAX_ORDER + 2, 0, -1)}
+    held = dict(zip(inputs, symbols, strict=True))
+    parts = ("N", "M", "F", "C", "gamma", "Phi", "Psi")
+    read = tuple(u.func.__name__ for u in inputs
+                 if any(getattr(form, part).has(sp.Derivative(u, t)) for part in parts))
+    values = {part: getattr(form, part).xreplace(still).xreplace(held) for part in parts}
+    return replace(form, parameters=(*form.parameters, *symbols), input_names=tuple(s.name for s in symbols),
+                   input_derivatives=read, **values)
 
 
 def from_eom(eom) -> FirstOrderForm:
