@@ -543,6 +543,9 @@ CASES = {
     "steady-singular-point": (lambda: an.linearize_steady(lc.System([x], T=m * x**2 * x.diff(t) ** 2 / 2,
                                                                     name="table_degenerate"), [0.0], None, {"m": 1.0}),
                               "singular"),
+    "linearize-inputs-missing": (lambda models: an.linearize_steady(models["pushed"], [0.0]), "inputs={'f'"),
+    "state-space-input-derivatives": (
+        lambda models: an.linearize(models["driven"], [0.0], inputs={"s": 0.0}).state_space(), "['s']"),
     "steady-unknown-state": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -1.0], drop=["w"]), "['w']"),
     "steady-too-many-independent": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -1.0],
                                                                       independent=["x", "y", "z"]), "['x', 'y', 'z']"),

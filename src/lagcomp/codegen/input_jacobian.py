@@ -29,7 +29,8 @@ def input_jacobian_kernel(eom: EOM, mapping, loads) -> Kernel:
     """``rhs_input_jacobian(t, y, p, out) -> int`` of `eom` (module docstring)."""
     inputs, n = eom.system.inputs, eom.n
     width = len(inputs)
-    read = [u.func.__name__ for u in inputs if any(e.has(sp.Derivative(u, t)) for e in (*eom.M, *eom.F))]
+    read = [u.func.__name__ for u in inputs
+            if any(d.expr == u for e in (*eom.M, *eom.F) for d in e.atoms(sp.Derivative))]
     if read:
         reason = (f"the derivatives of the input(s) {read} (in T or a constraint): the motion responds to u̇ and ü "
                   "as well, so ∂f/∂u is no input matrix")

@@ -100,7 +100,7 @@ def inputs_as_parameters(form: FirstOrderForm, inputs) -> FirstOrderForm:
     held = dict(zip(inputs, symbols, strict=True))
     parts = ("N", "M", "F", "C", "gamma", "Phi", "Psi")
     read = tuple(u.func.__name__ for u in inputs
-                 if any(getattr(form, part).has(sp.Derivative(u, t)) for part in parts))
+                 if any(d.expr == u for part in parts for d in getattr(form, part).atoms(sp.Derivative)))
     values = {part: getattr(form, part).xreplace(still).xreplace(held) for part in parts}
     return replace(form, parameters=(*form.parameters, *symbols), input_names=tuple(s.name for s in symbols),
                    input_derivatives=read, **values)

@@ -1,0 +1,144 @@
+"""State-space models for control (issue 37, part 5): A, B of a cart-pole against the closed form derived here,
+B against central differences of Model.rhs, a constrained cart-pole's transfer function against the
+unconstrained one, and an LQR design (scipy's Riccati solver) that balances the nonlinear model in simulation.
+
+The cart-pole: cart mass M at x, a point mass m at distance l on the pole, θ from the upright, a force F on
+the cart.  T = ½(M + m)ẋ² + m l ẋ θ̇ cos θ + ½ m l² θ̇², V = m g l cos θ.  About θ = 0 (q̇ = 0):
+M₀ = [[M + m, m l], [m l, m l²]] (det M m l²), −∂V/∂θ ≈ m g l θ, so
+    ẍ = (F − m g θ) / M,        θ̈ = ((M + m) g θ − F) / (M l),
+A = [[0, I], [[0, −m g / M], [0, (M + m) g / (M l)]], 0]], B = [0, 0, 1/M, −1/(M l)]ᵀ.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import linalg, signal
+
+import lagcomp as lc
+from lagcomp import analysis as an
+from lagcomp.model import t
+
+x, th, px, py = lc.coordinates("x th px py")
+M, m, l, g = sp.symbols("M m l g", positive=True)
+DEFAULTS = {"M": 1.0, "m": 0.1, "l": 0.5, "g": 9.81}
+
+
+def cart_pole() -> lc.System:
+    T = (M + m) * x.diff(t) ** 2 / 2 + m * l * x.diff(t) * th.diff(t) * sp.cos(th) + m * l**2 * th.diff(t) ** 2 / 2
+    return lc.System([x, th], T=T, V=m * g * l * sp.cos(th), forces=[lc.Input("F"), 0], name="ss_cart_pole",
+                     defaults=DEFAULTS)
+
+
+@pytest.fixture(scope="module")
+def model(cache_dir):
+    return lc.compile(cart_pole(), cache_dir=cache_dir)
+
+
+def closed_form(M_, m_, l_, g_):
+    A = np.zeros((4, 4))
+    A[0, 2] = A[1, 3] = 1.0
+    A[2, 1], A[3, 1] = -m_ * g_ / M_, (M_ + m_) * g_ / (M_ * l_)
+    return A, np.array([[0.0], [0.0], [1 / M_], [-1 / (M_ * l_)]])
+
+
+def test_linearize_steady_with_an_input(model):
+    # was: NameError: name 'F' is not defined (the form's lambdified functions met the input F(t))
+    system = cart_pole()
+    A, B = closed_form(1.0, 0.1, 0.5, 9.81)
+    for source in (model, system):
+        steady = an.linearize_steady(source, [0.0, 0.0], inputs={"F": 0.0})
+        assert steady.states == ("x", "th", "x_dot", "th_dot") and steady.inputs == ("F",)
+        assert np.allclose(steady.A, A, rtol=1e-13, atol=1e-13) and np.allclose(steady.B, B, rtol=1e-13, atol=0)
+    sweep = an.stability_sweep(system, "m", [0.1, 0.2, 0.3], [0.0, 0.0], inputs={"F": 0.0})
+    assert sweep.unstable.all()      # the inverted pendulum, for every mass
+    # θ̈ = ((M + m) g θ − F)/(M l): the growth rate √((M + m) g/(M l)) at m = 0.3
+    assert sweep.growth[-1] == pytest.approx(np.sqrt(1.3 * 9.81 / 0.5), rel=1e-12)
+    with pytest.raises(lc.OptionError, match=r"input\(s\) \['F'\]"):
+        an.linearize_steady(system, [0.0, 0.0])
+    with pytest.raises(lc.OptionError, match=r"input\(s\) \['F'\]"):
+        an.stability_sweep(system, "m", [0.1, 0.2], [0.0, 0.0])
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.floats(0.5, 5.0), st.floats(0.05, 2.0), st.floats(0.2, 3.0), st.floats(1.0, 20.0))
+def test_cart_pole_closed_form(model, M_, m_, l_, g_):
+    params = {"M": M_, "m": m_, "l": l_, "g": g_}
+    space = an.linearize(model, [0.0, 0.0], params, inputs={"F": 0.0}).state_space()
+    A, B = closed_form(M_, m_, l_, g_)
+    assert np.allclose(space.A, A, rtol=1e-12, atol=1e-12 * np.max(np.abs(A)))
+    assert np.allclose(space.B, B, rtol=1e-12, atol=1e-12 * np.max(np.abs(B)))
+    assert space.states == ("x", "th", "x_dot", "th_dot") and space.inputs == ("F",)
+
+
+def test_input_jacobian_against_differences_of_rhs(model, rng):
+    for _ in range(5):
+        y, F, time = rng.normal(size=4), float(rng.normal()), float(rng.uniform(0, 3))
+        exact = model.rhs_input_jacobian(time, y, inputs={"F": F})[:, 0]
+        h = 1e-5
+        central = (model.rhs(time, y, inputs={"F": F + h}) - model.rhs(time, y, inputs={"F": F - h})) / (2 * h)
+        # the rhs is affine in F: central differences are exact up to rounding
+        assert np.allclose(exact, central, rtol=1e-8, atol=1e-9)
+        assert exact[0] == exact[1] == 0.0
+
+
+def test_constrained_cart_pole_has_the_same_transfer_function(model, cache_dir):
+    # the pole's mass at (px, py) on a rod of length l from the cart: (px − x)² + py² = l²
+    rod = lc.System([x, px, py], T=M * x.diff(t) ** 2 / 2 + m * (px.diff(t) ** 2 + py.diff(t) ** 2) / 2, V=m * g * py,
+                    forces=[lc.Input("F"), 0, 0], constraints=[lc.Holonomic("rod", (px - x) ** 2 + py**2 - l**2)],
+                    name="ss_cart_pole_rod", defaults=DEFAULTS)
+    steady = an.linearize_steady(lc.compile(rod, cache_dir=cache_dir), [0.0, 0.0, 0.5], inputs={"F": 0.0},
+                                 independent=["x", "px", "x_dot", "px_dot"])
+    plain = an.linearize(model, [0.0, 0.0], inputs={"F": 0.0}).state_space(outputs=["x"])
+    rodded = steady.state_space(outputs=["x"])
+    for s in (0.3, 1.0 + 2.0j, 7.0j):
+        G = [(sys.C @ linalg.solve(s * np.eye(sys.A.shape[0]) - sys.A, sys.B))[0, 0] for sys in (plain, rodded)]
+        assert G[1] == pytest.approx(G[0], rel=1e-10)
+
+
+def test_lqr_balances_the_nonlinear_cart_pole(model):
+    space = an.linearize(model, [0.0, 0.0], inputs={"F": 0.0}).state_space()
+    Q, R = np.diag([1.0, 10.0, 1.0, 1.0]), np.array([[0.1]])
+    P = linalg.solve_continuous_are(space.A, space.B, Q, R)
+    gains = linalg.solve(R, space.B.T @ P)[0]
+    assert np.all(linalg.eigvals(space.A - space.B @ gains[None, :]).real < 0)
+    k0, k1, k2, k3 = (float(k) for k in gains)
+
+    @numba.njit
+    def feedback(time, y, p):
+        return -(k0 * y[0] + k1 * y[1] + k2 * y[2] + k3 * y[3])
+
+    start = ([0.1, 0.25], [0.0, 0.0])      # 0.25 rad ≈ 14° off the upright
+    closed = model.simulate((0.0, 15.0), *start, inputs={"F": feedback}, rtol=1e-9, atol=1e-11)
+    opened = model.simulate((0.0, 15.0), *start, inputs={"F": 0.0}, rtol=1e-9, atol=1e-11)
+    assert closed.success and np.max(np.abs(closed.y[-1])) < 1e-4
+    assert np.max(np.abs(opened.q[:, 1])) > 3.0    # without the controller it falls over
+
+
+def test_conversions(model):
+    space = an.linearize(model, [0.0, 0.0], inputs={"F": 0.0}).state_space(outputs=["x", "th"])
+    scipy_system = space.to_scipy()
+    assert isinstance(scipy_system, signal.StateSpace)
+    assert np.array_equal(scipy_system.A, space.A) and np.array_equal(scipy_system.C, [[1, 0, 0, 0], [0, 1, 0, 0]])
+    assert np.array_equal(space.D, np.zeros((2, 1)))
+    control = pytest.importorskip("control")
+    converted = space.to_control()
+    assert isinstance(converted, control.StateSpace) and np.array_equal(converted.B, space.B)
+
+
+def test_refusals(model, cache_dir):
+    support = lc.System([x], T=m * (x.diff(t) + lc.Input("s").diff(t)) ** 2 / 2, V=g * x**2 / 2,
+                        name="ss_support", defaults={"m": 1.0, "g": 4.0})
+    shaken = lc.compile(support, cache_dir=cache_dir)
+    with pytest.raises(lc.LinearizationError, match=r"\['s'\]"):
+        an.linearize(shaken, [0.0], inputs={"s": 0.0}).state_space()
+    with pytest.raises(lc.LinearizationError, match=r"\['s'\]"):
+        an.linearize_steady(support, [0.0], inputs={"s": 0.0}).state_space()
+    with pytest.raises(lc.OptionError, match="Unknown output"):
+        an.linearize(model, [0.0, 0.0], inputs={"F": 0.0}).state_space(outputs=["y"])
+    with pytest.raises(lc.OptionError, match="inputs="):
+        model.rhs(0.0, np.zeros(4))
