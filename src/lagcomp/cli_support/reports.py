@@ -12,6 +12,7 @@ def run_lines(sol, model) -> list[str]:
               f"(max relative drift {summary.energy_error:.3g})"),
              (f"            h:   {sol.energy_function[0]:.12g} -> {sol.energy_function[-1]:.12g} "
               f"(max relative drift {summary.energy_function_error:.3g})")]
+    lines += balance_lines(sol)
     for name, record in sol.events.items():
         when = f" at t = {record.t[0]:.10g}" + (f" .. {record.t[-1]:.10g}" if len(record) > 1 else "") \
             if len(record) else ""
@@ -25,3 +26,25 @@ def run_lines(sol, model) -> list[str]:
         lines.append(f"            largest constraint residual {sol.constraint_residual:.3g}")
     lines.append(f"final       {', '.join(f'{c}={v:.8g}' for c, v in zip(sol.coordinates, sol.q[-1]))}")
     return lines
+
+
+#: The drift of h beyond which `lagcomp run` reports the energy balance: h is then no first integral (forces,
+#: dissipation, imposed motions), and its drift measures them, not the integration error.
+BALANCE_ABOVE = 1e-6
+
+
+def balance_lines(sol) -> list[str]:
+    """The energy balance of `sol` (`lagcomp.Solution.energy_balance`) where h drifts by more than
+    `BALANCE_ABOVE`, in one line; nothing where it does not or where the balance is refused (contacts, friction,
+    Kane models, a summary run)."""
+    from lagcomp.errors import ModelError
+
+    if sol.summary.energy_function_error <= BALANCE_ABOVE:
+        return []
+    try:
+        balance = sol.energy_balance()
+    except ModelError:
+        return []
+    works = ", ".join(f"{name} {values[-1]:.6g}" for name, values in balance.work.items() if values.any())
+    return [f"balance     {balance.quantity}: change {balance.change[-1]:.6g} = work ({works or 'none'}) "
+            f"+ residual {balance.residual[-1]:.3g} (max relative {balance.relative_residual:.3g})"]
