@@ -282,8 +282,8 @@ class Solution:
         The energy function h (T + V when T is homogeneous quadratic in q̇) changes at the rate
         dh/dt = Q·q̇ − 2D − ∂L/∂t − λ·b; the residual h(t) − h(0) − ∫ dh/dt dt (less the jumps at resets) is
         the integration error, where `energy_drift` means nothing for a driven or damped run.  The integral
-        is taken along the saved rows (cubic Hermite interpolation, 3-point Gauss): save them densely
-        (``t_eval``) for a residual at the run's tolerance; ``quadrature_error`` estimates their share.
+        is taken along the saved rows (quintic Hermite interpolation, 4-point Gauss, O(Δ⁷) per interval);
+        ``quadrature_error`` estimates the rows' share: save them densely (``t_eval``) where it matters.
 
         Returns
         -------
