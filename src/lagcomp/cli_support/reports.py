@@ -46,5 +46,6 @@ def balance_lines(sol) -> list[str]:
     except ModelError:
         return []
     works = ", ".join(f"{name} {values[-1]:.6g}" for name, values in balance.work.items() if values.any())
-    return [f"balance     {balance.quantity}: change {balance.change[-1]:.6g} = work ({works or 'none'}) "
-            f"+ residual {balance.residual[-1]:.3g} (max relative {balance.relative_residual:.3g})"]
+    line = (f"balance     {balance.quantity}: change {balance.change[-1]:.6g} = work ({works or 'none'}) "
+            f"+ residual {balance.residual[-1]:.3g} (max relative {balance.relative_residual:.3g})")
+    return [line]

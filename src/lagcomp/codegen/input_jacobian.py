@@ -15,7 +15,11 @@ from dataclasses import replace
 import sympy as sp
 
 from lagcomp.codegen.cse import cse_kernel
-from lagcomp.codegen.jacobian_blocks import acceleration_block, fresh_symbols, jacobian_entry
+from lagcomp.codegen.jacobian_blocks import (
+    acceleration_block,
+    fresh_symbols,
+    jacobian_entry,
+)
 from lagcomp.ir import NO_JACOBIAN, JacobianSolve, Kernel, Unavailable
 from lagcomp.mechanics.lagrange import EOM
 from lagcomp.model.system import t

@@ -62,6 +62,7 @@ from lagcomp.codegen.directional import (
     tangents_kernels,
 )
 from lagcomp.codegen.geometry import geometry_kernel
+from lagcomp.codegen.input_jacobian import input_jacobian_kernel
 from lagcomp.codegen.jacobian_blocks import (
     RHS_PARAMETER_JACOBIAN_DOC,
     RHS_WITH_FULL_JACOBIAN_DOC,
@@ -72,7 +73,6 @@ from lagcomp.codegen.jacobian_blocks import (
     jacobian_entry,
     jacobian_only,
 )
-from lagcomp.codegen.input_jacobian import input_jacobian_kernel
 from lagcomp.codegen.kinds import ON_DEMAND
 from lagcomp.codegen.power import power_kernel
 from lagcomp.codegen.stabilization import stabilized_gamma, velocity_residual

@@ -36,6 +36,7 @@ from lagcomp.integrate.contacts import (
 from lagcomp.integrate.dae import dae_state, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
 from lagcomp.integrate.drivers.run_state import STEP, RunState
+from lagcomp.integrate.energy_balance import PowerSource
 from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, run_bytes
 from lagcomp.integrate.memory import check as check_memory
@@ -44,7 +45,6 @@ from lagcomp.integrate.options import RunOptions, positive, run_options
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.reset_checks import warn_of_resets_gone_through
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
-from lagcomp.integrate.energy_balance import PowerSource
 from lagcomp.integrate.solution import (
     ContactSwitch,
     EventRecord,
