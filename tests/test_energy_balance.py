@@ -176,3 +176,14 @@ def test_refusals(damped, cache_dir):
         ball = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=m * g * x, events=[lc.Contact("floor", x, restitution=0.5)],
                          name="balance_ball", defaults={"m": 1.0, "g": 9.81})
         lc.compile(ball, cache_dir=cache_dir).simulate((0.0, 1.0), [1.0], [0.0]).energy_balance()
+
+
+def test_cli_reports_the_balance_where_h_drifts(damped, cache_dir):
+    from lagcomp.cli_support.reports import balance_lines
+
+    (line,) = balance_lines(_run(damped, [1.0], [0.0]))
+    assert line.startswith("balance     T + V: change -1.83") and "dissipation -1.83" in line
+    assert float(line.split("max relative ")[1].rstrip(")")) < 10 * RTOL
+    spring = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="balance_spring",
+                       defaults={"m": 1.0, "k": 4.0})
+    assert balance_lines(_run(lc.compile(spring, cache_dir=cache_dir), [1.0], [0.0])) == []   # h is conserved
