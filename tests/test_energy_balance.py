@@ -187,3 +187,16 @@ def test_cli_reports_the_balance_where_h_drifts(damped, cache_dir):
     spring = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="balance_spring",
                        defaults={"m": 1.0, "k": 4.0})
     assert balance_lines(_run(lc.compile(spring, cache_dir=cache_dir), [1.0], [0.0])) == []   # h is conserved
+
+
+def test_plot_run_draws_the_balance_where_h_drifts(damped):
+    pytest.importorskip("matplotlib")
+    from lagcomp import plots
+
+    sol = _run(damped, [1.0], [0.0])
+    bottom = plots.plot_run(sol).axes[1]
+    assert "∫P dt" in bottom.get_ylabel()
+    drawn = bottom.lines[0].get_ydata()
+    b = sol.energy_balance()
+    assert np.max(drawn) == pytest.approx(b.relative_residual, rel=1e-12)
+    assert "h(0)|" in plots.plot_energy_error(sol).axes[0].get_ylabel()     # asked for: the plain drift

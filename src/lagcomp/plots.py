@@ -128,20 +128,27 @@ def plot_coordinates(sol, *, velocities: bool = False, events: bool = True, titl
 
 
 def _energy_error_axes(ax, sol, which: str) -> None:
-    values = getattr(sol, which)
-    scale = abs(values[0]) if values[0] != 0 else 1.0
-    error = np.abs(values - values[0]) / scale
+    if which == "balance":
+        balance = sol.energy_balance()
+        error = np.abs(balance.residual) / balance.scale
+        label = "|h(t) − h(0) − ∫P dt| / scale"
+    else:
+        values = getattr(sol, which)
+        scale = abs(values[0]) if values[0] != 0 else 1.0
+        error = np.abs(values - values[0]) / scale
+        symbol = "h" if which == "energy_function" else "E"
+        label = f"|{symbol}(t) − {symbol}(0)| / |{symbol}(0)|"
     positive = error > 0
     floor = float(np.min(error[positive])) / 10 if positive.any() else 1e-17
     ax.semilogy(sol.t, np.maximum(error, floor), lw=0.8)
-    symbol = "h" if which == "energy_function" else "E"
-    ax.set_ylabel(f"|{symbol}(t) − {symbol}(0)| / |{symbol}(0)|")
+    ax.set_ylabel(label)
     ax.set_xlabel("t")
     ax.grid(alpha=0.3, which="both")
 
 
 def plot_energy_error(sol, *, which: str = "energy_function", title: str | None = None):
-    """Relative error of the energy function (or ``which="energy"``: T + V) along a `Solution`, log scale.
+    """Relative error of the energy function (or ``which="energy"``: T + V; ``which="balance"``: the residual of
+    `Solution.energy_balance`, the error of a driven or dissipative run) along a `Solution`, log scale.
 
     Exact zeros (the initial point) are drawn at a tenth of the smallest
     non-zero error, so the log scale keeps them in view.
@@ -156,7 +163,9 @@ def plot_energy_error(sol, *, which: str = "energy_function", title: str | None 
 
 def plot_run(sol, *, events: bool = True, title: str | None = None):
     """Coordinates vs time above the energy error: the figure of ``lagcomp run --plot``; with `events`, the
-    resets, impacts and mode switches marked on both (as `plot_coordinates` marks them)."""
+    resets, impacts and mode switches marked on both (as `plot_coordinates` marks them).  Where h is no first
+    integral (it drifts by more than `lagcomp.integrate.energy_balance.BALANCE_ABOVE`: forces, dissipation,
+    imposed motions) the error drawn is the energy balance's residual."""
     _require(sol, "Solution", "plot_run")
     fig = _figure(7.0, 6.5)
     top, bottom = fig.subplots(2, 1, sharex=True)
@@ -167,7 +176,9 @@ def plot_run(sol, *, events: bool = True, title: str | None = None):
     top.set_ylabel("coordinates")
     top.legend(loc="upper right", fontsize="small")
     top.grid(alpha=0.3)
-    _energy_error_axes(bottom, sol, "energy_function")
+    from lagcomp.integrate.energy_balance import balance_or_none
+
+    _energy_error_axes(bottom, sol, "energy_function" if balance_or_none(sol) is None else "balance")
     top.set_title(title or f"{sol.method}, {len(sol.t)} points")
     return fig
 

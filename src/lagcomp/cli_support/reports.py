@@ -28,22 +28,14 @@ def run_lines(sol, model) -> list[str]:
     return lines
 
 
-#: The drift of h beyond which `lagcomp run` reports the energy balance: h is then no first integral (forces,
-#: dissipation, imposed motions), and its drift measures them, not the integration error.
-BALANCE_ABOVE = 1e-6
-
 
 def balance_lines(sol) -> list[str]:
-    """The energy balance of `sol` (`lagcomp.Solution.energy_balance`) where h drifts by more than
-    `BALANCE_ABOVE`, in one line; nothing where it does not or where the balance is refused (contacts, friction,
-    Kane models, a summary run)."""
-    from lagcomp.errors import ModelError
+    """The energy balance of `sol` in one line where h is no first integral
+    (`lagcomp.integrate.energy_balance.balance_or_none`); nothing otherwise."""
+    from lagcomp.integrate.energy_balance import balance_or_none
 
-    if sol.summary.energy_function_error <= BALANCE_ABOVE:
-        return []
-    try:
-        balance = sol.energy_balance()
-    except ModelError:
+    balance = balance_or_none(sol)
+    if balance is None:
         return []
     works = ", ".join(f"{name} {values[-1]:.6g}" for name, values in balance.work.items() if values.any())
     line = (f"balance     {balance.quantity}: change {balance.change[-1]:.6g} = work ({works or 'none'}) "

@@ -99,6 +99,22 @@ class EnergyBalance:
                 f"max_residual={self.max_residual:.3g} (relative {self.relative_residual:.3g}))")
 
 
+#: The drift of h beyond which `lagcomp run` and `lagcomp.plots.plot_run` show the energy balance instead: h is
+#: then no first integral (forces, dissipation, imposed motions), and its drift measures them, not the error.
+BALANCE_ABOVE = 1e-6
+
+
+def balance_or_none(solution) -> EnergyBalance | None:
+    """`solution`'s energy balance where h drifts by more than `BALANCE_ABOVE`; None where it does not, or where
+    the balance is refused (contacts, friction, Kane models, a summary run, no kernels kept)."""
+    if solution.summary.energy_function_error <= BALANCE_ABOVE:
+        return None
+    try:
+        return energy_balance(solution)
+    except ModelError:
+        return None
+
+
 class PowerSource:
     """A run's model kernels and parameter vector, for `Solution.energy_balance` (None for a Solution built by
     hand or pickled: the kernels are not kept), or why the balance is refused."""
