@@ -200,3 +200,18 @@ def test_plot_run_draws_the_balance_where_h_drifts(damped):
     b = sol.energy_balance()
     assert np.max(drawn) == pytest.approx(b.relative_residual, rel=1e-12)
     assert "h(0)|" in plots.plot_energy_error(sol).axes[0].get_ylabel()     # asked for: the plain drift
+
+
+def test_resets_are_jumps_with_or_without_event_rows(cache_dir):
+    # a ball bouncing with ẋ → −0.8 ẋ: all its energy is kinetic at x = 0, so each bounce takes 1 − 0.64 of it
+    ball = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=m * g * x, name="balance_bouncing",
+                     defaults={"m": 1.0, "g": 9.81, "c": 0.8},
+                     events=[lc.Event("bounce", x, direction=-1, reset={x.diff(t): -c * x.diff(t)})])
+    model = lc.compile(ball, cache_dir=cache_dir)
+    for t_eval in (None, np.linspace(0.0, 3.0, 301)):     # rows at the events' states, or none there
+        sol = model.simulate((0.0, 3.0), [1.0], [0.0], rtol=1e-10, atol=1e-12, t_eval=t_eval)
+        b = sol.energy_balance()
+        bounces = len(sol.events["bounce"])
+        assert bounces >= 3
+        assert b.jumps[-1] == pytest.approx(9.81 * (0.64**bounces - 1), rel=1e-9)
+        assert b.relative_residual < 1e-9 and not any(np.any(w) for w in b.work.values())

@@ -19,7 +19,9 @@ interpolant of the state through yᵢ, yᵢ₊₁, the slopes f (the model's ``r
 the motion (central differences of ``rhs``) at both ends, and 4-point Gauss–Legendre on it.  Its error
 is O(Δ⁷) per interval (Δ = tᵢ₊₁ − tᵢ): the rows of an adaptive run's steps are usually enough (a damped
 pendulum at rtol = 1e-10: 2e-8 of the energy against 6e-5 with a cubic interpolant); where they are not,
-save rows densely (a ``t_eval`` grid).  `EnergyBalance.quadrature_error` estimates this part
+save rows densely (a ``t_eval`` grid).  Rows at the events that reset the state are added where the saved
+ones lack them (from `Solution.events`), so that no interval spans a jump.
+`EnergyBalance.quadrature_error` estimates this part
 (Richardson: the same integrals over every other row).
 """
 
@@ -48,7 +50,8 @@ class EnergyBalance:
     Attributes
     ----------
     t : ndarray, shape (m,)
-        The saved times.
+        The saved times, and those of the events that reset the state where no row was saved there (a
+        ``t_eval`` run): twice, the states just before and after (`_rows`).
     quantity : str
         What is balanced: ``"T + V"`` when the energy function is the mechanical energy, else ``"h"``
         (the Jacobi integral q̇·∂L/∂q̇ − L).
@@ -153,18 +156,39 @@ def energy_balance(solution) -> EnergyBalance:
     if solution.summary.rows != solution.t.size:
         raise ModelError("The energy balance integrates the power along the saved rows; a record='summary' run "
                          "keeps only two: run with record='trajectory'.")
-    ts, ys = solution.t, np.hstack([solution.q, solution.qd])
-    h = solution.energy_function
+    ts, ys, h = _rows(solution, source)
     slopes = _slopes(source, ts, ys)
     work = _work(source, ts, ys, slopes)
     flat = np.diff(ts) == 0                                   # an event's reset: two rows at one time
     jumps = np.concatenate([[0.0], np.cumsum(np.where(flat, np.diff(h), 0.0))])
     change = h - h[0]
     return EnergyBalance(
-        t=ts, quantity="T + V" if np.array_equal(h, solution.energy) else "h", change=change,
+        t=ts, quantity="T + V" if np.array_equal(solution.energy_function, solution.energy) else "h", change=change,
         work={name: work[:, j] for j, name in enumerate(TERMS)}, jumps=jumps,
         residual=change - work.sum(axis=1) - jumps, h0=float(h[0]),
         quadrature_error=_quadrature_error(source, ts, ys, slopes, work, flat))
+
+
+def _rows(solution, source: PowerSource) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rows the balance integrates along, (ts (m,), ys (m, 2n), h (m,)): the saved ones, with the states just
+    before and just after each located event that reset the state, where the saved rows lack them (a ``t_eval``
+    run saves none at events), so that no interval spans a jump."""
+    ts, ys, h = solution.t, np.hstack([solution.q, solution.qd]), solution.energy_function
+    extra = [(time, 2 if after else 0, np.concatenate(state))    # before the saved rows at that time, or after
+             for record in solution.events.values() if record.q_after is not None
+             for time, *states in zip(record.t, record.q, record.qd, record.q_after, record.qd_after)
+             if not (np.array_equal(states[0], states[2]) and np.array_equal(states[1], states[3]))
+             for after, state in ((False, states[:2]), (True, states[2:]))
+             if not np.any((ts == time) & np.all(ys == np.concatenate(state), axis=1))]
+    if not extra:
+        return ts, ys, h
+    times = np.concatenate([ts, [time for time, _, _ in extra]])
+    ranks = np.concatenate([np.ones(ts.size), [rank for _, rank, _ in extra]])
+    order = np.lexsort((ranks, times))
+    states = np.vstack([ys, [state for _, _, state in extra]])[order]
+    energy = np.array([source.kernels.energy_function(float(time), state, source.p)
+                       for time, state in zip(times[order], states)])
+    return times[order], states, energy
 
 
 def _work(source: PowerSource, ts: np.ndarray, ys: np.ndarray, slopes: tuple) -> np.ndarray:
