@@ -146,9 +146,9 @@ def _point_function(system, parameter, q, u, params, t, independent, inputs=None
             return {**base, "u": consistent_speeds(system, q, new, base["params"], t=t, independent=keep,
                                                     inputs=inputs)}
         return speeds
-    raise LinearizationError(f"Unknown sweep parameter {parameter!r}: name a parameter "
-                             f"{[str(s) for s in form.parameters if str(s) not in form.input_names]} or a speed {list(form.speed_names)}, "
-                             "or pass a function value -> dict(q=..., u=..., params=...).")
+    names = [str(s) for s in form.parameters[:len(form.parameters) - len(form.input_names)]]
+    raise LinearizationError(f"Unknown sweep parameter {parameter!r}: name a parameter {names} or a speed "
+                             f"{list(form.speed_names)}, or pass a function value -> dict(q=..., u=..., params=...).")
 
 
 def _follow(spectra: list) -> np.ndarray:

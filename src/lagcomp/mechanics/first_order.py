@@ -55,7 +55,7 @@ class FirstOrderForm:
         Names of the k multipliers, in the row order of C.
     input_names : tuple of str
         Inputs (`lagcomp.Input` supplied at run time) held at constant values: the last parameters, one
-        symbol per input named like it (`inputs_as_parameters`); () when none.
+        symbol per input (`inputs_as_parameters`), in this order; () when none.
     input_derivatives : tuple of str
         Those of `input_names` whose derivatives the equations read (u̇, ü dropped with the inputs held
         constant): no input matrix B with respect to them alone.
@@ -95,14 +95,22 @@ def inputs_as_parameters(form: FirstOrderForm, inputs) -> FirstOrderForm:
     from lagcomp.model.inputs import MAX_ORDER
     from lagcomp.model.system import t
 
-    symbols = [sp.Symbol(u.func.__name__, real=True) for u in inputs]
+    taken = {s.name for part in (form.N, form.M, form.F, form.C, form.gamma, form.Phi, form.Psi)
+             for s in part.free_symbols} | {s.name for s in (*form.q, *form.u, *form.parameters)}
+    symbols = []
+    for u in inputs:    # (symengine tells symbols apart by name: none may share one with the form's)
+        name = f"_input_{u.func.__name__}"
+        while name in taken:
+            name += "_"
+        taken.add(name)
+        symbols.append(sp.Symbol(name, real=True))
     still = {u.diff(t, k): sp.S.Zero for u in inputs for k in range(MAX_ORDER + 2, 0, -1)}
     held = dict(zip(inputs, symbols, strict=True))
     parts = ("N", "M", "F", "C", "gamma", "Phi", "Psi")
     read = tuple(u.func.__name__ for u in inputs
                  if any(d.expr == u for part in parts for d in getattr(form, part).atoms(sp.Derivative)))
     values = {part: getattr(form, part).xreplace(still).xreplace(held) for part in parts}
-    return replace(form, parameters=(*form.parameters, *symbols), input_names=tuple(s.name for s in symbols),
+    return replace(form, parameters=(*form.parameters, *symbols), input_names=tuple(u.func.__name__ for u in inputs),
                    input_derivatives=read, **values)
 
 
