@@ -142,3 +142,21 @@ def test_refusals(model, cache_dir):
         an.linearize(model, [0.0, 0.0], inputs={"F": 0.0}).state_space(outputs=["y"])
     with pytest.raises(lc.OptionError, match="inputs="):
         model.rhs(0.0, np.zeros(4))
+
+
+def test_reaction_outputs_of_a_pendulum_held_aside():
+    # a bob on a rod (x² + y² = l²) held at θ0 by a horizontal force F0 = m g tan θ0.  Along the rod the
+    # tension is T = m g cos θ + F sin θ + m l θ̇², and λ = −T/(2l) (Λ = 2(x, y)), so about θ0:
+    # δT = (F0 cos θ0 − m g sin θ0) δθ + sin θ0 δF = sin θ0 δF: C = 0, D = −sin θ0/(2l)
+    x_, y_ = lc.coordinates("x y")
+    bob = lc.System([x_, y_], T=m * (x_.diff(t) ** 2 + y_.diff(t) ** 2) / 2, V=m * g * y_,
+                    forces=[lc.Input("F"), 0], constraints=[lc.Holonomic("rod", x_**2 + y_**2 - l**2)],
+                    name="ss_held_bob", defaults={"m": 0.7, "g": 9.81, "l": 1.3})
+    th0 = 0.5
+    steady = an.linearize_steady(bob, [1.3 * np.sin(th0), -1.3 * np.cos(th0)], inputs={"F": 0.7 * 9.81 * np.tan(th0)},
+                                 independent=["x", "x_dot"])
+    assert steady.residual < 1e-12
+    assert steady.reactions["rod"][2] == pytest.approx(-0.7 * 9.81 / np.cos(th0) / 2.6, rel=1e-13)
+    space = steady.state_space(outputs=["x", "rod"])
+    assert space.outputs == ("x", "rod") and np.array_equal(space.C[0], [1.0, 0.0]) and space.D[0, 0] == 0.0
+    assert np.allclose(space.C[1], 0.0, atol=1e-13) and space.D[1, 0] == pytest.approx(-np.sin(th0) / 2.6, rel=1e-13)

@@ -3,7 +3,8 @@
 `lagcomp.analysis.linearize(model, q, inputs=...)` (unconstrained, x = (δq, δq̇)) and
 `lagcomp.analysis.linearize_steady(..., inputs=...)` (constrained too, x the independent coordinates and
 speeds) give A and B: x the deviation of the state from the point, w that of the inputs from the values
-they are held at.  The outputs z are states chosen by name (C picks them, D = 0).  `StateSpace.to_scipy`
+they are held at.  The outputs z are states chosen by name (C picks them, D = 0) and, from
+`linearize_steady`, constraints' reactions (the multipliers' deviations: C = ∂λ/∂x, D = ∂λ/∂w).  `StateSpace.to_scipy`
 gives a `scipy.signal.StateSpace`, `StateSpace.to_control` a python-control one (``pip install control``).
 """
 
@@ -39,24 +40,29 @@ class StateSpace:
     outputs: tuple
 
     @classmethod
-    def of_states(cls, A, B, states, inputs, outputs=None, input_derivatives=()) -> StateSpace:
-        """A, B with the states named in `outputs` (all when None) as outputs; LinearizationError for inputs
-        whose derivatives enter the equations (`input_derivatives`)."""
+    def of_states(cls, A, B, states, inputs, outputs=None, input_derivatives=(), rows=None) -> StateSpace:
+        """A, B with the states named in `outputs` (all when None) as outputs, or other outputs `rows` gives
+        ({name: (C row (m,), D row (U,))}: a linearization's reactions); LinearizationError for inputs whose
+        derivatives enter the equations (`input_derivatives`)."""
         if input_derivatives:
             raise LinearizationError(
                 f"The equations read the derivatives of the input(s) {list(input_derivatives)} (an imposed motion "
                 "in T or a constraint): the motion responds to u̇ and ü too, which an input matrix B does not "
                 "describe. Write such an input as a force, or take its derivatives as states of your own.")
-        states = tuple(states)
+        states, rows = tuple(states), rows or {}
         names = states if outputs is None else tuple(outputs)
-        unknown = [name for name in names if name not in states]
+        unknown = [name for name in names if name not in states and name not in rows]
         if unknown:
-            raise OptionError(f"Unknown output(s) {unknown}: outputs are states, {list(states)}.")
-        C = np.zeros((len(names), len(states)))
-        C[np.arange(len(names)), [states.index(name) for name in names]] = 1.0
+            raise OptionError(f"Unknown output(s) {unknown}: outputs are states, {list(states)}"
+                              + (f", or reactions, {list(rows)}." if rows else "."))
         B = np.zeros((len(states), 0)) if B is None else np.asarray(B, dtype=float)
-        return cls(A=np.asarray(A, dtype=float), B=B, C=C, D=np.zeros((len(names), B.shape[1])), states=states,
-                   inputs=tuple(inputs), outputs=names)
+        C, D = np.zeros((len(names), len(states))), np.zeros((len(names), B.shape[1]))
+        for i, name in enumerate(names):
+            if name in states:
+                C[i, states.index(name)] = 1.0
+            else:
+                C[i], D[i] = rows[name]
+        return cls(A=np.asarray(A, dtype=float), B=B, C=C, D=D, states=states, inputs=tuple(inputs), outputs=names)
 
     def to_scipy(self):
         """`scipy.signal.StateSpace` (A, B, C, D)."""

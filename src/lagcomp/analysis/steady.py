@@ -121,6 +121,9 @@ class SteadyLinearization:
     input_derivatives : tuple of str
         Inputs whose derivatives the equations read: B (with respect to w alone) describes no response to
         them, and `state_space` refuses.
+    reactions : dict
+        {constraint: (∂λ/∂y (m,), ∂λ/∂w (U,), λ at the point)}, the multipliers' linearization, for
+        `state_space` outputs.
     """
 
     A: np.ndarray
@@ -141,17 +144,20 @@ class SteadyLinearization:
     B: np.ndarray | None = None
     inputs: tuple = ()
     input_derivatives: tuple = ()
+    reactions: dict = field(default_factory=dict, repr=False)
 
     def state_space(self, outputs=None):
         """ẏ = A y + B w, z = C y + D w (`lagcomp.analysis.StateSpace`): y the reduced state `states`, w the
-        deviations of the inputs from the values held, z the states named in `outputs` (all by default).
+        deviations of the inputs from the values held, z what `outputs` names (all the states by default): states,
+        and constraints' reactions (their multipliers' deviations δλ = ∂λ/∂y y + ∂λ/∂w w).
 
         Raises LinearizationError where an input's derivatives enter the equations (`input_derivatives`:
         the motion responds to u̇ too, which no B describes).
         """
         from lagcomp.analysis.state_space import StateSpace
 
-        return StateSpace.of_states(self.A, self.B, self.states, self.inputs, outputs, self.input_derivatives)
+        rows = {name: (C, D) for name, (C, D, _) in self.reactions.items()}
+        return StateSpace.of_states(self.A, self.B, self.states, self.inputs, outputs, self.input_derivatives, rows)
 
     @property
     def growth_rate(self) -> float:
@@ -239,14 +245,15 @@ def linearize_steady(system, q, u=None, params: dict | None = None, *, t: float 
     point = form_point(system, q, u, params, t, inputs)
     values = point.values
     choice = choose_states(point, independent, drop)
-    A_full = _full_state_matrix(point)
+    A_full, reactions_x = _full_state_matrix(point)
     basis = _tangent_basis(point, choice)
     A = A_full[choice.rows] @ basis
     kept = [j for j, name in enumerate(choice.states) if name not in choice.dropped]
     gone = [j for j in range(len(choice.states)) if j not in kept]
     _check_ignorable(A, choice, kept)
     A_kept = A[np.ix_(kept, kept)]
-    B = _full_input_matrix(point)[choice.rows][kept]
+    B_full, reactions_w = _full_input_matrix(point)
+    B = B_full[choice.rows][kept]
     eigenvalues, vectors = linalg.eig(A_kept)
     order = np.lexsort((-eigenvalues.imag, -eigenvalues.real))
     rates = np.concatenate([values["N"][:, 0], point.acceleration])
@@ -260,25 +267,29 @@ def linearize_steady(system, q, u=None, params: dict | None = None, *, t: float 
         drift={choice.states[j]: float(state_rates[j]) for j in range(len(choice.states)) if j not in kept},
         dropped_eigenvalues=linalg.eigvals(A[np.ix_(gone, gone)]) if gone else np.zeros(0, dtype=complex),
         B=B, inputs=point.form.input_names, input_derivatives=point.form.input_derivatives,
+        reactions=dict(zip(point.form.multiplier_names,
+                           zip(reactions_x @ basis[:, kept], reactions_w, point.multipliers), strict=True)),
     )
 
 
-def _full_state_matrix(point: FormPoint) -> np.ndarray:
-    """A_full = [[N_q, N_u], [a_q, a_u]] with ∂(a, λ)/∂x = −J⁻¹ ∂G/∂x (module docstring)."""
+def _full_state_matrix(point: FormPoint) -> tuple[np.ndarray, np.ndarray]:
+    """A_full = [[N_q, N_u], [a_q, a_u]] with ∂(a, λ)/∂x = −J⁻¹ ∂G/∂x (module docstring), and ∂λ/∂x (k, n_q + n_u)."""
     v = point.values
     G_q, G_u = evaluator(point.form).residual_partials(point.q, point.u, point.acceleration, point.multipliers,
                                                      point.p, point.t)
     sensitivity = -linalg.solve(point.kkt, np.hstack([G_q, G_u]))
     n_u = point.form.n_u
-    return np.block([[v["N_q"], v["N_u"]], [sensitivity[:n_u]]])
+    return np.block([[v["N_q"], v["N_u"]], [sensitivity[:n_u]]]), sensitivity[n_u:]
 
 
-def _full_input_matrix(point: FormPoint) -> np.ndarray:
-    """B_full = [[N_w], [a_w]], ∂(q̇, u̇)/∂w along the inputs w held constant, ∂(a, λ)/∂w = −J⁻¹ ∂G/∂w as for A."""
+def _full_input_matrix(point: FormPoint) -> tuple[np.ndarray, np.ndarray]:
+    """B_full = [[N_w], [a_w]], ∂(q̇, u̇)/∂w along the inputs w held constant, ∂(a, λ)/∂w = −J⁻¹ ∂G/∂w as for A, and
+    ∂λ/∂w (k, U)."""
     N_w, G_w = evaluator(point.form).input_partials(point.q, point.u, point.acceleration, point.multipliers,
                                                   point.p, point.t)
-    return np.vstack([N_w, -linalg.solve(point.kkt, G_w)[:point.form.n_u]]) if G_w.size else \
-        np.zeros((point.form.n_q + point.form.n_u, G_w.shape[1]))
+    sensitivity = -linalg.solve(point.kkt, G_w) if G_w.size else np.zeros((point.kkt.shape[0], G_w.shape[1]))
+    n_u = point.form.n_u
+    return np.vstack([N_w, sensitivity[:n_u]]), sensitivity[n_u:]
 
 
 def _tangent_basis(point: FormPoint, choice: Choice) -> np.ndarray:
