@@ -47,7 +47,7 @@ def _inward(prog: Program, nodes, X, c, IA, pA):
         u[i] = prog.let(node.force - spatial_dot(S, pA[i]))
         if node.parent < 0:
             continue
-        Ia = IA[i].minus_outer(prog, U[i], Dinv[i])
+        Ia = IA[i].minus_outer(prog, U[i], Dinv[i], _unit_index(S))
         scale = prog.let(u[i] * Dinv[i])
         Iac = Ia.times(prog, c[i])
         pa = (prog.vector(add(add(pA[i][0], Iac[0]), [x * scale for x in U[i][0]])),
@@ -56,6 +56,13 @@ def _inward(prog: Program, nodes, X, c, IA, pA):
         IA[parent] = IA[parent].plus(prog, Ia.to_parent(prog, X[i]))
         pA[parent] = add_spatial(prog, pA[parent], X[i].to_parent(prog, pa))
     return U, Dinv, u
+
+
+def _unit_index(S) -> int | None:
+    """k when the motion subspace S = (w, v) is the unit vector e_k of the six (a joint along a frame axis)."""
+    entries = [*S[0], *S[1]]
+    nonzero = [k for k, e in enumerate(entries) if e != 0]
+    return nonzero[0] if len(nonzero) == 1 and entries[nonzero[0]] == 1 else None
 
 
 def _outward(prog: Program, nodes, X, c, U, Dinv, u, gravity) -> list:

@@ -82,7 +82,3 @@ def add(a, b) -> list:
     """a + b, entrywise."""
     return [x + y for x, y in zip(a, b)]
 
-
-def scaled(a, s) -> list:
-    """s a."""
-    return [s * x for x in a]

@@ -114,15 +114,24 @@ class Inertia:
             return self.C
         return [[self.mass if i == j else sp.S.Zero for j in range(3)] for i in range(3)]
 
-    def minus_outer(self, prog: Program, U, scale) -> "Inertia":
-        """self − U Uᵀ · scale for a force-like 6-vector U = (U_n, U_f) (the articulated-body update)."""
+    def minus_outer(self, prog: Program, U, scale, null: int | None = None) -> "Inertia":
+        """self − U Uᵀ · scale for a force-like 6-vector U = (U_n, U_f) (the articulated-body update).
+
+        With `null` = k the result's row and column k (0-2 angular, 3-5 linear) are zero, not computed: the
+        articulated-body update I − I S Sᵀ I / (Sᵀ I S) annihilates S, and S = e_k for a joint along a coordinate
+        axis (its entries would be rounding left over from x − x)."""
         un, uf = U
         sn, sf = prog.vector([x * scale for x in un]), prog.vector([x * scale for x in uf])
-        A = _symmetric([[prog.let(self.A[i][j] - un[i] * sn[j]) if j <= i else None for j in range(3)]
-                        for i in range(3)])
-        B = [[prog.let(self.B[i][j] - un[i] * sf[j]) for j in range(3)] for i in range(3)]
+
+        def entry(row, column, value):
+            return sp.S.Zero if null in (row, column) else prog.let(value)
+
         C0 = self.full_C()
-        C = _symmetric([[prog.let(C0[i][j] - uf[i] * sf[j]) if j <= i else None for j in range(3)] for i in range(3)])
+        A = _symmetric([[entry(i, j, self.A[i][j] - un[i] * sn[j]) if j <= i else None for j in range(3)]
+                        for i in range(3)])
+        B = [[entry(i, 3 + j, self.B[i][j] - un[i] * sf[j]) for j in range(3)] for i in range(3)]
+        C = _symmetric([[entry(3 + i, 3 + j, C0[i][j] - uf[i] * sf[j]) if j <= i else None for j in range(3)]
+                        for i in range(3)])
         return Inertia(A, B, C)
 
     def to_parent(self, prog: Program, X: Placement) -> "Inertia":

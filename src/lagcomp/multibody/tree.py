@@ -137,7 +137,7 @@ class Tree:
             roles[f"node {i} ({node.link})"] = sp.Matrix([
                 node.mass, *node.com, *node.inertia, *j.axis, *j.origin, *(e for row in j.rotation for e in row),
                 j.stiffness, j.rest, j.damping])
-            roles[f"torque of {j.coordinate.func.__name__}"] = j.torque
+            roles[f"torque of {j.coordinate.func.__name__}"] = sp.sympify(j.torque)
         return roles
 
     def fingerprint(self) -> str:
