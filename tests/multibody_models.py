@@ -21,7 +21,7 @@ def planar_chain(n: int, name: str | None = None) -> lc.Tree:
     g = sp.Symbol("g", positive=True)
     links = []
     for i in range(n):
-        m, l, c, d, J = sp.symbols(f"m{i} l{i} c{i} d{i} J{i}")
+        m, c, d, J = sp.symbols(f"m{i} c{i} d{i} J{i}")
         origin = (0, 0, 0) if i == 0 else (sp.Symbol(f"l{i - 1}"), 0, 0)
         links.append(lc.Link(f"link{i}", lc.Revolute(f"th{i}", axis="z", origin=origin),
                              parent=None if i == 0 else f"link{i - 1}", mass=m, com=(c, d, 0), inertia=(J, J, J)))
@@ -108,7 +108,7 @@ def pinocchio_model(tree: lc.Tree, values: dict):
     for i, node in enumerate(tree.nodes):
         j = node.joint
         axis = np.array([num(a) for a in j.axis])
-        joint = (pin.JointModelRevoluteUnaligned(axis) if j.kind == "revolute" else pin.JointModelPrismaticUnaligned(axis))
+        joint = _pinocchio_joint(pin, j.kind, axis)
         R = np.array([[num(e) for e in row] for row in j.rotation])
         placement = pin.SE3(R, np.array([num(e) for e in j.origin]))
         parent = 0 if node.parent < 0 else ids[node.parent]
@@ -118,6 +118,15 @@ def pinocchio_model(tree: lc.Tree, values: dict):
                                 pin.SE3.Identity())
     model.gravity = pin.Motion(np.array([num(g) for g in tree.gravity]), np.zeros(3))
     return model
+
+
+def _pinocchio_joint(pin, kind: str, axis):
+    """Pinocchio's joint model: its axis-aligned kinds (JointModelRZ, ...) for x, y, z, as its own models of such
+    chains use, else the unaligned ones."""
+    for k, name in enumerate("XYZ"):
+        if np.array_equal(axis, np.eye(3)[k]):
+            return getattr(pin, f"JointModel{'R' if kind == 'revolute' else 'P'}{name}")()
+    return pin.JointModelRevoluteUnaligned(axis) if kind == "revolute" else pin.JointModelPrismaticUnaligned(axis)
 
 
 def random_tree(seed: int) -> tuple[lc.Tree, dict]:

@@ -8,13 +8,15 @@ but the Tree's description.
 
 from __future__ import annotations
 
+import pickle
+
+import multibody_models as mm
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
-import multibody_models as mm
 from lagcomp import analysis as an
 from lagcomp.tree_model import TreeModel
 
@@ -109,6 +111,15 @@ def test_a_tree_model_loads_from_the_cache_by_name(cache_dir):
     assert np.array_equal(loaded.rhs(0.0, y, params), compiled.rhs(0.0, y, params))
 
 
+def test_a_tree_model_pickles_as_a_tree_model(pairs):
+    tree_model, _ = pairs["cart_pole"]
+    copy = pickle.loads(pickle.dumps(tree_model))
+    assert isinstance(copy, TreeModel) and copy.cache_key == tree_model.cache_key
+    params = {name: 1.0 for name in copy.parameters}
+    y = np.array([0.3, -0.4, 0.5, 0.1])
+    assert np.array_equal(copy.rhs(0.2, y, params), tree_model.rhs(0.2, y, params))
+
+
 # -- against Pinocchio ----------------------------------------------------------------------------------------------
 
 
@@ -165,7 +176,7 @@ def test_kernels_of_later_steps_are_refused_naming_the_feature_and_the_issue(pai
     with pytest.raises(lc.ModelError, match=r"conserved_quantities.*issue 39"):
         an.conserved_quantities(tree_model)
     with pytest.raises(lc.ModelError, match=r"kernel_accuracy.*issue 39"):
-        lc.kernel_accuracy(tree_model)
+        lc.kernel_accuracy(tree_model, params=params)
 
 
 @pytest.mark.parametrize("links, culprit", [

@@ -18,7 +18,7 @@ from lagcomp.errors import CacheWarning
 from lagcomp.runtime import Model, run_defaults
 
 
-def compile_tree(tree, cache_dir=None, progress=None) -> "TreeModel":
+def compile_tree(tree, cache_dir=None, progress=None) -> TreeModel:
     """The `TreeModel` of `tree`, from the cache or built (derivation-free: the recursions are emitted)."""
     cache = Cache(cache_dir)
     key = input_key(tree.fingerprint(), options={"multibody": 1})

@@ -5,14 +5,14 @@ emits the articulated-body algorithm as straight-line code (`lagcomp.codegen.tre
 """
 
 from lagcomp.multibody.joints import (
-    Cylindrical as Cylindrical,
-    Free as Free,
-    Planar as Planar,
-    Prismatic as Prismatic,
-    Revolute as Revolute,
-    Spherical as Spherical,
-    Universal as Universal,
+    Cylindrical,
+    Free,
+    Planar,
+    Prismatic,
+    Revolute,
+    Spherical,
+    Universal,
 )
-from lagcomp.multibody.tree import Link as Link, Tree as Tree
+from lagcomp.multibody.tree import Link, Tree
 
 __all__ = ["Cylindrical", "Free", "Link", "Planar", "Prismatic", "Revolute", "Spherical", "Tree", "Universal"]

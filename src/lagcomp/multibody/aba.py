@@ -47,11 +47,15 @@ def _inward(prog: Program, nodes, X, c, IA, pA):
         u[i] = prog.let(node.force - spatial_dot(S, pA[i]))
         if node.parent < 0:
             continue
-        Ia = IA[i].minus_outer(prog, U[i], Dinv[i], _unit_index(S))
+        k = _unit_index(S)
+        Ia = IA[i].minus_outer(prog, U[i], Dinv[i], k)
         scale = prog.let(u[i] * Dinv[i])
         Iac = Ia.times(prog, c[i])
-        pa = (prog.vector(add(add(pA[i][0], Iac[0]), [x * scale for x in U[i][0]])),
-              prog.vector(add(add(pA[i][1], Iac[1]), [x * scale for x in U[i][1]])))
+        pa = [*add(add(pA[i][0], Iac[0]), [x * scale for x in U[i][0]]),
+              *add(add(pA[i][1], Iac[1]), [x * scale for x in U[i][1]])]
+        if k is not None:   # Sᵀ pa = Sᵀ pA + 0 + D u / D = τ exactly
+            pa[k] = node.force
+        pa = (prog.vector(pa[:3]), prog.vector(pa[3:]))
         parent = node.parent
         IA[parent] = IA[parent].plus(prog, Ia.to_parent(prog, X[i]))
         pA[parent] = add_spatial(prog, pA[parent], X[i].to_parent(prog, pa))

@@ -12,7 +12,13 @@ import sympy as sp
 
 from lagcomp.multibody.joints import t
 from lagcomp.multibody.program import Program, add, cross, mat_vec
-from lagcomp.multibody.spatial import ZERO3, Inertia, Placement, add_spatial, rigid_inertia
+from lagcomp.multibody.spatial import (
+    ZERO3,
+    Inertia,
+    Placement,
+    add_spatial,
+    rigid_inertia,
+)
 from lagcomp.multibody.tree import Tree
 
 

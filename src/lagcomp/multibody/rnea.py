@@ -7,7 +7,14 @@ subtree's spatial momentum h^C_i = I_i v_i + Σ_children X_cᵀ h^C_c, by the sa
 
 from __future__ import annotations
 
-from lagcomp.multibody.kinematics import base_acceleration, inertias, placement, subspace, velocities, velocity_product
+from lagcomp.multibody.kinematics import (
+    base_acceleration,
+    inertias,
+    placement,
+    subspace,
+    velocities,
+    velocity_product,
+)
 from lagcomp.multibody.program import Program
 from lagcomp.multibody.spatial import add_spatial, force_cross, spatial_dot
 

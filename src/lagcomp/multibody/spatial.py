@@ -97,7 +97,7 @@ class Inertia:
         return (prog.vector(add(mat_vec(self.A, w), mat_vec(self.B, v))),
                 prog.vector(add(mat_t_vec(self.B, w), mat_vec(C, v))))
 
-    def plus(self, prog: Program, other: "Inertia") -> "Inertia":
+    def plus(self, prog: Program, other: Inertia) -> Inertia:
         """self + other, entrywise (lower triangles of A and C)."""
         A = _symmetric([[prog.let(self.A[i][j] + other.A[i][j]) if j <= i else None for j in range(3)]
                         for i in range(3)])
@@ -114,7 +114,7 @@ class Inertia:
             return self.C
         return [[self.mass if i == j else sp.S.Zero for j in range(3)] for i in range(3)]
 
-    def minus_outer(self, prog: Program, U, scale, null: int | None = None) -> "Inertia":
+    def minus_outer(self, prog: Program, U, scale, null: int | None = None) -> Inertia:
         """self − U Uᵀ · scale for a force-like 6-vector U = (U_n, U_f) (the articulated-body update).
 
         With `null` = k the result's row and column k (0-2 angular, 3-5 linear) are zero, not computed: the
@@ -134,7 +134,7 @@ class Inertia:
                         for i in range(3)])
         return Inertia(A, B, C)
 
-    def to_parent(self, prog: Program, X: Placement) -> "Inertia":
+    def to_parent(self, prog: Program, X: Placement) -> Inertia:
         """Xᵀ I X: this inertia of i's frame expressed in the parent's (X = `Placement.to_child`).
 
         Rotated blocks A' = R A Rᵀ, B' = R B Rᵀ, C' = R C Rᵀ, then shifted by r:

@@ -234,6 +234,8 @@ def _defaults(tree: Tree, defaults) -> dict:
             checked[key] = float(value)
         except (TypeError, ValueError) as err:
             raise ParameterError(f"{tree.name}: default of `{key}` must be a number, got {value!r}.") from err
+        if not math.isfinite(checked[key]):
+            raise ParameterError(f"{tree.name}: default of `{key}` is {value}; it must be finite.")
     return checked
 
 
