@@ -67,7 +67,7 @@ def lower_tree(tree: Tree) -> ModuleIR:
                lambda prog: [(f"out[{i}]", h) for i, h in enumerate(momenta(prog, nodes))]),
         Kernel(name="event_values", doc="Event functions g, shape (0,): a tree has no events yet.", args=ARGS,
                loads=(), temps=(), stores=()),
-        Kernel(name="event_gradients", doc=f"Partials of the event functions, shape (0, {3 * n + 1 + len(tree.parameters)})"
+        Kernel(name="event_gradients", doc=f"Partials of the event functions, shape (0, {2 * n + 1 + len(tree.parameters)})"
                ": none.\nReturns 0.", args=ARGS, loads=(), temps=(), stores=(), solve=ReturnZero()),
         event_reset_kernel((), (), 2 * n, mapping, tuple(loads)),
     )
