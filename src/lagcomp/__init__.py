@@ -39,6 +39,7 @@ __all__ = [
     "Contact", "Damper", "Event", "Force", "Friction", "Gravity", "Holonomic", "Input", "MovingFrame", "Nonholonomic",
     "Particle", "RigidBody", "Spring", "System", "Torque", "body_rates", "coordinates", "from_kanes_method",
     "from_lagranges_method", "rotated", "t",
+    "Tree", "Link", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical", "Free",
     "LagcompError", "ModelError", "UndeclaredSymbolError", "ParameterError", "OptionError", "InitialConditionError",
     "SingularMassMatrixError", "IntegrationError", "LinearizationError", "CorruptCacheRecordError", "CacheWarning",
     "StiffnessWarning", "ResetWarning", "UnknownEventError",
@@ -54,6 +55,10 @@ _MODEL_NAMES = (
 )
 
 
+#: What `lagcomp.multibody` contributes (kinematic trees), imported on first use too (sympy).
+_MULTIBODY_NAMES = ("Tree", "Link", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical", "Free")
+
+
 #: Imported on first use too (sympy, mpmath): the kernel-accuracy check of `lagcomp.accuracy`.
 _ACCURACY_NAMES = ("kernel_accuracy",)
 
@@ -63,6 +68,11 @@ def __getattr__(name: str):
         from lagcomp import accuracy
 
         globals()[name] = value = getattr(accuracy, name)
+        return value
+    if name in _MULTIBODY_NAMES:
+        from lagcomp import multibody
+
+        globals()[name] = value = getattr(multibody, name)
         return value
     if name in _MODEL_NAMES:
         from lagcomp import model
@@ -74,4 +84,4 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_MODEL_NAMES) | set(_ACCURACY_NAMES))
+    return sorted(set(globals()) | set(_MODEL_NAMES) | set(_MULTIBODY_NAMES) | set(_ACCURACY_NAMES))

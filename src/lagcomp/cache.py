@@ -122,7 +122,7 @@ def _sha256(text: str) -> str:
 
 #: The parts of lagcomp whose code decides what a module's kernels compute: the derivation, the IR, the
 #: emitter and what the kernels call (not the drivers, which take the kernels as values).
-KERNEL_PRODUCERS = ("model", "mechanics", "ir.py", "codegen", "kernel_support")
+KERNEL_PRODUCERS = ("model", "mechanics", "multibody", "ir.py", "codegen", "kernel_support")
 #: The part numba compiles into the kernels' machine code from outside their module file.
 KERNEL_LIBRARY = ("kernel_support",)
 

@@ -81,7 +81,7 @@ class Companion:
                 entry = cache.lookup(key)
                 if entry is None:
                     with cache.lock(key):   # processes that need it at once build it once
-                        entry = cache.lookup(key) or build_companion(self._equations(wanted, cache), cache,
+                        entry = cache.lookup(key) or build_companion(self._buildable(wanted, cache), cache,
                                                                      self.key, self.name)
                 self._entry = entry
             return self._entry
@@ -92,6 +92,16 @@ class Companion:
         if self._module is None:
             self._module = load_module(entry)
         return self._module
+
+    def _buildable(self, wanted: str, cache: Cache):
+        """`_equations`, unless what they describe refuses on-demand kernels (a kinematic tree, for now: its
+        ``on_demand_refusal`` says why), which raises a ModelError naming `wanted` and its feature."""
+        eom = self._equations(wanted, cache)
+        refusal = getattr(eom, "on_demand_refusal", None)
+        if refusal is not None:
+            what = f"`{wanted}` ({feature(wanted)})" if on_demand(wanted) else wanted
+            raise ModelError(refusal(what))
+        return eom
 
     def _equations(self, wanted: str, cache: Cache):
         """The equations to lower the companion from (module docstring), or a ModelError naming the feature."""

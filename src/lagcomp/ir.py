@@ -326,7 +326,8 @@ class Kernel:
         Inputs bound to locals, e.g. ``("q_theta1", "y[0]")`` (user symbols are ``q_``, ``qd_``,
         ``p_`` ... locals: `lagcomp.codegen.lower`, Names).
     temps : tuple of (local, Expr)
-        Common subexpressions, in evaluation order.
+        Common subexpressions, in evaluation order; or a recursion's intermediate quantities, each a small
+        expression of earlier ones (`lagcomp.multibody.program`).
     stores : tuple of (target, Expr)
         Output assignments; the target is an lvalue (``out[0]``, a local) or
         ``return`` for scalar kernels.
@@ -388,6 +389,9 @@ class ModuleIR:
     #: that the kernels read (`lagcomp.kernel_support.inputs`).
     input_names: tuple[str, ...] = ()
     input_orders: tuple[int, ...] = ()
+    #: How the kernels get the motion, for the module's docstring: Lagrange's equations, or the recursions over a
+    #: kinematic tree (`lagcomp.codegen.tree_lower`).
+    formulation: str = "Equations of motion: M(q, t) q̈ = F(q, q̇, t) (see lagcomp.mechanics.lagrange)."
 
     @property
     def k(self) -> int:

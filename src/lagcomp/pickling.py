@@ -63,6 +63,10 @@ def restore_model(state: dict):
         from lagcomp.kane_model import KaneModel
 
         model = KaneModel(None, load_module(entry), entry, from_cache=True, recorded=recorded)
+    elif entry.metadata.get("tree"):
+        from lagcomp.tree_model import TreeModel
+
+        model = TreeModel(None, load_module(entry), entry, from_cache=True, recorded=recorded)
     else:
         model = Model(None, load_module(entry), entry, from_cache=True, recorded=recorded)
     model.system = system

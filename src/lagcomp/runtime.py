@@ -32,8 +32,10 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, pro
 
     Parameters
     ----------
-    system : System, or sympy.physics.mechanics LagrangesMethod / KanesMethod
-        What to compile.  A LagrangesMethod is converted first
+    system : System, Tree, or sympy.physics.mechanics LagrangesMethod / KanesMethod
+        What to compile.  A `lagcomp.Tree` (rigid links and joints) is compiled
+        from recursive multibody algorithms into a `lagcomp.tree_model.TreeModel`
+        (`lagcomp.multibody`).  A LagrangesMethod is converted first
         (`lagcomp.from_lagranges_method`), with `system_kwargs` (name,
         parameters, defaults, q0, qd0, ...) passed on.  A KanesMethod is
         compiled as Kane's equations over the state (q, u) into a
@@ -60,6 +62,15 @@ def compile(system, *, cache_dir: str | os.PathLike | None = None, eom=None, pro
         from lagcomp.kane_model import compile_kane
 
         return compile_kane(system, cache_dir, **system_kwargs)
+    from lagcomp.multibody.tree import Tree
+
+    if isinstance(system, Tree):
+        if system_kwargs or eom is not None:
+            raise ModelError(f"compile() of a lagcomp.Tree takes no options ({sorted(system_kwargs)}"
+                             f"{' and eom' if eom is not None else ''}): set them on the Tree itself.")
+        from lagcomp.tree_model import compile_tree
+
+        return compile_tree(system, cache_dir, progress)
     system = _as_system(system, system_kwargs)
     cache = Cache(cache_dir)
     key = input_key(system.fingerprint(), options={})
@@ -119,6 +130,10 @@ def load(name: str, *, cache_dir: str | os.PathLike | None = None) -> "Model":
         from lagcomp.kane_model import KaneModel
 
         return KaneModel(None, kernels, entry, from_cache=True, recorded=defaults)
+    if entry.metadata.get("tree"):
+        from lagcomp.tree_model import TreeModel
+
+        return TreeModel(None, kernels, entry, from_cache=True, recorded=defaults)
     return Model(None, kernels, entry, from_cache=True, recorded=defaults)
 
 

@@ -161,6 +161,8 @@ def _equations(model) -> ReferenceEquations:
         raise ModelError(f"The accuracy check measures kernels against Lagrange's equations of a System; "
                          f"{model.name!r} was compiled from a KanesMethod, whose equations it does not re-derive. "
                          "Compare its `rhs` with sympy's own `km.rhs()` evaluated in mpmath instead.")
+    if getattr(model.system, "on_demand_refusal", None) is not None:   # a lagcomp.Tree: no T and V to read
+        raise ModelError(model.system.on_demand_refusal("The accuracy check (lc.kernel_accuracy)"))
     if model.system is None:
         raise ModelError(f"The accuracy check of {model.name!r} needs its System: this model came from "
                          "`lagcomp.load`; use `lagcomp.compile(system)` instead.")

@@ -33,6 +33,8 @@ def symbolic_system(model, what: str):
             "lagcomp.System or sympy LagrangesMethod (possible when its velocities are the time derivatives of "
             "its positions) and compile that."
         )
+    if getattr(model.system, "on_demand_refusal", None) is not None:   # a lagcomp.Tree: no T and V to read
+        raise ModelError(model.system.on_demand_refusal(what))
     if model.system is None:
         raise ModelError(f"{what} reads the equations of {model.name!r}, which a model from lagcomp.load() does not "
                          "carry: build its System and use lagcomp.compile(system) (a cache hit, no recompilation).")

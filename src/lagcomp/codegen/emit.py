@@ -88,7 +88,7 @@ def _header(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None, kernels=No
         f"State       y = ({state})\n"
         f"Parameters  p = ({params})\n"
         f"{events}\n"
-        "Equations of motion: M(q, t) q̈ = F(q, q̇, t) (see lagcomp.mechanics.lagrange).\n"
+        f"{ir.formulation}\n"
         "Kernel locals: q_<name>, qd_<name>, p_<name> for the coordinates, velocities, parameters above.\n"
         "All kernels take float64 arrays and write into preallocated outputs.\n"
     )

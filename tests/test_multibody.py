@@ -1,0 +1,193 @@
+"""Kinematic trees (lc.Tree, issue 39's first step): the articulated-body rhs against the Lagrangian path and
+Pinocchio, the other recursions (M, F, momenta, energy) against each other, a run's energy, and the refusals.
+
+The Lagrangian path's models are the same systems written with lc.RigidBody and lc.rotated
+(`multibody_models.lagrangian_system`): derived from T and V by sympy, so they share no code with the recursions
+but the Tree's description.
+"""
+
+from __future__ import annotations
+
+import pickle
+
+import multibody_models as mm
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import lagcomp as lc
+from lagcomp import analysis as an
+from lagcomp.tree_model import TreeModel
+
+FACTORIES = {
+    "rigid_double_pendulum": lambda: mm.planar_chain(2, "rigid_double_pendulum"),
+    "planar_chain_4": lambda: mm.planar_chain(4),
+    "universal_chain_2": lambda: mm.universal_chain(2),
+    "cart_pole": mm.cart_pole,
+}
+
+
+@pytest.fixture(scope="module")
+def pairs(cache_dir):
+    """{name: (tree model, Lagrangian model)}, compiled once."""
+    made = {}
+    for name, factory in FACTORIES.items():
+        tree = factory()
+        made[name] = (lc.compile(tree, cache_dir=cache_dir), lc.compile(mm.lagrangian_system(tree),
+                                                                        cache_dir=cache_dir))
+    return made
+
+
+def _draw(data, model, scale=1.0):
+    """Random parameters (0.5 to 2, by name) and a state (q, q̇ within ±2 scale) for `model`."""
+    values = st.floats(0.5, 2.0, allow_nan=False)
+    params = {name: data.draw(values, label=name) for name in model.parameters}
+    y = np.array(data.draw(st.lists(st.floats(-2.0 * scale, 2.0 * scale, allow_nan=False), min_size=2 * model.n,
+                                    max_size=2 * model.n), label="y"))
+    return params, y
+
+
+def _relative(a, b) -> float:
+    return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
+
+
+@pytest.mark.parametrize("name", FACTORIES)
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_accelerations_and_energy_agree_with_the_lagrangian_path(pairs, name, data):
+    tree_model, lagrange_model = pairs[name]
+    params, y = _draw(data, tree_model)
+    t = data.draw(st.floats(0.0, 10.0), label="t")
+    assert tree_model.parameters == lagrange_model.parameters
+    assert _relative(tree_model.rhs(t, y, params), lagrange_model.rhs(t, y, params)) <= 1e-12
+    energies = [model.kernels.energy(t, y, model.parameter_vector(params)) for model in (tree_model, lagrange_model)]
+    assert abs(energies[0] - energies[1]) <= 1e-12 * max(abs(energies[1]), 1.0)
+
+
+@pytest.mark.parametrize("name", FACTORIES)
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_mass_matrix_forcing_and_momenta_agree_with_the_lagrangian_path(pairs, name, data):
+    tree_model, lagrange_model = pairs[name]
+    params, y = _draw(data, tree_model)
+    n = tree_model.n
+    for kernel, shape in (("mass_matrix", (n, n)), ("forcing", (n,)), ("momenta", (n,))):
+        got, want = np.empty(shape), np.empty(shape)
+        getattr(tree_model.kernels, kernel)(0.7, y, tree_model.parameter_vector(params), got)
+        getattr(lagrange_model.kernels, kernel)(0.7, y, lagrange_model.parameter_vector(params), want)
+        assert _relative(got, want) <= 1e-12, kernel
+
+
+def test_the_rhs_kernel_is_straight_line_code_from_the_recursion(pairs):
+    """The articulated-body rhs of a chain holds one sine and one cosine per joint and no linear solve."""
+    tree_model, _ = pairs["planar_chain_4"]
+    source = tree_model.source_path.read_text(encoding="utf-8")
+    rhs = source[source.index("def rhs("):source.index("def mass_matrix(")]
+    assert rhs.count("sin(q_th") == 4 and rhs.count("cos(q_th") == 4
+    assert "PIVOT" not in rhs and "solve" not in rhs and "for " not in rhs
+    assert isinstance(tree_model, TreeModel)
+
+
+def test_a_run_keeps_the_energy_of_a_conservative_tree(cache_dir):
+    tree = mm.universal_chain(2)
+    model = lc.compile(tree, cache_dir=cache_dir)
+    params = {name: 1.0 for name in model.parameters} | {"g": 9.81, "A0": 0.3, "B0": 0.4, "C0": 0.2}
+    sol = model.simulate((0.0, 10.0), q0=[1.0, -0.5, 0.3, 0.8], qd0=[0.0, 1.0, -1.0, 0.5], params=params,
+                         rtol=1e-12, atol=1e-12)
+    assert sol.success and sol.t[-1] == 10.0
+    energy = sol.energy
+    assert np.max(np.abs(energy - energy[0])) <= 1e-9 * abs(energy[0])
+    assert np.max(np.abs(energy - energy[0])) > 0   # (a real run: the energy is evaluated along it, not a constant)
+
+
+def test_a_tree_model_loads_from_the_cache_by_name(cache_dir):
+    tree = mm.planar_chain(2, "loaded_tree")
+    compiled = lc.compile(tree, cache_dir=cache_dir)
+    loaded = lc.load("loaded_tree", cache_dir=cache_dir)
+    assert isinstance(loaded, TreeModel) and loaded.from_cache and loaded.parameters == compiled.parameters
+    params = {name: 1.0 for name in loaded.parameters}
+    y = np.array([0.3, -0.4, 0.5, 0.1])
+    assert np.array_equal(loaded.rhs(0.0, y, params), compiled.rhs(0.0, y, params))
+
+
+def test_a_tree_model_pickles_as_a_tree_model(pairs):
+    tree_model, _ = pairs["cart_pole"]
+    copy = pickle.loads(pickle.dumps(tree_model))
+    assert isinstance(copy, TreeModel) and copy.cache_key == tree_model.cache_key
+    params = {name: 1.0 for name in copy.parameters}
+    y = np.array([0.3, -0.4, 0.5, 0.1])
+    assert np.array_equal(copy.rhs(0.2, y, params), tree_model.rhs(0.2, y, params))
+
+
+# -- against Pinocchio ----------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_trees_agree_with_pinocchio(cache_dir, seed):
+    """Random topologies, unaligned axes, rotated placements, prismatic joints, springs and dampers: q̈ against
+    Pinocchio's ABA, M against its inverse dynamics, T + V against its energies, at random states."""
+    pin = pytest.importorskip("pinocchio")
+    tree, _ = mm.random_tree(seed)
+    model = lc.compile(tree, cache_dir=cache_dir)
+    reference = mm.pinocchio_model(tree, {})
+    data = reference.createData()
+    rng = np.random.default_rng(seed)
+    n, p = tree.n, model.parameter_vector()
+    stiffness = np.array([float(node.joint.stiffness) for node in tree.nodes])
+    rest = np.array([float(node.joint.rest) for node in tree.nodes])
+    damping = np.array([float(node.joint.damping) for node in tree.nodes])
+    for _ in range(5):
+        q, v = rng.normal(size=n), rng.normal(size=n)
+        y = np.concatenate([q, v])
+        tau = -stiffness * (q - rest) - damping * v
+        assert _relative(model.rhs(0.0, y)[n:], pin.aba(reference, data, q, v, tau)) <= 1e-12
+        M = np.empty((n, n))
+        model.kernels.mass_matrix(0.0, y, p, M)
+        # M's columns from Pinocchio's inverse dynamics (its crba, pin 4.1.0, leaves zeros where an unaligned
+        # prismatic joint couples two others, which its own rnea contradicts)
+        bias = pin.rnea(reference, data, q, np.zeros(n), np.zeros(n)).copy()
+        columns = [pin.rnea(reference, data, q, np.zeros(n), e) - bias for e in np.eye(n)]
+        assert _relative(M, np.column_stack(columns)) <= 1e-12
+        energy = (pin.computeKineticEnergy(reference, data, q, v) + pin.computePotentialEnergy(reference, data, q)
+                  + np.sum(stiffness * (q - rest) ** 2) / 2)
+        assert abs(model.kernels.energy(0.0, y, p) - energy) <= 1e-12 * max(abs(energy), 1.0)
+
+
+# -- refusals -------------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("joint", [lc.Spherical(("a", "b", "c")), lc.Free(("x", "y", "z", "a", "b", "c"))])
+def test_spherical_and_free_joints_are_refused_naming_the_issue(joint):
+    with pytest.raises(lc.ModelError, match="issue 39"):
+        lc.Tree([lc.Link("body", joint, mass=1.0, inertia=(1, 1, 1))])
+
+
+def test_kernels_of_later_steps_are_refused_naming_the_feature_and_the_issue(pairs):
+    tree_model, _ = pairs["rigid_double_pendulum"]
+    params = {name: 1.0 for name in tree_model.parameters}
+    with pytest.raises(lc.ModelError, match=r"rhs_jacobian.*radau.*issue 39"):
+        tree_model.simulate((0.0, 1.0), q0=[0.1, 0.2], qd0=[0.0, 0.0], params=params, method="radau")
+    with pytest.raises(lc.ModelError, match=r"method='taylor'.*issue 39"):
+        tree_model.simulate((0.0, 1.0), q0=[0.1, 0.2], qd0=[0.0, 0.0], params=params, method="taylor")
+    assert set(tree_model.operations) >= {"rhs", "mass_matrix", "forcing", "energy", "momenta"}
+    with pytest.raises(lc.ModelError, match=r"EQUATIONS.*issue 39"):
+        tree_model.equations()
+    with pytest.raises(lc.ModelError, match=r"conserved_quantities.*issue 39"):
+        an.conserved_quantities(tree_model)
+    with pytest.raises(lc.ModelError, match=r"kernel_accuracy.*issue 39"):
+        lc.kernel_accuracy(tree_model, params=params)
+
+
+@pytest.mark.parametrize("links, culprit", [
+    ([lc.Link("a", lc.Revolute("q"), parent="ghost", mass=1.0)], "ghost"),
+    ([lc.Link("a", lc.Revolute("q"), mass=1.0), lc.Link("b", lc.Revolute("q"), parent="a", mass=1.0)], "['q']"),
+    ([lc.Link("a", lc.Revolute("q", axis=(0, 0, 0)), mass=1.0)], "zero vector"),
+    ([lc.Link("a", lc.Revolute("q", rotation=[[1, 0, 0], [0, 1, 0], [0, 0, -1]]), mass=1.0)], "not a rotation"),
+    ([lc.Link("a", lc.Revolute("q"), mass=-1.0)], "negative mass"),
+    ([lc.Link("a", lc.Universal(("u",)), mass=1.0)], "needs 2 coordinates"),
+])
+def test_bad_trees_are_refused_naming_the_culprit(links, culprit):
+    with pytest.raises(lc.ModelError) as raised:
+        lc.Tree(links)
+    assert culprit in str(raised.value)
