@@ -58,14 +58,14 @@ def _expected(answer: str) -> type:
 
 
 def oscillator(**overrides) -> lc.System:
-    spec = dict(coordinates=[x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="table_oscillator",
-                defaults={"m": 1.0, "k": 1.0}, q0=(1.0,))
+    spec = {"coordinates": [x], "T": m * x.diff(t) ** 2 / 2, "V": k * x**2 / 2, "name": "table_oscillator",
+                "defaults": {"m": 1.0, "k": 1.0}, "q0": (1.0,)}
     spec.update(overrides)
     return lc.System(**spec)
 
 
 def plane(**overrides) -> lc.System:
-    spec = dict(coordinates=[x, y], T=m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=m * g * y, name="table_plane")
+    spec = {"coordinates": [x, y], "T": m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, "V": m * g * y, "name": "table_plane"}
     spec.update(overrides)
     return lc.System(**spec)
 
@@ -291,7 +291,7 @@ def _kane_slider(formed=True, force=None, across=False):
     N = me.ReferenceFrame("N")
     P = me.Point("P")
     P.set_vel(N, w * N.x + (v * N.y if across else 0))
-    constraint = dict(u_dependent=[v], velocity_constraints=[v]) if across else {}
+    constraint = {"u_dependent": [v], "velocity_constraints": [v]} if across else {}
     km = me.KanesMethod(N, [x], [w], kd_eqs=[x.diff(t) - w], **constraint)
     if formed:
         km.kanes_equations([me.Particle("p", P, m)], [(P, force * N.x)] if force is not None else [])
@@ -496,6 +496,8 @@ CASES = {
     "taylor-not-applicable": (_simulate("friction", method="taylor"), "`taylor` cannot integrate 'rope_friction'"),
     "unknown-implicit-solver": (_simulate("pendulum", method="gauss2", dt=0.1, implicit_solver="broyden"), "broyden"),
     "bad-record": (_simulate("pendulum", record="everything"), "`record`"),
+    "specialize-method": (_simulate("pendulum", method="radau", specialize=True), "`specialize=True` with method 'radau'"),
+    "bad-specialize": (_simulate("pendulum", specialize="always"), "`specialize`"),
     "unknown-event": (_simulate("pendulum", events=["apex"]), "['apex']"),
     "events-with-fixed-step": (_simulate("degenerate", q0=[1.0], params={"m": 1.0}, method="rk4", dt=0.1, events=True),
                                "rk4"),

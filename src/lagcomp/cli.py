@@ -11,6 +11,7 @@
     lagcomp generate generated/          (add --check to only report stale files)
     lagcomp precompile                   (compile every library driver now, not at its first use)
     lagcomp precompile NAME --all        (compile a model and build its on-demand kernels now)
+    lagcomp precompile NAME --specialize dop853   (and its driver specialised for dop853: `specialize=True`)
 
 The MODEL of every model command is a bundled example, a model compiled earlier under a name, or a System in
 a file or module, by the rule `lagcomp.cli_support.models` states; each command prints which one it ran.
@@ -146,9 +147,9 @@ def cmd_run(args) -> int:
     compiled = time.perf_counter()
     origin = "from cache" if model.from_cache else "derived and emitted"
     print(f"{model.name}: {origin} in {compiled - started:.2f} s ({model.source_path})", file=sys.stderr)
-    options = dict(method=args.method, save_every=args.save_every, projection=args.projection,
-                   project_initial=args.project_initial, record="summary" if args.summary else "trajectory",
-                   progress=False if args.quiet else None)
+    options = {"method": args.method, "save_every": args.save_every, "projection": args.projection,
+                   "project_initial": args.project_initial, "record": "summary" if args.summary else "trajectory",
+                   "progress": False if args.quiet else None}
     if args.baumgarte:
         options["baumgarte"] = tuple(args.baumgarte)
     from lagcomp.integrate.methods import get_method
@@ -333,7 +334,23 @@ def _precompile_model(args) -> int:
         entry = model.on_demand_entry
         if entry is not None:
             print(f"{model.name}: on-demand kernels {entry.path}")
+    for name in args.specialize:
+        _specialise(model, name)
     return 0
+
+
+def _specialise(model, name: str) -> None:
+    """``--specialize METHOD``: compile (or load) `model`'s driver specialised for the method `name`."""
+    from lagcomp.integrate import specialize
+    from lagcomp.integrate.methods import get_method
+
+    method = get_method(name)
+    if method.name not in specialize.SPECIALISABLE:
+        raise LagcompError(f"--specialize {name}: the specialised drivers cover {', '.join(specialize.SPECIALISABLE)}.")
+    before = time.perf_counter()
+    how = "compiled" if specialize.prepare(model, method) else "loaded from numba's cache"
+    print(f"{model.name}: {method.name} driver specialised, {how} in {time.perf_counter() - before:.2f} s "
+          f"({specialize.driver(model, method).__module__})")
 
 
 def _grid_axis(spec: str, what: str) -> tuple[str, object]:
@@ -638,6 +655,9 @@ def _parser() -> argparse.ArgumentParser:
     pre.add_argument("--cached", action="store_true", help="MODEL is the model compiled earlier under that name")
     pre.add_argument("--arg", action="append", metavar="K=V", help="argument of the example factory, e.g. n=5")
     pre.add_argument("--all", action="store_true", help="build the model's on-demand kernels now as well")
+    pre.add_argument("--specialize", action="append", metavar="METHOD", default=[],
+                     help="compile the model's driver specialised for METHOD (its kernels inlined into the "
+                          "driver, cached with the model) for runs with `specialize=True`; repeat for more methods")
     pre.set_defaults(func=cmd_precompile)
     return parser
 
