@@ -82,15 +82,11 @@ def test_specialised_module_is_readable_code(compiled):
     assert "def run(y, clock, counters, p, projecting, residual_max, t0, dt, n_steps," in source
 
 
-def test_loaded_from_cache_in_a_new_process_without_touching_the_library_cache(compiled, cache_dir):
-    """A second process finds the specialised module and numba's machine code of `run` (no compile), and the
-    library drivers' numba cache files are left as they were (a cached library function called with a model's
-    kernels would add an entry for them at every process)."""
+def test_loaded_from_cache_in_a_new_process(compiled, cache_dir):
+    """A second process finds the specialised module and numba's machine code of `run`: no compile."""
     model = compiled("double_pendulum")
     model.simulate((0.0, 0.1), method="rk4", dt=1e-3, specialize=True, progress=False)
     assert specialize.cached(model, get_method("rk4"))
-    drivers = Path(specialize.__file__).parent / "drivers"
-    before = _library_cache_files(drivers)
     script = textwrap.dedent(f"""
         import lagcomp as lc
         from lagcomp import examples
@@ -106,15 +102,25 @@ def test_loaded_from_cache_in_a_new_process_without_touching_the_library_cache(c
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, check=True)
     assert out.stdout.split() == ["1", "0"], out.stdout + out.stderr
-    assert _library_cache_files(drivers) == before
 
 
-def _library_cache_files(drivers: Path) -> dict:
-    """{name: size} of numba's cache files of the library drivers (beside them, or under $NUMBA_CACHE_DIR)."""
-    from lagcomp.numba_cache import cache_directory
+def test_library_functions_called_with_kernels_are_uncached_copies():
+    """The specialised embedded driver calls copies of the event helpers, themselves calling copies, none cached by
+    numba: a cached library helper compiled for a model's kernels would add an entry for them to the library's own
+    cache files in every process (the kernels' type is keyed on the dispatcher, which pickles afresh each time)."""
+    from numba.core.caching import NullCache
 
-    directory = Path(cache_directory(drivers / "events.py"))
-    return {p.name: p.stat().st_size for p in directory.glob("events.*")}
+    from lagcomp.integrate.compile_time import uncached_copy
+    from lagcomp.integrate.drivers import embedded, events
+
+    copy = uncached_copy(embedded.embedded_run)
+    assert isinstance(copy._cache, NullCache) and copy.py_func.__code__ is embedded.embedded_run.py_func.__code__
+    for name in ("record_events_between", "restart_brackets", "reset_state", "dense_state"):
+        helper = copy.py_func.__globals__[name]
+        assert helper is uncached_copy(getattr(events, name)) and isinstance(helper._cache, NullCache)
+    called = copy.py_func.__globals__["record_events_between"].py_func.__globals__["event_root"]
+    assert called is uncached_copy(events.event_root)
+    assert embedded.embedded_run.py_func.__globals__["record_events_between"] is events.record_events_between
 
 
 def test_not_cached_before_a_run_asks(compiled):

@@ -8,15 +8,16 @@ writes any array, so the driver reloads what it had in registers), and, at every
 Python, numba's unboxing of each kernel (`kernel_types.AddressedKernel`).
 
 The *specialised* driver of a model and a library driver is that driver's own Python function
-(``py_func``) compiled once more, with the model's dispatchers for its kernel arguments: numba types
-each as that kernel (``numba.types.Dispatcher``), calls it directly, links its machine code into the
-driver's, and the driver's arguments from Python are arrays and numbers only.  It is the same source
-compiled with the same options (the library dispatcher's ``targetoptions``), so it does the same
-floating-point operations in the same order: the same steps, rows, counters and statuses as the
-library driver, bit for bit (`tests/test_specialize.py`).  What it costs is one compile of the driver
-per model (DOP853's embedded driver: ~10 s), which is why a run uses it only when asked
-(``simulate(..., specialize=True)``, ``lagcomp precompile MODEL --specialize METHOD``), never on the path
-to a model's first result.
+(``py_func``) compiled once more (`compile_time.uncached_copy`), with the model's kernels for its kernel
+arguments as values known at compile time (`compile_time.CompileTimeKernel`): numba calls each kernel
+directly and links its machine code into the driver's, and the driver's arguments from Python are arrays
+and numbers only.  It is the same source compiled with the same options (the library dispatcher's
+``targetoptions``), so it does the same floating-point operations in the same order: the same steps,
+rows and statuses as the library driver, bit for bit (`tests/test_specialize.py`; ``nfev`` counts one
+more evaluation per driver call, and the two tiers' calls are sized from step rates learned per tier).
+What it costs is one compile of the driver per model (DOP853's embedded driver: ~10 s on an idle
+machine), which is why a run uses it only when asked (``simulate(..., specialize=True)``, ``lagcomp
+precompile MODEL --specialize METHOD``), never on the path to a model's first result.
 
 Each specialised driver is a small generated module (a header docstring, its imports, one function
 ``run`` taking the library driver's arguments after the kernels), built from a Python AST and
@@ -27,8 +28,8 @@ loads it (milliseconds) instead of compiling it.  The drivers of the embedded pa
 function, so dop853, dopri5, tsit5 and bs3 share one specialised module per model.
 
 Covered (`SPECIALISABLE`): the methods whose driver takes the model's kernels and nothing else of the
-model (not Taylor's module data, not Radau's DAE kernels), run without sensitivities and without numba
-functions as inputs (their kernels are wrappers made per run).
+model (not Taylor's module data; Radau, whose constrained runs take other kernels, is not done yet), run
+without sensitivities and without numba functions as inputs (their kernels are wrappers made per run).
 """
 
 from __future__ import annotations
