@@ -196,9 +196,9 @@ def main(argv: list[str] | None = None) -> int:
         ctx = Context(args, args.cache_dir or tmp)
         head = ["# lagcomp benchmarks" + (" (--quick)" if args.quick else ""), "",
                 f"Machine: {machine()}.", "",
-                ("Every figure is a median of repeated runs with (min–max), and a ratio against a baseline measured "
+                "Every figure is a median of repeated runs with (min–max), and a ratio against a baseline measured "
                 "in this same run: the machines are small and shared, so absolute times move between runs "
-                "and ratios much less. Peers that are not installed are reported as skipped."), ""]
+                "and ratios much less. Peers that are not installed are reported as skipped.", ""]
         print("\n".join(head), flush=True)
         chunks = ["\n".join(head)]
 

@@ -58,14 +58,14 @@ def _expected(answer: str) -> type:
 
 
 def oscillator(**overrides) -> lc.System:
-    spec = {"coordinates": [x], "T": m * x.diff(t) ** 2 / 2, "V": k * x**2 / 2, "name": "table_oscillator",
-                "defaults": {"m": 1.0, "k": 1.0}, "q0": (1.0,)}
+    spec = dict(coordinates=[x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="table_oscillator",
+                defaults={"m": 1.0, "k": 1.0}, q0=(1.0,))
     spec.update(overrides)
     return lc.System(**spec)
 
 
 def plane(**overrides) -> lc.System:
-    spec = {"coordinates": [x, y], "T": m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, "V": m * g * y, "name": "table_plane"}
+    spec = dict(coordinates=[x, y], T=m * (x.diff(t) ** 2 + y.diff(t) ** 2) / 2, V=m * g * y, name="table_plane")
     spec.update(overrides)
     return lc.System(**spec)
 
@@ -291,7 +291,7 @@ def _kane_slider(formed=True, force=None, across=False):
     N = me.ReferenceFrame("N")
     P = me.Point("P")
     P.set_vel(N, w * N.x + (v * N.y if across else 0))
-    constraint = {"u_dependent": [v], "velocity_constraints": [v]} if across else {}
+    constraint = dict(u_dependent=[v], velocity_constraints=[v]) if across else {}
     km = me.KanesMethod(N, [x], [w], kd_eqs=[x.diff(t) - w], **constraint)
     if formed:
         km.kanes_equations([me.Particle("p", P, m)], [(P, force * N.x)] if force is not None else [])

@@ -163,3 +163,5 @@ def test_precompile_specialize(compiled, cache_dir, capsys):
     assert specialize.cached(model, get_method("verlet"))
     assert main(["--cache-dir", str(cache_dir), "precompile", "simple_pendulum", "--specialize", "radau"]) == 2
     assert "--specialize radau: the specialised drivers cover rk4" in capsys.readouterr().err
+    assert main(["--cache-dir", str(cache_dir), "precompile", "--specialize", "rk4"]) == 2
+    assert "name the model" in capsys.readouterr().err

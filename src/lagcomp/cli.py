@@ -147,9 +147,9 @@ def cmd_run(args) -> int:
     compiled = time.perf_counter()
     origin = "from cache" if model.from_cache else "derived and emitted"
     print(f"{model.name}: {origin} in {compiled - started:.2f} s ({model.source_path})", file=sys.stderr)
-    options = {"method": args.method, "save_every": args.save_every, "projection": args.projection,
-                   "project_initial": args.project_initial, "record": "summary" if args.summary else "trajectory",
-                   "progress": False if args.quiet else None}
+    options = dict(method=args.method, save_every=args.save_every, projection=args.projection,
+                   project_initial=args.project_initial, record="summary" if args.summary else "trajectory",
+                   progress=False if args.quiet else None)
     if args.baumgarte:
         options["baumgarte"] = tuple(args.baumgarte)
     from lagcomp.integrate.methods import get_method
@@ -309,6 +309,9 @@ def cmd_precompile(args) -> int:
 
     if args.name is not None:
         return _precompile_model(args)
+    if args.specialize:
+        raise LagcompError("--specialize compiles a model's specialised driver: name the model, e.g. "
+                           "`lagcomp precompile double_pendulum --specialize dop853`.")
     modules: dict[str, list[str]] = {}
     for reference in library_drivers():
         module, _, _ = reference.partition(":")
@@ -656,8 +659,8 @@ def _parser() -> argparse.ArgumentParser:
     pre.add_argument("--arg", action="append", metavar="K=V", help="argument of the example factory, e.g. n=5")
     pre.add_argument("--all", action="store_true", help="build the model's on-demand kernels now as well")
     pre.add_argument("--specialize", action="append", metavar="METHOD", default=[],
-                     help="compile the model's driver specialised for METHOD (its kernels inlined into the "
-                          "driver, cached with the model) for runs with `specialize=True`; repeat for more methods")
+                     help="compile the model's driver specialised for METHOD (its kernels compile-time callees of "
+                          "the driver, cached with the model) for runs with `specialize=True`; repeat for more methods")
     pre.set_defaults(func=cmd_precompile)
     return parser
 

@@ -227,9 +227,9 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
         recorder.add(np.array([state.t]), state.y[None, :width])  # keep the last good state
-    run = {"method": m.name, "status": status, "state": state, "projected": projected,
-               "residual_max": float(residual_max[0]), "max_residual": bound, "events": _event_records(model, p, event_parts),
-               "switches": _switches(model, p, event_parts, status)}
+    run = dict(method=m.name, status=status, state=state, projected=projected,
+               residual_max=float(residual_max[0]), max_residual=bound, events=_event_records(model, p, event_parts),
+               switches=_switches(model, p, event_parts, status))
     if columns is not None:
         run.update(sensitivities=recorder.sensitivities(), sensitivity_columns=columns, sensitivity_names=columns.names,
                    event_sensitivities=sens.event_sensitivities(model, p, columns, scale,
@@ -479,12 +479,12 @@ def _modes_along(model, p, ts, ys, switches) -> dict:
     """The `Solution` fields of the modes: the contacts' and friction elements' switches and forces."""
     forces = contact_forces_along(model, p, ts, ys, switches)
     count, frictions = len(contacts_of(model)), {name for name, *_ in frictions_of(model)}
-    return {
-        "contact_switches": tuple(ContactSwitch(t, name, bool(mode)) for t, name, mode in switches
+    return dict(
+        contact_switches=tuple(ContactSwitch(t, name, bool(mode)) for t, name, mode in switches
                                if name not in frictions),
-        "contact_forces": None if forces is None or (frictions and not count) else forces[:, :count],
-        "friction_switches": tuple(FrictionSwitch(t, name, int(mode)) for t, name, mode in switches if name in frictions),
-        "friction_forces": forces[:, count:] if frictions else None}
+        contact_forces=None if forces is None or (frictions and not count) else forces[:, :count],
+        friction_switches=tuple(FrictionSwitch(t, name, int(mode)) for t, name, mode in switches if name in frictions),
+        friction_forces=forces[:, count:] if frictions else None)
 
 
 def _solution(model, p, recorder, run, throw) -> Solution:
