@@ -801,7 +801,7 @@ class Model:
             compile-time callees, cached with the model
             (`lagcomp.integrate.specialize`), for long runs and repeated runs.
             Bitwise the same steps and results as the library driver.  Its
-            first use compiles it (DOP853's: ~10 s; `lagcomp precompile MODEL
+            first use compiles it (DOP853's: 12 s of CPU; `lagcomp precompile MODEL
             --specialize dop853` does it ahead); rk4, the embedded pairs
             (dop853, dopri5, tsit5, bs3) and verlet/yoshida4/yoshida6 only.
         progress : bool, optional
