@@ -165,3 +165,18 @@ def test_precompile_specialize(compiled, cache_dir, capsys):
     assert "--specialize radau: the specialised drivers cover rk4" in capsys.readouterr().err
     assert main(["--cache-dir", str(cache_dir), "precompile", "--specialize", "rk4"]) == 2
     assert "name the model" in capsys.readouterr().err
+
+
+def test_reset_events_bitwise(cache_dir):
+    """A model whose event resets the state (a bouncing ball): the specialised embedded driver calls the model's own
+    ``event_reset`` kernel; its steps, rows and event records are the library driver's, bit for bit."""
+    from tests.test_reset_events import _ball
+
+    model = lc.compile(_ball(name="specialised_ball"), cache_dir=cache_dir)
+    library = model.simulate((0.0, 3.0), rtol=1e-10, atol=1e-10, progress=False)
+    special = model.simulate((0.0, 3.0), rtol=1e-10, atol=1e-10, progress=False, specialize=True)
+    assert library.events["impact"].t.size > 5
+    assert np.array_equal(library.t, special.t) and np.array_equal(library.q, special.q)
+    assert np.array_equal(library.qd, special.qd)
+    for field in ("t", "q", "qd", "q_after", "qd_after"):
+        assert np.array_equal(getattr(library.events["impact"], field), getattr(special.events["impact"], field))
