@@ -21,7 +21,7 @@ FULL_CASES = ["double_pendulum", "kepler", "n_link_pendulum_2", "n_link_pendulum
               "n_link_pendulum_10", "rolling_disc", "free_axle", "n_link_pendulum_16", "n_link_pendulum_24"]
 QUICK_CASES = ["double_pendulum", "kepler", "n_link_pendulum_4"]
 SECTIONS = ["compile", "kernels", "accuracy", "adaptive", "fixed", "sweeps", "ensembles", "long", "memory",
-            "stiff", "impacts"]
+            "stiff", "impacts", "tiers"]
 
 TARGETS = {
     "rhs_dp": ("double-pendulum RHS in a loop", "≤ 1.2× hand-written numba"),
@@ -221,6 +221,7 @@ def main(argv: list[str] | None = None) -> int:
             bench_stiff,
             bench_sweep,
             bench_taylor,
+            bench_tiers,
             kernels,
             throughput,
         )
@@ -231,7 +232,7 @@ def main(argv: list[str] | None = None) -> int:
                        long=lambda ctx: [throughput.long_run_section(ctx), bench_taylor.long_run_table(ctx)],
                        memory=throughput.memory_section,
                        stiff=lambda ctx: [bench_stiff.section(ctx), bench_rattle.section(ctx), bench_loop.section(ctx)],
-                       impacts=bench_reset_sweep.section)
+                       impacts=bench_reset_sweep.section, tiers=bench_tiers.section)
         for name in SECTIONS:
             if name in sections:
                 print(f"<!-- section {name} ... -->", file=sys.stderr, flush=True)

@@ -65,3 +65,15 @@ def test_python_dash_m_bench_help_runs():
     out = subprocess.run([sys.executable, "-m", "bench", "--help"], cwd=ROOT, capture_output=True, text=True,
                          env={**__import__("os").environ, "PYTHONPATH": str(ROOT / "src")})
     assert out.returncode == 0 and "--quick" in out.stdout
+
+
+def test_bench_tiers_runs(bench_package, cache_dir):
+    """`python -m bench.bench_tiers` (section ``tiers``) on a few steps and one round: its three tables."""
+    from bench import bench_tiers
+
+    tables = bench_tiers.measure(rounds=1, steps=1000, cache_dir=cache_dir)
+    titles = [table.title for table in tables]
+    assert titles[0].startswith("RK4, double pendulum") and titles[1].startswith("DOP853, double pendulum")
+    assert [row[0] for row in tables[2].rows] == ["every step (the default)", "`t_eval`, 1001 points",
+                                                   "`save_every=10`", "`record=\"summary\"`",
+                                                   "every step, then `Solution.summary` read"]

@@ -510,6 +510,8 @@ CASES = {
     "taylor-not-applicable": (_simulate("friction", method="taylor"), "`taylor` cannot integrate 'rope_friction'"),
     "unknown-implicit-solver": (_simulate("pendulum", method="gauss2", dt=0.1, implicit_solver="broyden"), "broyden"),
     "bad-record": (_simulate("pendulum", record="everything"), "`record`"),
+    "specialize-method": (_simulate("pendulum", method="radau", specialize=True), "`specialize=True` with method 'radau'"),
+    "bad-specialize": (_simulate("pendulum", specialize="always"), "`specialize`"),
     "unknown-event": (_simulate("pendulum", events=["apex"]), "['apex']"),
     "events-with-fixed-step": (_simulate("degenerate", q0=[1.0], params={"m": 1.0}, method="rk4", dt=0.1, events=True),
                                "rk4"),

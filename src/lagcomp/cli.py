@@ -11,6 +11,7 @@
     lagcomp generate generated/          (add --check to only report stale files)
     lagcomp precompile                   (compile every library driver now, not at its first use)
     lagcomp precompile NAME --all        (compile a model and build its on-demand kernels now)
+    lagcomp precompile NAME --specialize dop853   (and its driver specialised for dop853: `specialize=True`)
 
 The MODEL of every model command is a bundled example, a model compiled earlier under a name, or a System in
 a file or module, by the rule `lagcomp.cli_support.models` states; each command prints which one it ran.
@@ -308,6 +309,9 @@ def cmd_precompile(args) -> int:
 
     if args.name is not None:
         return _precompile_model(args)
+    if args.specialize:
+        raise LagcompError("--specialize compiles a model's specialised driver: name the model, e.g. "
+                           "`lagcomp precompile double_pendulum --specialize dop853`.")
     modules: dict[str, list[str]] = {}
     for reference in library_drivers():
         module, _, _ = reference.partition(":")
@@ -333,7 +337,23 @@ def _precompile_model(args) -> int:
         entry = model.on_demand_entry
         if entry is not None:
             print(f"{model.name}: on-demand kernels {entry.path}")
+    for name in args.specialize:
+        _specialise(model, name)
     return 0
+
+
+def _specialise(model, name: str) -> None:
+    """``--specialize METHOD``: compile (or load) `model`'s driver specialised for the method `name`."""
+    from lagcomp.integrate import specialize
+    from lagcomp.integrate.methods import get_method
+
+    method = get_method(name)
+    if method.name not in specialize.SPECIALISABLE:
+        raise LagcompError(f"--specialize {name}: the specialised drivers cover {', '.join(specialize.SPECIALISABLE)}.")
+    before = time.perf_counter()
+    how = "compiled" if specialize.prepare(model, method) else "loaded from numba's cache"
+    print(f"{model.name}: {method.name} driver specialised, {how} in {time.perf_counter() - before:.2f} s "
+          f"({specialize.driver(model, method).__module__})")
 
 
 def _grid_axis(spec: str, what: str) -> tuple[str, object]:
@@ -638,6 +658,9 @@ def _parser() -> argparse.ArgumentParser:
     pre.add_argument("--cached", action="store_true", help="MODEL is the model compiled earlier under that name")
     pre.add_argument("--arg", action="append", metavar="K=V", help="argument of the example factory, e.g. n=5")
     pre.add_argument("--all", action="store_true", help="build the model's on-demand kernels now as well")
+    pre.add_argument("--specialize", action="append", metavar="METHOD", default=[],
+                     help="compile the model's driver specialised for METHOD (its kernels compile-time callees of "
+                          "the driver, cached with the model) for runs with `specialize=True`; repeat for more methods")
     pre.set_defaults(func=cmd_precompile)
     return parser
 

@@ -1,23 +1,44 @@
 """What a run keeps: every saved row, or only running reductions over them.
 
 The drivers hand back saved rows chunk by chunk.  A `Recorder` either keeps
-the rows (``record="trajectory"``) or evaluates the energies and momenta of
-each chunk with the compiled ``observables`` kernel, folds them into a
-`RunSummary` and drops them (``record="summary"``), so that a 10⁹-step run
-needs memory for one chunk only.  A run keeping its rows evaluates energies,
-momenta and summary over all of them when they are first read (`Observed`):
-numba compiles ``observables`` on its first call (0.4 s for a double pendulum,
-3.4 s for a 24-link pendulum), which the first trajectory of a new model need
-not wait for.  The values are the same either way: the kernel treats each row
-on its own, and maxima and minima do not depend on the chunking.
+the rows (``record="trajectory"``) or folds each chunk into a `RunSummary` and
+drops it (``record="summary"``), so that a 10⁹-step run needs memory for one
+chunk only.  The fold is one compiled pass over the rows (`fold_energies`)
+calling the pointwise kernels for what the summary needs and no more: the
+energy, the energy function where it is not the energy itself, the momenta
+where a coordinate is cyclic; the first and last rows get the ``observables``
+kernel, whose values the summary's `Observed` holds.  A run keeping its rows
+evaluates energies, momenta and summary over all of them when they are first
+read (`Observed`, with ``observables`` and `fold_rows`): numba compiles
+``observables`` on its first call (0.4 s for a double pendulum, 3.4 s for a
+24-link pendulum), which the first trajectory of a new model need not wait
+for.  The values are the same either way: the kernels treat each row on its
+own, ``observables`` calls the pointwise kernels, and maxima and minima do not
+depend on the chunking (`tests/test_solution.py`, `tests/test_recording.py`).
+
+What it costs (`bench/bench_tiers.py`, DOP853 on the double pendulum, 3 906
+rows): a summary costs a trajectory's time plus the energy at every row (three
+cosines), about 2% of the run; the numpy reductions over each chunk and the
+observables of every row it called before (seven cosines: the energy twice,
+the momenta of no cyclic coordinate) cost 8% more than a trajectory.
 """
 
 from __future__ import annotations
 
 import contextlib
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
+from numba.core.dispatcher import Dispatcher
+
+from lagcomp.integrate.drivers.kernel_types import (
+    ENERGY,
+    ENERGY_FUNCTION,
+    MOMENTA,
+    AddressedKernel,
+)
 
 RECORD_MODES = ("trajectory", "summary")
 
@@ -48,6 +69,28 @@ class RunSummary:
     q_max: np.ndarray
     qd_min: np.ndarray
     qd_max: np.ndarray
+
+
+#: {model kernels: `pointwise_kernels`}: their function values made (and their addresses looked up) once.
+_POINTWISE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def pointwise_kernels(kernels):
+    """(energy, energy_function or None when it is the energy kernel itself, momenta) of a model's `kernels` as
+    function values for `fold_energies`, once per kernels; None when they are not numba functions (a stand-in)."""
+    try:
+        return _POINTWISE[kernels]
+    except (KeyError, TypeError):
+        pass
+    found = [getattr(kernels, name, None) for name in ("energy", "energy_function", "momenta")]
+    pointwise = None
+    if all(isinstance(kernel, Dispatcher) for kernel in found):
+        energy, energy_function, momenta = (AddressedKernel(kernel, kind) for kernel, kind in
+                                            zip(found, (ENERGY, ENERGY_FUNCTION, MOMENTA), strict=True))
+        pointwise = (energy, None if found[1] is found[0] else energy_function, momenta)
+    with contextlib.suppress(TypeError):   # (not weakly referenceable: made again at each run)
+        _POINTWISE[kernels] = pointwise
+    return pointwise
 
 
 def _relative(deviation: float, reference: float) -> float:
@@ -83,26 +126,60 @@ class Recorder:
         self.last: tuple | None = None
         self.rows = 0
         if not self.keep:  # the running reductions (a run keeping its rows folds them in a new Recorder)
-            self.cyclic = [model.coordinates.index(c) for c in model.cyclic]
+            self.cyclic = np.array([model.coordinates.index(c) for c in model.cyclic], dtype=np.int64)
             size = model.state_size
             self.extremes = np.array([np.full(size, np.inf), np.full(size, -np.inf)])
             self.deviation = np.zeros(2 + len(self.cyclic))
+            self.start: np.ndarray | None = None    # (E, h, cyclic momenta) of the first row
+            self._kernels = False                   # `_pointwise`, looked up at the first chunk after the first row
 
     def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
-        """Take the rows ``ts`` (m,), ``ys`` (m, 2n) (copied: the caller reuses its buffers)."""
+        """Take the rows ``ts`` (m,), ``ys`` (m, 2n): copied when kept (the caller reuses its buffers), read at once
+        and dropped in summary mode (their first and last rows copied)."""
         if ts.shape[0] == 0:
             return
-        ts, ys = ts.copy(), ys.copy()
         if self.keep:
-            self._note((ts, ys))
-            self.parts.append((ts, ys))
-        else:
+            rows = (ts.copy(), ys.copy())
+            self._note(rows)
+            self.parts.append(rows)
+            return
+        if self.first is None:          # the first row's observables start the deviations
+            self._fold(ts[:1], ys[:1])
+            ts, ys = ts[1:], ys[1:]
+        if ts.shape[0] == 0:
+            return
+        if self._pointwise() is None:
             self._fold(ts, ys)
+        else:
+            self._reduce(ts, ys)
+
+    def _pointwise(self):
+        """`pointwise_kernels` of the model, with the momenta only if a coordinate is cyclic; None: call the observables
+        kernel on every row."""
+        if self._kernels is False:
+            found = pointwise_kernels(self.model.kernels)
+            self._kernels = None if found is None else (*found[:2], found[2] if self.cyclic.size else None)
+        return self._kernels
+
+    def _reduce(self, ts: np.ndarray, ys: np.ndarray) -> None:
+        """Summary mode after the first row: fold rows ts, ys into the running reductions by the pointwise kernels
+        (`fold_energies`: the energy function only where it is not the energy, the momenta only of cyclic
+        coordinates), the observables of the chunk's last row kept (`Observed` of a summary holds the first and
+        last rows')."""
+        energy, energy_function, momenta = self._pointwise()
+        ys = np.ascontiguousarray(ys)       # (each row goes to the kernels as a C-contiguous vector)
+        fold_energies(energy, energy_function or energy, momenta or _NO_MOMENTA, energy_function is not None,
+                      momenta is not None, ts, ys, self.p, self.cyclic, self.start, self.extremes, self.deviation,
+                      np.empty(self.model.n))
+        last = np.empty(1), np.empty(1), np.empty((1, self.model.n))
+        self.model.kernels.observables(ts[-1:], ys[-1:], self.p, *last)
+        self.last = (ts[-1:].copy(), ys[-1:].copy(), *last)
+        self.rows += ts.shape[0]
 
     def _note(self, rows: tuple) -> None:
         if self.first is None:
-            self.first = tuple(a[:1] for a in rows)
-        self.last = tuple(a[-1:] for a in rows)
+            self.first = tuple(a[:1].copy() for a in rows)
+        self.last = tuple(a[-1:].copy() for a in rows)
         self.rows += rows[0].shape[0]
 
     def _fold(self, ts: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -111,11 +188,9 @@ class Recorder:
         energy, energy_function, momenta = np.empty(m), np.empty(m), np.empty((m, self.model.n))
         self.model.kernels.observables(ts, ys, self.p, energy, energy_function, momenta)
         self._note((ts, ys, energy, energy_function, momenta))
-        self.extremes[0] = np.minimum(self.extremes[0], ys.min(axis=0))
-        self.extremes[1] = np.maximum(self.extremes[1], ys.max(axis=0))
-        tracked = np.column_stack([energy, energy_function, momenta[:, self.cyclic]])
-        start = np.concatenate([self.first[2], self.first[3], self.first[4][0, self.cyclic]])
-        self.deviation = np.maximum(self.deviation, np.max(np.abs(tracked - start), axis=0))
+        if self.start is None:
+            self.start = np.concatenate([self.first[2], self.first[3], self.first[4][0, self.cyclic]])
+        fold_rows(ys, energy, energy_function, momenta, self.cyclic, self.start, self.extremes, self.deviation)
         return energy, energy_function, momenta
 
     def result(self) -> tuple[np.ndarray, np.ndarray, Observed]:
@@ -141,6 +216,75 @@ class Recorder:
             q_min=self.extremes[0, :n].copy(), q_max=self.extremes[1, :n].copy(),
             qd_min=self.extremes[0, n:].copy(), qd_max=self.extremes[1, n:].copy(),
         )
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def fold_rows(ys, energy, energy_function, momenta, cyclic, start, extremes, deviation):
+    """Fold rows into the running reductions, in place, in one pass over them (no temporary arrays).
+
+    ``extremes`` (2, N): the smallest and largest value of each column of ``ys`` (m, N); ``deviation``
+    (2 + c,): the largest |energy − start[0]|, |energy_function − start[1]| and |momenta[:, cyclic[k]] −
+    start[2 + k]|.  A NaN sticks, as in ``np.minimum``/``np.maximum`` of the rows' ``min``/``max``.
+    The chain of numpy calls this replaces cost 0.1 ms per chunk of rows, more than the observables
+    kernel itself on a double pendulum (`bench/bench_tiers.py`, the ``record="summary"`` row).
+    """
+    m, size = ys.shape
+    for r in range(m):
+        for i in range(size):
+            v = ys[r, i]
+            low, high = extremes[0, i], extremes[1, i]
+            if not np.isnan(low) and (v < low or np.isnan(v)):      # (a NaN, once there, stays)
+                extremes[0, i] = v
+            if not np.isnan(high) and (v > high or np.isnan(v)):
+                extremes[1, i] = v
+        _raise_to(deviation, 0, abs(energy[r] - start[0]))
+        _raise_to(deviation, 1, abs(energy_function[r] - start[1]))
+        for k in range(cyclic.shape[0]):
+            _raise_to(deviation, 2 + k, abs(momenta[r, cyclic[k]] - start[2 + k]))
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def fold_energies(energy, energy_function, momenta, own_h, cyclic_rows, ts, ys, p, cyclic, start, extremes,
+                  deviation, work):
+    """`fold_rows` with the values computed row by row by the pointwise kernels (function values): ``energy``,
+    ``energy_function`` if ``own_h`` (else h is the energy: a model whose T is quadratic in q̇ and time-free, whose
+    module binds one kernel to both names), ``momenta`` into ``work`` (n,) if ``cyclic_rows`` (else no coordinate is
+    cyclic and they are not needed).  The values are those of the ``observables`` kernel, which calls the same
+    kernels on each row; a summary of the double pendulum evaluates three cosines per row instead of seven.
+    """
+    m, size = ys.shape
+    for r in range(m):
+        y = ys[r]
+        for i in range(size):
+            v = y[i]
+            low, high = extremes[0, i], extremes[1, i]
+            if not np.isnan(low) and (v < low or np.isnan(v)):      # (a NaN, once there, stays)
+                extremes[0, i] = v
+            if not np.isnan(high) and (v > high or np.isnan(v)):
+                extremes[1, i] = v
+        e = energy(ts[r], y, p)
+        _raise_to(deviation, 0, abs(e - start[0]))
+        _raise_to(deviation, 1, abs((energy_function(ts[r], y, p) if own_h else e) - start[1]))
+        if cyclic_rows:
+            momenta(ts[r], y, p, work)
+            for k in range(cyclic.shape[0]):
+                _raise_to(deviation, 2 + k, abs(work[cyclic[k]] - start[2 + k]))
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _no_momenta(t, y, p, out):
+    """Stands for the momenta kernel where no coordinate is cyclic (never called)."""
+
+
+#: `_no_momenta` as a function value (`fold_energies` takes one for its momenta in every case).
+_NO_MOMENTA = AddressedKernel(_no_momenta, MOMENTA)
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def _raise_to(values, i, value):
+    """values[i] = max(values[i], value), a NaN on either side giving (and keeping) NaN."""
+    if not np.isnan(values[i]) and (value > values[i] or np.isnan(value)):
+        values[i] = value
 
 
 def _observed_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, progress) -> tuple:

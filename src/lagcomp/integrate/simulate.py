@@ -58,8 +58,13 @@ from lagcomp.integrate.stiffness import (
     warn_if_stiff,
 )
 
-#: Rows per output chunk: small runs allocate little, long ones grow to this.
-FIRST_CHUNK, MAX_CHUNK = 1024, 1 << 18
+#: Rows per output chunk, the first and the largest (each full buffer doubles the next).  A full buffer ends a
+#: driver call, and a call costs (numba unboxing each kernel of a library driver, ~35 µs, and an f evaluation):
+#: with 1024 rows, saving every step of DOP853 on the double pendulum ([0, 100], tol 1e-10, 3900 steps) took
+#: three calls more than saving every tenth step, 1.34 times the driver's time alone against 1.19 with one call
+#: (`bench/bench_tiers.py`).  An unwritten buffer costs address space only (numpy's large arrays are mapped
+#: lazily), so the first holds 16384 rows.
+FIRST_CHUNK, MAX_CHUNK = 1 << 14, 1 << 18
 #: Target wall time of one driver call, and the step budget of the first one.
 CALL_SECONDS, FIRST_BUDGET = 0.25, 2048
 #: Target wall time of a run's first driver call once the model's step rate is known (`_STEP_RATES`):
@@ -91,17 +96,20 @@ def _columns(model, requested):
     return resolved[tuple(names)]
 
 
-def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions, differential: int):
+def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions, differential: int,
+                     specialised=None):
     """The chunk call of an adaptive method, and the rows its output will need (None: not known).
 
     `differential`: the state's first components that are differential, the rest algebraic (a DAE's; Radau).
+    `specialised`: the model's specialised driver (`lagcomp.integrate.specialize`) to call instead of the library's.
     """
     m = options.method
     if options.first_step is not None:
         state.clock[STEP] = options.first_step
     events = options.t_eval_after_start()
     dae = differential < state.y.size
-    drivers, tableau_arrays = _bound_drivers(m, kernels, dae), options.driver_arguments()
+    drivers = (specialised, specialised) if specialised is not None else _bound_drivers(m, kernels, dae)
+    tableau_arrays = options.driver_arguments()
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
         tableau_arrays = (np.zeros(state.y.size),)
     elif m.carry is not None:  # Radau: the count of differential components (all: an ODE), then what it keeps
@@ -120,9 +128,11 @@ def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions,
     return advance, (len(events) + 1 if options.t_eval is not None else None)
 
 
-def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions):
-    """The chunk call of a fixed-step method, and the rows its output will need."""
-    drivers, coefficients = _bound_drivers(options.method, kernels), options.driver_arguments()
+def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions, specialised=None):
+    """The chunk call of a fixed-step method, and the rows its output will need (`specialised`: as
+    `_adaptive_driver`'s)."""
+    drivers = (specialised, specialised) if specialised is not None else _bound_drivers(options.method, kernels)
+    coefficients = options.driver_arguments()
     t0, t1, dt, n_steps = options.t0, options.t1, options.dt, options.n_steps
 
     def advance(ts, ys, pause_at, event_buffers, first_call):
@@ -144,7 +154,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
              atol=None, t_eval=None, save_every=1, first_step=None, max_step=math.inf, implicit_solver=None,
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
              events=None, record="trajectory", progress=None, throw=False, max_residual=None,
-             memory_limit=MEMORY_LIMIT, inputs=None, sensitivities=None, sensitivity_control="both") -> Solution:
+             memory_limit=MEMORY_LIMIT, inputs=None, sensitivities=None, sensitivity_control="both",
+             specialize=False) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     columns = None if sensitivities is None else _columns(model, sensitivities)
     k_columns = 0 if columns is None else columns.k
@@ -163,6 +174,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     if columns is not None:
         _refuse_resets_with_sensitivities(model, options)
         sens.check(model, m, options, columns, given)
+    specialised = _specialised(model, given, m, specialize, columns, progress)
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     resting = check_contacts(model, t0, y0[None, :], p[None, :])
     set_initial_modes(model, m, t0, y0[None, :], p[None, :], resting)  # (p is this run's own: parameter_vector's)
@@ -192,9 +204,9 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         if (rtol, atol) != (options.rtol, options.atol):   # (the Taylor method's are the run's: 4 µs saved)
             options = dataclasses.replace(options, rtol=rtol, atol=atol)
     if options.adaptive:
-        advance, rows = _adaptive_driver(kernels, state, p_run, run_args, options, differential)
+        advance, rows = _adaptive_driver(kernels, state, p_run, run_args, options, differential, specialised)
     else:
-        advance, rows = _fixed_step_driver(model.kernels, state, p, run_args, options)
+        advance, rows = _fixed_step_driver(model.kernels, state, p, run_args, options, specialised)
 
     recorder = Recorder(model, p, record, progress)
     if columns is not None:
@@ -203,10 +215,13 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         recorder.add(np.array([t0]), state.y[None, :width] if columns is not None else y0[None, :])
     n_events = len(model.events)
     event_parts: list[tuple] = []
-    chunk = FIRST_CHUNK if rows is None else int(min(max(rows, 16), MAX_CHUNK))
-    first = _numba_stage(model, m, progress)
     max_rows = (options.memory_limit // _row_bytes(model, k_columns) if record == "trajectory" else math.inf)
+    # (a run of unknown length checks its rows against the memory limit after each buffer: no larger than the limit)
+    chunk = int(min(FIRST_CHUNK, max(max_rows, 16))) if rows is None else int(min(max(rows, 16), MAX_CHUNK))
+    first = None if specialised is not None else _numba_stage(model, m, progress)
     rate_key = m.name if columns is None else (m.name, columns.k)  # (a sensitivity run's steps cost more)
+    if specialised is not None:
+        rate_key = (m.name, "specialised")
     status = _run(advance, state, t1, (chunk, max_rows, width), recorder, n_events, event_parts, progress, first,
                   (_STEP_RATES.setdefault(model, {}), rate_key), _kernels_of(model, m))
     if status == Status.RHS_FAILED and state.nsteps == 0:
@@ -226,6 +241,30 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         warn_of_resets_gone_through(model, p, options.actions, solution.events, solution.t,
                                     np.hstack([solution.q, solution.qd]))
     return solution
+
+
+def _specialised(model, given, m, specialize, columns, progress):
+    """None for a run of the library driver; for ``specialize=True``, the model's specialised driver
+    (`lagcomp.integrate.specialize`: loaded, or compiled under a progress stage), after refusing a run it does not
+    cover."""
+    if not isinstance(specialize, bool | np.bool_):
+        raise OptionError(f"`specialize` must be True or False, got {specialize!r}.")
+    if not specialize:
+        return None
+    from lagcomp.integrate import specialize as tier
+
+    if columns is not None:
+        raise OptionError("`specialize=True` with `sensitivities=`: a sensitivity run's kernels are made per run, "
+                          "so no driver is specialised for them. Leave `specialize` unset.")
+    tier.check(m, model, given)
+    if tier.loaded(model, m):
+        return tier.driver(model, m)
+    from lagcomp.stages import Stages
+
+    what = f"numba: compiling the {m.name} driver specialised for {model.name} (once; cached for later runs)"
+    with Stages(f"preparing {model.name}", (what,), progress) as stages:
+        stages.start(what)
+        return tier.driver(model, m)
 
 
 def _row_bytes(model, k_columns: int) -> int:
