@@ -18,6 +18,13 @@ import lagcomp as lc
 from lagcomp import examples
 
 
+def pytest_collection_modifyitems(items):
+    """The heaviest files first, so that xdist's workers finish together (tests/suite_order.py)."""
+    import suite_order
+
+    suite_order.order(items)
+
+
 @pytest.fixture(scope="session")
 def cache_dir(tmp_path_factory):
     """The run's cache directory.  Under pytest-xdist (the default: ``-n auto`` in pyproject.toml) one directory

@@ -59,7 +59,10 @@ def pendulum(compiled):
     return compiled("double_pendulum")
 
 
-@pytest.mark.parametrize("k, parameters", [(1, ()), (4, ()), (9, (0, 1, 2, 3, 4))])
+@pytest.mark.parametrize("k, parameters", [
+    (1, ()), (4, ()),
+    pytest.param(9, (0, 1, 2, 3, 4), marks=pytest.mark.slow),  # 60 s of CPU: numba compiling its two kernels cold
+])
 def test_double_pendulum_coefficients_match_forward_mode(pendulum, k, parameters):
     kernels = [_kernel(pendulum, source_of, k, parameters) for source_of in (forward_source, jacobian_source)]
 
