@@ -32,6 +32,7 @@ import numpy as np
 import sympy as sp
 
 import lagcomp as lc
+from lagcomp.kernel_support import trig
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=False)
@@ -45,6 +46,26 @@ def double_pendulum_rhs(t, y, p, out):
     a22 = m2 * l2 * l2
     f1 = -m2 * l1 * l2 * y[3] * y[3] * s - (m1 + m2) * g * l1 * math.sin(y[0])
     f2 = m2 * l1 * l2 * y[2] * y[2] * s - m2 * g * l2 * math.sin(y[1])
+    det = a11 * a22 - a12 * a12
+    out[0] = y[2]
+    out[1] = y[3]
+    out[2] = (a22 * f1 - a12 * f2) / det
+    out[3] = (a11 * f2 - a12 * f1) / det
+    return 0
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=False)
+def double_pendulum_rhs_polynomial_trig(t, y, p, out):
+    """`double_pendulum_rhs` with lagcomp's sin and cos (`lagcomp.kernel_support.trig`, the polynomials its
+    kernels call) instead of libm's: the kernel section's row that separates their cost from the rest."""
+    m1, m2, l1, l2, g = p[0], p[1], p[2], p[3], p[4]
+    d = y[0] - y[1]
+    s, c = trig.sin(d), trig.cos(d)
+    a11 = (m1 + m2) * l1 * l1
+    a12 = m2 * l1 * l2 * c
+    a22 = m2 * l2 * l2
+    f1 = -m2 * l1 * l2 * y[3] * y[3] * s - (m1 + m2) * g * l1 * trig.sin(y[0])
+    f2 = m2 * l1 * l2 * y[2] * y[2] * s - m2 * g * l2 * trig.sin(y[1])
     det = a11 * a22 - a12 * a12
     out[0] = y[2]
     out[1] = y[3]
