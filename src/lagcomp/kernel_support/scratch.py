@@ -3,11 +3,12 @@
 A kernel whose solve is a loop (n > ``lagcomp.codegen.lower.UNROLL_MAX``: ``ldlt_solve`` and the
 product loop of ``momenta``; n > ``JACOBIAN_UNROLL_MAX``: ``ldlt_solve_matrix``) gathers M and f into
 arrays first, and ``rhs_jacobian`` passes ``rhs_with_jacobian`` a vector for the f it drops.  As
-``np.array``/``np.empty`` these were heap allocations through numba's runtime on every call: the
-planar chain's rhs went from 340 ns at 12 links (unrolled) to 703 ns at 13 (looped), half of it
-the two allocations.  Here they are ``alloca``s in the entry block of the function that calls
-`stack_array` or `stack_empty` (numba's ``cgutils.alloca_once``): reserved with the frame, nothing
-to free, and each thread of a parallel sweep has its own.
+``np.array``/``np.empty`` these were heap allocations through numba's runtime on every call, which
+a 13-link chain's rhs spent 5 % of its time on, a 16-link one's 16 % (CPU time in one process, loaded
+machine; the rest of the step from 12 links, unrolled, to 13, looped, is the loop).  Here they are
+``alloca``s in the entry block of the function that calls `stack_array` or `stack_empty` (numba's
+``cgutils.alloca_once``): reserved with the frame, nothing to free, and each thread of a parallel sweep
+has its own.
 
 The arrays have no meminfo (numba's reference counting skips them), so they are valid only while
 the calling function runs: a kernel passes them down to the solvers, never returns or stores one.
