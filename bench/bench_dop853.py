@@ -40,7 +40,7 @@ import numpy as np
 
 import lagcomp as lc
 from bench import systems
-from bench.harness import peer
+from bench.harness import no_events, peer
 from lagcomp import examples
 from lagcomp.integrate.drivers.kernel_types import RHS, VECTOR
 from lagcomp.integrate.drivers.run_state import CLOCK_SLOTS, COUNTER_SLOTS
@@ -118,16 +118,12 @@ def driver_run(model, case: Case):
     driver, arrays = method.bound_driver(model.kernels), method.driver_arguments()
     p = model.parameter_vector()
     n = case.y0.shape[0]
-    # no events: their directions and actions, then the buffers of their times, states, indices (and, for
-    # the drivers that apply resets, the states after them and which events are at their zero)
-    no_events = (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(1), np.empty((1, n)), np.empty(1, np.int64))
-    if "event_reset" in method.kernels:
-        no_events += (np.empty((1, n)), np.zeros(0, np.int64))
+    events = no_events(method, n)
 
     def run():
         y, clock, counters = case.y0.copy(), np.zeros(CLOCK_SLOTS), np.zeros(COUNTER_SLOTS, dtype=np.int64)
         driver(y, clock, counters, p, 0, np.array([0.0, np.inf]), case.grid[-1], TOL, TOL, np.inf,
-               10**9, 10**9, 1, case.grid[1:], np.empty(2), np.empty((2, n)), *no_events, *arrays)
+               10**9, 10**9, 1, case.grid[1:], np.empty(2), np.empty((2, n)), *events, *arrays)
         return int(counters[0])
     return run
 
