@@ -13,6 +13,7 @@ each) and checks that every script of the package is in it.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
 import subprocess
 import sys
@@ -49,6 +50,9 @@ SCRIPTS = {
     "taylor_error_sources": ["--t-end", "10", "--members", "2"],
 }
 
+#: Scripts that cannot run without a peer (their reference is the peer's result), and the peer's module.
+REQUIRES = {"bench_taylor_sensitivities": "heyoka"}
+
 #: Scripts of the package that are not run here, and why.
 NOT_RUN = {
     "taylor_library_vs_template": "compares with an older lagcomp checkout whose path it takes (no smoke form)",
@@ -62,6 +66,12 @@ LIBRARY = {"__init__", "__main__", "accuracy", "adaptive", "compile_time", "harn
 def command(script: str) -> list[str]:
     """The command line of `script`'s smoke run."""
     return [sys.executable, "-m", f"bench.{script}", *SCRIPTS[script]]
+
+
+def missing_peer(script: str) -> str | None:
+    """The module `script` cannot run without when it is not installed, else None."""
+    module = REQUIRES.get(script)
+    return module if module is not None and importlib.util.find_spec(module) is None else None
 
 
 def run(script: str, timeout: float) -> subprocess.CompletedProcess:
@@ -82,6 +92,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"not a bench script with a smoke run: {', '.join(unknown)} (known: {', '.join(SCRIPTS)})")
     failed = []
     for script in args.scripts or list(SCRIPTS):
+        if missing_peer(script):
+            print(f"skip {script}: {missing_peer(script)} is not installed", flush=True)
+            continue
         start = time.perf_counter()
         try:
             result = run(script, args.timeout)
