@@ -86,7 +86,7 @@ def test_solving_kernels_allocate_nothing(compiled, allocations, n):
         "energy": allocations(lambda calls: _repeat_scalar(k.energy, 0.0, y, p, calls)),
     }
     assert counts == dict.fromkeys(counts, 0)
-    assert ("ldlt_solve(mm, ff" in model.source_path.read_text()) == (n > UNROLL_MAX)
+    assert ("ldlt_solve_inline(mm, ff" in model.source_path.read_text()) == (n > UNROLL_MAX)
 
 
 @pytest.mark.parametrize("n", [JACOBIAN_UNROLL_MAX, JACOBIAN_UNROLL_MAX + 1])

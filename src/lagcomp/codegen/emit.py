@@ -113,8 +113,8 @@ KERNEL_SUPPORT = {
     "lagcomp.kernel_support.impacts": ("contact_impacts",),
     "lagcomp.kernel_support.inputs": ("input_value",),
     "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "kkt_solve_matrix",
-                                              "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
-                                              "lu_solve_matrix", "lu_substitute"),
+                                              "ldlt_solve", "ldlt_solve_inline", "ldlt_solve_matrix", "lu_factor",
+                                              "lu_solve", "lu_solve_matrix", "lu_substitute"),
     "lagcomp.kernel_support.scratch": ("stack_array", "stack_empty"),
     "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "contact_event", "friction_mode_after",
                                        "friction_modes_after_jump", "frictional_accelerations",
@@ -168,7 +168,7 @@ def kernel_support_names(kernels) -> set[str]:
         elif isinstance(solve, DirectionalSolve):
             names.add("PIVOT_TOLERANCE")
         elif isinstance(solve, LinearSolve):
-            names |= {"PIVOT_TOLERANCE"} if solve.unrolled or kernel.lanes else {"ldlt_solve", "stack_array"}
+            names |= {"PIVOT_TOLERANCE"} if solve.unrolled or kernel.lanes else {"ldlt_solve_inline", "stack_array"}
         elif isinstance(solve, SymmetricProduct):
             names.add("stack_array")
         elif isinstance(solve, JacobianSolve):
@@ -426,9 +426,9 @@ def delegated_call(solve: Delegate) -> str:
 
 
 def _looped_ldlt(solve: LinearSolve) -> list[str]:
-    """M's lower triangle and f gathered into arrays, then the loop `ldlt_solve` (`lagcomp.kernel_support`)."""
+    """M's lower triangle and f gathered into arrays, then the loop `ldlt_solve_inline` (`lagcomp.kernel_support`)."""
     lines = ["# Solve M x = f by LDLᵀ (loops); a non-positive pivot means M is singular here."]
-    return lines + _gathered(solve, symmetric=False) + [f"return ldlt_solve(mm, ff, out, {solve.offset})"]
+    return lines + _gathered(solve, symmetric=False) + [f"return ldlt_solve_inline(mm, ff, out, {solve.offset})"]
 
 
 def _symmetric_product(solve: SymmetricProduct) -> list[str]:

@@ -1,6 +1,6 @@
 """Work arrays in the calling kernel's stack frame: kernels that need arrays allocate nothing per call.
 
-A kernel whose solve is a loop (n > ``lagcomp.codegen.lower.UNROLL_MAX``: ``ldlt_solve`` and the
+A kernel whose solve is a loop (n > ``lagcomp.codegen.lower.UNROLL_MAX``: ``ldlt_solve_inline`` and the
 product loop of ``momenta``; n > ``JACOBIAN_UNROLL_MAX``: ``ldlt_solve_matrix``) gathers M and f into
 arrays first, and ``rhs_jacobian`` passes ``rhs_with_jacobian`` a vector for the f it drops.  As
 ``np.array``/``np.empty`` these were heap allocations through numba's runtime on every call, which
