@@ -22,7 +22,7 @@ import argparse
 import numpy as np
 
 import lagcomp as lc
-from bench.harness import fmt_stat, interleaved_times, paired, stat_of
+from bench.harness import fmt_stat, interleaved_times, no_events, paired, stat_of
 from lagcomp.examples import get
 from lagcomp.integrate.drivers.run_state import CLOCK_SLOTS, COUNTER_SLOTS
 from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE
@@ -34,15 +34,14 @@ def driver_call(model, addressed: bool, t_end: float):
     method = METHODS["dop853"]
     driver = method.bound_driver(model.kernels, addressed=addressed)
     y0, p = model.initial_state(None, None), model.parameter_vector(None)
-    no_events = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.empty(1), np.empty((1, y0.size)),
-                 np.empty(1, dtype=np.int64))
+    events = no_events(method, y0.size)
     coefficients = method.driver_arguments()
     ts, ys = np.empty(16), np.empty((16, y0.size))
 
     def call():
         y, clock, counters = y0.copy(), np.zeros(CLOCK_SLOTS), np.zeros(COUNTER_SLOTS, dtype=np.int64)
         status, _ = driver(y, clock, counters, p, 0, np.zeros(1), t_end, 1e-10, 1e-10, np.inf, 10**9, NO_PAUSE,
-                           10**9, np.empty(0), ts, ys, *no_events, *coefficients)
+                           10**9, np.empty(0), ts, ys, *events, *coefficients)
         if status not in (0, 10):
             raise RuntimeError(f"DOP853 driver returned status {status}")
     return call

@@ -1,6 +1,7 @@
 """Where lagcomp's DOP853 stands against numbalsoda's: steps, driver alone, and through Model.simulate.
 
-    PYTHONPATH=src python -m bench.bench_dop853 [--rounds 15] [--system double_pendulum|chain10]
+    PYTHONPATH=src python -m bench.bench_dop853 [--rounds 15] [--system double_pendulum|chain10] [--smoke]
+                                                [--cache-dir DIR]
 
 ``double_pendulum`` (the default): from (2, 1, 0, 0), t ∈ [0, 100], rtol = atol = 1e-10, the state
 reported at t = 10 and 100 (issue 8's DOP853 target).  ``chain10``: the 10-link chain
@@ -22,7 +23,9 @@ scratch in numbalsoda's data array after the parameters).  Prints:
    driver with no cost of its own would take f-evaluations × rhs: that bound, over numbalsoda's
    time, is the last column.
 
-numbalsoda comes with the bench extra (``pip install '.[bench]'``, it needs gfortran).
+numbalsoda comes with the bench extra (``pip install '.[bench]'``, it needs gfortran); without it its rows
+say so and the ratios are against lagcomp's driver.  ``--smoke``: one round of one run each, and the
+rhs loops short (tests/test_bench_scripts.py runs it so, to catch a driver signature that moved on).
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ import numpy as np
 
 import lagcomp as lc
 from bench import systems
+from bench.harness import no_events, peer
 from lagcomp import examples
 from lagcomp.integrate.drivers.kernel_types import RHS, VECTOR
 from lagcomp.integrate.drivers.run_state import CLOCK_SLOTS, COUNTER_SLOTS
@@ -47,14 +51,16 @@ TOL = 1e-10
 CHAIN = 10
 
 
+#: numbalsoda's rows when it is not installed.
+NOT_INSTALLED = "numbalsoda dop853 (not installed)"
+
+
 class Case:
     """One benchmark problem: the lagcomp system, the initial state, the output times (the first is the
     start), and numbalsoda's right-hand side: a cfunc of the hand-written numba rhs (bench/systems.py) that
     counts its calls in ``data[counter]``; ``hand_written_rhs`` that rhs as ``rhs(t, y, p, out)``, where it is one."""
 
     def __init__(self, name: str):
-        from numbalsoda import lsoda_sig
-
         if name == "double_pendulum":
             self.system = examples.get("double_pendulum")
             self.y0 = np.array([2.0, 1.0, 0.0, 0.0])
@@ -64,7 +70,6 @@ class Case:
             rhs = systems.double_pendulum_rhs
             self.hand_written_rhs = rhs
 
-            @numba.cfunc(lsoda_sig)
             def f(t, u, du, data):
                 rhs(t, numba.carray(u, (4,)), numba.carray(data, (5,)), numba.carray(du, (4,)))
                 data[5] += 1.0
@@ -79,7 +84,6 @@ class Case:
             rhs, n_data = systems.chain_rhs_ws, self.data.shape[0]
             self.hand_written_rhs = None    # its scratch is numbalsoda's data: no rhs(t, y, p, out) alone
 
-            @numba.cfunc(lsoda_sig)
             def f(t, u, du, data):
                 values = numba.carray(data, (n_data,))
                 work = values[n_p + 1:]
@@ -88,14 +92,18 @@ class Case:
                 data[n_p] += 1.0
         else:
             raise ValueError(f"unknown system {name!r}")
-        self.numbalsoda_rhs = f
+        self.numbalsoda_f = f   # compiled as numbalsoda's cfunc by `numbalsoda_run`, where it is installed
 
 
 def numbalsoda_run(case: Case):
-    """numbalsoda's dop853 on the case's hand-written rhs; returns its number of rhs calls."""
-    from numbalsoda import dop853
-
-    data, counter, address = case.data, case.counter, case.numbalsoda_rhs.address
+    """numbalsoda's dop853 on the case's hand-written rhs (returns its number of rhs calls), None when numbalsoda
+    is not installed."""
+    numbalsoda = peer("numbalsoda")
+    if numbalsoda is None:
+        return None
+    dop853 = numbalsoda.dop853
+    data, counter = case.data, case.counter
+    address = numba.cfunc(numbalsoda.lsoda_sig)(case.numbalsoda_f).address
 
     def run():
         data[counter] = 0.0
@@ -105,17 +113,17 @@ def numbalsoda_run(case: Case):
 
 
 def driver_run(model, case: Case):
-    """The DOP853 driver called directly, as simulate calls it, in one call."""
+    """The DOP853 driver called directly, with the arguments `lagcomp.integrate.simulate` gives it, in one call."""
     method = get_method("dop853")
     driver, arrays = method.bound_driver(model.kernels), method.driver_arguments()
     p = model.parameter_vector()
     n = case.y0.shape[0]
-    no_events = (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(1), np.empty((1, n)), np.empty(1, np.int64))
+    events = no_events(method, n)
 
     def run():
         y, clock, counters = case.y0.copy(), np.zeros(CLOCK_SLOTS), np.zeros(COUNTER_SLOTS, dtype=np.int64)
         driver(y, clock, counters, p, 0, np.array([0.0, np.inf]), case.grid[-1], TOL, TOL, np.inf,
-               10**9, 10**9, 1, case.grid[1:], np.empty(2), np.empty((2, n)), *no_events, *arrays)
+               10**9, 10**9, 1, case.grid[1:], np.empty(2), np.empty((2, n)), *events, *arrays)
         return int(counters[0])
     return run
 
@@ -142,14 +150,17 @@ def rhs_nanoseconds(rhs, y0, p, rounds: int, calls: int = 200_000) -> float:
     return statistics.median(samples)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=15)
     parser.add_argument("--system", choices=("double_pendulum", "chain10"), default="double_pendulum")
-    args = parser.parse_args()
+    parser.add_argument("--smoke", action="store_true", help="one round of one run each: does it run")
+    parser.add_argument("--cache-dir", help="compile the model into this cache (default: a fresh temporary one)")
+    args = parser.parse_args(argv)
+    rounds, runs_per_round, calls = (1, 1, 1000) if args.smoke else (args.rounds, 10, 200_000)
     case = Case(args.system)
-    with tempfile.TemporaryDirectory() as cache_dir:
-        model = lc.compile(case.system, cache_dir=cache_dir)
+    with tempfile.TemporaryDirectory() as scratch:
+        model = lc.compile(case.system, cache_dir=args.cache_dir or scratch)
         runners = {
             "lagcomp DOP853 driver, called directly": driver_run(model, case),
             "lagcomp Model.simulate": lambda: model.simulate((0, case.grid[-1]), *np.split(case.y0, 2),
@@ -157,21 +168,31 @@ def main() -> None:
                                                              t_eval=case.grid[1:]).nfev,
             "numbalsoda dop853": numbalsoda_run(case),
         }
+        if runners["numbalsoda dop853"] is None:
+            del runners["numbalsoda dop853"]
         evaluations = {name: run() for name, run in runners.items()}  # also compiles / loads everything
         times = {name: [] for name in runners}
-        for _ in range(args.rounds):
+        for _ in range(rounds):
             for name, run in runners.items():
                 start = time.perf_counter()
-                for _ in range(10):
+                for _ in range(runs_per_round):
                     run()
-                times[name].append((time.perf_counter() - start) / 10 * 1e3)
+                times[name].append((time.perf_counter() - start) / runs_per_round * 1e3)
         rhs_ns = {"lagcomp DOP853 driver, called directly":
-                  rhs_nanoseconds(model.kernels.rhs, case.y0, model.parameter_vector(), args.rounds)}
-        if case.hand_written_rhs is not None:
+                  rhs_nanoseconds(model.kernels.rhs, case.y0, model.parameter_vector(), rounds, calls)}
+        if case.hand_written_rhs is not None and "numbalsoda dop853" in runners:
             rhs_ns["numbalsoda dop853"] = rhs_nanoseconds(case.hand_written_rhs, case.y0,
-                                                          case.data[:case.counter].copy(), args.rounds)
-    baseline = times["numbalsoda dop853"]
-    print("| run | f evaluations | ms, median (min–max) | × numbalsoda (median of per-round ratios) |")
+                                                          case.data[:case.counter].copy(), rounds, calls)
+    report(times, evaluations, rhs_ns)
+
+
+def report(times: dict, evaluations: dict, rhs_ns: dict) -> None:
+    """The two tables, ratios against numbalsoda's run (against lagcomp's driver when numbalsoda is missing)."""
+    base = "numbalsoda dop853" if "numbalsoda dop853" in times else "lagcomp DOP853 driver, called directly"
+    if base != "numbalsoda dop853":
+        print(f"({NOT_INSTALLED}: ratios against lagcomp's driver)\n")
+    baseline = times[base]
+    print(f"| run | f evaluations | ms, median (min–max) | × {base} (median of per-round ratios) |")
     print("|---|---|---|---|")
     for name, samples in times.items():
         ratio = statistics.median(a / b for a, b in zip(samples, baseline, strict=True))
@@ -179,12 +200,12 @@ def main() -> None:
               f"{max(samples):.2f}) | {ratio:.2f}× |")
     print()
     print("| integrator | rhs alone, ns per call | rest, ns per f-evaluation "
-          "| f-evaluations × rhs, × numbalsoda's run |")
+          f"| f-evaluations × rhs, × {base}'s run |")
     print("|---|---|---|---|")
-    numbalsoda_ms = statistics.median(baseline)
+    base_ms = statistics.median(baseline)
     for run, ns in rhs_ns.items():
         per_eval = statistics.median(times[run]) * 1e6 / evaluations[run]
-        bound = evaluations[run] * ns * 1e-6 / numbalsoda_ms
+        bound = evaluations[run] * ns * 1e-6 / base_ms
         print(f"| {run} | {ns:.1f} | {per_eval - ns:.1f} | {bound:.2f}× |")
 
 

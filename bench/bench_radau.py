@@ -37,6 +37,7 @@ import numpy as np
 from numba import njit
 from scipy.integrate import solve_ivp
 
+from bench.harness import no_events
 from lagcomp.integrate.drivers import radau as radau_driver
 from lagcomp.integrate.drivers.embedded import embedded_run
 from lagcomp.integrate.drivers.kernel_types import EVENTS, RHS, RHS_JACOBIAN, AddressedKernel
@@ -92,14 +93,15 @@ def lagcomp_radau(problem, rtol, atol):
 def lagcomp_dop853(problem, rtol, atol):
     p, y0, t_end = np.array(problem["p"]), np.array(problem["y0"]), problem["t_end"]
     n = y0.size
-    arrays = get_method("dop853").driver_arguments()
+    method = get_method("dop853")
+    arrays, events = method.driver_arguments(), no_events(method, n)
 
     def run():
         y, clock, counters = y0.copy(), np.zeros(2), np.zeros(8, dtype=np.int64)
         status, _ = embedded_run(stiff_kernels.rhs, driver_kernels.project, driver_kernels.constraint_residual,
-                                 driver_kernels.event_values, y, clock, counters, p, 0, np.zeros(1), t_end, rtol,
-                                 atol, np.inf, 10**9, 10**9, 10**9, np.empty(0), np.empty(1), np.empty((1, n)),
-                                 NO_EVENTS, NO_EVENTS, np.empty(1), np.empty((1, n)), np.empty(1, np.int64), *arrays)
+                                 driver_kernels.event_values, driver_kernels.event_reset, y, clock, counters, p, 0,
+                                 np.zeros(1), t_end, rtol, atol, np.inf, 10**9, 10**9, 10**9, np.empty(0),
+                                 np.empty(1), np.empty((1, n)), *events, *arrays)
         assert status == 0, status
         return y, f"steps {counters[NSTEPS]}, f {counters[NFEV]}"
     return run

@@ -41,6 +41,19 @@ def stat_of(values: list[float]) -> Stat:
     return Stat(statistics.median(values), min(values), max(values), len(values))
 
 
+def no_events(method, n: int) -> tuple:
+    """The event arguments of an embedded driver's call without events, as `lagcomp.integrate.simulate` passes
+    them: directions and actions, the buffers of event times, states and indices, and for a driver that
+    applies resets (``event_reset`` among `method`'s kernels) the states after them and which events are at
+    their zero.  For the bench scripts that call a driver directly (bench_dop853, bench_call_cost)."""
+    import numpy as np
+
+    arguments = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.empty(1), np.empty((1, n)), np.empty(1, np.int64))
+    if "event_reset" in method.kernels:
+        arguments += (np.empty((1, n)), np.zeros(0, np.int64))
+    return arguments
+
+
 def peer(module: str):
     """The peer's module, or None when it is not installed (the table then says so)."""
     try:

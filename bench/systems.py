@@ -13,7 +13,14 @@ m1..mn l1..ln g) in closed form, with μ_k = Σ_{i≥k} m_i:
     M_jk = μ_max(j,k) l_j l_k cos(θj − θk),
     F_j  = −Σ_k μ_max(j,k) l_j l_k sin(θj − θk) θ̇k² − μ_j g l_j sin θj,
 
-solved by an in-place Cholesky factorization: `chain_rhs`.
+solved by an in-place Cholesky factorization: `chain_rhs` (a sine and a cosine per pair of links, the
+accuracy section's hand-written form).  `chain_rhs_fast_ws` is the fastest closed form a careful user
+writes: sin θ_j and cos θ_j once per link, the pairs' by the angle-difference identities (as lagcomp's
+derivation of the chain has them), M's lower triangle only, LDLᵀ with one reciprocal per pivot, scratch
+from the caller: the kernel section's baseline for the chain.
+
+The hand-written kernels compile as a careful user compiles them: ``error_model="numpy"`` (no
+division-by-zero checks, as lagcomp's kernels), libm's sin and cos (``math``), no fastmath.
 """
 
 from __future__ import annotations
@@ -25,9 +32,10 @@ import numpy as np
 import sympy as sp
 
 import lagcomp as lc
+from lagcomp.kernel_support import trig
 
 
-@numba.njit(cache=True, fastmath=False)
+@numba.njit(cache=True, error_model="numpy", fastmath=False)
 def double_pendulum_rhs(t, y, p, out):
     """Hand-written double pendulum, state y = (θ1, θ2, θ̇1, θ̇2), p = (m1, m2, l1, l2, g)."""
     m1, m2, l1, l2, g = p[0], p[1], p[2], p[3], p[4]
@@ -46,14 +54,34 @@ def double_pendulum_rhs(t, y, p, out):
     return 0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy", fastmath=False)
+def double_pendulum_rhs_polynomial_trig(t, y, p, out):
+    """`double_pendulum_rhs` with lagcomp's sin and cos (`lagcomp.kernel_support.trig`, the polynomials its
+    kernels call) instead of libm's: the kernel section's row that separates their cost from the rest."""
+    m1, m2, l1, l2, g = p[0], p[1], p[2], p[3], p[4]
+    d = y[0] - y[1]
+    s, c = trig.sin(d), trig.cos(d)
+    a11 = (m1 + m2) * l1 * l1
+    a12 = m2 * l1 * l2 * c
+    a22 = m2 * l2 * l2
+    f1 = -m2 * l1 * l2 * y[3] * y[3] * s - (m1 + m2) * g * l1 * trig.sin(y[0])
+    f2 = m2 * l1 * l2 * y[2] * y[2] * s - m2 * g * l2 * trig.sin(y[1])
+    det = a11 * a22 - a12 * a12
+    out[0] = y[2]
+    out[1] = y[3]
+    out[2] = (a22 * f1 - a12 * f2) / det
+    out[3] = (a11 * f2 - a12 * f1) / det
+    return 0
+
+
+@numba.njit(cache=True, error_model="numpy")
 def chain_rhs(t, y, p, out):
     """Closed-form N-link chain (n = len(y) // 2), p = (m1..mn, l1..ln, g), allocating its scratch."""
     n = y.shape[0] // 2
     return chain_rhs_ws(t, y, p, out, np.empty((n, n)), np.empty(n), np.empty(n))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def chain_rhs_ws(t, y, p, out, a, f, mu):
     """`chain_rhs` with caller-provided scratch a (n, n), f (n,), mu (n,): no allocation, Cholesky solve."""
     n = y.shape[0] // 2
@@ -97,6 +125,68 @@ def chain_rhs_ws(t, y, p, out, a, f, mu):
     return 0
 
 
+@numba.njit(cache=True, error_model="numpy")
+def chain_rhs_fast_ws(t, y, p, out, s, c, mu, a, f):
+    """The N-link chain's fastest closed form (module docstring), scratch s, c, mu, f (n,) and a (n, n) given."""
+    n = y.shape[0] // 2
+    g = p[2 * n]
+    acc = 0.0
+    for k in range(n - 1, -1, -1):
+        acc += p[k]
+        mu[k] = acc
+        s[k] = math.sin(y[k])
+        c[k] = math.cos(y[k])
+    for j in range(n):
+        f[j] = -mu[j] * g * p[n + j] * s[j]
+    for j in range(n):
+        lj = p[n + j]
+        for k in range(j + 1):
+            w = mu[j] * lj * p[n + k]       # μ_max(j,k) = μ_j for k ≤ j
+            a[j, k] = w * (c[j] * c[k] + s[j] * s[k])
+            if k < j:
+                w_sin = w * (s[j] * c[k] - c[j] * s[k])     # M-weighted sin(θj − θk)
+                f[j] -= w_sin * y[n + k] * y[n + k]
+                f[k] += w_sin * y[n + j] * y[n + j]
+    for j in range(n):  # LDLᵀ: D on the diagonal, L below it, 1/D in mu (no longer needed)
+        d = a[j, j]
+        for k in range(j):
+            d -= a[j, k] * a[j, k] * a[k, k]
+        a[j, j] = d
+        mu[j] = 1.0 / d
+        for i in range(j + 1, n):
+            v = a[i, j]
+            for k in range(j):
+                v -= a[i, k] * a[j, k] * a[k, k]
+            a[i, j] = v * mu[j]
+    for i in range(n):
+        v = f[i]
+        for k in range(i):
+            v -= a[i, k] * f[k]
+        f[i] = v
+    for i in range(n - 1, -1, -1):
+        v = f[i] * mu[i]
+        for k in range(i + 1, n):
+            v -= a[k, i] * f[k]
+        f[i] = v
+    for i in range(n):
+        out[i] = y[n + i]
+        out[n + i] = f[i]
+    return 0
+
+
+@numba.njit(error_model="numpy")
+def chain_fast_loop(y, p, out, calls):
+    """`calls` calls of `chain_rhs_fast_ws` with scratch allocated once: the kernel section's chain baseline."""
+    n = y.shape[0] // 2
+    s, c, mu, a, f = np.empty(n), np.empty(n), np.empty(n), np.empty((n, n)), np.empty(n)
+    acc = 0.0
+    for _ in range(calls):
+        y[0] += 1e-12
+        chain_rhs_fast_ws(0.0, y, p, out, s, c, mu, a, f)
+        acc += out[out.shape[0] - 1]
+    return acc
+
+
 def kepler() -> lc.System:
     """Kepler problem in Cartesian coordinates, μ = 1: T = ½ m (ẋ² + ẏ²), V = −m μ / r; eccentricity 0.5, period 2π.
 
@@ -113,7 +203,7 @@ def kepler() -> lc.System:
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def kepler_rhs(t, y, p, out):
     """Hand-written Kepler, y = (x, y, ẋ, ẏ), p = (m, μ)."""
     r2 = y[0] * y[0] + y[1] * y[1]
@@ -125,7 +215,7 @@ def kepler_rhs(t, y, p, out):
     return 0
 
 
-@numba.njit
+@numba.njit(error_model="numpy")
 def chain_loop(y, p, out, calls):
     """`calls` calls of `chain_rhs_ws` with scratch allocated once: the closed-form baseline's compiled loop."""
     n = y.shape[0] // 2
@@ -140,7 +230,7 @@ def chain_loop(y, p, out, calls):
 
 def rk4_driver(rhs):
     """A hand-written numba RK4 loop over `rhs`: the baseline of the fixed-step throughput."""
-    @numba.njit
+    @numba.njit(error_model="numpy")
     def run(y, p, dt, n):
         k1, k2, k3, k4, tmp = np.empty(y.size), np.empty(y.size), np.empty(y.size), np.empty(y.size), np.empty(y.size)
         t = 0.0

@@ -17,6 +17,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin, vcos, vsin
 
 
@@ -342,7 +343,7 @@ def rhs_with_jacobian(t, y, p, ydot, out):
 def rhs_jacobian(t, y, p, out):
     """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
     The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
-    return rhs_with_jacobian(t, y, p, np.empty(6), out)
+    return rhs_with_jacobian(t, y, p, stack_empty(6), out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -353,7 +354,7 @@ def rhs_parameter_jacobian(t, y, p, out):
     Rows 0 (q̇ does not depend on p), then ∂a/∂p = M⁻¹ (∂F/∂p − ∂(M ā)/∂p |ā=a) (a = q̈ from `rhs`).
     Returns 0, or k > 0 as `rhs` does, or when this LDLᵀ of M finds pivot k not positive (then `rhs`
     was within rounding of its threshold); `out` is then invalid."""
-    _ydot = np.empty(6)
+    _ydot = stack_empty(6)
     _status = rhs(t, y, p, _ydot)
     if _status:
         return _status

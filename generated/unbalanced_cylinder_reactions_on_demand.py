@@ -17,6 +17,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import kkt_solve, kkt_solve_matrix
+from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
 
 
@@ -219,7 +220,7 @@ def rhs_with_jacobian(t, y, p, ydot, out):
 def rhs_jacobian(t, y, p, out):
     """Exact Jacobian out[i, j] = ∂f_i/∂y_j, (N, N), of y' = f(t, y) as `rhs` computes it (symbolic, no differences).
     The Jacobian `rhs_with_jacobian` computes, its f dropped; its statuses."""
-    return rhs_with_jacobian(t, y, p, np.empty(6), out)
+    return rhs_with_jacobian(t, y, p, stack_empty(6), out)
 
 
 @njit(cache=True, error_model="numpy")

@@ -32,7 +32,7 @@ def test_kernels_agree_with_mass_matrix_and_forcing(compiled, n):
 def test_looped_solve_for_large_systems_matches_numpy(compiled, rng):
     n = UNROLL_MAX + 1     # the smallest looped solve: the model above, compiled once
     model = compiled("n_link_pendulum", n=n)
-    assert "return ldlt_solve(mm, ff, out, " in model.source_path.read_text()
+    assert "return ldlt_solve_inline(mm, ff, out, " in model.source_path.read_text()
     for _ in range(5):
         q, qd = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n)
         qdd = model.rhs(0.0, np.concatenate([q, qd]))[n:]

@@ -113,8 +113,9 @@ KERNEL_SUPPORT = {
     "lagcomp.kernel_support.impacts": ("contact_impacts",),
     "lagcomp.kernel_support.inputs": ("input_value",),
     "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "kkt_solve_matrix",
-                                              "ldlt_solve", "ldlt_solve_matrix", "lu_factor", "lu_solve",
-                                              "lu_solve_matrix", "lu_substitute"),
+                                              "ldlt_solve", "ldlt_solve_inline", "ldlt_solve_matrix", "lu_factor",
+                                              "lu_solve", "lu_solve_matrix", "lu_substitute"),
+    "lagcomp.kernel_support.scratch": ("stack_array", "stack_empty"),
     "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "contact_event", "friction_mode_after",
                                        "friction_modes_after_jump", "frictional_accelerations",
                                        "pressed_contact_event", "pressed_frictional_accelerations",
@@ -167,9 +168,15 @@ def kernel_support_names(kernels) -> set[str]:
         elif isinstance(solve, DirectionalSolve):
             names.add("PIVOT_TOLERANCE")
         elif isinstance(solve, LinearSolve):
-            names.add("PIVOT_TOLERANCE" if solve.unrolled or kernel.lanes else "ldlt_solve")
+            names |= {"PIVOT_TOLERANCE"} if solve.unrolled or kernel.lanes else {"ldlt_solve_inline", "stack_array"}
+        elif isinstance(solve, SymmetricProduct):
+            names.add("stack_array")
         elif isinstance(solve, JacobianSolve):
-            names.add("PIVOT_TOLERANCE" if solve.n <= JACOBIAN_UNROLL_MAX else "ldlt_solve_matrix")
+            names |= {"PIVOT_TOLERANCE"} if solve.n <= JACOBIAN_UNROLL_MAX else {"ldlt_solve_matrix", "stack_array"}
+            if not solve.given_ydot:
+                names.add("stack_empty")
+        elif isinstance(solve, Delegate):
+            names.add("stack_empty")
         elif isinstance(solve, AugmentedJacobianSolve):
             names.add("kkt_solve_matrix")
     return names
@@ -254,25 +261,27 @@ def _gathered(solve, symmetric: bool) -> list[str]:
     """``mm`` and ``ff`` from the locals of M (lower triangle, or both when `symmetric`) and f.
 
     From tuples: numba compiles a tuple into an array several times faster
-    than one store per element (a 24-link chain's 300 stores took ~3 s).
+    than one store per element (a 24-link chain's 300 stores took ~3 s).  The arrays are in the
+    kernel's stack frame (`lagcomp.kernel_support.scratch.stack_array`): no allocation per call.
     """
     one = "," if solve.n == 1 else ""  # a tuple of one element
-    return _gathered_matrix(solve.n, solve.m, symmetric) + [f"ff = np.array(({', '.join(solve.f)}{one}))"]
+    return _gathered_matrix(solve.n, solve.m, symmetric) + [f"ff = stack_array(({', '.join(solve.f)}{one}))"]
 
 
 def _gathered_matrix(n: int, m, symmetric: bool) -> list[str]:
-    """``mm`` (n, n) from the locals ``m[i][j]`` (i ≥ j) of a symmetric M: lower triangle, or both when `symmetric`."""
+    """``mm`` (n, n) from the locals ``m[i][j]`` (i ≥ j) of a symmetric M: lower triangle, or both when `symmetric`
+    (zeros above the diagonal), in the kernel's stack frame (`lagcomp.kernel_support.scratch`)."""
     entry = lambda i, j: m[i][j] if j <= i else (m[j][i] if symmetric else "0.0")  # noqa: E731
     one = "," if n == 1 else ""
     rows = [f"{INDENT}({', '.join(entry(i, j) for j in range(n))}{one})," for i in range(n)]
-    return ["mm = np.array(("] + rows + ["))"]
+    return ["mm = stack_array(("] + rows + ["))"]
 
 
 def _jacobian_frame(solve: JacobianSolve) -> tuple[list[str], list[str]]:
     """The lines of ``rhs_with_jacobian`` (``rhs_parameter_jacobian``) before its loads (`rhs` into ``_ydot``,
     `out` zeroed and seen flat as ``_jac``) and after its stores."""
     size, width, rows = solve.size, solve.width, solve.size - solve.n
-    before = ["_ydot = ydot" if solve.given_ydot else f"_ydot = np.empty({size})", "_status = rhs(t, y, p, _ydot)",
+    before = ["_ydot = ydot" if solve.given_ydot else f"_ydot = stack_empty({size})", "_status = rhs(t, y, p, _ydot)",
               "if _status:", f"{INDENT}return _status", f"_jac = out.reshape({size * width})", "_jac[:] = 0.0"]
     after = [f"# out[{rows}:] = M⁻¹ out[{rows}:]: one LDLᵀ of M (lower triangle), a substitution per column."]
     if solve.n <= JACOBIAN_UNROLL_MAX:
@@ -412,14 +421,14 @@ def _tangent_columns(solve: DirectionalSolve) -> list[str]:
 
 
 def delegated_call(solve: Delegate) -> str:
-    """The one line of a `Delegate` kernel: the other kernel's status, its scratch output dropped."""
-    return f"return {solve.kernel}(t, y, p, np.empty({solve.scratch}), out)"
+    """The one line of a `Delegate` kernel: the other kernel's status, its scratch output (on the stack) dropped."""
+    return f"return {solve.kernel}(t, y, p, stack_empty({solve.scratch}), out)"
 
 
 def _looped_ldlt(solve: LinearSolve) -> list[str]:
-    """M's lower triangle and f gathered into arrays, then the loop `ldlt_solve` (`lagcomp.kernel_support`)."""
+    """M's lower triangle and f gathered into arrays, then the loop `ldlt_solve_inline` (`lagcomp.kernel_support`)."""
     lines = ["# Solve M x = f by LDLᵀ (loops); a non-positive pivot means M is singular here."]
-    return lines + _gathered(solve, symmetric=False) + [f"return ldlt_solve(mm, ff, out, {solve.offset})"]
+    return lines + _gathered(solve, symmetric=False) + [f"return ldlt_solve_inline(mm, ff, out, {solve.offset})"]
 
 
 def _symmetric_product(solve: SymmetricProduct) -> list[str]:

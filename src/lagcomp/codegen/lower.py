@@ -93,7 +93,7 @@ from lagcomp.mechanics.lagrange import EOM, rest_partials, symengine_ready
 from lagcomp.model.inputs import is_input
 from lagcomp.model.system import t
 
-#: Largest system whose LDLᵀ solve is emitted unrolled; larger ones call a loop (`lagcomp.kernel_support.linear_solvers.ldlt_solve`).
+#: Largest system whose LDLᵀ solve is emitted unrolled; larger ones call a loop (`lagcomp.kernel_support.linear_solvers.ldlt_solve_inline`).
 #: Unrolled, the 10-link chain's rhs costs 462 ns in a compiled loop against 635 ns looped
 #: (`python -m bench --only kernels --cases n_link_pendulum_10` at aed6595 and at d880236, whose
 #: limit was 8), for about 0.4 s more numba compile time of rhs (1.1 s at 12 links).

@@ -40,8 +40,7 @@ from numba import njit
 PIVOT_TOLERANCE = 1e-14
 
 
-@njit(cache=True, error_model="numpy", fastmath=False)
-def ldlt_solve(mm, ff, out, offset):
+def _ldlt_solve(mm, ff, out, offset):
     """Solve mm x = ff (symmetric, lower triangle used) by LDLᵀ in place; x into out[offset:].
 
     On return the strict lower triangle of mm holds L, its diagonal D.
@@ -69,6 +68,17 @@ def ldlt_solve(mm, ff, out, offset):
             x -= mm[k, i] * out[offset + k]
         out[offset + i] = x
     return 0
+
+
+#: `_ldlt_solve` compiled on its own (the impact solver, `lagcomp.kernel_support.impacts`, calls it).
+ldlt_solve = njit(cache=True, error_model="numpy", fastmath=False)(_ldlt_solve)
+
+#: `_ldlt_solve` inlined into the calling kernel at numba's IR level, for the kernels whose solve is a loop
+#: (n > ``UNROLL_MAX``): there the shape of the kernel's stack arrays (`lagcomp.kernel_support.scratch`) is a
+#: constant LLVM sees as the loops' trip counts.  The same operations, bitwise the same results; a 13-link
+#: chain's rhs 632 against 787 ns (CPU time, one process, loaded machine).  Not cached on its own: its code is
+#: compiled, and cached, as part of each kernel that calls it.
+ldlt_solve_inline = njit(error_model="numpy", fastmath=False, inline="always")(_ldlt_solve)
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
