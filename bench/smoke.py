@@ -36,6 +36,7 @@ SCRIPTS = {
     "bench_large": ["--n", "3", "--repeats", "1"],
     "bench_loop": ["--rounds", "1"],
     "bench_lyapunov": ["--repeats", "1"],
+    "bench_multibody": ["4"],
     "bench_radau": ["--rounds", "1"],
     "bench_rattle": ["--steps", "1000", "--repeats", "1"],
     "bench_reset_sweep": ["--side", "4", "--repeats", "1"],
@@ -47,6 +48,7 @@ SCRIPTS = {
     "bench_taylor": ["--quick", "--sections", "1"],
     "bench_taylor_modes": [],
     "bench_taylor_sensitivities": ["--repeats", "1"],
+    "bench_tiers": ["--rounds", "1", "--steps", "1000"],
     "taylor_error_sources": ["--t-end", "10", "--members", "2"],
 }
 
