@@ -330,9 +330,8 @@ def _precompile_model(args) -> int:
     _, model = _model(args)
     print(f"{model.name}: eager module {model.source_path}")
     if args.all:
-        entry = model.on_demand_entry
-        if entry is not None:
-            print(f"{model.name}: on-demand kernels {entry.path}")
+        for kind, entry in model.on_demand_entries.items():
+            print(f"{model.name}: on-demand kernels ({kind}) {entry.path}")
     return 0
 
 
