@@ -18,6 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
 from lagcomp.kernel_support.trig import cos, sin
+from lagcomp.kernel_support.trivial import event_values
 
 
 @njit(cache=True, error_model="numpy")
@@ -211,11 +212,6 @@ def momenta(t, y, p, out):
     out[0] = p_m*qd_x
     out[1] = p_m*qd_y
     out[2] = p_I*qd_theta
-
-
-@njit(cache=True, error_model="numpy")
-def event_values(t, y, p, out):
-    """Event functions g, shape (0,), in order (), into `out`; the drivers locate their zeros."""
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,6 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
 from lagcomp.kernel_support.trig import cos, sin
+from lagcomp.kernel_support.trivial import event_values
 
 
 @njit(cache=True, error_model="numpy")
@@ -398,11 +399,6 @@ def momenta(t, y, p, out):
     out[0] = _c1*_c2 + qd_theta1*(_c0*(p_m2 + (0.25)*p_m1) + (0.08333333333333333)*_c0*p_m1)
     out[1] = (0.3333333333333333)*_c1*p_b**2 + _c2*p_m2*qd_theta1
     out[2] = (0.3333333333333333)*p_m3*qd_theta3*p_c**2
-
-
-@njit(cache=True, error_model="numpy")
-def event_values(t, y, p, out):
-    """Event functions g, shape (0,), in order (), into `out`; the drivers locate their zeros."""
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,6 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
 from lagcomp.kernel_support.trig import cos, sin
+from lagcomp.kernel_support.trivial import event_values
 
 
 @njit(cache=True, error_model="numpy")
@@ -398,11 +399,6 @@ def momenta(t, y, p, out):
     out[2] = qd_theta*(2.0*p_I1 + (0.5)*p_m*p_L**2)
     out[3] = p_I3*qd_phi
     out[4] = p_I3*qd_phi_prime
-
-
-@njit(cache=True, error_model="numpy")
-def event_values(t, y, p, out):
-    """Event functions g, shape (0,), in order (), into `out`; the drivers locate their zeros."""
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
+from lagcomp.kernel_support.trivial import constraint_residual, project
 
 
 @njit(cache=True, error_model="numpy")
@@ -147,18 +148,6 @@ def event_reset(t, y, p, e, out):
 
 #: The events whose reset event_reset applies, the contacts' impacts included (none: the drivers take a library kernel that copies y, which numba has compiled already).
 RESET_EVENTS = ()
-
-
-@njit(cache=True, error_model="numpy")
-def constraint_residual(t, y, p):
-    """Largest constraint residual: always 0.0, this system has no constraints."""
-    return 0.0
-
-
-@njit(cache=True, error_model="numpy")
-def project(t, y, p):
-    """Projection onto the constraints: nothing to do, this system has none."""
-    return 0
 
 
 @njit(cache=True, error_model="numpy")

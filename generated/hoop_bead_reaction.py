@@ -18,6 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
 from lagcomp.kernel_support.trig import cos, sin
+from lagcomp.kernel_support.trivial import event_values
 
 
 @njit(cache=True, error_model="numpy")
@@ -212,11 +213,6 @@ def momenta(t, y, p, out):
     _c0 = p_m*p_R**2
     out[0] = _c0*qd_theta
     out[1] = _c0*qd_phi*sin(q_theta)**2
-
-
-@njit(cache=True, error_model="numpy")
-def event_values(t, y, p, out):
-    """Event functions g, shape (0,), in order (), into `out`; the drivers locate their zeros."""
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,6 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
 from lagcomp.kernel_support.trig import cos, sin
+from lagcomp.kernel_support.trivial import event_values
 
 
 @njit(cache=True, error_model="numpy")
@@ -456,11 +457,6 @@ def momenta(t, y, p, out):
     out[2] = _c1*_c14 + qd_psi*(_c12 + p_I3 + _c11*p_I1 - _c11*_c12 - _c11*p_I3) + _c1*_c13*_c6 + _c1*_c15*_c3
     out[3] = qd_theta*(_c12 + p_I1) + _c15*_c6*_c8 - _c13*_c3*_c8
     out[4] = _c14 + _c2*p_I3
-
-
-@njit(cache=True, error_model="numpy")
-def event_values(t, y, p, out):
-    """Event functions g, shape (0,), in order (), into `out`; the drivers locate their zeros."""
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,6 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
+from lagcomp.kernel_support.trivial import constraint_residual, event_values, project
 
 
 @njit(cache=True, error_model="numpy")
@@ -121,11 +122,6 @@ def momenta(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
-def event_values(t, y, p, out):
-    """Event functions g, shape (0,), in order (), into `out`; the drivers locate their zeros."""
-
-
-@njit(cache=True, error_model="numpy")
 def event_gradients(t, y, p, out):
     """Partials of the event functions (), shape (0, 8), into `out`: row e is event e,
     columns ∂g_e/∂y_j (y = (q, q̇), 4 of them), then ∂g_e/∂t, then ∂g_e/∂p_j for the model's
@@ -148,18 +144,6 @@ def event_reset(t, y, p, e, out):
 
 #: The events whose reset event_reset applies, the contacts' impacts included (none: the drivers take a library kernel that copies y, which numba has compiled already).
 RESET_EVENTS = ()
-
-
-@njit(cache=True, error_model="numpy")
-def constraint_residual(t, y, p):
-    """Largest constraint residual: always 0.0, this system has no constraints."""
-    return 0.0
-
-
-@njit(cache=True, error_model="numpy")
-def project(t, y, p):
-    """Projection onto the constraints: nothing to do, this system has none."""
-    return 0
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,6 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import gram_solve, kkt_solve
 from lagcomp.kernel_support.trig import cos, sin
+from lagcomp.kernel_support.trivial import event_values
 
 
 @njit(cache=True, error_model="numpy")
@@ -300,11 +301,6 @@ def momenta(t, y, p, out):
     out[0] = _c0 - _c1*_c2
     out[1] = _c3 + _c2*_c4
     out[2] = _c3*_c4 + qd_theta*(p_I + p_M*p_a**2) - _c0*_c1
-
-
-@njit(cache=True, error_model="numpy")
-def event_values(t, y, p, out):
-    """Event functions g, shape (0,), in order (), into `out`; the drivers locate their zeros."""
 
 
 @njit(cache=True, error_model="numpy")

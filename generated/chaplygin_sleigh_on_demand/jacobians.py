@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_chaplygin_sleigh_e31ab194e937263e import rhs_and_reactions
+from lagcomp_kernels_chaplygin_sleigh_dd5eb7c00addf197 import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_driven_pendulum_4225e6e9f888b0f8 import rhs
+from lagcomp_kernels_driven_pendulum_e308c73b8fafacec import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_driven_pendulum_support_d450d8f414e67a8c import rhs
+from lagcomp_kernels_driven_pendulum_support_eb4f2ea0c420743b import rhs
 
 
 @njit(cache=True, error_model="numpy")

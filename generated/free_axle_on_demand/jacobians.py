@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_free_axle_5b0c4db811c2b37c import rhs_and_reactions
+from lagcomp_kernels_free_axle_0d14e05d188ea879 import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

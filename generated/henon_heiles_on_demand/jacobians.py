@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
-from lagcomp_kernels_henon_heiles_4f4edd8940ffc10c import rhs
+from lagcomp_kernels_henon_heiles_1fd24edd23700a5c import rhs
 
 
 @njit(cache=True, error_model="numpy")

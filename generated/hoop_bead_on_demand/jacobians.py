@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_hoop_bead_10dcf3f5f52a3e86 import rhs
+from lagcomp_kernels_hoop_bead_ea5b7658192cfa6c import rhs
 
 
 @njit(cache=True, error_model="numpy")

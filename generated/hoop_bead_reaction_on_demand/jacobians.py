@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_hoop_bead_reaction_2a29f99fa6e5670d import rhs_and_reactions
+from lagcomp_kernels_hoop_bead_reaction_c5510423e98edb0f import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_n_link_pendulum_3_13fafecf4eb0d4ee import rhs
+from lagcomp_kernels_n_link_pendulum_3_0511f7b15948d240 import rhs
 
 
 @njit(cache=True, error_model="numpy")

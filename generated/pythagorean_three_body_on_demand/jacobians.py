@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
-from lagcomp_kernels_pythagorean_three_body_e08b1a7351a6ed50 import rhs
+from lagcomp_kernels_pythagorean_three_body_1ca2397f94760393 import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
-from lagcomp_kernels_restricted_three_body_f63842267469ef78 import rhs
+from lagcomp_kernels_restricted_three_body_6d117b113e47932f import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
-from lagcomp_kernels_rope_friction_0db7bb6eabc10ccc import rhs
+from lagcomp_kernels_rope_friction_029f1730d801cf57 import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
-from lagcomp_kernels_rope_f4064351cdc42789 import rhs
+from lagcomp_kernels_rope_cc5155fa7aeaaddb import rhs
 
 
 @njit(cache=True, error_model="numpy")

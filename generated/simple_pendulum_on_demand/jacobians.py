@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_simple_pendulum_0b1ef5cdf24163dd import rhs
+from lagcomp_kernels_simple_pendulum_04746d7004fc72c3 import rhs
 
 
 @njit(cache=True, error_model="numpy")

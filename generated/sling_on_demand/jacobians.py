@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
-from lagcomp_kernels_sling_d230d1fec6abd29c import rhs
+from lagcomp_kernels_sling_1b157ea7c1acb224 import rhs
 
 
 @njit(cache=True, error_model="numpy")

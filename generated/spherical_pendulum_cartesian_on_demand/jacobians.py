@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
-from lagcomp_kernels_spherical_pendulum_cartesian_6f01a7893cfdd665 import rhs_and_reactions
+from lagcomp_kernels_spherical_pendulum_cartesian_cd81af822d3fa516 import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_spherical_pendulum_f200cbd9401e0319 import rhs
+from lagcomp_kernels_spherical_pendulum_3c798c447c6e7c6b import rhs
 
 
 @njit(cache=True, error_model="numpy")

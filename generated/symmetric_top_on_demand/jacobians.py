@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_symmetric_top_f5758c04e9feb143 import rhs
+from lagcomp_kernels_symmetric_top_1f6cd343b63eb2fc import rhs
 
 
 @njit(cache=True, error_model="numpy")

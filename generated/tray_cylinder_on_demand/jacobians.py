@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_tray_cylinder_f6f2c3d93f798ba3 import rhs
+from lagcomp_kernels_tray_cylinder_1b510cb431cd2e07 import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_turn_indicator_e2f7b0338c67a138 import rhs
+from lagcomp_kernels_turn_indicator_6f1f73933a2867aa import rhs
 
 
 @njit(cache=True, error_model="numpy")

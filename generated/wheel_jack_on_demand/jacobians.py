@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_wheel_jack_252450f8ba2bb9ce import rhs
+from lagcomp_kernels_wheel_jack_64b5146326d6273b import rhs
 
 
 @njit(cache=True, error_model="numpy")

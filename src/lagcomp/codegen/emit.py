@@ -71,9 +71,10 @@ def _docstring(text: str) -> str:
 
 
 def _header(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None, kernels=None, title: str = "Kernels",
-            hooks: bool = True) -> str:
+            hooks: bool = True, trivial: set[str] = frozenset()) -> str:
     """The module's docstring, which starts with `title`, and imports: of all of `ir`'s kernels, or of `kernels`
-    (those of the eager module, or of a companion module), and of the constraint `hooks` (`project`)."""
+    (those of the eager module, or of a companion module), of the constraint `hooks` (`project`), and the
+    `trivial` kernels (`trivial_kernels`)."""
     kernels = ir.kernels if kernels is None else kernels
     n = ir.n
     state = ", ".join(ir.coordinate_names + tuple(f"{c}_dot" for c in ir.coordinate_names))
@@ -100,7 +101,7 @@ def _header(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None, kernels=No
         "import math\n\n"
         "import numpy as np\n"
         "from numba import njit\n\n"
-        + support_imports(kernel_support_names(kernels) | hooks
+        + support_imports(kernel_support_names(kernels) | hooks | trivial
                           | (taylor_support_names(taylor) if taylor is not None else set()))
     )
 
@@ -122,6 +123,7 @@ KERNEL_SUPPORT = {
                                        "pressed_contact_event", "pressed_frictional_accelerations",
                                        "slip_most_overloaded"),
     "lagcomp.kernel_support.trig": ("cos", "sin", "vcos", "vsin"),
+    "lagcomp.kernel_support.trivial": ("constraint_residual", "event_values", "project"),
 }
 
 
@@ -584,20 +586,6 @@ def observables(ts, ys, p, energy_out, energy_function_out, momenta_out):
 '''
 
 
-_UNCONSTRAINED_HOOKS = '''
-
-@njit(cache=True, error_model="numpy")
-def constraint_residual(t, y, p):
-    """Largest constraint residual: always 0.0, this system has no constraints."""
-    return 0.0
-
-
-@njit(cache=True, error_model="numpy")
-def project(t, y, p):
-    """Projection onto the constraints: nothing to do, this system has none."""
-    return 0
-'''
-
 _CONSTRAINED_HOOKS = '''
 
 @njit(cache=True, error_model="numpy")
@@ -693,10 +681,21 @@ def _constraint_sizes(ir: ModuleIR) -> str:
 
 
 def _constraint_hooks(ir: ModuleIR) -> str:
-    """`project` and `constraint_residual`, which the drivers call after every step."""
+    """`project` and `constraint_residual`, which the drivers call after every step (for a system without
+    constraints, `lagcomp.kernel_support.trivial`'s, imported: `trivial_kernels`)."""
     if not ir.k:
-        return _UNCONSTRAINED_HOOKS
+        return ""
     return _constraint_sizes(ir) + _CONSTRAINED_HOOKS
+
+
+def trivial_kernels(ir: ModuleIR) -> set[str]:
+    """The kernels of `ir`'s module that it imports from `lagcomp.kernel_support.trivial` instead of defining
+    them, the same for every model (numba compiles them once, not once per model): ``project`` and
+    ``constraint_residual`` without constraints, ``event_values`` without events (a kernel of no stores)."""
+    names = set() if ir.k else {"constraint_residual", "project"}
+    if any(k.name == "event_values" and not k.stores and not k.temps and k.solve is None for k in ir.kernels):
+        names.add("event_values")
+    return names
 
 
 def _input_constants(ir: ModuleIR) -> str:
@@ -719,8 +718,10 @@ def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None,
     ``EQUATIONS``; the modules of a model have it, a module emitted only to test its kernels may leave it out.
     """
     taylor = taylor_decomposition(ir) if taylor is None else taylor
-    parts = [_header(ir, taylor), _input_constants(ir)]
-    parts += [_kernel_source(k) for k in ir.kernels]
+    trivial = trivial_kernels(ir)
+    kernels = [k for k in ir.kernels if k.name not in trivial]
+    parts = [_header(ir, taylor, kernels, trivial=trivial), _input_constants(ir)]
+    parts += [_kernel_source(k) for k in kernels]
     parts.append(_constraint_hooks(ir))
     parts.append(_OBSERVABLES)
     parts.append(taylor_source(taylor))  # taylor_coefficients with its data, or why the module has none
@@ -732,8 +733,9 @@ def emit(ir: ModuleIR, taylor: TaylorProgram | Unsupported | None = None,
 def emit_eager(ir: ModuleIR) -> str:
     """The source of the eager module (`lagcomp.codegen.kinds`): the kernels of `ir` a plain run calls (those
     of no on-demand kind), the constraint hooks and `observables`.  Each kernel's code is `emit`'s."""
-    kernels = [k for k in ir.kernels if not on_demand(k.name)]
-    parts = [_header(ir, None, kernels, _EAGER_TITLE), _input_constants(ir)]
+    trivial = trivial_kernels(ir)
+    kernels = [k for k in ir.kernels if not on_demand(k.name) and k.name not in trivial]
+    parts = [_header(ir, None, kernels, _EAGER_TITLE, trivial=trivial), _input_constants(ir)]
     parts += [_kernel_source(k) for k in kernels]
     return "".join(parts + [_constraint_hooks(ir), _OBSERVABLES])
 
