@@ -320,6 +320,12 @@ def cmd_precompile(args) -> int:
         names = ", ".join(reference.partition(":")[2] for reference in references)
         how = "compiled" if compiled else "loaded from numba's cache"
         print(f"[{i}/{len(modules)}] {module} ({names}): {how} in {time.perf_counter() - before:.2f} s", flush=True)
+    from lagcomp.kernel_support import trivial
+
+    before = time.perf_counter()
+    how = "compiled" if trivial.precompile() else "loaded from numba's cache"
+    print(f"lagcomp.kernel_support.trivial (the hooks of models without constraints or events): {how} in "
+          f"{time.perf_counter() - before:.2f} s", flush=True)
     print(f"{sum(map(len, modules.values()))} library drivers ready in {time.perf_counter() - started:.1f} s")
     return 0
 
