@@ -215,3 +215,39 @@ def test_processes_asking_at_once_build_the_companion_once(tmp_path):
     assert results[0]["jacobian"] == results[1]["jacobian"] and results[0]["path"] == results[1]["path"]
     assert len(list((tmp_path / "modules").glob("*_on_demand_*.py"))) == 1
     assert not list(tmp_path.rglob("*.tmp"))
+
+
+#: A process without sympy (its import fails): load the model, use a kind built earlier, then read a kernel of
+#: a kind never built.
+WITHOUT_SYMPY = textwrap.dedent("""
+    import json, sys
+    sys.modules["sympy"] = None         # `import sympy` raises ImportError from here on
+    import lagcomp as lc
+    from lagcomp.errors import ModelError
+
+    model = lc.load("simple_pendulum", cache_dir=sys.argv[1])
+    jacobian = model.jacobian(0.0, [0.3, 0.0]).tolist()
+    try:
+        model.kernels.taylor_coefficients
+        message = None
+    except ModelError as err:
+        message = str(err)
+    print(json.dumps({"jacobian": jacobian, "message": message}))
+""")
+
+
+def test_a_load_without_sympy_uses_the_kinds_built_and_names_the_feature_of_the_others(tmp_path):
+    """`lagcomp.load` where sympy cannot be imported: the Jacobians' companion, built by an earlier process,
+    serves; the Taylor kind, never built, is refused by a ModelError that names the kernel, its feature and
+    sympy (its equations cannot be read back without it)."""
+    model = lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path)
+    expected = model.jacobian(0.0, [0.3, 0.0]).tolist()
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    done = subprocess.run([sys.executable, "-c", WITHOUT_SYMPY, str(tmp_path)], capture_output=True, text=True,
+                          env=env, timeout=600, check=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["jacobian"] == expected
+    assert result["message"] is not None
+    assert "`taylor_coefficients` (method='taylor')" in result["message"] and "needs sympy" in result["message"]
+    assert "precompile simple_pendulum --all" in result["message"]
