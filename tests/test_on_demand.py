@@ -189,7 +189,8 @@ RACE = textwrap.dedent("""
     while not Path(root, "go").exists():
         time.sleep(0.01)
     jacobian = model.jacobian(0.0, [0.3, 0.0])
-    print(json.dumps({"builds": len(builds), "jacobian": jacobian.tolist(), "path": str(model.on_demand_entry("jacobians").path)}))
+    path = str(model.on_demand_entry("jacobians").path)
+    print(json.dumps({"builds": len(builds), "jacobian": jacobian.tolist(), "path": path}))
 """)
 
 

@@ -92,6 +92,7 @@ import platformdirs
 
 from lagcomp import __version__, numba_cache
 from lagcomp.errors import CacheWarning, CorruptCacheRecordError, OptionError
+from lagcomp.source_digest import code_digest
 
 try:
     import fcntl
@@ -126,27 +127,6 @@ def _sha256(text: str) -> str:
 KERNEL_PRODUCERS = ("model", "mechanics", "ir.py", "codegen", "kernel_support")
 #: The part numba compiles into the kernels' machine code from outside their module file.
 KERNEL_LIBRARY = ("kernel_support",)
-
-
-def hashed_files(parts: tuple[str, ...]) -> list[Path]:
-    """The Python files of the package `parts` (directories or files of lagcomp), in a stable order."""
-    package = Path(__file__).parent
-    files = []
-    for part in parts:
-        root = package / part
-        files += sorted(root.rglob("*.py")) if root.is_dir() else [root]
-    return files
-
-
-@functools.cache
-def code_digest(parts: tuple[str, ...]) -> str:
-    """sha256 over the paths and bytes of `hashed_files(parts)`."""
-    package = Path(__file__).parent
-    digest = hashlib.sha256()
-    for path in hashed_files(parts):
-        digest.update(path.relative_to(package).as_posix().encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
 
 
 @functools.lru_cache(maxsize=1)

@@ -41,8 +41,8 @@ from lagcomp.integrate.files import output_path
 from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, sweep_bytes
 from lagcomp.integrate.memory import check as check_memory
-from lagcomp.integrate.methods import library_function
-from lagcomp.integrate.options import count, method_names, run_options
+from lagcomp.integrate.methods import library_function, method_names
+from lagcomp.integrate.options import count, run_options
 from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 from lagcomp.integrate.stiffness import warn_if_sweep_stiff
 
