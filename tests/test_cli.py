@@ -18,7 +18,7 @@ def test_generated_modules_are_current():
     stale = [name for name, text in sources.items()
              if not (GENERATED / name).exists() or (GENERATED / name).read_text(encoding="utf-8") != text]
     assert not stale, f"stale files in generated/: {stale}; regenerate with `lagcomp generate generated/`"
-    assert sorted(p.name for p in GENERATED.glob("*.py")) == sorted(sources)
+    assert sorted(p.relative_to(GENERATED).as_posix() for p in GENERATED.rglob("*.py")) == sorted(sources)
 
 
 def test_list_names_every_example(capsys):
