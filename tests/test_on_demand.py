@@ -252,3 +252,13 @@ def test_a_load_without_sympy_uses_the_kinds_built_and_names_the_feature_of_the_
     assert result["message"] is not None
     assert "`taylor_coefficients` (method='taylor')" in result["message"] and "needs sympy" in result["message"]
     assert "precompile simple_pendulum --all" in result["message"]
+
+
+def test_a_companion_goes_to_the_cache_of_the_model_that_asked(tmp_path):
+    """The same System compiled into two cache roots in one process (one eager module, by name): the companion
+    a feature of the second model builds is stored in the second root, which a later process reads."""
+    first = lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path / "a")
+    first.jacobian(0.0, [0.3, 0.0])
+    second = lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path / "b")
+    second.jacobian(0.0, [0.3, 0.0])
+    assert len(list((tmp_path / "b" / "modules").glob("*_on_demand_jacobians_*.py"))) == 1

@@ -207,8 +207,8 @@ def build(system, cache: Cache, key: str, eom=None, progress=None) -> tuple[Entr
     return cache.store(key, source, system.name, metadata), eom
 
 
-#: The kernels' namespace of each eager module loaded in this process, by module name: the Models of one cache
-#: entry share it (and the drivers bound to it, and its companion module).
+#: The kernels' namespace of each eager module loaded in this process, by module name and cache root: the Models
+#: of one cache entry share it (and the drivers bound to it, and its companion modules).
 _NAMESPACES: dict = {}
 
 
@@ -217,9 +217,10 @@ def _namespace(module, entry: Entry, name: str, system, eom):
     of the eager `module` and its companion (`lagcomp.companion`), one per module and process."""
     if not entry.metadata.get("on_demand"):
         return module
-    kernels = _NAMESPACES.get(entry.module_name)
+    key = (entry.module_name, entry.path.parent.parent)   # (one module may serve two roots: each its companions)
+    kernels = _NAMESPACES.get(key)
     if kernels is None or kernels.eager_module is not module:
-        kernels = _NAMESPACES[entry.module_name] = ModelKernels(module, Companion(entry, name, system, eom))
+        kernels = _NAMESPACES[key] = ModelKernels(module, Companion(entry, name, system, eom))
     companion = kernels.companion
     if companion.system is None and system is not None:   # (a later compile can build it: loaded models cannot)
         companion.system = system
