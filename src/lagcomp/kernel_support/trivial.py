@@ -28,14 +28,3 @@ def project(t, y, p):
 def event_values(t, y, p, out):
     """Event functions g, shape (0,): this system has no events."""
 
-
-def precompile() -> bool:
-    """Compile the three kernels for the drivers' argument types (or load them from numba's cache), as
-    ``lagcomp precompile`` does for the drivers; whether any was compiled."""
-    import numpy as np
-
-    y = np.zeros(1)
-    project(0.0, y, y)
-    constraint_residual(0.0, y, y)
-    event_values(0.0, y, y, np.empty(0))
-    return any(sum(kernel.stats.cache_misses.values()) for kernel in (project, constraint_residual, event_values))
