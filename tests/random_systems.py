@@ -222,11 +222,21 @@ def lagcomp_functions(mech: Mechanism):
     return eom, accelerations
 
 
-def python_kernels(source: str) -> dict:
-    """The emitted module executed as plain Python (``njit`` a no-op): the real kernels, without numba."""
+def python_kernels(*sources: str) -> dict:
+    """The emitted modules executed as plain Python (``njit`` a no-op) into one namespace, in order: the real
+    kernels, without numba."""
     def njit(*args, **kwargs):
         return args[0] if args and callable(args[0]) else (lambda f: f)
 
     namespace = {"njit": njit, "__name__": "lagcomp_python_kernels"}
-    exec(compile(source.replace("from numba import njit", ""), "<lagcomp kernels>", "exec"), namespace)
+    for source in sources:
+        exec(compile(source.replace("from numba import njit", ""), "<lagcomp kernels>", "exec"), namespace)
     return namespace
+
+
+def python_model_kernels(model) -> dict:
+    """Every kernel of the Lagrange `model` as plain Python (`python_kernels`): its companion modules (every
+    on-demand kind, built here), then its eager module.  The eager module comes last, so that the eager kernels
+    a companion imports by name (numba's, from the loaded eager module) are replaced by the plain-Python ones."""
+    companions = [entry.path.read_text(encoding="utf-8") for entry in model.on_demand_entries.values()]
+    return python_kernels(*companions, model.source_path.read_text(encoding="utf-8"))

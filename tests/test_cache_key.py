@@ -31,7 +31,8 @@ from hypothesis import strategies as st
 
 import lagcomp as lc
 from lagcomp import cache as lagcomp_cache
-from lagcomp.cache import KERNEL_LIBRARY, KERNEL_PRODUCERS, Cache, hashed_files, input_key, source_key
+from lagcomp.cache import KERNEL_LIBRARY, KERNEL_PRODUCERS, Cache, input_key, source_key
+from lagcomp.source_digest import hashed_files
 
 t = lc.t
 x, y, z = lc.coordinates("x y z")

@@ -18,7 +18,7 @@ def test_generated_modules_are_current():
     stale = [name for name, text in sources.items()
              if not (GENERATED / name).exists() or (GENERATED / name).read_text(encoding="utf-8") != text]
     assert not stale, f"stale files in generated/: {stale}; regenerate with `lagcomp generate generated/`"
-    assert sorted(p.name for p in GENERATED.glob("*.py")) == sorted(sources)
+    assert sorted(p.relative_to(GENERATED).as_posix() for p in GENERATED.rglob("*.py")) == sorted(sources)
 
 
 def test_list_names_every_example(capsys):
@@ -174,7 +174,8 @@ def test_method_choices_are_the_registrys(capsys):
         assert all(f"'{name}'" in message for name in METHODS) and "'tsit5'" in message and "'bs3'" in message
 def test_precompile_compiles_every_library_driver_of_the_registry(capsys, monkeypatch):
     """Every `Method.driver` / `Method.sweep` in the library is imported (compiled, or loaded from numba's
-    cache) and reported with its time; a registry entry stands in for a driver family still to move."""
+    cache) and reported with its time, then the hooks models share (`lagcomp.kernel_support.trivial`); a
+    registry entry stands in for a driver family still to move."""
     import dataclasses
 
     from lagcomp.cli import library_drivers
@@ -188,7 +189,8 @@ def test_precompile_compiles_every_library_driver_of_the_registry(capsys, monkey
     modules = list(dict.fromkeys(reference.partition(":")[0] for reference in references))
     assert main(["precompile"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert len(out) == len(modules) + 1 and out[-1].startswith(f"{len(references)} library drivers ready in ")
+    assert len(out) == len(modules) + 2 and out[-1].startswith(f"{len(references)} library drivers ready in ")
+    assert out[-2].startswith("lagcomp.kernel_support.trivial and events.unchanged_state (") and out[-2].endswith(" s")
     for i, (line, module) in enumerate(zip(out, modules), 1):
         assert line.startswith(f"[{i}/{len(modules)}] {module} (") and line.endswith(" s")
         assert "compiled in" in line or "loaded from numba's cache in" in line

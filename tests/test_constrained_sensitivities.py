@@ -31,7 +31,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
-from random_systems import python_kernels, random_mechanism
+from random_systems import python_kernels, python_model_kernels, random_mechanism
 
 #: The kernels' errors allowed against the extrapolated differences of (a), relative to each matrix's largest entry.
 KERNEL_TOLERANCE = 1e-10
@@ -200,7 +200,7 @@ def test_parameters_named_like_the_kernels_locals(cache_dir, names):
                        constraints=[lc.Holonomic("rod", x**2 + z**2 - length**2)], parameters=(mass, gravity, length),
                        name="jacobian_named")
     model = lc.compile(system, cache_dir=cache_dir)
-    module = python_kernels(model.whole_source())
+    module = python_model_kernels(model)
     y, p = np.array([0.6, -0.7, 0.4, 0.3]), np.array([1.5, 9.75, 1.25, *GAINS])
     _check_kernels(module, 3, 1, y, p)
 

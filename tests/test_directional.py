@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
-from random_systems import python_kernels, random_mechanism
+from random_systems import python_kernels, python_model_kernels, random_mechanism
 
 from lagcomp.integrate import sensitivities
 
@@ -270,7 +270,7 @@ def test_parameters_named_like_the_kernels_locals(cache_dir, names, constrained)
         system = lc.System(coordinates=(x, z), T=T, V=mass * gravity * z + (sp.sqrt(x**2 + z**2) - length) ** 2,
                            parameters=(mass, gravity, length), name="directional_named_spring")
     model = lc.compile(system, cache_dir=cache_dir)
-    module = python_kernels(model.whole_source())
+    module = python_model_kernels(model)
     y, p = np.array([0.6, -0.7, 0.4, 0.3]), np.array([1.5, 9.75, 1.25, *(GAINS if constrained else ())])
     f_error, error = _product_errors(module, y, p, np.array([0.3, -1.1, 0.7, 2.0]), np.array([0.5, -0.25, 1.5]), 3)
     assert f_error <= 1e-14 and error <= PRODUCT_TOLERANCE, (f_error, error)

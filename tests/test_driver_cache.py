@@ -5,7 +5,8 @@ model's kernels), integrates it with every library method the model admits (swee
 the method has a library sweep loop), then reports numba's dispatcher statistics of every library
 driver the method registry names (`lagcomp.cli.library_drivers`: `Method.driver` and `Method.sweep`
 of the registry's methods), and of `sweep_rows.fold_rows`.  The second process must find each of
-them in numba's cache, which the first process filled (or an earlier test run did): no miss.
+them in numba's cache, which the first process filled (or an earlier test run did): no miss; nor of the
+hooks every unconstrained, eventless model shares (`lagcomp.kernel_support.trivial`).
 The list follows the registry, so each driver family is covered as it moves into the library.
 """
 
@@ -24,6 +25,7 @@ PROBE = textwrap.dedent(
     from lagcomp import examples
     from lagcomp.cli import library_drivers
     from lagcomp.integrate.methods import METHODS, library_function
+    from lagcomp.kernel_support import trivial
 
     model = lc.compile(examples.get(sys.argv[2]), cache_dir=sys.argv[1])
     model.rhs(0.0, [0.1] * model.state_size)
@@ -41,6 +43,10 @@ PROBE = textwrap.dedent(
         "methods": [m.name for m in methods],
         "driver_misses": {ref: sum(library_function(ref).stats.cache_misses.values()) for ref in references},
         "rhs_misses": sum(model.kernels.rhs.stats.cache_misses.values()),
+        "trivial_misses": {name: sum(getattr(trivial, name).stats.cache_misses.values())
+                           for name in ("project", "constraint_residual", "event_values")},
+        "trivial_bound": all(getattr(model.kernels, name) is getattr(trivial, name)
+                             for name in ("project", "constraint_residual", "event_values")),
     }))
     """
 )
@@ -58,6 +64,8 @@ def test_a_new_model_in_a_new_process_recompiles_no_library_driver(tmp_path):
     second = _probe(tmp_path / "second", "double_pendulum")
     assert second["rhs_misses"] > 0  # a model new to this process and its cache: its kernels were compiled
     assert second["driver_misses"] and not any(second["driver_misses"].values()), second
+    # an unconstrained model without events takes kernel_support.trivial's hooks: compiled once, by the first
+    assert second["trivial_bound"] and not any(second["trivial_misses"].values()), second
 
 
 DAMAGE_PROBE = textwrap.dedent(

@@ -24,7 +24,7 @@ import pytest
 
 import lagcomp
 from lagcomp import numba_cache
-from lagcomp.cache import hashed_files
+from lagcomp.source_digest import hashed_files
 
 #: A driver module of the copy: its code inlines a constant from another library file, as every driver does.
 STALENESS_PROBE_MODULE = textwrap.dedent(

@@ -120,12 +120,12 @@ def _probes() -> tuple[lc.System, ...]:
 
 
 def _sources(model: lc.Model) -> list[str]:
-    """The model's eager module, its companion module (the on-demand kernels, built here) and, when it has a
-    Taylor program, the batched Taylor module (written at sweep time)."""
+    """The model's eager module, its companion modules (the on-demand kernels, every kind, built here) and, when
+    it has a Taylor program, the batched Taylor module (written at sweep time)."""
     source = model.source_path.read_text(encoding="utf-8")
-    companion = model.on_demand_entry.path.read_text(encoding="utf-8")
+    companions = [entry.path.read_text(encoding="utf-8") for entry in model.on_demand_entries.values()]
     program = model._taylor_program
-    return [source, companion] + ([taylor_lanes_module(companion, program, order=3)] if program is not None else [])
+    return [source, *companions] + ([taylor_lanes_module(source, program, order=3)] if program is not None else [])
 
 
 def _user_locals(model: lc.Model) -> set[str]:
@@ -279,11 +279,11 @@ def test_the_parameter_jacobian_under_every_emitted_name(many_names):
     ~670 colliding names, against the closed form of c̈_j = −κ_j c_j/m_j: ∂c̈_j/∂m_j = κ_j c_j/m_j²,
     ∂c̈_j/∂a = −c_j/m_j for a in the group of j, 0 elsewhere.  Run as plain Python: numba would compile a
     (12, ~360) kernel for the same names."""
-    from random_systems import python_kernels
+    from random_systems import python_model_kernels
 
     model, spec = many_names
     params, amplitude, _ = spec.values()
-    module = python_kernels(model.whole_source())
+    module = python_model_kernels(model)
     n, column = len(spec.coordinates), {name: j for j, name in enumerate(model.parameters)}
     c = amplitude + 0.125
     out, expected = np.full((2 * n, len(column)), np.nan), np.zeros((2 * n, len(column)))
@@ -301,11 +301,11 @@ def test_the_directional_and_full_jacobian_kernels_under_every_emitted_name(many
     locals ``_dy<i>``, ``_dp<j>``, ``_g<i>``, ``_part<r>_<j>`` and arguments ``v``, ``w`` are among the names) under
     the ~670 colliding names, against the closed form of c̈_j = −κ_j c_j/m_j, κ_j the sum of group j.  Plain
     Python, as the parameter Jacobian's."""
-    from random_systems import python_kernels
+    from random_systems import python_model_kernels
 
     model, spec = many_names
     params, amplitude, _ = spec.values()
-    module = python_kernels(model.whole_source())
+    module = python_model_kernels(model)
     n, column = len(spec.coordinates), {name: j for j, name in enumerate(model.parameters)}
     N, P = 2 * n, len(column)
     c, cd = amplitude + 0.125, np.linspace(-0.5, 0.5, n)
@@ -463,14 +463,14 @@ def test_parameters_named_like_the_dae_kernels_locals(cache_dir, names):
     Φ = x² + z² − l², Λ = (2x, 2z), M = m I, F = (0, −m g); z = (x, z, vx, vz, wx, wz, λ, μ):
     G = (vx + 2x μ, vz + 2z μ, wx, wz, m wx − 2x λ, m wz + m g − 2z λ, 2x vx + 2z vz, x² + z² − l²).
     """
-    from random_systems import python_kernels
+    from random_systems import python_model_kernels
 
     x, z = lc.coordinates("x z")
     mass, gravity, length = (sp.Symbol(name, positive=True) for name in names)
     system = lc.System(coordinates=(x, z), T=mass * (x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=mass * gravity * z,
                        constraints=[lc.Holonomic("rod", x**2 + z**2 - length**2)], parameters=(mass, gravity, length),
                        name="dae_named")
-    module = python_kernels(lc.compile(system, cache_dir=cache_dir).whole_source())
+    module = python_model_kernels(lc.compile(system, cache_dir=cache_dir))
     M, G_, L = 1.5, 9.75, 1.25
     X, Z, VX, VZ, WX, WZ, LAM, MU = 0.75, -1.0, 0.5, 0.375, -2.25, 0.125, 3.5, -0.0625
     p = np.array([M, G_, L, 0.0, 0.0])

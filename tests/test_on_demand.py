@@ -1,6 +1,7 @@
 """Kernels on demand (`lagcomp.codegen.kinds`, `lagcomp.companion`): a plain run compiles only the eager
-kernels; the first call of a feature that needs more builds the companion module once, and a second process
-reuses it (no lowering, no sympy with `lagcomp.load`, no numba compilation of any kernel)."""
+kernels; the first call of a feature that needs more builds the companion modules of its kinds (those only)
+once, and a second process reuses them (no lowering, no sympy with `lagcomp.load`, no numba compilation of any
+kernel)."""
 
 from __future__ import annotations
 
@@ -11,11 +12,12 @@ import subprocess
 import sys
 import textwrap
 
+import numpy as np
 import pytest
 
 import lagcomp as lc
 from lagcomp import examples
-from lagcomp.codegen.kinds import CALLED, on_demand
+from lagcomp.codegen.kinds import KIND_OF, ON_DEMAND, on_demand
 from lagcomp.errors import ModelError
 
 #: One fresh process: compile (or, with "load", `lagcomp.load`) the example, then run `feature`; report which
@@ -93,30 +95,51 @@ def test_a_plain_run_compiles_only_eager_kernels(tmp_path):
     ("wheel_jack", "geometry", {"geometry"}),
 ])
 def test_a_feature_builds_its_kernels_once_and_a_second_process_reuses_them(tmp_path, name, feature, kernels):
-    """The first process builds the companion module (once: one file) and numba compiles the feature's
-    kernels from it; a second process, from `lagcomp.load`, runs the feature with no lowering, no sympy and no
-    numba compilation of any kernel."""
+    """The first process builds the companion modules of the feature's kinds only (once: one file each) and
+    numba compiles the feature's kernels from them, and nothing else of theirs; a second process, from
+    `lagcomp.load`, runs the feature with no lowering, no sympy and no numba compilation of any kernel."""
     first = _run(name, feature, "compile", tmp_path)
-    (companion,) = _companions(first["modules"])
-    assert len(first["modules"]) == 2
-    from_companion = {function for module, function in first["compiled"] if module.endswith(companion[:-3])}
-    assert kernels <= from_companion, first["compiled"]
-    assert all(on_demand(function) or function in CALLED for function in from_companion)
+    kinds = {KIND_OF[kernel].name for kernel in kernels}
+    companions = _companions(first["modules"])
+    assert sorted(kind for kind in kinds for m in companions if f"_on_demand_{kind}_" in m) == sorted(kinds)
+    assert len(companions) == len(kinds) and len(first["modules"]) == 1 + len(kinds)
+    from_companions = {function for module, function in first["compiled"] if "_on_demand_" in module}
+    assert kernels <= from_companions, first["compiled"]
+    assert all(KIND_OF[function].name in kinds for function in from_companions), from_companions
     second = _run(name, feature, "load", tmp_path)
     assert second["modules"] == first["modules"]
     assert second["compiled"] == [] and not second["sympy"] and not second["lowering"]
 
 
-def test_the_companion_equals_the_bundled_one_after_a_round_trip_of_the_equations(tmp_path):
-    """A later process lowers the companion from the equations the entry keeps (pickled): the same source as
-    from the derivation (the bundled `generated/` file)."""
+def test_the_companions_equal_the_bundled_ones_after_a_round_trip_of_the_equations(tmp_path):
+    """A later process lowers each companion from the equations the entry keeps (pickled): the same source as
+    from the derivation (the bundled `generated/` file), and no file for a kind with nothing to define."""
     from pathlib import Path
 
     model = lc.compile(examples.get("double_pendulum"), cache_dir=tmp_path)
     model.kernels.companion.eom = None       # as in a later process: the kept equations, not this one's
-    source = model.on_demand_entry.path.read_text(encoding="utf-8")
-    bundled = Path(__file__).resolve().parents[1] / "generated" / "double_pendulum_on_demand.py"
-    assert source == bundled.read_text(encoding="utf-8")
+    bundled = Path(__file__).resolve().parents[1] / "generated" / "double_pendulum_on_demand"
+    built = {kind: entry.path.read_text(encoding="utf-8") for kind, entry in model.on_demand_entries.items()}
+    assert set(built) == {kind.name for kind in ON_DEMAND}
+    assert {path.stem for path in bundled.glob("*.py")} == set(built) - {"dae"}   # (no constraints: no DAE)
+    for kind, source in built.items():
+        if kind != "dae":
+            assert source == (bundled / f"{kind}.py").read_text(encoding="utf-8"), kind
+
+
+def test_a_companion_imports_the_eager_kernels_it_calls(tmp_path):
+    """The Jacobians' companion calls the eager module's own ``rhs`` (imported by name, not a copy), and a
+    kind that calls none (the Taylor program) defines no ``rhs``."""
+    model = lc.compile(examples.get("double_pendulum"), cache_dir=tmp_path)
+    companion = model.kernels.companion
+    assert companion.module("jacobians").rhs is model.kernels.eager_module.rhs
+    assert not hasattr(companion.module("taylor"), "rhs")
+    y = np.array([0.3, -0.2, 0.1, 0.4])
+    jacobian, ydot = np.empty((4, 4)), np.empty(4)
+    assert model.kernels.rhs_with_jacobian(0.0, y, model.parameter_vector(), ydot, jacobian) == 0
+    expected = np.empty(4)
+    model.kernels.rhs(0.0, y, model.parameter_vector(), expected)
+    assert np.array_equal(ydot, expected)
 
 
 def test_a_loaded_model_without_kept_equations_names_the_feature(tmp_path):
@@ -166,7 +189,8 @@ RACE = textwrap.dedent("""
     while not Path(root, "go").exists():
         time.sleep(0.01)
     jacobian = model.jacobian(0.0, [0.3, 0.0])
-    print(json.dumps({"builds": len(builds), "jacobian": jacobian.tolist(), "path": str(model.on_demand_entry.path)}))
+    path = str(model.on_demand_entry("jacobians").path)
+    print(json.dumps({"builds": len(builds), "jacobian": jacobian.tolist(), "path": path}))
 """)
 
 
@@ -192,3 +216,49 @@ def test_processes_asking_at_once_build_the_companion_once(tmp_path):
     assert results[0]["jacobian"] == results[1]["jacobian"] and results[0]["path"] == results[1]["path"]
     assert len(list((tmp_path / "modules").glob("*_on_demand_*.py"))) == 1
     assert not list(tmp_path.rglob("*.tmp"))
+
+
+#: A process without sympy (its import fails): load the model, use a kind built earlier, then read a kernel of
+#: a kind never built.
+WITHOUT_SYMPY = textwrap.dedent("""
+    import json, sys
+    sys.modules["sympy"] = None         # `import sympy` raises ImportError from here on
+    import lagcomp as lc
+    from lagcomp.errors import ModelError
+
+    model = lc.load("simple_pendulum", cache_dir=sys.argv[1])
+    jacobian = model.jacobian(0.0, [0.3, 0.0]).tolist()
+    try:
+        model.kernels.taylor_coefficients
+        message = None
+    except ModelError as err:
+        message = str(err)
+    print(json.dumps({"jacobian": jacobian, "message": message}))
+""")
+
+
+def test_a_load_without_sympy_uses_the_kinds_built_and_names_the_feature_of_the_others(tmp_path):
+    """`lagcomp.load` where sympy cannot be imported: the Jacobians' companion, built by an earlier process,
+    serves; the Taylor kind, never built, is refused by a ModelError that names the kernel, its feature and
+    sympy (its equations cannot be read back without it)."""
+    model = lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path)
+    expected = model.jacobian(0.0, [0.3, 0.0]).tolist()
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    done = subprocess.run([sys.executable, "-c", WITHOUT_SYMPY, str(tmp_path)], capture_output=True, text=True,
+                          env=env, timeout=600, check=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["jacobian"] == expected
+    assert result["message"] is not None
+    assert "`taylor_coefficients` (method='taylor')" in result["message"] and "needs sympy" in result["message"]
+    assert "precompile simple_pendulum --all" in result["message"]
+
+
+def test_a_companion_goes_to_the_cache_of_the_model_that_asked(tmp_path):
+    """The same System compiled into two cache roots in one process (one eager module, by name): the companion
+    a feature of the second model builds is stored in the second root, which a later process reads."""
+    first = lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path / "a")
+    first.jacobian(0.0, [0.3, 0.0])
+    second = lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path / "b")
+    second.jacobian(0.0, [0.3, 0.0])
+    assert len(list((tmp_path / "b" / "modules").glob("*_on_demand_jacobians_*.py"))) == 1

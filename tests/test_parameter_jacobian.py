@@ -33,7 +33,7 @@ import pytest
 import sympy as sp
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
-from random_systems import python_kernels, random_mechanism
+from random_systems import python_kernels, python_model_kernels, random_mechanism
 from test_inputs import Kd, Kp, _inverted_pendulum, th
 from test_rhs_jacobian import (
     _differences,
@@ -243,7 +243,7 @@ def test_inputs_read_from_tables_are_not_parameters(cache_dir):
     r = lc.Input("r")
     model = lc.compile(_inverted_pendulum(lc.Input("tau", law=-Kp * (th - r) - Kd * th.diff(t)), "inputs_tracking"),
                        cache_dir=cache_dir)
-    module = python_kernels(model.whole_source())
+    module = python_model_kernels(model)
     assert model.parameters == ("K_d", "K_p", "g", "l", "m") and model.inputs == ("r",)
     times = np.linspace(0.0, 2.0, 9)
     p = model.parameter_vector(inputs={"r": lc.Tabulated(times, 0.25 * times, kind="linear")}, span=(0.0, 2.0))
@@ -278,7 +278,7 @@ def test_kernels_are_values_of_the_drivers_parameter_jacobian_type(compiled, sle
 def test_whipple_bicycle_parameter_jacobian_agrees_with_central_differences(whipple_bicycle):
     """The bicycle's ∂f/∂p against test_rhs_jacobian's extrapolated central differences, taken along p."""
     _, model = whipple_bicycle
-    module = python_kernels(model.whole_source())
+    module = python_model_kernels(model)
     p, y = model.parameter_vector(), np.random.default_rng(3).uniform(-0.3, 0.3, model.state_size)
     out = np.full((y.size, p.size), np.nan)
     assert module["rhs_parameter_jacobian"](0.0, y, p, out) == 0

@@ -31,7 +31,7 @@ import sympy as sp
 import sympy.physics.mechanics as me
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from random_systems import python_kernels, random_mechanism
+from random_systems import python_kernels, python_model_kernels, random_mechanism
 
 import lagcomp as lc
 from lagcomp.model import t
@@ -284,7 +284,7 @@ def test_whipple_bicycle_jacobian_agrees_with_central_differences(whipple_bicycl
     """sympy's test_kane3 bicycle (the session's model; its module run as plain Python): M with the
     differentiated velocity constraints among its rows, the dependent coordinate q4, CRAMER's quotients."""
     _, model = whipple_bicycle
-    module = python_kernels(model.whole_source())
+    module = python_model_kernels(model)
     p, rng = model.parameter_vector(), np.random.default_rng(3)
     y = rng.uniform(-0.3, 0.3, model.state_size)
     out = np.full((y.size, y.size), np.nan)

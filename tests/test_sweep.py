@@ -161,29 +161,35 @@ def test_kapitza_map_finds_the_stability_boundary_of_the_inverted_pendulum(compi
 
 def test_dask_local_cluster_gives_the_local_result_compiling_once_per_worker(double_pendulum):
     """Two worker processes load the module from its source (not pickled numba objects), compile or load it
-    once each, and return exactly the local result; a second sweep reuses the loaded kernels."""
+    once each, and return exactly the local result; a second sweep reuses the loaded kernels.  Radau's Jacobian
+    is on demand: the workers load the eager module, then the Jacobians' companion, which imports ``rhs`` from
+    it by name."""
     distributed = pytest.importorskip("distributed")
     grid = {"theta1": np.linspace(-2, 2, 9), "g": [9.0, 9.81]}
     local = double_pendulum.sweep((0, 3), grid, method="rk4", dt=0.01, output="energy")
     taylor = dict(method="taylor", rtol=1e-8, atol=1e-8, batched=True)    # a module of its own (taylor_lanes)
     local_taylor = double_pendulum.sweep((0, 3), grid, **taylor)
+    radau = dict(method="radau", rtol=1e-8, atol=1e-8)     # an on-demand kernel: the Jacobians' companion module
+    local_radau = double_pendulum.sweep((0, 1), grid, **radau)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) \
             as cluster, distributed.Client(cluster) as client:
         remote = double_pendulum.sweep((0, 3), grid, method="rk4", dt=0.01, output="energy", client=client)
         again = double_pendulum.sweep((0, 3), grid, method="rk4", dt=0.01, output="energy", client=client)
         remote_taylor = double_pendulum.sweep((0, 3), grid, client=client, **taylor)
+        remote_radau = double_pendulum.sweep((0, 1), grid, client=client, **radau)
 
-        def loaded():
+        def loaded():   # the eager modules: one per worker that ran a chunk, its rhs compiled once
             from lagcomp.integrate import sweep as module
             return [len(m.rhs.signatures) for m in module._WORKER_MODULES.values()
-                    if not hasattr(m, "taylor_lanes")]
+                    if hasattr(m, "observables") and not hasattr(m, "taylor_lanes")]
 
         per_worker = client.run(loaded)
     np.testing.assert_array_equal(remote.final, local.final)
     np.testing.assert_array_equal(remote.energy_error, local.energy_error)
     np.testing.assert_array_equal(again.final, local.final)
     np.testing.assert_array_equal(remote_taylor.final, local_taylor.final)
-    assert remote.done.all() and remote_taylor.done.all()
+    np.testing.assert_array_equal(remote_radau.final, local_radau.final)
+    assert remote.done.all() and remote_taylor.done.all() and remote_radau.done.all()
     assert all(counts in ([], [1]) for counts in per_worker.values()) and [1] in per_worker.values()
 
 

@@ -7,9 +7,10 @@ Layout under the cache root::
     modules/__pycache__/...              code is cached beside it (cache=True)
     index/<input key>.json               input key -> module file, its sha256,
                                          and the metadata a Model needs
-    index/<input key>-on-demand.json     the same for the companion module, whose
-                                         kernels are built on first use
-                                         (`lagcomp.codegen.kinds`, `lagcomp.companion`)
+    index/<input key>-on-demand-<kind>.json   the same for a companion module: the
+                                         kernels of one on-demand kind, built on
+                                         first use (`lagcomp.codegen.kinds`,
+                                         `lagcomp.companion`)
     equations/<input key>.pickle         the derived equations, from which a
                                          later process lowers the companion
     names/<system name>.json             the input key last compiled under that
@@ -91,6 +92,7 @@ import platformdirs
 
 from lagcomp import __version__, numba_cache
 from lagcomp.errors import CacheWarning, CorruptCacheRecordError, OptionError
+from lagcomp.source_digest import code_digest
 
 try:
     import fcntl
@@ -127,27 +129,6 @@ KERNEL_PRODUCERS = ("model", "mechanics", "multibody", "ir.py", "codegen", "kern
 KERNEL_LIBRARY = ("kernel_support",)
 
 
-def hashed_files(parts: tuple[str, ...]) -> list[Path]:
-    """The Python files of the package `parts` (directories or files of lagcomp), in a stable order."""
-    package = Path(__file__).parent
-    files = []
-    for part in parts:
-        root = package / part
-        files += sorted(root.rglob("*.py")) if root.is_dir() else [root]
-    return files
-
-
-@functools.cache
-def code_digest(parts: tuple[str, ...]) -> str:
-    """sha256 over the paths and bytes of `hashed_files(parts)`."""
-    package = Path(__file__).parent
-    digest = hashlib.sha256()
-    for path in hashed_files(parts):
-        digest.update(path.relative_to(package).as_posix().encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
-
-
 @functools.lru_cache(maxsize=1)
 def _sympy_version() -> str:
     """sympy's version from its package metadata: a warm start (`lagcomp.load`) never imports sympy."""
@@ -172,12 +153,17 @@ def source_key(source: str) -> str:
 
 @dataclass(frozen=True)
 class Entry:
-    """A usable cache entry: its input key, the module file and the metadata stored with it."""
+    """A usable cache entry: its input key, the module file and the metadata stored with it.
+
+    `import_name` is the name other generated modules import this one by (`import_name`): a companion module
+    imports the eager kernels it calls from its model's eager module under that name.
+    """
 
     key: str
     path: Path
     module_name: str
     metadata: dict
+    import_name: str = ""
 
 
 def _atomic_write(path: Path, text: str | bytes) -> None:
@@ -293,7 +279,8 @@ class Cache:
             except OSError:
                 pass  # a read-only cache: the rebuilt entry goes to the fallback root
             return None
-        return Entry(key=key, path=path, module_name=_module_name(path), metadata=record["metadata"])
+        return Entry(key=key, path=path, module_name=_module_name(path), metadata=record["metadata"],
+                     import_name=_import_name(path, record["sha256"]))
 
     def store(self, key: str, source: str, system_name: str, metadata: dict) -> Entry:
         """Write `source` (unless an intact copy exists) and index it under input `key`.
@@ -317,7 +304,8 @@ class Cache:
         _remove_stale_temporaries(path.parent)
         record = {"module": path.name, "sha256": digest, "metadata": metadata, "versions": _versions()}
         _atomic_write(self._index_file(key), json.dumps(record, indent=1, sort_keys=True))
-        return Entry(key=key, path=path, module_name=_module_name(path), metadata=metadata)
+        return Entry(key=key, path=path, module_name=_module_name(path), metadata=metadata,
+                     import_name=_import_name(path, digest))
 
     def store_equations(self, key: str, data: bytes) -> None:
         """Keep `data` (the pickled equations of the system under input `key`) beside its entry, so that a later
@@ -411,11 +399,31 @@ def _module_name(path: Path) -> str:
     return f"lagcomp_generated_{path.stem}"
 
 
+def import_name(system_name: str, source: str) -> str:
+    """The name under which the generated module of `source` (of the system `system_name`) is imported by other
+    generated modules: ``from <import_name> import rhs`` in a companion module (`lagcomp.codegen.kinds`).
+
+    It depends on the source text alone, not on the numba, Python or kernel_support versions that name the
+    module's file (`source_key`), so that a companion module's text is the same in every cache and in
+    `generated/`, and names the exact eager source it was emitted against.  `load_module` registers every
+    module it loads under this name as well as its own (`Entry.module_name`, which numba's cache files are named
+    after).
+    """
+    return f"lagcomp_kernels_{_file_stem(system_name)}_{_sha256(source)[:16]}"
+
+
+def _import_name(path: Path, digest: str) -> str:
+    """`import_name` of the module file `path` (``<file stem>_<source key>.py``) whose text has sha256 `digest`."""
+    return f"lagcomp_kernels_{path.stem.rsplit('_', 1)[0]}_{digest[:16]}"
+
+
 def load_module(entry: Entry) -> ModuleType:
     """Import the module file of `entry` under its stable, unique name.
 
     The module is registered in `sys.modules` before it runs: numba's cache
-    records the module by name and imports it again on later loads.
+    records the module by name and imports it again on later loads.  It is
+    registered under `Entry.import_name` too, the name companion modules
+    import it by.
     """
     if entry.module_name in sys.modules:
         return sys.modules[entry.module_name]
@@ -427,6 +435,8 @@ def load_module(entry: Entry) -> ModuleType:
     except BaseException:
         del sys.modules[entry.module_name]
         raise
+    if entry.import_name:
+        sys.modules.setdefault(entry.import_name, module)
     removed = numba_cache.heal(module)
     if removed:
         warnings.warn(f"lagcomp found numba's cache files of {entry.path.name} (or of the kernel_support code its "

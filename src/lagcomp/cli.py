@@ -298,6 +298,23 @@ def library_drivers() -> list[str]:
     return list(dict.fromkeys(references))
 
 
+def _precompile_shared_kernels() -> bool:
+    """Compile the library kernels that drivers take in place of a model's own, for the kernel types the drivers
+    take them as (numba caches each signature, return type included, apart): the hooks of models without
+    constraints or events (`lagcomp.kernel_support.trivial`) and the ``event_reset`` of a model whose events
+    reset nothing (`lagcomp.integrate.drivers.events.unchanged_state`).  Whether any was compiled (else loaded
+    from numba's cache)."""
+    from lagcomp.integrate.drivers import kernel_types
+    from lagcomp.integrate.drivers.events import unchanged_state
+    from lagcomp.kernel_support import trivial
+
+    kernels = ((trivial.project, kernel_types.PROJECT), (trivial.constraint_residual, kernel_types.RESIDUAL),
+               (trivial.event_values, kernel_types.EVENTS), (unchanged_state, kernel_types.EVENT_RESET))
+    for kernel, kind in kernels:
+        kernel.compile(kind.signature)
+    return any(sum(kernel.stats.cache_misses.values()) for kernel, _ in kernels)
+
+
 def cmd_precompile(args) -> int:
     """Compile every library driver into numba's cache now, so that no run pays for it later.
 
@@ -324,6 +341,10 @@ def cmd_precompile(args) -> int:
         names = ", ".join(reference.partition(":")[2] for reference in references)
         how = "compiled" if compiled else "loaded from numba's cache"
         print(f"[{i}/{len(modules)}] {module} ({names}): {how} in {time.perf_counter() - before:.2f} s", flush=True)
+    before = time.perf_counter()
+    how = "compiled" if _precompile_shared_kernels() else "loaded from numba's cache"
+    print(f"lagcomp.kernel_support.trivial and events.unchanged_state (kernels models share): {how} in "
+          f"{time.perf_counter() - before:.2f} s", flush=True)
     print(f"{sum(map(len, modules.values()))} library drivers ready in {time.perf_counter() - started:.1f} s")
     return 0
 
@@ -334,9 +355,8 @@ def _precompile_model(args) -> int:
     _, model = _model(args)
     print(f"{model.name}: eager module {model.source_path}")
     if args.all:
-        entry = model.on_demand_entry
-        if entry is not None:
-            print(f"{model.name}: on-demand kernels {entry.path}")
+        for kind, entry in model.on_demand_entries.items():
+            print(f"{model.name}: on-demand kernels ({kind}) {entry.path}")
     for name in args.specialize:
         _specialise(model, name)
     return 0

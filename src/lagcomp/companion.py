@@ -1,18 +1,20 @@
-"""A model's on-demand kernels: its companion module, built the first time a feature asks for one of them.
+"""A model's on-demand kernels: its companion modules, one per kind, each built the first time a feature asks
+for one of its names.
 
 `lagcomp.compile` writes the eager module of a model (what a plain run calls) and keeps the derived
-equations beside its cache entry (``equations/<key>.pickle``).  The kernels of the on-demand kinds
+equations beside its cache entry (``equations/<key>.pickle``).  The kernels of each on-demand kind
 (`lagcomp.codegen.kinds`: Jacobians, tangent kernels, the DAE's, the Hamiltonian form, the Taylor program,
-geometry, the LaTeX equations, ...) are lowered, emitted and stored as one companion module under the key
-``<key>-on-demand`` the first time a feature reads one of their names from ``model.kernels``
+geometry, the LaTeX equations, ...) are lowered, emitted and stored as a companion module of that kind under the
+key ``<key>-on-demand-<kind>`` the first time a feature reads one of their names from ``model.kernels``
 (`ModelKernels`), with the cache's guarantees (atomic writes, a lock per key, stale = miss), and numba
-compiles each of them at its first call, as any kernel.  A second process finds the companion in the cache:
-no sympy, no lowering.
+compiles each of them at its first call, as any kernel: a feature pays for its own kinds only.  A companion
+imports the eager kernels it calls from the eager module, by the name `lagcomp.cache.load_module` registers it
+under (`lagcomp.cache.import_name`).  A second process finds the companion in the cache: no sympy, no lowering.
 
 The equations a companion is lowered from are, in this order: those the compile of this process derived,
 those the cache entry keeps (unpickled: sympy is imported then, nothing is derived), those derived again from
-the System.  A model from `lagcomp.load` whose entry keeps none cannot build its companion: the error names
-the feature that asked (`lagcomp precompile NAME --all` builds every kernel ahead).
+the System.  A model from `lagcomp.load` whose entry keeps none cannot build a companion it has not yet built:
+the error names the feature that asked (`lagcomp precompile NAME --all` builds every kernel ahead).
 """
 
 from __future__ import annotations
@@ -22,20 +24,23 @@ import threading
 import warnings
 
 from lagcomp.cache import Cache, Entry, load_module
-from lagcomp.codegen.kinds import feature, on_demand
+from lagcomp.codegen.kinds import KIND_OF, ON_DEMAND, KernelKind
 from lagcomp.errors import CacheWarning, ModelError
 
-#: What the companion's input key adds to the model's.
+#: What a companion's input key adds to the model's, before the kind's name.
 SUFFIX = "-on-demand"
 
+#: The on-demand kinds by name.
+_KINDS = {kind.name: kind for kind in ON_DEMAND}
 
-def companion_key(key: str) -> str:
-    """The input key of the companion module of the model under input `key`."""
-    return key + SUFFIX
+
+def companion_key(key: str, kind: str) -> str:
+    """The input key of the companion module of `kind` of the model under input `key`."""
+    return f"{key}{SUFFIX}-{kind}"
 
 
 def keep_equations(cache: Cache, key: str, eom) -> None:
-    """Store `eom` beside the entry under `key`, for the companion a later process may build (best effort: a
+    """Store `eom` beside the entry under `key`, for the companions a later process may build (best effort: a
     System holding what pickle cannot write, a Python function say, keeps none; that process derives again)."""
     try:
         data = pickle.dumps(eom, protocol=pickle.HIGHEST_PROTOCOL)
@@ -44,70 +49,75 @@ def keep_equations(cache: Cache, key: str, eom) -> None:
     cache.store_equations(key, data)
 
 
-def build_companion(eom, cache: Cache, key: str, system_name: str) -> Entry:
-    """Lower, emit and store the companion module of `eom` (the model under input `key`)."""
-    from lagcomp.codegen.emit import emit_companion
-    from lagcomp.codegen.latex import lagrange_equations
-    from lagcomp.codegen.lower import lower
-    from lagcomp.codegen.taylor import taylor_decomposition, taylor_program
+def build_companion(eom, cache: Cache, key: str, system_name: str, kind: KernelKind, eager_module: str) -> Entry:
+    """Lower, emit and store the companion module of `kind` of `eom` (the model under input `key`, whose eager
+    module companions import as `eager_module`)."""
+    from lagcomp.codegen.companion_module import companion_source
 
-    ir = lower(eom, "on_demand")
-    taylor = taylor_decomposition(ir)
-    program = taylor_program(taylor)
-    source = emit_companion(ir, taylor, lagrange_equations(eom))
-    operations = {k.name: k.operation_count for k in ir.kernels if on_demand(k.name)}
-    if program:
-        operations["taylor_coefficients"] = program["operations"]
-    return cache.store(companion_key(key), source, f"{system_name}_on_demand",
-                       {"operations": operations, "taylor_program": program})
+    source, metadata = companion_source(eom, kind, eager_module)
+    return cache.store(companion_key(key, kind.name), source, f"{system_name}_on_demand_{kind.name}", metadata)
 
 
 class Companion:
-    """The companion module of one cache entry, loaded (or built) once per process at its first use."""
+    """The companion modules of one cache entry, each loaded (or built) once per process at its first use."""
 
     def __init__(self, entry: Entry, name: str, system=None, eom=None):
         self.root, self.key, self.name = entry.path.parent.parent, entry.key, name
+        self.eager_module = entry.import_name
         self.system, self.eom = system, eom
-        self._entry: Entry | None = None
-        self._module = None
-        self._lock = threading.Lock()
+        self._entries: dict[str, Entry] = {}
+        self._modules: dict = {}
+        self._lock = threading.RLock()
 
-    def entry(self, wanted: str = "the on-demand kernels") -> Entry:
-        """The companion's cache entry, built first if there is none (`wanted`: the name that asked)."""
+    def entry(self, kind: str, wanted: str | None = None) -> Entry:
+        """The cache entry of the companion of `kind`, built first if there is none (`wanted`: the name that
+        asked, for messages)."""
         with self._lock:
-            if self._entry is None:
+            if kind not in self._entries:
                 cache = Cache(self.root)
-                key = companion_key(self.key)
+                key = companion_key(self.key, kind)
                 entry = cache.lookup(key)
                 if entry is None:
                     with cache.lock(key):   # processes that need it at once build it once
-                        entry = cache.lookup(key) or build_companion(self._buildable(wanted, cache), cache,
-                                                                     self.key, self.name)
-                self._entry = entry
-            return self._entry
+                        entry = cache.lookup(key) or build_companion(self._buildable(kind, wanted, cache), cache,
+                                                                     self.key, self.name, _KINDS[kind],
+                                                                     self.eager_module)
+                self._entries[kind] = entry
+            return self._entries[kind]
 
-    def module(self, wanted: str = "the on-demand kernels"):
-        """The companion module, loaded (and built first if needed)."""
-        entry = self.entry(wanted)
-        if self._module is None:
-            self._module = load_module(entry)
-        return self._module
+    def entries(self) -> dict[str, Entry]:
+        """The entry of every on-demand kind, by kind, built first where needed (``lagcomp precompile --all``)."""
+        return {kind.name: self.entry(kind.name) for kind in ON_DEMAND}
 
-    def _buildable(self, wanted: str, cache: Cache):
+    def module(self, kind: str, wanted: str | None = None):
+        """The companion module of `kind`, loaded (and built first if needed)."""
+        entry = self.entry(kind, wanted)
+        with self._lock:
+            if kind not in self._modules:
+                self._modules[kind] = load_module(entry)
+            return self._modules[kind]
+
+    def _buildable(self, kind: str, wanted: str | None, cache: Cache):
         """`_equations`, unless what they describe refuses on-demand kernels (a kinematic tree, for now: its
         ``on_demand_refusal`` says why), which raises a ModelError naming `wanted` and its feature."""
-        eom = self._equations(wanted, cache)
+        eom = self._equations(kind, wanted, cache)
         refusal = getattr(eom, "on_demand_refusal", None)
         if refusal is not None:
-            what = f"`{wanted}` ({feature(wanted)})" if on_demand(wanted) else wanted
-            raise ModelError(refusal(what))
+            raise ModelError(refusal(self._what(kind, wanted)))
         return eom
 
-    def _equations(self, wanted: str, cache: Cache):
-        """The equations to lower the companion from (module docstring), or a ModelError naming the feature."""
+    @staticmethod
+    def _what(kind: str, wanted: str | None) -> str:
+        """How messages name what was asked: the kernel and its feature, else the kind and its feature."""
+        if wanted in KIND_OF:
+            return f"`{wanted}` ({KIND_OF[wanted].feature})"
+        return f"the {kind} kernels ({_KINDS[kind].feature})"
+
+    def _equations(self, kind: str, wanted: str | None, cache: Cache):
+        """The equations to lower a companion from (module docstring), or a ModelError naming the feature."""
         if self.eom is not None:
             return self.eom
-        what = f"`{wanted}` ({feature(wanted)})" if on_demand(wanted) else wanted
+        what = self._what(kind, wanted)
         data = cache.equations(self.key)
         if data is not None:
             try:
@@ -119,7 +129,7 @@ class Companion:
                                  f"installed (lagcomp precompile {self.name} --all).") from err
             except Exception as err:  # noqa: BLE001  (a damaged file is a miss)
                 warnings.warn(f"lagcomp could not read the equations kept for {self.name!r} ({err}); deriving "
-                              "them again.", CacheWarning, stacklevel=4)
+                              "them again.", CacheWarning, stacklevel=5)
         if self.system is None:
             raise ModelError(f"{what} of {self.name!r} is built on first use from the model's equations, and the "
                              f"cache entry lagcomp.load found keeps none: compile the System instead "
@@ -132,8 +142,8 @@ class Companion:
 
 
 class ModelKernels:
-    """A model's kernels as one namespace (``model.kernels``): the eager module's names, and the companion's
-    (`lagcomp.codegen.kinds.ON_DEMAND`), which the first read of one of them loads or builds.
+    """A model's kernels as one namespace (``model.kernels``): the eager module's names, and the companions'
+    (`lagcomp.codegen.kinds.ON_DEMAND`): the first read of a name of a kind loads or builds that kind's module.
 
     A name of neither raises AttributeError without building anything, so ``getattr(kernels, name, default)``
     keeps its meaning for the eager names.
@@ -148,15 +158,15 @@ class ModelKernels:
         try:
             value = getattr(self._module, name)   # (the module's own names too: __name__, __file__, ...)
         except AttributeError:
-            if not on_demand(name):
+            if name not in KIND_OF:
                 raise
-            value = getattr(self._companion.module(name), name)
+            value = getattr(self._companion.module(KIND_OF[name].name, name), name)
         self.__dict__[name] = value     # (later reads find it without this call: the modules never change)
         return value
 
     @property
     def companion(self) -> Companion:
-        """The companion module's loader (`Companion`)."""
+        """The companion modules' loader (`Companion`)."""
         return self._companion
 
     @property

@@ -48,6 +48,8 @@ import warnings
 from pathlib import Path
 from types import ModuleType, SimpleNamespace
 
+from lagcomp.source_digest import code_digest
+
 
 def _cache_files(module: ModuleType):
     """(dispatcher, numba's IndexDataCacheFile) of every cached numba function defined in `module`."""
@@ -174,7 +176,7 @@ def import_library_module(name: str) -> ModuleType:
 
 
 
-#: What numba compiles into the library drivers, as parts of the package (`lagcomp.cache.hashed_files`): the
+#: What numba compiles into the library drivers, as parts of the package (`lagcomp.source_digest.hashed_files`): the
 #: drivers' own modules, the `kernel_support` functions they call, and the modules whose constants they read
 #: when compiled (status codes, the tableaux and the Dormand–Prince coefficients these take).
 #: `tests/test_driver_staleness.py` checks that every lagcomp module a driver imports is in one of them.
@@ -207,7 +209,7 @@ def refresh_stale(package: str, sources: tuple[str, ...]) -> list[str]:
     numba keys a function's cache files on its own source file only (its modification time and size), but its
     machine code holds what it calls and reads from other files: a change there alone (a developer's checkout, an
     upgrade that keeps modification times) would leave the cached code stale.  So the digest of `sources`
-    (`lagcomp.cache.code_digest`, about a millisecond) is kept in a stamp file in the package's numba cache
+    (`lagcomp.source_digest.code_digest`, about a millisecond) is kept in a stamp file in the package's numba cache
     directory (`cache_directory`); on a difference, or with no stamp beside existing cache files, every index and
     data file of the package's modules there is removed, with one `lagcomp.errors.CacheWarning`, and the new stamp
     written: numba compiles those functions again, once.  Nothing is checked where numba would not cache them.
@@ -216,8 +218,6 @@ def refresh_stale(package: str, sources: tuple[str, ...]) -> list[str]:
     directory = cache_directory(root / "__init__.py")
     if directory is None:
         return []
-    from lagcomp.cache import code_digest
-
     stamp = directory / STAMP_NAME
     digest = code_digest(sources)
     try:

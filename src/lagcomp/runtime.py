@@ -222,8 +222,8 @@ def build(system, cache: Cache, key: str, eom=None, progress=None) -> tuple[Entr
     return cache.store(key, source, system.name, metadata), eom
 
 
-#: The kernels' namespace of each eager module loaded in this process, by module name: the Models of one cache
-#: entry share it (and the drivers bound to it, and its companion module).
+#: The kernels' namespace of each eager module loaded in this process, by module name and cache root: the Models
+#: of one cache entry share it (and the drivers bound to it, and its companion modules).
 _NAMESPACES: dict = {}
 
 
@@ -232,9 +232,10 @@ def _namespace(module, entry: Entry, name: str, system, eom):
     of the eager `module` and its companion (`lagcomp.companion`), one per module and process."""
     if not entry.metadata.get("on_demand"):
         return module
-    kernels = _NAMESPACES.get(entry.module_name)
+    key = (entry.module_name, entry.path.parent.parent)   # (one module may serve two roots: each its companions)
+    kernels = _NAMESPACES.get(key)
     if kernels is None or kernels.eager_module is not module:
-        kernels = _NAMESPACES[entry.module_name] = ModelKernels(module, Companion(entry, name, system, eom))
+        kernels = _NAMESPACES[key] = ModelKernels(module, Companion(entry, name, system, eom))
     companion = kernels.companion
     if companion.system is None and system is not None:   # (a later compile can build it: loaded models cannot)
         companion.system = system
@@ -293,10 +294,10 @@ class Model:
         The generated kernels (``rhs``, ``mass_matrix``, ``forcing``, ``energy``,
         ``energy_function``, ``momenta``, ...), numba functions following the
         conventions of `lagcomp.ir`: those a plain run calls from the eager
-        module, the others (`lagcomp.codegen.kinds`) from the companion module,
-        built the first time one of them is read (`lagcomp.companion`).
+        module, the others (`lagcomp.codegen.kinds`) from the companion module
+        of their kind, built the first time one of them is read (`lagcomp.companion`).
     source_path : pathlib.Path
-        The eager module's file (`on_demand_entry` has the companion's).
+        The eager module's file (`on_demand_entry` has the companions').
     cache_key : str
         The cache's input key of the compiled description.
     from_cache : bool
@@ -353,32 +354,28 @@ class Model:
     def operations(self) -> dict:
         """Arithmetic operations per kernel after CSE, the on-demand kernels' (`lagcomp.codegen.kinds`) included:
         reading it builds them if they are not yet."""
-        companion = self.on_demand_entry
-        return {**self._operations, **(companion.metadata["operations"] if companion is not None else {})}
+        operations = dict(self._operations)
+        for entry in self.on_demand_entries.values():
+            operations.update(entry.metadata["operations"])
+        return operations
 
     @property
-    def on_demand_entry(self) -> Entry | None:
-        """The cache entry of the companion module (the on-demand kernels, `lagcomp.companion`), built first if
-        needed; None for a model whose one module holds every kernel (a Kane model)."""
-        return self.kernels.companion.entry() if isinstance(self.kernels, ModelKernels) else None
+    def on_demand_entries(self) -> dict[str, Entry]:
+        """The cache entries of the companion modules (the on-demand kernels, `lagcomp.companion`), by kind, every
+        one built first if needed; none for a model whose one module holds every kernel (a Kane model)."""
+        return self.kernels.companion.entries() if isinstance(self.kernels, ModelKernels) else {}
 
-    def whole_source(self) -> str:
-        """The source of one module with every kernel of the model: the eager module's, then the companion
-        module's (built first if needed; `lagcomp.codegen.kinds`), whose copy of ``rhs`` is the eager one's line
-        for line.  What the modules of batched Taylor sweeps, Taylor sensitivities and Dask workers start from,
-        so that each stands on its own."""
-        source = self.source_path.read_text(encoding="utf-8")
-        companion = self.on_demand_entry
-        if companion is None:
-            return source
-        return source.rstrip("\n") + "\n\n\n" + companion.path.read_text(encoding="utf-8")
+    def on_demand_entry(self, kind: str) -> Entry | None:
+        """The cache entry of the companion module of the on-demand `kind` (`lagcomp.codegen.kinds`), built first
+        if needed; None for a model whose one module holds every kernel (a Kane model)."""
+        return self.kernels.companion.entry(kind) if isinstance(self.kernels, ModelKernels) else None
 
     @property
     def _taylor_program(self) -> dict | None:
-        """The Taylor program (`lagcomp.codegen.taylor.taylor_program`), from the companion module's entry:
-        for batched Taylor sweeps and Taylor sensitivities."""
-        companion = self.on_demand_entry
-        return self._taylor_program_kept if companion is None else companion.metadata["taylor_program"]
+        """The Taylor program (`lagcomp.codegen.taylor.taylor_program`), from the entry of the companion module of
+        the kind "taylor": for batched Taylor sweeps and Taylor sensitivities."""
+        taylor = self.on_demand_entry("taylor")
+        return self._taylor_program_kept if taylor is None else taylor.metadata["taylor_program"]
 
     @property
     def event_names(self) -> tuple[str, ...]:

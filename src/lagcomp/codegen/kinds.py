@@ -1,6 +1,7 @@
 """The kinds of kernels a model has: which `lagcomp.compile` builds, which are built the first time a feature asks.
 
-A model's cache entry holds two generated modules (`lagcomp.cache`, `lagcomp.runtime`):
+A model's cache entry holds its eager module and, once built, a companion module per on-demand kind
+(`lagcomp.cache`, `lagcomp.companion`):
 
 * the **eager module**, written by `lagcomp.compile`: what a plain run with the default method
   (``simulate``, ``sweep``, ``lagcomp run``: dop853, the fixed-step explicit methods, rattle) calls:
@@ -8,15 +9,19 @@ A model's cache entry holds two generated modules (`lagcomp.cache`, `lagcomp.run
   constrained model, the contact kernels of a model with contacts), ``mass_matrix``, ``forcing``,
   the energies and momenta with ``observables``, the events (``event_values``, ``event_gradients``,
   ``event_reset``), the constraint hooks (``project``, ``constraint_residual``, ``reactions_along``);
-* the **companion module** ("on demand"), lowered, emitted, stored and numba-compiled the first time a
-  feature asks for one of the names of `ON_DEMAND` (kinds below), all of them at once, from the
-  equations the entry keeps.  It stands on its own: it holds a copy of the eager kernels its kernels
-  call (`CALLED`), so that numba compiles it from its own file.
+* a **companion module** for each kind of `ON_DEMAND` below, lowered (that kind alone), emitted, stored and
+  numba-compiled the first time a feature asks for one of its names, from the equations the entry keeps
+  (`lagcomp.codegen.companion_module`).  It imports the eager kernels its kernels call (among `CALLED`) from
+  the eager module by name; it copies nothing.
 
 Every name that is not in an on-demand kind is eager: a new kernel kind is eager unless it is added here.
 To add an on-demand kind: build its kernels in `lagcomp.codegen.lower` under the kind's name (its
-`_builders`), list the names its module defines (kernels and module constants) in a `KernelKind` below,
-and say which feature asks for it (the message when it cannot be built).
+`_builders`), and list here, in a `KernelKind`, the names its module defines (kernels and module constants)
+and the feature that asks for it (the message when it cannot be built).  Nothing else: its companion module,
+cache key (``<key>-on-demand-<kind>``), file in `generated/` and loading follow from the registry.  Its kernels
+may call ``rhs`` or ``rhs_and_reactions`` (through a `lagcomp.ir.JacobianSolve` or
+`lagcomp.ir.AugmentedJacobianSolve` frame, `lagcomp.codegen.emit.eager_calls`), not a kernel of another
+on-demand kind.
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class KernelKind:
-    """Kernels built together on demand: the names they define in the companion module, and what asks for them."""
+    """Kernels built together on demand: the names they define in their companion module, and what asks for them."""
 
     name: str
     names: tuple[str, ...]
@@ -58,7 +63,7 @@ ON_DEMAND = (
 KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}
 
 #: The eager kernels that on-demand kernels call (the Jacobians start from ``rhs``, a constrained model's from
-#: ``rhs_and_reactions``): the companion module holds a copy of each, so that it stands on its own.
+#: ``rhs_and_reactions``): a companion module imports them from the eager module.
 CALLED = ("rhs", "rhs_and_reactions")
 
 

@@ -549,9 +549,9 @@ def _directional_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
     return (directional, *tangent_kernels(directional, len(eom.parameters)), *tangents_kernels(eom, mapping, loads))
 
 
-#: What `lower` builds: the kernels of every kind, those of the eager module, or those of the companion module
-#: (`lagcomp.codegen.kinds`; with the motion kernels the companion copies and its Taylor program starts from).
-PARTS = ("all", "eager", "on_demand")
+#: What `lower` builds besides one kind (`lagcomp.codegen.kinds`, and "motion", the kernels ``rhs`` comes with):
+#: the kernels of every kind, or those of the eager module.
+PARTS = ("all", "eager")
 
 
 def lower(eom: EOM, part: str = "all") -> ModuleIR:
@@ -562,16 +562,16 @@ def lower(eom: EOM, part: str = "all") -> ModuleIR:
     constraint residuals and matrix, and the DAE's residual and Jacobian; last the bodies' `geometry`
     (`lagcomp.codegen.geometry`).
 
-    `part` (`PARTS`) chooses which kinds are lowered (`lagcomp.codegen.kinds`): "eager" the kernels of the
-    eager module, "on_demand" those of the companion module and the motion kernels (``rhs`` and what comes
-    with it), "all" every kernel.  A kernel is the same whichever part it is lowered in.
+    `part` chooses which kinds are lowered (`lagcomp.codegen.kinds`): "all" every kernel, "eager" the kernels
+    of the eager module, the name of an on-demand kind (or "motion": ``rhs`` and what the same CSE gives) that
+    kind's kernels alone.  A kernel is the same whichever part it is lowered in.
     """
-    if part not in PARTS:
-        raise ValueError(f"part must be one of {PARTS}, got {part!r}")
-    mapping, loads = symbol_bindings(eom)
     on_demand = {kind.name for kind in ON_DEMAND}
-    wanted = {"all": lambda kind: True, "eager": lambda kind: kind not in on_demand,
-              "on_demand": lambda kind: kind in on_demand or kind == "motion"}[part]
+    if part not in PARTS and part not in on_demand and part != "motion":
+        raise ValueError(f"part must be one of {PARTS}, 'motion' or an on-demand kind {sorted(on_demand)}, "
+                         f"got {part!r}")
+    mapping, loads = symbol_bindings(eom)
+    wanted = {"all": lambda kind: True, "eager": lambda kind: kind not in on_demand}.get(part, part.__eq__)
     kernels = tuple(kernel for kind, build in _builders(eom, mapping, loads) if wanted(kind) for kernel in build())
     system = eom.system
     return ModuleIR(

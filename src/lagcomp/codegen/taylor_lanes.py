@@ -44,7 +44,15 @@ from __future__ import annotations
 
 import math
 
-from lagcomp.codegen.taylor_ops import CONVOLUTIONS, LINEAR, Op, Setup, linear_line, pivot_test, support_names
+from lagcomp.codegen.taylor_ops import (
+    CONVOLUTIONS,
+    LINEAR,
+    Op,
+    Setup,
+    linear_line,
+    pivot_test,
+    support_import_lines,
+)
 
 INDENT = "    "
 
@@ -258,18 +266,6 @@ def unrolled_terms(program: dict, order: int) -> int:
     return convolutions * order * (order + 1) // 2 + (len(operations) - len(calls)) * order
 
 
-def _support_imports(program: dict) -> str:
-    """The import lines of what the lane kernels of `program` call from `lagcomp.kernel_support`."""
-    kinds = {op["kind"] for op in program["body"]}
-    checks = any(entry["kind"] == "check" for entry in program["setup"])
-    names = support_names(kinds, checks, lanes=True)
-    trig = ", ".join(name for name in ("vcos", "vsin") if name in names)
-    lines = [f"from lagcomp.kernel_support.trig import {trig}  # noqa: E402\n"] if trig else []
-    if "PIVOT_TOLERANCE" in names:
-        lines.append("from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE  # noqa: E402\n")
-    return "".join(lines) + "\n"
-
-
 def taylor_lanes_module(module_source: str, program: dict, order: int, lanes: int = LANES) -> str:
     """A module for batched Taylor sweeps at `order`: the model's module and its lane kernels of that order.
 
@@ -285,7 +281,7 @@ def taylor_lanes_module(module_source: str, program: dict, order: int, lanes: in
         + f"\n\n\n# {'-' * 76}\n# Batched Taylor sweeps at order {order}, {lanes} lanes"
         + " (lagcomp.codegen.taylor_lanes)\n\n"
         + "from lagcomp.kernel_support.angles import reduced_angle  # noqa: E402\n"
-        + _support_imports(program)
+        + support_import_lines(program, lanes=True)
         + "#: The order and lane count of the lane kernels below.\n"
         + f"TAYLOR_ORDER = {order}\nTAYLOR_LANES = {lanes}\n\n\n"
         + taylor_lanes_source(program, order, lanes)

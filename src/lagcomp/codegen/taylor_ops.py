@@ -96,6 +96,20 @@ def support_names(kinds, checks: bool, lanes: bool) -> set[str]:
     return names
 
 
+def support_import_lines(program: dict, lanes: bool) -> str:
+    """The import lines of what the kernels written from the stored `program` (`lagcomp.codegen.taylor.
+    taylor_program`) call from `lagcomp.kernel_support` (`support_names`), for code appended to a module whose
+    own imports may lack them (``noqa: E402``: after its code)."""
+    kinds = {op["kind"] for op in program["body"]}
+    checks = any(entry["kind"] == "check" for entry in program["setup"])
+    names = support_names(kinds, checks, lanes)
+    trig = ", ".join(name for name in ("cos", "sin", "vcos", "vsin") if name in names)
+    lines = [f"from lagcomp.kernel_support.trig import {trig}  # noqa: E402\n"] if trig else []
+    if "PIVOT_TOLERANCE" in names:
+        lines.append("from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE  # noqa: E402\n")
+    return "".join(lines) + "\n"
+
+
 def pivot_test(pivot: str, scale: str) -> str:
     """The condition that the pivot (code) is positive relative to M's diagonal entry `scale` (code)."""
     return f"{pivot} > PIVOT_TOLERANCE*abs({scale})"

@@ -69,6 +69,7 @@ from lagcomp.codegen.taylor_kernel_frame import (
 from lagcomp.codegen.taylor_ops import (
     LINEAR,
     Op,
+    support_import_lines,
 )
 
 
@@ -328,8 +329,9 @@ def variational_source(program: dict, columns: int, parameters: tuple[int, ...] 
 
 def variational_module(module_source: str, program: dict, columns: int, parameters: tuple[int, ...] = (),
                        scale: float = 1.0) -> str:
-    """The model's module (whole, so that it stands on its own for numba's cache) and the variational kernel
-    (`variational_source`)."""
+    """The model's eager module (whole, so that the new module stands on its own for numba's cache), what the
+    variational kernel calls from `lagcomp.kernel_support`, and the kernel (`variational_source`)."""
     return (module_source.rstrip("\n") + f"\n\n\n# {'-' * 76}\n# The Taylor program differentiated in forward mode"
-            f", {columns} columns (lagcomp.codegen.taylor_variational)\n"
+            f", {columns} columns (lagcomp.codegen.taylor_variational)\n\n"
+            + support_import_lines(program, lanes=False)
             + variational_source(program, columns, parameters, scale))

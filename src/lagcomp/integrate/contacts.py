@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError, ParameterError
-from lagcomp.integrate.methods import library_function
+from lagcomp.integrate.methods import library_function, method_names
 from lagcomp.kernel_support.impacts import CLOSED_GAP
 
 
@@ -197,7 +197,6 @@ def set_initial_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray, r
             _set_friction_modes(model, method, t0, Y0[row:row + 1], P[row:row + 1], where)
         if candidates.any() and not closing:
             from lagcomp.codegen.taylor import MODE_PROGRAMS_MAX  # (imports sympy: only for this message)
-            from lagcomp.integrate.options import method_names  # (it imports this module)
 
             names = [name for (name, _, _), closed in zip(contacts_of(model), candidates, strict=True) if closed]
             raise OptionError(f"Contact(s) {names}{where(row)} start closed (touching, at rest, pressed shut), which "
@@ -220,7 +219,6 @@ def _set_friction_modes(model, method, t0: float, Y0: np.ndarray, P: np.ndarray,
         return
     if not integrates_modes(model, method) or "event_reset" not in method.kernels:
         from lagcomp.codegen.taylor import MODE_PROGRAMS_MAX  # (imports sympy: only for this message)
-        from lagcomp.integrate.options import method_names  # (it imports this module)
 
         raise OptionError(f"Friction element(s) {[f[0] for f in frictions]} of {model.name!r} stick and slip, which "
                           f"`{method.name}` cannot integrate (its program has no rows for a sticking element: more "

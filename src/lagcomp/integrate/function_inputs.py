@@ -63,6 +63,7 @@ from numba.core.dispatcher import Dispatcher
 
 from lagcomp.errors import OptionError
 from lagcomp.integrate.contacts import mode_slot_count
+from lagcomp.integrate.input_names import inputs_by_name
 
 #: The argument types a function input is compiled for: t, y, p.
 SIGNATURE = (types.float64, types.float64[::1], types.float64[::1])
@@ -120,8 +121,6 @@ def driven(model, inputs, p, method, client=None):
     (`DrivenModel`) — after refusing what cannot take them (`method`, a Dask `client`)."""
     if not model.inputs or not inputs:
         return model
-    from lagcomp.integrate.inputs import inputs_by_name
-
     functions = {name: value for name, value in inputs_by_name(inputs).items() if isinstance(value, Dispatcher)}
     if not functions:
         return model

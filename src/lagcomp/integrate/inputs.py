@@ -28,6 +28,7 @@ import numpy as np
 
 from lagcomp.errors import OptionError
 from lagcomp.integrate import function_inputs
+from lagcomp.integrate.input_names import inputs_by_name
 
 #: The interpolants a `Tabulated` signal may use.
 KINDS = ("cubic", "linear")
@@ -119,21 +120,6 @@ def _signal(value, name: str) -> tuple[np.ndarray, np.ndarray, str]:
     raise OptionError(f"Input `{name}` must be lagcomp.Tabulated(times, values, kind), a pair (times, values), "
                       f"a scipy CubicSpline / PPoly, a number or a numba function {function_inputs.SIGNATURE_TEXT}, "
                       f"got {type(value).__name__}.")
-
-
-def inputs_by_name(inputs: Mapping) -> dict:
-    """`inputs` keyed by name: an input u(t) itself (`lagcomp.Input`) stands for its name, as a Symbol does
-    for a parameter's in `params`."""
-    named = {}
-    for key, value in inputs.items():
-        function = getattr(key, "func", None)
-        name = function.__name__ if getattr(function, "lagcomp_input", False) else key
-        if not isinstance(name, str):
-            raise OptionError(f"`inputs` keys must be input names (or the inputs themselves), got {key!r}.")
-        if name in named:
-            raise OptionError(f"`inputs` gives input `{name}` twice (by name and as the input).")
-        named[name] = value
-    return named
 
 
 def pack_inputs(names, orders, inputs, span, first: int) -> np.ndarray:

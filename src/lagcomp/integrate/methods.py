@@ -229,6 +229,12 @@ def _kernel(kernels, name: str):
     return getattr(kernels, name)
 
 
+def method_names(test) -> str:
+    """The registry's methods that pass `test`, as "a, b or c" (messages name what would work)."""
+    names = [name for name, m in METHODS.items() if test(m)]
+    return ", ".join(names[:-1]) + " or " + names[-1] if len(names) > 1 else names[0]
+
+
 def library_function(reference: str):
     """The function ``"package.module:name"`` names, imported now (numba loads or compiles it then).
 

@@ -34,13 +34,8 @@ from lagcomp.integrate.methods import (
     Method,
     get_method,
     implicit_solver_for,
+    method_names,
 )
-
-
-def method_names(test) -> str:
-    """The registry's methods that pass `test`, as "a, b or c" (messages name what would work)."""
-    names = [name for name, m in METHODS.items() if test(m)]
-    return ", ".join(names[:-1]) + " or " + names[-1] if len(names) > 1 else names[0]
 
 
 def time_span(t_span) -> tuple[float, float]:

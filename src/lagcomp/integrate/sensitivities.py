@@ -460,6 +460,8 @@ def reaction_sensitivities(model, ts: np.ndarray, ys: np.ndarray, p: np.ndarray,
     module's exact ``reaction_jacobian`` (K, N + P).  None for a model without it (no multipliers, or a Kane
     model's auxiliary reactions); a row where the augmented matrix is singular is nan.  `p` is the run's
     parameter vector without the work space."""
+    if not model.k:     # no multipliers (and no companion of the Jacobians to build for nothing)
+        return None
     kernel = getattr(model.kernels, "reaction_jacobian", None)
     if kernel is None:
         return None

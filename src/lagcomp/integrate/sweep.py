@@ -41,8 +41,8 @@ from lagcomp.integrate.files import output_path
 from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, sweep_bytes
 from lagcomp.integrate.memory import check as check_memory
-from lagcomp.integrate.methods import library_function
-from lagcomp.integrate.options import count, method_names, run_options
+from lagcomp.integrate.methods import library_function, method_names
+from lagcomp.integrate.options import count, run_options
 from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 from lagcomp.integrate.stiffness import warn_if_sweep_stiff
 
@@ -556,20 +556,25 @@ def _run_locally(kernels, task: _Task, Y0, P, out, workers, progress) -> np.ndar
 _WORKER_MODULES: dict = {}
 
 
-def _worker_spec(model, names: tuple[str, ...]) -> tuple[str, str, str]:
-    """What a worker needs to load the model's kernels `names`: the emitted source, the system name, a cache root.
+def _worker_spec(model, names: tuple[str, ...]) -> tuple[tuple[tuple[str, str], ...], str]:
+    """What a worker needs to load the model's kernels `names`: the emitted sources with their system names, in
+    the order to load them, and a cache root.
 
-    The eager module's source, or the whole model's (`Model.whole_source`) when one of `names` is an on-demand
-    kernel (`lagcomp.codegen.kinds`).
+    The eager module's source, then the companion modules' of the on-demand kinds among `names`
+    (`lagcomp.codegen.kinds`), which import the eager kernels they call from the eager module by its name (the
+    worker loads it first, under that name: `lagcomp.cache.import_name`).
     """
-    from lagcomp.codegen.kinds import on_demand
+    from lagcomp.codegen.kinds import KIND_OF
 
-    whole = any(map(on_demand, names))
-    source = model.whole_source() if whole else model.source_path.read_text(encoding="utf-8")
-    return source, model.name, str(model.source_path.parent.parent)
+    kinds = sorted({KIND_OF[name].name for name in names if name in KIND_OF})
+    entries = [(kind, model.on_demand_entry(kind)) for kind in kinds] if hasattr(model, "on_demand_entry") else []
+    sources = [(model.source_path.read_text(encoding="utf-8"), model.name)]
+    sources += [(entry.path.read_text(encoding="utf-8"), f"{model.name}_on_demand_{kind}")
+                for kind, entry in entries if entry is not None]   # (a Kane model: one module, every kernel)
+    return tuple(sources), str(model.source_path.parent.parent)
 
 
-def _taylor_lanes_spec(model, rtol: float, atol: float) -> tuple[str, str, str]:
+def _taylor_lanes_spec(model, rtol: float, atol: float) -> tuple[tuple[tuple[str, str], ...], str]:
     """The spec of the module with the batched Taylor kernel of the order these tolerances need.
 
     Written from the model's module and its Taylor program (no sympy), then
@@ -587,27 +592,46 @@ def _taylor_lanes_spec(model, rtol: float, atol: float) -> tuple[str, str, str]:
             f"A batched Taylor sweep of {model.name!r} at order {order} (rtol={rtol:g}, atol={atol:g}) would unroll "
             f"about {terms:,} terms, above lagcomp.codegen.taylor_lanes.TERMS_MAX = {taylor_lanes.TERMS_MAX:,} "
             "(numba's compile time grows with them): loosen the tolerances, or drop `batched`.")
-    source = taylor_lanes.taylor_lanes_module(model.whole_source(), program, order)
-    return source, model.name, str(model.source_path.parent.parent)
+    source = taylor_lanes.taylor_lanes_module(model.source_path.read_text(encoding="utf-8"), program, order)
+    return ((source, model.name),), str(model.source_path.parent.parent)
 
 
-def _worker_kernels(spec: tuple[str, str, str]):
-    """The kernels module of `spec` in this process: from the worker's cache, written there if missing.
+def _worker_kernels(spec: tuple[tuple[tuple[str, str], ...], str]):
+    """The kernels of `spec` in this process (its modules, loaded in order), from the worker's cache, written
+    there if missing: the module, or for several (an eager module and its companions) one namespace of them.
 
-    The module is rebuilt from its source text, never unpickled, so numba
-    compiles it (or loads its own on-disk cache) once per worker process.
+    The modules are rebuilt from their source text, never unpickled, so numba
+    compiles them (or loads its own on-disk cache) once per worker process.
     The client's cache root is used when the worker can write to it (same
     machine or a shared file system), else the worker's default root.
     """
     from lagcomp.cache import Cache, load_module, source_key
 
-    source, system_name, root = spec
-    key = source_key(source)
-    if key not in _WORKER_MODULES:
-        cache = Cache(root) if os.access(root, os.W_OK) else Cache(None)
-        entry = cache.store(f"worker-{key}", source, system_name, {})
-        _WORKER_MODULES[key] = load_module(entry)
-    return _WORKER_MODULES[key]
+    sources, root = spec
+    modules = []
+    for source, system_name in sources:
+        key = source_key(source)
+        if key not in _WORKER_MODULES:
+            cache = Cache(root) if os.access(root, os.W_OK) else Cache(None)
+            entry = cache.store(f"worker-{key}", source, system_name, {})
+            _WORKER_MODULES[key] = load_module(entry)
+        modules.append(_WORKER_MODULES[key])
+    return modules[0] if len(modules) == 1 else _Modules(tuple(modules))
+
+
+class _Modules:
+    """Several modules' names as one namespace: a name is read from the first module that defines it."""
+
+    def __init__(self, modules: tuple):
+        self.modules = modules
+
+    def __getattr__(self, name: str):
+        if name == "modules":   # (before __init__ set it)
+            raise AttributeError(name)
+        for module in self.modules:
+            if hasattr(module, name):
+                return getattr(module, name)
+        raise AttributeError(name)
 
 
 def _remote_chunk(spec, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str, np.ndarray]:

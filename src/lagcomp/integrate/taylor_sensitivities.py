@@ -50,7 +50,7 @@ def variational_module(model, k: int, parameters: tuple[int, ...], scale: float)
     with _LOCK:
         key = (model.kernels, k, parameters, scale)
         if key not in _MODULES:
-            source = source_of(model.whole_source(), model._taylor_program, k, parameters,
+            source = source_of(model.source_path.read_text(encoding="utf-8"), model._taylor_program, k, parameters,
                                scale)
             cache = Cache(str(model.source_path.parent.parent))
             entry = cache.store(f"variational-{source_key(source)}", source, model.name, {})
