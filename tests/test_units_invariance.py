@@ -29,6 +29,8 @@ from hypothesis import strategies as st
 
 import lagcomp as lc
 from lagcomp.analysis import normal_modes, periodic_orbit
+from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
+from lagcomp.errors import LinearizationError
 from lagcomp.examples.constrained import four_bar_closure
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.resting import BOUNCE_HEIGHT, BOUNCE_TIME, ZENO_TIME
@@ -322,3 +324,34 @@ def test_a_periodic_orbit_is_the_same_in_any_units(compiled, length, mass, time)
     np.testing.assert_allclose(back, base.y0, rtol=0, atol=1e-9 * max(1.0, time))
     np.testing.assert_allclose(np.sort_complex(scaled.multipliers), np.sort_complex(base.multipliers), rtol=0,
                                atol=1e-6)
+
+
+# --- equilibria: "F = 0" judged in the problem's own scale -------------------------------------------------------------
+
+def spring_pendulum_params(model, units, changed=None):
+    _, dimensions, *_ = EXAMPLES["stiff_spring_pendulum"]
+    return {k: v * factor(units, dimensions[k]) for k, v in {**model.defaults, **(changed or {})}.items()}
+
+
+@pytest.mark.parametrize("offset", [1e-8, 1e-11])
+@pytest.mark.parametrize("units", [(1e-3, 1.0, 1.0), (1e3, 1.0, 1.0), (1e-3, 1e3, 1e-3), (1e3, 1e-3, 1e3)])
+def test_a_point_off_equilibrium_is_refused_or_accepted_alike_in_any_units(compiled, units, offset):
+    """The spring stretched to r* (1 + δ) instead of the hanging equilibrium r* = l0 + m g/k: a force k r* δ that
+    does not vanish, relative δ to the force the spring carries (k r*).  δ = 1e-8 is no equilibrium and δ = 1e-11 is
+    one (below `RESIDUAL_TOLERANCE` = 1e-10), in any units: normal_modes refuses the first and takes the second.
+    Before the fix the force scale was max |K| max(1, |q|),
+    a metre where lengths are below one, so in millimetres (×1e-3) δ = 1e-8 passed."""
+    model = compiled("stiff_spring_pendulum")
+
+    def verdict(u):
+        params = spring_pendulum_params(model, u)
+        q = [(params["l0"] + params["m"] * params["g"] / params["k"]) * (1 + offset), 0.0]
+        try:
+            normal_modes(model, q, params)
+        except LinearizationError:
+            return False
+        return True
+
+    assert offset > RESIDUAL_TOLERANCE or offset < RESIDUAL_TOLERANCE / 4
+    assert verdict((1.0, 1.0, 1.0)) == (offset < RESIDUAL_TOLERANCE)
+    assert verdict(units) == (offset < RESIDUAL_TOLERANCE)

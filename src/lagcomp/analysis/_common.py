@@ -97,17 +97,34 @@ class RestForces:
         self.model.kernels.mass_matrix(self.t, self._state(q), self.p, out)
         return out
 
-    def force_scale(self, q) -> float:
-        """A size for F near q: the largest |∂F/∂q| times the coordinates' size (at least 1e-300).
+    def force_scale(self, q) -> np.ndarray:
+        """A size for each F_i near q (`force_scale`), shape (n,).
 
         Residuals are judged against it, so that "F = 0" means the same for a
-        bead of 0.1 kg and a jack lifting 4000 N.
+        bead of 0.1 kg and a jack lifting 4000 N, in any units.
         """
         stiffness, _ = self.partials(q)
         return force_scale(stiffness, q)
 
 
-def force_scale(stiffness: np.ndarray, q) -> float:
-    """`RestForces.force_scale` from ∂F/∂q at q: the largest |∂F/∂q| times max(1, max |q|), at least 1e-300."""
-    return max(float(np.max(np.abs(stiffness), initial=0.0)) * max(1.0, float(np.max(np.abs(q), initial=0.0))),
-               1e-300)
+def force_scale(stiffness: np.ndarray, q) -> np.ndarray:
+    """The size of each generalized force near q, Σ_j |∂F_i/∂q_j| |q_j|, shape (n,), in F_i's own units.
+
+    The forces that balance at an equilibrium grow with q away from q = 0 (a spring's k q, a weight's moment
+    m g l sin q), so this is the size of the terms whose difference F_i is, up to rounding.  Each row in its own
+    unit (force per unit of coordinate i), none compared with another's, and no unit of length or force assumed:
+    scaling lengths, masses or times scales F_i and its scale alike.  Where every q_j that F_i depends on is 0
+    the scale is 0 and only an exact zero passes (a force odd in q, such as sin q's, is exactly 0 there).
+    """
+    return np.abs(np.asarray(stiffness, dtype=float)) @ np.abs(np.asarray(q, dtype=float))
+
+
+def force_ratio(force, scale) -> tuple[float, float]:
+    """(max_i |F_i| / scale_i, the scale of that row): how far F is from 0 relative to its own size (0/0 = 0)."""
+    force, scale = np.abs(np.asarray(force, dtype=float)), np.asarray(scale, dtype=float)
+    if force.size == 0:
+        return 0.0, 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratios = np.where(force == 0.0, 0.0, force / scale)
+    worst = int(np.argmax(ratios))
+    return float(ratios[worst]), float(scale[worst])

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg
 
-from lagcomp.analysis._common import RestForces, coordinates_vector, force_scale
+from lagcomp.analysis._common import RestForces, coordinates_vector, force_ratio, force_scale
 from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
 from lagcomp.errors import LinearizationError, ModelError
 
@@ -48,6 +48,8 @@ class Linearization:
         Mass, stiffness, gyroscopic and damping matrices at (q, 0, t).
     residual : float
         max |F(q, 0, t)|: the linearization is about an equilibrium only when it is ~0.
+    force : ndarray, shape (n,)
+        F(q, 0, t), each entry judged against its own scale (`lagcomp.analysis._common.force_scale`).
     coordinates : tuple of str
     params : dict
     """
@@ -59,6 +61,7 @@ class Linearization:
     G: np.ndarray
     D: np.ndarray
     residual: float
+    force: np.ndarray
     coordinates: tuple
     params: dict = field(default_factory=dict)
 
@@ -155,9 +158,10 @@ def linearize(model, q, params: dict | None = None, *, t: float = 0.0) -> Linear
     rest = RestForces(model, params, t)
     F_q, F_v = rest.partials(q)
     C = -F_v
+    force = rest.force(q)
     return Linearization(
         q=q, t=float(t), M=rest.mass_matrix(q), K=-F_q, G=(C - C.T) / 2, D=(C + C.T) / 2,
-        residual=float(np.max(np.abs(rest.force(q)))), coordinates=model.coordinates, params=rest.params,
+        residual=float(np.max(np.abs(force))), force=force, coordinates=model.coordinates, params=rest.params,
     )
 
 
@@ -206,19 +210,19 @@ def normal_modes(model_or_linearization, q=None, params: dict | None = None, *, 
 def _check_equilibrium(lin: Linearization) -> None:
     """Refuse a linearization about a q where F(q, 0, t) ≠ 0.
 
-    "F = 0" is judged as `find_equilibrium` judges it: max |F| against the force scale
-    (`lagcomp.analysis._common.force_scale`: the largest |K₀| times max(1, |q|)), with the same
-    `RESIDUAL_TOLERANCE`, so every equilibrium it reports as found passes.
+    "F = 0" is judged as `find_equilibrium` judges it: each |F_i| against its own force scale
+    (`lagcomp.analysis._common.force_scale`: Σ_j |K₀_ij| |q_j|, in F_i's units), with the same
+    `RESIDUAL_TOLERANCE`, so every equilibrium it reports as found passes, in any units.
     """
-    scale = force_scale(lin.K, lin.q)
-    if not lin.residual <= RESIDUAL_TOLERANCE * scale:
+    ratio, scale = force_ratio(lin.force, force_scale(lin.K, lin.q))
+    if not ratio <= RESIDUAL_TOLERANCE:
         point = ", ".join(f"{name}={value:.6g}" for name, value in zip(lin.coordinates, lin.q))
         raise LinearizationError(
-            f"q = ({point}) is not an equilibrium: max |F(q, 0, t)| = {lin.residual:.3g} is {lin.residual / scale:.3g} "
-            f"times the force scale {scale:.3g} (largest |∂F/∂q| times max(1, |q|)), above the {RESIDUAL_TOLERANCE:g} "
-            "that counts as zero, so the bodies accelerate there and its normal modes would describe no motion. "
-            "Find an equilibrium with lagcomp.analysis.find_equilibrium (or equilibria), or for a steady motion "
-            "use linearize_steady.")
+            f"q = ({point}) is not an equilibrium: max |F(q, 0, t)| = {lin.residual:.3g}; the worst force is "
+            f"{ratio:.3g} times its scale {scale:.3g} (Σ_j |∂F_i/∂q_j| |q_j|, the size of the forces that balance), "
+            f"above the {RESIDUAL_TOLERANCE:g} that counts as zero, so the bodies accelerate there and its normal "
+            "modes would describe no motion. Find an equilibrium with lagcomp.analysis.find_equilibrium (or "
+            "equilibria), or for a steady motion use linearize_steady.")
 
 
 def _quadratic_eigenvalues(lin: Linearization) -> np.ndarray:
