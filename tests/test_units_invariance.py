@@ -355,3 +355,29 @@ def test_a_point_off_equilibrium_is_refused_or_accepted_alike_in_any_units(compi
     assert offset > RESIDUAL_TOLERANCE or offset < RESIDUAL_TOLERANCE / 4
     assert verdict((1.0, 1.0, 1.0)) == (offset < RESIDUAL_TOLERANCE)
     assert verdict(units) == (offset < RESIDUAL_TOLERANCE)
+
+
+@pytest.mark.parametrize("offset", [1e-6, 1e-10])
+@pytest.mark.parametrize("length", [1e-3, 1e3])
+def test_a_point_off_the_constraints_is_refused_or_accepted_alike_in_any_units(compiled, length, offset):
+    """The Cartesian spherical pendulum hanging at z = −l (1 + δ): the rod's constraint x² + y² + z² − l² is off by
+    2 δ l², relative 2 δ to the terms it balances (Σ_j |∂Φ/∂q_j| |q_j| = 2 l²).  δ = 1e-6 is off the constraint
+    manifold (above `CONSISTENT` = 1e-8) and δ = 1e-10 on it, for a rod of any length: linearize_steady refuses
+    the first and takes the second.  Before the fix the scale was max(1, max|Φ_q| max|q|), one square metre for a
+    rod in millimetres, where δ = 1e-6 passed."""
+    from lagcomp.analysis import linearize_steady
+    from lagcomp.analysis._steady_setup import CONSISTENT
+    from lagcomp.errors import InitialConditionError
+
+    model = compiled("spherical_pendulum_cartesian")
+
+    def verdict(scale):
+        params = {**model.defaults, "l": model.defaults["l"] * scale, "g": model.defaults["g"] * scale}
+        try:
+            linearize_steady(model, [0.0, 0.0, -params["l"] * (1 + offset)], params=params)
+        except InitialConditionError:
+            return False
+        return True
+
+    assert offset > CONSISTENT or offset < CONSISTENT / 4
+    assert verdict(1.0) == verdict(length) == (offset < CONSISTENT)

@@ -107,6 +107,12 @@ class RestForces:
         return force_scale(stiffness, q)
 
 
+def row_scale(jacobian: np.ndarray, x) -> np.ndarray:
+    """Σ_j |J_ij| |x_j| for each row i, shape (rows,): the size of the terms a function r(x) of Jacobian J sums at x
+    (each term ∂r_i/∂x_j x_j in r_i's own units), so that r_i against it is the same in any units."""
+    return np.abs(np.asarray(jacobian, dtype=float)) @ np.abs(np.asarray(x, dtype=float))
+
+
 def force_scale(stiffness: np.ndarray, q) -> np.ndarray:
     """The size of each generalized force near q, Σ_j |∂F_i/∂q_j| |q_j|, shape (n,), in F_i's own units.
 
@@ -116,15 +122,16 @@ def force_scale(stiffness: np.ndarray, q) -> np.ndarray:
     scaling lengths, masses or times scales F_i and its scale alike.  Where every q_j that F_i depends on is 0
     the scale is 0 and only an exact zero passes (a force odd in q, such as sin q's, is exactly 0 there).
     """
-    return np.abs(np.asarray(stiffness, dtype=float)) @ np.abs(np.asarray(q, dtype=float))
+    return row_scale(stiffness, q)
 
 
-def force_ratio(force, scale) -> tuple[float, float]:
-    """(max_i |F_i| / scale_i, the scale of that row): how far F is from 0 relative to its own size (0/0 = 0)."""
-    force, scale = np.abs(np.asarray(force, dtype=float)), np.asarray(scale, dtype=float)
-    if force.size == 0:
-        return 0.0, 0.0
+def relative_residual(residual, scale) -> tuple[float, int]:
+    """(max_i |r_i| / scale_i, that row i): how far r is from 0, each entry against its own size, as
+    `force_scale` or `row_scale` give it (0/0 = 0, r_i/0 = inf).  NaN when r is."""
+    residual, scale = np.abs(np.asarray(residual, dtype=float)).ravel(), np.asarray(scale, dtype=float).ravel()
+    if residual.size == 0:
+        return 0.0, 0
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratios = np.where(force == 0.0, 0.0, force / scale)
+        ratios = np.where(residual == 0.0, 0.0, residual / scale)
     worst = int(np.argmax(ratios))
-    return float(ratios[worst]), float(scale[worst])
+    return float(ratios[worst]), worst

@@ -10,12 +10,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import linalg
 
+from lagcomp.analysis._common import relative_residual, row_scale
 from lagcomp.analysis._form_jacobians import evaluator
 from lagcomp.errors import InitialConditionError, LinearizationError, ModelError, ParameterError
 from lagcomp.mechanics.first_order import FirstOrderForm, from_eom
 from lagcomp.names import by_name
 
-#: Largest constraint residual accepted at the point, relative to the constraint Jacobians' scale.
+#: Largest constraint residual accepted at the point, relative to the size of the terms each constraint sums there
+#: (Σ_j |∂Φ_k/∂x_j| |x_j|, `lagcomp.analysis._common.row_scale`: in Φ_k's own units).
 CONSISTENT = 1e-8
 #: Forms derived from Systems, by fingerprint (the derivation is the slow part).
 _FORMS: OrderedDict = OrderedDict()
@@ -147,12 +149,13 @@ def _check_consistent(form, q, u, values) -> None:
                                     np.concatenate([q, u]))):
         if residual.size == 0:
             continue
-        scale = max(1.0, float(np.max(np.abs(jac), initial=0.0)) * float(np.max(np.abs(x), initial=0.0)))
-        worst = int(np.argmax(np.abs(residual[:, 0])))
-        if abs(residual[worst, 0]) > CONSISTENT * scale:
+        scale = row_scale(jac, x)
+        ratio, worst = relative_residual(residual[:, 0], scale)
+        if not ratio <= CONSISTENT:
             raise InitialConditionError(
                 f"The point is off the constraint manifold: {what} constraint {worst} "
-                f"{_row_name(form, what, worst)}has residual {residual[worst, 0]:.3g}. Choose q on Φ(q) = 0, "
+                f"{_row_name(form, what, worst)}has residual {residual[worst, 0]:.3g}, {ratio:.3g} times the size of the terms "
+                f"it sums there (above {CONSISTENT:g}). Choose q on Φ(q) = 0, "
                 "and complete the speeds with lagcomp.analysis.consistent_speeds.")
 
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg
 
-from lagcomp.analysis._common import RestForces, coordinates_vector, force_ratio, force_scale
+from lagcomp.analysis._common import RestForces, coordinates_vector, relative_residual, force_scale
 from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
 from lagcomp.errors import LinearizationError, ModelError
 
@@ -214,7 +214,9 @@ def _check_equilibrium(lin: Linearization) -> None:
     (`lagcomp.analysis._common.force_scale`: Σ_j |K₀_ij| |q_j|, in F_i's units), with the same
     `RESIDUAL_TOLERANCE`, so every equilibrium it reports as found passes, in any units.
     """
-    ratio, scale = force_ratio(lin.force, force_scale(lin.K, lin.q))
+    scales = force_scale(lin.K, lin.q)
+    ratio, worst = relative_residual(lin.force, scales)
+    scale = scales[worst]
     if not ratio <= RESIDUAL_TOLERANCE:
         point = ", ".join(f"{name}={value:.6g}" for name, value in zip(lin.coordinates, lin.q))
         raise LinearizationError(

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
-from lagcomp.analysis._common import (RestForces, coordinates_vector, explicit_time, force_ratio, symbolic_system,
+from lagcomp.analysis._common import (RestForces, coordinates_vector, explicit_time, relative_residual, symbolic_system,
                                       unconstrained)
 from lagcomp.errors import OptionError
 
@@ -108,13 +108,13 @@ def _equilibrium(rest: RestForces, q: np.ndarray, message: str, time_dependent: 
     model = rest.model
     force = rest.force(q)
     scale = rest.force_scale(q)
-    ratio, worst_scale = force_ratio(force, scale)
+    ratio, worst = relative_residual(force, scale)
     success = bool(np.all(np.isfinite(q)) and ratio <= RESIDUAL_TOLERANCE)
     steady = success
     if success and time_dependent:
-        later = max(force_ratio(rest.force(q, rest.t + dt), scale)[0] for dt in STEADY_CHECK_OFFSETS)
+        later = max(relative_residual(rest.force(q, rest.t + dt), scale)[0] for dt in STEADY_CHECK_OFFSETS)
         steady = later <= 1e3 * RESIDUAL_TOLERANCE
-    return Equilibrium(q=q, t=rest.t, residual=float(np.max(np.abs(force))), scale=worst_scale, success=success,
+    return Equilibrium(q=q, t=rest.t, residual=float(np.max(np.abs(force))), scale=float(scale[worst]), success=success,
                        steady=steady, message=message, coordinates=model.coordinates, params=rest.params)
 
 
