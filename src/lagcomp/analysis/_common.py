@@ -107,6 +107,16 @@ class RestForces:
         return force_scale(stiffness, q)
 
 
+def force_scale(self, q) -> np.ndarray:
+        """A size for each F_i near q (`force_scale`), shape (n,).
+
+        Residuals are judged against it, so that "F = 0" means the same for a
+        bead of 0.1 kg and a jack lifting 4000 N, in any units.
+        """
+        stiffness, _ = self.partials(q)
+        return force_scale(stiffness, q)
+
+
 def row_scale(jacobian: np.ndarray, x) -> np.ndarray:
     """Σ_j |J_ij| |x_j| for each row i, shape (rows,): the size of the terms a function r(x) of Jacobian J sums at x
     (each term ∂r_i/∂x_j x_j in r_i's own units), so that r_i against it is the same in any units."""
@@ -122,12 +132,12 @@ def force_scale(stiffness: np.ndarray, q) -> np.ndarray:
     scaling lengths, masses or times scales F_i and its scale alike.  Where every q_j that F_i depends on is 0
     the scale is 0 and only an exact zero passes (a force odd in q, such as sin q's, is exactly 0 there).
     """
-    return row_scale(stiffness, q)
+    return np.abs(np.asarray(stiffness, dtype=float)) @ np.abs(np.asarray(q, dtype=float))
 
 
 def relative_residual(residual, scale) -> tuple[float, int]:
     """(max_i |r_i| / scale_i, that row i): how far r is from 0, each entry against its own size, as
-    `force_scale` or `row_scale` give it (0/0 = 0, r_i/0 = inf).  NaN when r is."""
+    as `force_scale` gives it (0/0 = 0, r_i/0 = inf).  NaN when r is."""
     residual, scale = np.abs(np.asarray(residual, dtype=float)).ravel(), np.asarray(scale, dtype=float).ravel()
     if residual.size == 0:
         return 0.0, 0

@@ -10,14 +10,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import linalg
 
-from lagcomp.analysis._common import relative_residual, row_scale
+from lagcomp.analysis._common import relative_residual
 from lagcomp.analysis._form_jacobians import evaluator
 from lagcomp.errors import InitialConditionError, LinearizationError, ModelError, ParameterError
 from lagcomp.mechanics.first_order import FirstOrderForm, from_eom
 from lagcomp.names import by_name
 
 #: Largest constraint residual accepted at the point, relative to the size of the terms each constraint sums there
-#: (Σ_j |∂Φ_k/∂x_j| |x_j|, `lagcomp.analysis._common.row_scale`: in Φ_k's own units).
+#: (`lagcomp.analysis._form_jacobians.magnitude`: in Φ_k's own units, so the same in any units).
 CONSISTENT = 1e-8
 #: Forms derived from Systems, by fingerprint (the derivation is the slow part).
 _FORMS: OrderedDict = OrderedDict()
@@ -132,7 +132,7 @@ def _evaluated(system, q, u, params, t: float):
 def form_point(system, q, u, params, t: float) -> FormPoint:
     """Evaluate the form at (q, u): constraints checked, accelerations and multipliers from the KKT system."""
     form, q, u, p, named, values = _evaluated(system, q, u, params, t)
-    _check_consistent(form, q, u, values)
+    _check_consistent(form, values)
     k = form.C.rows
     kkt = np.block([[values["M"], -values["C"].T], [values["C"], np.zeros((k, k))]])
     try:
@@ -143,14 +143,12 @@ def form_point(system, q, u, params, t: float) -> FormPoint:
     return FormPoint(form, q, u, p, float(t), named, values, solution[: form.n_u], solution[form.n_u:], kkt)
 
 
-def _check_consistent(form, q, u, values) -> None:
-    for what, residual, jac, x in (("configuration", values["Phi"], values["Phi_q"], q),
-                                   ("velocity", values["Psi"], np.hstack([values["Psi_q"], values["Psi_u"]]),
-                                    np.concatenate([q, u]))):
+def _check_consistent(form, values) -> None:
+    for what, residual, scale in (("configuration", values["Phi"], values["Phi_size"]),
+                                  ("velocity", values["Psi"], values["Psi_size"])):
         if residual.size == 0:
             continue
-        scale = row_scale(jac, x)
-        ratio, worst = relative_residual(residual[:, 0], scale)
+        ratio, worst = relative_residual(residual[:, 0], scale[:, 0])
         if not ratio <= CONSISTENT:
             raise InitialConditionError(
                 f"The point is off the constraint manifold: {what} constraint {worst} "
