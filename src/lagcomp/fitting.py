@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError, ParameterError, SingularMassMatrixError
+from lagcomp.names import by_name
 
 
 @dataclass(frozen=True)
@@ -268,6 +269,7 @@ def _unknowns(model, params0, initial: bool) -> tuple[tuple[str, ...], np.ndarra
         raise OptionError("`params0` must be a dict of the parameters to fit and their starting values, "
                           f"e.g. {{{model.parameters[0]!r}: 1.0}}, got {params0!r}." if model.parameters else
                           f"{model.name!r} has no parameters to fit.")
+    params0 = by_name(params0, "params0", model.parameters)
     unknown = [name for name in params0 if name not in model.parameters]
     if unknown:
         raise OptionError(f"`params0` names unknown parameters {unknown}; {model.name!r} has {list(model.parameters)}.")

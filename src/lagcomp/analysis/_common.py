@@ -97,30 +97,31 @@ class RestForces:
         self.model.kernels.mass_matrix(self.t, self._state(q), self.p, out)
         return out
 
-    def force_scale(self, q) -> np.ndarray:
-        """A size for each F_i near q (`force_scale`), shape (n,).
+    def force_scale(self, q, force=None, tolerance: float = 0.0) -> np.ndarray:
+        """A size for each F_i near q, shape (n,): `force_scale` (the terms that grow with q), and where `force`
+        is not within `tolerance` of 0 against that, also Σ_m |∂F_i/∂p_m| |p_m|, the terms the parameters carry
+        (a weight m g balanced by a spring's pre-load k δ at q = 0, where the first is 0).
 
         Residuals are judged against it, so that "F = 0" means the same for a
-        bead of 0.1 kg and a jack lifting 4000 N, in any units.
+        bead of 0.1 kg and a jack lifting 4000 N, in any units.  The second part
+        needs the parameter Jacobian kernel (built on first use), hence only when
+        the first does not settle it.
         """
         stiffness, _ = self.partials(q)
-        return force_scale(stiffness, q)
+        scale = force_scale(stiffness, q)
+        if force is not None and not relative_residual(force, scale)[0] <= tolerance:
+            scale = scale + self.parameter_scale(q)
+        return scale
 
-
-def force_scale(self, q) -> np.ndarray:
-        """A size for each F_i near q (`force_scale`), shape (n,).
-
-        Residuals are judged against it, so that "F = 0" means the same for a
-        bead of 0.1 kg and a jack lifting 4000 N, in any units.
-        """
-        stiffness, _ = self.partials(q)
-        return force_scale(stiffness, q)
-
-
-def row_scale(jacobian: np.ndarray, x) -> np.ndarray:
-    """Σ_j |J_ij| |x_j| for each row i, shape (rows,): the size of the terms a function r(x) of Jacobian J sums at x
-    (each term ∂r_i/∂x_j x_j in r_i's own units), so that r_i against it is the same in any units."""
-    return np.abs(np.asarray(jacobian, dtype=float)) @ np.abs(np.asarray(x, dtype=float))
+    def parameter_scale(self, q) -> np.ndarray:
+        """Σ_m |∂F_i/∂p_m| |p_m| at (q, 0, t), shape (n,) (0 where the kernel fails): ∂F/∂p = M ∂q̈/∂p from the
+        ``rhs_parameter_jacobian`` kernel, exact where q̈ = 0 (an equilibrium) and a size elsewhere."""
+        n, count = self.model.n, len(self.model.parameters)
+        out = np.empty((2 * n, count))
+        y = np.concatenate([np.asarray(q, dtype=float), np.zeros(n)])
+        if self.model.kernels.rhs_parameter_jacobian(self.t, y, self.p, out) != 0:
+            return np.zeros(n)
+        return np.abs(self.mass_matrix(q) @ out[n:]) @ np.abs(self.p[:count])
 
 
 def force_scale(stiffness: np.ndarray, q) -> np.ndarray:

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg
 
-from lagcomp.analysis._common import RestForces, coordinates_vector, relative_residual, force_scale
+from lagcomp.analysis._common import RestForces, coordinates_vector, relative_residual
 from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
 from lagcomp.errors import LinearizationError, ModelError
 
@@ -49,7 +49,10 @@ class Linearization:
     residual : float
         max |F(q, 0, t)|: the linearization is about an equilibrium only when it is ~0.
     force : ndarray, shape (n,)
-        F(q, 0, t), each entry judged against its own scale (`lagcomp.analysis._common.force_scale`).
+        F(q, 0, t).
+    force_scale : ndarray, shape (n,)
+        The size of the terms each F_i balances (`lagcomp.analysis._common.RestForces.force_scale`), what
+        "F = 0" is judged against.
     coordinates : tuple of str
     params : dict
     """
@@ -62,6 +65,7 @@ class Linearization:
     D: np.ndarray
     residual: float
     force: np.ndarray
+    force_scale: np.ndarray
     coordinates: tuple
     params: dict = field(default_factory=dict)
 
@@ -161,7 +165,8 @@ def linearize(model, q, params: dict | None = None, *, t: float = 0.0) -> Linear
     force = rest.force(q)
     return Linearization(
         q=q, t=float(t), M=rest.mass_matrix(q), K=-F_q, G=(C - C.T) / 2, D=(C + C.T) / 2,
-        residual=float(np.max(np.abs(force))), force=force, coordinates=model.coordinates, params=rest.params,
+        residual=float(np.max(np.abs(force))), force=force, force_scale=rest.force_scale(q, force, RESIDUAL_TOLERANCE),
+        coordinates=model.coordinates, params=rest.params,
     )
 
 
@@ -211,17 +216,17 @@ def _check_equilibrium(lin: Linearization) -> None:
     """Refuse a linearization about a q where F(q, 0, t) ≠ 0.
 
     "F = 0" is judged as `find_equilibrium` judges it: each |F_i| against its own force scale
-    (`lagcomp.analysis._common.force_scale`: Σ_j |K₀_ij| |q_j|, in F_i's units), with the same
-    `RESIDUAL_TOLERANCE`, so every equilibrium it reports as found passes, in any units.
+    (`RestForces.force_scale`: Σ_j |K₀_ij| |q_j|, and the parameters' terms where needed, in F_i's units), with
+    the same `RESIDUAL_TOLERANCE`, so every equilibrium it reports as found passes, in any units.
     """
-    scales = force_scale(lin.K, lin.q)
-    ratio, worst = relative_residual(lin.force, scales)
-    scale = scales[worst]
+    ratio, worst = relative_residual(lin.force, lin.force_scale)
+    scale = lin.force_scale[worst]
     if not ratio <= RESIDUAL_TOLERANCE:
         point = ", ".join(f"{name}={value:.6g}" for name, value in zip(lin.coordinates, lin.q))
         raise LinearizationError(
             f"q = ({point}) is not an equilibrium: max |F(q, 0, t)| = {lin.residual:.3g}; the worst force is "
-            f"{ratio:.3g} times its scale {scale:.3g} (Σ_j |∂F_i/∂q_j| |q_j|, the size of the forces that balance), "
+            f"{ratio:.3g} times its scale {scale:.3g} (Σ_j |∂F_i/∂q_j| |q_j| + Σ_m |∂F_i/∂p_m| |p_m|, the size of the "
+            "forces that balance), "
             f"above the {RESIDUAL_TOLERANCE:g} that counts as zero, so the bodies accelerate there and its normal "
             "modes would describe no motion. Find an equilibrium with lagcomp.analysis.find_equilibrium (or "
             "equilibria), or for a steady motion use linearize_steady.")

@@ -53,7 +53,8 @@ class Equilibrium:
         max |F(q*, 0, t)|.
     scale : float
         The force scale of the coordinate whose F_i is largest against its own scale
-        (`lagcomp.analysis._common.force_scale`: Σ_j |∂F_i/∂q_j| |q*_j|, in F_i's units).
+        (`RestForces.force_scale`: Σ_j |∂F_i/∂q_j| |q*_j|, and the parameters' terms where that is not enough, in
+        F_i's units).
     success : bool
         Whether every |F_i| is below `RESIDUAL_TOLERANCE` × its scale.
     steady : bool
@@ -107,7 +108,7 @@ def _newton_polish(rest: RestForces, q: np.ndarray, iterations: int = 6) -> np.n
 def _equilibrium(rest: RestForces, q: np.ndarray, message: str, time_dependent: bool) -> Equilibrium:
     model = rest.model
     force = rest.force(q)
-    scale = rest.force_scale(q)
+    scale = rest.force_scale(q, force, RESIDUAL_TOLERANCE)
     ratio, worst = relative_residual(force, scale)
     success = bool(np.all(np.isfinite(q)) and ratio <= RESIDUAL_TOLERANCE)
     steady = success
