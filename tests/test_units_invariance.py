@@ -55,6 +55,14 @@ EXAMPLES = {
                          ("dop853", "radau", "rk4"), 0.5, 1e-4),
     "spherical_pendulum_cartesian": ((LENGTH, LENGTH, LENGTH), {"m": MASS, "l": LENGTH, "g": ACCELERATION},
                                      ("dop853", "radau", "rk4"), 1.0, 1e-3),
+    "n_link_pendulum": ((ANGLE, ANGLE, ANGLE), {"m1": MASS, "m2": MASS, "m3": MASS, "l1": LENGTH, "l2": LENGTH,
+                                                 "l3": LENGTH, "g": ACCELERATION},
+                        ("dop853", "dopri5", "radau", "taylor", "rk4"), 1.0, 1e-3),
+    "huygens": ((ANGLE,), {"m": MASS, "R": LENGTH, "g": ACCELERATION}, ("dop853", "radau", "taylor", "rk4"), 2.0,
+                1e-3),
+    "driven_pendulum": ((ANGLE,), {"m": MASS, "l": LENGTH, "g": ACCELERATION, "A": LENGTH, "Omega": (0, 0, -1)},
+                        ("dop853", "radau", "rk4"), 0.2, 1e-4),
+    "sling": ((LENGTH,), {"m": MASS, "omega": (0, 0, -1)}, ("dop853", "radau", "taylor", "rk4"), 1.0, 1e-3),
 }
 CASES = [(name, method) for name, (*_, methods, _, _) in EXAMPLES.items() for method in methods]
 RTOL = 1e-9
@@ -205,6 +213,64 @@ def test_the_bounces_and_the_rest_are_the_same_in_any_units(ball, length, mass, 
     first = min(len(impacts), len(base_impacts)) - 2          # (the last bounces kept depend on the rounding)
     np.testing.assert_allclose(impacts[:first], base_impacts[:first], rtol=0, atol=1e-9 * t_infinity)
     np.testing.assert_allclose(sol.contact_forces[-1, 0], 2.0 * mass * g * length / time**2, rtol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["dop853", "taylor"])
+@pytest.mark.parametrize("units", [(1.0, 1.0, 1e-3), (1e3, 1.0, 1e-3), (1e-3, 1e3, 1e-3), (1.0, 1.0, 1e3)])
+def test_a_ball_comes_to_rest_on_a_floor_at_zero_in_any_units(ball, method, units):
+    """The floor at H = 0, where the gap's rounding vanishes with the height and only the closing rule's times
+    (relative to |t|) end the bounces: the time of rest t∞ in any units.  Before the fix, in units of time ×1e-3
+    every run stopped with EVENTS_ACCUMULATED after 31–33 impacts: the impacts were located to 2 ε |t| + 2 ε in
+    time, an absolute 4.4e-16 that in milliseconds is 1600 times coarser than 2 ε |t| at t∞ = 0.6 ms."""
+    length, mass, time = units
+    e, g, h0 = 0.5, 9.81, 0.2
+    t_infinity = np.sqrt(2 * h0 / g) * (1 + e) / (1 - e)
+    sol = ball.simulate((0.0, 3 * t_infinity * time), [h0 * length], [0.0], method=method,
+                        params={"e": e, "H": 0.0, "m": 2.0 * mass, "g": g * length / time**2}, rtol=1e-12,
+                        atol=1e-12 * h0 * length, progress=False, throw=False)
+    assert sol.status == Status.DONE, sol.message
+    assert abs(sol.contact_switches[0].t / time - t_infinity) <= rest_time_bound(e, g, 0.0, t_infinity)
+
+
+# --- user events: located at the same times, with the same resets, in any units ------------------------------------
+
+@pytest.fixture(scope="module")
+def watched(cache_dir):
+    """A pendulum with four events of each kind: a reset at the bottom (θ̇ → r θ̇ when θ passes 0 downwards, r
+    dimensionless), a height l (1 − cos θ) − h crossed upwards (a length), the turning points θ̇ = 0 (a rate:
+    its zeros are the same in any units), and a terminal one at t = τ (a time)."""
+    theta, = lc.coordinates("theta")
+    m, l, g, r, h, tau = sp.symbols("m l g r h tau", positive=True)
+    events = [lc.Event("bottom", theta, direction=-1, reset={theta.diff(t): r * theta.diff(t)}),
+              lc.Event("height", l * (1 - sp.cos(theta)) - h, direction=1),
+              lc.Event("turn", theta.diff(t)),
+              lc.Event("late", t - tau, direction=1, terminal=True)]
+    system = lc.System([theta], T=m * l**2 * theta.diff(t) ** 2 / 2, V=-m * g * l * sp.cos(theta), events=events,
+                       name="units_watched", defaults={"m": 1.0, "l": 1.0, "g": 9.81, "r": 0.9, "h": 0.2, "tau": 4.5})
+    return lc.compile(system, cache_dir=cache_dir)
+
+
+@pytest.mark.parametrize("method", ["dop853", "dopri5", "taylor"])
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(length=unit_factors, mass=unit_factors, time=unit_factors)
+def test_user_events_are_the_same_in_any_units(watched, method, length, mass, time):
+    """Each event's times over T, the states at them mapped back, and the terminal stop, as in the base units, to
+    the tolerance (a few hundred rtol of the motion's period)."""
+
+    def run(L, M, T):
+        params = {"m": M, "l": L, "g": 9.81 * L / T**2, "r": 0.9, "h": 0.2 * L, "tau": 4.5 * T}
+        sol = watched.simulate((0.0, 10.0 * T), [1.0], [0.0], params=params, method=method, rtol=RTOL,
+                               atol=1e-3 * RTOL, progress=False, throw=False)
+        return sol, {name: (sol.events[name].t / T, sol.events[name].qd[:, 0] * T if len(sol.events[name].t) else
+                            np.zeros(0)) for name in ("bottom", "height", "turn", "late")}
+
+    base, base_events = run(1.0, 1.0, 1.0)
+    sol, events = run(length, mass, time)
+    assert sol.status == base.status and sol.t[-1] / time == pytest.approx(4.5, rel=4 * EPS)
+    for name, (times, rates) in base_events.items():
+        assert len(times) == len(events[name][0]) > 0, name
+        np.testing.assert_allclose(events[name][0], times, rtol=0, atol=300 * RTOL * 4.5, err_msg=name)
+        np.testing.assert_allclose(events[name][1], rates, rtol=0, atol=300 * RTOL * 5.0, err_msg=name)
 
 
 # --- linearization: eigenvalues in 1/time ------------------------------------------------------------------------------
@@ -381,3 +447,32 @@ def test_a_point_off_the_constraints_is_refused_or_accepted_alike_in_any_units(c
 
     assert offset > CONSISTENT or offset < CONSISTENT / 4
     assert verdict(1.0) == verdict(length) == (offset < CONSISTENT)
+
+
+@pytest.fixture(scope="module")
+def preloaded(cache_dir):
+    """A mass hanging on a spring, x measured from the spring's end at rest: F = −k x + k δ − m g, δ = m g/k a
+    parameter, so that x = 0 balances the weight with the spring's pre-load k δ, terms that do not grow with x."""
+    x, = lc.coordinates("x")
+    m, g, k, delta = sp.symbols("m g k delta", positive=True)
+    system = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * (x - delta) ** 2 / 2 + m * g * x, name="units_preloaded",
+                       defaults={"m": 0.3, "g": 9.81, "k": 7.0, "delta": 0.3 * 9.81 / 7.0})
+    return lc.compile(system, cache_dir=cache_dir)
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(length=unit_factors, mass=unit_factors, time=unit_factors)
+def test_a_preloaded_spring_balances_at_zero_in_any_units(preloaded, length, mass, time):
+    """With δ = (m g/k)(1 + 1e-13) the force at x = 0 is k δ − m g = 1e-13 m g, zero to 1e-13 of the terms it
+    balances: an equilibrium to `RESIDUAL_TOLERANCE`, whose scale is the parameters' terms (the stiffness term
+    k |x| is 0 there; without them it was refused); ω² = k/m in 1/time²."""
+    from lagcomp.analysis import find_equilibrium
+
+    units = (length, mass, time)
+    stiffness = 7.0 * factor(units, (0, 1, -2))
+    params = {"m": 0.3 * mass, "g": 9.81 * factor(units, ACCELERATION), "k": stiffness}
+    params["delta"] = params["m"] * params["g"] / stiffness * (1 + 1e-13)
+    assert preloaded.rhs(0.0, [0.0, 0.0], params)[1] != 0.0
+    modes = normal_modes(preloaded, [0.0], params)
+    assert modes.frequencies[0] * time == pytest.approx(np.sqrt(7.0 / 0.3), rel=1e-12)
+    assert find_equilibrium(preloaded, [0.1 * length], params).success
