@@ -476,3 +476,19 @@ def test_a_preloaded_spring_balances_at_zero_in_any_units(preloaded, length, mas
     modes = normal_modes(preloaded, [0.0], params)
     assert modes.frequencies[0] * time == pytest.approx(np.sqrt(7.0 / 0.3), rel=1e-12)
     assert find_equilibrium(preloaded, [0.1 * length], params).success
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-3, 1e3])
+def test_a_portrait_refuses_an_unsteady_energy_in_any_units(compiled, scale):
+    """The bead on a hoop wobbling by ε = 1e-7 (φ̇ = Ω + 2 ε cos 2t): its energy function varies in time by ~4 ε/Ω
+    of itself, no energy integral, whatever the units of mass and length (both × scale, energies × scale³; the
+    wobble's 2 rad/s is written into the model, so time is not rescaled).  Before the fix the spread was compared
+    with 1e-12 max(1, |E|), an absolute unit of energy, and in small units (E ~ 1e-9) the portrait was drawn."""
+    from lagcomp.analysis import phase_portrait
+    from lagcomp.errors import ModelError
+
+    model = compiled("hoop_bead")
+    params = {**model.defaults, "epsilon": 1e-7, **{k: model.defaults[k] * scale for k in ("m", "R", "g")}}
+    energy = model.defaults["m"] * model.defaults["g"] * model.defaults["R"] * scale**3
+    with pytest.raises(ModelError, match="depends on t"):
+        phase_portrait(model, [0.5 * energy], (-np.pi, np.pi), params, periodic=True)
