@@ -492,3 +492,27 @@ def test_a_portrait_refuses_an_unsteady_energy_in_any_units(compiled, scale):
     energy = model.defaults["m"] * model.defaults["g"] * model.defaults["R"] * scale**3
     with pytest.raises(ModelError, match="depends on t"):
         phase_portrait(model, [0.5 * energy], (-np.pi, np.pi), params, periodic=True)
+
+
+# --- fitting: the same estimate in any units ----------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def spring(cache_dir):
+    x, = lc.coordinates("x")
+    m, k = sp.symbols("m k", positive=True)
+    return lc.compile(lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="units_spring",
+                                defaults={"m": 1.5, "k": 6.0}), cache_dir=cache_dir)
+
+
+@pytest.mark.parametrize("units", [(1.0, 1.0, 1.0), (1e-3, 1.0, 1.0), (1e-3, 1e-3, 1e3), (1e3, 1e3, 1e-3)])
+def test_a_fit_is_as_accurate_in_any_units(spring, units):
+    """x(t) = A cos(√(k/m) t), sampled exactly, fitted for k from 0.9 k: the estimate is k to 1e-8 at the default
+    rtol (1e-10) in any units.  Before the fix atol defaulted to rtol in the state's units: in millimetres the
+    runs were 1e-7 accurate, and k came out ~1e-7 off."""
+    length, mass, time = units
+    k, m, amplitude = 6.0 * mass / time**2, 1.5 * mass, 0.8 * length
+    times = np.linspace(0.1, 3.0, 30) * time
+    observed = amplitude * np.cos(np.sqrt(k / m) * times)
+    result = spring.fit(times, observed, {"k": 0.9 * k}, q0=[amplitude], qd0=[0.0], fixed={"m": m})
+    assert result.success
+    assert result.estimates["k"] == pytest.approx(k, rel=1e-8, abs=0)
