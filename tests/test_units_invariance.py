@@ -16,7 +16,11 @@ Two faults of this kind are reproduced first (both failed before the fix): radau
 four-bar linkage ended at t = 0 with ITERATION_MATRIX_SINGULAR or NEWTON_FAILED (its singularity test and its
 norms compared quantities of different units), and a ball dropped on a floor at height H ≠ 0 stopped with
 EVENTS_ACCUMULATED before coming to rest (the closing rule looked at time alone, while the bounces it must
-resolve are limited by the gap's rounding, ε H).
+resolve are limited by the gap's rounding, ε H).  Then (each failed before its fix): an equilibrium judged against
+max|K| max(1, |q|), a constraint residual against max(1, …) (a spring or a rod in millimetres passed 1e-8 and 1e-6
+off), a periodic orbit's unscaled shooting residual (no convergence in units of time ×100), events located to
+2 ε |t| + 2 ε (a ball on a floor at H = 0 in milliseconds: EVENTS_ACCUMULATED), a portrait's energy spread against
+max(1, |E|), and a fit stopped by scipy's unscaled gtol.
 """
 
 import math
@@ -24,7 +28,7 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
@@ -367,6 +371,8 @@ def test_a_skidding_block_stops_at_the_same_place_in_any_units(skidding, length,
 
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(length=unit_factors, mass=unit_factors, time=unit_factors)
+@example(length=1.0, mass=1.0, time=100.0)      # (no convergence before the residual was scaled)
+@example(length=1.0, mass=1.0, time=1000.0)     # (another period)
 def test_a_periodic_orbit_is_the_same_in_any_units(compiled, length, mass, time):
     """The double pendulum's nonlinear in-phase normal mode at amplitude 0.3 (angles: only the rates and the period
     carry units): period/T, the state mapped back and the Floquet multipliers (dimensionless) agree with the base
