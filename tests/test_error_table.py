@@ -496,6 +496,7 @@ CASES = {
     "sensitivity-control-unknown": (_simulate("pendulum", sensitivities="q0", sensitivity_control="all"), "'all'"),
     "sensitivities-in-sweep": (lambda models: models["pendulum"].sweep((0.0, 1.0), {"theta": [0.1]},
                                                                       sensitivities="q0"), "a sweep"),
+    "fit-start-boolean": (lambda models: models["pendulum"].fit([0.5, 1.0], [[0.1], [0.2]], {"l": True}), "`l`"),
     "fit-unknown-parameter": (lambda models: models["pendulum"].fit([0.5, 1.0], [[0.1], [0.2]], {"mass": 1.0}),
                               "['mass']"),
     "fit-data-shape": (lambda models: models["pendulum"].fit([0.5, 1.0], [[0.1, 0.2]], {"l": 1.0}), "(1, 2)"),
@@ -526,6 +527,7 @@ CASES = {
                                    "10,000,000,000 trajectories"),
     "sweep-grid-not-numbers": (lambda models: models["pendulum"].sweep((0, 1), {"theta": ["up", "down"]}),
                                "Grid values of `theta`"),
+    "sweep-grid-boolean": (lambda models: models["pendulum"].sweep((0, 1), {"l": [1.0, True]}), "Grid values of `l`"),
     # a run that fails part-way (throw=True; the statuses are tested in test_integration_failures.py)
     "non-finite-state": (_fail("failing", t_span=(0, 2), params={"a": 1.0}, method="rk4", dt=0.01), "non-finite"),
     "singular-during-run": (_fail("failing", t_span=(0, 2), params={"c": 1.0}, method="rk4", dt=0.1), "singular"),

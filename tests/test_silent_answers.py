@@ -7,6 +7,7 @@ the answer lagcomp gives now: a refusal naming the culprit, or the right result.
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -83,6 +84,18 @@ def test_boolean_parameter_values_are_refused(model, value):
         model.simulate((0.0, 0.1), params={"m": value})
     with pytest.raises(lc.ParameterError, match=r"`k`.*boolean"):
         oscillator(defaults={"m": 1.0, "k": value})
+    with pytest.raises(lc.ParameterError, match=r"`m`.*boolean"):
+        model.fit([0.5, 1.0], [[0.1], [0.2]], {"m": value})
+
+
+@pytest.mark.parametrize("grid", [{"m": [1.0, True]}, {"m": np.array([True, False])}, {"x": (0.0, np.bool_(False))}])
+def test_boolean_grid_values_are_refused(model, grid):
+    """A sweep grid of flags (of a parameter or a coordinate) would run m = 1 and m = 0: refused, as in params."""
+    (name,) = grid
+    with pytest.raises(lc.OptionError, match=rf"Grid values of `{name}`.*boolean"):
+        model.sweep((0.0, 0.1), grid)
+    with pytest.raises(lc.OptionError, match=r"explicit grid.*boolean"):
+        model.sweep((0.0, 0.1), [[1.0, True]], names=["m", "k"])
 
 
 # -- 2.2: normal modes only about an equilibrium ----------------------------------------
@@ -90,14 +103,18 @@ def test_boolean_parameter_values_are_refused(model, value):
 
 @pytest.mark.parametrize("mass", [1.0, 1e-6, 1e6])
 def test_normal_modes_away_from_an_equilibrium_are_refused_with_the_distance(compiled, mass):
-    """The pendulum at θ = 1: F = −m g l sin 1, the force scale m g l |cos 1| (largest |∂F/∂θ|), whatever m."""
+    """The pendulum at θ = 1: F = −m g l sin 1 (the message gives it), against the size of the terms
+    (`RestForces.force_scale`: |∂F/∂θ| |θ| = m g l cos 1 and the parameters' |∂F/∂p| |p|, each at most |F|): a
+    ratio between sin 1/(cos 1 + 3 sin 1) and tan 1, far from the 1e-10 of an equilibrium, whatever m."""
     from lagcomp import analysis as an
 
     pendulum = compiled("simple_pendulum")
     params = {"m": mass, "l": 1.0, "g": 9.81}
-    ratio = np.sin(1.0) / np.cos(1.0)
-    with pytest.raises(lc.LinearizationError, match=rf"not an equilibrium.*{ratio:.3g} times") as info:
+    force = mass * 9.81 * np.sin(1.0)
+    with pytest.raises(lc.LinearizationError, match=r"not an equilibrium: max \|F\(q, 0, t\)\| = " + re.escape(f"{force:.3g};")) as info:
         an.normal_modes(pendulum, [1.0], params)
+    ratio = float(re.search(r"the worst force is (\S+) times", str(info.value)).group(1))
+    assert np.sin(1.0) / (np.cos(1.0) + 3 * np.sin(1.0)) * 0.99 <= ratio <= np.tan(1.0) * 1.01
     assert "find_equilibrium" in str(info.value)
     with pytest.raises(lc.LinearizationError, match="not an equilibrium"):
         an.normal_modes(an.linearize(pendulum, [1.0], params))

@@ -16,7 +16,11 @@ Two faults of this kind are reproduced first (both failed before the fix): radau
 four-bar linkage ended at t = 0 with ITERATION_MATRIX_SINGULAR or NEWTON_FAILED (its singularity test and its
 norms compared quantities of different units), and a ball dropped on a floor at height H ≠ 0 stopped with
 EVENTS_ACCUMULATED before coming to rest (the closing rule looked at time alone, while the bounces it must
-resolve are limited by the gap's rounding, ε H).
+resolve are limited by the gap's rounding, ε H).  Then (each failed before its fix): an equilibrium judged against
+max|K| max(1, |q|), a constraint residual against max(1, …) (a spring or a rod in millimetres passed 1e-8 and 1e-6
+off), a periodic orbit's unscaled shooting residual (no convergence in units of time ×100), events located to
+2 ε |t| + 2 ε (a ball on a floor at H = 0 in milliseconds: EVENTS_ACCUMULATED), a portrait's energy spread against
+max(1, |E|), and a fit stopped by scipy's unscaled gtol.
 """
 
 import math
@@ -24,11 +28,13 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
 from lagcomp.analysis import normal_modes, periodic_orbit
+from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
+from lagcomp.errors import LinearizationError
 from lagcomp.examples.constrained import four_bar_closure
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.resting import BOUNCE_HEIGHT, BOUNCE_TIME, ZENO_TIME
@@ -53,6 +59,14 @@ EXAMPLES = {
                          ("dop853", "radau", "rk4"), 0.5, 1e-4),
     "spherical_pendulum_cartesian": ((LENGTH, LENGTH, LENGTH), {"m": MASS, "l": LENGTH, "g": ACCELERATION},
                                      ("dop853", "radau", "rk4"), 1.0, 1e-3),
+    "n_link_pendulum": ((ANGLE, ANGLE, ANGLE), {"m1": MASS, "m2": MASS, "m3": MASS, "l1": LENGTH, "l2": LENGTH,
+                                                 "l3": LENGTH, "g": ACCELERATION},
+                        ("dop853", "dopri5", "radau", "taylor", "rk4"), 1.0, 1e-3),
+    "huygens": ((ANGLE,), {"m": MASS, "R": LENGTH, "g": ACCELERATION}, ("dop853", "radau", "taylor", "rk4"), 2.0,
+                1e-3),
+    "driven_pendulum": ((ANGLE,), {"m": MASS, "l": LENGTH, "g": ACCELERATION, "A": LENGTH, "Omega": (0, 0, -1)},
+                        ("dop853", "radau", "rk4"), 0.2, 1e-4),
+    "sling": ((LENGTH,), {"m": MASS, "omega": (0, 0, -1)}, ("dop853", "radau", "taylor", "rk4"), 1.0, 1e-3),
 }
 CASES = [(name, method) for name, (*_, methods, _, _) in EXAMPLES.items() for method in methods]
 RTOL = 1e-9
@@ -205,6 +219,64 @@ def test_the_bounces_and_the_rest_are_the_same_in_any_units(ball, length, mass, 
     np.testing.assert_allclose(sol.contact_forces[-1, 0], 2.0 * mass * g * length / time**2, rtol=1e-12)
 
 
+@pytest.mark.parametrize("method", ["dop853", "taylor"])
+@pytest.mark.parametrize("units", [(1.0, 1.0, 1e-3), (1e3, 1.0, 1e-3), (1e-3, 1e3, 1e-3), (1.0, 1.0, 1e3)])
+def test_a_ball_comes_to_rest_on_a_floor_at_zero_in_any_units(ball, method, units):
+    """The floor at H = 0, where the gap's rounding vanishes with the height and only the closing rule's times
+    (relative to |t|) end the bounces: the time of rest t∞ in any units.  Before the fix, in units of time ×1e-3
+    every run stopped with EVENTS_ACCUMULATED after 31–33 impacts: the impacts were located to 2 ε |t| + 2 ε in
+    time, an absolute 4.4e-16 that in milliseconds is 1600 times coarser than 2 ε |t| at t∞ = 0.6 ms."""
+    length, mass, time = units
+    e, g, h0 = 0.5, 9.81, 0.2
+    t_infinity = np.sqrt(2 * h0 / g) * (1 + e) / (1 - e)
+    sol = ball.simulate((0.0, 3 * t_infinity * time), [h0 * length], [0.0], method=method,
+                        params={"e": e, "H": 0.0, "m": 2.0 * mass, "g": g * length / time**2}, rtol=1e-12,
+                        atol=1e-12 * h0 * length, progress=False, throw=False)
+    assert sol.status == Status.DONE, sol.message
+    assert abs(sol.contact_switches[0].t / time - t_infinity) <= rest_time_bound(e, g, 0.0, t_infinity)
+
+
+# --- user events: located at the same times, with the same resets, in any units ------------------------------------
+
+@pytest.fixture(scope="module")
+def watched(cache_dir):
+    """A pendulum with four events of each kind: a reset at the bottom (θ̇ → r θ̇ when θ passes 0 downwards, r
+    dimensionless), a height l (1 − cos θ) − h crossed upwards (a length), the turning points θ̇ = 0 (a rate:
+    its zeros are the same in any units), and a terminal one at t = τ (a time)."""
+    theta, = lc.coordinates("theta")
+    m, l, g, r, h, tau = sp.symbols("m l g r h tau", positive=True)
+    events = [lc.Event("bottom", theta, direction=-1, reset={theta.diff(t): r * theta.diff(t)}),
+              lc.Event("height", l * (1 - sp.cos(theta)) - h, direction=1),
+              lc.Event("turn", theta.diff(t)),
+              lc.Event("late", t - tau, direction=1, terminal=True)]
+    system = lc.System([theta], T=m * l**2 * theta.diff(t) ** 2 / 2, V=-m * g * l * sp.cos(theta), events=events,
+                       name="units_watched", defaults={"m": 1.0, "l": 1.0, "g": 9.81, "r": 0.9, "h": 0.2, "tau": 4.5})
+    return lc.compile(system, cache_dir=cache_dir)
+
+
+@pytest.mark.parametrize("method", ["dop853", "dopri5", "taylor"])
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(length=unit_factors, mass=unit_factors, time=unit_factors)
+def test_user_events_are_the_same_in_any_units(watched, method, length, mass, time):
+    """Each event's times over T, the states at them mapped back, and the terminal stop, as in the base units, to
+    the tolerance (a few hundred rtol of the motion's period)."""
+
+    def run(L, M, T):
+        params = {"m": M, "l": L, "g": 9.81 * L / T**2, "r": 0.9, "h": 0.2 * L, "tau": 4.5 * T}
+        sol = watched.simulate((0.0, 10.0 * T), [1.0], [0.0], params=params, method=method, rtol=RTOL,
+                               atol=1e-3 * RTOL, progress=False, throw=False)
+        return sol, {name: (sol.events[name].t / T, sol.events[name].qd[:, 0] * T if len(sol.events[name].t) else
+                            np.zeros(0)) for name in ("bottom", "height", "turn", "late")}
+
+    base, base_events = run(1.0, 1.0, 1.0)
+    sol, events = run(length, mass, time)
+    assert sol.status == base.status and sol.t[-1] / time == pytest.approx(4.5, rel=4 * EPS)
+    for name, (times, rates) in base_events.items():
+        assert len(times) == len(events[name][0]) > 0, name
+        np.testing.assert_allclose(events[name][0], times, rtol=0, atol=300 * RTOL * 4.5, err_msg=name)
+        np.testing.assert_allclose(events[name][1], rates, rtol=0, atol=300 * RTOL * 5.0, err_msg=name)
+
+
 # --- linearization: eigenvalues in 1/time ------------------------------------------------------------------------------
 
 @pytest.mark.parametrize(("name", "changed"), [("double_pendulum", {}), ("stiff_spring_pendulum", {}),
@@ -303,6 +375,8 @@ _BASE_ORBIT: dict = {}
 
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(length=unit_factors, mass=unit_factors, time=unit_factors)
+@example(length=1.0, mass=1.0, time=100.0)      # (no convergence before the residual was scaled)
+@example(length=1.0, mass=1.0, time=1000.0)     # (another period)
 def test_a_periodic_orbit_is_the_same_in_any_units(compiled, length, mass, time):
     """The double pendulum's nonlinear in-phase normal mode at amplitude 0.3 (angles: only the rates and the period
     carry units): period/T, the state mapped back and the Floquet multipliers (dimensionless) agree with the base
@@ -328,3 +402,129 @@ def test_a_periodic_orbit_is_the_same_in_any_units(compiled, length, mass, time)
     np.testing.assert_allclose(back, base.y0, rtol=0, atol=1e-9 * max(1.0, time))
     np.testing.assert_allclose(np.sort_complex(scaled.multipliers), np.sort_complex(base.multipliers), rtol=0,
                                atol=1e-6)
+
+
+# --- equilibria: "F = 0" judged in the problem's own scale -------------------------------------------------------------
+
+def spring_pendulum_params(model, units, changed=None):
+    _, dimensions, *_ = EXAMPLES["stiff_spring_pendulum"]
+    return {k: v * factor(units, dimensions[k]) for k, v in {**model.defaults, **(changed or {})}.items()}
+
+
+@pytest.mark.parametrize("offset", [1e-8, 1e-11])
+@pytest.mark.parametrize("units", [(1e-3, 1.0, 1.0), (1e3, 1.0, 1.0), (1e-3, 1e3, 1e-3), (1e3, 1e-3, 1e3)])
+def test_a_point_off_equilibrium_is_refused_or_accepted_alike_in_any_units(compiled, units, offset):
+    """The spring stretched to r* (1 + δ) instead of the hanging equilibrium r* = l0 + m g/k: a force k r* δ that
+    does not vanish, relative δ to the force the spring carries (k r*).  δ = 1e-8 is no equilibrium and δ = 1e-11 is
+    one (below `RESIDUAL_TOLERANCE` = 1e-10), in any units: normal_modes refuses the first and takes the second.
+    Before the fix the force scale was max |K| max(1, |q|),
+    a metre where lengths are below one, so in millimetres (×1e-3) δ = 1e-8 passed."""
+    model = compiled("stiff_spring_pendulum")
+
+    def verdict(u):
+        params = spring_pendulum_params(model, u)
+        q = [(params["l0"] + params["m"] * params["g"] / params["k"]) * (1 + offset), 0.0]
+        try:
+            normal_modes(model, q, params)
+        except LinearizationError:
+            return False
+        return True
+
+    assert offset > RESIDUAL_TOLERANCE or offset < RESIDUAL_TOLERANCE / 4
+    assert verdict((1.0, 1.0, 1.0)) == (offset < RESIDUAL_TOLERANCE)
+    assert verdict(units) == (offset < RESIDUAL_TOLERANCE)
+
+
+@pytest.mark.parametrize("offset", [1e-6, 1e-10])
+@pytest.mark.parametrize("length", [1e-3, 1e3])
+def test_a_point_off_the_constraints_is_refused_or_accepted_alike_in_any_units(compiled, length, offset):
+    """The Cartesian spherical pendulum hanging at z = −l (1 + δ): the rod's constraint x² + y² + z² − l² is off by
+    2 δ l², relative 2 δ to the terms it balances (Σ_j |∂Φ/∂q_j| |q_j| = 2 l²).  δ = 1e-6 is off the constraint
+    manifold (above `CONSISTENT` = 1e-8) and δ = 1e-10 on it, for a rod of any length: linearize_steady refuses
+    the first and takes the second.  Before the fix the scale was max(1, max|Φ_q| max|q|), one square metre for a
+    rod in millimetres, where δ = 1e-6 passed."""
+    from lagcomp.analysis import linearize_steady
+    from lagcomp.analysis._steady_setup import CONSISTENT
+    from lagcomp.errors import InitialConditionError
+
+    model = compiled("spherical_pendulum_cartesian")
+
+    def verdict(scale):
+        params = {**model.defaults, "l": model.defaults["l"] * scale, "g": model.defaults["g"] * scale}
+        try:
+            linearize_steady(model, [0.0, 0.0, -params["l"] * (1 + offset)], params=params)
+        except InitialConditionError:
+            return False
+        return True
+
+    assert offset > CONSISTENT or offset < CONSISTENT / 4
+    assert verdict(1.0) == verdict(length) == (offset < CONSISTENT)
+
+
+@pytest.fixture(scope="module")
+def preloaded(cache_dir):
+    """A mass hanging on a spring, x measured from the spring's end at rest: F = −k x + k δ − m g, δ = m g/k a
+    parameter, so that x = 0 balances the weight with the spring's pre-load k δ, terms that do not grow with x."""
+    x, = lc.coordinates("x")
+    m, g, k, delta = sp.symbols("m g k delta", positive=True)
+    system = lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * (x - delta) ** 2 / 2 + m * g * x, name="units_preloaded",
+                       defaults={"m": 0.3, "g": 9.81, "k": 7.0, "delta": 0.3 * 9.81 / 7.0})
+    return lc.compile(system, cache_dir=cache_dir)
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(length=unit_factors, mass=unit_factors, time=unit_factors)
+def test_a_preloaded_spring_balances_at_zero_in_any_units(preloaded, length, mass, time):
+    """With δ = (m g/k)(1 + 1e-13) the force at x = 0 is k δ − m g = 1e-13 m g, zero to 1e-13 of the terms it
+    balances: an equilibrium to `RESIDUAL_TOLERANCE`, whose scale is the parameters' terms (the stiffness term
+    k |x| is 0 there; without them it was refused); ω² = k/m in 1/time²."""
+    from lagcomp.analysis import find_equilibrium
+
+    units = (length, mass, time)
+    stiffness = 7.0 * factor(units, (0, 1, -2))
+    params = {"m": 0.3 * mass, "g": 9.81 * factor(units, ACCELERATION), "k": stiffness}
+    params["delta"] = params["m"] * params["g"] / stiffness * (1 + 1e-13)
+    assert preloaded.rhs(0.0, [0.0, 0.0], params)[1] != 0.0
+    modes = normal_modes(preloaded, [0.0], params)
+    assert modes.frequencies[0] * time == pytest.approx(np.sqrt(7.0 / 0.3), rel=1e-12)
+    assert find_equilibrium(preloaded, [0.1 * length], params).success
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-3, 1e3])
+def test_a_portrait_refuses_an_unsteady_energy_in_any_units(compiled, scale):
+    """The bead on a hoop wobbling by ε = 1e-7 (φ̇ = Ω + 2 ε cos 2t): its energy function varies in time by ~4 ε/Ω
+    of itself, no energy integral, whatever the units of mass and length (both × scale, energies × scale³; the
+    wobble's 2 rad/s is written into the model, so time is not rescaled).  Before the fix the spread was compared
+    with 1e-12 max(1, |E|), an absolute unit of energy, and in small units (E ~ 1e-9) the portrait was drawn."""
+    from lagcomp.analysis import phase_portrait
+    from lagcomp.errors import ModelError
+
+    model = compiled("hoop_bead")
+    params = {**model.defaults, "epsilon": 1e-7, **{k: model.defaults[k] * scale for k in ("m", "R", "g")}}
+    energy = model.defaults["m"] * model.defaults["g"] * model.defaults["R"] * scale**3
+    with pytest.raises(ModelError, match="depends on t"):
+        phase_portrait(model, [0.5 * energy], (-np.pi, np.pi), params, periodic=True)
+
+
+# --- fitting: the same estimate in any units ----------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def spring(cache_dir):
+    x, = lc.coordinates("x")
+    m, k = sp.symbols("m k", positive=True)
+    return lc.compile(lc.System([x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="units_spring",
+                                defaults={"m": 1.5, "k": 6.0}), cache_dir=cache_dir)
+
+
+@pytest.mark.parametrize("units", [(1.0, 1.0, 1.0), (1e-3, 1.0, 1.0), (1e-3, 1e-3, 1e3), (1e3, 1e3, 1e-3)])
+def test_a_fit_is_as_accurate_in_any_units(spring, units):
+    """x(t) = A cos(√(k/m) t), sampled exactly, fitted for k from 0.9 k: the estimate is k to 1e-8 at the default
+    rtol (1e-10) in any units.  Before the fix atol defaulted to rtol in the state's units: in millimetres the
+    runs were 1e-7 accurate, and k came out ~1e-7 off."""
+    length, mass, time = units
+    k, m, amplitude = 6.0 * mass / time**2, 1.5 * mass, 0.8 * length
+    times = np.linspace(0.1, 3.0, 30) * time
+    observed = amplitude * np.cos(np.sqrt(k / m) * times)
+    result = spring.fit(times, observed, {"k": 0.9 * k}, q0=[amplitude], qd0=[0.0], fixed={"m": m})
+    assert result.success
+    assert result.estimates["k"] == pytest.approx(k, rel=1e-8, abs=0)

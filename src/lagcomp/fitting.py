@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lagcomp.errors import IntegrationError, OptionError, ParameterError, SingularMassMatrixError
+from lagcomp.names import by_name
 
 
 @dataclass(frozen=True)
@@ -148,8 +149,10 @@ def fit(model, t=None, observations=None, params0: Mapping | None = None, *, obs
     fixed = _fixed(model, fixed, parameters)
     observe = _observed(model, observe)
     experiments = _experiments(model, t, observations, q0, qd0, t0, experiments, len(observe))
-    weights = _weights(sigma, len(observe))
-    run_options = dict(method=method, rtol=rtol, atol=rtol if atol is None else atol, events=False, progress=False)
+    data_scale = 1.0 if sigma is not None else _data_scale(experiments)
+    weights = _weights(sigma, len(observe)) * data_scale
+    atol = default_atol(rtol, experiments) if atol is None else atol
+    run_options = dict(method=method, rtol=rtol, atol=atol, events=False, progress=False)
     runs = _Runs(model, parameters, initial, fixed, observe, experiments, weights, run_options)
     names = runs.names
     x0 = np.concatenate([x0] + [experiment.y0[list(initial)] for experiment in experiments])
@@ -159,18 +162,32 @@ def fit(model, t=None, observations=None, params0: Mapping | None = None, *, obs
     except OptionError as err:
         raise OptionError(f"`fit` integrates the sensitivities of the unknowns {list(names)}, and the run "
                           f"refuses: {err}") from err
-    result = least_squares(runs.residual, x0, jac=runs.jacobian, bounds=(lower, upper), x_scale="jac",
-                           max_nfev=max_nfev, **least_squares_options)
+    # the unknowns in units of their starting values (1 where that is 0): scipy's gtol tests J^T r unscaled, in
+    # the unknowns' units, and stopped a fit of k ~ 6e9 (a spring in other units) where it started
+    unit = np.where(np.abs(x0) > 0.0, np.abs(x0), 1.0)
+    result = least_squares(lambda u: runs.residual(u * unit), x0 / unit, jac=lambda u: runs.jacobian(u * unit) * unit,
+                           bounds=(lower / unit, upper / unit), x_scale="jac", max_nfev=max_nfev,
+                           **least_squares_options)
+    result.x = result.x * unit
     residuals, jacobian = runs.evaluate(result.x)
     covariance = _covariance(jacobian, residuals, sigma is not None)
     estimates = dict(zip(names, map(float, result.x), strict=True))
     return FitResult(
         estimates=estimates, covariance=covariance,
         standard_errors=dict(zip(names, map(float, np.sqrt(np.diag(covariance))), strict=True)),
-        residuals=runs.unweighted(result.x), cost=float(0.5 * residuals @ residuals), nfev=int(result.nfev),
+        residuals=runs.unweighted(result.x), cost=float(0.5 * residuals @ residuals) * data_scale**2, nfev=int(result.nfev),
         njev=int(result.njev or 0), success=bool(result.success), message=str(result.message), names=names,
         observe=observe, sigma_given=sigma is not None, experiments=runs.fitted_experiments(result.x), _model=model,
         _fixed=fixed, _run_options=runs.run_options)
+
+
+def default_atol(rtol: float, experiments) -> float:
+    """The runs' atol when none is given: rtol times the largest |component| of the experiments' initial states
+    (rtol itself when they are all 0), so that the runs are as accurate in any units: a fixed atol = rtol, in the
+    state's units, was 1e-7 of a state in millimetres against 1e-10 in metres at the default rtol, and the fitted
+    parameters moved by that much."""
+    size = max(float(np.max(np.abs(experiment.y0), initial=0.0)) for experiment in experiments)
+    return rtol * size if size > 0.0 else rtol
 
 
 class _Runs:
@@ -268,6 +285,7 @@ def _unknowns(model, params0, initial: bool) -> tuple[tuple[str, ...], np.ndarra
         raise OptionError("`params0` must be a dict of the parameters to fit and their starting values, "
                           f"e.g. {{{model.parameters[0]!r}: 1.0}}, got {params0!r}." if model.parameters else
                           f"{model.name!r} has no parameters to fit.")
+    params0 = by_name(params0, "params0", model.parameters)
     unknown = [name for name in params0 if name not in model.parameters]
     if unknown:
         raise OptionError(f"`params0` names unknown parameters {unknown}; {model.name!r} has {list(model.parameters)}.")
@@ -355,6 +373,15 @@ def _experiments(model, t, observations, q0, qd0, t0, experiments, width: int) -
             raise OptionError(f"{label}the times must increase strictly from t0 = {t0} on, and end after it.")
         checked.append(Experiment(times, data, model.initial_state(start_q, start_qd), float(t0)))
     return tuple(checked)
+
+
+def _data_scale(experiments) -> float:
+    """The largest |observation| of the experiments (1 when all are 0): without `sigma` the residuals are divided
+    by it, one number for all, which moves neither the optimum nor the covariance (scaled by the reduced χ²) but
+    makes least_squares' tolerances (gtol on J^T r, in the data's units squared) relative: in millimetres its
+    gradient test stopped the fit with k 2e-5 off."""
+    size = max(float(np.max(np.abs(experiment.observations), initial=0.0)) for experiment in experiments)
+    return size if size > 0.0 and np.isfinite(size) else 1.0
 
 
 def _weights(sigma, width: int) -> np.ndarray:

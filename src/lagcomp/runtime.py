@@ -927,7 +927,8 @@ class Model:
             `q0`, `qd0`), named ``q0:theta1``, ``qd0:theta1_dot`` in the result (``...[e]`` for experiment e
             of several).  `params0` may then be None.
         method, rtol, atol
-            The runs' (an embedded pair; rtol 1e-10, atol = rtol by default).
+            The runs' (an embedded pair; rtol 1e-10; atol by default rtol times the largest |component| of the
+            initial states, `lagcomp.fitting.default_atol`, so the same accuracy in any units).
         max_nfev, and other keywords
             Passed to `scipy.optimize.least_squares`.
 

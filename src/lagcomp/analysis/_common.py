@@ -100,17 +100,52 @@ class RestForces:
         self.model.kernels.mass_matrix(self.t, self._state(q), self.p, out)
         return out
 
-    def force_scale(self, q) -> float:
-        """A size for F near q: the largest |∂F/∂q| times the coordinates' size (at least 1e-300).
+    def force_scale(self, q, force=None, tolerance: float = 0.0) -> np.ndarray:
+        """A size for each F_i near q, shape (n,): `force_scale` (the terms that grow with q), and where `force`
+        is not within `tolerance` of 0 against that, also Σ_m |∂F_i/∂p_m| |p_m|, the terms the parameters carry
+        (a weight m g balanced by a spring's pre-load k δ at q = 0, where the first is 0).
 
         Residuals are judged against it, so that "F = 0" means the same for a
-        bead of 0.1 kg and a jack lifting 4000 N.
+        bead of 0.1 kg and a jack lifting 4000 N, in any units.  The second part
+        needs the parameter Jacobian kernel (built on first use), hence only when
+        the first does not settle it.
         """
         stiffness, _ = self.partials(q)
-        return force_scale(stiffness, q)
+        scale = force_scale(stiffness, q)
+        if force is not None and not relative_residual(force, scale)[0] <= tolerance:
+            scale = scale + self.parameter_scale(q)
+        return scale
+
+    def parameter_scale(self, q) -> np.ndarray:
+        """Σ_m |∂F_i/∂p_m| |p_m| at (q, 0, t), shape (n,) (0 where the kernel fails): ∂F/∂p = M ∂q̈/∂p from the
+        ``rhs_parameter_jacobian`` kernel, exact where q̈ = 0 (an equilibrium) and a size elsewhere."""
+        n, count = self.model.n, len(self.model.parameters)
+        out = np.empty((2 * n, count))
+        y = np.concatenate([np.asarray(q, dtype=float), np.zeros(n)])
+        if self.model.kernels.rhs_parameter_jacobian(self.t, y, self.p, out) != 0:
+            return np.zeros(n)
+        return np.abs(self.mass_matrix(q) @ out[n:]) @ np.abs(self.p[:count])
 
 
-def force_scale(stiffness: np.ndarray, q) -> float:
-    """`RestForces.force_scale` from ∂F/∂q at q: the largest |∂F/∂q| times max(1, max |q|), at least 1e-300."""
-    return max(float(np.max(np.abs(stiffness), initial=0.0)) * max(1.0, float(np.max(np.abs(q), initial=0.0))),
-               1e-300)
+def force_scale(stiffness: np.ndarray, q) -> np.ndarray:
+    """The size of each generalized force near q, Σ_j |∂F_i/∂q_j| |q_j|, shape (n,), in F_i's own units.
+
+    The forces that balance at an equilibrium grow with q away from q = 0 (a spring's k q, a weight's moment
+    m g l sin q), so this is the size of the terms whose difference F_i is, up to rounding.  Each row in its own
+    unit (force per unit of coordinate i), none compared with another's, and no unit of length or force assumed:
+    scaling lengths, masses or times scales F_i and its scale alike.  Where every q_j that F_i depends on is 0
+    the scale is 0 and only an exact zero passes (a force odd in q, such as sin q's, is exactly 0 there).
+    """
+    return np.abs(np.asarray(stiffness, dtype=float)) @ np.abs(np.asarray(q, dtype=float))
+
+
+def relative_residual(residual, scale) -> tuple[float, int]:
+    """(max_i |r_i| / scale_i, that row i): how far r is from 0, each entry against its own size, as
+    as `force_scale` gives it (0/0 = 0, r_i/0 = inf).  NaN when r is."""
+    residual, scale = np.abs(np.asarray(residual, dtype=float)).ravel(), np.asarray(scale, dtype=float).ravel()
+    if residual.size == 0:
+        return 0.0, 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratios = np.where(residual == 0.0, 0.0, residual / scale)
+    worst = int(np.argmax(ratios))
+    return float(ratios[worst]), worst

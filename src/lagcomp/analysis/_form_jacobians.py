@@ -14,7 +14,8 @@ Heaviside and Piecewise (DiracDelta terms) are taken away from their kinks,
 and a point on a kink is refused.  Two compiled functions:
 
 - `point(q, u, p, t)`: N, M, F, C, γ, Φ, Ψ and the Jacobians N_q, N_u, Φ_q,
-  Ψ_q, Ψ_u, everything the accelerations and the constraint manifold need;
+  Ψ_q, Ψ_u, everything the accelerations and the constraint manifold need, and
+  the sizes of Φ and Ψ (`magnitude`: what "Φ = 0" is judged against);
 - `residual_partials(q, u, a, l, p, t)`: [R; S]_q and [R; S]_u.
 
 `evaluator(form)` caches them per form (keyed by identity; a form is
@@ -38,7 +39,8 @@ from lagcomp.model.system import t as TIME
 CACHE_SIZE = 16
 
 #: Names of the outputs of `FormJacobians.point`, in order.
-POINT_OUTPUTS = ("N", "M", "F", "C", "gamma", "Phi", "Psi", "N_q", "N_u", "Phi_q", "Psi_q", "Psi_u")
+POINT_OUTPUTS = ("N", "M", "F", "C", "gamma", "Phi", "Psi", "N_q", "N_u", "Phi_q", "Psi_q", "Psi_u", "Phi_size",
+                 "Psi_size")
 
 _cache: OrderedDict = OrderedDict()
 
@@ -91,7 +93,7 @@ class FormJacobians:
         f = self.form
         n_h, n_v = f.Phi.rows, f.Psi.rows
         return ((f.n_q, 1), (f.n_u, f.n_u), (f.n_u, 1), f.C.shape, (f.C.rows, 1), (n_h, 1), (n_v, 1),
-                (f.n_q, f.n_q), (f.n_q, f.n_u), (n_h, f.n_q), (n_v, f.n_q), (n_v, f.n_u))
+                (f.n_q, f.n_q), (f.n_q, f.n_u), (n_h, f.n_q), (n_v, f.n_q), (n_v, f.n_u), (n_h, 1), (n_v, 1))
 
 
 def evaluator(form) -> FormJacobians:
@@ -115,6 +117,7 @@ def _build(form) -> FormJacobians:
     a_col, l_col = sp.Matrix(len(a), 1, a), sp.Matrix(len(l), 1, l)
     residual = (form.M * a_col - form.F - form.C.T * l_col).col_join(form.C * a_col - form.gamma)
     plain = [form.N, form.M, form.F, form.C, form.gamma, form.Phi, form.Psi]
+    sizes = [form.Phi.applyfunc(magnitude), form.Psi.applyfunc(magnitude)]
     jacobians = [(form.N, q), (form.N, u), (form.Phi, q), (form.Psi, q), (form.Psi, u), (residual, q), (residual, u)]
     w = p[len(p) - len(form.input_names):] if form.input_names else []
     jacobians += [(form.N, w), (residual, w)] if w else []
@@ -125,16 +128,29 @@ def _build(form) -> FormJacobians:
         image = lambda m: se.Matrix(m.rows, m.cols, [to_se(e) for e in m])  # noqa: E731
         derivs = [image(m).jacobian(se.Matrix([to_se(x) for x in xs])) for m, xs in jacobians]
         point = se.Lambdify([to_se(s) for s in point_args], *[image(m) for m in plain], *derivs[:5],
-                            cse=True, backend=_backend())
+                            *[image(m) for m in sizes], cse=True, backend=_backend())
         partials = se.Lambdify([to_se(s) for s in partial_args], *derivs[5:], cse=True, backend=_backend())
     else:
         derivs = [sp.Matrix(m).jacobian(xs) for m, xs in jacobians]
         kinks = sorted({d.args[0] for m in derivs for d in m.atoms(sp.DiracDelta)}, key=sp.default_sort_key)
         derivs = [m.replace(sp.DiracDelta, lambda *args: sp.S.Zero) for m in derivs]
-        point = _sympy_function(point_args, plain + derivs[:5] + [sp.Matrix(len(kinks), 1, kinks)])
+        point = _sympy_function(point_args, plain + derivs[:5] + sizes + [sp.Matrix(len(kinks), 1, kinks)])
         partials = _sympy_function(partial_args, derivs[5:])
         return FormJacobians(form, point, partials, tuple(kinks))
     return FormJacobians(form, point, partials)
+
+
+def magnitude(expr: sp.Expr) -> sp.Expr:
+    """The size of the terms `expr` sums, in its own units: sums and products of the magnitudes of its parts, |·|
+    of anything else (a function, a quotient), so x² + y² − l² has size x² + y² + l² and R cos q − R has 2 R at
+    q = 0.  Its value times ε bounds the rounding of `expr`; a residual is judged against it in any units."""
+    if expr.is_Add:
+        return sp.Add(*[magnitude(a) for a in expr.args])
+    if expr.is_Mul:
+        return sp.Mul(*[magnitude(a) for a in expr.args])
+    if expr.is_Pow and expr.exp.is_Integer and expr.exp > 0:
+        return magnitude(expr.base) ** expr.exp
+    return sp.Abs(expr)
 
 
 def _backend() -> str:

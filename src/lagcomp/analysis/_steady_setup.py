@@ -11,12 +11,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import linalg
 
+from lagcomp.analysis._common import relative_residual
 from lagcomp.analysis._form_jacobians import evaluator
 from lagcomp.errors import InitialConditionError, LinearizationError, ModelError, OptionError, ParameterError
 from lagcomp.mechanics.first_order import FirstOrderForm, from_eom, inputs_as_parameters
 from lagcomp.names import by_name
 
-#: Largest constraint residual accepted at the point, relative to the constraint Jacobians' scale.
+#: Largest constraint residual accepted at the point, relative to the size of the terms each constraint sums there
+#: (`lagcomp.analysis._form_jacobians.magnitude`: in Φ_k's own units, so the same in any units).
 CONSISTENT = 1e-8
 #: Forms derived from Systems, by fingerprint (the derivation is the slow part).
 _FORMS: OrderedDict = OrderedDict()
@@ -155,7 +157,7 @@ def _evaluated(system, q, u, params, t: float, inputs=None):
 def form_point(system, q, u, params, t: float, inputs=None) -> FormPoint:
     """Evaluate the form at (q, u): constraints checked, accelerations and multipliers from the KKT system."""
     form, q, u, p, named, values = _evaluated(system, q, u, params, t, inputs)
-    _check_consistent(form, q, u, values)
+    _check_consistent(form, values)
     k = form.C.rows
     kkt = np.block([[values["M"], -values["C"].T], [values["C"], np.zeros((k, k))]])
     try:
@@ -166,18 +168,17 @@ def form_point(system, q, u, params, t: float, inputs=None) -> FormPoint:
     return FormPoint(form, q, u, p, float(t), named, values, solution[: form.n_u], solution[form.n_u:], kkt)
 
 
-def _check_consistent(form, q, u, values) -> None:
-    for what, residual, jac, x in (("configuration", values["Phi"], values["Phi_q"], q),
-                                   ("velocity", values["Psi"], np.hstack([values["Psi_q"], values["Psi_u"]]),
-                                    np.concatenate([q, u]))):
+def _check_consistent(form, values) -> None:
+    for what, residual, scale in (("configuration", values["Phi"], values["Phi_size"]),
+                                  ("velocity", values["Psi"], values["Psi_size"])):
         if residual.size == 0:
             continue
-        scale = max(1.0, float(np.max(np.abs(jac), initial=0.0)) * float(np.max(np.abs(x), initial=0.0)))
-        worst = int(np.argmax(np.abs(residual[:, 0])))
-        if abs(residual[worst, 0]) > CONSISTENT * scale:
+        ratio, worst = relative_residual(residual[:, 0], scale[:, 0])
+        if not ratio <= CONSISTENT:
             raise InitialConditionError(
                 f"The point is off the constraint manifold: {what} constraint {worst} "
-                f"{_row_name(form, what, worst)}has residual {residual[worst, 0]:.3g}. Choose q on Φ(q) = 0, "
+                f"{_row_name(form, what, worst)}has residual {residual[worst, 0]:.3g}, {ratio:.3g} times the size of the terms "
+                f"it sums there (above {CONSISTENT:g}). Choose q on Φ(q) = 0, "
                 "and complete the speeds with lagcomp.analysis.consistent_speeds.")
 
 

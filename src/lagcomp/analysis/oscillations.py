@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg
 
-from lagcomp.analysis._common import RestForces, coordinates_vector, force_scale
+from lagcomp.analysis._common import RestForces, coordinates_vector, relative_residual
 from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
 from lagcomp.errors import LinearizationError, ModelError
 
@@ -48,6 +48,11 @@ class Linearization:
         Mass, stiffness, gyroscopic and damping matrices at (q, 0, t).
     residual : float
         max |F(q, 0, t)|: the linearization is about an equilibrium only when it is ~0.
+    force : ndarray, shape (n,)
+        F(q, 0, t).
+    force_scale : ndarray, shape (n,)
+        The size of the terms each F_i balances (`lagcomp.analysis._common.RestForces.force_scale`), what
+        "F = 0" is judged against.
     coordinates : tuple of str
     params : dict
     inputs : tuple of str
@@ -65,6 +70,8 @@ class Linearization:
     G: np.ndarray
     D: np.ndarray
     residual: float
+    force: np.ndarray
+    force_scale: np.ndarray
     coordinates: tuple
     params: dict = field(default_factory=dict)
     inputs: tuple = ()
@@ -185,11 +192,11 @@ def linearize(model, q, params: dict | None = None, *, t: float = 0.0, inputs=No
     F_q, F_v = rest.partials(q)
     C, M = -F_v, rest.mass_matrix(q)
     H, refused = _input_forces(model, q, M, rest, inputs)
+    force = rest.force(q)
     return Linearization(
         q=q, t=float(t), M=M, K=-F_q, G=(C - C.T) / 2, D=(C + C.T) / 2,
-        residual=float(np.max(np.abs(rest.force(q)))), coordinates=model.coordinates,
-        params=rest.params, inputs=model.inputs, H=H,
-        input_refused=refused,
+        residual=float(np.max(np.abs(force))), force=force, force_scale=rest.force_scale(q, force, RESIDUAL_TOLERANCE),
+        coordinates=model.coordinates, params=rest.params, inputs=model.inputs, H=H, input_refused=refused,
     )
 
 
@@ -250,19 +257,21 @@ def normal_modes(model_or_linearization, q=None, params: dict | None = None, *, 
 def _check_equilibrium(lin: Linearization) -> None:
     """Refuse a linearization about a q where F(q, 0, t) ≠ 0.
 
-    "F = 0" is judged as `find_equilibrium` judges it: max |F| against the force scale
-    (`lagcomp.analysis._common.force_scale`: the largest |K₀| times max(1, |q|)), with the same
-    `RESIDUAL_TOLERANCE`, so every equilibrium it reports as found passes.
+    "F = 0" is judged as `find_equilibrium` judges it: each |F_i| against its own force scale
+    (`RestForces.force_scale`: Σ_j |K₀_ij| |q_j|, and the parameters' terms where needed, in F_i's units), with
+    the same `RESIDUAL_TOLERANCE`, so every equilibrium it reports as found passes, in any units.
     """
-    scale = force_scale(lin.K, lin.q)
-    if not lin.residual <= RESIDUAL_TOLERANCE * scale:
+    ratio, worst = relative_residual(lin.force, lin.force_scale)
+    scale = lin.force_scale[worst]
+    if not ratio <= RESIDUAL_TOLERANCE:
         point = ", ".join(f"{name}={value:.6g}" for name, value in zip(lin.coordinates, lin.q))
         raise LinearizationError(
-            f"q = ({point}) is not an equilibrium: max |F(q, 0, t)| = {lin.residual:.3g} is {lin.residual / scale:.3g} "
-            f"times the force scale {scale:.3g} (largest |∂F/∂q| times max(1, |q|)), above the {RESIDUAL_TOLERANCE:g} "
-            "that counts as zero, so the bodies accelerate there and its normal modes would describe no motion. "
-            "Find an equilibrium with lagcomp.analysis.find_equilibrium (or equilibria), or for a steady motion "
-            "use linearize_steady.")
+            f"q = ({point}) is not an equilibrium: max |F(q, 0, t)| = {lin.residual:.3g}; the worst force is "
+            f"{ratio:.3g} times its scale {scale:.3g} (Σ_j |∂F_i/∂q_j| |q_j| + Σ_m |∂F_i/∂p_m| |p_m|, the size of the "
+            "forces that balance), "
+            f"above the {RESIDUAL_TOLERANCE:g} that counts as zero, so the bodies accelerate there and its normal "
+            "modes would describe no motion. Find an equilibrium with lagcomp.analysis.find_equilibrium (or "
+            "equilibria), or for a steady motion use linearize_steady.")
 
 
 def _quadratic_eigenvalues(lin: Linearization) -> np.ndarray:

@@ -2,16 +2,21 @@ r"""Periodic orbits by shooting: Newton (Gauss-Newton) on φ_T(y0) − y0 with t
 
 An orbit of ẏ = f(y) is periodic with period T when the flow φ brings its initial state back:
 
-    R(y0, T) = φ_T(y0) − y0 = 0       (N equations, N = 2n).
+    R(y0, T) = φ_T(y0) − y0 = 0       (N equations, N = 2n),
+
+each component divided by its size s_i over the guess's motion (`component_scale`), so that the least-squares
+sum weighs the coordinates and their rates alike in any units (unscaled, a run in hours weighted the rates
+3600² times less than the angles, and the solve stalled).
 
 The unknowns z = (y0, T) are found by `scipy.optimize.least_squares` (trust-region, below) with the exact
 Jacobian ∂R/∂(y0, T) = [Φ − I | f(φ_T(y0))]: the monodromy matrix Φ = ∂φ_T/∂y0 comes from
 ``simulate(..., sensitivities=("q0", "qd0"))`` (the variational equations with the emitted ``rhs_jacobian``),
 in the same run as φ_T(y0), and f from the model's ``rhs`` kernel.  Two equations more make the solution unique:
 
-* the phase condition f(y_g) · (y0 − y_g) = 0 (y_g the guess): any point of a periodic orbit is a solution, so
+* the phase condition Σ_i f_i(y_g) (y0 − y_g)_i / s_i² = 0 (y_g the guess, s_i the component's size over the
+  guess's motion, so that every term is in 1/time): any point of a periodic orbit is a solution, so
   y0 is pinned to the hyperplane through the guess across the flow there (the Poincaré phase condition;
-  its row of the Jacobian is f(y_g), exact);
+  its row of the Jacobian is f(y_g)/s², exact);
 * which member of the family: the periodic orbits of an autonomous conservative system come in one-parameter
   families (by energy, or by amplitude).  ``fix="period"`` holds T at `period`, the energy then being whatever
   the orbit of that period has; ``fix=<a state component's name>`` (default: the first coordinate) holds that
@@ -78,7 +83,8 @@ class PeriodicOrbit:
     monodromy : ndarray, shape (N, N)
         Φ = ∂φ_T(y0)/∂y0, columns in state order.
     residual : float
-        max |φ_T(y0) − y0| at the solution.
+        max_i |φ_T(y0) − y0|_i / s_i at the solution, s_i the component's size over the guess's motion
+        (`component_scale`).
     iterations : int
         Jacobian evaluations (each one integration with sensitivities).
     evaluations : int
@@ -126,7 +132,8 @@ def periodic_orbit(model, guess, period: float, *, fix: str | None = None, param
     rtol, atol : float
         Tolerances of every integration.
     tol : float
-        The largest max |φ_T(y0) − y0| accepted; `OptionError` above it.
+        The largest max_i |φ_T(y0) − y0|_i / s_i accepted, s_i = max_t |y_i(t)| over the guess's motion (at least
+        `atol`): relative to each component's own size, so the same in any units; `OptionError` above it.
     max_iterations : int
         Residual evaluations at most (scipy's ``max_nfev``; each iteration takes one, and one Jacobian).
     method : str
@@ -152,32 +159,35 @@ def periodic_orbit(model, guess, period: float, *, fix: str | None = None, param
     if fix != "period" and fix not in names:
         raise OptionError(f"`fix` must be 'period' or a state component {list(names)}, got {fix!r}.")
     shooting = _Shooting(model, y_guess, params, rtol, atol, method)
+    guess_run = shooting.plain_run(y_guess, period)
+    scale = component_scale(guess_run, atol)
     fixed_row = np.zeros(size + 1)
-    fixed_row[size if fix == "period" else names.index(fix)] = 1.0
-    fixed_value = period if fix == "period" else y_guess[names.index(fix)]
-    phase_row = np.append(shooting.field(y_guess), 0.0)
+    fixed_row[size if fix == "period" else names.index(fix)] = 1.0 / (period if fix == "period" else
+                                                                       scale[names.index(fix)])
+    fixed_value = fixed_row @ np.append(y_guess, period)
+    phase_row = np.append(shooting.field(y_guess) / scale**2, 0.0)
 
     def residual(z):
         end = shooting.run(z).y[-1]
         conditions = [phase_row @ (z - np.append(y_guess, 0.0)), z @ fixed_row - fixed_value]
-        return np.concatenate([end - z[:size], conditions])
+        return np.concatenate([(end - z[:size]) / scale, conditions])
 
     def jacobian(z):
         sol = shooting.run(z)
         block = np.hstack([sol.sensitivities[-1] - np.eye(size), shooting.field(sol.y[-1])[:, None]])
-        return np.vstack([block, phase_row, fixed_row])
+        return np.vstack([block / scale[:, None], phase_row, fixed_row])
 
     start = np.append(y_guess, period)
     result = least_squares(residual, start, jac=jacobian, method="trf", xtol=1e-15, ftol=1e-15, gtol=1e-15,
                            max_nfev=max(1, int(max_iterations)), x_scale="jac")  # (not "lm": see the module docstring)
     z = result.x
     sol = shooting.run(z)
-    closing = float(np.max(np.abs(sol.y[-1] - z[:size])))
+    closing = float(np.max(np.abs(sol.y[-1] - z[:size]) / scale))
     if not (closing <= tol) or not (z[size] > 0):
-        raise OptionError(f"`periodic_orbit` of {model.name!r} did not converge: max |φ_T(y0) − y0| reached "
-                          f"{closing:.3g} (tol {tol:g}) at T = {z[size]:.6g} after {result.njev} iterations "
+        raise OptionError(f"`periodic_orbit` of {model.name!r} did not converge: max |φ_T(y0) − y0| / scale "
+                          f"reached {closing:.3g} (tol {tol:g}) at T = {z[size]:.6g} after {result.njev} iterations "
                           f"({result.message}); start from a closer guess or period.")
-    _refuse_degenerate(shooting, sol, y_guess, period)
+    _refuse_degenerate(shooting, sol, guess_run)
     monodromy = sol.sensitivities[-1].copy()
     multipliers = np.linalg.eigvals(monodromy)
     multipliers = multipliers[np.argsort(-np.abs(multipliers), kind="stable")]
@@ -191,11 +201,18 @@ def _extent(sol) -> float:
     return float(np.max(np.abs(sol.y - sol.y[0])))
 
 
-def _refuse_degenerate(shooting, sol, y_guess, period: float) -> None:
+def component_scale(run, atol: float) -> np.ndarray:
+    """Each state component's size over a run, max_t |y_i(t)| (at least `atol`), shape (N,): in its own units, so
+    that the shooting residual φ_T(y0) − y0, the phase condition and the closing test over it are the same in any
+    units (an angle's rate is in 1/time, a length in metres or millimetres)."""
+    return np.maximum(np.max(np.abs(run.y), axis=0), atol)
+
+
+def _refuse_degenerate(shooting, sol, guess_run) -> None:
     """Refuse a solution of the shooting equations that is no orbit: nothing moving, on the scale of the motion
     the guess makes over the period (`DEGENERATE`: an equilibrium, or bodies so far apart that they hardly move,
     both "periodic" with any period)."""
-    moved, sought = _extent(sol), _extent(shooting.plain_run(y_guess, period))
+    moved, sought = _extent(sol), _extent(guess_run)
     if not moved > DEGENERATE * sought:
         state = ", ".join(f"{name}={value:.6g}" for name, value in zip(shooting.model.state_names, sol.y[0]))
         raise OptionError(

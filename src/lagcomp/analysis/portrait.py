@@ -101,12 +101,15 @@ def _check_energy_integral(model, p, grid) -> None:
         raise ModelError(f"{model.name!r} has generalized forces or dissipation: its energy function is not "
                          "conserved, so the phase portrait cannot come from the energy integral; simulate instead.")
     y = np.zeros(2)
+    spread, size = 0.0, 0.0
     for q in grid[:: max(1, grid.size // 16)]:
         y[0] = q
         values = [model.kernels.energy_function(t, y, p) for t in (0.0, *STEADY_CHECK_OFFSETS)]
-        if max(values) - min(values) > 1e-12 * max(1.0, max(abs(v) for v in values)):
-            raise ModelError(f"The energy function of {model.name!r} depends on t at these parameter values "
-                             "(an unsteady imposed motion): it is not conserved, so there is no energy integral.")
+        spread, size = max(spread, max(values) - min(values)), max(size, *(abs(v) for v in values))
+    # against the largest energy on the grid, the problem's own scale of energy (was max(1, |E|): one joule)
+    if not spread <= 1e-12 * size:
+        raise ModelError(f"The energy function of {model.name!r} depends on t at these parameter values "
+                         "(an unsteady imposed motion): it is not conserved, so there is no energy integral.")
 
 
 def phase_portrait(model, energies, bounds, params: dict | None = None, *, periodic: bool = False,

@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
-from lagcomp.analysis._common import RestForces, coordinates_vector, explicit_time, symbolic_system, unconstrained
+from lagcomp.analysis._common import (RestForces, coordinates_vector, explicit_time, relative_residual, symbolic_system,
+                                      unconstrained)
 from lagcomp.errors import OptionError
 
 #: Times (after t) at which a time-dependent system's equilibrium is checked for steadiness.
@@ -51,9 +52,11 @@ class Equilibrium:
     residual : float
         max |F(q*, 0, t)|.
     scale : float
-        The force scale the residual is judged against (largest |∂F/∂q| times max(1, |q*|)).
+        The force scale of the coordinate whose F_i is largest against its own scale
+        (`RestForces.force_scale`: Σ_j |∂F_i/∂q_j| |q*_j|, and the parameters' terms where that is not enough, in
+        F_i's units).
     success : bool
-        Whether the residual is below `RESIDUAL_TOLERANCE` × scale.
+        Whether every |F_i| is below `RESIDUAL_TOLERANCE` × its scale.
     steady : bool
         Whether F(q*, 0, t′) also vanishes at later times t′: always for
         systems without explicit t, for steady imposed motions in general; an
@@ -104,15 +107,16 @@ def _newton_polish(rest: RestForces, q: np.ndarray, iterations: int = 6) -> np.n
 
 def _equilibrium(rest: RestForces, q: np.ndarray, message: str, time_dependent: bool) -> Equilibrium:
     model = rest.model
-    residual = float(np.max(np.abs(rest.force(q))))
-    scale = rest.force_scale(q)
-    success = bool(np.all(np.isfinite(q)) and residual <= RESIDUAL_TOLERANCE * scale)
+    force = rest.force(q)
+    scale = rest.force_scale(q, force, RESIDUAL_TOLERANCE)
+    ratio, worst = relative_residual(force, scale)
+    success = bool(np.all(np.isfinite(q)) and ratio <= RESIDUAL_TOLERANCE)
     steady = success
     if success and time_dependent:
-        later = max(float(np.max(np.abs(rest.force(q, rest.t + dt)))) for dt in STEADY_CHECK_OFFSETS)
-        steady = later <= 1e3 * RESIDUAL_TOLERANCE * scale
-    return Equilibrium(q=q, t=rest.t, residual=residual, scale=scale, success=success, steady=steady,
-                       message=message, coordinates=model.coordinates, params=rest.params)
+        later = max(relative_residual(rest.force(q, rest.t + dt), scale)[0] for dt in STEADY_CHECK_OFFSETS)
+        steady = later <= 1e3 * RESIDUAL_TOLERANCE
+    return Equilibrium(q=q, t=rest.t, residual=float(np.max(np.abs(force))), scale=float(scale[worst]), success=success,
+                       steady=steady, message=message, coordinates=model.coordinates, params=rest.params)
 
 
 def find_equilibrium(model, guess, params: dict | None = None, *, t: float = 0.0, method: str = "hybr") -> Equilibrium:

@@ -195,10 +195,30 @@ class Sweep:
 
 
 def _floats(values, what: str) -> np.ndarray:
+    """`values` as floats; booleans refused (float(True) is 1.0: a flag where a coordinate or parameter was meant)."""
+    if _holds_boolean(values):
+        raise OptionError(f"{what} hold a boolean ({_shown(values)}), which would be taken as 1 or 0; give numbers.")
     try:
         return np.asarray(values, dtype=float)
     except (TypeError, ValueError) as err:
         raise OptionError(f"{what} must hold numbers, got {values!r}.") from err
+
+
+def _holds_boolean(values) -> bool:
+    """Whether `values` is or holds a bool or numpy.bool_ (a float array cannot: no walk over it)."""
+    if isinstance(values, np.ndarray) and values.dtype != object:
+        return values.dtype == np.bool_
+    if isinstance(values, (bool, np.bool_)):
+        return True
+    if isinstance(values, (list, tuple, np.ndarray)):
+        return any(_holds_boolean(v) for v in values)
+    return False
+
+
+def _shown(values) -> str:
+    """`values` for a message, cut at 80 characters."""
+    text = repr(values)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def _grid_name(key) -> str:

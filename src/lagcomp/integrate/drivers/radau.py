@@ -256,6 +256,13 @@ def _factor(jacobian, h, MU, differential, lu_real, pivots_real, lu_complex, piv
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _power_of_two_scale(largest):
+    """The power of two 2^−e that brings ``largest`` (≥ 0) into [1/2, 1), exactly; 1 for 0 or a non-finite value
+    (a zero row or column: the factorization then reports it)."""
+    return math.ldexp(1.0, -math.frexp(largest)[1]) if largest > 0.0 and np.isfinite(largest) else 1.0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _equilibrate(a, rows, columns):
     """Scale the square ``a`` in place to R a C, rows first then columns, each scale the power of two that brings
     the row's (then the column's) largest magnitude into [1/2, 1) (LAPACK's ``dgeequ``, rounded to powers of two:
@@ -272,14 +279,14 @@ def _equilibrate(a, rows, columns):
         largest = 0.0
         for j in range(n):
             largest = max(largest, abs(a[i, j]))
-        rows[i] = math.ldexp(1.0, -math.frexp(largest)[1]) if largest > 0.0 and np.isfinite(largest) else 1.0
+        rows[i] = _power_of_two_scale(largest)
         for j in range(n):
             a[i, j] *= rows[i]
     for j in range(n):
         largest = 0.0
         for i in range(n):
             largest = max(largest, abs(a[i, j]))
-        columns[j] = math.ldexp(1.0, -math.frexp(largest)[1]) if largest > 0.0 and np.isfinite(largest) else 1.0
+        columns[j] = _power_of_two_scale(largest)
         for i in range(n):
             a[i, j] *= columns[j]
 
@@ -500,7 +507,7 @@ def _initial_step(rhs, t, y, f, p, t_end, rtol, atol, max_step, differential, pr
         d1 += (f[i] / sc) ** 2
     d0 = np.sqrt(d0 / n)
     d1 = np.sqrt(d1 / n)
-    h0 = 0.01 * d0 / d1 if (d0 >= 1e-5 and d1 >= 1e-5) else 1e-6
+    h0 = 0.01 * d0 / d1 if (d0 >= 1e-5 and d1 * interval >= 1e-5) else 1e-6 * interval
     h0 = min(h0, interval)
     for i in range(n):
         probe_y[i] = y[i] + h0 * f[i]
@@ -516,8 +523,8 @@ def _initial_step(rhs, t, y, f, p, t_end, rtol, atol, max_step, differential, pr
         sc = atol + abs(y[i]) * rtol
         d2 += ((probe_f[i] - f[i]) / sc) ** 2
     d2 = np.sqrt(d2 / n) / h0
-    if d1 <= 1e-15 and d2 <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
+    if max(d1, d2) * interval <= 1e-15:
+        h1 = max(1e-6 * interval, h0 * 1e-3)
     else:
         h1 = (0.01 / max(d1, d2)) ** 0.25
     return min(100.0 * h0, h1, interval, max_step), 0
