@@ -43,8 +43,9 @@ speed² at each; a ball at rest keeps g = 0 exactly (q̈ = 0 to the last bit).  
 added: they would trade that drift, of the size of the run's own error, for a stiffer rhs and the exact rest,
 as lagcomp's bilateral constraints do by default (``baumgarte=(0, 0)``).
 
-These are helpers of the emitted kernels (``closed_contacts``, ``event_reset``): numba compiles them into the
-kernel that calls them.  They allocate small work arrays, only while some contact is closed or at an event.
+These are helpers of the emitted kernels (``closed_contacts``, ``event_reset``), which call the public entry points
+(end of this module) by symbol (`lagcomp.kernel_support.symbol_calls`): numba optimises each once, not in every
+kernel.  They allocate small work arrays, only while some contact is closed or at an event.
 """
 
 import numpy as np
