@@ -40,6 +40,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import ldlt_solve, ldlt_solve_matrix
+from lagcomp.kernel_support.symbol_calls import called_by_symbol
 
 #: Impacts solved: the complementarity problem's solution was found.
 IMPACT_SOLVED = 0
@@ -188,7 +189,7 @@ def touching(gap, gradients, row, q):
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd):
+def _contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd):
     """The impact of contact ``firing`` (its gap just closed) and of every other contact closed with it.
 
     mass (n, n) M, lower triangle; gaps, normal_velocities, restitution (C,) and gradients (C, n) of all C
@@ -268,3 +269,8 @@ def frictional_impact(mass, gradient, normal_velocity, restitution, slip_gradien
     for j in range(n):
         qd[j] += columns[j, 0] * p_n + columns[j, 1] * p_t
     return IMPACT_SOLVED
+
+
+#: What the generated kernels call: `_contact_impacts` by symbol, optimised once
+#: (`lagcomp.kernel_support.symbol_calls`).
+contact_impacts = called_by_symbol(_contact_impacts)

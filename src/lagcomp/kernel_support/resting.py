@@ -43,8 +43,9 @@ speed² at each; a ball at rest keeps g = 0 exactly (q̈ = 0 to the last bit).  
 added: they would trade that drift, of the size of the run's own error, for a stiffer rhs and the exact rest,
 as lagcomp's bilateral constraints do by default (``baumgarte=(0, 0)``).
 
-These are helpers of the emitted kernels (``closed_contacts``, ``event_reset``): numba compiles them into the
-kernel that calls them.  They allocate small work arrays, only while some contact is closed or at an event.
+These are helpers of the emitted kernels (``closed_contacts``, ``event_reset``), which call the public entry points
+(end of this module) by symbol (`lagcomp.kernel_support.symbol_calls`): numba optimises each once, not in every
+kernel.  They allocate small work arrays, only while some contact is closed or at an event.
 """
 
 import numpy as np
@@ -54,12 +55,13 @@ from lagcomp.kernel_support.impacts import (
     CLOSED_GAP,
     IMPACT_FRICTION_UNSOLVED,
     IMPACT_SOLVED,
-    contact_impacts,
+    _contact_impacts,
     frictional_impact,
     solve_on_set,
     touching,
 )
 from lagcomp.kernel_support.linear_solvers import ldlt_solve_matrix, lu_solve
+from lagcomp.kernel_support.symbol_calls import called_by_symbol
 
 #: The closed contacts' constraints are dependent (W singular): ``rhs`` returns this positive status, as for a
 #: singular mass matrix (the drivers stop with RHS_FAILED).
@@ -79,7 +81,7 @@ EPS = 2.220446049250313e-16
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, unilateral):
+def _closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, unilateral):
     """Correct the free accelerations ``qdd`` (n) in place for the contacts closed in ``modes`` (C,); their normal
     forces λ into ``forces`` (C,), 0 for the open ones.
 
@@ -101,7 +103,7 @@ def closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, unil
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def frictional_accelerations(mass, gradients, bias, modes, frictions, qdd, forces, unilateral):
+def _frictional_accelerations(mass, gradients, bias, modes, frictions, qdd, forces, unilateral):
     """`closed_contact_accelerations` with friction elements (`lagcomp.model.friction.Friction`): rows C.. of
     ``gradients`` (C + F, n) and ``bias`` (C + F) are the elements' a = ∂v/∂q̇ and b (v̇ = a q̈ + b), held
     (two-sided) while the element sticks (its mode in ``frictions`` (F,) is 0); their multipliers, the friction
@@ -116,7 +118,7 @@ def frictional_accelerations(mass, gradients, bias, modes, frictions, qdd, force
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def pressed_frictional_accelerations(mass, gradients, bias, modes, frictions, pressing, kinetic, qdd, forces,
+def _pressed_frictional_accelerations(mass, gradients, bias, modes, frictions, pressing, kinetic, qdd, forces,
                                      unilateral):
     """`frictional_accelerations` where some friction elements are pressed by a contact's normal force
     (``pressing`` (F,): the contact's index, −1 for an element whose N is an expression; ``kinetic`` (F,): μk).
@@ -278,7 +280,7 @@ def bounces_unresolved(v_after, pressing, restitution, t, gradient, q):
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes, closing,
+def _contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes, closing,
                   qd):
     """The reset of contact ``firing``'s event: the lift-off of a closed contact, or the impact of an open one.
 
@@ -297,7 +299,7 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
     n = q.shape[0]
     count = gaps.shape[0]
     before = qd.copy()
-    status = contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd)
+    status = _contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd)
     if status != IMPACT_SOLVED or closing == 0.0:
         return status
     plastic = restitution.copy()
@@ -322,14 +324,14 @@ def contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, q
     accelerations = qdd_free.copy()
     forces = np.empty(count)
     work = mass.copy()
-    if closed_contact_accelerations(work, gradients, bias, closed, accelerations, forces, 0.0) != 0:
+    if _closed_contact_accelerations(work, gradients, bias, closed, accelerations, forces, 0.0) != 0:
         return status
     for d in range(count):
         if closed[d] != 0.0 and not forces[d] > 0.0:
             return status                       # a closed contact would pull: leave them open, the impact as is
     for j in range(n):
         qd[j] = before[j]
-    status = contact_impacts(mass, gaps, gradients, normal_velocities, plastic, q, firing, qd)
+    status = _contact_impacts(mass, gaps, gradients, normal_velocities, plastic, q, firing, qd)
     if status == IMPACT_SOLVED:
         for d in range(count):
             modes[d] = closed[d]
@@ -430,7 +432,7 @@ def _friction_left_out(mass, gaps, gradients, q, before, after, firing, modes, p
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes,
+def _pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes,
                           closing, qd, slip_gradients, slip_offsets, pressing, static, kinetic):
     """`contact_event` where friction elements are pressed by contacts (``pressing`` (F,): the contact's index or
     −1; ``static``, ``kinetic`` (F,): μs, μk; ``slip_gradients`` (F, n), ``slip_offsets`` (F): v = a·q̇ + c).
@@ -456,7 +458,7 @@ def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution,
             alone = False
     before = qd.copy()
     if not alone:
-        status = contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing,
+        status = _contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing,
                                modes, closing, qd)
         if status == IMPACT_SOLVED and _friction_left_out(mass, gaps, gradients, q, before, qd, firing, modes,
                                                           pressing, slip_gradients, slip_offsets):
@@ -483,3 +485,12 @@ def pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution,
         if status == IMPACT_SOLVED:
             modes[firing] = 1.0
     return status
+
+
+#: What the generated kernels call: the routines above, by symbol, optimised once
+#: (`lagcomp.kernel_support.symbol_calls`).
+closed_contact_accelerations = called_by_symbol(_closed_contact_accelerations)
+frictional_accelerations = called_by_symbol(_frictional_accelerations)
+pressed_frictional_accelerations = called_by_symbol(_pressed_frictional_accelerations)
+contact_event = called_by_symbol(_contact_event)
+pressed_contact_event = called_by_symbol(_pressed_contact_event)
