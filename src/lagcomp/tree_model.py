@@ -62,6 +62,11 @@ class TreeModel(Model):
     """A `lagcomp.Model` compiled from a `lagcomp.Tree` (module docstring).  ``system`` is the Tree."""
 
     @property
-    def on_demand_entry(self):
+    def on_demand_entries(self) -> dict:
+        """None built: a tree model has no companion modules yet (its on-demand kernels are refused, issue 39), so
+        `operations` counts the eager kernels and ``lagcomp precompile --all`` builds nothing more."""
+        return {}
+
+    def on_demand_entry(self, kind: str):
         """None: a tree model has no companion module yet (its on-demand kernels are refused, issue 39)."""
         return None
