@@ -323,26 +323,37 @@ def test_an_unpickled_model_whose_entry_is_gone_is_compiled_again_from_its_syste
 
 
 def test_ctrl_c_during_the_first_compile_raises_keyboard_interrupt(tmp_path):
-    """SIGINT into the first radau run of a model (its set-up 0.15 s, then numba compiling its Jacobian kernel
-    for 1.5 s on the loaded 2-core machine; a dop853 run before compiled what every run's set-up calls): the compile finishes (its machine code kept),
-    then KeyboardInterrupt, not a run returned with status 2; the next run compiles nothing and ends normally."""
+    """SIGINT while numba compiles the first radau run's Jacobian kernel (sent from numba's own compile event for
+    `rhs_jacobian`, so it lands inside that compile whatever the machine's speed; a timer guessed wrong once the
+    first compiles got faster): the compile finishes (its machine code kept), then KeyboardInterrupt, not a run
+    returned with status 2; the next run compiles nothing and ends normally."""
     import signal
-    import threading
     import time
 
+    from numba.core import event
+
+    class InterruptWhileCompiling(event.Listener):
+        sent = False
+
+        def on_start(self, ev):
+            dispatcher = ev.data.get("dispatcher")
+            if not self.sent and getattr(dispatcher, "__name__", "") == "rhs_jacobian":
+                self.sent = True
+                os.kill(os.getpid(), signal.SIGINT)
+
+        def on_end(self, ev):
+            pass
+
     model = lc.compile(oscillator(V=k * x**2 / 2 + x**4 / 4, name="silent_interrupted"), cache_dir=tmp_path)
-    begun = time.perf_counter()
-    model.simulate((0.0, 1.0), progress=False)  # its first run: numba compiling for about as long as radau's will
-    delay = max(0.3, (time.perf_counter() - begun) / 2)  # (after radau's set-up, well before its compile ends)
+    model.simulate((0.0, 1.0), progress=False)  # compiles what every run's set-up calls
+    listener = InterruptWhileCompiling()
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    timer = threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT))
     try:
-        timer.start()
-        with pytest.raises(KeyboardInterrupt):
+        with event.install_listener("numba:compile", listener), pytest.raises(KeyboardInterrupt):
             model.simulate((0.0, 1.0), method="radau", progress=False)
     finally:
-        timer.cancel()
         signal.signal(signal.SIGINT, previous)
+    assert listener.sent
     started = time.process_time()
     assert model.simulate((0.0, 1.0), method="radau", progress=False).status == 0
     assert time.process_time() - started < 0.2  # compiled, not thrown away (the first compile took a second or more)

@@ -73,12 +73,10 @@ and II.6 (dense output), with scipy's constants (``solve_ivp``), so that at equa
 takes scipy's steps (tests/test_drivers.py checks DOPRI5, DOP853 and BS3 against RK45, DOP853, RK23):
 
 1. Initial step, when ``clock[1] <= 0``: with ``scale = atol + |y0| rtol`` and the RMS norm,
-   ``d0 = ||y0||``, ``d1 = ||f0||``; a probe ``h0 = 0.01 d0/d1`` (1e-6 ``Δ`` if d0 or d1 Δ is below 1e-5,
-   Δ = t_end − t0; at most Δ); an Euler step gives ``f1 = f(t0 + h0, y0 + h0 f0)`` and
-   ``d2 = ||f1 - f0|| / h0``; then ``h1 = (0.01 / max(d1, d2)) ** (1/(q+1))`` (or ``max(1e-6 Δ, 1e-3 h0)``
-   when max(d1, d2) Δ ≤ 1e-15) and the step is ``min(100 h0, h1, t_end - t0, max_step)``.  Scipy's
-   thresholds are in seconds (1e-6 s, 1e-5 /s); here they are relative to the run's span Δ, so that a run in
-   other units of time takes the same steps (issue #36); for Δ = 1 they are scipy's.  A non-finite probe derivative gives
+   ``d0 = ||y0||``, ``d1 = ||f0||``; a probe ``h0 = 0.01 d0/d1`` (1e-6 if either is tiny; at most the
+   interval); an Euler step gives ``f1 = f(t0 + h0, y0 + h0 f0)`` and ``d2 = ||f1 - f0|| / h0``; then
+   ``h1 = (0.01 / max(d1, d2)) ** (1/(q+1))`` (or ``max(1e-6, 1e-3 h0)`` when both are negligible)
+   and the step is ``min(100 h0, h1, t_end - t0, max_step)``.  A non-finite probe derivative gives
    ``min(h0, max_step)`` and leaves the trouble to the step rejection.
 2. Trial steps: the step is clamped to ``max_step`` (or raised to the minimum ``10 ulp(t)``) and
    clipped to land on ``t_end``.  It is accepted when the error norm ``err < 1`` (scale
@@ -339,10 +337,10 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                 d1 += r * r
             d0 = np.sqrt(d0 / n)
             d1 = np.sqrt(d1 / n)
-            if d0 >= 1e-5 and d1 * interval >= 1e-5:   # (false for NaN; both relative: #36)
+            if d0 >= 1e-5 and d1 >= 1e-5:   # (false for NaN)
                 h0 = 0.01 * d0 / d1
             else:
-                h0 = 1e-6 * interval
+                h0 = 1e-6
             h0 = min(h0, interval)
             for i in range(n):
                 ytmp[i] = y[i] + h0 * K[0, i]
@@ -358,8 +356,8 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                 h_abs = min(h0, max_step)
             else:
                 d2 = np.sqrt(d2 / n) / h0
-                if max(d1, d2) * interval <= 1e-15:
-                    h1 = max(1e-6 * interval, h0 * 1e-3)
+                if d1 <= 1e-15 and d2 <= 1e-15:
+                    h1 = max(1e-6, h0 * 1e-3)
                 else:
                     h1 = (0.01 / max(d1, d2)) ** (-error_exponent)
                 h_abs = min(100.0 * h0, h1, interval, max_step)

@@ -265,10 +265,10 @@ def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step
             d0 = np.sqrt(d0 / n2)
             d1 = np.sqrt(d1 / n2)
             d1s[l] = d1
-            if d0 >= 1e-5 and d1 * (t_end - t0) >= 1e-5:
+            if d0 >= 1e-5 and d1 >= 1e-5:
                 h0[l] = 0.01 * d0 / d1
             else:
-                h0[l] = 1e-6 * (t_end - t0)
+                h0[l] = 1e-6
             h0[l] = min(h0[l], t_end - t0)
             for i in range(n2):
                 Yt[i, l] = Y[i, l] + h0[l] * K[0, i, l]
@@ -292,8 +292,8 @@ def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step
                 h_abs[l] = min(h0[l], max_step)
             else:
                 d2 = np.sqrt(d2 / n2) / h0[l]
-                if max(d1s[l], d2) * (t_end - t0) <= 1e-15:
-                    h1 = max(1e-6 * (t_end - t0), h0[l] * 1e-3)
+                if d1s[l] <= 1e-15 and d2 <= 1e-15:
+                    h1 = max(1e-6, h0[l] * 1e-3)
                 else:
                     h1 = (0.01 / max(d1s[l], d2)) ** (-_EXPONENT)
                 h_abs[l] = min(100.0 * h0[l], h1, t_end - t0, max_step)

@@ -507,7 +507,7 @@ def _initial_step(rhs, t, y, f, p, t_end, rtol, atol, max_step, differential, pr
         d1 += (f[i] / sc) ** 2
     d0 = np.sqrt(d0 / n)
     d1 = np.sqrt(d1 / n)
-    h0 = 0.01 * d0 / d1 if (d0 >= 1e-5 and d1 * interval >= 1e-5) else 1e-6 * interval
+    h0 = 0.01 * d0 / d1 if (d0 >= 1e-5 and d1 >= 1e-5) else 1e-6
     h0 = min(h0, interval)
     for i in range(n):
         probe_y[i] = y[i] + h0 * f[i]
@@ -523,8 +523,8 @@ def _initial_step(rhs, t, y, f, p, t_end, rtol, atol, max_step, differential, pr
         sc = atol + abs(y[i]) * rtol
         d2 += ((probe_f[i] - f[i]) / sc) ** 2
     d2 = np.sqrt(d2 / n) / h0
-    if max(d1, d2) * interval <= 1e-15:
-        h1 = max(1e-6 * interval, h0 * 1e-3)
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
     else:
         h1 = (0.01 / max(d1, d2)) ** 0.25
     return min(100.0 * h0, h1, interval, max_step), 0
