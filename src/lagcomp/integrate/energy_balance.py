@@ -222,10 +222,13 @@ def _slopes(source: PowerSource, ts: np.ndarray, ys: np.ndarray) -> tuple[np.nda
     f, g, ahead, behind = np.empty_like(ys), np.empty_like(ys), np.empty(ys.shape[1]), np.empty(ys.shape[1])
     steps = np.diff(ts)
     local = np.maximum(np.concatenate([steps, [0.0]]), np.concatenate([[0.0], steps]))
+    # (a row between two zero-length intervals, at a reset: the run's span, a time of the problem's own; a single
+    # row has no interval that reads its slopes)
+    local[local <= 0] = (ts[-1] - ts[0]) or 1.0
     for i in range(ts.size):
         time = float(ts[i])
         source.kernels.rhs(time, ys[i], source.p, f[i])
-        eps = _DIFFERENCE * (local[i] if local[i] > 0 else max(1.0, abs(time)))
+        eps = _DIFFERENCE * local[i]
         source.kernels.rhs(time + eps, ys[i] + eps * f[i], source.p, ahead)
         source.kernels.rhs(time - eps, ys[i] - eps * f[i], source.p, behind)
         g[i] = (ahead - behind) / (2 * eps)
