@@ -83,3 +83,15 @@ def test_ci_builds_the_docs_with_warnings_as_errors_after_the_tests():
     assert [re.search(r"-b (\w+) docs ", line).group(1) for line in builds] == ["html", "doctest"]
     assert all(" -W " in line and pytest_at < ci.index(line) for line in builds)
     assert all(line.endswith("|| { cat \"$docs_log\"; exit 1; }") for line in builds)  # a failed build fails CI
+
+
+def test_public_subpackages_are_reachable_as_attributes_without_an_import_of_their_own():
+    """``lc.analysis.linearize(...)`` as the docs write it, in a fresh process (no earlier ``import lagcomp.analysis``
+    to hide a missing attribute)."""
+    import subprocess
+    import sys
+
+    probe = ("import sys, lagcomp as lc; assert 'lagcomp.analysis' not in sys.modules; "
+             "print(lc.analysis.linearize.__module__, lc.plots.__name__)")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["lagcomp.analysis.oscillations", "lagcomp.plots"]

@@ -63,6 +63,11 @@ _MULTIBODY_NAMES = ("Tree", "Link", "Revolute", "Prismatic", "Universal", "Cylin
 _ACCURACY_NAMES = ("kernel_accuracy",)
 
 
+#: Subpackages reachable as attributes (``lc.analysis.linearize(...)``) without an import of their own, imported
+#: on first use (they import scipy, sympy or matplotlib).
+_SUBMODULES = ("analysis", "plots")
+
+
 def __getattr__(name: str):
     if name in _ACCURACY_NAMES:
         from lagcomp import accuracy
@@ -74,6 +79,11 @@ def __getattr__(name: str):
 
         globals()[name] = value = getattr(multibody, name)
         return value
+    if name in _SUBMODULES:
+        import importlib
+
+        globals()[name] = value = importlib.import_module(f"lagcomp.{name}")
+        return value
     if name in _MODEL_NAMES:
         from lagcomp import model
 
@@ -84,4 +94,4 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_MODEL_NAMES) | set(_MULTIBODY_NAMES) | set(_ACCURACY_NAMES))
+    return sorted(set(globals()) | set(_MODEL_NAMES) | set(_MULTIBODY_NAMES) | set(_ACCURACY_NAMES) | set(_SUBMODULES))
