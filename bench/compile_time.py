@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import resource
 import subprocess
 import sys
 import tempfile
@@ -39,6 +40,7 @@ from bench.harness import Table, fmt, stat_of
 COLD_TARGETS = {"double_pendulum": ("cold_dp", 1.0, 4.2), "n_link_pendulum_10": ("cold10", 4.0, 10.2),
                 "n_link_pendulum_24": ("cold24", 15.0, 31.6)}
 WARM_TARGET = 0.6  # s, a cached double pendulum in a fresh process (0.8–1.0 s before issue 19)
+NEW_OVER_WARM_TARGET = 1.5  # issue 35: a new double pendulum's first dop853 result over a cached one's, CPU
 
 PRECOMPILE = "import sys; from lagcomp.cli import main; sys.exit(main(['precompile']))"
 #: A line of `lagcomp precompile`: ``[3/13] lagcomp.integrate.drivers.embedded (embedded_run, ...): compiled in 4.2 s``.
@@ -128,8 +130,10 @@ print(json.dumps({"total": time.perf_counter() - t0}))
 
 
 def run_probe(args: list[str], timeout: float, env: dict | None = None) -> dict | str:
-    """The JSON of the last stdout line of ``python -c *args`` with its wall time as "process"; an error as text."""
-    started = time.perf_counter()
+    """The JSON of the last stdout line of ``python -c *args`` with its wall time as "process" and its CPU time
+    (user + system, the child's own: less sensitive to other jobs on a shared machine) as "process_cpu"; an error
+    as text."""
+    started, cpu_started = time.perf_counter(), _children_cpu()
     try:
         out = subprocess.run([sys.executable, "-c", *args], capture_output=True, text=True, timeout=timeout,
                              cwd=_root(), env=env)
@@ -139,7 +143,14 @@ def run_probe(args: list[str], timeout: float, env: dict | None = None) -> dict 
         return f"failed: {out.stderr.strip().splitlines()[-1][:150] if out.stderr.strip() else out.returncode}"
     result = json.loads(out.stdout.strip().splitlines()[-1])
     result["process"] = time.perf_counter() - started
+    result["process_cpu"] = _children_cpu() - cpu_started
     return result
+
+
+def _children_cpu() -> float:
+    """CPU seconds (user + system) of this process's finished children so far."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def _root() -> str:
@@ -293,6 +304,12 @@ def section(ctx) -> Table:
                           f"{fmt(cached.median)} ({fmt(cached.low)}–{fmt(cached.high)})",
                           f"{cached.median / total:.3f}×",
                           f"the warm start is {process.median / cached.median:.2f}× this; {len(runs)} runs")
+                cpu = stat_of([r["process_cpu"] for r in runs]).median
+                table.add(case, "new model vs warm start: CPU of the whole cold process over the warm one's "
+                                f"(issue 35: ≤ {NEW_OVER_WARM_TARGET:g}×)",
+                          f"{result['process_cpu']:.2f} / {cpu:.2f}", f"{result['process_cpu'] / cpu:.2f}× warm",
+                          "fresh processes from interpreter start; the cold one compiles the model into an empty "
+                          "cache and runs dop853, the warm one loads it by name and runs dop853")
                 target = ctx.target("warm")
                 target.measured = (f"{process.median:.2f} s (min {process.low:.2f}; import lagcomp {imported:.2f} s; "
                                    f"importing numpy and numba alone {floor.median:.2f} s; loading one function from "
