@@ -24,6 +24,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from lagcomp.errors import ModelError
+from lagcomp.multibody.joints import ISSUE
 from lagcomp.multibody.kinematics import placement
 from lagcomp.multibody.program import Program, add, cross, dot, mat_vec
 
@@ -74,6 +76,9 @@ class WorldKinematics:
 
     def _outward(self, i: int) -> WorldNode:
         prog, node = self.prog, self.nodes[i]
+        if node.kind not in ("revolute", "prismatic"):   # (the formulas above are those of one-axis joints)
+            raise ModelError(f"A loop passes through a {node.kind} joint: loops close through revolute and "
+                             f"prismatic joints (and the joints made of them) only, for now ({ISSUE}).")
         parent, X = self.node(node.parent), placement(self.prog, node)
         R = [prog.vector(mat_vec(parent.R, [X.R[0][j], X.R[1][j], X.R[2][j]])) for j in range(3)]
         R = [[R[j][k] for j in range(3)] for k in range(3)]   # columns to rows
