@@ -18,7 +18,7 @@ import pytest
 import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from multibody_models import _rodrigues, lagrangian_system
+from multibody_models import _rodrigues, lagrangian_system, planar_chain
 
 import lagcomp as lc
 from lagcomp.examples.constrained import four_bar_closure, four_bar_linkage
@@ -103,6 +103,20 @@ def test_four_bar_tree_runs_as_the_example(four_bars):
     assert run_tree.constraint_residual <= 1e-12
     assert run_tree.energy_drift() <= 1e-11
     assert run.q[-1, 0] > 20 * math.pi / 2   # (the crank went round: the run is not a trivial one)
+
+
+def test_directions_as_vectors_rotate_the_reactions(four_bars, cache_dir):
+    """The pin closed along (1, 1, 0) and (1, −1, 0) instead of x and y: the same motion, and the multipliers are
+    the same pin force's components along the (normalised) directions, named by position."""
+    tree, _ = four_bars
+    turned = lc.compile(four_bar_tree(((1, 1, 0), (1, -1, 0))), cache_dir=cache_dir)
+    assert turned.constraints == ("loop_0", "loop_1")
+    y = tree.initial_state() + np.array([0.0, 0.01, -0.02, 0.0, 0.3, -0.1])   # (off the loop: Φ and Λ q̇ too)
+    qdd, lam = motion(tree, y, (1.0, 2.0))
+    qdd_turned, lam_turned = motion(turned, y, (1.0, 2.0))
+    assert relative(qdd_turned, qdd) <= 1e-13
+    expected = np.array([lam[0] + lam[1], lam[0] - lam[1]]) / math.sqrt(2)
+    assert relative(lam_turned, expected) <= 1e-13
 
 
 def test_four_bar_tree_reaction_is_the_pin_force(four_bars):
@@ -221,25 +235,55 @@ def _position(tree: lc.Tree, link: str, point) -> sp.Matrix:
     return o[last] + R[last] * sp.Matrix(point)
 
 
-def test_spatial_loop_matches_the_lagrangian_path(cache_dir):
-    tree = spatial_tree()
-    closure = tree.closures[0]
-    gap = _position(tree, closure.first, closure.first_point) - _position(tree, closure.second, closure.second_point)
-    system = dataclasses.replace(
-        lagrangian_system(tree), constraints=tuple(lc.Holonomic(f"ball_{x}", gap[k]) for k, x in enumerate("xyz")),
-        parameters=tree.parameters, defaults=tree.defaults)
-    tree_model, lagrange = lc.compile(tree, cache_dir=cache_dir), lc.compile(system, cache_dir=cache_dir)
-    assert tree_model.constraints == lagrange.constraints == ("ball_x", "ball_y", "ball_z")
-    rng = np.random.default_rng(7)
+def lagrangian_with_loops(tree: lc.Tree) -> lc.System:
+    """`tree` on the Lagrangian path (`multibody_models.lagrangian_system`) with its loops' constraints written
+    from sympy's rotation matrices: d·(P_first − P_second) = 0 for each direction d."""
+    constraints = []
+    for closure in tree.closures:
+        gap = _position(tree, closure.first, closure.first_point) - (
+            sp.Matrix(closure.second_point) if closure.second is None
+            else _position(tree, closure.second, closure.second_point))
+        constraints += [lc.Holonomic(name, (sp.Matrix(d).T * gap)[0]) for d, name in zip(closure.directions,
+                                                                                           closure.names)]
+    return dataclasses.replace(lagrangian_system(tree), constraints=tuple(constraints), parameters=tree.parameters)
+
+
+def agree_with_the_lagrangian_path(tree: lc.Tree, cache_dir, states, seed: int) -> None:
+    """q̈ and λ of `tree` and of `lagrangian_with_loops(tree)` agree to 1e-12 relative at the states `states()`
+    draws (numpy Generator → y), random Baumgarte gains and parameters (±50 % about the defaults)."""
+    tree_model = lc.compile(tree, cache_dir=cache_dir)
+    lagrange = lc.compile(lagrangian_with_loops(tree), cache_dir=cache_dir)
+    assert tree_model.constraints == lagrange.constraints
+    rng = np.random.default_rng(seed)
     for _ in range(20):
-        y = np.concatenate([rng.uniform(-1, 1, 2), rng.uniform(-0.3, 0.3, 1), rng.uniform(-1, 1, 2),
-                            rng.uniform(-2, 2, 5)])
-        gains = tuple(rng.uniform(0, 4, 2))
+        y, gains = states(rng), tuple(rng.uniform(0, 4, 2))
         params = {name: value * rng.uniform(0.5, 1.5) for name, value in tree.defaults.items()}
         qdd_tree, lam_tree = motion(tree_model, y, gains, params)
         qdd, lam = motion(lagrange, y, gains, params)
         assert relative(qdd_tree, qdd) <= 1e-12
         assert relative(lam_tree, lam) <= 1e-12
+
+
+def test_spatial_loop_matches_the_lagrangian_path(cache_dir):
+    agree_with_the_lagrangian_path(
+        spatial_tree(), cache_dir, lambda rng: np.concatenate([rng.uniform(-1, 1, 2), rng.uniform(-0.3, 0.3, 1),
+                                                               rng.uniform(-1, 1, 2), rng.uniform(-2, 2, 5)]), 7)
+
+
+def test_a_loop_within_one_branch_matches_the_lagrangian_path(cache_dir):
+    """A planar chain of four links whose last tip is pinned back to the first link's middle: the two ends share
+    the first joint (its columns of Λ cancel in part), and a second loop holds the third joint on a rail y = h
+    of the base."""
+    chain = planar_chain(4)
+    l0, l1, l3, h = sp.symbols("l0 l1 l3 h")
+    values = {"g": 9.81, "h": 0.2, "l0": 1.0, "l1": 0.8, "l2": 0.9, "l3": 0.7}
+    for i in range(4):
+        values.update({f"m{i}": 1.0 + i / 4, f"c{i}": 0.4, f"d{i}": 0.05 * i, f"J{i}": 0.1})
+    tree = lc.Tree(chain.links, gravity=chain.gravity, name="pinned_chain", defaults=values, loops=[
+        lc.Loop("back", ("link3", (l3, 0, 0)), ("link0", (l0 / 2, 0, 0)), directions="xy"),
+        lc.Loop("rail", ("link1", (l1, 0, 0)), (None, (0, h, 0)), directions="y")])
+    agree_with_the_lagrangian_path(
+        tree, cache_dir, lambda rng: np.concatenate([rng.uniform(-math.pi, math.pi, 4), rng.uniform(-2, 2, 4)]), 11)
 
 
 # -- what is refused --------------------------------------------------------------------------------------------
