@@ -311,7 +311,7 @@ def _on_demand_without_equations(tmp_path):
 
 def _planar_loop(directions: str) -> lc.Tree:
     """Two rods hinged about z at (0, 0) and (1, 0), their ends pinned together by a cut joint."""
-    rod = dict(mass=m, com=(l / 2, 0, 0), inertia=(0, m * l**2 / 12, m * l**2 / 12))
+    rod = {"mass": m, "com": (l / 2, 0, 0), "inertia": (0, m * l**2 / 12, m * l**2 / 12)}
     return lc.Tree([lc.Link("left", lc.Revolute("q1"), **rod), lc.Link("right", lc.Revolute("q2", origin=(1, 0, 0)),
                                                                           **rod)],
                    name="tree_loop", defaults={"m": 1.0, "l": 1.0},

@@ -30,7 +30,7 @@ TO_TREE = np.array([[1.0, 0.0, 0.0], [-1.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
 
 def rod(mass, length):
     """A uniform thin rod along x of its frame, from the origin."""
-    return dict(mass=mass, com=(length / 2, 0, 0), inertia=(0, mass * length**2 / 12, mass * length**2 / 12))
+    return {"mass": mass, "com": (length / 2, 0, 0), "inertia": (0, mass * length**2 / 12, mass * length**2 / 12)}
 
 
 def four_bar_tree(directions="xy") -> lc.Tree:
@@ -92,7 +92,8 @@ def test_four_bar_tree_runs_as_the_example(four_bars):
     the loop closed at rounding level and the energy is conserved."""
     tree, example = four_bars
     ts = np.linspace(0.0, 5.0, 101)
-    options = dict(t_eval=ts, method="dop853", rtol=1e-12, atol=1e-12, projection=True, max_residual=1e-12)
+    options = {"t_eval": ts, "method": "dop853", "rtol": 1e-12, "atol": 1e-12, "projection": True,
+               "max_residual": 1e-12}
     run_tree, run = tree.simulate((0.0, 5.0), **options), example.simulate((0.0, 5.0), **options)
     assert run_tree.success and run.success
     assert tree.constraints == example.constraints == ("loop_x", "loop_y")
@@ -216,9 +217,9 @@ def spatial_tree() -> lc.Tree:
                 inertia=(IB, IA, IC)),
         lc.Link("leg", lc.Universal(("a2", "b2"), origin=(D, 0, 0)), mass=mL, com=(0, 0, -cL), inertia=(IC, IB, IA)),
     ], gravity=(0, 0, -g), name="spatial_loop",
-        defaults=dict(mA=1.0, mS=0.5, mL=0.8, cA=0.3, cL=0.4, D=0.5, L=0.8, IA=0.02, IB=0.03, IC=0.01, K=20.0,
-                      g=9.81),
-        loops=[lc.Loop("ball", ("slide", (0, 0, -sp.Symbol("L", positive=True))), ("leg", (0.2, 0.1, -0.7)))])
+        defaults={"mA": 1.0, "mS": 0.5, "mL": 0.8, "cA": 0.3, "cL": 0.4, "D": 0.5, "L": 0.8, "IA": 0.02, "IB": 0.03,
+                  "IC": 0.01, "K": 20.0, "g": 9.81},
+        loops=[lc.Loop("ball", ("slide", (0, 0, -L)), ("leg", (0.2, 0.1, -0.7)))])
 
 
 def _position(tree: lc.Tree, link: str, point) -> sp.Matrix:
