@@ -106,6 +106,19 @@ def test_four_bar_tree_runs_as_the_example(four_bars):
     assert run.q[-1, 0] > 20 * math.pi / 2   # (the crank went round: the run is not a trivial one)
 
 
+def test_a_start_off_the_loop_is_projected_onto_it(four_bars):
+    """q0, q̇0 off the loop (by 0.02 rad and 0.1 rad/s) with ``project_initial=True``: the first saved state
+    closes the loop at rounding level (Φ and Λ q̇, from the model's own `constraint_residuals`)."""
+    tree, _ = four_bars
+    q0, qd0 = np.array(tree.q0) + [0.0, 0.02, -0.03], np.array(tree.qd0) + [0.0, 0.1, 0.0]
+    sol = tree.simulate((0.0, 0.5), q0=q0, qd0=qd0, project_initial=True, projection=True, rtol=1e-11, atol=1e-11)
+    assert sol.success, sol.message
+    residuals = np.zeros(4)
+    tree.kernels.constraint_residuals(0.0, sol.y[0], tree.parameter_vector(), residuals)
+    assert np.max(np.abs(residuals)) <= 1e-14
+    assert np.max(np.abs(sol.y[0] - np.concatenate([q0, qd0]))) >= 1e-3   # (it was off: projection moved it)
+
+
 def test_directions_as_vectors_rotate_the_reactions(four_bars, cache_dir):
     """The pin closed along (1, 1, 0) and (1, −1, 0) instead of x and y: the same motion, and the multipliers are
     the same pin force's components along the (normalised) directions, named by position."""
