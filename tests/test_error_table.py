@@ -309,6 +309,15 @@ def _on_demand_without_equations(tmp_path):
     lc.load(oscillator().name, cache_dir=tmp_path).jacobian(0.0, [0.1, 0.0])
 
 
+def _planar_loop(directions: str) -> lc.Tree:
+    """Two rods hinged about z at (0, 0) and (1, 0), their ends pinned together by a cut joint."""
+    rod = {"mass": m, "com": (l / 2, 0, 0), "inertia": (0, m * l**2 / 12, m * l**2 / 12)}
+    return lc.Tree([lc.Link("left", lc.Revolute("q1"), **rod), lc.Link("right", lc.Revolute("q2", origin=(1, 0, 0)),
+                                                                          **rod)],
+                   name="tree_loop", defaults={"m": 1.0, "l": 1.0},
+                   loops=[lc.Loop("pin", ("left", (l, 0, 0)), ("right", (l, 0, 0)), directions=directions)])
+
+
 def _tree_radau(tmp_path):
     """radau on a model compiled from a kinematic tree: its Jacobian is a later step of issue 39."""
     tree = lc.Tree([lc.Link("rod", lc.Revolute("q"), mass=m, com=(l, 0, 0), inertia=(0, 0, 0))], gravity=(0, -g, 0),
@@ -429,6 +438,9 @@ CASES = {
     "tree-parent-not-listed": (lambda: lc.Tree([lc.Link("arm", lc.Revolute("q"), parent="base", mass=1.0)]),
                                "'base'"),
     "tree-kernel-not-available": (_tree_radau, "rhs_jacobian"),
+    "tree-loop-unknown-link": (lambda: lc.Tree(_planar_loop("xy").links, loops=[
+        lc.Loop("pin", ("left", (1, 0, 0)), ("rihgt", (1, 0, 0)))]), "'rihgt'"),
+    "tree-loop-idle-direction": (lambda tmp_path: lc.compile(_planar_loop("xyz"), cache_dir=tmp_path), "'pin_z'"),
     "kane-equations-not-formed": (lambda: lc.compile(_kane_slider(formed=False)), "kanes_equations"),
     "kane-specified-function": (lambda: lc.compile(_kane_slider(force=me_function("F"))), "F(t)"),
     "kane-method-not-applicable": (_simulate("kane", q0=[0.0], method="gauss2", dt=0.1), "`gauss2`"),

@@ -39,7 +39,7 @@ __all__ = [
     "Contact", "Damper", "Event", "Force", "Friction", "Gravity", "Holonomic", "Input", "MovingFrame", "Nonholonomic",
     "Particle", "RigidBody", "Spring", "System", "Torque", "body_rates", "coordinates", "from_kanes_method",
     "from_lagranges_method", "rotated", "t",
-    "Tree", "Link", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical", "Free",
+    "Tree", "Link", "Loop", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical", "Free",
     "LagcompError", "ModelError", "UndeclaredSymbolError", "ParameterError", "OptionError", "InitialConditionError",
     "SingularMassMatrixError", "IntegrationError", "LinearizationError", "CorruptCacheRecordError", "CacheWarning",
     "StiffnessWarning", "ResetWarning", "UnknownEventError",
@@ -56,7 +56,8 @@ _MODEL_NAMES = (
 
 
 #: What `lagcomp.multibody` contributes (kinematic trees), imported on first use too (sympy).
-_MULTIBODY_NAMES = ("Tree", "Link", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical", "Free")
+_MULTIBODY_NAMES = ("Tree", "Link", "Loop", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical",
+                    "Free")
 
 
 #: Imported on first use too (sympy, mpmath): the kernel-accuracy check of `lagcomp.accuracy`.

@@ -51,7 +51,9 @@ def _build(tree, cache: Cache, key: str, progress=None):
         source = emit_eager(ir)
     metadata = {
         "tree": True, "coordinates": list(tree.coordinate_names), "parameters": list(tree.parameter_names),
-        "cyclic": [], "constraints": [], "holonomic": [], "separable": False, "holonomic_separable": False,
+        "cyclic": [],
+        "constraints": list(tree.constraint_names), "holonomic": [True] * len(tree.constraint_names),   # loops
+        "separable": False, "holonomic_separable": False,
         "operations": {k.name: k.operation_count for k in ir.kernels}, "on_demand": True,
     }
     keep_equations(cache, key, tree)   # (what the companion would be built from: the tree, which refuses it)

@@ -16,6 +16,7 @@ import sympy as sp
 
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.lower import event_reset_kernel
+from lagcomp.codegen.tree_constraints import gain_loads, loop_kernels
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.aba import accelerations
 from lagcomp.multibody.crba import mass_matrix
@@ -49,11 +50,17 @@ def lower_tree(tree: Tree) -> ModuleIR:
         stores = build(prog)
         return program_kernel(name, doc, args, prog, stores, loads, solve)
 
+    if tree.closures:   # closed loops: the motion through the augmented system (its kernels' own module)
+        loads += gain_loads(tree)
+        motion = loop_kernels(tree, nodes, gravity, mapping, kernel)
+    else:
+        motion = (kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), q̈ by the articulated-body "
+                         "algorithm.\n\nReturns 0.", ARGS,
+                         lambda prog: [(f"out[{i}]", qd[i]) for i in range(n)]
+                         + [(f"out[{n + i}]", a) for i, a in enumerate(accelerations(prog, nodes, gravity))],
+                         ReturnZero()),)
     kernels = (
-        kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), q̈ by the articulated-body algorithm.\n\n"
-               "Returns 0.", ARGS,
-               lambda prog: [(f"out[{i}]", qd[i]) for i in range(n)]
-               + [(f"out[{n + i}]", a) for i, a in enumerate(accelerations(prog, nodes, gravity))], ReturnZero()),
+        *motion,
         kernel("mass_matrix", "Mass matrix M(q), shape (n, n), into `out` (composite-rigid-body algorithm).", ARGS,
                lambda prog: _matrix_stores(mass_matrix(prog, nodes), n)),
         kernel("forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out` (recursive Newton-Euler at q̈ = 0).",
@@ -72,7 +79,8 @@ def lower_tree(tree: Tree) -> ModuleIR:
         event_reset_kernel((), (), 2 * n, mapping, tuple(loads)),
     )
     return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=names,
-                    parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION)
+                    parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION,
+                    constraint_names=tree.constraint_names, holonomic=(True,) * len(tree.constraint_names))
 
 
 def program_kernel(name: str, doc: str, args, prog: Program, stores, loads, solve=None) -> Kernel:

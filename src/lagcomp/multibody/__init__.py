@@ -1,7 +1,8 @@
 """Kinematic trees of rigid links and joints, compiled from recursive multibody algorithms (issue 39).
 
-`Tree` and `Link` describe the system, the joints (`lagcomp.multibody.joints`) how links move; ``lc.compile(tree)``
-emits the articulated-body algorithm as straight-line code (`lagcomp.codegen.tree_lower`).
+`Tree` and `Link` describe the system (`Loop` a cut joint closing a loop), the joints (`lagcomp.multibody.joints`)
+how links move; ``lc.compile(tree)`` emits the articulated-body algorithm as straight-line code
+(`lagcomp.codegen.tree_lower`).
 """
 
 from lagcomp.multibody.joints import (
@@ -13,6 +14,7 @@ from lagcomp.multibody.joints import (
     Spherical,
     Universal,
 )
+from lagcomp.multibody.loops import Loop
 from lagcomp.multibody.tree import Link, Tree
 
-__all__ = ["Cylindrical", "Free", "Link", "Planar", "Prismatic", "Revolute", "Spherical", "Tree", "Universal"]
+__all__ = ["Cylindrical", "Free", "Link", "Loop", "Planar", "Prismatic", "Revolute", "Spherical", "Tree", "Universal"]

@@ -21,6 +21,7 @@ import sympy as sp
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError
 from lagcomp.model.bodies import inertia_matrix
 from lagcomp.multibody.joints import ISSUE, Elementary, Joint, t
+from lagcomp.multibody.loops import closures
 
 ZERO_INERTIA = sp.zeros(3, 3)
 
@@ -84,6 +85,8 @@ class Tree:
         Default initial coordinates and velocities, in `coordinate_names` order.
     t_end : float
         Suggested run length (s).
+    loops : sequence of lagcomp.Loop, optional
+        Cut joints closing kinematic loops: holonomic constraints on the tree (`lagcomp.multibody.loops`).
 
     Attributes
     ----------
@@ -93,10 +96,12 @@ class Tree:
         The joints' coordinates q_i(t), in node order.
     parameters : tuple of Symbol
         Every symbol of the description other than t, sorted by name.
+    closures : tuple of lagcomp.multibody.loops.Closure
+        The checked loops.
     """
 
     def __init__(self, links, *, gravity=(0, 0, 0), name: str = "tree", description: str = "", defaults=None,
-                 q0=None, qd0=None, t_end: float = 10.0):
+                 q0=None, qd0=None, t_end: float = 10.0, loops=()):
         if not isinstance(name, str) or not name.isidentifier():
             raise ModelError(f"Tree: the name must be a Python identifier like 'arm', got {name!r}.")
         self.name, self.description = name, str(description)
@@ -108,6 +113,7 @@ class Tree:
         repeated = sorted({c for c in names if names.count(c) > 1})
         if repeated:
             raise ModelError(f"{name}: the coordinate(s) {repeated} move more than one joint: give each its own name.")
+        self.closures = closures(loops, [link.name for link in self.links], name)
         self.parameters = _parameters(self)
         self.defaults = _defaults(self, defaults or {})
         self.q0, self.qd0 = _initial(q0, "q0", self), _initial(qd0, "qd0", self)
@@ -129,6 +135,11 @@ class Tree:
     def parameter_names(self) -> tuple[str, ...]:
         return tuple(s.name for s in self.parameters)
 
+    @property
+    def constraint_names(self) -> tuple[str, ...]:
+        """The loops' holonomic constraints (one per closing direction), in order: the reactions' names."""
+        return tuple(name for closure in self.closures for name in closure.names)
+
     def expressions(self) -> dict:
         """Every expression of the description by role (for parameters, checks and the fingerprint)."""
         roles = {"gravity": sp.Matrix(self.gravity)}
@@ -138,12 +149,16 @@ class Tree:
                 node.mass, *node.com, *node.inertia, *j.axis, *j.origin, *(e for row in j.rotation for e in row),
                 j.stiffness, j.rest, j.damping])
             roles[f"torque of {j.coordinate.func.__name__}"] = sp.sympify(j.torque)
+        for closure in self.closures:
+            roles[f"points of loop {closure.loop}"] = sp.Matrix([*closure.first_point, *closure.second_point])
         return roles
 
     def fingerprint(self) -> str:
         """A canonical text of everything the kernels depend on (for the cache key)."""
         parts = ["multibody tree", self.name, repr(self.coordinate_names), repr(self.parameter_names),
                  repr([(node.parent, node.joint.kind) for node in self.nodes])]
+        if self.closures:   # (only then: the keys of trees without loops stay as they were)
+            parts.append(repr([(c.first, c.second, c.directions, c.names) for c in self.closures]))
         return "\n".join(parts + [f"{role}={sp.srepr(expr)}" for role, expr in self.expressions().items()])
 
     def on_demand_refusal(self, what: str) -> str:

@@ -1,0 +1,115 @@
+"""The kernels of a kinematic tree with closed loops (`lagcomp.Loop`): the motion through the augmented system.
+
+A tree whose cut joints add holonomic constraints Φ(q) = 0 (`lagcomp.multibody.loops`) gets the kernels a constrained
+Lagrange module has (`lagcomp.codegen.lower`), with the same names, signatures and conventions, so that the drivers,
+projection, ``reactions`` and `lagcomp.Solution` take it unchanged:
+
+* ``rhs``, ``reactions``, ``rhs_and_reactions``: one solve of the augmented system
+  [[M, −Λᵀ], [Λ, 0]] (q̈, λ) = (F, γ̃) (`lagcomp.ir.AugmentedSolve`), M by the composite-rigid-body algorithm, F by
+  recursive Newton–Euler, Λ = ∂Φ/∂q and γ = −Λ̇ q̇ from the tree's forward kinematics (`lagcomp.multibody.closure`),
+  γ̃ = γ − 2α Λ q̇ − β² Φ with the Baumgarte gains (α, β) the last two entries of p;
+* ``constraint_residuals`` (Φ, then Λ q̇) and ``constraint_matrix`` ([Λ | b], b = 0: the loops do not move with t).
+
+A direction along which Λ's row is identically zero (the tree cannot pull the cut points apart that way) is refused
+(`lagcomp.multibody.loops.refuse_idle_direction`): the augmented matrix would be singular at every state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import sympy as sp
+
+from lagcomp.codegen.bindings import BAUMGARTE
+from lagcomp.ir import AugmentedSolve
+from lagcomp.multibody.closure import closure_rows
+from lagcomp.multibody.crba import mass_matrix
+from lagcomp.multibody.loops import refuse_idle_direction
+from lagcomp.multibody.program import Program
+from lagcomp.multibody.rnea import forcing
+
+ARGS = ("t", "y", "p", "out")
+
+
+def gain_loads(tree) -> list[tuple[str, str]]:
+    """The loads of the Baumgarte gains (α, β): the two entries of p after the parameters."""
+    return [(name, f"p[{len(tree.parameters) + i}]") for i, name in enumerate(BAUMGARTE)]
+
+
+def loop_kernels(tree, nodes, gravity, mapping: dict, kernel) -> tuple:
+    """rhs, reactions, rhs_and_reactions, constraint_residuals and constraint_matrix of `tree` (with loops).
+
+    `nodes` are its `lagcomp.multibody.kinematics.LocalNode` s, `gravity` over the locals, `mapping` each parameter
+    to its local, `kernel(name, doc, args, build, solve=None)` the tree lowering's builder (a fresh
+    `lagcomp.multibody.program.Program` given to ``build``, which returns the stores).
+    """
+    n, k = len(nodes), len(tree.constraint_names)
+    _check_rows(tree, nodes, mapping)
+    rhs = kernel(
+        "rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), from the augmented system M q̈ = F + Λᵀ λ,\n"
+        "Λ q̈ = γ (Baumgarte terms from the last two entries of p): M by the composite-rigid-body\n"
+        "algorithm, F by recursive Newton-Euler, Λ and γ from the tree's forward kinematics.\n\n"
+        "Returns 0, or j > 0 when the augmented matrix is singular (pivot j); `out` is then invalid.", ARGS,
+        lambda prog: [(f"out[{i}]", nodes[i].qd) for i in range(n)] + _augmented_stores(prog, tree, nodes, gravity,
+                                                                                          mapping),
+        AugmentedSolve(size=n + k, mass_block=n, first=0, count=n, offset=n))
+    reactions = replace(
+        rhs, name="reactions",
+        doc=f"Multipliers λ, shape ({k},), in constraint order {tree.constraint_names}: the component along\n"
+            "each loop's direction of the force the second link exerts on the first at the cut joint (N).\n"
+            "Returns 0, or j > 0 when singular.",
+        stores=rhs.stores[n:], solve=AugmentedSolve(size=n + k, mass_block=n, first=n, count=k, offset=0))
+    both = replace(
+        rhs, name="rhs_and_reactions", args=(*ARGS, "lam"),
+        doc="`rhs` into `out` and `reactions` into `lam` from one solve of the augmented system, both bitwise\n"
+            "(the same code). Returns 0, or j > 0 when singular.", solve=replace(rhs.solve, multipliers=True))
+    residuals = kernel(
+        "constraint_residuals", f"Residuals, shape ({2 * k},): Φ of the {k} loop constraints, then Λ q̇.", ARGS,
+        lambda prog: _residual_stores(prog, tree, nodes, mapping, k))
+    matrix = kernel(
+        "constraint_matrix", f"Constraint matrix [Λ | b], shape ({k}, {n + 1}), into `out` (b = 0).", ARGS,
+        lambda prog: [(f"out[{c}, {j}]", row[j] if j < n else sp.S.Zero)
+                      for c, row in enumerate(_rows(prog, tree, nodes, mapping).rows) for j in range(n + 1)])
+    return rhs, reactions, both, residuals, matrix
+
+
+def _rows(prog, tree, nodes, mapping):
+    """The loops' `lagcomp.multibody.closure.ClosureRows` over the kernel's locals."""
+    last_node = {node.link: i for i, node in enumerate(tree.nodes)}
+    points = [(tuple(sp.sympify(x).xreplace(mapping) for x in c.first_point),
+               tuple(sp.sympify(x).xreplace(mapping) for x in c.second_point)) for c in tree.closures]
+    return closure_rows(prog, nodes, tree.closures, last_node, points)
+
+
+def _check_rows(tree, nodes, mapping) -> None:
+    """Refuse a loop direction whose row of Λ is identically zero (module docstring)."""
+    rows = _rows(Program(), tree, nodes, mapping).rows
+    c = 0
+    for closure in tree.closures:
+        for direction in range(len(closure.directions)):
+            if all(sp.sympify(entry).is_zero for entry in rows[c]):
+                refuse_idle_direction(closure, direction)
+            c += 1
+
+
+def _augmented_stores(prog, tree, nodes, gravity, mapping) -> list:
+    """Stores filling ``_kkt`` = [[M, −Λᵀ, F], [Λ, 0, γ̃]] (`lagcomp.ir.AugmentedSolve`)."""
+    n, k = len(nodes), len(tree.constraint_names)
+    alpha, beta = (sp.Symbol(name, real=True) for name in BAUMGARTE)
+    M = mass_matrix(prog, nodes)
+    F = forcing(prog, nodes, gravity)
+    loops = _rows(prog, tree, nodes, mapping)
+    N = n + k
+    stores = [(f"_kkt[{i}, {j}]", M[max(i, j), min(i, j)]) for i in range(n) for j in range(n)
+              if (max(i, j), min(i, j)) in M]
+    stores += [(f"_kkt[{i}, {n + c}]", -row[i]) for c, row in enumerate(loops.rows) for i in range(n) if row[i] != 0]
+    stores += [(f"_kkt[{i}, {N}]", F[i]) for i in range(n)]
+    stores += [(f"_kkt[{n + c}, {j}]", row[j]) for c, row in enumerate(loops.rows) for j in range(n) if row[j] != 0]
+    gamma = [prog.let(g - 2 * alpha * v - beta**2 * phi) for g, v, phi in zip(loops.gamma, loops.velocity, loops.Phi)]
+    return stores + [(f"_kkt[{n + c}, {N}]", g) for c, g in enumerate(gamma)]
+
+
+def _residual_stores(prog, tree, nodes, mapping, k: int) -> list:
+    loops = _rows(prog, tree, nodes, mapping)
+    return [(f"out[{c}]", phi) for c, phi in enumerate(loops.Phi)] + \
+        [(f"out[{k + c}]", v) for c, v in enumerate(loops.velocity)]
