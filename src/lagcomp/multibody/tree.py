@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from lagcomp.codegen.kinds import TREE_KINDS
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError
 from lagcomp.model.bodies import inertia_matrix
 from lagcomp.multibody.joints import ISSUE, Elementary, Joint, t
@@ -146,12 +147,17 @@ class Tree:
                  repr([(node.parent, node.joint.kind) for node in self.nodes])]
         return "\n".join(parts + [f"{role}={sp.srepr(expr)}" for role, expr in self.expressions().items()])
 
-    def on_demand_refusal(self, what: str) -> str:
-        """Why a tree model has no `what` (an on-demand kernel and its feature, `lagcomp.codegen.kinds`) yet."""
+    def on_demand_refusal(self, what: str, kind: str | None = None) -> str | None:
+        """Why a tree model has no `what` (an on-demand kernel and its feature, or an analysis that reads a System's
+        T and V) yet; None when `what` is a kernel of the on-demand `kind` the tree path builds
+        (`lagcomp.codegen.kinds.TREE_KINDS`: its recursions differentiated, `lagcomp.codegen.tree_companion`)."""
+        if kind in TREE_KINDS:
+            return None
         return (f"{what} is not available for the kinematic tree {self.name!r} yet: the multibody path emits rhs, "
-                f"mass_matrix, forcing, energy and momenta; the other kernels come in later steps of {ISSUE}. "
-                "Use the explicit methods (dop853, dopri5, tsit5, bs3, rk4), or write the system as a lc.System "
-                "with lc.RigidBody for this feature.")
+                "mass_matrix, forcing, energy and momenta, and on demand the Jacobians, the tangent kernels and "
+                "rest_partials (radau, sensitivities, fits, lagcomp.analysis.linearize); the other kernels come in "
+                f"later steps of {ISSUE}. Use those methods, or write the system as a lc.System with lc.RigidBody "
+                "for this feature.")
 
     def __repr__(self) -> str:
         return f"Tree({self.name!r}, links={[link.name for link in self.links]}, n={self.n})"
