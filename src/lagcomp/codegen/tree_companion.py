@@ -31,7 +31,7 @@ from lagcomp.codegen.kinds import KernelKind
 from lagcomp.codegen.tree_lower import FORMULATION, program_kernel
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.aba import accelerations
-from lagcomp.multibody.forward_mode import derivatives
+from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
 from lagcomp.multibody.kinematics import local_nodes
 from lagcomp.multibody.program import Program
@@ -164,20 +164,21 @@ def _tangent_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
 
 
 def _rest_partials_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
-    """``rest_partials``: ∂F/∂q, ∂F/∂q̇ of recursive Newton–Euler's F, the velocities loaded as 0."""
+    """``rest_partials``: ∂F/∂q, ∂F/∂q̇ of recursive Newton–Euler's F, then q̇ = 0 put into the program
+    (`lagcomp.multibody.forward_mode.substituted`: the velocity terms fold away)."""
     n, prog = local.n, Program()
     F = forcing(prog, list(local.nodes), list(local.gravity))
     tangent = derivatives(prog, F, _unit_seeds((*local.q, *local.qd)))
     stores = [(f"out[{k}, {i}, {j}]", tangent[i].get(k * n + j, sp.S.Zero))
               for k in range(2) for i in range(n) for j in range(n)]
-    resting = {s.name for s in local.qd}
-    loads = tuple((name, "0.0" if name in resting else source) for name, source in local.loads)
+    prog, values = substituted(prog, [e for _, e in stores], {s: sp.S.Zero for s in local.qd})
+    stores = [(target, e) for (target, _), e in zip(stores, values)]
     return (program_kernel(
         "rest_partials",
         "At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,\n"
         "column j the variable j). The velocities in `y` are ignored: the partials are those at rest.\n"
         "Forward mode over recursive Newton-Euler's F (lagcomp.multibody.forward_mode).",
-        ("t", "y", "p", "out"), prog, stores, loads),)
+        ("t", "y", "p", "out"), prog, stores, local.loads),)
 
 
 #: The kernels of each on-demand kind a tree has (`lagcomp.codegen.kinds.TREE_KINDS`).

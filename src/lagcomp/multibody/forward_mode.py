@@ -52,6 +52,17 @@ def derivatives(prog: Program, outputs, seeds: dict) -> list[dict]:
     return [_chain(prog, e, tangent) for e in outputs]
 
 
+def substituted(prog: Program, outputs, values: dict) -> tuple[Program, list]:
+    """A new program computing `outputs` with the symbols of `values` replaced by them (numbers: q̇ = 0 for the
+    partials at rest), and the outputs over its locals: each assignment `outputs` read, in order, with what it
+    reads replaced, through the new program's `Program.let`, so that zeros fold and the assignments they cancel
+    go."""
+    folded, env = Program(), dict(values)
+    for local, expr in prog.live(outputs):
+        env[local] = folded.let(expr.xreplace(env))
+    return folded, [sp.sympify(e).xreplace(env) for e in outputs]
+
+
 def _chain(prog: Program, expr: sp.Expr, tangent: dict) -> dict:
     """{direction: Σ_a ∂expr/∂a · ȧ[direction]} over the symbols a of `expr` that have derivatives, bound."""
     atoms = sorted((s for s in expr.free_symbols if s in tangent), key=sp.default_sort_key)
