@@ -250,7 +250,7 @@ def test_a_tree_has_its_kinds_and_names_the_others(pairs):
     with pytest.raises(lc.ModelError, match=r"taylor kernels.*method='taylor'.*kinematic tree 'planar_chain_4'"):
         tree_model.on_demand_entry("taylor")
     with pytest.raises(lc.ModelError, match=r"`geometry`.*issue 39"):
-        tree_model.kernels.geometry
+        _ = tree_model.kernels.geometry
 
 
 def test_the_jacobian_costs_less_than_2n_times_rhs(pairs):
