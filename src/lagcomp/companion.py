@@ -98,12 +98,14 @@ class Companion:
             return self._modules[kind]
 
     def _buildable(self, kind: str, wanted: str | None, cache: Cache):
-        """`_equations`, unless what they describe refuses on-demand kernels (a kinematic tree, for now: its
-        ``on_demand_refusal`` says why), which raises a ModelError naming `wanted` and its feature."""
+        """`_equations`, unless what they describe refuses the on-demand `kind` (a kinematic tree's
+        ``on_demand_refusal`` says why, for the kinds it has not), which raises a ModelError naming `wanted` and
+        its feature."""
         eom = self._equations(kind, wanted, cache)
         refusal = getattr(eom, "on_demand_refusal", None)
-        if refusal is not None:
-            raise ModelError(refusal(self._what(kind, wanted)))
+        reason = None if refusal is None else refusal(self._what(kind, wanted), kind)
+        if reason is not None:
+            raise ModelError(reason)
         return eom
 
     @staticmethod

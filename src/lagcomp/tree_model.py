@@ -3,9 +3,11 @@
 ``lagcomp.compile(tree)`` comes here.  The kernels come from the recursions over the tree
 (`lagcomp.codegen.tree_lower`), not from expanding T and V; the module is emitted, cached, loaded and run as any
 model's: same cache (keyed by the tree's fingerprint), same drivers, same `Model` (a `TreeModel`, whose ``system``
-is the Tree).  What this first step of issue 39 does not provide yet is refused with a `ModelError` naming it: the
-on-demand kernels (Jacobians for radau and sensitivities, the Hamiltonian form, Taylor, geometry, the equations'
-LaTeX) and the analyses that read a System's T and V.
+is the Tree).  Its on-demand kernels of the kinds `lagcomp.codegen.kinds.TREE_KINDS` (the Jacobians, the tangent
+kernels, ``rest_partials``: radau, sensitivities, linearization) are the recursions differentiated in forward mode
+(`lagcomp.codegen.tree_companion`), built on first use into companion modules as a System's are.  What issue 39
+does not provide yet is refused with a `ModelError` naming it: the other on-demand kernels (the Hamiltonian form,
+Taylor, geometry, the equations' LaTeX) and the analyses that read a System's T and V.
 """
 
 from __future__ import annotations
@@ -13,8 +15,9 @@ from __future__ import annotations
 import warnings
 
 from lagcomp.cache import Cache, input_key, load_module
+from lagcomp.codegen.kinds import ON_DEMAND, TREE_KINDS
 from lagcomp.companion import keep_equations
-from lagcomp.errors import CacheWarning
+from lagcomp.errors import CacheWarning, ModelError
 from lagcomp.runtime import Model, run_defaults
 
 
@@ -56,7 +59,7 @@ def _build(tree, cache: Cache, key: str, progress=None):
         "separable": False, "holonomic_separable": False,
         "operations": {k.name: k.operation_count for k in ir.kernels}, "on_demand": True,
     }
-    keep_equations(cache, key, tree)   # (what the companion would be built from: the tree, which refuses it)
+    keep_equations(cache, key, tree)   # (what the companions are built from: `lagcomp.codegen.tree_companion`)
     return cache.store(key, source, tree.name, metadata)
 
 
@@ -65,10 +68,17 @@ class TreeModel(Model):
 
     @property
     def on_demand_entries(self) -> dict:
-        """None built: a tree model has no companion modules yet (its on-demand kernels are refused, issue 39), so
-        `operations` counts the eager kernels and ``lagcomp precompile --all`` builds nothing more."""
-        return {}
+        """The cache entries of the companion modules of the on-demand kinds a tree has
+        (`lagcomp.codegen.kinds.TREE_KINDS`), by kind, each built first if needed: what ``operations`` counts and
+        ``lagcomp precompile --all`` builds."""
+        return {kind: self.kernels.companion.entry(kind) for kind in TREE_KINDS}
 
     def on_demand_entry(self, kind: str):
-        """None: a tree model has no companion module yet (its on-demand kernels are refused, issue 39)."""
-        return None
+        """The cache entry of the companion module of the on-demand `kind`, built first if needed; a ModelError
+        naming the kind for one a tree does not have yet (issue 39)."""
+        if kind not in TREE_KINDS:
+            feature = next((k.feature for k in ON_DEMAND if k.name == kind), "an unknown kind")
+            raise ModelError(f"the {kind} kernels ({feature}) are not available for the kinematic tree "
+                             f"{self.name!r} yet: a tree model has the on-demand kinds {list(TREE_KINDS)} "
+                             "(issue 39).")
+        return self.kernels.companion.entry(kind)

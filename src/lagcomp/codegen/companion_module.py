@@ -14,14 +14,19 @@ from lagcomp.codegen.kinds import KernelKind
 from lagcomp.codegen.latex import lagrange_equations
 from lagcomp.codegen.lower import lower
 from lagcomp.codegen.taylor import taylor_decomposition, taylor_program
+from lagcomp.codegen.tree_companion import tree_companion_source
 from lagcomp.mechanics.lagrange import EOM
+from lagcomp.multibody.tree import Tree
 
 
 def companion_source(eom: EOM, kind: KernelKind, eager_module: str) -> tuple[str, dict]:
     """The source of the companion module of `kind` for `eom`, and the metadata stored with it: ``operations``
     (arithmetic operations after CSE, per kernel) and, for the kind "taylor", ``taylor_program``
     (`lagcomp.codegen.taylor.taylor_program`, None without one).  `eager_module` is the name the companion
-    imports the eager kernels it calls from (`lagcomp.cache.import_name` of the model's eager module)."""
+    imports the eager kernels it calls from (`lagcomp.cache.import_name` of the model's eager module).  A
+    kinematic tree's (`eom` a `lagcomp.Tree`) come from its recursions (`lagcomp.codegen.tree_companion`)."""
+    if isinstance(eom, Tree):
+        return tree_companion_source(eom, kind, eager_module)
     if kind.name == "taylor":
         ir = lower(eom, "motion")
         taylor = taylor_decomposition(ir)

@@ -59,6 +59,10 @@ ON_DEMAND = (
                "state-space models (lagcomp.analysis.linearize(..., inputs=...), Model.rhs_input_jacobian)"),
 )
 
+#: The on-demand kinds a model compiled from a kinematic tree (`lagcomp.Tree`) has, built from its recursions
+#: differentiated in forward mode (`lagcomp.codegen.tree_companion`); its other kinds are refused.
+TREE_KINDS = ("jacobians", "directional", "analysis")
+
 #: Every name a companion module may define, and the kind that defines it.
 KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}
 

@@ -44,6 +44,11 @@ class Program:
         """Each entry of `entries` through `let`."""
         return [self.let(e) for e in entries]
 
+    def rebound(self, expr) -> sp.Expr:
+        """`expr` with each subexpression this program has bound replaced by its local (a derivative's
+        cos q by the local of cos q: `lagcomp.multibody.forward_mode`)."""
+        return sp.sympify(expr).xreplace(self._bound)
+
     def live(self, outputs) -> list[tuple[sp.Symbol, sp.Expr]]:
         """The assignments the expressions `outputs` read, directly or through other assignments, in order."""
         needed = set().union(*(sp.sympify(e).free_symbols for e in outputs)) if outputs else set()

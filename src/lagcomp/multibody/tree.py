@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from lagcomp.codegen.kinds import TREE_KINDS
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError
 from lagcomp.model.bodies import inertia_matrix
 from lagcomp.multibody.joints import ISSUE, Elementary, Joint, t
@@ -161,12 +162,22 @@ class Tree:
             parts.append(repr([(c.first, c.second, c.directions, c.names) for c in self.closures]))
         return "\n".join(parts + [f"{role}={sp.srepr(expr)}" for role, expr in self.expressions().items()])
 
-    def on_demand_refusal(self, what: str) -> str:
-        """Why a tree model has no `what` (an on-demand kernel and its feature, `lagcomp.codegen.kinds`) yet."""
+    def on_demand_refusal(self, what: str, kind: str | None = None) -> str | None:
+        """Why a tree model has no `what` (an on-demand kernel and its feature, or an analysis that reads a System's
+        T and V) yet; None when `what` is a kernel of the on-demand `kind` the tree path builds
+        (`lagcomp.codegen.kinds.TREE_KINDS`: its recursions differentiated, `lagcomp.codegen.tree_companion`)."""
+        if kind in TREE_KINDS and not self.closures:
+            return None
+        if kind in TREE_KINDS:
+            return (f"{what} is not available for the kinematic tree {self.name!r} yet: it has closed loops "
+                    f"({', '.join(c.name for c in self.closures)}), and the Jacobians of the recursions do not "
+                    f"include the loops' constraints yet (a later step of {ISSUE}). Use an explicit method "
+                    "(dop853, rk4, ...) with projection=True.")
         return (f"{what} is not available for the kinematic tree {self.name!r} yet: the multibody path emits rhs, "
-                f"mass_matrix, forcing, energy and momenta; the other kernels come in later steps of {ISSUE}. "
-                "Use the explicit methods (dop853, dopri5, tsit5, bs3, rk4), or write the system as a lc.System "
-                "with lc.RigidBody for this feature.")
+                "mass_matrix, forcing, energy and momenta, and on demand the Jacobians, the tangent kernels and "
+                "rest_partials (radau, sensitivities, lagcomp.analysis.linearize); the other kernels come in "
+                f"later steps of {ISSUE}. Use those methods, or write the system as a lc.System with lc.RigidBody "
+                "for this feature.")
 
     def __repr__(self) -> str:
         return f"Tree({self.name!r}, links={[link.name for link in self.links]}, n={self.n})"

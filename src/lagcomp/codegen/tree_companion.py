@@ -1,0 +1,185 @@
+r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions differentiated in forward mode.
+
+`lagcomp.codegen.tree_lower` emits the eager kernels of a tree from its recursions; the kinds here
+(`lagcomp.codegen.kinds.TREE_KINDS`) are those recursions' derivatives, each its own program
+(`lagcomp.multibody.program`) of the recursion followed by its forward-mode derivative
+(`lagcomp.multibody.forward_mode`), never an expanded expression:
+
+* "jacobians" (radau, sensitivities, fits, ``Model.jacobian``): ``rhs_with_jacobian`` (f = (q̇, q̈) of the
+  articulated-body algorithm and ∂f/∂y along the 2n state directions), ``rhs_jacobian`` (the same, f dropped),
+  ``rhs_parameter_jacobian`` (∂f/∂p along the P parameters) and ``rhs_with_full_jacobian`` (both);
+* "directional" (a sensitivity run of one column): ``rhs_tangent`` and ``rhs_tangent_parameters``, f and J v
+  (+ ∂f/∂p w) along one direction read from y's (and p's) tail: the recursion and one tangent, about three
+  times ``rhs``; runs of more columns take the full Jacobians (`lagcomp.integrate.sensitivities`);
+* "analysis" (``lagcomp.analysis.linearize``, equilibria): ``rest_partials``, ∂F/∂q and ∂F/∂q̇ of recursive
+  Newton–Euler's F at q̇ = 0.
+
+The program of a kernel that also writes f is the eager ``rhs``'s, assignment for assignment (same recursion,
+same locals), so its f is ``rhs``'s bitwise.  No M is factored: the articulated-body algorithm's q̈ is explicit,
+so every status is 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from lagcomp.codegen.bindings import user_local
+from lagcomp.codegen.emit import emit_companion
+from lagcomp.codegen.kinds import KernelKind
+from lagcomp.codegen.tree_lower import FORMULATION, program_kernel
+from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
+from lagcomp.multibody.aba import accelerations
+from lagcomp.multibody.forward_mode import derivatives, substituted
+from lagcomp.multibody.joints import t
+from lagcomp.multibody.kinematics import local_nodes
+from lagcomp.multibody.program import Program
+from lagcomp.multibody.rnea import forcing
+from lagcomp.multibody.tree import Tree
+
+
+@dataclass(frozen=True)
+class TreeLocals:
+    """The kernel locals of a tree: coordinates `q`, velocities `qd`, parameters `p` (symbols, in order), the
+    loads binding them to y and p, and the tree's nodes and gravity over them."""
+
+    q: tuple
+    qd: tuple
+    p: tuple
+    loads: tuple
+    nodes: tuple
+    gravity: tuple
+
+    @property
+    def n(self) -> int:
+        return len(self.q)
+
+
+def tree_locals(tree: Tree) -> TreeLocals:
+    """`TreeLocals` of `tree`, the eager module's names (`lagcomp.codegen.tree_lower.lower_tree`)."""
+    n = tree.n
+    q = tuple(sp.Symbol(user_local("q", name, i), real=True) for i, name in enumerate(tree.coordinate_names))
+    qd = tuple(sp.Symbol(user_local("qd", name, i), real=True) for i, name in enumerate(tree.coordinate_names))
+    mapping = {s: sp.Symbol(user_local("p", s.name, k), real=True) for k, s in enumerate(tree.parameters)}
+    loads = [(s.name, f"y[{i}]") for i, s in enumerate(q)] + [(s.name, f"y[{n + i}]") for i, s in enumerate(qd)]
+    loads += [(local.name, f"p[{k}]") for k, local in enumerate(mapping.values())]
+    p = tuple(mapping.values())
+    mapping[t] = sp.Symbol("t", real=True)
+    nodes = tuple(local_nodes(tree, q, qd, mapping))
+    return TreeLocals(q, qd, p, tuple(loads), nodes, tuple(sp.sympify(g).xreplace(mapping) for g in tree.gravity))
+
+
+def tree_companion_source(tree: Tree, kind: KernelKind, eager_module: str) -> tuple[str, dict]:
+    """The source of the companion module of `kind` (one of `lagcomp.codegen.kinds.TREE_KINDS`) of `tree`, and
+    its metadata (``operations`` per kernel), as `lagcomp.codegen.companion_module.companion_source` gives a
+    System's."""
+    ir = lower_tree_kind(tree, kind.name)
+    operations = {k.name: k.operation_count for k in ir.kernels}
+    return emit_companion(ir, kind, eager_module), {"operations": operations}
+
+
+def lower_tree_kind(tree: Tree, kind: str) -> ModuleIR:
+    """The IR of the kernels of the on-demand `kind` of `tree` (module docstring)."""
+    local = tree_locals(tree)
+    kernels = _BUILDERS[kind](local)
+    return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=tree.coordinate_names,
+                    parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION)
+
+
+def _motion(prog: Program, local: TreeLocals) -> list:
+    """f = (q̇, q̈) of the articulated-body algorithm, bound in `prog` as ``rhs`` binds it."""
+    return [*local.qd, *accelerations(prog, list(local.nodes), list(local.gravity))]
+
+
+def _unit_seeds(symbols, first: int = 0) -> dict:
+    """{symbol: {first + j: 1}}: the j-th of `symbols` is the direction first + j."""
+    return {s: {first + j: sp.S.One} for j, s in enumerate(symbols)}
+
+
+def _jacobian_stores(f: list, tangent: list, directions: range, with_f: bool) -> list:
+    """The stores of ∂f/∂x into out (2n, len(`directions`)), x the `directions` of `tangent`; with `with_f` f
+    into ydot first."""
+    stores = [(f"ydot[{i}]", e) for i, e in enumerate(f)] if with_f else []
+    return stores + [(f"out[{i}, {j}]", tangent[i].get(x, sp.S.Zero))
+                     for i in range(len(f)) for j, x in enumerate(directions)]
+
+
+_HOW = ("Forward mode over the articulated-body algorithm (lagcomp.multibody.forward_mode): each of its\n"
+        "assignments followed by its derivatives, no expression expanded.  Returns 0.")
+
+
+def _jacobian_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
+    """``rhs_with_jacobian``, ``rhs_jacobian``, ``rhs_parameter_jacobian``, ``rhs_with_full_jacobian``: one program
+    of f and its derivatives along the 2n + P directions (y, p), each kernel the part its stores read."""
+    size, P = 2 * local.n, len(local.p)
+    prog = Program()
+    f = _motion(prog, local)
+    tangent = derivatives(prog, f, {**_unit_seeds((*local.q, *local.qd)), **_unit_seeds(local.p, size)})
+
+    def kernel(name, doc, directions, with_f):
+        args = ("t", "y", "p", "ydot", "out") if with_f else ("t", "y", "p", "out")
+        return program_kernel(name, doc + _HOW, args, prog, _jacobian_stores(f, tangent, directions, with_f),
+                              local.loads, ReturnZero())
+
+    return (
+        kernel("rhs_with_jacobian", "f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise),\n"
+               f"out[i, j] = ∂f_i/∂y_j, ({size}, {size}).\n", range(size), with_f=True),
+        Kernel(name="rhs_jacobian", doc=f"out[i, j] = ∂f_i/∂y_j, ({size}, {size}): `rhs_with_jacobian`, f dropped.",
+               args=("t", "y", "p", "out"), loads=(), temps=(), stores=(), solve=Delegate("rhs_with_jacobian", size)),
+        kernel("rhs_parameter_jacobian", f"out[i, k] = ∂f_i/∂p_k, ({size}, {P}), p the model's parameters in order.\n",
+               range(size, size + P), with_f=False),
+        kernel("rhs_with_full_jacobian", "f and both Jacobians at once: ydot = f(t, y) as `rhs` computes it "
+               f"(bitwise),\nout = [∂f/∂y | ∂f/∂p], ({size}, {size + P}).\n", range(size + P), with_f=True),
+    )
+
+
+def _tangent_kernel(local: TreeLocals, name: str, doc: str, parameters: bool) -> Kernel:
+    """f and its derivative along v = y[2n:4n] (and w = p's last P floats) into out (4n,)."""
+    prog, size, P = Program(), 2 * local.n, len(local.p)
+    v = [sp.Symbol(f"_dy{j}", real=True) for j in range(size)]
+    w = [sp.Symbol(f"_dp{k}", real=True) for k in range(P)] if parameters else []
+    seeds = {s: {0: v[j]} for j, s in enumerate((*local.q, *local.qd))}
+    seeds.update({s: {0: w[k]} for k, s in enumerate(local.p[:len(w)])})
+    f = _motion(prog, local)
+    tangent = derivatives(prog, f, seeds)
+    stores = [(f"out[{i}]", e) for i, e in enumerate(f)]
+    stores += [(f"out[{size + i}]", tangent[i].get(0, sp.S.Zero)) for i in range(size)]
+    loads = (*local.loads, *((s.name, f"y[{size + j}]") for j, s in enumerate(v)),
+             *((s.name, f"p[p.shape[0] - {P - k}]") for k, s in enumerate(w)))
+    return program_kernel(name, doc, ("t", "y", "p", "out"), prog, stores, loads, ReturnZero())
+
+
+def _tangent_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
+    """``rhs_tangent`` and ``rhs_tangent_parameters`` (module docstring)."""
+    size = 2 * local.n
+    return (
+        _tangent_kernel(local, "rhs_tangent",
+                        f"The augmented rhs of one initial-state sensitivity column: y = (x, v) ({2 * size},),\n"
+                        "out = (f(x), ∂f/∂y v), f as `rhs` computes it (bitwise).\n" + _HOW, parameters=False),
+        _tangent_kernel(local, "rhs_tangent_parameters",
+                        f"`rhs_tangent` plus ∂f/∂p w, w the last {len(local.p)} floats of p (the parameters'\n"
+                        "direction, after everything the other kernels read).\n" + _HOW, parameters=True),
+    )
+
+
+def _rest_partials_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
+    """``rest_partials``: ∂F/∂q, ∂F/∂q̇ of recursive Newton–Euler's F, then q̇ = 0 put into the program
+    (`lagcomp.multibody.forward_mode.substituted`: the velocity terms fold away)."""
+    n, prog = local.n, Program()
+    F = forcing(prog, list(local.nodes), list(local.gravity))
+    tangent = derivatives(prog, F, _unit_seeds((*local.q, *local.qd)))
+    stores = [(f"out[{k}, {i}, {j}]", tangent[i].get(k * n + j, sp.S.Zero))
+              for k in range(2) for i in range(n) for j in range(n)]
+    prog, values = substituted(prog, [e for _, e in stores], {s: sp.S.Zero for s in local.qd})
+    stores = [(target, e) for (target, _), e in zip(stores, values)]
+    return (program_kernel(
+        "rest_partials",
+        "At (q, q̇ = 0, t), shape (2, n, n) into `out`: out[0] = ∂F/∂q, out[1] = ∂F/∂q̇ (row i is F_i,\n"
+        "column j the variable j). The velocities in `y` are ignored: the partials are those at rest.\n"
+        "Forward mode over recursive Newton-Euler's F (lagcomp.multibody.forward_mode).",
+        ("t", "y", "p", "out"), prog, stores, local.loads),)
+
+
+#: The kernels of each on-demand kind a tree has (`lagcomp.codegen.kinds.TREE_KINDS`).
+_BUILDERS = {"jacobians": _jacobian_kernels, "directional": _tangent_kernels, "analysis": _rest_partials_kernels}
