@@ -15,9 +15,14 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp.codegen.bindings import user_local
-from lagcomp.codegen.lower import event_reset_kernel
+from lagcomp.codegen.tree_events import tree_event_kernels
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.aba import accelerations
+from lagcomp.multibody.charts import (
+    accelerations_in_coordinates,
+    forces_in_coordinates,
+    mass_matrix_in_coordinates,
+)
 from lagcomp.multibody.crba import mass_matrix
 from lagcomp.multibody.energy import kinetic_energy, potential_energy
 from lagcomp.multibody.joints import t
@@ -53,23 +58,21 @@ def lower_tree(tree: Tree) -> ModuleIR:
         kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), q̈ by the articulated-body algorithm.\n\n"
                "Returns 0.", ARGS,
                lambda prog: [(f"out[{i}]", qd[i]) for i in range(n)]
-               + [(f"out[{n + i}]", a) for i, a in enumerate(accelerations(prog, nodes, gravity))], ReturnZero()),
+               + [(f"out[{n + i}]", a) for i, a in enumerate(
+                   accelerations_in_coordinates(prog, nodes, accelerations(prog, nodes, gravity)))], ReturnZero()),
         kernel("mass_matrix", "Mass matrix M(q), shape (n, n), into `out` (composite-rigid-body algorithm).", ARGS,
-               lambda prog: _matrix_stores(mass_matrix(prog, nodes), n)),
+               lambda prog: _matrix_stores(mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes)), n)),
         kernel("forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out` (recursive Newton-Euler at q̈ = 0).",
-               ARGS, lambda prog: [(f"out[{i}]", f) for i, f in enumerate(forcing(prog, nodes, gravity))]),
+               ARGS, lambda prog: [(f"out[{i}]", f) for i, f in enumerate(
+                   forces_in_coordinates(prog, nodes, forcing(prog, nodes, gravity)))]),
         kernel("energy", "Total mechanical energy T + V (gravity and the joints' springs).", ("t", "y", "p"),
                lambda prog: [("return", prog.let(kinetic_energy(prog, nodes) + potential_energy(prog, nodes, gravity)))]),
         Kernel(name="energy_function", doc="Energy function h = Σ q̇ ∂L/∂q̇ − L: T is homogeneous quadratic in q̇,\n"
                "so h = T + V, the kernel `energy`.", args=("t", "y", "p"), loads=(), temps=(), stores=(),
                alias="energy"),
         kernel("momenta", "Conjugate momenta ∂T/∂q̇_i, shape (n,), into `out` (the subtrees' spatial momenta).", ARGS,
-               lambda prog: [(f"out[{i}]", h) for i, h in enumerate(momenta(prog, nodes))]),
-        Kernel(name="event_values", doc="Event functions g, shape (0,): a tree has no events yet.", args=ARGS,
-               loads=(), temps=(), stores=()),
-        Kernel(name="event_gradients", doc=f"Partials of the event functions, shape (0, {2 * n + 1 + len(tree.parameters)})"
-               ": none.\nReturns 0.", args=ARGS, loads=(), temps=(), stores=(), solve=ReturnZero()),
-        event_reset_kernel((), (), 2 * n, mapping, tuple(loads)),
+               lambda prog: [(f"out[{i}]", h) for i, h in enumerate(forces_in_coordinates(prog, nodes, momenta(prog, nodes)))]),
+        *tree_event_kernels(tree, q, qd, mapping, loads),
     )
     return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=names,
                     parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION)

@@ -21,6 +21,7 @@ import sympy as sp
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError
 from lagcomp.model.bodies import inertia_matrix
 from lagcomp.multibody.joints import ISSUE, Elementary, Joint, t
+from lagcomp.multibody.shadow import shadow_events
 
 ZERO_INERTIA = sp.zeros(3, 3)
 
@@ -114,7 +115,7 @@ class Tree:
         if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
             raise ModelError(f"{name}: `t_end` must be a positive duration, got {t_end!r}.")
         self.t_end = float(t_end)
-        self.events = ()
+        self.events = shadow_events(self.nodes)   # (the spherical joints' MRP switches; none without them)
 
     @property
     def n(self) -> int:
