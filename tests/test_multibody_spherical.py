@@ -158,7 +158,7 @@ def _relative(a, b) -> float:
     return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
 
 
-@pytest.mark.parametrize("n_links, free_base", [(1, False), (3, False), (1, True), (2, True)])
+@pytest.mark.parametrize("n_links, free_base", [(1, False), (3, False), (2, True)])
 def test_spherical_chains_agree_with_pinocchio(cache_dir, n_links, free_base):
     """q̈ against Pinocchio's ABA, T + V against its energies, and the module's own M q̈ = F and p = M q̇, at random
     states with |σ| up to 2 (past the switch: the equations hold for any σ)."""

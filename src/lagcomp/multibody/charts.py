@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from lagcomp.multibody import mrp
-from lagcomp.multibody.program import Program
+from lagcomp.multibody.kinematics import mrp_matrices
+from lagcomp.multibody.program import Program, mat_t_vec, mat_vec
 
 
 def spherical_joints(nodes) -> list:
@@ -29,7 +29,7 @@ def accelerations_in_coordinates(prog: Program, nodes, psi) -> list:
     """q̈ from the recursions' accelerations `psi` (node order): σ̈ = J⁻¹ ψ on each spherical joint."""
     out = list(psi)
     for i, sigma in spherical_joints(nodes):
-        out[i:i + 3] = prog.vector(mrp.jacobian_inverse_times(sigma, psi[i:i + 3]))
+        out[i:i + 3] = prog.vector(mat_vec(mrp_matrices(prog, sigma)[1], psi[i:i + 3]))
     return out
 
 
@@ -38,7 +38,7 @@ def forces_in_coordinates(prog: Program, nodes, values) -> list:
     joint."""
     out = list(values)
     for i, sigma in spherical_joints(nodes):
-        out[i:i + 3] = prog.vector(mrp.jacobian_transpose_times(sigma, values[i:i + 3]))
+        out[i:i + 3] = prog.vector(mat_t_vec(mrp_matrices(prog, sigma)[0], values[i:i + 3]))
     return out
 
 
@@ -54,12 +54,12 @@ def mass_matrix_in_coordinates(prog: Program, nodes, entries: dict) -> dict:
         for j in range(n):
             full_column = [full[i + k][j] for k in range(3)]
             if any(e != 0 for e in full_column):
-                for k, e in enumerate(prog.vector(mrp.jacobian_transpose_times(sigma, full_column))):
+                for k, e in enumerate(prog.vector(mat_t_vec(mrp_matrices(prog, sigma)[0], full_column))):
                     full[i + k][j] = e
     for j, sigma in joints:   # the columns: each row's block through Jᵀ again (M is symmetric: (Jᵀ M J)ᵀ)
         for i in range(n):
             full_row = [full[i][j + k] for k in range(3)]
             if any(e != 0 for e in full_row):
-                for k, e in enumerate(prog.vector(mrp.jacobian_transpose_times(sigma, full_row))):
+                for k, e in enumerate(prog.vector(mat_t_vec(mrp_matrices(prog, sigma)[0], full_row))):
                     full[i][j + k] = e
     return {(i, j): full[i][j] for i in range(n) for j in range(i + 1) if full[i][j] != 0}

@@ -124,9 +124,20 @@ def node_rate(prog: Program, node: LocalNode):
     return joint_rates(prog, node)[node.part]
 
 
+def mrp_matrices(prog: Program, sigma) -> tuple[list, list]:
+    """J(σ) and J⁻¹(σ) = B / 4 (rows), bound entry by entry (`lagcomp.multibody.mrp`): s = σ·σ and 4 / (1 + s)²
+    formed once.  Binding the same σ again returns the same locals (`Program.let` hash-conses)."""
+    s = prog.let(dot(sigma, sigma))
+    k = prog.let(4 / (1 + s) ** 2)
+    B = mrp.b_matrix(sigma, s)
+    J = [[prog.let(k * B[j][i]) for j in range(3)] for i in range(3)]
+    return J, [[prog.let(B[i][j] / 4) for j in range(3)] for i in range(3)]
+
+
 def joint_rates(prog: Program, node: LocalNode) -> list:
     """A spherical joint's body-frame angular velocity ω = J(σ) σ̇, bound (the same locals for its three parts)."""
-    return prog.vector(mrp.angular_velocity(node.sigma, node.sigma_dot))
+    J, _ = mrp_matrices(prog, node.sigma)
+    return prog.vector(mat_vec(J, node.sigma_dot))
 
 
 def joint_motion(prog: Program, node: LocalNode) -> tuple[list, list]:
@@ -176,7 +187,7 @@ def spherical_velocity_product(prog: Program, velocity, node: LocalNode):
         return list(ZERO3), list(ZERO3)
     (w, v), omega = velocity, joint_rates(prog, node)
     sigma, rates = node.sigma, node.sigma_dot
-    one_plus_s = prog.let(1 + dot(sigma, sigma))
+    one_plus_s = prog.let(1 + prog.let(dot(sigma, sigma)))
     a = prog.let(-4 * dot(sigma, rates) / one_plus_s)
     b = prog.let(8 * dot(rates, rates) / one_plus_s ** 2)
     return (prog.vector(add(cross(w, omega), [a * omega[i] + b * sigma[i] for i in range(3)])),

@@ -41,6 +41,14 @@ def rotation(sigma) -> list:
             for i in range(3)]
 
 
+def b_matrix(sigma, s=None) -> list:
+    """B(σ) = (1 − s) 1 + 2 [σ]× + 2 σ σᵀ (rows), s = σ·σ (given, when bound already): J = 4 Bᵀ / (1 + s)², J⁻¹ =
+    B / 4."""
+    s = _dot(sigma, sigma) if s is None else s
+    skew = [[0, -sigma[2], sigma[1]], [sigma[2], 0, -sigma[0]], [-sigma[1], sigma[0], 0]]
+    return [[(1 - s if i == j else 0) + 2 * skew[i][j] + 2 * sigma[i] * sigma[j] for j in range(3)] for i in range(3)]
+
+
 def angular_velocity(sigma, sigma_dot) -> list:
     """ω = J(σ) σ̇ = 4 ((1 − s) σ̇ − 2 σ × σ̇ + 2 σ (σ·σ̇)) / (1 + s)²: the body's angular velocity, body axes."""
     return jacobian_times(sigma, sigma_dot)
