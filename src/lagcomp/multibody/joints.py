@@ -258,5 +258,7 @@ def _shown(coordinates) -> str:
 
 
 def _pairs(coordinates, axes, count: int, what: str) -> None:
-    if isinstance(coordinates, str) or len(tuple(coordinates)) != count or len(tuple(axes)) != count:
-        raise ModelError(f"{what}: needs {count} coordinates (and {count} axes), got {coordinates!r}.")
+    if isinstance(coordinates, str) or len(tuple(coordinates)) != count:
+        raise ModelError(f"{what}: needs {count} coordinates, one per degree of freedom; got {coordinates!r}.")
+    if len(tuple(axes)) != count:
+        raise ModelError(f"{what}: needs {count} axes, one per coordinate; got {axes!r}.")
