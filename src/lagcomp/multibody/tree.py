@@ -34,7 +34,7 @@ class Link:
     ----------
     name : str
         An identifier; other links name it as their `parent`.
-    joint : lagcomp.Revolute, Prismatic, Universal, Cylindrical or Planar
+    joint : lagcomp.Revolute, Prismatic, Universal, Cylindrical, Planar, Spherical or Free
         How the link moves relative to its parent, and where the joint sits in the parent's frame.
     parent : str, optional
         The parent link's name; None (default) for a link jointed to the fixed base.
