@@ -78,7 +78,8 @@ def _chain(n_links: int, free_base: bool) -> lc.Tree:
     rng = np.random.default_rng(n_links + 10 * free_base)
     links = []
     if free_base:
-        links.append(lc.Link("base", lc.Free(("x", "y", "z", "b1", "b2", "b3"), origin=(0.1, 0.2, 0.3)),
+        tilt = [[0.0, -0.6, 0.8], [1.0, 0.0, 0.0], [0.0, 0.8, 0.6]]
+        links.append(lc.Link("base", lc.Free(("x", "y", "z", "b1", "b2", "b3"), origin=(0.1, 0.2, 0.3), rotation=tilt),
                              mass=3.0, com=(0.1, -0.2, 0.05), inertia=(0.3, 0.4, 0.5)))
         links.append(lc.Link("elbow", lc.Revolute("th", axis=(0.3, 0.4, 1.0), origin=(0.5, 0.1, 0.0)),
                              parent="base", mass=1.0, com=(0.2, 0, -0.3), inertia=(0.2, 0.25, 0.1)))
