@@ -95,7 +95,8 @@ def placement(prog: Program, node: LocalNode) -> Placement:
     if node.kind == "spherical":
         if node.part > 0:
             return Placement([[sp.S.One if i == j else sp.S.Zero for j in range(3)] for i in range(3)], list(ZERO3))
-        RJ = [prog.vector(row) for row in mrp.rotation(node.sigma)]
+        s = prog.let(dot(node.sigma, node.sigma))
+        RJ = [prog.vector(row) for row in mrp.rotation(node.sigma, s, prog.let(1 / (1 + s) ** 2))]
         R = [prog.vector(mat_vec(RT, [RJ[0][j], RJ[1][j], RJ[2][j]])) for j in range(3)]
         return Placement([[R[j][i] for j in range(3)] for i in range(3)], list(node.origin))
     if node.kind == "revolute":

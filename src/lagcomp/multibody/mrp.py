@@ -31,10 +31,11 @@ def _cross(a, b) -> list:
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
-def rotation(sigma) -> list:
-    """R(σ), rows (3×3): the body's axes in the parent's, x_parent = R x_body."""
-    s = _dot(sigma, sigma)
-    k = 1 / (1 + s) ** 2
+def rotation(sigma, s=None, k=None) -> list:
+    """R(σ), rows (3×3): the body's axes in the parent's, x_parent = R x_body (`s` = σ·σ and `k` = 1 / (1 + s)²
+    given when they are bound already)."""
+    s = _dot(sigma, sigma) if s is None else s
+    k = 1 / (1 + s) ** 2 if k is None else k
     skew = [[0, -sigma[2], sigma[1]], [sigma[2], 0, -sigma[0]], [-sigma[1], sigma[0], 0]]
     square = [[sigma[i] * sigma[j] - (s if i == j else 0) for j in range(3)] for i in range(3)]   # [σ]×² = σσᵀ − s1
     return [[(1 if i == j else 0) + k * (8 * square[i][j] + 4 * (1 - s) * skew[i][j]) for j in range(3)]
