@@ -296,6 +296,32 @@ def test_the_shadow_switch_is_an_event_with_a_reset_that_fixed_step_methods_refu
     assert abs(sol.q[-1, 2] - np.tan(4.0 / 4)) <= 1e-12   # σ_z = tan(θ/4), θ = ω t about z: past |σ| = 1 (θ = π)
 
 
+@pytest.fixture(scope="module")
+def heavy_ball(cache_dir):
+    """An asymmetric body on a ball joint under gravity, its centre of mass off the joint."""
+    tree = lc.Tree([lc.Link("ball", lc.Spherical(("a", "b", "c")), mass=1.3, com=(0.2, -0.1, 0.5),
+                            inertia=(0.2, 0.3, 0.4))], gravity=(0.5, 0.0, -9.81), name="heavy_ball")
+    return lc.compile(tree, cache_dir=cache_dir)
+
+
+@settings(max_examples=60, deadline=None)
+@given(sigma=st.tuples(*[st.floats(-3.0, 3.0)] * 3).filter(lambda v: 0.25 <= np.dot(v, v) <= 9.0),
+       rates=st.tuples(*[st.floats(-5.0, 5.0)] * 3))
+def test_the_emitted_shadow_reset_keeps_the_orientation_the_angular_velocity_and_the_energy(heavy_ball, sigma,
+                                                                                         rates):
+    """The module's ``event_reset`` at any state: R(σ) and ω unchanged, so T + V too; |σ| becomes 1/|σ|."""
+    y, after, p = np.array([*sigma, *rates]), np.empty(6), heavy_ball.parameter_vector()
+    assert heavy_ball.kernels.event_reset(0.0, y, p, 0, after) == 0
+    assert abs(np.linalg.norm(after[:3]) * np.linalg.norm(sigma) - 1) <= 1e-15
+    assert np.max(np.abs(np.array(mrp.rotation(after[:3])) - np.array(mrp.rotation(sigma)))) <= 1e-15
+    omega = np.array(mrp.angular_velocity(sigma, rates))
+    assert np.max(np.abs(np.array(mrp.angular_velocity(after[:3], after[3:])) - omega)) <= 1e-14 * max(
+        np.linalg.norm(omega), 1.0)
+    energies = [heavy_ball.kernels.energy(0.0, state, p) for state in (y, after)]
+    scale = abs(energies[0]) + 1.3 * np.hypot(0.5, 9.81) * np.linalg.norm([0.2, -0.1, 0.5])   # |T + V| + max |V|
+    assert abs(energies[1] - energies[0]) <= 1e-14 * scale
+
+
 @pytest.mark.parametrize("joint, count", [(lc.Spherical(("a", "b")), 3), (lc.Free(("x", "y", "z", "a", "b")), 6)])
 def test_a_joint_with_the_wrong_number_of_coordinates_is_refused(joint, count):
     with pytest.raises(lc.ModelError, match=f"needs {count} coordinates"):
