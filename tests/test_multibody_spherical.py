@@ -74,7 +74,8 @@ def test_initial_orientations_from_a_rotation_and_an_axis_angle(axis, angle):
 
 def _chain(n_links: int, free_base: bool) -> lc.Tree:
     """A 3D chain of asymmetric bodies on spherical joints with offset, rotated placements, hanging under
-    gravity (on a free-floating base when `free_base`, then a revolute elbow about an unaligned axis)."""
+    gravity (on a free-floating base when `free_base`, then a revolute elbow about an unaligned axis); the first
+    ball joint has a damper and drives its link with a constant moment."""
     rng = np.random.default_rng(n_links + 10 * free_base)
     links = []
     if free_base:
@@ -87,8 +88,9 @@ def _chain(n_links: int, free_base: bool) -> lc.Tree:
         Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
         Q *= np.sign(np.linalg.det(Q))
         moments = rng.uniform(1.0, 1.5, size=3) * 0.1
+        loads = dict(damping=0.25, torque=(0.4, -0.3, 0.2)) if i == 0 else {}
         links.append(lc.Link(f"link{i}", lc.Spherical((f"s{i}x", f"s{i}y", f"s{i}z"), origin=tuple(
-            rng.normal(size=3).round(3)), rotation=Q.tolist()), parent=links[-1].name if links else None,
+            rng.normal(size=3).round(3)), rotation=Q.tolist(), **loads), parent=links[-1].name if links else None,
             mass=float(rng.uniform(0.5, 2)), com=tuple(rng.normal(size=3).round(3)), inertia=tuple(moments)))
     return lc.Tree(links, gravity=(0.3, -0.2, -9.81), name=f"spherical_chain_{n_links}{'_free' if free_base else ''}")
 
@@ -113,12 +115,13 @@ def _pinocchio(tree: lc.Tree):
 
 
 def _to_pinocchio(tree: lc.Tree, y):
-    """Pinocchio's (q, v) of the state y = (q, q̇): quaternions (x, y, z, w) of R(σ), body rates ω = J σ̇, a free
-    joint's linear velocity in its body frame Rᵀ ẋ; and per joint what turns its part of Pinocchio's q̈ back."""
+    """Pinocchio's (q, v, τ) of the state y = (q, q̇): quaternions (x, y, z, w) of R(σ), body rates ω = J σ̇, a free
+    joint's linear velocity in its body frame Rᵀ ẋ, a ball joint's moment torque − damping ω; and per joint what
+    turns its part of Pinocchio's q̈ back."""
     import pinocchio as pin
 
     n, i = tree.n, 0
-    q, v, joints = [], [], []
+    q, v, tau, joints = [], [], [], []
     for link in tree.links:
         if isinstance(link.joint, (lc.Free, lc.Spherical)):
             free = isinstance(link.joint, lc.Free)
@@ -128,14 +131,17 @@ def _to_pinocchio(tree: lc.Tree, y):
             R, omega = np.array(mrp.rotation(sigma)), np.array(mrp.angular_velocity(sigma, rates))
             q += [*(x if free else []), *pin.Quaternion(R).coeffs()]
             v += [*(R.T @ xd if free else []), *omega]
+            tau += [0.0] * 3 * free + list(np.zeros(3) if free else np.array(link.joint.torque, dtype=float)
+                                           - float(link.joint.damping) * omega)
             joints.append((free, sigma, rates, R, omega, R.T @ xd))
             i = k + 3
         else:
             q.append(y[i])
             v.append(y[n + i])
+            tau.append(0.0)
             joints.append(None)
             i += 1
-    return np.array(q), np.array(v), joints
+    return np.array(q), np.array(v), np.array(tau), joints
 
 
 def _from_pinocchio(joints, a) -> np.ndarray:
@@ -161,8 +167,9 @@ def _relative(a, b) -> float:
 
 @pytest.mark.parametrize("n_links, free_base", [(1, False), (3, False), (2, True)])
 def test_spherical_chains_agree_with_pinocchio(cache_dir, n_links, free_base):
-    """q̈ against Pinocchio's ABA, T + V against its energies, and the module's own M q̈ = F and p = M q̇, at random
-    states with |σ| up to 2 (past the switch: the equations hold for any σ)."""
+    """q̈ against Pinocchio's ABA (with the first ball joint's moments), T + V against its energies, and the
+    module's own M q̈ = F and p = M q̇, at random states with |σ| up to 2 (past the switch: the equations hold for
+    any σ)."""
     pin = pytest.importorskip("pinocchio")
     tree = _chain(n_links, free_base)
     model = lc.compile(tree, cache_dir=cache_dir)
@@ -172,9 +179,9 @@ def test_spherical_chains_agree_with_pinocchio(cache_dir, n_links, free_base):
     n, p = tree.n, model.parameter_vector()
     for _ in range(8):
         y = np.concatenate([rng.uniform(-1.2, 1.2, size=n), rng.normal(size=n)])
-        q, v, joints = _to_pinocchio(tree, y)
+        q, v, tau, joints = _to_pinocchio(tree, y)
         qdd = model.rhs(0.0, y)[n:]
-        assert _relative(qdd, _from_pinocchio(joints, pin.aba(reference, data, q, v, np.zeros(reference.nv)))) <= 1e-12
+        assert _relative(qdd, _from_pinocchio(joints, pin.aba(reference, data, q, v, tau))) <= 1e-12
         energy = pin.computeKineticEnergy(reference, data, q, v) + pin.computePotentialEnergy(reference, data, q)
         assert abs(model.kernels.energy(0.0, y, p) - energy) <= 1e-12 * abs(energy)
         M, F, momenta = np.empty((n, n)), np.empty(n), np.empty(n)

@@ -214,16 +214,27 @@ class Spherical(Joint):
     ----------
     coordinates : 3 names or functions of t
         σ_x, σ_y, σ_z (dimensionless), along the joint frame's axes.
+    damping : expression, optional
+        A viscous moment −damping·ω on the link (N m s), ω its angular velocity relative to the parent.
+    torque : 3 expressions, optional
+        A moment on the link from its parent (N m), components along the link's own axes; it may depend on t, the
+        coordinates, their velocities and parameters.
     origin, rotation : keyword-only
         The joint frame in the parent link's frame (module docstring).
     """
 
     coordinates: tuple
+    damping: object = 0
+    torque: tuple = (0, 0, 0)
 
     def elementary(self) -> list[Elementary]:
         what = f"Spherical{_shown(self.coordinates)}"
         _pairs(self.coordinates, "xyz", 3, what)
-        return spherical_steps(self.coordinates, what, self._placement(what))
+        if isinstance(self.torque, str) or len(tuple(self.torque)) != 3:
+            raise ModelError(f"{what}: `torque` must be three expressions (body axes), got {self.torque!r}.")
+        steps = spherical_steps(self.coordinates, what, self._placement(what))
+        return [replace(step, damping=sp.sympify(self.damping), torque=sp.sympify(moment))
+                for step, moment in zip(steps, self.torque)]
 
 
 @dataclass(frozen=True)

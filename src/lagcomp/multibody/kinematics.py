@@ -71,11 +71,12 @@ def local_nodes(tree: Tree, q, qd, mapping: dict) -> list[LocalNode]:
     nodes = []
     for i, node in enumerate(tree.nodes):
         j = node.joint
-        chart = {}
-        if j.kind == "spherical":
+        chart, rate = {}, qd[i]
+        if j.kind == "spherical":   # (its torque and damping act along ω_k, the node's rate in the recursions)
             part = list(j.axis).index(1)
             chart = dict(part=part, sigma=tuple(q[i - part:i - part + 3]), sigma_dot=tuple(qd[i - part:i - part + 3]))
-        force = local(j.torque) - local(j.stiffness) * (q[i] - local(j.rest)) - local(j.damping) * qd[i]
+            rate = mrp.angular_velocity(chart["sigma"], chart["sigma_dot"])[part]
+        force = local(j.torque) - local(j.stiffness) * (q[i] - local(j.rest)) - local(j.damping) * rate
         nodes.append(LocalNode(
             node.parent, j.kind, tuple(j.axis), tuple(tuple(local(e) for e in row) for row in j.rotation),
             tuple(local(e) for e in j.origin), q[i], qd[i], force, local(node.mass),
