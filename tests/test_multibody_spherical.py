@@ -88,7 +88,7 @@ def _chain(n_links: int, free_base: bool) -> lc.Tree:
         Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
         Q *= np.sign(np.linalg.det(Q))
         moments = rng.uniform(1.0, 1.5, size=3) * 0.1
-        loads = dict(damping=0.25, torque=(0.4, -0.3, 0.2)) if i == 0 else {}
+        loads = {"damping": 0.25, "torque": (0.4, -0.3, 0.2)} if i == 0 else {}
         links.append(lc.Link(f"link{i}", lc.Spherical((f"s{i}x", f"s{i}y", f"s{i}z"), origin=tuple(
             rng.normal(size=3).round(3)), rotation=Q.tolist(), **loads), parent=links[-1].name if links else None,
             mass=float(rng.uniform(0.5, 2)), com=tuple(rng.normal(size=3).round(3)), inertia=tuple(moments)))
@@ -103,11 +103,12 @@ def _pinocchio(tree: lc.Tree):
     for link in tree.links:
         joint = link.joint
         R = np.eye(3) if joint.rotation is None else np.array(joint.rotation, dtype=float)
-        kind = {lc.Free: pin.JointModelFreeFlyer, lc.Spherical: pin.JointModelSpherical}.get(type(joint))
-        if kind is None:
+        if isinstance(joint, (lc.Free, lc.Spherical)):
+            kind = pin.JointModelFreeFlyer() if isinstance(joint, lc.Free) else pin.JointModelSpherical()
+        else:
             axis = np.array(joint.axis, dtype=float)
-            kind = lambda: pin.JointModelRevoluteUnaligned(axis / np.linalg.norm(axis))  # noqa: E731
-        parent = model.addJoint(parent, kind(), pin.SE3(R, np.array(joint.origin, dtype=float)), link.name)
+            kind = pin.JointModelRevoluteUnaligned(axis / np.linalg.norm(axis))
+        parent = model.addJoint(parent, kind, pin.SE3(R, np.array(joint.origin, dtype=float)), link.name)
         model.appendBodyToJoint(parent, pin.Inertia(float(link.mass), np.array(link.com, dtype=float),
                                                     np.diag(np.array(link.inertia, dtype=float))), pin.SE3.Identity())
     model.gravity = pin.Motion(np.array(tree.gravity, dtype=float), np.zeros(3))

@@ -74,7 +74,8 @@ def local_nodes(tree: Tree, q, qd, mapping: dict) -> list[LocalNode]:
         chart, rate = {}, qd[i]
         if j.kind == "spherical":   # (its torque and damping act along ω_k, the node's rate in the recursions)
             part = list(j.axis).index(1)
-            chart = dict(part=part, sigma=tuple(q[i - part:i - part + 3]), sigma_dot=tuple(qd[i - part:i - part + 3]))
+            chart = {"part": part, "sigma": tuple(q[i - part:i - part + 3]),
+                     "sigma_dot": tuple(qd[i - part:i - part + 3])}
             rate = mrp.angular_velocity(chart["sigma"], chart["sigma_dot"])[part]
         force = local(j.torque) - local(j.stiffness) * (q[i] - local(j.rest)) - local(j.damping) * rate
         nodes.append(LocalNode(
