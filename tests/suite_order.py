@@ -24,6 +24,7 @@ HEAVIEST = (
     "test_taylor_sensitivities.py",      # 49
     "test_steady_linearization.py",      # 47
     "test_names.py",                     # 46
+    "test_multibody_spherical.py",       # 45 (session 28: Pinocchio's chains' kernels, 10⁴ turns of a free body)
     "test_rhs_jacobian.py",              # 43
     "test_kane_interop.py",              # 42
     "test_resting_contacts.py",          # 40

@@ -157,12 +157,6 @@ def test_random_trees_agree_with_pinocchio(cache_dir, seed):
 # -- refusals -------------------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("joint", [lc.Spherical(("a", "b", "c")), lc.Free(("x", "y", "z", "a", "b", "c"))])
-def test_spherical_and_free_joints_are_refused_naming_the_issue(joint):
-    with pytest.raises(lc.ModelError, match="issue 39"):
-        lc.Tree([lc.Link("body", joint, mass=1.0, inertia=(1, 1, 1))])
-
-
 def test_kernels_of_later_steps_are_refused_naming_the_feature_and_the_issue(pairs):
     tree_model, _ = pairs["rigid_double_pendulum"]
     params = {name: 1.0 for name in tree_model.parameters}

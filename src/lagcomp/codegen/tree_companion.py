@@ -28,14 +28,12 @@ import sympy as sp
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
-from lagcomp.codegen.tree_lower import FORMULATION, program_kernel
+from lagcomp.codegen.tree_lower import FORMULATION, generalized_forcing, motion, program_kernel
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
-from lagcomp.multibody.aba import accelerations
 from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
 from lagcomp.multibody.kinematics import local_nodes
 from lagcomp.multibody.program import Program
-from lagcomp.multibody.rnea import forcing
 from lagcomp.multibody.tree import Tree
 
 
@@ -89,7 +87,7 @@ def lower_tree_kind(tree: Tree, kind: str) -> ModuleIR:
 
 def _motion(prog: Program, local: TreeLocals) -> list:
     """f = (q̇, q̈) of the articulated-body algorithm, bound in `prog` as ``rhs`` binds it."""
-    return [*local.qd, *accelerations(prog, list(local.nodes), list(local.gravity))]
+    return motion(prog, list(local.nodes), list(local.qd), list(local.gravity))
 
 
 def _unit_seeds(symbols, first: int = 0) -> dict:
@@ -167,7 +165,7 @@ def _rest_partials_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
     """``rest_partials``: ∂F/∂q, ∂F/∂q̇ of recursive Newton–Euler's F, then q̇ = 0 put into the program
     (`lagcomp.multibody.forward_mode.substituted`: the velocity terms fold away)."""
     n, prog = local.n, Program()
-    F = forcing(prog, list(local.nodes), list(local.gravity))
+    F = generalized_forcing(prog, list(local.nodes), list(local.gravity))
     tangent = derivatives(prog, F, _unit_seeds((*local.q, *local.qd)))
     stores = [(f"out[{k}, {i}, {j}]", tangent[i].get(k * n + j, sp.S.Zero))
               for k in range(2) for i in range(n) for j in range(n)]

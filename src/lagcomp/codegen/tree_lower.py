@@ -6,8 +6,8 @@ Newton–Euler's for ``forcing`` and ``momenta``, the outward velocities' for ``
 they are (no CSE over the whole kernel: each is already a small expression of earlier locals), with the
 assignments no output reads dropped.  The module has the eager kernels of a Lagrange module, with the same names,
 signatures and locals (`lagcomp.codegen.bindings.user_local`), so the drivers, the cache and `lagcomp.Model`
-take it as they take any other; the on-demand kinds (`lagcomp.codegen.kinds`) are refused for now
-(`lagcomp.multibody.tree.Tree.on_demand_refusal`).
+take it as they take any other; the on-demand kinds a tree has are its recursions differentiated
+(`lagcomp.codegen.tree_companion`), the others are refused (`lagcomp.multibody.tree.Tree.on_demand_refusal`).
 """
 
 from __future__ import annotations
@@ -15,10 +15,15 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp.codegen.bindings import user_local
-from lagcomp.codegen.lower import event_reset_kernel
 from lagcomp.codegen.tree_constraints import gain_loads, loop_kernels
+from lagcomp.codegen.tree_events import tree_event_kernels
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.aba import accelerations
+from lagcomp.multibody.charts import (
+    accelerations_in_coordinates,
+    forces_in_coordinates,
+    mass_matrix_in_coordinates,
+)
 from lagcomp.multibody.crba import mass_matrix
 from lagcomp.multibody.energy import kinetic_energy, potential_energy
 from lagcomp.multibody.joints import t
@@ -52,35 +57,43 @@ def lower_tree(tree: Tree) -> ModuleIR:
 
     if tree.closures:   # closed loops: the motion through the augmented system (its kernels' own module)
         loads += gain_loads(tree)
-        motion = loop_kernels(tree, nodes, gravity, mapping, kernel)
+        dynamics = loop_kernels(tree, nodes, gravity, mapping, kernel)
     else:
-        motion = (kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), q̈ by the articulated-body "
+        dynamics = (kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), q̈ by the articulated-body "
                          "algorithm.\n\nReturns 0.", ARGS,
-                         lambda prog: [(f"out[{i}]", qd[i]) for i in range(n)]
-                         + [(f"out[{n + i}]", a) for i, a in enumerate(accelerations(prog, nodes, gravity))],
+                         lambda prog: [(f"out[{i}]", f) for i, f in enumerate(motion(prog, nodes, qd, gravity))],
                          ReturnZero()),)
     kernels = (
-        *motion,
+        *dynamics,
         kernel("mass_matrix", "Mass matrix M(q), shape (n, n), into `out` (composite-rigid-body algorithm).", ARGS,
-               lambda prog: _matrix_stores(mass_matrix(prog, nodes), n)),
+               lambda prog: _matrix_stores(mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes)), n)),
         kernel("forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out` (recursive Newton-Euler at q̈ = 0).",
-               ARGS, lambda prog: [(f"out[{i}]", f) for i, f in enumerate(forcing(prog, nodes, gravity))]),
+               ARGS, lambda prog: [(f"out[{i}]", f) for i, f in enumerate(generalized_forcing(prog, nodes, gravity))]),
         kernel("energy", "Total mechanical energy T + V (gravity and the joints' springs).", ("t", "y", "p"),
                lambda prog: [("return", prog.let(kinetic_energy(prog, nodes) + potential_energy(prog, nodes, gravity)))]),
         Kernel(name="energy_function", doc="Energy function h = Σ q̇ ∂L/∂q̇ − L: T is homogeneous quadratic in q̇,\n"
                "so h = T + V, the kernel `energy`.", args=("t", "y", "p"), loads=(), temps=(), stores=(),
                alias="energy"),
         kernel("momenta", "Conjugate momenta ∂T/∂q̇_i, shape (n,), into `out` (the subtrees' spatial momenta).", ARGS,
-               lambda prog: [(f"out[{i}]", h) for i, h in enumerate(momenta(prog, nodes))]),
-        Kernel(name="event_values", doc="Event functions g, shape (0,): a tree has no events yet.", args=ARGS,
-               loads=(), temps=(), stores=()),
-        Kernel(name="event_gradients", doc=f"Partials of the event functions, shape (0, {2 * n + 1 + len(tree.parameters)})"
-               ": none.\nReturns 0.", args=ARGS, loads=(), temps=(), stores=(), solve=ReturnZero()),
-        event_reset_kernel((), (), 2 * n, mapping, tuple(loads)),
+               lambda prog: [(f"out[{i}]", h) for i, h in enumerate(forces_in_coordinates(prog, nodes, momenta(prog, nodes)))]),
+        *tree_event_kernels(tree, q, qd, mapping, loads),
     )
     return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=names,
                     parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION,
                     constraint_names=tree.constraint_names, holonomic=(True,) * len(tree.constraint_names))
+
+
+def motion(prog: Program, nodes, qd, gravity) -> list:
+    """f = (q̇, q̈) of a tree without loops, bound in `prog`: q̈ by the articulated-body algorithm, mapped to the
+    coordinates' second derivatives (`lagcomp.multibody.charts`: σ̈ of a ball joint from its body-axis rates).
+    The eager ``rhs`` and every on-demand kernel that writes f (`lagcomp.codegen.tree_companion`) bind it so."""
+    return [*qd, *accelerations_in_coordinates(prog, nodes, accelerations(prog, nodes, gravity))]
+
+
+def generalized_forcing(prog: Program, nodes, gravity) -> list:
+    """F(q, q̇, t) of M q̈ = F over the coordinates, bound in `prog`: recursive Newton–Euler at q̈ = 0, mapped by
+    `lagcomp.multibody.charts` (Jᵀ on a ball joint)."""
+    return forces_in_coordinates(prog, nodes, forcing(prog, nodes, gravity))
 
 
 def program_kernel(name: str, doc: str, args, prog: Program, stores, loads, solve=None) -> Kernel:

@@ -14,8 +14,8 @@ or Pinocchio's joint placement.  The joint's motion then moves the child link's 
 joint may carry a spring (stiffness k about `rest`), a viscous damper (`damping`) and a driving `torque` (a force
 for a prismatic joint) along its axis: generalized force τ = torque − k (q − rest) − c q̇ (N m or N).
 
-`Spherical` and `Free` joints need a parametrization without the Euler-angle singularity, which comes in a later
-step of issue 39: they are refused with a `ModelError`.
+`Spherical` (3 DOF) and `Free` (6 DOF: three translations, then a spherical rotation) joints turn the link by the
+modified Rodrigues parameters of `lagcomp.multibody.mrp`, switched to their shadow set at half a turn.
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ def unit_axis(axis, what: str) -> tuple:
 @dataclass(frozen=True)
 class Elementary:
     """One degree of freedom: "revolute" or "prismatic" motion by `coordinate` along the unit `axis` of its joint
-    frame, placed by (`rotation`, `origin`) in its parent frame, with the generalized force `torque` − k (q − rest)
+    frame, or "spherical": MRP `coordinate` along `axis` = e_k, one of three consecutive nodes of a ball joint, placed by (`rotation`, `origin`) in its parent frame, with the generalized force `torque` − k (q − rest)
     − c q̇."""
 
     kind: str
@@ -201,27 +201,75 @@ class Planar(Joint):
 
 @dataclass(frozen=True)
 class Spherical(Joint):
-    """A ball joint (3 rotational DOF).  Not available yet: refused (module docstring)."""
+    """A ball joint (3 rotational DOF): the link's frame turned by the rotation whose modified Rodrigues parameters
+    (MRPs) are the three `coordinates`, σ = n tan(θ/4) for the angle θ about the unit axis n of the joint frame
+    (`lagcomp.multibody.mrp`; docs/multibody.md says why MRPs).
 
-    coordinates: tuple = ()
+    The coordinates jump to the shadow set σ → −σ/|σ|² (the same orientation, |σ| back below 1) whenever |σ| passes
+    1 (a half turn): an event with a reset named ``<link>_shadow``, so the adaptive methods with events integrate
+    it.  Initial values: ``mrp_from_rotation``, ``mrp_from_axis_angle`` and ``mrp_rate`` (from the body-frame
+    angular velocity) of `lagcomp.multibody.mrp`.
+
+    Parameters
+    ----------
+    coordinates : 3 names or functions of t
+        σ_x, σ_y, σ_z (dimensionless), along the joint frame's axes.
+    damping : expression, optional
+        A viscous moment −damping·ω on the link (N m s), ω its angular velocity relative to the parent.
+    torque : 3 expressions, optional
+        A moment on the link from its parent (N m), components along the link's own axes; it may depend on t, the
+        coordinates, their velocities and parameters.
+    origin, rotation : keyword-only
+        The joint frame in the parent link's frame (module docstring).
+    """
+
+    coordinates: tuple
+    damping: object = 0
+    torque: tuple = (0, 0, 0)
 
     def elementary(self) -> list[Elementary]:
-        raise ModelError(f"Spherical joints are not available in lagcomp's multibody trees yet ({ISSUE}): they need "
-                         "a parametrization without the Euler-angle singularity. Meanwhile write the ball joint as "
-                         "three Revolute joints about x, y, z with massless links between them (singular where "
-                         "the middle angle is ±90°), or as a lc.System with lc.rotated.")
+        what = f"Spherical{_shown(self.coordinates)}"
+        _pairs(self.coordinates, "xyz", 3, what)
+        if isinstance(self.torque, str) or len(tuple(self.torque)) != 3:
+            raise ModelError(f"{what}: `torque` must be three expressions (body axes), got {self.torque!r}.")
+        steps = spherical_steps(self.coordinates, what, self._placement(what))
+        return [replace(step, damping=sp.sympify(self.damping), torque=sp.sympify(moment))
+                for step, moment in zip(steps, self.torque)]
 
 
 @dataclass(frozen=True)
-class Free(Spherical):
-    """A floating base (6 DOF).  Not available yet: refused (module docstring)."""
+class Free(Joint):
+    """A floating base (6 DOF): the link's frame translated by `coordinates[0:3]` (m, along the joint frame's x, y,
+    z: the position of the link's origin in the joint frame), then turned by the MRPs `coordinates[3:6]` as a
+    `Spherical` joint (its shadow switch included).  Its velocities are these coordinates' rates: the origin's
+    velocity in the joint frame and σ̇ (`lagcomp.multibody.mrp.mrp_rate` of the body-frame angular velocity)."""
+
+    coordinates: tuple
 
     def elementary(self) -> list[Elementary]:
-        raise ModelError(f"Free (floating-base) joints are not available in lagcomp's multibody trees yet ({ISSUE}): "
-                         "they need a parametrization without the Euler-angle singularity. Meanwhile write the base "
-                         "as three Prismatic and three Revolute joints with massless links between them.")
+        what = f"Free{_shown(self.coordinates)}"
+        _pairs(self.coordinates, "xyzxyz", 6, what)
+        x, y, z = (unit_axis(a, what) for a in "xyz")
+        translations = [Elementary("prismatic", coordinate_of(self.coordinates[0], what), x, **self._placement(what)),
+                        Elementary("prismatic", coordinate_of(self.coordinates[1], what), y),
+                        Elementary("prismatic", coordinate_of(self.coordinates[2], what), z)]
+        return translations + spherical_steps(self.coordinates[3:], what, {})
+
+
+def spherical_steps(coordinates, what: str, placement: dict) -> list[Elementary]:
+    """The three nodes of a spherical joint: kind "spherical", σ_k along e_k; the first carries the placement (the
+    recursions read the three together: `lagcomp.multibody.kinematics`)."""
+    axes = [unit_axis(a, what) for a in "xyz"]
+    steps = [Elementary("spherical", coordinate_of(c, what), axis) for c, axis in zip(coordinates, axes)]
+    return [replace(steps[0], **placement), *steps[1:]]
+
+
+def _shown(coordinates) -> str:
+    return repr(coordinates) if isinstance(coordinates, str) else str(tuple(coordinates))
 
 
 def _pairs(coordinates, axes, count: int, what: str) -> None:
-    if isinstance(coordinates, str) or len(tuple(coordinates)) != count or len(tuple(axes)) != count:
-        raise ModelError(f"{what}: needs {count} coordinates (and {count} axes), got {coordinates!r}.")
+    if isinstance(coordinates, str) or len(tuple(coordinates)) != count:
+        raise ModelError(f"{what}: needs {count} coordinates, one per degree of freedom; got {coordinates!r}.")
+    if len(tuple(axes)) != count:
+        raise ModelError(f"{what}: needs {count} axes, one per coordinate; got {axes!r}.")

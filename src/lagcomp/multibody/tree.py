@@ -23,6 +23,7 @@ from lagcomp.errors import InitialConditionError, ModelError, ParameterError
 from lagcomp.model.bodies import inertia_matrix
 from lagcomp.multibody.joints import ISSUE, Elementary, Joint, t
 from lagcomp.multibody.loops import closures
+from lagcomp.multibody.shadow import shadow_events
 
 ZERO_INERTIA = sp.zeros(3, 3)
 
@@ -35,7 +36,7 @@ class Link:
     ----------
     name : str
         An identifier; other links name it as their `parent`.
-    joint : lagcomp.Revolute, Prismatic, Universal, Cylindrical or Planar
+    joint : lagcomp.Revolute, Prismatic, Universal, Cylindrical, Planar, Spherical or Free
         How the link moves relative to its parent, and where the joint sits in the parent's frame.
     parent : str, optional
         The parent link's name; None (default) for a link jointed to the fixed base.
@@ -121,7 +122,7 @@ class Tree:
         if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
             raise ModelError(f"{name}: `t_end` must be a positive duration, got {t_end!r}.")
         self.t_end = float(t_end)
-        self.events = ()
+        self.events = shadow_events(self.nodes)   # (the spherical joints' MRP switches; none without them)
 
     @property
     def n(self) -> int:
