@@ -40,6 +40,7 @@ __all__ = [
     "Particle", "RigidBody", "Spring", "System", "Torque", "body_rates", "coordinates", "from_kanes_method",
     "from_lagranges_method", "rotated", "t",
     "Tree", "Link", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical", "Free",
+    "from_urdf",
     "LagcompError", "ModelError", "UndeclaredSymbolError", "ParameterError", "OptionError", "InitialConditionError",
     "SingularMassMatrixError", "IntegrationError", "LinearizationError", "CorruptCacheRecordError", "CacheWarning",
     "StiffnessWarning", "ResetWarning", "UnknownEventError",
@@ -59,6 +60,10 @@ _MODEL_NAMES = (
 _MULTIBODY_NAMES = ("Tree", "Link", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical", "Free")
 
 
+#: Robots from URDF files (`lagcomp.multibody.urdf`), imported on first use too (sympy; yourdfpy when called).
+_URDF_NAMES = ("from_urdf",)
+
+
 #: Imported on first use too (sympy, mpmath): the kernel-accuracy check of `lagcomp.accuracy`.
 _ACCURACY_NAMES = ("kernel_accuracy",)
 
@@ -74,6 +79,11 @@ def __getattr__(name: str):
 
         globals()[name] = value = getattr(multibody, name)
         return value
+    if name in _URDF_NAMES:
+        from lagcomp.multibody import urdf
+
+        globals()[name] = value = getattr(urdf, name)
+        return value
     if name in _MODEL_NAMES:
         from lagcomp import model
 
@@ -84,4 +94,4 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_MODEL_NAMES) | set(_MULTIBODY_NAMES) | set(_ACCURACY_NAMES))
+    return sorted(set(globals()) | set(_MODEL_NAMES) | set(_MULTIBODY_NAMES) | set(_URDF_NAMES) | set(_ACCURACY_NAMES))
