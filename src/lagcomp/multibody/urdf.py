@@ -121,6 +121,8 @@ def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), dampi
         built[link_name] = (joint, coordinate, placement, body)
         bodies[joint.child] = (link_name, np.eye(4))
         links.append(link_name)
+    if not links:
+        raise ModelError(f"{path}: no revolute, continuous or prismatic joint: nothing in {robot.name!r} moves.")
     for urdf_link, (body, pose) in bodies.items():
         if body is not None and inertials.get(urdf_link) is not None:
             parts.setdefault(body, []).append(_part(inertials[urdf_link], pose))
@@ -138,6 +140,12 @@ def _parse(path: Path):
         raise ImportError("lc.from_urdf reads URDF files with yourdfpy: pip install 'lagcomp[urdf]'.") from err
     if not path.is_file():
         raise ModelError(f"from_urdf: there is no file {str(path)!r}.")
+    from lxml import etree   # (yourdfpy's own dependency)
+
+    try:   # strictly first: yourdfpy would recover what it can of a broken file, and say so only in its log
+        etree.parse(str(path))
+    except etree.XMLSyntaxError as err:
+        raise ModelError(f"from_urdf: {path} is not well-formed XML: {err}") from err
     try:
         urdf = yourdfpy.URDF.load(str(path), build_scene_graph=False, build_collision_scene_graph=False,
                                   load_meshes=False, load_collision_meshes=False)
