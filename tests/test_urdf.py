@@ -86,6 +86,7 @@ def _agree_with_pinocchio(path: Path, model, states: int, rng) -> float:
 ])
 def test_robot_arms_agree_with_pinocchio(cache_dir, relative, joints):
     """Panda (7 arm joints, fixed hand merged, two finger sliders, joint damping) and UR5: q̈ at random states."""
+    pytest.importorskip("pinocchio")
     path = _robot_file(relative)
     tree = lc.from_urdf(path)
     assert tree.coordinate_names == tuple(joints) and tree.parameters == ()
@@ -147,6 +148,7 @@ def urdf_texts(draw):
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(text=urdf_texts())
 def test_random_urdfs_agree_with_pinocchio(cache_dir, tmp_path, text):
+    pytest.importorskip("pinocchio")
     path = tmp_path / "robot.urdf"
     path.write_text(text, encoding="utf-8")
     tree = lc.from_urdf(path)
