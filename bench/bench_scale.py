@@ -170,9 +170,8 @@ def mjcf(tree, values: dict) -> str:
     """The tree as a MuJoCo model: a body per link (placed by its joint's origin and rotation), its joints' hinges
     and slides in order (MuJoCo composes the joints of one body as the tree's massless frames do), inertial
     properties about the centre of mass; gravity; contacts and every constraint disabled."""
-    import numpy as np
-
     import mujoco
+    import numpy as np
 
     children = {}
     for link in tree.links:

@@ -138,10 +138,10 @@ def urdf_texts(draw):
         limit = '<limit lower="-1" upper="1.5" effort="10" velocity="2"/>' if kind in ("revolute", "prismatic") else ""
         parent = draw(st.integers(0, i - 1))
         lines += [f'<link name="link{i}">{inertial()}</link>',
-                  f'<joint name="joint-{i}" type="{kind}"><parent link="{f"link{parent}" if parent else "base"}"/>'
-                  f'<child link="link{i}"/><origin xyz="{triple(-1, 1)}" rpy="{triple(-3, 3)}"/>'
-                  f'<axis xyz="{" ".join(repr(float(x)) for x in axis)}"/>{limit}'
-                  f'<dynamics damping="{_number(draw, 0, 0.5)!r}"/></joint>']
+                  (f'<joint name="joint-{i}" type="{kind}"><parent link="{f"link{parent}" if parent else "base"}"/>'
+                   f'<child link="link{i}"/><origin xyz="{triple(-1, 1)}" rpy="{triple(-3, 3)}"/>'
+                   f'<axis xyz="{" ".join(repr(float(x)) for x in axis)}"/>{limit}'
+                   f'<dynamics damping="{_number(draw, 0, 0.5)!r}"/></joint>')]
     return "\n".join(lines + ["</robot>"])
 
 

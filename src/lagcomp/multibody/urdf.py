@@ -88,7 +88,27 @@ def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), dampi
         yourdfpy is not installed.
     """
     robot = _parse(Path(path))
-    root = _root(robot, path)
+    walk = _walk(robot, _children(robot, path), _root(robot, path), path)
+    tree_links = [_link(*moving, walk.parts.get(moving[0], []), damping) for moving in walk.moving]
+    tree_name = name if name is not None else _Names.identifier(robot.name or "robot", "robot")
+    return Tree(tree_links, gravity=gravity, name=tree_name, q0=q0, qd0=qd0, t_end=t_end,
+                description=_description(robot.name, path, walk.renamed, walk.frictions, damping))
+
+
+@dataclass
+class _Walk:
+    """What a walk over the URDF tree found: the moving joints as (tree link name, joint, coordinate, placement in
+    the parent tree link's frame, parent tree link or None), the mass properties of each tree link's parts
+    (`_part`), the joints renamed {URDF name: coordinate}, the joints with Coulomb friction."""
+
+    moving: list
+    parts: dict
+    renamed: dict
+    frictions: list
+
+
+def _children(robot, path) -> dict:
+    """{URDF link name: the joints hanging from it}, the joints' types checked."""
     children = {}
     for joint in robot.joints:
         if joint.type in REFUSED:
@@ -100,11 +120,14 @@ def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), dampi
             raise ModelError(f"{path}: joint {joint.name!r} has the unknown type {joint.type!r}: URDF joints are "
                              "revolute, continuous, prismatic, fixed, floating or planar.")
         children.setdefault(joint.parent, []).append(joint)
-    inertials = {link.name: link.inertial for link in robot.links}
-    names = _Names()
-    renamed, links, frictions = {}, [], []
+    return children
+
+
+def _walk(robot, children: dict, root: str, path) -> _Walk:
+    """The tree links from the root outwards: a moving joint starts one, a fixed joint adds its child link to the
+    one it hangs from (at the pose it composes to)."""
+    names, walk = _Names(), _Walk([], {}, {}, [])
     bodies = {root: (None, np.eye(4))}   # URDF link -> (the tree link it is part of, its pose in that link's frame)
-    built, parts = {}, {}
     for joint in _parents_first(children, root, path):
         body, pose = bodies[joint.parent]
         placement = pose @ _matrix(joint.origin)
@@ -113,23 +136,19 @@ def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), dampi
             continue
         coordinate = names.coordinate(joint.name)
         if coordinate != joint.name:
-            renamed[joint.name] = coordinate
-        friction = _float(getattr(joint.dynamics, "friction", None))
-        if friction:
-            frictions.append(joint.name)
+            walk.renamed[joint.name] = coordinate
+        if _float(getattr(joint.dynamics, "friction", None)):
+            walk.frictions.append(joint.name)
         link_name = names.link(joint.child)
-        built[link_name] = (joint, coordinate, placement, body)
+        walk.moving.append((link_name, joint, coordinate, placement, body))
         bodies[joint.child] = (link_name, np.eye(4))
-        links.append(link_name)
-    if not links:
+    if not walk.moving:
         raise ModelError(f"{path}: no revolute, continuous or prismatic joint: nothing in {robot.name!r} moves.")
+    inertials = {link.name: link.inertial for link in robot.links}
     for urdf_link, (body, pose) in bodies.items():
         if body is not None and inertials.get(urdf_link) is not None:
-            parts.setdefault(body, []).append(_part(inertials[urdf_link], pose))
-    tree_links = [_link(link, *built[link], parts.get(link, []), damping) for link in links]
-    tree_name = name if name is not None else names.identifier(robot.name or "robot", "robot")
-    return Tree(tree_links, gravity=gravity, name=tree_name, q0=q0, qd0=qd0, t_end=t_end,
-                description=_description(robot.name, path, renamed, frictions, damping))
+            walk.parts.setdefault(body, []).append(_part(inertials[urdf_link], pose))
+    return walk
 
 
 def _parse(path: Path):
@@ -140,7 +159,7 @@ def _parse(path: Path):
         raise ImportError("lc.from_urdf reads URDF files with yourdfpy: pip install 'lagcomp[urdf]'.") from err
     if not path.is_file():
         raise ModelError(f"from_urdf: there is no file {str(path)!r}.")
-    from lxml import etree   # (yourdfpy's own dependency)
+    from lxml import etree  # (yourdfpy's own dependency)
 
     try:   # strictly first: yourdfpy would recover what it can of a broken file, and say so only in its log
         etree.parse(str(path))
@@ -149,7 +168,7 @@ def _parse(path: Path):
     try:
         urdf = yourdfpy.URDF.load(str(path), build_scene_graph=False, build_collision_scene_graph=False,
                                   load_meshes=False, load_collision_meshes=False)
-    except Exception as err:  # noqa: BLE001  (lxml's syntax errors, yourdfpy's own: any failure to parse)
+    except Exception as err:  # (yourdfpy's own errors: any failure to parse)
         raise ModelError(f"from_urdf: {path} is not a URDF file lagcomp can read: {err}") from err
     return urdf.robot
 
