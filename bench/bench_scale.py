@@ -333,13 +333,16 @@ COLUMNS = ["system", "DOF", "ops of rhs", "cold compile + first rhs, CPU s", "pe
 
 def table(systems, cpp: bool) -> Table:
     binary = cpp_loop() if cpp else "skipped: --no-cpp"
-    note = ("Cold: a fresh process and lagcomp cache per system. ns are the best of 5 rounds in that process, one "
+    note = (f"Load average {os.getloadavg()[0]:.1f} at start on {os.cpu_count()} logical CPUs. "
+            "Cold: a fresh process and lagcomp cache per system. ns are the best of 5 rounds in that process, one "
             "after the other (the C++ loop right after it): read the ratios. Pinocchio's C++ loop: "
             + (f"{binary}" if isinstance(binary, str) else "g++ -O3 -march=native, the ABA instantiated in the loop's "
                "program, its q̈ equal to Python's pin.aba") + ". MuJoCo: contacts and constraints disabled.")
     out = Table("Multibody at scale: lagcomp trees against Pinocchio and MuJoCo (issue 39)", COLUMNS, note=note)
-    for system in systems:
-        r = measure(system, binary)
+    results = [measure(system, binary) for system in systems]
+    out.note += growth([r for r in results if "error" not in r])
+    for r in results:
+        system = r["system"]
         if "error" in r:
             out.add(system, *["–"] * 10, r["error"])
             continue
@@ -352,6 +355,24 @@ def table(systems, cpp: bool) -> Table:
                 fmt(r.get("pin_python_ns", float("nan"))), fmt(r.get("mujoco_ns", float("nan"))),
                 f"{r['mujoco_rel_diff']:.1e}" if "mujoco_rel_diff" in r else "skipped: mujoco not installed")
     return out
+
+
+def growth(results) -> str:
+    """The log-log slopes of rhs ops, cold compile CPU and rhs ns against DOF within each chain family (from its
+    smallest to its largest member), as a sentence for the note."""
+    import math
+
+    parts = []
+    for family in ("planar", "universal"):
+        members = sorted((r for r in results if r["system"].startswith(family + "_")), key=lambda r: r["n"])
+        if len(members) < 2 or members[0]["n"] == members[-1]["n"]:
+            continue
+        a, b = members[0], members[-1]
+        span = math.log(b["n"] / a["n"])
+        slopes = {key: math.log(b[key] / a[key]) / span for key in ("ops", "compile_cpu_s", "lagcomp_ns")}
+        parts.append(f"{family} chains, {a['n']} to {b['n']} DOF: ops ~ n^{slopes['ops']:.2f}, cold compile ~ "
+                     f"n^{slopes['compile_cpu_s']:.2f}, rhs ns ~ n^{slopes['lagcomp_ns']:.2f}")
+    return (" Growth: " + "; ".join(parts) + ".") if parts else ""
 
 
 def available(systems) -> list:
