@@ -272,21 +272,21 @@ DEFINES = ["-DBOOST_MPL_LIMIT_LIST_SIZE=30", "-DBOOST_MPL_LIMIT_VECTOR_SIZE=30",
 
 def cpp_loop() -> Path | str:
     """The C++ ABA loop's executable (built once per pin version, kept in ~/.cache/lagcomp-bench), or why not."""
-    try:
-        import importlib.metadata
+    import importlib.metadata
 
-        files = importlib.metadata.files("pin") or []
+    try:
         version = importlib.metadata.version("pin")
+        files = [f for dist in ("libpinocchio", "pin") for f in importlib.metadata.files(dist) or []]
     except importlib.metadata.PackageNotFoundError:
         return "skipped: pin not installed"
-    prefix = next((Path(f.locate()).parent.parent.parent for f in files if str(f).endswith("pinocchio/algorithm/aba.hpp")),
-                  None)
+    header = "include/pinocchio/algorithm/aba.hpp"   # under the cmeel prefix of the wheels
+    prefix = next((Path(f.locate()).parents[3] for f in files if str(f).endswith(header)), None)
     compiler = shutil.which("g++")
     eigen = next((Path(d) for d in ("/usr/include/eigen3", str(prefix) + "/include/eigen3")
                   if prefix and Path(d, "Eigen", "Dense").exists()), None)
     if prefix is None or compiler is None or eigen is None:
-        missing = "the pin wheel's headers" if prefix is None else "g++" if compiler is None else "Eigen's headers"
-        return f"skipped: no {missing} (apt-get install g++ libeigen3-dev)"
+        missing = "Pinocchio's headers in the pin wheel" if prefix is None else "g++" if compiler is None else "Eigen"
+        return f"skipped: {missing} not found (apt-get install g++ libeigen3-dev)"
     key = hashlib.sha256(f"{version} {CPP} {DEFINES}".encode()).hexdigest()[:12]
     binary = Path.home() / ".cache" / "lagcomp-bench" / f"pinocchio-aba-{key}"
     if binary.exists():
