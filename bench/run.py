@@ -21,7 +21,7 @@ FULL_CASES = ["double_pendulum", "kepler", "n_link_pendulum_2", "n_link_pendulum
               "n_link_pendulum_10", "rolling_disc", "free_axle", "n_link_pendulum_16", "n_link_pendulum_24"]
 QUICK_CASES = ["double_pendulum", "kepler", "n_link_pendulum_4"]
 SECTIONS = ["compile", "kernels", "accuracy", "adaptive", "fixed", "sweeps", "ensembles", "long", "memory",
-            "stiff", "impacts", "tiers"]
+            "stiff", "impacts", "tiers", "scale"]
 
 TARGETS = {
     "rhs_dp": ("double-pendulum RHS in a loop", "≤ 1.2× hand-written numba"),
@@ -218,6 +218,7 @@ def main(argv: list[str] | None = None) -> int:
             bench_loop,
             bench_rattle,
             bench_reset_sweep,
+            bench_scale,
             bench_stiff,
             bench_sweep,
             bench_taylor,
@@ -232,7 +233,7 @@ def main(argv: list[str] | None = None) -> int:
                        long=lambda ctx: [throughput.long_run_section(ctx), bench_taylor.long_run_table(ctx)],
                        memory=throughput.memory_section,
                        stiff=lambda ctx: [bench_stiff.section(ctx), bench_rattle.section(ctx), bench_loop.section(ctx)],
-                       impacts=bench_reset_sweep.section, tiers=bench_tiers.section)
+                       impacts=bench_reset_sweep.section, tiers=bench_tiers.section, scale=bench_scale.section)
         for name in SECTIONS:
             if name in sections:
                 print(f"<!-- section {name} ... -->", file=sys.stderr, flush=True)

@@ -41,6 +41,7 @@ SCRIPTS = {
     "bench_rattle": ["--steps", "1000", "--repeats", "1"],
     "bench_reset_sweep": ["--side", "4", "--repeats", "1"],
     "bench_run": ["simple_pendulum"],
+    "bench_scale": ["--smoke"],
     "bench_sensitivities": ["--t-end", "1", "--repeats", "1"],
     "bench_stiff": ["--rounds", "1", "--t-end", "0.5"],
     "bench_sweep": ["--side", "4", "--repeats", "1", "--scipy-samples", "1", "--dop853-tolerances", "1e-8",

@@ -318,6 +318,16 @@ def _planar_loop(directions: str) -> lc.Tree:
                    loops=[lc.Loop("pin", ("left", (l, 0, 0)), ("right", (l, 0, 0)), directions=directions)])
 
 
+def _from_urdf(tmp_path, kind: str):
+    """lc.from_urdf of a two-link URDF whose one joint, 'base', is of `kind` (a skip without yourdfpy)."""
+    pytest.importorskip("yourdfpy")
+    inertial = '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
+    path = tmp_path / "bot.urdf"
+    path.write_text(f'<robot name="bot"><link name="ground"/><link name="arm">{inertial}</link><joint name="base" '
+                    f'type="{kind}"><parent link="ground"/><child link="arm"/></joint></robot>', encoding="utf-8")
+    lc.from_urdf(path)
+
+
 def _tree_taylor(tmp_path):
     """method="taylor" on a model compiled from a kinematic tree: its Taylor program is a later step of issue 39."""
     tree = lc.Tree([lc.Link("rod", lc.Revolute("q"), mass=m, com=(l, 0, 0), inertia=(0, 0, 0))], gravity=(0, -g, 0),
@@ -441,6 +451,8 @@ CASES = {
     "tree-loop-unknown-link": (lambda: lc.Tree(_planar_loop("xy").links, loops=[
         lc.Loop("pin", ("left", (1, 0, 0)), ("rihgt", (1, 0, 0)))]), "'rihgt'"),
     "tree-loop-idle-direction": (lambda tmp_path: lc.compile(_planar_loop("xyz"), cache_dir=tmp_path), "'pin_z'"),
+    "urdf-joint-not-available": (lambda tmp_path: _from_urdf(tmp_path, "floating"), "joint 'base' is a floating joint"),
+    "urdf-not-a-tree": (lambda tmp_path: _from_urdf(tmp_path, "fixed"), "nothing in 'bot' moves"),
     "kane-equations-not-formed": (lambda: lc.compile(_kane_slider(formed=False)), "kanes_equations"),
     "kane-specified-function": (lambda: lc.compile(_kane_slider(force=me_function("F"))), "F(t)"),
     "kane-method-not-applicable": (_simulate("kane", q0=[0.0], method="gauss2", dt=0.1), "`gauss2`"),

@@ -40,6 +40,7 @@ __all__ = [
     "Particle", "RigidBody", "Spring", "System", "Torque", "body_rates", "coordinates", "from_kanes_method",
     "from_lagranges_method", "rotated", "t",
     "Tree", "Link", "Loop", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical", "Free",
+    "from_urdf",
     "LagcompError", "ModelError", "UndeclaredSymbolError", "ParameterError", "OptionError", "InitialConditionError",
     "SingularMassMatrixError", "IntegrationError", "LinearizationError", "CorruptCacheRecordError", "CacheWarning",
     "StiffnessWarning", "ResetWarning", "UnknownEventError",
@@ -58,6 +59,10 @@ _MODEL_NAMES = (
 #: What `lagcomp.multibody` contributes (kinematic trees), imported on first use too (sympy).
 _MULTIBODY_NAMES = ("Tree", "Link", "Loop", "Revolute", "Prismatic", "Universal", "Cylindrical", "Planar", "Spherical",
                     "Free")
+
+
+#: Robots from URDF files (`lagcomp.multibody.urdf`), imported on first use too (sympy; yourdfpy when called).
+_URDF_NAMES = ("from_urdf",)
 
 
 #: Imported on first use too (sympy, mpmath): the kernel-accuracy check of `lagcomp.accuracy`.
@@ -85,6 +90,11 @@ def __getattr__(name: str):
 
         globals()[name] = value = importlib.import_module(f"lagcomp.{name}")
         return value
+    if name in _URDF_NAMES:
+        from lagcomp.multibody import urdf
+
+        globals()[name] = value = getattr(urdf, name)
+        return value
     if name in _MODEL_NAMES:
         from lagcomp import model
 
@@ -95,4 +105,5 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_MODEL_NAMES) | set(_MULTIBODY_NAMES) | set(_ACCURACY_NAMES) | set(_SUBMODULES))
+    return sorted(set(globals()) | set(_MODEL_NAMES) | set(_MULTIBODY_NAMES) | set(_URDF_NAMES) | set(_ACCURACY_NAMES)
+                  | set(_SUBMODULES))

@@ -46,6 +46,10 @@ class Link:
         Centre of mass in the link's frame (m).
     inertia : 3 principal moments or 3×3 tensor
         Inertia about the centre of mass, link axes (kg m²); symmetric, positive semidefinite.
+    limits : dict, optional
+        {coordinate name: limits} of the joint's coordinates (`lc.from_urdf` gives a
+        `lagcomp.multibody.urdf.JointLimits`): carried for the user in ``Tree.limits``; no kernel, driver or event
+        reads them today.
     """
 
     name: str
@@ -54,6 +58,7 @@ class Link:
     mass: object = 0
     com: object = (0, 0, 0)
     inertia: object = (0, 0, 0)
+    limits: object = None
 
 
 @dataclass(frozen=True)
@@ -94,6 +99,8 @@ class Tree:
     ----------
     nodes : tuple of Node
         The degrees of freedom, parents first; node i moves coordinate i.
+    limits : dict
+        {coordinate name: limits} gathered from the links' `limits` (not used by lagcomp yet).
     coordinates : tuple
         The joints' coordinates q_i(t), in node order.
     parameters : tuple of Symbol
@@ -123,6 +130,7 @@ class Tree:
             raise ModelError(f"{name}: `t_end` must be a positive duration, got {t_end!r}.")
         self.t_end = float(t_end)
         self.events = shadow_events(self.nodes)   # (the spherical joints' MRP switches; none without them)
+        self.limits = _limits(self.links, names, name)
 
     @property
     def n(self) -> int:
@@ -277,3 +285,20 @@ def _initial(values, what: str, tree: Tree):
         raise InitialConditionError(f"{tree.name}: `{what}` must be {tree.n} finite numbers (one per coordinate "
                                     f"{list(tree.coordinate_names)}), got {list(values)}.")
     return values
+
+
+def _limits(links, coordinate_names, name: str) -> dict:
+    """The links' `limits` merged by coordinate name; each key must name a coordinate of the tree."""
+    merged = {}
+    for link in links:
+        if link.limits is None:
+            continue
+        if not hasattr(link.limits, "items"):
+            raise ModelError(f"{name}: link {link.name!r}: `limits` must be a mapping of coordinate name to limits, "
+                             f"got {link.limits!r}.")
+        unknown = sorted(set(link.limits) - set(coordinate_names))
+        if unknown:
+            raise ModelError(f"{name}: link {link.name!r} gives limits of {unknown}, which are not coordinates of "
+                             f"the tree {list(coordinate_names)}.")
+        merged.update(link.limits)
+    return merged
