@@ -336,9 +336,9 @@ def test_two_loops_of_one_name_are_refused():
 
 def test_radau_on_a_loop_is_refused_until_the_jacobians_include_the_loops(four_bars):
     tree, _ = four_bars
-    with pytest.raises(lc.ModelError, match="'four_bar_tree' yet: it has closed loops \\(loop\\)"):
+    with pytest.raises(lc.ModelError, match="`dae_residual` .* kinematic tree 'four_bar_tree'"):
         tree.simulate((0.0, 0.1), method="radau")
-    with pytest.raises(lc.ModelError, match="closed loops"):
+    with pytest.raises(lc.ModelError, match="'four_bar_tree' yet: it has closed loops \\(loop\\)"):
         tree.jacobian(0.0, tree.initial_state())
 
 

@@ -157,6 +157,60 @@ def test_random_urdfs_agree_with_pinocchio(cache_dir, tmp_path, text):
     assert _agree_with_pinocchio(path, model, 5, np.random.default_rng(0)) <= 1e-12
 
 
+def _pinocchio_floating_accelerations(pin, model, data, names, q, v) -> np.ndarray:
+    """q̈ from Pinocchio's ABA of the robot on its free flyer at lagcomp's state (q, v; the root's position and MRPs
+    σ first): the flyer's q is (x, quaternion of R(σ)), its v (Rᵀ ẋ, ω = J(σ) σ̇) in the root's frame; back from
+    Pinocchio's v̇: ẍ = R (v̇_lin + ω × Rᵀ ẋ), σ̈ = J⁻¹ (ω̇ − J̇ σ̇).  The other joints as `_pinocchio_accelerations`."""
+    from lagcomp.multibody import mrp
+
+    sigma, sigma_dot = q[3:6], v[3:6]
+    R, omega = np.array(mrp.rotation(sigma)), np.array(mrp.angular_velocity(sigma, sigma_dot))
+    qp, vp = np.empty(model.nq), np.empty(model.nv)
+    qp[:3], qp[3:7] = q[:3], pin.Quaternion(R).coeffs()
+    vp[:3], vp[3:6] = R.T @ v[:3], omega
+    order = []
+    for j in range(2, model.njoints):
+        k = names.index(model.names[j].replace("-", "_"))
+        joint = model.joints[j]
+        if joint.nq == 2:
+            qp[joint.idx_q:joint.idx_q + 2] = math.cos(q[k]), math.sin(q[k])
+        else:
+            qp[joint.idx_q] = q[k]
+        vp[joint.idx_v] = v[k]
+        order.append((joint.idx_v, k))
+    a = pin.aba(model, data, qp, vp, -model.damping * vp)
+    out = np.empty(len(names))
+    out[:3] = R @ (a[:3] + np.cross(omega, vp[:3]))
+    out[3:6] = mrp.jacobian_inverse_times(sigma, a[3:6] - np.array(mrp.rate_product(sigma, sigma_dot)))
+    for index, k in order:
+        out[k] = a[index]
+    return out
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(text=urdf_texts())
+def test_random_urdfs_on_a_floating_base_agree_with_pinocchio_on_its_free_flyer(cache_dir, tmp_path, text):
+    """``floating_base=True``: the root link on an `lc.Free` joint, against ``buildModelFromUrdf(path,
+    JointModelFreeFlyer())`` and its ABA at random states (|σ| < 1, off the shadow switch), 1e-12 relative."""
+    pin = pytest.importorskip("pinocchio")
+    path = tmp_path / "robot.urdf"
+    path.write_text(text, encoding="utf-8")
+    tree = lc.from_urdf(path, floating_base=True)
+    assert tree.coordinate_names[:6] == ("base_x", "base_y", "base_z", "base_mrp1", "base_mrp2", "base_mrp3")
+    assert isinstance(tree.links[0].joint, lc.Free) and "floating on its root link 'base'" in tree.description
+    model = lc.compile(tree, cache_dir=cache_dir)
+    reference = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    data = reference.createData()
+    assert reference.nv == model.n
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        q, v = rng.uniform(-2, 2, model.n), rng.uniform(-2, 2, model.n)
+        q[3:6] = rng.uniform(-0.5, 0.5, 3)
+        got = model.rhs(0.0, np.concatenate([q, v]))[model.n:]
+        expected = _pinocchio_floating_accelerations(pin, reference, data, model.coordinates, q, v)
+        assert _relative(got, expected) <= 1e-12
+
+
 def test_merging_fixed_links_follows_the_parallel_axis_theorem():
     """Two point masses m at ±d along x: I = diag(0, 2 m d², 2 m d²) about their middle; a thin rod (m, length L,
     I_G = m L²/12 about y and z) turned 90° about z and put at (0, a, 0) beside a point mass M at the origin: the

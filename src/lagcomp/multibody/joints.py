@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+import numpy as np
 import sympy as sp
 from sympy.physics.mechanics import dynamicsymbols
 
@@ -51,12 +52,18 @@ def unit_axis(axis, what: str) -> tuple:
             raise ModelError(f"{what}: axis {axis!r} must be 'x', 'y', 'z' or three numbers.")
         return tuple(sp.S.One if axis == c else sp.S.Zero for c in "xyz")
     try:
-        values = [sp.nsimplify(sp.sympify(v)) for v in axis]
+        values = [sp.sympify(v) for v in axis]
     except (TypeError, sp.SympifyError) as err:
         raise ModelError(f"{what}: axis {axis!r} must be 'x', 'y', 'z' or three numbers.") from err
     if len(values) != 3 or not all(v.is_number for v in values):
         raise ModelError(f"{what}: axis {axis!r} must be 'x', 'y', 'z' or three numbers.")
-    norm = sp.sqrt(sum(v ** 2 for v in values))
+    if any(v.has(sp.Float) for v in values):   # measured numbers (a URDF's): normalised in floats, every digit kept
+        unit = np.array([float(v) for v in values])
+        norm = float(np.linalg.norm(unit))
+        if norm == 0:
+            raise ModelError(f"{what}: the axis is the zero vector.")
+        return tuple(sp.Float(float(x)) if x != 0 else sp.S.Zero for x in unit / norm)
+    norm = sp.sqrt(sum(v ** 2 for v in values))   # exact numbers: an exact unit vector ((1, 1, 0) → (√2/2, √2/2, 0))
     if norm == 0:
         raise ModelError(f"{what}: the axis is the zero vector.")
     return tuple(sp.nsimplify(v / norm) for v in values)

@@ -4,7 +4,11 @@ The file is parsed by yourdfpy (the ``urdf`` extra: ``pip install 'lagcomp[urdf]
 meshes are never read (the dynamics needs only the ``<inertial>`` elements).  What lagcomp builds from it:
 
 * the URDF's root link is the fixed base (its own mass and the links fixed to it move with the ground, so they do
-  not enter the dynamics); gravity is given in its frame, (0, 0, −9.81) m/s² by default;
+  not enter the dynamics); gravity is given in its frame, (0, 0, −9.81) m/s² by default.  With
+  ``floating_base=True`` the root link floats instead (a legged robot, a humanoid): it gets a `Free` joint to the
+  world frame, as Pinocchio's ``buildModelFromUrdf(path, JointModelFreeFlyer())`` gives it one, with the
+  coordinates ``<root>_x``, ``<root>_y``, ``<root>_z`` (its origin's position in the world frame, m) and
+  ``<root>_mrp1`` … ``<root>_mrp3`` (its orientation as modified Rodrigues parameters, `lagcomp.multibody.mrp`);
 * every ``revolute``, ``continuous`` and ``prismatic`` joint becomes a `Revolute` or `Prismatic` joint of its child
   link, placed by the joint's ``<origin>`` (xyz, rpy: R = Rz(yaw) Ry(pitch) Rx(roll)) and turning or sliding along
   its ``<axis>`` (normalised), with the URDF ``<dynamics damping>`` as a viscous damper (``damping=False`` drops
@@ -34,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from lagcomp.errors import ModelError
-from lagcomp.multibody.joints import Prismatic, Revolute
+from lagcomp.multibody.joints import Free, Prismatic, Revolute
 from lagcomp.multibody.tree import Link, Tree
 
 #: URDF joint types lagcomp builds a tree from, and the ones it refuses (with why).
@@ -56,8 +60,8 @@ class JointLimits:
     velocity: float | None
 
 
-def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), damping: bool = True, q0=None,
-              qd0=None, t_end: float = 10.0) -> Tree:
+def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), damping: bool = True,
+              floating_base: bool = False, q0=None, qd0=None, t_end: float = 10.0) -> Tree:
     """A kinematic tree of the robot described by the URDF file at `path` (module docstring says how).
 
     Parameters
@@ -70,6 +74,9 @@ def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), dampi
         Gravitational acceleration in the root link's frame (m/s²).
     damping : bool
         Keep the joints' ``<dynamics damping>`` as viscous dampers (τ = −damping q̇); default True.
+    floating_base : bool
+        Let the root link float on a `Free` joint (6 coordinates first: position, then MRPs) instead of fixing it
+        to the ground; default False.
     q0, qd0, t_end
         As for `Tree` (coordinates in URDF joint order, parents first).
 
@@ -88,23 +95,26 @@ def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), dampi
         yourdfpy is not installed.
     """
     robot = _parse(Path(path))
-    walk = _walk(robot, _children(robot, path), _root(robot, path), path)
-    tree_links = [_link(*moving, walk.parts.get(moving[0], []), damping) for moving in walk.moving]
+    walk = _walk(robot, _children(robot, path), _root(robot, path), path, floating_base)
+    tree_links = [_floating_link(*walk.base, walk.parts.get(walk.base[0], []))] if walk.base else []
+    tree_links += [_link(*moving, walk.parts.get(moving[0], []), damping) for moving in walk.moving]
     tree_name = name if name is not None else _Names.identifier(robot.name or "robot", "robot")
     return Tree(tree_links, gravity=gravity, name=tree_name, q0=q0, qd0=qd0, t_end=t_end,
-                description=_description(robot.name, path, walk.renamed, walk.frictions, damping))
+                description=_description(robot.name, path, walk.renamed, walk.frictions, damping, walk.base))
 
 
 @dataclass
 class _Walk:
     """What a walk over the URDF tree found: the moving joints as (tree link name, joint, coordinate, placement in
     the parent tree link's frame, parent tree link or None), the mass properties of each tree link's parts
-    (`_part`), the joints renamed {URDF name: coordinate}, the joints with Coulomb friction."""
+    (`_part`), the joints renamed {URDF name: coordinate}, the joints with Coulomb friction, and the floating base
+    as (tree link name, its six coordinates), or None."""
 
     moving: list
     parts: dict
     renamed: dict
     frictions: list
+    base: tuple | None = None
 
 
 def _children(robot, path) -> dict:
@@ -123,11 +133,16 @@ def _children(robot, path) -> dict:
     return children
 
 
-def _walk(robot, children: dict, root: str, path) -> _Walk:
+def _walk(robot, children: dict, root: str, path, floating_base: bool) -> _Walk:
     """The tree links from the root outwards: a moving joint starts one, a fixed joint adds its child link to the
-    one it hangs from (at the pose it composes to)."""
+    one it hangs from (at the pose it composes to); a floating root is a tree link of its own."""
     names, walk = _Names(), _Walk([], {}, {}, [])
-    bodies = {root: (None, np.eye(4))}   # URDF link -> (the tree link it is part of, its pose in that link's frame)
+    base = None
+    if floating_base:
+        base = names.link(root)
+        walk.base = (base, tuple(names.coordinate(f"{root}_{part}")
+                                 for part in ("x", "y", "z", "mrp1", "mrp2", "mrp3")))
+    bodies = {root: (base, np.eye(4))}   # URDF link -> (the tree link it is part of, its pose in that link's frame)
     for joint in _parents_first(children, root, path):
         body, pose = bodies[joint.parent]
         placement = pose @ _matrix(joint.origin)
@@ -142,7 +157,7 @@ def _walk(robot, children: dict, root: str, path) -> _Walk:
         link_name = names.link(joint.child)
         walk.moving.append((link_name, joint, coordinate, placement, body))
         bodies[joint.child] = (link_name, np.eye(4))
-    if not walk.moving:
+    if not walk.moving and not floating_base:
         raise ModelError(f"{path}: no revolute, continuous or prismatic joint: nothing in {robot.name!r} moves.")
     inertials = {link.name: link.inertial for link in robot.links}
     for urdf_link, (body, pose) in bodies.items():
@@ -252,6 +267,13 @@ def _link(name: str, joint, coordinate: str, placement, parent, parts, damping: 
                 inertia=inertia.tolist(), limits=None if limits is None else {coordinate: limits})
 
 
+def _floating_link(name: str, coordinates: tuple, parts) -> Link:
+    """The floating root link: a `Free` joint to the world frame, its mass properties those of the parts fixed to
+    it."""
+    mass, com, inertia = combined(parts)
+    return Link(name, Free(coordinates), mass=float(mass), com=tuple(float(x) for x in com), inertia=inertia.tolist())
+
+
 class _Names:
     """Identifiers for the URDF's joint and link names, each unique among its kind."""
 
@@ -280,8 +302,8 @@ class _Names:
         return self._unique(link_name, "link", "link")
 
 
-def _description(robot_name, path, renamed: dict, frictions: list, damping: bool) -> str:
-    text = f"{robot_name} from {path}"
+def _description(robot_name, path, renamed: dict, frictions: list, damping: bool, base) -> str:
+    text = f"{robot_name} from {path}" + (f", floating on its root link {base[0]!r}" if base else "")
     if renamed:
         text += "; joints renamed as coordinates: " + ", ".join(f"{a!r} -> {b!r}" for a, b in renamed.items())
     if frictions:
