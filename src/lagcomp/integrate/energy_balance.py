@@ -115,6 +115,19 @@ def balance_or_none(solution) -> EnergyBalance | None:
         return None
 
 
+def sweep_balances(model) -> bool:
+    """Whether a sweep of `model` reports the energy balance's residual as its energy error (`lagcomp.integrate.
+    sweep`): where the balance is available (`PowerSource.of`) and some term of dh/dt is not identically zero
+    (``power_terms`` of the ``power`` kind's entry); else h is a first integral and the drift of T + V is kept."""
+    if PowerSource.of(model, np.empty(0)).refused:
+        return False
+    try:
+        entry = model.on_demand_entry("power")
+    except ModelError:          # (a kinematic tree: its on-demand kinds are refused, naming the issue)
+        return False
+    return entry is not None and bool(entry.metadata["power_terms"])
+
+
 class PowerSource:
     """A run's model kernels and parameter vector, for `Solution.energy_balance` (None for a Solution built by
     hand or pickled: the kernels are not kept), or why the balance is refused."""
