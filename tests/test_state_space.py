@@ -225,3 +225,25 @@ def test_body_point_outputs_of_the_cart_pole_closed_form(shaken_arm):
         an.linearize(shaken_arm, [0.0, 0.0], inputs={"F": 0.0}, outputs=["pole.x"])
     with pytest.raises(lc.OptionError, match="Unknown output"):
         lin.state_space(["tip.x"])     # (not asked of linearize: its row was not computed)
+    control = pytest.importorskip("control")
+    converted = space.to_control()      # (python-control refuses '.' in names)
+    assert converted.output_labels == ["bob_x", "bob_y", "bob_vx"] and np.array_equal(converted.C, space.C)
+
+
+def test_python_control_lqr_stabilises_the_cart_pole_of_bodies(shaken_arm):
+    # the gallery's design (docs/gallery/workflows/plot_lqr_cart_pole.py): gains from control.lqr on to_control()
+    control = pytest.importorskip("control")
+    space = an.linearize(shaken_arm, [0.0, 0.0], params={"a": 0.0, "W": 0.0}, inputs={"F": 0.0},
+                         outputs=["bob.x"]).state_space()
+    gains, _, poles = control.lqr(space.to_control(), np.diag([1.0, 10.0, 1.0, 1.0]), np.array([[0.1]]))
+    assert np.all(np.real(poles) < 0)
+    k0, k1, k2, k3 = (float(k) for k in np.asarray(gains)[0])
+
+    @numba.njit
+    def feedback(t_, y_, p_):
+        return -(k0 * y_[0] + k1 * y_[1] + k2 * y_[2] + k3 * y_[3])
+
+    params = {"a": 0.0, "W": 0.0}
+    held = shaken_arm.simulate((0.0, 8.0), [0.1, 0.25], [0.0, 0.0], params=params, inputs={"F": feedback})
+    free = shaken_arm.simulate((0.0, 8.0), [0.1, 0.25], [0.0, 0.0], params=params, inputs={"F": 0.0})
+    assert np.max(np.abs(held.q[-1])) < 1e-3 and np.max(np.abs(free.q[:, 1])) > 1.0

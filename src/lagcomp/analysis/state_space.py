@@ -72,14 +72,15 @@ class StateSpace:
         return signal.StateSpace(self.A, self.B, self.C, self.D)
 
     def to_control(self):
-        """A python-control ``StateSpace`` with the states', inputs' and outputs' names (needs ``control``)."""
+        """A python-control ``StateSpace`` with the states', inputs' and outputs' names (needs ``control``); a
+        body point's ``"bob.x"`` is named ``"bob_x"`` there (python-control refuses '.' in a signal's name)."""
         try:
             import control
         except ImportError as err:
             raise ImportError("StateSpace.to_control needs python-control (pip install control); "
                               "StateSpace.to_scipy gives a scipy.signal.StateSpace without it.") from err
         return control.ss(self.A, self.B, self.C, self.D, states=list(self.states), inputs=list(self.inputs),
-                          outputs=list(self.outputs))
+                          outputs=[name.replace(".", "_") for name in self.outputs])
 
     def __repr__(self) -> str:
         return f"StateSpace(states={list(self.states)}, inputs={list(self.inputs)}, outputs={list(self.outputs)})"
