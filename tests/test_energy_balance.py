@@ -299,3 +299,13 @@ def test_compiled_rows_match_a_row_by_row_evaluation(driven):
         out = np.empty(4)
         source.kernels.power(ts[i], ys[i], source.p, np.zeros(0), out)
         assert np.array_equal(eb._power(source, ts[i:i + 1], ys[i:i + 1])[0], out)
+
+
+def test_sweep_balance_on_dask_is_the_local_one(damped):
+    distributed = pytest.importorskip("distributed")
+    grid, options = {"c": [0.0, 2.0]}, dict(q0=[1.0], qd0=[0.0], rtol=RTOL, atol=RTOL * 1e-2, output="energy")
+    local = damped.sweep((0.0, 6.0), grid, **options)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = damped.sweep((0.0, 6.0), grid, client=client, **options)
+    assert remote.energy_balance and np.array_equal(remote.energy_error, local.energy_error)

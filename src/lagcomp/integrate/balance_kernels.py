@@ -167,13 +167,18 @@ def no_reactions(t, y, p, out):
     return 0
 
 
-@functools.lru_cache(maxsize=64)
 def balance_row_kernel(kernels, n2: int, k: int, offset: int):
     """The sweep loops' ``energy`` kernel (``(t, y, p) -> float``) that folds each row into the balance of the
-    model of `kernels` (`balance_row`; state size `n2`, `k` multipliers, its slots from ``p[offset]``).  Compiled
-    once per process and model (numba caches no closure on disk; it is a call of the cached `balance_row`)."""
-    rhs, power, energy_function = kernels.rhs, kernels.power, kernels.energy_function
-    reactions = kernels.reactions if k else no_reactions
+    model of `kernels` (`balance_row`; state size `n2`, `k` multipliers, its slots from ``p[offset]``)."""
+    return _balance_kernel(kernels.rhs, kernels.power, kernels.energy_function,
+                           kernels.reactions if k else no_reactions, n2, k, offset)
+
+
+@functools.lru_cache(maxsize=64)
+def _balance_kernel(rhs, power, energy_function, reactions, n2: int, k: int, offset: int):
+    """`balance_row_kernel` for these kernels (dispatchers: one per model and process, whichever namespace holds
+    them).  Compiled once per process and model: numba caches no closure on disk; it is a call of the cached
+    `balance_row`."""
 
     @njit(FLOAT(FLOAT, VECTOR, VECTOR), error_model="numpy", nogil=True)
     def balance(t, y, p):
