@@ -125,7 +125,7 @@ def test_conversions(model):
     assert isinstance(scipy_system, signal.StateSpace)
     assert np.array_equal(scipy_system.A, space.A) and np.array_equal(scipy_system.C, [[1, 0, 0, 0], [0, 1, 0, 0]])
     assert np.array_equal(space.D, np.zeros((2, 1)))
-    control = pytest.importorskip("control")
+    pytest.importorskip("control")
     converted = space.to_control()
     assert isinstance(converted, control.StateSpace) and np.array_equal(converted.B, space.B)
 
@@ -225,7 +225,7 @@ def test_body_point_outputs_of_the_cart_pole_closed_form(shaken_arm):
         an.linearize(shaken_arm, [0.0, 0.0], inputs={"F": 0.0}, outputs=["pole.x"])
     with pytest.raises(lc.OptionError, match="Unknown output"):
         lin.state_space(["tip.x"])     # (not asked of linearize: its row was not computed)
-    control = pytest.importorskip("control")
+    pytest.importorskip("control")
     converted = space.to_control()      # (python-control refuses '.' in names)
     assert converted.output_labels == ["bob_x", "bob_y", "bob_vx"] and np.array_equal(converted.C, space.C)
 

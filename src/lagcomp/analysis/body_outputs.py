@@ -16,9 +16,10 @@ symbolic (sympy, from the System's bodies), evaluated at the point: no finite di
 from __future__ import annotations
 
 import numpy as np
-import sympy as sp
+from sympy.core.function import AppliedUndef
 
 from lagcomp.errors import ModelError, OptionError
+from lagcomp.model.inputs import is_input
 from lagcomp.model.system import t as time
 
 #: The components of a point's position and velocity, as output names' suffixes.
@@ -27,8 +28,10 @@ POSITION, VELOCITY = ("x", "y", "z"), ("vx", "vy", "vz")
 
 def point_rows(model, q: np.ndarray, t: float, params: dict, names) -> dict:
     """{name: (C row (2n,), D row (U,))} of each body output among `names` (module docstring); other names are
-    left to the caller (states).  A ModelError where the model carries no System (`lagcomp.load`) or a named
-    body is not placed (no position the model knows)."""
+    left to the caller (states).  A ModelError where the model carries no System (`lagcomp.load`), an OptionError
+    where a named body is not among those the model places (no position it knows).  A position that reads an
+    input u(t) gets no row: its kinetic energy reads u̇, and `Linearization.state_space` refuses the linearization
+    (`input_refused`) before it reads the rows."""
     wanted = [name for name in names if isinstance(name, str) and name.rpartition(".")[2] in POSITION + VELOCITY
               and "." in name]
     if not wanted:
@@ -45,6 +48,8 @@ def point_rows(model, q: np.ndarray, t: float, params: dict, names) -> dict:
         q_symbols, parameters, r = positions[body]
         component = (POSITION + VELOCITY).index(part) % 3
         expression = r[component]
+        if any(is_input(f) for f in expression.atoms(AppliedUndef)):
+            continue
         values = {**dict(zip(q_symbols, q.tolist(), strict=True)), **_parameter_values(parameters, params), time: t}
         jacobian = np.array([float(expression.diff(s).subs(values)) for s in q_symbols])
         if part in POSITION:

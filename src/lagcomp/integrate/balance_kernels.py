@@ -20,7 +20,14 @@ import functools
 import numpy as np
 from numba import njit, types
 
-from lagcomp.integrate.drivers.kernel_types import ENERGY_FUNCTION, FLOAT, INT, MATRIX, RHS, VECTOR
+from lagcomp.integrate.drivers.kernel_types import (
+    ENERGY_FUNCTION,
+    FLOAT,
+    INT,
+    MATRIX,
+    RHS,
+    VECTOR,
+)
 
 #: ``power(t, y, p, lam, out) -> int``: the four terms of dh/dt at y into ``out`` (4,), λ = ``lam`` (k,)
 #: (`lagcomp.codegen.power`).

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
+from lagcomp.integrate.balance_kernels import balance_row_kernel, slots
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.contacts import (
     check_contacts,
@@ -35,7 +36,6 @@ from lagcomp.integrate.contacts import (
     set_initial_modes,
     sweep_impulses,
 )
-from lagcomp.integrate.balance_kernels import balance_row_kernel, slots
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
 from lagcomp.integrate.energy_balance import sweep_balances
