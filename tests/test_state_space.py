@@ -125,7 +125,7 @@ def test_conversions(model):
     assert isinstance(scipy_system, signal.StateSpace)
     assert np.array_equal(scipy_system.A, space.A) and np.array_equal(scipy_system.C, [[1, 0, 0, 0], [0, 1, 0, 0]])
     assert np.array_equal(space.D, np.zeros((2, 1)))
-    pytest.importorskip("control")
+    control = pytest.importorskip("control")
     converted = space.to_control()
     assert isinstance(converted, control.StateSpace) and np.array_equal(converted.B, space.B)
 
