@@ -95,7 +95,8 @@ class Sweep:
         over the saved rows, each relative to the largest of |h(0)|,
         |h − h(0)| and each power term's |work| up to that row
         (`lagcomp.integrate.energy_balance`; what `Solution.energy_balance`
-        computes along the same rows).
+        computes along the same rows).  A batched Taylor sweep keeps the
+        drift of T + V (its lanes module holds no ``power`` kernel).
     energy_balance : bool
         Whether `energy_error` is the energy balance's residual (forces,
         inputs, dissipation, imposed motions or moving constraints) rather
