@@ -328,6 +328,12 @@ def _from_urdf(tmp_path, kind: str):
     lc.from_urdf(path)
 
 
+def _points_of_a_loaded_model(tmp_path):
+    """A body's point as an output of the linearization of a model from `lc.load` (no System kept)."""
+    lc.compile(oscillator(), cache_dir=tmp_path)
+    an.linearize(lc.load(oscillator().name, cache_dir=tmp_path), [0.0], outputs=["bob.x"])
+
+
 def _tree_taylor(tmp_path):
     """method="taylor" on a model compiled from a kinematic tree: its Taylor program is a later step of issue 39."""
     tree = lc.Tree([lc.Link("rod", lc.Revolute("q"), mass=m, com=(l, 0, 0), inertia=(0, 0, 0))], gravity=(0, -g, 0),
@@ -584,6 +590,9 @@ CASES = {
                                                                     name="table_degenerate"), [0.0], None, {"m": 1.0}),
                               "singular"),
     "linearize-inputs-missing": (lambda models: an.linearize_steady(models["pushed"], [0.0]), "inputs={'f'"),
+    "state-space-unknown-point": (lambda models: an.linearize(models["pendulum"], [0.0], outputs=["pole.x"]),
+                                  "'pole.x'"),
+    "state-space-points-need-system": (_points_of_a_loaded_model, "'table_oscillator'"),
     "state-space-input-derivatives": (
         lambda models: an.linearize(models["driven"], [0.0], inputs={"s": 0.0}).state_space(), "['s']"),
     "steady-unknown-state": (lambda models: an.linearize_steady(models["rod"], [0.0, 0.0, -1.0], drop=["w"]), "['w']"),

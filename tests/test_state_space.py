@@ -160,3 +160,90 @@ def test_reaction_outputs_of_a_pendulum_held_aside():
     space = steady.state_space(outputs=["x", "rod"])
     assert space.outputs == ("x", "rod") and np.array_equal(space.C[0], [1.0, 0.0]) and space.D[0, 0] == 0.0
     assert np.allclose(space.C[1], 0.0, atol=1e-13) and space.D[1, 0] == pytest.approx(-np.sin(th0) / 2.6, rel=1e-13)
+
+
+# -- points of bodies as outputs: C rows against differences of the geometry kernel's positions ------------------
+
+a, W = sp.symbols("a W", positive=True)
+
+
+@pytest.fixture(scope="module")
+def shaken_arm(cache_dir):
+    """A cart at x with an arm of two bodies: a bob at angle th, and a tip whose pivot is shaken, x + a sin(W t):
+    positions that depend on q and t (∂²r/∂q∂t ≠ 0 through the tip's rotating offset)."""
+    cart = lc.Particle(M, (x, 0, 0), name="cart")
+    bob = lc.Particle(m, (x + l * sp.sin(th), l * sp.cos(th), 0), name="bob")
+    tip = lc.Particle(m, (x + a * sp.sin(W * t) + l * sp.sin(th + W * t), l * sp.cos(th + W * t), 0), name="tip")
+    system = lc.System([x, th], bodies=[cart, bob, tip], loads=[lc.Gravity((0, -g, 0))], forces=[lc.Input("F"), 0],
+                       name="ss_shaken_arm", defaults={**DEFAULTS, "a": 0.3, "W": 1.7})
+    return lc.compile(system, cache_dir=cache_dir)
+
+
+def _positions(model, t_, q, p):
+    out = np.empty(model.kernels.GEOMETRY_SIZE)
+    model.kernels.geometry(float(t_), np.concatenate([q, np.zeros(2)]), p, out)
+    return out
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.floats(-1.0, 1.0), st.floats(-3.0, 3.0), st.floats(0.0, 5.0))
+def test_body_points_against_differences_of_positions(shaken_arm, x_, th_, t_):
+    names = [f"{body}.{part}" for body in ("cart", "bob", "tip") for part in ("x", "y", "vx", "vy")]
+    lin = an.linearize(shaken_arm, [x_, th_], t=t_, inputs={"F": 0.0}, outputs=["th", *names])
+    space = lin.state_space()
+    assert space.outputs == ("th", *names) and np.array_equal(space.C[0], [0, 1, 0, 0]) and not space.D.any()
+    p, q, h = shaken_arm.parameter_vector(inputs={"F": 0.0}), np.array([x_, th_]), 1e-5
+    offsets = {name: offset for name, _, offset in shaken_arm.kernels.GEOMETRY}
+
+    def r(q_, time):
+        return _positions(shaken_arm, time, q_, p)
+
+    def v(q_, qd_, time):        # the velocity along the motion through (q_, qd_) at `time`: d r / dt
+        return (r(q_ + h * qd_, time + h) - r(q_ - h * qd_, time - h)) / (2 * h)
+
+    e = np.eye(2)
+    dr_dq = np.stack([(r(q + h * e[j], t_) - r(q - h * e[j], t_)) / (2 * h) for j in range(2)], axis=1)
+    dv_dq = np.stack([(v(q + 1e-3 * e[j], np.zeros(2), t_) - v(q - 1e-3 * e[j], np.zeros(2), t_)) / 2e-3
+                      for j in range(2)], axis=1)
+    dv_dqd = np.stack([v(q, e[j], t_) for j in range(2)], axis=1) - v(q, np.zeros(2), t_)[:, None]
+    for row, name in zip(space.C[1:], names, strict=True):
+        body, _, part = name.partition(".")
+        i = offsets[body] + ("x", "y").index(part[-1])
+        expected = (np.concatenate([dr_dq[i], [0, 0]]) if part in ("x", "y")
+                    else np.concatenate([dv_dq[i], dv_dqd[i]]))
+        assert row == pytest.approx(expected, abs=2e-6 * max(1.0, np.abs(expected).max()))
+
+
+def test_body_point_outputs_of_the_cart_pole_closed_form(shaken_arm):
+    # about the upright (x, θ) = 0 at t = 0 the bob is at (x + l sin θ, l cos θ): δx_bob = δx + l δθ, δy_bob = 0,
+    # δvx_bob = δẋ + l δθ̇; the transfer function F → x_bob is C (sI − A)⁻¹ B of those rows
+    lin = an.linearize(shaken_arm, [0.0, 0.0], inputs={"F": 0.0}, outputs=["bob.x", "bob.y", "bob.vx"])
+    space = lin.state_space()
+    assert np.array_equal(space.C, [[1, 0.5, 0, 0], [0, 0, 0, 0], [0, 0, 1, 0.5]])
+    assert lin.state_space(["x", "bob.x"]).outputs == ("x", "bob.x")
+    with pytest.raises(lc.OptionError, match=r"'pole.x'.*\['bob', 'cart', 'tip'\]"):
+        an.linearize(shaken_arm, [0.0, 0.0], inputs={"F": 0.0}, outputs=["pole.x"])
+    with pytest.raises(lc.OptionError, match="Unknown output"):
+        lin.state_space(["tip.x"])     # (not asked of linearize: its row was not computed)
+    pytest.importorskip("control")
+    converted = space.to_control()      # (python-control refuses '.' in names)
+    assert converted.output_labels == ["bob_x", "bob_y", "bob_vx"] and np.array_equal(converted.C, space.C)
+
+
+def test_python_control_lqr_stabilises_the_cart_pole_of_bodies(shaken_arm):
+    # the gallery's design (docs/gallery/workflows/plot_lqr_cart_pole.py): gains from control.lqr on to_control()
+    control = pytest.importorskip("control")
+    space = an.linearize(shaken_arm, [0.0, 0.0], params={"a": 0.0, "W": 0.0}, inputs={"F": 0.0},
+                         outputs=["bob.x"]).state_space()
+    gains, _, poles = control.lqr(space.to_control(), np.diag([1.0, 10.0, 1.0, 1.0]), np.array([[0.1]]))
+    assert np.all(np.real(poles) < 0)
+    k0, k1, k2, k3 = (float(k) for k in np.asarray(gains)[0])
+
+    @numba.njit
+    def feedback(t_, y_, p_):
+        return -(k0 * y_[0] + k1 * y_[1] + k2 * y_[2] + k3 * y_[3])
+
+    params = {"a": 0.0, "W": 0.0}
+    held = shaken_arm.simulate((0.0, 8.0), [0.1, 0.25], [0.0, 0.0], params=params, inputs={"F": feedback})
+    free = shaken_arm.simulate((0.0, 8.0), [0.1, 0.25], [0.0, 0.0], params=params, inputs={"F": 0.0})
+    assert np.max(np.abs(held.q[-1])) < 1e-3 and np.max(np.abs(free.q[:, 1])) > 1.0

@@ -490,7 +490,8 @@ def cmd_sweep(args) -> int:
     if sweep.energy_error is not None:
         finite = sweep.energy_error[np.isfinite(sweep.energy_error)]
         if finite.size:
-            print(f"energy      largest relative error per trajectory: median {np.median(finite):.3g}, "
+            what = "energy balance residual (h − h(0) − ∫P dt)" if sweep.energy_balance else "relative error of T + V"
+            print(f"energy      largest {what} per trajectory: median {np.median(finite):.3g}, "
                   f"max {finite.max():.3g}")
     from lagcomp.event_report import sweep_event_summary
 

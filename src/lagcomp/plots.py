@@ -248,6 +248,8 @@ def plot_sweep(sweep, quantity="energy_error", *, label: str | None = None, log:
     from matplotlib.colors import LogNorm, Normalize
 
     values, name = _sweep_values(_require(sweep, "Sweep", "plot_sweep"), quantity)
+    if name == "energy_error" and getattr(sweep, "energy_balance", False):
+        name = "energy balance residual"        # (h − h(0) − ∫P dt, relative: a system that is not conservative)
     label = label or name
     finite = values[np.isfinite(values)]
     if log is None:

@@ -29,6 +29,7 @@ import numpy as np
 from scipy import linalg
 
 from lagcomp.analysis._common import RestForces, coordinates_vector, relative_residual
+from lagcomp.analysis.body_outputs import point_rows
 from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
 from lagcomp.errors import LinearizationError, ModelError
 
@@ -61,6 +62,10 @@ class Linearization:
         ∂F/∂u at the point: the generalized forces per unit of each input (M₀ δq̈ + ... = H δu); None without
         inputs, or where the equations read an input's derivatives (`input_refused` says so).
     input_refused : str or None
+    outputs : tuple of str or None
+        The outputs `linearize` was asked for: `state_space`'s default.
+    output_rows : dict of str to (ndarray (2n,), ndarray (U,))
+        The rows of C and D of the points of bodies among `outputs` (`lagcomp.analysis.body_outputs`).
     """
 
     q: np.ndarray
@@ -77,11 +82,14 @@ class Linearization:
     inputs: tuple = ()
     H: np.ndarray | None = None
     input_refused: str | None = None
+    outputs: tuple | None = None
+    output_rows: dict = field(default_factory=dict)
 
     def state_space(self, outputs=None):
         """ẋ = A x + B w, z = C x + D w (`lagcomp.analysis.StateSpace`) with x = (δq, δq̇), w = δu:
-        A = [[0, I], [−M₀⁻¹K₀, −M₀⁻¹C₀]], B = [[0], [M₀⁻¹H]]; z the states named in `outputs` (coordinates,
-        ``<coordinate>_dot``; all by default).  LinearizationError where no B exists (`input_refused`)."""
+        A = [[0, I], [−M₀⁻¹K₀, −M₀⁻¹C₀]], B = [[0], [M₀⁻¹H]]; z what `outputs` names: states (coordinates,
+        ``<coordinate>_dot``) and the points of bodies `linearize` was asked for (`output_rows`); by default the
+        outputs given to `linearize`, else every state.  LinearizationError where no B exists (`input_refused`)."""
         from lagcomp.analysis.state_space import StateSpace
 
         if self.input_refused:
@@ -92,7 +100,8 @@ class Linearization:
         H = np.zeros((n, 0)) if self.H is None else self.H
         B = np.vstack([np.zeros_like(H), linalg.solve(self.M, H, assume_a="sym")])
         states = (*self.coordinates, *(f"{c}_dot" for c in self.coordinates))
-        return StateSpace.of_states(A, B, states, self.inputs, outputs)
+        return StateSpace.of_states(A, B, states, self.inputs, self.outputs if outputs is None else outputs,
+                                    rows=self.output_rows)
 
     @property
     def C(self) -> np.ndarray:
@@ -170,12 +179,16 @@ class Modes:
                 f"growth_rate={self.growth_rate:.3g})")
 
 
-def linearize(model, q, params: dict | None = None, *, t: float = 0.0, inputs=None) -> Linearization:
+def linearize(model, q, params: dict | None = None, *, t: float = 0.0, inputs=None, outputs=None) -> Linearization:
     """M₀, K₀, G₀, D₀ about the configuration `q` (an equilibrium, e.g. `find_equilibrium(...).q`).
 
     A model with inputs (`lagcomp.Input` supplied at run time) is linearized with them held at `inputs`
     (a number per input, by name), and `Linearization.H` = ∂F/∂u there gives the input matrix of
     `Linearization.state_space` (the exact ``rhs_input_jacobian`` kernel, built on first use).
+
+    `outputs` names the outputs of `Linearization.state_space`: states (``x``, ``x_dot``) and points of the
+    System's bodies, ``"<body>.x"`` (``.y``, ``.z``; ``.vx``, ``.vy``, ``.vz`` for the velocity), whose rows of C
+    are the exact derivatives of the body's position there (`lagcomp.analysis.body_outputs`).
 
     Constrained systems, and steady motions (q̇ ≠ 0), are linearized by
     `lagcomp.analysis.linearize_steady` (a first-order state matrix on the
@@ -193,10 +206,12 @@ def linearize(model, q, params: dict | None = None, *, t: float = 0.0, inputs=No
     C, M = -F_v, rest.mass_matrix(q)
     H, refused = _input_forces(model, q, M, rest, inputs)
     force = rest.force(q)
+    outputs = None if outputs is None else ((outputs,) if isinstance(outputs, str) else tuple(outputs))
     return Linearization(
         q=q, t=float(t), M=M, K=-F_q, G=(C - C.T) / 2, D=(C + C.T) / 2,
         residual=float(np.max(np.abs(force))), force=force, force_scale=rest.force_scale(q, force, RESIDUAL_TOLERANCE),
         coordinates=model.coordinates, params=rest.params, inputs=model.inputs, H=H, input_refused=refused,
+        outputs=outputs, output_rows=point_rows(model, q, float(t), rest.params, outputs or ()),
     )
 
 

@@ -3,7 +3,8 @@
 `lagcomp.analysis.linearize(model, q, inputs=...)` (unconstrained, x = (δq, δq̇)) and
 `lagcomp.analysis.linearize_steady(..., inputs=...)` (constrained too, x the independent coordinates and
 speeds) give A and B: x the deviation of the state from the point, w that of the inputs from the values
-they are held at.  The outputs z are states chosen by name (C picks them, D = 0) and, from
+they are held at.  The outputs z are states chosen by name (C picks them, D = 0), from `linearize` points of
+bodies (``"cart.x"``, ``"pole.vy"``: `lagcomp.analysis.body_outputs`) and, from
 `linearize_steady`, constraints' reactions (the multipliers' deviations: C = ∂λ/∂x, D = ∂λ/∂w).  `StateSpace.to_scipy`
 gives a `scipy.signal.StateSpace`, `StateSpace.to_control` a python-control one (``pip install control``).
 """
@@ -54,7 +55,7 @@ class StateSpace:
         unknown = [name for name in names if name not in states and name not in rows]
         if unknown:
             raise OptionError(f"Unknown output(s) {unknown}: outputs are states, {list(states)}"
-                              + (f", or reactions, {list(rows)}." if rows else "."))
+                              + (f", or {list(rows)}." if rows else "."))
         B = np.zeros((len(states), 0)) if B is None else np.asarray(B, dtype=float)
         C, D = np.zeros((len(names), len(states))), np.zeros((len(names), B.shape[1]))
         for i, name in enumerate(names):
@@ -71,14 +72,15 @@ class StateSpace:
         return signal.StateSpace(self.A, self.B, self.C, self.D)
 
     def to_control(self):
-        """A python-control ``StateSpace`` with the states', inputs' and outputs' names (needs ``control``)."""
+        """A python-control ``StateSpace`` with the states', inputs' and outputs' names (needs ``control``); a
+        body point's ``"bob.x"`` is named ``"bob_x"`` there (python-control refuses '.' in a signal's name)."""
         try:
             import control
         except ImportError as err:
             raise ImportError("StateSpace.to_control needs python-control (pip install control); "
                               "StateSpace.to_scipy gives a scipy.signal.StateSpace without it.") from err
         return control.ss(self.A, self.B, self.C, self.D, states=list(self.states), inputs=list(self.inputs),
-                          outputs=list(self.outputs))
+                          outputs=[name.replace(".", "_") for name in self.outputs])
 
     def __repr__(self) -> str:
         return f"StateSpace(states={list(self.states)}, inputs={list(self.inputs)}, outputs={list(self.outputs)})"

@@ -42,12 +42,17 @@ def power_terms(eom: EOM, multipliers) -> list:
     ]
 
 
+def multiplier_symbols(eom: EOM) -> tuple:
+    """Symbols standing for the k multipliers λ in `power_terms`, named apart from every symbol of `eom`."""
+    taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}
+    taken |= {s.name for e in (eom.L, *eom.b, *eom.system.forces, eom.system.dissipation) for s in e.free_symbols}
+    return fresh_symbols("_lam", eom.k, taken)
+
+
 def power_kernel(eom: EOM, mapping, loads) -> Kernel:
     """``power(t, y, p, lam, out) -> int``: the four terms of dh/dt (`TERMS`) at y = (q, q̇) into `out` (4,),
     λ = `lam` (k,) the multipliers there (`reactions`; an empty array without constraints).  Returns 0."""
-    taken = {s.name for s in (*eom.q, *eom.qd, *eom.parameters, t)}
-    taken |= {s.name for e in (eom.L, *eom.b, *eom.system.forces, eom.system.dissipation) for s in e.free_symbols}
-    multipliers = fresh_symbols("_lam", eom.k, taken)
+    multipliers = multiplier_symbols(eom)
     mapping = {**mapping, **{s: sp.Symbol(f"_lam{c}", real=True) for c, s in enumerate(multipliers)}}
     loads = loads + tuple((f"_lam{c}", f"lam[{c}]") for c in range(eom.k))
     stores = [(f"out[{i}]", term) for i, term in enumerate(power_terms(eom, multipliers))]

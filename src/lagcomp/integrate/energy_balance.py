@@ -32,15 +32,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from lagcomp.errors import ModelError
+from lagcomp.integrate.balance_kernels import NODES as _NODES
+from lagcomp.integrate.balance_kernels import WEIGHTS as _WEIGHTS
+from lagcomp.integrate.balance_kernels import power_along, slopes_along
 
 #: The power's terms, in the order of the ``power`` kernel's output (`lagcomp.codegen.power.TERMS`).
 TERMS = ("forces", "dissipation", "time", "constraints")
-
-#: 4-point Gauss–Legendre on [0, 1]: nodes and weights.
-_NODES = 0.5 + 0.5 * np.polynomial.legendre.leggauss(4)[0]
-_WEIGHTS = 0.5 * np.polynomial.legendre.leggauss(4)[1]
-#: The central differences of f along the motion: ε over the row's interval.
-_DIFFERENCE = 1e-4
 
 
 @dataclass(frozen=True)
@@ -116,6 +113,19 @@ def balance_or_none(solution) -> EnergyBalance | None:
         return energy_balance(solution)
     except ModelError:
         return None
+
+
+def sweep_balances(model) -> bool:
+    """Whether a sweep of `model` reports the energy balance's residual as its energy error (`lagcomp.integrate.
+    sweep`): where the balance is available (`PowerSource.of`) and some term of dh/dt is not identically zero
+    (``power_terms`` of the ``power`` kind's entry); else h is a first integral and the drift of T + V is kept."""
+    if PowerSource.of(model, np.empty(0)).refused:
+        return False
+    try:
+        entry = model.on_demand_entry("power")
+    except ModelError:          # (a kinematic tree: its on-demand kinds are refused, naming the issue)
+        return False
+    return entry is not None and bool(entry.metadata["power_terms"])
 
 
 class PowerSource:
@@ -216,35 +226,29 @@ def _hermite(s: float, ys, slopes: tuple, steps) -> np.ndarray:
 
 def _slopes(source: PowerSource, ts: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """f(tᵢ, yᵢ) (the model's ``rhs``) and its rate along the motion f' = ∂f/∂t + ∂f/∂y f, by central differences
-    along (1, f) over ±ε, ε = `_DIFFERENCE` times the row's longer interval; both (m, 2n).  (With ε that small the
-    differences' truncation, ε² times the third derivative, and their rounding, 1e-16 |f|/ε, stay far below
-    what the interpolant leaves.)"""
-    f, g, ahead, behind = np.empty_like(ys), np.empty_like(ys), np.empty(ys.shape[1]), np.empty(ys.shape[1])
+    along (1, f) over ±ε, ε = `balance_kernels.DIFFERENCE` times the row's longer interval; both (m, 2n).  (With ε
+    that small the differences' truncation, ε² times the third derivative, and their rounding, 1e-16 |f|/ε, stay
+    far below what the interpolant leaves.)  One compiled loop over the rows (`balance_kernels.slopes_along`)."""
+    f, g = np.empty_like(ys), np.empty_like(ys)
     steps = np.diff(ts)
     local = np.maximum(np.concatenate([steps, [0.0]]), np.concatenate([[0.0], steps]))
     # (a row between two zero-length intervals, at a reset: the run's span, a time of the problem's own; a single
     # row has no interval that reads its slopes)
     local[local <= 0] = (ts[-1] - ts[0]) or 1.0
-    for i in range(ts.size):
-        time = float(ts[i])
-        source.kernels.rhs(time, ys[i], source.p, f[i])
-        eps = _DIFFERENCE * local[i]
-        source.kernels.rhs(time + eps, ys[i] + eps * f[i], source.p, ahead)
-        source.kernels.rhs(time - eps, ys[i] - eps * f[i], source.p, behind)
-        g[i] = (ahead - behind) / (2 * eps)
+    slopes_along(source.kernels.rhs, np.ascontiguousarray(ts), np.ascontiguousarray(ys), source.p, local, f, g)
     return f, g
 
 
 def _power(source: PowerSource, ts: np.ndarray, ys: np.ndarray) -> np.ndarray:
-    """The power's terms at the states `ys` (r, 2n), (r, 4): the multipliers there from ``reactions_along``."""
+    """The power's terms at the states `ys` (r, 2n), (r, 4): the multipliers there from ``reactions_along``; one
+    compiled loop over the rows (`balance_kernels.power_along`)."""
+    ts, ys = np.ascontiguousarray(ts, dtype=float), np.ascontiguousarray(ys, dtype=float)
     lam = np.zeros((ts.size, source.k))
     if source.k:
         residual = np.empty(ts.size)
         source.kernels.reactions_along(ts, ys, source.p, lam, residual)
     out = np.empty((ts.size, len(TERMS)))
-    power = source.kernels.power
-    for i in range(ts.size):
-        power(float(ts[i]), ys[i], source.p, lam[i], out[i])
+    power_along(source.kernels.power, ts, ys, source.p, lam, out)
     return out
 
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lagcomp.errors import InitialConditionError, OptionError
+from lagcomp.integrate.balance_kernels import balance_row_kernel, slots
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.contacts import (
     check_contacts,
@@ -37,6 +38,7 @@ from lagcomp.integrate.contacts import (
 )
 from lagcomp.integrate.dae import dae_states, differential_size, refuse_stabilisation
 from lagcomp.integrate.drivers.events import ACTION_RESET
+from lagcomp.integrate.energy_balance import sweep_balances
 from lagcomp.integrate.files import output_path
 from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, sweep_bytes
@@ -87,7 +89,18 @@ class Sweep:
         States at common times (``output`` includes "dense").
     energy_error : ndarray, shape, or None
         Largest relative deviation of T + V from its initial value over the
-        saved rows (every step unless `save_every`/`t_eval` say otherwise).
+        saved rows (every step unless `save_every`/`t_eval` say otherwise);
+        for a system that is not conservative (`energy_balance` True), the
+        energy balance's residual instead: the largest |h − h(0) − ∫P dt|
+        over the saved rows, each relative to the largest of |h(0)|,
+        |h − h(0)| and each power term's |work| up to that row
+        (`lagcomp.integrate.energy_balance`; what `Solution.energy_balance`
+        computes along the same rows).  A batched Taylor sweep keeps the
+        drift of T + V (its lanes module holds no ``power`` kernel).
+    energy_balance : bool
+        Whether `energy_error` is the energy balance's residual (forces,
+        inputs, dissipation, imposed motions or moving constraints) rather
+        than the drift of T + V.
     events : dict of str to dict, or None
         Per event: ``count`` (shape), ``t`` (*shape, cap) and ``y``
         (*shape, cap, n_y) of the first `event_cap` occurrences (NaN beyond);
@@ -121,6 +134,7 @@ class Sweep:
     energy_error: np.ndarray | None = None
     events: dict | None = field(default=None)
     speeds: tuple = ()
+    energy_balance: bool = False
 
     @property
     def interrupted(self) -> bool:
@@ -137,6 +151,8 @@ class Sweep:
         }
         if self.speeds:
             arrays["speeds"] = np.asarray(self.speeds)
+        if self.energy_balance:
+            arrays["energy_balance"] = np.asarray(True)
         arrays.update({f"axis_{name}": values for name, values in self.axes.items()})
         for key in ("t_dense", "dense", "energy_error"):
             if getattr(self, key) is not None:
@@ -169,6 +185,7 @@ class Sweep:
             names=names, axes={name: arrays.pop(f"axis_{name}") for name in names},
             shape=tuple(arrays.pop("shape").tolist()), coordinates=tuple(arrays.pop("coordinates").tolist()),
             speeds=tuple(arrays.pop("speeds").tolist()) if "speeds" in arrays else (),
+            energy_balance=bool(arrays.pop("energy_balance", False)),
             method=str(arrays.pop("method")), combine=str(arrays.pop("combine")), events=events or None, **arrays,
         )
 
@@ -191,7 +208,8 @@ class Sweep:
         if self.dense is not None:
             data["dense"] = ((*dims, "time", "state"), self.dense)
             coords["time"] = self.t_dense
-        return xr.Dataset(data, coords={**coords, "state": state})
+        return xr.Dataset(data, coords={**coords, "state": state},
+                          attrs={"energy_balance": int(self.energy_balance)} if self.energy_error is not None else {})
 
 
 def _floats(values, what: str) -> np.ndarray:
@@ -347,6 +365,11 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             Y0[:, state_names.index(name)] = values[:, column]
         else:
             P[:, list(model.parameters).index(name)] = values[:, column]
+    # the energy balance's running state, in slots after each row's parameters (`balance_kernels.balance_row`)
+    balance = ("energy" in output and not (batched and m.name == "taylor") and sweep_balances(model)
+               and (model.n * 2, model.k, P.shape[1]))
+    if balance:
+        P = np.hstack([P, np.zeros((n_traj, slots(model.n * 2)))])
     if model.residual_labels:  # (a Kane model's Φ and Ψ have no multipliers: model.k is 0)
         _consistent_initial_states(model, t0, Y0, P, project_initial, names, values)
     where = lambda i: f" in trajectory {i} of the sweep ({_where(names, values[i])})"  # noqa: E731
@@ -377,18 +400,19 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             spec = _taylor_lanes_spec(model, options.rtol, options.atol)
             task = _Task(driver, True, fixed, layout, (), projecting, *TAYLOR_LANES_LOOP)
         else:
-            task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",))
+            task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",), balance or None)
     else:
         coefficients = options.driver_arguments()
         if m.carry is not None:     # Radau: the count of differential components (all: an ODE)
             coefficients = (*coefficients, differential_size(model) if dae else n2)
         task = _Task(m.driver, m.adaptive, fixed, layout, coefficients, projecting, m.sweep,
-                     m.dae_kernels if dae else m.kernels)
+                     m.dae_kernels if dae else m.kernels, balance or None)
     if client is None:
         kernels = model.kernels if spec is None else _worker_kernels(spec)
         done = _run_locally(kernels, task, Y0, P, out, workers, progress)
     else:
-        done = _run_on_dask(client, spec or _worker_spec(model, task.kernels), task, Y0, P, out, progress)
+        done = _run_on_dask(client, spec or _worker_spec(model, task.kernels + (("power",) if balance else ())), task,
+                            Y0, P, out, progress)
     statuses = out["status"]
     counts = out["counts"]
     warn_if_sweep_stiff(m.name, counts[:, 3], stacklevel=3, model=model)     # (column 3: embedded pairs only)
@@ -404,6 +428,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         speeds=tuple(getattr(model, "speeds", None) or ()),
         t_dense=t_dense, dense=shaped(out["dense"][:, :, :n2]) if t_dense is not None else None,
         energy_error=shaped(relative) if "energy" in output else None, events=events_out,
+        energy_balance=bool(balance),
     )
 
 
@@ -486,11 +511,13 @@ class _Task:
     projecting: int        # constrained systems: project onto the constraints after every step (0 or 1)
     sweep: str             # the library sweep loop, ``"module:function"`` (`Method.sweep`)
     kernels: tuple         # what it takes first from the generated module, by name (`Method.kernels`), then ``energy``
+    balance: tuple | None = None   # (2n, k, offset of the slots in p): the energy balance's kernel for ``energy``
 
     def loop(self, kernels):
         """The compiled sweep loop of this task for the model's `kernels` (its generated module)."""
-        bound = (getattr(kernels, name) for name in (*self.kernels, "energy"))
-        return functools.partial(library_function(self.sweep), *bound)
+        energy = kernels.energy if self.balance is None else balance_row_kernel(kernels, *self.balance)
+        bound = [getattr(kernels, name) for name in self.kernels]
+        return functools.partial(library_function(self.sweep), *bound, energy)
 
 
 def _allocate(n_traj: int, layout: tuple) -> dict[str, np.ndarray]:
