@@ -9,6 +9,7 @@ refused before any work.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import subprocess
 import sys
@@ -19,6 +20,8 @@ import numpy as np
 import pytest
 
 import lagcomp as lc
+from lagcomp import examples
+from lagcomp.integrate import simulate as simulate_module
 from lagcomp.integrate import specialize
 from lagcomp.integrate.methods import METHODS, get_method
 
@@ -27,7 +30,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def _same_run(model, **options):
     """Run `model` with the library driver and with the specialised one; assert the two runs are bitwise equal."""
-    library = model.simulate((0.0, 5.0), progress=False, **options)
+    library = model.simulate((0.0, 5.0), progress=False, specialize=False, **options)
     special = model.simulate((0.0, 5.0), progress=False, specialize=True, **options)
     assert library.status == special.status == 0
     assert np.array_equal(library.t, special.t)
@@ -145,7 +148,7 @@ def test_rattle_is_refused(compiled):
 
 def test_refusals(compiled):
     model = compiled("double_pendulum")
-    with pytest.raises(lc.OptionError, match="`specialize` must be True or False"):
+    with pytest.raises(lc.OptionError, match="`specialize` must be True, False or None"):
         model.simulate((0.0, 1.0), specialize="yes")
     with pytest.raises(lc.OptionError, match="`sensitivities=`"):
         model.simulate((0.0, 1.0), specialize=True, sensitivities=["l1"])
@@ -174,10 +177,89 @@ def test_reset_events_bitwise(cache_dir):
     from tests.test_reset_events import _ball
 
     model = lc.compile(_ball(name="specialised_ball"), cache_dir=cache_dir)
-    library = model.simulate((0.0, 3.0), rtol=1e-10, atol=1e-10, progress=False)
+    library = model.simulate((0.0, 3.0), rtol=1e-10, atol=1e-10, progress=False, specialize=False)
     special = model.simulate((0.0, 3.0), rtol=1e-10, atol=1e-10, progress=False, specialize=True)
     assert library.events["impact"].t.size > 5
     assert np.array_equal(library.t, special.t) and np.array_equal(library.q, special.q)
     assert np.array_equal(library.qd, special.qd)
     for field in ("t", "q", "qd", "q_after", "qd_after"):
         assert np.array_equal(getattr(library.events["impact"], field), getattr(special.events["impact"], field))
+
+
+# -- the automatic tier (``specialize=None``, the default) ----------------------------------------------------------
+
+
+def _counting_driver(monkeypatch):
+    """Make `specialize.driver` hand out its drivers wrapped to count their calls; returns the list of calls."""
+    calls, real = [], specialize.driver
+
+    def counted(model, method):
+        run = real(model, method)
+
+        def call(*args):
+            calls.append(method.name)
+            return run(*args)
+        return call
+    monkeypatch.setattr(specialize, "driver", counted)
+    return calls
+
+
+def _several_calls(monkeypatch):
+    """Cut the next run into driver calls of a few dozen steps at first (no step rate learned before)."""
+    import weakref
+
+    monkeypatch.setattr(simulate_module, "_STEP_RATES", weakref.WeakKeyDictionary())
+    monkeypatch.setattr(simulate_module, "FIRST_BUDGET", 32)
+
+
+@pytest.mark.parametrize("method, options", [("dop853", {"rtol": 1e-10, "atol": 1e-10}), ("rk4", {"dt": 1e-3})])
+def test_automatic_tier_moves_a_long_run_to_a_cached_driver(compiled, monkeypatch, method, options):
+    """A run whose rest is estimated to take `AUTO_REMAINING_SECONDS` or more moves between two driver calls to the
+    model's specialised driver when numba's cache holds it (not loaded in this process): the run is bitwise the
+    library driver's."""
+    model, m = compiled("double_pendulum"), get_method(method)
+    specialize.prepare(model, m)
+    specialize._LOADED.pop(model.kernels, None)           # in the cache, not loaded: as in a new process
+    library = model.simulate((0.0, 10.0), method=method, progress=False, specialize=False, **options)
+    _several_calls(monkeypatch)
+    calls = _counting_driver(monkeypatch)
+    monkeypatch.setattr(specialize, "AUTO_REMAINING_SECONDS", 0.0)
+    auto = model.simulate((0.0, 10.0), method=method, progress=False, **options)
+    assert calls and specialize.loaded(model, m)
+    assert np.array_equal(library.t, auto.t) and np.array_equal(library.q, auto.q)
+    assert np.array_equal(library.qd, auto.qd)
+    assert (library.nsteps, library.nrejected) == (auto.nsteps, auto.nrejected)
+
+
+def test_automatic_tier_keeps_short_runs_and_uncached_drivers_on_the_library(cache_dir, monkeypatch):
+    """A run estimated to end sooner than `AUTO_REMAINING_SECONDS` stays on the library driver though the specialised
+    one is cached; a long run whose specialised driver is not cached stays there too, and compiles nothing."""
+    system = examples.get("simple_pendulum")
+    model = lc.compile(dataclasses.replace(system, name="auto_tier_pendulum"), cache_dir=cache_dir)
+    rk4, verlet = get_method("rk4"), get_method("verlet")
+    specialize.prepare(model, verlet)
+    specialize._LOADED.pop(model.kernels, None)
+    _several_calls(monkeypatch)
+    calls = _counting_driver(monkeypatch)
+    model.simulate((0.0, 10.0), method="verlet", dt=1e-3, progress=False)   # ~ms: far below one second
+    assert calls == [] and not specialize.loaded(model, verlet)
+    _several_calls(monkeypatch)
+    monkeypatch.setattr(specialize, "AUTO_REMAINING_SECONDS", 0.0)
+    model.simulate((0.0, 10.0), method="rk4", dt=1e-3, progress=False)
+    assert calls == [] and not specialize.cached(model, rk4)
+
+
+def test_automatic_tier_starts_with_a_loaded_driver(compiled, monkeypatch):
+    """Loaded in this process (an earlier run asked for it), the specialised driver takes every call of a run, however
+    short: bitwise the library driver's run."""
+    model, m = compiled("double_pendulum"), get_method("dop853")
+    model.simulate((0.0, 0.1), progress=False, specialize=True)
+    assert specialize.loaded(model, m)
+    calls = _counting_driver(monkeypatch)
+    specialize._LOADED[model.kernels][m.driver] = specialize.driver(model, m)   # (the counting one)
+    library = model.simulate((0.0, 1.0), rtol=1e-10, atol=1e-10, progress=False, specialize=False)
+    monkeypatch.setattr(simulate_module, "_bound_drivers", lambda *args, **kwargs: pytest.fail("library driver"))
+    auto = model.simulate((0.0, 1.0), rtol=1e-10, atol=1e-10, progress=False)
+    assert calls
+    assert np.array_equal(library.t, auto.t) and np.array_equal(library.q, auto.q)
+    assert np.array_equal(library.qd, auto.qd)

@@ -16,9 +16,16 @@ and numbers only.  It is the same source compiled with the same options (the lib
 rows and statuses as the library driver, bit for bit (`tests/test_specialize.py`; ``nfev`` counts one
 more evaluation per driver call, and the two tiers' calls are sized from step rates learned per tier).
 What it costs is one compile of the driver per model (the double pendulum's: RK4 1.3 s, DOP853's embedded
-driver 12 s of CPU time; loading it later: 0.1 s), which is why a run uses it only when asked
+driver 12 s of CPU time; loading it later: 0.1 s), which is why a run compiles it only when asked
 (``simulate(..., specialize=True)``, ``lagcomp precompile MODEL --specialize METHOD``), never on the path to a
 model's first result.
+
+The automatic tier (``specialize=None``, the default) uses it where that costs no compile: a run starts with it
+when it is loaded in the process already (its calls are even cheaper than a library driver's, which unboxes each
+kernel), and a run whose rest is estimated, between two driver calls, to take `AUTO_REMAINING_SECONDS` or more
+moves to it when numba's cache holds it (`lagcomp.integrate.simulate._upgrade`).  It never compiles one in the
+background: numba compiles under one process-wide lock, so a 12-s compile in a thread would hold up every other
+compile of the process (a new model's kernels, a first ``Solution.energy``) for as long.
 
 Each specialised driver is a small generated module (a header docstring, its imports, one function
 ``run`` taking the library driver's arguments after the kernels), built from a Python AST and
@@ -54,8 +61,18 @@ SPECIALISABLE_DRIVERS = ("lagcomp.integrate.drivers.fixed_step:runge_kutta_run",
 SPECIALISABLE = tuple(name for name, m in METHODS.items() if m.driver in SPECIALISABLE_DRIVERS)
 #: What the cache key of a specialised module adds to the model's input key (then the driver and the digest).
 SUFFIX = "-specialised-"
+#: The automatic tier (``specialize=None``): a run moves to the specialised driver, if numba's cache holds it, once
+#: the rest of the run is estimated to take this long (loading it takes ~0.1 s: a tenth of that at most).
+AUTO_REMAINING_SECONDS = 1.0
 #: The specialised drivers loaded in this process: {model's kernels: {driver reference: ``run``}}.
 _LOADED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def covers(method: Method, model, given, sensitivities) -> bool:
+    """Whether a run of `method` on `model` can use its specialised driver: the refusals of `check` (and of
+    ``sensitivities``, not None for a sensitivity run) as a test, for the automatic tier (``specialize=None``)."""
+    return (method.name in SPECIALISABLE and model is given and sensitivities is None
+            and getattr(model, "cache_key", None) is not None)
 
 
 def check(method: Method, model, given) -> None:
