@@ -165,6 +165,9 @@ def test_precompile_specialize(compiled, cache_dir, capsys):
     assert "simple_pendulum: verlet driver specialised, " in out
     assert "compiled in" in out or "loaded from numba's cache in" in out
     assert specialize.cached(model, get_method("verlet"))
+    assert main(["--cache-dir", str(cache_dir), "precompile", "simple_pendulum", "--specialize-sweep", "verlet"]) == 0
+    assert "simple_pendulum: verlet sweep loop specialised, " in capsys.readouterr().out
+    assert specialize.cached(model, get_method("verlet"), sweep=True)
     assert main(["--cache-dir", str(cache_dir), "precompile", "simple_pendulum", "--specialize", "radau"]) == 2
     assert "--specialize radau: the specialised drivers cover rk4" in capsys.readouterr().err
     assert main(["--cache-dir", str(cache_dir), "precompile", "--specialize", "rk4"]) == 2
@@ -263,3 +266,41 @@ def test_automatic_tier_starts_with_a_loaded_driver(compiled, monkeypatch):
     assert calls
     assert np.array_equal(library.t, auto.t) and np.array_equal(library.q, auto.q)
     assert np.array_equal(library.qd, auto.qd)
+
+
+@pytest.mark.parametrize("method, options", [("dop853", {"rtol": 1e-9, "atol": 1e-9}), ("rk4", {"dt": 1e-2})])
+def test_automatic_tier_of_a_sweep(compiled, monkeypatch, method, options):
+    """A sweep of `sweep.AUTO_TRAJECTORIES` or more trajectories runs the model's specialised sweep loop when numba's
+    cache holds it (``lagcomp precompile MODEL --specialize-sweep METHOD``): every output bitwise the library loop's;
+    fewer trajectories keep the library loop."""
+    from lagcomp.integrate import sweep as sweep_module
+
+    model, m = compiled("double_pendulum"), get_method(method)
+    reference = m.sweep
+    specialize._LOADED.get(model.kernels, {}).pop(reference, None)
+    grid = {"theta1": np.linspace(-2.0, 2.0, 6), "theta2": [0.5, 1.5]}
+    run = lambda: model.sweep((0.0, 2.0), grid, method=method, workers=1, progress=False, **options)
+    library = run()
+    specialize.prepare(model, m, sweep=True)
+    specialize._LOADED[model.kernels].pop(reference)      # in the cache, not loaded: as in a new process
+    monkeypatch.setattr(sweep_module, "AUTO_TRAJECTORIES", 13)
+    run()
+    assert not specialize.loaded(model, m, sweep=True)     # 12 trajectories: too few
+    monkeypatch.setattr(sweep_module, "AUTO_TRAJECTORIES", 12)
+    calls, real = [], specialize.loaded_for
+
+    def counted(kernels, reference):
+        loop = real(kernels, reference)
+        if loop is None:
+            return None
+
+        def call(*args):
+            calls.append(reference)
+            return loop(*args)
+        return call
+    monkeypatch.setattr(specialize, "loaded_for", counted)
+    auto = run()
+    assert specialize.loaded(model, m, sweep=True) and calls      # the chunks ran the specialised loop
+    assert (library.status == 0).all()
+    for name in ("final", "t_final", "status", "energy_error"):
+        assert np.array_equal(getattr(library, name), getattr(auto, name)), name

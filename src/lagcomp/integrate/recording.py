@@ -16,11 +16,18 @@ for.  The values are the same either way: the kernels treat each row on its
 own, ``observables`` calls the pointwise kernels, and maxima and minima do not
 depend on the chunking (`tests/test_solution.py`, `tests/test_recording.py`).
 
-What it costs (`bench/bench_tiers.py`, DOP853 on the double pendulum, 3 906
-rows): a summary costs a trajectory's time plus the energy at every row (three
-cosines), about 2% of the run; the numpy reductions over each chunk and the
-observables of every row it called before (seven cosines: the energy twice,
-the momenta of no cyclic coordinate) cost 8% more than a trajectory.
+What it costs (DOP853 on the double pendulum over [0, 100] at tol 1e-10, 3 906
+rows, 1.1 µs per step; `bench/bench_tiers.py`, table 3): a summary costs a
+trajectory's time plus T + V at every row, 1.05-1.07 times a trajectory's run in
+one process: the energy kernel itself (three cosines) takes 35 ns per row in a
+compiled loop, `fold_summary` with it 45-48 ns, against the trajectory's copies
+of its rows, 2 ns per row.  So on a small model a summary is cheaper than a
+trajectory only once the trajectory's summary is read (1.13 times); what it
+saves is memory.  Folding a chunk in one compiled call with the first and last
+rows' values from the pointwise kernels (rather than calling the ``observables``
+kernel for them) did not change that ratio, but takes the compile of
+``observables`` off the path of a new model's first summary run (1.5-2.1 s
+before, 0.86-0.98 s after, double pendulum, loaded machine).
 """
 
 from __future__ import annotations

@@ -101,56 +101,72 @@ def library_digest() -> str:
     return code_digest((*LIBRARY_SOURCES, "integrate/specialize.py", "integrate/compile_time.py"))
 
 
-def specialised_key(model, method: Method) -> str:
-    """The cache key of `model`'s specialised module for `method`'s driver."""
-    return f"{model.cache_key}{SUFFIX}{method.driver.partition(':')[2]}-{library_digest()[:16]}"
+def target(method: Method, sweep: bool = False) -> tuple[str, tuple[str, ...]]:
+    """(library function, the names of the kernels it takes first) of `method`'s driver, or with `sweep` of its sweep
+    loop (`Method.sweep`, which takes the driver's kernels and ``energy``)."""
+    return (method.sweep, (*method.kernels, "energy")) if sweep else (method.driver, method.kernels)
 
 
-def driver(model, method: Method):
-    """The specialised ``run`` of `model` for `method`, once per process: its module loaded (generated and stored
-    first if missing), which compiles ``run`` from its explicit signature or loads it from numba's cache."""
+def specialised_key(model, method: Method, sweep: bool = False) -> str:
+    """The cache key of `model`'s specialised module for `method`'s driver (or sweep loop)."""
+    return f"{model.cache_key}{SUFFIX}{target(method, sweep)[0].partition(':')[2]}-{library_digest()[:16]}"
+
+
+def driver(model, method: Method, sweep: bool = False):
+    """The specialised ``run`` of `model` for `method`'s driver (or sweep loop), once per process: its module loaded
+    (generated and stored first if missing), which compiles ``run`` from its explicit signature or loads it from
+    numba's cache."""
     loaded = _LOADED.setdefault(model.kernels, {})
-    if method.driver not in loaded:
-        loaded[method.driver] = _module(model, method).run
-    return loaded[method.driver]
+    reference = target(method, sweep)[0]
+    if reference not in loaded:
+        loaded[reference] = _module(model, method, sweep).run
+    return loaded[reference]
 
 
-def loaded(model, method: Method) -> bool:
-    """Whether `model`'s specialised driver for `method` is loaded in this process."""
-    return method.driver in _LOADED.get(model.kernels, {})
+def loaded(model, method: Method, sweep: bool = False) -> bool:
+    """Whether `model`'s specialised driver (or sweep loop) for `method` is loaded in this process."""
+    return target(method, sweep)[0] in _LOADED.get(model.kernels, {})
 
 
-def prepare(model, method: Method) -> bool:
+def loaded_for(kernels, reference: str):
+    """The specialised ``run`` of the library function `reference` loaded in this process for a model's `kernels`
+    (its generated module), or None."""
+    return _LOADED.get(kernels, {}).get(reference)
+
+
+def prepare(model, method: Method, sweep: bool = False) -> bool:
     """`driver`, for ``lagcomp precompile MODEL --specialize METHOD``; returns whether numba compiled it."""
-    return sum(driver(model, method).stats.cache_misses.values()) > 0
+    return sum(driver(model, method, sweep).stats.cache_misses.values()) > 0
 
 
-def cached(model, method: Method) -> bool:
-    """Whether `model`'s specialised driver for `method` is ready without a compile: loaded in this process, or its
-    module in the model cache with numba's cache files of ``run`` beside it."""
+def cached(model, method: Method, sweep: bool = False) -> bool:
+    """Whether `model`'s specialised driver (or sweep loop) for `method` is ready without a compile: loaded in this
+    process, or its module in the model cache with numba's cache files of ``run`` beside it."""
     from lagcomp.cache import Cache
     from lagcomp.numba_cache import cache_directory
 
     if method.name not in SPECIALISABLE:
         return False
-    if loaded(model, method):
+    if loaded(model, method, sweep):
         return True
-    entry = Cache(model.source_path.parent.parent).lookup(specialised_key(model, method))
+    entry = Cache(model.source_path.parent.parent).lookup(specialised_key(model, method, sweep))
     directory = None if entry is None else cache_directory(entry.path)
     return directory is not None and any(directory.glob(f"{entry.path.stem}.run-*.nbi"))
 
 
-def _module(model, method: Method):
-    """The specialised module of `model` for `method`'s driver, from the model's cache (stored first if missing)."""
+def _module(model, method: Method, sweep: bool):
+    """The specialised module of `model` for `method`'s driver (or sweep loop), from the model's cache (stored first
+    if missing)."""
     from lagcomp.cache import Cache, load_module
 
-    cache, key = Cache(model.source_path.parent.parent), specialised_key(model, method)
+    cache, key = Cache(model.source_path.parent.parent), specialised_key(model, method, sweep)
+    reference = target(method, sweep)[0]
     entry = cache.lookup(key)
     if entry is None:
         with cache.lock(key):
             entry = cache.lookup(key) or cache.store(
-                key, module_source(model, method), f"{model.name}_{method.driver.partition(':')[2]}",
-                {"driver": method.driver, "library": library_digest()})
+                key, module_source(model, method, sweep), f"{model.name}_{reference.partition(':')[2]}",
+                {"driver": reference, "library": library_digest()})
     with warnings.catch_warnings():
         # ``run`` passes more than 30 arguments, which Python packs into a tuple; numba warns that a tuple holding
         # dispatchers' types is an experimental first-class function feature, which the call does not use.
@@ -158,14 +174,15 @@ def _module(model, method: Method):
         return load_module(entry)
 
 
-def module_source(model, method: Method) -> str:
-    """The source of the specialised module of `model` for `method`'s driver (module docstring)."""
+def module_source(model, method: Method, sweep: bool = False) -> str:
+    """The source of the specialised module of `model` for `method`'s driver, or with `sweep` its sweep loop (module
+    docstring)."""
     from lagcomp import __version__
 
-    reference = method.driver
+    reference, names = target(method, sweep)
     library = library_function(reference)
     parameters = list(inspect.signature(library.py_func).parameters)
-    kernels = [_kernel(model.kernels, name) for name in method.kernels]
+    kernels = [_kernel(model.kernels, name) for name in names]
     rest = parameters[len(kernels):]
     options = {k: v for k, v in library.targetoptions.items() if k not in ("cache", "nopython") and v is not None}
     header = (f"The library driver {reference} specialised for the model {model.name!r}, generated by lagcomp "
@@ -181,10 +198,10 @@ def module_source(model, method: Method) -> str:
             ast.ImportFrom("lagcomp.integrate.compile_time",
                            [ast.alias("compile_time"), ast.alias("run_signature"), ast.alias("uncached_copy")], 0),
             ast.ImportFrom(module_name, [ast.alias(function)], 0),
-            *_kernel_imports(kernels, method.kernels),
+            *_kernel_imports(kernels, names),
             _assign("_driver", _call(ast.Name("uncached_copy"), [ast.Name(function)])),
-            *(_assign(name, _call(ast.Name("compile_time"), [ast.Name(name)])) for name in method.kernels),
-            _run(function, method.kernels, rest, options)]
+            *(_assign(name, _call(ast.Name("compile_time"), [ast.Name(name)])) for name in names),
+            _run(function, names, rest, options)]
     return ast.unparse(ast.fix_missing_locations(ast.Module(body, []))) + "\n"
 
 

@@ -338,6 +338,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
 
     y_base = model.initial_state(q0, qd0)
     p_base = model.parameter_vector(params, baumgarte, inputs, (t0, t1))  # every trajectory: the same tables
+    given = model
     model = driven(model, inputs, p_base, m, client)  # function inputs: each trajectory writes their values in its row
     Y0 = np.repeat(y_base[None, :], n_traj, axis=0)
     P = np.repeat(p_base[None, :], n_traj, axis=0)
@@ -386,6 +387,8 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
                      m.dae_kernels if dae else m.kernels)
     if client is None:
         kernels = model.kernels if spec is None else _worker_kernels(spec)
+        if spec is None and not batched:
+            _specialised_loop(model, given, m, n_traj)
         done = _run_locally(kernels, task, Y0, P, out, workers, progress)
     else:
         done = _run_on_dask(client, spec or _worker_spec(model, task.kernels), task, Y0, P, out, progress)
@@ -488,9 +491,34 @@ class _Task:
     kernels: tuple         # what it takes first from the generated module, by name (`Method.kernels`), then ``energy``
 
     def loop(self, kernels):
-        """The compiled sweep loop of this task for the model's `kernels` (its generated module)."""
+        """The compiled sweep loop of this task for the model's `kernels` (its generated module): the loop specialised
+        for them if it is loaded in this process (`_specialised_loop`), else the library loop with them bound."""
+        from lagcomp.integrate.specialize import loaded_for
+
+        special = loaded_for(kernels, self.sweep)
+        if special is not None:
+            return special
         bound = (getattr(kernels, name) for name in (*self.kernels, "energy"))
         return functools.partial(library_function(self.sweep), *bound)
+
+
+#: The automatic tier of a sweep: one of at least this many trajectories loads the model's specialised sweep loop
+#: (`lagcomp.integrate.specialize`, bitwise the library loop's results) when numba's cache holds it: ~0.1 s, which
+#: the loop's ~10% fewer CPU seconds per DOP853 trajectory (`bench/bench_tiers.py`, ~1 ms a double pendulum
+#: trajectory over 10 s) repay from about this many on.
+AUTO_TRAJECTORIES = 1000
+
+
+def _specialised_loop(model, given, m, n_traj: int) -> None:
+    """Load the model's specialised sweep loop for method `m` into this process where the automatic tier takes it: a
+    sweep of `AUTO_TRAJECTORIES` or more whose loop is cached (never compiled here: `lagcomp precompile MODEL
+    --specialize METHOD` compiles it), or at once when it is loaded already; `_Task.loop` then runs it."""
+    from lagcomp.integrate import specialize
+
+    if not specialize.covers(m, model, given, None) or specialize.loaded(model, m, sweep=True):
+        return
+    if n_traj >= AUTO_TRAJECTORIES and specialize.cached(model, m, sweep=True):
+        specialize.driver(model, m, sweep=True)
 
 
 def _allocate(n_traj: int, layout: tuple) -> dict[str, np.ndarray]:
