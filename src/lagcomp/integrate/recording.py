@@ -22,8 +22,8 @@ trajectory's time plus T + V at every row, 1.05-1.07 times a trajectory's run in
 one process: the energy kernel itself (three cosines) takes 35 ns per row in a
 compiled loop, `fold_summary` with it 45-48 ns, against the trajectory's copies
 of its rows, 2 ns per row.  So on a small model a summary is cheaper than a
-trajectory only once the trajectory's summary is read (1.13 times); what it
-saves is memory.  Folding a chunk in one compiled call with the first and last
+trajectory whose summary is read (the observables of every row: seven cosines
+per row), not than a bare trajectory; what it saves is memory.  Folding a chunk in one compiled call with the first and last
 rows' values from the pointwise kernels (rather than calling the ``observables``
 kernel for them) did not change that ratio, but takes the compile of
 ``observables`` off the path of a new model's first summary run (1.5-2.1 s
