@@ -35,6 +35,10 @@ calls makes a new module.  numba caches ``run``'s machine code beside that modul
 loads it (milliseconds) instead of compiling it.  The drivers of the embedded pairs are one library
 function, so dop853, dopri5, tsit5 and bs3 share one specialised module per model.
 
+A method's sweep loop (`Method.sweep`, which takes the driver's kernels and ``energy``) is specialised the same
+way, in a module of its own (``sweep=True``; ``lagcomp precompile MODEL --specialize-sweep METHOD``), for the
+automatic tier of large sweeps (`lagcomp.integrate.sweep.AUTO_TRAJECTORIES`).
+
 Covered (`SPECIALISABLE`): the methods whose driver takes the model's kernels and nothing else of the
 model (not Taylor's module data; Radau, whose constrained runs take other kernels, is not done yet), run
 without sensitivities and without numba functions as inputs (their kernels are wrappers made per run).
@@ -72,7 +76,7 @@ def covers(method: Method, model, given, sensitivities) -> bool:
     """Whether a run of `method` on `model` can use its specialised driver: the refusals of `check` (and of
     ``sensitivities``, not None for a sensitivity run) as a test, for the automatic tier (``specialize=None``)."""
     return (method.name in SPECIALISABLE and model is given and sensitivities is None
-            and getattr(model, "cache_key", None) is not None)
+            and getattr(model, "cache_key", None) is not None and getattr(model, "source_path", None) is not None)
 
 
 def check(method: Method, model, given) -> None:
@@ -125,13 +129,16 @@ def driver(model, method: Method, sweep: bool = False):
 
 def loaded(model, method: Method, sweep: bool = False) -> bool:
     """Whether `model`'s specialised driver (or sweep loop) for `method` is loaded in this process."""
-    return target(method, sweep)[0] in _LOADED.get(model.kernels, {})
+    return loaded_for(model.kernels, target(method, sweep)[0]) is not None
 
 
 def loaded_for(kernels, reference: str):
     """The specialised ``run`` of the library function `reference` loaded in this process for a model's `kernels`
-    (its generated module), or None."""
-    return _LOADED.get(kernels, {}).get(reference)
+    (its generated module), or None (also for kernels that cannot be weakly referenced: a stand-in's)."""
+    try:
+        return _LOADED.get(kernels, {}).get(reference)
+    except TypeError:
+        return None
 
 
 def prepare(model, method: Method, sweep: bool = False) -> bool:
