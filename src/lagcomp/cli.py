@@ -685,8 +685,8 @@ def _parser() -> argparse.ArgumentParser:
                      help="compile the model's driver specialised for METHOD (its kernels compile-time callees of "
                           "the driver, cached with the model) for runs with `specialize=True`; repeat for more methods")
     pre.add_argument("--specialize-sweep", action="append", metavar="METHOD", default=[],
-                     help="compile the model's sweep loop specialised for METHOD, which sweeps of 1000 trajectories or "
-                          "more then run (`lagcomp.integrate.sweep`); repeat for more methods")
+                     help="compile the model's sweep loop specialised for METHOD, which sweeps of 10,000 trajectories "
+                          "or more then run (`lagcomp.integrate.sweep`); repeat for more methods")
     pre.set_defaults(func=cmd_precompile)
     return parser
 

@@ -503,10 +503,11 @@ class _Task:
 
 
 #: The automatic tier of a sweep: one of at least this many trajectories loads the model's specialised sweep loop
-#: (`lagcomp.integrate.specialize`, bitwise the library loop's results) when numba's cache holds it: ~0.1 s, which
-#: the loop's ~10% fewer CPU seconds per DOP853 trajectory (`bench/bench_tiers.py`, ~1 ms a double pendulum
-#: trajectory over 10 s) repay from about this many on.
-AUTO_TRAJECTORIES = 1000
+#: (`lagcomp.integrate.specialize`, bitwise the library loop's results) when numba's cache holds it.  Loading takes
+#: ~0.1 s; the loop saved 2.4% of the CPU time of a DOP853 double-pendulum trajectory (0.976 times the library
+#: loop's, 0.32 ms a trajectory over [0, 10] at tol 1e-10; RK4 at dt 1e-3: 0.99 times), ~8 µs, which repays the load
+#: from about this many trajectories on (200 trajectories timed alternately in one process, loaded machine).
+AUTO_TRAJECTORIES = 10_000
 
 
 def _specialised_loop(model, given, m, n_traj: int) -> None:
