@@ -352,7 +352,8 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
     the first call (`FIRST_CALL_SECONDS`) and the second (`CALL_SECONDS`); the rate of each call that
     spends its whole budget outside numba's compilation is stored there for the next run.
     `upgrade`, if not None, is `_upgrade`'s, called after each call that did not end the run with the seconds the
-    rest of the run is estimated to take (from the calls so far outside numba's compilation) until it returns True.
+    rest of the run is estimated to take (from the CPU time of this thread in the calls so far after the first, which
+    a loaded machine does not inflate) until it returns True.
     """
     chunk, max_rows, width = chunk
     n = state.y.size
@@ -361,7 +362,7 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
     budget = FIRST_BUDGET if known is None else max(16, int(known * FIRST_CALL_SECONDS))
     t0, first_call = state.t, True
     signatures = [len(kernel.signatures) for kernel in watched]
-    timed = [0.0, 0.0]      # seconds and span of t of the calls outside numba's compilation
+    timed = [0.0, 0.0]      # CPU seconds and span of t of the calls after the first (`upgrade`'s estimate)
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
         ts, ys = np.empty(chunk), np.empty((chunk, n))
         while True:
@@ -369,7 +370,7 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
             event_buffers = (np.empty(rows_e), np.empty((rows_e, n)), np.empty(rows_e, dtype=np.int64),
                              np.full((rows_e, n), np.nan))  # times, states before, events, states after
             state.new_event_buffer()
-            started = time.perf_counter()
+            started, cpu_started = time.perf_counter(), time.thread_time()
             steps_before, t_before = state.nsteps, state.t
             with first or contextlib.nullcontext() as stages:
                 if stages is not None:
@@ -382,8 +383,8 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
             if first_call and interrupted[0] and signatures != [len(kernel.signatures) for kernel in watched]:
                 raise KeyboardInterrupt
             elapsed = time.perf_counter() - started
-            if not compiled:
-                timed[0], timed[1] = timed[0] + elapsed, timed[1] + (state.t - t_before)
+            if not first_call:  # (the first may compile kernels, and binds them: not a rate of the run's steps)
+                timed[0], timed[1] = timed[0] + time.thread_time() - cpu_started, timed[1] + (state.t - t_before)
             recorder.add(ts[:n_saved], ys[:n_saved, :width])
             if recorder.rows > max_rows and Status(status).call_again:
                 return Status.MEMORY_FULL  # what was computed is kept; a fixed-step or t_eval run was refused up front
