@@ -2,7 +2,7 @@
 
     python -m bench.bench_tiers [--rounds 7] [--steps 1000000]
 
-Three tables, every row timed round-robin with its baseline in this process, CPU time
+Four tables, every row timed round-robin with its baseline in this process, CPU time
 (``time.process_time``); a ratio is the median (min–max) of the per-round ratios.
 
 1. RK4 on the double pendulum (lagcomp example, y0 = (2, 1, 0, 0), dt = 1e-3, state at the end only):
@@ -22,6 +22,12 @@ Three tables, every row timed round-robin with its baseline in this process, CPU
    which keeps two rows, must cost less than a trajectory).  A summary evaluates the energy at every row
    during the run, which a trajectory defers until `Solution.energy` or `.summary` is read: the last row
    is a trajectory whose summary is read, the like-for-like comparison.
+4. sin and cos: the double pendulum's generated ``rhs`` with lagcomp's own polynomials (`lagcomp.kernel_support.trig`,
+   what the kernels call) against the same kernel with numba's libm ``math.sin``/``math.cos`` (the kernel's Python
+   function compiled again with those in its globals), and the hand-written closed-form rhs (libm): in the textbook
+   RK4 loop of table 1 (each call waits for the one before: latency), over 1024 independent states (throughput), and
+   the batched ``rhs_lanes`` over the same 1024 states per lane (lagcomp's inlined ``vsin``/``vcos`` against libm).
+   Each variant is checked for lanes bitwise equal to its scalar kernel on the 1024 states.
 
 The specialised drivers are compiled (or loaded from numba's cache) before anything is timed: that is
 their one-time cost per model, `lagcomp precompile MODEL --specialize METHOD`, and no part of a run here.
@@ -30,7 +36,9 @@ their one-time cost per model, `lagcomp precompile MODEL --specialize METHOD`, a
 from __future__ import annotations
 
 import argparse
+import math
 import time
+import types
 
 import numba
 import numpy as np
@@ -62,9 +70,9 @@ def ratio(times: list[float], base: list[float]) -> Stat:
     return stat_of([a / b for a, b in zip(times, base, strict=True)])
 
 
-def hand_written_rk4():
-    """The textbook RK4 loop over the hand-written double pendulum, as a user writes it with numba."""
-    rhs = numba.njit(error_model="numpy")(systems.double_pendulum_rhs.py_func)
+def hand_written_rk4(rhs=None):
+    """The textbook RK4 loop over the hand-written double pendulum (or over `rhs`), as a user writes it with numba."""
+    rhs = rhs or numba.njit(error_model="numpy")(systems.double_pendulum_rhs.py_func)
 
     @numba.njit(error_model="numpy")
     def loop(y0, p, dt, steps):
@@ -200,13 +208,82 @@ def recording_table(model, rounds: int) -> Table:
     return table
 
 
+def _libm_copy(kernel, **swap):
+    """`kernel`'s Python function compiled again (``error_model="numpy"``, as the kernels) with `swap` in its globals."""
+    function = kernel.py_func
+    names = {**function.__globals__, **swap}
+    copy = types.FunctionType(function.__code__, names, function.__name__, function.__defaults__, function.__closure__)
+    return numba.njit(error_model="numpy")(copy)
+
+
+@numba.njit(inline="always")
+def _libm_sin(x):
+    return math.sin(x)
+
+
+@numba.njit(inline="always")
+def _libm_cos(x):
+    return math.cos(x)
+
+
+def _states_loop(rhs):
+    """rhs over every row of Ys (B, 4), `reps` times: independent calls, which the processor overlaps."""
+    @numba.njit(error_model="numpy")
+    def loop(Ys, p, reps):
+        out, total = np.empty(4), 0.0
+        for _ in range(reps):
+            for row in range(Ys.shape[0]):
+                rhs(0.0, Ys[row], p, out)
+                total += out[2]
+        return total
+    return loop
+
+
+def trig_table(model, steps: int, rounds: int) -> Table:
+    """Table 4 (module docstring)."""
+    rng = np.random.default_rng(0)
+    states = np.vstack([rng.uniform(-3.0, 3.0, (2, 1024)), rng.uniform(-2.0, 2.0, (2, 1024))])
+    rows, params = np.ascontiguousarray(states.T), np.repeat(PARAMS[:, None], 1024, axis=1)
+    times, out, bad = np.zeros(1024), np.empty((4, 1024)), np.zeros(1024, dtype=np.bool_)
+    scalar = {"poly": _libm_copy(model.kernels.rhs), "libm": _libm_copy(model.kernels.rhs, sin=math.sin, cos=math.cos),
+              "hand": numba.njit(error_model="numpy")(systems.double_pendulum_rhs.py_func)}
+    lanes = {"poly": _libm_copy(model.kernels.rhs_lanes),
+             "libm": _libm_copy(model.kernels.rhs_lanes, vsin=_libm_sin, vcos=_libm_cos)}
+    for key, batched in lanes.items():      # lanes bitwise equal to the scalar kernel, state by state
+        batched(times, states, params, out, bad)
+        one = np.empty(4)
+        for lane in range(1024):
+            scalar[key](0.0, rows[lane].copy(), PARAMS, one)
+            assert np.array_equal(one, out[:, lane]), (key, lane)
+    labels = ["lagcomp's sin/cos polynomials", "numba's libm sin/cos", "hand-written rhs (libm)"]
+    rk4 = [hand_written_rk4(scalar[k]) for k in scalar]
+    loops = [_states_loop(scalar[k]) for k in scalar]
+    reps = max(1, steps // 1000)
+    runs = ([lambda f=f: f(Y0, PARAMS, DT, steps) for f in rk4] + [lambda f=f: f(rows, PARAMS, reps) for f in loops]
+            + [lambda f=f: [f(times, states, params, out, bad) for _ in range(reps)] for f in lanes.values()])
+    t = cpu_times(runs, rounds)
+    table = Table("sin and cos in the double pendulum's rhs: lagcomp's polynomials against numba's libm",
+                  ["rhs", "RK4 loop, ns per rhs", "× polynomials", "1024 states, ns per rhs", "× polynomials",
+                   "rhs_lanes, ns per lane", "× polynomials"],
+                  note="CPU time, round-robin; RK4: the loop of the RK4 table; lanes: 1024 lanes per call, "
+                       "bitwise equal to the scalar kernel of the same sin/cos (checked).")
+    for i, label in enumerate(labels):
+        cells = [fmt_stat(stat_of([x / (4 * steps) * 1e9 for x in t[i]])), fmt_stat(ratio(t[i], t[0]), "×"),
+                 fmt_stat(stat_of([x / (1024 * reps) * 1e9 for x in t[3 + i]])), fmt_stat(ratio(t[3 + i], t[3]), "×")]
+        cells += ([fmt_stat(stat_of([x / (1024 * reps) * 1e9 for x in t[6 + i]])), fmt_stat(ratio(t[6 + i], t[6]), "×")]
+                  if i < 2 else ["—", "—"])
+        table.add(label, *cells)
+    return table
+
+
 def measure(rounds: int = 7, steps: int = 1_000_000, cache_dir=None) -> list[Table]:
-    """The three tables (module docstring)."""
+    """The four tables (module docstring)."""
     import lagcomp as lc
     from lagcomp import examples
 
     model = lc.compile(examples.get("double_pendulum"), cache_dir=cache_dir)
-    return [rk4_table(model, steps, rounds), dop853_table(model, rounds), recording_table(model, rounds)]
+    return [rk4_table(model, steps, rounds), dop853_table(model, rounds), recording_table(model, rounds),
+            trig_table(model, steps, rounds)]
 
 
 def section(ctx) -> list[Table]:

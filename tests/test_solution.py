@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from lagcomp.integrate import simulate as simulate_module
 
@@ -73,11 +74,13 @@ def test_invariants_include_cyclic_momenta(compiled):
     assert sol.momenta.shape == sol.q.shape
 
 
-def test_energies_of_a_kept_trajectory_are_evaluated_on_first_read(compiled, monkeypatch):
-    """Bitwise what a summary run folds chunk by chunk; a pickled Solution carries the values, not the model."""
+@pytest.mark.parametrize("example", ["double_pendulum", "spherical_pendulum", "hoop_bead"])
+def test_energies_of_a_kept_trajectory_are_evaluated_on_first_read(compiled, monkeypatch, example):
+    """Bitwise what a summary run folds chunk by chunk (`fold_summary`: h the energy or its own kernel, momenta of a
+    cyclic coordinate or none); a pickled Solution carries the values, not the model."""
     import pickle
 
-    model = compiled("double_pendulum")
+    model = compiled(example)
     monkeypatch.setattr(simulate_module, "FIRST_CHUNK", 16)
     monkeypatch.setattr(simulate_module, "MAX_CHUNK", 64)
     kept = model.simulate((0, 5), rtol=1e-10, atol=1e-12)

@@ -9,6 +9,7 @@ refused before any work.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import subprocess
 import sys
@@ -19,6 +20,8 @@ import numpy as np
 import pytest
 
 import lagcomp as lc
+from lagcomp import examples
+from lagcomp.integrate import simulate as simulate_module
 from lagcomp.integrate import specialize
 from lagcomp.integrate.methods import METHODS, get_method
 
@@ -27,7 +30,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def _same_run(model, **options):
     """Run `model` with the library driver and with the specialised one; assert the two runs are bitwise equal."""
-    library = model.simulate((0.0, 5.0), progress=False, **options)
+    library = model.simulate((0.0, 5.0), progress=False, specialize=False, **options)
     special = model.simulate((0.0, 5.0), progress=False, specialize=True, **options)
     assert library.status == special.status == 0
     assert np.array_equal(library.t, special.t)
@@ -145,7 +148,7 @@ def test_rattle_is_refused(compiled):
 
 def test_refusals(compiled):
     model = compiled("double_pendulum")
-    with pytest.raises(lc.OptionError, match="`specialize` must be True or False"):
+    with pytest.raises(lc.OptionError, match="`specialize` must be True, False or None"):
         model.simulate((0.0, 1.0), specialize="yes")
     with pytest.raises(lc.OptionError, match="`sensitivities=`"):
         model.simulate((0.0, 1.0), specialize=True, sensitivities=["l1"])
@@ -162,6 +165,9 @@ def test_precompile_specialize(compiled, cache_dir, capsys):
     assert "simple_pendulum: verlet driver specialised, " in out
     assert "compiled in" in out or "loaded from numba's cache in" in out
     assert specialize.cached(model, get_method("verlet"))
+    assert main(["--cache-dir", str(cache_dir), "precompile", "simple_pendulum", "--specialize-sweep", "verlet"]) == 0
+    assert "simple_pendulum: verlet sweep loop specialised, " in capsys.readouterr().out
+    assert specialize.cached(model, get_method("verlet"), sweep=True)
     assert main(["--cache-dir", str(cache_dir), "precompile", "simple_pendulum", "--specialize", "radau"]) == 2
     assert "--specialize radau: the specialised drivers cover rk4" in capsys.readouterr().err
     assert main(["--cache-dir", str(cache_dir), "precompile", "--specialize", "rk4"]) == 2
@@ -174,10 +180,127 @@ def test_reset_events_bitwise(cache_dir):
     from tests.test_reset_events import _ball
 
     model = lc.compile(_ball(name="specialised_ball"), cache_dir=cache_dir)
-    library = model.simulate((0.0, 3.0), rtol=1e-10, atol=1e-10, progress=False)
+    library = model.simulate((0.0, 3.0), rtol=1e-10, atol=1e-10, progress=False, specialize=False)
     special = model.simulate((0.0, 3.0), rtol=1e-10, atol=1e-10, progress=False, specialize=True)
     assert library.events["impact"].t.size > 5
     assert np.array_equal(library.t, special.t) and np.array_equal(library.q, special.q)
     assert np.array_equal(library.qd, special.qd)
     for field in ("t", "q", "qd", "q_after", "qd_after"):
         assert np.array_equal(getattr(library.events["impact"], field), getattr(special.events["impact"], field))
+
+
+# -- the automatic tier (``specialize=None``, the default) ----------------------------------------------------------
+
+
+def _counting_driver(monkeypatch):
+    """Make `specialize.driver` hand out its drivers wrapped to count their calls; returns the list of calls."""
+    calls, real = [], specialize.driver
+
+    def counted(model, method):
+        run = real(model, method)
+
+        def call(*args):
+            calls.append(method.name)
+            return run(*args)
+        return call
+    monkeypatch.setattr(specialize, "driver", counted)
+    return calls
+
+
+def _several_calls(monkeypatch):
+    """Cut the next run into driver calls of a few dozen steps at first (no step rate learned before)."""
+    import weakref
+
+    monkeypatch.setattr(simulate_module, "_STEP_RATES", weakref.WeakKeyDictionary())
+    monkeypatch.setattr(simulate_module, "FIRST_BUDGET", 32)
+
+
+@pytest.mark.parametrize("method, options", [("dop853", {"rtol": 1e-10, "atol": 1e-10}), ("rk4", {"dt": 1e-3})])
+def test_automatic_tier_moves_a_long_run_to_a_cached_driver(compiled, monkeypatch, method, options):
+    """A run whose rest is estimated to take `AUTO_REMAINING_SECONDS` or more moves between two driver calls to the
+    model's specialised driver when numba's cache holds it (not loaded in this process): the run is bitwise the
+    library driver's."""
+    model, m = compiled("double_pendulum"), get_method(method)
+    specialize.prepare(model, m)
+    specialize._LOADED.pop(model.kernels, None)           # in the cache, not loaded: as in a new process
+    library = model.simulate((0.0, 10.0), method=method, progress=False, specialize=False, **options)
+    _several_calls(monkeypatch)
+    calls = _counting_driver(monkeypatch)
+    monkeypatch.setattr(specialize, "AUTO_REMAINING_SECONDS", 0.0)
+    auto = model.simulate((0.0, 10.0), method=method, progress=False, **options)
+    assert calls and specialize.loaded(model, m)
+    assert np.array_equal(library.t, auto.t) and np.array_equal(library.q, auto.q)
+    assert np.array_equal(library.qd, auto.qd)
+    assert (library.nsteps, library.nrejected) == (auto.nsteps, auto.nrejected)
+
+
+def test_automatic_tier_keeps_short_runs_and_uncached_drivers_on_the_library(cache_dir, monkeypatch):
+    """A run estimated to end sooner than `AUTO_REMAINING_SECONDS` stays on the library driver though the specialised
+    one is cached; a long run whose specialised driver is not cached stays there too, and compiles nothing."""
+    system = examples.get("simple_pendulum")
+    model = lc.compile(dataclasses.replace(system, name="auto_tier_pendulum"), cache_dir=cache_dir)
+    rk4, verlet = get_method("rk4"), get_method("verlet")
+    specialize.prepare(model, verlet)
+    specialize._LOADED.pop(model.kernels, None)
+    _several_calls(monkeypatch)
+    calls = _counting_driver(monkeypatch)
+    model.simulate((0.0, 10.0), method="verlet", dt=1e-3, progress=False)   # ~ms: far below one second
+    assert calls == [] and not specialize.loaded(model, verlet)
+    _several_calls(monkeypatch)
+    monkeypatch.setattr(specialize, "AUTO_REMAINING_SECONDS", 0.0)
+    model.simulate((0.0, 10.0), method="rk4", dt=1e-3, progress=False)
+    assert calls == [] and not specialize.cached(model, rk4)
+
+
+def test_automatic_tier_starts_with_a_loaded_driver(compiled, monkeypatch):
+    """Loaded in this process (an earlier run asked for it), the specialised driver takes every call of a run, however
+    short: bitwise the library driver's run."""
+    model, m = compiled("double_pendulum"), get_method("dop853")
+    model.simulate((0.0, 0.1), progress=False, specialize=True)
+    assert specialize.loaded(model, m)
+    calls = _counting_driver(monkeypatch)
+    specialize._LOADED[model.kernels][m.driver] = specialize.driver(model, m)   # (the counting one)
+    library = model.simulate((0.0, 1.0), rtol=1e-10, atol=1e-10, progress=False, specialize=False)
+    monkeypatch.setattr(simulate_module, "_bound_drivers", lambda *args, **kwargs: pytest.fail("library driver"))
+    auto = model.simulate((0.0, 1.0), rtol=1e-10, atol=1e-10, progress=False)
+    assert calls
+    assert np.array_equal(library.t, auto.t) and np.array_equal(library.q, auto.q)
+    assert np.array_equal(library.qd, auto.qd)
+
+
+@pytest.mark.parametrize("method, options", [("dop853", {"rtol": 1e-9, "atol": 1e-9}), ("rk4", {"dt": 1e-2})])
+def test_automatic_tier_of_a_sweep(compiled, monkeypatch, method, options):
+    """A sweep of `sweep.AUTO_TRAJECTORIES` or more trajectories runs the model's specialised sweep loop when numba's
+    cache holds it (``lagcomp precompile MODEL --specialize-sweep METHOD``): every output bitwise the library loop's;
+    fewer trajectories keep the library loop."""
+    from lagcomp.integrate import sweep as sweep_module
+
+    model, m = compiled("double_pendulum"), get_method(method)
+    reference = m.sweep
+    specialize._LOADED.get(model.kernels, {}).pop(reference, None)
+    grid = {"theta1": np.linspace(-2.0, 2.0, 6), "theta2": [0.5, 1.5]}
+    run = lambda: model.sweep((0.0, 2.0), grid, method=method, workers=1, progress=False, **options)
+    library = run()
+    specialize.prepare(model, m, sweep=True)
+    specialize._LOADED[model.kernels].pop(reference)      # in the cache, not loaded: as in a new process
+    monkeypatch.setattr(sweep_module, "AUTO_TRAJECTORIES", 13)
+    run()
+    assert not specialize.loaded(model, m, sweep=True)     # 12 trajectories: too few
+    monkeypatch.setattr(sweep_module, "AUTO_TRAJECTORIES", 12)
+    calls, real = [], specialize.loaded_for
+
+    def counted(kernels, reference):
+        loop = real(kernels, reference)
+        if loop is None:
+            return None
+
+        def call(*args):
+            calls.append(reference)
+            return loop(*args)
+        return call
+    monkeypatch.setattr(specialize, "loaded_for", counted)
+    auto = run()
+    assert specialize.loaded(model, m, sweep=True) and calls      # the chunks ran the specialised loop
+    assert (library.status == 0).all()
+    for name in ("final", "t_final", "status", "energy_error"):
+        assert np.array_equal(getattr(library, name), getattr(auto, name)), name

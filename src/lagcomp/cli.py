@@ -326,7 +326,7 @@ def cmd_precompile(args) -> int:
 
     if args.name is not None:
         return _precompile_model(args)
-    if args.specialize:
+    if args.specialize or args.specialize_sweep:
         raise LagcompError("--specialize compiles a model's specialised driver: name the model, e.g. "
                            "`lagcomp precompile double_pendulum --specialize dop853`.")
     modules: dict[str, list[str]] = {}
@@ -359,11 +359,14 @@ def _precompile_model(args) -> int:
             print(f"{model.name}: on-demand kernels ({kind}) {entry.path}")
     for name in args.specialize:
         _specialise(model, name)
+    for name in args.specialize_sweep:
+        _specialise(model, name, sweep=True)
     return 0
 
 
-def _specialise(model, name: str) -> None:
-    """``--specialize METHOD``: compile (or load) `model`'s driver specialised for the method `name`."""
+def _specialise(model, name: str, sweep: bool = False) -> None:
+    """``--specialize METHOD``: compile (or load) `model`'s driver specialised for the method `name`; with `sweep`
+    (``--specialize-sweep``) its sweep loop."""
     from lagcomp.integrate import specialize
     from lagcomp.integrate.methods import get_method
 
@@ -371,9 +374,9 @@ def _specialise(model, name: str) -> None:
     if method.name not in specialize.SPECIALISABLE:
         raise LagcompError(f"--specialize {name}: the specialised drivers cover {', '.join(specialize.SPECIALISABLE)}.")
     before = time.perf_counter()
-    how = "compiled" if specialize.prepare(model, method) else "loaded from numba's cache"
-    print(f"{model.name}: {method.name} driver specialised, {how} in {time.perf_counter() - before:.2f} s "
-          f"({specialize.driver(model, method).__module__})")
+    how = "compiled" if specialize.prepare(model, method, sweep) else "loaded from numba's cache"
+    print(f"{model.name}: {method.name} {'sweep loop' if sweep else 'driver'} specialised, {how} in "
+          f"{time.perf_counter() - before:.2f} s ({specialize.driver(model, method, sweep).__module__})")
 
 
 def _grid_axis(spec: str, what: str) -> tuple[str, object]:
@@ -682,6 +685,9 @@ def _parser() -> argparse.ArgumentParser:
     pre.add_argument("--specialize", action="append", metavar="METHOD", default=[],
                      help="compile the model's driver specialised for METHOD (its kernels compile-time callees of "
                           "the driver, cached with the model) for runs with `specialize=True`; repeat for more methods")
+    pre.add_argument("--specialize-sweep", action="append", metavar="METHOD", default=[],
+                     help="compile the model's sweep loop specialised for METHOD, which sweeps of 10,000 trajectories "
+                          "or more then run (`lagcomp.integrate.sweep`); repeat for more methods")
     pre.set_defaults(func=cmd_precompile)
     return parser
 

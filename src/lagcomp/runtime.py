@@ -835,14 +835,17 @@ class Model:
             `energy_function`, `momenta` and `summary` when first read (numba
             compiles their kernel then, not before the run's first result);
             ``"summary"`` evaluates them during the run.  Same values either way.
-        specialize : bool
-            Run the method's driver specialised for this model (default False):
-            the library driver compiled once more with the model's kernels as
-            compile-time callees, cached with the model
-            (`lagcomp.integrate.specialize`), for long runs and repeated runs.
-            Bitwise the same steps and results as the library driver.  Its
-            first use compiles it (DOP853's: 12 s of CPU; `lagcomp precompile MODEL
-            --specialize dop853` does it ahead); rk4, the embedded pairs
+        specialize : bool or None
+            Run the method's driver specialised for this model: the library
+            driver compiled once more with the model's kernels as compile-time
+            callees, cached with the model (`lagcomp.integrate.specialize`),
+            for long runs and repeated runs.  Bitwise the same steps and
+            results as the library driver.  True: always (its first use
+            compiles it, DOP853's in 12 s of CPU; `lagcomp precompile MODEL
+            --specialize dop853` does it ahead); False: never; None (default):
+            when it costs no compile, i.e. from the first call if it is loaded
+            in this process, and for the rest of a run estimated to need a
+            second more if numba's cache holds it.  rk4, the embedded pairs
             (dop853, dopri5, tsit5, bs3) and verlet/yoshida4/yoshida6 only.
         progress : bool, optional
             Show a progress bar: None (default) for runs lasting over two

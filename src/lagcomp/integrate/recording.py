@@ -3,11 +3,11 @@
 The drivers hand back saved rows chunk by chunk.  A `Recorder` either keeps
 the rows (``record="trajectory"``) or folds each chunk into a `RunSummary` and
 drops it (``record="summary"``), so that a 10⁹-step run needs memory for one
-chunk only.  The fold is one compiled pass over the rows (`fold_energies`)
+chunk only.  The fold is one compiled call per chunk (`fold_summary`)
 calling the pointwise kernels for what the summary needs and no more: the
 energy, the energy function where it is not the energy itself, the momenta
-where a coordinate is cyclic; the first and last rows get the ``observables``
-kernel, whose values the summary's `Observed` holds.  A run keeping its rows
+where a coordinate is cyclic, and at the run's first row and each chunk's
+last, whose values the summary's `Observed` holds.  A run keeping its rows
 evaluates energies, momenta and summary over all of them when they are first
 read (`Observed`, with ``observables`` and `fold_rows`): numba compiles
 ``observables`` on its first call (0.4 s for a double pendulum, 3.4 s for a
@@ -16,11 +16,18 @@ for.  The values are the same either way: the kernels treat each row on its
 own, ``observables`` calls the pointwise kernels, and maxima and minima do not
 depend on the chunking (`tests/test_solution.py`, `tests/test_recording.py`).
 
-What it costs (`bench/bench_tiers.py`, DOP853 on the double pendulum, 3 906
-rows): a summary costs a trajectory's time plus the energy at every row (three
-cosines), about 2% of the run; the numpy reductions over each chunk and the
-observables of every row it called before (seven cosines: the energy twice,
-the momenta of no cyclic coordinate) cost 8% more than a trajectory.
+What it costs (DOP853 on the double pendulum over [0, 100] at tol 1e-10, 3 906
+rows, 1.1 µs per step; `bench/bench_tiers.py`, table 3): a summary costs a
+trajectory's time plus T + V at every row, 1.05-1.07 times a trajectory's run in
+one process: the energy kernel itself (three cosines) takes 35 ns per row in a
+compiled loop, `fold_summary` with it 45-48 ns, against the trajectory's copies
+of its rows, 2 ns per row.  So on a small model a summary is cheaper than a
+trajectory whose summary is read (the observables of every row: seven cosines
+per row), not than a bare trajectory; what it saves is memory.  Folding a chunk in one compiled call with the first and last
+rows' values from the pointwise kernels (rather than calling the ``observables``
+kernel for them) did not change that ratio, but takes the compile of
+``observables`` off the path of a new model's first summary run (1.5-2.1 s
+before, 0.86-0.98 s after, double pendulum, loaded machine).
 """
 
 from __future__ import annotations
@@ -77,7 +84,7 @@ _POINTWISE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def pointwise_kernels(kernels):
     """(energy, energy_function or None when it is the energy kernel itself, momenta) of a model's `kernels` as
-    function values for `fold_energies`, once per kernels; None when they are not numba functions (a stand-in)."""
+    function values for `fold_summary`, once per kernels; None when they are not numba functions (a stand-in)."""
     try:
         return _POINTWISE[kernels]
     except (KeyError, TypeError):
@@ -131,7 +138,7 @@ class Recorder:
             self.extremes = np.array([np.full(size, np.inf), np.full(size, -np.inf)])
             self.deviation = np.zeros(2 + len(self.cyclic))
             self.start: np.ndarray | None = None    # (E, h, cyclic momenta) of the first row
-            self._kernels = False                   # `_pointwise`, looked up at the first chunk after the first row
+            self._kernels = False                   # `_pointwise`, looked up at the first chunk
 
     def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
         """Take the rows ``ts`` (m,), ``ys`` (m, 2n): copied when kept (the caller reuses its buffers), read at once
@@ -143,37 +150,36 @@ class Recorder:
             self._note(rows)
             self.parts.append(rows)
             return
-        if self.first is None:          # the first row's observables start the deviations
-            self._fold(ts[:1], ys[:1])
-            ts, ys = ts[1:], ys[1:]
-        if ts.shape[0] == 0:
-            return
         if self._pointwise() is None:
-            self._fold(ts, ys)
+            if self.first is None:      # the first row's observables start the deviations
+                self._fold(ts[:1], ys[:1])
+                ts, ys = ts[1:], ys[1:]
+            if ts.shape[0]:
+                self._fold(ts, ys)
         else:
             self._reduce(ts, ys)
 
     def _pointwise(self):
-        """`pointwise_kernels` of the model, with the momenta only if a coordinate is cyclic; None: call the observables
-        kernel on every row."""
+        """`pointwise_kernels` of the model; None: call the observables kernel on every row."""
         if self._kernels is False:
-            found = pointwise_kernels(self.model.kernels)
-            self._kernels = None if found is None else (*found[:2], found[2] if self.cyclic.size else None)
+            self._kernels = pointwise_kernels(self.model.kernels)
         return self._kernels
 
     def _reduce(self, ts: np.ndarray, ys: np.ndarray) -> None:
-        """Summary mode after the first row: fold rows ts, ys into the running reductions by the pointwise kernels
-        (`fold_energies`: the energy function only where it is not the energy, the momenta only of cyclic
-        coordinates), the observables of the chunk's last row kept (`Observed` of a summary holds the first and
-        last rows')."""
+        """Summary mode: fold rows ts, ys into the running reductions by the pointwise kernels in one compiled call
+        (`fold_summary`), which also evaluates the observables of the run's first row (they start the deviations)
+        and of the chunk's last row (`Observed` of a summary holds the first and last rows')."""
         energy, energy_function, momenta = self._pointwise()
+        n, first = self.model.n, self.first is None
         ys = np.ascontiguousarray(ys)       # (each row goes to the kernels as a C-contiguous vector)
-        fold_energies(energy, energy_function or energy, momenta or _NO_MOMENTA, energy_function is not None,
-                      momenta is not None, ts, ys, self.p, self.cyclic, self.start, self.extremes, self.deviation,
-                      np.empty(self.model.n))
-        last = np.empty(1), np.empty(1), np.empty((1, self.model.n))
-        self.model.kernels.observables(ts[-1:], ys[-1:], self.p, *last)
-        self.last = (ts[-1:].copy(), ys[-1:].copy(), *last)
+        if first:
+            self.start = np.empty(2 + self.cyclic.size)
+        ends = np.empty((2, 2 + n))         # (E, h, momenta) of the first and the last row
+        fold_summary(energy, energy_function or energy, momenta, energy_function is not None, self.cyclic.size > 0,
+                     first, ts, ys, self.p, self.cyclic, self.start, self.extremes, self.deviation, ends)
+        if first:
+            self.first = (ts[:1].copy(), ys[:1].copy(), ends[0, :1], ends[0, 1:2], ends[0, 2:][None, :])
+        self.last = (ts[-1:].copy(), ys[-1:].copy(), ends[1, :1], ends[1, 1:2], ends[1, 2:][None, :])
         self.rows += ts.shape[0]
 
     def _note(self, rows: tuple) -> None:
@@ -244,15 +250,22 @@ def fold_rows(ys, energy, energy_function, momenta, cyclic, start, extremes, dev
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def fold_energies(energy, energy_function, momenta, own_h, cyclic_rows, ts, ys, p, cyclic, start, extremes,
-                  deviation, work):
-    """`fold_rows` with the values computed row by row by the pointwise kernels (function values): ``energy``,
-    ``energy_function`` if ``own_h`` (else h is the energy: a model whose T is quadratic in q̇ and time-free, whose
-    module binds one kernel to both names), ``momenta`` into ``work`` (n,) if ``cyclic_rows`` (else no coordinate is
-    cyclic and they are not needed).  The values are those of the ``observables`` kernel, which calls the same
-    kernels on each row; a summary of the double pendulum evaluates three cosines per row instead of seven.
+def fold_summary(energy, energy_function, momenta, own_h, cyclic_rows, first, ts, ys, p, cyclic, start, extremes,
+                 deviation, ends):
+    """`fold_rows` with the values computed row by row by the pointwise kernels (function values), in one pass.
+
+    ``energy`` at every row, ``energy_function`` too if ``own_h`` (else h is the energy: a model whose T is
+    quadratic in q̇ and time-free, whose module binds one kernel to both names), ``momenta`` at the rows of a model
+    with a cyclic coordinate (``cyclic_rows``) and at the first and last rows only otherwise.  ``first``: ``ys[0]`` is
+    the run's first row, whose E, h and cyclic momenta are written into ``start`` before the fold.  ``ends`` (2, 2 + n)
+    gets (E, h, momenta) of the first row (when ``first``) and of the last.  The values are those of the
+    ``observables`` kernel, which calls the same kernels on each row; a summary of the double pendulum evaluates
+    three cosines per row instead of seven, and calls no kernel of its own (numba compiles ``observables`` for a
+    trajectory's energies, on first read: 0.4 s for a double pendulum).
     """
     m, size = ys.shape
+    n = ends.shape[1] - 2
+    work = np.empty(n)
     for r in range(m):
         y = ys[r]
         for i in range(size):
@@ -263,21 +276,31 @@ def fold_energies(energy, energy_function, momenta, own_h, cyclic_rows, ts, ys, 
             if not np.isnan(high) and (v > high or np.isnan(v)):
                 extremes[1, i] = v
         e = energy(ts[r], y, p)
-        _raise_to(deviation, 0, abs(e - start[0]))
-        _raise_to(deviation, 1, abs((energy_function(ts[r], y, p) if own_h else e) - start[1]))
-        if cyclic_rows:
+        h = energy_function(ts[r], y, p) if own_h else e
+        end = r == m - 1
+        starts = first and r == 0
+        if cyclic_rows or end or starts:
             momenta(ts[r], y, p, work)
+        if starts:
+            start[0], start[1] = e, h
+            for k in range(cyclic.shape[0]):
+                start[2 + k] = work[cyclic[k]]
+            _ends_row(ends, 0, e, h, work)
+        _raise_to(deviation, 0, abs(e - start[0]))
+        _raise_to(deviation, 1, abs(h - start[1]))
+        if cyclic_rows:
             for k in range(cyclic.shape[0]):
                 _raise_to(deviation, 2 + k, abs(work[cyclic[k]] - start[2 + k]))
+        if end:
+            _ends_row(ends, 1, e, h, work)
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
-def _no_momenta(t, y, p, out):
-    """Stands for the momenta kernel where no coordinate is cyclic (never called)."""
-
-
-#: `_no_momenta` as a function value (`fold_energies` takes one for its momenta in every case).
-_NO_MOMENTA = AddressedKernel(_no_momenta, MOMENTA)
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def _ends_row(ends, row, e, h, momenta):
+    """ends[row] = (e, h, momenta...)."""
+    ends[row, 0], ends[row, 1] = e, h
+    for i in range(momenta.shape[0]):
+        ends[row, 2 + i] = momenta[i]
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")

@@ -97,18 +97,19 @@ def _columns(model, requested):
 
 
 def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions, differential: int,
-                     specialised=None):
+                     tier=(None,)):
     """The chunk call of an adaptive method, and the rows its output will need (None: not known).
 
     `differential`: the state's first components that are differential, the rest algebraic (a DAE's; Radau).
-    `specialised`: the model's specialised driver (`lagcomp.integrate.specialize`) to call instead of the library's.
+    `tier`: a one-item list holding the model's specialised driver (`lagcomp.integrate.specialize`) to call instead
+    of the library's, or None; read at each call, so that a run can move to it between calls (`_upgrade`).
     """
     m = options.method
     if options.first_step is not None:
         state.clock[STEP] = options.first_step
     events = options.t_eval_after_start()
     dae = differential < state.y.size
-    drivers = (specialised, specialised) if specialised is not None else _bound_drivers(m, kernels, dae)
+    library = _bound_drivers(m, kernels, dae) if tier[0] is None else None
     tableau_arrays = options.driver_arguments()
     if m.tableau is None:  # the Taylor method: the carry of its compensated summation, kept across calls
         tableau_arrays = (np.zeros(state.y.size),)
@@ -121,23 +122,23 @@ def _adaptive_driver(kernels, state: RunState, p, run_args, options: RunOptions,
     at_zero = (np.zeros(options.directions.size, dtype=np.int64),) if resets else ()
 
     def advance(ts, ys, pause_at, event_buffers, first_call):
-        return drivers[first_call](state.y, state.clock, state.counters, p, *run_args, t1, rtol, atol, max_step,
-                                   options.max_steps, pause_at, options.save_every, events, ts, ys,
-                                   options.directions, options.actions, *event_buffers[:buffers], *at_zero,
-                                   *tableau_arrays)
+        driver = library[first_call] if tier[0] is None else tier[0]
+        return driver(state.y, state.clock, state.counters, p, *run_args, t1, rtol, atol, max_step,
+                      options.max_steps, pause_at, options.save_every, events, ts, ys,
+                      options.directions, options.actions, *event_buffers[:buffers], *at_zero, *tableau_arrays)
     return advance, (len(events) + 1 if options.t_eval is not None else None)
 
 
-def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions, specialised=None):
-    """The chunk call of a fixed-step method, and the rows its output will need (`specialised`: as
-    `_adaptive_driver`'s)."""
-    drivers = (specialised, specialised) if specialised is not None else _bound_drivers(options.method, kernels)
+def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOptions, tier=(None,)):
+    """The chunk call of a fixed-step method, and the rows its output will need (`tier`: as `_adaptive_driver`'s)."""
+    library = _bound_drivers(options.method, kernels) if tier[0] is None else None
     coefficients = options.driver_arguments()
     t0, t1, dt, n_steps = options.t0, options.t1, options.dt, options.n_steps
 
     def advance(ts, ys, pause_at, event_buffers, first_call):
-        return drivers[first_call](state.y, state.clock, state.counters, p, *run_args, t0, dt, n_steps, pause_at,
-                                   t1, options.save_every, ts, ys, *coefficients)
+        driver = library[first_call] if tier[0] is None else tier[0]
+        return driver(state.y, state.clock, state.counters, p, *run_args, t0, dt, n_steps, pause_at, t1,
+                      options.save_every, ts, ys, *coefficients)
     return advance, n_steps // options.save_every + 1
 
 
@@ -155,7 +156,7 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
              max_steps=100_000_000, projection=None, baumgarte=(0.0, 0.0), project_initial=False,
              events=None, record="trajectory", progress=None, throw=False, max_residual=None,
              memory_limit=MEMORY_LIMIT, inputs=None, sensitivities=None, sensitivity_control="both",
-             specialize=False) -> Solution:
+             specialize=None) -> Solution:
     """Integrate `model` over `t_span`; see `lagcomp.Model.simulate` for the arguments."""
     columns = None if sensitivities is None else _columns(model, sensitivities)
     k_columns = 0 if columns is None else columns.k
@@ -174,7 +175,8 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     if columns is not None:
         _refuse_resets_with_sensitivities(model, options)
         sens.check(model, m, options, columns, given)
-    specialised = _specialised(model, given, m, specialize, columns, progress)
+    tier = [_specialised(model, given, m, specialize, columns, progress)]
+    upgrade = _upgrade(model, given, m, columns, tier) if specialize is None and tier[0] is None else None
     y0, projected = consistent_initial_state(model, t0, model.initial_state(q0, qd0), p, project_initial)
     resting = check_contacts(model, t0, y0[None, :], p[None, :])
     set_initial_modes(model, m, t0, y0[None, :], p[None, :], resting)  # (p is this run's own: parameter_vector's)
@@ -204,9 +206,9 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
         if (rtol, atol) != (options.rtol, options.atol):   # (the Taylor method's are the run's: 4 µs saved)
             options = dataclasses.replace(options, rtol=rtol, atol=atol)
     if options.adaptive:
-        advance, rows = _adaptive_driver(kernels, state, p_run, run_args, options, differential, specialised)
+        advance, rows = _adaptive_driver(kernels, state, p_run, run_args, options, differential, tier)
     else:
-        advance, rows = _fixed_step_driver(model.kernels, state, p, run_args, options, specialised)
+        advance, rows = _fixed_step_driver(model.kernels, state, p, run_args, options, tier)
 
     recorder = Recorder(model, p, record, progress)
     if columns is not None:
@@ -218,12 +220,12 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     max_rows = (options.memory_limit // _row_bytes(model, k_columns) if record == "trajectory" else math.inf)
     # (a run of unknown length checks its rows against the memory limit after each buffer: no larger than the limit)
     chunk = int(min(FIRST_CHUNK, max(max_rows, 16))) if rows is None else int(min(max(rows, 16), MAX_CHUNK))
-    first = None if specialised is not None else _numba_stage(model, m, progress)
+    first = None if tier[0] is not None else _numba_stage(model, m, progress)
     rate_key = m.name if columns is None else (m.name, columns.k)  # (a sensitivity run's steps cost more)
-    if specialised is not None:
+    if tier[0] is not None:
         rate_key = (m.name, "specialised")
     status = _run(advance, state, t1, (chunk, max_rows, width), recorder, n_events, event_parts, progress, first,
-                  (_STEP_RATES.setdefault(model, {}), rate_key), _kernels_of(model, m))
+                  (_STEP_RATES.setdefault(model, {}), rate_key), _kernels_of(model, m), upgrade)
     if status == Status.RHS_FAILED and state.nsteps == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
@@ -244,15 +246,19 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
 
 
 def _specialised(model, given, m, specialize, columns, progress):
-    """None for a run of the library driver; for ``specialize=True``, the model's specialised driver
-    (`lagcomp.integrate.specialize`: loaded, or compiled under a progress stage), after refusing a run it does not
-    cover."""
-    if not isinstance(specialize, bool | np.bool_):
-        raise OptionError(f"`specialize` must be True or False, got {specialize!r}.")
-    if not specialize:
-        return None
+    """The driver a run starts with: None for the library driver; the model's specialised driver
+    (`lagcomp.integrate.specialize`) for ``specialize=True`` (loaded, or compiled under a progress stage, after
+    refusing a run it does not cover) and for ``None`` (the automatic tier) when it is loaded in this process
+    already, which costs nothing (each call of it even less than a library driver's: no kernel to unbox)."""
+    if specialize is not None and not isinstance(specialize, bool | np.bool_):
+        raise OptionError(f"`specialize` must be True, False or None (automatic), got {specialize!r}.")
     from lagcomp.integrate import specialize as tier
 
+    if specialize is None:
+        covered = tier.covers(m, model, given, columns)
+        return tier.driver(model, m) if covered and tier.loaded(model, m) else None
+    if not specialize:
+        return None
     if columns is not None:
         raise OptionError("`specialize=True` with `sensitivities=`: a sensitivity run's kernels are made per run, "
                           "so no driver is specialised for them. Leave `specialize` unset.")
@@ -265,6 +271,30 @@ def _specialised(model, given, m, specialize, columns, progress):
     with Stages(f"preparing {model.name}", (what,), progress) as stages:
         stages.start(what)
         return tier.driver(model, m)
+
+
+def _upgrade(model, given, m, columns, tier):
+    """The automatic tier's move of a long run to the model's specialised driver, or None for a run it does not cover.
+
+    `_run` calls it between driver calls with the run's estimated remaining seconds.  Once they reach
+    `specialize.AUTO_REMAINING_SECONDS`, it looks once whether the specialised driver is ready without a compile
+    (in numba's cache beside its module, `specialize.cached`): if so it loads it (~0.1 s, a tenth of the rest of the
+    run at most) into `tier`, where the run's next call takes it; either way it returns True and is not called again.
+    It never compiles: a compile (12 s of CPU for DOP853's) is no part of a run that did not ask for it.  The two
+    drivers being bitwise the same, the run is the one either driver alone gives.
+    """
+    from lagcomp.integrate import specialize as spec
+
+    if not spec.covers(m, model, given, columns):
+        return None
+
+    def upgrade(remaining: float) -> bool:
+        if not remaining >= spec.AUTO_REMAINING_SECONDS:
+            return False
+        if spec.cached(model, m):
+            tier[0] = spec.driver(model, m)
+        return True
+    return upgrade
 
 
 def _row_bytes(model, k_columns: int) -> int:
@@ -308,7 +338,7 @@ def _numba_stage(model, m, progress):
 
 
 def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, progress, first=None,
-         learned=None, watched=()) -> int:
+         learned=None, watched=(), upgrade=None) -> int:
     """Call the driver until the run ends; returns the run's `Status`.
 
     `first`, if not None, is a context around the first call (numba compiles there: `_numba_stage`).
@@ -321,6 +351,9 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
     `learned`, if not None, is (rates, key): ``rates[key]``, if there, is the steps per second that sizes
     the first call (`FIRST_CALL_SECONDS`) and the second (`CALL_SECONDS`); the rate of each call that
     spends its whole budget outside numba's compilation is stored there for the next run.
+    `upgrade`, if not None, is `_upgrade`'s, called after each call that did not end the run with the seconds the
+    rest of the run is estimated to take (from the CPU time of this thread in the calls so far after the first, which
+    a loaded machine does not inflate) until it returns True.
     """
     chunk, max_rows, width = chunk
     n = state.y.size
@@ -329,6 +362,7 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
     budget = FIRST_BUDGET if known is None else max(16, int(known * FIRST_CALL_SECONDS))
     t0, first_call = state.t, True
     signatures = [len(kernel.signatures) for kernel in watched]
+    timed = [0.0, 0.0]      # CPU seconds and span of t of the calls after the first (`upgrade`'s estimate)
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
         ts, ys = np.empty(chunk), np.empty((chunk, n))
         while True:
@@ -336,8 +370,8 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
             event_buffers = (np.empty(rows_e), np.empty((rows_e, n)), np.empty(rows_e, dtype=np.int64),
                              np.full((rows_e, n), np.nan))  # times, states before, events, states after
             state.new_event_buffer()
-            started = time.perf_counter()
-            steps_before = state.nsteps
+            started, cpu_started = time.perf_counter(), time.thread_time()
+            steps_before, t_before = state.nsteps, state.t
             with first or contextlib.nullcontext() as stages:
                 if stages is not None:
                     stages.start(stages.names[0])
@@ -349,6 +383,8 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
             if first_call and interrupted[0] and signatures != [len(kernel.signatures) for kernel in watched]:
                 raise KeyboardInterrupt
             elapsed = time.perf_counter() - started
+            if not first_call:  # (the first may compile kernels, and binds them: not a rate of the run's steps)
+                timed[0], timed[1] = timed[0] + time.thread_time() - cpu_started, timed[1] + (state.t - t_before)
             recorder.add(ts[:n_saved], ys[:n_saved, :width])
             if recorder.rows > max_rows and Status(status).call_again:
                 return Status.MEMORY_FULL  # what was computed is kept; a fixed-step or t_eval run was refused up front
@@ -372,6 +408,8 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
                 return Status(status)
             if interrupted[0]:
                 return Status.INTERRUPTED
+            if upgrade is not None and timed[1] > 0 and upgrade(timed[0] / timed[1] * (t1 - state.t)):
+                upgrade = None
 
 
 def _refuse_singular_start(model, t0: float, y0: np.ndarray, p: np.ndarray) -> None:

@@ -16,9 +16,16 @@ and numbers only.  It is the same source compiled with the same options (the lib
 rows and statuses as the library driver, bit for bit (`tests/test_specialize.py`; ``nfev`` counts one
 more evaluation per driver call, and the two tiers' calls are sized from step rates learned per tier).
 What it costs is one compile of the driver per model (the double pendulum's: RK4 1.3 s, DOP853's embedded
-driver 12 s of CPU time; loading it later: 0.1 s), which is why a run uses it only when asked
+driver 12 s of CPU time; loading it later: 0.1 s), which is why a run compiles it only when asked
 (``simulate(..., specialize=True)``, ``lagcomp precompile MODEL --specialize METHOD``), never on the path to a
 model's first result.
+
+The automatic tier (``specialize=None``, the default) uses it where that costs no compile: a run starts with it
+when it is loaded in the process already (its calls are even cheaper than a library driver's, which unboxes each
+kernel), and a run whose rest is estimated, between two driver calls, to take `AUTO_REMAINING_SECONDS` or more
+moves to it when numba's cache holds it (`lagcomp.integrate.simulate._upgrade`).  It never compiles one in the
+background: numba compiles under one process-wide lock, so a 12-s compile in a thread would hold up every other
+compile of the process (a new model's kernels, a first ``Solution.energy``) for as long.
 
 Each specialised driver is a small generated module (a header docstring, its imports, one function
 ``run`` taking the library driver's arguments after the kernels), built from a Python AST and
@@ -27,6 +34,10 @@ and a digest of the library sources (`specialised_key`), so that a change of a d
 calls makes a new module.  numba caches ``run``'s machine code beside that module file: a later process
 loads it (milliseconds) instead of compiling it.  The drivers of the embedded pairs are one library
 function, so dop853, dopri5, tsit5 and bs3 share one specialised module per model.
+
+A method's sweep loop (`Method.sweep`, which takes the driver's kernels and ``energy``) is specialised the same
+way, in a module of its own (``sweep=True``; ``lagcomp precompile MODEL --specialize-sweep METHOD``), for the
+automatic tier of large sweeps (`lagcomp.integrate.sweep.AUTO_TRAJECTORIES`).
 
 Covered (`SPECIALISABLE`): the methods whose driver takes the model's kernels and nothing else of the
 model (not Taylor's module data; Radau, whose constrained runs take other kernels, is not done yet), run
@@ -54,8 +65,18 @@ SPECIALISABLE_DRIVERS = ("lagcomp.integrate.drivers.fixed_step:runge_kutta_run",
 SPECIALISABLE = tuple(name for name, m in METHODS.items() if m.driver in SPECIALISABLE_DRIVERS)
 #: What the cache key of a specialised module adds to the model's input key (then the driver and the digest).
 SUFFIX = "-specialised-"
+#: The automatic tier (``specialize=None``): a run moves to the specialised driver, if numba's cache holds it, once
+#: the rest of the run is estimated to take this long (loading it takes ~0.1 s: a tenth of that at most).
+AUTO_REMAINING_SECONDS = 1.0
 #: The specialised drivers loaded in this process: {model's kernels: {driver reference: ``run``}}.
 _LOADED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def covers(method: Method, model, given, sensitivities) -> bool:
+    """Whether a run of `method` on `model` can use its specialised driver: the refusals of `check` (and of
+    ``sensitivities``, not None for a sensitivity run) as a test, for the automatic tier (``specialize=None``)."""
+    return (method.name in SPECIALISABLE and model is given and sensitivities is None
+            and getattr(model, "cache_key", None) is not None and getattr(model, "source_path", None) is not None)
 
 
 def check(method: Method, model, given) -> None:
@@ -84,56 +105,75 @@ def library_digest() -> str:
     return code_digest((*LIBRARY_SOURCES, "integrate/specialize.py", "integrate/compile_time.py"))
 
 
-def specialised_key(model, method: Method) -> str:
-    """The cache key of `model`'s specialised module for `method`'s driver."""
-    return f"{model.cache_key}{SUFFIX}{method.driver.partition(':')[2]}-{library_digest()[:16]}"
+def target(method: Method, sweep: bool = False) -> tuple[str, tuple[str, ...]]:
+    """(library function, the names of the kernels it takes first) of `method`'s driver, or with `sweep` of its sweep
+    loop (`Method.sweep`, which takes the driver's kernels and ``energy``)."""
+    return (method.sweep, (*method.kernels, "energy")) if sweep else (method.driver, method.kernels)
 
 
-def driver(model, method: Method):
-    """The specialised ``run`` of `model` for `method`, once per process: its module loaded (generated and stored
-    first if missing), which compiles ``run`` from its explicit signature or loads it from numba's cache."""
+def specialised_key(model, method: Method, sweep: bool = False) -> str:
+    """The cache key of `model`'s specialised module for `method`'s driver (or sweep loop)."""
+    return f"{model.cache_key}{SUFFIX}{target(method, sweep)[0].partition(':')[2]}-{library_digest()[:16]}"
+
+
+def driver(model, method: Method, sweep: bool = False):
+    """The specialised ``run`` of `model` for `method`'s driver (or sweep loop), once per process: its module loaded
+    (generated and stored first if missing), which compiles ``run`` from its explicit signature or loads it from
+    numba's cache."""
     loaded = _LOADED.setdefault(model.kernels, {})
-    if method.driver not in loaded:
-        loaded[method.driver] = _module(model, method).run
-    return loaded[method.driver]
+    reference = target(method, sweep)[0]
+    if reference not in loaded:
+        loaded[reference] = _module(model, method, sweep).run
+    return loaded[reference]
 
 
-def loaded(model, method: Method) -> bool:
-    """Whether `model`'s specialised driver for `method` is loaded in this process."""
-    return method.driver in _LOADED.get(model.kernels, {})
+def loaded(model, method: Method, sweep: bool = False) -> bool:
+    """Whether `model`'s specialised driver (or sweep loop) for `method` is loaded in this process."""
+    return loaded_for(model.kernels, target(method, sweep)[0]) is not None
 
 
-def prepare(model, method: Method) -> bool:
+def loaded_for(kernels, reference: str):
+    """The specialised ``run`` of the library function `reference` loaded in this process for a model's `kernels`
+    (its generated module), or None (also for kernels that cannot be weakly referenced: a stand-in's)."""
+    try:
+        return _LOADED.get(kernels, {}).get(reference)
+    except TypeError:
+        return None
+
+
+def prepare(model, method: Method, sweep: bool = False) -> bool:
     """`driver`, for ``lagcomp precompile MODEL --specialize METHOD``; returns whether numba compiled it."""
-    return sum(driver(model, method).stats.cache_misses.values()) > 0
+    return sum(driver(model, method, sweep).stats.cache_misses.values()) > 0
 
 
-def cached(model, method: Method) -> bool:
-    """Whether `model`'s specialised driver for `method` is ready without a compile: loaded in this process, or its
-    module in the model cache with numba's cache files of ``run`` beside it."""
+def cached(model, method: Method, sweep: bool = False) -> bool:
+    """Whether `model`'s specialised driver (or sweep loop) for `method` is ready without a compile: loaded in this
+    process, or its module in the model cache with numba's cache files of ``run`` beside it."""
     from lagcomp.cache import Cache
     from lagcomp.numba_cache import cache_directory
 
     if method.name not in SPECIALISABLE:
         return False
-    if loaded(model, method):
+    if loaded(model, method, sweep):
         return True
-    entry = Cache(model.source_path.parent.parent).lookup(specialised_key(model, method))
+    entry = Cache(model.source_path.parent.parent).lookup(specialised_key(model, method, sweep))
     directory = None if entry is None else cache_directory(entry.path)
     return directory is not None and any(directory.glob(f"{entry.path.stem}.run-*.nbi"))
 
 
-def _module(model, method: Method):
-    """The specialised module of `model` for `method`'s driver, from the model's cache (stored first if missing)."""
+def _module(model, method: Method, sweep: bool):
+    """The specialised module of `model` for `method`'s driver (or sweep loop), from the model's cache (stored first
+    if missing)."""
     from lagcomp.cache import Cache, load_module
 
-    cache, key = Cache(model.source_path.parent.parent), specialised_key(model, method)
+    cache, key = Cache(model.source_path.parent.parent), specialised_key(model, method, sweep)
+    reference = target(method, sweep)[0]
     entry = cache.lookup(key)
     if entry is None:
         with cache.lock(key):
             entry = cache.lookup(key) or cache.store(
-                key, module_source(model, method), f"{model.name}_{method.driver.partition(':')[2]}",
-                {"driver": method.driver, "library": library_digest()})
+                key, module_source(model, method, sweep), f"{model.name}_{reference.partition(':')[2]}",
+                {"driver": reference, "library": library_digest()})
     with warnings.catch_warnings():
         # ``run`` passes more than 30 arguments, which Python packs into a tuple; numba warns that a tuple holding
         # dispatchers' types is an experimental first-class function feature, which the call does not use.
@@ -141,14 +181,15 @@ def _module(model, method: Method):
         return load_module(entry)
 
 
-def module_source(model, method: Method) -> str:
-    """The source of the specialised module of `model` for `method`'s driver (module docstring)."""
+def module_source(model, method: Method, sweep: bool = False) -> str:
+    """The source of the specialised module of `model` for `method`'s driver, or with `sweep` its sweep loop (module
+    docstring)."""
     from lagcomp import __version__
 
-    reference = method.driver
+    reference, names = target(method, sweep)
     library = library_function(reference)
     parameters = list(inspect.signature(library.py_func).parameters)
-    kernels = [_kernel(model.kernels, name) for name in method.kernels]
+    kernels = [_kernel(model.kernels, name) for name in names]
     rest = parameters[len(kernels):]
     options = {k: v for k, v in library.targetoptions.items() if k not in ("cache", "nopython") and v is not None}
     header = (f"The library driver {reference} specialised for the model {model.name!r}, generated by lagcomp "
@@ -164,10 +205,10 @@ def module_source(model, method: Method) -> str:
             ast.ImportFrom("lagcomp.integrate.compile_time",
                            [ast.alias("compile_time"), ast.alias("run_signature"), ast.alias("uncached_copy")], 0),
             ast.ImportFrom(module_name, [ast.alias(function)], 0),
-            *_kernel_imports(kernels, method.kernels),
+            *_kernel_imports(kernels, names),
             _assign("_driver", _call(ast.Name("uncached_copy"), [ast.Name(function)])),
-            *(_assign(name, _call(ast.Name("compile_time"), [ast.Name(name)])) for name in method.kernels),
-            _run(function, method.kernels, rest, options)]
+            *(_assign(name, _call(ast.Name("compile_time"), [ast.Name(name)])) for name in names),
+            _run(function, names, rest, options)]
     return ast.unparse(ast.fix_missing_locations(ast.Module(body, []))) + "\n"
 
 
