@@ -140,7 +140,7 @@ def report(directory: str, top: int = 25) -> None:
     models = collections.defaultdict(lambda: [0.0, set(), set()])
     for r in records:
         for module, (seconds, _) in r["numba"].items():
-            match = re.match(r"lagcomp_generated_(.*?)(_on_demand)?_([0-9a-f]{16})$", module)
+            match = _GENERATED.match(module)
             if match:
                 row = models[match.group(1)]
                 row[0] += seconds
@@ -149,6 +149,29 @@ def report(directory: str, top: int = 25) -> None:
     print(f"\n{len(models)} models compiled, {sum(m[0] for m in models.values()):.0f} s; the slowest:")
     for name, (seconds, keys, names) in sorted(models.items(), key=lambda kv: -kv[1][0])[:top]:
         print(f"  {name:40s} {seconds:6.1f} s  {len(keys)} module(s)  {', '.join(sorted(names)[:4])}")
+    compiled_again(records, top)
+
+
+#: A generated module's name: the model's name, the on-demand kind of a companion module, the key.
+_GENERATED = re.compile(r"lagcomp_generated_(.*?)(?:_on_demand_([a-z_]+?))?_([0-9a-f]{16})$")
+
+
+def compiled_again(records: list, top: int) -> None:
+    """Print the generated modules that numba compiled in more than one test file or worker (the same module,
+    so the same key: the second compile is work a shared fixture or the shared cache would have saved), the
+    `top` most costly, with the seconds after the first file's."""
+    where = collections.defaultdict(lambda: collections.defaultdict(float))
+    for r in records:
+        for module, (seconds, _) in r["numba"].items():
+            if _GENERATED.match(module):
+                where[module][(r["worker"], r["file"].rsplit("/", 1)[-1])] += seconds
+    again = {module: places for module, places in where.items() if len(places) > 1}
+    extra = {module: sum(places.values()) - max(places.values()) for module, places in again.items()}
+    print(f"\n{len(again)} generated modules compiled in more than one file or worker, {sum(extra.values()):.0f} s "
+          "after the first:")
+    for module in sorted(again, key=lambda m: -extra[m])[:top]:
+        files = ", ".join(f"{file} ({worker})" for worker, file in sorted(again[module])[:4])
+        print(f"  {module[len('lagcomp_generated_'):]:60s} {extra[module]:6.1f} s  {files}")
 
 
 if __name__ == "__main__":
