@@ -8,7 +8,8 @@ appends one JSON line per test to ``<DIR>/<worker>-<pid>.jsonl`` (DIR from ``$LA
   fixture's work counts in the first test that asks for it), ``child``: those of the subprocesses it waited for;
 - ``numba``: the CPU seconds numba spent compiling (cache misses only), by the module of the compiled function:
   a generated module's name holds the model's name and key, so the same key in two workers or two tests is
-  compiled twice;
+  compiled twice; ``kernels``: the same for each kernel of a generated module (``module.function``), which the
+  report's last list reads: a kernel compiled in two files or two workers is work done twice;
 - ``builds``: lagcomp's derivations, lowerings and emissions (``lagcomp.runtime.build``, the companion's).
 
 ``python tests/cpu_profile.py DIR`` prints the totals, the files and the models by CPU::
@@ -41,11 +42,12 @@ class _Recorder:
 
     def __init__(self):
         self.numba: dict[str, list] = {}
+        self.kernels: dict[str, float] = {}
         self.builds: list = []
         self._depth, self._start = 0, 0.0
 
     def reset(self) -> None:
-        self.numba, self.builds = {}, []
+        self.numba, self.kernels, self.builds = {}, {}, []
 
     def compile_started(self) -> None:
         if self._depth == 0:
@@ -56,9 +58,13 @@ class _Recorder:
         self._depth -= 1
         if self._depth == 0:        # a nested compile (a callee) counts in its caller's
             module = getattr(dispatcher.py_func, "__module__", None) or "?"
+            seconds = time.process_time() - self._start
             entry = self.numba.setdefault(module, [0.0, 0])
-            entry[0] += time.process_time() - self._start
+            entry[0] += seconds
             entry[1] += 1
+            if module.startswith("lagcomp_generated_"):
+                kernel = f"{module}.{dispatcher.py_func.__name__}"
+                self.kernels[kernel] = self.kernels.get(kernel, 0.0) + seconds
 
     def timed(self, kind: str, function, name_of):
         """`function` wrapped to record its CPU seconds under (kind, name_of(args))."""
@@ -113,7 +119,7 @@ def pytest_runtest_protocol(item, nextitem):
     yield
     record = {"id": item.nodeid, "file": item.nodeid.split("::")[0], "cpu": time.process_time() - cpu,
               "child": _children_cpu() - child, "wall": time.perf_counter() - wall,
-              "numba": _RECORDER.numba, "builds": _RECORDER.builds,
+              "numba": _RECORDER.numba, "kernels": _RECORDER.kernels, "builds": _RECORDER.builds,
               "worker": os.environ.get("PYTEST_XDIST_WORKER", "main")}
     _OUT[0].write(json.dumps(record) + "\n")
     _OUT[0].flush()
@@ -140,7 +146,7 @@ def report(directory: str, top: int = 25) -> None:
     models = collections.defaultdict(lambda: [0.0, set(), set()])
     for r in records:
         for module, (seconds, _) in r["numba"].items():
-            match = re.match(r"lagcomp_generated_(.*?)(_on_demand)?_([0-9a-f]{16})$", module)
+            match = _GENERATED.match(module)
             if match:
                 row = models[match.group(1)]
                 row[0] += seconds
@@ -149,6 +155,31 @@ def report(directory: str, top: int = 25) -> None:
     print(f"\n{len(models)} models compiled, {sum(m[0] for m in models.values()):.0f} s; the slowest:")
     for name, (seconds, keys, names) in sorted(models.items(), key=lambda kv: -kv[1][0])[:top]:
         print(f"  {name:40s} {seconds:6.1f} s  {len(keys)} module(s)  {', '.join(sorted(names)[:4])}")
+    compiled_again(records, top)
+
+
+#: A generated module's name: the model's name, the on-demand kind of a companion module, the key.
+_GENERATED = re.compile(r"lagcomp_generated_(.*?)(?:_on_demand_([a-z_]+?))?_([0-9a-f]{16})$")
+
+
+def compiled_again(records: list, top: int) -> None:
+    """Print the kernels of generated modules that numba compiled in more than one test file or worker (the same
+    module, so the same key: the second compile is work a shared fixture or the shared cache would have saved),
+    the `top` most costly, with the seconds after the first file's.  (Records without ``kernels``, from before it
+    was recorded, count whole modules: two files may have compiled different kernels of one module.)"""
+    where = collections.defaultdict(lambda: collections.defaultdict(float))
+    for r in records:
+        compiles = r.get("kernels") or {module: seconds for module, (seconds, _) in r["numba"].items()}
+        for kernel, seconds in compiles.items():
+            if _GENERATED.match(kernel.split(".")[0]):
+                where[kernel][(r["worker"], r["file"].rsplit("/", 1)[-1])] += seconds
+    again = {kernel: places for kernel, places in where.items() if len(places) > 1}
+    extra = {kernel: sum(places.values()) - max(places.values()) for kernel, places in again.items()}
+    print(f"\n{len(again)} generated kernels compiled in more than one file or worker, {sum(extra.values()):.0f} s "
+          "after the first:")
+    for kernel in sorted(again, key=lambda k: -extra[k])[:top]:
+        files = ", ".join(f"{file} ({worker})" for worker, file in sorted(again[kernel])[:4])
+        print(f"  {kernel[len('lagcomp_generated_'):]:70s} {extra[kernel]:6.1f} s  {files}")
 
 
 if __name__ == "__main__":

@@ -14,12 +14,11 @@ about 15 s of CPU belongs in the list (docs/testing.md says how to measure).
 
 from __future__ import annotations
 
-#: Test files (names under tests/) by the CPU seconds of their tests, heaviest first, at e5082ac.
+#: Test files (names under tests/) by the CPU seconds of their tests, heaviest first, at e5082ac (two re-measured
+#: where marked, -n 0 with the library's numba cache warm).
 HEAVIEST = (
     "test_units_invariance.py",          # 90
-    "test_driver_staleness.py",          # 70 (subprocesses compiling the library from an empty numba cache)
     "test_error_table.py",               # 58
-    "test_directional.py",               # 52
     "test_acceptance.py",                # 50
     "test_taylor_sensitivities.py",      # 49
     "test_steady_linearization.py",      # 47
@@ -28,8 +27,10 @@ HEAVIEST = (
     "test_rhs_jacobian.py",              # 43
     "test_kane_interop.py",              # 42
     "test_resting_contacts.py",          # 40
+    "test_directional.py",               # 39 at 615d5a2 (52: kkt_solve linked into each constrained kernel)
     "test_taylor_jacobian.py",           # 33 (103 with the k = 9 case, now marked slow)
     "test_contact_friction.py",          # 32
+    "test_driver_staleness.py",          # 28 at 4805bf0 (66: dopri5 compiled twice into an empty numba cache)
     "test_taylor_modes.py",              # 27
     "test_constrained_sensitivities.py",  # 25
     "test_large_systems.py",             # 25

@@ -1,7 +1,11 @@
 """Linear solvers for the generated kernels and the implicit drivers.
 
 numba compiles each into the kernel or driver that calls it, at that
-function's first compile, and caches it with it.
+function's first compile, and caches it with it; except the solvers of a
+constrained or Kane model's kernels (``kkt_solve``, ``kkt_solve_matrix``,
+``gram_solve``, ``lu_solve_matrix``), which the kernels call by symbol
+(`lagcomp.kernel_support.symbol_calls`, end of this module): numba optimises
+each once, not again inside every kernel that calls it.
 
 * ``ldlt_solve``: symmetric positive definite systems (the mass matrix of a
   large unconstrained system; small ones get the same factorization unrolled
@@ -35,6 +39,8 @@ later caller (see `lagcomp.kernel_support.trig`).
 
 import numpy as np
 from numba import njit
+
+from lagcomp.kernel_support.symbol_calls import called_by_symbol
 
 #: Pivots below this times the matrix's scale count as zero (also the unrolled LDLᵀ of the kernels).
 PIVOT_TOLERANCE = 1e-14
@@ -198,7 +204,7 @@ def lu_substitute(a, pivots, r):
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def lu_solve_matrix(a, b):
+def _lu_solve_matrix(a, b):
     """Solve A X = b for all m columns of b, shape (n, m), in place: X overwrites b, LU overwrites a.
 
     ``lu_factor`` of the square a, then ``lu_substitute`` for each column: the pivots and the
@@ -215,7 +221,7 @@ def lu_solve_matrix(a, b):
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def kkt_solve(a, n):
+def _kkt_solve(a, n):
     """Solve [M −Λᵀ; Λ 0] (q̈, λ) = (F, γ), stored as a = [A | r], shape (n + k, n + k + 1).
 
     The solution ends in a[:, n + k] (q̈ first, then λ).  Schur complement
@@ -281,7 +287,7 @@ def kkt_solve(a, n):
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def kkt_solve_matrix(a, n, b):
+def _kkt_solve_matrix(a, n, b):
     """Solve [M −Λᵀ; Λ 0] X = b for all m columns of b, shape (n + k, m), in place: X overwrites b.
 
     a, shape (n + k, n + k), holds the matrix as ``kkt_solve`` reads it (M's lower triangle, −Λᵀ, Λ).  The
@@ -306,7 +312,7 @@ def kkt_solve_matrix(a, n, b):
         for r in range(j):
             d -= work[j, r] * work[j, r] * work[r, r]
         if not d > PIVOT_TOLERANCE * abs(a[j, j]):
-            return lu_solve_matrix(a, b)
+            return _lu_solve_matrix(a, b)
         work[j, j] = d
         for i in range(j + 1, n):
             s = work[i, j]
@@ -337,7 +343,7 @@ def kkt_solve_matrix(a, n, b):
                 s += a[n + r, i] * work[i, n + c]
             schur[r, c] = s
     if ldlt_solve_matrix(schur, lam):
-        return lu_solve_matrix(a, b)
+        return _lu_solve_matrix(a, b)
     for c in range(m):
         for i in range(n):
             x = work[i, n + k + c]
@@ -350,7 +356,7 @@ def kkt_solve_matrix(a, n, b):
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def gram_solve(a, rows, columns, rhs, mu):
+def _gram_solve(a, rows, columns, rhs, mu):
     """mu = (A Aᵀ)⁻¹ rhs for A = a[rows, :columns]: the multipliers of the least Euclidean change.
 
     The ``project`` kernels move a state onto its constraints along Aᵀ mu, with A
@@ -367,3 +373,11 @@ def gram_solve(a, rows, columns, rhs, mu):
                 s += a[rows[i], c] * a[rows[j], c]
             g[i, j] = s
     return ldlt_solve(g, rhs, mu, 0)
+
+
+#: What the generated kernels call: the solvers above, by symbol, optimised once
+#: (`lagcomp.kernel_support.symbol_calls`).
+kkt_solve = called_by_symbol(_kkt_solve)
+kkt_solve_matrix = called_by_symbol(_kkt_solve_matrix)
+gram_solve = called_by_symbol(_gram_solve)
+lu_solve_matrix = called_by_symbol(_lu_solve_matrix)
