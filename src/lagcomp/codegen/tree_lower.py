@@ -16,6 +16,7 @@ import sympy as sp
 
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.lower import event_reset_kernel
+from lagcomp.codegen.outline import outline
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.aba import accelerations
 from lagcomp.multibody.crba import mass_matrix
@@ -77,13 +78,14 @@ def lower_tree(tree: Tree) -> ModuleIR:
 
 def program_kernel(name: str, doc: str, args, prog: Program, stores, loads, solve=None) -> Kernel:
     """A kernel whose temporaries are the assignments of `prog` its `stores` read, and whose loads are those they
-    read."""
+    read; the steps its nodes repeat emitted once (`lagcomp.codegen.outline`)."""
     temps = prog.live([e for _, e in stores])
     used = set().union(*(sp.sympify(e).free_symbols for _, e in stores), *(e.free_symbols for _, e in temps))
     used_names = {s.name for s in used}
+    body, helpers = outline(name, temps, prog.step_of, [e for _, e in stores])
     return Kernel(name=name, doc=doc, args=args, loads=tuple((local, src) for local, src in loads if local in used_names),
-                  temps=tuple((local.name, e) for local, e in temps),
-                  stores=tuple((target, sp.sympify(e)) for target, e in stores), solve=solve)
+                  temps=body, stores=tuple((target, sp.sympify(e)) for target, e in stores), solve=solve,
+                  helpers=helpers)
 
 
 def _matrix_stores(entries: dict, n: int) -> list:

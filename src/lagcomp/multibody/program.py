@@ -11,14 +11,23 @@ velocities and parameters:
   massless frame's zero inertia, an identity placement);
 * an expression formed twice is bound once (hash-consing: the light CSE a recursion needs, per assignment);
 * assignments no output reads are dropped (`Program.live`).
+
+Each assignment also records the *step* it was formed in (`Program.step`: a node's share of one pass of a
+recursion), so that the steps of identical nodes can be emitted as one shared function
+(`lagcomp.codegen.outline`).  Locals are numbered with a fixed width (``_b000012``): their names then sort as
+they were formed, so the steps of two identical nodes print their sums and products in the same order.
 """
 
 from __future__ import annotations
+
+import contextlib
 
 import sympy as sp
 
 #: The prefix of the locals a program binds (generated names start with ``_``: `lagcomp.codegen.lower`, Names).
 PREFIX = "_b"
+#: Digits of a local's number (zero-padded: names sort as numbers).
+WIDTH = 6
 
 
 class Program:
@@ -26,7 +35,20 @@ class Program:
 
     def __init__(self):
         self.assignments: list[tuple[sp.Symbol, sp.Expr]] = []
+        #: The step each local was formed in (None: outside any step).
+        self.step_of: dict[sp.Symbol, object] = {}
         self._bound: dict = {}
+        self._step = None
+
+    @contextlib.contextmanager
+    def step(self, key):
+        """Tag the assignments formed inside the ``with`` block as the step `key` (any hashable: a pass and a
+        node); steps do not nest."""
+        outer, self._step = self._step, key
+        try:
+            yield
+        finally:
+            self._step = outer
 
     def let(self, expr) -> sp.Expr:
         """`expr` itself when it is a number, a symbol or a negated symbol, else the local bound to it."""
@@ -36,8 +58,9 @@ class Program:
             return expr
         local = self._bound.get(expr)
         if local is None:
-            local = self._bound[expr] = sp.Symbol(f"{PREFIX}{len(self.assignments)}", real=True)
+            local = self._bound[expr] = sp.Symbol(f"{PREFIX}{len(self.assignments):0{WIDTH}d}", real=True)
             self.assignments.append((local, expr))
+            self.step_of[local] = self._step
         return local
 
     def vector(self, entries) -> list:

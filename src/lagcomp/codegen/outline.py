@@ -1,0 +1,142 @@
+"""Emit the repeated steps of a straight-line program once, as shared helpers: numba's compile time grows with the
+code it types, not with the code it runs.
+
+numba types and lowers each arithmetic operation of a kernel on its own (about 1 ms each on the 2-core machine),
+so a 100-link chain's articulated-body ``rhs`` (11,000 operations) took 17 s to compile, though its links are all
+alike.  A recursion over a tree forms the same quantities node after node: each node's share of a pass (a *step*,
+`lagcomp.multibody.program.Program.step`) is the same little program over its own inputs.  `outline` finds the
+steps that are the same up to the names of their inputs, emits each such program once as a `lagcomp.ir.Helper`
+(``@njit(forceinline=True)``: numba compiles it once, LLVM inlines it at every call, so the machine code is the
+straight-line code it replaces) and calls it at each step with that step's inputs.  A step that occurs once stays
+inline.
+
+Two steps are the same when renaming their inputs (in the order the step first reads them) and their own locals
+(in the order it forms them) gives the same assignments and the same locals read after the step.  The
+program's locals are numbered with a fixed width, so the sums and products of two such steps list their terms in
+the same order and the renaming sees them alike.  The result is the same arithmetic in the same order: the kernel
+computes the same bits.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+
+import sympy as sp
+
+from lagcomp.ir import Helper, HelperCall
+
+#: The least number of identical steps worth a helper.
+MIN_CALLS = 2
+
+
+def outline(kernel_name: str, temps, step_of: dict, outputs) -> tuple[tuple, tuple[Helper, ...]]:
+    """The temporaries of a kernel with its repeated steps replaced by calls, and the helpers they call.
+
+    Parameters
+    ----------
+    kernel_name : str
+        Names the helpers (``_<kernel_name>_step<k>``).
+    temps : sequence of (Symbol, Expr)
+        The kernel's assignments in order (`lagcomp.multibody.program.Program.live`).
+    step_of : dict
+        The step of each local (`lagcomp.multibody.program.Program.step_of`); None: no step.
+    outputs : sequence of Expr
+        What the kernel stores: the locals they read are read after every step.
+
+    Returns
+    -------
+    temps : tuple of (str, Expr)
+        For `lagcomp.ir.Kernel`: assignments by local name, and `lagcomp.ir.HelperCall` s whose local is the
+        comma-separated names of their results.
+    helpers : tuple of Helper
+    """
+    runs = _runs(temps, step_of)
+    readers = _readers(temps, runs, outputs)
+    forms = [_canonical(temps, run, readers) if key is not None else None for key, run in runs]
+    groups = defaultdict(list)
+    for r, form in enumerate(forms):
+        if form is not None and form[2]:
+            groups[form].append(r)
+    helpers, helper_of = [], {}
+    for form, members in groups.items():
+        if len(members) < MIN_CALLS:
+            continue
+        body, inputs, returns = form
+        helper = Helper(name=f"_{kernel_name}_step{len(helpers)}", args=tuple(f"_a{k}" for k in range(inputs)),
+                        temps=tuple((f"_t{j}", e) for j, e in enumerate(body)),
+                        returns=tuple(f"_t{j}" for j in returns))
+        helpers.append(helper)
+        for r in members:
+            helper_of[r] = helper
+    out = []
+    for r, (_, run) in enumerate(runs):
+        helper = helper_of.get(r)
+        if helper is None:
+            out += [(temps[i][0].name, temps[i][1]) for i in run]
+            continue
+        locals_ = [temps[i][0] for i in run]
+        results = ", ".join(locals_[j].name for j in forms[r][2]) + ("," if len(forms[r][2]) == 1 else "")
+        out.append((results, HelperCall(sp.Symbol(helper.name), *_inputs(temps, run))))
+    return tuple(out), tuple(helpers)
+
+
+def _runs(temps, step_of: dict) -> list[tuple[object, list[int]]]:
+    """The temps as consecutive runs of one step each: (step key or None, indices); a temp of no step is a run of
+    its own."""
+    runs = []
+    for i, (local, _) in enumerate(temps):
+        key = step_of.get(local)
+        if key is not None and runs and runs[-1][0] == key:
+            runs[-1][1].append(i)
+        else:
+            runs.append((key, [i]))
+    return runs
+
+
+def _readers(temps, runs, outputs) -> set:
+    """The locals read outside the run that forms them (by a later run or by the stores)."""
+    run_of = {temps[i][0]: r for r, (_, run) in enumerate(runs) for i in run}
+    read = set().union(*(sp.sympify(e).free_symbols for e in outputs)) if outputs else set()
+    for r, (_, run) in enumerate(runs):
+        for i in run:
+            read |= {s for s in temps[i][1].free_symbols if run_of.get(s, r) != r}
+    return read
+
+
+def _ordered_symbols(expr) -> list:
+    """The symbols of `expr` in the order a preorder walk over its (canonically ordered) arguments meets them."""
+    seen, order = set(), []
+    for node in sp.preorder_traversal(expr):
+        if node.is_Symbol and node not in seen:
+            seen.add(node)
+            order.append(node)
+    return order
+
+
+def _canonical(temps, run, readers) -> tuple:
+    """The run's program with its inputs renamed ``_a<k>`` and its locals ``_t<j>``: (assignments, number of
+    inputs, positions of the locals read after it)."""
+    names, inputs = {}, 0
+    own = {temps[i][0] for i in run}
+    body = []
+    for j, i in enumerate(run):
+        local, expr = temps[i]
+        for s in _ordered_symbols(expr):
+            if s not in names and s not in own:
+                names[s] = sp.Symbol(f"_a{inputs}", real=True)
+                inputs += 1
+        body.append(expr.xreplace(names))
+        names[local] = sp.Symbol(f"_t{j}", real=True)
+    returns = tuple(j for j, i in enumerate(run) if temps[i][0] in readers)
+    return tuple(body), inputs, returns
+
+
+def _inputs(temps, run) -> list:
+    """The run's inputs, in the order `_canonical` numbers them."""
+    own, seen, order = {temps[i][0] for i in run}, set(), []
+    for i in run:
+        for s in _ordered_symbols(temps[i][1]):
+            if s not in own and s not in seen:
+                seen.add(s)
+                order.append(s)
+    return order
