@@ -140,3 +140,13 @@ def _inputs(temps, run) -> list:
                 seen.add(s)
                 order.append(s)
     return order
+
+
+def evaluated_operations(kernel) -> int:
+    """The arithmetic operations one call of `kernel` (`lagcomp.ir.Kernel`) performs: its own and, for each call
+    of a helper, the helper's (`Kernel.operation_count` counts each helper once: what numba compiles)."""
+    helpers = {h.name: h.operation_count for h in kernel.helpers}
+    total = sum(sp.count_ops(e) for _, e in kernel.stores)
+    for _, expr in kernel.temps:
+        total += helpers[expr.args[0].name] if isinstance(expr, HelperCall) else sp.count_ops(expr)
+    return int(total)
