@@ -198,7 +198,8 @@ def test_bad_trees_are_refused_naming_the_culprit(links, culprit):
 
 def test_a_chains_repeated_steps_are_shared_helpers_that_compute_the_same_bits(tmp_path, monkeypatch):
     """A 3D chain of six universal-jointed links: its rhs calls helpers for the steps the links repeat, compiles
-    fewer operations than it evaluates, and gives bit for bit the q̈ of the same rhs emitted without helpers."""
+    fewer operations than it evaluates, and gives bit for bit the q̈ of the same rhs emitted without helpers,
+    whether LLVM inlines them (a small kernel) or calls them (past `INLINE_LIMIT`)."""
     from lagcomp.codegen import outline
     from lagcomp.codegen.tree_lower import lower_tree
 
@@ -208,6 +209,9 @@ def test_a_chains_repeated_steps_are_shared_helpers_that_compute_the_same_bits(t
     shared = lc.compile(tree, cache_dir=tmp_path / "shared")
     source = shared.source_path.read_text(encoding="utf-8")
     assert "forceinline=True" in source and "= _rhs_step0(" in source
+    monkeypatch.setattr(outline, "INLINE_LIMIT", 0)
+    called = lc.compile(tree, cache_dir=tmp_path / "called")
+    assert "forceinline=False" in called.source_path.read_text(encoding="utf-8")
     monkeypatch.setattr(outline, "MIN_CALLS", 10 ** 9)
     inline = lc.compile(tree, cache_dir=tmp_path / "inline")
     assert "_rhs_step" not in inline.source_path.read_text(encoding="utf-8")
@@ -215,7 +219,9 @@ def test_a_chains_repeated_steps_are_shared_helpers_that_compute_the_same_bits(t
     for _ in range(5):
         params = {name: float(rng.uniform(0.5, 2.0)) for name in shared.parameters}
         y = rng.uniform(-2.0, 2.0, size=2 * tree.n)
-        assert np.array_equal(shared.rhs(0.3, y, params), inline.rhs(0.3, y, params))
+        expected = inline.rhs(0.3, y, params)
+        assert np.array_equal(shared.rhs(0.3, y, params), expected)
+        assert np.array_equal(called.rhs(0.3, y, params), expected)
 
 
 def test_a_long_planar_chain_agrees_with_pinocchio(cache_dir):

@@ -316,12 +316,14 @@ class Helper:
     recursion's step that repeats node after node, compiled by numba once and inlined by LLVM at each call.
 
     `args` are its parameters' names, `temps` its assignments in order (over the args and earlier temps), and
-    `returns` the temps it hands back, as a tuple, in that order."""
+    `returns` the temps it hands back, as a tuple, in that order.  `inline`: LLVM inlines it at every call
+    (numba's ``forceinline``), else it is called."""
 
     name: str
     args: tuple[str, ...]
     temps: tuple[tuple[str, sp.Expr], ...]
     returns: tuple[str, ...]
+    inline: bool = True
 
     @property
     def operation_count(self) -> int:

@@ -461,9 +461,9 @@ def _lanes_kernel_source(kernel: Kernel) -> list[str]:
 
 
 def _helper_source(helper: Helper) -> str:
-    """A `lagcomp.ir.Helper` as a function numba compiles once and LLVM inlines at each call
+    """A `lagcomp.ir.Helper` as a function numba compiles once, which LLVM inlines at each call if it is `inline`
     (`lagcomp.codegen.outline`)."""
-    lines = ["", "", '@njit(cache=True, error_model="numpy", forceinline=True)',
+    lines = ["", "", f'@njit(cache=True, error_model="numpy", forceinline={helper.inline})',
              f"def {helper.name}({', '.join(helper.args)}):"]
     lines += [f"{INDENT}{name} = {to_code(expr)}" for name, expr in helper.temps]
     lines.append(f"{INDENT}return {', '.join(helper.returns)}{',' if len(helper.returns) == 1 else ''}")

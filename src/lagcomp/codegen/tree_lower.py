@@ -4,7 +4,8 @@ Each kernel's temporaries are the assignments of one straight-line program (`lag
 articulated-body algorithm's for ``rhs``, the composite-rigid-body algorithm's for ``mass_matrix``, recursive
 Newton–Euler's for ``forcing`` and ``momenta``, the outward velocities' for ``energy``.  They go to the emitter as
 they are (no CSE over the whole kernel: each is already a small expression of earlier locals), with the
-assignments no output reads dropped.  The module has the eager kernels of a Lagrange module, with the same names,
+assignments no output reads dropped, and the steps that identical nodes repeat emitted once as shared helpers
+(`lagcomp.codegen.outline`: numba's compile time grows with the code it types).  The module has the eager kernels of a Lagrange module, with the same names,
 signatures and locals (`lagcomp.codegen.bindings.user_local`), so the drivers, the cache and `lagcomp.Model`
 take it as they take any other; the on-demand kinds (`lagcomp.codegen.kinds`) are refused for now
 (`lagcomp.multibody.tree.Tree.on_demand_refusal`).
