@@ -9,7 +9,7 @@ steps that are the same up to the names of their inputs, emits each such program
 (``@njit(forceinline=True)``: numba compiles it once, LLVM inlines it at every call, so the machine code is the
 straight-line code it replaces) and calls it at each step with that step's inputs.  A step that occurs once stays
 inline.  LLVM's optimization of the inlined copies then grows with the operations the kernel evaluates: past
-`INLINE_LIMIT` of them the helpers are called instead (a 100-link chain's rhs: 2.2 s less to compile, 13% slower).
+`INLINE_LIMIT` of them the helpers are called instead (a 100-link chain's rhs: 2.2 s less to compile, 12% slower).
 
 Two steps are the same when renaming their inputs (in the order the step first reads them) and their own locals
 (in the order it forms them) gives the same assignments and the same locals read after the step.  The
