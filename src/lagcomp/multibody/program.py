@@ -81,14 +81,32 @@ class Program:
 # -- 3-vectors and 3×3 matrices as lists of expressions ---------------------------------------------------------
 
 
+def _is(x, k: int) -> bool:
+    """Whether `x` is the exact integer `k` (0 or 1: a Python int or sympy's singleton), without sympy's
+    comparison."""
+    return x is (sp.S.Zero if k == 0 else sp.S.One) or (type(x) is int and x == k)
+
+
+def _product(x, y):
+    """x y, with a zero or one factor folded before sympy multiplies (the same expression, formed faster: the
+    placements and motion subspaces of a tree are mostly zeros and ones)."""
+    if _is(x, 0) or _is(y, 0):
+        return sp.S.Zero
+    if _is(x, 1):
+        return y
+    return x if _is(y, 1) else x * y
+
+
 def dot(a, b) -> sp.Expr:
     """a · b."""
-    return sp.Add(*(x * y for x, y in zip(a, b)))
+    terms = [t for t in (_product(x, y) for x, y in zip(a, b)) if not _is(t, 0)]
+    return sp.Add(*terms) if terms else sp.S.Zero
 
 
 def cross(a, b) -> list:
     """a × b."""
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    return [_product(a[1], b[2]) - _product(a[2], b[1]), _product(a[2], b[0]) - _product(a[0], b[2]),
+            _product(a[0], b[1]) - _product(a[1], b[0])]
 
 
 def mat_vec(m, v) -> list:
