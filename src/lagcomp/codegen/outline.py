@@ -57,38 +57,43 @@ def outline(kernel_name: str, temps, step_of: dict, outputs) -> tuple[tuple, tup
     runs = _runs(temps, step_of)
     readers = _readers(temps, runs, outputs)
     forms = [_canonical(temps, run, readers) if key is not None else None for key, run in runs]
-    groups = defaultdict(list)
-    for r, form in enumerate(forms):
-        if form is not None and form[2]:
-            groups[form].append(r)
-    helpers, helper_of = [], {}
-    for form, members in groups.items():
-        if len(members) < MIN_CALLS:
-            continue
-        body, inputs, returns = form
-        helper = Helper(name=f"_{kernel_name}_step{len(helpers)}", args=tuple(f"_a{k}" for k in range(inputs)),
-                        temps=tuple((f"_t{j}", e) for j, e in enumerate(body)),
-                        returns=tuple(f"_t{j}" for j in returns))
-        helpers.append(helper)
-        for r in members:
-            helper_of[r] = helper
-    calls = [helper_of[r].name for r in helper_of]
-    evaluated = sum(sp.count_ops(expr) for r, (_, run) in enumerate(runs) if r not in helper_of for _, expr in
-                    (temps[i] for i in run)) + sum(h.operation_count * calls.count(h.name) for h in helpers)
+    helper_of = _called(kernel_name, forms)
+    helpers = list({h.name: h for h in helper_of.values()}.values())
+    evaluated = sum(sp.count_ops(temps[i][1]) for r, (_, run) in enumerate(runs) if r not in helper_of for i in run)
+    evaluated += sum(h.operation_count for h in helper_of.values())
     if evaluated > INLINE_LIMIT:
-        inline = {h.name: replace(h, inline=False) for h in helpers}
-        helpers = list(inline.values())
-        helper_of = {r: inline[h.name] for r, h in helper_of.items()}
+        called = {h.name: replace(h, inline=False) for h in helpers}
+        helpers = list(called.values())
+        helper_of = {r: called[h.name] for r, h in helper_of.items()}
     out = []
     for r, (_, run) in enumerate(runs):
         helper = helper_of.get(r)
         if helper is None:
             out += [(temps[i][0].name, temps[i][1]) for i in run]
             continue
-        locals_ = [temps[i][0] for i in run]
-        results = ", ".join(locals_[j].name for j in forms[r][2]) + ("," if len(forms[r][2]) == 1 else "")
+        returns = forms[r][2]
+        results = ", ".join(temps[run[j]][0].name for j in returns) + ("," if len(returns) == 1 else "")
         out.append((results, HelperCall(sp.Symbol(helper.name), *_inputs(temps, run))))
     return tuple(out), tuple(helpers)
+
+
+def _called(kernel_name: str, forms) -> dict:
+    """{run index: the Helper it calls} for the runs whose canonical form (`_canonical`; None: no step) occurs at
+    least `MIN_CALLS` times and hands something back."""
+    groups = defaultdict(list)
+    for r, form in enumerate(forms):
+        if form is not None and form[2]:
+            groups[form].append(r)
+    helper_of, count = {}, 0
+    for (body, inputs, returns), members in groups.items():
+        if len(members) < MIN_CALLS:
+            continue
+        helper = Helper(name=f"_{kernel_name}_step{count}", args=tuple(f"_a{k}" for k in range(inputs)),
+                        temps=tuple((f"_t{j}", e) for j, e in enumerate(body)),
+                        returns=tuple(f"_t{j}" for j in returns))
+        count += 1
+        helper_of.update(dict.fromkeys(members, helper))
+    return helper_of
 
 
 def _runs(temps, step_of: dict) -> list[tuple[object, list[int]]]:
