@@ -1,9 +1,10 @@
 """Kinematic trees for tests/test_multibody.py, and the same systems built two other ways: as a lagcomp System of
 lc.RigidBody with frames from lc.rotated (the Lagrangian path), and as a Pinocchio model.
 
-Trees here place every joint frame without rotation (identity `rotation`) and turn about x, y or z, so that
-`lc.rotated` can build the same frames; `random_tree` exercises rotated placements and unaligned axes against
-Pinocchio only.
+The chains and the cart-pole are `lagcomp.examples.trees`' (re-exported here), the Pinocchio models
+`lagcomp.multibody.pinocchio_peer`'s; trees here place every joint frame without rotation (identity `rotation`)
+and turn about x, y or z, so that `lc.rotated` can build the same frames; `random_tree` exercises rotated
+placements and unaligned axes against Pinocchio only.
 """
 
 from __future__ import annotations
@@ -13,43 +14,10 @@ import sympy as sp
 from sympy.physics.vector import ReferenceFrame
 
 import lagcomp as lc
+from lagcomp.examples.trees import cart_pole, planar_chain, universal_chain
+from lagcomp.multibody.pinocchio_peer import pinocchio_model
 
-
-def planar_chain(n: int, name: str | None = None) -> lc.Tree:
-    """n rigid links hinged about z, each hinge at the end of the previous link (length l_i along its x), centre
-    of mass at (c_i, d_i, 0), inertia about it (J_i, J_i, J_i); gravity −g along y."""
-    g = sp.Symbol("g", positive=True)
-    links = []
-    for i in range(n):
-        m, c, d, J = sp.symbols(f"m{i} c{i} d{i} J{i}")
-        origin = (0, 0, 0) if i == 0 else (sp.Symbol(f"l{i - 1}"), 0, 0)
-        links.append(lc.Link(f"link{i}", lc.Revolute(f"th{i}", axis="z", origin=origin),
-                             parent=None if i == 0 else f"link{i - 1}", mass=m, com=(c, d, 0), inertia=(J, J, J)))
-    return lc.Tree(links, gravity=(0, -g, 0), name=name or f"planar_chain_{n}")
-
-
-def universal_chain(n: int) -> lc.Tree:
-    """n rigid links hanging from universal joints (x, then y), the next joint at (0, 0, −l_i) of link i, centre
-    of mass at (0, 0, −c_i), principal moments (A_i, B_i, C_i); gravity −g along z."""
-    g = sp.Symbol("g", positive=True)
-    links = []
-    for i in range(n):
-        m, c, A, B, C = sp.symbols(f"m{i} c{i} A{i} B{i} C{i}")
-        origin = (0, 0, 0) if i == 0 else (0, 0, -sp.Symbol(f"l{i - 1}"))
-        links.append(lc.Link(f"link{i}", lc.Universal((f"a{i}", f"b{i}"), origin=origin),
-                             parent=None if i == 0 else f"link{i - 1}", mass=m, com=(0, 0, -c), inertia=(A, B, C)))
-    return lc.Tree(links, gravity=(0, 0, -g), name=f"universal_chain_{n}")
-
-
-def cart_pole() -> lc.Tree:
-    """A cart sliding along x (spring k to x = 0, damper b, force F sin(w t)) carrying a pendulum about z (damper
-    e); gravity −g along y."""
-    M, m, c, J, g, k, b, F, w, e = sp.symbols("M m c J g k b F w e")
-    x, th = lc.coordinates("x th")
-    cart = lc.Link("cart", lc.Prismatic(x, axis="x", stiffness=k, damping=b, torque=F * sp.sin(w * lc.t)), mass=M)
-    pole = lc.Link("pole", lc.Revolute(th, axis="z", damping=e), parent="cart", mass=m, com=(0, -c, 0),
-                   inertia=(J, J, J))
-    return lc.Tree([cart, pole], gravity=(0, -g, 0), name="cart_pole_tree")
+__all__ = ["cart_pole", "lagrangian_system", "pinocchio_model", "planar_chain", "random_tree", "universal_chain"]
 
 
 # -- the same systems on the Lagrangian path ----------------------------------------------------------------------
@@ -90,43 +58,6 @@ def lagrangian_system(tree: lc.Tree) -> lc.System:
         V += j.stiffness * (q - j.rest) ** 2 / 2
         forces[q] = j.torque - j.damping * q.diff(lc.t)
     return lc.System(list(tree.coordinates), V=V, forces=forces, bodies=bodies, frame=N, name=f"{tree.name}_lagrange")
-
-
-# -- the same systems in Pinocchio --------------------------------------------------------------------------------
-
-
-def pinocchio_model(tree: lc.Tree, values: dict):
-    """A pinocchio.Model of `tree` with the parameters `values` (by name), and the joints' force terms as a
-    function tau(t, q, v) (Pinocchio's ABA takes τ as given)."""
-    import pinocchio as pin
-
-    def num(e):
-        return float(sp.sympify(e).subs({s: values[s.name] for s in sp.sympify(e).free_symbols}))
-
-    model = pin.Model()
-    ids = []
-    for i, node in enumerate(tree.nodes):
-        j = node.joint
-        axis = np.array([num(a) for a in j.axis])
-        joint = _pinocchio_joint(pin, j.kind, axis)
-        R = np.array([[num(e) for e in row] for row in j.rotation])
-        placement = pin.SE3(R, np.array([num(e) for e in j.origin]))
-        parent = 0 if node.parent < 0 else ids[node.parent]
-        ids.append(model.addJoint(parent, joint, placement, f"joint{i}"))
-        inertia = np.array([[num(node.inertia[a, b]) for b in range(3)] for a in range(3)])
-        model.appendBodyToJoint(ids[-1], pin.Inertia(num(node.mass), np.array([num(c) for c in node.com]), inertia),
-                                pin.SE3.Identity())
-    model.gravity = pin.Motion(np.array([num(g) for g in tree.gravity]), np.zeros(3))
-    return model
-
-
-def _pinocchio_joint(pin, kind: str, axis):
-    """Pinocchio's joint model: its axis-aligned kinds (JointModelRZ, ...) for x, y, z, as its own models of such
-    chains use, else the unaligned ones."""
-    for k, name in enumerate("XYZ"):
-        if np.array_equal(axis, np.eye(3)[k]):
-            return getattr(pin, f"JointModel{'R' if kind == 'revolute' else 'P'}{name}")()
-    return pin.JointModelRevoluteUnaligned(axis) if kind == "revolute" else pin.JointModelPrismaticUnaligned(axis)
 
 
 def random_tree(seed: int) -> tuple[lc.Tree, dict]:

@@ -213,3 +213,48 @@ def test_a_measured_axis_keeps_every_digit(cache_dir):
                                            r[0] * weight[1] - r[1] * weight[0]]))
             exact = float(torque / inertia)
             assert abs(model.rhs(0.0, np.array([q, 0.0]))[1] - exact) <= 1e-14 * abs(exact)
+
+
+# -- repeated steps emitted once (lagcomp.codegen.outline) ----------------------------------------------------------
+
+
+def test_a_chains_repeated_steps_are_shared_helpers_that_compute_the_same_bits(tmp_path, monkeypatch):
+    """A 3D chain of six universal-jointed links: its rhs calls helpers for the steps the links repeat, compiles
+    fewer operations than it evaluates, and gives bit for bit the q̈ of the same rhs emitted without helpers,
+    whether LLVM inlines them (a small kernel) or calls them (past `INLINE_LIMIT`)."""
+    from lagcomp.codegen import outline
+    from lagcomp.codegen.tree_lower import lower_tree
+
+    tree = mm.universal_chain(6)
+    rhs = next(k for k in lower_tree(tree).kernels if k.name == "rhs")
+    assert rhs.helpers and rhs.operation_count < outline.evaluated_operations(rhs)
+    shared = lc.compile(tree, cache_dir=tmp_path / "shared")
+    source = shared.source_path.read_text(encoding="utf-8")
+    assert "forceinline=True" in source and "= _rhs_step0(" in source
+    monkeypatch.setattr(outline, "INLINE_LIMIT", 0)
+    called = lc.compile(tree, cache_dir=tmp_path / "called")
+    assert "forceinline=False" in called.source_path.read_text(encoding="utf-8")
+    monkeypatch.setattr(outline, "MIN_CALLS", 10 ** 9)
+    inline = lc.compile(tree, cache_dir=tmp_path / "inline")
+    assert "_rhs_step" not in inline.source_path.read_text(encoding="utf-8")
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        params = {name: float(rng.uniform(0.5, 2.0)) for name in shared.parameters}
+        y = rng.uniform(-2.0, 2.0, size=2 * tree.n)
+        expected = inline.rhs(0.3, y, params)
+        assert np.array_equal(shared.rhs(0.3, y, params), expected)
+        assert np.array_equal(called.rhs(0.3, y, params), expected)
+
+
+def test_a_long_planar_chain_agrees_with_pinocchio(cache_dir):
+    """Twelve links (helpers shared by ten of them) against Pinocchio's ABA at random states."""
+    pin = pytest.importorskip("pinocchio")
+    tree = mm.planar_chain(12)
+    model = lc.compile(tree, cache_dir=cache_dir)
+    rng = np.random.default_rng(12)
+    for _ in range(5):
+        values = {name: float(rng.uniform(0.5, 1.5)) for name in model.parameters}
+        reference = mm.pinocchio_model(tree, values)
+        q, v = rng.normal(size=tree.n), rng.normal(size=tree.n)
+        expected = pin.aba(reference, reference.createData(), q, v, np.zeros(tree.n))
+        assert _relative(model.rhs(0.0, np.concatenate([q, v]), values)[tree.n:], expected) <= 1e-12

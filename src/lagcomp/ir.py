@@ -311,6 +311,38 @@ class EventResets:
 
 
 @dataclass(frozen=True)
+class Helper:
+    """A function of scalars shared by several steps of one kernel (`lagcomp.codegen.outline`): the body of a
+    recursion's step that repeats node after node, compiled by numba once and inlined by LLVM at each call.
+
+    `args` are its parameters' names, `temps` its assignments in order (over the args and earlier temps), and
+    `returns` the temps it hands back, as a tuple, in that order.  `inline`: LLVM inlines it at every call
+    (numba's ``forceinline``), else it is called."""
+
+    name: str
+    args: tuple[str, ...]
+    temps: tuple[tuple[str, sp.Expr], ...]
+    returns: tuple[str, ...]
+    inline: bool = True
+
+    @property
+    def operation_count(self) -> int:
+        """Arithmetic operations of its body."""
+        return int(sum(sp.count_ops(e) for _, e in self.temps))
+
+
+class HelperCall(sp.Function):
+    """``helper(arg, ...)`` in a kernel's temporaries: the call of the `Helper` named by the first argument (a
+    Symbol) on the other arguments.  The temporary's local is the comma-separated list of the names its results
+    unpack into."""
+
+    nargs = None
+
+    def _pythoncode(self, printer) -> str:
+        return f"{self.args[0].name}({', '.join(printer._print(a) for a in self.args[1:])})"
+
+
+@dataclass(frozen=True)
 class Kernel:
     """One numba function: load inputs, compute temporaries, store outputs.
 
@@ -352,6 +384,8 @@ class Kernel:
         comment ``#: comment``: data that describes the kernel's output to Python
         callers (``geometry``'s layout, `lagcomp.codegen.geometry`).  Values are
         Python literals (numbers, strings, tuples of them).
+    helpers : tuple of Helper
+        Functions its temporaries call (`HelperCall`), emitted before it.
     """
 
     name: str
@@ -366,11 +400,14 @@ class Kernel:
     lanes: bool = False
     alias: str | None = None
     constants: tuple[tuple[str, str, object], ...] = ()
+    helpers: tuple[Helper, ...] = ()
 
     @property
     def operation_count(self) -> int:
-        """Arithmetic operations left after CSE (what numba's compile time grows with)."""
-        return int(sum(sp.count_ops(e) for _, e in self.temps + self.stores))
+        """Arithmetic operations left after CSE (what numba's compile time grows with): those of its body and of
+        its helpers, each once (a call counts one)."""
+        return int(sum(sp.count_ops(e) for _, e in self.temps + self.stores)
+                   + sum(h.operation_count for h in self.helpers))
 
 
 @dataclass(frozen=True)

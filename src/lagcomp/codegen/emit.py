@@ -19,6 +19,7 @@ and stop the run with the time of failure.
 from __future__ import annotations
 
 import unicodedata
+from dataclasses import replace
 
 import sympy as sp
 
@@ -45,6 +46,7 @@ from lagcomp.ir import (
     EventResets,
     FlatMatrix,
     FrictionSwitch,
+    Helper,
     JacobianSolve,
     Kernel,
     LinearSolve,
@@ -159,6 +161,7 @@ def kernel_support_names(kernels) -> set[str]:
         if isinstance(kernel.solve, FrictionSwitch):
             names.add("friction_mode_after")
         expressions = [expr for _, expr in kernel.temps] + [expr for _, expr in kernel.stores]
+        expressions += [expr for helper in kernel.helpers for _, expr in helper.temps]
         for function, scalar, lanes in ((sp.sin, "sin", "vsin"), (sp.cos, "cos", "vcos")):
             if any(isinstance(expr, sp.Basic) and expr.has(function) for expr in expressions):
                 names.add(lanes if kernel.lanes else scalar)
@@ -457,7 +460,19 @@ def _lanes_kernel_source(kernel: Kernel) -> list[str]:
     return _docstring(kernel.doc).splitlines() + ["for _l in range(Y.shape[1]):"] + [INDENT + x for x in inner]
 
 
+def _helper_source(helper: Helper) -> str:
+    """A `lagcomp.ir.Helper` as a function numba compiles once, which LLVM inlines at each call if it is `inline`
+    (`lagcomp.codegen.outline`)."""
+    lines = ["", "", f'@njit(cache=True, error_model="numpy", forceinline={helper.inline})',
+             f"def {helper.name}({', '.join(helper.args)}):"]
+    lines += [f"{INDENT}{name} = {to_code(expr)}" for name, expr in helper.temps]
+    lines.append(f"{INDENT}return {', '.join(helper.returns)}{',' if len(helper.returns) == 1 else ''}")
+    return "\n".join(lines) + "\n"
+
+
 def _kernel_source(kernel: Kernel) -> str:
+    if kernel.helpers:
+        return "".join(map(_helper_source, kernel.helpers)) + _kernel_source(replace(kernel, helpers=()))
     if kernel.alias:
         comment = "".join(f"\n# {line}".rstrip() for line in kernel.doc.splitlines())
         return f"\n{comment}\n{kernel.name} = {kernel.alias}\n"

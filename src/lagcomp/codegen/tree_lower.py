@@ -4,7 +4,8 @@ Each kernel's temporaries are the assignments of one straight-line program (`lag
 articulated-body algorithm's for ``rhs``, the composite-rigid-body algorithm's for ``mass_matrix``, recursive
 Newton–Euler's for ``forcing`` and ``momenta``, the outward velocities' for ``energy``.  They go to the emitter as
 they are (no CSE over the whole kernel: each is already a small expression of earlier locals), with the
-assignments no output reads dropped.  The module has the eager kernels of a Lagrange module, with the same names,
+assignments no output reads dropped, and the steps that identical nodes repeat emitted once as shared helpers
+(`lagcomp.codegen.outline`: numba's compile time grows with the code it types).  The module has the eager kernels of a Lagrange module, with the same names,
 signatures and locals (`lagcomp.codegen.bindings.user_local`), so the drivers, the cache and `lagcomp.Model`
 take it as they take any other; the on-demand kinds a tree has are its recursions differentiated
 (`lagcomp.codegen.tree_companion`), the others are refused (`lagcomp.multibody.tree.Tree.on_demand_refusal`).
@@ -15,6 +16,7 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp.codegen.bindings import user_local
+from lagcomp.codegen.outline import outline
 from lagcomp.codegen.tree_constraints import gain_loads, loop_kernels
 from lagcomp.codegen.tree_events import tree_event_kernels
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
@@ -98,13 +100,14 @@ def generalized_forcing(prog: Program, nodes, gravity) -> list:
 
 def program_kernel(name: str, doc: str, args, prog: Program, stores, loads, solve=None) -> Kernel:
     """A kernel whose temporaries are the assignments of `prog` its `stores` read, and whose loads are those they
-    read."""
+    read; the steps its nodes repeat emitted once (`lagcomp.codegen.outline`)."""
     temps = prog.live([e for _, e in stores])
     used = set().union(*(sp.sympify(e).free_symbols for _, e in stores), *(e.free_symbols for _, e in temps))
     used_names = {s.name for s in used}
+    body, helpers = outline(name, temps, prog.step_of, [e for _, e in stores])
     return Kernel(name=name, doc=doc, args=args, loads=tuple((local, src) for local, src in loads if local in used_names),
-                  temps=tuple((local.name, e) for local, e in temps),
-                  stores=tuple((target, sp.sympify(e)) for target, e in stores), solve=solve)
+                  temps=body, stores=tuple((target, sp.sympify(e)) for target, e in stores), solve=solve,
+                  helpers=helpers)
 
 
 def _matrix_stores(entries: dict, n: int) -> list:

@@ -9,29 +9,35 @@ Three passes over the nodes (`lagcomp.multibody.kinematics`), every quantity bou
 3. outwards: a'_i = X_i a_λ + c_i (a_base = (0, −g): gravity), q̈_i = (u_i − U_iᵀ a'_i) / D_i, a_i = a'_i + S_i q̈_i.
 
 D_i > 0 for any tree whose subtrees have inertia along their joints' axes; 1/D_i is formed once per node.
+Each node's share of a pass is a step of the program (`Program.step`), which identical nodes share when emitted
+(`lagcomp.codegen.outline`).
 """
 
 from __future__ import annotations
 
 from lagcomp.multibody.kinematics import (
     base_acceleration,
-    inertias,
+    joint_motion,
     placement,
     subspace,
-    velocities,
     velocity_product,
 )
 from lagcomp.multibody.program import Program, add
-from lagcomp.multibody.spatial import add_spatial, force_cross, spatial_dot
+from lagcomp.multibody.spatial import ZERO3, add_spatial, force_cross, rigid_inertia, spatial_dot
 
 
 def accelerations(prog: Program, nodes, gravity) -> list:
     """q̈ of every node (its local or expression), in node order, bound in `prog`."""
-    X = [placement(prog, node) for node in nodes]
-    v = velocities(prog, nodes, X)
-    c = [velocity_product(prog, v[i], node) for i, node in enumerate(nodes)]
-    IA = inertias(prog, nodes)
-    pA = [force_cross(prog, v[i], IA[i].times(prog, v[i])) for i in range(len(nodes))]
+    X, v, c, IA, pA = [], [], [], [], []
+    for i, node in enumerate(nodes):
+        with prog.step(("velocities", i)):
+            X.append(placement(prog, node))
+            motion = joint_motion(prog, node)
+            moved = X[i].to_child(prog, v[node.parent]) if node.parent >= 0 else (ZERO3, ZERO3)
+            v.append(add_spatial(prog, moved, motion))
+            c.append(velocity_product(prog, v[i], node))
+            IA.append(rigid_inertia(prog, node.mass, list(node.com), [list(row) for row in node.inertia]))
+            pA.append(force_cross(prog, v[i], IA[i].times(prog, v[i])))
     U, Dinv, u = _inward(prog, nodes, X, c, IA, pA)
     return _outward(prog, nodes, X, c, U, Dinv, u, gravity)
 
@@ -41,24 +47,32 @@ def _inward(prog: Program, nodes, X, c, IA, pA):
     n = len(nodes)
     U, Dinv, u = [None] * n, [None] * n, [None] * n
     for i in reversed(range(n)):
-        node, S = nodes[i], subspace(nodes[i])
-        U[i] = IA[i].times(prog, S)
-        Dinv[i] = prog.let(1 / prog.let(spatial_dot(S, U[i])))
-        u[i] = prog.let(node.force - spatial_dot(S, pA[i]))
-        if node.parent < 0:
-            continue
-        k = _unit_index(S)
-        Ia = IA[i].minus_outer(prog, U[i], Dinv[i], k)
-        scale = prog.let(u[i] * Dinv[i])
-        Iac = Ia.times(prog, c[i])
-        pa = [*add(add(pA[i][0], Iac[0]), [x * scale for x in U[i][0]]),
-              *add(add(pA[i][1], Iac[1]), [x * scale for x in U[i][1]])]
-        if k is not None:   # Sᵀ pa = Sᵀ pA + 0 + D u / D = τ exactly
-            pa[k] = node.force
-        pa = (prog.vector(pa[:3]), prog.vector(pa[3:]))
-        parent = node.parent
-        IA[parent] = IA[parent].plus(prog, Ia.to_parent(prog, X[i]))
-        pA[parent] = add_spatial(prog, pA[parent], X[i].to_parent(prog, pa))
+        with prog.step(("inward", i)):
+            U[i], Dinv[i], u[i] = _inward_step(prog, nodes, i, X, c, IA, pA)
+    return U, Dinv, u
+
+
+def _inward_step(prog: Program, nodes, i, X, c, IA, pA):
+    """U_i, 1/D_i, u_i of node i; its articulated inertia and bias force folded into its parent's entries of
+    `IA` and `pA`."""
+    node, S = nodes[i], subspace(nodes[i])
+    U = IA[i].times(prog, S)
+    Dinv = prog.let(1 / prog.let(spatial_dot(S, U)))
+    u = prog.let(node.force - spatial_dot(S, pA[i]))
+    if node.parent < 0:
+        return U, Dinv, u
+    k = _unit_index(S)
+    Ia = IA[i].minus_outer(prog, U, Dinv, k)
+    scale = prog.let(u * Dinv)
+    Iac = Ia.times(prog, c[i])
+    pa = [*add(add(pA[i][0], Iac[0]), [x * scale for x in U[0]]),
+          *add(add(pA[i][1], Iac[1]), [x * scale for x in U[1]])]
+    if k is not None:   # Sᵀ pa = Sᵀ pA + 0 + D u / D = τ exactly
+        pa[k] = node.force
+    pa = (prog.vector(pa[:3]), prog.vector(pa[3:]))
+    parent = node.parent
+    IA[parent] = IA[parent].plus(prog, Ia.to_parent(prog, X[i]))
+    pA[parent] = add_spatial(prog, pA[parent], X[i].to_parent(prog, pa))
     return U, Dinv, u
 
 
@@ -74,10 +88,11 @@ def _outward(prog: Program, nodes, X, c, U, Dinv, u, gravity) -> list:
     base = base_acceleration(gravity)
     a, qdd = [None] * len(nodes), [None] * len(nodes)
     for i, node in enumerate(nodes):
-        parent = base if node.parent < 0 else a[node.parent]
-        moved = X[i].to_child(prog, parent)
-        a_prime = add_spatial(prog, moved, c[i])
-        qdd[i] = prog.let((u[i] - spatial_dot(a_prime, U[i])) * Dinv[i])
-        S = subspace(node)
-        a[i] = add_spatial(prog, a_prime, ([x * qdd[i] for x in S[0]], [x * qdd[i] for x in S[1]]))
+        with prog.step(("accelerations", i)):
+            parent = base if node.parent < 0 else a[node.parent]
+            moved = X[i].to_child(prog, parent)
+            a_prime = add_spatial(prog, moved, c[i])
+            qdd[i] = prog.let((u[i] - spatial_dot(a_prime, U[i])) * Dinv[i])
+            S = subspace(node)
+            a[i] = add_spatial(prog, a_prime, ([x * qdd[i] for x in S[0]], [x * qdd[i] for x in S[1]]))
     return qdd

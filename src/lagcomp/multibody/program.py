@@ -11,14 +11,23 @@ velocities and parameters:
   massless frame's zero inertia, an identity placement);
 * an expression formed twice is bound once (hash-consing: the light CSE a recursion needs, per assignment);
 * assignments no output reads are dropped (`Program.live`).
+
+Each assignment also records the *step* it was formed in (`Program.step`: a node's share of one pass of a
+recursion), so that the steps of identical nodes can be emitted as one shared function
+(`lagcomp.codegen.outline`).  Locals are numbered with a fixed width (``_b000012``): their names then sort as
+they were formed, so the steps of two identical nodes print their sums and products in the same order.
 """
 
 from __future__ import annotations
+
+import contextlib
 
 import sympy as sp
 
 #: The prefix of the locals a program binds (generated names start with ``_``: `lagcomp.codegen.lower`, Names).
 PREFIX = "_b"
+#: Digits of a local's number (zero-padded: names sort as numbers).
+WIDTH = 6
 
 
 class Program:
@@ -26,7 +35,20 @@ class Program:
 
     def __init__(self):
         self.assignments: list[tuple[sp.Symbol, sp.Expr]] = []
+        #: The step each local was formed in (None: outside any step).
+        self.step_of: dict[sp.Symbol, object] = {}
         self._bound: dict = {}
+        self._step = None
+
+    @contextlib.contextmanager
+    def step(self, key):
+        """Tag the assignments formed inside the ``with`` block as the step `key` (any hashable: a pass and a
+        node); steps do not nest."""
+        outer, self._step = self._step, key
+        try:
+            yield
+        finally:
+            self._step = outer
 
     def let(self, expr) -> sp.Expr:
         """`expr` itself when it is a number, a symbol or a negated symbol, else the local bound to it."""
@@ -36,8 +58,9 @@ class Program:
             return expr
         local = self._bound.get(expr)
         if local is None:
-            local = self._bound[expr] = sp.Symbol(f"{PREFIX}{len(self.assignments)}", real=True)
+            local = self._bound[expr] = sp.Symbol(f"{PREFIX}{len(self.assignments):0{WIDTH}d}", real=True)
             self.assignments.append((local, expr))
+            self.step_of[local] = self._step
         return local
 
     def vector(self, entries) -> list:
@@ -63,14 +86,32 @@ class Program:
 # -- 3-vectors and 3×3 matrices as lists of expressions ---------------------------------------------------------
 
 
+def _is(x, k: int) -> bool:
+    """Whether `x` is the exact integer `k` (0 or 1: a Python int or sympy's singleton), without sympy's
+    comparison."""
+    return x is (sp.S.Zero if k == 0 else sp.S.One) or (type(x) is int and x == k)
+
+
+def _product(x, y):
+    """x y, with a zero or one factor folded before sympy multiplies (the same expression, formed faster: the
+    placements and motion subspaces of a tree are mostly zeros and ones)."""
+    if _is(x, 0) or _is(y, 0):
+        return sp.S.Zero
+    if _is(x, 1):
+        return y
+    return x if _is(y, 1) else x * y
+
+
 def dot(a, b) -> sp.Expr:
     """a · b."""
-    return sp.Add(*(x * y for x, y in zip(a, b)))
+    terms = [t for t in (_product(x, y) for x, y in zip(a, b)) if not _is(t, 0)]
+    return sp.Add(*terms) if terms else sp.S.Zero
 
 
 def cross(a, b) -> list:
     """a × b."""
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    return [_product(a[1], b[2]) - _product(a[2], b[1]), _product(a[2], b[0]) - _product(a[0], b[2]),
+            _product(a[0], b[1]) - _product(a[1], b[0])]
 
 
 def mat_vec(m, v) -> list:
