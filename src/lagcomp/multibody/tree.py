@@ -179,7 +179,7 @@ class Tree:
             return None
         if kind in TREE_KINDS:
             return (f"{what} is not available for the kinematic tree {self.name!r} yet: it has closed loops "
-                    f"({', '.join(c.name for c in self.closures)}), and the Jacobians of the recursions do not "
+                    f"({', '.join(c.loop for c in self.closures)}), and the Jacobians of the recursions do not "
                     f"include the loops' constraints yet (a later step of {ISSUE}). Use an explicit method "
                     "(dop853, rk4, ...) with projection=True.")
         return (f"{what} is not available for the kinematic tree {self.name!r} yet: the multibody path emits rhs, "
