@@ -122,8 +122,36 @@ def test_a_user_model_through_every_subcommand(capsys, cache_dir, workdir):
     assert "11 frames" in capsys.readouterr().out and (workdir / "clip.html").stat().st_size > 1000
     assert main([*base, "animate", "mass.py", "--input", "F=ramp.csv", "-o", "clip2.html"]) == 2
     assert "has no bodies" in capsys.readouterr().err and not (workdir / "clip2.html").exists()
-    assert main([*base, "stability", "mass.py", "--param", "m", "--range", "1", "2"]) == 2
-    assert "without run-time inputs" in capsys.readouterr().err
+    assert main([*base, "stability", "mass.py", "--param", "m", "--range", "1", "2", "--input", "F=ramp.csv"]) == 2
+    assert "give --input F=VALUE (a number; a table or a function varies with time)" in capsys.readouterr().err
+
+
+SPRING_WITH_INPUT = '''
+import sympy as sp
+import lagcomp as lc
+
+x, = lc.coordinates("x")
+m, k = sp.symbols("m k", positive=True)
+spring = lc.System([x], T=m * x.diff(lc.t) ** 2 / 2, V=k * x ** 2 / 2, forces=[lc.Input("F")],
+                   name="cli_spring_input", defaults={"m": 1.0, "k": 4.0}, q0=(0.0,), qd0=(0.0,))
+'''
+
+
+def test_stability_holds_each_input_at_the_constant_given(capsys, cache_dir, workdir):
+    """m ẍ = −k x + F with F held at 2: the equilibrium x = F/k = 0.5, eigenvalues ±i √(k/m) (k = 4: ±2i at m = 1,
+    ±1i at m = 4); without the input the point is not steady, and the input must be a number."""
+    (workdir / "spring.py").write_text(SPRING_WITH_INPUT, encoding="utf-8")
+    base = ["--cache-dir", str(cache_dir), "stability", "spring.py", "--param", "m", "--range", "1", "4", "--num", "2",
+            "--q", "0.5"]
+    assert main([*base, "--input", "F=2"]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("m = ")]
+    assert len(lines) == 2
+    for line, omega in zip(lines, (2.0, 1.0)):
+        eigenvalues = sorted((complex(z) for z in line.split()[4:]), key=lambda z: z.imag)
+        assert len(eigenvalues) == 2 and max(abs(z.real) for z in eigenvalues) <= 1e-12
+        np.testing.assert_allclose([z.imag for z in eigenvalues], [-omega, omega], rtol=1e-12)
+    assert main(base) == 2
+    assert "give --input F=VALUE" in capsys.readouterr().err
 
 
 def test_a_model_from_a_module(capsys, cache_dir, workdir, monkeypatch):

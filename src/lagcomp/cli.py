@@ -525,14 +525,11 @@ def cmd_stability(args) -> int:
                            f"give the file that defines {args.name!r} (path/to/model.py:NAME) or its module.")
     system = source.system()
     _say_which(source)
-    if system.input_names:
-        raise LagcompError(f"lagcomp stability linearizes a model without run-time inputs; {system.name!r} reads "
-                           f"{', '.join(system.input_names)}: linearize a variant with each input a parameter "
-                           "(or a law lc.Input(name, law=...)).")
+    held = _held_inputs(system, run.inputs)
     q = args.q if args.q is not None else run.q0 if run.q0 is not None else system.q0
     u = [0.0] * len(system.coordinates) if args.u is None else args.u
     values = np.linspace(args.range[0], args.range[1], args.num)
-    sweep = stability_sweep(system, args.param, values, q, u, run.params, drop=args.drop or ())
+    sweep = stability_sweep(system, args.param, values, q, u, run.params, drop=args.drop or (), inputs=held)
     print(f"{system.name}: eigenvalues of the linearization about q = {list(q)}, u = {list(u)} "
           f"in the reduced state ({', '.join(sweep.states)})")
     for value, unstable, row in zip(sweep.values, sweep.unstable, sweep.eigenvalues):
@@ -548,6 +545,21 @@ def cmd_stability(args) -> int:
         plot_stability(sweep, title=f"{system.name}: eigenvalues vs {args.param}").savefig(args.plot, dpi=120)
         print(f"plot: {args.plot}")
     return 0
+
+
+def _held_inputs(system, inputs: dict) -> dict | None:
+    """The constant each run-time input of `system` is held at while `lagcomp stability` linearizes (``--input
+    NAME=2.5``): a steady motion needs them constant, so a table or a function is refused, as is a missing one."""
+    names = list(system.input_names)
+    if not names:
+        return None
+    varying = [name for name in names if not isinstance(inputs.get(name), float)]
+    if varying:
+        raise LagcompError(f"lagcomp stability linearizes about a steady motion, with each run-time input held at a "
+                           f"constant; {system.name!r} reads {', '.join(names)}: give "
+                           f"{' '.join(f'--input {name}=VALUE' for name in varying)} (a number; a table or a "
+                           "function varies with time).")
+    return {name: inputs[name] for name in names}
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -647,8 +659,8 @@ def _parser() -> argparse.ArgumentParser:
                                                               "examples only)")
     initial_state_flags(bench)
     stability = model_command("stability", "eigenvalues of a steady motion along a parameter; where stability "
-                                           "changes (needs the System: a bundled example, a file or a module)",
-                              inputs=False)
+                                           "changes (needs the System: a bundled example, a file or a module; "
+                                           "each input held at a constant, --input NAME=VALUE)")
     stability.add_argument("--param", required=True, help="swept parameter, or speed (<coordinate>_dot)")
     stability.add_argument("--range", type=float, nargs=2, required=True, metavar=("LO", "HI"))
     stability.add_argument("--num", type=int, default=41, help="values in the range (default 41)")
