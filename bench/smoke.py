@@ -30,6 +30,7 @@ SCRIPTS = {
     "bench_compile": ["simple_pendulum"],
     "bench_dop853": ["--smoke"],
     "bench_energy_balance": ["--t-end", "20", "--rows", "2001", "--repeats", "1"],
+    "bench_floating_robots": ["--smoke"],
     "bench_equations_size": [],
     "bench_fixed_step": ["--steps", "1000", "--repeats", "1"],
     "bench_geometry": ["--rounds", "1"],

@@ -19,6 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
+from lagcomp.multibody.pinocchio_peer import free_flyer_accelerations
 from lagcomp.multibody.urdf import JointLimits, combined
 
 pytest.importorskip("yourdfpy")
@@ -157,36 +158,6 @@ def test_random_urdfs_agree_with_pinocchio(cache_dir, tmp_path, text):
     assert _agree_with_pinocchio(path, model, 5, np.random.default_rng(0)) <= 1e-12
 
 
-def _pinocchio_floating_accelerations(pin, model, data, names, q, v) -> np.ndarray:
-    """q̈ from Pinocchio's ABA of the robot on its free flyer at lagcomp's state (q, v; the root's position and MRPs
-    σ first): the flyer's q is (x, quaternion of R(σ)), its v (Rᵀ ẋ, ω = J(σ) σ̇) in the root's frame; back from
-    Pinocchio's v̇: ẍ = R (v̇_lin + ω × Rᵀ ẋ), σ̈ = J⁻¹ (ω̇ − J̇ σ̇).  The other joints as `_pinocchio_accelerations`."""
-    from lagcomp.multibody import mrp
-
-    sigma, sigma_dot = q[3:6], v[3:6]
-    R, omega = np.array(mrp.rotation(sigma)), np.array(mrp.angular_velocity(sigma, sigma_dot))
-    qp, vp = np.empty(model.nq), np.empty(model.nv)
-    qp[:3], qp[3:7] = q[:3], pin.Quaternion(R).coeffs()
-    vp[:3], vp[3:6] = R.T @ v[:3], omega
-    order = []
-    for j in range(2, model.njoints):
-        k = names.index(model.names[j].replace("-", "_"))
-        joint = model.joints[j]
-        if joint.nq == 2:
-            qp[joint.idx_q:joint.idx_q + 2] = math.cos(q[k]), math.sin(q[k])
-        else:
-            qp[joint.idx_q] = q[k]
-        vp[joint.idx_v] = v[k]
-        order.append((joint.idx_v, k))
-    a = pin.aba(model, data, qp, vp, -model.damping * vp)
-    out = np.empty(len(names))
-    out[:3] = R @ (a[:3] + np.cross(omega, vp[:3]))
-    out[3:6] = mrp.jacobian_inverse_times(sigma, a[3:6] - np.array(mrp.rate_product(sigma, sigma_dot)))
-    for index, k in order:
-        out[k] = a[index]
-    return out
-
-
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(text=urdf_texts())
 def test_random_urdfs_on_a_floating_base_agree_with_pinocchio_on_its_free_flyer(cache_dir, tmp_path, text):
@@ -207,7 +178,7 @@ def test_random_urdfs_on_a_floating_base_agree_with_pinocchio_on_its_free_flyer(
         q, v = rng.uniform(-2, 2, model.n), rng.uniform(-2, 2, model.n)
         q[3:6] = rng.uniform(-0.5, 0.5, 3)
         got = model.rhs(0.0, np.concatenate([q, v]))[model.n:]
-        expected = _pinocchio_floating_accelerations(pin, reference, data, model.coordinates, q, v)
+        expected = free_flyer_accelerations(pin, reference, data, model.coordinates, q, v)
         assert _relative(got, expected) <= 1e-12
 
 
