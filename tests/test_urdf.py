@@ -9,7 +9,6 @@ nothing with lagcomp's path but the file.  Tests that need it, yourdfpy or examp
 from __future__ import annotations
 
 import importlib.metadata
-import math
 import sys
 from pathlib import Path
 
@@ -19,7 +18,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
-from lagcomp.multibody.pinocchio_peer import free_flyer_accelerations
+from lagcomp.multibody.pinocchio_peer import (
+    fixed_base_accelerations,
+    free_flyer_accelerations,
+)
 from lagcomp.multibody.urdf import JointLimits, combined
 
 pytest.importorskip("yourdfpy")
@@ -37,27 +39,6 @@ def _robot_file(relative: str) -> Path:
     pytest.skip(f"example-robot-data ships no {relative}")
 
 
-def _pinocchio_accelerations(pin, model, data, names, q, v) -> np.ndarray:
-    """q̈ from Pinocchio's ABA at lagcomp's state (q, v in lagcomp's coordinate order `names`), with the joints'
-    viscous damping as the torque; reordered to lagcomp's order.  A continuous joint is (cos q, sin q) there."""
-    qp, vp = np.empty(model.nq), np.empty(model.nv)
-    order = []
-    for j in range(1, model.njoints):
-        k = names.index(model.names[j].replace("-", "_"))
-        joint = model.joints[j]
-        if joint.nq == 2:
-            qp[joint.idx_q:joint.idx_q + 2] = math.cos(q[k]), math.sin(q[k])
-        else:
-            qp[joint.idx_q] = q[k]
-        vp[joint.idx_v] = v[k]
-        order.append((joint.idx_v, k))
-    a = pin.aba(model, data, qp, vp, -model.damping * vp)
-    out = np.empty(len(names))
-    for index, k in order:
-        out[k] = a[index]
-    return out
-
-
 def _relative(a, b) -> float:
     return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
 
@@ -71,7 +52,7 @@ def _agree_with_pinocchio(path: Path, model, states: int, rng) -> float:
     for _ in range(states):
         q, v = rng.uniform(-2, 2, model.n), rng.uniform(-2, 2, model.n)
         got = model.rhs(0.0, np.concatenate([q, v]))[model.n:]
-        worst = max(worst, _relative(got, _pinocchio_accelerations(pin, reference, data, model.coordinates, q, v)))
+        worst = max(worst, _relative(got, fixed_base_accelerations(pin, reference, data, model.coordinates, q, v)))
     return worst
 
 

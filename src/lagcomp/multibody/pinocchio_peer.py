@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-__all__ = ["free_flyer_accelerations", "pinocchio_model"]
+__all__ = ["fixed_base_accelerations", "free_flyer_accelerations", "pinocchio_model"]
 
 
 def pinocchio_model(tree, values: dict):
@@ -45,15 +45,15 @@ def _pinocchio_joint(pin, kind: str, axis):
     return pin.JointModelRevoluteUnaligned(axis) if kind == "revolute" else pin.JointModelPrismaticUnaligned(axis)
 
 
-def free_flyer_accelerations(pin, model, data, names, q, v, tau=None) -> np.ndarray:
+def free_flyer_accelerations(pin, model, data, names, q, v) -> np.ndarray:
     """q̈ in lagcomp's coordinates from Pinocchio's ABA of a robot on a free flyer (``buildModelFromUrdf(path,
     JointModelFreeFlyer())``) at lagcomp's state (q, v) of ``lc.from_urdf(path, floating_base=True)``.
 
     lagcomp's first six coordinates are the root's position x (m, world frame) and MRPs σ; Pinocchio's flyer has
     q = (x, quaternion of R(σ)) and v = (Rᵀ ẋ, ω = J(σ) σ̇) in the root's frame, and back from its v̇:
     ẍ = R (v̇_lin + ω × Rᵀ ẋ), σ̈ = J⁻¹ (ω̇ − J̇ σ̇) (`lagcomp.multibody.mrp`).  The other joints are matched by name
-    (URDF names, '-' made '_'), a continuous joint's (cos q, sin q).  `tau` (lagcomp's order, default the joints'
-    viscous damping −c q̇ as Pinocchio reads it) is the generalized force on the other joints."""
+    (URDF names, '-' made '_'), a continuous joint's (cos q, sin q); their generalized force is the joints' viscous
+    damping −c q̇ as Pinocchio reads it."""
     from lagcomp.multibody import mrp
 
     sigma, sigma_dot = q[3:6], v[3:6]
@@ -61,8 +61,35 @@ def free_flyer_accelerations(pin, model, data, names, q, v, tau=None) -> np.ndar
     qp, vp = np.empty(model.nq), np.empty(model.nv)
     qp[:3], qp[3:7] = q[:3], pin.Quaternion(R).coeffs()
     vp[:3], vp[3:6] = R.T @ v[:3], omega
+    order = _joint_states(model, names, q, v, qp, vp, first=2)
+    a = pin.aba(model, data, qp, vp, -model.damping * vp)
+    out = np.empty(len(names))
+    out[:3] = R @ (a[:3] + np.cross(omega, vp[:3]))
+    out[3:6] = mrp.jacobian_inverse_times(sigma, a[3:6] - np.array(mrp.rate_product(sigma, sigma_dot)))
+    for index, k in order:
+        out[k] = a[index]
+    return out
+
+
+def fixed_base_accelerations(pin, model, data, names, q, v) -> np.ndarray:
+    """q̈ in lagcomp's coordinate order `names` from Pinocchio's ABA of a fixed-base robot read from its URDF
+    (``buildModelFromUrdf(path)``) at lagcomp's state (q, v), the joints' viscous damping −c q̇ as the torque;
+    joints matched by name as in `free_flyer_accelerations`."""
+    qp, vp = np.empty(model.nq), np.empty(model.nv)
+    order = _joint_states(model, names, q, v, qp, vp, first=1)
+    a = pin.aba(model, data, qp, vp, -model.damping * vp)
+    out = np.empty(len(names))
+    for index, k in order:
+        out[k] = a[index]
+    return out
+
+
+def _joint_states(model, names, q, v, qp, vp, first: int) -> list:
+    """Fill Pinocchio's `qp`, `vp` for its one-coordinate joints from `first` on with lagcomp's q, v (matched by
+    URDF name, '-' made '_'; a continuous joint's q as (cos q, sin q)); [(Pinocchio's velocity index, lagcomp's
+    index)]."""
     order = []
-    for j in range(2, model.njoints):
+    for j in range(first, model.njoints):
         k = list(names).index(model.names[j].replace("-", "_"))
         joint = model.joints[j]
         if joint.nq == 2:
@@ -71,16 +98,4 @@ def free_flyer_accelerations(pin, model, data, names, q, v, tau=None) -> np.ndar
             qp[joint.idx_q] = q[k]
         vp[joint.idx_v] = v[k]
         order.append((joint.idx_v, k))
-    if tau is None:
-        torque = -model.damping * vp
-    else:
-        torque = np.zeros(model.nv)
-        for index, k in order:
-            torque[index] = tau[k]
-    a = pin.aba(model, data, qp, vp, torque)
-    out = np.empty(len(names))
-    out[:3] = R @ (a[:3] + np.cross(omega, vp[:3]))
-    out[3:6] = mrp.jacobian_inverse_times(sigma, a[3:6] - np.array(mrp.rate_product(sigma, sigma_dot)))
-    for index, k in order:
-        out[k] = a[index]
-    return out
+    return order
