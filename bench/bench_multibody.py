@@ -8,10 +8,11 @@ Python on the same chain (a Python call per evaluation: not the C++ loop issue 3
 largest relative difference of q̈ between the two.  Last, the exponents k of cost ~ n^k fitted over the sizes
 (least squares on the logarithms).
 
-    python -m bench.bench_multibody [planar|universal] [8 16 32 50 100]
+    python -m bench.bench_multibody [planar|universal|spherical] [8 16 32 50 100]
 
-The chains are `lagcomp.examples.trees`' ``planar_chain`` (links hinged about z) and ``universal_chain`` (3D
-links on universal joints: two DOF each).
+The chains are `lagcomp.examples.trees`' ``planar_chain`` (links hinged about z), ``universal_chain`` (3D
+links on universal joints: two DOF each) and ``spherical_chain`` (3D links on ball joints: three MRPs each; in
+Pinocchio ``JointModelSpherical``, the states converted by `lagcomp.multibody.pinocchio_peer.tree_state`).
 """
 
 from __future__ import annotations
@@ -63,14 +64,13 @@ try:
 except ImportError:
     pin = None
 if pin is not None:
-    from lagcomp.multibody.pinocchio_peer import pinocchio_model
+    from lagcomp.multibody.pinocchio_peer import pinocchio_model, tree_state
     ref = pinocchio_model(tree, values)
     data = ref.createData()
-    q, v = y[:dof].copy(), y[dof:].copy()
+    q, v, tau, back = tree_state(ref, tree, values, y)
     model.kernels.rhs(0.0, y, p, out)
-    a = pin.aba(ref, data, q, v, np.zeros(dof))
+    a = back(pin.aba(ref, data, q, v, tau))
     result["max_rel_diff"] = float(np.max(np.abs(out[dof:] - a)) / np.max(np.abs(a)))
-    tau = np.zeros(dof)
     reps = 20000
     s = time.perf_counter()
     for _ in range(reps):

@@ -1,64 +1,70 @@
 """Issue 39's scale table: lagcomp's kinematic trees against Pinocchio and MuJoCo on the same systems.
 
-Systems: planar n-link chains and 3D chains on universal joints (the builders of tests/multibody_models.py, their
-parameters drawn in [1, 1.5], g = 9.81), and the Panda and UR5 arms read by ``lc.from_urdf`` from
-example-robot-data's URDFs.  For each, a fresh process with an empty lagcomp cache measures:
+Systems (names as ``--systems`` takes them): planar n-link chains ``planar_N``, 3D chains on universal joints
+``universal_N`` and on ball joints ``spherical_N`` (`lagcomp.examples.trees`' builders, their parameters drawn in
+[1, 1.5], g = 9.81), the Panda and UR5 arms (``panda``, ``ur5``) and, on a floating base, the Solo12 quadruped and
+the Talos humanoid (``solo12``, ``talos``: ``lc.from_urdf(path, floating_base=True)``, the root on an ``lc.Free``
+joint), all from example-robot-data's URDFs.  For each, a fresh process with an empty lagcomp cache measures:
 
 * the cold ``lc.compile(tree)`` plus the first ``rhs`` call, in CPU seconds (numba's compile of ``rhs`` included;
-  importing lagcomp and building the tree are not), the op count of ``rhs`` and the process's peak memory;
-* q̈ against Pinocchio's ABA at random states first (its own URDF reader for the arms; the chains built in
-  Pinocchio by ``multibody_models.pinocchio_model``): the largest relative difference;
+  importing lagcomp and building the tree are not), the operations of ``rhs`` (compiled: a step the links repeat
+  counts once, `lagcomp.codegen.outline`; and evaluated by one call) and the process's peak memory;
+* q̈ against Pinocchio's ABA at 5 random states first (Pinocchio's own URDF reader for the robots, with
+  ``JointModelFreeFlyer`` for the floating bases; the chains built in Pinocchio by
+  `lagcomp.multibody.pinocchio_peer.pinocchio_model`, a ball joint as ``JointModelSpherical``; the states converted
+  by that module: quaternions and body-frame rates from the modified Rodrigues parameters): the largest relative
+  difference;
 * ns per call: lagcomp's ``rhs`` in a compiled loop (`lagcomp.benchmark.looped`); Pinocchio's ``aba`` called from
-  Python; Pinocchio's ABA in a C++ loop (a small program built here with g++ -O3 -march=native against the
-  headers of the ``pin`` wheel and Eigen, the ABA instantiated in it as Pinocchio's own benchmarks do; the model
-  passed by Pinocchio's binary serialization); MuJoCo's ``mj_forward`` from Python with contacts and all
-  constraints disabled (the model written as MJCF from the same tree, its q̈ checked against Pinocchio's too).
+  Python; Pinocchio's ABA in a C++ loop (`bench.pinocchio_loop`: its q̈ equal to Python's); MuJoCo's
+  ``mj_forward`` from Python with contacts and all constraints disabled (the model written as MJCF from the same
+  tree, `bench.mujoco_model`, ball and free joints included; its q̈ compared with lagcomp's, every coordinate).
 
 Each figure is the best of 5 rounds, in one process per system right after the others: ratios are what to read,
-this machine being shared.  A peer that is not installed, or a C++ build that fails, is reported as skipped.
+this machine being shared.  The ratio against Pinocchio's C++ loop is set against issue 39's targets (≤ 0.5× for
+the Panda and the 3D chains up to 30 bodies, ≤ 1.0× for a floating base).  A second table fits the growth
+exponents k of cost ~ n^k over each chain family.  A peer that is not installed, or a C++ build that fails, is
+reported as skipped.
 
-    python -m bench.bench_scale [--smoke] [--systems planar_8 universal_10 panda ...] [--no-cpp]
+    python -m bench.bench_scale [--smoke] [--systems planar_8 spherical_10 panda solo12 ...] [--no-cpp]
     python -m bench --only scale
 """
 
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
+import math
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 from bench.harness import Table, fmt
+from bench.pinocchio_loop import cpp_loop, run_loop, save_case
 
 ROOT = Path(__file__).resolve().parents[1]
-FULL = ["planar_8", "planar_32", "planar_100", "universal_3", "universal_10", "universal_30", "ur5", "panda"]
-QUICK = ["planar_8", "universal_3", "ur5", "panda"]
-SMOKE = ["planar_4", "ur5"]
-ROBOTS = {"panda": "panda_description/urdf/panda.urdf", "ur5": "ur_description/urdf/ur5_robot.urdf"}
+FULL = ["planar_8", "planar_32", "planar_100", "universal_3", "universal_10", "universal_30", "spherical_3",
+        "spherical_10", "spherical_30", "ur5", "panda", "solo12", "talos"]
+QUICK = ["planar_8", "universal_3", "spherical_3", "ur5", "panda", "solo12"]
+SMOKE = ["planar_4", "spherical_2", "ur5"]
+#: robot -> (its URDF in example-robot-data, on a floating base).
+ROBOTS = {"panda": ("panda_description/urdf/panda.urdf", False), "ur5": ("ur_description/urdf/ur5_robot.urdf", False),
+          "solo12": ("solo_description/robots/solo12.urdf", True),
+          "talos": ("talos_data/robots/talos_reduced.urdf", True)}
+CHAINS = ("planar", "universal", "spherical")
+#: issue 39's targets for the ratio of lagcomp's rhs to Pinocchio's ABA in C++, by system family.
+TARGETS = {"universal": 0.5, "spherical": 0.5, "panda": 0.5, "solo12": 1.0, "talos": 1.0}
 
 CHILD = r'''
-import json, resource, sys, time
+import json, sys
 import numpy as np
-sys.path.insert(0, "tests")
-import lagcomp as lc
 from bench import bench_scale as bs
 system, out_dir = sys.argv[1], sys.argv[2]
 tree, values = bs.build(system)
-start = time.process_time()
-model = lc.compile(tree, progress=False)
-rng = np.random.default_rng(39)
-p = model.parameter_vector(values)
-n = model.n
-y = rng.uniform(-1.0, 1.0, size=2 * n)
-out = np.empty(2 * n)
-model.kernels.rhs(0.0, y, p, out)
-result = {"system": system, "n": n, "ops": model.operations["rhs"], "compile_cpu_s": time.process_time() - start,
-          "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+model, y, result = bs.cold_compile(tree, values)
+result["system"] = system
+p, out, n = model.parameter_vector(values), np.empty(2 * model.n), model.n
 from lagcomp.benchmark import looped
 loop = looped(model.kernels.rhs)
 calls = max(2000, 400_000 // n)
@@ -69,18 +75,41 @@ print(json.dumps(result))
 '''
 
 
-def build(system: str):
-    """(lc.Tree, parameter values by name) of a system name: planar_N, universal_N, or a robot of `ROBOTS`."""
+def cold_compile(tree, values: dict, cache_dir=None) -> tuple:
+    """(model, y, figures): ``lc.compile(tree)`` and its first ``rhs`` call at a random state y, timed in CPU
+    seconds (numba's compile of ``rhs`` included, nothing built on demand: the operations are the eager kernels'
+    count, read without building the Jacobians' companions as ``Model.operations`` would), with the process's peak
+    memory and the operations of ``rhs`` compiled and evaluated."""
+    import resource
+    import time
+
     import numpy as np
 
     import lagcomp as lc
 
-    kind, _, size = system.rpartition("_")
-    if system in ROBOTS:
-        return lc.from_urdf(robot_file(system)), {}
-    import multibody_models as mm
+    start = time.process_time()
+    model = lc.compile(tree, progress=False, cache_dir=cache_dir)
+    p, n = model.parameter_vector(values), model.n
+    y = np.random.default_rng(39).uniform(-1.0, 1.0, size=2 * n)
+    model.kernels.rhs(0.0, y, p, np.empty(2 * n))
+    cpu = time.process_time() - start
+    figures = {"n": n, "compile_cpu_s": cpu, "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+               "ops": model._operations["rhs"], "evaluated": evaluated(tree)}
+    return model, y, figures
 
-    tree = mm.planar_chain(int(size)) if kind == "planar" else mm.universal_chain(int(size))
+
+def build(system: str):
+    """(lc.Tree, parameter values by name) of a system name: planar_N, universal_N, spherical_N, or a robot of
+    `ROBOTS`."""
+    import numpy as np
+
+    import lagcomp as lc
+    from lagcomp.examples import trees
+
+    if system in ROBOTS:
+        return lc.from_urdf(robot_file(system), floating_base=ROBOTS[system][1]), {}
+    kind, _, size = system.rpartition("_")
+    tree = getattr(trees, f"{kind}_chain")(int(size))
     rng = np.random.default_rng(int(size))
     return tree, {name: (9.81 if name == "g" else float(rng.uniform(1.0, 1.5))) for name in tree.parameter_names}
 
@@ -89,10 +118,19 @@ def robot_file(system: str) -> Path:
     """The URDF of a robot of example-robot-data (installed under its cmeel prefix)."""
     import importlib.metadata
 
+    relative = ROBOTS[system][0]
     for file in importlib.metadata.files("example-robot-data") or []:
-        if str(file).endswith(ROBOTS[system]):
+        if str(file).endswith(relative):
             return Path(file.locate())
-    raise FileNotFoundError(f"example-robot-data ships no {ROBOTS[system]}")
+    raise FileNotFoundError(f"example-robot-data ships no {relative}")
+
+
+def evaluated(tree) -> int:
+    """The operations one ``rhs`` call evaluates (each outlined step counted at every call)."""
+    from lagcomp.codegen.outline import evaluated_operations
+    from lagcomp.codegen.tree_lower import lower_tree
+
+    return evaluated_operations(next(k for k in lower_tree(tree).kernels if k.name == "rhs"))
 
 
 def best(run, calls: int, rounds: int = 5) -> float:
@@ -108,201 +146,72 @@ def best(run, calls: int, rounds: int = 5) -> float:
     return min(times) / calls * 1e9
 
 
-def _numeric(expr, values: dict) -> float:
-    import sympy as sp
+def pinocchio_peer(system: str, tree, values: dict):
+    """(Pinocchio's model of the system, state(y) -> (q, v, τ, back)): `lagcomp.multibody.pinocchio_peer`'s
+    conversion of lagcomp's state y, back turning Pinocchio's v̇ into lagcomp's q̈."""
+    import pinocchio as pin
 
-    expr = sp.sympify(expr)
-    return float(expr.subs({s: values[s.name] for s in expr.free_symbols}))
+    from lagcomp.multibody import pinocchio_peer as peer
+
+    names, n = tree.coordinate_names, tree.n
+    if system not in ROBOTS:
+        reference = peer.pinocchio_model(tree, values)
+        return reference, lambda y: peer.tree_state(reference, tree, values, y)
+    if ROBOTS[system][1]:
+        reference = pin.buildModelFromUrdf(str(robot_file(system)), pin.JointModelFreeFlyer())
+        return reference, lambda y: peer.free_flyer_state(pin, reference, names, y[:n], y[n:])
+    reference = pin.buildModelFromUrdf(str(robot_file(system)))
+    return reference, lambda y: peer.fixed_base_state(reference, names, y[:n], y[n:])
 
 
 def pinocchio_side(system: str, tree, values: dict, model, y, out_dir: str) -> dict:
-    """Pinocchio's model of the system, q̈ compared at 5 random states, ns per ``aba`` from Python; the model and
-    one state saved in `out_dir` for the C++ loop."""
+    """Pinocchio's model of the system, q̈ compared at y and 4 more random states, ns per ``aba`` from Python; the
+    model and the state y saved in `out_dir` for the C++ loop."""
     import numpy as np
 
     try:
         import pinocchio as pin
     except ImportError:
         return {}
-    if system in ROBOTS:
-        reference = pin.buildModelFromUrdf(str(robot_file(system)))
-    else:
-        import multibody_models as mm
-
-        reference = mm.pinocchio_model(tree, values)
+    reference, state = pinocchio_peer(system, tree, values)
     data = reference.createData()
-    damping = np.array([_numeric(node.joint.damping, values) for node in tree.nodes])
     n, p, out = model.n, model.parameter_vector(values), np.empty(2 * model.n)
     rng, worst = np.random.default_rng(1), 0.0
-    for state in [y] + [rng.uniform(-2.0, 2.0, 2 * n) for _ in range(4)]:
-        q, v, order = pinocchio_state(reference, tree, state)
-        expected = pin.aba(reference, data, q, v, -damping[order] * v)   # (no continuous joints in these systems)
-        model.kernels.rhs(0.0, state, p, out)
-        worst = max(worst, float(np.max(np.abs(out[n:][order] - expected)) / np.max(np.abs(expected))))
-    q, v, order = pinocchio_state(reference, tree, y)
-    tau = -damping[order] * v
+    for y_k in [y] + [rng.uniform(-2.0, 2.0, 2 * n) for _ in range(4)]:
+        q, v, tau, back = state(y_k)
+        expected = back(pin.aba(reference, data, q, v, tau))
+        model.kernels.rhs(0.0, y_k, p, out)
+        worst = max(worst, float(np.max(np.abs(out[n:] - expected)) / np.max(np.abs(expected))))
+    q, v, tau, _ = state(y)
     reps = 20000
     result = {"pin_rel_diff": worst,
               "pin_python_ns": best(lambda: [pin.aba(reference, data, q, v, tau) for _ in range(reps)], reps)}
-    reference.saveToBinary(os.path.join(out_dir, "model.bin"))
-    Path(out_dir, "state.txt").write_text(" ".join(repr(float(x)) for x in [*q, *v, *tau]))
+    save_case(reference, q, v, tau, out_dir)
     result["pin_ddq"] = pin.aba(reference, data, q, v, tau).tolist()
     return result
 
 
-def pinocchio_state(reference, tree, y):
-    """(q, v, order) in Pinocchio's joint order from lagcomp's state y: order[i] is lagcomp's index of Pinocchio's
-    i-th velocity (one coordinate per joint, matched by name where Pinocchio's joints carry the URDF names, else
-    in node order)."""
-    import numpy as np
-
-    n, names = tree.n, list(tree.coordinate_names)
-    q, v, order = np.empty(n), np.empty(n), np.empty(n, dtype=int)
-    for j in range(1, reference.njoints):
-        name = reference.names[j]
-        k = names.index(name) if name in names else j - 1
-        q[reference.joints[j].idx_q], v[reference.joints[j].idx_v] = y[k], y[n + k]
-        order[reference.joints[j].idx_v] = k
-    return q, v, order
-
-
-def mjcf(tree, values: dict) -> str:
-    """The tree as a MuJoCo model: a body per link (placed by its joint's origin and rotation), its joints' hinges
-    and slides in order (MuJoCo composes the joints of one body as the tree's massless frames do), inertial
-    properties about the centre of mass; gravity; contacts and every constraint disabled."""
-    import mujoco
-    import numpy as np
-
-    children = {}
-    for link in tree.links:
-        children.setdefault(link.parent, []).append(link)
-    nodes = {}
-    for node in tree.nodes:
-        nodes.setdefault(node.link, []).append(node)
-
-    def body(link) -> str:
-        steps = nodes[link.name]
-        first = steps[0].joint
-        quat = np.empty(4)
-        mujoco.mju_mat2Quat(quat, np.array([[_numeric(e, values) for e in row] for row in first.rotation]).ravel())
-        text = (f'<body name="{link.name}" pos="{_floats(first.origin, values)}" '
-                f'quat="{" ".join(repr(float(x)) for x in quat)}">')
-        for node in steps:
-            j = node.joint
-            text += (f'<joint name="{j.coordinate.func.__name__}" type="{"hinge" if j.kind == "revolute" else "slide"}" '
-                     f'axis="{_floats(j.axis, values)}" damping="{_numeric(j.damping, values)!r}" '
-                     f'stiffness="{_numeric(j.stiffness, values)!r}" springref="{_numeric(j.rest, values)!r}"/>')
-        last = steps[-1]
-        I = last.inertia
-        full = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
-        text += (f'<inertial pos="{_floats(last.com, values)}" mass="{_numeric(last.mass, values)!r}" '
-                 f'fullinertia="{_floats(full, values)}"/>')
-        return text + "".join(body(child) for child in children.get(link.name, [])) + "</body>"
-
-    return (f'<mujoco model="{tree.name}"><compiler angle="radian" inertiafromgeom="false"/>'
-            f'<option gravity="{_floats(tree.gravity, values)}"><flag contact="disable" constraint="disable"/></option>'
-            f'<worldbody>{"".join(body(link) for link in children[None])}</worldbody></mujoco>')
-
-
-def _floats(entries, values) -> str:
-    return " ".join(repr(_numeric(e, values)) for e in entries)
-
-
 def mujoco_side(tree, values: dict, model, y) -> dict:
-    """MuJoCo's q̈ (``mj_forward``, from Python) against lagcomp's at y, and ns per ``mj_forward`` call."""
+    """MuJoCo's q̈ (``mj_forward``, from Python; every coordinate, ball and free joints converted back to MRPs)
+    against lagcomp's at y, and ns per ``mj_forward`` call."""
     import numpy as np
 
     try:
         import mujoco
     except ImportError:
         return {}
-    m = mujoco.MjModel.from_xml_string(mjcf(tree, values))
+    from bench import mujoco_model
+
+    m = mujoco.MjModel.from_xml_string(mujoco_model.mjcf(tree, values))
     d = mujoco.MjData(m)
-    n = tree.n
-    for k, name in enumerate(tree.coordinate_names):
-        d.qpos[m.joint(name).qposadr[0]], d.qvel[m.joint(name).dofadr[0]] = y[k], y[n + k]
+    mujoco_model.set_state(m, d, tree, values, y)
     mujoco.mj_forward(m, d)
-    out = np.empty(2 * n)
+    n, out = tree.n, np.empty(2 * tree.n)
     model.kernels.rhs(0.0, y, model.parameter_vector(values), out)
-    qacc = np.array([d.qacc[m.joint(name).dofadr[0]] for name in tree.coordinate_names])
+    qdd = mujoco_model.accelerations(m, d, tree, values, y)
     reps = 20000
-    return {"mujoco_rel_diff": float(np.max(np.abs(qacc - out[n:])) / np.max(np.abs(out[n:]))),
+    return {"mujoco_rel_diff": float(np.max(np.abs(qdd - out[n:])) / np.max(np.abs(out[n:]))),
             "mujoco_ns": best(lambda: [mujoco.mj_forward(m, d) for _ in range(reps)], reps)}
-
-
-CPP = r"""
-#include <pinocchio/multibody.hpp>
-#include <pinocchio/algorithm/aba.hpp>
-#include <pinocchio/serialization.hpp>
-#include <chrono>
-#include <cstdio>
-#include <cstdlib>
-#include <fstream>
-
-// argv: model.bin state.txt calls rounds. Prints q̈ once, then ns per aba call of each round.
-int main(int argc, char **argv) {
-  pinocchio::Model model;
-  model.loadFromBinary(argv[1]);
-  pinocchio::Data data(model);
-  Eigen::VectorXd q(model.nq), v(model.nv), tau(model.nv);
-  std::ifstream in(argv[2]);
-  for (int i = 0; i < model.nq; ++i) in >> q[i];
-  for (int i = 0; i < model.nv; ++i) in >> v[i];
-  for (int i = 0; i < model.nv; ++i) in >> tau[i];
-  long calls = std::atol(argv[3]);
-  int rounds = std::atoi(argv[4]);
-  pinocchio::aba(model, data, q, v, tau);
-  for (int i = 0; i < model.nv; ++i) std::printf("%.17g ", data.ddq[i]);
-  std::printf("\n");
-  for (int r = 0; r < rounds; ++r) {
-    auto start = std::chrono::steady_clock::now();
-    for (long k = 0; k < calls; ++k) pinocchio::aba(model, data, q, v, tau);
-    auto stop = std::chrono::steady_clock::now();
-    std::printf("%.6f ", std::chrono::duration<double, std::nano>(stop - start).count() / calls);
-  }
-  std::printf("\n");
-  return 0;
-}
-"""
-
-#: What Pinocchio's CMake config asks of code compiled against its headers.
-DEFINES = ["-DBOOST_MPL_LIMIT_LIST_SIZE=30", "-DBOOST_MPL_LIMIT_VECTOR_SIZE=30", "-DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS",
-           "-DBOOST_FUSION_INVOKE_MAX_ARITY=12"]
-
-
-def cpp_loop() -> Path | str:
-    """The C++ ABA loop's executable (built once per pin version, kept in ~/.cache/lagcomp-bench), or why not."""
-    import importlib.metadata
-
-    try:
-        version = importlib.metadata.version("pin")
-        files = [f for dist in ("libpinocchio", "pin") for f in importlib.metadata.files(dist) or []]
-    except importlib.metadata.PackageNotFoundError:
-        return "skipped: pin not installed"
-    header = "include/pinocchio/algorithm/aba.hpp"   # under the cmeel prefix of the wheels
-    prefix = next((Path(f.locate()).parents[3] for f in files if str(f).endswith(header)), None)
-    compiler = shutil.which("g++")
-    eigen = next((Path(d) for d in ("/usr/include/eigen3", str(prefix) + "/include/eigen3")
-                  if prefix and Path(d, "Eigen", "Dense").exists()), None)
-    if prefix is None or compiler is None or eigen is None:
-        missing = "Pinocchio's headers in the pin wheel" if prefix is None else "g++" if compiler is None else "Eigen"
-        return f"skipped: {missing} not found (apt-get install g++ libeigen3-dev)"
-    key = hashlib.sha256(f"{version} {CPP} {DEFINES}".encode()).hexdigest()[:12]
-    binary = Path.home() / ".cache" / "lagcomp-bench" / f"pinocchio-aba-{key}"
-    if binary.exists():
-        return binary
-    binary.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        source = Path(tmp, "aba_loop.cpp")
-        source.write_text(CPP)
-        built = subprocess.run([compiler, "-O3", "-DNDEBUG", "-march=native", "-std=c++17", *DEFINES,
-                                f"-I{prefix}/include", f"-I{eigen}", str(source), "-o", str(Path(tmp, "aba")),
-                                f"-L{prefix}/lib", "-lboost_serialization", f"-Wl,-rpath,{prefix}/lib"],
-                               capture_output=True, text=True, check=False)
-        if built.returncode != 0:
-            return f"skipped: the C++ build failed ({built.stderr.strip().splitlines()[-1:]})"
-        shutil.move(str(Path(tmp, "aba")), binary)
-    return binary
 
 
 def measure(system: str, binary) -> dict:
@@ -316,22 +225,34 @@ def measure(system: str, binary) -> dict:
             return {"system": system, "error": (done.stderr.strip().splitlines() or ["failed"])[-1][:200]}
         result = json.loads(done.stdout.strip().splitlines()[-1])
         if isinstance(binary, Path) and Path(tmp, "model.bin").exists():
-            calls = max(2000, 400_000 // result["n"])
-            run = subprocess.run([str(binary), str(Path(tmp, "model.bin")), str(Path(tmp, "state.txt")), str(calls),
-                                  "5"], capture_output=True, text=True, check=True)
-            ddq, times = ([float(x) for x in line.split()] for line in run.stdout.strip().splitlines())
+            ddq, result["pin_cpp_ns"] = run_loop(binary, Path(tmp, "model.bin"), Path(tmp, "state.txt"),
+                                                 max(2000, 400_000 // result["n"]))
             scale = max(abs(x) for x in result["pin_ddq"])
             result["cpp_matches_python"] = max(abs(a - b) for a, b in zip(ddq, result["pin_ddq"])) <= 1e-12 * scale
-            result["pin_cpp_ns"] = min(times)
     return result
 
 
-COLUMNS = ["system", "DOF", "ops of rhs", "cold compile + first rhs, CPU s", "peak MB", "q̈ vs Pinocchio (max rel.)",
-           "lagcomp rhs ns (loop)", "Pinocchio ABA C++ loop ns", "lagcomp / Pinocchio C++", "Pinocchio aba from Python ns",
-           "MuJoCo mj_forward from Python ns", "MuJoCo q̈ vs lagcomp"]
+COLUMNS = ["system", "DOF", "ops of rhs (compiled / evaluated)", "cold compile + first rhs, CPU s", "peak MB",
+           "q̈ vs Pinocchio (max rel.)", "lagcomp rhs ns (loop)", "Pinocchio ABA C++ loop ns", "lagcomp / Pinocchio C++",
+           "issue 39 target", "Pinocchio aba from Python ns", "MuJoCo mj_forward from Python ns", "MuJoCo q̈ vs lagcomp"]
 
 
-def table(systems, cpp: bool) -> Table:
+def target(system: str) -> float | None:
+    """Issue 39's bound on lagcomp / Pinocchio C++ for `system` (None where the issue sets none)."""
+    return TARGETS.get(system, TARGETS.get(system.rpartition("_")[0]))
+
+
+def verdict(system: str, ratio: float) -> str:
+    bound = target(system)
+    if bound is None:
+        return "–"
+    if not math.isfinite(ratio):
+        return f"≤ {bound:g}×: not measured"
+    return f"≤ {bound:g}×: {'met' if ratio <= bound else 'missed'}"
+
+
+def table(systems, cpp: bool) -> list[Table]:
+    """The scale table and the growth table of `systems`, each measured cold in its own process."""
     binary = cpp_loop() if cpp else "skipped: --no-cpp"
     note = (f"Load average {os.getloadavg()[0]:.1f} at start on {os.cpu_count()} logical CPUs. "
             "Cold: a fresh process and lagcomp cache per system. ns are the best of 5 rounds in that process, one "
@@ -340,39 +261,53 @@ def table(systems, cpp: bool) -> Table:
                "program, its q̈ equal to Python's pin.aba") + ". MuJoCo: contacts and constraints disabled.")
     out = Table("Multibody at scale: lagcomp trees against Pinocchio and MuJoCo (issue 39)", COLUMNS, note=note)
     results = [measure(system, binary) for system in systems]
-    out.note += growth([r for r in results if "error" not in r])
     for r in results:
         system = r["system"]
         if "error" in r:
-            out.add(system, *["–"] * 10, r["error"])
+            out.add(system, *["–"] * (len(COLUMNS) - 2), r["error"])
             continue
         cpp_ns = r.get("pin_cpp_ns", float("nan"))
         if r.get("cpp_matches_python") is False:
             cpp_ns = float("nan")
-        out.add(system, r["n"], r["ops"], fmt(r["compile_cpu_s"]), fmt(r["peak_mb"]),
+        ratio = r["lagcomp_ns"] / cpp_ns
+        out.add(system, r["n"], f"{r['ops']:,} / {r['evaluated']:,}", fmt(r["compile_cpu_s"]), fmt(r["peak_mb"]),
                 f"{r['pin_rel_diff']:.1e}" if "pin_rel_diff" in r else "skipped: pin not installed",
-                fmt(r["lagcomp_ns"]), fmt(cpp_ns), fmt(r["lagcomp_ns"] / cpp_ns, "×"),
+                fmt(r["lagcomp_ns"]), fmt(cpp_ns), fmt(ratio, "×"), verdict(system, ratio),
                 fmt(r.get("pin_python_ns", float("nan"))), fmt(r.get("mujoco_ns", float("nan"))),
                 f"{r['mujoco_rel_diff']:.1e}" if "mujoco_rel_diff" in r else "skipped: mujoco not installed")
-    return out
+    return [out, growth([r for r in results if "error" not in r])]
 
 
-def growth(results) -> str:
-    """The log-log slopes of rhs ops, cold compile CPU and rhs ns against DOF within each chain family (from its
-    smallest to its largest member), as a sentence for the note."""
-    import math
+def exponent(sizes, values) -> float:
+    """k of values ~ sizes^k, by least squares on the logarithms."""
+    import numpy as np
 
-    parts = []
-    for family in ("planar", "universal"):
+    return float(np.polyfit(np.log(sizes), np.log(values), 1)[0])
+
+
+GROWTH = {"ops compiled": "ops", "ops evaluated": "evaluated", "cold compile + first rhs": "compile_cpu_s",
+          "peak MB": "peak_mb", "rhs ns": "lagcomp_ns", "Pinocchio C++ ns": "pin_cpp_ns"}
+
+
+def growth(results) -> Table:
+    """The exponents k of cost ~ n^k (n the DOF) within each chain family, fitted by least squares on the
+    logarithms of its members (issue 39's target: ops of rhs ~ n and compile ~ n; a family needs two sizes)."""
+    out = Table("Growth with the chain's size: k of cost ~ n^k (n = DOF), least squares over the sizes measured",
+                ["family", "DOF"] + list(GROWTH),
+                note="Issue 39's target: ops of rhs ~ n (the articulated-body algorithm) and cold compile ~ n. "
+                     "The ops compiled count a step the links repeat once (it is emitted once, as a helper); the "
+                     "ops evaluated count it at each call.")
+    for family in CHAINS:
         members = sorted((r for r in results if r["system"].startswith(family + "_")), key=lambda r: r["n"])
-        if len(members) < 2 or members[0]["n"] == members[-1]["n"]:
+        sizes = [r["n"] for r in members]
+        if len(set(sizes)) < 2:
             continue
-        a, b = members[0], members[-1]
-        span = math.log(b["n"] / a["n"])
-        slopes = {key: math.log(b[key] / a[key]) / span for key in ("ops", "compile_cpu_s", "lagcomp_ns")}
-        parts.append(f"{family} chains, {a['n']} to {b['n']} DOF: ops ~ n^{slopes['ops']:.2f}, cold compile ~ "
-                     f"n^{slopes['compile_cpu_s']:.2f}, rhs ns ~ n^{slopes['lagcomp_ns']:.2f}")
-    return (" Growth: " + "; ".join(parts) + ".") if parts else ""
+        cells = []
+        for key in GROWTH.values():
+            values = [r.get(key, float("nan")) for r in members]
+            cells.append(f"n^{exponent(sizes, values):.2f}" if all(v > 0 for v in values) else "–")
+        out.add(family, ", ".join(map(str, sizes)), *cells)
+    return out
 
 
 def available(systems) -> list:
@@ -389,7 +324,7 @@ def available(systems) -> list:
 
 
 def section(ctx):
-    """`python -m bench --only scale`."""
+    """`python -m bench --only scale`: the scale table and the growth table."""
     return table(available(QUICK if ctx.quick else FULL), cpp=ctx.use_peers)
 
 
@@ -400,7 +335,8 @@ def main(argv=None) -> None:
     parser.add_argument("--no-cpp", action="store_true", help="do not build Pinocchio's C++ loop")
     args = parser.parse_args(argv)
     systems = args.systems or (SMOKE if args.smoke else FULL)
-    print(table(available(systems), cpp=not (args.no_cpp or args.smoke)).markdown(), flush=True)
+    for out in table(available(systems), cpp=not (args.no_cpp or args.smoke)):
+        print(out.markdown(), flush=True)
 
 
 if __name__ == "__main__":

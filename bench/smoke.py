@@ -64,8 +64,8 @@ NOT_RUN = {
 }
 
 #: Modules of the package that are not scripts (`python -m bench`'s sections and shared code).
-LIBRARY = {"__init__", "__main__", "accuracy", "adaptive", "compile_time", "harness", "kernels", "run", "smoke",
-           "systems", "throughput"}
+LIBRARY = {"__init__", "__main__", "accuracy", "adaptive", "compile_time", "harness", "kernels", "mujoco_model",
+           "pinocchio_loop", "run", "smoke", "systems", "throughput"}
 
 
 def command(script: str) -> list[str]:

@@ -1,10 +1,11 @@
 """Kinematic trees (`lagcomp.Tree`) as examples and for the benchmarks: chains of n links to measure how the
-multibody path scales (`bench/bench_multibody.py`, issue 39), and a cart-pole.
+multibody path scales (`bench/bench_multibody.py`, `bench/bench_scale.py`, issue 39), and a cart-pole.
 
 These factories are not in `lagcomp.examples.EXAMPLES`, which holds Systems; each returns a Tree whose
 parameters are free symbols (no defaults): the tests draw them at random.  Every joint frame is placed without
-rotation and turns about x, y or z, so that the same system can also be written with `lagcomp.rotated`
-(`tests/multibody_models.py` does, for the Lagrangian path).
+rotation; the planar and universal chains' joints turn about x, y or z, so that the same system can also be written
+with `lagcomp.rotated` (`tests/multibody_models.py` does, for the Lagrangian path); the ball chain's turn about any
+axis (modified Rodrigues parameters, `lagcomp.Spherical`).
 """
 
 from __future__ import annotations
@@ -12,9 +13,9 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp.model import coordinates, t
-from lagcomp.multibody import Link, Prismatic, Revolute, Tree, Universal
+from lagcomp.multibody import Link, Prismatic, Revolute, Spherical, Tree, Universal
 
-__all__ = ["cart_pole", "planar_chain", "universal_chain"]
+__all__ = ["cart_pole", "planar_chain", "spherical_chain", "universal_chain"]
 
 
 def planar_chain(n: int, name: str | None = None) -> Tree:
@@ -41,6 +42,19 @@ def universal_chain(n: int) -> Tree:
         links.append(Link(f"link{i}", Universal((f"a{i}", f"b{i}"), origin=origin),
                           parent=None if i == 0 else f"link{i - 1}", mass=m, com=(0, 0, -c), inertia=(A, B, C)))
     return Tree(links, gravity=(0, 0, -g), name=f"universal_chain_{n}")
+
+
+def spherical_chain(n: int) -> Tree:
+    """n rigid links hanging from ball joints (`Spherical`: three MRPs each), the next joint at (0, 0, −l_i) of
+    link i, centre of mass at (0, 0, −c_i), principal moments (A_i, B_i, C_i); gravity −g along z."""
+    g = sp.Symbol("g", positive=True)
+    links = []
+    for i in range(n):
+        m, c, A, B, C = sp.symbols(f"m{i} c{i} A{i} B{i} C{i}")
+        origin = (0, 0, 0) if i == 0 else (0, 0, -sp.Symbol(f"l{i - 1}"))
+        links.append(Link(f"link{i}", Spherical((f"s{i}x", f"s{i}y", f"s{i}z"), origin=origin),
+                          parent=None if i == 0 else f"link{i - 1}", mass=m, com=(0, 0, -c), inertia=(A, B, C)))
+    return Tree(links, gravity=(0, 0, -g), name=f"spherical_chain_{n}")
 
 
 def cart_pole() -> Tree:

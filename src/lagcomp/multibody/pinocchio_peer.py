@@ -1,5 +1,7 @@
 """A `lagcomp.Tree` as a Pinocchio model, to check lagcomp's recursions against Pinocchio's and to time them side by
-side (`bench/bench_multibody.py`, the tests).  Needs ``pin`` (imported when called).
+side (`bench/bench_multibody.py`, `bench/bench_scale.py`, the tests), with the conversions between lagcomp's state
+(q, q̇; ball and free joints on modified Rodrigues parameters) and Pinocchio's (quaternions, body-frame rates).
+Needs ``pin`` (imported when called).
 """
 
 from __future__ import annotations
@@ -7,33 +9,122 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-__all__ = ["fixed_base_accelerations", "free_flyer_accelerations", "pinocchio_model"]
+__all__ = ["fixed_base_accelerations", "fixed_base_state", "free_flyer_accelerations", "free_flyer_state",
+           "joint_groups", "pinocchio_model", "tree_state"]
 
 
 def pinocchio_model(tree, values: dict):
     """A pinocchio.Model of `tree` with the parameters `values` (numbers by name): its joints, placements, mass
-    properties and gravity.  The joints' springs, dampers and torques are not in it: Pinocchio's ABA takes the
-    generalized forces τ as an argument."""
+    properties and gravity.  A revolute or prismatic node is a Pinocchio joint of its own (named ``joint<node>``), a
+    ball joint a ``JointModelSpherical``, a free joint a ``JointModelFreeFlyer`` (`joint_groups`).  The joints'
+    springs, dampers and torques are not in it: Pinocchio's ABA takes the generalized forces τ as an argument
+    (`tree_state` gives them)."""
     import pinocchio as pin
 
     def num(e):
-        return float(sp.sympify(e).subs({s: values[s.name] for s in sp.sympify(e).free_symbols}))
+        return _number(e, values)
 
     model = pin.Model()
     ids = []
-    for i, node in enumerate(tree.nodes):
-        j = node.joint
-        axis = np.array([num(a) for a in j.axis])
-        joint = _pinocchio_joint(pin, j.kind, axis)
+    for kind, indices in joint_groups(tree):
+        first, last = tree.nodes[indices[0]], tree.nodes[indices[-1]]
+        j = first.joint
+        if kind == "free":
+            joint = pin.JointModelFreeFlyer()
+        elif kind == "spherical":
+            joint = pin.JointModelSpherical()
+        else:
+            joint = _pinocchio_joint(pin, kind, np.array([num(a) for a in j.axis]))
         R = np.array([[num(e) for e in row] for row in j.rotation])
         placement = pin.SE3(R, np.array([num(e) for e in j.origin]))
-        parent = 0 if node.parent < 0 else ids[node.parent]
-        ids.append(model.addJoint(parent, joint, placement, f"joint{i}"))
-        inertia = np.array([[num(node.inertia[a, b]) for b in range(3)] for a in range(3)])
-        model.appendBodyToJoint(ids[-1], pin.Inertia(num(node.mass), np.array([num(c) for c in node.com]), inertia),
+        parent = 0 if first.parent < 0 else ids[first.parent]
+        joint_id = model.addJoint(parent, joint, placement, f"joint{indices[0]}")
+        ids += [joint_id] * len(indices)
+        inertia = np.array([[num(last.inertia[a, b]) for b in range(3)] for a in range(3)])
+        model.appendBodyToJoint(joint_id, pin.Inertia(num(last.mass), np.array([num(c) for c in last.com]), inertia),
                                 pin.SE3.Identity())
     model.gravity = pin.Motion(np.array([num(g) for g in tree.gravity]), np.zeros(3))
     return model
+
+
+def joint_groups(tree) -> list:
+    """[(kind, node indices)]: the tree's nodes as Pinocchio's joints, in order: a "free" joint's six nodes (three
+    translations, then its MRPs), a "spherical" joint's three, each other node alone (its kind).  The mass
+    properties of a group are those of its last node (the others are massless frames at the same origin)."""
+    from lagcomp.multibody.joints import Free
+
+    links = {link.name: link for link in tree.links}
+    groups, i = [], 0
+    while i < tree.n:
+        node = tree.nodes[i]
+        if isinstance(links[node.link].joint, Free):
+            groups.append(("free", list(range(i, i + 6))))
+        elif node.joint.kind == "spherical":
+            groups.append(("spherical", list(range(i, i + 3))))
+        else:
+            groups.append((node.joint.kind, [i]))
+        i += len(groups[-1][1])
+    return groups
+
+
+def tree_state(model, tree, values: dict, y) -> tuple:
+    """(q, v, τ, back): Pinocchio's state and generalized forces for `pinocchio_model(tree, values)` at lagcomp's
+    state y = (q, q̇), and the function turning Pinocchio's q̈ (v̇) back into lagcomp's q̈ (coordinate order).
+
+    A ball joint's q is the quaternion of R(σ), its v the body rate ω = J(σ) σ̇; a free joint's also has its
+    position x and Rᵀ ẋ (its frame's velocity, its own axes).  τ holds each joint's spring, damper and torque as
+    lagcomp applies them: −k (q − rest) − c q̇ + torque along a revolute or prismatic axis, torque − c ω on a ball
+    joint (torques that are numbers once `values` are in)."""
+    import pinocchio as pin
+
+    from lagcomp.multibody import mrp
+
+    n, y = tree.n, np.asarray(y, dtype=float)
+    q, v, tau, charts = np.empty(model.nq), np.empty(model.nv), np.zeros(model.nv), []
+    for g, (kind, indices) in enumerate(joint_groups(tree)):
+        joint = model.joints[g + 1]
+        iq, iv, k = joint.idx_q, joint.idx_v, indices[0]
+        if kind not in ("free", "spherical"):
+            j = tree.nodes[k].joint
+            q[iq], v[iv] = y[k], y[n + k]
+            tau[iv] = (_number(j.torque, values) - _number(j.stiffness, values) * (y[k] - _number(j.rest, values))
+                       - _number(j.damping, values) * y[n + k])
+            charts.append((kind, iv, k, None))
+            continue
+        m = 3 if kind == "free" else 0   # (the free joint's translations come first)
+        sigma, rates = y[k + m:k + m + 3], y[n + k + m:n + k + m + 3]
+        R, omega = np.array(mrp.rotation(sigma)), np.array(mrp.angular_velocity(sigma, rates))
+        q[iq:iq + m], q[iq + m:iq + m + 4] = y[k:k + m], pin.Quaternion(R).coeffs()
+        v[iv:iv + m], v[iv + m:iv + m + 3] = (R.T @ y[n + k:n + k + 3])[:m], omega
+        j = tree.nodes[k + m].joint
+        tau[iv + m:iv + m + 3] = ([_number(tree.nodes[k + m + a].joint.torque, values) for a in range(3)]
+                                  - _number(j.damping, values) * omega)
+        charts.append((kind, iv, k, (sigma, rates, R, omega, v[iv:iv + m])))
+    return q, v, tau, lambda a: _back(np.asarray(a, dtype=float), charts, n)
+
+
+def _back(a, charts, n) -> np.ndarray:
+    """lagcomp's q̈ from Pinocchio's v̇ `a`: a one-coordinate joint's as it is, σ̈ = J⁻¹ (ω̇ − J̇ σ̇), and a free
+    joint's ẍ = R (v̇ + ω × v) (v its frame's velocity in its own axes)."""
+    from lagcomp.multibody import mrp
+
+    out = np.empty(n)
+    for kind, iv, k, chart in charts:
+        if chart is None:
+            out[k] = a[iv]
+            continue
+        sigma, rates, R, omega, linear = chart
+        m = 3 if kind == "free" else 0
+        if m:
+            out[k:k + 3] = R @ (a[iv:iv + 3] + np.cross(omega, linear))
+        out[k + m:k + m + 3] = mrp.jacobian_inverse_times(sigma, a[iv + m:iv + m + 3]
+                                                          - np.array(mrp.rate_product(sigma, rates)))
+    return out
+
+
+def _number(e, values: dict) -> float:
+    e = sp.sympify(e)
+    return float(e.subs({s: values[s.name] for s in e.free_symbols}))
 
 
 def _pinocchio_joint(pin, kind: str, axis):
@@ -47,41 +138,49 @@ def _pinocchio_joint(pin, kind: str, axis):
 
 def free_flyer_accelerations(pin, model, data, names, q, v) -> np.ndarray:
     """q̈ in lagcomp's coordinates from Pinocchio's ABA of a robot on a free flyer (``buildModelFromUrdf(path,
-    JointModelFreeFlyer())``) at lagcomp's state (q, v) of ``lc.from_urdf(path, floating_base=True)``.
+    JointModelFreeFlyer())``) at lagcomp's state (q, v) of ``lc.from_urdf(path, floating_base=True)``
+    (`free_flyer_state`)."""
+    qp, vp, tau, back = free_flyer_state(pin, model, names, q, v)
+    return back(pin.aba(model, data, qp, vp, tau))
+
+
+def free_flyer_state(pin, model, names, q, v) -> tuple:
+    """(q, v, τ, back) of Pinocchio's free-flyer model of a URDF robot at lagcomp's state (q, v) of
+    ``lc.from_urdf(path, floating_base=True)``, and the function turning Pinocchio's v̇ into lagcomp's q̈.
 
     lagcomp's first six coordinates are the root's position x (m, world frame) and MRPs σ; Pinocchio's flyer has
     q = (x, quaternion of R(σ)) and v = (Rᵀ ẋ, ω = J(σ) σ̇) in the root's frame, and back from its v̇:
     ẍ = R (v̇_lin + ω × Rᵀ ẋ), σ̈ = J⁻¹ (ω̇ − J̇ σ̇) (`lagcomp.multibody.mrp`).  The other joints are matched by name
-    (URDF names, '-' made '_'), a continuous joint's (cos q, sin q); their generalized force is the joints' viscous
-    damping −c q̇ as Pinocchio reads it."""
+    (URDF names, '-' made '_'), a continuous joint's (cos q, sin q); their generalized force τ is the joints'
+    viscous damping −c q̇ as Pinocchio reads it."""
     from lagcomp.multibody import mrp
 
+    q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
     sigma, sigma_dot = q[3:6], v[3:6]
     R, omega = np.array(mrp.rotation(sigma)), np.array(mrp.angular_velocity(sigma, sigma_dot))
     qp, vp = np.empty(model.nq), np.empty(model.nv)
     qp[:3], qp[3:7] = q[:3], pin.Quaternion(R).coeffs()
     vp[:3], vp[3:6] = R.T @ v[:3], omega
     order = _joint_states(model, names, q, v, qp, vp, first=2)
-    a = pin.aba(model, data, qp, vp, -model.damping * vp)
-    out = np.empty(len(names))
-    out[:3] = R @ (a[:3] + np.cross(omega, vp[:3]))
-    out[3:6] = mrp.jacobian_inverse_times(sigma, a[3:6] - np.array(mrp.rate_product(sigma, sigma_dot)))
-    for index, k in order:
-        out[k] = a[index]
-    return out
+    charts = [("free", 0, 0, (sigma, sigma_dot, R, omega, vp[:3].copy()))]
+    charts += [("revolute", index, k, None) for index, k in order]
+    return qp, vp, -model.damping * vp, lambda a: _back(np.asarray(a, dtype=float), charts, len(names))
 
 
 def fixed_base_accelerations(pin, model, data, names, q, v) -> np.ndarray:
     """q̈ in lagcomp's coordinate order `names` from Pinocchio's ABA of a fixed-base robot read from its URDF
-    (``buildModelFromUrdf(path)``) at lagcomp's state (q, v), the joints' viscous damping −c q̇ as the torque;
-    joints matched by name as in `free_flyer_accelerations`."""
+    (``buildModelFromUrdf(path)``) at lagcomp's state (q, v) (`fixed_base_state`)."""
+    qp, vp, tau, back = fixed_base_state(model, names, q, v)
+    return back(pin.aba(model, data, qp, vp, tau))
+
+
+def fixed_base_state(model, names, q, v) -> tuple:
+    """(q, v, τ, back) of Pinocchio's model of a fixed-base URDF robot at lagcomp's state (q, v): joints matched by
+    name as in `free_flyer_state`, τ the joints' viscous damping −c q̇; back turns Pinocchio's v̇ into lagcomp's q̈."""
     qp, vp = np.empty(model.nq), np.empty(model.nv)
     order = _joint_states(model, names, q, v, qp, vp, first=1)
-    a = pin.aba(model, data, qp, vp, -model.damping * vp)
-    out = np.empty(len(names))
-    for index, k in order:
-        out[k] = a[index]
-    return out
+    charts = [("revolute", index, k, None) for index, k in order]
+    return qp, vp, -model.damping * vp, lambda a: _back(np.asarray(a, dtype=float), charts, len(names))
 
 
 def _joint_states(model, names, q, v, qp, vp, first: int) -> list:
