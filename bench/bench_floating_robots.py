@@ -7,9 +7,10 @@ Each robot of example-robot-data is read by ``lc.from_urdf(path, floating_base=T
 to the first rhs, and the peak memory.  Then q̈ against Pinocchio's ABA of ``buildModelFromUrdf(path,
 JointModelFreeFlyer())`` at 5 random states (`lagcomp.multibody.pinocchio_peer.free_flyer_accelerations`), and
 ns per rhs call in a compiled loop beside ns per ``pin.aba`` called from Python, both at the robot's neutral
-state at rest (which includes Python's call
-overhead; `python -m bench.bench_scale` has Pinocchio's C++ loop for fixed-base systems).  Issue 39's target: a
-floating-base robot with 30+ joints compiled in ≤ 60 s.  Needs pin and example-robot-data.
+state at rest (which includes Python's call overhead: no ratio is printed).  The ratios against Pinocchio's ABA
+in its C++ loop and MuJoCo's ``mj_forward`` are `python -m bench.bench_scale --systems solo12 talos`'s (the same
+robots, the same conversions).  Issue 39's target: a floating-base robot with 30+ joints compiled in ≤ 60 s.
+Needs pin and example-robot-data.
 """
 
 from __future__ import annotations
@@ -21,7 +22,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROBOTS = {"solo12": "solo_description/robots/solo12.urdf", "talos": "talos_data/robots/talos_reduced.urdf"}
+from bench import bench_scale
+
+#: The floating-base robots of `bench.bench_scale.ROBOTS`.
+ROBOTS = [robot for robot, (_, floating) in bench_scale.ROBOTS.items() if floating]
 
 PROBE = r"""
 import json, resource, sys, time
@@ -62,20 +66,10 @@ print(json.dumps({"n": model.n, "ops": model._operations["rhs"], "compile_cpu_s"
 """
 
 
-def robot_file(relative: str) -> Path:
-    """The URDF of example-robot-data (under its cmeel prefix)."""
-    import importlib.metadata
-
-    for file in importlib.metadata.files("example-robot-data") or []:
-        if str(file).endswith(relative):
-            return Path(file.locate())
-    raise FileNotFoundError(f"example-robot-data ships no {relative}")
-
-
 def measure(robot: str) -> dict | str:
     """The probe's figures for `robot` in a fresh process and cache, or why not."""
     try:
-        path = robot_file(ROBOTS[robot])
+        path = bench_scale.robot_file(robot)
     except Exception as err:  # noqa: BLE001  (not installed)
         return f"skipped: {err}"
     root = Path(__file__).resolve().parents[1]
@@ -89,7 +83,7 @@ def measure(robot: str) -> dict | str:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--robots", nargs="+", choices=list(ROBOTS), default=list(ROBOTS))
+    parser.add_argument("--robots", nargs="+", choices=ROBOTS, default=ROBOTS)
     parser.add_argument("--smoke", action="store_true", help="solo12 only")
     args = parser.parse_args(argv)
     print("| robot | DOF | rhs ops | cold compile + first rhs (CPU s) | peak MB | q̈ vs Pinocchio (rel.) "

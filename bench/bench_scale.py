@@ -260,7 +260,10 @@ def table(systems, cpp: bool) -> list[Table]:
             + (f"{binary}" if isinstance(binary, str) else "g++ -O3 -march=native, the ABA instantiated in the loop's "
                "program, its q̈ equal to Python's pin.aba") + ". MuJoCo: contacts and constraints disabled.")
     out = Table("Multibody at scale: lagcomp trees against Pinocchio and MuJoCo (issue 39)", COLUMNS, note=note)
-    results = [measure(system, binary) for system in systems]
+    results = []
+    for system in systems:   # (each result on stderr as it comes: a long run's figures survive an interruption)
+        results.append(measure(system, binary))
+        print(f"<!-- {json.dumps(results[-1])} -->", file=sys.stderr, flush=True)
     for r in results:
         system = r["system"]
         if "error" in r:
