@@ -14,6 +14,10 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
 * "analysis" (``lagcomp.analysis.linearize``, equilibria): ``rest_partials``, ∂F/∂q and ∂F/∂q̇ of recursive
   Newton–Euler's F at q̇ = 0.
 
+A tree with closed loops (`lagcomp.Loop`) moves by an augmented solve, not by the articulated-body algorithm: its
+kinds are built by `lagcomp.codegen.tree_loop_companion` (the Jacobians and the DAE kernels of radau, "dae"; no
+tangent kernels).  A tree without loops has no DAE kernels.
+
 The program of a kernel that also writes f is the eager ``rhs``'s, assignment for assignment (same recursion,
 same locals), so its f is ``rhs``'s bitwise.  No M is factored: the articulated-body algorithm's q̈ is explicit,
 so every status is 0.
