@@ -9,7 +9,8 @@ models' constraints are the same functions Φ(q) and their multipliers the same 
     ∂f_t/∂y_t = T (∂f/∂y) T⁻¹,   ∂f_t/∂p = T ∂f/∂p,   ∂λ/∂y_t = (∂λ/∂y) T⁻¹,   ∂λ/∂p the same,
 
 exactly, Baumgarte terms included, on the loop and off it: to 1e-12 relative at random states and parameters.
-The DAE kernels radau integrates (`lagcomp.integrate.dae`) map likewise (`test_the_dae_kernels_are_the_examples`).
+The DAE kernels radau integrates (`lagcomp.integrate.dae`) map likewise (`test_the_dae_kernels_are_the_examples`);
+the tangent kernels of a one-column sensitivity run are the full Jacobians' product along the direction.
 Runs: radau against dop853 at tight tolerance and against the example's radau; sensitivities against the example's
 (the same ODE in other coordinates: S_t = T S T⁻¹) and against Richardson-extrapolated central differences of runs.
 """
@@ -116,6 +117,28 @@ def test_the_jacobian_is_the_derivative_of_rhs(four_bars):
     assert relative(np.hstack([J, Jp]), differences) <= 1e-9
 
 
+def test_the_tangent_kernels_are_the_full_jacobians_along_a_direction(four_bars):
+    """``rhs_directional``, ``rhs_tangent`` and ``rhs_tangent_parameters`` (what a run of one sensitivity column
+    calls): f bitwise ``rhs``'s, the derivative J v + (∂f/∂p) w to 1e-13 of the full Jacobians' product, off the
+    loop with gains, at random directions."""
+    tree, _ = four_bars
+    rng = np.random.default_rng(5)
+    N, P = tree.state_size, len(tree.parameters)
+    for _ in range(5):
+        y = tree.initial_state() + rng.uniform(-0.05, 0.05, N)
+        p = tree.parameter_vector(baumgarte=tuple(rng.uniform(0, 4, 2)))
+        v, w = rng.normal(size=N), rng.normal(size=P)
+        f, _, _, full, _, _ = jacobians(tree, y, p)
+        ydot, out = np.zeros(N), np.zeros(N)
+        assert tree.kernels.rhs_directional(0.0, y, p, v, w, ydot, out) == 0
+        assert np.array_equal(ydot, f) and relative(out, full @ np.concatenate([v, w])) <= 1e-13
+        out = np.zeros(2 * N)
+        assert tree.kernels.rhs_tangent(0.0, np.concatenate([y, v]), p, out) == 0
+        assert np.array_equal(out[:N], f) and relative(out[N:], full[:, :N] @ v) <= 1e-13
+        assert tree.kernels.rhs_tangent_parameters(0.0, np.concatenate([y, v]), np.concatenate([p, w]), out) == 0
+        assert np.array_equal(out[:N], f) and relative(out[N:], full @ np.concatenate([v, w])) <= 1e-13
+
+
 def dae_residual(model, z, p):
     out = np.zeros(z.size)
     assert model.kernels.dae_residual(0.0, z, p, out) == 0
@@ -192,6 +215,17 @@ def test_radau_runs_the_four_bar_tree_as_a_dae(four_bars):
         assert relative(run.reactions[name], tight.reactions[name]) <= 1e-6
 
 
+def test_a_radau_sweep_of_the_loop_tree_runs_each_point_as_simulate_does(four_bars):
+    """sweep(method="radau") takes the tree's DAE kernels too: each final state is simulate's, to 1e-12."""
+    tree, _ = four_bars
+    masses = [0.5, 1.0, 1.5]
+    sweep = tree.sweep((0.0, 0.5), {"m2": masses}, method="radau", rtol=1e-9, atol=1e-9)
+    assert list(sweep.status) == [0, 0, 0]
+    for mass, final in zip(masses, sweep.final, strict=True):
+        run = tree.simulate((0.0, 0.5), params={"m2": mass}, method="radau", rtol=1e-9, atol=1e-9)
+        assert relative(final, run.y[-1]) <= 1e-12
+
+
 @pytest.fixture(scope="module")
 def sensitivity_runs(four_bars):
     """The tree's and the example's runs to t = 2 with the sensitivities to (q0, qd0) and to m2 and g, and the
@@ -217,6 +251,17 @@ def test_sensitivities_are_the_examples_in_the_trees_coordinates(four_bars, sens
     assert relative(states[:, :, columns], parameters) <= 1e-8
     assert relative(reactions[:, :, :N], theirs.reaction_sensitivities[:, :, :N] @ T_INV) <= 1e-8
     assert relative(reactions[:, :, columns], theirs.reaction_sensitivities[:, :, their_columns]) <= 1e-8
+
+
+def test_a_one_column_run_takes_the_tangent_kernel_and_agrees(four_bars, sensitivity_runs):
+    """A run of g's column alone (``rhs_tangent_parameters`` as its rhs) against the same column of the run of
+    every column (the full Jacobians), same tolerances: the same ODE, to 1e-9 of the column's largest entry."""
+    tree, _ = four_bars
+    solution, _, options = sensitivity_runs
+    alone = tree.simulate((0.0, 2.0), sensitivities="g", **options)
+    column = solution.sensitivity_names.index("p:g")
+    assert relative(alone.sensitivities[:, :, 0], solution.sensitivities[:, :, column]) <= 1e-9
+    assert relative(alone.reaction_sensitivities[:, :, 0], solution.reaction_sensitivities[:, :, column]) <= 1e-9
 
 
 @pytest.mark.parametrize("parameter", ["m2", "g"])

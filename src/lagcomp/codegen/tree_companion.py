@@ -15,8 +15,8 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
   Newton–Euler's F at q̇ = 0.
 
 A tree with closed loops (`lagcomp.Loop`) moves by an augmented solve, not by the articulated-body algorithm: its
-kinds are built by `lagcomp.codegen.tree_loop_companion` (the Jacobians and the DAE kernels of radau, "dae"; no
-tangent kernels).  A tree without loops has no DAE kernels.
+kinds are built by `lagcomp.codegen.tree_loop_companion` (the Jacobians, the tangent kernels and the DAE kernels of
+radau, "dae").  A tree without loops has no DAE kernels.
 
 The program of a kernel that also writes f is the eager ``rhs``'s, assignment for assignment (same recursion,
 same locals), so its f is ``rhs``'s bitwise.  No M is factored: the articulated-body algorithm's q̈ is explicit,
@@ -32,13 +32,8 @@ import sympy as sp
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
-from lagcomp.codegen.tree_loop_companion import loop_dae_kernels, loop_jacobian_kernels
-from lagcomp.codegen.tree_lower import (
-    FORMULATION,
-    generalized_forcing,
-    motion,
-    program_kernel,
-)
+from lagcomp.codegen.tree_loop_companion import LOOP_BUILDERS
+from lagcomp.codegen.tree_lower import FORMULATION, generalized_forcing, motion, program_kernel
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
@@ -198,7 +193,6 @@ _BUILDERS = {"jacobians": lambda tree, local: _jacobian_kernels(local),
              "directional": lambda tree, local: _tangent_kernels(local),
              "analysis": lambda tree, local: _rest_partials_kernels(local), "dae": lambda tree, local: ()}
 
-#: The same for a tree with loops (`lagcomp.codegen.tree_loop_companion`): the augmented solve differentiated; no
-#: tangent kernels (the sensitivities take the full Jacobians); ``rest_partials`` is the open tree's F's.
-_LOOP_BUILDERS = {"jacobians": loop_jacobian_kernels, "directional": lambda tree, local: (),
-                  "analysis": _BUILDERS["analysis"], "dae": loop_dae_kernels}
+#: The same for a tree with loops: the augmented solve differentiated (`lagcomp.codegen.tree_loop_companion`);
+#: ``rest_partials`` is the open tree's (F is the same).
+_LOOP_BUILDERS = {**_BUILDERS, **LOOP_BUILDERS}

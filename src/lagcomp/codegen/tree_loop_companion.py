@@ -20,16 +20,19 @@ recursions (`lagcomp.multibody.forward_mode`), each assignment followed by its d
 * "dae" (radau): the residual G(t, z) of the index-2 form of Gear, Gupta and Leimkuhler over z = (q, v, w, λ, μ),
   rows v + Λᵀ μ, w, M w − F − Λᵀ λ, Λ v, Φ (`lagcomp.integrate.dae`; every loop constraint is holonomic and
   scleronomic, b = 0), and its Jacobian ∂G/∂z along the 3n + 2k components of z.
+* "directional" (a run of one sensitivity column): ``rhs_directional``, ``rhs_tangent``, ``rhs_tangent_parameters``,
+  f and the derivative along one direction (v, w): K dz = Σ_j ∂R/∂x_j dx_j, the contraction by forward mode along
+  that one direction, solved by a second factorization of K (`lagcomp.ir.DirectionalSolve`).  A run of more columns
+  takes the full Jacobians (no ``rhs_tangents``).
 
-The tangent kernels of one sensitivity column ("directional") are not built for a tree with loops: its
-sensitivities take the full Jacobians, as a Lagrange module's larger than `lagcomp.codegen.directional.LARGEST_SYSTEM`
-do.  Neither is ``rest_partials`` different: F is the open tree's (`lagcomp.codegen.tree_companion`).
+``rest_partials`` ("analysis") is the open tree's (`lagcomp.codegen.tree_companion`): F is the same.
 """
 
 from __future__ import annotations
 
 import sympy as sp
 
+from lagcomp.codegen.directional import DIRECTIONAL_ARGS, RHS_DIRECTIONAL_DOC, tangent_kernels
 from lagcomp.codegen.jacobian_blocks import (
     RHS_PARAMETER_JACOBIAN_DOC,
     RHS_WITH_FULL_JACOBIAN_DOC,
@@ -38,13 +41,9 @@ from lagcomp.codegen.jacobian_blocks import (
     jacobian_entry,
     jacobian_only,
 )
-from lagcomp.codegen.tree_constraints import (
-    augmented_matrix,
-    augmented_parts,
-    gain_loads,
-)
+from lagcomp.codegen.tree_constraints import augmented_matrix, augmented_parts, gain_loads
 from lagcomp.codegen.tree_lower import program_kernel
-from lagcomp.ir import AugmentedJacobianSolve, FlatMatrix, Kernel, ReturnZero
+from lagcomp.ir import AugmentedJacobianSolve, DirectionalSolve, FlatMatrix, Kernel, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives
 from lagcomp.multibody.program import Program
 
@@ -66,6 +65,7 @@ def _unit_seeds(symbols, first: int = 0) -> dict:
 
 
 def _parts(prog: Program, tree, local):
+    """The tree's `lagcomp.codegen.tree_constraints.AugmentedParts` over the kernel locals `local`, bound in `prog`."""
     return augmented_parts(prog, tree, list(local.nodes), list(local.gravity), local.mapping)
 
 
@@ -78,11 +78,8 @@ def loop_jacobian_kernels(tree, local) -> tuple[Kernel, ...]:
     prog = Program()
     parts = _parts(prog, tree, local)
     acc, mult = _symbols("_acc", n), _symbols("_mult", k)
-    rows = parts.loops.rows
-    residual = [parts.F[i] - sum((parts.mass(i, j) * acc[j] for j in range(n)), sp.S.Zero)
-                + sum((rows[c][i] * mult[c] for c in range(k)), sp.S.Zero) for i in range(n)]
-    residual += [parts.gamma[c] - sum((rows[c][j] * acc[j] for j in range(n)), sp.S.Zero) for c in range(k)]
-    tangent = derivatives(prog, residual, {**_unit_seeds((*local.q, *local.qd)), **_unit_seeds(local.p, size)})
+    tangent = derivatives(prog, _residual(parts, acc, mult, n, k),
+                          {**_unit_seeds((*local.q, *local.qd)), **_unit_seeds(local.p, size)})
     top, bottom = augmented_matrix(parts, n)
     matrix = [(f"_kkt[{i}, {j}]", entry) for (i, j), entry in top + bottom]
     loads = (*local.loads, *gain_loads(tree), *((s.name, f"_ydot[{n + i}]") for i, s in enumerate(acc)),
@@ -110,6 +107,48 @@ def loop_jacobian_kernels(tree, local) -> tuple[Kernel, ...]:
                "the model's\nparameters (not the Baumgarte gains):", ("t", "y", "p", "out"), range(size + P), n, k, 0,
                with_f=False),
     )
+
+
+def loop_tangent_kernels(tree, local) -> tuple[Kernel, ...]:
+    """The "directional" kind of `tree` (with loops): ``rhs_directional`` (f and its derivative along (v, w) at
+    once, `lagcomp.ir.DirectionalSolve`: K (q̈, λ) = (F, γ̃) solved for f, then K dz = Σ_j ∂R/∂x_j dx_j, the
+    contraction by forward mode along the one direction (v, w)), and its tangent kernels ``rhs_tangent``,
+    ``rhs_tangent_parameters`` (`lagcomp.codegen.directional.tangent_kernels`: what a run of one sensitivity column
+    calls as its rhs).  A run of more columns takes the full Jacobians."""
+    n, k, P = local.n, len(tree.constraint_names), len(local.p)
+    size = n + k
+    prog = Program()
+    parts = _parts(prog, tree, local)
+    acc, mult = _symbols("_acc", n), _symbols("_mult", k)
+    dy, dp = _symbols("_dy", 2 * n), _symbols("_dp", P)
+    tangent = derivatives(prog, _residual(parts, acc, mult, n, k),
+                          {s: {0: d} for s, d in zip((*local.q, *local.qd, *local.p), (*dy, *dp))})
+    top, bottom = augmented_matrix(parts, n)
+    first = [(f"ydot[{i}]", local.qd[i]) for i in range(n)]
+    first += [(f"_kkt[{i}, {j}]", entry) for (i, j), entry in top + bottom]
+    first += [(f"_kkt[{r}, {size}]", right) for r, right in enumerate((*parts.F, *parts.gamma))]
+    second = [(f"out[{i}]", dy[n + i]) for i in range(n)]
+    second += [(f"_direction[{r}, {size}]", tangent[r].get(0, sp.S.Zero)) for r in range(size)]
+    loads = (*local.loads, *gain_loads(tree), *((s.name, f"v[{j}]") for j, s in enumerate(dy)),
+             *((s.name, f"w[{j}]") for j, s in enumerate(dp)),
+             *((s.name, f"_ydot[{n + i}]") for i, s in enumerate(acc)),
+             *((s.name, f"_lam[{c}]") for c, s in enumerate(mult)))
+    solve = DirectionalSolve(n=n, phase_one=len(first), solved=tuple(s.name for s in (*acc, *mult)), multipliers=k)
+    directional = program_kernel(
+        "rhs_directional", RHS_DIRECTIONAL_DOC + "K (q̈, λ) = (F, γ̃), then K dz = Σ_j ∂(r − K z̄)/∂x_j dx_j at "
+        "z̄ = (q̈, λ), K = [M −Λᵀ; Λ 0],\nthe contraction by forward mode over the recursions; out = (v[n:], "
+        "dz[:n]).\n"
+        "Returns 0, or j > 0 when a factorization of K finds pivot j zero; `out` is then invalid.",
+        DIRECTIONAL_ARGS, prog, first + second, loads, solve)
+    return (directional, *tangent_kernels(directional, P))
+
+
+def _residual(parts, acc, mult, n: int, k: int) -> list:
+    """R = [F − M ā + Λᵀ λ̄; γ̃ − Λ ā] over the symbols ā = `acc`, λ̄ = `mult` (module docstring)."""
+    rows = parts.loops.rows
+    residual = [parts.F[i] - sum((parts.mass(i, j) * acc[j] for j in range(n)), sp.S.Zero)
+                + sum((rows[c][i] * mult[c] for c in range(k)), sp.S.Zero) for i in range(n)]
+    return residual + [parts.gamma[c] - sum((rows[c][j] * acc[j] for j in range(n)), sp.S.Zero) for c in range(k)]
 
 
 def loop_dae_kernels(tree, local) -> tuple[Kernel, Kernel]:
@@ -147,3 +186,8 @@ def loop_dae_kernels(tree, local) -> tuple[Kernel, Kernel]:
             [(jacobian_entry(i, j, size), row[j]) for i, row in enumerate(tangent) for j in range(size) if j in row],
             loads, FlatMatrix(size=size)),
     )
+
+
+#: The kernels of the on-demand kinds of a tree with loops, from (tree, its locals) (`lagcomp.codegen.tree_companion`
+#: adds ``rest_partials``, the same as a tree's without loops).
+LOOP_BUILDERS = {"jacobians": loop_jacobian_kernels, "directional": loop_tangent_kernels, "dae": loop_dae_kernels}
