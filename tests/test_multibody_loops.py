@@ -334,14 +334,6 @@ def test_two_loops_of_one_name_are_refused():
         lc.Tree(links, loops=[loop, dataclasses.replace(loop, directions="y")])
 
 
-def test_radau_on_a_loop_is_refused_until_the_jacobians_include_the_loops(four_bars):
-    tree, _ = four_bars
-    with pytest.raises(lc.ModelError, match="`dae_residual` .* kinematic tree 'four_bar_tree'"):
-        tree.simulate((0.0, 0.1), method="radau")
-    with pytest.raises(lc.ModelError, match="'four_bar_tree' yet: it has closed loops \\(loop\\)"):
-        tree.jacobian(0.0, tree.initial_state())
-
-
 def test_a_loop_to_the_base_closes_a_slider_on_its_rail(cache_dir):
     """A uniform rod hinged at O, its tip held in a rail along x at height −h (a loop to the base, direction y):
     the rod is locked at l sin θ = −h, so q̈ = 0 at rest, and the rail carries half its weight: from

@@ -60,8 +60,9 @@ ON_DEMAND = (
 )
 
 #: The on-demand kinds a model compiled from a kinematic tree (`lagcomp.Tree`) has, built from its recursions
-#: differentiated in forward mode (`lagcomp.codegen.tree_companion`); its other kinds are refused.
-TREE_KINDS = ("jacobians", "directional", "analysis")
+#: differentiated in forward mode (`lagcomp.codegen.tree_companion`; "dae" only has kernels for a tree with loops,
+#: `lagcomp.codegen.tree_loop_companion`); its other kinds are refused.
+TREE_KINDS = ("jacobians", "directional", "analysis", "dae")
 
 #: Every name a companion module may define, and the kind that defines it.
 KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}

@@ -14,6 +14,10 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
 * "analysis" (``lagcomp.analysis.linearize``, equilibria): ``rest_partials``, ∂F/∂q and ∂F/∂q̇ of recursive
   Newton–Euler's F at q̇ = 0.
 
+A tree with closed loops (`lagcomp.Loop`) moves by an augmented solve, not by the articulated-body algorithm: its
+kinds are built by `lagcomp.codegen.tree_loop_companion` (the Jacobians, the tangent kernels and the DAE kernels of
+radau, "dae").  A tree without loops has no DAE kernels.
+
 The program of a kernel that also writes f is the eager ``rhs``'s, assignment for assignment (same recursion,
 same locals), so its f is ``rhs``'s bitwise.  No M is factored: the articulated-body algorithm's q̈ is explicit,
 so every status is 0.
@@ -28,6 +32,7 @@ import sympy as sp
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
+from lagcomp.codegen.tree_loop_companion import LOOP_BUILDERS
 from lagcomp.codegen.tree_lower import FORMULATION, generalized_forcing, motion, program_kernel
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
@@ -48,6 +53,8 @@ class TreeLocals:
     loads: tuple
     nodes: tuple
     gravity: tuple
+    #: Each parameter (and t) to its local: what a loop's points are written over (`lagcomp.codegen.tree_constraints`).
+    mapping: dict
 
     @property
     def n(self) -> int:
@@ -65,7 +72,8 @@ def tree_locals(tree: Tree) -> TreeLocals:
     p = tuple(mapping.values())
     mapping[t] = sp.Symbol("t", real=True)
     nodes = tuple(local_nodes(tree, q, qd, mapping))
-    return TreeLocals(q, qd, p, tuple(loads), nodes, tuple(sp.sympify(g).xreplace(mapping) for g in tree.gravity))
+    return TreeLocals(q, qd, p, tuple(loads), nodes, tuple(sp.sympify(g).xreplace(mapping) for g in tree.gravity),
+                      mapping)
 
 
 def tree_companion_source(tree: Tree, kind: KernelKind, eager_module: str) -> tuple[str, dict]:
@@ -80,7 +88,7 @@ def tree_companion_source(tree: Tree, kind: KernelKind, eager_module: str) -> tu
 def lower_tree_kind(tree: Tree, kind: str) -> ModuleIR:
     """The IR of the kernels of the on-demand `kind` of `tree` (module docstring)."""
     local = tree_locals(tree)
-    kernels = _BUILDERS[kind](local)
+    kernels = (_LOOP_BUILDERS if tree.closures else _BUILDERS)[kind](tree, local)
     return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=tree.coordinate_names,
                     parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION)
 
@@ -179,5 +187,12 @@ def _rest_partials_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
         ("t", "y", "p", "out"), prog, stores, local.loads),)
 
 
-#: The kernels of each on-demand kind a tree has (`lagcomp.codegen.kinds.TREE_KINDS`).
-_BUILDERS = {"jacobians": _jacobian_kernels, "directional": _tangent_kernels, "analysis": _rest_partials_kernels}
+#: The kernels of each on-demand kind a tree has (`lagcomp.codegen.kinds.TREE_KINDS`), from (tree, its locals):
+#: a tree without loops has no DAE kernels (radau integrates its ODE, as a Lagrange module's without constraints).
+_BUILDERS = {"jacobians": lambda tree, local: _jacobian_kernels(local),
+             "directional": lambda tree, local: _tangent_kernels(local),
+             "analysis": lambda tree, local: _rest_partials_kernels(local), "dae": lambda tree, local: ()}
+
+#: The same for a tree with loops: the augmented solve differentiated (`lagcomp.codegen.tree_loop_companion`);
+#: ``rest_partials`` is the open tree's (F is the same).
+_LOOP_BUILDERS = {**_BUILDERS, **LOOP_BUILDERS}

@@ -16,14 +16,16 @@ A direction along which Λ's row is identically zero (the tree cannot pull the c
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import sympy as sp
 
 from lagcomp.codegen.bindings import BAUMGARTE
+from lagcomp.errors import ModelError
 from lagcomp.ir import AugmentedSolve
-from lagcomp.multibody.closure import closure_rows
+from lagcomp.multibody.closure import ClosureRows, closure_rows
 from lagcomp.multibody.crba import mass_matrix
+from lagcomp.multibody.joints import ISSUE
 from lagcomp.multibody.loops import refuse_idle_direction
 from lagcomp.multibody.program import Program
 from lagcomp.multibody.rnea import forcing
@@ -44,6 +46,7 @@ def loop_kernels(tree, nodes, gravity, mapping: dict, kernel) -> tuple:
     `lagcomp.multibody.program.Program` given to ``build``, which returns the stores).
     """
     n, k = len(nodes), len(tree.constraint_names)
+    _refuse_ball_joints(tree)
     _check_rows(tree, nodes, mapping)
     rhs = kernel(
         "rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), from the augmented system M q̈ = F + Λᵀ λ,\n"
@@ -81,6 +84,20 @@ def _rows(prog, tree, nodes, mapping):
     return closure_rows(prog, nodes, tree.closures, last_node, points)
 
 
+def _refuse_ball_joints(tree) -> None:
+    """Refuse loops in a tree with ball (or free) joints, on a loop or off it: the augmented system here is written
+    in the recursions' velocities (M by CRBA, F by RNEA, Λ from the joint axes), which are a ball joint's body
+    rates, not the derivatives of its modified Rodrigues parameters (`lagcomp.multibody.charts` maps them for a
+    tree without loops only)."""
+    balls = sorted({node.link for node in tree.nodes if node.joint.kind == "spherical"})
+    if balls:
+        raise ModelError(
+            f"{tree.name}: the tree has closed loops ({', '.join(c.loop for c in tree.closures)}) and ball joints "
+            f"(links {balls}): loops are supported in trees of revolute and prismatic joints (and the joints made "
+            f"of them: universal, cylindrical, planar) only, for now ({ISSUE}). Replace each ball joint by a "
+            "lc.Universal and a lc.Revolute where the motion allows, or write the mechanism as a lc.System.")
+
+
 def _check_rows(tree, nodes, mapping) -> None:
     """Refuse a loop direction whose row of Λ is identically zero (module docstring)."""
     rows = _rows(Program(), tree, nodes, mapping).rows
@@ -92,21 +109,51 @@ def _check_rows(tree, nodes, mapping) -> None:
             c += 1
 
 
-def _augmented_stores(prog, tree, nodes, gravity, mapping) -> list:
-    """Stores filling ``_kkt`` = [[M, −Λᵀ, F], [Λ, 0, γ̃]] (`lagcomp.ir.AugmentedSolve`)."""
-    n, k = len(nodes), len(tree.constraint_names)
+@dataclass(frozen=True)
+class AugmentedParts:
+    """What the augmented system of a tree with loops is made of, bound in one `Program`: M's lower triangle
+    ({(i, j): M_ij}, i ≥ j, absent entries zero; composite-rigid-body algorithm), F (recursive Newton–Euler), the
+    loops' `lagcomp.multibody.closure.ClosureRows` and γ̃ = γ − 2α Λ q̇ − β² Φ (α, β the Baumgarte gains)."""
+
+    M: dict
+    F: list
+    loops: ClosureRows
+    gamma: list
+
+    def mass(self, i: int, j: int):
+        """M_ij (M is symmetric: its lower triangle is kept)."""
+        return self.M.get((max(i, j), min(i, j)), sp.S.Zero)
+
+
+def augmented_parts(prog, tree, nodes, gravity, mapping) -> AugmentedParts:
+    """The `AugmentedParts` of `tree` over the kernel's locals (`loop_kernels`' arguments), bound in `prog`: what
+    ``rhs`` solves and what the on-demand kernels differentiate (`lagcomp.codegen.tree_loop_companion`)."""
     alpha, beta = (sp.Symbol(name, real=True) for name in BAUMGARTE)
     M = mass_matrix(prog, nodes)
     F = forcing(prog, nodes, gravity)
     loops = _rows(prog, tree, nodes, mapping)
-    N = n + k
-    stores = [(f"_kkt[{i}, {j}]", M[max(i, j), min(i, j)]) for i in range(n) for j in range(n)
-              if (max(i, j), min(i, j)) in M]
-    stores += [(f"_kkt[{i}, {n + c}]", -row[i]) for c, row in enumerate(loops.rows) for i in range(n) if row[i] != 0]
-    stores += [(f"_kkt[{i}, {N}]", F[i]) for i in range(n)]
-    stores += [(f"_kkt[{n + c}, {j}]", row[j]) for c, row in enumerate(loops.rows) for j in range(n) if row[j] != 0]
     gamma = [prog.let(g - 2 * alpha * v - beta**2 * phi) for g, v, phi in zip(loops.gamma, loops.velocity, loops.Phi)]
-    return stores + [(f"_kkt[{n + c}, {N}]", g) for c, g in enumerate(gamma)]
+    return AugmentedParts(M, F, loops, gamma)
+
+
+def _augmented_stores(prog, tree, nodes, gravity, mapping) -> list:
+    """Stores filling ``_kkt`` = [[M, −Λᵀ, F], [Λ, 0, γ̃]] (`lagcomp.ir.AugmentedSolve`)."""
+    n, k = len(nodes), len(tree.constraint_names)
+    parts = augmented_parts(prog, tree, nodes, gravity, mapping)
+    N = n + k
+    top, bottom = augmented_matrix(parts, n)
+    stores = [(f"_kkt[{i}, {j}]", entry) for (i, j), entry in top]
+    stores += [(f"_kkt[{i}, {N}]", F_i) for i, F_i in enumerate(parts.F)]
+    stores += [(f"_kkt[{i}, {j}]", entry) for (i, j), entry in bottom]
+    return stores + [(f"_kkt[{n + c}, {N}]", g) for c, g in enumerate(parts.gamma)]
+
+
+def augmented_matrix(parts: AugmentedParts, n: int) -> tuple[list, list]:
+    """The nonzero entries ((row, column), entry) of K = [[M, −Λᵀ], [Λ, 0]] ((n + k, n + k)): those of its first
+    n rows (M's, then −Λᵀ's), and those of its last k rows (Λ's)."""
+    top = [((i, j), parts.mass(i, j)) for i in range(n) for j in range(n) if (max(i, j), min(i, j)) in parts.M]
+    top += [((i, n + c), -row[i]) for c, row in enumerate(parts.loops.rows) for i in range(n) if row[i] != 0]
+    return top, [((n + c, j), row[j]) for c, row in enumerate(parts.loops.rows) for j in range(n) if row[j] != 0]
 
 
 def _residual_stores(prog, tree, nodes, mapping, k: int) -> list:
