@@ -1,0 +1,61 @@
+"""The user's events and contacts of a kinematic tree (`lagcomp.Tree` ``events=``), checked.
+
+A tree takes the `lagcomp.Event` s and `lagcomp.Contact` s a `lagcomp.System` takes, written in the tree's
+coordinates q_i(t), their velocities q_i(t).diff(t), ``lc.t`` and parameters; a point of a link enters through
+`lagcomp.multibody.link_point` (the height of a tip over a floor: ``link_point(links, "lower", (l, 0, 0))[2]``).
+They follow the spherical joints' shadow switches (`lagcomp.multibody.shadow`) in the tree's events, so the
+index of a user event in the kernels is its position in ``events`` plus the number of ball joints.
+
+Refused (`ModelError`, each naming the event): an object that is not an Event, a name used twice or by a shadow
+switch, a reset of something that is not a coordinate of the tree, a `lagcomp.Friction` element (stick–slip on a
+tree is a later step of issue 39), a contact on a tree with closed loops (an impact there must keep the loops'
+velocities too, as a System with constraints refuses).
+"""
+
+from __future__ import annotations
+
+from lagcomp.errors import ModelError
+from lagcomp.model.contacts import Contact
+from lagcomp.model.events import Event, reset_role, reset_target
+from lagcomp.model.friction import Friction
+from lagcomp.multibody.joints import ISSUE
+
+
+def checked_events(events, tree) -> tuple[Event, ...]:
+    """`events` as a tuple, each checked against `tree` (its coordinates, shadow events and loops)."""
+    events = (events,) if isinstance(events, Event) else tuple(events)
+    taken = [e.name for e in tree.events]
+    for e in events:
+        if not isinstance(e, Event):
+            raise ModelError(f"{tree.name}: events must be lc.Event or lc.Contact, got {e!r}.")
+        if isinstance(e, Friction):
+            raise ModelError(f"{tree.name}: the friction element `{e.name}` is not available on a kinematic tree "
+                             f"yet (stick-slip on trees is a later step of {ISSUE}); write the system as a lc.System "
+                             "with lc.RigidBody for friction.")
+        if e.name in taken:
+            raise ModelError(f"{tree.name}: the event name {e.name!r} is used twice (the spherical joints' shadow "
+                             f"switches take {[s.name for s in tree.events]}); give each event its own name.")
+        taken.append(e.name)
+        for key, _ in e.reset or ():
+            coordinate, _ = reset_target(key)
+            if coordinate not in tree.coordinates:
+                raise ModelError(f"{tree.name}: event `{e.name}` resets {key}, but {coordinate} is not a coordinate "
+                                 f"of the tree (coordinates {list(tree.coordinate_names)}).")
+    contacts = [e.name for e in events if isinstance(e, Contact)]
+    if contacts and tree.closures:
+        raise ModelError(f"{tree.name}: contacts {contacts} on a tree with closed loops "
+                         f"({', '.join(c.loop for c in tree.closures)}): an impact there must keep the loops' "
+                         "velocities too, which is not supported yet.")
+    return events
+
+
+def event_roles(events) -> dict:
+    """Every expression of the user's `events` by role (for the parameters, the checks and the fingerprint): the
+    event function, each reset value, a contact's restitution."""
+    roles = {}
+    for e in events:
+        roles[f"event {e.name}"] = e.expr
+        roles.update({reset_role(e, key): value for key, value in e.reset or ()})
+        if isinstance(e, Contact):
+            roles[f"contact {e.name} restitution"] = e.restitution
+    return roles
