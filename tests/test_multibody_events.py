@@ -1,0 +1,143 @@
+"""Events and contacts on kinematic trees (``lc.Tree(..., events=)``, issue 39).
+
+References: the Lagrangian path (the same systems written with lc.RigidBody and lc.rotated,
+`multibody_models.lagrangian_system`: derived from T and V by sympy, sharing no code with the recursions), closed
+forms derived here (a uniformly turning link's crossing times, a torque-free isotropic ball's half turns, a free
+rod's impact on a floor), and Newton's restitution's energy balance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import multibody_models as mm
+import numpy as np
+import pytest
+import sympy as sp
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import lagcomp as lc
+from lagcomp.multibody import link_point, mrp
+
+t = lc.t
+DOUBLE = {"m0": 1.3, "m1": 0.8, "c0": 0.45, "c1": 0.35, "d0": 0.02, "d1": -0.03, "J0": 0.07, "J1": 0.04,
+          "l0": 0.9, "l1": 0.7, "g": 9.81}
+
+
+def _double_pendulum(name: str, events) -> lc.Tree:
+    """The planar double pendulum of `multibody_models.planar_chain(2)` with `events` (a function of the links)."""
+    links = mm.planar_chain(2).links
+    return lc.Tree(links, gravity=(0, -sp.Symbol("g", positive=True), 0), name=name, events=events(links),
+                   defaults=DOUBLE)
+
+
+def _pair(tree: lc.Tree, cache_dir):
+    """(the tree's model, the Lagrangian path's model of the same system with the same events)."""
+    system = replace(mm.lagrangian_system(tree), events=tree.user_events, defaults=tree.defaults,
+                     parameters=None)
+    return lc.compile(tree, cache_dir=cache_dir), lc.compile(system, cache_dir=cache_dir)
+
+
+def _watched(links):
+    """The tip's height crossing −1 m (both ways), the first link passing the vertical upwards with a kick (the
+    second joint's rate reversed and halved), and a stop at t = 2.9 s."""
+    th0, th1 = lc.coordinates("th0 th1")
+    tip = link_point(links, "link1", (sp.Symbol("l1"), 0, 0))
+    return [lc.Event("tip_low", tip[1] + 1, direction=0),
+            lc.Event("kick", th0 + sp.pi / 2, direction=1, reset={th1.diff(t): -th1.diff(t) / 2}),
+            lc.Event("stop", t - 2.9, direction=1, terminal=True)]
+
+
+@pytest.fixture(scope="module")
+def watched(cache_dir):
+    return _pair(_double_pendulum("tree_watched", _watched), cache_dir)
+
+
+def test_link_point_is_the_tip_of_the_chain():
+    th0, th1 = lc.coordinates("th0 th1")
+    l0, l1 = sp.symbols("l0 l1")
+    tip = link_point(mm.planar_chain(2).links, "link1", (l1, 0, 0))
+    expected = [l0 * sp.cos(th0) + l1 * sp.cos(th0 + th1), l0 * sp.sin(th0) + l1 * sp.sin(th0 + th1), 0]
+    assert [sp.simplify(sp.expand_trig(a - b)) for a, b in zip(tip, expected)] == [0, 0, 0]
+
+
+def _state(data, n=2, scale=1.0):
+    return np.array([data.draw(st.floats(-3.0, 3.0)) * scale for _ in range(2 * n)])
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_event_kernels_agree_with_the_lagrangian_path(watched, data):
+    tree, lagrange = watched
+    y, time = _state(data), data.draw(st.floats(0.0, 5.0))
+    p_tree, p_lagrange = tree.parameter_vector(), lagrange.parameter_vector()
+    assert tree.parameters == lagrange.parameters and tree.event_names == lagrange.event_names
+    g_tree, g_lagrange = np.empty(3), np.empty(3)
+    tree.kernels.event_values(time, y, p_tree, g_tree)
+    lagrange.kernels.event_values(time, y, p_lagrange, g_lagrange)
+    np.testing.assert_allclose(g_tree, g_lagrange, rtol=1e-13, atol=1e-13)
+    width = 4 + 1 + len(tree.parameters)
+    d_tree, d_lagrange = np.empty((3, width)), np.empty((3, width))
+    tree.kernels.event_gradients(time, y, p_tree, d_tree)
+    lagrange.kernels.event_gradients(time, y, p_lagrange, d_lagrange)
+    np.testing.assert_allclose(d_tree, d_lagrange, rtol=1e-13, atol=1e-13)
+    for e, after in enumerate(([*y], [*y[:3], -y[3] / 2], [*y])):
+        out_tree, out_lagrange = np.empty(4), np.empty(4)
+        if e < 2:   # (a terminal event has no reset: the drivers never call it)
+            assert tree.kernels.event_reset(time, y, p_tree, e, out_tree) == 0
+            assert lagrange.kernels.event_reset(time, y, p_lagrange, e, out_lagrange) == 0
+            np.testing.assert_array_equal(out_tree, after)
+            np.testing.assert_array_equal(out_lagrange, after)
+
+
+def test_event_times_agree_with_the_lagrangian_path(watched):
+    tree, lagrange = watched
+    runs = [model.simulate((0.0, 10.0), q0=[-0.3, 0.8], qd0=[1.5, -2.0], rtol=1e-12, atol=1e-12)
+            for model in watched]
+    a, b = runs
+    assert a.t[-1] == pytest.approx(2.9, abs=1e-12) and b.t[-1] == pytest.approx(2.9, abs=1e-12)
+    assert len(a.events["tip_low"].t) >= 2 and len(a.events["kick"].t) >= 1
+    for name in ("tip_low", "kick", "stop"):
+        np.testing.assert_allclose(a.events[name].t, b.events[name].t, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(a.events[name].qd_after, b.events[name].qd_after, rtol=0, atol=1e-8)
+    kick = a.events["kick"]
+    np.testing.assert_allclose(kick.qd_after[:, 1], -kick.qd[:, 1] / 2, rtol=1e-15)
+
+
+# -- a ball joint's shadow switches beside the user's events: the event indices -----------------------------------
+
+
+@pytest.fixture(scope="module")
+def spinner(cache_dir):
+    """Two roots, no gravity: an isotropic ball on a spherical joint (torque-free: constant ω, half turns at
+    |ω| t = π + 2πk) and a link on a revolute joint turning at a constant rate (a mark at angle a, where its rate is
+    reversed: once)."""
+    a = sp.Symbol("a")
+    th, = lc.coordinates("th")
+    links = [lc.Link("ball", lc.Spherical(("s1", "s2", "s3")), mass=2.0, inertia=(0.3, 0.3, 0.3)),
+             lc.Link("arm", lc.Revolute(th, axis="z"), mass=1.0, com=(0.5, 0, 0), inertia=(0.1, 0.1, 0.1))]
+    tree = lc.Tree(links, name="tree_spinner", defaults={"a": 2.0},
+                   events=[lc.Event("mark", th - a, direction=1, reset={th.diff(t): -th.diff(t)})])
+    return tree, lc.compile(tree, cache_dir=cache_dir)
+
+
+def test_the_shadow_switches_come_first_and_the_users_events_keep_their_resets(spinner):
+    tree, model = spinner
+    assert model.event_names == ("ball_shadow", "mark")
+    w, rate = np.array([0.4, -1.1, 0.7]), 0.8          # rad/s: the ball's ω (body = world, isotropic), the arm's
+    sol = model.simulate((0.0, 20.0), q0=[0.0, 0.0, 0.0, 0.0], qd0=[*mrp.mrp_rate([0.0, 0.0, 0.0], w), rate],
+                         rtol=1e-12, atol=1e-12)
+    speed = np.linalg.norm(w)
+    switches = sol.events["ball_shadow"].t
+    expected = (math.pi + 2 * math.pi * np.arange(len(switches))) / speed
+    assert len(switches) == int((20.0 * speed - math.pi) // (2 * math.pi)) + 1
+    np.testing.assert_allclose(switches, expected, rtol=0, atol=1e-9)
+    mark = sol.events["mark"]
+    np.testing.assert_allclose(mark.t, [2.0 / rate], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(mark.qd_after[:, 3], [-rate], rtol=1e-13)
+    shadow = sol.events["ball_shadow"]      # the arm's rate is the mark's business only
+    np.testing.assert_array_equal(shadow.qd[:, 3], shadow.qd_after[:, 3])
+    np.testing.assert_allclose(shadow.qd[:, 3], np.where(switches < 2.0 / rate, rate, -rate), rtol=1e-12)
+    np.testing.assert_allclose(sol.q[-1, 3], 2.0 - rate * (20.0 - 2.0 / rate), rtol=1e-10)
