@@ -141,3 +141,73 @@ def test_the_shadow_switches_come_first_and_the_users_events_keep_their_resets(s
     np.testing.assert_array_equal(shadow.qd[:, 3], shadow.qd_after[:, 3])
     np.testing.assert_allclose(shadow.qd[:, 3], np.where(switches < 2.0 / rate, rate, -rate), rtol=1e-12)
     np.testing.assert_allclose(sol.q[-1, 3], 2.0 - rate * (20.0 - 2.0 / rate), rtol=1e-10)
+
+
+# -- contacts -------------------------------------------------------------------------------------------------------
+
+G = 9.81
+
+
+@pytest.fixture(scope="module")
+def rod(cache_dir):
+    """A uniform rod (mass m, length L along its link's y axis, centre at the joint) on a planar joint (X, Y, θ)
+    under gravity −g along y, with a smooth wall at X = 0 touched by its top end and a floor at Y = 0 by its bottom
+    end, restitution e: the ladder of tests/test_resting_contacts.py, as a tree."""
+    m, L, e = sp.symbols("m L e", positive=True)
+    links = [lc.Link("rod", lc.Planar(("X", "Y", "theta")), mass=m, inertia=(m * L**2 / 12, 0, m * L**2 / 12))]
+    top, bottom = link_point(links, "rod", (0, L / 2, 0)), link_point(links, "rod", (0, -L / 2, 0))
+    tree = lc.Tree(links, gravity=(0, -sp.Symbol("g"), 0), name="tree_rod", defaults={"m": 3.0, "L": 2.0, "g": G},
+                   events=[lc.Contact("wall", top[0], restitution=e), lc.Contact("floor", bottom[1], restitution=e)])
+    return lc.compile(tree, cache_dir=cache_dir)
+
+
+def test_the_contacts_take_the_lagrange_modules_kernels_and_constants(rod):
+    assert rod.contacts == ("wall", "floor")
+    assert rod.kernels.CONTACTS == (("wall", 0, "e"), ("floor", 1, "e"))
+    assert rod.kernels.CONTACT_MODES == len(rod.parameters)
+    for name in ("rhs_free", "closed_contacts", "contact_forces"):
+        assert callable(getattr(rod.kernels, name))
+
+
+@pytest.mark.parametrize("theta0", [0.2, 0.6])
+def test_a_ladder_tree_leaves_the_wall_at_two_thirds_of_its_height(rod, theta0):
+    """Released at rest against the wall, both contacts closed: the closed form of test_resting_contacts.py's
+    ladder (the wall's force (3/4) m g sin θ (3 cos θ − 2 cos θ0) vanishes at cos θ = (2/3) cos θ0)."""
+    m, L = 3.0, 2.0
+    q0 = [L / 2 * np.sin(theta0), L / 2 * np.cos(theta0), theta0]
+    sol = rod.simulate((0, 3.0), q0=q0, qd0=[0.0, 0.0, 0.0], params={"e": 0.0}, rtol=1e-12, atol=1e-12)
+    first = sol.contact_switches[0]
+    assert (first.contact, first.closed) == ("wall", False)
+    row = np.searchsorted(sol.t, first.t)
+    assert np.cos(sol.q[row, 2]) == pytest.approx(2 / 3 * np.cos(theta0), abs=1e-10)
+    np.testing.assert_allclose(sol.contact_forces[0], [0.75 * m * G * np.sin(theta0) * np.cos(theta0),
+                                                        m * G * (1 - 0.75 * np.sin(theta0) ** 2)], rtol=1e-12)
+    assert sol.contact_forces[row, 1] > 0.0
+
+
+@pytest.mark.parametrize(("theta0", "e"), [(0.4, 0.0), (0.9, 0.6), (1.3, 1.0)])
+def test_a_falling_rod_hits_the_floor_as_the_impulse_closed_form_says(rod, theta0, e):
+    """The rod falls at rest from its centre's height Y0 at angle θ0 and its bottom end meets the floor after
+    t1 = √(2 (Y0 − (L/2) cos θ0) / g) at speed v = g t1.  There G = ∂g/∂(X, Y, θ) = (0, 1, (L/2) sin θ0) and
+    M = diag(m, m, m L²/12), so w = G M⁻¹ Gᵀ = (1 + 3 sin² θ0)/m and Newton's law (ġ⁺ = −e ġ⁻ = e v) takes the
+    impulse P = (1 + e) v / w: Ẏ⁺ = −v + P/m, θ̇⁺ = 6 sin θ0 P/(m L), Ẋ⁺ = 0; the kinetic energy drops by
+    (1 − e²) v²/(2 w)."""
+    m, L, Y0 = 3.0, 2.0, 2.5
+    t1 = math.sqrt(2 * (Y0 - L / 2 * math.cos(theta0)) / G)
+    v = G * t1
+    w = (1 + 3 * math.sin(theta0) ** 2) / m
+    P = (1 + e) * v / w
+    sol = rod.simulate((0, t1 + 1e-3), q0=[5.0, Y0, theta0], qd0=[0.0, 0.0, 0.0], params={"e": e}, rtol=1e-13,
+                       atol=1e-13)
+    floor = sol.events["floor"]
+    assert floor.t[0] == pytest.approx(t1, rel=1e-12)
+    np.testing.assert_allclose(floor.qd[0], [0.0, -v, 0.0], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(floor.qd_after[0], [0.0, -v + P / m, 6 * math.sin(theta0) * P / (m * L)], rtol=1e-11,
+                               atol=1e-11)
+    np.testing.assert_allclose(floor.impulses[0], [0.0, P], rtol=1e-11, atol=1e-11)
+
+    def kinetic(qd):
+        return m * (qd[0] ** 2 + qd[1] ** 2) / 2 + m * L**2 / 24 * qd[2] ** 2
+
+    assert kinetic(floor.qd[0]) - kinetic(floor.qd_after[0]) == pytest.approx((1 - e**2) * v**2 / (2 * w),
+                                                                              rel=1e-11, abs=1e-11)
