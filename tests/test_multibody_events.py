@@ -211,3 +211,68 @@ def test_a_falling_rod_hits_the_floor_as_the_impulse_closed_form_says(rod, theta
 
     assert kinetic(floor.qd[0]) - kinetic(floor.qd_after[0]) == pytest.approx((1 - e**2) * v**2 / (2 * w),
                                                                               rel=1e-11, abs=1e-11)
+
+
+def _floored(links):
+    """A floor at y = −h under the pivot, met by the second link's tip, restitution e."""
+    tip = link_point(links, "link1", (sp.Symbol("l1"), 0, 0))
+    return [lc.Contact("floor", tip[1] + sp.Symbol("h"), restitution=sp.Symbol("e"))]
+
+
+@pytest.fixture(scope="module")
+def floored(cache_dir):
+    tree = _double_pendulum("tree_floored", _floored)
+    tree = lc.Tree(tree.links, gravity=tree.gravity, name=tree.name, events=tree.user_events,
+                   defaults={**DOUBLE, "h": 1.2, "e": 0.7})
+    return _pair(tree, cache_dir)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_an_impact_of_the_chains_tip_agrees_with_the_lagrangian_path_and_loses_1_minus_e2(floored, data):
+    """At a state whose tip touches the floor moving down: the tree's impact against the Lagrangian module's, and
+    against Newton's restitution with G = ∂g/∂q from sympy and M from the Lagrangian path: the normal velocity
+    v = G q̇ leaves at −e v, and T drops by (1 − e²) v² / (2 G M⁻¹ Gᵀ)."""
+    tree, lagrange = floored
+    e = data.draw(st.floats(0.0, 1.0))
+    th0 = data.draw(st.floats(-1.5, -0.7))   # (where the tip can reach the floor)
+    # the second angle that puts the tip on the floor: l0 sin th0 + l1 sin(th0 + th1) = −h
+    s = (-1.2 - DOUBLE["l0"] * math.sin(th0)) / DOUBLE["l1"]
+    th1 = math.asin(s) - th0
+    qd = np.array([data.draw(st.floats(-3.0, 3.0)) for _ in range(2)])
+    G = np.array([DOUBLE["l0"] * math.cos(th0) + DOUBLE["l1"] * math.cos(th0 + th1), DOUBLE["l1"] * math.cos(th0 + th1)])
+    v = G @ qd
+    if v > -1e-3:   # (moving up: the drivers never call the impact)
+        qd = qd - (v + 1.0) * G / (G @ G)
+        v = G @ qd
+    y = np.array([th0, th1, *qd])
+    params = {"e": e}
+    out = {}
+    for model in floored:
+        p = model.parameter_vector(params)
+        gap = np.empty(1)
+        model.kernels.event_values(0.0, y, p, gap)
+        assert abs(gap[0]) < 1e-14
+        out[model] = np.empty(4)
+        assert model.kernels.event_reset(0.0, y, p, 0, out[model]) == 0
+    np.testing.assert_allclose(out[tree], out[lagrange], rtol=1e-12, atol=1e-12)
+    after = out[tree]
+    np.testing.assert_array_equal(after[:2], y[:2])
+    assert G @ after[2:] == pytest.approx(-e * v, rel=1e-12, abs=1e-12)
+    M = np.empty((2, 2))
+    lagrange.kernels.mass_matrix(0.0, y, lagrange.parameter_vector(params), M)
+    w = G @ np.linalg.solve(M, G)
+    loss = qd @ M @ qd / 2 - after[2:] @ M @ after[2:] / 2
+    assert loss == pytest.approx((1 - e**2) * v**2 / (2 * w), rel=1e-11, abs=1e-13)
+
+
+def test_the_chain_meets_the_floor_when_the_lagrangian_path_does(floored):
+    tree, lagrange = floored
+    a, b = (model.simulate((0.0, 4.0), q0=[0.0, 0.0], qd0=[0.0, 0.0], rtol=1e-12, atol=1e-12) for model in floored)
+    impacts, reference = a.events["floor"], b.events["floor"]
+    assert len(impacts) >= 2 and len(impacts) == len(reference)
+    np.testing.assert_allclose(impacts.t, reference.t, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(impacts.qd, reference.qd, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(impacts.qd_after, reference.qd_after, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(impacts.impulses, reference.impulses, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(a.energy[-1], b.energy[-1], rtol=1e-8)
