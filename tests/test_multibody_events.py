@@ -276,3 +276,42 @@ def test_the_chain_meets_the_floor_when_the_lagrangian_path_does(floored):
     np.testing.assert_allclose(impacts.qd_after, reference.qd_after, rtol=0, atol=1e-8)
     np.testing.assert_allclose(impacts.impulses, reference.impulses, rtol=0, atol=1e-8)
     np.testing.assert_allclose(a.energy[-1], b.energy[-1], rtol=1e-8)
+
+
+# -- refusals -------------------------------------------------------------------------------------------------------
+
+
+def _ball_and_stick():
+    return [lc.Link("ball", lc.Spherical(("a", "b", "c")), mass=1.0, inertia=(1, 1, 1)),
+            lc.Link("stick", lc.Revolute("q"), parent="ball", mass=1.0, inertia=(1, 1, 1))]
+
+
+@pytest.mark.parametrize(("build", "culprit"), [
+    (lambda: lc.Tree(_ball_and_stick(), events=[lc.Event("ball_shadow", lc.coordinates("q")[0])]), "'ball_shadow'"),
+    (lambda: lc.Tree(_ball_and_stick(), events=[lc.Event("a", lc.coordinates("q")[0]),
+                                                lc.Event("a", lc.coordinates("q")[0] - 1)]), "'a'"),
+    (lambda: lc.Tree(_ball_and_stick(), events=[lc.Event("kick", lc.coordinates("q")[0],
+                                                         reset={lc.coordinates("z")[0]: 0})]), "z(t)"),
+    (lambda: lc.Tree(_ball_and_stick(), events=["q"]), "'q'"),
+    (lambda: lc.Tree(_ball_and_stick(), events=[lc.Event("late", lc.coordinates("w")[0])]), "w(t)"),
+    (lambda: lc.Tree(mm.planar_chain(2).links, events=[lc.Contact("floor", lc.coordinates("th0")[0])],
+                     loops=[lc.Loop("pin", ("link1", (1, 0, 0)), (None, (1, 0, 0)), directions="xy")]), "['floor']"),
+    (lambda: link_point(_ball_and_stick(), "stick"), "'ball'"),
+    (lambda: link_point(_ball_and_stick(), "arm"), "'arm'"),
+    (lambda: link_point(mm.planar_chain(2).links, "link1", (1, 0)), "'link1'"),
+])
+def test_bad_events_are_refused_naming_the_culprit(build, culprit):
+    with pytest.raises(lc.ModelError) as caught:
+        build()
+    assert culprit in str(caught.value)
+
+
+def test_a_point_of_a_link_moves_with_the_links_frame():
+    # the rod's top end of `rod`, at a state: the centre plus the rotated (0, L/2)
+    X, Y, th = lc.coordinates("X Y theta")
+    L = sp.Symbol("L")
+    links = [lc.Link("rod", lc.Planar((X, Y, th)), mass=1.0, inertia=(1, 0, 1))]
+    top = link_point(links, "rod", (0, L / 2, 0))
+    values = {X: 0.3, Y: -1.2, th: 0.7, L: 2.0}
+    np.testing.assert_allclose(np.array(top.subs(values), dtype=float).ravel(),
+                               [0.3 - math.sin(0.7), -1.2 + math.cos(0.7), 0.0], rtol=1e-15)
