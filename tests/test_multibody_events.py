@@ -315,3 +315,11 @@ def test_a_point_of_a_link_moves_with_the_links_frame():
     values = {X: 0.3, Y: -1.2, th: 0.7, L: 2.0}
     np.testing.assert_allclose(np.array(top.subs(values), dtype=float).ravel(),
                                [0.3 - math.sin(0.7), -1.2 + math.cos(0.7), 0.0], rtol=1e-15)
+
+
+@pytest.mark.parametrize("method", ["radau", "rk4"])
+def test_a_method_that_cannot_apply_impacts_is_refused_naming_those_that_can(rod, method):
+    # as for a System with contacts: an OptionError naming the capable methods (listing them asks whether the
+    # Taylor method has mode programs, a kernel a tree does not have: no, rather than a ModelError about Taylor)
+    with pytest.raises(lc.OptionError, match=f"which `{method}` cannot do; use dopri5, dop853"):
+        rod.simulate((0, 0.1), q0=[5.0, 2.5, 0.5], qd0=[0.0, 0.0, 0.0], method=method, dt=1e-3)
