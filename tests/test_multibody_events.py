@@ -278,6 +278,39 @@ def test_the_chain_meets_the_floor_when_the_lagrangian_path_does(floored):
     np.testing.assert_allclose(a.energy[-1], b.energy[-1], rtol=1e-8)
 
 
+@pytest.fixture(scope="module")
+def bouncer(cache_dir):
+    """Two roots under gravity −g along z: an isotropic ball on a spherical joint about its centre (gravity exerts
+    no moment: constant ω) and a block on a prismatic joint along z over a floor at z = 0 (restitution e)."""
+    z, = lc.coordinates("z")
+    links = [lc.Link("ball", lc.Spherical(("s1", "s2", "s3")), mass=2.0, inertia=(0.3, 0.3, 0.3)),
+             lc.Link("block", lc.Prismatic(z, axis="z"), mass=1.5)]
+    tree = lc.Tree(links, gravity=(0, 0, -G), name="tree_bouncer", defaults={"e": 0.8},
+                   events=[lc.Contact("floor", link_point(links, "block")[2], restitution=sp.Symbol("e"))])
+    return lc.compile(tree, cache_dir=cache_dir)
+
+
+def test_a_contact_beside_a_ball_joint_bounces_at_the_closed_form_times(bouncer):
+    """The block falls from h and bounces: impacts at t_1 = √(2h/g), t_k+1 = t_k + 2 e^k v_1/g, v⁺ = e v⁻; the
+    ball's shadow switches at |ω| t = π + 2πk all the while (event 0), the floor's impacts are event 1."""
+    assert bouncer.event_names == ("ball_shadow", "floor") and bouncer.kernels.CONTACTS == (("floor", 1, "e"),)
+    h, e, w = 1.25, 0.8, np.array([3.3, 0.5, -2.1])
+    v1 = math.sqrt(2 * G * h)
+    times = [v1 / G]
+    for k in range(1, 5):
+        times.append(times[-1] + 2 * e**k * v1 / G)
+    sol = bouncer.simulate((0.0, times[-1] + 0.01), q0=[0.0, 0.0, 0.0, h], qd0=[*mrp.mrp_rate([0, 0, 0], w), 0.0],
+                           rtol=1e-13, atol=1e-13)
+    floor = sol.events["floor"]
+    np.testing.assert_allclose(floor.t, times, rtol=1e-11)
+    np.testing.assert_allclose(floor.qd_after[:, 3], v1 * e ** np.arange(1, 6), rtol=1e-10)
+    np.testing.assert_array_equal(floor.qd_after[:, :3], floor.qd[:, :3])     # the impact leaves the ball alone
+    switches = sol.events["ball_shadow"].t
+    assert len(switches) >= 2
+    np.testing.assert_allclose(switches, (math.pi + 2 * math.pi * np.arange(len(switches))) / np.linalg.norm(w),
+                               rtol=0, atol=1e-9)
+
+
 # -- refusals -------------------------------------------------------------------------------------------------------
 
 
