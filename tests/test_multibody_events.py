@@ -213,6 +213,25 @@ def test_a_falling_rod_hits_the_floor_as_the_impulse_closed_form_says(rod, theta
                                                                               rel=1e-11, abs=1e-11)
 
 
+def test_a_sweep_over_e_gives_each_rod_its_own_impact(rod):
+    """The falling rod of the test above, swept over e and θ0: each trajectory's first impact at its t1 with its
+    closed-form post-impact velocities (the sweep loop, its contact modes appended to each trajectory's p)."""
+    m, L, Y0 = 3.0, 2.0, 2.5
+    e, theta0 = np.array([0.0, 0.5, 1.0]), np.array([0.3, 1.1])
+    sweep = rod.sweep((0.0, 0.8), grid={"e": e, "theta": theta0}, q0=[5.0, Y0, 0.0], qd0=[0.0, 0.0, 0.0],
+                      params={"e": 0.0},    # (a value the grid replaces: the sweep asks for one)
+                      rtol=1e-13, atol=1e-13, output="events", event_cap=4, progress=False)
+    floor = sweep.events["floor"]
+    for i, ei in enumerate(e):
+        for j, th in enumerate(theta0):
+            t1 = math.sqrt(2 * (Y0 - L / 2 * math.cos(th)) / G)
+            v, w = G * t1, (1 + 3 * math.sin(th) ** 2) / m
+            P = (1 + ei) * v / w
+            assert floor["t"][i, j, 0] == pytest.approx(t1, rel=1e-12)
+            np.testing.assert_allclose(floor["y_after"][i, j, 0, 3:], [0.0, -v + P / m, 6 * math.sin(th) * P / (m * L)],
+                                       rtol=1e-11, atol=1e-11)
+
+
 def _floored(links):
     """A floor at y = −h under the pivot, met by the second link's tip, restitution e."""
     tip = link_point(links, "link1", (sp.Symbol("l1"), 0, 0))
