@@ -93,10 +93,8 @@ def test_event_kernels_agree_with_the_lagrangian_path(watched, data):
 
 
 def test_event_times_agree_with_the_lagrangian_path(watched):
-    tree, lagrange = watched
-    runs = [model.simulate((0.0, 10.0), q0=[-0.3, 0.8], qd0=[1.5, -2.0], rtol=1e-12, atol=1e-12)
-            for model in watched]
-    a, b = runs
+    a, b = (model.simulate((0.0, 10.0), q0=[-0.3, 0.8], qd0=[1.5, -2.0], rtol=1e-12, atol=1e-12)
+            for model in watched)
     assert a.t[-1] == pytest.approx(2.9, abs=1e-12) and b.t[-1] == pytest.approx(2.9, abs=1e-12)
     assert len(a.events["tip_low"].t) >= 2 and len(a.events["kick"].t) >= 1
     for name in ("tip_low", "kick", "stop"):
@@ -120,11 +118,11 @@ def spinner(cache_dir):
              lc.Link("arm", lc.Revolute(th, axis="z"), mass=1.0, com=(0.5, 0, 0), inertia=(0.1, 0.1, 0.1))]
     tree = lc.Tree(links, name="tree_spinner", defaults={"a": 2.0},
                    events=[lc.Event("mark", th - a, direction=1, reset={th.diff(t): -th.diff(t)})])
-    return tree, lc.compile(tree, cache_dir=cache_dir)
+    return lc.compile(tree, cache_dir=cache_dir)
 
 
 def test_the_shadow_switches_come_first_and_the_users_events_keep_their_resets(spinner):
-    tree, model = spinner
+    model = spinner
     assert model.event_names == ("ball_shadow", "mark")
     w, rate = np.array([0.4, -1.1, 0.7]), 0.8          # rad/s: the ball's ω (body = world, isotropic), the arm's
     sol = model.simulate((0.0, 20.0), q0=[0.0, 0.0, 0.0, 0.0], qd0=[*mrp.mrp_rate([0.0, 0.0, 0.0], w), rate],
@@ -286,7 +284,6 @@ def test_an_impact_of_the_chains_tip_agrees_with_the_lagrangian_path_and_loses_1
 
 
 def test_the_chain_meets_the_floor_when_the_lagrangian_path_does(floored):
-    tree, lagrange = floored
     a, b = (model.simulate((0.0, 4.0), q0=[0.0, 0.0], qd0=[0.0, 0.0], rtol=1e-12, atol=1e-12) for model in floored)
     impacts, reference = a.events["floor"], b.events["floor"]
     assert len(impacts) >= 2 and len(impacts) == len(reference)

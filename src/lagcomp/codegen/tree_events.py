@@ -1,7 +1,7 @@
 """The event kernels of a kinematic tree: its spherical joints' shadow switches and the user's events.
 
 The MRPs of a tree's spherical and free joints each switch to their shadow set at half a turn, an event with a
-reset (`lagcomp.multibody.shadow`); the user's events and contacts follow them (`lagcomp.multibody.tree_events`).
+reset (`lagcomp.multibody.shadow`); the user's events and contacts follow them (`lagcomp.multibody.user_events`).
 Here they become ``event_values``, ``event_gradients`` and ``event_reset`` with the conventions of a Lagrange
 module's (`lagcomp.codegen.lower`), over the tree kernels' locals: a reset's branch per event that has one, and for
 the contacts one impact branch and the modes of `lagcomp.codegen.tree_contacts`.

@@ -24,7 +24,7 @@ from lagcomp.model.bodies import inertia_matrix
 from lagcomp.multibody.joints import ISSUE, Elementary, Joint, t
 from lagcomp.multibody.loops import closures
 from lagcomp.multibody.shadow import shadow_events
-from lagcomp.multibody.tree_events import checked_events, event_roles
+from lagcomp.multibody.user_events import checked_events, event_roles
 
 ZERO_INERTIA = sp.zeros(3, 3)
 
@@ -98,7 +98,7 @@ class Tree:
     events : sequence of lagcomp.Event or lagcomp.Contact, optional
         The user's events and contacts, in the tree's coordinates, their velocities, t and parameters (a link's
         point through `lagcomp.multibody.link_point`); compiled as a System's are
-        (`lagcomp.multibody.tree_events`).
+        (`lagcomp.multibody.user_events`).
 
     Attributes
     ----------
