@@ -1,15 +1,15 @@
 """The position of a point fixed in a link of a tree, as an expression of the tree's coordinates.
 
 What a tree's events and contacts are written with (`lagcomp.Tree` ``events=``): the height of a link's tip over a
-floor, the distance of a point from a wall.  ``lc.link_point(links, "lower", (l, 0, 0))`` is the base-frame
-position (m) of the point (l, 0, 0) of link ``lower``'s frame, a 3×1 sympy Matrix over the coordinates q_i(t) and
-the parameters, from the same forward kinematics as the closed loops' (`lagcomp.multibody.closure`): each joint's
-placement and rotation composed outward from the base, the expression left as the product the tree forms (not
-expanded).  Its time derivative (``.diff(lc.t)``) is the point's velocity.
+floor, the distance of a point from a wall.  ``link_point(links, "lower", (l, 0, 0))`` is the base-frame position
+(m) of the point (l, 0, 0) of link ``lower``'s frame, a 3×1 sympy Matrix over the coordinates q_i(t) and the
+parameters: each joint's placement (`lagcomp.multibody.kinematics.placement`, the recursions' own) composed outward
+from the base, R_i = R_λ R_Xi, o_i = o_λ + R_λ r_Xi, and the point at o_L + R_L p, the expression left as the
+products the tree forms (not expanded).  Its time derivative (``.diff(lc.t)``) is the point's velocity.
 
-The path from the base to the link must go through revolute and prismatic joints (and the joints made of them:
-universal, cylindrical, planar); a point beyond a spherical or free joint is refused (its rotation is over the
-joint's modified Rodrigues parameters, whose shadow switch would make the expression jump).
+Through a spherical or free joint the rotation is R(σ) of the joint's modified Rodrigues parameters
+(`lagcomp.multibody.mrp`); the shadow switch σ → −σ/|σ|² leaves R, hence the point, where it is, so an event or a
+contact of such a point is continuous across the switch.
 """
 
 from __future__ import annotations
@@ -17,10 +17,9 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp.errors import ModelError
-from lagcomp.multibody.closure import WorldKinematics
-from lagcomp.multibody.joints import ISSUE, t
-from lagcomp.multibody.kinematics import local_nodes
-from lagcomp.multibody.program import Program
+from lagcomp.multibody.joints import t
+from lagcomp.multibody.kinematics import local_nodes, placement
+from lagcomp.multibody.program import Program, add, mat_vec
 
 
 class _Inline(Program):
@@ -59,14 +58,22 @@ def link_point(tree_or_links, link: str, point=(0, 0, 0)) -> sp.Matrix:
         p = ()
     if len(p) != 3:
         raise ModelError(f"link_point: the point on {link!r} must be three expressions (m, link axes), got {point!r}.")
-    i = last_node[link]
-    while i >= 0:
-        if tree.nodes[i].joint.kind not in ("revolute", "prismatic"):
-            raise ModelError(f"link_point: the path to {link!r} goes through the {tree.nodes[i].joint.kind} joint of "
-                             f"{tree.nodes[i].link!r}: points are placed through revolute and prismatic joints (and "
-                             f"the joints made of them) only, for now ({ISSUE}).")
-        i = tree.nodes[i].parent
     q, qd = list(tree.coordinates), [c.diff(t) for c in tree.coordinates]
-    nodes = local_nodes(tree, q, qd, {})
-    position, *_ = WorldKinematics(_Inline(), nodes).point(last_node[link], p)
-    return sp.Matrix(position)
+    R, o = _frame(tree, local_nodes(tree, q, qd, {}), last_node[link])
+    return sp.Matrix(add(o, mat_vec(R, p)))
+
+
+def _frame(tree, nodes, i: int) -> tuple[list, list]:
+    """The rotation (rows, base axes) and origin of node `i`'s frame, composed outward from the base."""
+    path = []
+    while i >= 0:
+        path.append(i)
+        i = tree.nodes[i].parent
+    prog = _Inline()
+    R, o = [[sp.S.One if a == b else sp.S.Zero for b in range(3)] for a in range(3)], [sp.S.Zero] * 3
+    for i in reversed(path):
+        X = placement(prog, nodes[i])
+        o = add(o, mat_vec(R, X.r))
+        R = [mat_vec(R, [X.R[0][j], X.R[1][j], X.R[2][j]]) for j in range(3)]   # (columns)
+        R = [[R[j][a] for j in range(3)] for a in range(3)]
+    return R, o
