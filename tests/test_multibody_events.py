@@ -354,6 +354,54 @@ def test_a_contact_beside_a_ball_joint_bounces_at_the_closed_form_times(bouncer)
                                rtol=0, atol=1e-9)
 
 
+@pytest.fixture(scope="module")
+def block(cache_dir):
+    """A block (mass m) on a massless carriage: the carriage slides along x (pushed by c t), the block along y on it,
+    over a floor y = 0 (restitution e) whose normal force presses a friction element on ẋ (μs, μk): the frictional
+    block of tests/test_contact_friction.py, as a tree."""
+    x, y = lc.coordinates("x y")
+    m, g, c, e, mu_s, mu_k = sp.symbols("m g c e mu_s mu_k", positive=True)
+    links = [lc.Link("carriage", lc.Prismatic(x, axis="x", torque=c * t)),
+             lc.Link("block", lc.Prismatic(y, axis="y"), parent="carriage", mass=m)]
+    tree = lc.Tree(links, gravity=(0, -g, 0), name="tree_block",
+                   defaults={"m": 2.0, "g": G, "c": 3.0, "e": 0.0, "mu_s": 0.5, "mu_k": 0.3},
+                   events=[lc.Contact("floor", link_point(links, "block")[1], restitution=e),
+                           lc.Friction("ground", x.diff(t), normal="floor", static=mu_s, kinetic=mu_k)])
+    return lc.compile(tree, cache_dir=cache_dir)
+
+
+def test_a_block_tree_pushed_harder_and_harder_breaks_away_at_the_static_limit(block):
+    """Resting on the floor, pushed by c t: it sticks until c t_s = μs m g, then slides with m ẍ = c t − μk m g."""
+    m, c, mu_s, mu_k = 2.0, 3.0, 0.5, 0.3
+    t_s = mu_s * m * G / c
+    sol = block.simulate((0.0, 5.0), [0.0, 0.0], [0.0, 0.0], rtol=1e-12, atol=1e-12)
+    assert block.frictions == ("ground",) and block.contacts == ("floor",)
+    assert [(s.friction, s.mode) for s in sol.friction_switches] == [("ground", 1)]
+    assert abs(sol.friction_switches[0].t - t_s) < 1e-10
+    tau = sol.t - t_s
+    after = tau > 0
+    x = (c * (sol.t**3 - t_s**3) / 6 - c * t_s**2 * tau / 2 - mu_k * m * G * tau**2 / 2) / m
+    np.testing.assert_allclose(sol.q[after, 0], x[after], rtol=1e-9, atol=1e-12)
+    assert np.abs(sol.q[~after, 0]).max() < 1e-12 and np.abs(sol.q[:, 1]).max() < 1e-12
+    np.testing.assert_allclose(sol.contact_forces[:, 0], m * G, rtol=1e-12)
+    holding = sol.t < t_s
+    np.testing.assert_allclose(sol.friction_forces[holding, 0], -c * sol.t[holding], rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("v_t", [1.0, 5.0])
+def test_a_block_tree_hitting_the_frictional_floor_obliquely_loses_tangential_speed_by_coulombs_law(block, v_t):
+    """Falling from h with ẋ = v_t: the impact takes P_n = (1 + e) m v_n; slipping through it (|v_t| > μs P_n/m),
+    friction takes μk P_n from m v_t, else the block sticks."""
+    h, e, mu_s, mu_k = 1.0, 0.5, 0.5, 0.3
+    v_n = np.sqrt(2 * G * h)
+    sol = block.simulate((0.0, 0.5), [0.0, h], [v_t, 0.0], params={"c": 0.0, "e": e}, rtol=1e-12, atol=1e-12)
+    impact = sol.events["floor"]
+    assert len(impact) == 1
+    slipping = abs(v_t) > mu_s * (1 + e) * v_n
+    expected = v_t - mu_k * (1 + e) * v_n * np.sign(v_t) if slipping else 0.0
+    np.testing.assert_allclose(impact.qd_after[0], [expected, e * v_n], rtol=1e-12, atol=1e-15)
+
+
 # -- refusals -------------------------------------------------------------------------------------------------------
 
 
@@ -373,6 +421,12 @@ def _ball_and_stick():
     (lambda: lc.Tree(mm.planar_chain(2).links, events=[lc.Contact("floor", lc.coordinates("th0")[0])],
                      loops=[lc.Loop("pin", ("link1", (1, 0, 0)), (None, (1, 0, 0)), directions="xy")]), "['floor']"),
     (lambda: link_point(_ball_and_stick(), "arm"), "'arm'"),
+    (lambda: lc.Tree(_ball_and_stick(), events=[lc.Friction("rub", lc.coordinates("q")[0].diff(t), normal=2.0,
+                                                             static=0.5)]), "`rub`"),
+    (lambda: lc.Tree(_ball_and_stick(), events=[lc.Contact("floor", lc.coordinates("q")[0]), lc.Friction(
+        "rub", lc.coordinates("q")[0].diff(t), normal="flor", static=0.5)]), "'flor'"),
+    (lambda: lc.Tree(_ball_and_stick(), events=[lc.Contact("floor", lc.coordinates("q")[0]), lc.Friction(
+        "rub", lc.coordinates("q")[0].diff(t) ** 2, normal="floor", static=0.5)]), "`rub`"),
     (lambda: link_point(mm.planar_chain(2).links, "link1", (1, 0)), "'link1'"),
 ])
 def test_bad_events_are_refused_naming_the_culprit(build, culprit):

@@ -10,6 +10,9 @@ and the resting contacts (`lagcomp.kernel_support.resting`) take them unchanged:
 * ``event_values`` gives a closed contact's normal force instead of its gap, and ``event_reset``'s impact branch
   writes M(q), each gap g_d, its gradient G_d = ∂g_d/∂q, its rate ġ_d = G_d q̇ + ∂g_d/∂t, e_d and the bias
   b_d of g̈_d = G_d q̈ + b_d, then calls the impact solver (velocities jump by M⁻¹ Gᵀ P).
+* friction elements pressed by a contact (`lagcomp.multibody.user_events`): a sticking one's row v̇ = a q̈ + b
+  after the contacts' in ``closed_contacts``, ``friction_limits`` (μs times the contact's normal force), a branch
+  of ``event_reset`` per element that writes its new mode, and the frictional impact's stores.
 
 The module builds those stores with the Lagrange path's own functions (`lagcomp.codegen.contacts.resting_kernels`,
 `impact_branches`), given `ContactView`, which holds what they read of an EOM: M by the composite-rigid-body
@@ -25,9 +28,10 @@ from dataclasses import dataclass, replace
 
 import sympy as sp
 
-from lagcomp.codegen.contacts import impact_branches, modes_of, resting_kernels
+from lagcomp.codegen.contacts import friction_branches, impact_branches, modes_of, resting_kernels
 from lagcomp.ir import Kernel
 from lagcomp.model.contacts import Contact
+from lagcomp.model.friction import Friction
 from lagcomp.multibody.charts import mass_matrix_in_coordinates
 from lagcomp.multibody.crba import mass_matrix
 from lagcomp.multibody.joints import t
@@ -38,8 +42,9 @@ from lagcomp.multibody.program import Program
 class ContactView:
     """What `lagcomp.codegen.contacts` reads of an EOM, for a tree: n, M (over program locals), the coordinate and
     velocity locals, each event's function over the locals, the restitutions (the user's: a number or a parameter,
-    None for an event that is not a contact), no friction, no constraints, the tree (its ``event_names``) and its
-    parameters (the modes' first slot of p follows them)."""
+    None for an event that is not a contact), the friction elements' (normal contact's name, μs, μk) (None for
+    another event), no constraints, the tree (its ``event_names``) and its parameters (the modes' first slot of p
+    follows them)."""
 
     n: int
     M: sp.Matrix
@@ -77,7 +82,8 @@ class TreeContacts:
         entries = mass_matrix_in_coordinates(self.prog, nodes, mass_matrix(self.prog, nodes))
         M = sp.Matrix(n, n, lambda i, j: entries.get((max(i, j), min(i, j)), sp.S.Zero))
         restitutions = tuple(e.restitution if isinstance(e, Contact) else None for e in tree.events)
-        self.view = ContactView(n, M, tuple(q), tuple(qd), tuple(values), restitutions, (None,) * len(values), tree,
+        frictions = tuple((e.normal, e.static, e.kinetic) if isinstance(e, Friction) else None for e in tree.events)
+        self.view = ContactView(n, M, tuple(q), tuple(qd), tuple(values), restitutions, frictions, tree,
                                 tree.parameters)
         self.first = len(tree.parameters)
 
@@ -111,3 +117,7 @@ class TreeContacts:
     def impacts(self) -> tuple:
         """The impact branch of ``event_reset`` (`lagcomp.codegen.contacts.impact_branches`)."""
         return impact_branches(self.view, self.view.restitutions, self.time, self.kernel, self.first)
+
+    def switches(self) -> tuple:
+        """The friction elements' branches of ``event_reset`` (`lagcomp.codegen.contacts.friction_branches`)."""
+        return friction_branches(self.view, self.first, self.kernel)

@@ -57,4 +57,5 @@ def tree_event_kernels(tree, q, qd, mapping, loads, contacts=None) -> tuple:
     if contacts is None:
         return event_values, event_gradients, event_reset_kernel(names, resets, 2 * n, mapping, tuple(loads))
     return event_values, event_gradients, event_reset_kernel(names, resets, 2 * n, mapping, tuple(loads),
-                                                             contacts.view.restitutions, contacts.impacts())
+                                                             contacts.view.restitutions, contacts.impacts(),
+                                                             contacts.switches())
