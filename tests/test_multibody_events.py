@@ -9,6 +9,7 @@ rod's impact on a floor), and Newton's restitution's energy balance.
 from __future__ import annotations
 
 import math
+import pickle
 from dataclasses import replace
 
 import multibody_models as mm
@@ -255,6 +256,16 @@ def test_a_sweep_over_e_gives_each_rod_its_own_impact(rod):
             assert floor["t"][i, j, 0] == pytest.approx(t1, rel=1e-12)
             np.testing.assert_allclose(floor["y_after"][i, j, 0, 3:], [0.0, -v + P / m, 6 * math.sin(th) * P / (m * L)],
                                        rtol=1e-11, atol=1e-11)
+
+
+def test_a_tree_with_contacts_loads_by_name_and_pickles_with_its_events(rod, cache_dir):
+    loaded = lc.load("tree_rod", cache_dir=cache_dir)
+    copy = pickle.loads(pickle.dumps(rod))
+    runs = [model.simulate((0, 0.7), q0=[5.0, 2.5, 0.9], qd0=[0.0, 0.0, 0.0], params={"e": 0.6}, rtol=1e-12,
+                           atol=1e-12) for model in (rod, loaded, copy)]
+    assert loaded.event_names == copy.event_names == ("wall", "floor") and loaded.contacts == ("wall", "floor")
+    for run in runs[1:]:
+        np.testing.assert_array_equal(run.events["floor"].qd_after, runs[0].events["floor"].qd_after)
 
 
 def _floored(links):
