@@ -20,6 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
+from lagcomp.examples.constrained import four_bar_linkage
 from lagcomp.multibody import link_point, mrp
 
 t = lc.t
@@ -167,6 +168,36 @@ def test_a_point_through_a_ball_joint_crosses_the_vertical_at_the_elliptic_quart
                                  qd0=[0.0, 0.0, 0.0], rtol=1e-13, atol=1e-13)
     assert ball_pendulum.event_names == ("bob_shadow", "bottom") and len(sol.events["bob_shadow"]) == 0
     np.testing.assert_allclose(sol.events["bottom"].t, period * np.array([0.25, 0.75, 1.25, 1.75]), rtol=1e-11)
+
+
+def test_events_on_a_tree_with_a_closed_loop_agree_with_the_four_bar_example(cache_dir):
+    """The four-bar as a tree plus a cut joint (tests/test_multibody_loops.py) with the pin B's height crossing
+    0.42 m upwards and the rocker passing 2 rad downwards (B's height swings within 0.33–0.5 m, the rocker within
+    1.52–2.42 rad, about ten times in 5 s), against `four_bar_linkage` (absolute angles)
+    with the same events written in its coordinates: B = a e1 + b e2, θ3 the rocker's angle."""
+    from test_multibody_loops import TO_TREE, four_bar_tree
+
+    b, c = sp.symbols("b c", positive=True)
+    base = four_bar_tree()
+    pin = link_point(base, "coupler", (b, 0, 0))
+    tree = lc.Tree(base.links, gravity=base.gravity, name="four_bar_events", defaults=base.defaults, q0=base.q0,
+                   qd0=base.qd0, loops=[lc.Loop("loop", ("coupler", (b, 0, 0)), ("rocker", (c, 0, 0)),
+                                                directions="xy")],
+                   events=[lc.Event("pin_high", pin[1] - sp.Rational(42, 100), direction=1),
+                           lc.Event("rocker_back", lc.coordinates("theta3")[0] - 2, direction=-1)])
+    example = four_bar_linkage()
+    a = sp.Symbol("a", positive=True)
+    th1, th2, th3 = example.coordinates
+    example = replace(example, name="four_bar_events_example",
+                      events=[lc.Event("pin_high", a * sp.sin(th1) + b * sp.sin(th2) - sp.Rational(42, 100), direction=1),
+                              lc.Event("rocker_back", th3 - 2, direction=-1)])
+    options = {"method": "dop853", "rtol": 1e-12, "atol": 1e-12, "projection": True, "max_residual": 1e-12}
+    run_tree = lc.compile(tree, cache_dir=cache_dir).simulate((0.0, 5.0), **options)
+    run = lc.compile(example, cache_dir=cache_dir).simulate((0.0, 5.0), **options)
+    assert len(run_tree.events["pin_high"]) >= 5 and len(run_tree.events["rocker_back"]) >= 5
+    for name in ("pin_high", "rocker_back"):
+        np.testing.assert_allclose(run_tree.events[name].t, run.events[name].t, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(run_tree.events[name].q, run.events[name].q @ TO_TREE.T, rtol=0, atol=1e-9)
 
 
 # -- contacts -------------------------------------------------------------------------------------------------------
