@@ -18,7 +18,8 @@ import sympy as sp
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.outline import outline
 from lagcomp.codegen.tree_constraints import gain_loads, loop_kernels
-from lagcomp.codegen.tree_events import tree_event_kernels
+from lagcomp.codegen.tree_contacts import TreeContacts
+from lagcomp.codegen.tree_events import event_functions, tree_event_kernels
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.aba import accelerations
 from lagcomp.multibody.charts import (
@@ -41,7 +42,8 @@ ARGS = ("t", "y", "p", "out")
 
 def lower_tree(tree: Tree) -> ModuleIR:
     """The IR of the eager module of `tree`: rhs, mass_matrix, forcing, energy (and energy_function), momenta and
-    the event kernels of a model without events."""
+    the event kernels (the ball joints' shadow switches, the tree's own events; with contacts, rhs with their modes:
+    `lagcomp.codegen.tree_contacts`)."""
     n, names = tree.n, tree.coordinate_names
     q = [sp.Symbol(user_local("q", name, i), real=True) for i, name in enumerate(names)]
     qd = [sp.Symbol(user_local("qd", name, i), real=True) for i, name in enumerate(names)]
@@ -65,6 +67,10 @@ def lower_tree(tree: Tree) -> ModuleIR:
                          "algorithm.\n\nReturns 0.", ARGS,
                          lambda prog: [(f"out[{i}]", f) for i, f in enumerate(motion(prog, nodes, qd, gravity))],
                          ReturnZero()),)
+    contacts = None
+    if tree.contacts:   # the contacts' modes: rhs is rhs_free corrected for the closed ones (`tree_contacts`)
+        contacts = TreeContacts(tree, nodes, q, qd, mapping, loads, event_functions(tree, q, qd, mapping)[0])
+        dynamics = contacts.motion(dynamics[0])
     kernels = (
         *dynamics,
         kernel("mass_matrix", "Mass matrix M(q), shape (n, n), into `out` (composite-rigid-body algorithm).", ARGS,
@@ -78,11 +84,12 @@ def lower_tree(tree: Tree) -> ModuleIR:
                alias="energy"),
         kernel("momenta", "Conjugate momenta ∂T/∂q̇_i, shape (n,), into `out` (the subtrees' spatial momenta).", ARGS,
                lambda prog: [(f"out[{i}]", h) for i, h in enumerate(forces_in_coordinates(prog, nodes, momenta(prog, nodes)))]),
-        *tree_event_kernels(tree, q, qd, mapping, loads),
+        *tree_event_kernels(tree, q, qd, mapping, loads, contacts),
     )
     return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=names,
                     parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION,
-                    constraint_names=tree.constraint_names, holonomic=(True,) * len(tree.constraint_names))
+                    constraint_names=tree.constraint_names, holonomic=(True,) * len(tree.constraint_names),
+                    event_names=tree.event_names if tree.user_events else ())
 
 
 def motion(prog: Program, nodes, qd, gravity) -> list:

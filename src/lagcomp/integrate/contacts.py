@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lagcomp.errors import InitialConditionError, OptionError, ParameterError
+from lagcomp.errors import InitialConditionError, ModelError, OptionError, ParameterError
 from lagcomp.integrate.methods import library_function, method_names
 from lagcomp.kernel_support.impacts import CLOSED_GAP
 
@@ -147,7 +147,12 @@ def integrates_modes(model, method) -> bool:
     """Whether `method` integrates the model's modes (closed contacts, sticking friction): it integrates the
     module's ``rhs``, which reads them, or it is the Taylor method and the module's ``taylor_coefficients`` branches
     on them (``TAYLOR_MODE_PROGRAMS``: at most `lagcomp.codegen.taylor.MODE_PROGRAMS_MAX` mode sets)."""
-    return "rhs" in method.kernels or (method.name == "taylor" and hasattr(model.kernels, "TAYLOR_MODE_PROGRAMS"))
+    if "rhs" in method.kernels or method.name != "taylor":
+        return "rhs" in method.kernels
+    try:
+        return hasattr(model.kernels, "TAYLOR_MODE_PROGRAMS")
+    except ModelError:      # a model without the Taylor kernels (a kinematic tree's, issue 39) has no mode programs
+        return False
 
 
 def with_open_contacts(model, p: np.ndarray) -> np.ndarray:

@@ -24,6 +24,7 @@ from lagcomp.model.bodies import inertia_matrix
 from lagcomp.multibody.joints import ISSUE, Elementary, Joint, t
 from lagcomp.multibody.loops import closures
 from lagcomp.multibody.shadow import shadow_events
+from lagcomp.multibody.user_events import checked_events, event_roles
 
 ZERO_INERTIA = sp.zeros(3, 3)
 
@@ -94,6 +95,10 @@ class Tree:
         Suggested run length (s).
     loops : sequence of lagcomp.Loop, optional
         Cut joints closing kinematic loops: holonomic constraints on the tree (`lagcomp.multibody.loops`).
+    events : sequence of lagcomp.Event or lagcomp.Contact, optional
+        The user's events and contacts, in the tree's coordinates, their velocities, t and parameters (a link's
+        point through `lagcomp.multibody.link_point`); compiled as a System's are
+        (`lagcomp.multibody.user_events`).
 
     Attributes
     ----------
@@ -107,10 +112,14 @@ class Tree:
         Every symbol of the description other than t, sorted by name.
     closures : tuple of lagcomp.multibody.loops.Closure
         The checked loops.
+    events : tuple of lagcomp.Event
+        The spherical joints' shadow switches (`lagcomp.multibody.shadow`), then the user's `events`.
+    user_events : tuple of lagcomp.Event
+        The user's events alone.
     """
 
     def __init__(self, links, *, gravity=(0, 0, 0), name: str = "tree", description: str = "", defaults=None,
-                 q0=None, qd0=None, t_end: float = 10.0, loops=()):
+                 q0=None, qd0=None, t_end: float = 10.0, loops=(), events=()):
         if not isinstance(name, str) or not name.isidentifier():
             raise ModelError(f"Tree: the name must be a Python identifier like 'arm', got {name!r}.")
         self.name, self.description = name, str(description)
@@ -123,13 +132,15 @@ class Tree:
         if repeated:
             raise ModelError(f"{name}: the coordinate(s) {repeated} move more than one joint: give each its own name.")
         self.closures = closures(loops, [link.name for link in self.links], name)
+        self.events = shadow_events(self.nodes)   # (the spherical joints' MRP switches; none without them)
+        self.user_events = checked_events(events, self)
+        self.events += self.user_events
         self.parameters = _parameters(self)
         self.defaults = _defaults(self, defaults or {})
         self.q0, self.qd0 = _initial(q0, "q0", self), _initial(qd0, "qd0", self)
         if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
             raise ModelError(f"{name}: `t_end` must be a positive duration, got {t_end!r}.")
         self.t_end = float(t_end)
-        self.events = shadow_events(self.nodes)   # (the spherical joints' MRP switches; none without them)
         self.limits = _limits(self.links, names, name)
 
     @property
@@ -150,6 +161,18 @@ class Tree:
         """The loops' holonomic constraints (one per closing direction), in order: the reactions' names."""
         return tuple(name for closure in self.closures for name in closure.names)
 
+    @property
+    def event_names(self) -> tuple[str, ...]:
+        """The events' names in kernel order: the shadow switches, then the user's."""
+        return tuple(e.name for e in self.events)
+
+    @property
+    def contacts(self) -> tuple:
+        """The user's `lagcomp.Contact` s, in order."""
+        from lagcomp.model.contacts import Contact
+
+        return tuple(e for e in self.user_events if isinstance(e, Contact))
+
     def expressions(self) -> dict:
         """Every expression of the description by role (for parameters, checks and the fingerprint)."""
         roles = {"gravity": sp.Matrix(self.gravity)}
@@ -161,7 +184,7 @@ class Tree:
             roles[f"torque of {j.coordinate.func.__name__}"] = sp.sympify(j.torque)
         for closure in self.closures:
             roles[f"points of loop {closure.loop}"] = sp.Matrix([*closure.first_point, *closure.second_point])
-        return roles
+        return roles | event_roles(self.user_events)
 
     def fingerprint(self) -> str:
         """A canonical text of everything the kernels depend on (for the cache key)."""
@@ -169,6 +192,9 @@ class Tree:
                  repr([(node.parent, node.joint.kind) for node in self.nodes])]
         if self.closures:   # (only then: the keys of trees without loops stay as they were)
             parts.append(repr([(c.first, c.second, c.directions, c.names) for c in self.closures]))
+        if self.user_events:   # (only then, likewise; the expressions are among the roles below)
+            parts.append(repr([(type(e).__name__, e.name, e.direction, e.terminal, e.changes_state)
+                               for e in self.user_events]))
         return "\n".join(parts + [f"{role}={sp.srepr(expr)}" for role, expr in self.expressions().items()])
 
     def on_demand_refusal(self, what: str, kind: str | None = None) -> str | None:
@@ -230,18 +256,19 @@ def _nodes(links, name: str) -> tuple[Node, ...]:
 
 
 def _parameters(tree: Tree) -> tuple:
-    """The symbols of `tree` other than t, sorted by name; only a joint's torque may read the coordinates."""
+    """The symbols of `tree` other than t, sorted by name; only a joint's torque and the user's events may read t
+    and the coordinates."""
     coordinates = set(tree.coordinates)
     found = set()
     for role, expr in tree.expressions().items():
-        allowed = coordinates if role.startswith("torque") else set()
+        allowed = coordinates if role.startswith(("torque", "event")) else set()
         if not allowed and expr.has(t):
-            raise ModelError(f"{tree.name}: {role} depends on t: only a joint's torque may (the links' mass "
-                             "properties and the joints' placements, axes, springs and dampers are constant).")
+            raise ModelError(f"{tree.name}: {role} depends on t: only a joint's torque and an event may (the links' "
+                             "mass properties and the joints' placements, axes, springs and dampers are constant).")
         for f in expr.atoms(sp.core.function.AppliedUndef):
             if f not in allowed:
-                raise ModelError(f"{tree.name}: {f} in {role} is not allowed there: only a joint's torque may "
-                                 "read t, the tree's coordinates and their velocities.")
+                raise ModelError(f"{tree.name}: {f} in {role} is not allowed there: only a joint's torque and an "
+                                 "event may read t, the tree's coordinates and their velocities.")
         found |= {s for s in expr.free_symbols if s != t}
     impostor = next((s for s in found if s.name == t.name), None)
     if impostor is not None:

@@ -1,0 +1,85 @@
+"""The user's events and contacts of a kinematic tree (`lagcomp.Tree` ``events=``), checked.
+
+A tree takes the `lagcomp.Event` s and `lagcomp.Contact` s a `lagcomp.System` takes, written in the tree's
+coordinates q_i(t), their velocities q_i(t).diff(t), ``lc.t`` and parameters; a point of a link enters through
+`lagcomp.multibody.link_point` (the height of a tip over a floor: ``link_point(links, "lower", (l, 0, 0))[2]``).
+They follow the spherical joints' shadow switches (`lagcomp.multibody.shadow`) in the tree's events, so the
+index of a user event in the kernels is its position in ``events`` plus the number of ball joints.
+
+A `lagcomp.Friction` element is taken when a contact of the tree presses it (``normal="floor"``): its normal force
+is the contact's, and its slip force joins the contact's column of the held rows
+(`lagcomp.kernel_support.resting.pressed_frictional_accelerations`), so the tree's articulated-body rhs (all
+contacts open) stays the motion without friction.  Its velocity must be linear in the velocities, as on a System.
+
+Refused (`ModelError`, each naming the event): an object that is not an Event, a name used twice or by a shadow
+switch, a reset of something that is not a coordinate of the tree, a friction element whose normal force is an
+expression (its slip force would enter the recursions' generalized forces: a later step of issue 39) or names no
+contact of the tree, a contact or friction element on a tree with closed loops (an impact there must keep the loops'
+velocities too, as a System with constraints refuses).
+"""
+
+from __future__ import annotations
+
+from lagcomp.errors import ModelError
+from lagcomp.model.contacts import Contact
+from lagcomp.model.events import Event, reset_role, reset_target
+from lagcomp.model.friction import Friction
+from lagcomp.multibody.joints import ISSUE, t
+
+
+def checked_events(events, tree) -> tuple[Event, ...]:
+    """`events` as a tuple, each checked against `tree` (its coordinates, shadow events and loops)."""
+    events = (events,) if isinstance(events, Event) else tuple(events)
+    taken = [e.name for e in tree.events]
+    for e in events:
+        if not isinstance(e, Event):
+            raise ModelError(f"{tree.name}: events must be lc.Event or lc.Contact, got {e!r}.")
+        if isinstance(e, Friction):
+            _check_friction(e, events, tree)
+        if e.name in taken:
+            raise ModelError(f"{tree.name}: the event name {e.name!r} is used twice (the spherical joints' shadow "
+                             f"switches take {[s.name for s in tree.events]}); give each event its own name.")
+        taken.append(e.name)
+        for key, _ in e.reset or ():
+            coordinate, _ = reset_target(key)
+            if coordinate not in tree.coordinates:
+                raise ModelError(f"{tree.name}: event `{e.name}` resets {key}, but {coordinate} is not a coordinate "
+                                 f"of the tree (coordinates {list(tree.coordinate_names)}).")
+    contacts = [e.name for e in events if isinstance(e, (Contact, Friction))]
+    if contacts and tree.closures:
+        raise ModelError(f"{tree.name}: contacts {contacts} on a tree with closed loops "
+                         f"({', '.join(c.loop for c in tree.closures)}): an impact there must keep the loops' "
+                         "velocities too, which is not supported yet.")
+    return events
+
+
+def _check_friction(element: Friction, events, tree) -> None:
+    """Refuse a friction element a contact of the tree does not press, or whose velocity is not linear in q̇."""
+    contacts = [e.name for e in events if isinstance(e, Contact)]
+    if not isinstance(element.normal, str):
+        raise ModelError(f"{tree.name}: the friction element `{element.name}` has its normal force as an expression: "
+                         f"on a kinematic tree only a contact's normal force presses friction yet ({ISSUE}); give "
+                         f"normal= the name of a lc.Contact of the tree (its contacts: {contacts}), or write the "
+                         "system as a lc.System.")
+    if element.normal not in contacts:
+        raise ModelError(f"{tree.name}: the friction element `{element.name}` names normal={element.normal!r}, which "
+                         f"is no contact of the tree (its contacts: {contacts}).")
+    rates = [c.diff(t) for c in tree.coordinates]
+    v = element.expr
+    if not any(v.diff(a) != 0 for a in rates) or any(v.diff(a).diff(b) != 0 for a in rates for b in rates):
+        raise ModelError(f"{tree.name}: the friction element `{element.name}`: its velocity must be linear in the "
+                         f"velocities q̇ (a(q, t)·q̇ + c(q, t), not constant in them); got {element.expr}.")
+
+
+def event_roles(events) -> dict:
+    """Every expression of the user's `events` by role (for the parameters, the checks and the fingerprint): the
+    event function, each reset value, a contact's restitution."""
+    roles = {}
+    for e in events:
+        roles[f"event {e.name}"] = e.expr
+        roles.update({reset_role(e, key): value for key, value in e.reset or ()})
+        if isinstance(e, Contact):
+            roles[f"contact {e.name} restitution"] = e.restitution
+        if isinstance(e, Friction):
+            roles.update({f"friction {e.name} {part}": getattr(e, part) for part in ("static", "kinetic")})
+    return roles
