@@ -12,7 +12,8 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
   (+ ∂f/∂p w) along one direction read from y's (and p's) tail: the recursion and one tangent, about three
   times ``rhs``; runs of more columns take the full Jacobians (`lagcomp.integrate.sensitivities`);
 * "analysis" (``lagcomp.analysis.linearize``, equilibria): ``rest_partials``, ∂F/∂q and ∂F/∂q̇ of recursive
-  Newton–Euler's F at q̇ = 0.
+  Newton–Euler's F at q̇ = 0;
+* "geometry" (animation): the links' frames by forward kinematics, no derivative (`lagcomp.codegen.tree_geometry`).
 
 The program of a kernel that also writes f is the eager ``rhs``'s, assignment for assignment (same recursion,
 same locals), so its f is ``rhs``'s bitwise.  No M is factored: the articulated-body algorithm's q̈ is explicit,
@@ -28,6 +29,7 @@ import sympy as sp
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
+from lagcomp.codegen.tree_geometry import tree_geometry_kernels
 from lagcomp.codegen.tree_lower import FORMULATION, generalized_forcing, motion, program_kernel
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
@@ -80,7 +82,7 @@ def tree_companion_source(tree: Tree, kind: KernelKind, eager_module: str) -> tu
 def lower_tree_kind(tree: Tree, kind: str) -> ModuleIR:
     """The IR of the kernels of the on-demand `kind` of `tree` (module docstring)."""
     local = tree_locals(tree)
-    kernels = _BUILDERS[kind](local)
+    kernels = tree_geometry_kernels(tree, local) if kind == "geometry" else _BUILDERS[kind](local)
     return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=tree.coordinate_names,
                     parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION)
 
