@@ -269,3 +269,22 @@ def test_a_tree_with_a_closed_loop_has_its_geometry(cache_dir):
     assert np.max(np.abs(frames["rocker"][0] - [2.5, 0, 0])) < TOL
     assert np.max(np.abs(frames["coupler"][1][:2, 0] - [np.cos(th1 + th2), np.sin(th1 + th2)])) < TOL
     assert np.max(np.abs(frames["rocker"][1][:2, 0] - [np.cos(th3), np.sin(th3)])) < TOL
+
+
+def test_lagcomp_animate_draws_a_tree_from_a_file(cache_dir, tmp_path, capsys):
+    """``lagcomp animate FILE:FUNCTION`` takes a function returning a Tree, and writes the clip of its links."""
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("yourdfpy")
+    from PIL import Image
+
+    from lagcomp.cli import main
+
+    (tmp_path / "robot.py").write_text("from lagcomp.examples.trees import arm5\n\n\ndef arm():\n"
+                                       "    return arm5(q0=[0.3, 0.9, 0.6, 0.4, 0.0], t_end=0.6)\n", encoding="utf-8")
+    out = tmp_path / "arm.gif"
+    argv = ["--cache-dir", str(cache_dir), "animate", f"{tmp_path / 'robot.py'}:arm", "-o", str(out), "--fps", "5",
+            "--quiet"]
+    assert main(argv) == 0
+    assert "animated" in capsys.readouterr().out
+    with Image.open(out) as clip:
+        assert clip.n_frames == 4      # t = 0, 0.2, 0.4, 0.6
