@@ -288,3 +288,37 @@ def test_lagcomp_animate_draws_a_tree_from_a_file(cache_dir, tmp_path, capsys):
     assert "animated" in capsys.readouterr().out
     with Image.open(out) as clip:
         assert clip.n_frames == 4      # t = 0, 0.2, 0.4, 0.6
+
+
+# -- link points as outputs of a state-space model ----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", [7, 39])
+def test_link_points_as_outputs_are_pinocchios_joint_jacobians(cache_dir, seed):
+    """``linearize(..., outputs=["<link>.x", ..., "<link>.vz"])``: rows [J, 0] and [0, J] with J = ∂o/∂q the linear
+    part of Pinocchio's joint Jacobian in world-aligned axes (a revolute or prismatic joint's velocity is q̇)."""
+    pin = pytest.importorskip("pinocchio")
+    tree, values = random_tree(seed)
+    model = lc.compile(tree, cache_dir=cache_dir)
+    reference = pinocchio_model(tree, values)
+    data = reference.createData()
+    q = np.random.default_rng(seed).uniform(-3, 3, tree.n)
+    names = [f"{link.name}.{part}" for link in tree.links for part in ("x", "y", "z", "vx", "vy", "vz")]
+    space = lc.analysis.linearize(model, q, outputs=names).state_space()
+    assert space.outputs == tuple(names) and not space.D.any()
+    pin.computeJointJacobians(reference, data, q)
+    last = {node.link: i for i, node in enumerate(tree.nodes)}
+    n = tree.n
+    for row, name in zip(space.C, names, strict=True):
+        link, _, part = name.partition(".")
+        J = pin.getJointJacobian(reference, data, last[link] + 1, pin.LOCAL_WORLD_ALIGNED)[:3]
+        expected = J["xyz".index(part[-1])]
+        position, velocity = (row[:n], row[n:]) if len(part) == 1 else (row[n:], row[:n])
+        assert np.max(np.abs(position - expected)) < TOL and not velocity.any(), name
+
+
+def test_an_unknown_link_point_names_the_links(cache_dir):
+    model = lc.compile(cart_pole(), cache_dir=cache_dir)
+    params = {name: 1.0 for name in model.parameters}
+    with pytest.raises(lc.OptionError, match=r"Unknown output.*\['arm\.vx'\].*\['cart', 'pole'\]"):
+        lc.analysis.linearize(model, [0.0, 0.0], params=params, outputs=["pole.x", "arm.vx"]).state_space()
