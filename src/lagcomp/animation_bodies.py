@@ -30,7 +30,8 @@ class BodyFrames:
     """The bodies at each frame.
 
     centres : dict of str to ndarray, shape (frames, 3)
-        Each drawn body's position (a particle's, a rigid body's centre of mass), by name.
+        Each drawn body's position (a particle's, a rigid body's centre of mass, a tree link's frame
+        origin), by name.
     rotations : dict of str to ndarray, shape (frames, 3, 3)
         Each rigid body's (or tree link's) rotation matrix C whose columns are its axes, by name
         (bodies whose orientation the model knows).
@@ -70,6 +71,9 @@ class BodyGeometry:
         The parameter vector the run used.
     kernel : numba dispatcher or None
         ``geometry(t, y, p, out)``; None once the Solution was pickled (the kernel is not kept).
+    parents : tuple of (str, str or None)
+        A kinematic tree's ``GEOMETRY_PARENTS`` (each link and its parent link, None for the base),
+        drawn as rods; empty for a System's bodies.
 
     `of` reads the three from the model's kernels when one of them is first read, not before: ``geometry``
     is an on-demand kernel (`lagcomp.codegen.kinds`), built the first time an animation or a plot asks.
