@@ -38,10 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from lagcomp.animation_bodies import BodyFrames
+from lagcomp.animation_bodies import ORIGIN, BodyFrames
 from lagcomp.errors import ModelError, OptionError
-
-ORIGIN = "origin"
 
 
 def frame_times(t: np.ndarray, fps: float, speed: float) -> np.ndarray:
@@ -180,7 +178,10 @@ def animate(sol, points: dict | None = None, *, links=(), trace=(), bodies: bool
         Points and bodies whose paths are drawn as they move (a body's centre).
     bodies : bool
         Draw the model's bodies (`lagcomp.Particle`, `lagcomp.RigidBody`): a marker at
-        each centre, and a rigid body's axes x, y, z (red, green, blue) from it.
+        each centre, and a rigid body's axes x, y, z (red, green, blue) from it.  A
+        kinematic tree's links (`lagcomp.Tree`) are drawn at their frames' origins, with
+        their axes, and a rod from each link's origin to its children's (from ``"origin"``
+        for a link on the base).
     axes_length : float, optional
         Length of the drawn body axes, in the model's units of length; by default half
         the largest extent of the motion (`default_axes_length`).
@@ -218,6 +219,7 @@ def animate(sol, points: dict | None = None, *, links=(), trace=(), bodies: bool
     if not named and not drawn.centres:
         raise OptionError(f"animate: {sol.model_name or 'this model'!r} has no bodies to draw (its T is written "
                           "directly, or bodies=False): name the points, points={'bob': (x, y)}.")
+    links += [rod for rod in drawn.skeleton if rod not in links]   # (a tree's links, parent to child)
     clash = sorted(set(named) & set(drawn.centres))
     if clash:
         raise OptionError(f"animate: {clash} name both a point and a body: rename the point.")
@@ -277,8 +279,12 @@ def _cartesian_bob(coordinates: tuple[str, ...]) -> dict:
 
 def body_drawing(sol) -> dict:
     """What ``lagcomp animate`` draws of a bundled example built from bodies, besides the bodies: a rod from the
-    origin (the examples' pivot) to each body, and its path (`animate`'s ``links`` and ``trace``)."""
+    origin (the examples' pivot) to each body, and its path (`animate`'s ``links`` and ``trace``); of a kinematic
+    tree, the paths of its last links (its rods `animate` draws itself)."""
     names = [name for name, kind, _ in sol.geometry.layout if kind != "unplaced"]
+    parents = sol.geometry.parents
+    if parents:     # a tree: `animate` draws its rods; the paths of its last links (those no link hangs from)
+        return dict(links=[], trace=[name for name, _ in parents if all(name != p for _, p in parents)])
     return dict(links=[(ORIGIN, name) for name in names], trace=names)
 
 

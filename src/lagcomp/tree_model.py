@@ -5,9 +5,10 @@
 model's: same cache (keyed by the tree's fingerprint), same drivers, same `Model` (a `TreeModel`, whose ``system``
 is the Tree).  Its on-demand kernels of the kinds `lagcomp.codegen.kinds.TREE_KINDS` (the Jacobians, the tangent
 kernels, ``rest_partials``: radau, sensitivities, linearization) are the recursions differentiated in forward mode
-(`lagcomp.codegen.tree_companion`), built on first use into companion modules as a System's are.  What issue 39
+(`lagcomp.codegen.tree_companion`), and ``geometry`` (animation) the links' frames
+(`lagcomp.codegen.tree_geometry`), built on first use into companion modules as a System's are.  What issue 39
 does not provide yet is refused with a `ModelError` naming it: the other on-demand kernels (the Hamiltonian form,
-Taylor, geometry, the equations' LaTeX) and the analyses that read a System's T and V.
+Taylor, the energy balance, the equations' LaTeX) and the analyses that read a System's T and V.
 """
 
 from __future__ import annotations

@@ -10,7 +10,8 @@ components along the axes of the System's frame, from its origin).  About an equ
 so the row of C of ``"<body>.x"`` (``.y``, ``.z``: the position's components) is [J_x, 0], and that of
 ``"<body>.vx"`` (``.vy``, ``.vz``: the velocity's) [∂²r_x/∂q∂t, J_x]; D is 0 (an input inside a position is an
 imposed motion, whose derivatives the equations read: `linearize` gives no B then).  The derivatives are
-symbolic (sympy, from the System's bodies), evaluated at the point: no finite difference.
+symbolic (sympy, from the System's bodies), evaluated at the point: no finite difference.  A kinematic tree's
+outputs are its links' origins (`lagcomp.analysis.tree_points`).
 """
 
 from __future__ import annotations
@@ -36,6 +37,12 @@ def point_rows(model, q: np.ndarray, t: float, params: dict, names) -> dict:
               and "." in name]
     if not wanted:
         return {}
+    from lagcomp.multibody.tree import Tree
+
+    if isinstance(getattr(model, "system", None), Tree):    # a tree's links: their frames' origins
+        from lagcomp.analysis.tree_points import tree_point_rows
+
+        return tree_point_rows(model, model.system, q, params, wanted)
     positions = _positions(model)
     unknown = [name for name in wanted if name.rpartition(".")[0] not in positions]
     if unknown:

@@ -278,17 +278,24 @@ def import_file(path: Path, where: str):
     return module
 
 
-def _pick(module, where: str, attribute: str | None) -> tuple[str, object]:
-    """The attribute `attribute` of `module`, or its one System when no attribute is named."""
+def _compilable() -> tuple[type, ...]:
+    """What a file or module may define for the command line: a System, a kinematic tree (`lagcomp.Tree`), a
+    compiled Model."""
     from lagcomp.model import System
+    from lagcomp.multibody.tree import Tree
     from lagcomp.runtime import Model
 
+    return System, Tree, Model
+
+
+def _pick(module, where: str, attribute: str | None) -> tuple[str, object]:
+    """The attribute `attribute` of `module`, or its one System (or Tree) when no attribute is named."""
     if attribute is not None:
         if not hasattr(module, attribute):
-            found = _systems(module, (System, Model))
+            found = _systems(module, _compilable())
             raise LagcompError(f"{where} has no {attribute!r}; its Systems: {', '.join(found) or 'none'}.")
         return attribute, getattr(module, attribute)
-    found = _systems(module, (System, Model))
+    found = _systems(module, _compilable())
     if len(found) == 1:
         return found[0], getattr(module, found[0])
     if not found:
@@ -302,11 +309,9 @@ def _systems(module, kinds) -> list[str]:
 
 
 def _built(value, name: str, where: str, arguments: dict):
-    """`value` itself (a System or Model), or what the function `value` returns when called with `arguments`."""
-    from lagcomp.model import System
-    from lagcomp.runtime import Model
-
-    if isinstance(value, (System, Model)):
+    """`value` itself (a System, Tree or Model), or what the function `value` returns when called with
+    `arguments`."""
+    if isinstance(value, _compilable()):
         if arguments:
             raise LagcompError(f"--arg {', '.join(arguments)}: {name} in {where} is a System, not a function "
                                "that takes arguments.")
@@ -320,6 +325,6 @@ def _built(value, name: str, where: str, arguments: dict):
     except Exception as err:
         raise LagcompError(f"{name}({', '.join(f'{k}={v}' for k, v in arguments.items())}) in {where} raised "
                            f"{type(err).__name__}: {err}") from err
-    if not isinstance(built, (System, Model)):
-        raise LagcompError(f"{name}() in {where} returned a {type(built).__name__}, not a System.")
+    if not isinstance(built, _compilable()):
+        raise LagcompError(f"{name}() in {where} returned a {type(built).__name__}, not a System or a Tree.")
     return built

@@ -50,7 +50,7 @@ ON_DEMAND = (
     KernelKind("canonical", ("momentum_rate", "velocities", "canonical_partials"),
                "the Hamiltonian form (gauss1/2/3, Lyapunov exponents, Model.hamiltonian)"),
     KernelKind("analysis", ("rest_partials",), "equilibria and small oscillations (lagcomp.analysis)"),
-    KernelKind("geometry", ("geometry", "GEOMETRY", "GEOMETRY_SIZE"), "the bodies' positions (animation, plots)"),
+    KernelKind("geometry", ("geometry", "GEOMETRY", "GEOMETRY_SIZE", "GEOMETRY_PARENTS"), "the bodies' positions (animation, plots)"),
     KernelKind("taylor", ("taylor_coefficients", "TAYLOR_WORK", "TAYLOR_PERIODIC", "TAYLOR_REFUSED",
                           "TAYLOR_MODE_PROGRAMS"), "method='taylor'"),
     KernelKind("equations", ("EQUATIONS",), "Model.equations()"),
@@ -61,8 +61,9 @@ ON_DEMAND = (
 
 #: The on-demand kinds a model compiled from a kinematic tree (`lagcomp.Tree`) has, built from its recursions
 #: differentiated in forward mode (`lagcomp.codegen.tree_companion`; "dae" only has kernels for a tree with loops,
-#: `lagcomp.codegen.tree_loop_companion`); its other kinds are refused.
-TREE_KINDS = ("jacobians", "directional", "analysis", "dae")
+#: `lagcomp.codegen.tree_loop_companion`), and the links' frames ("geometry", `lagcomp.codegen.tree_geometry`, whose
+#: ``GEOMETRY_PARENTS`` a System's module does not define); its other kinds are refused.
+TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry")
 
 #: Every name a companion module may define, and the kind that defines it.
 KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}

@@ -12,7 +12,8 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
   (+ ∂f/∂p w) along one direction read from y's (and p's) tail: the recursion and one tangent, about three
   times ``rhs``; runs of more columns take the full Jacobians (`lagcomp.integrate.sensitivities`);
 * "analysis" (``lagcomp.analysis.linearize``, equilibria): ``rest_partials``, ∂F/∂q and ∂F/∂q̇ of recursive
-  Newton–Euler's F at q̇ = 0.
+  Newton–Euler's F at q̇ = 0;
+* "geometry" (animation): the links' frames by forward kinematics, no derivative (`lagcomp.codegen.tree_geometry`).
 
 A tree with closed loops (`lagcomp.Loop`) moves by an augmented solve, not by the articulated-body algorithm: its
 kinds are built by `lagcomp.codegen.tree_loop_companion` (the Jacobians, the tangent kernels and the DAE kernels of
@@ -32,6 +33,7 @@ import sympy as sp
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
+from lagcomp.codegen.tree_geometry import tree_geometry_kernels
 from lagcomp.codegen.tree_loop_companion import LOOP_BUILDERS
 from lagcomp.codegen.tree_lower import FORMULATION, generalized_forcing, motion, program_kernel
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
@@ -88,7 +90,10 @@ def tree_companion_source(tree: Tree, kind: KernelKind, eager_module: str) -> tu
 def lower_tree_kind(tree: Tree, kind: str) -> ModuleIR:
     """The IR of the kernels of the on-demand `kind` of `tree` (module docstring)."""
     local = tree_locals(tree)
-    kernels = (_LOOP_BUILDERS if tree.closures else _BUILDERS)[kind](tree, local)
+    if kind == "geometry":
+        kernels = tree_geometry_kernels(tree, local)
+    else:
+        kernels = (_LOOP_BUILDERS if tree.closures else _BUILDERS)[kind](tree, local)
     return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=tree.coordinate_names,
                     parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION)
 

@@ -1,5 +1,6 @@
 """Kinematic trees (`lagcomp.Tree`) as examples and for the benchmarks: chains of n links to measure how the
-multibody path scales (`bench/bench_multibody.py`, `bench/bench_scale.py`, issue 39), and a cart-pole.
+multibody path scales (`bench/bench_multibody.py`, `bench/bench_scale.py`, issue 39), a cart-pole, and a five-joint
+robot arm read from the URDF file shipped with lagcomp (`ARM5_URDF`, `arm5`).
 
 These factories are not in `lagcomp.examples.EXAMPLES`, which holds Systems; each returns a Tree whose
 parameters are free symbols (no defaults): the tests draw them at random.  Every joint frame is placed without
@@ -10,12 +11,19 @@ axis (modified Rodrigues parameters, `lagcomp.Spherical`).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import sympy as sp
 
 from lagcomp.model import coordinates, t
 from lagcomp.multibody import Link, Prismatic, Revolute, Spherical, Tree, Universal
 
-__all__ = ["cart_pole", "planar_chain", "spherical_chain", "universal_chain"]
+__all__ = ["ARM5_URDF", "arm5", "cart_pole", "planar_chain", "spherical_chain", "universal_chain"]
+
+#: A five-joint arm's URDF, shipped with lagcomp: a turntable (``shoulder_pan`` about z), three pitch joints about y
+#: (``shoulder_lift``, ``elbow``, ``wrist_pitch``), a wrist roll (``wrist_roll`` about z) and a tool fixed to the hand;
+#: uniform cylinders of 0.25 to 1.5 kg, 0.75 m reach, viscous joint damping (the file's comment has the numbers).
+ARM5_URDF = Path(__file__).resolve().parent / "urdf" / "arm5.urdf"
 
 
 def planar_chain(n: int, name: str | None = None) -> Tree:
@@ -66,3 +74,11 @@ def cart_pole() -> Tree:
     pole = Link("pole", Revolute(th, axis="z", damping=e), parent="cart", mass=m, com=(0, -c, 0),
                 inertia=(J, J, J))
     return Tree([cart, pole], gravity=(0, -g, 0), name="cart_pole_tree")
+
+
+def arm5(**options) -> Tree:
+    """The five-joint arm of `ARM5_URDF` as a Tree (`lagcomp.from_urdf` with `options`: ``floating_base``,
+    ``damping``, ``q0``, ...); needs yourdfpy (the ``urdf`` extra)."""
+    from lagcomp.multibody.urdf import from_urdf
+
+    return from_urdf(ARM5_URDF, **options)
