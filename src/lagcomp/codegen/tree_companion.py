@@ -12,7 +12,11 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
   (+ ∂f/∂p w) along one direction read from y's (and p's) tail: the recursion and one tangent, about three
   times ``rhs``; runs of more columns take the full Jacobians (`lagcomp.integrate.sensitivities`);
 * "analysis" (``lagcomp.analysis.linearize``, equilibria): ``rest_partials``, ∂F/∂q and ∂F/∂q̇ of recursive
-  Newton–Euler's F at q̇ = 0.
+  Newton–Euler's F at q̇ = 0;
+* "dynamics" (``Model.mass_matrix``, ``Model.forcing``, ``lagcomp.analysis``; a tree's own kind,
+  `lagcomp.codegen.kinds.TREE_ON_DEMAND`): ``mass_matrix`` by the composite-rigid-body algorithm and ``forcing``
+  by recursive Newton–Euler at q̈ = 0, not differentiated: a System's eager module has them, but no run of a tree
+  calls them (its ``rhs`` is the articulated-body algorithm).
 
 The program of a kernel that also writes f is the eager ``rhs``'s, assignment for assignment (same recursion,
 same locals), so its f is ``rhs``'s bitwise.  No M is factored: the articulated-body algorithm's q̈ is explicit,
@@ -28,7 +32,13 @@ import sympy as sp
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
-from lagcomp.codegen.tree_lower import FORMULATION, generalized_forcing, motion, program_kernel
+from lagcomp.codegen.tree_lower import (
+    FORMULATION,
+    generalized_forcing,
+    mass_matrix_stores,
+    motion,
+    program_kernel,
+)
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
@@ -179,5 +189,20 @@ def _rest_partials_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
         ("t", "y", "p", "out"), prog, stores, local.loads),)
 
 
+def _dynamics_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
+    """``mass_matrix`` (the composite-rigid-body algorithm) and ``forcing`` (recursive Newton–Euler at q̈ = 0): the
+    tree's M q̈ = F, which no run calls (module docstring)."""
+    nodes, args = list(local.nodes), ("t", "y", "p", "out")
+    prog = Program()
+    mass = program_kernel("mass_matrix", "Mass matrix M(q), shape (n, n), into `out` (composite-rigid-body "
+                          "algorithm).", args, prog, mass_matrix_stores(prog, nodes), local.loads)
+    prog = Program()
+    stores = [(f"out[{i}]", f) for i, f in enumerate(generalized_forcing(prog, nodes, list(local.gravity)))]
+    forcing = program_kernel("forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out` (recursive "
+                             "Newton-Euler at q̈ = 0).", args, prog, stores, local.loads)
+    return mass, forcing
+
+
 #: The kernels of each on-demand kind a tree has (`lagcomp.codegen.kinds.TREE_KINDS`).
-_BUILDERS = {"jacobians": _jacobian_kernels, "directional": _tangent_kernels, "analysis": _rest_partials_kernels}
+_BUILDERS = {"jacobians": _jacobian_kernels, "directional": _tangent_kernels, "analysis": _rest_partials_kernels,
+             "dynamics": _dynamics_kernels}

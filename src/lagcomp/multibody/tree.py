@@ -175,7 +175,7 @@ class Tree:
         """Why a tree model has no `what` (an on-demand kernel and its feature, or an analysis that reads a System's
         T and V) yet; None when `what` is a kernel of the on-demand `kind` the tree path builds
         (`lagcomp.codegen.kinds.TREE_KINDS`: its recursions differentiated, `lagcomp.codegen.tree_companion`)."""
-        if kind in TREE_KINDS and not self.closures:
+        if kind in TREE_KINDS and (not self.closures or kind == "dynamics"):   # (M and F ignore the loops)
             return None
         if kind in TREE_KINDS:
             return (f"{what} is not available for the kinematic tree {self.name!r} yet: it has closed loops "
@@ -183,7 +183,7 @@ class Tree:
                     f"include the loops' constraints yet (a later step of {ISSUE}). Use an explicit method "
                     "(dop853, rk4, ...) with projection=True.")
         return (f"{what} is not available for the kinematic tree {self.name!r} yet: the multibody path emits rhs, "
-                "mass_matrix, forcing, energy and momenta, and on demand the Jacobians, the tangent kernels and "
+                "energy and momenta, and on demand mass_matrix, forcing, the Jacobians, the tangent kernels and "
                 "rest_partials (radau, sensitivities, lagcomp.analysis.linearize); the other kernels come in "
                 f"later steps of {ISSUE}. Use those methods, or write the system as a lc.System with lc.RigidBody "
                 "for this feature.")
