@@ -24,14 +24,20 @@ import threading
 import warnings
 
 from lagcomp.cache import Cache, Entry, load_module
-from lagcomp.codegen.kinds import KIND_OF, ON_DEMAND, KernelKind
+from lagcomp.codegen.kinds import (
+    KIND_OF,
+    ON_DEMAND,
+    TREE_KIND_OF,
+    TREE_ON_DEMAND,
+    KernelKind,
+)
 from lagcomp.errors import CacheWarning, ModelError
 
 #: What a companion's input key adds to the model's, before the kind's name.
 SUFFIX = "-on-demand"
 
-#: The on-demand kinds by name.
-_KINDS = {kind.name: kind for kind in ON_DEMAND}
+#: The on-demand kinds by name (a kinematic tree's own, `lagcomp.codegen.kinds.TREE_ON_DEMAND`, included).
+_KINDS = {kind.name: kind for kind in (*ON_DEMAND, *TREE_ON_DEMAND)}
 
 
 def companion_key(key: str, kind: str) -> str:
@@ -65,6 +71,9 @@ class Companion:
         self.root, self.key, self.name = entry.path.parent.parent, entry.key, name
         self.eager_module = entry.import_name
         self.system, self.eom = system, eom
+        #: The kind of each on-demand name of this model: a kinematic tree's holds M and F too
+        #: (`lagcomp.codegen.kinds.TREE_KIND_OF`).
+        self.kind_of = TREE_KIND_OF if entry.metadata.get("tree") else KIND_OF
         self._entries: dict[str, Entry] = {}
         self._modules: dict = {}
         self._lock = threading.RLock()
@@ -111,8 +120,8 @@ class Companion:
     @staticmethod
     def _what(kind: str, wanted: str | None) -> str:
         """How messages name what was asked: the kernel and its feature, else the kind and its feature."""
-        if wanted in KIND_OF:
-            return f"`{wanted}` ({KIND_OF[wanted].feature})"
+        if wanted in TREE_KIND_OF:
+            return f"`{wanted}` ({TREE_KIND_OF[wanted].feature})"
         return f"the {kind} kernels ({_KINDS[kind].feature})"
 
     def _equations(self, kind: str, wanted: str | None, cache: Cache):
@@ -160,9 +169,10 @@ class ModelKernels:
         try:
             value = getattr(self._module, name)   # (the module's own names too: __name__, __file__, ...)
         except AttributeError:
-            if name not in KIND_OF:
+            kind_of = self._companion.kind_of
+            if name not in kind_of:
                 raise
-            value = getattr(self._companion.module(KIND_OF[name].name, name), name)
+            value = getattr(self._companion.module(kind_of[name].name, name), name)
         self.__dict__[name] = value     # (later reads find it without this call: the modules never change)
         return value
 

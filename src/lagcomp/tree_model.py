@@ -5,8 +5,9 @@
 model's: same cache (keyed by the tree's fingerprint), same drivers, same `Model` (a `TreeModel`, whose ``system``
 is the Tree).  Its on-demand kernels of the kinds `lagcomp.codegen.kinds.TREE_KINDS` (the Jacobians, the tangent
 kernels, ``rest_partials``: radau, sensitivities, linearization) are the recursions differentiated in forward mode
-(`lagcomp.codegen.tree_companion`), and ``geometry`` (animation) the links' frames
-(`lagcomp.codegen.tree_geometry`), built on first use into companion modules as a System's are.  What issue 39
+(`lagcomp.codegen.tree_companion`), ``mass_matrix`` and ``forcing``, which no run of a tree calls, their recursions,
+and ``geometry`` (animation) the links' frames (`lagcomp.codegen.tree_geometry`), built on first use into companion
+modules as a System's are.  What issue 39
 does not provide yet is refused with a `ModelError` naming it: the other on-demand kernels (the Hamiltonian form,
 Taylor, the energy balance, the equations' LaTeX) and the analyses that read a System's T and V.
 """
@@ -16,7 +17,7 @@ from __future__ import annotations
 import warnings
 
 from lagcomp.cache import Cache, input_key, load_module
-from lagcomp.codegen.kinds import ON_DEMAND, TREE_KINDS
+from lagcomp.codegen.kinds import ON_DEMAND, TREE_KINDS, TREE_ON_DEMAND
 from lagcomp.companion import keep_equations
 from lagcomp.errors import CacheWarning, ModelError
 from lagcomp.runtime import Model, run_defaults
@@ -78,7 +79,7 @@ class TreeModel(Model):
         """The cache entry of the companion module of the on-demand `kind`, built first if needed; a ModelError
         naming the kind for one a tree does not have yet (issue 39)."""
         if kind not in TREE_KINDS:
-            feature = next((k.feature for k in ON_DEMAND if k.name == kind), "an unknown kind")
+            feature = next((k.feature for k in (*ON_DEMAND, *TREE_ON_DEMAND) if k.name == kind), "an unknown kind")
             raise ModelError(f"the {kind} kernels ({feature}) are not available for the kinematic tree "
                              f"{self.name!r} yet: a tree model has the on-demand kinds {list(TREE_KINDS)} "
                              "(issue 39).")

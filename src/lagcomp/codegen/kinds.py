@@ -59,14 +59,26 @@ ON_DEMAND = (
                "state-space models (lagcomp.analysis.linearize(..., inputs=...), Model.rhs_input_jacobian)"),
 )
 
+#: The on-demand kinds only a kinematic tree (`lagcomp.Tree`) has: kernels a System's eager module holds, which no
+#: run of a tree calls (its ``rhs`` is the articulated-body algorithm, which forms no M), built on first use.
+TREE_ON_DEMAND = (
+    KernelKind("dynamics", ("mass_matrix", "forcing"),
+               "M(q) and F(q, q̇, t) of a kinematic tree (Model.mass_matrix, Model.forcing, lagcomp.analysis)"),
+)
+
 #: The on-demand kinds a model compiled from a kinematic tree (`lagcomp.Tree`) has, built from its recursions
-#: differentiated in forward mode (`lagcomp.codegen.tree_companion`; "dae" only has kernels for a tree with loops,
+#: (``dynamics``: the composite-rigid-body algorithm and recursive Newton–Euler), those differentiated in forward
+#: mode (`lagcomp.codegen.tree_companion`; "dae" only has kernels for a tree with loops,
 #: `lagcomp.codegen.tree_loop_companion`), and the links' frames ("geometry", `lagcomp.codegen.tree_geometry`, whose
 #: ``GEOMETRY_PARENTS`` a System's module does not define); its other kinds are refused.
-TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry")
+TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry", "dynamics")
 
 #: Every name a companion module may define, and the kind that defines it.
 KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}
+
+#: `KIND_OF` of a tree model: a System's on-demand names (its refused kinds included: asking for one says why) and
+#: the names of `TREE_ON_DEMAND`.
+TREE_KIND_OF = {**KIND_OF, **{name: kind for kind in TREE_ON_DEMAND for name in kind.names}}
 
 #: The eager kernels that on-demand kernels call (the Jacobians start from ``rhs``, a constrained model's from
 #: ``rhs_and_reactions``): a companion module imports them from the eager module.

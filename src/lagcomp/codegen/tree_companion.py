@@ -13,6 +13,10 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
   times ``rhs``; runs of more columns take the full Jacobians (`lagcomp.integrate.sensitivities`);
 * "analysis" (``lagcomp.analysis.linearize``, equilibria): ``rest_partials``, ∂F/∂q and ∂F/∂q̇ of recursive
   Newton–Euler's F at q̇ = 0;
+* "dynamics" (``Model.mass_matrix``, ``Model.forcing``, ``lagcomp.analysis``; a tree's own kind,
+  `lagcomp.codegen.kinds.TREE_ON_DEMAND`): ``mass_matrix`` by the composite-rigid-body algorithm and ``forcing``
+  by recursive Newton–Euler at q̈ = 0, not differentiated: a System's eager module has them, but no run of a tree
+  calls them (its ``rhs`` is the articulated-body algorithm);
 * "geometry" (animation): the links' frames by forward kinematics, no derivative (`lagcomp.codegen.tree_geometry`).
 
 A tree with closed loops (`lagcomp.Loop`) moves by an augmented solve, not by the articulated-body algorithm: its
@@ -35,7 +39,13 @@ from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
 from lagcomp.codegen.tree_geometry import tree_geometry_kernels
 from lagcomp.codegen.tree_loop_companion import LOOP_BUILDERS
-from lagcomp.codegen.tree_lower import FORMULATION, generalized_forcing, motion, program_kernel
+from lagcomp.codegen.tree_lower import (
+    FORMULATION,
+    generalized_forcing,
+    mass_matrix_stores,
+    motion,
+    program_kernel,
+)
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
@@ -192,11 +202,26 @@ def _rest_partials_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
         ("t", "y", "p", "out"), prog, stores, local.loads),)
 
 
+def _dynamics_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
+    """``mass_matrix`` (the composite-rigid-body algorithm) and ``forcing`` (recursive Newton–Euler at q̈ = 0): the
+    tree's M q̈ = F, which no run calls (module docstring)."""
+    nodes, args = list(local.nodes), ("t", "y", "p", "out")
+    prog = Program()
+    mass = program_kernel("mass_matrix", "Mass matrix M(q), shape (n, n), into `out` (composite-rigid-body "
+                          "algorithm).", args, prog, mass_matrix_stores(prog, nodes), local.loads)
+    prog = Program()
+    stores = [(f"out[{i}]", f) for i, f in enumerate(generalized_forcing(prog, nodes, list(local.gravity)))]
+    forcing = program_kernel("forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out` (recursive "
+                             "Newton-Euler at q̈ = 0).", args, prog, stores, local.loads)
+    return mass, forcing
+
+
 #: The kernels of each on-demand kind a tree has (`lagcomp.codegen.kinds.TREE_KINDS`), from (tree, its locals):
 #: a tree without loops has no DAE kernels (radau integrates its ODE, as a Lagrange module's without constraints).
 _BUILDERS = {"jacobians": lambda tree, local: _jacobian_kernels(local),
              "directional": lambda tree, local: _tangent_kernels(local),
-             "analysis": lambda tree, local: _rest_partials_kernels(local), "dae": lambda tree, local: ()}
+             "analysis": lambda tree, local: _rest_partials_kernels(local), "dae": lambda tree, local: (),
+             "dynamics": lambda tree, local: _dynamics_kernels(local)}
 
 #: The same for a tree with loops: the augmented solve differentiated (`lagcomp.codegen.tree_loop_companion`);
 #: ``rest_partials`` is the open tree's (F is the same).

@@ -1,8 +1,8 @@
 """Lower a kinematic tree (`lagcomp.multibody.Tree`) to the kernel IR, from the recursions, not from T and V.
 
 Each kernel's temporaries are the assignments of one straight-line program (`lagcomp.multibody.program`): the
-articulated-body algorithm's for ``rhs``, the composite-rigid-body algorithm's for ``mass_matrix``, recursive
-Newton–Euler's for ``forcing`` and ``momenta``, the outward velocities' for ``energy``.  They go to the emitter as
+articulated-body algorithm's for ``rhs``, recursive Newton–Euler's for ``momenta`` (and, on demand, the
+composite-rigid-body algorithm's for ``mass_matrix``, recursive Newton–Euler's for ``forcing``), the outward velocities' for ``energy``.  They go to the emitter as
 they are (no CSE over the whole kernel: each is already a small expression of earlier locals), with the
 assignments no output reads dropped, and the steps that identical nodes repeat emitted once as shared helpers
 (`lagcomp.codegen.outline`: numba's compile time grows with the code it types).  The module has the eager kernels of a Lagrange module, with the same names,
@@ -41,9 +41,10 @@ ARGS = ("t", "y", "p", "out")
 
 
 def lower_tree(tree: Tree) -> ModuleIR:
-    """The IR of the eager module of `tree`: rhs, mass_matrix, forcing, energy (and energy_function), momenta and
-    the event kernels (the ball joints' shadow switches, the tree's own events; with contacts, rhs with their modes:
-    `lagcomp.codegen.tree_contacts`)."""
+    """The IR of the eager module of `tree`: rhs, energy (and energy_function), momenta and the event kernels (the
+    ball joints' shadow switches, the tree's own events; with contacts, rhs with their modes:
+    `lagcomp.codegen.tree_contacts`); ``mass_matrix`` and ``forcing``, which no run calls, are on demand
+    (`lagcomp.codegen.tree_companion`)."""
     n, names = tree.n, tree.coordinate_names
     q = [sp.Symbol(user_local("q", name, i), real=True) for i, name in enumerate(names)]
     qd = [sp.Symbol(user_local("qd", name, i), real=True) for i, name in enumerate(names)]
@@ -73,10 +74,6 @@ def lower_tree(tree: Tree) -> ModuleIR:
         dynamics = contacts.motion(dynamics[0])
     kernels = (
         *dynamics,
-        kernel("mass_matrix", "Mass matrix M(q), shape (n, n), into `out` (composite-rigid-body algorithm).", ARGS,
-               lambda prog: _matrix_stores(mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes)), n)),
-        kernel("forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out` (recursive Newton-Euler at q̈ = 0).",
-               ARGS, lambda prog: [(f"out[{i}]", f) for i, f in enumerate(generalized_forcing(prog, nodes, gravity))]),
         kernel("energy", "Total mechanical energy T + V (gravity and the joints' springs).", ("t", "y", "p"),
                lambda prog: [("return", prog.let(kinetic_energy(prog, nodes) + potential_energy(prog, nodes, gravity)))]),
         Kernel(name="energy_function", doc="Energy function h = Σ q̇ ∂L/∂q̇ − L: T is homogeneous quadratic in q̇,\n"
@@ -115,6 +112,12 @@ def program_kernel(name: str, doc: str, args, prog: Program, stores, loads, solv
     return Kernel(name=name, doc=doc, args=args, loads=tuple((local, src) for local, src in loads if local in used_names),
                   temps=body, stores=tuple((target, sp.sympify(e)) for target, e in stores), solve=solve,
                   helpers=helpers)
+
+
+def mass_matrix_stores(prog: Program, nodes) -> list:
+    """The stores of M(q) into the symmetric (n, n) `out`, bound in `prog`: the composite-rigid-body algorithm, mapped
+    to the coordinates by `lagcomp.multibody.charts`."""
+    return _matrix_stores(mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes)), len(nodes))
 
 
 def _matrix_stores(entries: dict, n: int) -> list:

@@ -204,7 +204,7 @@ class Tree:
         if kind in TREE_KINDS:   # (with loops too: `lagcomp.codegen.tree_loop_companion`)
             return None
         return (f"{what} is not available for the kinematic tree {self.name!r} yet: the multibody path emits rhs, "
-                "mass_matrix, forcing, energy and momenta, and on demand the Jacobians, the tangent kernels, "
+                "energy and momenta, and on demand mass_matrix, forcing, the Jacobians, the tangent kernels, "
                 "rest_partials (radau, sensitivities, lagcomp.analysis.linearize) and the links' geometry "
                 "(animation); the other kernels come in "
                 f"later steps of {ISSUE}. Use those methods, or write the system as a lc.System with lc.RigidBody "
