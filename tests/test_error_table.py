@@ -512,6 +512,8 @@ CASES = {
     "atol-shape": (_simulate("pendulum", atol=[1e-9, 1e-9, 1e-9]), "`atol` has shape (3,)"),
     "atol-component-not-positive": (_simulate("pendulum", atol=[1e-9, -1e-9]), "`atol[1]` (theta_dot)"),
     "atol-mapping-incomplete": (_simulate("pendulum", atol={"phi": (1e-9, 1e-9)}), "missing: ['theta']"),
+    "lyapunov-scale": (lambda models: an.two_trajectory_lyapunov(models["pendulum"], (0.0, 1.0), scale=[1.0, 0.0],
+                                                                 progress=False), "`scale` must hold 2"),
     "batched-taylor-atol": (lambda models: models["pendulum"].sweep((0, 1), {"l": [1.0, 2.0]}, method="taylor",
                                                                    batched=True, atol=[1e-9, 1e-8], progress=False),
                             "`atol`"),

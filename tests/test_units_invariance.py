@@ -33,7 +33,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
-from lagcomp.analysis import normal_modes, periodic_orbit
+from lagcomp.analysis import normal_modes, periodic_orbit, two_trajectory_lyapunov
 from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
 from lagcomp.errors import LinearizationError
 from lagcomp.examples.constrained import four_bar_closure
@@ -393,6 +393,29 @@ def test_a_skidding_block_stops_at_the_same_place_in_any_units(skidding, length,
     assert abs(x - distance) <= slack + 1e-9 * distance
     assert abs(base_x - distance) <= slack + 1e-9 * distance
     assert abs(x - base_x) <= 2 * slack + 1e-9 * distance
+
+
+# --- Lyapunov exponents: in 1/time, the shadow's distance in each component's units ---------------------------------
+
+@pytest.mark.parametrize("units", [(1e-3, 1e-6, 1.0), (1e3, 1e3, 1e-3), (1.0, 1.0, 1e3), (2.0, 0.5, 0.25)])
+def test_a_two_trajectory_lyapunov_exponent_scales_with_one_over_time(compiled, units):
+    """The double pendulum from (2, 1) at rest, over 20 of its time units (before rounding differences grow past
+    1e-5 on this chaotic orbit): the exponent times T is the base units' to 1e-4, with the shadow's distance d0 = 1e-8
+    relative to each component of x = (q, p) (`scale`: 1 for the angles, M L²/T for the momenta).  With the default
+    scale (d0 absolute, 1e-8 in every unit) momenta of 1e-12 ended in NaN and time × 1e3 gave 1.57 for 1.41."""
+    model = compiled("double_pendulum")
+    _, dimensions, *_ = EXAMPLES["double_pendulum"]
+
+    def exponent(units):
+        params = {k: v * factor(units, dimensions[k]) for k, v in model.defaults.items()}
+        momentum = units[1] * units[0] ** 2 / units[2]
+        scale = np.array([1.0, 1.0, momentum, momentum])
+        return units[2] * two_trajectory_lyapunov(model, (0.0, 20.0 * units[2]), [2.0, 1.0], [0.0, 0.0],
+                                                  params=params, dt=0.01 * units[2], scale=scale,
+                                                  progress=False).exponents[0]
+
+    base = exponent((1.0, 1.0, 1.0))
+    assert exponent(units) == pytest.approx(base, rel=1e-4)
 
 
 # --- periodic orbits: the period in units of time, the multipliers unchanged ------------------------------------------
