@@ -37,10 +37,11 @@ def driver_call(model, addressed: bool, t_end: float):
     events = no_events(method, y0.size)
     coefficients = method.driver_arguments()
     ts, ys = np.empty(16), np.empty((16, y0.size))
+    atol = np.full(y0.size, 1e-10)      # (one per component, as simulate passes it)
 
     def call():
         y, clock, counters = y0.copy(), np.zeros(CLOCK_SLOTS), np.zeros(COUNTER_SLOTS, dtype=np.int64)
-        status, _ = driver(y, clock, counters, p, 0, np.zeros(1), t_end, 1e-10, 1e-10, np.inf, 10**9, NO_PAUSE,
+        status, _ = driver(y, clock, counters, p, 0, np.zeros(1), t_end, 1e-10, atol, np.inf, 10**9, NO_PAUSE,
                            10**9, np.empty(0), ts, ys, *events, *coefficients)
         if status not in (0, 10):
             raise RuntimeError(f"DOP853 driver returned status {status}")

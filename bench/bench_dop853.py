@@ -122,7 +122,7 @@ def driver_run(model, case: Case):
 
     def run():
         y, clock, counters = case.y0.copy(), np.zeros(CLOCK_SLOTS), np.zeros(COUNTER_SLOTS, dtype=np.int64)
-        driver(y, clock, counters, p, 0, np.array([0.0, np.inf]), case.grid[-1], TOL, TOL, np.inf,
+        driver(y, clock, counters, p, 0, np.array([0.0, np.inf]), case.grid[-1], TOL, np.full(y.size, TOL), np.inf,
                10**9, 10**9, 1, case.grid[1:], np.empty(2), np.empty((2, n)), *events, *arrays)
         return int(counters[0])
     return run

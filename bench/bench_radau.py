@@ -82,7 +82,7 @@ def lagcomp_radau(problem, rtol, atol):
 
     def run():
         y, clock, counters = y0.copy(), np.zeros(2), np.zeros(8, dtype=np.int64)
-        status, _ = radau_run(*RADAU_KERNELS, y, clock, counters, p, 0, np.zeros(1), t_end, rtol, atol, np.inf,
+        status, _ = radau_run(*RADAU_KERNELS, y, clock, counters, p, 0, np.zeros(1), t_end, rtol, np.full(n, atol), np.inf,
                               10**9, 10**9, 10**9, np.empty(0), np.empty(1), np.empty((1, n)), NO_EVENTS, NO_EVENTS,
                               np.empty(1), np.empty((1, n)), np.empty(1, np.int64), *constants, n, *new_carry(n))
         assert status == 0, status
@@ -100,7 +100,7 @@ def lagcomp_dop853(problem, rtol, atol):
         y, clock, counters = y0.copy(), np.zeros(2), np.zeros(8, dtype=np.int64)
         status, _ = embedded_run(stiff_kernels.rhs, driver_kernels.project, driver_kernels.constraint_residual,
                                  driver_kernels.event_values, driver_kernels.event_reset, y, clock, counters, p, 0,
-                                 np.zeros(1), t_end, rtol, atol, np.inf, 10**9, 10**9, 10**9, np.empty(0),
+                                 np.zeros(1), t_end, rtol, np.full(n, atol), np.inf, 10**9, 10**9, 10**9, np.empty(0),
                                  np.empty(1), np.empty((1, n)), *events, *arrays)
         assert status == 0, status
         return y, f"steps {counters[NSTEPS]}, f {counters[NFEV]}"
@@ -246,8 +246,8 @@ def _split(model, method, rounds: int) -> None:
 
     def run():
         y, clock, counters = y0.copy(), np.zeros(2), np.zeros(8, dtype=np.int64)
-        driver(y, clock, counters, p, 0, np.zeros(2), t_end, tol, tol, np.inf, 10**9, 10**9, 10**9, np.empty(0),
-               ts, ys, *no_events, *constants, n, *new_carry(n))
+        driver(y, clock, counters, p, 0, np.zeros(2), t_end, tol, np.full(n, tol), np.inf, 10**9, 10**9, 10**9,
+               np.empty(0), ts, ys, *no_events, *constants, n, *new_carry(n))
         return counters
 
     driver_seconds, counters = best(run, rounds)

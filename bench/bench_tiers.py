@@ -109,10 +109,11 @@ def rk4_call(driver, coefficients, steps: int):
 def dop853_call(driver, tableau):
     """One call of the embedded driver (kernels bound) over [0, T_END] at TOL, recording nothing but the end."""
     none = np.zeros(0, dtype=np.int64)
+    atol = np.full(Y0.size, TOL)        # (one per component, as simulate passes it)
 
     def run():
         y, clock, counters = Y0.copy(), np.zeros(3), np.zeros(11, dtype=np.int64)
-        driver(y, clock, counters, PARAMS, 0, np.array([0.0, np.inf]), T_END, TOL, TOL, np.inf, 10**9, 10**9, 10**9,
+        driver(y, clock, counters, PARAMS, 0, np.array([0.0, np.inf]), T_END, TOL, atol, np.inf, 10**9, 10**9, 10**9,
                np.empty(0), np.empty(1), np.empty((1, 4)), none, none, np.empty(16), np.empty((16, 4)),
                np.zeros(16, dtype=np.int64), np.empty((16, 4)), none, *tableau)
         return y

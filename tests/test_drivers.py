@@ -28,8 +28,12 @@ KERNELS = (driver_kernels.rhs, driver_kernels.project, driver_kernels.constraint
 
 
 def embedded_run(*args):
+    """The library driver with the test kernels; a number for ``atol`` (args[8]) spread over the state, as
+    `simulate` does (the driver takes one per component)."""
     from lagcomp.integrate.drivers.embedded import embedded_run as driver
 
+    y, atol = args[0], args[8]
+    args = (*args[:8], np.full(y.size, atol) if np.ndim(atol) == 0 else atol, *args[9:])
     return driver(*KERNELS, *args)
 
 

@@ -50,7 +50,7 @@ class Run:
         status, n_saved = radau_run(
             *self.kernels, driver_kernels.event_values,
             self.state.y, self.state.clock, self.state.counters, self.p, 0, np.zeros(1), self.t_end, self.rtol,
-            self.atol, self.max_step, self.max_steps, pause_at, self.save_every, self.t_eval, ts, ys,
+            np.full(n, self.atol), self.max_step, self.max_steps, pause_at, self.save_every, self.t_eval, ts, ys,
             self.directions, self.actions, *ev, *RADAU5.driver_arguments(), self.differential, *self.carry)
         self.calls += 1
         self.ts.append(ts[:n_saved].copy())
@@ -286,7 +286,7 @@ def test_sweep_loop_gives_each_trajectory_of_the_driver():
     dense, energy = np.empty((3, 0, 2)), np.empty((3, 2))
     event_count, event_t, event_y = np.empty((3, 0), np.int64), np.empty((3, 0, 1)), np.empty((3, 0, 1, 2))
     sweep_radau(stiff_kernels.rhs, stiff_kernels.rhs_jacobian, driver_kernels.event_values,
-                driver_kernels.oscillator_energy, Y0, P, 0, 0.0, 0.01, 1e-8, 1e-8, np.inf, 10**9, 10**9, np.empty(0),
+                driver_kernels.oscillator_energy, Y0, P, 0, 0.0, 0.01, 1e-8, np.full(2, 1e-8), np.inf, 10**9, 10**9, np.empty(0),
                 False, NO_EVENTS, NO_EVENTS, final, t_final, status, counts, dense, energy, event_count, event_t,
                 event_y, *RADAU5.driver_arguments(), 2)
     for row, p in enumerate(P):

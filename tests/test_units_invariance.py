@@ -8,9 +8,10 @@ declares the dimension of its coordinates and parameters, derived from its Lagra
 * a spring's stiffness k (k x²/2 is an energy, M L² T⁻²) is M T⁻², a damper's c (c ẋ²/2 a power, M L² T⁻³) M T⁻¹.
 
 The rescaled run gets the parameters, the initial state, ``t_span`` (and ``dt``) in the new units, the same rtol
-and atol in the units of the positions (the state's; lagcomp's atol is one number for all components, so for
-the velocities, in position units per time, it holds only up to the time factor: the runs are compared to the
-tolerance, not bit for bit).
+and an atol per state component in that component's units (positions × their unit, velocities × their unit over
+the unit of time: `simulate(..., atol=array)`), so that every error test of the drivers compares the same
+ratios; the runs are compared to the tolerance (the factors' roundings can still move a step).  Every method each
+example accepts is covered (`test_the_cases_are_every_method_each_example_accepts` keeps the table whole).
 
 Two faults of this kind are reproduced first (both failed before the fix): radau on a millimetre and a large
 four-bar linkage ended at t = 0 with ITERATION_MATRIX_SINGULAR or NEWTON_FAILED (its singularity test and its
@@ -32,10 +33,12 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
-from lagcomp.analysis import normal_modes, periodic_orbit
+from lagcomp.analysis import normal_modes, periodic_orbit, two_trajectory_lyapunov
 from lagcomp.analysis.statics import RESIDUAL_TOLERANCE
 from lagcomp.errors import LinearizationError
 from lagcomp.examples.constrained import four_bar_closure
+from lagcomp.integrate.methods import METHODS
+from lagcomp.integrate.options import check_method
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.resting import BOUNCE_HEIGHT, BOUNCE_TIME, ZENO_TIME
 
@@ -46,27 +49,32 @@ ANGLE = (0, 0, 0)
 
 #: example: (dimensions of the coordinates, of the parameters, the methods it accepts, a span of a few of its
 #: characteristic times, rk4's dt).
+ADAPTIVE = ("dopri5", "dop853", "tsit5", "bs3", "radau")
+EXPLICIT_FIXED = ("rk4",)
+GAUSS = ("gauss1", "gauss2", "gauss3")
+SEPARABLE = ("verlet", "yoshida4", "yoshida6")
 EXAMPLES = {
     "simple_pendulum": ((ANGLE,), {"m": MASS, "l": LENGTH, "g": ACCELERATION},
-                        ("dop853", "radau", "taylor", "rk4", "verlet"), 2.0, 1e-3),
+                        ADAPTIVE + ("taylor",) + EXPLICIT_FIXED + SEPARABLE + GAUSS, 2.0, 1e-3),
     "double_pendulum": ((ANGLE, ANGLE), {"m1": MASS, "m2": MASS, "l1": LENGTH, "l2": LENGTH, "g": ACCELERATION},
-                        ("dop853", "radau", "taylor", "rk4"), 2.0, 1e-3),
+                        ADAPTIVE + ("taylor",) + EXPLICIT_FIXED + GAUSS, 2.0, 1e-3),
     "stiff_spring_pendulum": ((LENGTH, ANGLE), {"m": MASS, "k": (0, 1, -2), "c": (0, 1, -1), "l0": LENGTH,
                                                 "g": ACCELERATION},
-                              ("dop853", "radau", "taylor", "rk4"), 0.05, 2e-5),
+                              ADAPTIVE + ("taylor",) + EXPLICIT_FIXED + GAUSS, 0.05, 2e-5),
     "four_bar_linkage": ((ANGLE, ANGLE, ANGLE), {"a": LENGTH, "b": LENGTH, "c": LENGTH, "d": LENGTH, "m1": MASS,
                                                   "m2": MASS, "m3": MASS, "g": ACCELERATION},
-                         ("dop853", "radau", "rk4"), 0.5, 1e-4),
+                         ADAPTIVE + EXPLICIT_FIXED, 0.5, 1e-4),
     "spherical_pendulum_cartesian": ((LENGTH, LENGTH, LENGTH), {"m": MASS, "l": LENGTH, "g": ACCELERATION},
-                                     ("dop853", "radau", "rk4"), 1.0, 1e-3),
+                                     ADAPTIVE + EXPLICIT_FIXED + ("rattle",), 1.0, 1e-3),
     "n_link_pendulum": ((ANGLE, ANGLE, ANGLE), {"m1": MASS, "m2": MASS, "m3": MASS, "l1": LENGTH, "l2": LENGTH,
                                                  "l3": LENGTH, "g": ACCELERATION},
-                        ("dop853", "dopri5", "radau", "taylor", "rk4"), 1.0, 1e-3),
-    "huygens": ((ANGLE,), {"m": MASS, "R": LENGTH, "g": ACCELERATION}, ("dop853", "radau", "taylor", "rk4"), 2.0,
-                1e-3),
+                        ADAPTIVE + ("taylor",) + EXPLICIT_FIXED + GAUSS, 1.0, 1e-3),
+    "huygens": ((ANGLE,), {"m": MASS, "R": LENGTH, "g": ACCELERATION},
+                ADAPTIVE + ("taylor",) + EXPLICIT_FIXED + GAUSS, 2.0, 1e-3),
     "driven_pendulum": ((ANGLE,), {"m": MASS, "l": LENGTH, "g": ACCELERATION, "A": LENGTH, "Omega": (0, 0, -1)},
-                        ("dop853", "radau", "rk4"), 0.2, 1e-4),
-    "sling": ((LENGTH,), {"m": MASS, "omega": (0, 0, -1)}, ("dop853", "radau", "taylor", "rk4"), 1.0, 1e-3),
+                        ADAPTIVE + ("taylor",) + EXPLICIT_FIXED + SEPARABLE + GAUSS, 0.2, 1e-4),
+    "sling": ((LENGTH,), {"m": MASS, "omega": (0, 0, -1)},
+              ADAPTIVE + ("taylor",) + EXPLICIT_FIXED + SEPARABLE + GAUSS, 1.0, 1e-3),
 }
 CASES = [(name, method) for name, (*_, methods, _, _) in EXAMPLES.items() for method in methods]
 RTOL = 1e-9
@@ -77,6 +85,12 @@ def factor(units, dimension):
     return math.prod(u ** d for u, d in zip(units, dimension, strict=True))
 
 
+def state_atol(position, time, size=1e-3 * RTOL):
+    """atol per state component in the new units: `size` times each coordinate's unit (`position`, one per
+    coordinate), and that over the unit of time for its velocity."""
+    return np.concatenate([size * position, size * position / time])
+
+
 def run_in_units(model, name, method, units):
     """A short run of the bundled ``name`` in units scaled by ``units`` = (L, M, T), mapped back: (status, y)."""
     coordinates, dimensions, _, span, dt = EXAMPLES[name]
@@ -84,8 +98,8 @@ def run_in_units(model, name, method, units):
     time = units[2]
     params = {k: v * factor(units, dimensions[k]) for k, v in model.defaults.items()}
     q0, qd0 = np.asarray(model.q0, float), np.asarray(model.qd0, float)
-    atol_unit = max(factor(units, d) for d in coordinates)      # (angles: 1; the positions' unit otherwise)
-    options = {"dt": dt * time} if method in ("rk4", "verlet") else {"rtol": RTOL, "atol": 1e-3 * RTOL * atol_unit}
+    options = ({"rtol": RTOL, "atol": state_atol(position, time)} if METHODS[method].adaptive
+               else {"dt": dt * time})
     sol = model.simulate((0.0, span * time), q0 * position, qd0 * position / time, params=params, method=method,
                          throw=False, progress=False, **options)
     return sol.status, np.concatenate([sol.q[-1] / position, sol.qd[-1] * time / position]), sol.t[-1] / time
@@ -105,8 +119,22 @@ def test_a_run_is_the_same_in_any_units(compiled, name, method, length, mass, ti
     assert scaled_status == status and scaled_t_end == pytest.approx(t_end, rel=4 * EPS)
     # to the tolerance: a few hundred rtol of the state's size over a few characteristic times (rk4: the same
     # steps, so rounding only)
-    bound = (1e-10 if method in ("rk4", "verlet") else 300 * RTOL) * np.max(np.abs(y))
+    bound = (300 * RTOL if METHODS[method].adaptive else 1e-10) * np.max(np.abs(y))
     np.testing.assert_allclose(scaled_y, y, rtol=0, atol=bound)
+
+
+@pytest.mark.parametrize("name", list(EXAMPLES))
+def test_the_cases_are_every_method_each_example_accepts(compiled, name):
+    """The table above names every method the example accepts (a new method or example must join it)."""
+    model = compiled(name)
+    accepted = []
+    for method in METHODS.values():
+        try:
+            check_method(model, method)
+        except lc.OptionError:
+            continue
+        accepted.append(method.name)
+    assert sorted(EXAMPLES[name][2]) == sorted(accepted)
 
 
 # --- radau on a closed loop in millimetres and in a large size (the issue's reproduction) ---------------------------
@@ -367,6 +395,29 @@ def test_a_skidding_block_stops_at_the_same_place_in_any_units(skidding, length,
     assert abs(x - base_x) <= 2 * slack + 1e-9 * distance
 
 
+# --- Lyapunov exponents: in 1/time, the shadow's distance in each component's units ---------------------------------
+
+@pytest.mark.parametrize("units", [(1e-3, 1e-6, 1.0), (1e3, 1e3, 1e-3), (1.0, 1.0, 1e3), (2.0, 0.5, 0.25)])
+def test_a_two_trajectory_lyapunov_exponent_scales_with_one_over_time(compiled, units):
+    """The double pendulum from (2, 1) at rest, over 20 of its time units (before rounding differences grow past
+    1e-5 on this chaotic orbit): the exponent times T is the base units' to 1e-4, with the shadow's distance d0 = 1e-8
+    relative to each component of x = (q, p) (`scale`: 1 for the angles, M L²/T for the momenta).  With the default
+    scale (d0 absolute, 1e-8 in every unit) momenta of 1e-12 ended in NaN and time × 1e3 gave 1.57 for 1.41."""
+    model = compiled("double_pendulum")
+    _, dimensions, *_ = EXAMPLES["double_pendulum"]
+
+    def exponent(units):
+        params = {k: v * factor(units, dimensions[k]) for k, v in model.defaults.items()}
+        momentum = units[1] * units[0] ** 2 / units[2]
+        scale = np.array([1.0, 1.0, momentum, momentum])
+        return units[2] * two_trajectory_lyapunov(model, (0.0, 20.0 * units[2]), [2.0, 1.0], [0.0, 0.0],
+                                                  params=params, dt=0.01 * units[2], scale=scale,
+                                                  progress=False).exponents[0]
+
+    base = exponent((1.0, 1.0, 1.0))
+    assert exponent(units) == pytest.approx(base, rel=1e-4)
+
+
 # --- periodic orbits: the period in units of time, the multipliers unchanged ------------------------------------------
 
 #: The orbit in the base units (periodic_orbit's result, not modified by the tests), shared by the examples.
@@ -389,9 +440,9 @@ def test_a_periodic_orbit_is_the_same_in_any_units(compiled, length, mass, time)
         modes = normal_modes(model, [0.0, 0.0], params)
         shape = modes.shapes[:, 0] / modes.shapes[0, 0]
         guess = np.concatenate([0.3 * shape, [0.0, 0.0]])
-        # atol is one number for the angles and their rates: small enough for both in any units
+        # atol per component in its units: the angles', and their rates' (per unit of time)
         return periodic_orbit(model, guess, 2 * np.pi / modes.frequencies[0], params=params,
-                              atol=1e-12 * min(1.0, 1.0 / units[2]))
+                              atol=state_atol(np.ones(2), units[2], 1e-12))
 
     if "base" not in _BASE_ORBIT:      # the same for every example: computed by the first
         _BASE_ORBIT["base"] = orbit((1.0, 1.0, 1.0))

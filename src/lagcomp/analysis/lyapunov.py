@@ -209,21 +209,29 @@ def lyapunov_spectrum(model, t_span, q0=None, qd0=None, params: dict | None = No
 
 
 def two_trajectory_lyapunov(model, t_span, q0=None, qd0=None, params: dict | None = None, *, d0: float = 1e-8,
-                            dt: float = 0.01, renorm_every: int = 10, transient: float = 0.0, samples: int = 200,
-                            progress=None, throw: bool = True) -> Lyapunov:
+                            scale=None, dt: float = 0.01, renorm_every: int = 10, transient: float = 0.0,
+                            samples: int = 200, progress=None, throw: bool = True) -> Lyapunov:
     """The largest exponent from a shadow trajectory kept at distance `d0` (in x = (q, p)).
 
     A cross-check of `lyapunov_exponents` that does not use the Jacobian.
     `d0` must be small enough for the separation to stay linear between
-    renormalizations and large enough to stand above rounding (1e-8 suits
-    states of order one).  Other arguments as for `lyapunov_exponents`.
+    renormalizations and large enough to stand above rounding.  The distance
+    is sqrt(Σ ((xs_i − x_i)/scale_i)²), each component of x = (q, p) in units of
+    its `scale_i`: a coordinate and a momentum have different units, so one
+    absolute d0 cannot suit both in every unit system.  `scale` (2n,), the size
+    of each component in its units (e.g. the coordinates' and momenta's
+    typical magnitudes), makes `d0` relative and the estimate the same in any
+    units; None (the default) is scale 1 for every component, d0 absolute
+    (1e-8 suits states of order one; kept so that earlier results stay bit for
+    bit).  Other arguments as for `lyapunov_exponents`.
     """
     p, x, t0, t1, dt = _setup(model, q0, qd0, params, t_span, dt)
     d0 = float(d0)
     if not (d0 > 0 and math.isfinite(d0)):
         raise OptionError(f"`d0` must be positive and finite, got {d0}.")
+    scale = _separation_scale(scale, x.size)
     u = np.random.default_rng(SEED).normal(size=x.size)
-    xs = x + d0 * u / np.linalg.norm(u)
+    xs = x + d0 * (scale * u) / np.linalg.norm(u)
     sums = np.zeros(1)
     from lagcomp.integrate.drivers.lyapunov import divergence_run
 
@@ -231,7 +239,21 @@ def two_trajectory_lyapunov(model, t_span, q0=None, qd0=None, params: dict | Non
 
     def advance(steps, n_steps):
         return divergence_run(kernels.velocities, kernels.momentum_rate, x, xs, steps, sums, p, t0, dt, n_steps,
-                              renorm_every, d0)
+                              renorm_every, d0, scale)
 
     status, times, history = _run(model, advance, t0, t1, dt, transient, renorm_every, samples, progress, sums)
     return _result(model, "two-trajectory", status, times, history, x, dt, renorm_every, p, throw)
+
+
+def _separation_scale(scale, size: int) -> np.ndarray:
+    """`two_trajectory_lyapunov`'s `scale` checked: (size,) positive finite floats (None: ones)."""
+    if scale is None:
+        return np.ones(size)
+    try:
+        values = np.array(scale, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise OptionError(f"`scale` must be an array of {size} numbers, got {scale!r}.") from err
+    if values.shape != (size,) or not np.all(np.isfinite(values) & (values > 0)):
+        raise OptionError(f"`scale` must hold {size} positive finite numbers, one per component of x = (q, p) in its "
+                          f"units; got {scale!r}.")
+    return values

@@ -113,7 +113,7 @@ class PeriodicOrbit:
 
 
 def periodic_orbit(model, guess, period: float, *, fix: str | None = None, params: dict | None = None,
-                   rtol: float = 1e-12, atol: float = 1e-12, tol: float = 1e-10, max_iterations: int = 50,
+                   rtol: float = 1e-12, atol=1e-12, tol: float = 1e-10, max_iterations: int = 50,
                    method: str = "dop853") -> PeriodicOrbit:
     """The periodic orbit of an autonomous model near `guess` by shooting (see the module docstring).
 
@@ -129,8 +129,9 @@ def periodic_orbit(model, guess, period: float, *, fix: str | None = None, param
         "period", or the name of a state component (`Model.state_names`) held at its value in `guess`
         (default: the first coordinate; an amplitude when the guess is at rest).
     params : dict, optional
-    rtol, atol : float
-        Tolerances of every integration.
+    rtol, atol : float or array_like
+        Tolerances of every integration; `atol` one number or one per state component in its units
+        (`lagcomp.integrate.tolerances`: positions and velocities differ by a unit of time).
     tol : float
         The largest max_i |φ_T(y0) − y0|_i / s_i accepted, s_i = max_t |y_i(t)| over the guess's motion (at least
         `atol`): relative to each component's own size, so the same in any units; `OptionError` above it.
@@ -201,8 +202,8 @@ def _extent(sol) -> float:
     return float(np.max(np.abs(sol.y - sol.y[0])))
 
 
-def component_scale(run, atol: float) -> np.ndarray:
-    """Each state component's size over a run, max_t |y_i(t)| (at least `atol`), shape (N,): in its own units, so
+def component_scale(run, atol) -> np.ndarray:
+    """Each state component's size over a run, max_t |y_i(t)| (at least `atol`, a number or (N,)), shape (N,): in its own units, so
     that the shooting residual φ_T(y0) − y0, the phase condition and the closing test over it are the same in any
     units (an angle's rate is in 1/time, a length in metres or millimetres)."""
     return np.maximum(np.max(np.abs(run.y), axis=0), atol)

@@ -27,6 +27,7 @@ from lagcomp.integrate.drivers.events import (
     ACTION_TERMINAL,
 )
 from lagcomp.integrate.memory import checked_limit
+from lagcomp.integrate.tolerances import absolute_tolerance
 from lagcomp.integrate.methods import (
     DEFAULT_IMPLICIT_SOLVER,
     METHODS,
@@ -80,17 +81,19 @@ def t_eval_points(t_eval, t0: float, t1: float) -> np.ndarray | None:
     return t_eval
 
 
-def tolerances(rtol, atol, m=None) -> tuple[float, float]:
+def tolerances(rtol, atol, m=None, state_names=None) -> tuple[float, float | np.ndarray]:
     """`rtol` and `atol` checked: positive, finite, and rtol in [100 eps, 1) (float64 cannot do better).
 
     With a method `m`, None stands for its defaults (`Method.default_rtol`, `default_atol`) and
     rtol may go down to its `rtol_min` (machine epsilon for the Taylor method, which has no error
-    estimate to keep above rounding).
+    estimate to keep above rounding).  With the model's `state_names`, `atol` may also be one per state
+    component, or a mapping by coordinate (`lagcomp.integrate.tolerances.absolute_tolerance`: then an array).
     """
     if m is not None:
         rtol = m.default_rtol if rtol is None else rtol
         atol = (rtol if m.default_atol is None else m.default_atol) if atol is None else atol
-    rtol, atol = positive(rtol, "rtol"), positive(atol, "atol")
+    rtol = positive(rtol, "rtol")
+    atol = positive(atol, "atol") if state_names is None else absolute_tolerance(atol, state_names)
     rtol_min = RTOL_MIN if m is None else m.rtol_min
     if not rtol_min <= rtol < 1:
         reason = "100 machine epsilons; float64 cannot do better" if rtol_min >= RTOL_MIN else "machine epsilon"
@@ -233,7 +236,8 @@ class RunOptions:
     memory_limit: float
     implicit_solver: str = DEFAULT_IMPLICIT_SOLVER
     rtol: float | None = None
-    atol: float | None = None
+    #: A number, or (2n,) per state component (`lagcomp.integrate.tolerances`); the drivers take `driver_atol`'s.
+    atol: float | np.ndarray | None = None
     first_step: float | None = None
     max_step: float = math.inf
     #: (m,) strictly increasing times in [t0, t1], or None.
@@ -315,7 +319,7 @@ def run_options(model, t_span, *, method="dop853", dt=None, rtol=None, atol=None
         if dt is not None:
             raise OptionError(f"`dt` sets the step of fixed-step methods; {m.name} chooses its own "
                               "(bound it with `max_step`).")
-        rtol, atol = tolerances(rtol, atol, m)
+        rtol, atol = tolerances(rtol, atol, m, model.state_names)
         if m.solves_dae(model) and rtol < DAE_RTOL_MIN:
             raise OptionError(f"`{m.name}` solves the constraints of {model.name!r} with the motion (a DAE) to rtol "
                               f"≥ {DAE_RTOL_MIN:g}; tighter, the constraints' rounding noise stalls its Newton "

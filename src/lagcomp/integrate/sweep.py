@@ -47,6 +47,7 @@ from lagcomp.integrate.methods import library_function, method_names
 from lagcomp.integrate.options import count, run_options
 from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 from lagcomp.integrate.stiffness import warn_if_sweep_stiff
+from lagcomp.integrate.tolerances import driver_atol, uniform
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
@@ -382,6 +383,8 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         refuse_stabilisation(m.name, model, baumgarte)
         Y0 = dae_states(model, t0, Y0, P, lambda i: f"Trajectory {i} of the sweep ({_where(names, values[i])})")
 
+    if options.adaptive:    # atol (N,) over the loop's state (a DAE's wider: `driver_atol`)
+        fixed = (*fixed[:3], driver_atol(options.atol, Y0.shape[1]), *fixed[4:])
     resetting = want_events and bool((actions >= ACTION_RESET).any())  # then event rows keep the state after too
     layout = (Y0.shape[1], rows, len(options.directions), cap, (2 if resetting else 1) * Y0.shape[1])
     out = _allocate(n_traj, layout)
@@ -399,6 +402,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         fixed = fixed[:7] if m.adaptive else fixed      # (the lane loops take their tableaux from `tableaux`)
         if m.name == "taylor":      # the library loop around the lane kernels of this order (a module of their own)
             spec = _taylor_lanes_spec(model, options.rtol, options.atol)
+            fixed = (*fixed[:3], uniform(options.atol), *fixed[4:])    # (its lanes' norms: one atol, checked there)
             task = _Task(driver, True, fixed, layout, (), projecting, *TAYLOR_LANES_LOOP)
         else:
             task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",), balance or None)
@@ -652,7 +656,7 @@ def _worker_spec(model, names: tuple[str, ...]) -> tuple[tuple[tuple[str, str], 
     return tuple(sources), str(model.source_path.parent.parent)
 
 
-def _taylor_lanes_spec(model, rtol: float, atol: float) -> tuple[tuple[tuple[str, str], ...], str]:
+def _taylor_lanes_spec(model, rtol: float, atol) -> tuple[tuple[tuple[str, str], ...], str]:
     """The spec of the module with the batched Taylor kernel of the order these tolerances need.
 
     Written from the model's module and its Taylor program (no sympy), then
@@ -661,6 +665,11 @@ def _taylor_lanes_spec(model, rtol: float, atol: float) -> tuple[tuple[tuple[str
     """
     from lagcomp.codegen import taylor_lanes
 
+    if uniform(atol) is None:
+        raise OptionError(f"A batched Taylor sweep takes one `atol` for every component (its lane kernels' norms are "
+                          f"unweighted); {model.name!r} was given one per component: drop `batched` (each trajectory "
+                          "then runs the Taylor driver, which weighs its norms by them) or pass one number.")
+    atol = uniform(atol)
     program, order = model._taylor_program, taylor_lanes.taylor_order(rtol, atol)
     if program is None:     # (check_method refuses systems without a Taylor kernel before this)
         raise OptionError(f"{model.name!r} has no Taylor program for a batched sweep; drop `batched`.")

@@ -27,6 +27,8 @@ the pairs is data (`lagcomp.integrate.tableaux.driver_arguments`), in the spirit
 Arguments, after the kernels (`kernel_types`) and before the tableau: the driver protocol of
 `lagcomp.integrate.drivers`, with
 
+* ``atol`` (N,): the absolute tolerance of each component of ``y``, in its own units (`simulate` fills it with
+  one number where the user gives one: then the same bits as a scalar would give);
 * ``y`` (N,): the state, the last accepted one on return; ``clock`` = [t, h, t_stiff]: its time and
   the next step to try (h <= 0 selects the initial step); ``counters`` int64[11] = [nfev, nsteps,
   nrejected, i_eval, since_save, n_events, -, -, stiffness test..], n_events the event rows this call
@@ -241,7 +243,7 @@ STIFFNESS_TEST_EVERY, STIFF_TESTS_TO_DECLARE, CALM_TESTS_TO_RESET = 100, 15, 6
 TABLEAU = (MATRIX, VECTOR, VECTOR, MATRIX, INT, FLOAT, INT, MATRIX, MATRIX, VECTOR, FLOAT)
 
 SIGNATURE = OUTCOME(RHS, PROJECT, RESIDUAL, EVENTS, EVENT_RESET,
-                    VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, INT,
+                    VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, VECTOR, FLOAT, INT, INT, INT,
                     VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX, INDICES, MATRIX, INDICES,
                     *TABLEAU)
 
@@ -329,7 +331,7 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
             d0 = 0.0
             d1 = 0.0
             for i in range(n):
-                sc = atol + abs(y[i]) * rtol
+                sc = atol[i] + abs(y[i]) * rtol
                 F[0, i] = sc
                 r = y[i] / sc
                 d0 += r * r
@@ -491,11 +493,11 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                             e_2 += w * K[j, i0 + 2]
                             e_3 += w * K[j, i0 + 3]
                         for e, i in ((e_0, i0), (e_1, i0 + 1), (e_2, i0 + 2), (e_3, i0 + 3)):
-                            e = h * e / (atol + max(abs(y[i]), abs(y_new[i])) * rtol)
+                            e = h * e / (atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol)
                             acc += e * e
                         i0 += 4
                     for i in range(i0, n):
-                        sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+                        sc = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
                         e = 0.0
                         for j in range(n_k):
                             e += error_weights[0, j] * K[j, i]
@@ -522,14 +524,14 @@ def embedded_run(rhs, project, constraint_residual, event_values, event_reset,
                             e3_3 += w3 * K[j, i0 + 3]
                         for e5, e3, i in ((e5_0, e3_0, i0), (e5_1, e3_1, i0 + 1), (e5_2, e3_2, i0 + 2),
                                           (e5_3, e3_3, i0 + 3)):
-                            sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+                            sc = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
                             e5 /= sc
                             e3 /= sc
                             sum5 += e5 * e5
                             sum3 += e3 * e3
                         i0 += 4
                     for i in range(i0, n):
-                        sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+                        sc = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
                         e5 = 0.0
                         e3 = 0.0
                         for j in range(n_k):

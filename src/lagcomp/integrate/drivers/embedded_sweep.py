@@ -47,7 +47,7 @@ from lagcomp.integrate.status import Status
 STIFF_COLUMN = 3
 
 SWEEP_SIGNATURE = types.none(RHS, PROJECT, RESIDUAL, EVENTS, EVENT_RESET, ENERGY,
-                             MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean,
+                             MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, VECTOR, FLOAT, INT, INT, VECTOR, types.boolean,
                              INDICES, INDICES, MATRIX, VECTOR, INDICES, types.int64[:, ::1], types.float64[:, :, ::1],
                              MATRIX, types.int64[:, ::1], types.float64[:, :, ::1], types.float64[:, :, :, ::1],
                              *TABLEAU)

@@ -182,7 +182,7 @@ def sweep_rk4_lanes(rhs_lanes, energy, Y0, P, t0, dt, n_steps, t_end, save_every
             energy_stats[a + l, 1] = deviation[l]
 
 
-@njit(types.none(RHS_LANES, ENERGY, MATRIX, MATRIX, FLOAT, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, *_OUTPUTS),
+@njit(types.none(RHS_LANES, ENERGY, MATRIX, MATRIX, FLOAT, FLOAT, FLOAT, VECTOR, FLOAT, INT, INT, *_OUTPUTS),
       cache=True, error_model="numpy", nogil=True)
 def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step, max_steps, save_every, final,
                        t_final, status, counts, dense, energy_stats):
@@ -193,7 +193,7 @@ def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step
     lanes in one ``rhs_lanes`` call per stage), then accepts or rejects it
     by its own error norm.  The per-lane arithmetic, step-size control and
     initial step are those of ``dop853_run``, in the same order, so a lane
-    takes the steps the scalar driver takes.  No dense rows and no events
+    takes the steps the scalar driver takes (``atol`` (N,) per state component, as the scalar driver's).  No dense rows and no events
     (``dense`` is not written); lanes that finish early idle.
     """
     n_traj = Y0.shape[0]
@@ -257,7 +257,7 @@ def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step
             d0 = 0.0
             d1 = 0.0
             for i in range(n2):
-                sc = atol + abs(Y[i, l]) * rtol
+                sc = atol[i] + abs(Y[i, l]) * rtol
                 r = Y[i, l] / sc
                 d0 += r * r
                 r = K[0, i, l] / sc
@@ -282,7 +282,7 @@ def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step
             d2 = 0.0
             for i in range(n2):
                 finite = finite and np.isfinite(Yn[i, l])
-                sc = atol + abs(Y[i, l]) * rtol
+                sc = atol[i] + abs(Y[i, l]) * rtol
                 r = (Yn[i, l] - K[0, i, l]) / sc
                 d2 += r * r
             if bad[l]:
@@ -381,7 +381,7 @@ def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step
                     sum5 = 0.0
                     sum3 = 0.0
                     for i in range(n2):
-                        sc = atol + max(abs(Y[i, l]), abs(Yn[i, l])) * rtol
+                        sc = atol[i] + max(abs(Y[i, l]), abs(Yn[i, l])) * rtol
                         e5 = 0.0
                         e3 = 0.0
                         for j in range(n_k):

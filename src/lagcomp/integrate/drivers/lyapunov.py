@@ -12,7 +12,8 @@ where the Jacobian J = ∂f/∂x is compiled.
   orthogonality) and log R_jj is added to ``sums[j]``: sums / (elapsed time) are the estimates of
   the k largest exponents (Benettin, Galgani, Giorgilli and Strelcyn 1980; Shimada and Nagashima
   1979).
-* `divergence_run`: the two-trajectory estimate.  A shadow state xs starts at distance d0 from x;
+* `divergence_run`: the two-trajectory estimate.  A shadow state xs starts at distance d0 from x (in the
+  norm weighted by a scale per component: q and p have different units);
   both are advanced, and every ``renorm_every`` steps (and at the end of each call) log(d/d0) is
   added to ``sums[0]`` and xs is pulled back to distance d0 along xs − x.
 
@@ -192,12 +193,15 @@ def lyapunov_run(velocities, momentum_rate, canonical_partials, x, W, steps, sum
 
 
 _DIVERGENCE = types.int64(VELOCITIES, MOMENTUM_RATE, VECTOR, VECTOR, INDICES, VECTOR, VECTOR, FLOAT, FLOAT, INT, INT,
-                          FLOAT)
+                          FLOAT, VECTOR)
 
 
 @njit(_DIVERGENCE, cache=True, error_model="numpy", nogil=True)
-def divergence_run(velocities, momentum_rate, x, xs, steps, sums, p, t0, dt, n_steps, renorm_every, d0):
-    """Advance x and its shadow xs by ``n_steps`` RK4 steps, renormalizing their distance to d0 (module docstring)."""
+def divergence_run(velocities, momentum_rate, x, xs, steps, sums, p, t0, dt, n_steps, renorm_every, d0, scale):
+    """Advance x and its shadow xs by ``n_steps`` RK4 steps, renormalizing their distance to d0 (module docstring).
+
+    The distance is sqrt(Σ ((xs_i − x_i)/scale_i)²): each component in units of its own ``scale_i`` (ones: the plain
+    Euclidean distance, to the bit), so that d0 means the same in any units when the scales follow them."""
     m = x.shape[0]
     y, xt = np.empty(m), np.empty(m)
     k1, k2, k3, k4 = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
@@ -213,7 +217,7 @@ def divergence_run(velocities, momentum_rate, x, xs, steps, sums, p, t0, dt, n_s
         if (step + 1) % renorm_every == 0 or step == n_steps - 1:
             d = 0.0
             for i in range(m):
-                d += (xs[i] - x[i]) ** 2
+                d += ((xs[i] - x[i]) / scale[i]) ** 2
             d = math.sqrt(d)
             if not (d > 0.0 and math.isfinite(d)):
                 return Status.NONFINITE

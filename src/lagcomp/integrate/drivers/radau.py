@@ -16,7 +16,7 @@ takes up to round-off (tests/test_radau_driver.py compares them):
    previous step's collocation polynomial extrapolated to t + c_i h (zero at the first step).
 2. Newton failure: with an old Jacobian, evaluate J at (t, y) and retry; with the current one, halve
    the step.  A singular iteration matrix is handled the same way.
-3. Error: err = (γ/h M − J)⁻¹ (f(t, y) + M E·Z/h), RMS norm with scale atol + max(|y|, |y_new|) rtol
+3. Error: err = (γ/h M − J)⁻¹ (f(t, y) + M E·Z/h), RMS norm with scale atol_i + max(|y_i|, |y_new,i|) rtol
    (of the differential components: "DAEs");
    on the first step and after a rejection an estimate > 1 is filtered once more,
    err = (γ/h M − J)⁻¹ (f(t, y + err) + M E·Z/h) (HNW IV.8, (8.21); scipy does it after rejections only).
@@ -35,7 +35,8 @@ protocol of `lagcomp.integrate.drivers` exactly as `lagcomp.integrate.drivers.em
 takes it (``y``, ``clock``, ``counters``, ``p``, ``projecting``, ``residual_max``, ``t_end``, ``rtol``,
 ``atol``, ``max_step``, ``max_steps``, ``pause_at``, ``save_every``, ``t_eval``, ``ts``, ``ys``,
 ``directions``, ``actions``, ``ev_t``, ``ev_y``, ``ev_i``), so that `lagcomp.integrate.simulate`
-calls both alike; ``projecting`` and ``residual_max`` are unused (constrained systems are solved as DAEs,
+calls both alike (``atol`` (N,) per component: only its first ``differential`` entries are read, the algebraic
+components' scales come from `_algebraic_scales`); ``projecting`` and ``residual_max`` are unused (constrained systems are solved as DAEs,
 not projected: "DAEs" below).  Then
 the method's constants (`RadauIIA.driver_arguments`: C, T, TI, MU, ERROR_WEIGHTS, DENSE_WEIGHTS), the
 count ``differential`` of differential components (0 ≤ differential ≤ N; N for an ODE; DAEs below) and
@@ -211,7 +212,7 @@ CONSTANTS = (VECTOR, MATRIX, MATRIX, VECTOR, VECTOR, MATRIX)
 CARRY = (MATRIX, MATRIX, VECTOR)
 
 SIGNATURE = OUTCOME(RHS, RHS_JACOBIAN, EVENTS,
-                    VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, INT,
+                    VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, VECTOR, FLOAT, INT, INT, INT,
                     VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX, INDICES,
                     *CONSTANTS, INT, *CARRY)
 
@@ -428,7 +429,7 @@ def _error_norm(err, y, y_new, rtol, atol, differential, h, jacobian, time_scale
     ``time_scale``); ``scale`` (N,) is work space.  0 for N = 0."""
     n = y.shape[0]
     for i in range(differential):
-        scale[i] = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+        scale[i] = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
     _algebraic_scales(jacobian, differential, h, rtol, y, y_new, time_scale, scale)
     acc = 0.0
     for i in range(n):
@@ -466,7 +467,7 @@ def _time_scale(y, f, previous, h_previous, rtol, atol, differential, interval):
     d1 = 0.0
     d2 = 0.0
     for i in range(differential):
-        sc = atol + abs(y[i]) * rtol
+        sc = atol[i] + abs(y[i]) * rtol
         d0 += (y[i] / sc) ** 2
         d1 += (f[i] / sc) ** 2
         if h_previous > 0.0:
@@ -502,7 +503,7 @@ def _initial_step(rhs, t, y, f, p, t_end, rtol, atol, max_step, differential, pr
     d0 = 0.0
     d1 = 0.0
     for i in range(n):
-        sc = atol + abs(y[i]) * rtol
+        sc = atol[i] + abs(y[i]) * rtol
         d0 += (y[i] / sc) ** 2
         d1 += (f[i] / sc) ** 2
     d0 = np.sqrt(d0 / n)
@@ -520,7 +521,7 @@ def _initial_step(rhs, t, y, f, p, t_end, rtol, atol, max_step, differential, pr
     for i in range(n):
         if not np.isfinite(probe_f[i]):
             return min(h0, max_step), 0
-        sc = atol + abs(y[i]) * rtol
+        sc = atol[i] + abs(y[i]) * rtol
         d2 += ((probe_f[i] - f[i]) / sc) ** 2
     d2 = np.sqrt(d2 / n) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
@@ -714,7 +715,7 @@ def radau_run(rhs, rhs_jacobian, event_values,
                     for i in range(n):
                         Z[s, i] = 0.0
             for i in range(differential):
-                scale[i] = atol + abs(y[i]) * rtol
+                scale[i] = atol[i] + abs(y[i]) * rtol
             _algebraic_scales(jacobian, differential, h, rtol, y, y, time_scale, scale)
 
             converged = False

@@ -31,7 +31,7 @@ from lagcomp.integrate.drivers.sweep_rows import NO_PAUSE, SWEEP_ROWS, fold_even
 from lagcomp.integrate.status import Status
 
 SWEEP_SIGNATURE = types.none(RHS, RHS_JACOBIAN, EVENTS, ENERGY,
-                             MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean,
+                             MATRIX, MATRIX, INT, FLOAT, FLOAT, FLOAT, VECTOR, FLOAT, INT, INT, VECTOR, types.boolean,
                              INDICES, INDICES, MATRIX, VECTOR, INDICES, types.int64[:, ::1], types.float64[:, :, ::1],
                              MATRIX, types.int64[:, ::1], types.float64[:, :, ::1], types.float64[:, :, :, ::1],
                              *CONSTANTS, INT)

@@ -9,11 +9,16 @@ kernel's work array.  Each step:
 1. Order and step (Jorba & Zou, "A software package for the numerical
    integration of ODEs by means of high-order Taylor methods", Experiment.
    Math. 14 (2005) 99-117, sec. 3.2; the rule heyoka uses): the order is
-   fixed for the run, ``p = ceil(−½ ln ε + 1)`` with ε = min(rtol, atol)
-   (20 at ε = 2.2e-16).  At each step the series of the solution to order p
-   is computed, and with ``‖·‖`` the max norm over the state,
-   ``ρ_j = (s / ‖y[j]‖)^(1/j)`` for j = p − 1 and p, s = ‖y‖ (relative
-   control) or 1 when ``rtol ‖y‖ ≤ atol`` (absolute control); the step is
+   fixed for the run, ``p = ceil(−½ ln ε + 1)`` with ε = min(rtol, a),
+   a = min_i atol_i (20 at ε = 2.2e-16).  At each step the series of the
+   solution to order p is computed, and with ``‖x‖ = max_i |x_i| a/atol_i``
+   the max norm over the state weighted by the per-component ``atol`` (each
+   component in units of its own atol; the plain max norm where atol is one
+   number), ``ρ_j = (s / ‖y[j]‖)^(1/j)`` for j = p − 1 and p, s = ‖y‖
+   (relative control) or 1 when ``rtol ‖y‖ ≤ a`` (absolute control).  The
+   order still compares rtol with an absolute a (the order does not follow
+   a change of units; deriving it from rtol alone would change every Taylor
+   run's steps); the step is
    ``h = min(ρ_{p−1}, ρ_p) · exp(−0.7/(p − 1)) / e²``, clamped to
    ``max_step`` and to the end of the span.  Then the truncation term is
    about ``s e^(−2p) ≤ ε s``: no step is ever rejected, and ``nrejected``
@@ -113,20 +118,21 @@ def multiplier_radius(W, rows, order, rtol, atol):
 #: residual_max, t_end, rtol, atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys, directions,
 #: actions, ev_t, ev_y, ev_i, ev_y_after, at_zero, carry)
 SIGNATURE = OUTCOME(TAYLOR, EVENTS, EVENT_RESET, INDICES, INT, VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT,
-                    FLOAT, FLOAT, FLOAT, INT, INT, INT, VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX,
+                    FLOAT, VECTOR, FLOAT, INT, INT, INT, VECTOR, VECTOR, MATRIX, INDICES, INDICES, VECTOR, MATRIX,
                     INDICES, MATRIX, INDICES, VECTOR)
 
 
-def taylor_order(rtol: float, atol: float) -> int:
-    """The order `taylor_run` uses for these tolerances: ceil(−½ ln min(rtol, atol) + 1), at least 2."""
-    return max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol)) + 1.0)))
+def taylor_order(rtol: float, atol) -> int:
+    """The order `taylor_run` uses for these tolerances: ceil(−½ ln min(rtol, min atol) + 1), at least 2 (`atol` a
+    number or the per-component array)."""
+    return max(2, int(math.ceil(-0.5 * math.log(min(rtol, float(np.min(atol)))) + 1.0)))
 
 
 @njit(SIGNATURE, cache=True, error_model="numpy", nogil=True)
 def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_rows, y, clock, counters, p, projecting,
                residual_max, t_end, rtol, atol, max_step, max_steps, pause_at, save_every, t_eval, ts, ys,
                directions, actions, ev_t, ev_y, ev_i, ev_y_after, at_zero, carry):
-    """Adaptive Taylor method of order p = ceil(−½ ln min(rtol, atol) + 1); see the module docstring.
+    """Adaptive Taylor method of order p = ceil(−½ ln min(rtol, min atol) + 1); see the module docstring.
 
     ``taylor_coefficients``, ``event_values`` and ``event_reset`` are the model's kernels, ``periodic`` (int64, the
     state indices reduced to [−π, π]) and ``work_rows`` its ``TAYLOR_PERIODIC`` and ``TAYLOR_WORK``.
@@ -140,7 +146,13 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
     cap = ts.shape[0]
     n_eval = t_eval.shape[0]
     use_t_eval = n_eval > 0
-    order = max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol)) + 1.0)))
+    weights = np.empty(n)               # the max norms' weights: component i in units of atol_i / atol_min
+    atol_min = np.inf
+    for i in range(n):
+        atol_min = min(atol_min, atol[i])
+    for i in range(n):
+        weights[i] = atol_min / atol[i]  # (1.0 exactly where atol is one number: the unweighted norms' bits)
+    order = max(2, int(math.ceil(-0.5 * math.log(min(rtol, atol_min)) + 1.0)))
     rho_factor = math.exp(-0.7 / (order - 1)) / (math.e * math.e)
 
     # Work arrays, allocated once per call.
@@ -205,15 +217,15 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
         norm_last = 0.0
         norm_before = 0.0
         for i in range(n):
-            norm_y = max(norm_y, abs(y[i]))
-            norm_last = max(norm_last, abs(X[i, order]))
-            norm_before = max(norm_before, abs(X[i, order - 1]))
+            norm_y = max(norm_y, abs(y[i]) * weights[i])
+            norm_last = max(norm_last, abs(X[i, order]) * weights[i])
+            norm_before = max(norm_before, abs(X[i, order - 1]) * weights[i])
         if not (norm_last < np.inf and norm_before < np.inf):      # (also false for NaN)
             return Status.NONFINITE, n_saved
-        scale = 1.0 if rtol * norm_y <= atol else norm_y
+        scale = 1.0 if rtol * norm_y <= atol_min else norm_y
         rho = min((scale / norm_last) ** (1.0 / order), (scale / norm_before) ** (1.0 / (order - 1)))
         if status < 0 and order > 2:
-            rho = min(rho, multiplier_radius(W, -status, order, rtol, atol))
+            rho = min(rho, multiplier_radius(W, -status, order, rtol, atol_min))
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         # inf when both coefficients vanish; after a reset at most the step cut at it, and at least min_step (the
         # event may have been at the very start of that step)
@@ -354,7 +366,7 @@ def taylor_run(taylor_coefficients, event_values, event_reset, periodic, work_ro
 #: t_end, rtol, atol, max_step, max_steps, save_every, t_eval, save_initial, directions, actions, final, t_final,
 #: status, counts, dense, energy_stats, event_count, event_t, event_y, carry)
 SWEEP_SIGNATURE = types.none(TAYLOR, EVENTS, EVENT_RESET, INDICES, INT, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT,
-                             FLOAT, FLOAT, FLOAT, INT, INT, VECTOR, types.boolean, INDICES, INDICES, MATRIX, VECTOR,
+                             FLOAT, VECTOR, FLOAT, INT, INT, VECTOR, types.boolean, INDICES, INDICES, MATRIX, VECTOR,
                              INDICES, types.int64[:, ::1], types.float64[:, :, ::1], MATRIX, types.int64[:, ::1],
                              types.float64[:, :, ::1], types.float64[:, :, :, ::1], VECTOR)
 
