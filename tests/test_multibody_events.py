@@ -526,3 +526,16 @@ def test_a_method_that_cannot_apply_impacts_is_refused_naming_those_that_can(rod
     # Taylor method has mode programs, a kernel a tree does not have: no, rather than a ModelError about Taylor)
     with pytest.raises(lc.OptionError, match=f"which `{method}` cannot do; use dopri5, dop853"):
         rod.simulate((0, 0.1), q0=[5.0, 2.5, 0.5], qd0=[0.0, 0.0, 0.0], method=method, dt=1e-3)
+
+
+def test_which_contact_presses_a_friction_element_is_part_of_the_trees_key():
+    x, y = lc.coordinates("x y")
+    links = [lc.Link("carriage", lc.Prismatic(x, axis="x")), lc.Link("block", lc.Prismatic(y, axis="y"),
+                                                                     parent="carriage", mass=1.0)]
+
+    def tree(normal):
+        return lc.Tree(links, name="pressed", events=[lc.Contact("low", y), lc.Contact("high", 1 - y),
+                                                      lc.Friction("rub", x.diff(t), normal=normal, static=0.5)])
+
+    assert tree("low").fingerprint() != tree("high").fingerprint()
+    assert tree("low").fingerprint() == tree("low").fingerprint()
