@@ -352,6 +352,38 @@ def test_an_impact_of_the_chains_tip_agrees_with_the_lagrangian_path_and_loses_1
     assert loss == pytest.approx((1 - e**2) * v**2 / (2 * w), rel=1e-11, abs=1e-13)
 
 
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_a_closed_contact_of_the_chain_holds_as_the_lagrangian_paths(floored, data):
+    """With the floor's mode closed (its slot of p at 1), at a touching state: rhs (q̈ with the normal force, or
+    without it where it would pull), contact_forces and event_values (the normal force) of the tree equal the
+    Lagrangian module's."""
+    th0 = data.draw(st.floats(-1.5, -0.7))
+    th1 = math.asin((-1.2 - DOUBLE["l0"] * math.sin(th0)) / DOUBLE["l1"]) - th0
+    G = np.array([DOUBLE["l0"] * math.cos(th0) + DOUBLE["l1"] * math.cos(th0 + th1), DOUBLE["l1"] * math.cos(th0 + th1)])
+    qd = np.array([data.draw(st.floats(-2.0, 2.0)) for _ in range(2)])
+    y = np.array([th0, th1, *(qd - (G @ qd) * G / (G @ G))])      # sliding along the floor: ġ = 0
+    found = []
+    for model in floored:
+        p = model.parameter_vector({"e": 0.3})
+        p[model.kernels.CONTACT_MODES] = 1.0
+        rhs, forces, values = np.empty(4), np.empty(1), np.empty(1)
+        assert model.kernels.rhs(0.0, y, p, rhs) == 0
+        assert model.kernels.contact_forces(0.0, y, p, forces) == 0
+        model.kernels.event_values(0.0, y, p, values)
+        assert values[0] == forces[0]
+        found.append(np.concatenate([rhs, forces]))
+    np.testing.assert_allclose(found[0], found[1], rtol=1e-11, atol=1e-11)
+    qdd, force = found[0][2:4], found[0][4]
+    w0, w01 = y[2], y[2] + y[3]
+    tip_acceleration = G @ qdd - DOUBLE["l0"] * math.sin(th0) * w0**2 - DOUBLE["l1"] * math.sin(th0 + th1) * w01**2
+    assert force >= 0.0
+    if force > 0.0:     # held: the tip does not leave the floor
+        assert abs(tip_acceleration) < 1e-10
+    else:               # it would pull: released, the tip accelerates upwards
+        assert tip_acceleration >= -1e-10
+
+
 def test_the_chain_meets_the_floor_when_the_lagrangian_path_does(floored):
     a, b = (model.simulate((0.0, 4.0), q0=[0.0, 0.0], qd0=[0.0, 0.0], rtol=1e-12, atol=1e-12) for model in floored)
     impacts, reference = a.events["floor"], b.events["floor"]
@@ -494,3 +526,16 @@ def test_a_method_that_cannot_apply_impacts_is_refused_naming_those_that_can(rod
     # Taylor method has mode programs, a kernel a tree does not have: no, rather than a ModelError about Taylor)
     with pytest.raises(lc.OptionError, match=f"which `{method}` cannot do; use dopri5, dop853"):
         rod.simulate((0, 0.1), q0=[5.0, 2.5, 0.5], qd0=[0.0, 0.0, 0.0], method=method, dt=1e-3)
+
+
+def test_which_contact_presses_a_friction_element_is_part_of_the_trees_key():
+    x, y = lc.coordinates("x y")
+    links = [lc.Link("carriage", lc.Prismatic(x, axis="x")), lc.Link("block", lc.Prismatic(y, axis="y"),
+                                                                     parent="carriage", mass=1.0)]
+
+    def tree(normal):
+        return lc.Tree(links, name="pressed", events=[lc.Contact("low", y), lc.Contact("high", 1 - y),
+                                                      lc.Friction("rub", x.diff(t), normal=normal, static=0.5)])
+
+    assert tree("low").fingerprint() != tree("high").fingerprint()
+    assert tree("low").fingerprint() == tree("low").fingerprint()

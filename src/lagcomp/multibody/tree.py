@@ -95,10 +95,10 @@ class Tree:
         Suggested run length (s).
     loops : sequence of lagcomp.Loop, optional
         Cut joints closing kinematic loops: holonomic constraints on the tree (`lagcomp.multibody.loops`).
-    events : sequence of lagcomp.Event or lagcomp.Contact, optional
-        The user's events and contacts, in the tree's coordinates, their velocities, t and parameters (a link's
-        point through `lagcomp.multibody.link_point`); compiled as a System's are
-        (`lagcomp.multibody.user_events`).
+    events : sequence of lagcomp.Event, lagcomp.Contact or lagcomp.Friction, optional
+        The user's events, contacts and friction elements (pressed by a contact), in the tree's coordinates, their
+        velocities, t and parameters (a link's point through `lagcomp.multibody.link_point`); compiled as a
+        System's are (`lagcomp.multibody.user_events`).
 
     Attributes
     ----------
@@ -193,8 +193,8 @@ class Tree:
         if self.closures:   # (only then: the keys of trees without loops stay as they were)
             parts.append(repr([(c.first, c.second, c.directions, c.names) for c in self.closures]))
         if self.user_events:   # (only then, likewise; the expressions are among the roles below)
-            parts.append(repr([(type(e).__name__, e.name, e.direction, e.terminal, e.changes_state)
-                               for e in self.user_events]))
+            parts.append(repr([(type(e).__name__, e.name, e.direction, e.terminal, e.changes_state,
+                                getattr(e, "normal", None)) for e in self.user_events]))   # (a contact's name)
         return "\n".join(parts + [f"{role}={sp.srepr(expr)}" for role, expr in self.expressions().items()])
 
     def on_demand_refusal(self, what: str, kind: str | None = None) -> str | None:
