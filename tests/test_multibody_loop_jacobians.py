@@ -199,7 +199,8 @@ def test_a_spatial_loop_has_the_jacobians_of_the_lagrangian_path(cache_dir):
 
 def test_radau_runs_the_four_bar_tree_as_a_dae(four_bars):
     """radau (the DAE, no projection) at rtol 1e-10 against dop853 at 1e-13 with projection, and against the
-    example's radau: the crank turns about four times in 2 s; the loop stays closed without projection."""
+    example's radau: the crank turns about four times in 2 s; the loop stays closed without projection.  Measured:
+    states 1.9e-11 of their largest entry from either, residual 2.5e-11, reactions 4.5e-11."""
     tree, example = four_bars
     ts = np.linspace(0.0, 2.0, 41)
     tight = tree.simulate((0.0, 2.0), t_eval=ts, method="dop853", rtol=1e-13, atol=1e-13, projection=True,
@@ -208,11 +209,11 @@ def test_radau_runs_the_four_bar_tree_as_a_dae(four_bars):
     theirs = example.simulate((0.0, 2.0), t_eval=ts, method="radau", rtol=1e-10, atol=1e-10)
     assert tight.success and run.success and theirs.success, (run.message, theirs.message)
     assert run.q[-1, 0] - run.q[0, 0] > 6 * math.pi   # (not a trivial run)
-    assert np.max(np.abs(run.y - tight.y)) <= 1e-7 * np.max(np.abs(tight.y))
-    assert np.max(np.abs(run.y - theirs.y @ T.T)) <= 1e-7 * np.max(np.abs(tight.y))
+    assert np.max(np.abs(run.y - tight.y)) <= 1e-9 * np.max(np.abs(tight.y))
+    assert np.max(np.abs(run.y - theirs.y @ T.T)) <= 1e-9 * np.max(np.abs(tight.y))
     assert run.constraint_residual <= 1e-9
     for name in tree.constraints:
-        assert relative(run.reactions[name], tight.reactions[name]) <= 1e-6
+        assert relative(run.reactions[name], tight.reactions[name]) <= 1e-8
 
 
 def test_a_radau_sweep_of_the_loop_tree_runs_each_point_as_simulate_does(four_bars):
@@ -238,7 +239,8 @@ def sensitivity_runs(four_bars):
 
 def test_sensitivities_are_the_examples_in_the_trees_coordinates(four_bars, sensitivity_runs):
     """The same ODE in other coordinates: S_t = T S T⁻¹ for the initial state's columns, T S for a parameter's,
-    the reactions' (∂λ/∂y0) T⁻¹ and ∂λ/∂p, to 1e-8 of each block's largest entry (both runs at rtol 1e-12)."""
+    the reactions' (∂λ/∂y0) T⁻¹ and ∂λ/∂p, to 1e-10 of each block's largest entry (both runs at rtol 1e-12;
+    measured 1.3e-12)."""
     tree, _ = four_bars
     mine, theirs, _ = sensitivity_runs
     assert mine.success and theirs.success
@@ -246,28 +248,30 @@ def test_sensitivities_are_the_examples_in_the_trees_coordinates(four_bars, sens
     columns = [mine.sensitivity_names.index(f"p:{name}") for name in ("m2", "g")]
     their_columns = [theirs.sensitivity_names.index(f"p:{name}") for name in ("m2", "g")]
     states, reactions = mine.sensitivities, mine.reaction_sensitivities
-    assert relative(states[:, :, :N], np.einsum("ij,mjk,kl->mil", T, theirs.sensitivities[:, :, :N], T_INV)) <= 1e-8
+    assert relative(states[:, :, :N], np.einsum("ij,mjk,kl->mil", T, theirs.sensitivities[:, :, :N], T_INV)) <= 1e-10
     parameters = np.einsum("ij,mjk->mik", T, theirs.sensitivities[:, :, their_columns])
-    assert relative(states[:, :, columns], parameters) <= 1e-8
-    assert relative(reactions[:, :, :N], theirs.reaction_sensitivities[:, :, :N] @ T_INV) <= 1e-8
-    assert relative(reactions[:, :, columns], theirs.reaction_sensitivities[:, :, their_columns]) <= 1e-8
+    assert relative(states[:, :, columns], parameters) <= 1e-10
+    assert relative(reactions[:, :, :N], theirs.reaction_sensitivities[:, :, :N] @ T_INV) <= 1e-10
+    assert relative(reactions[:, :, columns], theirs.reaction_sensitivities[:, :, their_columns]) <= 1e-10
 
 
 def test_a_one_column_run_takes_the_tangent_kernel_and_agrees(four_bars, sensitivity_runs):
     """A run of g's column alone (``rhs_tangent_parameters`` as its rhs) against the same column of the run of
-    every column (the full Jacobians), same tolerances: the same ODE, to 1e-9 of the column's largest entry."""
+    every column (the full Jacobians), same tolerances: the same ODE, to 1e-10 of the column's largest entry
+    (measured 1.0e-11)."""
     tree, _ = four_bars
     solution, _, options = sensitivity_runs
     alone = tree.simulate((0.0, 2.0), sensitivities="g", **options)
     column = solution.sensitivity_names.index("p:g")
-    assert relative(alone.sensitivities[:, :, 0], solution.sensitivities[:, :, column]) <= 1e-9
-    assert relative(alone.reaction_sensitivities[:, :, 0], solution.reaction_sensitivities[:, :, column]) <= 1e-9
+    assert relative(alone.sensitivities[:, :, 0], solution.sensitivities[:, :, column]) <= 1e-10
+    assert relative(alone.reaction_sensitivities[:, :, 0], solution.reaction_sensitivities[:, :, column]) <= 1e-10
 
 
 @pytest.mark.parametrize("parameter", ["m2", "g"])
 def test_parameter_sensitivities_against_differences_of_runs(four_bars, sensitivity_runs, parameter):
     """∂y/∂p and ∂λ/∂p against central differences of runs at p ± h, p ± h/2 extrapolated once, to 1e-8 of each
-    block's largest entry (m2 and g leave the initial state on the loop; a, b, c, d would move it off)."""
+    block's largest entry (m2 and g leave the initial state on the loop; a, b, c, d would move it off; measured
+    1.6e-10 to 5.1e-10, the differences' own error)."""
     tree, _ = four_bars
     solution, _, options = sensitivity_runs
     value = solution.params[parameter]
