@@ -15,7 +15,13 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from multibody_models import cart_pole, lagrangian_system, pinocchio_model, random_tree, universal_chain
+from multibody_models import (
+    cart_pole,
+    lagrangian_system,
+    pinocchio_model,
+    random_tree,
+    universal_chain,
+)
 
 import lagcomp as lc
 from lagcomp.animation_bodies import BodyGeometry
