@@ -82,9 +82,10 @@ def lagcomp_radau(problem, rtol, atol):
 
     def run():
         y, clock, counters = y0.copy(), np.zeros(2), np.zeros(8, dtype=np.int64)
-        status, _ = radau_run(*RADAU_KERNELS, y, clock, counters, p, 0, np.zeros(1), t_end, rtol, np.full(n, atol), np.inf,
-                              10**9, 10**9, 10**9, np.empty(0), np.empty(1), np.empty((1, n)), NO_EVENTS, NO_EVENTS,
-                              np.empty(1), np.empty((1, n)), np.empty(1, np.int64), *constants, n, *new_carry(n))
+        status, _ = radau_run(*RADAU_KERNELS, y, clock, counters, p, 0, np.zeros(1), t_end, rtol, np.full(n, atol),
+                              np.inf, 10**9, 10**9, 10**9, np.empty(0), np.empty(1), np.empty((1, n)), NO_EVENTS,
+                              NO_EVENTS, np.empty(1), np.empty((1, n)), np.empty(1, np.int64), *constants, n,
+                              *new_carry(n))
         assert status == 0, status
         return y, f"steps {counters[NSTEPS]}, f {counters[NFEV]}, J {counters[NJEV]}, LU {counters[NLU]}"
     return run

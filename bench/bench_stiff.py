@@ -105,8 +105,8 @@ def radau_driver_call(model, y0, t_end: float):
 
     def run(tol):
         y, clock, counters = y0.copy(), np.zeros(2), np.zeros(COUNTER_SLOTS, dtype=np.int64)
-        status, _ = driver(y, clock, counters, p, 0, np.zeros(2), t_end, tol, np.full(y.size, tol), np.inf, 10**9, NO_PAUSE, 10**9,
-                           np.empty(0), ts, ys, *no_events, *constants, n, *new_carry(n))
+        status, _ = driver(y, clock, counters, p, 0, np.zeros(2), t_end, tol, np.full(y.size, tol), np.inf, 10**9,
+                           NO_PAUSE, 10**9, np.empty(0), ts, ys, *no_events, *constants, n, *new_carry(n))
         if status != 0:
             raise RuntimeError(f"radau_run returned status {status}")
         return y, int(counters[NFEV])

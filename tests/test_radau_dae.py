@@ -184,8 +184,9 @@ def test_sweep_passes_differential_to_each_run():
     event_count, event_t, event_y = np.empty((2, 0), np.int64), np.empty((2, 0, 1)), np.empty((2, 0, 1, 8))
     no_events = np.zeros(0, dtype=np.int64)
     sweep_radau(*KERNELS, driver_kernels.event_values, driver_kernels.oscillator_energy, Y0, P, 0, 0.0, 2.0, 1e-8,
-                np.full(Y0.shape[1], 1e-8), np.inf, 10**9, 10**9, np.empty(0), False, no_events, no_events, final, t_final, status, counts,
-                dense, energy, event_count, event_t, event_y, *RADAU5.driver_arguments(), DIFFERENTIAL)
+                np.full(Y0.shape[1], 1e-8), np.inf, 10**9, 10**9, np.empty(0), False, no_events, no_events, final,
+                t_final, status, counts, dense, energy, event_count, event_t, event_y, *RADAU5.driver_arguments(),
+                DIFFERENTIAL)
     for row, z0 in enumerate(Y0):
         run = dae_run(PENDULUM_P, z0, 2.0, 1e-8)
         assert run.solve()[0] == status[row] == Status.DONE

@@ -286,9 +286,9 @@ def test_sweep_loop_gives_each_trajectory_of_the_driver():
     dense, energy = np.empty((3, 0, 2)), np.empty((3, 2))
     event_count, event_t, event_y = np.empty((3, 0), np.int64), np.empty((3, 0, 1)), np.empty((3, 0, 1, 2))
     sweep_radau(stiff_kernels.rhs, stiff_kernels.rhs_jacobian, driver_kernels.event_values,
-                driver_kernels.oscillator_energy, Y0, P, 0, 0.0, 0.01, 1e-8, np.full(2, 1e-8), np.inf, 10**9, 10**9, np.empty(0),
-                False, NO_EVENTS, NO_EVENTS, final, t_final, status, counts, dense, energy, event_count, event_t,
-                event_y, *RADAU5.driver_arguments(), 2)
+                driver_kernels.oscillator_energy, Y0, P, 0, 0.0, 0.01, 1e-8, np.full(2, 1e-8), np.inf, 10**9, 10**9,
+                np.empty(0), False, NO_EVENTS, NO_EVENTS, final, t_final, status, counts, dense, energy, event_count,
+                event_t, event_y, *RADAU5.driver_arguments(), 2)
     for row, p in enumerate(P):
         run = Run(p, [1.0, 0.0], 0.01, 1e-8, 1e-8)
         assert run.solve()[0] == status[row] == Status.DONE

@@ -294,8 +294,8 @@ def test_chunked_run_equals_one_call(pendulum):
     carry = np.zeros(4)
     while True:
         ts, ys = np.empty(5), np.empty((5, 4))
-        status, n = taylor_run(*model_parts, y, clock, counters, p, 0, np.zeros(1), 20.0, eps, np.full(4, eps), math.inf, 10**9,
-                               counters[1] + 13, 7, np.empty(0), ts, ys, *empty, carry)
+        status, n = taylor_run(*model_parts, y, clock, counters, p, 0, np.zeros(1), 20.0, eps, np.full(4, eps),
+                               math.inf, 10**9, counters[1] + 13, 7, np.empty(0), ts, ys, *empty, carry)
         rows.append(ys[:n].copy())
         if not Status(status).call_again:
             break

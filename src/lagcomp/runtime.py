@@ -798,9 +798,12 @@ class Model:
             simplified Newton with the Jacobian of the canonical equations,
             which converges at steps where fixed-point iteration does not
             (stiff or fast motions; status -5 says the step was too large).
-        rtol, atol : float
+        rtol, atol : float, or for atol array_like or dict
             Tolerances of adaptive methods (defaults 1e-8, 1e-10; for taylor machine
-            epsilon, and atol = rtol unless given).
+            epsilon, and atol = rtol unless given).  `atol` is one number, or one per
+            state component in its units (2n, ordered as `state_names`: q, then q̇), or
+            ``{coordinate: (atol of q, atol of q̇)}``: positions and velocities do not
+            share a unit (`lagcomp.integrate.tolerances`).
         t_eval : array_like, optional
             Times at which to save, by dense output (adaptive methods only).
         save_every : int

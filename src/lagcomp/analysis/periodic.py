@@ -203,7 +203,8 @@ def _extent(sol) -> float:
 
 
 def component_scale(run, atol) -> np.ndarray:
-    """Each state component's size over a run, max_t |y_i(t)| (at least `atol`, a number or (N,)), shape (N,): in its own units, so
+    """Each state component's size over a run, max_t |y_i(t)| (at least `atol`, a number or (N,)), shape (N,): in its
+    own units, so
     that the shooting residual φ_T(y0) − y0, the phase condition and the closing test over it are the same in any
     units (an angle's rate is in 1/time, a length in metres or millimetres)."""
     return np.maximum(np.max(np.abs(run.y), axis=0), atol)

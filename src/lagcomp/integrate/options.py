@@ -27,7 +27,6 @@ from lagcomp.integrate.drivers.events import (
     ACTION_TERMINAL,
 )
 from lagcomp.integrate.memory import checked_limit
-from lagcomp.integrate.tolerances import absolute_tolerance
 from lagcomp.integrate.methods import (
     DEFAULT_IMPLICIT_SOLVER,
     METHODS,
@@ -37,6 +36,7 @@ from lagcomp.integrate.methods import (
     implicit_solver_for,
     method_names,
 )
+from lagcomp.integrate.tolerances import absolute_tolerance
 
 
 def time_span(t_span) -> tuple[float, float]:

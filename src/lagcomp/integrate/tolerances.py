@@ -71,6 +71,9 @@ def _positive_number(atol) -> float:
 def _from_mapping(atol: Mapping, state_names) -> list:
     """The array form of ``{coordinate: (atol of q, atol of q̇)}``: every coordinate once, a pair each."""
     coordinates = list(state_names[:len(state_names) // 2])
+    if list(state_names[len(coordinates):]) != [f"{c}_dot" for c in coordinates]:
+        raise OptionError(f"`atol` as a mapping {{coordinate: (atol of q, atol of q̇)}} needs a state (q, q̇); this "
+                          f"model's is {list(state_names)}: pass one atol per state component in that order.")
     keys = [getattr(key, "name", key) if not isinstance(key, str) else key for key in atol]
     unknown = [key for key in keys if key not in coordinates]
     missing = [c for c in coordinates if c not in keys]

@@ -193,7 +193,8 @@ def sweep_dop853_lanes(rhs_lanes, energy, Y0, P, t0, t_end, rtol, atol, max_step
     lanes in one ``rhs_lanes`` call per stage), then accepts or rejects it
     by its own error norm.  The per-lane arithmetic, step-size control and
     initial step are those of ``dop853_run``, in the same order, so a lane
-    takes the steps the scalar driver takes (``atol`` (N,) per state component, as the scalar driver's).  No dense rows and no events
+    takes the steps the scalar driver takes (``atol`` (N,) per state component, as the scalar driver's).  No dense
+    rows and no events
     (``dense`` is not written); lanes that finish early idle.
     """
     n_traj = Y0.shape[0]

@@ -36,8 +36,8 @@ takes it (``y``, ``clock``, ``counters``, ``p``, ``projecting``, ``residual_max`
 ``atol``, ``max_step``, ``max_steps``, ``pause_at``, ``save_every``, ``t_eval``, ``ts``, ``ys``,
 ``directions``, ``actions``, ``ev_t``, ``ev_y``, ``ev_i``), so that `lagcomp.integrate.simulate`
 calls both alike (``atol`` (N,) per component: only its first ``differential`` entries are read, the algebraic
-components' scales come from `_algebraic_scales`); ``projecting`` and ``residual_max`` are unused (constrained systems are solved as DAEs,
-not projected: "DAEs" below).  Then
+components' scales come from `_algebraic_scales`); ``projecting`` and ``residual_max`` are unused (constrained
+systems are solved as DAEs, not projected: "DAEs" below).  Then
 the method's constants (`RadauIIA.driver_arguments`: C, T, TI, MU, ERROR_WEIGHTS, DENSE_WEIGHTS), the
 count ``differential`` of differential components (0 ≤ differential ≤ N; N for an ODE; DAEs below) and
 its carry, the state a run keeps from call to call besides (y, clock, counters), owned by the caller
