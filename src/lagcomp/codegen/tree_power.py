@@ -8,14 +8,11 @@ the rest does work at the rate
 
 * out[0] = Σ_i τ_i ṡ_i (the joints' torques and forces, ``torque=``: "forces");
 * out[1] = −Σ_i c_i ṡ_i² (the joints' dampers, ``damping=``: "dissipation", −2D with D = ½ Σ c ṡ²);
-* out[2] = −∂L/∂t = ∂V/∂t (gravity, springs or masses that change with t: V's explicit time, forward mode over the
-  potential energy's program);
-* out[3] = −λ·b = 0: a loop's points do not move with t (b = 0; λ·Λ q̇ = 0 on the constraints).
+* out[2] = −∂L/∂t = 0 and out[3] = −λ·b = 0: only a joint's torque (and an event) may read t
+  (`lagcomp.multibody.tree`), so L has no explicit time and a loop's points do not move (b = 0).
 
 The rates are those the recursions use, so on a spherical joint the power is ω·τ, the same number as q̇·Q in the
-MRP coordinates (Q_σ = Jᵀ Q_ω, `lagcomp.multibody.charts`).  A tree whose kinetic energy has explicit time (a
-joint's placement, axis or a link's mass properties with t) has h ≠ T + V (its ``energy_function`` is ``energy``):
-its power is refused rather than balanced against the wrong h; so is a loop whose points move with t.
+MRP coordinates (Q_σ = Jᵀ Q_ω, `lagcomp.multibody.charts`).
 """
 
 from __future__ import annotations
@@ -24,21 +21,15 @@ import sympy as sp
 
 from lagcomp.codegen.power import TERMS
 from lagcomp.codegen.tree_lower import program_kernel
-from lagcomp.errors import ModelError
 from lagcomp.ir import Kernel, ReturnZero
-from lagcomp.multibody.energy import potential_energy
-from lagcomp.multibody.forward_mode import derivatives
 from lagcomp.multibody.joints import t
 from lagcomp.multibody.kinematics import node_rate
 from lagcomp.multibody.program import Program
 
 
 def tree_power_terms(prog: Program, tree, local) -> list:
-    """[Σ τ ṡ, −Σ c ṡ², ∂V/∂t, 0] of `tree` over its kernel locals `local`
-    (`lagcomp.codegen.tree_companion.TreeLocals`), bound in `prog` (module docstring); a ModelError where h is not
-    T + V or a loop moves with t."""
-    time = local.mapping[t]
-    _refuse_moving_geometry(tree, local, time)
+    """[Σ τ ṡ, −Σ c ṡ², 0, 0] of `tree` over its kernel locals `local` (`lagcomp.codegen.tree_companion.TreeLocals`),
+    bound in `prog` (module docstring)."""
     signals = {c.diff(t): local.qd[i] for i, c in enumerate(tree.coordinates)}
     signals.update({c: local.q[i] for i, c in enumerate(tree.coordinates)})
 
@@ -53,9 +44,7 @@ def tree_power_terms(prog: Program, tree, local) -> list:
         rate = node_rate(prog, local_node)
         forces.append(torque * rate)
         dissipation.append(-damping * rate ** 2)
-    V = potential_energy(prog, list(local.nodes), list(local.gravity))
-    explicit = derivatives(prog, [V], {time: {0: sp.S.One}})[0].get(0, sp.S.Zero)
-    return [prog.let(sp.Add(*forces)), prog.let(sp.Add(*dissipation)), explicit, sp.S.Zero]
+    return [prog.let(sp.Add(*forces)), prog.let(sp.Add(*dissipation)), sp.S.Zero, sp.S.Zero]
 
 
 def tree_power_kernels(tree, local) -> tuple[Kernel, ...]:
@@ -66,8 +55,8 @@ def tree_power_kernels(tree, local) -> tuple[Kernel, ...]:
     return (program_kernel(
         "power",
         "The rate of change of the energy function h = T + V, term by term, into `out` (4,): out[0] = Σ τ ṡ (the\n"
-        "joints' torques), out[1] = −Σ c ṡ² (their dampers), out[2] = ∂V/∂t (explicit time), out[3] = −λ·b = 0\n"
-        "(loops fixed in time); ṡ the joint rates of the recursions (a ball joint's body rates). `lam` is not\n"
+        "joints' torques), out[1] = −Σ c ṡ² (their dampers), out[2] = −∂L/∂t = 0 and out[3] = −λ·b = 0\n"
+        "(only torques read t); ṡ the joint rates of the recursions (a ball joint's body rates). `lam` is not\n"
         "read. dh/dt is their sum along a motion (lagcomp.codegen.tree_power). Returns 0.",
         ("t", "y", "p", "lam", "out"), prog, stores, local.loads, ReturnZero()),)
 
@@ -78,18 +67,3 @@ def active_tree_power_terms(tree, local) -> list[str]:
     terms = tree_power_terms(Program(), tree, local)
     return [name for name, term in zip(TERMS, terms, strict=True) if sp.sympify(term) != 0]
 
-
-def _refuse_moving_geometry(tree, local, time) -> None:
-    """A ModelError where T has explicit time (h ≠ T + V) or a loop's points move with t (b ≠ 0)."""
-    for node in local.nodes:
-        fixed = (*node.axis, *(e for row in node.rotation for e in row), *node.origin, node.mass, *node.com,
-                 *(e for row in node.inertia for e in row))
-        if any(time in sp.sympify(e).free_symbols for e in fixed):
-            raise ModelError(f"The energy balance of the kinematic tree {tree.name!r} is not available: a joint's "
-                             "placement or axis or a link's mass properties change with t, so its kinetic energy "
-                             "has explicit time and h is not T + V. Write it as a lc.System for the balance.")
-    for closure in tree.closures:
-        if any(t in sp.sympify(e).free_symbols for e in (*closure.first_point, *closure.second_point)):
-            raise ModelError(f"The energy balance of the kinematic tree {tree.name!r} is not available: the points "
-                             f"of loop {closure.loop!r} move with t (their constraint does work). Write it as a "
-                             "lc.System for the balance.")
