@@ -53,9 +53,9 @@ def _tree(chain_file) -> lc.Tree:
 
 
 def test_run_integrates_a_tree_from_a_file_and_balances_its_energy(cache_dir, chain_file, capsys):
-    assert _lagcomp(cache_dir, "run", f"{chain_file}:chain") == 0
+    assert _lagcomp(cache_dir, "run", f"{chain_file}:chain", "--rtol", "1e-10", "--atol", "1e-12") == 0
     out = capsys.readouterr().out
-    sol = lc.compile(_tree(chain_file), cache_dir=cache_dir).simulate()
+    sol = lc.compile(_tree(chain_file), cache_dir=cache_dir).simulate((0.0, 1.0), rtol=1e-10, atol=1e-12)
     final = dict(item.strip().split("=") for item in out.split("final", 1)[1].splitlines()[0].split(","))
     assert [float(final["q0"]), float(final["q1"])] == pytest.approx(sol.q[-1], rel=1e-7)
     balance = sol.energy_balance()   # the damper and the torque: the report shows the balance, not the drift
