@@ -120,3 +120,41 @@ def test_a_sweep_of_a_damped_tree_reports_the_balance(cache_dir):
     sweep = model.sweep((0, 4), {"b": [0.0, 0.3, 1.0]}, params=CART_POLE, output="energy", **options)
     assert sweep.energy_balance and np.all(sweep.energy_error < 1e-8)
 
+
+
+def _damped_four_bar() -> lc.Tree:
+    """A four-bar linkage as a tree with its pin at B cut (`lc.Loop`): crank O→A driven and damped, coupler A→B
+    damped, rocker D→B; uniform thin rods along x, gravity −y."""
+    def rod(mass, length):
+        return {"mass": mass, "com": (length / 2, 0, 0), "inertia": (0, mass * length**2 / 12, mass * length**2 / 12)}
+
+    a, b, c, d = 0.6, 1.4, 1.1, 1.5
+    return lc.Tree([
+        lc.Link("crank", lc.Revolute("theta1", damping=0.3, torque=0.5 * sp.cos(2 * lc.t)), **rod(1.0, a)),
+        lc.Link("coupler", lc.Revolute("phi2", origin=(a, 0, 0), damping=0.1), parent="crank", **rod(1.5, b)),
+        lc.Link("rocker", lc.Revolute("theta3", origin=(d, 0, 0)), **rod(1.2, c)),
+    ], gravity=(0, -9.81, 0), name="power_four_bar",
+        loops=[lc.Loop("pin", ("coupler", (b, 0, 0)), ("rocker", (c, 0, 0)), directions="xy")])
+
+
+def _closed_angles(theta1: float) -> list:
+    """(θ1, φ2, θ3) with the pin closed: B where the circles of radius b about A and c about D meet (above AD)."""
+    a, b, c, d = 0.6, 1.4, 1.1, 1.5
+    A, D = a * np.array([np.cos(theta1), np.sin(theta1)]), np.array([d, 0.0])
+    gap = np.linalg.norm(D - A)
+    along = (b**2 - c**2 + gap**2) / (2 * gap)
+    unit = (D - A) / gap
+    B = A + along * unit + np.sqrt(b**2 - along**2) * np.array([-unit[1], unit[0]])
+    theta2 = np.arctan2(*(B - A)[::-1])
+    return [theta1, theta2 - theta1, np.arctan2(*(B - D)[::-1])]
+
+
+def test_a_loops_constraint_forces_do_no_work(cache_dir):
+    """The balance of a damped, driven four-bar closes with the torques and dampers alone: the loop's reactions
+    λ do no work (b = 0, Λ q̇ = 0 along the motion), so their term is zero and the residual the integration's."""
+    model = lc.compile(_damped_four_bar(), cache_dir=cache_dir)
+    sol = model.simulate((0, 5), q0=_closed_angles(1.0), qd0=[0.0, 0.0, 0.0], rtol=RTOL, atol=RTOL * 1e-2,
+                         t_eval=DENSE)
+    b = sol.energy_balance()
+    assert b.work["dissipation"][-1] < -0.1 and not np.any(b.work["constraints"])
+    assert b.relative_residual < 10 * RTOL and b.quadrature_error < RTOL * b.scale
