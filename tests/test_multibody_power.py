@@ -19,7 +19,7 @@ import lagcomp as lc
 RTOL = 1e-10
 #: The saved rows: dense enough that the quadrature of the power is not the residual (`quadrature_error`).
 DENSE = np.linspace(0.0, 5.0, 2501)
-CART_POLE = dict(M=1.3, m=0.7, c=0.4, J=0.05, g=9.81, k=2.0, b=0.3, F=1.5, w=2.0, e=0.1)
+CART_POLE = {"M": 1.3, "m": 0.7, "c": 0.4, "J": 0.05, "g": 9.81, "k": 2.0, "b": 0.3, "F": 1.5, "w": 2.0, "e": 0.1}
 
 
 def _swinging_chain() -> lc.Tree:
@@ -39,7 +39,7 @@ def _swinging_chain() -> lc.Tree:
     return lc.Tree(links, gravity=(0, 0, -g), name="power_chain")
 
 
-CHAIN = dict(a=0.7, b=0.35, g=9.81)
+CHAIN = {"a": 0.7, "b": 0.35, "g": 9.81}
 
 
 @pytest.mark.parametrize(("build", "params"), [(cart_pole, CART_POLE), (_swinging_chain, CHAIN)])
@@ -116,7 +116,7 @@ def test_a_ball_joints_power_is_omega_dot_tau(cache_dir):
 
 def test_a_sweep_of_a_damped_tree_reports_the_balance(cache_dir):
     model = lc.compile(cart_pole(), cache_dir=cache_dir)
-    options = dict(q0=[0.1, 0.5], qd0=[0.0, 0.0], rtol=RTOL, atol=RTOL * 1e-2)
+    options = {"q0": [0.1, 0.5], "qd0": [0.0, 0.0], "rtol": RTOL, "atol": RTOL * 1e-2}
     sweep = model.sweep((0, 4), {"b": [0.0, 0.3, 1.0]}, params=CART_POLE, output="energy", **options)
     assert sweep.energy_balance and np.all(sweep.energy_error < 1e-8)
 

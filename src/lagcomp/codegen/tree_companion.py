@@ -41,7 +41,6 @@ from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
 from lagcomp.codegen.tree_geometry import tree_geometry_kernels
 from lagcomp.codegen.tree_loop_companion import LOOP_BUILDERS
-from lagcomp.codegen.tree_power import active_tree_power_terms, tree_power_kernels
 from lagcomp.codegen.tree_lower import (
     FORMULATION,
     generalized_forcing,
@@ -49,6 +48,7 @@ from lagcomp.codegen.tree_lower import (
     motion,
     program_kernel,
 )
+from lagcomp.codegen.tree_power import active_tree_power_terms, tree_power_kernels
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
