@@ -77,8 +77,9 @@ def kernel_cost(model, repeats: int = 5, calls: int = 200_000, inputs: dict | No
 
 def applicable_methods(model) -> list:
     """The registry's methods that `model` accepts: those `lagcomp.integrate.options.check_method` does not refuse
-    (separable-only, holonomic-separable-only, unconstrained-only, a Taylor kernel, and a Kane model's state (q, u))."""
-    from lagcomp.errors import OptionError
+    (separable-only, holonomic-separable-only, unconstrained-only, a Taylor kernel, and a Kane model's state (q, u)),
+    nor a kinematic tree's model (`lagcomp.Tree`) for a kernel it does not have (a ModelError: the Taylor kernel)."""
+    from lagcomp.errors import ModelError, OptionError
     from lagcomp.integrate.methods import METHODS
     from lagcomp.integrate.options import check_method
 
@@ -86,7 +87,7 @@ def applicable_methods(model) -> list:
     for m in METHODS.values():
         try:
             check_method(model, m)
-        except OptionError:
+        except (OptionError, ModelError):
             continue
         accepted.append(m)
     return accepted

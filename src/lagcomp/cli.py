@@ -39,6 +39,7 @@ from lagcomp.cli_support.outputs import (
 )
 from lagcomp.cli_support.reports import run_lines
 from lagcomp.cli_support.run_inputs import check_inputs, run_values
+from lagcomp.cli_support.trees import is_tree, refuse_tree, show_tree
 from lagcomp.errors import LagcompError
 
 
@@ -107,6 +108,10 @@ def cmd_show(args) -> int:
     if isinstance(system, Model):
         _say_which(source, system)
         return _show_compiled(system)
+    if is_tree(system):   # (its equations are its recursions: no derivation)
+        model = compile(system, cache_dir=args.cache_dir)
+        _say_which(source, model)
+        return show_tree(system, model)
     eom = derive(system)
     model = compile(system, cache_dir=args.cache_dir, eom=eom)
     _say_which(source, model)
@@ -524,6 +529,9 @@ def cmd_stability(args) -> int:
         raise LagcompError(f"lagcomp stability linearizes the symbolic System, which a compiled model does not keep: "
                            f"give the file that defines {args.name!r} (path/to/model.py:NAME) or its module.")
     system = source.system()
+    if is_tree(system):
+        refuse_tree(system, "stability", "it linearizes a steady motion from a System's T and V; "
+                    "lagcomp.analysis.linearize(model, q) linearizes a tree's model about an equilibrium.")
     _say_which(source)
     held = _held_inputs(system, run.inputs)
     q = args.q if args.q is not None else run.q0 if run.q0 is not None else system.q0

@@ -69,9 +69,10 @@ TREE_ON_DEMAND = (
 #: The on-demand kinds a model compiled from a kinematic tree (`lagcomp.Tree`) has, built from its recursions
 #: (``dynamics``: the composite-rigid-body algorithm and recursive Newton–Euler), those differentiated in forward
 #: mode (`lagcomp.codegen.tree_companion`; "dae" only has kernels for a tree with loops,
-#: `lagcomp.codegen.tree_loop_companion`), and the links' frames ("geometry", `lagcomp.codegen.tree_geometry`, whose
-#: ``GEOMETRY_PARENTS`` a System's module does not define); its other kinds are refused.
-TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry", "dynamics")
+#: `lagcomp.codegen.tree_loop_companion`), the links' frames ("geometry", `lagcomp.codegen.tree_geometry`, whose
+#: ``GEOMETRY_PARENTS`` a System's module does not define) and the energy balance's "power"
+#: (`lagcomp.codegen.tree_power`); its other kinds are refused.
+TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry", "dynamics", "power")
 
 #: Every name a companion module may define, and the kind that defines it.
 KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}

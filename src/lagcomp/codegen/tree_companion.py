@@ -17,7 +17,9 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
   `lagcomp.codegen.kinds.TREE_ON_DEMAND`): ``mass_matrix`` by the composite-rigid-body algorithm and ``forcing``
   by recursive Newton–Euler at q̈ = 0, not differentiated: a System's eager module has them, but no run of a tree
   calls them (its ``rhs`` is the articulated-body algorithm);
-* "geometry" (animation): the links' frames by forward kinematics, no derivative (`lagcomp.codegen.tree_geometry`).
+* "geometry" (animation): the links' frames by forward kinematics, no derivative (`lagcomp.codegen.tree_geometry`);
+* "power" (``Solution.energy_balance``, a sweep's balance): the joints' torques' and dampers' power and V's explicit
+  time, no derivative of the motion (`lagcomp.codegen.tree_power`).
 
 A tree with closed loops (`lagcomp.Loop`) moves by an augmented solve, not by the articulated-body algorithm: its
 kinds are built by `lagcomp.codegen.tree_loop_companion` (the Jacobians, the tangent kernels and the DAE kernels of
@@ -46,6 +48,7 @@ from lagcomp.codegen.tree_lower import (
     motion,
     program_kernel,
 )
+from lagcomp.codegen.tree_power import active_tree_power_terms, tree_power_kernels
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
@@ -93,8 +96,10 @@ def tree_companion_source(tree: Tree, kind: KernelKind, eager_module: str) -> tu
     its metadata (``operations`` per kernel), as `lagcomp.codegen.companion_module.companion_source` gives a
     System's."""
     ir = lower_tree_kind(tree, kind.name)
-    operations = {k.name: k.operation_count for k in ir.kernels}
-    return emit_companion(ir, kind, eager_module), {"operations": operations}
+    metadata = {"operations": {k.name: k.operation_count for k in ir.kernels}}
+    if kind.name == "power":        # which terms of dh/dt the tree has (a sweep balances only where some has)
+        metadata["power_terms"] = active_tree_power_terms(tree, tree_locals(tree))
+    return emit_companion(ir, kind, eager_module), metadata
 
 
 def lower_tree_kind(tree: Tree, kind: str) -> ModuleIR:
@@ -221,7 +226,8 @@ def _dynamics_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
 _BUILDERS = {"jacobians": lambda tree, local: _jacobian_kernels(local),
              "directional": lambda tree, local: _tangent_kernels(local),
              "analysis": lambda tree, local: _rest_partials_kernels(local), "dae": lambda tree, local: (),
-             "dynamics": lambda tree, local: _dynamics_kernels(local)}
+             "dynamics": lambda tree, local: _dynamics_kernels(local),
+             "power": tree_power_kernels}
 
 #: The same for a tree with loops: the augmented solve differentiated (`lagcomp.codegen.tree_loop_companion`);
 #: ``rest_partials`` is the open tree's (F is the same).
