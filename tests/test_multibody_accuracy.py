@@ -16,7 +16,12 @@ import pytest
 import sympy as sp
 
 import lagcomp as lc
-from lagcomp.accuracy import kernel_accuracy, random_states, reference_equations, tree_reference
+from lagcomp.accuracy import (
+    kernel_accuracy,
+    random_states,
+    reference_equations,
+    tree_reference,
+)
 
 
 def ball_and_elbow() -> lc.Tree:

@@ -21,6 +21,7 @@ import sympy as sp
 from lagcomp.codegen.kinds import TREE_KINDS
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError
 from lagcomp.model.bodies import inertia_matrix
+from lagcomp.model.system import _unique_names as unique_names
 from lagcomp.multibody.joints import ISSUE, Elementary, Joint, t
 from lagcomp.multibody.loops import closures
 from lagcomp.multibody.shadow import shadow_events
@@ -271,6 +272,7 @@ def _parameters(tree: Tree) -> tuple:
                 raise ModelError(f"{tree.name}: {f} in {role} is not allowed there: only a joint's torque and an "
                                  "event may read t, the tree's coordinates and their velocities.")
         found |= {s for s in expr.free_symbols if s != t}
+    unique_names([s.name for s in found], "parameters")   # (values are passed by name)
     impostor = next((s for s in found if s.name == t.name), None)
     if impostor is not None:
         raise ModelError(f"{tree.name}: a symbol named t that is not lagcomp's time symbol (lc.t) would become a "
