@@ -25,18 +25,16 @@ HEAVIEST = (
     "test_error_table.py",               # 74
     "test_taylor_sensitivities.py",      # 58
     "test_multibody_spherical.py",       # 54 (without Pinocchio 21; -n 0 70, with the dop853 driver's compile)
+    "test_taylor_jacobian.py",           # 52 (its k = 9 case marked slow)
     "test_steady_linearization.py",      # 52
+    "test_rhs_jacobian.py",              # 50
     "test_names.py",                     # 46
+    "test_kane_interop.py",              # 46
     "test_multibody_jacobians.py",       # not measured yet (session 29: 5-9 min of wall under load, as the next two)
     "test_urdf.py",                      # not measured yet (18 random URDFs against Pinocchio)
     "test_multibody_loops.py",           # not measured yet
-    "test_rhs_jacobian.py",              # 43 (e5082ac)
-    "test_kane_interop.py",              # 42 (e5082ac)
-    "test_resting_contacts.py",          # 40 (e5082ac)
-    "test_directional.py",               # 39 at 615d5a2 (52: kkt_solve linked into each constrained kernel)
+    "test_directional.py",               # 41
     "test_acceptance.py",                # 38
-    "test_taylor_jacobian.py",           # 33 (103 with the k = 9 case, now marked slow)
-    "test_contact_friction.py",          # 32 (e5082ac)
     "test_driver_staleness.py",          # 28 at 4805bf0 (66: dopri5 compiled twice into an empty numba cache)
     "test_taylor_modes.py",              # 27 (e5082ac)
     "test_constrained_sensitivities.py",  # 25 (e5082ac)
@@ -54,6 +52,7 @@ HEAVIEST = (
     "test_driver_cache.py",              # 17 (e5082ac)
     "test_cache_faults.py",              # 16 (e5082ac)
 )
+# (Out of the list at 8a988cb: test_resting_contacts.py 13 s, test_contact_friction.py 9 s.)
 
 _RANK = {name: rank for rank, name in enumerate(HEAVIEST)}
 
