@@ -22,6 +22,9 @@ from __future__ import annotations
 HEAVIEST = (
     "test_multibody.py",                 # 122 (-n 0; without Pinocchio 47: its random trees took 72)
     "test_units_invariance.py",          # 81
+    "test_multibody_jacobians.py",       # 107 (-n 0 after test_multibody.py, whose models it shares: conftest's
+                                         # tree_pair; radau's driver 19 of it): third, so that it starts once the
+                                         # first has compiled them, not on the other worker at the same time
     "test_error_table.py",               # 74
     "test_taylor_sensitivities.py",      # 58
     "test_multibody_spherical.py",       # 54 (without Pinocchio 21; -n 0 70, with the dop853 driver's compile)
@@ -30,8 +33,8 @@ HEAVIEST = (
     "test_rhs_jacobian.py",              # 50
     "test_names.py",                     # 46
     "test_kane_interop.py",              # 46
-    "test_multibody_jacobians.py",       # not measured yet (session 29: 5-9 min of wall under load, as the next two)
-    "test_urdf.py",                      # not measured yet (18 random URDFs against Pinocchio)
+    "test_urdf.py",                      # not measured yet (5-9 min of wall under load, session 29; 18 random
+                                         # URDFs against Pinocchio)
     "test_multibody_loops.py",           # not measured yet
     "test_directional.py",               # 41
     "test_acceptance.py",                # 38
