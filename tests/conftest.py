@@ -52,6 +52,24 @@ def compiled(cache_dir):
 
 
 @pytest.fixture(scope="session")
+def tree_pair(cache_dir):
+    """`tree_pair(name)` -> (the model of the tree `multibody_models.PAIRS[name]`, the model of the same system on
+    the Lagrangian path, `multibody_models.lagrangian_system`), compiled once per session."""
+    import multibody_models
+
+    pairs = {}
+
+    def get(name: str) -> tuple[lc.Model, lc.Model]:
+        if name not in pairs:
+            tree = multibody_models.PAIRS[name]()
+            pairs[name] = (lc.compile(tree, cache_dir=cache_dir),
+                           lc.compile(multibody_models.lagrangian_system(tree), cache_dir=cache_dir))
+        return pairs[name]
+
+    return get
+
+
+@pytest.fixture(scope="session")
 def whipple_bicycle(cache_dir):
     """sympy's test_kane3 bicycle: (its KanesMethod, the model `lc.compile(km)` makes of it), built once."""
     import kane_models

@@ -10,7 +10,8 @@ appends one JSON line per test to ``<DIR>/<worker>-<pid>.jsonl`` (DIR from ``$LA
   a generated module's name holds the model's name and key, so the same key in two workers or two tests is
   compiled twice; ``kernels``: the same for each kernel of a generated module (``module.function``), which the
   report's last list reads: a kernel compiled in two files or two workers is work done twice;
-- ``builds``: lagcomp's derivations, lowerings and emissions (``lagcomp.runtime.build``, the companion's).
+- ``builds``: lagcomp's derivations, lowerings and emissions (``lagcomp.runtime.build``, a tree's
+  ``lagcomp.tree_model._build``, the companion's).
 
 ``python tests/cpu_profile.py DIR`` prints the totals, the files and the models by CPU::
 
@@ -86,6 +87,7 @@ def _install() -> None:
 
     import lagcomp.companion as companion
     import lagcomp.runtime as runtime
+    import lagcomp.tree_model as tree_model
 
     class Listener(event.Listener):
         def on_start(self, ev):
@@ -97,6 +99,7 @@ def _install() -> None:
     event.register("numba:compile", Listener())
     runtime.build = _RECORDER.timed("eager", runtime.build, lambda args: getattr(args[0], "name", "?"))
     companion.build_companion = _RECORDER.timed("companion", companion.build_companion, lambda args: args[3])
+    tree_model._build = _RECORDER.timed("tree", tree_model._build, lambda args: getattr(args[0], "name", "?"))
 
 
 def pytest_configure(config):
@@ -156,6 +159,18 @@ def report(directory: str, top: int = 25) -> None:
     for name, (seconds, keys, names) in sorted(models.items(), key=lambda kv: -kv[1][0])[:top]:
         print(f"  {name:40s} {seconds:6.1f} s  {len(keys)} module(s)  {', '.join(sorted(names)[:4])}")
     compiled_again(records, top)
+    heaviest(files)
+
+
+def heaviest(files: dict, threshold: float = 15.0) -> None:
+    """Print the files of more than `threshold` CPU seconds (their processes' and subprocesses'), heaviest first,
+    as `tests/suite_order.HEAVIEST` lists them."""
+    rows = sorted(((cpu + child, name.rsplit("/", 1)[-1]) for name, (cpu, child, _, _) in files.items()
+                   if cpu + child > threshold), reverse=True)
+    print(f"\nsuite_order.HEAVIEST (files over {threshold:.0f} s):")
+    for seconds, name in rows:
+        quoted = f'"{name}",'
+        print(f"    {quoted:40s} # {seconds:.0f}")
 
 
 #: A generated module's name: the model's name, the on-demand kind of a companion module, the key.

@@ -17,7 +17,17 @@ import lagcomp as lc
 from lagcomp.examples.trees import cart_pole, planar_chain, universal_chain
 from lagcomp.multibody.pinocchio_peer import pinocchio_model
 
-__all__ = ["cart_pole", "lagrangian_system", "pinocchio_model", "planar_chain", "random_tree", "universal_chain"]
+__all__ = ["PAIRS", "cart_pole", "lagrangian_system", "pinocchio_model", "planar_chain", "random_tree",
+           "universal_chain"]
+
+#: The trees that tests/test_multibody.py and tests/test_multibody_jacobians.py compare with the same systems on
+#: the Lagrangian path, by name: conftest's `tree_pair(name)` compiles each pair once per worker.
+PAIRS = {
+    "rigid_double_pendulum": lambda: planar_chain(2, "rigid_double_pendulum"),
+    "planar_chain_4": lambda: planar_chain(4),
+    "universal_chain_2": lambda: universal_chain(2),
+    "cart_pole": cart_pole,
+}
 
 
 # -- the same systems on the Lagrangian path ----------------------------------------------------------------------

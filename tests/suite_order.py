@@ -14,39 +14,48 @@ about 15 s of CPU belongs in the list (docs/testing.md says how to measure).
 
 from __future__ import annotations
 
-#: Test files (names under tests/) by the CPU seconds of their tests, heaviest first, at e5082ac (two re-measured
-#: where marked, -n 0 with the library's numba cache warm).
+#: Test files (names under tests/) by the CPU seconds of their tests, heaviest first: unmarked figures from one run
+#: at 8a988cb (session 29: -n 2, a cold cache, Pinocchio installed, ``tests/cpu_profile.py``), test_multibody.py's
+#: -n 0 at 8a988cb, the others at e5082ac or where noted.  Without Pinocchio (the ``test`` extra has no ``pin``:
+#: CI's run) the tests against it skip and the multibody files weigh less; ranked by their weight with it, they run
+#: early where they are heavy, and cost nothing by going first where they are light.
 HEAVIEST = (
-    "test_units_invariance.py",          # 90
-    "test_error_table.py",               # 58
-    "test_acceptance.py",                # 50
-    "test_taylor_sensitivities.py",      # 49
-    "test_steady_linearization.py",      # 47
+    "test_multibody.py",                 # 122 (-n 0; without Pinocchio 47: its random trees took 72)
+    "test_units_invariance.py",          # 81
+    "test_multibody_jacobians.py",       # 107 (-n 0 after test_multibody.py, whose models it shares: conftest's
+                                         # tree_pair; radau's driver 19 of it): third, so that it starts once the
+                                         # first has compiled them, not on the other worker at the same time
+    "test_error_table.py",               # 74
+    "test_taylor_sensitivities.py",      # 58
+    "test_multibody_spherical.py",       # 54 (without Pinocchio 21; -n 0 70, with the dop853 driver's compile)
+    "test_taylor_jacobian.py",           # 52 (its k = 9 case marked slow)
+    "test_steady_linearization.py",      # 52
+    "test_rhs_jacobian.py",              # 50
     "test_names.py",                     # 46
-    "test_multibody_spherical.py",       # 45 (session 28: Pinocchio's chains' kernels, 10⁴ turns of a free body)
-    "test_rhs_jacobian.py",              # 43
-    "test_kane_interop.py",              # 42
-    "test_resting_contacts.py",          # 40
-    "test_directional.py",               # 39 at 615d5a2 (52: kkt_solve linked into each constrained kernel)
-    "test_taylor_jacobian.py",           # 33 (103 with the k = 9 case, now marked slow)
-    "test_contact_friction.py",          # 32
+    "test_kane_interop.py",              # 46
+    "test_urdf.py",                      # not measured yet (5-9 min of wall under load, session 29; 18 random
+                                         # URDFs against Pinocchio)
+    "test_multibody_loops.py",           # not measured yet
+    "test_directional.py",               # 41
+    "test_acceptance.py",                # 38
     "test_driver_staleness.py",          # 28 at 4805bf0 (66: dopri5 compiled twice into an empty numba cache)
-    "test_taylor_modes.py",              # 27
-    "test_constrained_sensitivities.py",  # 25
-    "test_large_systems.py",             # 25
-    "test_sweep.py",                     # 23
-    "test_on_demand.py",                 # 22
-    "test_inputs.py",                    # 22
-    "test_animation.py",                 # 20
-    "test_geometry.py",                  # 20
-    "test_silent_answers.py",            # 19
-    "test_friction.py",                  # 18
-    "test_parameter_jacobian.py",        # 18
-    "test_plots.py",                     # 18
-    "test_cli_impacts.py",               # 18
-    "test_driver_cache.py",              # 17
-    "test_cache_faults.py",              # 16
+    "test_taylor_modes.py",              # 27 (e5082ac)
+    "test_constrained_sensitivities.py",  # 25 (e5082ac)
+    "test_large_systems.py",             # 25 (e5082ac)
+    "test_sweep.py",                     # 23 (e5082ac)
+    "test_on_demand.py",                 # 22 (e5082ac)
+    "test_inputs.py",                    # 22 (e5082ac)
+    "test_animation.py",                 # 20 (e5082ac)
+    "test_geometry.py",                  # 20 (e5082ac)
+    "test_silent_answers.py",            # 19 (e5082ac)
+    "test_friction.py",                  # 18 (e5082ac)
+    "test_parameter_jacobian.py",        # 18 (e5082ac)
+    "test_plots.py",                     # 18 (e5082ac)
+    "test_cli_impacts.py",               # 18 (e5082ac)
+    "test_driver_cache.py",              # 17 (e5082ac)
+    "test_cache_faults.py",              # 16 (e5082ac)
 )
+# (Out of the list at 8a988cb: test_resting_contacts.py 13 s, test_contact_friction.py 9 s.)
 
 _RANK = {name: rank for rank, name in enumerate(HEAVIEST)}
 

@@ -20,24 +20,6 @@ import lagcomp as lc
 from lagcomp import analysis as an
 from lagcomp.tree_model import TreeModel
 
-FACTORIES = {
-    "rigid_double_pendulum": lambda: mm.planar_chain(2, "rigid_double_pendulum"),
-    "planar_chain_4": lambda: mm.planar_chain(4),
-    "universal_chain_2": lambda: mm.universal_chain(2),
-    "cart_pole": mm.cart_pole,
-}
-
-
-@pytest.fixture(scope="module")
-def pairs(cache_dir):
-    """{name: (tree model, Lagrangian model)}, compiled once."""
-    made = {}
-    for name, factory in FACTORIES.items():
-        tree = factory()
-        made[name] = (lc.compile(tree, cache_dir=cache_dir), lc.compile(mm.lagrangian_system(tree),
-                                                                        cache_dir=cache_dir))
-    return made
-
 
 def _draw(data, model, scale=1.0):
     """Random parameters (0.5 to 2, by name) and a state (q, q̇ within ±2 scale) for `model`."""
@@ -52,11 +34,11 @@ def _relative(a, b) -> float:
     return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
 
 
-@pytest.mark.parametrize("name", FACTORIES)
+@pytest.mark.parametrize("name", mm.PAIRS)
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_accelerations_and_energy_agree_with_the_lagrangian_path(pairs, name, data):
-    tree_model, lagrange_model = pairs[name]
+def test_accelerations_and_energy_agree_with_the_lagrangian_path(tree_pair, name, data):
+    tree_model, lagrange_model = tree_pair(name)
     params, y = _draw(data, tree_model)
     t = data.draw(st.floats(0.0, 10.0), label="t")
     assert tree_model.parameters == lagrange_model.parameters
@@ -65,11 +47,11 @@ def test_accelerations_and_energy_agree_with_the_lagrangian_path(pairs, name, da
     assert abs(energies[0] - energies[1]) <= 1e-12 * max(abs(energies[1]), 1.0)
 
 
-@pytest.mark.parametrize("name", FACTORIES)
+@pytest.mark.parametrize("name", mm.PAIRS)
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_mass_matrix_forcing_and_momenta_agree_with_the_lagrangian_path(pairs, name, data):
-    tree_model, lagrange_model = pairs[name]
+def test_mass_matrix_forcing_and_momenta_agree_with_the_lagrangian_path(tree_pair, name, data):
+    tree_model, lagrange_model = tree_pair(name)
     params, y = _draw(data, tree_model)
     n = tree_model.n
     for kernel, shape in (("mass_matrix", (n, n)), ("forcing", (n,)), ("momenta", (n,))):
@@ -79,9 +61,9 @@ def test_mass_matrix_forcing_and_momenta_agree_with_the_lagrangian_path(pairs, n
         assert _relative(got, want) <= 1e-12, kernel
 
 
-def test_the_rhs_kernel_is_straight_line_code_from_the_recursion(pairs):
+def test_the_rhs_kernel_is_straight_line_code_from_the_recursion(tree_pair):
     """The articulated-body rhs of a chain holds one sine and one cosine per joint and no linear solve."""
-    tree_model, _ = pairs["planar_chain_4"]
+    tree_model, _ = tree_pair("planar_chain_4")
     source = tree_model.source_path.read_text(encoding="utf-8")
     start = source.index("def rhs(")
     rhs = source[start:source.index("\ndef ", start)]
@@ -90,9 +72,8 @@ def test_the_rhs_kernel_is_straight_line_code_from_the_recursion(pairs):
     assert isinstance(tree_model, TreeModel)
 
 
-def test_a_run_keeps_the_energy_of_a_conservative_tree(cache_dir):
-    tree = mm.universal_chain(2)
-    model = lc.compile(tree, cache_dir=cache_dir)
+def test_a_run_keeps_the_energy_of_a_conservative_tree(tree_pair):
+    model, _ = tree_pair("universal_chain_2")
     params = {name: 1.0 for name in model.parameters} | {"g": 9.81, "A0": 0.3, "B0": 0.4, "C0": 0.2}
     sol = model.simulate((0.0, 10.0), q0=[1.0, -0.5, 0.3, 0.8], qd0=[0.0, 1.0, -1.0, 0.5], params=params,
                          rtol=1e-12, atol=1e-12)
@@ -102,18 +83,17 @@ def test_a_run_keeps_the_energy_of_a_conservative_tree(cache_dir):
     assert np.max(np.abs(energy - energy[0])) > 0   # (a real run: the energy is evaluated along it, not a constant)
 
 
-def test_a_tree_model_loads_from_the_cache_by_name(cache_dir):
-    tree = mm.planar_chain(2, "loaded_tree")
-    compiled = lc.compile(tree, cache_dir=cache_dir)
-    loaded = lc.load("loaded_tree", cache_dir=cache_dir)
+def test_a_tree_model_loads_from_the_cache_by_name(tree_pair, cache_dir):
+    compiled, _ = tree_pair("rigid_double_pendulum")
+    loaded = lc.load("rigid_double_pendulum", cache_dir=cache_dir)
     assert isinstance(loaded, TreeModel) and loaded.from_cache and loaded.parameters == compiled.parameters
     params = {name: 1.0 for name in loaded.parameters}
     y = np.array([0.3, -0.4, 0.5, 0.1])
     assert np.array_equal(loaded.rhs(0.0, y, params), compiled.rhs(0.0, y, params))
 
 
-def test_a_tree_model_pickles_as_a_tree_model(pairs):
-    tree_model, _ = pairs["cart_pole"]
+def test_a_tree_model_pickles_as_a_tree_model(tree_pair):
+    tree_model, _ = tree_pair("cart_pole")
     copy = pickle.loads(pickle.dumps(tree_model))
     assert isinstance(copy, TreeModel) and copy.cache_key == tree_model.cache_key
     params = {name: 1.0 for name in copy.parameters}
@@ -158,8 +138,8 @@ def test_random_trees_agree_with_pinocchio(cache_dir, seed):
 # -- refusals -------------------------------------------------------------------------------------------------------
 
 
-def test_kernels_of_later_steps_are_refused_naming_the_feature_and_the_issue(pairs):
-    tree_model, _ = pairs["rigid_double_pendulum"]
+def test_kernels_of_later_steps_are_refused_naming_the_feature_and_the_issue(tree_pair):
+    tree_model, _ = tree_pair("rigid_double_pendulum")
     params = {name: 1.0 for name in tree_model.parameters}
     with pytest.raises(lc.ModelError, match=r"method='taylor'.*issue 39"):
         tree_model.simulate((0.0, 1.0), q0=[0.1, 0.2], qd0=[0.0, 0.0], params=params, method="taylor")

@@ -26,24 +26,6 @@ import lagcomp as lc
 from lagcomp import analysis as an
 from lagcomp.codegen.kinds import TREE_KINDS
 
-FACTORIES = {
-    "rigid_double_pendulum": lambda: mm.planar_chain(2, "rigid_double_pendulum"),
-    "planar_chain_4": lambda: mm.planar_chain(4),
-    "universal_chain_2": lambda: mm.universal_chain(2),
-    "cart_pole": mm.cart_pole,
-}
-
-
-@pytest.fixture(scope="module")
-def pairs(cache_dir):
-    """{name: (tree model, Lagrangian model)}, compiled once (the same models as tests/test_multibody.py)."""
-    made = {}
-    for name, factory in FACTORIES.items():
-        tree = factory()
-        made[name] = (lc.compile(tree, cache_dir=cache_dir), lc.compile(mm.lagrangian_system(tree),
-                                                                        cache_dir=cache_dir))
-    return made
-
 
 def _draw(data, model):
     """Random parameters (0.5 to 2, by name) and a state (q, q̇ within ±2) for `model`."""
@@ -61,13 +43,13 @@ def _relative(a, b) -> float:
 # -- against the Lagrangian path ----------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", FACTORIES)
+@pytest.mark.parametrize("name", mm.PAIRS)
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_jacobians_agree_with_the_lagrangian_path(pairs, name, data):
+def test_jacobians_agree_with_the_lagrangian_path(tree_pair, name, data):
     """∂f/∂y and ∂f/∂p of the tree (forward mode over the recursion) against the Lagrangian path's (derived from
     the expanded T and V), to 1e-12 relative; the full Jacobian is both side by side."""
-    tree_model, lagrange_model = pairs[name]
+    tree_model, lagrange_model = tree_pair(name)
     params, y = _draw(data, tree_model)
     t = data.draw(st.floats(0.0, 10.0), label="t")
     assert tree_model.parameters == lagrange_model.parameters
@@ -80,11 +62,11 @@ def test_jacobians_agree_with_the_lagrangian_path(pairs, name, data):
     assert np.array_equal(full, np.hstack([tree_model.jacobian(t, y, params), tree_p]))
 
 
-@pytest.mark.parametrize("name", FACTORIES)
-def test_the_kernels_that_write_f_write_rhs_bitwise(pairs, name):
+@pytest.mark.parametrize("name", mm.PAIRS)
+def test_the_kernels_that_write_f_write_rhs_bitwise(tree_pair, name):
     """rhs_with_jacobian, rhs_with_full_jacobian and the tangent kernels run the eager rhs's program first: the
     same f, bit for bit; the tangent kernels' J v is the Jacobian's product (to rounding: other sums)."""
-    tree_model, _ = pairs[name]
+    tree_model, _ = tree_pair(name)
     rng = np.random.default_rng(3)
     p = tree_model.parameter_vector({name: float(v) for name, v in
                                      zip(tree_model.parameters, rng.uniform(0.5, 2, len(tree_model.parameters)))})
@@ -135,10 +117,10 @@ def _double_pendulum_acceleration():
     return acceleration
 
 
-def test_the_jacobian_agrees_with_40_digit_central_differences_of_an_independent_derivation(pairs):
+def test_the_jacobian_agrees_with_40_digit_central_differences_of_an_independent_derivation(tree_pair):
     """∂q̈/∂y of the double pendulum tree against central differences (step 1e-15) of q̈ from T and V derived here,
     evaluated with mpmath at 40 digits: the difference's error is ~1e-30 of J, below the kernel's rounding."""
-    tree_model, _ = pairs["rigid_double_pendulum"]
+    tree_model, _ = tree_pair("rigid_double_pendulum")
     acceleration = _double_pendulum_acceleration()
     rng = np.random.default_rng(11)
     with mpmath.workdps(40):
@@ -163,9 +145,9 @@ def test_the_jacobian_agrees_with_40_digit_central_differences_of_an_independent
 # -- what uses them: radau, linearize, sensitivities ---------------------------------------------------------------
 
 
-def test_radau_on_a_tree_agrees_with_dop853(pairs):
+def test_radau_on_a_tree_agrees_with_dop853(tree_pair):
     """The 3D universal-joint chain, radau (the tree's exact Jacobian) against dop853, both at tight tolerance."""
-    tree_model, _ = pairs["universal_chain_2"]
+    tree_model, _ = tree_pair("universal_chain_2")
     params = {name: 1.0 for name in tree_model.parameters} | {"g": 9.81, "A0": 0.3, "B0": 0.4, "C0": 0.2}
     start = dict(q0=[1.0, -0.5, 0.3, 0.8], qd0=[0.0, 1.0, -1.0, 0.5], params=params)
     radau = tree_model.simulate((0.0, 3.0), method="radau", rtol=1e-12, atol=1e-12, **start)
@@ -185,9 +167,9 @@ def _double_pendulum_frequencies(m1, m2, l1, l2, g):
 
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(m1=st.floats(0.2, 5.0), m2=st.floats(0.2, 5.0), l1=st.floats(0.2, 3.0), l2=st.floats(0.2, 3.0))
-def test_linearize_of_a_tree_double_pendulum_gives_the_closed_form_frequencies(pairs, m1, m2, l1, l2):
+def test_linearize_of_a_tree_double_pendulum_gives_the_closed_form_frequencies(tree_pair, m1, m2, l1, l2):
     """The planar chain with point masses at the links' ends, hanging down (θ0 = −π/2: link 0's x along −y)."""
-    tree_model, _ = pairs["rigid_double_pendulum"]
+    tree_model, _ = tree_pair("rigid_double_pendulum")
     params = dict(m0=m1, m1=m2, c0=l1, l0=l1, c1=l2, d0=0.0, d1=0.0, J0=0.0, J1=0.0, g=9.81)
     modes = an.normal_modes(tree_model, [-np.pi / 2, 0.0], params)
     assert modes.stability == "stable"
@@ -195,10 +177,10 @@ def test_linearize_of_a_tree_double_pendulum_gives_the_closed_form_frequencies(p
 
 
 @pytest.mark.parametrize("name", ["planar_chain_4", "cart_pole"])
-def test_linearize_of_a_tree_agrees_with_the_lagrangian_path(pairs, name):
+def test_linearize_of_a_tree_agrees_with_the_lagrangian_path(tree_pair, name):
     """M₀, K₀, G₀, D₀ (the cart-pole's dampers give D₀) at a random configuration, the tree's rest_partials by
     forward mode over recursive Newton–Euler against the Lagrangian path's symbolic ones."""
-    tree_model, lagrange_model = pairs[name]
+    tree_model, lagrange_model = tree_pair(name)
     rng = np.random.default_rng(5)
     params = {k: float(v) for k, v in zip(tree_model.parameters, rng.uniform(0.5, 2.0, len(tree_model.parameters)))}
     q = rng.uniform(-2.0, 2.0, tree_model.n)
@@ -211,11 +193,11 @@ def test_linearize_of_a_tree_agrees_with_the_lagrangian_path(pairs, name):
 
 
 @pytest.mark.parametrize("columns", [("q0:th",), ("p:m",), ("q0", "qd0", "params")])
-def test_sensitivities_on_a_tree_agree_with_finite_differences_of_runs(pairs, columns):
+def test_sensitivities_on_a_tree_agree_with_finite_differences_of_runs(tree_pair, columns):
     """The cart-pole (spring, dampers, a forcing in t): one column (a tangent kernel), and all of them (the full
     Jacobians), against central differences of runs at rtol 1e-12 (step 1e-5: truncation ~1e-10, rounding of
     the runs ~1e-7 relative to the sensitivities), and against the Lagrangian path's sensitivities."""
-    tree_model, lagrange_model = pairs["cart_pole"]
+    tree_model, lagrange_model = tree_pair("cart_pole")
     params = {name: 1.0 for name in tree_model.parameters} | {"g": 9.81, "c": 0.7, "k": 3.0, "w": 2.0}
     q0, qd0 = np.array([0.2, 0.5]), np.array([0.1, -0.3])
     options = dict(rtol=1e-12, atol=1e-12, t_eval=np.linspace(0.0, 2.0, 5))
@@ -243,8 +225,8 @@ def test_sensitivities_on_a_tree_agree_with_finite_differences_of_runs(pairs, co
 # -- the companion modules -------------------------------------------------------------------------------------
 
 
-def test_a_tree_has_its_kinds_and_names_the_others(pairs):
-    tree_model, _ = pairs["planar_chain_4"]
+def test_a_tree_has_its_kinds_and_names_the_others(tree_pair):
+    tree_model, _ = tree_pair("planar_chain_4")
     assert set(tree_model.on_demand_entries) == set(TREE_KINDS)
     assert tree_model.on_demand_entry("jacobians").path.exists()
     with pytest.raises(lc.ModelError, match=r"taylor kernels.*method='taylor'.*kinematic tree 'planar_chain_4'"):
@@ -253,10 +235,10 @@ def test_a_tree_has_its_kinds_and_names_the_others(pairs):
         _ = tree_model.kernels.momentum_rate
 
 
-def test_the_jacobian_costs_less_than_2n_times_rhs(pairs):
+def test_the_jacobian_costs_less_than_2n_times_rhs(tree_pair):
     """Forward mode carries only the nonzero derivatives (a link's outward quantities depend on its ancestors'
     coordinates only): ∂f/∂y of the 4-link chain costs less than 2n times rhs's operations."""
-    tree_model, _ = pairs["planar_chain_4"]
+    tree_model, _ = tree_pair("planar_chain_4")
     operations = tree_model.operations
     assert operations["rhs_with_jacobian"] < 0.8 * 2 * tree_model.n * operations["rhs"]
     assert operations["rhs_tangent"] < 3.5 * operations["rhs"]
