@@ -4,8 +4,8 @@ as for a System, and `normal_modes` judges their stability.
 
 References: closed forms derived here (a double pendulum's four equilibria and their stability, the spring-loaded
 joints' balance), the Lagrangian twin of the same double pendulum (`multibody_models.lagrangian_system`, compiled
-through T and V), and the analyses' refusals for what a tree still cannot give (closed loops; the energy portrait,
-which reads a System's T and V).
+through T and V), the phase portrait of a sprung hinge (the energy integral from the tree's energy function), and the
+refusals of what a tree cannot give (the equilibria of closed loops; the portrait of a damped joint).
 """
 
 from __future__ import annotations
@@ -184,8 +184,25 @@ def test_closed_loop_tree_is_refused(cache_dir):
             find()
 
 
-def test_energy_portrait_of_a_tree_is_refused(spring_trees):
-    """The phase portrait reads a System's T and V (its energy integral): a tree is refused by name, before work."""
+def test_energy_portrait_of_a_sprung_hinge(spring_trees):
+    """The phase portrait of a conservative 1-DoF tree: U(θ) = m g c sin θ + k (θ − r)² / 2 (gravity and the
+    joint's spring), m(θ) = J + m c², the one equilibrium of `test_sprung_hinge_equilibrium`, stable."""
     _, hinge = spring_trees
-    with pytest.raises(ModelError, match=r"sprung_hinge"):
-        phase_portrait(hinge, [1.0], (-1.0, 1.0), dict(k=10.0, r=0.0, m=1.0, g=9.81, c=0.5))
+    k, m, g, c, theta = 30.0, 1.2, 9.81, 0.5, 0.4
+    p = dict(k=k, r=theta + m * g * c * math.cos(theta) / k, m=m, g=g, c=c)
+    portrait = phase_portrait(hinge, [5.0, 20.0], (-2.0, 2.5), p, samples=201)
+    U = m * g * c * np.sin(portrait.q) + k * (portrait.q - p["r"]) ** 2 / 2
+    assert np.max(np.abs(portrait.potential - U)) <= 1e-13 * np.max(np.abs(U))
+    assert np.allclose(portrait.inertia, 0.01 + m * c**2, rtol=1e-14, atol=0)
+    assert [abs(e.q[0] - theta) <= TOLERANCE for e in portrait.equilibria] == [True]
+    assert portrait.stable == (True,)
+
+
+def test_energy_portrait_of_a_damped_tree_is_refused(cache_dir):
+    """A joint's damper makes the energy function not conserved: refused by name, as a System with dissipation."""
+    damped = lc.Tree([lc.Link("arm", lc.Revolute("th", axis="z", damping=0.1), mass=1.0, com=(0.5, 0, 0),
+                              inertia=(0.01, 0.01, 0.01))], gravity=(0, -9.81, 0), name="damped_arm")
+    model = lc.compile(damped, cache_dir=cache_dir)
+    with pytest.raises(ModelError, match=r"damped_arm.*dissipation"):
+        phase_portrait(model, [1.0], (-1.0, 1.0))
+    assert find_equilibrium(model, [-1.0]).q == pytest.approx([-math.pi / 2], abs=TOLERANCE)

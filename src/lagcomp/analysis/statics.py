@@ -30,7 +30,7 @@ import numpy as np
 from scipy import optimize
 
 from lagcomp.analysis._common import (RestForces, coordinates_vector, explicit_time, relative_residual, symbolic_system,
-                                      unconstrained)
+                                      tree_of, unconstrained)
 from lagcomp.errors import OptionError
 
 #: Times (after t) at which a time-dependent system's equilibrium is checked for steadiness.
@@ -89,22 +89,11 @@ def _depends_on_time(model) -> bool:
     A System's from its T, V, dissipation and forces; a kinematic tree's (`lagcomp.Tree`) from its joints'
     torques, the only part of a tree that may read t (its masses, placements, springs and dampers are constant).
     """
-    tree_torques = _tree_torques(model)
-    if tree_torques is not None:
-        return explicit_time(*tree_torques, system=model.system)
+    tree = tree_of(model)
+    if tree is not None:
+        return explicit_time(*(node.joint.torque for node in tree.nodes), system=tree)
     system = symbolic_system(model, "The statics analysis")
     return explicit_time(system.T, system.V, system.dissipation, *system.forces, system=system)
-
-
-def _tree_torques(model):
-    """The joint torques of a model compiled from a `lagcomp.Tree` (one per node, its coordinate's driving
-    torque or force), None for any other model."""
-    from lagcomp.multibody.tree import Tree
-
-    tree = getattr(model, "system", None)
-    if not isinstance(tree, Tree):
-        return None
-    return [node.joint.torque for node in tree.nodes]
 
 
 def _newton_polish(rest: RestForces, q: np.ndarray, iterations: int = 6) -> np.ndarray:
