@@ -206,3 +206,17 @@ def test_energy_portrait_of_a_damped_tree_is_refused(cache_dir):
     with pytest.raises(ModelError, match=r"damped_arm.*dissipation"):
         phase_portrait(model, [1.0], (-1.0, 1.0))
     assert find_equilibrium(model, [-1.0]).q == pytest.approx([-math.pi / 2], abs=TOLERANCE)
+
+
+def test_steady_motion_analyses_of_a_tree_are_refused(double_pendulum):
+    """linearize_steady and stability_sweep reduce a System's symbolic equations: refused for a tree, by name,
+    where before a tree model was called no Model; `normal_modes` at the equilibrium is what applies."""
+    from lagcomp.analysis import linearize_steady, stability_sweep
+
+    tree_model, _ = double_pendulum
+    p = pendulum_parameters(1.0, 2.0, 0.5, 0.0, 0.4, 0.0, 1.0, 9.81)
+    hanging = [-math.pi / 2, 0.0]
+    with pytest.raises(ModelError, match=r"linearize_steady.*'planar_chain_2'"):
+        linearize_steady(tree_model, hanging, [0.0, 0.0], p)
+    with pytest.raises(ModelError, match=r"stability_sweep.*'planar_chain_2'"):
+        stability_sweep(tree_model, "g", [1.0, 2.0], hanging, [0.0, 0.0], p)
