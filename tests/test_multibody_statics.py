@@ -36,7 +36,8 @@ def double_pendulum(cache_dir):
 
 
 def pendulum_parameters(m0, m1, c0, d0, c1, d1, l0, g) -> dict:
-    return dict(m0=m0, m1=m1, c0=c0, d0=d0, c1=c1, d1=d1, l0=l0, g=g, J0=0.3 * m0, J1=0.2 * m1)
+    return {"m0": m0, "m1": m1, "c0": c0, "d0": d0, "c1": c1, "d1": d1, "l0": l0, "g": g,
+            "J0": 0.3 * m0, "J1": 0.2 * m1}
 
 
 def closed_form_equilibria(p) -> dict:
@@ -86,7 +87,7 @@ def test_double_pendulum_against_lagrangian_twin(double_pendulum):
     """Same equilibria, force scales (what "F = 0" is judged against) and modes as the model compiled from T and V."""
     tree_model, twin = double_pendulum
     p = pendulum_parameters(1.3, 0.7, 0.6, 0.1, 0.45, -0.05, 1.1, 9.81)
-    for (s0, s1), q in closed_form_equilibria(p).items():
+    for q in closed_form_equilibria(p).values():
         e_tree = find_equilibrium(tree_model, nudged(q), p)
         e_twin = find_equilibrium(twin, nudged(q), p)
         assert e_tree.success and e_twin.success
@@ -126,7 +127,7 @@ def spring_trees(cache_dir):
 def test_sprung_slider_balances_weight(spring_trees, k, r, m, g):
     """m g = k (r − y*): a weight against a spring's pre-load (where ∂F/∂q q alone is no force scale at y* ≈ 0)."""
     slider, _ = spring_trees
-    p = dict(k=k, r=r, m=m, g=g)
+    p = {"k": k, "r": r, "m": m, "g": g}
     y = r - m * g / k
     e = find_equilibrium(slider, [y + 0.3], p)
     assert e.success and e.steady
@@ -143,7 +144,7 @@ def test_sprung_hinge_equilibrium(spring_trees, theta, m, c, g, stiffer):
     the only one since k > m g c makes F strictly decreasing in θ."""
     _, hinge = spring_trees
     k = stiffer * m * g * c
-    p = dict(k=k, r=theta + m * g * c * math.cos(theta) / k, m=m, g=g, c=c)
+    p = {"k": k, "r": theta + m * g * c * math.cos(theta) / k, "m": m, "g": g, "c": c}
     (only,) = find_equilibria(hinge, (-math.pi - 1.0, math.pi + 1.0), p)
     assert only.success and abs(only.q[0] - theta) <= TOLERANCE
     assert normal_modes(hinge, only.q, p).stability == "stable"
@@ -157,7 +158,7 @@ def driven_cart(cache_dir):
 def test_driven_cart_balance_is_instantaneous(driven_cart):
     """The cart's drive F sin(w t) (the only way a tree reads t) shifts x* = F sin(w t) / k: solved at t, but not
     steady; without drive (F = 0) the same equilibrium is steady."""
-    p = dict(M=2.0, m=0.5, c=0.3, J=0.02, g=9.81, k=40.0, b=0.4, F=3.0, w=1.7, e=0.1)
+    p = {"M": 2.0, "m": 0.5, "c": 0.3, "J": 0.02, "g": 9.81, "k": 40.0, "b": 0.4, "F": 3.0, "w": 1.7, "e": 0.1}
     t = 0.6
     for th, stability in ((0.0, "asymptotically stable"), (math.pi, "unstable")):
         e = find_equilibrium(driven_cart, [0.2, th + 0.1], p, t=t)
@@ -189,7 +190,7 @@ def test_energy_portrait_of_a_sprung_hinge(spring_trees):
     joint's spring), m(θ) = J + m c², the one equilibrium of `test_sprung_hinge_equilibrium`, stable."""
     _, hinge = spring_trees
     k, m, g, c, theta = 30.0, 1.2, 9.81, 0.5, 0.4
-    p = dict(k=k, r=theta + m * g * c * math.cos(theta) / k, m=m, g=g, c=c)
+    p = {"k": k, "r": theta + m * g * c * math.cos(theta) / k, "m": m, "g": g, "c": c}
     portrait = phase_portrait(hinge, [5.0, 20.0], (-2.0, 2.5), p, samples=201)
     U = m * g * c * np.sin(portrait.q) + k * (portrait.q - p["r"]) ** 2 / 2
     assert np.max(np.abs(portrait.potential - U)) <= 1e-13 * np.max(np.abs(U))
