@@ -221,3 +221,36 @@ def test_steady_motion_analyses_of_a_tree_are_refused(double_pendulum):
         linearize_steady(tree_model, hanging, [0.0, 0.0], p)
     with pytest.raises(ModelError, match=r"stability_sweep.*'planar_chain_2'"):
         stability_sweep(tree_model, "g", [1.0, 2.0], hanging, [0.0, 0.0], p)
+
+
+@pytest.fixture(scope="module")
+def universal_pendulum(cache_dir):
+    """A link hanging from a universal joint (x, then y), centre of mass at (0, 0, −c), under gravity in any
+    direction (gx, gy, gz): a 3D tree whose equilibria have a closed form."""
+    gx, gy, gz, m, c = sp.symbols("gx gy gz m c")
+    tree = lc.Tree([lc.Link("bob", lc.Universal(("a", "b")), mass=m, com=(0, 0, -c), inertia=(0.02, 0.03, 0.01))],
+                   gravity=(gx, gy, gz), name="universal_pendulum")
+    return lc.compile(tree, cache_dir=cache_dir)
+
+
+@settings(max_examples=15, deadline=None)
+@given(polar=st.floats(0.05, 1.2), quadrant=st.integers(0, 3), within=st.floats(0.1, 1.47), g=st.floats(1.0, 20.0),
+       m=masses, c=lengths)
+def test_universal_pendulum_hangs_along_gravity(universal_pendulum, polar, quadrant, within, g, m, c):
+    """The centre of mass R_x(a) R_y(b) (0, 0, −c) = −c (sin b, −sin a cos b, cos a cos b) points along gravity ĝ
+    at b* = −asin ĝx, a* = atan2(ĝy, −ĝz) (cos b* > 0): a minimum of V, stable; the opposite branch, pointing
+    against gravity, unstable.
+
+    (Gravity off the coordinate planes: where gx or gy is exactly 0, an equilibrium angle is exactly 0, F_i there
+    is K a alone, and a converged a of 1e-47 leaves |F_i| equal to its own force scale: judged no equilibrium, as
+    for a System: a limit of `lagcomp.analysis._common.force_scale`, not of the tree.)"""
+    azimuth = quadrant * math.pi / 2 + within
+    direction = np.array([math.sin(polar) * math.cos(azimuth), math.sin(polar) * math.sin(azimuth), -math.cos(polar)])
+    p = {"gx": g * direction[0], "gy": g * direction[1], "gz": g * direction[2], "m": m, "c": c}
+    hanging = np.array([math.atan2(direction[1], -direction[2]), -math.asin(direction[0])])
+    upright = np.array([math.atan2(-direction[1], direction[2]), math.asin(direction[0])])
+    for q, stability in ((hanging, "stable"), (upright, "unstable")):
+        e = find_equilibrium(universal_pendulum, q + 0.05, p)
+        assert e.success and e.steady
+        assert np.max(np.abs(e.q - q)) <= TOLERANCE, (e.q, q)
+        assert normal_modes(universal_pendulum, e.q, p).stability == stability
