@@ -350,6 +350,13 @@ def _tree_taylor(tmp_path):
     lc.compile(tree, cache_dir=tmp_path).simulate((0.0, 1.0), q0=[0.1], qd0=[0.0], method="taylor")
 
 
+def _tree_steady(tmp_path):
+    """linearize_steady on a model compiled from a kinematic tree: it reduces a System's symbolic equations."""
+    tree = lc.Tree([lc.Link("rod", lc.Revolute("q"), mass=m, com=(l, 0, 0), inertia=(0, 0, 0))], gravity=(0, -g, 0),
+                   name="tree_rod", defaults={"m": 1.0, "l": 1.0, "g": 9.81})
+    an.linearize_steady(lc.compile(tree, cache_dir=tmp_path), [0.1], [0.0])
+
+
 CASES = {
     # the description: System(...) and compile
     "undeclared-symbol": (lambda: oscillator(V=k * x**2 / 2 + sp.Symbol("stray") * x, parameters=(m, k)), "stray"),
@@ -463,6 +470,7 @@ CASES = {
     "tree-parent-not-listed": (lambda: lc.Tree([lc.Link("arm", lc.Revolute("q"), parent="base", mass=1.0)]),
                                "'base'"),
     "tree-kernel-not-available": (_tree_taylor, "method='taylor'"),
+    "tree-no-lagrangian": (_tree_steady, "linearize_steady"),
     "tree-loop-unknown-link": (lambda: lc.Tree(_planar_loop("xy").links, loops=[
         lc.Loop("pin", ("left", (1, 0, 0)), ("rihgt", (1, 0, 0)))]), "'rihgt'"),
     "tree-loop-idle-direction": (lambda tmp_path: lc.compile(_planar_loop("xyz"), cache_dir=tmp_path), "'pin_z'"),

@@ -41,6 +41,16 @@ def symbolic_system(model, what: str):
     return model.system
 
 
+def tree_of(model):
+    """The `lagcomp.Tree` `model` was compiled from (``lc.compile(tree)``), None for any other model: the analyses
+    that read a System's T and V read what the tree knows instead where that is enough (its joints' torques and
+    dampers are its only non-conservative forces, and its torques the only part of it that may read t)."""
+    from lagcomp.multibody.tree import Tree
+
+    system = getattr(model, "system", None)
+    return system if isinstance(system, Tree) else None
+
+
 def explicit_time(*exprs, system) -> bool:
     """Whether any of `exprs` depends on t other than through the coordinates q(t) and velocities q̇(t)."""
     from lagcomp.model.system import t

@@ -77,6 +77,9 @@ def first_order_form(system) -> tuple[FirstOrderForm, dict]:
     if source is None:
         raise ModelError(f"linearize_steady reads the equations of {system.name!r}, which a model from "
                          "lagcomp.load() does not carry: pass its System (or lagcomp.compile(system)).")
+    if getattr(source, "on_demand_refusal", None) is not None:   # a lagcomp.Tree: no symbolic equations to reduce
+        raise ModelError(source.on_demand_refusal("linearize_steady (and stability_sweep), which reduce a System's "
+                                                  "symbolic equations,"))
     if not isinstance(source, System):
         raise ModelError(f"linearize_steady takes a Model, a System or a FirstOrderForm, got {type(system).__name__}.")
     key = source.fingerprint()

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lagcomp.analysis._common import symbolic_system, unconstrained
+from lagcomp.analysis._common import symbolic_system, tree_of, unconstrained
 from lagcomp.analysis.oscillations import normal_modes
 from lagcomp.analysis.statics import STEADY_CHECK_OFFSETS, Equilibrium, find_equilibria
 from lagcomp.errors import ModelError, OptionError
@@ -96,8 +96,13 @@ class Portrait:
 
 def _check_energy_integral(model, p, grid) -> None:
     """Refuse systems whose energy function is not conserved (forces, dissipation, explicit t)."""
-    system = symbolic_system(model, "The energy portrait")
-    if any(Q != 0 for Q in system.forces) or system.dissipation != 0:
+    tree = tree_of(model)
+    if tree is not None:   # (a kinematic tree: its joints' torques and dampers are its forces and dissipation)
+        loaded = any(node.joint.torque != 0 or node.joint.damping != 0 for node in tree.nodes)
+    else:
+        system = symbolic_system(model, "The energy portrait")
+        loaded = any(Q != 0 for Q in system.forces) or system.dissipation != 0
+    if loaded:
         raise ModelError(f"{model.name!r} has generalized forces or dissipation: its energy function is not "
                          "conserved, so the phase portrait cannot come from the energy integral; simulate instead.")
     y = np.zeros(2)

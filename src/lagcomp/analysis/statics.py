@@ -30,7 +30,7 @@ import numpy as np
 from scipy import optimize
 
 from lagcomp.analysis._common import (RestForces, coordinates_vector, explicit_time, relative_residual, symbolic_system,
-                                      unconstrained)
+                                      tree_of, unconstrained)
 from lagcomp.errors import OptionError
 
 #: Times (after t) at which a time-dependent system's equilibrium is checked for steadiness.
@@ -84,6 +84,14 @@ class Equilibrium:
 
 
 def _depends_on_time(model) -> bool:
+    """Whether F(q, 0, t) may depend on t explicitly (then `Equilibrium.steady` is checked at later times).
+
+    A System's from its T, V, dissipation and forces; a kinematic tree's (`lagcomp.Tree`) from its joints'
+    torques, the only part of a tree that may read t (its masses, placements, springs and dampers are constant).
+    """
+    tree = tree_of(model)
+    if tree is not None:
+        return explicit_time(*(node.joint.torque for node in tree.nodes), system=tree)
     system = symbolic_system(model, "The statics analysis")
     return explicit_time(system.T, system.V, system.dissipation, *system.forces, system=system)
 
