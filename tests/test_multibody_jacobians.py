@@ -8,17 +8,12 @@ double pendulum's normal-mode frequencies in closed form, dop853 runs, and finit
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
-import textwrap
-
 import mpmath
 import multibody_models as mm
 import numpy as np
 import pytest
 import sympy as sp
+from compile_probe import run_probe
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -246,25 +241,7 @@ def test_the_jacobian_costs_less_than_2n_times_rhs(tree_pair):
 
 #: A fresh process: compile (or `lagcomp.load`) the tree `planar_chain(2, name)`, run radau and a one-column
 #: sensitivity run; report the kernels numba compiled, the cache's modules and whether the lowering was imported.
-SCRIPT = textwrap.dedent("""
-    import json, sys
-    from pathlib import Path
-    from numba.core import event
-
-    compiled = []
-
-    class Compiles(event.Listener):
-        def on_start(self, ev):
-            function = ev.data["dispatcher"].py_func
-            if function.__module__.startswith("lagcomp_generated_"):
-                compiled.append([function.__module__, function.__name__])
-
-        def on_end(self, ev):
-            pass
-
-    event.register("numba:compile", Compiles())
-    import lagcomp as lc
-
+SCRIPT = """
     name, how, root = sys.argv[1:4]
     if how == "load":
         model = lc.load(name, cache_dir=root)
@@ -277,15 +254,11 @@ SCRIPT = textwrap.dedent("""
     modules = sorted(p.name for p in Path(root, "modules").glob("*.py"))
     print(json.dumps({"compiled": compiled, "modules": modules,
                       "lowering": "lagcomp.codegen.tree_companion" in sys.modules}))
-""")
+"""
 
 
 def _run(name: str, how: str, root) -> dict:
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    done = subprocess.run([sys.executable, "-c", SCRIPT, name, how, str(root)], capture_output=True, text=True,
-                          env=env, timeout=900)
-    assert done.returncode == 0, done.stderr[-3000:]
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return run_probe(SCRIPT, name, how, root)[0]
 
 
 def test_a_tree_builds_its_companions_once_and_a_second_process_reuses_them(tmp_path):

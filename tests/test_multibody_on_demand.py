@@ -5,14 +5,9 @@ kind "dynamics" alone, once, which a second process reuses (no lowering, no symp
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
-import textwrap
-
 import multibody_models as mm
 import numpy as np
+from compile_probe import run_probe
 
 import lagcomp as lc
 from lagcomp.codegen.kinds import KIND_OF, TREE_KIND_OF, TREE_ON_DEMAND
@@ -20,25 +15,7 @@ from lagcomp.codegen.kinds import KIND_OF, TREE_KIND_OF, TREE_ON_DEMAND
 #: One fresh process: compile the 3-link planar chain (or `lagcomp.load` it), then run `feature`; report which
 #: kernels of the generated modules numba compiled (its "numba:compile" events), whether sympy and the lowering
 #: were imported, and the cache's module files (tests/test_on_demand.py's SCRIPT, for a tree).
-SCRIPT = textwrap.dedent("""
-    import json, sys
-    from pathlib import Path
-    from numba.core import event
-
-    compiled = []
-
-    class Compiles(event.Listener):
-        def on_start(self, ev):
-            function = ev.data["dispatcher"].py_func
-            if function.__module__.startswith("lagcomp_generated_"):
-                compiled.append([function.__module__, function.__name__])
-
-        def on_end(self, ev):
-            pass
-
-    event.register("numba:compile", Compiles())
-    import lagcomp as lc
-
+SCRIPT = """
     feature, how, root = sys.argv[1:4]
     if how == "load":
         model = lc.load("planar_chain_3", cache_dir=root)
@@ -54,16 +31,11 @@ SCRIPT = textwrap.dedent("""
     modules = sorted(p.name for p in Path(root, "modules").glob("*.py"))
     print(json.dumps({"compiled": compiled, "modules": modules, "sympy": "sympy" in sys.modules,
                       "lowering": "lagcomp.codegen.tree_lower" in sys.modules}))
-""")
+"""
 
 
 def _run(feature: str, how: str, root) -> tuple[dict, list[str]]:
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    done = subprocess.run([sys.executable, "-c", SCRIPT, feature, how, str(root)], capture_output=True, text=True,
-                          env=env, timeout=900)
-    assert done.returncode == 0, done.stderr[-3000:]
-    lines = done.stdout.strip().splitlines()
-    return json.loads(lines[-1]), lines[:-1]
+    return run_probe(SCRIPT, feature, how, root)
 
 
 def _companions(modules: list[str]) -> list[str]:

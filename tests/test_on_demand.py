@@ -14,6 +14,7 @@ import textwrap
 
 import numpy as np
 import pytest
+from compile_probe import run_probe
 
 import lagcomp as lc
 from lagcomp import examples
@@ -23,25 +24,7 @@ from lagcomp.errors import ModelError
 #: One fresh process: compile (or, with "load", `lagcomp.load`) the example, then run `feature`; report which
 #: kernels of the generated modules numba compiled (numba's "numba:compile" events fire on compilation only,
 #: never on a load from its disk cache), whether sympy and the lowering were imported, and the cache's files.
-SCRIPT = textwrap.dedent("""
-    import json, sys
-    from pathlib import Path
-    from numba.core import event
-
-    compiled = []
-
-    class Compiles(event.Listener):
-        def on_start(self, ev):
-            function = ev.data["dispatcher"].py_func
-            if function.__module__.startswith("lagcomp_generated_"):
-                compiled.append([function.__module__, function.__name__])
-
-        def on_end(self, ev):
-            pass
-
-    event.register("numba:compile", Compiles())
-    import lagcomp as lc
-
+SCRIPT = """
     name, feature, how, root = sys.argv[1:5]
     if how == "load":
         model = lc.load(name, cache_dir=root)
@@ -63,15 +46,11 @@ SCRIPT = textwrap.dedent("""
     modules = sorted(p.name for p in Path(root, "modules").glob("*.py"))
     print(json.dumps({"compiled": compiled, "modules": modules, "sympy": "sympy" in sys.modules,
                       "lowering": "lagcomp.codegen.lower" in sys.modules}))
-""")
+"""
 
 
 def _run(name: str, feature: str, how: str, root) -> dict:
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    done = subprocess.run([sys.executable, "-c", SCRIPT, name, feature, how, str(root)], capture_output=True,
-                          text=True, env=env, timeout=900)
-    assert done.returncode == 0, done.stderr[-3000:]
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return run_probe(SCRIPT, name, feature, how, root)[0]
 
 
 def _companions(modules: list[str]) -> list[str]:
