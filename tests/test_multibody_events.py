@@ -18,6 +18,7 @@ import pytest
 import sympy as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_contact_friction import check_breakaway
 
 import lagcomp as lc
 from lagcomp.examples.constrained import four_bar_linkage
@@ -447,19 +448,9 @@ def block(cache_dir):
 def test_a_block_tree_pushed_harder_and_harder_breaks_away_at_the_static_limit(block):
     """Resting on the floor, pushed by c t: it sticks until c t_s = μs m g, then slides with m ẍ = c t − μk m g."""
     m, c, mu_s, mu_k = 2.0, 3.0, 0.5, 0.3
-    t_s = mu_s * m * G / c
     sol = block.simulate((0.0, 5.0), [0.0, 0.0], [0.0, 0.0], rtol=1e-12, atol=1e-12)
     assert block.frictions == ("ground",) and block.contacts == ("floor",)
-    assert [(s.friction, s.mode) for s in sol.friction_switches] == [("ground", 1)]
-    assert abs(sol.friction_switches[0].t - t_s) < 1e-10
-    tau = sol.t - t_s
-    after = tau > 0
-    x = (c * (sol.t**3 - t_s**3) / 6 - c * t_s**2 * tau / 2 - mu_k * m * G * tau**2 / 2) / m
-    np.testing.assert_allclose(sol.q[after, 0], x[after], rtol=1e-9, atol=1e-12)
-    assert np.abs(sol.q[~after, 0]).max() < 1e-12 and np.abs(sol.q[:, 1]).max() < 1e-12
-    np.testing.assert_allclose(sol.contact_forces[:, 0], m * G, rtol=1e-12)
-    holding = sol.t < t_s
-    np.testing.assert_allclose(sol.friction_forces[holding, 0], -c * sol.t[holding], rtol=1e-10, atol=1e-12)
+    check_breakaway(sol, m, c, mu_s, mu_k)
 
 
 @pytest.mark.parametrize("v_t", [1.0, 5.0])

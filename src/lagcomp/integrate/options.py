@@ -36,7 +36,7 @@ from lagcomp.integrate.methods import (
     implicit_solver_for,
     method_names,
 )
-from lagcomp.integrate.tolerances import absolute_tolerance
+from lagcomp.integrate.tolerances import absolute_tolerance, positive
 
 
 def time_span(t_span) -> tuple[float, float]:
@@ -49,16 +49,6 @@ def time_span(t_span) -> tuple[float, float]:
     if not t1 > t0:
         raise OptionError(f"`t_span` = ({t0}, {t1}) is empty: the end time must be after the start time.")
     return t0, t1
-
-
-def positive(value, name: str) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError) as err:
-        raise OptionError(f"`{name}` must be a number, got {value!r}.") from err
-    if not (value > 0 and math.isfinite(value)):
-        raise OptionError(f"`{name}` must be positive and finite, got {value}.")
-    return value
 
 
 def count(value, name: str) -> int:

@@ -41,7 +41,7 @@ from lagcomp.integrate.function_inputs import driven
 from lagcomp.integrate.memory import MEMORY_LIMIT, run_bytes
 from lagcomp.integrate.memory import check as check_memory
 from lagcomp.integrate.methods import library_function
-from lagcomp.integrate.options import RunOptions, positive, run_options
+from lagcomp.integrate.options import RunOptions, run_options
 from lagcomp.integrate.recording import RECORD_MODES, Recorder
 from lagcomp.integrate.reset_checks import warn_of_resets_gone_through
 from lagcomp.integrate.run_control import deferred_interrupt, progress_bar
@@ -57,7 +57,7 @@ from lagcomp.integrate.stiffness import (
     stiffness_advice,
     warn_if_stiff,
 )
-from lagcomp.integrate.tolerances import driver_atol
+from lagcomp.integrate.tolerances import driver_atol, positive
 
 #: Rows per output chunk, the first and the largest (each full buffer doubles the next).  A full buffer ends a
 #: driver call, and a call costs (numba unboxing each kernel of a library driver, ~35 µs, and an f evaluation):

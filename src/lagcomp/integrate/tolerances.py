@@ -59,12 +59,17 @@ def absolute_tolerance(atol, state_names) -> float | np.ndarray:
 def _positive_number(atol) -> float:
     if isinstance(atol, (bool, np.bool_)):
         raise OptionError(f"`atol` must be a number, got {atol!r}.")
+    return positive(atol, "atol")
+
+
+def positive(value, name: str) -> float:
+    """`value` as a float, refused (OptionError naming `name`) unless it is a positive finite number."""
     try:
-        value = float(atol)
+        value = float(value)
     except (TypeError, ValueError) as err:
-        raise OptionError(f"`atol` must be a number, got {atol!r}.") from err
+        raise OptionError(f"`{name}` must be a number, got {value!r}.") from err
     if not (value > 0 and math.isfinite(value)):
-        raise OptionError(f"`atol` must be positive and finite, got {value}.")
+        raise OptionError(f"`{name}` must be positive and finite, got {value}.")
     return value
 
 
