@@ -271,6 +271,19 @@ def ladder(tmp_path_factory):
     return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
 
 
+def check_ladder_leaves_the_wall(sol, m, theta0):
+    """A ladder of mass m released at rest at angle θ0 from the wall (coordinates X, Y, θ; contacts "wall" and
+    "floor"): its first switch opens the wall at cos θ = (2/3) cos θ0, the floor still pushing, and the initial
+    contact forces are ((3/4) m G sin θ0 cos θ0, m G (1 − (3/4) sin² θ0)) (the closed form below)."""
+    first = sol.contact_switches[0]
+    assert (first.contact, first.closed) == ("wall", False)
+    row = np.searchsorted(sol.t, first.t)
+    assert np.cos(sol.q[row, 2]) == pytest.approx(2 / 3 * np.cos(theta0), abs=1e-10)
+    np.testing.assert_allclose(sol.contact_forces[0], [0.75 * m * G * np.sin(theta0) * np.cos(theta0),
+                                                        m * G * (1 - 0.75 * np.sin(theta0) ** 2)], rtol=1e-12)
+    assert sol.contact_forces[row, 1] > 0.0
+
+
 @pytest.mark.parametrize("theta0", [0.2, 0.6])
 def test_a_ladder_leaves_the_wall_at_two_thirds_of_its_height(ladder, theta0):
     """A uniform ladder (length L, mass m, angle θ from the wall) released at rest against a smooth wall on a
@@ -280,13 +293,7 @@ def test_a_ladder_leaves_the_wall_at_two_thirds_of_its_height(ladder, theta0):
     m, L = 3.0, 2.0
     q0 = [L / 2 * np.sin(theta0), L / 2 * np.cos(theta0), theta0]
     sol = ladder.simulate((0, 3.0), q0=q0, qd0=[0.0, 0.0, 0.0], method="dop853", rtol=1e-12, atol=1e-12)
-    first = sol.contact_switches[0]
-    assert (first.contact, first.closed) == ("wall", False)
-    row = np.searchsorted(sol.t, first.t)
-    assert np.cos(sol.q[row, 2]) == pytest.approx(2 / 3 * np.cos(theta0), abs=1e-10)
-    np.testing.assert_allclose(sol.contact_forces[0], [0.75 * m * G * np.sin(theta0) * np.cos(theta0),
-                                                        m * G * (1 - 0.75 * np.sin(theta0) ** 2)], rtol=1e-12)
-    assert sol.contact_forces[row, 1] > 0.0
+    check_ladder_leaves_the_wall(sol, m, theta0)
 
 
 # -- the kernel helpers, called directly -----------------------------------------------------------------------------
