@@ -23,6 +23,7 @@ import functools
 import math
 import os
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -48,6 +49,7 @@ from lagcomp.integrate.options import count, run_options
 from lagcomp.integrate.run_control import LazyProgress, deferred_interrupt
 from lagcomp.integrate.stiffness import warn_if_sweep_stiff
 from lagcomp.integrate.tolerances import driver_atol, uniform
+from lagcomp.names import by_name
 
 #: Outputs a sweep can keep besides the final state and status.
 OUTPUTS = ("dense", "energy", "events")
@@ -249,6 +251,19 @@ def _grid_name(key) -> str:
     return name
 
 
+def _with_swept(model, params, names, values):
+    """`params` with each swept parameter's first grid value where `params` does not give it.
+
+    Every trajectory overwrites its swept parameters with its own grid values, so a parameter swept by the
+    grid needs no value (nor a default) in `params`; the first point's stands in while p is assembled and
+    checked.  `params` that is not a mapping is returned as it is, for `parameter_vector` to refuse.
+    """
+    swept = {name: values[0, column] for column, name in enumerate(names) if name in model.parameters}
+    if not swept or (params is not None and not isinstance(params, Mapping)):
+        return params
+    return {**swept, **by_name(params or {}, "params", model.parameters)}
+
+
 def _grid(model, grid, combine: str, names, memory_limit) -> tuple[tuple, dict, tuple, np.ndarray]:
     """(names, axes, shape, values (N, k)) from the user's grid description.
 
@@ -356,7 +371,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     rows = 0 if t_dense is None else t_dense.size
 
     y_base = model.initial_state(q0, qd0)
-    p_base = model.parameter_vector(params, baumgarte, inputs, (t0, t1))  # every trajectory: the same tables
+    p_base = model.parameter_vector(_with_swept(model, params, names, values), baumgarte, inputs, (t0, t1))
     given = model
     model = driven(model, inputs, p_base, m, client)  # function inputs: each trajectory writes their values in its row
     Y0 = np.repeat(y_base[None, :], n_traj, axis=0)
