@@ -19,8 +19,6 @@ and rounding 2¹¹ times below those of the runs measured.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from bench import systems

@@ -224,7 +224,7 @@ def test_events_of_a_kane_model_fall_at_the_pendulums_closed_form_times(cache_di
     events = [lc.Event("bottom", q, direction=-1), lc.Event("turn", u, direction=1, terminal=True)]
     model = lc.compile(km, cache_dir=cache_dir, name="kane_pendulum_events", defaults=PENDULUM, events=events)
     assert model.event_names == ("bottom", "turn")
-    m, l, g = PENDULUM["m"], PENDULUM["l"], PENDULUM["g"]
+    l, g = PENDULUM["l"], PENDULUM["g"]
     period = lambda q0: 4 * math.sqrt(l / g) * ellipk(math.sin(q0 / 2) ** 2)  # noqa: E731
     sol = model.simulate((0, 10), q0=[2.0], u0=[0.0], rtol=1e-12, atol=1e-12)
     assert sol.status == 1 and "Event 'turn'" in sol.message
