@@ -48,3 +48,15 @@ def test_a_swept_parameter_beside_a_given_one(model):
 def test_a_parameter_neither_swept_nor_given_is_still_named(model):
     with pytest.raises(lc.ParameterError, match=r"Missing value.*\['m'\]"):
         model.sweep((0.0, T_END), {"k": [1.0, 2.0]})
+
+
+def test_every_coordinate_swept_needs_no_q0(tmp_path):
+    system = lc.System(coordinates=[x], T=m * x.diff(t) ** 2 / 2, V=k * x**2 / 2, name="oscillator_no_q0",
+                       defaults={"m": 1.0, "k": 4.0})
+    model = lc.compile(system, cache_dir=tmp_path)
+    starts = [0.5, -1.0, 2.0]
+    result = model.sweep((0.0, T_END), {"x": starts}, rtol=1e-12, atol=1e-12)
+    x_end, _ = closed_form([4.0] * 3, [1.0] * 3)
+    np.testing.assert_allclose(result.final[:, 0], np.multiply(starts, x_end), rtol=0, atol=1e-10)
+    with pytest.raises(lc.InitialConditionError, match="`q0` is required"):
+        model.sweep((0.0, T_END), {"x_dot": [0.0, 1.0]})

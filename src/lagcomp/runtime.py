@@ -964,9 +964,11 @@ class Model:
         Other Parameters
         ----------------
         q0, qd0, params, inputs
-            Values of everything not swept (defaults: the System's); every
-            trajectory reads the same input tables, and calls the same input
-            functions with its own p (a swept gain read from p is its own).
+            Values of everything not swept (defaults: the System's); a swept
+            parameter needs no value here, nor does ``q0`` when the grid sweeps
+            every coordinate.  Every trajectory reads the same input tables, and
+            calls the same input functions with its own p (a swept gain read
+            from p is its own).
         method, dt, rtol, atol, t_eval, save_every, max_step, max_steps, implicit_solver, events
             As for `simulate`, checked by the same code with the same messages
             (`lagcomp.integrate.options.run_options`); each trajectory has its own

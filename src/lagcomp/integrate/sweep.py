@@ -251,6 +251,14 @@ def _grid_name(key) -> str:
     return name
 
 
+def _swept_coordinates(model, q0, names, values):
+    """`q0`, or where neither it nor the model gives the coordinates and the grid sweeps every one of them,
+    the first point's (each trajectory then writes its own)."""
+    if q0 is not None or model.q0 is not None or not set(model.coordinates) <= set(names):
+        return q0
+    return [values[0, names.index(name)] for name in model.coordinates]
+
+
 def _with_swept(model, params, names, values):
     """`params` with each swept parameter's first grid value where `params` does not give it.
 
@@ -370,7 +378,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         fixed = (t0, options.dt, options.n_steps, t1, _row_every(options.save_every, output, options.n_steps))
     rows = 0 if t_dense is None else t_dense.size
 
-    y_base = model.initial_state(q0, qd0)
+    y_base = model.initial_state(_swept_coordinates(model, q0, names, values), qd0)
     p_base = model.parameter_vector(_with_swept(model, params, names, values), baumgarte, inputs, (t0, t1))
     given = model
     model = driven(model, inputs, p_base, m, client)  # function inputs: each trajectory writes their values in its row
