@@ -212,3 +212,40 @@ def test_the_on_demand_jacobian_sees_the_slip_forces(twins):
             assert tree.kernels.rhs_jacobian(0.4, y, p_tree, got) == 0
             expected = _differences(twin.kernels.rhs, 0.4, y, p_twin)
             assert np.max(np.abs(got - expected)) <= 1e-9 * np.max(np.abs(expected))
+
+
+@pytest.fixture(scope="module")
+def pressed_both_ways(cache_dir):
+    """The frictional block of tests/test_multibody_events.py (a carriage along x pushed by P sin(w t), the block
+    along y on it over a floor y = 0 whose normal force presses friction on ẋ) carrying a pendulum (hinge about z)
+    whose hinge friction is pressed by the expression N_0 + m_p θ̇² l: one element pressed by a contact, one by an
+    expression, in one tree; and its Lagrangian twin."""
+    x, y, th = lc.coordinates("x y th")
+    m, mp, l, J, g, P, w, e, N0 = sp.symbols("m m_p l J g P w e N0")
+    links = [lc.Link("carriage", lc.Prismatic(x, axis="x", torque=P * sp.sin(w * t))),
+             lc.Link("block", lc.Prismatic(y, axis="y"), parent="carriage", mass=m),
+             lc.Link("bob", lc.Revolute(th, axis="z"), parent="block", mass=mp, com=(0, -l, 0), inertia=(J, J, J))]
+    defaults = {"m": 2.0, "m_p": 0.5, "l": 0.6, "J": 0.02, "g": G, "P": 9.0, "w": 2.0, "e": 0.0, "N0": 5.0,
+                "r": 0.04}
+    events = [lc.Contact("floor", y, restitution=e),
+              lc.Friction("ground", x.diff(t), normal="floor", static=0.4, kinetic=0.3),
+              lc.Friction("pin", sp.Symbol("r") * th.diff(t), normal=N0 + mp * th.diff(t) ** 2 * l, static=0.5,
+                          kinetic=0.4)]
+    tree = lc.Tree(links, gravity=(0, -g, 0), name="tree_pressed_both_ways", defaults=defaults, events=events)
+    twin = replace(lagrangian_system(tree), name="pressed_both_ways_lagrange", defaults=defaults, parameters=None,
+                   events=events)
+    return tuple(lc.compile(model, cache_dir=cache_dir) for model in (tree, twin))
+
+
+def test_friction_pressed_by_a_contact_and_by_an_expression_in_one_tree_is_the_twins(pressed_both_ways):
+    """Resting on the floor and pushed to and fro, the carriage and the pendulum stick and slip: the same switches at
+    the same times (1e-9) as the Lagrangian twin, the same states and contact and friction forces."""
+    runs = [model.simulate((0.0, 5.0), [0.0, 0.0, 0.4], [0.0, 0.0, 0.0], rtol=1e-12, atol=1e-12,
+                           t_eval=np.linspace(0, 5, 101)) for model in pressed_both_ways]
+    a, b = ([(s.friction, s.mode) for s in run.friction_switches] for run in runs)
+    assert {name for name, _ in a} == {"ground", "pin"} and 0 in {mode for _, mode in a} and a == b
+    np.testing.assert_allclose([s.t for s in runs[0].friction_switches], [s.t for s in runs[1].friction_switches],
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(runs[0].y, runs[1].y, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(runs[0].contact_forces, runs[1].contact_forces, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(runs[0].friction_forces, runs[1].friction_forces, rtol=0, atol=1e-7)
