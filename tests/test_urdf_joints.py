@@ -16,11 +16,14 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import lagcomp as lc
 from lagcomp.animation_bodies import BodyGeometry
 from lagcomp.multibody.pinocchio_peer import urdf_accelerations
+from lagcomp.multibody.urdf import normal_frame
 
 pytest.importorskip("yourdfpy")
 
@@ -97,8 +100,9 @@ def _write(tmp_path, text: str, name: str) -> str:
     return str(path)
 
 
-def _part(k: int, pose=np.eye(3)):
-    """Link k's (mass, com, inertia) in a frame turned by `pose` from the URDF link's own."""
+def _part(k: int, pose=None):
+    """Link k's (mass, com, inertia) in a frame turned by `pose` from the URDF link's own (default: its own)."""
+    pose = np.eye(3) if pose is None else pose
     mass, com, rpy, moments = INERTIALS[k]
     E = pose @ Rotation.from_euler("xyz", rpy).as_matrix()
     inertia = E @ np.diag(moments) @ E.T
@@ -214,3 +218,19 @@ def test_joint_types_urdf_does_not_define_are_refused(tmp_path):
             + _joint("shoulder", "ball", "ground", "arm", (0, 0, 0), (0, 0, 0)) + "</robot>")
     with pytest.raises(lc.ModelError, match="joint 'shoulder' has the unknown type 'ball'"):
         lc.from_urdf(_write(tmp_path, text, "bot"))
+
+
+@settings(max_examples=200, deadline=None)
+@given(axis=st.tuples(*[st.floats(-1, 1, allow_nan=False)] * 3).filter(lambda a: np.linalg.norm(a) > 1e-3))
+def test_the_planar_frame_is_the_smallest_rotation_onto_the_axis(axis):
+    """`normal_frame` of any unit axis n: a rotation (NᵀN = 1, det 1) taking e_z to n, about an axis normal to both
+    (the smallest: its angle is acos(n_z)), scipy's `align_vectors` up to rounding (except at n = −e_z, where the
+    half turn about x is lagcomp's choice)."""
+    n = np.array(axis) / np.linalg.norm(axis)
+    N = normal_frame(n)
+    tol = 3e-14   # (entries within 1e-14 of 0 or ±1 are snapped to them, `lagcomp.multibody.urdf.SNAP`)
+    np.testing.assert_allclose(N.T @ N, np.eye(3), rtol=0, atol=tol)
+    assert abs(np.linalg.det(N) - 1) < tol
+    np.testing.assert_allclose(N[:, 2], n, rtol=0, atol=tol)
+    if n[2] > -1 + 1e-6:
+        np.testing.assert_allclose(N, _normal_frame(n), rtol=0, atol=1e-9)

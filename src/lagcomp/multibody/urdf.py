@@ -199,15 +199,18 @@ def _axis(joint) -> np.ndarray:
 def normal_frame(axis) -> np.ndarray:
     """The smallest rotation N taking e_z to the unit vector `axis` (a planar joint's frame: its x-y plane is the
     plane normal to the axis), by Rodrigues' formula N = 1 + [k]× + [k]×² / (1 + c) with k = e_z × axis and c = e_z ·
-    axis, 1 + c written |k|² / (1 − c) when c < 0 (no cancellation); for the axis −e_z, the half turn about x.
-    Entries snapped as `_matrix`'s."""
+    axis; when c < 0, [k]×² / (1 + c) = (1 − c) (k̂ k̂ᵀ − 1) with k̂ = k / |k| (no cancellation, no underflow); for
+    the axis −e_z (k = 0), the half turn about x.  Entries snapped as `_matrix`'s."""
     n = np.asarray(axis, dtype=float)
     c, k = n[2], np.array([-n[1], n[0], 0.0])
-    squared = float(k @ k)
-    if c < 0 and squared == 0.0:
-        return np.diag([1.0, -1.0, -1.0])
     K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    N = np.eye(3) + K + K @ K * ((1 - c) / squared if c < 0 else 1 / (1 + c))
+    if c >= 0:
+        N = np.eye(3) + K + K @ K / (1 + c)
+    elif not k.any():
+        return np.diag([1.0, -1.0, -1.0])
+    else:
+        unit = k / np.hypot(k[0], k[1])
+        N = np.eye(3) + K + (1 - c) * (np.outer(unit, unit) - np.eye(3))
     for target in (0.0, 1.0, -1.0):
         N[np.abs(N - target) < SNAP] = target
     return N
