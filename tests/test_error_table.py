@@ -475,11 +475,13 @@ CASES = {
         lc.Loop("pin", ("left", (1, 0, 0)), ("rihgt", (1, 0, 0)))]), "'rihgt'"),
     "tree-loop-idle-direction": (lambda tmp_path: lc.compile(_planar_loop("xyz"), cache_dir=tmp_path), "'pin_z'"),
     "tree-loop-ball-joint": (_loop_beside_a_ball, "ball joints (links ['bob'])"),
-    "tree-event-not-available": (lambda: lc.Tree([lc.Link("slider", lc.Prismatic("s"), mass=1.0)], events=[
-        lc.Friction("rub", lc.coordinates("s")[0].diff(t), normal=1.0, static=0.5)]), "`rub`"),
+    "tree-event-not-available": (lambda: lc.Tree(_planar_loop("xy").links, name="tree_loop", loops=[
+        lc.Loop("pin", ("left", (l, 0, 0)), ("right", (l, 0, 0)), directions="xy")], events=[
+        lc.Friction("rub", lc.coordinates("q1")[0].diff(t), normal=1.0, static=0.5)]), "['rub']"),
     "tree-point-not-placed": (lambda: link_point([lc.Link("arm", lc.Revolute("q"), mass=1.0)], "amr", (1, 0, 0)),
                               "'amr'"),
-    "urdf-joint-not-available": (lambda tmp_path: _from_urdf(tmp_path, "floating"), "joint 'base' is a floating joint"),
+    "urdf-joint-not-available": (lambda tmp_path: _from_urdf(tmp_path, "ball"),
+                                 "joint 'base' has the unknown type 'ball'"),
     "urdf-not-a-tree": (lambda tmp_path: _from_urdf(tmp_path, "fixed"), "nothing in 'bot' moves"),
     "kane-equations-not-formed": (lambda: lc.compile(_kane_slider(formed=False)), "kanes_equations"),
     "kane-specified-function": (lambda: lc.compile(_kane_slider(force=me_function("F"))), "F(t)"),

@@ -481,8 +481,6 @@ def _ball_and_stick():
     (lambda: lc.Tree(mm.planar_chain(2).links, events=[lc.Contact("floor", lc.coordinates("th0")[0])],
                      loops=[lc.Loop("pin", ("link1", (1, 0, 0)), (None, (1, 0, 0)), directions="xy")]), "['floor']"),
     (lambda: link_point(_ball_and_stick(), "arm"), "'arm'"),
-    (lambda: lc.Tree(_ball_and_stick(), events=[lc.Friction("rub", lc.coordinates("q")[0].diff(t), normal=2.0,
-                                                             static=0.5)]), "`rub`"),
     (lambda: lc.Tree(_ball_and_stick(), events=[lc.Contact("floor", lc.coordinates("q")[0]), lc.Friction(
         "rub", lc.coordinates("q")[0].diff(t), normal="flor", static=0.5)]), "'flor'"),
     (lambda: lc.Tree(_ball_and_stick(), events=[lc.Contact("floor", lc.coordinates("q")[0]), lc.Friction(

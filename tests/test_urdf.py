@@ -224,13 +224,6 @@ def test_damping_is_kept_unless_asked_not_to(tmp_path):
 # -- refusals ---------------------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("kind", ["floating", "planar"])
-def test_floating_and_planar_joints_are_refused_naming_the_joint(tmp_path, kind):
-    path = _write(tmp_path, _chain(("hinge", "revolute"), ("base_joint", kind)))
-    with pytest.raises(lc.ModelError, match=f"joint 'base_joint' is a {kind} joint.*issue 39"):
-        lc.from_urdf(path)
-
-
 def test_files_that_are_not_urdf_trees_are_refused(tmp_path):
     with pytest.raises(lc.ModelError, match="no file"):
         lc.from_urdf(tmp_path / "missing.urdf")

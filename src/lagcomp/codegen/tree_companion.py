@@ -49,6 +49,7 @@ from lagcomp.codegen.tree_lower import (
     program_kernel,
 )
 from lagcomp.codegen.tree_power import active_tree_power_terms, tree_power_kernels
+from lagcomp.codegen.tree_slip import slipping_nodes
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
@@ -86,8 +87,10 @@ def tree_locals(tree: Tree) -> TreeLocals:
     loads += [(local.name, f"p[{k}]") for k, local in enumerate(mapping.values())]
     p = tuple(mapping.values())
     mapping[t] = sp.Symbol("t", real=True)
-    nodes = tuple(local_nodes(tree, q, qd, mapping))
-    return TreeLocals(q, qd, p, tuple(loads), nodes, tuple(sp.sympify(g).xreplace(mapping) for g in tree.gravity),
+    nodes, slip_loads = slipping_nodes(tree, local_nodes(tree, q, qd, mapping), q, qd, mapping)
+    loads += slip_loads   # (friction elements pressed by an expression: their modes, `lagcomp.codegen.tree_slip`)
+    return TreeLocals(q, qd, p, tuple(loads), tuple(nodes), tuple(sp.sympify(g).xreplace(mapping)
+                                                                for g in tree.gravity),
                       mapping)
 
 

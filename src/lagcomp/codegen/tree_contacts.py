@@ -12,7 +12,10 @@ and the resting contacts (`lagcomp.kernel_support.resting`) take them unchanged:
   b_d of g̈_d = G_d q̈ + b_d, then calls the impact solver (velocities jump by M⁻¹ Gᵀ P).
 * friction elements pressed by a contact (`lagcomp.multibody.user_events`): a sticking one's row v̇ = a q̈ + b
   after the contacts' in ``closed_contacts``, ``friction_limits`` (μs times the contact's normal force), a branch
-  of ``event_reset`` per element that writes its new mode, and the frictional impact's stores.
+  of ``event_reset`` per element that writes its new mode, and the frictional impact's stores;
+* friction elements pressed by an expression N (with or without contacts): the same rows, limits μs |N| and
+  branches; their slip force is in the nodes' generalized forces, hence in ``rhs_free``
+  (`lagcomp.codegen.tree_slip`).
 
 The module builds those stores with the Lagrange path's own functions (`lagcomp.codegen.contacts.resting_kernels`,
 `impact_branches`), given `ContactView`, which holds what they read of an EOM: M by the composite-rigid-body
@@ -64,7 +67,7 @@ class TreeContacts:
     Parameters
     ----------
     tree : lagcomp.Tree
-        With at least one contact among its events.
+        With at least one contact or friction element among its events.
     nodes : list of lagcomp.multibody.kinematics.LocalNode
     q, qd : sequences of Symbol
         The coordinate and velocity locals, node order.
@@ -82,7 +85,12 @@ class TreeContacts:
         entries = mass_matrix_in_coordinates(self.prog, nodes, mass_matrix(self.prog, nodes))
         M = sp.Matrix(n, n, lambda i, j: entries.get((max(i, j), min(i, j)), sp.S.Zero))
         restitutions = tuple(e.restitution if isinstance(e, Contact) else None for e in tree.events)
-        frictions = tuple((e.normal, e.static, e.kinetic) if isinstance(e, Friction) else None for e in tree.events)
+        signals = {c.diff(t): qd[i] for i, c in enumerate(tree.coordinates)} | {c: q[i]
+                                                                               for i, c in enumerate(tree.coordinates)}
+        frictions = tuple(None if not isinstance(e, Friction) else (e.normal if isinstance(e.normal, str) else
+                                                                    sp.sympify(e.normal).xreplace(signals),
+                                                                    e.static, e.kinetic)
+                          for e in tree.events)
         self.view = ContactView(n, M, tuple(q), tuple(qd), tuple(values), restitutions, frictions, tree,
                                 tree.parameters)
         self.first = len(tree.parameters)

@@ -20,7 +20,9 @@ from lagcomp.codegen.outline import outline
 from lagcomp.codegen.tree_constraints import gain_loads, loop_kernels
 from lagcomp.codegen.tree_contacts import TreeContacts
 from lagcomp.codegen.tree_events import event_functions, tree_event_kernels
+from lagcomp.codegen.tree_slip import slipping_nodes
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
+from lagcomp.model.friction import Friction
 from lagcomp.multibody.aba import accelerations
 from lagcomp.multibody.charts import (
     accelerations_in_coordinates,
@@ -52,7 +54,8 @@ def lower_tree(tree: Tree) -> ModuleIR:
     loads = [(s.name, f"y[{i}]") for i, s in enumerate(q)] + [(s.name, f"y[{n + i}]") for i, s in enumerate(qd)]
     loads += [(local.name, f"p[{k}]") for k, local in enumerate(mapping.values())]
     mapping[t] = sp.Symbol("t", real=True)
-    nodes = local_nodes(tree, q, qd, mapping)
+    nodes, slip_loads = slipping_nodes(tree, local_nodes(tree, q, qd, mapping), q, qd, mapping)
+    loads += slip_loads   # (friction elements pressed by an expression: their modes, `lagcomp.codegen.tree_slip`)
     gravity = [sp.sympify(g).xreplace(mapping) for g in tree.gravity]
 
     def kernel(name, doc, args, build, solve=None):
@@ -69,7 +72,8 @@ def lower_tree(tree: Tree) -> ModuleIR:
                          lambda prog: [(f"out[{i}]", f) for i, f in enumerate(motion(prog, nodes, qd, gravity))],
                          ReturnZero()),)
     contacts = None
-    if tree.contacts:   # the contacts' modes: rhs is rhs_free corrected for the closed ones (`tree_contacts`)
+    if tree.contacts or any(isinstance(e, Friction) for e in tree.events):
+        # the contacts' and friction elements' modes: rhs is rhs_free corrected for the held rows (`tree_contacts`)
         contacts = TreeContacts(tree, nodes, q, qd, mapping, loads, event_functions(tree, q, qd, mapping)[0])
         dynamics = contacts.motion(dynamics[0])
     kernels = (

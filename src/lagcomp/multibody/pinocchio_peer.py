@@ -6,11 +6,13 @@ Needs ``pin`` (imported when called).
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import sympy as sp
 
 __all__ = ["fixed_base_accelerations", "fixed_base_state", "free_flyer_accelerations", "free_flyer_state",
-           "joint_groups", "pinocchio_model", "tree_state"]
+           "joint_groups", "pinocchio_model", "tree_state", "urdf_accelerations", "urdf_state"]
 
 
 def pinocchio_model(tree, values: dict):
@@ -198,3 +200,71 @@ def _joint_states(model, names, q, v, qp, vp, first: int) -> list:
         vp[joint.idx_v] = v[k]
         order.append((joint.idx_v, k))
     return order
+
+
+def urdf_accelerations(pin, model, data, names, q, v) -> np.ndarray:
+    """q̈ in lagcomp's coordinates `names` from Pinocchio's ABA of a URDF robot read by its own reader, whatever its
+    joints (`urdf_state`)."""
+    qp, vp, tau, back = urdf_state(pin, model, names, q, v)
+    return back(pin.aba(model, data, qp, vp, tau))
+
+
+def urdf_state(pin, model, names, q, v) -> tuple:
+    """(q, v, τ, back) of Pinocchio's model of a URDF robot at lagcomp's state (q, v) of ``lc.from_urdf(path)``
+    (with ``floating_base=True`` if the model has Pinocchio's ``root_joint`` free flyer), joints matched by name
+    (URDF names made identifiers as lagcomp makes them: every character outside letters, digits and ``_`` becomes
+    ``_``):
+
+    * a one-coordinate joint as in `fixed_base_state` (a continuous joint's q as (cos q, sin q));
+    * a ``JointModelFreeFlyer`` named J (``<J>_x`` … ``<J>_mrp3``; the root's first six coordinates) as in
+      `free_flyer_state`;
+    * a ``JointModelPlanar`` named J (``<J>_x``, ``<J>_y``, ``<J>_theta``): q = (x, y, cos θ, sin θ) and v = (Rᵀ (ẋ,
+      ẏ), θ̇), its linear velocity in the child's axes (R = Rz(θ)); back: (ẍ, ÿ) = R (v̇_lin + θ̇ ẑ × v_lin), θ̈ = v̇_θ.
+
+    τ is the joints' viscous damping −c v as Pinocchio reads it; back turns Pinocchio's v̇ into lagcomp's q̈."""
+    from lagcomp.multibody import mrp
+
+    names = [str(name) for name in names]
+    q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
+    qp, vp, charts = np.empty(model.nq), np.empty(model.nv), []
+    for j in range(1, model.njoints):
+        joint, name = model.joints[j], _identifier(model.names[j])
+        iq, iv, kind = joint.idx_q, joint.idx_v, joint.shortname()
+        if kind == "JointModelFreeFlyer":
+            k = 0 if model.names[j] == "root_joint" else names.index(f"{name}_x")
+            sigma, sigma_dot = q[k + 3:k + 6], v[k + 3:k + 6]
+            R, omega = np.array(mrp.rotation(sigma)), np.array(mrp.angular_velocity(sigma, sigma_dot))
+            qp[iq:iq + 3], qp[iq + 3:iq + 7] = q[k:k + 3], pin.Quaternion(R).coeffs()
+            vp[iv:iv + 3], vp[iv + 3:iv + 6] = R.T @ v[k:k + 3], omega
+            charts.append(("free", iv, k, (sigma, sigma_dot, R, omega, vp[iv:iv + 3].copy())))
+        elif kind == "JointModelPlanar":
+            k = names.index(f"{name}_x")
+            c, s = np.cos(q[k + 2]), np.sin(q[k + 2])
+            qp[iq:iq + 4] = q[k], q[k + 1], c, s
+            vp[iv:iv + 3] = c * v[k] + s * v[k + 1], -s * v[k] + c * v[k + 1], v[k + 2]
+            charts.append(("planar", iv, k, (c, s, vp[iv:iv + 3].copy())))
+        else:
+            k = names.index(name)
+            if joint.nq == 2:
+                qp[iq:iq + 2] = np.cos(q[k]), np.sin(q[k])
+            else:
+                qp[iq] = q[k]
+            vp[iv] = v[k]
+            charts.append(("revolute", iv, k, None))
+    planar = [chart for chart in charts if chart[0] == "planar"]
+    rest = [chart for chart in charts if chart[0] != "planar"]
+
+    def back(a):
+        a = np.asarray(a, dtype=float)
+        out = _back(a, rest, len(names))
+        for _, iv, k, (c, s, linear) in planar:
+            w = linear[2]
+            lx, ly = a[iv] - w * linear[1], a[iv + 1] + w * linear[0]
+            out[k:k + 3] = c * lx - s * ly, s * lx + c * ly, a[iv + 2]
+        return out
+
+    return qp, vp, -model.damping * vp, back
+
+
+def _identifier(name: str) -> str:
+    return re.sub(r"\W", "_", name, flags=re.ASCII)

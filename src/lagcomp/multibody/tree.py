@@ -97,9 +97,9 @@ class Tree:
     loops : sequence of lagcomp.Loop, optional
         Cut joints closing kinematic loops: holonomic constraints on the tree (`lagcomp.multibody.loops`).
     events : sequence of lagcomp.Event, lagcomp.Contact or lagcomp.Friction, optional
-        The user's events, contacts and friction elements (pressed by a contact), in the tree's coordinates, their
-        velocities, t and parameters (a link's point through `lagcomp.multibody.link_point`); compiled as a
-        System's are (`lagcomp.multibody.user_events`).
+        The user's events, contacts and friction elements (pressed by a contact or an expression), in the tree's
+        coordinates, their velocities, t and parameters (a link's point through `lagcomp.multibody.link_point`);
+        compiled as a System's are (`lagcomp.multibody.user_events`).
 
     Attributes
     ----------

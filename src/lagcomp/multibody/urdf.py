@@ -19,8 +19,17 @@ meshes are never read (the dynamics needs only the ``<inertial>`` elements).  Wh
 * the ``<limit>`` of each joint (lower, upper, effort, velocity) is kept as a `JointLimits` in the link's
   ``limits`` and the tree's ``limits`` (by coordinate name): lagcomp carries them and uses them nowhere yet;
 * a ``<mimic>`` joint is an independent coordinate, as Pinocchio's ``buildModelFromUrdf`` makes it by default;
-* ``floating`` and ``planar`` joints are refused (`ModelError` naming the joint): not read from URDF yet,
-  though a tree built by hand has them (`lagcomp.Free`, `lagcomp.Planar`).
+* a ``floating`` joint becomes a `Free` joint placed by its ``<origin>``, with the coordinates ``<joint>_x``,
+  ``<joint>_y``, ``<joint>_z`` (the child's origin in the joint frame, m) and ``<joint>_mrp1`` … ``<joint>_mrp3``
+  (its orientation as MRPs), as Pinocchio's reader makes it a ``JointModelFreeFlyer``;
+* a ``planar`` joint moves its child in the plane through the joint's origin normal to its ``<axis>`` (the URDF
+  specification's meaning; default (1, 0, 0)): a `Planar` joint whose frame is the ``<origin>`` turned by N, the
+  smallest rotation taking e_z to the axis (`normal_frame`), with the coordinates ``<joint>_x``, ``<joint>_y``
+  (m, along N e_x and N e_y) and ``<joint>_theta`` (rad, about the axis).  The child link's URDF frame is then
+  lagcomp's link frame turned back by Nᵀ (its inertial and its children are placed so); for the axis (0, 0, 1) the
+  two are the same, and that is the only axis Pinocchio's reader honours (it moves a planar joint in its frame's
+  x-y plane whatever the axis).  Neither joint has limits; their ``<dynamics>`` are not modelled (the description
+  says so);
 
 The coordinates are named after the URDF joints, made into Python identifiers where they are not (every character
 outside letters, digits and ``_`` becomes ``_``; a name starting with a digit gets a ``q_`` prefix; repeats get a
@@ -38,12 +47,13 @@ from pathlib import Path
 import numpy as np
 
 from lagcomp.errors import ModelError
-from lagcomp.multibody.joints import Free, Prismatic, Revolute
+from lagcomp.multibody.joints import Free, Planar, Prismatic, Revolute
 from lagcomp.multibody.tree import Link, Tree
 
 #: URDF joint types lagcomp builds a tree from, and the ones it refuses (with why).
 MOVING = {"revolute": Revolute, "continuous": Revolute, "prismatic": Prismatic}
-REFUSED = ("floating", "planar")
+#: URDF joints of several coordinates: the suffixes of their coordinates' names (after the joint's name).
+SEVERAL = {"floating": ("x", "y", "z", "mrp1", "mrp2", "mrp3"), "planar": ("x", "y", "theta")}
 
 #: Rotation entries this close to 0 or ±1 are taken as exactly that.
 SNAP = 1e-14
@@ -90,7 +100,7 @@ def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), dampi
     ------
     ModelError
         The file cannot be read or is not a tree of links (no single root, a link with two parents), or holds a
-        floating or planar joint.
+        joint of a type URDF does not define.
     ImportError
         yourdfpy is not installed.
     """
@@ -100,20 +110,21 @@ def from_urdf(path, *, name: str | None = None, gravity=(0.0, 0.0, -9.81), dampi
     tree_links += [_link(*moving, walk.parts.get(moving[0], []), damping) for moving in walk.moving]
     tree_name = name if name is not None else _Names.identifier(robot.name or "robot", "robot")
     return Tree(tree_links, gravity=gravity, name=tree_name, q0=q0, qd0=qd0, t_end=t_end,
-                description=_description(robot.name, path, walk.renamed, walk.frictions, damping, walk.base))
+                description=_description(robot.name, path, walk, damping))
 
 
 @dataclass
 class _Walk:
-    """What a walk over the URDF tree found: the moving joints as (tree link name, joint, coordinate, placement in
-    the parent tree link's frame, parent tree link or None), the mass properties of each tree link's parts
-    (`_part`), the joints renamed {URDF name: coordinate}, the joints with Coulomb friction, and the floating base
-    as (tree link name, its six coordinates), or None."""
+    """What a walk over the URDF tree found: the moving joints as (tree link name, joint, its coordinates,
+    placement in the parent tree link's frame, parent tree link or None), the mass properties of each tree link's
+    parts (`_part`), the joints renamed {URDF name: coordinates}, the joints with Coulomb friction or with dynamics
+    lagcomp leaves out, and the floating base as (tree link name, its six coordinates), or None."""
 
     moving: list
     parts: dict
     renamed: dict
     frictions: list
+    unmodelled: list
     base: tuple | None = None
 
 
@@ -121,14 +132,10 @@ def _children(robot, path) -> dict:
     """{URDF link name: the joints hanging from it}, the joints' types checked."""
     children = {}
     for joint in robot.joints:
-        if joint.type in REFUSED:
-            raise ModelError(f"{path}: joint {joint.name!r} is a {joint.type} joint, which lagcomp's trees do not "
-                             "read from URDF yet (issue 39). Fix the base (remove the joint, or make it fixed), or "
-                             "build the tree with lc.Tree and give the base link an lc.Free (floating) or lc.Planar "
-                             "joint.")
-        if joint.type != "fixed" and joint.type not in MOVING:
+        if joint.type != "fixed" and joint.type not in MOVING and joint.type not in SEVERAL:
             raise ModelError(f"{path}: joint {joint.name!r} has the unknown type {joint.type!r}: URDF joints are "
-                             "revolute, continuous, prismatic, fixed, floating or planar.")
+                             "revolute, continuous, prismatic, fixed, floating or planar. Give the joint one of these "
+                             "types (a ball joint: build the tree with lc.Tree and an lc.Spherical joint).")
         children.setdefault(joint.parent, []).append(joint)
     return children
 
@@ -136,7 +143,7 @@ def _children(robot, path) -> dict:
 def _walk(robot, children: dict, root: str, path, floating_base: bool) -> _Walk:
     """The tree links from the root outwards: a moving joint starts one, a fixed joint adds its child link to the
     one it hangs from (at the pose it composes to); a floating root is a tree link of its own."""
-    names, walk = _Names(), _Walk([], {}, {}, [])
+    names, walk = _Names(), _Walk([], {}, {}, [], [])
     base = None
     if floating_base:
         base = names.link(root)
@@ -149,21 +156,64 @@ def _walk(robot, children: dict, root: str, path, floating_base: bool) -> _Walk:
         if joint.type == "fixed":
             bodies[joint.child] = (body, placement)
             continue
-        coordinate = names.coordinate(joint.name)
-        if coordinate != joint.name:
-            walk.renamed[joint.name] = coordinate
-        if _float(getattr(joint.dynamics, "friction", None)):
-            walk.frictions.append(joint.name)
+        coordinates = _coordinates(joint, names, walk)
         link_name = names.link(joint.child)
-        walk.moving.append((link_name, joint, coordinate, placement, body))
-        bodies[joint.child] = (link_name, np.eye(4))
+        walk.moving.append((link_name, joint, coordinates, placement, body))
+        child_pose = np.eye(4)
+        if joint.type == "planar":   # the URDF child frame in lagcomp's link frame (module docstring)
+            child_pose[:3, :3] = normal_frame(_axis(joint)).T
+        bodies[joint.child] = (link_name, child_pose)
     if not walk.moving and not floating_base:
-        raise ModelError(f"{path}: no revolute, continuous or prismatic joint: nothing in {robot.name!r} moves.")
+        raise ModelError(f"{path}: no revolute, continuous, prismatic, planar or floating joint: nothing in "
+                         f"{robot.name!r} moves.")
     inertials = {link.name: link.inertial for link in robot.links}
     for urdf_link, (body, pose) in bodies.items():
         if body is not None and inertials.get(urdf_link) is not None:
             walk.parts.setdefault(body, []).append(_part(inertials[urdf_link], pose))
     return walk
+
+
+def _coordinates(joint, names: _Names, walk: _Walk) -> tuple:
+    """The coordinates of a moving joint, named after it (module docstring), noting in `walk` a renamed joint and
+    the joint's dynamics lagcomp leaves out."""
+    if joint.type in SEVERAL:
+        wanted = tuple(f"{joint.name}_{part}" for part in SEVERAL[joint.type])
+        if _float(getattr(joint.dynamics, "damping", None)) or _float(getattr(joint.dynamics, "friction", None)):
+            walk.unmodelled.append(joint.name)
+    else:
+        wanted = (joint.name,)
+        if _float(getattr(joint.dynamics, "friction", None)):
+            walk.frictions.append(joint.name)
+    coordinates = tuple(names.coordinate(text) for text in wanted)
+    if coordinates != wanted:
+        walk.renamed[joint.name] = ", ".join(repr(c) for c in coordinates)
+    return coordinates
+
+
+def _axis(joint) -> np.ndarray:
+    """The joint's unit ``<axis>`` ((1, 0, 0) when it has none, as the URDF specification says)."""
+    axis = np.array([1.0, 0.0, 0.0] if joint.axis is None else joint.axis, dtype=float)
+    return axis / np.linalg.norm(axis)
+
+
+def normal_frame(axis) -> np.ndarray:
+    """The smallest rotation N taking e_z to the unit vector `axis` (a planar joint's frame: its x-y plane is the
+    plane normal to the axis), by Rodrigues' formula N = 1 + [k]× + [k]×² / (1 + c) with k = e_z × axis and c = e_z ·
+    axis; when c < 0, [k]×² / (1 + c) = (1 − c) (k̂ k̂ᵀ − 1) with k̂ = k / |k| (no cancellation, no underflow); for
+    the axis −e_z (k = 0), the half turn about x.  Entries snapped as `_matrix`'s."""
+    n = np.asarray(axis, dtype=float)
+    c, k = n[2], np.array([-n[1], n[0], 0.0])
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    if c >= 0:
+        N = np.eye(3) + K + K @ K / (1 + c)
+    elif not k.any():
+        return np.diag([1.0, -1.0, -1.0])
+    else:
+        unit = k / np.hypot(k[0], k[1])
+        N = np.eye(3) + K + (1 - c) * (np.outer(unit, unit) - np.eye(3))
+    for target in (0.0, 1.0, -1.0):
+        N[np.abs(N - target) < SNAP] = target
+    return N
 
 
 def _parse(path: Path):
@@ -251,8 +301,18 @@ def combined(parts) -> tuple:
     return mass, com, (inertia + inertia.T) / 2
 
 
-def _link(name: str, joint, coordinate: str, placement, parent, parts, damping: bool) -> Link:
+def _link(name: str, joint, coordinates: tuple, placement, parent, parts, damping: bool) -> Link:
     mass, com, inertia = combined(parts)
+    origin = tuple(float(x) for x in placement[:3, 3])
+    if joint.type in SEVERAL:
+        if joint.type == "floating":
+            moving = Free(coordinates, origin=origin, rotation=placement[:3, :3].tolist())
+        else:
+            turned = placement[:3, :3] @ normal_frame(_axis(joint))
+            moving = Planar(coordinates, origin=origin, rotation=turned.tolist())
+        return Link(name, moving, parent=parent, mass=float(mass), com=tuple(float(x) for x in com),
+                    inertia=inertia.tolist())
+    coordinate = coordinates[0]
     limit = joint.limit
     limits = None if limit is None else JointLimits(
         None if joint.type == "continuous" or limit.lower is None else float(limit.lower),
@@ -260,8 +320,7 @@ def _link(name: str, joint, coordinate: str, placement, parent, parts, damping: 
         None if limit.effort is None else float(limit.effort), None if limit.velocity is None else float(limit.velocity))
     axis = np.array([1.0, 0.0, 0.0] if joint.axis is None else joint.axis, dtype=float)
     c = _float(getattr(joint.dynamics, "damping", None)) if damping else 0.0
-    moving = MOVING[joint.type](coordinate, axis=tuple(float(a) for a in axis), damping=c,
-                                origin=tuple(float(x) for x in placement[:3, 3]),
+    moving = MOVING[joint.type](coordinate, axis=tuple(float(a) for a in axis), damping=c, origin=origin,
                                 rotation=placement[:3, :3].tolist())
     return Link(name, moving, parent=parent, mass=float(mass), com=tuple(float(x) for x in com),
                 inertia=inertia.tolist(), limits=None if limits is None else {coordinate: limits})
@@ -302,12 +361,14 @@ class _Names:
         return self._unique(link_name, "link", "link")
 
 
-def _description(robot_name, path, renamed: dict, frictions: list, damping: bool, base) -> str:
-    text = f"{robot_name} from {path}" + (f", floating on its root link {base[0]!r}" if base else "")
-    if renamed:
-        text += "; joints renamed as coordinates: " + ", ".join(f"{a!r} -> {b!r}" for a, b in renamed.items())
-    if frictions:
-        text += f"; Coulomb friction of {frictions} not modelled"
+def _description(robot_name, path, walk: _Walk, damping: bool) -> str:
+    text = f"{robot_name} from {path}" + (f", floating on its root link {walk.base[0]!r}" if walk.base else "")
+    if walk.renamed:
+        text += "; joints renamed as coordinates: " + ", ".join(f"{a!r} -> {b}" for a, b in walk.renamed.items())
+    if walk.frictions:
+        text += f"; Coulomb friction of {walk.frictions} not modelled"
+    if walk.unmodelled:
+        text += f"; damping and friction of {walk.unmodelled} not modelled (floating and planar joints)"
     if not damping:
         text += "; joint damping left out"
     return text + "."

@@ -6,14 +6,15 @@ coordinates q_i(t), their velocities q_i(t).diff(t), ``lc.t`` and parameters; a 
 They follow the spherical joints' shadow switches (`lagcomp.multibody.shadow`) in the tree's events, so the
 index of a user event in the kernels is its position in ``events`` plus the number of ball joints.
 
-A `lagcomp.Friction` element is taken when a contact of the tree presses it (``normal="floor"``): its normal force
-is the contact's, and its slip force joins the contact's column of the held rows
+A `lagcomp.Friction` element pressed by a contact of the tree (``normal="floor"``) has the contact's normal force,
+and its slip force joins the contact's column of the held rows
 (`lagcomp.kernel_support.resting.pressed_frictional_accelerations`), so the tree's articulated-body rhs (all
-contacts open) stays the motion without friction.  Its velocity must be linear in the velocities, as on a System.
+contacts open) stays the motion without friction.  One pressed by an expression N(q, q̇, t) slips with the
+generalized force −μk |N| s ∂v/∂q̇ in the recursions' joint forces (`lagcomp.multibody.slip`).  Its velocity must be
+linear in the velocities, as on a System.
 
 Refused (`ModelError`, each naming the event): an object that is not an Event, a name used twice or by a shadow
-switch, a reset of something that is not a coordinate of the tree, a friction element whose normal force is an
-expression (its slip force would enter the recursions' generalized forces: a later step of issue 39) or names no
+switch, a reset of something that is not a coordinate of the tree, a friction element whose normal names no
 contact of the tree, a contact or friction element on a tree with closed loops (an impact there must keep the loops'
 velocities too, as a System with constraints refuses).
 """
@@ -24,7 +25,7 @@ from lagcomp.errors import ModelError
 from lagcomp.model.contacts import Contact
 from lagcomp.model.events import Event, reset_role, reset_target
 from lagcomp.model.friction import Friction
-from lagcomp.multibody.joints import ISSUE, t
+from lagcomp.multibody.joints import t
 
 
 def checked_events(events, tree) -> tuple[Event, ...]:
@@ -54,14 +55,9 @@ def checked_events(events, tree) -> tuple[Event, ...]:
 
 
 def _check_friction(element: Friction, events, tree) -> None:
-    """Refuse a friction element a contact of the tree does not press, or whose velocity is not linear in q̇."""
+    """Refuse a friction element whose normal names no contact of the tree, or whose velocity is not linear in q̇."""
     contacts = [e.name for e in events if isinstance(e, Contact)]
-    if not isinstance(element.normal, str):
-        raise ModelError(f"{tree.name}: the friction element `{element.name}` has its normal force as an expression: "
-                         f"on a kinematic tree only a contact's normal force presses friction yet ({ISSUE}); give "
-                         f"normal= the name of a lc.Contact of the tree (its contacts: {contacts}), or write the "
-                         "system as a lc.System.")
-    if element.normal not in contacts:
+    if isinstance(element.normal, str) and element.normal not in contacts:
         raise ModelError(f"{tree.name}: the friction element `{element.name}` names normal={element.normal!r}, which "
                          f"is no contact of the tree (its contacts: {contacts}).")
     rates = [c.diff(t) for c in tree.coordinates]
@@ -73,7 +69,8 @@ def _check_friction(element: Friction, events, tree) -> None:
 
 def event_roles(events) -> dict:
     """Every expression of the user's `events` by role (for the parameters, the checks and the fingerprint): the
-    event function, each reset value, a contact's restitution."""
+    event function, each reset value, a contact's restitution, a friction element's coefficients and its normal
+    force when it is an expression."""
     roles = {}
     for e in events:
         roles[f"event {e.name}"] = e.expr
@@ -82,4 +79,6 @@ def event_roles(events) -> dict:
             roles[f"contact {e.name} restitution"] = e.restitution
         if isinstance(e, Friction):
             roles.update({f"friction {e.name} {part}": getattr(e, part) for part in ("static", "kinetic")})
+            if not isinstance(e.normal, str):   # (an event's role: it may read t and the coordinates)
+                roles[f"event {e.name} normal force"] = e.normal
     return roles
