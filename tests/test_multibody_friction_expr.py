@@ -198,8 +198,7 @@ def _differences(kernel, t0, y, p, h=1e-3) -> np.ndarray:
 def test_the_on_demand_jacobian_sees_the_slip_forces(twins):
     """``rhs_jacobian`` (on demand: the tree's recursions differentiated in forward mode) while the elements slip:
     the slip forces, their modes read from p, are differentiated too (|N| of the state-dependent N included),
-    against differences of the twin's rhs (the Lagrangian path; its own rhs_jacobian cannot be printed for this N
-    today, see the report)."""
+    against differences of the twin's rhs (the Lagrangian path)."""
     tree, twin = twins
     rng = np.random.default_rng(8)
     p_tree, p_twin = tree.parameter_vector(DEFAULTS), twin.parameter_vector(DEFAULTS)
@@ -212,6 +211,37 @@ def test_the_on_demand_jacobian_sees_the_slip_forces(twins):
             assert tree.kernels.rhs_jacobian(0.4, y, p_tree, got) == 0
             expected = _differences(twin.kernels.rhs, 0.4, y, p_twin)
             assert np.max(np.abs(got - expected)) <= 1e-9 * np.max(np.abs(expected))
+
+
+def test_the_lagrangian_jacobians_of_a_normal_force_over_symbols_without_assumptions(twins):
+    """The twin's own ``rhs_jacobian`` and ``rhs_parameter_jacobian``: its N = (M + m) g − m c θ̇² cos θ is written
+    over symbols declared without assumptions, which sympy takes as complex and differentiated |N| into derivatives
+    of re N and im N that no kernel can print (a traceback from the printer); lagcomp's quantities are real, so
+    ∂|N| = sign(N) ∂N.  Against the tree's forward-mode Jacobian (1e-12) and differences in the parameters."""
+    tree, twin = twins
+    rng = np.random.default_rng(9)
+    p_tree, p_twin = tree.parameter_vector(DEFAULTS), twin.parameter_vector(DEFAULTS)
+    slots = [row[2] for row in tree.kernels.FRICTIONS]
+    names = list(twin.parameters)
+    for slide, hinge in [(1, -1), (-1, 1)]:
+        for p in (p_tree, p_twin):
+            p[slots[0]], p[slots[1]] = slide, hinge
+        y = rng.uniform(-1.5, 1.5, 4)
+        expected, got = np.empty((4, 4)), np.empty((4, 4))
+        assert tree.kernels.rhs_jacobian(0.4, y, p_tree, expected) == 0
+        assert twin.kernels.rhs_jacobian(0.4, y, p_twin, got) == 0
+        assert np.max(np.abs(got - expected)) <= 1e-12 * np.max(np.abs(expected))
+        partials = np.empty((4, len(names)))
+        assert twin.kernels.rhs_parameter_jacobian(0.4, y, p_twin, partials) == 0
+        for j in (names.index("g"), names.index("c"), names.index("mu_k")):
+            h, values = 1e-3 * abs(p_twin[j]), []
+            for step in (2, 1, -1, -2):
+                shifted, out = p_twin.copy(), np.empty(4)
+                shifted[j] += step * h
+                assert twin.kernels.rhs(0.4, y, shifted, out) == 0
+                values.append(out)
+            column = (-values[0] + 8 * values[1] - 8 * values[2] + values[3]) / (12 * h)
+            assert np.max(np.abs(partials[:, j] - column)) <= 1e-9 * np.max(np.abs(column))
 
 
 @pytest.fixture(scope="module")

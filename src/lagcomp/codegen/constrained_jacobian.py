@@ -42,7 +42,7 @@ from lagcomp.codegen.jacobian_blocks import (
 )
 from lagcomp.codegen.stabilization import stabilized_gamma
 from lagcomp.ir import AugmentedJacobianSolve, Kernel
-from lagcomp.mechanics.lagrange import EOM, symengine_ready
+from lagcomp.mechanics.lagrange import EOM, kink_free_jacobian, symengine_ready
 from lagcomp.model.system import t
 
 #: What every constrained Jacobian kernel returns, after what it computes.
@@ -129,4 +129,4 @@ def residual_partials(rows: list, variables) -> list[list]:
     if symengine_ready(rows):
         images, xs = [se.sympify(r) for r in rows], [se.sympify(x) for x in variables]
         return [[image.diff(x) for x in xs] for image in images]
-    return sp.Matrix(rows).jacobian(list(variables)).replace(sp.DiracDelta, lambda *args: sp.S.Zero).tolist()
+    return kink_free_jacobian(rows, variables)

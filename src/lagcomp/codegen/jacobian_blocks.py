@@ -10,7 +10,7 @@ import symengine as se
 import sympy as sp
 
 from lagcomp.ir import Delegate, Kernel
-from lagcomp.mechanics.lagrange import EOM, symengine_ready
+from lagcomp.mechanics.lagrange import EOM, kink_free_jacobian, symengine_ready
 from lagcomp.model.system import t
 
 
@@ -56,8 +56,7 @@ def acceleration_partials(M, F, accelerations, variables) -> list[list]:
         return [[image.diff(x) for x in xs] for image in images]
     residual = [F[i] - sum((M[i, k] * accelerations[k] for k in range(columns) if M[i, k] != 0), sp.S.Zero)
                 for i in range(rows)]
-    block = sp.Matrix(residual).jacobian(list(variables)).replace(sp.DiracDelta, lambda *args: sp.S.Zero)
-    return block.tolist()
+    return kink_free_jacobian(residual, variables)
 
 
 #: The docstring of every ``rhs_jacobian`` kernel: what it computes; `lagcomp.codegen.lower` adds how.

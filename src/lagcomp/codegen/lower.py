@@ -89,7 +89,7 @@ from lagcomp.ir import (
     SymmetricProduct,
     Unavailable,
 )
-from lagcomp.mechanics.lagrange import EOM, rest_partials, symengine_ready
+from lagcomp.mechanics.lagrange import EOM, kink_free_jacobian, rest_partials, symengine_ready
 from lagcomp.model.inputs import is_input
 from lagcomp.model.system import t
 
@@ -207,9 +207,8 @@ def _canonical_partials_kernel(eom: EOM, mapping, loads) -> Kernel:
         blocks = [eom.M.tolist()] + [[[f[i].diff(x[j]) for j in range(n)] for i in range(n)]
                             for f, x in ((momenta, q), (rate, q), (rate, qd))]
     else:
-        blocks = (eom.M, eom.momenta.jacobian(eom.q), eom.momentum_rate.jacobian(eom.q),
-                  eom.momentum_rate.jacobian(eom.qd))
-        blocks = [block.replace(sp.DiracDelta, lambda *args: sp.S.Zero).tolist() for block in blocks]
+        blocks = [eom.M.tolist(), kink_free_jacobian(eom.momenta, eom.q), kink_free_jacobian(eom.momentum_rate, eom.q),
+                  kink_free_jacobian(eom.momentum_rate, eom.qd)]
     return cse_kernel(
         "canonical_partials",
         "At y = (q, q̇), shape (4, n, n) into `out`: out[0] = M, out[1] = ∂P/∂q, out[2] = ∂r/∂q,\n"
@@ -340,7 +339,7 @@ def dae_jacobian(residual: list, z) -> list[list]:
     if symengine_ready(residual):
         images, xs = [se.sympify(g) for g in residual], [se.sympify(x) for x in z]
         return [[image.diff(x) for x in xs] for image in images]
-    return sp.Matrix(residual).jacobian(list(z)).replace(sp.DiracDelta, lambda *args: sp.S.Zero).tolist()
+    return kink_free_jacobian(residual, z)
 
 
 #: The docstrings' common ending: where the formulation is described.

@@ -421,10 +421,31 @@ def jacobian(exprs: sp.Matrix, xs) -> sp.Matrix:
     """
     exprs = list(exprs)
     if not symengine_ready(exprs):
-        return sp.Matrix(exprs).jacobian(xs)
+        return real_jacobian(exprs, xs)
     to_se, to_sympy = _symengine_maps(set(xs).union(*(e.free_symbols for e in exprs)))
     images, variables = [to_se(e) for e in exprs], [to_se(x) for x in xs]
     return sp.Matrix(len(exprs), len(xs), lambda i, j: to_sympy(images[i].diff(variables[j])))
+
+
+def real_jacobian(exprs, xs) -> sp.Matrix:
+    """sympy's ∂exprs_i/∂x_j, shape (len(exprs), len(xs)), every symbol taken as the real number it stands for.
+
+    A parameter declared without assumptions (``m, g = sp.symbols("m g")``) is complex to sympy, which
+    differentiates |m g cos θ| into derivatives of its real and imaginary parts that no kernel can evaluate;
+    as reals, the derivative is sign(m g cos θ) ∂(m g cos θ)/∂x.  The symbols go over to real dummies and
+    come back, so the result is over the caller's symbols.
+    """
+    exprs, xs = sp.Matrix(list(exprs)), list(xs)
+    complex_symbols = [s for s in exprs.free_symbols | set(xs) if isinstance(s, sp.Symbol) and s.is_real is not True]
+    real = {s: sp.Dummy(s.name, real=True) for s in complex_symbols}
+    block = exprs.xreplace(real).jacobian([x.xreplace(real) for x in xs])
+    return block.xreplace({dummy: s for s, dummy in real.items()})
+
+
+def kink_free_jacobian(exprs, xs) -> list[list]:
+    """`real_jacobian` with a force's jump (Coulomb friction's sign(v), a Heaviside) contributing its
+    derivative away from the jump: the DiracDelta at the jump is dropped."""
+    return real_jacobian(exprs, xs).replace(sp.DiracDelta, lambda *args: sp.S.Zero).tolist()
 
 
 #: Functions that symengine differentiates as sympy does; expressions with others go through sympy.
