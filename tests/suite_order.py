@@ -20,16 +20,21 @@ from __future__ import annotations
 #: CI's run) the tests against it skip and the multibody files weigh less; ranked by their weight with it, they run
 #: early where they are heavy, and cost nothing by going first where they are light.
 HEAVIEST = (
-    "test_multibody.py",                 # 122 (-n 0; without Pinocchio 47: its random trees took 72)
-    "test_units_invariance.py",          # 81
+    "test_multibody.py",                 # 122 (-n 0; without Pinocchio 47: its random trees took 72; 4 less since
+                                         # session 30: the repeated-steps test's 4-link chain)
+    "test_units_invariance.py",          # 81 (-n 0 with every driver cold, session 30: 119, of which radau's
+                                         # driver 16 and the collocation one 8)
     "test_multibody_jacobians.py",       # 107 (-n 0 after test_multibody.py, whose models it shares: conftest's
                                          # tree_pair; radau's driver 19 of it): third, so that it starts once the
-                                         # first has compiled them, not on the other worker at the same time
-    "test_error_table.py",               # 74
-    "test_taylor_sensitivities.py",      # 58
+                                         # first has compiled them, not on the other worker at the same time;
+                                         # 25 less since session 30 (its Lagrangian references run as Python)
+    "test_error_table.py",               # 74 (29 at -n 0 with the library drivers already compiled, session 30)
+    "test_taylor_sensitivities.py",      # 58 (-n 0 with dop853's and Taylor's drivers cold, session 30: 73, then
+                                         # 66 with one variational module fewer)
+    "test_multibody_names.py",           # 58 (-n 0, session 30; 79 before its plain-named ∂f/∂y ran as Python)
     "test_multibody_spherical.py",       # 54 (without Pinocchio 21; -n 0 70, with the dop853 driver's compile)
     "test_taylor_jacobian.py",           # 52 (its k = 9 case marked slow)
-    "test_steady_linearization.py",      # 52
+    "test_steady_linearization.py",      # 52 (-n 0, session 30: 50, of which 27 the Whipple bicycle's sympy)
     "test_rhs_jacobian.py",              # 50
     "test_names.py",                     # 46
     "test_kane_interop.py",              # 46

@@ -200,13 +200,14 @@ def test_a_measured_axis_keeps_every_digit(cache_dir):
 
 
 def test_a_chains_repeated_steps_are_shared_helpers_that_compute_the_same_bits(tmp_path, monkeypatch):
-    """A 3D chain of six universal-jointed links: its rhs calls helpers for the steps the links repeat, compiles
-    fewer operations than it evaluates, and gives bit for bit the q̈ of the same rhs emitted without helpers,
-    whether LLVM inlines them (a small kernel) or calls them (past `INLINE_LIMIT`)."""
+    """A 3D chain of four universal-jointed links (the fewest whose rhs has helpers; three have
+    none): its rhs calls helpers for the steps the links repeat, compiles fewer operations than it evaluates, and
+    gives bit for bit the q̈ of the same rhs emitted without helpers, whether LLVM inlines them (a small kernel) or
+    calls them (past `INLINE_LIMIT`)."""
     from lagcomp.codegen import outline
     from lagcomp.codegen.tree_lower import lower_tree
 
-    tree = mm.universal_chain(6)
+    tree = mm.universal_chain(4)
     rhs = next(k for k in lower_tree(tree).kernels if k.name == "rhs")
     assert rhs.helpers and rhs.operation_count < outline.evaluated_operations(rhs)
     shared = lc.compile(tree, cache_dir=tmp_path / "shared")

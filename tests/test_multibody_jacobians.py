@@ -16,6 +16,7 @@ import sympy as sp
 from compile_probe import run_probe
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from random_systems import python_kernels
 
 import lagcomp as lc
 from lagcomp import analysis as an
@@ -37,6 +38,21 @@ def _relative(a, b) -> float:
 
 # -- against the Lagrangian path ----------------------------------------------------------------------------------
 
+#: {model name: its kernels as plain Python (`_python_jacobians`)}, for the run.
+_PYTHON_KERNELS: dict = {}
+
+
+def _python_jacobians(model: lc.Model) -> dict:
+    """The Lagrangian path's eager module and its companion of the Jacobians (``rhs_jacobian``,
+    ``rhs_parameter_jacobian``) run as plain Python: the reference is the same emitted code, which numba need not
+    compile here (its compiled Jacobians are tests/test_rhs_jacobian.py's subject; ~15 s of numba for the four
+    pairs)."""
+    if model.name not in _PYTHON_KERNELS:
+        companion = model.on_demand_entry("jacobians").path.read_text(encoding="utf-8")
+        _PYTHON_KERNELS[model.name] = python_kernels(companion, model.source_path.read_text(encoding="utf-8"))
+    return _PYTHON_KERNELS[model.name]
+
+
 
 @pytest.mark.parametrize("name", mm.PAIRS)
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -48,10 +64,15 @@ def test_jacobians_agree_with_the_lagrangian_path(tree_pair, name, data):
     params, y = _draw(data, tree_model)
     t = data.draw(st.floats(0.0, 10.0), label="t")
     assert tree_model.parameters == lagrange_model.parameters
-    assert _relative(tree_model.jacobian(t, y, params), lagrange_model.jacobian(t, y, params)) <= 1e-12
-    tree_p = tree_model.rhs_parameter_jacobian(t, y, params)
-    assert _relative(tree_p, lagrange_model.rhs_parameter_jacobian(t, y, params)) <= 1e-12
     size, p = 2 * tree_model.n, tree_model.parameter_vector(params)
+    lagrange = _python_jacobians(lagrange_model)
+    want, want_p = np.empty((size, size)), np.empty((size, len(tree_model.parameters)))
+    lagrange_p = lagrange_model.parameter_vector(params)
+    assert lagrange["rhs_jacobian"](t, y, lagrange_p, want) == 0
+    assert lagrange["rhs_parameter_jacobian"](t, y, lagrange_p, want_p) == 0
+    assert _relative(tree_model.jacobian(t, y, params), want) <= 1e-12
+    tree_p = tree_model.rhs_parameter_jacobian(t, y, params)
+    assert _relative(tree_p, want_p) <= 1e-12
     ydot, full = np.empty(size), np.empty((size, size + len(p)))
     assert tree_model.kernels.rhs_with_full_jacobian(t, y, p, ydot, full) == 0
     assert np.array_equal(full, np.hstack([tree_model.jacobian(t, y, params), tree_p]))

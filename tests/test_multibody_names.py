@@ -52,9 +52,9 @@ VALUES = (1.5, 0.75, 2.0, 3.0, 0.5, 9.75, 0.25)
 STATE = np.array([0.3, -0.2, 0.4, 0.1, -0.2, 0.3, 0.5, -0.25, 0.75, 0.125, -0.5, 0.25])
 
 
-def _outputs(model: lc.Model, names: tuple, kernels: dict | None = None) -> dict:
-    """rhs, M, F, energy and (with the numba kernels) ∂f/∂y at `STATE`, the parameters `VALUES` given by `names`
-    (in `probe_tree`'s order), with the model's numba kernels or the plain-Python `kernels`."""
+def _outputs(model: lc.Model, names: tuple, kernels: dict | None = None, jacobian=None) -> dict:
+    """rhs, M, F, energy at `STATE`, the parameters `VALUES` given by `names` (in `probe_tree`'s order), with the
+    model's numba kernels or the plain-Python `kernels`; and ∂f/∂y with the kernel `jacobian` if one is given."""
     p = model.parameter_vector(dict(zip(names, VALUES)))
     call = (lambda name: kernels[name]) if kernels is not None else (lambda name: getattr(model.kernels, name))
     n = model.n
@@ -63,22 +63,25 @@ def _outputs(model: lc.Model, names: tuple, kernels: dict | None = None) -> dict
     call("mass_matrix")(0.0, STATE, p, M)
     call("forcing")(0.0, STATE, p, F)
     found = {"rhs": f, "mass_matrix": M, "forcing": F, "energy": np.array(call("energy")(0.0, STATE, p))}
-    if kernels is None:
+    if jacobian is not None:
         J = found["rhs_jacobian"] = np.empty((2 * n, 2 * n))
-        assert call("rhs_jacobian")(0.0, STATE, p, J) == 0
+        assert jacobian(0.0, STATE, p, J) == 0
     return found
 
 
-def _python_kernels(model: lc.Model) -> dict:
-    """The eager module and the companion of M and F as plain Python (numba would compile each drawn tree)."""
-    dynamics = model.on_demand_entry("dynamics").path.read_text(encoding="utf-8")
-    return python_kernels(model.source_path.read_text(encoding="utf-8"), dynamics)
+def _python_kernels(model: lc.Model, kind: str = "dynamics") -> dict:
+    """The eager module and the companion of the on-demand `kind` (M and F: "dynamics") as plain Python (numba
+    would compile each drawn tree)."""
+    companion = model.on_demand_entry(kind).path.read_text(encoding="utf-8")
+    return python_kernels(model.source_path.read_text(encoding="utf-8"), companion)
 
 
 @pytest.fixture(scope="module")
 def plain(cache_dir) -> tuple[lc.Model, dict]:
+    """The probe tree under plain names and its outputs: rhs, M, F and the energy by numba, ∂f/∂y as plain Python
+    (the reference the risky names' numba Jacobian must meet; numba spends ~25 s of CPU on this kernel)."""
     model = lc.compile(probe_tree(*PLAIN), cache_dir=cache_dir)
-    return model, _outputs(model, PLAIN[2])
+    return model, _outputs(model, PLAIN[2], jacobian=_python_kernels(model, "jacobians")["rhs_jacobian"])
 
 
 @pytest.fixture(scope="module")
@@ -111,7 +114,7 @@ def test_a_tree_named_with_its_own_emitted_names_compiles_and_agrees(plain, tree
     names = (tuple(pool[:LINKS]), tuple(pool[LINKS:LINKS + COORDINATES]),
              tuple(pool[LINKS + COORDINATES:LINKS + COORDINATES + PARAMETERS]))
     model = lc.compile(probe_tree(*names), cache_dir=cache_dir)
-    _agree(_outputs(model, names[2]), plain[1])
+    _agree(_outputs(model, names[2], jacobian=model.kernels.rhs_jacobian), plain[1])
 
 
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,

@@ -87,10 +87,11 @@ def test_double_pendulum_against_dop853_and_extrapolated_differences(pendulum):
 
 def test_state_control_keeps_the_plain_run_bitwise(pendulum):
     plain = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, **TAYLOR)
-    sol = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities="qd0",
+    # (the four columns of test_a_column_alone_is_the_same_column_of_all: one variational kernel for both tests)
+    sol = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities=("q0", "qd0"),
                         sensitivity_control="state", **TAYLOR)
     assert np.array_equal(sol.t, plain.t) and np.array_equal(sol.y, plain.y)
-    assert sol.sensitivities.shape == (sol.t.size, 4, 2) and sol.nfev == plain.nfev
+    assert sol.sensitivities.shape == (sol.t.size, 4, 4) and sol.nfev == plain.nfev
 
 
 def test_a_column_alone_is_the_same_column_of_all(pendulum):
@@ -104,9 +105,10 @@ def test_a_column_alone_is_the_same_column_of_all(pendulum):
 
 
 def test_both_control_takes_more_steps_and_agrees(pendulum):
-    state = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities="q0",
+    # (the columns, and so the variational kernels, of the tests above: k = 4 under each control)
+    state = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities=("q0", "qd0"),
                           sensitivity_control="state", **TAYLOR)
-    both = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities="q0",
+    both = _pendulum_run(pendulum, PENDULUM_STATE, rtol=1e-12, atol=1e-12, sensitivities=("q0", "qd0"),
                          sensitivity_control="both", **TAYLOR)
     assert both.nsteps > state.nsteps
     assert np.abs(both.y[-1] - state.y[-1]).max() < 1e-10
