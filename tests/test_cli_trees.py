@@ -105,5 +105,5 @@ def test_precompile_all_builds_a_trees_kinds_and_bench_skips_what_it_lacks(cache
     rows = {line.split("|")[1].strip(): line for line in capsys.readouterr().out.splitlines()
             if line.startswith("| ") and line.count("|") == 7}
     assert "taylor" not in rows                                  # not applicable: no Taylor kernel
-    assert "failed: ModelError: `velocities`" in rows["gauss2"]   # the Hamiltonian form, named
+    assert np.isfinite(float(rows["gauss2"].split("|")[4].split()[0]))   # the tree's canonical kind
     assert np.isfinite(float(rows["rk4"].split("|")[4].split()[0]))

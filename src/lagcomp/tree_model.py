@@ -8,8 +8,9 @@ kernels, ``rest_partials``: radau, sensitivities, linearization) are the recursi
 (`lagcomp.codegen.tree_companion`), ``mass_matrix`` and ``forcing``, which no run of a tree calls, their recursions,
 and ``geometry`` (animation) the links' frames (`lagcomp.codegen.tree_geometry`), built on first use into companion
 modules as a System's are, and so is ``power`` (the energy balance, `lagcomp.codegen.tree_power`).  What issue 39
-does not provide yet is refused with a `ModelError` naming it: the other on-demand kernels (the Hamiltonian form,
-Taylor, the equations' LaTeX) and the analyses that read a System's T and V.
+does not provide yet is refused with a `ModelError` naming it: the other on-demand kernels (Taylor, the equations'
+LaTeX) and the analyses that read a System's T and V.  The Hamiltonian form of gauss1/2/3 is the kind "canonical"
+(`lagcomp.codegen.tree_canonical`).
 """
 
 from __future__ import annotations

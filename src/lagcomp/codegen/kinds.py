@@ -72,7 +72,7 @@ TREE_ON_DEMAND = (
 #: `lagcomp.codegen.tree_loop_companion`), the links' frames ("geometry", `lagcomp.codegen.tree_geometry`, whose
 #: ``GEOMETRY_PARENTS`` a System's module does not define) and the energy balance's "power"
 #: (`lagcomp.codegen.tree_power`); its other kinds are refused.
-TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry", "dynamics", "power")
+TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry", "dynamics", "power", "canonical")
 
 #: Every name a companion module may define, and the kind that defines it.
 KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}

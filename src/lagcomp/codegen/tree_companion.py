@@ -39,6 +39,7 @@ import sympy as sp
 from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
+from lagcomp.codegen.tree_canonical import tree_canonical_kernels
 from lagcomp.codegen.tree_geometry import tree_geometry_kernels
 from lagcomp.codegen.tree_loop_companion import LOOP_BUILDERS
 from lagcomp.codegen.tree_lower import (
@@ -230,7 +231,8 @@ _BUILDERS = {"jacobians": lambda tree, local: _jacobian_kernels(local),
              "directional": lambda tree, local: _tangent_kernels(local),
              "analysis": lambda tree, local: _rest_partials_kernels(local), "dae": lambda tree, local: (),
              "dynamics": lambda tree, local: _dynamics_kernels(local),
-             "power": tree_power_kernels}
+             "power": tree_power_kernels,
+             "canonical": tree_canonical_kernels}
 
 #: The same for a tree with loops: the augmented solve differentiated (`lagcomp.codegen.tree_loop_companion`);
 #: ``rest_partials`` is the open tree's (F is the same).

@@ -86,6 +86,10 @@ class Method:
     #: this method keeps from one driver call to the next besides (y, clock, counters), which `simulate`
     #: passes after the coefficients (Radau's Jacobian and last collocation polynomial); None: none.
     carry: str | None = None
+    #: Whether the driver switches charts (a ball joint's MRPs to their shadow) at the end of a step that left one,
+    #: without locating the event (`lagcomp.integrate.drivers.collocation`): it takes ``event_values`` and
+    #: ``event_reset`` after `kernels` and the events' actions last, and applies no other event.
+    switches_charts: bool = False
     def solves_dae(self, model) -> bool:
         """Whether this method integrates `model` as an index-2 DAE (a constrained model, `dae_kernels`)."""
         return bool(self.dae_kernels) and model.k > 0
@@ -108,9 +112,15 @@ class Method:
             bound[key] = self._bind(kernels, addressed, dae)
         return bound[key]
 
+    @property
+    def driver_kernels(self) -> tuple[str, ...]:
+        """What the driver and its sweep loop take first, by name: `kernels`, and the event kernels of the chart
+        switches (`switches_charts`)."""
+        return (*self.kernels, *_CHART_KERNELS) if self.switches_charts else self.kernels
+
     def _bind(self, kernels, addressed: bool, dae: bool):
         driver = library_function(self.driver)
-        names = self.dae_kernels if dae else self.kernels
+        names = self.dae_kernels if dae else self.driver_kernels
         bound = [_kernel(kernels, k) for k in names]
         kinds = driver.signatures[0]
         bound = [AddressedKernel(value, kind) if isinstance(kind, types.FunctionType)
@@ -158,6 +168,8 @@ def _embedded(name: str, tableau: Tableau, summary: str) -> Method:
 _COLLOCATION = "lagcomp.integrate.drivers.collocation:collocation_run"
 _COLLOCATION_SWEEP = "lagcomp.integrate.drivers.collocation:collocation_sweep"
 _CANONICAL_KERNELS = ("velocities", "momenta", "momentum_rate", "canonical_partials")
+#: The kernels a driver that switches charts takes after its `Method.kernels` (`Method.switches_charts`).
+_CHART_KERNELS = ("event_values", "event_reset")
 
 METHODS = {
     m.name: m
@@ -185,13 +197,13 @@ METHODS = {
                sweep="lagcomp.integrate.drivers.rattle:rattle_sweep"),
         Method("gauss1", 2, False, _COLLOCATION, collocation.GAUSS1,
                "implicit midpoint rule on (q, p), symplectic for any Lagrangian", unconstrained_only=True,
-               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
+               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP, switches_charts=True),
         Method("gauss2", 4, False, _COLLOCATION, collocation.GAUSS2,
                "2-stage Gauss-Legendre on (q, p), symplectic, order 4", unconstrained_only=True,
-               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
+               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP, switches_charts=True),
         Method("gauss3", 6, False, _COLLOCATION, collocation.GAUSS3,
                "3-stage Gauss-Legendre on (q, p), symplectic, order 6", unconstrained_only=True,
-               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP),
+               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP, switches_charts=True),
         Method("radau", 5, True, "lagcomp.integrate.drivers.radau:radau_run", radau.RADAU5,
                "Radau IIA order 5 (Hairer-Wanner's RADAU5), implicit, adaptive, for stiff systems, with the "
                "model's exact Jacobian; constrained systems as index-2 DAEs, constraints held without projection",

@@ -99,6 +99,9 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     An event with a reset changes the motion: a method that cannot apply it (`Method.kernels` without
     ``event_reset``) is refused unless the run leaves the event out by name (``events=False`` or a list).
     A contact's event cannot be left out (`lagcomp.model.contacts`): its impacts are part of the motion.
+    A method that switches charts (`Method.switches_charts`: the Gauss methods) applies a tree's chart switches (its
+    ball joints' shadow switches, `lagcomp.multibody.Tree.chart_events`) in a run that does not choose its events
+    (``events`` None), and resets no other event.
     """
     declared = model.events
     if events is None or events is True:
@@ -127,7 +130,9 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     if chosen and not m.adaptive:
         raise OptionError(f"Events are located on dense output, which {m.name} lacks; use "
                           f"{method_names(lambda m: m.adaptive)}.")
-    resetting = [e.name for e in declared if e.resets and (e.name in chosen or events is None)]
+    tree = getattr(model, "system", None)
+    charts = getattr(tree, "chart_events", ()) if m.switches_charts and events is None else ()
+    resetting = [e.name for e in declared if e.resets and (e.name in chosen or events is None) and e.name not in charts]
     if resetting and "event_reset" not in m.kernels:
         raise OptionError(f"Event(s) {resetting} of {model.name!r} reset the state, which `{m.name}` cannot do; use "
                           f"{method_names(lambda m: 'event_reset' in m.kernels)}, or leave them out "
@@ -135,8 +140,8 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     directions = np.array([e.direction for e in declared], dtype=np.int64)
     impacts = {name for name, _, _ in contacts_of(model)}
     actions = np.array([(ACTION_IMPACT if e.name in impacts else ACTION_RESET if e.resets else ACTION_TERMINAL
-                         if e.terminal else ACTION_RECORD) if e.name in chosen else ACTION_IGNORE for e in declared],
-                       dtype=np.int64)
+                         if e.terminal else ACTION_RECORD) if e.name in chosen else ACTION_RESET if e.name in charts
+                        else ACTION_IGNORE for e in declared], dtype=np.int64)
     return directions, actions
 
 

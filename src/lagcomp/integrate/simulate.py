@@ -135,6 +135,8 @@ def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOption
     """The chunk call of a fixed-step method, and the rows its output will need (`tier`: as `_adaptive_driver`'s)."""
     library = _bound_drivers(options.method, kernels) if tier[0] is None else None
     coefficients = options.driver_arguments()
+    if options.method.switches_charts:    # the events' actions: which are chart switches (`Method.switches_charts`)
+        coefficients = (*coefficients, options.actions)
     t0, t1, dt, n_steps = options.t0, options.t1, options.dt, options.n_steps
 
     def advance(ts, ys, pause_at, event_buffers, first_call):
@@ -324,7 +326,7 @@ def _memory_check(model, memory_limit, k_columns: int = 0):
 def _kernels_of(model, m) -> tuple:
     """The numba dispatchers among the kernels the run's driver takes (numba compiles those it has not yet in
     the driver's first call: the library driver itself was compiled, or loaded, on import)."""
-    names = m.dae_kernels if m.solves_dae(model) else m.kernels
+    names = m.dae_kernels if m.solves_dae(model) else m.driver_kernels
     return tuple(kernel for kernel in (getattr(model.kernels, name, None) for name in names)
                  if hasattr(kernel, "signatures"))
 

@@ -108,7 +108,8 @@ def library_digest() -> str:
 def target(method: Method, sweep: bool = False) -> tuple[str, tuple[str, ...]]:
     """(library function, the names of the kernels it takes first) of `method`'s driver, or with `sweep` of its sweep
     loop (`Method.sweep`, which takes the driver's kernels and ``energy``)."""
-    return (method.sweep, (*method.kernels, "energy")) if sweep else (method.driver, method.kernels)
+    kernels = method.driver_kernels
+    return (method.sweep, (*kernels, "energy")) if sweep else (method.driver, kernels)
 
 
 def specialised_key(model, method: Method, sweep: bool = False) -> str:

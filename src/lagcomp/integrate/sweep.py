@@ -433,8 +433,10 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         coefficients = options.driver_arguments()
         if m.carry is not None:     # Radau: the count of differential components (all: an ODE)
             coefficients = (*coefficients, differential_size(model) if dae else n2)
+        if m.switches_charts:       # the events' actions: which are chart switches (`Method.switches_charts`)
+            coefficients = (*coefficients, actions)
         task = _Task(m.driver, m.adaptive, fixed, layout, coefficients, projecting, m.sweep,
-                     m.dae_kernels if dae else m.kernels, balance or None)
+                     m.dae_kernels if dae else m.driver_kernels, balance or None)
     if client is None:
         kernels = model.kernels if spec is None else _worker_kernels(spec)
         if spec is None and not batched:

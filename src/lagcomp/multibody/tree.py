@@ -168,6 +168,13 @@ class Tree:
         return tuple(e.name for e in self.events)
 
     @property
+    def chart_events(self) -> tuple[str, ...]:
+        """The names of the events that change charts, not the motion: the spherical joints' shadow switches
+        (`lagcomp.multibody.shadow`), which a method may apply anywhere past their zero without locating it
+        (`lagcomp.integrate.methods.Method.switches_charts`)."""
+        return tuple(e.name for e in self.events[:len(self.events) - len(self.user_events)])
+
+    @property
     def contacts(self) -> tuple:
         """The user's `lagcomp.Contact` s, in order."""
         from lagcomp.model.contacts import Contact
@@ -207,9 +214,9 @@ class Tree:
         return (f"{what} is not available for the kinematic tree {self.name!r} yet: the multibody path emits rhs, "
                 "energy and momenta, and on demand mass_matrix, forcing, the Jacobians, the tangent kernels, "
                 "rest_partials (radau, sensitivities, lagcomp.analysis.linearize), the links' geometry "
-                "(animation) and the power of the energy balance; the other kernels come in "
-                f"later steps of {ISSUE}. Use those methods, or write the system as a lc.System with lc.RigidBody "
-                "for this feature.")
+                "(animation), the power of the energy balance and the canonical kernels (gauss1/2/3); the other "
+                f"kernels come in later steps of {ISSUE}. Use those methods, or write the system as a lc.System with "
+                "lc.RigidBody for this feature.")
 
     def __repr__(self) -> str:
         return f"Tree({self.name!r}, links={[link.name for link in self.links]}, n={self.n})"

@@ -9,6 +9,15 @@ from `lagcomp.integrate.collocation`.
 `collocation_run` is the resumable driver (the protocol of `lagcomp.integrate.drivers`), fixed-step
 like RK4: step k goes from ``t0 + k dt`` to ``t0 + (k+1) dt``, the last step landing exactly on
 ``t_end``; `collocation_sweep` runs it over many trajectories.
+
+Chart switches.  A ball joint's MRPs σ change to their shadow σ' = −σ/|σ|² past half a turn (an event with a reset,
+`lagcomp.multibody.shadow`), which is a change of coordinates, not a jump of the motion: the same orientation and
+angular velocity in the other chart.  In (q, p) it is the cotangent lift of the map σ → σ', a symplectic map, and it
+may be made anywhere the two charts overlap, so it needs no locating: after a step that leaves the chart (its event
+function g > 0), the driver applies the event's reset to y = (q, q̇) and rebuilds p = ``momenta`` there (the momenta
+of the new chart, p' = Dφ⁻ᵀ p), then goes on from the new x with neither extrapolated stages nor a summation carry of
+the old chart.  ``actions`` (one per event, `lagcomp.integrate.drivers.events`) marks the chart switches with
+ACTION_RESET; no other event is located or reset here (`lagcomp.integrate.options.event_arguments` refuses them).
 """
 
 from __future__ import annotations
@@ -18,9 +27,12 @@ from numba import njit, types
 
 from lagcomp.integrate.drivers.canonical import canonical_jacobian
 from lagcomp.integrate.drivers.fixed_step import fixed_step_window
+from lagcomp.integrate.drivers.events import ACTION_RESET
 from lagcomp.integrate.drivers.kernel_types import (
     CANONICAL_PARTIALS,
     ENERGY,
+    EVENT_RESET,
+    EVENTS,
     FLOAT,
     INDICES,
     INT,
@@ -48,10 +60,11 @@ from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.linear_solvers import lu_factor, lu_substitute
 
 #: The model kernels `collocation_run` takes first (`Method.kernels` of the gauss methods names them).
-_KERNEL_TYPES = (VELOCITIES, MOMENTA, MOMENTUM_RATE, CANONICAL_PARTIALS)
+_KERNEL_TYPES = (VELOCITIES, MOMENTA, MOMENTUM_RATE, CANONICAL_PARTIALS, EVENTS, EVENT_RESET)
 #: The method's arrays and settings after the common arguments: A (s, s), B (s,), C (s,), E (s, s),
-#: the iteration limit and whether the stage equations are solved by simplified Newton.
-_COEFFICIENTS = (MATRIX, VECTOR, VECTOR, MATRIX, INT, types.boolean)
+#: the iteration limit, whether the stage equations are solved by simplified Newton, and the events' actions (the
+#: chart switches: module docstring).
+_COEFFICIENTS = (MATRIX, VECTOR, VECTOR, MATRIX, INT, types.boolean, INDICES)
 
 #: kernels, y, clock, counters, p, projecting, residual_max, t0, dt, n_steps, pause_at, t_end, save_every,
 #: ts, ys, then the coefficients: the fixed-step driver protocol (as the RK4 driver's).
@@ -60,8 +73,25 @@ _RUN = OUTCOME(*_KERNEL_TYPES, VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLO
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters, p, t0, dt,
-                       n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton):
+def _switch_charts(event_values, event_reset, t, y, p, actions, g, y_after):
+    """Apply the reset of each chart switch (``actions`` ACTION_RESET) whose event function is positive at y (the
+    state has left its chart) to ``y`` in place; ``g`` (E,) and ``y_after`` (2n,) work space.  Returns the number
+    applied, or −1 when a reset could not be computed (module docstring)."""
+    event_values(t, y, p, g)
+    switched = 0
+    for e in range(actions.shape[0]):
+        if actions[e] == ACTION_RESET and g[e] > 0.0:
+            if event_reset(t, y, p, e, y_after) != 0:
+                return -1
+            y[:] = y_after
+            switched += 1
+    return switched
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset, y, clock,
+                       counters, p, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton,
+                       actions):
     """Implicit Runge-Kutta (Gauss-Legendre) on x = (q, p); fixed step ``dt``; resumable.
 
     The canonical equations are evaluated without a symbolic inverse: q̇ = ``velocities``(t, x)
@@ -107,6 +137,10 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y
     pivots = np.empty(s * n2, dtype=np.int64)
     delta = np.empty(s * n2)
     extrapolate = False
+    charts = False
+    for e in range(actions.shape[0]):
+        charts = charts or actions[e] == ACTION_RESET
+    g = np.empty(actions.shape[0])
     compensation = np.zeros(n2)
     new_compensation = np.zeros(n2)
     n_saved = 0
@@ -230,6 +264,17 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y
             for c in range(n2):
                 K_previous[i, c] = K[i, c]
         extrapolate = True
+        if charts:
+            switched = _switch_charts(event_values, event_reset, t_b, y, p, actions, g, y_stage)
+            if switched < 0:
+                return Status.RHS_FAILED, n_saved
+            if switched > 0:    # the new chart's x; nothing carried over from the old one
+                momenta(t_b, y, p, pdot)
+                for c in range(n):
+                    x[c] = y[c]
+                    x[n + c] = pdot[c]
+                compensation[:] = 0.0
+                extrapolate = False
         clock[TIME] = t_b
         counters[NSTEPS] = k + 1
         counters[SINCE_SAVE] += 1
@@ -242,21 +287,23 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y
 
 
 @njit(_RUN, cache=True, error_model="numpy", nogil=True)
-def collocation_run(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters, p, projecting,
-                    residual_max, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter,
-                    newton):
+def collocation_run(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset, y, clock,
+                    counters, p, projecting, residual_max, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B,
+                    C, E, max_iter, newton, actions):
     """Gauss-Legendre collocation on x = (q, p); fixed step ``dt``; resumable (see `_collocation_steps`).
 
     ``newton`` chooses how the stage equations are solved: simplified Newton (True) or fixed-point
     iteration (False).  Each runs its own specialisation of `_collocation_steps`, from which numba
     drops the other's branches (``projecting`` and ``residual_max`` are unused: unconstrained
-    systems only).
+    systems only).  ``actions`` marks the events that are chart switches (module docstring).
     """
     if newton:
-        return _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters, p, t0,
-                                  dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, True)
-    return _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters, p, t0,
-                              dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, None)
+        return _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset,
+                                  y, clock, counters, p, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B,
+                                  C, E, max_iter, True, actions)
+    return _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset, y,
+                              clock, counters, p, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E,
+                              max_iter, None, actions)
 
 
 _SWEEP = types.none(*_KERNEL_TYPES, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT, INT, FLOAT, INT, MATRIX, VECTOR,
@@ -264,16 +311,16 @@ _SWEEP = types.none(*_KERNEL_TYPES, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT, I
 
 
 @njit(_SWEEP, cache=True, error_model="numpy", nogil=True)
-def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, energy, Y0, P, projecting, t0, dt,
-                      n_steps, t_end, save_every, final, t_final, status, counts, dense, energy_stats, A, B, C, E,
-                      max_iter, newton):
+def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset, energy, Y0,
+                      P, projecting, t0, dt, n_steps, t_end, save_every, final, t_final, status, counts, dense,
+                      energy_stats, A, B, C, E, max_iter, newton, actions):
     """Trajectory k from (t0, Y0[k]) with parameters P[k], ``n_steps`` steps of ``dt`` by `collocation_run`.
 
     The outputs and their shapes are those of every fixed-step sweep loop (`lagcomp.integrate.sweep`):
     ``final`` (N, 2n), ``t_final`` (N,), ``status`` (N,), ``counts`` (N, 3) = [nfev, nsteps, nrejected],
     ``dense`` (N, m, 2n) the initial state and the saved rows (m = 0: none kept), ``energy_stats``
     (N, 2) = [E0, largest |E − E0| over the saved rows].  Then the driver's trailing arguments
-    (A, B, C, E, max_iter, newton).
+    (A, B, C, E, max_iter, newton, actions).
     """
     n_traj = Y0.shape[0]
     n2 = Y0.shape[1]
@@ -294,9 +341,9 @@ def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, en
                 dense[k, 0, c] = y[c]
             row = 1
         while True:
-            code, n_saved = collocation_run(velocities, momenta, momentum_rate, canonical_partials, y, clock, counters,
-                                            p, projecting, residual, t0, dt, n_steps, NO_PAUSE, t_end, save_every, ts,
-                                            ys, A, B, C, E, max_iter, newton)
+            code, n_saved = collocation_run(velocities, momenta, momentum_rate, canonical_partials, event_values,
+                                            event_reset, y, clock, counters, p, projecting, residual, t0, dt, n_steps,
+                                            NO_PAUSE, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton, actions)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
             if code != Status.BUFFER_FULL:
                 break
