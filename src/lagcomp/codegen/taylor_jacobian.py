@@ -441,7 +441,7 @@ def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padde
     def block(offset):      # the code of the position `offset` + _b (in a loop over blocks)
         return f"_b + {offset}" if looped else str(offset)
     init = [f"_pk = k*{padded} + _b" if looped else f"_pk = k*{padded}", f"_pk1 = _pk + {padded}",
-            "_k1 = k + 1"]
+            "_kn = k + 1"]
     loop, stores = [f"{INDENT}_pj = _pk - _j*{padded}"], []
     entries = sweeps.entries(n_state)
     for i in range(n_state):
@@ -459,7 +459,7 @@ def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padde
             stores.append(f"_v = ({' + '.join(total)})*_ik1" if total else "_v = 0.0")
             stores.append(f"{s(i, 'k + 1', c)} = _v")
             row = n_state * (c + 1) + i        # X's row of S_i in column _b + c: N (_b + c + 1) + i
-            store = f"X[{n_state}*_b + {row}, _k1] = _v" if looped else f"X[{row}, _k1] = _v"
+            store = f"X[{n_state}*_b + {row}, _kn] = _v" if looped else f"X[{row}, _kn] = _v"
             stores += [store] if padded == columns else [f"if _b + {c} < {columns}:", INDENT + store]
     loop = ["for _j in range(1, k + 1):", *loop] if len(loop) > 1 else []
     return [*init, *loop, *stores]

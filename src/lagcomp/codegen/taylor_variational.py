@@ -135,7 +135,7 @@ class _Writer:
 
     def position_lines(self) -> list[str]:
         """The positions of coefficients k and k + 1 of the pass's block: ``(k)*padded + _b``, and k + 1."""
-        return [f"_pk = k*{self.padded}" + " + _b" * self.looped, f"_pk1 = _pk + {self.padded}", "_k1 = k + 1"]
+        return [f"_pk = k*{self.padded}" + " + _b" * self.looped, f"_pk1 = _pk + {self.padded}", "_kn = k + 1"]
 
     def state_row(self, c: int, index: int) -> str:
         """X's row of state `index`'s coefficient in column ``_b + c``: N (_b + c + 1) + index."""
@@ -179,7 +179,7 @@ class _Writer:
             state = self.slots_state[op.index]
             lines = []
             for c in range(self.columns):
-                store = f"X[{self.state_row(c, op.index)}, _k1] = {t(state, 'k + 1', c)}"
+                store = f"X[{self.state_row(c, op.index)}, _kn] = {t(state, 'k + 1', c)}"
                 lines.append(f"{t(state, 'k + 1', c)} = {derivative(c)}")
                 # (a padding column of the last block has no row in X)
                 lines += [store] if self.padded == self.total else [f"if _b + {c} < {self.total}:", INDENT + store]
