@@ -422,17 +422,27 @@ def jacobian_products(program: dict, columns: int, parameters: tuple[int, ...] =
 
 
 def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padded: int,
-                  forced: set[int]) -> list[str]:
+                  forced: set[int], looped: bool) -> list[str]:
     """The code of column ``_b + c``'s coefficient k + 1, for c < `width`: Ṡ_i[k] = Σ_j (J_ij ⊛ S_j)[k] + F_i
     (F: the parameters' terms ∂f/∂p[k], 0 in the others; only in the rows of `forced`), into S (the columns
     adjacent, ``_S``) and X.  A row's
     convolutions sum into one accumulator per column: a pass's accumulators stay a few vectors (one per entry
-    and column, the double pendulum's 72 at k = 9, spill: 6.1 against 4.6 µs per call at order 13)."""
+    and column, the double pendulum's 72 at k = 9, spill: 6.1 against 4.6 µs per call at order 13).
+
+    The positions in S are integers computed once per pass (``_pk``, ``_pk1``) or per j (``_pj``) and added to
+    the rows' offsets ``_sr{i}`` (`_row_offsets`): numba types and lowers every operation of the source, and a
+    position written out per access (seven operations) was most of the update's code."""
     kernel = sweeps.kernel
+    positions = {"k": "_pk", "k + 1": "_pk1", "k - _j": "_pj"}
 
     def s(i, index, c):     # coefficient `index` of S_i in column _b + c
-        return f"_S[({i}*(order + 1) + {index})*{padded} + _b + {c}]"
-    init, loop, stores = [], [], []
+        return "_S[" + " + ".join([f"_sr{i}"] * bool(i) + [positions[index]] + [str(c)] * bool(c)) + "]"
+
+    def block(offset):      # the code of the position `offset` + _b (in a loop over blocks)
+        return f"_b + {offset}" if looped else str(offset)
+    init = [f"_pk = k*{padded} + _b" if looped else f"_pk = k*{padded}", f"_pk1 = _pk + {padded}",
+            "_kn = k + 1"]
+    loop, stores = [f"{INDENT}_pj = _pk - _j*{padded}"], []
     entries = sweeps.entries(n_state)
     for i in range(n_state):
         ones = [(factor, j) for row, j, (factor, kind, _) in entries if row == i and kind == "one"]
@@ -445,13 +455,19 @@ def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padde
                 loop.append(f"{INDENT}_a{i}_{c} += " + " + ".join(f"{_scaled(f, read(name, '_j'))}*{s(j, 'k - _j', c)}"
                                                                   for f, j, read, name in series))
             total = [f"_a{i}_{c}"] * bool(series) + [_scaled(f, s(j, "k", c)) for f, j in ones]
-            total += [f"_F[{i * padded} + _b + {c}]"] * (i in forced)
+            total += [f"_F[{block(i * padded + c)}]"] * (i in forced)
             stores.append(f"_v = ({' + '.join(total)})*_ik1" if total else "_v = 0.0")
             stores.append(f"{s(i, 'k + 1', c)} = _v")
-            store = f"X[{n_state}*(_b + {c} + 1) + {i}, k + 1] = _v"
+            row = n_state * (c + 1) + i        # X's row of S_i in column _b + c: N (_b + c + 1) + i
+            store = f"X[{n_state}*_b + {row}, _kn] = _v" if looped else f"X[{row}, _kn] = _v"
             stores += [store] if padded == columns else [f"if _b + {c} < {columns}:", INDENT + store]
-    loop = ["for _j in range(1, k + 1):", *loop] if loop else []
+    loop = ["for _j in range(1, k + 1):", *loop] if len(loop) > 1 else []
     return [*init, *loop, *stores]
+
+
+def _row_offsets(n_state: int, padded: int) -> list[str]:
+    """The offsets in ``_S`` of the rows S_i (i > 0: S_0's is 0), before the loop over the orders."""
+    return [f"_sr{i} = {i}*(order + 1)*{padded}" for i in range(1, n_state)]
 
 
 def jacobian_source(program: dict, columns: int, parameters: tuple[int, ...] = (), scale: float = 1.0) -> str:
@@ -482,6 +498,7 @@ def jacobian_source(program: dict, columns: int, parameters: tuple[int, ...] = (
               *["_F[:] = 0.0"] * bool(forced), f"for _c in range({padded}):   # (padding: 0)"]
     lines += [f"{INDENT}_S[{i}*(order + 1)*{padded} + _c] = y[{n_state}*(_c + 1) + {i}] if _c < {columns} else 0.0"
               for i in range(n_state)]
+    lines += _row_offsets(n_state, padded)
     lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
     lines += [INDENT + line for op in program_ops(program) for line in value_lines(op, kernel.at)]
     lines += [f"{INDENT}# The series of J's entries and of ∂f/∂p, order k"] + [INDENT + line for line in sweeps.lines]
@@ -491,9 +508,9 @@ def jacobian_source(program: dict, columns: int, parameters: tuple[int, ...] = (
                   for i, tangent in sorted(sweep.derivatives.items()) if tangent]
     looped = padded > width
     lines += [f"{INDENT}# Every column: Ṡ = J S + F, {width} columns at a time",
-              f"{INDENT}for _b in range(0, {padded}, {width}):" if looped else f"{INDENT}_b = 0"]
+              f"{INDENT}for _b in range(0, {padded}, {width}):"] * looped
     lines += [INDENT * (2 if looped else 1) + line
-              for line in _update_lines(sweeps, n_state, columns, width, padded, forced)]
+              for line in _update_lines(sweeps, n_state, columns, width, padded, forced, looped)]
     lines.append("return 0")
     # (S: N × padded rows of order + 1; F: N × padded floats, at most as many rows)
     return kernel_source(docstring, lines, columns, kernel.row_count + kernel.slots + 2 * n_state * padded)

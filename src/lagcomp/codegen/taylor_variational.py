@@ -119,10 +119,28 @@ class _Writer:
             return f"X[{self.states[name]}, {index}]"
         return f"W[{self.rows[name]}, {index}]"
 
+    @property
+    def looped(self) -> bool:
+        """Whether the columns take a loop over blocks (``_b`` its variable; else the one pass has none)."""
+        return self.padded > self.columns
+
     def tangent(self, name: str, index, c: int) -> str:
-        """Coefficient `index` of the tangent of `name` in column ``_b + c`` of the block loop, in T (the columns
-        of a coefficient are adjacent: the loads of a convolution's chains in a block are one vector)."""
-        return f"T[_t{self.slots[name]} + ({index})*{self.padded} + _b + {c}]"
+        """Coefficient `index` (k, k + 1, _j or k − _j) of the tangent of `name` in column ``_b + c`` of the block
+        loop, in T (the columns of a coefficient are adjacent: the loads of a convolution's chains in a block are
+        one vector).  The position of the coefficient's block is an integer of the pass or of the loop over j
+        (`position_lines`), not written out at every access: numba types and lowers each operation of the
+        source, and the positions' were most of them."""
+        position = _POSITIONS[index]
+        return "T[" + " + ".join([f"_t{self.slots[name]}", position] + [str(c)] * bool(c)) + "]"
+
+    def position_lines(self) -> list[str]:
+        """The positions of coefficients k and k + 1 of the pass's block: ``(k)*padded + _b``, and k + 1."""
+        return [f"_pk = k*{self.padded}" + " + _b" * self.looped, f"_pk1 = _pk + {self.padded}", "_kn = k + 1"]
+
+    def state_row(self, c: int, index: int) -> str:
+        """X's row of state `index`'s coefficient in column ``_b + c``: N (_b + c + 1) + index."""
+        row = self.n_state * (c + 1) + index
+        return f"{self.n_state}*_b + {row}" if self.looped else str(row)
 
     @property
     def tangent_rows(self) -> int:
@@ -144,6 +162,8 @@ class _Writer:
         columns = range(self.columns)
         lines = [line for c in columns for line in init(c)]
         lines.append(f"for _j in range({first}, k + 1):")
+        jumps = f"_j*{self.padded}"          # coefficients _j and k − _j of the block (`tangent`)
+        lines += [f"{INDENT}_pj = {jumps}" + " + _b" * self.looped, f"{INDENT}_pkj = _pk - {jumps}"]
         lines += [INDENT + line for c in columns for line in terms(c)]
         return lines + [line for c in columns for line in finish(c)]
 
@@ -159,7 +179,7 @@ class _Writer:
             state = self.slots_state[op.index]
             lines = []
             for c in range(self.columns):
-                store = f"X[{self.n_state}*(_b + {c} + 1) + {op.index}, k + 1] = {t(state, 'k + 1', c)}"
+                store = f"X[{self.state_row(c, op.index)}, _kn] = {t(state, 'k + 1', c)}"
                 lines.append(f"{t(state, 'k + 1', c)} = {derivative(c)}")
                 # (a padding column of the last block has no row in X)
                 lines += [store] if self.padded == self.total else [f"if _b + {c} < {self.total}:", INDENT + store]
@@ -241,6 +261,10 @@ class _Writer:
         raise ValueError(f"no tangent recurrence for the operation {kind!r}")
 
 
+#: The variables of `_Writer.tangent`'s positions, by coefficient.
+_POSITIONS = {"k": "_pk", "k + 1": "_pk1", "_j": "_pj", "k - _j": "_pkj"}
+
+
 #: The products of a tangent recurrence per term of its sums, by operation (a mul's: per moving operand).
 _TANGENT_PRODUCTS = {"sin_cos": 2, "square": 1, "exp": 1, "sqrt": 1, "log": 1, "pow": 2, "rdiv": 1, "div": 1}
 
@@ -292,9 +316,10 @@ def forward_source(program: dict, columns: int, parameters: tuple[int, ...] = ()
                     lines.append(f"T[_g{i} + {column}] = {tangent}")
     lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
     lines += [INDENT + line for op in ops for line in value_lines(op, writer.at)]
-    looped = padded > writer.columns
+    looped = writer.looped
     lines += [f"{INDENT}# The tangents of order k, {writer.columns} columns at a time.",
-              f"{INDENT}for _b in range(0, {padded}, {writer.columns}):" if looped else f"{INDENT}_b = 0"]
+              *[f"{INDENT}for _b in range(0, {padded}, {writer.columns}):"] * looped]
+    lines += [INDENT * (2 if looped else 1) + line for line in writer.position_lines()]
     for op in ops:
         tangent = writer.tangent_lines(op)
         if tangent and op.kind != "state":
