@@ -282,3 +282,34 @@ def test_a_ball_joint_beside_a_loop_moves_as_without_it(cache_dir):
         assert relative(qdd[:3], out[3:]) <= 1e-12
         qdd_arm, lam_arm = motion(arm_alone, y[[3, 7]], (1.0, 2.0))
         assert abs(qdd[3] - qdd_arm[0]) <= 1e-12 * abs(qdd_arm[0]) and abs(lam[0] - lam_arm[0]) <= 1e-12 * abs(lam_arm[0])
+
+
+def test_a_free_body_held_at_a_point_moves_as_on_a_ball_joint(cache_dir):
+    """A free body (`lc.Free`: three slides, then a ball joint) whose point p_b is held at the base point P0 by a
+    loop (xyz) is the body on a ball joint at P0 (the open tree, the articulated-body algorithm): at the states
+    where the loop is closed (x = P0 − R p_b, ẋ = −R (ω × p_b)) its σ̈ is the ball joint's to 1e-12, and λ, the
+    force the base exerts on the body at the pivot, is Newton's m (a_G − g) of the ball joint's motion."""
+    mass, com, inertia = 1.3, np.array([0.1, -0.2, 0.4]), (0.05, 0.07, 0.04)
+    pivot, hold = np.array([0.3, -0.1, 0.2]), np.array([0.05, 0.1, -0.15])
+    gravity = np.array([0.0, 0.0, -9.81])
+    free = lc.compile(lc.Tree([lc.Link("body", lc.Free(("x", "y", "z", "s1", "s2", "s3")), mass=mass,
+                                       com=tuple(com), inertia=inertia)], gravity=tuple(gravity), name="held_free_body",
+                              loops=[lc.Loop("pivot", ("body", tuple(hold)), (None, tuple(pivot)))]),
+                      cache_dir=cache_dir)
+    ball = lc.compile(lc.Tree([lc.Link("body", lc.Spherical(("s1", "s2", "s3"), origin=tuple(pivot)), mass=mass,
+                                       com=tuple(com - hold), inertia=inertia)], gravity=tuple(gravity),
+                              name="ball_jointed_body"), cache_dir=cache_dir)
+    rng = np.random.default_rng(13)
+    for _ in range(10):
+        sigma, rates = rng.uniform(-0.6, 0.6, 3), rng.uniform(-2, 2, 3)
+        R = Rotation.from_mrp(sigma).as_matrix()
+        omega = np.array(mrp.jacobian_times(sigma, rates))
+        y = np.concatenate([pivot - R @ hold, sigma, -R @ np.cross(omega, hold), rates])
+        qdd, lam = motion(free, y)
+        out = np.zeros(6)
+        assert ball.kernels.rhs(0.0, np.concatenate([sigma, rates]), ball.parameter_vector(), out) == 0
+        assert relative(qdd[3:], out[3:]) <= 1e-12
+        alpha = np.add(mrp.jacobian_times(sigma, out[3:]), mrp.rate_product(sigma, rates))
+        r = com - hold
+        a_G = R @ (np.cross(alpha, r) + np.cross(omega, np.cross(omega, r)))
+        assert relative(lam, mass * (a_G - gravity)) <= 1e-12
