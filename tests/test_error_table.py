@@ -319,14 +319,6 @@ def _planar_loop(directions: str) -> lc.Tree:
                    loops=[lc.Loop("pin", ("left", (l, 0, 0)), ("right", (l, 0, 0)), directions=directions)])
 
 
-def _loop_beside_a_ball(tmp_path):
-    """`_planar_loop` with a ball-jointed pendulum beside it."""
-    ball = lc.Link("bob", lc.Spherical(("s1", "s2", "s3")), mass=m, com=(0, 0, -l), inertia=(1, 1, 1))
-    loop = _planar_loop("xy")
-    lc.compile(lc.Tree([*loop.links, ball], name="tree_loop_ball", defaults={"m": 1.0, "l": 1.0}, loops=[
-        lc.Loop("pin", ("left", (l, 0, 0)), ("right", (l, 0, 0)), directions="xy")]), cache_dir=tmp_path)
-
-
 def _from_urdf(tmp_path, kind: str):
     """lc.from_urdf of a two-link URDF whose one joint, 'base', is of `kind` (a skip without yourdfpy)."""
     pytest.importorskip("yourdfpy")
@@ -474,7 +466,6 @@ CASES = {
     "tree-loop-unknown-link": (lambda: lc.Tree(_planar_loop("xy").links, loops=[
         lc.Loop("pin", ("left", (1, 0, 0)), ("rihgt", (1, 0, 0)))]), "'rihgt'"),
     "tree-loop-idle-direction": (lambda tmp_path: lc.compile(_planar_loop("xyz"), cache_dir=tmp_path), "'pin_z'"),
-    "tree-loop-ball-joint": (_loop_beside_a_ball, "ball joints (links ['bob'])"),
     "tree-event-not-available": (lambda: lc.Tree(_planar_loop("xy").links, name="tree_loop", loops=[
         lc.Loop("pin", ("left", (l, 0, 0)), ("right", (l, 0, 0)), directions="xy")], events=[
         lc.Friction("rub", lc.coordinates("q1")[0].diff(t), normal=1.0, static=0.5)]), "['rub']"),

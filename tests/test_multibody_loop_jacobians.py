@@ -297,16 +297,3 @@ def test_linearize_refuses_the_loop_tree_as_it_refuses_the_example(four_bars):
     for model in four_bars:
         with pytest.raises(lc.ModelError, match="needs an unconstrained system"):
             an.linearize(model, model.initial_state()[:3])
-
-
-def test_a_loop_in_a_tree_with_a_ball_joint_is_refused(cache_dir):
-    """A ball-jointed pendulum beside an arm on a rail: the augmented system is written in the recursions'
-    velocities, a ball joint's body rates, not its MRP rates: the eager rhs gave the pendulum other accelerations
-    than the same pendulum without the arm's loop.  Refused at compile, naming the loop and the ball joint."""
-    links = [lc.Link("ball", lc.Spherical(("s1", "s2", "s3")), mass=1.0, com=(0.1, 0.2, -0.5),
-                     inertia=(0.02, 0.03, 0.04)),
-             lc.Link("arm", lc.Revolute("th", origin=(2, 0, 0)), mass=1.0, com=(0.5, 0, 0), inertia=(0.01, 0.1, 0.1))]
-    tree = lc.Tree(links, gravity=(0, -9.81, 0), name="ball_beside_a_loop",
-                   loops=[lc.Loop("rail", ("arm", (1, 0, 0)), (None, (0, -0.5, 0)), directions="y")])
-    with pytest.raises(lc.ModelError, match=r"closed loops \(rail\) and ball joints \(links \['ball'\]\)"):
-        lc.compile(tree, cache_dir=cache_dir)

@@ -10,6 +10,10 @@ projection, ``reactions`` and `lagcomp.Solution` take it unchanged:
   γ̃ = γ − 2α Λ q̇ − β² Φ with the Baumgarte gains (α, β) the last two entries of p;
 * ``constraint_residuals`` (Φ, then Λ q̇) and ``constraint_matrix`` ([Λ | b], b = 0: the loops do not move with t).
 
+Every part is in the tree's coordinates: a ball joint's (or a free joint's) rows and columns of M, its entries of F and
+its columns of Λ are mapped from the recursions' body rates to its MRPs (`lagcomp.multibody.charts`), so the solve
+gives σ̈ and the multipliers directly, as a Lagrange module in the same coordinates would.
+
 A direction along which Λ's row is identically zero (the tree cannot pull the cut points apart that way) is refused
 (`lagcomp.multibody.loops.refuse_idle_direction`): the augmented matrix would be singular at every state.
 """
@@ -21,11 +25,10 @@ from dataclasses import dataclass, replace
 import sympy as sp
 
 from lagcomp.codegen.bindings import BAUMGARTE
-from lagcomp.errors import ModelError
 from lagcomp.ir import AugmentedSolve
+from lagcomp.multibody.charts import forces_in_coordinates, mass_matrix_in_coordinates
 from lagcomp.multibody.closure import ClosureRows, closure_rows
 from lagcomp.multibody.crba import mass_matrix
-from lagcomp.multibody.joints import ISSUE
 from lagcomp.multibody.loops import refuse_idle_direction
 from lagcomp.multibody.program import Program
 from lagcomp.multibody.rnea import forcing
@@ -46,7 +49,6 @@ def loop_kernels(tree, nodes, gravity, mapping: dict, kernel) -> tuple:
     `lagcomp.multibody.program.Program` given to ``build``, which returns the stores).
     """
     n, k = len(nodes), len(tree.constraint_names)
-    _refuse_ball_joints(tree)
     _check_rows(tree, nodes, mapping)
     rhs = kernel(
         "rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), from the augmented system M q̈ = F + Λᵀ λ,\n"
@@ -84,20 +86,6 @@ def _rows(prog, tree, nodes, mapping):
     return closure_rows(prog, nodes, tree.closures, last_node, points)
 
 
-def _refuse_ball_joints(tree) -> None:
-    """Refuse loops in a tree with ball (or free) joints, on a loop or off it: the augmented system here is written
-    in the recursions' velocities (M by CRBA, F by RNEA, Λ from the joint axes), which are a ball joint's body
-    rates, not the derivatives of its modified Rodrigues parameters (`lagcomp.multibody.charts` maps them for a
-    tree without loops only)."""
-    balls = sorted({node.link for node in tree.nodes if node.joint.kind == "spherical"})
-    if balls:
-        raise ModelError(
-            f"{tree.name}: the tree has closed loops ({', '.join(c.loop for c in tree.closures)}) and ball joints "
-            f"(links {balls}): loops are supported in trees of revolute and prismatic joints (and the joints made "
-            f"of them: universal, cylindrical, planar) only, for now ({ISSUE}). Replace each ball joint by a "
-            "lc.Universal and a lc.Revolute where the motion allows, or write the mechanism as a lc.System.")
-
-
 def _check_rows(tree, nodes, mapping) -> None:
     """Refuse a loop direction whose row of Λ is identically zero (module docstring)."""
     rows = _rows(Program(), tree, nodes, mapping).rows
@@ -129,8 +117,8 @@ def augmented_parts(prog, tree, nodes, gravity, mapping) -> AugmentedParts:
     """The `AugmentedParts` of `tree` over the kernel's locals (`loop_kernels`' arguments), bound in `prog`: what
     ``rhs`` solves and what the on-demand kernels differentiate (`lagcomp.codegen.tree_loop_companion`)."""
     alpha, beta = (sp.Symbol(name, real=True) for name in BAUMGARTE)
-    M = mass_matrix(prog, nodes)
-    F = forcing(prog, nodes, gravity)
+    M = mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes))
+    F = forces_in_coordinates(prog, nodes, forcing(prog, nodes, gravity))
     loops = _rows(prog, tree, nodes, mapping)
     gamma = [prog.let(g - 2 * alpha * v - beta**2 * phi) for g, v, phi in zip(loops.gamma, loops.velocity, loops.Phi)]
     return AugmentedParts(M, F, loops, gamma)

@@ -183,15 +183,20 @@ def velocity_product(prog: Program, velocity, node: LocalNode):
 
 
 def spherical_velocity_product(prog: Program, velocity, node: LocalNode):
-    """v ×ₘ (ω, 0) + (J̇ σ̇, 0) on part 2 of a spherical joint (v its body's velocity), zero on the others.
-
-    J̇ σ̇ = −4 (σ·σ̇) ω / (1 + s) + 8 |σ̇|² σ / (1 + s)² (`lagcomp.multibody.mrp.rate_product`), with ω bound."""
+    """v ×ₘ (ω, 0) + (J̇ σ̇, 0) on part 2 of a spherical joint (v its body's velocity), zero on the others."""
     if node.part != 2:
         return list(ZERO3), list(ZERO3)
-    (w, v), omega = velocity, joint_rates(prog, node)
+    (w, v), (omega, jdot) = velocity, rate_product(prog, node)
+    return prog.vector(add(cross(w, omega), jdot)), prog.vector(cross(v, omega))
+
+
+def rate_product(prog: Program, node: LocalNode) -> tuple[list, list]:
+    """(ω, J̇ σ̇) of a spherical joint's node: its body rate ω = J(σ) σ̇ (bound) and what ω̇ holds besides J σ̈,
+    J̇ σ̇ = −4 (σ·σ̇) ω / (1 + s) + 8 |σ̇|² σ / (1 + s)² (`lagcomp.multibody.mrp.rate_product`), its two scalar
+    factors bound, its entries not."""
+    omega = joint_rates(prog, node)
     sigma, rates = node.sigma, node.sigma_dot
     one_plus_s = prog.let(1 + prog.let(dot(sigma, sigma)))
     a = prog.let(-4 * dot(sigma, rates) / one_plus_s)
     b = prog.let(8 * dot(rates, rates) / one_plus_s ** 2)
-    return (prog.vector(add(cross(w, omega), [a * omega[i] + b * sigma[i] for i in range(3)])),
-            prog.vector(cross(v, omega)))
+    return omega, [a * omega[i] + b * sigma[i] for i in range(3)]

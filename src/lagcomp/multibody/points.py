@@ -3,9 +3,9 @@
 What a tree's events and contacts are written with (`lagcomp.Tree` ``events=``): the height of a link's tip over a
 floor, the distance of a point from a wall.  ``link_point(links, "lower", (l, 0, 0))`` is the base-frame position
 (m) of the point (l, 0, 0) of link ``lower``'s frame, a 3×1 sympy Matrix over the coordinates q_i(t) and the
-parameters: each joint's placement (`lagcomp.multibody.kinematics.placement`, the recursions' own) composed outward
-from the base, R_i = R_λ R_Xi, o_i = o_λ + R_λ r_Xi, and the point at o_L + R_L p, the expression left as the
-products the tree forms (not expanded).  Its time derivative (``.diff(lc.t)``) is the point's velocity.
+parameters: the tree's forward kinematics (`lagcomp.multibody.frames`, the recursions' placements composed outward
+from the base along the link's path, R_i = R_λ R_Xi, o_i = o_λ + R_λ r_Xi) and the point at o_L + R_L p, the
+expression left as the products the tree forms (not expanded).  Its time derivative (``.diff(lc.t)``) is the point's velocity.
 
 Through a spherical or free joint the rotation is R(σ) of the joint's modified Rodrigues parameters
 (`lagcomp.multibody.mrp`); the shadow switch σ → −σ/|σ|² leaves R, hence the point, where it is, so an event or a
@@ -17,9 +17,10 @@ from __future__ import annotations
 import sympy as sp
 
 from lagcomp.errors import ModelError
+from lagcomp.multibody.frames import WorldKinematics, link_nodes
 from lagcomp.multibody.joints import t
-from lagcomp.multibody.kinematics import local_nodes, placement
-from lagcomp.multibody.program import Program, add, mat_vec
+from lagcomp.multibody.kinematics import local_nodes
+from lagcomp.multibody.program import Program
 
 
 class _Inline(Program):
@@ -49,7 +50,7 @@ def link_point(tree_or_links, link: str, point=(0, 0, 0)) -> sp.Matrix:
     from lagcomp.multibody.tree import Tree
 
     tree = tree_or_links if isinstance(tree_or_links, Tree) else Tree(tree_or_links, name="points")
-    last_node = {node.link: i for i, node in enumerate(tree.nodes)}
+    last_node = link_nodes(tree)
     if link not in last_node:
         raise ModelError(f"link_point: {link!r} is not a link of the tree; its links are {sorted(last_node)}.")
     try:
@@ -59,21 +60,5 @@ def link_point(tree_or_links, link: str, point=(0, 0, 0)) -> sp.Matrix:
     if len(p) != 3:
         raise ModelError(f"link_point: the point on {link!r} must be three expressions (m, link axes), got {point!r}.")
     q, qd = list(tree.coordinates), [c.diff(t) for c in tree.coordinates]
-    R, o = _frame(tree, local_nodes(tree, q, qd, {}), last_node[link])
-    return sp.Matrix(add(o, mat_vec(R, p)))
+    return sp.Matrix(WorldKinematics(_Inline(), local_nodes(tree, q, qd, {})).position(last_node[link], p))
 
-
-def _frame(tree, nodes, i: int) -> tuple[list, list]:
-    """The rotation (rows, base axes) and origin of node `i`'s frame, composed outward from the base."""
-    path = []
-    while i >= 0:
-        path.append(i)
-        i = tree.nodes[i].parent
-    prog = _Inline()
-    R, o = [[sp.S.One if a == b else sp.S.Zero for b in range(3)] for a in range(3)], [sp.S.Zero] * 3
-    for i in reversed(path):
-        X = placement(prog, nodes[i])
-        o = add(o, mat_vec(R, X.r))
-        R = [mat_vec(R, [X.R[0][j], X.R[1][j], X.R[2][j]]) for j in range(3)]   # (columns)
-        R = [[R[j][a] for j in range(3)] for a in range(3)]
-    return R, o
