@@ -207,7 +207,8 @@ class Tree:
         return (f"{what} is not available for the kinematic tree {self.name!r} yet: the multibody path emits rhs, "
                 "energy and momenta, and on demand mass_matrix, forcing, the Jacobians, the tangent kernels, "
                 "rest_partials (radau, sensitivities, lagcomp.analysis.linearize), the links' geometry "
-                "(animation) and the power of the energy balance; the other kernels come in "
+                "(animation), the power of the energy balance and the Taylor coefficients (method='taylor'); the "
+                "other kernels come in "
                 f"later steps of {ISSUE}. Use those methods, or write the system as a lc.System with lc.RigidBody "
                 "for this feature.")
 
