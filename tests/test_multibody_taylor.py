@@ -231,3 +231,18 @@ def test_a_program_too_large_to_compile_is_refused():
         in str(refusal)
     short_chain = mm.planar_chain(4)
     assert tree_taylor_decomposition(short_chain, tree_locals(short_chain)).operation_count <= OPERATIONS_MAX
+
+
+@pytest.mark.slow     # (numba compiles the lane kernels of order 20: about 2 CPU-minutes on a loaded machine)
+def test_a_batched_taylor_sweep_agrees_with_dop853(tree_pair):
+    """sweep(..., method="taylor", batched=True) on a tree: the lane kernels written from the tree's program
+    (`lagcomp.codegen.taylor_lanes`), final states against a dop853 sweep at the same tolerance."""
+    tree_model, _ = tree_pair("rigid_double_pendulum")
+    q0, qd0 = STATES["rigid_double_pendulum"]
+    run = dict(params=PARAMS["rigid_double_pendulum"], q0=q0, qd0=qd0, rtol=1e-12, atol=1e-12)
+    grid = {"g": [9.0, 9.81], "m1": [0.5, 0.7]}
+    taylor = tree_model.sweep((0.0, 1.0), grid, method="taylor", batched=True, **run)
+    dop853 = tree_model.sweep((0.0, 1.0), grid, method="dop853", **run)
+    assert np.all(taylor.status == 0)
+    want = np.asarray(dop853.final)
+    assert np.max(np.abs(np.asarray(taylor.final) - want)) <= 1e-10 * np.max(np.abs(want))
