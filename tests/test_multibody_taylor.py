@@ -22,7 +22,12 @@ from lagcomp.codegen.taylor import Unsupported
 from lagcomp.codegen.tree_companion import tree_locals
 from lagcomp.codegen.tree_taylor import tree_taylor_decomposition
 from lagcomp.errors import OptionError
-from lagcomp.multibody.mrp import angular_velocity, mrp_from_rotation, mrp_rate, rotation
+from lagcomp.multibody.mrp import (
+    angular_velocity,
+    mrp_from_rotation,
+    mrp_rate,
+    rotation,
+)
 
 #: Parameters of the tree_pair models used here (the examples' trees have free symbols, no defaults).
 PARAMS = {
@@ -233,7 +238,7 @@ def test_a_program_too_large_to_compile_is_refused():
     assert tree_taylor_decomposition(short_chain, tree_locals(short_chain)).operation_count <= OPERATIONS_MAX
 
 
-@pytest.mark.slow     # (numba compiles the lane kernels of order 20: about 2 CPU-minutes on a loaded machine)
+@pytest.mark.slow     # (numba compiles the lane kernels: 162 s wall with the pair's compile, on the loaded machine)
 def test_a_batched_taylor_sweep_agrees_with_dop853(tree_pair):
     """sweep(..., method="taylor", batched=True) on a tree: the lane kernels written from the tree's program
     (`lagcomp.codegen.taylor_lanes`), final states against a dop853 sweep at the same tolerance."""

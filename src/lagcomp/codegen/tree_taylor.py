@@ -34,9 +34,9 @@ from lagcomp.multibody.tree import Tree
 
 
 #: The most series operations per order of a tree's ``taylor_coefficients``: numba's compile time of the one function
-#: grows faster than its size (measured, CPU: planar chains of 3 links, 192 operations, 15 s; 10 links, 934 operations,
-#: more than 6 min and 4.5 GB).  About 106 operations per planar link: chains of up to 4 links (3D chains on ball
-#: joints: 2).
+#: grows about as its size squared (measured, CPU, numba alone: planar chains of 3 links, 192 operations, 15 s; 5 links,
+#: 404, 62 s; 10 links, 934, 399 s and 4.5 GB).  About 106 operations per planar link: chains of up to 4 links (3D
+#: chains on ball joints: 2).
 OPERATIONS_MAX = 500
 
 
