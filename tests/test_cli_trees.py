@@ -99,11 +99,11 @@ def test_what_a_tree_lacks_is_refused_by_name(cache_dir, chain_file, capsys, arg
 def test_precompile_all_builds_a_trees_kinds_and_bench_skips_what_it_lacks(cache_dir, chain_file, capsys):
     assert _lagcomp(cache_dir, "precompile", f"{chain_file}:chain", "--all") == 0
     out = capsys.readouterr().out
-    assert "on-demand kernels (power)" in out and "on-demand kernels (taylor)" not in out
+    assert "on-demand kernels (power)" in out and "on-demand kernels (taylor)" in out
     assert _lagcomp(cache_dir, "bench", f"{chain_file}:chain", "--methods", "rk4", "taylor", "gauss2",
                     "--repeats", "1", "--steps", "200", "--no-cold") == 0
     rows = {line.split("|")[1].strip(): line for line in capsys.readouterr().out.splitlines()
             if line.startswith("| ") and line.count("|") == 7}
-    assert "taylor" not in rows                                  # not applicable: no Taylor kernel
+    assert np.isfinite(float(rows["taylor"].split("|")[4].split()[0]))   # (the tree's Taylor program)
     assert np.isfinite(float(rows["gauss2"].split("|")[4].split()[0]))   # the tree's canonical kind
     assert np.isfinite(float(rows["rk4"].split("|")[4].split()[0]))

@@ -71,8 +71,9 @@ TREE_ON_DEMAND = (
 #: mode (`lagcomp.codegen.tree_companion`; "dae" only has kernels for a tree with loops,
 #: `lagcomp.codegen.tree_loop_companion`), the links' frames ("geometry", `lagcomp.codegen.tree_geometry`, whose
 #: ``GEOMETRY_PARENTS`` a System's module does not define) and the energy balance's "power"
-#: (`lagcomp.codegen.tree_power`); its other kinds are refused.
-TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry", "dynamics", "power", "canonical")
+#: (`lagcomp.codegen.tree_power`), the Taylor series program of "taylor" (`lagcomp.codegen.tree_taylor`) and the
+#: Hamiltonian form of "canonical" (`lagcomp.codegen.tree_canonical`); its other kinds are refused.
+TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry", "dynamics", "power", "canonical", "taylor")
 
 #: Every name a companion module may define, and the kind that defines it.
 KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}

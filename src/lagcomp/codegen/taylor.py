@@ -70,7 +70,7 @@ from lagcomp.codegen.taylor_ops import (
     setup_statements,
     support_names,
 )
-from lagcomp.ir import ContactModes, Kernel, LinearSolve, ModuleIR, target_local
+from lagcomp.ir import ContactModes, Kernel, LinearSolve, ModuleIR, ReturnZero, target_local
 from lagcomp.kernel_support.resting import DEPENDENT_CLOSED_CONTACTS
 
 INDENT = "    "
@@ -472,10 +472,31 @@ def decompose(rhs: Kernel, n: int, closed: Kernel | None = None, held: tuple[int
     """The Taylor program of an unconstrained ``rhs`` kernel (n coordinates, state size 2n); with the module's
     ``closed_contacts`` kernel `closed`, the program of the motion that holds its rows `held` (`_held_rows`).
 
-    Raises `Unsupported` for anything without a recurrence here.
+    `rhs` either solves M q̈ = F (`lagcomp.ir.LinearSolve`: a Lagrange module's) or stores every component of
+    f = (q̇, q̈) itself (`lagcomp.ir.ReturnZero`: an explicit q̈, as the articulated-body algorithm of a kinematic
+    tree gives it, `lagcomp.codegen.tree_taylor`).  Raises `Unsupported` for anything without a recurrence here.
     """
+    if isinstance(rhs.solve, ReturnZero) and closed is None:
+        return _explicit_program(rhs, n)
     if not isinstance(rhs.solve, LinearSolve):
         raise Unsupported("constraints (the augmented system is solved with pivoting)")
+    b, derivative = _bound_kernel(rhs, n)
+    m = [[b.env[sp.Symbol(target_local(rhs.solve.m[i][j]), real=True)] for j in range(i + 1)] for i in range(n)]
+    f = [b.env[sp.Symbol(target_local(rhs.solve.f[i]), real=True)] for i in range(n)]
+    b._emit("comment", const="Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.")
+    d, low = _factor(b, m)
+    accelerations = _substitute(b, d, low, f)
+    multipliers = ()
+    if held:
+        accelerations, multipliers = _held_rows(b, closed, held, d, low, accelerations)
+    for i, v in enumerate(accelerations):
+        derivative[rhs.solve.offset + i] = v
+    return _finished(b, rhs, n, derivative, multipliers, closed)
+
+
+def _bound_kernel(rhs: Kernel, n: int) -> tuple[_Builder, list]:
+    """A builder with the loads, temporaries and stores of `rhs` bound: the Values of its ``out[i]`` stores in
+    the list (None where `rhs` leaves the component to its solve)."""
     b = _Builder(2 * n)
     for local, source in rhs.loads:
         _load(b, local, source)
@@ -489,16 +510,25 @@ def decompose(rhs: Kernel, n: int, closed: Kernel | None = None, held: tuple[int
         else:
             local = target_local(target)
             b.env[sp.Symbol(local, real=True)] = b.bind(local, expr)
-    m = [[b.env[sp.Symbol(target_local(rhs.solve.m[i][j]), real=True)] for j in range(i + 1)] for i in range(n)]
-    f = [b.env[sp.Symbol(target_local(rhs.solve.f[i]), real=True)] for i in range(n)]
-    b._emit("comment", const="Solve M x = f by LDLᵀ; a non-positive pivot means M is singular here.")
-    d, low = _factor(b, m)
-    accelerations = _substitute(b, d, low, f)
-    multipliers = ()
-    if held:
-        accelerations, multipliers = _held_rows(b, closed, held, d, low, accelerations)
-    for i, v in enumerate(accelerations):
-        derivative[rhs.solve.offset + i] = v
+    return b, derivative
+
+
+def _explicit_program(rhs: Kernel, n: int) -> TaylorProgram:
+    """The Taylor program of an ``rhs`` that stores all of f itself (no solve: `decompose`)."""
+    if rhs.helpers:
+        raise Unsupported("an rhs whose steps are outlined into helper functions (build its program from the "
+                          "un-outlined kernel)")
+    b, derivative = _bound_kernel(rhs, n)
+    missing = [i for i, v in enumerate(derivative) if v is None]
+    if missing:
+        raise Unsupported(f"an rhs that does not store the components {missing} of f")
+    return _finished(b, rhs, n, derivative, (), None)
+
+
+def _finished(b: _Builder, rhs: Kernel, n: int, derivative: list, multipliers, closed: Kernel | None) -> TaylorProgram:
+    """The program of `b`: the state's recurrences y[k + 1] = f[k]/(k + 1) from `derivative` appended, the series
+    renamed after the statements of `rhs` that form them, the held rows' `multipliers` and the periodic
+    coordinates recorded."""
     b._emit("comment", const="The state's next coefficient: y[k + 1] = f[k]/(k + 1).")
     for i, v in enumerate(derivative):
         if v.is_const:

@@ -20,6 +20,8 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
 * "geometry" (animation): the links' frames by forward kinematics, no derivative (`lagcomp.codegen.tree_geometry`);
 * "power" (``Solution.energy_balance``, a sweep's balance): the joints' torques' and dampers' power and V's explicit
   time, no derivative of the motion (`lagcomp.codegen.tree_power`).
+* "taylor" (``method="taylor"``): ``taylor_coefficients``, the articulated-body algorithm in series arithmetic
+  (`lagcomp.codegen.tree_taylor`).
 
 A tree with closed loops (`lagcomp.Loop`) moves by an augmented solve, not by the articulated-body algorithm: its
 kinds are built by `lagcomp.codegen.tree_loop_companion` (the Jacobians, the tangent kernels and the DAE kernels of
@@ -51,6 +53,7 @@ from lagcomp.codegen.tree_lower import (
 )
 from lagcomp.codegen.tree_power import active_tree_power_terms, tree_power_kernels
 from lagcomp.codegen.tree_slip import slipping_nodes
+from lagcomp.codegen.tree_taylor import tree_taylor_source
 from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
@@ -99,6 +102,8 @@ def tree_companion_source(tree: Tree, kind: KernelKind, eager_module: str) -> tu
     """The source of the companion module of `kind` (one of `lagcomp.codegen.kinds.TREE_KINDS`) of `tree`, and
     its metadata (``operations`` per kernel), as `lagcomp.codegen.companion_module.companion_source` gives a
     System's."""
+    if kind.name == "taylor":   # (a series program, not kernels: `lagcomp.codegen.tree_taylor`)
+        return tree_taylor_source(tree, tree_locals(tree), kind, eager_module)
     ir = lower_tree_kind(tree, kind.name)
     metadata = {"operations": {k.name: k.operation_count for k in ir.kernels}}
     if kind.name == "power":        # which terms of dh/dt the tree has (a sweep balances only where some has)

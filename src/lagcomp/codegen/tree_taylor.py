@@ -1,0 +1,81 @@
+"""The Taylor method's kernel of a kinematic tree (`lagcomp.Tree`): its articulated-body recursion in series arithmetic.
+
+A tree's ``rhs`` is a straight-line program (`lagcomp.codegen.tree_lower`): loads, the assignments of the
+articulated-body algorithm (sin and cos of the joint angles, the ball joints' rational functions of their modified
+Rodrigues parameters, products, sums, divisions by the articulated inertias' pivots), and the stores of
+f = (q̇, q̈), with q̈ explicit (no M to factor).  `lagcomp.codegen.taylor.decompose` splits such a program into
+elementary operations with Taylor recurrences as it splits a Lagrange module's (whose q̈ is an LDLᵀ solve), so the
+companion module of the kind "taylor" of a tree holds ``taylor_coefficients``, ``TAYLOR_WORK`` and
+``TAYLOR_PERIODIC`` as a System's does, and `lagcomp.integrate.drivers.taylor` runs it with the tree's events (the
+ball joints' shadow switches: a switch event's reset maps σ to its shadow, and the next step's series starts there).
+
+The program is built from the recursion itself, every step written out: the eager ``rhs`` of a large tree calls the
+steps its identical links share as helper functions (`lagcomp.codegen.outline`), which a series program cannot call
+(each step's series are rows of one work array).  Its size is the recursion's, O(n) operations per order for an
+n-link chain (about 106 per planar link), each a loop over the orders in one numba function.
+
+Refused, with ``TAYLOR_REFUSED`` saying why (``method="taylor"`` then raises `taylor-not-applicable`): closed loops
+(`lagcomp.Loop`: q̈ from an augmented solve with multipliers, as a System's constraints), contacts (their modes'
+programs are a System's, built from its closed-contacts kernel), a load without a recurrence (sign, Abs,
+Piecewise), and a program of more than `OPERATIONS_MAX` operations per order (numba's compile time).
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from lagcomp.codegen.emit import emit_companion
+from lagcomp.codegen.kinds import KernelKind
+from lagcomp.codegen.taylor import TaylorProgram, Unsupported, decompose, taylor_program
+from lagcomp.codegen.tree_lower import FORMULATION, motion
+from lagcomp.ir import Kernel, ModuleIR, ReturnZero
+from lagcomp.multibody.program import Program
+from lagcomp.multibody.tree import Tree
+
+
+#: The most series operations per order of a tree's ``taylor_coefficients``: numba's compile time of the one function
+#: grows about as its size squared (measured, CPU, numba alone: planar chains of 3 links, 192 operations, 15 s; 5 links,
+#: 404, 62 s; 10 links, 934, 399 s and 4.5 GB).  About 106 operations per planar link: chains of up to 4 links (3D
+#: chains on ball joints: 2).
+OPERATIONS_MAX = 500
+
+
+def tree_taylor_source(tree: Tree, local, kind: KernelKind, eager_module: str) -> tuple[str, dict]:
+    """The source of the companion module of the kind "taylor" of `tree` (its locals `local`, a
+    `lagcomp.codegen.tree_companion.TreeLocals`), and its metadata: ``operations`` and ``taylor_program``
+    (`lagcomp.codegen.taylor.taylor_program`, None when refused), as a System's companion gives them."""
+    taylor = tree_taylor_decomposition(tree, local)
+    program = taylor_program(taylor)
+    ir = ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=tree.coordinate_names,
+                  parameter_names=tree.parameter_names, kernels=(), formulation=FORMULATION)
+    operations = {"taylor_coefficients": program["operations"]} if program else {}
+    return emit_companion(ir, kind, eager_module, taylor=taylor), {"operations": operations, "taylor_program": program}
+
+
+def tree_taylor_decomposition(tree: Tree, local) -> TaylorProgram | Unsupported:
+    """The Taylor program of `tree`'s motion, or the `Unsupported` saying why it has none (module docstring)."""
+    if tree.closures:
+        return Unsupported(f"closed loops ({', '.join(tree.constraint_names)}: their multipliers are not covered)")
+    if tree.contacts:
+        return Unsupported("contacts of a kinematic tree (their modes' series programs are not built for trees)")
+    try:
+        program = decompose(motion_kernel(local), local.n)
+    except Unsupported as err:
+        return err
+    if program.operation_count > OPERATIONS_MAX:
+        return Unsupported(f"a Taylor program too large to compile ({program.operation_count} series operations per "
+                           f"order, above lagcomp.codegen.tree_taylor.OPERATIONS_MAX = {OPERATIONS_MAX}: numba would "
+                           "take minutes and gigabytes on one function that size)")
+    return program
+
+
+def motion_kernel(local) -> Kernel:
+    """``rhs`` of the tree whose locals are `local`, un-outlined: the articulated-body algorithm's live assignments
+    as temporaries, f = (q̇, q̈) stored into out (2n,)."""
+    prog = Program()
+    f = motion(prog, list(local.nodes), list(local.qd), list(local.gravity))
+    temps = tuple((symbol.name, expr) for symbol, expr in prog.live(f))
+    stores = tuple((f"out[{i}]", sp.sympify(e)) for i, e in enumerate(f))
+    return Kernel(name="rhs", doc="f = (q̇, q̈) of the articulated-body algorithm, every step written out.",
+                  args=("t", "y", "p", "out"), loads=tuple(local.loads), temps=temps, stores=stores,
+                  solve=ReturnZero())
