@@ -40,12 +40,16 @@ import numpy as np
 from numba import njit
 from numba.core.dispatcher import Dispatcher
 
+from lagcomp.codegen.kinds import TREE_KIND_OF
+from lagcomp.errors import ModelError
 from lagcomp.integrate.drivers.kernel_types import (
     ENERGY,
     ENERGY_FUNCTION,
+    ENERGY_LANES,
     MOMENTA,
     AddressedKernel,
 )
+from lagcomp.kernel_support.trig import _TRIG_POLY_MAX
 
 RECORD_MODES = ("trajectory", "summary")
 
@@ -100,6 +104,36 @@ def pointwise_kernels(kernels):
     return pointwise
 
 
+#: {model kernels: `lane_kernels`}, once per kernels.
+_LANES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def lane_kernels(kernels):
+    """(energy_lanes, energy_function_lanes) of a model's `kernels` as function values for `fold_summary_lanes`
+    (`lagcomp.codegen.energy_lanes`), once per kernels: built on first use, as an on-demand kind.  None for a model
+    without them: a kinematic tree (its energy is `lagcomp.multibody.energy`'s), a Kane model or a stand-in (no
+    companion modules), a model with inputs or more than ``UNROLL_MAX`` coordinates (the kind is empty), or one
+    whose companion cannot be built here (loaded without its equations, no sympy): their summaries call the
+    pointwise kernels, with the same values."""
+    try:
+        return _LANES[kernels]
+    except (KeyError, TypeError):
+        pass
+    companion = getattr(kernels, "companion", None)
+    lanes = None
+    if companion is not None and companion.kind_of is not TREE_KIND_OF:
+        try:
+            found = (kernels.energy_lanes, kernels.energy_function_lanes)
+        except (AttributeError, ModelError):     # (an empty kind, or no equations to build it from)
+            found = ()
+        if found and all(isinstance(kernel, Dispatcher) for kernel in found):
+            energy, energy_function = (AddressedKernel(kernel, ENERGY_LANES) for kernel in found)
+            lanes = (energy, None if found[1] is found[0] else energy_function)
+    with contextlib.suppress(TypeError):   # (not weakly referenceable: looked up again at each run)
+        _LANES[kernels] = lanes
+    return lanes
+
+
 def _relative(deviation: float, reference: float) -> float:
     return deviation / abs(reference) if reference != 0 else deviation
 
@@ -139,6 +173,7 @@ class Recorder:
             self.deviation = np.zeros(2 + len(self.cyclic))
             self.start: np.ndarray | None = None    # (E, h, cyclic momenta) of the first row
             self._kernels = False                   # `_pointwise`, looked up at the first chunk
+            self._lanes = False                     # `lane_kernels`, looked up at the first chunk
 
     def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
         """Take the rows ``ts`` (m,), ``ys`` (m, 2n): copied when kept (the caller reuses its buffers), read at once
@@ -175,8 +210,14 @@ class Recorder:
         if first:
             self.start = np.empty(2 + self.cyclic.size)
         ends = np.empty((2, 2 + n))         # (E, h, momenta) of the first and the last row
-        fold_summary(energy, energy_function or energy, momenta, energy_function is not None, self.cyclic.size > 0,
-                     first, ts, ys, self.p, self.cyclic, self.start, self.extremes, self.deviation, ends)
+        rest = (energy, energy_function or energy, momenta, energy_function is not None, self.cyclic.size > 0, first,
+                ts, ys, self.p, self.cyclic, self.start, self.extremes, self.deviation, ends)
+        if self._lanes is False:
+            self._lanes = lane_kernels(self.model.kernels)
+        if self._lanes is None:
+            fold_summary(*rest)
+        else:
+            fold_summary_lanes(self._lanes[0], self._lanes[1] or self._lanes[0], *rest)
         if first:
             self.first = (ts[:1].copy(), ys[:1].copy(), ends[0, :1], ends[0, 1:2], ends[0, 2:][None, :])
         self.last = (ts[-1:].copy(), ys[-1:].copy(), ends[1, :1], ends[1, 1:2], ends[1, 2:][None, :])
@@ -252,7 +293,7 @@ def fold_rows(ys, energy, energy_function, momenta, cyclic, start, extremes, dev
 @njit(cache=True, error_model="numpy", nogil=True)
 def fold_summary(energy, energy_function, momenta, own_h, cyclic_rows, first, ts, ys, p, cyclic, start, extremes,
                  deviation, ends):
-    """`fold_rows` with the values computed row by row by the pointwise kernels (function values), in one pass.
+    """`fold_rows` with the values computed row by row by the pointwise kernels (function values).
 
     ``energy`` at every row, ``energy_function`` too if ``own_h`` (else h is the energy: a model whose T is
     quadratic in q̇ and time-free, whose module binds one kernel to both names), ``momenta`` at the rows of a model
@@ -261,8 +302,50 @@ def fold_summary(energy, energy_function, momenta, own_h, cyclic_rows, first, ts
     gets (E, h, momenta) of the first row (when ``first``) and of the last.  The values are those of the
     ``observables`` kernel, which calls the same kernels on each row; a summary of the double pendulum evaluates
     three cosines per row instead of seven, and calls no kernel of its own (numba compiles ``observables`` for a
-    trajectory's energies, on first read: 0.4 s for a double pendulum).
+    trajectory's energies, on first read: 0.4 s for a double pendulum).  A model with lane kernels folds by
+    `fold_summary_lanes`, to the same values.
     """
+    m = ys.shape[0]
+    e, h = np.empty(m), np.empty(m if own_h else 0)
+    for r in range(m):
+        e[r] = energy(ts[r], ys[r], p)
+        if own_h:
+            h[r] = energy_function(ts[r], ys[r], p)
+    _fold_energies(e, h if own_h else e, momenta, cyclic_rows, first, ts, ys, p, cyclic, start, extremes, deviation,
+                   ends)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def fold_summary_lanes(energy_lanes, energy_function_lanes, energy, energy_function, momenta, own_h, cyclic_rows,
+                       first, ts, ys, p, cyclic, start, extremes, deviation, ends):
+    """`fold_summary` with E and h of all the rows from the lane kernels ``energy_lanes`` and
+    ``energy_function_lanes`` (`lagcomp.codegen.energy_lanes`), on the rows copied as columns (the layout their loop
+    vectorizes on): bitwise the scalar kernels' values, the rows whose sin and cos arguments leave the polynomials'
+    range evaluated again by the scalar ``energy`` and ``energy_function``, as `fold_summary` would.
+    """
+    columns = np.ascontiguousarray(ys.T)
+    e = _by_lanes(energy_lanes, energy, ts, ys, columns, p)
+    h = _by_lanes(energy_function_lanes, energy_function, ts, ys, columns, p) if own_h else e
+    _fold_energies(e, h, momenta, cyclic_rows, first, ts, ys, p, cyclic, start, extremes, deviation, ends)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _by_lanes(lanes, scalar, ts, ys, columns, p):
+    """The values (m,) of a scalar kernel at rows ys (m, N) by its lane kernel on ``columns`` = ysᵀ, rows whose
+    trigonometric arguments are not all within `_TRIG_POLY_MAX` (NaN included) by the scalar kernel itself."""
+    m = ys.shape[0]
+    values, reach = np.empty(m), np.empty(m)
+    lanes(ts, columns, p, values, reach)
+    for r in range(m):
+        if not reach[r] <= _TRIG_POLY_MAX:
+            values[r] = scalar(ts[r], ys[r], p)
+    return values
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _fold_energies(e, h, momenta, cyclic_rows, first, ts, ys, p, cyclic, start, extremes, deviation, ends):
+    """Fold rows ys (m, N) with their E and h, e and h (m,), into the running reductions, in one pass (see
+    `fold_summary` for the other arguments)."""
     m, size = ys.shape
     n = ends.shape[1] - 2
     work = np.empty(n)
@@ -275,24 +358,22 @@ def fold_summary(energy, energy_function, momenta, own_h, cyclic_rows, first, ts
                 extremes[0, i] = v
             if not np.isnan(high) and (v > high or np.isnan(v)):
                 extremes[1, i] = v
-        e = energy(ts[r], y, p)
-        h = energy_function(ts[r], y, p) if own_h else e
         end = r == m - 1
         starts = first and r == 0
         if cyclic_rows or end or starts:
             momenta(ts[r], y, p, work)
         if starts:
-            start[0], start[1] = e, h
+            start[0], start[1] = e[r], h[r]
             for k in range(cyclic.shape[0]):
                 start[2 + k] = work[cyclic[k]]
-            _ends_row(ends, 0, e, h, work)
-        _raise_to(deviation, 0, abs(e - start[0]))
-        _raise_to(deviation, 1, abs(h - start[1]))
+            _ends_row(ends, 0, e[r], h[r], work)
+        _raise_to(deviation, 0, abs(e[r] - start[0]))
+        _raise_to(deviation, 1, abs(h[r] - start[1]))
         if cyclic_rows:
             for k in range(cyclic.shape[0]):
                 _raise_to(deviation, 2 + k, abs(work[cyclic[k]] - start[2 + k]))
         if end:
-            _ends_row(ends, 1, e, h, work)
+            _ends_row(ends, 1, e[r], h[r], work)
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
