@@ -54,9 +54,9 @@ def _lanes_kernel(scalar: Kernel, name: str, eom) -> Kernel:
     assert target == "return", scalar.stores
     return replace(
         scalar, name=name, args=ARGS, lanes=True,
-        doc=f"{scalar.doc.splitlines()[0]} For every row l: T (B,) times, Y (2n, B) rows as columns, p the run's\n"
-            f"parameters; out[l] = `{scalar.name}` of row l, reach[l] = the sum of |x| over the arguments x of its\n"
-            "sin and cos (0.0 without any): where it is not <= _TRIG_POLY_MAX, evaluate the row with "
+        doc=f"{scalar.doc.splitlines()[0]}\nFor every row l: T (B,) times, Y (2n, B) rows as columns, p the run's "
+            f"parameters; out[l] = `{scalar.name}`\nof row l, reach[l] = the sum of |x| over the arguments x of its "
+            "sin and cos (0.0 without any):\nwhere it is not <= _TRIG_POLY_MAX, evaluate the row with "
             f"`{scalar.name}`.",
         loads=(("t", "T[_l]"),) * uses_t + tuple((local, columns.get(local, source)) for local, source in scalar.loads),
         stores=(("out[_l]", value), ("reach[_l]", sp.Add(*(sp.Abs(x) for x in arguments)))),
