@@ -17,7 +17,7 @@ from hypothesis.extra.numpy import arrays
 
 import lagcomp as lc
 from lagcomp.integrate import recording
-from lagcomp.integrate.recording import _by_lanes, lane_kernels
+from lagcomp.integrate.recording import _by_lanes, _extreme, _largest_deviation, fold_rows, lane_kernels
 from lagcomp.kernel_support.trig import _TRIG_POLY_MAX
 from lagcomp.model.system import t
 
@@ -71,6 +71,39 @@ def test_reach_bounds_every_trigonometric_argument(compiled):
     model.kernels.energy_lanes(ts, np.ascontiguousarray(ys.T), p, values, reach)
     assert reach[0] == 0.3 + 0.2 + 0.5 and reach[1] == 922352.0 + 1.0 + 922351.0 and np.isnan(reach[2])
     assert values[1] != model.kernels.energy(0.0, ys[1], p)
+
+
+#: Column entries rich in ties (small integers), signed zeros, infinities and NaNs of either sign.
+FOLDED = st.one_of(st.integers(-3, 3).map(float), st.sampled_from([0.0, -0.0, np.inf, -np.inf, np.nan, -np.nan]),
+                   st.floats(-1e3, 1e3))
+#: Columns whose smallest value is a zero of either sign, met in any order.
+ZEROS = st.sampled_from([0.0, -0.0, 1.0, 2.0, np.inf])
+
+
+@settings(max_examples=300, deadline=None)
+@given(data=st.data())
+def test_the_column_reductions_leave_fold_rows_bits(data):
+    """`_extreme` and `_largest_deviation` (a column at a time, four running bounds) leave bitwise what `fold_rows`
+    (row by row) leaves, chunk after chunk: the first NaN met, the first of +0 and −0, the same largest deviation."""
+    rows, size = data.draw(st.integers(1, 20)), data.draw(st.integers(1, 3))
+    ys = data.draw(arrays(np.float64, (rows, size), elements=data.draw(st.sampled_from([FOLDED, ZEROS]))))
+    energies = data.draw(arrays(np.float64, (2, rows), elements=FOLDED))
+    start = data.draw(arrays(np.float64, 2, elements=FOLDED))
+    cuts = sorted(data.draw(st.lists(st.integers(1, rows - 1), max_size=3, unique=True))) if rows > 1 else []
+    theirs = (np.array([np.full(size, np.inf), np.full(size, -np.inf)]), np.zeros(2))
+    ours = (theirs[0].copy(), theirs[1].copy())
+    for a, b in zip([0, *cuts], [*cuts, rows], strict=True):
+        part = ys[a:b]
+        fold_rows(part, energies[0, a:b], energies[1, a:b], np.empty((b - a, 1)), np.zeros(0, dtype=np.int64), start,
+                  *theirs)
+        columns = np.ascontiguousarray(part.T)
+        for i in range(size):
+            ours[0][0, i] = _extreme(columns[i], ours[0][0, i], True)
+            ours[0][1, i] = _extreme(columns[i], ours[0][1, i], False)
+        for k in range(2):
+            ours[1][k] = _largest_deviation(np.ascontiguousarray(energies[k, a:b]), start[k], ours[1][k])
+    assert _bits(ours[0]).tolist() == _bits(theirs[0]).tolist()
+    assert _bits(ours[1]).tolist() == _bits(theirs[1]).tolist()
 
 
 def _with_and_without_lanes(model, monkeypatch, *args, **options):
