@@ -209,3 +209,24 @@ def test_a_summary_builds_the_lanes_kind_once_and_a_second_process_reuses_it(tmp
     second = run_probe(SCRIPT, "load", tmp_path)[0]
     assert second["modules"] == first["modules"]
     assert second["compiled"] == [] and not second["sympy"] and not second["lowering"]
+
+
+def test_a_run_of_one_row_folds_its_held_row(compiled, monkeypatch):
+    """The first row, held to fold with the next chunk (`Recorder._hold`), is folded by `result` when no chunk
+    follows: the same values as the pointwise fold, and meanwhile the row's time and count are what a caller reads."""
+    model = compiled("double_pendulum")
+    p, t0, y0 = model.parameter_vector(), np.array([0.25]), np.array([[0.1, 0.2, -0.4, 0.3]])
+    results = []
+    for lanes in (True, False):
+        if not lanes:
+            monkeypatch.setattr(recording, "lane_kernels", lambda kernels: None)
+        recorder = recording.Recorder(model, p, "summary")
+        recorder.add(t0, y0)
+        assert recorder.rows == 1 and recorder.last[0][0] == 0.25
+        results.append(recorder.result())
+    (ts, ys, observed), (ts_, ys_, observed_) = results
+    assert ts.tobytes() == ts_.tobytes() and ys.tobytes() == ys_.tobytes()
+    values, values_ = observed.values(), observed_.values()
+    assert all(a.tobytes() == b.tobytes() for a, b in zip(values[:3], values_[:3], strict=True))
+    assert values[0][0] == model.kernels.energy(0.25, y0[0], p) and values[3].rows == values_[3].rows == 1
+    assert (values[3].energy_error, values[3].q_min.tobytes()) == (values_[3].energy_error, values_[3].q_min.tobytes())
