@@ -107,7 +107,9 @@ def test_the_column_reductions_leave_fold_rows_bits(data):
 
 
 def _with_and_without_lanes(model, monkeypatch, *args, **options):
-    """The same summary run with the lane kernels and with the pointwise fold (the path before them)."""
+    """The same summary run with the lane kernels (built first, as ``lagcomp precompile`` does) and with the
+    pointwise fold (the path before them)."""
+    model.kernels.energy_lanes
     assert lane_kernels(model.kernels) is not None
     lanes = model.simulate(*args, record="summary", **options)
     monkeypatch.setattr(recording, "lane_kernels", lambda kernels: None)
@@ -185,7 +187,9 @@ def test_models_without_lanes_fold_pointwise(cache_dir, tree_pair):
 #: A fresh process: compile (or load) the double pendulum, one summary run; which kernels numba compiled, the
 #: modules in the cache, whether sympy and the lowering were imported.
 SCRIPT = """
-    how, root = sys.argv[1:3]
+    how, root, after = sys.argv[1:4]
+    from lagcomp.integrate import recording
+    recording.LANES_AFTER_ROWS = int(after)
     if how == "load":
         model = lc.load("double_pendulum", cache_dir=root)
     else:
@@ -199,14 +203,17 @@ SCRIPT = """
 
 
 def test_a_summary_builds_the_lanes_kind_once_and_a_second_process_reuses_it(tmp_path):
-    """The first summary run builds the energy_lanes companion (one module) and numba compiles its kernel, nothing
-    else of a companion's; a second process, from `lagcomp.load`, compiles nothing and imports no sympy."""
-    first = run_probe(SCRIPT, "compile", tmp_path)[0]
+    """A summary run builds no companion before its model's summaries have folded `LANES_AFTER_ROWS` rows; then
+    it builds the energy_lanes companion (one module) and numba compiles its kernel, nothing else of a companion's;
+    a second process, from `lagcomp.load`, uses it (whatever its count) and compiles nothing, imports no sympy."""
+    early = run_probe(SCRIPT, "compile", tmp_path, 10**9)[0]
+    assert not [m for m in early["modules"] if "_on_demand_" in m], early["modules"]
+    first = run_probe(SCRIPT, "compile", tmp_path, 0)[0]
     companions = [m for m in first["modules"] if "_on_demand_" in m]
     assert len(companions) == 1 and "_on_demand_energy_lanes_" in companions[0], first["modules"]
     from_companions = {function for module, function in first["compiled"] if "_on_demand_" in module}
     assert from_companions == {"energy_lanes"}, first["compiled"]
-    second = run_probe(SCRIPT, "load", tmp_path)[0]
+    second = run_probe(SCRIPT, "load", tmp_path, 10**9)[0]
     assert second["modules"] == first["modules"]
     assert second["compiled"] == [] and not second["sympy"] and not second["lowering"]
 
@@ -230,3 +237,21 @@ def test_a_run_of_one_row_folds_its_held_row(compiled, monkeypatch):
     assert all(a.tobytes() == b.tobytes() for a, b in zip(values[:3], values_[:3], strict=True))
     assert values[0][0] == model.kernels.energy(0.25, y0[0], p) and values[3].rows == values_[3].rows == 1
     assert (values[3].energy_error, values[3].q_min.tobytes()) == (values_[3].energy_error, values_[3].q_min.tobytes())
+
+
+def test_the_lanes_are_built_once_summaries_have_folded_enough_rows(tmp_path, monkeypatch):
+    """Below `LANES_AFTER_ROWS` rows folded pointwise, summaries build nothing; the chunk after that builds the
+    lane kernels, mid-run, and the run's values are the pointwise fold's."""
+    from lagcomp import examples
+    from lagcomp.integrate import simulate as simulate_module
+
+    model = lc.compile(examples.get("simple_pendulum"), cache_dir=tmp_path)
+    monkeypatch.setattr(recording, "LANES_AFTER_ROWS", 200)
+    monkeypatch.setattr(simulate_module, "FIRST_CHUNK", 16)
+    monkeypatch.setattr(simulate_module, "MAX_CHUNK", 64)
+    short = model.simulate((0, 0.5), rtol=1e-10, atol=1e-12, record="summary")
+    assert short.summary.rows < 200 and not model.kernels.companion.built("energy_lanes")
+    long = model.simulate((0, 60), rtol=1e-10, atol=1e-12, record="summary")
+    assert long.summary.rows > 400 and model.kernels.companion.built("energy_lanes")
+    monkeypatch.setattr(recording, "lane_kernels", lambda kernels: None)
+    _assert_same_summary(long, model.simulate((0, 60), rtol=1e-10, atol=1e-12, record="summary"))

@@ -3,8 +3,9 @@
 The drivers hand back saved rows chunk by chunk.  A `Recorder` either keeps
 the rows (``record="trajectory"``) or folds each chunk into a `RunSummary` and
 drops it (``record="summary"``), so that a 10⁹-step run needs memory for one
-chunk only.  The fold is one compiled call per chunk (`fold_summary`)
-calling the pointwise kernels for what the summary needs and no more: the
+chunk only.  The fold is one compiled call per chunk (`fold_summary_lanes`
+with the model's lane kernels where it has them, else `fold_summary`)
+calling the kernels for what the summary needs and no more: the
 energy, the energy function where it is not the energy itself, the momenta
 where a coordinate is cyclic, and at the run's first row and each chunk's
 last, whose values the summary's `Observed` holds.  A run keeping its rows
@@ -17,17 +18,26 @@ own, ``observables`` calls the pointwise kernels, and maxima and minima do not
 depend on the chunking (`tests/test_solution.py`, `tests/test_recording.py`).
 
 What it costs (DOP853 on the double pendulum over [0, 100] at tol 1e-10, 3 906
-rows, 1.1 µs per step; `bench/bench_tiers.py`, table 3): a summary costs a
-trajectory's time plus T + V at every row, 1.05-1.07 times a trajectory's run in
-one process: the energy kernel itself (three cosines) takes 35 ns per row in a
-compiled loop, `fold_summary` with it 45-48 ns, against the trajectory's copies
-of its rows, 2 ns per row.  So on a small model a summary is cheaper than a
-trajectory whose summary is read (the observables of every row: seven cosines
-per row), not than a bare trajectory; what it saves is memory.  Folding a chunk in one compiled call with the first and last
-rows' values from the pointwise kernels (rather than calling the ``observables``
-kernel for them) did not change that ratio, but takes the compile of
-``observables`` off the path of a new model's first summary run (1.5-2.1 s
-before, 0.86-0.98 s after, double pendulum, loaded machine).
+rows, 1.1 µs per step; `bench/bench_tiers.py`, table 3): a trajectory copies
+its rows, 2 ns a row; a summary evaluates T + V at every row.  Row by row
+through a function value (`fold_summary`) that cost 45-48 ns a row and made a
+summary 1.05-1.07 times a trajectory's run.  Now a model with lane kernels
+(`lagcomp.codegen.energy_lanes`, built on first use) folds a chunk by
+`fold_summary_lanes`: its rows copied as columns (1.7 ns a row), E and h of
+all of them by the lane kernels (6.6 ns a row with the range check), the
+reductions a column at a time (4.8 ns a row, `_extreme`), 14.5 ns a row in all,
+plus some 18 µs per compiled call (its function values unboxed: the initial
+state is held to fold with the first chunk, `Recorder._hold`).  The lane
+kernels are built once a model's summaries have folded `LANES_AFTER_ROWS`
+rows without them (or ahead, by ``lagcomp precompile NAME --all``).  A summary
+then costs what a bare trajectory costs, within the machine's noise (1.00×
+it in one process, 31 rounds); what it saves is memory.  The values are
+bitwise those of the pointwise fold (tests/test_summary_lanes.py).  Folding a
+chunk in one compiled call with the first and last rows' values from the
+pointwise kernels (rather than calling the ``observables`` kernel for them)
+takes the compile of ``observables`` off the path of a new model's first
+summary run (1.5-2.1 s before, 0.86-0.98 s after, double pendulum, loaded
+machine).
 """
 
 from __future__ import annotations
@@ -106,12 +116,20 @@ def pointwise_kernels(kernels):
 
 #: {model kernels: `lane_kernels`}, once per kernels.
 _LANES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: {model kernels: rows its summaries folded by the pointwise kernels in this process}.
+_FOLDED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: Rows a model's summaries fold by the pointwise kernels before they build its lane kernels, when those are not
+#: in the cache yet.  Building them (lowering, emitting, numba's compile) costs some 0.5 s of CPU, what the
+#: pointwise fold spends over the lanes' in ~15 million rows (35 ns a row, double pendulum): built at once, they
+#: would double a new model's first summary run (0.5 -> 1.1 s); built when the rows folded without them have cost
+#: about as much, they cost at most twice what they save (ski rental).  ``lagcomp precompile NAME --all`` builds them.
+LANES_AFTER_ROWS = 10_000_000
 
 
 def lane_kernels(kernels):
     """(energy_lanes, energy_function_lanes) of a model's `kernels` as function values for `fold_summary_lanes`
-    (`lagcomp.codegen.energy_lanes`), once per kernels: built on first use, as an on-demand kind.  None for a model
-    without them: a kinematic tree (its energy is `lagcomp.multibody.energy`'s), a Kane model or a stand-in (no
+    (`lagcomp.codegen.energy_lanes`), once per kernels: an on-demand kind, built once the model's summaries have
+    folded `LANES_AFTER_ROWS` rows without it (None until then).  None for a model without them: a kinematic tree (its energy is `lagcomp.multibody.energy`'s), a Kane model or a stand-in (no
     companion modules), a model with inputs or more than ``UNROLL_MAX`` coordinates (the kind is empty), or one
     whose companion cannot be built here (loaded without its equations, no sympy): their summaries call the
     pointwise kernels, with the same values."""
@@ -122,6 +140,8 @@ def lane_kernels(kernels):
     companion = getattr(kernels, "companion", None)
     lanes = None
     if companion is not None and companion.kind_of is not TREE_KIND_OF:
+        if not companion.built("energy_lanes") and _FOLDED.get(kernels, 0) < LANES_AFTER_ROWS:
+            return None         # (not yet: asked again at the next chunk)
         try:
             found = (kernels.energy_lanes, kernels.energy_function_lanes)
         except (AttributeError, ModelError):     # (an empty kind, or no equations to build it from)
@@ -174,7 +194,7 @@ class Recorder:
             self.deviation = np.zeros(2 + len(self.cyclic))
             self.start: np.ndarray | None = None    # (E, h, cyclic momenta) of the first row
             self._kernels = False                   # `_pointwise`, looked up at the first chunk
-            self._lanes = False                     # `lane_kernels`, looked up at the first chunk
+            self._lanes = False                     # `lane_kernels`, looked up at each chunk until found
 
     def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
         """Take the rows ``ts`` (m,), ``ys`` (m, 2n): copied when kept (the caller reuses its buffers), read at once
@@ -229,10 +249,12 @@ class Recorder:
         ends = np.empty((2, 2 + n))         # (E, h, momenta) of the first and the last row
         rest = (energy, energy_function or energy, momenta, energy_function is not None, self.cyclic.size > 0, first,
                 ts, ys, self.p, self.cyclic, self.start, self.extremes, self.deviation, ends)
-        if self._lanes is False:
+        if not self._lanes:
             self._lanes = lane_kernels(self.model.kernels)
         if self._lanes is None:
             fold_summary(*rest)
+            with contextlib.suppress(TypeError):    # (rows toward `LANES_AFTER_ROWS`)
+                _FOLDED[self.model.kernels] = _FOLDED.get(self.model.kernels, 0) + ts.shape[0]
         else:
             fold_summary_lanes(self._lanes[0], self._lanes[1] or self._lanes[0], *rest)
         if first:
