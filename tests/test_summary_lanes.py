@@ -17,7 +17,13 @@ from hypothesis.extra.numpy import arrays
 
 import lagcomp as lc
 from lagcomp.integrate import recording
-from lagcomp.integrate.recording import _by_lanes, _extreme, _largest_deviation, fold_rows, lane_kernels
+from lagcomp.integrate.recording import (
+    _by_lanes,
+    _extreme,
+    _largest_deviation,
+    fold_rows,
+    lane_kernels,
+)
 from lagcomp.kernel_support.trig import _TRIG_POLY_MAX
 from lagcomp.model.system import t
 
@@ -109,7 +115,7 @@ def test_the_column_reductions_leave_fold_rows_bits(data):
 def _with_and_without_lanes(model, monkeypatch, *args, **options):
     """The same summary run with the lane kernels (built first, as ``lagcomp precompile`` does) and with the
     pointwise fold (the path before them)."""
-    model.kernels.energy_lanes
+    model.kernels.companion.entry("energy_lanes")
     assert lane_kernels(model.kernels) is not None
     lanes = model.simulate(*args, record="summary", **options)
     monkeypatch.setattr(recording, "lane_kernels", lambda kernels: None)

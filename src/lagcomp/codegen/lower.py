@@ -614,7 +614,8 @@ def _builders(eom: EOM, mapping, loads) -> list:
                                         _rhs_parameter_jacobian_kernel(eom, mapping, loads))
                   + ((_rhs_with_full_jacobian_kernel(eom, mapping, loads),) if n <= LARGEST_SYSTEM else ())),
                  ("directional", lambda: _directional_kernels(eom, mapping, loads) if n <= LARGEST_SYSTEM else ())]
-    energy = _once(lambda: kernel("energy", "Total mechanical energy T + V.", ("t", "y", "p"), [("return", eom.energy)]))
+    energy = _once(lambda: kernel("energy", "Total mechanical energy T + V.", ("t", "y", "p"),
+                                  [("return", eom.energy)]))
     energy_function = _once(lambda: _energy_function_kernel(eom, mapping, loads))
     # a summary's energies over many rows (no inputs: each row would read the tables through a call, which keeps
     # the loop scalar; above UNROLL_MAX a second copy of a long energy costs its compile on a first summary)

@@ -129,10 +129,10 @@ LANES_AFTER_ROWS = 10_000_000
 def lane_kernels(kernels):
     """(energy_lanes, energy_function_lanes) of a model's `kernels` as function values for `fold_summary_lanes`
     (`lagcomp.codegen.energy_lanes`), once per kernels: an on-demand kind, built once the model's summaries have
-    folded `LANES_AFTER_ROWS` rows without it (None until then).  None for a model without them: a kinematic tree (its energy is `lagcomp.multibody.energy`'s), a Kane model or a stand-in (no
-    companion modules), a model with inputs or more than ``UNROLL_MAX`` coordinates (the kind is empty), or one
-    whose companion cannot be built here (loaded without its equations, no sympy): their summaries call the
-    pointwise kernels, with the same values."""
+    folded `LANES_AFTER_ROWS` rows without it (None until then).  None for a model without them: a kinematic tree
+    (its energy is `lagcomp.multibody.energy`'s), a Kane model or a stand-in (no companion modules), a model with
+    inputs or more than ``UNROLL_MAX`` coordinates (the kind is empty), or one whose companion cannot be built here
+    (loaded without its equations, no sympy): their summaries call the pointwise kernels, with the same values."""
     try:
         return _LANES[kernels]
     except (KeyError, TypeError):
