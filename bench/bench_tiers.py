@@ -183,6 +183,8 @@ def dop853_table(model, rounds: int) -> Table:
 
 def recording_table(model, rounds: int) -> Table:
     library, _, tableau = _drivers(model, "dop853")
+    model.kernels.companion.entry("energy_lanes")     # a summary's lane kernels, built ahead as `lagcomp precompile --all` builds them
+    # (a run builds them itself once the model's summaries have folded `recording.LANES_AFTER_ROWS` rows)
     span, tol = (0.0, T_END), {"rtol": TOL, "atol": TOL}
 
     def simulate(specialize, read_summary=False, **options):

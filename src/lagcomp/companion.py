@@ -94,6 +94,16 @@ class Companion:
                 self._entries[kind] = entry
             return self._entries[kind]
 
+    def built(self, kind: str) -> bool:
+        """Whether the companion of `kind` is in the cache (loaded in this process or on disk), building nothing."""
+        with self._lock:
+            if kind not in self._entries:
+                entry = Cache(self.root).lookup(companion_key(self.key, kind))
+                if entry is None:
+                    return False
+                self._entries[kind] = entry
+            return True
+
     def entries(self) -> dict[str, Entry]:
         """The entry of every on-demand kind, by kind, built first where needed (``lagcomp precompile --all``)."""
         return {kind.name: self.entry(kind.name) for kind in ON_DEMAND}

@@ -452,11 +452,12 @@ def _symmetric_product(solve: SymmetricProduct) -> list[str]:
 
 
 def _lanes_kernel_source(kernel: Kernel) -> list[str]:
-    """The body of a `Kernel.lanes` kernel: the scalar body, once per lane, in a loop over lanes."""
+    """The body of a `Kernel.lanes` kernel: the scalar body, once per lane, in a loop over lanes (then ``rhs_lanes``'s
+    solve; a kernel without one, `lagcomp.codegen.energy_lanes`, has stores only)."""
     inner = [f"{local} = {source}" for local, source in kernel.loads]
     inner += [f"{name} = {to_code(expr, lanes=True)}" for name, expr in kernel.temps]
     inner += [f"{target} = {to_code(expr, lanes=True)}" for target, expr in kernel.stores]
-    inner += _unrolled_ldlt(kernel.solve, lanes=True)
+    inner += _unrolled_ldlt(kernel.solve, lanes=True) if kernel.solve is not None else []
     return _docstring(kernel.doc).splitlines() + ["for _l in range(Y.shape[1]):"] + [INDENT + x for x in inner]
 
 

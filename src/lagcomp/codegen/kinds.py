@@ -57,6 +57,8 @@ ON_DEMAND = (
     KernelKind("power", ("power",), "the energy balance (Solution.energy_balance)"),
     KernelKind("input_jacobian", ("rhs_input_jacobian", "RHS_INPUT_JACOBIAN_REFUSED"),
                "state-space models (lagcomp.analysis.linearize(..., inputs=...), Model.rhs_input_jacobian)"),
+    KernelKind("energy_lanes", ("energy_lanes", "energy_function_lanes"),
+               "a run's summary (simulate(..., record='summary'))"),
 )
 
 #: The on-demand kinds only a kinematic tree (`lagcomp.Tree`) has: kernels a System's eager module holds, which no

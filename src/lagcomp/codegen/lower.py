@@ -61,6 +61,7 @@ from lagcomp.codegen.directional import (
     tangent_kernels,
     tangents_kernels,
 )
+from lagcomp.codegen.energy_lanes import energy_lanes_kernels
 from lagcomp.codegen.geometry import geometry_kernel
 from lagcomp.codegen.input_jacobian import input_jacobian_kernel
 from lagcomp.codegen.jacobian_blocks import (
@@ -612,15 +613,19 @@ def _builders(eom: EOM, mapping, loads) -> list:
                                         _rhs_parameter_jacobian_kernel(eom, mapping, loads))
                   + ((_rhs_with_full_jacobian_kernel(eom, mapping, loads),) if n <= LARGEST_SYSTEM else ())),
                  ("directional", lambda: _directional_kernels(eom, mapping, loads) if n <= LARGEST_SYSTEM else ())]
+    energy = _once(lambda: kernel("energy", "Total mechanical energy T + V.", ("t", "y", "p"),
+                                  [("return", eom.energy)]))
+    energy_function = _once(lambda: _energy_function_kernel(eom, mapping, loads))
+    # a summary's energies over many rows (no inputs: each row would read the tables through a call, which keeps
+    # the loop scalar; above UNROLL_MAX a second copy of a long energy costs its compile on a first summary)
+    summary_lanes = n <= UNROLL_MAX and not eom.system.inputs
     return first + [
         ("eager", lambda: (kernel("mass_matrix", "Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`.",
                                   ("t", "y", "p", "out"),
                                   [(f"out[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(n)]),
                            kernel("forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out`.",
                                   ("t", "y", "p", "out"), [(f"out[{i}]", eom.F[i]) for i in range(n)]),
-                           kernel("energy", "Total mechanical energy T + V.", ("t", "y", "p"),
-                                  [("return", eom.energy)]),
-                           _energy_function_kernel(eom, mapping, loads), _momenta_kernel(eom, mapping, loads))),
+                           energy(), energy_function(), _momenta_kernel(eom, mapping, loads))),
         ("canonical", lambda: (kernel(
             "momentum_rate",
             "ṗ = ∂L/∂q + Q − ∂D/∂q̇ at y = (q, q̇), shape (n,), into `out`: Hamilton's −∂H/∂q plus forces.",
@@ -634,6 +639,7 @@ def _builders(eom: EOM, mapping, loads) -> list:
         ("power", lambda: (power_kernel(eom, mapping, loads),)),
         ("input_jacobian", lambda: () if eom.k or mode_slots(eom) or not eom.system.inputs
          else (input_jacobian_kernel(eom, mapping, loads),)),
+        ("energy_lanes", lambda: energy_lanes_kernels(energy(), energy_function(), eom) if summary_lanes else ()),
     ]
 
 

@@ -3,8 +3,9 @@
 The drivers hand back saved rows chunk by chunk.  A `Recorder` either keeps
 the rows (``record="trajectory"``) or folds each chunk into a `RunSummary` and
 drops it (``record="summary"``), so that a 10⁹-step run needs memory for one
-chunk only.  The fold is one compiled call per chunk (`fold_summary`)
-calling the pointwise kernels for what the summary needs and no more: the
+chunk only.  The fold is one compiled call per chunk (`fold_summary_lanes`
+with the model's lane kernels where it has them, else `fold_summary`)
+calling the kernels for what the summary needs and no more: the
 energy, the energy function where it is not the energy itself, the momenta
 where a coordinate is cyclic, and at the run's first row and each chunk's
 last, whose values the summary's `Observed` holds.  A run keeping its rows
@@ -17,17 +18,26 @@ own, ``observables`` calls the pointwise kernels, and maxima and minima do not
 depend on the chunking (`tests/test_solution.py`, `tests/test_recording.py`).
 
 What it costs (DOP853 on the double pendulum over [0, 100] at tol 1e-10, 3 906
-rows, 1.1 µs per step; `bench/bench_tiers.py`, table 3): a summary costs a
-trajectory's time plus T + V at every row, 1.05-1.07 times a trajectory's run in
-one process: the energy kernel itself (three cosines) takes 35 ns per row in a
-compiled loop, `fold_summary` with it 45-48 ns, against the trajectory's copies
-of its rows, 2 ns per row.  So on a small model a summary is cheaper than a
-trajectory whose summary is read (the observables of every row: seven cosines
-per row), not than a bare trajectory; what it saves is memory.  Folding a chunk in one compiled call with the first and last
-rows' values from the pointwise kernels (rather than calling the ``observables``
-kernel for them) did not change that ratio, but takes the compile of
-``observables`` off the path of a new model's first summary run (1.5-2.1 s
-before, 0.86-0.98 s after, double pendulum, loaded machine).
+rows, 1.1 µs per step; `bench/bench_tiers.py`, table 3): a trajectory copies
+its rows, 2 ns a row; a summary evaluates T + V at every row.  Row by row
+through a function value (`fold_summary`) that cost 45-48 ns a row and made a
+summary 1.05-1.07 times a trajectory's run.  Now a model with lane kernels
+(`lagcomp.codegen.energy_lanes`, built on first use) folds a chunk by
+`fold_summary_lanes`: its rows copied as columns (1.7 ns a row), E and h of
+all of them by the lane kernels (6.6 ns a row with the range check), the
+reductions a column at a time (4.8 ns a row, `_extreme`), 14.5 ns a row in all,
+plus some 18 µs per compiled call (its function values unboxed: the initial
+state is held to fold with the first chunk, `Recorder._hold`).  The lane
+kernels are built once a model's summaries have folded `LANES_AFTER_ROWS`
+rows without them (or ahead, by ``lagcomp precompile NAME --all``).  A summary
+then costs what a bare trajectory costs, within the machine's noise (1.00×
+it in one process, 31 rounds); what it saves is memory.  The values are
+bitwise those of the pointwise fold (tests/test_summary_lanes.py).  Folding a
+chunk in one compiled call with the first and last rows' values from the
+pointwise kernels (rather than calling the ``observables`` kernel for them)
+takes the compile of ``observables`` off the path of a new model's first
+summary run (1.5-2.1 s before, 0.86-0.98 s after, double pendulum, loaded
+machine).
 """
 
 from __future__ import annotations
@@ -40,12 +50,16 @@ import numpy as np
 from numba import njit
 from numba.core.dispatcher import Dispatcher
 
+from lagcomp.codegen.kinds import TREE_KIND_OF
+from lagcomp.errors import ModelError
 from lagcomp.integrate.drivers.kernel_types import (
     ENERGY,
     ENERGY_FUNCTION,
+    ENERGY_LANES,
     MOMENTA,
     AddressedKernel,
 )
+from lagcomp.kernel_support.trig import _TRIG_POLY_MAX
 
 RECORD_MODES = ("trajectory", "summary")
 
@@ -100,6 +114,46 @@ def pointwise_kernels(kernels):
     return pointwise
 
 
+#: {model kernels: `lane_kernels`}, once per kernels.
+_LANES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: {model kernels: rows its summaries folded by the pointwise kernels in this process}.
+_FOLDED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: Rows a model's summaries fold by the pointwise kernels before they build its lane kernels, when those are not
+#: in the cache yet.  Building them (lowering, emitting, numba's compile) costs some 0.5 s of CPU, what the
+#: pointwise fold spends over the lanes' in ~15 million rows (35 ns a row, double pendulum): built at once, they
+#: would double a new model's first summary run (0.5 -> 1.1 s); built when the rows folded without them have cost
+#: about as much, they cost at most twice what they save (ski rental).  ``lagcomp precompile NAME --all`` builds them.
+LANES_AFTER_ROWS = 10_000_000
+
+
+def lane_kernels(kernels):
+    """(energy_lanes, energy_function_lanes) of a model's `kernels` as function values for `fold_summary_lanes`
+    (`lagcomp.codegen.energy_lanes`), once per kernels: an on-demand kind, built once the model's summaries have
+    folded `LANES_AFTER_ROWS` rows without it (None until then).  None for a model without them: a kinematic tree
+    (its energy is `lagcomp.multibody.energy`'s), a Kane model or a stand-in (no companion modules), a model with
+    inputs or more than ``UNROLL_MAX`` coordinates (the kind is empty), or one whose companion cannot be built here
+    (loaded without its equations, no sympy): their summaries call the pointwise kernels, with the same values."""
+    try:
+        return _LANES[kernels]
+    except (KeyError, TypeError):
+        pass
+    companion = getattr(kernels, "companion", None)
+    lanes = None
+    if companion is not None and companion.kind_of is not TREE_KIND_OF:
+        if not companion.built("energy_lanes") and _FOLDED.get(kernels, 0) < LANES_AFTER_ROWS:
+            return None         # (not yet: asked again at the next chunk)
+        try:
+            found = (kernels.energy_lanes, kernels.energy_function_lanes)
+        except (AttributeError, ModelError):     # (an empty kind, or no equations to build it from)
+            found = ()
+        if found and all(isinstance(kernel, Dispatcher) for kernel in found):
+            energy, energy_function = (AddressedKernel(kernel, ENERGY_LANES) for kernel in found)
+            lanes = (energy, None if found[1] is found[0] else energy_function)
+    with contextlib.suppress(TypeError):   # (not weakly referenceable: looked up again at each run)
+        _LANES[kernels] = lanes
+    return lanes
+
+
 def _relative(deviation: float, reference: float) -> float:
     return deviation / abs(reference) if reference != 0 else deviation
 
@@ -132,6 +186,7 @@ class Recorder:
         self.first: tuple | None = None  # rows (t, y) and, in summary mode, (energy, energy_function, momenta)
         self.last: tuple | None = None
         self.rows = 0
+        self.held: tuple | None = None   # summary mode: the first row, not folded yet (`_hold`)
         if not self.keep:  # the running reductions (a run keeping its rows folds them in a new Recorder)
             self.cyclic = np.array([model.coordinates.index(c) for c in model.cyclic], dtype=np.int64)
             size = model.state_size
@@ -139,6 +194,7 @@ class Recorder:
             self.deviation = np.zeros(2 + len(self.cyclic))
             self.start: np.ndarray | None = None    # (E, h, cyclic momenta) of the first row
             self._kernels = False                   # `_pointwise`, looked up at the first chunk
+            self._lanes = False                     # `lane_kernels`, looked up at each chunk until found
 
     def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
         """Take the rows ``ts`` (m,), ``ys`` (m, 2n): copied when kept (the caller reuses its buffers), read at once
@@ -156,8 +212,24 @@ class Recorder:
                 ts, ys = ts[1:], ys[1:]
             if ts.shape[0]:
                 self._fold(ts, ys)
+        elif self.first is None and self.held is None and ts.shape[0] == 1:
+            self._hold(ts, ys)
         else:
-            self._reduce(ts, ys)
+            self._reduce(*self._after_held(ts, ys))
+
+    def _hold(self, ts: np.ndarray, ys: np.ndarray) -> None:
+        """Keep the run's first row when it comes alone (`lagcomp.integrate.simulate` adds the initial state on its
+        own) to fold with the next chunk: one compiled call fewer, whose unboxing of five function values costs
+        some 18 µs, more than the fold of a 3,906-row chunk's energies by lanes (`fold_summary_lanes`)."""
+        self.held = (ts.copy(), ys.copy())
+        self.last, self.rows = self.held, 1   # (what a caller reads of them meanwhile: the last time, the rows)
+
+    def _after_held(self, ts: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The rows ts, ys after the held first row, if any, which is no longer held (nor counted)."""
+        if self.held is None:
+            return ts, ys
+        (t0, y0), self.held, self.rows = self.held, None, 0
+        return np.concatenate([t0, ts]), np.concatenate([y0, ys])
 
     def _pointwise(self):
         """`pointwise_kernels` of the model; None: call the observables kernel on every row."""
@@ -175,8 +247,16 @@ class Recorder:
         if first:
             self.start = np.empty(2 + self.cyclic.size)
         ends = np.empty((2, 2 + n))         # (E, h, momenta) of the first and the last row
-        fold_summary(energy, energy_function or energy, momenta, energy_function is not None, self.cyclic.size > 0,
-                     first, ts, ys, self.p, self.cyclic, self.start, self.extremes, self.deviation, ends)
+        rest = (energy, energy_function or energy, momenta, energy_function is not None, self.cyclic.size > 0, first,
+                ts, ys, self.p, self.cyclic, self.start, self.extremes, self.deviation, ends)
+        if not self._lanes:
+            self._lanes = lane_kernels(self.model.kernels)
+        if self._lanes is None:
+            fold_summary(*rest)
+            with contextlib.suppress(TypeError):    # (rows toward `LANES_AFTER_ROWS`)
+                _FOLDED[self.model.kernels] = _FOLDED.get(self.model.kernels, 0) + ts.shape[0]
+        else:
+            fold_summary_lanes(self._lanes[0], self._lanes[1] or self._lanes[0], *rest)
         if first:
             self.first = (ts[:1].copy(), ys[:1].copy(), ends[0, :1], ends[0, 1:2], ends[0, 2:][None, :])
         self.last = (ts[-1:].copy(), ys[-1:].copy(), ends[1, :1], ends[1, 1:2], ends[1, 2:][None, :])
@@ -205,6 +285,8 @@ class Recorder:
             ts, ys = (np.concatenate(columns) for columns in zip(*self.parts))
             model, p, progress = self.model, self.p, self.progress
             return ts, ys, Observed(lambda: _observed_along(model, p, ts, ys, progress))
+        if self.held is not None:   # (a run of one row)
+            self._reduce(*self._after_held(self.held[0][:0], self.held[1][:0]))
         rows = self.first if self.rows == 1 else tuple(np.concatenate(pair) for pair in zip(self.first, self.last))
         return rows[0], rows[1], Observed(values=(*rows[2:], self.summary()))
 
@@ -252,7 +334,7 @@ def fold_rows(ys, energy, energy_function, momenta, cyclic, start, extremes, dev
 @njit(cache=True, error_model="numpy", nogil=True)
 def fold_summary(energy, energy_function, momenta, own_h, cyclic_rows, first, ts, ys, p, cyclic, start, extremes,
                  deviation, ends):
-    """`fold_rows` with the values computed row by row by the pointwise kernels (function values), in one pass.
+    """`fold_rows` with the values computed row by row by the pointwise kernels (function values).
 
     ``energy`` at every row, ``energy_function`` too if ``own_h`` (else h is the energy: a model whose T is
     quadratic in q̇ and time-free, whose module binds one kernel to both names), ``momenta`` at the rows of a model
@@ -261,38 +343,142 @@ def fold_summary(energy, energy_function, momenta, own_h, cyclic_rows, first, ts
     gets (E, h, momenta) of the first row (when ``first``) and of the last.  The values are those of the
     ``observables`` kernel, which calls the same kernels on each row; a summary of the double pendulum evaluates
     three cosines per row instead of seven, and calls no kernel of its own (numba compiles ``observables`` for a
-    trajectory's energies, on first read: 0.4 s for a double pendulum).
+    trajectory's energies, on first read: 0.4 s for a double pendulum).  A model with lane kernels folds by
+    `fold_summary_lanes`, to the same values.
     """
+    m = ys.shape[0]
+    e, h = np.empty(m), np.empty(m if own_h else 0)
+    for r in range(m):
+        e[r] = energy(ts[r], ys[r], p)
+        if own_h:
+            h[r] = energy_function(ts[r], ys[r], p)
+    _fold_energies(e, h if own_h else e, momenta, cyclic_rows, first, ts, ys, np.ascontiguousarray(ys.T), p, cyclic,
+                   start, extremes, deviation, ends)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def fold_summary_lanes(energy_lanes, energy_function_lanes, energy, energy_function, momenta, own_h, cyclic_rows,
+                       first, ts, ys, p, cyclic, start, extremes, deviation, ends):
+    """`fold_summary` with E and h of all the rows from the lane kernels ``energy_lanes`` and
+    ``energy_function_lanes`` (`lagcomp.codegen.energy_lanes`), on the rows copied as columns (the layout their loop
+    vectorizes on): bitwise the scalar kernels' values, the rows whose sin and cos arguments leave the polynomials'
+    range evaluated again by the scalar ``energy`` and ``energy_function``, as `fold_summary` would.
+    """
+    columns = np.ascontiguousarray(ys.T)
+    e = _by_lanes(energy_lanes, energy, ts, ys, columns, p)
+    h = _by_lanes(energy_function_lanes, energy_function, ts, ys, columns, p) if own_h else e
+    _fold_energies(e, h, momenta, cyclic_rows, first, ts, ys, columns, p, cyclic, start, extremes, deviation, ends)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _by_lanes(lanes, scalar, ts, ys, columns, p):
+    """The values (m,) of a scalar kernel at rows ys (m, N) by its lane kernel on ``columns`` = ysᵀ, rows whose
+    trigonometric arguments are not all within `_TRIG_POLY_MAX` (NaN included) by the scalar kernel itself."""
+    m = ys.shape[0]
+    values, reach = np.empty(m), np.empty(m)
+    lanes(ts, columns, p, values, reach)
+    for r in range(m):
+        if not reach[r] <= _TRIG_POLY_MAX:
+            values[r] = scalar(ts[r], ys[r], p)
+    return values
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _fold_energies(e, h, momenta, cyclic_rows, first, ts, ys, columns, p, cyclic, start, extremes, deviation, ends):
+    """Fold rows ys (m, N), also given as ``columns`` = ysᵀ, with their E and h, e and h (m,), into the running
+    reductions (see `fold_summary` for the other arguments): to the values `fold_rows` leaves, each reduction over
+    a column at a time (`_extreme`, `_largest_deviation`: 2-3 ns a row on the double pendulum, against 12 ns for
+    `fold_rows`'s pass over the rows, which carries each bound through memory from row to row)."""
     m, size = ys.shape
     n = ends.shape[1] - 2
     work = np.empty(n)
-    for r in range(m):
-        y = ys[r]
-        for i in range(size):
-            v = y[i]
-            low, high = extremes[0, i], extremes[1, i]
-            if not np.isnan(low) and (v < low or np.isnan(v)):      # (a NaN, once there, stays)
-                extremes[0, i] = v
-            if not np.isnan(high) and (v > high or np.isnan(v)):
-                extremes[1, i] = v
-        e = energy(ts[r], y, p)
-        h = energy_function(ts[r], y, p) if own_h else e
-        end = r == m - 1
-        starts = first and r == 0
-        if cyclic_rows or end or starts:
-            momenta(ts[r], y, p, work)
-        if starts:
-            start[0], start[1] = e, h
-            for k in range(cyclic.shape[0]):
-                start[2 + k] = work[cyclic[k]]
-            _ends_row(ends, 0, e, h, work)
-        _raise_to(deviation, 0, abs(e - start[0]))
-        _raise_to(deviation, 1, abs(h - start[1]))
-        if cyclic_rows:
+    if first:
+        momenta(ts[0], ys[0], p, work)
+        start[0], start[1] = e[0], h[0]
+        for k in range(cyclic.shape[0]):
+            start[2 + k] = work[cyclic[k]]
+        _ends_row(ends, 0, e[0], h[0], work)
+    for i in range(size):
+        extremes[0, i] = _extreme(columns[i], extremes[0, i], True)
+        extremes[1, i] = _extreme(columns[i], extremes[1, i], False)
+    deviation[0] = _largest_deviation(e, start[0], deviation[0])
+    deviation[1] = _largest_deviation(h, start[1], deviation[1])
+    if cyclic_rows:
+        for r in range(m):
+            momenta(ts[r], ys[r], p, work)
             for k in range(cyclic.shape[0]):
                 _raise_to(deviation, 2 + k, abs(work[cyclic[k]] - start[2 + k]))
-        if end:
-            _ends_row(ends, 1, e, h, work)
+    momenta(ts[m - 1], ys[m - 1], p, work)
+    _ends_row(ends, 1, e[m - 1], h[m - 1], work)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _extreme(values, bound, lowest):
+    """What `fold_rows` leaves in a running bound after ``values`` (m,), in order: NaN once there (the bound's own,
+    else the first NaN met), else the smallest (`lowest`) or the largest of the bound and the values, the first met
+    of two that compare equal (+0 and −0, the only equal values whose bits differ).  Four running bounds over
+    alternate values, whose chains of comparisons overlap; a zero result is found again in order."""
+    if np.isnan(bound):
+        return bound
+    m = values.shape[0]
+    nan = False
+    for r in range(m):
+        nan |= np.isnan(values[r])
+    if nan:
+        for r in range(m):
+            if np.isnan(values[r]):
+                return values[r]
+    a0 = a1 = a2 = a3 = bound
+    r = 0
+    while r + 4 <= m:
+        a0 = _better(values[r], a0, lowest)
+        a1 = _better(values[r + 1], a1, lowest)
+        a2 = _better(values[r + 2], a2, lowest)
+        a3 = _better(values[r + 3], a3, lowest)
+        r += 4
+    for k in range(r, m):
+        a0 = _better(values[k], a0, lowest)
+    result = _better(a3, _better(a2, _better(a1, a0, lowest), lowest), lowest)
+    if result == 0.0:           # (which zero: the first met)
+        result = bound
+        for k in range(m):
+            result = _better(values[k], result, lowest)
+    return result
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def _better(value, bound, lowest):
+    """value if it is below (`lowest`) or above the bound, else the bound (a NaN value never is)."""
+    return value if (value < bound if lowest else value > bound) else bound
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _largest_deviation(values, reference, largest):
+    """What `_raise_to` leaves in ``largest`` after |values[r] − reference| for each r in order: NaN once there
+    (``largest``'s own, else the first NaN met), else the largest (all are ≥ +0: no tie of two zeros)."""
+    if np.isnan(largest):
+        return largest
+    m = values.shape[0]
+    a0 = a1 = a2 = a3 = largest
+    nan = False
+    r = 0
+    while r + 4 <= m:
+        d0, d1 = abs(values[r] - reference), abs(values[r + 1] - reference)
+        d2, d3 = abs(values[r + 2] - reference), abs(values[r + 3] - reference)
+        nan |= np.isnan(d0) | np.isnan(d1) | np.isnan(d2) | np.isnan(d3)
+        a0, a1 = _better(d0, a0, False), _better(d1, a1, False)
+        a2, a3 = _better(d2, a2, False), _better(d3, a3, False)
+        r += 4
+    for k in range(r, m):
+        d = abs(values[k] - reference)
+        nan |= np.isnan(d)
+        a0 = _better(d, a0, False)
+    if nan:
+        for k in range(m):
+            d = abs(values[k] - reference)
+            if np.isnan(d):
+                return d
+    return _better(a3, _better(a2, _better(a1, a0, False), False), False)
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")

@@ -60,6 +60,10 @@ ENERGY = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
 ENERGY_FUNCTION = types.FunctionType(types.float64(FLOAT, VECTOR, VECTOR))
 #: ``velocities(t, x, p, out) -> int`` (unconstrained models): ``out = q̇`` (n,) at x = (q, p) from M q̇ = p − b; 0, or k > 0.
 VELOCITIES = types.FunctionType(types.int64(FLOAT, VECTOR, VECTOR, VECTOR))
+#: ``energy_lanes(T, Y, p, out, reach)`` (and ``energy_function_lanes``): ``out[l]`` = ``energy`` of row l of a run,
+#: ``reach[l]`` the sum of |x| over its sin and cos arguments; T, out, reach (B,), Y (2n, B) the rows as columns, p
+#: the run's (`lagcomp.codegen.energy_lanes`: a summary's energies).
+ENERGY_LANES = types.FunctionType(types.none(VECTOR, MATRIX, VECTOR, VECTOR, VECTOR))
 #: ``momenta(t, y, p, out)``: ``out = ∂L/∂q̇`` (n,), the conjugate momenta at y = (q, q̇).
 MOMENTA = types.FunctionType(types.none(FLOAT, VECTOR, VECTOR, VECTOR))
 #: ``momentum_rate(t, y, p, out)``: ``out = ṗ = ∂L/∂q + Q − ∂D/∂q̇`` (n,) at y = (q, q̇).
