@@ -117,7 +117,7 @@ def program_kernel(name: str, doc: str, args, prog: Program, stores, loads, solv
 def mass_matrix_stores(prog: Program, nodes) -> list:
     """The stores of M(q) into the symmetric (n, n) `out`, bound in `prog`: the composite-rigid-body algorithm, mapped
     to the coordinates by `lagcomp.multibody.charts`."""
-    return _matrix_stores(mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes)), len(nodes))
+    return _matrix_stores(mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes), stepped=True), len(nodes))
 
 
 def _matrix_stores(entries: dict, n: int) -> list:
