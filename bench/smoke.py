@@ -38,6 +38,7 @@ SCRIPTS = {
     "bench_large": ["--n", "3", "--repeats", "1"],
     "bench_loop": ["--rounds", "1"],
     "bench_lyapunov": ["--repeats", "1"],
+    "bench_mass_matrix_compile": ["planar_4"],
     "bench_multibody": ["4"],
     "bench_radau": ["--rounds", "1"],
     "bench_rattle": ["--steps", "1000", "--repeats", "1"],

@@ -199,9 +199,15 @@ class FlatMatrix:
     """The frame of a kernel whose stores fill a (size, size) matrix (``dae_jacobian``): before its temporaries
     it allocates the work array ``_jac`` of size² zeros, the stores write the nonzero entries into it, row-major
     (`lagcomp.codegen.jacobian_blocks.jacobian_entry`: a 1-D array compiles faster than `out`), and after them ``_jac``
-    is copied into `out`, every entry, and the kernel returns 0."""
+    is copied into `out`, every entry, and the kernel returns 0.
+
+    With `symmetric`, the stores write the lower triangle only (i ≥ j) and a loop mirrors it into the upper one
+    before the copy (``mass_matrix`` of a tree: half the stores, each a fraction of a 2-D store's compile time);
+    without `status`, the kernel returns nothing (the signature of ``mass_matrix``)."""
 
     size: int
+    symmetric: bool = False
+    status: bool = True
 
 
 @dataclass(frozen=True)

@@ -142,6 +142,19 @@ class TreeReference:
         with mpmath.workdps(digits):
             return ([+solution[i] for i in range(n)], [+solution[n + c] for c in range(k)], (+T, +V))
 
+    def mass_matrix_and_forcing(self, t_value, y, p, digits: int) -> tuple[list, list]:
+        """M (n rows of n) and F of M q̈ = F at (t, y), to `digits` digits: the reference of the kernels
+        ``mass_matrix`` and ``forcing`` (p as `evaluate` takes it: the tree's parameters first)."""
+        n = self.n
+        with mpmath.workdps(GUARD * digits):
+            q = [mpmath.mpf(float(x)) for x in y[:n]]
+            v = [mpmath.mpf(float(x)) for x in y[n:2 * n]]
+            params = [mpmath.mpf(float(x)) for x in p[:len(self.tree.parameters)]]
+            numbers = self._numbers(mpmath.mpf(float(t_value)), q, v, params)
+            M, F, *_ = self._dynamics(numbers, q, v, mpmath.mpf(10) ** -(digits + 5))
+        with mpmath.workdps(digits):
+            return [[+x for x in row] for row in M], [+x for x in F]
+
     def _dynamics(self, numbers, q, v, h):
         """M, F, T, V and each loop direction's (Φ, Λ, γ) at (q, q̇ = v) (module docstring)."""
         tree, n = self.tree, self.n

@@ -520,7 +520,10 @@ def _kernel_source(kernel: Kernel) -> str:
     elif isinstance(solve, (JacobianSolve, AugmentedJacobianSolve, ContactModes)):
         body += after
     elif isinstance(solve, FlatMatrix):
-        body += [f"out[:] = _jac.reshape(({solve.size}, {solve.size}))", "return 0"]
+        if solve.symmetric:
+            body += [f"for _i in range({solve.size}):", f"{INDENT}for _j in range(_i):",
+                     f"{INDENT * 2}_jac[_j * {solve.size} + _i] = _jac[_i * {solve.size} + _j]"]
+        body += [f"out[:] = _jac.reshape(({solve.size}, {solve.size}))"] + (["return 0"] if solve.status else [])
     elif isinstance(solve, ReturnZero):
         body.append("return 0")
     elif solve is not None:

@@ -54,7 +54,7 @@ from lagcomp.codegen.tree_lower import (
 from lagcomp.codegen.tree_power import active_tree_power_terms, tree_power_kernels
 from lagcomp.codegen.tree_slip import slipping_nodes
 from lagcomp.codegen.tree_taylor import tree_taylor_source
-from lagcomp.ir import Delegate, Kernel, ModuleIR, ReturnZero
+from lagcomp.ir import Delegate, FlatMatrix, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
 from lagcomp.multibody.joints import t
 from lagcomp.multibody.kinematics import local_nodes
@@ -222,7 +222,8 @@ def _dynamics_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
     nodes, args = list(local.nodes), ("t", "y", "p", "out")
     prog = Program()
     mass = program_kernel("mass_matrix", "Mass matrix M(q), shape (n, n), into `out` (composite-rigid-body "
-                          "algorithm).", args, prog, mass_matrix_stores(prog, nodes), local.loads)
+                          "algorithm).", args, prog, mass_matrix_stores(prog, nodes), local.loads,
+                          FlatMatrix(len(nodes), symmetric=True, status=False))
     prog = Program()
     stores = [(f"out[{i}]", f) for i, f in enumerate(generalized_forcing(prog, nodes, list(local.gravity)))]
     forcing = program_kernel("forcing", "Forcing F(q, q̇, t) of M q̈ = F, shape (n,), into `out` (recursive "

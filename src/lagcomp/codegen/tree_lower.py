@@ -119,16 +119,11 @@ def program_kernel(name: str, doc: str, args, prog: Program, stores, loads, solv
 
 
 def mass_matrix_stores(prog: Program, nodes) -> list:
-    """The stores of M(q) into the symmetric (n, n) `out`, bound in `prog`: the composite-rigid-body algorithm, mapped
-    to the coordinates by `lagcomp.multibody.charts`."""
-    return _matrix_stores(mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes)), len(nodes))
-
-
-def _matrix_stores(entries: dict, n: int) -> list:
-    """Every entry of the symmetric (n, n) `out` from M's lower triangle `entries` ({(i, j): M_ij}, i ≥ j; absent
-    entries are zero)."""
-    stores = []
-    for i in range(n):
-        for j in range(n):
-            stores.append((f"out[{i}, {j}]", entries.get((max(i, j), min(i, j)), sp.S.Zero)))
-    return stores
+    """The stores of M(q)'s nonzero lower triangle into the flat work array ``_jac`` of a symmetric
+    `lagcomp.ir.FlatMatrix` (entry (i, j) at i n + j, i ≥ j; the emitted loop mirrors it), bound in `prog`: the
+    composite-rigid-body algorithm, mapped to the coordinates by `lagcomp.multibody.charts`, its n² / 2 steps and
+    block products emitted as calls (`lagcomp.codegen.outline`).  numba compiles a store into a 1-D array in
+    about a third of the time of one into the 2-D `out`, and half of them are left."""
+    n = len(nodes)
+    entries = mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes), stepped=True)
+    return [(f"_jac[{i * n + j}]", entries[i, j]) for i in range(n) for j in range(i + 1) if (i, j) in entries]

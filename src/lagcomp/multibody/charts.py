@@ -14,6 +14,8 @@ Every other node passes through unchanged, so a tree without spherical joints ge
 
 from __future__ import annotations
 
+import contextlib
+
 import sympy as sp
 
 from lagcomp.multibody.kinematics import mrp_matrices
@@ -42,24 +44,29 @@ def forces_in_coordinates(prog: Program, nodes, values) -> list:
     return out
 
 
-def mass_matrix_in_coordinates(prog: Program, nodes, entries: dict) -> dict:
+def mass_matrix_in_coordinates(prog: Program, nodes, entries: dict, stepped: bool = False) -> dict:
     """M_σ = Tᵀ M_ω T from the recursion's lower triangle `entries` ({(i, j): M_ij}, i ≥ j; absent entries are
-    zero), returned the same way."""
+    zero), returned the same way.  With `stepped`, each block's product by Jᵀ is a step of `prog` (`Program.step`:
+    the n² / 3 of them on a long chain are emitted as calls of a few shared helpers, `lagcomp.codegen.outline`), the
+    arithmetic unchanged."""
     joints = spherical_joints(nodes)
     if not joints:
         return entries
     n = len(nodes)
+    step = prog.step if stepped else (lambda key: contextlib.nullcontext())
     full = [[entries.get((max(i, j), min(i, j)), sp.S.Zero) for j in range(n)] for i in range(n)]
     for i, sigma in joints:   # the rows: each column's block through Jᵀ
+        J = mrp_matrices(prog, sigma)[0]
         for j in range(n):
             full_column = [full[i + k][j] for k in range(3)]
             if any(e != 0 for e in full_column):
-                for k, e in enumerate(prog.vector(mat_t_vec(mrp_matrices(prog, sigma)[0], full_column))):
-                    full[i + k][j] = e
+                with step(("chart rows", i, j)):
+                    full[i][j], full[i + 1][j], full[i + 2][j] = prog.vector(mat_t_vec(J, full_column))
     for j, sigma in joints:   # the columns: each row's block through Jᵀ again (M is symmetric: (Jᵀ M J)ᵀ)
+        J = mrp_matrices(prog, sigma)[0]
         for i in range(n):
             full_row = [full[i][j + k] for k in range(3)]
             if any(e != 0 for e in full_row):
-                for k, e in enumerate(prog.vector(mat_t_vec(mrp_matrices(prog, sigma)[0], full_row))):
-                    full[i][j + k] = e
+                with step(("chart columns", i, j)):
+                    full[i][j], full[i][j + 1], full[i][j + 2] = prog.vector(mat_t_vec(J, full_row))
     return {(i, j): full[i][j] for i in range(n) for j in range(i + 1) if full[i][j] != 0}
