@@ -70,16 +70,22 @@ def block_on_incline(tmp_path_factory):
     return lc.compile(system, cache_dir=tmp_path_factory.mktemp("cache"))
 
 
+def breakaway_slide(t, m, c, mu_s, mu_k):
+    """(t_s, t > t_s, x(t)) of a block of mass m at rest under a normal force m G, pushed by c t: it breaks away at
+    c t_s = μs m G and slides with m ẍ = c t − μk m G, x = (c (t³ − t_s³)/6 − c t_s² (t − t_s)/2 − μk m G (t − t_s)²/2) / m
+    after t_s."""
+    t_s = mu_s * m * G / c
+    tau = t - t_s
+    return t_s, tau > 0, (c * (t**3 - t_s**3) / 6 - c * t_s**2 * tau / 2 - mu_k * m * G * tau**2 / 2) / m
+
+
 def check_breakaway(sol, m, c, mu_s, mu_k):
     """A block of mass m resting on a floor (normal force m G), pushed along x by c t against friction (the element
     "ground", μs, μk): it sticks, the friction force −c t, until c t_s = μs m G, then slides with
     m ẍ = c t − μk m G from rest, x = (c (t³ − t_s³)/6 − c t_s² (t − t_s)/2 − μk m G (t − t_s)²/2) / m."""
-    t_s = mu_s * m * G / c
+    t_s, after, x = breakaway_slide(sol.t, m, c, mu_s, mu_k)
     assert [(s.friction, s.mode) for s in sol.friction_switches] == [("ground", 1)]
     assert abs(sol.friction_switches[0].t - t_s) < 1e-10
-    tau = sol.t - t_s
-    after = tau > 0
-    x = (c * (sol.t**3 - t_s**3) / 6 - c * t_s**2 * tau / 2 - mu_k * m * G * tau**2 / 2) / m
     np.testing.assert_allclose(sol.q[after, 0], x[after], rtol=1e-9, atol=1e-12)
     assert np.abs(sol.q[~after, 0]).max() < 1e-12 and np.abs(sol.q[:, 1]).max() < 1e-12
     np.testing.assert_allclose(sol.contact_forces[:, 0], m * G, rtol=1e-12)

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 import sympy as sp
 from multibody_models import cart_pole, lagrangian_system, planar_chain
+from test_contact_friction import breakaway_slide
 
 import lagcomp as lc
 from lagcomp.multibody import mrp
@@ -70,14 +71,11 @@ def test_a_block_pushed_harder_and_harder_breaks_away_at_the_static_limit(spring
     """Without the spring, pushed by c t from rest: it sticks (the friction force −c t) until c t_s = μs m g, then
     slides with m ẍ = c t − μk m g: x = (c (t³ − t_s³)/6 − c t_s² (t − t_s)/2 − μk m g (t − t_s)²/2) / m."""
     m, c, mu_s, mu_k = 1.5, 3.0, 0.3, 0.2
-    t_s = mu_s * m * G / c
     sol = spring_block.simulate((0.0, 3.0), [0.0], [0.0], params={"k": 0.0, "c": c}, rtol=1e-12, atol=1e-12,
                                 t_eval=np.linspace(0, 3.0, 301))
+    t_s, after, x = breakaway_slide(sol.t, m, c, mu_s, mu_k)
     assert [(s.friction, s.mode) for s in sol.friction_switches] == [("table", 1)]
     assert abs(sol.friction_switches[0].t - t_s) < 1e-9
-    tau = sol.t - t_s
-    after = tau > 0
-    x = (c * (sol.t**3 - t_s**3) / 6 - c * t_s**2 * tau / 2 - mu_k * m * G * tau**2 / 2) / m
     np.testing.assert_allclose(sol.q[after, 0], x[after], rtol=1e-9, atol=1e-12)
     assert np.abs(sol.q[~after, 0]).max() < 1e-12
     holding = sol.t < t_s
