@@ -29,9 +29,13 @@ HEAVIEST = (
                                          # first has compiled them, not on the other worker at the same time;
                                          # 25 less since session 30 (its Lagrangian references run as Python)
     "test_error_table.py",               # 74 (29 at -n 0 with the library drivers already compiled, session 30)
+    "test_multibody_taylor.py",          # 58 (-n 0, session 30, with the Taylor, dop853 and sweep drivers cold: 18
+                                         # of it; the top's Taylor kernel 11, the pairs' Taylor kernels 16)
     "test_taylor_sensitivities.py",      # 58 (-n 0 with dop853's and Taylor's drivers cold, session 30: 73, then
                                          # 66 with one variational module fewer)
     "test_multibody_names.py",           # 58 (-n 0, session 30; 79 before its plain-named ∂f/∂y ran as Python)
+    "test_multibody_loop_names.py",      # 54 (-n 0, session 30: the risky-named loop tree's numba 33, the drawn
+                                         # trees' builds 18; 88 before the plain-named probe ran as Python)
     "test_multibody_spherical.py",       # 54 (without Pinocchio 21; -n 0 70, with the dop853 driver's compile)
     "test_taylor_jacobian.py",           # 52 (its k = 9 case marked slow)
     "test_steady_linearization.py",      # 52 (-n 0, session 30: 50, of which 27 the Whipple bicycle's sympy)
@@ -41,8 +45,11 @@ HEAVIEST = (
     "test_urdf.py",                      # not measured yet (5-9 min of wall under load, session 29; 18 random
                                          # URDFs against Pinocchio)
     "test_multibody_loops.py",           # not measured yet
+    "test_multibody_gauss.py",           # 41 (-n 0, session 30, the gauss drivers cold: 17 of it)
     "test_directional.py",               # 41
     "test_acceptance.py",                # 38
+    "test_multibody_friction_expr.py",   # 37 (-n 0, session 30; the contact-and-expression tree's kernels 15)
+    "test_multibody_loop_ball.py",       # 31 (-n 0, session 30; 35 before its Lagrange module ran as Python)
     "test_driver_staleness.py",          # 28 at 4805bf0 (66: dopri5 compiled twice into an empty numba cache)
     "test_taylor_modes.py",              # 27 (e5082ac)
     "test_constrained_sensitivities.py",  # 25 (e5082ac)
@@ -57,6 +64,7 @@ HEAVIEST = (
     "test_parameter_jacobian.py",        # 18 (e5082ac)
     "test_plots.py",                     # 18 (e5082ac)
     "test_cli_impacts.py",               # 18 (e5082ac)
+    "test_urdf_joints.py",               # 18 (-n 0, session 30; 25 before the hand-built trees ran as Python)
     "test_driver_cache.py",              # 17 (e5082ac)
     "test_cache_faults.py",              # 16 (e5082ac)
 )

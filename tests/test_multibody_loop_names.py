@@ -82,8 +82,10 @@ def _outputs(model: lc.Model, names: tuple, kernels: dict | None = None) -> dict
 
 @pytest.fixture(scope="module")
 def plain(cache_dir) -> tuple[lc.Model, dict]:
+    """The plain-named probe and its outputs, the reference of both tests: its kernels run as plain Python (the
+    same emitted code; numba compiles the risky-named tree's, the subject, in the first test)."""
     model = lc.compile(probe_tree(*PLAIN), cache_dir=cache_dir)
-    return model, _outputs(model, PLAIN[2])
+    return model, _outputs(model, PLAIN[2], _python_kernels(model))
 
 
 @pytest.fixture(scope="module")
@@ -123,8 +125,8 @@ def test_a_loop_tree_named_with_its_own_emitted_names_compiles_and_agrees(plain,
                                                                   HealthCheck.too_slow])
 @given(data=st.data())
 def test_loop_names_drawn_from_the_emitted_ones(plain, loop_names, cache_dir, data):
-    """Hypothesis draws the names; the kernels (the eager module, the loops' companions) run as plain Python: the
-    outputs of the plain names."""
+    """Hypothesis draws the names; the kernels (the eager module, the loops' companions) run as plain Python, as the
+    plain names' do: the outputs of the plain names."""
     identifiers = [name for name in loop_names if not keyword.iskeyword(name)]
     links = data.draw(st.lists(st.sampled_from(identifiers), min_size=LINKS, max_size=LINKS, unique=True))
     coordinates = data.draw(st.lists(st.sampled_from(identifiers), min_size=COORDINATES, max_size=COORDINATES,
