@@ -152,10 +152,11 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
     inner loops, and the other way round.
 
     Both stop when the change of h·K reaches rounding level, component by component and so in any
-    units (`_rounding_ratio`): below `ROUNDING` (4e-16) of the larger of |x_c| and h max_i |K_ic| in
-    every component c, or, once it no longer decreases, below `NOISE` (1e-14) of the larger of those
-    and the noise floor h Σ_d |∂f_c/∂x_d| |x_d| (`_noise_floor`: the rounding of large terms that
-    cancel in f_c, a stiff spring's; the Jacobian is Newton's, or evaluated then for the fixed point).
+    units (`_rounding_ratio`): below `ROUNDING` (4e-16) of the largest of |x_c|, h max_i |K_ic| and
+    the noise floor h Σ_d |∂f_c/∂x_d| |x_d| in every component c (`_noise_floor`: the size of the
+    terms that cancel in f_c, a stiff spring's, whose rounding no iteration gets below), or, once it
+    no longer decreases, below `NOISE` (1e-14) of it.  Newton has the floor from its Jacobian; the
+    fixed point does without it until it first stalls, then evaluates the Jacobian once for the step.
     After ``max_iter`` sweeps, or when the iterates become non-finite or the iteration matrix
     singular, the run stops with NOT_CONVERGED (the step is too large for the iteration to converge).
     Explicit time dependence is evaluated at the stage times t + c_i h, which is the method applied to the autonomous system
@@ -226,6 +227,9 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
                 sweeps = 0  # M singular here (status > 0), or I − h A ⊗ J: not converged
         previous = np.inf
         noise_known = False
+        if newton is not None and status == 0:
+            _noise_floor(J, x, h, floor)
+            noise_known = True
         for sweep in range(sweeps):
             change[:] = 0.0
             size[:] = 0.0
@@ -270,7 +274,7 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
                         size[c] = max(size[c], abs(K[i, c]))
                         K[i, c] += delta[i * n2 + c]
                         size[c] = max(size[c], abs(K[i, c]))
-            ratio = _rounding_ratio(change, size, no_floor, x, h)
+            ratio = _rounding_ratio(change, size, floor if noise_known else no_floor, x, h)
             if not np.isfinite(ratio):
                 break  # the iteration diverged: not converged
             if ratio <= ROUNDING:
