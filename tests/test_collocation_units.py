@@ -32,16 +32,18 @@ FAILED_UNITS = [
 ]
 
 
-def run_in_units(model, method, solver, units):
-    """The stiff spring pendulum's short run in units (L, M, T), mapped back: (status, final state (q, q̇))."""
-    coordinates, dimensions, _, span, dt = EXAMPLES["stiff_spring_pendulum"]
+def run_in_units(model, method, solver, units, name="stiff_spring_pendulum", dt=None, span=None):
+    """``name``'s short run (its span and step, or ``span`` and ``dt`` in seconds) in units (L, M, T), mapped back:
+    (status, final state (q, q̇), end time in seconds)."""
+    coordinates, dimensions, _, default_span, default_dt = EXAMPLES[name]
+    span = span or default_span
     position = np.array([factor(units, d) for d in coordinates])
     time = units[2]
     params = {k: v * factor(units, dimensions[k]) for k, v in model.defaults.items()}
     q0, qd0 = np.asarray(model.q0, float), np.asarray(model.qd0, float)
     sol = model.simulate((0.0, span * time), q0 * position, qd0 * position / time, params=params, method=method,
-                         dt=dt * time, implicit_solver=solver, throw=False, progress=False)
-    return sol.status, np.concatenate([sol.q[-1] / position, sol.qd[-1] * time / position])
+                         dt=(dt or default_dt) * time, implicit_solver=solver, throw=False, progress=False)
+    return sol.status, np.concatenate([sol.q[-1] / position, sol.qd[-1] * time / position]), sol.t[-1] / time
 
 
 @pytest.mark.parametrize("units", FAILED_UNITS, ids=lambda u: "x".join(f"{np.log10(f):+.2f}" for f in u))
@@ -49,8 +51,23 @@ def run_in_units(model, method, solver, units):
 @pytest.mark.parametrize("method", ["gauss1", "gauss2", "gauss3"])
 def test_the_stage_iteration_converges_in_any_units(compiled, method, solver, units):
     model = compiled("stiff_spring_pendulum")
-    status, y = run_in_units(model, method, solver, (1.0, 1.0, 1.0))
+    status, y, _ = run_in_units(model, method, solver, (1.0, 1.0, 1.0))
     assert status == Status.DONE
-    scaled_status, scaled_y = run_in_units(model, method, solver, units)
+    scaled_status, scaled_y, _ = run_in_units(model, method, solver, units)
     assert scaled_status == Status.DONE
     np.testing.assert_allclose(scaled_y, y, rtol=0, atol=1e-10 * np.max(np.abs(y)))
+
+
+#: A step too large for the iteration, in seconds (in SI units the runs end at t = 0 with NOT_CONVERGED): the
+#: fixed point on the stiff spring (h ω ≈ 5 for ω = √(k/m) = 1000/s; it converged at dt = 1e-3), simplified Newton
+#: on the pendulum at dt = 20 s over 100 s (`tests/test_symplectic.py`).
+TOO_LARGE = [("stiff_spring_pendulum", "fixed_point", 5e-3, 0.05), ("simple_pendulum", "newton", 20.0, 100.0)]
+
+
+@pytest.mark.parametrize("units", [(1.0, 1.0, 1.0), *FAILED_UNITS],
+                         ids=lambda u: "x".join(f"{np.log10(f):+.2f}" for f in u))
+@pytest.mark.parametrize(("name", "solver", "dt", "span"), TOO_LARGE)
+@pytest.mark.parametrize("method", ["gauss1", "gauss2", "gauss3"])
+def test_a_step_too_large_still_fails_in_any_units(compiled, method, name, solver, dt, span, units):
+    status, _, t_end = run_in_units(compiled(name), method, solver, units, name=name, dt=dt, span=span)
+    assert status == Status.NOT_CONVERGED and t_end == 0.0
