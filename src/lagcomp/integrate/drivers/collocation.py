@@ -96,7 +96,7 @@ ROUNDING = 4e-16
 NOISE = 1e-14
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def _rounding_ratio(change, size, floor, x, h):
     """max over the components c of change[c] / max(|x[c]|, h size[c], floor[c]): the stage iteration's change of
     h·K_c against component c's own size (0 for a component that did not change; NaN kept).
@@ -182,7 +182,6 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
     change = np.empty(n2)
     size = np.empty(n2)
     floor = np.empty(n2)
-    no_floor = np.zeros(n2)
     extrapolate = False
     charts = False
     for e in range(actions.shape[0]):
@@ -226,13 +225,16 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
             if status != 0 or lu_factor(newton_matrix, pivots) != 0:
                 sweeps = 0  # M singular here (status > 0), or I − h A ⊗ J: not converged
         previous = np.inf
-        noise_known = False
-        if newton is not None and status == 0:
+        noise_known = newton is not None and status == 0
+        if noise_known:
             _noise_floor(J, x, h, floor)
-            noise_known = True
+        else:
+            for c in range(n2):
+                floor[c] = 0.0
         for sweep in range(sweeps):
-            change[:] = 0.0
-            size[:] = 0.0
+            for c in range(n2):
+                change[c] = 0.0
+                size[c] = 0.0
             for i in range(s):
                 for c in range(n2):
                     acc = x[c]
@@ -274,7 +276,7 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
                         size[c] = max(size[c], abs(K[i, c]))
                         K[i, c] += delta[i * n2 + c]
                         size[c] = max(size[c], abs(K[i, c]))
-            ratio = _rounding_ratio(change, size, floor if noise_known else no_floor, x, h)
+            ratio = _rounding_ratio(change, size, floor, x, h)
             if not np.isfinite(ratio):
                 break  # the iteration diverged: not converged
             if ratio <= ROUNDING:
