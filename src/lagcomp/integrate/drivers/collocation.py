@@ -156,7 +156,8 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
     the noise floor h Σ_d |∂f_c/∂x_d| |x_d| in every component c (`_noise_floor`: the size of the
     terms that cancel in f_c, a stiff spring's, whose rounding no iteration gets below), or, once it
     no longer decreases, below `NOISE` (1e-14) of it.  Newton has the floor from its Jacobian; the
-    fixed point does without it until it first stalls, then evaluates the Jacobian once for the step.
+    fixed point does without it until it stalls above `NOISE`, then evaluates the Jacobian once for
+    the step (most steps never need it).
     After ``max_iter`` sweeps, or when the iterates become non-finite or the iteration matrix
     singular, the run stops with NOT_CONVERGED (the step is too large for the iteration to converge).
     Explicit time dependence is evaluated at the stage times t + c_i h, which is the method applied to the autonomous system
@@ -283,12 +284,13 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
                 converged = True
                 break
             if ratio >= previous:  # no longer decreasing: at the noise of terms that cancel in f?
-                if not noise_known:
-                    if newton is None and canonical_jacobian(velocities, canonical_partials, t_a, x, p, J) != 0:
+                if ratio >= NOISE and not noise_known:  # the fixed point's floor, once in a step
+                    if canonical_jacobian(velocities, canonical_partials, t_a, x, p, J) != 0:
                         J[:] = 0.0  # M singular at x (the stages' velocities were solved): no floor
                     _noise_floor(J, x, h, floor)
                     noise_known = True
-                if _rounding_ratio(change, size, floor, x, h) < NOISE:
+                    ratio = _rounding_ratio(change, size, floor, x, h)
+                if ratio < NOISE:
                     converged = True
                     break
             previous = ratio
