@@ -5,7 +5,9 @@ change of units (a diagonal scaling of x = (q, p) and a unit of time) up to roun
 too.  It compared the change of h·K with max(1, max|x|, h max|K|): the 1 is a unit, and one maximum over q (in
 L) and p (in M L² T⁻¹) mixes units.  The stiff spring pendulum, whose ṗ carries large spring terms that cancel,
 then ended with NOT_CONVERGED in units where those terms' rounding stayed above the test's bounds, while the run
-in the original units was DONE.  The units below are the ones that failed (L, M, T factors; found by
+in the original units was DONE; and simplified Newton's iteration matrix I − h A ⊗ J, whose blocks are in the units
+of q, p and their rates, was called singular at t = 0 in units of 1000 m, 1000 kg, 1 ms (a pivot test relative to
+its largest entry).  The units below are the ones that failed (L, M, T factors; found by
 `tests/test_units_invariance.py`'s hypothesis draws and a grid of 10^{-3, -1.5, 0, 0.38, 1.5, 3}); each run
 must end as the one in the original units does and agree with it to rounding (the invariance test's bound).
 
