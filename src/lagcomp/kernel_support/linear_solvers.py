@@ -37,6 +37,8 @@ of the caller that first compiles it, and numba caches that version for every
 later caller (see `lagcomp.kernel_support.trig`).
 """
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -381,3 +383,40 @@ kkt_solve = called_by_symbol(_kkt_solve)
 kkt_solve_matrix = called_by_symbol(_kkt_solve_matrix)
 gram_solve = called_by_symbol(_gram_solve)
 lu_solve_matrix = called_by_symbol(_lu_solve_matrix)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _power_of_two_scale(largest):
+    """The power of two 2^−e that brings ``largest`` (≥ 0) into [1/2, 1), exactly; 1 for 0 or a non-finite value
+    (a zero row or column: the factorization then reports it)."""
+    return math.ldexp(1.0, -math.frexp(largest)[1]) if largest > 0.0 and np.isfinite(largest) else 1.0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def equilibrate(a, rows, columns):
+    """Scale the square ``a`` in place to R a C, rows first then columns, each scale the power of two that brings
+    the row's (then the column's) largest magnitude into [1/2, 1) (LAPACK's ``dgeequ``, rounded to powers of two:
+    exact, and the factors' bits independent of the units).
+
+    An iteration matrix has blocks in the units of its equations and its variables (positions, velocities,
+    accelerations, forces): `lu_factor`'s pivot test, relative to max|a|, would call it singular or not depending on
+    the units (radau on a millimetre four-bar linkage: ITERATION_MATRIX_SINGULAR at t = 0; Gauss-Legendre's
+    simplified Newton on a stiff spring pendulum in units of 1000 m, 1000 kg, 1 ms: NOT_CONVERGED at t = 0).  R a C does not depend on them
+    (a change of units is a diagonal D_r a D_c, which the scales absorb up to their rounding to powers of two).
+    A zero row or column keeps the scale 1 (the factorization then reports it).
+    """
+    n = a.shape[0]
+    for i in range(n):
+        largest = 0.0
+        for j in range(n):
+            largest = max(largest, abs(a[i, j]))
+        rows[i] = _power_of_two_scale(largest)
+        for j in range(n):
+            a[i, j] *= rows[i]
+    for j in range(n):
+        largest = 0.0
+        for i in range(n):
+            largest = max(largest, abs(a[i, j]))
+        columns[j] = _power_of_two_scale(largest)
+        for i in range(n):
+            a[i, j] *= columns[j]

@@ -57,7 +57,7 @@ from lagcomp.integrate.drivers.sweep_rows import (
     record_end,
 )
 from lagcomp.integrate.status import Status
-from lagcomp.kernel_support.linear_solvers import lu_factor, lu_substitute
+from lagcomp.kernel_support.linear_solvers import equilibrate, lu_factor, lu_substitute
 
 #: The model kernels `collocation_run` takes first (`Method.kernels` of the gauss methods names them).
 _KERNEL_TYPES = (VELOCITIES, MOMENTA, MOMENTUM_RATE, CANONICAL_PARTIALS, EVENTS, EVENT_RESET)
@@ -88,6 +88,41 @@ def _switch_charts(event_values, event_reset, t, y, p, actions, g, y_after):
     return switched
 
 
+#: The stage iteration has converged when every component's change of h·K is below this fraction of the
+#: component's own size (`_rounding_ratio`): about two ulps.
+ROUNDING = 4e-16
+#: ... or when that ratio, with the component's rounding noise in its scale (`_noise_floor`), no longer decreases
+#: and is below this bound (the iteration has reached the noise of the terms that cancel in f).
+NOISE = 1e-14
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def _rounding_ratio(change, size, floor, x, h):
+    """max over the components c of change[c] / max(|x[c]|, h size[c], floor[c]): the stage iteration's change of
+    h·K_c against component c's own size (0 for a component that did not change; NaN kept).
+
+    Each component is compared with a size in its own unit (a length, an angle, a momentum) and of its own time
+    scale (h K_c is x_c's increment), so the ratio is the same in any units: a change of units multiplies x_c,
+    h K_c and ``floor[c]`` by the same factor, and the iteration itself is unchanged up to rounding."""
+    ratio = 0.0
+    for c in range(x.shape[0]):
+        if change[c] != 0.0:  # np.maximum keeps a NaN, where max would drop it
+            ratio = np.maximum(ratio, change[c] / max(abs(x[c]), h * size[c], floor[c]))
+    return ratio
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _noise_floor(J, x, h, floor):
+    """floor[c] = h Σ_d |J[c, d]| |x[d]|, J = ∂f/∂x at x: the size of the terms of h f_c that scale with the state
+    (a stiff spring's k r in ṗ, which cancels against its k l0), whose rounding bounds how far h K_c can converge.
+    Like x_c and h K_c it is in x_c's unit (J[c, d] x[d] is in that of f_c)."""
+    for c in range(x.shape[0]):
+        acc = 0.0
+        for d in range(x.shape[0]):
+            acc += abs(J[c, d]) * abs(x[d])
+        floor[c] = h * acc
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset, y, clock,
                        counters, p, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton,
@@ -106,7 +141,9 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
       h ‖∂f/∂x‖ ‖A‖ < 1 (roughly);
     * simplified Newton (``newton`` True): with J = `canonical_jacobian` at the step's start
       (t, x), solve (I − h A ⊗ J) ΔK = F(K) − K, F_i(K) the right-hand side above, and
-      K ← K + ΔK; the (2ns)×(2ns) iteration matrix is factored once per step (``lu_factor``).  It
+      K ← K + ΔK; the (2ns)×(2ns) iteration matrix is factored once per step (``lu_factor``),
+      equilibrated by powers of two (``equilibrate``: its blocks are in the units of q, p and
+      their rates, and the pivot test must not depend on them).  It
       converges for steps far beyond the fixed point's reach (stiff or fast motions), at the price
       of one Jacobian and one factorization per step.
 
@@ -114,11 +151,16 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
     when the function is compiled, so the fixed-point specialisation has no Newton branch in its
     inner loops, and the other way round.
 
-    Both stop when the change of h·K reaches rounding level (below 4e-16 relative to the larger of
-    the state and h·K, or no longer decreasing once below 1e-14); after ``max_iter`` sweeps, or when
-    the iterates become non-finite or the iteration matrix singular, the run stops with
-    NOT_CONVERGED (the step is too large for the iteration to converge).  Explicit time dependence
-    is evaluated at the stage times t + c_i h, which is the method applied to the autonomous system
+    Both stop when the change of h·K reaches rounding level, component by component and so in any
+    units (`_rounding_ratio`): below `ROUNDING` (4e-16) of the largest of |x_c|, h max_i |K_ic| and
+    the noise floor h Σ_d |∂f_c/∂x_d| |x_d| in every component c (`_noise_floor`: the size of the
+    terms that cancel in f_c, a stiff spring's, whose rounding no iteration gets below), or, once it
+    no longer decreases, below `NOISE` (1e-14) of it.  Newton has the floor from its Jacobian; the
+    fixed point does without it until it stalls above `NOISE`, then evaluates the Jacobian once for
+    the step (most steps never need it).
+    After ``max_iter`` sweeps, or when the iterates become non-finite or the iteration matrix
+    singular, the run stops with NOT_CONVERGED (the step is too large for the iteration to converge).
+    Explicit time dependence is evaluated at the stage times t + c_i h, which is the method applied to the autonomous system
     extended by t' = 1 (HLW, sec. VI.4).  Step times, saving and chunking follow the RK4 driver.
     """
     n2 = y.shape[0]
@@ -136,6 +178,11 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
     newton_matrix = np.empty((s * n2, s * n2))
     pivots = np.empty(s * n2, dtype=np.int64)
     delta = np.empty(s * n2)
+    rows = np.empty(s * n2)
+    columns = np.empty(s * n2)
+    change = np.empty(n2)
+    size = np.empty(n2)
+    floor = np.empty(n2)
     extrapolate = False
     charts = False
     for e in range(actions.shape[0]):
@@ -157,9 +204,6 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
         last = k == n_steps - 1
         h = t_b - t_a
 
-        scale = 1.0
-        for c in range(n2):
-            scale = max(scale, abs(x[c]))
         for i in range(s):
             for c in range(n2):
                 guess = 0.0
@@ -178,12 +222,20 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
                         for b in range(n2):
                             unit = 1.0 if i == j and a == b else 0.0
                             newton_matrix[i * n2 + a, j * n2 + b] = unit - h * A[i, j] * J[a, b]
+            equilibrate(newton_matrix, rows, columns)  # R (I − h A ⊗ J) C: its pivot test unit-free
             if status != 0 or lu_factor(newton_matrix, pivots) != 0:
                 sweeps = 0  # M singular here (status > 0), or I − h A ⊗ J: not converged
         previous = np.inf
+        noise_known = newton is not None and status == 0
+        if noise_known:
+            _noise_floor(J, x, h, floor)
+        else:
+            for c in range(n2):
+                floor[c] = 0.0
         for sweep in range(sweeps):
-            change = 0.0
-            size = 0.0
+            for c in range(n2):
+                change[c] = 0.0
+                size[c] = 0.0
             for i in range(s):
                 for c in range(n2):
                     acc = x[c]
@@ -205,29 +257,43 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
                         delta[i * n2 + c] = qdot[c] - K[i, c]
                         delta[i * n2 + n + c] = pdot[c] - K[i, n + c]
                     else:  # np.maximum keeps a NaN, where max would drop it
-                        change = np.maximum(change, abs(h * (qdot[c] - K[i, c])))
-                        change = np.maximum(change, abs(h * (pdot[c] - K[i, n + c])))
-                        size = max(size, abs(qdot[c]), abs(pdot[c]))
+                        change[c] = np.maximum(change[c], abs(h * (qdot[c] - K[i, c])))
+                        change[n + c] = np.maximum(change[n + c], abs(h * (pdot[c] - K[i, n + c])))
+                        size[c] = max(size[c], abs(qdot[c]), abs(K[i, c]))
+                        size[n + c] = max(size[n + c], abs(pdot[c]), abs(K[i, n + c]))
                         K[i, c] = qdot[c]
                         K[i, n + c] = pdot[c]
             if status != 0:
                 break
             if newton is not None:
+                for c in range(s * n2):
+                    delta[c] *= rows[c]
                 lu_substitute(newton_matrix, pivots, delta)
+                for c in range(s * n2):
+                    delta[c] *= columns[c]
                 for i in range(s):
                     for c in range(n2):
-                        change = np.maximum(change, abs(h * delta[i * n2 + c]))
+                        change[c] = np.maximum(change[c], abs(h * delta[i * n2 + c]))
+                        size[c] = max(size[c], abs(K[i, c]))
                         K[i, c] += delta[i * n2 + c]
-                        size = max(size, abs(K[i, c]))
-            # rounding level: of the state, or of the stage increments h K when
-            # they are larger (stiff or fast motion: large terms that cancel)
-            change /= max(scale, h * size)
-            if not np.isfinite(change):
+                        size[c] = max(size[c], abs(K[i, c]))
+            ratio = _rounding_ratio(change, size, floor, x, h)
+            if not np.isfinite(ratio):
                 break  # the iteration diverged: not converged
-            if change <= 4e-16 or (change >= previous and change < 1e-14):
+            if ratio <= ROUNDING:
                 converged = True
                 break
-            previous = change
+            if ratio >= previous:  # no longer decreasing: at the noise of terms that cancel in f?
+                if ratio >= NOISE and not noise_known:  # the fixed point's floor, once in a step
+                    if canonical_jacobian(velocities, canonical_partials, t_a, x, p, J) != 0:
+                        J[:] = 0.0  # M singular at x (the stages' velocities were solved): no floor
+                    _noise_floor(J, x, h, floor)
+                    noise_known = True
+                    ratio = _rounding_ratio(change, size, floor, x, h)
+                if ratio < NOISE:
+                    converged = True
+                    break
+            previous = ratio
         if status > 0:
             return Status.RHS_FAILED, n_saved
         if not converged:

@@ -80,7 +80,8 @@ four-bar linkage scaled to millimetres, or by 1e3, then ended at t = 0 with NEWT
 time, and a_j the absolute part the differential scales imply: an error δz_j moves the derivatives of the
 differential rows i that depend on it by J_ij δz_j, so a_j = min_i scale_i/|J_ij| (λ enters no differential
 row: its error is w's, and it is left out).  The same scales in the Newton and the error norms; and the
-iteration matrices are factored equilibrated (`_equilibrate`, powers of two), so that the pivot test does not
+iteration matrices are factored equilibrated (`lagcomp.kernel_support.linear_solvers.equilibrate`, powers of
+two), so that the pivot test does not
 depend on the units of their blocks either: a run takes the same steps in any units.  What did not do:
 leaving the algebraic components out of the norms (the pendulum's error erratic in rtol: 1.2e-8 at 1e-7,
 1.7e-10 at 1e-10), or a_j/h alone (RADAU5's relative part dropped: the spherical pendulum in Cartesian
@@ -152,8 +153,6 @@ values cost 25-37% of the run), `_newton` is inlined and the two substitutions i
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
@@ -182,7 +181,7 @@ from lagcomp.integrate.drivers.run_state import (
     TIME,
 )
 from lagcomp.integrate.status import Status
-from lagcomp.kernel_support.linear_solvers import lu_factor, lu_substitute
+from lagcomp.kernel_support.linear_solvers import equilibrate, lu_factor, lu_substitute
 
 #: Newton iterations per step (HNW's NIT = 7 in radau5.f; scipy's 6, taken here).
 NEWTON_MAXITER = 6
@@ -227,7 +226,7 @@ def _factor(jacobian, h, MU, differential, lu_real, pivots_real, lu_complex, piv
     """LU factors of γ/h M − J and (α − iβ)/h M − J in place, M = diag(1 × differential, 0 × the rest);
     0, or k > 0 when one is singular (pivot k).
 
-    A DAE's matrices are equilibrated first (`_equilibrate`): both factored as R A C, with the powers of two
+    A DAE's matrices are equilibrated first (`equilibrate`): both factored as R A C, with the powers of two
     R = diag(``rows``), C = diag(``columns``) of the real one; an ODE's are factored as they are (R = C = I:
     the same bits as without).
     """
@@ -240,7 +239,7 @@ def _factor(jacobian, h, MU, differential, lu_real, pivots_real, lu_complex, piv
     for i in range(differential):
         lu_real[i, i] += shift_real
     if differential < n:
-        _equilibrate(lu_real, rows, columns)
+        equilibrate(lu_real, rows, columns)
     else:
         for i in range(n):
             rows[i] = 1.0
@@ -254,42 +253,6 @@ def _factor(jacobian, h, MU, differential, lu_real, pivots_real, lu_complex, piv
     if status != 0:
         return status
     return lu_factor(lu_complex, pivots_complex)
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _power_of_two_scale(largest):
-    """The power of two 2^−e that brings ``largest`` (≥ 0) into [1/2, 1), exactly; 1 for 0 or a non-finite value
-    (a zero row or column: the factorization then reports it)."""
-    return math.ldexp(1.0, -math.frexp(largest)[1]) if largest > 0.0 and np.isfinite(largest) else 1.0
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _equilibrate(a, rows, columns):
-    """Scale the square ``a`` in place to R a C, rows first then columns, each scale the power of two that brings
-    the row's (then the column's) largest magnitude into [1/2, 1) (LAPACK's ``dgeequ``, rounded to powers of two:
-    exact, and the factors' bits independent of the units).
-
-    A DAE's iteration matrix has blocks in the units of its equations and its variables (positions, velocities,
-    accelerations, forces): `lu_factor`'s pivot test, relative to max|a|, would call it singular or not depending on
-    the units (a millimetre four-bar linkage: ITERATION_MATRIX_SINGULAR at t = 0).  R a C does not depend on them
-    (a change of units is a diagonal D_r a D_c, which the scales absorb up to their rounding to powers of two).
-    A zero row or column keeps the scale 1 (the factorization then reports it).
-    """
-    n = a.shape[0]
-    for i in range(n):
-        largest = 0.0
-        for j in range(n):
-            largest = max(largest, abs(a[i, j]))
-        rows[i] = _power_of_two_scale(largest)
-        for j in range(n):
-            a[i, j] *= rows[i]
-    for j in range(n):
-        largest = 0.0
-        for i in range(n):
-            largest = max(largest, abs(a[i, j]))
-        columns[j] = _power_of_two_scale(largest)
-        for i in range(n):
-            a[i, j] *= columns[j]
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
