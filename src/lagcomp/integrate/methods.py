@@ -84,7 +84,8 @@ class Method:
     sweep: str | None = None
     #: The library function (``"module:function"``) giving, for a state of N components, the arrays a run of
     #: this method keeps from one driver call to the next besides (y, clock, counters), which `simulate`
-    #: passes after the coefficients (Radau's Jacobian and last collocation polynomial); None: none.
+    #: passes after the coefficients (Radau's Jacobian and last collocation polynomial; the Gauss methods' (q, p),
+    #: summation compensation and last stages, whose function also takes the stage count); None: none.
     carry: str | None = None
     #: Whether the driver switches charts (a ball joint's MRPs to their shadow) at the end of a step that left one,
     #: without locating the event (`lagcomp.integrate.drivers.collocation`): it takes ``event_values`` and
@@ -168,6 +169,7 @@ def _embedded(name: str, tableau: Tableau, summary: str) -> Method:
 _COLLOCATION = "lagcomp.integrate.drivers.collocation:collocation_run"
 _COLLOCATION_SWEEP = "lagcomp.integrate.drivers.collocation:collocation_sweep"
 _CANONICAL_KERNELS = ("velocities", "momenta", "momentum_rate", "canonical_partials")
+_COLLOCATION_CARRY = "lagcomp.integrate.drivers.collocation:new_carry"
 #: The kernels a driver that switches charts takes after its `Method.kernels` (`Method.switches_charts`).
 _CHART_KERNELS = ("event_values", "event_reset")
 
@@ -197,13 +199,16 @@ METHODS = {
                sweep="lagcomp.integrate.drivers.rattle:rattle_sweep"),
         Method("gauss1", 2, False, _COLLOCATION, collocation.GAUSS1,
                "implicit midpoint rule on (q, p), symplectic for any Lagrangian", unconstrained_only=True,
-               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP, switches_charts=True),
+               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP, switches_charts=True,
+               carry=_COLLOCATION_CARRY),
         Method("gauss2", 4, False, _COLLOCATION, collocation.GAUSS2,
                "2-stage Gauss-Legendre on (q, p), symplectic, order 4", unconstrained_only=True,
-               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP, switches_charts=True),
+               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP, switches_charts=True,
+               carry=_COLLOCATION_CARRY),
         Method("gauss3", 6, False, _COLLOCATION, collocation.GAUSS3,
                "3-stage Gauss-Legendre on (q, p), symplectic, order 6", unconstrained_only=True,
-               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP, switches_charts=True),
+               kernels=_CANONICAL_KERNELS, sweep=_COLLOCATION_SWEEP, switches_charts=True,
+               carry=_COLLOCATION_CARRY),
         Method("radau", 5, True, "lagcomp.integrate.drivers.radau:radau_run", radau.RADAU5,
                "Radau IIA order 5 (Hairer-Wanner's RADAU5), implicit, adaptive, for stiff systems, with the "
                "model's exact Jacobian; constrained systems as index-2 DAEs, constraints held without projection",

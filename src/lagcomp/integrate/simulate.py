@@ -137,6 +137,9 @@ def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOption
     coefficients = options.driver_arguments()
     if options.method.switches_charts:    # the events' actions: which are chart switches (`Method.switches_charts`)
         coefficients = (*coefficients, options.actions)
+    if options.method.carry is not None:  # the Gauss methods: what their steps carry from call to call
+        stages = options.method.tableau.B.size
+        coefficients = (*coefficients, *_library_function(options.method.carry)(state.y.size, stages))
     t0, t1, dt, n_steps = options.t0, options.t1, options.dt, options.n_steps
 
     def advance(ts, ys, pause_at, event_buffers, first_call):

@@ -431,7 +431,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
             task = _Task(driver, m.adaptive, fixed, layout, (), projecting, driver, ("rhs_lanes",), balance or None)
     else:
         coefficients = options.driver_arguments()
-        if m.carry is not None:     # Radau: the count of differential components (all: an ODE)
+        if m.dae_kernels:           # Radau: the count of differential components (all: an ODE)
             coefficients = (*coefficients, differential_size(model) if dae else n2)
         if m.switches_charts:       # the events' actions: which are chart switches (`Method.switches_charts`)
             coefficients = (*coefficients, actions)

@@ -18,6 +18,17 @@ function g > 0), the driver applies the event's reset to y = (q, q̇) and rebuil
 of the new chart, p' = Dφ⁻ᵀ p), then goes on from the new x with neither extrapolated stages nor a summation carry of
 the old chart.  ``actions`` (one per event, `lagcomp.integrate.drivers.events`) marks the chart switches with
 ACTION_RESET; no other event is located or reset here (`lagcomp.integrate.options.event_arguments` refuses them).
+
+The carry.  What the step loop keeps from one step to the next besides (y, clock, counters) is held by the caller
+(`new_carry`, `lagcomp.integrate.methods.Method.carry`) and passed to each call, so that a run cut into calls (by
+`lagcomp.integrate.simulate`'s call budgets, a sweep's row buffers) takes the steps one call would, bit for bit:
+
+* ``x`` (2n,): the canonical state (q, p) as continued; p rebuilt from (q, q̇) by ``momenta`` would differ from it in
+  its last bits;
+* ``compensation`` (2n,): the Kahan compensation of the sum x ← x + h Σ b_i K_i;
+* ``stages`` (s, 2n): the last step's stage derivatives K, extrapolated (E) to the next step's first guess;
+* ``control`` int64 (2,): [STARTED] 0 until the first step of the run (which then builds x from y), [EXTRAPOLATE]
+  whether ``stages`` hold a guess (not at the start, nor after a chart switch).
 """
 
 from __future__ import annotations
@@ -59,17 +70,43 @@ from lagcomp.integrate.drivers.sweep_rows import (
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.linear_solvers import equilibrate, lu_factor, lu_substitute
 
+#: Slots of the carry's ``control`` (module docstring): x has been built from y; ``stages`` hold a guess.
+STARTED, EXTRAPOLATE = 0, 1
+CONTROL_SLOTS = 2
+
 #: The model kernels `collocation_run` takes first (`Method.kernels` of the gauss methods names them).
 _KERNEL_TYPES = (VELOCITIES, MOMENTA, MOMENTUM_RATE, CANONICAL_PARTIALS, EVENTS, EVENT_RESET)
 #: The method's arrays and settings after the common arguments: A (s, s), B (s,), C (s,), E (s, s),
 #: the iteration limit, whether the stage equations are solved by simplified Newton, and the events' actions (the
 #: chart switches: module docstring).
 _COEFFICIENTS = (MATRIX, VECTOR, VECTOR, MATRIX, INT, types.boolean, INDICES)
+#: The carry (module docstring): x, compensation, stages, control.
+_CARRY = (VECTOR, VECTOR, MATRIX, INDICES)
 
 #: kernels, y, clock, counters, p, projecting, residual_max, t0, dt, n_steps, pause_at, t_end, save_every,
-#: ts, ys, then the coefficients: the fixed-step driver protocol (as the RK4 driver's).
+#: ts, ys, then the coefficients: the fixed-step driver protocol (as the RK4 driver's); then the carry.
 _RUN = OUTCOME(*_KERNEL_TYPES, VECTOR, VECTOR, INDICES, VECTOR, INT, VECTOR, FLOAT, FLOAT, INT, INT, FLOAT, INT,
-               VECTOR, MATRIX, *_COEFFICIENTS)
+               VECTOR, MATRIX, *_COEFFICIENTS, *_CARRY)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def new_carry(n, s):
+    """The carry of a new run of an ``n``-component state (q, q̇) by an ``s``-stage method: (x, compensation, stages,
+    control), see the module docstring; the run's first step builds x from its y."""
+    return np.zeros(n), np.zeros(n), np.zeros((s, n)), np.zeros(CONTROL_SLOTS, dtype=np.int64)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _canonical_state(momenta, t, y, p, x, work, compensation, control):
+    """x = (q, p) of y = (q, q̇) at t (``momenta``; ``work`` (n,)), with no compensation nor stages carried: the start
+    of a run, or of a new chart."""
+    n = work.shape[0]
+    momenta(t, y, p, work)
+    for c in range(n):
+        x[c] = y[c]
+        x[n + c] = work[c]
+    compensation[:] = 0.0
+    control[EXTRAPOLATE] = 0
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -126,15 +163,16 @@ def _noise_floor(J, x, h, floor):
 @njit(cache=True, error_model="numpy", nogil=True)
 def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset, y, clock,
                        counters, p, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton,
-                       actions):
+                       actions, x, compensation, K_previous, control):
     """Implicit Runge-Kutta (Gauss-Legendre) on x = (q, p); fixed step ``dt``; resumable.
 
     The canonical equations are evaluated without a symbolic inverse: q̇ = ``velocities``(t, x)
     solves M q̇ = p − b, and ṗ = ``momentum_rate`` at (q, q̇) is ∂L/∂q + Q = −∂H/∂q + Q.  Saved
-    rows and ``y`` stay in (q, q̇); x is rebuilt from ``momenta`` at the start of each call.  The
-    stage equations K_i = f(t + c_i h, x + h Σ_j a_ij K_j), i = 1..s, are solved from the previous
-    step's stages extrapolated by E (zero on a call's first step), by one of two iterations, chosen
-    by ``newton``:
+    rows and ``y`` stay in (q, q̇); x is carried from call to call (``x``, ``compensation``,
+    ``K_previous``, ``control``: the carry of the module docstring) and built from y by ``momenta``
+    at the run's first step only.  The stage equations K_i = f(t + c_i h, x + h Σ_j a_ij K_j),
+    i = 1..s, are solved from the previous step's stages extrapolated by E (zero on the run's first
+    step and after a chart switch), by one of two iterations, chosen by ``newton``:
 
     * fixed point (``newton`` None): K_i ← f(t + c_i h, x + h Σ_j a_ij K_j), updating each stage
       as soon as it is computed; s evaluations of f per sweep, and it contracts only while
@@ -167,13 +205,11 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
     n = n2 // 2
     s = B.shape[0]
     cap = ts.shape[0]
-    x = np.empty(n2)
     xs = np.empty(n2)
     y_stage = np.empty(n2)
     qdot = np.empty(n)
     pdot = np.empty(n)
     K = np.empty((s, n2))
-    K_previous = np.zeros((s, n2))
     J = np.empty((n2, n2))
     newton_matrix = np.empty((s * n2, s * n2))
     pivots = np.empty(s * n2, dtype=np.int64)
@@ -183,18 +219,15 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
     change = np.empty(n2)
     size = np.empty(n2)
     floor = np.empty(n2)
-    extrapolate = False
     charts = False
     for e in range(actions.shape[0]):
         charts = charts or actions[e] == ACTION_RESET
     g = np.empty(actions.shape[0])
-    compensation = np.zeros(n2)
     new_compensation = np.zeros(n2)
     n_saved = 0
-    momenta(clock[TIME], y, p, pdot)
-    for c in range(n):
-        x[c] = y[c]
-        x[n + c] = pdot[c]
+    if control[STARTED] == 0:
+        _canonical_state(momenta, clock[TIME], y, p, x, pdot, compensation, control)
+        control[STARTED] = 1
     while True:
         k = counters[NSTEPS]
         stop, why, t_a, t_b = fixed_step_window(k, n_steps, pause_at, counters[SINCE_SAVE], save_every,
@@ -207,7 +240,7 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
         for i in range(s):
             for c in range(n2):
                 guess = 0.0
-                if extrapolate and not last:
+                if control[EXTRAPOLATE] != 0 and not last:
                     for j in range(s):
                         guess += E[i, j] * K_previous[j, c]
                 K[i, c] = guess
@@ -329,18 +362,13 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
         for i in range(s):
             for c in range(n2):
                 K_previous[i, c] = K[i, c]
-        extrapolate = True
+        control[EXTRAPOLATE] = 1
         if charts:
             switched = _switch_charts(event_values, event_reset, t_b, y, p, actions, g, y_stage)
             if switched < 0:
                 return Status.RHS_FAILED, n_saved
             if switched > 0:    # the new chart's x; nothing carried over from the old one
-                momenta(t_b, y, p, pdot)
-                for c in range(n):
-                    x[c] = y[c]
-                    x[n + c] = pdot[c]
-                compensation[:] = 0.0
-                extrapolate = False
+                _canonical_state(momenta, t_b, y, p, x, pdot, compensation, control)
         clock[TIME] = t_b
         counters[NSTEPS] = k + 1
         counters[SINCE_SAVE] += 1
@@ -355,8 +383,9 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
 @njit(_RUN, cache=True, error_model="numpy", nogil=True)
 def collocation_run(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset, y, clock,
                     counters, p, projecting, residual_max, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B,
-                    C, E, max_iter, newton, actions):
-    """Gauss-Legendre collocation on x = (q, p); fixed step ``dt``; resumable (see `_collocation_steps`).
+                    C, E, max_iter, newton, actions, x, compensation, stages, control):
+    """Gauss-Legendre collocation on x = (q, p); fixed step ``dt``; resumable (see `_collocation_steps`): ``x``,
+    ``compensation``, ``stages`` and ``control`` are the run's carry (module docstring, `new_carry`).
 
     ``newton`` chooses how the stage equations are solved: simplified Newton (True) or fixed-point
     iteration (False).  Each runs its own specialisation of `_collocation_steps`, from which numba
@@ -366,10 +395,10 @@ def collocation_run(velocities, momenta, momentum_rate, canonical_partials, even
     if newton:
         return _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset,
                                   y, clock, counters, p, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B,
-                                  C, E, max_iter, True, actions)
+                                  C, E, max_iter, True, actions, x, compensation, stages, control)
     return _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset, y,
                               clock, counters, p, t0, dt, n_steps, pause_at, t_end, save_every, ts, ys, A, B, C, E,
-                              max_iter, None, actions)
+                              max_iter, None, actions, x, compensation, stages, control)
 
 
 _SWEEP = types.none(*_KERNEL_TYPES, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT, INT, FLOAT, INT, MATRIX, VECTOR,
@@ -380,7 +409,8 @@ _SWEEP = types.none(*_KERNEL_TYPES, ENERGY, MATRIX, MATRIX, INT, FLOAT, FLOAT, I
 def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, event_values, event_reset, energy, Y0,
                       P, projecting, t0, dt, n_steps, t_end, save_every, final, t_final, status, counts, dense,
                       energy_stats, A, B, C, E, max_iter, newton, actions):
-    """Trajectory k from (t0, Y0[k]) with parameters P[k], ``n_steps`` steps of ``dt`` by `collocation_run`.
+    """Trajectory k from (t0, Y0[k]) with parameters P[k], ``n_steps`` steps of ``dt`` by `collocation_run`, with a
+    carry of its own (`new_carry`): its calls (one more each time the row buffer fills) make the run of one call.
 
     The outputs and their shapes are those of every fixed-step sweep loop (`lagcomp.integrate.sweep`):
     ``final`` (N, 2n), ``t_final`` (N,), ``status`` (N,), ``counts`` (N, 3) = [nfev, nsteps, nrejected],
@@ -397,6 +427,7 @@ def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, ev
         clock[TIME] = t0
         counters = np.zeros(COUNTER_SLOTS, dtype=np.int64)
         residual = np.zeros(1)
+        x, compensation, stages, control = new_carry(n2, B.shape[0])
         ts = np.empty(SWEEP_ROWS)
         ys = np.empty((SWEEP_ROWS, n2))
         e0 = energy(t0, y, p)
@@ -409,7 +440,8 @@ def collocation_sweep(velocities, momenta, momentum_rate, canonical_partials, ev
         while True:
             code, n_saved = collocation_run(velocities, momenta, momentum_rate, canonical_partials, event_values,
                                             event_reset, y, clock, counters, p, projecting, residual, t0, dt, n_steps,
-                                            NO_PAUSE, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton, actions)
+                                            NO_PAUSE, t_end, save_every, ts, ys, A, B, C, E, max_iter, newton, actions,
+                                            x, compensation, stages, control)
             deviation, row = fold_rows(energy, ts, ys, n_saved, p, e0, deviation, dense, k, row)
             if code != Status.BUFFER_FULL:
                 break
