@@ -73,11 +73,11 @@ def test_a_gauss_run_cut_into_calls_keeps_its_chart_switches(ball, monkeypatch, 
 
 @pytest.mark.parametrize("method", METHODS)
 def test_a_gauss_sweep_ends_where_its_runs_end(ball, method):
-    """The sweep loop calls the driver again whenever its 64-row buffer fills (300 steps here): each trajectory's
-    final state is its own run's, bit for bit."""
+    """The sweep loop calls the driver again whenever its 64-row buffer fills (a row per step for the energy error,
+    300 steps here): each trajectory's final state is its own run's, bit for bit."""
     masses = (1.0, 1.3)
     sweep = ball.sweep((0, 3), {"m0": list(masses)}, q0=TUMBLING[0], qd0=TUMBLING[1], params=BALL_PARAMETERS,
-                       method=method, dt=0.01, progress=False)
+                       method=method, dt=0.01, output=("energy",), progress=False)
     for k, mass in enumerate(masses):
         run = ball.simulate((0, 3), *TUMBLING, {**BALL_PARAMETERS, "m0": mass}, method=method, dt=0.01,
                             progress=False)
