@@ -385,14 +385,14 @@ gram_solve = called_by_symbol(_gram_solve)
 lu_solve_matrix = called_by_symbol(_lu_solve_matrix)
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", fastmath=False, nogil=True)
 def _power_of_two_scale(largest):
     """The power of two 2^−e that brings ``largest`` (≥ 0) into [1/2, 1), exactly; 1 for 0 or a non-finite value
     (a zero row or column: the factorization then reports it)."""
     return math.ldexp(1.0, -math.frexp(largest)[1]) if largest > 0.0 and np.isfinite(largest) else 1.0
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", fastmath=False, nogil=True)
 def equilibrate(a, rows, columns):
     """Scale the square ``a`` in place to R a C, rows first then columns, each scale the power of two that brings
     the row's (then the column's) largest magnitude into [1/2, 1) (LAPACK's ``dgeequ``, rounded to powers of two:
