@@ -26,6 +26,7 @@ import pytest
 import sympy as sp
 from random_systems import python_kernels
 from scipy.spatial.transform import Rotation
+from test_multibody_loops import motion
 
 import lagcomp as lc
 from lagcomp.multibody import mrp
@@ -125,15 +126,6 @@ def plain_python(model) -> dict:
     """The eager kernels of `model` run as plain Python (`random_systems.python_kernels`): the Lagrangian reference's,
     which numba need not compile (the same emitted code; its compiled kernels are other files' subject)."""
     return python_kernels(model.source_path.read_text(encoding="utf-8"))
-
-
-def motion(model, y, gains=(0.0, 0.0), params=None, kernels=None):
-    """(q̈, λ) of `model` at the state `y`, by its numba kernels or the plain-Python `kernels` (`plain_python`)."""
-    p = model.parameter_vector(params, baumgarte=gains)
-    out, lam = np.zeros(y.size), np.zeros(model.k)
-    rhs_and_reactions = model.kernels.rhs_and_reactions if kernels is None else kernels["rhs_and_reactions"]
-    assert rhs_and_reactions(0.0, y, p, out, lam) == 0
-    return out[model.n:], lam
 
 
 def kernel_rows(model, y, params=None, kernels=None):

@@ -51,11 +51,12 @@ def four_bars(cache_dir):
     return lc.compile(four_bar_tree(), cache_dir=cache_dir), lc.compile(four_bar_linkage(), cache_dir=cache_dir)
 
 
-def motion(model, y, gains=(0.0, 0.0), params=None):
-    """(q̈, λ) of `model` at the state `y`."""
+def motion(model, y, gains=(0.0, 0.0), params=None, kernels=None):
+    """(q̈, λ) of `model` at the state `y`, by its numba kernels or the plain-Python `kernels` (`random_systems.python_kernels`)."""
     p = model.parameter_vector(params, baumgarte=gains)
     out, lam = np.zeros(y.size), np.zeros(model.k)
-    assert model.kernels.rhs_and_reactions(0.0, y, p, out, lam) == 0
+    rhs_and_reactions = model.kernels.rhs_and_reactions if kernels is None else kernels["rhs_and_reactions"]
+    assert rhs_and_reactions(0.0, y, p, out, lam) == 0
     return out[model.n:], lam
 
 
