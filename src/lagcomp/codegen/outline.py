@@ -141,10 +141,26 @@ def _canonical(temps, run, readers) -> tuple:
             if s not in names and s not in own:
                 names[s] = sp.Symbol(f"_a{inputs}", real=True)
                 inputs += 1
-        body.append(expr.xreplace(names))
+        body.append(_renamed(expr, names))
         names[local] = sp.Symbol(f"_t{j}", real=True)
     returns = tuple(j for j, i in enumerate(run) if temps[i][0] in readers)
     return tuple(body), inputs, returns
+
+
+def _renamed(expr, names: dict):
+    """`expr` with its symbols renamed by `names`, each sum's terms and each product's factors kept in the order
+    `expr` holds them (not sorted again by the new names, as ``xreplace`` would): the helper then adds and
+    multiplies in the order of the inline code it replaces, so it computes the same bits, and two runs are the same
+    only when they compute in the same order."""
+    if expr.is_Symbol:
+        return names.get(expr, expr)
+    if not expr.args:
+        return expr
+    args = [_renamed(a, names) for a in expr.args]
+    try:
+        return expr.func(*args, evaluate=False)
+    except TypeError:   # (a node without the keyword: a Piecewise's pair)
+        return expr.func(*args)
 
 
 def _inputs(temps, run) -> list:
