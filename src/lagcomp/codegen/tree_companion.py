@@ -143,6 +143,12 @@ def _jacobian_stores(f: list, tangent: list, directions: range, with_f: bool) ->
                      for i in range(len(f)) for j, x in enumerate(directions) if x in tangent[i]]
 
 
+#: Derivative assignments past which a tree's Jacobians get the steps of the recursion they differentiate
+#: (`lagcomp.multibody.forward_mode.derivatives`): about `lagcomp.codegen.outline.INLINE_LIMIT` operations (some
+#: three an assignment), where the outlined helpers are called, not inlined.  Below it the kernels stay straight-line
+#: code: a small tree's Jacobian with inlined helpers ran ~25% slower (planar_2, 0.32 -> 0.40 µs a call).
+STEP_ABOVE = 2500
+
 _HOW = ("Forward mode over the articulated-body algorithm (lagcomp.multibody.forward_mode): each of its\n"
         "assignments followed by its derivatives, no expression expanded.  Returns 0.")
 
@@ -154,7 +160,7 @@ def _jacobian_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
     prog = Program()
     f = _motion(prog, local)
     tangent = derivatives(prog, f, {**_unit_seeds((*local.q, *local.qd)), **_unit_seeds(local.p, size)},
-                          stepped=True)
+                          step_above=STEP_ABOVE)
 
     def kernel(name, doc, directions, with_f):
         args = ("t", "y", "p", "ydot", "out") if with_f else ("t", "y", "p", "out")

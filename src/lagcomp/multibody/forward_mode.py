@@ -25,7 +25,7 @@ import sympy as sp
 from lagcomp.multibody.program import Program
 
 
-def derivatives(prog: Program, outputs, seeds: dict, stepped: bool = False) -> list[dict]:
+def derivatives(prog: Program, outputs, seeds: dict, step_above: int | None = None) -> list[dict]:
     """The derivatives of each of `outputs` along the directions `seeds` defines, bound in `prog`.
 
     Parameters
@@ -37,10 +37,10 @@ def derivatives(prog: Program, outputs, seeds: dict, stepped: bool = False) -> l
     seeds : dict
         ``{symbol: {direction: derivative}}``: each independent symbol's derivative along each direction (1 for
         the Jacobian's own variable, a direction's component for J v); a symbol absent is constant.
-    stepped : bool
-        Give the derivatives the steps of the recursion they differentiate (`stepped_order`), so that the kernel
-        emits the repeated ones as shared helpers (`lagcomp.codegen.outline`); the assignments themselves are the
-        same either way.
+    step_above : int, optional
+        When the derivatives form more than this many assignments, give them the steps of the recursion they
+        differentiate (`_stepped_order`), so that the kernel emits the repeated ones as shared helpers
+        (`lagcomp.codegen.outline`); the assignments themselves are the same either way.  None: never.
 
     Returns
     -------
@@ -55,7 +55,7 @@ def derivatives(prog: Program, outputs, seeds: dict, stepped: bool = False) -> l
         formed.update(dict.fromkeys((a for a, _ in prog.assignments[first:]), (local, derivative)))
         if derivative:
             tangent[local] = derivative
-    if stepped:
+    if step_above is not None and len(prog.assignments) - start > step_above:
         _stepped_order(prog, start, formed)
     return [_chain(prog, e, tangent) for e in outputs]
 
