@@ -101,10 +101,10 @@ def test_outlined_jacobians_compute_the_straight_line_bits(tmp_path, monkeypatch
     tree = planar_chain(3)
     monkeypatch.setattr(tree_companion, "STEP_ABOVE", None)
     straight = lc.compile(tree, progress=False, cache_dir=tmp_path / "straight")
-    straight.kernels.rhs_with_jacobian
+    assert straight.kernels.rhs_with_jacobian is not None
     monkeypatch.setattr(tree_companion, "STEP_ABOVE", 0)
     inlined = lc.compile(tree, progress=False, cache_dir=tmp_path / "inlined")
-    inlined.kernels.rhs_with_jacobian
+    assert inlined.kernels.rhs_with_jacobian is not None
     monkeypatch.setattr(outline, "INLINE_LIMIT", 0)
     called = lc.compile(tree, progress=False, cache_dir=tmp_path / "called")
     source = called.kernels.companion.entry("jacobians").path.read_text(encoding="utf-8")

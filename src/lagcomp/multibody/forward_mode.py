@@ -14,6 +14,10 @@ expanded: the derivative program has the recursion's structure, and its size is 
 times the recursion's, less where a quantity does not depend on a direction (a link's quantities of the outward
 pass depend on its ancestors' coordinates only): each local carries only its nonzero derivatives.
 
+Past a size (`derivatives`'s `step_above`), the derivatives are emitted grouped by the steps of the recursion they
+differentiate, a step's partials first, then its derivatives along one direction after another: along a direction,
+the links of a chain repeat the same little program, which `lagcomp.codegen.outline` emits once as a helper.
+
 A partial of a non-smooth function (a torque's Heaviside) has its DiracDelta taken as 0, as the Lagrangian path's
 Jacobians do (`lagcomp.codegen.lower`).
 """
