@@ -206,8 +206,9 @@ class FlatMatrix:
     without `status`, the kernel returns nothing (the signature of ``mass_matrix``).
 
     With `width`, the matrix is (size, width), rows of `width` entries in ``_jac`` (a tree's ``rhs_with_jacobian``,
-    ``rhs_parameter_jacobian``); with `in_place`, ``_jac`` is `out` itself seen flat and zeroed, no array allocated
-    and nothing copied (`out` C-contiguous: the drivers' ``MATRIX``, `lagcomp.integrate.drivers.kernel_types`)."""
+    ``rhs_parameter_jacobian``); with `in_place`, ``_jac`` is `out` itself seen flat, no array allocated, nothing
+    zeroed or copied: the stores write every entry, zeros too (`out` C-contiguous: the drivers' ``MATRIX``,
+    `lagcomp.integrate.drivers.kernel_types`)."""
 
     size: int
     symmetric: bool = False

@@ -504,8 +504,8 @@ def _kernel_source(kernel: Kernel) -> str:
     if isinstance(solve, AugmentedSolve):
         body.append(f"_kkt = np.zeros(({solve.size}, {solve.size + 1}))")
     elif isinstance(solve, FlatMatrix):
-        body += ([f"_jac = out.reshape({solve.size * solve.columns})", "_jac[:] = 0.0"] if solve.in_place
-                 else [f"_jac = np.zeros({solve.size * solve.columns})"])
+        body.append(f"_jac = out.reshape({solve.size * solve.columns})" if solve.in_place
+                    else f"_jac = np.zeros({solve.size * solve.columns})")
     body += [f"{name} = {to_code(expr)}" for name, expr in kernel.temps]
     for target, expr in kernel.stores:
         body.append(f"return {to_code(expr)}" if target == "return" else f"{target} = {to_code(expr)}")
