@@ -1,11 +1,11 @@
 """The on-demand kind "jacobians" of a tree laid out for numba's compile (issue 39, issue 35's compile cost).
 
 Forward mode over the articulated-body algorithm (`lagcomp.multibody.forward_mode`) forms tens of thousands of
-derivative assignments for a long chain.  numba's compile time grows with the code it types, so the Jacobians are
-stored flat (``_jac``: `out` seen 1-D, zeroed, the nonzero entries stored) and, past
-`lagcomp.codegen.tree_companion.STEP_ABOVE` assignments, the derivatives carry the steps of the recursion they
-differentiate (its partials, then one direction after another), so that `lagcomp.codegen.outline` emits the
-repeated ones once as shared helpers, as it does the recursion's.  Neither may change a bit: the stepped program
+derivative assignments for a long chain.  numba's compile time grows with the code it types, so past
+`lagcomp.codegen.tree_companion.STEP_ABOVE` assignments the Jacobians are stored flat (``_jac``: `out` seen 1-D)
+and the derivatives carry the steps of the recursion they differentiate (its partials, then one direction after
+another), so that `lagcomp.codegen.outline` emits the repeated ones once as shared helpers, as it does the
+recursion's; a smaller tree's kernels stay the straight-line code they were.  Neither may change a bit: the stepped program
 has the unstepped one's assignments in another (topological) order, and the helpers add and multiply in the
 inline code's order.  A 20-link chain's Jacobian is checked against Richardson-extrapolated central differences of
 its ``rhs`` (no code of forward mode's).
