@@ -36,6 +36,7 @@ SCRIPTS = {
     "bench_geometry": ["--rounds", "1"],
     "bench_inputs": ["--t-end", "0.5", "--repeats", "1"],
     "bench_large": ["--n", "3", "--repeats", "1"],
+    "bench_jacobian_compile": ["planar_2", "--calls", "100"],
     "bench_loop": ["--rounds", "1"],
     "bench_lyapunov": ["--repeats", "1"],
     "bench_mass_matrix_compile": ["planar_4"],

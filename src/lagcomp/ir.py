@@ -203,11 +203,24 @@ class FlatMatrix:
 
     With `symmetric`, the stores write the lower triangle only (i ≥ j) and a loop mirrors it into the upper one
     before the copy (``mass_matrix`` of a tree: half the stores, each a fraction of a 2-D store's compile time);
-    without `status`, the kernel returns nothing (the signature of ``mass_matrix``)."""
+    without `status`, the kernel returns nothing (the signature of ``mass_matrix``).
+
+    With `width`, the matrix is (size, width), rows of `width` entries in ``_jac`` (a tree's ``rhs_with_jacobian``,
+    ``rhs_parameter_jacobian``); with `in_place`, ``_jac`` is `out` itself seen flat, no array allocated, nothing
+    zeroed or copied: the stores write every entry, zeros too (`out` C-contiguous: the drivers' ``MATRIX``,
+    `lagcomp.integrate.drivers.kernel_types`)."""
 
     size: int
     symmetric: bool = False
     status: bool = True
+    #: Entries per row (None: `size`, square).
+    width: int | None = None
+    in_place: bool = False
+
+    @property
+    def columns(self) -> int:
+        """The matrix's number of columns: `width`, or `size` when square."""
+        return self.size if self.width is None else self.width
 
 
 @dataclass(frozen=True)

@@ -504,7 +504,8 @@ def _kernel_source(kernel: Kernel) -> str:
     if isinstance(solve, AugmentedSolve):
         body.append(f"_kkt = np.zeros(({solve.size}, {solve.size + 1}))")
     elif isinstance(solve, FlatMatrix):
-        body.append(f"_jac = np.zeros({solve.size * solve.size})")
+        body.append(f"_jac = out.reshape({solve.size * solve.columns})" if solve.in_place
+                    else f"_jac = np.zeros({solve.size * solve.columns})")
     body += [f"{name} = {to_code(expr)}" for name, expr in kernel.temps]
     for target, expr in kernel.stores:
         body.append(f"return {to_code(expr)}" if target == "return" else f"{target} = {to_code(expr)}")
@@ -523,7 +524,9 @@ def _kernel_source(kernel: Kernel) -> str:
         if solve.symmetric:
             body += [f"for _i in range({solve.size}):", f"{INDENT}for _j in range(_i):",
                      f"{INDENT * 2}_jac[_j * {solve.size} + _i] = _jac[_i * {solve.size} + _j]"]
-        body += [f"out[:] = _jac.reshape(({solve.size}, {solve.size}))"] + (["return 0"] if solve.status else [])
+        if not solve.in_place:
+            body.append(f"out[:] = _jac.reshape(({solve.size}, {solve.columns}))")
+        body += ["return 0"] if solve.status else []
     elif isinstance(solve, ReturnZero):
         body.append("return 0")
     elif solve is not None:

@@ -12,10 +12,12 @@ inline.  LLVM's optimization of the inlined copies then grows with the operation
 `INLINE_LIMIT` of them the helpers are called instead (a 100-link chain's rhs: 2.2 s less to compile, 12% slower).
 
 Two steps are the same when renaming their inputs (in the order the step first reads them) and their own locals
-(in the order it forms them) gives the same assignments and the same locals read after the step.  The
-program's locals are numbered with a fixed width, so the sums and products of two such steps list their terms in
-the same order and the renaming sees them alike.  The result is the same arithmetic in the same order: the kernel
-computes the same bits.
+(in the order it forms them) gives the same assignments and the same locals read after the step.  The renaming
+keeps each sum's terms and each product's factors in the order the step holds them (`_renamed`), and two steps are
+the same only when those orders agree too: the result is the same arithmetic in the same order, and the kernel
+computes the same bits.  (The program's locals are numbered with a fixed width, so the steps of identical nodes
+list their terms alike; so do forward mode's derivatives, grouped by step and direction,
+`lagcomp.multibody.forward_mode`.)
 """
 
 from __future__ import annotations
@@ -141,10 +143,26 @@ def _canonical(temps, run, readers) -> tuple:
             if s not in names and s not in own:
                 names[s] = sp.Symbol(f"_a{inputs}", real=True)
                 inputs += 1
-        body.append(expr.xreplace(names))
+        body.append(_renamed(expr, names))
         names[local] = sp.Symbol(f"_t{j}", real=True)
     returns = tuple(j for j, i in enumerate(run) if temps[i][0] in readers)
     return tuple(body), inputs, returns
+
+
+def _renamed(expr, names: dict):
+    """`expr` with its symbols renamed by `names`, each sum's terms and each product's factors kept in the order
+    `expr` holds them (not sorted again by the new names, as ``xreplace`` would): the helper then adds and
+    multiplies in the order of the inline code it replaces, so it computes the same bits, and two runs are the same
+    only when they compute in the same order."""
+    if expr.is_Symbol:
+        return names.get(expr, expr)
+    if not expr.args:
+        return expr
+    args = [_renamed(a, names) for a in expr.args]
+    try:
+        return expr.func(*args, evaluate=False)
+    except TypeError:   # (a node without the keyword: a Piecewise's pair)
+        return expr.func(*args)
 
 
 def _inputs(temps, run) -> list:

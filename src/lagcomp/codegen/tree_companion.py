@@ -132,13 +132,23 @@ def _unit_seeds(symbols, first: int = 0) -> dict:
     return {s: {first + j: sp.S.One} for j, s in enumerate(symbols)}
 
 
-def _jacobian_stores(f: list, tangent: list, directions: range, with_f: bool) -> list:
-    """The stores of ∂f/∂x into out (2n, len(`directions`)), x the `directions` of `tangent`; with `with_f` f
-    into ydot first."""
+def _jacobian_stores(f: list, tangent: list, directions: range, with_f: bool, flat: bool) -> list:
+    """The stores of ∂f/∂x into out (2n, len(`directions`)), every entry, x the `directions` of `tangent`; with
+    `with_f` f into ydot first.  With `flat` (a large tree), into `out` seen flat as ``_jac`` (row-major:
+    `lagcomp.ir.FlatMatrix` in place): numba compiles a store into a 1-D array in about a third of the time of one
+    into the 2-D `out`, but the reshape costs a call (a small tree's Jacobian ran ~20-30% slower)."""
+    width = len(directions)
     stores = [(f"ydot[{i}]", e) for i, e in enumerate(f)] if with_f else []
-    return stores + [(f"out[{i}, {j}]", tangent[i].get(x, sp.S.Zero))
+    return stores + [(f"_jac[{i * width + j}]" if flat else f"out[{i}, {j}]", tangent[i].get(x, sp.S.Zero))
                      for i in range(len(f)) for j, x in enumerate(directions)]
 
+
+#: Derivative assignments past which a tree's Jacobians get the steps of the recursion they differentiate
+#: (`lagcomp.multibody.forward_mode.derivatives`): about `lagcomp.codegen.outline.INLINE_LIMIT` operations (some
+#: three an assignment), where the outlined helpers are called, not inlined, and where the Jacobians are stored flat
+#: (`_jacobian_stores`).  Below it the kernels stay straight-line code into the 2-D `out`, as before: a small tree's
+#: Jacobian with inlined helpers ran ~25% slower (planar_2, 0.32 -> 0.40 µs a call), flat ~20-30% slower.
+STEP_ABOVE = 2500
 
 _HOW = ("Forward mode over the articulated-body algorithm (lagcomp.multibody.forward_mode): each of its\n"
         "assignments followed by its derivatives, no expression expanded.  Returns 0.")
@@ -150,12 +160,16 @@ def _jacobian_kernels(local: TreeLocals) -> tuple[Kernel, ...]:
     size, P = 2 * local.n, len(local.p)
     prog = Program()
     f = _motion(prog, local)
-    tangent = derivatives(prog, f, {**_unit_seeds((*local.q, *local.qd)), **_unit_seeds(local.p, size)})
+    start = len(prog.assignments)
+    tangent = derivatives(prog, f, {**_unit_seeds((*local.q, *local.qd)), **_unit_seeds(local.p, size)},
+                          step_above=STEP_ABOVE)
+    flat = STEP_ABOVE is not None and len(prog.assignments) - start > STEP_ABOVE
 
     def kernel(name, doc, directions, with_f):
         args = ("t", "y", "p", "ydot", "out") if with_f else ("t", "y", "p", "out")
-        return program_kernel(name, doc + _HOW, args, prog, _jacobian_stores(f, tangent, directions, with_f),
-                              local.loads, ReturnZero())
+        stores = _jacobian_stores(f, tangent, directions, with_f, flat)
+        return program_kernel(name, doc + _HOW, args, prog, stores, local.loads,
+                              FlatMatrix(size, width=len(directions), in_place=True) if flat else ReturnZero())
 
     return (
         kernel("rhs_with_jacobian", "f and its exact Jacobian at once: ydot = f(t, y) as `rhs` computes it (bitwise),\n"

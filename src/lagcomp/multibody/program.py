@@ -63,6 +63,15 @@ class Program:
             self.step_of[local] = self._step
         return local
 
+    def regroup(self, start: int, rank: dict, steps: dict) -> None:
+        """Reorder the assignments from `start` on by ``rank[local]`` (a stable sort: the caller keeps the order
+        topological, each local ranked no lower than the locals it reads) and tag them with the steps `steps` (a
+        local absent: no step), without renaming anything (`lagcomp.multibody.forward_mode`: the derivatives
+        grouped by the steps they differentiate)."""
+        self.assignments[start:] = sorted(self.assignments[start:], key=lambda assignment: rank[assignment[0]])
+        for local, _ in self.assignments[start:]:
+            self.step_of[local] = steps.get(local)
+
     def vector(self, entries) -> list:
         """Each entry of `entries` through `let`."""
         return [self.let(e) for e in entries]
