@@ -60,16 +60,15 @@ import sympy as sp
 from lagcomp.codegen.periodic import periodic_coordinates
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor_ops import (
-    LINEAR,
     Op,
     Setup,
-    convolution_loop,
-    linear_line,
     partial_name,
     pivot_test,
     setup_statements,
     support_names,
+    value_lines,
 )
+from lagcomp.codegen.taylor_split import NJIT, SPLIT_OPERATIONS, chunked_loop
 from lagcomp.ir import ContactModes, Kernel, LinearSolve, ModuleIR, ReturnZero, target_local
 from lagcomp.kernel_support.resting import DEPENDENT_CLOSED_CONTACTS
 
@@ -605,14 +604,18 @@ COEFFICIENTS_DOC = (
 )
 
 
-def emit_taylor(program: TaylorProgram) -> str:
-    """The source of ``taylor_coefficients``, ``TAYLOR_WORK`` and ``TAYLOR_PERIODIC`` for `program`."""
-    return (_coefficients_function(program, "taylor_coefficients", COEFFICIENTS_DOC)
+def emit_taylor(program: TaylorProgram, split_operations: int = SPLIT_OPERATIONS) -> str:
+    """The source of ``taylor_coefficients``, ``TAYLOR_WORK`` and ``TAYLOR_PERIODIC`` for `program` (in chunks
+    above `split_operations` series operations per order: `lagcomp.codegen.taylor_split`)."""
+    return (_coefficients_function(program, "taylor_coefficients", COEFFICIENTS_DOC, split_operations)
             + _taylor_data(program.operation_count, len(program.rows) + program.uses_t, program.periodic))
 
 
-def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ...]) -> str:
-    """The source of the njit function `name`(t, y, p, X, W) that writes the coefficients of `program`."""
+def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ...],
+                           split_operations: int = SPLIT_OPERATIONS) -> str:
+    """The source of the njit function `name`(t, y, p, X, W) that writes the coefficients of `program`: its order
+    loop written out, or calling the chunks of a program of more than `split_operations` series operations per
+    order (`lagcomp.codegen.taylor_split`)."""
     multipliers = list(program.multipliers)
     rows = multipliers + (["_t"] if program.uses_t else []) + [row for row in program.rows if row not in multipliers]
     states = {s.name: s.index for s in program.setup if s.kind == "state"}
@@ -630,25 +633,20 @@ def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ..
     if program.uses_t:
         lines += ["for k in range(order + 1):", f"{INDENT}{at('_t', 'k')} = 0.0", f"{at('_t', 0)} = t",
                   "if order > 0:", f"{INDENT}{at('_t', 1)} = 1.0"]
-    reciprocals = "_ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order"
-    lines += ["for k in range(order):", INDENT + reciprocals, f"{INDENT}_ik1 = 1.0/(k + 1)"]
-    for op in program.body:
-        if op.kind == "comment":
-            body = [f"# {op.const}"]
-        elif op.kind == "pivot":
-            scale = at(op.args[1], 0) if len(op.args) > 1 else op.const
-            body = [f"if k == 0 and not {pivot_test(at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
-        elif op.kind == "state":
-            body = [f"X[{op.index}, k + 1] = {linear_line(op, at)}*_ik1"]
-        elif op.kind in LINEAR:
-            body = [linear_line(op, at)]
-        else:
-            summary, loop = convolution_loop(op, at)
-            body = [f"# {summary}", *loop]
-        lines += [INDENT + line for line in body]
+    parts = ""
+    if program.operation_count > split_operations:
+        scalars = [s.name for s in program.setup if s.kind in ("param", "constant")]
+        row_lines = {**{name: f"{name} = {i}" for name, i in states.items()},
+                     **{row: f"{row} = {i}" for i, row in enumerate(rows)}}
+        parts, loop = chunked_loop(name, program.body, at, row_lines, scalars)
+        lines += loop
+    else:
+        reciprocals = "_ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order"
+        lines += ["for k in range(order):", INDENT + reciprocals, f"{INDENT}_ik1 = 1.0/(k + 1)"]
+        lines += [INDENT + line for op in program.body for line in value_lines(op, at)]
     lines.append(f"return {-len(multipliers)}" if multipliers else "return 0")
     body = "\n".join(INDENT + line if line else "" for line in lines)
-    return f'\n\n@njit(cache=True, error_model="numpy", fastmath={{"contract"}})\ndef {name}(t, y, p, X, W):\n{body}\n'
+    return f'{parts}\n\n{NJIT}\ndef {name}(t, y, p, X, W):\n{body}\n'
 
 
 def _taylor_data(operations: int, rows: int, periodic: tuple[int, ...]) -> str:
@@ -692,7 +690,7 @@ def emit_mode_programs(modes: ModePrograms) -> str:
         lines += [f"if _held == {mask}:", f"{INDENT}return _taylor_held_{mask}(t, y, p, X, W)"]
     lines.append(f"return _taylor_held_{len(modes.programs) - 1}(t, y, p, X, W)")
     body = "\n".join(INDENT + line if line else "" for line in lines)
-    parts.append(f'\n\n@njit(cache=True, error_model="numpy", fastmath={{"contract"}})\n'
+    parts.append(f"\n\n{NJIT}\n"
                  f"def taylor_coefficients(t, y, p, X, W):\n{body}\n")
     operations = max(program.operation_count for program in modes.programs)
     rows = max(len(program.rows) + program.uses_t for program in modes.programs)
