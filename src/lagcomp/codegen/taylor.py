@@ -68,7 +68,7 @@ from lagcomp.codegen.taylor_ops import (
     support_names,
     value_lines,
 )
-from lagcomp.codegen.taylor_split import NJIT, SPLIT_OPERATIONS, chunked_loop
+from lagcomp.codegen.taylor_split import CHUNK_OPERATIONS, NJIT, SPLIT_OPERATIONS, chunked_loop
 from lagcomp.ir import ContactModes, Kernel, LinearSolve, ModuleIR, ReturnZero, target_local
 from lagcomp.kernel_support.resting import DEPENDENT_CLOSED_CONTACTS
 
@@ -604,18 +604,20 @@ COEFFICIENTS_DOC = (
 )
 
 
-def emit_taylor(program: TaylorProgram, split_operations: int = SPLIT_OPERATIONS) -> str:
-    """The source of ``taylor_coefficients``, ``TAYLOR_WORK`` and ``TAYLOR_PERIODIC`` for `program` (in chunks
-    above `split_operations` series operations per order: `lagcomp.codegen.taylor_split`)."""
-    return (_coefficients_function(program, "taylor_coefficients", COEFFICIENTS_DOC, split_operations)
+def emit_taylor(program: TaylorProgram, split_operations: int = SPLIT_OPERATIONS,
+                chunk_operations: int = CHUNK_OPERATIONS) -> str:
+    """The source of ``taylor_coefficients``, ``TAYLOR_WORK`` and ``TAYLOR_PERIODIC`` for `program` (in chunks of
+    `chunk_operations` above `split_operations` series operations per order: `lagcomp.codegen.taylor_split`)."""
+    return (_coefficients_function(program, "taylor_coefficients", COEFFICIENTS_DOC, split_operations,
+                                   chunk_operations)
             + _taylor_data(program.operation_count, len(program.rows) + program.uses_t, program.periodic))
 
 
 def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ...],
-                           split_operations: int = SPLIT_OPERATIONS) -> str:
+                           split_operations: int = SPLIT_OPERATIONS, chunk_operations: int = CHUNK_OPERATIONS) -> str:
     """The source of the njit function `name`(t, y, p, X, W) that writes the coefficients of `program`: its order
-    loop written out, or calling the chunks of a program of more than `split_operations` series operations per
-    order (`lagcomp.codegen.taylor_split`)."""
+    loop written out, or calling its chunks of `chunk_operations` when it has more than `split_operations` series
+    operations per order (`lagcomp.codegen.taylor_split`)."""
     multipliers = list(program.multipliers)
     rows = multipliers + (["_t"] if program.uses_t else []) + [row for row in program.rows if row not in multipliers]
     states = {s.name: s.index for s in program.setup if s.kind == "state"}
@@ -625,20 +627,23 @@ def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ..
         """Coefficient `index` of the series `name`: its row of X or W (indexing the 2-d arrays directly
         instead of through row views is 8% faster: no views to build and count references to)."""
         return f"{array_of[name]}[{name}, {index}]"
+    row_lines = {**{name: f"{name} = {i}" for name, i in states.items()},
+                 **{row: f"{row} = {i}" for i, row in enumerate(rows)}}
+    split = program.operation_count > split_operations
     lines = [*doc, "order = X.shape[1] - 1", *setup_statements(program.setup, indent=INDENT)]
-    lines.append("# Row indices: a state component's series is a row of X, an intermediate value's a row of W.")
-    lines += [f"{name} = {i}" for name, i in states.items()]
-    lines += [f"{row} = {i}" for i, row in enumerate(rows)]
+    if split:       # (the chunks define the rows they use)
+        lines += [row_lines["_t"]] if program.uses_t else []
+    else:
+        lines.append("# Row indices: a state component's series is a row of X, an intermediate value's a row of W.")
+        lines += list(row_lines.values())
     lines += [f"for i in range({program.n_state}):", f"{INDENT}X[i, 0] = y[i]"]
     if program.uses_t:
         lines += ["for k in range(order + 1):", f"{INDENT}{at('_t', 'k')} = 0.0", f"{at('_t', 0)} = t",
                   "if order > 0:", f"{INDENT}{at('_t', 1)} = 1.0"]
     parts = ""
-    if program.operation_count > split_operations:
+    if split:
         scalars = [s.name for s in program.setup if s.kind in ("param", "constant")]
-        row_lines = {**{name: f"{name} = {i}" for name, i in states.items()},
-                     **{row: f"{row} = {i}" for i, row in enumerate(rows)}}
-        parts, loop = chunked_loop(name, program.body, at, row_lines, scalars)
+        parts, loop = chunked_loop(name, program.body, at, row_lines, scalars, chunk_operations)
         lines += loop
     else:
         reciprocals = "_ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order"
