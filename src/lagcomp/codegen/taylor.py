@@ -38,6 +38,10 @@ function with reference counting, which costs more than these short loops:
 inline, the double pendulum runs 1.5x faster), each block commented with the
 statement of ``rhs`` it computes; plus ``TAYLOR_WORK`` (rows of the work
 array ``W``) and ``TAYLOR_PERIODIC``, the data the driver takes with it.
+A program of more than `lagcomp.codegen.taylor_split.SPLIT_OPERATIONS`
+operations per order has its order loop call chunks of its operations, each
+its own numba function (numba's compile time of one function grows as its
+size squared).
 The driver is library code: ``lagcomp.integrate.drivers.taylor.taylor_run``.
 Systems the method does not cover (constraints, or a function without a
 recurrence here: sign, Abs, Piecewise, ...) get ``TAYLOR_REFUSED``, a
