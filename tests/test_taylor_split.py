@@ -89,7 +89,7 @@ def test_small_programs_are_one_function(programs):
 def _assert_bitwise(tmp_path, name: str, program, chunk: int, rng, parameters: int = 16) -> None:
     """`program` forced to split into chunks of `chunk` operations: coefficients to order 24 bitwise the unsplit
     function's at 5 random states, parameters and times."""
-    whole = _module(tmp_path, f"{name}_whole", program)
+    whole = _module(tmp_path, f"{name}_whole", program, split_operations=program.operation_count)
     split = _module(tmp_path, f"{name}_split", program, split_operations=1, chunk_operations=chunk)
     parts = len(split_body(program.body, chunk))
     assert parts > 1 and f"_taylor_coefficients_part{parts - 1}" in vars(split)
@@ -143,7 +143,7 @@ def test_a_six_link_chain_has_the_reference_series(cache_dir):
 
     chain = mm.planar_chain(6)
     model = lc.compile(chain, cache_dir=cache_dir)
-    params = {name: 0.4 + 0.1 * i for i, name in enumerate(model.parameter_names)} | {"g": 9.81}
+    params = {name: 0.4 + 0.1 * i for i, name in enumerate(chain.parameter_names)} | {"g": 9.81}
     y = np.array([0.3, -0.2, 0.5, 0.1, -0.4, 0.2, 0.5, -0.3, 0.2, 0.4, -0.1, 0.3])
     X = coefficients(model, 0.0, y, model.parameter_vector(params))
     want = _reference_coefficients(model, params, chain, 0.0, X, orders=10)
@@ -152,3 +152,33 @@ def test_a_six_link_chain_has_the_reference_series(cache_dir):
     run = {"params": params, "q0": y[:6], "qd0": y[6:], "rtol": 1e-13, "atol": 1e-13, "progress": False}
     taylor, dop853 = model.simulate((0.0, 1.0), method="taylor", **run), model.simulate((0.0, 1.0), **run)
     assert np.max(np.abs(taylor.y[-1] - dop853.y[-1])) <= 1e-9
+
+
+@pytest.mark.slow     # (numba compiles the model, its Taylor chunks, the variational and the lane kernels: minutes)
+def test_a_split_model_runs_sensitivities_and_batched_sweeps(tmp_path, monkeypatch):
+    """A System compiled with its Taylor program forced to split: the variational kernels (sensitivities) and the
+    batched sweep's lane kernels, written from the stored program and not from ``taylor_coefficients``, still
+    agree with dop853 at tight tolerance."""
+    import sympy as sp
+
+    from lagcomp.codegen import taylor_split
+    from lagcomp.model import t
+
+    monkeypatch.setattr(taylor_split, "SPLIT_OPERATIONS", 10)
+    monkeypatch.setattr(taylor_split, "CHUNK_OPERATIONS", 12)
+    x, z = lc.coordinates("x z")
+    a, c = sp.symbols("a c", positive=True)
+    T = ((c + sp.cos(z)) * x.diff(t) ** 2 + z.diff(t) ** 2 + x.diff(t) * z.diff(t) * sp.sin(z)) / 2
+    system = lc.System([x, z], T=T, V=a * sp.exp(x / 3) + sp.sqrt(1 + z**2), name="taylor_split_twin",
+                       defaults={"a": 1.0, "c": 2.0}, q0=(0.3, -0.2), qd0=(0.1, 0.4))
+    model = lc.compile(system, cache_dir=tmp_path)
+    assert hasattr(model.kernels, "taylor_coefficients") and model.operations["taylor_coefficients"] > 10
+    assert hasattr(model.kernels.companion.module("taylor", "taylor_coefficients"), "_taylor_coefficients_part1")
+    run = {"rtol": 1e-12, "atol": 1e-12, "progress": False, "sensitivities": ("q0", "qd0")}
+    taylor, dop853 = model.simulate((0.0, 3.0), method="taylor", **run), model.simulate((0.0, 3.0), **run)
+    assert np.max(np.abs(taylor.sensitivities[-1] - dop853.sensitivities[-1])) <= 1e-8
+    grid = {"a": [0.8, 1.0], "c": [2.0, 2.5]}
+    lanes = model.sweep((0.0, 3.0), grid, method="taylor", batched=True, rtol=1e-12, atol=1e-12)
+    want = np.asarray(model.sweep((0.0, 3.0), grid, method="dop853", rtol=1e-12, atol=1e-12).final)
+    assert np.all(lanes.status == 0)
+    assert np.max(np.abs(np.asarray(lanes.final) - want)) <= 1e-9 * np.max(np.abs(want))

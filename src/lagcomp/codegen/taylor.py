@@ -72,7 +72,8 @@ from lagcomp.codegen.taylor_ops import (
     support_names,
     value_lines,
 )
-from lagcomp.codegen.taylor_split import CHUNK_OPERATIONS, NJIT, SPLIT_OPERATIONS, chunked_loop
+from lagcomp.codegen import taylor_split
+from lagcomp.codegen.taylor_split import NJIT, chunked_loop
 from lagcomp.ir import ContactModes, Kernel, LinearSolve, ModuleIR, ReturnZero, target_local
 from lagcomp.kernel_support.resting import DEPENDENT_CLOSED_CONTACTS
 
@@ -608,20 +609,23 @@ COEFFICIENTS_DOC = (
 )
 
 
-def emit_taylor(program: TaylorProgram, split_operations: int = SPLIT_OPERATIONS,
-                chunk_operations: int = CHUNK_OPERATIONS) -> str:
+def emit_taylor(program: TaylorProgram, split_operations: int | None = None,
+                chunk_operations: int | None = None) -> str:
     """The source of ``taylor_coefficients``, ``TAYLOR_WORK`` and ``TAYLOR_PERIODIC`` for `program` (in chunks of
-    `chunk_operations` above `split_operations` series operations per order: `lagcomp.codegen.taylor_split`)."""
+    `chunk_operations` above `split_operations` series operations per order: `lagcomp.codegen.taylor_split`, whose
+    ``SPLIT_OPERATIONS`` and ``CHUNK_OPERATIONS`` are the defaults)."""
     return (_coefficients_function(program, "taylor_coefficients", COEFFICIENTS_DOC, split_operations,
                                    chunk_operations)
             + _taylor_data(program.operation_count, len(program.rows) + program.uses_t, program.periodic))
 
 
 def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ...],
-                           split_operations: int = SPLIT_OPERATIONS, chunk_operations: int = CHUNK_OPERATIONS) -> str:
+                           split_operations: int | None = None, chunk_operations: int | None = None) -> str:
     """The source of the njit function `name`(t, y, p, X, W) that writes the coefficients of `program`: its order
     loop written out, or calling its chunks of `chunk_operations` when it has more than `split_operations` series
-    operations per order (`lagcomp.codegen.taylor_split`)."""
+    operations per order (`lagcomp.codegen.taylor_split`, whose constants are the defaults, read at each call)."""
+    split_operations = taylor_split.SPLIT_OPERATIONS if split_operations is None else split_operations
+    chunk_operations = taylor_split.CHUNK_OPERATIONS if chunk_operations is None else chunk_operations
     multipliers = list(program.multipliers)
     rows = multipliers + (["_t"] if program.uses_t else []) + [row for row in program.rows if row not in multipliers]
     states = {s.name: s.index for s in program.setup if s.kind == "state"}
