@@ -15,7 +15,8 @@ steps its identical links share as helper functions (`lagcomp.codegen.outline`),
 n-link chain (about 106 per planar link, 380 per ball joint), each a loop over the orders; above
 `lagcomp.codegen.taylor_split.SPLIT_OPERATIONS` they are emitted as chunks of numba functions, so that numba's compile
 time grows about linearly with the chain (CPU, fresh cache: planar chains of 5 links, 404 operations, 29 s; 10 links,
-934, 69 s; 3 ball joints, 1151, 79 s; one function took 62 s for 5 links and 399 s and 4.5 GB for 10).
+934, 69 s; 3 ball joints, 1151, 79 s; one function took 62 s for 5 links, 399 s and 4.5 GB for 10,
+121 s and 2.3 GB for 2 ball joints).
 
 Refused, with ``TAYLOR_REFUSED`` saying why (``method="taylor"`` then raises `taylor-not-applicable`): closed loops
 (`lagcomp.Loop`: q̈ from an augmented solve with multipliers, as a System's constraints), contacts (their modes'
