@@ -12,7 +12,7 @@ ball joints' shadow switches: a switch event's reset maps σ to its shadow, and 
 The program is built from the recursion itself, every step written out: the eager ``rhs`` of a large tree calls the
 steps its identical links share as helper functions (`lagcomp.codegen.outline`), which a series program cannot call
 (each step's series are rows of one work array).  Its size is the recursion's, O(n) operations per order for an
-n-link chain (about 106 per planar link, 380 per ball joint), each a loop over the orders; above
+n-link chain (about 106 per planar link; 596 for 2 ball joints, 1151 for 3), each a loop over the orders; above
 `lagcomp.codegen.taylor_split.SPLIT_OPERATIONS` they are emitted as chunks of numba functions, so that numba's compile
 time grows about linearly with the chain (CPU, fresh cache: planar chains of 5 links, 404 operations, 29 s; 10 links,
 934, 69 s; 3 ball joints, 1151, 79 s; one function took 62 s for 5 links, 399 s and 4.5 GB for 10,
