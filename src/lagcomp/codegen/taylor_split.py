@@ -9,7 +9,11 @@ on the same rows of X and W, with the same fastmath flags), and the function's o
 The setup's scalars a chunk reads are its arguments (computed once, before the loop, as in the unsplit function).
 A chunk with pivot tests returns 0 or the failing pivot's index, which the loop returns; the others return nothing.
 
-A program up to `SPLIT_OPERATIONS` (every bundled example) is emitted as one function, its source unchanged.
+A program up to `SPLIT_OPERATIONS` (every bundled example) is emitted as one function, its source unchanged.  The
+calls cost run time (order 20: a 3-link planar chain, 192 operations in 3 chunks, 16.7 µs against 13.8 µs in one
+function; 2 ball joints, 596 in 10, 59.1 against 52.9 µs) and save compile time (3 links: 11.3 s of CPU against 15 s;
+2 ball joints: 39 s and 0.31 GB against 121 s and 2.3 GB); with chunks of 16 to 128 operations a 4-link chain's
+compile took 18 to 22 s, its calls fastest from 64 up.
 
 The chunks compute what the one function computes, in its order, so their results are bitwise its own as far as the
 compiler keeps them: under ``fastmath={"contract"}`` LLVM fuses a product into a sum (one rounding, an fma) where both
