@@ -38,6 +38,10 @@ function with reference counting, which costs more than these short loops:
 inline, the double pendulum runs 1.5x faster), each block commented with the
 statement of ``rhs`` it computes; plus ``TAYLOR_WORK`` (rows of the work
 array ``W``) and ``TAYLOR_PERIODIC``, the data the driver takes with it.
+A program of more than `lagcomp.codegen.taylor_split.SPLIT_OPERATIONS`
+operations per order has its order loop call chunks of its operations, each
+its own numba function (numba's compile time of one function grows as its
+size squared).
 The driver is library code: ``lagcomp.integrate.drivers.taylor.taylor_run``.
 Systems the method does not cover (constraints, or a function without a
 recurrence here: sign, Abs, Piecewise, ...) get ``TAYLOR_REFUSED``, a
@@ -60,16 +64,16 @@ import sympy as sp
 from lagcomp.codegen.periodic import periodic_coordinates
 from lagcomp.codegen.printer import to_code
 from lagcomp.codegen.taylor_ops import (
-    LINEAR,
     Op,
     Setup,
-    convolution_loop,
-    linear_line,
     partial_name,
     pivot_test,
     setup_statements,
     support_names,
+    value_lines,
 )
+from lagcomp.codegen import taylor_split
+from lagcomp.codegen.taylor_split import NJIT, chunked_loop
 from lagcomp.ir import ContactModes, Kernel, LinearSolve, ModuleIR, ReturnZero, target_local
 from lagcomp.kernel_support.resting import DEPENDENT_CLOSED_CONTACTS
 
@@ -605,14 +609,23 @@ COEFFICIENTS_DOC = (
 )
 
 
-def emit_taylor(program: TaylorProgram) -> str:
-    """The source of ``taylor_coefficients``, ``TAYLOR_WORK`` and ``TAYLOR_PERIODIC`` for `program`."""
-    return (_coefficients_function(program, "taylor_coefficients", COEFFICIENTS_DOC)
+def emit_taylor(program: TaylorProgram, split_operations: int | None = None,
+                chunk_operations: int | None = None) -> str:
+    """The source of ``taylor_coefficients``, ``TAYLOR_WORK`` and ``TAYLOR_PERIODIC`` for `program` (in chunks of
+    `chunk_operations` above `split_operations` series operations per order: `lagcomp.codegen.taylor_split`, whose
+    ``SPLIT_OPERATIONS`` and ``CHUNK_OPERATIONS`` are the defaults)."""
+    return (_coefficients_function(program, "taylor_coefficients", COEFFICIENTS_DOC, split_operations,
+                                   chunk_operations)
             + _taylor_data(program.operation_count, len(program.rows) + program.uses_t, program.periodic))
 
 
-def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ...]) -> str:
-    """The source of the njit function `name`(t, y, p, X, W) that writes the coefficients of `program`."""
+def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ...],
+                           split_operations: int | None = None, chunk_operations: int | None = None) -> str:
+    """The source of the njit function `name`(t, y, p, X, W) that writes the coefficients of `program`: its order
+    loop written out, or calling its chunks of `chunk_operations` when it has more than `split_operations` series
+    operations per order (`lagcomp.codegen.taylor_split`, whose constants are the defaults, read at each call)."""
+    split_operations = taylor_split.SPLIT_OPERATIONS if split_operations is None else split_operations
+    chunk_operations = taylor_split.CHUNK_OPERATIONS if chunk_operations is None else chunk_operations
     multipliers = list(program.multipliers)
     rows = multipliers + (["_t"] if program.uses_t else []) + [row for row in program.rows if row not in multipliers]
     states = {s.name: s.index for s in program.setup if s.kind == "state"}
@@ -622,33 +635,31 @@ def _coefficients_function(program: TaylorProgram, name: str, doc: tuple[str, ..
         """Coefficient `index` of the series `name`: its row of X or W (indexing the 2-d arrays directly
         instead of through row views is 8% faster: no views to build and count references to)."""
         return f"{array_of[name]}[{name}, {index}]"
+    row_lines = {**{name: f"{name} = {i}" for name, i in states.items()},
+                 **{row: f"{row} = {i}" for i, row in enumerate(rows)}}
+    split = program.operation_count > split_operations
     lines = [*doc, "order = X.shape[1] - 1", *setup_statements(program.setup, indent=INDENT)]
-    lines.append("# Row indices: a state component's series is a row of X, an intermediate value's a row of W.")
-    lines += [f"{name} = {i}" for name, i in states.items()]
-    lines += [f"{row} = {i}" for i, row in enumerate(rows)]
+    if split:       # (the chunks define the rows they use)
+        lines += [row_lines["_t"]] if program.uses_t else []
+    else:
+        lines.append("# Row indices: a state component's series is a row of X, an intermediate value's a row of W.")
+        lines += list(row_lines.values())
     lines += [f"for i in range({program.n_state}):", f"{INDENT}X[i, 0] = y[i]"]
     if program.uses_t:
         lines += ["for k in range(order + 1):", f"{INDENT}{at('_t', 'k')} = 0.0", f"{at('_t', 0)} = t",
                   "if order > 0:", f"{INDENT}{at('_t', 1)} = 1.0"]
-    reciprocals = "_ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order"
-    lines += ["for k in range(order):", INDENT + reciprocals, f"{INDENT}_ik1 = 1.0/(k + 1)"]
-    for op in program.body:
-        if op.kind == "comment":
-            body = [f"# {op.const}"]
-        elif op.kind == "pivot":
-            scale = at(op.args[1], 0) if len(op.args) > 1 else op.const
-            body = [f"if k == 0 and not {pivot_test(at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
-        elif op.kind == "state":
-            body = [f"X[{op.index}, k + 1] = {linear_line(op, at)}*_ik1"]
-        elif op.kind in LINEAR:
-            body = [linear_line(op, at)]
-        else:
-            summary, loop = convolution_loop(op, at)
-            body = [f"# {summary}", *loop]
-        lines += [INDENT + line for line in body]
+    parts = ""
+    if split:
+        scalars = [s.name for s in program.setup if s.kind in ("param", "constant")]
+        parts, loop = chunked_loop(name, program.body, at, row_lines, scalars, chunk_operations)
+        lines += loop
+    else:
+        reciprocals = "_ik = 1.0/k if k > 0 else 0.0  # 1/k and 1/(k + 1): one division each per order"
+        lines += ["for k in range(order):", INDENT + reciprocals, f"{INDENT}_ik1 = 1.0/(k + 1)"]
+        lines += [INDENT + line for op in program.body for line in value_lines(op, at)]
     lines.append(f"return {-len(multipliers)}" if multipliers else "return 0")
     body = "\n".join(INDENT + line if line else "" for line in lines)
-    return f'\n\n@njit(cache=True, error_model="numpy", fastmath={{"contract"}})\ndef {name}(t, y, p, X, W):\n{body}\n'
+    return f'{parts}\n\n{NJIT}\ndef {name}(t, y, p, X, W):\n{body}\n'
 
 
 def _taylor_data(operations: int, rows: int, periodic: tuple[int, ...]) -> str:
@@ -692,7 +703,7 @@ def emit_mode_programs(modes: ModePrograms) -> str:
         lines += [f"if _held == {mask}:", f"{INDENT}return _taylor_held_{mask}(t, y, p, X, W)"]
     lines.append(f"return _taylor_held_{len(modes.programs) - 1}(t, y, p, X, W)")
     body = "\n".join(INDENT + line if line else "" for line in lines)
-    parts.append(f'\n\n@njit(cache=True, error_model="numpy", fastmath={{"contract"}})\n'
+    parts.append(f"\n\n{NJIT}\n"
                  f"def taylor_coefficients(t, y, p, X, W):\n{body}\n")
     operations = max(program.operation_count for program in modes.programs)
     rows = max(len(program.rows) + program.uses_t for program in modes.programs)

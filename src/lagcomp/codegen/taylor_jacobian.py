@@ -59,10 +59,9 @@ from lagcomp.codegen.taylor_kernel_frame import (
     kernel_source,
     program_ops,
     setup_lines,
-    value_lines,
     work_rows,
 )
-from lagcomp.codegen.taylor_ops import LINEAR, Op
+from lagcomp.codegen.taylor_ops import LINEAR, Op, value_lines
 
 #: A term of a tangent: (factor (code), kind ("one", "value" or "slot"), series (a value's name, a slot's index)).
 Term = tuple[str, str, str]

@@ -3,21 +3,17 @@
 
 Both write the same kernel around a body of their own: the columns of one pass (`block_width` and its
 limits), the rows of W (`work_rows`), the tangents of the program's scalars (`ScalarTangents`), the
-statements before the order loop (`setup_lines`), a value's coefficient k (`value_lines`, the code of
-``taylor_coefficients``, so that the state rows of X are bitwise its) and the function around the body
-with its constants (`kernel_source`).
+statements before the order loop (`setup_lines`) and the function around the body with its constants
+(`kernel_source`); a value's coefficient k is `lagcomp.codegen.taylor_ops.value_lines`, the code of
+``taylor_coefficients``, so that the state rows of X are bitwise its.
 """
 
 from __future__ import annotations
 
 from lagcomp.codegen.taylor_ops import (
-    LINEAR,
     Op,
     Setup,
-    convolution_loop,
-    linear_line,
     partial_name,
-    pivot_test,
     setup_statements,
 )
 
@@ -73,22 +69,6 @@ class ScalarTangents:
 
     def varies(self, const: str) -> bool:
         return any(self.tangent(const, j) is not None for j in self.parameters)
-
-
-def value_lines(op: Op, at) -> list[str]:
-    """Coefficient k of `op`'s value(s): the code of ``taylor_coefficients`` (`lagcomp.codegen.taylor`), with
-    ``at(name, index)`` the code of a coefficient (a writer's ``at``)."""
-    if op.kind == "comment":
-        return [f"# {op.const}"]
-    if op.kind == "pivot":
-        scale = at(op.args[1], 0) if len(op.args) > 1 else op.const
-        return [f"if k == 0 and not {pivot_test(at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
-    if op.kind == "state":
-        return [f"X[{op.index}, k + 1] = {linear_line(op, at)}*_ik1"]
-    if op.kind in LINEAR:
-        return [linear_line(op, at)]
-    summary, loop = convolution_loop(op, at)
-    return [f"# {summary}", *loop]
 
 
 def setup_lines(program: dict, columns: int, parameters: tuple[int, ...]) -> list[str]:

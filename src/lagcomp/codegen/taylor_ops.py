@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+INDENT = "    "
+
 #: The operations with a convolution (coefficient k sums over the lower ones): `taylor_lanes` unrolls them.
 CONVOLUTIONS = ("mul", "square", "div", "rdiv", "sqrt", "pow", "exp", "log", "sin_cos")
 #: The linear operations (coefficient k from the arguments' coefficient k alone).
@@ -210,3 +212,19 @@ def linear_line(op: Op, at, first: bool | None = None) -> str:
         "rsub_const": lambda: at_zero(f"{c} - {at(a, 'k')}", f"-{at(a, 'k')}"),
     }[kind]()
     return f"{at(w, 'k')} = {value}"
+
+
+def value_lines(op: Op, at) -> list[str]:
+    """Coefficient k of `op`'s value(s): the code of ``taylor_coefficients`` (`lagcomp.codegen.taylor`), with
+    ``at(name, index)`` the code of a coefficient (a writer's ``at``)."""
+    if op.kind == "comment":
+        return [f"# {op.const}"]
+    if op.kind == "pivot":
+        scale = at(op.args[1], 0) if len(op.args) > 1 else op.const
+        return [f"if k == 0 and not {pivot_test(at(op.args[0], 0), scale)}:", f"{INDENT}return {op.index}"]
+    if op.kind == "state":
+        return [f"X[{op.index}, k + 1] = {linear_line(op, at)}*_ik1"]
+    if op.kind in LINEAR:
+        return [linear_line(op, at)]
+    summary, loop = convolution_loop(op, at)
+    return [f"# {summary}", *loop]

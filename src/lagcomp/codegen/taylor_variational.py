@@ -63,13 +63,13 @@ from lagcomp.codegen.taylor_kernel_frame import (
     kernel_source,
     program_ops,
     setup_lines,
-    value_lines,
     work_rows,
 )
 from lagcomp.codegen.taylor_ops import (
     LINEAR,
     Op,
     support_import_lines,
+    value_lines,
 )
 
 

@@ -12,12 +12,16 @@ ball joints' shadow switches: a switch event's reset maps σ to its shadow, and 
 The program is built from the recursion itself, every step written out: the eager ``rhs`` of a large tree calls the
 steps its identical links share as helper functions (`lagcomp.codegen.outline`), which a series program cannot call
 (each step's series are rows of one work array).  Its size is the recursion's, O(n) operations per order for an
-n-link chain (about 106 per planar link), each a loop over the orders in one numba function.
+n-link chain (about 106 per planar link; 596 for 2 ball joints, 1151 for 3), each a loop over the orders; above
+`lagcomp.codegen.taylor_split.SPLIT_OPERATIONS` they are emitted as chunks of numba functions, so that numba's compile
+time grows about linearly with the chain (CPU, fresh cache: planar chains of 5 links, 404 operations, 29 s; 10 links,
+934, 69 s; 3 ball joints, 1151, 79 s; one function took 62 s for 5 links, 399 s and 4.5 GB for 10,
+121 s and 2.3 GB for 2 ball joints).
 
 Refused, with ``TAYLOR_REFUSED`` saying why (``method="taylor"`` then raises `taylor-not-applicable`): closed loops
 (`lagcomp.Loop`: q̈ from an augmented solve with multipliers, as a System's constraints), contacts (their modes'
-programs are a System's, built from its closed-contacts kernel), a load without a recurrence (sign, Abs,
-Piecewise), and a program of more than `OPERATIONS_MAX` operations per order (numba's compile time).
+programs are a System's, built from its closed-contacts kernel) and a load without a recurrence (sign, Abs,
+Piecewise).
 """
 
 from __future__ import annotations
@@ -31,13 +35,6 @@ from lagcomp.codegen.tree_lower import FORMULATION, motion
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.program import Program
 from lagcomp.multibody.tree import Tree
-
-
-#: The most series operations per order of a tree's ``taylor_coefficients``: numba's compile time of the one function
-#: grows about as its size squared (measured, CPU, numba alone: planar chains of 3 links, 192 operations, 15 s; 5 links,
-#: 404, 62 s; 10 links, 934, 399 s and 4.5 GB).  About 106 operations per planar link: chains of up to 4 links (3D
-#: chains on ball joints: 2).
-OPERATIONS_MAX = 500
 
 
 def tree_taylor_source(tree: Tree, local, kind: KernelKind, eager_module: str) -> tuple[str, dict]:
@@ -59,14 +56,9 @@ def tree_taylor_decomposition(tree: Tree, local) -> TaylorProgram | Unsupported:
     if tree.contacts:
         return Unsupported("contacts of a kinematic tree (their modes' series programs are not built for trees)")
     try:
-        program = decompose(motion_kernel(local), local.n)
+        return decompose(motion_kernel(local), local.n)
     except Unsupported as err:
         return err
-    if program.operation_count > OPERATIONS_MAX:
-        return Unsupported(f"a Taylor program too large to compile ({program.operation_count} series operations per "
-                           f"order, above lagcomp.codegen.tree_taylor.OPERATIONS_MAX = {OPERATIONS_MAX}: numba would "
-                           "take minutes and gigabytes on one function that size)")
-    return program
 
 
 def motion_kernel(local) -> Kernel:
