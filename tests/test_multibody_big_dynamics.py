@@ -18,7 +18,7 @@ from random_systems import python_kernels
 
 import lagcomp as lc
 from lagcomp.accuracy import tree_reference
-from lagcomp.codegen.tree_companion import tree_locals
+from lagcomp.codegen.tree_locals import tree_locals
 from lagcomp.examples.trees import planar_chain, spherical_chain
 from lagcomp.multibody.charts import mass_matrix_in_coordinates
 from lagcomp.multibody.crba import mass_matrix

@@ -19,7 +19,8 @@ import sympy as sp
 
 import lagcomp as lc
 from lagcomp.codegen import outline, tree_companion
-from lagcomp.codegen.tree_companion import lower_tree_kind, tree_locals
+from lagcomp.codegen.tree_companion import lower_tree_kind
+from lagcomp.codegen.tree_locals import tree_locals
 from lagcomp.codegen.tree_lower import motion
 from lagcomp.examples.trees import planar_chain, spherical_chain
 from lagcomp.multibody.forward_mode import derivatives

@@ -19,7 +19,7 @@ import sympy as sp
 import lagcomp as lc
 from lagcomp.accuracy.tree_reference import tree_reference
 from lagcomp.codegen.taylor import Unsupported
-from lagcomp.codegen.tree_companion import tree_locals
+from lagcomp.codegen.tree_locals import tree_locals
 from lagcomp.codegen.tree_taylor import tree_taylor_decomposition
 from lagcomp.errors import OptionError
 from lagcomp.multibody.mrp import (

@@ -27,7 +27,7 @@ from lagcomp.codegen.taylor_split import (
     counted,
     split_body,
 )
-from lagcomp.codegen.tree_companion import tree_locals
+from lagcomp.codegen.tree_locals import tree_locals
 from lagcomp.codegen.tree_taylor import tree_taylor_decomposition
 from lagcomp.examples import get
 from lagcomp.mechanics.lagrange import derive

@@ -27,7 +27,7 @@ POSITION, VELOCITY = ("x", "y", "z"), ("vx", "vy", "vz")
 def tree_point_rows(model, tree, q: np.ndarray, params: dict, wanted) -> dict:
     """{name: (C row (2n,), D row (U,))} of each link output among `wanted` (``"<link>.<part>"`` names, parts of
     `POSITION` and `VELOCITY`) of `model` compiled from `tree`; an OptionError naming the links for an unknown one."""
-    from lagcomp.codegen.tree_companion import tree_locals
+    from lagcomp.codegen.tree_locals import tree_locals
     from lagcomp.multibody.forward_mode import derivatives
     from lagcomp.multibody.frames import link_nodes, world_frames
     from lagcomp.multibody.program import Program

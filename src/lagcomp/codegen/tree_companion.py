@@ -34,15 +34,13 @@ so every status is 0.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import sympy as sp
 
-from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
 from lagcomp.codegen.tree_canonical import tree_canonical_kernels
 from lagcomp.codegen.tree_geometry import tree_geometry_kernels
+from lagcomp.codegen.tree_locals import TreeLocals, tree_locals
 from lagcomp.codegen.tree_loop_companion import LOOP_BUILDERS
 from lagcomp.codegen.tree_lower import (
     FORMULATION,
@@ -52,50 +50,11 @@ from lagcomp.codegen.tree_lower import (
     program_kernel,
 )
 from lagcomp.codegen.tree_power import active_tree_power_terms, tree_power_kernels
-from lagcomp.codegen.tree_slip import slipping_nodes
 from lagcomp.codegen.tree_taylor import tree_taylor_source
 from lagcomp.ir import Delegate, FlatMatrix, Kernel, ModuleIR, ReturnZero
 from lagcomp.multibody.forward_mode import derivatives, substituted
-from lagcomp.multibody.joints import t
-from lagcomp.multibody.kinematics import local_nodes
 from lagcomp.multibody.program import Program
 from lagcomp.multibody.tree import Tree
-
-
-@dataclass(frozen=True)
-class TreeLocals:
-    """The kernel locals of a tree: coordinates `q`, velocities `qd`, parameters `p` (symbols, in order), the
-    loads binding them to y and p, and the tree's nodes and gravity over them."""
-
-    q: tuple
-    qd: tuple
-    p: tuple
-    loads: tuple
-    nodes: tuple
-    gravity: tuple
-    #: Each parameter (and t) to its local: what a loop's points are written over (`lagcomp.codegen.tree_constraints`).
-    mapping: dict
-
-    @property
-    def n(self) -> int:
-        return len(self.q)
-
-
-def tree_locals(tree: Tree) -> TreeLocals:
-    """`TreeLocals` of `tree`, the eager module's names (`lagcomp.codegen.tree_lower.lower_tree`)."""
-    n = tree.n
-    q = tuple(sp.Symbol(user_local("q", name, i), real=True) for i, name in enumerate(tree.coordinate_names))
-    qd = tuple(sp.Symbol(user_local("qd", name, i), real=True) for i, name in enumerate(tree.coordinate_names))
-    mapping = {s: sp.Symbol(user_local("p", s.name, k), real=True) for k, s in enumerate(tree.parameters)}
-    loads = [(s.name, f"y[{i}]") for i, s in enumerate(q)] + [(s.name, f"y[{n + i}]") for i, s in enumerate(qd)]
-    loads += [(local.name, f"p[{k}]") for k, local in enumerate(mapping.values())]
-    p = tuple(mapping.values())
-    mapping[t] = sp.Symbol("t", real=True)
-    nodes, slip_loads = slipping_nodes(tree, local_nodes(tree, q, qd, mapping), q, qd, mapping)
-    loads += slip_loads   # (friction elements pressed by an expression: their modes, `lagcomp.codegen.tree_slip`)
-    return TreeLocals(q, qd, p, tuple(loads), tuple(nodes), tuple(sp.sympify(g).xreplace(mapping)
-                                                                for g in tree.gravity),
-                      mapping)
 
 
 def tree_companion_source(tree: Tree, kind: KernelKind, eager_module: str) -> tuple[str, dict]:

@@ -15,12 +15,11 @@ from __future__ import annotations
 
 import sympy as sp
 
-from lagcomp.codegen.bindings import user_local
 from lagcomp.codegen.outline import outline
 from lagcomp.codegen.tree_constraints import gain_loads, loop_kernels
 from lagcomp.codegen.tree_contacts import TreeContacts
 from lagcomp.codegen.tree_events import event_functions, tree_event_kernels
-from lagcomp.codegen.tree_slip import slipping_nodes
+from lagcomp.codegen.tree_locals import tree_locals
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
 from lagcomp.model.friction import Friction
 from lagcomp.multibody.aba import accelerations
@@ -31,8 +30,6 @@ from lagcomp.multibody.charts import (
 )
 from lagcomp.multibody.crba import mass_matrix
 from lagcomp.multibody.energy import kinetic_energy, potential_energy
-from lagcomp.multibody.joints import t
-from lagcomp.multibody.kinematics import local_nodes
 from lagcomp.multibody.program import Program
 from lagcomp.multibody.rnea import forcing, momenta
 from lagcomp.multibody.tree import Tree
@@ -47,16 +44,8 @@ def lower_tree(tree: Tree) -> ModuleIR:
     ball joints' shadow switches, the tree's own events; with contacts, rhs with their modes:
     `lagcomp.codegen.tree_contacts`); ``mass_matrix`` and ``forcing``, which no run calls, are on demand
     (`lagcomp.codegen.tree_companion`)."""
-    n, names = tree.n, tree.coordinate_names
-    q = [sp.Symbol(user_local("q", name, i), real=True) for i, name in enumerate(names)]
-    qd = [sp.Symbol(user_local("qd", name, i), real=True) for i, name in enumerate(names)]
-    mapping = {s: sp.Symbol(user_local("p", s.name, k), real=True) for k, s in enumerate(tree.parameters)}
-    loads = [(s.name, f"y[{i}]") for i, s in enumerate(q)] + [(s.name, f"y[{n + i}]") for i, s in enumerate(qd)]
-    loads += [(local.name, f"p[{k}]") for k, local in enumerate(mapping.values())]
-    mapping[t] = sp.Symbol("t", real=True)
-    nodes, slip_loads = slipping_nodes(tree, local_nodes(tree, q, qd, mapping), q, qd, mapping)
-    loads += slip_loads   # (friction elements pressed by an expression: their modes, `lagcomp.codegen.tree_slip`)
-    gravity = [sp.sympify(g).xreplace(mapping) for g in tree.gravity]
+    local = tree_locals(tree)
+    q, qd, nodes, gravity, mapping, loads = local.q, local.qd, local.nodes, local.gravity, local.mapping, [*local.loads]
 
     def kernel(name, doc, args, build, solve=None):
         prog = Program()
@@ -87,7 +76,7 @@ def lower_tree(tree: Tree) -> ModuleIR:
                lambda prog: [(f"out[{i}]", h) for i, h in enumerate(forces_in_coordinates(prog, nodes, momenta(prog, nodes)))]),
         *tree_event_kernels(tree, q, qd, mapping, loads, contacts),
     )
-    return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=names,
+    return ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=tree.coordinate_names,
                     parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION,
                     constraint_names=tree.constraint_names, holonomic=(True,) * len(tree.constraint_names),
                     event_names=tree.event_names if tree.user_events else ())
