@@ -25,7 +25,6 @@ from hypothesis import strategies as st
 from sympy.physics.vector import ReferenceFrame
 
 import lagcomp as lc
-from lagcomp import examples
 from lagcomp.cli import main
 from lagcomp.codegen.bindings import INPUT_PREFIXES, USER_NAMESPACE
 from lagcomp.codegen.taylor_lanes import taylor_lanes_module
