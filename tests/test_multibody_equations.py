@@ -22,7 +22,12 @@ import time
 import numpy as np
 import pytest
 import sympy as sp
-from multibody_models import cart_pole, lagrangian_system, planar_chain, random_tree, universal_chain
+from multibody_models import (
+    cart_pole,
+    planar_chain,
+    random_tree,
+    universal_chain,
+)
 from sympy.parsing.sympy_parser import parse_expr
 from test_multibody_loops import four_bar_tree, spatial_tree
 
@@ -287,6 +292,11 @@ def test_qdd_from_the_table_is_rhs(tree, cache_dir, rng):
         assert relative(accelerations(table(equations, values)), model.rhs(values["t"], y, params)[tree.n:]) < 1e-11
 
 
+def _placed(R, r):
+    """point(j, p): the point p of node j's frame in the base frame, ⁰r_j + ⁰R_j p (nodes numbered from 1)."""
+    return lambda j, p: r[j - 1] + R[j - 1] @ np.array([float(x) for x in p])
+
+
 @pytest.mark.parametrize("tree", [four_bar_tree(), spatial_tree()], ids=lambda tree: tree.name)
 def test_the_loops_closure_is_the_models_constraint(tree, cache_dir, rng):
     model = lc.compile(tree, cache_dir=cache_dir)
@@ -296,15 +306,11 @@ def test_the_loops_closure_is_the_models_constraint(tree, cache_dir, rng):
     for _ in range(3):
         values = random_values(tree, rng)
         y, params = state(tree, values)
-        R, r = base_frames(table(equations, values))
-
-        def point(j, p):
-            return r[j - 1] + R[j - 1] @ np.array([float(x) for x in p])
-
-        names = {**values, "point": point, "dot": lambda d, x: float(np.dot([float(e) for e in d], x))}
+        names = {**values, "point": _placed(*base_frames(table(equations, values))),
+                 "dot": lambda d, x: float(np.dot([float(e) for e in d], x))}
         residuals = model.constraint_residuals(values["t"], y, params)
         for line in equations.part("constraint"):
-            phi = eval(line.text.split(" = ")[0], {"__builtins__": {}}, names)   # noqa: S307  (our own text)
+            phi = eval(line.text.split(" = ")[0], {"__builtins__": {}}, names)
             assert phi == pytest.approx(residuals[line.label], rel=1e-12, abs=1e-13)
 
 

@@ -202,11 +202,11 @@ def _base_frame_lines() -> list[Equation]:
     them for V: `lagcomp.multibody.energy` dots gravity into each placement instead)."""
     return [
         _line("tree", "base frame", (r"{}^{0}R_{i}", "R0_i"),
-              (r"{}^{0}R_{\lambda(i)} E_{i}^{T}, \quad {}^{0}r_{i} = {}^{0}r_{\lambda(i)} + {}^{0}R_{\lambda(i)} r_{i}"
+              ((r"{}^{0}R_{\lambda(i)} E_{i}^{T}, \quad {}^{0}r_{i} = {}^{0}r_{\lambda(i)} + {}^{0}R_{\lambda(i)} r_{i}"
                r" \quad \left({}^{i}X_{\lambda(i)} = \operatorname{rot}(E_{i}) \operatorname{xlt}(r_{i}),\ "
-               r"{}^{0}R_{0} = \mathbf{1},\ {}^{0}r_{0} = 0\right)",
-               "R0_lambda(i)*E_i.T,  r0_i = r0_lambda(i) + R0_lambda(i)*r_i  (X_i = rot(E_i)*xlt(r_i), R0_0 = 1, "
-               "r0_0 = 0)")),
+               r"{}^{0}R_{0} = \mathbf{1},\ {}^{0}r_{0} = 0\right)"),
+               ("R0_lambda(i)*E_i.T,  r0_i = r0_lambda(i) + R0_lambda(i)*r_i  (X_i = rot(E_i)*xlt(r_i), R0_0 = 1, "
+               "r0_0 = 0)"))),
     ]
 
 
@@ -240,13 +240,13 @@ _BALL = (
     ("mrp", r"\operatorname{mrp}(\sigma)",
      r"\mathbf{1} + \frac{8 [\sigma]_{\times}^{2} + 4 (1 - \sigma^{T}\sigma) [\sigma]_{\times}}{(1 + \sigma^{T}\sigma)^{2}}",
      "mrp(sigma) = 1 + (8*[sigma]x**2 + 4*(1 - sigma.sigma)*[sigma]x)/(1 + sigma.sigma)**2"),
-    ("J", r"J(\sigma)", r"\frac{4}{(1 + \sigma^{T}\sigma)^{2}} \left((1 - \sigma^{T}\sigma) \mathbf{1} - 2 [\sigma]_{\times}"
-     r" + 2 \sigma \sigma^{T}\right)", "J(sigma) = 4*((1 - sigma.sigma)*1 - 2*[sigma]x + 2*sigma*sigma.T)/(1 + "
-     "sigma.sigma)**2"),
-    ("ball joint velocity product", r"c_{k+2}", r"v_{k+2} \times (\omega, 0) + (\dot{J} \dot{\sigma}, 0), \quad "
-     r"c_{k} = c_{k+1} = 0 \quad (\text{nodes } k, k+1, k+2 \text{ of a ball joint}, \omega = J(\sigma) \dot{\sigma})",
-     "c_(k+2) = v_(k+2) x (omega, 0) + (Jdot*sigma_dot, 0),  c_k = c_(k+1) = 0  (nodes k, k+1, k+2 of a ball joint, "
-     "omega = J(sigma)*sigma_dot)"),
+    ("J", r"J(\sigma)", (r"\frac{4}{(1 + \sigma^{T}\sigma)^{2}} \left((1 - \sigma^{T}\sigma) \mathbf{1} - 2 [\sigma]_{\times}"
+     r" + 2 \sigma \sigma^{T}\right)"), ("J(sigma) = 4*((1 - sigma.sigma)*1 - 2*[sigma]x + 2*sigma*sigma.T)/(1 + "
+     "sigma.sigma)**2")),
+    ("ball joint velocity product", r"c_{k+2}", (r"v_{k+2} \times (\omega, 0) + (\dot{J} \dot{\sigma}, 0), \quad "
+     r"c_{k} = c_{k+1} = 0 \quad (\text{nodes } k, k+1, k+2 \text{ of a ball joint}, \omega = J(\sigma) \dot{\sigma})"),
+     ("c_(k+2) = v_(k+2) x (omega, 0) + (Jdot*sigma_dot, 0),  c_k = c_(k+1) = 0  (nodes k, k+1, k+2 of a ball joint, "
+     "omega = J(sigma)*sigma_dot)")),
 )
 
 _BALL_ACCELERATION = (
@@ -266,26 +266,26 @@ def _aba_lines(spherical: bool) -> list[Equation]:
 
 #: A tree with loops: the augmented system, M by the composite-rigid-body algorithm, F by recursive Newton–Euler.
 _LOOPS = (
-    ("augmented system", r"M(q) \ddot{q}", r"F(q, \dot{q}, t) + \Lambda(q)^{T} \lambda, \quad \Lambda = "
-     r"\partial \Phi / \partial q", "M(q)*qddot = F(q, qdot, t) + Lambda(q).T*lambda,  Lambda = dPhi/dq"),
+    ("augmented system", r"M(q) \ddot{q}", (r"F(q, \dot{q}, t) + \Lambda(q)^{T} \lambda, \quad \Lambda = "
+     r"\partial \Phi / \partial q"), "M(q)*qddot = F(q, qdot, t) + Lambda(q).T*lambda,  Lambda = dPhi/dq"),
     ("velocity", "v_{i}", r"{}^{i}X_{\lambda(i)} v_{\lambda(i)} + S_{i} \dot{q}_{i} \quad (i = 1, \dots, n;\ v_{0} = 0)",
      "v_i = X_i*v_lambda(i) + S_i*qdot_i   (i = 1..n; v_0 = 0)"),
-    ("acceleration at rest", "a_{i}", r"{}^{i}X_{\lambda(i)} a_{\lambda(i)} + v_{i} \times S_{i} \dot{q}_{i} "
-     r"\quad (a_{0} = (0, -\vec{g}))", "a_i = X_i*a_lambda(i) + v_i x S_i*qdot_i   (a_0 = (0, -gravity))"),
+    ("acceleration at rest", "a_{i}", (r"{}^{i}X_{\lambda(i)} a_{\lambda(i)} + v_{i} \times S_{i} \dot{q}_{i} "
+     r"\quad (a_{0} = (0, -\vec{g}))"), "a_i = X_i*a_lambda(i) + v_i x S_i*qdot_i   (a_0 = (0, -gravity))"),
     ("force", "f_{i}", r"I_{i} a_{i} + v_{i} \times^{*} I_{i} v_{i} + \sum_{j:\,\lambda(j) = i} {}^{j}X_{i}^{T} f_{j}",
      "f_i = I_i*a_i + v_i x* I_i*v_i + sum_{j: lambda(j) = i} X_j.T*f_j"),
     ("forcing", "F_{i}", r"\tau_{i} - S_{i}^{T} f_{i}", "F_i = tau_i - S_i.T*f_i"),
     ("composite inertia", "I^{C}_{i}", r"I_{i} + \sum_{j:\,\lambda(j) = i} {}^{j}X_{i}^{T} I^{C}_{j}\, {}^{j}X_{i}",
      "IC_i = I_i + sum_{j: lambda(j) = i} X_j.T*IC_j*X_j"),
-    ("mass matrix", "M_{ji} = M_{ij}", r"S_{j}^{T} \left({}^{i}X_{j}\right)^{T} I^{C}_{i} S_{i} \quad "
-     r"(j = i \text{ or an ancestor of } i)", "M_ji = M_ij = S_j.T*X(j<-i).T*IC_i*S_i   (j = i or an ancestor of i)"),
+    ("mass matrix", "M_{ji} = M_{ij}", (r"S_{j}^{T} \left({}^{i}X_{j}\right)^{T} I^{C}_{i} S_{i} \quad "
+     r"(j = i \text{ or an ancestor of } i)"), "M_ji = M_ij = S_j.T*X(j<-i).T*IC_i*S_i   (j = i or an ancestor of i)"),
 )
 
 _BALL_COORDINATES = (
     "ball joint coordinates", r"M_{\sigma}, F_{\sigma}, \Lambda_{\sigma}",
     r"J^{T} M J,\ J^{T} F,\ \Lambda J \quad (\text{each ball joint's rows and columns}, \omega = J(\sigma) \dot{\sigma})",
-    "M_sigma, F_sigma, Lambda_sigma = J.T*M*J, J.T*F, Lambda*J   (each ball joint's rows and columns, "
-    "omega = J(sigma)*sigma_dot)")
+    ("M_sigma, F_sigma, Lambda_sigma = J.T*M*J, J.T*F, Lambda*J   (each ball joint's rows and columns, "
+    "omega = J(sigma)*sigma_dot)"))
 
 
 def _loop_motion_lines(spherical: bool) -> list[Equation]:
