@@ -34,7 +34,7 @@ from test_multibody_loops import four_bar_tree, spatial_tree
 import lagcomp as lc
 from lagcomp.codegen.tree_latex import tree_equations
 from lagcomp.equations import Equations
-from lagcomp.examples.trees import spherical_chain
+from lagcomp.examples.trees import arm5, spherical_chain
 
 # -- Featherstone's operators, 6×6, angular part first ---------------------------------------------------------------
 
@@ -225,6 +225,16 @@ def relative(x, reference) -> float:
     return float(np.max(np.abs(np.asarray(x) - reference)) / max(np.max(np.abs(reference)), 1e-300))
 
 
+def floating_pair() -> lc.Tree:
+    """A free body (translations, then MRPs) carrying a link on a hinge about an unaligned axis."""
+    m, M, k = sp.symbols("m M k", positive=True)
+    return lc.Tree([
+        lc.Link("body", lc.Free(("x", "y", "z", "s1", "s2", "s3")), mass=M, com=(0.1, 0, 0.2), inertia=(1, 2, 3)),
+        lc.Link("flap", lc.Revolute("q", axis=(1, 1, 0), origin=(0.5, 0, 0), stiffness=k, rest=0.3), parent="body",
+                mass=m, com=(0.2, 0.1, 0), inertia=((1, 0.1, 0), (0.1, 2, 0), (0, 0, 2.5))),
+    ], gravity=(0, 0, -sp.Symbol("g")), name="floating_pair")
+
+
 # -- content ----------------------------------------------------------------------------------------------------------
 
 JOINT = re.compile(r"lambda\((\d+)\) = (\d+)   \[(\w+) on (\w+|the base): (\w+)(?: (\d) of (\d))?, (\w+) "
@@ -232,10 +242,12 @@ JOINT = re.compile(r"lambda\((\d+)\) = (\d+)   \[(\w+) on (\w+|the base): (\w+)(
 
 
 @pytest.mark.parametrize("tree", [planar_chain(3), cart_pole(), universal_chain(2), spherical_chain(2),
-                                  random_tree(3)[0], spatial_tree()], ids=lambda tree: tree.name)
+                                  random_tree(3)[0], spatial_tree(), floating_pair(), arm5()],
+                         ids=lambda tree: tree.name)
 def test_the_joint_table_is_the_trees(tree):
-    joints = [JOINT.fullmatch(line.text) for line in Equations(tree.name, tree_equations(tree)).part("tree")
-              if line.text.startswith("lambda(")]
+    lines = Equations(tree.name, tree_equations(tree)).part("tree")
+    assert all("\n" not in line.text for line in lines)   # (a matrix's text on one line)
+    joints = [JOINT.fullmatch(line.text) for line in lines if line.text.startswith("lambda(")]
     assert len(joints) == tree.n and all(joints)
     links = {link.name: link for link in tree.links}
     for i, (match, node) in enumerate(zip(joints, tree.nodes)):
@@ -266,9 +278,10 @@ def test_T_and_V_from_the_table_are_the_lagrangian_twins(tree_pair, name, rng):
         assert T + V == pytest.approx(model.energy(y[:tree.n], y[tree.n:], values["t"], params), rel=1e-12)
 
 
-@pytest.mark.parametrize("tree", [spherical_chain(2), random_tree(5)[0], spatial_tree()], ids=lambda tree: tree.name)
+@pytest.mark.parametrize("tree", [spherical_chain(2), random_tree(5)[0], spatial_tree(), floating_pair()],
+                         ids=lambda tree: tree.name)
 def test_T_plus_V_from_the_table_is_the_energy_kernel(tree, cache_dir, rng):
-    """Ball joints (mrp, J), rotated placements and unaligned axes (explicit E), a loop's tree."""
+    """Ball and free joints (mrp, J), rotated placements and unaligned axes (explicit E), springs, a loop's tree."""
     model = lc.compile(tree, cache_dir=cache_dir)
     equations = model.equations()
     for _ in range(4):
@@ -279,7 +292,7 @@ def test_T_plus_V_from_the_table_is_the_energy_kernel(tree, cache_dir, rng):
         assert energy == pytest.approx(model.energy(y[:tree.n], y[tree.n:], values["t"], params), rel=1e-12)
 
 
-@pytest.mark.parametrize("tree", [cart_pole(), universal_chain(2), random_tree(3)[0], random_tree(7)[0]],
+@pytest.mark.parametrize("tree", [cart_pole(), universal_chain(2), random_tree(3)[0], random_tree(7)[0], arm5()],
                          ids=lambda tree: tree.name)
 def test_qdd_from_the_table_is_rhs(tree, cache_dir, rng):
     """The table's placements, subspaces, inertias, joint forces (springs, dampers, a driving force of t) and

@@ -63,12 +63,18 @@ class _Printer:
                 "(" + ", ".join(self.text(v) for v in values) + ")")
 
     def matrix(self, rows) -> tuple[str, str]:
-        """A 3×3 matrix: diag(...) where it is diagonal, else the whole matrix."""
+        """A 3×3 matrix, in the text on one line, ``Matrix([[a, b, c], ...])``."""
+        m = sp.Matrix(rows)
+        text = ", ".join("[" + ", ".join(self.text(e) for e in m.row(i)) + "]" for i in range(m.rows))
+        return self.latex(m), f"Matrix([{text}])"
+
+    def inertia(self, rows) -> tuple[str, str]:
+        """A 3×3 inertia: diag(...) where it is diagonal, else the whole matrix."""
         m = sp.Matrix(rows)
         if m.is_diagonal():
             values = [m[k, k] for k in range(3)]
             return (r"\operatorname{diag}" + self.vector(values)[0], "diag" + self.vector(values)[1])
-        return self.latex(m), self.text(m)
+        return self.matrix(m)
 
 
 def tree_equations(tree: Tree) -> tuple[Equation, ...]:
@@ -110,7 +116,7 @@ def _node_lines(tree: Tree, i: int, node: LocalNode, printer: _Printer) -> list[
     if node.kind == "spherical":
         lines.append(_line("tree", coordinate, (rf"\dot{{q}}_{{{k}}}", f"qdot_{k}"), _ball_rate(node, printer)))
     if node.mass != 0 or any(e != 0 for row in node.inertia for e in row):
-        c, inertia = printer.vector(node.com), printer.matrix(node.inertia)
+        c, inertia = printer.vector(node.com), printer.inertia(node.inertia)
         mass = (printer.latex(node.mass), printer.text(node.mass))
         lines.append(_line("tree", coordinate, (f"I_{{{k}}}", f"I_{k}"),
                            (rf"\operatorname{{mcI}}\left({mass[0]}, {c[0]}, {inertia[0]}\right)",
@@ -149,7 +155,7 @@ def _placement(node: LocalNode, printer: _Printer) -> tuple[str, str]:
     factors = [_joint_transform(node, printer)]
     rotation = sp.Matrix(node.rotation)
     if rotation != sp.eye(3):
-        E = printer.latex(rotation.T), printer.text(rotation.T)
+        E = printer.matrix(rotation.T)
         factors.append((rf"\operatorname{{rot}}\left({E[0]}\right)", f"rot({E[1]})"))
     if any(e != 0 for e in node.origin):
         r = printer.vector(node.origin)
@@ -179,8 +185,8 @@ def _joint_transform(node: LocalNode, printer: _Printer) -> tuple[str, str] | No
         name = _AXIS_ROTATIONS[k]
         return (rf"\operatorname{{rot}}\left(\operatorname{{{name}}}\left({printer.latex(angle)}\right)\right)",
                 f"rot({name}({printer.text(angle)}))")
-    E = _rodrigues(axis, node.q).T
-    return rf"\operatorname{{rot}}\left({printer.latex(E)}\right)", f"rot({printer.text(E)})"
+    E = printer.matrix(_rodrigues(axis, node.q).T)
+    return rf"\operatorname{{rot}}\left({E[0]}\right)", f"rot({E[1]})"
 
 
 def _rodrigues(axis, angle) -> sp.Matrix:
