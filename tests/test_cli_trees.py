@@ -1,6 +1,6 @@
 """The command line on a kinematic tree (issue 39): ``lagcomp run``, ``show``, ``sweep``, ``precompile`` and ``bench``
-take a file's function returning an `lc.Tree`; ``stability`` and ``show --latex`` refuse it by name, without a
-traceback (`lagcomp.cli_support.trees`).
+take a file's function returning an `lc.Tree` (``show --latex`` prints its recursion, `Model.equations()`);
+``stability`` refuses it by name, without a traceback (`lagcomp.cli_support.trees`).
 
 References: the same tree run through the Python API (``lc.compile(tree).simulate``), whose final state and energy
 balance the command's report must print.
@@ -83,8 +83,17 @@ def test_show_lists_a_trees_links_and_joints(cache_dir, chain_file, capsys):
     assert "articulated-body algorithm" in out and "| power" not in out and "power" in out   # (its operations)
 
 
+def test_show_latex_prints_a_trees_recursion(cache_dir, chain_file, capsys):
+    assert _lagcomp(cache_dir, "show", f"{chain_file}:chain", "--latex") == 0
+    out = capsys.readouterr().out
+    assert out == lc.compile(_tree(chain_file), cache_dir=cache_dir).equations().latex + "\n"
+    lines = out.splitlines()
+    assert r"{}^{2}X_{1} &= \operatorname{rot}\left(\operatorname{rz}\left(q_{1}\right)\right) " \
+           r"\operatorname{xlt}\left(1, 0, 0\right) \\" in lines
+    assert r"\tau_{1} &= - \dot{q}_{0} c + 0.5 \sin{\left(3 t \right)} \\" in lines   # (sympy's order)
+
+
 @pytest.mark.parametrize(("argv", "message"), [
-    (("show", "--latex"), "Model.equations().*kinematic tree 'cli_tree_chain'"),
     (("stability", "--param", "c", "--range", "0", "1", "--q", "0", "0"),
      "lagcomp stability is not available for the kinematic tree 'cli_tree_chain'.*lagcomp.analysis.linearize"),
 ])

@@ -16,6 +16,12 @@ A Kane model (`lagcomp.kane_model`) has ``kinematics`` q̇_i = N_i first, then `
 M u̇ = F per row (sympy's mass matrix and forcing), ``constraint`` Φ = 0 and Ψ = 0, and
 ``energy`` T + V where it could be formed.
 
+A kinematic tree (`lagcomp.Tree`) has its recursion, never expanded (`lagcomp.codegen.tree_latex`):
+``tree``, a table of its nodes (parent, link, joint, coordinate, axis, placement X_i, motion
+subspace S_i, inertia I_i, joint force τ_i), then ``motion``, the articulated-body algorithm in
+Featherstone's notation over that table (with loops: M q̈ = F + Λᵀλ, M and F by their recursions),
+``constraint``, the loops' Φ_k = 0, and ``energy``, T = ½ Σ v_iᵀ I_i v_i and V.
+
 A side of an equation whose LaTeX is longer than `lagcomp.codegen.latex.MAX_CHARACTERS` is
 replaced by a marker, ``\text{[omitted: longer than 4000 characters]}`` (the same without
 ``\text`` in the text), so that a large system's module stays small.
@@ -26,9 +32,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 #: The parts of a model's equations, in the order they are listed.
-PARTS = ("kinematics", "motion", "constraint", "energy")
+PARTS = ("tree", "kinematics", "motion", "constraint", "energy")
 #: How each part is headed in the plain text (`Equations.__str__`).
-HEADINGS = {"kinematics": "Kinematic differential equations", "motion": "Equations of motion",
+HEADINGS = {"tree": "Kinematic tree (nodes i = 1..n, parents first; the base is node 0)",
+            "kinematics": "Kinematic differential equations", "motion": "Equations of motion",
             "constraint": "Constraints", "energy": "Energy"}
 
 
@@ -38,8 +45,9 @@ class Equation(NamedTuple):
     part : str
         One of `PARTS`.
     label : str
-        What the line is about: a coordinate (``motion``, ``kinematics``), a constraint's name, or
-        ``T``, ``V``, ``T + V`` (``energy``).
+        What the line is about: a coordinate (``motion``, ``kinematics``; a tree's node in ``tree``), a
+        constraint's name, ``T``, ``V``, ``T + V`` (``energy``), or the quantity a line of a tree's
+        recursion defines.
     lhs, rhs : str
         The two sides in LaTeX (sympy's `latex`), math mode without delimiters.
     text : str

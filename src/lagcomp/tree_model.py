@@ -8,9 +8,16 @@ kernels, ``rest_partials``: radau, sensitivities, linearization) are the recursi
 (`lagcomp.codegen.tree_companion`), ``mass_matrix`` and ``forcing``, which no run of a tree calls, their recursions,
 and ``geometry`` (animation) the links' frames (`lagcomp.codegen.tree_geometry`), built on first use into companion
 modules as a System's are, and so are ``power`` (the energy balance, `lagcomp.codegen.tree_power`) and
-``taylor_coefficients`` (method="taylor", `lagcomp.codegen.tree_taylor`).  What issue 39 does not provide yet is
-refused with a `ModelError` naming it: the other on-demand kernels (the equations' LaTeX) and the analyses that read
-a System's T and V.  The Hamiltonian form of gauss1/2/3 is the kind "canonical" (`lagcomp.codegen.tree_canonical`).
+``taylor_coefficients`` (method="taylor", `lagcomp.codegen.tree_taylor`).  The Hamiltonian form of gauss1/2/3 is the
+kind "canonical" (`lagcomp.codegen.tree_canonical`).
+
+``Model.equations()`` is the kind "equations": the recursion in Featherstone's notation over a table of the tree's
+nodes (placement, motion subspace, inertia, joint force of each), the loops' closure, T and V
+(`lagcomp.codegen.tree_latex` says why the recursion and not the emitted program), rendered by sympy on first use
+into a companion module, so that `lagcomp.load` shows them without sympy once they are built, as a System's.
+
+What issue 39 does not provide yet is refused with a `ModelError` naming it: the other on-demand kernels (the lanes
+of batched sweeps) and the analyses that read a System's T and V.
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """The commands' handling of a kinematic tree (`lagcomp.Tree`) named on the command line (issue 39).
 
 ``lagcomp run``, ``sweep``, ``animate``, ``bench`` and ``precompile`` take a tree's compiled model as they take any
-model's.  ``lagcomp show`` prints what a tree is made of (`show_tree`): its equations are its recursions, no
-symbolic M and F.  ``lagcomp stability`` reads a System's T and V (`lagcomp.analysis.stability_sweep`), which a tree
+model's.  ``lagcomp show`` prints what a tree is made of (`show_tree`): its equations are its recursions
+(`Model.equations()`), no symbolic M and F.  ``lagcomp stability`` reads a System's T and V (`lagcomp.analysis.stability_sweep`), which a tree
 does not have: it is refused by name (`refuse_tree`).
 """
 
@@ -26,7 +26,7 @@ def refuse_tree(tree, command: str, instead: str) -> None:
 
 def show_tree(tree, model) -> int:
     """``lagcomp show`` of a tree: its links and joints, coordinates, parameters, loops and events, how its kernels
-    are formed, and its module."""
+    are formed, its equations (the recursion over a table of its nodes) and its module."""
     print(f"{tree.name}: {tree.description or '(no description)'}   [kinematic tree]\n")
     print(f"coordinates q  = ({', '.join(tree.coordinate_names)})")
     print(f"parameters  p  = ({', '.join(tree.parameter_names)})   [kernel order]")
@@ -45,7 +45,8 @@ def show_tree(tree, model) -> int:
     from lagcomp.codegen.tree_lower import FORMULATION
 
     print(f"\n{FORMULATION}")
-    print("(no symbolic M and F: Model.mass_matrix and Model.forcing evaluate them; Model.equations() is a System's)")
+    print("(no symbolic M and F: Model.mass_matrix and Model.forcing evaluate them)")
+    print(f"\n{model.equations()}")
     print(f"\noperations: {model.operations}")
     print(f"generated module: {model.source_path}")
     return 0

@@ -56,7 +56,7 @@ def dotted_latex(name: str, accent: str) -> str:
     return f"{accent}{{{whole}}}"
 
 
-class _TextPrinter(StrPrinter):
+class TextPrinter(StrPrinter):
     """sympy's `str` with some symbols printed under other names (velocities, accelerations, multipliers)."""
 
     def __init__(self, names: dict):
@@ -74,7 +74,7 @@ class _Renderer:
 
     def __init__(self, names: dict, signals: dict | None = None):
         self.latex_names = {s: latex for s, (latex, _) in names.items()}
-        self.text = _TextPrinter({s: text for s, (_, text) in names.items()})
+        self.text = TextPrinter({s: text for s, (_, text) in names.items()})
         self.signals = signals or {}  # inputs u(t), u̇(t), ... -> their symbols (xreplace takes a derivative whole)
 
     def side(self, *terms) -> tuple[str, str]:

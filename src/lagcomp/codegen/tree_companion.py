@@ -21,7 +21,9 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
 * "power" (``Solution.energy_balance``, a sweep's balance): the joints' torques' and dampers' power and V's explicit
   time, no derivative of the motion (`lagcomp.codegen.tree_power`).
 * "taylor" (``method="taylor"``): ``taylor_coefficients``, the articulated-body algorithm in series arithmetic
-  (`lagcomp.codegen.tree_taylor`).
+  (`lagcomp.codegen.tree_taylor`);
+* "equations" (``Model.equations()``): no kernel, the constant ``EQUATIONS``: the recursion and the table of the
+  tree's nodes as LaTeX and text (`lagcomp.codegen.tree_latex`).
 
 A tree with closed loops (`lagcomp.Loop`) moves by an augmented solve, not by the articulated-body algorithm: its
 kinds are built by `lagcomp.codegen.tree_loop_companion` (the Jacobians, the tangent kernels and the DAE kernels of
@@ -40,6 +42,7 @@ from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
 from lagcomp.codegen.tree_canonical import tree_canonical_kernels
 from lagcomp.codegen.tree_geometry import tree_geometry_kernels
+from lagcomp.codegen.tree_latex import tree_equations
 from lagcomp.codegen.tree_locals import TreeLocals, tree_locals
 from lagcomp.codegen.tree_loop_companion import LOOP_BUILDERS
 from lagcomp.codegen.tree_lower import (
@@ -63,6 +66,10 @@ def tree_companion_source(tree: Tree, kind: KernelKind, eager_module: str) -> tu
     System's."""
     if kind.name == "taylor":   # (a series program, not kernels: `lagcomp.codegen.tree_taylor`)
         return tree_taylor_source(tree, tree_locals(tree), kind, eager_module)
+    if kind.name == "equations":   # (data, no kernel: the recursion as LaTeX and text, `lagcomp.codegen.tree_latex`)
+        ir = ModuleIR(system_name=tree.name, description=tree.description, coordinate_names=tree.coordinate_names,
+                      parameter_names=tree.parameter_names, kernels=(), formulation=FORMULATION)
+        return emit_companion(ir, kind, eager_module, equations=tree_equations(tree)), {"operations": {}}
     ir = lower_tree_kind(tree, kind.name)
     metadata = {"operations": {k.name: k.operation_count for k in ir.kernels}}
     if kind.name == "power":        # which terms of dh/dt the tree has (a sweep balances only where some has)

@@ -214,8 +214,8 @@ class Tree:
         return (f"{what} is not available for the kinematic tree {self.name!r} yet: the multibody path emits rhs, "
                 "energy and momenta, and on demand mass_matrix, forcing, the Jacobians, the tangent kernels, "
                 "rest_partials (radau, sensitivities, lagcomp.analysis.linearize), the links' geometry "
-                "(animation), the power of the energy balance, the canonical kernels (gauss1/2/3) and the Taylor "
-                f"coefficients (method='taylor'); the other kernels come in later steps of {ISSUE}. Use those methods, "
+                "(animation), the power of the energy balance, the canonical kernels (gauss1/2/3), the Taylor "
+                f"coefficients (method='taylor') and the equations (Model.equations()); the other kernels come in later steps of {ISSUE}. Use those methods, "
                 "or write the system as a lc.System with lc.RigidBody for this feature.")
 
     def __repr__(self) -> str:
