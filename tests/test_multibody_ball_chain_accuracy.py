@@ -3,11 +3,11 @@ hardest system, ``spherical_30`` of bench/bench_scale.py: 30 bodies, 90 DOF).
 
 On that chain Pinocchio 4.1's ABA departs from the exact q̈ by 1.4e-11 to 3.9e-10 (normwise, at the bench's five
 states), more than a backward-stable solve of M q̈ = F may (cond(M) ε: 3e-12 to 3e-11): its articulated inertias
-drift from symmetric, the drift growing about 1.8× per ball joint towards the root (up to 2e-8
-at the second joint from rounding near the tip), and the update I − U D⁻¹ Uᵀ turns it into inertia the parent adds.  lagcomp's articulated
-inertias are symmetric by construction (`lagcomp.multibody.spatial.Inertia` keeps lower triangles): this test
-holds its q̈ to the bound, against `lagcomp.accuracy.tree_reference` (d'Alembert's principle in many digits, none
-of the recursions' code).  docs/benchmarks.md ("Multibody at scale") has the measurements.
+drift from symmetric, the drift growing about 1.8× per ball joint towards the root (up to 2e-8 at the second joint
+from rounding near the tip), and the update I − U D⁻¹ Uᵀ turns it into inertia the parent adds.  lagcomp's
+articulated inertias are symmetric by construction (`lagcomp.multibody.spatial.Inertia` keeps lower triangles): this
+test holds its q̈ to the bound, against `lagcomp.accuracy.tree_reference` (d'Alembert's principle in many digits,
+none of the recursions' code).  docs/benchmarks.md ("Multibody at scale") has the measurements.
 """
 
 from __future__ import annotations
