@@ -13,7 +13,9 @@ joint), all from example-robot-data's URDFs.  For each, a fresh process with an 
   ``JointModelFreeFlyer`` for the floating bases; the chains built in Pinocchio by
   `lagcomp.multibody.pinocchio_peer.pinocchio_model`, a ball joint as ``JointModelSpherical``; the states converted
   by that module: quaternions and body-frame rates from the modified Rodrigues parameters): the largest relative
-  difference;
+  difference (`relative`: max |Δq̈| / max |q̈|, normwise); the same against Pinocchio's M⁻¹ (τ − h) (CRBA and RNEA,
+  an LU solve: backward stable, `pinocchio_solved`), with the largest cond(M) of the 5 states (Pinocchio's
+  coordinates) — where the two Pinocchio answers part, the solve is the one within cond(M) ε of the exact q̈;
 * ns per call: lagcomp's ``rhs`` in a compiled loop (`lagcomp.benchmark.looped`); Pinocchio's ``aba`` called from
   Python; Pinocchio's ABA in a C++ loop (`bench.pinocchio_loop`: its q̈ equal to Python's); MuJoCo's
   ``mj_forward`` from Python with contacts and all constraints disabled (the model written as MJCF from the same
@@ -90,12 +92,22 @@ def cold_compile(tree, values: dict, cache_dir=None) -> tuple:
     start = time.process_time()
     model = lc.compile(tree, progress=False, cache_dir=cache_dir)
     p, n = model.parameter_vector(values), model.n
-    y = np.random.default_rng(39).uniform(-1.0, 1.0, size=2 * n)
+    y = states(n)[0]
     model.kernels.rhs(0.0, y, p, np.empty(2 * n))
     cpu = time.process_time() - start
     figures = {"n": n, "compile_cpu_s": cpu, "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                "ops": model._operations["rhs"], "evaluated": evaluated(tree)}
     return model, y, figures
+
+
+def states(n: int) -> list:
+    """The 5 states y = (q, q̇) of an n-coordinate system where q̈ is compared: the timed one, uniform in [−1, 1],
+    then 4 in [−2, 2] (MRPs past the shadow switch |σ| = 1 included)."""
+    import numpy as np
+
+    rng = np.random.default_rng(1)
+    return [np.random.default_rng(39).uniform(-1.0, 1.0, size=2 * n)] + [rng.uniform(-2.0, 2.0, 2 * n)
+                                                                          for _ in range(4)]
 
 
 def build(system: str):
@@ -165,8 +177,9 @@ def pinocchio_peer(system: str, tree, values: dict):
 
 
 def pinocchio_side(system: str, tree, values: dict, model, y, out_dir: str) -> dict:
-    """Pinocchio's model of the system, q̈ compared at y and 4 more random states, ns per ``aba`` from Python; the
-    model and the state y saved in `out_dir` for the C++ loop."""
+    """Pinocchio's model of the system, q̈ compared at y and 4 more random states with its ABA and with its
+    M⁻¹ (τ − h) (`pinocchio_solved`), the largest cond(M); ns per ``aba`` from Python; the model and the state y
+    saved in `out_dir` for the C++ loop."""
     import numpy as np
 
     try:
@@ -176,19 +189,42 @@ def pinocchio_side(system: str, tree, values: dict, model, y, out_dir: str) -> d
     reference, state = pinocchio_peer(system, tree, values)
     data = reference.createData()
     n, p, out = model.n, model.parameter_vector(values), np.empty(2 * model.n)
-    rng, worst = np.random.default_rng(1), 0.0
-    for y_k in [y] + [rng.uniform(-2.0, 2.0, 2 * n) for _ in range(4)]:
+    worst, worst_solved, condition = 0.0, 0.0, 0.0
+    for y_k in [y, *states(n)[1:]]:
         q, v, tau, back = state(y_k)
-        expected = back(pin.aba(reference, data, q, v, tau))
         model.kernels.rhs(0.0, y_k, p, out)
-        worst = max(worst, float(np.max(np.abs(out[n:] - expected)) / np.max(np.abs(expected))))
+        solved, cond_k = pinocchio_solved(pin, reference, data, q, v, tau)
+        worst = max(worst, relative(out[n:], back(pin.aba(reference, data, q, v, tau))))
+        worst_solved, condition = max(worst_solved, relative(out[n:], back(solved))), max(condition, cond_k)
     q, v, tau, _ = state(y)
     reps = 20000
-    result = {"pin_rel_diff": worst,
+    result = {"pin_rel_diff": worst, "pin_solved_rel_diff": worst_solved, "cond_m": condition,
               "pin_python_ns": best(lambda: [pin.aba(reference, data, q, v, tau) for _ in range(reps)], reps)}
     save_case(reference, q, v, tau, out_dir)
     result["pin_ddq"] = pin.aba(reference, data, q, v, tau).tolist()
     return result
+
+
+def pinocchio_solved(pin, reference, data, q, v, tau) -> tuple:
+    """(v̇, cond(M)): Pinocchio's accelerations as M⁻¹ (τ − h), M its ``crba`` (upper triangle, mirrored) and h its
+    ``rnea`` at v̇ = 0 (gravity, Coriolis and centrifugal forces), solved by LU with partial pivoting; cond(M) in the
+    2-norm, in Pinocchio's coordinates.  A second Pinocchio answer, by another algorithm: the solve is backward
+    stable, so within about cond(M) ε of the exact q̈, where an ABA's rounding may wander further (the 30-body
+    ball chain, docs/benchmarks.md)."""
+    import numpy as np
+
+    M = np.triu(pin.crba(reference, data, q))
+    M = M + np.triu(M, 1).T
+    h = pin.rnea(reference, data, q, v, np.zeros(reference.nv))
+    return np.linalg.solve(M, tau - h), float(np.linalg.cond(M))
+
+
+def relative(value, expected) -> float:
+    """max |value − expected| / max |expected|: the difference relative to the vector's scale (normwise, the
+    ∞-norm; not coordinate by coordinate, where a q̈ component near zero would make any rounding look large)."""
+    import numpy as np
+
+    return float(np.max(np.abs(np.asarray(value) - expected)) / np.max(np.abs(expected)))
 
 
 def mujoco_side(tree, values: dict, model, y) -> dict:
@@ -210,7 +246,7 @@ def mujoco_side(tree, values: dict, model, y) -> dict:
     model.kernels.rhs(0.0, y, model.parameter_vector(values), out)
     qdd = mujoco_model.accelerations(m, d, tree, values, y)
     reps = 20000
-    return {"mujoco_rel_diff": float(np.max(np.abs(qdd - out[n:])) / np.max(np.abs(out[n:]))),
+    return {"mujoco_rel_diff": relative(qdd, out[n:]),
             "mujoco_ns": best(lambda: [mujoco.mj_forward(m, d) for _ in range(reps)], reps)}
 
 
@@ -237,7 +273,7 @@ def measure(system: str, binary) -> dict:
 
 
 COLUMNS = ["system", "DOF", "ops of rhs (compiled / evaluated)", "cold compile + first rhs, CPU s", "peak MB",
-           "q̈ vs Pinocchio (max rel.)", "lagcomp rhs ns (loop)", "Pinocchio ABA C++ loop ns", "lagcomp / Pinocchio C++",
+           "q̈ vs Pinocchio (max rel.)", "q̈ vs Pinocchio's M⁻¹(τ − h)", "cond(M)", "lagcomp rhs ns (loop)", "Pinocchio ABA C++ loop ns", "lagcomp / Pinocchio C++",
            "issue 39 target", "Pinocchio aba from Python ns", "MuJoCo mj_forward from Python ns", "MuJoCo q̈ vs lagcomp"]
 
 
@@ -279,7 +315,8 @@ def table(systems, cpp: bool) -> list[Table]:
         if r.get("cpp_rel_diff", 0.0) > 1e-12:
             difference += f" (C++ loop vs Python: {r['cpp_rel_diff']:.1e})"
         out.add(system, r["n"], f"{r['ops']:,} / {r['evaluated']:,}", fmt(r["compile_cpu_s"]), fmt(r["peak_mb"]),
-                difference,
+                difference, f"{r['pin_solved_rel_diff']:.1e}" if "pin_solved_rel_diff" in r else "–",
+                f"{r['cond_m']:.1e}" if "cond_m" in r else "–",
                 fmt(r["lagcomp_ns"]), fmt(cpp_ns), fmt(ratio, "×"), verdict(system, ratio),
                 fmt(r.get("pin_python_ns", float("nan"))), fmt(r.get("mujoco_ns", float("nan"))),
                 f"{r['mujoco_rel_diff']:.1e}" if "mujoco_rel_diff" in r else "skipped: mujoco not installed")

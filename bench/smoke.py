@@ -54,11 +54,12 @@ SCRIPTS = {
     "bench_taylor_modes": [],
     "bench_taylor_sensitivities": ["--repeats", "1"],
     "bench_tiers": ["--rounds", "1", "--steps", "1000"],
+    "pinocchio_rounding": ["--systems", "spherical_2"],
     "taylor_error_sources": ["--t-end", "10", "--members", "2"],
 }
 
 #: Scripts that cannot run without a peer (their reference is the peer's result), and the peer's module.
-REQUIRES = {"bench_taylor_sensitivities": "heyoka"}
+REQUIRES = {"bench_taylor_sensitivities": "heyoka", "pinocchio_rounding": "pinocchio"}
 
 #: Scripts of the package that are not run here, and why.
 NOT_RUN = {

@@ -42,15 +42,16 @@ def test_the_cold_compile_builds_no_kernel_on_demand(tmp_path):
     build the Jacobians' companion modules (``Model.operations`` does; the bench counted them in until
     2026-11-29: Solo12's figure 50.9 s instead of ~10 s)."""
     tree = trees.planar_chain(2)
-    model, y, figures = bench_scale.cold_compile(tree, _values(tree, 2), cache_dir=tmp_path)
+    _, y, figures = bench_scale.cold_compile(tree, _values(tree, 2), cache_dir=tmp_path)
     assert not [f.name for f in (tmp_path / "modules").iterdir() if "on_demand" in f.name]
     assert figures["ops"] == figures["evaluated"] > 0 and figures["n"] == 2 and y.shape == (4,)
 
 
 @pytest.mark.parametrize("build", [lambda: trees.spherical_chain(3), _floating_tree])
 def test_pinocchio_and_mujoco_accelerations_in_lagcomps_coordinates(tmp_path, build):
-    """Pinocchio's and MuJoCo's q̈, converted back to the MRP coordinates, equal lagcomp's rhs to 1e-12 relative
-    at random states with |σ| up to 2 (past the shadow switch: the equations hold for any σ)."""
+    """Pinocchio's q̈ (its ABA, and its M⁻¹ (τ − h) from CRBA and RNEA: `bench_scale.pinocchio_solved`) and
+    MuJoCo's, converted back to the MRP coordinates, equal lagcomp's rhs to 1e-12 relative at random states with
+    |σ| up to 2 (past the shadow switch: the equations hold for any σ)."""
     pin = pytest.importorskip("pinocchio")
     mujoco = pytest.importorskip("mujoco")
     from bench import mujoco_model
@@ -69,8 +70,11 @@ def test_pinocchio_and_mujoco_accelerations_in_lagcomps_coordinates(tmp_path, bu
         expected = model.rhs(0.0, y, values)[n:]
         q, v, tau, back = tree_state(reference, tree, values, y)
         pinocchio = back(pin.aba(reference, data, q, v, tau))
+        solved, condition = bench_scale.pinocchio_solved(pin, reference, data, q, v, tau)
         mujoco_model.set_state(m, d, tree, values, y)
         mujoco.mj_forward(m, d)
         scale = np.max(np.abs(expected))
         assert np.max(np.abs(pinocchio - expected)) <= 1e-12 * scale
+        assert np.max(np.abs(back(solved) - expected)) <= 1e-12 * scale
+        assert 1.0 <= condition < 1e6
         assert np.max(np.abs(mujoco_model.accelerations(m, d, tree, values, y) - expected)) <= 1e-12 * scale
