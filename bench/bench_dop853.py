@@ -45,8 +45,8 @@ import lagcomp as lc
 from bench import systems
 from bench.harness import no_events, peer
 from lagcomp import examples
-from lagcomp.integrate.drivers.kernel_types import RHS, VECTOR
 from lagcomp.integrate import specialize
+from lagcomp.integrate.drivers.kernel_types import RHS, VECTOR
 from lagcomp.integrate.drivers.run_state import CLOCK_SLOTS, COUNTER_SLOTS
 from lagcomp.integrate.methods import get_method
 
