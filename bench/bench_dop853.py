@@ -13,8 +13,11 @@ scratch in numbalsoda's data array after the parameters).  Prints:
    cfunc right-hand side (the hand-written numba one, bench/systems.py), so
    the two take the same steps or not;
 2. wall time of lagcomp's DOP853 driver (``embedded_run``) called directly (no Python around
-   it), of ``Model.simulate`` with its default options (the same driver plus
-   the run's fixed cost), and of numbalsoda's dop853, timed round-robin;
+   it), of the model's specialised driver called the same way (`lagcomp.integrate.specialize`: the library
+   driver compiled with the model's kernels as compile-time callees; compiled or loaded before the timing, and
+   left out with ``--smoke``), of ``Model.simulate`` with its default options but ``specialize=False`` (the
+   library driver plus the run's fixed cost; by default a run takes the specialised driver once it is loaded in
+   the process, as it is here for the row before), and of numbalsoda's dop853, timed round-robin;
    ratios are medians of per-round ratios against numbalsoda;
 3. where the time goes: each right-hand side alone, called in a compiled loop through a function
    value as the drivers call it (ns per call), and what is left per f-evaluation for the rest of
@@ -42,6 +45,7 @@ import lagcomp as lc
 from bench import systems
 from bench.harness import no_events, peer
 from lagcomp import examples
+from lagcomp.integrate import specialize
 from lagcomp.integrate.drivers.kernel_types import RHS, VECTOR
 from lagcomp.integrate.drivers.run_state import CLOCK_SLOTS, COUNTER_SLOTS
 from lagcomp.integrate.methods import get_method
@@ -51,6 +55,8 @@ TOL = 1e-10
 CHAIN = 10
 
 
+#: The row of the model's specialised driver (`lagcomp.integrate.specialize`), called as the library's.
+SPECIALISED = "lagcomp DOP853 specialised driver, called directly"
 #: numbalsoda's rows when it is not installed.
 NOT_INSTALLED = "numbalsoda dop853 (not installed)"
 
@@ -112,10 +118,15 @@ def numbalsoda_run(case: Case):
     return run
 
 
-def driver_run(model, case: Case):
-    """The DOP853 driver called directly, with the arguments `lagcomp.integrate.simulate` gives it, in one call."""
+def driver_run(model, case: Case, specialised: bool = False):
+    """The DOP853 driver called directly, with the arguments `lagcomp.integrate.simulate` gives it, in one call:
+    the library driver, or with `specialised` the model's specialised one (`lagcomp.integrate.specialize`, compiled
+    or loaded first), which takes the same arguments after the kernels."""
     method = get_method("dop853")
-    driver, arrays = method.bound_driver(model.kernels), method.driver_arguments()
+    if specialised:
+        specialize.prepare(model, method)
+    driver = specialize.driver(model, method) if specialised else method.bound_driver(model.kernels)
+    arrays = method.driver_arguments()
     p = model.parameter_vector()
     n = case.y0.shape[0]
     events = no_events(method, n)
@@ -163,13 +174,15 @@ def main(argv: list[str] | None = None) -> None:
         model = lc.compile(case.system, cache_dir=args.cache_dir or scratch)
         runners = {
             "lagcomp DOP853 driver, called directly": driver_run(model, case),
+            SPECIALISED: None if args.smoke else driver_run(model, case, specialised=True),
             "lagcomp Model.simulate": lambda: model.simulate((0, case.grid[-1]), *np.split(case.y0, 2),
                                                              method="dop853", rtol=TOL, atol=TOL,
-                                                             t_eval=case.grid[1:]).nfev,
+                                                             t_eval=case.grid[1:], specialize=False).nfev,
             "numbalsoda dop853": numbalsoda_run(case),
         }
-        if runners["numbalsoda dop853"] is None:
-            del runners["numbalsoda dop853"]
+        # (numbalsoda: not installed; the specialised driver with --smoke: its compile takes 10-30 s, and its
+        # arguments are the library row's, which a smoke run calls)
+        runners = {name: run for name, run in runners.items() if run is not None}
         evaluations = {name: run() for name, run in runners.items()}  # also compiles / loads everything
         times = {name: [] for name in runners}
         for _ in range(rounds):
