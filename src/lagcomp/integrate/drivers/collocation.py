@@ -177,33 +177,30 @@ def _noise_floor(J, x, h, floor):
         floor[c] = h * acc
 
 
-#: What `_stop_test` finds after a sweep of the stage iteration: go on, converged, or diverged (non-finite).
-GO_ON, CONVERGED, DIVERGED = 0, 1, 2
+#: What `_stop_test` finds after a sweep of the stage iteration: go on, converged, diverged (non-finite), or stalled
+#: above `NOISE` without the noise floor (the fixed point's: `_solve_stages` then evaluates it, once in a step).
+GO_ON, CONVERGED, DIVERGED, STALLED = 0, 1, 2, 3
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
-def _stop_test(velocities, canonical_partials, t, x, p, h, J, change, size, floor, previous, noise_known):
+def _stop_test(change, size, floor, x, h, previous, noise_known):
     """Whether the stage iteration stops after a sweep whose changes of h·K are in ``change``, ``size``, ``floor``
-    (`_rounding_ratio`): (GO_ON, CONVERGED or DIVERGED, the sweep's ratio, whether the noise floor is known).
+    (`_rounding_ratio`): (GO_ON, CONVERGED, DIVERGED or STALLED, the sweep's ratio).
 
     CONVERGED below `ROUNDING`, or, once the ratio no longer decreases (below ``previous``, the last sweep's), below
-    `NOISE`; a fixed-point iteration that stalls above `NOISE` without its floor evaluates the Jacobian ``J`` (2n, 2n)
-    at (t, x) once for the step (`_noise_floor`) and compares again.  DIVERGED: the ratio is not finite."""
+    `NOISE`; STALLED there above `NOISE` when the floor is not ``noise_known``; DIVERGED: the ratio is not finite.
+    (It calls no kernel: numba then drops the reference counting of the arrays it is passed.)"""
     ratio = _rounding_ratio(change, size, floor, x, h)
     if not np.isfinite(ratio):
-        return DIVERGED, ratio, noise_known
+        return DIVERGED, ratio
     if ratio <= ROUNDING:
-        return CONVERGED, ratio, noise_known
+        return CONVERGED, ratio
     if ratio >= previous:  # no longer decreasing: at the noise of terms that cancel in f?
-        if ratio >= NOISE and not noise_known:  # the fixed point's floor, once in a step
-            if canonical_jacobian(velocities, canonical_partials, t, x, p, J) != 0:
-                J[:] = 0.0  # M singular at x (the stages' velocities were solved): no floor
-            _noise_floor(J, x, h, floor)
-            noise_known = True
-            ratio = _rounding_ratio(change, size, floor, x, h)
+        if ratio >= NOISE and not noise_known:
+            return STALLED, ratio
         if ratio < NOISE:
-            return CONVERGED, ratio, noise_known
-    return GO_ON, ratio, noise_known
+            return CONVERGED, ratio
+    return GO_ON, ratio
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
@@ -220,13 +217,12 @@ def _first_guess(K, K_previous, E, extrapolate):
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
-def _factor_newton_matrix(velocities, canonical_partials, t, x, p, h, A, J, matrix, pivots, rows, columns):
-    """The simplified Newton iteration's matrix I − h A ⊗ J, J = ∂f/∂x at (t, x), equilibrated by powers of two
+def _factor_newton_matrix(h, A, J, matrix, pivots, rows, columns):
+    """The simplified Newton iteration's matrix I − h A ⊗ J, J = ∂f/∂x (2n, 2n), equilibrated by powers of two
     (``equilibrate``: its blocks are in the units of q, p and their rates, and the pivot test must not depend on
-    them) and LU-factored in place; ``J`` (2n, 2n), the others work space.  Returns the
-    Jacobian's status (k > 0: M singular at x) and whether the matrix was factored."""
-    status = canonical_jacobian(velocities, canonical_partials, t, x, p, J)
-    s, n2 = A.shape[0], x.shape[0]
+    them) and LU-factored in place; the others are work space.  Returns whether the matrix was factored.  (It calls
+    no kernel: numba then drops the reference counting of the arrays it is passed.)"""
+    s, n2 = A.shape[0], J.shape[0]
     for i in range(s):
         for j in range(s):
             for a in range(n2):
@@ -234,7 +230,7 @@ def _factor_newton_matrix(velocities, canonical_partials, t, x, p, h, A, J, matr
                     unit = 1.0 if i == j and a == b else 0.0
                     matrix[i * n2 + a, j * n2 + b] = unit - h * A[i, j] * J[a, b]
     equilibrate(matrix, rows, columns)  # R (I − h A ⊗ J) C: its pivot test unit-free
-    return status, status == 0 and lu_factor(matrix, pivots) == 0
+    return lu_factor(matrix, pivots) == 0
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
@@ -256,8 +252,9 @@ def _solve_stages(velocities, momentum_rate, canonical_partials, t, h, x, p, A, 
     noise floor ``floor``, which Newton has from its Jacobian).
 
     A sweep's body is written out here, not in a function of its own: numba increfs and decrefs every array a call
-    passes (inlined or not), and a call per sweep with its dozen arrays cost the double pendulum's gauss2 a fifth of
-    its steps per second (measured when `_collocation_steps` was split; the calls once per step cost ~10%).
+    passes (inlined or not), and cannot drop the pairs around a call of a kernel (it may release anything); a call
+    per sweep with its dozen arrays cost the double pendulum's gauss2 a fifth of its steps per second, measured when
+    `_collocation_steps` was split.  The helpers it and the step loop call call no kernel, `_solve_stages` aside.
 
     The other arrays are work space (`_collocation_steps`).  Returns DONE; RHS_FAILED (M
     singular); or NOT_CONVERGED after ``max_iter`` sweeps, or when the iterates become non-finite or the iteration
@@ -266,9 +263,8 @@ def _solve_stages(velocities, momentum_rate, canonical_partials, t, h, x, p, A, 
     status = 0
     sweeps = max_iter
     if newton is not None:
-        status, factored = _factor_newton_matrix(velocities, canonical_partials, t, x, p, h, A, J, matrix, pivots,
-                                                  rows, columns)
-        if not factored:
+        status = canonical_jacobian(velocities, canonical_partials, t, x, p, J)
+        if status != 0 or not _factor_newton_matrix(h, A, J, matrix, pivots, rows, columns):
             sweeps = 0  # M singular here (status > 0), or I − h A ⊗ J: not converged
     noise_known = newton is not None and status == 0
     if noise_known:
@@ -326,8 +322,14 @@ def _solve_stages(velocities, momentum_rate, canonical_partials, t, h, x, p, A, 
                     size[c] = max(size[c], abs(K[i, c]))
                     K[i, c] += delta[i * n2 + c]
                     size[c] = max(size[c], abs(K[i, c]))
-        outcome, previous, noise_known = _stop_test(velocities, canonical_partials, t, x, p, h, J, change, size,
-                                                    floor, previous, noise_known)
+        outcome, previous = _stop_test(change, size, floor, x, h, previous, noise_known)
+        if outcome == STALLED:  # the fixed point's floor, once in a step
+            if canonical_jacobian(velocities, canonical_partials, t, x, p, J) != 0:
+                J[:] = 0.0  # M singular at x (the stages' velocities were solved): no floor
+            _noise_floor(J, x, h, floor)
+            noise_known = True
+            previous = _rounding_ratio(change, size, floor, x, h)
+            outcome = CONVERGED if previous < NOISE else GO_ON
         if outcome != GO_ON:
             break
     if status > 0:
@@ -336,10 +338,11 @@ def _solve_stages(velocities, momentum_rate, canonical_partials, t, h, x, p, A, 
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
-def _step_end(velocities, t, h, x, p, B, K, compensation, new_compensation, xs, qdot):
-    """The step's end x + h Σ b_i K_i into ``xs`` and its velocities q̇ into ``qdot``, summed with Kahan's
-    compensation: the increment's rounding (``new_compensation``) is carried to the next step instead of lost, which
-    removes the systematic energy drift of long runs.  Returns DONE, RHS_FAILED (M singular) or NONFINITE."""
+def _step_end(h, x, B, K, compensation, new_compensation, xs):
+    """The step's end x + h Σ b_i K_i into ``xs``, summed with Kahan's compensation: the increment's rounding
+    (``new_compensation``) is carried to the next step instead of lost, which removes the systematic energy drift of
+    long runs.  Returns 0, or −1 when it is not finite.  (It calls no kernel: numba then drops the reference counting
+    of the arrays it is passed.)"""
     status = 0
     for c in range(x.shape[0]):
         increment = 0.0
@@ -351,13 +354,7 @@ def _step_end(velocities, t, h, x, p, B, K, compensation, new_compensation, xs, 
         xs[c] = acc
         if not np.isfinite(acc):
             status = -1
-    if status == 0:
-        status = velocities(t, xs, p, qdot)
-        if status > 0:
-            return Status.RHS_FAILED
-    if status != 0:
-        return Status.NONFINITE
-    return Status.DONE
+    return status
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
@@ -405,7 +402,7 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
     carried from call to call (``x``, ``compensation``, ``K_previous``, ``control``: the carry of the module
     docstring) and built from y by ``momenta`` at the run's first step only.  A step: the stages' first guess
     (`_first_guess`), the stage equations solved (`_solve_stages`, by fixed point or simplified Newton as ``newton``
-    says), the step's end summed (`_step_end`) and taken (`_accept_step`), the chart switches it calls for
+    says), the step's end summed (`_step_end`), its velocities, the step taken (`_accept_step`), the chart switches it calls for
     (`_switch_charts`), its row (`_record_step`).  Explicit time dependence is evaluated at the stage times
     t + c_i h, which is the method applied to the autonomous system extended by t' = 1 (HLW, sec. VI.4).  Step
     times, saving and chunking follow the RK4 driver.
@@ -439,10 +436,15 @@ def _collocation_steps(velocities, momenta, momentum_rate, canonical_partials, e
         why = _solve_stages(velocities, momentum_rate, canonical_partials, t_a, h, x, p, A, C, K, max_iter, newton,
                             counters, xs, y_stage, qdot, pdot, J, matrix, pivots, delta, rows, columns, change, size,
                             floor)
-        if why == Status.DONE:
-            why = _step_end(velocities, t_b, h, x, p, B, K, compensation, new_compensation, xs, qdot)
         if why != Status.DONE:
             return why, n_saved
+        status = _step_end(h, x, B, K, compensation, new_compensation, xs)
+        if status == 0:
+            status = velocities(t_b, xs, p, qdot)   # (q̇ at the step's end: y's)
+            if status > 0:
+                return Status.RHS_FAILED, n_saved
+        if status != 0:
+            return Status.NONFINITE, n_saved
         _accept_step(x, y, compensation, new_compensation, K, K_previous, control, xs, qdot)
         if charts > 0:
             switched = _switch_charts(event_values, event_reset, t_b, y, p, actions, g, counters, ev_t, ev_y, ev_i,
