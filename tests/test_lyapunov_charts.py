@@ -56,7 +56,7 @@ def test_the_closed_form_switch_is_the_models_reset_and_its_derivative_is_symple
         D = np.eye(6)
         _shadow_tangents(x, D, SIGMA)
         for j in range(6):
-            def central(step, j=j):
+            def central(step, j=j, x=x):
                 e = np.zeros(6)
                 e[j] = step
                 return (_switched(x + e) - _switched(x - e)) / (2 * step)

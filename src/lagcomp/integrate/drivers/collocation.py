@@ -254,7 +254,7 @@ def _solve_stages(velocities, momentum_rate, canonical_partials, t, h, x, p, A, 
     A sweep's body is written out here, not in a function of its own: numba increfs and decrefs every array a call
     passes (inlined or not), and cannot drop the pairs around a call of a kernel (it may release anything); a call
     per sweep with its dozen arrays cost the double pendulum's gauss2 a fifth of its steps per second, measured when
-    `_collocation_steps` was split.  The helpers it and the step loop call call no kernel, `_solve_stages` aside.
+    `_collocation_steps` was split.  The helpers called per sweep and per step call no kernel, this one aside.
 
     The other arrays are work space (`_collocation_steps`).  Returns DONE; RHS_FAILED (M
     singular); or NOT_CONVERGED after ``max_iter`` sweeps, or when the iterates become non-finite or the iteration

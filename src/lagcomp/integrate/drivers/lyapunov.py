@@ -245,7 +245,8 @@ def lyapunov_run(velocities, momentum_rate, canonical_partials, x, W, steps, sum
             for c in range(k):
                 W[i, c] += dt / _DENOMINATOR * (_WEIGHTS[0] * K1[i, c] + _WEIGHTS[1] * K2[i, c]
                                                 + _WEIGHTS[2] * K3[i, c] + _WEIGHTS[3] * K4[i, c])
-        _switch_charts(x, W, x[:0], charts)
+        if charts.shape[0] > 0:
+            _switch_charts(x, W, x[:0], charts)
         steps[0] += 1
         renormalize = (step + 1) % renorm_every == 0 or step == n_steps - 1
         if renormalize and _orthonormalize(W, sums) != Status.DONE:
@@ -277,7 +278,8 @@ def divergence_run(velocities, momentum_rate, x, xs, steps, sums, p, t0, dt, n_s
         status = _rk4_state(velocities, momentum_rate, t, xs, p, dt, y, k1, k2, k3, k4, xt)
         if status != Status.DONE:
             return status
-        _switch_charts(x, no_tangents, xs, charts)
+        if charts.shape[0] > 0:
+            _switch_charts(x, no_tangents, xs, charts)
         steps[0] += 1
         if (step + 1) % renorm_every == 0 or step == n_steps - 1:
             d = 0.0
