@@ -40,8 +40,8 @@ import numpy as np
 from numba import njit, types
 
 from lagcomp.integrate.drivers.canonical import canonical_jacobian
-from lagcomp.integrate.drivers.fixed_step import fixed_step_window
 from lagcomp.integrate.drivers.events import ACTION_RESET
+from lagcomp.integrate.drivers.fixed_step import fixed_step_window
 from lagcomp.integrate.drivers.kernel_types import (
     CANONICAL_PARTIALS,
     ENERGY,
