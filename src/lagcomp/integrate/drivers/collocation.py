@@ -234,16 +234,57 @@ def _factor_newton_matrix(h, A, J, matrix, pivots, rows, columns):
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def _take_stage(i, h, qdot, pdot, K, newton, delta, change, size):
+    """Stage i's f_i = (``qdot``, ``pdot``): the fixed point (``newton`` None) takes K_i ← f_i at once, into the next
+    stage, and keeps the change of h·K and the size of K per component in ``change`` and ``size`` (2n,); Newton keeps
+    the residual f_i − K_i in ``delta`` (s·2n,).  (It calls no kernel: numba then drops the reference counting of
+    the arrays it is passed.)"""
+    n = qdot.shape[0]
+    n2 = 2 * n
+    for c in range(n):
+        if newton is not None:
+            delta[i * n2 + c] = qdot[c] - K[i, c]
+            delta[i * n2 + n + c] = pdot[c] - K[i, n + c]
+        else:  # np.maximum keeps a NaN, where max would drop it
+            change[c] = np.maximum(change[c], abs(h * (qdot[c] - K[i, c])))
+            change[n + c] = np.maximum(change[n + c], abs(h * (pdot[c] - K[i, n + c])))
+            size[c] = max(size[c], abs(qdot[c]), abs(K[i, c]))
+            size[n + c] = max(size[n + c], abs(pdot[c]), abs(K[i, n + c]))
+            K[i, c] = qdot[c]
+            K[i, n + c] = pdot[c]
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def _newton_correction(matrix, pivots, rows, columns, delta, K, h, change, size):
+    """K ← K + ΔK, ΔK solving (I − h A ⊗ J) ΔK = F(K) − K (the residuals in ``delta``, the matrix factored by
+    `_factor_newton_matrix`); the change of h·K and the size of K per component into ``change`` and ``size``.  (It
+    calls no kernel: numba then drops the reference counting of the arrays it is passed.)"""
+    s, n2 = K.shape
+    for c in range(s * n2):
+        delta[c] *= rows[c]
+    lu_substitute(matrix, pivots, delta)
+    for c in range(s * n2):
+        delta[c] *= columns[c]
+    for i in range(s):
+        for c in range(n2):
+            change[c] = np.maximum(change[c], abs(h * delta[i * n2 + c]))
+            size[c] = max(size[c], abs(K[i, c]))
+            K[i, c] += delta[i * n2 + c]
+            size[c] = max(size[c], abs(K[i, c]))
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def _solve_stages(velocities, momentum_rate, canonical_partials, t, h, x, p, A, C, K, max_iter, newton, counters,
                   xs, y_stage, qdot, pdot, J, matrix, pivots, delta, rows, columns, change, size, floor):
     """Solve the stage equations K_i = f(t + c_i h, x + h Σ_j a_ij K_j), i = 1..s, from the first guess in ``K``
     (s, 2n), by one of two iterations, chosen by ``newton``:
 
     * fixed point (``newton`` None): K_i ← f(t + c_i h, x + h Σ_j a_ij K_j), updating each stage as soon as it is
-      computed; s evaluations of f per sweep, and it contracts only while h ‖∂f/∂x‖ ‖A‖ < 1 (roughly);
+      computed (`_take_stage`); s evaluations of f per sweep, and it contracts only while h ‖∂f/∂x‖ ‖A‖ < 1
+      (roughly);
     * simplified Newton (``newton`` True): with J = `canonical_jacobian` at the step's start (t, x), solve
-      (I − h A ⊗ J) ΔK = F(K) − K, F_i(K) the right-hand side above, and K ← K + ΔK; the (2ns)×(2ns) iteration
-      matrix is factored once per step (`_factor_newton_matrix`).  It converges for steps far
+      (I − h A ⊗ J) ΔK = F(K) − K, F_i(K) the right-hand side above, and K ← K + ΔK (`_newton_correction`); the
+      (2ns)×(2ns) iteration matrix is factored once per step (`_factor_newton_matrix`).  It converges for steps far
       beyond the fixed point's reach (stiff or fast motions), at the price of one Jacobian and one factorization.
 
     ``newton`` is None or True, a compile-time constant to numba, so the fixed-point specialisation has no Newton
@@ -251,10 +292,11 @@ def _solve_stages(velocities, momentum_rate, canonical_partials, t, h, x, p, A, 
     component by component and so in any units (`_stop_test`: ``change`` and ``size`` (2n,) per component, the
     noise floor ``floor``, which Newton has from its Jacobian).
 
-    A sweep's body is written out here, not in a function of its own: numba increfs and decrefs every array a call
-    passes (inlined or not), and cannot drop the pairs around a call of a kernel (it may release anything); a call
-    per sweep with its dozen arrays cost the double pendulum's gauss2 a fifth of its steps per second, measured when
-    `_collocation_steps` was split.  The helpers called per sweep and per step call no kernel, this one aside.
+    The stages' kernel calls are written out here, not in a function of their own: numba increfs and decrefs every
+    array a call passes (inlined or not), and cannot drop the pairs around a call of a kernel (it may release
+    anything); a call per sweep with its dozen arrays cost the double pendulum's gauss2 a fifth of its steps per
+    second, measured when `_collocation_steps` was split.  The helpers called per stage, sweep and step
+    (`_take_stage`, `_newton_correction`, `_stop_test`, ...) call no kernel, this one aside.
 
     The other arrays are work space (`_collocation_steps`).  Returns DONE; RHS_FAILED (M
     singular); or NOT_CONVERGED after ``max_iter`` sweeps, or when the iterates become non-finite or the iteration
@@ -296,32 +338,11 @@ def _solve_stages(velocities, momentum_rate, canonical_partials, t, h, x, p, A, 
             counters[NFEV] += 1
             if status != 0:
                 break
-            for c in range(n):
-                if newton is not None:
-                    delta[i * n2 + c] = qdot[c] - K[i, c]
-                    delta[i * n2 + n + c] = pdot[c] - K[i, n + c]
-                else:  # np.maximum keeps a NaN, where max would drop it
-                    change[c] = np.maximum(change[c], abs(h * (qdot[c] - K[i, c])))
-                    change[n + c] = np.maximum(change[n + c], abs(h * (pdot[c] - K[i, n + c])))
-                    size[c] = max(size[c], abs(qdot[c]), abs(K[i, c]))
-                    size[n + c] = max(size[n + c], abs(pdot[c]), abs(K[i, n + c]))
-                    K[i, c] = qdot[c]
-                    K[i, n + c] = pdot[c]
+            _take_stage(i, h, qdot, pdot, K, newton, delta, change, size)
         if status != 0:
             break
         if newton is not None:
-            s = K.shape[0]
-            for c in range(s * n2):
-                delta[c] *= rows[c]
-            lu_substitute(matrix, pivots, delta)
-            for c in range(s * n2):
-                delta[c] *= columns[c]
-            for i in range(s):
-                for c in range(n2):
-                    change[c] = np.maximum(change[c], abs(h * delta[i * n2 + c]))
-                    size[c] = max(size[c], abs(K[i, c]))
-                    K[i, c] += delta[i * n2 + c]
-                    size[c] = max(size[c], abs(K[i, c]))
+            _newton_correction(matrix, pivots, rows, columns, delta, K, h, change, size)
         outcome, previous = _stop_test(change, size, floor, x, h, previous, noise_known)
         if outcome == STALLED:  # the fixed point's floor, once in a step
             if canonical_jacobian(velocities, canonical_partials, t, x, p, J) != 0:
