@@ -21,7 +21,9 @@ positive value but falls like log(t)/t: tangent vectors grow only linearly
 (shear between neighbouring tori).
 
 Both loops are library code taking the model's kernels
-(`lagcomp.integrate.drivers.lyapunov`, RK4 with a fixed step).  They run in chunks: each
+(`lagcomp.integrate.drivers.lyapunov`, RK4 with a fixed step).  On a tree with ball joints they switch each
+joint's MRPs to their shadow past |σ| = 1, the tangent vectors (or the shadow trajectory) with them
+(`_chart_coordinates`).  They run in chunks: each
 chunk's end gives one row of the running estimate (`Lyapunov.history`),
 moves the progress bar, and is where Ctrl-C stops the run cleanly.
 """
@@ -98,6 +100,18 @@ def _setup(model, q0, qd0, params, t_span, dt):
     n = model.n
     x = model.canonical_state(y0[:n], y0[n:], t0, params)
     return p, x, t0, t1, dt
+
+
+def _chart_coordinates(model) -> np.ndarray:
+    """Each ball joint's three coordinates (MRPs σ), int64 (J, 3), whose shadow switches the loops make
+    (`lagcomp.integrate.drivers.lyapunov`: past |σ| = 1, tangent vectors through the switch's derivative); (0, 3)
+    for a model without."""
+    tree = getattr(model, "system", None)
+    names = tuple(getattr(tree, "chart_events", ()))
+    coordinates = list(getattr(tree, "coordinates", ()))
+    rows = [[coordinates.index(sigma) for sigma, _ in event.reset[:3]] for event in tree.events[:len(names)]] \
+        if names else []
+    return np.array(rows, dtype=np.int64).reshape(len(rows), 3)
 
 
 def _run(model, advance, t0, t1, dt, transient, renorm_every, samples, progress, sums):
@@ -193,11 +207,11 @@ def lyapunov_exponents(model, t_span, q0=None, qd0=None, params: dict | None = N
     sums = np.zeros(k)
     from lagcomp.integrate.drivers.lyapunov import lyapunov_run
 
-    kernels = model.kernels
+    kernels, charts = model.kernels, _chart_coordinates(model)
 
     def advance(steps, n_steps):
         return lyapunov_run(kernels.velocities, kernels.momentum_rate, kernels.canonical_partials, x, W, steps, sums,
-                            p, t0, dt, n_steps, renorm_every)
+                            p, t0, dt, n_steps, renorm_every, charts)
 
     status, times, history = _run(model, advance, t0, t1, dt, transient, renorm_every, samples, progress, sums)
     return _result(model, "variational", status, times, history, x, dt, renorm_every, p, throw)
@@ -235,11 +249,11 @@ def two_trajectory_lyapunov(model, t_span, q0=None, qd0=None, params: dict | Non
     sums = np.zeros(1)
     from lagcomp.integrate.drivers.lyapunov import divergence_run
 
-    kernels = model.kernels
+    kernels, charts = model.kernels, _chart_coordinates(model)
 
     def advance(steps, n_steps):
         return divergence_run(kernels.velocities, kernels.momentum_rate, x, xs, steps, sums, p, t0, dt, n_steps,
-                              renorm_every, d0, scale)
+                              renorm_every, d0, scale, charts)
 
     status, times, history = _run(model, advance, t0, t1, dt, transient, renorm_every, samples, progress, sums)
     return _result(model, "two-trajectory", status, times, history, x, dt, renorm_every, p, throw)

@@ -89,7 +89,9 @@ class Method:
     carry: str | None = None
     #: Whether the driver switches charts (a ball joint's MRPs to their shadow) at the end of a step that left one,
     #: without locating the event (`lagcomp.integrate.drivers.collocation`): it takes ``event_values`` and
-    #: ``event_reset`` after `kernels` and the events' actions last, and applies no other event.
+    #: ``event_reset`` after `kernels`, the events' actions after its coefficients, then the event buffers it records
+    #: the switches in (times, states before, events, states after; its sweep loop the event outputs), and applies
+    #: no other event.
     switches_charts: bool = False
     def solves_dae(self, model) -> bool:
         """Whether this method integrates `model` as an index-2 DAE (a constrained model, `dae_kernels`)."""

@@ -135,17 +135,20 @@ def _fixed_step_driver(kernels, state: RunState, p, run_args, options: RunOption
     """The chunk call of a fixed-step method, and the rows its output will need (`tier`: as `_adaptive_driver`'s)."""
     library = _bound_drivers(options.method, kernels) if tier[0] is None else None
     coefficients = options.driver_arguments()
-    if options.method.switches_charts:    # the events' actions: which are chart switches (`Method.switches_charts`)
+    charts = options.method.switches_charts
+    if charts:    # the events' actions: which are chart switches (`Method.switches_charts`)
         coefficients = (*coefficients, options.actions)
+    carry = ()
     if options.method.carry is not None:  # the Gauss methods: what their steps carry from call to call
         stages = options.method.tableau.B.size
-        coefficients = (*coefficients, *_library_function(options.method.carry)(state.y.size, stages))
+        carry = _library_function(options.method.carry)(state.y.size, stages)
     t0, t1, dt, n_steps = options.t0, options.t1, options.dt, options.n_steps
 
     def advance(ts, ys, pause_at, event_buffers, first_call):
         driver = library[first_call] if tier[0] is None else tier[0]
+        # a method that switches charts records them in the event buffers (times, states before, events, after)
         return driver(state.y, state.clock, state.counters, p, *run_args, t0, dt, n_steps, pause_at, t1,
-                      options.save_every, ts, ys, *coefficients)
+                      options.save_every, ts, ys, *coefficients, *(event_buffers if charts else ()), *carry)
     return advance, n_steps // options.save_every + 1
 
 

@@ -436,7 +436,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
         if m.switches_charts:       # the events' actions: which are chart switches (`Method.switches_charts`)
             coefficients = (*coefficients, actions)
         task = _Task(m.driver, m.adaptive, fixed, layout, coefficients, projecting, m.sweep,
-                     m.dae_kernels if dae else m.driver_kernels, balance or None)
+                     m.dae_kernels if dae else m.driver_kernels, balance or None, m.adaptive or m.switches_charts)
     if client is None:
         kernels = model.kernels if spec is None else _worker_kernels(spec)
         if spec is None and not batched:
@@ -544,6 +544,7 @@ class _Task:
     sweep: str             # the library sweep loop, ``"module:function"`` (`Method.sweep`)
     kernels: tuple         # what it takes first from the generated module, by name (`Method.kernels`), then ``energy``
     balance: tuple | None = None   # (2n, k, offset of the slots in p): the energy balance's kernel for ``energy``
+    events: bool = False   # whether the loop takes the event outputs (adaptive methods; those that switch charts)
 
     def loop(self, kernels):
         """The compiled sweep loop of this task for the model's `kernels` (its generated module): the loop specialised
@@ -599,7 +600,7 @@ def _run_chunk(kernels, task: _Task, Y0: np.ndarray, P: np.ndarray) -> dict[str,
     common = (out["final"], out["t_final"], out["status"], out["counts"], out["dense"], out["energy"])
     if task.driver in BATCHED.values():
         loop(Y0, P, *task.fixed, *common, *task.coefficients)
-    elif task.adaptive:
+    elif task.events:
         loop(Y0, P, task.projecting, *task.fixed, *common, out["event_count"], out["event_t"], out["event_y"],
              *task.coefficients)
     else:

@@ -17,6 +17,18 @@ where the Jacobian J = ∂f/∂x is compiled.
   both are advanced, and every ``renorm_every`` steps (and at the end of each call) log(d/d0) is
   added to ``sums[0]`` and xs is pulled back to distance d0 along xs − x.
 
+Chart switches.  A ball joint's MRPs σ (three of the coordinates, their momenta π three of p) switch to the shadow
+σ' = −σ/s, s = σ·σ, at the end of the first step past |σ| = 1 (`lagcomp.multibody.shadow`; the rows of ``charts``
+name each joint's three coordinates), as the Gauss driver switches (`lagcomp.integrate.drivers.collocation`).  In
+(q, p) the switch is the cotangent lift of σ → σ', a symplectic map in closed form: Dσ'/Dσ = −(I − 2σσᵀ/s)/s, its
+inverse −s I + 2σσᵀ, symmetric, so π' = −s π + 2σ (σ·π) (`_shadow_state`).  The tangent vectors are pushed through
+its derivative at the state before the switch (`_shadow_tangents`):
+
+    δσ' = −δσ/s + 2σ (σ·δσ)/s²,
+    δπ' = −s δπ + 2σ (σ·δπ) − 2π (σ·δσ) + 2(σ·π) δσ + 2σ (π·δσ).
+
+The two-trajectory run switches the shadow state with the trajectory's, so that both are in one chart.
+
 Both are resumable: the state lives in the in/out arrays ``x``, ``W`` (or ``xs``), ``steps``
 (int64[1], steps taken since t0) and ``sums``, so the caller runs them in chunks (progress,
 Ctrl-C) with the same result as one call.  They return `Status` DONE, NONFINITE when the state
@@ -133,16 +145,64 @@ def _orthonormalize(W, sums):
     return Status.DONE
 
 
+@njit(cache=True, error_model="numpy", nogil=True)
+def _shadow_state(x, a):
+    """The shadow switch of the ball joint whose σ are x[a[0]], x[a[1]], x[a[2]] (their momenta π at n + a), in place:
+    σ' = −σ/s, π' = −s π + 2σ (σ·π) (module docstring)."""
+    n = x.shape[0] // 2
+    s = x[a[0]] * x[a[0]] + x[a[1]] * x[a[1]] + x[a[2]] * x[a[2]]
+    sp = x[a[0]] * x[n + a[0]] + x[a[1]] * x[n + a[1]] + x[a[2]] * x[n + a[2]]
+    for i in range(3):
+        sigma = x[a[i]]
+        x[n + a[i]] = -s * x[n + a[i]] + 2.0 * sigma * sp
+        x[a[i]] = -sigma / s
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _shadow_tangents(x, W, a):
+    """The tangent vectors W (2n, k) through the derivative of `_shadow_state` at x (before the switch), in place
+    (module docstring)."""
+    n = x.shape[0] // 2
+    s = x[a[0]] * x[a[0]] + x[a[1]] * x[a[1]] + x[a[2]] * x[a[2]]
+    sp = x[a[0]] * x[n + a[0]] + x[a[1]] * x[n + a[1]] + x[a[2]] * x[n + a[2]]
+    for c in range(W.shape[1]):
+        s_ds, s_dp, p_ds = 0.0, 0.0, 0.0
+        for i in range(3):
+            s_ds += x[a[i]] * W[a[i], c]
+            s_dp += x[a[i]] * W[n + a[i], c]
+            p_ds += x[n + a[i]] * W[a[i], c]
+        for i in range(3):
+            sigma, pi, ds, dp = x[a[i]], x[n + a[i]], W[a[i], c], W[n + a[i], c]
+            W[a[i], c] = -ds / s + 2.0 * sigma * s_ds / (s * s)
+            W[n + a[i], c] = -s * dp + 2.0 * sigma * s_dp - 2.0 * pi * s_ds + 2.0 * sp * ds + 2.0 * sigma * p_ds
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _switch_charts(x, W, xs, charts):
+    """After a step: each ball joint (a row of ``charts``) whose |σ| passed 1 switches to the shadow, x in place, the
+    tangent vectors W (2n, k) with it (k = 0: none), and the shadow trajectory xs (size 0: none) in the same chart."""
+    for j in range(charts.shape[0]):
+        a = charts[j]
+        if x[a[0]] * x[a[0]] + x[a[1]] * x[a[1]] + x[a[2]] * x[a[2]] > 1.0:
+            _shadow_tangents(x, W, a)
+            _shadow_state(x, a)
+            if xs.shape[0] > 0:
+                _shadow_state(xs, a)
+
+#: Each ball joint's three coordinates (rows; none: shape (0, 3)): its chart switches (module docstring).
+CHARTS = types.int64[:, ::1]
+
 _LYAPUNOV = types.int64(VELOCITIES, MOMENTUM_RATE, CANONICAL_PARTIALS, VECTOR, MATRIX, INDICES, VECTOR, VECTOR, FLOAT,
-                        FLOAT, INT, INT)
+                        FLOAT, INT, INT, CHARTS)
 
 
 @njit(_LYAPUNOV, cache=True, error_model="numpy", nogil=True)
-def lyapunov_run(velocities, momentum_rate, canonical_partials, x, W, steps, sums, p, t0, dt, n_steps, renorm_every):
+def lyapunov_run(velocities, momentum_rate, canonical_partials, x, W, steps, sums, p, t0, dt, n_steps, renorm_every,
+                 charts):
     """Advance x (2n,) and the tangent vectors W (2n, k) by ``n_steps`` RK4 steps (see the module docstring).
 
     ``steps[0]`` counts the steps since t0 (in/out); ``sums`` (k,) accumulates log R_jj at each
-    orthonormalization, the last one at the end of the call.
+    orthonormalization, the last one at the end of the call; ``charts``: the ball joints' chart switches.
     """
     m, k = W.shape
     y, xt, v = np.empty(m), np.empty(m), np.empty(m // 2)
@@ -185,6 +245,8 @@ def lyapunov_run(velocities, momentum_rate, canonical_partials, x, W, steps, sum
             for c in range(k):
                 W[i, c] += dt / _DENOMINATOR * (_WEIGHTS[0] * K1[i, c] + _WEIGHTS[1] * K2[i, c]
                                                 + _WEIGHTS[2] * K3[i, c] + _WEIGHTS[3] * K4[i, c])
+        if charts.shape[0] > 0:
+            _switch_charts(x, W, x[:0], charts)
         steps[0] += 1
         renormalize = (step + 1) % renorm_every == 0 or step == n_steps - 1
         if renormalize and _orthonormalize(W, sums) != Status.DONE:
@@ -193,17 +255,20 @@ def lyapunov_run(velocities, momentum_rate, canonical_partials, x, W, steps, sum
 
 
 _DIVERGENCE = types.int64(VELOCITIES, MOMENTUM_RATE, VECTOR, VECTOR, INDICES, VECTOR, VECTOR, FLOAT, FLOAT, INT, INT,
-                          FLOAT, VECTOR)
+                          FLOAT, VECTOR, CHARTS)
 
 
 @njit(_DIVERGENCE, cache=True, error_model="numpy", nogil=True)
-def divergence_run(velocities, momentum_rate, x, xs, steps, sums, p, t0, dt, n_steps, renorm_every, d0, scale):
+def divergence_run(velocities, momentum_rate, x, xs, steps, sums, p, t0, dt, n_steps, renorm_every, d0, scale,
+                   charts):
     """Advance x and its shadow xs by ``n_steps`` RK4 steps, renormalizing their distance to d0 (module docstring).
 
     The distance is sqrt(Σ ((xs_i − x_i)/scale_i)²): each component in units of its own ``scale_i`` (ones: the plain
-    Euclidean distance, to the bit), so that d0 means the same in any units when the scales follow them."""
+    Euclidean distance, to the bit), so that d0 means the same in any units when the scales follow them.  ``charts``:
+    the ball joints' chart switches, xs switched with x."""
     m = x.shape[0]
     y, xt = np.empty(m), np.empty(m)
+    no_tangents = np.empty((m, 0))
     k1, k2, k3, k4 = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     for step in range(n_steps):
         t = t0 + steps[0] * dt
@@ -213,6 +278,8 @@ def divergence_run(velocities, momentum_rate, x, xs, steps, sums, p, t0, dt, n_s
         status = _rk4_state(velocities, momentum_rate, t, xs, p, dt, y, k1, k2, k3, k4, xt)
         if status != Status.DONE:
             return status
+        if charts.shape[0] > 0:
+            _switch_charts(x, no_tangents, xs, charts)
         steps[0] += 1
         if (step + 1) % renorm_every == 0 or step == n_steps - 1:
             d = 0.0
