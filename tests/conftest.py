@@ -18,6 +18,17 @@ import lagcomp as lc
 from lagcomp import examples
 
 
+def pytest_configure(config):
+    """In the controller of an xdist run (the default, pyproject.toml), compile the library's drivers into numba's
+    cache first, one process per worker (tests/library_warmup.py), so that the workers load them rather than both
+    compiling them at once."""
+    workers = getattr(config.option, "numprocesses", None)
+    if isinstance(workers, int) and workers > 1 and not hasattr(config, "workerinput"):
+        import library_warmup
+
+        library_warmup.warm(workers)
+
+
 def pytest_collection_modifyitems(items):
     """The heaviest files first, so that xdist's workers finish together (tests/suite_order.py)."""
     import suite_order
