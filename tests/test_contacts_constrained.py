@@ -175,3 +175,43 @@ def test_bounces_to_rest_on_the_floor_as_the_angle_model(models, theta0, restitu
     scale = np.abs(hits.q).sum(axis=1) * (np.abs(hits.qd) + np.abs(hits.qd_after)).sum(axis=1)
     change = np.einsum("ij,ij->i", hits.q, hits.qd_after - hits.qd)
     assert np.all(np.abs(change) <= 8 * np.finfo(float).eps * scale)
+
+
+@pytest.mark.parametrize("method", ["dopri5", "tsit5", "bs3"])
+def test_the_other_event_methods_bounce_to_rest_as_dop853(models, method):
+    cartesian, _ = models
+    start, params = (_position(-1.2), [0.0, 0.0]), {"d": FAR, "ef": 0.3}
+    reference = cartesian.simulate((0.0, 2.0), *start, params, rtol=1e-12, atol=1e-12)
+    run = cartesian.simulate((0.0, 2.0), *start, params, method=method, rtol=1e-10, atol=1e-10)
+    assert run.status == Status.DONE, run.message
+    np.testing.assert_allclose(run.events["floor"].t[:3], reference.events["floor"].t[:3], rtol=0, atol=1e-8)
+    assert [(s.contact, s.closed) for s in run.contact_switches] == [("floor", True)]
+    bound = 1e-8 + 2 * np.sqrt(2 * 64 * np.finfo(float).eps * 2 / (G / 4)) / (1 - 0.3)   # (the Zeno rule's, above)
+    assert abs(run.contact_switches[0].t - reference.contact_switches[0].t) <= bound
+
+
+def test_methods_without_contacts_or_constraints_are_refused_naming_the_capable_ones(models):
+    cartesian, _ = models
+    start = (_position(-1.2), [0.0, 0.0])
+    with pytest.raises(lc.OptionError, match="constraints") as refused:
+        cartesian.simulate((0.0, 1.0), *start, method="taylor")
+    assert "['rod']" in str(refused.value)
+    with pytest.raises(lc.OptionError, match="switch and jump") as refused:
+        cartesian.simulate((0.0, 1.0), *start, method="radau")
+    assert "taylor" not in str(refused.value) and "dop853" in str(refused.value)
+
+
+def test_a_sweep_over_the_restitution_matches_its_single_runs(models):
+    cartesian, _ = models
+    restitutions = np.array([0.0, 0.3, 0.6])
+    start = dict(q0=_position(-1.2), qd0=[0.0, 0.0])
+    sweep = cartesian.sweep((0.0, 2.0), grid={"ef": restitutions}, params={"d": FAR}, rtol=1e-12, atol=1e-12,
+                            output="events", event_cap=256, progress=False, **start)
+    assert (sweep.status == Status.DONE).all()
+    for i, restitution in enumerate(restitutions):
+        single = cartesian.simulate((0.0, 2.0), params={"d": FAR, "ef": restitution}, rtol=1e-12, atol=1e-12,
+                                    **start)
+        count = sweep.events["floor"]["count"][i]
+        assert count == len(single.events["floor"])
+        np.testing.assert_array_equal(sweep.events["floor"]["t"][i, :count], single.events["floor"].t)
+        np.testing.assert_array_equal(sweep.final[i], single.y[-1])
