@@ -94,9 +94,6 @@ def test_bad_contacts_refused():
     y, = lc.coordinates("y")
     with pytest.raises(ModelError, match="not a coordinate"):
         lc.System([x], T=x.diff(t) ** 2 / 2, events=[lc.Contact("floor", y)], name="stray")
-    with pytest.raises(ModelError, match="nonholonomic constraints"):    # (holonomic ones: test_contacts_constrained)
-        lc.System([x, y], T=(x.diff(t) ** 2 + y.diff(t) ** 2) / 2, events=[lc.Contact("floor", y)],
-                  constraints=[lc.Nonholonomic("roll", x.diff(t) - y.diff(t))], name="rod")
 
 
 def test_run_refuses_penetration_and_restitution_out_of_range(ball):

@@ -215,3 +215,42 @@ def test_a_sweep_over_the_restitution_matches_its_single_runs(models):
         assert count == len(single.events["floor"])
         np.testing.assert_array_equal(sweep.events["floor"]["t"][i, :count], single.events["floor"].t)
         np.testing.assert_array_equal(sweep.final[i], single.y[-1])
+
+
+def test_a_rolling_disc_bounces_off_a_wall_keeping_its_rolling_constraint(tmp_path):
+    """A nonholonomic constraint: a disc (mass m, I = κ m R²) rolling without slipping, ẋ − R θ̇ = 0, pushed by F0
+    toward a wall at x = −d.  The impact keeps the rolling: with W = J K Jᵀ = 1/(m + I/R²) (K of the module
+    docstring of `lagcomp.kernel_support.constrained_response`), ẋ⁺ = −e ẋ⁻, θ̇⁺ = ẋ⁺/R and P = (1 + e) m_eff |ẋ⁻|,
+    m_eff = m + I/R²; between impacts ẍ = −F0/m_eff, so from x0 at rest the first impact comes at
+    t1 = √(2 (x0 + d) m_eff/F0), the bounces end at t∞ = t1 + 2 e v1 m_eff/(F0 (1 − e)), and at rest the wall
+    pushes with F0 while the rolling constraint holds with 0 (statics: −F0 + μ + N = 0, −R μ = 0)."""
+    x, theta = lc.coordinates("x theta")
+    m, R, kappa, F0, d, e = sp.symbols("m R kappa F0 d e", positive=True)
+    system = lc.System([x, theta], T=m * x.diff(t) ** 2 / 2 + kappa * m * R**2 * theta.diff(t) ** 2 / 2, V=F0 * x,
+                       constraints=[lc.Nonholonomic("roll", x.diff(t) - R * theta.diff(t))],
+                       events=[lc.Contact("wall", x + d, restitution=e)], name="rolling_disc",
+                       defaults={"m": 2.0, "R": 0.3, "kappa": 0.5, "F0": 3.0, "d": 0.5, "e": 0.5})
+    model = lc.compile(system, cache_dir=tmp_path)
+    mass, inertia, force, restitution = 2.0, 0.5 * 2.0 * 0.3**2, 3.0, 0.5
+    effective = mass + inertia / 0.3**2
+    sol = model.simulate((0.0, 6.0), [1.0, 0.0], [0.0, 0.0], rtol=1e-12, atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    hits = sol.events["wall"]
+    t1 = np.sqrt(2 * 1.5 * effective / force)
+    v1 = force / effective * t1
+    assert hits.t[0] == pytest.approx(t1, abs=1e-11)
+    assert hits.qd_after[0, 0] == pytest.approx(restitution * v1, rel=1e-10)
+    residual = lambda qd: qd[:, 0] - 0.3 * qd[:, 1]  # noqa: E731  (ẋ − R θ̇: kept by the impact, drift and all)
+    assert np.all(np.abs(residual(hits.qd_after) - residual(hits.qd)) <= 8 * np.finfo(float).eps * np.abs(hits.qd).max())
+    assert hits.impulses[0, 0] == pytest.approx((1 + restitution) * effective * v1, rel=1e-10)
+    t_rest = t1 + 2 * restitution * v1 * effective / (force * (1 - restitution))
+    assert [(s.contact, s.closed) for s in sol.contact_switches] == [("wall", True)]
+    # within the Zeno rule's bound (resting's docstring): the bounces below 64 roundings of the gap (ε |x| = ε d)
+    # left out, 2 √(2 · 64 ε d / |a|) / (1 − e), |a| = F0/m_eff
+    bound = 2 * np.sqrt(2 * 64 * np.finfo(float).eps * 0.5 / (force / effective)) / (1 - restitution)
+    assert abs(sol.contact_switches[0].t - t_rest) <= bound
+    resting = sol.t > sol.contact_switches[0].t
+    np.testing.assert_allclose(sol.contact_forces[resting, 0], force, rtol=1e-12)
+    assert np.abs(sol.reactions["roll"][resting]).max() <= 1e-12 * force
+    rolling = sol.t < hits.t[0]
+    np.testing.assert_allclose(sol.reactions["roll"][rolling], force * inertia / 0.3**2 / effective, rtol=1e-10)

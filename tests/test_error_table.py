@@ -440,9 +440,6 @@ CASES = {
     "contact-gap-with-velocities": (lambda: lc.Contact("floor", x + x.diff(t)), "`floor`"),
     "contact-unknown-coordinate": (lambda: oscillator(events=[lc.Contact("floor", x - sp.Function("w")(t))]),
                                    "w(t)"),
-    "contact-with-constraints": (
-        lambda: plane(events=[lc.Contact("floor", y)], constraints=[lc.Nonholonomic("roll", x.diff(t) - l * y.diff(t))]),
-        "['floor']"),
     "contact-on-kanes-method": (lambda: lc.compile(_kane_slider(), events=[lc.Contact("wall", x)]), "`wall`"),
     "friction-coefficient-out-of-range": (lambda: lc.Friction("slide", x.diff(t), normal=m * g, static=-0.1),
                                           "`slide`"),

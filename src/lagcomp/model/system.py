@@ -379,12 +379,6 @@ class System:
             if isinstance(e, Friction) and isinstance(e.normal, str) and e.normal not in contacts:
                 raise ModelError(f"Friction `{e.name}`: normal={e.normal!r} names no contact of this system "
                                  f"(contacts {contacts}); give a Contact's name or N as an expression.")
-        rolling = [c.name for c in self.constraints if isinstance(c, Nonholonomic)]
-        if contacts and rolling:
-            raise ModelError(f"Contacts {contacts} on a system with nonholonomic constraints {rolling}: contacts "
-                             "keep holonomic constraints only (their impacts and resting forces are solved with "
-                             "them, lagcomp.kernel_support.constrained_response); write the constraint as "
-                             "Holonomic if it integrates, or leave the contacts out.")
         if frictions and self.constraints:
             raise ModelError(f"Friction {frictions} on a system with constraints {list(self.constraint_names)}: a "
                              "sticking element's row would join the constraints' KKT system, which is not supported "
