@@ -445,8 +445,8 @@ CASES = {
                                           "`slide`"),
     "friction-velocity-not-linear": (lambda: lc.compile(oscillator(events=[
         lc.Friction("slide", x.diff(t) ** 3, normal=m * g, static=0.5)])), "`slide`"),
-    "friction-with-constraints": (lambda: plane(events=[lc.Friction("slide", x.diff(t), normal=m * g, static=0.5)],
-                                                constraints=[lc.Holonomic("rod", x - l)]), "['slide']"),
+    "friction-with-constraints": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction(
+        "slide", x.diff(t), normal=m * g, static=0.5)], constraints=[lc.Holonomic("rod", x - l)]), "['slide']"),
     "friction-unknown-contact": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction(
         "slide", x.diff(t), normal="ground", static=0.5)]), "'ground'"),
     "default-unknown-parameter": (lambda: oscillator(defaults={"mass": 1.0}), "['mass']"),

@@ -49,7 +49,6 @@ def stopped(tmp_path_factory):
 
 
 def _runs(stopped, restitution, span=(0.0, 1.0)):
-    tree, system = stopped
     runs = [model.simulate(span, params={"e": restitution}, rtol=1e-12, atol=1e-12) for model in stopped]
     assert all(run.status == Status.DONE for run in runs), [run.message for run in runs]
     return runs

@@ -59,8 +59,8 @@ def friction_events(frictions: tuple) -> tuple[int, ...]:
 
 def mode_slots(eom) -> int:
     """How many slots of p the modes take: one per contact, the closing flag, one per friction element
-    (`ContactModes`); 0 without contacts and friction (a constrained system's contacts have modes too, its
-    friction elements are refused: `lagcomp.model.system.System`)."""
+    (`ContactModes`); 0 without contacts and friction (a constrained system's too: its contacts, or its friction
+    elements without contacts, `lagcomp.model.system.System`)."""
     count, elements = len(contact_events(eom.restitutions)), len(friction_events(eom.frictions))
     return count + 1 + elements if count or elements else 0
 
@@ -253,19 +253,11 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     if solve.kind == "rhs":
         return [], ["_status = rhs_free(t, y, p, out)", f"if _status != 0 or ({none_held}):", f"{indent}return _status",
                     f"return closed_contacts(t, y, p, out, np.empty({rows + k}), 1.0)"]
+    if k and solve.kind in ("forces", "reactions"):
+        return [], _constrained_force_lines(solve, none_held, indent)
     if solve.kind == "forces":
-        free = [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
-                f"{indent}return _status"]
-        if not k:
-            return [], free + ["return closed_contacts(t, y, p, _ydot, out, 0.0)"]
-        return [], free + [f"_forces = np.empty({rows + k})", "_status = closed_contacts(t, y, p, _ydot, _forces, 0.0)",
-                           f"out[:] = _forces[:{rows}]", "return _status"]
-    if solve.kind == "reactions":   # the constraints' multipliers with the closed contacts' Δμ (as rhs: unilateral)
-        return [], ["_status = reactions_free(t, y, p, out)", f"if _status != 0 or ({none_held}):",
-                    f"{indent}return _status", f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)",
-                    "if _status != 0:", f"{indent}return _status", f"_forces = np.empty({rows + k})",
-                    "_status = closed_contacts(t, y, p, _ydot, _forces, 1.0)",
-                    f"out[:] += _forces[{rows}:]", "return _status"]
+        return [], [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
+                    f"{indent}return _status", "return closed_contacts(t, y, p, _ydot, out, 0.0)"]
     if solve.kind == "limits":      # the pressed elements' μs times their contact's normal force, 0 while open
         after = [f"_normal = np.empty({rows})", "_status = contact_forces(t, y, p, _normal)"]
         after += [f"out[{f}] = out[{f}] * max(_normal[{d}], 0.0) if _status == 0 else 0.0"
@@ -273,6 +265,10 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
         return [], after + ["return 0"]
     if solve.kind == "closed":
         work = [f"_mass = np.zeros(({n}, {n}))", f"_gradient = np.zeros(({rows}, {n}))", f"_bias = np.empty({rows})"]
+        if k and slots:     # (friction with constraints: no contacts, `lagcomp.model.system.System`)
+            return work + [f"_constraint = np.zeros(({k}, {n}))"], [
+                f"return constrained_frictional_accelerations(_mass, _constraint, _gradient, _bias, "
+                f"p[{first}:{first + count}], p[{slots[0]}:{slots[-1] + 1}], out[{n}:{2 * n}], forces, unilateral)"]
         if k:
             return work + [f"_constraint = np.zeros(({k}, {n}))"], [
                 f"return constrained_closed_contact_accelerations(_mass, _constraint, _gradient, _bias, "
@@ -297,6 +293,21 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     for f, (e, s) in enumerate(zip(solve.frictions, slots, strict=True)):
         after += [f"{indent * 2}if p[{s}] == 0.0:", f"{indent * 3}out[{e}] = _limits[{f}] - abs(_forces[{count + f}])"]
     return [], after
+
+
+def _constrained_force_lines(solve: ContactModes, none_held: str, indent: str) -> list[str]:
+    """The lines after the stores of a constrained module's ``contact_forces`` (the first `rows` of
+    ``closed_contacts``' forces, which end with the constraints' Δμ) and ``reactions`` (``reactions_free`` plus that
+    Δμ while some contact is held, unilateral as ``rhs``)."""
+    n, rows, k = solve.n, solve.rows, solve.constraints
+    free = [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
+            f"{indent}return _status", f"_forces = np.empty({rows + k})"]
+    if solve.kind == "forces":
+        return free + ["_status = closed_contacts(t, y, p, _ydot, _forces, 0.0)", f"out[:] = _forces[:{rows}]",
+                       "return _status"]
+    return ["_status = reactions_free(t, y, p, out)", f"if _status != 0 or ({none_held}):", f"{indent}return _status",
+            *free, "_status = closed_contacts(t, y, p, _ydot, _forces, 1.0)", f"out[:] += _forces[{rows}:]",
+            "return _status"]
 
 
 def _checked_closing(call: str, n: int, count: int, first: int, indent: str) -> list[str]:

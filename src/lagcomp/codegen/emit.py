@@ -122,7 +122,8 @@ KERNEL_SUPPORT = {
                                               "lu_solve", "lu_solve_matrix", "lu_substitute"),
     "lagcomp.kernel_support.scratch": ("stack_array", "stack_empty"),
     "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "constrained_closed_contact_accelerations",
-                                       "constrained_contact_event", "contact_event", "friction_mode_after",
+                                       "constrained_contact_event", "constrained_frictional_accelerations",
+                                       "contact_event", "friction_mode_after",
                                        "friction_modes_after_jump", "frictional_accelerations",
                                        "pressed_contact_event", "pressed_frictional_accelerations",
                                        "slip_most_overloaded"),
@@ -159,7 +160,8 @@ def kernel_support_names(kernels) -> set[str]:
                 names.add("pressed_contact_event")
         if isinstance(kernel.solve, ContactModes) and kernel.solve.kind == "closed":
             names.add("pressed_frictional_accelerations" if kernel.solve.pressing else
-                      "frictional_accelerations" if kernel.solve.frictions else
+                      ("constrained_" if kernel.solve.constraints else "") + "frictional_accelerations"
+                      if kernel.solve.frictions else
                       "constrained_closed_contact_accelerations" if kernel.solve.constraints else
                       "closed_contact_accelerations")
         if isinstance(kernel.solve, FrictionSwitch):

@@ -117,12 +117,39 @@ def _constrained_closed_contact_accelerations(mass, constraint, gradients, bias,
     Δμ, the change of the constraints' multipliers (the generalized forces along the rows of Λ, `reactions`'
     convention M q̈ = F + Λᵀ μ) that the closed contacts cause.  Returns as `closed_contact_accelerations`.
     """
-    count, k, n = modes.shape[0], constraint.shape[0], qdd.shape[0]
+    count = modes.shape[0]
+    held = np.empty(count, dtype=np.bool_)
+    for d in range(count):
+        held[d] = modes[d] != 0.0
+    return held_with_constraints(mass, constraint, gradients, bias, held, count, qdd, forces, unilateral)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _constrained_frictional_accelerations(mass, constraint, gradients, bias, modes, frictions, qdd, forces,
+                                          unilateral):
+    """`frictional_accelerations` for a system with constraints (``constraint`` (k, n): Λ): the sticking elements'
+    rows after the closed contacts', the constraints' after theirs (`constrained_closed_contact_accelerations`);
+    ``forces`` (C + F + k)."""
+    count, elements = modes.shape[0], frictions.shape[0]
+    held = np.empty(count + elements, dtype=np.bool_)
+    for d in range(count):
+        held[d] = modes[d] != 0.0
+    for f in range(elements):
+        held[count + f] = frictions[f] == 0.0
+    return held_with_constraints(mass, constraint, gradients, bias, held, count, qdd, forces, unilateral)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def held_with_constraints(mass, constraint, gradients, bias, held, one_sided, qdd, forces, unilateral):
+    """`held_row_accelerations` on the rows R of ``gradients`` (R, n) that are ``held``, then the k rows of
+    ``constraint`` (k, n), always held, with bias −Λ q̈_free (``qdd`` on entry): the correction keeps Λ q̈.
+    ``forces`` (R + k): the rows' multipliers, then the constraints' Δμ."""
+    count, k, n = held.shape[0], constraint.shape[0], qdd.shape[0]
     rows = np.empty((count + k, n))
     stacked_bias = np.empty(count + k)
     active = np.empty(count + k, dtype=np.bool_)
     for d in range(count):
-        active[d] = modes[d] != 0.0
+        active[d] = held[d]
         stacked_bias[d] = bias[d]
         for j in range(n):
             rows[d, j] = gradients[d, j]
@@ -133,7 +160,7 @@ def _constrained_closed_contact_accelerations(mass, constraint, gradients, bias,
             rows[count + r, j] = constraint[r, j]
             s -= constraint[r, j] * qdd[j]
         stacked_bias[count + r] = s
-    return held_row_accelerations(mass, rows, stacked_bias, active, count, qdd, forces, unilateral)
+    return held_row_accelerations(mass, rows, stacked_bias, active, one_sided, qdd, forces, unilateral)
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
@@ -581,5 +608,6 @@ frictional_accelerations = called_by_symbol(_frictional_accelerations)
 pressed_frictional_accelerations = called_by_symbol(_pressed_frictional_accelerations)
 contact_event = called_by_symbol(_contact_event)
 constrained_closed_contact_accelerations = called_by_symbol(_constrained_closed_contact_accelerations)
+constrained_frictional_accelerations = called_by_symbol(_constrained_frictional_accelerations)
 constrained_contact_event = called_by_symbol(_constrained_contact_event)
 pressed_contact_event = called_by_symbol(_pressed_contact_event)
