@@ -94,9 +94,6 @@ def test_bad_contacts_refused():
     y, = lc.coordinates("y")
     with pytest.raises(ModelError, match="not a coordinate"):
         lc.System([x], T=x.diff(t) ** 2 / 2, events=[lc.Contact("floor", y)], name="stray")
-    with pytest.raises(ModelError, match="constraints"):
-        lc.System([x, y], T=(x.diff(t) ** 2 + y.diff(t) ** 2) / 2, events=[lc.Contact("floor", y)],
-                  constraints=[lc.Holonomic("rod", x**2 + y**2 - 1)], name="rod")
 
 
 def test_run_refuses_penetration_and_restitution_out_of_range(ball):

@@ -440,15 +440,13 @@ CASES = {
     "contact-gap-with-velocities": (lambda: lc.Contact("floor", x + x.diff(t)), "`floor`"),
     "contact-unknown-coordinate": (lambda: oscillator(events=[lc.Contact("floor", x - sp.Function("w")(t))]),
                                    "w(t)"),
-    "contact-with-constraints": (
-        lambda: plane(events=[lc.Contact("floor", y)], constraints=[lc.Holonomic("rod", x - l)]), "['floor']"),
     "contact-on-kanes-method": (lambda: lc.compile(_kane_slider(), events=[lc.Contact("wall", x)]), "`wall`"),
     "friction-coefficient-out-of-range": (lambda: lc.Friction("slide", x.diff(t), normal=m * g, static=-0.1),
                                           "`slide`"),
     "friction-velocity-not-linear": (lambda: lc.compile(oscillator(events=[
         lc.Friction("slide", x.diff(t) ** 3, normal=m * g, static=0.5)])), "`slide`"),
-    "friction-with-constraints": (lambda: plane(events=[lc.Friction("slide", x.diff(t), normal=m * g, static=0.5)],
-                                                constraints=[lc.Holonomic("rod", x - l)]), "['slide']"),
+    "friction-with-constraints": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction(
+        "slide", x.diff(t), normal=m * g, static=0.5)], constraints=[lc.Holonomic("rod", x - l)]), "['slide']"),
     "friction-unknown-contact": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction(
         "slide", x.diff(t), normal="ground", static=0.5)]), "'ground'"),
     "default-unknown-parameter": (lambda: oscillator(defaults={"mass": 1.0}), "['mass']"),

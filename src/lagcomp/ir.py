@@ -256,6 +256,9 @@ class ContactImpact:
     #: contact.  Then the branch also stores ``_static``, ``_kinetic`` (F) and an impact is frictional
     #: (`lagcomp.kernel_support.resting.pressed_contact_event`).
     pressing: tuple[int, ...] = ()
+    #: The constraints of a constrained module (k rows of Λ): the branch also stores ``_constraint`` (k, n) = Λ and
+    #: calls the constrained solvers (`lagcomp.kernel_support.constrained_response`: the impact keeps Λ q̇ + b = 0).
+    constraints: int = 0
 
 
 @dataclass(frozen=True)
@@ -289,6 +292,11 @@ class ContactModes:
     #: Per friction element, the index (in contact order) of the contact whose normal force presses it, −1 for an
     #: N given as an expression; () when no element is pressed by a contact (`lagcomp.codegen.contacts`).
     pressing: tuple[int, ...] = ()
+    #: The constraints of a constrained module (k rows of Λ, no friction elements): ``closed_contacts`` also stores
+    #: ``_constraint`` (k, n) = Λ, holds them beside the closed contacts
+    #: (`lagcomp.kernel_support.resting.constrained_closed_contact_accelerations`: its ``forces`` are rows + k, the
+    #: constraints' Δμ last), and ``reactions`` (kind "reactions") adds that Δμ to ``reactions_free``.
+    constraints: int = 0
 
     @property
     def rows(self) -> int:

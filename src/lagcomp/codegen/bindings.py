@@ -109,6 +109,6 @@ def input_slots(eom: EOM) -> list[tuple]:
 
 
 def first_mode_slot(eom: EOM) -> int:
-    """The first slot of p of the contacts' modes: after the parameters (a system with contacts has no
-    constraints, so no Baumgarte gains)."""
-    return len(eom.parameters)
+    """The first slot of p of the contacts' modes: after the parameters and a constrained system's Baumgarte
+    gains."""
+    return len(eom.parameters) + (len(BAUMGARTE) if eom.k else 0)

@@ -59,9 +59,10 @@ def friction_events(frictions: tuple) -> tuple[int, ...]:
 
 def mode_slots(eom) -> int:
     """How many slots of p the modes take: one per contact, the closing flag, one per friction element
-    (`ContactModes`); 0 without contacts and friction, or for a constrained system (which has none)."""
+    (`ContactModes`); 0 without contacts and friction (a constrained system's too: its contacts, or its friction
+    elements without contacts, `lagcomp.model.system.System`)."""
     count, elements = len(contact_events(eom.restitutions)), len(friction_events(eom.frictions))
-    return count + 1 + elements if (count or elements) and not eom.k else 0
+    return count + 1 + elements if count or elements else 0
 
 
 def pressing(eom) -> tuple[int, ...]:
@@ -78,7 +79,12 @@ def pressing(eom) -> tuple[int, ...]:
 def modes_of(eom, kind: str, first: int) -> ContactModes:
     """The `ContactModes` of kernel `kind` of `eom`, whose modes start at slot `first` of p."""
     return ContactModes(kind, eom.n, len(contact_events(eom.restitutions)), first, contact_events(eom.restitutions),
-                        friction_events(eom.frictions), pressing(eom))
+                        friction_events(eom.frictions), pressing(eom), eom.k)
+
+
+def constraint_stores(eom) -> list:
+    """The stores of ``_constraint[c, j]`` = Λ_cj, the constraint matrix of a constrained `eom` (none without)."""
+    return [(f"_constraint[{c}, {j}]", eom.C[c, j]) for c in range(eom.k) for j in range(eom.n) if eom.C[c, j] != 0]
 
 
 def _gap_rate(gap, eom, time):
@@ -107,6 +113,7 @@ def resting_kernels(eom, time, first: int, kernel) -> tuple:
                  "Returns 0, or k > 0 when M (or the closed contacts' W) is singular here; `out` is then invalid."
                  + friction_doc, ("t", "y", "p", "out"), [], modes_of(eom, "rhs", first))
     stores = [(f"_mass[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(i + 1) if eom.M[i, j] != 0]
+    stores += constraint_stores(eom)
     for d, e in enumerate(events):
         gap = eom.events[e]
         stores += [(f"_gradient[{d}, {j}]", gap.diff(q)) for j, q in enumerate(eom.q) if gap.diff(q) != 0]
@@ -198,6 +205,7 @@ def impact_branches(eom, restitutions: tuple, time, kernel, modes: int | None = 
         return ()
     n = eom.n
     stores = [(f"_mass[{i}, {j}]", eom.M[i, j]) for i in range(n) for j in range(i + 1) if eom.M[i, j] != 0]
+    stores += constraint_stores(eom)
     for d, e in enumerate(events):
         gap = eom.events[e]
         gradient = [gap.diff(q) for q in eom.q]
@@ -219,7 +227,7 @@ def impact_branches(eom, restitutions: tuple, time, kernel, modes: int | None = 
                        (f"_kinetic[{f}]", sp.sympify(eom.frictions[e][2]))]
     branch = kernel("event_reset", "", ("t", "y", "p", "e", "out"), stores,
                     ContactImpact(n=n, events=events, modes=modes, elements=len(elements),
-                                  pressing=pressing(eom) if modes is not None else ()))
+                                  pressing=pressing(eom) if modes is not None else (), constraints=eom.k))
     return ((events, branch),)
 
 
@@ -239,12 +247,14 @@ def contacts_constant(names: tuple[str, ...], restitutions: tuple) -> tuple:
 def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     """The emitted lines of a kernel whose solve is `solve`: (after its loads, before its temporaries; after its
     stores)."""
-    n, count, first, rows = solve.n, solve.count, solve.first, solve.rows
+    n, count, first, rows, k = solve.n, solve.count, solve.first, solve.rows, solve.constraints
     slots = [solve.friction_slot(f) for f in range(len(solve.frictions))]
     none_held = " and ".join([f"p[{first + d}] == 0.0" for d in range(count)] + [f"p[{s}] != 0.0" for s in slots])
     if solve.kind == "rhs":
         return [], ["_status = rhs_free(t, y, p, out)", f"if _status != 0 or ({none_held}):", f"{indent}return _status",
-                    f"return closed_contacts(t, y, p, out, np.empty({rows}), 1.0)"]
+                    f"return closed_contacts(t, y, p, out, np.empty({rows + k}), 1.0)"]
+    if k and solve.kind in ("forces", "reactions"):
+        return [], _constrained_force_lines(solve, none_held, indent)
     if solve.kind == "forces":
         return [], [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
                     f"{indent}return _status", "return closed_contacts(t, y, p, _ydot, out, 0.0)"]
@@ -255,6 +265,14 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
         return [], after + ["return 0"]
     if solve.kind == "closed":
         work = [f"_mass = np.zeros(({n}, {n}))", f"_gradient = np.zeros(({rows}, {n}))", f"_bias = np.empty({rows})"]
+        if k and slots:     # (friction with constraints: no contacts, `lagcomp.model.system.System`)
+            return work + [f"_constraint = np.zeros(({k}, {n}))"], [
+                f"return constrained_frictional_accelerations(_mass, _constraint, _gradient, _bias, "
+                f"p[{first}:{first + count}], p[{slots[0]}:{slots[-1] + 1}], out[{n}:{2 * n}], forces, unilateral)"]
+        if k:
+            return work + [f"_constraint = np.zeros(({k}, {n}))"], [
+                f"return constrained_closed_contact_accelerations(_mass, _constraint, _gradient, _bias, "
+                f"p[{first}:{first + count}], out[{n}:{2 * n}], forces, unilateral)"]
         if solve.pressing:
             return work + [f"_kinetic = np.zeros({len(slots)})"], [
                 f"return pressed_frictional_accelerations(_mass, _gradient, _bias, p[{first}:{first + count}], "
@@ -277,21 +295,57 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
     return [], after
 
 
+def _constrained_force_lines(solve: ContactModes, none_held: str, indent: str) -> list[str]:
+    """The lines after the stores of a constrained module's ``contact_forces`` (the first `rows` of
+    ``closed_contacts``' forces, which end with the constraints' Δμ) and ``reactions`` (``reactions_free`` plus that
+    Δμ while some contact is held, unilateral as ``rhs``)."""
+    n, rows, k = solve.n, solve.rows, solve.constraints
+    free = [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
+            f"{indent}return _status", f"_forces = np.empty({rows + k})"]
+    if solve.kind == "forces":
+        return free + ["_status = closed_contacts(t, y, p, _ydot, _forces, 0.0)", f"out[:] = _forces[:{rows}]",
+                       "return _status"]
+    return ["_status = reactions_free(t, y, p, out)", f"if _status != 0 or ({none_held}):", f"{indent}return _status",
+            *free, "_status = closed_contacts(t, y, p, _ydot, _forces, 1.0)", f"out[:] += _forces[{rows}:]",
+            "return _status"]
+
+
+def _checked_closing(call: str, n: int, count: int, first: int, indent: str) -> list[str]:
+    """The lines of a constrained module's impact branch after ``_firing``: the impact (`call`), then, when it
+    closed some contact, the forces at the state after it (``contact_forces``, under the new modes); if one it
+    closed would not push, the modes and velocities as before and the impact again without closing."""
+    modes = f"p[{first}:{first + count}]"
+    again = call.replace(f"p[{first + count}], out", "0.0, out")
+    return [f"_modes = {modes}.copy()", f"_status = {call}",
+            f"if _status != 0 or ({modes} == _modes).all():", f"{indent}return _status",
+            f"_forces = np.empty({count})", "_status = contact_forces(t, out, p, _forces)",
+            f"for _d in range({count}):",
+            f"{indent}if p[{first} + _d] != 0.0 and _modes[_d] == 0.0 and (_status != 0 or not _forces[_d] > 0.0):",
+            f"{indent * 2}{modes} = _modes", f"{indent * 2}out[{n}:{2 * n}] = y[{n}:{2 * n}]",
+            f"{indent * 2}return {again}",
+            "return 0"]
+
+
 def contact_event_call(n: int, count: int, first: int, firing: str, indent: str, elements: int = 0,
-                       pressed: tuple[int, ...] = ()) -> list[str]:
+                       pressed: tuple[int, ...] = (), constraints: int = 0) -> list[str]:
     """The end of the impact branch of a module with modes: q̈ without contacts, then
     `lagcomp.kernel_support.resting.contact_event` on the mode slots of p; with `elements` friction elements,
     their modes decided again from the state after the event (`friction_modes_after_jump`: slip along v ≠ 0,
     stick at v = 0 unless the holding force exceeds μs |N|, then `slip_most_overloaded`), so that no mode is
     stale after an impact, a closing or a lift-off.  With friction elements `pressed` by a contact (their
-    contact's index or −1 each), the impact is `pressed_contact_event`'s: frictional."""
+    contact's index or −1 each), the impact is `pressed_contact_event`'s: frictional.  With `constraints` (a
+    constrained module, no friction), `constrained_contact_event` on ``_constraint`` too."""
     call = (f"contact_event(_mass, _gap, _gradient, _normal_velocity, _restitution, _bias, _ydot[{n}:{2 * n}], "
             f"y[:{n}], t, _firing, p[{first}:{first + count}], p[{first + count}], out[{n}:{2 * n}])")
+    if constraints:
+        call = f"constrained_contact_event(_mass, _constraint, {call[len('contact_event(_mass, '):]}"
     if pressed:
         call = (f"pressed_{call[:-1]}, _slip_gradient, _slip_offset, np.array({list(pressed)}, dtype=np.int64), "
                 "_static, _kinetic)")
     lines = [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
              f"{indent}return _status", f"_firing = {firing}"]
+    if constraints:
+        return lines + _checked_closing(call, n, count, first, indent)
     if not elements:
         return lines + [f"return {call}"]
     frictions = f"p[{first + count + 1}:{first + count + 1 + elements}]"

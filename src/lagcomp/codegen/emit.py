@@ -115,13 +115,15 @@ _COMPANION_TITLE = "Kernels built on first use (lagcomp.codegen.kinds)"
 
 #: What kernels may call from `lagcomp.kernel_support`, by module.
 KERNEL_SUPPORT = {
-    "lagcomp.kernel_support.impacts": ("contact_impacts",),
+    "lagcomp.kernel_support.impacts": ("constrained_contact_impacts", "contact_impacts"),
     "lagcomp.kernel_support.inputs": ("input_value",),
     "lagcomp.kernel_support.linear_solvers": ("PIVOT_TOLERANCE", "gram_solve", "kkt_solve", "kkt_solve_matrix",
                                               "ldlt_solve", "ldlt_solve_inline", "ldlt_solve_matrix", "lu_factor",
                                               "lu_solve", "lu_solve_matrix", "lu_substitute"),
     "lagcomp.kernel_support.scratch": ("stack_array", "stack_empty"),
-    "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "contact_event", "friction_mode_after",
+    "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "constrained_closed_contact_accelerations",
+                                       "constrained_contact_event", "constrained_frictional_accelerations",
+                                       "contact_event", "friction_mode_after",
                                        "friction_modes_after_jump", "frictional_accelerations",
                                        "pressed_contact_event", "pressed_frictional_accelerations",
                                        "slip_most_overloaded"),
@@ -150,14 +152,18 @@ def kernel_support_names(kernels) -> set[str]:
         if isinstance(kernel.solve, EventResets):
             names |= kernel_support_names(branch for _, branch in kernel.solve.branches)
         if isinstance(kernel.solve, ContactImpact):
-            names.add("contact_impacts" if kernel.solve.modes is None else "contact_event")
+            names.add(("constrained_" if kernel.solve.constraints else "")
+                      + ("contact_impacts" if kernel.solve.modes is None else "contact_event"))
             if kernel.solve.elements:
                 names |= {"friction_modes_after_jump", "slip_most_overloaded"}
             if kernel.solve.pressing:
                 names.add("pressed_contact_event")
         if isinstance(kernel.solve, ContactModes) and kernel.solve.kind == "closed":
             names.add("pressed_frictional_accelerations" if kernel.solve.pressing else
-                      "frictional_accelerations" if kernel.solve.frictions else "closed_contact_accelerations")
+                      ("constrained_" if kernel.solve.constraints else "") + "frictional_accelerations"
+                      if kernel.solve.frictions else
+                      "constrained_closed_contact_accelerations" if kernel.solve.constraints else
+                      "closed_contact_accelerations")
         if isinstance(kernel.solve, FrictionSwitch):
             names.add("friction_mode_after")
         expressions = [expr for _, expr in kernel.temps] + [expr for _, expr in kernel.stores]
@@ -572,6 +578,7 @@ def _impact_work(solve: ContactImpact) -> list[str]:
     return [f"_mass = np.zeros(({n}, {n}))", f"_gap = np.empty({c})", f"_gradient = np.zeros(({c}, {n}))",
             f"_normal_velocity = np.empty({c})", f"_restitution = np.empty({c})"] + (
         [] if solve.modes is None else [f"_bias = np.empty({c})"]) + (
+        [f"_constraint = np.zeros(({solve.constraints}, {n}))"] if solve.constraints else []) + (
         [f"_slip_gradient = np.zeros(({solve.elements}, {n}))", f"_slip_offset = np.empty({solve.elements})"]
         if solve.elements else []) + (
         [f"_static = np.empty({solve.elements})", f"_kinetic = np.empty({solve.elements})"] if solve.pressing else [])
@@ -583,9 +590,11 @@ def _impact_call(solve: ContactImpact) -> list[str]:
     firing = f"{firing} else {len(solve.events) - 1}" if firing else "0"
     n = solve.n
     if solve.modes is not None:
-        return contact_event_call(n, len(solve.events), solve.modes, firing, INDENT, solve.elements, solve.pressing)
+        return contact_event_call(n, len(solve.events), solve.modes, firing, INDENT, solve.elements, solve.pressing,
+                                  solve.constraints)
+    solver = "constrained_contact_impacts(_mass, _constraint," if solve.constraints else "contact_impacts(_mass,"
     return [f"_firing = {firing}",
-            f"return contact_impacts(_mass, _gap, _gradient, _normal_velocity, _restitution, y[:{n}], _firing, "
+            f"return {solver} _gap, _gradient, _normal_velocity, _restitution, y[:{n}], _firing, "
             f"out[{n}:{2 * n}])"]
 
 

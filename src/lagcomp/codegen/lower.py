@@ -593,7 +593,7 @@ def _builders(eom: EOM, mapping, loads) -> list:
         return cse_kernel(name, doc, args, stores, mapping, loads, solve=solve)
 
     if eom.k:
-        first = [("motion", lambda: _constraint_kernels(eom, mapping, loads)),
+        first = [("motion", lambda: _constrained_motion(eom, mapping, loads, kernel)),
                  ("jacobians", lambda: constrained_jacobian_kernels(eom, mapping, loads)),
                  ("directional", lambda: _directional_kernels(eom, mapping, loads)),
                  ("dae", lambda: _dae_kernels(eom, mapping, loads))]
@@ -641,6 +641,26 @@ def _builders(eom: EOM, mapping, loads) -> list:
          else (input_jacobian_kernel(eom, mapping, loads),)),
         ("energy_lanes", lambda: energy_lanes_kernels(energy(), energy_function(), eom) if summary_lanes else ()),
     ]
+
+
+def _constrained_motion(eom: EOM, mapping, loads, kernel) -> tuple[Kernel, ...]:
+    """The motion kernels of a constrained system (`_constraint_kernels`); with contacts, ``rhs`` and ``reactions``
+    read their modes: ``rhs_free`` and ``reactions_free`` are the motion without contacts, ``closed_contacts``
+    holds the closed contacts beside the constraints (`lagcomp.ir.ContactModes`), ``reactions`` adds the change
+    of the multipliers they cause.  ``rhs_and_reactions`` (what the Jacobians start from) stays the motion without
+    contacts, as an unconstrained module's Jacobians are those of ``rhs_free``."""
+    kernels = _constraint_kernels(eom, mapping, loads)
+    if not mode_slots(eom):
+        return kernels
+    rhs, reactions, *rest = kernels
+    first = first_mode_slot(eom)
+    free = replace(rhs, name="rhs_free", doc="The motion without contacts (all open): " + rhs.doc)
+    reactions_free = replace(reactions, name="reactions_free",
+                             doc="The multipliers without contacts (all open): " + reactions.doc)
+    with_contacts = kernel("reactions", reactions.doc + "\nWhile some contact is closed (its mode p[first + d] = 1), "
+                           "with the change its normal force\ncauses (closed_contacts: the constraints' rows held "
+                           "beside the contacts').", ("t", "y", "p", "out"), [], modes_of(eom, "reactions", first))
+    return (*resting_kernels(eom, t, first, kernel), with_contacts, free, reactions_free, *rest)
 
 
 def _once(build):

@@ -74,11 +74,11 @@ def loop_kernels(tree, nodes, gravity, mapping: dict, kernel) -> tuple:
     matrix = kernel(
         "constraint_matrix", f"Constraint matrix [Λ | b], shape ({k}, {n + 1}), into `out` (b = 0).", ARGS,
         lambda prog: [(f"out[{c}, {j}]", row[j] if j < n else sp.S.Zero)
-                      for c, row in enumerate(_rows(prog, tree, nodes, mapping).rows) for j in range(n + 1)])
+                      for c, row in enumerate(loop_rows(prog, tree, nodes, mapping).rows) for j in range(n + 1)])
     return rhs, reactions, both, residuals, matrix
 
 
-def _rows(prog, tree, nodes, mapping):
+def loop_rows(prog, tree, nodes, mapping):
     """The loops' `lagcomp.multibody.closure.ClosureRows` over the kernel's locals."""
     last_node = {node.link: i for i, node in enumerate(tree.nodes)}
     points = [(tuple(sp.sympify(x).xreplace(mapping) for x in c.first_point),
@@ -88,7 +88,7 @@ def _rows(prog, tree, nodes, mapping):
 
 def _check_rows(tree, nodes, mapping) -> None:
     """Refuse a loop direction whose row of Λ is identically zero (module docstring)."""
-    rows = _rows(Program(), tree, nodes, mapping).rows
+    rows = loop_rows(Program(), tree, nodes, mapping).rows
     c = 0
     for closure in tree.closures:
         for direction in range(len(closure.directions)):
@@ -119,7 +119,7 @@ def augmented_parts(prog, tree, nodes, gravity, mapping) -> AugmentedParts:
     alpha, beta = (sp.Symbol(name, real=True) for name in BAUMGARTE)
     M = mass_matrix_in_coordinates(prog, nodes, mass_matrix(prog, nodes))
     F = forces_in_coordinates(prog, nodes, forcing(prog, nodes, gravity))
-    loops = _rows(prog, tree, nodes, mapping)
+    loops = loop_rows(prog, tree, nodes, mapping)
     gamma = [prog.let(g - 2 * alpha * v - beta**2 * phi) for g, v, phi in zip(loops.gamma, loops.velocity, loops.Phi)]
     return AugmentedParts(M, F, loops, gamma)
 
@@ -145,6 +145,6 @@ def augmented_matrix(parts: AugmentedParts, n: int) -> tuple[list, list]:
 
 
 def _residual_stores(prog, tree, nodes, mapping, k: int) -> list:
-    loops = _rows(prog, tree, nodes, mapping)
+    loops = loop_rows(prog, tree, nodes, mapping)
     return [(f"out[{c}]", phi) for c, phi in enumerate(loops.Phi)] + \
         [(f"out[{k + c}]", v) for c, v in enumerate(loops.velocity)]

@@ -31,7 +31,9 @@ from dataclasses import dataclass, replace
 
 import sympy as sp
 
+from lagcomp.codegen.bindings import BAUMGARTE
 from lagcomp.codegen.contacts import friction_branches, impact_branches, modes_of, resting_kernels
+from lagcomp.codegen.tree_constraints import loop_rows
 from lagcomp.ir import Kernel
 from lagcomp.model.contacts import Contact
 from lagcomp.model.friction import Friction
@@ -46,8 +48,9 @@ class ContactView:
     """What `lagcomp.codegen.contacts` reads of an EOM, for a tree: n, M (over program locals), the coordinate and
     velocity locals, each event's function over the locals, the restitutions (the user's: a number or a parameter,
     None for an event that is not a contact), the friction elements' (normal contact's name, μs, μk) (None for
-    another event), no constraints, the tree (its ``event_names``) and its parameters (the modes' first slot of p
-    follows them)."""
+    another event), the tree (its ``event_names``), its parameters (the modes' first slot of p follows them, and
+    the Baumgarte gains of a tree with loops), and the loops' constraint rows: k and C (k, n), Λ = ∂Φ/∂q over the
+    locals (`lagcomp.multibody.closure`; none without loops)."""
 
     n: int
     M: sp.Matrix
@@ -59,6 +62,7 @@ class ContactView:
     system: object
     parameters: tuple
     k: int = 0
+    C: sp.Matrix | None = None
 
 
 class TreeContacts:
@@ -91,9 +95,11 @@ class TreeContacts:
                                                                     sp.sympify(e.normal).xreplace(signals),
                                                                     e.static, e.kinetic)
                           for e in tree.events)
+        k = len(tree.constraint_names)
+        C = sp.Matrix(loop_rows(self.prog, tree, nodes, mapping).rows) if k else None
         self.view = ContactView(n, M, tuple(q), tuple(qd), tuple(values), restitutions, frictions, tree,
-                                tree.parameters)
-        self.first = len(tree.parameters)
+                                tree.parameters, k, C)
+        self.first = len(tree.parameters) + (len(BAUMGARTE) if k else 0)
 
     def kernel(self, name: str, doc: str, args, stores, solve=None) -> Kernel:
         """A kernel of `stores` (target, expression over the locals or the user's parameters): the expressions
@@ -112,11 +118,22 @@ class TreeContacts:
                       temps=tuple((s.name, e) for s, e in temps),
                       stores=tuple((target, e) for (target, _), e in zip(stores, outputs, strict=True)), solve=solve)
 
-    def motion(self, rhs: Kernel) -> tuple[Kernel, ...]:
-        """``rhs`` with the contacts' modes, ``closed_contacts``, ``contact_forces`` and ``rhs_free`` (`rhs`, the
-        tree's rhs with every contact open, renamed)."""
+    def motion(self, dynamics: tuple[Kernel, ...]) -> tuple[Kernel, ...]:
+        """``rhs`` with the contacts' modes, ``closed_contacts``, ``contact_forces`` and ``rhs_free`` (the tree's
+        rhs, ``dynamics[0]``, with every contact open, renamed); with loops (`dynamics` are then
+        `lagcomp.codegen.tree_constraints.loop_kernels`'), ``reactions`` with the modes too, ``reactions_free``
+        and the other loop kernels as they are (`lagcomp.codegen.lower`'s constrained motion with contacts)."""
+        rhs, *rest = dynamics
         free = replace(rhs, name="rhs_free", doc="The motion without contacts (all open): " + rhs.doc)
-        return (*resting_kernels(self.view, self.time, self.first, self.kernel), free)
+        kernels = (*resting_kernels(self.view, self.time, self.first, self.kernel), free)
+        if not self.view.k:
+            return kernels
+        reactions, *others = rest
+        with_contacts = self.kernel("reactions", reactions.doc + "\nWhile some contact is closed, with the change "
+                                    "its normal force causes (closed_contacts).", ("t", "y", "p", "out"), [],
+                                    modes_of(self.view, "reactions", self.first))
+        return (*kernels, with_contacts, replace(reactions, name="reactions_free", doc="The multipliers without "
+                                                 "contacts (all open): " + reactions.doc), *others)
 
     def event_modes(self):
         """The `lagcomp.ir.ContactModes` of ``event_values``: a closed contact's value is its normal force."""

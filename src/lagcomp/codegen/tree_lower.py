@@ -64,7 +64,7 @@ def lower_tree(tree: Tree) -> ModuleIR:
     if tree.contacts or any(isinstance(e, Friction) for e in tree.events):
         # the contacts' and friction elements' modes: rhs is rhs_free corrected for the held rows (`tree_contacts`)
         contacts = TreeContacts(tree, nodes, q, qd, mapping, loads, event_functions(tree, q, qd, mapping)[0])
-        dynamics = contacts.motion(dynamics[0])
+        dynamics = contacts.motion(dynamics)
     kernels = (
         *dynamics,
         kernel("energy", "Total mechanical energy T + V (gravity and the joints' springs).", ("t", "y", "p"),

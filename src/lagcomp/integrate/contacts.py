@@ -105,6 +105,9 @@ def sweep_impulses(model, firing: int, P: np.ndarray, count: np.ndarray, times: 
     contact_events = np.array([index for _, index, _ in contacts_of(model)], dtype=np.int64)
     n, n_events = model.n, len(model.event_names)
     values = np.full((*times.shape, contact_events.size), np.nan)
+    if model.k:
+        return _constrained_impulses(model, contact_events, firing, with_open_contacts(model, P), count, times, before,
+                                     after, values)
     library_function(IMPULSES)(
         model.kernels.mass_matrix, model.kernels.event_values, model.kernels.event_gradients, contact_events,
         firing, n, np.ascontiguousarray(with_open_contacts(model, P), dtype=np.float64),
@@ -113,6 +116,32 @@ def sweep_impulses(model, firing: int, P: np.ndarray, count: np.ndarray, times: 
         np.empty((n, n)), np.empty(n_events), np.empty((n_events, model.state_size + 1 + len(model.parameters))),
         values)
     return values
+
+
+def _constrained_impulses(model, contact_events, firing: int, P, count, times, before, after, out) -> np.ndarray:
+    """`sweep_impulses` of a model with constraints: M (q̇⁺ − q̇⁻) = Gᵀ P + Λᵀ Λ_c, the constraints' impulses Λ_c
+    too (`lagcomp.kernel_support.constrained_response`), both by least squares on [Gᵀ Λᵀ]; a loop in Python (a
+    constrained model's sweeps of many impacts are not what the compiled loop is for)."""
+    n, k = model.n, model.k
+    mass, matrix = np.empty((n, n)), np.empty((k, n + 1))
+    values = np.empty(len(model.event_names))
+    gradients = np.empty((len(model.event_names), model.state_size + 1 + len(model.parameters)))
+    for row in range(times.shape[0]):
+        p = P[row]
+        for r in range(min(int(count[row]), times.shape[1])):
+            t, y = float(times[row, r]), before[row, r]
+            model.kernels.mass_matrix(t, y, p, mass)
+            model.kernels.event_values(t, y, p, values)
+            model.kernels.event_gradients(t, y, p, gradients)
+            model.kernels.constraint_matrix(t, y, p, matrix)
+            G = gradients[contact_events, :n]
+            closed = (contact_events == firing) | (values[contact_events] <= touching(G, y[:n]))
+            columns = np.hstack([G[closed].T, matrix[:, :n].T])
+            jump = mass @ (after[row, r, n:2 * n] - y[n:2 * n])
+            solution = np.linalg.lstsq(columns, jump, rcond=np.finfo(np.float64).eps * max(n, columns.shape[1]))[0]
+            out[row, r] = 0.0
+            out[row, r, closed] = solution[:int(closed.sum())]
+    return out
 
 
 def frictions_of(model) -> tuple:
@@ -316,21 +345,15 @@ def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, s
     if slots is None:
         return None
     first, count = slots
-    slot_of = mode_slot_of(model)
     frictions = frictions_of(model)
     sticking = np.array([slot for _, _, slot, _, _ in frictions], dtype=np.int64)
     coefficients = np.array([(_coefficient(model, p, mu_s), _coefficient(model, p, mu_k))
                              for _, _, _, mu_s, mu_k in frictions]).reshape(-1, 2)
     static = coefficients[:, 0]
     kinetic_over_static = np.divide(coefficients[:, 1], static, out=np.zeros_like(static), where=static > 0.0)
-    work, out = p.copy(), np.zeros((ts.shape[0], count + sticking.size))
+    out = np.zeros((ts.shape[0], count + sticking.size))
     limits = np.empty(sticking.size)
-    k = 0
-    for r in range(ts.shape[0]):
-        while k < len(switches) and (switches[k][0] < ts[r] or (switches[k][0] == ts[r] and r > 0
-                                                                 and ts[r - 1] == ts[r])):
-            work[slot_of[switches[k][1]]] = float(switches[k][2])
-            k += 1
+    for r, work in _modes_at_rows(model, p, ts, switches):
         if work[first:first + count].any() or (work[sticking] == 0.0).any():
             model.kernels.contact_forces(float(ts[r]), ys[r], work, out[r])
         slipping = work[sticking]
@@ -338,6 +361,39 @@ def contact_forces_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, s
             model.kernels.friction_limits(float(ts[r]), ys[r], work, limits)
             out[r, count:] = np.where(slipping != 0.0, -slipping * kinetic_over_static * limits, out[r, count:])
     return out
+
+
+def _modes_at_rows(model, p: np.ndarray, ts: np.ndarray, switches: tuple):
+    """(row, p with the modes at that row) for each saved row: the modes at the start (`p`) changed by the
+    `switches` before it; at a switch's time the first row is the state before the switch and a second row at
+    the same time the state after.  The same array each time, changed in place."""
+    slot_of = mode_slot_of(model)
+    work, k = p.copy(), 0
+    for r in range(ts.shape[0]):
+        while k < len(switches) and (switches[k][0] < ts[r] or (switches[k][0] == ts[r] and r > 0
+                                                                 and ts[r - 1] == ts[r])):
+            work[slot_of[switches[k][1]]] = float(switches[k][2])
+            k += 1
+        yield r, work
+
+
+def contact_reactions_along(model, p: np.ndarray, ts: np.ndarray, ys: np.ndarray, switches: tuple,
+                            reactions: dict) -> dict:
+    """`reactions` (the constraints' multipliers by name at the saved rows, computed with the modes at the start)
+    with the rows where some contact is closed computed again under the modes there (`_modes_at_rows`): a
+    constrained module's ``reactions`` adds the change the closed contacts' forces cause
+    (`lagcomp.kernel_support.resting.constrained_closed_contact_accelerations`).  `reactions` itself without
+    modes or constraints."""
+    slots = mode_slots(model)
+    if slots is None or not model.k or not reactions:
+        return reactions
+    first, count = slots
+    names = tuple(reactions)
+    values = np.stack([reactions[name] for name in names], axis=1)
+    for r, work in _modes_at_rows(model, p, ts, switches):
+        if work[first:first + count].any() and model.kernels.reactions(float(ts[r]), ys[r], work, values[r]) != 0:
+            values[r] = np.nan
+    return {name: values[:, j].copy() for j, name in enumerate(names)}
 
 
 def _coefficient(model, p: np.ndarray, mu) -> float:

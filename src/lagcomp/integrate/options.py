@@ -120,7 +120,8 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     inherent = [name for name, *_ in contacts_of(model) + frictions_of(model)]
     if inherent and "event_reset" not in m.kernels:
         capable = method_names(lambda m: "event_reset" in m.kernels
-                               and (integrates_modes(model, m) or not frictions_of(model)))
+                               and (integrates_modes(model, m) or not frictions_of(model))
+                               and not (m.unconstrained_only and model.k))
         raise OptionError(f"The contacts and friction elements {inherent} of {model.name!r} switch and jump within "
                           f"its motion, which `{m.name}` cannot do; use {capable}.")
     left_out = [name for name in inherent if name not in chosen]

@@ -27,6 +27,7 @@ from lagcomp.integrate.constraints import consistent_initial_state, reactions_al
 from lagcomp.integrate.contacts import (
     check_contacts,
     contact_forces_along,
+    contact_reactions_along,
     contact_switches,
     contacts_of,
     frictions_of,
@@ -556,6 +557,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
         fired = [name for name, record in run["events"].items() if record.t.size and record.t[-1] == run_state.t]
         message = f"{message} Event {fired[0] if fired else '?'!r} at t = {run_state.t:.10g}."
     reactions, residual = reactions_along(model, ts, ys, p)
+    reactions = contact_reactions_along(model, p, ts, ys, run.get("switches", ()), reactions)
     reaction_sensitivities = (None if run.get("sensitivities") is None else
                               sens.reaction_sensitivities(model, ts, ys, p, run["sensitivities"],
                                                           run["sensitivity_columns"]))

@@ -31,6 +31,11 @@ depend on t (M-weighted algebra from the jump above): with e = 1 that is
 simultaneous impacts; with e < 1 it is ½ (1 − e) Pᵀ v⁻, a loss as long as the
 contacts that push were approaching.
 
+With holonomic constraints (a System's, a tree's loops) M⁻¹ becomes the constrained response
+K = M⁻¹ − M⁻¹Aᵀ (A M⁻¹ Aᵀ)⁻¹ A M⁻¹ (A the constraint matrix): the jump is K Gᵀ P, W = G K Gᵀ, and the
+constraints' velocities are kept (`lagcomp.kernel_support.constrained_response` derives it; the
+``constrained_`` entry points take A).
+
 These are helpers of the emitted ``event_reset`` kernels: numba compiles them
 into the kernel that calls them.  They allocate small work arrays: impacts are
 rare events, not the inner loop.
@@ -39,6 +44,7 @@ rare events, not the inner loop.
 import numpy as np
 from numba import njit
 
+from lagcomp.kernel_support.constrained_response import response_columns
 from lagcomp.kernel_support.linear_solvers import ldlt_solve, ldlt_solve_matrix
 from lagcomp.kernel_support.symbol_calls import called_by_symbol
 
@@ -124,6 +130,12 @@ def solve_lcp(W, q, z, w):
 
 @njit(cache=True, error_model="numpy", fastmath=False)
 def impact_velocities(M, G, v_minus, restitution, qd, impulses):
+    """`constrained_impact_velocities` without constraints: K = M⁻¹."""
+    return constrained_impact_velocities(M, np.empty((0, M.shape[0])), G, v_minus, restitution, qd, impulses)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def constrained_impact_velocities(M, A, G, v_minus, restitution, qd, impulses):
     """Apply the impacts of the closed contacts to the velocities ``qd`` (n) in place; impulses into ``impulses``.
 
     M (n, n): the mass matrix (lower triangle read, not modified).  G (c, n):
@@ -131,8 +143,11 @@ def impact_velocities(M, G, v_minus, restitution, qd, impulses):
     velocities before the impact, G q̇⁻ + ∂g/∂t (negative: approaching).
     restitution (c): Newton's coefficients e in [0, 1].  Impulses are in the
     units of the gaps' conjugate forces times time (N s for a gap in metres),
-    ≥ 0, zero for a contact that does not push.  Returns `IMPACT_SOLVED` or a
-    negative status (the velocities are then unchanged).
+    ≥ 0, zero for a contact that does not push.  A (k, n): the constraint matrix
+    Λ of a constrained system (k = 0 without): the jump is K Gᵀ P, W = G K Gᵀ
+    (`lagcomp.kernel_support.constrained_response`), which keeps Λ q̇ + b.
+    Returns `IMPACT_SOLVED` or a negative status (the velocities are then
+    unchanged).
     """
     n = M.shape[0]
     c = G.shape[0]
@@ -140,11 +155,11 @@ def impact_velocities(M, G, v_minus, restitution, qd, impulses):
     for i in range(n):
         for j in range(i + 1):
             factor[i, j] = M[i, j]
-    minv_gt = np.empty((n, c))                  # M⁻¹ Gᵀ, column per contact
+    minv_gt = np.empty((n, c))                  # M⁻¹ Gᵀ (K Gᵀ), column per contact
     for i in range(n):
         for a in range(c):
             minv_gt[i, a] = G[a, i]
-    if ldlt_solve_matrix(factor, minv_gt) != 0:
+    if response_columns(factor, A, minv_gt) != 0:
         return IMPACT_SINGULAR_MASS
     delassus = np.empty((c, c))
     for a in range(c):
@@ -190,11 +205,20 @@ def touching(gap, gradients, row, q):
 
 @njit(cache=True, error_model="numpy", fastmath=False)
 def _contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd):
+    """`_constrained_contact_impacts` without constraints."""
+    return _constrained_contact_impacts(mass, np.empty((0, q.shape[0])), gaps, gradients, normal_velocities,
+                                        restitution, q, firing, qd)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _constrained_contact_impacts(mass, constraint, gaps, gradients, normal_velocities, restitution, q, firing, qd):
     """The impact of contact ``firing`` (its gap just closed) and of every other contact closed with it.
 
     mass (n, n) M, lower triangle; gaps, normal_velocities, restitution (C,) and gradients (C, n) of all C
     contacts (`lagcomp.codegen.contacts`); q (n) the coordinates; qd (n) the velocities before the impact,
-    overwritten with those after.  Returns `IMPACT_SOLVED` or a negative status of `impact_velocities`.
+    overwritten with those after; constraint (k, n) the constraint matrix Λ of a constrained system (k = 0
+    without; the velocities before satisfy its constraints, and those after too).  Returns `IMPACT_SOLVED` or a
+    negative status of `constrained_impact_velocities`.
     """
     n = q.shape[0]
     taking = np.zeros(gaps.shape[0], dtype=np.bool_)
@@ -216,7 +240,7 @@ def _contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, f
             e[row] = restitution[d]
             row += 1
     impulses = np.empty(c)
-    return impact_velocities(mass, G, v_minus, e, qd, impulses)
+    return constrained_impact_velocities(mass, constraint, G, v_minus, e, qd, impulses)
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
@@ -274,3 +298,4 @@ def frictional_impact(mass, gradient, normal_velocity, restitution, slip_gradien
 #: What the generated kernels call: `_contact_impacts` by symbol, optimised once
 #: (`lagcomp.kernel_support.symbol_calls`).
 contact_impacts = called_by_symbol(_contact_impacts)
+constrained_contact_impacts = called_by_symbol(_constrained_contact_impacts)

@@ -55,7 +55,7 @@ from lagcomp.kernel_support.impacts import (
     CLOSED_GAP,
     IMPACT_FRICTION_UNSOLVED,
     IMPACT_SOLVED,
-    _contact_impacts,
+    _constrained_contact_impacts,
     frictional_impact,
     solve_on_set,
     touching,
@@ -100,6 +100,67 @@ def _closed_contact_accelerations(mass, gradients, bias, modes, qdd, forces, uni
     for d in range(count):
         active[d] = modes[d] != 0.0
     return held_row_accelerations(mass, gradients, bias, active, count, qdd, forces, unilateral)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _constrained_closed_contact_accelerations(mass, constraint, gradients, bias, modes, qdd, forces, unilateral):
+    """`closed_contact_accelerations` for a system with constraints Λ q̇ + b = 0 (``constraint`` (k, n): Λ).
+
+    ``qdd`` (n) on entry is the constrained motion without contacts (the module's ``rhs_free``: it satisfies
+    Λ q̈ = γ, Baumgarte terms included).  The constraints are k more rows held two-sided after the contacts',
+    with bias −Λ q̈_free, so that the correction keeps Λ q̈ as it is:
+
+        M q̈ = M q̈_free + Gᵀ λ + Λᵀ Δμ,    [G; Λ] q̈ + [b; −Λ q̈_free] = 0 on the held rows,
+
+    the block system of `lagcomp.kernel_support.constrained_response` at the level of accelerations (its Schur
+    complement on the contacts' rows is W = G K Gᵀ).  ``forces`` (C + k): the contacts' normal forces, then
+    Δμ, the change of the constraints' multipliers (the generalized forces along the rows of Λ, `reactions`'
+    convention M q̈ = F + Λᵀ μ) that the closed contacts cause.  Returns as `closed_contact_accelerations`.
+    """
+    count = modes.shape[0]
+    held = np.empty(count, dtype=np.bool_)
+    for d in range(count):
+        held[d] = modes[d] != 0.0
+    return held_with_constraints(mass, constraint, gradients, bias, held, count, qdd, forces, unilateral)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _constrained_frictional_accelerations(mass, constraint, gradients, bias, modes, frictions, qdd, forces,
+                                          unilateral):
+    """`frictional_accelerations` for a system with constraints (``constraint`` (k, n): Λ): the sticking elements'
+    rows after the closed contacts', the constraints' after theirs (`constrained_closed_contact_accelerations`);
+    ``forces`` (C + F + k)."""
+    count, elements = modes.shape[0], frictions.shape[0]
+    held = np.empty(count + elements, dtype=np.bool_)
+    for d in range(count):
+        held[d] = modes[d] != 0.0
+    for f in range(elements):
+        held[count + f] = frictions[f] == 0.0
+    return held_with_constraints(mass, constraint, gradients, bias, held, count, qdd, forces, unilateral)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def held_with_constraints(mass, constraint, gradients, bias, held, one_sided, qdd, forces, unilateral):
+    """`held_row_accelerations` on the rows R of ``gradients`` (R, n) that are ``held``, then the k rows of
+    ``constraint`` (k, n), always held, with bias −Λ q̈_free (``qdd`` on entry): the correction keeps Λ q̈.
+    ``forces`` (R + k): the rows' multipliers, then the constraints' Δμ."""
+    count, k, n = held.shape[0], constraint.shape[0], qdd.shape[0]
+    rows = np.empty((count + k, n))
+    stacked_bias = np.empty(count + k)
+    active = np.empty(count + k, dtype=np.bool_)
+    for d in range(count):
+        active[d] = held[d]
+        stacked_bias[d] = bias[d]
+        for j in range(n):
+            rows[d, j] = gradients[d, j]
+    for r in range(k):
+        active[count + r] = True
+        s = 0.0
+        for j in range(n):
+            rows[count + r, j] = constraint[r, j]
+            s -= constraint[r, j] * qdd[j]
+        stacked_bias[count + r] = s
+    return held_row_accelerations(mass, rows, stacked_bias, active, one_sided, qdd, forces, unilateral)
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
@@ -282,6 +343,27 @@ def bounces_unresolved(v_after, pressing, restitution, t, gradient, q):
 @njit(cache=True, error_model="numpy", fastmath=False)
 def _contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes, closing,
                   qd):
+    """`impact_and_closing` without constraints, the closed contacts' forces checked at the state before."""
+    return impact_and_closing(mass, np.empty((0, q.shape[0])), gaps, gradients, normal_velocities, restitution, bias,
+                              qdd_free, q, t, firing, modes, closing, qd, True)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _constrained_contact_event(mass, constraint, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q,
+                               t, firing, modes, closing, qd):
+    """`impact_and_closing` with the constraints Λ (``constraint`` (k, n)), the closed contacts' forces not checked
+    here: a constrained q̈_free depends on q̇ (Λ q̈ = −Λ̇ q̇: a rod's centripetal pull), so the forces before a
+    plastic impact say nothing of those after it; for the same reason a contact with e = 0 left at rest by the
+    impact is a candidate to close whatever its free normal acceleration before.  The emitted branch checks them at the state after the event
+    (``contact_forces``) and does the impact again without closing when a contact it closed would pull
+    (`lagcomp.codegen.contacts.contact_event_call`)."""
+    return impact_and_closing(mass, constraint, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t,
+                              firing, modes, closing, qd, False)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def impact_and_closing(mass, constraint, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t,
+                       firing, modes, closing, qd, check):
     """The reset of contact ``firing``'s event: the lift-off of a closed contact, or the impact of an open one.
 
     A closed contact (``modes[firing]`` 1) whose force reached 0 opens: its mode becomes 0, the velocities do not
@@ -289,9 +371,13 @@ def _contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, 
     overwritten; then, when ``closing`` is 1, each contact taking part whose free normal acceleration
     a = G q̈_free + b presses it shut (a < 0) and whose bounces the run would not resolve (`bounces_unresolved`)
     closes: the impact is done again with e = 0 for those, and their modes become 1, unless the closed contacts'
-    forces would not all push (then none closes).
+    forces would not all push (then none closes; checked with q̈_free and b at the state before when ``check``).
     mass (n, n) lower triangle, gaps, normal_velocities, restitution, bias (C,), gradients (C, n) as in
-    `contact_impacts`; qdd_free (n): q̈ without contacts at the state before.  Returns the impact's status.
+    `contact_impacts`; qdd_free (n): q̈ without contacts at the state before.  ``constraint`` (k, n): the
+    constraint matrix Λ of a constrained system (k = 0 without): the impacts keep its constraints' velocities
+    (`lagcomp.kernel_support.impacts.constrained_contact_impacts`), qdd_free is the constrained motion and the
+    closed contacts' forces are those with the constraints held (`constrained_closed_contact_accelerations`).
+    Returns the impact's status.
     """
     if modes[firing] != 0.0:
         modes[firing] = 0.0
@@ -299,7 +385,8 @@ def _contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, 
     n = q.shape[0]
     count = gaps.shape[0]
     before = qd.copy()
-    status = _contact_impacts(mass, gaps, gradients, normal_velocities, restitution, q, firing, qd)
+    status = _constrained_contact_impacts(mass, constraint, gaps, gradients, normal_velocities, restitution, q,
+                                          firing, qd)
     if status != IMPACT_SOLVED or closing == 0.0:
         return status
     plastic = restitution.copy()
@@ -315,25 +402,52 @@ def _contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, 
         for j in range(n):
             pressing += gradients[d, j] * qdd_free[j]
             v_after += gradients[d, j] * (qd[j] - before[j])
-        if bounces_unresolved(v_after, pressing, restitution[d], t, gradients[d], q):
+        if bounces_unresolved(v_after, pressing, restitution[d], t, gradients[d], q) or (
+                not check and restitution[d] == 0.0 and _at_rest(v_after, gradients, d, qd)):
             plastic[d] = 0.0
             closed[d] = 1.0
             any_closing = True
     if not any_closing:
         return status
+    if not check:
+        return _close_plastic(mass, constraint, gaps, gradients, normal_velocities, plastic, q, firing, modes, closed,
+                              before, qd)
     accelerations = qdd_free.copy()
-    forces = np.empty(count)
+    forces = np.empty(count + constraint.shape[0])
     work = mass.copy()
-    if _closed_contact_accelerations(work, gradients, bias, closed, accelerations, forces, 0.0) != 0:
+    if _constrained_closed_contact_accelerations(work, constraint, gradients, bias, closed, accelerations, forces,
+                                                 0.0) != 0:
         return status
     for d in range(count):
         if closed[d] != 0.0 and not forces[d] > 0.0:
             return status                       # a closed contact would pull: leave them open, the impact as is
-    for j in range(n):
+    return _close_plastic(mass, constraint, gaps, gradients, normal_velocities, plastic, q, firing, modes, closed,
+                          before, qd)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _at_rest(v, gradients, row, qd):
+    """Whether the normal velocity v of contact ``row`` is 0 on the scale of rest (`CLOSED_GAP` Σ_j |∂g/∂q_j|
+    (|q̇_j| + 1), a run's start's): a plastic impact's, which closes the contact when its force pushes at the state
+    after (the caller checks it there, `_constrained_contact_event`; the free normal acceleration before a fast
+    impact may point either way)."""
+    scale = 0.0
+    for j in range(qd.shape[0]):
+        scale += abs(gradients[row, j]) * (abs(qd[j]) + 1.0)
+    return abs(v) <= CLOSED_GAP * scale
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _close_plastic(mass, constraint, gaps, gradients, normal_velocities, plastic, q, firing, modes, closed, before,
+                   qd):
+    """The impact from the velocities ``before`` again with the restitutions ``plastic`` (0 for the contacts that
+    close), into ``qd``; the modes ``closed`` into ``modes`` when it is solved.  Returns its status."""
+    for j in range(q.shape[0]):
         qd[j] = before[j]
-    status = _contact_impacts(mass, gaps, gradients, normal_velocities, plastic, q, firing, qd)
+    status = _constrained_contact_impacts(mass, constraint, gaps, gradients, normal_velocities, plastic, q, firing,
+                                          qd)
     if status == IMPACT_SOLVED:
-        for d in range(count):
+        for d in range(gaps.shape[0]):
             modes[d] = closed[d]
     return status
 
@@ -493,4 +607,7 @@ closed_contact_accelerations = called_by_symbol(_closed_contact_accelerations)
 frictional_accelerations = called_by_symbol(_frictional_accelerations)
 pressed_frictional_accelerations = called_by_symbol(_pressed_frictional_accelerations)
 contact_event = called_by_symbol(_contact_event)
+constrained_closed_contact_accelerations = called_by_symbol(_constrained_closed_contact_accelerations)
+constrained_frictional_accelerations = called_by_symbol(_constrained_frictional_accelerations)
+constrained_contact_event = called_by_symbol(_constrained_contact_event)
 pressed_contact_event = called_by_symbol(_pressed_contact_event)

@@ -25,8 +25,11 @@ Conventions and limits of this first form:
 * a contact is frictionless unless a `lagcomp.model.friction.Friction` names it
   (``normal="floor"``): its normal force then presses that element, and an
   impact of it alone is frictional (`lagcomp.kernel_support.impacts.frictional_impact`);
-  contacts are on systems without bilateral constraints, with the Lagrange
-  formulation (M from T).
+  contacts need the Lagrange formulation (M from T) or a kinematic tree;
+* on a system with constraints (a System's, a tree's loops) an impact keeps the
+  constraints' velocities and a closed contact's row is held beside theirs
+  (`lagcomp.kernel_support.constrained_response`); friction elements there are
+  refused.
 """
 
 from __future__ import annotations

@@ -26,7 +26,8 @@ the all-open path costs nothing more: ``rhs`` is ``rhs_free`` then).  Sticking, 
 friction force; the event is μs λ_c − |λ_f|.  An impact of that contact alone is frictional
 (`lagcomp.kernel_support.impacts.frictional_impact`).
 
-Limits: the system has no bilateral constraints and is a Lagrange one (M from T).  The Taylor method
+Limits: the system is a Lagrange one (M from T); with bilateral constraints it has no contacts (a sticking
+element's row is held beside the constraints', `lagcomp.kernel_support.resting.constrained_frictional_accelerations`).  The Taylor method
 integrates friction with one program per mode set, stick rows included (`lagcomp.codegen.taylor.ModePrograms`),
 while the contacts and friction elements make at most `lagcomp.codegen.taylor.MODE_PROGRAMS_MAX` mode sets and
 no element is pressed by a contact; beyond, or pressed (``normal="floor"``), it refuses them (docs/errors.md,

@@ -379,13 +379,11 @@ class System:
             if isinstance(e, Friction) and isinstance(e.normal, str) and e.normal not in contacts:
                 raise ModelError(f"Friction `{e.name}`: normal={e.normal!r} names no contact of this system "
                                  f"(contacts {contacts}); give a Contact's name or N as an expression.")
-        if contacts and self.constraints:
-            raise ModelError(f"Contacts {contacts} on a system with constraints {list(self.constraint_names)}: an "
-                             "impact there must keep the constraints' velocities too, which is not supported yet.")
-        if frictions and self.constraints:
-            raise ModelError(f"Friction {frictions} on a system with constraints {list(self.constraint_names)}: a "
-                             "sticking element's row would join the constraints' KKT system, which is not supported "
-                             "yet.")
+        if frictions and contacts and self.constraints:
+            raise ModelError(f"Friction {frictions} on a system with constraints {list(self.constraint_names)} and "
+                             f"contacts {contacts}: an impact would have to decide the friction modes with the "
+                             "constraints held, which is not supported yet (friction with constraints and no "
+                             "contacts is).")
         return events
 
     def expressions(self) -> dict[str, sp.Expr]:
