@@ -153,6 +153,7 @@ def test_a_plastic_impact_on_the_floor_rests_with_the_static_forces(models, thet
 
 @settings(max_examples=12, deadline=None)
 @example(theta0=-1.0, restitution=0.7421875)
+@example(theta0=-1.28125, restitution=0.625)   # (found by CI: the rest point 1.006e-11 off, the drift's 1.050e-11)
 @given(theta0=st.floats(-1.3, -0.9), restitution=st.floats(0.05, 0.9))   # (e = 0: the test above)
 def test_bounces_to_rest_on_the_floor_as_the_angle_model(models, theta0, restitution):
     # A known limit: the last bounces of the Zeno series (~4e-7 m/s, rising ~1e-14 m) may end the Cartesian run with
@@ -181,7 +182,14 @@ def test_bounces_to_rest_on_the_floor_as_the_angle_model(models, theta0, restitu
         # H ≤ 2 the gap's rounding scale Σ |∂g/∂q_j| |q_j| in either coordinates and |a| ≥ g/4 the normal pull)
         assert switches == [("floor", True)]
         assert abs(on_rod.contact_switches[0].t - on_angle.contact_switches[0].t) <= bound
-        np.testing.assert_allclose(on_rod.q[-1], _position(on_angle.q[-1, 0]), rtol=0, atol=1e-11)
+        # both rest where the floor meets the rod's circle, the Cartesian run off the circle by its drift δr (it
+        # does not project: ~1e-11 by t = 3), i.e. along the floor (direction u) by δr / (u·r̂) from the angle model's
+        L, s = DEFAULTS["L"], DEFAULTS["s"]
+        rest = on_rod.q[-1]
+        drift = (rest @ rest - L * L) / (2 * L)
+        u = np.array([1.0, s]) / np.hypot(1.0, s)
+        expected = _position(on_angle.q[-1, 0]) + drift / (u @ rest / L) * u
+        np.testing.assert_allclose(rest, expected, rtol=0, atol=1e-12)
     # each impact keeps Λ q̇ to rounding
     scale = np.abs(hits.q).sum(axis=1) * (np.abs(hits.qd) + np.abs(hits.qd_after)).sum(axis=1)
     change = np.einsum("ij,ij->i", hits.q, hits.qd_after - hits.qd)
