@@ -94,7 +94,7 @@ def _identifiers(source: str) -> set[str]:
 
 def _probes() -> tuple[lc.System, ...]:
     """Small systems whose modules hold every kind of emitted code: events, a contact, friction, Taylor, lanes;
-    constraints; bodies (the `geometry` kernel); an input read with its first two derivatives (a support s(t)
+    constraints (with a contact: the constrained impact and resting code); bodies (the `geometry` kernel); an input read with its first two derivatives (a support s(t)
     under a spring)."""
     x, z = lc.coordinates("x z")
     a, b = sp.symbols("a b", positive=True)
@@ -107,7 +107,8 @@ def _probes() -> tuple[lc.System, ...]:
                                 lc.Friction("rub", x.diff(lc.t) - b, normal=a * z**2, static=b, kinetic=a)],
                         name="probe_friction")
     rod = lc.System(coordinates=(x, z), T=(x.diff(lc.t) ** 2 + z.diff(lc.t) ** 2) / 2, V=a * z,
-                    constraints=[lc.Holonomic("rod", x**2 + z**2 - b**2)], name="probe_rod")
+                    constraints=[lc.Holonomic("rod", x**2 + z**2 - b**2)], events=[lc.Contact("floor", z + b, restitution=a)],
+                    name="probe_rod")
     N = ReferenceFrame("N")
     bodies = lc.System(coordinates=(x, z), bodies=[lc.Particle(a, (x, z, 0), name="bob"),
                                                    lc.RigidBody(b, (0, 0, x), (1, 1, 1), lc.rotated(N, (z, "z")))],
