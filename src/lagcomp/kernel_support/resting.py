@@ -130,13 +130,8 @@ def _constrained_frictional_accelerations(mass, constraint, gradients, bias, mod
     """`frictional_accelerations` for a system with constraints (``constraint`` (k, n): Λ): the sticking elements'
     rows after the closed contacts', the constraints' after theirs (`constrained_closed_contact_accelerations`);
     ``forces`` (C + F + k)."""
-    count, elements = modes.shape[0], frictions.shape[0]
-    held = np.empty(count + elements, dtype=np.bool_)
-    for d in range(count):
-        held[d] = modes[d] != 0.0
-    for f in range(elements):
-        held[count + f] = frictions[f] == 0.0
-    return held_with_constraints(mass, constraint, gradients, bias, held, count, qdd, forces, unilateral)
+    held = _held_rows(modes, frictions)
+    return held_with_constraints(mass, constraint, gradients, bias, held, modes.shape[0], qdd, forces, unilateral)
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
@@ -169,13 +164,21 @@ def _frictional_accelerations(mass, gradients, bias, modes, frictions, qdd, forc
     ``gradients`` (C + F, n) and ``bias`` (C + F) are the elements' a = ∂v/∂q̇ and b (v̇ = a q̈ + b), held
     (two-sided) while the element sticks (its mode in ``frictions`` (F,) is 0); their multipliers, the friction
     forces along v, go into ``forces`` (C + F) after the contacts' normal forces (0 while slipping)."""
+    active = _held_rows(modes, frictions)
+    return held_row_accelerations(mass, gradients, bias, active, modes.shape[0], qdd, forces, unilateral)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _held_rows(modes, frictions):
+    """Which rows are held: each contact's while closed (its mode in ``modes`` (C,) not 0), then each friction
+    element's while it sticks (its mode in ``frictions`` (F,) 0); shape (C + F,)."""
     count, elements = modes.shape[0], frictions.shape[0]
-    active = np.empty(count + elements, dtype=np.bool_)
+    held = np.empty(count + elements, dtype=np.bool_)
     for d in range(count):
-        active[d] = modes[d] != 0.0
+        held[d] = modes[d] != 0.0
     for f in range(elements):
-        active[count + f] = frictions[f] == 0.0
-    return held_row_accelerations(mass, gradients, bias, active, count, qdd, forces, unilateral)
+        held[count + f] = frictions[f] == 0.0
+    return held
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
