@@ -405,18 +405,19 @@ def equilibrate(a, rows, columns):
     (a change of units is a diagonal D_r a D_c, which the scales absorb up to their rounding to powers of two).
     A zero row or column keeps the scale 1 (the factorization then reports it).
     """
+    _scale_rows(a, rows)
+    _scale_rows(a.T, columns)     # (the columns of a are the rows of its transpose, a view)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False, nogil=True)
+def _scale_rows(a, scales):
+    """Scale each row i of the square ``a`` in place by ``scales[i]``, the power of two that brings its largest
+    magnitude into [1/2, 1) (`_power_of_two_scale`): one pass of `equilibrate`."""
     n = a.shape[0]
     for i in range(n):
         largest = 0.0
         for j in range(n):
             largest = max(largest, abs(a[i, j]))
-        rows[i] = _power_of_two_scale(largest)
+        scales[i] = _power_of_two_scale(largest)
         for j in range(n):
-            a[i, j] *= rows[i]
-    for j in range(n):
-        largest = 0.0
-        for i in range(n):
-            largest = max(largest, abs(a[i, j]))
-        columns[j] = _power_of_two_scale(largest)
-        for i in range(n):
-            a[i, j] *= columns[j]
+            a[i, j] *= scales[i]
