@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import gc
 import os
-import time
 import warnings
 
 import numpy as np
@@ -17,30 +16,6 @@ import pytest
 
 import lagcomp as lc
 from lagcomp import examples
-
-
-def pytest_configure(config):
-    """In the controller of an xdist run (the default, pyproject.toml), compile the library's drivers into numba's
-    cache first, one process per worker (tests/library_warmup.py), so that the workers load them rather than both
-    compiling them at once."""
-    workers = getattr(config.option, "numprocesses", None)
-    if isinstance(workers, int) and workers > 1 and not hasattr(config, "workerinput"):
-        import library_warmup
-
-        start = time.perf_counter()
-        if library_warmup.warm(min(workers, os.cpu_count() or 1)):
-            _WARMUP.append(time.perf_counter() - start)
-
-
-#: The wall seconds of the controller's compile of the library drivers, when it compiled any: pytest's closing
-#: line counts from the session's start, after it, so the summary says it apart.
-_WARMUP: list[float] = []
-
-
-def pytest_terminal_summary(terminalreporter):
-    for seconds in _WARMUP:
-        terminalreporter.write_line(f"library drivers compiled before the session started: {seconds:.1f} s "
-                                    "(not in pytest's time below)")
 
 
 def pytest_collection_modifyitems(items):
