@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
-from lagcomp_kernels_restricted_three_body_a1632dc3ddcb8efd import rhs
+from lagcomp_kernels_restricted_three_body_94d72d34587954b6 import rhs
 
 
 @njit(cache=True, error_model="numpy")
