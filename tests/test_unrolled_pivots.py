@@ -5,7 +5,9 @@ M = L D Lᵀ, L unit lower triangular and D diagonal given by parameters l_ij
 (i > j) and d_j, pushed by a constant force b (V = −b·q): rhs's accelerations
 are M⁻¹ b, and the pivots of M are the d_j, chosen by the test.  The contract
 (the kernel docstring): 0 and x when every pivot is positive, else j + 1 for
-the first pivot j that is not, whatever the later ones.
+the first pivot j that is not, whatever the later ones.  A second system has
+entries of M that are zero at every state (and one of L that is not: fill-in),
+whose terms the factorization leaves out; a diagonal M gives the dense form's bits.
 """
 
 from __future__ import annotations
@@ -58,8 +60,8 @@ def exact_matrix(lower: list[float], pivots: list[float]) -> mpmath.matrix:
     """L D Lᵀ in the working precision of mpmath."""
     n = len(pivots)
     L = mpmath.eye(n)
-    for (i, j), v in zip([(i, j) for i in range(n) for j in range(i)], lower):
-        L[i, j] = v
+    for (row, column), v in zip([(i, j) for i in range(n) for j in range(i)], lower):
+        L[row, column] = v
     return L * mpmath.diag(pivots) * L.T
 
 
