@@ -73,22 +73,19 @@ def rhs(t, y, p, out):
     _f2 = _c15*_c17 - _c14*_c18 - _c10*_c8*p_g
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
-    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
-        return 1
+    _ok0 = _d0 > PIVOT_TOLERANCE*abs(_m0_0)
     _r0 = 1.0/_d0
     _l1_0 = (_m1_0)*_r0
     _w1_0 = _l1_0*_d0
     _l2_0 = (_m2_0)*_r0
     _w2_0 = _l2_0*_d0
     _d1 = _m1_1 - _l1_0*_w1_0
-    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
-        return 2
+    _ok1 = _d1 > PIVOT_TOLERANCE*abs(_m1_1)
     _r1 = 1.0/_d1
     _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
     _w2_1 = _l2_1*_d1
     _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
-    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
-        return 3
+    _ok2 = _d2 > PIVOT_TOLERANCE*abs(_m2_2)
     _r2 = 1.0/_d2
     _z0 = _f0
     _z1 = _f1 - _l1_0*_z0
@@ -99,7 +96,7 @@ def rhs(t, y, p, out):
     out[3] = _x0
     out[4] = _x1
     out[5] = _x2
-    return 0
+    return 0 if _ok0 & _ok1 & _ok2 else 1 if not _ok0 else 2 if not _ok1 else 3
 
 
 @njit(cache=True, error_model="numpy")

@@ -95,78 +95,42 @@ def rhs(t, y, p, out):
     _f5 = _c12 + _c17
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
-    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
-        return 1
+    _ok0 = _d0 > PIVOT_TOLERANCE*abs(_m0_0)
     _r0 = 1.0/_d0
-    _l1_0 = (_m1_0)*_r0
-    _w1_0 = _l1_0*_d0
-    _l2_0 = (_m2_0)*_r0
-    _w2_0 = _l2_0*_d0
-    _l3_0 = (_m3_0)*_r0
-    _w3_0 = _l3_0*_d0
-    _l4_0 = (_m4_0)*_r0
-    _w4_0 = _l4_0*_d0
-    _l5_0 = (_m5_0)*_r0
-    _w5_0 = _l5_0*_d0
-    _d1 = _m1_1 - _l1_0*_w1_0
-    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
-        return 2
+    _d1 = _m1_1
+    _ok1 = _d1 > PIVOT_TOLERANCE*abs(_m1_1)
     _r1 = 1.0/_d1
-    _l2_1 = (_m2_1 - _l2_0*_w1_0)*_r1
-    _w2_1 = _l2_1*_d1
-    _l3_1 = (_m3_1 - _l3_0*_w1_0)*_r1
-    _w3_1 = _l3_1*_d1
-    _l4_1 = (_m4_1 - _l4_0*_w1_0)*_r1
-    _w4_1 = _l4_1*_d1
-    _l5_1 = (_m5_1 - _l5_0*_w1_0)*_r1
-    _w5_1 = _l5_1*_d1
-    _d2 = _m2_2 - _l2_0*_w2_0 - _l2_1*_w2_1
-    if not _d2 > PIVOT_TOLERANCE*abs(_m2_2):
-        return 3
+    _d2 = _m2_2
+    _ok2 = _d2 > PIVOT_TOLERANCE*abs(_m2_2)
     _r2 = 1.0/_d2
-    _l3_2 = (_m3_2 - _l3_0*_w2_0 - _l3_1*_w2_1)*_r2
-    _w3_2 = _l3_2*_d2
-    _l4_2 = (_m4_2 - _l4_0*_w2_0 - _l4_1*_w2_1)*_r2
-    _w4_2 = _l4_2*_d2
-    _l5_2 = (_m5_2 - _l5_0*_w2_0 - _l5_1*_w2_1)*_r2
-    _w5_2 = _l5_2*_d2
-    _d3 = _m3_3 - (_l3_0*_w3_0 + _l3_1*_w3_1) - _l3_2*_w3_2
-    if not _d3 > PIVOT_TOLERANCE*abs(_m3_3):
-        return 4
+    _d3 = _m3_3
+    _ok3 = _d3 > PIVOT_TOLERANCE*abs(_m3_3)
     _r3 = 1.0/_d3
-    _l4_3 = (_m4_3 - (_l4_0*_w3_0 + _l4_1*_w3_1) - _l4_2*_w3_2)*_r3
-    _w4_3 = _l4_3*_d3
-    _l5_3 = (_m5_3 - (_l5_0*_w3_0 + _l5_1*_w3_1) - _l5_2*_w3_2)*_r3
-    _w5_3 = _l5_3*_d3
-    _d4 = _m4_4 - (_l4_0*_w4_0 + (_l4_1*_w4_1 + _l4_2*_w4_2)) - _l4_3*_w4_3
-    if not _d4 > PIVOT_TOLERANCE*abs(_m4_4):
-        return 5
+    _d4 = _m4_4
+    _ok4 = _d4 > PIVOT_TOLERANCE*abs(_m4_4)
     _r4 = 1.0/_d4
-    _l5_4 = (_m5_4 - (_l5_0*_w4_0 + (_l5_1*_w4_1 + _l5_2*_w4_2)) - _l5_3*_w4_3)*_r4
-    _w5_4 = _l5_4*_d4
-    _d5 = _m5_5 - ((_l5_0*_w5_0 + _l5_1*_w5_1) + (_l5_2*_w5_2 + _l5_3*_w5_3)) - _l5_4*_w5_4
-    if not _d5 > PIVOT_TOLERANCE*abs(_m5_5):
-        return 6
+    _d5 = _m5_5
+    _ok5 = _d5 > PIVOT_TOLERANCE*abs(_m5_5)
     _r5 = 1.0/_d5
     _z0 = _f0
-    _z1 = _f1 - _l1_0*_z0
-    _z2 = _f2 - _l2_0*_z0 - _l2_1*_z1
-    _z3 = _f3 - (_l3_0*_z0 + _l3_1*_z1) - _l3_2*_z2
-    _z4 = _f4 - (_l4_0*_z0 + (_l4_1*_z1 + _l4_2*_z2)) - _l4_3*_z3
-    _z5 = _f5 - ((_l5_0*_z0 + _l5_1*_z1) + (_l5_2*_z2 + _l5_3*_z3)) - _l5_4*_z4
+    _z1 = _f1
+    _z2 = _f2
+    _z3 = _f3
+    _z4 = _f4
+    _z5 = _f5
     _x5 = _z5*_r5
-    _x4 = _z4*_r4 - _l5_4*_x5
-    _x3 = _z3*_r3 - _l5_3*_x5 - _l4_3*_x4
-    _x2 = _z2*_r2 - (_l5_2*_x5 + _l4_2*_x4) - _l3_2*_x3
-    _x1 = _z1*_r1 - (_l5_1*_x5 + (_l4_1*_x4 + _l3_1*_x3)) - _l2_1*_x2
-    _x0 = _z0*_r0 - ((_l5_0*_x5 + _l4_0*_x4) + (_l3_0*_x3 + _l2_0*_x2)) - _l1_0*_x1
+    _x4 = _z4*_r4
+    _x3 = _z3*_r3
+    _x2 = _z2*_r2
+    _x1 = _z1*_r1
+    _x0 = _z0*_r0
     out[6] = _x0
     out[7] = _x1
     out[8] = _x2
     out[9] = _x3
     out[10] = _x4
     out[11] = _x5
-    return 0
+    return 0 if _ok0 & _ok1 & _ok2 & _ok3 & _ok4 & _ok5 else 1 if not _ok0 else 2 if not _ok1 else 3 if not _ok2 else 4 if not _ok3 else 5 if not _ok4 else 6
 
 
 @njit(cache=True, error_model="numpy")

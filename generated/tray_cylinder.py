@@ -39,13 +39,12 @@ def rhs(t, y, p, out):
     _f0 = -_c0*p_A*p_Omega**2*sin(p_Omega*t)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
-    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
-        return 1
+    _ok0 = _d0 > PIVOT_TOLERANCE*abs(_m0_0)
     _r0 = 1.0/_d0
     _z0 = _f0
     _x0 = _z0*_r0
     out[1] = _x0
-    return 0
+    return 0 if _ok0 else 1
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_compton_disc_1ec3b26e4ed2aa21 import rhs
+from lagcomp_kernels_compton_disc_b563f264601defed import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_double_pendulum_0e5a5a00a2acc739 import rhs
+from lagcomp_kernels_double_pendulum_2b87e4bf04ac475a import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_driven_pendulum_e308c73b8fafacec import rhs
+from lagcomp_kernels_driven_pendulum_28c4c15bdb9f5c5d import rhs
 
 
 @njit(cache=True, error_model="numpy")

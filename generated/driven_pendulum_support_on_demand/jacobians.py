@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_driven_pendulum_support_eb4f2ea0c420743b import rhs
+from lagcomp_kernels_driven_pendulum_support_9e0b1b1ba110100a import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
-from lagcomp_kernels_henon_heiles_1fd24edd23700a5c import rhs
+from lagcomp_kernels_henon_heiles_c51d6bc3ae2dc5fe import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_hoop_bead_ea5b7658192cfa6c import rhs
+from lagcomp_kernels_hoop_bead_fbcb438327b102fa import rhs
 
 
 @njit(cache=True, error_model="numpy")

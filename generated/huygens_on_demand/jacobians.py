@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_huygens_25414e3a188037b1 import rhs
+from lagcomp_kernels_huygens_715def0c5fa03347 import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_n_link_pendulum_3_0511f7b15948d240 import rhs
+from lagcomp_kernels_n_link_pendulum_3_a64b47bf1d44c5bd import rhs
 
 
 @njit(cache=True, error_model="numpy")

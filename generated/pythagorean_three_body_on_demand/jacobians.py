@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
-from lagcomp_kernels_pythagorean_three_body_1ca2397f94760393 import rhs
+from lagcomp_kernels_pythagorean_three_body_f65e3d9cf9062ada import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -51,22 +51,18 @@ def velocities(t, y, p, out):
     _f1 = mom_y - q_x
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
-    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
-        return 1
+    _ok0 = _d0 > PIVOT_TOLERANCE*abs(_m0_0)
     _r0 = 1.0/_d0
-    _l1_0 = (_m1_0)*_r0
-    _w1_0 = _l1_0*_d0
-    _d1 = _m1_1 - _l1_0*_w1_0
-    if not _d1 > PIVOT_TOLERANCE*abs(_m1_1):
-        return 2
+    _d1 = _m1_1
+    _ok1 = _d1 > PIVOT_TOLERANCE*abs(_m1_1)
     _r1 = 1.0/_d1
     _z0 = _f0
-    _z1 = _f1 - _l1_0*_z0
+    _z1 = _f1
     _x1 = _z1*_r1
-    _x0 = _z0*_r0 - _l1_0*_x1
+    _x0 = _z0*_r0
     out[0] = _x0
     out[1] = _x1
-    return 0
+    return 0 if _ok0 & _ok1 else 1 if not _ok0 else 2
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
-from lagcomp_kernels_restricted_three_body_6d117b113e47932f import rhs
+from lagcomp_kernels_restricted_three_body_94d72d34587954b6 import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
-from lagcomp_kernels_rope_friction_029f1730d801cf57 import rhs
+from lagcomp_kernels_rope_friction_145eea536645123b import rhs
 
 
 @njit(cache=True, error_model="numpy")

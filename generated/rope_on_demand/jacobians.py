@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
-from lagcomp_kernels_rope_cc5155fa7aeaaddb import rhs
+from lagcomp_kernels_rope_e7a1cce069ca2a92 import rhs
 
 
 @njit(cache=True, error_model="numpy")

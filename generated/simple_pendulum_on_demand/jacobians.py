@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_simple_pendulum_04746d7004fc72c3 import rhs
+from lagcomp_kernels_simple_pendulum_64412ee773d136e4 import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
-from lagcomp_kernels_sling_1b157ea7c1acb224 import rhs
+from lagcomp_kernels_sling_89c999eeb612cb60 import rhs
 
 
 @njit(cache=True, error_model="numpy")

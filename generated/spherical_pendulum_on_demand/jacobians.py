@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_spherical_pendulum_3c798c447c6e7c6b import rhs
+from lagcomp_kernels_spherical_pendulum_a22d27c1bbf802d8 import rhs
 
 
 @njit(cache=True, error_model="numpy")

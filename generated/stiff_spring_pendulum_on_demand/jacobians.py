@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_stiff_spring_pendulum_10bd2653d5c5c183 import rhs
+from lagcomp_kernels_stiff_spring_pendulum_fab03377930eb3a1 import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_symmetric_top_1f6cd343b63eb2fc import rhs
+from lagcomp_kernels_symmetric_top_7244c03514c311e5 import rhs
 
 
 @njit(cache=True, error_model="numpy")

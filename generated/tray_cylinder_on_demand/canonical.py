@@ -41,13 +41,12 @@ def velocities(t, y, p, out):
     _f0 = mom_X + _c0*p_A*p_Omega*cos(p_Omega*t)
     # Solve M x = f by LDLᵀ (unrolled); a non-positive pivot means M is singular here.
     _d0 = _m0_0
-    if not _d0 > PIVOT_TOLERANCE*abs(_m0_0):
-        return 1
+    _ok0 = _d0 > PIVOT_TOLERANCE*abs(_m0_0)
     _r0 = 1.0/_d0
     _z0 = _f0
     _x0 = _z0*_r0
     out[0] = _x0
-    return 0
+    return 0 if _ok0 else 1
 
 
 @njit(cache=True, error_model="numpy")

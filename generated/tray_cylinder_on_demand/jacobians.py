@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_tray_cylinder_1b510cb431cd2e07 import rhs
+from lagcomp_kernels_tray_cylinder_5e03e7cbc8d445da import rhs
 
 
 @njit(cache=True, error_model="numpy")

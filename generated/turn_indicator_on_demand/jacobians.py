@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_turn_indicator_6f1f73933a2867aa import rhs
+from lagcomp_kernels_turn_indicator_b69a9ed0a9c9db71 import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_unbalanced_cylinder_1d3c03180bbdbe05 import rhs
+from lagcomp_kernels_unbalanced_cylinder_056ebff2ec22dd8f import rhs
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import PIVOT_TOLERANCE
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_wheel_jack_64b5146326d6273b import rhs
+from lagcomp_kernels_wheel_jack_7d1e7f5bc3ec1cdd import rhs
 
 
 @njit(cache=True, error_model="numpy")

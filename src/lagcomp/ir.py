@@ -33,6 +33,8 @@ class LinearSolve:
     stores bind; x is written to ``out[offset + i]``.  Unrolled, the
     factorization is straight-line code; otherwise the locals are gathered
     into arrays ``mm`` (n, n) and ``ff`` (n,) handed to a loop.
+    ``zeros``: the (i, j), i > j, where M is zero whatever the state (its
+    local is bound to 0.0), whose terms the unrolled factorization leaves out.
     """
 
     n: int
@@ -40,6 +42,7 @@ class LinearSolve:
     f: tuple[str, ...]
     offset: int
     unrolled: bool = True
+    zeros: frozenset = frozenset()
 
 
 @dataclass(frozen=True)

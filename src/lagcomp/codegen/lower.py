@@ -108,7 +108,8 @@ def _spd_solve(M: sp.Matrix, rhs: list, offset: int) -> tuple[list, LinearSolve]
     m = tuple(tuple(f"_m{i}_{j}" for j in range(i + 1)) for i in range(n))
     f = tuple(f"_f{i}" for i in range(n))
     stores = [(m[i][j], M[i, j]) for i in range(n) for j in range(i + 1)] + list(zip(f, rhs))
-    return stores, LinearSolve(n=n, m=m, f=f, offset=offset, unrolled=unrolled)
+    zeros = frozenset((i, j) for i in range(n) for j in range(i) if M[i, j] == 0)
+    return stores, LinearSolve(n=n, m=m, f=f, offset=offset, unrolled=unrolled, zeros=zeros)
 
 
 def _augmented_stores(eom: EOM) -> list:
