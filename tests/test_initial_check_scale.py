@@ -195,3 +195,27 @@ def test_a_kane_models_start_is_checked_at_every_scale(kane_model, decade, angle
     q0, qd0 = _start(length, angle, rate, slip=1e-3)
     with pytest.raises(lc.InitialConditionError, match="velocity_0"):
         kane_model.simulate((0, 1e-6), q0=q0, u0=qd0, params=_params(length))
+
+
+@pytest.mark.parametrize("length", [1e-12, 1e-9, 1.0, 1e6])
+def test_projection_reaches_rounding_level_at_every_scale(rod, length):
+    """`project` stops its Gauss-Newton corrections at a step of 4 ulps of the coordinates' size (relative, not
+    4e-16 (1 + size), which at L = 1e-12 stopped after one correction of a start 1e-4 off: |r − L| ~ 5e-8 L); the
+    projected start then passes the check it failed."""
+    for off in (1e-3, 3e-4, 1e-4, 1e-5, 1e-6):
+        q0 = [length * math.sin(0.3) * (1 + off), -length * math.cos(0.3) * (1 + off)]
+        start = rod.simulate((0, 1e-9), q0=q0, qd0=[0, 0], params=_params(length),
+                             project_initial=True).projected_initial_state
+        assert abs(math.hypot(start[0], start[1]) - length) <= 4 * np.finfo(float).eps * length
+        assert rod.simulate((0, 1e-9), q0=start[:2], qd0=start[2:], params=_params(length)).success
+
+
+@pytest.mark.parametrize("length", [1e-12, 1e-9, 1.0, 1e6])
+def test_rattle_holds_the_rod_to_rounding_level_at_every_scale(rod, length):
+    """RATTLE's Newton iteration on Φ stops at 4 ulps of the coordinates' size (relative: `ROUNDING`); with
+    4 ulps of 1 + size it left |r − L| ~ 5e-8 L at L = 1e-12.  Gravity scaled with L: the same swing, period 2.3 s."""
+    q0 = [length * math.sin(1.0), -length * math.cos(1.0)]
+    sol = rod.simulate((0, 20), q0=q0, qd0=[0, 0], params={**_params(length), "g": 9.81 * length}, method="rattle",
+                       dt=1e-2)
+    assert sol.success
+    assert np.max(np.abs(np.hypot(sol.q[:, 0], sol.q[:, 1]) - length)) <= 4 * np.finfo(float).eps * length

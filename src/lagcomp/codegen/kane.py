@@ -290,7 +290,7 @@ def project(t, y, p):
                 y[c] -= d
                 step = max(step, abs(d))
                 size = max(size, abs(y[c]))
-            if step <= 4e-16 * (1.0 + size):
+            if step <= 4e-16 * size:
                 break
     if n_v:
         a = np.empty((n_v, n_u + 1))
