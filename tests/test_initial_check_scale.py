@@ -124,6 +124,14 @@ def test_rounding_scale_takes_terms_and_factors_in_absolute_value():
     assert value == pytest.approx(math.pi, rel=1e-15)
 
 
+def test_a_moving_constraints_scale_grows_with_the_rounding_of_its_time_argument():
+    """x − a sin(ω t): sin's argument ω t rounds by ε |ω| |t|, which its slope carries into the row."""
+    a, w = sp.symbols("a omega", positive=True)
+    xs = sp.Symbol("x", real=True)
+    expected = sp.Abs(xs) + a * (sp.Abs(sp.sin(w * t)) + sp.Abs(sp.cos(w * t)) * w * sp.Abs(t))
+    assert sp.simplify(rounding_scale(xs - a * sp.sin(w * t)) - expected) == 0
+
+
 def test_a_programs_scale_follows_its_assignments():
     """s = a − b, then s·s + c: A = (|a| + |b|)² + |c|, not |s|² + |c| (the cancellation in s rounds)."""
     a, b, c = sp.symbols("a b c", real=True)

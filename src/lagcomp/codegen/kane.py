@@ -208,8 +208,8 @@ def _plain_kernels(form: FirstOrderForm, energy, mapping, loads) -> list:
          + [(f"out[{i}, {n_u}]", form.Psi[i].xreplace(at_rest)) for i in range(n_v)]),
     ]
     if n_h + n_v:   # (what the check of a start divides by: `lagcomp.integrate.constraints`)
-        specs.append(("constraint_residual_scales", f"Rounding scales, shape ({n_h + n_v},), of the entries of "
-                      "`constraint_residuals` (lagcomp.codegen.rounding_scale).", ARGS,
+        specs.append(("constraint_residual_scales", (f"Rounding scales, shape ({n_h + n_v},), of the entries of "
+                                                     "`constraint_residuals` (lagcomp.codegen.rounding_scale)."), ARGS,
                       [(f"out[{i}]", rounding_scale(row)) for i, row in enumerate([*form.Phi, *form.Psi])]))
     return [cse_kernel(name, doc, args, stores, mapping, loads) for name, doc, args, stores in specs]
 
