@@ -162,6 +162,21 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def constraint_residual_scales(t, y, p, out):
+    """Rounding scales, shape (1,), of the entries of `constraint_residuals`: each expression with
+    its terms and factors in absolute value (lagcomp.codegen.rounding_scale), evaluated at the state."""
+    q_theta = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_theta = y[5]
+    p_a = p[2]
+    _c0 = abs(cos(q_theta))
+    _c1 = abs(q_theta)
+    _c2 = abs(sin(q_theta))
+    out[0] = p_a*abs(qd_theta) + (_c0 + _c1*_c2)*abs(qd_y) + (_c2 + _c0*_c1)*abs(qd_x)
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_m = p[0]
@@ -264,8 +279,8 @@ def project(t, y, p):
     """Move y onto the constraints at time t, in place, by the smallest Euclidean change.
 
     Coordinates: Gauss-Newton on Φ(q, t) = 0, q ← q − Jᵀ (J Jᵀ)⁻¹ Φ with J the
-    holonomic rows of Λ, until the correction is at rounding level (at most
-    PROJECTION_ITERATIONS corrections).
+    holonomic rows of Λ, until the correction is 4 ulps of max|q| (relative: the same
+    in any units; at most PROJECTION_ITERATIONS corrections).
     Velocities: q̇ ← q̇ − Λᵀ (Λ Λᵀ)⁻¹ (Λ q̇ + b) for all constraints.
     Returns 0, or j > 0 when Λ Λᵀ is singular (redundant constraints).
     """
@@ -291,7 +306,7 @@ def project(t, y, p):
             y[c] -= d
             step = max(step, abs(d))
             size = max(size, abs(y[c]))
-        if step <= 4e-16 * (1.0 + size):
+        if step <= 4e-16 * size:
             break
     constraint_matrix(t, y, p, a)
     for i in range(k):

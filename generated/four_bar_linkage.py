@@ -297,6 +297,44 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def constraint_residual_scales(t, y, p, out):
+    """Rounding scales, shape (4,), of the entries of `constraint_residuals`: each expression with
+    its terms and factors in absolute value (lagcomp.codegen.rounding_scale), evaluated at the state."""
+    q_theta1 = y[0]
+    q_theta2 = y[1]
+    q_theta3 = y[2]
+    qd_theta1 = y[3]
+    qd_theta2 = y[4]
+    qd_theta3 = y[5]
+    p_a = p[0]
+    p_b = p[1]
+    p_c = p[2]
+    p_d = p[3]
+    _c0 = abs(cos(q_theta1))
+    _c1 = abs(q_theta1)
+    _c2 = abs(sin(q_theta1))
+    _c3 = p_a*(_c0 + _c1*_c2)
+    _c4 = abs(cos(q_theta2))
+    _c5 = abs(q_theta2)
+    _c6 = abs(sin(q_theta2))
+    _c7 = p_b*(_c4 + _c5*_c6)
+    _c8 = abs(cos(q_theta3))
+    _c9 = abs(q_theta3)
+    _c10 = abs(sin(q_theta3))
+    _c11 = p_c*(_c8 + _c10*_c9)
+    _c12 = p_a*(_c2 + _c0*_c1)
+    _c13 = p_b*(_c6 + _c4*_c5)
+    _c14 = p_c*(_c10 + _c8*_c9)
+    _c15 = abs(qd_theta1)
+    _c16 = abs(qd_theta2)
+    _c17 = abs(qd_theta3)
+    out[0] = _c11 + _c3 + _c7 + p_d
+    out[1] = _c12 + _c13 + _c14
+    out[2] = _c12*_c15 + _c13*_c16 + _c14*_c17
+    out[3] = _c11*_c17 + _c15*_c3 + _c16*_c7
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_theta1 = y[0]
@@ -451,8 +489,8 @@ def project(t, y, p):
     """Move y onto the constraints at time t, in place, by the smallest Euclidean change.
 
     Coordinates: Gauss-Newton on Φ(q, t) = 0, q ← q − Jᵀ (J Jᵀ)⁻¹ Φ with J the
-    holonomic rows of Λ, until the correction is at rounding level (at most
-    PROJECTION_ITERATIONS corrections).
+    holonomic rows of Λ, until the correction is 4 ulps of max|q| (relative: the same
+    in any units; at most PROJECTION_ITERATIONS corrections).
     Velocities: q̇ ← q̇ − Λᵀ (Λ Λᵀ)⁻¹ (Λ q̇ + b) for all constraints.
     Returns 0, or j > 0 when Λ Λᵀ is singular (redundant constraints).
     """
@@ -478,7 +516,7 @@ def project(t, y, p):
             y[c] -= d
             step = max(step, abs(d))
             size = max(size, abs(y[c]))
-        if step <= 4e-16 * (1.0 + size):
+        if step <= 4e-16 * size:
             break
     constraint_matrix(t, y, p, a)
     for i in range(k):

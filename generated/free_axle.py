@@ -311,6 +311,33 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def constraint_residual_scales(t, y, p, out):
+    """Rounding scales, shape (4,), of the entries of `constraint_residuals`: each expression with
+    its terms and factors in absolute value (lagcomp.codegen.rounding_scale), evaluated at the state."""
+    q_theta = y[2]
+    q_phi = y[3]
+    q_phi_prime = y[4]
+    qd_X = y[5]
+    qd_Y = y[6]
+    qd_theta = y[7]
+    qd_phi = y[8]
+    qd_phi_prime = y[9]
+    p_R = p[1]
+    p_L = p[2]
+    _c0 = abs(q_theta)
+    _c1 = abs(sin(q_theta))
+    _c2 = abs(cos(q_theta))
+    _c3 = _c1 + _c0*_c2
+    _c4 = p_R*abs(qd_phi)
+    _c5 = p_R*abs(qd_phi_prime)
+    _c6 = _c2 + _c0*_c1
+    out[0] = _c0*p_L + p_R*(abs(q_phi) + abs(q_phi_prime))
+    out[1] = 2.0*abs(qd_X) + _c3*_c4 + _c3*_c5
+    out[2] = 2.0*abs(qd_Y) + _c4*_c6 + _c5*_c6
+    out[3] = _c4 + _c5 + p_L*abs(qd_theta)
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_m = p[0]
@@ -455,8 +482,8 @@ def project(t, y, p):
     """Move y onto the constraints at time t, in place, by the smallest Euclidean change.
 
     Coordinates: Gauss-Newton on Φ(q, t) = 0, q ← q − Jᵀ (J Jᵀ)⁻¹ Φ with J the
-    holonomic rows of Λ, until the correction is at rounding level (at most
-    PROJECTION_ITERATIONS corrections).
+    holonomic rows of Λ, until the correction is 4 ulps of max|q| (relative: the same
+    in any units; at most PROJECTION_ITERATIONS corrections).
     Velocities: q̇ ← q̇ − Λᵀ (Λ Λᵀ)⁻¹ (Λ q̇ + b) for all constraints.
     Returns 0, or j > 0 when Λ Λᵀ is singular (redundant constraints).
     """
@@ -482,7 +509,7 @@ def project(t, y, p):
             y[c] -= d
             step = max(step, abs(d))
             size = max(size, abs(y[c]))
-        if step <= 4e-16 * (1.0 + size):
+        if step <= 4e-16 * size:
             break
     constraint_matrix(t, y, p, a)
     for i in range(k):

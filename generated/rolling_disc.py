@@ -308,6 +308,23 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def constraint_residual_scales(t, y, p, out):
+    """Rounding scales, shape (2,), of the entries of `constraint_residuals`: each expression with
+    its terms and factors in absolute value (lagcomp.codegen.rounding_scale), evaluated at the state."""
+    q_psi = y[2]
+    qd_x = y[5]
+    qd_y = y[6]
+    qd_phi = y[9]
+    p_r = p[1]
+    _c0 = abs(cos(q_psi))
+    _c1 = abs(q_psi)
+    _c2 = abs(sin(q_psi))
+    _c3 = p_r*abs(qd_phi)
+    out[0] = _c3*(_c0 + _c1*_c2) + abs(qd_x)
+    out[1] = _c3*(_c2 + _c0*_c1) + abs(qd_y)
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     q_psi = y[2]
@@ -513,8 +530,8 @@ def project(t, y, p):
     """Move y onto the constraints at time t, in place, by the smallest Euclidean change.
 
     Coordinates: Gauss-Newton on Φ(q, t) = 0, q ← q − Jᵀ (J Jᵀ)⁻¹ Φ with J the
-    holonomic rows of Λ, until the correction is at rounding level (at most
-    PROJECTION_ITERATIONS corrections).
+    holonomic rows of Λ, until the correction is 4 ulps of max|q| (relative: the same
+    in any units; at most PROJECTION_ITERATIONS corrections).
     Velocities: q̇ ← q̇ − Λᵀ (Λ Λᵀ)⁻¹ (Λ q̇ + b) for all constraints.
     Returns 0, or j > 0 when Λ Λᵀ is singular (redundant constraints).
     """
@@ -540,7 +557,7 @@ def project(t, y, p):
             y[c] -= d
             step = max(step, abs(d))
             size = max(size, abs(y[c]))
-        if step <= 4e-16 * (1.0 + size):
+        if step <= 4e-16 * size:
             break
     constraint_matrix(t, y, p, a)
     for i in range(k):

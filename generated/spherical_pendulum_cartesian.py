@@ -177,6 +177,21 @@ def constraint_matrix(t, y, p, out):
 
 
 @njit(cache=True, error_model="numpy")
+def constraint_residual_scales(t, y, p, out):
+    """Rounding scales, shape (2,), of the entries of `constraint_residuals`: each expression with
+    its terms and factors in absolute value (lagcomp.codegen.rounding_scale), evaluated at the state."""
+    q_x = y[0]
+    q_y = y[1]
+    q_z = y[2]
+    qd_x = y[3]
+    qd_y = y[4]
+    qd_z = y[5]
+    p_l = p[1]
+    out[0] = p_l**2 + q_x**2 + q_y**2 + q_z**2
+    out[1] = 2.0*abs(q_x)*abs(qd_x) + 2.0*abs(q_y)*abs(qd_y) + 2.0*abs(q_z)*abs(qd_z)
+
+
+@njit(cache=True, error_model="numpy")
 def mass_matrix(t, y, p, out):
     """Mass matrix M(q, t) = ∂²T/∂q̇², shape (n, n), into `out`."""
     p_m = p[0]
@@ -280,8 +295,8 @@ def project(t, y, p):
     """Move y onto the constraints at time t, in place, by the smallest Euclidean change.
 
     Coordinates: Gauss-Newton on Φ(q, t) = 0, q ← q − Jᵀ (J Jᵀ)⁻¹ Φ with J the
-    holonomic rows of Λ, until the correction is at rounding level (at most
-    PROJECTION_ITERATIONS corrections).
+    holonomic rows of Λ, until the correction is 4 ulps of max|q| (relative: the same
+    in any units; at most PROJECTION_ITERATIONS corrections).
     Velocities: q̇ ← q̇ − Λᵀ (Λ Λᵀ)⁻¹ (Λ q̇ + b) for all constraints.
     Returns 0, or j > 0 when Λ Λᵀ is singular (redundant constraints).
     """
@@ -307,7 +322,7 @@ def project(t, y, p):
             y[c] -= d
             step = max(step, abs(d))
             size = max(size, abs(y[c]))
-        if step <= 4e-16 * (1.0 + size):
+        if step <= 4e-16 * size:
             break
     constraint_matrix(t, y, p, a)
     for i in range(k):

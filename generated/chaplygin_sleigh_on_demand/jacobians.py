@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_chaplygin_sleigh_dd5eb7c00addf197 import rhs_and_reactions
+from lagcomp_kernels_chaplygin_sleigh_2164d9dd404efd2a import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

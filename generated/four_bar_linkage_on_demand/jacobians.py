@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_four_bar_linkage_d4b9231bc898134a import rhs_and_reactions
+from lagcomp_kernels_four_bar_linkage_8377433ecd5a4076 import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_free_axle_0d14e05d188ea879 import rhs_and_reactions
+from lagcomp_kernels_free_axle_1e4586c2452d441f import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_hoop_bead_reaction_c5510423e98edb0f import rhs_and_reactions
+from lagcomp_kernels_hoop_bead_reaction_27fcd694fe209ecd import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

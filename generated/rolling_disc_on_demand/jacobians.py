@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_rolling_disc_d74a3328f7cdd34f import rhs_and_reactions
+from lagcomp_kernels_rolling_disc_4af8392119426e69 import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

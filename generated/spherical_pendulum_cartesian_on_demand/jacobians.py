@@ -18,7 +18,7 @@ from numba import njit
 
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.scratch import stack_empty
-from lagcomp_kernels_spherical_pendulum_cartesian_cd81af822d3fa516 import rhs_and_reactions
+from lagcomp_kernels_spherical_pendulum_cartesian_e469ddaeafe8afba import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from numba import njit
 from lagcomp.kernel_support.linear_solvers import kkt_solve_matrix
 from lagcomp.kernel_support.scratch import stack_empty
 from lagcomp.kernel_support.trig import cos, sin
-from lagcomp_kernels_unbalanced_cylinder_reactions_0deae7f8b81cb97d import rhs_and_reactions
+from lagcomp_kernels_unbalanced_cylinder_reactions_4b648e9419987aae import rhs_and_reactions
 
 
 @njit(cache=True, error_model="numpy")

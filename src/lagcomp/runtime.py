@@ -821,7 +821,9 @@ class Model:
             Constrained systems: Baumgarte gains (α, β) ≥ 0, replacing Λ q̈ = γ
             by Λ q̈ = γ − 2α (Λ q̇ + b) − β² Φ; (0, 0) by default.
         project_initial : bool
-            Constrained systems: project inconsistent q0/qd0 onto the
+            Constrained systems: project inconsistent q0/qd0 (a residual
+            above 1e-9 of the size of its terms, in any units:
+            `lagcomp.integrate.constraints.INITIAL_TOLERANCE`) onto the
             constraints (reported in `Solution.projected_initial_state`)
             instead of raising `InitialConditionError`.
         events : None, bool or list of str

@@ -697,8 +697,8 @@ def project(t, y, p):
     """Move y onto the constraints at time t, in place, by the smallest Euclidean change.
 
     Coordinates: Gauss-Newton on Φ(q, t) = 0, q ← q − Jᵀ (J Jᵀ)⁻¹ Φ with J the
-    holonomic rows of Λ, until the correction is at rounding level (at most
-    PROJECTION_ITERATIONS corrections).
+    holonomic rows of Λ, until the correction is 4 ulps of max|q| (relative: the same
+    in any units; at most PROJECTION_ITERATIONS corrections).
     Velocities: q̇ ← q̇ − Λᵀ (Λ Λᵀ)⁻¹ (Λ q̇ + b) for all constraints.
     Returns 0, or j > 0 when Λ Λᵀ is singular (redundant constraints).
     """
@@ -724,7 +724,7 @@ def project(t, y, p):
             y[c] -= d
             step = max(step, abs(d))
             size = max(size, abs(y[c]))
-        if step <= 4e-16 * (1.0 + size):
+        if step <= 4e-16 * size:
             break
     constraint_matrix(t, y, p, a)
     for i in range(k):

@@ -17,7 +17,8 @@ speeds, state length ``n_q + n_u``; same calling conventions as
   exact (`_rhs_parameter_jacobian`); the same statuses.
 - ``kinematics(t, y, p, out)``: q̇ = N, shape (n_q,).
 - ``energy(t, y, p)``: T + V, NaN when it could not be formed; ``energy_function`` is the same kernel.
-- ``constraint_residuals(t, y, p, out)``: Φ (n_h), then Ψ (n_v);
+- ``constraint_residuals(t, y, p, out)``: Φ (n_h), then Ψ (n_v); with constraints,
+  ``constraint_residual_scales`` the rounding scale of each (`lagcomp.codegen.rounding_scale`);
   ``configuration_jacobian`` ∂Φ/∂q (n_h, n_q) and ``velocity_constraint_matrix``
   [∂Ψ/∂u | Ψ at u = 0] (n_v, n_u + 1), which ``project`` uses.
 - ``reactions(t, y, p, out)``: the noncontributing forces of the auxiliary
@@ -68,6 +69,7 @@ from lagcomp.codegen.jacobian_blocks import (
 from lagcomp.codegen.latex import equations_source, kane_equations
 from lagcomp.codegen.lower import event_reset_kernel
 from lagcomp.codegen.printer import to_code
+from lagcomp.codegen.rounding_scale import rounding_scale
 from lagcomp.mechanics.first_order import FirstOrderForm
 from lagcomp.mechanics.kane import acceleration_symbols
 from lagcomp.model.system import t
@@ -205,6 +207,10 @@ def _plain_kernels(form: FirstOrderForm, energy, mapping, loads) -> list:
          [(f"out[{i}, {j}]", A[i, j]) for i in range(n_v) for j in range(n_u)]
          + [(f"out[{i}, {n_u}]", form.Psi[i].xreplace(at_rest)) for i in range(n_v)]),
     ]
+    if n_h + n_v:   # (what the check of a start divides by: `lagcomp.integrate.constraints`)
+        specs.append(("constraint_residual_scales", (f"Rounding scales, shape ({n_h + n_v},), of the entries of "
+                                                     "`constraint_residuals` (lagcomp.codegen.rounding_scale)."), ARGS,
+                      [(f"out[{i}]", rounding_scale(row)) for i, row in enumerate([*form.Phi, *form.Psi])]))
     return [cse_kernel(name, doc, args, stores, mapping, loads) for name, doc, args, stores in specs]
 
 
@@ -284,7 +290,7 @@ def project(t, y, p):
                 y[c] -= d
                 step = max(step, abs(d))
                 size = max(size, abs(y[c]))
-            if step <= 4e-16 * (1.0 + size):
+            if step <= 4e-16 * size:
                 break
     if n_v:
         a = np.empty((n_v, n_u + 1))

@@ -76,6 +76,7 @@ from lagcomp.codegen.jacobian_blocks import (
 )
 from lagcomp.codegen.kinds import ON_DEMAND
 from lagcomp.codegen.power import power_kernel
+from lagcomp.codegen.rounding_scale import rounding_scale
 from lagcomp.codegen.stabilization import stabilized_gamma, velocity_residual
 from lagcomp.ir import (
     NO_JACOBIAN,
@@ -172,6 +173,20 @@ def _constraint_kernels(eom: EOM, mapping, loads) -> tuple[Kernel, ...]:
             + [(f"out[{c}, {n}]", eom.b[c]) for c in range(k)],
             mapping, loads,
         ),
+    )
+
+
+def _residual_scales_kernel(eom: EOM, mapping, loads) -> Kernel:
+    """``constraint_residual_scales``: the rounding scale A (`lagcomp.codegen.rounding_scale`) of each entry of
+    ``constraint_residuals``, which the check of an initial state divides by (`lagcomp.integrate.constraints`).
+    Eager: every run of a constrained model checks its start."""
+    kh = len(eom.Phi)
+    rows = list(eom.Phi) + [velocity_residual(eom, c) for c in range(eom.k)]
+    return cse_kernel(
+        "constraint_residual_scales",
+        f"Rounding scales, shape ({kh + eom.k},), of the entries of `constraint_residuals`: each expression with\n"
+        "its terms and factors in absolute value (lagcomp.codegen.rounding_scale), evaluated at the state.",
+        ("t", "y", "p", "out"), [(f"out[{i}]", rounding_scale(row)) for i, row in enumerate(rows)], mapping, loads,
     )
 
 
@@ -595,6 +610,7 @@ def _builders(eom: EOM, mapping, loads) -> list:
 
     if eom.k:
         first = [("motion", lambda: _constrained_motion(eom, mapping, loads, kernel)),
+                 ("eager", lambda: (_residual_scales_kernel(eom, mapping, loads),)),
                  ("jacobians", lambda: constrained_jacobian_kernels(eom, mapping, loads)),
                  ("directional", lambda: _directional_kernels(eom, mapping, loads)),
                  ("dae", lambda: _dae_kernels(eom, mapping, loads))]

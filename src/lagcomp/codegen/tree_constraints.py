@@ -8,7 +8,8 @@ projection, ``reactions`` and `lagcomp.Solution` take it unchanged:
   [[M, −Λᵀ], [Λ, 0]] (q̈, λ) = (F, γ̃) (`lagcomp.ir.AugmentedSolve`), M by the composite-rigid-body algorithm, F by
   recursive Newton–Euler, Λ = ∂Φ/∂q and γ = −Λ̇ q̇ from the tree's forward kinematics (`lagcomp.multibody.closure`),
   γ̃ = γ − 2α Λ q̇ − β² Φ with the Baumgarte gains (α, β) the last two entries of p;
-* ``constraint_residuals`` (Φ, then Λ q̇) and ``constraint_matrix`` ([Λ | b], b = 0: the loops do not move with t).
+* ``constraint_residuals`` (Φ, then Λ q̇), ``constraint_residual_scales`` (the rounding scale of each, over the
+  program that forms it: `lagcomp.codegen.rounding_scale.program_scales`) and ``constraint_matrix`` ([Λ | b], b = 0: the loops do not move with t).
 
 Every part is in the tree's coordinates: a ball joint's (or a free joint's) rows and columns of M, its entries of F and
 its columns of Λ are mapped from the recursions' body rates to its MRPs (`lagcomp.multibody.charts`), so the solve
@@ -25,6 +26,7 @@ from dataclasses import dataclass, replace
 import sympy as sp
 
 from lagcomp.codegen.bindings import BAUMGARTE
+from lagcomp.codegen.rounding_scale import program_scales
 from lagcomp.ir import AugmentedSolve
 from lagcomp.multibody.charts import forces_in_coordinates, mass_matrix_in_coordinates
 from lagcomp.multibody.closure import ClosureRows, closure_rows
@@ -42,7 +44,8 @@ def gain_loads(tree) -> list[tuple[str, str]]:
 
 
 def loop_kernels(tree, nodes, gravity, mapping: dict, kernel) -> tuple:
-    """rhs, reactions, rhs_and_reactions, constraint_residuals and constraint_matrix of `tree` (with loops).
+    """rhs, reactions, rhs_and_reactions, constraint_residuals, constraint_residual_scales and constraint_matrix of
+    `tree` (with loops).
 
     `nodes` are its `lagcomp.multibody.kinematics.LocalNode` s, `gravity` over the locals, `mapping` each parameter
     to its local, `kernel(name, doc, args, build, solve=None)` the tree lowering's builder (a fresh
@@ -71,11 +74,15 @@ def loop_kernels(tree, nodes, gravity, mapping: dict, kernel) -> tuple:
     residuals = kernel(
         "constraint_residuals", f"Residuals, shape ({2 * k},): Φ of the {k} loop constraints, then Λ q̇.", ARGS,
         lambda prog: _residual_stores(prog, tree, nodes, mapping, k))
+    scales = kernel(
+        "constraint_residual_scales", f"Rounding scales, shape ({2 * k},), of the entries of `constraint_residuals`:\n"
+        "the running bound of the forward kinematics that forms them (lagcomp.codegen.rounding_scale).", ARGS,
+        lambda prog: _scale_stores(prog, tree, nodes, mapping))
     matrix = kernel(
         "constraint_matrix", f"Constraint matrix [Λ | b], shape ({k}, {n + 1}), into `out` (b = 0).", ARGS,
         lambda prog: [(f"out[{c}, {j}]", row[j] if j < n else sp.S.Zero)
                       for c, row in enumerate(loop_rows(prog, tree, nodes, mapping).rows) for j in range(n + 1)])
-    return rhs, reactions, both, residuals, matrix
+    return rhs, reactions, both, residuals, scales, matrix
 
 
 def loop_rows(prog, tree, nodes, mapping):
@@ -148,3 +155,9 @@ def _residual_stores(prog, tree, nodes, mapping, k: int) -> list:
     loops = loop_rows(prog, tree, nodes, mapping)
     return [(f"out[{c}]", phi) for c, phi in enumerate(loops.Phi)] + \
         [(f"out[{k + c}]", v) for c, v in enumerate(loops.velocity)]
+
+
+def _scale_stores(prog, tree, nodes, mapping) -> list:
+    """The rounding scale of each entry of ``constraint_residuals``, following the program that forms them."""
+    loops = loop_rows(prog, tree, nodes, mapping)
+    return [(f"out[{i}]", scale) for i, scale in enumerate(program_scales(prog, [*loops.Phi, *loops.velocity]))]

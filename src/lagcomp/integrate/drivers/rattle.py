@@ -36,9 +36,10 @@ for independent constraints, and independent of h), factored once per position (
 pivoting), and each iteration is ν ← ν − S_n⁻¹ Φ(q̃ + W_n ν): one ``constraint_residuals`` call and one
 k × k substitution.  The contraction factor is O(h) (G changes by O(h) over the step), so a handful of
 iterations reach round-off.  Stopping rule, on the change of the coordinates Δq = W_n Δν of an
-iteration: converged when max|Δq| ≤ `ROUNDING` (1 + max|q|) (4 ulps, the rule of the ``project``
-kernels), or, once Δq stops shrinking, when it is below `NOISE` (1 + max|q|) (rounding noise of Φ's
-evaluation); a Δq that stops shrinking above that, or `MAX_ITERATIONS` iterations, stop the run with
+iteration: converged when max|Δq| ≤ `ROUNDING` max|q| (4 ulps, the rule of the ``project``
+kernels), or, once Δq stops shrinking, when it is below `NOISE` max|q| (rounding noise of Φ's
+evaluation); relative, so the same in any units (with 1 + max|q| a rod of 1e-12 m stopped at |Δq| ≤ 4 ulps of 1,
+one correction early, its length 5e-8 off); a Δq that stops shrinking above that, or `MAX_ITERATIONS` iterations, stop the run with
 ``CONSTRAINTS_NOT_CONVERGED`` (the step is too large).  Then v_½ = v_n + h/2 a_n + W_n ν / h.
 
 The velocity stage is linear: with w = v_½ + h/2 a_{n+1} and μ' = (h/2) μ, S_{n+1} μ' = −(G_{n+1} w + b)
@@ -107,9 +108,9 @@ from lagcomp.integrate.drivers.sweep_rows import (
 from lagcomp.integrate.status import Status
 from lagcomp.kernel_support.linear_solvers import lu_factor, lu_substitute
 
-#: A Newton correction of the coordinates below ROUNDING (1 + max|q|) has converged (4 ulps).
+#: A Newton correction of the coordinates below ROUNDING max|q| has converged (4 ulps).
 ROUNDING = 4 * 2.220446049250313e-16
-#: A correction that stops shrinking below NOISE (1 + max|q|) is the rounding noise of Φ: converged too.
+#: A correction that stops shrinking below NOISE max|q| is the rounding noise of Φ: converged too.
 NOISE = 1e-10
 #: Newton iterations per position stage before the run stops with CONSTRAINTS_NOT_CONVERGED.
 MAX_ITERATIONS = 50
@@ -219,11 +220,11 @@ def rattle_run(forcing, mass_matrix, constraint_residuals, constraint_matrix, k,
                     size = max(size, abs(y_new[i]))
                 for r in range(k):
                     nu[r] += correction[r]
-                if change <= ROUNDING * (1.0 + size):
+                if change <= ROUNDING * size:
                     converged = True
                     break
                 if change >= previous:
-                    converged = change <= NOISE * (1.0 + size)
+                    converged = change <= NOISE * size
                     break
                 previous = change
             if not converged:
