@@ -384,13 +384,17 @@ class Model:
     @property
     def contacts(self) -> tuple[str, ...]:
         """The names of the contacts (`lagcomp.Contact`), in order: the columns of an impact's ``impulses``."""
-        return tuple(name for name, _, _ in getattr(self.kernels, "CONTACTS", ()))
+        from lagcomp.integrate.contacts import contacts_of
+
+        return tuple(name for name, _, _ in contacts_of(self))
 
     @property
     def frictions(self) -> tuple[str, ...]:
         """The names of the friction elements (`lagcomp.Friction`), in order: the columns of
         `Solution.friction_forces`."""
-        return tuple(name for name, *_ in getattr(self.kernels, "FRICTIONS", ()))
+        from lagcomp.integrate.contacts import frictions_of
+
+        return tuple(name for name, *_ in frictions_of(self))
 
     @property
     def n(self) -> int:
@@ -530,16 +534,18 @@ class Model:
             if values is None:
                 raise InitialConditionError(f"`q0` is required: {self.name!r} has no default initial coordinates.")
             try:
-                values = np.atleast_1d(np.asarray(values, dtype=float))
+                values = np.asarray(values, dtype=float)
             except (TypeError, ValueError) as err:
                 raise InitialConditionError(f"`{what}` must be {self.n} number(s), one per coordinate "
                                             f"{list(self.coordinates)}, got {values!r}.") from err
+            if values.ndim == 0:
+                values = values.reshape(1)
             if values.shape != (self.n,):
                 shape = f"shape {values.shape}" if values.ndim > 1 else f"{values.size} value(s)"
                 raise InitialConditionError(
                     f"`{what}` has {shape}; {self.name!r} has {self.n} coordinates {list(self.coordinates)}."
                 )
-            if not np.all(np.isfinite(values)):
+            if not np.isfinite(values).all():
                 raise InitialConditionError(f"`{what}` = {values.tolist()} is not finite.")
             parts.append(values)
         y = np.concatenate(parts)
