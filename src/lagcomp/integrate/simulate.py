@@ -235,8 +235,10 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     rate_key = m.name if columns is None else (m.name, columns.k)  # (a sensitivity run's steps cost more)
     if tier[0] is not None:
         rate_key = (m.name, "specialised")
+    # (a specialised driver's kernels are compiled into it: none of them compiles in its first call)
+    watched = _kernels_of(model, m) if tier[0] is None else ()
     status = _run(advance, state, t1, (chunk, max_rows, width), recorder, n_events, event_parts, progress, first,
-                  (_STEP_RATES.setdefault(model, {}), rate_key), _kernels_of(model, m), upgrade)
+                  (_STEP_RATES.setdefault(model, {}), rate_key), watched, upgrade)
     if status == Status.RHS_FAILED and state.nsteps == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
@@ -562,7 +564,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
                               sens.reaction_sensitivities(model, ts, ys, p, run["sensitivities"],
                                                           run["sensitivity_columns"]))
     n = model.n
-    solution = Solution(
+    solution = Solution.of_run(
         t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), observed=observed, cyclic=model.cyclic,
         status=status, message=message, t_failure=t_failure,
         nfev=run_state.nfev, nsteps=run_state.nsteps, nrejected=run_state.nrejected,
