@@ -227,6 +227,16 @@ def build(system, cache: Cache, key: str, eom=None, progress=None) -> tuple[Entr
 _NAMESPACES: dict = {}
 
 
+@functools.cache
+def _run_entry() -> tuple:
+    """(`lagcomp.integrate.options.known_options`, `lagcomp.integrate.simulate.simulate`), imported at the first run
+    (not with lagcomp: they import the drivers) and kept: an import statement costs ~1 µs at each `Model.simulate`."""
+    from lagcomp.integrate.options import known_options
+    from lagcomp.integrate.simulate import simulate
+
+    return known_options, simulate
+
+
 def _namespace(module, entry: Entry, name: str, system, eom):
     """``Model.kernels``: `module` itself for an entry without a companion module, else the `ModelKernels`
     of the eager `module` and its companion (`lagcomp.companion`), one per module and process."""
@@ -892,9 +902,7 @@ class Model:
             events that read inputs and function inputs; see
             `lagcomp.integrate.sensitivities`.
         """
-        from lagcomp.integrate.options import known_options
-        from lagcomp.integrate.simulate import simulate
-
+        known_options, simulate = _run_entry()
         if options.pop("u0", None) is not None:  # (None: what `lagcomp run` passes when --u0 is not given)
             raise InitialConditionError(f"`u0` gives the initial speeds of a Kane model (state (q, u)); {self.name!r} "
                                         f"is a Lagrange model: give its initial velocities as `qd0` (--qd0 on the "
