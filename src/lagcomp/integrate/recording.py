@@ -205,7 +205,7 @@ class Recorder:
             return
         if self.keep:
             rows = (ts.copy(), ys.copy()) if reused else (ts, ys)
-            self._note(rows)
+            self._note(rows, copy=False)    # (views of rows no one writes again)
             self.parts.append(rows)
             return
         if self._pointwise() is None:
@@ -264,10 +264,12 @@ class Recorder:
         self.last = (ts[-1:].copy(), ys[-1:].copy(), ends[1, :1], ends[1, 1:2], ends[1, 2:][None, :])
         self.rows += ts.shape[0]
 
-    def _note(self, rows: tuple) -> None:
+    def _note(self, rows: tuple, copy: bool = True) -> None:
+        """Count `rows` (arrays along the rows: t, y, ...) and keep their first (the run's first) and last; copied
+        unless `copy` is False (rows kept as they are)."""
         if self.first is None:
-            self.first = tuple(a[:1].copy() for a in rows)
-        self.last = tuple(a[-1:].copy() for a in rows)
+            self.first = tuple(a[:1].copy() if copy else a[:1] for a in rows)
+        self.last = tuple(a[-1:].copy() if copy else a[-1:] for a in rows)
         self.rows += rows[0].shape[0]
 
     def _fold(self, ts: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, ...]:
