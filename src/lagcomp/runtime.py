@@ -23,6 +23,7 @@ import numpy as np
 from lagcomp.cache import Cache, Entry, input_key, load_module
 from lagcomp.companion import Companion, ModelKernels
 from lagcomp.errors import CacheWarning, InitialConditionError, ModelError, ParameterError, SingularMassMatrixError
+from lagcomp.integrate.contacts import contacts_of, frictions_of, mode_slot_count
 from lagcomp.names import by_name
 
 
@@ -394,16 +395,12 @@ class Model:
     @property
     def contacts(self) -> tuple[str, ...]:
         """The names of the contacts (`lagcomp.Contact`), in order: the columns of an impact's ``impulses``."""
-        from lagcomp.integrate.contacts import contacts_of
-
         return tuple(name for name, _, _ in contacts_of(self))
 
     @property
     def frictions(self) -> tuple[str, ...]:
         """The names of the friction elements (`lagcomp.Friction`), in order: the columns of
         `Solution.friction_forces`."""
-        from lagcomp.integrate.contacts import frictions_of
-
         return tuple(name for name, *_ in frictions_of(self))
 
     @property
@@ -466,8 +463,6 @@ class Model:
         tables end p, and must cover the time `span` (t0, t1) when it is given.
         """
         p = self._parameter_values(params, baumgarte)
-        from lagcomp.integrate.contacts import mode_slot_count
-
         modes = mode_slot_count(self.kernels)
         if modes:  # the contacts' modes, all open, and closing not allowed (`lagcomp.ir.ContactModes`)
             p = np.concatenate([p, np.zeros(modes)])
