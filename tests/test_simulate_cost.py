@@ -14,6 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import lagcomp as lc
+from lagcomp import cache as cache_module
+from lagcomp.companion import companion_key
+from lagcomp.integrate import recording
 from lagcomp.integrate import simulate as simulate_module
 from lagcomp.integrate.recording import Observed
 from lagcomp.integrate.solution import EventRecords, Solution
@@ -108,10 +111,14 @@ def _ball() -> lc.System:
                      events=[lc.Event("impact", x, direction=-1, reset={x.diff(lc.t): -e * x.diff(lc.t)})])
 
 
-def test_event_rows_of_many_calls_are_those_of_one(cache_dir, monkeypatch):
+@pytest.fixture(scope="module")
+def ball(cache_dir) -> lc.Model:
+    return lc.compile(_ball(), cache_dir=cache_dir)
+
+
+def test_event_rows_of_many_calls_are_those_of_one(ball, monkeypatch):
     """Impacts met in many driver calls, with the event buffers of the first call serving them all, are recorded as
     in a run of one call: times, states before and after, bit for bit."""
-    ball = lc.compile(_ball(), cache_dir=cache_dir)
     run = dict(rtol=1e-10, atol=1e-10, progress=False)
     whole = ball.simulate((0.0, 3.0), **run)
     _in_small_calls(monkeypatch, steps=1)
@@ -122,3 +129,33 @@ def test_event_rows_of_many_calls_are_those_of_one(cache_dir, monkeypatch):
     for part in ("t", "q", "qd", "q_after", "qd_after"):
         assert np.array_equal(getattr(a, part), getattr(b, part)), part
     assert np.array_equal(whole.t, cut.t) and np.array_equal(whole.qd, cut.qd)
+
+
+def test_summaries_look_for_lane_kernels_on_disk_once(ball, monkeypatch):
+    """A model whose lane kernels are not built: its first summary in the process looks for them in the cache on
+    disk, the next ones do not; built in this process afterwards, they fold the next summary, to the same values."""
+    kernels = ball.kernels
+    wanted = companion_key(kernels.companion.key, "energy_lanes")
+    if kernels.companion.built("energy_lanes"):
+        pytest.skip("the ball's lane kernels were built earlier in this session")
+    recording._LOOKED_UP.discard(kernels)
+    recording._LANES.pop(kernels, None)
+    lookups, real = [], cache_module.Cache.lookup
+
+    def counted(self, key):
+        lookups.append(key)
+        return real(self, key)
+    monkeypatch.setattr(cache_module.Cache, "lookup", counted)
+    run = dict(record="summary", rtol=1e-10, atol=1e-10, progress=False)
+    pointwise = [ball.simulate((0.0, 3.0), **run) for _ in range(3)]
+    assert lookups.count(wanted) == 1 and recording.lane_kernels(kernels) is None
+    kernels.companion.entry("energy_lanes")
+    by_lanes = ball.simulate((0.0, 3.0), **run)
+    assert recording.lane_kernels(kernels) is not None
+    assert _same_summary(by_lanes.summary, pointwise[0].summary)
+
+
+def _same_summary(a, b) -> bool:
+    """Two `RunSummary`s equal bit for bit (arrays compared by value)."""
+    return all(np.array_equal(getattr(a, f.name), getattr(b, f.name)) if isinstance(getattr(a, f.name), np.ndarray)
+               else getattr(a, f.name) == getattr(b, f.name) for f in dataclasses.fields(a))

@@ -94,10 +94,14 @@ class Companion:
                 self._entries[kind] = entry
             return self._entries[kind]
 
-    def built(self, kind: str) -> bool:
-        """Whether the companion of `kind` is in the cache (loaded in this process or on disk), building nothing."""
+    def built(self, kind: str, on_disk: bool = True) -> bool:
+        """Whether the companion of `kind` is in the cache (loaded in this process or on disk), building nothing;
+        with `on_disk` False, whether this process has it (no look-up in the cache on disk, whose index a busy
+        machine may take milliseconds to read)."""
         with self._lock:
             if kind not in self._entries:
+                if not on_disk:
+                    return False
                 entry = Cache(self.root).lookup(companion_key(self.key, kind))
                 if entry is None:
                     return False
