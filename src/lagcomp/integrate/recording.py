@@ -30,8 +30,18 @@ plus some 18 µs per compiled call (its function values unboxed: the initial
 state is held to fold with the first chunk, `Recorder._hold`).  The lane
 kernels are built once a model's summaries have folded `LANES_AFTER_ROWS`
 rows without them (or ahead, by ``lagcomp precompile NAME --all``).  A summary
-then costs what a bare trajectory costs, within the machine's noise (1.00×
-it in one process, 31 rounds); what it saves is memory.  The values are
+then costs about what a bare trajectory costs; what it saves is memory, and
+the energies a trajectory computes when its summary is read.  It is not
+cheaper (issue 38; `bench/bench_recording.py`): both have the driver write
+every row into the same buffer, then a trajectory copies the rows (joined,
+then split into q and q̇: ~2 ns a row) where a summary folds them (T + V at
+every row, which a trajectory defers until it is read, and the extremes:
+~15 ns a row) in one compiled call per chunk (~15 µs of function values
+unboxed).  Through `Model.simulate` with the specialised driver, over the
+driver recording nothing: 1.22× for a summary, 1.17× for every step kept,
+1.26× for every step kept and its summary read (31 rounds, loaded machine).
+Cheaper than a trajectory would need the fold inside the driver, with no
+rows written at all.  The values are
 bitwise those of the pointwise fold (tests/test_summary_lanes.py).  Folding a
 chunk in one compiled call with the first and last rows' values from the
 pointwise kernels (rather than calling the ``observables`` kernel for them)
