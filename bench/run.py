@@ -217,6 +217,7 @@ def main(argv: list[str] | None = None) -> int:
             adaptive,
             bench_loop,
             bench_rattle,
+            bench_recording,
             bench_reset_sweep,
             bench_scale,
             bench_stiff,
@@ -233,7 +234,9 @@ def main(argv: list[str] | None = None) -> int:
                        long=lambda ctx: [throughput.long_run_section(ctx), bench_taylor.long_run_table(ctx)],
                        memory=throughput.memory_section,
                        stiff=lambda ctx: [bench_stiff.section(ctx), bench_rattle.section(ctx), bench_loop.section(ctx)],
-                       impacts=bench_reset_sweep.section, tiers=bench_tiers.section, scale=bench_scale.section)
+                       impacts=bench_reset_sweep.section,
+                       tiers=lambda ctx: [*bench_tiers.section(ctx), *bench_recording.section(ctx)],
+                       scale=bench_scale.section)
         for name in SECTIONS:
             if name in sections:
                 print(f"<!-- section {name} ... -->", file=sys.stderr, flush=True)

@@ -42,6 +42,7 @@ SCRIPTS = {
     "bench_mass_matrix_compile": ["planar_4"],
     "bench_multibody": ["4"],
     "bench_radau": ["--rounds", "1"],
+    "bench_recording": ["--rounds", "1", "--t-end", "2"],
     "bench_rattle": ["--steps", "1000", "--repeats", "1"],
     "bench_reset_sweep": ["--side", "4", "--repeats", "1"],
     "bench_run": ["simple_pendulum"],

@@ -23,6 +23,7 @@ import numpy as np
 from lagcomp.cache import Cache, Entry, input_key, load_module
 from lagcomp.companion import Companion, ModelKernels
 from lagcomp.errors import CacheWarning, InitialConditionError, ModelError, ParameterError, SingularMassMatrixError
+from lagcomp.integrate.contacts import contacts_of, frictions_of, mode_slot_count
 from lagcomp.names import by_name
 
 
@@ -227,6 +228,16 @@ def build(system, cache: Cache, key: str, eom=None, progress=None) -> tuple[Entr
 _NAMESPACES: dict = {}
 
 
+@functools.cache
+def _run_entry() -> tuple:
+    """(`lagcomp.integrate.options.known_options`, `lagcomp.integrate.simulate.simulate`), imported at the first run
+    (not with lagcomp: they import the drivers) and kept: an import statement costs ~1 µs at each `Model.simulate`."""
+    from lagcomp.integrate.options import known_options
+    from lagcomp.integrate.simulate import simulate
+
+    return known_options, simulate
+
+
 def _namespace(module, entry: Entry, name: str, system, eom):
     """``Model.kernels``: `module` itself for an entry without a companion module, else the `ModelKernels`
     of the eager `module` and its companion (`lagcomp.companion`), one per module and process."""
@@ -384,13 +395,13 @@ class Model:
     @property
     def contacts(self) -> tuple[str, ...]:
         """The names of the contacts (`lagcomp.Contact`), in order: the columns of an impact's ``impulses``."""
-        return tuple(name for name, _, _ in getattr(self.kernels, "CONTACTS", ()))
+        return tuple(name for name, _, _ in contacts_of(self))
 
     @property
     def frictions(self) -> tuple[str, ...]:
         """The names of the friction elements (`lagcomp.Friction`), in order: the columns of
         `Solution.friction_forces`."""
-        return tuple(name for name, *_ in getattr(self.kernels, "FRICTIONS", ()))
+        return tuple(name for name, *_ in frictions_of(self))
 
     @property
     def n(self) -> int:
@@ -452,8 +463,6 @@ class Model:
         tables end p, and must cover the time `span` (t0, t1) when it is given.
         """
         p = self._parameter_values(params, baumgarte)
-        from lagcomp.integrate.contacts import mode_slot_count
-
         modes = mode_slot_count(self.kernels)
         if modes:  # the contacts' modes, all open, and closing not allowed (`lagcomp.ir.ContactModes`)
             p = np.concatenate([p, np.zeros(modes)])
@@ -530,16 +539,18 @@ class Model:
             if values is None:
                 raise InitialConditionError(f"`q0` is required: {self.name!r} has no default initial coordinates.")
             try:
-                values = np.atleast_1d(np.asarray(values, dtype=float))
+                values = np.asarray(values, dtype=float)
             except (TypeError, ValueError) as err:
                 raise InitialConditionError(f"`{what}` must be {self.n} number(s), one per coordinate "
                                             f"{list(self.coordinates)}, got {values!r}.") from err
+            if values.ndim == 0:
+                values = values.reshape(1)
             if values.shape != (self.n,):
                 shape = f"shape {values.shape}" if values.ndim > 1 else f"{values.size} value(s)"
                 raise InitialConditionError(
                     f"`{what}` has {shape}; {self.name!r} has {self.n} coordinates {list(self.coordinates)}."
                 )
-            if not np.all(np.isfinite(values)):
+            if not np.isfinite(values).all():
                 raise InitialConditionError(f"`{what}` = {values.tolist()} is not finite.")
             parts.append(values)
         y = np.concatenate(parts)
@@ -888,9 +899,7 @@ class Model:
             events that read inputs and function inputs; see
             `lagcomp.integrate.sensitivities`.
         """
-        from lagcomp.integrate.options import known_options
-        from lagcomp.integrate.simulate import simulate
-
+        known_options, simulate = _run_entry()
         if options.pop("u0", None) is not None:  # (None: what `lagcomp run` passes when --u0 is not given)
             raise InitialConditionError(f"`u0` gives the initial speeds of a Kane model (state (q, u)); {self.name!r} "
                                         f"is a Lagrange model: give its initial velocities as `qd0` (--qd0 on the "

@@ -19,6 +19,9 @@ again after the contacts that start closed), and reports their switches and forc
 
 from __future__ import annotations
 
+import contextlib
+import weakref
+
 import numpy as np
 
 from lagcomp.errors import InitialConditionError, ModelError, OptionError, ParameterError
@@ -32,9 +35,28 @@ def touching(gradients: np.ndarray, q: np.ndarray) -> np.ndarray:
     return CLOSED_GAP * (np.abs(gradients) @ (np.abs(q) + 1.0))
 
 
+#: {model kernels: (CONTACTS, FRICTIONS, CONTACT_MODES)} (`_declared`).
+_DECLARED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _declared(kernels) -> tuple:
+    """The module's ``CONTACTS`` and ``FRICTIONS`` as tuples (() without them) and ``CONTACT_MODES`` (None without),
+    read once per kernels: a run asks a dozen times, and a name a model's kernels do not hold costs an
+    AttributeError raised and caught at each read (`lagcomp.companion.ModelKernels`), ~1 µs."""
+    try:
+        return _DECLARED[kernels]
+    except (KeyError, TypeError):
+        pass
+    declared = (tuple(getattr(kernels, "CONTACTS", ())), tuple(getattr(kernels, "FRICTIONS", ())),
+                getattr(kernels, "CONTACT_MODES", None))
+    with contextlib.suppress(TypeError):   # (not weakly referenceable: read again at each call)
+        _DECLARED[kernels] = declared
+    return declared
+
+
 def contacts_of(model) -> tuple:
     """The model's contacts as (name, event index, restitution), () for a module without them."""
-    return tuple(getattr(model.kernels, "CONTACTS", ()))
+    return _declared(model.kernels)[0]
 
 
 def check_contacts(model, t0: float, Y0: np.ndarray, P: np.ndarray, where=lambda row: "") -> np.ndarray | None:
@@ -147,14 +169,14 @@ def _constrained_impulses(model, contact_events, firing: int, P, count, times, b
 def frictions_of(model) -> tuple:
     """The model's friction elements as (name, event index, mode slot of p, μs, μk), each μ a number or the name
     of its parameter; () without them."""
-    return tuple(getattr(model.kernels, "FRICTIONS", ()))
+    return _declared(model.kernels)[1]
 
 
 def mode_slots(model) -> tuple[int, int] | None:
     """(first slot of p, count) of the model's contact modes (`lagcomp.ir.ContactModes`), None without them;
     the closing flag is the slot after them."""
-    first = getattr(model.kernels, "CONTACT_MODES", None)
-    return None if first is None else (first, len(contacts_of(model)))
+    contacts, _, first = _declared(model.kernels)
+    return None if first is None else (first, len(contacts))
 
 
 def mode_slot_of(model) -> dict[str, int]:
@@ -167,9 +189,8 @@ def mode_slot_of(model) -> dict[str, int]:
 def mode_slot_count(kernels) -> int:
     """The slots of p a module's contact modes take (its contacts and the closing flag; 0 without modes): after
     the parameters, before the inputs' headers (`lagcomp.codegen.contacts.mode_slots`)."""
-    if not hasattr(kernels, "CONTACT_MODES"):
-        return 0
-    return len(getattr(kernels, "CONTACTS", ())) + 1 + len(getattr(kernels, "FRICTIONS", ()))
+    contacts, frictions, first = _declared(kernels)
+    return 0 if first is None else len(contacts) + 1 + len(frictions)
 
 
 def integrates_modes(model, method) -> bool:

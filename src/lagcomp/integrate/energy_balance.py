@@ -35,6 +35,7 @@ from lagcomp.errors import ModelError
 from lagcomp.integrate.balance_kernels import NODES as _NODES
 from lagcomp.integrate.balance_kernels import WEIGHTS as _WEIGHTS
 from lagcomp.integrate.balance_kernels import power_along, slopes_along
+from lagcomp.integrate.contacts import contacts_of, frictions_of
 
 #: The power's terms, in the order of the ``power`` kernel's output (`lagcomp.codegen.power.TERMS`).
 TERMS = ("forces", "dissipation", "time", "constraints")
@@ -142,7 +143,7 @@ class PowerSource:
         refused = None
         if getattr(model, "speeds", None) is not None:
             refused = "a Kane model (its equations are not Lagrange's: no energy function h is derived)"
-        elif model.contacts or model.frictions:
+        elif contacts_of(model) or frictions_of(model):
             refused = ("contacts or friction elements (their normal and friction forces are not generalized "
                        "forces of the System: the balance would not close)")
         return cls(model.kernels, p, model.n, model.k, refused)

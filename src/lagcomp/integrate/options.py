@@ -104,6 +104,8 @@ def event_arguments(model, m, events) -> tuple[np.ndarray, np.ndarray]:
     (``events`` None), and resets no other event.
     """
     declared = model.events
+    if not declared and (events is None or events is True or events is False):  # (nor contacts: they are events)
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
     if events is None or events is True:
         chosen = [e.name for e in declared] if (m.adaptive or events is True) else []
     elif events is False:

@@ -30,8 +30,18 @@ plus some 18 µs per compiled call (its function values unboxed: the initial
 state is held to fold with the first chunk, `Recorder._hold`).  The lane
 kernels are built once a model's summaries have folded `LANES_AFTER_ROWS`
 rows without them (or ahead, by ``lagcomp precompile NAME --all``).  A summary
-then costs what a bare trajectory costs, within the machine's noise (1.00×
-it in one process, 31 rounds); what it saves is memory.  The values are
+then costs about what a bare trajectory costs; what it saves is memory, and
+the energies a trajectory computes when its summary is read.  It is not
+cheaper (issue 38; `bench/bench_recording.py`): both have the driver write
+every row into the same buffer, then a trajectory copies the rows (joined,
+then split into q and q̇: ~2 ns a row) where a summary folds them (T + V at
+every row, which a trajectory defers until it is read, and the extremes:
+~15 ns a row) in one compiled call per chunk (~15 µs of function values
+unboxed).  Through `Model.simulate` with the specialised driver, over the
+driver recording nothing: 1.22× for a summary, 1.17× for every step kept,
+1.26× for every step kept and its summary read (31 rounds, loaded machine).
+Cheaper than a trajectory would need the fold inside the driver, with no
+rows written at all.  The values are
 bitwise those of the pointwise fold (tests/test_summary_lanes.py).  Folding a
 chunk in one compiled call with the first and last rows' values from the
 pointwise kernels (rather than calling the ``observables`` kernel for them)
@@ -140,7 +150,7 @@ def lane_kernels(kernels):
     companion = getattr(kernels, "companion", None)
     lanes = None
     if companion is not None and companion.kind_of is not TREE_KIND_OF:
-        if not companion.built("energy_lanes") and _FOLDED.get(kernels, 0) < LANES_AFTER_ROWS:
+        if _FOLDED.get(kernels, 0) < LANES_AFTER_ROWS and not _lanes_built(kernels, companion):
             return None         # (not yet: asked again at the next chunk)
         try:
             found = (kernels.energy_lanes, kernels.energy_function_lanes)
@@ -152,6 +162,23 @@ def lane_kernels(kernels):
     with contextlib.suppress(TypeError):   # (not weakly referenceable: looked up again at each run)
         _LANES[kernels] = lanes
     return lanes
+
+
+#: {model kernels} whose lane kernels the cache on disk did not hold when a summary first asked in this process.
+_LOOKED_UP: weakref.WeakSet = weakref.WeakSet()
+
+
+def _lanes_built(kernels, companion) -> bool:
+    """Whether the model's lane kernels are built: looked up in the cache on disk at a model's first summary chunk in
+    this process, in the process only after (a summary of a model without them asked the disk at every chunk: a
+    read of the cache's index, 10 µs, milliseconds on a busy machine, for a run of 0.2 ms).  Lanes built meanwhile
+    by another process are found once `LANES_AFTER_ROWS` rows are folded; the values are the same either way."""
+    looked_up = kernels in _LOOKED_UP
+    if companion.built("energy_lanes", on_disk=not looked_up):
+        return True
+    with contextlib.suppress(TypeError):   # (not weakly referenceable: looked up at each chunk)
+        _LOOKED_UP.add(kernels)
+    return False
 
 
 def _relative(deviation: float, reference: float) -> float:
@@ -196,14 +223,16 @@ class Recorder:
             self._kernels = False                   # `_pointwise`, looked up at the first chunk
             self._lanes = False                     # `lane_kernels`, looked up at each chunk until found
 
-    def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
-        """Take the rows ``ts`` (m,), ``ys`` (m, 2n): copied when kept (the caller reuses its buffers), read at once
-        and dropped in summary mode (their first and last rows copied)."""
+    def add(self, ts: np.ndarray, ys: np.ndarray, reused: bool = True) -> None:
+        """Take the rows ``ts`` (m,), ``ys`` (m, 2n): copied when kept and the caller `reused` its buffers (kept as
+        they are when it does not: a run's last driver call, whose rows `result` copies once, a 3,906-row copy
+        fewer for a run of one call), read at once and dropped in summary mode (their first and last rows
+        copied)."""
         if ts.shape[0] == 0:
             return
         if self.keep:
-            rows = (ts.copy(), ys.copy())
-            self._note(rows)
+            rows = (ts.copy(), ys.copy()) if reused else (ts, ys)
+            self._note(rows, copy=False)    # (views of rows no one writes again)
             self.parts.append(rows)
             return
         if self._pointwise() is None:
@@ -262,10 +291,12 @@ class Recorder:
         self.last = (ts[-1:].copy(), ys[-1:].copy(), ends[1, :1], ends[1, 1:2], ends[1, 2:][None, :])
         self.rows += ts.shape[0]
 
-    def _note(self, rows: tuple) -> None:
+    def _note(self, rows: tuple, copy: bool = True) -> None:
+        """Count `rows` (arrays along the rows: t, y, ...) and keep their first (the run's first) and last; copied
+        unless `copy` is False (rows kept as they are)."""
         if self.first is None:
-            self.first = tuple(a[:1].copy() for a in rows)
-        self.last = tuple(a[-1:].copy() for a in rows)
+            self.first = tuple(a[:1].copy() if copy else a[:1] for a in rows)
+        self.last = tuple(a[-1:].copy() if copy else a[-1:] for a in rows)
         self.rows += rows[0].shape[0]
 
     def _fold(self, ts: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, ...]:

@@ -392,10 +392,11 @@ class SensitivityRecorder:
         self.recorder, self.n, self.k, self.unscale = recorder, n, k, 1.0 / scale
         self.parts: list[np.ndarray] = []
 
-    def add(self, ts: np.ndarray, ys: np.ndarray) -> None:
+    def add(self, ts: np.ndarray, ys: np.ndarray, reused: bool = True) -> None:
+        """`Recorder.add` of the state's columns; the sensitivities' columns copied."""
         if ts.shape[0] == 0:
             return
-        self.recorder.add(ts, ys[:, :self.n])
+        self.recorder.add(ts, ys[:, :self.n], reused)
         rows = ys[:, self.n:].copy()
         if self.recorder.keep:
             self.parts.append(rows)

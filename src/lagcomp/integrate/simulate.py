@@ -23,6 +23,7 @@ import numpy as np
 from lagcomp.animation_bodies import BodyGeometry
 from lagcomp.errors import IntegrationError, OptionError, SingularMassMatrixError
 from lagcomp.integrate import sensitivities as sens
+from lagcomp.integrate import specialize as tiers
 from lagcomp.integrate.constraints import consistent_initial_state, reactions_along
 from lagcomp.integrate.contacts import (
     check_contacts,
@@ -235,8 +236,10 @@ def simulate(model, t_span, q0=None, qd0=None, params=None, *, method="dop853", 
     rate_key = m.name if columns is None else (m.name, columns.k)  # (a sensitivity run's steps cost more)
     if tier[0] is not None:
         rate_key = (m.name, "specialised")
+    # (a specialised driver's kernels are compiled into it: none of them compiles in its first call)
+    watched = _kernels_of(model, m) if tier[0] is None else ()
     status = _run(advance, state, t1, (chunk, max_rows, width), recorder, n_events, event_parts, progress, first,
-                  (_STEP_RATES.setdefault(model, {}), rate_key), _kernels_of(model, m), upgrade)
+                  (_STEP_RATES.setdefault(model, {}), rate_key), watched, upgrade)
     if status == Status.RHS_FAILED and state.nsteps == 0:
         _refuse_singular_start(model, t0, y0, p)
     if (status < 0 or status == Status.INTERRUPTED) and (recorder.last is None or recorder.last[0][0] != state.t):
@@ -263,25 +266,23 @@ def _specialised(model, given, m, specialize, columns, progress):
     already, which costs nothing (each call of it even less than a library driver's: no kernel to unbox)."""
     if specialize is not None and not isinstance(specialize, bool | np.bool_):
         raise OptionError(f"`specialize` must be True, False or None (automatic), got {specialize!r}.")
-    from lagcomp.integrate import specialize as tier
-
     if specialize is None:
-        covered = tier.covers(m, model, given, columns)
-        return tier.driver(model, m) if covered and tier.loaded(model, m) else None
+        covered = tiers.covers(m, model, given, columns)
+        return tiers.driver(model, m) if covered and tiers.loaded(model, m) else None
     if not specialize:
         return None
     if columns is not None:
         raise OptionError("`specialize=True` with `sensitivities=`: a sensitivity run's kernels are made per run, "
                           "so no driver is specialised for them. Leave `specialize` unset.")
-    tier.check(m, model, given)
-    if tier.loaded(model, m):
-        return tier.driver(model, m)
+    tiers.check(m, model, given)
+    if tiers.loaded(model, m):
+        return tiers.driver(model, m)
     from lagcomp.stages import Stages
 
     what = f"numba: compiling the {m.name} driver specialised for {model.name} (once; cached for later runs)"
     with Stages(f"preparing {model.name}", (what,), progress) as stages:
         stages.start(what)
-        return tier.driver(model, m)
+        return tiers.driver(model, m)
 
 
 def _upgrade(model, given, m, columns, tier):
@@ -294,16 +295,14 @@ def _upgrade(model, given, m, columns, tier):
     It never compiles: a compile (12 s of CPU for DOP853's) is no part of a run that did not ask for it.  The two
     drivers being bitwise the same, the run is the one either driver alone gives.
     """
-    from lagcomp.integrate import specialize as spec
-
-    if not spec.covers(m, model, given, columns):
+    if not tiers.covers(m, model, given, columns):
         return None
 
     def upgrade(remaining: float) -> bool:
-        if not remaining >= spec.AUTO_REMAINING_SECONDS:
+        if not remaining >= tiers.AUTO_REMAINING_SECONDS:
             return False
-        if spec.cached(model, m):
-            tier[0] = spec.driver(model, m)
+        if tiers.cached(model, m):
+            tier[0] = tiers.driver(model, m)
         return True
     return upgrade
 
@@ -376,10 +375,10 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
     timed = [0.0, 0.0]      # CPU seconds and span of t of the calls after the first (`upgrade`'s estimate)
     with deferred_interrupt() as interrupted, progress_bar(t0, t1, progress) as bar:
         ts, ys = np.empty(chunk), np.empty((chunk, n))
+        rows_e = max(n_events, 16)      # (each call's event rows are copied out: the buffers serve every call)
+        event_buffers = (np.empty(rows_e), np.empty((rows_e, n)), np.empty(rows_e, dtype=np.int64),
+                         np.full((rows_e, n), np.nan))  # times, states before, events, states after
         while True:
-            rows_e = max(n_events, 16)
-            event_buffers = (np.empty(rows_e), np.empty((rows_e, n)), np.empty(rows_e, dtype=np.int64),
-                             np.full((rows_e, n), np.nan))  # times, states before, events, states after
             state.new_event_buffer()
             started, cpu_started = time.perf_counter(), time.thread_time()
             steps_before, t_before = state.nsteps, state.t
@@ -396,11 +395,14 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
             elapsed = time.perf_counter() - started
             if not first_call:  # (the first may compile kernels, and binds them: not a rate of the run's steps)
                 timed[0], timed[1] = timed[0] + time.thread_time() - cpu_started, timed[1] + (state.t - t_before)
-            recorder.add(ts[:n_saved], ys[:n_saved, :width])
-            if recorder.rows > max_rows and Status(status).call_again:
+            outcome = Status(status)
+            # (the buffers are filled again by the next call, if any: the rows of the last are not copied here)
+            recorder.add(ts[:n_saved], ys[:n_saved, :width], outcome.call_again)
+            if recorder.rows > max_rows and outcome.call_again:
                 return Status.MEMORY_FULL  # what was computed is kept; a fixed-step or t_eval run was refused up front
             if state.event_rows:
                 event_parts.append(tuple(a[:state.event_rows].copy() for a in event_buffers))
+                event_buffers[3][:state.event_rows] = np.nan    # (a driver that does not write them leaves NaN)
             bar.update(state.t - t0 - bar.n)
             if status == Status.BUFFER_FULL and n_saved == chunk and chunk < MAX_CHUNK:
                 chunk = min(2 * chunk, MAX_CHUNK)
@@ -413,10 +415,10 @@ def _run(advance, state: RunState, t1, chunk, recorder, n_events, event_parts, p
                 else:
                     budget = max(16, int(budget * min(8.0, max(0.5, CALL_SECONDS / max(elapsed, 1e-6)))))
             first_call = False
-            if not Status(status).call_again:
+            if not outcome.call_again:
                 if status == Status.DONE and interrupted[0]:
                     return Status.INTERRUPTED  # Ctrl-C in the last call (often numba compiling): reported
-                return Status(status)
+                return outcome
             if interrupted[0]:
                 return Status.INTERRUPTED
             if upgrade is not None and timed[1] > 0 and upgrade(timed[0] / timed[1] * (t1 - state.t)):
@@ -562,7 +564,7 @@ def _solution(model, p, recorder, run, throw) -> Solution:
                               sens.reaction_sensitivities(model, ts, ys, p, run["sensitivities"],
                                                           run["sensitivity_columns"]))
     n = model.n
-    solution = Solution(
+    solution = Solution.of_run(
         t=ts, q=ys[:, :n].copy(), qd=ys[:, n:].copy(), observed=observed, cyclic=model.cyclic,
         status=status, message=message, t_failure=t_failure,
         nfev=run_state.nfev, nsteps=run_state.nsteps, nrejected=run_state.nrejected,
