@@ -12,6 +12,8 @@ and G_toe = (l0 + l1, l1), the statics Gᵀ λ = ∂V/∂θ − Q, ∂V/∂θ = 
     λ_toe = g m1 c1 / l1,    λ_knee = (g (m0 c0 + m1 (l0 + c1)) − λ_toe (l0 + l1) − k t) / l0
 
 (link 1's moments about its hinge, then the whole chain's about the pivot), and the knee lifts off where λ_knee = 0.
+A friction element pressed by an expression takes the same programs (a sticking element's row held): a block on a
+spring carried by a belt, as tests/test_taylor_modes.py's System, switches at the closed form's times.
 References: the same tree run with dop853 at rtol 1e-13, and the same system on the Lagrangian path
 (`multibody_models.lagrangian_system`, M from T expanded) run with its own Taylor programs.
 """
@@ -24,6 +26,7 @@ import pytest
 import sympy as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_taylor_modes import _belt_switches
 
 import lagcomp as lc
 from lagcomp.codegen.taylor import ModePrograms
@@ -145,3 +148,20 @@ def test_the_knee_lifts_off_where_the_torque_takes_its_force_to_zero(chain):
     expected = np.array([_resting_forces(k * t) for t in sol.t[held]])
     np.testing.assert_allclose(sol.contact_forces[held], expected, rtol=1e-12, atol=1e-12 * expected.max())
     assert sol.q[sol.t > t_off + 0.1, 0].min() > 0.0
+
+
+def test_a_tree_block_on_a_belt_switches_at_the_closed_form_times(cache_dir):
+    """A block (m) on a prismatic joint with a spring (k), friction μs, μk against a belt at v_b, pressed by m g:
+    stick and slip alternate at the closed form's times (`test_taylor_modes._belt_switches`)."""
+    x, = lc.coordinates("x")
+    m, k, g, v_b, mu_s, mu_k = sp.symbols("m k g v_b mu_s mu_k", positive=True)
+    tree = lc.Tree([lc.Link("block", lc.Prismatic(x, axis="x", stiffness=k), mass=m)], gravity=(0, 0, 0),
+                   events=[lc.Friction("belt", x.diff(lc.t) - v_b, normal=m * g, static=mu_s, kinetic=mu_k)],
+                   name="taylor_contacts_belt", defaults={"m": 1.0, "k": 4.0, "g": G, "v_b": 0.5, "mu_s": 0.6,
+                                                          "mu_k": 0.4})
+    expected, period = _belt_switches(0.6, 0.4, periods=4)
+    sol = lc.compile(tree, cache_dir=cache_dir).simulate((0.0, expected[-1] + period / 4), [0.0], [0.5],
+                                                          method="taylor", rtol=1e-12, atol=1e-12)
+    assert sol.status == Status.DONE, sol.message
+    assert [s.mode for s in sol.friction_switches] == [-1, 0] * 4
+    np.testing.assert_allclose([s.t for s in sol.friction_switches], expected, rtol=0, atol=1e-10)
