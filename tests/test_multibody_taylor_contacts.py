@@ -120,6 +120,17 @@ def test_the_dropped_chain_bounces_as_dop853_and_the_lagrangian_taylor_run_say(c
             np.testing.assert_allclose(impacts.qd_after, expected.qd_after, rtol=0, atol=100 * tolerance)
 
 
+def test_a_taylor_sweep_over_the_restitution_ends_where_dop853s_does(chain):
+    """`sweep(..., method="taylor")` (the driver per trajectory, its modes in each trajectory's p): final states
+    against a dop853 sweep at rtol 1e-13, through the bounces (e = 0.8, 0.5) and to rest (e = 0.3)."""
+    grid = {"e": [0.3, 0.5, 0.8]}
+    taylor, dop853 = (chain[0].sweep((0.0, 1.0), grid, method=method, rtol=tol, atol=tol, progress=False, **DROP)
+                      for method, tol in (("taylor", 1e-12), ("dop853", 1e-13)))
+    assert not taylor.status.any() and not dop853.status.any()
+    np.testing.assert_allclose(taylor.final, dop853.final, rtol=0, atol=1e-10)
+    assert np.abs(taylor.final[0]).max() < 1e-13        # (at rest by t = 1 s)
+
+
 def test_the_chain_at_rest_is_held_by_the_static_forces(chain):
     """After both contacts close the chain lies flat (to 1e-13 rad) and the floor pushes with the statics' forces."""
     sol = chain[0].simulate((0.0, 3.0), method="taylor", rtol=1e-12, atol=1e-12, t_eval=np.linspace(0.0, 3.0, 301),
