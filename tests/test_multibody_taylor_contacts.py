@@ -93,7 +93,7 @@ def test_the_series_of_each_mode_equal_the_lagrangian_paths(chain, mask, state):
         p[kernels.CONTACT_MODES:kernels.CONTACT_MODES + 2] = [mask & 1, mask >> 1 & 1]
         X, W = np.zeros((4, order + 1)), np.zeros((kernels.TAYLOR_WORK, order + 1))
         status = kernels.taylor_coefficients(0.0, y, p, X, W)
-        assert status == -bin(mask).count("1")      # (−c: rows 0..c−1 of W hold the c multipliers' series)
+        assert status == -mask.bit_count()      # (−c: rows 0..c−1 of W hold the c multipliers' series)
         found.append(np.vstack([X[:, :order], W[:-status, :order]]))
     scale = np.maximum(np.abs(found[1]).max(axis=0), 1.0)
     assert (np.abs(found[0] - found[1]) <= 1e-11 * scale).all()
