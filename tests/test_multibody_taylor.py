@@ -211,12 +211,9 @@ def test_a_closed_loop_is_refused(cache_dir):
         lc.compile(tree, cache_dir=cache_dir).simulate((0, 1), q0=[0.5, np.pi - 0.5], qd0=[0.0, 0.0], method="taylor")
 
 
-def test_contacts_and_functions_without_a_recurrence_are_refused():
-    """A tree with contacts, and a joint torque with sign (Coulomb friction): no Taylor program, saying why
-    (``TAYLOR_REFUSED``, which `simulate` raises as taylor-not-applicable)."""
-    floor = _two_rods(events=[lc.Contact("floor", lc.coordinates("q1")[0])])
-    refusal = tree_taylor_decomposition(floor, tree_locals(floor))
-    assert isinstance(refusal, Unsupported) and "contacts" in str(refusal)
+def test_functions_without_a_recurrence_are_refused():
+    """A joint torque with sign (Coulomb friction): no Taylor program, saying why (``TAYLOR_REFUSED``, which
+    `simulate` raises as taylor-not-applicable).  Contacts have programs (tests/test_multibody_taylor_contacts.py)."""
     q = lc.coordinates("q")[0]
     rubbing = lc.Tree([lc.Link("rod", lc.Revolute(q, torque=-sp.sign(q.diff(lc.t))), mass=1, com=(1, 0, 0))],
                       name="taylor_rubbing")

@@ -153,8 +153,11 @@ class _Builder:
         return name
 
     def _scalar(self, expr: sp.Expr, name: str | None = None) -> Value:
-        """A constant, bound to a scalar local unless it is a number or a symbol already."""
+        """A constant, bound to a scalar local unless it is a number or a symbol already.  The locals of `expr` are
+        replaced by the scalars they are bound to: a constant temporary of ``closed_contacts`` is bound under another
+        name (``_h``…, `_bind_closed`) than the one its kernel reads, which may also be one of rhs's."""
         expr = sp.sympify(expr)
+        expr = expr.xreplace({s: self.env[s].const for s in expr.free_symbols if s in self.env and self.env[s].is_const})
         if name is None and (expr.is_Number or expr.is_Symbol):
             return _c(expr)
         if name is None:
@@ -480,8 +483,8 @@ def decompose(rhs: Kernel, n: int, closed: Kernel | None = None, held: tuple[int
     f = (q̇, q̈) itself (`lagcomp.ir.ReturnZero`: an explicit q̈, as the articulated-body algorithm of a kinematic
     tree gives it, `lagcomp.codegen.tree_taylor`).  Raises `Unsupported` for anything without a recurrence here.
     """
-    if isinstance(rhs.solve, ReturnZero) and closed is None:
-        return _explicit_program(rhs, n)
+    if isinstance(rhs.solve, ReturnZero):
+        return _explicit_program(rhs, n, closed, held)
     if not isinstance(rhs.solve, LinearSolve):
         raise Unsupported("constraints (the augmented system is solved with pivoting)")
     b, derivative = _bound_kernel(rhs, n)
@@ -492,6 +495,7 @@ def decompose(rhs: Kernel, n: int, closed: Kernel | None = None, held: tuple[int
     accelerations = _substitute(b, d, low, f)
     multipliers = ()
     if held:
+        _bind_closed(b, closed)
         accelerations, multipliers = _held_rows(b, closed, held, d, low, accelerations)
     for i, v in enumerate(accelerations):
         derivative[rhs.solve.offset + i] = v
@@ -517,8 +521,19 @@ def _bound_kernel(rhs: Kernel, n: int) -> tuple[_Builder, list]:
     return b, derivative
 
 
-def _explicit_program(rhs: Kernel, n: int) -> TaylorProgram:
-    """The Taylor program of an ``rhs`` that stores all of f itself (no solve: `decompose`)."""
+def _explicit_program(rhs: Kernel, n: int, closed: Kernel | None = None, held: tuple[int, ...] = ()) -> TaylorProgram:
+    """The Taylor program of an ``rhs`` that stores all of f itself (no solve: `decompose`); with the rows `held`
+    of ``closed_contacts`` `closed`, its q̈ corrected by their multipliers (`_held_rows`).
+
+    Such an rhs (a tree's articulated-body algorithm) has no factors of M, which `_held_rows` needs for M⁻¹ G_Aᵀ:
+    they come from the ``_mass`` stores of `closed` (M by the composite-rigid-body algorithm, the M whose factors
+    the tree's own ``closed_contacts`` solves with at run time, `lagcomp.kernel_support.resting`), factored by
+    the same series LDLᵀ as a Lagrange module's M (`_factor`).  The articulated-body algorithm run with unit test
+    forces (one more recursion per held row, q̈(Gᵀ e_a) − q̈(0)) would avoid the O(n³) factorization, but its
+    columns would not be the run time's M⁻¹ Gᵀ to rounding, and the held rows' programs are for trees of few
+    coordinates (at most `MODE_PROGRAMS_MAX` mode sets); the factors are computed only in the programs that hold
+    some row.
+    """
     if rhs.helpers:
         raise Unsupported("an rhs whose steps are outlined into helper functions (build its program from the "
                           "un-outlined kernel)")
@@ -526,7 +541,35 @@ def _explicit_program(rhs: Kernel, n: int) -> TaylorProgram:
     missing = [i for i, v in enumerate(derivative) if v is None]
     if missing:
         raise Unsupported(f"an rhs that does not store the components {missing} of f")
-    return _finished(b, rhs, n, derivative, (), None)
+    multipliers = ()
+    if held:
+        _bind_closed(b, closed)
+        b._emit("comment", const="M of closed_contacts (the composite-rigid-body algorithm's), factored by LDLᵀ.")
+        d, low = _factor(b, _closed_mass(b, closed, n))
+        derivative[n:], multipliers = _held_rows(b, closed, held, d, low, derivative[n:])
+    return _finished(b, rhs, n, derivative, multipliers, closed)
+
+
+def _bind_closed(b: _Builder, closed: Kernel) -> None:
+    """Bind the loads of ``closed_contacts`` `closed` that rhs has not, and its temporaries (renamed ``_h``…: the
+    two kernels' temporaries share names; rhs's Values are built, so its bindings may be shadowed)."""
+    for local, source in closed.loads:
+        if sp.Symbol(local, real=True) not in b.env:
+            _load(b, local, source)
+    for name, expr in closed.temps:
+        b.env[sp.Symbol(name, real=True)] = b.bind(f"_h{name}", expr)
+
+
+def _closed_mass(b: _Builder, closed: Kernel, n: int) -> list[list[Value]]:
+    """The lower triangle of M from the ``_mass[i, j]`` stores of `closed` (bound by `_bind_closed`; an entry it
+    does not store is 0)."""
+    m = [[_c(0)] * (i + 1) for i in range(n)]
+    for target, expr in closed.stores:
+        array, index = target[:-1].split("[")
+        if array == "_mass":
+            i, j = (int(k) for k in index.split(", "))
+            m[i][j] = b.bind(f"_m{i}_{j}", expr)
+    return m
 
 
 def _finished(b: _Builder, rhs: Kernel, n: int, derivative: list, multipliers, closed: Kernel | None) -> TaylorProgram:
@@ -559,14 +602,10 @@ def _held_rows(b: _Builder, closed: Kernel, held: tuple[int, ...], d: list[Value
 
     λ_A has either sign: a series cannot clip a pulling contact (as ``rhs``'s stages do), and needs not, since
     a closed contact's event is its λ, located on the series where it turns negative (`ModePrograms`).  A W_AA
-    pivot that is not positive at order 0 returns `DEPENDENT_CLOSED_CONTACTS`, as ``rhs`` does.  Returns (q̈, λ_A).
+    pivot that is not positive at order 0 returns `DEPENDENT_CLOSED_CONTACTS`, as ``rhs`` does.  `closed`'s loads and
+    temporaries are bound (`_bind_closed`).  Returns (q̈, λ_A).
     """
     n = len(free)
-    for local, source in closed.loads:
-        if sp.Symbol(local, real=True) not in b.env:
-            _load(b, local, source)
-    for name, expr in closed.temps:         # (renamed: the two kernels' temporaries share names)
-        b.env[sp.Symbol(name, real=True)] = b.bind(f"_h{name}", expr)
     gradients = {r: [_c(0)] * n for r in held}
     biases = {}
     for target, expr in closed.stores:
@@ -750,19 +789,23 @@ def taylor_decomposition(ir: ModuleIR) -> TaylorProgram | ModePrograms | Unsuppo
             raise Unsupported("inputs supplied at run time (their tables' Taylor coefficients are not emitted)")
         if not any(kernel.name == "rhs_free" for kernel in ir.kernels):
             return decompose(ir.kernel("rhs"), ir.n)
-        closed = ir.kernel("closed_contacts")
-        modes = closed.solve
-        # the motion without contacts (its runs keep them open, and refuse friction): beyond the bound, or with
-        # friction pressed by a contact, whose slip force is a column of the held rows (`lagcomp.kernel_support.
-        # resting`), not a term of rhs_free that the programs of the held rows would take
-        if 2 ** modes.rows > MODE_PROGRAMS_MAX or any(d >= 0 for d in modes.pressing):
-            return decompose(ir.kernel("rhs_free"), ir.n)
-        programs = ModePrograms(modes, [])
-        programs.programs = [decompose(ir.kernel("rhs_free"), ir.n, closed, programs.held(mask))
-                             for mask in range(2 ** modes.rows)]
-        return programs
+        return held_programs(ir.kernel("rhs_free"), ir.kernel("closed_contacts"), ir.n)
     except Unsupported as err:
         return err
+
+
+def held_programs(free: Kernel, closed: Kernel, n: int) -> TaylorProgram | ModePrograms:
+    """The programs of a module with modes: one per set of held rows of ``closed_contacts`` `closed` (`ModePrograms`),
+    each `free` (``rhs_free``, the motion with every row free; n coordinates) corrected by its rows; or the program of
+    `free` alone, whose runs keep contacts open and refuse friction, beyond `MODE_PROGRAMS_MAX` sets or with friction
+    pressed by a contact (its slip force is a column of the held rows, `lagcomp.kernel_support.resting`, not a term
+    of rhs_free that the programs of the held rows would take).  Raises `Unsupported` as `decompose` does."""
+    modes = closed.solve
+    if 2 ** modes.rows > MODE_PROGRAMS_MAX or any(d >= 0 for d in modes.pressing):
+        return decompose(free, n)
+    programs = ModePrograms(modes, [])
+    programs.programs = [decompose(free, n, closed, programs.held(mask)) for mask in range(2 ** modes.rows)]
+    return programs
 
 
 def taylor_program(taylor: TaylorProgram | Unsupported) -> dict | None:

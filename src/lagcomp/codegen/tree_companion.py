@@ -21,7 +21,8 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
 * "power" (``Solution.energy_balance``, a sweep's balance): the joints' torques' and dampers' power and V's explicit
   time, no derivative of the motion (`lagcomp.codegen.tree_power`).
 * "taylor" (``method="taylor"``): ``taylor_coefficients``, the articulated-body algorithm in series arithmetic
-  (`lagcomp.codegen.tree_taylor`);
+  (`lagcomp.codegen.tree_taylor`; with contacts, one program per set of closed contacts, which factors M and returns
+  a System's statuses);
 * "equations" (``Model.equations()``): no kernel, the constant ``EQUATIONS``: the recursion and the table of the
   tree's nodes as LaTeX and text (`lagcomp.codegen.tree_latex`).
 

@@ -18,10 +18,17 @@ time grows about linearly with the chain (CPU, fresh cache: planar chains of 5 l
 934, 69 s; 3 ball joints, 1151, 79 s; one function took 62 s for 5 links, 399 s and 4.5 GB for 10,
 121 s and 2.3 GB for 2 ball joints).
 
+A tree with contacts (or friction elements) gets a System's mode programs (`lagcomp.codegen.taylor.held_programs`):
+one per set of held rows, the program above with q̈ corrected by the held rows' multipliers, q̈ = q̈_free +
+M⁻¹ G_Aᵀ λ_A, from the ``closed_contacts`` kernel the tree's contacts module builds (`lagcomp.codegen.tree_contacts`:
+the gaps' gradients and biases, and M by the composite-rigid-body algorithm, which the program factors by LDLᵀ in
+series arithmetic as it factors a Lagrange module's M: `lagcomp.codegen.taylor._explicit_program` says why not the
+articulated-body algorithm with unit forces).  ``taylor_coefficients`` branches on the modes in p, and the driver
+switches programs where the impacts and lift-offs switch modes, as for a System.
+
 Refused, with ``TAYLOR_REFUSED`` saying why (``method="taylor"`` then raises `taylor-not-applicable`): closed loops
-(`lagcomp.Loop`: q̈ from an augmented solve with multipliers, as a System's constraints), contacts (their modes'
-programs are a System's, built from its closed-contacts kernel) and a load without a recurrence (sign, Abs,
-Piecewise).
+(`lagcomp.Loop`: q̈ from an augmented solve with multipliers, as a System's constraints) and a load without a
+recurrence (sign, Abs, Piecewise).
 """
 
 from __future__ import annotations
@@ -30,9 +37,19 @@ import sympy as sp
 
 from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
-from lagcomp.codegen.taylor import TaylorProgram, Unsupported, decompose, taylor_program
+from lagcomp.codegen.taylor import (
+    ModePrograms,
+    TaylorProgram,
+    Unsupported,
+    decompose,
+    held_programs,
+    taylor_program,
+)
+from lagcomp.codegen.tree_contacts import TreeContacts
+from lagcomp.codegen.tree_events import event_functions
 from lagcomp.codegen.tree_lower import FORMULATION, motion
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
+from lagcomp.model.friction import Friction
 from lagcomp.multibody.program import Program
 from lagcomp.multibody.tree import Tree
 
@@ -49,16 +66,27 @@ def tree_taylor_source(tree: Tree, local, kind: KernelKind, eager_module: str) -
     return emit_companion(ir, kind, eager_module, taylor=taylor), {"operations": operations, "taylor_program": program}
 
 
-def tree_taylor_decomposition(tree: Tree, local) -> TaylorProgram | Unsupported:
-    """The Taylor program of `tree`'s motion, or the `Unsupported` saying why it has none (module docstring)."""
+def tree_taylor_decomposition(tree: Tree, local) -> TaylorProgram | ModePrograms | Unsupported:
+    """The Taylor program of `tree`'s motion (programs, with contacts or friction elements), or the `Unsupported`
+    saying why it has none (module docstring)."""
     if tree.closures:
         return Unsupported(f"closed loops ({', '.join(tree.constraint_names)}: their multipliers are not covered)")
-    if tree.contacts:
-        return Unsupported("contacts of a kinematic tree (their modes' series programs are not built for trees)")
     try:
-        return decompose(motion_kernel(local), local.n)
+        free = motion_kernel(local)
+        if tree.contacts or any(isinstance(e, Friction) for e in tree.events):
+            return held_programs(free, closed_contacts_kernel(tree, local, free), local.n)
+        return decompose(free, local.n)
     except Unsupported as err:
         return err
+
+
+def closed_contacts_kernel(tree: Tree, local, free: Kernel) -> Kernel:
+    """The ``closed_contacts`` kernel of `tree` (`lagcomp.codegen.tree_contacts`, as the eager module's: the rows'
+    gradients and biases, M by the composite-rigid-body algorithm), over the locals `local`; `free` is the motion
+    with every row free, which the contacts module renames ``rhs_free``."""
+    functions, _ = event_functions(tree, local.q, local.qd, local.mapping)
+    contacts = TreeContacts(tree, local.nodes, local.q, local.qd, local.mapping, local.loads, functions)
+    return next(kernel for kernel in contacts.motion((free,)) if kernel.name == "closed_contacts")
 
 
 def motion_kernel(local) -> Kernel:
