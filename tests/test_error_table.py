@@ -445,8 +445,6 @@ CASES = {
                                           "`slide`"),
     "friction-velocity-not-linear": (lambda: lc.compile(oscillator(events=[
         lc.Friction("slide", x.diff(t) ** 3, normal=m * g, static=0.5)])), "`slide`"),
-    "friction-with-constraints": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction(
-        "slide", x.diff(t), normal=m * g, static=0.5)], constraints=[lc.Holonomic("rod", x - l)]), "['slide']"),
     "friction-unknown-contact": (lambda: plane(events=[lc.Contact("floor", y), lc.Friction(
         "slide", x.diff(t), normal="ground", static=0.5)]), "'ground'"),
     "default-unknown-parameter": (lambda: oscillator(defaults={"mass": 1.0}), "['mass']"),
@@ -464,9 +462,6 @@ CASES = {
     "tree-loop-unknown-link": (lambda: lc.Tree(_planar_loop("xy").links, loops=[
         lc.Loop("pin", ("left", (1, 0, 0)), ("rihgt", (1, 0, 0)))]), "'rihgt'"),
     "tree-loop-idle-direction": (lambda tmp_path: lc.compile(_planar_loop("xyz"), cache_dir=tmp_path), "'pin_z'"),
-    "tree-event-not-available": (lambda: lc.Tree(_planar_loop("xy").links, name="tree_loop", loops=[
-        lc.Loop("pin", ("left", (l, 0, 0)), ("right", (l, 0, 0)), directions="xy")], events=[
-        lc.Friction("rub", lc.coordinates("q1")[0].diff(t), normal=1.0, static=0.5)]), "['rub']"),
     "tree-point-not-placed": (lambda: link_point([lc.Link("arm", lc.Revolute("q"), mass=1.0)], "amr", (1, 0, 0)),
                               "'amr'"),
     "urdf-joint-not-available": (lambda tmp_path: _from_urdf(tmp_path, "ball"),

@@ -478,9 +478,6 @@ def _ball_and_stick():
                                                          reset={lc.coordinates("z")[0]: 0})]), "z(t)"),
     (lambda: lc.Tree(_ball_and_stick(), events=["q"]), "'q'"),
     (lambda: lc.Tree(_ball_and_stick(), events=[lc.Event("late", lc.coordinates("w")[0])]), "w(t)"),
-    (lambda: lc.Tree(mm.planar_chain(2).links, events=[lc.Friction("rub", lc.coordinates("th0")[0].diff(t),
-                                                                   normal=1.0, static=0.5)],
-                     loops=[lc.Loop("pin", ("link1", (1, 0, 0)), (None, (1, 0, 0)), directions="xy")]), "['rub']"),
     (lambda: link_point(_ball_and_stick(), "arm"), "'arm'"),
     (lambda: lc.Tree(_ball_and_stick(), events=[lc.Contact("floor", lc.coordinates("q")[0]), lc.Friction(
         "rub", lc.coordinates("q")[0].diff(t), normal="flor", static=0.5)]), "'flor'"),

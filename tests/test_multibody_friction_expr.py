@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import sympy as sp
-from multibody_models import cart_pole, lagrangian_system, planar_chain
+from multibody_models import cart_pole, lagrangian_system
 from test_contact_friction import breakaway_slide
 
 import lagcomp as lc
@@ -168,13 +168,6 @@ def test_the_stick_slip_motion_is_the_lagrangian_twins(twins):
                                rtol=0, atol=1e-9)
     np.testing.assert_allclose(runs[0].y, runs[1].y, rtol=0, atol=1e-8)
     np.testing.assert_allclose(runs[0].friction_forces, runs[1].friction_forces, rtol=0, atol=1e-7)
-
-
-def test_friction_on_a_tree_with_loops_is_still_refused(cache_dir):
-    x, = lc.coordinates("th0")
-    with pytest.raises(lc.ModelError, match=r"\['rub'\] on a tree with closed loops"):
-        lc.Tree(planar_chain(2).links, events=[lc.Friction("rub", x.diff(t), normal=1.0, static=0.5)],
-                loops=[lc.Loop("pin", ("link1", (1, 0, 0)), (None, (1, 0, 0)), directions="xy")])
 
 
 

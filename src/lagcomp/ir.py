@@ -295,10 +295,10 @@ class ContactModes:
     #: Per friction element, the index (in contact order) of the contact whose normal force presses it, −1 for an
     #: N given as an expression; () when no element is pressed by a contact (`lagcomp.codegen.contacts`).
     pressing: tuple[int, ...] = ()
-    #: The constraints of a constrained module (k rows of Λ, no friction elements): ``closed_contacts`` also stores
-    #: ``_constraint`` (k, n) = Λ, holds them beside the closed contacts
-    #: (`lagcomp.kernel_support.resting.constrained_closed_contact_accelerations`: its ``forces`` are rows + k, the
-    #: constraints' Δμ last), and ``reactions`` (kind "reactions") adds that Δμ to ``reactions_free``.
+    #: The constraints of a constrained module (k rows of Λ): ``closed_contacts`` also stores ``_constraint``
+    #: (k, n) = Λ, holds them beside the closed contacts and sticking friction elements
+    #: (`lagcomp.kernel_support.resting.held_with_constraints`: its ``forces`` are rows + k, the constraints' Δμ
+    #: last), and ``reactions`` (kind "reactions") adds that Δμ to ``reactions_free``.
     constraints: int = 0
 
     @property

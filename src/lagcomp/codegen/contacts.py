@@ -265,7 +265,12 @@ def mode_lines(solve: ContactModes, indent: str) -> tuple[list[str], list[str]]:
         return [], after + ["return 0"]
     if solve.kind == "closed":
         work = [f"_mass = np.zeros(({n}, {n}))", f"_gradient = np.zeros(({rows}, {n}))", f"_bias = np.empty({rows})"]
-        if k and slots:     # (friction with constraints: no contacts, `lagcomp.model.system.System`)
+        if k and solve.pressing:
+            return work + [f"_constraint = np.zeros(({k}, {n}))", f"_kinetic = np.zeros({len(slots)})"], [
+                f"return constrained_pressed_frictional_accelerations(_mass, _constraint, _gradient, _bias, "
+                f"p[{first}:{first + count}], p[{slots[0]}:{slots[-1] + 1}], "
+                f"np.array({list(solve.pressing)}, dtype=np.int64), _kinetic, out[{n}:{2 * n}], forces, unilateral)"]
+        if k and slots:
             return work + [f"_constraint = np.zeros(({k}, {n}))"], [
                 f"return constrained_frictional_accelerations(_mass, _constraint, _gradient, _bias, "
                 f"p[{first}:{first + count}], p[{slots[0]}:{slots[-1] + 1}], out[{n}:{2 * n}], forces, unilateral)"]
@@ -310,51 +315,65 @@ def _constrained_force_lines(solve: ContactModes, none_held: str, indent: str) -
             "return _status"]
 
 
-def _checked_closing(call: str, n: int, count: int, first: int, indent: str) -> list[str]:
-    """The lines of a constrained module's impact branch after ``_firing``: the impact (`call`), then, when it
-    closed some contact, the forces at the state after it (``contact_forces``, under the new modes); if one it
-    closed would not push, the modes and velocities as before and the impact again without closing."""
+def _checked_closing(call: str, n: int, count: int, first: int, elements: int, indent: str) -> list[str]:
+    """The lines of the impact branch after ``_firing``: the impact (`call`), which may close contacts
+    (`lagcomp.kernel_support.resting.impact_and_closing`); with `elements` friction elements, their modes decided
+    again from the velocities after it (`friction_modes_after_jump`); then, when it closed some contact, the forces
+    at the state after it (``contact_forces``, under the new modes); if one it closed would not push, the modes and
+    velocities as before and the impact again without closing (the friction modes again after it).  Leaves
+    ``_stuck`` (some element sticks) for `_overload_lines` with elements; returns at the end without."""
     modes = f"p[{first}:{first + count}]"
     again = call.replace(f"p[{first + count}], out", "0.0, out")
-    return [f"_modes = {modes}.copy()", f"_status = {call}",
-            f"if _status != 0 or ({modes} == _modes).all():", f"{indent}return _status",
-            f"_forces = np.empty({count})", "_status = contact_forces(t, out, p, _forces)",
-            f"for _d in range({count}):",
-            f"{indent}if p[{first} + _d] != 0.0 and _modes[_d] == 0.0 and (_status != 0 or not _forces[_d] > 0.0):",
-            f"{indent * 2}{modes} = _modes", f"{indent * 2}out[{n}:{2 * n}] = y[{n}:{2 * n}]",
-            f"{indent * 2}return {again}",
+    frictions = f"p[{first + count + 1}:{first + count + 1 + elements}]"
+    decide = (f"friction_modes_after_jump(_slip_gradient, _slip_offset, out[{n}:{2 * n}], {frictions})"
+              if elements else "")
+    lines = [f"_modes = {modes}.copy()", f"_status = {call}", "if _status != 0:", f"{indent}return _status"]
+    if elements:
+        lines.append(f"_stuck = {decide}")
+    lines += [f"if not ({modes} == _modes).all():", f"{indent}_forces = np.empty({count + elements})",
+              f"{indent}_status = contact_forces(t, out, p, _forces)",
+              f"{indent}for _d in range({count}):",
+              f"{indent * 2}if p[{first} + _d] != 0.0 and _modes[_d] == 0.0 and (_status != 0 or not "
+              "_forces[_d] > 0.0):",
+              f"{indent * 3}{modes} = _modes", f"{indent * 3}out[{n}:{2 * n}] = y[{n}:{2 * n}]"]
+    if not elements:
+        return lines + [f"{indent * 3}return {again}", "return 0"]
+    return lines + [f"{indent * 3}_status = {again}", f"{indent * 3}if _status != 0:",
+                    f"{indent * 4}return _status", f"{indent * 3}_stuck = {decide}", f"{indent * 3}break"]
+
+
+def _overload_lines(count: int, elements: int, first: int, indent: str) -> list[str]:
+    """The lines that end the impact branch of a module with friction: while some element sticks (``_stuck``) and
+    its holding force exceeds μs |N|, the most overloaded slips (`slip_most_overloaded`, one pass per element)."""
+    frictions = f"p[{first + count + 1}:{first + count + 1 + elements}]"
+    return ["if _stuck:", f"{indent}_forces = np.empty({count + elements})", f"{indent}_limits = np.empty({elements})",
+            f"{indent}for _pass in range({elements}):",
+            f"{indent * 2}if contact_forces(t, out, p, _forces) != 0:", f"{indent * 3}break",
+            f"{indent * 2}friction_limits(t, out, p, _limits)",
+            f"{indent * 2}if not slip_most_overloaded(_forces[{count}:], _limits, {frictions}):",
+            f"{indent * 3}break",
             "return 0"]
 
 
 def contact_event_call(n: int, count: int, first: int, firing: str, indent: str, elements: int = 0,
                        pressed: tuple[int, ...] = (), constraints: int = 0) -> list[str]:
     """The end of the impact branch of a module with modes: q̈ without contacts, then
-    `lagcomp.kernel_support.resting.contact_event` on the mode slots of p; with `elements` friction elements,
-    their modes decided again from the state after the event (`friction_modes_after_jump`: slip along v ≠ 0,
-    stick at v = 0 unless the holding force exceeds μs |N|, then `slip_most_overloaded`), so that no mode is
-    stale after an impact, a closing or a lift-off.  With friction elements `pressed` by a contact (their
-    contact's index or −1 each), the impact is `pressed_contact_event`'s: frictional.  With `constraints` (a
-    constrained module, no friction), `constrained_contact_event` on ``_constraint`` too."""
+    `lagcomp.kernel_support.resting.contact_event` on the mode slots of p, whose closings stand only when the
+    closed contacts push at the state after the impact (`_checked_closing`: one rule for every module with
+    modes); with `elements` friction elements, their modes decided again from the state after the event
+    (`friction_modes_after_jump`: slip along v ≠ 0, stick at v = 0 unless the holding force exceeds μs |N|, then
+    `slip_most_overloaded`), so that no mode is stale after an impact, a closing or a lift-off.  With friction
+    elements `pressed` by a contact (their contact's index or −1 each), the impact is `pressed_contact_event`'s:
+    frictional.  With `constraints` (a constrained module), the ``constrained_`` routines on ``_constraint`` too."""
     call = (f"contact_event(_mass, _gap, _gradient, _normal_velocity, _restitution, _bias, _ydot[{n}:{2 * n}], "
             f"y[:{n}], t, _firing, p[{first}:{first + count}], p[{first + count}], out[{n}:{2 * n}])")
     if constraints:
         call = f"constrained_contact_event(_mass, _constraint, {call[len('contact_event(_mass, '):]}"
     if pressed:
-        call = (f"pressed_{call[:-1]}, _slip_gradient, _slip_offset, np.array({list(pressed)}, dtype=np.int64), "
-                "_static, _kinetic)")
+        name = "constrained_pressed_contact_event" if constraints else "pressed_contact_event"
+        call = (f"{name}{call[call.index('('):-1]}, _slip_gradient, _slip_offset, "
+                f"np.array({list(pressed)}, dtype=np.int64), _static, _kinetic)")
     lines = [f"_ydot = np.empty({2 * n})", "_status = rhs_free(t, y, p, _ydot)", "if _status != 0:",
-             f"{indent}return _status", f"_firing = {firing}"]
-    if constraints:
-        return lines + _checked_closing(call, n, count, first, indent)
-    if not elements:
-        return lines + [f"return {call}"]
-    frictions = f"p[{first + count + 1}:{first + count + 1 + elements}]"
-    return lines + [f"_status = {call}", "if _status != 0:", f"{indent}return _status",
-                    f"if friction_modes_after_jump(_slip_gradient, _slip_offset, out[{n}:{2 * n}], {frictions}):",
-                    f"{indent}_forces = np.empty({count + elements})", f"{indent}_limits = np.empty({elements})",
-                    f"{indent}for _pass in range({elements}):",
-                    f"{indent * 2}if contact_forces(t, out, p, _forces) != 0:", f"{indent * 3}break",
-                    f"{indent * 2}friction_limits(t, out, p, _limits)",
-                    f"{indent * 2}if not slip_most_overloaded(_forces[{count}:], _limits, {frictions}):",
-                    f"{indent * 3}break",
-                    "return 0"]
+             f"{indent}return _status", f"_firing = {firing}"] + _checked_closing(call, n, count, first, elements,
+                                                                                indent)
+    return lines + (_overload_lines(count, elements, first, indent) if elements else [])

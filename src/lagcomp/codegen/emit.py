@@ -123,6 +123,8 @@ KERNEL_SUPPORT = {
     "lagcomp.kernel_support.scratch": ("stack_array", "stack_empty"),
     "lagcomp.kernel_support.resting": ("closed_contact_accelerations", "constrained_closed_contact_accelerations",
                                        "constrained_contact_event", "constrained_frictional_accelerations",
+                                       "constrained_pressed_contact_event",
+                                       "constrained_pressed_frictional_accelerations",
                                        "contact_event", "friction_mode_after",
                                        "friction_modes_after_jump", "frictional_accelerations",
                                        "pressed_contact_event", "pressed_frictional_accelerations",
@@ -157,9 +159,10 @@ def kernel_support_names(kernels) -> set[str]:
             if kernel.solve.elements:
                 names |= {"friction_modes_after_jump", "slip_most_overloaded"}
             if kernel.solve.pressing:
-                names.add("pressed_contact_event")
+                names.add(("constrained_" if kernel.solve.constraints else "") + "pressed_contact_event")
         if isinstance(kernel.solve, ContactModes) and kernel.solve.kind == "closed":
-            names.add("pressed_frictional_accelerations" if kernel.solve.pressing else
+            names.add(("constrained_" if kernel.solve.constraints else "") + "pressed_frictional_accelerations"
+                      if kernel.solve.pressing else
                       ("constrained_" if kernel.solve.constraints else "") + "frictional_accelerations"
                       if kernel.solve.frictions else
                       "constrained_closed_contact_accelerations" if kernel.solve.constraints else

@@ -31,9 +31,9 @@ from dataclasses import dataclass, replace
 
 import sympy as sp
 
-from lagcomp.codegen.bindings import BAUMGARTE
 from lagcomp.codegen.contacts import friction_branches, impact_branches, modes_of, resting_kernels
 from lagcomp.codegen.tree_constraints import loop_rows
+from lagcomp.codegen.tree_slip import first_mode_slot
 from lagcomp.ir import Kernel
 from lagcomp.model.contacts import Contact
 from lagcomp.model.friction import Friction
@@ -99,7 +99,7 @@ class TreeContacts:
         C = sp.Matrix(loop_rows(self.prog, tree, nodes, mapping).rows) if k else None
         self.view = ContactView(n, M, tuple(q), tuple(qd), tuple(values), restitutions, frictions, tree,
                                 tree.parameters, k, C)
-        self.first = len(tree.parameters) + (len(BAUMGARTE) if k else 0)
+        self.first = first_mode_slot(tree)
 
     def kernel(self, name: str, doc: str, args, stores, solve=None) -> Kernel:
         """A kernel of `stores` (target, expression over the locals or the user's parameters): the expressions

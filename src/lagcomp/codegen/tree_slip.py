@@ -8,18 +8,24 @@ from __future__ import annotations
 
 import sympy as sp
 
-from lagcomp.codegen.bindings import user_local
+from lagcomp.codegen.bindings import BAUMGARTE, user_local
 from lagcomp.model.contacts import Contact
 from lagcomp.model.friction import Friction, slip_symbol
 from lagcomp.multibody.joints import t
 from lagcomp.multibody.slip import pressed_by_expressions, with_slip_forces
 
 
+def first_mode_slot(tree) -> int:
+    """The first slot of p that holds a mode of `tree`'s contacts and friction elements: after the parameters and,
+    with closed loops, the Baumgarte gains (`lagcomp.codegen.tree_constraints.gain_loads`)."""
+    return len(tree.parameters) + (len(BAUMGARTE) if tree.closures else 0)
+
+
 def slip_slots(tree) -> list[tuple[sp.Symbol, str, int]]:
     """(mode symbol, its local's name, slot of p) of each friction element of `tree` pressed by an expression: the
-    modes follow the parameters, one per contact and the closing flag, then one per friction element
+    modes follow `first_mode_slot`, one per contact and the closing flag, then one per friction element
     (`lagcomp.codegen.contacts.mode_slots`)."""
-    first = len(tree.parameters) + len([e for e in tree.events if isinstance(e, Contact)]) + 1
+    first = first_mode_slot(tree) + len([e for e in tree.events if isinstance(e, Contact)]) + 1
     elements = [e for e in tree.events if isinstance(e, Friction)]
     return [(slip_symbol(f), user_local("slip", e.name, f), first + f)
             for f, e in enumerate(elements) if not isinstance(e.normal, str)]

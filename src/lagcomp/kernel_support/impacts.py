@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit
 
 from lagcomp.kernel_support.constrained_response import response_columns
-from lagcomp.kernel_support.linear_solvers import ldlt_solve, ldlt_solve_matrix
+from lagcomp.kernel_support.linear_solvers import ldlt_solve
 from lagcomp.kernel_support.symbol_calls import called_by_symbol
 
 #: Impacts solved: the complementarity problem's solution was found.
@@ -246,6 +246,14 @@ def _constrained_contact_impacts(mass, constraint, gaps, gradients, normal_veloc
 @njit(cache=True, error_model="numpy", fastmath=False)
 def frictional_impact(mass, gradient, normal_velocity, restitution, slip_gradient, slip_velocity, static, kinetic,
                       qd):
+    """`constrained_frictional_impact` without constraints (M⁻¹ in place of K)."""
+    return constrained_frictional_impact(mass, np.empty((0, qd.shape[0])), gradient, normal_velocity, restitution,
+                                         slip_gradient, slip_velocity, static, kinetic, qd)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def constrained_frictional_impact(mass, constraint, gradient, normal_velocity, restitution, slip_gradient,
+                                  slip_velocity, static, kinetic, qd):
     """The impact of one contact with Coulomb friction along one sliding velocity (a point on a floor).
 
     Impulses P_n along the gap's gradient G and P_t along the sliding velocity's a = ∂v/∂q̇:
@@ -262,6 +270,9 @@ def frictional_impact(mass, gradient, normal_velocity, restitution, slip_gradien
     No impulse when the contact is not approaching (v_n⁻ ≥ 0).  mass (n, n) lower triangle (not written);
     gradient, slip_gradient (n); qd (n) before, overwritten with after.  Returns `IMPACT_SOLVED`, or
     `IMPACT_SINGULAR_MASS` / `IMPACT_DEPENDENT_CONTACTS` (G and a parallel) with qd unchanged.
+    With constraints A q̇ + b = 0 (``constraint`` (k, n): A) M⁻¹ is K, the constrained response
+    (`lagcomp.kernel_support.constrained_response`): the impulses keep the constraints' velocities, and W is
+    [G; a] K [Gᵀ aᵀ]; without (k = 0) K is M⁻¹ bit for bit.
     """
     n = qd.shape[0]
     if not normal_velocity < 0.0:
@@ -270,7 +281,7 @@ def frictional_impact(mass, gradient, normal_velocity, restitution, slip_gradien
     for j in range(n):
         columns[j, 0] = gradient[j]
         columns[j, 1] = slip_gradient[j]
-    if ldlt_solve_matrix(mass.copy(), columns) != 0:
+    if response_columns(mass.copy(), constraint, columns) != 0:
         return IMPACT_SINGULAR_MASS
     w_nn = w_nt = w_tn = w_tt = 0.0
     for j in range(n):

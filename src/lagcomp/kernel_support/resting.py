@@ -16,7 +16,11 @@ contact with normal velocity v⁺ = −e v⁻; the bounces that follow, all unde
 or the next bounce 2 v⁺/|a| shorter than `BOUNCE_TIME` |t| (e near 1), or its height v⁺²/(2|a|) less than
 `BOUNCE_HEIGHT` roundings of the gap, ε Σ_j |∂g/∂q_j| |q_j| (`bounces_unresolved`), the impact is made plastic
 (e = 0: v⁺ = 0) and the contact closes: the error in the time the ball comes to rest is the remaining time.
-A plastic impact (e = 0) under pressing closes the contact at once.
+A plastic impact (e = 0) that leaves the contact at rest closes it too, whatever a was before it.  Either closing
+stands only if the closed contacts' forces all push at the state after the impact (the emitted branch computes
+them there and does the impact again without closing otherwise): a before the impact depends on q̇, through b (a
+curved gap's centripetal term) or a constrained q̈_free, so a fast plastic impact on a curved gap, a < 0 only once
+it has stopped, closes on that check and not on a.
 
 Why those scales: the drivers resolve a bounce down to about 2048 × 2 ε |t| ≈ 1e-12 |t| in time (an impact
 located to 2 ε |t| leaves the gap a rounding below 0, and the bounce after it must reach above 0 by the first
@@ -51,12 +55,13 @@ kernel.  They allocate small work arrays, only while some contact is closed or a
 import numpy as np
 from numba import njit
 
+from lagcomp.kernel_support.constrained_response import response_columns
 from lagcomp.kernel_support.impacts import (
     CLOSED_GAP,
     IMPACT_FRICTION_UNSOLVED,
     IMPACT_SOLVED,
     _constrained_contact_impacts,
-    frictional_impact,
+    constrained_frictional_impact,
     solve_on_set,
     touching,
 )
@@ -139,8 +144,18 @@ def held_with_constraints(mass, constraint, gradients, bias, held, one_sided, qd
     """`held_row_accelerations` on the rows R of ``gradients`` (R, n) that are ``held``, then the k rows of
     ``constraint`` (k, n), always held, with bias −Λ q̈_free (``qdd`` on entry): the correction keeps Λ q̈.
     ``forces`` (R + k): the rows' multipliers, then the constraints' Δμ."""
+    return coupled_with_constraints(mass, constraint, gradients, gradients, bias, held, one_sided, qdd, forces,
+                                    unilateral, True)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def coupled_with_constraints(mass, constraint, gradients, columns, bias, held, one_sided, qdd, forces, unilateral,
+                             symmetric):
+    """`held_with_constraints` with the forces' directions ``columns`` (R, n) apart from the rows ``gradients``
+    (`coupled_row_accelerations`); the constraints' rows are their own columns."""
     count, k, n = held.shape[0], constraint.shape[0], qdd.shape[0]
     rows = np.empty((count + k, n))
+    stacked_columns = np.empty((count + k, n))
     stacked_bias = np.empty(count + k)
     active = np.empty(count + k, dtype=np.bool_)
     for d in range(count):
@@ -148,14 +163,17 @@ def held_with_constraints(mass, constraint, gradients, bias, held, one_sided, qd
         stacked_bias[d] = bias[d]
         for j in range(n):
             rows[d, j] = gradients[d, j]
+            stacked_columns[d, j] = columns[d, j]
     for r in range(k):
         active[count + r] = True
         s = 0.0
         for j in range(n):
             rows[count + r, j] = constraint[r, j]
+            stacked_columns[count + r, j] = constraint[r, j]
             s -= constraint[r, j] * qdd[j]
         stacked_bias[count + r] = s
-    return held_row_accelerations(mass, rows, stacked_bias, active, one_sided, qdd, forces, unilateral)
+    return coupled_row_accelerations(mass, rows, stacked_columns, stacked_bias, active, one_sided, qdd, forces,
+                                     unilateral, symmetric)
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
@@ -199,19 +217,43 @@ def _pressed_frictional_accelerations(mass, gradients, bias, modes, frictions, p
     contact the columns are the rows and the solve that of `frictional_accelerations`."""
     count, elements = modes.shape[0], frictions.shape[0]
     active = np.empty(count + elements, dtype=np.bool_)
+    columns = gradients.copy()
+    coupled = _pressed_columns(gradients, modes, frictions, pressing, kinetic, active, columns)
+    return coupled_row_accelerations(mass, gradients, columns, bias, active, count, qdd, forces, unilateral,
+                                     not coupled)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _constrained_pressed_frictional_accelerations(mass, constraint, gradients, bias, modes, frictions, pressing,
+                                                  kinetic, qdd, forces, unilateral):
+    """`pressed_frictional_accelerations` for a system with constraints (``constraint`` (k, n): Λ): the
+    constraints' rows held after the contacts' and the elements' (`coupled_with_constraints`, as
+    `constrained_closed_contact_accelerations`); ``forces`` (C + F + k), the constraints' Δμ last."""
+    count, elements = modes.shape[0], frictions.shape[0]
+    active = np.empty(count + elements, dtype=np.bool_)
+    columns = gradients.copy()
+    coupled = _pressed_columns(gradients, modes, frictions, pressing, kinetic, active, columns)
+    return coupled_with_constraints(mass, constraint, gradients, columns, bias, active, count, qdd, forces,
+                                    unilateral, not coupled)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _pressed_columns(gradients, modes, frictions, pressing, kinetic, active, columns):
+    """Into ``active`` (C + F,) the held rows of `pressed_frictional_accelerations` (a closed contact's; a sticking
+    element's whose contact is closed or whose N is an expression), and into ``columns`` (a copy of ``gradients``
+    on entry) each closed contact's column with its slipping elements' −μk s a_f; True when some column moved."""
+    count = modes.shape[0]
     for d in range(count):
         active[d] = modes[d] != 0.0
-    columns = gradients.copy()
     coupled = False
-    for f in range(elements):
+    for f in range(frictions.shape[0]):
         d = pressing[f]
         active[count + f] = frictions[f] == 0.0 and (d < 0 or modes[d] != 0.0)
         if d >= 0 and modes[d] != 0.0 and frictions[f] != 0.0:
             coupled = True
             for j in range(columns.shape[1]):
                 columns[d, j] -= kinetic[f] * frictions[f] * gradients[count + f, j]
-    return coupled_row_accelerations(mass, gradients, columns, bias, active, count, qdd, forces, unilateral,
-                                     not coupled)
+    return coupled
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
@@ -346,46 +388,42 @@ def bounces_unresolved(v_after, pressing, restitution, t, gradient, q):
 @njit(cache=True, error_model="numpy", fastmath=False)
 def _contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes, closing,
                   qd):
-    """`impact_and_closing` without constraints, the closed contacts' forces checked at the state before."""
+    """`impact_and_closing` without constraints."""
     return impact_and_closing(mass, np.empty((0, q.shape[0])), gaps, gradients, normal_velocities, restitution, bias,
-                              qdd_free, q, t, firing, modes, closing, qd, True)
+                              qdd_free, q, t, firing, modes, closing, qd)
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
 def _constrained_contact_event(mass, constraint, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q,
                                t, firing, modes, closing, qd):
-    """`impact_and_closing` with the constraints Λ (``constraint`` (k, n)), the closed contacts' forces not checked
-    here: a constrained q̈_free depends on q̇ (Λ q̈ = −Λ̇ q̇: a rod's centripetal pull), so the forces before a
-    plastic impact say nothing of those after it; for the same reason a contact with e = 0 left at rest by the
-    impact is a candidate to close whatever its free normal acceleration before.  The emitted branch checks them at the state after the event
-    (``contact_forces``) and does the impact again without closing when a contact it closed would pull
-    (`lagcomp.codegen.contacts.contact_event_call`)."""
+    """`impact_and_closing` with the constraints Λ (``constraint`` (k, n))."""
     return impact_and_closing(mass, constraint, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t,
-                              firing, modes, closing, qd, False)
+                              firing, modes, closing, qd)
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
 def impact_and_closing(mass, constraint, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t,
-                       firing, modes, closing, qd, check):
+                       firing, modes, closing, qd):
     """The reset of contact ``firing``'s event: the lift-off of a closed contact, or the impact of an open one.
 
     A closed contact (``modes[firing]`` 1) whose force reached 0 opens: its mode becomes 0, the velocities do not
     jump.  An open one's impact is `lagcomp.kernel_support.impacts.contact_impacts`, the velocities ``qd`` (n)
-    overwritten; then, when ``closing`` is 1, each contact taking part whose free normal acceleration
-    a = G q̈_free + b presses it shut (a < 0) and whose bounces the run would not resolve (`bounces_unresolved`)
-    closes: the impact is done again with e = 0 for those, and their modes become 1, unless the closed contacts'
-    forces would not all push (then none closes; checked with q̈_free and b at the state before when ``check``).
+    overwritten; then, when ``closing`` is 1, each contact taking part that is a candidate to close
+    (`_closes`: its bounces the run would not resolve, or a plastic impact left it at rest) closes: the impact is
+    done again with e = 0 for those, and their modes become 1.  Whether the closed contacts' forces all push is
+    not decided here but at the state after the impact, by the emitted branch (``contact_forces`` under the new
+    modes), which does the impact again without closing when a contact it closed would pull
+    (`lagcomp.codegen.contacts.contact_event_call`): q̈_free and b depend on q̇ (a curved gap's centripetal
+    ġ' q̇, a rod's pull Λ q̈ = −Λ̇ q̇), so the forces before an impact say nothing of those after it (a fast
+    plastic impact on a curved gap does not press before it and rests pressed after it).
     mass (n, n) lower triangle, gaps, normal_velocities, restitution, bias (C,), gradients (C, n) as in
     `contact_impacts`; qdd_free (n): q̈ without contacts at the state before.  ``constraint`` (k, n): the
     constraint matrix Λ of a constrained system (k = 0 without): the impacts keep its constraints' velocities
-    (`lagcomp.kernel_support.impacts.constrained_contact_impacts`), qdd_free is the constrained motion and the
-    closed contacts' forces are those with the constraints held (`constrained_closed_contact_accelerations`).
-    Returns the impact's status.
+    (`lagcomp.kernel_support.impacts.constrained_contact_impacts`).  Returns the impact's status.
     """
     if modes[firing] != 0.0:
         modes[firing] = 0.0
         return IMPACT_SOLVED
-    n = q.shape[0]
     count = gaps.shape[0]
     before = qd.copy()
     status = _constrained_contact_impacts(mass, constraint, gaps, gradients, normal_velocities, restitution, q,
@@ -396,43 +434,38 @@ def impact_and_closing(mass, constraint, gaps, gradients, normal_velocities, res
     closed = modes.copy()
     any_closing = False
     for d in range(count):
-        if modes[d] != 0.0:
+        if modes[d] != 0.0 or (d != firing and not touching(gaps[d], gradients, d, q)):
             continue
-        if d != firing and not touching(gaps[d], gradients, d, q):
-            continue
-        pressing = bias[d]
-        v_after = normal_velocities[d]
-        for j in range(n):
-            pressing += gradients[d, j] * qdd_free[j]
-            v_after += gradients[d, j] * (qd[j] - before[j])
-        if bounces_unresolved(v_after, pressing, restitution[d], t, gradients[d], q) or (
-                not check and restitution[d] == 0.0 and _at_rest(v_after, gradients, d, qd)):
+        if _closes(d, gradients, bias, normal_velocities[d], restitution[d], qdd_free, q, t, before, qd):
             plastic[d] = 0.0
             closed[d] = 1.0
             any_closing = True
     if not any_closing:
         return status
-    if not check:
-        return _close_plastic(mass, constraint, gaps, gradients, normal_velocities, plastic, q, firing, modes, closed,
-                              before, qd)
-    accelerations = qdd_free.copy()
-    forces = np.empty(count + constraint.shape[0])
-    work = mass.copy()
-    if _constrained_closed_contact_accelerations(work, constraint, gradients, bias, closed, accelerations, forces,
-                                                 0.0) != 0:
-        return status
-    for d in range(count):
-        if closed[d] != 0.0 and not forces[d] > 0.0:
-            return status                       # a closed contact would pull: leave them open, the impact as is
     return _close_plastic(mass, constraint, gaps, gradients, normal_velocities, plastic, q, firing, modes, closed,
                           before, qd)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _closes(d, gradients, bias, v_before, restitution, qdd_free, q, t, before, after):
+    """Whether contact ``d``, at normal velocity ``v_before`` before an impact that took the velocities from
+    ``before`` to ``after`` (n), is a candidate to close: its bounces under the free normal acceleration before,
+    a = G_d q̈_free + b_d, would not be resolved (`bounces_unresolved`), or its restitution is 0 and the impact
+    left it at rest (`_at_rest`) whatever a was (the forces after the impact decide)."""
+    pressing = bias[d]
+    v_after = v_before
+    for j in range(q.shape[0]):
+        pressing += gradients[d, j] * qdd_free[j]
+        v_after += gradients[d, j] * (after[j] - before[j])
+    return bounces_unresolved(v_after, pressing, restitution, t, gradients[d], q) or (
+        restitution == 0.0 and _at_rest(v_after, gradients, d, after))
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
 def _at_rest(v, gradients, row, qd):
     """Whether the normal velocity v of contact ``row`` is 0 on the scale of rest (`CLOSED_GAP` Σ_j |∂g/∂q_j|
     (|q̇_j| + 1), a run's start's): a plastic impact's, which closes the contact when its force pushes at the state
-    after (the caller checks it there, `_constrained_contact_event`; the free normal acceleration before a fast
+    after (the emitted branch checks it there, `impact_and_closing`; the free normal acceleration before a fast
     impact may point either way)."""
     scale = 0.0
     for j in range(qd.shape[0]):
@@ -501,14 +534,15 @@ def slip_most_overloaded(forces, limits, frictions):
 
 
 @njit(cache=True, error_model="numpy", fastmath=False)
-def _friction_left_out(mass, gaps, gradients, q, before, after, firing, modes, pressing, slip_gradients,
+def _friction_left_out(mass, constraint, gaps, gradients, q, before, after, firing, modes, pressing, slip_gradients,
                        slip_offsets):
     """Whether the frictionless impact that took the velocities from ``before`` to ``after`` (n) gave a normal
     impulse to a contact that presses a friction element sliding before or after it (v beyond the scale of rest
     `CLOSED_GAP` Σ_j |a_j| (|q̇_j| + 1)), where Coulomb's law would have added a tangential impulse.  The impulses
     of the contacts that took part (the firing one, the closed and the touching ones, set A) from the jump:
-    M Δq̇ = G_Aᵀ P, so W_AA P = G_A Δq̇, W = G M⁻¹ Gᵀ; a P_d above 1e-10 of the largest counts.  True too when
-    W_AA is singular (the impulses cannot be told apart)."""
+    M Δq̇ = G_Aᵀ P (+ Λᵀ Λc with constraints, ``constraint`` (k, n): Λ), so Δq̇ = K G_Aᵀ P, W_AA P = G_A Δq̇,
+    W = G K Gᵀ (K = M⁻¹ without constraints, `lagcomp.kernel_support.constrained_response`); a P_d above 1e-10 of
+    the largest counts.  True too when W_AA is singular (the impulses cannot be told apart)."""
     n, count = q.shape[0], gaps.shape[0]
     involved = np.zeros(count, dtype=np.bool_)
     for d in range(count):
@@ -518,7 +552,7 @@ def _friction_left_out(mass, gaps, gradients, q, before, after, firing, modes, p
         if involved[d]:
             for j in range(n):
                 minv_gt[j, d] = gradients[d, j]
-    if ldlt_solve_matrix(mass.copy(), minv_gt) != 0:
+    if response_columns(mass.copy(), constraint, minv_gt) != 0:
         return True
     delassus = np.zeros((count, count))
     jump = np.zeros(count)                  # −G Δq̇: solve_on_set gives P = −W⁻¹ (−G Δq̇)
@@ -551,16 +585,29 @@ def _friction_left_out(mass, gaps, gradients, q, before, after, firing, modes, p
 @njit(cache=True, error_model="numpy", fastmath=False)
 def _pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing, modes,
                           closing, qd, slip_gradients, slip_offsets, pressing, static, kinetic):
+    """`constrained_pressed_contact_event` without constraints."""
+    return _constrained_pressed_contact_event(mass, np.empty((0, q.shape[0])), gaps, gradients, normal_velocities,
+                                              restitution, bias, qdd_free, q, t, firing, modes, closing, qd,
+                                              slip_gradients, slip_offsets, pressing, static, kinetic)
+
+
+@njit(cache=True, error_model="numpy", fastmath=False)
+def _constrained_pressed_contact_event(mass, constraint, gaps, gradients, normal_velocities, restitution, bias,
+                                       qdd_free, q, t, firing, modes, closing, qd, slip_gradients, slip_offsets,
+                                       pressing, static, kinetic):
     """`contact_event` where friction elements are pressed by contacts (``pressing`` (F,): the contact's index or
     −1; ``static``, ``kinetic`` (F,): μs, μk; ``slip_gradients`` (F, n), ``slip_offsets`` (F): v = a·q̇ + c).
 
     The impact of an open contact that presses an element, alone at that instant (no other contact closed or
     touching), is frictional: `lagcomp.kernel_support.impacts.frictional_impact` (Newton on the normal, the
-    tangential impulse within μ P_n), with the Zeno closing of `contact_event` (done again with e = 0, the
-    contact closed, when the run would not resolve the bounces left, `bounces_unresolved`).  Every other event
+    tangential impulse within μ P_n), with the closing of `contact_event` (done again with e = 0, the contact
+    closed, when it is a candidate, `_closes`; the emitted branch checks its force after).  Every other event
     is `contact_event`'s, frictionless, which is right as long as no contact that presses a sliding element takes
-    a normal impulse (a block sliding on a floor into a smooth wall: the floor takes none); otherwise (`_friction_left_out`) the tangential impulses would need a complementarity problem of
-    their own, not solved yet: `IMPACT_FRICTION_UNSOLVED`, and the run stops at the impact (RESET_FAILED)."""
+    a normal impulse (a block sliding on a floor into a smooth wall: the floor takes none); otherwise
+    (`_friction_left_out`) the tangential impulses would need a complementarity problem of their own, not solved
+    yet: `IMPACT_FRICTION_UNSOLVED`, and the run stops at the impact (RESET_FAILED).
+    With constraints (``constraint`` (k, n): Λ; k = 0 without) every impulse goes through the constrained
+    response K (`lagcomp.kernel_support.impacts.constrained_frictional_impact`, `impact_and_closing`)."""
     if modes[firing] != 0.0:
         modes[firing] = 0.0
         return IMPACT_SOLVED
@@ -575,30 +622,27 @@ def _pressed_contact_event(mass, gaps, gradients, normal_velocities, restitution
             alone = False
     before = qd.copy()
     if not alone:
-        status = _contact_event(mass, gaps, gradients, normal_velocities, restitution, bias, qdd_free, q, t, firing,
-                               modes, closing, qd)
-        if status == IMPACT_SOLVED and _friction_left_out(mass, gaps, gradients, q, before, qd, firing, modes,
-                                                          pressing, slip_gradients, slip_offsets):
+        status = impact_and_closing(mass, constraint, gaps, gradients, normal_velocities, restitution, bias, qdd_free,
+                                    q, t, firing, modes, closing, qd)
+        if status == IMPACT_SOLVED and _friction_left_out(mass, constraint, gaps, gradients, q, before, qd, firing,
+                                                          modes, pressing, slip_gradients, slip_offsets):
             return IMPACT_FRICTION_UNSOLVED
         return status
     slip_velocity = slip_offsets[element]
     for j in range(n):
         slip_velocity += slip_gradients[element, j] * qd[j]
     e = restitution[firing]
-    status = frictional_impact(mass, gradients[firing], normal_velocities[firing], e, slip_gradients[element],
-                               slip_velocity, static[element], kinetic[element], qd)
+    status = constrained_frictional_impact(mass, constraint, gradients[firing], normal_velocities[firing], e,
+                                           slip_gradients[element], slip_velocity, static[element], kinetic[element],
+                                           qd)
     if status != IMPACT_SOLVED or closing == 0.0:
         return status
-    pressing_acceleration = bias[firing]
-    v_after = normal_velocities[firing]
-    for j in range(n):
-        pressing_acceleration += gradients[firing, j] * qdd_free[j]
-        v_after += gradients[firing, j] * (qd[j] - before[j])
-    if bounces_unresolved(v_after, pressing_acceleration, e, t, gradients[firing], q):
+    if _closes(firing, gradients, bias, normal_velocities[firing], e, qdd_free, q, t, before, qd):
         for j in range(n):
             qd[j] = before[j]
-        status = frictional_impact(mass, gradients[firing], normal_velocities[firing], 0.0, slip_gradients[element],
-                                   slip_velocity, static[element], kinetic[element], qd)
+        status = constrained_frictional_impact(mass, constraint, gradients[firing], normal_velocities[firing], 0.0,
+                                               slip_gradients[element], slip_velocity, static[element],
+                                               kinetic[element], qd)
         if status == IMPACT_SOLVED:
             modes[firing] = 1.0
     return status
@@ -614,3 +658,5 @@ constrained_closed_contact_accelerations = called_by_symbol(_constrained_closed_
 constrained_frictional_accelerations = called_by_symbol(_constrained_frictional_accelerations)
 constrained_contact_event = called_by_symbol(_constrained_contact_event)
 pressed_contact_event = called_by_symbol(_pressed_contact_event)
+constrained_pressed_frictional_accelerations = called_by_symbol(_constrained_pressed_frictional_accelerations)
+constrained_pressed_contact_event = called_by_symbol(_constrained_pressed_contact_event)

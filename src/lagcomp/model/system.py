@@ -374,16 +374,10 @@ class System:
                     raise ModelError(f"Event `{e.name}`: its reset sets {key}, but {coordinate} is not a coordinate "
                                      f"of {self.name!r} (coordinates {list(self.coordinate_names)}).")
         contacts = [e.name for e in events if isinstance(e, Contact)]
-        frictions = [e.name for e in events if isinstance(e, Friction)]
         for e in events:
             if isinstance(e, Friction) and isinstance(e.normal, str) and e.normal not in contacts:
                 raise ModelError(f"Friction `{e.name}`: normal={e.normal!r} names no contact of this system "
                                  f"(contacts {contacts}); give a Contact's name or N as an expression.")
-        if frictions and contacts and self.constraints:
-            raise ModelError(f"Friction {frictions} on a system with constraints {list(self.constraint_names)} and "
-                             f"contacts {contacts}: an impact would have to decide the friction modes with the "
-                             "constraints held, which is not supported yet (friction with constraints and no "
-                             "contacts is).")
         return events
 
     def expressions(self) -> dict[str, sp.Expr]:

@@ -15,8 +15,8 @@ linear in the velocities, as on a System.
 
 Refused (`ModelError`, each naming the event): an object that is not an Event, a name used twice or by a shadow
 switch, a reset of something that is not a coordinate of the tree, a friction element whose normal names no
-contact of the tree, a friction element on a tree with closed loops (a System with constraints refuses it too).
-Contacts on a tree with loops are solved with the loops' constraints (`lagcomp.kernel_support.constrained_response`).
+contact of the tree.  Contacts and friction elements on a tree with loops are solved with the loops' constraints
+held (`lagcomp.kernel_support.constrained_response`, `lagcomp.kernel_support.resting.held_with_constraints`).
 """
 
 from __future__ import annotations
@@ -46,12 +46,6 @@ def checked_events(events, tree) -> tuple[Event, ...]:
             if coordinate not in tree.coordinates:
                 raise ModelError(f"{tree.name}: event `{e.name}` resets {key}, but {coordinate} is not a coordinate "
                                  f"of the tree (coordinates {list(tree.coordinate_names)}).")
-    frictions = [e.name for e in events if isinstance(e, Friction)]
-    if frictions and tree.closures:
-        raise ModelError(f"{tree.name}: friction elements {frictions} on a tree with closed loops "
-                         f"({', '.join(c.loop for c in tree.closures)}): a sticking element's row would join the "
-                         "loops' augmented system, which is not supported yet (contacts are: their impacts keep the "
-                         "loops' velocities).")
     return events
 
 
