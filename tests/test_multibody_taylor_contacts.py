@@ -84,7 +84,11 @@ def test_a_tree_with_contacts_has_one_program_per_set_of_closed_contacts():
 def test_the_series_of_each_mode_equal_the_lagrangian_paths(chain, mask, state):
     """At any state, under each set of closed contacts: the tree's Taylor coefficients to order 20 and its
     multipliers' series equal the Lagrangian twin's (whose M is T's Hessian, factored in the same series LDLᵀ),
-    order by order to 1e-11 of the order's largest coefficient."""
+    order by order to 1e-11 of order k's largest coefficient (at least 1) up to order 15, growing 1.8× an order
+    beyond: the two programs round differently and the recurrences carry each order's rounding into the next
+    (measured at y = 0 with the knee closed: 4e-16 at order 1, 1.2e-13 at 11, 1.4e-12 at 15, 2.0e-11 at 19, about
+    1.7× an order; a multiplier's order 2 at rest, 0 exactly, 6e-13 from the cancellation of its terms; a wrong
+    program is off by O(1))."""
     y = np.array(state)
     found = []
     for model in chain:
@@ -95,8 +99,8 @@ def test_the_series_of_each_mode_equal_the_lagrangian_paths(chain, mask, state):
         status = kernels.taylor_coefficients(0.0, y, p, X, W)
         assert status == -mask.bit_count()      # (−c: rows 0..c−1 of W hold the c multipliers' series)
         found.append(np.vstack([X[:, :order], W[:-status, :order]]))
-    scale = np.maximum(np.abs(found[1]).max(axis=0), 1.0)
-    assert (np.abs(found[0] - found[1]) <= 1e-11 * scale).all()
+    scale = np.maximum(np.abs(found[1]).max(axis=0), 1.0) * 1e-11 * 1.8 ** np.maximum(np.arange(order) - 15, 0)
+    assert (np.abs(found[0] - found[1]) <= scale).all()
 
 
 def test_the_dropped_chain_bounces_as_dop853_and_the_lagrangian_taylor_run_say(chain):
