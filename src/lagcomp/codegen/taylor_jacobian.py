@@ -61,7 +61,7 @@ from lagcomp.codegen.taylor_kernel_frame import (
     setup_lines,
     work_rows,
 )
-from lagcomp.codegen.taylor_ops import LINEAR, Op, value_lines
+from lagcomp.codegen.taylor_ops import LINEAR, Op
 
 #: A term of a tangent: (factor (code), kind ("one", "value" or "slot"), series (a value's name, a slot's index)).
 Term = tuple[str, str, str]
@@ -498,8 +498,7 @@ def jacobian_source(program: dict, columns: int, parameters: tuple[int, ...] = (
     lines += [f"{INDENT}_S[{i}*(order + 1)*{padded} + _c] = y[{n_state}*(_c + 1) + {i}] if _c < {columns} else 0.0"
               for i in range(n_state)]
     lines += _row_offsets(n_state, padded)
-    lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
-    lines += [INDENT + line for op in program_ops(program) for line in value_lines(op, kernel.at)]
+    lines += ["for k in range(order):", f"{INDENT}_ik1 = 1.0/(k + 1)"]
     lines += [f"{INDENT}# The series of J's entries and of ∂f/∂p, order k"] + [INDENT + line for line in sweeps.lines]
     for position, sweep in enumerate(sweeps.parameters):
         column = columns - len(parameters) + position

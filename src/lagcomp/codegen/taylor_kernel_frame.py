@@ -19,6 +19,10 @@ from lagcomp.codegen.taylor_ops import (
 
 INDENT = "    "
 KERNEL = "taylor_variational_coefficients"
+#: The kernel the variational kernel calls for the values' coefficients, every order, before its tangents' loop:
+#: the model's own (`lagcomp.integrate.taylor_sensitivities.values_import`), compiled once per model, not once per
+#: choice of columns, and its X and W rows bitwise the variational kernel's by construction.
+VALUES = "taylor_coefficients"
 #: Up to this many columns are written out in one pass (`block_width`); more take a loop over blocks of `BLOCK`.
 UNROLLED_COLUMNS = 9
 #: Columns of one pass of the loop over blocks: an AVX2 vector of float64.
@@ -73,15 +77,14 @@ class ScalarTangents:
 
 def setup_lines(program: dict, columns: int, parameters: tuple[int, ...]) -> list[str]:
     """The kernel's statements before its order loop: the setup's scalars (and the partials of the `parameters`'
-    columns), the pivot checks, coefficient 0 of y (all N (1 + `columns`) rows of X) and the time's series."""
+    columns), the pivot checks, coefficient 0 of the columns' rows of X (N (1 + c) + i), then every value's
+    coefficients, all orders, by a call of ``taylor_coefficients`` (`VALUES`), returning its status if not 0."""
+    n_state = program["n_state"]
     lines = ["order = X.shape[1] - 1", *setup_statements((Setup(**entry) for entry in program["setup"]), parameters,
                                                           INDENT)]
-    lines += [f"for i in range({program['n_state'] * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
-    if program["uses_t"]:
-        time = work_rows(program).index("_t")
-        lines += ["for k in range(order + 1):", f"{INDENT}W[{time}, k] = 0.0", f"W[{time}, 0] = t",
-                  "if order > 0:", f"{INDENT}W[{time}, 1] = 1.0"]
-    return lines
+    lines += [f"for i in range({n_state}, {n_state * (1 + columns)}):", f"{INDENT}X[i, 0] = y[i]"]
+    return lines + [f"_status = {VALUES}(t, y, p, X, W)   # x's rows of X, the values' rows of W",
+                    "if _status != 0:", f"{INDENT}return _status"]
 
 
 def kernel_source(docstring: list[str], lines: list[str], columns: int, work: int) -> str:

@@ -55,6 +55,7 @@ the state → its tangent at order 0.  That is ∂f/∂p_j in the column's Ṡ, 
 
 from __future__ import annotations
 
+from lagcomp.codegen import taylor_kernel_frame as frame
 from lagcomp.codegen.taylor_jacobian import jacobian_products, jacobian_source
 from lagcomp.codegen.taylor_kernel_frame import (
     INDENT,
@@ -69,7 +70,6 @@ from lagcomp.codegen.taylor_ops import (
     LINEAR,
     Op,
     support_import_lines,
-    value_lines,
 )
 
 
@@ -314,8 +314,7 @@ def forward_source(program: dict, columns: int, parameters: tuple[int, ...] = ()
                 tangent = writer.constants.tangent(name, j)
                 if tangent is not None:
                     lines.append(f"T[_g{i} + {column}] = {tangent}")
-    lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
-    lines += [INDENT + line for op in ops for line in value_lines(op, writer.at)]
+    lines += ["for k in range(order):", f"{INDENT}_ik1 = 1.0/(k + 1)"]
     looped = writer.looped
     lines += [f"{INDENT}# The tangents of order k, {writer.columns} columns at a time.",
               *[f"{INDENT}for _b in range(0, {padded}, {writer.columns}):"] * looped]
@@ -353,10 +352,12 @@ def variational_source(program: dict, columns: int, parameters: tuple[int, ...] 
 
 
 def variational_module(module_source: str, program: dict, columns: int, parameters: tuple[int, ...] = (),
-                       scale: float = 1.0) -> str:
-    """The model's eager module (whole, so that the new module stands on its own for numba's cache), what the
-    variational kernel calls from `lagcomp.kernel_support`, and the kernel (`variational_source`)."""
+                       scale: float = 1.0, values_module: str | None = None) -> str:
+    """The model's eager module (whole: the kernel uses its imports), what the variational kernel calls from
+    `lagcomp.kernel_support`, ``taylor_coefficients`` from `values_module` (the import name of the model's module
+    of the kind "taylor"; None when `module_source` defines it), and the kernel (`variational_source`)."""
+    values = "" if values_module is None else f"from {values_module} import {frame.VALUES}  # noqa: E402\n"
     return (module_source.rstrip("\n") + f"\n\n\n# {'-' * 76}\n# The Taylor program differentiated in forward mode"
             f", {columns} columns (lagcomp.codegen.taylor_variational)\n\n"
-            + support_import_lines(program, lanes=False)
+            + values + support_import_lines(program, lanes=False)
             + variational_source(program, columns, parameters, scale))
