@@ -35,8 +35,8 @@ coefficients in W with the columns adjacent (as forward mode's tangents), so tha
 convolution in the pass's columns one vector; the parameters' terms ∂f/∂p[k] come in as F.
 
 `jacobian_source` writes the kernel, with the signature, the layout of X and the constants of
-`lagcomp.codegen.taylor_variational.forward_source`'s; the values are written by the same code as
-``taylor_coefficients`` (the state rows of X are bitwise its), the columns' rows agree with the forward mode's
+`lagcomp.codegen.taylor_variational.forward_source`'s; the values are ``taylor_coefficients``'s, called
+first (the state rows of X are its), the columns' rows agree with the forward mode's
 to rounding.  `jacobian_products` counts its products per order (the convolutions' terms), which
 `lagcomp.codegen.taylor_variational.variational_source` weighs against the forward mode's to pick one.  The
 double pendulum: 19 (J's series) + 8 per column, + 19 for ∂f/∂p's five columns (23 when a sum of series was

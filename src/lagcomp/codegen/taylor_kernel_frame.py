@@ -4,8 +4,8 @@
 Both write the same kernel around a body of their own: the columns of one pass (`block_width` and its
 limits), the rows of W (`work_rows`), the tangents of the program's scalars (`ScalarTangents`), the
 statements before the order loop (`setup_lines`) and the function around the body with its constants
-(`kernel_source`); a value's coefficient k is `lagcomp.codegen.taylor_ops.value_lines`, the code of
-``taylor_coefficients``, so that the state rows of X are bitwise its.
+(`kernel_source`, which refuses a body too large for numba: `check_size`); the values' coefficients, every
+order, are the model's ``taylor_coefficients`` called before the tangents' loop (`VALUES`).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from lagcomp.codegen.taylor_ops import (
     partial_name,
     setup_statements,
 )
+from lagcomp.errors import OptionError
 
 INDENT = "    "
 KERNEL = "taylor_variational_coefficients"
@@ -27,6 +28,10 @@ VALUES = "taylor_coefficients"
 UNROLLED_COLUMNS = 9
 #: Columns of one pass of the loop over blocks: an AVX2 vector of float64.
 BLOCK = 4
+#: Most lines of a kernel's body (`check_size`): the tangents are one function (the values' coefficients are the
+#: model's ``taylor_coefficients``, split in chunks when large), whose numba compile takes (CPU, cold) 2.8 s at 186
+#: lines (the double pendulum, 4 columns), 6.3 s at 359 (9 columns), MEASURE.
+KERNEL_LINES_MAX = 4000
 #: Most columns × operations written out in one pass (`block_width`): numba's compile time grows faster than
 #: the code (n_link_pendulum(5), 261 operations, 10 columns in one pass: 12 minutes).
 COLUMN_OPERATIONS_MAX = 600
@@ -89,7 +94,9 @@ def setup_lines(program: dict, columns: int, parameters: tuple[int, ...]) -> lis
 
 def kernel_source(docstring: list[str], lines: list[str], columns: int, work: int) -> str:
     """The kernel ``taylor_variational_coefficients`` of the body `lines` (and its `docstring`'s lines), then
-    ``VARIATIONAL_COLUMNS`` (`columns`) and ``VARIATIONAL_WORK`` (`work`, the rows of W)."""
+    ``VARIATIONAL_COLUMNS`` (`columns`) and ``VARIATIONAL_WORK`` (`work`, the rows of W); an OptionError for a
+    body of more than `KERNEL_LINES_MAX` lines (`check_size`)."""
+    check_size(len(lines), columns)
     docstring = [f'"""{docstring[0]}', *docstring[1:-1], f'{docstring[-1]}"""']
     body = "\n".join(INDENT + line if line else "" for line in [*docstring, *lines])
     return (
@@ -99,3 +106,14 @@ def kernel_source(docstring: list[str], lines: list[str], columns: int, work: in
         f"#: The sensitivity columns of `{KERNEL}`, and the rows of its work array W.\n"
         f"VARIATIONAL_COLUMNS = {columns}\nVARIATIONAL_WORK = {work}\n"
     )
+
+
+def check_size(lines: int, columns: int) -> None:
+    """Refuse a kernel body of more than `KERNEL_LINES_MAX` `lines` (for `columns` columns): an OptionError naming
+    the kernel, its size and what to do instead, before numba spends hours on it."""
+    if lines > KERNEL_LINES_MAX:
+        raise OptionError(
+            f"Sensitivities with method='taylor': the kernel `{KERNEL}` for {columns} sensitivity columns would be "
+            f"{lines} lines of code, more than the {KERNEL_LINES_MAX} numba compiles in a few minutes (its compile "
+            "time grows faster than the code: a large program or many columns would take hours).  Use "
+            "method='dop853' (its sensitivities use the model's Jacobian kernels), or ask for fewer sensitivities.")

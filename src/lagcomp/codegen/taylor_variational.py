@@ -20,7 +20,8 @@ tangents, from the derivative of the function (an identity between series, so ex
 
 and the state's operation y[k+1] = f[k]/(k+1) gives Ṡ[k+1] = ḟ[k]/(k+1), ḟ = J S: the coefficients of the
 variational equations' solution S' = J S, with no Jacobian formed.  The tangents of order k need the values of
-order ≤ k (w[k] itself for a quotient): each order computes the values first, then the tangents.
+order ≤ k (w[k] itself for a quotient): the kernel computes the values of every order first, then the
+tangents order by order.
 Values that depend on the parameters only (the setup's scalars) and time have no tangent; a series computed from
 those alone has none either (`varying`).
 
@@ -34,8 +35,12 @@ of one pass (`block_width`: all of them up to 9) are written out, so each convol
 chains in one loop over j, and with the columns adjacent LLVM makes those chains one vector: the double
 pendulum's kernel at k = 4 (per call, order 13 / 20) took 5.2 / 10.7 µs with a loop over the columns inside,
 3.1 / 6.1 µs so (the plain kernel: 0.9 / 1.7 µs).  More columns, or a large program, take a loop over blocks
-of columns, whose code numba compiles in bounded time.  The values are written by the same code as
-``taylor_coefficients`` (`taylor_ops`), so the state rows of X are bitwise ``taylor_coefficients``'s.
+of columns, whose code numba compiles in bounded time.  The values are the model's ``taylor_coefficients``
+itself, called before the tangents' loop (`lagcomp.codegen.taylor_kernel_frame.VALUES`): the state rows of X are
+its, and numba compiles the values once per model, not in every kernel of every choice of columns (the double
+pendulum's kernel for 4 columns took 4.3 s of CPU to compile with the values written out in it, 2.8 s with the
+call; `bench.bench_kernel_compile`).  A kernel so large that numba would take hours is refused
+(`lagcomp.codegen.taylor_kernel_frame.check_size`).
 `lagcomp.integrate.taylor_sensitivities` appends the kernel to the model's module and compiles it once per
 model and choice of columns (cached on disk like any module).
 
