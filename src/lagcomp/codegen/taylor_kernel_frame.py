@@ -29,8 +29,10 @@ UNROLLED_COLUMNS = 9
 #: Columns of one pass of the loop over blocks: an AVX2 vector of float64.
 BLOCK = 4
 #: Most lines of a kernel's body (`check_size`): the tangents are one function (the values' coefficients are the
-#: model's ``taylor_coefficients``, split in chunks when large), whose numba compile takes (CPU, cold) 2.8 s at 186
-#: lines (the double pendulum, 4 columns), 6.3 s at 359 (9 columns), MEASURE.
+#: model's ``taylor_coefficients``, split in chunks when large), whose numba compile took (CPU, cold,
+#: `bench.bench_kernel_compile`) 2.6 s at 208 lines (the double pendulum, 4 columns), 5.1 s at 381 (9 columns with
+#: the parameters): growing faster than the lines (one function's, as size² in `lagcomp.codegen.taylor_split`), so
+#: that 4000 lines, extrapolated, take minutes to a quarter of an hour; a 6-link planar chain's 12 columns are 6,200.
 KERNEL_LINES_MAX = 4000
 #: Most columns × operations written out in one pass (`block_width`): numba's compile time grows faster than
 #: the code (n_link_pendulum(5), 261 operations, 10 columns in one pass: 12 minutes).
