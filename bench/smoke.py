@@ -37,6 +37,7 @@ SCRIPTS = {
     "bench_inputs": ["--t-end", "0.5", "--repeats", "1"],
     "bench_large": ["--n", "3", "--repeats", "1"],
     "bench_jacobian_compile": ["planar_2", "--calls", "100"],
+    "bench_kernel_compile": ["double_pendulum", "--kernels", "rhs_jacobian", "variational"],
     "bench_loop": ["--rounds", "1"],
     "bench_lyapunov": ["--repeats", "1"],
     "bench_mass_matrix_compile": ["planar_4"],

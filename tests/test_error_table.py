@@ -155,6 +155,16 @@ def _fail(name, **options):
     return _simulate(name, throw=True, progress=False, **options)
 
 
+def _large_taylor_sensitivities(tmp_path):
+    """Every state's sensitivity of a 6-link planar chain with method="taylor": a variational kernel of 12 columns
+    over a program of 510 operations, which `lagcomp.codegen.taylor_kernel_frame.check_size` refuses."""
+    from lagcomp.examples.trees import planar_chain
+
+    model = lc.compile(planar_chain(6), cache_dir=tmp_path, progress=False)
+    return model.simulate((0.0, 0.1), [0.1] * model.n, [0.0] * model.n, params=dict.fromkeys(model.parameters, 1.0),
+                          method="taylor", sensitivities=("q0", "qd0"), progress=False)
+
+
 def _cache_case(kind):
     def provoke(models, tmp_path):
         system = oscillator(name="table_cached")
@@ -535,6 +545,7 @@ CASES = {
     "radau-constrained-options": (_simulate("rod", method="radau", projection=True), "without projection"),
     "radau-dae-tolerance": (_simulate("rod", method="radau", rtol=1e-12), "rtol = 1e-12 asked"),
     "sensitivities-method": (_simulate("pendulum", method="rk4", dt=0.1, sensitivities="q0"), "`rk4`"),
+    "taylor-sensitivities-too-large": (_large_taylor_sensitivities, "`taylor_variational_coefficients` for 12"),
     "sensitivities-with-events": (_simulate("signalled", inputs={"s": 0.5}, sensitivities="q0"), "['past']"),
     "sensitivities-function-input": (_simulate("pushed", inputs={"f": numba.njit(lambda t, y, p: 0.0)},
                                                sensitivities="q0"), "numba functions"),

@@ -20,6 +20,7 @@ from lagcomp.cache import Cache, load_module, source_key
 from lagcomp.codegen import taylor_kernel_frame
 from lagcomp.codegen.taylor_jacobian import jacobian_source
 from lagcomp.codegen.taylor_variational import forward_source
+from lagcomp.integrate.taylor_sensitivities import values_import
 
 ORDER = 10
 X0, V0, K, C = 0.7, -0.4, 2.1, 1.3
@@ -52,7 +53,8 @@ def _coefficients(model, source_of, program=None) -> np.ndarray:
     """X of `source_of`'s kernel (4 columns: x₀, v₀, then the parameters k and c) at the series' start, for
     `program` (the model's by default)."""
     program = model._taylor_program if program is None else program
-    source = model.source_path.read_text(encoding="utf-8") + source_of(program, 4, (0, 1), 1.0)
+    source = (model.source_path.read_text(encoding="utf-8") + f"from {values_import(model)} import taylor_coefficients\n"
+              + source_of(program, 4, (0, 1), 1.0))
     entry = Cache(str(model.source_path.parent.parent)).store(f"variational-{source_key(source)}", source,
                                                               model.name, {})
     module = load_module(entry)

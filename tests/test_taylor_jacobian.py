@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 from lagcomp.cache import Cache, load_module, source_key
 from lagcomp.codegen.taylor_jacobian import jacobian_products, jacobian_source
 from lagcomp.codegen.taylor_variational import forward_products, forward_source, variational_source
+from lagcomp.integrate.taylor_sensitivities import values_import
 from tests.test_taylor_sensitivities import zoo  # noqa: F401  (the fixture: every operation, time, parameters)
 
 ORDER = 16
@@ -23,7 +24,8 @@ ORDER = 16
 
 def _kernel(model, source_of, k: int, parameters: tuple[int, ...]):
     """``taylor_variational_coefficients`` of `source_of` (forward_source or jacobian_source) for `model`."""
-    source = model.source_path.read_text(encoding="utf-8") + source_of(model._taylor_program, k, parameters, 1.0)
+    source = (model.source_path.read_text(encoding="utf-8") + f"from {values_import(model)} import taylor_coefficients\n"
+              + source_of(model._taylor_program, k, parameters, 1.0))
     entry = Cache(str(model.source_path.parent.parent)).store(f"variational-{source_key(source)}", source,
                                                               model.name, {})
     module = load_module(entry)

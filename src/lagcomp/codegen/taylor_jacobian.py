@@ -35,8 +35,8 @@ coefficients in W with the columns adjacent (as forward mode's tangents), so tha
 convolution in the pass's columns one vector; the parameters' terms ∂f/∂p[k] come in as F.
 
 `jacobian_source` writes the kernel, with the signature, the layout of X and the constants of
-`lagcomp.codegen.taylor_variational.forward_source`'s; the values are written by the same code as
-``taylor_coefficients`` (the state rows of X are bitwise its), the columns' rows agree with the forward mode's
+`lagcomp.codegen.taylor_variational.forward_source`'s; the values are ``taylor_coefficients``'s, called
+first (the state rows of X are its), the columns' rows agree with the forward mode's
 to rounding.  `jacobian_products` counts its products per order (the convolutions' terms), which
 `lagcomp.codegen.taylor_variational.variational_source` weighs against the forward mode's to pick one.  The
 double pendulum: 19 (J's series) + 8 per column, + 19 for ∂f/∂p's five columns (23 when a sum of series was
@@ -61,7 +61,7 @@ from lagcomp.codegen.taylor_kernel_frame import (
     setup_lines,
     work_rows,
 )
-from lagcomp.codegen.taylor_ops import LINEAR, Op, value_lines
+from lagcomp.codegen.taylor_ops import LINEAR, Op
 
 #: A term of a tangent: (factor (code), kind ("one", "value" or "slot"), series (a value's name, a slot's index)).
 Term = tuple[str, str, str]
@@ -430,29 +430,38 @@ def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padde
 
     The positions in S are integers computed once per pass (``_pk``, ``_pk1``) or per j (``_pj``) and added to
     the rows' offsets ``_sr{i}`` (`_row_offsets`): numba types and lowers every operation of the source, and a
-    position written out per access (seven operations) was most of the update's code."""
+    position written out per access (seven operations) was most of the update's code.  In a pass of several
+    columns, the rows' positions (``_o{i}``, ``_q{i}``) and J's factors (`_Shared`) are locals too, set once for
+    the pass's columns (the double pendulum, numba's compile CPU, `bench.bench_kernel_compile`: k = 4, 3.1 → 2.6 s;
+    k = 9 with the parameters, 6.4 → 5.1 s)."""
     kernel = sweeps.kernel
     positions = {"k": "_pk", "k + 1": "_pk1", "k - _j": "_pj"}
 
+    rows = {"k": "_o", "k - _j": "_q"} if width > 1 else {}    # S_i's coefficient k, k − j: locals of the pass
+
     def s(i, index, c):     # coefficient `index` of S_i in column _b + c
+        if i and index in rows:
+            return f"_S[{rows[index]}{i}" + f" + {c}" * bool(c) + "]"
         return "_S[" + " + ".join([f"_sr{i}"] * bool(i) + [positions[index]] + [str(c)] * bool(c)) + "]"
 
     def block(offset):      # the code of the position `offset` + _b (in a loop over blocks)
         return f"_b + {offset}" if looped else str(offset)
     init = [f"_pk = k*{padded} + _b" if looped else f"_pk = k*{padded}", f"_pk1 = _pk + {padded}",
-            "_kn = k + 1"]
-    loop, stores = [f"{INDENT}_pj = _pk - _j*{padded}"], []
+            "_kn = k + 1", *(f"_o{i} = _sr{i} + _pk" for i in range(1, n_state) if rows)]
+    loop = [f"{INDENT}_pj = _pk - _j*{padded}", *(f"{INDENT}_q{i} = _sr{i} + _pj" for i in range(1, n_state) if rows)]
+    stores = []
     entries = sweeps.entries(n_state)
+    start, step = _Shared(init, "_e", width), _Shared(loop, "_w", width, INDENT)
     for i in range(n_state):
         ones = [(factor, j) for row, j, (factor, kind, _) in entries if row == i and kind == "one"]
         series = [(factor, j, kernel.at if kind == "value" else kernel.slot, name)
                   for row, j, (factor, kind, name) in entries if row == i and kind != "one"]
+        firsts = [(start(_scaled(f, read(name, 0))), j) for f, j, read, name in series]
+        terms = [(step(_scaled(f, read(name, "_j"))), j) for f, j, read, name in series]
         for c in range(width):
             if series:
-                init.append(f"_a{i}_{c} = " + " + ".join(f"{_scaled(f, read(name, 0))}*{s(j, 'k', c)}"
-                                                         for f, j, read, name in series))
-                loop.append(f"{INDENT}_a{i}_{c} += " + " + ".join(f"{_scaled(f, read(name, '_j'))}*{s(j, 'k - _j', c)}"
-                                                                  for f, j, read, name in series))
+                init.append(f"_a{i}_{c} = " + " + ".join(f"{first}*{s(j, 'k', c)}" for first, j in firsts))
+                loop.append(f"{INDENT}_a{i}_{c} += " + " + ".join(f"{term}*{s(j, 'k - _j', c)}" for term, j in terms))
             total = [f"_a{i}_{c}"] * bool(series) + [_scaled(f, s(j, "k", c)) for f, j in ones]
             total += [f"_F[{block(i * padded + c)}]"] * (i in forced)
             stores.append(f"_v = ({' + '.join(total)})*_ik1" if total else "_v = 0.0")
@@ -460,8 +469,29 @@ def _update_lines(sweeps: _Sweeps, n_state: int, columns: int, width: int, padde
             row = n_state * (c + 1) + i        # X's row of S_i in column _b + c: N (_b + c + 1) + i
             store = f"X[{n_state}*_b + {row}, _kn] = _v" if looped else f"X[{row}, _kn] = _v"
             stores += [store] if padded == columns else [f"if _b + {c} < {columns}:", INDENT + store]
-    loop = ["for _j in range(1, k + 1):", *loop] if len(loop) > 1 else []
+    loop = ["for _j in range(1, k + 1):", *loop] if any(row[-1][1] != "one" for row in entries) else []
     return [*init, *loop, *stores]
+
+
+class _Shared:
+    """The factors of J's entries that every column of a pass multiplies (``-_k20*_c3*W[60, _j]``), each a local
+    set once before the pass's uses (``_w3 = ...``, appended to `lines`) when the pass has more than one column:
+    numba types and lowers every operation of the source, and those factors written out in every column were a
+    third of the update's.  The product is the same, term for term (``a*b*c*S`` is ``((a*b)*c)*S``: the local
+    holds ``(a*b)*c``), so the columns' sums are bitwise those of the factors written out."""
+
+    def __init__(self, lines: list[str], prefix: str, width: int, indent: str = ""):
+        self.lines, self.prefix, self.width, self.indent = lines, prefix, width, indent
+        self.names: dict[str, str] = {}
+
+    def __call__(self, code: str) -> str:
+        """The name of the local holding `code` (set on first use), or `code` itself in a pass of one column."""
+        if self.width == 1:
+            return code
+        if code not in self.names:
+            self.names[code] = f"{self.prefix}{len(self.names)}"
+            self.lines.append(f"{self.indent}{self.names[code]} = {code}")
+        return self.names[code]
 
 
 def _row_offsets(n_state: int, padded: int) -> list[str]:
@@ -498,8 +528,7 @@ def jacobian_source(program: dict, columns: int, parameters: tuple[int, ...] = (
     lines += [f"{INDENT}_S[{i}*(order + 1)*{padded} + _c] = y[{n_state}*(_c + 1) + {i}] if _c < {columns} else 0.0"
               for i in range(n_state)]
     lines += _row_offsets(n_state, padded)
-    lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
-    lines += [INDENT + line for op in program_ops(program) for line in value_lines(op, kernel.at)]
+    lines += ["for k in range(order):", f"{INDENT}_ik1 = 1.0/(k + 1)"]
     lines += [f"{INDENT}# The series of J's entries and of ∂f/∂p, order k"] + [INDENT + line for line in sweeps.lines]
     for position, sweep in enumerate(sweeps.parameters):
         column = columns - len(parameters) + position

@@ -20,7 +20,8 @@ tangents, from the derivative of the function (an identity between series, so ex
 
 and the state's operation y[k+1] = f[k]/(k+1) gives Ṡ[k+1] = ḟ[k]/(k+1), ḟ = J S: the coefficients of the
 variational equations' solution S' = J S, with no Jacobian formed.  The tangents of order k need the values of
-order ≤ k (w[k] itself for a quotient): each order computes the values first, then the tangents.
+order ≤ k (w[k] itself for a quotient): the kernel computes the values of every order first, then the
+tangents order by order.
 Values that depend on the parameters only (the setup's scalars) and time have no tangent; a series computed from
 those alone has none either (`varying`).
 
@@ -34,8 +35,12 @@ of one pass (`block_width`: all of them up to 9) are written out, so each convol
 chains in one loop over j, and with the columns adjacent LLVM makes those chains one vector: the double
 pendulum's kernel at k = 4 (per call, order 13 / 20) took 5.2 / 10.7 µs with a loop over the columns inside,
 3.1 / 6.1 µs so (the plain kernel: 0.9 / 1.7 µs).  More columns, or a large program, take a loop over blocks
-of columns, whose code numba compiles in bounded time.  The values are written by the same code as
-``taylor_coefficients`` (`taylor_ops`), so the state rows of X are bitwise ``taylor_coefficients``'s.
+of columns, whose code numba compiles in bounded time.  The values are the model's ``taylor_coefficients``
+itself, called before the tangents' loop (`lagcomp.codegen.taylor_kernel_frame.VALUES`): the state rows of X are
+its, and numba compiles the values once per model, not in every kernel of every choice of columns (the double
+pendulum's kernel for 4 columns took 4.3 s of CPU to compile with the values written out in it, 2.8 s with the
+call; `bench.bench_kernel_compile`).  A kernel so large that numba would take hours is refused
+(`lagcomp.codegen.taylor_kernel_frame.check_size`).
 `lagcomp.integrate.taylor_sensitivities` appends the kernel to the model's module and compiles it once per
 model and choice of columns (cached on disk like any module).
 
@@ -55,6 +60,7 @@ the state → its tangent at order 0.  That is ∂f/∂p_j in the column's Ṡ, 
 
 from __future__ import annotations
 
+from lagcomp.codegen import taylor_kernel_frame as frame
 from lagcomp.codegen.taylor_jacobian import jacobian_products, jacobian_source
 from lagcomp.codegen.taylor_kernel_frame import (
     INDENT,
@@ -69,7 +75,6 @@ from lagcomp.codegen.taylor_ops import (
     LINEAR,
     Op,
     support_import_lines,
-    value_lines,
 )
 
 
@@ -314,8 +319,7 @@ def forward_source(program: dict, columns: int, parameters: tuple[int, ...] = ()
                 tangent = writer.constants.tangent(name, j)
                 if tangent is not None:
                     lines.append(f"T[_g{i} + {column}] = {tangent}")
-    lines += ["for k in range(order):", f"{INDENT}_ik = 1.0/k if k > 0 else 0.0", f"{INDENT}_ik1 = 1.0/(k + 1)"]
-    lines += [INDENT + line for op in ops for line in value_lines(op, writer.at)]
+    lines += ["for k in range(order):", f"{INDENT}_ik1 = 1.0/(k + 1)"]
     looped = writer.looped
     lines += [f"{INDENT}# The tangents of order k, {writer.columns} columns at a time.",
               *[f"{INDENT}for _b in range(0, {padded}, {writer.columns}):"] * looped]
@@ -353,10 +357,12 @@ def variational_source(program: dict, columns: int, parameters: tuple[int, ...] 
 
 
 def variational_module(module_source: str, program: dict, columns: int, parameters: tuple[int, ...] = (),
-                       scale: float = 1.0) -> str:
-    """The model's eager module (whole, so that the new module stands on its own for numba's cache), what the
-    variational kernel calls from `lagcomp.kernel_support`, and the kernel (`variational_source`)."""
+                       scale: float = 1.0, values_module: str | None = None) -> str:
+    """The model's eager module (whole: the kernel uses its imports), what the variational kernel calls from
+    `lagcomp.kernel_support`, ``taylor_coefficients`` from `values_module` (the import name of the model's module
+    of the kind "taylor"; None when `module_source` defines it), and the kernel (`variational_source`)."""
+    values = "" if values_module is None else f"from {values_module} import {frame.VALUES}  # noqa: E402\n"
     return (module_source.rstrip("\n") + f"\n\n\n# {'-' * 76}\n# The Taylor program differentiated in forward mode"
             f", {columns} columns (lagcomp.codegen.taylor_variational)\n\n"
-            + support_import_lines(program, lanes=False)
+            + values + support_import_lines(program, lanes=False)
             + variational_source(program, columns, parameters, scale))

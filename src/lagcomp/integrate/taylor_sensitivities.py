@@ -51,11 +51,24 @@ def variational_module(model, k: int, parameters: tuple[int, ...], scale: float)
         key = (model.kernels, k, parameters, scale)
         if key not in _MODULES:
             source = source_of(model.source_path.read_text(encoding="utf-8"), model._taylor_program, k, parameters,
-                               scale)
+                               scale, values_import(model))
             cache = Cache(str(model.source_path.parent.parent))
             entry = cache.store(f"variational-{source_key(source)}", source, model.name, {})
             _MODULES[key] = load_module(entry)
         return _MODULES[key]
+
+
+def values_import(model) -> str | None:
+    """The name the variational kernel imports ``taylor_coefficients`` by (its values' coefficients: one numba
+    compile per model, not per choice of columns), the module loaded first (`lagcomp.cache.load_module` registers
+    it under that name, content-addressed: a module of another program has another name, so the variational
+    module's text, hence its cache entry, changes with it); None for a model whose one module holds every kernel
+    (a Kane model's: the variational module copies it, ``taylor_coefficients`` included)."""
+    entry = model.on_demand_entry("taylor")
+    if entry is None:
+        return None
+    model.kernels.companion.module("taylor")
+    return entry.import_name
 
 
 class TaylorSensitivityKernels:
