@@ -467,19 +467,21 @@ def _lanes_kernel_source(kernel: Kernel) -> list[str]:
     return _docstring(kernel.doc).splitlines() + ["for _l in range(Y.shape[1]):"] + [INDENT + x for x in inner]
 
 
-def _helper_source(helper: Helper) -> str:
+def _helper_source(helper: Helper, lanes: bool = False) -> str:
     """A `lagcomp.ir.Helper` as a function numba compiles once, which LLVM inlines at each call if it is `inline`
-    (`lagcomp.codegen.outline`)."""
+    (`lagcomp.codegen.outline`); a helper of a `Kernel.lanes` kernel (`lanes`) calls ``vsin``/``vcos``, as its
+    kernel does, so that the loop over lanes it is inlined into holds no call."""
     lines = ["", "", f'@njit(cache=True, error_model="numpy", forceinline={helper.inline})',
              f"def {helper.name}({', '.join(helper.args)}):"]
-    lines += [f"{INDENT}{name} = {to_code(expr)}" for name, expr in helper.temps]
+    lines += [f"{INDENT}{name} = {to_code(expr, lanes=lanes)}" for name, expr in helper.temps]
     lines.append(f"{INDENT}return {', '.join(helper.returns)}{',' if len(helper.returns) == 1 else ''}")
     return "\n".join(lines) + "\n"
 
 
 def _kernel_source(kernel: Kernel) -> str:
     if kernel.helpers:
-        return "".join(map(_helper_source, kernel.helpers)) + _kernel_source(replace(kernel, helpers=()))
+        return ("".join(_helper_source(helper, kernel.lanes) for helper in kernel.helpers)
+                + _kernel_source(replace(kernel, helpers=())))
     if kernel.alias:
         comment = "".join(f"\n# {line}".rstrip() for line in kernel.doc.splitlines())
         return f"\n{comment}\n{kernel.name} = {kernel.alias}\n"

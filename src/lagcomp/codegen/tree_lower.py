@@ -19,7 +19,7 @@ from lagcomp.codegen.outline import outline
 from lagcomp.codegen.tree_constraints import gain_loads, loop_kernels
 from lagcomp.codegen.tree_contacts import TreeContacts
 from lagcomp.codegen.tree_events import event_functions, tree_event_kernels
-from lagcomp.codegen.tree_locals import tree_locals
+from lagcomp.codegen.tree_locals import TreeLocals, tree_locals
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
 from lagcomp.model.friction import Friction
 from lagcomp.multibody.aba import accelerations
@@ -56,10 +56,7 @@ def lower_tree(tree: Tree) -> ModuleIR:
         loads += gain_loads(tree)
         dynamics = loop_kernels(tree, nodes, gravity, mapping, kernel)
     else:
-        dynamics = (kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), q̈ by the articulated-body "
-                         "algorithm.\n\nReturns 0.", ARGS,
-                         lambda prog: [(f"out[{i}]", f) for i, f in enumerate(motion(prog, nodes, qd, gravity))],
-                         ReturnZero()),)
+        dynamics = (open_rhs(local),)
     contacts = None
     if tree.contacts or any(isinstance(e, Friction) for e in tree.events):
         # the contacts' and friction elements' modes: rhs is rhs_free corrected for the held rows (`tree_contacts`)
@@ -80,6 +77,17 @@ def lower_tree(tree: Tree) -> ModuleIR:
                     parameter_names=tree.parameter_names, kernels=kernels, formulation=FORMULATION,
                     constraint_names=tree.constraint_names, holonomic=(True,) * len(tree.constraint_names),
                     event_names=tree.event_names if tree.user_events else ())
+
+
+def open_rhs(local: TreeLocals, name: str = "rhs") -> Kernel:
+    """``rhs`` of a tree without loops: f = (q̇, q̈) into ``out[0:2n]``, q̈ by the articulated-body algorithm
+    (`motion`).  The eager module's, and under `name` the program of the lanes of batched sweeps
+    (`lagcomp.codegen.tree_lanes`), which are this kernel evaluated per lane: the same assignments in the same
+    order."""
+    prog = Program()
+    stores = [(f"out[{i}]", f) for i, f in enumerate(motion(prog, local.nodes, local.qd, local.gravity))]
+    return program_kernel(name, "State derivative dy/dt = (q̇, q̈), shape (2n,), q̈ by the articulated-body "
+                          "algorithm.\n\nReturns 0.", ARGS, prog, stores, local.loads, ReturnZero())
 
 
 def motion(prog: Program, nodes, qd, gravity) -> list:

@@ -415,9 +415,12 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if batched:
         resetting = [e.name for e, action in zip(model.events, actions.tolist(), strict=True) if action >= ACTION_RESET]
         if resetting:
+            charts = set(getattr(getattr(model, "system", None), "chart_events", ())) & set(resetting)
             raise OptionError(f"Event(s) {resetting} reset the state, which a batched sweep's lanes cannot do yet: "
                               "drop `batched` (each trajectory then runs with its own resets), or leave the events "
-                              "out (`events=False`).")
+                              "out (`events=False`" + (f": the ball joints' shadow switches {sorted(charts)} then "
+                              "stay off, which is right until a joint's rotation nears a full turn" if charts else "")
+                              + ").")
         driver = _batched_driver(model, m)
         if m.adaptive and (rows or want_events):
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "

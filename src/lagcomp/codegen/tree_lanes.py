@@ -1,0 +1,56 @@
+"""The lane kernel of a kinematic tree (`lagcomp.Tree`): ``rhs_lanes``, the articulated-body algorithm over a batch.
+
+A batched sweep (``Model.sweep(..., batched=True)``, `lagcomp.integrate.drivers.lanes`) evaluates the right-hand
+side of B trajectories in one call, laid out as structure of arrays (``Y[i, l]``: component i of lane l), in a loop
+over the lanes that LLVM vectorizes.  A System's lane kernel is its ``rhs`` with each lane reading its own column
+(`lagcomp.codegen.lower`); a tree's is the same: the eager ``rhs`` of a tree without loops
+(`lagcomp.codegen.tree_lower.open_rhs`: the articulated-body recursion, its repeated steps as inlined helpers),
+assignment for assignment, with
+
+* a local bound to ``y[i]`` reading ``Y[i, _l]``, one bound to ``p[k]`` reading ``P[k, _l]``, ``t`` reading
+  ``T[_l]``, and f_i stored into ``out[i, _l]``;
+* ``sin`` and ``cos`` printed as ``vsin`` and ``vcos`` (`lagcomp.kernel_support.trig`), in the kernel and in its
+  helpers: the scalar kernels' polynomials without their branch to libm, so that the loop holds no call.
+
+No fastmath in either kernel, so LLVM's vector code rounds as the scalar code does: each lane computes the scalar
+``rhs``'s bits (for |x| < 10⁵ in every sin and cos, where the scalar ``sin`` takes the polynomial too), and a batched
+sweep gives bitwise the unbatched sweep's trajectories.  ``bad`` is never set: the recursion factors no mass matrix
+(its articulated inertias are inverted joint by joint, as in ``rhs``, which returns 0 always).
+
+A tree whose motion is not that one ``rhs`` has no lane kernel: closed loops (an augmented solve per lane,
+`lagcomp.codegen.tree_constraints`), contacts and friction elements (their modes switch per lane,
+`lagcomp.codegen.tree_contacts`).  Asking for it raises a ModelError that names them
+(`lagcomp.multibody.tree.Tree.lanes_refusal`), before any lowering.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import sympy as sp
+
+from lagcomp.codegen.tree_locals import TreeLocals
+from lagcomp.codegen.tree_lower import open_rhs
+from lagcomp.ir import Kernel
+from lagcomp.multibody.tree import Tree
+
+#: The arguments of ``rhs_lanes``, as a System's (`lagcomp.integrate.drivers.kernel_types.RHS_LANES`).
+ARGS = ("T", "Y", "P", "out", "bad")
+
+
+def tree_lanes_kernels(tree: Tree, local: TreeLocals) -> tuple[Kernel, ...]:
+    """``rhs_lanes`` of `tree` (module docstring), a tree without loops, contacts or friction elements: the companion
+    refuses the others before lowering (`lagcomp.multibody.tree.Tree.lanes_refusal`)."""
+    rhs = open_rhs(local, name="rhs_lanes")
+    n = local.n
+    columns = {s.name: f"Y[{i}, _l]" for i, s in enumerate((*local.q, *local.qd))}
+    columns.update({s.name: f"P[{k}, _l]" for k, s in enumerate(local.p)})
+    uses_t = any(sp.Symbol("t", real=True) in e.free_symbols for _, e in rhs.temps + rhs.stores)
+    stores = tuple((f"out[{i}, _l]", expr) for i, (_, expr) in enumerate(rhs.stores))   # (f_i into out[i]: `open_rhs`)
+    return (replace(
+        rhs, args=ARGS, lanes=True, solve=None, stores=stores,
+        doc="dy/dt of `rhs` for every lane l: T (B,) times, Y (2n, B) states, P (n_p, B) parameters,\n"
+            f"out (2n, B), n = {n}: the articulated-body algorithm per lane, as `rhs` computes it (bitwise);\n"
+            "bad is never set (no mass matrix is factored).",
+        loads=(("t", "T[_l]"),) * uses_t + tuple((name, columns[name]) for name, _ in rhs.loads),
+    ),)
