@@ -131,8 +131,9 @@ def test_a_ball_chain_sweep_names_its_shadow_switches(ball_chain):
 
 
 def test_a_tree_with_a_loop_has_no_lanes_and_says_why(cache_dir):
-    """A closed loop moves by an augmented solve, not by the articulated-body rhs: the lanes are refused naming it.
-    Two rods hinged about z at (0, 0) and (1, 0), their ends held at one x (a one-degree-of-freedom mechanism)."""
+    """A closed loop moves by an augmented solve, not by the articulated-body rhs: the tree's kind "lanes" is empty (so
+    `Model.operations` and ``lagcomp precompile --all`` build it as any kind) and a batched sweep names the loop.  Two
+    rods hinged about z at (0, 0) and (1, 0), their ends held at one x (a one-degree-of-freedom mechanism)."""
     m, l = sp.symbols("m l", positive=True)
     rod = {"mass": m, "com": (l / 2, 0, 0), "inertia": (0, m * l**2 / 12, m * l**2 / 12)}
     tree = lc.Tree([lc.Link("left", lc.Revolute("q1"), **rod), lc.Link("right", lc.Revolute("q2", origin=(1, 0, 0)),
@@ -140,6 +141,7 @@ def test_a_tree_with_a_loop_has_no_lanes_and_says_why(cache_dir):
                    name="lanes_loop", defaults={"m": 1.0, "l": 1.0},
                    loops=[lc.Loop("pin", ("left", (l, 0, 0)), ("right", (l, 0, 0)), directions="x")])
     model = lc.compile(tree, cache_dir=cache_dir)
+    assert model.on_demand_entry("lanes").path.exists() and not hasattr(model.kernels, "rhs_lanes")   # (empty kind)
     with pytest.raises(lc.ModelError, match=r"`rhs_lanes`.*'lanes_loop'.*closed loops \['pin'\].*`batched`"):
         model.sweep((0.0, 0.1), {"m": [1.0, 2.0]}, q0=[np.pi / 3, 2 * np.pi / 3], qd0=[0.0, 0.0], method="rk4",
                     dt=0.01, batched=True)

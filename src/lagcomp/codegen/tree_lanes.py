@@ -19,8 +19,8 @@ sweep gives bitwise the unbatched sweep's trajectories.  ``bad`` is never set: t
 
 A tree whose motion is not that one ``rhs`` has no lane kernel: closed loops (an augmented solve per lane,
 `lagcomp.codegen.tree_constraints`), contacts and friction elements (their modes switch per lane,
-`lagcomp.codegen.tree_contacts`).  Asking for it raises a ModelError that names them
-(`lagcomp.multibody.tree.Tree.lanes_refusal`), before any lowering.
+`lagcomp.codegen.tree_contacts`): its kind "lanes" is empty, as a constrained System's is, and its batched sweep
+raises a ModelError that names them (`lagcomp.multibody.tree.Tree.lanes_refusal`).
 """
 
 from __future__ import annotations
@@ -39,8 +39,10 @@ ARGS = ("T", "Y", "P", "out", "bad")
 
 
 def tree_lanes_kernels(tree: Tree, local: TreeLocals) -> tuple[Kernel, ...]:
-    """``rhs_lanes`` of `tree` (module docstring), a tree without loops, contacts or friction elements: the companion
-    refuses the others before lowering (`lagcomp.multibody.tree.Tree.lanes_refusal`)."""
+    """``rhs_lanes`` of `tree` (module docstring); none for a tree with loops, contacts or friction elements
+    (`lagcomp.multibody.tree.Tree.lanes_refusal`)."""
+    if tree.lanes_refusal() is not None:
+        return ()
     rhs = open_rhs(local, name="rhs_lanes")
     n = local.n
     columns = {s.name: f"Y[{i}, _l]" for i, s in enumerate((*local.q, *local.qd))}

@@ -210,11 +210,6 @@ class Tree:
         """Why a tree model has no `what` (an on-demand kernel and its feature, or an analysis that reads a System's
         T and V) yet; None when `what` is a kernel of the on-demand `kind` the tree path builds
         (`lagcomp.codegen.kinds.TREE_KINDS`: its recursions differentiated, `lagcomp.codegen.tree_companion`)."""
-        if kind == "lanes" and self.lanes_refusal() is not None:
-            return (f"{what} is not available for the kinematic tree {self.name!r} yet: its motion has "
-                    f"{self.lanes_refusal()}, which the lanes (the articulated-body rhs per lane) do not evaluate "
-                    f"({ISSUE}). Drop `batched`: each trajectory then runs on its own, with any method the tree "
-                    "takes.")
         if kind in TREE_KINDS:   # (with loops too: `lagcomp.codegen.tree_loop_companion`)
             return None
         return (f"{what} is not available for the kinematic tree {self.name!r} yet: the multibody path emits rhs, "
@@ -228,7 +223,8 @@ class Tree:
     def lanes_refusal(self) -> str | None:
         """What the tree's motion has besides its articulated-body ``rhs``, which the lanes of a batched sweep
         (``rhs_lanes``, `lagcomp.codegen.tree_lanes`) do not evaluate: closed loops (an augmented solve), contacts
-        and friction elements (modes that switch per trajectory); None when there is nothing."""
+        and friction elements (modes that switch per trajectory); None when there is nothing.  Such a tree's kind
+        "lanes" is empty (as a constrained System's), and its batched sweep says this (`lagcomp.integrate.sweep`)."""
         frictions = [e.name for e in self.user_events if isinstance(e, Friction)]
         reasons = [f"closed loops {[c.loop for c in self.closures]}"] * bool(self.closures)
         reasons += [f"contacts {[c.name for c in self.contacts]}"] * bool(self.contacts)
