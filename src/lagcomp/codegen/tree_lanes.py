@@ -10,6 +10,10 @@ assignment for assignment, with
 * a local bound to ``y[i]`` reading ``Y[i, _l]``, one bound to ``p[k]`` reading ``P[k, _l]``, ``t`` reading
   ``T[_l]``, and f_i stored into ``out[i, _l]``: past `PLAIN_ROWS` rows through a stack buffer of `LANE_CHUNK` lanes
   (`lagcomp.ir.LaneBuffer`), without which LLVM leaves the loop scalar (too many runtime alias checks);
+* the steps its links repeat written out where they occur, not called as helpers (`lagcomp.codegen.outline`), while
+  ``rhs`` inlines its helpers (below ``INLINE_LIMIT`` operations): with them LLVM left the loop of the 12-link planar
+  chain scalar (1.0x the scalar ``rhs`` per lane), written out it vectorizes (4.2x), at a longer numba compile
+  (about 1 ms per operation, as an un-outlined ``rhs``); past the limit the helpers are calls either way;
 * ``sin`` and ``cos`` printed as ``vsin`` and ``vcos`` (`lagcomp.kernel_support.trig`), in the kernel and in its
   helpers: the scalar kernels' polynomials without their branch to libm, so that the loop holds no call.
 
@@ -51,6 +55,8 @@ def tree_lanes_kernels(tree: Tree, local: TreeLocals) -> tuple[Kernel, ...]:
     if tree.lanes_refusal() is not None:
         return ()
     rhs = open_rhs(local, name="rhs_lanes")
+    if all(helper.inline for helper in rhs.helpers):   # (LLVM vectorizes the loop with its steps written out only)
+        rhs = open_rhs(local, name="rhs_lanes", outlined=False)
     n = local.n
     columns = {s.name: f"Y[{i}, _l]" for i, s in enumerate((*local.q, *local.qd))}
     columns.update({s.name: f"P[{k}, _l]" for k, s in enumerate(local.p)})
