@@ -461,9 +461,9 @@ CASES = {
                                "Spherical('a', 'b'): needs 3 coordinates"),
     "tree-parent-not-listed": (lambda: lc.Tree([lc.Link("arm", lc.Revolute("q"), parent="base", mass=1.0)]),
                                "'base'"),
-    "tree-kernel-not-available": (_tree_batched_sweep, "`rhs_lanes` (batched sweeps) is not available for the "
-                                                      "kinematic tree 'tree_loop' yet: its motion has closed loops "
-                                                      "['pin']"),
+    "tree-kernel-not-available": (_tree_batched_sweep, ("`rhs_lanes` (batched sweeps) is not available for the "
+                                                       "kinematic tree 'tree_loop' yet: its motion has closed loops "
+                                                       "['pin']")),
     "tree-no-lagrangian": (_tree_steady, "linearize_steady"),
     "tree-loop-unknown-link": (lambda: lc.Tree(_planar_loop("xy").links, loops=[
         lc.Loop("pin", ("left", (1, 0, 0)), ("rihgt", (1, 0, 0)))]), "'rihgt'"),

@@ -8,7 +8,6 @@ switches (events that reset the state) are refused by name.
 
 from __future__ import annotations
 
-import multibody_models as mm
 import numpy as np
 import pytest
 import sympy as sp
