@@ -142,8 +142,9 @@ def test_kernels_of_later_steps_are_refused_naming_the_feature_and_the_issue(tre
     tree_model, _ = tree_pair("rigid_double_pendulum")
     params = {name: 1.0 for name in tree_model.parameters}
     assert set(tree_model.operations) >= {"rhs", "mass_matrix", "forcing", "energy", "momenta"}
-    with pytest.raises(lc.ModelError, match=r"rhs_lanes.*issue 39"):
-        _ = tree_model.kernels.rhs_lanes   # (Model.equations(): tests/test_multibody_equations.py)
+    with pytest.raises(lc.ModelError, match=r"energy_lanes.*issue 39"):
+        _ = tree_model.kernels.energy_lanes   # (rhs_lanes: tests/test_multibody_lanes.py; Model.equations():
+        # tests/test_multibody_equations.py)
     with pytest.raises(lc.ModelError, match=r"conserved_quantities.*issue 39"):
         an.conserved_quantities(tree_model)
     assert lc.kernel_accuracy(tree_model, n=2, params=params)["rhs"].max_normwise < 64   # (no longer refused:

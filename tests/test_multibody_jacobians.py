@@ -245,10 +245,10 @@ def test_a_tree_has_its_kinds_and_names_the_others(tree_pair):
     tree_model, _ = tree_pair("planar_chain_4")
     assert set(tree_model.on_demand_entries) == set(TREE_KINDS)
     assert tree_model.on_demand_entry("jacobians").path.exists()
-    with pytest.raises(lc.ModelError, match=r"lanes kernels.*batched.*kinematic tree 'planar_chain_4'"):
-        tree_model.on_demand_entry("lanes")
-    with pytest.raises(lc.ModelError, match=r"`rhs_lanes`.*issue 39"):
-        _ = tree_model.kernels.rhs_lanes
+    with pytest.raises(lc.ModelError, match=r"energy_lanes kernels.*summary.*kinematic tree 'planar_chain_4'"):
+        tree_model.on_demand_entry("energy_lanes")
+    with pytest.raises(lc.ModelError, match=r"`energy_lanes`.*issue 39"):
+        _ = tree_model.kernels.energy_lanes
 
 
 def test_the_jacobian_costs_less_than_2n_times_rhs(tree_pair):

@@ -198,6 +198,22 @@ class ReturnZero:
 
 
 @dataclass(frozen=True)
+class LaneBuffer:
+    """The frame of a `Kernel.lanes` kernel whose stores go into a stack buffer of `width` lanes, ``_buf[i * width +
+    _j]`` for ``out[i, _c + _j]``, copied into `out` ((`rows`, B)) after each chunk of lanes ``_c .. _c + width``.
+
+    Why: LLVM vectorizes the loop over lanes only when it can rule out that its stores into `out` overwrite what
+    later lanes read from the inputs; with `out`'s rows at a stride known at run time only, that takes a runtime
+    check per pair of rows, and past a few rows it gives up ("loop not vectorized: too many memory checks needed")
+    and the loop runs one lane at a time.  A buffer in the kernel's stack frame cannot alias an argument: the loop
+    over a chunk vectorizes whatever the number of rows, and the copy into `out` is a loop per row.  Each lane's
+    arithmetic is unchanged (no fastmath): the same bits."""
+
+    rows: int
+    width: int
+
+
+@dataclass(frozen=True)
 class FlatMatrix:
     """The frame of a kernel whose stores fill a (size, size) matrix (``dae_jacobian``): before its temporaries
     it allocates the work array ``_jac`` of size² zeros, the stores write the nonzero entries into it, row-major
@@ -426,7 +442,7 @@ class Kernel:
     stores: tuple[tuple[str, sp.Expr], ...]
     solve: (LinearSolve | AugmentedSolve | SymmetricProduct | JacobianSolve | AugmentedJacobianSolve
             | DirectionalSolve | Delegate | ReturnZero | FlatMatrix | Unavailable | EventResets | ContactModes
-            | FrictionSwitch | None) = None
+            | FrictionSwitch | LaneBuffer | None) = None
     lanes: bool = False
     alias: str | None = None
     constants: tuple[tuple[str, str, object], ...] = ()

@@ -9,7 +9,8 @@ kernels, ``rest_partials``: radau, sensitivities, linearization) are the recursi
 and ``geometry`` (animation) the links' frames (`lagcomp.codegen.tree_geometry`), built on first use into companion
 modules as a System's are, and so are ``power`` (the energy balance, `lagcomp.codegen.tree_power`) and
 ``taylor_coefficients`` (method="taylor", `lagcomp.codegen.tree_taylor`).  The Hamiltonian form of gauss1/2/3 is the
-kind "canonical" (`lagcomp.codegen.tree_canonical`).
+kind "canonical" (`lagcomp.codegen.tree_canonical`), the lanes of batched sweeps the kind "lanes" (``rhs`` per lane,
+`lagcomp.codegen.tree_lanes`).
 
 ``Model.equations()`` is the kind "equations": the recursion in Featherstone's notation over a table of the tree's
 nodes (placement, motion subspace, inertia, joint force of each), the loops' closure, T and V
@@ -17,7 +18,8 @@ nodes (placement, motion subspace, inertia, joint force of each), the loops' clo
 into a companion module, so that `lagcomp.load` shows them without sympy once they are built, as a System's.
 
 What issue 39 does not provide yet is refused with a `ModelError` naming it: the other on-demand kernels (the lanes
-of batched sweeps) and the analyses that read a System's T and V.
+of a tree with loops, contacts or friction elements; a System's kinds a tree has no use for) and the analyses that
+read a System's T and V.
 """
 
 from __future__ import annotations

@@ -49,6 +49,7 @@ from lagcomp.ir import (
     Helper,
     JacobianSolve,
     Kernel,
+    LaneBuffer,
     LinearSolve,
     ModuleIR,
     ReturnZero,
@@ -191,7 +192,7 @@ def kernel_support_names(kernels) -> set[str]:
             names |= {"PIVOT_TOLERANCE"} if solve.n <= JACOBIAN_UNROLL_MAX else {"ldlt_solve_matrix", "stack_array"}
             if not solve.given_ydot:
                 names.add("stack_empty")
-        elif isinstance(solve, Delegate):
+        elif isinstance(solve, (Delegate, LaneBuffer)):
             names.add("stack_empty")
         elif isinstance(solve, AugmentedJacobianSolve):
             names.add("kkt_solve_matrix")
@@ -518,27 +519,44 @@ def _symmetric_product(solve: SymmetricProduct) -> list[str]:
 
 def _lanes_kernel_source(kernel: Kernel) -> list[str]:
     """The body of a `Kernel.lanes` kernel: the scalar body, once per lane, in a loop over lanes (then ``rhs_lanes``'s
-    solve; a kernel without one, `lagcomp.codegen.energy_lanes`, has stores only)."""
+    solve; a kernel without one, `lagcomp.codegen.energy_lanes`, has stores only), or in chunks of lanes through a
+    `lagcomp.ir.LaneBuffer`."""
     inner = [f"{local} = {source}" for local, source in kernel.loads]
     inner += [f"{name} = {to_code(expr, lanes=True)}" for name, expr in kernel.temps]
     inner += [f"{target} = {to_code(expr, lanes=True)}" for target, expr in kernel.stores]
+    doc = _docstring(kernel.doc).splitlines()
+    if isinstance(kernel.solve, LaneBuffer):
+        return doc + _lane_buffer_frame(kernel.solve, inner)
     inner += _unrolled_ldlt(kernel.solve, lanes=True) if kernel.solve is not None else []
-    return _docstring(kernel.doc).splitlines() + ["for _l in range(Y.shape[1]):"] + [INDENT + x for x in inner]
+    return doc + ["for _l in range(Y.shape[1]):"] + [INDENT + x for x in inner]
 
 
-def _helper_source(helper: Helper) -> str:
+def _lane_buffer_frame(solve: LaneBuffer, inner: list[str]) -> list[str]:
+    """The lanes in chunks of ``solve.width``: lane ``_l = _c + _j`` stores into ``_buf[i * width + _j]``, copied
+    into ``out[i, _c + _j]`` after its chunk (`lagcomp.ir.LaneBuffer`)."""
+    width = solve.width
+    return [f"_buf = stack_empty({solve.rows * width})", f"for _c in range(0, Y.shape[1], {width}):",
+            f"{INDENT}_w = min({width}, Y.shape[1] - _c)", f"{INDENT}for _j in range(_w):",
+            f"{INDENT * 2}_l = _c + _j"] + [INDENT * 2 + x for x in inner] + [
+            f"{INDENT}for _i in range({solve.rows}):", f"{INDENT * 2}for _j in range(_w):",
+            f"{INDENT * 3}out[_i, _c + _j] = _buf[_i * {width} + _j]"]
+
+
+def _helper_source(helper: Helper, lanes: bool = False) -> str:
     """A `lagcomp.ir.Helper` as a function numba compiles once, which LLVM inlines at each call if it is `inline`
-    (`lagcomp.codegen.outline`)."""
+    (`lagcomp.codegen.outline`); a helper of a `Kernel.lanes` kernel (`lanes`) calls ``vsin``/``vcos``, as its
+    kernel does, so that the loop over lanes it is inlined into holds no call."""
     lines = ["", "", f'@njit(cache=True, error_model="numpy", forceinline={helper.inline})',
              f"def {helper.name}({', '.join(helper.args)}):"]
-    lines += [f"{INDENT}{name} = {to_code(expr)}" for name, expr in helper.temps]
+    lines += [f"{INDENT}{name} = {to_code(expr, lanes=lanes)}" for name, expr in helper.temps]
     lines.append(f"{INDENT}return {', '.join(helper.returns)}{',' if len(helper.returns) == 1 else ''}")
     return "\n".join(lines) + "\n"
 
 
 def _kernel_source(kernel: Kernel) -> str:
     if kernel.helpers:
-        return "".join(map(_helper_source, kernel.helpers)) + _kernel_source(replace(kernel, helpers=()))
+        return ("".join(_helper_source(helper, kernel.lanes) for helper in kernel.helpers)
+                + _kernel_source(replace(kernel, helpers=())))
     if kernel.alias:
         comment = "".join(f"\n# {line}".rstrip() for line in kernel.doc.splitlines())
         return f"\n{comment}\n{kernel.name} = {kernel.alias}\n"

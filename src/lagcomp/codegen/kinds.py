@@ -74,10 +74,11 @@ TREE_ON_DEMAND = (
 #: `lagcomp.codegen.tree_loop_companion`), the links' frames ("geometry", `lagcomp.codegen.tree_geometry`, whose
 #: ``GEOMETRY_PARENTS`` a System's module does not define) and the energy balance's "power"
 #: (`lagcomp.codegen.tree_power`), the Taylor series program of "taylor" (`lagcomp.codegen.tree_taylor`) and the
-#: Hamiltonian form of "canonical" (`lagcomp.codegen.tree_canonical`), and the recursion as LaTeX and text of
-#: "equations" (`lagcomp.codegen.tree_latex`); its other kinds are refused.
-TREE_KINDS = ("jacobians", "directional", "analysis", "dae", "geometry", "dynamics", "power", "canonical", "taylor",
-              "equations")
+#: Hamiltonian form of "canonical" (`lagcomp.codegen.tree_canonical`), the recursion as LaTeX and text of
+#: "equations" (`lagcomp.codegen.tree_latex`) and the lanes of batched sweeps, ``rhs`` per lane ("lanes",
+#: `lagcomp.codegen.tree_lanes`); its other kinds are refused.
+TREE_KINDS = ("lanes", "jacobians", "directional", "analysis", "dae", "geometry", "dynamics", "power", "canonical",
+              "taylor", "equations")
 
 #: Every name a companion module may define, and the kind that defines it.
 KIND_OF = {name: kind for kind in ON_DEMAND for name in kind.names}

@@ -23,6 +23,8 @@ r"""The on-demand kernels of a kinematic tree (`lagcomp.Tree`): its recursions d
 * "taylor" (``method="taylor"``): ``taylor_coefficients``, the articulated-body algorithm in series arithmetic
   (`lagcomp.codegen.tree_taylor`; with contacts, one program per set of closed contacts, which factors M and returns
   a System's statuses);
+* "lanes" (``sweep(..., batched=True)``): ``rhs_lanes``, the eager ``rhs`` evaluated per lane of a batch, bitwise
+  (`lagcomp.codegen.tree_lanes`; none for a tree with loops, contacts or friction elements);
 * "equations" (``Model.equations()``): no kernel, the constant ``EQUATIONS``: the recursion and the table of the
   tree's nodes as LaTeX and text (`lagcomp.codegen.tree_latex`).
 
@@ -43,6 +45,7 @@ from lagcomp.codegen.emit import emit_companion
 from lagcomp.codegen.kinds import KernelKind
 from lagcomp.codegen.tree_canonical import tree_canonical_kernels
 from lagcomp.codegen.tree_geometry import tree_geometry_kernels
+from lagcomp.codegen.tree_lanes import tree_lanes_kernels
 from lagcomp.codegen.tree_latex import tree_equations
 from lagcomp.codegen.tree_locals import TreeLocals, tree_locals
 from lagcomp.codegen.tree_loop_companion import LOOP_BUILDERS
@@ -219,7 +222,8 @@ _BUILDERS = {"jacobians": lambda tree, local: _jacobian_kernels(local),
              "analysis": lambda tree, local: _rest_partials_kernels(local), "dae": lambda tree, local: (),
              "dynamics": lambda tree, local: _dynamics_kernels(local),
              "power": tree_power_kernels,
-             "canonical": tree_canonical_kernels}
+             "canonical": tree_canonical_kernels,
+             "lanes": tree_lanes_kernels}
 
 #: The same for a tree with loops: the augmented solve differentiated (`lagcomp.codegen.tree_loop_companion`);
 #: ``rest_partials`` is the open tree's (F is the same).

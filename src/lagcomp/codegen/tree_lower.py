@@ -19,7 +19,7 @@ from lagcomp.codegen.outline import outline
 from lagcomp.codegen.tree_constraints import gain_loads, loop_kernels
 from lagcomp.codegen.tree_contacts import TreeContacts
 from lagcomp.codegen.tree_events import event_functions, tree_event_kernels
-from lagcomp.codegen.tree_locals import tree_locals
+from lagcomp.codegen.tree_locals import TreeLocals, tree_locals
 from lagcomp.ir import Kernel, ModuleIR, ReturnZero
 from lagcomp.model.friction import Friction
 from lagcomp.multibody.aba import accelerations
@@ -56,10 +56,7 @@ def lower_tree(tree: Tree) -> ModuleIR:
         loads += gain_loads(tree)
         dynamics = loop_kernels(tree, nodes, gravity, mapping, kernel)
     else:
-        dynamics = (kernel("rhs", "State derivative dy/dt = (q̇, q̈), shape (2n,), q̈ by the articulated-body "
-                         "algorithm.\n\nReturns 0.", ARGS,
-                         lambda prog: [(f"out[{i}]", f) for i, f in enumerate(motion(prog, nodes, qd, gravity))],
-                         ReturnZero()),)
+        dynamics = (open_rhs(local),)
     contacts = None
     if tree.contacts or any(isinstance(e, Friction) for e in tree.events):
         # the contacts' and friction elements' modes: rhs is rhs_free corrected for the held rows (`tree_contacts`)
@@ -82,6 +79,17 @@ def lower_tree(tree: Tree) -> ModuleIR:
                     event_names=tree.event_names if tree.user_events else ())
 
 
+def open_rhs(local: TreeLocals, name: str = "rhs", outlined: bool = True) -> Kernel:
+    """``rhs`` of a tree without loops: f = (q̇, q̈) into ``out[0:2n]``, q̈ by the articulated-body algorithm
+    (`motion`).  The eager module's, and under `name` the program of the lanes of batched sweeps
+    (`lagcomp.codegen.tree_lanes`), which are this kernel evaluated per lane: the same assignments in the same
+    order (without `outlined`, its repeated steps written out: `program_kernel`)."""
+    prog = Program()
+    stores = [(f"out[{i}]", f) for i, f in enumerate(motion(prog, local.nodes, local.qd, local.gravity))]
+    return program_kernel(name, "State derivative dy/dt = (q̇, q̈), shape (2n,), q̈ by the articulated-body "
+                          "algorithm.\n\nReturns 0.", ARGS, prog, stores, local.loads, ReturnZero(), outlined)
+
+
 def motion(prog: Program, nodes, qd, gravity) -> list:
     """f = (q̇, q̈) of a tree without loops, bound in `prog`: q̈ by the articulated-body algorithm, mapped to the
     coordinates' second derivatives (`lagcomp.multibody.charts`: σ̈ of a ball joint from its body-axis rates).
@@ -95,13 +103,17 @@ def generalized_forcing(prog: Program, nodes, gravity) -> list:
     return forces_in_coordinates(prog, nodes, forcing(prog, nodes, gravity))
 
 
-def program_kernel(name: str, doc: str, args, prog: Program, stores, loads, solve=None) -> Kernel:
+def program_kernel(name: str, doc: str, args, prog: Program, stores, loads, solve=None, outlined: bool = True) -> Kernel:
     """A kernel whose temporaries are the assignments of `prog` its `stores` read, and whose loads are those they
-    read; the steps its nodes repeat emitted once (`lagcomp.codegen.outline`)."""
+    read; the steps its nodes repeat emitted once (`lagcomp.codegen.outline`), or with `outlined` False written out
+    where they occur (the same assignments: the same bits)."""
     temps = prog.live([e for _, e in stores])
     used = set().union(*(sp.sympify(e).free_symbols for _, e in stores), *(e.free_symbols for _, e in temps))
     used_names = {s.name for s in used}
-    body, helpers = outline(name, temps, prog.step_of, [e for _, e in stores])
+    if outlined:
+        body, helpers = outline(name, temps, prog.step_of, [e for _, e in stores])
+    else:
+        body, helpers = tuple((local.name, e) for local, e in temps), ()
     return Kernel(name=name, doc=doc, args=args, loads=tuple((local, src) for local, src in loads if local in used_names),
                   temps=body, stores=tuple((target, sp.sympify(e)) for target, e in stores), solve=solve,
                   helpers=helpers)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lagcomp.errors import InitialConditionError, OptionError
+from lagcomp.errors import InitialConditionError, ModelError, OptionError
 from lagcomp.integrate.balance_kernels import balance_row_kernel, slots
 from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.contacts import (
@@ -415,9 +415,12 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if batched:
         resetting = [e.name for e, action in zip(model.events, actions.tolist(), strict=True) if action >= ACTION_RESET]
         if resetting:
+            charts = set(getattr(getattr(model, "system", None), "chart_events", ())) & set(resetting)
             raise OptionError(f"Event(s) {resetting} reset the state, which a batched sweep's lanes cannot do yet: "
                               "drop `batched` (each trajectory then runs with its own resets), or leave the events "
-                              "out (`events=False`).")
+                              "out (`events=False`" + (f": the ball joints' shadow switches {sorted(charts)} then "
+                              "stay off, which is right until a joint's rotation nears a full turn" if charts else "")
+                              + ").")
         driver = _batched_driver(model, m)
         if m.adaptive and (rows or want_events):
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "
@@ -526,6 +529,12 @@ def _batched_driver(model, m) -> str:
     if m.name == "taylor":
         return BATCHED["taylor"]       # check_method has checked that the model has a Taylor program
     if not hasattr(model.kernels, "rhs_lanes"):
+        beyond = getattr(getattr(model, "system", None), "lanes_refusal", lambda: None)()
+        if beyond is not None:      # a kinematic tree whose motion is more than its articulated-body rhs
+            raise ModelError(f"`rhs_lanes` (batched sweeps) is not available for the kinematic tree {model.name!r} "
+                             f"yet: its motion has {beyond}, which the lanes (the articulated-body rhs per lane) do "
+                             "not evaluate (issue 39). Drop `batched`: each trajectory then runs on its own, with "
+                             "any method the tree takes.")
         raise OptionError(f"{model.name!r} has no batched kernel (constrained, with inputs, or more coordinates "
                           "than lagcomp.codegen.lower.UNROLL_MAX, whose LDLᵀ solve is a loop).")
     return BATCHED[m.name]

@@ -21,6 +21,7 @@ import sympy as sp
 from lagcomp.codegen.kinds import TREE_KINDS
 from lagcomp.errors import InitialConditionError, ModelError, ParameterError
 from lagcomp.model.bodies import inertia_matrix
+from lagcomp.model.friction import Friction
 from lagcomp.model.system import _unique_names as unique_names
 from lagcomp.multibody.joints import ISSUE, Elementary, Joint, t
 from lagcomp.multibody.loops import closures
@@ -215,8 +216,20 @@ class Tree:
                 "energy and momenta, and on demand mass_matrix, forcing, the Jacobians, the tangent kernels, "
                 "rest_partials (radau, sensitivities, lagcomp.analysis.linearize), the links' geometry "
                 "(animation), the power of the energy balance, the canonical kernels (gauss1/2/3), the Taylor "
-                f"coefficients (method='taylor') and the equations (Model.equations()); the other kernels come in later steps of {ISSUE}. Use those methods, "
+                "coefficients (method='taylor'), the equations (Model.equations()) and the lanes of batched sweeps; "
+                f"the other kernels come in later steps of {ISSUE}. Use those methods, "
                 "or write the system as a lc.System with lc.RigidBody for this feature.")
+
+    def lanes_refusal(self) -> str | None:
+        """What the tree's motion has besides its articulated-body ``rhs``, which the lanes of a batched sweep
+        (``rhs_lanes``, `lagcomp.codegen.tree_lanes`) do not evaluate: closed loops (an augmented solve), contacts
+        and friction elements (modes that switch per trajectory); None when there is nothing.  Such a tree's kind
+        "lanes" is empty (as a constrained System's), and its batched sweep says this (`lagcomp.integrate.sweep`)."""
+        frictions = [e.name for e in self.user_events if isinstance(e, Friction)]
+        reasons = [f"closed loops {[c.loop for c in self.closures]}"] * bool(self.closures)
+        reasons += [f"contacts {[c.name for c in self.contacts]}"] * bool(self.contacts)
+        reasons += [f"friction elements {frictions}"] * bool(frictions)
+        return " and ".join(reasons) or None
 
     def __repr__(self) -> str:
         return f"Tree({self.name!r}, links={[link.name for link in self.links]}, n={self.n})"
