@@ -9,7 +9,7 @@ import pytest
 import sympy as sp
 
 import lagcomp as lc
-from lagcomp.errors import InitialConditionError, ModelError, ParameterError
+from lagcomp.errors import InitialConditionError, ModelError, OptionError, ParameterError
 from lagcomp.integrate.status import Status
 
 t = lc.t
@@ -211,3 +211,14 @@ def test_impacts_record_their_impulses(ball, chain):
     sol = chain.simulate((0.0, 1.0), [-0.5, 1.0, 2.0], [1.0, 0.0, 0.0], params={"m2": 1.0}, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(sol.events["c12"].impulses, [[4 / 3, 2 / 3]], rtol=1e-13)
     assert sol.events["c23"].impulses.shape == (0, 2)
+
+
+def test_a_batched_sweep_of_contacts_does_not_advise_leaving_them_out(ball):
+    """A contact is part of the motion (a run refuses ``events=False`` with one), so the batched sweep's refusal
+    names it and says to drop `batched`, not to leave the events out."""
+    with pytest.raises(OptionError, match="batched") as refused:
+        ball.sweep((0.0, 1.0), {"e": [0.5, 0.6]}, q0=[1.0], qd0=[0.0], batched=True, progress=False)
+    message = str(refused.value)
+    assert "['floor'] are part of the motion" in message and "events=False" not in message
+    with pytest.raises(OptionError, match="cannot leave out"):      # (what the old advice led to)
+        ball.sweep((0.0, 1.0), {"e": [0.5, 0.6]}, q0=[1.0], qd0=[0.0], batched=True, events=False, progress=False)

@@ -34,6 +34,7 @@ from lagcomp.integrate.constraints import consistent_initial_state
 from lagcomp.integrate.contacts import (
     check_contacts,
     contacts_of,
+    frictions_of,
     set_initial_modes,
     sweep_impulses,
 )
@@ -415,12 +416,7 @@ def sweep(model, t_span, grid, *, combine="product", names=None, q0=None, qd0=No
     if batched:
         resetting = [e.name for e, action in zip(model.events, actions.tolist(), strict=True) if action >= ACTION_RESET]
         if resetting:
-            charts = set(getattr(getattr(model, "system", None), "chart_events", ())) & set(resetting)
-            raise OptionError(f"Event(s) {resetting} reset the state, which a batched sweep's lanes cannot do yet: "
-                              "drop `batched` (each trajectory then runs with its own resets), or leave the events "
-                              "out (`events=False`" + (f": the ball joints' shadow switches {sorted(charts)} then "
-                              "stay off, which is right until a joint's rotation nears a full turn" if charts else "")
-                              + ").")
+            raise OptionError(_batched_resets_refusal(model, resetting))
         driver = _batched_driver(model, m)
         if m.adaptive and (rows or want_events):
             raise OptionError("A batched adaptive sweep keeps final states and energy errors only (no dense rows or "
@@ -517,6 +513,22 @@ BATCHED = {"rk4": "lagcomp.integrate.drivers.lanes:sweep_rk4_lanes",
 #: The batched Taylor sweep's library loop and what it takes from the lanes module, by name (then ``energy``).
 TAYLOR_LANES_LOOP = ("lagcomp.integrate.drivers.taylor_lanes:sweep_taylor_lanes",
                      ("taylor_lanes", "taylor_lanes_advance", "TAYLOR_ORDER", "TAYLOR_LANES"))
+
+
+def _batched_resets_refusal(model, resetting: list[str]) -> str:
+    """Why a batched sweep refuses the events `resetting` (their names) of `model`, and what to do: drop `batched`;
+    or leave them out, unless some are contacts or friction elements, which are part of the motion
+    (`lagcomp.integrate.options` refuses a run without them)."""
+    inherent = [name for name, _, _ in contacts_of(model)] + [name for name, *_ in frictions_of(model)]
+    charts = set(getattr(getattr(model, "system", None), "chart_events", ())) & set(resetting)
+    message = (f"Event(s) {resetting} reset the state, which a batched sweep's lanes cannot do yet: drop `batched` "
+               "(each trajectory then runs with its own resets)")
+    if set(resetting) & set(inherent):
+        return message + f"; the contacts and friction elements {sorted(set(resetting) & set(inherent))} are part " \
+                         "of the motion and cannot be left out."
+    return message + (", or leave the events out (`events=False`" + (
+        f": the ball joints' shadow switches {sorted(charts)} then stay off, which is right until a joint's "
+        "rotation nears a full turn" if charts else "") + ").")
 
 
 def _batched_driver(model, m) -> str:
