@@ -217,7 +217,7 @@ class Tree:
                 "rest_partials (radau, sensitivities, lagcomp.analysis.linearize), the links' geometry "
                 "(animation), the power of the energy balance, the canonical kernels (gauss1/2/3), the Taylor "
                 "coefficients (method='taylor'), the equations (Model.equations()) and the lanes of batched sweeps; "
-                f"the other kernels come in later steps of {ISSUE}. Use those methods, "
+                f"the other kernels are not built for trees ({ISSUE}). Use those methods, "
                 "or write the system as a lc.System with lc.RigidBody for this feature.")
 
     def lanes_refusal(self) -> str | None:
